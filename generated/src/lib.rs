@@ -1,0 +1,1 @@
+//! Emitted modules (filled by the generator).

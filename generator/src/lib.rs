@@ -1,0 +1,7 @@
+//! Derives the equations of motion of multibody systems symbolically and emits Rust.
+//!
+//! The pipeline: [`model`] (parse and validate a RON model) → [`kinematics`] (frames, body
+//! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
+//! formulations) → emission. [`symbolic`] is the engine underneath.
+
+pub mod symbolic;
