@@ -5,3 +5,7 @@
 //! formulations) → emission. [`symbolic`] is the engine underneath.
 
 pub mod symbolic;
+pub mod kinematics;
+pub mod model;
+pub mod formulation;
+pub mod inspect;

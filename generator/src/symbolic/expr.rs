@@ -21,7 +21,6 @@
 //! ```
 
 use super::number::{Rat, rat_from_i64};
-use num_integer::Roots;
 use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::cell::RefCell;
 use std::collections::HashMap;

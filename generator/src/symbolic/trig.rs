@@ -327,3 +327,134 @@ mod tests {
         assert!(matches!(err, StopReason::TermLimit { limit: 100, .. }), "{err}");
     }
 }
+
+/// Most terms a sum may have for [`Expr::simplify_trig`] to try contracting it.
+const CONTRACT_MAX_TERMS: usize = 400;
+
+impl Expr {
+    /// A compact equivalent form: the trigonometric normal form with products of sines and
+    /// cosines contracted back into angle sums and differences
+    /// (`cos a cos b + sin a sin b -> cos(a - b)`), kept only when it is no larger than the
+    /// input. Never runs past `limits`: on a stop, the input comes back unchanged.
+    pub fn simplify_trig(self, limits: Limits) -> Expr {
+        match self.trig_normal(limits) {
+            Ok(n) => {
+                let c = contract(n);
+                if c.tree_size() <= self.tree_size() { c } else { self }
+            }
+            Err(_) => self,
+        }
+    }
+}
+
+/// The factors of a monomial as a sorted list.
+fn factors_of(mono: Expr) -> Vec<(Expr, Rat)> {
+    match &*mono.node() {
+        Node::Mul { factors, .. } => factors.clone(),
+        Node::Num(_) => vec![],
+        _ => vec![(mono, Rat::one())],
+    }
+}
+
+/// Splits off one `f(a)^1` factor with `f` sin or cos: returns (func, arg, rest factors).
+fn trig_factors(fs: &[(Expr, Rat)]) -> Vec<(usize, Func, Expr)> {
+    fs.iter()
+        .enumerate()
+        .filter_map(|(i, (b, x))| match &*b.node() {
+            Node::Fun(f @ (Func::Sin | Func::Cos), a) if x.is_one() => Some((i, *f, *a)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn contract(e: Expr) -> Expr {
+    let Node::Add { constant, terms } = &*e.node() else { return e };
+    if terms.len() > CONTRACT_MAX_TERMS {
+        return e;
+    }
+    let mut terms: Vec<(Vec<(Expr, Rat)>, Rat)> = terms
+        .iter()
+        .map(|(t, c)| {
+            let (k, mono) = t.split_coefficient();
+            (factors_of(mono), c * k)
+        })
+        .collect();
+    'outer: loop {
+        for i in 0..terms.len() {
+            let ti = trig_factors(&terms[i].0);
+            for (x, fx, ax) in &ti {
+                for (y, fy, ay) in &ti {
+                    if x >= y || ax == ay {
+                        continue;
+                    }
+                    // Term i has fx(ax) fy(ay) K. Look for the partner with the other functions.
+                    let rest: Vec<(Expr, Rat)> =
+                        terms[i].0.iter().enumerate().filter(|(k, _)| k != x && k != y).map(|(_, f)| f.clone()).collect();
+                    let other = |f: Func| if f == Func::Sin { Func::Cos } else { Func::Sin };
+                    let (gx, gy) = (other(*fx), other(*fy));
+                    let want_x = Expr::apply(gx, *ax);
+                    let want_y = Expr::apply(gy, *ay);
+                    let mut target = rest.clone();
+                    target.push((want_x, Rat::one()));
+                    target.push((want_y, Rat::one()));
+                    let target_mono = Expr::make_mul(Rat::one(), target);
+                    for j in 0..terms.len() {
+                        if j == i || Expr::make_mul(Rat::one(), terms[j].0.clone()) != target_mono {
+                            continue;
+                        }
+                        let (ci, cj) = (terms[i].1.clone(), terms[j].1.clone());
+                        let same = ci == cj;
+                        if !same && ci != -cj.clone() {
+                            continue;
+                        }
+                        // cos cos + sin sin = cos(a-b); cos cos - sin sin = cos(a+b);
+                        // sin a cos b + cos a sin b = sin(a+b); sin a cos b - cos a sin b = sin(a-b).
+                        let (new_f, arg) = match (fx, fy) {
+                            (Func::Cos, Func::Cos) => (Func::Cos, if same { *ax - *ay } else { *ax + *ay }),
+                            (Func::Sin, Func::Sin) => (Func::Cos, if same { *ax - *ay } else { *ax + *ay }),
+                            (Func::Sin, Func::Cos) => (Func::Sin, if same { *ax + *ay } else { *ax - *ay }),
+                            _ => (Func::Sin, if same { *ay + *ax } else { *ay - *ax }),
+                        };
+                        // For (sin, sin) first with minus: -sin sin + cos cos: coefficient of the
+                        // cos-cos partner leads, handled by using cj.
+                        let coef = match (fx, fy) {
+                            (Func::Sin, Func::Sin) => cj,
+                            _ => ci,
+                        };
+                        let mut nf = rest;
+                        nf.push((Expr::apply(new_f, arg), Rat::one()));
+                        let (hi, lo) = if i > j { (i, j) } else { (j, i) };
+                        terms.remove(hi);
+                        terms.remove(lo);
+                        terms.push((nf, coef));
+                        continue 'outer;
+                    }
+                }
+            }
+        }
+        break;
+    }
+    Expr::make_add(constant.clone(), terms.into_iter().map(|(fs, c)| (Expr::make_mul(Rat::one(), fs), c)).collect())
+}
+
+#[cfg(test)]
+mod contract_tests {
+    use super::*;
+
+    #[test]
+    fn products_contract_to_angle_differences() {
+        let (a, b, k) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("k"));
+        let lim = Limits::default();
+        assert_eq!((k * a.cos() * b.cos() + k * a.sin() * b.sin()).simplify_trig(lim), k * (a - b).cos());
+        assert_eq!((a.cos() * b.cos() - a.sin() * b.sin()).simplify_trig(lim), (a + b).cos());
+        assert_eq!((a.sin() * b.cos() - a.cos() * b.sin()).simplify_trig(lim), (a - b).sin());
+        assert_eq!((k * a.sin().powi(2) + k * a.cos().powi(2)).simplify_trig(lim), k);
+        // Values are preserved for something that does not contract.
+        let e = a.sin() * b.cos() * 2 + a.cos() * b.sin() * 3;
+        let s = e.simplify_trig(lim);
+        let mut env = crate::symbolic::eval::Env::default();
+        env.set(Symbol::new("a"), 0.3);
+        env.set(Symbol::new("b"), 1.1);
+        assert!((s.eval(&env).unwrap() - e.eval(&env).unwrap()).abs() < 1e-14);
+    }
+}

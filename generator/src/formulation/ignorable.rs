@@ -1,0 +1,148 @@
+//! Ignorable coordinates (paper Definition 1): `q_j` is ignorable when the Lagrangian
+//! `L = T - V` does not depend on it, its column of the constraint Jacobian `a` is zero, and
+//! its generalized force `Q_j` is zero. Then `G_j = dT/dq_j'` is conserved (Eqs. 20-26).
+//! Separately: whether `a`, `b` and `Q` are free of it too, which is what dropping it from the
+//! integrated state needs.
+//!
+//! ```
+//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+//! let mech = generator::formulation::mechanics::derive(&model);
+//! let report = generator::formulation::ignorable::analyze(&model, &mech);
+//! assert!(report[2].is_ignorable() && !report[0].is_ignorable());
+//! ```
+
+use super::mechanics::{Mechanics, derivation_limits};
+use crate::model::{ErrorKind, Model, ModelError};
+use crate::symbolic::trig::zero_test;
+use crate::symbolic::{Expr, Symbol};
+
+/// Which condition of Definition 1 fails, and on what.
+#[derive(Clone, Debug)]
+pub enum Failure {
+    /// The Lagrangian depends on the coordinate, through `place` (`M[1][2]`, `N[0]`, `T0`,
+    /// `V`), whose derivative is `derivative`.
+    InLagrangian { place: String, derivative: Expr },
+    /// Column of `a` is not zero in constraint `constraint`.
+    InConstraint { constraint: String, entry: Expr },
+    /// The generalized force `Q_j` is not zero.
+    Forced { force: Expr },
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Failure::InLagrangian { place, derivative } => write!(f, "L = T - V depends on it through {place} (derivative {derivative})"),
+            Failure::InConstraint { constraint, entry } => write!(f, "its column of a is not zero in constraint `{constraint}` (entry {entry})"),
+            Failure::Forced { force } => write!(f, "its generalized force is not zero (Q = {force})"),
+        }
+    }
+}
+
+/// The verdict for one coordinate.
+#[derive(Clone, Debug)]
+pub struct CoordinateReport {
+    pub index: usize,
+    pub name: String,
+    /// `None` when Definition 1 holds.
+    pub failure: Option<Failure>,
+    /// Where `a`, `b` or `Q` depend on the coordinate (empty when it could leave the state).
+    pub appears_in: Vec<String>,
+}
+
+impl CoordinateReport {
+    /// Definition 1 holds.
+    pub fn is_ignorable(&self) -> bool {
+        self.failure.is_none()
+    }
+}
+
+fn depends(e: Expr, q: Symbol) -> Option<Expr> {
+    if !e.contains(q) {
+        return None;
+    }
+    let d = e.diff(q);
+    (!zero_test(d, derivation_limits()).is_zero()).then_some(d)
+}
+
+/// Checks Definition 1 for every coordinate.
+pub fn analyze(model: &Model, mech: &Mechanics) -> Vec<CoordinateReport> {
+    let m = mech.m;
+    model
+        .coordinates
+        .iter()
+        .enumerate()
+        .map(|(j, q)| {
+            let mut failure = None;
+            'lag: for r in 0..m {
+                for c in r..m {
+                    if let Some(d) = depends(mech.mass.get(r, c), *q) {
+                        failure = Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d });
+                        break 'lag;
+                    }
+                }
+            }
+            if failure.is_none() {
+                let parts = (0..m).map(|k| (format!("N[{}]", k + 1), mech.n[k])).chain([("T0".to_string(), mech.t0), ("V".to_string(), mech.potential)]);
+                for (place, e) in parts {
+                    if let Some(d) = depends(e, *q) {
+                        failure = Some(Failure::InLagrangian { place, derivative: d });
+                        break;
+                    }
+                }
+            }
+            if failure.is_none() {
+                for i in 0..mech.r {
+                    let entry = mech.a.get(i, j);
+                    if !zero_test(entry, derivation_limits()).is_zero() {
+                        failure = Some(Failure::InConstraint { constraint: mech.constraint_names[i].clone(), entry });
+                        break;
+                    }
+                }
+            }
+            if failure.is_none() && !zero_test(mech.q_forces[j], derivation_limits()).is_zero() {
+                failure = Some(Failure::Forced { force: mech.q_forces[j] });
+            }
+            let mut appears_in = Vec::new();
+            for i in 0..mech.r {
+                for k in 0..m {
+                    if depends(mech.a.get(i, k), *q).is_some() {
+                        appears_in.push(format!("a[{}][{}]", i + 1, k + 1));
+                    }
+                }
+                if depends(mech.b[i], *q).is_some() {
+                    appears_in.push(format!("b[{}]", i + 1));
+                }
+            }
+            for k in 0..m {
+                if depends(mech.q_forces[k], *q).is_some() {
+                    appears_in.push(format!("Q[{}]", k + 1));
+                }
+            }
+            CoordinateReport { index: j, name: q.name(), failure, appears_in }
+        })
+        .collect()
+}
+
+/// The ignorable set the reduced method uses: the declared one (each verified), or all
+/// coordinates that qualify.
+pub fn choose(model: &Model, reports: &[CoordinateReport]) -> Result<Vec<usize>, ModelError> {
+    match &model.declared_ignorable {
+        None => Ok(reports.iter().filter(|r| r.is_ignorable()).map(|r| r.index).collect()),
+        Some(list) => {
+            for &j in list {
+                if let Some(f) = &reports[j].failure {
+                    return Err(model.error(
+                        ErrorKind::NotIgnorable,
+                        "ignorable",
+                        &format!("\"{}\"", reports[j].name),
+                        format!("`{}` is declared ignorable but is not (Definition 1): {f}", reports[j].name),
+                        "remove it from `ignorable`, or use `ignorable: Auto` to see which coordinates qualify".into(),
+                    ));
+                }
+            }
+            let mut l = list.clone();
+            l.sort();
+            Ok(l)
+        }
+    }
+}

@@ -1,0 +1,5 @@
+//! From mechanics to equations of motion: the shared derivation ([`mechanics`]), the
+//! ignorable-coordinate analysis ([`ignorable`]) and the formulations built on them.
+
+pub mod ignorable;
+pub mod mechanics;

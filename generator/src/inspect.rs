@@ -1,0 +1,127 @@
+//! The `inspect` report: what was derived from a model, as text or LaTeX.
+//!
+//! ```
+//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+//! let text = generator::inspect::inspect(&model, false).unwrap();
+//! assert!(text.contains("s = 1"));
+//! ```
+
+use crate::formulation::{ignorable, mechanics};
+use crate::model::{Model, ModelError};
+use crate::symbolic::Expr;
+use std::fmt::Write;
+
+/// Renders the derivation report for a model.
+pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
+    let mech = mechanics::derive(model);
+    let reports = ignorable::analyze(model, &mech);
+    let chosen = ignorable::choose(model, &reports)?;
+    let s = chosen.len();
+    let show = |e: Expr| if latex { e.to_latex() } else { e.to_string() };
+    let names: Vec<String> = model.coordinates.iter().map(|q| q.name()).collect();
+    let mut out = String::new();
+    let w = &mut out;
+    let _ = writeln!(w, "model: {} ({})", model.name, model.file);
+    let _ = writeln!(w, "m = {}, r = {}, p = {}, s = {}, p - s = {}", mech.m, mech.r, mech.p, s, mech.p.saturating_sub(s));
+    let _ = writeln!(w, "coordinates q = [{}]", names.join(", "));
+    let ign: Vec<&str> = chosen.iter().map(|&j| names[j].as_str()).collect();
+    let _ = writeln!(
+        w,
+        "ignorable coordinates used by the reduced method: [{}] ({})",
+        ign.join(", "),
+        if model.declared_ignorable.is_some() { "declared, verified" } else { "detected" }
+    );
+    let (open, close, eq) = if latex { ("\\begin{aligned}", "\\end{aligned}\n", " &= ") } else { ("", "", " = ") };
+    let line = |w: &mut String, lhs: &str, rhs: String| {
+        let _ = writeln!(w, "  {lhs}{eq}{rhs}{}", if latex { " \\\\" } else { "" });
+    };
+    let _ = writeln!(w, "\nenergies:");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    line(w, "T", show(mech.kinetic));
+    line(w, "V", show(mech.potential));
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "\nmass matrix M (nonzero entries, upper triangle):");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..mech.m {
+        for j in i..mech.m {
+            let e = mech.mass.get(i, j);
+            if !e.is_zero() {
+                line(w, &sub("M", &[i + 1, j + 1], latex), show(e));
+            }
+        }
+    }
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "\nN and T0 (nonzero entries):");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..mech.m {
+        if !mech.n[i].is_zero() {
+            line(w, &sub("N", &[i + 1], latex), show(mech.n[i]));
+        }
+    }
+    if !mech.t0.is_zero() {
+        line(w, if latex { "T_{0}" } else { "T0" }, show(mech.t0));
+    }
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "\ngeneralized forces Q (nonzero entries; potential forces are in V):");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..mech.m {
+        if !mech.q_forces[i].is_zero() {
+            line(w, &sub("Q", &[i + 1], latex), show(mech.q_forces[i]));
+        }
+    }
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "\nconstraints a q' + b = 0 (nonzero entries):");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..mech.r {
+        for j in 0..mech.m {
+            let e = mech.a.get(i, j);
+            if !e.is_zero() {
+                line(w, &sub("a", &[i + 1, j + 1], latex), show(e));
+            }
+        }
+        if !mech.b[i].is_zero() {
+            line(w, &sub("b", &[i + 1], latex), show(mech.b[i]));
+        }
+    }
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "\nDefinition 1, coordinate by coordinate:");
+    for r in &reports {
+        match &r.failure {
+            None => {
+                let drop = if r.appears_in.is_empty() {
+                    "a, b and Q are free of it too (it can leave the integrated state)".to_string()
+                } else {
+                    format!("but it appears in {} (it must stay in the integrated state)", r.appears_in.join(", "))
+                };
+                let _ = writeln!(w, "  {}: ignorable; {drop}", r.name);
+            }
+            Some(f) => {
+                let _ = writeln!(w, "  {}: not ignorable: {}", r.name, if latex { latex_failure(f) } else { f.to_string() });
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn latex_failure(f: &ignorable::Failure) -> String {
+    match f {
+        ignorable::Failure::InLagrangian { place, derivative } => format!("L depends on it through {place}, derivative ${}$", derivative.to_latex()),
+        ignorable::Failure::InConstraint { constraint, entry } => format!("column of a nonzero in `{constraint}`: ${}$", entry.to_latex()),
+        ignorable::Failure::Forced { force } => format!("generalized force ${}$", force.to_latex()),
+    }
+}
+
+fn sub(name: &str, idx: &[usize], latex: bool) -> String {
+    let i: Vec<String> = idx.iter().map(|x| x.to_string()).collect();
+    if latex { format!("{name}_{{{}}}", i.join("")) } else { format!("{name}[{}]", i.join("][")) }
+}

@@ -1,0 +1,132 @@
+//! Errors in model files: each names the file, the place (line and column where it can be
+//! found, and the path inside the model), what is wrong, and the fix.
+
+use std::fmt;
+
+/// The classes of bad input, so callers and tests can tell them apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The file could not be read.
+    Io,
+    /// Malformed RON, or a field of the wrong type, missing or unknown.
+    Syntax,
+    /// A syntax error inside an expression string.
+    ExpressionSyntax,
+    /// A name in an expression that is not a parameter, coordinate, function or `t`.
+    UnknownName,
+    /// A vector or matrix with the wrong number of entries.
+    Dimension,
+    /// A reference to a frame or body that does not exist.
+    UnknownFrame,
+    /// The frame tree has a cycle.
+    FrameCycle,
+    /// A name used twice.
+    Duplicate,
+    /// A mass that is not positive.
+    NonPositiveMass,
+    /// An inertia matrix that is not symmetric positive semi-definite.
+    InertiaNotPsd,
+    /// A velocity constraint that is not linear in the velocities, or a position constraint
+    /// that uses velocities.
+    NonlinearConstraint,
+    /// Too many or too few quasi-velocities.
+    QuasiVelocityCount,
+    /// A declared ignorable coordinate that fails Definition 1.
+    NotIgnorable,
+    /// A choice of quasi-velocities (with the constraints) that does not determine `q'`.
+    SingularQuasiVelocities,
+    /// Initial values missing, or initial velocities that violate the constraints.
+    InitialState,
+    /// A parameter value that is not a finite number, or another bad value.
+    BadValue,
+}
+
+/// A located error in a model file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelError {
+    pub kind: ErrorKind,
+    /// The file as given by the user.
+    pub file: String,
+    /// 1-based line and column, when the place could be found in the file.
+    pub location: Option<(usize, usize)>,
+    /// The path inside the model, e.g. `bodies[1] (bar1).com[0]`.
+    pub place: String,
+    /// What is wrong.
+    pub message: String,
+    /// How to fix it.
+    pub help: String,
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "error: {}", self.file)?;
+        if let Some((l, c)) = self.location {
+            write!(f, ":{l}:{c}")?;
+        }
+        if !self.place.is_empty() {
+            write!(f, ": in {}", self.place)?;
+        }
+        write!(f, ": {}", self.message)?;
+        if !self.help.is_empty() {
+            write!(f, "\n  help: {}", self.help)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// Finds the 1-based line and column of `needle` in `source`, searching after `after` first
+/// (so repeated strings resolve to the right place when a context string is known).
+pub fn locate(source: &str, needle: &str, after: Option<&str>) -> Option<(usize, usize)> {
+    if needle.is_empty() {
+        return None;
+    }
+    let start = after.and_then(|a| source.find(a)).unwrap_or(0);
+    let idx = source[start..].find(needle).map(|i| i + start).or_else(|| source.find(needle))?;
+    Some(line_col(source, idx))
+}
+
+/// 1-based line and column of a byte offset.
+pub fn line_col(source: &str, idx: usize) -> (usize, usize) {
+    let before = &source[..idx.min(source.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rfind('\n').map_or(before.len(), |p| before.len() - p - 1) + 1;
+    (line, col)
+}
+
+/// The candidate closest to `name` by edit distance, if any is close.
+pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|(d, c)| *d <= 2.max(c.len() / 3))
+        .min()
+        .map(|(_, c)| c)
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur.push((prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1));
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locates_and_suggests() {
+        let src = "a: \"x\",\nb: \"l/2\",\n";
+        assert_eq!(locate(src, "\"l/2\"", None), Some((2, 4)));
+        assert_eq!(closest("thta1", ["theta1", "theta2", "x"]), Some("theta1"));
+        assert_eq!(closest("zzz", ["theta1"]), None);
+    }
+}

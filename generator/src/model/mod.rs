@@ -1,0 +1,790 @@
+//! Loading and validating a model: from RON text to a [`Model`] whose every expression is
+//! resolved, every frame has its kinematics, and every check that can be made on the input
+//! alone has been made (names, sizes, frame tree, masses, inertias, quasi-velocity counts).
+//!
+//! ```
+//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+//! assert_eq!(model.coordinates.len(), 3);
+//! ```
+
+pub mod error;
+pub mod schema;
+
+pub use error::{ErrorKind, ModelError};
+pub use schema::*;
+
+use crate::kinematics::{Axis, FrameKinematics, TimeChain};
+use crate::symbolic::eval::Env;
+use crate::symbolic::number::rat_from_f64;
+use crate::symbolic::parse::{self, Ast, AstKind, LowerError, Resolver};
+use crate::symbolic::{Expr, Matrix, Symbol};
+use std::collections::{HashMap, HashSet};
+
+/// A resolved body.
+#[derive(Clone, Debug)]
+pub struct Body {
+    pub name: String,
+    /// Index into [`Model::frames`].
+    pub frame: usize,
+    pub mass: Expr,
+    /// Centre of mass in the frame.
+    pub com: [Expr; 3],
+    /// Inertia about the centre of mass, frame components (`None` for a point mass).
+    pub inertia: Option<Matrix>,
+}
+
+/// A resolved constraint.
+#[derive(Clone, Debug)]
+pub enum Constraint {
+    /// `expr(q, q', t) = 0`, linear in `q'`.
+    Velocity { name: String, expr: Expr },
+    /// `expr(q, t) = 0`.
+    Position { name: String, expr: Expr },
+}
+
+/// A resolved force.
+#[derive(Clone, Debug)]
+pub enum Force {
+    Gravity { vector: [Expr; 3] },
+    PointForce { name: String, frame: usize, point: [Expr; 3], force_world: [Expr; 3] },
+    Torque { name: String, body: usize, torque: [Expr; 3] },
+    Spring { name: String, a: (usize, [Expr; 3]), b: (usize, [Expr; 3]), stiffness: Expr, rest_length: Expr },
+    Damper { name: String, a: (usize, [Expr; 3]), b: (usize, [Expr; 3]), damping: Expr },
+    Generalized { name: String, components: Vec<Expr> },
+    Potential { name: String, expr: Expr },
+}
+
+/// A validated model.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// The file it came from (as given).
+    pub file: String,
+    /// The file's text (for locating later errors).
+    pub source: String,
+    pub name: String,
+    pub description: String,
+    /// Parameters and their values, in file order.
+    pub parameters: Vec<(Symbol, f64)>,
+    /// `q`.
+    pub coordinates: Vec<Symbol>,
+    /// `q'`, one per coordinate.
+    pub velocities: Vec<Symbol>,
+    /// `q''`, one per coordinate.
+    pub accelerations: Vec<Symbol>,
+    /// Time.
+    pub t: Symbol,
+    /// Named time functions with their definitions in `t`.
+    pub time_functions: Vec<(Symbol, Expr)>,
+    /// Frames with kinematics; index 0 is the world.
+    pub frames: Vec<FrameKinematics>,
+    pub bodies: Vec<Body>,
+    pub constraints: Vec<Constraint>,
+    pub forces: Vec<Force>,
+    /// The p quasi-velocities for Maggi and Kane.
+    pub quasi_full: Vec<Expr>,
+    /// The p - s quasi-velocities of the reduced Volterra method.
+    pub quasi_reduced: Vec<Expr>,
+    /// Declared ignorable coordinates (indices), or `None` for automatic detection.
+    pub declared_ignorable: Option<Vec<usize>>,
+    /// Initial coordinates and velocities (values), when the model gives them.
+    pub initial: Option<(Vec<f64>, Vec<f64>)>,
+    pub simulation: Option<SimulationDef>,
+    /// The raw definition.
+    pub def: ModelFile,
+}
+
+impl Model {
+    /// The time chain `q -> q'` for total time derivatives of position-level expressions.
+    pub fn position_chain(&self) -> TimeChain {
+        TimeChain { t: self.t, pairs: self.coordinates.iter().zip(&self.velocities).map(|(q, v)| (*q, v.expr())).collect() }
+    }
+
+    /// The time chain `q -> q'`, `q' -> q''` for velocity-level expressions.
+    pub fn velocity_chain(&self) -> TimeChain {
+        let mut c = self.position_chain();
+        c.pairs.extend(self.velocities.iter().zip(&self.accelerations).map(|(v, a)| (*v, a.expr())));
+        c
+    }
+
+    /// An evaluation environment with the parameters, `pi` and the time functions bound.
+    pub fn parameter_env(&self) -> Env {
+        let mut env = Env::default();
+        for (s, v) in &self.parameters {
+            env.set(*s, *v);
+        }
+        env.set(Symbol::new("pi"), std::f64::consts::PI);
+        for (f, body) in &self.time_functions {
+            env.define(*f, self.t, *body);
+        }
+        env
+    }
+
+    /// The parameter symbols (and `pi`): constants for the solver.
+    pub fn constant_symbols(&self) -> HashSet<Symbol> {
+        let mut s: HashSet<Symbol> = self.parameters.iter().map(|(p, _)| *p).collect();
+        s.insert(Symbol::new("pi"));
+        s
+    }
+
+    /// Number of coordinates, m.
+    pub fn m(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// An error located at `needle` in the file.
+    pub fn error(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: String) -> ModelError {
+        ModelError {
+            kind,
+            file: self.file.clone(),
+            location: error::locate(&self.source, needle, None),
+            place: place.to_string(),
+            message,
+            help,
+        }
+    }
+}
+
+/// Reads and validates a model file.
+pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let source = std::fs::read_to_string(path).map_err(|e| ModelError {
+        kind: ErrorKind::Io,
+        file: file.clone(),
+        location: None,
+        place: String::new(),
+        message: format!("cannot read the file: {e}"),
+        help: "check the path; models live in `models/`".into(),
+    })?;
+    from_source(&file, &source)
+}
+
+/// Parses and validates model text; `file` names it in errors.
+pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
+    let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let def: ModelFile = options.from_str(source).map_err(|e| {
+        let (line, col) = (e.span.start.line, e.span.start.col);
+        let code = e.code.to_string();
+        let help = if code.contains("Unexpected field") || code.contains("unknown field") {
+            "remove the field or fix its spelling; the fields each item takes are documented in README.md".to_string()
+        } else if code.contains("missing field") || code.contains("Missing") {
+            "add the missing field (see the model format in README.md)".to_string()
+        } else {
+            "fix the RON syntax at this place (strings in double quotes, items separated by commas, balanced brackets)".to_string()
+        };
+        ModelError {
+            kind: ErrorKind::Syntax,
+            file: file.to_string(),
+            location: Some((line, col)),
+            place: String::new(),
+            message: format!("malformed model: {code}"),
+            help,
+        }
+    })?;
+    Builder::new(file, source, def).build()
+}
+
+/// What an expression may refer to.
+#[derive(Clone, Copy, PartialEq)]
+enum Scope {
+    /// Parameters only.
+    Parameters,
+    /// Parameters, coordinates, time, time functions.
+    Position,
+    /// Also velocities `q'`.
+    Velocity,
+    /// Also `omega_x(body)` etc.
+    Quasi,
+}
+
+struct Builder<'a> {
+    file: &'a str,
+    source: &'a str,
+    def: ModelFile,
+    names: HashMap<String, Expr>,
+    params: HashSet<String>,
+    coords: Vec<String>,
+    time_fns: HashMap<String, Symbol>,
+    body_omega: HashMap<String, [Expr; 3]>,
+    t: Symbol,
+}
+
+struct ScopedResolver<'b, 'a> {
+    b: &'b Builder<'a>,
+    scope: Scope,
+}
+
+impl Resolver for ScopedResolver<'_, '_> {
+    fn name(&self, name: &str, primes: usize) -> Result<Expr, String> {
+        let b = self.b;
+        let is_coord = b.coords.iter().any(|c| c == name);
+        if primes > 0 {
+            if !is_coord {
+                return Err(format!("`{name}{}`: only coordinates have time derivatives", "'".repeat(primes)));
+            }
+            if primes > 1 || matches!(self.scope, Scope::Parameters | Scope::Position) {
+                return Err(format!(
+                    "`{name}{}` is not allowed here: {}",
+                    "'".repeat(primes),
+                    if primes > 1 { "accelerations never appear in a model" } else { "this expression is position-level" }
+                ));
+            }
+            return Ok(Symbol::new(&format!("{name}'")).expr());
+        }
+        if self.scope == Scope::Parameters && (is_coord || name == "t") {
+            return Err(format!("`{name}` is not allowed here: only parameters may appear"));
+        }
+        if let Some(e) = b.names.get(name) {
+            return Ok(*e);
+        }
+        let mut known: Vec<&str> = b.names.keys().map(String::as_str).collect();
+        known.sort();
+        let hint = match error::closest(name, known.iter().copied()) {
+            Some(c) => format!("; did you mean `{c}`?"),
+            None => String::new(),
+        };
+        Err(format!("unknown name `{name}`{hint} (known: {})", known.join(", ")))
+    }
+
+    fn call(&self, name: &str, args: &[Ast], lower: &dyn Fn(&Ast) -> Result<Expr, LowerError>) -> Result<Expr, String> {
+        let b = self.b;
+        if let Some(f) = b.time_fns.get(name) {
+            if self.scope == Scope::Parameters {
+                return Err(format!("time function `{name}` is not allowed here"));
+            }
+            if args.len() != 1 {
+                return Err(format!("`{name}` takes 1 argument (time), found {}", args.len()));
+            }
+            let a = lower(&args[0]).map_err(|e| e.message)?;
+            return Ok(Expr::apply_named(*f, a));
+        }
+        if let Some(axis) = name.strip_prefix("omega_") {
+            if self.scope != Scope::Quasi {
+                return Err(format!("`{name}(..)` may only appear in quasi-velocities"));
+            }
+            let k = match axis {
+                "x" => 0,
+                "y" => 1,
+                "z" => 2,
+                _ => return Err(format!("unknown function `{name}`: use omega_x, omega_y or omega_z")),
+            };
+            let body = match args {
+                [Ast { kind: AstKind::Name(n, 0), .. }] => n,
+                _ => return Err(format!("`{name}` takes one body name, as in `{name}(satellite)`")),
+            };
+            return b.body_omega.get(body).map(|w| w[k]).ok_or_else(|| {
+                let known: Vec<&str> = b.body_omega.keys().map(String::as_str).collect();
+                format!("`{body}` is not a body (bodies: {})", known.join(", "))
+            });
+        }
+        Err(format!(
+            "unknown function `{name}` (functions: sin, cos, tan, exp, ln, sqrt, abs, omega_x/y/z(body), and the model's time functions)"
+        ))
+    }
+}
+
+impl<'a> Builder<'a> {
+    fn new(file: &'a str, source: &'a str, def: ModelFile) -> Builder<'a> {
+        Builder {
+            file,
+            source,
+            def,
+            names: HashMap::new(),
+            params: HashSet::new(),
+            coords: Vec::new(),
+            time_fns: HashMap::new(),
+            body_omega: HashMap::new(),
+            t: Symbol::new("t"),
+        }
+    }
+
+    fn err(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: &str) -> ModelError {
+        ModelError {
+            kind,
+            file: self.file.to_string(),
+            location: error::locate(self.source, needle, None),
+            place: place.to_string(),
+            message,
+            help: help.to_string(),
+        }
+    }
+
+    /// Parses and resolves one expression string found at `place`.
+    fn expr(&self, src: &str, place: &str, scope: Scope) -> Result<Expr, ModelError> {
+        let quoted = format!("\"{src}\"");
+        let base = error::locate(self.source, &quoted, None);
+        let at = |col: usize| base.map(|(l, c)| (l, c + col));
+        let ast = parse::parse(src).map_err(|e| ModelError {
+            kind: ErrorKind::ExpressionSyntax,
+            file: self.file.to_string(),
+            location: at(e.column),
+            place: place.to_string(),
+            message: format!("in expression `{src}`, column {}: {}", e.column, e.message),
+            help: "expressions use + - * / ^, parentheses, numbers, names, calls like sin(x), and q' for a rate".into(),
+        })?;
+        parse::lower(&ast, &ScopedResolver { b: self, scope }).map_err(|e| {
+            let kind = if e.message.starts_with("unknown") || e.message.contains("is not a body") {
+                ErrorKind::UnknownName
+            } else {
+                ErrorKind::ExpressionSyntax
+            };
+            ModelError {
+                kind,
+                file: self.file.to_string(),
+                location: at(e.column),
+                place: place.to_string(),
+                message: format!("in expression `{src}`, column {}: {}", e.column, e.message),
+                help: match kind {
+                    ErrorKind::UnknownName => "declare it under `parameters` (with a value), `coordinates` or `time_functions`, or fix the spelling".into(),
+                    _ => "rewrite the expression as the message says".into(),
+                },
+            }
+        })
+    }
+
+    fn vec3(&self, v: &[String], place: &str, scope: Scope) -> Result<[Expr; 3], ModelError> {
+        if v.len() != 3 {
+            let needle = v.first().map(|s| format!("\"{s}\"")).unwrap_or_default();
+            return Err(self.err(
+                ErrorKind::Dimension,
+                place,
+                &needle,
+                format!("expected a 3-vector, found {} entries", v.len()),
+                "give exactly three components, as in [\"0\", \"-l/2\", \"0\"]",
+            ));
+        }
+        Ok([
+            self.expr(&v[0], &format!("{place}[0]"), scope)?,
+            self.expr(&v[1], &format!("{place}[1]"), scope)?,
+            self.expr(&v[2], &format!("{place}[2]"), scope)?,
+        ])
+    }
+
+    fn check_name(&self, seen: &mut HashSet<String>, name: &str, place: &str, what: &str) -> Result<(), ModelError> {
+        let valid = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid {
+            return Err(self.err(
+                ErrorKind::BadValue,
+                place,
+                &format!("\"{name}\""),
+                format!("`{name}` is not a valid {what} name"),
+                "names start with a letter and use letters, digits and `_`",
+            ));
+        }
+        if ["t", "pi", "world"].contains(&name) || !seen.insert(name.to_string()) {
+            return Err(self.err(
+                ErrorKind::Duplicate,
+                place,
+                &format!("\"{name}\""),
+                format!("the name `{name}` is already taken (`t`, `pi` and `world` are reserved)"),
+                "give every parameter, coordinate, function, frame and body its own name",
+            ));
+        }
+        Ok(())
+    }
+
+    fn build(mut self) -> Result<Model, ModelError> {
+        let def = self.def.clone();
+        // Names.
+        let mut seen = HashSet::new();
+        let mut parameters = Vec::new();
+        for (name, value) in &def.parameters {
+            self.check_name(&mut seen, name, &format!("parameters.{name}"), "parameter")?;
+            if !value.is_finite() || rat_from_f64(*value).is_none() {
+                return Err(self.err(
+                    ErrorKind::BadValue,
+                    &format!("parameters.{name}"),
+                    &format!("\"{name}\""),
+                    format!("parameter `{name}` has no finite value"),
+                    "give every parameter a finite number",
+                ));
+            }
+            let s = Symbol::new(name);
+            self.names.insert(name.clone(), s.expr());
+            self.params.insert(name.clone());
+            parameters.push((s, *value));
+        }
+        if def.coordinates.is_empty() {
+            return Err(self.err(ErrorKind::Dimension, "coordinates", "coordinates", "the model has no coordinates".into(), "list the generalized coordinates, as in coordinates: [\"theta1\", \"x\"]"));
+        }
+        let mut coordinates = Vec::new();
+        for (i, name) in def.coordinates.iter().enumerate() {
+            self.check_name(&mut seen, name, &format!("coordinates[{i}]"), "coordinate")?;
+            let s = Symbol::new(name);
+            self.names.insert(name.clone(), s.expr());
+            self.coords.push(name.clone());
+            coordinates.push(s);
+        }
+        self.names.insert("t".into(), self.t.expr());
+        self.names.insert("pi".into(), Symbol::new("pi").expr());
+        for name in def.time_functions.keys() {
+            self.check_name(&mut seen, name, &format!("time_functions.{name}"), "function")?;
+            self.time_fns.insert(name.clone(), Symbol::new(name));
+        }
+        let mut time_functions = Vec::new();
+        for (name, src) in &def.time_functions {
+            let e = self.expr(src, &format!("time_functions.{name}"), Scope::Position)?;
+            if e.free_symbols().iter().any(|s| coordinates.contains(s)) {
+                return Err(self.err(ErrorKind::BadValue, &format!("time_functions.{name}"), &format!("\"{src}\""), format!("time function `{name}` depends on a coordinate"), "a time function may use only `t` and parameters; put state-dependent forces under `forces`"));
+            }
+            time_functions.push((self.time_fns[name], e));
+        }
+        let velocities: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}'"))).collect();
+        let accelerations: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}''"))).collect();
+        let chain = TimeChain { t: self.t, pairs: coordinates.iter().zip(&velocities).map(|(q, v)| (*q, v.expr())).collect() };
+
+        // Frames, in dependency order, with cycle and unknown-parent detection.
+        let frames = self.frames(&def, &chain, &mut seen)?;
+        let frame_index = |name: &str| frames.iter().position(|f| f.name == name);
+
+        // Bodies.
+        let mut bodies = Vec::new();
+        // Bodies have their own namespace: a body may share its frame's name.
+        let mut body_names = HashSet::new();
+        for (i, b) in def.bodies.iter().enumerate() {
+            let place = format!("bodies[{i}] ({})", b.name);
+            self.check_name(&mut body_names, &b.name, &place, "body")?;
+            let frame = frame_index(&b.frame).ok_or_else(|| {
+                self.err(ErrorKind::UnknownFrame, &format!("{place}.frame"), &format!("\"{}\"", b.frame), format!("body `{}` is on frame `{}`, which is not defined", b.name, b.frame), "define the frame under `frames` or use `world`")
+            })?;
+            let mass = self.expr(&b.mass, &format!("{place}.mass"), Scope::Parameters)?;
+            let env = self.param_env(&parameters);
+            let mv = mass.eval(&env).unwrap_or(f64::NAN);
+            if mv.is_nan() || mv <= 0.0 {
+                return Err(self.err(ErrorKind::NonPositiveMass, &format!("{place}.mass"), &format!("\"{}\"", b.mass), format!("body `{}` has mass {} = {mv}, which is not positive", b.name, b.mass), "give every body a positive mass; model a massless point as a frame, not a body"));
+            }
+            let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
+            let com = self.vec3(b.com.as_ref().unwrap_or(&zero()), &format!("{place}.com"), Scope::Position)?;
+            let inertia = self.inertia(&b.inertia, &place, &env)?;
+            self.body_omega.insert(b.name.clone(), frames[frame].omega.clone());
+            bodies.push(Body { name: b.name.clone(), frame, mass, com, inertia });
+        }
+        if bodies.is_empty() {
+            return Err(self.err(ErrorKind::Dimension, "bodies", "bodies", "the model has no bodies".into(), "add at least one body"));
+        }
+
+        // Constraints.
+        let mut constraints = Vec::new();
+        for (i, c) in def.constraints.iter().enumerate() {
+            constraints.push(match c {
+                ConstraintDef::Velocity { name, expr } => {
+                    let place = format!("constraints[{i}] ({name})");
+                    let e = self.expr(expr, &place, Scope::Velocity)?;
+                    // Linear in the velocities: every second derivative vanishes.
+                    for v in &velocities {
+                        let d1 = e.diff(*v);
+                        for w in &velocities {
+                            let d2 = d1.diff(*w);
+                            if !crate::symbolic::trig::zero_test(d2, Default::default()).is_zero() {
+                                return Err(self.err(ErrorKind::NonlinearConstraint, &place, &format!("\"{expr}\""), format!("constraint `{name}` is not linear in the velocities: d²/d{}d{} = {d2}", v.name(), w.name()), "write velocity constraints as a(q,t)*q' + b(q,t) = 0"));
+                            }
+                        }
+                    }
+                    Constraint::Velocity { name: name.clone(), expr: e }
+                }
+                ConstraintDef::Position { name, expr } => {
+                    let place = format!("constraints[{i}] ({name})");
+                    let e = self.expr(expr, &place, Scope::Position).map_err(|mut err| {
+                        if err.message.contains("position-level") {
+                            err.kind = ErrorKind::NonlinearConstraint;
+                            err.help = "a position constraint uses coordinates only; write rate constraints as `Velocity`".into();
+                        }
+                        err
+                    })?;
+                    Constraint::Position { name: name.clone(), expr: e }
+                }
+            });
+        }
+        if constraints.len() >= coordinates.len() {
+            return Err(self.err(ErrorKind::Dimension, "constraints", "constraints", format!("{} constraints on {} coordinates leave no freedom", constraints.len(), coordinates.len()), "remove constraints or add coordinates"));
+        }
+
+        // Forces.
+        let mut forces = Vec::new();
+        for (i, f) in def.forces.iter().enumerate() {
+            forces.push(self.force(f, i, &frames, &bodies, &coordinates)?);
+        }
+
+        // Quasi-velocities.
+        let p = coordinates.len() - constraints.len();
+        let quasi_full = self.quasi(&def.quasi_velocities.full, "quasi_velocities.full", p, "p = m - r", coordinates.len(), constraints.len())?;
+        let declared_ignorable = match &def.ignorable {
+            IgnorableDef::Auto => None,
+            IgnorableDef::Declared(list) => {
+                let mut idx = Vec::new();
+                for (k, n) in list.iter().enumerate() {
+                    let i = def.coordinates.iter().position(|c| c == n).ok_or_else(|| {
+                        self.err(ErrorKind::UnknownName, &format!("ignorable[{k}]"), &format!("\"{n}\""), format!("`{n}` is declared ignorable but is not a coordinate"), "declare only coordinates as ignorable")
+                    })?;
+                    idx.push(i);
+                }
+                Some(idx)
+            }
+        };
+        let quasi_reduced: Vec<Expr> = def
+            .quasi_velocities
+            .reduced
+            .iter()
+            .enumerate()
+            .map(|(k, s)| self.expr(s, &format!("quasi_velocities.reduced[{k}]"), Scope::Quasi))
+            .collect::<Result<_, _>>()?;
+        for (k, u) in quasi_full.iter().chain(&quasi_reduced).enumerate() {
+            for v in &velocities {
+                if u.diff(*v).free_symbols().iter().any(|s| velocities.contains(s)) {
+                    return Err(self.err(ErrorKind::NonlinearConstraint, "quasi_velocities", "quasi_velocities", format!("quasi-velocity {k} is not linear in the velocities"), "quasi-velocities are u = Y(q,t) q' + Z(q,t)"));
+                }
+            }
+        }
+
+        let initial = match &def.initial {
+            None => None,
+            Some(init) => Some(self.initial(init, &def.coordinates, &parameters)?),
+        };
+        if let Some(sim) = &def.simulation
+            && !(sim.t_end > sim.t_start && sim.dt_out > 0.0 && sim.dt_out.is_finite())
+        {
+            return Err(self.err(ErrorKind::BadValue, "simulation", "simulation", format!("simulation from {} to {} every {} is not a run", sim.t_start, sim.t_end, sim.dt_out), "use t_end > t_start and dt_out > 0"));
+        }
+        Ok(Model {
+            file: self.file.to_string(),
+            source: self.source.to_string(),
+            name: def.name.clone(),
+            description: def.description.clone(),
+            parameters,
+            coordinates,
+            velocities,
+            accelerations,
+            t: self.t,
+            time_functions,
+            frames,
+            bodies,
+            constraints,
+            forces,
+            quasi_full,
+            quasi_reduced,
+            declared_ignorable,
+            initial,
+            simulation: def.simulation.clone(),
+            def,
+        })
+    }
+
+    fn param_env(&self, parameters: &[(Symbol, f64)]) -> Env {
+        let mut env = Env::default();
+        for (s, v) in parameters {
+            env.set(*s, *v);
+        }
+        env.set(Symbol::new("pi"), std::f64::consts::PI);
+        env
+    }
+
+    fn frames(&self, def: &ModelFile, chain: &TimeChain, seen: &mut HashSet<String>) -> Result<Vec<FrameKinematics>, ModelError> {
+        for (i, f) in def.frames.iter().enumerate() {
+            self.check_name(seen, &f.name, &format!("frames[{i}]"), "frame")?;
+        }
+        let mut done: Vec<FrameKinematics> = vec![FrameKinematics::world()];
+        let mut pending: Vec<usize> = (0..def.frames.len()).collect();
+        while !pending.is_empty() {
+            let before = pending.len();
+            let mut still = Vec::new();
+            for i in pending {
+                let f = &def.frames[i];
+                let Some(parent) = done.iter().find(|d| d.name == f.parent).cloned() else {
+                    if !def.frames.iter().any(|g| g.name == f.parent) {
+                        return Err(self.err(ErrorKind::UnknownFrame, &format!("frames[{i}] ({}).parent", f.name), &format!("\"{}\"", f.parent), format!("frame `{}` has parent `{}`, which is not defined", f.name, f.parent), "use `world` or the name of another frame"));
+                    }
+                    still.push(i);
+                    continue;
+                };
+                let place = format!("frames[{i}] ({})", f.name);
+                let zero = vec!["0".to_string(), "0".to_string(), "0".to_string()];
+                let translation = self.vec3(f.translation.as_ref().unwrap_or(&zero), &format!("{place}.translation"), Scope::Position)?;
+                let mut turns = Vec::new();
+                for (k, r) in f.rotation.iter().enumerate() {
+                    let rp = format!("{place}.rotation[{k}]");
+                    match r {
+                        RotationDef::X(a) => turns.push((Axis::X, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::Y(a) => turns.push((Axis::Y, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::Z(a) => turns.push((Axis::Z, self.expr(a, &rp, Scope::Position)?)),
+                        RotationDef::EulerZYX(psi, theta, phi) => {
+                            turns.push((Axis::Z, self.expr(psi, &rp, Scope::Position)?));
+                            turns.push((Axis::Y, self.expr(theta, &rp, Scope::Position)?));
+                            turns.push((Axis::X, self.expr(phi, &rp, Scope::Position)?));
+                        }
+                    }
+                }
+                done.push(parent.child(&f.name, &translation, &turns, chain));
+            }
+            if still.len() == before {
+                let names: Vec<&str> = still.iter().map(|i| def.frames[*i].name.as_str()).collect();
+                return Err(self.err(ErrorKind::FrameCycle, "frames", &format!("\"{}\"", names[0]), format!("the frames {} form a cycle (each is an ancestor of itself)", names.join(", ")), "every chain of parents must end at `world`"));
+            }
+            pending = still;
+        }
+        Ok(done)
+    }
+
+    fn inertia(&self, def: &InertiaDef, place: &str, env: &Env) -> Result<Option<Matrix>, ModelError> {
+        let p = format!("{place}.inertia");
+        let m = match def {
+            InertiaDef::PointMass => return Ok(None),
+            InertiaDef::Diagonal(d) => {
+                let v = self.vec3(d, &p, Scope::Parameters)?;
+                let z = Expr::zero();
+                Matrix::from_rows(vec![vec![v[0], z, z], vec![z, v[1], z], vec![z, z, v[2]]])
+            }
+            InertiaDef::Products { ixx, iyy, izz, ixy, ixz, iyz } => {
+                let e = |s: &String, n: &str| self.expr(s, &format!("{p}.{n}"), Scope::Parameters);
+                let (xx, yy, zz) = (e(ixx, "ixx")?, e(iyy, "iyy")?, e(izz, "izz")?);
+                let (xy, xz, yz) = (e(ixy, "ixy")?, e(ixz, "ixz")?, e(iyz, "iyz")?);
+                Matrix::from_rows(vec![vec![xx, -xy, -xz], vec![-xy, yy, -yz], vec![-xz, -yz, zz]])
+            }
+            InertiaDef::Matrix(rows) => {
+                if rows.len() != 3 || rows.iter().any(|r| r.len() != 3) {
+                    return Err(self.err(ErrorKind::Dimension, &p, "Matrix", format!("an inertia matrix is 3x3, found {} rows of lengths {:?}", rows.len(), rows.iter().map(Vec::len).collect::<Vec<_>>()), "give three rows of three entries"));
+                }
+                let mut out = Vec::new();
+                for (i, r) in rows.iter().enumerate() {
+                    out.push(self.vec3(r, &format!("{p}[{i}]"), Scope::Parameters)?.to_vec());
+                }
+                Matrix::from_rows(out)
+            }
+        };
+        let vals: Vec<f64> = m.data.iter().map(|e| e.eval(env).unwrap_or(f64::NAN)).collect();
+        let sym = (0..3).all(|i| (0..3).all(|j| (vals[i * 3 + j] - vals[j * 3 + i]).abs() <= 1e-12 * (1.0 + vals[i * 3 + j].abs())));
+        let min_eig = min_eigenvalue_sym3(&vals);
+        let scale = vals.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        if !sym || vals.iter().any(|v| !v.is_finite()) || min_eig < -1e-12 * scale.max(1e-300) {
+            return Err(self.err(ErrorKind::InertiaNotPsd, &p, "inertia", format!("the inertia of {place} is not symmetric positive semi-definite (smallest eigenvalue {min_eig:.3e}, symmetric: {sym})"), "check the values and the sign convention: Products(...) takes the paper's Eq. (75) form, [[Ixx, -Ixy, -Ixz], ...]"));
+        }
+        Ok(Some(m))
+    }
+
+    fn force(&self, f: &ForceDef, i: usize, frames: &[FrameKinematics], bodies: &[Body], coords: &[Symbol]) -> Result<Force, ModelError> {
+        let frame = |name: &str, place: &str| {
+            frames.iter().position(|f| f.name == name).ok_or_else(|| {
+                self.err(ErrorKind::UnknownFrame, place, &format!("\"{name}\""), format!("frame `{name}` is not defined"), "use `world` or a frame defined under `frames`")
+            })
+        };
+        Ok(match f {
+            ForceDef::Gravity { vector } => Force::Gravity { vector: self.vec3(vector, &format!("forces[{i}] (gravity).vector"), Scope::Parameters)? },
+            ForceDef::PointForce { name, frame: fr, point, force, expressed_in } => {
+                let place = format!("forces[{i}] ({name})");
+                let fi = frame(fr, &format!("{place}.frame"))?;
+                let pt = self.vec3(point, &format!("{place}.point"), Scope::Position)?;
+                let fv = self.vec3(force, &format!("{place}.force"), Scope::Velocity)?;
+                let ei = frame(expressed_in.as_deref().unwrap_or("world"), &format!("{place}.expressed_in"))?;
+                Force::PointForce { name: name.clone(), frame: fi, point: pt, force_world: frames[ei].to_world(&fv) }
+            }
+            ForceDef::Torque { name, body, torque } => {
+                let place = format!("forces[{i}] ({name})");
+                let bi = bodies.iter().position(|b| &b.name == body).ok_or_else(|| {
+                    self.err(ErrorKind::UnknownFrame, &format!("{place}.body"), &format!("\"{body}\""), format!("body `{body}` is not defined"), "name a body defined under `bodies`")
+                })?;
+                Force::Torque { name: name.clone(), body: bi, torque: self.vec3(torque, &format!("{place}.torque"), Scope::Velocity)? }
+            }
+            ForceDef::Spring { name, frame_a, point_a, frame_b, point_b, stiffness, rest_length } => {
+                let place = format!("forces[{i}] ({name})");
+                Force::Spring {
+                    name: name.clone(),
+                    a: (frame(frame_a, &format!("{place}.frame_a"))?, self.vec3(point_a, &format!("{place}.point_a"), Scope::Position)?),
+                    b: (frame(frame_b, &format!("{place}.frame_b"))?, self.vec3(point_b, &format!("{place}.point_b"), Scope::Position)?),
+                    stiffness: self.expr(stiffness, &format!("{place}.stiffness"), Scope::Parameters)?,
+                    rest_length: self.expr(rest_length, &format!("{place}.rest_length"), Scope::Parameters)?,
+                }
+            }
+            ForceDef::Damper { name, frame_a, point_a, frame_b, point_b, damping } => {
+                let place = format!("forces[{i}] ({name})");
+                Force::Damper {
+                    name: name.clone(),
+                    a: (frame(frame_a, &format!("{place}.frame_a"))?, self.vec3(point_a, &format!("{place}.point_a"), Scope::Position)?),
+                    b: (frame(frame_b, &format!("{place}.frame_b"))?, self.vec3(point_b, &format!("{place}.point_b"), Scope::Position)?),
+                    damping: self.expr(damping, &format!("{place}.damping"), Scope::Parameters)?,
+                }
+            }
+            ForceDef::Generalized { name, components } => {
+                let place = format!("forces[{i}] ({name})");
+                let mut v = vec![Expr::zero(); coords.len()];
+                for (c, src) in components {
+                    let k = self.coords.iter().position(|x| x == c).ok_or_else(|| {
+                        self.err(ErrorKind::UnknownName, &format!("{place}.components"), &format!("\"{c}\""), format!("`{c}` is not a coordinate"), "key generalized forces by coordinate name")
+                    })?;
+                    v[k] = v[k] + self.expr(src, &format!("{place}.components.{c}"), Scope::Velocity)?;
+                }
+                Force::Generalized { name: name.clone(), components: v }
+            }
+            ForceDef::Potential { name, expr } => Force::Potential { name: name.clone(), expr: self.expr(expr, &format!("forces[{i}] ({name})"), Scope::Position)? },
+        })
+    }
+
+    fn quasi(&self, list: &[String], place: &str, want: usize, rule: &str, m: usize, r: usize) -> Result<Vec<Expr>, ModelError> {
+        if list.len() != want {
+            return Err(self.err(
+                ErrorKind::QuasiVelocityCount,
+                place,
+                "full",
+                format!("{} quasi-velocities given, but {rule} = {m} - {r} = {want} are needed", list.len()),
+                &format!("list exactly {want} independent combinations of the velocities"),
+            ));
+        }
+        list.iter().enumerate().map(|(k, s)| self.expr(s, &format!("{place}[{k}]"), Scope::Quasi)).collect()
+    }
+
+    fn initial(&self, init: &InitialDef, coords: &[String], parameters: &[(Symbol, f64)]) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+        let mut env = self.param_env(parameters);
+        let mut q = Vec::new();
+        for c in coords {
+            let src = init.q.get(c).ok_or_else(|| {
+                self.err(ErrorKind::InitialState, "initial.q", "initial", format!("no initial value for coordinate `{c}`"), "give every coordinate an initial value under initial.q")
+            })?;
+            let v = self.expr(src, &format!("initial.q.{c}"), Scope::Parameters)?.eval(&env).unwrap_or(f64::NAN);
+            env.set(Symbol::new(c), v);
+            q.push(v);
+        }
+        for k in init.q.keys().chain(init.qdot.keys()) {
+            if !coords.contains(k) {
+                return Err(self.err(ErrorKind::UnknownName, "initial", &format!("\"{k}\""), format!("`{k}` is not a coordinate"), "key initial values by coordinate name"));
+            }
+        }
+        // Velocities may refer to one another (theta2' = -cos(..)*theta1'): evaluate in order.
+        let mut qd = vec![f64::NAN; coords.len()];
+        for _ in 0..coords.len() {
+            for (i, c) in coords.iter().enumerate() {
+                if !qd[i].is_nan() {
+                    continue;
+                }
+                let src = init.qdot.get(c).ok_or_else(|| {
+                    self.err(ErrorKind::InitialState, "initial.qdot", "qdot", format!("no initial velocity for coordinate `{c}`"), "give every coordinate an initial rate under initial.qdot")
+                })?;
+                let e = self.expr(src, &format!("initial.qdot.{c}"), Scope::Velocity)?;
+                if let Ok(v) = e.eval(&env) {
+                    qd[i] = v;
+                    env.set(Symbol::new(&format!("{c}'")), v);
+                }
+            }
+        }
+        if let Some(i) = qd.iter().position(|v| v.is_nan()) {
+            return Err(self.err(ErrorKind::InitialState, &format!("initial.qdot.{}", coords[i]), "qdot", format!("the initial velocity of `{}` cannot be evaluated (circular or undefined)", coords[i]), "write each initial rate in terms of parameters, coordinates and rates given before it"));
+        }
+        Ok((q, qd))
+    }
+}
+
+/// Smallest eigenvalue of a symmetric 3x3 matrix (row-major), by the trigonometric method.
+fn min_eigenvalue_sym3(a: &[f64]) -> f64 {
+    let (a11, a12, a13, a22, a23, a33) = (a[0], a[1], a[2], a[4], a[5], a[8]);
+    let p1 = a12 * a12 + a13 * a13 + a23 * a23;
+    if p1 == 0.0 {
+        return a11.min(a22).min(a33);
+    }
+    let q = (a11 + a22 + a33) / 3.0;
+    let p2 = (a11 - q).powi(2) + (a22 - q).powi(2) + (a33 - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    let b = |x: f64| x / p;
+    let (b11, b22, b33, b12, b13, b23) = (b(a11 - q), b(a22 - q), b(a33 - q), b(a12), b(a13), b(a23));
+    let det = b11 * (b22 * b33 - b23 * b23) - b12 * (b12 * b33 - b23 * b13) + b13 * (b12 * b23 - b22 * b13);
+    let r = (det / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
+}

@@ -1,0 +1,179 @@
+//! The RON model format, as written by users. Every struct denies unknown fields so a typo is
+//! an error, not a silently ignored line. Expressions are strings in the language of
+//! [`crate::symbolic::parse`].
+
+use indexmap::IndexMap;
+use serde::Deserialize;
+
+/// A model file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Model")]
+pub struct ModelFile {
+    /// Identifier of the model (used for generated module names).
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Parameter names and values. Every symbol must be bound here or be a coordinate.
+    pub parameters: IndexMap<String, f64>,
+    /// Generalized coordinates, in order.
+    pub coordinates: Vec<String>,
+    /// Named functions of time: name -> expression in `t` (e.g. a prescribed force `F(t)`).
+    #[serde(default)]
+    pub time_functions: IndexMap<String, String>,
+    /// The kinematic tree; `world` is the implicit root.
+    pub frames: Vec<FrameDef>,
+    /// Rigid bodies and point masses.
+    pub bodies: Vec<BodyDef>,
+    /// Kinematic constraints.
+    #[serde(default)]
+    pub constraints: Vec<ConstraintDef>,
+    /// Applied forces and potentials.
+    #[serde(default)]
+    pub forces: Vec<ForceDef>,
+    /// The choice of quasi-velocities.
+    pub quasi_velocities: QuasiVelocityDef,
+    /// Which coordinates are ignorable.
+    #[serde(default)]
+    pub ignorable: IgnorableDef,
+    /// The initial state of the reference run.
+    #[serde(default)]
+    pub initial: Option<InitialDef>,
+    /// The reference run.
+    #[serde(default)]
+    pub simulation: Option<SimulationDef>,
+}
+
+/// A frame: its parent frame moved by `translation` (in parent components) and turned by the
+/// `rotation` sequence (applied left to right, each about the current axes).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Frame")]
+pub struct FrameDef {
+    pub name: String,
+    pub parent: String,
+    #[serde(default)]
+    pub translation: Option<Vec<String>>,
+    #[serde(default)]
+    pub rotation: Vec<RotationDef>,
+}
+
+/// An elementary rotation by an angle expression, or the ZYX Euler shorthand
+/// `EulerZYX(psi, theta, phi)` = `[Z(psi), Y(theta), X(phi)]`, `R = Rz Ry Rx`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum RotationDef {
+    X(String),
+    Y(String),
+    Z(String),
+    EulerZYX(String, String, String),
+}
+
+/// A body attached to a frame.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Body")]
+pub struct BodyDef {
+    pub name: String,
+    pub frame: String,
+    pub mass: String,
+    /// Centre of mass in the frame's components (default: the frame's origin).
+    #[serde(default)]
+    pub com: Option<Vec<String>>,
+    pub inertia: InertiaDef,
+}
+
+/// Inertia about the centre of mass, in the body frame.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum InertiaDef {
+    /// No rotational inertia.
+    PointMass,
+    /// `diag(Ixx, Iyy, Izz)`.
+    Diagonal(Vec<String>),
+    /// The paper's Eq. (75): `[[Ixx, -Ixy, -Ixz], [-Ixy, Iyy, -Iyz], [-Ixz, -Iyz, Izz]]`.
+    Products { ixx: String, iyy: String, izz: String, ixy: String, ixz: String, iyz: String },
+    /// The full symmetric matrix, as written.
+    Matrix(Vec<Vec<String>>),
+}
+
+/// A kinematic constraint.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ConstraintDef {
+    /// Velocity level, `expr = 0`, linear in the velocities `q'` (nonholonomic or not).
+    Velocity { name: String, expr: String },
+    /// Position level, `expr(q, t) = 0` (holonomic); differentiated by the generator.
+    Position { name: String, expr: String },
+}
+
+/// An applied force or a potential.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ForceDef {
+    /// Uniform gravity on every body: the acceleration vector in world components.
+    Gravity { vector: Vec<String> },
+    /// A force at a point fixed in a frame, with components in `expressed_in` (default world).
+    PointForce {
+        name: String,
+        frame: String,
+        point: Vec<String>,
+        force: Vec<String>,
+        #[serde(default)]
+        expressed_in: Option<String>,
+    },
+    /// A torque on a body, in body-frame components.
+    Torque { name: String, body: String, torque: Vec<String> },
+    /// A linear spring between two points fixed in frames.
+    Spring {
+        name: String,
+        frame_a: String,
+        point_a: Vec<String>,
+        frame_b: String,
+        point_b: Vec<String>,
+        stiffness: String,
+        rest_length: String,
+    },
+    /// A linear damper between two points fixed in frames.
+    Damper { name: String, frame_a: String, point_a: Vec<String>, frame_b: String, point_b: Vec<String>, damping: String },
+    /// Generalized forces given directly: coordinate -> expression.
+    Generalized { name: String, components: IndexMap<String, String> },
+    /// A potential energy given directly.
+    Potential { name: String, expr: String },
+}
+
+/// Quasi-velocities: `full` has p of them (Maggi, Kane/Gibbs-Appell); `reduced` has p - s
+/// (the reduced Volterra method). Expressions in `q`, `q'`, `t` and `omega_x(body)`,
+/// `omega_y(body)`, `omega_z(body)` (body-frame angular velocity components).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "QuasiVelocities")]
+pub struct QuasiVelocityDef {
+    pub full: Vec<String>,
+    pub reduced: Vec<String>,
+}
+
+/// Ignorable coordinates: found automatically, or declared (and verified).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum IgnorableDef {
+    #[default]
+    Auto,
+    Declared(Vec<String>),
+}
+
+/// Initial coordinates and velocities: expressions in the parameters; velocity expressions may
+/// also use the initial coordinates and other initial velocities (`theta1'`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Initial")]
+pub struct InitialDef {
+    pub q: IndexMap<String, String>,
+    pub qdot: IndexMap<String, String>,
+}
+
+/// The reference run.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Simulation")]
+pub struct SimulationDef {
+    #[serde(default)]
+    pub t_start: f64,
+    pub t_end: f64,
+    pub dt_out: f64,
+}

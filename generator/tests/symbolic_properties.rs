@@ -1,0 +1,111 @@
+//! Property tests for the symbolic core: derivatives match central finite differences,
+//! expansion, normal form and substitution preserve numeric value.
+
+use generator::symbolic::eval::Env;
+use generator::symbolic::limits::Limits;
+use generator::symbolic::trig::{ZeroVerdict, zero_test};
+use generator::symbolic::{Expr, Symbol};
+use proptest::prelude::*;
+use std::collections::HashMap;
+
+const VARS: [&str; 3] = ["pa", "pb", "pc"];
+
+/// Random expressions over three symbols with sums, products, small powers and trig.
+fn arb_expr() -> impl Strategy<Value = Expr> {
+    let leaf = prop_oneof![
+        (0usize..3).prop_map(|i| Expr::sym(VARS[i])),
+        (-3i64..4).prop_map(Expr::int),
+    ];
+    leaf.prop_recursive(4, 24, 3, |inner| {
+        prop_oneof![
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| a + b),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| a - b),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| a * b),
+            (inner.clone(), 2i64..4).prop_map(|(a, n)| a.powi(n)),
+            inner.clone().prop_map(|a| a.sin()),
+            inner.clone().prop_map(|a| a.cos()),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| (a + b).sin() * (a - b).cos()),
+        ]
+    })
+}
+
+fn env_at(p: [f64; 3]) -> Env {
+    let mut env = Env::default();
+    for (name, v) in VARS.iter().zip(p) {
+        env.set(Symbol::new(name), v);
+    }
+    env
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * (1.0 + a.abs().max(b.abs()))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn derivative_matches_central_difference(e in arb_expr(), p in prop::array::uniform3(-1.5f64..1.5), k in 0usize..3) {
+        let x = Symbol::new(VARS[k]);
+        let d = e.diff(x);
+        let h = 1e-5;
+        let mut lo = p; lo[k] -= h;
+        let mut hi = p; hi[k] += h;
+        let fd = (e.eval(&env_at(hi)).unwrap() - e.eval(&env_at(lo)).unwrap()) / (2.0 * h);
+        let exact = d.eval(&env_at(p)).unwrap();
+        // Finite differences lose about 1e-10/h relative accuracy; scale by the size of e.
+        let scale = 1.0 + e.eval(&env_at(p)).unwrap().abs();
+        prop_assert!((fd - exact).abs() <= 1e-5 * scale * (1.0 + exact.abs()), "d/d{} of {}: {} vs {}", VARS[k], e, exact, fd);
+    }
+
+    #[test]
+    fn expansion_preserves_value(e in arb_expr(), p in prop::array::uniform3(-1.5f64..1.5)) {
+        let x = e.expand(Limits::default()).unwrap();
+        let (a, b) = (e.eval(&env_at(p)).unwrap(), x.eval(&env_at(p)).unwrap());
+        prop_assert!(close(a, b, 1e-9), "{} -> {}: {} vs {}", e, x, a, b);
+    }
+
+    #[test]
+    fn normal_form_preserves_value(e in arb_expr(), p in prop::array::uniform3(-1.5f64..1.5)) {
+        if let Ok(n) = e.trig_normal(Limits::default()) {
+            let (a, b) = (e.eval(&env_at(p)).unwrap(), n.eval(&env_at(p)).unwrap());
+            prop_assert!(close(a, b, 1e-8), "{} -> {}: {} vs {}", e, n, a, b);
+        }
+    }
+
+    #[test]
+    fn substitution_preserves_value(e in arb_expr(), f in arb_expr(), p in prop::array::uniform3(-1.5f64..1.5)) {
+        // e(pa := f) evaluated at p equals e evaluated at p with pa = f(p).
+        let pa = Symbol::new("pa");
+        let s = e.subs(&HashMap::from([(pa, f)]));
+        let fv = f.eval(&env_at(p)).unwrap();
+        let direct = e.eval(&env_at([fv, p[1], p[2]])).unwrap();
+        let substituted = s.eval(&env_at(p)).unwrap();
+        prop_assert!(close(direct, substituted, 1e-9), "{} with pa={}: {} vs {}", e, f, direct, substituted);
+    }
+
+    #[test]
+    fn expression_minus_its_normal_form_is_zero(e in arb_expr()) {
+        if let Ok(n) = e.trig_normal(Limits::default()) {
+            prop_assert!(zero_test(e - n, Limits::default()).is_zero());
+        }
+    }
+
+    #[test]
+    fn zero_test_rejects_perturbed_identities(e in arb_expr(), eps_exp in 3i32..9) {
+        let eps = Expr::num(generator::symbolic::number::rat_from_decimal(&format!("1e-{eps_exp}")).unwrap());
+        let a = Expr::sym("pa");
+        let id = a.sin().powi(2) + a.cos().powi(2) - 1;
+        // e*0-ish identity plus a small constant is never zero.
+        let verdict = zero_test(id * e + eps, Limits::default());
+        prop_assert!(matches!(verdict, ZeroVerdict::NonZero { .. }), "{:?}", verdict);
+    }
+}
+
+#[test]
+fn named_identities() {
+    let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+    assert!(zero_test(a.sin().powi(2) + a.cos().powi(2) - 1, Limits::default()).is_zero());
+    assert!(zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin(), Limits::default()).is_zero());
+    assert!(!zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::number::rat_from_decimal("1e-9").unwrap()), Limits::default()).is_zero());
+}
