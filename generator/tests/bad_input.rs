@@ -1,0 +1,143 @@
+//! One test per class of bad input: each must give a clear, located error, never a panic.
+
+use generator::formulation::{ignorable, mechanics};
+use generator::model::{ErrorKind, ModelError, from_source};
+
+fn scene1() -> String {
+    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap()
+}
+
+fn scene2() -> String {
+    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/three_body.ron")).unwrap()
+}
+
+/// Applies a textual edit that must change the file, loads it, and returns the error.
+fn broken(src: &str, from: &str, to: &str) -> ModelError {
+    assert!(src.contains(from), "test edit `{from}` not found");
+    let text = src.replacen(from, to, 1);
+    match from_source("models/broken.ron", &text) {
+        Ok(model) => {
+            // Some errors are found after loading (Definition 1).
+            let mech = mechanics::derive(&model);
+            let reports = ignorable::analyze(&model, &mech);
+            ignorable::choose(&model, &reports).expect_err("the edited model should be rejected");
+            ignorable::choose(&model, &reports).unwrap_err()
+        }
+        Err(e) => e,
+    }
+}
+
+fn check(e: &ModelError, kind: ErrorKind, words: &[&str]) {
+    let text = e.to_string();
+    assert_eq!(e.kind, kind, "{text}");
+    assert!(text.starts_with("error: models/broken.ron:"), "names the file: {text}");
+    assert!(text.contains("help: "), "gives a fix: {text}");
+    for w in words {
+        assert!(text.contains(w), "`{w}` missing from: {text}");
+    }
+}
+
+#[test]
+fn malformed_ron_gives_line_and_column() {
+    let e = broken(&scene1(), "coordinates: [\"theta1\", \"theta2\", \"x\"],", "coordinates: [\"theta1\" \"theta2\", \"x\"],");
+    check(&e, ErrorKind::Syntax, &["malformed model"]);
+    assert_eq!(e.location.unwrap().0, 14);
+    let e = broken(&scene1(), "description:", "descripton:");
+    check(&e, ErrorKind::Syntax, &["descripton"]);
+}
+
+#[test]
+fn unknown_names_are_located_and_suggested() {
+    let e = broken(&scene1(), "com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-lx/2\", \"0\"]");
+    check(&e, ErrorKind::UnknownName, &["unknown name `lx`", "did you mean `l`", "bodies[1] (bar1).com[1]", "column 2"]);
+    assert!(e.location.is_some());
+}
+
+#[test]
+fn expression_syntax_errors_give_the_column() {
+    let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", "\"m1*l^^2/12\", \"0\"");
+    check(&e, ErrorKind::ExpressionSyntax, &["column 6", "m1*l^^2/12"]);
+}
+
+#[test]
+fn wrong_vector_sizes() {
+    let e = broken(&scene1(), "translation: [\"x\", \"0\", \"0\"]", "translation: [\"x\", \"0\"]");
+    check(&e, ErrorKind::Dimension, &["3-vector", "2 entries", "frames[0] (cart).translation"]);
+    let e = broken(&scene2(), "Diagonal([\"J1\", \"J2\", \"J2\"])", "Matrix([[\"J1\", \"0\"], [\"0\", \"J2\"]])");
+    check(&e, ErrorKind::Dimension, &["3x3"]);
+}
+
+#[test]
+fn body_on_unknown_frame() {
+    let e = broken(&scene1(), "Body(name: \"bar2\", frame: \"bar2\"", "Body(name: \"bar2\", frame: \"bar3\"");
+    check(&e, ErrorKind::UnknownFrame, &["`bar3`", "bodies[2] (bar2).frame"]);
+}
+
+#[test]
+fn cycles_in_the_frame_tree() {
+    let e = broken(&scene1(), "Frame(name: \"cart\", parent: \"world\"", "Frame(name: \"cart\", parent: \"bar2\"");
+    check(&e, ErrorKind::FrameCycle, &["cycle", "cart", "bar1", "bar2"]);
+}
+
+#[test]
+fn non_positive_mass() {
+    let e = broken(&scene1(), "\"m2\": 1.0,", "\"m2\": -1.0,");
+    check(&e, ErrorKind::NonPositiveMass, &["bar2", "not positive"]);
+}
+
+#[test]
+fn inertia_not_positive_semi_definite() {
+    let e = broken(&scene2(), "\"Ixy\": 0.05", "\"Ixy\": 5.0");
+    check(&e, ErrorKind::InertiaNotPsd, &["middle", "positive semi-definite", "Eq. (75)"]);
+}
+
+#[test]
+fn wrong_number_of_quasi_velocities() {
+    let e = broken(&scene1(), "full: [\"theta1' - theta2'\", \"x'\"]", "full: [\"theta1' - theta2'\"]");
+    check(&e, ErrorKind::QuasiVelocityCount, &["1 quasi-velocities given", "3 - 1 = 2"]);
+}
+
+#[test]
+fn declared_ignorable_that_is_not() {
+    let e = broken(&scene1(), "ignorable: Declared([\"x\"])", "ignorable: Declared([\"theta1\", \"x\"])");
+    check(&e, ErrorKind::NotIgnorable, &["`theta1` is declared ignorable but is not", "M[1][2]"]);
+    // A spring on x breaks it through V.
+    let e = broken(&scene1(), "Gravity(vector: [\"0\", \"-g\", \"0\"]),", "Gravity(vector: [\"0\", \"-g\", \"0\"]), Potential(name: \"tether\", expr: \"x^2\"),");
+    check(&e, ErrorKind::NotIgnorable, &["`x`", "through V"]);
+    // A force on x breaks it through Q.
+    let e = broken(&scene1(), "{\"theta1\": \"tau\", \"theta2\": \"-tau\"}", "{\"theta1\": \"tau\", \"theta2\": \"-tau\", \"x\": \"tau\"}");
+    check(&e, ErrorKind::NotIgnorable, &["generalized force"]);
+}
+
+#[test]
+fn nonlinear_velocity_constraints() {
+    let e = broken(&scene1(), "l*theta2'\"", "l*theta2'^2\"");
+    check(&e, ErrorKind::NonlinearConstraint, &["not linear in the velocities"]);
+}
+
+#[test]
+fn velocities_where_positions_are_expected() {
+    let e = broken(&scene1(), "com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2*theta1'\", \"0\"]");
+    check(&e, ErrorKind::ExpressionSyntax, &["position-level"]);
+}
+
+#[test]
+fn missing_initial_values() {
+    let e = broken(&scene1(), ", \"x\": \"0.3\"", "");
+    check(&e, ErrorKind::InitialState, &["no initial velocity for coordinate `x`"]);
+}
+
+#[test]
+fn the_cli_exits_non_zero_with_the_message() {
+    let dir = std::env::temp_dir().join(format!("gen-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("broken.ron");
+    std::fs::write(&path, scene1().replacen("\"m2\": 1.0,", "\"m2\": 0.0,", 1)).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_generator")).arg("inspect").arg(&path).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("broken.ron:") && err.contains("not positive") && err.contains("help:"), "{err}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_generator")).arg("inspect").arg(dir.join("missing.ron")).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read the file"));
+}
