@@ -6,7 +6,7 @@
 //! assert!(text.contains("s = 1"));
 //! ```
 
-use crate::formulation::{ignorable, mechanics};
+use crate::formulation::{ignorable, mechanics, volterra};
 use crate::model::{Model, ModelError};
 use crate::symbolic::Expr;
 use std::fmt::Write;
@@ -92,6 +92,48 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
         if !mech.b[i].is_zero() {
             line(w, &sub("b", &[i + 1], latex), show(mech.b[i]));
         }
+    }
+    let _ = write!(w, "{close}");
+    let v = volterra::derive(model, &mech, &chosen, &model.quasi_reduced)?;
+    let u_names: Vec<String> = v.u.iter().zip(&model.quasi_reduced).map(|(u, e)| format!("{} = {}", u.name(), show(*e))).collect();
+    let _ = writeln!(w, "\nreduced Volterra method (Eqs. 42-67), u_NI: {}", u_names.join("; "));
+    let g_names: Vec<String> = v.g.iter().map(|g| g.name()).collect();
+    if !g_names.is_empty() {
+        let _ = writeln!(w, "  G_I = [{}]: conserved momenta, computed from the initial state (Eq. 26)", g_names.join(", "));
+    }
+    let _ = writeln!(w, "  det [Y_NI; M'; a] = {}", show(v.determinant));
+    let sing: Vec<String> = v.singular_factors.iter().map(|e| show(e.simplify_trig(mechanics::derivation_limits()))).collect();
+    if sing.is_empty() {
+        let _ = writeln!(w, "  the choice of quasi-velocities is regular at every state");
+    } else {
+        let _ = writeln!(w, "  singular only where one of these vanishes: {}", sing.join(", "));
+    }
+    let _ = writeln!(w, "q' = W_NI u_NI + X_NI (nonzero entries):");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..mech.m {
+        for k in 0..v.u.len() {
+            if !v.w.get(i, k).is_zero() {
+                line(w, &sub("W", &[i + 1, k + 1], latex), show(v.w.get(i, k)));
+            }
+        }
+        if !v.x[i].is_zero() {
+            line(w, &sub("X", &[i + 1], latex), show(v.x[i]));
+        }
+    }
+    let _ = write!(w, "{close}");
+    let _ = writeln!(w, "M_NI u_NI' = L_NI:");
+    if latex {
+        let _ = writeln!(w, "{open}");
+    }
+    for i in 0..v.u.len() {
+        for j in i..v.u.len() {
+            line(w, &sub("M_NI", &[i + 1, j + 1], latex), show(v.mass_ni.get(i, j)));
+        }
+    }
+    for i in 0..v.u.len() {
+        line(w, &sub("L_NI", &[i + 1], latex), show(v.l_ni[i]));
     }
     let _ = write!(w, "{close}");
     let _ = writeln!(w, "\nDefinition 1, coordinate by coordinate:");

@@ -3,3 +3,4 @@
 
 pub mod ignorable;
 pub mod mechanics;
+pub mod volterra;

@@ -119,6 +119,61 @@ impl Matrix {
         Matrix { rows: self.rows, cols: self.cols, data: self.data.iter().map(f).collect() }
     }
 
+    /// The determinant by Laplace expansion along the sparsest row or column (for the small,
+    /// sparse matrices of multibody systems), simplified under `limits`.
+    pub fn determinant(&self, limits: Limits) -> Expr {
+        assert_eq!(self.rows, self.cols, "determinant of a non-square matrix");
+        let rows: Vec<usize> = (0..self.rows).collect();
+        let cols: Vec<usize> = (0..self.cols).collect();
+        let mut memo = std::collections::HashMap::new();
+        self.minor(&rows, &cols, &mut memo).simplify_trig(limits)
+    }
+
+    fn minor(&self, rows: &[usize], cols: &[usize], memo: &mut std::collections::HashMap<(Vec<usize>, Vec<usize>), Expr>) -> Expr {
+        if rows.is_empty() {
+            return Expr::one();
+        }
+        if rows.len() == 1 {
+            return self.get(rows[0], cols[0]);
+        }
+        let key = (rows.to_vec(), cols.to_vec());
+        if let Some(e) = memo.get(&key) {
+            return *e;
+        }
+        // Expand along the row or column with the most zeros.
+        let zeros_row = |r: usize| cols.iter().filter(|&&c| self.get(r, c).is_zero()).count();
+        let zeros_col = |c: usize| rows.iter().filter(|&&r| self.get(r, c).is_zero()).count();
+        let (best_r, zr) = rows.iter().enumerate().map(|(i, &r)| (i, zeros_row(r))).max_by_key(|x| x.1).unwrap_or((0, 0));
+        let (best_c, zc) = cols.iter().enumerate().map(|(i, &c)| (i, zeros_col(c))).max_by_key(|x| x.1).unwrap_or((0, 0));
+        let mut terms = Vec::new();
+        if zr >= zc {
+            let sub_rows: Vec<usize> = rows.iter().enumerate().filter(|(i, _)| *i != best_r).map(|(_, r)| *r).collect();
+            for (j, &c) in cols.iter().enumerate() {
+                let e = self.get(rows[best_r], c);
+                if e.is_zero() {
+                    continue;
+                }
+                let sub_cols: Vec<usize> = cols.iter().enumerate().filter(|(k, _)| *k != j).map(|(_, c)| *c).collect();
+                let sign = if (best_r + j) % 2 == 0 { 1 } else { -1 };
+                terms.push(e * self.minor(&sub_rows, &sub_cols, memo) * sign);
+            }
+        } else {
+            let sub_cols: Vec<usize> = cols.iter().enumerate().filter(|(k, _)| *k != best_c).map(|(_, c)| *c).collect();
+            for (i, &r) in rows.iter().enumerate() {
+                let e = self.get(r, cols[best_c]);
+                if e.is_zero() {
+                    continue;
+                }
+                let sub_rows: Vec<usize> = rows.iter().enumerate().filter(|(k, _)| *k != i).map(|(_, r)| *r).collect();
+                let sign = if (i + best_c) % 2 == 0 { 1 } else { -1 };
+                terms.push(e * self.minor(&sub_rows, &sub_cols, memo) * sign);
+            }
+        }
+        let d = Expr::sum(terms);
+        memo.insert(key, d);
+        d
+    }
+
     /// Stacks matrices with equal column counts on top of each other.
     pub fn vstack(parts: &[&Matrix]) -> Matrix {
         let cols = parts.iter().find(|m| m.rows > 0).map_or(0, |m| m.cols);
@@ -185,9 +240,6 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
     let mut row_used = vec![false; n];
     let mut col_used = vec![false; n];
     let mut pivot_of_col = vec![usize::MAX; n];
-    let mut det_num: Vec<Expr> = Vec::new();
-    let mut det_den: Vec<Expr> = Vec::new();
-    let mut sign = 1i32;
 
     for _ in 0..n {
         // Candidates, simplest first.
@@ -234,8 +286,6 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
                 let factor = f.scale(&pn.recip());
                 rows[i].iter().zip(&prow).map(|(x, y)| if y.is_zero() { *x } else { *x - factor * *y }).collect()
             } else {
-                // Scaling a row scales the determinant.
-                det_den.push(p);
                 rows[i].iter().zip(&prow).map(|(x, y)| if y.is_zero() { p * *x } else { p * *x - f * *y }).collect()
             };
             let mut updated: Vec<Expr> =
@@ -244,7 +294,6 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             if p.as_num().is_none() {
                 let content = common_content(&updated);
                 if !content.is_one() {
-                    det_num.push(content);
                     updated = updated.into_iter().map(|e| divide_content(e, content)).collect();
                 }
             }
@@ -254,12 +303,9 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
     // Now row pivot_of_col[j] reads d * x_j = rhs.
     let mut x = Matrix::zeros(n, k);
     let mut pivots = Vec::new();
-    let mut perm: Vec<usize> = Vec::with_capacity(n);
     for j in 0..n {
         let i = pivot_of_col[j];
-        perm.push(i);
         let d = rows[i][j];
-        det_num.push(d);
         for f in factors_of(d) {
             if !pivots.contains(&f) {
                 pivots.push(f);
@@ -270,26 +316,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             x.set(j, c, cancel_divide(r, d));
         }
     }
-    // Sign of the row permutation.
-    let mut seen = vec![false; n];
-    for s in 0..n {
-        if seen[s] {
-            continue;
-        }
-        let mut len = 0;
-        let mut c = s;
-        while !seen[c] {
-            seen[c] = true;
-            c = perm[c];
-            len += 1;
-        }
-        if len % 2 == 0 {
-            sign = -sign;
-        }
-    }
-    let det = Expr::product(det_num) / Expr::product(det_den);
-    let det = if sign < 0 { -det } else { det };
-    let determinant = simplify_entry(det, opts.limits, &mut stops);
+    let determinant = a.determinant(opts.limits);
     Ok(Solution { x, pivots, determinant, stops })
 }
 

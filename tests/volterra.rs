@@ -1,0 +1,145 @@
+//! The reduced Volterra equations against Lagrange's equations and the Kane form, at random
+//! states consistent with the constraints.
+
+use generator::formulation::{ignorable, mechanics, volterra};
+use generator::model::{self, Model};
+use generator::symbolic::eval::Env;
+use generator::symbolic::trig::SplitMix;
+use generator::symbolic::{Expr, Symbol};
+
+const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];
+
+fn load(name: &str) -> Model {
+    model::load(format!("{}/models/{name}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// Solves a small dense system by Gaussian elimination with partial pivoting.
+fn lin_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+    let n = b.len();
+    for c in 0..n {
+        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap();
+        a.swap(c, p);
+        b.swap(c, p);
+        for r in c + 1..n {
+            let f = a[r][c] / a[c][c];
+            for k in c..n {
+                a[r][k] -= f * a[c][k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|k| a[r][k] * x[k]).sum();
+        x[r] = (b[r] - s) / a[r][r];
+    }
+    x
+}
+
+/// q'' implied by a Volterra form at the state in `env` (q, u, G, t set): returns (q', q'').
+fn accelerations(v: &volterra::Volterra, env: &Env, model: &Model) -> (Vec<f64>, Vec<f64>) {
+    let n = v.u.len();
+    let mass: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| v.mass_ni.get(i, j).eval(env).unwrap()).collect()).collect();
+    let l: Vec<f64> = v.l_ni.iter().map(|e| e.eval(env).unwrap()).collect();
+    let ud = lin_solve(mass, l);
+    let chain: Vec<(Symbol, Expr)> = model.coordinates.iter().copied().zip(v.qdot.iter().copied()).collect();
+    let mut env2 = env.clone();
+    let primes: Vec<Symbol> = v.u.iter().map(|u| Symbol::new(&format!("{}'", u.name()))).collect();
+    for (p, x) in primes.iter().zip(&ud) {
+        env2.set(*p, *x);
+    }
+    let qd: Vec<f64> = v.qdot.iter().map(|e| e.eval(env).unwrap()).collect();
+    let qdd: Vec<f64> = v
+        .qdot
+        .iter()
+        .map(|e| {
+            let mut d = e.time_derivative(model.t, &chain);
+            for (u, p) in v.u.iter().zip(&primes) {
+                d = d + e.diff(*u) * p.expr();
+            }
+            d.eval(&env2).unwrap()
+        })
+        .collect();
+    (qd, qdd)
+}
+
+#[test]
+fn reduced_volterra_satisfies_lagrange_and_agrees_with_kane() {
+    for name in MODELS {
+        let model = load(name);
+        let mech = mechanics::derive(&model);
+        let reports = ignorable::analyze(&model, &mech);
+        let chosen = ignorable::choose(&model, &reports).unwrap();
+        let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        let reduced = volterra::derive(&model, &mech, &chosen, &model.quasi_reduced).unwrap();
+        assert_eq!(reduced.u.len(), mech.p - chosen.len());
+        // Lagrange's equations, symbolically: d/dt(dT/dq') - dT/dq + dV/dq - Q.
+        let vchain = model.velocity_chain();
+        let lagrange: Vec<Expr> = (0..mech.m)
+            .map(|j| {
+                let p = mech.kinetic.diff(model.velocities[j]);
+                vchain.dt(p) - mech.kinetic.diff(model.coordinates[j]) + mech.potential.diff(model.coordinates[j]) - mech.q_forces[j]
+            })
+            .collect();
+        let mut rng = SplitMix(42);
+        for trial in 0..5 {
+            let mut env = model.parameter_env();
+            for q in &model.coordinates {
+                env.set(*q, rng.uniform(-1.0, 1.0));
+            }
+            env.set(model.t, rng.uniform(0.0, 20.0));
+            // A consistent velocity from random full quasi-velocities (Kane has no G).
+            for u in &kane.u {
+                env.set(*u, rng.uniform(-1.5, 1.5));
+            }
+            let (qd, qdd_kane) = accelerations(&kane, &env, &model);
+            let mut renv = env.clone();
+            for (v, x) in model.velocities.iter().zip(&qd) {
+                renv.set(*v, *x);
+            }
+            // G_I and u_NI at this state.
+            for (k, &i) in chosen.iter().enumerate() {
+                let g = mech.kinetic.diff(model.velocities[i]).eval(&renv).unwrap();
+                renv.set(reduced.g[k], g);
+            }
+            let quasi: Vec<f64> = model.quasi_reduced.iter().map(|e| e.eval(&renv).unwrap()).collect();
+            for (u, x) in reduced.u.iter().zip(&quasi) {
+                renv.set(*u, *x);
+            }
+            let (qd_r, qdd_r) = accelerations(&reduced, &renv, &model);
+            for j in 0..mech.m {
+                assert!((qd_r[j] - qd[j]).abs() < 1e-10 * (1.0 + qd[j].abs()), "{name} #{trial}: q'[{j}] {} vs {}", qd_r[j], qd[j]);
+                assert!(
+                    (qdd_r[j] - qdd_kane[j]).abs() < 1e-8 * (1.0 + qdd_kane[j].abs()),
+                    "{name} #{trial}: q''[{j}] reduced {} vs Kane {}",
+                    qdd_r[j],
+                    qdd_kane[j]
+                );
+            }
+            // Lagrange residual projected on the admissible motions (columns of Kane's W).
+            let mut lenv = renv.clone();
+            for (a, x) in model.accelerations.iter().zip(&qdd_r) {
+                lenv.set(*a, *x);
+            }
+            let res: Vec<f64> = lagrange.iter().map(|e| e.eval(&lenv).unwrap()).collect();
+            let scale: f64 = 1.0 + res.iter().map(|x| x.abs()).sum::<f64>() + qdd_r.iter().map(|x| x.abs()).sum::<f64>();
+            for k in 0..kane.u.len() {
+                let proj: f64 = (0..mech.m).map(|j| kane.w.get(j, k).eval(&renv).unwrap() * res[j]).sum();
+                assert!(proj.abs() < 1e-9 * scale, "{name} #{trial}: projected Lagrange residual {proj:e} (scale {scale})");
+            }
+        }
+    }
+}
+
+#[test]
+fn scene1_singular_set_is_reported() {
+    let model = load("cart_pendulum");
+    let mech = mechanics::derive(&model);
+    let v = volterra::derive(&model, &mech, &[2], &model.quasi_reduced).unwrap();
+    let mut env = model.parameter_env();
+    env.set(model.coordinates[0], 0.3);
+    env.set(model.coordinates[1], 0.3 + std::f64::consts::PI);
+    assert!(v.determinant.eval(&env).unwrap().abs() < 1e-12, "det = {}", v.determinant);
+    env.set(model.coordinates[1], 0.9);
+    assert!(v.determinant.eval(&env).unwrap().abs() > 1e-3);
+}
