@@ -222,10 +222,39 @@ pub fn zero_test(e: Expr, limits: Limits) -> ZeroVerdict {
     }
     let stopped = match e.trig_normal(limits) {
         Ok(n) if n.is_zero() => return ZeroVerdict::Zero { proof: ZeroProof::NormalForm },
+        // A nonzero polynomial in symbols and sin/cos of symbols is canonical: not zero.
+        Ok(n) if is_canonical_polynomial(n) => return numeric_witness(e),
         Ok(_) => None,
         Err(stop) => Some(stop),
     };
     numeric_zero_test(e, stopped)
+}
+
+/// True when the normal form is a polynomial in symbols and in sin/cos of (multiples of)
+/// symbols, where it is canonical.
+fn is_canonical_polynomial(n: Expr) -> bool {
+    let atom_ok = |b: Expr| match &*b.node() {
+        Node::Sym(_) => true,
+        Node::Fun(Func::Sin | Func::Cos, a) => a.split_coefficient().1.as_sym().is_some(),
+        _ => false,
+    };
+    let mono_ok = |t: Expr| match &*t.node() {
+        Node::Num(_) => true,
+        Node::Mul { factors, .. } => factors.iter().all(|(b, x)| x.is_integer() && x.is_positive() && atom_ok(*b)),
+        _ => atom_ok(t),
+    };
+    match &*n.node() {
+        Node::Add { terms, .. } => terms.iter().all(|(t, _)| mono_ok(*t)),
+        _ => mono_ok(n),
+    }
+}
+
+/// A point where `e` is not zero (for a verdict already known to be "not zero").
+fn numeric_witness(e: Expr) -> ZeroVerdict {
+    match numeric_zero_test(e, None) {
+        ZeroVerdict::Zero { .. } => ZeroVerdict::NonZero { value: 0.0, at: vec![] },
+        nonzero => nonzero,
+    }
 }
 
 fn numeric_zero_test(e: Expr, stopped: Option<StopReason>) -> ZeroVerdict {
