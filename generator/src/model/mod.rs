@@ -667,6 +667,10 @@ impl<'a> Builder<'a> {
                 self.err(ErrorKind::UnknownFrame, place, &format!("\"{name}\""), format!("frame `{name}` is not defined"), "use `world` or a frame defined under `frames`")
             })
         };
+        // A point fixed in a frame, the end `end` of a spring or damper.
+        let attach = |fr: &str, pt: &[String], end: &str, place: &str| -> Result<(usize, [Expr; 3]), ModelError> {
+            Ok((frame(fr, &format!("{place}.frame_{end}"))?, self.vec3(pt, &format!("{place}.point_{end}"), Scope::Position)?))
+        };
         Ok(match f {
             ForceDef::Gravity { vector } => Force::Gravity { vector: self.vec3(vector, &format!("forces[{i}] (gravity).vector"), Scope::Parameters)? },
             ForceDef::PointForce { name, frame: fr, point, force, expressed_in } => {
@@ -686,20 +690,22 @@ impl<'a> Builder<'a> {
             }
             ForceDef::Spring { name, frame_a, point_a, frame_b, point_b, stiffness, rest_length } => {
                 let place = format!("forces[{i}] ({name})");
+                let (a, b) = (attach(frame_a, point_a, "a", &place)?, attach(frame_b, point_b, "b", &place)?);
                 Force::Spring {
                     name: name.clone(),
-                    a: (frame(frame_a, &format!("{place}.frame_a"))?, self.vec3(point_a, &format!("{place}.point_a"), Scope::Position)?),
-                    b: (frame(frame_b, &format!("{place}.frame_b"))?, self.vec3(point_b, &format!("{place}.point_b"), Scope::Position)?),
+                    a,
+                    b,
                     stiffness: self.expr(stiffness, &format!("{place}.stiffness"), Scope::Parameters)?,
                     rest_length: self.expr(rest_length, &format!("{place}.rest_length"), Scope::Parameters)?,
                 }
             }
             ForceDef::Damper { name, frame_a, point_a, frame_b, point_b, damping } => {
                 let place = format!("forces[{i}] ({name})");
+                let (a, b) = (attach(frame_a, point_a, "a", &place)?, attach(frame_b, point_b, "b", &place)?);
                 Force::Damper {
                     name: name.clone(),
-                    a: (frame(frame_a, &format!("{place}.frame_a"))?, self.vec3(point_a, &format!("{place}.point_a"), Scope::Position)?),
-                    b: (frame(frame_b, &format!("{place}.frame_b"))?, self.vec3(point_b, &format!("{place}.point_b"), Scope::Position)?),
+                    a,
+                    b,
                     damping: self.expr(damping, &format!("{place}.damping"), Scope::Parameters)?,
                 }
             }

@@ -508,8 +508,7 @@ impl Expr {
             }
         }
         // Odd/even symmetry: f(-x) for a "negative-looking" argument.
-        let (c, _) = a.leading_sign_split();
-        if c {
+        if a.has_negative_lead() {
             let neg = -a;
             match f {
                 Func::Sin | Func::Tan => return -Expr::intern(Node::Fun(f, neg)),
@@ -522,8 +521,8 @@ impl Expr {
 
     /// True when the canonical form starts with a negative coefficient; used to put odd and
     /// even functions into a canonical sign.
-    fn leading_sign_split(self) -> (bool, ()) {
-        let neg = match &*self.node() {
+    fn has_negative_lead(self) -> bool {
+        match &*self.node() {
             Node::Num(r) => r.is_negative(),
             Node::Mul { coefficient, .. } => coefficient.is_negative(),
             Node::Add { constant, terms } => {
@@ -531,8 +530,7 @@ impl Expr {
                 terms.first().map(|(_, c)| c.is_negative()).unwrap_or(constant.is_negative())
             }
             _ => false,
-        };
-        (neg, ())
+        }
     }
 
     /// A named function of one argument, such as `F(t)`.

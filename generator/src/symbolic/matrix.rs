@@ -261,7 +261,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
         let mut chosen = None;
         for (_, i, j) in cands {
             let e = rows[i][j];
-            if e.as_num().is_some() || zero_test(e, opts.limits).is_zero() == false {
+            if e.as_num().is_some() || !zero_test(e, opts.limits).is_zero() {
                 chosen = Some((i, j));
                 break;
             }

@@ -283,7 +283,11 @@ fn numeric_zero_test(e: Expr, stopped: Option<StopReason>) -> ZeroVerdict {
             continue;
         }
         evaluated += 1;
-        let scale: f64 = parts.iter().map(|v| v.abs()).sum::<f64>() + e.split_coefficient().0.abs().to_f64_lossy();
+        let constant = match &*e.node() {
+            Node::Add { constant, .. } => super::number::rat_to_f64(constant).abs(),
+            _ => 0.0,
+        };
+        let scale: f64 = parts.iter().map(|v| v.abs()).sum::<f64>() + constant;
         if value.abs() > 1e-10 * scale.max(1e-300) || (scale == 0.0 && value != 0.0) {
             return ZeroVerdict::NonZero { value, at };
         }
@@ -294,14 +298,6 @@ fn numeric_zero_test(e: Expr, stopped: Option<StopReason>) -> ZeroVerdict {
     ZeroVerdict::Zero { proof: ZeroProof::Numeric { points: evaluated, stopped } }
 }
 
-trait ToF64Lossy {
-    fn to_f64_lossy(&self) -> f64;
-}
-impl ToF64Lossy for Rat {
-    fn to_f64_lossy(&self) -> f64 {
-        super::number::rat_to_f64(self)
-    }
-}
 
 #[cfg(test)]
 mod tests {
