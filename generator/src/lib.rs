@@ -2,10 +2,11 @@
 //!
 //! The pipeline: [`model`] (parse and validate a RON model) → [`kinematics`] (frames, body
 //! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
-//! formulations) → emission. [`symbolic`] is the engine underneath.
+//! formulations) → [`emit`] (flat Rust). [`symbolic`] is the engine underneath.
 
 pub mod symbolic;
 pub mod kinematics;
 pub mod model;
 pub mod formulation;
 pub mod inspect;
+pub mod emit;

@@ -23,6 +23,7 @@ use super::mechanics::{Mechanics, derivation_limits};
 use crate::kinematics::TimeChain;
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::matrix::{SolveError, SolveOptions, solve};
+use crate::symbolic::trig::zero_test;
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::collections::HashMap;
 
@@ -53,6 +54,19 @@ pub struct Volterra {
     pub k_ni: Vec<Expr>,
     pub u_ni: Vec<Expr>,
     pub l_ni: Vec<Expr>,
+}
+
+/// `e` with each symbol in `symbols` it does not depend on (its derivative is identically
+/// zero) set to zero. `L_NI` is polynomial in `G_I`, so this is exact; it removes terms that
+/// cancel only across bodies, such as the total momentum in the relative motion of scene 2.
+fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
+    let mut out = e;
+    for s in symbols {
+        if out.contains(*s) && zero_test(out.diff(*s), derivation_limits()).is_zero() {
+            out = out.subs(&HashMap::from([(*s, Expr::zero())]));
+        }
+    }
+    out
 }
 
 /// Name of the `G` symbol of an ignorable coordinate.
@@ -164,10 +178,13 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let mut k_ni = vec![Expr::zero(); n_u];
     let qdot_col = Matrix::column(qdot.clone());
     for (bi, body) in mech.bodies.iter().zip(&model.bodies) {
-        let pv = bi.b.mul(&w); // dV/du (3 x n_u), world components
-        let pw = bi.d.mul(&w); // d omega/du, body components
-        let v = bi.b.mul(&qdot_col).col(0).iter().zip(&bi.c).map(|(a, b)| *a + *b).collect::<Vec<_>>();
-        let om = bi.d.mul(&qdot_col).col(0).iter().zip(&bi.e).map(|(a, b)| *a + *b).collect::<Vec<_>>();
+        // Partial velocities and velocities in u, simplified first: the round trip
+        // u -> q' -> omega cancels here (omega of a body whose rates are quasi-velocities
+        // becomes u itself), which keeps everything derived from them small.
+        let pv = bi.b.mul(&w).map(|e| tidy(*e)); // dV/du (3 x n_u), world components
+        let pw = bi.d.mul(&w).map(|e| tidy(*e)); // d omega/du, body components
+        let v = bi.b.mul(&qdot_col).col(0).iter().zip(&bi.c).map(|(a, b)| tidy(*a + *b)).collect::<Vec<_>>();
+        let om = bi.d.mul(&qdot_col).col(0).iter().zip(&bi.e).map(|(a, b)| tidy(*a + *b)).collect::<Vec<_>>();
         for k in 0..n_u {
             // F_NI: m (d/dt dV/du_k) . V
             let dpv: Vec<Expr> = (0..3).map(|r| chain.dt(pv.get(r, k))).collect();
@@ -191,7 +208,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         .map(|(j, q)| mech.q_forces[j].subs(&to_u) - mech.potential.diff(*q))
         .collect();
     let u_ni: Vec<Expr> = wt.mul(&Matrix::column(gen_force)).col(0);
-    let l_ni: Vec<Expr> = (0..n_u).map(|k| u_ni[k] + k_ni[k] - a_ni[k]).collect();
+    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(u_ni[k] + k_ni[k] - a_ni[k], &g)).collect();
     Ok(Volterra {
         ignorable: ignorable.to_vec(),
         g,
@@ -211,3 +228,4 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         l_ni,
     })
 }
+

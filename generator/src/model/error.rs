@@ -39,6 +39,11 @@ pub enum ErrorKind {
     InitialState,
     /// A parameter value that is not a finite number, or another bad value.
     BadValue,
+    /// Ignorable coordinates asked to leave the state while the equations depend on them.
+    IgnorableNeeded,
+    /// The derived equations could not be emitted as Rust (a number that is not a finite
+    /// float, or a function left without a definition).
+    Emission,
 }
 
 /// A located error in a model file.

@@ -42,6 +42,91 @@ pub struct ModelFile {
     /// The reference run.
     #[serde(default)]
     pub simulation: Option<SimulationDef>,
+    /// What the generated module contains (default: everything, runtime parameters).
+    #[serde(default)]
+    pub emit: EmitDef,
+}
+
+/// What to emit: the model "models only what a scene requires".
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Emit")]
+pub struct EmitDef {
+    /// Formulations to emit, each as a module with its own right-hand side.
+    #[serde(default = "all_formulations")]
+    pub formulations: Vec<FormulationDef>,
+    /// Extra functions beside the right-hand sides.
+    #[serde(default = "all_functions")]
+    pub functions: Vec<FunctionDef>,
+    /// `Runtime`: parameters are fields of `Params`; `Baked`: folded in as constants.
+    #[serde(default)]
+    pub parameters: ParameterDef,
+    /// Integrate the ignorable coordinates in the reduced method (`false`: state `[q_NI; u_NI]`,
+    /// allowed when nothing in it depends on them).
+    #[serde(default = "yes")]
+    pub integrate_ignorable: bool,
+    /// Above this many common subexpressions, a function's work is split into helpers.
+    #[serde(default = "default_max_lets")]
+    pub max_lets_per_function: usize,
+}
+
+impl Default for EmitDef {
+    fn default() -> Self {
+        EmitDef {
+            formulations: all_formulations(),
+            functions: all_functions(),
+            parameters: ParameterDef::Runtime,
+            integrate_ignorable: true,
+            max_lets_per_function: default_max_lets(),
+        }
+    }
+}
+
+fn all_formulations() -> Vec<FormulationDef> {
+    vec![FormulationDef::ReducedVolterra, FormulationDef::Kane]
+}
+
+fn all_functions() -> Vec<FunctionDef> {
+    vec![FunctionDef::Energy, FunctionDef::WorkRate, FunctionDef::Momenta, FunctionDef::Constraints]
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn default_max_lets() -> usize {
+    2000
+}
+
+/// A formulation of the equations of motion.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
+pub enum FormulationDef {
+    /// The paper's reduced Volterra equations: state `[q; u_NI]`, p - s equations.
+    ReducedVolterra,
+    /// Kane / Gibbs-Appell (standard Volterra): state `[q; u]`, p equations.
+    Kane,
+}
+
+/// An extra emitted function.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
+pub enum FunctionDef {
+    /// `energy(t, q, qdot, params)`: T + V.
+    Energy,
+    /// `work_rate(t, q, qdot, params)`: `Q . q'`, the power of the non-potential forces.
+    WorkRate,
+    /// `momenta(t, q, qdot, params)`: the generalized momenta of the ignorable coordinates.
+    Momenta,
+    /// `constraint_residuals` (velocity level) and `position_residuals` (holonomic).
+    Constraints,
+}
+
+/// How parameters reach the emitted code.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum ParameterDef {
+    /// Fields of `Params`, set at runtime (sweepable).
+    #[default]
+    Runtime,
+    /// Folded into the code as constants (fewer operations).
+    Baked,
 }
 
 /// A frame: its parent frame moved by `translation` (in parent components) and turned by the

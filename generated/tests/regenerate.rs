@@ -1,0 +1,68 @@
+//! Every committed module is exactly what the generator makes of its model today.
+//! `REGENERATE=1 cargo test -p generated --test regenerate` rewrites them instead.
+
+use generator::emit::{Formulation, Options, Parameters, generate};
+
+/// (module, model, how its options differ from the model's own).
+fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
+    vec![
+        ("cart_pendulum", "cart_pendulum", |_| {}),
+        ("three_body", "three_body", |_| {}),
+        ("satellite_boom", "satellite_boom", |_| {}),
+        ("cartesian_pendulum", "cartesian_pendulum", |_| {}),
+        ("rolling_disk", "rolling_disk", |_| {}),
+        ("spring_cart", "spring_cart", |_| {}),
+        // `--baked`
+        ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
+        // `--max-lets 40`
+        ("three_body_split", "three_body", |o| o.max_lets_per_function = 40),
+        // `--drop-ignorable --formulations reduced_volterra`
+        ("three_body_drop", "three_body", |o| {
+            o.integrate_ignorable = false;
+            o.formulations = vec![Formulation::ReducedVolterra];
+        }),
+    ]
+}
+
+#[test]
+fn committed_modules_match_the_generator() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let rewrite = std::env::var_os("REGENERATE").is_some();
+    let mut stale = Vec::new();
+    for (module, model, edit) in variants() {
+        let m = generator::model::load(format!("{root}/models/{model}.ron")).unwrap();
+        let mut options = Options::from_model(&m);
+        edit(&mut options);
+        let code = generate(&m, &options).unwrap().code;
+        let path = format!("{root}/generated/src/{module}.rs");
+        let committed = std::fs::read_to_string(&path).unwrap_or_default();
+        if committed != code {
+            if rewrite {
+                std::fs::write(&path, &code).unwrap();
+            } else {
+                stale.push(module);
+            }
+        }
+    }
+    assert!(stale.is_empty(), "stale generated modules {stale:?}: run `REGENERATE=1 cargo test -p generated --test regenerate`");
+}
+
+#[test]
+fn generation_is_deterministic_across_threads() {
+    const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let root = ROOT;
+    let run = move || {
+        let m = generator::model::load(format!("{root}/models/three_body.ron")).unwrap();
+        generate(&m, &Options::from_model(&m)).unwrap().code
+    };
+    let a = std::thread::spawn(run).join().unwrap();
+    // A second pool that has seen other expressions first.
+    let b = std::thread::spawn(move || {
+        let m = generator::model::load(format!("{root}/models/cart_pendulum.ron")).unwrap();
+        let _ = generate(&m, &Options::from_model(&m)).unwrap();
+        run()
+    })
+    .join()
+    .unwrap();
+    assert_eq!(a, b);
+}

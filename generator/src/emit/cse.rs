@@ -1,0 +1,102 @@
+//! Common-subexpression elimination over all outputs of one function.
+//!
+//! The expression pool is hash-consed, so a common subexpression is simply a node reached
+//! from more than one place. [`plan`] lists, in evaluation order, the nodes that get their own
+//! `let`: those used at least twice, and the compound bases of small integer powers (so
+//! `x^2` becomes `x * x`). The order comes from a depth-first walk in the outputs' order and
+//! the canonical child order, so it never depends on how the expressions were built.
+//!
+//! ```
+//! use generator::emit::cse::plan;
+//! use generator::symbolic::Expr;
+//! let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+//! let s = x.sin();
+//! let bound = plan(&[s * y, s + y]);
+//! assert_eq!(bound, vec![s]);
+//! ```
+
+use crate::symbolic::{Expr, Node};
+use num_traits::{Signed, ToPrimitive};
+use std::collections::HashMap;
+
+fn is_leaf(e: Expr) -> bool {
+    matches!(&*e.node(), Node::Num(_) | Node::Sym(_))
+}
+
+/// The subexpressions to bind, in an order where each comes after everything it uses.
+pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
+    let order = post_order(outputs);
+    let mut uses: HashMap<Expr, usize> = HashMap::new();
+    let mut force = std::collections::HashSet::new();
+    for e in outputs {
+        *uses.entry(*e).or_default() += 1;
+    }
+    for &e in &order {
+        for c in e.children() {
+            *uses.entry(c).or_default() += 1;
+        }
+        if let Node::Mul { factors, .. } = &*e.node() {
+            for (b, ex) in factors {
+                let small = ex.is_integer() && ex.abs().to_integer().to_i64().is_some_and(|n| n == 2 || n == 3);
+                if small {
+                    force.insert(*b);
+                }
+            }
+        }
+    }
+    order.into_iter().filter(|e| !is_leaf(*e) && (uses[e] >= 2 || force.contains(e))).collect()
+}
+
+/// Every node reachable from `outputs`, children before parents, each once.
+pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
+    let mut seen = std::collections::HashSet::new();
+    let mut order = Vec::new();
+    for &root in outputs {
+        if !seen.insert(root) {
+            continue;
+        }
+        // (node, its children, next child index)
+        let mut stack: Vec<(Expr, Vec<Expr>, usize)> = vec![(root, root.children(), 0)];
+        while let Some((node, children, next)) = stack.last_mut() {
+            if *next < children.len() {
+                let c = children[*next];
+                *next += 1;
+                if seen.insert(c) {
+                    let cc = c.children();
+                    stack.push((c, cc, 0));
+                }
+            } else {
+                order.push(*node);
+                stack.pop();
+            }
+        }
+    }
+    order
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn children_come_before_parents_and_squares_bind_their_base() {
+        let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+        let base = x + y;
+        let e = base.powi(2) + x.cos();
+        let bound = plan(&[e]);
+        assert_eq!(bound, vec![base]);
+        let order = post_order(&[e]);
+        let pos = |n: Expr| order.iter().position(|o| *o == n).unwrap();
+        assert!(pos(base) < pos(base.powi(2)) && pos(base.powi(2)) < pos(e));
+    }
+
+    #[test]
+    fn order_does_not_depend_on_construction_order() {
+        let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+        let first = (a.sin() * b.cos() + b.cos() * a.sin().powi(3)).to_string();
+        let e = b.cos() * a.sin().powi(3) + a.sin() * b.cos();
+        assert_eq!(e.to_string(), first);
+        let names: Vec<String> = plan(&[e]).iter().map(|n| n.to_string()).collect();
+        assert_eq!(names, vec!["sin(a)", "cos(b)"]);
+    }
+}

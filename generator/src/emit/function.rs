@@ -1,0 +1,233 @@
+//! One emitted function body: input bindings, one `let` per common subexpression, and the
+//! outputs; split into helper functions that fill a scratch array when it would be too long
+//! to compile quickly (see `shared/crates.md`: rustc time grows about quadratically above a
+//! few thousand statements in one function).
+//!
+//! ```
+//! use generator::emit::function::{Arg, Input, body};
+//! use generator::symbolic::Expr;
+//! use quote::quote;
+//! let x = Expr::sym("x");
+//! let args = [Arg::new("state", quote!(&[f64; 1]))];
+//! let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
+//! let b = body("f", &[x.sin() * x, x.sin() + x], &inputs, &args, usize::MAX).unwrap();
+//! assert_eq!(b.lets, 1); // sin(x), shared by both outputs
+//! assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x);
+//! ```
+
+use super::cse::plan;
+use super::lower::{LowerError, lower};
+use super::optimize::{factor_sums, share_reciprocals};
+use super::ops::OpCount;
+use crate::symbolic::{Expr, Symbol};
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::quote;
+use std::cell::RefCell;
+use std::collections::{BTreeSet, HashMap, HashSet};
+
+/// A function argument.
+#[derive(Clone, Debug)]
+pub struct Arg {
+    pub name: String,
+    pub ty: TokenStream,
+}
+
+impl Arg {
+    /// An argument `name: ty`.
+    pub fn new(name: &str, ty: TokenStream) -> Arg {
+        Arg { name: name.to_string(), ty }
+    }
+}
+
+/// A symbol's value inside the function: `let ident = source;`, where `source` reads
+/// argument number `arg`.
+#[derive(Clone, Debug)]
+pub struct Input {
+    pub symbol: Symbol,
+    pub ident: String,
+    pub arg: usize,
+    pub source: TokenStream,
+}
+
+impl Input {
+    /// A binding of `symbol` to `ident`, read from argument `arg` by `source`.
+    pub fn new(symbol: Symbol, ident: &str, arg: usize, source: TokenStream) -> Input {
+        Input { symbol, ident: ident.to_string(), arg, source }
+    }
+}
+
+/// The pieces of a function body.
+#[derive(Clone, Debug)]
+pub struct Body {
+    /// Statements: input bindings, then the `let`s (or the calls of the helper parts).
+    pub stmts: Vec<TokenStream>,
+    /// One expression per output, in terms of the `let`s and inputs.
+    pub outputs: Vec<TokenStream>,
+    /// Helper functions (the parts of a split body), to place beside the function.
+    pub helpers: Vec<TokenStream>,
+    /// Arguments the statements and outputs read.
+    pub used_args: BTreeSet<usize>,
+    /// Operations of the whole body.
+    pub ops: OpCount,
+    /// Number of common subexpressions bound.
+    pub lets: usize,
+}
+
+pub(crate) fn ident(name: &str) -> Ident {
+    Ident::new(name, Span::call_site())
+}
+
+/// Argument list with unused arguments prefixed by `_`.
+pub fn arg_list(args: &[Arg], used: &BTreeSet<usize>) -> Vec<TokenStream> {
+    args.iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let name = if used.contains(&i) { ident(&a.name) } else { ident(&format!("_{}", a.name)) };
+            let ty = &a.ty;
+            quote!(#name: #ty)
+        })
+        .collect()
+}
+
+/// Builds the body computing `outputs`. Above `max_lets` bound subexpressions the work goes to
+/// helper functions `<name>_part<k>` that fill a scratch array.
+pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize) -> Result<Body, LowerError> {
+    let outputs = &share_reciprocals(&factor_sums(outputs));
+    let bound = plan(outputs);
+    let by_symbol: HashMap<Symbol, &Input> = inputs.iter().map(|i| (i.symbol, i)).collect();
+    let taken: HashSet<String> = inputs.iter().map(|i| i.ident.clone()).chain(args.iter().map(|a| a.name.clone())).collect();
+    let mut ops = OpCount::default();
+    if bound.len() <= max_lets {
+        let names = let_names(bound.len(), &taken);
+        let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
+        let used = RefCell::new(BTreeSet::new());
+        let symbol = |s: Symbol| {
+            let inp = by_symbol.get(&s)?;
+            used.borrow_mut().insert(s);
+            let i = ident(&inp.ident);
+            Some(quote!(#i))
+        };
+        let reference = |e: Expr| {
+            index.get(&e).map(|&k| {
+                let i = ident(&names[k]);
+                quote!(#i)
+            })
+        };
+        let mut lets = Vec::new();
+        for (k, e) in bound.iter().enumerate() {
+            let (t, o) = lower(*e, &symbol, &reference)?;
+            ops.merge(&o);
+            let i = ident(&names[k]);
+            lets.push(quote!(let #i = #t;));
+        }
+        let mut outs = Vec::new();
+        for e in outputs {
+            let (t, o) = match reference(*e) {
+                Some(t) => (t, OpCount::default()),
+                None => lower(*e, &symbol, &reference)?,
+            };
+            ops.merge(&o);
+            outs.push(t);
+        }
+        let used = used.into_inner();
+        let (mut stmts, used_args) = input_lets(inputs, &used);
+        stmts.extend(lets);
+        return Ok(Body { stmts, outputs: outs, helpers: vec![], used_args, ops, lets: bound.len() });
+    }
+    // Split: v[k] holds bound subexpression k; part j computes a contiguous range of them.
+    let n = bound.len();
+    let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
+    let reference = |e: Expr| {
+        index.get(&e).map(|&k| {
+            let l = Literal::usize_unsuffixed(k);
+            quote!(v[#l])
+        })
+    };
+    let size = Literal::usize_unsuffixed(n);
+    let mut helpers = Vec::new();
+    let mut calls = Vec::new();
+    let mut all_used_args = BTreeSet::new();
+    for (j, chunk) in bound.chunks(max_lets.max(1)).enumerate() {
+        let used = RefCell::new(BTreeSet::new());
+        let symbol = |s: Symbol| {
+            let inp = by_symbol.get(&s)?;
+            used.borrow_mut().insert(s);
+            let i = ident(&inp.ident);
+            Some(quote!(#i))
+        };
+        let mut lines = Vec::new();
+        for e in chunk {
+            let (t, o) = lower(*e, &symbol, &reference)?;
+            ops.merge(&o);
+            let target = reference(*e).expect("bound");
+            lines.push(quote!(#target = #t;));
+        }
+        let (ins, used_args) = input_lets(inputs, &used.into_inner());
+        all_used_args.extend(used_args.iter().copied());
+        let part = ident(&format!("{name}_part{j}"));
+        let param_types = arg_list(args, &used_args);
+        helpers.push(quote! {
+            #[allow(non_snake_case)]
+            #[inline(never)]
+            fn #part(#(#param_types,)* v: &mut [f64; #size]) {
+                #(#ins)*
+                #(#lines)*
+            }
+        });
+        // Pass every argument (the part's signature has them all, unused ones prefixed).
+        let all: Vec<Ident> = args.iter().map(|a| ident(&a.name)).collect();
+        calls.push(quote!(#part(#(#all,)* &mut v);));
+        all_used_args.extend(0..args.len());
+    }
+    let used = RefCell::new(BTreeSet::new());
+    let symbol = |s: Symbol| {
+        let inp = by_symbol.get(&s)?;
+        used.borrow_mut().insert(s);
+        let i = ident(&inp.ident);
+        Some(quote!(#i))
+    };
+    let mut outs = Vec::new();
+    for e in outputs {
+        let (t, o) = match reference(*e) {
+            Some(t) => (t, OpCount::default()),
+            None => lower(*e, &symbol, &reference)?,
+        };
+        ops.merge(&o);
+        outs.push(t);
+    }
+    let (mut stmts, used_args) = input_lets(inputs, &used.into_inner());
+    all_used_args.extend(used_args);
+    stmts.push(quote!(let mut v = [0.0f64; #size];));
+    stmts.extend(calls);
+    Ok(Body { stmts, outputs: outs, helpers, used_args: all_used_args, ops, lets: n })
+}
+
+/// `let x = source;` for each used input, in the inputs' order; and the arguments they read.
+fn input_lets(inputs: &[Input], used: &BTreeSet<Symbol>) -> (Vec<TokenStream>, BTreeSet<usize>) {
+    let mut stmts = Vec::new();
+    let mut args = BTreeSet::new();
+    for inp in inputs.iter().filter(|i| used.contains(&i.symbol)) {
+        args.insert(inp.arg);
+        // An empty source: the argument itself (such as `t`).
+        if !inp.source.is_empty() {
+            let i = ident(&inp.ident);
+            let src = &inp.source;
+            stmts.push(quote!(let #i = #src;));
+        }
+    }
+    (stmts, args)
+}
+
+/// `x0, x1, ...`, skipping names already taken.
+fn let_names(n: usize, taken: &HashSet<String>) -> Vec<String> {
+    let mut out = Vec::with_capacity(n);
+    let mut k = 0;
+    while out.len() < n {
+        let name = format!("x{k}");
+        if !taken.contains(&name) {
+            out.push(name);
+        }
+        k += 1;
+    }
+    out
+}

@@ -1,0 +1,112 @@
+//! Emission: the derived equations as a flat, specialized Rust module.
+//!
+//! [`generate`] runs the whole pipeline on a model: mechanics, the ignorable coordinates, the
+//! requested formulations, then [`module`] writes the module as a syntax tree (quote), printed
+//! by prettyplease. Inside each function, [`cse`] picks one `let` per common subexpression,
+//! [`lower`] turns nodes into Rust expressions and [`ops`] counts what they cost.
+//!
+//! ```no_run
+//! let model = generator::model::load("models/cart_pendulum.ron").unwrap();
+//! let out = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+//! std::fs::write("cart_pendulum.rs", &out.code).unwrap();
+//! eprintln!("{}", out.summary);
+//! ```
+
+pub mod cse;
+pub mod function;
+pub mod lower;
+pub mod module;
+pub mod ops;
+pub mod optimize;
+pub mod prepare;
+
+pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
+use crate::model::{Model, ModelError};
+use ops::OpCount;
+use std::fmt;
+use std::time::Duration;
+
+/// What to emit. [`Options::from_model`] reads the model's `emit` section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    pub formulations: Vec<Formulation>,
+    pub functions: Vec<Function>,
+    pub parameters: Parameters,
+    pub integrate_ignorable: bool,
+    pub max_lets_per_function: usize,
+}
+
+impl Options {
+    /// The options the model file asks for.
+    pub fn from_model(model: &Model) -> Options {
+        let e = &model.def.emit;
+        let mut formulations = e.formulations.clone();
+        formulations.sort();
+        formulations.dedup();
+        let mut functions = e.functions.clone();
+        functions.sort();
+        functions.dedup();
+        Options {
+            formulations,
+            functions,
+            parameters: e.parameters,
+            integrate_ignorable: e.integrate_ignorable,
+            max_lets_per_function: e.max_lets_per_function,
+        }
+    }
+}
+
+/// The generated module and what it took.
+#[derive(Clone, Debug)]
+pub struct Generated {
+    /// The Rust source, formatted; identical bytes for identical input.
+    pub code: String,
+    pub summary: Summary,
+}
+
+/// Sizes and costs, printed by the command line to stderr.
+#[derive(Clone, Debug)]
+pub struct Summary {
+    pub model: String,
+    pub m: usize,
+    pub r: usize,
+    pub p: usize,
+    pub s: usize,
+    /// Per formulation: name, states, equations.
+    pub formulations: Vec<(String, usize, usize)>,
+    /// Per emitted function: name, common subexpressions bound, operations.
+    pub functions: Vec<(String, usize, OpCount)>,
+    /// Time spent deriving (mechanics and formulations) and emitting.
+    pub derive_time: Duration,
+    pub emit_time: Duration,
+}
+
+impl Summary {
+    /// The operation count of the function called `name` (e.g. `"kane::rhs"`).
+    pub fn ops(&self, name: &str) -> Option<&OpCount> {
+        self.functions.iter().find(|(n, _, _)| n == name).map(|(_, _, o)| o)
+    }
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "model {}: m = {}, r = {}, p = {}, s = {}", self.model, self.m, self.r, self.p, self.s)?;
+        for (name, states, eqs) in &self.formulations {
+            writeln!(f, "  {name:<18} {states:>3} states, {eqs:>3} equations")?;
+        }
+        for (name, lets, ops) in &self.functions {
+            writeln!(f, "  {name:<28} {lets:>5} lets, {ops}")?;
+        }
+        write!(
+            f,
+            "  derived in {:.1} ms, emitted in {:.1} ms",
+            self.derive_time.as_secs_f64() * 1e3,
+            self.emit_time.as_secs_f64() * 1e3
+        )
+    }
+}
+
+/// Derives and emits the module of `model`.
+pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
+    module::generate(model, options)
+}

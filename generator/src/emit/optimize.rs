@@ -1,0 +1,165 @@
+//! Rewrites that make emitted code cheaper without changing its value (beyond rounding):
+//!
+//! - [`factor_sums`]: multivariate Horner form. In a sum, the factor shared by the most
+//!   terms is pulled out, recursively: `a*x*y + b*x*y + x` becomes `x*(y*(a + b) + 1)`. The
+//!   pieces it creates are hash-consed like everything else, so a factor sum such as
+//!   `M + m1 + m2` found in several places is computed once.
+//! - [`share_reciprocals`]: a denominator used by two or more products is inverted once,
+//!   `1/d`, and multiplied in (one division instead of many).
+//!
+//! ```
+//! use generator::emit::optimize::factor_sums;
+//! use generator::symbolic::Expr;
+//! let (a, b, x, y) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("x"), Expr::sym("y"));
+//! let e = a * x * y + b * x * y + x;
+//! assert_eq!(factor_sums(&[e])[0], x * (y * (a + b) + 1));
+//! ```
+
+use super::cse::post_order;
+use crate::symbolic::number::Rat;
+use crate::symbolic::{Expr, Node, Symbol};
+use num_traits::{One, Signed, Zero};
+use std::collections::HashMap;
+
+/// The named function that emission lowers as `1.0 / x`.
+pub fn reciprocal_symbol() -> Symbol {
+    Symbol::new("1/")
+}
+
+/// A term of a sum as coefficient times factors.
+type Term = (Rat, Vec<(Expr, Rat)>);
+
+fn as_term(e: Expr, c: &Rat) -> Term {
+    match &*e.node() {
+        Node::Mul { coefficient, factors } => (coefficient * c, factors.clone()),
+        _ => (c.clone(), vec![(e, Rat::one())]),
+    }
+}
+
+fn from_term(t: &Term) -> Expr {
+    Expr::make_mul(t.0.clone(), t.1.clone())
+}
+
+/// Horner form of a sum of terms (constant kept apart).
+fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
+    // Count, for each (base, sign of exponent), the terms holding it with an integer exponent.
+    let mut count: HashMap<(Expr, bool), usize> = HashMap::new();
+    for (_, factors) in &terms {
+        for (b, e) in factors {
+            if e.is_integer() && !e.is_zero() {
+                *count.entry((*b, e.is_negative())).or_default() += 1;
+            }
+        }
+    }
+    let best = count
+        .iter()
+        .filter(|(_, n)| **n >= 2)
+        .max_by(|(ka, na), (kb, nb)| na.cmp(nb).then_with(|| kb.0.key().cmp(&ka.0.key())).then_with(|| kb.1.cmp(&ka.1)))
+        .map(|(k, _)| *k);
+    let Some((base, negative)) = best else {
+        return Expr::make_add(constant, terms.iter().map(|t| (from_term(t), Rat::one())).collect());
+    };
+    let step = if negative { -Rat::one() } else { Rat::one() };
+    let mut with = Vec::new();
+    let mut without = Vec::new();
+    for (c, factors) in terms {
+        let hit = factors.iter().any(|(b, e)| *b == base && e.is_integer() && e.is_negative() == negative && !e.is_zero());
+        if hit {
+            let reduced: Vec<(Expr, Rat)> = factors
+                .into_iter()
+                .filter_map(|(b, e)| {
+                    if b == base {
+                        let r = e - &step;
+                        (!r.is_zero()).then_some((b, r))
+                    } else {
+                        Some((b, e))
+                    }
+                })
+                .collect();
+            with.push((c, reduced));
+        } else {
+            without.push((c, factors));
+        }
+    }
+    let inner = horner(Rat::zero(), with);
+    let pulled = Expr::make_mul(Rat::one(), vec![(base, step), (inner, Rat::one())]);
+    let rest = horner(constant, without);
+    rest + pulled
+}
+
+/// Horner-factors every sum in `outputs` (bottom-up, shared across outputs).
+pub fn factor_sums(outputs: &[Expr]) -> Vec<Expr> {
+    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    for e in post_order(outputs) {
+        let rebuilt = e.map_children(|c| memo[&c]);
+        let r = match &*rebuilt.node() {
+            Node::Add { constant, terms } if terms.len() >= 2 => {
+                horner(constant.clone(), terms.iter().map(|(t, c)| as_term(*t, c)).collect())
+            }
+            _ => rebuilt,
+        };
+        memo.insert(e, r);
+    }
+    outputs.iter().map(|e| memo[e]).collect()
+}
+
+/// Replaces denominators used by two or more products with a shared reciprocal.
+pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
+    let order = post_order(outputs);
+    let mut uses: HashMap<Expr, usize> = HashMap::new();
+    for e in &order {
+        if let Node::Mul { factors, .. } = &*e.node() {
+            for (b, ex) in factors {
+                if ex.is_negative() && ex.is_integer() {
+                    *uses.entry(*b).or_default() += 1;
+                }
+            }
+        }
+    }
+    let recip = reciprocal_symbol();
+    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    for e in order {
+        let r = match &*e.node() {
+            Node::Mul { coefficient, factors } => {
+                let f = factors
+                    .iter()
+                    .map(|(b, ex)| {
+                        let nb = memo[b];
+                        if ex.is_negative() && ex.is_integer() && uses[b] >= 2 {
+                            (Expr::apply_named(recip, nb), -ex)
+                        } else {
+                            (nb, ex.clone())
+                        }
+                    })
+                    .collect();
+                Expr::make_mul(coefficient.clone(), f)
+            }
+            _ => e.map_children(|c| memo[&c]),
+        };
+        memo.insert(e, r);
+    }
+    outputs.iter().map(|e| memo[e]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::symbolic::eval::Env;
+
+    #[test]
+    fn rewrites_keep_the_value() {
+        let (a, b, x, y) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("x"), Expr::sym("y"));
+        let e = (a * x * y + b * x * y + x * 3 - y.powi(2) * a) / (x + y) + b / (x + y) + 2;
+        let mut env = Env::default();
+        for (s, v) in [("a", 0.3), ("b", -1.7), ("x", 2.5), ("y", 0.9)] {
+            env.set(Symbol::new(s), v);
+        }
+        env.define(reciprocal_symbol(), Symbol::new("arg"), Symbol::new("arg").expr().recip());
+        let want = e.eval(&env).unwrap();
+        let f = factor_sums(&[e]);
+        let g = share_reciprocals(&f);
+        for out in [f[0], g[0]] {
+            assert!((out.eval(&env).unwrap() - want).abs() < 1e-12 * want.abs());
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! Expressions made ready for emission: time functions inlined, `pi` and (when baked) the
+//! parameters replaced by numbers; and triangle-inequality magnitudes for residual tests.
+//!
+//! ```
+//! use generator::emit::prepare::magnitude;
+//! use generator::symbolic::Expr;
+//! let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+//! assert_eq!(magnitude(a - b * 2), a.abs() + b.abs() * 2);
+//! ```
+
+use crate::model::Model;
+use crate::symbolic::number::rat_from_f64;
+use crate::symbolic::{Expr, Node, Symbol};
+use num_traits::{Signed, Zero};
+use std::collections::HashMap;
+
+/// Rewrites expressions for emission, memoized over the DAG.
+pub struct Preparer {
+    numbers: HashMap<Symbol, Expr>,
+    functions: HashMap<String, (Symbol, Expr)>,
+    memo: HashMap<Expr, Expr>,
+}
+
+impl Preparer {
+    /// For `model`; with `bake`, parameters become constants.
+    pub fn new(model: &Model, bake: bool) -> Preparer {
+        let mut numbers = HashMap::new();
+        numbers.insert(Symbol::new("pi"), Expr::num(rat_from_f64(std::f64::consts::PI).expect("finite")));
+        if bake {
+            for (s, v) in &model.parameters {
+                // Values were checked finite when the model was loaded.
+                numbers.insert(*s, Expr::num(rat_from_f64(*v).expect("finite parameter")));
+            }
+        }
+        let functions = model.time_functions.iter().map(|(f, body)| (f.name(), (model.t, *body))).collect();
+        Preparer { numbers, functions, memo: HashMap::new() }
+    }
+
+    /// The expression with functions inlined and numbers substituted.
+    pub fn prepare(&mut self, e: Expr) -> Expr {
+        if let Some(&r) = self.memo.get(&e) {
+            return r;
+        }
+        let r = match &*e.node() {
+            Node::Num(_) => e,
+            Node::Sym(s) => self.numbers.get(s).copied().unwrap_or(e),
+            Node::Apply(name, arg) => {
+                let arg = self.prepare(*arg);
+                let full = name.name();
+                let base = full.trim_end_matches('\'');
+                let order = full.len() - base.len();
+                match self.functions.get(base).copied() {
+                    Some((param, body)) => {
+                        let mut d = body;
+                        for _ in 0..order {
+                            d = d.diff(param);
+                        }
+                        let d = self.prepare(d);
+                        d.subs(&HashMap::from([(param, arg)]))
+                    }
+                    None => Expr::apply_named(*name, arg),
+                }
+            }
+            _ => e.map_children(|c| self.prepare(c)),
+        };
+        self.memo.insert(e, r);
+        r
+    }
+
+    /// [`Preparer::prepare`] on each.
+    pub fn prepare_all(&mut self, items: &[Expr]) -> Vec<Expr> {
+        items.iter().map(|e| self.prepare(*e)).collect()
+    }
+}
+
+/// An upper bound of `|e|` by the triangle inequality: sums become sums of magnitudes and
+/// products products of magnitudes. A residual is negligible against it when it is a few
+/// rounding errors of this size.
+pub fn magnitude(e: Expr) -> Expr {
+    match &*e.node() {
+        Node::Num(r) => Expr::num(r.abs()),
+        Node::Add { constant, terms } => {
+            let mut out = Expr::num(constant.abs());
+            for (t, c) in terms {
+                out = out + magnitude(*t).scale(&c.abs());
+            }
+            out
+        }
+        Node::Mul { coefficient, factors } => {
+            let mut out = Expr::num(coefficient.abs());
+            for (b, ex) in factors {
+                let positive_integer = ex.is_integer() && !ex.is_negative() && !ex.is_zero();
+                out = out * if positive_integer { magnitude(*b).pow_rat(ex) } else { b.abs().pow_rat(ex) };
+            }
+            out
+        }
+        _ => e.abs(),
+    }
+}
