@@ -110,3 +110,33 @@ impl fmt::Display for Summary {
 pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
     module::generate(model, options)
 }
+
+/// Why [`write_module`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The model is invalid or cannot be emitted.
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    /// The output could not be written.
+    #[error("cannot write `{path}`: {source}")]
+    Io { path: String, source: std::io::Error },
+}
+
+/// Loads `model`, generates its module with the model's own options, and writes it to `out`
+/// only if it changed (so a `build.rs` does not trigger needless rebuilds). For a downstream
+/// crate's `build.rs`:
+///
+/// ```no_run
+/// let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("cart_pendulum.rs");
+/// generator::emit::write_module("models/cart_pendulum.ron", &out).unwrap();
+/// println!("cargo:rerun-if-changed=models/cart_pendulum.ron");
+/// ```
+pub fn write_module(model: impl AsRef<std::path::Path>, out: impl AsRef<std::path::Path>) -> Result<Summary, WriteError> {
+    let model = crate::model::load(model)?;
+    let generated = generate(&model, &Options::from_model(&model))?;
+    let out = out.as_ref();
+    if std::fs::read_to_string(out).ok().as_deref() != Some(generated.code.as_str()) {
+        std::fs::write(out, &generated.code).map_err(|source| WriteError::Io { path: out.display().to_string(), source })?;
+    }
+    Ok(generated.summary)
+}
