@@ -371,61 +371,30 @@ pub mod reduced_volterra {
         let x2 = x0 * u2 + u3 * x1;
         let x3 = f64::cos(theta);
         let x4 = 1.0 / x3;
-        let x5 = u2 * x1 - u3 * x0;
-        let x6 = f64::sin(theta);
-        let x7 = x6 * x2 * x4 + u1;
-        let x8 = 1.0 / (m + mg);
-        let x9 = f64::cos(psi);
-        let x10 = rho + 0.5 * l;
-        let x11 = f64::sin(psi);
-        let x12 = x10 * x0 * x11 + x6 * x9 * x10 * x1;
-        let x13 = u2 * x12;
-        let x14 = -rho - 0.5 * l;
-        let x15 = x10 * x1 * x11 + x6 * x14 * x9 * x0;
-        let x16 = x15 * u3;
-        let x17 = x13 - u4 * x9 * x3 + x16;
-        let x18 = u4 * x3 * x11;
-        let x19 = x14 * x9 * x1 + x6 * x14 * x0 * x11;
-        let x20 = (x6 * x10 * x1 * x11 + x14 * x9 * x0) * u2 - x18 + x19 * u3;
-        let x21 = x6 * u4;
-        let x22 = x3 * (x10 * u2 * x1 + x14 * u3 * x0) + x21;
-        let x23 = -Ixy;
-        let x24 = -Ixz;
-        let x25 = x8 * m;
-        let x26 = 1.0 - x25;
-        let x27 = l * x26;
-        let x28 = (l * l * (0.25 - 0.25 * x25) + rho * (x27 + rho * x26)) * m;
-        let x29 = -Iyz;
-        let x30 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x31 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x32 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x33 = rho + 0.5 * l + x8 * x14 * m;
-        let x34 = x25 - 1.0;
-        let x35 = x22 * x8 * m - x3 * x10 * x5 - x21;
-        let x36 = x9 * x0;
-        let x37 = x6 * x1 * x11;
-        let x38 = x37 - x36;
-        let x39 = x9 * x10 * x0 + x6 * x14 * x1 * x11;
-        let x40 = x0 * x11;
-        let x41 = x6 * x9 * x1;
-        let x42 = x40 + x41;
-        let x43 = x27 + (2.0 - 2.0 * x25) * rho;
-        let x44 = x8 * m * (x13 + x16) + x9 * (u4 * x3 * x26 - x6 * x10 * x5)
-            - x2 * x10 * x11;
-        let x45 = x8 * x39 * m + x10 * x38;
-        let x46 = x6 * x9 * x0;
-        let x47 = x1 * x11;
-        let x48 = (x46 - x47) * x10 + x8 * x15 * m;
-        let x49 = x9 * x1;
-        let x50 = x6 * x0 * x11;
-        let x51 = x6 * x5 * x11;
-        let x52 = x2 * x9;
-        let x53 = x18 + x10 * (x52 - x51) + x8 * m * x20;
-        let x54 = x14 * x0 * x11 + x6 * x14 * x9 * x1;
-        let x55 = x47 - x46;
-        let x56 = x6 * x10 * x0 * x11 + x9 * x10 * x1;
-        let x57 = -x49 - x50;
-        let x58 = x2 * x11 + x6 * x9 * x5;
+        let x5 = f64::sin(theta);
+        let x6 = 1.0 / (m + mg);
+        let x7 = f64::cos(psi);
+        let x8 = rho + 0.5 * l;
+        let x9 = f64::sin(psi);
+        let x10 = -rho - 0.5 * l;
+        let x11 = -Ixy;
+        let x12 = -Ixz;
+        let x13 = x6 * m;
+        let x14 = 1.0 - x13;
+        let x15 = l * x14;
+        let x16 = rho * x14;
+        let x17 = (l * l * (0.25 - 0.25 * x13) + rho * (x15 + x16)) * m;
+        let x18 = -Iyz;
+        let x19 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x20 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x21 = Ixy * u2;
+        let x22 = Ixx * u1;
+        let x23 = u3 * Ixz;
+        let x24 = l * (0.5 * x13 - 0.5) + rho * (x13 - 1.0);
+        let x25 = x16 + l * (0.5 - 0.5 * x13);
+        let x26 = x24 * x25;
+        let x27 = x6 * x6 * x10 * m * x8 * mg;
+        let x28 = x15 + (2.0 - 2.0 * x13) * rho;
         let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -435,49 +404,21 @@ pub mod reduced_volterra {
             });
         }
         let mut mass: [[f64; 4]; 4] = [
-            [Ixx, x23, x24, 0.0],
-            [x23, Iyy + x28, x29, 0.0],
-            [x24, x29, x28 + Izz, 0.0],
-            [0.0, 0.0, 0.0, m * x26],
+            [Ixx, x11, x12, 0.0],
+            [x11, Iyy + x17, x18, 0.0],
+            [x12, x18, x17 + Izz, 0.0],
+            [0.0, 0.0, 0.0, m * x14],
         ];
         let mut force: [f64; 4] = [
-            x31 * u3 - x30 * u2,
-            x30 * u1 - x32 * u3
-                + ((x6 * x33 * x5 * x1 + x3 * (x0 * x7 * x33 + u4 * x34 * x1)) * x35
-                    + x8 * x8
-                        * ((u4 * x38 + x19 * x7 + x2 * x4 * x12
-                            + x3 * x10 * x5 * x1 * x11) * x20
-                            + x22 * (x14 * (x3 * x0 * x7 + x6 * x5 * x1) + u4 * x3 * x1)
-                            + (x15 * x7 + x2 * x4 * x39 + u4 * x42
-                                + x9 * x3 * x10 * x5 * x1) * x17) * m * mg - x43 * u4 * u2
-                    + x44
-                        * (x9 * x3 * x10 * x34 * x5 * x1 + x2 * x4 * x45 + x7 * x48
-                            + (x8 * x42 * m - x40 - x41) * u4)
-                    + ((x19 * x8 * m + x10 * (x49 + x50)) * x7
-                        + u4 * (x36 + x8 * m * x38 - x37)
-                        + x3 * x10 * x34 * x5 * x1 * x11
-                        + x2 * x4 * ((-x40 - x41) * x10 + x8 * m * x12)) * x53) * m,
+            x20 * u3 - x19 * u2,
+            u3 * (x21 - x22 + x23 + m * u1 * (-x26 - x27)) + x19 * u1
+                - x28 * u4 * m * u2,
+            ((x26 + x27) * u1 * u2 - x28 * u4 * u3) * m - x20 * u1
+                + (x22 - x21 - x23) * u2,
             m
-                * (x8 * x8 * m
-                    * (x22 * (x6 * x10 * x0 * x5 + (x14 * x7 * x1 - u4 * x0) * x3)
-                        + x17
-                            * (x14 * x9 * x3 * x0 * x5 + x54 * x7 + u4 * x55
-                                + x2 * x4 * x56)
-                        + (u4 * x57 + x2 * x4 * x15 + x39 * x7
-                            + x14 * x3 * x0 * x5 * x11) * x20) * mg - x43 * u4 * u3
-                    + (u4 * (x8 * x57 * m + x49 + x50) + x45 * x7 + x2 * x4 * x48
-                        + x3 * x0 * x33 * x5 * x11) * x53
-                    + (x6 * x10 * x0 * x34 * x5 + (u4 * x0 * x26 + x7 * x33 * x1) * x3)
-                        * x35
-                    + x44
-                        * (x2 * x4 * (x8 * x56 * m + x57 * x10)
-                            + (x42 * x10 + x8 * x54 * m) * x7 + x9 * x3 * x0 * x33 * x5
-                            + u4 * (x46 - x47 + x8 * x55 * m))) - x31 * u1 + x32 * u2,
-            0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t)
-                + (x34 * (x3 * x5 * x35 + x44 * x58)
-                    + x53 * (x2 * x9 * x26 + x6 * x34 * x5 * x11)
-                    + (x17 * x58 + (x51 - x52) * x20 + x22 * x3 * x5) * x8 * x8 * m * mg)
-                    * m,
+                * ((x8 * u2 * u2 - x10 * u3 * u3) * x6 * x6 * m * mg
+                    + (u3 * u3 * x25 - x24 * u2 * u2) * x14)
+                + 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -487,12 +428,18 @@ pub mod reduced_volterra {
             });
         }
         dstate[0] = x2 * x4;
-        dstate[1] = x5;
-        dstate[2] = x7;
+        dstate[1] = u2 * x1 - u3 * x0;
+        dstate[2] = x5 * x2 * x4 + u1;
         dstate[3] = u4;
-        dstate[4] = x8 * (G_X + x17 * m);
-        dstate[5] = (G_Y + m * x20) * x8;
-        dstate[6] = x8 * (x22 * m + G_Z);
+        dstate[4] = x6
+            * (G_X
+                + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
+                    + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m);
+        dstate[5] = (G_Y
+            + m
+                * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
+                    + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6;
+        dstate[6] = x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z);
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
@@ -728,43 +675,55 @@ pub mod kane {
         let x23 = x21 - x22;
         let x24 = x23 * m * x19;
         let x25 = -(x3 * m * x19 * x1);
-        let x26 = x8 * x16 * x0 - x1 * x14;
-        let x27 = x26 * m * x19;
-        let x28 = x16 * x1;
-        let x29 = x8 * x0 * x14;
-        let x30 = x28 + x29;
-        let x31 = m * x19 * x30;
-        let x32 = x3 * m * x19 * x0;
-        let x33 = x16 * x3 * m;
-        let x34 = x3 * m * x14;
-        let x35 = -(x8 * m);
-        let x36 = m + mg;
-        let x37 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x38 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x39 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x40 = x8 * u4;
-        let x41 = u7 - x3 * x19 * x7 - x40;
-        let x42 = u4 * x3 * x14;
-        let x43 = x2 * x16 - x8 * x7 * x14;
-        let x44 = u6 + x42 + x19 * x43;
-        let x45 = 2.0 * rho + l;
-        let x46 = u7 * x3 * x1;
-        let x47 = u4 * x3;
-        let x48 = x8 * x19 * x7;
-        let x49 = u5 + (x47 - x48) * x16 - x2 * x19 * x14;
-        let x50 = x22 - x21;
-        let x51 = u6 * x30;
-        let x52 = u7 * x3 * x0;
-        let x53 = u5 * x26;
-        let x54 = u5 * x16;
-        let x55 = u6 * x14;
-        let x56 = -x54 - x55;
-        let x57 = u7 * x8;
-        let x58 = -x28 - x29;
-        let x59 = x15 + x17;
-        let x60 = u3 * x26 + x18 * u2;
-        let x61 = x5 - x6;
-        let x62 = x3 * x19 * x61 - x40;
+        let x26 = x8 * x16 * x0;
+        let x27 = x1 * x14;
+        let x28 = x26 - x27;
+        let x29 = x28 * m * x19;
+        let x30 = x16 * x1;
+        let x31 = x8 * x0 * x14;
+        let x32 = x30 + x31;
+        let x33 = m * x19 * x32;
+        let x34 = x3 * m * x19 * x0;
+        let x35 = x16 * x3 * m;
+        let x36 = x3 * m * x14;
+        let x37 = -(x8 * m);
+        let x38 = m + mg;
+        let x39 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x40 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x41 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x42 = 2.0 * rho + l;
+        let x43 = u7 * x3 * x1;
+        let x44 = u6 * x32;
+        let x45 = u7 * x3 * x0;
+        let x46 = u5 * x28;
+        let x47 = u5 * x16;
+        let x48 = u6 * x14;
+        let x49 = -x47 - x48;
+        let x50 = u7 * x8;
+        let x51 = x22 - x21;
+        let x52 = x47 + x48;
+        let x53 = x3 * x52;
+        let x54 = u4 + x53 - x50;
+        let x55 = u6 * x16;
+        let x56 = u5 * x14;
+        let x57 = x55 - x56;
+        let x58 = u7 * x3;
+        let x59 = x8 * x52 + x58;
+        let x60 = x57 * x1 + x59 * x0 + u3 * x19;
+        let x61 = -rho - 0.5 * l;
+        let x62 = x59 * x1 + x61 * u2 + (x56 - x55) * x0;
+        let x63 = -x30 - x31;
+        let x64 = x15 + x17;
+        let x65 = x51 * u2;
+        let x66 = u3 * x28;
+        let x67 = x66 + x18 * u2;
+        let x68 = x5 - x6;
+        let x69 = x3 * x19 * x68 - x8 * u4;
+        let x70 = x0 * x7;
+        let x71 = u3 + x70;
+        let x72 = x7 * x1;
+        let x73 = x72 - u2;
+        let x74 = u3 * x32;
         let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -776,46 +735,45 @@ pub mod kane {
         let mut mass: [[f64; 7]; 7] = [
             [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
             [x10, Iyy + x12, x13, 0.0, x20, x24, x25],
-            [x11, x13, x12 + Izz, 0.0, x27, x31, x32],
-            [0.0, 0.0, 0.0, m, x33, x34, x35],
-            [0.0, x20, x27, x33, x36, 0.0, 0.0],
-            [0.0, x24, x31, x34, 0.0, x36, 0.0],
-            [0.0, x25, x32, x35, 0.0, 0.0, x36],
+            [x11, x13, x12 + Izz, 0.0, x29, x33, x34],
+            [0.0, 0.0, 0.0, m, x35, x36, x37],
+            [0.0, x20, x29, x35, x38, 0.0, 0.0],
+            [0.0, x24, x33, x36, 0.0, x38, 0.0],
+            [0.0, x25, x34, x37, 0.0, 0.0, x38],
         ];
         let mut force: [f64; 7] = [
-            x38 * u3 - x37 * u2,
-            x37 * u1 - x39 * u3
-                + ((x8 * x19 * x7 * x1 + x3 * (x19 * x0 * x9 - u4 * x1)) * x41
-                    + (u4 * x23 + x19 * (x18 * x2 * x4 + x30 * x9 - x3 * x7 * x1 * x14))
-                        * x44 - (x45 * u2 - x46 + u5 * x18 + u6 * x23) * u4
-                    + x49
-                        * (x18 * u4
-                            + (x2 * x4 * x50 - x16 * x3 * x7 * x1 + x26 * x9) * x19)
-                    + x19
-                        * (-(x51 + x52 + x53) * x9 - x7 * x1 * (x56 * x3 + x57)
-                            - x2 * x4 * (u6 * x18 + u5 * x50))) * m,
-            x39 * u2 - x38 * u1
-                + m
-                    * ((-x2 * x4 * (u5 * x58 + u6 * x26)
-                        - (x46 + u6 * x50 + u5 * x59) * x9
-                        - (x3 * (x54 + x55) - x57) * x0 * x7) * x19
-                        + x49
-                            * (u4 * x26
-                                + x19 * (x59 * x9 + x16 * x3 * x0 * x7 + x2 * x4 * x58))
-                        + (x19 * (x3 * x0 * x7 * x14 + x2 * x4 * x26 + x50 * x9)
-                            + u4 * x30) * x44 - u4 * (x51 + x52 + x53 + x45 * u3)
-                        + x41 * (x3 * (u4 * x0 + x19 * x9 * x1) - x8 * x19 * x0 * x7)),
-            0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t)
-                + m
-                    * (x44 * x43 - x7 * (x56 * x8 - u7 * x3) - x2 * (u6 * x16 - u5 * x14)
-                        - x41 * x3 * x7 + x49 * (-x2 * x14 - x8 * x16 * x7)),
+            x40 * u3 - x39 * u2,
             m
-                * (-x2 * x4 * (x19 * (x58 * u3 + x50 * u2) - x42) - u4 * x60
-                    - x16 * x62 * x7 - (x26 * u2 + x59 * u3) * x19 * x9),
-            (-(x23 * u2 + u3 * x30) * u4 - x62 * x7 * x14
-                - (x30 * u2 + u3 * x50) * x19 * x9
-                - (x19 * x60 + u4 * x16 * x3) * x2 * x4) * m,
-            m * ((-u4 * x61 - x2 * x19 * x9) * x3 - (x48 - x47) * x7),
+                * (x19
+                    * (-(x44 + x45 + x46) * x9 - x7 * x1 * (x49 * x3 + x50)
+                        - x2 * x4 * (u6 * x18 + u5 * x51))
+                    - (x42 * u2 - x43 + u5 * x18 + u6 * x23) * u4
+                    + (x54 * u2 - x60 * u1) * x61 - x62 * u4) - x41 * u3 + x39 * u1,
+            m
+                * ((-x2 * x4 * (u5 * x63 + u6 * x28) - (x43 + u6 * x51 + u5 * x64) * x9
+                    - (x53 - x50) * x0 * x7) * x19 + u4 * x60
+                    - u4 * (x44 + x45 + x46 + x42 * u3) + x19 * (x62 * u1 - x54 * u3))
+                - x40 * u1 + x41 * u2,
+            0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t)
+                + (u3 * x60 - x7 * (x49 * x8 - x58) - x2 * x57 - x62 * u2) * m,
+            ((x64 * u2 - x66 - x2 * x14 - x8 * x16 * x7) * x54
+                - x2 * x4 * (x19 * (x63 * u3 + x65) - u4 * x3 * x14) - u4 * x67
+                - x16 * x69 * x7
+                + (x71 * x16 * x3 + x8 * x2 * x64 * x4 + x2 * x4 * x63) * x60
+                - (x28 * u2 + x64 * u3) * x19 * x9
+                + x62 * (x2 * x4 * x23 + (x27 - x26) * x9 + x16 * x3 * x73 + x28 * u1))
+                * m,
+            (x60 * (x2 * x4 * x28 + x71 * x3 * x14 + x8 * x2 * x4 * x51)
+                - (x23 * u2 + x74) * u4 - x69 * x7 * x14
+                - (x32 * u2 + u3 * x51) * x19 * x9
+                + x62 * (x2 * x64 * x4 + x3 * x73 * x14 + u1 * x32 + x63 * x9)
+                + x54 * (x65 - x8 * x7 * x14 - x74 + x2 * x16)
+                - (x19 * x67 + u4 * x16 * x3) * x2 * x4) * m,
+            m
+                * ((-u4 * x68 - x2 * x19 * x9) * x3
+                    + x60 * (x8 * x2 * x1 + x8 * (-u3 - x70))
+                    - (x8 * x19 * x7 - u4 * x3) * x7
+                    + (x8 * (u2 - x72) - x8 * x2 * x4 * x3 * x0) * x62),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {

@@ -496,272 +496,151 @@ pub mod reduced_volterra {
         let x2 = x0 * u2 + u3 * x1;
         let x3 = f64::cos(theta);
         let x4 = 1.0 / x3;
-        let x5 = u2 * x1 - u3 * x0;
-        let x6 = f64::sin(theta);
-        let x7 = x6 * x2 * x4 + u1;
-        let x8 = f64::cos(psi);
-        let x9 = f64::sin(gamma2);
-        let x10 = x3 * d * x9;
-        let x11 = f64::cos(gamma2);
-        let x12 = x11 * d;
-        let x13 = -a - x12;
-        let x14 = f64::sin(psi);
-        let x15 = f64::cos(gamma1);
-        let x16 = x0 * x14;
-        let x17 = x6 * x8 * x1;
-        let x18 = x16 + x17;
-        let x19 = x15 * x18 * d;
-        let x20 = a * x18;
-        let x21 = m2 * (x8 * (x6 * x13 * x1 - x10) + x13 * x0 * x14) + (x19 + x20) * m1;
-        let x22 = x21 * u2;
-        let x23 = x6 * x8 * x0;
-        let x24 = x1 * x14;
-        let x25 = x23 - x24;
-        let x26 = -x16 - x17;
-        let x27 = f64::sin(gamma1);
-        let x28 = m2 * x25 * x9 + x26 * x27 * m1;
-        let x29 = x8 * x27 * x3;
-        let x30 = x24 - x23;
-        let x31 = x29 + x15 * x30;
-        let x32 = x8 * x3 * x9;
-        let x33 = x11 * x26 - x32;
-        let x34 = u1 * x28 + u4 * m1 * x31 + u5 * m2 * x33;
-        let x35 = d * x34;
-        let x36 = x15 * d;
-        let x37 = a + x36;
-        let x38 = m2 * x13 + x37 * m1;
-        let x39 = x27 * x3 * d * m1;
-        let x40 = a + x12;
-        let x41 = -a - x36;
-        let x42 = m2 * x40 + x41 * m1;
-        let x43 = x38 * x1 * x14 + x8 * (x39 + x42 * x6 * x0);
-        let x44 = u3 * x43;
-        let x45 = 1.0 / (m2 + m0 + m1);
-        let x46 = x8 * x1;
-        let x47 = x6 * x0 * x14;
-        let x48 = -x46 - x47;
-        let x49 = x15 * x48;
-        let x50 = x27 * x3 * x14;
-        let x51 = x49 + x50;
-        let x52 = x46 + x47;
-        let x53 = u3 * (d * (x51 * m1 + x11 * m2 * x52) + a * (m2 * x52 + x48 * m1));
-        let x54 = x8 * x0;
-        let x55 = x6 * x1 * x14;
-        let x56 = x55 - x54;
-        let x57 = x15 * d * x56;
-        let x58 = a * x56;
-        let x59 = x54 - x55;
-        let x60 = a * x59;
-        let x61 = x3 * x9 * x14;
-        let x62 = x11 * x59;
-        let x63 = x62 - x61;
-        let x64 = d * x63;
-        let x65 = ((x57 + x58) * m1 + (x60 + x64) * m2) * u2;
-        let x66 = u4 * x51 * m1 + (m2 * x9 * x52 + x27 * x59 * m1) * u1 + u5 * m2 * x63;
-        let x67 = d * x66;
-        let x68 = m2 * x9 * x0;
-        let x69 = x27 * m1 * x1;
-        let x70 = x68 - x69;
-        let x71 = x15 * x3 * x0;
-        let x72 = x6 * x27;
-        let x73 = -x71 - x72;
-        let x74 = x11 * x3 * x1;
-        let x75 = x6 * x9;
-        let x76 = x75 - x74;
-        let x77 = x3 * u1 * x70 + u4 * m1 * x73 + u5 * m2 * x76;
-        let x78 = d * x77;
-        let x79 = x42 * x3 * x0 - x6 * x27 * d * m1;
-        let x80 = u3 * x79;
-        let x81 = x3 * x38 * x1 + m2 * x6 * d * x9;
-        let x82 = x81 * u2;
-        let x83 = m1 * x45;
-        let x84 = x83 - 1.0;
-        let x85 = m2 * x45;
-        let x86 = x85 - 1.0;
-        let x87 = x15 * x15;
-        let x88 = x11 * x11;
-        let x89 = x38 * x45;
-        let x90 = x89 - a - x36;
-        let x91 = x15 * (J1 - J2) + d * m1 * x90;
-        let x92 = x27 * x91 - Ixy;
-        let x93 = a + x12 + x89;
-        let x94 = m2 * d * x93 + x11 * (J2 - J1);
-        let x95 = x9 * x94 - Ixz;
-        let x96 = x15 * m2 * d * d * x9 * m1 * x45;
-        let x97 = -(x11 * m2 * x27 * d * d * m1 * x45);
-        let x98 = 1.0 - x83;
-        let x99 = d * d * x98 * m1;
-        let x100 = x99 + J2 - J1;
-        let x101 = 1.0 - x85;
-        let x102 = m2 * d * d * x101;
-        let x103 = 2.0 - 2.0 * x83;
-        let x104 = 2.0 * m1 - 2.0 * m2;
-        let x105 = a
-            * ((a * x98 + x15 * d * x103) * m1
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma2);
+        let x8 = f64::cos(gamma2);
+        let x9 = x8 * d;
+        let x10 = -a - x9;
+        let x11 = f64::sin(psi);
+        let x12 = f64::cos(gamma1);
+        let x13 = x0 * x11;
+        let x14 = x5 * x6 * x1;
+        let x15 = x13 + x14;
+        let x16 = x5 * x6 * x0;
+        let x17 = x1 * x11;
+        let x18 = -x13 - x14;
+        let x19 = f64::sin(gamma1);
+        let x20 = x12 * d;
+        let x21 = m2 * x10 + (a + x20) * m1;
+        let x22 = m2 * (a + x9) + (-a - x20) * m1;
+        let x23 = 1.0 / (m2 + m0 + m1);
+        let x24 = x6 * x1;
+        let x25 = x5 * x0 * x11;
+        let x26 = -x24 - x25;
+        let x27 = x12 * x26 + x19 * x3 * x11;
+        let x28 = x24 + x25;
+        let x29 = x6 * x0;
+        let x30 = x5 * x1 * x11;
+        let x31 = x30 - x29;
+        let x32 = x29 - x30;
+        let x33 = x8 * x32 - x3 * x7 * x11;
+        let x34 = m1 * x23;
+        let x35 = m2 * x23;
+        let x36 = x35 - 1.0;
+        let x37 = x12 * x12;
+        let x38 = x8 * x8;
+        let x39 = x21 * x23;
+        let x40 = x39 - a - x20;
+        let x41 = x12 * (J1 - J2) + d * m1 * x40;
+        let x42 = x19 * x41 - Ixy;
+        let x43 = m2 * d * (a + x9 + x39) + x8 * (J2 - J1);
+        let x44 = x7 * x43 - Ixz;
+        let x45 = x12 * m2 * d * d * x7 * m1 * x23;
+        let x46 = -(x8 * m2 * x19 * d * d * m1 * x23);
+        let x47 = 1.0 - x34;
+        let x48 = d * d * x47 * m1;
+        let x49 = x48 + J2 - J1;
+        let x50 = 1.0 - x35;
+        let x51 = m2 * d * d * x50;
+        let x52 = 2.0 - 2.0 * x34;
+        let x53 = 2.0 * m1 - 2.0 * m2;
+        let x54 = a
+            * ((a * x47 + x12 * d * x52) * m1
                 + m2
                     * (a
-                        + (d * (2.0 * (x15 * m1) + x11 * x104) + a * (2.0 * m1 - m2))
-                            * x45 + 2.0 * x12));
-        let x106 = m2 * x27 * d * d * x9 * m1 * x45;
-        let x107 = x106 - Iyz;
-        let x108 = x15 * d * m1 * x45;
-        let x109 = (m1 - m2) * x45;
-        let x110 = m2 * (d * x101 + x11 * (x108 + (x109 + 1.0) * a)) * d + J2;
-        let x111 = (m2 - m1) * x45;
-        let x112 = x11 * m2 * d * x45;
-        let x113 = J2 + (x15 * (a * (x111 + 1.0) + x112) + d * x98) * d * m1;
-        let x114 = x11 * u1;
-        let x115 = x114 - u3 * x9;
-        let x116 = u3 * Izz;
-        let x117 = Iyz * u2;
-        let x118 = u1 * Ixz;
-        let x119 = x9 * u1;
-        let x120 = x11 * u3;
-        let x121 = x119 + x120;
-        let x122 = x27 * u1;
-        let x123 = x15 * u2 - x122;
-        let x124 = x15 * u1;
-        let x125 = x27 * u2;
-        let x126 = x124 + x125;
-        let x127 = u4 + u3;
-        let x128 = u5 + u2;
-        let x129 = x9 * x9 * (m2 * x86 * d * d - J2 + J1) + x11 * x94;
-        let x130 = Iyz * u3;
-        let x131 = Ixy * u1;
-        let x132 = Iyy * u2;
-        let x133 = x53 + x65 + x67;
-        let x134 = m2 * x9 * x56 + x27 * m1 * x52;
-        let x135 = m2 * x18 * x9 + x27 * x25 * m1;
-        let x136 = m2 * x48 * x9 + x27 * x56 * m1;
-        let x137 = x22 + x35 + x44;
-        let x138 = m2 * x9 * x1 + x27 * x0 * m1;
-        let x139 = x69 - x68;
-        let x140 = x78 + x80 + x82;
-        let x141 = x139 * x45;
-        let x142 = x9 * x0;
-        let x143 = x138 * x45;
-        let x144 = (x80 + x82) * x45;
-        let x145 = x77 * x45;
-        let x146 = x40 * x3;
-        let x147 = x144 + d * (x145 - x3 * x9 * x0 * x7 + u5 * (x74 - x75))
-            + (x146 - x6 * d * x9 * x1) * x5;
-        let x148 = a * x6;
-        let x149 = x11 * x6;
-        let x150 = x3 * x9 * x1;
-        let x151 = x148 - d * (-x149 - x150);
-        let x152 = x66 * x45;
-        let x153 = x11 * x56;
-        let x154 = x45 * (x53 + x65);
-        let x155 = a * x8 * x3;
-        let x156 = x18 * x9;
-        let x157 = x11 * x8 * x3;
-        let x158 = x151 * x5 * x14 + (x152 - u5 * (-x61 - x153) + x48 * x9 * x7) * d
-            + x154 + x2 * x4 * (-x155 - d * (x157 - x156));
-        let x159 = x134 * x45;
-        let x160 = x59 * x9;
-        let x161 = m2 * x52 * x45 - x46 - x47;
-        let x162 = x45 * x70;
-        let x163 = x162 - x142;
-        let x164 = x45 * x28;
-        let x165 = (x22 + x44) * x45;
-        let x166 = x11 * x3 * x14;
-        let x167 = a * x3 * x14;
-        let x168 = x11 * x18;
-        let x169 = x34 * x45;
-        let x170 = x165 + x2 * x4 * (x167 - d * (-x160 - x166)) + x8 * x151 * x5
-            + d * (x30 * x9 * x7 - u5 * (-x32 - x168) + x169);
-        let x171 = x136 * x45;
-        let x172 = m2 * x25 * x45 - x23 + x24;
-        let x173 = x135 * x45;
-        let x174 = x27 * x1;
-        let x175 = x174 + x162;
-        let x176 = x59 * m1 * x45 - x54 + x55;
-        let x177 = x48 * x27;
-        let x178 = x15 * x6;
-        let x179 = x27 * x3 * x0;
-        let x180 = x179 - x178;
-        let x181 = x180 * d - x148;
-        let x182 = x15 * x52 - x50;
-        let x183 = x27 * x25;
-        let x184 = x15 * x8 * x3;
-        let x185 = x181 * x5 * x14 + (u4 * x182 + x152 + x27 * x56 * x7) * d
-            + x2 * x4 * (x155 + d * (x183 + x184)) + x154;
-        let x186 = x41 * x3;
-        let x187 = x144 + (x186 - x6 * x27 * d * x0) * x5
-            + ((x71 + x72) * u4 + x145 + x27 * x3 * x7 * x1) * d;
-        let x188 = x15 * x3 * x14;
-        let x189 = x15 * x25;
-        let x190 = x2 * x4 * (d * (x177 - x188) - x167) + x8 * x181 * x5 + x165
-            + d * (x18 * x27 * x7 + u4 * (x189 - x29) + x169);
-        let x191 = x16 + x26 * m1 * x45 + x17;
-        let x192 = x15 * x91 + x27 * x27 * x100;
-        let x193 = Ixy * u2;
-        let x194 = Ixx * u1;
-        let x195 = u3 * Ixz;
-        let x196 = -x119 - x120;
-        let x197 = 2.0 * J1 - 2.0 * J2;
-        let x198 = a * x30;
-        let x199 = a * x25;
-        let x200 = (x15 * x30 * d + x198) * m1 + m2 * (x11 * d * x25 + x199);
-        let x201 = x200 * x45;
-        let x202 = x11 * x30 * d;
-        let x203 = x6 * x86 * d * x9 + x3 * x93 * x1;
-        let x204 = (x60 + x15 * x59 * d) * m1;
-        let x205 = x61 + x153;
-        let x206 = x204 + m2 * (x205 * d + x58);
-        let x207 = x206 * x45;
-        let x208 = a * x48;
-        let x209 = x11 * d * x52;
-        let x210 = a * x52;
-        let x211 = m2 * (x209 + x210) + m1 * (x208 + x15 * x48 * d);
-        let x212 = x211 * x45;
-        let x213 = x21 * x45;
-        let x214 = x42 * x6 * x1 + m2 * x3 * d * x9;
-        let x215 = x11 * x6 * x1;
-        let x216 = x3 * x9;
-        let x217 = x149 + x150;
-        let x218 = m2 * x217 * x45;
-        let x219 = x42 * x3 * x45;
-        let x220 = x27 * d * m1 * (x119 + x11 * x127) * x45;
-        let x221 = (x111 - 1.0) * a - x108;
-        let x222 = x9 * x56 - x166;
-        let x223 = x9 * x0 * x14 + (x6 * x9 * x1 - x11 * x3) * x8;
-        let x224 = x42 * x45;
-        let x225 = a + x36 + x224;
-        let x226 = m2 * x6 * d * x9 * x45 + x3 * x90 * x1;
-        let x227 = a * x26;
-        let x228 = x15 * x26 * d;
-        let x229 = m2 * d * x9 * x45 * (x15 * x128 - x122);
-        let x230 = a * (x109 - 1.0) - x112;
-        let x231 = x6 * x38 * x0 - x39;
-        let x232 = x180 * m1 * x45;
-        let x233 = x15 * x6 * x0;
-        let x234 = x27 * x3;
-        let x235 = x6 * x27 * d * x98 + x225 * x3 * x0;
-        let x236 = (x11 * m2 * x48 + m1 * x182) * d + a * (m2 * x48 + m1 * x52);
-        let x237 = x236 * x45;
-        let x238 = m2 * (x11 * x18 * d + x20) + (x227 + x228) * m1;
-        let x239 = x238 * x45;
-        let x240 = m2 * (x11 * d * x56 + x58) + x204;
-        let x241 = x240 * x45;
-        let x242 = x43 * x45;
-        let x243 = -x124 - x125;
-        let x244 = x8 * (x15 * x3 + x6 * x27 * x0) - x27 * x1 * x14;
-        let x245 = x224 - a - x12;
-        let x246 = x3 * x0 * x245 - x6 * x27 * d * m1 * x45;
-        let x247 = x27 * x52;
-        let x248 = x188 + x247;
-        let x249 = x233 - x234;
-        let x250 = x249 * x5 - x15 * x3 * x7 * x1 + x180 * u4;
-        let x251 = x2 * x4 * x182 + x15 * x26 * x7 + x244 * u4 + x8 * x73 * x5;
-        let x252 = x15 * x59 * x7 + x73 * x5 * x14 + u4 * x248 + x2 * x4 * x31;
-        let x253 = m1 * x73 * x45 + x71 + x72;
-        let x254 = x215 + x216;
-        let x255 = x76 * x5 * x14;
-        let x256 = u5 * x222;
-        let x257 = u5 * x217 + x11 * x3 * x0 * x7 + x254 * x5;
-        let x258 = x255 + x256 + x33 * x2 * x4 + x11 * x52 * x7;
-        let x259 = x205 * x2 * x4 + x76 * x8 * x5 + x11 * x25 * x7 + u5 * x223;
+                        + (d * (2.0 * (x12 * m1) + x8 * x53) + a * (2.0 * m1 - m2)) * x23
+                        + 2.0 * x9));
+        let x55 = m2 * x19 * d * d * x7 * m1 * x23;
+        let x56 = x55 - Iyz;
+        let x57 = x12 * d * m1 * x23;
+        let x58 = m1 - m2;
+        let x59 = x58 * x23;
+        let x60 = x59 + 1.0;
+        let x61 = d * x50 + x8 * (x57 + x60 * a);
+        let x62 = m2 * x61 * d + J2;
+        let x63 = (m2 - m1) * x23;
+        let x64 = x63 + 1.0;
+        let x65 = x8 * m2 * d * x23;
+        let x66 = a * x64 + x65;
+        let x67 = x12 * x66 + d * x47;
+        let x68 = J2 + x67 * d * m1;
+        let x69 = x8 * u1;
+        let x70 = u3 * x7;
+        let x71 = x69 - x70;
+        let x72 = u3 * Izz;
+        let x73 = Iyz * u2;
+        let x74 = u1 * Ixz;
+        let x75 = x7 * u1;
+        let x76 = x8 * u3;
+        let x77 = x75 + x76;
+        let x78 = x12 * u2;
+        let x79 = x19 * u1;
+        let x80 = x78 - x79;
+        let x81 = x12 * x80;
+        let x82 = x12 * u1;
+        let x83 = x19 * u2;
+        let x84 = x82 + x83;
+        let x85 = x84 * x19;
+        let x86 = u4 + u3;
+        let x87 = x7 * x71;
+        let x88 = x77 * x8;
+        let x89 = u5 + u2;
+        let x90 = x7 * x7 * (m2 * x36 * d * d - J2 + J1) + x8 * x43;
+        let x91 = x12 * x8 * u4;
+        let x92 = Iyz * u3;
+        let x93 = Ixy * u1;
+        let x94 = Iyy * u2;
+        let x95 = a * x7 * u2;
+        let x96 = x75 + x8 * x86;
+        let x97 = (m2 * a * x7 * u2 + (d * (x19 * x96 - x12 * x7 * u2) - x95) * m1) * x23
+            - x95;
+        let x98 = x8 * x19 * u2;
+        let x99 = x12 * u4 * x7;
+        let x100 = x99 - x98;
+        let x101 = -u5 - u2;
+        let x102 = x7 * x86 - x69;
+        let x103 = (u5 + (m2 * x101 + m1 * (x19 * x102 + x12 * x8 * u2)) * x23 + u2) * d
+            + x60 * x8 * a * u2;
+        let x104 = x22 * x23 - a - x9;
+        let x105 = u3 * x104 + d * (x36 * x7 * u1 - x12 * u4 * m1 * x23);
+        let x106 = a * u3 * x19;
+        let x107 = (m2 * ((x8 * u3 * x19 + x7 * (x12 * x101 + x79)) * d + x106)
+            - a * u3 * x19 * m1) * x23 + x106;
+        let x108 = x8 * u5 * x19;
+        let x109 = x12 * u3 * x7;
+        let x110 = x108 - x109;
+        let x111 = x12 * x8 * u5;
+        let x112 = u3 * x19 * x7;
+        let x113 = -u4 - u3;
+        let x114 = x19 * x89 + x82;
+        let x115 = x12 * a * x64 * u3
+            + (u4 + (x113 * m1 + m2 * (x12 * x8 * u3 + x7 * x114)) * x23 + u3) * d;
+        let x116 = x59 - 1.0;
+        let x117 = x8 * m2 * x101 + x80 * m1;
+        let x118 = a * x116 * u2 + d * (x79 - x78 + x117 * x23);
+        let x119 = x19 * x86 * m1;
+        let x120 = m2 * x7 * x101 + x119;
+        let x121 = m2 * x7 * u1 - x12 * u4 * m1;
+        let x122 = d * x117 + a * x58 * u2;
+        let x123 = x22 * u3;
+        let x124 = x123 + x121 * d;
+        let x125 = x12 * x41 + x19 * x19 * x49;
+        let x126 = (x63 - 1.0) * a - x57;
+        let x127 = x7 * u2 * x126;
+        let x128 = x19 * d * m1 * x96 * x23;
+        let x129 = Ixy * u2;
+        let x130 = Ixx * u1;
+        let x131 = u3 * Ixz;
+        let x132 = u5 + x81 + x85;
+        let x133 = -x75 - x76;
+        let x134 = 2.0 * J1 - 2.0 * J2;
+        let x135 = m2 * d * x7 * x23 * (x12 * x89 - x79);
+        let x136 = a * x116 - x65;
+        let x137 = u4 * x136;
+        let x138 = -x82 - x83;
+        let x139 = x19 * x7 * u2;
+        let x140 = u4 - x87 + x88;
         let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -772,227 +651,130 @@ pub mod reduced_volterra {
         }
         let mut mass: [[f64; 5]; 5] = [
             [
-                ((x15 * x15 * x84 - x83 + 1.0) * m1 + m2 * (x11 * x11 * x86 - x85 + 1.0))
-                    * d * d + (x87 + x88) * J1 + Ixx + J2 * (2.0 - x87 - x88),
-                x92,
-                x95,
-                x96,
-                x97,
+                ((x12 * x12 * (x34 - 1.0) - x34 + 1.0) * m1
+                    + m2 * (x8 * x8 * x36 - x35 + 1.0)) * d * d + (x37 + x38) * J1 + Ixx
+                    + J2 * (2.0 - x37 - x38),
+                x42,
+                x44,
+                x45,
+                x46,
             ],
             [
-                x92,
-                Iyy + x15 * (x15 * x100 + 2.0 * (x11 * m2 * d * d * m1 * x45)) + J2
-                    + x102 + J1 + x105,
-                x107,
-                x106,
-                x110,
+                x42,
+                Iyy + x12 * (x12 * x49 + 2.0 * (x8 * m2 * d * d * m1 * x23)) + J2 + x51
+                    + J1 + x54,
+                x56,
+                x55,
+                x62,
             ],
             [
-                x95,
-                x107,
-                x99 + J2
-                    + x11
-                        * (x11 * (J2 + x102 - J1) + 2.0 * (x15 * m2 * d * d * m1 * x45))
-                    + Izz + J1 + x105,
-                x113,
-                x106,
+                x44,
+                x56,
+                x48 + J2
+                    + x8 * (x8 * (J2 + x51 - J1) + 2.0 * (x12 * m2 * d * d * m1 * x23))
+                    + Izz + J1 + x54,
+                x68,
+                x55,
             ],
-            [x96, x106, x113, x99 + J2, x106],
-            [x97, x110, x106, x106, J2 + x102],
+            [x45, x55, x68, x48 + J2, x55],
+            [x46, x62, x55, x55, J2 + x51],
         ];
         let mut force: [f64; 5] = [
-            u2 * (x9 * x115 * J1 - x116 + x117 + x118)
-                + (x15 * x123 * u3 - x121 * x11 * u2 + (-x15 * x123 - x126 * x27) * x127
-                    + (x121 * x11 - x9 * x115) * x128) * J2
-                - (u3 * x129
-                    + x11 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x85) - 2.0 * J1) * x9
-                        * u1
-                    + m2 * d * d * (x27 * x9 * x128 + x15 * x11 * u4) * m1 * x45) * u5
-                + u3 * (x132 - x130 - x131 + x126 * x27 * J1)
-                + (m0
-                    * (x133
-                        * (x7 * x134 + x2 * x4 * x28 + x15 * u4 * x59 * m1
-                            + x3 * x5 * x70 * x14 + x11 * u5 * m2 * x52)
-                        + (x11 * u5 * m2 * x25 + x8 * x3 * x5 * x70 + x135 * x7
-                            + x15 * x26 * u4 * m1 + x136 * x2 * x4) * x137
-                        + (x3 * (x11 * u5 * m2 * x0 - x15 * u4 * m1 * x1 + x138 * x7)
-                            + x6 * x139 * x5) * x140) * x45 * x45
-                    + ((x6 * (x141 + x142) * x5
-                        + ((x143 - x9 * x1) * x7 + x11 * u5 * x86 * x0
-                            - x15 * u4 * m1 * x1 * x45) * x3) * x147
-                        + x158
-                            * ((x159 + x160) * x7 + x161 * x11 * u5
-                                + x163 * x3 * x5 * x14 + x2 * (x30 * x9 + x164) * x4
-                                + x15 * u4 * x59 * m1 * x45)
-                        + x170
-                            * (x163 * x8 * x3 * x5 + x2 * x4 * (x171 + x9 * x52)
-                                + x11 * u5 * x172 + x15 * x26 * u4 * m1 * x45
-                                + (x26 * x9 + x173) * x7)) * m2
-                    + ((x2 * x4 * (x18 * x27 + x164) + x175 * x3 * x5 * x14
-                        + x11 * u5 * m2 * x52 * x45 + x15 * u4 * x176
-                        + (x159 + x177) * x7) * x185
-                        + x187
-                            * (((x143 - x27 * x0) * x7 + x15 * u4 * x98 * x1
-                                + x11 * u5 * m2 * x0 * x45) * x3 + (x141 - x174) * x6 * x5)
-                        + x190
-                            * (x2 * x4 * (x171 + x27 * x59) + x11 * u5 * m2 * x25 * x45
-                                + x15 * u4 * x191 + x175 * x8 * x3 * x5
-                                + (x30 * x27 + x173) * x7)) * m1) * d
-                - u4
-                    * (m2 * (x27 * x9 * (-u4 - u3) - x15 * x11 * u5) * d * d * m1 * x45
-                        + x192 * u2
-                        + x15 * (2.0 * J2 - 2.0 * J1 + d * d * x103 * m1) * x27 * u1),
-            (x196 * x115 - x15 * x126 * u3) * J1 - (x194 - x193 - x195) * u3
-                + (x116 - x117 - x118) * u1
-                - u4
-                    * ((x15 * x9 * x127 - x11 * u5 * x27) * m2 * d * d * m1 * x45
-                        + x27 * u2
-                            * (x15 * x197
-                                + d
-                                    * ((m2 * (-2.0 * a - 2.0 * x12)
-                                        + (2.0 * a + 2.0 * x36) * m1) * x45 - 2.0 * a - 2.0 * x36)
-                                    * m1) + x192 * u1)
-                + m2
-                    * (((x201 + x198 + x202) * x7 + x8 * x203 * x5
-                        + (u5
-                            * (x86 * x9 * x0 * x14
-                                + x8 * (x11 * x3 * x101 + x6 * x86 * x9 * x1))
-                            + x26 * u4 * x27 * m1 * x45) * d
-                        + (x60 + x64 + x207) * x2 * x4) * x170
-                        + (x203 * x5 * x14 + (x11 * x48 * d + x208 + x212) * x7
-                            + x2 * x4
-                                * (x40 * x0 * x14 + x213 + (x6 * x40 * x1 + x10) * x8)
-                            + d
-                                * (u4 * x27 * x59 * m1 * x45
-                                    + u5
-                                        * ((x54 - x55 + m2 * x56 * x45) * x9
-                                            + x11 * x3 * x101 * x14))) * x158
-                        + (x5
-                            * (x214 * x45 - x3 * d * x9 * x0 * x0
-                                + (x6 * x13 - x3 * d * x9 * x1) * x1)
-                            + d
-                                * (((-x215 - x216) * x1 - x11 * x6 * x0 * x0 + x218) * u5
-                                    - u4 * x27 * x3 * m1 * x1 * x45) + (x219 - x146) * x0 * x7)
-                            * x147
-                        - u5
-                            * (x220
-                                + x9
-                                    * (u5 * x221
-                                        + (a * ((2.0 * m2 - 2.0 * m1) * x45 - 2.0) - 2.0 * x108)
-                                            * u2)) * d)
-                + ((x211 * x7 + x81 * x5 * x14
-                    + d * (u5 * m2 * x222 + u4 * x27 * x59 * m1) + x2 * x4 * x21) * x133
-                    + (x2 * x4 * x206 + x7 * x200
-                        + d * (u5 * m2 * x223 + x26 * u4 * x27 * m1) + x8 * x81 * x5)
-                        * x137
-                    + x140
-                        * (x214 * x5 + x3 * (x42 * x0 * x7 - u4 * x27 * d * m1 * x1)
-                            + u5 * m2 * x217 * d)) * m0 * x45 * x45
-                + m1
-                    * (x187
-                        * (x3 * (x225 * x0 * x7 + u4 * x27 * d * x98 * x1)
-                            + x5 * (x225 * x6 * x1 + m2 * x3 * d * x9 * x45)
-                            + u5 * m2 * x217 * d * x45)
-                        + x190
-                            * (x2 * x4 * (x57 + x207 + x58)
-                                + (x201 + x15 * d * x25 + x199) * x7 + x8 * x226 * x5
-                                + d
-                                    * (u5 * m2 * x223 * x45
-                                        + u4 * x27 * (x98 * x0 * x14 + x6 * x8 * x98 * x1)))
-                        + x185
-                            * ((x15 * d * x52 + x210 + x212) * x7 + x226 * x5 * x14
-                                + (u4 * x27 * (x6 * x98 * x1 * x14 + x8 * x0 * x84)
-                                    + u5 * m2 * x222 * x45) * d
-                                + (x227 + x213 + x228) * x2 * x4))
-                + J2
-                    * (x123 * u3 * x27 + x121 * x115 + (x15 * x126 - x123 * x27) * x127),
-            (x187
-                * ((x231 * x45 - x0 * (x6 * x37 - x27 * x3 * d * x0)
-                    + x27 * x3 * d * x1 * x1) * x5 + (x219 - x186) * x7 * x1
-                    + (u4 * (x15 * x6 * x1 * x1 + x232 - x0 * (x234 - x233))
-                        - u5 * m2 * x3 * x9 * x0 * x45) * d)
-                - u4 * d
-                    * (x229
-                        + x27 * (u3 * (a * (x104 * x45 - 2.0) - 2.0 * x112) + u4 * x230))
-                + (x8 * x5 * x235
-                    + d
-                        * (u4
-                            * ((x6 * x27 * x0 * x84 + x15 * x3 * x84) * x8
-                                + x27 * x98 * x1 * x14) + u5 * m2 * x30 * x9 * x45)
-                    + x2 * x4 * (x237 + x208 + d * x51) + x7 * (x239 + x19 + x20)) * x190
-                + x185
-                    * ((x241 + x57 + x58) * x7
-                        + x2 * x4
-                            * ((x6 * x0 * x37 - x27 * x3 * d) * x8 + x242
-                                + x41 * x1 * x14)
-                        + d
-                            * (u4
-                                * (x27 * (x8 * x84 * x1 + x6 * x0 * x84 * x14)
-                                    + x15 * x3 * x84 * x14) + u5 * m2 * x48 * x9 * x45)
-                        + x5 * x235 * x14)) * m1 - (x132 - x130 - x131) * u1
-                - u5
-                    * (m2 * (x11 * x27 * x128 - x15 * u4 * x9) * d * d * m1 * x45
-                        + u3 * x9
-                            * (m2 * d
-                                * (((2.0 * a + 2.0 * x12) * m2
-                                    + (-2.0 * a - 2.0 * x36) * m1) * x45 - 2.0 * a - 2.0 * x12)
-                                + x11 * x197) + x129 * u1)
-                + (x11 * x115 * J1 - x193 + x194 - x195) * u2 + x126 * x123 * J1
-                + J2 * (x121 * x9 * u2 + (-x121 * x9 - x11 * x115) * x128 + x123 * x243)
-                + m2
-                    * ((x7 * (x239 + x227 + x11 * x26 * d)
-                        + x2 * x4 * (x237 + x209 + x210)
-                        + d
-                            * (x244 * u4 * m1 * x45
-                                + u5 * (x23 - x24 + m2 * x30 * x45) * x9) + x8 * x5 * x246)
-                        * x170
-                        + (x2 * x4 * (x198 + x242 + x202) + x5 * x246 * x14
-                            + (x241 + x60 + x11 * x59 * d) * x7
-                            + (u4 * m1 * x248 * x45
-                                + u5 * (m2 * x48 * x45 + x46 + x47) * x9) * d) * x158
-                        + (x180 * u4 * d * m1 * x45
-                            + (u5 * d * x9 * x0 * x101 + x245 * x7 * x1) * x3
-                            + (x6 * x0 * x93 - x27 * x3 * d * m1 * x45) * x5) * x147)
-                + m0
-                    * ((x8 * x79 * x5 + x2 * x4 * x236
-                        + (u5 * m2 * x30 * x9 + x244 * u4 * m1) * d + x238 * x7) * x137
-                        + x133
-                            * (x79 * x5 * x14 + x240 * x7
-                                + d * (u4 * m1 * x248 + u5 * m2 * x48 * x9) + x2 * x4 * x43)
-                        + x140
-                            * (x3 * (x42 * x7 * x1 - u5 * m2 * d * x9 * x0)
-                                + x180 * u4 * d * m1 + x231 * x5)) * x45 * x45,
-            x123 * (J2 * x243 + x126 * J1)
+            u2 * (x7 * x71 * J1 - x72 + x73 + x74)
+                + (x12 * x80 * u3 - x77 * x8 * u2 + (-x81 - x85) * x86
+                    + (x88 - x87) * x89) * J2
+                - (u3 * x90
+                    + x8 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x35) - 2.0 * J1) * x7
+                        * u1 + m2 * d * d * (x19 * x7 * x89 + x91) * m1 * x23) * u5
+                + u3 * (x94 - x92 - x93 + x84 * x19 * J1)
                 + d
-                    * ((m0 * (x140 * x250 + x251 * x137 + x133 * x252) * x45
-                        + m2
-                            * (x158 * x252
-                                - u5 * (x11 * (x27 * x128 + x124) - x15 * u3 * x9) * d
-                                + x250 * x147 + x251 * x170)) * x45
-                        + x187
-                            * (x15 * x3 * x98 * x7 * x1 + u4 * (x232 + x178 - x179)
-                                + (m1 * x249 * x45 - x233 + x234) * x5)
-                        + (u4 * (x244 * m1 * x45 - x183 - x184)
-                            + x2 * x4 * (x49 + x50 + m1 * x182 * x45) + x15 * x7 * x191
-                            + x253 * x8 * x5) * x190
-                        + ((m1 * x248 * x45 - x188 - x247) * u4 + x253 * x5 * x14
-                            + x2 * x4 * (x189 - x29 + m1 * x31 * x45) + x15 * x176 * x7)
-                            * x185 - u4 * (u3 * x27 * x230 + x229)) * m1,
-            (x196 * J1 + x121 * J2) * x115
-                + m2
-                    * ((x2 * (x62 - x61 + x205 * m2 * x45) * x4
-                        + u5 * (m2 * x223 * x45 - x156 + x157) + x11 * x172 * x7
-                        + x76 * x8 * x86 * x5) * x170 - u5 * (x220 + x9 * u2 * x221)
-                        + (x11 * x86 * x3 * x0 * x7
-                            + (m2 * x254 * x45 - x215 - x216) * x5
-                            + u5 * (x218 - x149 - x150)) * x147
-                        + (x161 * x11 * x7 + x2 * x4 * (x32 + x168 + m2 * x33 * x45)
-                            + (x255 + x256) * x86) * x158
-                        + x45
-                            * (m0 * (x257 * x140 + x133 * x258 + x259 * x137) * x45
-                                + (x259 * x190 + x257 * x187 + x185 * x258
-                                    - u4 * (x15 * (x9 * x127 - x114) - x11 * x27 * u2) * d)
-                                    * m1)) * d,
+                    * (m2
+                        * (x97 * (x100 * m1 * x23 - x77 * x36 * x7)
+                            + (x7 * (x36 * x71 - x19 * m1 * u2 * x23)
+                                - x12 * x8 * u4 * m1 * x23) * x103
+                            + x105
+                                * (x77 * x19 * x7 * m1 * x23
+                                    + x8 * (x19 * m1 * x71 * x23 + u5 * x36)))
+                        + (x107 * (x80 * x19 * x47 + m2 * x110 * x23)
+                            + (m2 * (x111 + x112) * x23 - x84 * x19 * x47) * x115
+                            + x118
+                                * (x12 * (m2 * x84 * x7 * x23 + u4 * x47)
+                                    - m2 * x80 * x19 * x7 * x23)) * m1
+                        + m0
+                            * (d * x120 * (-x19 * m1 * u2 - m2 * u3 * x7) + x121 * x122
+                                + (x19 * u1 * m1 + x8 * u5 * m2) * x124) * x23 * x23)
+                - u4
+                    * (m2 * (x19 * x7 * x113 - x111) * d * d * m1 * x23 + x125 * u2
+                        + x12 * (2.0 * J2 - 2.0 * J1 + d * d * x52 * m1) * x19 * u1),
+            m2
+                * (x105 * (x77 * x7 * x126 - x61 * x71)
+                    + x97 * (u4 * x19 * d * x7 * m1 * x23 + x8 * u5 * x126 + x61 * x89)
+                    + (-x8 * u4 * x19 * d * m1 * x23 - x127) * x103
+                    - u5
+                        * (x128
+                            + x7
+                                * (u5 * x126
+                                    + (a * ((2.0 * m2 - 2.0 * m1) * x23 - 2.0) - 2.0 * x57)
+                                        * u2)) * d) - (x130 - x129 - x131) * u3
+                + m1
+                    * (x107 * (m2 * (-x111 - x112) * d * x23 + x80 * x40)
+                        + x118 * d * (m2 * x132 * x7 * x23 + u4 * x19 * x47)
+                        + (m2 * x110 * d * x23 - x84 * x40) * x115)
+                + m0
+                    * (d
+                        * (x120 * (x21 * u2 - x8 * u5 * m2 * d)
+                            + (m2 * x7 * x89 - u4 * x19 * m1) * x122)
+                        + x124 * (-m2 * u3 * d * x7 - x21 * u1)) * x23 * x23
+                + (x133 * x71 - x12 * x84 * u3) * J1 + (x72 - x73 - x74) * u1
+                - u4
+                    * ((x12 * x7 * x86 - x108) * m2 * d * d * m1 * x23
+                        + x19 * u2
+                            * (x12 * x134
+                                + d
+                                    * ((m2 * (-2.0 * a - 2.0 * x9) + (2.0 * a + 2.0 * x20) * m1)
+                                        * x23 - 2.0 * a - 2.0 * x20) * m1) + x125 * u1)
+                + J2 * (x80 * u3 * x19 + x77 * x71 + (x12 * x84 - x80 * x19) * x86),
+            m1
+                * (x118 * (x84 * x67 - x66 * x80 * x19)
+                    - u4 * d
+                        * (x135
+                            + x19 * (u3 * (a * (x53 * x23 - 2.0) - 2.0 * x65) + x137))
+                    + (x19 * (x66 * x86 + x137) - x12 * u5 * m2 * d * x7 * x23) * x115
+                    + (x12 * u4 * x66 - x67 * x86 - u5 * m2 * x19 * d * x7 * x23) * x107)
+                - (x94 - x92 - x93) * u1
+                - u5
+                    * (m2 * (x8 * x19 * x89 - x99) * d * d * m1 * x23
+                        + u3 * x7
+                            * (m2 * d
+                                * (((2.0 * a + 2.0 * x9) * m2 + (-2.0 * a - 2.0 * x20) * m1)
+                                    * x23 - 2.0 * a - 2.0 * x9) + x8 * x134) + x90 * u1)
+                + (x8 * x71 * J1 - x129 + x130 - x131) * u2 + x84 * x80 * J1
+                + m0
+                    * (d
+                        * (x124 * (x119 - u5 * m2 * x7)
+                            + x120 * (x12 * u4 * d * m1 - x123))
+                        + (x22 * u1 - x19 * d * m1 * u2) * x122) * x23 * x23
+                + J2 * (x77 * x7 * u2 + (-x77 * x7 - x8 * x71) * x89 + x80 * x138)
+                + ((d * x100 * m1 * x23 + x104 * x71) * x103
+                    + x97 * (d * m1 * (x139 + x91) * x23 - x77 * x104)
+                    + x105 * d * (u5 * x7 * x50 + x19 * x140 * m1 * x23)) * m2,
+            x80 * (J2 * x138 + x84 * J1)
+                + d
+                    * ((x84 * x118 - x107 * x86) * x47
+                        + (m0 * ((x124 * x19 + x12 * d * x120) * x86 + x122 * x138) * x23
+                            + m2
+                                * (x19 * x105 * x140 - u5 * (x8 * x114 - x109) * d
+                                    + (x12 * (u4 * x7 - x69 + x70) - x98) * x103
+                                    + x97 * (x12 * (x75 + x8 * u4 + x76) + x139))) * x23
+                        - u4 * (u3 * x19 * x136 + x135)) * m1,
+            (x133 * J1 + x77 * J2) * x71
+                + m2 * d
+                    * ((x97 * x89 - x105 * x71) * x50 - u5 * (x128 + x127)
+                        + (m0 * (x7 * x122 * x89 + x124 * x71 + x8 * d * x120 * x101)
+                            * x23
+                            + (x115 * (x8 * (u5 * x19 + x82 + x83) - x109)
+                                + x132 * x118 * x7 - u4 * (x12 * x102 - x98) * d
+                                + x107 * (x8 * (x79 - x12 * u5 - x78) - x112)) * m1) * x23),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -1002,13 +784,30 @@ pub mod reduced_volterra {
             });
         }
         dstate[0] = x2 * x4;
-        dstate[1] = x5;
-        dstate[2] = x7;
+        dstate[1] = u2 * x1 - u3 * x0;
+        dstate[2] = x5 * x2 * x4 + u1;
         dstate[3] = u4;
         dstate[4] = u5;
-        dstate[5] = (G_X + x22 + x35 + x44) * x45;
-        dstate[6] = (x53 + G_Y + x65 + x67) * x45;
-        dstate[7] = (G_Z + x78 + x80 + x82) * x45;
+        dstate[5] = (G_X
+            + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
+                + (x12 * x15 * d + a * x15) * m1) * u2
+            + d
+                * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
+                    + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
+                    + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
+            + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0))) * x23;
+        dstate[6] = (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1))
+            + G_Y + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
+            + d
+                * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
+                    + u5 * m2 * x33)) * x23;
+        dstate[7] = (G_Z
+            + d
+                * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
+                    + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
+                    + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
+            + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
+            + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23;
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
@@ -1307,212 +1106,210 @@ pub mod kane {
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::sin(phi);
-        let x1 = x0 * u2;
-        let x2 = f64::cos(phi);
-        let x3 = u3 * x2;
-        let x4 = x1 + x3;
-        let x5 = f64::cos(theta);
-        let x6 = 1.0 / x5;
-        let x7 = u3 * x0;
-        let x8 = u2 * x2;
-        let x9 = x8 - x7;
-        let x10 = f64::sin(theta);
-        let x11 = x10 * x4 * x6 + u1;
-        let x12 = f64::cos(gamma1);
-        let x13 = x12 * x12;
-        let x14 = f64::cos(gamma2);
-        let x15 = x14 * x14;
-        let x16 = d * d * m1;
-        let x17 = a * d * m1;
-        let x18 = x12 * (J1 - J2 - x16) - x17;
-        let x19 = f64::sin(gamma1);
-        let x20 = x18 * x19 - Ixy;
-        let x21 = m2 * d * d;
-        let x22 = x14 * (x21 + J2 - J1);
-        let x23 = m2 * a * d;
-        let x24 = x22 + x23;
-        let x25 = f64::sin(gamma2);
-        let x26 = x24 * x25 - Ixz;
-        let x27 = f64::cos(psi);
-        let x28 = x10 * x27 * x0;
-        let x29 = f64::sin(psi);
-        let x30 = x2 * x29;
-        let x31 = x30 - x28;
-        let x32 = x0 * x29;
-        let x33 = x10 * x27 * x2;
-        let x34 = x32 + x33;
-        let x35 = m2 * x31 * x25 + x34 * x19 * m1;
-        let x36 = x35 * d;
-        let x37 = x27 * x2;
-        let x38 = x10 * x0 * x29;
-        let x39 = -x37 - x38;
-        let x40 = x27 * x0;
-        let x41 = x10 * x2 * x29;
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = u2 * x1 - u3 * x0;
+        let x6 = f64::sin(theta);
+        let x7 = x6 * x2 * x4 + u1;
+        let x8 = f64::cos(gamma1);
+        let x9 = x8 * x8;
+        let x10 = f64::cos(gamma2);
+        let x11 = x10 * x10;
+        let x12 = d * d * m1;
+        let x13 = a * d * m1;
+        let x14 = x8 * (J1 - J2 - x12) - x13;
+        let x15 = f64::sin(gamma1);
+        let x16 = x14 * x15 - Ixy;
+        let x17 = m2 * d * d;
+        let x18 = x10 * (x17 + J2 - J1);
+        let x19 = m2 * a * d;
+        let x20 = x18 + x19;
+        let x21 = f64::sin(gamma2);
+        let x22 = x20 * x21 - Ixz;
+        let x23 = f64::cos(psi);
+        let x24 = x6 * x23 * x0;
+        let x25 = f64::sin(psi);
+        let x26 = x1 * x25;
+        let x27 = x26 - x24;
+        let x28 = x0 * x25;
+        let x29 = x6 * x23 * x1;
+        let x30 = x28 + x29;
+        let x31 = m2 * x27 * x21 + x30 * x15 * m1;
+        let x32 = x31 * d;
+        let x33 = x23 * x1;
+        let x34 = x6 * x0 * x25;
+        let x35 = -x33 - x34;
+        let x36 = x23 * x0;
+        let x37 = x6 * x1 * x25;
+        let x38 = x37 - x36;
+        let x39 = (m2 * x35 * x21 + x15 * x38 * m1) * d;
+        let x40 = m2 * x21 * x0;
+        let x41 = x15 * m1 * x1;
         let x42 = x41 - x40;
-        let x43 = (m2 * x39 * x25 + x19 * x42 * m1) * d;
-        let x44 = m2 * x25 * x0;
-        let x45 = x19 * m1 * x2;
-        let x46 = x45 - x44;
-        let x47 = x46 * x5 * d;
-        let x48 = J2 + x16 - J1;
-        let x49 = x14 * d;
-        let x50 = -Iyz;
-        let x51 = m2 * d * (d + x14 * a) + J2;
-        let x52 = a + x49;
-        let x53 = x5 * d * x25;
-        let x54 = x52 * x0 * x29 + (x10 * x52 * x2 + x53) * x27;
-        let x55 = -x32 - x33;
-        let x56 = a * x55;
-        let x57 = x56 + x12 * x55 * d;
-        let x58 = m2 * x54 + x57 * m1;
-        let x59 = x40 - x41;
-        let x60 = a * x59;
-        let x61 = x5 * x25 * x29;
-        let x62 = x14 * x42;
-        let x63 = a * x42;
-        let x64 = (x60 + x12 * x59 * d) * m1 + m2 * ((x61 + x62) * d + x63);
-        let x65 = x12 * d;
-        let x66 = -a - x65;
-        let x67 = m2 * x52 + x66 * m1;
-        let x68 = x67 * x5 * x2 - m2 * x10 * d * x25;
-        let x69 = J2 + (d + x12 * a) * d * m1;
-        let x70 = -a - x49;
-        let x71 = a + x65;
-        let x72 = m2 * x70 + x71 * m1;
-        let x73 = x19 * x5 * d * m1;
-        let x74 = x27 * (x10 * x72 * x0 - x73) + x67 * x2 * x29;
-        let x75 = x37 + x38;
-        let x76 = x19 * x5 * x29;
-        let x77 = x12 * x75 - x76;
-        let x78 = (x14 * m2 * x39 + m1 * x77) * d + a * (m2 * x39 + m1 * x75);
-        let x79 = x10 * x19 * d * m1 + x5 * x72 * x0;
-        let x80 = x28 - x30;
-        let x81 = x12 * x80 - x27 * x19 * x5;
-        let x82 = d * m1 * x81;
-        let x83 = d * m1 * x77;
-        let x84 = x12 * x5 * x0 + x10 * x19;
-        let x85 = x84 * d * m1;
-        let x86 = -x27 * x5 * x25 - x14 * x34;
-        let x87 = -(m2 * x86 * d);
-        let x88 = -(m2 * d * (-x61 - x62));
-        let x89 = x14 * x5 * x2;
-        let x90 = x10 * x25;
-        let x91 = (x89 - x90) * m2 * d;
-        let x92 = m2 + m0 + m1;
-        let x93 = -m2 * x25 * x2 - x19 * x0 * m1;
-        let x94 = x31 * x19 * m1 + m2 * x55 * x25;
-        let x95 = x39 * x19 * m1 + m2 * x59 * x25;
-        let x96 = m2 * x25 * x75 + x19 * x59 * m1;
-        let x97 = -u5 - u2;
-        let x98 = u5 + u2;
-        let x99 = x98 * x2 - x7;
-        let x100 = u8 + x10 * d * x25 * x97
-            + x5 * (d * (x14 * x99 - x25 * x0 * u1) + a * x9);
-        let x101 = x5 * x98 - x10 * x0 * u1;
-        let x102 = u6 + a * (x4 * x29 + x10 * x27 * x9)
-            + d
-                * (x25 * (u1 * x2 * x29 + x27 * x101)
-                    + x14 * (x10 * x99 * x27 + (x0 * x98 + x3) * x29));
-        let x103 = -x1 - x3;
-        let x104 = u7
-            + (x14 * (x10 * x99 * x29 + x27 * (x0 * x97 - x3))
-                + x25 * (x101 * x29 - x27 * u1 * x2)) * d
-            + a * (x10 * x9 * x29 + x27 * x103);
-        let x105 = u7 * x29;
-        let x106 = u6 * x27;
-        let x107 = x105 + x106;
-        let x108 = x44 - x45;
+        let x43 = x42 * x3 * d;
+        let x44 = J2 + x12 - J1;
+        let x45 = x10 * d;
+        let x46 = -Iyz;
+        let x47 = d + x10 * a;
+        let x48 = m2 * d * x47 + J2;
+        let x49 = a + x45;
+        let x50 = -x28 - x29;
+        let x51 = a * x50;
+        let x52 = m2 * (x49 * x0 * x25 + (x6 * x49 * x1 + x3 * d * x21) * x23)
+            + (x51 + x8 * x50 * d) * m1;
+        let x53 = x36 - x37;
+        let x54 = a * x53;
+        let x55 = x3 * x21 * x25;
+        let x56 = x10 * x38;
+        let x57 = x55 + x56;
+        let x58 = a * x38;
+        let x59 = (x54 + x8 * x53 * d) * m1 + m2 * (x57 * d + x58);
+        let x60 = x8 * d;
+        let x61 = -a - x60;
+        let x62 = m2 * x49 + x61 * m1;
+        let x63 = x62 * x3 * x1 - m2 * x6 * d * x21;
+        let x64 = d + x8 * a;
+        let x65 = J2 + x64 * d * m1;
+        let x66 = -a - x45;
+        let x67 = m2 * x66 + (a + x60) * m1;
+        let x68 = x15 * x3 * d * m1;
+        let x69 = x23 * (x6 * x67 * x0 - x68) + x62 * x1 * x25;
+        let x70 = x33 + x34;
+        let x71 = x15 * x3 * x25;
+        let x72 = x8 * x70 - x71;
+        let x73 = (x10 * m2 * x35 + m1 * x72) * d + a * (m2 * x35 + m1 * x70);
+        let x74 = x6 * x15 * d * m1 + x3 * x67 * x0;
+        let x75 = x24 - x26;
+        let x76 = x8 * x75 - x23 * x15 * x3;
+        let x77 = d * m1 * x76;
+        let x78 = d * m1 * x72;
+        let x79 = x8 * x3 * x0 + x6 * x15;
+        let x80 = x79 * d * m1;
+        let x81 = x23 * x3 * x21;
+        let x82 = x10 * x30;
+        let x83 = -x81 - x82;
+        let x84 = -(m2 * x83 * d);
+        let x85 = -(m2 * d * (-x55 - x56));
+        let x86 = x10 * x3 * x1;
+        let x87 = x6 * x21;
+        let x88 = x86 - x87;
+        let x89 = x88 * m2 * d;
+        let x90 = m2 + m0 + m1;
+        let x91 = x10 * u1;
+        let x92 = u3 * x21;
+        let x93 = x91 - x92;
+        let x94 = u3 * Izz;
+        let x95 = Iyz * u2;
+        let x96 = u1 * Ixz;
+        let x97 = x8 * x14 + x44 * x15 * x15;
+        let x98 = u6 * x30 + u7 * x38 + u8 * x3 * x1;
+        let x99 = d * m1 * x98;
+        let x100 = x21 * u1;
+        let x101 = x10 * u3;
+        let x102 = x100 + x101;
+        let x103 = x8 * u2;
+        let x104 = x15 * u1;
+        let x105 = x103 - x104;
+        let x106 = x8 * u1;
+        let x107 = x15 * u2;
+        let x108 = x106 + x107;
         let x109 = u4 + u3;
-        let x110 = x0 * x109 - x8;
-        let x111 = -u4 - u3;
-        let x112 = x5 * x111 + x10 * u1 * x2;
-        let x113 = x7 - x8;
-        let x114 = u7
-            + (x12 * (x27 * (x109 * x2 + x1) + x10 * x110 * x29)
-                + x19 * (x112 * x29 - x27 * x0 * u1)) * d
-            + a * (x10 * x113 * x29 + x4 * x27);
-        let x115 = u8 + x10 * x19 * d * x109
-            + x5 * (d * (x12 * x110 + x19 * u1 * x2) + a * x113);
-        let x116 = a * (x103 * x29 + x10 * x27 * x113) + u6
-            + ((x27 * x112 + x0 * u1 * x29) * x19
-                + x12 * (x10 * x27 * x110 + (x111 * x2 - x1) * x29)) * d;
-        let x117 = x14 * u1;
-        let x118 = u3 * x25;
-        let x119 = x117 - x118;
-        let x120 = u3 * Izz;
-        let x121 = Iyz * u2;
-        let x122 = u1 * Ixz;
-        let x123 = x12 * x18 + x48 * x19 * x19;
-        let x124 = u6 * x34 + u7 * x42 + u8 * x5 * x2;
-        let x125 = d * m1 * x124;
-        let x126 = x25 * u1;
-        let x127 = x14 * u3;
-        let x128 = x126 + x127;
-        let x129 = x12 * u2 - x19 * u1;
-        let x130 = x12 * u1;
-        let x131 = x19 * u2;
-        let x132 = x130 + x131;
-        let x133 = x14 * x24 + (J1 - x21 - J2) * x25 * x25;
-        let x134 = u8 * x5 * x0;
-        let x135 = u7 * x39 - x134 + u6 * x31;
-        let x136 = Iyz * u3;
-        let x137 = Ixy * u1;
-        let x138 = Iyy * u2;
-        let x139 = Ixy * u2;
-        let x140 = Ixx * u1;
-        let x141 = u3 * Ixz;
-        let x142 = x12 * d * x42 + x63;
-        let x143 = x12 * d * x80 + a * x80;
-        let x144 = a * x75;
-        let x145 = x12 * d * x75 + x144;
-        let x146 = -x126 - x127;
-        let x147 = x10 * x72 * x2 - m2 * x5 * d * x25;
-        let x148 = -x14 * x10 - x5 * x25 * x2;
-        let x149 = x14 * x59;
-        let x150 = x60 + d * (x149 - x61);
-        let x151 = a * x31 + x14 * x31 * d;
-        let x152 = x52 * x5 * x2 - x10 * d * x25;
-        let x153 = x27 * (x14 * x5 - x10 * x25 * x2) - x25 * x0 * x29;
-        let x154 = a * x39;
-        let x155 = x14 * x39 * d + x154;
-        let x156 = x14 * x5 * x29;
-        let x157 = x59 * x25 + x156;
-        let x158 = u8 * x148;
-        let x159 = x143 * m1 + x151 * m2;
-        let x160 = m2 * x155 + x145 * m1;
-        let x161 = x142 * m1;
-        let x162 = x161 + x150 * m2;
-        let x163 = x12 * x10 - x19 * x5 * x0;
-        let x164 = x19 * x5 * d;
-        let x165 = x27 * (-x12 * x5 - x10 * x19 * x0) + x19 * x2 * x29;
-        let x166 = x12 * x5 * x29;
-        let x167 = x39 * x19 - x166;
-        let x168 = u8 * x163;
-        let x169 = x5 * x0 * x71 + x10 * x19 * d;
-        let x170 = x12 * x34 * d + a * x34;
-        let x171 = x12 * x39 + x76;
-        let x172 = x73 + x67 * x10 * x0;
-        let x173 = x56 + x14 * x55 * d;
-        let x174 = x60 + x14 * x59 * d;
-        let x175 = -x130 - x131;
-        let x176 = x161 + m2 * x174;
-        let x177 = m2 * x173 + x170 * m1;
-        let x178 = d * (x171 * m1 + x14 * m2 * x75) + a * (m2 * x75 + x39 * m1);
-        let x179 = -x19 * x80 - x12 * x27 * x5;
-        let x180 = -x166 - x19 * x75;
-        let x181 = x19 * x5 - x12 * x10 * x0;
-        let x182 = u4 * x179;
-        let x183 = x180 * u4;
-        let x184 = x25 * x42 - x156;
-        let x185 = x34 * x25 - x14 * x27 * x5;
-        let x186 = x61 - x149;
-        let x187 = x90 - x89;
-        let x188 = u5 * x184;
-        let x189 = u5 * x185;
-        let x190 = -x14 * x10 * x2 - x5 * x25;
-        let x191 = x68 * u2 + d * (x46 * x5 * u1 - u5 * m2 * x187 + x84 * u4 * m1)
-            + u3 * x79;
-        let value = x5;
+        let x110 = u5 + u2;
+        let x111 = -m2 * x21 * x1 - x15 * x0 * m1;
+        let x112 = x27 * x15 * m1 + m2 * x50 * x21;
+        let x113 = x35 * x15 * m1 + m2 * x53 * x21;
+        let x114 = x6 * u8;
+        let x115 = u7 * x25;
+        let x116 = u6 * x23;
+        let x117 = x115 + x116;
+        let x118 = x3 * x117 - x114;
+        let x119 = u6 * x25;
+        let x120 = u7 * x23;
+        let x121 = x120 - x119;
+        let x122 = u8 * x3;
+        let x123 = -x115 - x116;
+        let x124 = a * u2;
+        let x125 = x10 * x118 + (x0 * x121 + (x6 * x123 - x122) * x1 - x124) * x21;
+        let x126 = x102 * x125;
+        let x127 = x122 + x6 * x117;
+        let x128 = x127 * x1;
+        let x129 = x0 * (x119 - x120);
+        let x130 = x118 * x21 + x10 * (x128 + x124 + x129) + d * x110;
+        let x131 = x130 * x93;
+        let x132 = x127 * x0;
+        let x133 = x1 * x121;
+        let x134 = x132 - d * x21 * u1 + x133 + x66 * u3;
+        let x135 = m2 * x21 * x70 + x15 * x53 * m1;
+        let x136 = x40 - x41;
+        let x137 = x132 + a * u3 + x133;
+        let x138 = x8 * x137 + (x114 + x123 * x3) * x15 + d * x109;
+        let x139 = x15 * x137 + x8 * x118;
+        let x140 = x105 * x139 - x108 * x138;
+        let x141 = x128 - x124 + x129 + d * (x104 - x103);
+        let x142 = x10 * x20 + (J1 - x17 - J2) * x21 * x21;
+        let x143 = u8 * x3 * x0;
+        let x144 = u7 * x35 - x143 + u6 * x27;
+        let x145 = Iyz * u3;
+        let x146 = Ixy * u1;
+        let x147 = Iyy * u2;
+        let x148 = Ixy * u2;
+        let x149 = Ixx * u1;
+        let x150 = u3 * Ixz;
+        let x151 = -x100 - x101;
+        let x152 = x6 * x67 * x1 - m2 * x3 * d * x21;
+        let x153 = (x8 * d * x75 + a * x75) * m1 + (a * x27 + x10 * x27 * d) * m2;
+        let x154 = m2 * (x10 * x35 * d + a * x35) + (x8 * d * x70 + a * x70) * m1;
+        let x155 = (x8 * d * x38 + x58) * m1;
+        let x156 = x10 * x53;
+        let x157 = x156 - x55;
+        let x158 = x155 + (x54 + d * x157) * m2;
+        let x159 = -x10 * x6 - x3 * x21 * x1;
+        let x160 = u8 * x159;
+        let x161 = x10 * x3 * x25;
+        let x162 = x53 * x21 + x161;
+        let x163 = x10 * x3;
+        let x164 = x6 * x21 * x1;
+        let x165 = x23 * (x163 - x164) - x21 * x0 * x25;
+        let x166 = x68 + x62 * x6 * x0;
+        let x167 = -x106 - x107;
+        let x168 = x155 + m2 * (x54 + x10 * x53 * d);
+        let x169 = m2 * (x51 + x10 * x50 * d) + (x8 * x30 * d + a * x30) * m1;
+        let x170 = x8 * x35 + x71;
+        let x171 = d * (x170 * m1 + x10 * m2 * x70) + a * (m2 * x70 + x35 * m1);
+        let x172 = x8 * x3;
+        let x173 = x6 * x15 * x0;
+        let x174 = -x172 - x173;
+        let x175 = x15 * x1 * x25;
+        let x176 = x23 * x174 + x175;
+        let x177 = x8 * x3 * x25;
+        let x178 = x35 * x15 - x177;
+        let x179 = x8 * x6;
+        let x180 = x15 * x3 * x0;
+        let x181 = x179 - x180;
+        let x182 = u8 * x181;
+        let x183 = -x15 * x75 - x8 * x23 * x3;
+        let x184 = x15 * x70;
+        let x185 = -x177 - x184;
+        let x186 = x15 * x3 - x8 * x6 * x0;
+        let x187 = x21 * x38 - x161;
+        let x188 = x30 * x21 - x10 * x23 * x3;
+        let x189 = x55 - x156;
+        let x190 = -x10 * x6 * x1 - x3 * x21;
+        let x191 = x87 - x86;
+        let x192 = x63 * u2 + d * (x42 * x3 * u1 - u5 * m2 * x191 + x79 * u4 * m1)
+            + u3 * x74;
+        let x193 = x165 * u2;
+        let x194 = x81 + x82;
+        let x195 = x21 * x7 - x100 - x101;
+        let x196 = x23 * (x172 + x173) - x175;
+        let x197 = x15 * x7 + x103 - x104;
+        let x198 = x180 - x179;
+        let x199 = x8 * x7 - x106 - x107;
+        let x200 = x162 * u2;
+        let x201 = x177 + x184;
+        let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1522,171 +1319,162 @@ pub mod kane {
         }
         let mut mass: [[f64; 8]; 8] = [
             [
-                (x13 + x15) * J1 + Ixx + J2 * (2.0 - x13 - x15)
-                    + (m2 * (1.0 - x15) + (1.0 - x13) * m1) * d * d,
-                x20,
-                x26,
+                (x9 + x11) * J1 + Ixx + J2 * (2.0 - x9 - x11)
+                    + (m2 * (1.0 - x11) + (1.0 - x9) * m1) * d * d,
+                x16,
+                x22,
                 0.0,
                 0.0,
-                x36,
+                x32,
+                x39,
                 x43,
-                x47,
             ],
             [
-                x20,
-                x12 * (2.0 * x17 + x12 * x48) + Iyy + m2 * (a * (a + 2.0 * x49) + d * d)
+                x16,
+                x8 * (2.0 * x13 + x8 * x44) + Iyy + m2 * (a * (a + 2.0 * x45) + d * d)
                     + J2 + a * a * m1 + J1,
-                x50,
+                x46,
                 0.0,
-                x51,
-                x58,
-                x64,
-                x68,
+                x48,
+                x52,
+                x59,
+                x63,
             ],
             [
-                x26,
-                x50,
-                J2 + x14 * (x22 + 2.0 * x23) + a * ((m2 + m1) * a + 2.0 * (x12 * d * m1))
-                    + x16 + Izz + J1,
-                x69,
+                x22,
+                x46,
+                J2 + x10 * (x18 + 2.0 * x19) + a * ((m2 + m1) * a + 2.0 * (x8 * d * m1))
+                    + x12 + Izz + J1,
+                x65,
                 0.0,
+                x69,
+                x73,
                 x74,
-                x78,
-                x79,
             ],
-            [0.0, 0.0, x69, J2 + x16, 0.0, x82, x83, x85],
-            [0.0, x51, 0.0, 0.0, x21 + J2, x87, x88, x91],
-            [x36, x58, x74, x82, x87, x92, 0.0, 0.0],
-            [x43, x64, x78, x83, x88, 0.0, x92, 0.0],
-            [x47, x68, x79, x85, x91, 0.0, 0.0, x92],
+            [0.0, 0.0, x65, J2 + x12, 0.0, x77, x78, x80],
+            [0.0, x48, 0.0, 0.0, x17 + J2, x84, x85, x89],
+            [x32, x52, x69, x77, x84, x90, 0.0, 0.0],
+            [x39, x59, x73, x78, x85, 0.0, x90, 0.0],
+            [x43, x63, x74, x80, x89, 0.0, 0.0, x90],
         ];
         let mut force: [f64; 8] = [
-            d
-                * (m2
-                    * (x100
-                        * (x10 * x25 * x0 * x9 + (-x14 * u5 * x0 - x25 * x11 * x2) * x5)
-                        + ((x4 * x6 * x75 + x55 * x11 - x27 * x5 * x0 * x9) * x25
-                            + x14 * u5 * x31) * x102
-                        + x104
-                            * ((x4 * x6 * x31 - x5 * x0 * x9 * x29 + x59 * x11) * x25
-                                + x14 * u5 * x39))
-                    - (u8 * x5 * x93 + u6 * x94 + u7 * x95) * x11
-                    - (u6 * x96 + x35 * u7) * x4 * x6
-                    - (x46 * x5 * x107 + x10 * u8 * x108) * x9
-                    + m1
-                        * ((x19 * (x4 * x34 * x6 + x5 * x9 * x2 * x29 + x39 * x11)
-                            + x12 * u4 * x42) * x114
-                            + (x12 * u4 * x5 * x2
-                                + (-x5 * x0 * x11 - x10 * x9 * x2) * x19) * x115
-                            + (x19 * (x27 * x5 * x9 * x2 + x4 * x6 * x59 + x31 * x11)
-                                + x12 * u4 * x34) * x116))
-                + u2 * (x25 * x119 * J1 - x120 + x121 + x122)
+            u2 * (x21 * x93 * J1 - x94 + x95 + x96)
                 - u4
-                    * (u2 * x123
-                        + x12 * (x125 + x19 * (2.0 * J2 + 2.0 * x16 - 2.0 * J1) * u1))
-                + (x12 * x129 * u3 - x128 * x14 * u2 + (-x12 * x129 - x132 * x19) * x109
-                    + (x128 * x14 - x25 * x119) * x98) * J2
+                    * (u2 * x97
+                        + x8 * (x99 + x15 * (2.0 * J2 + 2.0 * x12 - 2.0 * J1) * u1))
+                + (x8 * x105 * u3 - x102 * x10 * u2 + (-x8 * x105 - x108 * x15) * x109
+                    + (x102 * x10 - x21 * x93) * x110) * J2
+                + d
+                    * (m2 * ((x126 - x131) * x21 - x10 * u5 * x134)
+                        - (u8 * x3 * x111 + u6 * x112 + u7 * x113) * x7
+                        - (u6 * x135 + x31 * u7) * x2 * x4
+                        - (x42 * x3 * x117 + x6 * u8 * x136) * x5
+                        + (x15 * x140 + x8 * u4 * x141) * m1)
                 - u5
-                    * (x133 * u3
-                        + x14
-                            * (x25 * u1 * (2.0 * x21 + 2.0 * J2 - 2.0 * J1)
-                                + m2 * d * x135))
-                + u3 * (x138 - x136 - x137 + x132 * x19 * J1),
-            m1
-                * ((x4 * x6 * x142 + x143 * x11 + u4 * x34 * x19 * d
-                    + x27 * x66 * x5 * x9 * x2) * x116
-                    + x114
-                        * (x66 * x5 * x9 * x2 * x29 + u4 * x19 * d * x42 + x4 * x6 * x57
-                            + x145 * x11)
-                    + x115
-                        * (x10 * x71 * x9 * x2
-                            + (u4 * x19 * d * x2 + x0 * x71 * x11) * x5))
-                - (x140 - x139 - x141) * u3 + (x146 * x119 - x12 * x132 * u3) * J1
-                + (x120 - x121 - x122) * u1
+                    * (x142 * u3
+                        + x10
+                            * (x21 * u1 * (2.0 * x17 + 2.0 * J2 - 2.0 * J1)
+                                + m2 * d * x144))
+                + u3 * (x147 - x145 - x146 + x108 * x15 * J1),
+            m1 * (u4 * x15 * d * x141 + x61 * x140) - (x149 - x148 - x150) * u3
+                + (x151 * x93 - x8 * x108 * u3) * J1 + (x94 - x95 - x96) * u1
                 - u4
-                    * (x19
-                        * (x125
-                            + (x12 * (2.0 * J1 - 2.0 * J2 - 2.0 * x16) - 2.0 * x17) * u2)
-                        + u1 * x123) - x9 * (u8 * x147 + x107 * x68)
+                    * (x15
+                        * (x99
+                            + (x8 * (2.0 * J1 - 2.0 * J2 - 2.0 * x12) - 2.0 * x13) * u2)
+                        + u1 * x97) - x5 * (u8 * x152 + x117 * x63)
+                + J2 * (x105 * u3 * x15 + x102 * x93 + (x8 * x108 - x105 * x15) * x109)
+                - (x153 * u6 + u7 * x154 + u8 * x3 * x67 * x0) * x7
+                - x2 * x4 * (u7 * x52 + x158 * u6)
                 + m2
-                    * (x100
-                        * (x70 * x5 * x0 * x11 + u5 * d * x148
-                            + (x10 * x70 * x2 - x53) * x9)
-                        + (x150 * x4 * x6 + x151 * x11 + x27 * x152 * x9 + u5 * d * x153)
-                            * x102
-                        + x104
-                            * (x155 * x11 + x152 * x9 * x29 + x4 * x6 * x54
-                                + x157 * u5 * d)
+                    * ((x47 * x110 - x10 * u5 * a) * x125
                         - u5 * d
-                            * ((-u5 - 2.0 * u2) * a * x25 + x158 + x157 * u7
-                                + u6 * x153))
-                + J2 * (x129 * u3 * x19 + x128 * x119 + (x12 * x132 - x129 * x19) * x109)
-                - (x159 * u6 + u7 * x160 + u8 * x5 * x72 * x0) * x11
-                - x4 * x6 * (u7 * x58 + x162 * u6),
-            (x115 * (u4 * d * x163 + (x10 * x66 * x0 + x164) * x9 + x5 * x71 * x11 * x2)
-                - u4 * (u6 * x165 + u7 * x167 + x168 + a * x19 * (-u4 - 2.0 * u3)) * d
-                + (x27 * x169 * x9 + u4 * d * x165 + x170 * x11
-                    + x4 * x6 * (x154 + d * x171)) * x116
-                + (x4 * x6 * ((x10 * x0 * x71 - x164) * x27 + x66 * x2 * x29)
-                    + u4 * d * x167 + x169 * x9 * x29 + x142 * x11) * x114) * m1
-                - (x138 - x136 - x137) * u1 - (u8 * x172 + x79 * x107) * x9
-                + (x14 * x119 * J1 - x139 + x140 - x141) * u2
-                + m2
-                    * ((x70 * x27 * x5 * x0 * x9 + x173 * x11 + u5 * d * x80 * x25
-                        + (x14 * d * x75 + x144) * x4 * x6) * x102
-                        + x100
-                            * (x10 * x52 * x0 * x9
-                                + (x70 * x11 * x2 + u5 * d * x25 * x0) * x5)
-                        + x104
-                            * (x151 * x4 * x6 + u5 * d * x25 * x75 + x174 * x11
-                                + x70 * x5 * x0 * x9 * x29)) + x132 * x129 * J1
-                + J2 * (x128 * x25 * u2 + (-x128 * x25 - x14 * x119) * x98 + x129 * x175)
+                            * ((-u5 - 2.0 * u2) * a * x21 + x160 + x162 * u7 + u6 * x165)
+                        + (-x47 * x93 - x102 * a * x21) * x134 + a * x130 * x21 * u2),
+            m2 * (u5 * x134 * d * x21 + x66 * (x131 - x126)) - (x147 - x145 - x146) * u1
+                - (u8 * x166 + x74 * x117) * x5
+                + (x10 * x93 * J1 - x148 + x149 - x150) * u2 + x108 * x105 * J1
+                + J2 * (x102 * x21 * u2 + (-x102 * x21 - x10 * x93) * x110 + x105 * x167)
                 - u5
-                    * (x25
-                        * (((2.0 * J1 - 2.0 * x21 - 2.0 * J2) * x14 - 2.0 * x23) * u3
-                            + m2 * (x134 + u6 * x80 + u7 * x75) * d) + x133 * u1)
-                - (x176 * u7 + u8 * x5 * x72 * x2 + x177 * u6) * x11
-                - x4 * x6 * (u6 * x178 + u7 * x74),
-            x129 * (J2 * x175 + x132 * J1)
-                + ((x84 * x27 * x9 + x182 + x4 * x6 * x171 + x12 * x34 * x11) * x116
-                    - u4 * (u6 * x179 + u7 * x180 + x168 - a * u3 * x19)
-                    - x9 * (u8 * x181 + x84 * x107)
-                    + x114 * (x12 * x42 * x11 + x4 * x6 * x81 + x183 + x84 * x9 * x29)
-                    - x12 * x11 * x124
-                    + (u4 * x163 + x12 * x5 * x11 * x2 + x181 * x9) * x115
-                    - x4 * x6 * (u7 * x81 + u6 * x171)) * d * m1,
-            ((x14 * x39 * x11 - x4 * x6 * x86 - x187 * x9 * x29 - x188) * x104
-                - u5 * (x158 - u7 * x184 - a * x25 * u2 - u6 * x185) - x14 * x135 * x11
-                - x4 * x6 * (-u7 * x86 - u6 * x186)
-                + (x14 * x31 * x11 - x4 * x6 * x186 - x189 - x187 * x27 * x9) * x102
-                - (x190 * u8 + x187 * (-x105 - x106)) * x9
-                + x100 * (u5 * x148 + x190 * x9 - x14 * x5 * x0 * x11)) * m2 * d
-                + (x146 * J1 + x128 * J2) * x119,
-            d
-                * (-(x182 + u3 * x165 + x132 * x34) * u4 * m1
-                    - u5 * m2 * (x14 * x31 * u1 - x189 + x153 * u2 + u3 * x80 * x25))
-                - x191 * x27 * x9
-                - x4
-                    * (u3 * x178 + (u4 * x171 * m1 + x96 * u1 - u5 * m2 * x186) * d
-                        + x162 * u2) * x6
-                - ((x12 * u4 * x34 * m1 + x94 * u1 + x14 * u5 * m2 * x31) * d + x177 * u3
-                    + x159 * u2) * x11,
-            d
-                * (-(x183 + x132 * x42 + u3 * x167) * u4 * m1
-                    - u5 * m2 * (x14 * x39 * u1 - x188 + u3 * x25 * x75 + x157 * u2))
-                - (d * (u1 * x95 + x14 * u5 * m2 * x39 + x12 * u4 * x42 * m1) + x176 * u3
-                    + x160 * u2) * x11
-                - x4 * x6
-                    * (x74 * u3 + x58 * u2
-                        + (x35 * u1 - u5 * m2 * x86 + u4 * m1 * x81) * d)
-                - x191 * x9 * x29,
-            (-u5 * m2 * (x5 * x0 * (x118 - x117) + x98 * x148)
-                - u4 * (x109 * x163 + x132 * x5 * x2) * m1) * d
-                - ((u1 * x93 - x14 * u5 * m2 * x0 + x12 * u4 * m1 * x2) * d + x4 * x72)
-                    * x5 * x11
-                - x9
-                    * (d * (x10 * u1 * x108 + u5 * m2 * x190 + u4 * x181 * m1)
-                        + u3 * x172 + x147 * u2),
+                    * (x21
+                        * (((2.0 * J1 - 2.0 * x17 - 2.0 * J2) * x10 - 2.0 * x19) * u3
+                            + m2 * (x143 + u6 * x75 + u7 * x70) * d) + x142 * u1)
+                - (x168 * u7 + u8 * x3 * x67 * x1 + x169 * u6) * x7
+                - x2 * x4 * (u6 * x171 + u7 * x69)
+                + ((x8 * a * u4 - x64 * x109) * x139
+                    - u4 * (u6 * x176 + u7 * x178 + x182 + a * x15 * (-u4 - 2.0 * u3))
+                        * d + (x64 * x108 - a * x105 * x15) * x141 + a * x138 * u3 * x15)
+                    * m1,
+            x105 * (J2 * x167 + x108 * J1)
+                + (x108 * x141 - u4 * (u6 * x183 + u7 * x185 + x182 - a * u3 * x15)
+                    - x5 * (u8 * x186 + x79 * x117) - x8 * x7 * x98
+                    - x2 * x4 * (u7 * x76 + u6 * x170) - x139 * x109) * d * m1,
+            m2 * d
+                * (x125 * x110 - u5 * (x160 - u7 * x187 - a * x21 * u2 - u6 * x188)
+                    - x10 * x144 * x7 - x2 * x4 * (-u7 * x83 - u6 * x189)
+                    - (x190 * u8 + x191 * x123) * x5 - x134 * x93)
+                + (x151 * J1 + x102 * J2) * x93,
+            m2
+                * (x130
+                    * (x10 * x27 * x7 + x75 * x93 + x2 * x4 * x157 + x88 * x23 * x5
+                        - x193)
+                    - u5 * (x10 * x27 * u1 - u5 * x188 + x193 + u3 * x75 * x21) * d
+                    + (u5 * (x10 * x50 - x81) + x194 * x110 + x195 * x75 + x2 * x4 * x187
+                        + x23 * x5 * x159) * x125
+                    + x134
+                        * (x102 * x165 + x30 * x7 - x194 * x93 + x23 * x3 * x0 * x5
+                            + x2 * x4 * x35)) - x192 * x23 * x5
+                - x2
+                    * (u3 * x171 + (u4 * x170 * m1 + x135 * u1 - u5 * m2 * x189) * d
+                        + x158 * u2) * x4
+                - ((x8 * u4 * x30 * m1 + x112 * u1 + x10 * u5 * m2 * x27) * d + x169 * u3
+                    + x153 * u2) * x7
+                + m1
+                    * ((x23 * x3 * x5 * x1 + x2 * x4 * x53 + x27 * x7 + x108 * x76
+                        - x196 * x105) * x141
+                        - (u4 * x183 + u3 * x176 + x108 * x30) * u4 * d
+                        + (x30 * x197 - u3 * x76 + x198 * x23 * x5 + x2 * x4 * x178)
+                            * x139
+                        + x138
+                            * (x79 * x23 * x5 + x30 * x199 + u4 * x176 + x2 * x4 * x170
+                                + x196 * x109)),
+            m2
+                * ((x70 * x93 + x10 * x35 * x7 - x200 + x194 * x2 * x4 + x88 * x5 * x25)
+                    * x130
+                    + x125
+                        * (u5 * x157 + x195 * x70 + x5 * x25 * x159 + x2 * x4 * x165
+                            + x57 * x110)
+                    + x134
+                        * (x3 * x0 * x5 * x25 + x2 * x4 * x75 - x57 * x93 + x102 * x162
+                            + x38 * x7)
+                    - u5 * (x10 * x35 * u1 - u5 * x187 + u3 * x21 * x70 + x200) * d)
+                - (d * (u1 * x113 + x10 * u5 * m2 * x35 + x8 * u4 * x38 * m1) + x168 * u3
+                    + x154 * u2) * x7
+                - x2 * x4
+                    * (x69 * u3 + x52 * u2
+                        + (x31 * u1 - u5 * m2 * x83 + u4 * m1 * x76) * d)
+                - x192 * x5 * x25
+                + ((u4 * x178 + x199 * x38 + x2 * x4 * x76 + x109 * x201
+                    + x79 * x5 * x25) * x138
+                    + (x196 * x2 * x4 + x198 * x5 * x25 + x197 * x38 - u3 * x72) * x139
+                    - (x185 * u4 + x108 * x38 + u3 * x178) * u4 * d
+                    + (x2 * x30 * x4 + x3 * x5 * x1 * x25 + x108 * x72 + x35 * x7
+                        - x105 * x201) * x141) * m1,
+            m2
+                * (x130 * (x190 * x5 - u2 * x159 + (x91 - x92 - x10 * x7) * x3 * x0)
+                    + x134 * (x102 * x159 - x6 * x0 * x5 - x88 * x93 + x3 * x7 * x1)
+                    + x125
+                        * (x195 * x3 * x0 + x88 * x110 + (x164 - x163) * x5 + u5 * x191)
+                    - u5 * d * (x3 * x0 * (x92 - x91) + x110 * x159))
+                + ((x79 * x108 - x198 * x105 - x3 * x0 * x7 - x6 * x5 * x1) * x141
+                    + (x174 * x5 + x197 * x3 * x1 - x79 * u3) * x139
+                    + (u4 * x181 + x198 * x109 + x3 * x199 * x1 + x186 * x5) * x138
+                    - u4 * d * (x109 * x181 + x108 * x3 * x1)) * m1
+                - ((u1 * x111 - x10 * u5 * m2 * x0 + x8 * u4 * m1 * x1) * d + x2 * x67)
+                    * x3 * x7
+                - x5
+                    * (d * (x6 * u1 * x136 + u5 * m2 * x190 + u4 * x186 * m1) + u3 * x166
+                        + x152 * u2),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -1695,9 +1483,9 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x4 * x6;
-        dstate[1] = x9;
-        dstate[2] = x11;
+        dstate[0] = x2 * x4;
+        dstate[1] = x5;
+        dstate[2] = x7;
         dstate[3] = u4;
         dstate[4] = u5;
         dstate[5] = u6;

@@ -462,7 +462,6 @@ pub mod reduced_volterra {
         _g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
     ) -> Result<(), EvalError> {
-        let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -490,270 +489,130 @@ pub mod reduced_volterra {
         let x2 = x0 * u2 + u3 * x1;
         let x3 = f64::cos(theta);
         let x4 = 1.0 / x3;
-        let x5 = u2 * x1 - u3 * x0;
-        let x6 = f64::sin(theta);
-        let x7 = x6 * x2 * x4 + u1;
-        let x8 = 1.0 / (m2 + m0 + m1);
-        let x9 = m1 * x8;
-        let x10 = f64::cos(gamma1);
-        let x11 = x9 - 1.0;
-        let x12 = f64::cos(gamma2);
-        let x13 = m2 * x8;
-        let x14 = x13 - 1.0;
-        let x15 = x10 * x10;
-        let x16 = x12 * x12;
-        let x17 = f64::sin(gamma1);
-        let x18 = x10 * d;
-        let x19 = x12 * d;
-        let x20 = -a - x19;
-        let x21 = a + x18;
-        let x22 = m2 * x20 + x21 * m1;
-        let x23 = x22 * x8;
-        let x24 = x23 - a - x18;
-        let x25 = x10 * (J1 - J2) + d * m1 * x24;
-        let x26 = x17 * x25 - Ixy;
-        let x27 = f64::sin(gamma2);
-        let x28 = a + x19 + x23;
-        let x29 = m2 * d * x28 + x12 * (J2 - J1);
-        let x30 = x27 * x29 - Ixz;
-        let x31 = x10 * m2 * d * d * x27 * m1 * x8;
-        let x32 = -(x12 * m2 * x17 * d * d * m1 * x8);
-        let x33 = 1.0 - x9;
-        let x34 = d * d * x33 * m1;
-        let x35 = x34 + J2 - J1;
-        let x36 = 1.0 - x13;
-        let x37 = m2 * d * d * x36;
-        let x38 = 2.0 - 2.0 * x9;
-        let x39 = 2.0 * m1 - 2.0 * m2;
-        let x40 = a
-            * ((a * x33 + x10 * d * x38) * m1
+        let x5 = 1.0 / (m2 + m0 + m1);
+        let x6 = m1 * x5;
+        let x7 = f64::cos(gamma1);
+        let x8 = f64::cos(gamma2);
+        let x9 = m2 * x5;
+        let x10 = x9 - 1.0;
+        let x11 = x7 * x7;
+        let x12 = x8 * x8;
+        let x13 = f64::sin(gamma1);
+        let x14 = x7 * d;
+        let x15 = x8 * d;
+        let x16 = m2 * (-a - x15) + (a + x14) * m1;
+        let x17 = x16 * x5;
+        let x18 = x17 - a - x14;
+        let x19 = x7 * (J1 - J2) + d * m1 * x18;
+        let x20 = x13 * x19 - Ixy;
+        let x21 = f64::sin(gamma2);
+        let x22 = m2 * d * (a + x15 + x17) + x8 * (J2 - J1);
+        let x23 = x21 * x22 - Ixz;
+        let x24 = x7 * m2 * d * d * x21 * m1 * x5;
+        let x25 = -(x8 * m2 * x13 * d * d * m1 * x5);
+        let x26 = 1.0 - x6;
+        let x27 = d * d * x26 * m1;
+        let x28 = x27 + J2 - J1;
+        let x29 = 1.0 - x9;
+        let x30 = m2 * d * d * x29;
+        let x31 = 2.0 - 2.0 * x6;
+        let x32 = 2.0 * m1 - 2.0 * m2;
+        let x33 = a
+            * ((a * x26 + x7 * d * x31) * m1
                 + m2
-                    * (a
-                        + (d * (2.0 * (x10 * m1) + x12 * x39) + a * (2.0 * m1 - m2)) * x8
-                        + 2.0 * x19));
-        let x41 = m2 * x17 * d * d * x27 * m1 * x8;
-        let x42 = x41 - Iyz;
-        let x43 = x10 * d * m1 * x8;
-        let x44 = (m1 - m2) * x8;
-        let x45 = m2 * (d * x36 + x12 * (x43 + (x44 + 1.0) * a)) * d + J2;
-        let x46 = (m2 - m1) * x8;
-        let x47 = x12 * m2 * d * x8;
-        let x48 = J2 + (x10 * (a * (x46 + 1.0) + x47) + d * x33) * d * m1;
-        let x49 = x12 * u1;
-        let x50 = x49 - u3 * x27;
+                    * (a + (d * (2.0 * (x7 * m1) + x8 * x32) + a * (2.0 * m1 - m2)) * x5
+                        + 2.0 * x15));
+        let x34 = m2 * x13 * d * d * x21 * m1 * x5;
+        let x35 = x34 - Iyz;
+        let x36 = x7 * d * m1 * x5;
+        let x37 = m1 - m2;
+        let x38 = x37 * x5;
+        let x39 = x38 + 1.0;
+        let x40 = d * x29 + x8 * (x36 + x39 * a);
+        let x41 = m2 * x40 * d + J2;
+        let x42 = (m2 - m1) * x5;
+        let x43 = x42 + 1.0;
+        let x44 = x8 * m2 * d * x5;
+        let x45 = a * x43 + x44;
+        let x46 = x7 * x45 + d * x26;
+        let x47 = J2 + x46 * d * m1;
+        let x48 = x8 * u1;
+        let x49 = u3 * x21;
+        let x50 = x48 - x49;
         let x51 = u3 * Izz;
         let x52 = Iyz * u2;
         let x53 = u1 * Ixz;
-        let x54 = x27 * u1;
-        let x55 = x12 * u3;
+        let x54 = x21 * u1;
+        let x55 = x8 * u3;
         let x56 = x54 + x55;
-        let x57 = x17 * u1;
-        let x58 = x10 * u2 - x57;
-        let x59 = x10 * u1;
-        let x60 = x17 * u2;
-        let x61 = x59 + x60;
-        let x62 = u4 + u3;
-        let x63 = u5 + u2;
-        let x64 = x27 * x27 * (m2 * x14 * d * d - J2 + J1) + x12 * x29;
-        let x65 = Iyz * u3;
-        let x66 = Ixy * u1;
-        let x67 = Iyy * u2;
-        let x68 = f64::cos(psi);
-        let x69 = x68 * x1;
-        let x70 = f64::sin(psi);
-        let x71 = x6 * x0 * x70;
-        let x72 = -x69 - x71;
-        let x73 = x10 * x72;
-        let x74 = x17 * x3 * x70;
-        let x75 = x73 + x74;
-        let x76 = x69 + x71;
-        let x77 = u3 * (d * (x75 * m1 + x12 * m2 * x76) + a * (m2 * x76 + x72 * m1));
-        let x78 = x68 * x0;
-        let x79 = x6 * x1 * x70;
-        let x80 = x79 - x78;
-        let x81 = x10 * d * x80;
-        let x82 = a * x80;
-        let x83 = x78 - x79;
-        let x84 = a * x83;
-        let x85 = x3 * x27 * x70;
-        let x86 = x12 * x83;
-        let x87 = x86 - x85;
-        let x88 = d * x87;
-        let x89 = ((x81 + x82) * m1 + (x84 + x88) * m2) * u2;
-        let x90 = u4 * x75 * m1 + (m2 * x27 * x76 + x17 * x83 * m1) * u1 + u5 * m2 * x87;
-        let x91 = x77 + x89 + d * x90;
-        let x92 = m2 * x27 * x80 + x17 * m1 * x76;
-        let x93 = x6 * x68 * x0;
-        let x94 = x1 * x70;
-        let x95 = x93 - x94;
-        let x96 = x0 * x70;
-        let x97 = x6 * x68 * x1;
-        let x98 = -x96 - x97;
-        let x99 = m2 * x95 * x27 + x98 * x17 * m1;
-        let x100 = m2 * x27 * x0;
-        let x101 = x17 * m1 * x1;
-        let x102 = x100 - x101;
-        let x103 = x96 + x97;
-        let x104 = m2 * x103 * x27 + x17 * x95 * m1;
-        let x105 = m2 * x72 * x27 + x17 * x80 * m1;
-        let x106 = x3 * d * x27;
-        let x107 = x10 * x103 * d;
-        let x108 = a * x103;
-        let x109 = m2 * (x68 * (x6 * x20 * x1 - x106) + x20 * x0 * x70)
-            + (x107 + x108) * m1;
-        let x110 = x109 * u2;
-        let x111 = x68 * x17 * x3;
-        let x112 = x94 - x93;
-        let x113 = x111 + x10 * x112;
-        let x114 = x68 * x3 * x27;
-        let x115 = x12 * x98 - x114;
-        let x116 = u1 * x99 + u4 * m1 * x113 + u5 * m2 * x115;
-        let x117 = x17 * x3 * d * m1;
-        let x118 = a + x19;
-        let x119 = -a - x18;
-        let x120 = m2 * x118 + x119 * m1;
-        let x121 = x22 * x1 * x70 + x68 * (x117 + x120 * x6 * x0);
-        let x122 = u3 * x121;
-        let x123 = x110 + d * x116 + x122;
-        let x124 = m2 * x27 * x1 + x17 * x0 * m1;
-        let x125 = x101 - x100;
-        let x126 = x10 * x3 * x0;
-        let x127 = x6 * x17;
-        let x128 = -x126 - x127;
-        let x129 = x12 * x3 * x1;
-        let x130 = x6 * x27;
-        let x131 = x130 - x129;
-        let x132 = x3 * u1 * x102 + u4 * m1 * x128 + u5 * m2 * x131;
-        let x133 = x120 * x3 * x0 - x6 * x17 * d * m1;
-        let x134 = u3 * x133;
-        let x135 = x3 * x22 * x1 + m2 * x6 * d * x27;
-        let x136 = x135 * u2;
-        let x137 = d * x132 + x134 + x136;
-        let x138 = x125 * x8;
-        let x139 = x27 * x0;
-        let x140 = x124 * x8;
-        let x141 = (x134 + x136) * x8;
-        let x142 = x132 * x8;
-        let x143 = x118 * x3;
-        let x144 = x141 + d * (x142 - x3 * x27 * x0 * x7 + u5 * (x129 - x130))
-            + (x143 - x6 * d * x27 * x1) * x5;
-        let x145 = a * x6;
-        let x146 = x12 * x6;
-        let x147 = x3 * x27 * x1;
-        let x148 = x145 - d * (-x146 - x147);
-        let x149 = x90 * x8;
-        let x150 = x12 * x80;
-        let x151 = x8 * (x77 + x89);
-        let x152 = a * x68 * x3;
-        let x153 = x103 * x27;
-        let x154 = x12 * x68 * x3;
-        let x155 = x148 * x5 * x70 + (x149 - u5 * (-x85 - x150) + x72 * x27 * x7) * d
-            + x151 + x2 * x4 * (-x152 - d * (x154 - x153));
-        let x156 = x92 * x8;
-        let x157 = x83 * x27;
-        let x158 = m2 * x76 * x8 - x69 - x71;
-        let x159 = x8 * x102;
-        let x160 = x159 - x139;
-        let x161 = x8 * x99;
-        let x162 = (x110 + x122) * x8;
-        let x163 = x12 * x3 * x70;
-        let x164 = a * x3 * x70;
-        let x165 = x12 * x103;
-        let x166 = x116 * x8;
-        let x167 = x162 + x2 * x4 * (x164 - d * (-x157 - x163)) + x68 * x148 * x5
-            + d * (x112 * x27 * x7 - u5 * (-x114 - x165) + x166);
-        let x168 = x105 * x8;
-        let x169 = m2 * x95 * x8 - x93 + x94;
-        let x170 = x104 * x8;
-        let x171 = x17 * x1;
-        let x172 = x171 + x159;
-        let x173 = x83 * m1 * x8 - x78 + x79;
-        let x174 = x72 * x17;
-        let x175 = x10 * x6;
-        let x176 = x17 * x3 * x0;
-        let x177 = x176 - x175;
-        let x178 = x177 * d - x145;
-        let x179 = x10 * x76 - x74;
-        let x180 = x17 * x95;
-        let x181 = x10 * x68 * x3;
-        let x182 = x178 * x5 * x70 + (u4 * x179 + x149 + x17 * x80 * x7) * d
-            + x2 * x4 * (x152 + d * (x180 + x181)) + x151;
-        let x183 = x119 * x3;
-        let x184 = x141 + (x183 - x6 * x17 * d * x0) * x5
-            + ((x126 + x127) * u4 + x142 + x17 * x3 * x7 * x1) * d;
-        let x185 = x10 * x3 * x70;
-        let x186 = x10 * x95;
-        let x187 = x2 * x4 * (d * (x174 - x185) - x164) + x68 * x178 * x5 + x162
-            + d * (x103 * x17 * x7 + u4 * (x186 - x111) + x166);
-        let x188 = x96 + x98 * m1 * x8 + x97;
-        let x189 = x10 * x25 + x17 * x17 * x35;
-        let x190 = Ixy * u2;
-        let x191 = Ixx * u1;
-        let x192 = u3 * Ixz;
-        let x193 = -x54 - x55;
-        let x194 = 2.0 * J1 - 2.0 * J2;
-        let x195 = a * x112;
-        let x196 = a * x95;
-        let x197 = (x10 * x112 * d + x195) * m1 + m2 * (x12 * d * x95 + x196);
-        let x198 = x197 * x8;
-        let x199 = x12 * x112 * d;
-        let x200 = x6 * x14 * d * x27 + x3 * x28 * x1;
-        let x201 = (x84 + x10 * x83 * d) * m1;
-        let x202 = x85 + x150;
-        let x203 = x201 + m2 * (x202 * d + x82);
-        let x204 = x203 * x8;
-        let x205 = a * x72;
-        let x206 = x12 * d * x76;
-        let x207 = a * x76;
-        let x208 = m2 * (x206 + x207) + m1 * (x205 + x10 * x72 * d);
-        let x209 = x208 * x8;
-        let x210 = x109 * x8;
-        let x211 = x120 * x6 * x1 + m2 * x3 * d * x27;
-        let x212 = x12 * x6 * x1;
-        let x213 = x3 * x27;
-        let x214 = x146 + x147;
-        let x215 = m2 * x214 * x8;
-        let x216 = x120 * x3 * x8;
-        let x217 = x17 * d * m1 * (x54 + x12 * x62) * x8;
-        let x218 = (x46 - 1.0) * a - x43;
-        let x219 = x27 * x80 - x163;
-        let x220 = x27 * x0 * x70 + (x6 * x27 * x1 - x12 * x3) * x68;
-        let x221 = x120 * x8;
-        let x222 = a + x18 + x221;
-        let x223 = m2 * x6 * d * x27 * x8 + x3 * x24 * x1;
-        let x224 = a * x98;
-        let x225 = x10 * x98 * d;
-        let x226 = m2 * d * x27 * x8 * (x10 * x63 - x57);
-        let x227 = a * (x44 - 1.0) - x47;
-        let x228 = x6 * x22 * x0 - x117;
-        let x229 = x177 * m1 * x8;
-        let x230 = x10 * x6 * x0;
-        let x231 = x17 * x3;
-        let x232 = x6 * x17 * d * x33 + x222 * x3 * x0;
-        let x233 = (x12 * m2 * x72 + m1 * x179) * d + a * (m2 * x72 + m1 * x76);
-        let x234 = x233 * x8;
-        let x235 = m2 * (x12 * x103 * d + x108) + (x224 + x225) * m1;
-        let x236 = x235 * x8;
-        let x237 = m2 * (x12 * d * x80 + x82) + x201;
-        let x238 = x237 * x8;
-        let x239 = x121 * x8;
-        let x240 = -x59 - x60;
-        let x241 = x68 * (x10 * x3 + x6 * x17 * x0) - x17 * x1 * x70;
-        let x242 = x221 - a - x19;
-        let x243 = x3 * x0 * x242 - x6 * x17 * d * m1 * x8;
-        let x244 = x17 * x76;
-        let x245 = x185 + x244;
-        let x246 = x230 - x231;
-        let x247 = x246 * x5 - x10 * x3 * x7 * x1 + x177 * u4;
-        let x248 = x2 * x4 * x179 + x10 * x98 * x7 + x241 * u4 + x68 * x128 * x5;
-        let x249 = x10 * x83 * x7 + x128 * x5 * x70 + u4 * x245 + x2 * x4 * x113;
-        let x250 = m1 * x128 * x8 + x126 + x127;
-        let x251 = x212 + x213;
-        let x252 = x131 * x5 * x70;
-        let x253 = u5 * x219;
-        let x254 = u5 * x214 + x12 * x3 * x0 * x7 + x251 * x5;
-        let x255 = x252 + x253 + x115 * x2 * x4 + x12 * x76 * x7;
-        let x256 = x202 * x2 * x4 + x131 * x68 * x5 + x12 * x95 * x7 + u5 * x220;
+        let x57 = x7 * u2;
+        let x58 = x13 * u1;
+        let x59 = x57 - x58;
+        let x60 = x7 * x59;
+        let x61 = x7 * u1;
+        let x62 = x13 * u2;
+        let x63 = x61 + x62;
+        let x64 = x63 * x13;
+        let x65 = u4 + u3;
+        let x66 = x21 * x50;
+        let x67 = x56 * x8;
+        let x68 = u5 + u2;
+        let x69 = x21 * x21 * (m2 * x10 * d * d - J2 + J1) + x8 * x22;
+        let x70 = x7 * x8 * u4;
+        let x71 = Iyz * u3;
+        let x72 = Ixy * u1;
+        let x73 = Iyy * u2;
+        let x74 = a * x21 * u2;
+        let x75 = x54 + x8 * x65;
+        let x76 = (m2 * a * x21 * u2 + (d * (x13 * x75 - x7 * x21 * u2) - x74) * m1) * x5
+            - x74;
+        let x77 = x8 * x13 * u2;
+        let x78 = x7 * u4 * x21;
+        let x79 = x78 - x77;
+        let x80 = -u5 - u2;
+        let x81 = x21 * x65 - x48;
+        let x82 = (u5 + (m2 * x80 + m1 * (x13 * x81 + x7 * x8 * u2)) * x5 + u2) * d
+            + x39 * x8 * a * u2;
+        let x83 = m2 * (a + x15) + (-a - x14) * m1;
+        let x84 = x83 * x5 - a - x15;
+        let x85 = u3 * x84 + d * (x10 * x21 * u1 - x7 * u4 * m1 * x5);
+        let x86 = a * u3 * x13;
+        let x87 = (m2 * ((x8 * u3 * x13 + x21 * (x7 * x80 + x58)) * d + x86)
+            - a * u3 * x13 * m1) * x5 + x86;
+        let x88 = x8 * u5 * x13;
+        let x89 = x7 * u3 * x21;
+        let x90 = x88 - x89;
+        let x91 = x7 * x8 * u5;
+        let x92 = u3 * x13 * x21;
+        let x93 = -u4 - u3;
+        let x94 = x13 * x68 + x61;
+        let x95 = x7 * a * x43 * u3
+            + (u4 + (x93 * m1 + m2 * (x7 * x8 * u3 + x21 * x94)) * x5 + u3) * d;
+        let x96 = x38 - 1.0;
+        let x97 = x8 * m2 * x80 + x59 * m1;
+        let x98 = a * x96 * u2 + d * (x58 - x57 + x97 * x5);
+        let x99 = x13 * x65 * m1;
+        let x100 = m2 * x21 * x80 + x99;
+        let x101 = m2 * x21 * u1 - x7 * u4 * m1;
+        let x102 = d * x97 + a * x37 * u2;
+        let x103 = x83 * u3;
+        let x104 = x103 + x101 * d;
+        let x105 = x7 * x19 + x13 * x13 * x28;
+        let x106 = (x42 - 1.0) * a - x36;
+        let x107 = x21 * u2 * x106;
+        let x108 = x13 * d * m1 * x75 * x5;
+        let x109 = Ixy * u2;
+        let x110 = Ixx * u1;
+        let x111 = u3 * Ixz;
+        let x112 = u5 + x60 + x64;
+        let x113 = -x54 - x55;
+        let x114 = 2.0 * J1 - 2.0 * J2;
+        let x115 = m2 * d * x21 * x5 * (x7 * x68 - x58);
+        let x116 = a * x96 - x44;
+        let x117 = u4 * x116;
+        let x118 = -x61 - x62;
+        let x119 = x13 * x21 * u2;
+        let x120 = u4 - x66 + x67;
         let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -764,225 +623,131 @@ pub mod reduced_volterra {
         }
         let mut mass: [[f64; 5]; 5] = [
             [
-                ((x10 * x10 * x11 - x9 + 1.0) * m1 + m2 * (x12 * x12 * x14 - x13 + 1.0))
-                    * d * d + (x15 + x16) * J1 + Ixx + J2 * (2.0 - x15 - x16),
-                x26,
-                x30,
-                x31,
-                x32,
+                ((x7 * x7 * (x6 - 1.0) - x6 + 1.0) * m1
+                    + m2 * (x8 * x8 * x10 - x9 + 1.0)) * d * d + (x11 + x12) * J1 + Ixx
+                    + J2 * (2.0 - x11 - x12),
+                x20,
+                x23,
+                x24,
+                x25,
             ],
             [
-                x26,
-                Iyy + x10 * (x10 * x35 + 2.0 * (x12 * m2 * d * d * m1 * x8)) + J2 + x37
-                    + J1 + x40,
-                x42,
+                x20,
+                Iyy + x7 * (x7 * x28 + 2.0 * (x8 * m2 * d * d * m1 * x5)) + J2 + x30 + J1
+                    + x33,
+                x35,
+                x34,
                 x41,
-                x45,
             ],
             [
-                x30,
-                x42,
-                x34 + J2
-                    + x12 * (x12 * (J2 + x37 - J1) + 2.0 * (x10 * m2 * d * d * m1 * x8))
-                    + Izz + J1 + x40,
-                x48,
-                x41,
+                x23,
+                x35,
+                x27 + J2
+                    + x8 * (x8 * (J2 + x30 - J1) + 2.0 * (x7 * m2 * d * d * m1 * x5))
+                    + Izz + J1 + x33,
+                x47,
+                x34,
             ],
-            [x31, x41, x48, x34 + J2, x41],
-            [x32, x45, x41, x41, J2 + x37],
+            [x24, x34, x47, x27 + J2, x34],
+            [x25, x41, x34, x34, J2 + x30],
         ];
         let mut force: [f64; 5] = [
-            u2 * (x27 * x50 * J1 - x51 + x52 + x53)
-                + (x10 * x58 * u3 - x56 * x12 * u2 + (-x10 * x58 - x61 * x17) * x62
-                    + (x56 * x12 - x27 * x50) * x63) * J2
-                - (u3 * x64
-                    + x12 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x13) - 2.0 * J1) * x27
-                        * u1 + m2 * d * d * (x17 * x27 * x63 + x10 * x12 * u4) * m1 * x8)
-                    * u5 + u3 * (x67 - x65 - x66 + x61 * x17 * J1)
-                + (m0
-                    * (x91
-                        * (x7 * x92 + x2 * x4 * x99 + x10 * u4 * x83 * m1
-                            + x3 * x5 * x102 * x70 + x12 * u5 * m2 * x76)
-                        + (x12 * u5 * m2 * x95 + x68 * x3 * x5 * x102 + x104 * x7
-                            + x10 * x98 * u4 * m1 + x105 * x2 * x4) * x123
-                        + (x3 * (x12 * u5 * m2 * x0 - x10 * u4 * m1 * x1 + x124 * x7)
-                            + x6 * x125 * x5) * x137) * x8 * x8
-                    + ((x6 * (x138 + x139) * x5
-                        + ((x140 - x27 * x1) * x7 + x12 * u5 * x14 * x0
-                            - x10 * u4 * m1 * x1 * x8) * x3) * x144
-                        + x155
-                            * ((x156 + x157) * x7 + x158 * x12 * u5
-                                + x160 * x3 * x5 * x70 + x2 * (x112 * x27 + x161) * x4
-                                + x10 * u4 * x83 * m1 * x8)
-                        + x167
-                            * (x160 * x68 * x3 * x5 + x2 * x4 * (x168 + x27 * x76)
-                                + x12 * u5 * x169 + x10 * x98 * u4 * m1 * x8
-                                + (x98 * x27 + x170) * x7)) * m2
-                    + ((x2 * x4 * (x103 * x17 + x161) + x172 * x3 * x5 * x70
-                        + x12 * u5 * m2 * x76 * x8 + x10 * u4 * x173
-                        + (x156 + x174) * x7) * x182
-                        + x184
-                            * (((x140 - x17 * x0) * x7 + x10 * u4 * x33 * x1
-                                + x12 * u5 * m2 * x0 * x8) * x3 + (x138 - x171) * x6 * x5)
-                        + x187
-                            * (x2 * x4 * (x168 + x17 * x83) + x12 * u5 * m2 * x95 * x8
-                                + x10 * u4 * x188 + x172 * x68 * x3 * x5
-                                + (x112 * x17 + x170) * x7)) * m1) * d
-                - u4
-                    * (m2 * (x17 * x27 * (-u4 - u3) - x10 * x12 * u5) * d * d * m1 * x8
-                        + x189 * u2
-                        + x10 * (2.0 * J2 - 2.0 * J1 + d * d * x38 * m1) * x17 * u1),
-            (x193 * x50 - x10 * x61 * u3) * J1 - (x191 - x190 - x192) * u3
-                + (x51 - x52 - x53) * u1
-                - u4
-                    * ((x10 * x27 * x62 - x12 * u5 * x17) * m2 * d * d * m1 * x8
-                        + x17 * u2
-                            * (x10 * x194
-                                + d
-                                    * ((m2 * (-2.0 * a - 2.0 * x19)
-                                        + (2.0 * a + 2.0 * x18) * m1) * x8 - 2.0 * a - 2.0 * x18)
-                                    * m1) + x189 * u1)
-                + m2
-                    * (((x198 + x195 + x199) * x7 + x68 * x200 * x5
-                        + (u5
-                            * (x14 * x27 * x0 * x70
-                                + x68 * (x12 * x3 * x36 + x6 * x14 * x27 * x1))
-                            + x98 * u4 * x17 * m1 * x8) * d
-                        + (x84 + x88 + x204) * x2 * x4) * x167
-                        + (x200 * x5 * x70 + (x12 * x72 * d + x205 + x209) * x7
-                            + x2 * x4
-                                * (x118 * x0 * x70 + x210 + (x6 * x118 * x1 + x106) * x68)
-                            + d
-                                * (u4 * x17 * x83 * m1 * x8
-                                    + u5
-                                        * ((x78 - x79 + m2 * x80 * x8) * x27
-                                            + x12 * x3 * x36 * x70))) * x155
-                        + (x5
-                            * (x211 * x8 - x3 * d * x27 * x0 * x0
-                                + (x6 * x20 - x3 * d * x27 * x1) * x1)
-                            + d
-                                * (((-x212 - x213) * x1 - x12 * x6 * x0 * x0 + x215) * u5
-                                    - u4 * x17 * x3 * m1 * x1 * x8) + (x216 - x143) * x0 * x7)
-                            * x144
-                        - u5
-                            * (x217
-                                + x27
-                                    * (u5 * x218
-                                        + (a * ((2.0 * m2 - 2.0 * m1) * x8 - 2.0) - 2.0 * x43)
-                                            * u2)) * d)
-                + ((x208 * x7 + x135 * x5 * x70
-                    + d * (u5 * m2 * x219 + u4 * x17 * x83 * m1) + x2 * x4 * x109) * x91
-                    + (x2 * x4 * x203 + x7 * x197
-                        + d * (u5 * m2 * x220 + x98 * u4 * x17 * m1) + x68 * x135 * x5)
-                        * x123
-                    + x137
-                        * (x211 * x5 + x3 * (x120 * x0 * x7 - u4 * x17 * d * m1 * x1)
-                            + u5 * m2 * x214 * d)) * m0 * x8 * x8
-                + m1
-                    * (x184
-                        * (x3 * (x222 * x0 * x7 + u4 * x17 * d * x33 * x1)
-                            + x5 * (x222 * x6 * x1 + m2 * x3 * d * x27 * x8)
-                            + u5 * m2 * x214 * d * x8)
-                        + x187
-                            * (x2 * x4 * (x81 + x204 + x82)
-                                + (x198 + x10 * d * x95 + x196) * x7 + x68 * x223 * x5
-                                + d
-                                    * (u5 * m2 * x220 * x8
-                                        + u4 * x17 * (x33 * x0 * x70 + x6 * x68 * x33 * x1)))
-                        + x182
-                            * ((x10 * d * x76 + x207 + x209) * x7 + x223 * x5 * x70
-                                + (u4 * x17 * (x6 * x33 * x1 * x70 + x68 * x0 * x11)
-                                    + u5 * m2 * x219 * x8) * d
-                                + (x224 + x210 + x225) * x2 * x4))
-                + J2 * (x58 * u3 * x17 + x56 * x50 + (x10 * x61 - x58 * x17) * x62),
-            (x184
-                * ((x228 * x8 - x0 * (x6 * x21 - x17 * x3 * d * x0)
-                    + x17 * x3 * d * x1 * x1) * x5 + (x216 - x183) * x7 * x1
-                    + (u4 * (x10 * x6 * x1 * x1 + x229 - x0 * (x231 - x230))
-                        - u5 * m2 * x3 * x27 * x0 * x8) * d)
-                - u4 * d
-                    * (x226
-                        + x17 * (u3 * (a * (x39 * x8 - 2.0) - 2.0 * x47) + u4 * x227))
-                + (x68 * x5 * x232
-                    + d
-                        * (u4
-                            * ((x6 * x17 * x0 * x11 + x10 * x3 * x11) * x68
-                                + x17 * x33 * x1 * x70) + u5 * m2 * x112 * x27 * x8)
-                    + x2 * x4 * (x234 + x205 + d * x75) + x7 * (x236 + x107 + x108))
-                    * x187
-                + x182
-                    * ((x238 + x81 + x82) * x7
-                        + x2 * x4
-                            * ((x6 * x0 * x21 - x17 * x3 * d) * x68 + x239
-                                + x119 * x1 * x70)
-                        + d
-                            * (u4
-                                * (x17 * (x68 * x11 * x1 + x6 * x0 * x11 * x70)
-                                    + x10 * x3 * x11 * x70) + u5 * m2 * x72 * x27 * x8)
-                        + x5 * x232 * x70)) * m1 - (x67 - x65 - x66) * u1
-                - u5
-                    * (m2 * (x12 * x17 * x63 - x10 * u4 * x27) * d * d * m1 * x8
-                        + u3 * x27
-                            * (m2 * d
-                                * (((2.0 * a + 2.0 * x19) * m2
-                                    + (-2.0 * a - 2.0 * x18) * m1) * x8 - 2.0 * a - 2.0 * x19)
-                                + x12 * x194) + x64 * u1)
-                + (x12 * x50 * J1 - x190 + x191 - x192) * u2 + x61 * x58 * J1
-                + J2 * (x56 * x27 * u2 + (-x56 * x27 - x12 * x50) * x63 + x58 * x240)
-                + m2
-                    * ((x7 * (x236 + x224 + x12 * x98 * d)
-                        + x2 * x4 * (x234 + x206 + x207)
-                        + d
-                            * (x241 * u4 * m1 * x8
-                                + u5 * (x93 - x94 + m2 * x112 * x8) * x27)
-                        + x68 * x5 * x243) * x167
-                        + (x2 * x4 * (x195 + x239 + x199) + x5 * x243 * x70
-                            + (x238 + x84 + x12 * x83 * d) * x7
-                            + (u4 * m1 * x245 * x8
-                                + u5 * (m2 * x72 * x8 + x69 + x71) * x27) * d) * x155
-                        + (x177 * u4 * d * m1 * x8
-                            + (u5 * d * x27 * x0 * x36 + x242 * x7 * x1) * x3
-                            + (x6 * x0 * x28 - x17 * x3 * d * m1 * x8) * x5) * x144)
-                + m0
-                    * ((x68 * x133 * x5 + x2 * x4 * x233
-                        + (u5 * m2 * x112 * x27 + x241 * u4 * m1) * d + x235 * x7) * x123
-                        + x91
-                            * (x133 * x5 * x70 + x237 * x7
-                                + d * (u4 * m1 * x245 + u5 * m2 * x72 * x27)
-                                + x2 * x4 * x121)
-                        + x137
-                            * (x3 * (x120 * x7 * x1 - u5 * m2 * d * x27 * x0)
-                                + x177 * u4 * d * m1 + x228 * x5)) * x8 * x8,
-            x58 * (J2 * x240 + x61 * J1)
+            u2 * (x21 * x50 * J1 - x51 + x52 + x53)
+                + (x7 * x59 * u3 - x56 * x8 * u2 + (-x60 - x64) * x65
+                    + (x67 - x66) * x68) * J2
+                - (u3 * x69
+                    + x8 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x9) - 2.0 * J1) * x21
+                        * u1 + m2 * d * d * (x13 * x21 * x68 + x70) * m1 * x5) * u5
+                + u3 * (x73 - x71 - x72 + x63 * x13 * J1)
                 + d
-                    * ((m0 * (x137 * x247 + x248 * x123 + x91 * x249) * x8
-                        + m2
-                            * (x155 * x249
-                                - u5 * (x12 * (x17 * x63 + x59) - x10 * u3 * x27) * d
-                                + x247 * x144 + x248 * x167)) * x8
-                        + x184
-                            * (x10 * x3 * x33 * x7 * x1 + u4 * (x229 + x175 - x176)
-                                + (m1 * x246 * x8 - x230 + x231) * x5)
-                        + (u4 * (x241 * m1 * x8 - x180 - x181)
-                            + x2 * x4 * (x73 + x74 + m1 * x179 * x8) + x10 * x7 * x188
-                            + x250 * x68 * x5) * x187
-                        + ((m1 * x245 * x8 - x185 - x244) * u4 + x250 * x5 * x70
-                            + x2 * x4 * (x186 - x111 + m1 * x113 * x8) + x10 * x173 * x7)
-                            * x182 - u4 * (u3 * x17 * x227 + x226)) * m1,
-            (x193 * J1 + x56 * J2) * x50
-                + m2
-                    * ((x2 * (x86 - x85 + x202 * m2 * x8) * x4
-                        + u5 * (m2 * x220 * x8 - x153 + x154) + x12 * x169 * x7
-                        + x131 * x68 * x14 * x5) * x167 - u5 * (x217 + x27 * u2 * x218)
-                        + (x12 * x14 * x3 * x0 * x7 + (m2 * x251 * x8 - x212 - x213) * x5
-                            + u5 * (x215 - x146 - x147)) * x144
-                        + (x158 * x12 * x7 + x2 * x4 * (x114 + x165 + m2 * x115 * x8)
-                            + (x252 + x253) * x14) * x155
-                        + x8
-                            * (m0 * (x254 * x137 + x91 * x255 + x256 * x123) * x8
-                                + (x256 * x187 + x254 * x184 + x182 * x255
-                                    - u4 * (x10 * (x27 * x62 - x49) - x12 * x17 * u2) * d)
-                                    * m1)) * d,
+                    * (m2
+                        * (x76 * (x79 * m1 * x5 - x56 * x10 * x21)
+                            + (x21 * (x10 * x50 - x13 * m1 * u2 * x5)
+                                - x7 * x8 * u4 * m1 * x5) * x82
+                            + x85
+                                * (x56 * x13 * x21 * m1 * x5
+                                    + x8 * (x13 * m1 * x50 * x5 + u5 * x10)))
+                        + (x87 * (x59 * x13 * x26 + m2 * x90 * x5)
+                            + (m2 * (x91 + x92) * x5 - x63 * x13 * x26) * x95
+                            + x98
+                                * (x7 * (m2 * x63 * x21 * x5 + u4 * x26)
+                                    - m2 * x59 * x13 * x21 * x5)) * m1
+                        + m0
+                            * (d * x100 * (-x13 * m1 * u2 - m2 * u3 * x21) + x101 * x102
+                                + (x13 * u1 * m1 + x8 * u5 * m2) * x104) * x5 * x5)
+                - u4
+                    * (m2 * (x13 * x21 * x93 - x91) * d * d * m1 * x5 + x105 * u2
+                        + x7 * (2.0 * J2 - 2.0 * J1 + d * d * x31 * m1) * x13 * u1),
+            m2
+                * (x85 * (x56 * x21 * x106 - x40 * x50)
+                    + x76 * (u4 * x13 * d * x21 * m1 * x5 + x8 * u5 * x106 + x40 * x68)
+                    + (-x8 * u4 * x13 * d * m1 * x5 - x107) * x82
+                    - u5
+                        * (x108
+                            + x21
+                                * (u5 * x106
+                                    + (a * ((2.0 * m2 - 2.0 * m1) * x5 - 2.0) - 2.0 * x36)
+                                        * u2)) * d) - (x110 - x109 - x111) * u3
+                + m1
+                    * (x87 * (m2 * (-x91 - x92) * d * x5 + x59 * x18)
+                        + x98 * d * (m2 * x112 * x21 * x5 + u4 * x13 * x26)
+                        + (m2 * x90 * d * x5 - x63 * x18) * x95)
+                + m0
+                    * (d
+                        * (x100 * (x16 * u2 - x8 * u5 * m2 * d)
+                            + (m2 * x21 * x68 - u4 * x13 * m1) * x102)
+                        + x104 * (-m2 * u3 * d * x21 - x16 * u1)) * x5 * x5
+                + (x113 * x50 - x7 * x63 * u3) * J1 + (x51 - x52 - x53) * u1
+                - u4
+                    * ((x7 * x21 * x65 - x88) * m2 * d * d * m1 * x5
+                        + x13 * u2
+                            * (x7 * x114
+                                + d
+                                    * ((m2 * (-2.0 * a - 2.0 * x15)
+                                        + (2.0 * a + 2.0 * x14) * m1) * x5 - 2.0 * a - 2.0 * x14)
+                                    * m1) + x105 * u1)
+                + J2 * (x59 * u3 * x13 + x56 * x50 + (x7 * x63 - x59 * x13) * x65),
+            m1
+                * (x98 * (x63 * x46 - x45 * x59 * x13)
+                    - u4 * d
+                        * (x115 + x13 * (u3 * (a * (x32 * x5 - 2.0) - 2.0 * x44) + x117))
+                    + (x13 * (x45 * x65 + x117) - x7 * u5 * m2 * d * x21 * x5) * x95
+                    + (x7 * u4 * x45 - x46 * x65 - u5 * m2 * x13 * d * x21 * x5) * x87)
+                - (x73 - x71 - x72) * u1
+                - u5
+                    * (m2 * (x8 * x13 * x68 - x78) * d * d * m1 * x5
+                        + u3 * x21
+                            * (m2 * d
+                                * (((2.0 * a + 2.0 * x15) * m2
+                                    + (-2.0 * a - 2.0 * x14) * m1) * x5 - 2.0 * a - 2.0 * x15)
+                                + x8 * x114) + x69 * u1)
+                + (x8 * x50 * J1 - x109 + x110 - x111) * u2 + x63 * x59 * J1
+                + m0
+                    * (d
+                        * (x104 * (x99 - u5 * m2 * x21)
+                            + x100 * (x7 * u4 * d * m1 - x103))
+                        + (x83 * u1 - x13 * d * m1 * u2) * x102) * x5 * x5
+                + J2 * (x56 * x21 * u2 + (-x56 * x21 - x8 * x50) * x68 + x59 * x118)
+                + ((d * x79 * m1 * x5 + x84 * x50) * x82
+                    + x76 * (d * m1 * (x119 + x70) * x5 - x56 * x84)
+                    + x85 * d * (u5 * x21 * x29 + x13 * x120 * m1 * x5)) * m2,
+            x59 * (J2 * x118 + x63 * J1)
+                + d
+                    * ((x63 * x98 - x87 * x65) * x26
+                        + (m0 * ((x104 * x13 + x7 * d * x100) * x65 + x102 * x118) * x5
+                            + m2
+                                * (x13 * x85 * x120 - u5 * (x8 * x94 - x89) * d
+                                    + (x7 * (u4 * x21 - x48 + x49) - x77) * x82
+                                    + x76 * (x7 * (x54 + x8 * u4 + x55) + x119))) * x5
+                        - u4 * (u3 * x13 * x116 + x115)) * m1,
+            (x113 * J1 + x56 * J2) * x50
+                + m2 * d
+                    * ((x76 * x68 - x85 * x50) * x29 - u5 * (x108 + x107)
+                        + (m0 * (x21 * x102 * x68 + x104 * x50 + x8 * d * x100 * x80)
+                            * x5
+                            + (x95 * (x8 * (u5 * x13 + x61 + x62) - x89)
+                                + x112 * x98 * x21 - u4 * (x7 * x81 - x77) * d
+                                + x87 * (x8 * (x58 - x7 * u5 - x57) - x92)) * m1) * x5),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -992,8 +757,8 @@ pub mod reduced_volterra {
             });
         }
         dstate[0] = x2 * x4;
-        dstate[1] = x5;
-        dstate[2] = x7;
+        dstate[1] = u2 * x1 - u3 * x0;
+        dstate[2] = f64::sin(theta) * x2 * x4 + u1;
         dstate[3] = u4;
         dstate[4] = u5;
         dstate[5] = force[0];

@@ -88,15 +88,23 @@ impl Summary {
     }
 }
 
-impl fmt::Display for Summary {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "model {}: m = {}, r = {}, p = {}, s = {}", self.model, self.m, self.r, self.p, self.s)?;
+impl Summary {
+    /// Sizes and operation counts without the timings: deterministic, for golden files.
+    pub fn work_counters(&self) -> String {
+        let mut out = format!("model {}: m = {}, r = {}, p = {}, s = {}\n", self.model, self.m, self.r, self.p, self.s);
         for (name, states, eqs) in &self.formulations {
-            writeln!(f, "  {name:<18} {states:>3} states, {eqs:>3} equations")?;
+            out += &format!("  {name:<18} {states:>3} states, {eqs:>3} equations\n");
         }
         for (name, lets, ops) in &self.functions {
-            writeln!(f, "  {name:<28} {lets:>5} lets, {ops}")?;
+            out += &format!("  {name:<32} {lets:>5} lets, {ops}\n");
         }
+        out
+    }
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.work_counters())?;
         write!(
             f,
             "  derived in {:.1} ms, emitted in {:.1} ms",

@@ -181,13 +181,28 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         // Partial velocities and velocities in u, simplified first: the round trip
         // u -> q' -> omega cancels here (omega of a body whose rates are quasi-velocities
         // becomes u itself), which keeps everything derived from them small.
-        let pv = bi.b.mul(&w).map(|e| tidy(*e)); // dV/du (3 x n_u), world components
+        // Translation in the body's own components (R^T of world components): the dot
+        // products are the same, but the rotation of the body drops out of them. Their
+        // inertial derivative gets the transport term omega x (.), as for the rotation.
+        // Whichever of world and body components is smaller is used (the transport term
+        // vanishes in world components).
+        let pv_world = bi.b.mul(&w);
+        let v_world = Matrix::column(bi.b.mul(&qdot_col).col(0).iter().zip(&bi.c).map(|(a, b)| *a + *b).collect());
+        let rt = model.frames[body.frame].rotation.transpose();
+        let in_world = (pv_world.map(|e| tidy(*e)), v_world.map(|e| tidy(*e)));
+        let in_body = (rt.mul(&pv_world).map(|e| tidy(*e)), rt.mul(&v_world).map(|e| tidy(*e)));
+        let size = |(a, b): &(Matrix, Matrix)| a.data.iter().chain(&b.data).map(|e| e.dag_size()).sum::<usize>();
+        let body_frame = size(&in_body) < size(&in_world);
+        let (pv, v) = if body_frame { in_body } else { in_world };
+        let v = v.col(0);
         let pw = bi.d.mul(&w).map(|e| tidy(*e)); // d omega/du, body components
-        let v = bi.b.mul(&qdot_col).col(0).iter().zip(&bi.c).map(|(a, b)| tidy(*a + *b)).collect::<Vec<_>>();
         let om = bi.d.mul(&qdot_col).col(0).iter().zip(&bi.e).map(|(a, b)| tidy(*a + *b)).collect::<Vec<_>>();
+        let cross = |a: [Expr; 3], b: [Expr; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
         for k in 0..n_u {
-            // F_NI: m (d/dt dV/du_k) . V
-            let dpv: Vec<Expr> = (0..3).map(|r| chain.dt(pv.get(r, k))).collect();
+            // F_NI: m (d/dt dV/du_k, inertial) . V
+            let c = [pv.get(0, k), pv.get(1, k), pv.get(2, k)];
+            let transport = if body_frame { cross([om[0], om[1], om[2]], c) } else { [Expr::zero(); 3] };
+            let dpv: Vec<Expr> = (0..3).map(|r| chain.dt(c[r]) + transport[r]).collect();
             k_ni[k] = k_ni[k] + (dpv[0] * v[0] + dpv[1] * v[1] + dpv[2] * v[2]) * body.mass;
             // J_NI: (d/dt dω/du_k, inertial) . H, with H = I ω in body components.
             if let Some(inertia) = &body.inertia {
