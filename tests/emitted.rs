@@ -263,3 +263,13 @@ fn bad_states_are_reported_not_computed() {
     // Slices of the wrong length.
     assert!(matches!((f.rhs)(0.0, &[0.0; 3], &params, &[0.2], &mut ds), Err(Failure::Dimension { argument: "state", .. })));
 }
+
+#[test]
+fn reduced_scene2_right_hand_side_does_less_work_than_kane() {
+    // The target, on the deterministic op count (the ns figures are in docs/benchmarks.md).
+    let def = load("three_body");
+    let out = generator::emit::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
+    let reduced = out.summary.ops("reduced_volterra::rhs").unwrap().total();
+    let kane = out.summary.ops("kane::rhs").unwrap().total();
+    assert!(reduced < kane, "reduced {reduced} ops, Kane {kane} ops");
+}

@@ -285,49 +285,45 @@ pub mod reduced_volterra {
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
         let x7 = 1.0 / x6;
-        let x8 = theta1 - theta2;
-        let x9 = f64::cos(x8);
-        let x10 = x2 + x5 + 1.0;
-        let x11 = 1.0 / x10;
-        let x12 = m2 + M + m1;
-        let x13 = m2 + M + x12 * x3 * x4 + m1 + x0 * x12 * x1;
-        let x14 = 1.0 / x13;
-        let x15 = 0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1);
+        let x8 = x2 + x5;
+        let x9 = x2 + x5 + 1.0;
+        let x10 = 1.0 / x9;
+        let x11 = m2 + M + m1;
+        let x12 = m2 + M + x11 * x3 * x4 + m1 + x0 * x11 * x1;
+        let x13 = 1.0 / x12;
+        let x14 = 0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1);
+        let x15 = x8 * (0.3333333333333333 * x10 + 0.5 * x7) + 0.5 * (x0 * x13 * x14);
         let x16 = m2 + 0.5 * m1;
         let x17 = m2 + 0.3333333333333333 * m1;
-        let x18 = x14 * x16 * x1 * x15 + 0.5 * (x9 * x9 * m2 * x11) + x17 * x7;
-        let x19 = x16 * x1 * x7 + 0.5 * (x9 * x0 * m2 * x11) + x12 * x14 * x15;
-        let x20 = 0.3333333333333333 * x11 + 0.5 * x7;
-        let x21 = x9 * x20 + 0.5 * (x0 * x14 * x15);
-        let x22 = -m2 - 0.5 * m1;
-        let x23 = x1 * x4;
-        let x24 = x0 * x3;
-        let x25 = x24 - x23;
-        let x26 = x25 * x1 * x7;
-        let x27 = f64::sin(x8);
-        let x28 = x23 - x24;
-        let x29 = x9 * x11 * x28;
-        let x30 = -0.5 * x27 - 0.5 * x29;
-        let x31 = m2 * (x0 * (0.5 * x24 - 0.5 * x23) - x3);
-        let x32 = x3 * m1;
-        let x33 = -m2 - M - m1;
-        let x34 = x12 * x1 * x4 + x33 * x0 * x3;
-        let x35 = x14 * x34 * x15;
-        let x36 = x31 - 0.5 * x32 - x35;
-        let x37 = x36 * x14;
-        let x38 = x1 * x28 * x7 * x7;
-        let x39 = 0.5 * (x3 * x4 * x4) + x0 * (x23 - 0.5 * x24);
-        let x40 = m2 * x39;
-        let x41 = x33 * x1 * x4 + x0 * x12 * x3;
-        let x42 = x41 * x14 * x15;
-        let x43 = x40 - x42;
-        let x44 = x14 * x43;
-        let x45 = x11 * (0.5 * (x27 * x0) + x9 * (-0.5 * x4 - 0.5 * (x0 * x25 * x11)));
-        let x46 = x1 * x7;
-        let x47 = x14 * x15;
-        let x48 = x25 * x3 * x7;
-        let x49 = x9 * x25 * x11;
-        let x50 = x27 * x21;
+        let x18 = x13 * x16 * x1 * x14 + 0.5 * (m2 * x8 * x8 * x10) + x17 * x7;
+        let x19 = x16 * x1 * x7 + 0.5 * (x0 * m2 * x8 * x10) + x11 * x13 * x14;
+        let x20 = -m2 - 0.5 * m1;
+        let x21 = x1 * x4;
+        let x22 = x0 * x3;
+        let x23 = 0.5 * (x3 * x4 * x4) + x0 * (x21 - 0.5 * x22);
+        let x24 = m2 * x23;
+        let x25 = -m2 - M - m1;
+        let x26 = x25 * x1 * x4 + x0 * x11 * x3;
+        let x27 = x26 * x13 * x14;
+        let x28 = x24 - x27;
+        let x29 = m2 * (x0 * (0.5 * x22 - 0.5 * x21) - x3);
+        let x30 = x3 * m1;
+        let x31 = x13 * (x11 * x1 * x4 + x25 * x0 * x3) * x14;
+        let x32 = x29 - 0.5 * x30 - x31;
+        let x33 = x22 - x21;
+        let x34 = x21 - x22;
+        let x35 = x8 * x10 * x34;
+        let x36 = 0.5 * x21 - 0.5 * x35 - 0.5 * x22;
+        let x37 = x1 * x7;
+        let x38 = x13 * x14;
+        let x39 = x32 * x13;
+        let x40 = x33 * x1 * x7;
+        let x41 = x1 * x34 * x7 * x7;
+        let x42 = x13 * x28;
+        let x43 = x8 * x10;
+        let x44 = 1.0 - x43;
+        let x45 = 0.5 - 0.5 * x43;
+        let x46 = x10 * (x0 * x33 * x45 - 0.5 * (x8 * x4));
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -336,7 +332,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = l * x10;
+        let value = l * x9;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -344,7 +340,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x13;
+        let value = x12;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -353,64 +349,64 @@ pub mod reduced_volterra {
             });
         }
         let mut mass: [[f64; 1]; 1] = [
-            [l * l * (x18 * x7 + x14 * x15 * x19 + x9 * m2 * x11 * x21)],
+            [(m2 * x8 * x10 * x15 + x18 * x7 + x19 * x13 * x14) * l * l],
         ];
         let mut force: [f64; 1] = [
-            x7 * (tau + x3 * l * g * x22)
+            x7 * (tau + x3 * l * g * x20) + x8 * x10 * (-0.5 * (m2 * l * g * x4) - tau)
                 + l * l
-                    * (m2
-                        * ((((-x3 - x26) * x7 + x0 * x11 * x30 + x37) * x7
-                            + x9 * (x44 - x38 + x45) * x11)
-                            * (0.5 * (x9 * x0 * x11) + x46 + x47)
-                            + (((x1 - x48) * x7 + x11 * x30 * x4) * x7
-                                + x9 * x11
-                                    * ((0.5 * (x27 * x4)
-                                        + x9 * (0.5 * x0 - 0.5 * (x25 * x11 * x4))) * x11
-                                        - x3 * x28 * x7 * x7)) * (0.5 * (x9 * x11 * x4) + x3 * x7))
-                        + x14 * x14 * (x9 * x11 * x43 + x36 * x7) * M * x15
-                        + x9 * x11
+                    * (x13 * x13 * (x8 * x10 * x28 + x32 * x7) * M * x14
+                        - x7
+                            * (((x32 * x11 * x13 + (x3 * x20 - x33 * x16 * x1 * x7) * x7
+                                + x0 * m2 * x36 * x10) * x14 + x32 * x19) * x13
+                                + (x13 * (x3 * x14 * x20 + x32 * x16 * x1)
+                                    + x33 * (-m2 * x8 * x10 - x17 * x7 * x7) - x33 * x18 * x7
+                                    - 0.5 * (m2 * x8 * x8 * x10 * x10 * x34)) * x7
+                                + m2 * x10
+                                    * (x8
+                                        * (((-0.5 * (x8 * x7) - 0.5) * x7
+                                            - 0.3333333333333333 * x10) * x33
+                                            - 0.3333333333333333 * (x8 * x10 * x10 * x34)
+                                            - x10 * x34 * x15
+                                            + x0 * x13 * (0.5 * x29 - 0.25 * x30 - 0.5 * x31))
+                                        - x33 * x15))
+                        + (0.5
+                            * (x3
+                                * (0.5 * x1 - 0.5 * (x3 * x8 * x10 * x34)
+                                    - 0.5 * (x33 * x3 * x7)) * x7 * x7 * x7)
+                            + (0.5 * x37 + x38)
+                                * (x7 * (x39 + (-0.5 * x3 - 0.5 * x40) * x7)
+                                    + x8 * x10 * (x42 - 0.5 * x41))
+                            + 0.08333333333333333 * (x7 * x7 * x7 * (-x33 * x7 - x35)))
+                            * m1
+                        + m2
                             * (0.08333333333333333
-                                * (m2 * x11 * (x9 * x11 * (x27 - x49) + (-x27 - x29) * x7))
-                                - x14
-                                    * ((x12 * x14 * x39 + x45) * m2 - x16 * x1 * x28 * x7 * x7
-                                        - x41 * x12 * x14 * x14 * x15 - x41 * x14 * x19) * x15
-                                - m2
-                                    * (x14 * x39 * x19
-                                        + x11
-                                            * (x50
-                                                + x9
-                                                    * (x14 * (x0 * (0.5 * x40 - 0.5 * x42) - 0.5 * (x15 * x4))
-                                                        - x25 * x11 * x21
-                                                        + x9
-                                                            * (-0.5 * (x28 * x7 * x7)
-                                                                - 0.3333333333333333 * (x25 * x11 * x11)) + x27 * x20)))
-                                - (m2
-                                    * (x14 * x39 * x16 * x1 + x9 * (x27 - 0.5 * x49) * x11)
-                                    - x41 * x14 * x14 * x16 * x1 * x15 - x18 * x28 * x7
-                                    - x17 * x28 * x7 * x7) * x7)
-                        + (0.08333333333333333 * ((-x25 * x7 - x29) * x7 * x7 * x7)
-                            + 0.5
-                                * ((0.5 * x1 - 0.5 * (x9 * x3 * x11 * x28) - 0.5 * x48) * x3
-                                    * x7 * x7 * x7)
-                            + (x7 * (x37 + (-0.5 * x3 - 0.5 * x26) * x7)
-                                + x9 * x11 * (x44 - 0.5 * x38)) * (0.5 * x46 + x47)) * m1
-                        - (x14
-                            * (x15
-                                * (x36 * x12 * x14 - x14 * x34 * x19
-                                    + (x3 * x22 - x25 * x16 * x1 * x7) * x7
-                                    + x0 * m2 * x11 * x30) + x19 * (x31 - 0.5 * x32))
-                            + m2
-                                * (x9
-                                    * (x9
-                                        * (-0.3333333333333333 * (x11 * x11 * x28)
-                                            - 0.5 * (x25 * x7 * x7))
-                                        + x27 * (-0.3333333333333333 * x11 - 0.5 * x7)
-                                        + x0 * x14 * (0.5 * x31 - 0.25 * x32 - 0.5 * x35)
-                                        - x11 * x21 * x28) - x50) * x11
-                            + (x9 * m2 * x11 * (-x27 - 0.5 * x29) - x17 * x25 * x7 * x7
-                                + x14 * (x3 * x15 * x22 + x36 * x16 * x1) - x25 * x18 * x7)
-                                * x7) * x7) * u1 * u1
-                + x9 * x11 * (-0.5 * (m2 * l * g * x4) - tau),
+                                * (x8 * x10 * x10
+                                    * (x33 * x8 * x10 * x44 + (x21 - x35 - x22) * x7))
+                                + (((-x3 - x40) * x7 + x39 + x0 * x36 * x10) * x7
+                                    + x8 * x10 * (x46 - x41 + x42))
+                                    * (0.5 * (x0 * x8 * x10) + x37 + x38)
+                                + (x3 * x7 + 0.5 * (x8 * x10 * x4))
+                                    * ((x37 + x33 * (-x3 * x7 * x7 - 0.5 * (x10 * x4))
+                                        - 0.5 * (x8 * x10 * x10 * x34 * x4)) * x7
+                                        + x8
+                                            * (x10 * (x33 * x4 * x45 + 0.5 * (x0 * x8))
+                                                - x3 * x34 * x7 * x7) * x10))
+                        - x8
+                            * ((m2 * (x11 * x13 * x23 + x46) - x26 * x19 * x13
+                                - x16 * x1 * x34 * x7 * x7 - x26 * x11 * x13 * x13 * x14)
+                                * x13 * x14
+                                + m2
+                                    * (x10
+                                        * (x8
+                                            * (x13 * (x0 * (0.5 * x24 - 0.5 * x27) - 0.5 * (x14 * x4))
+                                                - 0.5 * (x8 * x34 * x7 * x7)
+                                                + x33
+                                                    * ((0.3333333333333333 - 0.3333333333333333 * x43) * x10
+                                                        + 0.5 * x7)) + x33 * x44 * x15) + x19 * x13 * x23)
+                                + ((x13 * x23 * x16 * x1
+                                    + x33 * x8 * (1.0 - 0.5 * x43) * x10) * m2
+                                    - x26 * x13 * x13 * x16 * x1 * x14 - x18 * x34 * x7
+                                    - x17 * x34 * x7 * x7) * x7) * x10) * u1 * u1,
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -420,8 +416,8 @@ pub mod reduced_volterra {
             });
         }
         dstate[0] = u1 * x7;
-        dstate[1] = x9 * x11 * u1;
-        dstate[2] = x14 * (x10 * G_x + l * u1 * x15);
+        dstate[1] = x8 * x10 * u1;
+        dstate[2] = x13 * (x9 * G_x + l * u1 * x14);
         dstate[3] = force[0];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -534,7 +530,7 @@ pub mod reduced_volterra {
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
             u1 / x6,
-            f64::cos(theta1 - theta2) * u1 / x7,
+            (x2 + x5) * u1 / x7,
             (x7 * G_x
                 + l * u1 * (0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1)))
                 / x9,
@@ -579,36 +575,35 @@ pub mod kane {
         let tau = params.tau;
         let x0 = f64::cos(theta2);
         let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
-        let x4 = x0 * x1 + x2 * x3 + 1.0;
-        let x5 = 1.0 / x4;
-        let x6 = theta1 - theta2;
-        let x7 = f64::cos(x6);
-        let x8 = x7 * x7 * m2;
-        let x9 = m2 + 0.5 * m1;
-        let x10 = l * (x9 * x1 - 0.5 * (x7 * x0 * m2)) * x5;
-        let x11 = m2 - 0.5 * x8 + 0.3333333333333333 * m1;
-        let x12 = x1 * x3;
-        let x13 = x0 * x2;
-        let x14 = x12 - x13;
-        let x15 = f64::sin(x6);
-        let x16 = x7 * x5 * x14;
-        let x17 = m2 + 0.3333333333333333 * m1;
-        let x18 = -m2 - 0.5 * m1;
-        let x19 = x2 * x18;
-        let x20 = 0.5 * x15 + 0.5 * x16;
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = m2 * x8 * x8;
+        let x10 = m2 + 0.5 * m1;
+        let x11 = l * x7 * (x10 * x1 - 0.5 * (x0 * m2 * x8));
+        let x12 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
+        let x13 = x1 * x4;
+        let x14 = x0 * x3;
+        let x15 = x13 - x14;
+        let x16 = m2 + 0.3333333333333333 * m1;
+        let x17 = x8 * x7 * x15;
+        let x18 = x14 - x13;
+        let x19 = x18 * x8;
+        let x20 = 0.5 * x17 - 0.5 * x13 + 0.5 * x14;
         let x21 = x0 * m2 * x20;
-        let x22 = x9 * x5 * x1 * x14;
-        let x23 = x7 * x0;
-        let x24 = x15 * x0;
-        let x25 = x13 - x12;
-        let x26 = x0 * x25 * x5;
-        let x27 = x7 * (0.5 * x3 + 0.5 * x26);
-        let x28 = x7 * x25;
-        let x29 = x7 * x25 * x5;
-        let x30 = m2 * (x27 - 0.5 * x24) - x25 * x9 * x5 * x1;
-        let value = x4;
+        let x22 = -m2 - 0.5 * m1;
+        let x23 = x3 * x22;
+        let x24 = x10 * x7 * x1 * x15;
+        let x25 = x0 * x18;
+        let x26 = x0 * x8;
+        let x27 = x8 * x7;
+        let x28 = 0.5 * x27 - 0.5;
+        let x29 = x18 * (x0 * m2 * x28 - x10 * x7 * x1) + 0.5 * (m2 * x8 * x4);
+        let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -616,7 +611,7 @@ pub mod kane {
                 value,
             });
         }
-        let value = l * x4;
+        let value = l * x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -626,43 +621,45 @@ pub mod kane {
         }
         let mut mass: [[f64; 2]; 2] = [
             [
-                (m2 - 0.6666666666666666 * x8 + 0.3333333333333333 * m1) * l * l * x5
-                    * x5,
-                x10,
+                l * l * x7 * x7
+                    * (m2 - 0.6666666666666666 * x9 + 0.3333333333333333 * m1),
+                x11,
             ],
-            [x10, m2 + M + m1],
+            [x11, m2 + M + m1],
         ];
         let mut force: [f64; 2] = [
-            (tau
-                + l
-                    * (((u2 + l * x5 * u1 * (x1 - 0.5 * x23))
-                        * (x0 * x20 - x2 - x5 * x1 * x14
-                            - x7 * (x27 - 0.5 * x24 - x25 * x5 * x1))
-                        + (x0 * (0.5 * x7 - 0.5 * (x15 * x5 * x14))
-                            - 0.5 * (x2 * x5 * x14) + 0.5 * x1
-                            - x7
-                                * (x15 * (-0.5 * x3 - 0.5 * x26) - 0.5 * x23
-                                    - 0.5 * (x25 * x2 * x5))) * (0.5 * x24 + 0.5 * x2) * l * x5
-                            * u1) * m2
-                        - l
-                            * (x7 * m2
-                                * (0.3333333333333333 * x15 + 0.3333333333333333 * x16)
-                                - x5 * x11 * x14 + x7 * m2 * (x15 + 0.5 * x16)
-                                - x17 * x5 * x14) * x5 * u1 - (x19 + x21 - x22) * u2
-                        + (0.08333333333333333 * (l * x5 * x5 * u1 * (x28 - x12 + x13))
-                            + (0.5 * x28 - 0.5 * x12 + 0.5 * x13) * x5
-                                * (x1 * u2 + 0.5 * (l * x5 * u1)) - 0.5 * (x2 * u2)) * m1
-                        + x7
-                            * (l * x5
-                                * (x7 * m2
-                                    * (0.3333333333333333 * x29 - 0.3333333333333333 * x15)
-                                    - x17 * x25 * x5 - x25 * x5 * x11
-                                    + x7 * m2 * (0.5 * x29 - x15)) * u1
+            (tau - x8 * (-0.5 * (m2 * l * g * x4) - tau)
+                + l * x7 * u1
+                    * (((0.5 * x19 - 0.5 * x13 + 0.5 * x14) * x7
+                        * (x1 * u2 + 0.5 * (l * x7 * u1))
+                        + 0.08333333333333333 * (l * (x19 - x13 + x14) * x7 * x7 * u1)
+                        - 0.5 * (x3 * u2)) * m1
+                        - l * x7 * u1
+                            * ((0.5 * x17 - x13 + x14) * m2 * x8 - x12 * x7 * x15
+                                - x16 * x7 * x15
+                                + m2 * x8
+                                    * (0.3333333333333333 * x17 - 0.3333333333333333 * x13
+                                        + 0.3333333333333333 * x14)) - u2 * (x21 + x23 - x24)
+                        + m2
+                            * (l * (0.5 * x25 + 0.5 * x3) * x7
+                                * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
+                                    - x8
+                                        * (x18 * ((-0.5 * x25 - 0.5 * x3) * x7 - 0.5 * x4)
+                                            - 0.5 * x26)
+                                    + x0 * (0.5 * x2 - 0.5 * (x18 * x7 * x15) + 0.5 * x5)) * u1
+                                + (x0 * x20 - x3 - x7 * x1 * x15
+                                    - x8 * (0.5 * (x8 * x4) + (x0 * x28 - x7 * x1) * x18))
+                                    * (l * x7 * u1 * (x1 - 0.5 * x26) + u2)
                                 - 0.08333333333333333
-                                    * (m2 * (x15 - x7 * (x29 - x15) + x16) * l * x5 * u1)
-                                + x30 * u2)) * x5 * u1
-                - x7 * (-0.5 * (m2 * l * g * x3) - tau) + x2 * l * g * x18) * x5,
-            l * x5 * x5 * u1 * u1 * (x7 * x30 - x19 - x21 + x22),
+                                    * ((x17 - x13 - x18 * (x27 - 1.0) * x8 + x14) * l * x8 * x7
+                                        * u1))
+                        + x8
+                            * (x29 * u2
+                                + x18 * l * x7
+                                    * (m2 * x8 * (0.3333333333333333 * x27 - 0.3333333333333333)
+                                        - x12 * x7 - x16 * x7 + m2 * x8 * (0.5 * x27 - 1.0)) * u1))
+                + x3 * l * g * x22) * x7,
+            l * (x24 - x21 - x23 + x8 * x29) * x7 * x7 * u1 * u1,
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -671,8 +668,8 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x5 * u1;
-        dstate[1] = -(x7 * x5 * u1);
+        dstate[0] = x7 * u1;
+        dstate[1] = -(x8 * x7 * u1);
         dstate[2] = u2;
         dstate[3] = force[0];
         dstate[4] = force[1];
@@ -747,10 +744,11 @@ pub mod kane {
         let u1 = state[3];
         let u2 = state[4];
         let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
-        let x1 = 1.0 / x0;
-        let value = x0;
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x2 = x0 + x1 + 1.0;
+        let x3 = 1.0 / x2;
+        let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -758,7 +756,7 @@ pub mod kane {
                 value,
             });
         }
-        let value = l * x0;
+        let value = l * x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -767,11 +765,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [
-            x1 * u1,
-            -(f64::cos(theta1 - theta2) * x1 * u1),
-            u2,
-        ];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

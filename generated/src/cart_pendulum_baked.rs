@@ -231,51 +231,45 @@ pub mod reduced_volterra {
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
         let x7 = 1.0 / x6;
-        let x8 = theta1 - theta2;
-        let x9 = f64::cos(x8);
-        let x10 = x2 + x5 + 1.0;
-        let x11 = 1.0 / x10;
-        let x12 = 4.0 * x2 + 4.0 * x5 + 4.0;
-        let x13 = 1.0 / x12;
-        let x14 = x0 * (-0.5 * x2 - 0.5 * x5) + 1.5 * x1;
-        let x15 = 0.3333333333333333 * x11 + 0.5 * x7;
-        let x16 = x9 * x15 + 0.5 * (x0 * x14 * x13);
-        let x17 = 1.5 * (x14 * x13 * x1) + 1.3333333333333333 * x7
-            + 0.5 * (x9 * x9 * x11);
-        let x18 = x9 * x0 * x11;
-        let x19 = x1 * x7;
-        let x20 = x14 * x13;
-        let x21 = 0.5 * x18 + 1.5 * x19 + 4.0 * x20;
-        let x22 = x9 * x11 * x4;
-        let x23 = x3 * x7;
-        let x24 = x1 * x4;
-        let x25 = x0 * x3;
-        let x26 = x25 - x24;
-        let x27 = x26 * x3 * x7;
-        let x28 = f64::sin(x8);
-        let x29 = x24 - x25;
-        let x30 = x9 * x11 * x29;
-        let x31 = -0.5 * x28 - 0.5 * x30;
-        let x32 = x3 * x4 * x4;
-        let x33 = x0 * (x24 - 0.5 * x25);
-        let x34 = 4.0 * x25 - 4.0 * x24;
-        let x35 = x14 * x13 * x34;
-        let x36 = 0.5 * x32 + x33 - x35;
-        let x37 = x0 * (0.5 * x25 - 0.5 * x24);
-        let x38 = 4.0 * x24 - 4.0 * x25;
-        let x39 = x14 * x13 * x38;
-        let x40 = x37 - 1.5 * x3 - x39;
-        let x41 = x1 * x29 * x7 * x7;
-        let x42 = x13 * x36;
-        let x43 = x26 * x1 * x7;
-        let x44 = x13 * x40;
-        let x45 = x11 * (0.5 * (x28 * x0) + x9 * (-0.5 * x4 - 0.5 * (x0 * x26 * x11)));
-        let x46 = x29 * x7 * x7;
-        let x47 = x28 * x16;
-        let x48 = x9 * x26 * x11;
-        let x49 = x0 * x11 * x31;
-        let x50 = x26 * x7 * x7;
-        let x51 = x37 - 1.5 * x3;
+        let x8 = x2 + x5;
+        let x9 = x2 + x5 + 1.0;
+        let x10 = 1.0 / x9;
+        let x11 = 4.0 * x2 + 4.0 * x5 + 4.0;
+        let x12 = 1.0 / x11;
+        let x13 = x0 * (-0.5 * x2 - 0.5 * x5) + 1.5 * x1;
+        let x14 = x8 * (0.3333333333333333 * x10 + 0.5 * x7) + 0.5 * (x0 * x13 * x12);
+        let x15 = x0 * x8 * x10;
+        let x16 = x1 * x7;
+        let x17 = x13 * x12;
+        let x18 = 0.5 * x15 + 1.5 * x16 + 4.0 * x17;
+        let x19 = 1.5 * (x13 * x12 * x1) + 0.5 * (x8 * x8 * x10)
+            + 1.3333333333333333 * x7;
+        let x20 = x3 * x7;
+        let x21 = x1 * x4;
+        let x22 = x0 * x3;
+        let x23 = x22 - x21;
+        let x24 = x23 * x1 * x7;
+        let x25 = x21 - x22;
+        let x26 = x8 * x10 * x25;
+        let x27 = x0 * (0.5 * x21 - 0.5 * x26 - 0.5 * x22) * x10;
+        let x28 = x0 * (0.5 * x22 - 0.5 * x21);
+        let x29 = 4.0 * x21 - 4.0 * x22;
+        let x30 = x13 * x12 * x29;
+        let x31 = x28 - 1.5 * x3 - x30;
+        let x32 = x12 * x31;
+        let x33 = x1 * x25 * x7 * x7;
+        let x34 = x3 * x4 * x4;
+        let x35 = x0 * (x21 - 0.5 * x22);
+        let x36 = 4.0 * x22 - 4.0 * x21;
+        let x37 = x13 * x12 * x36;
+        let x38 = 0.5 * x34 + x35 - x37;
+        let x39 = x12 * x38;
+        let x40 = x8 * x10;
+        let x41 = 0.5 - 0.5 * x40;
+        let x42 = x10 * (x0 * x23 * x41 - 0.5 * (x8 * x4));
+        let x43 = x28 - 1.5 * x3;
+        let x44 = 1.0 - x40;
+        let x45 = x8 * x10 * x4;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -284,7 +278,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x10;
+        let value = x9;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -292,7 +286,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x12;
+        let value = x11;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -300,57 +294,66 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut mass: [[f64; 1]; 1] = [[x9 * x16 * x11 + x7 * x17 + x14 * x13 * x21]];
+        let mut mass: [[f64; 1]; 1] = [[x8 * x10 * x14 + x13 * x12 * x18 + x19 * x7]];
         let mut force: [f64; 1] = [
             u1 * u1
-                * ((((x1 - x27) * x7 + x11 * x31 * x4) * x7
-                    + x9 * x11
-                        * ((0.5 * (x28 * x4) + x9 * (0.5 * x0 - 0.5 * (x26 * x11 * x4)))
-                            * x11 - x3 * x29 * x7 * x7)) * (0.5 * x22 + x23)
-                    + 2.0 * (x14 * x13 * x13 * (x9 * x36 * x11 + x40 * x7))
-                    + (x9 * (x42 - 0.5 * x41) * x11
-                        + ((-0.5 * x3 - 0.5 * x43) * x7 + x44) * x7) * (0.5 * x19 + x20)
-                    + x9
+                * ((0.5 * x15 + x16 + x17)
+                    * (((-x3 - x24) * x7 + x27 + x32) * x7
+                        + (x39 - x33 + x42) * x8 * x10)
+                    + x7
+                        * ((0.5
+                            * (x3
+                                * (0.5 * x1 - 0.5 * (x3 * x8 * x10 * x25)
+                                    - 0.5 * (x23 * x3 * x7))) - 0.08333333333333333 * (x23 * x7)
+                            - 0.08333333333333333 * x26) * x7 * x7
+                            - (x23 * (-x40 - 1.3333333333333333 * (x7 * x7))
+                                - x23 * x19 * x7 - 0.5 * (x8 * x8 * x10 * x10 * x25)
+                                + x12
+                                    * ((-1.5 * x3 - 1.5 * (x12 * x1 * x29)) * x13
+                                        + 1.5 * (x1 * x43))) * x7
+                            - x10
+                                * (x8
+                                    * (((-0.5 * (x8 * x7) - 0.5) * x7
+                                        - 0.3333333333333333 * x10) * x23
+                                        - 0.3333333333333333 * (x8 * x10 * x10 * x25)
+                                        - x10 * x14 * x25
+                                        + x0 * x12 * (0.5 * x28 - 0.75 * x3 - 0.5 * x30))
+                                    - x23 * x14)
+                            - (x18 * x43
+                                + x13
+                                    * (x27 - x12 * x18 * x29
+                                        + x12 * (4.0 * x28 - 6.0 * x3 - 4.0 * x30)
+                                        + (-1.5 * x3 - 1.5 * x24) * x7)) * x12)
+                    + x8
                         * (0.08333333333333333
-                            * (x11 * (x9 * x11 * (x28 - x48) + (-x28 - x30) * x7))
-                            - x13
-                                * ((0.5 * x32 + x33) * x21
-                                    + x14
-                                        * ((2.0 * x32 + 4.0 * x33 - 4.0 * x35) * x13 - 1.5 * x41
-                                            - x13 * x21 * x34 + x45))
-                            - x11
-                                * (x9
-                                    * (x13
-                                        * (x0 * (0.25 * x32 + 0.5 * x33 - 0.5 * x35)
-                                            - 0.5 * (x14 * x4)) - x26 * x16 * x11
-                                        + x9 * (-0.5 * x46 - 0.3333333333333333 * (x26 * x11 * x11))
-                                        + x28 * x15) + x47)
-                            - x7
-                                * (x9 * (x28 - 0.5 * x48) * x11
-                                    + x13 * (0.75 * x32 + 1.5 * x33 - 1.5 * x35) * x1
-                                    - 1.3333333333333333 * x46 - x29 * x7 * x17)) * x11
-                    + (0.5 * x18 + x19 + x20)
-                        * (x9 * x11 * (x42 - x41 + x45)
-                            + ((-x3 - x43) * x7 + x49 + x44) * x7)
-                    + ((0.5 * ((0.5 * x1 - 0.5 * (x9 * x3 * x11 * x29) - 0.5 * x27) * x3)
-                        - 0.08333333333333333 * (x26 * x7) - 0.08333333333333333 * x30)
-                        * x7 * x7
-                        - (x9 * x11 * (-x28 - 0.5 * x30) - 1.3333333333333333 * x50
-                            - x26 * x7 * x17
-                            + x13
-                                * ((-1.5 * x3 - 1.5 * (x13 * x1 * x38)) * x14
-                                    + 1.5 * (x1 * x51))) * x7
-                        - (x21 * x51
-                            + x14
-                                * (x49 - x13 * x21 * x38
-                                    + x13 * (4.0 * x37 - 6.0 * x3 - 4.0 * x39)
-                                    + (-1.5 * x3 - 1.5 * x43) * x7)) * x13
-                        - (x9
-                            * (x9 * (-0.3333333333333333 * (x11 * x11 * x29) - 0.5 * x50)
-                                + x28 * (-0.3333333333333333 * x11 - 0.5 * x7)
-                                - x16 * x11 * x29
-                                + x0 * x13 * (0.5 * x37 - 0.75 * x3 - 0.5 * x39)) - x47)
-                            * x11) * x7) - 4.905 * x22 - 14.715 * x23,
+                            * (x10 * (x23 * x8 * x10 * x44 + (x21 - x26 - x22) * x7))
+                            - x12
+                                * (x18 * (0.5 * x34 + x35)
+                                    + x13
+                                        * ((2.0 * x34 + 4.0 * x35 - 4.0 * x37) * x12 - 1.5 * x33
+                                            - x12 * x18 * x36 + x42))
+                            - (x23 * x8 * (1.0 - 0.5 * x40) * x10
+                                + x12 * (0.75 * x34 + 1.5 * x35 - 1.5 * x37) * x1
+                                - x25 * x19 * x7 - 1.3333333333333333 * (x25 * x7 * x7))
+                                * x7
+                            - (x23 * x14 * x44
+                                + x8
+                                    * (x12
+                                        * (x0 * (0.25 * x34 + 0.5 * x35 - 0.5 * x37)
+                                            - 0.5 * (x13 * x4)) - 0.5 * (x8 * x25 * x7 * x7)
+                                        + x23
+                                            * ((0.3333333333333333 - 0.3333333333333333 * x40) * x10
+                                                + 0.5 * x7))) * x10) * x10
+                    + (x20 + 0.5 * x45)
+                        * ((x16 + x23 * (-x3 * x7 * x7 - 0.5 * (x10 * x4))
+                            - 0.5 * (x8 * x10 * x10 * x25 * x4)) * x7
+                            + x8
+                                * (x10 * (x23 * x4 * x41 + 0.5 * (x0 * x8))
+                                    - x3 * x25 * x7 * x7) * x10)
+                    + 2.0 * (x13 * x12 * x12 * (x31 * x7 + x8 * x38 * x10))
+                    + (0.5 * x16 + x17)
+                        * (((-0.5 * x3 - 0.5 * x24) * x7 + x32) * x7
+                            + (x39 - 0.5 * x33) * x8 * x10)) - 14.715 * x20 - 4.905 * x45,
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -360,8 +363,8 @@ pub mod reduced_volterra {
             });
         }
         dstate[0] = u1 * x7;
-        dstate[1] = x9 * x11 * u1;
-        dstate[2] = x13 * (x14 * u1 + x10 * G_x);
+        dstate[1] = x8 * x10 * u1;
+        dstate[2] = x12 * (x13 * u1 + x9 * G_x);
         dstate[3] = force[0];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -460,7 +463,7 @@ pub mod reduced_volterra {
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
             u1 / x4,
-            f64::cos(theta1 - theta2) * u1 / x5,
+            (x2 + x3) * u1 / x5,
             ((x0 * (-0.5 * x2 - 0.5 * x3) + 1.5 * x1) * u1 + x5 * G_x) / x6,
         ];
         for (index, value) in qdot.iter().enumerate() {
@@ -497,33 +500,33 @@ pub mod kane {
         let u2 = state[4];
         let x0 = f64::cos(theta2);
         let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
-        let x4 = x0 * x1 + x2 * x3 + 1.0;
-        let x5 = 1.0 / x4;
-        let x6 = x5 * u1;
-        let x7 = theta1 - theta2;
-        let x8 = f64::cos(x7);
-        let x9 = x8 * x8;
-        let x10 = x8 * x0;
-        let x11 = x5 * (1.5 * x1 - 0.5 * x10);
-        let x12 = f64::sin(x7);
-        let x13 = x1 * x3;
-        let x14 = x0 * x2;
-        let x15 = x14 - x13;
-        let x16 = x8 * x15 * x5;
-        let x17 = 1.3333333333333333 - 0.5 * x9;
-        let x18 = x12 * x0;
-        let x19 = x15 * x5 * x1;
-        let x20 = x0 * x15 * x5;
-        let x21 = x8 * (0.5 * x3 + 0.5 * x20);
-        let x22 = x21 - 0.5 * x18 - 1.5 * x19;
-        let x23 = x13 - x14;
-        let x24 = x8 * x5 * x23;
-        let x25 = x0 * (0.5 * x12 + 0.5 * x24);
-        let x26 = x5 * x1 * x23;
-        let x27 = x8 * x15;
-        let value = x4;
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x7 * u1;
+        let x9 = x2 + x5;
+        let x10 = x9 * x9;
+        let x11 = x0 * x9;
+        let x12 = x7 * (1.5 * x1 - 0.5 * x11);
+        let x13 = x1 * x4;
+        let x14 = x0 * x3;
+        let x15 = x13 - x14;
+        let x16 = x9 * x7 * x15;
+        let x17 = 1.3333333333333333 - 0.5 * x10;
+        let x18 = x7 * x1 * x15;
+        let x19 = x0 * (0.5 * x16 - 0.5 * x13 + 0.5 * x14);
+        let x20 = x14 - x13;
+        let x21 = x20 * x9;
+        let x22 = x9 * x7;
+        let x23 = x0 * x20;
+        let x24 = x7 * x1;
+        let x25 = x0 * (0.5 * x22 - 0.5);
+        let x26 = x9 * x4;
+        let x27 = x20 * (x25 - 1.5 * x24) + 0.5 * x26;
+        let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -531,7 +534,7 @@ pub mod kane {
                 value,
             });
         }
-        let value = x4;
+        let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -540,35 +543,38 @@ pub mod kane {
             });
         }
         let mut mass: [[f64; 2]; 2] = [
-            [(1.3333333333333333 - 0.6666666666666666 * x9) * x5 * x5, x11],
-            [x11, 4.0],
+            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * x10), x12],
+            [x12, 4.0],
         ];
         let mut force: [f64; 2] = [
-            (4.905 * (x8 * x3) - 14.715 * x2
-                + x5 * u1
-                    * (x8
-                        * (x5 * u1
-                            * (x8 * (0.3333333333333333 * x16 - 0.3333333333333333 * x12)
-                                + x8 * (0.5 * x16 - x12) - 1.3333333333333333 * (x15 * x5)
-                                - x15 * x5 * x17) + u2 * x22)
-                        + (x25 - x2 - x26 - x8 * (x21 - 0.5 * x18 - x19))
-                            * (x5 * u1 * (x1 - 0.5 * x10) + u2)
-                        - (x25 - 1.5 * x2 - 1.5 * x26) * u2
-                        - (x8 * (0.3333333333333333 * x12 + 0.3333333333333333 * x24)
-                            - 1.3333333333333333 * (x5 * x23) - x5 * x17 * x23
-                            + x8 * (x12 + 0.5 * x24)) * x5 * u1 - 0.5 * (x2 * u2)
-                        + (u1
-                            * ((x0 * (0.5 * x8 - 0.5 * (x12 * x5 * x23))
-                                - 0.5 * (x2 * x5 * x23) + 0.5 * x1
-                                - x8
-                                    * (x12 * (-0.5 * x3 - 0.5 * x20) - 0.5 * x10
-                                        - 0.5 * (x15 * x2 * x5))) * (0.5 * x18 + 0.5 * x2)
-                                + 0.08333333333333333 * (x5 * (x27 - x13 + x14))
+            (x7 * u1
+                * (x7
+                    * ((0.5 * x21 - 0.5 * x13 + 0.5 * x14) * (0.5 * x8 + x1 * u2)
+                        + u1
+                            * (0.08333333333333333 * ((x21 - x13 + x14) * x7)
                                 - 0.08333333333333333
-                                    * (x8 * (x12 - x8 * (x16 - x12) + x24)))
-                            + (0.5 * x27 - 0.5 * x13 + 0.5 * x14) * (0.5 * x6 + x1 * u2))
-                            * x5)) * x5,
-            x5 * x5 * (1.5 * x2 - x25 + x8 * x22 + 1.5 * x26) * u1 * u1,
+                                    * ((x16 - x13 - x20 * (x22 - 1.0) * x9 + x14) * x9)
+                                + (0.5 * x23 + 0.5 * x3)
+                                    * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
+                                        - x9
+                                            * (x20 * ((-0.5 * x23 - 0.5 * x3) * x7 - 0.5 * x4)
+                                                - 0.5 * x11)
+                                        + x0 * (0.5 * x2 - 0.5 * (x20 * x7 * x15) + 0.5 * x5))))
+                    - x7 * u1
+                        * ((0.5 * x16 - x13 + x14) * x9 - 1.3333333333333333 * (x7 * x15)
+                            - x17 * x7 * x15
+                            + x9
+                                * (0.3333333333333333 * x16 - 0.3333333333333333 * x13
+                                    + 0.3333333333333333 * x14))
+                    - (x19 - 1.5 * x3 - 1.5 * x18) * u2 - 0.5 * (x3 * u2)
+                    + (x20 * x7 * u1
+                        * (x9 * (0.3333333333333333 * x22 - 0.3333333333333333)
+                            + x9 * (0.5 * x22 - 1.0) - 1.3333333333333333 * x7
+                            - x17 * x7) + x27 * u2) * x9
+                    + (x19 - x3 - x18 - x9 * (0.5 * x26 + (x25 - x24) * x20))
+                        * (x7 * u1 * (x1 - 0.5 * x11) + u2)) - 14.715 * x3 + 4.905 * x26)
+                * x7,
+            x7 * x7 * u1 * u1 * (1.5 * x3 + 1.5 * x18 - x19 + x9 * x27),
         ];
         if let Err(column) = solve_dense(&mut mass, &mut force) {
             return Err(EvalError::Singular {
@@ -577,8 +583,8 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x6;
-        dstate[1] = -(x8 * x5 * u1);
+        dstate[0] = x8;
+        dstate[1] = -(x9 * x7 * u1);
         dstate[2] = u2;
         dstate[3] = force[0];
         dstate[4] = force[1];
@@ -645,10 +651,11 @@ pub mod kane {
         let theta2 = state[1];
         let u1 = state[3];
         let u2 = state[4];
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
-        let x1 = 1.0 / x0;
-        let value = x0;
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x2 = x0 + x1 + 1.0;
+        let x3 = 1.0 / x2;
+        let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -656,7 +663,7 @@ pub mod kane {
                 value,
             });
         }
-        let value = x0;
+        let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -665,11 +672,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [
-            x1 * u1,
-            -(f64::cos(theta1 - theta2) * x1 * u1),
-            u2,
-        ];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

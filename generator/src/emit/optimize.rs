@@ -6,6 +6,9 @@
 //!   `M + m1 + m2` found in several places is computed once.
 //! - [`share_reciprocals`]: a denominator used by two or more products is inverted once,
 //!   `1/d`, and multiplied in (one division instead of many).
+//! - [`expand_angle_sums`]: `cos(theta1 - theta2)` becomes
+//!   `cos(theta1) cos(theta2) + sin(theta1) sin(theta2)` when the sines and cosines of the single
+//!   angles are computed anyway: two products instead of a call.
 //!
 //! ```
 //! use generator::emit::optimize::factor_sums;
@@ -17,7 +20,7 @@
 
 use super::cse::post_order;
 use crate::symbolic::number::Rat;
-use crate::symbolic::{Expr, Node, Symbol};
+use crate::symbolic::{Expr, Func, Node, Symbol};
 use num_traits::{One, Signed, Zero};
 use std::collections::HashMap;
 
@@ -141,6 +144,63 @@ pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
     outputs.iter().map(|e| memo[e]).collect()
 }
 
+/// Rewrites sin/cos of sums of angles `±x ± y ...` into products of the sines and cosines
+/// of the single angles, for angles whose sine and cosine both occur in `outputs`.
+pub fn expand_angle_sums(outputs: &[Expr]) -> Vec<Expr> {
+    let order = post_order(outputs);
+    let mut sines = std::collections::HashSet::new();
+    let mut cosines = std::collections::HashSet::new();
+    for e in &order {
+        match &*e.node() {
+            Node::Fun(Func::Sin, a) => {
+                sines.insert(*a);
+            }
+            Node::Fun(Func::Cos, a) => {
+                cosines.insert(*a);
+            }
+            _ => {}
+        }
+    }
+    let expandable = |a: Expr| -> Option<Vec<(Expr, bool)>> {
+        match &*a.node() {
+            Node::Add { constant, terms } if constant.is_zero() && terms.len() >= 2 => terms
+                .iter()
+                .map(|(x, c)| {
+                    let unit = c.is_one() || (-c).is_one();
+                    (unit && sines.contains(x) && cosines.contains(x)).then_some((*x, c.is_negative()))
+                })
+                .collect(),
+            _ => None,
+        }
+    };
+    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    for e in order {
+        let r = match &*e.node() {
+            Node::Fun(f @ (Func::Sin | Func::Cos), a) => match expandable(*a) {
+                Some(angles) => {
+                    let (s, c) = sin_cos_of_sum(&angles);
+                    if *f == Func::Sin { s } else { c }
+                }
+                None => e.map_children(|c| memo[&c]),
+            },
+            _ => e.map_children(|c| memo[&c]),
+        };
+        memo.insert(e, r);
+    }
+    outputs.iter().map(|e| memo[e]).collect()
+}
+
+/// `(sin, cos)` of `sum(±x_i)` by the angle-sum formulas.
+fn sin_cos_of_sum(angles: &[(Expr, bool)]) -> (Expr, Expr) {
+    let (x, negative) = angles[0];
+    let (sx, cx) = (if negative { -x.sin() } else { x.sin() }, x.cos());
+    if angles.len() == 1 {
+        return (sx, cx);
+    }
+    let (sr, cr) = sin_cos_of_sum(&angles[1..]);
+    (sx * cr + cx * sr, cx * cr - sx * sr)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -158,6 +218,11 @@ mod tests {
         let want = e.eval(&env).unwrap();
         let f = factor_sums(&[e]);
         let g = share_reciprocals(&f);
+        let (sa, ca) = (a.sin(), a.cos());
+        let h = expand_angle_sums(&[(a - b).cos() + (a + b - x).sin() * sa * ca * b.sin() * b.cos() * x.sin() * x.cos()])[0];
+        assert!(!h.to_string().contains("a - b") && !h.to_string().contains("a + b"), "{h}");
+        let want_h = ((a - b).cos() + (a + b - x).sin() * sa * ca * b.sin() * b.cos() * x.sin() * x.cos()).eval(&env).unwrap();
+        assert!((h.eval(&env).unwrap() - want_h).abs() < 1e-14);
         for out in [f[0], g[0]] {
             assert!((out.eval(&env).unwrap() - want).abs() < 1e-12 * want.abs());
         }
