@@ -1,17 +1,10 @@
 //! Expressions made ready for emission: time functions inlined, `pi` and (when baked) the
 //! parameters replaced by numbers; and triangle-inequality magnitudes for residual tests.
 //!
-//! ```
-//! use generator::emit::prepare::magnitude;
-//! use generator::symbolic::Expr;
-//! let (a, b) = (Expr::sym("a"), Expr::sym("b"));
-//! assert_eq!(magnitude(a - b * 2), a.abs() + b.abs() * 2);
-//! ```
 
 use crate::model::Model;
 use crate::symbolic::number::rat_from_f64;
 use crate::symbolic::{Expr, Node, Symbol};
-use num_traits::{Signed, Zero};
 use std::collections::HashMap;
 
 /// Rewrites expressions for emission, memoized over the DAG.
@@ -73,27 +66,4 @@ impl Preparer {
     }
 }
 
-/// An upper bound of `|e|` by the triangle inequality: sums become sums of magnitudes and
-/// products products of magnitudes. A residual is negligible against it when it is a few
-/// rounding errors of this size.
-pub fn magnitude(e: Expr) -> Expr {
-    match &*e.node() {
-        Node::Num(r) => Expr::num(r.abs()),
-        Node::Add { constant, terms } => {
-            let mut out = Expr::num(constant.abs());
-            for (t, c) in terms {
-                out = out + magnitude(*t).scale(&c.abs());
-            }
-            out
-        }
-        Node::Mul { coefficient, factors } => {
-            let mut out = Expr::num(coefficient.abs());
-            for (b, ex) in factors {
-                let positive_integer = ex.is_integer() && !ex.is_negative() && !ex.is_zero();
-                out = out * if positive_integer { magnitude(*b).pow_rat(ex) } else { b.abs().pow_rat(ex) };
-            }
-            out
-        }
-        _ => e.abs(),
-    }
-}
+pub use crate::symbolic::eval::magnitude;

@@ -11,6 +11,7 @@
 
 use super::expr::{Expr, Node, Symbol};
 use super::number::rat_to_f64;
+use num_traits::{Signed, Zero};
 use std::collections::HashMap;
 
 /// Values of symbols and definitions of named functions for evaluation.
@@ -104,5 +105,36 @@ pub fn pow_f64(b: f64, e: f64, integer: bool) -> f64 {
         b.sqrt()
     } else {
         b.powf(e)
+    }
+}
+
+/// An upper bound of `|e|` by the triangle inequality: sums become sums of magnitudes and
+/// products products of magnitudes. A residual is negligible against it when it is a few
+/// rounding errors of this size.
+///
+/// ```
+/// use generator::symbolic::{Expr, eval::magnitude};
+/// let (a, b) = (Expr::sym("a"), Expr::sym("b"));
+/// assert_eq!(magnitude(a - b * 2), a.abs() + b.abs() * 2);
+/// ```
+pub fn magnitude(e: Expr) -> Expr {
+    match &*e.node() {
+        Node::Num(r) => Expr::num(r.abs()),
+        Node::Add { constant, terms } => {
+            let mut out = Expr::num(constant.abs());
+            for (t, c) in terms {
+                out = out + magnitude(*t).scale(&c.abs());
+            }
+            out
+        }
+        Node::Mul { coefficient, factors } => {
+            let mut out = Expr::num(coefficient.abs());
+            for (b, ex) in factors {
+                let positive_integer = ex.is_integer() && !ex.is_negative() && !ex.is_zero();
+                out = out * if positive_integer { magnitude(*b).pow_rat(ex) } else { b.abs().pow_rat(ex) };
+            }
+            out
+        }
+        _ => e.abs(),
     }
 }
