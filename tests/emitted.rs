@@ -89,7 +89,14 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
         let params = (e.default_params)();
         let (red, kf) = (e.formulation("reduced_volterra").unwrap(), e.formulation("kane").unwrap());
         let (m, s) = (mech.m, chosen.len());
-        assert_eq!((red.states, red.equations, kf.states, kf.equations), (m + mech.p - s, mech.p - s, m + mech.p, mech.p), "{name}");
+        let w = usize::from(red.has_work_state);
+        // The paper's Table 1: states 2m, 2m, m + p, m + p - s (+1 for the work integral);
+        // equations m, m, p, p - s.
+        let counts: Vec<(usize, usize)> = ["lagrange", "maggi", "kane", "reduced_volterra"]
+            .iter()
+            .map(|f| e.formulation(f).map(|f| (f.states, f.equations)).unwrap())
+            .collect();
+        assert_eq!(counts, vec![(2 * m + w, m), (2 * m + w, m), (m + mech.p + w, mech.p), (m + mech.p - s + w, mech.p - s)], "{name}");
         let mut rng = SplitMix(7);
         for trial in 0..5 {
             let holonomic: Vec<Expr> = mech.holonomic.iter().map(|(_, h)| *h).collect();
@@ -140,6 +147,21 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
             for j in 0..m {
                 assert!(close(qdd[j], kqdd[j], 1e-8), "{name} #{trial}: q''[{j}] reduced {} vs Kane {}", qdd[j], kqdd[j]);
             }
+            // Lagrange and Maggi give q'' directly: state [q; q'].
+            for form in ["lagrange", "maggi"] {
+                let ds = rhs_at(&e, form, t, &q, &qd).unwrap();
+                for j in 0..m {
+                    assert!(close(ds[j], qd[j], 1e-14), "{name} {form}: q'[{j}]");
+                    assert!(close(ds[m + j], qdd[j], 1e-8), "{name} #{trial}: q''[{j}] {form} {} vs reduced {}", ds[m + j], qdd[j]);
+                }
+            }
+            // The work integral's rate is Q . q' in every formulation.
+            if red.has_work_state {
+                let mut power = [0.0];
+                (e.work_rate)(t, &q, &qd, &params, &mut power).unwrap();
+                let last = red.states - 1;
+                assert!(close(ds[last], power[0], 1e-12), "{name}: W' {} vs Q.q' {}", ds[last], power[0]);
+            }
             // The momenta of the reduced state are G_I; the constraints hold; energy matches.
             let (mut qq, mut qqd) = (vec![0.0; m], vec![0.0; m]);
             (red.velocities)(t, &state, &params, &g, &mut qq, &mut qqd).unwrap();
@@ -175,7 +197,7 @@ fn rhs_at(e: &Model, form: &str, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f6
 fn variants_compute_the_same_right_hand_sides() {
     let full = emitted("three_body");
     let (q, qd) = full.initial;
-    for form in ["reduced_volterra", "kane"] {
+    for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&full, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&emitted("three_body_split"), form, 0.0, q, qd).unwrap();
         for (x, y) in a.iter().zip(&b) {
@@ -196,9 +218,10 @@ fn variants_compute_the_same_right_hand_sides() {
     let (runtime, baked) = (emitted("cart_pendulum"), emitted("cart_pendulum_baked"));
     assert!(baked.parameter_names.is_empty() && !runtime.parameter_names.is_empty());
     let (q, qd) = runtime.initial;
-    for form in ["reduced_volterra", "kane"] {
+    for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&runtime, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&baked, form, 0.0, q, qd).unwrap();
+        // With tau baked to 0 the motor does no work: no work state in the baked module.
         for (x, y) in a.iter().zip(&b) {
             assert!(close(*x, *y, 1e-12), "baked {form}: {x} vs {y}");
         }
@@ -230,7 +253,7 @@ fn bad_states_are_reported_not_computed() {
     // Velocities that violate the wheel constraint: rejected with the residual.
     let mut bad = qd.to_vec();
     bad[1] += 0.1;
-    for form in ["reduced_volterra", "kane"] {
+    for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         match rhs_at(&e, form, 0.0, q, &bad) {
             Err(Failure::ConstraintViolated { constraint, residual, .. }) => {
                 assert_eq!(constraint, "wheel");
@@ -248,8 +271,8 @@ fn bad_states_are_reported_not_computed() {
     // Scene 1 at cos(theta1 - theta2) = -1: singular, reported with the condition.
     let f = e.formulation("reduced_volterra").unwrap();
     let params = (e.default_params)();
-    let state = [0.3, 0.3 + std::f64::consts::PI, 0.0, 0.5];
-    let mut ds = [0.0; 4];
+    let state = [0.3, 0.3 + std::f64::consts::PI, 0.0, 0.5, 0.0];
+    let mut ds = [0.0; 5];
     match (f.rhs)(1.5, &state, &params, &[0.2], &mut ds) {
         Err(Failure::Singular { t, condition, .. }) => {
             assert_eq!(t, 1.5);
@@ -258,10 +281,10 @@ fn bad_states_are_reported_not_computed() {
         other => panic!("expected a singular configuration, got {other:?}"),
     }
     // A NaN in the state never comes back as a number.
-    let state = [0.3, f64::NAN, 0.0, 0.5];
+    let state = [0.3, f64::NAN, 0.0, 0.5, 0.0];
     assert!((f.rhs)(0.0, &state, &params, &[0.2], &mut ds).is_err());
     // Slices of the wrong length.
-    assert!(matches!((f.rhs)(0.0, &[0.0; 3], &params, &[0.2], &mut ds), Err(Failure::Dimension { argument: "state", .. })));
+    assert!(matches!((f.rhs)(0.0, &[0.0; 4], &params, &[0.2], &mut ds), Err(Failure::Dimension { argument: "state", .. })));
 }
 
 #[test]

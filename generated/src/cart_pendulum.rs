@@ -247,18 +247,674 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 7 states, 3 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 4;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 1;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 7;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 3;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1'",
+        "theta2'",
+        "x'",
+        "W",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * m2 * l * l * x4;
+        let x6 = l * (m2 + 0.5 * m1) * x1;
+        let x7 = l * x4;
+        let x8 = 0.5 * x0 * m2 * l;
+        let x9 = x0 * x2 - x1 * x3;
+        let x10 = -m2 - 0.5 * m1;
+        let x11 = x_dot * theta1_dot;
+        let x12 = theta1_dot - theta2_dot;
+        let mut matrix: [[f64; 4]; 4] = [
+            [(m2 + 0.3333333333333333 * m1) * l * l, x5, x6, x7],
+            [x5, 0.3333333333333333 * m2 * l * l, x8, l],
+            [x6, x8, m2 + M + m1, 0.0],
+            [x7, l, 0.0, 0.0],
+        ];
+        let mut force: [f64; 4] = [
+            tau
+                + l
+                    * ((-0.5 * x11 - 0.5 * g) * x2 * m1
+                        - (x2 * x_dot * x10 - 0.5 * (x9 * m2 * l * theta2_dot))
+                            * theta1_dot
+                        + m2
+                            * (x9 * l * theta2_dot
+                                * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                                + (-x11 - g) * x2)),
+            m2 * l * (0.5 * (x9 * l * theta1_dot * theta1_dot) - 0.5 * (g * x3)) - tau,
+            l
+                * (0.5 * (m2 * theta2_dot * theta2_dot * x3)
+                    - x2 * theta1_dot * theta1_dot * x10),
+            x9 * l * theta1_dot * x12,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        dstate[5] = force[2];
+        dstate[6] = tau * x12;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                (theta2_dot + x0 * theta1_dot) * l,
+                f64::abs(l)
+                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            theta1_dot,
+            theta2_dot,
+            x_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            (m2 + M + m1) * x_dot
+                + l
+                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 7 states, 3 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 7;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 3;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1'",
+        "theta2'",
+        "x'",
+        "W",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = m2 + 0.5 * m1;
+        let x10 = l * x7 * (x9 * x1 - 0.5 * (x0 * m2 * x8));
+        let x11 = x1 * x4;
+        let x12 = x0 * x3;
+        let x13 = x12 - x11;
+        let x14 = theta1_dot - theta2_dot;
+        let x15 = x11 - x12;
+        let x16 = -x13 * theta2_dot - theta1_dot * x15;
+        let x17 = x13 * (x8 * x7 - 1.0) * theta2_dot;
+        let x18 = (x8 * x7 * x15 - x11 + x12) * theta1_dot;
+        let x19 = x17 + x18;
+        let x20 = x_dot * theta1_dot;
+        let x21 = -m2 - 0.5 * m1;
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = l * x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 2]; 2] = [
+            [
+                l * l * x7 * x7
+                    * (m2 - 0.6666666666666666 * (m2 * x8 * x8)
+                        + 0.3333333333333333 * m1),
+                x10,
+            ],
+            [x10, m2 + M + m1],
+        ];
+        let mut force: [f64; 2] = [
+            (tau
+                - x8
+                    * (m2
+                        * (l
+                            * (x7 * x14
+                                * (-0.5 * (x8 * x16 * x7) - 0.3333333333333333 * x17
+                                    - 0.3333333333333333 * x18)
+                                + x13 * (0.5 * theta1_dot + 0.5 * theta2_dot) * theta1_dot)
+                            - 0.5 * (x13 * l * theta1_dot * theta2_dot) - 0.5 * (g * x4))
+                        * l - tau)
+                + l
+                    * (m2
+                        * (l
+                            * (x13 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                                - 0.5 * (x19 * x8 * x7 * x14)) + (-x20 - g) * x3)
+                        - (x3 * x_dot * x21 - 0.5 * (x13 * m2 * l * theta2_dot))
+                            * theta1_dot
+                        - (m2 + 0.3333333333333333 * m1) * l * x16 * x7 * x7 * x14
+                        + (-0.5 * x20 - 0.5 * g) * x3 * m1)) * x7,
+            l
+                * (m2
+                    * (0.5 * (theta2_dot * theta2_dot * x4)
+                        - 0.5 * (x19 * x0 * x7 * x14))
+                    - x3 * theta1_dot * theta1_dot * x21 - x16 * x9 * x7 * x7 * x1 * x14),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x16 * x7 * x7 * x14;
+        dstate[4] = -(x8 * x7) * force[0] + 0.0 * force[1] + x19 * x7 * x14;
+        dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
+        dstate[6] = tau * x14;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                (theta2_dot + x0 * theta1_dot) * l,
+                f64::abs(l)
+                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            theta1_dot,
+            theta2_dot,
+            x_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            (m2 + M + m1) * x_dot
+                + l
+                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let l = params.l;
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let value = x0;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = l * x0;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Kane / Gibbs-Appell (standard Volterra): 6 states, 2 equations.
+pub mod kane {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 6;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = m2 * x8 * x8;
+        let x10 = m2 + 0.5 * m1;
+        let x11 = l * x7 * (x10 * x1 - 0.5 * (x0 * m2 * x8));
+        let x12 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
+        let x13 = x1 * x4;
+        let x14 = x0 * x3;
+        let x15 = x13 - x14;
+        let x16 = m2 + 0.3333333333333333 * m1;
+        let x17 = x8 * x7 * x15;
+        let x18 = x14 - x13;
+        let x19 = x18 * x8;
+        let x20 = 0.5 * x17 - 0.5 * x13 + 0.5 * x14;
+        let x21 = x0 * m2 * x20;
+        let x22 = -m2 - 0.5 * m1;
+        let x23 = x3 * x22;
+        let x24 = x10 * x7 * x1 * x15;
+        let x25 = x0 * x18;
+        let x26 = x0 * x8;
+        let x27 = x8 * x7;
+        let x28 = 0.5 * x27 - 0.5;
+        let x29 = x18 * (x0 * m2 * x28 - x10 * x7 * x1) + 0.5 * (m2 * x8 * x4);
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = l * x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 2]; 2] = [
+            [
+                l * l * x7 * x7
+                    * (m2 - 0.6666666666666666 * x9 + 0.3333333333333333 * m1),
+                x11,
+            ],
+            [x11, m2 + M + m1],
+        ];
+        let mut force: [f64; 2] = [
+            (tau - x8 * (-0.5 * (m2 * l * g * x4) - tau)
+                + l * x7 * u1
+                    * (((0.5 * x19 - 0.5 * x13 + 0.5 * x14) * x7
+                        * (x1 * u2 + 0.5 * (l * x7 * u1))
+                        + 0.08333333333333333 * (l * (x19 - x13 + x14) * x7 * x7 * u1)
+                        - 0.5 * (x3 * u2)) * m1
+                        - l * x7 * u1
+                            * ((0.5 * x17 - x13 + x14) * m2 * x8 - x12 * x7 * x15
+                                - x16 * x7 * x15
+                                + m2 * x8
+                                    * (0.3333333333333333 * x17 - 0.3333333333333333 * x13
+                                        + 0.3333333333333333 * x14)) - u2 * (x21 + x23 - x24)
+                        + m2
+                            * (l * (0.5 * x25 + 0.5 * x3) * x7
+                                * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
+                                    - x8
+                                        * (x18 * ((-0.5 * x25 - 0.5 * x3) * x7 - 0.5 * x4)
+                                            - 0.5 * x26)
+                                    + x0 * (0.5 * x2 - 0.5 * (x18 * x7 * x15) + 0.5 * x5)) * u1
+                                + (x0 * x20 - x3 - x7 * x1 * x15
+                                    - x8 * (0.5 * (x8 * x4) + (x0 * x28 - x7 * x1) * x18))
+                                    * (l * x7 * u1 * (x1 - 0.5 * x26) + u2)
+                                - 0.08333333333333333
+                                    * ((x17 - x13 - x18 * (x27 - 1.0) * x8 + x14) * l * x8 * x7
+                                        * u1))
+                        + x8
+                            * (x29 * u2
+                                + x18 * l * x7
+                                    * (m2 * x8 * (0.3333333333333333 * x27 - 0.3333333333333333)
+                                        - x12 * x7 - x16 * x7 + m2 * x8 * (0.5 * x27 - 1.0)) * u1))
+                + x3 * l * g * x22) * x7,
+            l * (x24 - x21 - x23 + x8 * x29) * x7 * x7 * u1 * u1,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x7 * u1;
+        dstate[1] = -(x8 * x7 * u1);
+        dstate[2] = u2;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        dstate[5] = tau * u1;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                (theta2_dot + x0 * theta1_dot) * l,
+                f64::abs(l)
+                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            theta1_dot - theta2_dot,
+            x_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            (m2 + M + m1) * x_dot
+                + l
+                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let l = params.l;
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x2 = x0 + x1 + 1.0;
+        let x3 = 1.0 / x2;
+        let value = x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = l * x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 1 equations.
+pub mod reduced_volterra {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 1;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -348,7 +1004,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut mass: [[f64; 1]; 1] = [
+        let mut matrix: [[f64; 1]; 1] = [
             [(m2 * x8 * x10 * x15 + x18 * x7 + x19 * x13 * x14) * l * l],
         ];
         let mut force: [f64; 1] = [
@@ -408,7 +1064,7 @@ pub mod reduced_volterra {
                                     - x26 * x13 * x13 * x16 * x1 * x14 - x18 * x34 * x7
                                     - x17 * x34 * x7 * x7) * x7) * x10) * u1 * u1,
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -419,6 +1075,7 @@ pub mod reduced_volterra {
         dstate[1] = x8 * x10 * u1;
         dstate[2] = x13 * (x9 * G_x + l * u1 * x14);
         dstate[3] = force[0];
+        dstate[4] = tau * u1 * (x7 - x43);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -426,7 +1083,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -463,7 +1120,7 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot];
+        let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [
             (m2 + M + m1) * x_dot
                 + l
@@ -477,7 +1134,7 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -535,237 +1192,6 @@ pub mod reduced_volterra {
                 + l * u1 * (0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1)))
                 / x9,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((q, qdot))
-    }
-}
-///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
-pub mod kane {
-    use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 5;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 2;
-    ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2"];
-    ///False when the ignorable coordinates are left out of the state.
-    pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let u1 = state[3];
-        let u2 = state[4];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let g = params.g;
-        let tau = params.tau;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
-        let x9 = m2 * x8 * x8;
-        let x10 = m2 + 0.5 * m1;
-        let x11 = l * x7 * (x10 * x1 - 0.5 * (x0 * m2 * x8));
-        let x12 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
-        let x13 = x1 * x4;
-        let x14 = x0 * x3;
-        let x15 = x13 - x14;
-        let x16 = m2 + 0.3333333333333333 * m1;
-        let x17 = x8 * x7 * x15;
-        let x18 = x14 - x13;
-        let x19 = x18 * x8;
-        let x20 = 0.5 * x17 - 0.5 * x13 + 0.5 * x14;
-        let x21 = x0 * m2 * x20;
-        let x22 = -m2 - 0.5 * m1;
-        let x23 = x3 * x22;
-        let x24 = x10 * x7 * x1 * x15;
-        let x25 = x0 * x18;
-        let x26 = x0 * x8;
-        let x27 = x8 * x7;
-        let x28 = 0.5 * x27 - 0.5;
-        let x29 = x18 * (x0 * m2 * x28 - x10 * x7 * x1) + 0.5 * (m2 * x8 * x4);
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = l * x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 2]; 2] = [
-            [
-                l * l * x7 * x7
-                    * (m2 - 0.6666666666666666 * x9 + 0.3333333333333333 * m1),
-                x11,
-            ],
-            [x11, m2 + M + m1],
-        ];
-        let mut force: [f64; 2] = [
-            (tau - x8 * (-0.5 * (m2 * l * g * x4) - tau)
-                + l * x7 * u1
-                    * (((0.5 * x19 - 0.5 * x13 + 0.5 * x14) * x7
-                        * (x1 * u2 + 0.5 * (l * x7 * u1))
-                        + 0.08333333333333333 * (l * (x19 - x13 + x14) * x7 * x7 * u1)
-                        - 0.5 * (x3 * u2)) * m1
-                        - l * x7 * u1
-                            * ((0.5 * x17 - x13 + x14) * m2 * x8 - x12 * x7 * x15
-                                - x16 * x7 * x15
-                                + m2 * x8
-                                    * (0.3333333333333333 * x17 - 0.3333333333333333 * x13
-                                        + 0.3333333333333333 * x14)) - u2 * (x21 + x23 - x24)
-                        + m2
-                            * (l * (0.5 * x25 + 0.5 * x3) * x7
-                                * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
-                                    - x8
-                                        * (x18 * ((-0.5 * x25 - 0.5 * x3) * x7 - 0.5 * x4)
-                                            - 0.5 * x26)
-                                    + x0 * (0.5 * x2 - 0.5 * (x18 * x7 * x15) + 0.5 * x5)) * u1
-                                + (x0 * x20 - x3 - x7 * x1 * x15
-                                    - x8 * (0.5 * (x8 * x4) + (x0 * x28 - x7 * x1) * x18))
-                                    * (l * x7 * u1 * (x1 - 0.5 * x26) + u2)
-                                - 0.08333333333333333
-                                    * ((x17 - x13 - x18 * (x27 - 1.0) * x8 + x14) * l * x8 * x7
-                                        * u1))
-                        + x8
-                            * (x29 * u2
-                                + x18 * l * x7
-                                    * (m2 * x8 * (0.3333333333333333 * x27 - 0.3333333333333333)
-                                        - x12 * x7 - x16 * x7 + m2 * x8 * (0.5 * x27 - 1.0)) * u1))
-                + x3 * l * g * x22) * x7,
-            l * (x24 - x21 - x23 + x8 * x29) * x7 * x7 * u1 * u1,
-        ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
-                value: column as f64,
-            });
-        }
-        dstate[0] = x7 * u1;
-        dstate[1] = -(x8 * x7 * u1);
-        dstate[2] = u2;
-        dstate[3] = force[0];
-        dstate[4] = force[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
-    }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn initial_state(
-        t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let theta1 = q[0];
-        let theta2 = q[1];
-        let theta1_dot = qdot[0];
-        let theta2_dot = qdot[1];
-        let x_dot = qdot[2];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let x0 = f64::cos(theta1 - theta2);
-        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "wheel",
-                (theta2_dot + x0 * theta1_dot) * l,
-                f64::abs(l)
-                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
-            ),
-        ];
-        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
-                    constraint,
-                    residual,
-                    tolerance,
-                });
-            }
-        }
-        let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot - theta2_dot, x_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            (m2 + M + m1) * x_dot
-                + l
-                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
-        ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((state, g_i))
-    }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn velocities(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let u1 = state[3];
-        let u2 = state[4];
-        let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1);
-        let x1 = f64::sin(theta1) * f64::sin(theta2);
-        let x2 = x0 + x1 + 1.0;
-        let x3 = 1.0 / x2;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = l * x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

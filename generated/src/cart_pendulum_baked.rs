@@ -199,17 +199,562 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
+///Lagrange's equations with multipliers: 6 states, 3 equations.
+pub mod lagrange {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 6;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 3;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1'",
+        "theta2'",
+        "x'",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * x4;
+        let x6 = 1.5 * x1;
+        let x7 = 0.5 * x0;
+        let x8 = x0 * x2 - x1 * x3;
+        let mut matrix: [[f64; 4]; 4] = [
+            [1.3333333333333333, x5, x6, x4],
+            [x5, 0.3333333333333333, x7, 1.0],
+            [x6, x7, 4.0, 0.0],
+            [x4, 1.0, 0.0, 0.0],
+        ];
+        let mut force: [f64; 4] = [
+            -14.715 * x2 - 0.5 * (x8 * theta2_dot * theta2_dot),
+            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x3,
+            1.5 * (x2 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x3),
+            x8 * theta1_dot * (theta1_dot - theta2_dot),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        dstate[5] = force[2];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                theta2_dot + x0 * theta1_dot,
+                f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
+                + 0.5 * (f64::cos(theta2) * theta2_dot),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 6 states, 3 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 6;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 3;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "theta1",
+        "theta2",
+        "x",
+        "theta1'",
+        "theta2'",
+        "x'",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = x7 * (1.5 * x1 - 0.5 * (x0 * x8));
+        let x10 = x1 * x4;
+        let x11 = x0 * x3;
+        let x12 = x11 - x10;
+        let x13 = x8 * x7 - 1.0;
+        let x14 = theta1_dot - theta2_dot;
+        let x15 = x10 - x11;
+        let x16 = -x12 * theta2_dot - theta1_dot * x15;
+        let x17 = (x8 * x7 * x15 - x10 + x11) * theta1_dot;
+        let x18 = x12 * x13 * theta2_dot + x17;
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 2]; 2] = [
+            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * (x8 * x8)), x9],
+            [x9, 4.0],
+        ];
+        let mut force: [f64; 2] = [
+            x7
+                * (1.3333333333333333 * (x7 * x7 * theta1_dot * x14 * x15) - 14.715 * x3
+                    - x8
+                        * ((x12
+                            * (0.5 * theta1_dot - 0.3333333333333333 * (x13 * x7 * x14))
+                            - 0.5 * (x12 * theta1_dot)) * theta2_dot
+                            + 0.5 * (x12 * theta1_dot * theta1_dot) - 4.905 * x4
+                            + x7 * (-0.5 * (x8 * x16 * x7) - 0.3333333333333333 * x17)
+                                * x14)
+                    + x12 * theta2_dot
+                        * (1.3333333333333333 * (x7 * x7 * x14) - 0.5 * theta2_dot)
+                    - 0.5 * (x18 * x8 * x7 * x14)),
+            1.5 * (x3 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x4)
+                + x7 * (-1.5 * (x16 * x7 * x1) - 0.5 * (x18 * x0)) * x14,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x16 * x7 * x7 * x14;
+        dstate[4] = -(x8 * x7) * force[0] + 0.0 * force[1] + x18 * x7 * x14;
+        dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                theta2_dot + x0 * theta1_dot,
+                f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot, theta2_dot, x_dot];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
+                + 0.5 * (f64::cos(theta2) * theta2_dot),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let value = x0;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = x0;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
+pub mod kane {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x7 * u1;
+        let x9 = x2 + x5;
+        let x10 = x9 * x9;
+        let x11 = x0 * x9;
+        let x12 = x7 * (1.5 * x1 - 0.5 * x11);
+        let x13 = x1 * x4;
+        let x14 = x0 * x3;
+        let x15 = x13 - x14;
+        let x16 = x9 * x7 * x15;
+        let x17 = 1.3333333333333333 - 0.5 * x10;
+        let x18 = x7 * x1 * x15;
+        let x19 = x0 * (0.5 * x16 - 0.5 * x13 + 0.5 * x14);
+        let x20 = x14 - x13;
+        let x21 = x20 * x9;
+        let x22 = x9 * x7;
+        let x23 = x0 * x20;
+        let x24 = x7 * x1;
+        let x25 = x0 * (0.5 * x22 - 0.5);
+        let x26 = x9 * x4;
+        let x27 = x20 * (x25 - 1.5 * x24) + 0.5 * x26;
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = x6;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 2]; 2] = [
+            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * x10), x12],
+            [x12, 4.0],
+        ];
+        let mut force: [f64; 2] = [
+            (x7 * u1
+                * (x7
+                    * ((0.5 * x21 - 0.5 * x13 + 0.5 * x14) * (0.5 * x8 + x1 * u2)
+                        + u1
+                            * (0.08333333333333333 * ((x21 - x13 + x14) * x7)
+                                - 0.08333333333333333
+                                    * ((x16 - x13 - x20 * (x22 - 1.0) * x9 + x14) * x9)
+                                + (0.5 * x23 + 0.5 * x3)
+                                    * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
+                                        - x9
+                                            * (x20 * ((-0.5 * x23 - 0.5 * x3) * x7 - 0.5 * x4)
+                                                - 0.5 * x11)
+                                        + x0 * (0.5 * x2 - 0.5 * (x20 * x7 * x15) + 0.5 * x5))))
+                    - x7 * u1
+                        * ((0.5 * x16 - x13 + x14) * x9 - 1.3333333333333333 * (x7 * x15)
+                            - x17 * x7 * x15
+                            + x9
+                                * (0.3333333333333333 * x16 - 0.3333333333333333 * x13
+                                    + 0.3333333333333333 * x14))
+                    - (x19 - 1.5 * x3 - 1.5 * x18) * u2 - 0.5 * (x3 * u2)
+                    + (x20 * x7 * u1
+                        * (x9 * (0.3333333333333333 * x22 - 0.3333333333333333)
+                            + x9 * (0.5 * x22 - 1.0) - 1.3333333333333333 * x7
+                            - x17 * x7) + x27 * u2) * x9
+                    + (x19 - x3 - x18 - x9 * (0.5 * x26 + (x25 - x24) * x20))
+                        * (x7 * u1 * (x1 - 0.5 * x11) + u2)) - 14.715 * x3 + 4.905 * x26)
+                * x7,
+            x7 * x7 * u1 * u1 * (1.5 * x3 + 1.5 * x18 - x19 + x9 * x27),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x8;
+        dstate[1] = -(x9 * x7 * u1);
+        dstate[2] = u2;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let theta1 = q[0];
+        let theta2 = q[1];
+        let theta1_dot = qdot[0];
+        let theta2_dot = qdot[1];
+        let x_dot = qdot[2];
+        let x0 = f64::cos(theta1 - theta2);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "wheel",
+                theta2_dot + x0 * theta1_dot,
+                f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot - theta2_dot, x_dot];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
+                + 0.5 * (f64::cos(theta2) * theta2_dot),
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x2 = x0 + x1 + 1.0;
+        let x3 = 1.0 / x2;
+        let value = x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                value,
+            });
+        }
+        let value = x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
 pub mod reduced_volterra {
     use super::*;
-    ///Length of the state `[q; u]`.
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
     pub const STATES: usize = 4;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
@@ -294,7 +839,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut mass: [[f64; 1]; 1] = [[x8 * x10 * x14 + x13 * x12 * x18 + x19 * x7]];
+        let mut matrix: [[f64; 1]; 1] = [[x8 * x10 * x14 + x13 * x12 * x18 + x19 * x7]];
         let mut force: [f64; 1] = [
             u1 * u1
                 * ((0.5 * x15 + x16 + x17)
@@ -355,7 +900,7 @@ pub mod reduced_volterra {
                         * (((-0.5 * x3 - 0.5 * x24) * x7 + x32) * x7
                             + (x39 - 0.5 * x33) * x8 * x10)) - 14.715 * x20 - 4.905 * x45,
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -373,7 +918,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -417,7 +962,7 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -466,213 +1011,6 @@ pub mod reduced_volterra {
             (x2 + x3) * u1 / x5,
             ((x0 * (-0.5 * x2 - 0.5 * x3) + 1.5 * x1) * u1 + x5 * G_x) / x6,
         ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((q, qdot))
-    }
-}
-///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
-pub mod kane {
-    use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 5;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 2;
-    ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["theta1", "theta2", "x", "u1", "u2"];
-    ///False when the ignorable coordinates are left out of the state.
-    pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let u1 = state[3];
-        let u2 = state[4];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x7 * u1;
-        let x9 = x2 + x5;
-        let x10 = x9 * x9;
-        let x11 = x0 * x9;
-        let x12 = x7 * (1.5 * x1 - 0.5 * x11);
-        let x13 = x1 * x4;
-        let x14 = x0 * x3;
-        let x15 = x13 - x14;
-        let x16 = x9 * x7 * x15;
-        let x17 = 1.3333333333333333 - 0.5 * x10;
-        let x18 = x7 * x1 * x15;
-        let x19 = x0 * (0.5 * x16 - 0.5 * x13 + 0.5 * x14);
-        let x20 = x14 - x13;
-        let x21 = x20 * x9;
-        let x22 = x9 * x7;
-        let x23 = x0 * x20;
-        let x24 = x7 * x1;
-        let x25 = x0 * (0.5 * x22 - 0.5);
-        let x26 = x9 * x4;
-        let x27 = x20 * (x25 - 1.5 * x24) + 0.5 * x26;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 2]; 2] = [
-            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * x10), x12],
-            [x12, 4.0],
-        ];
-        let mut force: [f64; 2] = [
-            (x7 * u1
-                * (x7
-                    * ((0.5 * x21 - 0.5 * x13 + 0.5 * x14) * (0.5 * x8 + x1 * u2)
-                        + u1
-                            * (0.08333333333333333 * ((x21 - x13 + x14) * x7)
-                                - 0.08333333333333333
-                                    * ((x16 - x13 - x20 * (x22 - 1.0) * x9 + x14) * x9)
-                                + (0.5 * x23 + 0.5 * x3)
-                                    * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
-                                        - x9
-                                            * (x20 * ((-0.5 * x23 - 0.5 * x3) * x7 - 0.5 * x4)
-                                                - 0.5 * x11)
-                                        + x0 * (0.5 * x2 - 0.5 * (x20 * x7 * x15) + 0.5 * x5))))
-                    - x7 * u1
-                        * ((0.5 * x16 - x13 + x14) * x9 - 1.3333333333333333 * (x7 * x15)
-                            - x17 * x7 * x15
-                            + x9
-                                * (0.3333333333333333 * x16 - 0.3333333333333333 * x13
-                                    + 0.3333333333333333 * x14))
-                    - (x19 - 1.5 * x3 - 1.5 * x18) * u2 - 0.5 * (x3 * u2)
-                    + (x20 * x7 * u1
-                        * (x9 * (0.3333333333333333 * x22 - 0.3333333333333333)
-                            + x9 * (0.5 * x22 - 1.0) - 1.3333333333333333 * x7
-                            - x17 * x7) + x27 * u2) * x9
-                    + (x19 - x3 - x18 - x9 * (0.5 * x26 + (x25 - x24) * x20))
-                        * (x7 * u1 * (x1 - 0.5 * x11) + u2)) - 14.715 * x3 + 4.905 * x26)
-                * x7,
-            x7 * x7 * u1 * u1 * (1.5 * x3 + 1.5 * x18 - x19 + x9 * x27),
-        ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
-                value: column as f64,
-            });
-        }
-        dstate[0] = x8;
-        dstate[1] = -(x9 * x7 * u1);
-        dstate[2] = u2;
-        dstate[3] = force[0];
-        dstate[4] = force[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
-    }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn initial_state(
-        t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        _params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let theta1 = q[0];
-        let theta2 = q[1];
-        let theta1_dot = qdot[0];
-        let theta2_dot = qdot[1];
-        let x_dot = qdot[2];
-        let x0 = f64::cos(theta1 - theta2);
-        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "wheel",
-                theta2_dot + x0 * theta1_dot,
-                f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
-            ),
-        ];
-        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
-                    constraint,
-                    residual,
-                    tolerance,
-                });
-            }
-        }
-        let state: [f64; STATES] = [q[0], q[1], q[2], theta1_dot - theta2_dot, x_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [
-            4.0 * x_dot + 1.5 * (theta1_dot * f64::cos(theta1))
-                + 0.5 * (f64::cos(theta2) * theta2_dot),
-        ];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((state, g_i))
-    }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn velocities(
-        t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let u1 = state[3];
-        let u2 = state[4];
-        let x0 = f64::cos(theta2) * f64::cos(theta1);
-        let x1 = f64::sin(theta1) * f64::sin(theta2);
-        let x2 = x0 + x1 + 1.0;
-        let x3 = 1.0 / x2;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

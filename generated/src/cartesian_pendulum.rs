@@ -213,18 +213,20 @@ pub fn position_residuals(
     let L = params.L;
     [x * x - L * L + y * y]
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 3 states, 1 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 5 states, 2 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 3;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 1;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "x'", "y'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -235,34 +237,31 @@ pub mod reduced_volterra {
     ) -> Result<(), EvalError> {
         let x = state[0];
         let y = state[1];
-        let u1 = state[2];
+        let x_dot = state[2];
+        let y_dot = state[3];
         let mb = params.mb;
         let g = params.g;
         let w = params.w;
-        let x0 = x * x;
-        let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
-        let x3 = 1.0 / x2;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
+        let x0 = 2.0 * x;
+        let x1 = 2.0 * y;
+        let mut matrix: [[f64; 3]; 3] = [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]];
+        let mut force: [f64; 3] = [
+            w,
+            -(mb * g),
+            -2.0 * (y_dot * y_dot) - 2.0 * (x_dot * x_dot),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "2*x^2 + 2*y^2 = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [x3 * (-2.0 * (x * mb * g) - 2.0 * (w * y))];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = -(2.0 * y * u1 * x3);
-        dstate[1] = 2.0 * x * u1 * x3;
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
         dstate[2] = force[0];
+        dstate[3] = force[1];
+        dstate[4] = w * x_dot;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -270,7 +269,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -306,7 +305,7 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y];
+        let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -315,7 +314,275 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 5 states, 2 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "x'", "y'", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let y = state[1];
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let mb = params.mb;
+        let g = params.g;
+        let w = params.w;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x3 = 1.0 / x2;
+        let x4 = x * y_dot - x_dot * y;
+        let x5 = 8.0 * (x * x_dot * y * x3) + (8.0 * (y * y * x3) - 2.0) * y_dot;
+        let x6 = x4 * x3
+            * ((2.0 - 8.0 * (x * x * x3)) * x_dot - 8.0 * (x * y * y_dot * x3));
+        let value = x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "2*x^2 + 2*y^2 = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
+        let mut force: [f64; 1] = [
+            x3 * (2.0 * (x * mb * (-g - x6)) - 2.0 * ((w - x4 * mb * x5 * x3) * y)),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
+        dstate[2] = -(2.0 * y * x3) * force[0] + x4 * x5 * x3;
+        dstate[3] = 2.0 * x * x3 * force[0] + x6;
+        dstate[4] = w * x_dot;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let x = q[0];
+        let y = q[1];
+        let x_dot = qdot[0];
+        let y_dot = qdot[1];
+        let L = params.L;
+        let x0 = f64::abs(x);
+        let x1 = f64::abs(y);
+        let x2 = f64::abs(L);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "rod",
+                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
+                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
+            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+        ];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], x_dot, y_dot, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x = state[0];
+        let y = state[1];
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let value = 2.0 * (x * x) + 2.0 * (y * y);
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "2*x^2 + 2*y^2 = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Kane / Gibbs-Appell (standard Volterra): 4 states, 1 equations.
+pub mod kane {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 4;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 1;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let y = state[1];
+        let u1 = state[2];
+        let mb = params.mb;
+        let g = params.g;
+        let w = params.w;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x3 = 1.0 / x2;
+        let value = x2;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "2*x^2 + 2*y^2 = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
+        let mut force: [f64; 1] = [x3 * (-2.0 * (x * mb * g) - 2.0 * (w * y))];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = -(2.0 * y * u1 * x3);
+        dstate[1] = 2.0 * x * u1 * x3;
+        dstate[2] = force[0];
+        dstate[3] = -(2.0 * w * y * u1 * x3);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let x = q[0];
+        let y = q[1];
+        let x_dot = qdot[0];
+        let y_dot = qdot[1];
+        let L = params.L;
+        let x0 = f64::abs(x);
+        let x1 = f64::abs(y);
+        let x2 = f64::abs(L);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "rod",
+                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
+                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
+            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+        ];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -346,18 +613,20 @@ pub mod reduced_volterra {
         Ok((q, qdot))
     }
 }
-///Kane / Gibbs-Appell (standard Volterra): 3 states, 1 equations.
-pub mod kane {
+///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
+pub mod reduced_volterra {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 3;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 4;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 1;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "u1", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -384,9 +653,9 @@ pub mod kane {
                 value,
             });
         }
-        let mut mass: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
+        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
         let mut force: [f64; 1] = [x3 * (-2.0 * (x * mb * g) - 2.0 * (w * y))];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -396,6 +665,7 @@ pub mod kane {
         dstate[0] = -(2.0 * y * u1 * x3);
         dstate[1] = 2.0 * x * u1 * x3;
         dstate[2] = force[0];
+        dstate[3] = -(2.0 * w * y * u1 * x3);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -403,7 +673,7 @@ pub mod kane {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -439,7 +709,7 @@ pub mod kane {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y];
+        let state: [f64; STATES] = [q[0], q[1], x * y_dot - x_dot * y, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -448,7 +718,7 @@ pub mod kane {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,

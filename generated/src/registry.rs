@@ -46,11 +46,13 @@ pub type PointFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Fai
 /// One formulation of a model.
 #[derive(Clone, Copy, Debug)]
 pub struct Formulation {
-    /// `reduced_volterra` or `kane`.
+    /// `lagrange`, `maggi`, `kane` or `reduced_volterra`.
     pub name: &'static str,
     pub states: usize,
     pub equations: usize,
     pub integrates_ignorable: bool,
+    /// The last state entry is the work integral `W` (Eq. 80).
+    pub has_work_state: bool,
     pub state_names: &'static [&'static str],
     pub rhs: RhsFn,
     pub initial_state: InitialFn,
@@ -128,6 +130,7 @@ macro_rules! formulation {
             states: crate::$m::$f::STATES,
             equations: crate::$m::$f::EQUATIONS,
             integrates_ignorable: crate::$m::$f::INTEGRATES_IGNORABLE,
+            has_work_state: crate::$m::$f::HAS_WORK_STATE,
             state_names: &crate::$m::$f::STATE_NAMES,
             rhs: |t, state, params, g_i, dstate| {
                 let p = crate::$m::Params::from_values(fixed("params", params)?);
@@ -212,14 +215,14 @@ failure_from!(three_body_drop);
 /// Every emitted module.
 pub fn models() -> Vec<Model> {
     vec![
-        model!(cart_pendulum, [reduced_volterra, kane]),
-        model!(three_body, [reduced_volterra, kane]),
-        model!(satellite_boom, [reduced_volterra, kane]),
-        model!(cartesian_pendulum, [reduced_volterra, kane]),
-        model!(rolling_disk, [reduced_volterra, kane]),
-        model!(spring_cart, [reduced_volterra, kane]),
-        model!(cart_pendulum_baked, [reduced_volterra, kane]),
-        model!(three_body_split, [reduced_volterra, kane]),
+        model!(cart_pendulum, [lagrange, maggi, kane, reduced_volterra]),
+        model!(three_body, [lagrange, maggi, kane, reduced_volterra]),
+        model!(satellite_boom, [lagrange, maggi, kane, reduced_volterra]),
+        model!(cartesian_pendulum, [lagrange, maggi, kane, reduced_volterra]),
+        model!(rolling_disk, [lagrange, maggi, kane, reduced_volterra]),
+        model!(spring_cart, [lagrange, maggi, kane, reduced_volterra]),
+        model!(cart_pendulum_baked, [lagrange, maggi, kane, reduced_volterra]),
+        model!(three_body_split, [lagrange, maggi, kane, reduced_volterra]),
         model!(three_body_drop, [reduced_volterra]),
     ]
 }

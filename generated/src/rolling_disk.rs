@@ -212,46 +212,82 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 1 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 9 states, 4 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 5;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 1;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 9;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 4;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "psi", "phi", "u1"];
+    pub const STATE_NAMES: [&str; STATES] = [
+        "x",
+        "y",
+        "psi",
+        "phi",
+        "x'",
+        "y'",
+        "psi'",
+        "phi'",
+        "W",
+    ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
+        _g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
     ) -> Result<(), EvalError> {
         let psi = state[2];
-        let u1 = state[4];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let G_psi = g_i[0];
-        let mut mass: [[f64; 1]; 1] = [[1.5 * md * R * R]];
-        let mut force: [f64; 1] = [tq];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        let x0 = f64::cos(psi);
+        let x1 = -(R * x0);
+        let x2 = f64::sin(psi);
+        let x3 = -(R * x2);
+        let mut matrix: [[f64; 6]; 6] = [
+            [md, 0.0, 0.0, 0.0, 1.0, 0.0],
+            [0.0, md, 0.0, 0.0, 0.0, 1.0],
+            [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
+            [1.0, 0.0, 0.0, x1, 0.0, 0.0],
+            [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+        ];
+        let mut force: [f64; 6] = [
+            0.0,
+            0.0,
+            0.0,
+            tq,
+            -(R * psi_dot * phi_dot * x2),
+            R * x0 * psi_dot * phi_dot,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = R * f64::cos(psi) * u1;
-        dstate[1] = R * u1 * f64::sin(psi);
-        dstate[2] = 4.0 * G_psi / (md * R * R);
-        dstate[3] = u1;
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
+        dstate[2] = psi_dot;
+        dstate[3] = phi_dot;
         dstate[4] = force[0];
+        dstate[5] = force[1];
+        dstate[6] = force[2];
+        dstate[7] = force[3];
+        dstate[8] = tq * phi_dot;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -259,7 +295,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -301,7 +337,17 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], q[2], q[3], phi_dot];
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            x_dot,
+            y_dot,
+            psi_dot,
+            phi_dot,
+            0.0,
+        ];
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -310,7 +356,415 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 9 states, 4 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 9;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 4;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "x",
+        "y",
+        "psi",
+        "phi",
+        "x'",
+        "y'",
+        "psi'",
+        "phi'",
+        "W",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi = state[2];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let x0 = f64::sin(psi);
+        let x1 = f64::cos(psi);
+        let mut matrix: [[f64; 2]; 2] = [
+            [0.25 * md * R * R, 0.0],
+            [0.0, (x0 * x0 + x1 * x1 + 0.5) * md * R * R],
+        ];
+        let mut force: [f64; 2] = [0.0, tq];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
+        dstate[2] = psi_dot;
+        dstate[3] = phi_dot;
+        dstate[4] = 0.0 * force[0] + R * x1 * force[1] + -(R * psi_dot * phi_dot * x0);
+        dstate[5] = 0.0 * force[0] + R * x0 * force[1] + R * x1 * psi_dot * phi_dot;
+        dstate[6] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
+        dstate[7] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
+        dstate[8] = tq * phi_dot;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[2];
+        let x_dot = qdot[0];
+        let y_dot = qdot[1];
+        let psi_dot = qdot[2];
+        let phi_dot = qdot[3];
+        let md = params.md;
+        let R = params.R;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        let x2 = f64::abs(phi_dot);
+        let x3 = f64::abs(R);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "roll_forward",
+                x_dot - R * x0 * phi_dot,
+                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
+            ),
+            (
+                "roll_sideways",
+                y_dot - R * phi_dot * x1,
+                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            x_dot,
+            y_dot,
+            psi_dot,
+            phi_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Kane / Gibbs-Appell (standard Volterra): 7 states, 2 equations.
+pub mod kane {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 7;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "psi", "phi", "u1", "u2", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi = state[2];
+        let u1 = state[4];
+        let u2 = state[5];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let mut matrix: [[f64; 2]; 2] = [
+            [0.25 * md * R * R, 0.0],
+            [0.0, 1.5 * md * R * R],
+        ];
+        let mut force: [f64; 2] = [0.0, tq];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = R * f64::cos(psi) * u2;
+        dstate[1] = R * u2 * f64::sin(psi);
+        dstate[2] = u1;
+        dstate[3] = u2;
+        dstate[4] = force[0];
+        dstate[5] = force[1];
+        dstate[6] = tq * u2;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[2];
+        let x_dot = qdot[0];
+        let y_dot = qdot[1];
+        let psi_dot = qdot[2];
+        let phi_dot = qdot[3];
+        let md = params.md;
+        let R = params.R;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        let x2 = f64::abs(phi_dot);
+        let x3 = f64::abs(R);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "roll_forward",
+                x_dot - R * x0 * phi_dot,
+                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
+            ),
+            (
+                "roll_sideways",
+                y_dot - R * phi_dot * x1,
+                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], q[2], q[3], psi_dot, phi_dot, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi = state[2];
+        let u1 = state[4];
+        let u2 = state[5];
+        let R = params.R;
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
+        let qdot: [f64; NUM_COORDINATES] = [
+            R * f64::cos(psi) * u2,
+            R * u2 * f64::sin(psi),
+            u1,
+            u2,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///the reduced Volterra equations (paper Eqs. 64-67): 6 states, 1 equations.
+pub mod reduced_volterra {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 6;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 1;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "psi", "phi", "u1", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi = state[2];
+        let u1 = state[4];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let G_psi = g_i[0];
+        let mut matrix: [[f64; 1]; 1] = [[1.5 * md * R * R]];
+        let mut force: [f64; 1] = [tq];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = R * f64::cos(psi) * u1;
+        dstate[1] = R * u1 * f64::sin(psi);
+        dstate[2] = 4.0 * G_psi / (md * R * R);
+        dstate[3] = u1;
+        dstate[4] = force[0];
+        dstate[5] = tq * u1;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[2];
+        let x_dot = qdot[0];
+        let y_dot = qdot[1];
+        let psi_dot = qdot[2];
+        let phi_dot = qdot[3];
+        let md = params.md;
+        let R = params.R;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        let x2 = f64::abs(phi_dot);
+        let x3 = f64::abs(R);
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
+            (
+                "roll_forward",
+                x_dot - R * x0 * phi_dot,
+                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
+            ),
+            (
+                "roll_sideways",
+                y_dot - R * phi_dot * x1,
+                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
+            ),
+        ];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], q[2], q[3], phi_dot, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -329,135 +783,6 @@ pub mod reduced_volterra {
             R * u1 * f64::sin(psi),
             4.0 * G_psi / (md * R * R),
             u1,
-        ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((q, qdot))
-    }
-}
-///Kane / Gibbs-Appell (standard Volterra): 6 states, 2 equations.
-pub mod kane {
-    use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 6;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 2;
-    ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "y", "psi", "phi", "u1", "u2"];
-    ///False when the ignorable coordinates are left out of the state.
-    pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
-        let psi = state[2];
-        let u1 = state[4];
-        let u2 = state[5];
-        let md = params.md;
-        let R = params.R;
-        let tq = params.tq;
-        let mut mass: [[f64; 2]; 2] = [
-            [0.25 * md * R * R, 0.0],
-            [0.0, 1.5 * md * R * R],
-        ];
-        let mut force: [f64; 2] = [0.0, tq];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
-                value: column as f64,
-            });
-        }
-        dstate[0] = R * f64::cos(psi) * u2;
-        dstate[1] = R * u2 * f64::sin(psi);
-        dstate[2] = u1;
-        dstate[3] = u2;
-        dstate[4] = force[0];
-        dstate[5] = force[1];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
-    }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn initial_state(
-        t: f64,
-        q: &[f64; NUM_COORDINATES],
-        qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let psi = q[2];
-        let x_dot = qdot[0];
-        let y_dot = qdot[1];
-        let psi_dot = qdot[2];
-        let phi_dot = qdot[3];
-        let md = params.md;
-        let R = params.R;
-        let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = f64::abs(phi_dot);
-        let x3 = f64::abs(R);
-        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "roll_forward",
-                x_dot - R * x0 * phi_dot,
-                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
-            ),
-            (
-                "roll_sideways",
-                y_dot - R * phi_dot * x1,
-                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
-            ),
-        ];
-        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
-        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
-            let tolerance = CONSTRAINT_TOLERANCE * bound;
-            if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
-                    constraint,
-                    residual,
-                    tolerance,
-                });
-            }
-        }
-        let state: [f64; STATES] = [q[0], q[1], q[2], q[3], psi_dot, phi_dot];
-        let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
-        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((state, g_i))
-    }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn velocities(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
-        let psi = state[2];
-        let u1 = state[4];
-        let u2 = state[5];
-        let R = params.R;
-        let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
-        let qdot: [f64; NUM_COORDINATES] = [
-            R * f64::cos(psi) * u2,
-            R * u2 * f64::sin(psi),
-            u1,
-            u2,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

@@ -314,13 +314,13 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 11 states, 4 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 15 states, 7 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 11;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 4;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 15;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 7;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
         "psi",
@@ -330,30 +330,39 @@ pub mod reduced_volterra {
         "X",
         "Y",
         "Z",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
+        "psi'",
+        "theta'",
+        "phi'",
+        "rho'",
+        "X'",
+        "Y'",
+        "Z'",
+        "W",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
+        _g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
     ) -> Result<(), EvalError> {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let rho = state[3];
-        let u1 = state[7];
-        let u2 = state[8];
-        let u3 = state[9];
-        let u4 = state[10];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
         let mg = params.mg;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
@@ -363,87 +372,166 @@ pub mod reduced_volterra {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
-        let x7 = f64::cos(psi);
-        let x8 = rho + 0.5 * l;
-        let x9 = f64::sin(psi);
-        let x10 = -rho - 0.5 * l;
-        let x11 = -Ixy;
-        let x12 = -Ixz;
-        let x13 = x6 * m;
-        let x14 = 1.0 - x13;
-        let x15 = l * x14;
-        let x16 = rho * x14;
-        let x17 = (l * l * (0.25 - 0.25 * x13) + rho * (x15 + x16)) * m;
-        let x18 = -Iyz;
-        let x19 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x20 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x21 = Ixy * u2;
-        let x22 = Ixx * u1;
-        let x23 = u3 * Ixz;
-        let x24 = l * (0.5 * x13 - 0.5) + rho * (x13 - 1.0);
-        let x25 = x16 + l * (0.5 - 0.5 * x13);
-        let x26 = x24 * x25;
-        let x27 = x6 * x6 * x10 * m * x8 * mg;
-        let x28 = x15 + (2.0 - 2.0 * x13) * rho;
-        let value = x3;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 4]; 4] = [
-            [Ixx, x11, x12, 0.0],
-            [x11, Iyy + x17, x18, 0.0],
-            [x12, x18, x17 + Izz, 0.0],
-            [0.0, 0.0, 0.0, m * x14],
+        let x0 = f64::sin(theta);
+        let x1 = f64::sin(phi);
+        let x2 = Ixy * x1;
+        let x3 = f64::cos(phi);
+        let x4 = Ixz * x3;
+        let x5 = 2.0 * x2 + 2.0 * x4;
+        let x6 = Izz - Iyy;
+        let x7 = Iyz * x1;
+        let x8 = l * l;
+        let x9 = m * (0.25 * x8 + (rho + l) * rho);
+        let x10 = f64::cos(theta);
+        let x11 = Iyy - Izz;
+        let x12 = Iyz * x3;
+        let x13 = Ixy * x3;
+        let x14 = x1 * Ixz;
+        let x15 = x13 - x14;
+        let x16 = x10 * (Iyz + (x11 * x1 - 2.0 * x12) * x3) + x0 * x15;
+        let x17 = -x2 - x4;
+        let x18 = x17 * x10 - x0 * Ixx;
+        let x19 = rho + 0.5 * l;
+        let x20 = f64::sin(psi);
+        let x21 = -(x10 * m * x19 * x20);
+        let x22 = f64::cos(psi);
+        let x23 = x22 * x10 * m * x19;
+        let x24 = x14 - x13;
+        let x25 = -(x0 * x22 * m * x19);
+        let x26 = -(x0 * m * x19 * x20);
+        let x27 = -(x10 * m * x19);
+        let x28 = x22 * x10 * m;
+        let x29 = x10 * m * x20;
+        let x30 = -(x0 * m);
+        let x31 = m + mg;
+        let x32 = x22 * Y_dot;
+        let x33 = X_dot * x20;
+        let x34 = x33 - x32;
+        let x35 = x1 * x6;
+        let x36 = x15 * x10 + x0 * ((x35 + 2.0 * x12) * x3 - Iyz);
+        let x37 = x2 + x4;
+        let x38 = x37 * x0 - Ixx * x10;
+        let x39 = (2.0 * Iyy - 2.0 * Izz) * x3;
+        let x40 = Iyz * x3 * x3;
+        let x41 = x0 * x17 + x10 * (x1 * (x35 + 4.0 * x12) + x11 * x3 * x3);
+        let x42 = x0 * theta_dot * x19 * x20;
+        let x43 = x22 * psi_dot * x19;
+        let x44 = rho_dot * x20;
+        let x45 = Y_dot - x42 + x10 * (x43 + x44);
+        let x46 = x0 * theta_dot * x19;
+        let x47 = x10 * rho_dot;
+        let x48 = x22 * (x47 - x46);
+        let x49 = x10 * psi_dot * x19 * x20;
+        let x50 = x48 - x49;
+        let x51 = X_dot + x48 - x49;
+        let x52 = -x43 - x44;
+        let x53 = x42 + x52 * x10;
+        let x54 = 2.0 * rho + l;
+        let x55 = -Y_dot * x20 - X_dot * x22;
+        let x56 = x0 * (psi_dot * x19 * x20 - x22 * rho_dot)
+            - theta_dot * x22 * x10 * x19;
+        let x57 = x0 * x52 - theta_dot * x10 * x19 * x20;
+        let x58 = Z_dot - theta_dot * x10 * x19 - x0 * rho_dot;
+        let x59 = x0 * x55;
+        let x60 = Z_dot * x10;
+        let x61 = x10 * psi_dot * x3 - theta_dot * x1;
+        let x62 = Iyz * x61;
+        let x63 = phi_dot - x0 * psi_dot;
+        let x64 = x63 * Ixy;
+        let x65 = theta_dot * x3;
+        let x66 = x10 * psi_dot * x1;
+        let x67 = x65 + x66;
+        let x68 = Iyy * x67;
+        let x69 = Izz * x61 - Iyz * x67 - x63 * Ixz;
+        let x70 = -x65 - x66;
+        let x71 = f64::cos(0.0485 * t);
+        let x72 = f64::sin(0.089 * t);
+        let x73 = x22 * x10 * psi_dot - x0 * theta_dot * x20;
+        let x74 = -x10 * psi_dot * x20 - x0 * theta_dot * x22;
+        let mut matrix: [[f64; 7]; 7] = [
+            [
+                Ixx
+                    + (x0 * x5 + ((x6 * x3 - 2.0 * x7) * x3 + Iyy - Ixx + x9) * x10)
+                        * x10,
+                x16,
+                x18,
+                0.0,
+                x21,
+                x23,
+                0.0,
+            ],
+            [x16, (2.0 * x7 + x11 * x3) * x3 + x9 + Izz, x24, 0.0, x25, x26, x27],
+            [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x28, x29, x30],
+            [x21, x25, 0.0, x28, x31, 0.0, 0.0],
+            [x23, x26, 0.0, x29, 0.0, x31, 0.0],
+            [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
         ];
-        let mut force: [f64; 4] = [
-            x20 * u3 - x19 * u2,
-            u3 * (x21 - x22 + x23 + m * u1 * (-x26 - x27)) + x19 * u1
-                - x28 * u4 * m * u2,
-            ((x26 + x27) * u1 * u2 - x28 * u4 * u3) * m - x20 * u1
-                + (x22 - x21 - x23) * u2,
+        let mut force: [f64; 7] = [
             m
-                * ((x8 * u2 * u2 - x10 * u3 * u3) * x6 * x6 * m * mg
-                    + (u3 * u3 * x25 - x24 * u2 * u2) * x14)
-                + 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t),
+                * (x45 * x50 + x51 * x53
+                    + x10
+                        * (-rho_dot * (x32 + x54 * x10 * psi_dot - x33)
+                            - x55 * psi_dot * x19))
+                - theta_dot
+                    * (x0 * x34 * m * x19 + x36 * theta_dot + x38 * phi_dot
+                        + (x5 * x10 * x10
+                            + (x0 * (-2.0 * x2 - 2.0 * x4)
+                                + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x8) - 2.0 * Iyy
+                                    + 2.0 * Ixx + (x39 + 4.0 * x7) * x3) * x10) * x0) * psi_dot)
+                - ((x24 * phi_dot
+                    + (x0 * (2.0 * x13 - 2.0 * x14)
+                        + ((x39 + 2.0 * x7) * x1 - 2.0 * x40) * x10) * psi_dot) * x10
+                    + theta_dot * x41) * phi_dot,
+            m
+                * (x51 * x56 + x45 * x57 + (x46 - x47) * x58
+                    - rho_dot * (theta_dot * x54 + x59 - x60))
+                - (x41 * psi_dot
+                    + theta_dot
+                        * (2.0 * x40 + ((2.0 * Izz - 2.0 * Iyy) * x3 - 2.0 * x7) * x1)
+                    + x37 * phi_dot) * phi_dot
+                + psi_dot
+                    * (x0
+                        * (-x34 * m * x19 - 0.5 * ((x68 - x62 - x64) * x1)
+                            - 0.5 * (x69 * x3)) + 0.5 * (x63 * x38)
+                        + 0.5 * ((Ixy * x10 + x0 * (x12 - Iyy * x1)) * x67)
+                        + 0.5 * ((x0 * (x7 - Izz * x3) + x10 * Ixz) * x61)
+                        - 0.5 * ((x63 * Ixx - Ixy * x67 - Ixz * x61) * x10))
+                - theta_dot * (x36 * psi_dot + (x55 * x10 + Z_dot * x0) * m * x19),
+            0.5 * ((Iyy * x61 - Iyz * x70) * x67)
+                - (x24 * x10 * psi_dot + x37 * theta_dot) * phi_dot
+                + 0.5 * (x63 * (-x70 * Ixz - Ixy * x61)) - theta_dot * psi_dot * x38
+                + 0.5 * (x70 * x69)
+                + x61 * (0.5 * (x70 * Izz) - x62 - 0.5 * x64 + 0.5 * x68),
+            0.012 * x71 - 0.018 * x72
+                + (x45 * x73 + x74 * x51 - (x59 - x60) * theta_dot
+                    - (x32 - x33) * x10 * psi_dot - theta_dot * x58 * x10) * m,
+            (-theta_dot * x56 - psi_dot * x53 - x74 * rho_dot) * m,
+            m * (-theta_dot * x57 - x50 * psi_dot - rho_dot * x73),
+            theta_dot * m * (2.0 * x47 - x46),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = x2 * x4;
-        dstate[1] = u2 * x1 - u3 * x0;
-        dstate[2] = x5 * x2 * x4 + u1;
-        dstate[3] = u4;
-        dstate[4] = x6
-            * (G_X
-                + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
-                    + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m);
-        dstate[5] = (G_Y
-            + m
-                * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
-                    + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6;
-        dstate[6] = x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z);
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = rho_dot;
+        dstate[4] = X_dot;
+        dstate[5] = Y_dot;
+        dstate[6] = Z_dot;
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
         dstate[10] = force[3];
+        dstate[11] = force[4];
+        dstate[12] = force[5];
+        dstate[13] = force[6];
+        dstate[14] = rho_dot * (0.012 * x71 - 0.018 * x72);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -451,7 +539,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -461,7 +549,6 @@ pub mod reduced_volterra {
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
         let psi = q[0];
         let theta = q[1];
-        let phi = q[2];
         let rho = q[3];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
@@ -473,14 +560,12 @@ pub mod reduced_volterra {
         let mg = params.mg;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
-        let x5 = rho + 0.5 * l;
-        let x6 = f64::sin(psi);
-        let x7 = m + mg;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(theta);
+        let x2 = rho + 0.5 * l;
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(psi);
+        let x5 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -501,18 +586,22 @@ pub mod reduced_volterra {
             q[4],
             q[5],
             q[6],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            psi_dot,
+            theta_dot,
+            phi_dot,
             rho_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+            0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6) * m
-                + X_dot * x7,
-            Y_dot * x7
-                + (x2 * (x4 * psi_dot * x5 + rho_dot * x6) - x0 * theta_dot * x5 * x6)
+            (x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4) * m
+                + X_dot * x5,
+            Y_dot * x5
+                + (x3 * (x0 * psi_dot * x2 + rho_dot * x4) - x1 * theta_dot * x2 * x4)
                     * m,
-            (-theta_dot * x2 * x5 - x0 * rho_dot) * m + Z_dot * x7,
+            (-theta_dot * x3 * x2 - x1 * rho_dot) * m + Z_dot * x5,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -521,40 +610,405 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
         state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
     ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            rho_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 15 states, 7 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 15;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 7;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "rho",
+        "X",
+        "Y",
+        "Z",
+        "psi'",
+        "theta'",
+        "phi'",
+        "rho'",
+        "X'",
+        "Y'",
+        "Z'",
+        "W",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let rho = state[3];
-        let u1 = state[7];
-        let u2 = state[8];
-        let u3 = state[9];
-        let u4 = state[10];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(phi);
+        let x1 = Ixy * x0;
+        let x2 = f64::cos(phi);
+        let x3 = Ixz * x2;
+        let x4 = -x1 - x3;
+        let x5 = Ixy * x2;
+        let x6 = x0 * Ixz;
+        let x7 = x6 - x5;
+        let x8 = x4 * x0 + x7 * x2;
+        let x9 = x4 * x2 - x7 * x0;
+        let x10 = f64::cos(theta);
+        let x11 = 1.0 / x10;
+        let x12 = f64::sin(theta);
+        let x13 = 2.0 * x1 + 2.0 * x3;
+        let x14 = Izz - Iyy;
+        let x15 = Iyz * x0;
+        let x16 = l * l;
+        let x17 = m * (0.25 * x16 + (rho + l) * rho);
+        let x18 = (x12 * x13 + ((x14 * x2 - 2.0 * x15) * x2 + Iyy - Ixx + x17) * x10)
+            * x10;
+        let x19 = x4 * x10 - x12 * Ixx;
+        let x20 = Ixx + x18 + x12 * x19;
+        let x21 = Iyy - Izz;
+        let x22 = Iyz * x2;
+        let x23 = x10 * (Iyz + (x21 * x0 - 2.0 * x22) * x2);
+        let x24 = x5 - x6;
+        let x25 = x12 * x24;
+        let x26 = x23 + x25;
+        let x27 = x11 * x20 * x0 + x12 * x8 + x26 * x2;
+        let x28 = x23 + x25 + x12 * x7;
+        let x29 = (2.0 * x15 + x21 * x2) * x2 + x17 + Izz;
+        let x30 = x11 * x0 * x28 + x29 * x2;
+        let x31 = x27 * x11 * x2 - x30 * x0;
+        let x32 = f64::sin(psi);
+        let x33 = f64::cos(psi);
+        let x34 = rho + 0.5 * l;
+        let x35 = (-x0 * x32 - x12 * x33 * x2) * m * x34;
+        let x36 = (x33 * x0 - x12 * x2 * x32) * m * x34;
+        let x37 = -(x10 * m * x34 * x2);
+        let x38 = (x12 * x33 * x0 - x2 * x32) * m * x34;
+        let x39 = m * x34 * (x33 * x2 + x12 * x0 * x32);
+        let x40 = x10 * m * x34 * x0;
+        let x41 = x33 * x10 * m;
+        let x42 = x10 * m * x32;
+        let x43 = -(x12 * m);
+        let x44 = m + mg;
+        let x45 = theta_dot * x2;
+        let x46 = x10 * psi_dot * x0;
+        let x47 = -x45 - x46;
+        let x48 = x10 * psi_dot * x2 - theta_dot * x0;
+        let x49 = x45 + x46;
+        let x50 = phi_dot - x12 * psi_dot;
+        let x51 = x1 + x3;
+        let x52 = x51 * x12 - Ixx * x10;
+        let x53 = Izz * x48 - Iyz * x49 - x50 * Ixz;
+        let x54 = x2 * x48;
+        let x55 = x0 * x49;
+        let x56 = x54 + x55;
+        let x57 = x49 * x2 - x0 * x48;
+        let x58 = x12 * theta_dot * x11 * x56 + phi_dot * x57;
+        let x59 = Iyz * x48;
+        let x60 = x50 * Ixy;
+        let x61 = Iyy * x49;
+        let x62 = x12 * x11 * phi_dot * x57
+            + theta_dot * (x54 + x55 + x12 * x12 * x11 * x11 * x56);
+        let x63 = -x54 - x55;
+        let x64 = 0.5 * ((Iyy * x48 - Iyz * x47) * x49)
+            + 0.5 * (x50 * (-x47 * Ixz - Ixy * x48)) - theta_dot * psi_dot * x52
+            + 0.5 * (x47 * x53) - x58 * x11 * x19
+            + x48 * (0.5 * (x47 * Izz) - x59 - 0.5 * x60 + 0.5 * x61) - Ixx * x62
+            + phi_dot * (-x7 * x63 - x7 * x10 * psi_dot - x51 * theta_dot);
+        let x65 = x12 * theta_dot * x34;
+        let x66 = x10 * rho_dot;
+        let x67 = x33 * (x66 - x65);
+        let x68 = x10 * psi_dot * x34 * x32;
+        let x69 = X_dot + x67 - x68;
+        let x70 = x12 * (psi_dot * x34 * x32 - x33 * rho_dot)
+            - theta_dot * x33 * x10 * x34;
+        let x71 = x12 * theta_dot * x34 * x32;
+        let x72 = x33 * psi_dot * x34;
+        let x73 = rho_dot * x32;
+        let x74 = Y_dot - x71 + x10 * (x72 + x73);
+        let x75 = -x72 - x73;
+        let x76 = x12 * x75 - theta_dot * x10 * x34 * x32;
+        let x77 = Z_dot - theta_dot * x10 * x34 - x12 * rho_dot;
+        let x78 = 2.0 * rho + l;
+        let x79 = -Y_dot * x32 - X_dot * x33;
+        let x80 = x12 * x79;
+        let x81 = Z_dot * x10;
+        let x82 = x33 * Y_dot;
+        let x83 = X_dot * x32;
+        let x84 = x83 - x82;
+        let x85 = x0 * x14;
+        let x86 = x12 * x4 + x10 * (x0 * (x85 + 4.0 * x22) + x21 * x2 * x2);
+        let x87 = Iyz * x2 * x2;
+        let x88 = x24 * x10 + x12 * ((x85 + 2.0 * x22) * x2 - Iyz);
+        let x89 = m
+            * (x69 * x70 + x74 * x76 + (x65 - x66) * x77
+                - rho_dot * (theta_dot * x78 + x80 - x81)) - x58 * x11 * x26
+            + psi_dot
+                * (x12
+                    * (-x84 * m * x34 - 0.5 * ((x61 - x59 - x60) * x0)
+                        - 0.5 * (x53 * x2)) + 0.5 * (x50 * x52)
+                    + 0.5 * ((Ixy * x10 + x12 * (x22 - Iyy * x0)) * x49)
+                    + 0.5 * ((x12 * (x15 - Izz * x2) + x10 * Ixz) * x48)
+                    - 0.5 * ((x50 * Ixx - Ixy * x49 - Ixz * x48) * x10)) - x7 * x62
+            + (-x63 * x29 - x86 * psi_dot
+                - theta_dot
+                    * (2.0 * x87 + ((2.0 * Izz - 2.0 * Iyy) * x2 - 2.0 * x15) * x0)
+                - x51 * phi_dot) * phi_dot
+            - theta_dot * (x88 * psi_dot + (x79 * x10 + Z_dot * x12) * m * x34);
+        let x90 = (2.0 * Iyy - 2.0 * Izz) * x2;
+        let x91 = x67 - x68;
+        let x92 = x71 + x75 * x10;
+        let x93 = m
+            * (x74 * x91 + x69 * x92
+                + x10
+                    * (-rho_dot * (x82 + x78 * x10 * psi_dot - x83)
+                        - x79 * psi_dot * x34))
+            - theta_dot
+                * (x12 * x84 * m * x34 + x88 * theta_dot + x52 * phi_dot
+                    + (x13 * x10 * x10
+                        + (x12 * (-2.0 * x1 - 2.0 * x3)
+                            + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x16) - 2.0 * Iyy
+                                + 2.0 * Ixx + (x90 + 4.0 * x15) * x2) * x10) * x12)
+                        * psi_dot) - x19 * x62 - (Ixx + x18) * x58 * x11 + x12 * x64
+            + (-(x7 * phi_dot
+                + (x12 * (2.0 * x5 - 2.0 * x6)
+                    + ((x90 + 2.0 * x15) * x0 - 2.0 * x87) * x10) * psi_dot) * x10
+                - x26 * x63 - theta_dot * x86) * phi_dot;
+        let x94 = f64::cos(0.0485 * t);
+        let x95 = f64::sin(0.089 * t);
+        let x96 = x33 * x10 * psi_dot - x12 * theta_dot * x32;
+        let x97 = -x10 * psi_dot * x32 - x12 * theta_dot * x33;
+        let value = x10;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 7]; 7] = [
+            [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
+            [x8, x27 * x11 * x0 + x30 * x2, x31, 0.0, x35, x36, x37],
+            [
+                x9,
+                x31,
+                x11 * x2 * (x11 * x20 * x2 - x26 * x0 + x12 * x9)
+                    - x0 * (x11 * x28 * x2 - x0 * x29),
+                0.0,
+                x38,
+                x39,
+                x40,
+            ],
+            [0.0, 0.0, 0.0, m, x41, x42, x43],
+            [0.0, x35, x38, x41, x44, 0.0, 0.0],
+            [0.0, x36, x39, x42, 0.0, x44, 0.0],
+            [0.0, x37, x40, x43, 0.0, 0.0, x44],
+        ];
+        let mut force: [f64; 7] = [
+            x64,
+            x89 * x2 + x93 * x11 * x0,
+            x93 * x11 * x2 - x89 * x0,
+            0.012 * x94 - 0.018 * x95
+                + (x74 * x96 + x97 * x69 - (x80 - x81) * theta_dot
+                    - (x82 - x83) * x10 * psi_dot - theta_dot * x77 * x10) * m,
+            m
+                * ((x12 * x33 * x63 * phi_dot + x58 * x32) * x34 - theta_dot * x70
+                    - psi_dot * x92 - x97 * rho_dot),
+            ((x12 * x63 * phi_dot * x32 - x58 * x33) * x34 - theta_dot * x76
+                - x91 * psi_dot - rho_dot * x96) * m,
+            (theta_dot * (2.0 * x66 - x65) + x10 * x34 * x63 * phi_dot) * m,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = rho_dot;
+        dstate[4] = X_dot;
+        dstate[5] = Y_dot;
+        dstate[6] = Z_dot;
+        dstate[7] = 0.0 * force[0] + x11 * x0 * force[1] + x11 * x2 * force[2]
+            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
+            + x58 * x11;
+        dstate[8] = 0.0 * force[0] + x2 * force[1] + -x0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + x63 * phi_dot;
+        dstate[9] = 1.0 * force[0] + x12 * x11 * x0 * force[1]
+            + x12 * x11 * x2 * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + x62;
+        dstate[10] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
+        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
+        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0;
+        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0;
+        dstate[14] = rho_dot * (0.012 * x94 - 0.018 * x95);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let rho = q[3];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let rho_dot = qdot[3];
+        let X_dot = qdot[4];
+        let Y_dot = qdot[5];
+        let Z_dot = qdot[6];
         let mg = params.mg;
         let m = params.m;
         let l = params.l;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(theta);
+        let x2 = rho + 0.5 * l;
         let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
-        let x7 = f64::cos(psi);
-        let x8 = rho + 0.5 * l;
-        let x9 = f64::sin(psi);
-        let x10 = -rho - 0.5 * l;
-        let value = x3;
+        let x4 = f64::sin(psi);
+        let x5 = m + mg;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            rho_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            (x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4) * m
+                + X_dot * x5,
+            Y_dot * x5
+                + (x3 * (x0 * psi_dot * x2 + rho_dot * x4) - x1 * theta_dot * x2 * x4)
+                    * m,
+            (-theta_dot * x3 * x2 - x1 * rho_dot) * m + Z_dot * x5,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta = state[1];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let value = f64::cos(theta);
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -572,19 +1026,13 @@ pub mod reduced_volterra {
             state[6],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            x5 * x2 * x4 + u1,
-            u4,
-            x6
-                * (G_X
-                    + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
-                        + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m),
-            (G_Y
-                + m
-                    * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
-                        + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6,
-            x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z),
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            rho_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -594,12 +1042,12 @@ pub mod reduced_volterra {
         Ok((q, qdot))
     }
 }
-///Kane / Gibbs-Appell (standard Volterra): 14 states, 7 equations.
+///Kane / Gibbs-Appell (standard Volterra): 15 states, 7 equations.
 pub mod kane {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 14;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 15;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 7;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
@@ -617,10 +1065,13 @@ pub mod kane {
         "u5",
         "u6",
         "u7",
+        "W",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -714,16 +1165,18 @@ pub mod kane {
         let x62 = x59 * x1 + x61 * u2 + (x56 - x55) * x0;
         let x63 = -x30 - x31;
         let x64 = x15 + x17;
-        let x65 = x51 * u2;
-        let x66 = u3 * x28;
-        let x67 = x66 + x18 * u2;
-        let x68 = x5 - x6;
-        let x69 = x3 * x19 * x68 - x8 * u4;
-        let x70 = x0 * x7;
-        let x71 = u3 + x70;
-        let x72 = x7 * x1;
-        let x73 = x72 - u2;
-        let x74 = u3 * x32;
+        let x65 = f64::cos(0.0485 * t);
+        let x66 = f64::sin(0.089 * t);
+        let x67 = x51 * u2;
+        let x68 = u3 * x28;
+        let x69 = x68 + x18 * u2;
+        let x70 = x5 - x6;
+        let x71 = x3 * x19 * x70 - x8 * u4;
+        let x72 = x0 * x7;
+        let x73 = u3 + x72;
+        let x74 = x7 * x1;
+        let x75 = x74 - u2;
+        let x76 = u3 * x32;
         let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -732,7 +1185,7 @@ pub mod kane {
                 value,
             });
         }
-        let mut mass: [[f64; 7]; 7] = [
+        let mut matrix: [[f64; 7]; 7] = [
             [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
             [x10, Iyy + x12, x13, 0.0, x20, x24, x25],
             [x11, x13, x12 + Izz, 0.0, x29, x33, x34],
@@ -754,28 +1207,28 @@ pub mod kane {
                     - (x53 - x50) * x0 * x7) * x19 + u4 * x60
                     - u4 * (x44 + x45 + x46 + x42 * u3) + x19 * (x62 * u1 - x54 * u3))
                 - x40 * u1 + x41 * u2,
-            0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t)
+            0.012 * x65 - 0.018 * x66
                 + (u3 * x60 - x7 * (x49 * x8 - x58) - x2 * x57 - x62 * u2) * m,
-            ((x64 * u2 - x66 - x2 * x14 - x8 * x16 * x7) * x54
-                - x2 * x4 * (x19 * (x63 * u3 + x65) - u4 * x3 * x14) - u4 * x67
-                - x16 * x69 * x7
-                + (x71 * x16 * x3 + x8 * x2 * x64 * x4 + x2 * x4 * x63) * x60
+            ((x64 * u2 - x68 - x2 * x14 - x8 * x16 * x7) * x54
+                - x2 * x4 * (x19 * (x63 * u3 + x67) - u4 * x3 * x14) - u4 * x69
+                - x16 * x71 * x7
+                + (x73 * x16 * x3 + x8 * x2 * x64 * x4 + x2 * x4 * x63) * x60
                 - (x28 * u2 + x64 * u3) * x19 * x9
-                + x62 * (x2 * x4 * x23 + (x27 - x26) * x9 + x16 * x3 * x73 + x28 * u1))
+                + x62 * (x2 * x4 * x23 + (x27 - x26) * x9 + x16 * x3 * x75 + x28 * u1))
                 * m,
-            (x60 * (x2 * x4 * x28 + x71 * x3 * x14 + x8 * x2 * x4 * x51)
-                - (x23 * u2 + x74) * u4 - x69 * x7 * x14
+            (x60 * (x2 * x4 * x28 + x73 * x3 * x14 + x8 * x2 * x4 * x51)
+                - (x23 * u2 + x76) * u4 - x71 * x7 * x14
                 - (x32 * u2 + u3 * x51) * x19 * x9
-                + x62 * (x2 * x64 * x4 + x3 * x73 * x14 + u1 * x32 + x63 * x9)
-                + x54 * (x65 - x8 * x7 * x14 - x74 + x2 * x16)
-                - (x19 * x67 + u4 * x16 * x3) * x2 * x4) * m,
+                + x62 * (x2 * x64 * x4 + x3 * x75 * x14 + u1 * x32 + x63 * x9)
+                + x54 * (x67 - x8 * x7 * x14 - x76 + x2 * x16)
+                - (x19 * x69 + u4 * x16 * x3) * x2 * x4) * m,
             m
-                * ((-u4 * x68 - x2 * x19 * x9) * x3
-                    + x60 * (x8 * x2 * x1 + x8 * (-u3 - x70))
+                * ((-u4 * x70 - x2 * x19 * x9) * x3
+                    + x60 * (x8 * x2 * x1 + x8 * (-u3 - x72))
                     - (x8 * x19 * x7 - u4 * x3) * x7
-                    + (x8 * (u2 - x72) - x8 * x2 * x4 * x3 * x0) * x62),
+                    + (x8 * (u2 - x74) - x8 * x2 * x4 * x3 * x0) * x62),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -796,6 +1249,7 @@ pub mod kane {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
+        dstate[14] = u4 * (0.012 * x65 - 0.018 * x66);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -803,7 +1257,7 @@ pub mod kane {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -860,6 +1314,7 @@ pub mod kane {
             X_dot,
             Y_dot,
             Z_dot,
+            0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6) * m
@@ -876,7 +1331,7 @@ pub mod kane {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -923,6 +1378,292 @@ pub mod kane {
             u5,
             u6,
             u7,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///the reduced Volterra equations (paper Eqs. 64-67): 12 states, 4 equations.
+pub mod reduced_volterra {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 12;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 4;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "rho",
+        "X",
+        "Y",
+        "Z",
+        "u1",
+        "u2",
+        "u3",
+        "u4",
+        "W",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = f64::sin(theta);
+        let x6 = 1.0 / (m + mg);
+        let x7 = f64::cos(psi);
+        let x8 = rho + 0.5 * l;
+        let x9 = f64::sin(psi);
+        let x10 = -rho - 0.5 * l;
+        let x11 = -Ixy;
+        let x12 = -Ixz;
+        let x13 = x6 * m;
+        let x14 = 1.0 - x13;
+        let x15 = l * x14;
+        let x16 = rho * x14;
+        let x17 = (l * l * (0.25 - 0.25 * x13) + rho * (x15 + x16)) * m;
+        let x18 = -Iyz;
+        let x19 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x20 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x21 = Ixy * u2;
+        let x22 = Ixx * u1;
+        let x23 = u3 * Ixz;
+        let x24 = l * (0.5 * x13 - 0.5) + rho * (x13 - 1.0);
+        let x25 = x16 + l * (0.5 - 0.5 * x13);
+        let x26 = x24 * x25;
+        let x27 = x6 * x6 * x10 * m * x8 * mg;
+        let x28 = x15 + (2.0 - 2.0 * x13) * rho;
+        let x29 = f64::cos(0.0485 * t);
+        let x30 = f64::sin(0.089 * t);
+        let value = x3;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 4]; 4] = [
+            [Ixx, x11, x12, 0.0],
+            [x11, Iyy + x17, x18, 0.0],
+            [x12, x18, x17 + Izz, 0.0],
+            [0.0, 0.0, 0.0, m * x14],
+        ];
+        let mut force: [f64; 4] = [
+            x20 * u3 - x19 * u2,
+            u3 * (x21 - x22 + x23 + m * u1 * (-x26 - x27)) + x19 * u1
+                - x28 * u4 * m * u2,
+            ((x26 + x27) * u1 * u2 - x28 * u4 * u3) * m - x20 * u1
+                + (x22 - x21 - x23) * u2,
+            m
+                * ((x8 * u2 * u2 - x10 * u3 * u3) * x6 * x6 * m * mg
+                    + (u3 * u3 * x25 - x24 * u2 * u2) * x14) + 0.012 * x29 - 0.018 * x30,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x2 * x4;
+        dstate[1] = u2 * x1 - u3 * x0;
+        dstate[2] = x5 * x2 * x4 + u1;
+        dstate[3] = u4;
+        dstate[4] = x6
+            * (G_X
+                + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
+                    + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m);
+        dstate[5] = (G_Y
+            + m
+                * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
+                    + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6;
+        dstate[6] = x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z);
+        dstate[7] = force[0];
+        dstate[8] = force[1];
+        dstate[9] = force[2];
+        dstate[10] = force[3];
+        dstate[11] = u4 * (0.012 * x29 - 0.018 * x30);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let rho = q[3];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let rho_dot = qdot[3];
+        let X_dot = qdot[4];
+        let Y_dot = qdot[5];
+        let Z_dot = qdot[6];
+        let mg = params.mg;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(phi);
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = f64::cos(psi);
+        let x5 = rho + 0.5 * l;
+        let x6 = f64::sin(psi);
+        let x7 = m + mg;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            phi_dot - x0 * psi_dot,
+            theta_dot * x1 + x2 * psi_dot * x3,
+            x2 * psi_dot * x1 - theta_dot * x3,
+            rho_dot,
+            0.0,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6) * m
+                + X_dot * x7,
+            Y_dot * x7
+                + (x2 * (x4 * psi_dot * x5 + rho_dot * x6) - x0 * theta_dot * x5 * x6)
+                    * m,
+            (-theta_dot * x2 * x5 - x0 * rho_dot) * m + Z_dot * x7,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let mg = params.mg;
+        let m = params.m;
+        let l = params.l;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = f64::sin(theta);
+        let x6 = 1.0 / (m + mg);
+        let x7 = f64::cos(psi);
+        let x8 = rho + 0.5 * l;
+        let x9 = f64::sin(psi);
+        let x10 = -rho - 0.5 * l;
+        let value = x3;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            x2 * x4,
+            u2 * x1 - u3 * x0,
+            x5 * x2 * x4 + u1,
+            u4,
+            x6
+                * (G_X
+                    + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
+                        + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m),
+            (G_Y
+                + m
+                    * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
+                        + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6,
+            x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

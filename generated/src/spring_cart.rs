@@ -228,18 +228,20 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 2 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 5 states, 2 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 4;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 2;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "u1", "u2"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "x'", "th'", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -250,8 +252,8 @@ pub mod reduced_volterra {
     ) -> Result<(), EvalError> {
         let x = state[0];
         let th = state[1];
-        let u1 = state[2];
-        let u2 = state[3];
+        let x_dot = state[2];
+        let th_dot = state[3];
         let mc = params.mc;
         let mp = params.mp;
         let lp = params.lp;
@@ -260,28 +262,31 @@ pub mod reduced_volterra {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = x2 * x2;
-        let x4 = f64::sin(th);
-        let mut mass: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
+        let x1 = f64::sin(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = x3 * x3;
+        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            x1
-                * (-0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))
-                    - 0.25 * (x1 * c * u1 / (x2 * x2))) + x4 * mp * u2 * u2 * lp,
-            -(x4 * g * mp * lp),
+            x1 * mp * th_dot * th_dot * lp
+                + x2
+                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
+                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
+            -(x1 * g * mp * lp),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = u1;
-        dstate[1] = u2;
+        dstate[0] = x_dot;
+        dstate[1] = th_dot;
         dstate[2] = force[0];
         dstate[3] = force[1];
+        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -289,7 +294,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -311,7 +316,7 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot];
+        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -320,7 +325,239 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, th_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 5 states, 2 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "x'", "th'", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c = params.c;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = mp * f64::cos(th) * lp;
+        let x1 = f64::sin(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = x3 * x3;
+        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
+        let mut force: [f64; 2] = [
+            x1 * mp * th_dot * th_dot * lp
+                + x2
+                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
+                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
+            -(x1 * g * mp * lp),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = th_dot;
+        dstate[2] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
+        dstate[3] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
+        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let x_dot = qdot[0];
+        let th_dot = qdot[1];
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
+        let qdot: [f64; NUM_COORDINATES] = [x_dot, th_dot];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
+pub mod kane {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 2;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "u1", "u2", "W"];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let th = state[1];
+        let u1 = state[2];
+        let u2 = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c = params.c;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = mp * f64::cos(th) * lp;
+        let x1 = -x - L0;
+        let x2 = x1 * x1;
+        let x3 = 2.0 * x + 2.0 * L0;
+        let x4 = 1.0 / x1;
+        let x5 = f64::sin(th);
+        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
+        let mut force: [f64; 2] = [
+            (-0.5 * ((f64::sqrt(x2) - L0) * k / f64::sqrt(x2))
+                - 0.25 * (x3 * c * u1 * x4 * x4)) * x3 + x5 * mp * u2 * u2 * lp,
+            -(x5 * g * mp * lp),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = u1;
+        dstate[1] = u2;
+        dstate[2] = force[0];
+        dstate[3] = force[1];
+        dstate[4] = -(0.25 * x3 * x3 * c * u1 * u1 * x4 * x4);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let x_dot = qdot[0];
+        let th_dot = qdot[1];
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
+        let g_i: [f64; NUM_IGNORABLE] = [];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -340,18 +577,20 @@ pub mod reduced_volterra {
         Ok((q, qdot))
     }
 }
-///Kane / Gibbs-Appell (standard Volterra): 4 states, 2 equations.
-pub mod kane {
+///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 2 equations.
+pub mod reduced_volterra {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 4;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 5;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 2;
     ///Names of the state entries.
-    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "u1", "u2"];
+    pub const STATE_NAMES: [&str; STATES] = ["x", "th", "u1", "u2", "W"];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = true;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -372,18 +611,18 @@ pub mod kane {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = x2 * x2;
-        let x4 = f64::sin(th);
-        let mut mass: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
+        let x1 = -x - L0;
+        let x2 = x1 * x1;
+        let x3 = 2.0 * x + 2.0 * L0;
+        let x4 = 1.0 / x1;
+        let x5 = f64::sin(th);
+        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            x1
-                * (-0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))
-                    - 0.25 * (x1 * c * u1 / (x2 * x2))) + x4 * mp * u2 * u2 * lp,
-            -(x4 * g * mp * lp),
+            (-0.5 * ((f64::sqrt(x2) - L0) * k / f64::sqrt(x2))
+                - 0.25 * (x3 * c * u1 * x4 * x4)) * x3 + x5 * mp * u2 * u2 * lp,
+            -(x5 * g * mp * lp),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -394,6 +633,7 @@ pub mod kane {
         dstate[1] = u2;
         dstate[2] = force[0];
         dstate[3] = force[1];
+        dstate[4] = -(0.25 * x3 * x3 * c * u1 * u1 * x4 * x4);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -401,7 +641,7 @@ pub mod kane {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -423,7 +663,7 @@ pub mod kane {
                 });
             }
         }
-        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot];
+        let state: [f64; STATES] = [q[0], q[1], x_dot, th_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -432,7 +672,7 @@ pub mod kane {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,

@@ -431,13 +431,13 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 16 states, 8 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 13;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 5;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 16;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 8;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
         "psi",
@@ -448,21 +448,26 @@ pub mod reduced_volterra {
         "X",
         "Y",
         "Z",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
+        "psi'",
+        "theta'",
+        "phi'",
+        "gamma1'",
+        "gamma2'",
+        "X'",
+        "Y'",
+        "Z'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
+        _g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
     ) -> Result<(), EvalError> {
         let psi = state[0];
@@ -470,11 +475,14 @@ pub mod reduced_volterra {
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
         let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
@@ -488,331 +496,533 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma2);
-        let x8 = f64::cos(gamma2);
-        let x9 = x8 * d;
-        let x10 = -a - x9;
-        let x11 = f64::sin(psi);
-        let x12 = f64::cos(gamma1);
-        let x13 = x0 * x11;
-        let x14 = x5 * x6 * x1;
-        let x15 = x13 + x14;
-        let x16 = x5 * x6 * x0;
-        let x17 = x1 * x11;
-        let x18 = -x13 - x14;
-        let x19 = f64::sin(gamma1);
-        let x20 = x12 * d;
-        let x21 = m2 * x10 + (a + x20) * m1;
-        let x22 = m2 * (a + x9) + (-a - x20) * m1;
-        let x23 = 1.0 / (m2 + m0 + m1);
-        let x24 = x6 * x1;
-        let x25 = x5 * x0 * x11;
-        let x26 = -x24 - x25;
-        let x27 = x12 * x26 + x19 * x3 * x11;
-        let x28 = x24 + x25;
-        let x29 = x6 * x0;
-        let x30 = x5 * x1 * x11;
-        let x31 = x30 - x29;
-        let x32 = x29 - x30;
-        let x33 = x8 * x32 - x3 * x7 * x11;
-        let x34 = m1 * x23;
-        let x35 = m2 * x23;
-        let x36 = x35 - 1.0;
-        let x37 = x12 * x12;
-        let x38 = x8 * x8;
-        let x39 = x21 * x23;
-        let x40 = x39 - a - x20;
-        let x41 = x12 * (J1 - J2) + d * m1 * x40;
-        let x42 = x19 * x41 - Ixy;
-        let x43 = m2 * d * (a + x9 + x39) + x8 * (J2 - J1);
-        let x44 = x7 * x43 - Ixz;
-        let x45 = x12 * m2 * d * d * x7 * m1 * x23;
-        let x46 = -(x8 * m2 * x19 * d * d * m1 * x23);
-        let x47 = 1.0 - x34;
-        let x48 = d * d * x47 * m1;
-        let x49 = x48 + J2 - J1;
-        let x50 = 1.0 - x35;
-        let x51 = m2 * d * d * x50;
-        let x52 = 2.0 - 2.0 * x34;
-        let x53 = 2.0 * m1 - 2.0 * m2;
-        let x54 = a
-            * ((a * x47 + x12 * d * x52) * m1
-                + m2
-                    * (a
-                        + (d * (2.0 * (x12 * m1) + x8 * x53) + a * (2.0 * m1 - m2)) * x23
-                        + 2.0 * x9));
-        let x55 = m2 * x19 * d * d * x7 * m1 * x23;
-        let x56 = x55 - Iyz;
-        let x57 = x12 * d * m1 * x23;
-        let x58 = m1 - m2;
-        let x59 = x58 * x23;
-        let x60 = x59 + 1.0;
-        let x61 = d * x50 + x8 * (x57 + x60 * a);
-        let x62 = m2 * x61 * d + J2;
-        let x63 = (m2 - m1) * x23;
-        let x64 = x63 + 1.0;
-        let x65 = x8 * m2 * d * x23;
-        let x66 = a * x64 + x65;
-        let x67 = x12 * x66 + d * x47;
-        let x68 = J2 + x67 * d * m1;
-        let x69 = x8 * u1;
-        let x70 = u3 * x7;
-        let x71 = x69 - x70;
-        let x72 = u3 * Izz;
-        let x73 = Iyz * u2;
-        let x74 = u1 * Ixz;
-        let x75 = x7 * u1;
-        let x76 = x8 * u3;
-        let x77 = x75 + x76;
-        let x78 = x12 * u2;
-        let x79 = x19 * u1;
-        let x80 = x78 - x79;
-        let x81 = x12 * x80;
-        let x82 = x12 * u1;
-        let x83 = x19 * u2;
-        let x84 = x82 + x83;
-        let x85 = x84 * x19;
-        let x86 = u4 + u3;
-        let x87 = x7 * x71;
-        let x88 = x77 * x8;
-        let x89 = u5 + u2;
-        let x90 = x7 * x7 * (m2 * x36 * d * d - J2 + J1) + x8 * x43;
-        let x91 = x12 * x8 * u4;
-        let x92 = Iyz * u3;
-        let x93 = Ixy * u1;
-        let x94 = Iyy * u2;
-        let x95 = a * x7 * u2;
-        let x96 = x75 + x8 * x86;
-        let x97 = (m2 * a * x7 * u2 + (d * (x19 * x96 - x12 * x7 * u2) - x95) * m1) * x23
-            - x95;
-        let x98 = x8 * x19 * u2;
-        let x99 = x12 * u4 * x7;
-        let x100 = x99 - x98;
-        let x101 = -u5 - u2;
-        let x102 = x7 * x86 - x69;
-        let x103 = (u5 + (m2 * x101 + m1 * (x19 * x102 + x12 * x8 * u2)) * x23 + u2) * d
-            + x60 * x8 * a * u2;
-        let x104 = x22 * x23 - a - x9;
-        let x105 = u3 * x104 + d * (x36 * x7 * u1 - x12 * u4 * m1 * x23);
-        let x106 = a * u3 * x19;
-        let x107 = (m2 * ((x8 * u3 * x19 + x7 * (x12 * x101 + x79)) * d + x106)
-            - a * u3 * x19 * m1) * x23 + x106;
-        let x108 = x8 * u5 * x19;
-        let x109 = x12 * u3 * x7;
-        let x110 = x108 - x109;
-        let x111 = x12 * x8 * u5;
-        let x112 = u3 * x19 * x7;
-        let x113 = -u4 - u3;
-        let x114 = x19 * x89 + x82;
-        let x115 = x12 * a * x64 * u3
-            + (u4 + (x113 * m1 + m2 * (x12 * x8 * u3 + x7 * x114)) * x23 + u3) * d;
-        let x116 = x59 - 1.0;
-        let x117 = x8 * m2 * x101 + x80 * m1;
-        let x118 = a * x116 * u2 + d * (x79 - x78 + x117 * x23);
-        let x119 = x19 * x86 * m1;
-        let x120 = m2 * x7 * x101 + x119;
-        let x121 = m2 * x7 * u1 - x12 * u4 * m1;
-        let x122 = d * x117 + a * x58 * u2;
-        let x123 = x22 * u3;
-        let x124 = x123 + x121 * d;
-        let x125 = x12 * x41 + x19 * x19 * x49;
-        let x126 = (x63 - 1.0) * a - x57;
-        let x127 = x7 * u2 * x126;
-        let x128 = x19 * d * m1 * x96 * x23;
-        let x129 = Ixy * u2;
-        let x130 = Ixx * u1;
-        let x131 = u3 * Ixz;
-        let x132 = u5 + x81 + x85;
-        let x133 = -x75 - x76;
-        let x134 = 2.0 * J1 - 2.0 * J2;
-        let x135 = m2 * d * x7 * x23 * (x12 * x89 - x79);
-        let x136 = a * x116 - x65;
-        let x137 = u4 * x136;
-        let x138 = -x82 - x83;
-        let x139 = x19 * x7 * u2;
-        let x140 = u4 - x87 + x88;
-        let value = x3;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 5]; 5] = [
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = x2 * x2;
+        let x7 = f64::cos(phi);
+        let x8 = x7 * x7;
+        let x9 = f64::cos(gamma2);
+        let x10 = x9 * x1 * x7;
+        let x11 = f64::sin(gamma2);
+        let x12 = x3 * x11;
+        let x13 = x10 - x12;
+        let x14 = f64::sin(psi);
+        let x15 = x0 * x1 * x14;
+        let x16 = f64::cos(psi);
+        let x17 = x16 * x7;
+        let x18 = x3 * x2 * x14;
+        let x19 = -x17 - x18;
+        let x20 = a * x1 * x14;
+        let x21 = d * (x19 * x4 - x15) - x20;
+        let x22 = a * x16 * x1;
+        let x23 = x3 * x16 * x2;
+        let x24 = x7 * x14;
+        let x25 = x23 - x24;
+        let x26 = x4 * x25;
+        let x27 = x0 * x16 * x1;
+        let x28 = d * (x26 + x27);
+        let x29 = x22 + x28;
+        let x30 = x3 * Ixx;
+        let x31 = Ixy * x2;
+        let x32 = Ixz * x7;
+        let x33 = (-x31 - x32) * x1;
+        let x34 = x9 * x3;
+        let x35 = x1 * x11 * x7;
+        let x36 = -x34 - x35;
+        let x37 = x0 * x3;
+        let x38 = x4 * x1 * x2;
+        let x39 = x38 - x37;
+        let x40 = x2 * x14;
+        let x41 = x3 * x16 * x7;
+        let x42 = x40 + x41;
+        let x43 = x42 * x11;
+        let x44 = x9 * x16 * x1;
+        let x45 = d * (x44 - x43);
+        let x46 = -x22 - x45;
+        let x47 = x16 * x2;
+        let x48 = x3 * x7 * x14;
+        let x49 = x47 - x48;
+        let x50 = x9 * x1 * x14;
+        let x51 = x20 - d * (-x49 * x11 - x50);
+        let x52 = x3 * Ixz;
+        let x53 = Izz * x7;
+        let x54 = Iyz * x2;
+        let x55 = (x53 - x54) * x1;
+        let x56 = (x52 + x55) * x7;
+        let x57 = Iyy * x2;
+        let x58 = Iyz * x7;
+        let x59 = x1 * (x57 - x58);
+        let x60 = x3 * Ixy;
+        let x61 = x2 * (x59 + x60);
+        let x62 = m2 * d * d;
+        let x63 = x62 + J2 - J1;
+        let x64 = x9 * x63;
+        let x65 = m2 * a * d;
+        let x66 = x64 + x65;
+        let x67 = x66 * x11 - Ixz;
+        let x68 = a * d * m1;
+        let x69 = d * d * m1;
+        let x70 = J2 + x69 - J1;
+        let x71 = x68 + x0 * x70;
+        let x72 = Ixy + x4 * x71;
+        let x73 = J2 - J1;
+        let x74 = x0 * x0;
+        let x75 = (x74 - 1.0) * m1;
+        let x76 = x9 * x9;
+        let x77 = m2 * (1.0 - x76);
+        let x78 = J1 - J2;
+        let x79 = x0 * x0 * x73 + Iyy + d * d * (x75 + x77) - Izz + x9 * x9 * x78;
+        let x80 = Iyz * x1 + x3 * x67 * x2
+            + (x3 * x72 + (x79 * x2 - 2.0 * x58) * x1) * x7;
+        let x81 = m2 * (x76 - 1.0);
+        let x82 = (x74 + x76 - 2.0) * J2 + (-x74 - x76) * J1 - Ixx + (x75 + x81) * d * d;
+        let x83 = J1 - J2 - x69;
+        let x84 = x0 * x83 - x68;
+        let x85 = x84 * x4 - Ixy;
+        let x86 = x67 * x7 + x85 * x2;
+        let x87 = x82 * x3 + x86 * x1;
+        let x88 = x0 * a;
+        let x89 = x1 * (J2 + (d + x88) * d * m1) * x7;
+        let x90 = x9 * a;
+        let x91 = m2 * d * (d + x90) + J2;
+        let x92 = x1 * x91 * x2;
+        let x93 = m1 * x21 + m2 * x51;
+        let x94 = m1 * x29 + m2 * x46;
+        let x95 = J1 - x62 - J2;
+        let x96 = x9 * x95 - x65;
+        let x97 = Ixz + x11 * x96;
+        let x98 = x97 * x2 + x85 * x7;
+        let x99 = (-d - x88) * d * m1 - J2;
+        let x100 = x99 * x2;
+        let x101 = x91 * x7;
+        let x102 = m2 * x11 * x7;
+        let x103 = x4 * x2 * m1;
+        let x104 = x9 * d;
+        let x105 = x0 * d;
+        let x106 = m2 * (a + x104) + (-a - x105) * m1;
+        let x107 = (x102 + x103) * x1 * d + x106 * x3;
+        let x108 = x16 * x107;
+        let x109 = x14 * x107;
+        let x110 = -x102 - x103;
+        let x111 = x3 * d * x110 + x106 * x1;
+        let x112 = (1.0 - x74) * m1;
+        let x113 = x24 - x23;
+        let x114 = m2 * x113 * x11 + x42 * x4 * m1;
+        let x115 = x114 * d;
+        let x116 = x48 - x47;
+        let x117 = (m2 * x19 * x11 + x4 * x116 * m1) * d;
+        let x118 = m2 * x11 * x2;
+        let x119 = x4 * m1 * x7;
+        let x120 = x119 - x118;
+        let x121 = x120 * x1 * d;
+        let x122 = x0 * x25 - x16 * x4 * x1;
+        let x123 = d * m1 * x122;
+        let x124 = x17 + x18;
+        let x125 = x4 * x1 * x14;
+        let x126 = x0 * x124 - x125;
+        let x127 = d * m1 * x126;
+        let x128 = x5 * d * m1;
+        let x129 = -x16 * x1 * x11 - x9 * x42;
+        let x130 = -(m2 * x129 * d);
+        let x131 = x1 * x11 * x14;
+        let x132 = -x131 - x9 * x116;
+        let x133 = -(m2 * d * x132);
+        let x134 = x13 * m2 * d;
+        let x135 = m2 + m0 + m1;
+        let x136 = x2
+            * (x9 * x9 * x73 - Iyy + d * d * (x112 + x81) + Izz + x0 * x0 * x78);
+        let x137 = x3 * x86 + x1 * (x79 * x7 * x7 + x2 * (4.0 * x58 + x136));
+        let x138 = m2 * x11 * x124 + x4 * x49 * m1;
+        let x139 = x114 * Y_dot + x138 * X_dot;
+        let x140 = (x113 * x4 - x27) * d;
+        let x141 = -x40 - x41;
+        let x142 = (-x141 * x11 - x44) * d;
+        let x143 = x22 - x142;
+        let x144 = x140 - x22;
+        let x145 = m2 * x143 + m1 * x144;
+        let x146 = x95 * x1 * x11 * x11 * x7
+            + x9 * (x66 * x1 * x7 + (2.0 * J1 - 2.0 * x62 - 2.0 * J2) * x3 * x11);
+        let x147 = 2.0 * x62 + 2.0 * J2 - 2.0 * J1;
+        let x148 = x3 * x95 * x11 * x11 + x9 * (x1 * x11 * x147 * x7 + x3 * x66);
+        let x149 = x12 - x10;
+        let x150 = x131 - x9 * x49;
+        let x151 = X_dot * x150;
+        let x152 = x129 * Y_dot;
+        let x153 = d * (x42 * x4 * phi_dot + gamma1_dot * x122);
+        let x154 = a * x3;
+        let x155 = x39 * d - x154;
+        let x156 = theta_dot * x16 * x155;
+        let x157 = psi_dot * x21;
+        let x158 = Y_dot + psi_dot * x29 + d * (gamma1_dot * x126 + x4 * x116 * phi_dot)
+            + theta_dot * x155 * x14;
+        let x159 = x0 * x19 + x125;
+        let x160 = x37 - x38;
+        let x161 = d * x160 + x154;
+        let x162 = X_dot + x153 + x156 + x157;
+        let x163 = -(x34 + x35) * d - x154;
+        let x164 = x154 - d * x36;
+        let x165 = theta_dot * x16 * x164;
+        let x166 = psi_dot * x51;
+        let x167 = (x113 * x11 * phi_dot - gamma2_dot * x129) * d;
+        let x168 = x165 + x166 + X_dot + x167;
+        let x169 = d * (x19 * x11 * phi_dot - gamma2_dot * x132) + Y_dot + psi_dot * x46
+            + theta_dot * x164 * x14;
+        let x170 = x155 * m1 + m2 * x164;
+        let x171 = x1 * x67 * x2 + (x72 * x1 + (2.0 * x58 + x136) * x3) * x7 - x3 * Iyz;
+        let x172 = x3 * (x54 - x53) + x1 * Ixz;
+        let x173 = Ixy * x1 + x3 * (x58 - x57);
+        let x174 = x3 * x11 * x7 - x9 * x1;
+        let x175 = -x0 * x1 - x3 * x4 * x2;
+        let x176 = (x31 + x32) * x3;
+        let x177 = Ixx * x1;
+        let x178 = -x9 * x3 * x7 - x1 * x11;
+        let x179 = x4 * x1 - x0 * x3 * x2;
+        let x180 = m2 * d * (-d - x90) - J2;
+        let x181 = gamma2_dot * x180 * x2;
+        let x182 = x99 * gamma1_dot * x7;
+        let x183 = x72 * x2 + x97 * x7;
+        let x184 = x3 * x183 + x82 * x1;
+        let x185 = m2 * x163 + x161 * m1;
+        let x186 = 2.0 * J1 - 2.0 * J2 - 2.0 * x69;
+        let x187 = x0 * (x3 * x71 + x4 * x1 * x2 * x186) + x3 * x83 * x4 * x4;
+        let x188 = X_dot * x159;
+        let x189 = Y_dot * x122;
+        let x190 = x70 * x4 * x4 * x1 * x2 + x0 * (x84 * x1 * x2 + x3 * x4 * x186);
+        let x191 = a * x1;
+        let x192 = theta_dot * (d * x175 - x191)
+            + d * (x5 * gamma1_dot + x4 * x1 * phi_dot * x7);
+        let x193 = theta_dot * x2;
+        let x194 = gamma1_dot - x193;
+        let x195 = x3 * x194 + x1 * phi_dot * x7;
+        let x196 = gamma1_dot * x2;
+        let x197 = a * theta_dot * x1;
+        let x198 = Z_dot + (x195 * x4 + x0 * x1 * (x196 - theta_dot)) * d - x197;
+        let x199 = a * x3 * theta_dot;
+        let x200 = theta_dot - x196;
+        let x201 = x3 * (m2 * (-a - x104) + (a + x105) * m1) + x1 * d * x110;
+        let x202 = Y_dot * x14;
+        let x203 = X_dot * x16;
+        let x204 = x202 + x203;
+        let x205 = x118 - x119;
+        let x206 = (x204 * x120 * x1 + Z_dot * x3 * x205) * d;
+        let x207 = phi_dot - x3 * psi_dot;
+        let x208 = theta_dot * x7;
+        let x209 = x1 * psi_dot * x2;
+        let x210 = x1 * psi_dot * x7;
+        let x211 = x210 - x193;
+        let x212 = Iyz * x211;
+        let x213 = x207 * Ixy;
+        let x214 = x208 + x209;
+        let x215 = Iyy * x214;
+        let x216 = Iyz * x214;
+        let x217 = x207 * Ixz;
+        let x218 = Izz * x211;
+        let x219 = x9 * x207 - x11 * x211;
+        let x220 = x0 * x207;
+        let x221 = x4 * x214;
+        let x222 = x220 + x221;
+        let x223 = x0 * x214 - x207 * x4;
+        let x224 = x9 * x211;
+        let x225 = x207 * x11;
+        let x226 = x224 + x225;
+        let x227 = x0 * x84 + x70 * x4 * x4;
+        let x228 = x204 * x5;
+        let x229 = Z_dot * x179;
+        let x230 = Z_dot * x178;
+        let x231 = x63 * x11 * x11 + x9 * x96;
+        let x232 = d * (-gamma2_dot * x149 - x1 * x11 * x2 * phi_dot)
+            + theta_dot * (x191 - x174 * d);
+        let x233 = -gamma2_dot - x208;
+        let x234 = gamma2_dot * x7;
+        let x235 = -x234 - theta_dot;
+        let x236 = x11 * x2 * phi_dot;
+        let x237 = Z_dot + x197
+            + (x3 * x233 * x11 + (x9 * (x234 + theta_dot) - x236) * x1) * d;
+        let x238 = x113 * x4 * m1 + m2 * x141 * x11;
+        let x239 = x19 * x4 * m1 + m2 * x49 * x11;
+        let x240 = -x208 - x209;
+        let x241 = x19 * Y_dot + X_dot * x113 - Z_dot * x1 * x2;
+        let x242 = x1 * x2 * phi_dot;
+        let x243 = Y_dot * x116 + Z_dot * x1 * x7 + x42 * X_dot;
+        let x244 = -x26 - x27;
+        let x245 = x5 * theta_dot * x16 + psi_dot * x159 + x244 * gamma1_dot
+            + x0 * x42 * phi_dot;
+        let x246 = -x15 - x4 * x124;
+        let x247 = x0 * x116 * phi_dot + x246 * gamma1_dot + psi_dot * x122
+            + x5 * theta_dot * x14;
+        let x248 = x9 * x19 * phi_dot;
+        let x249 = x129 * psi_dot;
+        let x250 = x11 * x116 - x50;
+        let x251 = gamma2_dot * x250;
+        let x252 = x43 - x44;
+        let x253 = gamma2_dot * x252;
+        let x254 = x9 * x113 * phi_dot;
+        let x255 = psi_dot * x150;
+        let x256 = d
+            * (x120 * x1 * phi_dot - m2 * gamma2_dot * x149 + x5 * gamma1_dot * m1)
+            + theta_dot * x111;
+        let mut matrix: [[f64; 8]; 8] = [
             [
-                ((x12 * x12 * (x34 - 1.0) - x34 + 1.0) * m1
-                    + m2 * (x8 * x8 * x36 - x35 + 1.0)) * d * d + (x37 + x38) * J1 + Ixx
-                    + J2 * (2.0 - x37 - x38),
-                x42,
-                x44,
-                x45,
-                x46,
+                J2 * (x5 * x5 + x1 * x1 * (x6 + x8) + x13 * x13)
+                    + (x21 * x21 + x29 * x29) * m1 - x3 * (x33 - x30)
+                    + (x36 * x36 + x39 * x39) * J1 + m2 * (x46 * x46 + x51 * x51)
+                    + x1 * (x56 + x61),
+                x80,
+                x87,
+                x89,
+                x92,
+                x93,
+                x94,
+                0.0,
             ],
             [
-                x42,
-                Iyy + x12 * (x12 * x49 + 2.0 * (x8 * m2 * d * d * m1 * x23)) + J2 + x51
-                    + J1 + x54,
-                x56,
-                x55,
-                x62,
+                x80,
+                J2 + x9 * (x64 + 2.0 * x65) + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1))
+                    + x69 + Izz + (x79 * x7 + 2.0 * x54) * x7 + J1,
+                x98,
+                x100,
+                x101,
+                x108,
+                x109,
+                x111,
             ],
             [
-                x44,
-                x56,
-                x48 + J2
-                    + x8 * (x8 * (J2 + x51 - J1) + 2.0 * (x12 * m2 * d * d * m1 * x23))
-                    + Izz + J1 + x54,
-                x68,
-                x55,
+                x87,
+                x98,
+                (x74 + x76) * J1 + Ixx + J2 * (2.0 - x74 - x76) + (x77 + x112) * d * d,
+                0.0,
+                0.0,
+                x115,
+                x117,
+                x121,
             ],
-            [x45, x55, x68, x48 + J2, x55],
-            [x46, x62, x55, x55, J2 + x51],
+            [x89, x100, 0.0, J2 + x69, 0.0, x123, x127, x128],
+            [x92, x101, 0.0, 0.0, x62 + J2, x130, x133, x134],
+            [x93, x108, x115, x123, x130, x135, 0.0, 0.0],
+            [x94, x109, x117, x127, x133, 0.0, x135, 0.0],
+            [0.0, x111, x121, x128, x134, 0.0, 0.0, x135],
         ];
-        let mut force: [f64; 5] = [
-            u2 * (x7 * x71 * J1 - x72 + x73 + x74)
-                + (x12 * x80 * u3 - x77 * x8 * u2 + (-x81 - x85) * x86
-                    + (x88 - x87) * x89) * J2
-                - (u3 * x90
-                    + x8 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x35) - 2.0 * J1) * x7
-                        * u1 + m2 * d * d * (x19 * x7 * x89 + x91) * m1 * x23) * u5
-                + u3 * (x94 - x92 - x93 + x84 * x19 * J1)
-                + d
+        let mut force: [f64; 8] = [
+            0.5
+                * ((2.0 * ((x153 + x156 + x157) * x158)
+                    + 2.0
+                        * ((psi_dot * x144 + (x4 * x49 * phi_dot + gamma1_dot * x159) * d
+                            + theta_dot * x161 * x14) * x162)) * m1)
+                - phi_dot
+                    * (theta_dot * x137
+                        + psi_dot
+                            * (((2.0 * (x42 * x29) + 2.0 * (x49 * x21)) * x4 * m1
+                                + m2 * x11 * (2.0 * (x51 * x124) + 2.0 * (x113 * x46))) * d
+                                + x1
+                                    * ((x1 * (-x58 - x2 * Izz) + x59 + 2.0 * (x39 * x4 * J1)
+                                        + 2.0 * (x0 * x5 * J2) + x60) * x7
+                                        - x3 * (x2 * Ixz - Ixy * x7)
+                                        + (x1 * (Iyy * x7 + x54) - 2.0 * (x9 * x13 * J2) - x52 - x55
+                                            + 2.0 * (x11 * J1 * x36)) * x2))
+                        + (x99 * gamma1_dot * x2 + phi_dot * x98 + gamma2_dot * x91 * x7)
+                            * x1 + d * x139)
+                - (((2.0 * x140 + 2.0 * x28) * m1 * x21
+                    + m2 * (-2.0 * x142 - 2.0 * x45) * x51) * psi_dot + Y_dot * x93
+                    + X_dot * x145) * psi_dot
+                - gamma2_dot
+                    * (phi_dot * x146 + theta_dot * x2 * x148
+                        + ((2.0 * (x13 * J2) + 2.0 * (x149 * J1)) * x36
+                            + m2 * (-2.0 * (x51 * x150) - 2.0 * (x129 * x46)) * d)
+                            * psi_dot
+                        + m2 * d * (-x151 - a * gamma2_dot * x1 * x11 * x2 - x152))
+                + 0.5
                     * (m2
-                        * (x97 * (x100 * m1 * x23 - x77 * x36 * x7)
-                            + (x7 * (x36 * x71 - x19 * m1 * u2 * x23)
-                                - x12 * x8 * u4 * m1 * x23) * x103
-                            + x105
-                                * (x77 * x19 * x7 * m1 * x23
-                                    + x8 * (x19 * m1 * x71 * x23 + u5 * x36)))
-                        + (x107 * (x80 * x19 * x47 + m2 * x110 * x23)
-                            + (m2 * (x111 + x112) * x23 - x84 * x19 * x47) * x115
-                            + x118
-                                * (x12 * (m2 * x84 * x7 * x23 + u4 * x47)
-                                    - m2 * x80 * x19 * x7 * x23)) * m1
-                        + m0
-                            * (d * x120 * (-x19 * m1 * u2 - m2 * u3 * x7) + x121 * x122
-                                + (x19 * u1 * m1 + x8 * u5 * m2) * x124) * x23 * x23)
-                - u4
-                    * (m2 * (x19 * x7 * x113 - x111) * d * d * m1 * x23 + x125 * u2
-                        + x12 * (2.0 * J2 - 2.0 * J1 + d * d * x52 * m1) * x19 * u1),
-            m2
-                * (x105 * (x77 * x7 * x126 - x61 * x71)
-                    + x97 * (u4 * x19 * d * x7 * m1 * x23 + x8 * u5 * x126 + x61 * x89)
-                    + (-x8 * u4 * x19 * d * m1 * x23 - x127) * x103
-                    - u5
-                        * (x128
-                            + x7
-                                * (u5 * x126
-                                    + (a * ((2.0 * m2 - 2.0 * m1) * x23 - 2.0) - 2.0 * x57)
-                                        * u2)) * d) - (x130 - x129 - x131) * u3
-                + m1
-                    * (x107 * (m2 * (-x111 - x112) * d * x23 + x80 * x40)
-                        + x118 * d * (m2 * x132 * x7 * x23 + u4 * x19 * x47)
-                        + (m2 * x110 * d * x23 - x84 * x40) * x115)
-                + m0
-                    * (d
-                        * (x120 * (x21 * u2 - x8 * u5 * m2 * d)
-                            + (m2 * x7 * x89 - u4 * x19 * m1) * x122)
-                        + x124 * (-m2 * u3 * d * x7 - x21 * u1)) * x23 * x23
-                + (x133 * x71 - x12 * x84 * u3) * J1 + (x72 - x73 - x74) * u1
-                - u4
-                    * ((x12 * x7 * x86 - x108) * m2 * d * d * m1 * x23
-                        + x19 * u2
-                            * (x12 * x134
+                        * (2.0
+                            * ((psi_dot * x143
+                                + (x11 * phi_dot * x124 - gamma2_dot * x150) * d
+                                + x163 * theta_dot * x14) * x168)
+                            + 2.0 * (x169 * (x165 + x166 + x167))))
+                - theta_dot
+                    * (x170 * x16 * Y_dot + theta_dot * x171
+                        + psi_dot
+                            * ((x30 + x172 * x7 - x33 + x2 * x173) * x1
+                                + (2.0 * (x174 * x36) + 2.0 * (x39 * x175)) * J1
+                                + m2 * (2.0 * (x163 * x51 * x14) + 2.0 * (x16 * x46 * x164))
+                                + x3
+                                    * (x177 - x176 + J2 * x1 * (-2.0 * x6 - 2.0 * x8) - x56
+                                        - x61)
+                                + (2.0 * (x161 * x21 * x14) + 2.0 * (x16 * x155 * x29)) * m1
+                                + J2 * (2.0 * (x13 * x178) + 2.0 * (x5 * x179)))
+                        + (x181 + x182) * x3 + x184 * phi_dot + X_dot * x185 * x14)
+                - ((d * m1 * (2.0 * (x159 * x21) + 2.0 * (x29 * x122))
+                    + x5 * (2.0 * (J2 * x160) + 2.0 * (x39 * J1))) * psi_dot
+                    + theta_dot * x187 * x7
+                    + d * m1 * (x188 - a * x4 * x1 * gamma1_dot * x7 + x189)
+                    + x190 * phi_dot) * gamma1_dot,
+            0.5
+                * ((2.0 * ((x192 * x14 + x16 * psi_dot * x155) * x158)
+                    + 2.0
+                        * (x198
+                            * (x199
                                 + d
-                                    * ((m2 * (-2.0 * a - 2.0 * x9) + (2.0 * a + 2.0 * x20) * m1)
-                                        * x23 - 2.0 * a - 2.0 * x20) * m1) + x125 * u1)
-                + J2 * (x80 * u3 * x19 + x77 * x71 + (x12 * x84 - x80 * x19) * x86),
-            m1
-                * (x118 * (x84 * x67 - x66 * x80 * x19)
-                    - u4 * d
-                        * (x135
-                            + x19 * (u3 * (a * (x53 * x23 - 2.0) - 2.0 * x65) + x137))
-                    + (x19 * (x66 * x86 + x137) - x12 * u5 * m2 * d * x7 * x23) * x115
-                    + (x12 * u4 * x66 - x67 * x86 - u5 * m2 * x19 * d * x7 * x23) * x107)
-                - (x94 - x92 - x93) * u1
-                - u5
-                    * (m2 * (x8 * x19 * x89 - x99) * d * d * m1 * x23
-                        + u3 * x7
-                            * (m2 * d
-                                * (((2.0 * a + 2.0 * x9) * m2 + (-2.0 * a - 2.0 * x20) * m1)
-                                    * x23 - 2.0 * a - 2.0 * x9) + x8 * x134) + x90 * u1)
-                + (x8 * x71 * J1 - x129 + x130 - x131) * u2 + x84 * x80 * J1
-                + m0
-                    * (d
-                        * (x124 * (x119 - u5 * m2 * x7)
-                            + x120 * (x12 * u4 * d * m1 - x123))
-                        + (x22 * u1 - x19 * d * m1 * u2) * x122) * x23 * x23
-                + J2 * (x77 * x7 * u2 + (-x77 * x7 - x8 * x71) * x89 + x80 * x138)
-                + ((d * x100 * m1 * x23 + x104 * x71) * x103
-                    + x97 * (d * m1 * (x139 + x91) * x23 - x77 * x104)
-                    + x105 * d * (u5 * x7 * x50 + x19 * x140 * m1 * x23)) * m2,
-            x80 * (J2 * x138 + x84 * J1)
+                                    * (x3 * (x0 * x200 - x4 * phi_dot * x7) + x4 * x1 * x194)))
+                    + 2.0 * ((psi_dot * x161 * x14 + x16 * x192) * x162)) * m1)
+                - (Z_dot * x201 + psi_dot * x171 + x204 * x111) * theta_dot
+                - (x181 + x206 + psi_dot * x137 + phi_dot * x183 + x182
+                    + theta_dot
+                        * (2.0 * (Iyz * x7 * x7)
+                            + ((x9 * x9 * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy + 2.0 * Izz
+                                + x0 * x0 * (2.0 * J1 - 2.0 * J2)
+                                + d * d * (m1 * (2.0 - 2.0 * x74) + m2 * (2.0 * x76 - 2.0)))
+                                * x7 - 2.0 * x54) * x2)) * phi_dot
+                + psi_dot
+                    * (0.5 * (x207 * (x176 - x177)) - X_dot * x201 * x14
+                        + x3
+                            * ((-x2 * (gamma2_dot + x208 + x209)
+                                - (gamma1_dot + x210 - x193) * x7) * J2
+                                - 0.5 * ((x215 - x212 - x213) * x2)
+                                - 0.5 * ((x218 - x216 - x217) * x7)) + 0.5 * (x173 * x214)
+                        + (x174 * x219 + x175 * x222) * J1 + 0.5 * (x172 * x211)
+                        + (x223 * x179 + x178 * x226) * J2 - x16 * Y_dot * x107
+                        - 0.5 * ((x207 * Ixx - Ixy * x214 - Ixz * x211) * x1))
+                - gamma1_dot
+                    * ((x0 * x7 * x7 * x186 - 2.0 * x68) * theta_dot * x4
+                        + x7 * (phi_dot * x227 + x187 * psi_dot)
+                        + (x228 + a * x4 * gamma1_dot * x2 + x229) * d * m1)
+                - gamma2_dot
+                    * (m2 * d * (x204 * x13 - a * gamma2_dot * x11 * x7 + x230)
+                        + (x9 * (x147 * x7 * x7 - 2.0 * x62 - 2.0 * J2 + 2.0 * J1)
+                            - 2.0 * x65) * theta_dot * x11
+                        + (x231 * phi_dot + psi_dot * x148) * x2)
+                + 0.5
+                    * (m2
+                        * (2.0 * (x169 * (x16 * psi_dot * x164 + x232 * x14))
+                            + 2.0
+                                * (((x233 * x1 * x11 + x3 * (x9 * x235 + x236)) * d - x199)
+                                    * x237)
+                            + 2.0 * ((x163 * psi_dot * x14 + x16 * x232) * x168))),
+            0.5 * ((Iyy * x211 - Iyz * x240) * x214)
+                - (x184 * psi_dot + x206) * theta_dot
+                - (theta_dot * x183
+                    + d * (x238 * X_dot + Y_dot * x239 + Z_dot * x1 * x110)
+                    + x1 * psi_dot * x98) * phi_dot
+                - gamma2_dot
+                    * (x231 * theta_dot * x2 + psi_dot * x146
+                        + x9 * (m2 * d * x241 + x11 * phi_dot * x147))
                 + d
-                    * ((x84 * x118 - x107 * x86) * x47
-                        + (m0 * ((x124 * x19 + x12 * d * x120) * x86 + x122 * x138) * x23
-                            + m2
-                                * (x19 * x105 * x140 - u5 * (x8 * x114 - x109) * d
-                                    + (x12 * (u4 * x7 - x69 + x70) - x98) * x103
-                                    + x97 * (x12 * (x75 + x8 * u4 + x76) + x139))) * x23
-                        - u4 * (u3 * x19 * x136 + x135)) * m1,
-            (x133 * J1 + x77 * J2) * x71
-                + m2 * d
-                    * ((x97 * x89 - x105 * x71) * x50 - u5 * (x128 + x127)
-                        + (m0 * (x7 * x122 * x89 + x124 * x71 + x8 * d * x120 * x101)
-                            * x23
-                            + (x115 * (x8 * (u5 * x19 + x82 + x83) - x109)
-                                + x132 * x118 * x7 - u4 * (x12 * x102 - x98) * d
-                                + x107 * (x8 * (x79 - x12 * u5 - x78) - x112)) * m1) * x23),
+                    * (0.5
+                        * (m2
+                            * (2.0
+                                * ((x3 * theta_dot * x11 * x2
+                                    + (-x9 * gamma2_dot * x2 - x11 * phi_dot * x7) * x1) * x237)
+                                + 2.0
+                                    * (((x113 * psi_dot + x49 * phi_dot
+                                        - theta_dot * x1 * x2 * x14) * x11 + x9 * gamma2_dot * x19)
+                                        * x169)
+                                + 2.0
+                                    * (x168
+                                        * ((psi_dot * x124 - theta_dot * x16 * x1 * x2
+                                            + x141 * phi_dot) * x11 + x9 * gamma2_dot * x113))))
+                        - psi_dot * x139
+                        + 0.5
+                            * ((2.0
+                                * (((-x242 - x3 * theta_dot * x7) * x4
+                                    + x0 * x1 * gamma1_dot * x7) * x198)
+                                + 2.0
+                                    * ((x4
+                                        * (theta_dot * x16 * x1 * x7 + x113 * phi_dot
+                                            + x49 * psi_dot) + x0 * x42 * gamma1_dot) * x162)
+                                + 2.0
+                                    * ((x0 * gamma1_dot * x116
+                                        + x4
+                                            * (x19 * phi_dot + theta_dot * x1 * x7 * x14
+                                                + x42 * psi_dot)) * x158)) * m1))
+                + 0.5 * (x207 * (-x240 * Ixz - Ixy * x211))
+                + (0.5 * (x240 * Izz) - x212
+                    + (x0 * x223 + gamma2_dot + x208 + x209) * J2 + x4 * x222 * J1
+                    - 0.5 * x213 + 0.5 * x215) * x211
+                + ((gamma1_dot + x9 * x226 + x210 - x193) * J2 - x11 * x219 * J1
+                    - 0.5 * x216 - 0.5 * x217 + 0.5 * x218) * x240
+                - (theta_dot * x7 * x227
+                    + x0
+                        * (x4 * (2.0 * J2 + 2.0 * x69 - 2.0 * J1) * phi_dot
+                            + x243 * d * m1) + x190 * psi_dot) * gamma1_dot,
+            d * m1
+                * (x245 * x162 - psi_dot * (x188 + x189) + x158 * x247
+                    + (x0 * x195 + x4 * x1 * x200) * x198
+                    - gamma1_dot
+                        * (x246 * Y_dot + Z_dot * x160 + X_dot * x244
+                            + a * (x193 - x210) * x4))
+                - (x0 * x243 * d * m1 + x99 * x214) * phi_dot
+                - ((x228 + x229) * d * m1 + x99 * x3 * psi_dot * x7) * theta_dot
+                + (x222 * J1 + (-x220 - x221) * J2) * x223,
+            ((x248 - x249 - x149 * theta_dot * x14 - x251) * x169
+                - psi_dot * (-x151 - x152)
+                - gamma2_dot
+                    * (a * x240 * x11 - X_dot * x252 - Y_dot * x250 + Z_dot * x36)
+                + x237 * (x235 * x1 * x11 + x9 * (x3 * x233 - x242))
+                + x168 * (x254 - x253 - x149 * theta_dot * x16 - x255)) * m2 * d
+                - (x9 * m2 * d * x241 + x180 * theta_dot * x2 + x1 * x91 * psi_dot * x7)
+                    * phi_dot
+                - (m2 * d * (x149 * (-x202 - x203) + x230) + x3 * x180 * psi_dot * x2)
+                    * theta_dot + x219 * (J2 * x226 + (-x224 - x225) * J1),
+            d
+                * (-x245 * gamma1_dot * m1
+                    - m2 * gamma2_dot * (x254 - x253 - x255 + x13 * theta_dot * x16)
+                    - (x138 * psi_dot + x238 * phi_dot + x0 * x42 * gamma1_dot * m1
+                        + x120 * theta_dot * x16 * x1 + x9 * m2 * gamma2_dot * x113)
+                        * phi_dot) - theta_dot * (x16 * x256 + psi_dot * x185 * x14)
+                - psi_dot
+                    * (x145 * psi_dot + theta_dot * x201 * x14
+                        + d
+                            * (x138 * phi_dot + gamma1_dot * x159 * m1
+                                - m2 * gamma2_dot * x150)),
+            (-(phi_dot * x239 + x120 * theta_dot * x1 * x14 + x114 * psi_dot
+                + x0 * gamma1_dot * x116 * m1 + x9 * m2 * gamma2_dot * x19) * phi_dot
+                - (x248 - x249 + x13 * theta_dot * x14 - x251) * m2 * gamma2_dot
+                - gamma1_dot * m1 * x247) * d
+                - theta_dot * (x170 * x16 * psi_dot + x256 * x14)
+                - (theta_dot * x16 * x107 + psi_dot * x93
+                    + (x114 * phi_dot + gamma1_dot * m1 * x122 - m2 * gamma2_dot * x129)
+                        * d) * psi_dot,
+            d
+                * (-gamma1_dot
+                    * (x0 * x1 * phi_dot * x7 + gamma1_dot * x160 + theta_dot * x179)
+                    * m1
+                    - phi_dot
+                        * (x3 * theta_dot * x205
+                            + x1
+                                * (x0 * gamma1_dot * m1 * x7 + x110 * phi_dot
+                                    - x9 * m2 * gamma2_dot * x2))
+                    - m2 * gamma2_dot
+                        * (x178 * theta_dot + gamma2_dot * x36 - x9 * x1 * x2 * phi_dot))
+                - theta_dot
+                    * (theta_dot * x201
+                        + (gamma1_dot * x179 * m1 + m2 * gamma2_dot * x178
+                            + x3 * phi_dot * x205) * d),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = x2 * x4;
-        dstate[1] = u2 * x1 - u3 * x0;
-        dstate[2] = x5 * x2 * x4 + u1;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = (G_X
-            + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
-                + (x12 * x15 * d + a * x15) * m1) * u2
-            + d
-                * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
-                    + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
-                    + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
-            + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0))) * x23;
-        dstate[6] = (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1))
-            + G_Y + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
-            + d
-                * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
-                    + u5 * m2 * x33)) * x23;
-        dstate[7] = (G_Z
-            + d
-                * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
-                    + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
-                    + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
-            + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
-            + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23;
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
         dstate[11] = force[3];
         dstate[12] = force[4];
+        dstate[13] = force[5];
+        dstate[14] = force[6];
+        dstate[15] = force[7];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -820,7 +1030,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -846,33 +1056,33 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
-        let x5 = f64::sin(gamma2);
-        let x6 = m2 * x5 * x1;
-        let x7 = f64::sin(gamma1);
-        let x8 = x7 * x3 * m1;
-        let x9 = f64::cos(gamma2);
-        let x10 = f64::cos(gamma1);
-        let x11 = m2 * (a + x9 * d) + (-a - x10 * d) * m1;
-        let x12 = (x6 + x8) * x2 * d + x11 * x0;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(gamma2);
+        let x2 = f64::cos(phi);
+        let x3 = m2 * x1 * x2;
+        let x4 = f64::sin(gamma1);
+        let x5 = f64::sin(phi);
+        let x6 = x4 * x5 * m1;
+        let x7 = f64::cos(theta);
+        let x8 = f64::cos(gamma2);
+        let x9 = f64::cos(gamma1);
+        let x10 = m2 * (a + x8 * d) + (-a - x9 * d) * m1;
+        let x11 = f64::sin(theta);
+        let x12 = (x3 + x6) * x7 * d + x10 * x11;
         let x13 = f64::sin(psi);
-        let x14 = x4 * x1;
-        let x15 = x0 * x3 * x13;
+        let x14 = x0 * x2;
+        let x15 = x11 * x5 * x13;
         let x16 = -x14 - x15;
-        let x17 = a * x2 * x13;
-        let x18 = x4 * x3;
-        let x19 = x0 * x1 * x13;
+        let x17 = a * x7 * x13;
+        let x18 = x0 * x5;
+        let x19 = x11 * x2 * x13;
         let x20 = m2 + m0 + m1;
-        let x21 = x0 * x4 * x3;
-        let x22 = x1 * x13;
-        let x23 = x3 * x13 + x0 * x4 * x1;
+        let x21 = x11 * x0 * x5;
+        let x22 = x2 * x13;
+        let x23 = x5 * x13 + x11 * x0 * x2;
         let x24 = x21 - x22;
         let x25 = x19 - x18;
-        let x26 = a * x4 * x2;
+        let x26 = a * x0 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -894,32 +1104,35 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            psi_dot,
+            theta_dot,
+            phi_dot,
             gamma1_dot,
             gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x4 * x12
+            theta_dot * x0 * x12
                 + psi_dot
-                    * (m1 * (d * (x16 * x7 - x10 * x2 * x13) - x17)
-                        + m2 * (x17 - d * (-(x18 - x19) * x5 - x9 * x2 * x13)))
+                    * (m1 * (d * (x16 * x4 - x9 * x7 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x1 - x8 * x7 * x13)))
                 + X_dot * x20
-                + ((m2 * (x22 - x21) * x5 + x23 * x7 * m1) * phi_dot
-                    + gamma1_dot * m1 * (x10 * x24 - x4 * x7 * x2)
-                    - m2 * gamma2_dot * (-x4 * x2 * x5 - x9 * x23)) * d,
+                + ((m2 * (x22 - x21) * x1 + x23 * x4 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x9 * x24 - x0 * x4 * x7)
+                    - m2 * gamma2_dot * (-x0 * x7 * x1 - x8 * x23)) * d,
             Y_dot * x20
-                + (gamma1_dot * m1 * (x10 * (x14 + x15) - x7 * x2 * x13)
-                    - m2 * gamma2_dot * (-x2 * x5 * x13 - x9 * x25)
-                    + (m2 * x16 * x5 + x7 * x25 * m1) * phi_dot) * d
-                + (m1 * (x26 + d * (x7 * x24 + x10 * x4 * x2))
-                    + m2 * (-x26 - d * (x9 * x4 * x2 - x23 * x5))) * psi_dot
+                + (gamma1_dot * m1 * (x9 * (x14 + x15) - x4 * x7 * x13)
+                    - m2 * gamma2_dot * (-x7 * x1 * x13 - x8 * x25)
+                    + (m2 * x16 * x1 + x4 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x4 * x24 + x9 * x0 * x7))
+                    + m2 * (-x26 - d * (x8 * x0 * x7 - x23 * x1))) * psi_dot
                 + theta_dot * x13 * x12,
-            Z_dot * x20 + theta_dot * (x0 * d * (-x6 - x8) + x11 * x2)
-                + ((x7 * m1 * x1 - m2 * x5 * x3) * x2 * phi_dot
-                    + (x9 * x2 * x1 - x0 * x5) * m2 * gamma2_dot
-                    + (x10 * x2 * x3 + x0 * x7) * gamma1_dot * m1) * d,
+            Z_dot * x20 + theta_dot * (x11 * d * (-x3 - x6) + x10 * x7)
+                + ((x4 * m1 * x2 - m2 * x1 * x5) * x7 * phi_dot
+                    + (x8 * x7 * x2 - x11 * x1) * m2 * gamma2_dot
+                    + (x9 * x7 * x5 + x11 * x4) * gamma1_dot * m1) * d,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -928,67 +1141,830 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
         state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
     ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 16 states, 8 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 16;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 8;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "gamma1",
+        "gamma2",
+        "X",
+        "Y",
+        "Z",
+        "psi'",
+        "theta'",
+        "phi'",
+        "gamma1'",
+        "gamma2'",
+        "X'",
+        "Y'",
+        "Z'",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = x0 * x0;
+        let x2 = f64::cos(gamma2);
+        let x3 = x2 * x2;
+        let x4 = m2 * (1.0 - x3);
+        let x5 = (1.0 - x1) * m1;
+        let x6 = (x1 + x3) * J1 + Ixx + J2 * (2.0 - x1 - x3) + (x4 + x5) * d * d;
+        let x7 = f64::cos(theta);
+        let x8 = 1.0 / x7;
+        let x9 = f64::sin(phi);
+        let x10 = (x1 - 1.0) * m1;
+        let x11 = m2 * (x3 - 1.0);
+        let x12 = (x1 + x3 - 2.0) * J2 + (-x1 - x3) * J1 - Ixx + (x10 + x11) * d * d;
+        let x13 = f64::sin(theta);
+        let x14 = x12 * x13;
+        let x15 = m2 * d * d;
+        let x16 = x15 + J2 - J1;
+        let x17 = x2 * x16;
+        let x18 = m2 * a * d;
+        let x19 = x17 + x18;
+        let x20 = f64::sin(gamma2);
+        let x21 = x19 * x20 - Ixz;
+        let x22 = f64::cos(phi);
+        let x23 = d * d * m1;
+        let x24 = J1 - J2 - x23;
+        let x25 = a * d * m1;
+        let x26 = x0 * x24 - x25;
+        let x27 = f64::sin(gamma1);
+        let x28 = x26 * x27 - Ixy;
+        let x29 = x21 * x22 + x28 * x9;
+        let x30 = x29 * x7;
+        let x31 = x14 + x30 + x13 * x6;
+        let x32 = J1 - x15 - J2;
+        let x33 = x2 * x32 - x18;
+        let x34 = Ixz + x20 * x33;
+        let x35 = x34 * x9 + x28 * x22;
+        let x36 = x8 * x9 * x31 + x35 * x22;
+        let x37 = x8 * x31 * x22 - x9 * x35;
+        let x38 = f64::cos(psi);
+        let x39 = x13 * x38 * x9;
+        let x40 = f64::sin(psi);
+        let x41 = x22 * x40;
+        let x42 = x41 - x39;
+        let x43 = x9 * x40;
+        let x44 = x13 * x38 * x22;
+        let x45 = x43 + x44;
+        let x46 = m2 * x42 * x20 + x45 * x27 * m1;
+        let x47 = x46 * d;
+        let x48 = x38 * x22;
+        let x49 = x13 * x9 * x40;
+        let x50 = -x48 - x49;
+        let x51 = x38 * x9;
+        let x52 = x13 * x22 * x40;
+        let x53 = x52 - x51;
+        let x54 = m2 * x50 * x20 + x27 * x53 * m1;
+        let x55 = x54 * d;
+        let x56 = m2 * x20 * x9;
+        let x57 = x27 * m1 * x22;
+        let x58 = x57 - x56;
+        let x59 = x58 * x7 * d;
+        let x60 = Iyz * x7;
+        let x61 = x13 * x21 * x9;
+        let x62 = J2 + x23 - J1;
+        let x63 = x25 + x0 * x62;
+        let x64 = Ixy + x27 * x63;
+        let x65 = J2 - J1;
+        let x66 = J1 - J2;
+        let x67 = x0 * x0 * x65 + Iyy + d * d * (x10 + x4) - Izz + x2 * x2 * x66;
+        let x68 = Iyz * x22;
+        let x69 = (x13 * x64 + (x67 * x9 - 2.0 * x68) * x7) * x22;
+        let x70 = x60 + x61 + x69;
+        let x71 = x0 * x7 * x9 + x13 * x27;
+        let x72 = x9 * x9;
+        let x73 = x22 * x22;
+        let x74 = x72 + x73;
+        let x75 = x2 * x7 * x22;
+        let x76 = x13 * x20;
+        let x77 = x75 - x76;
+        let x78 = J2 * (x71 * x71 + x7 * x7 * x74 + x77 * x77);
+        let x79 = x0 * x7 * x40;
+        let x80 = a * x7 * x40;
+        let x81 = d * (x50 * x27 - x79) - x80;
+        let x82 = a * x38 * x7;
+        let x83 = x39 - x41;
+        let x84 = x27 * x83;
+        let x85 = x0 * x38 * x7;
+        let x86 = d * (x84 + x85);
+        let x87 = x82 + x86;
+        let x88 = (x81 * x81 + x87 * x87) * m1;
+        let x89 = x13 * Ixx;
+        let x90 = Ixy * x9;
+        let x91 = Ixz * x22;
+        let x92 = (-x90 - x91) * x7;
+        let x93 = x13 * (x92 - x89);
+        let x94 = x2 * x13;
+        let x95 = x7 * x20 * x22;
+        let x96 = -x94 - x95;
+        let x97 = x0 * x13;
+        let x98 = x27 * x7 * x9;
+        let x99 = x98 - x97;
+        let x100 = (x96 * x96 + x99 * x99) * J1;
+        let x101 = x45 * x20;
+        let x102 = x2 * x38 * x7;
+        let x103 = d * (x102 - x101);
+        let x104 = -x82 - x103;
+        let x105 = x51 - x52;
+        let x106 = x2 * x7 * x40;
+        let x107 = x80 - d * (-x105 * x20 - x106);
+        let x108 = m2 * (x104 * x104 + x107 * x107);
+        let x109 = x14 + x30;
+        let x110 = x13 * Ixz;
+        let x111 = Izz * x22;
+        let x112 = Iyz * x9;
+        let x113 = (x111 - x112) * x7;
+        let x114 = (x110 + x113) * x22;
+        let x115 = Iyy * x9;
+        let x116 = x7 * (x115 - x68);
+        let x117 = x13 * Ixy;
+        let x118 = x9 * (x116 + x117);
+        let x119 = x7 * (x114 + x118);
+        let x120 = x78 + x88 - x93 + x100 + x108 + x13 * x109 + x119;
+        let x121 = x70 * x22 + x8 * x120 * x9 + x13 * x36;
+        let x122 = x60 + x61 + x13 * x35 + x69;
+        let x123 = J2 + x2 * (x17 + 2.0 * x18)
+            + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1)) + x23 + Izz
+            + (x67 * x22 + 2.0 * x112) * x22 + J1;
+        let x124 = x122 * x8 * x9 + x123 * x22;
+        let x125 = x8 * x121 * x22 - x9 * x124;
+        let x126 = x0 * a;
+        let x127 = (-d - x126) * d * m1;
+        let x128 = (d + x126) * d * m1;
+        let x129 = (x127 + x128) * x9 * x22;
+        let x130 = x2 * a;
+        let x131 = m2 * d * (d + x130) + J2;
+        let x132 = x131 * x74;
+        let x133 = m2 * x20 * x22;
+        let x134 = x27 * x9 * m1;
+        let x135 = x2 * d;
+        let x136 = x0 * d;
+        let x137 = m2 * (a + x135) + (-a - x136) * m1;
+        let x138 = (x133 + x134) * x7 * d + x137 * x13;
+        let x139 = m1 * x81;
+        let x140 = m2 * x107;
+        let x141 = x46 * x13 * d + x139 + x140;
+        let x142 = x38 * x22 * x138 + x8 * x141 * x9;
+        let x143 = m1 * x87;
+        let x144 = m2 * x104;
+        let x145 = x54 * x13 * d + x143 + x144;
+        let x146 = x8 * x145 * x9 + x22 * x40 * x138;
+        let x147 = -x133 - x134;
+        let x148 = x13 * d * x147 + x137 * x7;
+        let x149 = x22 * x148 + x13 * x58 * d * x9;
+        let x150 = x127 - J2;
+        let x151 = J2 + x128;
+        let x152 = x151 * x22 * x22 - x150 * x9 * x9;
+        let x153 = x8 * x141 * x22 - x38 * x9 * x138;
+        let x154 = x8 * x145 * x22 - x9 * x40 * x138;
+        let x155 = x13 * x58 * d * x22 - x9 * x148;
+        let x156 = x0 * x83 - x38 * x27 * x7;
+        let x157 = d * m1 * x156;
+        let x158 = x48 + x49;
+        let x159 = x27 * x7 * x40;
+        let x160 = x0 * x158 - x159;
+        let x161 = d * m1 * x160;
+        let x162 = x71 * d * m1;
+        let x163 = -x38 * x7 * x20 - x2 * x45;
+        let x164 = -(m2 * x163 * d);
+        let x165 = x7 * x20 * x40;
+        let x166 = -x165 - x2 * x53;
+        let x167 = -(m2 * d * x166);
+        let x168 = x77 * m2 * d;
+        let x169 = m2 + m0 + m1;
+        let x170 = x64 * x9 + x34 * x22;
+        let x171 = x13 * x170 + x12 * x7;
+        let x172 = Y_dot * x40;
+        let x173 = X_dot * x38;
+        let x174 = x172 + x173;
+        let x175 = x56 - x57;
+        let x176 = (x174 * x58 * x7 + Z_dot * x13 * x175) * d;
+        let x177 = theta_dot * x22;
+        let x178 = x7 * psi_dot * x9;
+        let x179 = -x177 - x178;
+        let x180 = x7 * psi_dot * x22;
+        let x181 = theta_dot * x9;
+        let x182 = x180 - x181;
+        let x183 = x177 + x178;
+        let x184 = x16 * x20 * x20 + x2 * x33;
+        let x185 = x32 * x7 * x20 * x20 * x22
+            + x2 * (x19 * x7 * x22 + (2.0 * J1 - 2.0 * x15 - 2.0 * J2) * x13 * x20);
+        let x186 = x50 * Y_dot + X_dot * x42 - Z_dot * x7 * x9;
+        let x187 = 2.0 * x15 + 2.0 * J2 - 2.0 * J1;
+        let x188 = m2 * x20 * x158 + x27 * x105 * m1;
+        let x189 = x46 * Y_dot + x188 * X_dot;
+        let x190 = a * theta_dot * x7;
+        let x191 = -gamma2_dot - x177;
+        let x192 = gamma2_dot * x22;
+        let x193 = x20 * x9 * phi_dot;
+        let x194 = Z_dot + x190
+            + (x13 * x191 * x20 + (x2 * (x192 + theta_dot) - x193) * x7) * d;
+        let x195 = a * x13;
+        let x196 = x195 - d * x96;
+        let x197 = d * (x50 * x20 * phi_dot - gamma2_dot * x166) + Y_dot + psi_dot * x104
+            + theta_dot * x196 * x40;
+        let x198 = theta_dot * x38 * x196;
+        let x199 = psi_dot * x107;
+        let x200 = (x42 * x20 * phi_dot - gamma2_dot * x163) * d;
+        let x201 = x198 + x199 + X_dot + x200;
+        let x202 = -x43 - x44;
+        let x203 = x7 * x9 * phi_dot;
+        let x204 = gamma1_dot - x181;
+        let x205 = x13 * x204 + x7 * phi_dot * x22;
+        let x206 = gamma1_dot * x9;
+        let x207 = Z_dot + (x205 * x27 + x0 * x7 * (x206 - theta_dot)) * d - x190;
+        let x208 = d * (x45 * x27 * phi_dot + gamma1_dot * x156);
+        let x209 = x99 * d - x195;
+        let x210 = theta_dot * x38 * x209;
+        let x211 = psi_dot * x81;
+        let x212 = X_dot + x208 + x210 + x211;
+        let x213 = Y_dot + psi_dot * x87 + d * (gamma1_dot * x160 + x27 * x53 * phi_dot)
+            + theta_dot * x209 * x40;
+        let x214 = phi_dot - x13 * psi_dot;
+        let x215 = x22 * x182;
+        let x216 = x9 * x183;
+        let x217 = x215 + x216;
+        let x218 = x183 * x22 - x9 * x182;
+        let x219 = x13 * theta_dot * x8 * x217 + phi_dot * x218;
+        let x220 = Iyz * x182;
+        let x221 = x0 * x183 - x214 * x27;
+        let x222 = x0 * x214;
+        let x223 = x27 * x183;
+        let x224 = x222 + x223;
+        let x225 = x214 * Ixy;
+        let x226 = Iyy * x183;
+        let x227 = -x215 - x216;
+        let x228 = x42 * x27 * m1 + m2 * x202 * x20;
+        let x229 = x50 * x27 * m1 + m2 * x105 * x20;
+        let x230 = x2 * x214 - x20 * x182;
+        let x231 = x2 * x182;
+        let x232 = x214 * x20;
+        let x233 = x231 + x232;
+        let x234 = Iyz * x183;
+        let x235 = x214 * Ixz;
+        let x236 = Izz * x182;
+        let x237 = x13 * x8 * phi_dot * x218
+            + theta_dot * (x215 + x216 + x13 * x13 * x8 * x8 * x217);
+        let x238 = x0 * x26 + x62 * x27 * x27;
+        let x239 = Y_dot * x53 + Z_dot * x7 * x22 + x45 * X_dot;
+        let x240 = 2.0 * J1 - 2.0 * J2 - 2.0 * x23;
+        let x241 = x62 * x27 * x27 * x7 * x9 + x0 * (x26 * x7 * x9 + x13 * x27 * x240);
+        let x242 = 0.5 * ((Iyy * x182 - Iyz * x179) * x183)
+            - (x171 * psi_dot + x176) * theta_dot
+            - gamma2_dot
+                * (x184 * theta_dot * x9 + psi_dot * x185
+                    + x2 * (m2 * d * x186 + x20 * phi_dot * x187))
+            + d
+                * (0.5
+                    * (m2
+                        * (2.0
+                            * ((x13 * theta_dot * x20 * x9
+                                + (-x2 * gamma2_dot * x9 - x20 * phi_dot * x22) * x7)
+                                * x194)
+                            + 2.0
+                                * (((x42 * psi_dot + x105 * phi_dot
+                                    - theta_dot * x7 * x9 * x40) * x20 + x2 * gamma2_dot * x50)
+                                    * x197)
+                            + 2.0
+                                * (x201
+                                    * ((psi_dot * x158 - theta_dot * x38 * x7 * x9
+                                        + x202 * phi_dot) * x20 + x2 * gamma2_dot * x42))))
+                    - psi_dot * x189
+                    + 0.5
+                        * ((2.0
+                            * (((-x203 - x13 * theta_dot * x22) * x27
+                                + x0 * x7 * gamma1_dot * x22) * x207)
+                            + 2.0
+                                * ((x27
+                                    * (theta_dot * x38 * x7 * x22 + x42 * phi_dot
+                                        + x105 * psi_dot) + x0 * x45 * gamma1_dot) * x212)
+                            + 2.0
+                                * ((x0 * gamma1_dot * x53
+                                    + x27
+                                        * (x50 * phi_dot + theta_dot * x7 * x22 * x40
+                                            + x45 * psi_dot)) * x213)) * m1))
+            + 0.5 * (x214 * (-x179 * Ixz - Ixy * x182)) - x219 * x8 * x109
+            + (0.5 * (x179 * Izz) - x220 + (x0 * x221 + gamma2_dot + x177 + x178) * J2
+                + x27 * x224 * J1 - 0.5 * x225 + 0.5 * x226) * x182
+            + phi_dot
+                * (-theta_dot * x170 - x227 * x35
+                    - d * (x228 * X_dot + Y_dot * x229 + Z_dot * x7 * x147)
+                    - x7 * psi_dot * x35)
+            + ((gamma1_dot + x2 * x233 + x180 - x181) * J2 - x20 * x230 * J1 - 0.5 * x234
+                - 0.5 * x235 + 0.5 * x236) * x179 - x6 * x237
+            - (theta_dot * x22 * x238
+                + x0
+                    * (x27 * (2.0 * J2 + 2.0 * x23 - 2.0 * J1) * phi_dot + x239 * d * m1)
+                + x241 * psi_dot) * gamma1_dot;
+        let x243 = (x42 * x27 - x85) * d;
+        let x244 = (-x202 * x20 - x102) * d;
+        let x245 = x139 + x140;
+        let x246 = x82 - x244;
+        let x247 = x243 - x82;
+        let x248 = m2 * x246 + m1 * x247;
+        let x249 = x13 * x32 * x20 * x20 + x2 * (x7 * x20 * x187 * x22 + x13 * x19);
+        let x250 = x76 - x75;
+        let x251 = x165 - x2 * x105;
+        let x252 = X_dot * x251;
+        let x253 = x163 * Y_dot;
+        let x254 = x9 * (x2 * x2 * x65 - Iyy + d * d * (x5 + x11) + Izz + x0 * x0 * x66);
+        let x255 = x13 * x29 + x7 * (x67 * x22 * x22 + x9 * (4.0 * x68 + x254));
+        let x256 = x0 * x50 + x159;
+        let x257 = x97 - x98;
+        let x258 = d * x257 + x195;
+        let x259 = -(x94 + x95) * d - x195;
+        let x260 = x209 * m1 + m2 * x196;
+        let x261 = x7 * x21 * x9 + (x64 * x7 + (2.0 * x68 + x254) * x13) * x22
+            - x13 * Iyz;
+        let x262 = x13 * (x112 - x111) + x7 * Ixz;
+        let x263 = Ixy * x7 + x13 * (x68 - x115);
+        let x264 = x13 * x20 * x22 - x2 * x7;
+        let x265 = -x0 * x7 - x13 * x27 * x9;
+        let x266 = (x90 + x91) * x13;
+        let x267 = Ixx * x7;
+        let x268 = -x2 * x13 * x22 - x7 * x20;
+        let x269 = x27 * x7 - x0 * x13 * x9;
+        let x270 = m2 * d * (-d - x130) - J2;
+        let x271 = gamma2_dot * x270 * x9;
+        let x272 = x150 * gamma1_dot * x22;
+        let x273 = m2 * x259 + x258 * m1;
+        let x274 = x0 * (x13 * x63 + x27 * x7 * x9 * x240) + x13 * x24 * x27 * x27;
+        let x275 = X_dot * x256;
+        let x276 = Y_dot * x156;
+        let x277 = (-theta_dot * x255
+            - psi_dot
+                * (((2.0 * (x45 * x87) + 2.0 * (x105 * x81)) * x27 * m1
+                    + m2 * x20 * (2.0 * (x107 * x158) + 2.0 * (x42 * x104))) * d
+                    + x7
+                        * ((x7 * (-x68 - x9 * Izz) + x116 + 2.0 * (x99 * x27 * J1)
+                            + 2.0 * (x0 * x71 * J2) + x117) * x22
+                            - x13 * (x9 * Ixz - Ixy * x22)
+                            + (x7 * (Iyy * x22 + x112) - 2.0 * (x2 * x77 * J2) - x110
+                                - x113 + 2.0 * (x20 * J1 * x96)) * x9)) - x70 * x227
+            - (x150 * gamma1_dot * x9 + phi_dot * x35 + gamma2_dot * x131 * x22) * x7
+            - d * x189) * phi_dot - x219 * x8 * (x78 + x88 - x93 + x100 + x108 + x119)
+            - (((2.0 * x243 + 2.0 * x86) * m1 * x81
+                + m2 * (-2.0 * x244 - 2.0 * x103) * x107) * psi_dot + Y_dot * x245
+                + X_dot * x248) * psi_dot
+            - gamma2_dot
+                * (phi_dot * x185 + theta_dot * x9 * x249
+                    + ((2.0 * (x77 * J2) + 2.0 * (x250 * J1)) * x96
+                        + m2 * (-2.0 * (x107 * x251) - 2.0 * (x163 * x104)) * d)
+                        * psi_dot
+                    + m2 * d * (-x252 - a * gamma2_dot * x7 * x20 * x9 - x253))
+            + 0.5
+                * ((2.0 * ((x208 + x210 + x211) * x213)
+                    + 2.0
+                        * ((psi_dot * x247
+                            + (x27 * x105 * phi_dot + gamma1_dot * x256) * d
+                            + theta_dot * x258 * x40) * x212)) * m1)
+            + 0.5
+                * (m2
+                    * (2.0
+                        * ((psi_dot * x246
+                            + (x20 * phi_dot * x158 - gamma2_dot * x251) * d
+                            + x259 * theta_dot * x40) * x201)
+                        + 2.0 * (x197 * (x198 + x199 + x200))))
+            - theta_dot
+                * (x260 * x38 * Y_dot + theta_dot * x261
+                    + psi_dot
+                        * ((x89 + x262 * x22 - x92 + x9 * x263) * x7
+                            + (2.0 * (x264 * x96) + 2.0 * (x99 * x265)) * J1
+                            + m2
+                                * (2.0 * (x259 * x107 * x40) + 2.0 * (x38 * x104 * x196))
+                            + x13
+                                * (x267 - x266 + J2 * x7 * (-2.0 * x72 - 2.0 * x73) - x114
+                                    - x118)
+                            + (2.0 * (x258 * x81 * x40) + 2.0 * (x38 * x209 * x87)) * m1
+                            + J2 * (2.0 * (x77 * x268) + 2.0 * (x71 * x269)))
+                    + (x271 + x272) * x13 + x171 * phi_dot + X_dot * x273 * x40)
+            - x109 * x237 + x13 * x242
+            - ((d * m1 * (2.0 * (x256 * x81) + 2.0 * (x87 * x156))
+                + x71 * (2.0 * (J2 * x257) + 2.0 * (x99 * J1))) * psi_dot
+                + theta_dot * x274 * x22
+                + d * m1 * (x275 - a * x27 * x7 * gamma1_dot * x22 + x276)
+                + x241 * phi_dot) * gamma1_dot;
+        let x278 = a * x7;
+        let x279 = theta_dot * (d * x265 - x278)
+            + d * (x71 * gamma1_dot + x27 * x7 * phi_dot * x22);
+        let x280 = a * x13 * theta_dot;
+        let x281 = theta_dot - x206;
+        let x282 = x13 * (m2 * (-a - x135) + (a + x136) * m1) + x7 * d * x147;
+        let x283 = x174 * x71;
+        let x284 = Z_dot * x269;
+        let x285 = Z_dot * x268;
+        let x286 = d * (-gamma2_dot * x250 - x7 * x20 * x9 * phi_dot)
+            + theta_dot * (x278 - x264 * d);
+        let x287 = -x192 - theta_dot;
+        let x288 = 0.5
+            * ((2.0 * ((x279 * x40 + x38 * psi_dot * x209) * x213)
+                + 2.0
+                    * (x207
+                        * (x280
+                            + d
+                                * (x13 * (x0 * x281 - x27 * phi_dot * x22)
+                                    + x27 * x7 * x204)))
+                + 2.0 * ((psi_dot * x258 * x40 + x38 * x279) * x212)) * m1)
+            - (Z_dot * x282 + psi_dot * x261 + x174 * x148) * theta_dot - x70 * x219 * x8
+            - x237 * x35
+            + psi_dot
+                * (0.5 * (x214 * (x266 - x267)) - X_dot * x282 * x40
+                    + x13
+                        * ((-x9 * (gamma2_dot + x177 + x178)
+                            - (gamma1_dot + x180 - x181) * x22) * J2
+                            - 0.5 * ((x226 - x220 - x225) * x9)
+                            - 0.5 * ((x236 - x234 - x235) * x22)) + 0.5 * (x263 * x183)
+                    + (x264 * x230 + x265 * x224) * J1 + 0.5 * (x262 * x182)
+                    + (x221 * x269 + x268 * x233) * J2 - x38 * Y_dot * x138
+                    - 0.5 * ((x214 * Ixx - Ixy * x183 - Ixz * x182) * x7))
+            - gamma1_dot
+                * ((x0 * x22 * x22 * x240 - 2.0 * x25) * theta_dot * x27
+                    + x22 * (phi_dot * x238 + x274 * psi_dot)
+                    + (x283 + a * x27 * gamma1_dot * x9 + x284) * d * m1)
+            - gamma2_dot
+                * (m2 * d * (x174 * x77 - a * gamma2_dot * x20 * x22 + x285)
+                    + (x2 * (x187 * x22 * x22 - 2.0 * x15 - 2.0 * J2 + 2.0 * J1)
+                        - 2.0 * x18) * theta_dot * x20
+                    + (x184 * phi_dot + psi_dot * x249) * x9)
+            + 0.5
+                * (m2
+                    * (2.0 * (x197 * (x38 * psi_dot * x196 + x286 * x40))
+                        + 2.0
+                            * (((x191 * x7 * x20 + x13 * (x2 * x287 + x193)) * d - x280)
+                                * x194)
+                        + 2.0 * ((x259 * psi_dot * x40 + x38 * x286) * x201)))
+            + (-x271 - x176 - x227 * x123 - psi_dot * x255 - phi_dot * x170 - x272
+                - theta_dot
+                    * (2.0 * (Iyz * x22 * x22)
+                        + ((x2 * x2 * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy + 2.0 * Izz
+                            + x0 * x0 * (2.0 * J1 - 2.0 * J2)
+                            + d * d * (m1 * (2.0 - 2.0 * x1) + m2 * (2.0 * x3 - 2.0)))
+                            * x22 - 2.0 * x112) * x9)) * phi_dot;
+        let x289 = -x84 - x85;
+        let x290 = x71 * theta_dot * x38 + psi_dot * x256 + x289 * gamma1_dot
+            + x0 * x45 * phi_dot;
+        let x291 = -x79 - x27 * x158;
+        let x292 = x0 * x53 * phi_dot + x291 * gamma1_dot + psi_dot * x156
+            + x71 * theta_dot * x40;
+        let x293 = x2 * x50 * phi_dot;
+        let x294 = x163 * psi_dot;
+        let x295 = x20 * x53 - x106;
+        let x296 = gamma2_dot * x295;
+        let x297 = x101 - x102;
+        let x298 = gamma2_dot * x297;
+        let x299 = x2 * x42 * phi_dot;
+        let x300 = psi_dot * x251;
+        let x301 = d
+            * (x58 * x7 * phi_dot - m2 * gamma2_dot * x250 + x71 * gamma1_dot * m1)
+            + theta_dot * x148;
+        let value = x7;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 8]; 8] = [
+            [x6, x36, x37, 0.0, 0.0, x47, x55, x59],
+            [x36, x8 * x9 * x121 + x22 * x124, x125, x129, x132, x142, x146, x149],
+            [
+                x37,
+                x125,
+                x8 * (x37 * x13 - x70 * x9 + x8 * x120 * x22) * x22
+                    - x9 * (x122 * x8 * x22 - x9 * x123),
+                x152,
+                0.0,
+                x153,
+                x154,
+                x155,
+            ],
+            [0.0, x129, x152, J2 + x23, 0.0, x157, x161, x162],
+            [0.0, x132, 0.0, 0.0, x15 + J2, x164, x167, x168],
+            [x47, x142, x153, x157, x164, x169, 0.0, 0.0],
+            [x55, x146, x154, x161, x167, 0.0, x169, 0.0],
+            [x59, x149, x155, x162, x168, 0.0, 0.0, x169],
+        ];
+        let mut force: [f64; 8] = [
+            x242,
+            x8 * x9 * x277 + x288 * x22,
+            x8 * x277 * x22 - x288 * x9,
+            d * m1
+                * (x290 * x212 - psi_dot * (x275 + x276) + x213 * x292
+                    + (x0 * x205 + x27 * x7 * x281) * x207
+                    - gamma1_dot
+                        * (x291 * Y_dot + Z_dot * x257 + X_dot * x289
+                            + a * (x181 - x180) * x27))
+                - ((x283 + x284) * d * m1 + x150 * x13 * psi_dot * x22) * theta_dot
+                + phi_dot * (-x0 * x239 * d * m1 - x150 * x227 * x9 - x150 * x183)
+                - x219 * x151 * x22 + (x224 * J1 + (-x222 - x223) * J2) * x221,
+            ((x293 - x294 - x250 * theta_dot * x40 - x296) * x197
+                - psi_dot * (-x252 - x253)
+                - gamma2_dot
+                    * (a * x179 * x20 - X_dot * x297 - Y_dot * x295 + Z_dot * x96)
+                + x194 * (x287 * x7 * x20 + x2 * (x13 * x191 - x203))
+                + x201 * (x299 - x298 - x250 * theta_dot * x38 - x300)) * m2 * d
+                - (x2 * m2 * d * x186 + x270 * theta_dot * x9
+                    + x7 * x131 * psi_dot * x22) * phi_dot
+                - (m2 * d * (x250 * (-x172 - x173) + x285) + x13 * x270 * psi_dot * x9)
+                    * theta_dot + x230 * (J2 * x233 + (-x231 - x232) * J1)
+                + (-x219 * x9 - x227 * phi_dot * x22) * x131,
+            d
+                * (-x290 * gamma1_dot * m1 - x46 * x237
+                    - m2 * gamma2_dot * (x299 - x298 - x300 + x77 * theta_dot * x38)
+                    - (x188 * psi_dot + x228 * phi_dot + x0 * x45 * gamma1_dot * m1
+                        + x58 * theta_dot * x38 * x7 + x2 * m2 * gamma2_dot * x42)
+                        * phi_dot) - x38 * x227 * phi_dot * x138
+                - theta_dot * (x38 * x301 + psi_dot * x273 * x40)
+                - psi_dot
+                    * (x248 * psi_dot + theta_dot * x282 * x40
+                        + d
+                            * (x188 * phi_dot + gamma1_dot * x256 * m1
+                                - m2 * gamma2_dot * x251)) - x219 * x8 * x245,
+            d
+                * (-(phi_dot * x229 + x58 * theta_dot * x7 * x40 + x46 * psi_dot
+                    + x0 * gamma1_dot * x53 * m1 + x2 * m2 * gamma2_dot * x50) * phi_dot
+                    - (x293 - x294 + x77 * theta_dot * x40 - x296) * m2 * gamma2_dot
+                    - x54 * x237 - gamma1_dot * m1 * x292)
+                - theta_dot * (x260 * x38 * psi_dot + x301 * x40)
+                - (x143 + x144) * x219 * x8
+                - (theta_dot * x38 * x138 + psi_dot * x245
+                    + (x46 * phi_dot + gamma1_dot * m1 * x156 - m2 * gamma2_dot * x163)
+                        * d) * psi_dot - x227 * phi_dot * x40 * x138,
+            (-gamma1_dot
+                * (x0 * x7 * phi_dot * x22 + gamma1_dot * x257 + theta_dot * x269) * m1
+                - phi_dot
+                    * (x13 * theta_dot * x175
+                        + x7
+                            * (x0 * gamma1_dot * m1 * x22 + x147 * phi_dot
+                                - x2 * m2 * gamma2_dot * x9)) - x58 * x7 * x237
+                - m2 * gamma2_dot
+                    * (x268 * theta_dot + gamma2_dot * x96 - x2 * x7 * x9 * phi_dot)) * d
+                - theta_dot
+                    * (theta_dot * x282
+                        + (gamma1_dot * x269 * m1 + m2 * gamma2_dot * x268
+                            + x13 * phi_dot * x175) * d) - x227 * phi_dot * x148,
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
+        dstate[8] = 0.0 * force[0] + x8 * x9 * force[1] + x8 * x22 * force[2]
+            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
+            + 0.0 * force[7] + x219 * x8;
+        dstate[9] = 0.0 * force[0] + x22 * force[1] + -x9 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
+            + x227 * phi_dot;
+        dstate[10] = 1.0 * force[0] + x13 * x8 * x9 * force[1]
+            + x13 * x8 * x22 * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + x237;
+        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[14] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[15] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 1.0 * force[7] + 0.0;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let X_dot = qdot[5];
+        let Y_dot = qdot[6];
+        let Z_dot = qdot[7];
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma2);
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(gamma2);
+        let x2 = f64::cos(phi);
+        let x3 = m2 * x1 * x2;
+        let x4 = f64::sin(gamma1);
+        let x5 = f64::sin(phi);
+        let x6 = x4 * x5 * m1;
+        let x7 = f64::cos(theta);
         let x8 = f64::cos(gamma2);
-        let x9 = x8 * d;
-        let x10 = -a - x9;
-        let x11 = f64::sin(psi);
-        let x12 = f64::cos(gamma1);
-        let x13 = x0 * x11;
-        let x14 = x5 * x6 * x1;
-        let x15 = x13 + x14;
-        let x16 = x5 * x6 * x0;
-        let x17 = x1 * x11;
-        let x18 = -x13 - x14;
-        let x19 = f64::sin(gamma1);
-        let x20 = x12 * d;
-        let x21 = m2 * x10 + (a + x20) * m1;
-        let x22 = m2 * (a + x9) + (-a - x20) * m1;
-        let x23 = 1.0 / (m2 + m0 + m1);
-        let x24 = x6 * x1;
-        let x25 = x5 * x0 * x11;
-        let x26 = -x24 - x25;
-        let x27 = x12 * x26 + x19 * x3 * x11;
-        let x28 = x24 + x25;
-        let x29 = x6 * x0;
-        let x30 = x5 * x1 * x11;
-        let x31 = x30 - x29;
-        let x32 = x29 - x30;
-        let x33 = x8 * x32 - x3 * x7 * x11;
-        let value = x3;
+        let x9 = f64::cos(gamma1);
+        let x10 = m2 * (a + x8 * d) + (-a - x9 * d) * m1;
+        let x11 = f64::sin(theta);
+        let x12 = (x3 + x6) * x7 * d + x10 * x11;
+        let x13 = f64::sin(psi);
+        let x14 = x0 * x2;
+        let x15 = x11 * x5 * x13;
+        let x16 = -x14 - x15;
+        let x17 = a * x7 * x13;
+        let x18 = x0 * x5;
+        let x19 = x11 * x2 * x13;
+        let x20 = m2 + m0 + m1;
+        let x21 = x11 * x0 * x5;
+        let x22 = x2 * x13;
+        let x23 = x5 * x13 + x11 * x0 * x2;
+        let x24 = x21 - x22;
+        let x25 = x19 - x18;
+        let x26 = a * x0 * x7;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            q[7],
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            theta_dot * x0 * x12
+                + psi_dot
+                    * (m1 * (d * (x16 * x4 - x9 * x7 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x1 - x8 * x7 * x13)))
+                + X_dot * x20
+                + ((m2 * (x22 - x21) * x1 + x23 * x4 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x9 * x24 - x0 * x4 * x7)
+                    - m2 * gamma2_dot * (-x0 * x7 * x1 - x8 * x23)) * d,
+            Y_dot * x20
+                + (gamma1_dot * m1 * (x9 * (x14 + x15) - x4 * x7 * x13)
+                    - m2 * gamma2_dot * (-x7 * x1 * x13 - x8 * x25)
+                    + (m2 * x16 * x1 + x4 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x4 * x24 + x9 * x0 * x7))
+                    + m2 * (-x26 - d * (x8 * x0 * x7 - x23 * x1))) * psi_dot
+                + theta_dot * x13 * x12,
+            Z_dot * x20 + theta_dot * (x11 * d * (-x3 - x6) + x10 * x7)
+                + ((x4 * m1 * x2 - m2 * x1 * x5) * x7 * phi_dot
+                    + (x8 * x7 * x2 - x11 * x1) * m2 * gamma2_dot
+                    + (x9 * x7 * x5 + x11 * x4) * gamma1_dot * m1) * d,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta = state[1];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let value = f64::cos(theta);
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1007,32 +1983,14 @@ pub mod reduced_volterra {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            x5 * x2 * x4 + u1,
-            u4,
-            u5,
-            (G_X
-                + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
-                    + (x12 * x15 * d + a * x15) * m1) * u2
-                + d
-                    * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
-                        + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
-                        + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
-                + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0)))
-                * x23,
-            (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1)) + G_Y
-                + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
-                + d
-                    * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
-                        + u5 * m2 * x33)) * x23,
-            (G_Z
-                + d
-                    * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
-                        + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
-                        + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
-                + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
-                + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23,
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1045,9 +2003,9 @@ pub mod reduced_volterra {
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
 pub mod kane {
     use super::*;
-    ///Length of the state `[q; u]`.
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
     pub const STATES: usize = 16;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 8;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
@@ -1070,6 +2028,8 @@ pub mod kane {
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
@@ -1317,7 +2277,7 @@ pub mod kane {
                 value,
             });
         }
-        let mut mass: [[f64; 8]; 8] = [
+        let mut matrix: [[f64; 8]; 8] = [
             [
                 (x9 + x11) * J1 + Ixx + J2 * (2.0 - x9 - x11)
                     + (m2 * (1.0 - x11) + (1.0 - x9) * m1) * d * d,
@@ -1476,7 +2436,7 @@ pub mod kane {
                     * (d * (x6 * u1 * x136 + u5 * m2 * x190 + u4 * x186 * m1) + u3 * x166
                         + x152 * u2),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -1506,7 +2466,7 @@ pub mod kane {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -1617,7 +2577,7 @@ pub mod kane {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -1667,6 +2627,619 @@ pub mod kane {
             u6,
             u7,
             u8,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
+pub mod reduced_volterra {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 13;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 5;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "gamma1",
+        "gamma2",
+        "X",
+        "Y",
+        "Z",
+        "u1",
+        "u2",
+        "u3",
+        "u4",
+        "u5",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma2);
+        let x8 = f64::cos(gamma2);
+        let x9 = x8 * d;
+        let x10 = -a - x9;
+        let x11 = f64::sin(psi);
+        let x12 = f64::cos(gamma1);
+        let x13 = x0 * x11;
+        let x14 = x5 * x6 * x1;
+        let x15 = x13 + x14;
+        let x16 = x5 * x6 * x0;
+        let x17 = x1 * x11;
+        let x18 = -x13 - x14;
+        let x19 = f64::sin(gamma1);
+        let x20 = x12 * d;
+        let x21 = m2 * x10 + (a + x20) * m1;
+        let x22 = m2 * (a + x9) + (-a - x20) * m1;
+        let x23 = 1.0 / (m2 + m0 + m1);
+        let x24 = x6 * x1;
+        let x25 = x5 * x0 * x11;
+        let x26 = -x24 - x25;
+        let x27 = x12 * x26 + x19 * x3 * x11;
+        let x28 = x24 + x25;
+        let x29 = x6 * x0;
+        let x30 = x5 * x1 * x11;
+        let x31 = x30 - x29;
+        let x32 = x29 - x30;
+        let x33 = x8 * x32 - x3 * x7 * x11;
+        let x34 = m1 * x23;
+        let x35 = m2 * x23;
+        let x36 = x35 - 1.0;
+        let x37 = x12 * x12;
+        let x38 = x8 * x8;
+        let x39 = x21 * x23;
+        let x40 = x39 - a - x20;
+        let x41 = x12 * (J1 - J2) + d * m1 * x40;
+        let x42 = x19 * x41 - Ixy;
+        let x43 = m2 * d * (a + x9 + x39) + x8 * (J2 - J1);
+        let x44 = x7 * x43 - Ixz;
+        let x45 = x12 * m2 * d * d * x7 * m1 * x23;
+        let x46 = -(x8 * m2 * x19 * d * d * m1 * x23);
+        let x47 = 1.0 - x34;
+        let x48 = d * d * x47 * m1;
+        let x49 = x48 + J2 - J1;
+        let x50 = 1.0 - x35;
+        let x51 = m2 * d * d * x50;
+        let x52 = 2.0 - 2.0 * x34;
+        let x53 = 2.0 * m1 - 2.0 * m2;
+        let x54 = a
+            * ((a * x47 + x12 * d * x52) * m1
+                + m2
+                    * (a
+                        + (d * (2.0 * (x12 * m1) + x8 * x53) + a * (2.0 * m1 - m2)) * x23
+                        + 2.0 * x9));
+        let x55 = m2 * x19 * d * d * x7 * m1 * x23;
+        let x56 = x55 - Iyz;
+        let x57 = x12 * d * m1 * x23;
+        let x58 = m1 - m2;
+        let x59 = x58 * x23;
+        let x60 = x59 + 1.0;
+        let x61 = d * x50 + x8 * (x57 + x60 * a);
+        let x62 = m2 * x61 * d + J2;
+        let x63 = (m2 - m1) * x23;
+        let x64 = x63 + 1.0;
+        let x65 = x8 * m2 * d * x23;
+        let x66 = a * x64 + x65;
+        let x67 = x12 * x66 + d * x47;
+        let x68 = J2 + x67 * d * m1;
+        let x69 = x8 * u1;
+        let x70 = u3 * x7;
+        let x71 = x69 - x70;
+        let x72 = u3 * Izz;
+        let x73 = Iyz * u2;
+        let x74 = u1 * Ixz;
+        let x75 = x7 * u1;
+        let x76 = x8 * u3;
+        let x77 = x75 + x76;
+        let x78 = x12 * u2;
+        let x79 = x19 * u1;
+        let x80 = x78 - x79;
+        let x81 = x12 * x80;
+        let x82 = x12 * u1;
+        let x83 = x19 * u2;
+        let x84 = x82 + x83;
+        let x85 = x84 * x19;
+        let x86 = u4 + u3;
+        let x87 = x7 * x71;
+        let x88 = x77 * x8;
+        let x89 = u5 + u2;
+        let x90 = x7 * x7 * (m2 * x36 * d * d - J2 + J1) + x8 * x43;
+        let x91 = x12 * x8 * u4;
+        let x92 = Iyz * u3;
+        let x93 = Ixy * u1;
+        let x94 = Iyy * u2;
+        let x95 = a * x7 * u2;
+        let x96 = x75 + x8 * x86;
+        let x97 = (m2 * a * x7 * u2 + (d * (x19 * x96 - x12 * x7 * u2) - x95) * m1) * x23
+            - x95;
+        let x98 = x8 * x19 * u2;
+        let x99 = x12 * u4 * x7;
+        let x100 = x99 - x98;
+        let x101 = -u5 - u2;
+        let x102 = x7 * x86 - x69;
+        let x103 = (u5 + (m2 * x101 + m1 * (x19 * x102 + x12 * x8 * u2)) * x23 + u2) * d
+            + x60 * x8 * a * u2;
+        let x104 = x22 * x23 - a - x9;
+        let x105 = u3 * x104 + d * (x36 * x7 * u1 - x12 * u4 * m1 * x23);
+        let x106 = a * u3 * x19;
+        let x107 = (m2 * ((x8 * u3 * x19 + x7 * (x12 * x101 + x79)) * d + x106)
+            - a * u3 * x19 * m1) * x23 + x106;
+        let x108 = x8 * u5 * x19;
+        let x109 = x12 * u3 * x7;
+        let x110 = x108 - x109;
+        let x111 = x12 * x8 * u5;
+        let x112 = u3 * x19 * x7;
+        let x113 = -u4 - u3;
+        let x114 = x19 * x89 + x82;
+        let x115 = x12 * a * x64 * u3
+            + (u4 + (x113 * m1 + m2 * (x12 * x8 * u3 + x7 * x114)) * x23 + u3) * d;
+        let x116 = x59 - 1.0;
+        let x117 = x8 * m2 * x101 + x80 * m1;
+        let x118 = a * x116 * u2 + d * (x79 - x78 + x117 * x23);
+        let x119 = x19 * x86 * m1;
+        let x120 = m2 * x7 * x101 + x119;
+        let x121 = m2 * x7 * u1 - x12 * u4 * m1;
+        let x122 = d * x117 + a * x58 * u2;
+        let x123 = x22 * u3;
+        let x124 = x123 + x121 * d;
+        let x125 = x12 * x41 + x19 * x19 * x49;
+        let x126 = (x63 - 1.0) * a - x57;
+        let x127 = x7 * u2 * x126;
+        let x128 = x19 * d * m1 * x96 * x23;
+        let x129 = Ixy * u2;
+        let x130 = Ixx * u1;
+        let x131 = u3 * Ixz;
+        let x132 = u5 + x81 + x85;
+        let x133 = -x75 - x76;
+        let x134 = 2.0 * J1 - 2.0 * J2;
+        let x135 = m2 * d * x7 * x23 * (x12 * x89 - x79);
+        let x136 = a * x116 - x65;
+        let x137 = u4 * x136;
+        let x138 = -x82 - x83;
+        let x139 = x19 * x7 * u2;
+        let x140 = u4 - x87 + x88;
+        let value = x3;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 5]; 5] = [
+            [
+                ((x12 * x12 * (x34 - 1.0) - x34 + 1.0) * m1
+                    + m2 * (x8 * x8 * x36 - x35 + 1.0)) * d * d + (x37 + x38) * J1 + Ixx
+                    + J2 * (2.0 - x37 - x38),
+                x42,
+                x44,
+                x45,
+                x46,
+            ],
+            [
+                x42,
+                Iyy + x12 * (x12 * x49 + 2.0 * (x8 * m2 * d * d * m1 * x23)) + J2 + x51
+                    + J1 + x54,
+                x56,
+                x55,
+                x62,
+            ],
+            [
+                x44,
+                x56,
+                x48 + J2
+                    + x8 * (x8 * (J2 + x51 - J1) + 2.0 * (x12 * m2 * d * d * m1 * x23))
+                    + Izz + J1 + x54,
+                x68,
+                x55,
+            ],
+            [x45, x55, x68, x48 + J2, x55],
+            [x46, x62, x55, x55, J2 + x51],
+        ];
+        let mut force: [f64; 5] = [
+            u2 * (x7 * x71 * J1 - x72 + x73 + x74)
+                + (x12 * x80 * u3 - x77 * x8 * u2 + (-x81 - x85) * x86
+                    + (x88 - x87) * x89) * J2
+                - (u3 * x90
+                    + x8 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x35) - 2.0 * J1) * x7
+                        * u1 + m2 * d * d * (x19 * x7 * x89 + x91) * m1 * x23) * u5
+                + u3 * (x94 - x92 - x93 + x84 * x19 * J1)
+                + d
+                    * (m2
+                        * (x97 * (x100 * m1 * x23 - x77 * x36 * x7)
+                            + (x7 * (x36 * x71 - x19 * m1 * u2 * x23)
+                                - x12 * x8 * u4 * m1 * x23) * x103
+                            + x105
+                                * (x77 * x19 * x7 * m1 * x23
+                                    + x8 * (x19 * m1 * x71 * x23 + u5 * x36)))
+                        + (x107 * (x80 * x19 * x47 + m2 * x110 * x23)
+                            + (m2 * (x111 + x112) * x23 - x84 * x19 * x47) * x115
+                            + x118
+                                * (x12 * (m2 * x84 * x7 * x23 + u4 * x47)
+                                    - m2 * x80 * x19 * x7 * x23)) * m1
+                        + m0
+                            * (d * x120 * (-x19 * m1 * u2 - m2 * u3 * x7) + x121 * x122
+                                + (x19 * u1 * m1 + x8 * u5 * m2) * x124) * x23 * x23)
+                - u4
+                    * (m2 * (x19 * x7 * x113 - x111) * d * d * m1 * x23 + x125 * u2
+                        + x12 * (2.0 * J2 - 2.0 * J1 + d * d * x52 * m1) * x19 * u1),
+            m2
+                * (x105 * (x77 * x7 * x126 - x61 * x71)
+                    + x97 * (u4 * x19 * d * x7 * m1 * x23 + x8 * u5 * x126 + x61 * x89)
+                    + (-x8 * u4 * x19 * d * m1 * x23 - x127) * x103
+                    - u5
+                        * (x128
+                            + x7
+                                * (u5 * x126
+                                    + (a * ((2.0 * m2 - 2.0 * m1) * x23 - 2.0) - 2.0 * x57)
+                                        * u2)) * d) - (x130 - x129 - x131) * u3
+                + m1
+                    * (x107 * (m2 * (-x111 - x112) * d * x23 + x80 * x40)
+                        + x118 * d * (m2 * x132 * x7 * x23 + u4 * x19 * x47)
+                        + (m2 * x110 * d * x23 - x84 * x40) * x115)
+                + m0
+                    * (d
+                        * (x120 * (x21 * u2 - x8 * u5 * m2 * d)
+                            + (m2 * x7 * x89 - u4 * x19 * m1) * x122)
+                        + x124 * (-m2 * u3 * d * x7 - x21 * u1)) * x23 * x23
+                + (x133 * x71 - x12 * x84 * u3) * J1 + (x72 - x73 - x74) * u1
+                - u4
+                    * ((x12 * x7 * x86 - x108) * m2 * d * d * m1 * x23
+                        + x19 * u2
+                            * (x12 * x134
+                                + d
+                                    * ((m2 * (-2.0 * a - 2.0 * x9) + (2.0 * a + 2.0 * x20) * m1)
+                                        * x23 - 2.0 * a - 2.0 * x20) * m1) + x125 * u1)
+                + J2 * (x80 * u3 * x19 + x77 * x71 + (x12 * x84 - x80 * x19) * x86),
+            m1
+                * (x118 * (x84 * x67 - x66 * x80 * x19)
+                    - u4 * d
+                        * (x135
+                            + x19 * (u3 * (a * (x53 * x23 - 2.0) - 2.0 * x65) + x137))
+                    + (x19 * (x66 * x86 + x137) - x12 * u5 * m2 * d * x7 * x23) * x115
+                    + (x12 * u4 * x66 - x67 * x86 - u5 * m2 * x19 * d * x7 * x23) * x107)
+                - (x94 - x92 - x93) * u1
+                - u5
+                    * (m2 * (x8 * x19 * x89 - x99) * d * d * m1 * x23
+                        + u3 * x7
+                            * (m2 * d
+                                * (((2.0 * a + 2.0 * x9) * m2 + (-2.0 * a - 2.0 * x20) * m1)
+                                    * x23 - 2.0 * a - 2.0 * x9) + x8 * x134) + x90 * u1)
+                + (x8 * x71 * J1 - x129 + x130 - x131) * u2 + x84 * x80 * J1
+                + m0
+                    * (d
+                        * (x124 * (x119 - u5 * m2 * x7)
+                            + x120 * (x12 * u4 * d * m1 - x123))
+                        + (x22 * u1 - x19 * d * m1 * u2) * x122) * x23 * x23
+                + J2 * (x77 * x7 * u2 + (-x77 * x7 - x8 * x71) * x89 + x80 * x138)
+                + ((d * x100 * m1 * x23 + x104 * x71) * x103
+                    + x97 * (d * m1 * (x139 + x91) * x23 - x77 * x104)
+                    + x105 * d * (u5 * x7 * x50 + x19 * x140 * m1 * x23)) * m2,
+            x80 * (J2 * x138 + x84 * J1)
+                + d
+                    * ((x84 * x118 - x107 * x86) * x47
+                        + (m0 * ((x124 * x19 + x12 * d * x120) * x86 + x122 * x138) * x23
+                            + m2
+                                * (x19 * x105 * x140 - u5 * (x8 * x114 - x109) * d
+                                    + (x12 * (u4 * x7 - x69 + x70) - x98) * x103
+                                    + x97 * (x12 * (x75 + x8 * u4 + x76) + x139))) * x23
+                        - u4 * (u3 * x19 * x136 + x135)) * m1,
+            (x133 * J1 + x77 * J2) * x71
+                + m2 * d
+                    * ((x97 * x89 - x105 * x71) * x50 - u5 * (x128 + x127)
+                        + (m0 * (x7 * x122 * x89 + x124 * x71 + x8 * d * x120 * x101)
+                            * x23
+                            + (x115 * (x8 * (u5 * x19 + x82 + x83) - x109)
+                                + x132 * x118 * x7 - u4 * (x12 * x102 - x98) * d
+                                + x107 * (x8 * (x79 - x12 * u5 - x78) - x112)) * m1) * x23),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x2 * x4;
+        dstate[1] = u2 * x1 - u3 * x0;
+        dstate[2] = x5 * x2 * x4 + u1;
+        dstate[3] = u4;
+        dstate[4] = u5;
+        dstate[5] = (G_X
+            + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
+                + (x12 * x15 * d + a * x15) * m1) * u2
+            + d
+                * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
+                    + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
+                    + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
+            + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0))) * x23;
+        dstate[6] = (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1))
+            + G_Y + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
+            + d
+                * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
+                    + u5 * m2 * x33)) * x23;
+        dstate[7] = (G_Z
+            + d
+                * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
+                    + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
+                    + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
+            + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
+            + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23;
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let X_dot = qdot[5];
+        let Y_dot = qdot[6];
+        let Z_dot = qdot[7];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(phi);
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = f64::cos(psi);
+        let x5 = f64::sin(gamma2);
+        let x6 = m2 * x5 * x1;
+        let x7 = f64::sin(gamma1);
+        let x8 = x7 * x3 * m1;
+        let x9 = f64::cos(gamma2);
+        let x10 = f64::cos(gamma1);
+        let x11 = m2 * (a + x9 * d) + (-a - x10 * d) * m1;
+        let x12 = (x6 + x8) * x2 * d + x11 * x0;
+        let x13 = f64::sin(psi);
+        let x14 = x4 * x1;
+        let x15 = x0 * x3 * x13;
+        let x16 = -x14 - x15;
+        let x17 = a * x2 * x13;
+        let x18 = x4 * x3;
+        let x19 = x0 * x1 * x13;
+        let x20 = m2 + m0 + m1;
+        let x21 = x0 * x4 * x3;
+        let x22 = x1 * x13;
+        let x23 = x3 * x13 + x0 * x4 * x1;
+        let x24 = x21 - x22;
+        let x25 = x19 - x18;
+        let x26 = a * x4 * x2;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            q[7],
+            phi_dot - x0 * psi_dot,
+            theta_dot * x1 + x2 * psi_dot * x3,
+            x2 * psi_dot * x1 - theta_dot * x3,
+            gamma1_dot,
+            gamma2_dot,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            theta_dot * x4 * x12
+                + psi_dot
+                    * (m1 * (d * (x16 * x7 - x10 * x2 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x5 - x9 * x2 * x13)))
+                + X_dot * x20
+                + ((m2 * (x22 - x21) * x5 + x23 * x7 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x10 * x24 - x4 * x7 * x2)
+                    - m2 * gamma2_dot * (-x4 * x2 * x5 - x9 * x23)) * d,
+            Y_dot * x20
+                + (gamma1_dot * m1 * (x10 * (x14 + x15) - x7 * x2 * x13)
+                    - m2 * gamma2_dot * (-x2 * x5 * x13 - x9 * x25)
+                    + (m2 * x16 * x5 + x7 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x7 * x24 + x10 * x4 * x2))
+                    + m2 * (-x26 - d * (x9 * x4 * x2 - x23 * x5))) * psi_dot
+                + theta_dot * x13 * x12,
+            Z_dot * x20 + theta_dot * (x0 * d * (-x6 - x8) + x11 * x2)
+                + ((x7 * m1 * x1 - m2 * x5 * x3) * x2 * phi_dot
+                    + (x9 * x2 * x1 - x0 * x5) * m2 * gamma2_dot
+                    + (x10 * x2 * x3 + x0 * x7) * gamma1_dot * m1) * d,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma2);
+        let x8 = f64::cos(gamma2);
+        let x9 = x8 * d;
+        let x10 = -a - x9;
+        let x11 = f64::sin(psi);
+        let x12 = f64::cos(gamma1);
+        let x13 = x0 * x11;
+        let x14 = x5 * x6 * x1;
+        let x15 = x13 + x14;
+        let x16 = x5 * x6 * x0;
+        let x17 = x1 * x11;
+        let x18 = -x13 - x14;
+        let x19 = f64::sin(gamma1);
+        let x20 = x12 * d;
+        let x21 = m2 * x10 + (a + x20) * m1;
+        let x22 = m2 * (a + x9) + (-a - x20) * m1;
+        let x23 = 1.0 / (m2 + m0 + m1);
+        let x24 = x6 * x1;
+        let x25 = x5 * x0 * x11;
+        let x26 = -x24 - x25;
+        let x27 = x12 * x26 + x19 * x3 * x11;
+        let x28 = x24 + x25;
+        let x29 = x6 * x0;
+        let x30 = x5 * x1 * x11;
+        let x31 = x30 - x29;
+        let x32 = x29 - x30;
+        let x33 = x8 * x32 - x3 * x7 * x11;
+        let value = x3;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            x2 * x4,
+            u2 * x1 - u3 * x0,
+            x5 * x2 * x4 + u1,
+            u4,
+            u5,
+            (G_X
+                + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
+                    + (x12 * x15 * d + a * x15) * m1) * u2
+                + d
+                    * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
+                        + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
+                        + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
+                + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0)))
+                * x23,
+            (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1)) + G_Y
+                + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
+                + d
+                    * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
+                        + u5 * m2 * x33)) * x23,
+            (G_Z
+                + d
+                    * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
+                        + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
+                        + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
+                + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
+                + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

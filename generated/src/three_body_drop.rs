@@ -434,9 +434,9 @@ pub fn position_residuals(
 ///the reduced Volterra equations (paper Eqs. 64-67): 10 states, 5 equations.
 pub mod reduced_volterra {
     use super::*;
-    ///Length of the state `[q; u]`.
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
     pub const STATES: usize = 10;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 5;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
@@ -453,6 +453,8 @@ pub mod reduced_volterra {
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = false;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
     ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
@@ -621,7 +623,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut mass: [[f64; 5]; 5] = [
+        let mut matrix: [[f64; 5]; 5] = [
             [
                 ((x7 * x7 * (x6 - 1.0) - x6 + 1.0) * m1
                     + m2 * (x8 * x8 * x10 - x9 + 1.0)) * d * d + (x11 + x12) * J1 + Ixx
@@ -749,7 +751,7 @@ pub mod reduced_volterra {
                                 + x112 * x98 * x21 - u4 * (x7 * x81 - x77) * d
                                 + x87 * (x8 * (x58 - x7 * u5 - x57) - x92)) * m1) * x5),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -773,7 +775,7 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -878,7 +880,7 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,

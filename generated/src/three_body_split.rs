@@ -474,13 +474,13 @@ pub fn position_residuals(
 ) -> [f64; NUM_HOLONOMIC] {
     []
 }
-///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
-pub mod reduced_volterra {
+///Lagrange's equations with multipliers: 16 states, 8 equations.
+pub mod lagrange {
     use super::*;
-    ///Length of the state `[q; u]`.
-    pub const STATES: usize = 13;
-    ///Number of dynamical equations (quasi-velocities).
-    pub const EQUATIONS: usize = 5;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 16;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 8;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
         "psi",
@@ -491,15 +491,20 @@ pub mod reduced_volterra {
         "X",
         "Y",
         "Z",
-        "u1",
-        "u2",
-        "u3",
-        "u4",
-        "u5",
+        "psi'",
+        "theta'",
+        "phi'",
+        "gamma1'",
+        "gamma2'",
+        "X'",
+        "Y'",
+        "Z'",
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
         t: f64,
@@ -508,233 +513,319 @@ pub mod reduced_volterra {
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
     ) -> Result<(), EvalError> {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m0 = params.m0;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let mut v = [0.0f64; 141];
+        let mut v = [0.0f64; 257];
         rhs_part0(t, state, params, g_i, dstate, &mut v);
         rhs_part1(t, state, params, g_i, dstate, &mut v);
         rhs_part2(t, state, params, g_i, dstate, &mut v);
         rhs_part3(t, state, params, g_i, dstate, &mut v);
-        let value = v[3];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut mass: [[f64; 5]; 5] = [
+        rhs_part4(t, state, params, g_i, dstate, &mut v);
+        rhs_part5(t, state, params, g_i, dstate, &mut v);
+        rhs_part6(t, state, params, g_i, dstate, &mut v);
+        let mut matrix: [[f64; 8]; 8] = [
             [
-                ((v[12] * v[12] * (v[34] - 1.0) - v[34] + 1.0) * m1
-                    + m2 * (v[8] * v[8] * v[36] - v[35] + 1.0)) * d * d
-                    + (v[37] + v[38]) * J1 + Ixx + J2 * (2.0 - v[37] - v[38]),
-                v[42],
-                v[44],
-                v[45],
-                v[46],
+                J2 * (v[5] * v[5] + v[1] * v[1] * (v[6] + v[8]) + v[13] * v[13])
+                    + (v[21] * v[21] + v[29] * v[29]) * m1 - v[3] * (v[33] - v[30])
+                    + (v[36] * v[36] + v[39] * v[39]) * J1
+                    + m2 * (v[46] * v[46] + v[51] * v[51]) + v[1] * (v[56] + v[61]),
+                v[80],
+                v[87],
+                v[89],
+                v[92],
+                v[93],
+                v[94],
+                0.0,
             ],
             [
-                v[42],
-                Iyy + v[12] * (v[12] * v[49] + 2.0 * (v[8] * m2 * d * d * m1 * v[23]))
-                    + J2 + v[51] + J1 + v[54],
-                v[56],
-                v[55],
-                v[62],
+                v[80],
+                J2 + v[9] * (v[64] + 2.0 * v[65])
+                    + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[69] + Izz
+                    + (v[79] * v[7] + 2.0 * v[54]) * v[7] + J1,
+                v[98],
+                v[100],
+                v[101],
+                v[108],
+                v[109],
+                v[111],
             ],
             [
-                v[44],
-                v[56],
-                v[48] + J2
-                    + v[8]
-                        * (v[8] * (J2 + v[51] - J1)
-                            + 2.0 * (v[12] * m2 * d * d * m1 * v[23])) + Izz + J1
-                    + v[54],
-                v[68],
-                v[55],
+                v[87],
+                v[98],
+                (v[74] + v[76]) * J1 + Ixx + J2 * (2.0 - v[74] - v[76])
+                    + (v[77] + v[112]) * d * d,
+                0.0,
+                0.0,
+                v[115],
+                v[117],
+                v[121],
             ],
-            [v[45], v[55], v[68], v[48] + J2, v[55]],
-            [v[46], v[62], v[55], v[55], J2 + v[51]],
+            [v[89], v[100], 0.0, J2 + v[69], 0.0, v[123], v[127], v[128]],
+            [v[92], v[101], 0.0, 0.0, v[62] + J2, v[130], v[133], v[134]],
+            [v[93], v[108], v[115], v[123], v[130], v[135], 0.0, 0.0],
+            [v[94], v[109], v[117], v[127], v[133], 0.0, v[135], 0.0],
+            [0.0, v[111], v[121], v[128], v[134], 0.0, 0.0, v[135]],
         ];
-        let mut force: [f64; 5] = [
-            u2 * (v[7] * v[71] * J1 - v[72] + v[73] + v[74])
-                + (v[12] * v[80] * u3 - v[77] * v[8] * u2 + (-v[81] - v[85]) * v[86]
-                    + (v[88] - v[87]) * v[89]) * J2
-                - (u3 * v[90]
-                    + v[8] * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * v[35]) - 2.0 * J1)
-                        * v[7] * u1
-                    + m2 * d * d * (v[19] * v[7] * v[89] + v[91]) * m1 * v[23]) * u5
-                + u3 * (v[94] - v[92] - v[93] + v[84] * v[19] * J1)
-                + d
+        let mut force: [f64; 8] = [
+            0.5
+                * ((2.0 * ((v[153] + v[156] + v[157]) * v[158])
+                    + 2.0
+                        * ((psi_dot * v[144]
+                            + (v[4] * v[49] * phi_dot + gamma1_dot * v[159]) * d
+                            + theta_dot * v[161] * v[14]) * v[162])) * m1)
+                - phi_dot
+                    * (theta_dot * v[137]
+                        + psi_dot
+                            * (((2.0 * (v[42] * v[29]) + 2.0 * (v[49] * v[21])) * v[4]
+                                * m1
+                                + m2 * v[11]
+                                    * (2.0 * (v[51] * v[124]) + 2.0 * (v[113] * v[46]))) * d
+                                + v[1]
+                                    * ((v[1] * (-v[58] - v[2] * Izz) + v[59]
+                                        + 2.0 * (v[39] * v[4] * J1) + 2.0 * (v[0] * v[5] * J2)
+                                        + v[60]) * v[7] - v[3] * (v[2] * Ixz - Ixy * v[7])
+                                        + (v[1] * (Iyy * v[7] + v[54]) - 2.0 * (v[9] * v[13] * J2)
+                                            - v[52] - v[55] + 2.0 * (v[11] * J1 * v[36])) * v[2]))
+                        + (v[99] * gamma1_dot * v[2] + phi_dot * v[98]
+                            + gamma2_dot * v[91] * v[7]) * v[1] + d * v[139])
+                - (((2.0 * v[140] + 2.0 * v[28]) * m1 * v[21]
+                    + m2 * (-2.0 * v[142] - 2.0 * v[45]) * v[51]) * psi_dot
+                    + Y_dot * v[93] + X_dot * v[145]) * psi_dot
+                - gamma2_dot
+                    * (phi_dot * v[146] + theta_dot * v[2] * v[148]
+                        + ((2.0 * (v[13] * J2) + 2.0 * (v[149] * J1)) * v[36]
+                            + m2 * (-2.0 * (v[51] * v[150]) - 2.0 * (v[129] * v[46]))
+                                * d) * psi_dot
+                        + m2 * d
+                            * (-v[151] - a * gamma2_dot * v[1] * v[11] * v[2] - v[152]))
+                + 0.5
                     * (m2
-                        * (v[97] * (v[100] * m1 * v[23] - v[77] * v[36] * v[7])
-                            + (v[7] * (v[36] * v[71] - v[19] * m1 * u2 * v[23])
-                                - v[12] * v[8] * u4 * m1 * v[23]) * v[103]
-                            + v[105]
-                                * (v[77] * v[19] * v[7] * m1 * v[23]
-                                    + v[8] * (v[19] * m1 * v[71] * v[23] + u5 * v[36])))
-                        + (v[107] * (v[80] * v[19] * v[47] + m2 * v[110] * v[23])
-                            + (m2 * (v[111] + v[112]) * v[23] - v[84] * v[19] * v[47])
-                                * v[115]
-                            + v[118]
-                                * (v[12] * (m2 * v[84] * v[7] * v[23] + u4 * v[47])
-                                    - m2 * v[80] * v[19] * v[7] * v[23])) * m1
-                        + m0
-                            * (d * v[120] * (-v[19] * m1 * u2 - m2 * u3 * v[7])
-                                + v[121] * v[122]
-                                + (v[19] * u1 * m1 + v[8] * u5 * m2) * v[124]) * v[23]
-                            * v[23])
-                - u4
-                    * (m2 * (v[19] * v[7] * v[113] - v[111]) * d * d * m1 * v[23]
-                        + v[125] * u2
-                        + v[12] * (2.0 * J2 - 2.0 * J1 + d * d * v[52] * m1) * v[19]
-                            * u1),
-            m2
-                * (v[105] * (v[77] * v[7] * v[126] - v[61] * v[71])
-                    + v[97]
-                        * (u4 * v[19] * d * v[7] * m1 * v[23] + v[8] * u5 * v[126]
-                            + v[61] * v[89])
-                    + (-v[8] * u4 * v[19] * d * m1 * v[23] - v[127]) * v[103]
-                    - u5
-                        * (v[128]
-                            + v[7]
-                                * (u5 * v[126]
-                                    + (a * ((2.0 * m2 - 2.0 * m1) * v[23] - 2.0) - 2.0 * v[57])
-                                        * u2)) * d) - (v[130] - v[129] - v[131]) * u3
-                + m1
-                    * (v[107] * (m2 * (-v[111] - v[112]) * d * v[23] + v[80] * v[40])
-                        + v[118] * d * (m2 * v[132] * v[7] * v[23] + u4 * v[19] * v[47])
-                        + (m2 * v[110] * d * v[23] - v[84] * v[40]) * v[115])
-                + m0
-                    * (d
-                        * (v[120] * (v[21] * u2 - v[8] * u5 * m2 * d)
-                            + (m2 * v[7] * v[89] - u4 * v[19] * m1) * v[122])
-                        + v[124] * (-m2 * u3 * d * v[7] - v[21] * u1)) * v[23] * v[23]
-                + (v[133] * v[71] - v[12] * v[84] * u3) * J1
-                + (v[72] - v[73] - v[74]) * u1
-                - u4
-                    * ((v[12] * v[7] * v[86] - v[108]) * m2 * d * d * m1 * v[23]
-                        + v[19] * u2
-                            * (v[12] * v[134]
+                        * (2.0
+                            * ((psi_dot * v[143]
+                                + (v[11] * phi_dot * v[124] - gamma2_dot * v[150]) * d
+                                + v[163] * theta_dot * v[14]) * v[168])
+                            + 2.0 * (v[169] * (v[165] + v[166] + v[167]))))
+                - theta_dot
+                    * (v[170] * v[16] * Y_dot + theta_dot * v[171]
+                        + psi_dot
+                            * ((v[30] + v[172] * v[7] - v[33] + v[2] * v[173]) * v[1]
+                                + (2.0 * (v[174] * v[36]) + 2.0 * (v[39] * v[175])) * J1
+                                + m2
+                                    * (2.0 * (v[163] * v[51] * v[14])
+                                        + 2.0 * (v[16] * v[46] * v[164]))
+                                + v[3]
+                                    * (v[177] - v[176] + J2 * v[1] * (-2.0 * v[6] - 2.0 * v[8])
+                                        - v[56] - v[61])
+                                + (2.0 * (v[161] * v[21] * v[14])
+                                    + 2.0 * (v[16] * v[155] * v[29])) * m1
+                                + J2 * (2.0 * (v[13] * v[178]) + 2.0 * (v[5] * v[179])))
+                        + (v[181] + v[182]) * v[3] + v[184] * phi_dot
+                        + X_dot * v[185] * v[14])
+                - ((d * m1 * (2.0 * (v[159] * v[21]) + 2.0 * (v[29] * v[122]))
+                    + v[5] * (2.0 * (J2 * v[160]) + 2.0 * (v[39] * J1))) * psi_dot
+                    + theta_dot * v[187] * v[7]
+                    + d * m1 * (v[188] - a * v[4] * v[1] * gamma1_dot * v[7] + v[189])
+                    + v[190] * phi_dot) * gamma1_dot,
+            0.5
+                * ((2.0 * ((v[192] * v[14] + v[16] * psi_dot * v[155]) * v[158])
+                    + 2.0
+                        * (v[198]
+                            * (v[199]
                                 + d
-                                    * ((m2 * (-2.0 * a - 2.0 * v[9])
-                                        + (2.0 * a + 2.0 * v[20]) * m1) * v[23] - 2.0 * a
-                                        - 2.0 * v[20]) * m1) + v[125] * u1)
-                + J2
-                    * (v[80] * u3 * v[19] + v[77] * v[71]
-                        + (v[12] * v[84] - v[80] * v[19]) * v[86]),
-            m1
-                * (v[118] * (v[84] * v[67] - v[66] * v[80] * v[19])
-                    - u4 * d
-                        * (v[135]
-                            + v[19]
-                                * (u3 * (a * (v[53] * v[23] - 2.0) - 2.0 * v[65]) + v[137]))
-                    + (v[19] * (v[66] * v[86] + v[137])
-                        - v[12] * u5 * m2 * d * v[7] * v[23]) * v[115]
-                    + (v[12] * u4 * v[66] - v[67] * v[86]
-                        - u5 * m2 * v[19] * d * v[7] * v[23]) * v[107])
-                - (v[94] - v[92] - v[93]) * u1
-                - u5
-                    * (m2 * (v[8] * v[19] * v[89] - v[99]) * d * d * m1 * v[23]
-                        + u3 * v[7]
-                            * (m2 * d
-                                * (((2.0 * a + 2.0 * v[9]) * m2
-                                    + (-2.0 * a - 2.0 * v[20]) * m1) * v[23] - 2.0 * a
-                                    - 2.0 * v[9]) + v[8] * v[134]) + v[90] * u1)
-                + (v[8] * v[71] * J1 - v[129] + v[130] - v[131]) * u2
-                + v[84] * v[80] * J1
-                + m0
-                    * (d
-                        * (v[124] * (v[119] - u5 * m2 * v[7])
-                            + v[120] * (v[12] * u4 * d * m1 - v[123]))
-                        + (v[22] * u1 - v[19] * d * m1 * u2) * v[122]) * v[23] * v[23]
-                + J2
-                    * (v[77] * v[7] * u2 + (-v[77] * v[7] - v[8] * v[71]) * v[89]
-                        + v[80] * v[138])
-                + ((d * v[100] * m1 * v[23] + v[104] * v[71]) * v[103]
-                    + v[97] * (d * m1 * (v[139] + v[91]) * v[23] - v[77] * v[104])
-                    + v[105] * d * (u5 * v[7] * v[50] + v[19] * v[140] * m1 * v[23]))
-                    * m2,
-            v[80] * (J2 * v[138] + v[84] * J1)
+                                    * (v[3] * (v[0] * v[200] - v[4] * phi_dot * v[7])
+                                        + v[4] * v[1] * v[194])))
+                    + 2.0 * ((psi_dot * v[161] * v[14] + v[16] * v[192]) * v[162])) * m1)
+                - (Z_dot * v[201] + psi_dot * v[171] + v[204] * v[111]) * theta_dot
+                - (v[181] + v[206] + psi_dot * v[137] + phi_dot * v[183] + v[182]
+                    + theta_dot
+                        * (2.0 * (Iyz * v[7] * v[7])
+                            + ((v[9] * v[9] * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy
+                                + 2.0 * Izz + v[0] * v[0] * (2.0 * J1 - 2.0 * J2)
+                                + d * d
+                                    * (m1 * (2.0 - 2.0 * v[74]) + m2 * (2.0 * v[76] - 2.0)))
+                                * v[7] - 2.0 * v[54]) * v[2])) * phi_dot
+                + psi_dot
+                    * (0.5 * (v[207] * (v[176] - v[177])) - X_dot * v[201] * v[14]
+                        + v[3]
+                            * ((-v[2] * (gamma2_dot + v[208] + v[209])
+                                - (gamma1_dot + v[210] - v[193]) * v[7]) * J2
+                                - 0.5 * ((v[215] - v[212] - v[213]) * v[2])
+                                - 0.5 * ((v[218] - v[216] - v[217]) * v[7]))
+                        + 0.5 * (v[173] * v[214])
+                        + (v[174] * v[219] + v[175] * v[222]) * J1
+                        + 0.5 * (v[172] * v[211])
+                        + (v[223] * v[179] + v[178] * v[226]) * J2
+                        - v[16] * Y_dot * v[107]
+                        - 0.5 * ((v[207] * Ixx - Ixy * v[214] - Ixz * v[211]) * v[1]))
+                - gamma1_dot
+                    * ((v[0] * v[7] * v[7] * v[186] - 2.0 * v[68]) * theta_dot * v[4]
+                        + v[7] * (phi_dot * v[227] + v[187] * psi_dot)
+                        + (v[228] + a * v[4] * gamma1_dot * v[2] + v[229]) * d * m1)
+                - gamma2_dot
+                    * (m2 * d * (v[204] * v[13] - a * gamma2_dot * v[11] * v[7] + v[230])
+                        + (v[9]
+                            * (v[147] * v[7] * v[7] - 2.0 * v[62] - 2.0 * J2 + 2.0 * J1)
+                            - 2.0 * v[65]) * theta_dot * v[11]
+                        + (v[231] * phi_dot + psi_dot * v[148]) * v[2])
+                + 0.5
+                    * (m2
+                        * (2.0 * (v[169] * (v[16] * psi_dot * v[164] + v[232] * v[14]))
+                            + 2.0
+                                * (((v[233] * v[1] * v[11]
+                                    + v[3] * (v[9] * v[235] + v[236])) * d - v[199]) * v[237])
+                            + 2.0
+                                * ((v[163] * psi_dot * v[14] + v[16] * v[232]) * v[168]))),
+            0.5 * ((Iyy * v[211] - Iyz * v[240]) * v[214])
+                - (v[184] * psi_dot + v[206]) * theta_dot
+                - (theta_dot * v[183]
+                    + d * (v[238] * X_dot + Y_dot * v[239] + Z_dot * v[1] * v[110])
+                    + v[1] * psi_dot * v[98]) * phi_dot
+                - gamma2_dot
+                    * (v[231] * theta_dot * v[2] + psi_dot * v[146]
+                        + v[9] * (m2 * d * v[241] + v[11] * phi_dot * v[147]))
                 + d
-                    * ((v[84] * v[118] - v[107] * v[86]) * v[47]
-                        + (m0
-                            * ((v[124] * v[19] + v[12] * d * v[120]) * v[86]
-                                + v[122] * v[138]) * v[23]
-                            + m2
-                                * (v[19] * v[105] * v[140]
-                                    - u5 * (v[8] * v[114] - v[109]) * d
-                                    + (v[12] * (u4 * v[7] - v[69] + v[70]) - v[98]) * v[103]
-                                    + v[97] * (v[12] * (v[75] + v[8] * u4 + v[76]) + v[139])))
-                            * v[23] - u4 * (u3 * v[19] * v[136] + v[135])) * m1,
-            (v[133] * J1 + v[77] * J2) * v[71]
-                + m2 * d
-                    * ((v[97] * v[89] - v[105] * v[71]) * v[50] - u5 * (v[128] + v[127])
-                        + (m0
-                            * (v[7] * v[122] * v[89] + v[124] * v[71]
-                                + v[8] * d * v[120] * v[101]) * v[23]
-                            + (v[115] * (v[8] * (u5 * v[19] + v[82] + v[83]) - v[109])
-                                + v[132] * v[118] * v[7] - u4 * (v[12] * v[102] - v[98]) * d
-                                + v[107] * (v[8] * (v[79] - v[12] * u5 - v[78]) - v[112]))
-                                * m1) * v[23]),
+                    * (0.5
+                        * (m2
+                            * (2.0
+                                * ((v[3] * theta_dot * v[11] * v[2]
+                                    + (-v[9] * gamma2_dot * v[2] - v[11] * phi_dot * v[7])
+                                        * v[1]) * v[237])
+                                + 2.0
+                                    * (((v[113] * psi_dot + v[49] * phi_dot
+                                        - theta_dot * v[1] * v[2] * v[14]) * v[11]
+                                        + v[9] * gamma2_dot * v[19]) * v[169])
+                                + 2.0
+                                    * (v[168]
+                                        * ((psi_dot * v[124] - theta_dot * v[16] * v[1] * v[2]
+                                            + v[141] * phi_dot) * v[11] + v[9] * gamma2_dot * v[113]))))
+                        - psi_dot * v[139]
+                        + 0.5
+                            * ((2.0
+                                * (((-v[242] - v[3] * theta_dot * v[7]) * v[4]
+                                    + v[0] * v[1] * gamma1_dot * v[7]) * v[198])
+                                + 2.0
+                                    * ((v[4]
+                                        * (theta_dot * v[16] * v[1] * v[7] + v[113] * phi_dot
+                                            + v[49] * psi_dot) + v[0] * v[42] * gamma1_dot) * v[162])
+                                + 2.0
+                                    * ((v[0] * gamma1_dot * v[116]
+                                        + v[4]
+                                            * (v[19] * phi_dot + theta_dot * v[1] * v[7] * v[14]
+                                                + v[42] * psi_dot)) * v[158])) * m1))
+                + 0.5 * (v[207] * (-v[240] * Ixz - Ixy * v[211]))
+                + (0.5 * (v[240] * Izz) - v[212]
+                    + (v[0] * v[223] + gamma2_dot + v[208] + v[209]) * J2
+                    + v[4] * v[222] * J1 - 0.5 * v[213] + 0.5 * v[215]) * v[211]
+                + ((gamma1_dot + v[9] * v[226] + v[210] - v[193]) * J2
+                    - v[11] * v[219] * J1 - 0.5 * v[216] - 0.5 * v[217] + 0.5 * v[218])
+                    * v[240]
+                - (theta_dot * v[7] * v[227]
+                    + v[0]
+                        * (v[4] * (2.0 * J2 + 2.0 * v[69] - 2.0 * J1) * phi_dot
+                            + v[243] * d * m1) + v[190] * psi_dot) * gamma1_dot,
+            d * m1
+                * (v[245] * v[162] - psi_dot * (v[188] + v[189]) + v[158] * v[247]
+                    + (v[0] * v[195] + v[4] * v[1] * v[200]) * v[198]
+                    - gamma1_dot
+                        * (v[246] * Y_dot + Z_dot * v[160] + X_dot * v[244]
+                            + a * (v[193] - v[210]) * v[4]))
+                - (v[0] * v[243] * d * m1 + v[99] * v[214]) * phi_dot
+                - ((v[228] + v[229]) * d * m1 + v[99] * v[3] * psi_dot * v[7])
+                    * theta_dot + (v[222] * J1 + (-v[220] - v[221]) * J2) * v[223],
+            ((v[248] - v[249] - v[149] * theta_dot * v[14] - v[251]) * v[169]
+                - psi_dot * (-v[151] - v[152])
+                - gamma2_dot
+                    * (a * v[240] * v[11] - X_dot * v[252] - Y_dot * v[250]
+                        + Z_dot * v[36])
+                + v[237] * (v[235] * v[1] * v[11] + v[9] * (v[3] * v[233] - v[242]))
+                + v[168] * (v[254] - v[253] - v[149] * theta_dot * v[16] - v[255])) * m2
+                * d
+                - (v[9] * m2 * d * v[241] + v[180] * theta_dot * v[2]
+                    + v[1] * v[91] * psi_dot * v[7]) * phi_dot
+                - (m2 * d * (v[149] * (-v[202] - v[203]) + v[230])
+                    + v[3] * v[180] * psi_dot * v[2]) * theta_dot
+                + v[219] * (J2 * v[226] + (-v[224] - v[225]) * J1),
+            d
+                * (-v[245] * gamma1_dot * m1
+                    - m2 * gamma2_dot
+                        * (v[254] - v[253] - v[255] + v[13] * theta_dot * v[16])
+                    - (v[138] * psi_dot + v[238] * phi_dot
+                        + v[0] * v[42] * gamma1_dot * m1
+                        + v[120] * theta_dot * v[16] * v[1]
+                        + v[9] * m2 * gamma2_dot * v[113]) * phi_dot)
+                - theta_dot * (v[16] * v[256] + psi_dot * v[185] * v[14])
+                - psi_dot
+                    * (v[145] * psi_dot + theta_dot * v[201] * v[14]
+                        + d
+                            * (v[138] * phi_dot + gamma1_dot * v[159] * m1
+                                - m2 * gamma2_dot * v[150])),
+            (-(phi_dot * v[239] + v[120] * theta_dot * v[1] * v[14] + v[114] * psi_dot
+                + v[0] * gamma1_dot * v[116] * m1 + v[9] * m2 * gamma2_dot * v[19])
+                * phi_dot
+                - (v[248] - v[249] + v[13] * theta_dot * v[14] - v[251]) * m2
+                    * gamma2_dot - gamma1_dot * m1 * v[247]) * d
+                - theta_dot * (v[170] * v[16] * psi_dot + v[256] * v[14])
+                - (theta_dot * v[16] * v[107] + psi_dot * v[93]
+                    + (v[114] * phi_dot + gamma1_dot * m1 * v[122]
+                        - m2 * gamma2_dot * v[129]) * d) * psi_dot,
+            d
+                * (-gamma1_dot
+                    * (v[0] * v[1] * phi_dot * v[7] + gamma1_dot * v[160]
+                        + theta_dot * v[179]) * m1
+                    - phi_dot
+                        * (v[3] * theta_dot * v[205]
+                            + v[1]
+                                * (v[0] * gamma1_dot * m1 * v[7] + v[110] * phi_dot
+                                    - v[9] * m2 * gamma2_dot * v[2]))
+                    - m2 * gamma2_dot
+                        * (v[178] * theta_dot + gamma2_dot * v[36]
+                            - v[9] * v[1] * v[2] * phi_dot))
+                - theta_dot
+                    * (theta_dot * v[201]
+                        + (gamma1_dot * v[179] * m1 + m2 * gamma2_dot * v[178]
+                            + v[3] * phi_dot * v[205]) * d),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
             });
         }
-        dstate[0] = v[2] * v[4];
-        dstate[1] = u2 * v[1] - u3 * v[0];
-        dstate[2] = v[5] * v[2] * v[4] + u1;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = (G_X
-            + (m2
-                * (v[6] * (v[5] * v[10] * v[1] - v[3] * d * v[7]) + v[10] * v[0] * v[11])
-                + (v[12] * v[15] * d + a * v[15]) * m1) * u2
-            + d
-                * (u1 * (m2 * (v[16] - v[17]) * v[7] + v[18] * v[19] * m1)
-                    + u4 * m1 * (v[6] * v[19] * v[3] + v[12] * (v[17] - v[16]))
-                    + u5 * m2 * (v[8] * v[18] - v[6] * v[3] * v[7]))
-            + u3
-                * (v[21] * v[1] * v[11]
-                    + v[6] * (v[19] * v[3] * d * m1 + v[22] * v[5] * v[0]))) * v[23];
-        dstate[6] = (u3
-            * (d * (v[27] * m1 + v[8] * m2 * v[28]) + a * (m2 * v[28] + v[26] * m1))
-            + G_Y
-            + ((v[12] * d * v[31] + a * v[31]) * m1 + (a * v[32] + d * v[33]) * m2) * u2
-            + d
-                * (u4 * v[27] * m1 + (m2 * v[7] * v[28] + v[19] * v[32] * m1) * u1
-                    + u5 * m2 * v[33])) * v[23];
-        dstate[7] = (G_Z
-            + d
-                * (v[3] * u1 * (m2 * v[7] * v[0] - v[19] * m1 * v[1])
-                    + u4 * m1 * (-v[12] * v[3] * v[0] - v[5] * v[19])
-                    + u5 * m2 * (v[5] * v[7] - v[8] * v[3] * v[1]))
-            + u3 * (v[22] * v[3] * v[0] - v[5] * v[19] * d * m1)
-            + (v[3] * v[21] * v[1] + m2 * v[5] * d * v[7]) * u2) * v[23];
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
         dstate[11] = force[3];
         dstate[12] = force[4];
+        dstate[13] = force[5];
+        dstate[14] = force[6];
+        dstate[15] = force[7];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -750,74 +841,70 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 257],
     ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let u2 = state[9];
-        let u3 = state[10];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let d = params.d;
         let a = params.a;
-        v[0] = f64::sin(phi);
-        v[1] = f64::cos(phi);
-        v[2] = v[0] * u2 + u3 * v[1];
-        v[3] = f64::cos(theta);
-        v[4] = 1.0 / v[3];
-        v[5] = f64::sin(theta);
-        v[6] = f64::cos(psi);
-        v[7] = f64::sin(gamma2);
-        v[8] = f64::cos(gamma2);
-        v[9] = v[8] * d;
-        v[10] = -a - v[9];
-        v[11] = f64::sin(psi);
-        v[12] = f64::cos(gamma1);
-        v[13] = v[0] * v[11];
-        v[14] = v[5] * v[6] * v[1];
-        v[15] = v[13] + v[14];
-        v[16] = v[5] * v[6] * v[0];
-        v[17] = v[1] * v[11];
-        v[18] = -v[13] - v[14];
-        v[19] = f64::sin(gamma1);
-        v[20] = v[12] * d;
-        v[21] = m2 * v[10] + (a + v[20]) * m1;
-        v[22] = m2 * (a + v[9]) + (-a - v[20]) * m1;
-        v[23] = 1.0 / (m2 + m0 + m1);
-        v[24] = v[6] * v[1];
-        v[25] = v[5] * v[0] * v[11];
-        v[26] = -v[24] - v[25];
-        v[27] = v[12] * v[26] + v[19] * v[3] * v[11];
-        v[28] = v[24] + v[25];
-        v[29] = v[6] * v[0];
-        v[30] = v[5] * v[1] * v[11];
-        v[31] = v[30] - v[29];
-        v[32] = v[29] - v[30];
-        v[33] = v[8] * v[32] - v[3] * v[7] * v[11];
-        v[34] = m1 * v[23];
-        v[35] = m2 * v[23];
-        v[36] = v[35] - 1.0;
-        v[37] = v[12] * v[12];
-        v[38] = v[8] * v[8];
-        v[39] = v[21] * v[23];
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = v[2] * v[2];
+        v[7] = f64::cos(phi);
+        v[8] = v[7] * v[7];
+        v[9] = f64::cos(gamma2);
+        v[10] = v[9] * v[1] * v[7];
+        v[11] = f64::sin(gamma2);
+        v[12] = v[3] * v[11];
+        v[13] = v[10] - v[12];
+        v[14] = f64::sin(psi);
+        v[15] = v[0] * v[1] * v[14];
+        v[16] = f64::cos(psi);
+        v[17] = v[16] * v[7];
+        v[18] = v[3] * v[2] * v[14];
+        v[19] = -v[17] - v[18];
+        v[20] = a * v[1] * v[14];
+        v[21] = d * (v[19] * v[4] - v[15]) - v[20];
+        v[22] = a * v[16] * v[1];
+        v[23] = v[3] * v[16] * v[2];
+        v[24] = v[7] * v[14];
+        v[25] = v[23] - v[24];
+        v[26] = v[4] * v[25];
+        v[27] = v[0] * v[16] * v[1];
+        v[28] = d * (v[26] + v[27]);
+        v[29] = v[22] + v[28];
+        v[30] = v[3] * Ixx;
+        v[31] = Ixy * v[2];
+        v[32] = Ixz * v[7];
+        v[33] = (-v[31] - v[32]) * v[1];
+        v[34] = v[9] * v[3];
+        v[35] = v[1] * v[11] * v[7];
+        v[36] = -v[34] - v[35];
+        v[37] = v[0] * v[3];
+        v[38] = v[4] * v[1] * v[2];
+        v[39] = v[38] - v[37];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 257],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
+        let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
@@ -828,69 +915,61 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[39] - a - v[20];
-        v[41] = v[12] * (J1 - J2) + d * m1 * v[40];
-        v[42] = v[19] * v[41] - Ixy;
-        v[43] = m2 * d * (a + v[9] + v[39]) + v[8] * (J2 - J1);
-        v[44] = v[7] * v[43] - Ixz;
-        v[45] = v[12] * m2 * d * d * v[7] * m1 * v[23];
-        v[46] = -(v[8] * m2 * v[19] * d * d * m1 * v[23]);
-        v[47] = 1.0 - v[34];
-        v[48] = d * d * v[47] * m1;
-        v[49] = v[48] + J2 - J1;
-        v[50] = 1.0 - v[35];
-        v[51] = m2 * d * d * v[50];
-        v[52] = 2.0 - 2.0 * v[34];
-        v[53] = 2.0 * m1 - 2.0 * m2;
-        v[54] = a
-            * ((a * v[47] + v[12] * d * v[52]) * m1
-                + m2
-                    * (a
-                        + (d * (2.0 * (v[12] * m1) + v[8] * v[53]) + a * (2.0 * m1 - m2))
-                            * v[23] + 2.0 * v[9]));
-        v[55] = m2 * v[19] * d * d * v[7] * m1 * v[23];
-        v[56] = v[55] - Iyz;
-        v[57] = v[12] * d * m1 * v[23];
-        v[58] = m1 - m2;
-        v[59] = v[58] * v[23];
-        v[60] = v[59] + 1.0;
-        v[61] = d * v[50] + v[8] * (v[57] + v[60] * a);
-        v[62] = m2 * v[61] * d + J2;
-        v[63] = (m2 - m1) * v[23];
-        v[64] = v[63] + 1.0;
-        v[65] = v[8] * m2 * d * v[23];
-        v[66] = a * v[64] + v[65];
-        v[67] = v[12] * v[66] + d * v[47];
-        v[68] = J2 + v[67] * d * m1;
-        v[69] = v[8] * u1;
-        v[70] = u3 * v[7];
-        v[71] = v[69] - v[70];
-        v[72] = u3 * Izz;
-        v[73] = Iyz * u2;
-        v[74] = u1 * Ixz;
-        v[75] = v[7] * u1;
-        v[76] = v[8] * u3;
-        v[77] = v[75] + v[76];
-        v[78] = v[12] * u2;
-        v[79] = v[19] * u1;
+        v[40] = v[2] * v[14];
+        v[41] = v[3] * v[16] * v[7];
+        v[42] = v[40] + v[41];
+        v[43] = v[42] * v[11];
+        v[44] = v[9] * v[16] * v[1];
+        v[45] = d * (v[44] - v[43]);
+        v[46] = -v[22] - v[45];
+        v[47] = v[16] * v[2];
+        v[48] = v[3] * v[7] * v[14];
+        v[49] = v[47] - v[48];
+        v[50] = v[9] * v[1] * v[14];
+        v[51] = v[20] - d * (-v[49] * v[11] - v[50]);
+        v[52] = v[3] * Ixz;
+        v[53] = Izz * v[7];
+        v[54] = Iyz * v[2];
+        v[55] = (v[53] - v[54]) * v[1];
+        v[56] = (v[52] + v[55]) * v[7];
+        v[57] = Iyy * v[2];
+        v[58] = Iyz * v[7];
+        v[59] = v[1] * (v[57] - v[58]);
+        v[60] = v[3] * Ixy;
+        v[61] = v[2] * (v[59] + v[60]);
+        v[62] = m2 * d * d;
+        v[63] = v[62] + J2 - J1;
+        v[64] = v[9] * v[63];
+        v[65] = m2 * a * d;
+        v[66] = v[64] + v[65];
+        v[67] = v[66] * v[11] - Ixz;
+        v[68] = a * d * m1;
+        v[69] = d * d * m1;
+        v[70] = J2 + v[69] - J1;
+        v[71] = v[68] + v[0] * v[70];
+        v[72] = Ixy + v[4] * v[71];
+        v[73] = J2 - J1;
+        v[74] = v[0] * v[0];
+        v[75] = (v[74] - 1.0) * m1;
+        v[76] = v[9] * v[9];
+        v[77] = m2 * (1.0 - v[76]);
+        v[78] = J1 - J2;
+        v[79] = v[0] * v[0] * v[73] + Iyy + d * d * (v[75] + v[77]) - Izz
+            + v[9] * v[9] * v[78];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part2(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 257],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let Iyy = params.Iyy;
+        let Ixx = params.Ixx;
         let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -898,52 +977,48 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[78] - v[79];
-        v[81] = v[12] * v[80];
-        v[82] = v[12] * u1;
-        v[83] = v[19] * u2;
-        v[84] = v[82] + v[83];
-        v[85] = v[84] * v[19];
-        v[86] = u4 + u3;
-        v[87] = v[7] * v[71];
-        v[88] = v[77] * v[8];
-        v[89] = u5 + u2;
-        v[90] = v[7] * v[7] * (m2 * v[36] * d * d - J2 + J1) + v[8] * v[43];
-        v[91] = v[12] * v[8] * u4;
-        v[92] = Iyz * u3;
-        v[93] = Ixy * u1;
-        v[94] = Iyy * u2;
-        v[95] = a * v[7] * u2;
-        v[96] = v[75] + v[8] * v[86];
-        v[97] = (m2 * a * v[7] * u2
-            + (d * (v[19] * v[96] - v[12] * v[7] * u2) - v[95]) * m1) * v[23] - v[95];
-        v[98] = v[8] * v[19] * u2;
-        v[99] = v[12] * u4 * v[7];
-        v[100] = v[99] - v[98];
-        v[101] = -u5 - u2;
-        v[102] = v[7] * v[86] - v[69];
-        v[103] = (u5 + (m2 * v[101] + m1 * (v[19] * v[102] + v[12] * v[8] * u2)) * v[23]
-            + u2) * d + v[60] * v[8] * a * u2;
-        v[104] = v[22] * v[23] - a - v[9];
-        v[105] = u3 * v[104] + d * (v[36] * v[7] * u1 - v[12] * u4 * m1 * v[23]);
-        v[106] = a * u3 * v[19];
-        v[107] = (m2
-            * ((v[8] * u3 * v[19] + v[7] * (v[12] * v[101] + v[79])) * d + v[106])
-            - a * u3 * v[19] * m1) * v[23] + v[106];
-        v[108] = v[8] * u5 * v[19];
-        v[109] = v[12] * u3 * v[7];
-        v[110] = v[108] - v[109];
-        v[111] = v[12] * v[8] * u5;
-        v[112] = u3 * v[19] * v[7];
-        v[113] = -u4 - u3;
-        v[114] = v[19] * v[89] + v[82];
-        v[115] = v[12] * a * v[64] * u3
-            + (u4 + (v[113] * m1 + m2 * (v[12] * v[8] * u3 + v[7] * v[114])) * v[23]
-                + u3) * d;
-        v[116] = v[59] - 1.0;
-        v[117] = v[8] * m2 * v[101] + v[80] * m1;
-        v[118] = a * v[116] * u2 + d * (v[79] - v[78] + v[117] * v[23]);
-        v[119] = v[19] * v[86] * m1;
+        v[80] = Iyz * v[1] + v[3] * v[67] * v[2]
+            + (v[3] * v[72] + (v[79] * v[2] - 2.0 * v[58]) * v[1]) * v[7];
+        v[81] = m2 * (v[76] - 1.0);
+        v[82] = (v[74] + v[76] - 2.0) * J2 + (-v[74] - v[76]) * J1 - Ixx
+            + (v[75] + v[81]) * d * d;
+        v[83] = J1 - J2 - v[69];
+        v[84] = v[0] * v[83] - v[68];
+        v[85] = v[84] * v[4] - Ixy;
+        v[86] = v[67] * v[7] + v[85] * v[2];
+        v[87] = v[82] * v[3] + v[86] * v[1];
+        v[88] = v[0] * a;
+        v[89] = v[1] * (J2 + (d + v[88]) * d * m1) * v[7];
+        v[90] = v[9] * a;
+        v[91] = m2 * d * (d + v[90]) + J2;
+        v[92] = v[1] * v[91] * v[2];
+        v[93] = m1 * v[21] + m2 * v[51];
+        v[94] = m1 * v[29] + m2 * v[46];
+        v[95] = J1 - v[62] - J2;
+        v[96] = v[9] * v[95] - v[65];
+        v[97] = Ixz + v[11] * v[96];
+        v[98] = v[97] * v[2] + v[85] * v[7];
+        v[99] = (-d - v[88]) * d * m1 - J2;
+        v[100] = v[99] * v[2];
+        v[101] = v[91] * v[7];
+        v[102] = m2 * v[11] * v[7];
+        v[103] = v[4] * v[2] * m1;
+        v[104] = v[9] * d;
+        v[105] = v[0] * d;
+        v[106] = m2 * (a + v[104]) + (-a - v[105]) * m1;
+        v[107] = (v[102] + v[103]) * v[1] * d + v[106] * v[3];
+        v[108] = v[16] * v[107];
+        v[109] = v[14] * v[107];
+        v[110] = -v[102] - v[103];
+        v[111] = v[3] * d * v[110] + v[106] * v[1];
+        v[112] = (1.0 - v[74]) * m1;
+        v[113] = v[24] - v[23];
+        v[114] = m2 * v[113] * v[11] + v[42] * v[4] * m1;
+        v[115] = v[114] * d;
+        v[116] = v[48] - v[47];
+        v[117] = (m2 * v[19] * v[11] + v[4] * v[116] * m1) * d;
+        v[118] = m2 * v[11] * v[2];
+        v[119] = v[4] * m1 * v[7];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -953,45 +1028,262 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 257],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let m0 = params.m0;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = m2 * v[7] * v[101] + v[119];
-        v[121] = m2 * v[7] * u1 - v[12] * u4 * m1;
-        v[122] = d * v[117] + a * v[58] * u2;
-        v[123] = v[22] * u3;
-        v[124] = v[123] + v[121] * d;
-        v[125] = v[12] * v[41] + v[19] * v[19] * v[49];
-        v[126] = (v[63] - 1.0) * a - v[57];
-        v[127] = v[7] * u2 * v[126];
-        v[128] = v[19] * d * m1 * v[96] * v[23];
-        v[129] = Ixy * u2;
-        v[130] = Ixx * u1;
-        v[131] = u3 * Ixz;
-        v[132] = u5 + v[81] + v[85];
-        v[133] = -v[75] - v[76];
-        v[134] = 2.0 * J1 - 2.0 * J2;
-        v[135] = m2 * d * v[7] * v[23] * (v[12] * v[89] - v[79]);
-        v[136] = a * v[116] - v[65];
-        v[137] = u4 * v[136];
-        v[138] = -v[82] - v[83];
-        v[139] = v[19] * v[7] * u2;
-        v[140] = u4 - v[87] + v[88];
+        v[120] = v[119] - v[118];
+        v[121] = v[120] * v[1] * d;
+        v[122] = v[0] * v[25] - v[16] * v[4] * v[1];
+        v[123] = d * m1 * v[122];
+        v[124] = v[17] + v[18];
+        v[125] = v[4] * v[1] * v[14];
+        v[126] = v[0] * v[124] - v[125];
+        v[127] = d * m1 * v[126];
+        v[128] = v[5] * d * m1;
+        v[129] = -v[16] * v[1] * v[11] - v[9] * v[42];
+        v[130] = -(m2 * v[129] * d);
+        v[131] = v[1] * v[11] * v[14];
+        v[132] = -v[131] - v[9] * v[116];
+        v[133] = -(m2 * d * v[132]);
+        v[134] = v[13] * m2 * d;
+        v[135] = m2 + m0 + m1;
+        v[136] = v[2]
+            * (v[9] * v[9] * v[73] - Iyy + d * d * (v[112] + v[81]) + Izz
+                + v[0] * v[0] * v[78]);
+        v[137] = v[3] * v[86]
+            + v[1] * (v[79] * v[7] * v[7] + v[2] * (4.0 * v[58] + v[136]));
+        v[138] = m2 * v[11] * v[124] + v[4] * v[49] * m1;
+        v[139] = v[114] * Y_dot + v[138] * X_dot;
+        v[140] = (v[113] * v[4] - v[27]) * d;
+        v[141] = -v[40] - v[41];
+        v[142] = (-v[141] * v[11] - v[44]) * d;
+        v[143] = v[22] - v[142];
+        v[144] = v[140] - v[22];
+        v[145] = m2 * v[143] + m1 * v[144];
+        v[146] = v[95] * v[1] * v[11] * v[11] * v[7]
+            + v[9]
+                * (v[66] * v[1] * v[7]
+                    + (2.0 * J1 - 2.0 * v[62] - 2.0 * J2) * v[3] * v[11]);
+        v[147] = 2.0 * v[62] + 2.0 * J2 - 2.0 * J1;
+        v[148] = v[3] * v[95] * v[11] * v[11]
+            + v[9] * (v[1] * v[11] * v[147] * v[7] + v[3] * v[66]);
+        v[149] = v[12] - v[10];
+        v[150] = v[131] - v[9] * v[49];
+        v[151] = X_dot * v[150];
+        v[152] = v[129] * Y_dot;
+        v[153] = d * (v[42] * v[4] * phi_dot + gamma1_dot * v[122]);
+        v[154] = a * v[3];
+        v[155] = v[39] * d - v[154];
+        v[156] = theta_dot * v[16] * v[155];
+        v[157] = psi_dot * v[21];
+        v[158] = Y_dot + psi_dot * v[29]
+            + d * (gamma1_dot * v[126] + v[4] * v[116] * phi_dot)
+            + theta_dot * v[155] * v[14];
+        v[159] = v[0] * v[19] + v[125];
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part4(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[160] = v[37] - v[38];
+        v[161] = d * v[160] + v[154];
+        v[162] = X_dot + v[153] + v[156] + v[157];
+        v[163] = -(v[34] + v[35]) * d - v[154];
+        v[164] = v[154] - d * v[36];
+        v[165] = theta_dot * v[16] * v[164];
+        v[166] = psi_dot * v[51];
+        v[167] = (v[113] * v[11] * phi_dot - gamma2_dot * v[129]) * d;
+        v[168] = v[165] + v[166] + X_dot + v[167];
+        v[169] = d * (v[19] * v[11] * phi_dot - gamma2_dot * v[132]) + Y_dot
+            + psi_dot * v[46] + theta_dot * v[164] * v[14];
+        v[170] = v[155] * m1 + m2 * v[164];
+        v[171] = v[1] * v[67] * v[2]
+            + (v[72] * v[1] + (2.0 * v[58] + v[136]) * v[3]) * v[7] - v[3] * Iyz;
+        v[172] = v[3] * (v[54] - v[53]) + v[1] * Ixz;
+        v[173] = Ixy * v[1] + v[3] * (v[58] - v[57]);
+        v[174] = v[3] * v[11] * v[7] - v[9] * v[1];
+        v[175] = -v[0] * v[1] - v[3] * v[4] * v[2];
+        v[176] = (v[31] + v[32]) * v[3];
+        v[177] = Ixx * v[1];
+        v[178] = -v[9] * v[3] * v[7] - v[1] * v[11];
+        v[179] = v[4] * v[1] - v[0] * v[3] * v[2];
+        v[180] = m2 * d * (-d - v[90]) - J2;
+        v[181] = gamma2_dot * v[180] * v[2];
+        v[182] = v[99] * gamma1_dot * v[7];
+        v[183] = v[72] * v[2] + v[97] * v[7];
+        v[184] = v[3] * v[183] + v[82] * v[1];
+        v[185] = m2 * v[163] + v[161] * m1;
+        v[186] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[69];
+        v[187] = v[0] * (v[3] * v[71] + v[4] * v[1] * v[2] * v[186])
+            + v[3] * v[83] * v[4] * v[4];
+        v[188] = X_dot * v[159];
+        v[189] = Y_dot * v[122];
+        v[190] = v[70] * v[4] * v[4] * v[1] * v[2]
+            + v[0] * (v[84] * v[1] * v[2] + v[3] * v[4] * v[186]);
+        v[191] = a * v[1];
+        v[192] = theta_dot * (d * v[175] - v[191])
+            + d * (v[5] * gamma1_dot + v[4] * v[1] * phi_dot * v[7]);
+        v[193] = theta_dot * v[2];
+        v[194] = gamma1_dot - v[193];
+        v[195] = v[3] * v[194] + v[1] * phi_dot * v[7];
+        v[196] = gamma1_dot * v[2];
+        v[197] = a * theta_dot * v[1];
+        v[198] = Z_dot + (v[195] * v[4] + v[0] * v[1] * (v[196] - theta_dot)) * d
+            - v[197];
+        v[199] = a * v[3] * theta_dot;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part5(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        v[200] = theta_dot - v[196];
+        v[201] = v[3] * (m2 * (-a - v[104]) + (a + v[105]) * m1) + v[1] * d * v[110];
+        v[202] = Y_dot * v[14];
+        v[203] = X_dot * v[16];
+        v[204] = v[202] + v[203];
+        v[205] = v[118] - v[119];
+        v[206] = (v[204] * v[120] * v[1] + Z_dot * v[3] * v[205]) * d;
+        v[207] = phi_dot - v[3] * psi_dot;
+        v[208] = theta_dot * v[7];
+        v[209] = v[1] * psi_dot * v[2];
+        v[210] = v[1] * psi_dot * v[7];
+        v[211] = v[210] - v[193];
+        v[212] = Iyz * v[211];
+        v[213] = v[207] * Ixy;
+        v[214] = v[208] + v[209];
+        v[215] = Iyy * v[214];
+        v[216] = Iyz * v[214];
+        v[217] = v[207] * Ixz;
+        v[218] = Izz * v[211];
+        v[219] = v[9] * v[207] - v[11] * v[211];
+        v[220] = v[0] * v[207];
+        v[221] = v[4] * v[214];
+        v[222] = v[220] + v[221];
+        v[223] = v[0] * v[214] - v[207] * v[4];
+        v[224] = v[9] * v[211];
+        v[225] = v[207] * v[11];
+        v[226] = v[224] + v[225];
+        v[227] = v[0] * v[84] + v[70] * v[4] * v[4];
+        v[228] = v[204] * v[5];
+        v[229] = Z_dot * v[179];
+        v[230] = Z_dot * v[178];
+        v[231] = v[63] * v[11] * v[11] + v[9] * v[96];
+        v[232] = d * (-gamma2_dot * v[149] - v[1] * v[11] * v[2] * phi_dot)
+            + theta_dot * (v[191] - v[174] * d);
+        v[233] = -gamma2_dot - v[208];
+        v[234] = gamma2_dot * v[7];
+        v[235] = -v[234] - theta_dot;
+        v[236] = v[11] * v[2] * phi_dot;
+        v[237] = Z_dot + v[197]
+            + (v[3] * v[233] * v[11] + (v[9] * (v[234] + theta_dot) - v[236]) * v[1])
+                * d;
+        v[238] = v[113] * v[4] * m1 + m2 * v[141] * v[11];
+        v[239] = v[19] * v[4] * m1 + m2 * v[49] * v[11];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part6(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        v[240] = -v[208] - v[209];
+        v[241] = v[19] * Y_dot + X_dot * v[113] - Z_dot * v[1] * v[2];
+        v[242] = v[1] * v[2] * phi_dot;
+        v[243] = Y_dot * v[116] + Z_dot * v[1] * v[7] + v[42] * X_dot;
+        v[244] = -v[26] - v[27];
+        v[245] = v[5] * theta_dot * v[16] + psi_dot * v[159] + v[244] * gamma1_dot
+            + v[0] * v[42] * phi_dot;
+        v[246] = -v[15] - v[4] * v[124];
+        v[247] = v[0] * v[116] * phi_dot + v[246] * gamma1_dot + psi_dot * v[122]
+            + v[5] * theta_dot * v[14];
+        v[248] = v[9] * v[19] * phi_dot;
+        v[249] = v[129] * psi_dot;
+        v[250] = v[11] * v[116] - v[50];
+        v[251] = gamma2_dot * v[250];
+        v[252] = v[43] - v[44];
+        v[253] = gamma2_dot * v[252];
+        v[254] = v[9] * v[113] * phi_dot;
+        v[255] = psi_dot * v[150];
+        v[256] = d
+            * (v[120] * v[1] * phi_dot - m2 * gamma2_dot * v[149]
+                + v[5] * gamma1_dot * m1) + theta_dot * v[111];
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -1017,33 +1309,33 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
-        let x5 = f64::sin(gamma2);
-        let x6 = m2 * x5 * x1;
-        let x7 = f64::sin(gamma1);
-        let x8 = x7 * x3 * m1;
-        let x9 = f64::cos(gamma2);
-        let x10 = f64::cos(gamma1);
-        let x11 = m2 * (a + x9 * d) + (-a - x10 * d) * m1;
-        let x12 = (x6 + x8) * x2 * d + x11 * x0;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(gamma2);
+        let x2 = f64::cos(phi);
+        let x3 = m2 * x1 * x2;
+        let x4 = f64::sin(gamma1);
+        let x5 = f64::sin(phi);
+        let x6 = x4 * x5 * m1;
+        let x7 = f64::cos(theta);
+        let x8 = f64::cos(gamma2);
+        let x9 = f64::cos(gamma1);
+        let x10 = m2 * (a + x8 * d) + (-a - x9 * d) * m1;
+        let x11 = f64::sin(theta);
+        let x12 = (x3 + x6) * x7 * d + x10 * x11;
         let x13 = f64::sin(psi);
-        let x14 = x4 * x1;
-        let x15 = x0 * x3 * x13;
+        let x14 = x0 * x2;
+        let x15 = x11 * x5 * x13;
         let x16 = -x14 - x15;
-        let x17 = a * x2 * x13;
-        let x18 = x4 * x3;
-        let x19 = x0 * x1 * x13;
+        let x17 = a * x7 * x13;
+        let x18 = x0 * x5;
+        let x19 = x11 * x2 * x13;
         let x20 = m2 + m0 + m1;
-        let x21 = x0 * x4 * x3;
-        let x22 = x1 * x13;
-        let x23 = x3 * x13 + x0 * x4 * x1;
+        let x21 = x11 * x0 * x5;
+        let x22 = x2 * x13;
+        let x23 = x5 * x13 + x11 * x0 * x2;
         let x24 = x21 - x22;
         let x25 = x19 - x18;
-        let x26 = a * x4 * x2;
+        let x26 = a * x0 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1065,32 +1357,35 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            psi_dot,
+            theta_dot,
+            phi_dot,
             gamma1_dot,
             gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x4 * x12
+            theta_dot * x0 * x12
                 + psi_dot
-                    * (m1 * (d * (x16 * x7 - x10 * x2 * x13) - x17)
-                        + m2 * (x17 - d * (-(x18 - x19) * x5 - x9 * x2 * x13)))
+                    * (m1 * (d * (x16 * x4 - x9 * x7 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x1 - x8 * x7 * x13)))
                 + X_dot * x20
-                + ((m2 * (x22 - x21) * x5 + x23 * x7 * m1) * phi_dot
-                    + gamma1_dot * m1 * (x10 * x24 - x4 * x7 * x2)
-                    - m2 * gamma2_dot * (-x4 * x2 * x5 - x9 * x23)) * d,
+                + ((m2 * (x22 - x21) * x1 + x23 * x4 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x9 * x24 - x0 * x4 * x7)
+                    - m2 * gamma2_dot * (-x0 * x7 * x1 - x8 * x23)) * d,
             Y_dot * x20
-                + (gamma1_dot * m1 * (x10 * (x14 + x15) - x7 * x2 * x13)
-                    - m2 * gamma2_dot * (-x2 * x5 * x13 - x9 * x25)
-                    + (m2 * x16 * x5 + x7 * x25 * m1) * phi_dot) * d
-                + (m1 * (x26 + d * (x7 * x24 + x10 * x4 * x2))
-                    + m2 * (-x26 - d * (x9 * x4 * x2 - x23 * x5))) * psi_dot
+                + (gamma1_dot * m1 * (x9 * (x14 + x15) - x4 * x7 * x13)
+                    - m2 * gamma2_dot * (-x7 * x1 * x13 - x8 * x25)
+                    + (m2 * x16 * x1 + x4 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x4 * x24 + x9 * x0 * x7))
+                    + m2 * (-x26 - d * (x8 * x0 * x7 - x23 * x1))) * psi_dot
                 + theta_dot * x13 * x12,
-            Z_dot * x20 + theta_dot * (x0 * d * (-x6 - x8) + x11 * x2)
-                + ((x7 * m1 * x1 - m2 * x5 * x3) * x2 * phi_dot
-                    + (x9 * x2 * x1 - x0 * x5) * m2 * gamma2_dot
-                    + (x10 * x2 * x3 + x0 * x7) * gamma1_dot * m1) * d,
+            Z_dot * x20 + theta_dot * (x11 * d * (-x3 - x6) + x10 * x7)
+                + ((x4 * m1 * x2 - m2 * x1 * x5) * x7 * phi_dot
+                    + (x8 * x7 * x2 - x11 * x1) * m2 * gamma2_dot
+                    + (x9 * x7 * x5 + x11 * x4) * gamma1_dot * m1) * d,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1099,67 +1394,1074 @@ pub mod reduced_volterra {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
         state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///Maggi's equations: 16 states, 8 equations.
+pub mod maggi {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 16;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 8;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "gamma1",
+        "gamma2",
+        "X",
+        "Y",
+        "Z",
+        "psi'",
+        "theta'",
+        "phi'",
+        "gamma1'",
+        "gamma2'",
+        "X'",
+        "Y'",
+        "Z'",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let mut v = [0.0f64; 302];
+        rhs_part0(t, state, params, g_i, dstate, &mut v);
+        rhs_part1(t, state, params, g_i, dstate, &mut v);
+        rhs_part2(t, state, params, g_i, dstate, &mut v);
+        rhs_part3(t, state, params, g_i, dstate, &mut v);
+        rhs_part4(t, state, params, g_i, dstate, &mut v);
+        rhs_part5(t, state, params, g_i, dstate, &mut v);
+        rhs_part6(t, state, params, g_i, dstate, &mut v);
+        rhs_part7(t, state, params, g_i, dstate, &mut v);
+        let value = v[7];
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 8]; 8] = [
+            [v[6], v[36], v[37], 0.0, 0.0, v[47], v[55], v[59]],
+            [
+                v[36],
+                v[8] * v[9] * v[121] + v[22] * v[124],
+                v[125],
+                v[129],
+                v[132],
+                v[142],
+                v[146],
+                v[149],
+            ],
+            [
+                v[37],
+                v[125],
+                v[8] * (v[37] * v[13] - v[70] * v[9] + v[8] * v[120] * v[22]) * v[22]
+                    - v[9] * (v[122] * v[8] * v[22] - v[9] * v[123]),
+                v[152],
+                0.0,
+                v[153],
+                v[154],
+                v[155],
+            ],
+            [0.0, v[129], v[152], J2 + v[23], 0.0, v[157], v[161], v[162]],
+            [0.0, v[132], 0.0, 0.0, v[15] + J2, v[164], v[167], v[168]],
+            [v[47], v[142], v[153], v[157], v[164], v[169], 0.0, 0.0],
+            [v[55], v[146], v[154], v[161], v[167], 0.0, v[169], 0.0],
+            [v[59], v[149], v[155], v[162], v[168], 0.0, 0.0, v[169]],
+        ];
+        let mut force: [f64; 8] = [
+            v[242],
+            v[8] * v[9] * v[277] + v[288] * v[22],
+            v[8] * v[277] * v[22] - v[288] * v[9],
+            d * m1
+                * (v[290] * v[212] - psi_dot * (v[275] + v[276]) + v[213] * v[292]
+                    + (v[0] * v[205] + v[27] * v[7] * v[281]) * v[207]
+                    - gamma1_dot
+                        * (v[291] * Y_dot + Z_dot * v[257] + X_dot * v[289]
+                            + a * (v[181] - v[180]) * v[27]))
+                - ((v[283] + v[284]) * d * m1 + v[150] * v[13] * psi_dot * v[22])
+                    * theta_dot
+                + phi_dot
+                    * (-v[0] * v[239] * d * m1 - v[150] * v[227] * v[9]
+                        - v[150] * v[183]) - v[219] * v[151] * v[22]
+                + (v[224] * J1 + (-v[222] - v[223]) * J2) * v[221],
+            ((v[293] - v[294] - v[250] * theta_dot * v[40] - v[296]) * v[197]
+                - psi_dot * (-v[252] - v[253])
+                - gamma2_dot
+                    * (a * v[179] * v[20] - X_dot * v[297] - Y_dot * v[295]
+                        + Z_dot * v[96])
+                + v[194] * (v[287] * v[7] * v[20] + v[2] * (v[13] * v[191] - v[203]))
+                + v[201] * (v[299] - v[298] - v[250] * theta_dot * v[38] - v[300])) * m2
+                * d
+                - (v[2] * m2 * d * v[186] + v[270] * theta_dot * v[9]
+                    + v[7] * v[131] * psi_dot * v[22]) * phi_dot
+                - (m2 * d * (v[250] * (-v[172] - v[173]) + v[285])
+                    + v[13] * v[270] * psi_dot * v[9]) * theta_dot
+                + v[230] * (J2 * v[233] + (-v[231] - v[232]) * J1)
+                + (-v[219] * v[9] - v[227] * phi_dot * v[22]) * v[131],
+            d
+                * (-v[290] * gamma1_dot * m1 - v[46] * v[237]
+                    - m2 * gamma2_dot
+                        * (v[299] - v[298] - v[300] + v[77] * theta_dot * v[38])
+                    - (v[188] * psi_dot + v[228] * phi_dot
+                        + v[0] * v[45] * gamma1_dot * m1
+                        + v[58] * theta_dot * v[38] * v[7]
+                        + v[2] * m2 * gamma2_dot * v[42]) * phi_dot)
+                - v[38] * v[227] * phi_dot * v[138]
+                - theta_dot * (v[38] * v[301] + psi_dot * v[273] * v[40])
+                - psi_dot
+                    * (v[248] * psi_dot + theta_dot * v[282] * v[40]
+                        + d
+                            * (v[188] * phi_dot + gamma1_dot * v[256] * m1
+                                - m2 * gamma2_dot * v[251])) - v[219] * v[8] * v[245],
+            d
+                * (-(phi_dot * v[229] + v[58] * theta_dot * v[7] * v[40]
+                    + v[46] * psi_dot + v[0] * gamma1_dot * v[53] * m1
+                    + v[2] * m2 * gamma2_dot * v[50]) * phi_dot
+                    - (v[293] - v[294] + v[77] * theta_dot * v[40] - v[296]) * m2
+                        * gamma2_dot - v[54] * v[237] - gamma1_dot * m1 * v[292])
+                - theta_dot * (v[260] * v[38] * psi_dot + v[301] * v[40])
+                - (v[143] + v[144]) * v[219] * v[8]
+                - (theta_dot * v[38] * v[138] + psi_dot * v[245]
+                    + (v[46] * phi_dot + gamma1_dot * m1 * v[156]
+                        - m2 * gamma2_dot * v[163]) * d) * psi_dot
+                - v[227] * phi_dot * v[40] * v[138],
+            (-gamma1_dot
+                * (v[0] * v[7] * phi_dot * v[22] + gamma1_dot * v[257]
+                    + theta_dot * v[269]) * m1
+                - phi_dot
+                    * (v[13] * theta_dot * v[175]
+                        + v[7]
+                            * (v[0] * gamma1_dot * m1 * v[22] + v[147] * phi_dot
+                                - v[2] * m2 * gamma2_dot * v[9])) - v[58] * v[7] * v[237]
+                - m2 * gamma2_dot
+                    * (v[268] * theta_dot + gamma2_dot * v[96]
+                        - v[2] * v[7] * v[9] * phi_dot)) * d
+                - theta_dot
+                    * (theta_dot * v[282]
+                        + (gamma1_dot * v[269] * m1 + m2 * gamma2_dot * v[268]
+                            + v[13] * phi_dot * v[175]) * d) - v[227] * phi_dot * v[148],
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
+        dstate[8] = 0.0 * force[0] + v[8] * v[9] * force[1] + v[8] * v[22] * force[2]
+            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
+            + 0.0 * force[7] + v[219] * v[8];
+        dstate[9] = 0.0 * force[0] + v[22] * force[1] + -v[9] * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
+            + v[227] * phi_dot;
+        dstate[10] = 1.0 * force[0] + v[13] * v[8] * v[9] * force[1]
+            + v[13] * v[8] * v[22] * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + v[237];
+        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[14] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0 * force[7] + 0.0;
+        dstate[15] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 1.0 * force[7] + 0.0;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[0] = f64::cos(gamma1);
+        v[1] = v[0] * v[0];
+        v[2] = f64::cos(gamma2);
+        v[3] = v[2] * v[2];
+        v[4] = m2 * (1.0 - v[3]);
+        v[5] = (1.0 - v[1]) * m1;
+        v[6] = (v[1] + v[3]) * J1 + Ixx + J2 * (2.0 - v[1] - v[3])
+            + (v[4] + v[5]) * d * d;
+        v[7] = f64::cos(theta);
+        v[8] = 1.0 / v[7];
+        v[9] = f64::sin(phi);
+        v[10] = (v[1] - 1.0) * m1;
+        v[11] = m2 * (v[3] - 1.0);
+        v[12] = (v[1] + v[3] - 2.0) * J2 + (-v[1] - v[3]) * J1 - Ixx
+            + (v[10] + v[11]) * d * d;
+        v[13] = f64::sin(theta);
+        v[14] = v[12] * v[13];
+        v[15] = m2 * d * d;
+        v[16] = v[15] + J2 - J1;
+        v[17] = v[2] * v[16];
+        v[18] = m2 * a * d;
+        v[19] = v[17] + v[18];
+        v[20] = f64::sin(gamma2);
+        v[21] = v[19] * v[20] - Ixz;
+        v[22] = f64::cos(phi);
+        v[23] = d * d * m1;
+        v[24] = J1 - J2 - v[23];
+        v[25] = a * d * m1;
+        v[26] = v[0] * v[24] - v[25];
+        v[27] = f64::sin(gamma1);
+        v[28] = v[26] * v[27] - Ixy;
+        v[29] = v[21] * v[22] + v[28] * v[9];
+        v[30] = v[29] * v[7];
+        v[31] = v[14] + v[30] + v[13] * v[6];
+        v[32] = J1 - v[15] - J2;
+        v[33] = v[2] * v[32] - v[18];
+        v[34] = Ixz + v[20] * v[33];
+        v[35] = v[34] * v[9] + v[28] * v[22];
+        v[36] = v[8] * v[9] * v[31] + v[35] * v[22];
+        v[37] = v[8] * v[31] * v[22] - v[9] * v[35];
+        v[38] = f64::cos(psi);
+        v[39] = v[13] * v[38] * v[9];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part1(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let psi = state[0];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = f64::sin(psi);
+        v[41] = v[22] * v[40];
+        v[42] = v[41] - v[39];
+        v[43] = v[9] * v[40];
+        v[44] = v[13] * v[38] * v[22];
+        v[45] = v[43] + v[44];
+        v[46] = m2 * v[42] * v[20] + v[45] * v[27] * m1;
+        v[47] = v[46] * d;
+        v[48] = v[38] * v[22];
+        v[49] = v[13] * v[9] * v[40];
+        v[50] = -v[48] - v[49];
+        v[51] = v[38] * v[9];
+        v[52] = v[13] * v[22] * v[40];
+        v[53] = v[52] - v[51];
+        v[54] = m2 * v[50] * v[20] + v[27] * v[53] * m1;
+        v[55] = v[54] * d;
+        v[56] = m2 * v[20] * v[9];
+        v[57] = v[27] * m1 * v[22];
+        v[58] = v[57] - v[56];
+        v[59] = v[58] * v[7] * d;
+        v[60] = Iyz * v[7];
+        v[61] = v[13] * v[21] * v[9];
+        v[62] = J2 + v[23] - J1;
+        v[63] = v[25] + v[0] * v[62];
+        v[64] = Ixy + v[27] * v[63];
+        v[65] = J2 - J1;
+        v[66] = J1 - J2;
+        v[67] = v[0] * v[0] * v[65] + Iyy + d * d * (v[10] + v[4]) - Izz
+            + v[2] * v[2] * v[66];
+        v[68] = Iyz * v[22];
+        v[69] = (v[13] * v[64] + (v[67] * v[9] - 2.0 * v[68]) * v[7]) * v[22];
+        v[70] = v[60] + v[61] + v[69];
+        v[71] = v[0] * v[7] * v[9] + v[13] * v[27];
+        v[72] = v[9] * v[9];
+        v[73] = v[22] * v[22];
+        v[74] = v[72] + v[73];
+        v[75] = v[2] * v[7] * v[22];
+        v[76] = v[13] * v[20];
+        v[77] = v[75] - v[76];
+        v[78] = J2 * (v[71] * v[71] + v[7] * v[7] * v[74] + v[77] * v[77]);
+        v[79] = v[0] * v[7] * v[40];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part2(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        v[80] = a * v[7] * v[40];
+        v[81] = d * (v[50] * v[27] - v[79]) - v[80];
+        v[82] = a * v[38] * v[7];
+        v[83] = v[39] - v[41];
+        v[84] = v[27] * v[83];
+        v[85] = v[0] * v[38] * v[7];
+        v[86] = d * (v[84] + v[85]);
+        v[87] = v[82] + v[86];
+        v[88] = (v[81] * v[81] + v[87] * v[87]) * m1;
+        v[89] = v[13] * Ixx;
+        v[90] = Ixy * v[9];
+        v[91] = Ixz * v[22];
+        v[92] = (-v[90] - v[91]) * v[7];
+        v[93] = v[13] * (v[92] - v[89]);
+        v[94] = v[2] * v[13];
+        v[95] = v[7] * v[20] * v[22];
+        v[96] = -v[94] - v[95];
+        v[97] = v[0] * v[13];
+        v[98] = v[27] * v[7] * v[9];
+        v[99] = v[98] - v[97];
+        v[100] = (v[96] * v[96] + v[99] * v[99]) * J1;
+        v[101] = v[45] * v[20];
+        v[102] = v[2] * v[38] * v[7];
+        v[103] = d * (v[102] - v[101]);
+        v[104] = -v[82] - v[103];
+        v[105] = v[51] - v[52];
+        v[106] = v[2] * v[7] * v[40];
+        v[107] = v[80] - d * (-v[105] * v[20] - v[106]);
+        v[108] = m2 * (v[104] * v[104] + v[107] * v[107]);
+        v[109] = v[14] + v[30];
+        v[110] = v[13] * Ixz;
+        v[111] = Izz * v[22];
+        v[112] = Iyz * v[9];
+        v[113] = (v[111] - v[112]) * v[7];
+        v[114] = (v[110] + v[113]) * v[22];
+        v[115] = Iyy * v[9];
+        v[116] = v[7] * (v[115] - v[68]);
+        v[117] = v[13] * Ixy;
+        v[118] = v[9] * (v[116] + v[117]);
+        v[119] = v[7] * (v[114] + v[118]);
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part3(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let Izz = params.Izz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[120] = v[78] + v[88] - v[93] + v[100] + v[108] + v[13] * v[109] + v[119];
+        v[121] = v[70] * v[22] + v[8] * v[120] * v[9] + v[13] * v[36];
+        v[122] = v[60] + v[61] + v[13] * v[35] + v[69];
+        v[123] = J2 + v[2] * (v[17] + 2.0 * v[18])
+            + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[23] + Izz
+            + (v[67] * v[22] + 2.0 * v[112]) * v[22] + J1;
+        v[124] = v[122] * v[8] * v[9] + v[123] * v[22];
+        v[125] = v[8] * v[121] * v[22] - v[9] * v[124];
+        v[126] = v[0] * a;
+        v[127] = (-d - v[126]) * d * m1;
+        v[128] = (d + v[126]) * d * m1;
+        v[129] = (v[127] + v[128]) * v[9] * v[22];
+        v[130] = v[2] * a;
+        v[131] = m2 * d * (d + v[130]) + J2;
+        v[132] = v[131] * v[74];
+        v[133] = m2 * v[20] * v[22];
+        v[134] = v[27] * v[9] * m1;
+        v[135] = v[2] * d;
+        v[136] = v[0] * d;
+        v[137] = m2 * (a + v[135]) + (-a - v[136]) * m1;
+        v[138] = (v[133] + v[134]) * v[7] * d + v[137] * v[13];
+        v[139] = m1 * v[81];
+        v[140] = m2 * v[107];
+        v[141] = v[46] * v[13] * d + v[139] + v[140];
+        v[142] = v[38] * v[22] * v[138] + v[8] * v[141] * v[9];
+        v[143] = m1 * v[87];
+        v[144] = m2 * v[104];
+        v[145] = v[54] * v[13] * d + v[143] + v[144];
+        v[146] = v[8] * v[145] * v[9] + v[22] * v[40] * v[138];
+        v[147] = -v[133] - v[134];
+        v[148] = v[13] * d * v[147] + v[137] * v[7];
+        v[149] = v[22] * v[148] + v[13] * v[58] * d * v[9];
+        v[150] = v[127] - J2;
+        v[151] = J2 + v[128];
+        v[152] = v[151] * v[22] * v[22] - v[150] * v[9] * v[9];
+        v[153] = v[8] * v[141] * v[22] - v[38] * v[9] * v[138];
+        v[154] = v[8] * v[145] * v[22] - v[9] * v[40] * v[138];
+        v[155] = v[13] * v[58] * d * v[22] - v[9] * v[148];
+        v[156] = v[0] * v[83] - v[38] * v[27] * v[7];
+        v[157] = d * m1 * v[156];
+        v[158] = v[48] + v[49];
+        v[159] = v[27] * v[7] * v[40];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part4(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma2);
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[160] = v[0] * v[158] - v[159];
+        v[161] = d * m1 * v[160];
+        v[162] = v[71] * d * m1;
+        v[163] = -v[38] * v[7] * v[20] - v[2] * v[45];
+        v[164] = -(m2 * v[163] * d);
+        v[165] = v[7] * v[20] * v[40];
+        v[166] = -v[165] - v[2] * v[53];
+        v[167] = -(m2 * d * v[166]);
+        v[168] = v[77] * m2 * d;
+        v[169] = m2 + m0 + m1;
+        v[170] = v[64] * v[9] + v[34] * v[22];
+        v[171] = v[13] * v[170] + v[12] * v[7];
+        v[172] = Y_dot * v[40];
+        v[173] = X_dot * v[38];
+        v[174] = v[172] + v[173];
+        v[175] = v[56] - v[57];
+        v[176] = (v[174] * v[58] * v[7] + Z_dot * v[13] * v[175]) * d;
+        v[177] = theta_dot * v[22];
+        v[178] = v[7] * psi_dot * v[9];
+        v[179] = -v[177] - v[178];
+        v[180] = v[7] * psi_dot * v[22];
+        v[181] = theta_dot * v[9];
+        v[182] = v[180] - v[181];
+        v[183] = v[177] + v[178];
+        v[184] = v[16] * v[20] * v[20] + v[2] * v[33];
+        v[185] = v[32] * v[7] * v[20] * v[20] * v[22]
+            + v[2]
+                * (v[19] * v[7] * v[22]
+                    + (2.0 * J1 - 2.0 * v[15] - 2.0 * J2) * v[13] * v[20]);
+        v[186] = v[50] * Y_dot + X_dot * v[42] - Z_dot * v[7] * v[9];
+        v[187] = 2.0 * v[15] + 2.0 * J2 - 2.0 * J1;
+        v[188] = m2 * v[20] * v[158] + v[27] * v[105] * m1;
+        v[189] = v[46] * Y_dot + v[188] * X_dot;
+        v[190] = a * theta_dot * v[7];
+        v[191] = -gamma2_dot - v[177];
+        v[192] = gamma2_dot * v[22];
+        v[193] = v[20] * v[9] * phi_dot;
+        v[194] = Z_dot + v[190]
+            + (v[13] * v[191] * v[20] + (v[2] * (v[192] + theta_dot) - v[193]) * v[7])
+                * d;
+        v[195] = a * v[13];
+        v[196] = v[195] - d * v[96];
+        v[197] = d * (v[50] * v[20] * phi_dot - gamma2_dot * v[166]) + Y_dot
+            + psi_dot * v[104] + theta_dot * v[196] * v[40];
+        v[198] = theta_dot * v[38] * v[196];
+        v[199] = psi_dot * v[107];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part5(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        v[200] = (v[42] * v[20] * phi_dot - gamma2_dot * v[163]) * d;
+        v[201] = v[198] + v[199] + X_dot + v[200];
+        v[202] = -v[43] - v[44];
+        v[203] = v[7] * v[9] * phi_dot;
+        v[204] = gamma1_dot - v[181];
+        v[205] = v[13] * v[204] + v[7] * phi_dot * v[22];
+        v[206] = gamma1_dot * v[9];
+        v[207] = Z_dot + (v[205] * v[27] + v[0] * v[7] * (v[206] - theta_dot)) * d
+            - v[190];
+        v[208] = d * (v[45] * v[27] * phi_dot + gamma1_dot * v[156]);
+        v[209] = v[99] * d - v[195];
+        v[210] = theta_dot * v[38] * v[209];
+        v[211] = psi_dot * v[81];
+        v[212] = X_dot + v[208] + v[210] + v[211];
+        v[213] = Y_dot + psi_dot * v[87]
+            + d * (gamma1_dot * v[160] + v[27] * v[53] * phi_dot)
+            + theta_dot * v[209] * v[40];
+        v[214] = phi_dot - v[13] * psi_dot;
+        v[215] = v[22] * v[182];
+        v[216] = v[9] * v[183];
+        v[217] = v[215] + v[216];
+        v[218] = v[183] * v[22] - v[9] * v[182];
+        v[219] = v[13] * theta_dot * v[8] * v[217] + phi_dot * v[218];
+        v[220] = Iyz * v[182];
+        v[221] = v[0] * v[183] - v[214] * v[27];
+        v[222] = v[0] * v[214];
+        v[223] = v[27] * v[183];
+        v[224] = v[222] + v[223];
+        v[225] = v[214] * Ixy;
+        v[226] = Iyy * v[183];
+        v[227] = -v[215] - v[216];
+        v[228] = v[42] * v[27] * m1 + m2 * v[202] * v[20];
+        v[229] = v[50] * v[27] * m1 + m2 * v[105] * v[20];
+        v[230] = v[2] * v[214] - v[20] * v[182];
+        v[231] = v[2] * v[182];
+        v[232] = v[214] * v[20];
+        v[233] = v[231] + v[232];
+        v[234] = Iyz * v[183];
+        v[235] = v[214] * Ixz;
+        v[236] = Izz * v[182];
+        v[237] = v[13] * v[8] * phi_dot * v[218]
+            + theta_dot * (v[215] + v[216] + v[13] * v[13] * v[8] * v[8] * v[217]);
+        v[238] = v[0] * v[26] + v[62] * v[27] * v[27];
+        v[239] = Y_dot * v[53] + Z_dot * v[7] * v[22] + v[45] * X_dot;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part6(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[240] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[23];
+        v[241] = v[62] * v[27] * v[27] * v[7] * v[9]
+            + v[0] * (v[26] * v[7] * v[9] + v[13] * v[27] * v[240]);
+        v[242] = 0.5 * ((Iyy * v[182] - Iyz * v[179]) * v[183])
+            - (v[171] * psi_dot + v[176]) * theta_dot
+            - gamma2_dot
+                * (v[184] * theta_dot * v[9] + psi_dot * v[185]
+                    + v[2] * (m2 * d * v[186] + v[20] * phi_dot * v[187]))
+            + d
+                * (0.5
+                    * (m2
+                        * (2.0
+                            * ((v[13] * theta_dot * v[20] * v[9]
+                                + (-v[2] * gamma2_dot * v[9] - v[20] * phi_dot * v[22])
+                                    * v[7]) * v[194])
+                            + 2.0
+                                * (((v[42] * psi_dot + v[105] * phi_dot
+                                    - theta_dot * v[7] * v[9] * v[40]) * v[20]
+                                    + v[2] * gamma2_dot * v[50]) * v[197])
+                            + 2.0
+                                * (v[201]
+                                    * ((psi_dot * v[158] - theta_dot * v[38] * v[7] * v[9]
+                                        + v[202] * phi_dot) * v[20] + v[2] * gamma2_dot * v[42]))))
+                    - psi_dot * v[189]
+                    + 0.5
+                        * ((2.0
+                            * (((-v[203] - v[13] * theta_dot * v[22]) * v[27]
+                                + v[0] * v[7] * gamma1_dot * v[22]) * v[207])
+                            + 2.0
+                                * ((v[27]
+                                    * (theta_dot * v[38] * v[7] * v[22] + v[42] * phi_dot
+                                        + v[105] * psi_dot) + v[0] * v[45] * gamma1_dot) * v[212])
+                            + 2.0
+                                * ((v[0] * gamma1_dot * v[53]
+                                    + v[27]
+                                        * (v[50] * phi_dot + theta_dot * v[7] * v[22] * v[40]
+                                            + v[45] * psi_dot)) * v[213])) * m1))
+            + 0.5 * (v[214] * (-v[179] * Ixz - Ixy * v[182])) - v[219] * v[8] * v[109]
+            + (0.5 * (v[179] * Izz) - v[220]
+                + (v[0] * v[221] + gamma2_dot + v[177] + v[178]) * J2
+                + v[27] * v[224] * J1 - 0.5 * v[225] + 0.5 * v[226]) * v[182]
+            + phi_dot
+                * (-theta_dot * v[170] - v[227] * v[35]
+                    - d * (v[228] * X_dot + Y_dot * v[229] + Z_dot * v[7] * v[147])
+                    - v[7] * psi_dot * v[35])
+            + ((gamma1_dot + v[2] * v[233] + v[180] - v[181]) * J2 - v[20] * v[230] * J1
+                - 0.5 * v[234] - 0.5 * v[235] + 0.5 * v[236]) * v[179] - v[6] * v[237]
+            - (theta_dot * v[22] * v[238]
+                + v[0]
+                    * (v[27] * (2.0 * J2 + 2.0 * v[23] - 2.0 * J1) * phi_dot
+                        + v[239] * d * m1) + v[241] * psi_dot) * gamma1_dot;
+        v[243] = (v[42] * v[27] - v[85]) * d;
+        v[244] = (-v[202] * v[20] - v[102]) * d;
+        v[245] = v[139] + v[140];
+        v[246] = v[82] - v[244];
+        v[247] = v[243] - v[82];
+        v[248] = m2 * v[246] + m1 * v[247];
+        v[249] = v[13] * v[32] * v[20] * v[20]
+            + v[2] * (v[7] * v[20] * v[187] * v[22] + v[13] * v[19]);
+        v[250] = v[76] - v[75];
+        v[251] = v[165] - v[2] * v[105];
+        v[252] = X_dot * v[251];
+        v[253] = v[163] * Y_dot;
+        v[254] = v[9]
+            * (v[2] * v[2] * v[65] - Iyy + d * d * (v[5] + v[11]) + Izz
+                + v[0] * v[0] * v[66]);
+        v[255] = v[13] * v[29]
+            + v[7] * (v[67] * v[22] * v[22] + v[9] * (4.0 * v[68] + v[254]));
+        v[256] = v[0] * v[50] + v[159];
+        v[257] = v[97] - v[98];
+        v[258] = d * v[257] + v[195];
+        v[259] = -(v[94] + v[95]) * d - v[195];
+        v[260] = v[209] * m1 + m2 * v[196];
+        v[261] = v[7] * v[21] * v[9]
+            + (v[64] * v[7] + (2.0 * v[68] + v[254]) * v[13]) * v[22] - v[13] * Iyz;
+        v[262] = v[13] * (v[112] - v[111]) + v[7] * Ixz;
+        v[263] = Ixy * v[7] + v[13] * (v[68] - v[115]);
+        v[264] = v[13] * v[20] * v[22] - v[2] * v[7];
+        v[265] = -v[0] * v[7] - v[13] * v[27] * v[9];
+        v[266] = (v[90] + v[91]) * v[13];
+        v[267] = Ixx * v[7];
+        v[268] = -v[2] * v[13] * v[22] - v[7] * v[20];
+        v[269] = v[27] * v[7] - v[0] * v[13] * v[9];
+        v[270] = m2 * d * (-d - v[130]) - J2;
+        v[271] = gamma2_dot * v[270] * v[9];
+        v[272] = v[150] * gamma1_dot * v[22];
+        v[273] = m2 * v[259] + v[258] * m1;
+        v[274] = v[0] * (v[13] * v[63] + v[27] * v[7] * v[9] * v[240])
+            + v[13] * v[24] * v[27] * v[27];
+        v[275] = X_dot * v[256];
+        v[276] = Y_dot * v[156];
+        v[277] = (-theta_dot * v[255]
+            - psi_dot
+                * (((2.0 * (v[45] * v[87]) + 2.0 * (v[105] * v[81])) * v[27] * m1
+                    + m2 * v[20] * (2.0 * (v[107] * v[158]) + 2.0 * (v[42] * v[104])))
+                    * d
+                    + v[7]
+                        * ((v[7] * (-v[68] - v[9] * Izz) + v[116]
+                            + 2.0 * (v[99] * v[27] * J1) + 2.0 * (v[0] * v[71] * J2)
+                            + v[117]) * v[22] - v[13] * (v[9] * Ixz - Ixy * v[22])
+                            + (v[7] * (Iyy * v[22] + v[112]) - 2.0 * (v[2] * v[77] * J2)
+                                - v[110] - v[113] + 2.0 * (v[20] * J1 * v[96])) * v[9]))
+            - v[70] * v[227]
+            - (v[150] * gamma1_dot * v[9] + phi_dot * v[35]
+                + gamma2_dot * v[131] * v[22]) * v[7] - d * v[189]) * phi_dot
+            - v[219] * v[8] * (v[78] + v[88] - v[93] + v[100] + v[108] + v[119])
+            - (((2.0 * v[243] + 2.0 * v[86]) * m1 * v[81]
+                + m2 * (-2.0 * v[244] - 2.0 * v[103]) * v[107]) * psi_dot
+                + Y_dot * v[245] + X_dot * v[248]) * psi_dot
+            - gamma2_dot
+                * (phi_dot * v[185] + theta_dot * v[9] * v[249]
+                    + ((2.0 * (v[77] * J2) + 2.0 * (v[250] * J1)) * v[96]
+                        + m2 * (-2.0 * (v[107] * v[251]) - 2.0 * (v[163] * v[104])) * d)
+                        * psi_dot
+                    + m2 * d * (-v[252] - a * gamma2_dot * v[7] * v[20] * v[9] - v[253]))
+            + 0.5
+                * ((2.0 * ((v[208] + v[210] + v[211]) * v[213])
+                    + 2.0
+                        * ((psi_dot * v[247]
+                            + (v[27] * v[105] * phi_dot + gamma1_dot * v[256]) * d
+                            + theta_dot * v[258] * v[40]) * v[212])) * m1)
+            + 0.5
+                * (m2
+                    * (2.0
+                        * ((psi_dot * v[246]
+                            + (v[20] * phi_dot * v[158] - gamma2_dot * v[251]) * d
+                            + v[259] * theta_dot * v[40]) * v[201])
+                        + 2.0 * (v[197] * (v[198] + v[199] + v[200]))))
+            - theta_dot
+                * (v[260] * v[38] * Y_dot + theta_dot * v[261]
+                    + psi_dot
+                        * ((v[89] + v[262] * v[22] - v[92] + v[9] * v[263]) * v[7]
+                            + (2.0 * (v[264] * v[96]) + 2.0 * (v[99] * v[265])) * J1
+                            + m2
+                                * (2.0 * (v[259] * v[107] * v[40])
+                                    + 2.0 * (v[38] * v[104] * v[196]))
+                            + v[13]
+                                * (v[267] - v[266]
+                                    + J2 * v[7] * (-2.0 * v[72] - 2.0 * v[73]) - v[114]
+                                    - v[118])
+                            + (2.0 * (v[258] * v[81] * v[40])
+                                + 2.0 * (v[38] * v[209] * v[87])) * m1
+                            + J2 * (2.0 * (v[77] * v[268]) + 2.0 * (v[71] * v[269])))
+                    + (v[271] + v[272]) * v[13] + v[171] * phi_dot
+                    + X_dot * v[273] * v[40]) - v[109] * v[237] + v[13] * v[242]
+            - ((d * m1 * (2.0 * (v[256] * v[81]) + 2.0 * (v[87] * v[156]))
+                + v[71] * (2.0 * (J2 * v[257]) + 2.0 * (v[99] * J1))) * psi_dot
+                + theta_dot * v[274] * v[22]
+                + d * m1 * (v[275] - a * v[27] * v[7] * gamma1_dot * v[22] + v[276])
+                + v[241] * phi_dot) * gamma1_dot;
+        v[278] = a * v[7];
+        v[279] = theta_dot * (d * v[265] - v[278])
+            + d * (v[71] * gamma1_dot + v[27] * v[7] * phi_dot * v[22]);
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part7(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 302],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[280] = a * v[13] * theta_dot;
+        v[281] = theta_dot - v[206];
+        v[282] = v[13] * (m2 * (-a - v[135]) + (a + v[136]) * m1) + v[7] * d * v[147];
+        v[283] = v[174] * v[71];
+        v[284] = Z_dot * v[269];
+        v[285] = Z_dot * v[268];
+        v[286] = d * (-gamma2_dot * v[250] - v[7] * v[20] * v[9] * phi_dot)
+            + theta_dot * (v[278] - v[264] * d);
+        v[287] = -v[192] - theta_dot;
+        v[288] = 0.5
+            * ((2.0 * ((v[279] * v[40] + v[38] * psi_dot * v[209]) * v[213])
+                + 2.0
+                    * (v[207]
+                        * (v[280]
+                            + d
+                                * (v[13] * (v[0] * v[281] - v[27] * phi_dot * v[22])
+                                    + v[27] * v[7] * v[204])))
+                + 2.0 * ((psi_dot * v[258] * v[40] + v[38] * v[279]) * v[212])) * m1)
+            - (Z_dot * v[282] + psi_dot * v[261] + v[174] * v[148]) * theta_dot
+            - v[70] * v[219] * v[8] - v[237] * v[35]
+            + psi_dot
+                * (0.5 * (v[214] * (v[266] - v[267])) - X_dot * v[282] * v[40]
+                    + v[13]
+                        * ((-v[9] * (gamma2_dot + v[177] + v[178])
+                            - (gamma1_dot + v[180] - v[181]) * v[22]) * J2
+                            - 0.5 * ((v[226] - v[220] - v[225]) * v[9])
+                            - 0.5 * ((v[236] - v[234] - v[235]) * v[22]))
+                    + 0.5 * (v[263] * v[183]) + (v[264] * v[230] + v[265] * v[224]) * J1
+                    + 0.5 * (v[262] * v[182]) + (v[221] * v[269] + v[268] * v[233]) * J2
+                    - v[38] * Y_dot * v[138]
+                    - 0.5 * ((v[214] * Ixx - Ixy * v[183] - Ixz * v[182]) * v[7]))
+            - gamma1_dot
+                * ((v[0] * v[22] * v[22] * v[240] - 2.0 * v[25]) * theta_dot * v[27]
+                    + v[22] * (phi_dot * v[238] + v[274] * psi_dot)
+                    + (v[283] + a * v[27] * gamma1_dot * v[9] + v[284]) * d * m1)
+            - gamma2_dot
+                * (m2 * d * (v[174] * v[77] - a * gamma2_dot * v[20] * v[22] + v[285])
+                    + (v[2]
+                        * (v[187] * v[22] * v[22] - 2.0 * v[15] - 2.0 * J2 + 2.0 * J1)
+                        - 2.0 * v[18]) * theta_dot * v[20]
+                    + (v[184] * phi_dot + psi_dot * v[249]) * v[9])
+            + 0.5
+                * (m2
+                    * (2.0 * (v[197] * (v[38] * psi_dot * v[196] + v[286] * v[40]))
+                        + 2.0
+                            * (((v[191] * v[7] * v[20]
+                                + v[13] * (v[2] * v[287] + v[193])) * d - v[280]) * v[194])
+                        + 2.0 * ((v[259] * psi_dot * v[40] + v[38] * v[286]) * v[201])))
+            + (-v[271] - v[176] - v[227] * v[123] - psi_dot * v[255] - phi_dot * v[170]
+                - v[272]
+                - theta_dot
+                    * (2.0 * (Iyz * v[22] * v[22])
+                        + ((v[2] * v[2] * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy + 2.0 * Izz
+                            + v[0] * v[0] * (2.0 * J1 - 2.0 * J2)
+                            + d * d
+                                * (m1 * (2.0 - 2.0 * v[1]) + m2 * (2.0 * v[3] - 2.0)))
+                            * v[22] - 2.0 * v[112]) * v[9])) * phi_dot;
+        v[289] = -v[84] - v[85];
+        v[290] = v[71] * theta_dot * v[38] + psi_dot * v[256] + v[289] * gamma1_dot
+            + v[0] * v[45] * phi_dot;
+        v[291] = -v[79] - v[27] * v[158];
+        v[292] = v[0] * v[53] * phi_dot + v[291] * gamma1_dot + psi_dot * v[156]
+            + v[71] * theta_dot * v[40];
+        v[293] = v[2] * v[50] * phi_dot;
+        v[294] = v[163] * psi_dot;
+        v[295] = v[20] * v[53] - v[106];
+        v[296] = gamma2_dot * v[295];
+        v[297] = v[101] - v[102];
+        v[298] = gamma2_dot * v[297];
+        v[299] = v[2] * v[42] * phi_dot;
+        v[300] = psi_dot * v[251];
+        v[301] = d
+            * (v[58] * v[7] * phi_dot - m2 * gamma2_dot * v[250]
+                + v[71] * gamma1_dot * m1) + theta_dot * v[148];
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let X_dot = qdot[5];
+        let Y_dot = qdot[6];
+        let Z_dot = qdot[7];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(gamma2);
+        let x2 = f64::cos(phi);
+        let x3 = m2 * x1 * x2;
+        let x4 = f64::sin(gamma1);
+        let x5 = f64::sin(phi);
+        let x6 = x4 * x5 * m1;
+        let x7 = f64::cos(theta);
         let x8 = f64::cos(gamma2);
-        let x9 = x8 * d;
-        let x10 = -a - x9;
-        let x11 = f64::sin(psi);
-        let x12 = f64::cos(gamma1);
-        let x13 = x0 * x11;
-        let x14 = x5 * x6 * x1;
-        let x15 = x13 + x14;
-        let x16 = x5 * x6 * x0;
-        let x17 = x1 * x11;
-        let x18 = -x13 - x14;
-        let x19 = f64::sin(gamma1);
-        let x20 = x12 * d;
-        let x21 = m2 * x10 + (a + x20) * m1;
-        let x22 = m2 * (a + x9) + (-a - x20) * m1;
-        let x23 = 1.0 / (m2 + m0 + m1);
-        let x24 = x6 * x1;
-        let x25 = x5 * x0 * x11;
-        let x26 = -x24 - x25;
-        let x27 = x12 * x26 + x19 * x3 * x11;
-        let x28 = x24 + x25;
-        let x29 = x6 * x0;
-        let x30 = x5 * x1 * x11;
-        let x31 = x30 - x29;
-        let x32 = x29 - x30;
-        let x33 = x8 * x32 - x3 * x7 * x11;
-        let value = x3;
+        let x9 = f64::cos(gamma1);
+        let x10 = m2 * (a + x8 * d) + (-a - x9 * d) * m1;
+        let x11 = f64::sin(theta);
+        let x12 = (x3 + x6) * x7 * d + x10 * x11;
+        let x13 = f64::sin(psi);
+        let x14 = x0 * x2;
+        let x15 = x11 * x5 * x13;
+        let x16 = -x14 - x15;
+        let x17 = a * x7 * x13;
+        let x18 = x0 * x5;
+        let x19 = x11 * x2 * x13;
+        let x20 = m2 + m0 + m1;
+        let x21 = x11 * x0 * x5;
+        let x22 = x2 * x13;
+        let x23 = x5 * x13 + x11 * x0 * x2;
+        let x24 = x21 - x22;
+        let x25 = x19 - x18;
+        let x26 = a * x0 * x7;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            q[7],
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            theta_dot * x0 * x12
+                + psi_dot
+                    * (m1 * (d * (x16 * x4 - x9 * x7 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x1 - x8 * x7 * x13)))
+                + X_dot * x20
+                + ((m2 * (x22 - x21) * x1 + x23 * x4 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x9 * x24 - x0 * x4 * x7)
+                    - m2 * gamma2_dot * (-x0 * x7 * x1 - x8 * x23)) * d,
+            Y_dot * x20
+                + (gamma1_dot * m1 * (x9 * (x14 + x15) - x4 * x7 * x13)
+                    - m2 * gamma2_dot * (-x7 * x1 * x13 - x8 * x25)
+                    + (m2 * x16 * x1 + x4 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x4 * x24 + x9 * x0 * x7))
+                    + m2 * (-x26 - d * (x8 * x0 * x7 - x23 * x1))) * psi_dot
+                + theta_dot * x13 * x12,
+            Z_dot * x20 + theta_dot * (x11 * d * (-x3 - x6) + x10 * x7)
+                + ((x4 * m1 * x2 - m2 * x1 * x5) * x7 * phi_dot
+                    + (x8 * x7 * x2 - x11 * x1) * m2 * gamma2_dot
+                    + (x9 * x7 * x5 + x11 * x4) * gamma1_dot * m1) * d,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let theta = state[1];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let value = f64::cos(theta);
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1178,32 +2480,14 @@ pub mod reduced_volterra {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            x5 * x2 * x4 + u1,
-            u4,
-            u5,
-            (G_X
-                + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
-                    + (x12 * x15 * d + a * x15) * m1) * u2
-                + d
-                    * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
-                        + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
-                        + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
-                + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0)))
-                * x23,
-            (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1)) + G_Y
-                + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
-                + d
-                    * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
-                        + u5 * m2 * x33)) * x23,
-            (G_Z
-                + d
-                    * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
-                        + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
-                        + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
-                + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
-                + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23,
+            psi_dot,
+            theta_dot,
+            phi_dot,
+            gamma1_dot,
+            gamma2_dot,
+            X_dot,
+            Y_dot,
+            Z_dot,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1216,9 +2500,9 @@ pub mod reduced_volterra {
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
 pub mod kane {
     use super::*;
-    ///Length of the state `[q; u]`.
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
     pub const STATES: usize = 16;
-    ///Number of dynamical equations (quasi-velocities).
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
     pub const EQUATIONS: usize = 8;
     ///Names of the state entries.
     pub const STATE_NAMES: [&str; STATES] = [
@@ -1241,6 +2525,8 @@ pub mod kane {
     ];
     ///False when the ignorable coordinates are left out of the state.
     pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
     ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
     #[allow(non_snake_case, clippy::all)]
     pub fn rhs(
@@ -1282,7 +2568,7 @@ pub mod kane {
                 value,
             });
         }
-        let mut mass: [[f64; 8]; 8] = [
+        let mut matrix: [[f64; 8]; 8] = [
             [
                 (v[9] + v[11]) * J1 + Ixx + J2 * (2.0 - v[9] - v[11])
                     + (m2 * (1.0 - v[11]) + (1.0 - v[9]) * m1) * d * d,
@@ -1472,7 +2758,7 @@ pub mod kane {
                     * (d * (v[6] * u1 * v[136] + u5 * m2 * v[190] + u4 * v[186] * m1)
                         + u3 * v[166] + v[152] * u2),
         ];
-        if let Err(column) = solve_dense(&mut mass, &mut force) {
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
                 condition: "mass matrix M_NI",
@@ -1842,7 +3128,7 @@ pub mod kane {
         v[200] = v[162] * u2;
         v[201] = v[177] + v[184];
     }
-    ///The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(
         t: f64,
@@ -1953,7 +3239,7 @@ pub mod kane {
         }
         Ok((state, g_i))
     }
-    ///Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0.
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
     pub fn velocities(
         t: f64,
@@ -2003,6 +3289,747 @@ pub mod kane {
             u6,
             u7,
             u8,
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+}
+///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
+pub mod reduced_volterra {
+    use super::*;
+    ///Length of the state: kept coordinates, speeds, and the work integral when forces do work.
+    pub const STATES: usize = 13;
+    ///Number of dynamical equations, counted as the paper's Table 1 does.
+    pub const EQUATIONS: usize = 5;
+    ///Names of the state entries.
+    pub const STATE_NAMES: [&str; STATES] = [
+        "psi",
+        "theta",
+        "phi",
+        "gamma1",
+        "gamma2",
+        "X",
+        "Y",
+        "Z",
+        "u1",
+        "u2",
+        "u3",
+        "u4",
+        "u5",
+    ];
+    ///False when the ignorable coordinates are left out of the state.
+    pub const INTEGRATES_IGNORABLE: bool = true;
+    ///True when the last state entry is the work integral `W` of Eq. 80.
+    pub const HAS_WORK_STATE: bool = false;
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let mut v = [0.0f64; 141];
+        rhs_part0(t, state, params, g_i, dstate, &mut v);
+        rhs_part1(t, state, params, g_i, dstate, &mut v);
+        rhs_part2(t, state, params, g_i, dstate, &mut v);
+        rhs_part3(t, state, params, g_i, dstate, &mut v);
+        let value = v[3];
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let mut matrix: [[f64; 5]; 5] = [
+            [
+                ((v[12] * v[12] * (v[34] - 1.0) - v[34] + 1.0) * m1
+                    + m2 * (v[8] * v[8] * v[36] - v[35] + 1.0)) * d * d
+                    + (v[37] + v[38]) * J1 + Ixx + J2 * (2.0 - v[37] - v[38]),
+                v[42],
+                v[44],
+                v[45],
+                v[46],
+            ],
+            [
+                v[42],
+                Iyy + v[12] * (v[12] * v[49] + 2.0 * (v[8] * m2 * d * d * m1 * v[23]))
+                    + J2 + v[51] + J1 + v[54],
+                v[56],
+                v[55],
+                v[62],
+            ],
+            [
+                v[44],
+                v[56],
+                v[48] + J2
+                    + v[8]
+                        * (v[8] * (J2 + v[51] - J1)
+                            + 2.0 * (v[12] * m2 * d * d * m1 * v[23])) + Izz + J1
+                    + v[54],
+                v[68],
+                v[55],
+            ],
+            [v[45], v[55], v[68], v[48] + J2, v[55]],
+            [v[46], v[62], v[55], v[55], J2 + v[51]],
+        ];
+        let mut force: [f64; 5] = [
+            u2 * (v[7] * v[71] * J1 - v[72] + v[73] + v[74])
+                + (v[12] * v[80] * u3 - v[77] * v[8] * u2 + (-v[81] - v[85]) * v[86]
+                    + (v[88] - v[87]) * v[89]) * J2
+                - (u3 * v[90]
+                    + v[8] * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * v[35]) - 2.0 * J1)
+                        * v[7] * u1
+                    + m2 * d * d * (v[19] * v[7] * v[89] + v[91]) * m1 * v[23]) * u5
+                + u3 * (v[94] - v[92] - v[93] + v[84] * v[19] * J1)
+                + d
+                    * (m2
+                        * (v[97] * (v[100] * m1 * v[23] - v[77] * v[36] * v[7])
+                            + (v[7] * (v[36] * v[71] - v[19] * m1 * u2 * v[23])
+                                - v[12] * v[8] * u4 * m1 * v[23]) * v[103]
+                            + v[105]
+                                * (v[77] * v[19] * v[7] * m1 * v[23]
+                                    + v[8] * (v[19] * m1 * v[71] * v[23] + u5 * v[36])))
+                        + (v[107] * (v[80] * v[19] * v[47] + m2 * v[110] * v[23])
+                            + (m2 * (v[111] + v[112]) * v[23] - v[84] * v[19] * v[47])
+                                * v[115]
+                            + v[118]
+                                * (v[12] * (m2 * v[84] * v[7] * v[23] + u4 * v[47])
+                                    - m2 * v[80] * v[19] * v[7] * v[23])) * m1
+                        + m0
+                            * (d * v[120] * (-v[19] * m1 * u2 - m2 * u3 * v[7])
+                                + v[121] * v[122]
+                                + (v[19] * u1 * m1 + v[8] * u5 * m2) * v[124]) * v[23]
+                            * v[23])
+                - u4
+                    * (m2 * (v[19] * v[7] * v[113] - v[111]) * d * d * m1 * v[23]
+                        + v[125] * u2
+                        + v[12] * (2.0 * J2 - 2.0 * J1 + d * d * v[52] * m1) * v[19]
+                            * u1),
+            m2
+                * (v[105] * (v[77] * v[7] * v[126] - v[61] * v[71])
+                    + v[97]
+                        * (u4 * v[19] * d * v[7] * m1 * v[23] + v[8] * u5 * v[126]
+                            + v[61] * v[89])
+                    + (-v[8] * u4 * v[19] * d * m1 * v[23] - v[127]) * v[103]
+                    - u5
+                        * (v[128]
+                            + v[7]
+                                * (u5 * v[126]
+                                    + (a * ((2.0 * m2 - 2.0 * m1) * v[23] - 2.0) - 2.0 * v[57])
+                                        * u2)) * d) - (v[130] - v[129] - v[131]) * u3
+                + m1
+                    * (v[107] * (m2 * (-v[111] - v[112]) * d * v[23] + v[80] * v[40])
+                        + v[118] * d * (m2 * v[132] * v[7] * v[23] + u4 * v[19] * v[47])
+                        + (m2 * v[110] * d * v[23] - v[84] * v[40]) * v[115])
+                + m0
+                    * (d
+                        * (v[120] * (v[21] * u2 - v[8] * u5 * m2 * d)
+                            + (m2 * v[7] * v[89] - u4 * v[19] * m1) * v[122])
+                        + v[124] * (-m2 * u3 * d * v[7] - v[21] * u1)) * v[23] * v[23]
+                + (v[133] * v[71] - v[12] * v[84] * u3) * J1
+                + (v[72] - v[73] - v[74]) * u1
+                - u4
+                    * ((v[12] * v[7] * v[86] - v[108]) * m2 * d * d * m1 * v[23]
+                        + v[19] * u2
+                            * (v[12] * v[134]
+                                + d
+                                    * ((m2 * (-2.0 * a - 2.0 * v[9])
+                                        + (2.0 * a + 2.0 * v[20]) * m1) * v[23] - 2.0 * a
+                                        - 2.0 * v[20]) * m1) + v[125] * u1)
+                + J2
+                    * (v[80] * u3 * v[19] + v[77] * v[71]
+                        + (v[12] * v[84] - v[80] * v[19]) * v[86]),
+            m1
+                * (v[118] * (v[84] * v[67] - v[66] * v[80] * v[19])
+                    - u4 * d
+                        * (v[135]
+                            + v[19]
+                                * (u3 * (a * (v[53] * v[23] - 2.0) - 2.0 * v[65]) + v[137]))
+                    + (v[19] * (v[66] * v[86] + v[137])
+                        - v[12] * u5 * m2 * d * v[7] * v[23]) * v[115]
+                    + (v[12] * u4 * v[66] - v[67] * v[86]
+                        - u5 * m2 * v[19] * d * v[7] * v[23]) * v[107])
+                - (v[94] - v[92] - v[93]) * u1
+                - u5
+                    * (m2 * (v[8] * v[19] * v[89] - v[99]) * d * d * m1 * v[23]
+                        + u3 * v[7]
+                            * (m2 * d
+                                * (((2.0 * a + 2.0 * v[9]) * m2
+                                    + (-2.0 * a - 2.0 * v[20]) * m1) * v[23] - 2.0 * a
+                                    - 2.0 * v[9]) + v[8] * v[134]) + v[90] * u1)
+                + (v[8] * v[71] * J1 - v[129] + v[130] - v[131]) * u2
+                + v[84] * v[80] * J1
+                + m0
+                    * (d
+                        * (v[124] * (v[119] - u5 * m2 * v[7])
+                            + v[120] * (v[12] * u4 * d * m1 - v[123]))
+                        + (v[22] * u1 - v[19] * d * m1 * u2) * v[122]) * v[23] * v[23]
+                + J2
+                    * (v[77] * v[7] * u2 + (-v[77] * v[7] - v[8] * v[71]) * v[89]
+                        + v[80] * v[138])
+                + ((d * v[100] * m1 * v[23] + v[104] * v[71]) * v[103]
+                    + v[97] * (d * m1 * (v[139] + v[91]) * v[23] - v[77] * v[104])
+                    + v[105] * d * (u5 * v[7] * v[50] + v[19] * v[140] * m1 * v[23]))
+                    * m2,
+            v[80] * (J2 * v[138] + v[84] * J1)
+                + d
+                    * ((v[84] * v[118] - v[107] * v[86]) * v[47]
+                        + (m0
+                            * ((v[124] * v[19] + v[12] * d * v[120]) * v[86]
+                                + v[122] * v[138]) * v[23]
+                            + m2
+                                * (v[19] * v[105] * v[140]
+                                    - u5 * (v[8] * v[114] - v[109]) * d
+                                    + (v[12] * (u4 * v[7] - v[69] + v[70]) - v[98]) * v[103]
+                                    + v[97] * (v[12] * (v[75] + v[8] * u4 + v[76]) + v[139])))
+                            * v[23] - u4 * (u3 * v[19] * v[136] + v[135])) * m1,
+            (v[133] * J1 + v[77] * J2) * v[71]
+                + m2 * d
+                    * ((v[97] * v[89] - v[105] * v[71]) * v[50] - u5 * (v[128] + v[127])
+                        + (m0
+                            * (v[7] * v[122] * v[89] + v[124] * v[71]
+                                + v[8] * d * v[120] * v[101]) * v[23]
+                            + (v[115] * (v[8] * (u5 * v[19] + v[82] + v[83]) - v[109])
+                                + v[132] * v[118] * v[7] - u4 * (v[12] * v[102] - v[98]) * d
+                                + v[107] * (v[8] * (v[79] - v[12] * u5 - v[78]) - v[112]))
+                                * m1) * v[23]),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = v[2] * v[4];
+        dstate[1] = u2 * v[1] - u3 * v[0];
+        dstate[2] = v[5] * v[2] * v[4] + u1;
+        dstate[3] = u4;
+        dstate[4] = u5;
+        dstate[5] = (G_X
+            + (m2
+                * (v[6] * (v[5] * v[10] * v[1] - v[3] * d * v[7]) + v[10] * v[0] * v[11])
+                + (v[12] * v[15] * d + a * v[15]) * m1) * u2
+            + d
+                * (u1 * (m2 * (v[16] - v[17]) * v[7] + v[18] * v[19] * m1)
+                    + u4 * m1 * (v[6] * v[19] * v[3] + v[12] * (v[17] - v[16]))
+                    + u5 * m2 * (v[8] * v[18] - v[6] * v[3] * v[7]))
+            + u3
+                * (v[21] * v[1] * v[11]
+                    + v[6] * (v[19] * v[3] * d * m1 + v[22] * v[5] * v[0]))) * v[23];
+        dstate[6] = (u3
+            * (d * (v[27] * m1 + v[8] * m2 * v[28]) + a * (m2 * v[28] + v[26] * m1))
+            + G_Y
+            + ((v[12] * d * v[31] + a * v[31]) * m1 + (a * v[32] + d * v[33]) * m2) * u2
+            + d
+                * (u4 * v[27] * m1 + (m2 * v[7] * v[28] + v[19] * v[32] * m1) * u1
+                    + u5 * m2 * v[33])) * v[23];
+        dstate[7] = (G_Z
+            + d
+                * (v[3] * u1 * (m2 * v[7] * v[0] - v[19] * m1 * v[1])
+                    + u4 * m1 * (-v[12] * v[3] * v[0] - v[5] * v[19])
+                    + u5 * m2 * (v[5] * v[7] - v[8] * v[3] * v[1]))
+            + u3 * (v[22] * v[3] * v[0] - v[5] * v[19] * d * m1)
+            + (v[3] * v[21] * v[1] + m2 * v[5] * d * v[7]) * u2) * v[23];
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 141],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u2 = state[9];
+        let u3 = state[10];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        v[0] = f64::sin(phi);
+        v[1] = f64::cos(phi);
+        v[2] = v[0] * u2 + u3 * v[1];
+        v[3] = f64::cos(theta);
+        v[4] = 1.0 / v[3];
+        v[5] = f64::sin(theta);
+        v[6] = f64::cos(psi);
+        v[7] = f64::sin(gamma2);
+        v[8] = f64::cos(gamma2);
+        v[9] = v[8] * d;
+        v[10] = -a - v[9];
+        v[11] = f64::sin(psi);
+        v[12] = f64::cos(gamma1);
+        v[13] = v[0] * v[11];
+        v[14] = v[5] * v[6] * v[1];
+        v[15] = v[13] + v[14];
+        v[16] = v[5] * v[6] * v[0];
+        v[17] = v[1] * v[11];
+        v[18] = -v[13] - v[14];
+        v[19] = f64::sin(gamma1);
+        v[20] = v[12] * d;
+        v[21] = m2 * v[10] + (a + v[20]) * m1;
+        v[22] = m2 * (a + v[9]) + (-a - v[20]) * m1;
+        v[23] = 1.0 / (m2 + m0 + m1);
+        v[24] = v[6] * v[1];
+        v[25] = v[5] * v[0] * v[11];
+        v[26] = -v[24] - v[25];
+        v[27] = v[12] * v[26] + v[19] * v[3] * v[11];
+        v[28] = v[24] + v[25];
+        v[29] = v[6] * v[0];
+        v[30] = v[5] * v[1] * v[11];
+        v[31] = v[30] - v[29];
+        v[32] = v[29] - v[30];
+        v[33] = v[8] * v[32] - v[3] * v[7] * v[11];
+        v[34] = m1 * v[23];
+        v[35] = m2 * v[23];
+        v[36] = v[35] - 1.0;
+        v[37] = v[12] * v[12];
+        v[38] = v[8] * v[8];
+        v[39] = v[21] * v[23];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part1(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 141],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = v[39] - a - v[20];
+        v[41] = v[12] * (J1 - J2) + d * m1 * v[40];
+        v[42] = v[19] * v[41] - Ixy;
+        v[43] = m2 * d * (a + v[9] + v[39]) + v[8] * (J2 - J1);
+        v[44] = v[7] * v[43] - Ixz;
+        v[45] = v[12] * m2 * d * d * v[7] * m1 * v[23];
+        v[46] = -(v[8] * m2 * v[19] * d * d * m1 * v[23]);
+        v[47] = 1.0 - v[34];
+        v[48] = d * d * v[47] * m1;
+        v[49] = v[48] + J2 - J1;
+        v[50] = 1.0 - v[35];
+        v[51] = m2 * d * d * v[50];
+        v[52] = 2.0 - 2.0 * v[34];
+        v[53] = 2.0 * m1 - 2.0 * m2;
+        v[54] = a
+            * ((a * v[47] + v[12] * d * v[52]) * m1
+                + m2
+                    * (a
+                        + (d * (2.0 * (v[12] * m1) + v[8] * v[53]) + a * (2.0 * m1 - m2))
+                            * v[23] + 2.0 * v[9]));
+        v[55] = m2 * v[19] * d * d * v[7] * m1 * v[23];
+        v[56] = v[55] - Iyz;
+        v[57] = v[12] * d * m1 * v[23];
+        v[58] = m1 - m2;
+        v[59] = v[58] * v[23];
+        v[60] = v[59] + 1.0;
+        v[61] = d * v[50] + v[8] * (v[57] + v[60] * a);
+        v[62] = m2 * v[61] * d + J2;
+        v[63] = (m2 - m1) * v[23];
+        v[64] = v[63] + 1.0;
+        v[65] = v[8] * m2 * d * v[23];
+        v[66] = a * v[64] + v[65];
+        v[67] = v[12] * v[66] + d * v[47];
+        v[68] = J2 + v[67] * d * m1;
+        v[69] = v[8] * u1;
+        v[70] = u3 * v[7];
+        v[71] = v[69] - v[70];
+        v[72] = u3 * Izz;
+        v[73] = Iyz * u2;
+        v[74] = u1 * Ixz;
+        v[75] = v[7] * u1;
+        v[76] = v[8] * u3;
+        v[77] = v[75] + v[76];
+        v[78] = v[12] * u2;
+        v[79] = v[19] * u1;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part2(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 141],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let Iyy = params.Iyy;
+        let Ixy = params.Ixy;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = v[78] - v[79];
+        v[81] = v[12] * v[80];
+        v[82] = v[12] * u1;
+        v[83] = v[19] * u2;
+        v[84] = v[82] + v[83];
+        v[85] = v[84] * v[19];
+        v[86] = u4 + u3;
+        v[87] = v[7] * v[71];
+        v[88] = v[77] * v[8];
+        v[89] = u5 + u2;
+        v[90] = v[7] * v[7] * (m2 * v[36] * d * d - J2 + J1) + v[8] * v[43];
+        v[91] = v[12] * v[8] * u4;
+        v[92] = Iyz * u3;
+        v[93] = Ixy * u1;
+        v[94] = Iyy * u2;
+        v[95] = a * v[7] * u2;
+        v[96] = v[75] + v[8] * v[86];
+        v[97] = (m2 * a * v[7] * u2
+            + (d * (v[19] * v[96] - v[12] * v[7] * u2) - v[95]) * m1) * v[23] - v[95];
+        v[98] = v[8] * v[19] * u2;
+        v[99] = v[12] * u4 * v[7];
+        v[100] = v[99] - v[98];
+        v[101] = -u5 - u2;
+        v[102] = v[7] * v[86] - v[69];
+        v[103] = (u5 + (m2 * v[101] + m1 * (v[19] * v[102] + v[12] * v[8] * u2)) * v[23]
+            + u2) * d + v[60] * v[8] * a * u2;
+        v[104] = v[22] * v[23] - a - v[9];
+        v[105] = u3 * v[104] + d * (v[36] * v[7] * u1 - v[12] * u4 * m1 * v[23]);
+        v[106] = a * u3 * v[19];
+        v[107] = (m2
+            * ((v[8] * u3 * v[19] + v[7] * (v[12] * v[101] + v[79])) * d + v[106])
+            - a * u3 * v[19] * m1) * v[23] + v[106];
+        v[108] = v[8] * u5 * v[19];
+        v[109] = v[12] * u3 * v[7];
+        v[110] = v[108] - v[109];
+        v[111] = v[12] * v[8] * u5;
+        v[112] = u3 * v[19] * v[7];
+        v[113] = -u4 - u3;
+        v[114] = v[19] * v[89] + v[82];
+        v[115] = v[12] * a * v[64] * u3
+            + (u4 + (v[113] * m1 + m2 * (v[12] * v[8] * u3 + v[7] * v[114])) * v[23]
+                + u3) * d;
+        v[116] = v[59] - 1.0;
+        v[117] = v[8] * m2 * v[101] + v[80] * m1;
+        v[118] = a * v[116] * u2 + d * (v[79] - v[78] + v[117] * v[23]);
+        v[119] = v[19] * v[86] * m1;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part3(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 141],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[120] = m2 * v[7] * v[101] + v[119];
+        v[121] = m2 * v[7] * u1 - v[12] * u4 * m1;
+        v[122] = d * v[117] + a * v[58] * u2;
+        v[123] = v[22] * u3;
+        v[124] = v[123] + v[121] * d;
+        v[125] = v[12] * v[41] + v[19] * v[19] * v[49];
+        v[126] = (v[63] - 1.0) * a - v[57];
+        v[127] = v[7] * u2 * v[126];
+        v[128] = v[19] * d * m1 * v[96] * v[23];
+        v[129] = Ixy * u2;
+        v[130] = Ixx * u1;
+        v[131] = u3 * Ixz;
+        v[132] = u5 + v[81] + v[85];
+        v[133] = -v[75] - v[76];
+        v[134] = 2.0 * J1 - 2.0 * J2;
+        v[135] = m2 * d * v[7] * v[23] * (v[12] * v[89] - v[79]);
+        v[136] = a * v[116] - v[65];
+        v[137] = u4 * v[136];
+        v[138] = -v[82] - v[83];
+        v[139] = v[19] * v[7] * u2;
+        v[140] = u4 - v[87] + v[88];
+    }
+    ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn initial_state(
+        t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let psi_dot = qdot[0];
+        let theta_dot = qdot[1];
+        let phi_dot = qdot[2];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let X_dot = qdot[5];
+        let Y_dot = qdot[6];
+        let Z_dot = qdot[7];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(phi);
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = f64::cos(psi);
+        let x5 = f64::sin(gamma2);
+        let x6 = m2 * x5 * x1;
+        let x7 = f64::sin(gamma1);
+        let x8 = x7 * x3 * m1;
+        let x9 = f64::cos(gamma2);
+        let x10 = f64::cos(gamma1);
+        let x11 = m2 * (a + x9 * d) + (-a - x10 * d) * m1;
+        let x12 = (x6 + x8) * x2 * d + x11 * x0;
+        let x13 = f64::sin(psi);
+        let x14 = x4 * x1;
+        let x15 = x0 * x3 * x13;
+        let x16 = -x14 - x15;
+        let x17 = a * x2 * x13;
+        let x18 = x4 * x3;
+        let x19 = x0 * x1 * x13;
+        let x20 = m2 + m0 + m1;
+        let x21 = x0 * x4 * x3;
+        let x22 = x1 * x13;
+        let x23 = x3 * x13 + x0 * x4 * x1;
+        let x24 = x21 - x22;
+        let x25 = x19 - x18;
+        let x26 = a * x4 * x2;
+        let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
+        let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
+        for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+            let tolerance = CONSTRAINT_TOLERANCE * bound;
+            if !(residual.abs() <= tolerance) {
+                return Err(EvalError::ConstraintViolated {
+                    constraint,
+                    residual,
+                    tolerance,
+                });
+            }
+        }
+        let state: [f64; STATES] = [
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            q[4],
+            q[5],
+            q[6],
+            q[7],
+            phi_dot - x0 * psi_dot,
+            theta_dot * x1 + x2 * psi_dot * x3,
+            x2 * psi_dot * x1 - theta_dot * x3,
+            gamma1_dot,
+            gamma2_dot,
+        ];
+        let g_i: [f64; NUM_IGNORABLE] = [
+            theta_dot * x4 * x12
+                + psi_dot
+                    * (m1 * (d * (x16 * x7 - x10 * x2 * x13) - x17)
+                        + m2 * (x17 - d * (-(x18 - x19) * x5 - x9 * x2 * x13)))
+                + X_dot * x20
+                + ((m2 * (x22 - x21) * x5 + x23 * x7 * m1) * phi_dot
+                    + gamma1_dot * m1 * (x10 * x24 - x4 * x7 * x2)
+                    - m2 * gamma2_dot * (-x4 * x2 * x5 - x9 * x23)) * d,
+            Y_dot * x20
+                + (gamma1_dot * m1 * (x10 * (x14 + x15) - x7 * x2 * x13)
+                    - m2 * gamma2_dot * (-x2 * x5 * x13 - x9 * x25)
+                    + (m2 * x16 * x5 + x7 * x25 * m1) * phi_dot) * d
+                + (m1 * (x26 + d * (x7 * x24 + x10 * x4 * x2))
+                    + m2 * (-x26 - d * (x9 * x4 * x2 - x23 * x5))) * psi_dot
+                + theta_dot * x13 * x12,
+            Z_dot * x20 + theta_dot * (x0 * d * (-x6 - x8) + x11 * x2)
+                + ((x7 * m1 * x1 - m2 * x5 * x3) * x2 * phi_dot
+                    + (x9 * x2 * x1 - x0 * x5) * m2 * gamma2_dot
+                    + (x10 * x2 * x3 + x0 * x7) * gamma1_dot * m1) * d,
+        ];
+        for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((state, g_i))
+    }
+    ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn velocities(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = x0 * u2 + u3 * x1;
+        let x3 = f64::cos(theta);
+        let x4 = 1.0 / x3;
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma2);
+        let x8 = f64::cos(gamma2);
+        let x9 = x8 * d;
+        let x10 = -a - x9;
+        let x11 = f64::sin(psi);
+        let x12 = f64::cos(gamma1);
+        let x13 = x0 * x11;
+        let x14 = x5 * x6 * x1;
+        let x15 = x13 + x14;
+        let x16 = x5 * x6 * x0;
+        let x17 = x1 * x11;
+        let x18 = -x13 - x14;
+        let x19 = f64::sin(gamma1);
+        let x20 = x12 * d;
+        let x21 = m2 * x10 + (a + x20) * m1;
+        let x22 = m2 * (a + x9) + (-a - x20) * m1;
+        let x23 = 1.0 / (m2 + m0 + m1);
+        let x24 = x6 * x1;
+        let x25 = x5 * x0 * x11;
+        let x26 = -x24 - x25;
+        let x27 = x12 * x26 + x19 * x3 * x11;
+        let x28 = x24 + x25;
+        let x29 = x6 * x0;
+        let x30 = x5 * x1 * x11;
+        let x31 = x30 - x29;
+        let x32 = x29 - x30;
+        let x33 = x8 * x32 - x3 * x7 * x11;
+        let value = x3;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "cos(theta) = 0",
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            x2 * x4,
+            u2 * x1 - u3 * x0,
+            x5 * x2 * x4 + u1,
+            u4,
+            u5,
+            (G_X
+                + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
+                    + (x12 * x15 * d + a * x15) * m1) * u2
+                + d
+                    * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
+                        + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
+                        + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
+                + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0)))
+                * x23,
+            (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1)) + G_Y
+                + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
+                + d
+                    * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
+                        + u5 * m2 * x33)) * x23,
+            (G_Z
+                + d
+                    * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
+                        + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
+                        + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
+                + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
+                + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

@@ -8,7 +8,7 @@ const USAGE: &str = "usage:
   generator inspect MODEL.ron [--latex]    show what is derived from a model
 
 options (each overrides the model's `emit` section):
-  --formulations LIST   comma-separated: reduced_volterra, kane
+  --formulations LIST   comma-separated: lagrange, maggi, kane, reduced_volterra
   --baked               fold the parameters into the code as constants
   --runtime-params      keep the parameters as fields of `Params`
   --drop-ignorable      leave the ignorable coordinates out of the reduced state
@@ -68,7 +68,11 @@ fn generate(args: &[String]) -> Result<(), String> {
                     list.push(match name.trim() {
                         "reduced_volterra" | "reduced" => Formulation::ReducedVolterra,
                         "kane" => Formulation::Kane,
-                        other => return Err(format!("unknown formulation `{other}`: use reduced_volterra or kane")),
+                        "lagrange" => Formulation::Lagrange,
+                        "maggi" => Formulation::Maggi,
+                        other => {
+                            return Err(format!("unknown formulation `{other}`: use lagrange, maggi, kane or reduced_volterra"));
+                        }
                     });
                 }
                 list.sort();

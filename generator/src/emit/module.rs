@@ -9,10 +9,10 @@ use super::prepare::{Preparer, magnitude};
 use super::{Formulation, Function, Generated, Options, Parameters, Summary};
 use crate::formulation::mechanics::{self, Mechanics};
 use crate::formulation::volterra::{self, Volterra};
-use crate::formulation::ignorable;
+use crate::formulation::{classical, ignorable};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::number::rat_from_f64;
-use crate::symbolic::{Expr, Symbol};
+use crate::symbolic::{Expr, Matrix, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::{BTreeSet, HashSet};
@@ -86,7 +86,7 @@ fn derive(model: &Model, options: &Options) -> Result<Derived, ModelError> {
     } else {
         None
     };
-    let kane = if options.formulations.contains(&Formulation::Kane) {
+    let kane = if options.formulations.iter().any(|f| matches!(f, Formulation::Kane | Formulation::Maggi)) {
         Some(volterra::derive(model, &mech, &[], &model.quasi_full)?)
     } else {
         None
@@ -109,6 +109,8 @@ struct Emitter<'a> {
     prep: Preparer,
     names: SymbolNames,
     functions: Vec<(String, usize, OpCount)>,
+    /// Per emitted formulation: name, states, equations.
+    forms: Vec<(String, usize, usize)>,
 }
 
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
@@ -129,6 +131,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         prep: Preparer::new(model, options.parameters == Parameters::Baked),
         names: SymbolNames { coordinates, velocities, parameters, momenta, quasi },
         functions: Vec::new(),
+        forms: Vec::new(),
     };
     let mut items = vec![em.header(&derived)];
     items.push(em.params());
@@ -141,11 +144,19 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         fns.extend(em.shared_function(*f, &derived)?);
     }
     items.extend(fns);
-    if let Some(v) = &derived.reduced {
-        items.push(em.formulation("reduced_volterra", v, &derived, options.integrate_ignorable)?);
+    if options.formulations.contains(&Formulation::Lagrange) {
+        items.push(em.classical_form("lagrange", &derived)?);
     }
-    if let Some(v) = &derived.kane {
-        items.push(em.formulation("kane", v, &derived, true)?);
+    if options.formulations.contains(&Formulation::Maggi) {
+        items.push(em.classical_form("maggi", &derived)?);
+    }
+    if let Some(v) = &derived.kane
+        && options.formulations.contains(&Formulation::Kane)
+    {
+        items.push(em.volterra_form("kane", v, &derived, true)?);
+    }
+    if let Some(v) = &derived.reduced {
+        items.push(em.volterra_form("reduced_volterra", v, &derived, options.integrate_ignorable)?);
     }
     let tokens = quote!(#(#items)*);
     let file: syn::File = syn::parse2(tokens).map_err(|e| {
@@ -157,15 +168,8 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         model.name,
         prettyplease::unparse(&file)
     );
-    let mut formulations = Vec::new();
     let s = derived.ignorable.len();
-    if derived.reduced.is_some() {
-        let states = if options.integrate_ignorable { derived.mech.m } else { derived.mech.m - s } + derived.mech.p - s;
-        formulations.push(("reduced_volterra".to_string(), states, derived.mech.p - s));
-    }
-    if derived.kane.is_some() {
-        formulations.push(("kane".to_string(), derived.mech.m + derived.mech.p, derived.mech.p));
-    }
+    let formulations = std::mem::take(&mut em.forms);
     let summary = Summary {
         model: model.name.clone(),
         m: derived.mech.m,
@@ -432,23 +436,112 @@ impl Emitter<'_> {
         Ok(out)
     }
 
-    /// A formulation's submodule: `rhs`, `initial_state`, `velocities`.
-    fn formulation(&mut self, name: &str, v: &Volterra, d: &Derived, integrate_ignorable: bool) -> Result<TokenStream, ModelError> {
+    /// The reduced Volterra or Kane submodule.
+    fn volterra_form(&mut self, name: &str, v: &Volterra, d: &Derived, integrate_ignorable: bool) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let m = model.m();
-        let n_u = v.u.len();
-        // Coordinates kept in the state.
         let dropped: Vec<usize> = if integrate_ignorable { vec![] } else { v.ignorable.clone() };
         if !dropped.is_empty() {
             self.check_droppable(v, &dropped)?;
         }
-        let kept: Vec<usize> = (0..m).filter(|j| !dropped.contains(j)).collect();
-        let n_states = kept.len() + n_u;
-        let mut state_names: Vec<String> = kept.iter().map(|&j| model.coordinates[j].name()).collect();
-        state_names.extend((0..n_u).map(|k| volterra::quasi_symbol(k).name()));
+        let n_u = v.u.len();
+        let speeds: Vec<(Symbol, String)> = v.u.iter().zip(&self.names.quasi).map(|(u, n)| (*u, n.clone())).collect();
+        // u = Y q' + Z, for the initial state.
+        let from_qdot: Vec<Expr> = (0..n_u)
+            .map(|k| Expr::sum((0..m).map(|j| v.y.get(k, j) * model.velocities[j].expr())) + v.z[k])
+            .collect();
+        let kane = name == "kane";
+        let form = Form {
+            name: name.to_string(),
+            label: if kane { "Kane / Gibbs-Appell (standard Volterra)" } else { "the reduced Volterra equations (paper Eqs. 64-67)" }.into(),
+            kept: (0..m).filter(|j| !dropped.contains(j)).collect(),
+            speeds,
+            momenta: v.g.clone(),
+            qdot: v.qdot.clone(),
+            from_qdot,
+            mass: v.mass_ni.clone(),
+            force: v.l_ni.clone(),
+            solved: n_u,
+            post: None,
+            checks: self.runtime_factors(v),
+            equations: n_u,
+            matrix_name: "mass matrix M_NI",
+        };
+        self.form(&form, d)
+    }
+
+    /// The Lagrange (with multipliers) or Maggi submodule, state `[q; q']`.
+    fn classical_form(&mut self, name: &str, d: &Derived) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let mech = &d.mech;
+        let (m, r) = (mech.m, mech.r);
+        let c = classical::derive(model, mech);
+        let speeds: Vec<(Symbol, String)> = model.velocities.iter().zip(&self.names.velocities).map(|(v, n)| (*v, n.clone())).collect();
+        let qd: Vec<Expr> = model.velocities.iter().map(|s| s.expr()).collect();
+        let (mass, force, solved, post, matrix_name, label) = if name == "lagrange" {
+            // [M a^T; a 0] [q''; -lambda] = [f; gamma]: symmetric.
+            let mut kkt = Matrix::zeros(m + r, m + r);
+            for i in 0..m {
+                for j in 0..m {
+                    kkt.set(i, j, mech.mass.get(i, j));
+                }
+            }
+            for i in 0..r {
+                for j in 0..m {
+                    kkt.set(m + i, j, mech.a.get(i, j));
+                    kkt.set(j, m + i, mech.a.get(i, j));
+                }
+            }
+            let rhs: Vec<Expr> = c.force.iter().chain(&c.gamma).copied().collect();
+            (kkt, rhs, m, None, "constraint matrix [M a^T; a 0]", "Lagrange's equations with multipliers")
+        } else {
+            let kane = d.kane.as_ref().expect("Maggi needs the Kane derivation");
+            let w = kane.w.clone();
+            let drift = classical::maggi_drift(model, kane);
+            let wt = w.transpose();
+            let mass = wt.mul(&mech.mass).mul(&w);
+            let mc = mech.mass.mul(&Matrix::column(drift.clone()));
+            let rest = Matrix::column((0..m).map(|j| c.force[j] - mc.get(j, 0)).collect());
+            let force = wt.mul(&rest).col(0);
+            (mass, force, kane.u.len(), Some((w, drift)), "Maggi matrix W^T M W", "Maggi's equations")
+        };
+        let checks = d.kane.as_ref().map(|k| self.runtime_factors(k)).filter(|_| name == "maggi").unwrap_or_default();
+        let form = Form {
+            name: name.to_string(),
+            label: label.into(),
+            kept: (0..m).collect(),
+            speeds,
+            momenta: vec![],
+            qdot: qd.clone(),
+            from_qdot: qd,
+            mass,
+            force,
+            solved,
+            post,
+            checks,
+            equations: m,
+            matrix_name,
+        };
+        self.form(&form, d)
+    }
+
+    /// A formulation's submodule: `rhs`, `initial_state`, `velocities`.
+    fn form(&mut self, f: &Form, d: &Derived) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let m = model.m();
+        let name = f.name.as_str();
+        let nq = f.kept.len();
+        let n_speeds = f.speeds.len();
+        let work = self.has_work(d);
+        let n_states = nq + n_speeds + usize::from(work);
+        let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
+        state_names.extend(f.speeds.iter().map(|(s, _)| s.name()));
+        if work {
+            state_names.push("W".into());
+        }
         let states_l = usize_lit(n_states);
-        let n_u_l = usize_lit(n_u);
-        let label = if name == "kane" { "Kane / Gibbs-Appell (standard Volterra)" } else { "the reduced Volterra equations (paper Eqs. 64-67)" };
+        let n = f.mass.rows;
+        let n_l = usize_lit(n);
 
         // The right-hand side.
         let args = vec![
@@ -458,48 +551,81 @@ impl Emitter<'_> {
             Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
             Arg::new("dstate", quote!(&mut [f64; STATES])),
         ];
-        let mut inputs = vec![self.time_input()];
-        for (pos, &j) in kept.iter().enumerate() {
-            let l = usize_lit(pos);
-            inputs.push(Input::new(model.coordinates[j], &self.names.coordinates[j], 1, quote!(state[#l])));
-        }
-        for (k, u) in v.u.iter().enumerate() {
-            let l = usize_lit(kept.len() + k);
-            inputs.push(Input::new(*u, &self.names.quasi[k], 1, quote!(state[#l])));
-        }
-        inputs.extend(self.parameter_inputs(2));
-        for (k, g) in v.g.iter().enumerate() {
-            let l = usize_lit(k);
-            inputs.push(Input::new(*g, &self.names.momenta[k], 3, quote!(g_i[#l])));
-        }
-        let checks = self.runtime_factors(v);
-        let mut outputs: Vec<Expr> = kept.iter().map(|&j| v.qdot[j]).collect();
-        // M_NI is symmetric: both triangles read the upper entry, so CSE binds it once.
-        for i in 0..n_u {
-            for j in 0..n_u {
-                outputs.push(v.mass_ni.get(i.min(j), i.max(j)));
+        let inputs = self.state_inputs(f);
+        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
+        // Symmetric: both triangles read the upper entry, so CSE binds it once.
+        for i in 0..n {
+            for j in 0..n {
+                outputs.push(f.mass.get(i.min(j), i.max(j)));
             }
         }
-        outputs.extend(v.l_ni.iter().copied());
-        outputs.extend(checks.iter().copied());
+        outputs.extend(f.force.iter().copied());
+        let post_len = f.post.as_ref().map_or(0, |(w, _)| w.rows * w.cols + w.rows);
+        if let Some((w, c)) = &f.post {
+            outputs.extend(w.data.iter().copied());
+            outputs.extend(c.iter().copied());
+        }
+        if work {
+            let to_qdot: std::collections::HashMap<Symbol, Expr> =
+                model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
+            let power = Expr::sum(d.mech.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v));
+            outputs.push(power);
+        }
+        outputs.extend(f.checks.iter().copied());
         let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
-        add_solve_cost(self.functions.last_mut().expect("just pushed"), n_u);
+        add_solve_cost(self.functions.last_mut().expect("just pushed"), n);
         let o = &b.outputs;
-        let nq = kept.len();
         let qd_out = &o[..nq];
-        let rows: Vec<TokenStream> = o[nq..nq + n_u * n_u].chunks(n_u).map(|r| quote!([#(#r),*])).collect();
-        let at = nq + n_u * n_u;
-        let l_out = &o[at..at + n_u];
-        let check_out = &o[at + n_u..];
-        let check_stmts = singular_checks(&checks, check_out);
+        let rows: Vec<TokenStream> = o[nq..nq + n * n].chunks(n).map(|r| quote!([#(#r),*])).collect();
+        let mut at = nq + n * n;
+        let l_out = &o[at..at + n];
+        at += n;
+        let speed_values: Vec<TokenStream> = match &f.post {
+            None => (0..n_speeds).map(|k| {
+                let l = usize_lit(k);
+                quote!(force[#l])
+            }).collect(),
+            Some((w, _)) => {
+                let (rows_w, cols_w) = (w.rows, w.cols);
+                let w_out = &o[at..at + rows_w * cols_w];
+                let c_out = &o[at + rows_w * cols_w..at + post_len];
+                (0..rows_w)
+                    .map(|j| {
+                        let terms: Vec<TokenStream> = (0..cols_w)
+                            .map(|k| {
+                                let wk = &w_out[j * cols_w + k];
+                                let l = usize_lit(k);
+                                quote!(#wk * force[#l])
+                            })
+                            .collect();
+                        let cj = &c_out[j];
+                        quote!(#(#terms +)* #cj)
+                    })
+                    .collect()
+            }
+        };
+        at += post_len;
+        let power_stmt = if work {
+            let p = &o[at];
+            at += 1;
+            let l = usize_lit(n_states - 1);
+            quote!(dstate[#l] = #p;)
+        } else {
+            TokenStream::new()
+        };
+        let check_stmts = singular_checks(&f.checks, &o[at..]);
         let qd_idx: Vec<Literal> = (0..nq).map(usize_lit).collect();
-        let u_idx: Vec<Literal> = (0..n_u).map(|k| usize_lit(nq + k)).collect();
-        let ks: Vec<Literal> = (0..n_u).map(usize_lit).collect();
+        let s_idx: Vec<Literal> = (0..n_speeds).map(|k| usize_lit(nq + k)).collect();
         let stmts = &b.stmts;
         let helpers = &b.helpers;
+        let matrix_name = f.matrix_name;
         let rhs_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1, 4]).collect());
         let rhs_doc = doc(&format!(
-            "Right-hand side of {label}: `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN."
+            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.",
+            f.label,
+            if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
+            if work { " and the power `W' = Q . q'` last" } else { "" },
+            if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let rhs = quote! {
             #rhs_doc
@@ -507,13 +633,14 @@ impl Emitter<'_> {
             pub fn rhs(#(#rhs_args),*) -> Result<(), EvalError> {
                 #(#stmts)*
                 #(#check_stmts)*
-                let mut mass: [[f64; #n_u_l]; #n_u_l] = [#(#rows),*];
-                let mut force: [f64; #n_u_l] = [#(#l_out),*];
-                if let Err(column) = solve_dense(&mut mass, &mut force) {
-                    return Err(EvalError::Singular { t, condition: "mass matrix M_NI", value: column as f64 });
+                let mut matrix: [[f64; #n_l]; #n_l] = [#(#rows),*];
+                let mut force: [f64; #n_l] = [#(#l_out),*];
+                if let Err(column) = solve_dense(&mut matrix, &mut force) {
+                    return Err(EvalError::Singular { t, condition: #matrix_name, value: column as f64 });
                 }
                 #(dstate[#qd_idx] = #qd_out;)*
-                #(dstate[#u_idx] = force[#ks];)*
+                #(dstate[#s_idx] = #speed_values;)*
+                #power_stmt
                 for (index, value) in dstate.iter().enumerate() {
                     if !value.is_finite() {
                         return Err(EvalError::NonFinite { t, index });
@@ -523,30 +650,59 @@ impl Emitter<'_> {
             }
             #(#helpers)*
         };
-
-        let init = self.initial_state(name, v, d, &kept)?;
-        let vel = self.velocities_fn(name, v, &kept, &checks)?;
+        let init = self.initial_state(f, d, work)?;
+        let vel = self.velocities_fn(f)?;
         let module = ident(name);
-        let eqs = usize_lit(n_u);
-        let integrates = dropped.is_empty();
-        let mod_doc = doc(&format!("{label}: {n_states} states, {n_u} equations."));
+        let eqs = usize_lit(f.equations);
+        let integrates = nq == m;
+        let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
+        self.forms.push((name.to_string(), n_states, f.equations));
+        let _ = f.solved;
         Ok(quote! {
             #mod_doc
             pub mod #module {
                 use super::*;
-                #[doc = "Length of the state `[q; u]`."]
+                #[doc = "Length of the state: kept coordinates, speeds, and the work integral when forces do work."]
                 pub const STATES: usize = #states_l;
-                #[doc = "Number of dynamical equations (quasi-velocities)."]
+                #[doc = "Number of dynamical equations, counted as the paper's Table 1 does."]
                 pub const EQUATIONS: usize = #eqs;
                 #[doc = "Names of the state entries."]
                 pub const STATE_NAMES: [&str; STATES] = [#(#state_names),*];
                 #[doc = "False when the ignorable coordinates are left out of the state."]
                 pub const INTEGRATES_IGNORABLE: bool = #integrates;
+                #[doc = "True when the last state entry is the work integral `W` of Eq. 80."]
+                pub const HAS_WORK_STATE: bool = #work;
                 #rhs
                 #init
                 #vel
             }
         })
+    }
+
+    /// True when applied non-potential forces can do work (Q is not identically zero).
+    fn has_work(&mut self, d: &Derived) -> bool {
+        d.mech.q_forces.iter().any(|q| !self.prep.prepare(*q).is_zero())
+    }
+
+    /// Inputs of the functions of a state: `t`, kept coordinates and speeds from `state`
+    /// (argument 1), parameters (argument 2), `G_I` (argument 3).
+    fn state_inputs(&self, f: &Form) -> Vec<Input> {
+        let model = self.model;
+        let mut inputs = vec![self.time_input()];
+        for (pos, &j) in f.kept.iter().enumerate() {
+            let l = usize_lit(pos);
+            inputs.push(Input::new(model.coordinates[j], &self.names.coordinates[j], 1, quote!(state[#l])));
+        }
+        for (k, (s, n)) in f.speeds.iter().enumerate() {
+            let l = usize_lit(f.kept.len() + k);
+            inputs.push(Input::new(*s, n, 1, quote!(state[#l])));
+        }
+        inputs.extend(self.parameter_inputs(2));
+        for (k, g) in f.momenta.iter().enumerate() {
+            let l = usize_lit(k);
+            inputs.push(Input::new(*g, &self.names.momenta[k], 3, quote!(g_i[#l])));
+        }
+        inputs
     }
 
     /// The factors of `[Y; M'; a]`'s pivots that vary with the state: checked at runtime.
@@ -596,14 +752,12 @@ impl Emitter<'_> {
         Ok(())
     }
 
-    fn initial_state(&mut self, name: &str, v: &Volterra, d: &Derived, kept: &[usize]) -> Result<TokenStream, ModelError> {
+    fn initial_state(&mut self, f: &Form, d: &Derived, work: bool) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let mech = &d.mech;
+        let name = f.name.as_str();
         let (args, inputs) = self.q_qdot_inputs(true);
-        // u = Y q' + Z.
-        let u: Vec<Expr> = (0..v.u.len())
-            .map(|k| Expr::sum((0..model.m()).map(|j| v.y.get(k, j) * model.velocities[j].expr())) + v.z[k])
-            .collect();
+        let u = &f.from_qdot;
         let g = momenta(mech, &d.ignorable, &model.velocities);
         let residuals = velocity_residuals(mech, &model.velocities);
         let bounds: Vec<Expr> = (0..mech.r)
@@ -630,13 +784,13 @@ impl Emitter<'_> {
         let hb_out = &o[nu + ng + 2 * nr + nh..];
         let names: Vec<&String> = mech.constraint_names.iter().collect();
         let h_names: Vec<&String> = mech.holonomic.iter().map(|(i, _)| &mech.constraint_names[*i]).collect();
-        let q_idx: Vec<Literal> = kept.iter().map(|&j| usize_lit(j)).collect();
+        let q_idx: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
+        let w0 = if work { quote!(, 0.0) } else { TokenStream::new() };
         let stmts = &b.stmts;
         let used: BTreeSet<usize> = b.used_args.iter().copied().chain([0, 1, 2]).collect();
         let fn_args = arg_list(&args, &used);
-        let _ = kept.len();
         Ok(quote! {
-            #[doc = "The initial state `[q; u]` and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
+            #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
             #[allow(non_snake_case, clippy::all)]
             pub fn initial_state(#(#fn_args),*) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
                 #(#stmts)*
@@ -648,7 +802,7 @@ impl Emitter<'_> {
                         return Err(EvalError::ConstraintViolated { constraint, residual, tolerance });
                     }
                 }
-                let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),*];
+                let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
                 let g_i: [f64; NUM_IGNORABLE] = [#(#g_out),*];
                 for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
                     if !value.is_finite() {
@@ -660,36 +814,24 @@ impl Emitter<'_> {
         })
     }
 
-    fn velocities_fn(&mut self, name: &str, v: &Volterra, kept: &[usize], checks: &[Expr]) -> Result<TokenStream, ModelError> {
+    fn velocities_fn(&mut self, f: &Form) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let m = model.m();
+        let name = f.name.as_str();
         let args = vec![
             Arg::new("t", quote!(f64)),
             Arg::new("state", quote!(&[f64; STATES])),
             Arg::new("params", quote!(&Params)),
             Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
         ];
-        let mut inputs = vec![self.time_input()];
-        for (pos, &j) in kept.iter().enumerate() {
-            let l = usize_lit(pos);
-            inputs.push(Input::new(model.coordinates[j], &self.names.coordinates[j], 1, quote!(state[#l])));
-        }
-        for (k, u) in v.u.iter().enumerate() {
-            let l = usize_lit(kept.len() + k);
-            inputs.push(Input::new(*u, &self.names.quasi[k], 1, quote!(state[#l])));
-        }
-        inputs.extend(self.parameter_inputs(2));
-        for (k, g) in v.g.iter().enumerate() {
-            let l = usize_lit(k);
-            inputs.push(Input::new(*g, &self.names.momenta[k], 3, quote!(g_i[#l])));
-        }
-        let mut outputs = v.qdot.clone();
-        outputs.extend(checks.iter().copied());
+        let inputs = self.state_inputs(f);
+        let mut outputs = f.qdot.clone();
+        outputs.extend(f.checks.iter().copied());
         let b = self.body(&format!("{name}::velocities"), &outputs, &inputs, &args)?;
         let qd = &b.outputs[..m];
-        let check_stmts = singular_checks(checks, &b.outputs[m..]);
+        let check_stmts = singular_checks(&f.checks, &b.outputs[m..]);
         let q_items: Vec<TokenStream> = (0..m)
-            .map(|j| match kept.iter().position(|&k| k == j) {
+            .map(|j| match f.kept.iter().position(|&k| k == j) {
                 Some(pos) => {
                     let l = usize_lit(pos);
                     quote!(state[#l])
@@ -700,7 +842,7 @@ impl Emitter<'_> {
         let stmts = &b.stmts;
         let fn_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1]).collect());
         Ok(quote! {
-            #[doc = "Coordinates and velocities `(q, q')` at a state, `q' = W u + X` (Eq. 43). Coordinates left out of the state read as 0."]
+            #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
             #[allow(non_snake_case, clippy::all)]
             pub fn velocities(#(#fn_args),*) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
                 #(#stmts)*
@@ -716,6 +858,33 @@ impl Emitter<'_> {
             }
         })
     }
+}
+
+/// What a formulation's submodule is built from.
+struct Form {
+    name: String,
+    label: String,
+    /// Coordinates in the state, in order.
+    kept: Vec<usize>,
+    /// The second half of the state: quasi-velocities or `q'` symbols, with identifiers.
+    speeds: Vec<(Symbol, String)>,
+    /// `G_I` symbols the expressions use.
+    momenta: Vec<Symbol>,
+    /// `q'` of every coordinate in terms of the state.
+    qdot: Vec<Expr>,
+    /// The speeds in terms of `q, q'` (for the initial state).
+    from_qdot: Vec<Expr>,
+    /// `matrix x = force`, solved numerically (symmetric: the upper triangle is read).
+    mass: Matrix,
+    force: Vec<Expr>,
+    /// How many entries of `x` are speeds' rates (the rest are multipliers).
+    solved: usize,
+    /// Maggi: the speeds' rates are `W x + c`.
+    post: Option<(Matrix, Vec<Expr>)>,
+    /// Factors whose vanishing makes the equations singular.
+    checks: Vec<Expr>,
+    equations: usize,
+    matrix_name: &'static str,
 }
 
 /// `if !(f.abs() > SINGULAR_TOLERANCE) { return Err(..) }` per factor.

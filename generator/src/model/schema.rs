@@ -82,7 +82,7 @@ impl Default for EmitDef {
 }
 
 fn all_formulations() -> Vec<FormulationDef> {
-    vec![FormulationDef::ReducedVolterra, FormulationDef::Kane]
+    vec![FormulationDef::Lagrange, FormulationDef::Maggi, FormulationDef::Kane, FormulationDef::ReducedVolterra]
 }
 
 fn all_functions() -> Vec<FunctionDef> {
@@ -100,10 +100,14 @@ fn default_max_lets() -> usize {
 /// A formulation of the equations of motion.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
 pub enum FormulationDef {
-    /// The paper's reduced Volterra equations: state `[q; u_NI]`, p - s equations.
-    ReducedVolterra,
+    /// Lagrange's equations with multipliers: state `[q; q']`, m equations (+ r multipliers).
+    Lagrange,
+    /// Maggi's equations: state `[q; q']`, m equations, no multipliers.
+    Maggi,
     /// Kane / Gibbs-Appell (standard Volterra): state `[q; u]`, p equations.
     Kane,
+    /// The paper's reduced Volterra equations: state `[q; u_NI]`, p - s equations.
+    ReducedVolterra,
 }
 
 /// An extra emitted function.
