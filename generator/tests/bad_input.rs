@@ -154,7 +154,7 @@ fn generation_writes_the_module_and_a_summary_or_a_clear_error() {
     let out = run_generator(&[model.as_os_str(), "-o".as_ref(), out_path.as_os_str()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary = String::from_utf8_lossy(&out.stderr);
-    for w in ["m = 3, r = 1, p = 2, s = 1", "reduced_volterra", "4 states", "kane::rhs", "ops", "derived in"] {
+    for w in ["m = 3, r = 1, p = 2, s = 1", "reduced_volterra", "5 states", "lagrange::rhs", "kane::rhs", "ops", "derived in"] {
         assert!(summary.contains(w), "`{w}` missing from the summary: {summary}");
     }
     let code = std::fs::read_to_string(&out_path).unwrap();
