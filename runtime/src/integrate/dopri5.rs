@@ -1,0 +1,140 @@
+//! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
+//! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
+
+use super::{Reason, Rhs, RunError, Settings, Solution, Stats, error_norm, finite, initial_step};
+
+const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
+const A: [[f64; 6]; 7] = [
+    [0.0; 6],
+    [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0],
+    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0],
+    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+];
+/// Fifth minus fourth order weights.
+const E: [f64; 7] = [71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
+/// Shampine's dense output.
+const D: [f64; 7] = [
+    -12715105075.0 / 11282082432.0,
+    0.0,
+    87487479700.0 / 32700410799.0,
+    -10690763975.0 / 1880347072.0,
+    701980252875.0 / 199316789632.0,
+    -1453857185.0 / 822651844.0,
+    69997945.0 / 29380423.0,
+];
+
+pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
+    let n = y0.len();
+    let mut stats = Stats::default();
+    let t_end = *outputs.last().expect("checked");
+    let mut t = outputs[0];
+    let mut y = y0.to_vec();
+    let mut states = vec![y.clone()];
+    let mut next = 1;
+    let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
+    let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 7];
+    f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+    let mut h = initial_step(f, t, &y, &k[0].clone(), 5, s, &mut stats).map_err(|r| stop(t, &y, r))?;
+    let (beta, safe, facc1, facc2) = (0.04, 0.9, 5.0, 0.1);
+    let expo1 = 0.2 - beta * 0.75;
+    let mut facold: f64 = 1e-4;
+    let mut rejected_last = false;
+    let (mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut rcont = vec![vec![0.0; n]; 5];
+    while next < outputs.len() {
+        if stats.steps + stats.rejected >= s.max_steps {
+            return Err(stop(t, &y, Reason::TooManySteps(s.max_steps)));
+        }
+        if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
+            return Err(stop(t, &y, Reason::StepSizeTooSmall { h }));
+        }
+        if t + 1.01 * h >= t_end {
+            h = t_end - t;
+        }
+        for st in 1..6 {
+            for i in 0..n {
+                let mut acc = 0.0;
+                for j in 0..st {
+                    acc += A[st][j] * k[j][i];
+                }
+                tmp[i] = y[i] + h * acc;
+            }
+            let (_, tail) = k.split_at_mut(st);
+            f(t + C[st] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+        }
+        for i in 0..n {
+            let mut acc = 0.0;
+            for j in 0..6 {
+                acc += A[6][j] * k[j][i];
+            }
+            y_new[i] = y[i] + h * acc;
+        }
+        f(t + h, &y_new, &mut k[6], &mut stats).map_err(|r| stop(t, &y, r))?;
+        for i in 0..n {
+            let mut acc = 0.0;
+            for j in 0..7 {
+                acc += E[j] * k[j][i];
+            }
+            err[i] = h * acc;
+        }
+        let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
+        if !e.is_finite() {
+            stats.rejected += 1;
+            rejected_last = true;
+            h *= 0.2;
+            continue;
+        }
+        let fac11 = e.powf(expo1);
+        if e <= 1.0 {
+            let fac = (fac11 / facold.powf(beta) / safe).clamp(facc2, facc1);
+            let mut h_new = h / fac;
+            facold = e.max(1e-4);
+            stats.steps += 1;
+            // Dense output over [t, t + h].
+            for i in 0..n {
+                let ydiff = y_new[i] - y[i];
+                let bspl = h * k[0][i] - ydiff;
+                rcont[0][i] = y[i];
+                rcont[1][i] = ydiff;
+                rcont[2][i] = bspl;
+                rcont[3][i] = ydiff - h * k[6][i] - bspl;
+                let mut acc = 0.0;
+                for j in 0..7 {
+                    acc += D[j] * k[j][i];
+                }
+                rcont[4][i] = h * acc;
+            }
+            let t_new = if h == t_end - t { t_end } else { t + h };
+            while next < outputs.len() && outputs[next] <= t_new {
+                let theta = (outputs[next] - t) / h;
+                let theta1 = 1.0 - theta;
+                let out: Vec<f64> = (0..n)
+                    .map(|i| rcont[0][i] + theta * (rcont[1][i] + theta1 * (rcont[2][i] + theta * (rcont[3][i] + theta1 * rcont[4][i]))))
+                    .collect();
+                states.push(out);
+                next += 1;
+            }
+            t = t_new;
+            std::mem::swap(&mut y, &mut y_new);
+            let (first, rest) = k.split_at_mut(1);
+            first[0].copy_from_slice(&rest[5]);
+            if !finite(&y) {
+                return Err(stop(t, &y, Reason::Diverged));
+            }
+            h_new = h_new.min(s.h_max);
+            if rejected_last {
+                h_new = h_new.min(h);
+            }
+            rejected_last = false;
+            h = h_new;
+        } else {
+            stats.rejected += 1;
+            rejected_last = true;
+            h /= (fac11 / safe).min(facc1);
+        }
+    }
+    Ok(Solution { times: outputs.to_vec(), states, stats })
+}

@@ -1,0 +1,269 @@
+//! Integrators: fixed-step RK4, adaptive Dormand-Prince 5(4) with PI step control and dense
+//! output (what MATLAB's `ode45` does with a vector of output times), and DOP853.
+//!
+//! All three are ours: the systems are small (4 to 16 states), a right-hand side costs 0.1 to
+//! 1 µs, and the candidate crates either allocate per step, pull a second nalgebra, or gave a
+//! wrong dense output (`shared/crates.md`). The measurement is in `docs/benchmarks.md`.
+//!
+//! ```
+//! use runtime::integrate::{Method, Settings, integrate};
+//! // y'' = -y from (1, 0): y(t) = cos t.
+//! let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+//!     dy[0] = y[1];
+//!     dy[1] = -y[0];
+//!     Ok(())
+//! };
+//! let out: Vec<f64> = (0..=10).map(|i| i as f64).collect();
+//! let s = Settings { method: Method::Dopri5, rtol: 1e-8, atol: 1e-10, ..Settings::default() };
+//! let sol = integrate(&mut f, &[1.0, 0.0], &out, &s).unwrap();
+//! assert!((sol.states[10][0] - 10f64.cos()).abs() < 1e-6);
+//! ```
+
+mod dop853;
+mod dopri5;
+mod rk4;
+
+use std::fmt;
+
+/// The integration method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Classical Runge-Kutta, fixed step `h` (shortened to land on output times).
+    Rk4 { h: f64 },
+    /// Dormand-Prince 5(4), PI step control, dense output (Shampine's 4th-order interpolant).
+    Dopri5,
+    /// Dormand-Prince 8(5,3); steps are shortened to land on the output times.
+    Dop853,
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Method::Rk4 { h } => write!(f, "RK4 h={h}"),
+            Method::Dopri5 => write!(f, "DOPRI5"),
+            Method::Dop853 => write!(f, "DOP853"),
+        }
+    }
+}
+
+/// Integrator settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub method: Method,
+    pub rtol: f64,
+    pub atol: f64,
+    /// Largest step (adaptive methods).
+    pub h_max: f64,
+    /// Give up after this many steps.
+    pub max_steps: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { method: Method::Dopri5, rtol: 1e-3, atol: 1e-6, h_max: f64::INFINITY, max_steps: 10_000_000 }
+    }
+}
+
+impl Settings {
+    /// "The paper's settings" (`shared/scenes.md`): MATLAB `ode45` defaults, Dormand-Prince
+    /// 5(4) with rtol 1e-3, atol 1e-6, maximum step a tenth of the span.
+    pub fn paper(span: f64) -> Settings {
+        Settings { method: Method::Dopri5, rtol: 1e-3, atol: 1e-6, h_max: 0.1 * span, ..Settings::default() }
+    }
+}
+
+/// Work done by the integrator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    pub steps: usize,
+    pub rejected: usize,
+    pub rhs_calls: usize,
+}
+
+/// The states at the requested output times.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    pub times: Vec<f64>,
+    pub states: Vec<Vec<f64>>,
+    pub stats: Stats,
+}
+
+/// Why a run stopped early: the time, the last accepted state, and the reason.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("integration stopped at t = {t}: {reason}")]
+pub struct RunError {
+    pub t: f64,
+    pub state: Vec<f64>,
+    pub reason: Reason,
+}
+
+/// The reason a run stopped.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum Reason {
+    /// The right-hand side refused (singular configuration, non-finite value, ...).
+    #[error("{0}")]
+    Rhs(String),
+    /// The step size fell below what the time's resolution allows.
+    #[error("step size {h:e} underflows at this time (tolerance too tight?)")]
+    StepSizeTooSmall { h: f64 },
+    /// More steps than `max_steps`.
+    #[error("more than {0} steps")]
+    TooManySteps(usize),
+    /// A state that is not finite (a fixed step too large for the dynamics).
+    #[error("the state is not finite (diverged)")]
+    Diverged,
+    /// Output times that are not increasing.
+    #[error("output times must start at the initial time and increase")]
+    BadOutputTimes,
+}
+
+/// Integrates `y' = f(t, y)` from `y0` at `outputs[0]` and returns the state at each output
+/// time.
+pub fn integrate<E: fmt::Display>(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), E>,
+    y0: &[f64],
+    outputs: &[f64],
+    settings: &Settings,
+) -> Result<Solution, RunError> {
+    if outputs.is_empty() || outputs.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(RunError { t: outputs.first().copied().unwrap_or(0.0), state: y0.to_vec(), reason: Reason::BadOutputTimes });
+    }
+    let mut counted = |t: f64, y: &[f64], dy: &mut [f64], stats: &mut Stats| -> Result<(), Reason> {
+        stats.rhs_calls += 1;
+        f(t, y, dy).map_err(|e| Reason::Rhs(e.to_string()))
+    };
+    match settings.method {
+        Method::Rk4 { h } => rk4::run(&mut counted, y0, outputs, h, settings.max_steps),
+        Method::Dopri5 => dopri5::run(&mut counted, y0, outputs, settings),
+        Method::Dop853 => dop853::run(&mut counted, y0, outputs, settings),
+    }
+}
+
+/// The right-hand side as the steppers see it, counting calls.
+type Rhs<'a> = dyn FnMut(f64, &[f64], &mut [f64], &mut Stats) -> Result<(), Reason> + 'a;
+
+/// Weighted RMS norm of an error estimate (Hairer's `sk = atol + rtol * max(|y0|, |y1|)`).
+fn error_norm(err: &[f64], y0: &[f64], y1: &[f64], rtol: f64, atol: f64) -> f64 {
+    let n = err.len().max(1) as f64;
+    let sum: f64 = err
+        .iter()
+        .zip(y0.iter().zip(y1))
+        .map(|(e, (a, b))| {
+            let sk = atol + rtol * a.abs().max(b.abs());
+            (e / sk) * (e / sk)
+        })
+        .sum();
+    (sum / n).sqrt()
+}
+
+/// Hairer's initial step guess for an order-`order` method.
+fn initial_step(f: &mut Rhs, t: f64, y: &[f64], f0: &[f64], order: i32, s: &Settings, stats: &mut Stats) -> Result<f64, Reason> {
+    let n = y.len();
+    let sk: Vec<f64> = y.iter().map(|v| s.atol + s.rtol * v.abs()).collect();
+    let dnf: f64 = f0.iter().zip(&sk).map(|(a, b)| (a / b) * (a / b)).sum::<f64>() / n as f64;
+    let dny: f64 = y.iter().zip(&sk).map(|(a, b)| (a / b) * (a / b)).sum::<f64>() / n as f64;
+    let mut h = if dnf <= 1e-10 || dny <= 1e-10 { 1e-6 } else { (dny / dnf).sqrt() * 0.01 };
+    h = h.min(s.h_max);
+    let y1: Vec<f64> = y.iter().zip(f0).map(|(a, b)| a + h * b).collect();
+    let mut f1 = vec![0.0; n];
+    f(t + h, &y1, &mut f1, stats)?;
+    let der2: f64 = (f1.iter().zip(f0).zip(&sk).map(|((a, b), c)| ((a - b) / c).powi(2)).sum::<f64>() / n as f64).sqrt() / h;
+    let der12 = der2.max(dnf.sqrt());
+    let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / order as f64) };
+    Ok((100.0 * h).min(h1).min(s.h_max))
+}
+
+fn finite(y: &[f64]) -> bool {
+    y.iter().all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `y'' = -y`, `y(0) = 1`: `y = cos t`.
+    fn oscillator(_t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+        dy[0] = y[1];
+        dy[1] = -y[0];
+        Ok(())
+    }
+
+    fn max_error(settings: &Settings, outputs: &[f64]) -> (f64, Stats) {
+        let sol = integrate(&mut oscillator, &[1.0, 0.0], outputs, settings).unwrap();
+        let e = sol.times.iter().zip(&sol.states).map(|(t, y)| (y[0] - t.cos()).abs().max((y[1] + t.sin()).abs())).fold(0.0, f64::max);
+        (e, sol.stats)
+    }
+
+    fn grid(end: f64, dt: f64) -> Vec<f64> {
+        (0..=((end / dt).round() as usize)).map(|i| i as f64 * dt).collect()
+    }
+
+    #[test]
+    fn rk4_is_fourth_order() {
+        let out = grid(10.0, 0.5);
+        let (e1, _) = max_error(&Settings { method: Method::Rk4 { h: 0.1 }, ..Settings::default() }, &out);
+        let (e2, s2) = max_error(&Settings { method: Method::Rk4 { h: 0.05 }, ..Settings::default() }, &out);
+        let ratio = e1 / e2;
+        assert!((14.0..18.0).contains(&ratio), "error ratio {ratio} for halved steps");
+        assert_eq!((s2.steps, s2.rhs_calls), (200, 800));
+    }
+
+    #[test]
+    fn adaptive_methods_meet_their_tolerance_and_tighten_with_it() {
+        // DOPRI5 with many outputs per step: its dense output is checked too. DOP853 lands on
+        // each output, so it gets a coarse grid that leaves the step size to the tolerance.
+        for (method, out) in [(Method::Dopri5, grid(20.0, 0.01)), (Method::Dop853, grid(20.0, 2.0))] {
+            let mut last = f64::INFINITY;
+            for rtol in [1e-4, 1e-7, 1e-10] {
+                let (e, stats) = max_error(&Settings { method, rtol, atol: rtol, ..Settings::default() }, &out);
+                eprintln!("{method} rtol {rtol:e}: error {e:e}, {stats:?}");
+                assert!(e < 200.0 * rtol, "{method} rtol {rtol}: error {e:e}");
+                assert!(e < last, "{method}: error must fall with rtol");
+                assert!(stats.rejected <= stats.steps);
+                last = e;
+            }
+        }
+        let (e, _) = max_error(&Settings { method: Method::Dop853, rtol: 1e-13, atol: 1e-13, ..Settings::default() }, &grid(20.0, 2.0));
+        assert!(e < 1e-11, "DOP853 at 1e-13: {e:e}");
+    }
+
+    #[test]
+    fn dense_output_takes_fewer_steps_than_outputs() {
+        let out = grid(20.0, 0.01);
+        let sol = integrate(&mut oscillator, &[1.0, 0.0], &out, &Settings::paper(20.0)).unwrap();
+        assert_eq!(sol.states.len(), out.len());
+        assert!(sol.stats.steps < 200, "{} steps for 2001 outputs", sol.stats.steps);
+        // The paper's cap: no step longer than a tenth of the span.
+        assert!(sol.stats.steps >= 10);
+    }
+
+    #[test]
+    fn failures_stop_the_run_with_time_state_and_reason() {
+        let out = grid(1.0, 0.1);
+        // A tolerance below what doubles can resolve: the step size underflows.
+        let tight = Settings { method: Method::Dopri5, rtol: 1e-30, atol: 1e-30, max_steps: 200_000, ..Settings::default() };
+        let err = integrate(&mut oscillator, &[1.0, 0.0], &out, &tight).unwrap_err();
+        assert!(matches!(err.reason, Reason::StepSizeTooSmall { .. } | Reason::TooManySteps(_)), "{err}");
+        // A fixed step far too large for a stiff decay diverges and says so.
+        let mut stiff = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+            dy[0] = -1000.0 * y[0];
+            Ok(())
+        };
+        let err = integrate(&mut stiff, &[1.0], &grid(100.0, 1.0), &Settings { method: Method::Rk4 { h: 0.5 }, ..Settings::default() }).unwrap_err();
+        assert_eq!(err.reason, Reason::Diverged);
+        assert!(err.t > 0.0);
+        // A right-hand side that refuses: its message, the time, the last good state.
+        let mut refuses = |t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+            if t > 0.5 {
+                return Err(format!("singular at t = {t}"));
+            }
+            dy[0] = y[0];
+            Ok(())
+        };
+        let err = integrate(&mut refuses, &[1.0], &out, &Settings::default()).unwrap_err();
+        assert!(matches!(&err.reason, Reason::Rhs(m) if m.contains("singular")), "{err}");
+        assert!(err.t <= 0.5 + 1e-12 && err.state[0] > 1.0);
+        // Output times that go backwards.
+        assert_eq!(integrate(&mut oscillator, &[1.0, 0.0], &[0.0, 1.0, 0.5], &Settings::default()).unwrap_err().reason, Reason::BadOutputTimes);
+    }
+}
