@@ -8,3 +8,7 @@
 #![forbid(unsafe_code)]
 
 pub mod integrate;
+pub mod system;
+pub mod monitor;
+pub mod compare;
+pub mod plot;

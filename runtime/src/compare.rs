@@ -1,0 +1,161 @@
+//! Every formulation of a model under the same integrator settings, measured like the paper's
+//! Tables 2, 3 and 6: states, equations, CPU time (median of repeated runs), and the norms of
+//! the energy, constraint and momentum errors.
+//!
+//! ```
+//! use runtime::compare::{Options, compare};
+//! let model = generated::find("cart_pendulum").unwrap();
+//! let runs = compare(&model, &Options { repeats: 1, ..Options::paper(&model) }).unwrap();
+//! let reduced = runs.iter().find(|r| r.record.method == "reduced_volterra").unwrap();
+//! assert!(reduced.record.constraint_error_norm < 1e-12);
+//! ```
+
+use crate::integrate::{RunError, Settings, Solution, integrate};
+use crate::monitor::{Invariants, monitor, norm};
+use crate::system::{SetupError, System};
+use generated::{Failure, Model};
+use std::time::Instant;
+
+/// What to run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    pub settings: Settings,
+    /// CPU time is the median of this many runs.
+    pub repeats: usize,
+    /// Formulations to run (empty: all the model has).
+    pub formulations: Vec<String>,
+}
+
+impl Options {
+    /// The paper's settings for the model's reference run, 5 repeats.
+    pub fn paper(model: &Model) -> Options {
+        let (t0, t1, _) = model.run;
+        Options { settings: Settings::paper(t1 - t0), repeats: 5, formulations: vec![] }
+    }
+}
+
+/// One row of the comparison table (also the JSON record).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Record {
+    pub scene: String,
+    pub method: String,
+    pub integrator: String,
+    pub states: usize,
+    pub equations: usize,
+    pub cpu_seconds: f64,
+    pub energy_error_norm: f64,
+    pub energy_error_rel: f64,
+    pub constraint_error_norm: f64,
+    pub position_constraint_error_norm: f64,
+    pub momentum_error_norm: f64,
+    pub momentum_error_rel: f64,
+    pub steps: usize,
+    pub rejected: usize,
+    pub rhs_calls: usize,
+}
+
+/// A formulation's run: its record, samples and monitors.
+#[derive(Clone, Debug)]
+pub struct Run {
+    pub record: Record,
+    pub solution: Solution,
+    pub invariants: Invariants,
+}
+
+/// Why a comparison failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CompareError {
+    #[error("{method}: {source}")]
+    Setup { method: String, source: SetupError },
+    #[error("{method}: {source}")]
+    Run { method: String, source: RunError },
+    #[error("{method}: monitor failed: {source}")]
+    Monitor { method: String, source: Failure },
+}
+
+/// The model's output times: `t_start, t_start + dt, ..., t_end`.
+pub fn output_times(model: &Model) -> Vec<f64> {
+    let (t0, t1, dt) = model.run;
+    let n = ((t1 - t0) / dt).round() as usize;
+    (0..=n).map(|i| t0 + i as f64 * dt).collect()
+}
+
+/// Runs one formulation.
+pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
+    let (q0, qd0) = model.initial;
+    let (sys, y0) = System::start(*model, method, (model.default_params)(), q0, qd0)
+        .map_err(|source| CompareError::Setup { method: method.into(), source })?;
+    let times = output_times(model);
+    let mut cpu = Vec::new();
+    let mut solution = None;
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &times, settings)
+            .map_err(|source| CompareError::Run { method: method.into(), source })?;
+        cpu.push(start.elapsed().as_secs_f64());
+        solution = Some(sol);
+    }
+    cpu.sort_by(f64::total_cmp);
+    let solution = solution.expect("at least one run");
+    let invariants = monitor(&sys, &solution).map_err(|source| CompareError::Monitor { method: method.into(), source })?;
+    let energy = norm(&invariants.energy_error);
+    let momentum = invariants.momentum_error.iter().map(|s| norm(s).powi(2)).sum::<f64>().sqrt();
+    let g0 = norm(&invariants.momentum0);
+    let record = Record {
+        scene: model.module.to_string(),
+        method: method.to_string(),
+        integrator: settings.method.to_string(),
+        states: sys.form.states,
+        equations: sys.form.equations,
+        cpu_seconds: cpu[cpu.len() / 2],
+        energy_error_norm: energy,
+        energy_error_rel: energy / invariants.energy0.abs(),
+        constraint_error_norm: norm(&invariants.velocity_constraint),
+        position_constraint_error_norm: norm(&invariants.position_constraint),
+        momentum_error_norm: momentum,
+        momentum_error_rel: if g0 > 0.0 { momentum / g0 } else { f64::NAN },
+        steps: solution.stats.steps,
+        rejected: solution.stats.rejected,
+        rhs_calls: solution.stats.rhs_calls,
+    };
+    Ok(Run { record, solution, invariants })
+}
+
+/// Runs every requested formulation of `model`.
+pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareError> {
+    model
+        .formulations
+        .iter()
+        .filter(|f| options.formulations.is_empty() || options.formulations.iter().any(|n| n == f.name))
+        .map(|f| run(model, f.name, &options.settings, options.repeats))
+        .collect()
+}
+
+/// The runs as a Markdown table shaped like the paper's.
+pub fn table(runs: &[Run]) -> String {
+    let mut out = String::from(
+        "| method | states | equations | CPU s | energy err | (rel) | constraint err | momentum err | (rel) | steps | rhs calls |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in runs.iter().map(|r| &r.record) {
+        let constraint = if r.position_constraint_error_norm > 0.0 {
+            format!("{:.2e} (pos {:.2e})", r.constraint_error_norm, r.position_constraint_error_norm)
+        } else {
+            format!("{:.2e}", r.constraint_error_norm)
+        };
+        out += &format!(
+            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {:.2e} | {:.2e} | {} | {} |\n",
+            r.method,
+            r.states,
+            r.equations,
+            r.cpu_seconds,
+            r.energy_error_norm,
+            r.energy_error_rel,
+            constraint,
+            r.momentum_error_norm,
+            r.momentum_error_rel,
+            r.steps,
+            r.rhs_calls
+        );
+    }
+    out
+}

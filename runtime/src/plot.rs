@@ -1,0 +1,92 @@
+//! SVG plots like the paper's figures: generalized coordinates over time, and the energy,
+//! constraint and momentum errors over time, one curve per method. SVG needs no font files.
+
+use crate::compare::Run;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+const COLORS: [RGBColor; 6] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189), RGBColor(140, 86, 75)];
+
+/// Why a plot could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write plot `{path}`: {message}")]
+pub struct PlotError {
+    pub path: String,
+    pub message: String,
+}
+
+fn err(path: &Path, e: impl std::fmt::Display) -> PlotError {
+    PlotError { path: path.display().to_string(), message: e.to_string() }
+}
+
+/// One panel: a titled chart of several series over `times`.
+fn panel(area: &DrawingArea<SVGBackend, plotters::coord::Shift>, title: &str, times: &[f64], series: &[(&str, Vec<f64>)]) -> Result<(), String> {
+    let (t0, t1) = (times[0], *times.last().unwrap_or(&1.0));
+    let finite = series.iter().flat_map(|(_, s)| s.iter().copied()).filter(|v| v.is_finite());
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) };
+    let pad = if hi > lo { 0.05 * (hi - lo) } else { 1e-300_f64.max(lo.abs() * 0.1).max(1e-16) };
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 14))
+        .margin(8)
+        .x_label_area_size(28)
+        .y_label_area_size(70)
+        .build_cartesian_2d(t0..t1, (lo - pad)..(hi + pad))
+        .map_err(|e| e.to_string())?;
+    chart.configure_mesh().x_desc("t [s]").y_label_formatter(&|v| format!("{v:.2e}")).draw().map_err(|e| e.to_string())?;
+    for (k, (name, values)) in series.iter().enumerate() {
+        let color = COLORS[k % COLORS.len()];
+        chart
+            .draw_series(LineSeries::new(times.iter().copied().zip(values.iter().copied()).filter(|(_, v)| v.is_finite()), color.stroke_width(1)))
+            .map_err(|e| e.to_string())?
+            .label(*name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Writes `<scene>_coordinates.svg` and `<scene>_errors.svg` into `dir`; returns their paths.
+pub fn write_plots(runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+    std::fs::create_dir_all(dir).map_err(|e| err(dir, e))?;
+    let Some(first) = runs.first() else { return Ok(vec![]) };
+    let scene = &first.record.scene;
+    let times = &first.solution.times;
+    let m = first.invariants.coordinates.first().map_or(0, |q| q.len());
+    let names = generated::find(scene).map(|model| model.coordinates.to_vec()).unwrap_or_default();
+    // Coordinates: one panel per coordinate.
+    let path = dir.join(format!("{scene}_coordinates.svg"));
+    let rows = m.div_ceil(2).max(1);
+    let root = SVGBackend::new(path.as_path(), (1100, 260 * rows as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&path, e))?;
+    for (j, area) in root.split_evenly((rows, 2)).iter().enumerate().take(m) {
+        let series: Vec<(&str, Vec<f64>)> =
+            runs.iter().map(|r| (r.record.method.as_str(), r.invariants.coordinates.iter().map(|q| q[j]).collect())).collect();
+        let title = names.get(j).map_or(format!("q{j}"), |n| n.to_string());
+        panel(area, &title, times, &series).map_err(|e| err(&path, e))?;
+    }
+    root.present().map_err(|e| err(&path, e))?;
+    drop(root);
+    // Errors: energy, constraint, momentum.
+    let epath = dir.join(format!("{scene}_errors.svg"));
+    let root = SVGBackend::new(epath.as_path(), (1100, 780)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&epath, e))?;
+    let areas = root.split_evenly((3, 1));
+    let energy: Vec<(&str, Vec<f64>)> = runs.iter().map(|r| (r.record.method.as_str(), r.invariants.energy_error.clone())).collect();
+    panel(&areas[0], "energy error E(t) - E(0) (E = T + V - W)", times, &energy).map_err(|e| err(&epath, e))?;
+    let constraint: Vec<(&str, Vec<f64>)> = runs.iter().map(|r| (r.record.method.as_str(), r.invariants.velocity_constraint.clone())).collect();
+    panel(&areas[1], "constraint error |a q' + b|", times, &constraint).map_err(|e| err(&epath, e))?;
+    let momentum: Vec<(&str, Vec<f64>)> = runs
+        .iter()
+        .map(|r| {
+            let s = &r.invariants.momentum_error;
+            let total = (0..times.len()).map(|i| s.iter().map(|k| k[i] * k[i]).sum::<f64>().sqrt()).collect();
+            (r.record.method.as_str(), total)
+        })
+        .collect();
+    panel(&areas[2], "momentum error |G_I(t) - G_I(0)|", times, &momentum).map_err(|e| err(&epath, e))?;
+    root.present().map_err(|e| err(&epath, e))?;
+    drop(areas);
+    drop(root);
+    Ok(vec![path, epath])
+}
