@@ -344,6 +344,84 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * m2 * l * l * x4;
+        let x6 = l * (m2 + 0.5 * m1) * x1;
+        let x7 = l * x4;
+        let x8 = 0.5 * x0 * m2 * l;
+        let x9 = x0 * x2 - x1 * x3;
+        let x10 = -m2 - 0.5 * m1;
+        let x11 = x_dot * theta1_dot;
+        let x12 = theta1_dot - theta2_dot;
+        let mut matrix: [[f64; 4]; 4] = [
+            [(m2 + 0.3333333333333333 * m1) * l * l, x5, x6, x7],
+            [x5, 0.3333333333333333 * m2 * l * l, x8, l],
+            [x6, x8, m2 + M + m1, 0.0],
+            [x7, l, 0.0, 0.0],
+        ];
+        let mut force: [f64; 4] = [
+            tau
+                + l
+                    * ((-0.5 * x11 - 0.5 * g) * x2 * m1
+                        - (x2 * x_dot * x10 - 0.5 * (x9 * m2 * l * theta2_dot))
+                            * theta1_dot
+                        + m2
+                            * (x9 * l * theta2_dot
+                                * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                                + (-x11 - g) * x2)),
+            m2 * l * (0.5 * (x9 * l * theta1_dot * theta1_dot) - 0.5 * (g * x3)) - tau,
+            l
+                * (0.5 * (m2 * theta2_dot * theta2_dot * x3)
+                    - x2 * theta1_dot * theta1_dot * x10),
+            l * (x9 * theta1_dot * x12 - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        dstate[5] = force[2];
+        dstate[6] = tau * x12;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

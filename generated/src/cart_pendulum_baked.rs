@@ -274,6 +274,64 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * x4;
+        let x6 = 1.5 * x1;
+        let x7 = 0.5 * x0;
+        let x8 = x0 * x2 - x1 * x3;
+        let mut matrix: [[f64; 4]; 4] = [
+            [1.3333333333333333, x5, x6, x4],
+            [x5, 0.3333333333333333, x7, 1.0],
+            [x6, x7, 4.0, 0.0],
+            [x4, 1.0, 0.0, 0.0],
+        ];
+        let mut force: [f64; 4] = [
+            -14.715 * x2 - 0.5 * (x8 * theta2_dot * theta2_dot),
+            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x3,
+            1.5 * (x2 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x3),
+            x8 * theta1_dot * (theta1_dot - theta2_dot)
+                - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = theta1_dot;
+        dstate[1] = theta2_dot;
+        dstate[2] = x_dot;
+        dstate[3] = force[0];
+        dstate[4] = force[1];
+        dstate[5] = force[2];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

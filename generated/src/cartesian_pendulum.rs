@@ -269,6 +269,54 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        beta: f64,
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let y = state[1];
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let mb = params.mb;
+        let L = params.L;
+        let g = params.g;
+        let w = params.w;
+        let x0 = 2.0 * x;
+        let x1 = 2.0 * y;
+        let mut matrix: [[f64; 3]; 3] = [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]];
+        let mut force: [f64; 3] = [
+            w,
+            -(mb * g),
+            -2.0 * ((2.0 * (y * y_dot) + 2.0 * (x * x_dot)) * alpha)
+                - 2.0 * (y_dot * y_dot) - beta * beta * (x * x - L * L + y * y)
+                - 2.0 * (x_dot * x_dot),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
+        dstate[2] = force[0];
+        dstate[3] = force[1];
+        dstate[4] = w * x_dot;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

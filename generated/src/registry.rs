@@ -36,6 +36,8 @@ impl std::error::Error for Failure {}
 
 /// `rhs(t, state, params, g_i, dstate)`.
 pub type RhsFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
+/// `rhs_baumgarte(t, state, params, g_i, dstate, alpha, beta)`.
+pub type StabilizedFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], f64, f64) -> Result<(), Failure>;
 /// `initial_state(t, q, qdot, params, state, g_i)`.
 pub type InitialFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
 /// `velocities(t, state, params, g_i, q, qdot)`.
@@ -55,6 +57,8 @@ pub struct Formulation {
     pub has_work_state: bool,
     pub state_names: &'static [&'static str],
     pub rhs: RhsFn,
+    /// Lagrange only: the Baumgarte-stabilized right-hand side.
+    pub rhs_baumgarte: Option<StabilizedFn>,
     pub initial_state: InitialFn,
     pub velocities: VelocitiesFn,
 }
@@ -124,8 +128,30 @@ macro_rules! failure_from {
 }
 
 macro_rules! formulation {
-    ($m:ident, $f:ident) => {
+    ($m:ident, lagrange) => {
         Formulation {
+            rhs_baumgarte: Some(|t, state, params, g_i, dstate, alpha, beta| {
+                let p = crate::$m::Params::from_values(fixed("params", params)?);
+                crate::$m::lagrange::rhs_baumgarte(
+                    t,
+                    fixed("state", state)?,
+                    &p,
+                    fixed("g_i", g_i)?,
+                    fixed_mut("dstate", dstate)?,
+                    alpha,
+                    beta,
+                )?;
+                Ok(())
+            }),
+            ..formulation!(@plain $m, lagrange)
+        }
+    };
+    ($m:ident, $f:ident) => {
+        formulation!(@plain $m, $f)
+    };
+    (@plain $m:ident, $f:ident) => {
+        Formulation {
+            rhs_baumgarte: None,
             name: stringify!($f),
             states: crate::$m::$f::STATES,
             equations: crate::$m::$f::EQUATIONS,

@@ -295,6 +295,68 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let psi = state[2];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let x0 = f64::cos(psi);
+        let x1 = -(R * x0);
+        let x2 = f64::sin(psi);
+        let x3 = -(R * x2);
+        let mut matrix: [[f64; 6]; 6] = [
+            [md, 0.0, 0.0, 0.0, 1.0, 0.0],
+            [0.0, md, 0.0, 0.0, 0.0, 1.0],
+            [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
+            [1.0, 0.0, 0.0, x1, 0.0, 0.0],
+            [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+        ];
+        let mut force: [f64; 6] = [
+            0.0,
+            0.0,
+            0.0,
+            tq,
+            -2.0 * ((x_dot - R * x0 * phi_dot) * alpha) - R * psi_dot * phi_dot * x2,
+            R * x0 * psi_dot * phi_dot - 2.0 * ((y_dot - R * phi_dot * x2) * alpha),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = y_dot;
+        dstate[2] = psi_dot;
+        dstate[3] = phi_dot;
+        dstate[4] = force[0];
+        dstate[5] = force[1];
+        dstate[6] = force[2];
+        dstate[7] = force[3];
+        dstate[8] = tq * phi_dot;
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

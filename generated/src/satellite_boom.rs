@@ -539,6 +539,204 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(theta);
+        let x1 = f64::sin(phi);
+        let x2 = Ixy * x1;
+        let x3 = f64::cos(phi);
+        let x4 = Ixz * x3;
+        let x5 = 2.0 * x2 + 2.0 * x4;
+        let x6 = Izz - Iyy;
+        let x7 = Iyz * x1;
+        let x8 = l * l;
+        let x9 = m * (0.25 * x8 + (rho + l) * rho);
+        let x10 = f64::cos(theta);
+        let x11 = Iyy - Izz;
+        let x12 = Iyz * x3;
+        let x13 = Ixy * x3;
+        let x14 = x1 * Ixz;
+        let x15 = x13 - x14;
+        let x16 = x10 * (Iyz + (x11 * x1 - 2.0 * x12) * x3) + x0 * x15;
+        let x17 = -x2 - x4;
+        let x18 = x17 * x10 - x0 * Ixx;
+        let x19 = rho + 0.5 * l;
+        let x20 = f64::sin(psi);
+        let x21 = -(x10 * m * x19 * x20);
+        let x22 = f64::cos(psi);
+        let x23 = x22 * x10 * m * x19;
+        let x24 = x14 - x13;
+        let x25 = -(x0 * x22 * m * x19);
+        let x26 = -(x0 * m * x19 * x20);
+        let x27 = -(x10 * m * x19);
+        let x28 = x22 * x10 * m;
+        let x29 = x10 * m * x20;
+        let x30 = -(x0 * m);
+        let x31 = m + mg;
+        let x32 = x22 * Y_dot;
+        let x33 = X_dot * x20;
+        let x34 = x33 - x32;
+        let x35 = x1 * x6;
+        let x36 = x15 * x10 + x0 * ((x35 + 2.0 * x12) * x3 - Iyz);
+        let x37 = x2 + x4;
+        let x38 = x37 * x0 - Ixx * x10;
+        let x39 = (2.0 * Iyy - 2.0 * Izz) * x3;
+        let x40 = Iyz * x3 * x3;
+        let x41 = x0 * x17 + x10 * (x1 * (x35 + 4.0 * x12) + x11 * x3 * x3);
+        let x42 = x0 * theta_dot * x19 * x20;
+        let x43 = x22 * psi_dot * x19;
+        let x44 = rho_dot * x20;
+        let x45 = Y_dot - x42 + x10 * (x43 + x44);
+        let x46 = x0 * theta_dot * x19;
+        let x47 = x10 * rho_dot;
+        let x48 = x22 * (x47 - x46);
+        let x49 = x10 * psi_dot * x19 * x20;
+        let x50 = x48 - x49;
+        let x51 = X_dot + x48 - x49;
+        let x52 = -x43 - x44;
+        let x53 = x42 + x52 * x10;
+        let x54 = 2.0 * rho + l;
+        let x55 = -Y_dot * x20 - X_dot * x22;
+        let x56 = x0 * (psi_dot * x19 * x20 - x22 * rho_dot)
+            - theta_dot * x22 * x10 * x19;
+        let x57 = x0 * x52 - theta_dot * x10 * x19 * x20;
+        let x58 = Z_dot - theta_dot * x10 * x19 - x0 * rho_dot;
+        let x59 = x0 * x55;
+        let x60 = Z_dot * x10;
+        let x61 = x10 * psi_dot * x3 - theta_dot * x1;
+        let x62 = Iyz * x61;
+        let x63 = phi_dot - x0 * psi_dot;
+        let x64 = x63 * Ixy;
+        let x65 = theta_dot * x3;
+        let x66 = x10 * psi_dot * x1;
+        let x67 = x65 + x66;
+        let x68 = Iyy * x67;
+        let x69 = Izz * x61 - Iyz * x67 - x63 * Ixz;
+        let x70 = -x65 - x66;
+        let x71 = f64::cos(0.0485 * t);
+        let x72 = f64::sin(0.089 * t);
+        let x73 = x22 * x10 * psi_dot - x0 * theta_dot * x20;
+        let x74 = -x10 * psi_dot * x20 - x0 * theta_dot * x22;
+        let mut matrix: [[f64; 7]; 7] = [
+            [
+                Ixx
+                    + (x0 * x5 + ((x6 * x3 - 2.0 * x7) * x3 + Iyy - Ixx + x9) * x10)
+                        * x10,
+                x16,
+                x18,
+                0.0,
+                x21,
+                x23,
+                0.0,
+            ],
+            [x16, (2.0 * x7 + x11 * x3) * x3 + x9 + Izz, x24, 0.0, x25, x26, x27],
+            [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x28, x29, x30],
+            [x21, x25, 0.0, x28, x31, 0.0, 0.0],
+            [x23, x26, 0.0, x29, 0.0, x31, 0.0],
+            [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
+        ];
+        let mut force: [f64; 7] = [
+            m
+                * (x45 * x50 + x51 * x53
+                    + x10
+                        * (-rho_dot * (x32 + x54 * x10 * psi_dot - x33)
+                            - x55 * psi_dot * x19))
+                - theta_dot
+                    * (x0 * x34 * m * x19 + x36 * theta_dot + x38 * phi_dot
+                        + (x5 * x10 * x10
+                            + (x0 * (-2.0 * x2 - 2.0 * x4)
+                                + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x8) - 2.0 * Iyy
+                                    + 2.0 * Ixx + (x39 + 4.0 * x7) * x3) * x10) * x0) * psi_dot)
+                - ((x24 * phi_dot
+                    + (x0 * (2.0 * x13 - 2.0 * x14)
+                        + ((x39 + 2.0 * x7) * x1 - 2.0 * x40) * x10) * psi_dot) * x10
+                    + theta_dot * x41) * phi_dot,
+            m
+                * (x51 * x56 + x45 * x57 + (x46 - x47) * x58
+                    - rho_dot * (theta_dot * x54 + x59 - x60))
+                - (x41 * psi_dot
+                    + theta_dot
+                        * (2.0 * x40 + ((2.0 * Izz - 2.0 * Iyy) * x3 - 2.0 * x7) * x1)
+                    + x37 * phi_dot) * phi_dot
+                + psi_dot
+                    * (x0
+                        * (-x34 * m * x19 - 0.5 * ((x68 - x62 - x64) * x1)
+                            - 0.5 * (x69 * x3)) + 0.5 * (x63 * x38)
+                        + 0.5 * ((Ixy * x10 + x0 * (x12 - Iyy * x1)) * x67)
+                        + 0.5 * ((x0 * (x7 - Izz * x3) + x10 * Ixz) * x61)
+                        - 0.5 * ((x63 * Ixx - Ixy * x67 - Ixz * x61) * x10))
+                - theta_dot * (x36 * psi_dot + (x55 * x10 + Z_dot * x0) * m * x19),
+            0.5 * ((Iyy * x61 - Iyz * x70) * x67)
+                - (x24 * x10 * psi_dot + x37 * theta_dot) * phi_dot
+                + 0.5 * (x63 * (-x70 * Ixz - Ixy * x61)) - theta_dot * psi_dot * x38
+                + 0.5 * (x70 * x69)
+                + x61 * (0.5 * (x70 * Izz) - x62 - 0.5 * x64 + 0.5 * x68),
+            0.012 * x71 - 0.018 * x72
+                + (x45 * x73 + x74 * x51 - (x59 - x60) * theta_dot
+                    - (x32 - x33) * x10 * psi_dot - theta_dot * x58 * x10) * m,
+            (-theta_dot * x56 - psi_dot * x53 - x74 * rho_dot) * m,
+            m * (-theta_dot * x57 - x50 * psi_dot - rho_dot * x73),
+            theta_dot * m * (2.0 * x47 - x46),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = rho_dot;
+        dstate[4] = X_dot;
+        dstate[5] = Y_dot;
+        dstate[6] = Z_dot;
+        dstate[7] = force[0];
+        dstate[8] = force[1];
+        dstate[9] = force[2];
+        dstate[10] = force[3];
+        dstate[11] = force[4];
+        dstate[12] = force[5];
+        dstate[13] = force[6];
+        dstate[14] = rho_dot * (0.012 * x71 - 0.018 * x72);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

@@ -294,6 +294,61 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c = params.c;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = mp * f64::cos(th) * lp;
+        let x1 = f64::sin(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = x3 * x3;
+        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
+        let mut force: [f64; 2] = [
+            x1 * mp * th_dot * th_dot * lp
+                + x2
+                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
+                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
+            -(x1 * g * mp * lp),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = x_dot;
+        dstate[1] = th_dot;
+        dstate[2] = force[0];
+        dstate[3] = force[1];
+        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

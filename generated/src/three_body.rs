@@ -1030,6 +1030,577 @@ pub mod lagrange {
         }
         Ok(())
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+    ) -> Result<(), EvalError> {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = x2 * x2;
+        let x7 = f64::cos(phi);
+        let x8 = x7 * x7;
+        let x9 = f64::cos(gamma2);
+        let x10 = x9 * x1 * x7;
+        let x11 = f64::sin(gamma2);
+        let x12 = x3 * x11;
+        let x13 = x10 - x12;
+        let x14 = f64::sin(psi);
+        let x15 = x0 * x1 * x14;
+        let x16 = f64::cos(psi);
+        let x17 = x16 * x7;
+        let x18 = x3 * x2 * x14;
+        let x19 = -x17 - x18;
+        let x20 = a * x1 * x14;
+        let x21 = d * (x19 * x4 - x15) - x20;
+        let x22 = a * x16 * x1;
+        let x23 = x3 * x16 * x2;
+        let x24 = x7 * x14;
+        let x25 = x23 - x24;
+        let x26 = x4 * x25;
+        let x27 = x0 * x16 * x1;
+        let x28 = d * (x26 + x27);
+        let x29 = x22 + x28;
+        let x30 = x3 * Ixx;
+        let x31 = Ixy * x2;
+        let x32 = Ixz * x7;
+        let x33 = (-x31 - x32) * x1;
+        let x34 = x9 * x3;
+        let x35 = x1 * x11 * x7;
+        let x36 = -x34 - x35;
+        let x37 = x0 * x3;
+        let x38 = x4 * x1 * x2;
+        let x39 = x38 - x37;
+        let x40 = x2 * x14;
+        let x41 = x3 * x16 * x7;
+        let x42 = x40 + x41;
+        let x43 = x42 * x11;
+        let x44 = x9 * x16 * x1;
+        let x45 = d * (x44 - x43);
+        let x46 = -x22 - x45;
+        let x47 = x16 * x2;
+        let x48 = x3 * x7 * x14;
+        let x49 = x47 - x48;
+        let x50 = x9 * x1 * x14;
+        let x51 = x20 - d * (-x49 * x11 - x50);
+        let x52 = x3 * Ixz;
+        let x53 = Izz * x7;
+        let x54 = Iyz * x2;
+        let x55 = (x53 - x54) * x1;
+        let x56 = (x52 + x55) * x7;
+        let x57 = Iyy * x2;
+        let x58 = Iyz * x7;
+        let x59 = x1 * (x57 - x58);
+        let x60 = x3 * Ixy;
+        let x61 = x2 * (x59 + x60);
+        let x62 = m2 * d * d;
+        let x63 = x62 + J2 - J1;
+        let x64 = x9 * x63;
+        let x65 = m2 * a * d;
+        let x66 = x64 + x65;
+        let x67 = x66 * x11 - Ixz;
+        let x68 = a * d * m1;
+        let x69 = d * d * m1;
+        let x70 = J2 + x69 - J1;
+        let x71 = x68 + x0 * x70;
+        let x72 = Ixy + x4 * x71;
+        let x73 = J2 - J1;
+        let x74 = x0 * x0;
+        let x75 = (x74 - 1.0) * m1;
+        let x76 = x9 * x9;
+        let x77 = m2 * (1.0 - x76);
+        let x78 = J1 - J2;
+        let x79 = x0 * x0 * x73 + Iyy + d * d * (x75 + x77) - Izz + x9 * x9 * x78;
+        let x80 = Iyz * x1 + x3 * x67 * x2
+            + (x3 * x72 + (x79 * x2 - 2.0 * x58) * x1) * x7;
+        let x81 = m2 * (x76 - 1.0);
+        let x82 = (x74 + x76 - 2.0) * J2 + (-x74 - x76) * J1 - Ixx + (x75 + x81) * d * d;
+        let x83 = J1 - J2 - x69;
+        let x84 = x0 * x83 - x68;
+        let x85 = x84 * x4 - Ixy;
+        let x86 = x67 * x7 + x85 * x2;
+        let x87 = x82 * x3 + x86 * x1;
+        let x88 = x0 * a;
+        let x89 = x1 * (J2 + (d + x88) * d * m1) * x7;
+        let x90 = x9 * a;
+        let x91 = m2 * d * (d + x90) + J2;
+        let x92 = x1 * x91 * x2;
+        let x93 = m1 * x21 + m2 * x51;
+        let x94 = m1 * x29 + m2 * x46;
+        let x95 = J1 - x62 - J2;
+        let x96 = x9 * x95 - x65;
+        let x97 = Ixz + x11 * x96;
+        let x98 = x97 * x2 + x85 * x7;
+        let x99 = (-d - x88) * d * m1 - J2;
+        let x100 = x99 * x2;
+        let x101 = x91 * x7;
+        let x102 = m2 * x11 * x7;
+        let x103 = x4 * x2 * m1;
+        let x104 = x9 * d;
+        let x105 = x0 * d;
+        let x106 = m2 * (a + x104) + (-a - x105) * m1;
+        let x107 = (x102 + x103) * x1 * d + x106 * x3;
+        let x108 = x16 * x107;
+        let x109 = x14 * x107;
+        let x110 = -x102 - x103;
+        let x111 = x3 * d * x110 + x106 * x1;
+        let x112 = (1.0 - x74) * m1;
+        let x113 = x24 - x23;
+        let x114 = m2 * x113 * x11 + x42 * x4 * m1;
+        let x115 = x114 * d;
+        let x116 = x48 - x47;
+        let x117 = (m2 * x19 * x11 + x4 * x116 * m1) * d;
+        let x118 = m2 * x11 * x2;
+        let x119 = x4 * m1 * x7;
+        let x120 = x119 - x118;
+        let x121 = x120 * x1 * d;
+        let x122 = x0 * x25 - x16 * x4 * x1;
+        let x123 = d * m1 * x122;
+        let x124 = x17 + x18;
+        let x125 = x4 * x1 * x14;
+        let x126 = x0 * x124 - x125;
+        let x127 = d * m1 * x126;
+        let x128 = x5 * d * m1;
+        let x129 = -x16 * x1 * x11 - x9 * x42;
+        let x130 = -(m2 * x129 * d);
+        let x131 = x1 * x11 * x14;
+        let x132 = -x131 - x9 * x116;
+        let x133 = -(m2 * d * x132);
+        let x134 = x13 * m2 * d;
+        let x135 = m2 + m0 + m1;
+        let x136 = x2
+            * (x9 * x9 * x73 - Iyy + d * d * (x112 + x81) + Izz + x0 * x0 * x78);
+        let x137 = x3 * x86 + x1 * (x79 * x7 * x7 + x2 * (4.0 * x58 + x136));
+        let x138 = m2 * x11 * x124 + x4 * x49 * m1;
+        let x139 = x114 * Y_dot + x138 * X_dot;
+        let x140 = (x113 * x4 - x27) * d;
+        let x141 = -x40 - x41;
+        let x142 = (-x141 * x11 - x44) * d;
+        let x143 = x22 - x142;
+        let x144 = x140 - x22;
+        let x145 = m2 * x143 + m1 * x144;
+        let x146 = x95 * x1 * x11 * x11 * x7
+            + x9 * (x66 * x1 * x7 + (2.0 * J1 - 2.0 * x62 - 2.0 * J2) * x3 * x11);
+        let x147 = 2.0 * x62 + 2.0 * J2 - 2.0 * J1;
+        let x148 = x3 * x95 * x11 * x11 + x9 * (x1 * x11 * x147 * x7 + x3 * x66);
+        let x149 = x12 - x10;
+        let x150 = x131 - x9 * x49;
+        let x151 = X_dot * x150;
+        let x152 = x129 * Y_dot;
+        let x153 = d * (x42 * x4 * phi_dot + gamma1_dot * x122);
+        let x154 = a * x3;
+        let x155 = x39 * d - x154;
+        let x156 = theta_dot * x16 * x155;
+        let x157 = psi_dot * x21;
+        let x158 = Y_dot + psi_dot * x29 + d * (gamma1_dot * x126 + x4 * x116 * phi_dot)
+            + theta_dot * x155 * x14;
+        let x159 = x0 * x19 + x125;
+        let x160 = x37 - x38;
+        let x161 = d * x160 + x154;
+        let x162 = X_dot + x153 + x156 + x157;
+        let x163 = -(x34 + x35) * d - x154;
+        let x164 = x154 - d * x36;
+        let x165 = theta_dot * x16 * x164;
+        let x166 = psi_dot * x51;
+        let x167 = (x113 * x11 * phi_dot - gamma2_dot * x129) * d;
+        let x168 = x165 + x166 + X_dot + x167;
+        let x169 = d * (x19 * x11 * phi_dot - gamma2_dot * x132) + Y_dot + psi_dot * x46
+            + theta_dot * x164 * x14;
+        let x170 = x155 * m1 + m2 * x164;
+        let x171 = x1 * x67 * x2 + (x72 * x1 + (2.0 * x58 + x136) * x3) * x7 - x3 * Iyz;
+        let x172 = x3 * (x54 - x53) + x1 * Ixz;
+        let x173 = Ixy * x1 + x3 * (x58 - x57);
+        let x174 = x3 * x11 * x7 - x9 * x1;
+        let x175 = -x0 * x1 - x3 * x4 * x2;
+        let x176 = (x31 + x32) * x3;
+        let x177 = Ixx * x1;
+        let x178 = -x9 * x3 * x7 - x1 * x11;
+        let x179 = x4 * x1 - x0 * x3 * x2;
+        let x180 = m2 * d * (-d - x90) - J2;
+        let x181 = gamma2_dot * x180 * x2;
+        let x182 = x99 * gamma1_dot * x7;
+        let x183 = x72 * x2 + x97 * x7;
+        let x184 = x3 * x183 + x82 * x1;
+        let x185 = m2 * x163 + x161 * m1;
+        let x186 = 2.0 * J1 - 2.0 * J2 - 2.0 * x69;
+        let x187 = x0 * (x3 * x71 + x4 * x1 * x2 * x186) + x3 * x83 * x4 * x4;
+        let x188 = X_dot * x159;
+        let x189 = Y_dot * x122;
+        let x190 = x70 * x4 * x4 * x1 * x2 + x0 * (x84 * x1 * x2 + x3 * x4 * x186);
+        let x191 = a * x1;
+        let x192 = theta_dot * (d * x175 - x191)
+            + d * (x5 * gamma1_dot + x4 * x1 * phi_dot * x7);
+        let x193 = theta_dot * x2;
+        let x194 = gamma1_dot - x193;
+        let x195 = x3 * x194 + x1 * phi_dot * x7;
+        let x196 = gamma1_dot * x2;
+        let x197 = a * theta_dot * x1;
+        let x198 = Z_dot + (x195 * x4 + x0 * x1 * (x196 - theta_dot)) * d - x197;
+        let x199 = a * x3 * theta_dot;
+        let x200 = theta_dot - x196;
+        let x201 = x3 * (m2 * (-a - x104) + (a + x105) * m1) + x1 * d * x110;
+        let x202 = Y_dot * x14;
+        let x203 = X_dot * x16;
+        let x204 = x202 + x203;
+        let x205 = x118 - x119;
+        let x206 = (x204 * x120 * x1 + Z_dot * x3 * x205) * d;
+        let x207 = phi_dot - x3 * psi_dot;
+        let x208 = theta_dot * x7;
+        let x209 = x1 * psi_dot * x2;
+        let x210 = x1 * psi_dot * x7;
+        let x211 = x210 - x193;
+        let x212 = Iyz * x211;
+        let x213 = x207 * Ixy;
+        let x214 = x208 + x209;
+        let x215 = Iyy * x214;
+        let x216 = Iyz * x214;
+        let x217 = x207 * Ixz;
+        let x218 = Izz * x211;
+        let x219 = x9 * x207 - x11 * x211;
+        let x220 = x0 * x207;
+        let x221 = x4 * x214;
+        let x222 = x220 + x221;
+        let x223 = x0 * x214 - x207 * x4;
+        let x224 = x9 * x211;
+        let x225 = x207 * x11;
+        let x226 = x224 + x225;
+        let x227 = x0 * x84 + x70 * x4 * x4;
+        let x228 = x204 * x5;
+        let x229 = Z_dot * x179;
+        let x230 = Z_dot * x178;
+        let x231 = x63 * x11 * x11 + x9 * x96;
+        let x232 = d * (-gamma2_dot * x149 - x1 * x11 * x2 * phi_dot)
+            + theta_dot * (x191 - x174 * d);
+        let x233 = -gamma2_dot - x208;
+        let x234 = gamma2_dot * x7;
+        let x235 = -x234 - theta_dot;
+        let x236 = x11 * x2 * phi_dot;
+        let x237 = Z_dot + x197
+            + (x3 * x233 * x11 + (x9 * (x234 + theta_dot) - x236) * x1) * d;
+        let x238 = x113 * x4 * m1 + m2 * x141 * x11;
+        let x239 = x19 * x4 * m1 + m2 * x49 * x11;
+        let x240 = -x208 - x209;
+        let x241 = x19 * Y_dot + X_dot * x113 - Z_dot * x1 * x2;
+        let x242 = x1 * x2 * phi_dot;
+        let x243 = Y_dot * x116 + Z_dot * x1 * x7 + x42 * X_dot;
+        let x244 = -x26 - x27;
+        let x245 = x5 * theta_dot * x16 + psi_dot * x159 + x244 * gamma1_dot
+            + x0 * x42 * phi_dot;
+        let x246 = -x15 - x4 * x124;
+        let x247 = x0 * x116 * phi_dot + x246 * gamma1_dot + psi_dot * x122
+            + x5 * theta_dot * x14;
+        let x248 = x9 * x19 * phi_dot;
+        let x249 = x129 * psi_dot;
+        let x250 = x11 * x116 - x50;
+        let x251 = gamma2_dot * x250;
+        let x252 = x43 - x44;
+        let x253 = gamma2_dot * x252;
+        let x254 = x9 * x113 * phi_dot;
+        let x255 = psi_dot * x150;
+        let x256 = d
+            * (x120 * x1 * phi_dot - m2 * gamma2_dot * x149 + x5 * gamma1_dot * m1)
+            + theta_dot * x111;
+        let mut matrix: [[f64; 8]; 8] = [
+            [
+                J2 * (x5 * x5 + x1 * x1 * (x6 + x8) + x13 * x13)
+                    + (x21 * x21 + x29 * x29) * m1 - x3 * (x33 - x30)
+                    + (x36 * x36 + x39 * x39) * J1 + m2 * (x46 * x46 + x51 * x51)
+                    + x1 * (x56 + x61),
+                x80,
+                x87,
+                x89,
+                x92,
+                x93,
+                x94,
+                0.0,
+            ],
+            [
+                x80,
+                J2 + x9 * (x64 + 2.0 * x65) + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1))
+                    + x69 + Izz + (x79 * x7 + 2.0 * x54) * x7 + J1,
+                x98,
+                x100,
+                x101,
+                x108,
+                x109,
+                x111,
+            ],
+            [
+                x87,
+                x98,
+                (x74 + x76) * J1 + Ixx + J2 * (2.0 - x74 - x76) + (x77 + x112) * d * d,
+                0.0,
+                0.0,
+                x115,
+                x117,
+                x121,
+            ],
+            [x89, x100, 0.0, J2 + x69, 0.0, x123, x127, x128],
+            [x92, x101, 0.0, 0.0, x62 + J2, x130, x133, x134],
+            [x93, x108, x115, x123, x130, x135, 0.0, 0.0],
+            [x94, x109, x117, x127, x133, 0.0, x135, 0.0],
+            [0.0, x111, x121, x128, x134, 0.0, 0.0, x135],
+        ];
+        let mut force: [f64; 8] = [
+            0.5
+                * ((2.0 * ((x153 + x156 + x157) * x158)
+                    + 2.0
+                        * ((psi_dot * x144 + (x4 * x49 * phi_dot + gamma1_dot * x159) * d
+                            + theta_dot * x161 * x14) * x162)) * m1)
+                - phi_dot
+                    * (theta_dot * x137
+                        + psi_dot
+                            * (((2.0 * (x42 * x29) + 2.0 * (x49 * x21)) * x4 * m1
+                                + m2 * x11 * (2.0 * (x51 * x124) + 2.0 * (x113 * x46))) * d
+                                + x1
+                                    * ((x1 * (-x58 - x2 * Izz) + x59 + 2.0 * (x39 * x4 * J1)
+                                        + 2.0 * (x0 * x5 * J2) + x60) * x7
+                                        - x3 * (x2 * Ixz - Ixy * x7)
+                                        + (x1 * (Iyy * x7 + x54) - 2.0 * (x9 * x13 * J2) - x52 - x55
+                                            + 2.0 * (x11 * J1 * x36)) * x2))
+                        + (x99 * gamma1_dot * x2 + phi_dot * x98 + gamma2_dot * x91 * x7)
+                            * x1 + d * x139)
+                - (((2.0 * x140 + 2.0 * x28) * m1 * x21
+                    + m2 * (-2.0 * x142 - 2.0 * x45) * x51) * psi_dot + Y_dot * x93
+                    + X_dot * x145) * psi_dot
+                - gamma2_dot
+                    * (phi_dot * x146 + theta_dot * x2 * x148
+                        + ((2.0 * (x13 * J2) + 2.0 * (x149 * J1)) * x36
+                            + m2 * (-2.0 * (x51 * x150) - 2.0 * (x129 * x46)) * d)
+                            * psi_dot
+                        + m2 * d * (-x151 - a * gamma2_dot * x1 * x11 * x2 - x152))
+                + 0.5
+                    * (m2
+                        * (2.0
+                            * ((psi_dot * x143
+                                + (x11 * phi_dot * x124 - gamma2_dot * x150) * d
+                                + x163 * theta_dot * x14) * x168)
+                            + 2.0 * (x169 * (x165 + x166 + x167))))
+                - theta_dot
+                    * (x170 * x16 * Y_dot + theta_dot * x171
+                        + psi_dot
+                            * ((x30 + x172 * x7 - x33 + x2 * x173) * x1
+                                + (2.0 * (x174 * x36) + 2.0 * (x39 * x175)) * J1
+                                + m2 * (2.0 * (x163 * x51 * x14) + 2.0 * (x16 * x46 * x164))
+                                + x3
+                                    * (x177 - x176 + J2 * x1 * (-2.0 * x6 - 2.0 * x8) - x56
+                                        - x61)
+                                + (2.0 * (x161 * x21 * x14) + 2.0 * (x16 * x155 * x29)) * m1
+                                + J2 * (2.0 * (x13 * x178) + 2.0 * (x5 * x179)))
+                        + (x181 + x182) * x3 + x184 * phi_dot + X_dot * x185 * x14)
+                - ((d * m1 * (2.0 * (x159 * x21) + 2.0 * (x29 * x122))
+                    + x5 * (2.0 * (J2 * x160) + 2.0 * (x39 * J1))) * psi_dot
+                    + theta_dot * x187 * x7
+                    + d * m1 * (x188 - a * x4 * x1 * gamma1_dot * x7 + x189)
+                    + x190 * phi_dot) * gamma1_dot,
+            0.5
+                * ((2.0 * ((x192 * x14 + x16 * psi_dot * x155) * x158)
+                    + 2.0
+                        * (x198
+                            * (x199
+                                + d
+                                    * (x3 * (x0 * x200 - x4 * phi_dot * x7) + x4 * x1 * x194)))
+                    + 2.0 * ((psi_dot * x161 * x14 + x16 * x192) * x162)) * m1)
+                - (Z_dot * x201 + psi_dot * x171 + x204 * x111) * theta_dot
+                - (x181 + x206 + psi_dot * x137 + phi_dot * x183 + x182
+                    + theta_dot
+                        * (2.0 * (Iyz * x7 * x7)
+                            + ((x9 * x9 * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy + 2.0 * Izz
+                                + x0 * x0 * (2.0 * J1 - 2.0 * J2)
+                                + d * d * (m1 * (2.0 - 2.0 * x74) + m2 * (2.0 * x76 - 2.0)))
+                                * x7 - 2.0 * x54) * x2)) * phi_dot
+                + psi_dot
+                    * (0.5 * (x207 * (x176 - x177)) - X_dot * x201 * x14
+                        + x3
+                            * ((-x2 * (gamma2_dot + x208 + x209)
+                                - (gamma1_dot + x210 - x193) * x7) * J2
+                                - 0.5 * ((x215 - x212 - x213) * x2)
+                                - 0.5 * ((x218 - x216 - x217) * x7)) + 0.5 * (x173 * x214)
+                        + (x174 * x219 + x175 * x222) * J1 + 0.5 * (x172 * x211)
+                        + (x223 * x179 + x178 * x226) * J2 - x16 * Y_dot * x107
+                        - 0.5 * ((x207 * Ixx - Ixy * x214 - Ixz * x211) * x1))
+                - gamma1_dot
+                    * ((x0 * x7 * x7 * x186 - 2.0 * x68) * theta_dot * x4
+                        + x7 * (phi_dot * x227 + x187 * psi_dot)
+                        + (x228 + a * x4 * gamma1_dot * x2 + x229) * d * m1)
+                - gamma2_dot
+                    * (m2 * d * (x204 * x13 - a * gamma2_dot * x11 * x7 + x230)
+                        + (x9 * (x147 * x7 * x7 - 2.0 * x62 - 2.0 * J2 + 2.0 * J1)
+                            - 2.0 * x65) * theta_dot * x11
+                        + (x231 * phi_dot + psi_dot * x148) * x2)
+                + 0.5
+                    * (m2
+                        * (2.0 * (x169 * (x16 * psi_dot * x164 + x232 * x14))
+                            + 2.0
+                                * (((x233 * x1 * x11 + x3 * (x9 * x235 + x236)) * d - x199)
+                                    * x237)
+                            + 2.0 * ((x163 * psi_dot * x14 + x16 * x232) * x168))),
+            0.5 * ((Iyy * x211 - Iyz * x240) * x214)
+                - (x184 * psi_dot + x206) * theta_dot
+                - (theta_dot * x183
+                    + d * (x238 * X_dot + Y_dot * x239 + Z_dot * x1 * x110)
+                    + x1 * psi_dot * x98) * phi_dot
+                - gamma2_dot
+                    * (x231 * theta_dot * x2 + psi_dot * x146
+                        + x9 * (m2 * d * x241 + x11 * phi_dot * x147))
+                + d
+                    * (0.5
+                        * (m2
+                            * (2.0
+                                * ((x3 * theta_dot * x11 * x2
+                                    + (-x9 * gamma2_dot * x2 - x11 * phi_dot * x7) * x1) * x237)
+                                + 2.0
+                                    * (((x113 * psi_dot + x49 * phi_dot
+                                        - theta_dot * x1 * x2 * x14) * x11 + x9 * gamma2_dot * x19)
+                                        * x169)
+                                + 2.0
+                                    * (x168
+                                        * ((psi_dot * x124 - theta_dot * x16 * x1 * x2
+                                            + x141 * phi_dot) * x11 + x9 * gamma2_dot * x113))))
+                        - psi_dot * x139
+                        + 0.5
+                            * ((2.0
+                                * (((-x242 - x3 * theta_dot * x7) * x4
+                                    + x0 * x1 * gamma1_dot * x7) * x198)
+                                + 2.0
+                                    * ((x4
+                                        * (theta_dot * x16 * x1 * x7 + x113 * phi_dot
+                                            + x49 * psi_dot) + x0 * x42 * gamma1_dot) * x162)
+                                + 2.0
+                                    * ((x0 * gamma1_dot * x116
+                                        + x4
+                                            * (x19 * phi_dot + theta_dot * x1 * x7 * x14
+                                                + x42 * psi_dot)) * x158)) * m1))
+                + 0.5 * (x207 * (-x240 * Ixz - Ixy * x211))
+                + (0.5 * (x240 * Izz) - x212
+                    + (x0 * x223 + gamma2_dot + x208 + x209) * J2 + x4 * x222 * J1
+                    - 0.5 * x213 + 0.5 * x215) * x211
+                + ((gamma1_dot + x9 * x226 + x210 - x193) * J2 - x11 * x219 * J1
+                    - 0.5 * x216 - 0.5 * x217 + 0.5 * x218) * x240
+                - (theta_dot * x7 * x227
+                    + x0
+                        * (x4 * (2.0 * J2 + 2.0 * x69 - 2.0 * J1) * phi_dot
+                            + x243 * d * m1) + x190 * psi_dot) * gamma1_dot,
+            d * m1
+                * (x245 * x162 - psi_dot * (x188 + x189) + x158 * x247
+                    + (x0 * x195 + x4 * x1 * x200) * x198
+                    - gamma1_dot
+                        * (x246 * Y_dot + Z_dot * x160 + X_dot * x244
+                            + a * (x193 - x210) * x4))
+                - (x0 * x243 * d * m1 + x99 * x214) * phi_dot
+                - ((x228 + x229) * d * m1 + x99 * x3 * psi_dot * x7) * theta_dot
+                + (x222 * J1 + (-x220 - x221) * J2) * x223,
+            ((x248 - x249 - x149 * theta_dot * x14 - x251) * x169
+                - psi_dot * (-x151 - x152)
+                - gamma2_dot
+                    * (a * x240 * x11 - X_dot * x252 - Y_dot * x250 + Z_dot * x36)
+                + x237 * (x235 * x1 * x11 + x9 * (x3 * x233 - x242))
+                + x168 * (x254 - x253 - x149 * theta_dot * x16 - x255)) * m2 * d
+                - (x9 * m2 * d * x241 + x180 * theta_dot * x2 + x1 * x91 * psi_dot * x7)
+                    * phi_dot
+                - (m2 * d * (x149 * (-x202 - x203) + x230) + x3 * x180 * psi_dot * x2)
+                    * theta_dot + x219 * (J2 * x226 + (-x224 - x225) * J1),
+            d
+                * (-x245 * gamma1_dot * m1
+                    - m2 * gamma2_dot * (x254 - x253 - x255 + x13 * theta_dot * x16)
+                    - (x138 * psi_dot + x238 * phi_dot + x0 * x42 * gamma1_dot * m1
+                        + x120 * theta_dot * x16 * x1 + x9 * m2 * gamma2_dot * x113)
+                        * phi_dot) - theta_dot * (x16 * x256 + psi_dot * x185 * x14)
+                - psi_dot
+                    * (x145 * psi_dot + theta_dot * x201 * x14
+                        + d
+                            * (x138 * phi_dot + gamma1_dot * x159 * m1
+                                - m2 * gamma2_dot * x150)),
+            (-(phi_dot * x239 + x120 * theta_dot * x1 * x14 + x114 * psi_dot
+                + x0 * gamma1_dot * x116 * m1 + x9 * m2 * gamma2_dot * x19) * phi_dot
+                - (x248 - x249 + x13 * theta_dot * x14 - x251) * m2 * gamma2_dot
+                - gamma1_dot * m1 * x247) * d
+                - theta_dot * (x170 * x16 * psi_dot + x256 * x14)
+                - (theta_dot * x16 * x107 + psi_dot * x93
+                    + (x114 * phi_dot + gamma1_dot * m1 * x122 - m2 * gamma2_dot * x129)
+                        * d) * psi_dot,
+            d
+                * (-gamma1_dot
+                    * (x0 * x1 * phi_dot * x7 + gamma1_dot * x160 + theta_dot * x179)
+                    * m1
+                    - phi_dot
+                        * (x3 * theta_dot * x205
+                            + x1
+                                * (x0 * gamma1_dot * m1 * x7 + x110 * phi_dot
+                                    - x9 * m2 * gamma2_dot * x2))
+                    - m2 * gamma2_dot
+                        * (x178 * theta_dot + gamma2_dot * x36 - x9 * x1 * x2 * phi_dot))
+                - theta_dot
+                    * (theta_dot * x201
+                        + (gamma1_dot * x179 * m1 + m2 * gamma2_dot * x178
+                            + x3 * phi_dot * x205) * d),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        dstate[13] = force[5];
+        dstate[14] = force[6];
+        dstate[15] = force[7];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

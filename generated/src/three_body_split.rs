@@ -1283,6 +1283,801 @@ pub mod lagrange {
             * (v[120] * v[1] * phi_dot - m2 * gamma2_dot * v[149]
                 + v[5] * gamma1_dot * m1) + theta_dot * v[111];
     }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        beta: f64,
+    ) -> Result<(), EvalError> {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let mut v = [0.0f64; 257];
+        rhs_baumgarte_part0(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part1(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part2(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part3(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part4(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part5(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        rhs_baumgarte_part6(t, state, params, g_i, dstate, alpha, beta, &mut v);
+        let mut matrix: [[f64; 8]; 8] = [
+            [
+                J2 * (v[5] * v[5] + v[1] * v[1] * (v[6] + v[8]) + v[13] * v[13])
+                    + (v[21] * v[21] + v[29] * v[29]) * m1 - v[3] * (v[33] - v[30])
+                    + (v[36] * v[36] + v[39] * v[39]) * J1
+                    + m2 * (v[46] * v[46] + v[51] * v[51]) + v[1] * (v[56] + v[61]),
+                v[80],
+                v[87],
+                v[89],
+                v[92],
+                v[93],
+                v[94],
+                0.0,
+            ],
+            [
+                v[80],
+                J2 + v[9] * (v[64] + 2.0 * v[65])
+                    + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[69] + Izz
+                    + (v[79] * v[7] + 2.0 * v[54]) * v[7] + J1,
+                v[98],
+                v[100],
+                v[101],
+                v[108],
+                v[109],
+                v[111],
+            ],
+            [
+                v[87],
+                v[98],
+                (v[74] + v[76]) * J1 + Ixx + J2 * (2.0 - v[74] - v[76])
+                    + (v[77] + v[112]) * d * d,
+                0.0,
+                0.0,
+                v[115],
+                v[117],
+                v[121],
+            ],
+            [v[89], v[100], 0.0, J2 + v[69], 0.0, v[123], v[127], v[128]],
+            [v[92], v[101], 0.0, 0.0, v[62] + J2, v[130], v[133], v[134]],
+            [v[93], v[108], v[115], v[123], v[130], v[135], 0.0, 0.0],
+            [v[94], v[109], v[117], v[127], v[133], 0.0, v[135], 0.0],
+            [0.0, v[111], v[121], v[128], v[134], 0.0, 0.0, v[135]],
+        ];
+        let mut force: [f64; 8] = [
+            0.5
+                * ((2.0 * ((v[153] + v[156] + v[157]) * v[158])
+                    + 2.0
+                        * ((psi_dot * v[144]
+                            + (v[4] * v[49] * phi_dot + gamma1_dot * v[159]) * d
+                            + theta_dot * v[161] * v[14]) * v[162])) * m1)
+                - phi_dot
+                    * (theta_dot * v[137]
+                        + psi_dot
+                            * (((2.0 * (v[42] * v[29]) + 2.0 * (v[49] * v[21])) * v[4]
+                                * m1
+                                + m2 * v[11]
+                                    * (2.0 * (v[51] * v[124]) + 2.0 * (v[113] * v[46]))) * d
+                                + v[1]
+                                    * ((v[1] * (-v[58] - v[2] * Izz) + v[59]
+                                        + 2.0 * (v[39] * v[4] * J1) + 2.0 * (v[0] * v[5] * J2)
+                                        + v[60]) * v[7] - v[3] * (v[2] * Ixz - Ixy * v[7])
+                                        + (v[1] * (Iyy * v[7] + v[54]) - 2.0 * (v[9] * v[13] * J2)
+                                            - v[52] - v[55] + 2.0 * (v[11] * J1 * v[36])) * v[2]))
+                        + (v[99] * gamma1_dot * v[2] + phi_dot * v[98]
+                            + gamma2_dot * v[91] * v[7]) * v[1] + d * v[139])
+                - (((2.0 * v[140] + 2.0 * v[28]) * m1 * v[21]
+                    + m2 * (-2.0 * v[142] - 2.0 * v[45]) * v[51]) * psi_dot
+                    + Y_dot * v[93] + X_dot * v[145]) * psi_dot
+                - gamma2_dot
+                    * (phi_dot * v[146] + theta_dot * v[2] * v[148]
+                        + ((2.0 * (v[13] * J2) + 2.0 * (v[149] * J1)) * v[36]
+                            + m2 * (-2.0 * (v[51] * v[150]) - 2.0 * (v[129] * v[46]))
+                                * d) * psi_dot
+                        + m2 * d
+                            * (-v[151] - a * gamma2_dot * v[1] * v[11] * v[2] - v[152]))
+                + 0.5
+                    * (m2
+                        * (2.0
+                            * ((psi_dot * v[143]
+                                + (v[11] * phi_dot * v[124] - gamma2_dot * v[150]) * d
+                                + v[163] * theta_dot * v[14]) * v[168])
+                            + 2.0 * (v[169] * (v[165] + v[166] + v[167]))))
+                - theta_dot
+                    * (v[170] * v[16] * Y_dot + theta_dot * v[171]
+                        + psi_dot
+                            * ((v[30] + v[172] * v[7] - v[33] + v[2] * v[173]) * v[1]
+                                + (2.0 * (v[174] * v[36]) + 2.0 * (v[39] * v[175])) * J1
+                                + m2
+                                    * (2.0 * (v[163] * v[51] * v[14])
+                                        + 2.0 * (v[16] * v[46] * v[164]))
+                                + v[3]
+                                    * (v[177] - v[176] + J2 * v[1] * (-2.0 * v[6] - 2.0 * v[8])
+                                        - v[56] - v[61])
+                                + (2.0 * (v[161] * v[21] * v[14])
+                                    + 2.0 * (v[16] * v[155] * v[29])) * m1
+                                + J2 * (2.0 * (v[13] * v[178]) + 2.0 * (v[5] * v[179])))
+                        + (v[181] + v[182]) * v[3] + v[184] * phi_dot
+                        + X_dot * v[185] * v[14])
+                - ((d * m1 * (2.0 * (v[159] * v[21]) + 2.0 * (v[29] * v[122]))
+                    + v[5] * (2.0 * (J2 * v[160]) + 2.0 * (v[39] * J1))) * psi_dot
+                    + theta_dot * v[187] * v[7]
+                    + d * m1 * (v[188] - a * v[4] * v[1] * gamma1_dot * v[7] + v[189])
+                    + v[190] * phi_dot) * gamma1_dot,
+            0.5
+                * ((2.0 * ((v[192] * v[14] + v[16] * psi_dot * v[155]) * v[158])
+                    + 2.0
+                        * (v[198]
+                            * (v[199]
+                                + d
+                                    * (v[3] * (v[0] * v[200] - v[4] * phi_dot * v[7])
+                                        + v[4] * v[1] * v[194])))
+                    + 2.0 * ((psi_dot * v[161] * v[14] + v[16] * v[192]) * v[162])) * m1)
+                - (Z_dot * v[201] + psi_dot * v[171] + v[204] * v[111]) * theta_dot
+                - (v[181] + v[206] + psi_dot * v[137] + phi_dot * v[183] + v[182]
+                    + theta_dot
+                        * (2.0 * (Iyz * v[7] * v[7])
+                            + ((v[9] * v[9] * (2.0 * J2 - 2.0 * J1) - 2.0 * Iyy
+                                + 2.0 * Izz + v[0] * v[0] * (2.0 * J1 - 2.0 * J2)
+                                + d * d
+                                    * (m1 * (2.0 - 2.0 * v[74]) + m2 * (2.0 * v[76] - 2.0)))
+                                * v[7] - 2.0 * v[54]) * v[2])) * phi_dot
+                + psi_dot
+                    * (0.5 * (v[207] * (v[176] - v[177])) - X_dot * v[201] * v[14]
+                        + v[3]
+                            * ((-v[2] * (gamma2_dot + v[208] + v[209])
+                                - (gamma1_dot + v[210] - v[193]) * v[7]) * J2
+                                - 0.5 * ((v[215] - v[212] - v[213]) * v[2])
+                                - 0.5 * ((v[218] - v[216] - v[217]) * v[7]))
+                        + 0.5 * (v[173] * v[214])
+                        + (v[174] * v[219] + v[175] * v[222]) * J1
+                        + 0.5 * (v[172] * v[211])
+                        + (v[223] * v[179] + v[178] * v[226]) * J2
+                        - v[16] * Y_dot * v[107]
+                        - 0.5 * ((v[207] * Ixx - Ixy * v[214] - Ixz * v[211]) * v[1]))
+                - gamma1_dot
+                    * ((v[0] * v[7] * v[7] * v[186] - 2.0 * v[68]) * theta_dot * v[4]
+                        + v[7] * (phi_dot * v[227] + v[187] * psi_dot)
+                        + (v[228] + a * v[4] * gamma1_dot * v[2] + v[229]) * d * m1)
+                - gamma2_dot
+                    * (m2 * d * (v[204] * v[13] - a * gamma2_dot * v[11] * v[7] + v[230])
+                        + (v[9]
+                            * (v[147] * v[7] * v[7] - 2.0 * v[62] - 2.0 * J2 + 2.0 * J1)
+                            - 2.0 * v[65]) * theta_dot * v[11]
+                        + (v[231] * phi_dot + psi_dot * v[148]) * v[2])
+                + 0.5
+                    * (m2
+                        * (2.0 * (v[169] * (v[16] * psi_dot * v[164] + v[232] * v[14]))
+                            + 2.0
+                                * (((v[233] * v[1] * v[11]
+                                    + v[3] * (v[9] * v[235] + v[236])) * d - v[199]) * v[237])
+                            + 2.0
+                                * ((v[163] * psi_dot * v[14] + v[16] * v[232]) * v[168]))),
+            0.5 * ((Iyy * v[211] - Iyz * v[240]) * v[214])
+                - (v[184] * psi_dot + v[206]) * theta_dot
+                - (theta_dot * v[183]
+                    + d * (v[238] * X_dot + Y_dot * v[239] + Z_dot * v[1] * v[110])
+                    + v[1] * psi_dot * v[98]) * phi_dot
+                - gamma2_dot
+                    * (v[231] * theta_dot * v[2] + psi_dot * v[146]
+                        + v[9] * (m2 * d * v[241] + v[11] * phi_dot * v[147]))
+                + d
+                    * (0.5
+                        * (m2
+                            * (2.0
+                                * ((v[3] * theta_dot * v[11] * v[2]
+                                    + (-v[9] * gamma2_dot * v[2] - v[11] * phi_dot * v[7])
+                                        * v[1]) * v[237])
+                                + 2.0
+                                    * (((v[113] * psi_dot + v[49] * phi_dot
+                                        - theta_dot * v[1] * v[2] * v[14]) * v[11]
+                                        + v[9] * gamma2_dot * v[19]) * v[169])
+                                + 2.0
+                                    * (v[168]
+                                        * ((psi_dot * v[124] - theta_dot * v[16] * v[1] * v[2]
+                                            + v[141] * phi_dot) * v[11] + v[9] * gamma2_dot * v[113]))))
+                        - psi_dot * v[139]
+                        + 0.5
+                            * ((2.0
+                                * (((-v[242] - v[3] * theta_dot * v[7]) * v[4]
+                                    + v[0] * v[1] * gamma1_dot * v[7]) * v[198])
+                                + 2.0
+                                    * ((v[4]
+                                        * (theta_dot * v[16] * v[1] * v[7] + v[113] * phi_dot
+                                            + v[49] * psi_dot) + v[0] * v[42] * gamma1_dot) * v[162])
+                                + 2.0
+                                    * ((v[0] * gamma1_dot * v[116]
+                                        + v[4]
+                                            * (v[19] * phi_dot + theta_dot * v[1] * v[7] * v[14]
+                                                + v[42] * psi_dot)) * v[158])) * m1))
+                + 0.5 * (v[207] * (-v[240] * Ixz - Ixy * v[211]))
+                + (0.5 * (v[240] * Izz) - v[212]
+                    + (v[0] * v[223] + gamma2_dot + v[208] + v[209]) * J2
+                    + v[4] * v[222] * J1 - 0.5 * v[213] + 0.5 * v[215]) * v[211]
+                + ((gamma1_dot + v[9] * v[226] + v[210] - v[193]) * J2
+                    - v[11] * v[219] * J1 - 0.5 * v[216] - 0.5 * v[217] + 0.5 * v[218])
+                    * v[240]
+                - (theta_dot * v[7] * v[227]
+                    + v[0]
+                        * (v[4] * (2.0 * J2 + 2.0 * v[69] - 2.0 * J1) * phi_dot
+                            + v[243] * d * m1) + v[190] * psi_dot) * gamma1_dot,
+            d * m1
+                * (v[245] * v[162] - psi_dot * (v[188] + v[189]) + v[158] * v[247]
+                    + (v[0] * v[195] + v[4] * v[1] * v[200]) * v[198]
+                    - gamma1_dot
+                        * (v[246] * Y_dot + Z_dot * v[160] + X_dot * v[244]
+                            + a * (v[193] - v[210]) * v[4]))
+                - (v[0] * v[243] * d * m1 + v[99] * v[214]) * phi_dot
+                - ((v[228] + v[229]) * d * m1 + v[99] * v[3] * psi_dot * v[7])
+                    * theta_dot + (v[222] * J1 + (-v[220] - v[221]) * J2) * v[223],
+            ((v[248] - v[249] - v[149] * theta_dot * v[14] - v[251]) * v[169]
+                - psi_dot * (-v[151] - v[152])
+                - gamma2_dot
+                    * (a * v[240] * v[11] - X_dot * v[252] - Y_dot * v[250]
+                        + Z_dot * v[36])
+                + v[237] * (v[235] * v[1] * v[11] + v[9] * (v[3] * v[233] - v[242]))
+                + v[168] * (v[254] - v[253] - v[149] * theta_dot * v[16] - v[255])) * m2
+                * d
+                - (v[9] * m2 * d * v[241] + v[180] * theta_dot * v[2]
+                    + v[1] * v[91] * psi_dot * v[7]) * phi_dot
+                - (m2 * d * (v[149] * (-v[202] - v[203]) + v[230])
+                    + v[3] * v[180] * psi_dot * v[2]) * theta_dot
+                + v[219] * (J2 * v[226] + (-v[224] - v[225]) * J1),
+            d
+                * (-v[245] * gamma1_dot * m1
+                    - m2 * gamma2_dot
+                        * (v[254] - v[253] - v[255] + v[13] * theta_dot * v[16])
+                    - (v[138] * psi_dot + v[238] * phi_dot
+                        + v[0] * v[42] * gamma1_dot * m1
+                        + v[120] * theta_dot * v[16] * v[1]
+                        + v[9] * m2 * gamma2_dot * v[113]) * phi_dot)
+                - theta_dot * (v[16] * v[256] + psi_dot * v[185] * v[14])
+                - psi_dot
+                    * (v[145] * psi_dot + theta_dot * v[201] * v[14]
+                        + d
+                            * (v[138] * phi_dot + gamma1_dot * v[159] * m1
+                                - m2 * gamma2_dot * v[150])),
+            (-(phi_dot * v[239] + v[120] * theta_dot * v[1] * v[14] + v[114] * psi_dot
+                + v[0] * gamma1_dot * v[116] * m1 + v[9] * m2 * gamma2_dot * v[19])
+                * phi_dot
+                - (v[248] - v[249] + v[13] * theta_dot * v[14] - v[251]) * m2
+                    * gamma2_dot - gamma1_dot * m1 * v[247]) * d
+                - theta_dot * (v[170] * v[16] * psi_dot + v[256] * v[14])
+                - (theta_dot * v[16] * v[107] + psi_dot * v[93]
+                    + (v[114] * phi_dot + gamma1_dot * m1 * v[122]
+                        - m2 * gamma2_dot * v[129]) * d) * psi_dot,
+            d
+                * (-gamma1_dot
+                    * (v[0] * v[1] * phi_dot * v[7] + gamma1_dot * v[160]
+                        + theta_dot * v[179]) * m1
+                    - phi_dot
+                        * (v[3] * theta_dot * v[205]
+                            + v[1]
+                                * (v[0] * gamma1_dot * m1 * v[7] + v[110] * phi_dot
+                                    - v[9] * m2 * gamma2_dot * v[2]))
+                    - m2 * gamma2_dot
+                        * (v[178] * theta_dot + gamma2_dot * v[36]
+                            - v[9] * v[1] * v[2] * phi_dot))
+                - theta_dot
+                    * (theta_dot * v[201]
+                        + (gamma1_dot * v[179] * m1 + m2 * gamma2_dot * v[178]
+                            + v[3] * phi_dot * v[205]) * d),
+        ];
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "constraint matrix [M a^T; a 0]",
+                value: column as f64,
+            });
+        }
+        dstate[0] = psi_dot;
+        dstate[1] = theta_dot;
+        dstate[2] = phi_dot;
+        dstate[3] = gamma1_dot;
+        dstate[4] = gamma2_dot;
+        dstate[5] = X_dot;
+        dstate[6] = Y_dot;
+        dstate[7] = Z_dot;
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        dstate[13] = force[5];
+        dstate[14] = force[6];
+        dstate[15] = force[7];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let d = params.d;
+        let a = params.a;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = v[2] * v[2];
+        v[7] = f64::cos(phi);
+        v[8] = v[7] * v[7];
+        v[9] = f64::cos(gamma2);
+        v[10] = v[9] * v[1] * v[7];
+        v[11] = f64::sin(gamma2);
+        v[12] = v[3] * v[11];
+        v[13] = v[10] - v[12];
+        v[14] = f64::sin(psi);
+        v[15] = v[0] * v[1] * v[14];
+        v[16] = f64::cos(psi);
+        v[17] = v[16] * v[7];
+        v[18] = v[3] * v[2] * v[14];
+        v[19] = -v[17] - v[18];
+        v[20] = a * v[1] * v[14];
+        v[21] = d * (v[19] * v[4] - v[15]) - v[20];
+        v[22] = a * v[16] * v[1];
+        v[23] = v[3] * v[16] * v[2];
+        v[24] = v[7] * v[14];
+        v[25] = v[23] - v[24];
+        v[26] = v[4] * v[25];
+        v[27] = v[0] * v[16] * v[1];
+        v[28] = d * (v[26] + v[27]);
+        v[29] = v[22] + v[28];
+        v[30] = v[3] * Ixx;
+        v[31] = Ixy * v[2];
+        v[32] = Ixz * v[7];
+        v[33] = (-v[31] - v[32]) * v[1];
+        v[34] = v[9] * v[3];
+        v[35] = v[1] * v[11] * v[7];
+        v[36] = -v[34] - v[35];
+        v[37] = v[0] * v[3];
+        v[38] = v[4] * v[1] * v[2];
+        v[39] = v[38] - v[37];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = v[2] * v[14];
+        v[41] = v[3] * v[16] * v[7];
+        v[42] = v[40] + v[41];
+        v[43] = v[42] * v[11];
+        v[44] = v[9] * v[16] * v[1];
+        v[45] = d * (v[44] - v[43]);
+        v[46] = -v[22] - v[45];
+        v[47] = v[16] * v[2];
+        v[48] = v[3] * v[7] * v[14];
+        v[49] = v[47] - v[48];
+        v[50] = v[9] * v[1] * v[14];
+        v[51] = v[20] - d * (-v[49] * v[11] - v[50]);
+        v[52] = v[3] * Ixz;
+        v[53] = Izz * v[7];
+        v[54] = Iyz * v[2];
+        v[55] = (v[53] - v[54]) * v[1];
+        v[56] = (v[52] + v[55]) * v[7];
+        v[57] = Iyy * v[2];
+        v[58] = Iyz * v[7];
+        v[59] = v[1] * (v[57] - v[58]);
+        v[60] = v[3] * Ixy;
+        v[61] = v[2] * (v[59] + v[60]);
+        v[62] = m2 * d * d;
+        v[63] = v[62] + J2 - J1;
+        v[64] = v[9] * v[63];
+        v[65] = m2 * a * d;
+        v[66] = v[64] + v[65];
+        v[67] = v[66] * v[11] - Ixz;
+        v[68] = a * d * m1;
+        v[69] = d * d * m1;
+        v[70] = J2 + v[69] - J1;
+        v[71] = v[68] + v[0] * v[70];
+        v[72] = Ixy + v[4] * v[71];
+        v[73] = J2 - J1;
+        v[74] = v[0] * v[0];
+        v[75] = (v[74] - 1.0) * m1;
+        v[76] = v[9] * v[9];
+        v[77] = m2 * (1.0 - v[76]);
+        v[78] = J1 - J2;
+        v[79] = v[0] * v[0] * v[73] + Iyy + d * d * (v[75] + v[77]) - Izz
+            + v[9] * v[9] * v[78];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part2(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = Iyz * v[1] + v[3] * v[67] * v[2]
+            + (v[3] * v[72] + (v[79] * v[2] - 2.0 * v[58]) * v[1]) * v[7];
+        v[81] = m2 * (v[76] - 1.0);
+        v[82] = (v[74] + v[76] - 2.0) * J2 + (-v[74] - v[76]) * J1 - Ixx
+            + (v[75] + v[81]) * d * d;
+        v[83] = J1 - J2 - v[69];
+        v[84] = v[0] * v[83] - v[68];
+        v[85] = v[84] * v[4] - Ixy;
+        v[86] = v[67] * v[7] + v[85] * v[2];
+        v[87] = v[82] * v[3] + v[86] * v[1];
+        v[88] = v[0] * a;
+        v[89] = v[1] * (J2 + (d + v[88]) * d * m1) * v[7];
+        v[90] = v[9] * a;
+        v[91] = m2 * d * (d + v[90]) + J2;
+        v[92] = v[1] * v[91] * v[2];
+        v[93] = m1 * v[21] + m2 * v[51];
+        v[94] = m1 * v[29] + m2 * v[46];
+        v[95] = J1 - v[62] - J2;
+        v[96] = v[9] * v[95] - v[65];
+        v[97] = Ixz + v[11] * v[96];
+        v[98] = v[97] * v[2] + v[85] * v[7];
+        v[99] = (-d - v[88]) * d * m1 - J2;
+        v[100] = v[99] * v[2];
+        v[101] = v[91] * v[7];
+        v[102] = m2 * v[11] * v[7];
+        v[103] = v[4] * v[2] * m1;
+        v[104] = v[9] * d;
+        v[105] = v[0] * d;
+        v[106] = m2 * (a + v[104]) + (-a - v[105]) * m1;
+        v[107] = (v[102] + v[103]) * v[1] * d + v[106] * v[3];
+        v[108] = v[16] * v[107];
+        v[109] = v[14] * v[107];
+        v[110] = -v[102] - v[103];
+        v[111] = v[3] * d * v[110] + v[106] * v[1];
+        v[112] = (1.0 - v[74]) * m1;
+        v[113] = v[24] - v[23];
+        v[114] = m2 * v[113] * v[11] + v[42] * v[4] * m1;
+        v[115] = v[114] * d;
+        v[116] = v[48] - v[47];
+        v[117] = (m2 * v[19] * v[11] + v[4] * v[116] * m1) * d;
+        v[118] = m2 * v[11] * v[2];
+        v[119] = v[4] * m1 * v[7];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part3(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let m0 = params.m0;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[120] = v[119] - v[118];
+        v[121] = v[120] * v[1] * d;
+        v[122] = v[0] * v[25] - v[16] * v[4] * v[1];
+        v[123] = d * m1 * v[122];
+        v[124] = v[17] + v[18];
+        v[125] = v[4] * v[1] * v[14];
+        v[126] = v[0] * v[124] - v[125];
+        v[127] = d * m1 * v[126];
+        v[128] = v[5] * d * m1;
+        v[129] = -v[16] * v[1] * v[11] - v[9] * v[42];
+        v[130] = -(m2 * v[129] * d);
+        v[131] = v[1] * v[11] * v[14];
+        v[132] = -v[131] - v[9] * v[116];
+        v[133] = -(m2 * d * v[132]);
+        v[134] = v[13] * m2 * d;
+        v[135] = m2 + m0 + m1;
+        v[136] = v[2]
+            * (v[9] * v[9] * v[73] - Iyy + d * d * (v[112] + v[81]) + Izz
+                + v[0] * v[0] * v[78]);
+        v[137] = v[3] * v[86]
+            + v[1] * (v[79] * v[7] * v[7] + v[2] * (4.0 * v[58] + v[136]));
+        v[138] = m2 * v[11] * v[124] + v[4] * v[49] * m1;
+        v[139] = v[114] * Y_dot + v[138] * X_dot;
+        v[140] = (v[113] * v[4] - v[27]) * d;
+        v[141] = -v[40] - v[41];
+        v[142] = (-v[141] * v[11] - v[44]) * d;
+        v[143] = v[22] - v[142];
+        v[144] = v[140] - v[22];
+        v[145] = m2 * v[143] + m1 * v[144];
+        v[146] = v[95] * v[1] * v[11] * v[11] * v[7]
+            + v[9]
+                * (v[66] * v[1] * v[7]
+                    + (2.0 * J1 - 2.0 * v[62] - 2.0 * J2) * v[3] * v[11]);
+        v[147] = 2.0 * v[62] + 2.0 * J2 - 2.0 * J1;
+        v[148] = v[3] * v[95] * v[11] * v[11]
+            + v[9] * (v[1] * v[11] * v[147] * v[7] + v[3] * v[66]);
+        v[149] = v[12] - v[10];
+        v[150] = v[131] - v[9] * v[49];
+        v[151] = X_dot * v[150];
+        v[152] = v[129] * Y_dot;
+        v[153] = d * (v[42] * v[4] * phi_dot + gamma1_dot * v[122]);
+        v[154] = a * v[3];
+        v[155] = v[39] * d - v[154];
+        v[156] = theta_dot * v[16] * v[155];
+        v[157] = psi_dot * v[21];
+        v[158] = Y_dot + psi_dot * v[29]
+            + d * (gamma1_dot * v[126] + v[4] * v[116] * phi_dot)
+            + theta_dot * v[155] * v[14];
+        v[159] = v[0] * v[19] + v[125];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part4(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[160] = v[37] - v[38];
+        v[161] = d * v[160] + v[154];
+        v[162] = X_dot + v[153] + v[156] + v[157];
+        v[163] = -(v[34] + v[35]) * d - v[154];
+        v[164] = v[154] - d * v[36];
+        v[165] = theta_dot * v[16] * v[164];
+        v[166] = psi_dot * v[51];
+        v[167] = (v[113] * v[11] * phi_dot - gamma2_dot * v[129]) * d;
+        v[168] = v[165] + v[166] + X_dot + v[167];
+        v[169] = d * (v[19] * v[11] * phi_dot - gamma2_dot * v[132]) + Y_dot
+            + psi_dot * v[46] + theta_dot * v[164] * v[14];
+        v[170] = v[155] * m1 + m2 * v[164];
+        v[171] = v[1] * v[67] * v[2]
+            + (v[72] * v[1] + (2.0 * v[58] + v[136]) * v[3]) * v[7] - v[3] * Iyz;
+        v[172] = v[3] * (v[54] - v[53]) + v[1] * Ixz;
+        v[173] = Ixy * v[1] + v[3] * (v[58] - v[57]);
+        v[174] = v[3] * v[11] * v[7] - v[9] * v[1];
+        v[175] = -v[0] * v[1] - v[3] * v[4] * v[2];
+        v[176] = (v[31] + v[32]) * v[3];
+        v[177] = Ixx * v[1];
+        v[178] = -v[9] * v[3] * v[7] - v[1] * v[11];
+        v[179] = v[4] * v[1] - v[0] * v[3] * v[2];
+        v[180] = m2 * d * (-d - v[90]) - J2;
+        v[181] = gamma2_dot * v[180] * v[2];
+        v[182] = v[99] * gamma1_dot * v[7];
+        v[183] = v[72] * v[2] + v[97] * v[7];
+        v[184] = v[3] * v[183] + v[82] * v[1];
+        v[185] = m2 * v[163] + v[161] * m1;
+        v[186] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[69];
+        v[187] = v[0] * (v[3] * v[71] + v[4] * v[1] * v[2] * v[186])
+            + v[3] * v[83] * v[4] * v[4];
+        v[188] = X_dot * v[159];
+        v[189] = Y_dot * v[122];
+        v[190] = v[70] * v[4] * v[4] * v[1] * v[2]
+            + v[0] * (v[84] * v[1] * v[2] + v[3] * v[4] * v[186]);
+        v[191] = a * v[1];
+        v[192] = theta_dot * (d * v[175] - v[191])
+            + d * (v[5] * gamma1_dot + v[4] * v[1] * phi_dot * v[7]);
+        v[193] = theta_dot * v[2];
+        v[194] = gamma1_dot - v[193];
+        v[195] = v[3] * v[194] + v[1] * phi_dot * v[7];
+        v[196] = gamma1_dot * v[2];
+        v[197] = a * theta_dot * v[1];
+        v[198] = Z_dot + (v[195] * v[4] + v[0] * v[1] * (v[196] - theta_dot)) * d
+            - v[197];
+        v[199] = a * v[3] * theta_dot;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part5(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        v[200] = theta_dot - v[196];
+        v[201] = v[3] * (m2 * (-a - v[104]) + (a + v[105]) * m1) + v[1] * d * v[110];
+        v[202] = Y_dot * v[14];
+        v[203] = X_dot * v[16];
+        v[204] = v[202] + v[203];
+        v[205] = v[118] - v[119];
+        v[206] = (v[204] * v[120] * v[1] + Z_dot * v[3] * v[205]) * d;
+        v[207] = phi_dot - v[3] * psi_dot;
+        v[208] = theta_dot * v[7];
+        v[209] = v[1] * psi_dot * v[2];
+        v[210] = v[1] * psi_dot * v[7];
+        v[211] = v[210] - v[193];
+        v[212] = Iyz * v[211];
+        v[213] = v[207] * Ixy;
+        v[214] = v[208] + v[209];
+        v[215] = Iyy * v[214];
+        v[216] = Iyz * v[214];
+        v[217] = v[207] * Ixz;
+        v[218] = Izz * v[211];
+        v[219] = v[9] * v[207] - v[11] * v[211];
+        v[220] = v[0] * v[207];
+        v[221] = v[4] * v[214];
+        v[222] = v[220] + v[221];
+        v[223] = v[0] * v[214] - v[207] * v[4];
+        v[224] = v[9] * v[211];
+        v[225] = v[207] * v[11];
+        v[226] = v[224] + v[225];
+        v[227] = v[0] * v[84] + v[70] * v[4] * v[4];
+        v[228] = v[204] * v[5];
+        v[229] = Z_dot * v[179];
+        v[230] = Z_dot * v[178];
+        v[231] = v[63] * v[11] * v[11] + v[9] * v[96];
+        v[232] = d * (-gamma2_dot * v[149] - v[1] * v[11] * v[2] * phi_dot)
+            + theta_dot * (v[191] - v[174] * d);
+        v[233] = -gamma2_dot - v[208];
+        v[234] = gamma2_dot * v[7];
+        v[235] = -v[234] - theta_dot;
+        v[236] = v[11] * v[2] * phi_dot;
+        v[237] = Z_dot + v[197]
+            + (v[3] * v[233] * v[11] + (v[9] * (v[234] + theta_dot) - v[236]) * v[1])
+                * d;
+        v[238] = v[113] * v[4] * m1 + m2 * v[141] * v[11];
+        v[239] = v[19] * v[4] * m1 + m2 * v[49] * v[11];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part6(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 257],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        v[240] = -v[208] - v[209];
+        v[241] = v[19] * Y_dot + X_dot * v[113] - Z_dot * v[1] * v[2];
+        v[242] = v[1] * v[2] * phi_dot;
+        v[243] = Y_dot * v[116] + Z_dot * v[1] * v[7] + v[42] * X_dot;
+        v[244] = -v[26] - v[27];
+        v[245] = v[5] * theta_dot * v[16] + psi_dot * v[159] + v[244] * gamma1_dot
+            + v[0] * v[42] * phi_dot;
+        v[246] = -v[15] - v[4] * v[124];
+        v[247] = v[0] * v[116] * phi_dot + v[246] * gamma1_dot + psi_dot * v[122]
+            + v[5] * theta_dot * v[14];
+        v[248] = v[9] * v[19] * phi_dot;
+        v[249] = v[129] * psi_dot;
+        v[250] = v[11] * v[116] - v[50];
+        v[251] = gamma2_dot * v[250];
+        v[252] = v[43] - v[44];
+        v[253] = gamma2_dot * v[252];
+        v[254] = v[9] * v[113] * phi_dot;
+        v[255] = psi_dot * v[150];
+        v[256] = d
+            * (v[120] * v[1] * phi_dot - m2 * gamma2_dot * v[149]
+                + v[5] * gamma1_dot * m1) + theta_dot * v[111];
+    }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
     pub fn initial_state(

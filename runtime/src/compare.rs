@@ -10,9 +10,9 @@
 //! assert!(reduced.record.constraint_error_norm < 1e-12);
 //! ```
 
-use crate::integrate::{RunError, Settings, Solution, integrate};
+use crate::integrate::{Projector, RunError, Settings, Solution, integrate_projected};
 use crate::monitor::{Invariants, monitor, norm};
-use crate::system::{SetupError, System};
+use crate::system::{Drift, SetupError, System};
 use generated::{Failure, Model};
 use std::time::Instant;
 
@@ -24,13 +24,15 @@ pub struct Options {
     pub repeats: usize,
     /// Formulations to run (empty: all the model has).
     pub formulations: Vec<String>,
+    /// Drift control applied to the classical formulations that support it.
+    pub drift: Drift,
 }
 
 impl Options {
     /// The paper's settings for the model's reference run, 5 repeats.
     pub fn paper(model: &Model) -> Options {
         let (t0, t1, _) = model.run;
-        Options { settings: Settings::paper(t1 - t0), repeats: 5, formulations: vec![] }
+        Options { settings: Settings::paper(t1 - t0), repeats: 5, formulations: vec![], drift: Drift::None }
     }
 }
 
@@ -82,15 +84,28 @@ pub fn output_times(model: &Model) -> Vec<f64> {
 
 /// Runs one formulation.
 pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
+    run_with(model, method, settings, repeats, Drift::None)
+}
+
+/// Runs one formulation with drift control.
+pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize, drift: Drift) -> Result<Run, CompareError> {
     let (q0, qd0) = model.initial;
-    let (sys, y0) = System::start(*model, method, (model.default_params)(), q0, qd0)
-        .map_err(|source| CompareError::Setup { method: method.into(), source })?;
+    let setup = |source| CompareError::Setup { method: method.into(), source };
+    let (sys, y0) = System::start(*model, method, (model.default_params)(), q0, qd0).map_err(setup)?;
+    let sys = sys.with_drift(drift).map_err(setup)?;
+    let label = match drift {
+        Drift::None => method.to_string(),
+        Drift::Baumgarte { .. } => format!("{method}+baumgarte"),
+        Drift::Projection => format!("{method}+projection"),
+    };
     let times = output_times(model);
     let mut cpu = Vec::new();
     let mut solution = None;
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
-        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &times, settings)
+        let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
+        let projector: Option<Projector<Failure>> = if drift == Drift::Projection { Some(&mut project) } else { None };
+        let sol = integrate_projected(&mut |t, y, dy| sys.rhs(t, y, dy), projector, &y0, &times, settings)
             .map_err(|source| CompareError::Run { method: method.into(), source })?;
         cpu.push(start.elapsed().as_secs_f64());
         solution = Some(sol);
@@ -99,11 +114,11 @@ pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> 
     let solution = solution.expect("at least one run");
     let invariants = monitor(&sys, &solution).map_err(|source| CompareError::Monitor { method: method.into(), source })?;
     let energy = norm(&invariants.energy_error);
-    let momentum = invariants.momentum_error.iter().map(|s| norm(s).powi(2)).sum::<f64>().sqrt();
+    let momentum = invariants.momentum_error.iter().map(|s| norm(s).powi(2)).fold(0.0, |a, b| a + b).sqrt();
     let g0 = norm(&invariants.momentum0);
     let record = Record {
         scene: model.module.to_string(),
-        method: method.to_string(),
+        method: label,
         integrator: settings.method.to_string(),
         states: sys.form.states,
         equations: sys.form.equations,
@@ -127,7 +142,14 @@ pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareErro
         .formulations
         .iter()
         .filter(|f| options.formulations.is_empty() || options.formulations.iter().any(|n| n == f.name))
-        .map(|f| run(model, f.name, &options.settings, options.repeats))
+        .map(|f| {
+            let drift = match options.drift {
+                Drift::Baumgarte { .. } if f.rhs_baumgarte.is_some() => options.drift,
+                Drift::Projection if matches!(f.name, "lagrange" | "maggi") => options.drift,
+                _ => Drift::None,
+            };
+            run_with(model, f.name, &options.settings, options.repeats, drift)
+        })
         .collect()
 }
 
@@ -142,8 +164,13 @@ pub fn table(runs: &[Run]) -> String {
         } else {
             format!("{:.2e}", r.constraint_error_norm)
         };
+        let (momentum, momentum_rel) = if r.momentum_error_rel.is_nan() {
+            ("-".to_string(), "-".to_string())
+        } else {
+            (format!("{:.2e}", r.momentum_error_norm), format!("{:.2e}", r.momentum_error_rel))
+        };
         out += &format!(
-            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {:.2e} | {:.2e} | {} | {} |\n",
+            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {} | {} | {} | {} |\n",
             r.method,
             r.states,
             r.equations,
@@ -151,8 +178,8 @@ pub fn table(runs: &[Run]) -> String {
             r.energy_error_norm,
             r.energy_error_rel,
             constraint,
-            r.momentum_error_norm,
-            r.momentum_error_rel,
+            momentum,
+            momentum_rel,
             r.steps,
             r.rhs_calls
         );

@@ -31,7 +31,7 @@ pub struct Invariants {
 
 /// Euclidean norm of a sampled series, as in the paper's tables.
 pub fn norm(series: &[f64]) -> f64 {
-    series.iter().map(|x| x * x).sum::<f64>().sqrt()
+    series.iter().map(|x| x * x).fold(0.0, |a, b| a + b).sqrt()
 }
 
 /// Evaluates the monitors at every sample of `sol`.

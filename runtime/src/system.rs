@@ -12,6 +12,19 @@
 
 use generated::{Failure, Formulation, Model};
 
+/// Drift control for the classical methods (Lagrange, Maggi), off by default so the paper's
+/// comparison stays honest.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Drift {
+    #[default]
+    None,
+    /// Lagrange only: `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h`.
+    Baumgarte { alpha: f64, beta: f64 },
+    /// After every step, `q` is moved onto the holonomic constraints (Gauss-Newton, minimal
+    /// norm) and `q'` onto `a q' + b = 0` (minimal-norm correction).
+    Projection,
+}
+
 /// A formulation ready to integrate.
 #[derive(Clone, Debug)]
 pub struct System {
@@ -20,6 +33,8 @@ pub struct System {
     pub params: Vec<f64>,
     /// `G_I` from the initial state (Eq. 26).
     pub g_i: Vec<f64>,
+    /// Drift control (classical formulations only).
+    pub drift: Drift,
 }
 
 /// Why a system could not be set up.
@@ -29,6 +44,8 @@ pub enum SetupError {
     UnknownFormulation { model: String, name: String, available: String },
     #[error("initial state rejected: {0}")]
     Initial(Failure),
+    #[error("{drift:?} applies to {applies}, not to `{name}`")]
+    DriftNotApplicable { drift: Drift, name: String, applies: &'static str },
 }
 
 impl System {
@@ -42,12 +59,100 @@ impl System {
         let mut y0 = vec![0.0; form.states];
         let mut g_i = vec![0.0; model.ignorable.len()];
         (form.initial_state)(0.0, q0, qd0, &params, &mut y0, &mut g_i).map_err(SetupError::Initial)?;
-        Ok((System { model, form, params, g_i }, y0))
+        Ok((System { model, form, params, g_i, drift: Drift::None }, y0))
+    }
+
+    /// The same system with drift control.
+    pub fn with_drift(mut self, drift: Drift) -> Result<System, SetupError> {
+        let ok = match drift {
+            Drift::None => true,
+            Drift::Baumgarte { .. } => self.form.rhs_baumgarte.is_some(),
+            Drift::Projection => matches!(self.form.name, "lagrange" | "maggi"),
+        };
+        if !ok {
+            let applies = if matches!(drift, Drift::Projection) { "lagrange and maggi" } else { "lagrange" };
+            return Err(SetupError::DriftNotApplicable { drift, name: self.form.name.to_string(), applies });
+        }
+        self.drift = drift;
+        Ok(self)
     }
 
     /// `dy = f(t, y)`.
     pub fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-        (self.form.rhs)(t, y, &self.params, &self.g_i, dy)
+        match (self.drift, self.form.rhs_baumgarte) {
+            (Drift::Baumgarte { alpha, beta }, Some(stabilized)) => stabilized(t, y, &self.params, &self.g_i, dy, alpha, beta),
+            _ => (self.form.rhs)(t, y, &self.params, &self.g_i, dy),
+        }
+    }
+
+    /// Projection onto the constraints for [`Drift::Projection`] (state `[q; q'; W]`); returns
+    /// whether the state changed.
+    pub fn project(&self, t: f64, y: &mut [f64]) -> Result<bool, Failure> {
+        if self.drift != Drift::Projection {
+            return Ok(false);
+        }
+        let m = self.model.coordinates.len();
+        let (r, h) = (self.model.constraints.len(), self.model.holonomic);
+        let mut changed = false;
+        // Positions: Gauss-Newton on h(q) = 0 with a central-difference Jacobian.
+        if h > 0 {
+            for _ in 0..3 {
+                let res = self.position_residuals(t, &y[..m])?;
+                if res.iter().all(|v| v.abs() < 1e-15) {
+                    break;
+                }
+                let mut jac = nalgebra::DMatrix::zeros(h, m);
+                for j in 0..m {
+                    let step = 1e-7 * (1.0 + y[j].abs());
+                    let mut qp = y[..m].to_vec();
+                    qp[j] += step;
+                    let hp = self.position_residuals(t, &qp)?;
+                    qp[j] -= 2.0 * step;
+                    let hm = self.position_residuals(t, &qp)?;
+                    for i in 0..h {
+                        jac[(i, j)] = (hp[i] - hm[i]) / (2.0 * step);
+                    }
+                }
+                let dq = minimal_norm(&jac, &res);
+                for j in 0..m {
+                    y[j] -= dq[j];
+                }
+                changed = true;
+            }
+        }
+        // Velocities: a q' + b is linear in q', so a and b come out exactly.
+        if r > 0 {
+            let q = y[..m].to_vec();
+            let b = self.velocity_residuals(t, &q, &vec![0.0; m])?;
+            let mut a = nalgebra::DMatrix::zeros(r, m);
+            for j in 0..m {
+                let mut e = vec![0.0; m];
+                e[j] = 1.0;
+                let col = self.velocity_residuals(t, &q, &e)?;
+                for i in 0..r {
+                    a[(i, j)] = col[i] - b[i];
+                }
+            }
+            let res = self.velocity_residuals(t, &q, &y[m..2 * m])?;
+            let dv = minimal_norm(&a, &res);
+            for j in 0..m {
+                y[m + j] -= dv[j];
+            }
+            changed = true;
+        }
+        Ok(changed)
+    }
+
+    fn position_residuals(&self, t: f64, q: &[f64]) -> Result<Vec<f64>, Failure> {
+        let mut out = vec![0.0; self.model.holonomic];
+        (self.model.position_residuals)(t, q, &vec![0.0; q.len()], &self.params, &mut out)?;
+        Ok(out)
+    }
+
+    fn velocity_residuals(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f64>, Failure> {
+        let mut out = vec![0.0; self.model.constraints.len()];
+        (self.model.constraint_residuals)(t, q, qd, &self.params, &mut out)?;
+        Ok(out)
     }
 
     /// `(q, q')` at a state.
@@ -61,5 +166,15 @@ impl System {
     /// The work integral `W` carried in the state (0 when no force can do work).
     pub fn work(&self, y: &[f64]) -> f64 {
         if self.form.has_work_state { y[self.form.states - 1] } else { 0.0 }
+    }
+}
+
+/// `J^T (J J^T)^-1 r`: the smallest correction `d` with `J d = r`.
+fn minimal_norm(j: &nalgebra::DMatrix<f64>, r: &[f64]) -> Vec<f64> {
+    let jjt = j * j.transpose();
+    let rhs = nalgebra::DVector::from_column_slice(r);
+    match jjt.lu().solve(&rhs) {
+        Some(x) => (j.transpose() * x).iter().copied().collect(),
+        None => vec![0.0; j.ncols()],
     }
 }

@@ -43,7 +43,7 @@ const ITEM_NAMES: &[&str] = &[
     "work_rate", "momenta", "constraint_residuals", "position_residuals", "reduced_volterra", "kane", "STATES",
     "EQUATIONS", "STATE_NAMES", "INTEGRATES_IGNORABLE", "rhs", "initial_state", "velocities", "t", "state", "params",
     "g_i", "dstate", "q", "qdot", "v", "mass", "force", "value", "residual", "tolerance", "column", "index",
-    "constraint", "bound", "residuals", "positions",
+    "constraint", "bound", "residuals", "positions", "alpha", "beta", "rhs_baumgarte", "lagrange", "maggi",
 ];
 
 /// Identifiers for model symbols, unique and never a keyword or item name.
@@ -540,18 +540,75 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let states_l = usize_lit(n_states);
+
+        let rhs = self.rhs_item(f, d, work, n_states, "rhs", &f.force, &[])?;
+        let stabilized = if name == "lagrange" {
+            // Baumgarte: a q'' = gamma - 2 alpha (a q' + b) - beta^2 h.
+            let (alpha, beta) = (Symbol::new("alpha__"), Symbol::new("beta__"));
+            let mech = &d.mech;
+            let mut force = f.force.clone();
+            let m = mech.m;
+            for i in 0..mech.r {
+                let residual = Expr::sum((0..m).map(|j| mech.a.get(i, j) * model.velocities[j].expr())) + mech.b[i];
+                let position = mech.holonomic.iter().find(|(k, _)| *k == i).map_or(Expr::zero(), |(_, h)| *h);
+                force[m + i] = force[m + i] - alpha.expr() * residual * 2 - beta.expr().powi(2) * position;
+            }
+            self.rhs_item(f, d, work, n_states, "rhs_baumgarte", &force, &[(alpha, "alpha"), (beta, "beta")])?
+        } else {
+            TokenStream::new()
+        };
+        let init = self.initial_state(f, d, work)?;
+        let vel = self.velocities_fn(f)?;
+        let module = ident(name);
+        let eqs = usize_lit(f.equations);
+        let integrates = nq == m;
+        let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
+        self.forms.push((name.to_string(), n_states, f.equations));
+        let _ = f.solved;
+        Ok(quote! {
+            #mod_doc
+            pub mod #module {
+                use super::*;
+                #[doc = "Length of the state: kept coordinates, speeds, and the work integral when forces do work."]
+                pub const STATES: usize = #states_l;
+                #[doc = "Number of dynamical equations, counted as the paper's Table 1 does."]
+                pub const EQUATIONS: usize = #eqs;
+                #[doc = "Names of the state entries."]
+                pub const STATE_NAMES: [&str; STATES] = [#(#state_names),*];
+                #[doc = "False when the ignorable coordinates are left out of the state."]
+                pub const INTEGRATES_IGNORABLE: bool = #integrates;
+                #[doc = "True when the last state entry is the work integral `W` of Eq. 80."]
+                pub const HAS_WORK_STATE: bool = #work;
+                #rhs
+                #stabilized
+                #init
+                #vel
+            }
+        })
+    }
+
+    /// The `rhs` function (or a variant with `extra` scalar arguments after `dstate`).
+    #[allow(clippy::too_many_arguments)]
+    fn rhs_item(&mut self, f: &Form, d: &Derived, work: bool, n_states: usize, fn_name: &str, force: &[Expr], extra: &[(Symbol, &str)]) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let name = f.name.as_str();
+        let nq = f.kept.len();
+        let n_speeds = f.speeds.len();
         let n = f.mass.rows;
         let n_l = usize_lit(n);
-
         // The right-hand side.
-        let args = vec![
+        let mut args = vec![
             Arg::new("t", quote!(f64)),
             Arg::new("state", quote!(&[f64; STATES])),
             Arg::new("params", quote!(&Params)),
             Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
             Arg::new("dstate", quote!(&mut [f64; STATES])),
         ];
-        let inputs = self.state_inputs(f);
+        let mut inputs = self.state_inputs(f);
+        for (k, (sym, arg)) in extra.iter().enumerate() {
+            args.push(Arg::new(arg, quote!(f64)));
+            inputs.push(Input::new(*sym, arg, 5 + k, TokenStream::new()));
+        }
         let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
         // Symmetric: both triangles read the upper entry, so CSE binds it once.
         for i in 0..n {
@@ -559,7 +616,7 @@ impl Emitter<'_> {
                 outputs.push(f.mass.get(i.min(j), i.max(j)));
             }
         }
-        outputs.extend(f.force.iter().copied());
+        outputs.extend(force.iter().copied());
         let post_len = f.post.as_ref().map_or(0, |(w, _)| w.rows * w.cols + w.rows);
         if let Some((w, c)) = &f.post {
             outputs.extend(w.data.iter().copied());
@@ -572,7 +629,7 @@ impl Emitter<'_> {
             outputs.push(power);
         }
         outputs.extend(f.checks.iter().copied());
-        let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
+        let b = self.body(&format!("{name}::{fn_name}"), &outputs, &inputs, &args)?;
         add_solve_cost(self.functions.last_mut().expect("just pushed"), n);
         let o = &b.outputs;
         let qd_out = &o[..nq];
@@ -620,17 +677,24 @@ impl Emitter<'_> {
         let helpers = &b.helpers;
         let matrix_name = f.matrix_name;
         let rhs_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1, 4]).collect());
+        let fn_ident = ident(fn_name);
+        let stabilized_note = if extra.is_empty() {
+            ""
+        } else {
+            " Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`."
+        };
         let rhs_doc = doc(&format!(
-            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.",
+            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.{}",
             f.label,
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
             if work { " and the power `W' = Q . q'` last" } else { "" },
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
+            stabilized_note,
         ));
-        let rhs = quote! {
+        Ok(quote! {
             #rhs_doc
             #[allow(non_snake_case, clippy::all)]
-            pub fn rhs(#(#rhs_args),*) -> Result<(), EvalError> {
+            pub fn #fn_ident(#(#rhs_args),*) -> Result<(), EvalError> {
                 #(#stmts)*
                 #(#check_stmts)*
                 let mut matrix: [[f64; #n_l]; #n_l] = [#(#rows),*];
@@ -649,33 +713,6 @@ impl Emitter<'_> {
                 Ok(())
             }
             #(#helpers)*
-        };
-        let init = self.initial_state(f, d, work)?;
-        let vel = self.velocities_fn(f)?;
-        let module = ident(name);
-        let eqs = usize_lit(f.equations);
-        let integrates = nq == m;
-        let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
-        self.forms.push((name.to_string(), n_states, f.equations));
-        let _ = f.solved;
-        Ok(quote! {
-            #mod_doc
-            pub mod #module {
-                use super::*;
-                #[doc = "Length of the state: kept coordinates, speeds, and the work integral when forces do work."]
-                pub const STATES: usize = #states_l;
-                #[doc = "Number of dynamical equations, counted as the paper's Table 1 does."]
-                pub const EQUATIONS: usize = #eqs;
-                #[doc = "Names of the state entries."]
-                pub const STATE_NAMES: [&str; STATES] = [#(#state_names),*];
-                #[doc = "False when the ignorable coordinates are left out of the state."]
-                pub const INTEGRATES_IGNORABLE: bool = #integrates;
-                #[doc = "True when the last state entry is the work integral `W` of Eq. 80."]
-                pub const HAS_WORK_STATE: bool = #work;
-                #rhs
-                #init
-                #vel
-            }
         })
     }
 

@@ -14,6 +14,8 @@ options (default: the paper's settings, Dormand-Prince 5(4), rtol 1e-3, atol 1e-
   --h-max X            largest step
   --repeats N          CPU time is the median of N runs (default 5)
   --formulations LIST  comma-separated subset of lagrange, maggi, kane, reduced_volterra
+  --baumgarte A,B      Baumgarte stabilization of Lagrange (alpha, beta)
+  --projection         project Lagrange and Maggi onto the constraints after every step
   --json FILE          also write the records as JSON (`-` for stdout)
   --plots DIR          also write SVG plots of coordinates and errors";
 
@@ -71,6 +73,13 @@ fn run(args: Vec<String>) -> Result<(), String> {
                 let list: Vec<String> = it.next().unwrap_or_default().split(',').map(|s| s.trim().to_string()).collect();
                 edits.push(Box::new(move |o| o.formulations = list.clone()));
             }
+            "--baumgarte" => {
+                let v = it.next().unwrap_or_default();
+                let parts: Vec<f64> = v.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+                let [alpha, beta] = parts[..] else { return Err(format!("`--baumgarte` needs `alpha,beta`, not `{v}`")) };
+                edits.push(Box::new(move |o| o.drift = runtime::system::Drift::Baumgarte { alpha, beta }));
+            }
+            "--projection" => edits.push(Box::new(|o| o.drift = runtime::system::Drift::Projection)),
             "--json" => json = Some(it.next().ok_or("`--json` needs a file (or -)")?),
             "--plots" => plots = Some(it.next().ok_or("`--plots` needs a directory")?),
             s if s.starts_with('-') => return Err(format!("unknown option `{s}`\n{USAGE}")),

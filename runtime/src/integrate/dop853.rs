@@ -5,7 +5,7 @@
 //! Coefficients: Hairer, Nørsett & Wanner, "Solving Ordinary Differential Equations I", the
 //! published DOP853 tableau.
 
-use super::{Reason, Rhs, RunError, Settings, Solution, Stats, finite, initial_step};
+use super::{Project, Reason, Rhs, RunError, Settings, Solution, Stats, finite, initial_step};
 
 const C: [f64; 12] = [
     0.0,
@@ -132,7 +132,7 @@ const ER: [f64; 12] = [
     -0.2235530786388629525884427845e-01,
 ];
 
-pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
+pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
     let n = y0.len();
     let mut stats = Stats::default();
     let mut t = outputs[0];
@@ -204,6 +204,7 @@ pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], s: &Settings) -> Res
             if !finite(&y) {
                 return Err(stop(t, &y, Reason::Diverged));
             }
+            project(t, &mut y).map_err(|r| stop(t, &y, r))?;
             f(t, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
             k[0].copy_from_slice(&tmp);
             if landing {

@@ -1,7 +1,7 @@
 //! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
-use super::{Reason, Rhs, RunError, Settings, Solution, Stats, error_norm, finite, initial_step};
+use super::{Project, Reason, Rhs, RunError, Settings, Solution, Stats, error_norm, finite, initial_step};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -26,7 +26,7 @@ const D: [f64; 7] = [
     69997945.0 / 29380423.0,
 ];
 
-pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
+pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
     let n = y0.len();
     let mut stats = Stats::default();
     let t_end = *outputs.last().expect("checked");
@@ -123,6 +123,13 @@ pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], s: &Settings) -> Res
             first[0].copy_from_slice(&rest[5]);
             if !finite(&y) {
                 return Err(stop(t, &y, Reason::Diverged));
+            }
+            if project(t, &mut y).map_err(|r| stop(t, &y, r))? {
+                f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+                // An output at the step's end reads the projected state.
+                if outputs[next - 1] == t {
+                    *states.last_mut().expect("an output was written") = y.clone();
+                }
             }
             h_new = h_new.min(s.h_max);
             if rejected_last {

@@ -125,6 +125,21 @@ pub fn integrate<E: fmt::Display>(
     outputs: &[f64],
     settings: &Settings,
 ) -> Result<Solution, RunError> {
+    integrate_projected(f, None, y0, outputs, settings)
+}
+
+/// A map applied to the state after every accepted step (drift control by projection onto
+/// the constraints). It returns `true` when it changed the state.
+pub type Projector<'a, E> = &'a mut dyn FnMut(f64, &mut [f64]) -> Result<bool, E>;
+
+/// [`integrate`], with `project` applied after every accepted step.
+pub fn integrate_projected<E: fmt::Display>(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), E>,
+    mut project: Option<Projector<E>>,
+    y0: &[f64],
+    outputs: &[f64],
+    settings: &Settings,
+) -> Result<Solution, RunError> {
     if outputs.is_empty() || outputs.windows(2).any(|w| !(w[1] > w[0])) {
         return Err(RunError { t: outputs.first().copied().unwrap_or(0.0), state: y0.to_vec(), reason: Reason::BadOutputTimes });
     }
@@ -132,12 +147,21 @@ pub fn integrate<E: fmt::Display>(
         stats.rhs_calls += 1;
         f(t, y, dy).map_err(|e| Reason::Rhs(e.to_string()))
     };
+    let mut projector = |t: f64, y: &mut [f64]| -> Result<bool, Reason> {
+        match project.as_mut() {
+            Some(p) => p(t, y).map_err(|e| Reason::Rhs(e.to_string())),
+            None => Ok(false),
+        }
+    };
     match settings.method {
-        Method::Rk4 { h } => rk4::run(&mut counted, y0, outputs, h, settings.max_steps),
-        Method::Dopri5 => dopri5::run(&mut counted, y0, outputs, settings),
-        Method::Dop853 => dop853::run(&mut counted, y0, outputs, settings),
+        Method::Rk4 { h } => rk4::run(&mut counted, &mut projector, y0, outputs, h, settings.max_steps),
+        Method::Dopri5 => dopri5::run(&mut counted, &mut projector, y0, outputs, settings),
+        Method::Dop853 => dop853::run(&mut counted, &mut projector, y0, outputs, settings),
     }
 }
+
+/// The projection hook as the steppers see it.
+type Project<'a> = dyn FnMut(f64, &mut [f64]) -> Result<bool, Reason> + 'a;
 
 /// The right-hand side as the steppers see it, counting calls.
 type Rhs<'a> = dyn FnMut(f64, &[f64], &mut [f64], &mut Stats) -> Result<(), Reason> + 'a;

@@ -1,8 +1,8 @@
 //! Classical fourth-order Runge-Kutta with a fixed step, shortened to land on output times.
 
-use super::{Reason, Rhs, RunError, Solution, Stats, finite};
+use super::{Project, Reason, Rhs, RunError, Solution, Stats, finite};
 
-pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], h: f64, max_steps: usize) -> Result<Solution, RunError> {
+pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], h: f64, max_steps: usize) -> Result<Solution, RunError> {
     let n = y0.len();
     let mut stats = Stats::default();
     let mut t = outputs[0];
@@ -41,6 +41,7 @@ pub(super) fn run(f: &mut Rhs, y0: &[f64], outputs: &[f64], h: f64, max_steps: u
             if !finite(&y) {
                 return Err(stop(t, &y, Reason::Diverged));
             }
+            project(t, &mut y).map_err(|r| stop(t, &y, r))?;
         }
         states.push(y.clone());
     }
