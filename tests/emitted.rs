@@ -296,3 +296,16 @@ fn reduced_scene2_right_hand_side_does_less_work_than_kane() {
     let kane = out.summary.ops("kane::rhs").unwrap().total();
     assert!(reduced < kane, "reduced {reduced} ops, Kane {kane} ops");
 }
+
+#[test]
+fn inspect_and_the_generator_count_the_same_states_and_equations() {
+    for name in MODELS {
+        let def = load(name);
+        let text = generator::inspect::inspect(&def, false).unwrap();
+        let out = generator::emit::generate(&def, &generator::emit::Options::from_model(&def)).unwrap();
+        for (form, states, eqs) in &out.summary.formulations {
+            let line = format!("  {form:<17} {states:>3} states, {eqs:>3} equations");
+            assert!(text.contains(&line), "{name}: `{line}` missing from inspect");
+        }
+    }
+}

@@ -31,6 +31,18 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
         ign.join(", "),
         if model.declared_ignorable.is_some() { "declared, verified" } else { "detected" }
     );
+    // The paper's Table 1: states and equations per method (the work integral adds a state
+    // where applied forces can do work).
+    let work = usize::from(mech.q_forces.iter().any(|q| !q.is_zero()));
+    let _ = writeln!(w, "\nstates and equations per formulation (paper Table 1){}:", if work == 1 { ", the work integral W included" } else { "" });
+    for (name, states, eqs) in [
+        ("lagrange", 2 * mech.m, mech.m),
+        ("maggi", 2 * mech.m, mech.m),
+        ("kane", mech.m + mech.p, mech.p),
+        ("reduced_volterra", mech.m + mech.p - s, mech.p - s),
+    ] {
+        let _ = writeln!(w, "  {name:<17} {:>3} states, {eqs:>3} equations", states + work);
+    }
     let (open, close, eq) = if latex { ("\\begin{aligned}", "\\end{aligned}\n", " &= ") } else { ("", "", " = ") };
     let line = |w: &mut String, lhs: &str, rhs: String| {
         let _ = writeln!(w, "  {lhs}{eq}{rhs}{}", if latex { " \\\\" } else { "" });

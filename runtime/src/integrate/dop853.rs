@@ -5,7 +5,7 @@
 //! Coefficients: Hairer, Nørsett & Wanner, "Solving Ordinary Differential Equations I", the
 //! published DOP853 tableau.
 
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, Stats, finite, initial_step};
+use super::{Project, Reason, States, Rhs, RunError, Settings, Solution, Stats, combine, finite, initial_step};
 
 const C: [f64; 12] = [
     0.0,
@@ -137,7 +137,8 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let mut stats = Stats::default();
     let mut t = outputs[0];
     let mut y = y0.to_vec();
-    let mut states = vec![y.clone()];
+    let mut states = States::new(n, outputs.len());
+    states.push(&y);
     let mut next = 1;
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
     let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 12];
@@ -157,13 +158,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         let landing = t + 1.01 * h >= target;
         let step = if landing { target - t } else { h };
         for st in 1..12 {
-            for i in 0..n {
-                let mut acc = 0.0;
-                for j in 0..st {
-                    acc += A[st][j] * k[j][i];
-                }
-                tmp[i] = y[i] + step * acc;
-            }
+            combine(&mut tmp, &y, step, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);
             f(t + C[st] * step, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
         }
@@ -208,7 +203,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             f(t, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
             k[0].copy_from_slice(&tmp);
             if landing {
-                states.push(y.clone());
+                states.push(&y);
                 next += 1;
                 // A step shortened to land says little about the next one.
                 h_new = h_new.max(h);

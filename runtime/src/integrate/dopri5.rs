@@ -1,7 +1,7 @@
 //! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, Stats, error_norm, finite, initial_step};
+use super::{Project, Reason, States, Rhs, RunError, Settings, Solution, Stats, axpy_stages, combine, error_norm, finite, initial_step};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -32,7 +32,8 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let t_end = *outputs.last().expect("checked");
     let mut t = outputs[0];
     let mut y = y0.to_vec();
-    let mut states = vec![y.clone()];
+    let mut states = States::new(n, outputs.len());
+    states.push(&y);
     let mut next = 1;
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
     let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 7];
@@ -55,31 +56,14 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             h = t_end - t;
         }
         for st in 1..6 {
-            for i in 0..n {
-                let mut acc = 0.0;
-                for j in 0..st {
-                    acc += A[st][j] * k[j][i];
-                }
-                tmp[i] = y[i] + h * acc;
-            }
+            combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);
             f(t + C[st] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
         }
-        for i in 0..n {
-            let mut acc = 0.0;
-            for j in 0..6 {
-                acc += A[6][j] * k[j][i];
-            }
-            y_new[i] = y[i] + h * acc;
-        }
+        combine(&mut y_new, &y, h, &A[6], &k);
         f(t + h, &y_new, &mut k[6], &mut stats).map_err(|r| stop(t, &y, r))?;
-        for i in 0..n {
-            let mut acc = 0.0;
-            for j in 0..7 {
-                acc += E[j] * k[j][i];
-            }
-            err[i] = h * acc;
-        }
+        err.fill(0.0);
+        axpy_stages(&mut err, h, &E, &k);
         let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
         if !e.is_finite() {
             stats.rejected += 1;
@@ -101,20 +85,17 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
                 rcont[1][i] = ydiff;
                 rcont[2][i] = bspl;
                 rcont[3][i] = ydiff - h * k[6][i] - bspl;
-                let mut acc = 0.0;
-                for j in 0..7 {
-                    acc += D[j] * k[j][i];
-                }
-                rcont[4][i] = h * acc;
             }
+            rcont[4].fill(0.0);
+            axpy_stages(&mut rcont[4], h, &D, &k);
             let t_new = if h == t_end - t { t_end } else { t + h };
             while next < outputs.len() && outputs[next] <= t_new {
                 let theta = (outputs[next] - t) / h;
                 let theta1 = 1.0 - theta;
-                let out: Vec<f64> = (0..n)
-                    .map(|i| rcont[0][i] + theta * (rcont[1][i] + theta1 * (rcont[2][i] + theta * (rcont[3][i] + theta1 * rcont[4][i]))))
-                    .collect();
-                states.push(out);
+                for i in 0..n {
+                    tmp[i] = rcont[0][i] + theta * (rcont[1][i] + theta1 * (rcont[2][i] + theta * (rcont[3][i] + theta1 * rcont[4][i])));
+                }
+                states.push(&tmp);
                 next += 1;
             }
             t = t_new;
@@ -128,7 +109,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
                 f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
                 // An output at the step's end reads the projected state.
                 if outputs[next - 1] == t {
-                    *states.last_mut().expect("an output was written") = y.clone();
+                    states.last_mut().expect("an output was written").copy_from_slice(&y);
                 }
             }
             h_new = h_new.min(s.h_max);

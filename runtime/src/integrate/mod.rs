@@ -84,8 +84,63 @@ pub struct Stats {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solution {
     pub times: Vec<f64>,
-    pub states: Vec<Vec<f64>>,
+    pub states: States,
     pub stats: Stats,
+}
+
+/// Equal-length states stored in one flat buffer (no allocation per sample).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct States {
+    dim: usize,
+    data: Vec<f64>,
+}
+
+impl States {
+    /// Room for `capacity` states of `dim` entries.
+    pub fn new(dim: usize, capacity: usize) -> States {
+        States { dim, data: Vec::with_capacity(dim * capacity) }
+    }
+    /// Appends a state.
+    pub fn push(&mut self, y: &[f64]) {
+        debug_assert_eq!(y.len(), self.dim);
+        self.data.extend_from_slice(y);
+    }
+    /// Number of states.
+    pub fn len(&self) -> usize {
+        if self.dim == 0 { 0 } else { self.data.len() / self.dim }
+    }
+    /// True when empty.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+    /// The states in order.
+    pub fn iter(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.data.chunks_exact(self.dim.max(1))
+    }
+    /// The last state.
+    pub fn last(&self) -> Option<&[f64]> {
+        self.iter().last()
+    }
+    /// The last state, mutable.
+    pub fn last_mut(&mut self) -> Option<&mut [f64]> {
+        let dim = self.dim.max(1);
+        self.data.chunks_exact_mut(dim).last()
+    }
+}
+
+impl std::ops::Index<usize> for States {
+    type Output = [f64];
+    fn index(&self, i: usize) -> &[f64] {
+        &self.data[i * self.dim..(i + 1) * self.dim]
+    }
+}
+
+impl<'a> IntoIterator for &'a States {
+    type Item = &'a [f64];
+    type IntoIter = std::slice::ChunksExact<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
 }
 
 /// Why a run stopped early: the time, the last accepted state, and the reason.
@@ -195,6 +250,24 @@ fn initial_step(f: &mut Rhs, t: f64, y: &[f64], f0: &[f64], order: i32, s: &Sett
     let der12 = der2.max(dnf.sqrt());
     let h1 = if der12 <= 1e-15 { (h * 1e-3).max(1e-6) } else { (0.01 / der12).powf(1.0 / order as f64) };
     Ok((100.0 * h).min(h1).min(s.h_max))
+}
+
+/// `out = y + h * sum_j a_j k_j` (zero weights skipped).
+fn combine(out: &mut [f64], y: &[f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
+    out.copy_from_slice(y);
+    axpy_stages(out, h, a, k);
+}
+
+/// `out += h * sum_j a_j k_j`.
+fn axpy_stages(out: &mut [f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
+    for (aj, kj) in a.iter().zip(k) {
+        if *aj != 0.0 {
+            let w = h * aj;
+            for (o, x) in out.iter_mut().zip(kj) {
+                *o += w * x;
+            }
+        }
+    }
 }
 
 fn finite(y: &[f64]) -> bool {

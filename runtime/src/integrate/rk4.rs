@@ -1,13 +1,14 @@
 //! Classical fourth-order Runge-Kutta with a fixed step, shortened to land on output times.
 
-use super::{Project, Reason, Rhs, RunError, Solution, Stats, finite};
+use super::{Project, Reason, States, Rhs, RunError, Solution, Stats, finite};
 
 pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], h: f64, max_steps: usize) -> Result<Solution, RunError> {
     let n = y0.len();
     let mut stats = Stats::default();
     let mut t = outputs[0];
     let mut y = y0.to_vec();
-    let mut states = vec![y.clone()];
+    let mut states = States::new(n, outputs.len());
+    states.push(&y);
     let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
     if !(h > 0.0) {
@@ -43,7 +44,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             }
             project(t, &mut y).map_err(|r| stop(t, &y, r))?;
         }
-        states.push(y.clone());
+        states.push(&y);
     }
     Ok(Solution { times: outputs.to_vec(), states, stats })
 }

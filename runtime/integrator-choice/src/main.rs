@@ -1,0 +1,75 @@
+//! Our DOPRI5 against `ode_solvers`' on scene 2 (reduced Volterra, 13 states), same
+//! tolerances, same output times: time per 50 s run (median of 21) and the agreement.
+
+use ode_solvers::{Dopri5, SVector, System};
+use runtime::compare::output_times;
+use runtime::integrate::{Method, Settings, integrate};
+use std::time::Instant;
+
+type State = SVector<f64, 13>;
+
+struct Scene2 {
+    params: generated::three_body::Params,
+    g_i: [f64; 3],
+}
+
+impl System<f64, State> for Scene2 {
+    fn system(&self, t: f64, y: &State, dy: &mut State) {
+        let state: [f64; 13] = y.as_slice().try_into().unwrap();
+        let mut out = [0.0; 13];
+        generated::three_body::reduced_volterra::rhs(t, &state, &self.params, &self.g_i, &mut out).unwrap();
+        dy.copy_from_slice(&out);
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    use generated::three_body as model;
+    let params = model::Params::default();
+    let (y0, g_i) = model::reduced_volterra::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &params).unwrap();
+    let registry = generated::find("three_body").unwrap();
+    let times = output_times(&registry);
+    println!("| rtol = atol | ours: ms (rhs calls, ns per call incl. stepping) | ode_solvers: ms (rhs calls, ns per call) | time ode_solvers / ours | max |y_ours - y_theirs| at t_end |");
+    println!("|---|---|---|---|---|");
+    for tol in [1e-3, 1e-6, 1e-9] {
+        let settings = Settings { method: Method::Dopri5, rtol: tol, atol: tol, h_max: 50.0, ..Settings::default() };
+        let mut ours = Vec::new();
+        let mut last = Vec::new();
+        let mut our_calls = 0;
+        for _ in 0..21 {
+            let start = Instant::now();
+            let sol = integrate(
+                &mut |t, y, dy| model::reduced_volterra::rhs(t, y.try_into().unwrap(), &params, &g_i, dy.try_into().unwrap()),
+                &y0,
+                &times,
+                &settings,
+            )
+            .unwrap();
+            ours.push(start.elapsed().as_secs_f64());
+            last = sol.states.last().unwrap().to_vec();
+            our_calls = sol.stats.rhs_calls;
+        }
+        let mut theirs = Vec::new();
+        let mut their_last = State::zeros();
+        let mut their_calls = 0;
+        for _ in 0..21 {
+            let start = Instant::now();
+            let mut solver = Dopri5::new(Scene2 { params, g_i }, 0.0, 50.0, 0.1, State::from_column_slice(&y0), tol, tol);
+            their_calls = solver.integrate().unwrap().num_eval;
+            theirs.push(start.elapsed().as_secs_f64());
+            their_last = *solver.y_out().last().unwrap();
+        }
+        let diff = last.iter().zip(their_last.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let (a, b) = (median(ours) * 1e3, median(theirs) * 1e3);
+        println!(
+            "| {tol:e} | {a:.3} ({our_calls} calls, {:.0} ns/call) | {b:.3} ({their_calls} calls, {:.0} ns/call) | {:.2} | {diff:.1e} |",
+            a * 1e6 / our_calls as f64,
+            b * 1e6 / their_calls as f64,
+            b / a
+        );
+    }
+}
