@@ -12,3 +12,4 @@ pub mod system;
 pub mod monitor;
 pub mod compare;
 pub mod plot;
+pub mod sweep;

@@ -90,3 +90,74 @@ pub fn write_plots(runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> 
     drop(root);
     Ok(vec![path, epath])
 }
+
+/// The work-precision diagram: error against CPU time, log-log, one curve per formulation and
+/// integrator (colour: formulation; marker: integrator).
+pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Result<(), PlotError> {
+    let ok: Vec<&crate::sweep::Point> = points.iter().filter(|p| p.failure.is_none() && p.cpu_seconds > 0.0).collect();
+    let floor = 1e-16;
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
+    for p in &ok {
+        x0 = x0.min(p.cpu_seconds);
+        x1 = x1.max(p.cpu_seconds);
+        y0 = y0.min(p.error.max(floor));
+        y1 = y1.max(p.error.max(floor));
+    }
+    if ok.is_empty() {
+        return Err(err(path, "no successful runs to plot"));
+    }
+    let scene = &ok[0].scene;
+    let root = SVGBackend::new(path, (1000, 700)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(path, e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{scene}: work-precision (max |q - q_ref| against CPU time per run)"), ("sans-serif", 16))
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 / 3.0..y1 * 3.0).log_scale())
+        .map_err(|e| err(path, e))?;
+    chart
+        .configure_mesh()
+        .x_desc("CPU seconds per run")
+        .y_desc("max error in q")
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()
+        .map_err(|e| err(path, e))?;
+    let mut methods: Vec<&str> = ok.iter().map(|p| p.method.as_str()).collect();
+    methods.dedup();
+    methods.sort();
+    methods.dedup();
+    let mut integrators: Vec<&str> = ok.iter().map(|p| p.integrator.as_str()).collect();
+    integrators.sort();
+    integrators.dedup();
+    for (mi, method) in methods.iter().enumerate() {
+        let color = COLORS[mi % COLORS.len()];
+        for (ii, integrator) in integrators.iter().enumerate() {
+            let mut curve: Vec<(f64, f64)> = ok
+                .iter()
+                .filter(|p| p.method == *method && p.integrator == *integrator)
+                .map(|p| (p.cpu_seconds, p.error.max(floor)))
+                .collect();
+            curve.sort_by(|a, b| a.0.total_cmp(&b.0));
+            if curve.is_empty() {
+                continue;
+            }
+            let style = color.stroke_width(if ii == 0 { 2 } else { 1 });
+            chart
+                .draw_series(LineSeries::new(curve.clone(), style))
+                .map_err(|e| err(path, e))?
+                .label(format!("{method} {integrator}"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+            match ii % 3 {
+                0 => chart.draw_series(curve.iter().map(|&(x, y)| Circle::new((x, y), 3, color.filled()))),
+                1 => chart.draw_series(curve.iter().map(|&(x, y)| TriangleMarker::new((x, y), 4, color.filled()))),
+                _ => chart.draw_series(curve.iter().map(|&(x, y)| Cross::new((x, y), 4, color))),
+            }
+            .map_err(|e| err(path, e))?;
+        }
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(|e| err(path, e))?;
+    root.present().map_err(|e| err(path, e))?;
+    Ok(())
+}

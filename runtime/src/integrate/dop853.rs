@@ -1,11 +1,11 @@
 //! Dormand-Prince 8(5,3) (Hairer's DOP853): eighth order with the combined fifth- and
-//! third-order error estimate. Steps are shortened to end exactly on each output time, so the
-//! outputs carry the full eighth-order accuracy without an interpolant.
+//! third-order error estimate, and the seventh-order dense output (three extra stages, computed
+//! only for steps that contain an output time).
 //!
 //! Coefficients: Hairer, Nørsett & Wanner, "Solving Ordinary Differential Equations I", the
 //! published DOP853 tableau.
 
-use super::{Project, Reason, States, Rhs, RunError, Settings, Solution, Stats, combine, finite, initial_step};
+use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, finite, initial_step};
 
 const C: [f64; 12] = [
     0.0,
@@ -132,21 +132,158 @@ const ER: [f64; 12] = [
     -0.2235530786388629525884427845e-01,
 ];
 
+/// Nodes of the three extra stages of the dense output.
+const C_DENSE: [f64; 3] = [0.1, 0.2, 0.777777777777777777777777777778];
+
+/// Weights of the extra stages, over stages 1..=15 (stage 13 is `f(t + h, y_new)`).
+const A_DENSE: [[f64; 15]; 3] = [
+    [
+        5.61675022830479523392909219681e-2,
+        0.,
+        0.,
+        0.,
+        0.,
+        0.,
+        2.53500210216624811088794765333e-1,
+        -2.46239037470802489917441475441e-1,
+        -1.24191423263816360469010140626e-1,
+        1.5329179827876569731206322685e-1,
+        8.20105229563468988491666602057e-3,
+        7.56789766054569976138603589584e-3,
+        -8.298e-3,
+        0.,
+        0.,
+    ],
+    [
+        3.18346481635021405060768473261e-2,
+        0.,
+        0.,
+        0.,
+        0.,
+        2.83009096723667755288322961402e-2,
+        5.35419883074385676223797384372e-2,
+        -5.49237485713909884646569340306e-2,
+        0.,
+        0.,
+        -1.08347328697249322858509316994e-4,
+        3.82571090835658412954920192323e-4,
+        -3.40465008687404560802977114492e-4,
+        1.41312443674632500278074618366e-1,
+        0.,
+    ],
+    [
+        -4.28896301583791923408573538692e-1,
+        0.,
+        0.,
+        0.,
+        0.,
+        -4.69762141536116384314449447206e0,
+        7.68342119606259904184240953878e0,
+        4.06898981839711007970213554331e0,
+        3.56727187455281109270669543021e-1,
+        0.,
+        0.,
+        0.,
+        -1.39902416515901462129418009734e-3,
+        2.9475147891527723389556272149e0,
+        -9.15095847217987001081870187138e0,
+    ],
+];
+
+/// Dense-output weights over stages 1..=16 for the coefficients 5 to 8 of the interpolant.
+const D: [[f64; 16]; 4] = [
+    [
+        -0.84289382761090128651353491142e+01,
+        0.,
+        0.,
+        0.,
+        0.,
+        0.56671495351937776962531783590e+00,
+        -0.30689499459498916912797304727e+01,
+        0.23846676565120698287728149680e+01,
+        0.21170345824450282767155149946e+01,
+        -0.87139158377797299206789907490e+00,
+        0.22404374302607882758541771650e+01,
+        0.63157877876946881815570249290e+00,
+        -0.88990336451333310820698117400e-01,
+        0.18148505520854727256656404962e+02,
+        -0.91946323924783554000451984436e+01,
+        -0.44360363875948939664310572000e+01,
+    ],
+    [
+        0.10427508642579134603413151009e+02,
+        0.,
+        0.,
+        0.,
+        0.,
+        0.24228349177525818288430175319e+03,
+        0.16520045171727028198505394887e+03,
+        -0.37454675472269020279518312152e+03,
+        -0.22113666853125306036270938578e+02,
+        0.77334326684722638389603898808e+01,
+        -0.30674084731089398182061213626e+02,
+        -0.93321305264302278729567221706e+01,
+        0.15697238121770843886131091075e+02,
+        -0.31139403219565177677282850411e+02,
+        -0.93529243588444783865713862664e+01,
+        0.35816841486394083752465898540e+02,
+    ],
+    [
+        0.19985053242002433820987653617e+02,
+        0.,
+        0.,
+        0.,
+        0.,
+        -0.38703730874935176555105901742e+03,
+        -0.18917813819516756882830838328e+03,
+        0.52780815920542364900561016686e+03,
+        -0.11573902539959630126141871134e+02,
+        0.68812326946963000169666922661e+01,
+        -0.10006050966910838403183860980e+01,
+        0.77771377980534432092869265740e+00,
+        -0.27782057523535084065932004339e+01,
+        -0.60196695231264120758267380846e+02,
+        0.84320405506677161018159903784e+02,
+        0.11992291136182789328035130030e+02,
+    ],
+    [
+        -0.25693933462703749003312586129e+02,
+        0.,
+        0.,
+        0.,
+        0.,
+        -0.15418974869023643374053993627e+03,
+        -0.23152937917604549567536039109e+03,
+        0.35763911791061412378285349910e+03,
+        0.93405324183624310003907691704e+02,
+        -0.37458323136451633156875139351e+02,
+        0.10409964950896230045147246184e+03,
+        0.29840293426660503123344363579e+02,
+        -0.43533456590011143754432175058e+02,
+        0.96324553959188282948394950600e+02,
+        -0.39177261675615439165231486172e+02,
+        -0.14972683625798562581422125276e+03,
+    ],
+];
+
 pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
     let n = y0.len();
     let mut stats = Stats::default();
+    let t_end = *outputs.last().expect("checked");
     let mut t = outputs[0];
     let mut y = y0.to_vec();
     let mut states = States::new(n, outputs.len());
     states.push(&y);
     let mut next = 1;
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
-    let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 12];
+    // Stages 1..=16; k[12] is f(t + h, y_new), the next step's first stage.
+    let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 16];
     f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
     let mut h = initial_step(f, t, &y, &k[0].clone(), 8, s, &mut stats).map_err(|r| stop(t, &y, r))?;
     let (safe, facc1, facc2, expo1) = (0.9, 1.0 / 0.333, 1.0 / 6.0, 1.0 / 8.0);
     let mut rejected_last = false;
     let (mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n]);
+    let mut rcont = vec![vec![0.0; n]; 8];
     while next < outputs.len() {
         if stats.steps + stats.rejected >= s.max_steps {
             return Err(stop(t, &y, Reason::TooManySteps(s.max_steps)));
@@ -154,13 +291,13 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
             return Err(stop(t, &y, Reason::StepSizeTooSmall { h }));
         }
-        let target = outputs[next];
-        let landing = t + 1.01 * h >= target;
-        let step = if landing { target - t } else { h };
+        if t + 1.01 * h >= t_end {
+            h = t_end - t;
+        }
         for st in 1..12 {
-            combine(&mut tmp, &y, step, &A[st][..st], &k);
+            combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);
-            f(t + C[st] * step, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+            f(t + C[st] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
         }
         let (mut err5, mut err3) = (0.0, 0.0);
         for i in 0..n {
@@ -168,7 +305,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             for j in 0..12 {
                 acc += B[j] * k[j][i];
             }
-            y_new[i] = y[i] + step * acc;
+            y_new[i] = y[i] + h * acc;
             let sk = s.atol + s.rtol * y[i].abs().max(y_new[i].abs());
             let e3 = acc - BHH[0] * k[0][i] - BHH[1] * k[8][i] - BHH[2] * k[11][i];
             let mut e5 = 0.0;
@@ -182,42 +319,77 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         if deno <= 0.0 {
             deno = 1.0;
         }
-        let e = step.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt();
+        let e = h.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt();
         if !e.is_finite() {
             stats.rejected += 1;
             rejected_last = true;
-            h = step * 0.2;
+            h *= 0.2;
             continue;
         }
         let fac11 = e.powf(expo1);
         if e <= 1.0 {
             stats.steps += 1;
             let fac = (fac11 / safe).clamp(facc2, facc1);
-            let mut h_new = step / fac;
-            t = if landing { target } else { t + step };
+            let mut h_new = h / fac;
+            let t_new = if h == t_end - t { t_end } else { t + h };
+            {
+                let (_, tail) = k.split_at_mut(12);
+                f(t_new, &y_new, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+            }
+            if outputs[next] <= t_new {
+                // Dense output: three more stages, then the seventh-order interpolant.
+                for (x, row) in A_DENSE.iter().enumerate() {
+                    let st = 13 + x;
+                    combine(&mut tmp, &y, h, &row[..st], &k);
+                    let (_, tail) = k.split_at_mut(st);
+                    f(t + C_DENSE[x] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+                }
+                for i in 0..n {
+                    let ydiff = y_new[i] - y[i];
+                    let bspl = h * k[0][i] - ydiff;
+                    rcont[0][i] = y[i];
+                    rcont[1][i] = ydiff;
+                    rcont[2][i] = bspl;
+                    rcont[3][i] = ydiff - h * k[12][i] - bspl;
+                }
+                for (row, d) in rcont[4..].iter_mut().zip(&D) {
+                    row.fill(0.0);
+                    axpy_stages(row, h, d, &k);
+                }
+                while next < outputs.len() && outputs[next] <= t_new {
+                    let th = (outputs[next] - t) / h;
+                    let th1 = 1.0 - th;
+                    for i in 0..n {
+                        let r = |c: usize| rcont[c][i];
+                        tmp[i] = r(0) + th * (r(1) + th1 * (r(2) + th * (r(3) + th1 * (r(4) + th * (r(5) + th1 * (r(6) + th * r(7)))))));
+                    }
+                    states.push(&tmp);
+                    next += 1;
+                }
+            }
+            t = t_new;
             std::mem::swap(&mut y, &mut y_new);
             if !finite(&y) {
                 return Err(stop(t, &y, Reason::Diverged));
             }
-            project(t, &mut y).map_err(|r| stop(t, &y, r))?;
-            f(t, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
-            k[0].copy_from_slice(&tmp);
-            if landing {
-                states.push(&y);
-                next += 1;
-                // A step shortened to land says little about the next one.
-                h_new = h_new.max(h);
+            let (first, rest) = k.split_at_mut(1);
+            first[0].copy_from_slice(&rest[11]);
+            if project(t, &mut y).map_err(|r| stop(t, &y, r))? {
+                f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+                if outputs[next - 1] == t {
+                    states.last_mut().expect("an output was written").copy_from_slice(&y);
+                }
             }
             h_new = h_new.min(s.h_max);
             if rejected_last {
-                h_new = h_new.min(step);
+                h_new = h_new.min(h);
             }
             rejected_last = false;
             h = h_new;
         } else {
             stats.rejected += 1;
             rejected_last = true;
-            h = step / (fac11 / safe).min(facc1);
+            h /= (fac11 / safe).min(facc1);
         }
     }
     Ok(Solution { times: outputs.to_vec(), states, stats })

@@ -1,0 +1,177 @@
+//! Work-precision sweeps: every formulation x every integrator x a range of settings, each run
+//! measured for CPU time (median of repeats), right-hand-side calls, error against a reference
+//! solution, and the invariants, like the work-precision diagrams of ODE benchmark suites.
+//!
+//! ```no_run
+//! use runtime::sweep::{SweepOptions, sweep};
+//! let model = generated::find("satellite_boom").unwrap();
+//! let points = sweep(&model, &SweepOptions::default(), &mut |_done, _total, _label| {}).unwrap();
+//! assert!(points.iter().any(|p| p.method == "reduced_volterra"));
+//! ```
+
+use crate::compare::{CompareError, output_times, run_with};
+use crate::integrate::{Method, Settings};
+use crate::system::Drift;
+use generated::Model;
+
+/// What to sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepOptions {
+    /// Tolerances (rtol = atol) for DOPRI5 and DOP853.
+    pub tolerances: Vec<f64>,
+    /// RK4 steps, as fractions of the output interval.
+    pub rk4_steps: Vec<f64>,
+    pub repeats: usize,
+    /// Tolerance of the reference run (DOP853, reduced Volterra).
+    pub reference_tolerance: f64,
+    /// Formulations (empty: all).
+    pub formulations: Vec<String>,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions {
+            tolerances: (3..=12).map(|k| 10f64.powi(-k)).collect(),
+            // Two decades of steps.
+            rk4_steps: vec![1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01],
+            repeats: 3,
+            reference_tolerance: 1e-13,
+            formulations: vec![],
+        }
+    }
+}
+
+/// One measured run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Point {
+    pub scene: String,
+    pub method: String,
+    pub integrator: String,
+    /// rtol (= atol) for the adaptive methods, the step for RK4.
+    pub setting: f64,
+    pub cpu_seconds: f64,
+    pub rhs_calls: usize,
+    pub steps: usize,
+    /// Largest |q - q_ref| over the samples and coordinates.
+    pub error: f64,
+    pub energy_error_norm: f64,
+    pub momentum_error_norm: f64,
+    pub constraint_error_norm: f64,
+    /// Why the run stopped, when it did not finish.
+    pub failure: Option<String>,
+}
+
+fn max_error(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter().zip(b).flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs())).fold(0.0, f64::max)
+}
+
+/// The settings a sweep runs, with labels.
+pub fn plan(model: &Model, options: &SweepOptions) -> Vec<Settings> {
+    let (t0, t1, dt) = model.run;
+    let h_max = 0.1 * (t1 - t0);
+    let mut out = Vec::new();
+    for method in [Method::Dopri5, Method::Dop853] {
+        for &tol in &options.tolerances {
+            out.push(Settings { method, rtol: tol, atol: tol, h_max, ..Settings::default() });
+        }
+    }
+    for &f in &options.rk4_steps {
+        out.push(Settings { method: Method::Rk4 { h: f * dt }, h_max, ..Settings::default() });
+    }
+    out
+}
+
+/// Runs the sweep; `progress(done, total, label)` is called before each run.
+pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usize, usize, &str)) -> Result<Vec<Point>, CompareError> {
+    let (t0, t1, _) = model.run;
+    let reference_settings = Settings {
+        method: Method::Dop853,
+        rtol: options.reference_tolerance,
+        atol: options.reference_tolerance,
+        h_max: 0.1 * (t1 - t0),
+        ..Settings::default()
+    };
+    let reference = run_with(model, "reduced_volterra", &reference_settings, 1, Drift::None)?.invariants.coordinates;
+    let forms: Vec<&str> = model
+        .formulations
+        .iter()
+        .map(|f| f.name)
+        .filter(|n| options.formulations.is_empty() || options.formulations.iter().any(|o| o == n))
+        .collect();
+    let settings = plan(model, options);
+    let total = forms.len() * settings.len();
+    let mut points = Vec::new();
+    let _ = output_times(model);
+    for form in &forms {
+        for s in &settings {
+            let setting = match s.method {
+                Method::Rk4 { h } => h,
+                _ => s.rtol,
+            };
+            let integrator = match s.method {
+                Method::Rk4 { .. } => "RK4".to_string(),
+                m => m.to_string(),
+            };
+            progress(points.len(), total, &format!("{form} {integrator} {setting:.2e}"));
+            let point = match run_with(model, form, s, options.repeats, Drift::None) {
+                Ok(r) => Point {
+                    scene: model.module.to_string(),
+                    method: form.to_string(),
+                    integrator,
+                    setting,
+                    cpu_seconds: r.record.cpu_seconds,
+                    rhs_calls: r.record.rhs_calls,
+                    steps: r.record.steps,
+                    error: max_error(&r.invariants.coordinates, &reference),
+                    energy_error_norm: r.record.energy_error_norm,
+                    momentum_error_norm: r.record.momentum_error_norm,
+                    constraint_error_norm: r.record.constraint_error_norm,
+                    failure: None,
+                },
+                // A failed run is a result too: recorded with its reason.
+                Err(e) => Point {
+                    scene: model.module.to_string(),
+                    method: form.to_string(),
+                    integrator,
+                    setting,
+                    cpu_seconds: f64::NAN,
+                    rhs_calls: 0,
+                    steps: 0,
+                    error: f64::NAN,
+                    energy_error_norm: f64::NAN,
+                    momentum_error_norm: f64::NAN,
+                    constraint_error_norm: f64::NAN,
+                    failure: Some(e.to_string()),
+                },
+            };
+            points.push(point);
+        }
+    }
+    progress(total, total, "done");
+    Ok(points)
+}
+
+/// The points as CSV.
+pub fn csv(points: &[Point]) -> String {
+    let mut out = String::from(
+        "scene,method,integrator,setting,cpu_seconds,rhs_calls,steps,error,energy_error_norm,momentum_error_norm,constraint_error_norm,failure\n",
+    );
+    for p in points {
+        out += &format!(
+            "{},{},{},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}\n",
+            p.scene,
+            p.method,
+            p.integrator,
+            p.setting,
+            p.cpu_seconds,
+            p.rhs_calls,
+            p.steps,
+            p.error,
+            p.energy_error_norm,
+            p.momentum_error_norm,
+            p.constraint_error_norm,
+            p.failure.as_deref().unwrap_or("").replace(',', ";")
+        );
+    }
+    out
+}
