@@ -501,6 +501,44 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 0.5 * x0 * m2 * l * l;
+        let x2 = l * (m2 + 0.5 * m1) * f64::cos(theta1);
+        let x3 = x0 * l;
+        let x4 = 0.5 * f64::cos(theta2) * m2 * l;
+        [
+            [(m2 + 0.3333333333333333 * m1) * l * l, x1, x2, x3],
+            [x1, 0.3333333333333333 * m2 * l * l, x4, l],
+            [x2, x4, m2 + M + m1, 0.0],
+            [x3, l, 0.0, 0.0],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 7 states, 3 equations.
 pub mod maggi {
@@ -736,6 +774,54 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1) * f64::sin(theta2);
+        let x4 = 1.0 / (x2 + x3 + 1.0);
+        let x5 = x2 + x3;
+        let x6 = l * x4 * ((m2 + 0.5 * m1) * x1 - 0.5 * (x0 * m2 * x5));
+        [
+            [
+                l * l * x4 * x4
+                    * (m2 - 0.6666666666666666 * (m2 * x5 * x5)
+                        + 0.3333333333333333 * m1),
+                x6,
+            ],
+            [x6, m2 + M + m1],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let l = params.l;
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 6 states, 2 equations.
@@ -977,6 +1063,54 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1) * f64::sin(theta2);
+        let x4 = 1.0 / (x2 + x3 + 1.0);
+        let x5 = x2 + x3;
+        let x6 = l * x4 * ((m2 + 0.5 * m1) * x1 - 0.5 * (x0 * m2 * x5));
+        [
+            [
+                l * l * x4 * x4
+                    * (m2 - 0.6666666666666666 * (m2 * x5 * x5)
+                        + 0.3333333333333333 * m1),
+                x6,
+            ],
+            [x6, m2 + M + m1],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let l = params.l;
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 1 equations.
@@ -1276,5 +1410,72 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5;
+        let x7 = 1.0 / (x2 + x5 + 1.0);
+        let x8 = 1.0 / (-x2 - x5 - 1.0);
+        let x9 = m2 + M + m1;
+        let x10 = 1.0 / (m2 + M + x9 * x3 * x4 + m1 + x0 * x9 * x1);
+        let x11 = 0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1);
+        let x12 = m2 + 0.5 * m1;
+        [
+            [
+                (m2 * x6 * x7
+                    * (x6 * (0.3333333333333333 * x7 + 0.5 * x8)
+                        + 0.5 * (x0 * x10 * x11))
+                    + (x10 * x12 * x1 * x11 + 0.5 * (m2 * x6 * x6 * x7)
+                        + (m2 + 0.3333333333333333 * m1) * x8) * x8
+                    + (x12 * x1 * x8 + 0.5 * (x0 * m2 * x6 * x7) + x9 * x10 * x11) * x10
+                        * x11) * l * l,
+            ],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
+        let x5 = x3 * x4;
+        let x6 = m2 + M + m1;
+        f64::INFINITY
+            .min(f64::abs(-x2 - x5 - 1.0))
+            .min(f64::abs(l * (x2 + x5 + 1.0)))
+            .min(f64::abs(m2 + M + x6 * x3 * x4 + m1 + x0 * x6 * x1))
     }
 }

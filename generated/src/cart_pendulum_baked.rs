@@ -396,6 +396,39 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 0.5 * x0;
+        let x2 = 1.5 * f64::cos(theta1);
+        let x3 = 0.5 * f64::cos(theta2);
+        [
+            [1.3333333333333333, x1, x2, x0],
+            [x1, 0.3333333333333333, x3, 1.0],
+            [x2, x3, 4.0, 0.0],
+            [x0, 1.0, 0.0, 0.0],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 6 states, 3 equations.
 pub mod maggi {
@@ -589,6 +622,44 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1) * f64::sin(theta2);
+        let x4 = 1.0 / (x2 + x3 + 1.0);
+        let x5 = x2 + x3;
+        let x6 = x4 * (1.5 * x1 - 0.5 * (x0 * x5));
+        [
+            [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
+            [x6, 4.0],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
@@ -798,6 +869,44 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1) * f64::sin(theta2);
+        let x4 = 1.0 / (x2 + x3 + 1.0);
+        let x5 = x2 + x3;
+        let x6 = x4 * (1.5 * x1 - 0.5 * (x0 * x5));
+        [
+            [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
+            [x6, 4.0],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2) * f64::cos(theta1)
+            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
@@ -1075,5 +1184,54 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(theta1) * f64::sin(theta2);
+        let x4 = x2 + x3;
+        let x5 = 1.0 / (x2 + x3 + 1.0);
+        let x6 = 1.0 / (-x2 - x3 - 1.0);
+        let x7 = x0 * (-0.5 * x2 - 0.5 * x3) + 1.5 * x1;
+        let x8 = 1.0 / (4.0 * x2 + 4.0 * x3 + 4.0);
+        [
+            [
+                x4 * x5
+                    * (x4 * (0.3333333333333333 * x5 + 0.5 * x6) + 0.5 * (x0 * x7 * x8))
+                    + x7 * x8
+                        * (0.5 * (x0 * x4 * x5) + 1.5 * (x1 * x6) + 4.0 * (x7 * x8))
+                    + (1.5 * (x7 * x8 * x1) + 0.5 * (x4 * x4 * x5)
+                        + 1.3333333333333333 * x6) * x6,
+            ],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        f64::INFINITY
+            .min(f64::abs(-x0 - x1 - 1.0))
+            .min(f64::abs(x0 + x1 + 1.0))
+            .min(f64::abs(4.0 * x0 + 4.0 * x1 + 4.0))
     }
 }

@@ -381,6 +381,33 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 3;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let x = state[0];
+        let y = state[1];
+        let mb = params.mb;
+        let x0 = 2.0 * x;
+        let x1 = 2.0 * y;
+        [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 5 states, 2 equations.
 pub mod maggi {
@@ -524,6 +551,36 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let x = state[0];
+        let y = state[1];
+        let mb = params.mb;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let x = state[0];
+        let y = state[1];
+        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
+    }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 4 states, 1 equations.
 pub mod kane {
@@ -660,6 +717,36 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let x = state[0];
+        let y = state[1];
+        let mb = params.mb;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let x = state[0];
+        let y = state[1];
+        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
+    }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
 pub mod reduced_volterra {
@@ -795,5 +882,35 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let x = state[0];
+        let y = state[1];
+        let mb = params.mb;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let x = state[0];
+        let y = state[1];
+        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
     }
 }

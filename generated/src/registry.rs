@@ -38,6 +38,10 @@ impl std::error::Error for Failure {}
 pub type RhsFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
 /// `rhs_baumgarte(t, state, params, g_i, dstate, alpha, beta)`.
 pub type StabilizedFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], f64, f64) -> Result<(), Failure>;
+/// `matrix(t, state, params, g_i, out)`: the matrix `rhs` solves, row-major.
+pub type MatrixFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
+/// `singular_margin(t, state, params, g_i)`.
+pub type MarginFn = fn(f64, &[f64], &[f64], &[f64]) -> Result<f64, Failure>;
 /// `initial_state(t, q, qdot, params, state, g_i)`.
 pub type InitialFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
 /// `velocities(t, state, params, g_i, q, qdot)`.
@@ -61,6 +65,10 @@ pub struct Formulation {
     pub rhs_baumgarte: Option<StabilizedFn>,
     pub initial_state: InitialFn,
     pub velocities: VelocitiesFn,
+    /// Size of the matrix `rhs` solves numerically.
+    pub matrix_size: usize,
+    pub matrix: MatrixFn,
+    pub singular_margin: MarginFn,
 }
 
 /// One emitted model.
@@ -169,6 +177,23 @@ macro_rules! formulation {
                 fixed_mut::<{ crate::$m::$f::STATES }>("state", state)?.copy_from_slice(&s);
                 fixed_mut::<{ crate::$m::NUM_IGNORABLE }>("g_i", g_i)?.copy_from_slice(&g);
                 Ok(())
+            },
+            matrix_size: crate::$m::$f::MATRIX_SIZE,
+            matrix: |t, state, params, g_i, out| {
+                let p = crate::$m::Params::from_values(fixed("params", params)?);
+                let a = crate::$m::$f::matrix(t, fixed("state", state)?, &p, fixed("g_i", g_i)?);
+                let n = crate::$m::$f::MATRIX_SIZE;
+                if out.len() != n * n {
+                    return Err(Failure::Dimension { argument: "out", expected: n * n, got: out.len() });
+                }
+                for (row, chunk) in a.iter().zip(out.chunks_mut(n)) {
+                    chunk.copy_from_slice(row);
+                }
+                Ok(())
+            },
+            singular_margin: |t, state, params, g_i| {
+                let p = crate::$m::Params::from_values(fixed("params", params)?);
+                Ok(crate::$m::$f::singular_margin(t, fixed("state", state)?, &p, fixed("g_i", g_i)?))
             },
             velocities: |t, state, params, g_i, q, qdot| {
                 let p = crate::$m::Params::from_values(fixed("params", params)?);

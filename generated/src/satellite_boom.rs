@@ -848,6 +848,86 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(theta);
+        let x1 = f64::sin(phi);
+        let x2 = Ixy * x1;
+        let x3 = f64::cos(phi);
+        let x4 = Ixz * x3;
+        let x5 = Iyz * x1;
+        let x6 = m * (0.25 * (l * l) + (rho + l) * rho);
+        let x7 = f64::cos(theta);
+        let x8 = Iyy - Izz;
+        let x9 = Ixy * x3;
+        let x10 = x1 * Ixz;
+        let x11 = x7 * (Iyz + (x8 * x1 - 2.0 * (Iyz * x3)) * x3) + x0 * (x9 - x10);
+        let x12 = (-x2 - x4) * x7 - x0 * Ixx;
+        let x13 = rho + 0.5 * l;
+        let x14 = f64::sin(psi);
+        let x15 = -(x7 * m * x13 * x14);
+        let x16 = f64::cos(psi);
+        let x17 = x16 * x7 * m * x13;
+        let x18 = x10 - x9;
+        let x19 = -(x0 * x16 * m * x13);
+        let x20 = -(x0 * m * x13 * x14);
+        let x21 = -(x7 * m * x13);
+        let x22 = x16 * x7 * m;
+        let x23 = x7 * m * x14;
+        let x24 = -(x0 * m);
+        let x25 = m + mg;
+        [
+            [
+                Ixx
+                    + (x0 * (2.0 * x2 + 2.0 * x4)
+                        + (((Izz - Iyy) * x3 - 2.0 * x5) * x3 + Iyy - Ixx + x6) * x7)
+                        * x7,
+                x11,
+                x12,
+                0.0,
+                x15,
+                x17,
+                0.0,
+            ],
+            [x11, (2.0 * x5 + x8 * x3) * x3 + x6 + Izz, x18, 0.0, x19, x20, x21],
+            [x12, x18, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x22, x23, x24],
+            [x15, x19, 0.0, x22, x25, 0.0, 0.0],
+            [x17, x20, 0.0, x23, 0.0, x25, 0.0],
+            [0.0, x21, 0.0, x24, 0.0, 0.0, x25],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 15 states, 7 equations.
 pub mod maggi {
@@ -1239,6 +1319,100 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(phi);
+        let x1 = Ixy * x0;
+        let x2 = f64::cos(phi);
+        let x3 = Ixz * x2;
+        let x4 = -x1 - x3;
+        let x5 = Ixy * x2;
+        let x6 = x0 * Ixz;
+        let x7 = x6 - x5;
+        let x8 = x4 * x0 + x7 * x2;
+        let x9 = x4 * x2 - x7 * x0;
+        let x10 = f64::cos(theta);
+        let x11 = 1.0 / x10;
+        let x12 = f64::sin(theta);
+        let x13 = Iyz * x0;
+        let x14 = m * (0.25 * (l * l) + (rho + l) * rho);
+        let x15 = Ixx
+            + (x12 * (2.0 * x1 + 2.0 * x3)
+                + (((Izz - Iyy) * x2 - 2.0 * x13) * x2 + Iyy - Ixx + x14) * x10) * x10
+            + x12 * (x4 * x10 - x12 * Ixx);
+        let x16 = Iyy - Izz;
+        let x17 = x10 * (Iyz + (x16 * x0 - 2.0 * (Iyz * x2)) * x2);
+        let x18 = x12 * (x5 - x6);
+        let x19 = x17 + x18;
+        let x20 = x11 * x15 * x0 + x12 * x8 + x19 * x2;
+        let x21 = x17 + x18 + x12 * x7;
+        let x22 = (2.0 * x13 + x16 * x2) * x2 + x14 + Izz;
+        let x23 = x11 * x0 * x21 + x22 * x2;
+        let x24 = x20 * x11 * x2 - x23 * x0;
+        let x25 = f64::sin(psi);
+        let x26 = f64::cos(psi);
+        let x27 = rho + 0.5 * l;
+        let x28 = (-x0 * x25 - x12 * x26 * x2) * m * x27;
+        let x29 = (x26 * x0 - x12 * x2 * x25) * m * x27;
+        let x30 = -(x10 * m * x27 * x2);
+        let x31 = (x12 * x26 * x0 - x2 * x25) * m * x27;
+        let x32 = m * x27 * (x26 * x2 + x12 * x0 * x25);
+        let x33 = x10 * m * x27 * x0;
+        let x34 = x26 * x10 * m;
+        let x35 = x10 * m * x25;
+        let x36 = -(x12 * m);
+        let x37 = m + mg;
+        [
+            [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
+            [x8, x20 * x11 * x0 + x23 * x2, x24, 0.0, x28, x29, x30],
+            [
+                x9,
+                x24,
+                x11 * x2 * (x11 * x15 * x2 - x19 * x0 + x12 * x9)
+                    - x0 * (x11 * x21 * x2 - x0 * x22),
+                0.0,
+                x31,
+                x32,
+                x33,
+            ],
+            [0.0, 0.0, 0.0, m, x34, x35, x36],
+            [0.0, x28, x31, x34, x37, 0.0, 0.0],
+            [0.0, x29, x32, x35, 0.0, x37, 0.0],
+            [0.0, x30, x33, x36, 0.0, 0.0, x37],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 15 states, 7 equations.
 pub mod kane {
@@ -1584,6 +1758,71 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = -Ixy;
+        let x1 = -Ixz;
+        let x2 = m * (0.25 * (l * l) + (rho + l) * rho);
+        let x3 = -Iyz;
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(psi);
+        let x8 = f64::cos(phi);
+        let x9 = rho + 0.5 * l;
+        let x10 = (-x4 * x5 - x6 * x7 * x8) * m * x9;
+        let x11 = (x7 * x4 - x6 * x8 * x5) * m * x9;
+        let x12 = f64::cos(theta);
+        let x13 = -(x12 * m * x9 * x8);
+        let x14 = (x6 * x7 * x4 - x8 * x5) * m * x9;
+        let x15 = m * x9 * (x7 * x8 + x6 * x4 * x5);
+        let x16 = x12 * m * x9 * x4;
+        let x17 = x7 * x12 * m;
+        let x18 = x12 * m * x5;
+        let x19 = -(x6 * m);
+        let x20 = m + mg;
+        [
+            [Ixx, x0, x1, 0.0, 0.0, 0.0, 0.0],
+            [x0, Iyy + x2, x3, 0.0, x10, x11, x13],
+            [x1, x3, x2 + Izz, 0.0, x14, x15, x16],
+            [0.0, 0.0, 0.0, m, x17, x18, x19],
+            [0.0, x10, x14, x17, x20, 0.0, 0.0],
+            [0.0, x11, x15, x18, 0.0, x20, 0.0],
+            [0.0, x13, x16, x19, 0.0, 0.0, x20],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 12 states, 4 equations.
 pub mod reduced_volterra {
@@ -1869,5 +2108,49 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let rho = state[3];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = -Ixy;
+        let x1 = -Ixz;
+        let x2 = m / (m + mg);
+        let x3 = 1.0 - x2;
+        let x4 = m * (rho * (x3 * l + x3 * rho) + l * l * (0.25 - 0.25 * x2));
+        let x5 = -Iyz;
+        [
+            [Ixx, x0, x1, 0.0],
+            [x0, Iyy + x4, x5, 0.0],
+            [x1, x5, Izz + x4, 0.0],
+            [0.0, 0.0, 0.0, x3 * m],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

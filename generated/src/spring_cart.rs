@@ -399,6 +399,33 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let th = state[1];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let x0 = mp * f64::cos(th) * lp;
+        [[mc + mp, x0], [x0, mp * lp * lp]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 5 states, 2 equations.
 pub mod maggi {
@@ -516,6 +543,33 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let th = state[1];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let x0 = mp * f64::cos(th) * lp;
+        [[mc + mp, x0], [x0, mp * lp * lp]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
 pub mod kane {
@@ -631,6 +685,33 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let th = state[1];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let x0 = mp * f64::cos(th) * lp;
+        [[mc + mp, x0], [x0, mp * lp * lp]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 2 equations.
 pub mod reduced_volterra {
@@ -745,5 +826,32 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let th = state[1];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let x0 = mp * f64::cos(th) * lp;
+        [[mc + mp, x0], [x0, mp * lp * lp]]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
     }
 }

@@ -1755,6 +1755,166 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = f64::cos(phi);
+        let x7 = f64::cos(gamma2);
+        let x8 = f64::sin(gamma2);
+        let x9 = x7 * x1 * x6 - x3 * x8;
+        let x10 = f64::sin(psi);
+        let x11 = f64::cos(psi);
+        let x12 = x11 * x6;
+        let x13 = x3 * x2 * x10;
+        let x14 = -x12 - x13;
+        let x15 = a * x1 * x10;
+        let x16 = d * (x14 * x4 - x0 * x1 * x10) - x15;
+        let x17 = a * x11 * x1;
+        let x18 = x3 * x11 * x2;
+        let x19 = x6 * x10;
+        let x20 = x18 - x19;
+        let x21 = x17 + d * (x4 * x20 + x0 * x11 * x1);
+        let x22 = -x7 * x3 - x1 * x8 * x6;
+        let x23 = x4 * x1 * x2 - x0 * x3;
+        let x24 = x2 * x10 + x3 * x11 * x6;
+        let x25 = -x17 - d * (x7 * x11 * x1 - x24 * x8);
+        let x26 = x11 * x2;
+        let x27 = x3 * x6 * x10;
+        let x28 = x15 - d * (-(x26 - x27) * x8 - x7 * x1 * x10);
+        let x29 = Iyz * x2;
+        let x30 = Iyz * x6;
+        let x31 = m2 * d * d;
+        let x32 = x7 * (x31 + J2 - J1);
+        let x33 = m2 * a * d;
+        let x34 = (x32 + x33) * x8 - Ixz;
+        let x35 = a * d * m1;
+        let x36 = d * d * m1;
+        let x37 = x0 * x0;
+        let x38 = (x37 - 1.0) * m1;
+        let x39 = x7 * x7;
+        let x40 = m2 * (1.0 - x39);
+        let x41 = x0 * x0 * (J2 - J1) + Iyy + d * d * (x38 + x40) - Izz
+            + x7 * x7 * (J1 - J2);
+        let x42 = Iyz * x1 + x3 * x34 * x2
+            + (x3 * (Ixy + x4 * (x35 + x0 * (J2 + x36 - J1)))
+                + (x41 * x2 - 2.0 * x30) * x1) * x6;
+        let x43 = (x0 * (J1 - J2 - x36) - x35) * x4 - Ixy;
+        let x44 = ((x37 + x39 - 2.0) * J2 + (-x37 - x39) * J1 - Ixx
+            + (x38 + m2 * (x39 - 1.0)) * d * d) * x3 + (x34 * x6 + x43 * x2) * x1;
+        let x45 = x0 * a;
+        let x46 = x1 * (J2 + (d + x45) * d * m1) * x6;
+        let x47 = m2 * d * (d + x7 * a) + J2;
+        let x48 = x1 * x47 * x2;
+        let x49 = m1 * x16 + m2 * x28;
+        let x50 = m1 * x21 + m2 * x25;
+        let x51 = (Ixz + x8 * (x7 * (J1 - x31 - J2) - x33)) * x2 + x43 * x6;
+        let x52 = ((-d - x45) * d * m1 - J2) * x2;
+        let x53 = x47 * x6;
+        let x54 = m2 * x8 * x6;
+        let x55 = x4 * x2 * m1;
+        let x56 = m2 * (a + x7 * d) + (-a - x0 * d) * m1;
+        let x57 = (x54 + x55) * x1 * d + x56 * x3;
+        let x58 = x11 * x57;
+        let x59 = x10 * x57;
+        let x60 = x3 * d * (-x54 - x55) + x56 * x1;
+        let x61 = (m2 * (x19 - x18) * x8 + x24 * x4 * m1) * d;
+        let x62 = x27 - x26;
+        let x63 = (m2 * x14 * x8 + x4 * x62 * m1) * d;
+        let x64 = (x4 * m1 * x6 - m2 * x8 * x2) * x1 * d;
+        let x65 = d * m1 * (x0 * x20 - x11 * x4 * x1);
+        let x66 = d * m1 * (x0 * (x12 + x13) - x4 * x1 * x10);
+        let x67 = x5 * d * m1;
+        let x68 = -(m2 * (-x11 * x1 * x8 - x7 * x24) * d);
+        let x69 = -(m2 * d * (-x1 * x8 * x10 - x7 * x62));
+        let x70 = x9 * m2 * d;
+        let x71 = m2 + m0 + m1;
+        [
+            [
+                J2 * (x5 * x5 + x1 * x1 * (x2 * x2 + x6 * x6) + x9 * x9)
+                    + (x16 * x16 + x21 * x21) * m1
+                    - x3 * ((-Ixy * x2 - Ixz * x6) * x1 - x3 * Ixx)
+                    + (x22 * x22 + x23 * x23) * J1 + m2 * (x25 * x25 + x28 * x28)
+                    + x1
+                        * ((x3 * Ixz + (Izz * x6 - x29) * x1) * x6
+                            + x2 * (x1 * (Iyy * x2 - x30) + x3 * Ixy)),
+                x42,
+                x44,
+                x46,
+                x48,
+                x49,
+                x50,
+                0.0,
+            ],
+            [
+                x42,
+                J2 + x7 * (x32 + 2.0 * x33) + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1))
+                    + x36 + Izz + (x41 * x6 + 2.0 * x29) * x6 + J1,
+                x51,
+                x52,
+                x53,
+                x58,
+                x59,
+                x60,
+            ],
+            [
+                x44,
+                x51,
+                (x37 + x39) * J1 + Ixx + J2 * (2.0 - x37 - x39)
+                    + (x40 + (1.0 - x37) * m1) * d * d,
+                0.0,
+                0.0,
+                x61,
+                x63,
+                x64,
+            ],
+            [x46, x52, 0.0, J2 + x36, 0.0, x65, x66, x67],
+            [x48, x53, 0.0, 0.0, x31 + J2, x68, x69, x70],
+            [x49, x58, x61, x65, x68, x71, 0.0, 0.0],
+            [x50, x59, x63, x66, x69, 0.0, x71, 0.0],
+            [0.0, x60, x64, x67, x70, 0.0, 0.0, x71],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 16 states, 8 equations.
 pub mod maggi {
@@ -2570,6 +2730,173 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = x0 * x0;
+        let x2 = f64::cos(gamma2);
+        let x3 = x2 * x2;
+        let x4 = m2 * (1.0 - x3);
+        let x5 = (x1 + x3) * J1 + Ixx + J2 * (2.0 - x1 - x3)
+            + (x4 + (1.0 - x1) * m1) * d * d;
+        let x6 = f64::cos(theta);
+        let x7 = 1.0 / x6;
+        let x8 = f64::sin(phi);
+        let x9 = (x1 - 1.0) * m1;
+        let x10 = f64::sin(theta);
+        let x11 = ((x1 + x3 - 2.0) * J2 + (-x1 - x3) * J1 - Ixx
+            + (x9 + m2 * (x3 - 1.0)) * d * d) * x10;
+        let x12 = m2 * d * d;
+        let x13 = x2 * (x12 + J2 - J1);
+        let x14 = m2 * a * d;
+        let x15 = f64::sin(gamma2);
+        let x16 = (x13 + x14) * x15 - Ixz;
+        let x17 = f64::cos(phi);
+        let x18 = d * d * m1;
+        let x19 = a * d * m1;
+        let x20 = f64::sin(gamma1);
+        let x21 = (x0 * (J1 - J2 - x18) - x19) * x20 - Ixy;
+        let x22 = (x16 * x17 + x21 * x8) * x6;
+        let x23 = x11 + x22 + x10 * x5;
+        let x24 = (Ixz + x15 * (x2 * (J1 - x12 - J2) - x14)) * x8 + x21 * x17;
+        let x25 = x7 * x8 * x23 + x24 * x17;
+        let x26 = x7 * x23 * x17 - x8 * x24;
+        let x27 = f64::cos(psi);
+        let x28 = x10 * x27 * x8;
+        let x29 = f64::sin(psi);
+        let x30 = x17 * x29;
+        let x31 = x8 * x29 + x10 * x27 * x17;
+        let x32 = m2 * (x30 - x28) * x15 + x31 * x20 * m1;
+        let x33 = x32 * d;
+        let x34 = x27 * x17;
+        let x35 = x10 * x8 * x29;
+        let x36 = -x34 - x35;
+        let x37 = x27 * x8;
+        let x38 = x10 * x17 * x29;
+        let x39 = x38 - x37;
+        let x40 = m2 * x36 * x15 + x20 * x39 * m1;
+        let x41 = x40 * d;
+        let x42 = x20 * m1 * x17 - m2 * x15 * x8;
+        let x43 = x42 * x6 * d;
+        let x44 = Iyz * x6;
+        let x45 = x10 * x16 * x8;
+        let x46 = x0 * x0 * (J2 - J1) + Iyy + d * d * (x9 + x4) - Izz
+            + x2 * x2 * (J1 - J2);
+        let x47 = Iyz * x17;
+        let x48 = (x10 * (Ixy + x20 * (x19 + x0 * (J2 + x18 - J1)))
+            + (x46 * x8 - 2.0 * x47) * x6) * x17;
+        let x49 = x44 + x45 + x48;
+        let x50 = x0 * x6 * x8 + x10 * x20;
+        let x51 = x8 * x8 + x17 * x17;
+        let x52 = x2 * x6 * x17 - x10 * x15;
+        let x53 = a * x6 * x29;
+        let x54 = d * (x36 * x20 - x0 * x6 * x29) - x53;
+        let x55 = a * x27 * x6;
+        let x56 = x28 - x30;
+        let x57 = x55 + d * (x20 * x56 + x0 * x27 * x6);
+        let x58 = -x2 * x10 - x6 * x15 * x17;
+        let x59 = x20 * x6 * x8 - x0 * x10;
+        let x60 = -x55 - d * (x2 * x27 * x6 - x31 * x15);
+        let x61 = x53 - d * (-(x37 - x38) * x15 - x2 * x6 * x29);
+        let x62 = Iyz * x8;
+        let x63 = J2 * (x50 * x50 + x6 * x6 * x51 + x52 * x52)
+            + (x54 * x54 + x57 * x57) * m1
+            - x10 * ((-Ixy * x8 - Ixz * x17) * x6 - x10 * Ixx)
+            + (x58 * x58 + x59 * x59) * J1 + m2 * (x60 * x60 + x61 * x61)
+            + x10 * (x11 + x22)
+            + x6
+                * ((x10 * Ixz + (Izz * x17 - x62) * x6) * x17
+                    + x8 * (x6 * (Iyy * x8 - x47) + x10 * Ixy));
+        let x64 = x49 * x17 + x7 * x63 * x8 + x10 * x25;
+        let x65 = x44 + x45 + x10 * x24 + x48;
+        let x66 = J2 + x2 * (x13 + 2.0 * x14) + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1))
+            + x18 + Izz + (x46 * x17 + 2.0 * x62) * x17 + J1;
+        let x67 = x65 * x7 * x8 + x66 * x17;
+        let x68 = x7 * x64 * x17 - x8 * x67;
+        let x69 = x0 * a;
+        let x70 = (-d - x69) * d * m1;
+        let x71 = (d + x69) * d * m1;
+        let x72 = (x70 + x71) * x8 * x17;
+        let x73 = (m2 * d * (d + x2 * a) + J2) * x51;
+        let x74 = m2 * x15 * x17;
+        let x75 = x20 * x8 * m1;
+        let x76 = m2 * (a + x2 * d) + (-a - x0 * d) * m1;
+        let x77 = (x74 + x75) * x6 * d + x76 * x10;
+        let x78 = x32 * x10 * d + m1 * x54 + m2 * x61;
+        let x79 = x27 * x17 * x77 + x7 * x78 * x8;
+        let x80 = x40 * x10 * d + m1 * x57 + m2 * x60;
+        let x81 = x7 * x80 * x8 + x17 * x29 * x77;
+        let x82 = x10 * d * (-x74 - x75) + x76 * x6;
+        let x83 = x17 * x82 + x10 * x42 * d * x8;
+        let x84 = (J2 + x71) * x17 * x17 - (x70 - J2) * x8 * x8;
+        let x85 = x7 * x78 * x17 - x27 * x8 * x77;
+        let x86 = x7 * x80 * x17 - x8 * x29 * x77;
+        let x87 = x10 * x42 * d * x17 - x8 * x82;
+        let x88 = d * m1 * (x0 * x56 - x27 * x20 * x6);
+        let x89 = d * m1 * (x0 * (x34 + x35) - x20 * x6 * x29);
+        let x90 = x50 * d * m1;
+        let x91 = -(m2 * (-x27 * x6 * x15 - x2 * x31) * d);
+        let x92 = -(m2 * d * (-x6 * x15 * x29 - x2 * x39));
+        let x93 = x52 * m2 * d;
+        let x94 = m2 + m0 + m1;
+        [
+            [x5, x25, x26, 0.0, 0.0, x33, x41, x43],
+            [x25, x7 * x8 * x64 + x17 * x67, x68, x72, x73, x79, x81, x83],
+            [
+                x26,
+                x68,
+                x7 * (x26 * x10 - x49 * x8 + x7 * x63 * x17) * x17
+                    - x8 * (x65 * x7 * x17 - x8 * x66),
+                x84,
+                0.0,
+                x85,
+                x86,
+                x87,
+            ],
+            [0.0, x72, x84, J2 + x18, 0.0, x88, x89, x90],
+            [0.0, x73, 0.0, 0.0, x12 + J2, x91, x92, x93],
+            [x33, x79, x85, x88, x91, x94, 0.0, 0.0],
+            [x41, x81, x86, x89, x92, 0.0, x94, 0.0],
+            [x43, x83, x87, x90, x93, 0.0, 0.0, x94],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
 pub mod kane {
@@ -3206,6 +3533,147 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = x0 * x0;
+        let x2 = f64::cos(gamma2);
+        let x3 = x2 * x2;
+        let x4 = d * d * m1;
+        let x5 = a * d * m1;
+        let x6 = f64::sin(gamma1);
+        let x7 = (x0 * (J1 - J2 - x4) - x5) * x6 - Ixy;
+        let x8 = m2 * d * d;
+        let x9 = x2 * (x8 + J2 - J1);
+        let x10 = m2 * a * d;
+        let x11 = f64::sin(gamma2);
+        let x12 = (x9 + x10) * x11 - Ixz;
+        let x13 = f64::sin(theta);
+        let x14 = f64::cos(psi);
+        let x15 = f64::sin(phi);
+        let x16 = x13 * x14 * x15;
+        let x17 = f64::cos(phi);
+        let x18 = f64::sin(psi);
+        let x19 = x17 * x18;
+        let x20 = x15 * x18;
+        let x21 = x13 * x14 * x17;
+        let x22 = x20 + x21;
+        let x23 = (m2 * (x19 - x16) * x11 + x22 * x6 * m1) * d;
+        let x24 = x14 * x17;
+        let x25 = x13 * x15 * x18;
+        let x26 = -x24 - x25;
+        let x27 = x14 * x15;
+        let x28 = x13 * x17 * x18;
+        let x29 = x28 - x27;
+        let x30 = (m2 * x26 * x11 + x6 * x29 * m1) * d;
+        let x31 = f64::cos(theta);
+        let x32 = (x6 * m1 * x17 - m2 * x11 * x15) * x31 * d;
+        let x33 = x2 * d;
+        let x34 = -Iyz;
+        let x35 = m2 * d * (d + x2 * a) + J2;
+        let x36 = a + x33;
+        let x37 = -x20 - x21;
+        let x38 = m2 * (x36 * x15 * x18 + (x13 * x36 * x17 + x31 * d * x11) * x14)
+            + (a * x37 + x0 * x37 * d) * m1;
+        let x39 = x27 - x28;
+        let x40 = x31 * x11 * x18;
+        let x41 = x2 * x29;
+        let x42 = (a * x39 + x0 * x39 * d) * m1 + m2 * ((x40 + x41) * d + a * x29);
+        let x43 = x0 * d;
+        let x44 = m2 * x36 + (-a - x43) * m1;
+        let x45 = x44 * x31 * x17 - m2 * x13 * d * x11;
+        let x46 = J2 + (d + x0 * a) * d * m1;
+        let x47 = m2 * (-a - x33) + (a + x43) * m1;
+        let x48 = x14 * (x13 * x47 * x15 - x6 * x31 * d * m1) + x44 * x17 * x18;
+        let x49 = x24 + x25;
+        let x50 = x0 * x49 - x6 * x31 * x18;
+        let x51 = (x2 * m2 * x26 + m1 * x50) * d + a * (m2 * x26 + m1 * x49);
+        let x52 = x13 * x6 * d * m1 + x31 * x47 * x15;
+        let x53 = d * m1 * (x0 * (x16 - x19) - x14 * x6 * x31);
+        let x54 = d * m1 * x50;
+        let x55 = (x0 * x31 * x15 + x13 * x6) * d * m1;
+        let x56 = -(m2 * (-x14 * x31 * x11 - x2 * x22) * d);
+        let x57 = -(m2 * d * (-x40 - x41));
+        let x58 = (x2 * x31 * x17 - x13 * x11) * m2 * d;
+        let x59 = m2 + m0 + m1;
+        [
+            [
+                (x1 + x3) * J1 + Ixx + J2 * (2.0 - x1 - x3)
+                    + (m2 * (1.0 - x3) + (1.0 - x1) * m1) * d * d,
+                x7,
+                x12,
+                0.0,
+                0.0,
+                x23,
+                x30,
+                x32,
+            ],
+            [
+                x7,
+                x0 * (2.0 * x5 + x0 * (J2 + x4 - J1)) + Iyy
+                    + m2 * (a * (a + 2.0 * x33) + d * d) + J2 + a * a * m1 + J1,
+                x34,
+                0.0,
+                x35,
+                x38,
+                x42,
+                x45,
+            ],
+            [
+                x12,
+                x34,
+                J2 + x2 * (x9 + 2.0 * x10) + a * ((m2 + m1) * a + 2.0 * (x0 * d * m1))
+                    + x4 + Izz + J1,
+                x46,
+                0.0,
+                x48,
+                x51,
+                x52,
+            ],
+            [0.0, 0.0, x46, J2 + x4, 0.0, x53, x54, x55],
+            [0.0, x35, 0.0, 0.0, x8 + J2, x56, x57, x58],
+            [x23, x38, x48, x53, x56, x59, 0.0, 0.0],
+            [x30, x42, x51, x54, x57, 0.0, x59, 0.0],
+            [x32, x45, x52, x55, x58, 0.0, 0.0, x59],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
 pub mod reduced_volterra {
@@ -3818,5 +4286,104 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = 1.0 / (m2 + m0 + m1);
+        let x1 = m1 * x0;
+        let x2 = f64::cos(gamma1);
+        let x3 = f64::cos(gamma2);
+        let x4 = m2 * x0;
+        let x5 = x2 * x2;
+        let x6 = x3 * x3;
+        let x7 = f64::sin(gamma1);
+        let x8 = x2 * d;
+        let x9 = x3 * d;
+        let x10 = (m2 * (-a - x9) + (a + x8) * m1) * x0;
+        let x11 = x7 * (x2 * (J1 - J2) + d * m1 * (x10 - a - x8)) - Ixy;
+        let x12 = f64::sin(gamma2);
+        let x13 = x12 * (m2 * d * (a + x9 + x10) + x3 * (J2 - J1)) - Ixz;
+        let x14 = x2 * m2 * d * d * x12 * m1 * x0;
+        let x15 = -(x3 * m2 * x7 * d * d * m1 * x0);
+        let x16 = 1.0 - x1;
+        let x17 = d * d * x16 * m1;
+        let x18 = 1.0 - x4;
+        let x19 = m2 * d * d * x18;
+        let x20 = a
+            * ((a * x16 + x2 * d * (2.0 - 2.0 * x1)) * m1
+                + m2
+                    * (a
+                        + (d * (2.0 * (x2 * m1) + x3 * (2.0 * m1 - 2.0 * m2))
+                            + a * (2.0 * m1 - m2)) * x0 + 2.0 * x9));
+        let x21 = m2 * x7 * d * d * x12 * m1 * x0;
+        let x22 = x21 - Iyz;
+        let x23 = m2 * (d * x18 + x3 * (x2 * d * m1 * x0 + ((m1 - m2) * x0 + 1.0) * a))
+            * d + J2;
+        let x24 = J2
+            + (x2 * (a * ((m2 - m1) * x0 + 1.0) + x3 * m2 * d * x0) + d * x16) * d * m1;
+        [
+            [
+                ((x2 * x2 * (x1 - 1.0) - x1 + 1.0) * m1
+                    + m2 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) * d * d + (x5 + x6) * J1
+                    + Ixx + J2 * (2.0 - x5 - x6),
+                x11,
+                x13,
+                x14,
+                x15,
+            ],
+            [
+                x11,
+                Iyy + x2 * (x2 * (x17 + J2 - J1) + 2.0 * (x3 * m2 * d * d * m1 * x0))
+                    + J2 + x19 + J1 + x20,
+                x22,
+                x21,
+                x23,
+            ],
+            [
+                x13,
+                x22,
+                x17 + J2
+                    + x3 * (x3 * (J2 + x19 - J1) + 2.0 * (x2 * m2 * d * d * m1 * x0))
+                    + Izz + J1 + x20,
+                x24,
+                x21,
+            ],
+            [x14, x21, x24, x17 + J2, x21],
+            [x15, x23, x21, x21, J2 + x19],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

@@ -993,4 +993,103 @@ pub mod reduced_volterra {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = 1.0 / (m2 + m0 + m1);
+        let x1 = m1 * x0;
+        let x2 = f64::cos(gamma1);
+        let x3 = f64::cos(gamma2);
+        let x4 = m2 * x0;
+        let x5 = x2 * x2;
+        let x6 = x3 * x3;
+        let x7 = f64::sin(gamma1);
+        let x8 = x2 * d;
+        let x9 = x3 * d;
+        let x10 = (m2 * (-a - x9) + (a + x8) * m1) * x0;
+        let x11 = x7 * (x2 * (J1 - J2) + d * m1 * (x10 - a - x8)) - Ixy;
+        let x12 = f64::sin(gamma2);
+        let x13 = x12 * (m2 * d * (a + x9 + x10) + x3 * (J2 - J1)) - Ixz;
+        let x14 = x2 * m2 * d * d * x12 * m1 * x0;
+        let x15 = -(x3 * m2 * x7 * d * d * m1 * x0);
+        let x16 = 1.0 - x1;
+        let x17 = d * d * x16 * m1;
+        let x18 = 1.0 - x4;
+        let x19 = m2 * d * d * x18;
+        let x20 = a
+            * ((a * x16 + x2 * d * (2.0 - 2.0 * x1)) * m1
+                + m2
+                    * (a
+                        + (d * (2.0 * (x2 * m1) + x3 * (2.0 * m1 - 2.0 * m2))
+                            + a * (2.0 * m1 - m2)) * x0 + 2.0 * x9));
+        let x21 = m2 * x7 * d * d * x12 * m1 * x0;
+        let x22 = x21 - Iyz;
+        let x23 = m2 * (d * x18 + x3 * (x2 * d * m1 * x0 + ((m1 - m2) * x0 + 1.0) * a))
+            * d + J2;
+        let x24 = J2
+            + (x2 * (a * ((m2 - m1) * x0 + 1.0) + x3 * m2 * d * x0) + d * x16) * d * m1;
+        [
+            [
+                ((x2 * x2 * (x1 - 1.0) - x1 + 1.0) * m1
+                    + m2 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) * d * d + (x5 + x6) * J1
+                    + Ixx + J2 * (2.0 - x5 - x6),
+                x11,
+                x13,
+                x14,
+                x15,
+            ],
+            [
+                x11,
+                Iyy + x2 * (x2 * (x17 + J2 - J1) + 2.0 * (x3 * m2 * d * d * m1 * x0))
+                    + J2 + x19 + J1 + x20,
+                x22,
+                x21,
+                x23,
+            ],
+            [
+                x13,
+                x22,
+                x17 + J2
+                    + x3 * (x3 * (J2 + x19 - J1) + 2.0 * (x2 * m2 * d * d * m1 * x0))
+                    + Izz + J1 + x20,
+                x24,
+                x21,
+            ],
+            [x14, x21, x24, x17 + J2, x21],
+            [x15, x23, x21, x21, J2 + x19],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }

@@ -2232,6 +2232,212 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let mut v = [0.0f64; 72];
+        matrix_part0(t, state, params, g_i, &mut v);
+        matrix_part1(t, state, params, g_i, &mut v);
+        [
+            [
+                J2
+                    * (v[5] * v[5] + v[1] * v[1] * (v[2] * v[2] + v[6] * v[6])
+                        + v[9] * v[9]) + (v[16] * v[16] + v[21] * v[21]) * m1
+                    - v[3] * ((-Ixy * v[2] - Ixz * v[6]) * v[1] - v[3] * Ixx)
+                    + (v[22] * v[22] + v[23] * v[23]) * J1
+                    + m2 * (v[25] * v[25] + v[28] * v[28])
+                    + v[1]
+                        * ((v[3] * Ixz + (Izz * v[6] - v[29]) * v[1]) * v[6]
+                            + v[2] * (v[1] * (Iyy * v[2] - v[30]) + v[3] * Ixy)),
+                v[42],
+                v[44],
+                v[46],
+                v[48],
+                v[49],
+                v[50],
+                0.0,
+            ],
+            [
+                v[42],
+                J2 + v[7] * (v[32] + 2.0 * v[33])
+                    + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[36] + Izz
+                    + (v[41] * v[6] + 2.0 * v[29]) * v[6] + J1,
+                v[51],
+                v[52],
+                v[53],
+                v[58],
+                v[59],
+                v[60],
+            ],
+            [
+                v[44],
+                v[51],
+                (v[37] + v[39]) * J1 + Ixx + J2 * (2.0 - v[37] - v[39])
+                    + (v[40] + (1.0 - v[37]) * m1) * d * d,
+                0.0,
+                0.0,
+                v[61],
+                v[63],
+                v[64],
+            ],
+            [v[46], v[52], 0.0, J2 + v[36], 0.0, v[65], v[66], v[67]],
+            [v[48], v[53], 0.0, 0.0, v[31] + J2, v[68], v[69], v[70]],
+            [v[49], v[58], v[61], v[65], v[68], v[71], 0.0, 0.0],
+            [v[50], v[59], v[63], v[66], v[69], 0.0, v[71], 0.0],
+            [0.0, v[60], v[64], v[67], v[70], 0.0, 0.0, v[71]],
+        ]
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 72],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = f64::cos(phi);
+        v[7] = f64::cos(gamma2);
+        v[8] = f64::sin(gamma2);
+        v[9] = v[7] * v[1] * v[6] - v[3] * v[8];
+        v[10] = f64::sin(psi);
+        v[11] = f64::cos(psi);
+        v[12] = v[11] * v[6];
+        v[13] = v[3] * v[2] * v[10];
+        v[14] = -v[12] - v[13];
+        v[15] = a * v[1] * v[10];
+        v[16] = d * (v[14] * v[4] - v[0] * v[1] * v[10]) - v[15];
+        v[17] = a * v[11] * v[1];
+        v[18] = v[3] * v[11] * v[2];
+        v[19] = v[6] * v[10];
+        v[20] = v[18] - v[19];
+        v[21] = v[17] + d * (v[4] * v[20] + v[0] * v[11] * v[1]);
+        v[22] = -v[7] * v[3] - v[1] * v[8] * v[6];
+        v[23] = v[4] * v[1] * v[2] - v[0] * v[3];
+        v[24] = v[2] * v[10] + v[3] * v[11] * v[6];
+        v[25] = -v[17] - d * (v[7] * v[11] * v[1] - v[24] * v[8]);
+        v[26] = v[11] * v[2];
+        v[27] = v[3] * v[6] * v[10];
+        v[28] = v[15] - d * (-(v[26] - v[27]) * v[8] - v[7] * v[1] * v[10]);
+        v[29] = Iyz * v[2];
+        v[30] = Iyz * v[6];
+        v[31] = m2 * d * d;
+        v[32] = v[7] * (v[31] + J2 - J1);
+        v[33] = m2 * a * d;
+        v[34] = (v[32] + v[33]) * v[8] - Ixz;
+        v[35] = a * d * m1;
+        v[36] = d * d * m1;
+        v[37] = v[0] * v[0];
+        v[38] = (v[37] - 1.0) * m1;
+        v[39] = v[7] * v[7];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 72],
+    ) {
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = m2 * (1.0 - v[39]);
+        v[41] = v[0] * v[0] * (J2 - J1) + Iyy + d * d * (v[38] + v[40]) - Izz
+            + v[7] * v[7] * (J1 - J2);
+        v[42] = Iyz * v[1] + v[3] * v[34] * v[2]
+            + (v[3] * (Ixy + v[4] * (v[35] + v[0] * (J2 + v[36] - J1)))
+                + (v[41] * v[2] - 2.0 * v[30]) * v[1]) * v[6];
+        v[43] = (v[0] * (J1 - J2 - v[36]) - v[35]) * v[4] - Ixy;
+        v[44] = ((v[37] + v[39] - 2.0) * J2 + (-v[37] - v[39]) * J1 - Ixx
+            + (v[38] + m2 * (v[39] - 1.0)) * d * d) * v[3]
+            + (v[34] * v[6] + v[43] * v[2]) * v[1];
+        v[45] = v[0] * a;
+        v[46] = v[1] * (J2 + (d + v[45]) * d * m1) * v[6];
+        v[47] = m2 * d * (d + v[7] * a) + J2;
+        v[48] = v[1] * v[47] * v[2];
+        v[49] = m1 * v[16] + m2 * v[28];
+        v[50] = m1 * v[21] + m2 * v[25];
+        v[51] = (Ixz + v[8] * (v[7] * (J1 - v[31] - J2) - v[33])) * v[2] + v[43] * v[6];
+        v[52] = ((-d - v[45]) * d * m1 - J2) * v[2];
+        v[53] = v[47] * v[6];
+        v[54] = m2 * v[8] * v[6];
+        v[55] = v[4] * v[2] * m1;
+        v[56] = m2 * (a + v[7] * d) + (-a - v[0] * d) * m1;
+        v[57] = (v[54] + v[55]) * v[1] * d + v[56] * v[3];
+        v[58] = v[11] * v[57];
+        v[59] = v[10] * v[57];
+        v[60] = v[3] * d * (-v[54] - v[55]) + v[56] * v[1];
+        v[61] = (m2 * (v[19] - v[18]) * v[8] + v[24] * v[4] * m1) * d;
+        v[62] = v[27] - v[26];
+        v[63] = (m2 * v[14] * v[8] + v[4] * v[62] * m1) * d;
+        v[64] = (v[4] * m1 * v[6] - m2 * v[8] * v[2]) * v[1] * d;
+        v[65] = d * m1 * (v[0] * v[20] - v[11] * v[4] * v[1]);
+        v[66] = d * m1 * (v[0] * (v[12] + v[13]) - v[4] * v[1] * v[10]);
+        v[67] = v[5] * d * m1;
+        v[68] = -(m2 * (-v[11] * v[1] * v[8] - v[7] * v[24]) * d);
+        v[69] = -(m2 * d * (-v[1] * v[8] * v[10] - v[7] * v[62]));
+        v[70] = v[9] * m2 * d;
+        v[71] = m2 + m0 + m1;
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        f64::INFINITY
+    }
 }
 ///Maggi's equations: 16 states, 8 equations.
 pub mod maggi {
@@ -3291,6 +3497,232 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let J2 = params.J2;
+        let mut v = [0.0f64; 95];
+        matrix_part0(t, state, params, g_i, &mut v);
+        matrix_part1(t, state, params, g_i, &mut v);
+        matrix_part2(t, state, params, g_i, &mut v);
+        [
+            [v[5], v[25], v[26], 0.0, 0.0, v[33], v[41], v[43]],
+            [
+                v[25],
+                v[7] * v[8] * v[64] + v[17] * v[67],
+                v[68],
+                v[72],
+                v[73],
+                v[79],
+                v[81],
+                v[83],
+            ],
+            [
+                v[26],
+                v[68],
+                v[7] * (v[26] * v[10] - v[49] * v[8] + v[7] * v[63] * v[17]) * v[17]
+                    - v[8] * (v[65] * v[7] * v[17] - v[8] * v[66]),
+                v[84],
+                0.0,
+                v[85],
+                v[86],
+                v[87],
+            ],
+            [0.0, v[72], v[84], J2 + v[18], 0.0, v[88], v[89], v[90]],
+            [0.0, v[73], 0.0, 0.0, v[12] + J2, v[91], v[92], v[93]],
+            [v[33], v[79], v[85], v[88], v[91], v[94], 0.0, 0.0],
+            [v[41], v[81], v[86], v[89], v[92], 0.0, v[94], 0.0],
+            [v[43], v[83], v[87], v[90], v[93], 0.0, 0.0, v[94]],
+        ]
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 95],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[0] = f64::cos(gamma1);
+        v[1] = v[0] * v[0];
+        v[2] = f64::cos(gamma2);
+        v[3] = v[2] * v[2];
+        v[4] = m2 * (1.0 - v[3]);
+        v[5] = (v[1] + v[3]) * J1 + Ixx + J2 * (2.0 - v[1] - v[3])
+            + (v[4] + (1.0 - v[1]) * m1) * d * d;
+        v[6] = f64::cos(theta);
+        v[7] = 1.0 / v[6];
+        v[8] = f64::sin(phi);
+        v[9] = (v[1] - 1.0) * m1;
+        v[10] = f64::sin(theta);
+        v[11] = ((v[1] + v[3] - 2.0) * J2 + (-v[1] - v[3]) * J1 - Ixx
+            + (v[9] + m2 * (v[3] - 1.0)) * d * d) * v[10];
+        v[12] = m2 * d * d;
+        v[13] = v[2] * (v[12] + J2 - J1);
+        v[14] = m2 * a * d;
+        v[15] = f64::sin(gamma2);
+        v[16] = (v[13] + v[14]) * v[15] - Ixz;
+        v[17] = f64::cos(phi);
+        v[18] = d * d * m1;
+        v[19] = a * d * m1;
+        v[20] = f64::sin(gamma1);
+        v[21] = (v[0] * (J1 - J2 - v[18]) - v[19]) * v[20] - Ixy;
+        v[22] = (v[16] * v[17] + v[21] * v[8]) * v[6];
+        v[23] = v[11] + v[22] + v[10] * v[5];
+        v[24] = (Ixz + v[15] * (v[2] * (J1 - v[12] - J2) - v[14])) * v[8]
+            + v[21] * v[17];
+        v[25] = v[7] * v[8] * v[23] + v[24] * v[17];
+        v[26] = v[7] * v[23] * v[17] - v[8] * v[24];
+        v[27] = f64::cos(psi);
+        v[28] = v[10] * v[27] * v[8];
+        v[29] = f64::sin(psi);
+        v[30] = v[17] * v[29];
+        v[31] = v[8] * v[29] + v[10] * v[27] * v[17];
+        v[32] = m2 * (v[30] - v[28]) * v[15] + v[31] * v[20] * m1;
+        v[33] = v[32] * d;
+        v[34] = v[27] * v[17];
+        v[35] = v[10] * v[8] * v[29];
+        v[36] = -v[34] - v[35];
+        v[37] = v[27] * v[8];
+        v[38] = v[10] * v[17] * v[29];
+        v[39] = v[38] - v[37];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 95],
+    ) {
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = m2 * v[36] * v[15] + v[20] * v[39] * m1;
+        v[41] = v[40] * d;
+        v[42] = v[20] * m1 * v[17] - m2 * v[15] * v[8];
+        v[43] = v[42] * v[6] * d;
+        v[44] = Iyz * v[6];
+        v[45] = v[10] * v[16] * v[8];
+        v[46] = v[0] * v[0] * (J2 - J1) + Iyy + d * d * (v[9] + v[4]) - Izz
+            + v[2] * v[2] * (J1 - J2);
+        v[47] = Iyz * v[17];
+        v[48] = (v[10] * (Ixy + v[20] * (v[19] + v[0] * (J2 + v[18] - J1)))
+            + (v[46] * v[8] - 2.0 * v[47]) * v[6]) * v[17];
+        v[49] = v[44] + v[45] + v[48];
+        v[50] = v[0] * v[6] * v[8] + v[10] * v[20];
+        v[51] = v[8] * v[8] + v[17] * v[17];
+        v[52] = v[2] * v[6] * v[17] - v[10] * v[15];
+        v[53] = a * v[6] * v[29];
+        v[54] = d * (v[36] * v[20] - v[0] * v[6] * v[29]) - v[53];
+        v[55] = a * v[27] * v[6];
+        v[56] = v[28] - v[30];
+        v[57] = v[55] + d * (v[20] * v[56] + v[0] * v[27] * v[6]);
+        v[58] = -v[2] * v[10] - v[6] * v[15] * v[17];
+        v[59] = v[20] * v[6] * v[8] - v[0] * v[10];
+        v[60] = -v[55] - d * (v[2] * v[27] * v[6] - v[31] * v[15]);
+        v[61] = v[53] - d * (-(v[37] - v[38]) * v[15] - v[2] * v[6] * v[29]);
+        v[62] = Iyz * v[8];
+        v[63] = J2 * (v[50] * v[50] + v[6] * v[6] * v[51] + v[52] * v[52])
+            + (v[54] * v[54] + v[57] * v[57]) * m1
+            - v[10] * ((-Ixy * v[8] - Ixz * v[17]) * v[6] - v[10] * Ixx)
+            + (v[58] * v[58] + v[59] * v[59]) * J1 + m2 * (v[60] * v[60] + v[61] * v[61])
+            + v[10] * (v[11] + v[22])
+            + v[6]
+                * ((v[10] * Ixz + (Izz * v[17] - v[62]) * v[6]) * v[17]
+                    + v[8] * (v[6] * (Iyy * v[8] - v[47]) + v[10] * Ixy));
+        v[64] = v[49] * v[17] + v[7] * v[63] * v[8] + v[10] * v[25];
+        v[65] = v[44] + v[45] + v[10] * v[24] + v[48];
+        v[66] = J2 + v[2] * (v[13] + 2.0 * v[14])
+            + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[18] + Izz
+            + (v[46] * v[17] + 2.0 * v[62]) * v[17] + J1;
+        v[67] = v[65] * v[7] * v[8] + v[66] * v[17];
+        v[68] = v[7] * v[64] * v[17] - v[8] * v[67];
+        v[69] = v[0] * a;
+        v[70] = (-d - v[69]) * d * m1;
+        v[71] = (d + v[69]) * d * m1;
+        v[72] = (v[70] + v[71]) * v[8] * v[17];
+        v[73] = (m2 * d * (d + v[2] * a) + J2) * v[51];
+        v[74] = m2 * v[15] * v[17];
+        v[75] = v[20] * v[8] * m1;
+        v[76] = m2 * (a + v[2] * d) + (-a - v[0] * d) * m1;
+        v[77] = (v[74] + v[75]) * v[6] * d + v[76] * v[10];
+        v[78] = v[32] * v[10] * d + m1 * v[54] + m2 * v[61];
+        v[79] = v[27] * v[17] * v[77] + v[7] * v[78] * v[8];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part2(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 95],
+    ) {
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J2 = params.J2;
+        v[80] = v[40] * v[10] * d + m1 * v[57] + m2 * v[60];
+        v[81] = v[7] * v[80] * v[8] + v[17] * v[29] * v[77];
+        v[82] = v[10] * d * (-v[74] - v[75]) + v[76] * v[6];
+        v[83] = v[17] * v[82] + v[10] * v[42] * d * v[8];
+        v[84] = (J2 + v[71]) * v[17] * v[17] - (v[70] - J2) * v[8] * v[8];
+        v[85] = v[7] * v[78] * v[17] - v[27] * v[8] * v[77];
+        v[86] = v[7] * v[80] * v[17] - v[8] * v[29] * v[77];
+        v[87] = v[10] * v[42] * d * v[17] - v[8] * v[82];
+        v[88] = d * m1 * (v[0] * v[56] - v[27] * v[20] * v[6]);
+        v[89] = d * m1 * (v[0] * (v[34] + v[35]) - v[20] * v[6] * v[29]);
+        v[90] = v[50] * d * m1;
+        v[91] = -(m2 * (-v[27] * v[6] * v[15] - v[2] * v[31]) * d);
+        v[92] = -(m2 * d * (-v[6] * v[15] * v[29] - v[2] * v[39]));
+        v[93] = v[52] * m2 * d;
+        v[94] = m2 + m0 + m1;
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
 pub mod kane {
@@ -4092,6 +4524,185 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let mut v = [0.0f64; 60];
+        matrix_part0(t, state, params, g_i, &mut v);
+        matrix_part1(t, state, params, g_i, &mut v);
+        [
+            [
+                (v[1] + v[3]) * J1 + Ixx + J2 * (2.0 - v[1] - v[3])
+                    + (m2 * (1.0 - v[3]) + (1.0 - v[1]) * m1) * d * d,
+                v[7],
+                v[12],
+                0.0,
+                0.0,
+                v[23],
+                v[30],
+                v[32],
+            ],
+            [
+                v[7],
+                v[0] * (2.0 * v[5] + v[0] * (J2 + v[4] - J1)) + Iyy
+                    + m2 * (a * (a + 2.0 * v[33]) + d * d) + J2 + a * a * m1 + J1,
+                v[34],
+                0.0,
+                v[35],
+                v[38],
+                v[42],
+                v[45],
+            ],
+            [
+                v[12],
+                v[34],
+                J2 + v[2] * (v[9] + 2.0 * v[10])
+                    + a * ((m2 + m1) * a + 2.0 * (v[0] * d * m1)) + v[4] + Izz + J1,
+                v[46],
+                0.0,
+                v[48],
+                v[51],
+                v[52],
+            ],
+            [0.0, 0.0, v[46], J2 + v[4], 0.0, v[53], v[54], v[55]],
+            [0.0, v[35], 0.0, 0.0, v[8] + J2, v[56], v[57], v[58]],
+            [v[23], v[38], v[48], v[53], v[56], v[59], 0.0, 0.0],
+            [v[30], v[42], v[51], v[54], v[57], 0.0, v[59], 0.0],
+            [v[32], v[45], v[52], v[55], v[58], 0.0, 0.0, v[59]],
+        ]
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 60],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[0] = f64::cos(gamma1);
+        v[1] = v[0] * v[0];
+        v[2] = f64::cos(gamma2);
+        v[3] = v[2] * v[2];
+        v[4] = d * d * m1;
+        v[5] = a * d * m1;
+        v[6] = f64::sin(gamma1);
+        v[7] = (v[0] * (J1 - J2 - v[4]) - v[5]) * v[6] - Ixy;
+        v[8] = m2 * d * d;
+        v[9] = v[2] * (v[8] + J2 - J1);
+        v[10] = m2 * a * d;
+        v[11] = f64::sin(gamma2);
+        v[12] = (v[9] + v[10]) * v[11] - Ixz;
+        v[13] = f64::sin(theta);
+        v[14] = f64::cos(psi);
+        v[15] = f64::sin(phi);
+        v[16] = v[13] * v[14] * v[15];
+        v[17] = f64::cos(phi);
+        v[18] = f64::sin(psi);
+        v[19] = v[17] * v[18];
+        v[20] = v[15] * v[18];
+        v[21] = v[13] * v[14] * v[17];
+        v[22] = v[20] + v[21];
+        v[23] = (m2 * (v[19] - v[16]) * v[11] + v[22] * v[6] * m1) * d;
+        v[24] = v[14] * v[17];
+        v[25] = v[13] * v[15] * v[18];
+        v[26] = -v[24] - v[25];
+        v[27] = v[14] * v[15];
+        v[28] = v[13] * v[17] * v[18];
+        v[29] = v[28] - v[27];
+        v[30] = (m2 * v[26] * v[11] + v[6] * v[29] * m1) * d;
+        v[31] = f64::cos(theta);
+        v[32] = (v[6] * m1 * v[17] - m2 * v[11] * v[15]) * v[31] * d;
+        v[33] = v[2] * d;
+        v[34] = -Iyz;
+        v[35] = m2 * d * (d + v[2] * a) + J2;
+        v[36] = a + v[33];
+        v[37] = -v[20] - v[21];
+        v[38] = m2
+            * (v[36] * v[15] * v[18]
+                + (v[13] * v[36] * v[17] + v[31] * d * v[11]) * v[14])
+            + (a * v[37] + v[0] * v[37] * d) * m1;
+        v[39] = v[27] - v[28];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 60],
+    ) {
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J2 = params.J2;
+        v[40] = v[31] * v[11] * v[18];
+        v[41] = v[2] * v[29];
+        v[42] = (a * v[39] + v[0] * v[39] * d) * m1
+            + m2 * ((v[40] + v[41]) * d + a * v[29]);
+        v[43] = v[0] * d;
+        v[44] = m2 * v[36] + (-a - v[43]) * m1;
+        v[45] = v[44] * v[31] * v[17] - m2 * v[13] * d * v[11];
+        v[46] = J2 + (d + v[0] * a) * d * m1;
+        v[47] = m2 * (-a - v[33]) + (a + v[43]) * m1;
+        v[48] = v[14] * (v[13] * v[47] * v[15] - v[6] * v[31] * d * m1)
+            + v[44] * v[17] * v[18];
+        v[49] = v[24] + v[25];
+        v[50] = v[0] * v[49] - v[6] * v[31] * v[18];
+        v[51] = (v[2] * m2 * v[26] + m1 * v[50]) * d + a * (m2 * v[26] + m1 * v[49]);
+        v[52] = v[13] * v[6] * d * m1 + v[31] * v[47] * v[15];
+        v[53] = d * m1 * (v[0] * (v[16] - v[19]) - v[14] * v[6] * v[31]);
+        v[54] = d * m1 * v[50];
+        v[55] = (v[0] * v[31] * v[15] + v[13] * v[6]) * d * m1;
+        v[56] = -(m2 * (-v[14] * v[31] * v[11] - v[2] * v[22]) * d);
+        v[57] = -(m2 * d * (-v[40] - v[41]));
+        v[58] = (v[2] * v[31] * v[17] - v[13] * v[11]) * m2 * d;
+        v[59] = m2 + m0 + m1;
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
 pub mod reduced_volterra {
@@ -4832,5 +5443,104 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn matrix(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = 1.0 / (m2 + m0 + m1);
+        let x1 = m1 * x0;
+        let x2 = f64::cos(gamma1);
+        let x3 = f64::cos(gamma2);
+        let x4 = m2 * x0;
+        let x5 = x2 * x2;
+        let x6 = x3 * x3;
+        let x7 = f64::sin(gamma1);
+        let x8 = x2 * d;
+        let x9 = x3 * d;
+        let x10 = (m2 * (-a - x9) + (a + x8) * m1) * x0;
+        let x11 = x7 * (x2 * (J1 - J2) + d * m1 * (x10 - a - x8)) - Ixy;
+        let x12 = f64::sin(gamma2);
+        let x13 = x12 * (m2 * d * (a + x9 + x10) + x3 * (J2 - J1)) - Ixz;
+        let x14 = x2 * m2 * d * d * x12 * m1 * x0;
+        let x15 = -(x3 * m2 * x7 * d * d * m1 * x0);
+        let x16 = 1.0 - x1;
+        let x17 = d * d * x16 * m1;
+        let x18 = 1.0 - x4;
+        let x19 = m2 * d * d * x18;
+        let x20 = a
+            * ((a * x16 + x2 * d * (2.0 - 2.0 * x1)) * m1
+                + m2
+                    * (a
+                        + (d * (2.0 * (x2 * m1) + x3 * (2.0 * m1 - 2.0 * m2))
+                            + a * (2.0 * m1 - m2)) * x0 + 2.0 * x9));
+        let x21 = m2 * x7 * d * d * x12 * m1 * x0;
+        let x22 = x21 - Iyz;
+        let x23 = m2 * (d * x18 + x3 * (x2 * d * m1 * x0 + ((m1 - m2) * x0 + 1.0) * a))
+            * d + J2;
+        let x24 = J2
+            + (x2 * (a * ((m2 - m1) * x0 + 1.0) + x3 * m2 * d * x0) + d * x16) * d * m1;
+        [
+            [
+                ((x2 * x2 * (x1 - 1.0) - x1 + 1.0) * m1
+                    + m2 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) * d * d + (x5 + x6) * J1
+                    + Ixx + J2 * (2.0 - x5 - x6),
+                x11,
+                x13,
+                x14,
+                x15,
+            ],
+            [
+                x11,
+                Iyy + x2 * (x2 * (x17 + J2 - J1) + 2.0 * (x3 * m2 * d * d * m1 * x0))
+                    + J2 + x19 + J1 + x20,
+                x22,
+                x21,
+                x23,
+            ],
+            [
+                x13,
+                x22,
+                x17 + J2
+                    + x3 * (x3 * (J2 + x19 - J1) + 2.0 * (x2 * m2 * d * d * m1 * x0))
+                    + Izz + J1 + x20,
+                x24,
+                x21,
+            ],
+            [x14, x21, x24, x17 + J2, x21],
+            [x15, x23, x21, x21, J2 + x19],
+        ]
+    }
+    ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
+    #[allow(non_snake_case, clippy::all)]
+    pub fn singular_margin(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> f64 {
+        let theta = state[1];
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

@@ -54,6 +54,10 @@ pub struct Record {
     pub steps: usize,
     pub rejected: usize,
     pub rhs_calls: usize,
+    /// Largest condition number of the matrix solved at run time, over the samples.
+    pub max_condition: f64,
+    /// Smallest distance to the singular set of `[Y; M'; a]` over the samples (`null`: none).
+    pub min_singular_margin: f64,
 }
 
 /// A formulation's run: its record, samples and monitors.
@@ -132,6 +136,8 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         steps: solution.stats.steps,
         rejected: solution.stats.rejected,
         rhs_calls: solution.stats.rhs_calls,
+        max_condition: invariants.condition.iter().fold(0.0, |a, b| a.max(*b)),
+        min_singular_margin: invariants.singular_margin.iter().fold(f64::INFINITY, |a, b| a.min(*b)),
     };
     Ok(Run { record, solution, invariants })
 }
@@ -156,7 +162,7 @@ pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareErro
 /// The runs as a Markdown table shaped like the paper's.
 pub fn table(runs: &[Run]) -> String {
     let mut out = String::from(
-        "| method | states | equations | CPU s | energy err | (rel) | constraint err | momentum err | (rel) | steps | rhs calls |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| method | states | equations | CPU s | energy err | (rel) | constraint err | momentum err | (rel) | steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in runs.iter().map(|r| &r.record) {
         let constraint = if r.position_constraint_error_norm > 0.0 {
@@ -170,7 +176,7 @@ pub fn table(runs: &[Run]) -> String {
             (format!("{:.2e}", r.momentum_error_norm), format!("{:.2e}", r.momentum_error_rel))
         };
         out += &format!(
-            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {} | {} | {} | {} | {:.1e} |\n",
             r.method,
             r.states,
             r.equations,
@@ -181,7 +187,8 @@ pub fn table(runs: &[Run]) -> String {
             momentum,
             momentum_rel,
             r.steps,
-            r.rhs_calls
+            r.rhs_calls,
+            r.max_condition
         );
     }
     out

@@ -27,6 +27,20 @@ pub struct Invariants {
     pub position_constraint: Vec<f64>,
     /// `q(t)` at the samples.
     pub coordinates: Vec<Vec<f64>>,
+    /// 2-norm condition number of the matrix `rhs` solves (Lagrange: `[M a^T; a 0]`, Maggi:
+    /// `W^T M W`, Kane and reduced Volterra: `M_NI`).
+    pub condition: Vec<f64>,
+    /// Distance to the singular set of what was solved symbolically (smallest singular factor
+    /// of `[Y; M'; a]`; infinite when there is none).
+    pub singular_margin: Vec<f64>,
+}
+
+/// 2-norm condition number of a square matrix given row-major.
+pub fn condition_number(n: usize, a: &[f64]) -> f64 {
+    let m = nalgebra::DMatrix::from_row_slice(n, n, a);
+    let sv = m.singular_values();
+    let (lo, hi) = sv.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| (lo.min(*s), hi.max(*s)));
+    if lo > 0.0 { hi / lo } else { f64::INFINITY }
 }
 
 /// Euclidean norm of a sampled series, as in the paper's tables.
@@ -43,6 +57,8 @@ pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
     let mut g_buf = vec![0.0; s];
     let mut c_buf = vec![0.0; model.constraints.len()];
     let mut h_buf = vec![0.0; model.holonomic];
+    let n = sys.form.matrix_size;
+    let mut a_buf = vec![0.0; n * n];
     let mut e0 = None;
     let mut g0: Vec<f64> = Vec::new();
     for (t, y) in sol.times.iter().zip(&sol.states) {
@@ -63,6 +79,9 @@ pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
         (model.position_residuals)(*t, &q, &qd, &sys.params, &mut h_buf)?;
         inv.position_constraint.push(norm(&h_buf));
         inv.coordinates.push(q);
+        (sys.form.matrix)(*t, y, &sys.params, &sys.g_i, &mut a_buf)?;
+        inv.condition.push(condition_number(n, &a_buf));
+        inv.singular_margin.push((sys.form.singular_margin)(*t, y, &sys.params, &sys.g_i)?);
     }
     inv.energy0 = e0.unwrap_or(0.0);
     inv.momentum0 = g0;

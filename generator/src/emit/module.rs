@@ -43,7 +43,7 @@ const ITEM_NAMES: &[&str] = &[
     "work_rate", "momenta", "constraint_residuals", "position_residuals", "reduced_volterra", "kane", "STATES",
     "EQUATIONS", "STATE_NAMES", "INTEGRATES_IGNORABLE", "rhs", "initial_state", "velocities", "t", "state", "params",
     "g_i", "dstate", "q", "qdot", "v", "mass", "force", "value", "residual", "tolerance", "column", "index",
-    "constraint", "bound", "residuals", "positions", "alpha", "beta", "rhs_baumgarte", "lagrange", "maggi",
+    "constraint", "bound", "residuals", "positions", "alpha", "beta", "rhs_baumgarte", "lagrange", "maggi", "matrix", "singular_margin", "MATRIX_SIZE",
 ];
 
 /// Identifiers for model symbols, unique and never a keyword or item name.
@@ -559,6 +559,7 @@ impl Emitter<'_> {
         };
         let init = self.initial_state(f, d, work)?;
         let vel = self.velocities_fn(f)?;
+        let conditioning = self.conditioning_fns(f)?;
         let module = ident(name);
         let eqs = usize_lit(f.equations);
         let integrates = nq == m;
@@ -583,6 +584,7 @@ impl Emitter<'_> {
                 #stabilized
                 #init
                 #vel
+                #conditioning
             }
         })
     }
@@ -714,6 +716,63 @@ impl Emitter<'_> {
             }
             #(#helpers)*
         })
+    }
+
+    /// `matrix` (what `rhs` solves numerically, for its condition number) and
+    /// `singular_margin` (the smallest singular factor of what was solved symbolically).
+    fn conditioning_fns(&mut self, f: &Form) -> Result<TokenStream, ModelError> {
+        let name = f.name.as_str();
+        let n = f.mass.rows;
+        let n_l = usize_lit(n);
+        let args = vec![
+            Arg::new("t", quote!(f64)),
+            Arg::new("state", quote!(&[f64; STATES])),
+            Arg::new("params", quote!(&Params)),
+            Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
+        ];
+        let inputs = self.state_inputs(f);
+        let mut outputs = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                outputs.push(f.mass.get(i.min(j), i.max(j)));
+            }
+        }
+        let b = self.body(&format!("{name}::matrix"), &outputs, &inputs, &args)?;
+        let rows: Vec<TokenStream> = b.outputs.chunks(n).map(|r| quote!([#(#r),*])).collect();
+        let stmts = &b.stmts;
+        let helpers = &b.helpers;
+        let fn_args = arg_list(&args, &b.used_args);
+        let matrix_name = f.matrix_name;
+        let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
+        let mut out = quote! {
+            #[doc = "Size of the matrix `rhs` solves numerically."]
+            pub const MATRIX_SIZE: usize = #n_l;
+            #matrix_doc
+            #[allow(non_snake_case, clippy::all)]
+            pub fn matrix(#(#fn_args),*) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+                #(#stmts)*
+                [#(#rows),*]
+            }
+            #(#helpers)*
+        };
+        let b = self.body(&format!("{name}::singular_margin"), &f.checks, &inputs, &args)?;
+        let stmts = &b.stmts;
+        let values = &b.outputs;
+        let fn_args = arg_list(&args, &b.used_args);
+        let body = if values.is_empty() {
+            quote!(f64::INFINITY)
+        } else {
+            quote!(f64::INFINITY #(.min(f64::abs(#values)))*)
+        };
+        out.extend(quote! {
+            #[doc = "The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`."]
+            #[allow(non_snake_case, clippy::all)]
+            pub fn singular_margin(#(#fn_args),*) -> f64 {
+                #(#stmts)*
+                #body
+            }
+        });
+        Ok(out)
     }
 
     /// True when applied non-potential forces can do work (Q is not identically zero).
