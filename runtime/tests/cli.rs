@@ -49,3 +49,30 @@ fn bad_arguments_are_refused_with_the_reason() {
     let out = compare(&["cart_pendulum", "--method", "rk4"]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("needs `--h`"));
 }
+
+#[test]
+fn the_sweep_writes_its_table_and_diagram_and_shows_progress() {
+    let dir = std::env::temp_dir().join(format!("sweep-{}", std::process::id()));
+    let out = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        .args(["satellite_boom", "--quick", "--repeats", "1", "--out", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("[ 35/36]"), "progress on stderr");
+    let csv = std::fs::read_to_string(dir.join("satellite_boom_work_precision.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    // 4 formulations x (3 DOPRI5 + 3 DOP853 + 3 RK4) settings.
+    assert_eq!(rows.len(), 36);
+    // Tighter tolerance, smaller error against the reference (DOP853, reduced Volterra).
+    let errors: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[1] == "reduced_volterra" && r[2] == "DOP853")
+        .map(|r| r[7].parse().unwrap())
+        .collect();
+    assert_eq!(errors.len(), 3);
+    assert!(errors[0] > errors[1] && errors[1] > errors[2], "{errors:?}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("satellite_boom_work_precision.json")).unwrap()).unwrap();
+    assert_eq!(json.as_array().unwrap().len(), 36);
+    let svg = std::fs::read_to_string(dir.join("satellite_boom_work_precision.svg")).unwrap();
+    assert!(svg.contains("work-precision") && svg.contains("reduced_volterra DOP853"));
+}
