@@ -100,13 +100,7 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
     if bound.len() <= max_lets {
         let names = let_names(bound.len(), &taken);
         let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
-        let used = RefCell::new(BTreeSet::new());
-        let symbol = |s: Symbol| {
-            let inp = by_symbol.get(&s)?;
-            used.borrow_mut().insert(s);
-            let i = ident(&inp.ident);
-            Some(quote!(#i))
-        };
+        let symbols = SymbolUse::new(&by_symbol);
         let reference = |e: Expr| {
             index.get(&e).map(|&k| {
                 let i = ident(&names[k]);
@@ -115,21 +109,13 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
         };
         let mut lets = Vec::new();
         for (k, e) in bound.iter().enumerate() {
-            let (t, o) = lower(*e, &symbol, &reference)?;
+            let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
             ops.merge(&o);
             let i = ident(&names[k]);
             lets.push(quote!(let #i = #t;));
         }
-        let mut outs = Vec::new();
-        for e in outputs {
-            let (t, o) = match reference(*e) {
-                Some(t) => (t, OpCount::default()),
-                None => lower(*e, &symbol, &reference)?,
-            };
-            ops.merge(&o);
-            outs.push(t);
-        }
-        let used = used.into_inner();
+        let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
+        let used = symbols.used.into_inner();
         let (mut stmts, used_args) = input_lets(inputs, &used);
         stmts.extend(lets);
         return Ok(Body { stmts, outputs: outs, helpers: vec![], used_args, ops, lets: bound.len() });
@@ -148,21 +134,15 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
     let mut calls = Vec::new();
     let mut all_used_args = BTreeSet::new();
     for (j, chunk) in bound.chunks(max_lets.max(1)).enumerate() {
-        let used = RefCell::new(BTreeSet::new());
-        let symbol = |s: Symbol| {
-            let inp = by_symbol.get(&s)?;
-            used.borrow_mut().insert(s);
-            let i = ident(&inp.ident);
-            Some(quote!(#i))
-        };
+        let symbols = SymbolUse::new(&by_symbol);
         let mut lines = Vec::new();
         for e in chunk {
-            let (t, o) = lower(*e, &symbol, &reference)?;
+            let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
             ops.merge(&o);
             let target = reference(*e).expect("bound");
             lines.push(quote!(#target = #t;));
         }
-        let (ins, used_args) = input_lets(inputs, &used.into_inner());
+        let (ins, used_args) = input_lets(inputs, &symbols.used.into_inner());
         all_used_args.extend(used_args.iter().copied());
         let part = ident(&format!("{name}_part{j}"));
         let param_types = arg_list(args, &used_args);
@@ -179,27 +159,51 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
         calls.push(quote!(#part(#(#all,)* &mut v);));
         all_used_args.extend(0..args.len());
     }
-    let used = RefCell::new(BTreeSet::new());
-    let symbol = |s: Symbol| {
-        let inp = by_symbol.get(&s)?;
-        used.borrow_mut().insert(s);
-        let i = ident(&inp.ident);
-        Some(quote!(#i))
-    };
-    let mut outs = Vec::new();
-    for e in outputs {
-        let (t, o) = match reference(*e) {
-            Some(t) => (t, OpCount::default()),
-            None => lower(*e, &symbol, &reference)?,
-        };
-        ops.merge(&o);
-        outs.push(t);
-    }
-    let (mut stmts, used_args) = input_lets(inputs, &used.into_inner());
+    let symbols = SymbolUse::new(&by_symbol);
+    let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
+    let (mut stmts, used_args) = input_lets(inputs, &symbols.used.into_inner());
     all_used_args.extend(used_args);
     stmts.push(quote!(let mut v = [0.0f64; #size];));
     stmts.extend(calls);
     Ok(Body { stmts, outputs: outs, helpers, used_args: all_used_args, ops, lets: n })
+}
+
+/// Resolves symbols to their input identifiers, remembering which were used.
+struct SymbolUse<'a> {
+    by_symbol: &'a HashMap<Symbol, &'a Input>,
+    used: RefCell<BTreeSet<Symbol>>,
+}
+
+impl<'a> SymbolUse<'a> {
+    fn new(by_symbol: &'a HashMap<Symbol, &'a Input>) -> Self {
+        SymbolUse { by_symbol, used: RefCell::new(BTreeSet::new()) }
+    }
+
+    fn lookup(&self, s: Symbol) -> Option<TokenStream> {
+        let inp = self.by_symbol.get(&s)?;
+        self.used.borrow_mut().insert(s);
+        let i = ident(&inp.ident);
+        Some(quote!(#i))
+    }
+}
+
+/// Each output as tokens: a bound name, or the lowered expression.
+fn lower_outputs(
+    outputs: &[Expr],
+    symbols: &SymbolUse,
+    reference: &dyn Fn(Expr) -> Option<TokenStream>,
+    ops: &mut OpCount,
+) -> Result<Vec<TokenStream>, LowerError> {
+    let mut outs = Vec::with_capacity(outputs.len());
+    for e in outputs {
+        let (t, o) = match reference(*e) {
+            Some(t) => (t, OpCount::default()),
+            None => lower(*e, &|s| symbols.lookup(s), reference)?,
+        };
+        ops.merge(&o);
+        outs.push(t);
+    }
+    Ok(outs)
 }
 
 /// `let x = source;` for each used input, in the inputs' order; and the arguments they read.

@@ -461,7 +461,6 @@ impl Emitter<'_> {
             from_qdot,
             mass: v.mass_ni.clone(),
             force: v.l_ni.clone(),
-            solved: n_u,
             post: None,
             checks: self.runtime_factors(v),
             equations: n_u,
@@ -478,7 +477,7 @@ impl Emitter<'_> {
         let c = classical::derive(model, mech);
         let speeds: Vec<(Symbol, String)> = model.velocities.iter().zip(&self.names.velocities).map(|(v, n)| (*v, n.clone())).collect();
         let qd: Vec<Expr> = model.velocities.iter().map(|s| s.expr()).collect();
-        let (mass, force, solved, post, matrix_name, label) = if name == "lagrange" {
+        let (mass, force, post, matrix_name, label) = if name == "lagrange" {
             // [M a^T; a 0] [q''; -lambda] = [f; gamma]: symmetric.
             let mut kkt = Matrix::zeros(m + r, m + r);
             for i in 0..m {
@@ -493,7 +492,7 @@ impl Emitter<'_> {
                 }
             }
             let rhs: Vec<Expr> = c.force.iter().chain(&c.gamma).copied().collect();
-            (kkt, rhs, m, None, "constraint matrix [M a^T; a 0]", "Lagrange's equations with multipliers")
+            (kkt, rhs, None, "constraint matrix [M a^T; a 0]", "Lagrange's equations with multipliers")
         } else {
             let kane = d.kane.as_ref().expect("Maggi needs the Kane derivation");
             let w = kane.w.clone();
@@ -503,7 +502,7 @@ impl Emitter<'_> {
             let mc = mech.mass.mul(&Matrix::column(drift.clone()));
             let rest = Matrix::column((0..m).map(|j| c.force[j] - mc.get(j, 0)).collect());
             let force = wt.mul(&rest).col(0);
-            (mass, force, kane.u.len(), Some((w, drift)), "Maggi matrix W^T M W", "Maggi's equations")
+            (mass, force, Some((w, drift)), "Maggi matrix W^T M W", "Maggi's equations")
         };
         let checks = d.kane.as_ref().map(|k| self.runtime_factors(k)).filter(|_| name == "maggi").unwrap_or_default();
         let form = Form {
@@ -516,7 +515,6 @@ impl Emitter<'_> {
             from_qdot: qd,
             mass,
             force,
-            solved,
             post,
             checks,
             equations: m,
@@ -565,7 +563,6 @@ impl Emitter<'_> {
         let integrates = nq == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
-        let _ = f.solved;
         Ok(quote! {
             #mod_doc
             pub mod #module {
@@ -973,8 +970,6 @@ struct Form {
     /// `matrix x = force`, solved numerically (symmetric: the upper triangle is read).
     mass: Matrix,
     force: Vec<Expr>,
-    /// How many entries of `x` are speeds' rates (the rest are multipliers).
-    solved: usize,
     /// Maggi: the speeds' rates are `W x + c`.
     post: Option<(Matrix, Vec<Expr>)>,
     /// Factors whose vanishing makes the equations singular.
