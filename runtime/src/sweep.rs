@@ -9,7 +9,7 @@
 //! assert!(points.iter().any(|p| p.method == "reduced_volterra"));
 //! ```
 
-use crate::compare::{CompareError, output_times, run_with};
+use crate::compare::{CompareError, run_with};
 use crate::integrate::{Method, Settings};
 use crate::system::Drift;
 use generated::Model;
@@ -101,7 +101,6 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
     let settings = plan(model, options);
     let total = forms.len() * settings.len();
     let mut points = Vec::new();
-    let _ = output_times(model);
     for form in &forms {
         for s in &settings {
             let setting = match s.method {

@@ -128,19 +128,23 @@ fn join_mul(den: &[Code]) -> TokenStream {
 /// A float literal for a rational number.
 pub fn literal(r: &Rat) -> Result<TokenStream, LowerError> {
     let v = rat_to_f64(r);
-    if !v.is_finite() {
-        return Err(LowerError::NotFinite(r.to_string()));
-    }
-    let lit = Literal::f64_unsuffixed(v.abs());
+    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(r.to_string()))?;
     Ok(if v < 0.0 { quote!(-#lit) } else { quote!(#lit) })
+}
+
+/// `|v|` as the shortest literal that reads back to it (`0.5`, `1e-12`, `1.0`).
+fn magnitude_literal(v: f64) -> Option<Literal> {
+    if !v.is_finite() {
+        return None;
+    }
+    // Debug formatting is the shortest round-trip form, with an exponent when that is shorter.
+    let text = format!("{:?}", v.abs());
+    Some(text.parse().unwrap_or_else(|_| Literal::f64_unsuffixed(v.abs())))
 }
 
 fn num_code(r: &Rat) -> Result<Code, LowerError> {
     let v = rat_to_f64(r);
-    if !v.is_finite() {
-        return Err(LowerError::NotFinite(r.to_string()));
-    }
-    let lit = Literal::f64_unsuffixed(v.abs());
+    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(r.to_string()))?;
     Ok(if v < 0.0 { Code::Neg(Box::new(Code::Atom(quote!(#lit)))) } else { Code::Atom(quote!(#lit)) })
 }
 
@@ -311,5 +315,8 @@ mod tests {
         assert_eq!(show(a.powi(5)), "f64::powi(a, 5)");
         assert_eq!(show((a + b).recip()), "1.0 / (a + b)");
         assert_eq!(show(a.sqrt()), "f64::sqrt(a)");
+        let tiny = Expr::num(crate::symbolic::number::rat_from_f64(1e-12).unwrap());
+        assert_eq!(show(a * tiny), "1e-12 * a");
+        assert_eq!(show(a * 2), "2.0 * a");
     }
 }

@@ -224,6 +224,7 @@ impl Emitter<'_> {
         let coords: Vec<String> = model.coordinates.iter().map(|s| s.name()).collect();
         let cons = &m.constraint_names;
         let ign: Vec<Literal> = d.ignorable.iter().map(|&i| usize_lit(i)).collect();
+        let (pivot, singular, constraint) = (f64_lit(PIVOT_TOLERANCE), f64_lit(SINGULAR_TOLERANCE), f64_lit(CONSTRAINT_TOLERANCE));
         let mut out = quote! {
             #description
             pub const MODEL: &str = #name;
@@ -244,13 +245,12 @@ impl Emitter<'_> {
             #[doc = "Indices of the ignorable coordinates in `COORDINATES`."]
             pub const IGNORABLE: [usize; NUM_IGNORABLE] = [#(#ign),*];
             #[doc = "A singular factor of `[Y; M'; a]` smaller than this in magnitude stops the right-hand side."]
-            pub const SINGULAR_TOLERANCE: f64 = 1e-12;
+            pub const SINGULAR_TOLERANCE: f64 = #singular;
             #[doc = "A mass-matrix pivot smaller than this, relative to the largest entry, stops the right-hand side."]
-            pub const PIVOT_TOLERANCE: f64 = 1e-13;
+            pub const PIVOT_TOLERANCE: f64 = #pivot;
             #[doc = "Initial velocities are rejected when a constraint residual exceeds this, relative to the residual's magnitude bound."]
-            pub const CONSTRAINT_TOLERANCE: f64 = 1e-9;
+            pub const CONSTRAINT_TOLERANCE: f64 = #constraint;
         };
-        debug_assert_eq!((PIVOT_TOLERANCE, SINGULAR_TOLERANCE, CONSTRAINT_TOLERANCE), (1e-13, 1e-12, 1e-9));
         if let Some((q0, qd0)) = &model.initial {
             let q0: Vec<TokenStream> = q0.iter().map(|x| f64_lit(*x)).collect();
             let qd0: Vec<TokenStream> = qd0.iter().map(|x| f64_lit(*x)).collect();
