@@ -23,12 +23,12 @@ macro_rules! bench_rhs {
 }
 
 fn rhs(c: &mut Criterion) {
-    bench_rhs!(c, cart_pendulum, "cart_pendulum", [reduced_volterra, kane]);
+    bench_rhs!(c, cart_pendulum, "cart_pendulum", [lagrange, maggi, kane, reduced_volterra]);
     bench_rhs!(c, cart_pendulum_baked, "cart_pendulum_baked", [reduced_volterra, kane]);
-    bench_rhs!(c, three_body, "three_body", [reduced_volterra, kane]);
+    bench_rhs!(c, three_body, "three_body", [lagrange, maggi, kane, reduced_volterra]);
     bench_rhs!(c, three_body_drop, "three_body_drop", [reduced_volterra]);
     bench_rhs!(c, three_body_split, "three_body_split", [reduced_volterra, kane]);
-    bench_rhs!(c, satellite_boom, "satellite_boom", [reduced_volterra, kane]);
+    bench_rhs!(c, satellite_boom, "satellite_boom", [lagrange, maggi, kane, reduced_volterra]);
 }
 
 criterion_group!(benches, rhs);
