@@ -20,7 +20,7 @@
 
 use super::ops::OpCount;
 use crate::symbolic::number::{Rat, rat_to_f64};
-use crate::symbolic::{Expr, Func, Node, Symbol};
+use crate::symbolic::{Expr, Node, Symbol};
 use num_traits::{One, Signed, ToPrimitive, Zero};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
@@ -148,17 +148,6 @@ fn num_code(r: &Rat) -> Result<Code, LowerError> {
     Ok(if v < 0.0 { Code::Neg(Box::new(Code::Atom(quote!(#lit)))) } else { Code::Atom(quote!(#lit)) })
 }
 
-fn func_name(f: Func) -> &'static str {
-    match f {
-        Func::Sin => "sin",
-        Func::Cos => "cos",
-        Func::Tan => "tan",
-        Func::Exp => "exp",
-        Func::Ln => "ln",
-        Func::Abs => "abs",
-    }
-}
-
 fn call(name: &'static str, args: TokenStream, ops: &mut OpCount) -> Code {
     ops.call(name);
     let f = proc_macro2::Ident::new(name, proc_macro2::Span::call_site());
@@ -252,7 +241,7 @@ fn lower_node(
         }
         Node::Fun(f, a) => {
             let at = child(*a, ops)?.tokens();
-            call(func_name(*f), at, ops)
+            call(f.name(), at, ops)
         }
         Node::Apply(name, a) if *name == super::optimize::reciprocal_symbol() => {
             ops.div += 1;

@@ -111,6 +111,8 @@ struct Emitter<'a> {
     functions: Vec<(String, usize, OpCount)>,
     /// Per emitted formulation: name, states, equations.
     forms: Vec<(String, usize, usize)>,
+    /// The states end with the work integral `W`.
+    work: bool,
 }
 
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
@@ -132,7 +134,11 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         names: SymbolNames { coordinates, velocities, parameters, momenta, quasi },
         functions: Vec::new(),
         forms: Vec::new(),
+        work: false,
     };
+    // Applied non-potential forces can do work (Q not identically zero once prepared): every
+    // formulation then carries the work integral W as its last state.
+    em.work = derived.mech.q_forces.iter().any(|q| !em.prep.prepare(*q).is_zero());
     let mut items = vec![em.header(&derived)];
     items.push(em.params());
     items.push(error_type());
@@ -410,7 +416,7 @@ impl Emitter<'_> {
             }
             Function::Constraints => {
                 let (args, inputs) = self.q_qdot_inputs(true);
-                let res = velocity_residuals(m, &self.model.velocities);
+                let res = m.velocity_residuals(&self.model.velocities);
                 let b = self.body("constraint_residuals", &res, &inputs, &args)?;
                 out.push(simple_fn(
                     "constraint_residuals",
@@ -528,10 +534,8 @@ impl Emitter<'_> {
         let model = self.model;
         let m = model.m();
         let name = f.name.as_str();
-        let nq = f.kept.len();
-        let n_speeds = f.speeds.len();
-        let work = self.has_work(d);
-        let n_states = nq + n_speeds + usize::from(work);
+        let work = self.work;
+        let n_states = f.states(work);
         let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
         state_names.extend(f.speeds.iter().map(|(s, _)| s.name()));
         if work {
@@ -539,28 +543,27 @@ impl Emitter<'_> {
         }
         let states_l = usize_lit(n_states);
 
-        let rhs = self.rhs_item(f, d, work, n_states, "rhs", &f.force, &[])?;
+        let rhs = self.rhs_item(f, d, "rhs", &f.force, &[])?;
         let stabilized = if name == "lagrange" {
             // Baumgarte: a q'' = gamma - 2 alpha (a q' + b) - beta^2 h.
             let (alpha, beta) = (Symbol::new("alpha__"), Symbol::new("beta__"));
             let mech = &d.mech;
             let mut force = f.force.clone();
             let m = mech.m;
-            for i in 0..mech.r {
-                let residual = Expr::sum((0..m).map(|j| mech.a.get(i, j) * model.velocities[j].expr())) + mech.b[i];
+            for (i, residual) in mech.velocity_residuals(&model.velocities).into_iter().enumerate() {
                 let position = mech.holonomic.iter().find(|(k, _)| *k == i).map_or(Expr::zero(), |(_, h)| *h);
                 force[m + i] = force[m + i] - alpha.expr() * residual * 2 - beta.expr().powi(2) * position;
             }
-            self.rhs_item(f, d, work, n_states, "rhs_baumgarte", &force, &[(alpha, "alpha"), (beta, "beta")])?
+            self.rhs_item(f, d, "rhs_baumgarte", &force, &[(alpha, "alpha"), (beta, "beta")])?
         } else {
             TokenStream::new()
         };
-        let init = self.initial_state(f, d, work)?;
+        let init = self.initial_state(f, d)?;
         let vel = self.velocities_fn(f)?;
         let conditioning = self.conditioning_fns(f)?;
         let module = ident(name);
         let eqs = usize_lit(f.equations);
-        let integrates = nq == m;
+        let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
         Ok(quote! {
@@ -587,8 +590,9 @@ impl Emitter<'_> {
     }
 
     /// The `rhs` function (or a variant with `extra` scalar arguments after `dstate`).
-    #[allow(clippy::too_many_arguments)]
-    fn rhs_item(&mut self, f: &Form, d: &Derived, work: bool, n_states: usize, fn_name: &str, force: &[Expr], extra: &[(Symbol, &str)]) -> Result<TokenStream, ModelError> {
+    fn rhs_item(&mut self, f: &Form, d: &Derived, fn_name: &str, force: &[Expr], extra: &[(Symbol, &str)]) -> Result<TokenStream, ModelError> {
+        let work = self.work;
+        let n_states = f.states(work);
         let model = self.model;
         let name = f.name.as_str();
         let nq = f.kept.len();
@@ -772,11 +776,6 @@ impl Emitter<'_> {
         Ok(out)
     }
 
-    /// True when applied non-potential forces can do work (Q is not identically zero).
-    fn has_work(&mut self, d: &Derived) -> bool {
-        d.mech.q_forces.iter().any(|q| !self.prep.prepare(*q).is_zero())
-    }
-
     /// Inputs of the functions of a state: `t`, kept coordinates and speeds from `state`
     /// (argument 1), parameters (argument 2), `G_I` (argument 3).
     fn state_inputs(&self, f: &Form) -> Vec<Input> {
@@ -845,14 +844,15 @@ impl Emitter<'_> {
         Ok(())
     }
 
-    fn initial_state(&mut self, f: &Form, d: &Derived, work: bool) -> Result<TokenStream, ModelError> {
+    fn initial_state(&mut self, f: &Form, d: &Derived) -> Result<TokenStream, ModelError> {
+        let work = self.work;
         let model = self.model;
         let mech = &d.mech;
         let name = f.name.as_str();
         let (args, inputs) = self.q_qdot_inputs(true);
         let u = &f.from_qdot;
         let g = momenta(mech, &d.ignorable, &model.velocities);
-        let residuals = velocity_residuals(mech, &model.velocities);
+        let residuals = mech.velocity_residuals(&model.velocities);
         let bounds: Vec<Expr> = (0..mech.r)
             .map(|i| {
                 Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * model.velocities[j].expr()))) + magnitude(mech.b[i])
@@ -978,6 +978,13 @@ struct Form {
     matrix_name: &'static str,
 }
 
+impl Form {
+    /// Length of the state: kept coordinates, speeds, and `W` when forces can do work.
+    fn states(&self, work: bool) -> usize {
+        self.kept.len() + self.speeds.len() + usize::from(work)
+    }
+}
+
 /// `if !(f.abs() > SINGULAR_TOLERANCE) { return Err(..) }` per factor.
 fn singular_checks(factors: &[Expr], values: &[TokenStream]) -> Vec<TokenStream> {
     factors
@@ -997,15 +1004,7 @@ fn singular_checks(factors: &[Expr], values: &[TokenStream]) -> Vec<TokenStream>
 
 /// `M' q' + N2` for the ignorable coordinates.
 fn momenta(m: &Mechanics, ignorable: &[usize], velocities: &[Symbol]) -> Vec<Expr> {
-    ignorable
-        .iter()
-        .map(|&i| Expr::sum((0..m.m).map(|j| m.mass.get(i, j) * velocities[j].expr())) + m.n[i])
-        .collect()
-}
-
-/// `a q' + b`.
-fn velocity_residuals(m: &Mechanics, velocities: &[Symbol]) -> Vec<Expr> {
-    (0..m.r).map(|i| Expr::sum((0..m.m).map(|j| m.a.get(i, j) * velocities[j].expr())) + m.b[i]).collect()
+    ignorable.iter().map(|&i| m.momentum(i, velocities)).collect()
 }
 
 /// The worst-case cost of `solve_dense` for `n` unknowns, added to a function's count.

@@ -34,20 +34,14 @@ pub struct Classical {
 pub fn derive(model: &Model, mech: &Mechanics) -> Classical {
     let m = mech.m;
     let chain = model.position_chain();
-    let qd: Vec<Expr> = model.velocities.iter().map(|s| s.expr()).collect();
     let force = (0..m)
         .map(|j| {
             let q = model.coordinates[j];
-            let momentum = Expr::sum((0..m).map(|k| mech.mass.get(j, k) * qd[k])) + mech.n[j];
+            let momentum = mech.momentum(j, &model.velocities);
             mech.q_forces[j] - mech.potential.diff(q) + mech.kinetic.diff(q) - chain.dt(momentum)
         })
         .collect();
-    let gamma = (0..mech.r)
-        .map(|i| {
-            let residual = Expr::sum((0..m).map(|j| mech.a.get(i, j) * qd[j])) + mech.b[i];
-            -chain.dt(residual)
-        })
-        .collect();
+    let gamma = mech.velocity_residuals(&model.velocities).into_iter().map(|r| -chain.dt(r)).collect();
     Classical { force, gamma }
 }
 

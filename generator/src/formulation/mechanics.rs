@@ -231,4 +231,17 @@ impl Mechanics {
         }
         t
     }
+
+    /// The generalized momentum of coordinate `j`, `dT/dq'_j = M_j q' + N_j` (Eq. 26 for an
+    /// ignorable one).
+    pub fn momentum(&self, j: usize, velocities: &[Symbol]) -> Expr {
+        Expr::sum((0..self.m).map(|k| self.mass.get(j, k) * velocities[k].expr())) + self.n[j]
+    }
+
+    /// The residuals `a q' + b` of the kinematic constraints, one per constraint.
+    pub fn velocity_residuals(&self, velocities: &[Symbol]) -> Vec<Expr> {
+        (0..self.r)
+            .map(|i| Expr::sum((0..self.m).map(|j| self.a.get(i, j) * velocities[j].expr())) + self.b[i])
+            .collect()
+    }
 }

@@ -234,7 +234,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
             // J_NI: (d/dt dω/du_k, inertial) . H, with H = I ω in body components.
             if let Some(inertia) = &body.inertia {
                 let c = [pw.get(0, k), pw.get(1, k), pw.get(2, k)];
-                let transport = [om[1] * c[2] - om[2] * c[1], om[2] * c[0] - om[0] * c[2], om[0] * c[1] - om[1] * c[0]];
+                let transport = cross([om[0], om[1], om[2]], c);
                 let dpw: Vec<Expr> = (0..3).map(|r| chain.dt(c[r]) + transport[r]).collect();
                 let h = inertia.mul(&Matrix::column(om.clone()));
                 k_ni[k] = k_ni[k] + dpw[0] * h.get(0, 0) + dpw[1] * h.get(1, 0) + dpw[2] * h.get(2, 0);

@@ -46,7 +46,8 @@ pub enum Func {
 }
 
 impl Func {
-    /// The name used in model files and printed output.
+    /// The name used in model files and printed output; also the name of the `f64` method
+    /// that emitted code calls.
     pub fn name(self) -> &'static str {
         match self {
             Func::Sin => "sin",
