@@ -5,7 +5,7 @@
 //! Coefficients: Hairer, Nørsett & Wanner, "Solving Ordinary Differential Equations I", the
 //! published DOP853 tableau.
 
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, finite, initial_step};
+use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, finish_step, grown_step, initial_step, next_step_size};
 
 const C: [f64; 12] = [
     0.0,
@@ -285,15 +285,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let (mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n]);
     let mut rcont = vec![vec![0.0; n]; 8];
     while next < outputs.len() {
-        if stats.steps + stats.rejected >= s.max_steps {
-            return Err(stop(t, &y, Reason::TooManySteps(s.max_steps)));
-        }
-        if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
-            return Err(stop(t, &y, Reason::StepSizeTooSmall { h }));
-        }
-        if t + 1.01 * h >= t_end {
-            h = t_end - t;
-        }
+        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
         for st in 1..12 {
             combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);
@@ -330,7 +322,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         if e <= 1.0 {
             stats.steps += 1;
             let fac = (fac11 / safe).clamp(facc2, facc1);
-            let mut h_new = h / fac;
+            let h_new = h / fac;
             let t_new = if h == t_end - t { t_end } else { t + h };
             {
                 let (_, tail) = k.split_at_mut(12);
@@ -369,23 +361,11 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             }
             t = t_new;
             std::mem::swap(&mut y, &mut y_new);
-            if !finite(&y) {
-                return Err(stop(t, &y, Reason::Diverged));
-            }
             let (first, rest) = k.split_at_mut(1);
-            first[0].copy_from_slice(&rest[11]);
-            if project(t, &mut y).map_err(|r| stop(t, &y, r))? {
-                f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-                if outputs[next - 1] == t {
-                    states.last_mut().expect("an output was written").copy_from_slice(&y);
-                }
-            }
-            h_new = h_new.min(s.h_max);
-            if rejected_last {
-                h_new = h_new.min(h);
-            }
+            finish_step(f, project, t, &mut y, &rest[11], &mut first[0], &mut states, outputs[next - 1], &mut stats)
+                .map_err(|r| stop(t, &y, r))?;
+            h = grown_step(h_new, h, s, rejected_last);
             rejected_last = false;
-            h = h_new;
         } else {
             stats.rejected += 1;
             rejected_last = true;

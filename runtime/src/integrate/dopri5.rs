@@ -1,7 +1,7 @@
 //! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
-use super::{Project, Reason, States, Rhs, RunError, Settings, Solution, Stats, axpy_stages, combine, error_norm, finite, initial_step};
+use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, error_norm, finish_step, grown_step, initial_step, next_step_size};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -46,15 +46,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let (mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut rcont = vec![vec![0.0; n]; 5];
     while next < outputs.len() {
-        if stats.steps + stats.rejected >= s.max_steps {
-            return Err(stop(t, &y, Reason::TooManySteps(s.max_steps)));
-        }
-        if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
-            return Err(stop(t, &y, Reason::StepSizeTooSmall { h }));
-        }
-        if t + 1.01 * h >= t_end {
-            h = t_end - t;
-        }
+        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
         for st in 1..6 {
             combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);
@@ -74,7 +66,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         let fac11 = e.powf(expo1);
         if e <= 1.0 {
             let fac = (fac11 / facold.powf(beta) / safe).clamp(facc2, facc1);
-            let mut h_new = h / fac;
+            let h_new = h / fac;
             facold = e.max(1e-4);
             stats.steps += 1;
             // Dense output over [t, t + h].
@@ -101,23 +93,10 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             t = t_new;
             std::mem::swap(&mut y, &mut y_new);
             let (first, rest) = k.split_at_mut(1);
-            first[0].copy_from_slice(&rest[5]);
-            if !finite(&y) {
-                return Err(stop(t, &y, Reason::Diverged));
-            }
-            if project(t, &mut y).map_err(|r| stop(t, &y, r))? {
-                f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-                // An output at the step's end reads the projected state.
-                if outputs[next - 1] == t {
-                    states.last_mut().expect("an output was written").copy_from_slice(&y);
-                }
-            }
-            h_new = h_new.min(s.h_max);
-            if rejected_last {
-                h_new = h_new.min(h);
-            }
+            finish_step(f, project, t, &mut y, &rest[5], &mut first[0], &mut states, outputs[next - 1], &mut stats)
+                .map_err(|r| stop(t, &y, r))?;
+            h = grown_step(h_new, h, s, rejected_last);
             rejected_last = false;
-            h = h_new;
         } else {
             stats.rejected += 1;
             rejected_last = true;

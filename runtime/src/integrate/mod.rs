@@ -271,6 +271,53 @@ fn axpy_stages(out: &mut [f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
     }
 }
 
+/// Before an adaptive step: the step budget, step-size underflow, and the last step shortened
+/// to end on `t_end`. Returns the step to try.
+fn next_step_size(stats: &Stats, s: &Settings, t: f64, h: f64, t_end: f64) -> Result<f64, Reason> {
+    if stats.steps + stats.rejected >= s.max_steps {
+        return Err(Reason::TooManySteps(s.max_steps));
+    }
+    if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
+        return Err(Reason::StepSizeTooSmall { h });
+    }
+    Ok(if t + 1.01 * h >= t_end { t_end - t } else { h })
+}
+
+/// After an accepted step ending at `t` with state `y`, whose right-hand side `fsal` the
+/// method already has: the divergence check, the first stage `k0` of the next step, and the
+/// projection (which re-evaluates `k0` and rewrites an output written at `t`).
+#[allow(clippy::too_many_arguments)]
+fn finish_step(
+    f: &mut Rhs,
+    project: &mut Project,
+    t: f64,
+    y: &mut [f64],
+    fsal: &[f64],
+    k0: &mut [f64],
+    states: &mut States,
+    last_output: f64,
+    stats: &mut Stats,
+) -> Result<(), Reason> {
+    if !finite(y) {
+        return Err(Reason::Diverged);
+    }
+    k0.copy_from_slice(fsal);
+    if project(t, y)? {
+        f(t, y, k0, stats)?;
+        if last_output == t {
+            states.last_mut().expect("an output was written").copy_from_slice(y);
+        }
+    }
+    Ok(())
+}
+
+/// The step after an accepted one: the controller's proposal, capped by `h_max`, and not
+/// larger than the step just taken when that one followed a rejection.
+fn grown_step(proposal: f64, taken: f64, s: &Settings, rejected_last: bool) -> f64 {
+    let h = proposal.min(s.h_max);
+    if rejected_last { h.min(taken) } else { h }
+}
+
 fn finite(y: &[f64]) -> bool {
     y.iter().all(|v| v.is_finite())
 }
