@@ -18,14 +18,23 @@
 #![forbid(unsafe_code)]
 #![deny(warnings)]
 
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod cart_pendulum;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod cart_pendulum_baked;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod cartesian_pendulum;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod rolling_disk;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod satellite_boom;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod spring_cart;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod three_body;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod three_body_drop;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod three_body_split;
 
 mod registry;

@@ -207,6 +207,14 @@ macro_rules! formulation {
 }
 
 macro_rules! point {
+    // A scalar function, written as one output.
+    ($m:ident, $fun:ident) => {
+        |t, q, qdot, params, out| {
+            let p = crate::$m::Params::from_values(fixed("params", params)?);
+            fixed_mut::<1>("out", out)?[0] = crate::$m::$fun(t, fixed("q", q)?, fixed("qdot", qdot)?, &p);
+            Ok(())
+        }
+    };
     ($m:ident, $fun:ident, $n:expr) => {
         |t, q, qdot, params, out| {
             let p = crate::$m::Params::from_values(fixed("params", params)?);
@@ -230,16 +238,8 @@ macro_rules! model {
             default_params: || crate::$m::Params::default().values().to_vec(),
             initial: (&crate::$m::INITIAL_Q[..], &crate::$m::INITIAL_QDOT[..]),
             run: (crate::$m::T_START, crate::$m::T_END, crate::$m::DT_OUT),
-            energy: |t, q, qdot, params, out| {
-                let p = crate::$m::Params::from_values(fixed("params", params)?);
-                fixed_mut::<1>("out", out)?[0] = crate::$m::energy(t, fixed("q", q)?, fixed("qdot", qdot)?, &p);
-                Ok(())
-            },
-            work_rate: |t, q, qdot, params, out| {
-                let p = crate::$m::Params::from_values(fixed("params", params)?);
-                fixed_mut::<1>("out", out)?[0] = crate::$m::work_rate(t, fixed("q", q)?, fixed("qdot", qdot)?, &p);
-                Ok(())
-            },
+            energy: point!($m, energy),
+            work_rate: point!($m, work_rate),
             momenta: point!($m, momenta, crate::$m::NUM_IGNORABLE),
             constraint_residuals: point!($m, constraint_residuals, crate::$m::NUM_CONSTRAINTS),
             position_residuals: |t, q, _qdot, params, out| {

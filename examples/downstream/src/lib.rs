@@ -13,6 +13,7 @@
 #![deny(warnings)]
 
 /// Scene 1, generated at build time.
+#[allow(clippy::all)]
 pub mod cart_pendulum {
     include!(concat!(env!("OUT_DIR"), "/cart_pendulum.rs"));
 }

@@ -5,7 +5,8 @@
 use super::function::{Arg, Body, Input, arg_list, body, ident};
 use super::lower::literal;
 use super::ops::OpCount;
-use super::prepare::{Preparer, magnitude};
+use super::prepare::Preparer;
+use crate::symbolic::eval::magnitude;
 use super::{Formulation, Function, Generated, Options, Parameters, Summary};
 use crate::formulation::mechanics::{self, Mechanics};
 use crate::formulation::volterra::{self, Volterra};

@@ -1,6 +1,5 @@
 //! Expressions made ready for emission: time functions inlined, `pi` and (when baked) the
-//! parameters replaced by numbers; and triangle-inequality magnitudes for residual tests.
-//!
+//! parameters replaced by numbers.
 
 use crate::model::Model;
 use crate::symbolic::number::rat_from_f64;
@@ -66,4 +65,3 @@ impl Preparer {
     }
 }
 
-pub use crate::symbolic::eval::magnitude;
