@@ -1,7 +1,7 @@
 //! Workspace-level checks of the derivation up to M, N, T0, Q, a, b and Definition 1.
 
 use generator::formulation::{ignorable, mechanics};
-use generator::model::{self, Model};
+use generator::model::Model;
 use generator::symbolic::limits::Limits;
 use generator::symbolic::parse::{lower, parse, Resolver};
 use generator::symbolic::trig::{SplitMix, zero_test};
@@ -10,9 +10,8 @@ use generator::symbolic::{Expr, Symbol};
 const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
 const OWN: [&str; 3] = ["cartesian_pendulum", "rolling_disk", "spring_cart"];
 
-fn load(name: &str) -> Model {
-    model::load(format!("{}/models/{name}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
+mod common;
+use common::load;
 
 struct Names;
 impl Resolver for Names {

@@ -4,31 +4,17 @@
 
 use generated::{Failure, Model};
 use generator::formulation::{ignorable, mechanics, volterra};
-use generator::model::{self, Model as ModelDef};
-use generator::symbolic::eval::Env;
+use generator::model::Model as ModelDef;
 use generator::symbolic::trig::SplitMix;
-use generator::symbolic::{Expr, Symbol};
+use generator::symbolic::Expr;
 
 const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];
 
-fn load(name: &str) -> ModelDef {
-    model::load(format!("{}/models/{name}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
+mod common;
+use common::{accelerations_from as accelerations, load};
 
 fn emitted(module: &str) -> Model {
     generated::find(module).unwrap_or_else(|| panic!("no emitted module {module}"))
-}
-
-/// `q''` from a Volterra form's `q' = W u + X` and the emitted `u'`.
-fn accelerations(v: &volterra::Volterra, env: &Env, model: &ModelDef, udot: &[f64]) -> Vec<f64> {
-    let chain: Vec<(Symbol, Expr)> = model.coordinates.iter().copied().zip(v.qdot.iter().copied()).collect();
-    v.qdot
-        .iter()
-        .map(|e| {
-            let explicit = e.time_derivative(model.t, &chain).eval(env).unwrap();
-            explicit + v.u.iter().zip(udot).map(|(u, ud)| e.diff(*u).eval(env).unwrap() * ud).sum::<f64>()
-        })
-        .collect()
 }
 
 fn close(a: f64, b: f64, rel: f64) -> bool {

@@ -2,16 +2,15 @@
 //! states consistent with the constraints.
 
 use generator::formulation::{ignorable, mechanics, volterra};
-use generator::model::{self, Model};
+use generator::model::Model;
 use generator::symbolic::eval::Env;
 use generator::symbolic::trig::SplitMix;
-use generator::symbolic::{Expr, Symbol};
+use generator::symbolic::Expr;
 
 const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];
 
-fn load(name: &str) -> Model {
-    model::load(format!("{}/models/{name}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
+mod common;
+use common::{accelerations_from, load};
 
 /// Solves a small dense system by Gaussian elimination with partial pivoting.
 fn lin_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
@@ -42,25 +41,8 @@ fn accelerations(v: &volterra::Volterra, env: &Env, model: &Model) -> (Vec<f64>,
     let mass: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| v.mass_ni.get(i, j).eval(env).unwrap()).collect()).collect();
     let l: Vec<f64> = v.l_ni.iter().map(|e| e.eval(env).unwrap()).collect();
     let ud = lin_solve(mass, l);
-    let chain: Vec<(Symbol, Expr)> = model.coordinates.iter().copied().zip(v.qdot.iter().copied()).collect();
-    let mut env2 = env.clone();
-    let primes: Vec<Symbol> = v.u.iter().map(|u| Symbol::new(&format!("{}'", u.name()))).collect();
-    for (p, x) in primes.iter().zip(&ud) {
-        env2.set(*p, *x);
-    }
     let qd: Vec<f64> = v.qdot.iter().map(|e| e.eval(env).unwrap()).collect();
-    let qdd: Vec<f64> = v
-        .qdot
-        .iter()
-        .map(|e| {
-            let mut d = e.time_derivative(model.t, &chain);
-            for (u, p) in v.u.iter().zip(&primes) {
-                d = d + e.diff(*u) * p.expr();
-            }
-            d.eval(&env2).unwrap()
-        })
-        .collect();
-    (qd, qdd)
+    (qd, accelerations_from(v, env, model, &ud))
 }
 
 #[test]
