@@ -85,6 +85,10 @@ fn at_the_papers_settings_the_reduced_method_keeps_constraint_and_momenta_to_rou
         }
         // Round-off: relative to the size of the momenta (scene 3's are about 4.5e3).
         assert!(reduced.momentum_error_rel < 1e-12, "{scene}: reduced momentum error {:e} (rel)", reduced.momentum_error_rel);
+        assert_eq!(reduced.momenta.len(), model.ignorable.len());
+        for g in &reduced.momenta {
+            assert!(g.rel < 1e-12, "{scene}: momentum of {} drifts by {:e} (rel)", g.coordinate, g.rel);
+        }
         assert!(reduced.constraint_error_norm < 1e-12, "{scene}: reduced constraint error {:e}", reduced.constraint_error_norm);
         assert!(
             reduced.energy_error_norm <= lagrange.energy_error_norm,

@@ -49,8 +49,11 @@ pub struct Record {
     pub energy_error_rel: f64,
     pub constraint_error_norm: f64,
     pub position_constraint_error_norm: f64,
+    /// All ignorable momenta together.
     pub momentum_error_norm: f64,
     pub momentum_error_rel: f64,
+    /// Each ignorable momentum on its own.
+    pub momenta: Vec<MomentumError>,
     pub steps: usize,
     pub rejected: usize,
     pub rhs_calls: usize,
@@ -58,6 +61,16 @@ pub struct Record {
     pub max_condition: f64,
     /// Smallest distance to the singular set of `[Y; M'; a]` over the samples (`null`: none).
     pub min_singular_margin: f64,
+}
+
+/// The drift of one ignorable coordinate's momentum over a run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MomentumError {
+    pub coordinate: String,
+    /// Norm of `G(t) - G(0)` over the samples.
+    pub norm: f64,
+    /// The same divided by `|G(0)|` (NaN, `null` in JSON, when `G(0) = 0`).
+    pub rel: f64,
 }
 
 /// A formulation's run: its record, samples and monitors.
@@ -133,6 +146,15 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         position_constraint_error_norm: norm(&invariants.position_constraint),
         momentum_error_norm: momentum,
         momentum_error_rel: if g0 > 0.0 { momentum / g0 } else { f64::NAN },
+        momenta: model
+            .ignorable
+            .iter()
+            .zip(invariants.momentum_error.iter().zip(&invariants.momentum0))
+            .map(|(&j, (series, g))| {
+                let n = norm(series);
+                MomentumError { coordinate: model.coordinates[j].to_string(), norm: n, rel: if *g != 0.0 { n / g.abs() } else { f64::NAN } }
+            })
+            .collect(),
         steps: solution.stats.steps,
         rejected: solution.stats.rejected,
         rhs_calls: solution.stats.rhs_calls,
@@ -160,9 +182,13 @@ pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareErro
 }
 
 /// The runs as a Markdown table shaped like the paper's.
+/// One column pair (absolute, relative) per ignorable momentum, as the paper's "momentum err (X)".
 pub fn table(runs: &[Run]) -> String {
-    let mut out = String::from(
-        "| method | states | equations | CPU s | energy err | (rel) | constraint err | momentum err | (rel) | steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    let names: Vec<&str> = runs.first().map(|r| r.record.momenta.iter().map(|m| m.coordinate.as_str()).collect()).unwrap_or_default();
+    let momentum_header: String = names.iter().map(|n| format!(" momentum err ({n}) | (rel) |")).collect();
+    let momentum_rule = "---|---|".repeat(names.len());
+    let mut out = format!(
+        "| method | states | equations | CPU s | energy err | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
     );
     for r in runs.iter().map(|r| &r.record) {
         let constraint = if r.position_constraint_error_norm > 0.0 {
@@ -170,13 +196,10 @@ pub fn table(runs: &[Run]) -> String {
         } else {
             format!("{:.2e}", r.constraint_error_norm)
         };
-        let (momentum, momentum_rel) = if r.momentum_error_rel.is_nan() {
-            ("-".to_string(), "-".to_string())
-        } else {
-            (format!("{:.2e}", r.momentum_error_norm), format!("{:.2e}", r.momentum_error_rel))
-        };
+        let fmt = |x: f64| if x.is_nan() { "-".to_string() } else { format!("{x:.2e}") };
+        let momentum: String = r.momenta.iter().map(|m| format!(" {} | {} |", fmt(m.norm), fmt(m.rel))).collect();
         out += &format!(
-            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} | {} | {} | {} | {} | {:.1e} |\n",
+            "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} |{} {} | {} | {:.1e} |\n",
             r.method,
             r.states,
             r.equations,
@@ -185,7 +208,6 @@ pub fn table(runs: &[Run]) -> String {
             r.energy_error_rel,
             constraint,
             momentum,
-            momentum_rel,
             r.steps,
             r.rhs_calls,
             r.max_condition

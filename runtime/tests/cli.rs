@@ -20,11 +20,14 @@ fn json_records_carry_the_documented_fields() {
             assert!(r.get(field).is_some(), "missing `{field}` in {r}");
         }
         assert_eq!(r["scene"], "satellite_boom");
+        let names: Vec<&str> = r["momenta"].as_array().unwrap().iter().map(|m| m["coordinate"].as_str().unwrap()).collect();
+        assert_eq!(names, ["X", "Y", "Z"], "one momentum record per ignorable coordinate");
     }
     // The paper's state counts for scene 3, the work integral included: 15, 15, 15, 12.
     let states: Vec<u64> = records.iter().map(|r| r["states"].as_u64().unwrap()).collect();
     assert_eq!(states, vec![15, 15, 15, 12]);
     assert!(text.contains("| reduced_volterra | 12 | 4 |"), "{text}");
+    assert!(text.contains("momentum err (X) | (rel) | momentum err (Y)"), "{text}");
 }
 
 #[test]
