@@ -178,3 +178,15 @@ fn dropping_an_ignorable_coordinate_that_the_equations_need_is_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("`psi` cannot leave the state") && err.contains("help: set `integrate_ignorable: true`"), "{err}");
 }
+
+#[test]
+fn quasi_velocities_dependent_on_the_constraints_are_refused_naming_the_rows() {
+    // Scene 1's reduced quasi-velocity replaced by the wheel constraint itself: [Y_NI; M'; a] is
+    // singular at every state.
+    let src = scene1().replacen("reduced: [\"theta2' - theta1'\"]", "reduced: [\"l*cos(theta1 - theta2)*theta1' + l*theta2'\"]", 1);
+    assert_ne!(src, scene1(), "test edit not applied");
+    let model = from_source("models/broken.ron", &src).unwrap();
+    let options = generator::emit::Options::from_model(&model);
+    let e = generator::emit::generate(&model, &options).expect_err("a singular choice must not generate");
+    check(&e, ErrorKind::SingularQuasiVelocities, &["constraint `wheel` depends on the other rows", "quasi_velocities.reduced", "choose quasi-velocities independent"]);
+}

@@ -167,7 +167,11 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
                 ErrorKind::SingularQuasiVelocities,
                 &format!("quasi_velocities.{which}"),
                 which,
-                format!("the quasi-velocities with the constraints do not determine q' at any state: {} depend on the other rows", names.join(", ")),
+                format!(
+                    "the quasi-velocities with the constraints do not determine q' at any state: {} {} on the other rows",
+                    names.join(", "),
+                    if names.len() == 1 { "depends" } else { "depend" }
+                ),
                 "choose quasi-velocities independent of each other, of the constraints and of the ignorable momenta".into(),
             )
         }
