@@ -174,17 +174,14 @@ pub fn energy(
     let l = params.l;
     let g = params.g;
     let x0 = f64::cos(theta1);
-    x_dot * x_dot * (0.5 * m2 + 0.5 * M + 0.5 * m1)
-        + l
-            * (m2
-                * (l
-                    * ((0.5 * theta1_dot
-                        + 0.5 * (f64::cos(theta1 - theta2) * theta2_dot)) * theta1_dot
-                        + 0.16666666666666666 * (theta2_dot * theta2_dot))
-                    + f64::cos(theta2) * (0.5 * (x_dot * theta2_dot) - 0.5 * g)
-                    + (x_dot * theta1_dot - g) * x0)
-                + ((0.5 * (x_dot * x0) + 0.16666666666666666 * (l * theta1_dot))
-                    * theta1_dot - 0.5 * (g * x0)) * m1)
+    (0.5 * m2 + 0.5 * M + 0.5 * m1) * x_dot * x_dot
+        + (m2
+            * ((x_dot * theta1_dot - g) * x0
+                + ((0.5 * (f64::cos(theta1 - theta2) * theta2_dot) + 0.5 * theta1_dot)
+                    * theta1_dot + 0.16666666666666666 * (theta2_dot * theta2_dot)) * l
+                + f64::cos(theta2) * (0.5 * (x_dot * theta2_dot) - 0.5 * g))
+            + (theta1_dot * (0.5 * (x_dot * x0) + 0.16666666666666666 * (l * theta1_dot))
+                - 0.5 * (g * x0)) * m1) * l
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -197,7 +194,7 @@ pub fn work_rate(
     let theta1_dot = qdot[0];
     let theta2_dot = qdot[1];
     let tau = params.tau;
-    tau * (theta1_dot - theta2_dot)
+    (theta1_dot - theta2_dot) * tau
 }
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
@@ -217,10 +214,10 @@ pub fn momenta(
     let m2 = params.m2;
     let l = params.l;
     [
-        (m2 + M + m1) * x_dot
-            + l
-                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+        l
+            * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
+            + (m2 + M + m1) * x_dot,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -236,7 +233,7 @@ pub fn constraint_residuals(
     let theta1_dot = qdot[0];
     let theta2_dot = qdot[1];
     let l = params.l;
-    [(theta2_dot + f64::cos(theta1 - theta2) * theta1_dot) * l]
+    [l * (theta1_dot * f64::cos(theta1 - theta2) + theta2_dot)]
 }
 ///Position-level residuals of the holonomic constraints.
 #[allow(non_snake_case, clippy::all)]
@@ -288,21 +285,21 @@ pub mod lagrange {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
         let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = l * (m2 + 0.5 * m1) * x1;
+        let x6 = l * (m2 + 0.5 * m1) * x3;
         let x7 = l * x4;
-        let x8 = 0.5 * x0 * m2 * l;
-        let x9 = x0 * x2 - x1 * x3;
-        let x10 = -m2 - 0.5 * m1;
-        let x11 = x_dot * theta1_dot;
+        let x8 = 0.5 * x2 * m2 * l;
+        let x9 = x2 * x0 - x3 * x1;
+        let x10 = x_dot * theta1_dot;
+        let x11 = -m2 - 0.5 * m1;
         let x12 = theta1_dot - theta2_dot;
         let mut matrix: [[f64; 4]; 4] = [
-            [(m2 + 0.3333333333333333 * m1) * l * l, x5, x6, x7],
+            [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
             [x5, 0.3333333333333333 * m2 * l * l, x8, l],
             [x6, x8, m2 + M + m1, 0.0],
             [x7, l, 0.0, 0.0],
@@ -310,18 +307,17 @@ pub mod lagrange {
         let mut force: [f64; 4] = [
             tau
                 + l
-                    * ((-0.5 * x11 - 0.5 * g) * x2 * m1
-                        - (x2 * x_dot * x10 - 0.5 * (x9 * m2 * l * theta2_dot))
-                            * theta1_dot
-                        + m2
-                            * (x9 * l * theta2_dot
-                                * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                                + (-x11 - g) * x2)),
-            m2 * l * (0.5 * (x9 * l * theta1_dot * theta1_dot) - 0.5 * (g * x3)) - tau,
+                    * (m2
+                        * (l * x9 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                            + x0 * (-g - x10))
+                        - theta1_dot
+                            * (x11 * x0 * x_dot - 0.5 * (m2 * l * x9 * theta2_dot))
+                        + x0 * (-0.5 * g - 0.5 * x10) * m1),
+            m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
             l
-                * (0.5 * (m2 * theta2_dot * theta2_dot * x3)
-                    - x2 * theta1_dot * theta1_dot * x10),
-            x9 * l * theta1_dot * x12,
+                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
+                    - x11 * x0 * theta1_dot * theta1_dot),
+            x12 * l * x9 * theta1_dot,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -336,7 +332,7 @@ pub mod lagrange {
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
-        dstate[6] = tau * x12;
+        dstate[6] = x12 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -366,21 +362,21 @@ pub mod lagrange {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
         let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = l * (m2 + 0.5 * m1) * x1;
+        let x6 = l * (m2 + 0.5 * m1) * x3;
         let x7 = l * x4;
-        let x8 = 0.5 * x0 * m2 * l;
-        let x9 = x0 * x2 - x1 * x3;
-        let x10 = -m2 - 0.5 * m1;
-        let x11 = x_dot * theta1_dot;
+        let x8 = 0.5 * x2 * m2 * l;
+        let x9 = x2 * x0 - x3 * x1;
+        let x10 = x_dot * theta1_dot;
+        let x11 = -m2 - 0.5 * m1;
         let x12 = theta1_dot - theta2_dot;
         let mut matrix: [[f64; 4]; 4] = [
-            [(m2 + 0.3333333333333333 * m1) * l * l, x5, x6, x7],
+            [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
             [x5, 0.3333333333333333 * m2 * l * l, x8, l],
             [x6, x8, m2 + M + m1, 0.0],
             [x7, l, 0.0, 0.0],
@@ -388,18 +384,17 @@ pub mod lagrange {
         let mut force: [f64; 4] = [
             tau
                 + l
-                    * ((-0.5 * x11 - 0.5 * g) * x2 * m1
-                        - (x2 * x_dot * x10 - 0.5 * (x9 * m2 * l * theta2_dot))
-                            * theta1_dot
-                        + m2
-                            * (x9 * l * theta2_dot
-                                * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                                + (-x11 - g) * x2)),
-            m2 * l * (0.5 * (x9 * l * theta1_dot * theta1_dot) - 0.5 * (g * x3)) - tau,
+                    * (m2
+                        * (l * x9 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                            + x0 * (-g - x10))
+                        - theta1_dot
+                            * (x11 * x0 * x_dot - 0.5 * (m2 * l * x9 * theta2_dot))
+                        + x0 * (-0.5 * g - 0.5 * x10) * m1),
+            m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
             l
-                * (0.5 * (m2 * theta2_dot * theta2_dot * x3)
-                    - x2 * theta1_dot * theta1_dot * x10),
-            l * (x9 * theta1_dot * x12 - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
+                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
+                    - x11 * x0 * theta1_dot * theta1_dot),
+            l * (x12 * x9 * theta1_dot - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -414,7 +409,7 @@ pub mod lagrange {
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
-        dstate[6] = tau * x12;
+        dstate[6] = x12 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -443,9 +438,9 @@ pub mod lagrange {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                (theta2_dot + x0 * theta1_dot) * l,
-                f64::abs(l)
-                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+                l * (theta1_dot * x0 + theta2_dot),
+                (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot))
+                    * f64::abs(l),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -469,10 +464,10 @@ pub mod lagrange {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m2 + M + m1) * x_dot
-                + l
-                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+            l
+                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
+                + (m2 + M + m1) * x_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -518,12 +513,12 @@ pub mod lagrange {
         let m2 = params.m2;
         let l = params.l;
         let x0 = f64::cos(theta1 - theta2);
-        let x1 = 0.5 * x0 * m2 * l * l;
+        let x1 = 0.5 * m2 * l * l * x0;
         let x2 = l * (m2 + 0.5 * m1) * f64::cos(theta1);
-        let x3 = x0 * l;
+        let x3 = l * x0;
         let x4 = 0.5 * f64::cos(theta2) * m2 * l;
         [
-            [(m2 + 0.3333333333333333 * m1) * l * l, x1, x2, x3],
+            [l * l * (m2 + 0.3333333333333333 * m1), x1, x2, x3],
             [x1, 0.3333333333333333 * m2 * l * l, x4, l],
             [x2, x4, m2 + M + m1, 0.0],
             [x3, l, 0.0, 0.0],
@@ -581,28 +576,28 @@ pub mod maggi {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
         let x8 = x2 + x5;
         let x9 = m2 + 0.5 * m1;
-        let x10 = l * x7 * (x9 * x1 - 0.5 * (x0 * m2 * x8));
-        let x11 = x1 * x4;
-        let x12 = x0 * x3;
-        let x13 = x12 - x11;
-        let x14 = theta1_dot - theta2_dot;
-        let x15 = x11 - x12;
-        let x16 = -x13 * theta2_dot - theta1_dot * x15;
-        let x17 = x13 * (x8 * x7 - 1.0) * theta2_dot;
-        let x18 = (x8 * x7 * x15 - x11 + x12) * theta1_dot;
-        let x19 = x17 + x18;
-        let x20 = x_dot * theta1_dot;
-        let x21 = -m2 - 0.5 * m1;
+        let x10 = l * x7 * (x9 * x4 - 0.5 * (x3 * m2 * x8));
+        let x11 = theta1_dot - theta2_dot;
+        let x12 = x4 * x1;
+        let x13 = x3 * x0;
+        let x14 = x13 - x12;
+        let x15 = x12 - x13;
+        let x16 = -x14 * theta2_dot - theta1_dot * x15;
+        let x17 = -m2 - 0.5 * m1;
+        let x18 = x_dot * theta1_dot;
+        let x19 = (x7 * x8 - 1.0) * x14 * theta2_dot;
+        let x20 = (x13 - x12 + x7 * x8 * x15) * theta1_dot;
+        let x21 = x19 + x20;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -629,30 +624,31 @@ pub mod maggi {
             [x10, m2 + M + m1],
         ];
         let mut force: [f64; 2] = [
-            (tau
-                - x8
-                    * (m2
-                        * (l
-                            * (x7 * x14
-                                * (-0.5 * (x8 * x16 * x7) - 0.3333333333333333 * x17
-                                    - 0.3333333333333333 * x18)
-                                + x13 * (0.5 * theta1_dot + 0.5 * theta2_dot) * theta1_dot)
-                            - 0.5 * (x13 * l * theta1_dot * theta2_dot) - 0.5 * (g * x4))
-                        * l - tau)
-                + l
-                    * (m2
-                        * (l
-                            * (x13 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                                - 0.5 * (x19 * x8 * x7 * x14)) + (-x20 - g) * x3)
-                        - (x3 * x_dot * x21 - 0.5 * (x13 * m2 * l * theta2_dot))
-                            * theta1_dot
-                        - (m2 + 0.3333333333333333 * m1) * l * x16 * x7 * x7 * x14
-                        + (-0.5 * x20 - 0.5 * g) * x3 * m1)) * x7,
+            x7
+                * (tau
+                    + l
+                        * (m2
+                            * (x0 * (-g - x18)
+                                + l
+                                    * (x14 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
+                                        - 0.5 * (x21 * x11 * x7 * x8)))
+                            - x11 * l * x7 * x7 * x16 * (m2 + 0.3333333333333333 * m1)
+                            - theta1_dot
+                                * (x17 * x0 * x_dot - 0.5 * (m2 * l * x14 * theta2_dot))
+                            + x0 * (-0.5 * g - 0.5 * x18) * m1)
+                    - x8
+                        * (m2 * l
+                            * (l
+                                * (x11 * x7
+                                    * (-0.5 * (x7 * x8 * x16) - 0.3333333333333333 * x19
+                                        - 0.3333333333333333 * x20)
+                                    + x14 * (0.5 * theta1_dot + 0.5 * theta2_dot) * theta1_dot)
+                                - 0.5 * (g * x1)
+                                - 0.5 * (l * x14 * theta1_dot * theta2_dot)) - tau)),
             l
-                * (m2
-                    * (0.5 * (theta2_dot * theta2_dot * x4)
-                        - 0.5 * (x19 * x0 * x7 * x14))
-                    - x3 * theta1_dot * theta1_dot * x21 - x16 * x9 * x7 * x7 * x1 * x14),
+                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
+                    - x17 * x0 * theta1_dot * theta1_dot
+                    + x11 * (-x7 * x9 * x16 * x4 - 0.5 * (x21 * x3 * m2)) * x7),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -664,10 +660,10 @@ pub mod maggi {
         dstate[0] = theta1_dot;
         dstate[1] = theta2_dot;
         dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x16 * x7 * x7 * x14;
-        dstate[4] = -(x8 * x7) * force[0] + 0.0 * force[1] + x19 * x7 * x14;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x11 * x7 * x7 * x16;
+        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x21 * x11 * x7;
         dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[6] = tau * x14;
+        dstate[6] = x11 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -696,9 +692,9 @@ pub mod maggi {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                (theta2_dot + x0 * theta1_dot) * l,
-                f64::abs(l)
-                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+                l * (theta1_dot * x0 + theta2_dot),
+                (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot))
+                    * f64::abs(l),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -722,10 +718,10 @@ pub mod maggi {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m2 + M + m1) * x_dot
-                + l
-                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+            l
+                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
+                + (m2 + M + m1) * x_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -748,8 +744,8 @@ pub mod maggi {
         let theta2_dot = state[4];
         let x_dot = state[5];
         let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -791,13 +787,13 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = 1.0 / (x2 + x3 + 1.0);
-        let x5 = x2 + x3;
-        let x6 = l * x4 * ((m2 + 0.5 * m1) * x1 - 0.5 * (x0 * m2 * x5));
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = 1.0 / (x0 + x3 + 1.0);
+        let x5 = x0 + x3;
+        let x6 = l * x4 * ((m2 + 0.5 * m1) * x2 - 0.5 * (x1 * m2 * x5));
         [
             [
                 l * l * x4 * x4
@@ -819,8 +815,8 @@ pub mod maggi {
         let theta1 = state[0];
         let theta2 = state[1];
         let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
 }
@@ -856,36 +852,37 @@ pub mod kane {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
         let x8 = x2 + x5;
         let x9 = m2 * x8 * x8;
         let x10 = m2 + 0.5 * m1;
-        let x11 = l * x7 * (x10 * x1 - 0.5 * (x0 * m2 * x8));
-        let x12 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
-        let x13 = x1 * x4;
-        let x14 = x0 * x3;
-        let x15 = x13 - x14;
+        let x11 = l * x7 * (x10 * x4 - 0.5 * (x3 * m2 * x8));
+        let x12 = x4 * x1;
+        let x13 = x3 * x0;
+        let x14 = x12 - x13;
+        let x15 = x7 * x8 * x14;
         let x16 = m2 + 0.3333333333333333 * m1;
-        let x17 = x8 * x7 * x15;
-        let x18 = x14 - x13;
-        let x19 = x18 * x8;
-        let x20 = 0.5 * x17 - 0.5 * x13 + 0.5 * x14;
-        let x21 = x0 * m2 * x20;
-        let x22 = -m2 - 0.5 * m1;
-        let x23 = x3 * x22;
-        let x24 = x10 * x7 * x1 * x15;
-        let x25 = x0 * x18;
-        let x26 = x0 * x8;
-        let x27 = x8 * x7;
-        let x28 = 0.5 * x27 - 0.5;
-        let x29 = x18 * (x0 * m2 * x28 - x10 * x7 * x1) + 0.5 * (m2 * x8 * x4);
+        let x17 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
+        let x18 = x13 - x12;
+        let x19 = x7 * x8;
+        let x20 = 0.5 * x19 - 0.5;
+        let x21 = x8 * x1;
+        let x22 = m2 * (x3 * x20 * x18 + 0.5 * x21) - x7 * x10 * x18 * x4;
+        let x23 = 0.5 * x13 - 0.5 * x12 + 0.5 * x15;
+        let x24 = x3 * x8;
+        let x25 = x3 * x18;
+        let x26 = x3 * m2 * x23;
+        let x27 = x7 * x10 * x4 * x14;
+        let x28 = -m2 - 0.5 * m1;
+        let x29 = x28 * x0;
+        let x30 = x18 * x8;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -911,38 +908,39 @@ pub mod kane {
             [x11, m2 + M + m1],
         ];
         let mut force: [f64; 2] = [
-            (tau - x8 * (-0.5 * (m2 * l * g * x4) - tau)
-                + l * x7 * u1
-                    * (((0.5 * x19 - 0.5 * x13 + 0.5 * x14) * x7
-                        * (x1 * u2 + 0.5 * (l * x7 * u1))
-                        + 0.08333333333333333 * (l * (x19 - x13 + x14) * x7 * x7 * u1)
-                        - 0.5 * (x3 * u2)) * m1
-                        - l * x7 * u1
-                            * ((0.5 * x17 - x13 + x14) * m2 * x8 - x12 * x7 * x15
-                                - x16 * x7 * x15
-                                + m2 * x8
-                                    * (0.3333333333333333 * x17 - 0.3333333333333333 * x13
-                                        + 0.3333333333333333 * x14)) - u2 * (x21 + x23 - x24)
+            (tau
+                + l
+                    * (x8
+                        * (l * x7 * x18 * u1
+                            * (m2 * (0.3333333333333333 * x19 - 0.3333333333333333) * x8
+                                - x17 * x7 - x7 * x16 + m2 * x8 * (0.5 * x19 - 1.0))
+                            + x22 * u2)
+                        - l
+                            * (m2 * x8 * (x13 - x12 + 0.5 * x15) - x7 * x14 * x16
+                                - x17 * x7 * x14
+                                + m2
+                                    * (0.3333333333333333 * x13 - 0.3333333333333333 * x12
+                                        + 0.3333333333333333 * x15) * x8) * x7 * u1
                         + m2
-                            * (l * (0.5 * x25 + 0.5 * x3) * x7
-                                * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
-                                    - x8
-                                        * (x18 * ((-0.5 * x25 - 0.5 * x3) * x7 - 0.5 * x4)
-                                            - 0.5 * x26)
-                                    + x0 * (0.5 * x2 - 0.5 * (x18 * x7 * x15) + 0.5 * x5)) * u1
-                                + (x0 * x20 - x3 - x7 * x1 * x15
-                                    - x8 * (0.5 * (x8 * x4) + (x0 * x28 - x7 * x1) * x18))
-                                    * (l * x7 * u1 * (x1 - 0.5 * x26) + u2)
+                            * ((x3 * x23 - x0 - x7 * x4 * x14
+                                - (x18 * (x3 * x20 - x7 * x4) + 0.5 * x21) * x8)
+                                * (u2 + (x4 - 0.5 * x24) * l * x7 * u1)
                                 - 0.08333333333333333
-                                    * ((x17 - x13 - x18 * (x27 - 1.0) * x8 + x14) * l * x8 * x7
-                                        * u1))
-                        + x8
-                            * (x29 * u2
-                                + x18 * l * x7
-                                    * (m2 * x8 * (0.3333333333333333 * x27 - 0.3333333333333333)
-                                        - x12 * x7 - x16 * x7 + m2 * x8 * (0.5 * x27 - 1.0)) * u1))
-                + x3 * l * g * x22) * x7,
-            l * (x24 - x21 - x23 + x8 * x29) * x7 * x7 * u1 * u1,
+                                    * (l * x7 * x8 * (x13 - x12 - (x19 - 1.0) * x18 * x8 + x15)
+                                        * u1)
+                                + (0.5 * x0 + 0.5 * x25) * l * x7 * u1
+                                    * (0.5 * x4
+                                        + x3 * (0.5 * x2 - 0.5 * (x7 * x18 * x14) + 0.5 * x5)
+                                        - (((-0.5 * x0 - 0.5 * x25) * x7 - 0.5 * x1) * x18
+                                            - 0.5 * x24) * x8 - 0.5 * (x0 * x7 * x14)))
+                        - (x26 - x27 + x29) * u2
+                        + m1
+                            * (0.08333333333333333
+                                * (l * x7 * x7 * (x30 - x12 + x13) * u1) - 0.5 * (x0 * u2)
+                                + x7 * (x4 * u2 + 0.5 * (l * x7 * u1))
+                                    * (0.5 * x30 - 0.5 * x12 + 0.5 * x13))) * x7 * u1
+                + x28 * x0 * l * g - x8 * (-tau - 0.5 * (m2 * l * g * x1))) * x7,
+            (x27 - x26 - x29 + x8 * x22) * l * x7 * x7 * u1 * u1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -952,7 +950,7 @@ pub mod kane {
             });
         }
         dstate[0] = x7 * u1;
-        dstate[1] = -(x8 * x7 * u1);
+        dstate[1] = -(x7 * x8 * u1);
         dstate[2] = u2;
         dstate[3] = force[0];
         dstate[4] = force[1];
@@ -985,9 +983,9 @@ pub mod kane {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                (theta2_dot + x0 * theta1_dot) * l,
-                f64::abs(l)
-                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+                l * (theta1_dot * x0 + theta2_dot),
+                (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot))
+                    * f64::abs(l),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -1010,10 +1008,10 @@ pub mod kane {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m2 + M + m1) * x_dot
-                + l
-                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+            l
+                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
+                + (m2 + M + m1) * x_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1035,8 +1033,8 @@ pub mod kane {
         let u1 = state[3];
         let u2 = state[4];
         let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1);
-        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2) * f64::cos(theta1);
         let x2 = x0 + x1 + 1.0;
         let x3 = 1.0 / x2;
         let value = x2;
@@ -1056,7 +1054,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -(x3 * (x0 + x1) * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -1080,13 +1078,13 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = 1.0 / (x2 + x3 + 1.0);
-        let x5 = x2 + x3;
-        let x6 = l * x4 * ((m2 + 0.5 * m1) * x1 - 0.5 * (x0 * m2 * x5));
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = 1.0 / (x0 + x3 + 1.0);
+        let x5 = x0 + x3;
+        let x6 = l * x4 * ((m2 + 0.5 * m1) * x2 - 0.5 * (x1 * m2 * x5));
         [
             [
                 l * l * x4 * x4
@@ -1108,8 +1106,8 @@ pub mod kane {
         let theta1 = state[0];
         let theta2 = state[1];
         let l = params.l;
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
 }
@@ -1145,53 +1143,55 @@ pub mod reduced_volterra {
         let g = params.g;
         let tau = params.tau;
         let G_x = g_i[0];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
         let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
-        let x9 = x2 + x5 + 1.0;
-        let x10 = 1.0 / x9;
-        let x11 = m2 + M + m1;
-        let x12 = m2 + M + x11 * x3 * x4 + m1 + x0 * x11 * x1;
-        let x13 = 1.0 / x12;
-        let x14 = 0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1);
-        let x15 = x8 * (0.3333333333333333 * x10 + 0.5 * x7) + 0.5 * (x0 * x13 * x14);
+        let x8 = x2 + x5 + 1.0;
+        let x9 = 1.0 / x8;
+        let x10 = x2 + x5;
+        let x11 = 0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4);
+        let x12 = m2 + M + m1;
+        let x13 = x0 * x12 * x1 + m2 + x3 * x12 * x4 + M + m1;
+        let x14 = 1.0 / x13;
+        let x15 = m2 + 0.3333333333333333 * m1;
         let x16 = m2 + 0.5 * m1;
-        let x17 = m2 + 0.3333333333333333 * m1;
-        let x18 = x13 * x16 * x1 * x14 + 0.5 * (m2 * x8 * x8 * x10) + x17 * x7;
-        let x19 = x16 * x1 * x7 + 0.5 * (x0 * m2 * x8 * x10) + x11 * x13 * x14;
-        let x20 = -m2 - 0.5 * m1;
-        let x21 = x1 * x4;
-        let x22 = x0 * x3;
-        let x23 = 0.5 * (x3 * x4 * x4) + x0 * (x21 - 0.5 * x22);
-        let x24 = m2 * x23;
-        let x25 = -m2 - M - m1;
-        let x26 = x25 * x1 * x4 + x0 * x11 * x3;
-        let x27 = x26 * x13 * x14;
-        let x28 = x24 - x27;
-        let x29 = m2 * (x0 * (0.5 * x22 - 0.5 * x21) - x3);
-        let x30 = x3 * m1;
-        let x31 = x13 * (x11 * x1 * x4 + x25 * x0 * x3) * x14;
-        let x32 = x29 - 0.5 * x30 - x31;
-        let x33 = x22 - x21;
-        let x34 = x21 - x22;
-        let x35 = x8 * x10 * x34;
-        let x36 = 0.5 * x21 - 0.5 * x35 - 0.5 * x22;
-        let x37 = x1 * x7;
-        let x38 = x13 * x14;
-        let x39 = x32 * x13;
-        let x40 = x33 * x1 * x7;
-        let x41 = x1 * x34 * x7 * x7;
-        let x42 = x13 * x28;
-        let x43 = x8 * x10;
-        let x44 = 1.0 - x43;
-        let x45 = 0.5 - 0.5 * x43;
-        let x46 = x10 * (x0 * x33 * x45 - 0.5 * (x8 * x4));
+        let x17 = x7 * x15 + 0.5 * (m2 * x9 * x10 * x10) + x16 * x4 * x11 * x14;
+        let x18 = 0.5 * (x3 * x11 * x14) + x10 * (0.3333333333333333 * x9 + 0.5 * x7);
+        let x19 = 0.5 * (x3 * m2 * x9 * x10) + x16 * x7 * x4 + x12 * x11 * x14;
+        let x20 = x4 * x1;
+        let x21 = x3 * x0;
+        let x22 = x21 - x20;
+        let x23 = x7 * x4;
+        let x24 = x20 - x21;
+        let x25 = x9 * x10;
+        let x26 = 0.5 - 0.5 * x25;
+        let x27 = m2 * (x3 * (0.5 * x21 - 0.5 * x20) - x0);
+        let x28 = -m2 - M - m1;
+        let x29 = x3 * x0 * x28 + x12 * x4 * x1;
+        let x30 = x29 * x11 * x14;
+        let x31 = x0 * m1;
+        let x32 = x27 - x30 - 0.5 * x31;
+        let x33 = x32 * x14;
+        let x34 = x9 * x10 * x24;
+        let x35 = 0.5 * x20 - 0.5 * x21 - 0.5 * x34;
+        let x36 = x7 * x22 * x4;
+        let x37 = 0.5 * (x0 * x1 * x1) + x3 * (x20 - 0.5 * x21);
+        let x38 = m2 * x37;
+        let x39 = x28 * x4 * x1 + x3 * x0 * x12;
+        let x40 = x39 * x11 * x14;
+        let x41 = x38 - x40;
+        let x42 = x41 * x14;
+        let x43 = x9 * (x3 * x26 * x22 - 0.5 * (x10 * x1));
+        let x44 = x7 * x7 * x4 * x24;
+        let x45 = x11 * x14;
+        let x46 = 1.0 - x25;
+        let x47 = x20 - x21 - x34;
+        let x48 = -m2 - 0.5 * m1;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1200,7 +1200,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = l * x9;
+        let value = l * x8;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1208,7 +1208,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x12;
+        let value = x13;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1217,64 +1217,64 @@ pub mod reduced_volterra {
             });
         }
         let mut matrix: [[f64; 1]; 1] = [
-            [(m2 * x8 * x10 * x15 + x18 * x7 + x19 * x13 * x14) * l * l],
+            [l * l * (x7 * x17 + m2 * x9 * x18 * x10 + x19 * x11 * x14)],
         ];
         let mut force: [f64; 1] = [
-            x7 * (tau + x3 * l * g * x20) + x8 * x10 * (-0.5 * (m2 * l * g * x4) - tau)
-                + l * l
-                    * (x13 * x13 * (x8 * x10 * x28 + x32 * x7) * M * x14
+            l * l
+                * (m2
+                    * ((x7
+                        * ((-0.5 * (x9 * x1) - x0 * x7 * x7) * x22 + x23
+                            - 0.5 * (x9 * x9 * x10 * x1 * x24))
+                        + x9
+                            * (x9 * (x26 * x22 * x1 + 0.5 * (x3 * x10))
+                                - x0 * x7 * x7 * x24) * x10)
+                        * (0.5 * (x9 * x10 * x1) + x0 * x7)
+                        + (x7 * (x33 + x3 * x9 * x35 + x7 * (-x0 - x36))
+                            + x9 * x10 * (x42 + x43 - x44))
+                            * (0.5 * (x3 * x9 * x10) + x23 + x45)
+                        + 0.08333333333333333
+                            * (x9 * x9 * x10 * (x46 * x9 * x22 * x10 + x47 * x7)))
+                    + (x7 * x32 + x9 * x10 * x41) * M * x11 * x14 * x14
+                    + (0.08333333333333333 * ((-x34 - x7 * x22) * x7 * x7 * m1)
+                        - ((x12 * x32 * x14 + x7 * (x48 * x0 - x16 * x7 * x22 * x4)
+                            - x19 * x29 * x14 + x3 * m2 * x9 * x35) * x11
+                            + x19 * (x27 - 0.5 * x31)) * x14
                         - x7
-                            * (((x32 * x11 * x13 + (x3 * x20 - x33 * x16 * x1 * x7) * x7
-                                + x0 * m2 * x36 * x10) * x14 + x32 * x19) * x13
-                                + (x13 * (x3 * x14 * x20 + x32 * x16 * x1)
-                                    + x33 * (-m2 * x8 * x10 - x17 * x7 * x7) - x33 * x18 * x7
-                                    - 0.5 * (m2 * x8 * x8 * x10 * x10 * x34)) * x7
-                                + m2 * x10
-                                    * (x8
-                                        * (((-0.5 * (x8 * x7) - 0.5) * x7
-                                            - 0.3333333333333333 * x10) * x33
-                                            - 0.3333333333333333 * (x8 * x10 * x10 * x34)
-                                            - x10 * x34 * x15
-                                            + x0 * x13 * (0.5 * x29 - 0.25 * x30 - 0.5 * x31))
-                                        - x33 * x15))
-                        + (0.5
-                            * (x3
-                                * (0.5 * x1 - 0.5 * (x3 * x8 * x10 * x34)
-                                    - 0.5 * (x33 * x3 * x7)) * x7 * x7 * x7)
-                            + (0.5 * x37 + x38)
-                                * (x7 * (x39 + (-0.5 * x3 - 0.5 * x40) * x7)
-                                    + x8 * x10 * (x42 - 0.5 * x41))
-                            + 0.08333333333333333 * (x7 * x7 * x7 * (-x33 * x7 - x35)))
-                            * m1
-                        + m2
-                            * (0.08333333333333333
-                                * (x8 * x10 * x10
-                                    * (x33 * x8 * x10 * x44 + (x21 - x35 - x22) * x7))
-                                + (((-x3 - x40) * x7 + x39 + x0 * x36 * x10) * x7
-                                    + x8 * x10 * (x46 - x41 + x42))
-                                    * (0.5 * (x0 * x8 * x10) + x37 + x38)
-                                + (x3 * x7 + 0.5 * (x8 * x10 * x4))
-                                    * ((x37 + x33 * (-x3 * x7 * x7 - 0.5 * (x10 * x4))
-                                        - 0.5 * (x8 * x10 * x10 * x34 * x4)) * x7
-                                        + x8
-                                            * (x10 * (x33 * x4 * x45 + 0.5 * (x0 * x8))
-                                                - x3 * x34 * x7 * x7) * x10))
-                        - x8
-                            * ((m2 * (x11 * x13 * x23 + x46) - x26 * x19 * x13
-                                - x16 * x1 * x34 * x7 * x7 - x26 * x11 * x13 * x13 * x14)
-                                * x13 * x14
-                                + m2
-                                    * (x10
-                                        * (x8
-                                            * (x13 * (x0 * (0.5 * x24 - 0.5 * x27) - 0.5 * (x14 * x4))
-                                                - 0.5 * (x8 * x34 * x7 * x7)
-                                                + x33
-                                                    * ((0.3333333333333333 - 0.3333333333333333 * x43) * x10
-                                                        + 0.5 * x7)) + x33 * x44 * x15) + x19 * x13 * x23)
-                                + ((x13 * x23 * x16 * x1
-                                    + x33 * x8 * (1.0 - 0.5 * x43) * x10) * m2
-                                    - x26 * x13 * x13 * x16 * x1 * x14 - x18 * x34 * x7
-                                    - x17 * x34 * x7 * x7) * x7) * x10) * u1 * u1,
+                            * (m2 * (x20 - x21 - 0.5 * x34) * x9 * x10
+                                - x7 * x7 * x22 * x15
+                                + (x16 * x32 * x4 + x48 * x0 * x11) * x14 - x7 * x17 * x22)
+                        - m2 * x9
+                            * (x10
+                                * (x22
+                                    * (x7 * (-0.5 * (x7 * x10) - 0.5) - 0.3333333333333333 * x9)
+                                    + x3 * (0.5 * x27 - 0.5 * x30 - 0.25 * x31) * x14
+                                    - 0.3333333333333333 * (x9 * x9 * x10 * x24)) + x47 * x18))
+                        * x7
+                    - x9 * x10
+                        * ((x19 * x37 * x14
+                            + x9
+                                * (x10
+                                    * ((0.5 * x7
+                                        + x9 * (0.3333333333333333 - 0.3333333333333333 * x25))
+                                        * x22 - 0.5 * (x7 * x7 * x10 * x24)
+                                        + (x3 * (0.5 * x38 - 0.5 * x40) - 0.5 * (x11 * x1)) * x14)
+                                    + x46 * x18 * x22)) * m2
+                            + (m2
+                                * ((1.0 - 0.5 * x25) * x9 * x22 * x10
+                                    + x16 * x4 * x37 * x14) - x7 * x17 * x24
+                                - x16 * x39 * x4 * x11 * x14 * x14 - x7 * x7 * x24 * x15)
+                                * x7
+                            + (m2 * (x12 * x37 * x14 + x43) - x39 * x12 * x11 * x14 * x14
+                                - x19 * x39 * x14 - x16 * x7 * x7 * x4 * x24) * x11 * x14)
+                    + ((0.5 * x23 + x45)
+                        * ((x42 - 0.5 * x44) * x9 * x10
+                            + x7 * (x33 + x7 * (-0.5 * x0 - 0.5 * x36)))
+                        + 0.5
+                            * (x0 * x7 * x7 * x7
+                                * (0.5 * x4 - 0.5 * (x0 * x7 * x22)
+                                    - 0.5 * (x0 * x9 * x10 * x24)))) * m1) * u1 * u1
+                + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
+                + (tau + x48 * x0 * l * g) * x7,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1283,11 +1283,11 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = u1 * x7;
-        dstate[1] = x8 * x10 * u1;
-        dstate[2] = x13 * (x9 * G_x + l * u1 * x14);
+        dstate[0] = x7 * u1;
+        dstate[1] = x9 * x10 * u1;
+        dstate[2] = (x8 * G_x + l * u1 * x11) * x14;
         dstate[3] = force[0];
-        dstate[4] = tau * u1 * (x7 - x43);
+        dstate[4] = tau * u1 * (x7 - x25);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -1316,9 +1316,9 @@ pub mod reduced_volterra {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                (theta2_dot + x0 * theta1_dot) * l,
-                f64::abs(l)
-                    * (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot)),
+                l * (theta1_dot * x0 + theta2_dot),
+                (f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot))
+                    * f64::abs(l),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -1334,10 +1334,10 @@ pub mod reduced_volterra {
         }
         let state: [f64; STATES] = [q[0], q[1], q[2], theta2_dot - theta1_dot, 0.0];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (m2 + M + m1) * x_dot
-                + l
-                    * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
-                        + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1)),
+            l
+                * (0.5 * (f64::cos(theta2) * m2 * theta2_dot)
+                    + (m2 + 0.5 * m1) * theta1_dot * f64::cos(theta1))
+                + (m2 + M + m1) * x_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1362,16 +1362,16 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let l = params.l;
         let G_x = g_i[0];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
         let x7 = x2 + x5 + 1.0;
         let x8 = m2 + M + m1;
-        let x9 = m2 + M + x8 * x3 * x4 + m1 + x0 * x8 * x1;
+        let x9 = x0 * x8 * x1 + m2 + x3 * x8 * x4 + M + m1;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1401,7 +1401,7 @@ pub mod reduced_volterra {
             u1 / x6,
             (x2 + x5) * u1 / x7,
             (x7 * G_x
-                + l * u1 * (0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1)))
+                + l * u1 * (0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4)))
                 / x9,
         ];
         for (index, value) in qdot.iter().enumerate() {
@@ -1427,28 +1427,30 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
-        let x6 = x2 + x5;
+        let x6 = 1.0 / (-x2 - x5 - 1.0);
         let x7 = 1.0 / (x2 + x5 + 1.0);
-        let x8 = 1.0 / (-x2 - x5 - 1.0);
-        let x9 = m2 + M + m1;
-        let x10 = 1.0 / (m2 + M + x9 * x3 * x4 + m1 + x0 * x9 * x1);
-        let x11 = 0.5 * (x1 * m1) + m2 * (x0 * (-0.5 * x2 - 0.5 * x5) + x1);
-        let x12 = m2 + 0.5 * m1;
+        let x8 = x2 + x5;
+        let x9 = m2 + 0.5 * m1;
+        let x10 = 0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4);
+        let x11 = m2 + M + m1;
+        let x12 = 1.0 / (x0 * x11 * x1 + m2 + x3 * x11 * x4 + M + m1);
         [
             [
-                (m2 * x6 * x7
-                    * (x6 * (0.3333333333333333 * x7 + 0.5 * x8)
-                        + 0.5 * (x0 * x10 * x11))
-                    + (x10 * x12 * x1 * x11 + 0.5 * (m2 * x6 * x6 * x7)
-                        + (m2 + 0.3333333333333333 * m1) * x8) * x8
-                    + (x12 * x1 * x8 + 0.5 * (x0 * m2 * x6 * x7) + x9 * x10 * x11) * x10
-                        * x11) * l * l,
+                l * l
+                    * (x6
+                        * (x6 * (m2 + 0.3333333333333333 * m1)
+                            + 0.5 * (m2 * x7 * x8 * x8) + x9 * x4 * x10 * x12)
+                        + m2 * x7
+                            * (0.5 * (x3 * x10 * x12)
+                                + x8 * (0.3333333333333333 * x7 + 0.5 * x6)) * x8
+                        + (0.5 * (x3 * m2 * x7 * x8) + x9 * x6 * x4 + x11 * x10 * x12)
+                            * x10 * x12),
             ],
         ]
     }
@@ -1466,16 +1468,16 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = m2 + M + m1;
         f64::INFINITY
             .min(f64::abs(-x2 - x5 - 1.0))
             .min(f64::abs(l * (x2 + x5 + 1.0)))
-            .min(f64::abs(m2 + M + x6 * x3 * x4 + m1 + x0 * x6 * x1))
+            .min(f64::abs(x0 * x6 * x1 + m2 + x3 * x6 * x4 + M + m1))
     }
 }

@@ -144,9 +144,9 @@ pub fn energy(
     let x0 = f64::cos(theta2);
     let x1 = f64::cos(theta1);
     0.16666666666666666 * (theta2_dot * theta2_dot) - 4.905 * x0
-        + (2.0 * x_dot + 1.5 * (theta1_dot * x1) + 0.5 * (x0 * theta2_dot)) * x_dot
-        + (0.6666666666666666 * theta1_dot
-            + 0.5 * (f64::cos(theta1 - theta2) * theta2_dot)) * theta1_dot - 14.715 * x1
+        + x_dot * (2.0 * x_dot + 1.5 * (theta1_dot * x1) + 0.5 * (x0 * theta2_dot))
+        + (0.5 * (f64::cos(theta1 - theta2) * theta2_dot)
+            + 0.6666666666666666 * theta1_dot) * theta1_dot - 14.715 * x1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -188,7 +188,7 @@ pub fn constraint_residuals(
     let theta2 = q[1];
     let theta1_dot = qdot[0];
     let theta2_dot = qdot[1];
-    [theta2_dot + f64::cos(theta1 - theta2) * theta1_dot]
+    [theta1_dot * f64::cos(theta1 - theta2) + theta2_dot]
 }
 ///Position-level residuals of the holonomic constraints.
 #[allow(non_snake_case, clippy::all)]
@@ -233,15 +233,15 @@ pub mod lagrange {
         let theta1_dot = state[3];
         let theta2_dot = state[4];
         let x_dot = state[5];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
         let x5 = 0.5 * x4;
-        let x6 = 1.5 * x1;
-        let x7 = 0.5 * x0;
-        let x8 = x0 * x2 - x1 * x3;
+        let x6 = 1.5 * x3;
+        let x7 = 0.5 * x2;
+        let x8 = x2 * x0 - x3 * x1;
         let mut matrix: [[f64; 4]; 4] = [
             [1.3333333333333333, x5, x6, x4],
             [x5, 0.3333333333333333, x7, 1.0],
@@ -249,10 +249,10 @@ pub mod lagrange {
             [x4, 1.0, 0.0, 0.0],
         ];
         let mut force: [f64; 4] = [
-            -14.715 * x2 - 0.5 * (x8 * theta2_dot * theta2_dot),
-            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x3,
-            1.5 * (x2 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x3),
-            x8 * theta1_dot * (theta1_dot - theta2_dot),
+            -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
+            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
+            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1),
+            (theta1_dot - theta2_dot) * x8 * theta1_dot,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -290,15 +290,15 @@ pub mod lagrange {
         let theta1_dot = state[3];
         let theta2_dot = state[4];
         let x_dot = state[5];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = f64::sin(theta1);
-        let x3 = f64::sin(theta2);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
         let x5 = 0.5 * x4;
-        let x6 = 1.5 * x1;
-        let x7 = 0.5 * x0;
-        let x8 = x0 * x2 - x1 * x3;
+        let x6 = 1.5 * x3;
+        let x7 = 0.5 * x2;
+        let x8 = x2 * x0 - x3 * x1;
         let mut matrix: [[f64; 4]; 4] = [
             [1.3333333333333333, x5, x6, x4],
             [x5, 0.3333333333333333, x7, 1.0],
@@ -306,10 +306,10 @@ pub mod lagrange {
             [x4, 1.0, 0.0, 0.0],
         ];
         let mut force: [f64; 4] = [
-            -14.715 * x2 - 0.5 * (x8 * theta2_dot * theta2_dot),
-            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x3,
-            1.5 * (x2 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x3),
-            x8 * theta1_dot * (theta1_dot - theta2_dot)
+            -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
+            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
+            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1),
+            (theta1_dot - theta2_dot) * x8 * theta1_dot
                 - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
@@ -349,7 +349,7 @@ pub mod lagrange {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                theta2_dot + x0 * theta1_dot,
+                theta1_dot * x0 + theta2_dot,
                 f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
             ),
         ];
@@ -464,25 +464,25 @@ pub mod maggi {
         let theta1_dot = state[3];
         let theta2_dot = state[4];
         let x_dot = state[5];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
         let x8 = x2 + x5;
-        let x9 = x7 * (1.5 * x1 - 0.5 * (x0 * x8));
-        let x10 = x1 * x4;
-        let x11 = x0 * x3;
-        let x12 = x11 - x10;
-        let x13 = x8 * x7 - 1.0;
-        let x14 = theta1_dot - theta2_dot;
-        let x15 = x10 - x11;
-        let x16 = -x12 * theta2_dot - theta1_dot * x15;
-        let x17 = (x8 * x7 * x15 - x10 + x11) * theta1_dot;
-        let x18 = x12 * x13 * theta2_dot + x17;
+        let x9 = x7 * (1.5 * x4 - 0.5 * (x3 * x8));
+        let x10 = theta1_dot - theta2_dot;
+        let x11 = x4 * x1;
+        let x12 = x3 * x0;
+        let x13 = x11 - x12;
+        let x14 = x7 * x8 - 1.0;
+        let x15 = x12 - x11;
+        let x16 = (x12 - x11 + x7 * x8 * x13) * theta1_dot;
+        let x17 = x14 * x15 * theta2_dot + x16;
+        let x18 = -x15 * theta2_dot - theta1_dot * x13;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -505,19 +505,19 @@ pub mod maggi {
         ];
         let mut force: [f64; 2] = [
             x7
-                * (1.3333333333333333 * (x7 * x7 * theta1_dot * x14 * x15) - 14.715 * x3
+                * (1.3333333333333333 * (x10 * x7 * x7 * theta1_dot * x13) - 14.715 * x0
+                    + x10 * x7
+                        * (1.3333333333333333 * (x7 * x15 * theta2_dot)
+                            - 0.5 * (x17 * x8)) - 0.5 * (x15 * theta2_dot * theta2_dot)
                     - x8
-                        * ((x12
-                            * (0.5 * theta1_dot - 0.3333333333333333 * (x13 * x7 * x14))
-                            - 0.5 * (x12 * theta1_dot)) * theta2_dot
-                            + 0.5 * (x12 * theta1_dot * theta1_dot) - 4.905 * x4
-                            + x7 * (-0.5 * (x8 * x16 * x7) - 0.3333333333333333 * x17)
-                                * x14)
-                    + x12 * theta2_dot
-                        * (1.3333333333333333 * (x7 * x7 * x14) - 0.5 * theta2_dot)
-                    - 0.5 * (x18 * x8 * x7 * x14)),
-            1.5 * (x3 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x4)
-                + x7 * (-1.5 * (x16 * x7 * x1) - 0.5 * (x18 * x0)) * x14,
+                        * (0.5 * (x15 * theta1_dot * theta1_dot)
+                            + x10 * (-0.5 * (x7 * x8 * x18) - 0.3333333333333333 * x16)
+                                * x7
+                            + ((0.5 * theta1_dot - 0.3333333333333333 * (x10 * x14 * x7))
+                                * x15 - 0.5 * (x15 * theta1_dot)) * theta2_dot
+                            - 4.905 * x1)),
+            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1)
+                + x10 * x7 * (-0.5 * (x17 * x3) - 1.5 * (x7 * x18 * x4)),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -529,8 +529,8 @@ pub mod maggi {
         dstate[0] = theta1_dot;
         dstate[1] = theta2_dot;
         dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x16 * x7 * x7 * x14;
-        dstate[4] = -(x8 * x7) * force[0] + 0.0 * force[1] + x18 * x7 * x14;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x10 * x7 * x7 * x18;
+        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x17 * x10 * x7;
         dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -556,7 +556,7 @@ pub mod maggi {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                theta2_dot + x0 * theta1_dot,
+                theta1_dot * x0 + theta2_dot,
                 f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
             ),
         ];
@@ -596,8 +596,8 @@ pub mod maggi {
         let theta1_dot = state[3];
         let theta2_dot = state[4];
         let x_dot = state[5];
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -635,13 +635,13 @@ pub mod maggi {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = 1.0 / (x2 + x3 + 1.0);
-        let x5 = x2 + x3;
-        let x6 = x4 * (1.5 * x1 - 0.5 * (x0 * x5));
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = 1.0 / (x0 + x3 + 1.0);
+        let x5 = x0 + x3;
+        let x6 = x4 * (1.5 * x2 - 0.5 * (x1 * x5));
         [
             [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
             [x6, 4.0],
@@ -657,8 +657,8 @@ pub mod maggi {
     ) -> f64 {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
 }
@@ -688,34 +688,34 @@ pub mod kane {
         let theta2 = state[1];
         let u1 = state[3];
         let u2 = state[4];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
         let x8 = x7 * u1;
         let x9 = x2 + x5;
         let x10 = x9 * x9;
-        let x11 = x0 * x9;
-        let x12 = x7 * (1.5 * x1 - 0.5 * x11);
-        let x13 = x1 * x4;
-        let x14 = x0 * x3;
-        let x15 = x13 - x14;
-        let x16 = x9 * x7 * x15;
-        let x17 = 1.3333333333333333 - 0.5 * x10;
-        let x18 = x7 * x1 * x15;
-        let x19 = x0 * (0.5 * x16 - 0.5 * x13 + 0.5 * x14);
-        let x20 = x14 - x13;
-        let x21 = x20 * x9;
-        let x22 = x9 * x7;
-        let x23 = x0 * x20;
-        let x24 = x7 * x1;
-        let x25 = x0 * (0.5 * x22 - 0.5);
-        let x26 = x9 * x4;
-        let x27 = x20 * (x25 - 1.5 * x24) + 0.5 * x26;
+        let x11 = x3 * x9;
+        let x12 = x7 * (1.5 * x4 - 0.5 * x11);
+        let x13 = x4 * x1;
+        let x14 = x3 * x0;
+        let x15 = x14 - x13;
+        let x16 = x7 * x4;
+        let x17 = x7 * x9;
+        let x18 = x3 * (0.5 * x17 - 0.5);
+        let x19 = x9 * x1;
+        let x20 = x15 * (x18 - 1.5 * x16) + 0.5 * x19;
+        let x21 = 1.3333333333333333 - 0.5 * x10;
+        let x22 = x13 - x14;
+        let x23 = x7 * x4 * x22;
+        let x24 = x7 * x9 * x22;
+        let x25 = x3 * (0.5 * x14 - 0.5 * x13 + 0.5 * x24);
+        let x26 = x15 * x9;
+        let x27 = x3 * x15;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -737,34 +737,33 @@ pub mod kane {
             [x12, 4.0],
         ];
         let mut force: [f64; 2] = [
-            (x7 * u1
-                * (x7
-                    * ((0.5 * x21 - 0.5 * x13 + 0.5 * x14) * (0.5 * x8 + x1 * u2)
-                        + u1
-                            * (0.08333333333333333 * ((x21 - x13 + x14) * x7)
-                                - 0.08333333333333333
-                                    * ((x16 - x13 - x20 * (x22 - 1.0) * x9 + x14) * x9)
-                                + (0.5 * x23 + 0.5 * x3)
-                                    * (0.5 * x1 - 0.5 * (x3 * x7 * x15)
-                                        - x9
-                                            * (x20 * ((-0.5 * x23 - 0.5 * x3) * x7 - 0.5 * x4)
-                                                - 0.5 * x11)
-                                        + x0 * (0.5 * x2 - 0.5 * (x20 * x7 * x15) + 0.5 * x5))))
-                    - x7 * u1
-                        * ((0.5 * x16 - x13 + x14) * x9 - 1.3333333333333333 * (x7 * x15)
-                            - x17 * x7 * x15
-                            + x9
-                                * (0.3333333333333333 * x16 - 0.3333333333333333 * x13
-                                    + 0.3333333333333333 * x14))
-                    - (x19 - 1.5 * x3 - 1.5 * x18) * u2 - 0.5 * (x3 * u2)
-                    + (x20 * x7 * u1
-                        * (x9 * (0.3333333333333333 * x22 - 0.3333333333333333)
-                            + x9 * (0.5 * x22 - 1.0) - 1.3333333333333333 * x7
-                            - x17 * x7) + x27 * u2) * x9
-                    + (x19 - x3 - x18 - x9 * (0.5 * x26 + (x25 - x24) * x20))
-                        * (x7 * u1 * (x1 - 0.5 * x11) + u2)) - 14.715 * x3 + 4.905 * x26)
-                * x7,
-            x7 * x7 * u1 * u1 * (1.5 * x3 + 1.5 * x18 - x19 + x9 * x27),
+            x7
+                * (x7 * u1
+                    * (x9
+                        * (x20 * u2
+                            + x7 * x15 * u1
+                                * (x9 * (0.5 * x17 - 1.0) - 1.3333333333333333 * x7
+                                    - x7 * x21
+                                    + (0.3333333333333333 * x17 - 0.3333333333333333) * x9))
+                        - 0.5 * (x0 * u2) - (x25 - 1.5 * x0 - 1.5 * x23) * u2
+                        + (x25 - x0 - x23 - (x15 * (x18 - x16) + 0.5 * x19) * x9)
+                            * ((x4 - 0.5 * x11) * x7 * u1 + u2)
+                        + x7
+                            * ((0.5 * x26 - 0.5 * x13 + 0.5 * x14) * (x4 * u2 + 0.5 * x8)
+                                + (0.08333333333333333 * (x7 * (x26 - x13 + x14))
+                                    - 0.08333333333333333
+                                        * (x9 * (x14 - x13 - (x17 - 1.0) * x15 * x9 + x24))
+                                    + (0.5 * x0 + 0.5 * x27)
+                                        * (0.5 * x4
+                                            + x3 * (0.5 * x2 - 0.5 * (x7 * x15 * x22) + 0.5 * x5)
+                                            - (((-0.5 * x0 - 0.5 * x27) * x7 - 0.5 * x1) * x15
+                                                - 0.5 * x11) * x9 - 0.5 * (x0 * x7 * x22))) * u1)
+                        - ((0.3333333333333333 * x14 - 0.3333333333333333 * x13
+                            + 0.3333333333333333 * x24) * x9 - x7 * x21 * x22
+                            - 1.3333333333333333 * (x7 * x22)
+                            + x9 * (x14 - x13 + 0.5 * x24)) * x7 * u1) - 14.715 * x0
+                    + 4.905 * x19),
+            x7 * x7 * u1 * u1 * (1.5 * x0 + 1.5 * x23 + x9 * x20 - x25),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -774,7 +773,7 @@ pub mod kane {
             });
         }
         dstate[0] = x8;
-        dstate[1] = -(x9 * x7 * u1);
+        dstate[1] = -(x7 * x9 * u1);
         dstate[2] = u2;
         dstate[3] = force[0];
         dstate[4] = force[1];
@@ -802,7 +801,7 @@ pub mod kane {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                theta2_dot + x0 * theta1_dot,
+                theta1_dot * x0 + theta2_dot,
                 f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
             ),
         ];
@@ -841,8 +840,8 @@ pub mod kane {
         let theta2 = state[1];
         let u1 = state[3];
         let u2 = state[4];
-        let x0 = f64::cos(theta2) * f64::cos(theta1);
-        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2) * f64::cos(theta1);
         let x2 = x0 + x1 + 1.0;
         let x3 = 1.0 / x2;
         let value = x2;
@@ -862,7 +861,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -((x0 + x1) * x3 * u1), u2];
+        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -(x3 * (x0 + x1) * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -882,13 +881,13 @@ pub mod kane {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = 1.0 / (x2 + x3 + 1.0);
-        let x5 = x2 + x3;
-        let x6 = x4 * (1.5 * x1 - 0.5 * (x0 * x5));
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = 1.0 / (x0 + x3 + 1.0);
+        let x5 = x0 + x3;
+        let x6 = x4 * (1.5 * x2 - 0.5 * (x1 * x5));
         [
             [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
             [x6, 4.0],
@@ -904,8 +903,8 @@ pub mod kane {
     ) -> f64 {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2) * f64::cos(theta1)
-            + f64::sin(theta1) * f64::sin(theta2) + 1.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
 }
@@ -935,53 +934,50 @@ pub mod reduced_volterra {
         let theta2 = state[1];
         let u1 = state[3];
         let G_x = g_i[0];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
         let x2 = x0 * x1;
-        let x3 = f64::sin(theta1);
-        let x4 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
         let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
-        let x9 = x2 + x5 + 1.0;
-        let x10 = 1.0 / x9;
+        let x8 = x2 + x5 + 1.0;
+        let x9 = 1.0 / x8;
+        let x10 = x2 + x5;
         let x11 = 4.0 * x2 + 4.0 * x5 + 4.0;
         let x12 = 1.0 / x11;
-        let x13 = x0 * (-0.5 * x2 - 0.5 * x5) + 1.5 * x1;
-        let x14 = x8 * (0.3333333333333333 * x10 + 0.5 * x7) + 0.5 * (x0 * x13 * x12);
-        let x15 = x0 * x8 * x10;
-        let x16 = x1 * x7;
-        let x17 = x13 * x12;
+        let x13 = x3 * (-0.5 * x2 - 0.5 * x5) + 1.5 * x4;
+        let x14 = x10 * (0.3333333333333333 * x9 + 0.5 * x7) + 0.5 * (x12 * x3 * x13);
+        let x15 = x3 * x9 * x10;
+        let x16 = x7 * x4;
+        let x17 = x12 * x13;
         let x18 = 0.5 * x15 + 1.5 * x16 + 4.0 * x17;
-        let x19 = 1.5 * (x13 * x12 * x1) + 0.5 * (x8 * x8 * x10)
-            + 1.3333333333333333 * x7;
-        let x20 = x3 * x7;
-        let x21 = x1 * x4;
-        let x22 = x0 * x3;
-        let x23 = x22 - x21;
-        let x24 = x23 * x1 * x7;
-        let x25 = x21 - x22;
-        let x26 = x8 * x10 * x25;
-        let x27 = x0 * (0.5 * x21 - 0.5 * x26 - 0.5 * x22) * x10;
-        let x28 = x0 * (0.5 * x22 - 0.5 * x21);
-        let x29 = 4.0 * x21 - 4.0 * x22;
-        let x30 = x13 * x12 * x29;
-        let x31 = x28 - 1.5 * x3 - x30;
-        let x32 = x12 * x31;
-        let x33 = x1 * x25 * x7 * x7;
-        let x34 = x3 * x4 * x4;
-        let x35 = x0 * (x21 - 0.5 * x22);
-        let x36 = 4.0 * x22 - 4.0 * x21;
-        let x37 = x13 * x12 * x36;
-        let x38 = 0.5 * x34 + x35 - x37;
-        let x39 = x12 * x38;
-        let x40 = x8 * x10;
-        let x41 = 0.5 - 0.5 * x40;
-        let x42 = x10 * (x0 * x23 * x41 - 0.5 * (x8 * x4));
-        let x43 = x28 - 1.5 * x3;
-        let x44 = 1.0 - x40;
-        let x45 = x8 * x10 * x4;
+        let x19 = 1.3333333333333333 * x7 + 1.5 * (x12 * x4 * x13)
+            + 0.5 * (x9 * x10 * x10);
+        let x20 = x9 * x10 * x1;
+        let x21 = x9 * x10;
+        let x22 = 0.5 - 0.5 * x21;
+        let x23 = x4 * x1;
+        let x24 = x3 * x0;
+        let x25 = x24 - x23;
+        let x26 = x9 * (x3 * x22 * x25 - 0.5 * (x10 * x1));
+        let x27 = x23 - x24;
+        let x28 = x7 * x7 * x4 * x27;
+        let x29 = x12 * (4.0 * x24 - 4.0 * x23) * x13;
+        let x30 = x0 * x1 * x1;
+        let x31 = x3 * (x23 - 0.5 * x24);
+        let x32 = 0.5 * x30 - x29 + x31;
+        let x33 = x12 * x32;
+        let x34 = x12 * (4.0 * x23 - 4.0 * x24) * x13;
+        let x35 = x3 * (0.5 * x24 - 0.5 * x23);
+        let x36 = x35 - 1.5 * x0 - x34;
+        let x37 = x12 * x36;
+        let x38 = x9 * x10 * x27;
+        let x39 = x3 * x9 * (0.5 * x23 - 0.5 * x24 - 0.5 * x38);
+        let x40 = x7 * x25 * x4;
+        let x41 = x0 * x7;
+        let x42 = 1.0 - x21;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -990,7 +986,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x9;
+        let value = x8;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1006,66 +1002,59 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut matrix: [[f64; 1]; 1] = [[x8 * x10 * x14 + x13 * x12 * x18 + x19 * x7]];
+        let mut matrix: [[f64; 1]; 1] = [[x9 * x10 * x14 + x12 * x18 * x13 + x19 * x7]];
         let mut force: [f64; 1] = [
-            u1 * u1
-                * ((0.5 * x15 + x16 + x17)
-                    * (((-x3 - x24) * x7 + x27 + x32) * x7
-                        + (x39 - x33 + x42) * x8 * x10)
-                    + x7
-                        * ((0.5
-                            * (x3
-                                * (0.5 * x1 - 0.5 * (x3 * x8 * x10 * x25)
-                                    - 0.5 * (x23 * x3 * x7))) - 0.08333333333333333 * (x23 * x7)
-                            - 0.08333333333333333 * x26) * x7 * x7
-                            - (x23 * (-x40 - 1.3333333333333333 * (x7 * x7))
-                                - x23 * x19 * x7 - 0.5 * (x8 * x8 * x10 * x10 * x25)
+            ((0.5 * x15 + x16 + x17)
+                * ((x26 - x28 + x33) * x9 * x10 + x7 * (x37 + x39 + x7 * (-x0 - x40)))
+                + ((x37 + x7 * (-0.5 * x0 - 0.5 * x40)) * x7
+                    + x9 * (x33 - 0.5 * x28) * x10) * (0.5 * x16 + x17)
+                + (x7
+                    * ((-0.5 * (x9 * x1) - x0 * x7 * x7) * x25 + x16
+                        - 0.5 * (x9 * x9 * x10 * x1 * x27))
+                    + x9
+                        * (x9 * (x22 * x25 * x1 + 0.5 * (x3 * x10)) - x0 * x7 * x7 * x27)
+                        * x10) * (0.5 * x20 + x41)
+                + 2.0 * (x12 * x12 * x13 * (x36 * x7 + x32 * x9 * x10))
+                + x7
+                    * (x7 * x7
+                        * (0.5
+                            * (x0
+                                * (0.5 * x4 - 0.5 * (x0 * x7 * x25)
+                                    - 0.5 * (x0 * x9 * x10 * x27))) - 0.08333333333333333 * x38
+                            - 0.08333333333333333 * (x7 * x25))
+                        - x12
+                            * ((x12 * (4.0 * x35 - 6.0 * x0 - 4.0 * x34)
+                                + x7 * (-1.5 * x0 - 1.5 * x40) + x39) * x13 + x18 * x36)
+                        - ((x25
+                            * (x7 * (-0.5 * (x7 * x10) - 0.5) - 0.3333333333333333 * x9)
+                            + x12 * x3 * (0.5 * x35 - 0.75 * x0 - 0.5 * x34)
+                            - 0.3333333333333333 * (x9 * x9 * x10 * x27)
+                            - x9 * x14 * x27) * x10 - x25 * x14) * x9
+                        - x7
+                            * (x25 * (-1.3333333333333333 * (x7 * x7) - x21)
+                                - 0.5 * (x9 * x9 * x10 * x10 * x27) - x19 * x7 * x25
                                 + x12
-                                    * ((-1.5 * x3 - 1.5 * (x12 * x1 * x29)) * x13
-                                        + 1.5 * (x1 * x43))) * x7
-                            - x10
-                                * (x8
-                                    * (((-0.5 * (x8 * x7) - 0.5) * x7
-                                        - 0.3333333333333333 * x10) * x23
-                                        - 0.3333333333333333 * (x8 * x10 * x10 * x25)
-                                        - x10 * x14 * x25
-                                        + x0 * x12 * (0.5 * x28 - 0.75 * x3 - 0.5 * x30))
-                                    - x23 * x14)
-                            - (x18 * x43
-                                + x13
-                                    * (x27 - x12 * x18 * x29
-                                        + x12 * (4.0 * x28 - 6.0 * x3 - 4.0 * x30)
-                                        + (-1.5 * x3 - 1.5 * x24) * x7)) * x12)
-                    + x8
-                        * (0.08333333333333333
-                            * (x10 * (x23 * x8 * x10 * x44 + (x21 - x26 - x22) * x7))
-                            - x12
-                                * (x18 * (0.5 * x34 + x35)
-                                    + x13
-                                        * ((2.0 * x34 + 4.0 * x35 - 4.0 * x37) * x12 - 1.5 * x33
-                                            - x12 * x18 * x36 + x42))
-                            - (x23 * x8 * (1.0 - 0.5 * x40) * x10
-                                + x12 * (0.75 * x34 + 1.5 * x35 - 1.5 * x37) * x1
-                                - x25 * x19 * x7 - 1.3333333333333333 * (x25 * x7 * x7))
-                                * x7
-                            - (x23 * x14 * x44
-                                + x8
-                                    * (x12
-                                        * (x0 * (0.25 * x34 + 0.5 * x35 - 0.5 * x37)
-                                            - 0.5 * (x13 * x4)) - 0.5 * (x8 * x25 * x7 * x7)
-                                        + x23
-                                            * ((0.3333333333333333 - 0.3333333333333333 * x40) * x10
-                                                + 0.5 * x7))) * x10) * x10
-                    + (x20 + 0.5 * x45)
-                        * ((x16 + x23 * (-x3 * x7 * x7 - 0.5 * (x10 * x4))
-                            - 0.5 * (x8 * x10 * x10 * x25 * x4)) * x7
-                            + x8
-                                * (x10 * (x23 * x4 * x41 + 0.5 * (x0 * x8))
-                                    - x3 * x25 * x7 * x7) * x10)
-                    + 2.0 * (x13 * x12 * x12 * (x31 * x7 + x8 * x38 * x10))
-                    + (0.5 * x16 + x17)
-                        * (((-0.5 * x3 - 0.5 * x24) * x7 + x32) * x7
-                            + (x39 - 0.5 * x33) * x8 * x10)) - 14.715 * x20 - 4.905 * x45,
+                                    * ((1.5 * x35 - 2.25 * x0 - 1.5 * x34) * x4
+                                        - 1.5 * (x0 * x13))))
+                + x9 * x10
+                    * (0.08333333333333333
+                        * (x9 * (x42 * x9 * x25 * x10 + (x23 - x24 - x38) * x7))
+                        - x12
+                            * (x18 * x32
+                                + (x26 + x12 * (2.0 * x30 - 4.0 * x29 + 4.0 * x31)
+                                    - 1.5 * x28) * x13)
+                        - ((1.0 - 0.5 * x21) * x9 * x25 * x10 - x19 * x7 * x27
+                            - 1.3333333333333333 * (x7 * x7 * x27)
+                            + x12 * x4 * (0.75 * x30 - 1.5 * x29 + 1.5 * x31)) * x7
+                        - x9
+                            * (x42 * x25 * x14
+                                + ((0.5 * x7
+                                    + x9 * (0.3333333333333333 - 0.3333333333333333 * x21))
+                                    * x25
+                                    + x12
+                                        * (x3 * (0.25 * x30 - 0.5 * x29 + 0.5 * x31)
+                                            - 0.5 * (x13 * x1)) - 0.5 * (x7 * x7 * x10 * x27)) * x10)))
+                * u1 * u1 - 4.905 * x20 - 14.715 * x41,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1074,9 +1063,9 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = u1 * x7;
-        dstate[1] = x8 * x10 * u1;
-        dstate[2] = x12 * (x13 * u1 + x9 * G_x);
+        dstate[0] = x7 * u1;
+        dstate[1] = x9 * x10 * u1;
+        dstate[2] = x12 * (u1 * x13 + x8 * G_x);
         dstate[3] = force[0];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -1102,7 +1091,7 @@ pub mod reduced_volterra {
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "wheel",
-                theta2_dot + x0 * theta1_dot,
+                theta1_dot * x0 + theta2_dot,
                 f64::abs(theta1_dot) * f64::abs(x0) + f64::abs(theta2_dot),
             ),
         ];
@@ -1141,13 +1130,13 @@ pub mod reduced_volterra {
         let theta2 = state[1];
         let u1 = state[3];
         let G_x = g_i[0];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = -x2 - x3 - 1.0;
-        let x5 = x2 + x3 + 1.0;
-        let x6 = 4.0 * x2 + 4.0 * x3 + 4.0;
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = -x0 - x3 - 1.0;
+        let x5 = x0 + x3 + 1.0;
+        let x6 = 4.0 * x0 + 4.0 * x3 + 4.0;
         let value = x4;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1175,8 +1164,8 @@ pub mod reduced_volterra {
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
             u1 / x4,
-            (x2 + x3) * u1 / x5,
-            ((x0 * (-0.5 * x2 - 0.5 * x3) + 1.5 * x1) * u1 + x5 * G_x) / x6,
+            (x0 + x3) * u1 / x5,
+            (u1 * (x1 * (-0.5 * x0 - 0.5 * x3) + 1.5 * x2) + x5 * G_x) / x6,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1197,23 +1186,23 @@ pub mod reduced_volterra {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2);
-        let x1 = f64::cos(theta1);
-        let x2 = x0 * x1;
-        let x3 = f64::sin(theta1) * f64::sin(theta2);
-        let x4 = x2 + x3;
-        let x5 = 1.0 / (x2 + x3 + 1.0);
-        let x6 = 1.0 / (-x2 - x3 - 1.0);
-        let x7 = x0 * (-0.5 * x2 - 0.5 * x3) + 1.5 * x1;
-        let x8 = 1.0 / (4.0 * x2 + 4.0 * x3 + 4.0);
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2);
+        let x2 = f64::cos(theta1);
+        let x3 = x1 * x2;
+        let x4 = 1.0 / (x0 + x3 + 1.0);
+        let x5 = x0 + x3;
+        let x6 = 1.0 / (-x0 - x3 - 1.0);
+        let x7 = 1.0 / (4.0 * x0 + 4.0 * x3 + 4.0);
+        let x8 = x1 * (-0.5 * x0 - 0.5 * x3) + 1.5 * x2;
         [
             [
                 x4 * x5
-                    * (x4 * (0.3333333333333333 * x5 + 0.5 * x6) + 0.5 * (x0 * x7 * x8))
-                    + x7 * x8
-                        * (0.5 * (x0 * x4 * x5) + 1.5 * (x1 * x6) + 4.0 * (x7 * x8))
-                    + (1.5 * (x7 * x8 * x1) + 0.5 * (x4 * x4 * x5)
-                        + 1.3333333333333333 * x6) * x6,
+                    * (x5 * (0.3333333333333333 * x4 + 0.5 * x6) + 0.5 * (x7 * x1 * x8))
+                    + x7 * (0.5 * (x1 * x4 * x5) + 1.5 * (x6 * x2) + 4.0 * (x7 * x8))
+                        * x8
+                    + (1.3333333333333333 * x6 + 1.5 * (x7 * x2 * x8)
+                        + 0.5 * (x4 * x5 * x5)) * x6,
             ],
         ]
     }
@@ -1227,8 +1216,8 @@ pub mod reduced_volterra {
     ) -> f64 {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::cos(theta2) * f64::cos(theta1);
-        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x0 = f64::sin(theta1) * f64::sin(theta2);
+        let x1 = f64::cos(theta2) * f64::cos(theta1);
         f64::INFINITY
             .min(f64::abs(-x0 - x1 - 1.0))
             .min(f64::abs(x0 + x1 + 1.0))

@@ -163,7 +163,7 @@ pub fn energy(
     let y_dot = qdot[1];
     let mb = params.mb;
     let g = params.g;
-    (0.5 * (y_dot * y_dot) + g * y + 0.5 * (x_dot * x_dot)) * mb
+    (0.5 * (x_dot * x_dot) + g * y + 0.5 * (y_dot * y_dot)) * mb
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -199,7 +199,7 @@ pub fn constraint_residuals(
     let y = q[1];
     let x_dot = qdot[0];
     let y_dot = qdot[1];
-    [2.0 * (y * y_dot) + 2.0 * (x * x_dot)]
+    [2.0 * (x * x_dot) + 2.0 * (y * y_dot)]
 }
 ///Position-level residuals of the holonomic constraints.
 #[allow(non_snake_case, clippy::all)]
@@ -211,7 +211,7 @@ pub fn position_residuals(
     let x = q[0];
     let y = q[1];
     let L = params.L;
-    [x * x - L * L + y * y]
+    [x * x + y * y - L * L]
 }
 ///Lagrange's equations with multipliers: 5 states, 2 equations.
 pub mod lagrange {
@@ -248,7 +248,7 @@ pub mod lagrange {
         let mut force: [f64; 3] = [
             w,
             -(mb * g),
-            -2.0 * (y_dot * y_dot) - 2.0 * (x_dot * x_dot),
+            -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -294,9 +294,9 @@ pub mod lagrange {
         let mut force: [f64; 3] = [
             w,
             -(mb * g),
-            -2.0 * ((2.0 * (y * y_dot) + 2.0 * (x * x_dot)) * alpha)
-                - 2.0 * (y_dot * y_dot) - beta * beta * (x * x - L * L + y * y)
-                - 2.0 * (x_dot * x_dot),
+            -2.0 * ((2.0 * (x * x_dot) + 2.0 * (y * y_dot)) * alpha)
+                - 2.0 * (x_dot * x_dot) - beta * beta * (x * x + y * y - L * L)
+                - 2.0 * (y_dot * y_dot),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -330,18 +330,18 @@ pub mod lagrange {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
         let L = params.L;
-        let x0 = f64::abs(x);
-        let x1 = f64::abs(y);
+        let x0 = f64::abs(y);
+        let x1 = f64::abs(x);
         let x2 = f64::abs(L);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rod",
-                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
-                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+                2.0 * (x * x_dot) + 2.0 * (y * y_dot),
+                2.0 * (x0 * f64::abs(y_dot)) + 2.0 * (x1 * f64::abs(x_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
-            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+            ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
@@ -443,9 +443,9 @@ pub mod maggi {
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
         let x4 = x * y_dot - x_dot * y;
-        let x5 = 8.0 * (x * x_dot * y * x3) + (8.0 * (y * y * x3) - 2.0) * y_dot;
-        let x6 = x4 * x3
-            * ((2.0 - 8.0 * (x * x * x3)) * x_dot - 8.0 * (x * y * y_dot * x3));
+        let x5 = 8.0 * (x * x_dot * x3 * y) + (8.0 * (x3 * y * y) - 2.0) * y_dot;
+        let x6 = x3 * x4
+            * ((2.0 - 8.0 * (x * x * x3)) * x_dot - 8.0 * (x * x3 * y * y_dot));
         let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -456,7 +456,7 @@ pub mod maggi {
         }
         let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
         let mut force: [f64; 1] = [
-            x3 * (2.0 * (x * mb * (-g - x6)) - 2.0 * ((w - x4 * mb * x5 * x3) * y)),
+            x3 * (2.0 * (x * mb * (-g - x6)) - 2.0 * ((w - mb * x3 * x4 * x5) * y)),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -467,7 +467,7 @@ pub mod maggi {
         }
         dstate[0] = x_dot;
         dstate[1] = y_dot;
-        dstate[2] = -(2.0 * y * x3) * force[0] + x4 * x5 * x3;
+        dstate[2] = -(2.0 * x3 * y) * force[0] + x3 * x4 * x5;
         dstate[3] = 2.0 * x * x3 * force[0] + x6;
         dstate[4] = w * x_dot;
         for (index, value) in dstate.iter().enumerate() {
@@ -490,18 +490,18 @@ pub mod maggi {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
         let L = params.L;
-        let x0 = f64::abs(x);
-        let x1 = f64::abs(y);
+        let x0 = f64::abs(y);
+        let x1 = f64::abs(x);
         let x2 = f64::abs(L);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rod",
-                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
-                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+                2.0 * (x * x_dot) + 2.0 * (y * y_dot),
+                2.0 * (x0 * f64::abs(y_dot)) + 2.0 * (x1 * f64::abs(x_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
-            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+            ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
@@ -623,7 +623,7 @@ pub mod kane {
             });
         }
         let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [x3 * (-2.0 * (x * mb * g) - 2.0 * (w * y))];
+        let mut force: [f64; 1] = [(-2.0 * (w * y) - 2.0 * (x * mb * g)) * x3];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -631,10 +631,10 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = -(2.0 * y * u1 * x3);
-        dstate[1] = 2.0 * x * u1 * x3;
+        dstate[0] = -(2.0 * x3 * y * u1);
+        dstate[1] = 2.0 * x * x3 * u1;
         dstate[2] = force[0];
-        dstate[3] = -(2.0 * w * y * u1 * x3);
+        dstate[3] = -(2.0 * w * x3 * y * u1);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -655,18 +655,18 @@ pub mod kane {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
         let L = params.L;
-        let x0 = f64::abs(x);
-        let x1 = f64::abs(y);
+        let x0 = f64::abs(y);
+        let x1 = f64::abs(x);
         let x2 = f64::abs(L);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rod",
-                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
-                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+                2.0 * (x * x_dot) + 2.0 * (y * y_dot),
+                2.0 * (x0 * f64::abs(y_dot)) + 2.0 * (x1 * f64::abs(x_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
-            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+            ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
@@ -709,7 +709,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * u1 * x1), 2.0 * x * u1 * x1];
+        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * x1 * y * u1), 2.0 * x * x1 * u1];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -789,7 +789,7 @@ pub mod reduced_volterra {
             });
         }
         let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [x3 * (-2.0 * (x * mb * g) - 2.0 * (w * y))];
+        let mut force: [f64; 1] = [(-2.0 * (w * y) - 2.0 * (x * mb * g)) * x3];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -797,10 +797,10 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = -(2.0 * y * u1 * x3);
-        dstate[1] = 2.0 * x * u1 * x3;
+        dstate[0] = -(2.0 * x3 * y * u1);
+        dstate[1] = 2.0 * x * x3 * u1;
         dstate[2] = force[0];
-        dstate[3] = -(2.0 * w * y * u1 * x3);
+        dstate[3] = -(2.0 * w * x3 * y * u1);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -821,18 +821,18 @@ pub mod reduced_volterra {
         let x_dot = qdot[0];
         let y_dot = qdot[1];
         let L = params.L;
-        let x0 = f64::abs(x);
-        let x1 = f64::abs(y);
+        let x0 = f64::abs(y);
+        let x1 = f64::abs(x);
         let x2 = f64::abs(L);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rod",
-                2.0 * (y * y_dot) + 2.0 * (x * x_dot),
-                2.0 * (x0 * f64::abs(x_dot)) + 2.0 * (x1 * f64::abs(y_dot)),
+                2.0 * (x * x_dot) + 2.0 * (y * y_dot),
+                2.0 * (x0 * f64::abs(y_dot)) + 2.0 * (x1 * f64::abs(x_dot)),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
-            ("rod", x * x - L * L + y * y, x2 * x2 + x0 * x0 + x1 * x1),
+            ("rod", x * x + y * y - L * L, x2 * x2 + x0 * x0 + x1 * x1),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
@@ -875,7 +875,7 @@ pub mod reduced_volterra {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * u1 * x1), 2.0 * x * u1 * x1];
+        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * x1 * y * u1), 2.0 * x * x1 * u1];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

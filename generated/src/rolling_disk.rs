@@ -159,9 +159,8 @@ pub fn energy(
     let md = params.md;
     let R = params.R;
     md
-        * (0.5 * (y_dot * y_dot)
-            + R * R * (0.125 * (psi_dot * psi_dot) + 0.25 * (phi_dot * phi_dot))
-            + 0.5 * (x_dot * x_dot))
+        * (R * R * (0.25 * (phi_dot * phi_dot) + 0.125 * (psi_dot * psi_dot))
+            + 0.5 * (x_dot * x_dot) + 0.5 * (y_dot * y_dot))
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -331,7 +330,7 @@ pub mod lagrange {
             0.0,
             0.0,
             tq,
-            -2.0 * ((x_dot - R * x0 * phi_dot) * alpha) - R * psi_dot * phi_dot * x2,
+            -R * psi_dot * phi_dot * x2 - 2.0 * (alpha * (x_dot - R * x0 * phi_dot)),
             R * x0 * psi_dot * phi_dot - 2.0 * ((y_dot - R * phi_dot * x2) * alpha),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
@@ -514,11 +513,11 @@ pub mod maggi {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::sin(psi);
-        let x1 = f64::cos(psi);
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
         let mut matrix: [[f64; 2]; 2] = [
             [0.25 * md * R * R, 0.0],
-            [0.0, (x0 * x0 + x1 * x1 + 0.5) * md * R * R],
+            [0.0, md * R * R * (x0 * x0 + x1 * x1 + 0.5)],
         ];
         let mut force: [f64; 2] = [0.0, tq];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
@@ -532,8 +531,8 @@ pub mod maggi {
         dstate[1] = y_dot;
         dstate[2] = psi_dot;
         dstate[3] = phi_dot;
-        dstate[4] = 0.0 * force[0] + R * x1 * force[1] + -(R * psi_dot * phi_dot * x0);
-        dstate[5] = 0.0 * force[0] + R * x0 * force[1] + R * x1 * psi_dot * phi_dot;
+        dstate[4] = 0.0 * force[0] + R * x0 * force[1] + -(R * psi_dot * phi_dot * x1);
+        dstate[5] = 0.0 * force[0] + R * x1 * force[1] + R * x0 * psi_dot * phi_dot;
         dstate[6] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
         dstate[7] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
         dstate[8] = tq * phi_dot;
@@ -639,9 +638,9 @@ pub mod maggi {
         let psi = state[2];
         let md = params.md;
         let R = params.R;
-        let x0 = f64::sin(psi);
-        let x1 = f64::cos(psi);
-        [[0.25 * md * R * R, 0.0], [0.0, (x0 * x0 + x1 * x1 + 0.5) * md * R * R]]
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        [[0.25 * md * R * R, 0.0], [0.0, md * R * R * (x0 * x0 + x1 * x1 + 0.5)]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -231,24 +231,24 @@ pub fn energy(
     let Iyz = params.Iyz;
     let m = params.m;
     let l = params.l;
-    let x0 = f64::cos(psi);
-    let x1 = f64::sin(theta);
-    let x2 = rho + 0.5 * l;
-    let x3 = f64::cos(theta);
-    let x4 = f64::sin(psi);
-    let x5 = X_dot + x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4;
-    let x6 = Y_dot - x1 * theta_dot * x2 * x4 + x3 * (x0 * psi_dot * x2 + rho_dot * x4);
-    let x7 = Z_dot - theta_dot * x3 * x2 - x1 * rho_dot;
-    let x8 = f64::cos(phi);
-    let x9 = f64::sin(phi);
-    let x10 = x3 * psi_dot * x8 - theta_dot * x9;
-    let x11 = phi_dot - x1 * psi_dot;
-    let x12 = theta_dot * x8 + x3 * psi_dot * x9;
-    0.5 * ((x5 * x5 + x6 * x6 + x7 * x7) * m)
-        + 0.5 * ((Iyy * x12 - Iyz * x10 - x11 * Ixy) * x12)
-        + 0.5 * ((Izz * x10 - Iyz * x12 - x11 * Ixz) * x10)
-        + 0.5 * (x11 * (x11 * Ixx - Ixy * x12 - Ixz * x10))
-        + 0.5 * (mg * (Y_dot * Y_dot + X_dot * X_dot + Z_dot * Z_dot))
+    let x0 = f64::sin(theta);
+    let x1 = phi_dot - x0 * psi_dot;
+    let x2 = f64::cos(theta);
+    let x3 = f64::cos(phi);
+    let x4 = f64::sin(phi);
+    let x5 = x2 * psi_dot * x3 - theta_dot * x4;
+    let x6 = theta_dot * x3 + x2 * psi_dot * x4;
+    let x7 = f64::cos(psi);
+    let x8 = rho + 0.5 * l;
+    let x9 = f64::sin(psi);
+    let x10 = X_dot + x7 * (x2 * rho_dot - x0 * theta_dot * x8) - x2 * psi_dot * x8 * x9;
+    let x11 = Y_dot - x0 * theta_dot * x8 * x9 + x2 * (rho_dot * x9 + x7 * psi_dot * x8);
+    let x12 = Z_dot - theta_dot * x2 * x8 - x0 * rho_dot;
+    0.5 * (x1 * (Ixx * x1 - x5 * Ixz - Ixy * x6))
+        + 0.5 * ((x5 * Izz - Iyz * x6 - Ixz * x1) * x5)
+        + 0.5 * ((x10 * x10 + x11 * x11 + x12 * x12) * m)
+        + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * mg)
+        + 0.5 * ((Iyy * x6 - x5 * Iyz - Ixy * x1) * x6)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -282,17 +282,17 @@ pub fn momenta(
     let m = params.m;
     let l = params.l;
     let x0 = f64::cos(psi);
-    let x1 = f64::sin(theta);
-    let x2 = rho + 0.5 * l;
-    let x3 = f64::cos(theta);
+    let x1 = f64::cos(theta);
+    let x2 = f64::sin(theta);
+    let x3 = rho + 0.5 * l;
     let x4 = f64::sin(psi);
     let x5 = m + mg;
     [
-        (x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4) * m
-            + X_dot * x5,
-        Y_dot * x5
-            + (x3 * (x0 * psi_dot * x2 + rho_dot * x4) - x1 * theta_dot * x2 * x4) * m,
-        (-theta_dot * x3 * x2 - x1 * rho_dot) * m + Z_dot * x5,
+        m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
+            + x5 * X_dot,
+        x5 * Y_dot
+            + m * (x1 * (rho_dot * x4 + x0 * psi_dot * x3) - x2 * theta_dot * x3 * x4),
+        m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -372,87 +372,87 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::sin(phi);
-        let x2 = Ixy * x1;
-        let x3 = f64::cos(phi);
-        let x4 = Ixz * x3;
-        let x5 = 2.0 * x2 + 2.0 * x4;
-        let x6 = Izz - Iyy;
-        let x7 = Iyz * x1;
-        let x8 = l * l;
-        let x9 = m * (0.25 * x8 + (rho + l) * rho);
-        let x10 = f64::cos(theta);
+        let x0 = f64::cos(theta);
+        let x1 = l * l;
+        let x2 = m * (0.25 * x1 + rho * (rho + l));
+        let x3 = Izz - Iyy;
+        let x4 = f64::cos(phi);
+        let x5 = f64::sin(phi);
+        let x6 = Iyz * x5;
+        let x7 = f64::sin(theta);
+        let x8 = Ixy * x5;
+        let x9 = Ixz * x4;
+        let x10 = 2.0 * x8 + 2.0 * x9;
         let x11 = Iyy - Izz;
-        let x12 = Iyz * x3;
-        let x13 = Ixy * x3;
-        let x14 = x1 * Ixz;
+        let x12 = Iyz * x4;
+        let x13 = Ixy * x4;
+        let x14 = x5 * Ixz;
         let x15 = x13 - x14;
-        let x16 = x10 * (Iyz + (x11 * x1 - 2.0 * x12) * x3) + x0 * x15;
-        let x17 = -x2 - x4;
-        let x18 = x17 * x10 - x0 * Ixx;
+        let x16 = (Iyz + (x5 * x11 - 2.0 * x12) * x4) * x0 + x7 * x15;
+        let x17 = -x8 - x9;
+        let x18 = x0 * x17 - x7 * Ixx;
         let x19 = rho + 0.5 * l;
         let x20 = f64::sin(psi);
-        let x21 = -(x10 * m * x19 * x20);
+        let x21 = -(x0 * m * x19 * x20);
         let x22 = f64::cos(psi);
-        let x23 = x22 * x10 * m * x19;
+        let x23 = x22 * x0 * m * x19;
         let x24 = x14 - x13;
-        let x25 = -(x0 * x22 * m * x19);
-        let x26 = -(x0 * m * x19 * x20);
-        let x27 = -(x10 * m * x19);
-        let x28 = x22 * x10 * m;
-        let x29 = x10 * m * x20;
-        let x30 = -(x0 * m);
+        let x25 = -(x7 * x22 * m * x19);
+        let x26 = -(x7 * m * x19 * x20);
+        let x27 = -(x0 * m * x19);
+        let x28 = x22 * x0 * m;
+        let x29 = x0 * m * x20;
+        let x30 = -(x7 * m);
         let x31 = m + mg;
-        let x32 = x22 * Y_dot;
-        let x33 = X_dot * x20;
-        let x34 = x33 - x32;
-        let x35 = x1 * x6;
-        let x36 = x15 * x10 + x0 * ((x35 + 2.0 * x12) * x3 - Iyz);
-        let x37 = x2 + x4;
-        let x38 = x37 * x0 - Ixx * x10;
-        let x39 = (2.0 * Iyy - 2.0 * Izz) * x3;
-        let x40 = Iyz * x3 * x3;
-        let x41 = x0 * x17 + x10 * (x1 * (x35 + 4.0 * x12) + x11 * x3 * x3);
-        let x42 = x0 * theta_dot * x19 * x20;
-        let x43 = x22 * psi_dot * x19;
-        let x44 = rho_dot * x20;
-        let x45 = Y_dot - x42 + x10 * (x43 + x44);
-        let x46 = x0 * theta_dot * x19;
-        let x47 = x10 * rho_dot;
-        let x48 = x22 * (x47 - x46);
-        let x49 = x10 * psi_dot * x19 * x20;
-        let x50 = x48 - x49;
-        let x51 = X_dot + x48 - x49;
-        let x52 = -x43 - x44;
-        let x53 = x42 + x52 * x10;
-        let x54 = 2.0 * rho + l;
-        let x55 = -Y_dot * x20 - X_dot * x22;
-        let x56 = x0 * (psi_dot * x19 * x20 - x22 * rho_dot)
-            - theta_dot * x22 * x10 * x19;
-        let x57 = x0 * x52 - theta_dot * x10 * x19 * x20;
-        let x58 = Z_dot - theta_dot * x10 * x19 - x0 * rho_dot;
-        let x59 = x0 * x55;
-        let x60 = Z_dot * x10;
-        let x61 = x10 * psi_dot * x3 - theta_dot * x1;
-        let x62 = Iyz * x61;
-        let x63 = phi_dot - x0 * psi_dot;
-        let x64 = x63 * Ixy;
-        let x65 = theta_dot * x3;
-        let x66 = x10 * psi_dot * x1;
-        let x67 = x65 + x66;
-        let x68 = Iyy * x67;
-        let x69 = Izz * x61 - Iyz * x67 - x63 * Ixz;
-        let x70 = -x65 - x66;
+        let x32 = x7 * theta_dot * x19 * x20;
+        let x33 = rho_dot * x20;
+        let x34 = x22 * psi_dot * x19;
+        let x35 = Y_dot - x32 + x0 * (x33 + x34);
+        let x36 = x0 * rho_dot;
+        let x37 = x7 * theta_dot * x19;
+        let x38 = x22 * (x36 - x37);
+        let x39 = x0 * psi_dot * x19 * x20;
+        let x40 = x38 - x39;
+        let x41 = -Y_dot * x20 - X_dot * x22;
+        let x42 = X_dot * x20;
+        let x43 = 2.0 * rho + l;
+        let x44 = x22 * Y_dot;
+        let x45 = X_dot + x38 - x39;
+        let x46 = -x33 - x34;
+        let x47 = x0 * x46 + x32;
+        let x48 = x3 * x5;
+        let x49 = ((x48 + 2.0 * x12) * x4 - Iyz) * x7 + x0 * x15;
+        let x50 = x8 + x9;
+        let x51 = x7 * x50 - Ixx * x0;
+        let x52 = (2.0 * Iyy - 2.0 * Izz) * x4;
+        let x53 = x42 - x44;
+        let x54 = Iyz * x4 * x4;
+        let x55 = ((x48 + 4.0 * x12) * x5 + x11 * x4 * x4) * x0 + x7 * x17;
+        let x56 = Z_dot * x0;
+        let x57 = x7 * x41;
+        let x58 = x7 * x46 - theta_dot * x0 * x19 * x20;
+        let x59 = Z_dot - theta_dot * x0 * x19 - x7 * rho_dot;
+        let x60 = x7 * (psi_dot * x19 * x20 - x22 * rho_dot)
+            - theta_dot * x22 * x0 * x19;
+        let x61 = theta_dot * x4;
+        let x62 = x0 * psi_dot * x5;
+        let x63 = x61 + x62;
+        let x64 = phi_dot - x7 * psi_dot;
+        let x65 = x0 * psi_dot * x4 - theta_dot * x5;
+        let x66 = x65 * Iyz;
+        let x67 = Iyy * x63;
+        let x68 = Ixy * x64;
+        let x69 = x65 * Izz - Iyz * x63 - Ixz * x64;
+        let x70 = -x61 - x62;
         let x71 = f64::cos(0.0485 * t);
         let x72 = f64::sin(0.089 * t);
-        let x73 = x22 * x10 * psi_dot - x0 * theta_dot * x20;
-        let x74 = -x10 * psi_dot * x20 - x0 * theta_dot * x22;
+        let x73 = -x7 * theta_dot * x22 - x0 * psi_dot * x20;
+        let x74 = x22 * x0 * psi_dot - x7 * theta_dot * x20;
         let mut matrix: [[f64; 7]; 7] = [
             [
                 Ixx
-                    + (x0 * x5 + ((x6 * x3 - 2.0 * x7) * x3 + Iyy - Ixx + x9) * x10)
-                        * x10,
+                    + (x0 * (x2 + Iyy + (x3 * x4 - 2.0 * x6) * x4 - Ixx) + x7 * x10)
+                        * x0,
                 x16,
                 x18,
                 0.0,
@@ -460,7 +460,7 @@ pub mod lagrange {
                 x23,
                 0.0,
             ],
-            [x16, (2.0 * x7 + x11 * x3) * x3 + x9 + Izz, x24, 0.0, x25, x26, x27],
+            [x16, x2 + Izz + (x11 * x4 + 2.0 * x6) * x4, x24, 0.0, x25, x26, x27],
             [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
             [0.0, 0.0, 0.0, m, x28, x29, x30],
             [x21, x25, 0.0, x28, x31, 0.0, 0.0],
@@ -468,47 +468,48 @@ pub mod lagrange {
             [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
         ];
         let mut force: [f64; 7] = [
-            m
-                * (x45 * x50 + x51 * x53
-                    + x10
-                        * (-rho_dot * (x32 + x54 * x10 * psi_dot - x33)
-                            - x55 * psi_dot * x19))
+            (x35 * x40
+                + (-x41 * psi_dot * x19 - (x0 * psi_dot * x43 - x42 + x44) * rho_dot)
+                    * x0 + x45 * x47) * m
                 - theta_dot
-                    * (x0 * x34 * m * x19 + x36 * theta_dot + x38 * phi_dot
-                        + (x5 * x10 * x10
-                            + (x0 * (-2.0 * x2 - 2.0 * x4)
-                                + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x8) - 2.0 * Iyy
-                                    + 2.0 * Ixx + (x39 + 4.0 * x7) * x3) * x10) * x0) * psi_dot)
-                - ((x24 * phi_dot
-                    + (x0 * (2.0 * x13 - 2.0 * x14)
-                        + ((x39 + 2.0 * x7) * x1 - 2.0 * x40) * x10) * psi_dot) * x10
-                    + theta_dot * x41) * phi_dot,
+                    * (x49 * theta_dot + x51 * phi_dot
+                        + psi_dot
+                            * (x10 * x0 * x0
+                                + x7
+                                    * (x0
+                                        * ((x52 + 4.0 * x6) * x4 - 2.0 * Iyy + 2.0 * Ixx
+                                            + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x1))
+                                        + x7 * (-2.0 * x8 - 2.0 * x9))) + x7 * m * x19 * x53)
+                - phi_dot
+                    * ((((x5 * (x52 + 2.0 * x6) - 2.0 * x54) * x0
+                        + (2.0 * x13 - 2.0 * x14) * x7) * psi_dot + x24 * phi_dot) * x0
+                        + theta_dot * x55),
             m
-                * (x51 * x56 + x45 * x57 + (x46 - x47) * x58
-                    - rho_dot * (theta_dot * x54 + x59 - x60))
-                - (x41 * psi_dot
-                    + theta_dot
-                        * (2.0 * x40 + ((2.0 * Izz - 2.0 * Iyy) * x3 - 2.0 * x7) * x1)
-                    + x37 * phi_dot) * phi_dot
+                * (x35 * x58 - (theta_dot * x43 - x56 + x57) * rho_dot
+                    + (x37 - x36) * x59 + x45 * x60)
                 + psi_dot
-                    * (x0
-                        * (-x34 * m * x19 - 0.5 * ((x68 - x62 - x64) * x1)
-                            - 0.5 * (x69 * x3)) + 0.5 * (x63 * x38)
-                        + 0.5 * ((Ixy * x10 + x0 * (x12 - Iyy * x1)) * x67)
-                        + 0.5 * ((x0 * (x7 - Izz * x3) + x10 * Ixz) * x61)
-                        - 0.5 * ((x63 * Ixx - Ixy * x67 - Ixz * x61) * x10))
-                - theta_dot * (x36 * psi_dot + (x55 * x10 + Z_dot * x0) * m * x19),
-            0.5 * ((Iyy * x61 - Iyz * x70) * x67)
-                - (x24 * x10 * psi_dot + x37 * theta_dot) * phi_dot
-                + 0.5 * (x63 * (-x70 * Ixz - Ixy * x61)) - theta_dot * psi_dot * x38
-                + 0.5 * (x70 * x69)
-                + x61 * (0.5 * (x70 * Izz) - x62 - 0.5 * x64 + 0.5 * x68),
+                    * (0.5 * ((Ixy * x0 + x7 * (x12 - Iyy * x5)) * x63)
+                        + 0.5 * (x51 * x64)
+                        + 0.5 * ((x7 * (x6 - Izz * x4) + x0 * Ixz) * x65)
+                        - 0.5 * (x0 * (Ixx * x64 - x65 * Ixz - Ixy * x63))
+                        + x7
+                            * (-m * x19 * x53 - 0.5 * ((x67 - x66 - x68) * x5)
+                                - 0.5 * (x69 * x4)))
+                - (theta_dot
+                    * (2.0 * x54 + x5 * ((2.0 * Izz - 2.0 * Iyy) * x4 - 2.0 * x6))
+                    + phi_dot * x50 + psi_dot * x55) * phi_dot
+                - theta_dot * (m * x19 * (Z_dot * x7 + x41 * x0) + x49 * psi_dot),
+            0.5 * (x69 * x70) - (theta_dot * x50 + x24 * x0 * psi_dot) * phi_dot
+                - theta_dot * x51 * psi_dot + 0.5 * (x64 * (-x70 * Ixz - x65 * Ixy))
+                + x65 * (0.5 * x67 - x66 - 0.5 * x68 + 0.5 * (x70 * Izz))
+                + 0.5 * ((x65 * Iyy - Iyz * x70) * x63),
             0.012 * x71 - 0.018 * x72
-                + (x45 * x73 + x74 * x51 - (x59 - x60) * theta_dot
-                    - (x32 - x33) * x10 * psi_dot - theta_dot * x58 * x10) * m,
-            (-theta_dot * x56 - psi_dot * x53 - x74 * rho_dot) * m,
-            m * (-theta_dot * x57 - x50 * psi_dot - rho_dot * x73),
-            theta_dot * m * (2.0 * x47 - x46),
+                + m
+                    * (x73 * x45 - x0 * psi_dot * (x44 - x42) - theta_dot * x0 * x59
+                        - theta_dot * (x57 - x56) + x35 * x74),
+            (-psi_dot * x47 - x73 * rho_dot - theta_dot * x60) * m,
+            (-theta_dot * x58 - x74 * rho_dot - psi_dot * x40) * m,
+            theta_dot * m * (2.0 * x36 - x37),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -570,87 +571,87 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::sin(phi);
-        let x2 = Ixy * x1;
-        let x3 = f64::cos(phi);
-        let x4 = Ixz * x3;
-        let x5 = 2.0 * x2 + 2.0 * x4;
-        let x6 = Izz - Iyy;
-        let x7 = Iyz * x1;
-        let x8 = l * l;
-        let x9 = m * (0.25 * x8 + (rho + l) * rho);
-        let x10 = f64::cos(theta);
+        let x0 = f64::cos(theta);
+        let x1 = l * l;
+        let x2 = m * (0.25 * x1 + rho * (rho + l));
+        let x3 = Izz - Iyy;
+        let x4 = f64::cos(phi);
+        let x5 = f64::sin(phi);
+        let x6 = Iyz * x5;
+        let x7 = f64::sin(theta);
+        let x8 = Ixy * x5;
+        let x9 = Ixz * x4;
+        let x10 = 2.0 * x8 + 2.0 * x9;
         let x11 = Iyy - Izz;
-        let x12 = Iyz * x3;
-        let x13 = Ixy * x3;
-        let x14 = x1 * Ixz;
+        let x12 = Iyz * x4;
+        let x13 = Ixy * x4;
+        let x14 = x5 * Ixz;
         let x15 = x13 - x14;
-        let x16 = x10 * (Iyz + (x11 * x1 - 2.0 * x12) * x3) + x0 * x15;
-        let x17 = -x2 - x4;
-        let x18 = x17 * x10 - x0 * Ixx;
+        let x16 = (Iyz + (x5 * x11 - 2.0 * x12) * x4) * x0 + x7 * x15;
+        let x17 = -x8 - x9;
+        let x18 = x0 * x17 - x7 * Ixx;
         let x19 = rho + 0.5 * l;
         let x20 = f64::sin(psi);
-        let x21 = -(x10 * m * x19 * x20);
+        let x21 = -(x0 * m * x19 * x20);
         let x22 = f64::cos(psi);
-        let x23 = x22 * x10 * m * x19;
+        let x23 = x22 * x0 * m * x19;
         let x24 = x14 - x13;
-        let x25 = -(x0 * x22 * m * x19);
-        let x26 = -(x0 * m * x19 * x20);
-        let x27 = -(x10 * m * x19);
-        let x28 = x22 * x10 * m;
-        let x29 = x10 * m * x20;
-        let x30 = -(x0 * m);
+        let x25 = -(x7 * x22 * m * x19);
+        let x26 = -(x7 * m * x19 * x20);
+        let x27 = -(x0 * m * x19);
+        let x28 = x22 * x0 * m;
+        let x29 = x0 * m * x20;
+        let x30 = -(x7 * m);
         let x31 = m + mg;
-        let x32 = x22 * Y_dot;
-        let x33 = X_dot * x20;
-        let x34 = x33 - x32;
-        let x35 = x1 * x6;
-        let x36 = x15 * x10 + x0 * ((x35 + 2.0 * x12) * x3 - Iyz);
-        let x37 = x2 + x4;
-        let x38 = x37 * x0 - Ixx * x10;
-        let x39 = (2.0 * Iyy - 2.0 * Izz) * x3;
-        let x40 = Iyz * x3 * x3;
-        let x41 = x0 * x17 + x10 * (x1 * (x35 + 4.0 * x12) + x11 * x3 * x3);
-        let x42 = x0 * theta_dot * x19 * x20;
-        let x43 = x22 * psi_dot * x19;
-        let x44 = rho_dot * x20;
-        let x45 = Y_dot - x42 + x10 * (x43 + x44);
-        let x46 = x0 * theta_dot * x19;
-        let x47 = x10 * rho_dot;
-        let x48 = x22 * (x47 - x46);
-        let x49 = x10 * psi_dot * x19 * x20;
-        let x50 = x48 - x49;
-        let x51 = X_dot + x48 - x49;
-        let x52 = -x43 - x44;
-        let x53 = x42 + x52 * x10;
-        let x54 = 2.0 * rho + l;
-        let x55 = -Y_dot * x20 - X_dot * x22;
-        let x56 = x0 * (psi_dot * x19 * x20 - x22 * rho_dot)
-            - theta_dot * x22 * x10 * x19;
-        let x57 = x0 * x52 - theta_dot * x10 * x19 * x20;
-        let x58 = Z_dot - theta_dot * x10 * x19 - x0 * rho_dot;
-        let x59 = x0 * x55;
-        let x60 = Z_dot * x10;
-        let x61 = x10 * psi_dot * x3 - theta_dot * x1;
-        let x62 = Iyz * x61;
-        let x63 = phi_dot - x0 * psi_dot;
-        let x64 = x63 * Ixy;
-        let x65 = theta_dot * x3;
-        let x66 = x10 * psi_dot * x1;
-        let x67 = x65 + x66;
-        let x68 = Iyy * x67;
-        let x69 = Izz * x61 - Iyz * x67 - x63 * Ixz;
-        let x70 = -x65 - x66;
+        let x32 = x7 * theta_dot * x19 * x20;
+        let x33 = rho_dot * x20;
+        let x34 = x22 * psi_dot * x19;
+        let x35 = Y_dot - x32 + x0 * (x33 + x34);
+        let x36 = x0 * rho_dot;
+        let x37 = x7 * theta_dot * x19;
+        let x38 = x22 * (x36 - x37);
+        let x39 = x0 * psi_dot * x19 * x20;
+        let x40 = x38 - x39;
+        let x41 = -Y_dot * x20 - X_dot * x22;
+        let x42 = X_dot * x20;
+        let x43 = 2.0 * rho + l;
+        let x44 = x22 * Y_dot;
+        let x45 = X_dot + x38 - x39;
+        let x46 = -x33 - x34;
+        let x47 = x0 * x46 + x32;
+        let x48 = x3 * x5;
+        let x49 = ((x48 + 2.0 * x12) * x4 - Iyz) * x7 + x0 * x15;
+        let x50 = x8 + x9;
+        let x51 = x7 * x50 - Ixx * x0;
+        let x52 = (2.0 * Iyy - 2.0 * Izz) * x4;
+        let x53 = x42 - x44;
+        let x54 = Iyz * x4 * x4;
+        let x55 = ((x48 + 4.0 * x12) * x5 + x11 * x4 * x4) * x0 + x7 * x17;
+        let x56 = Z_dot * x0;
+        let x57 = x7 * x41;
+        let x58 = x7 * x46 - theta_dot * x0 * x19 * x20;
+        let x59 = Z_dot - theta_dot * x0 * x19 - x7 * rho_dot;
+        let x60 = x7 * (psi_dot * x19 * x20 - x22 * rho_dot)
+            - theta_dot * x22 * x0 * x19;
+        let x61 = theta_dot * x4;
+        let x62 = x0 * psi_dot * x5;
+        let x63 = x61 + x62;
+        let x64 = phi_dot - x7 * psi_dot;
+        let x65 = x0 * psi_dot * x4 - theta_dot * x5;
+        let x66 = x65 * Iyz;
+        let x67 = Iyy * x63;
+        let x68 = Ixy * x64;
+        let x69 = x65 * Izz - Iyz * x63 - Ixz * x64;
+        let x70 = -x61 - x62;
         let x71 = f64::cos(0.0485 * t);
         let x72 = f64::sin(0.089 * t);
-        let x73 = x22 * x10 * psi_dot - x0 * theta_dot * x20;
-        let x74 = -x10 * psi_dot * x20 - x0 * theta_dot * x22;
+        let x73 = -x7 * theta_dot * x22 - x0 * psi_dot * x20;
+        let x74 = x22 * x0 * psi_dot - x7 * theta_dot * x20;
         let mut matrix: [[f64; 7]; 7] = [
             [
                 Ixx
-                    + (x0 * x5 + ((x6 * x3 - 2.0 * x7) * x3 + Iyy - Ixx + x9) * x10)
-                        * x10,
+                    + (x0 * (x2 + Iyy + (x3 * x4 - 2.0 * x6) * x4 - Ixx) + x7 * x10)
+                        * x0,
                 x16,
                 x18,
                 0.0,
@@ -658,7 +659,7 @@ pub mod lagrange {
                 x23,
                 0.0,
             ],
-            [x16, (2.0 * x7 + x11 * x3) * x3 + x9 + Izz, x24, 0.0, x25, x26, x27],
+            [x16, x2 + Izz + (x11 * x4 + 2.0 * x6) * x4, x24, 0.0, x25, x26, x27],
             [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
             [0.0, 0.0, 0.0, m, x28, x29, x30],
             [x21, x25, 0.0, x28, x31, 0.0, 0.0],
@@ -666,47 +667,48 @@ pub mod lagrange {
             [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
         ];
         let mut force: [f64; 7] = [
-            m
-                * (x45 * x50 + x51 * x53
-                    + x10
-                        * (-rho_dot * (x32 + x54 * x10 * psi_dot - x33)
-                            - x55 * psi_dot * x19))
+            (x35 * x40
+                + (-x41 * psi_dot * x19 - (x0 * psi_dot * x43 - x42 + x44) * rho_dot)
+                    * x0 + x45 * x47) * m
                 - theta_dot
-                    * (x0 * x34 * m * x19 + x36 * theta_dot + x38 * phi_dot
-                        + (x5 * x10 * x10
-                            + (x0 * (-2.0 * x2 - 2.0 * x4)
-                                + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x8) - 2.0 * Iyy
-                                    + 2.0 * Ixx + (x39 + 4.0 * x7) * x3) * x10) * x0) * psi_dot)
-                - ((x24 * phi_dot
-                    + (x0 * (2.0 * x13 - 2.0 * x14)
-                        + ((x39 + 2.0 * x7) * x1 - 2.0 * x40) * x10) * psi_dot) * x10
-                    + theta_dot * x41) * phi_dot,
+                    * (x49 * theta_dot + x51 * phi_dot
+                        + psi_dot
+                            * (x10 * x0 * x0
+                                + x7
+                                    * (x0
+                                        * ((x52 + 4.0 * x6) * x4 - 2.0 * Iyy + 2.0 * Ixx
+                                            + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x1))
+                                        + x7 * (-2.0 * x8 - 2.0 * x9))) + x7 * m * x19 * x53)
+                - phi_dot
+                    * ((((x5 * (x52 + 2.0 * x6) - 2.0 * x54) * x0
+                        + (2.0 * x13 - 2.0 * x14) * x7) * psi_dot + x24 * phi_dot) * x0
+                        + theta_dot * x55),
             m
-                * (x51 * x56 + x45 * x57 + (x46 - x47) * x58
-                    - rho_dot * (theta_dot * x54 + x59 - x60))
-                - (x41 * psi_dot
-                    + theta_dot
-                        * (2.0 * x40 + ((2.0 * Izz - 2.0 * Iyy) * x3 - 2.0 * x7) * x1)
-                    + x37 * phi_dot) * phi_dot
+                * (x35 * x58 - (theta_dot * x43 - x56 + x57) * rho_dot
+                    + (x37 - x36) * x59 + x45 * x60)
                 + psi_dot
-                    * (x0
-                        * (-x34 * m * x19 - 0.5 * ((x68 - x62 - x64) * x1)
-                            - 0.5 * (x69 * x3)) + 0.5 * (x63 * x38)
-                        + 0.5 * ((Ixy * x10 + x0 * (x12 - Iyy * x1)) * x67)
-                        + 0.5 * ((x0 * (x7 - Izz * x3) + x10 * Ixz) * x61)
-                        - 0.5 * ((x63 * Ixx - Ixy * x67 - Ixz * x61) * x10))
-                - theta_dot * (x36 * psi_dot + (x55 * x10 + Z_dot * x0) * m * x19),
-            0.5 * ((Iyy * x61 - Iyz * x70) * x67)
-                - (x24 * x10 * psi_dot + x37 * theta_dot) * phi_dot
-                + 0.5 * (x63 * (-x70 * Ixz - Ixy * x61)) - theta_dot * psi_dot * x38
-                + 0.5 * (x70 * x69)
-                + x61 * (0.5 * (x70 * Izz) - x62 - 0.5 * x64 + 0.5 * x68),
+                    * (0.5 * ((Ixy * x0 + x7 * (x12 - Iyy * x5)) * x63)
+                        + 0.5 * (x51 * x64)
+                        + 0.5 * ((x7 * (x6 - Izz * x4) + x0 * Ixz) * x65)
+                        - 0.5 * (x0 * (Ixx * x64 - x65 * Ixz - Ixy * x63))
+                        + x7
+                            * (-m * x19 * x53 - 0.5 * ((x67 - x66 - x68) * x5)
+                                - 0.5 * (x69 * x4)))
+                - (theta_dot
+                    * (2.0 * x54 + x5 * ((2.0 * Izz - 2.0 * Iyy) * x4 - 2.0 * x6))
+                    + phi_dot * x50 + psi_dot * x55) * phi_dot
+                - theta_dot * (m * x19 * (Z_dot * x7 + x41 * x0) + x49 * psi_dot),
+            0.5 * (x69 * x70) - (theta_dot * x50 + x24 * x0 * psi_dot) * phi_dot
+                - theta_dot * x51 * psi_dot + 0.5 * (x64 * (-x70 * Ixz - x65 * Ixy))
+                + x65 * (0.5 * x67 - x66 - 0.5 * x68 + 0.5 * (x70 * Izz))
+                + 0.5 * ((x65 * Iyy - Iyz * x70) * x63),
             0.012 * x71 - 0.018 * x72
-                + (x45 * x73 + x74 * x51 - (x59 - x60) * theta_dot
-                    - (x32 - x33) * x10 * psi_dot - theta_dot * x58 * x10) * m,
-            (-theta_dot * x56 - psi_dot * x53 - x74 * rho_dot) * m,
-            m * (-theta_dot * x57 - x50 * psi_dot - rho_dot * x73),
-            theta_dot * m * (2.0 * x47 - x46),
+                + m
+                    * (x73 * x45 - x0 * psi_dot * (x44 - x42) - theta_dot * x0 * x59
+                        - theta_dot * (x57 - x56) + x35 * x74),
+            (-psi_dot * x47 - x73 * rho_dot - theta_dot * x60) * m,
+            (-theta_dot * x58 - x74 * rho_dot - psi_dot * x40) * m,
+            theta_dot * m * (2.0 * x36 - x37),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -759,9 +761,9 @@ pub mod lagrange {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(theta);
-        let x2 = rho + 0.5 * l;
-        let x3 = f64::cos(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(theta);
+        let x3 = rho + 0.5 * l;
         let x4 = f64::sin(psi);
         let x5 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
@@ -794,12 +796,13 @@ pub mod lagrange {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4) * m
-                + X_dot * x5,
-            Y_dot * x5
-                + (x3 * (x0 * psi_dot * x2 + rho_dot * x4) - x1 * theta_dot * x2 * x4)
-                    * m,
-            (-theta_dot * x3 * x2 - x1 * rho_dot) * m + Z_dot * x5,
+            m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
+                + x5 * X_dot,
+            x5 * Y_dot
+                + m
+                    * (x1 * (rho_dot * x4 + x0 * psi_dot * x3)
+                        - x2 * theta_dot * x3 * x4),
+            m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -871,38 +874,37 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::sin(phi);
-        let x2 = Ixy * x1;
-        let x3 = f64::cos(phi);
-        let x4 = Ixz * x3;
-        let x5 = Iyz * x1;
-        let x6 = m * (0.25 * (l * l) + (rho + l) * rho);
-        let x7 = f64::cos(theta);
+        let x0 = f64::cos(theta);
+        let x1 = m * (0.25 * (l * l) + rho * (rho + l));
+        let x2 = f64::cos(phi);
+        let x3 = f64::sin(phi);
+        let x4 = Iyz * x3;
+        let x5 = f64::sin(theta);
+        let x6 = Ixy * x3;
+        let x7 = Ixz * x2;
         let x8 = Iyy - Izz;
-        let x9 = Ixy * x3;
-        let x10 = x1 * Ixz;
-        let x11 = x7 * (Iyz + (x8 * x1 - 2.0 * (Iyz * x3)) * x3) + x0 * (x9 - x10);
-        let x12 = (-x2 - x4) * x7 - x0 * Ixx;
+        let x9 = Ixy * x2;
+        let x10 = x3 * Ixz;
+        let x11 = (Iyz + (x3 * x8 - 2.0 * (Iyz * x2)) * x2) * x0 + x5 * (x9 - x10);
+        let x12 = x0 * (-x6 - x7) - x5 * Ixx;
         let x13 = rho + 0.5 * l;
         let x14 = f64::sin(psi);
-        let x15 = -(x7 * m * x13 * x14);
+        let x15 = -(x0 * m * x13 * x14);
         let x16 = f64::cos(psi);
-        let x17 = x16 * x7 * m * x13;
+        let x17 = x16 * x0 * m * x13;
         let x18 = x10 - x9;
-        let x19 = -(x0 * x16 * m * x13);
-        let x20 = -(x0 * m * x13 * x14);
-        let x21 = -(x7 * m * x13);
-        let x22 = x16 * x7 * m;
-        let x23 = x7 * m * x14;
-        let x24 = -(x0 * m);
+        let x19 = -(x5 * x16 * m * x13);
+        let x20 = -(x5 * m * x13 * x14);
+        let x21 = -(x0 * m * x13);
+        let x22 = x16 * x0 * m;
+        let x23 = x0 * m * x14;
+        let x24 = -(x5 * m);
         let x25 = m + mg;
         [
             [
                 Ixx
-                    + (x0 * (2.0 * x2 + 2.0 * x4)
-                        + (((Izz - Iyy) * x3 - 2.0 * x5) * x3 + Iyy - Ixx + x6) * x7)
-                        * x7,
+                    + (x0 * (x1 + Iyy + ((Izz - Iyy) * x2 - 2.0 * x4) * x2 - Ixx)
+                        + x5 * (2.0 * x6 + 2.0 * x7)) * x0,
                 x11,
                 x12,
                 0.0,
@@ -910,7 +912,7 @@ pub mod lagrange {
                 x17,
                 0.0,
             ],
-            [x11, (2.0 * x5 + x8 * x3) * x3 + x6 + Izz, x18, 0.0, x19, x20, x21],
+            [x11, x1 + Izz + (x8 * x2 + 2.0 * x4) * x2, x18, 0.0, x19, x20, x21],
             [x12, x18, Ixx, 0.0, 0.0, 0.0, 0.0],
             [0.0, 0.0, 0.0, m, x22, x23, x24],
             [x15, x19, 0.0, x22, x25, 0.0, 0.0],
@@ -987,141 +989,144 @@ pub mod maggi {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(phi);
+        let x0 = f64::cos(phi);
         let x1 = Ixy * x0;
-        let x2 = f64::cos(phi);
-        let x3 = Ixz * x2;
-        let x4 = -x1 - x3;
+        let x2 = f64::sin(phi);
+        let x3 = x2 * Ixz;
+        let x4 = x3 - x1;
         let x5 = Ixy * x2;
-        let x6 = x0 * Ixz;
-        let x7 = x6 - x5;
-        let x8 = x4 * x0 + x7 * x2;
-        let x9 = x4 * x2 - x7 * x0;
-        let x10 = f64::cos(theta);
-        let x11 = 1.0 / x10;
-        let x12 = f64::sin(theta);
-        let x13 = 2.0 * x1 + 2.0 * x3;
-        let x14 = Izz - Iyy;
-        let x15 = Iyz * x0;
-        let x16 = l * l;
-        let x17 = m * (0.25 * x16 + (rho + l) * rho);
-        let x18 = (x12 * x13 + ((x14 * x2 - 2.0 * x15) * x2 + Iyy - Ixx + x17) * x10)
-            * x10;
-        let x19 = x4 * x10 - x12 * Ixx;
-        let x20 = Ixx + x18 + x12 * x19;
-        let x21 = Iyy - Izz;
-        let x22 = Iyz * x2;
-        let x23 = x10 * (Iyz + (x21 * x0 - 2.0 * x22) * x2);
-        let x24 = x5 - x6;
-        let x25 = x12 * x24;
-        let x26 = x23 + x25;
-        let x27 = x11 * x20 * x0 + x12 * x8 + x26 * x2;
-        let x28 = x23 + x25 + x12 * x7;
-        let x29 = (2.0 * x15 + x21 * x2) * x2 + x17 + Izz;
-        let x30 = x11 * x0 * x28 + x29 * x2;
-        let x31 = x27 * x11 * x2 - x30 * x0;
+        let x6 = Ixz * x0;
+        let x7 = -x5 - x6;
+        let x8 = x4 * x0 + x2 * x7;
+        let x9 = x7 * x0 - x4 * x2;
+        let x10 = Iyy - Izz;
+        let x11 = Iyz * x0;
+        let x12 = f64::cos(theta);
+        let x13 = (Iyz + (x2 * x10 - 2.0 * x11) * x0) * x12;
+        let x14 = f64::sin(theta);
+        let x15 = x1 - x3;
+        let x16 = x14 * x15;
+        let x17 = x13 + x16;
+        let x18 = l * l;
+        let x19 = m * (0.25 * x18 + rho * (rho + l));
+        let x20 = Izz - Iyy;
+        let x21 = Iyz * x2;
+        let x22 = 2.0 * x5 + 2.0 * x6;
+        let x23 = (x12 * (x19 + Iyy + (x20 * x0 - 2.0 * x21) * x0 - Ixx) + x14 * x22)
+            * x12;
+        let x24 = x12 * x7 - x14 * Ixx;
+        let x25 = Ixx + x23 + x14 * x24;
+        let x26 = 1.0 / x12;
+        let x27 = x17 * x0 + x14 * x8 + x25 * x26 * x2;
+        let x28 = x19 + Izz + (x10 * x0 + 2.0 * x21) * x0;
+        let x29 = x13 + x14 * x4 + x16;
+        let x30 = x28 * x0 + x26 * x2 * x29;
+        let x31 = x27 * x26 * x0 - x2 * x30;
         let x32 = f64::sin(psi);
         let x33 = f64::cos(psi);
         let x34 = rho + 0.5 * l;
-        let x35 = (-x0 * x32 - x12 * x33 * x2) * m * x34;
-        let x36 = (x33 * x0 - x12 * x2 * x32) * m * x34;
-        let x37 = -(x10 * m * x34 * x2);
-        let x38 = (x12 * x33 * x0 - x2 * x32) * m * x34;
-        let x39 = m * x34 * (x33 * x2 + x12 * x0 * x32);
-        let x40 = x10 * m * x34 * x0;
-        let x41 = x33 * x10 * m;
-        let x42 = x10 * m * x32;
-        let x43 = -(x12 * m);
+        let x35 = (-x2 * x32 - x14 * x33 * x0) * m * x34;
+        let x36 = (x33 * x2 - x14 * x0 * x32) * m * x34;
+        let x37 = -(x12 * m * x34 * x0);
+        let x38 = (x14 * x33 * x2 - x0 * x32) * m * x34;
+        let x39 = m * x34 * (x33 * x0 + x14 * x2 * x32);
+        let x40 = x12 * m * x34 * x2;
+        let x41 = x33 * x12 * m;
+        let x42 = x12 * m * x32;
+        let x43 = -(x14 * m);
         let x44 = m + mg;
-        let x45 = theta_dot * x2;
-        let x46 = x10 * psi_dot * x0;
-        let x47 = -x45 - x46;
-        let x48 = x10 * psi_dot * x2 - theta_dot * x0;
-        let x49 = x45 + x46;
-        let x50 = phi_dot - x12 * psi_dot;
-        let x51 = x1 + x3;
-        let x52 = x51 * x12 - Ixx * x10;
-        let x53 = Izz * x48 - Iyz * x49 - x50 * Ixz;
-        let x54 = x2 * x48;
-        let x55 = x0 * x49;
-        let x56 = x54 + x55;
-        let x57 = x49 * x2 - x0 * x48;
-        let x58 = x12 * theta_dot * x11 * x56 + phi_dot * x57;
-        let x59 = Iyz * x48;
-        let x60 = x50 * Ixy;
-        let x61 = Iyy * x49;
-        let x62 = x12 * x11 * phi_dot * x57
-            + theta_dot * (x54 + x55 + x12 * x12 * x11 * x11 * x56);
-        let x63 = -x54 - x55;
-        let x64 = 0.5 * ((Iyy * x48 - Iyz * x47) * x49)
-            + 0.5 * (x50 * (-x47 * Ixz - Ixy * x48)) - theta_dot * psi_dot * x52
-            + 0.5 * (x47 * x53) - x58 * x11 * x19
-            + x48 * (0.5 * (x47 * Izz) - x59 - 0.5 * x60 + 0.5 * x61) - Ixx * x62
-            + phi_dot * (-x7 * x63 - x7 * x10 * psi_dot - x51 * theta_dot);
-        let x65 = x12 * theta_dot * x34;
-        let x66 = x10 * rho_dot;
-        let x67 = x33 * (x66 - x65);
-        let x68 = x10 * psi_dot * x34 * x32;
-        let x69 = X_dot + x67 - x68;
-        let x70 = x12 * (psi_dot * x34 * x32 - x33 * rho_dot)
-            - theta_dot * x33 * x10 * x34;
-        let x71 = x12 * theta_dot * x34 * x32;
-        let x72 = x33 * psi_dot * x34;
-        let x73 = rho_dot * x32;
-        let x74 = Y_dot - x71 + x10 * (x72 + x73);
-        let x75 = -x72 - x73;
-        let x76 = x12 * x75 - theta_dot * x10 * x34 * x32;
-        let x77 = Z_dot - theta_dot * x10 * x34 - x12 * rho_dot;
-        let x78 = 2.0 * rho + l;
-        let x79 = -Y_dot * x32 - X_dot * x33;
-        let x80 = x12 * x79;
-        let x81 = Z_dot * x10;
-        let x82 = x33 * Y_dot;
-        let x83 = X_dot * x32;
-        let x84 = x83 - x82;
-        let x85 = x0 * x14;
-        let x86 = x12 * x4 + x10 * (x0 * (x85 + 4.0 * x22) + x21 * x2 * x2);
-        let x87 = Iyz * x2 * x2;
-        let x88 = x24 * x10 + x12 * ((x85 + 2.0 * x22) * x2 - Iyz);
-        let x89 = m
-            * (x69 * x70 + x74 * x76 + (x65 - x66) * x77
-                - rho_dot * (theta_dot * x78 + x80 - x81)) - x58 * x11 * x26
-            + psi_dot
-                * (x12
-                    * (-x84 * m * x34 - 0.5 * ((x61 - x59 - x60) * x0)
-                        - 0.5 * (x53 * x2)) + 0.5 * (x50 * x52)
-                    + 0.5 * ((Ixy * x10 + x12 * (x22 - Iyy * x0)) * x49)
-                    + 0.5 * ((x12 * (x15 - Izz * x2) + x10 * Ixz) * x48)
-                    - 0.5 * ((x50 * Ixx - Ixy * x49 - Ixz * x48) * x10)) - x7 * x62
-            + (-x63 * x29 - x86 * psi_dot
-                - theta_dot
-                    * (2.0 * x87 + ((2.0 * Izz - 2.0 * Iyy) * x2 - 2.0 * x15) * x0)
-                - x51 * phi_dot) * phi_dot
-            - theta_dot * (x88 * psi_dot + (x79 * x10 + Z_dot * x12) * m * x34);
-        let x90 = (2.0 * Iyy - 2.0 * Izz) * x2;
-        let x91 = x67 - x68;
-        let x92 = x71 + x75 * x10;
-        let x93 = m
-            * (x74 * x91 + x69 * x92
-                + x10
-                    * (-rho_dot * (x82 + x78 * x10 * psi_dot - x83)
-                        - x79 * psi_dot * x34))
+        let x45 = theta_dot * x0;
+        let x46 = x12 * psi_dot * x2;
+        let x47 = x45 + x46;
+        let x48 = phi_dot - x14 * psi_dot;
+        let x49 = x12 * psi_dot * x0 - theta_dot * x2;
+        let x50 = x49 * Izz - Iyz * x47 - Ixz * x48;
+        let x51 = -x45 - x46;
+        let x52 = x5 + x6;
+        let x53 = x14 * x52 - Ixx * x12;
+        let x54 = x14 * x14 * x26 * x26 + 1.0;
+        let x55 = x47 * x0 - x49 * x2;
+        let x56 = theta_dot * (x54 * x2 * x47 + x49 * x54 * x0)
+            + x14 * x26 * phi_dot * x55;
+        let x57 = x2 * x47;
+        let x58 = x49 * x0;
+        let x59 = -x57 - x58;
+        let x60 = phi_dot * x55 + x14 * theta_dot * x26 * (x57 + x58);
+        let x61 = x49 * Iyz;
+        let x62 = Iyy * x47;
+        let x63 = Ixy * x48;
+        let x64 = 0.5 * (x50 * x51) - theta_dot * x53 * psi_dot - x56 * Ixx
+            + (-x59 * x4 - theta_dot * x52 - x4 * x12 * psi_dot) * phi_dot
+            + 0.5 * (x48 * (-x51 * Ixz - x49 * Ixy)) - x26 * x60 * x24
+            + x49 * (0.5 * x62 - x61 - 0.5 * x63 + 0.5 * (x51 * Izz))
+            + 0.5 * ((x49 * Iyy - Iyz * x51) * x47);
+        let x65 = x14 * theta_dot * x34 * x32;
+        let x66 = rho_dot * x32;
+        let x67 = x33 * psi_dot * x34;
+        let x68 = Y_dot - x65 + x12 * (x66 + x67);
+        let x69 = x12 * rho_dot;
+        let x70 = x14 * theta_dot * x34;
+        let x71 = x33 * (x69 - x70);
+        let x72 = x12 * psi_dot * x34 * x32;
+        let x73 = x71 - x72;
+        let x74 = -Y_dot * x32 - X_dot * x33;
+        let x75 = X_dot * x32;
+        let x76 = 2.0 * rho + l;
+        let x77 = x33 * Y_dot;
+        let x78 = X_dot + x71 - x72;
+        let x79 = -x66 - x67;
+        let x80 = x12 * x79 + x65;
+        let x81 = x20 * x2;
+        let x82 = ((x81 + 2.0 * x11) * x0 - Iyz) * x14 + x12 * x15;
+        let x83 = (2.0 * Iyy - 2.0 * Izz) * x0;
+        let x84 = x75 - x77;
+        let x85 = Iyz * x0 * x0;
+        let x86 = ((x81 + 4.0 * x11) * x2 + x10 * x0 * x0) * x12 + x14 * x7;
+        let x87 = x64 * x14
+            + (x68 * x73
+                + (-x74 * psi_dot * x34 - (x12 * psi_dot * x76 - x75 + x77) * rho_dot)
+                    * x12 + x78 * x80) * m - (Ixx + x23) * x26 * x60
             - theta_dot
-                * (x12 * x84 * m * x34 + x88 * theta_dot + x52 * phi_dot
-                    + (x13 * x10 * x10
-                        + (x12 * (-2.0 * x1 - 2.0 * x3)
-                            + (m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x16) - 2.0 * Iyy
-                                + 2.0 * Ixx + (x90 + 4.0 * x15) * x2) * x10) * x12)
-                        * psi_dot) - x19 * x62 - (Ixx + x18) * x58 * x11 + x12 * x64
-            + (-(x7 * phi_dot
-                + (x12 * (2.0 * x5 - 2.0 * x6)
-                    + ((x90 + 2.0 * x15) * x0 - 2.0 * x87) * x10) * psi_dot) * x10
-                - x26 * x63 - theta_dot * x86) * phi_dot;
+                * (x82 * theta_dot + x53 * phi_dot
+                    + psi_dot
+                        * (x22 * x12 * x12
+                            + x14
+                                * (x12
+                                    * ((x83 + 4.0 * x21) * x0 - 2.0 * Iyy + 2.0 * Ixx
+                                        + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x18))
+                                    + x14 * (-2.0 * x5 - 2.0 * x6))) + x14 * m * x34 * x84)
+            - x56 * x24
+            + (-x59 * x17
+                - (((x2 * (x83 + 2.0 * x21) - 2.0 * x85) * x12
+                    + (2.0 * x1 - 2.0 * x3) * x14) * psi_dot + x4 * phi_dot) * x12
+                - theta_dot * x86) * phi_dot;
+        let x88 = Z_dot * x12;
+        let x89 = x14 * x74;
+        let x90 = x14 * x79 - theta_dot * x12 * x34 * x32;
+        let x91 = Z_dot - theta_dot * x12 * x34 - x14 * rho_dot;
+        let x92 = x14 * (psi_dot * x34 * x32 - x33 * rho_dot)
+            - theta_dot * x33 * x12 * x34;
+        let x93 = m
+            * (x68 * x90 - (theta_dot * x76 - x88 + x89) * rho_dot + (x70 - x69) * x91
+                + x78 * x92) - x56 * x4
+            + psi_dot
+                * (0.5 * ((Ixy * x12 + x14 * (x11 - Iyy * x2)) * x47) + 0.5 * (x53 * x48)
+                    + 0.5 * ((x14 * (x21 - Izz * x0) + x12 * Ixz) * x49)
+                    - 0.5 * (x12 * (Ixx * x48 - x49 * Ixz - Ixy * x47))
+                    + x14
+                        * (-m * x34 * x84 - 0.5 * ((x62 - x61 - x63) * x2)
+                            - 0.5 * (x50 * x0)))
+            - theta_dot * (m * x34 * (Z_dot * x14 + x74 * x12) + x82 * psi_dot)
+            - x26 * x60 * x17
+            + (-x59 * x28
+                - theta_dot
+                    * (2.0 * x85 + x2 * ((2.0 * Izz - 2.0 * Iyy) * x0 - 2.0 * x21))
+                - phi_dot * x52 - psi_dot * x86) * phi_dot;
         let x94 = f64::cos(0.0485 * t);
         let x95 = f64::sin(0.089 * t);
-        let x96 = x33 * x10 * psi_dot - x12 * theta_dot * x32;
-        let x97 = -x10 * psi_dot * x32 - x12 * theta_dot * x33;
-        let value = x10;
+        let x96 = -x14 * theta_dot * x33 - x12 * psi_dot * x32;
+        let x97 = x33 * x12 * psi_dot - x14 * theta_dot * x32;
+        let value = x12;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1131,12 +1136,12 @@ pub mod maggi {
         }
         let mut matrix: [[f64; 7]; 7] = [
             [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
-            [x8, x27 * x11 * x0 + x30 * x2, x31, 0.0, x35, x36, x37],
+            [x8, x27 * x26 * x2 + x30 * x0, x31, 0.0, x35, x36, x37],
             [
                 x9,
                 x31,
-                x11 * x2 * (x11 * x20 * x2 - x26 * x0 + x12 * x9)
-                    - x0 * (x11 * x28 * x2 - x0 * x29),
+                x26 * (x25 * x26 * x0 + x9 * x14 - x2 * x17) * x0
+                    - (x26 * x29 * x0 - x2 * x28) * x2,
                 0.0,
                 x38,
                 x39,
@@ -1149,17 +1154,18 @@ pub mod maggi {
         ];
         let mut force: [f64; 7] = [
             x64,
-            x89 * x2 + x93 * x11 * x0,
-            x93 * x11 * x2 - x89 * x0,
+            x26 * x87 * x2 + x93 * x0,
+            x26 * x87 * x0 - x93 * x2,
             0.012 * x94 - 0.018 * x95
-                + (x74 * x96 + x97 * x69 - (x80 - x81) * theta_dot
-                    - (x82 - x83) * x10 * psi_dot - theta_dot * x77 * x10) * m,
+                + m
+                    * (x96 * x78 - x12 * psi_dot * (x77 - x75) - theta_dot * x12 * x91
+                        - theta_dot * (x89 - x88) + x68 * x97),
             m
-                * ((x12 * x33 * x63 * phi_dot + x58 * x32) * x34 - theta_dot * x70
-                    - psi_dot * x92 - x97 * rho_dot),
-            ((x12 * x63 * phi_dot * x32 - x58 * x33) * x34 - theta_dot * x76
-                - x91 * psi_dot - rho_dot * x96) * m,
-            (theta_dot * (2.0 * x66 - x65) + x10 * x34 * x63 * phi_dot) * m,
+                * ((x59 * x14 * x33 * phi_dot + x60 * x32) * x34 - psi_dot * x80
+                    - x96 * rho_dot - theta_dot * x92),
+            ((x59 * x14 * phi_dot * x32 - x60 * x33) * x34 - theta_dot * x90
+                - x97 * rho_dot - psi_dot * x73) * m,
+            m * (theta_dot * (2.0 * x69 - x70) + x59 * x12 * x34 * phi_dot),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1175,14 +1181,14 @@ pub mod maggi {
         dstate[4] = X_dot;
         dstate[5] = Y_dot;
         dstate[6] = Z_dot;
-        dstate[7] = 0.0 * force[0] + x11 * x0 * force[1] + x11 * x2 * force[2]
+        dstate[7] = 0.0 * force[0] + x26 * x2 * force[1] + x26 * x0 * force[2]
             + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + x58 * x11;
-        dstate[8] = 0.0 * force[0] + x2 * force[1] + -x0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + x63 * phi_dot;
-        dstate[9] = 1.0 * force[0] + x12 * x11 * x0 * force[1]
-            + x12 * x11 * x2 * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + x62;
+            + x26 * x60;
+        dstate[8] = 0.0 * force[0] + x0 * force[1] + -x2 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + x59 * phi_dot;
+        dstate[9] = 1.0 * force[0] + x14 * x26 * x2 * force[1]
+            + x14 * x26 * x0 * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + x56;
         dstate[10] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
         dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
@@ -1221,9 +1227,9 @@ pub mod maggi {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(theta);
-        let x2 = rho + 0.5 * l;
-        let x3 = f64::cos(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(theta);
+        let x3 = rho + 0.5 * l;
         let x4 = f64::sin(psi);
         let x5 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
@@ -1256,12 +1262,13 @@ pub mod maggi {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (x0 * (x3 * rho_dot - x1 * theta_dot * x2) - x3 * psi_dot * x2 * x4) * m
-                + X_dot * x5,
-            Y_dot * x5
-                + (x3 * (x0 * psi_dot * x2 + rho_dot * x4) - x1 * theta_dot * x2 * x4)
-                    * m,
-            (-theta_dot * x3 * x2 - x1 * rho_dot) * m + Z_dot * x5,
+            m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
+                + x5 * X_dot,
+            x5 * Y_dot
+                + m
+                    * (x1 * (rho_dot * x4 + x0 * psi_dot * x3)
+                        - x2 * theta_dot * x3 * x4),
+            m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1342,55 +1349,54 @@ pub mod maggi {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(phi);
+        let x0 = f64::cos(phi);
         let x1 = Ixy * x0;
-        let x2 = f64::cos(phi);
-        let x3 = Ixz * x2;
-        let x4 = -x1 - x3;
+        let x2 = f64::sin(phi);
+        let x3 = x2 * Ixz;
+        let x4 = x3 - x1;
         let x5 = Ixy * x2;
-        let x6 = x0 * Ixz;
-        let x7 = x6 - x5;
-        let x8 = x4 * x0 + x7 * x2;
-        let x9 = x4 * x2 - x7 * x0;
-        let x10 = f64::cos(theta);
-        let x11 = 1.0 / x10;
-        let x12 = f64::sin(theta);
-        let x13 = Iyz * x0;
-        let x14 = m * (0.25 * (l * l) + (rho + l) * rho);
-        let x15 = Ixx
-            + (x12 * (2.0 * x1 + 2.0 * x3)
-                + (((Izz - Iyy) * x2 - 2.0 * x13) * x2 + Iyy - Ixx + x14) * x10) * x10
-            + x12 * (x4 * x10 - x12 * Ixx);
-        let x16 = Iyy - Izz;
-        let x17 = x10 * (Iyz + (x16 * x0 - 2.0 * (Iyz * x2)) * x2);
-        let x18 = x12 * (x5 - x6);
-        let x19 = x17 + x18;
-        let x20 = x11 * x15 * x0 + x12 * x8 + x19 * x2;
-        let x21 = x17 + x18 + x12 * x7;
-        let x22 = (2.0 * x13 + x16 * x2) * x2 + x14 + Izz;
-        let x23 = x11 * x0 * x21 + x22 * x2;
-        let x24 = x20 * x11 * x2 - x23 * x0;
+        let x6 = Ixz * x0;
+        let x7 = -x5 - x6;
+        let x8 = x4 * x0 + x2 * x7;
+        let x9 = x7 * x0 - x4 * x2;
+        let x10 = Iyy - Izz;
+        let x11 = f64::cos(theta);
+        let x12 = (Iyz + (x2 * x10 - 2.0 * (Iyz * x0)) * x0) * x11;
+        let x13 = f64::sin(theta);
+        let x14 = x13 * (x1 - x3);
+        let x15 = x12 + x14;
+        let x16 = m * (0.25 * (l * l) + rho * (rho + l));
+        let x17 = Iyz * x2;
+        let x18 = Ixx
+            + (x11 * (x16 + Iyy + ((Izz - Iyy) * x0 - 2.0 * x17) * x0 - Ixx)
+                + x13 * (2.0 * x5 + 2.0 * x6)) * x11 + x13 * (x11 * x7 - x13 * Ixx);
+        let x19 = 1.0 / x11;
+        let x20 = x15 * x0 + x13 * x8 + x18 * x19 * x2;
+        let x21 = x16 + Izz + (x10 * x0 + 2.0 * x17) * x0;
+        let x22 = x12 + x13 * x4 + x14;
+        let x23 = x21 * x0 + x19 * x2 * x22;
+        let x24 = x20 * x19 * x0 - x2 * x23;
         let x25 = f64::sin(psi);
         let x26 = f64::cos(psi);
         let x27 = rho + 0.5 * l;
-        let x28 = (-x0 * x25 - x12 * x26 * x2) * m * x27;
-        let x29 = (x26 * x0 - x12 * x2 * x25) * m * x27;
-        let x30 = -(x10 * m * x27 * x2);
-        let x31 = (x12 * x26 * x0 - x2 * x25) * m * x27;
-        let x32 = m * x27 * (x26 * x2 + x12 * x0 * x25);
-        let x33 = x10 * m * x27 * x0;
-        let x34 = x26 * x10 * m;
-        let x35 = x10 * m * x25;
-        let x36 = -(x12 * m);
+        let x28 = (-x2 * x25 - x13 * x26 * x0) * m * x27;
+        let x29 = (x26 * x2 - x13 * x0 * x25) * m * x27;
+        let x30 = -(x11 * m * x27 * x0);
+        let x31 = (x13 * x26 * x2 - x0 * x25) * m * x27;
+        let x32 = m * x27 * (x26 * x0 + x13 * x2 * x25);
+        let x33 = x11 * m * x27 * x2;
+        let x34 = x26 * x11 * m;
+        let x35 = x11 * m * x25;
+        let x36 = -(x13 * m);
         let x37 = m + mg;
         [
             [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
-            [x8, x20 * x11 * x0 + x23 * x2, x24, 0.0, x28, x29, x30],
+            [x8, x20 * x19 * x2 + x23 * x0, x24, 0.0, x28, x29, x30],
             [
                 x9,
                 x24,
-                x11 * x2 * (x11 * x15 * x2 - x19 * x0 + x12 * x9)
-                    - x0 * (x11 * x21 * x2 - x0 * x22),
+                x19 * (x18 * x19 * x0 + x9 * x13 - x2 * x15) * x0
+                    - (x19 * x22 * x0 - x2 * x21) * x2,
                 0.0,
                 x31,
                 x32,
@@ -1472,84 +1478,84 @@ pub mod kane {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = u3 * x0;
-        let x6 = u2 * x1;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let x5 = u3 * x2;
+        let x6 = u2 * x3;
         let x7 = x6 - x5;
         let x8 = f64::sin(theta);
-        let x9 = x8 * x2 * x4 + u1;
+        let x9 = x8 * x1 * x4 + u1;
         let x10 = -Ixy;
         let x11 = -Ixz;
-        let x12 = m * (0.25 * (l * l) + (rho + l) * rho);
+        let x12 = m * (0.25 * (l * l) + rho * (rho + l));
         let x13 = -Iyz;
         let x14 = f64::sin(psi);
-        let x15 = x0 * x14;
+        let x15 = x2 * x14;
         let x16 = f64::cos(psi);
-        let x17 = x8 * x16 * x1;
+        let x17 = x8 * x16 * x3;
         let x18 = -x15 - x17;
         let x19 = rho + 0.5 * l;
         let x20 = x18 * m * x19;
-        let x21 = x16 * x0;
-        let x22 = x8 * x1 * x14;
+        let x21 = x16 * x2;
+        let x22 = x8 * x3 * x14;
         let x23 = x21 - x22;
         let x24 = x23 * m * x19;
-        let x25 = -(x3 * m * x19 * x1);
-        let x26 = x8 * x16 * x0;
-        let x27 = x1 * x14;
-        let x28 = x26 - x27;
+        let x25 = -(x0 * m * x19 * x3);
+        let x26 = x3 * x14;
+        let x27 = x8 * x16 * x2;
+        let x28 = x27 - x26;
         let x29 = x28 * m * x19;
-        let x30 = x16 * x1;
-        let x31 = x8 * x0 * x14;
+        let x30 = x16 * x3;
+        let x31 = x8 * x2 * x14;
         let x32 = x30 + x31;
         let x33 = m * x19 * x32;
-        let x34 = x3 * m * x19 * x0;
-        let x35 = x16 * x3 * m;
-        let x36 = x3 * m * x14;
+        let x34 = x0 * m * x19 * x2;
+        let x35 = x16 * x0 * m;
+        let x36 = x0 * m * x14;
         let x37 = -(x8 * m);
         let x38 = m + mg;
         let x39 = u3 * Izz - Iyz * u2 - u1 * Ixz;
         let x40 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x41 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x42 = 2.0 * rho + l;
-        let x43 = u7 * x3 * x1;
-        let x44 = u6 * x32;
-        let x45 = u7 * x3 * x0;
-        let x46 = u5 * x28;
-        let x47 = u5 * x16;
-        let x48 = u6 * x14;
-        let x49 = -x47 - x48;
-        let x50 = u7 * x8;
-        let x51 = x22 - x21;
-        let x52 = x47 + x48;
-        let x53 = x3 * x52;
-        let x54 = u4 + x53 - x50;
-        let x55 = u6 * x16;
-        let x56 = u5 * x14;
-        let x57 = x55 - x56;
-        let x58 = u7 * x3;
-        let x59 = x8 * x52 + x58;
-        let x60 = x57 * x1 + x59 * x0 + u3 * x19;
-        let x61 = -rho - 0.5 * l;
-        let x62 = x59 * x1 + x61 * u2 + (x56 - x55) * x0;
-        let x63 = -x30 - x31;
-        let x64 = x15 + x17;
+        let x41 = -rho - 0.5 * l;
+        let x42 = u5 * x16;
+        let x43 = u6 * x14;
+        let x44 = x42 + x43;
+        let x45 = u7 * x0;
+        let x46 = x8 * x44 + x45;
+        let x47 = u5 * x14;
+        let x48 = u6 * x16;
+        let x49 = x41 * u2 + x46 * x3 + (x47 - x48) * x2;
+        let x50 = x48 - x47;
+        let x51 = x46 * x2 + u3 * x19 + x50 * x3;
+        let x52 = x44 * x0;
+        let x53 = u7 * x8;
+        let x54 = x52 + u4 - x53;
+        let x55 = x22 - x21;
+        let x56 = -x42 - x43;
+        let x57 = u7 * x0 * x2;
+        let x58 = u5 * x28;
+        let x59 = u6 * x32;
+        let x60 = u7 * x0 * x3;
+        let x61 = 2.0 * rho + l;
+        let x62 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x63 = x15 + x17;
+        let x64 = -x30 - x31;
         let x65 = f64::cos(0.0485 * t);
         let x66 = f64::sin(0.089 * t);
-        let x67 = x51 * u2;
-        let x68 = u3 * x28;
-        let x69 = x68 + x18 * u2;
-        let x70 = x5 - x6;
-        let x71 = x3 * x19 * x70 - x8 * u4;
-        let x72 = x0 * x7;
-        let x73 = u3 + x72;
-        let x74 = x7 * x1;
-        let x75 = x74 - u2;
+        let x67 = x55 * u2;
+        let x68 = x3 * x7;
+        let x69 = x68 - u2;
+        let x70 = x28 * u3;
+        let x71 = x5 - x6;
+        let x72 = x71 * x0 * x19 - x8 * u4;
+        let x73 = x2 * x7;
+        let x74 = x73 + u3;
+        let x75 = x18 * u2 + x70;
         let x76 = u3 * x32;
-        let value = x3;
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1559,7 +1565,7 @@ pub mod kane {
         }
         let mut matrix: [[f64; 7]; 7] = [
             [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
-            [x10, Iyy + x12, x13, 0.0, x20, x24, x25],
+            [x10, x12 + Iyy, x13, 0.0, x20, x24, x25],
             [x11, x13, x12 + Izz, 0.0, x29, x33, x34],
             [0.0, 0.0, 0.0, m, x35, x36, x37],
             [0.0, x20, x29, x35, x38, 0.0, 0.0],
@@ -1567,38 +1573,39 @@ pub mod kane {
             [0.0, x25, x34, x37, 0.0, 0.0, x38],
         ];
         let mut force: [f64; 7] = [
-            x40 * u3 - x39 * u2,
+            u3 * x40 - x39 * u2,
+            x39 * u1
+                + m
+                    * (x41 * (x54 * u2 - x51 * u1) - u4 * x49
+                        + x19
+                            * (-x1 * (u5 * x55 + u6 * x18) * x4
+                                - (x0 * x56 + x53) * x3 * x7 - x9 * (x57 + x58 + x59))
+                        - (u5 * x18 - x60 + x23 * u6 + x61 * u2) * u4) - u3 * x62,
             m
-                * (x19
-                    * (-(x44 + x45 + x46) * x9 - x7 * x1 * (x49 * x3 + x50)
-                        - x2 * x4 * (u6 * x18 + u5 * x51))
-                    - (x42 * u2 - x43 + u5 * x18 + u6 * x23) * u4
-                    + (x54 * u2 - x60 * u1) * x61 - x62 * u4) - x41 * u3 + x39 * u1,
+                * (x51 * u4
+                    + (-x9 * (x60 + u6 * x55 + u5 * x63)
+                        - x1 * x4 * (u5 * x64 + u6 * x28) - x2 * (x52 - x53) * x7) * x19
+                    - (x57 + u3 * x61 + x58 + x59) * u4 + (u1 * x49 - u3 * x54) * x19)
+                - u1 * x40 + x62 * u2,
+            (x51 * u3 - x49 * u2 - x50 * x4 - (x8 * x56 - x45) * x7) * m + 0.012 * x65
+                - 0.018 * x66,
             m
-                * ((-x2 * x4 * (u5 * x63 + u6 * x28) - (x43 + u6 * x51 + u5 * x64) * x9
-                    - (x53 - x50) * x0 * x7) * x19 + u4 * x60
-                    - u4 * (x44 + x45 + x46 + x42 * u3) + x19 * (x62 * u1 - x54 * u3))
-                - x40 * u1 + x41 * u2,
-            0.012 * x65 - 0.018 * x66
-                + (u3 * x60 - x7 * (x49 * x8 - x58) - x2 * x57 - x62 * u2) * m,
-            ((x64 * u2 - x68 - x2 * x14 - x8 * x16 * x7) * x54
-                - x2 * x4 * (x19 * (x63 * u3 + x67) - u4 * x3 * x14) - u4 * x69
-                - x16 * x71 * x7
-                + (x73 * x16 * x3 + x8 * x2 * x64 * x4 + x2 * x4 * x63) * x60
-                - (x28 * u2 + x64 * u3) * x19 * x9
-                + x62 * (x2 * x4 * x23 + (x27 - x26) * x9 + x16 * x3 * x75 + x28 * u1))
-                * m,
-            (x60 * (x2 * x4 * x28 + x73 * x3 * x14 + x8 * x2 * x4 * x51)
-                - (x23 * u2 + x76) * u4 - x71 * x7 * x14
-                - (x32 * u2 + u3 * x51) * x19 * x9
-                + x62 * (x2 * x64 * x4 + x3 * x75 * x14 + u1 * x32 + x63 * x9)
-                + x54 * (x67 - x8 * x7 * x14 - x76 + x2 * x16)
-                - (x19 * x69 + u4 * x16 * x3) * x2 * x4) * m,
+                * ((x23 * x1 * x4 + x28 * u1 + x9 * (x26 - x27) + x69 * x16 * x0) * x49
+                    - x1 * ((u3 * x64 + x67) * x19 - u4 * x0 * x14) * x4
+                    + (x63 * u2 - x8 * x16 * x7 - x4 * x14 - x70) * x54
+                    - x9 * (u3 * x63 + x28 * u2) * x19 - x16 * x72 * x7
+                    + x51 * (x74 * x16 * x0 + x8 * x1 * x63 * x4 + x1 * x64 * x4)
+                    - u4 * x75),
             m
-                * ((-u4 * x70 - x2 * x19 * x9) * x3
-                    + x60 * (x8 * x2 * x1 + x8 * (-u3 - x72))
-                    - (x8 * x19 * x7 - u4 * x3) * x7
-                    + (x8 * (u2 - x74) - x8 * x2 * x4 * x3 * x0) * x62),
+                * ((x16 * x4 - x8 * x7 * x14 + x67 - x76) * x54 - x72 * x7 * x14
+                    - x1 * (u4 * x16 * x0 + x19 * x75) * x4
+                    + x51 * (x74 * x0 * x14 + x8 * x1 * x55 * x4 + x28 * x1 * x4)
+                    - u4 * (x23 * u2 + x76)
+                    + x49 * (x69 * x0 * x14 + x9 * x64 + x1 * x63 * x4 + u1 * x32)
+                    - (u3 * x55 + x32 * u2) * x9 * x19),
+            (x51 * (x8 * x4 * x3 + x8 * (-x73 - u3)) - (x8 * x19 * x7 - u4 * x0) * x7
+                + x49 * (x8 * (u2 - x68) - x8 * x1 * x0 * x2 * x4)
+                + (-x71 * u4 - x9 * x19 * x4) * x0) * m,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1607,7 +1614,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x2 * x4;
+        dstate[0] = x1 * x4;
         dstate[1] = x7;
         dstate[2] = x9;
         dstate[3] = u4;
@@ -1689,12 +1696,13 @@ pub mod kane {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6) * m
-                + X_dot * x7,
-            Y_dot * x7
-                + (x2 * (x4 * psi_dot * x5 + rho_dot * x6) - x0 * theta_dot * x5 * x6)
-                    * m,
-            (-theta_dot * x2 * x5 - x0 * rho_dot) * m + Z_dot * x7,
+            m * (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6)
+                + x7 * X_dot,
+            x7 * Y_dot
+                + m
+                    * (x2 * (rho_dot * x6 + x4 * psi_dot * x5)
+                        - x0 * theta_dot * x5 * x6),
+            m * (-theta_dot * x2 * x5 - x0 * rho_dot) + Z_dot * x7,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1720,12 +1728,12 @@ pub mod kane {
         let u5 = state[11];
         let u6 = state[12];
         let u7 = state[13];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let value = x3;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1743,9 +1751,9 @@ pub mod kane {
             state[6],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            f64::sin(theta) * x2 * x4 + u1,
+            x1 * x4,
+            u2 * x3 - u3 * x2,
+            f64::sin(theta) * x1 * x4 + u1,
             u4,
             u5,
             u6,
@@ -1783,7 +1791,7 @@ pub mod kane {
         let l = params.l;
         let x0 = -Ixy;
         let x1 = -Ixz;
-        let x2 = m * (0.25 * (l * l) + (rho + l) * rho);
+        let x2 = m * (0.25 * (l * l) + rho * (rho + l));
         let x3 = -Iyz;
         let x4 = f64::sin(phi);
         let x5 = f64::sin(psi);
@@ -1804,7 +1812,7 @@ pub mod kane {
         let x20 = m + mg;
         [
             [Ixx, x0, x1, 0.0, 0.0, 0.0, 0.0],
-            [x0, Iyy + x2, x3, 0.0, x10, x11, x13],
+            [x0, x2 + Iyy, x3, 0.0, x10, x11, x13],
             [x1, x3, x2 + Izz, 0.0, x14, x15, x16],
             [0.0, 0.0, 0.0, m, x17, x18, x19],
             [0.0, x10, x14, x17, x20, 0.0, 0.0],
@@ -1879,38 +1887,38 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = 1.0 / (m + mg);
         let x7 = f64::cos(psi);
-        let x8 = rho + 0.5 * l;
-        let x9 = f64::sin(psi);
-        let x10 = -rho - 0.5 * l;
+        let x8 = -rho - 0.5 * l;
+        let x9 = rho + 0.5 * l;
+        let x10 = f64::sin(psi);
         let x11 = -Ixy;
         let x12 = -Ixz;
-        let x13 = x6 * m;
+        let x13 = m * x6;
         let x14 = 1.0 - x13;
         let x15 = l * x14;
         let x16 = rho * x14;
-        let x17 = (l * l * (0.25 - 0.25 * x13) + rho * (x15 + x16)) * m;
+        let x17 = ((x15 + x16) * rho + l * l * (0.25 - 0.25 * x13)) * m;
         let x18 = -Iyz;
         let x19 = u3 * Izz - Iyz * u2 - u1 * Ixz;
         let x20 = Iyy * u2 - Iyz * u3 - Ixy * u1;
         let x21 = Ixy * u2;
-        let x22 = Ixx * u1;
-        let x23 = u3 * Ixz;
-        let x24 = l * (0.5 * x13 - 0.5) + rho * (x13 - 1.0);
-        let x25 = x16 + l * (0.5 - 0.5 * x13);
-        let x26 = x24 * x25;
-        let x27 = x6 * x6 * x10 * m * x8 * mg;
-        let x28 = x15 + (2.0 - 2.0 * x13) * rho;
+        let x22 = l * (0.5 - 0.5 * x13) + x16;
+        let x23 = (0.5 * x13 - 0.5) * l + (x13 - 1.0) * rho;
+        let x24 = x22 * x23;
+        let x25 = x8 * m * x9 * x6 * x6 * mg;
+        let x26 = Ixx * u1;
+        let x27 = u3 * Ixz;
+        let x28 = x15 + rho * (2.0 - 2.0 * x13);
         let x29 = f64::cos(0.0485 * t);
         let x30 = f64::sin(0.089 * t);
-        let value = x3;
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1925,14 +1933,15 @@ pub mod reduced_volterra {
             [0.0, 0.0, 0.0, m * x14],
         ];
         let mut force: [f64; 4] = [
-            x20 * u3 - x19 * u2,
-            u3 * (x21 - x22 + x23 + m * u1 * (-x26 - x27)) + x19 * u1
+            u3 * x20 - x19 * u2,
+            x19 * u1 + u3 * (x21 + m * u1 * (-x24 - x25) - x26 + x27)
                 - x28 * u4 * m * u2,
-            ((x26 + x27) * u1 * u2 - x28 * u4 * u3) * m - x20 * u1
-                + (x22 - x21 - x23) * u2,
+            (u1 * (x24 + x25) * u2 - x28 * u4 * u3) * m - u1 * x20
+                + (x26 - x21 - x27) * u2,
             m
-                * ((x8 * u2 * u2 - x10 * u3 * u3) * x6 * x6 * m * mg
-                    + (u3 * u3 * x25 - x24 * u2 * u2) * x14) + 0.012 * x29 - 0.018 * x30,
+                * ((x22 * u3 * u3 - x23 * u2 * u2) * x14
+                    + (x9 * u2 * u2 - x8 * u3 * u3) * m * x6 * x6 * mg) + 0.012 * x29
+                - 0.018 * x30,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1941,19 +1950,18 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x2 * x4;
-        dstate[1] = u2 * x1 - u3 * x0;
-        dstate[2] = x5 * x2 * x4 + u1;
+        dstate[0] = x1 * x4;
+        dstate[1] = u2 * x3 - u3 * x2;
+        dstate[2] = x5 * x1 * x4 + u1;
         dstate[3] = u4;
         dstate[4] = x6
             * (G_X
-                + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
-                    + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m);
+                + ((x8 * x5 * x7 * x2 + x9 * x3 * x10) * u3 - u4 * x7 * x0
+                    + (x9 * x2 * x10 + x5 * x7 * x9 * x3) * u2) * m);
         dstate[5] = (G_Y
-            + m
-                * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
-                    + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6;
-        dstate[6] = x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z);
+            + (u3 * (x8 * x7 * x3 + x8 * x5 * x2 * x10) - u4 * x0 * x10
+                + (x5 * x9 * x3 * x10 + x8 * x7 * x2) * u2) * m) * x6;
+        dstate[6] = x6 * (G_Z + m * ((x8 * u3 * x2 + x9 * u2 * x3) * x0 + x5 * u4));
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
@@ -2023,12 +2031,13 @@ pub mod reduced_volterra {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6) * m
-                + X_dot * x7,
-            Y_dot * x7
-                + (x2 * (x4 * psi_dot * x5 + rho_dot * x6) - x0 * theta_dot * x5 * x6)
-                    * m,
-            (-theta_dot * x2 * x5 - x0 * rho_dot) * m + Z_dot * x7,
+            m * (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6)
+                + x7 * X_dot,
+            x7 * Y_dot
+                + m
+                    * (x2 * (rho_dot * x6 + x4 * psi_dot * x5)
+                        - x0 * theta_dot * x5 * x6),
+            m * (-theta_dot * x2 * x5 - x0 * rho_dot) + Z_dot * x7,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2059,18 +2068,18 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = 1.0 / (m + mg);
         let x7 = f64::cos(psi);
-        let x8 = rho + 0.5 * l;
-        let x9 = f64::sin(psi);
-        let x10 = -rho - 0.5 * l;
-        let value = x3;
+        let x8 = -rho - 0.5 * l;
+        let x9 = rho + 0.5 * l;
+        let x10 = f64::sin(psi);
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -2088,19 +2097,18 @@ pub mod reduced_volterra {
             state[6],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            x5 * x2 * x4 + u1,
+            x1 * x4,
+            u2 * x3 - u3 * x2,
+            x5 * x1 * x4 + u1,
             u4,
             x6
                 * (G_X
-                    + (u2 * (x8 * x0 * x9 + x5 * x7 * x8 * x1) - u4 * x7 * x3
-                        + (x8 * x1 * x9 + x5 * x10 * x7 * x0) * u3) * m),
+                    + ((x8 * x5 * x7 * x2 + x9 * x3 * x10) * u3 - u4 * x7 * x0
+                        + (x9 * x2 * x10 + x5 * x7 * x9 * x3) * u2) * m),
             (G_Y
-                + m
-                    * ((x5 * x8 * x1 * x9 + x10 * x7 * x0) * u2 - u4 * x3 * x9
-                        + (x10 * x7 * x1 + x5 * x10 * x0 * x9) * u3)) * x6,
-            x6 * ((x3 * (x8 * u2 * x1 + x10 * u3 * x0) + x5 * u4) * m + G_Z),
+                + (u3 * (x8 * x7 * x3 + x8 * x5 * x2 * x10) - u4 * x0 * x10
+                    + (x5 * x9 * x3 * x10 + x8 * x7 * x2) * u2) * m) * x6,
+            x6 * (G_Z + m * ((x8 * u3 * x2 + x9 * u2 * x3) * x0 + x5 * u4)),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -2133,12 +2141,12 @@ pub mod reduced_volterra {
         let x1 = -Ixz;
         let x2 = m / (m + mg);
         let x3 = 1.0 - x2;
-        let x4 = m * (rho * (x3 * l + x3 * rho) + l * l * (0.25 - 0.25 * x2));
+        let x4 = (rho * (l * x3 + rho * x3) + l * l * (0.25 - 0.25 * x2)) * m;
         let x5 = -Iyz;
         [
             [Ixx, x0, x1, 0.0],
             [x0, Iyy + x4, x5, 0.0],
-            [x1, x5, Izz + x4, 0.0],
+            [x1, x5, x4 + Izz, 0.0],
             [0.0, 0.0, 0.0, x3 * m],
         ]
     }

@@ -179,9 +179,9 @@ pub fn energy(
     let g = params.g;
     let x0 = -x - L0;
     let x1 = f64::sqrt(x0 * x0) - L0;
-    0.5 * (x1 * x1 * k)
-        + (((x_dot * th_dot - g) * f64::cos(th) + 0.5 * (th_dot * th_dot * lp)) * lp
-            + 0.5 * (x_dot * x_dot)) * mp + 0.5 * (mc * x_dot * x_dot)
+    (0.5 * (x_dot * x_dot)
+        + (0.5 * (th_dot * th_dot * lp) + (x_dot * th_dot - g) * f64::cos(th)) * lp) * mp
+        + 0.5 * (x1 * x1 * k) + 0.5 * (mc * x_dot * x_dot)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -262,18 +262,18 @@ pub mod lagrange {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = f64::sin(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = x3 * x3;
+        let x1 = 2.0 * x + 2.0 * L0;
+        let x2 = -x - L0;
+        let x3 = 1.0 / x2;
+        let x4 = x2 * x2;
+        let x5 = f64::sin(th);
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            x1 * mp * th_dot * th_dot * lp
-                + x2
-                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
-                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-            -(x1 * g * mp * lp),
+            x1
+                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                + x5 * mp * th_dot * th_dot * lp,
+            -(x5 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -286,7 +286,7 @@ pub mod lagrange {
         dstate[1] = th_dot;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
+        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -317,18 +317,18 @@ pub mod lagrange {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = f64::sin(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = x3 * x3;
+        let x1 = 2.0 * x + 2.0 * L0;
+        let x2 = -x - L0;
+        let x3 = 1.0 / x2;
+        let x4 = x2 * x2;
+        let x5 = f64::sin(th);
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            x1 * mp * th_dot * th_dot * lp
-                + x2
-                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
-                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-            -(x1 * g * mp * lp),
+            x1
+                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                + x5 * mp * th_dot * th_dot * lp,
+            -(x5 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -341,7 +341,7 @@ pub mod lagrange {
         dstate[1] = th_dot;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
+        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -461,18 +461,18 @@ pub mod maggi {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = f64::sin(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = x3 * x3;
+        let x1 = 2.0 * x + 2.0 * L0;
+        let x2 = -x - L0;
+        let x3 = 1.0 / x2;
+        let x4 = x2 * x2;
+        let x5 = f64::sin(th);
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            x1 * mp * th_dot * th_dot * lp
-                + x2
-                    * (-0.25 * (x2 * c * x_dot * x4 * x4)
-                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-            -(x1 * g * mp * lp),
+            x1
+                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                + x5 * mp * th_dot * th_dot * lp,
+            -(x5 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -485,7 +485,7 @@ pub mod maggi {
         dstate[1] = th_dot;
         dstate[2] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
         dstate[3] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[4] = -(0.25 * x2 * x2 * c * x_dot * x_dot * x4 * x4);
+        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -605,16 +605,17 @@ pub mod kane {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = -x - L0;
-        let x2 = x1 * x1;
-        let x3 = 2.0 * x + 2.0 * L0;
-        let x4 = 1.0 / x1;
-        let x5 = f64::sin(th);
+        let x1 = f64::sin(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = x3 * x3;
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            (-0.5 * ((f64::sqrt(x2) - L0) * k / f64::sqrt(x2))
-                - 0.25 * (x3 * c * u1 * x4 * x4)) * x3 + x5 * mp * u2 * u2 * lp,
-            -(x5 * g * mp * lp),
+            x1 * mp * u2 * u2 * lp
+                + (-0.25 * (x2 * c * x4 * x4 * u1)
+                    - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))) * x2,
+            -(x1 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -627,7 +628,7 @@ pub mod kane {
         dstate[1] = u2;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x3 * x3 * c * u1 * u1 * x4 * x4);
+        dstate[4] = -(0.25 * x2 * x2 * c * x4 * x4 * u1 * u1);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -747,16 +748,17 @@ pub mod reduced_volterra {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = -x - L0;
-        let x2 = x1 * x1;
-        let x3 = 2.0 * x + 2.0 * L0;
-        let x4 = 1.0 / x1;
-        let x5 = f64::sin(th);
+        let x1 = f64::sin(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = x3 * x3;
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
-            (-0.5 * ((f64::sqrt(x2) - L0) * k / f64::sqrt(x2))
-                - 0.25 * (x3 * c * u1 * x4 * x4)) * x3 + x5 * mp * u2 * u2 * lp,
-            -(x5 * g * mp * lp),
+            x1 * mp * u2 * u2 * lp
+                + (-0.25 * (x2 * c * x4 * x4 * u1)
+                    - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))) * x2,
+            -(x1 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -769,7 +771,7 @@ pub mod reduced_volterra {
         dstate[1] = u2;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x3 * x3 * c * u1 * u1 * x4 * x4);
+        dstate[4] = -(0.25 * x2 * x2 * c * x4 * x4 * u1 * u1);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

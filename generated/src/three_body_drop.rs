@@ -263,69 +263,71 @@ pub fn energy(
     let a = params.a;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::cos(theta);
-    let x1 = a * theta_dot * x0;
-    let x2 = f64::sin(theta);
+    let x0 = f64::sin(theta);
+    let x1 = phi_dot - x0 * psi_dot;
+    let x2 = f64::cos(theta);
     let x3 = f64::cos(phi);
-    let x4 = theta_dot * x3;
-    let x5 = f64::sin(gamma2);
-    let x6 = f64::cos(gamma2);
-    let x7 = f64::sin(phi);
-    let x8 = Z_dot + x1
-        + (x2 * (-gamma2_dot - x4) * x5
-            + (x6 * (gamma2_dot * x3 + theta_dot) - x5 * x7 * phi_dot) * x0) * d;
-    let x9 = f64::cos(psi);
-    let x10 = a * x2;
-    let x11 = x10 - d * (-x6 * x2 - x0 * x5 * x3);
-    let x12 = x9 * x7;
-    let x13 = f64::sin(psi);
-    let x14 = x2 * x3 * x13;
-    let x15 = a * x0 * x13;
-    let x16 = x7 * x13 + x2 * x9 * x3;
-    let x17 = x2 * x9 * x7;
-    let x18 = x3 * x13;
-    let x19 = theta_dot * x9 * x11
-        + psi_dot * (x15 - d * (-(x12 - x14) * x5 - x6 * x0 * x13)) + X_dot
-        + ((x18 - x17) * x5 * phi_dot - gamma2_dot * (-x9 * x0 * x5 - x6 * x16)) * d;
-    let x20 = x9 * x3;
-    let x21 = x2 * x7 * x13;
-    let x22 = -x20 - x21;
-    let x23 = x14 - x12;
-    let x24 = a * x9 * x0;
-    let x25 = d * (x22 * x5 * phi_dot - gamma2_dot * (-x0 * x5 * x13 - x6 * x23)) + Y_dot
-        + psi_dot * (-x24 - d * (x6 * x9 * x0 - x16 * x5)) + theta_dot * x11 * x13;
-    let x26 = x0 * psi_dot * x3;
-    let x27 = theta_dot * x7;
-    let x28 = x26 - x27;
-    let x29 = phi_dot - x2 * psi_dot;
-    let x30 = x0 * psi_dot * x7;
-    let x31 = x4 + x30;
-    let x32 = x6 * x28 + x29 * x5;
-    let x33 = gamma2_dot + x4 + x30;
-    let x34 = gamma1_dot + x26 - x27;
-    let x35 = f64::sin(gamma1);
-    let x36 = f64::cos(gamma1);
-    let x37 = x36 * x31 - x29 * x35;
-    let x38 = x17 - x18;
-    let x39 = (x35 * x0 * x7 - x36 * x2) * d - x10;
-    let x40 = Y_dot + psi_dot * (x24 + d * (x35 * x38 + x36 * x9 * x0))
-        + d * (gamma1_dot * (x36 * (x20 + x21) - x35 * x0 * x13) + x35 * x23 * phi_dot)
-        + theta_dot * x39 * x13;
-    let x41 = X_dot
-        + d * (x16 * x35 * phi_dot + gamma1_dot * (x36 * x38 - x9 * x35 * x0))
-        + theta_dot * x9 * x39 + psi_dot * (d * (x22 * x35 - x36 * x0 * x13) - x15);
-    let x42 = Z_dot
-        + ((x2 * (gamma1_dot - x27) + x0 * phi_dot * x3) * x35
-            + x36 * x0 * (gamma1_dot * x7 - theta_dot)) * d - x1;
-    let x43 = x6 * x29 - x5 * x28;
-    let x44 = x36 * x29 + x35 * x31;
-    0.5 * (m2 * (x8 * x8 + x19 * x19 + x25 * x25))
-        + 0.5 * ((Iyy * x31 - Iyz * x28 - x29 * Ixy) * x31)
-        + (0.5 * (x32 * x32) + 0.5 * (x33 * x33) + 0.5 * (x34 * x34) + 0.5 * (x37 * x37))
-            * J2 + 0.5 * ((x40 * x40 + x41 * x41 + x42 * x42) * m1)
-        + 0.5 * (m0 * (Y_dot * Y_dot + X_dot * X_dot + Z_dot * Z_dot))
-        + 0.5 * ((Izz * x28 - Iyz * x31 - x29 * Ixz) * x28)
-        + 0.5 * (x29 * (x29 * Ixx - Ixy * x31 - Ixz * x28))
+    let x4 = x2 * psi_dot * x3;
+    let x5 = f64::sin(phi);
+    let x6 = theta_dot * x5;
+    let x7 = x4 - x6;
+    let x8 = theta_dot * x3;
+    let x9 = x2 * psi_dot * x5;
+    let x10 = x8 + x9;
+    let x11 = f64::cos(psi);
+    let x12 = f64::sin(gamma2);
+    let x13 = f64::cos(gamma2);
+    let x14 = a * x0;
+    let x15 = x14 - (-x2 * x12 * x3 - x13 * x0) * d;
+    let x16 = f64::sin(psi);
+    let x17 = x3 * x16;
+    let x18 = x0 * x11 * x5;
+    let x19 = x5 * x16 + x0 * x11 * x3;
+    let x20 = a * x2 * x16;
+    let x21 = x11 * x5;
+    let x22 = x0 * x3 * x16;
+    let x23 = theta_dot * x11 * x15 + X_dot
+        + (x12 * phi_dot * (x17 - x18) - gamma2_dot * (-x11 * x2 * x12 - x13 * x19)) * d
+        + psi_dot * (x20 - (-x13 * x2 * x16 - (x21 - x22) * x12) * d);
+    let x24 = a * theta_dot * x2;
+    let x25 = Z_dot
+        + d
+            * (x0 * (-gamma2_dot - x8) * x12
+                + (x13 * (gamma2_dot * x3 + theta_dot) - x12 * x5 * phi_dot) * x2) + x24;
+    let x26 = a * x11 * x2;
+    let x27 = x11 * x3;
+    let x28 = x0 * x5 * x16;
+    let x29 = -x27 - x28;
+    let x30 = x22 - x21;
+    let x31 = psi_dot * (-d * (x13 * x11 * x2 - x12 * x19) - x26) + theta_dot * x15 * x16
+        + Y_dot + (x12 * x29 * phi_dot - gamma2_dot * (-x2 * x12 * x16 - x13 * x30)) * d;
+    let x32 = gamma2_dot + x8 + x9;
+    let x33 = f64::cos(gamma1);
+    let x34 = f64::sin(gamma1);
+    let x35 = x33 * x10 - x34 * x1;
+    let x36 = x4 + gamma1_dot - x6;
+    let x37 = x12 * x1 + x13 * x7;
+    let x38 = Z_dot - x24
+        + (x34 * (x0 * (gamma1_dot - x6) + x2 * phi_dot * x3)
+            + x33 * x2 * (gamma1_dot * x5 - theta_dot)) * d;
+    let x39 = x18 - x17;
+    let x40 = (x34 * x2 * x5 - x33 * x0) * d - x14;
+    let x41 = (d * (x34 * x29 - x33 * x2 * x16) - x20) * psi_dot + X_dot
+        + ((x33 * x39 - x11 * x34 * x2) * gamma1_dot + x34 * x19 * phi_dot) * d
+        + theta_dot * x11 * x40;
+    let x42 = d
+        * (x34 * phi_dot * x30 + (x33 * (x27 + x28) - x34 * x2 * x16) * gamma1_dot)
+        + Y_dot + theta_dot * x40 * x16
+        + psi_dot * (d * (x39 * x34 + x33 * x11 * x2) + x26);
+    let x43 = x34 * x10 + x33 * x1;
+    let x44 = x13 * x1 - x7 * x12;
+    0.5 * (x1 * (Ixx * x1 - x7 * Ixz - Ixy * x10))
+        + 0.5 * ((x7 * Izz - Iyz * x10 - Ixz * x1) * x7)
+        + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
+        + 0.5 * (m2 * (x23 * x23 + x25 * x25 + x31 * x31))
+        + 0.5 * ((Iyy * x10 - x7 * Iyz - Ixy * x1) * x10)
+        + (0.5 * (x32 * x32) + 0.5 * (x35 * x35) + 0.5 * (x36 * x36) + 0.5 * (x37 * x37))
+            * J2 + 0.5 * ((x38 * x38 + x41 * x41 + x42 * x42) * m1)
         + (0.5 * (x43 * x43) + 0.5 * (x44 * x44)) * J1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
@@ -364,52 +366,52 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a = params.a;
-    let x0 = f64::cos(psi);
-    let x1 = f64::sin(gamma2);
-    let x2 = f64::cos(phi);
-    let x3 = m2 * x1 * x2;
-    let x4 = f64::sin(gamma1);
-    let x5 = f64::sin(phi);
-    let x6 = x4 * x5 * m1;
-    let x7 = f64::cos(theta);
-    let x8 = f64::cos(gamma2);
-    let x9 = f64::cos(gamma1);
-    let x10 = m2 * (a + x8 * d) + (-a - x9 * d) * m1;
-    let x11 = f64::sin(theta);
-    let x12 = (x3 + x6) * x7 * d + x10 * x11;
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::cos(gamma2);
+    let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
+    let x3 = f64::sin(theta);
+    let x4 = f64::sin(gamma2);
+    let x5 = f64::cos(phi);
+    let x6 = m2 * x4 * x5;
+    let x7 = f64::sin(gamma1);
+    let x8 = f64::sin(phi);
+    let x9 = x7 * x8 * m1;
+    let x10 = f64::cos(theta);
+    let x11 = x2 * x3 + (x6 + x9) * x10 * d;
+    let x12 = f64::cos(psi);
     let x13 = f64::sin(psi);
-    let x14 = x0 * x2;
-    let x15 = x11 * x5 * x13;
-    let x16 = -x14 - x15;
-    let x17 = a * x7 * x13;
-    let x18 = x0 * x5;
-    let x19 = x11 * x2 * x13;
-    let x20 = m2 + m0 + m1;
-    let x21 = x11 * x0 * x5;
-    let x22 = x2 * x13;
-    let x23 = x5 * x13 + x11 * x0 * x2;
-    let x24 = x21 - x22;
-    let x25 = x19 - x18;
-    let x26 = a * x0 * x7;
+    let x14 = a * x10 * x13;
+    let x15 = x12 * x8;
+    let x16 = x3 * x5 * x13;
+    let x17 = x12 * x5;
+    let x18 = x3 * x8 * x13;
+    let x19 = -x17 - x18;
+    let x20 = x8 * x13 + x3 * x12 * x5;
+    let x21 = x5 * x13;
+    let x22 = x3 * x12 * x8;
+    let x23 = x22 - x21;
+    let x24 = m2 + m0 + m1;
+    let x25 = a * x12 * x10;
+    let x26 = x16 - x15;
     [
-        theta_dot * x0 * x12
+        theta_dot * x11 * x12
+            + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
+                + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
+            + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
+                - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
+                + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d + X_dot * x24,
+        Y_dot * x24 + theta_dot * x11 * x13
             + psi_dot
-                * (m1 * (d * (x16 * x4 - x9 * x7 * x13) - x17)
-                    + m2 * (x17 - d * (-(x18 - x19) * x1 - x8 * x7 * x13))) + X_dot * x20
-            + ((m2 * (x22 - x21) * x1 + x23 * x4 * m1) * phi_dot
-                + gamma1_dot * m1 * (x9 * x24 - x0 * x4 * x7)
-                - m2 * gamma2_dot * (-x0 * x7 * x1 - x8 * x23)) * d,
-        Y_dot * x20
-            + (gamma1_dot * m1 * (x9 * (x14 + x15) - x4 * x7 * x13)
-                - m2 * gamma2_dot * (-x7 * x1 * x13 - x8 * x25)
-                + (m2 * x16 * x1 + x4 * x25 * m1) * phi_dot) * d
-            + (m1 * (x26 + d * (x4 * x24 + x9 * x0 * x7))
-                + m2 * (-x26 - d * (x8 * x0 * x7 - x23 * x1))) * psi_dot
-            + theta_dot * x13 * x12,
-        Z_dot * x20 + theta_dot * (x11 * d * (-x3 - x6) + x10 * x7)
-            + ((x4 * m1 * x2 - m2 * x1 * x5) * x7 * phi_dot
-                + (x8 * x7 * x2 - x11 * x1) * m2 * gamma2_dot
-                + (x9 * x7 * x5 + x11 * x4) * gamma1_dot * m1) * d,
+                * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
+                    + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+            + d
+                * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
+                    - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
+                    + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
+        (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
+            + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
+            + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
+            + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -486,136 +488,137 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
-        let x5 = 1.0 / (m2 + m0 + m1);
-        let x6 = m1 * x5;
-        let x7 = f64::cos(gamma1);
-        let x8 = f64::cos(gamma2);
-        let x9 = m2 * x5;
-        let x10 = x9 - 1.0;
-        let x11 = x7 * x7;
-        let x12 = x8 * x8;
-        let x13 = f64::sin(gamma1);
-        let x14 = x7 * d;
-        let x15 = x8 * d;
-        let x16 = m2 * (-a - x15) + (a + x14) * m1;
-        let x17 = x16 * x5;
-        let x18 = x17 - a - x14;
-        let x19 = x7 * (J1 - J2) + d * m1 * x18;
-        let x20 = x13 * x19 - Ixy;
-        let x21 = f64::sin(gamma2);
-        let x22 = m2 * d * (a + x15 + x17) + x8 * (J2 - J1);
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let x5 = f64::cos(gamma2);
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = x6 * m2;
+        let x8 = x7 - 1.0;
+        let x9 = f64::cos(gamma1);
+        let x10 = x6 * m1;
+        let x11 = x9 * x9;
+        let x12 = x5 * x5;
+        let x13 = x9 * d;
+        let x14 = x5 * d;
+        let x15 = (a + x13) * m1 + m2 * (-a - x14);
+        let x16 = x6 * x15;
+        let x17 = x16 - a - x13;
+        let x18 = x9 * (J1 - J2) + d * m1 * x17;
+        let x19 = f64::sin(gamma1);
+        let x20 = x18 * x19 - Ixy;
+        let x21 = x5 * (J2 - J1) + m2 * d * (a + x14 + x16);
+        let x22 = f64::sin(gamma2);
         let x23 = x21 * x22 - Ixz;
-        let x24 = x7 * m2 * d * d * x21 * m1 * x5;
-        let x25 = -(x8 * m2 * x13 * d * d * m1 * x5);
-        let x26 = 1.0 - x6;
-        let x27 = d * d * x26 * m1;
+        let x24 = x9 * x6 * m2 * d * d * x22 * m1;
+        let x25 = -(x5 * x6 * m2 * x19 * d * d * m1);
+        let x26 = 1.0 - x10;
+        let x27 = x26 * d * d * m1;
         let x28 = x27 + J2 - J1;
-        let x29 = 1.0 - x9;
+        let x29 = 1.0 - x7;
         let x30 = m2 * d * d * x29;
-        let x31 = 2.0 - 2.0 * x6;
-        let x32 = 2.0 * m1 - 2.0 * m2;
+        let x31 = 2.0 * m1 - 2.0 * m2;
+        let x32 = 2.0 - 2.0 * x10;
         let x33 = a
-            * ((a * x26 + x7 * d * x31) * m1
-                + m2
-                    * (a + (d * (2.0 * (x7 * m1) + x8 * x32) + a * (2.0 * m1 - m2)) * x5
-                        + 2.0 * x15));
-        let x34 = m2 * x13 * d * d * x21 * m1 * x5;
+            * (m2
+                * (a + 2.0 * x14
+                    + x6 * (a * (2.0 * m1 - m2) + (x5 * x31 + 2.0 * (x9 * m1)) * d))
+                + (a * x26 + x9 * d * x32) * m1);
+        let x34 = x6 * m2 * x19 * d * d * x22 * m1;
         let x35 = x34 - Iyz;
-        let x36 = x7 * d * m1 * x5;
+        let x36 = x9 * x6 * d * m1;
         let x37 = m1 - m2;
-        let x38 = x37 * x5;
+        let x38 = x6 * x37;
         let x39 = x38 + 1.0;
-        let x40 = d * x29 + x8 * (x36 + x39 * a);
-        let x41 = m2 * x40 * d + J2;
-        let x42 = (m2 - m1) * x5;
+        let x40 = d * x29 + x5 * (x36 + a * x39);
+        let x41 = J2 + m2 * x40 * d;
+        let x42 = x6 * (m2 - m1);
         let x43 = x42 + 1.0;
-        let x44 = x8 * m2 * d * x5;
+        let x44 = x5 * x6 * m2 * d;
         let x45 = a * x43 + x44;
-        let x46 = x7 * x45 + d * x26;
+        let x46 = x26 * d + x9 * x45;
         let x47 = J2 + x46 * d * m1;
-        let x48 = x8 * u1;
-        let x49 = u3 * x21;
-        let x50 = x48 - x49;
-        let x51 = u3 * Izz;
-        let x52 = Iyz * u2;
-        let x53 = u1 * Ixz;
-        let x54 = x21 * u1;
-        let x55 = x8 * u3;
+        let x48 = x22 * u1;
+        let x49 = x5 * u3;
+        let x50 = x48 + x49;
+        let x51 = x9 * u2;
+        let x52 = x19 * u1;
+        let x53 = x51 - x52;
+        let x54 = x19 * u2;
+        let x55 = x9 * u1;
         let x56 = x54 + x55;
-        let x57 = x7 * u2;
-        let x58 = x13 * u1;
-        let x59 = x57 - x58;
-        let x60 = x7 * x59;
-        let x61 = x7 * u1;
-        let x62 = x13 * u2;
-        let x63 = x61 + x62;
-        let x64 = x63 * x13;
-        let x65 = u4 + u3;
-        let x66 = x21 * x50;
-        let x67 = x56 * x8;
-        let x68 = u5 + u2;
-        let x69 = x21 * x21 * (m2 * x10 * d * d - J2 + J1) + x8 * x22;
-        let x70 = x7 * x8 * u4;
-        let x71 = Iyz * u3;
-        let x72 = Ixy * u1;
-        let x73 = Iyy * u2;
-        let x74 = a * x21 * u2;
-        let x75 = x54 + x8 * x65;
-        let x76 = (m2 * a * x21 * u2 + (d * (x13 * x75 - x7 * x21 * u2) - x74) * m1) * x5
-            - x74;
-        let x77 = x8 * x13 * u2;
-        let x78 = x7 * u4 * x21;
-        let x79 = x78 - x77;
-        let x80 = -u5 - u2;
-        let x81 = x21 * x65 - x48;
-        let x82 = (u5 + (m2 * x80 + m1 * (x13 * x81 + x7 * x8 * u2)) * x5 + u2) * d
-            + x39 * x8 * a * u2;
-        let x83 = m2 * (a + x15) + (-a - x14) * m1;
-        let x84 = x83 * x5 - a - x15;
-        let x85 = u3 * x84 + d * (x10 * x21 * u1 - x7 * u4 * m1 * x5);
-        let x86 = a * u3 * x13;
-        let x87 = (m2 * ((x8 * u3 * x13 + x21 * (x7 * x80 + x58)) * d + x86)
-            - a * u3 * x13 * m1) * x5 + x86;
-        let x88 = x8 * u5 * x13;
-        let x89 = x7 * u3 * x21;
-        let x90 = x88 - x89;
-        let x91 = x7 * x8 * u5;
-        let x92 = u3 * x13 * x21;
-        let x93 = -u4 - u3;
-        let x94 = x13 * x68 + x61;
-        let x95 = x7 * a * x43 * u3
-            + (u4 + (x93 * m1 + m2 * (x7 * x8 * u3 + x21 * x94)) * x5 + u3) * d;
-        let x96 = x38 - 1.0;
-        let x97 = x8 * m2 * x80 + x59 * m1;
-        let x98 = a * x96 * u2 + d * (x58 - x57 + x97 * x5);
-        let x99 = x13 * x65 * m1;
-        let x100 = m2 * x21 * x80 + x99;
-        let x101 = m2 * x21 * u1 - x7 * u4 * m1;
-        let x102 = d * x97 + a * x37 * u2;
-        let x103 = x83 * u3;
-        let x104 = x103 + x101 * d;
-        let x105 = x7 * x19 + x13 * x13 * x28;
-        let x106 = (x42 - 1.0) * a - x36;
-        let x107 = x21 * u2 * x106;
-        let x108 = x13 * d * m1 * x75 * x5;
-        let x109 = Ixy * u2;
-        let x110 = Ixx * u1;
-        let x111 = u3 * Ixz;
-        let x112 = u5 + x60 + x64;
-        let x113 = -x54 - x55;
-        let x114 = 2.0 * J1 - 2.0 * J2;
-        let x115 = m2 * d * x21 * x5 * (x7 * x68 - x58);
-        let x116 = a * x96 - x44;
-        let x117 = u4 * x116;
-        let x118 = -x61 - x62;
-        let x119 = x13 * x21 * u2;
-        let x120 = u4 - x66 + x67;
-        let value = x3;
+        let x57 = x56 * x19;
+        let x58 = x9 * x53;
+        let x59 = u4 + u3;
+        let x60 = u5 + u2;
+        let x61 = x5 * x50;
+        let x62 = u3 * x22;
+        let x63 = x5 * u1;
+        let x64 = x63 - x62;
+        let x65 = x64 * x22;
+        let x66 = x9 * x5 * u4;
+        let x67 = x22 * x22 * (m2 * d * d * x8 - J2 + J1) + x5 * x21;
+        let x68 = x9 * x18 + x28 * x19 * x19;
+        let x69 = -u4 - u3;
+        let x70 = x9 * x5 * u5;
+        let x71 = Iyz * u2;
+        let x72 = u3 * Izz;
+        let x73 = u1 * Ixz;
+        let x74 = Iyy * u2;
+        let x75 = Iyz * u3;
+        let x76 = Ixy * u1;
+        let x77 = -u5 - u2;
+        let x78 = x5 * m2 * x77 + x53 * m1;
+        let x79 = x38 - 1.0;
+        let x80 = (x52 - x51 + x6 * x78) * d + a * x79 * u2;
+        let x81 = x5 * u5 * x19;
+        let x82 = x9 * u3 * x22;
+        let x83 = x81 - x82;
+        let x84 = a * u3 * x19;
+        let x85 = (m2 * ((x22 * (x9 * x77 + x52) + x5 * u3 * x19) * d + x84)
+            - a * u3 * x19 * m1) * x6 + x84;
+        let x86 = u3 * x19 * x22;
+        let x87 = x60 * x19 + x55;
+        let x88 = (x6 * (x69 * m1 + m2 * (x87 * x22 + x9 * x5 * u3)) + u4 + u3) * d
+            + x9 * a * x43 * u3;
+        let x89 = x19 * m1 * x59;
+        let x90 = m2 * x77 * x22 + x89;
+        let x91 = m2 * x22 * u1 - x9 * u4 * m1;
+        let x92 = (-a - x13) * m1 + m2 * (a + x14);
+        let x93 = x92 * u3;
+        let x94 = x91 * d + x93;
+        let x95 = a * x37 * u2 + x78 * d;
+        let x96 = x22 * x59 - x63;
+        let x97 = d * (u5 + x6 * ((x9 * x5 * u2 + x96 * x19) * m1 + m2 * x77) + u2)
+            + x5 * a * u2 * x39;
+        let x98 = x92 * x6 - a - x14;
+        let x99 = x98 * u3 + d * (x22 * u1 * x8 - x9 * x6 * u4 * m1);
+        let x100 = a * x22 * u2;
+        let x101 = x5 * x59 + x48;
+        let x102 = x6
+            * (m2 * a * x22 * u2 + (d * (x101 * x19 - x9 * x22 * u2) - x100) * m1)
+            - x100;
+        let x103 = x9 * u4 * x22;
+        let x104 = x5 * x19 * u2;
+        let x105 = x103 - x104;
+        let x106 = -x48 - x49;
+        let x107 = Ixy * u2;
+        let x108 = Ixx * u1;
+        let x109 = u3 * Ixz;
+        let x110 = 2.0 * J1 - 2.0 * J2;
+        let x111 = x57 + u5 + x58;
+        let x112 = a * (x42 - 1.0) - x36;
+        let x113 = x22 * x112 * u2;
+        let x114 = x6 * x101 * x19 * d * m1;
+        let x115 = a * x79 - x44;
+        let x116 = u4 * x115;
+        let x117 = (x9 * x60 - x52) * x6 * m2 * d * x22;
+        let x118 = -x54 - x55;
+        let x119 = x19 * x22 * u2;
+        let x120 = u4 + x61 - x65;
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -625,9 +628,11 @@ pub mod reduced_volterra {
         }
         let mut matrix: [[f64; 5]; 5] = [
             [
-                ((x7 * x7 * (x6 - 1.0) - x6 + 1.0) * m1
-                    + m2 * (x8 * x8 * x10 - x9 + 1.0)) * d * d + (x11 + x12) * J1 + Ixx
-                    + J2 * (2.0 - x11 - x12),
+                Ixx
+                    + d * d
+                        * (m2 * (x5 * x5 * x8 - x7 + 1.0)
+                            + m1 * (x9 * x9 * (x10 - 1.0) - x10 + 1.0))
+                    + (x11 + x12) * J1 + J2 * (2.0 - x11 - x12),
                 x20,
                 x23,
                 x24,
@@ -635,8 +640,8 @@ pub mod reduced_volterra {
             ],
             [
                 x20,
-                Iyy + x7 * (x7 * x28 + 2.0 * (x8 * m2 * d * d * m1 * x5)) + J2 + x30 + J1
-                    + x33,
+                Iyy + J2 + x9 * (x9 * x28 + 2.0 * (x5 * x6 * m2 * d * d * m1)) + x30
+                    + x33 + J1,
                 x35,
                 x34,
                 x41,
@@ -644,9 +649,8 @@ pub mod reduced_volterra {
             [
                 x23,
                 x35,
-                x27 + J2
-                    + x8 * (x8 * (J2 + x30 - J1) + 2.0 * (x7 * m2 * d * d * m1 * x5))
-                    + Izz + J1 + x33,
+                x27 + x5 * (x5 * (J2 + x30 - J1) + 2.0 * (x9 * x6 * m2 * d * d * m1))
+                    + J2 + Izz + x33 + J1,
                 x47,
                 x34,
             ],
@@ -654,102 +658,103 @@ pub mod reduced_volterra {
             [x25, x41, x34, x34, J2 + x30],
         ];
         let mut force: [f64; 5] = [
-            u2 * (x21 * x50 * J1 - x51 + x52 + x53)
-                + (x7 * x59 * u3 - x56 * x8 * u2 + (-x60 - x64) * x65
-                    + (x67 - x66) * x68) * J2
-                - (u3 * x69
-                    + x8 * (2.0 * J2 + m2 * d * d * (2.0 - 2.0 * x9) - 2.0 * J1) * x21
-                        * u1 + m2 * d * d * (x13 * x21 * x68 + x70) * m1 * x5) * u5
-                + u3 * (x73 - x71 - x72 + x63 * x13 * J1)
-                + d
-                    * (m2
-                        * (x76 * (x79 * m1 * x5 - x56 * x10 * x21)
-                            + (x21 * (x10 * x50 - x13 * m1 * u2 * x5)
-                                - x7 * x8 * u4 * m1 * x5) * x82
-                            + x85
-                                * (x56 * x13 * x21 * m1 * x5
-                                    + x8 * (x13 * m1 * x50 * x5 + u5 * x10)))
-                        + (x87 * (x59 * x13 * x26 + m2 * x90 * x5)
-                            + (m2 * (x91 + x92) * x5 - x63 * x13 * x26) * x95
-                            + x98
-                                * (x7 * (m2 * x63 * x21 * x5 + u4 * x26)
-                                    - m2 * x59 * x13 * x21 * x5)) * m1
-                        + m0
-                            * (d * x100 * (-x13 * m1 * u2 - m2 * u3 * x21) + x101 * x102
-                                + (x13 * u1 * m1 + x8 * u5 * m2) * x104) * x5 * x5)
-                - u4
-                    * (m2 * (x13 * x21 * x93 - x91) * d * d * m1 * x5 + x105 * u2
-                        + x7 * (2.0 * J2 - 2.0 * J1 + d * d * x31 * m1) * x13 * u1),
-            m2
-                * (x85 * (x56 * x21 * x106 - x40 * x50)
-                    + x76 * (u4 * x13 * d * x21 * m1 * x5 + x8 * u5 * x106 + x40 * x68)
-                    + (-x8 * u4 * x13 * d * m1 * x5 - x107) * x82
-                    - u5
-                        * (x108
-                            + x21
-                                * (u5 * x106
-                                    + (a * ((2.0 * m2 - 2.0 * m1) * x5 - 2.0) - 2.0 * x36)
-                                        * u2)) * d) - (x110 - x109 - x111) * u3
-                + m1
-                    * (x87 * (m2 * (-x91 - x92) * d * x5 + x59 * x18)
-                        + x98 * d * (m2 * x112 * x21 * x5 + u4 * x13 * x26)
-                        + (m2 * x90 * d * x5 - x63 * x18) * x95)
-                + m0
-                    * (d
-                        * (x100 * (x16 * u2 - x8 * u5 * m2 * d)
-                            + (m2 * x21 * x68 - u4 * x13 * m1) * x102)
-                        + x104 * (-m2 * u3 * d * x21 - x16 * u1)) * x5 * x5
-                + (x113 * x50 - x7 * x63 * u3) * J1 + (x51 - x52 - x53) * u1
-                - u4
-                    * ((x7 * x21 * x65 - x88) * m2 * d * d * m1 * x5
-                        + x13 * u2
-                            * (x7 * x114
-                                + d
-                                    * ((m2 * (-2.0 * a - 2.0 * x15)
-                                        + (2.0 * a + 2.0 * x14) * m1) * x5 - 2.0 * a - 2.0 * x14)
-                                    * m1) + x105 * u1)
-                + J2 * (x59 * u3 * x13 + x56 * x50 + (x7 * x63 - x59 * x13) * x65),
-            m1
-                * (x98 * (x63 * x46 - x45 * x59 * x13)
-                    - u4 * d
-                        * (x115 + x13 * (u3 * (a * (x32 * x5 - 2.0) - 2.0 * x44) + x117))
-                    + (x13 * (x45 * x65 + x117) - x7 * u5 * m2 * d * x21 * x5) * x95
-                    + (x7 * u4 * x45 - x46 * x65 - u5 * m2 * x13 * d * x21 * x5) * x87)
-                - (x73 - x71 - x72) * u1
+            J2 * (x9 * x53 * u3 - x5 * x50 * u2 + (-x57 - x58) * x59 + x60 * (x61 - x65))
                 - u5
-                    * (m2 * (x8 * x13 * x68 - x78) * d * d * m1 * x5
-                        + u3 * x21
-                            * (m2 * d
-                                * (((2.0 * a + 2.0 * x15) * m2
-                                    + (-2.0 * a - 2.0 * x14) * m1) * x5 - 2.0 * a - 2.0 * x15)
-                                + x8 * x114) + x69 * u1)
-                + (x8 * x50 * J1 - x109 + x110 - x111) * u2 + x63 * x59 * J1
-                + m0
-                    * (d
-                        * (x104 * (x99 - u5 * m2 * x21)
-                            + x100 * (x7 * u4 * d * m1 - x103))
-                        + (x83 * u1 - x13 * d * m1 * u2) * x102) * x5 * x5
-                + J2 * (x56 * x21 * u2 + (-x56 * x21 - x8 * x50) * x68 + x59 * x118)
-                + ((d * x79 * m1 * x5 + x84 * x50) * x82
-                    + x76 * (d * m1 * (x119 + x70) * x5 - x56 * x84)
-                    + x85 * d * (u5 * x21 * x29 + x13 * x120 * m1 * x5)) * m2,
-            x59 * (J2 * x118 + x63 * J1)
+                    * (x6 * m2 * d * d * m1 * (x66 + x60 * x19 * x22) + u3 * x67
+                        + x5 * (m2 * d * d * (2.0 - 2.0 * x7) + 2.0 * J2 - 2.0 * J1)
+                            * x22 * u1)
+                - u4
+                    * (x9 * x19 * u1 * (2.0 * J2 + d * d * x32 * m1 - 2.0 * J1)
+                        + x68 * u2 + (x69 * x19 * x22 - x70) * x6 * m2 * d * d * m1)
+                + (x71 - x72 + x73 + x64 * x22 * J1) * u2
+                + u3 * (x74 + x56 * x19 * J1 - x75 - x76)
                 + d
-                    * ((x63 * x98 - x87 * x65) * x26
-                        + (m0 * ((x104 * x13 + x7 * d * x100) * x65 + x102 * x118) * x5
-                            + m2
-                                * (x13 * x85 * x120 - u5 * (x8 * x94 - x89) * d
-                                    + (x7 * (u4 * x21 - x48 + x49) - x77) * x82
-                                    + x76 * (x7 * (x54 + x8 * u4 + x55) + x119))) * x5
-                        - u4 * (u3 * x13 * x116 + x115)) * m1,
-            (x113 * J1 + x56 * J2) * x50
+                    * (m1
+                        * ((x9 * (x6 * m2 * x56 * x22 + u4 * x26)
+                            - x6 * x53 * m2 * x19 * x22) * x80
+                            + (x53 * x19 * x26 + x6 * m2 * x83) * x85
+                            + (x6 * m2 * (x86 + x70) - x56 * x19 * x26) * x88)
+                        + x6 * x6 * m0
+                            * (x90 * d * (-x19 * m1 * u2 - m2 * u3 * x22)
+                                + (x5 * u5 * m2 + x19 * u1 * m1) * x94 + x91 * x95)
+                        + m2
+                            * (x97
+                                * ((x64 * x8 - x6 * x19 * m1 * u2) * x22
+                                    - x9 * x5 * x6 * u4 * m1)
+                                + x99
+                                    * (x6 * x50 * x19 * x22 * m1
+                                        + x5 * (x6 * x64 * x19 * m1 + u5 * x8))
+                                + x102 * (x6 * m1 * x105 - x50 * x22 * x8))),
+            J2 * ((x9 * x56 - x53 * x19) * x59 + x53 * u3 * x19 + x64 * x50)
+                + ((x90 * (x15 * u2 - x5 * u5 * m2 * d)
+                    + x95 * (x60 * m2 * x22 - u4 * x19 * m1)) * d
+                    + x94 * (-x15 * u1 - m2 * u3 * d * x22)) * x6 * x6 * m0
+                + (x72 - x71 - x73) * u1 + (x64 * x106 - x9 * x56 * u3) * J1
+                - u3 * (x108 - x107 - x109)
+                - (x19
+                    * (x9 * x110
+                        + d
+                            * (x6
+                                * (m2 * (-2.0 * a - 2.0 * x14) + (2.0 * a + 2.0 * x13) * m1)
+                                - 2.0 * a - 2.0 * x13) * m1) * u2 + x68 * u1
+                    + (x9 * x22 * x59 - x81) * x6 * m2 * d * d * m1) * u4
+                + m1
+                    * (x80 * d * (x111 * x6 * m2 * x22 + u4 * x19 * x26)
+                        + (x6 * m2 * d * x83 - x56 * x17) * x88
+                        + (x6 * m2 * (-x86 - x70) * d + x53 * x17) * x85)
+                + (x102 * (x5 * u5 * x112 + x6 * u4 * x19 * d * x22 * m1 + x60 * x40)
+                    + x99 * (x50 * x22 * x112 - x64 * x40)
+                    + (-x113 - x5 * x6 * u4 * x19 * d * m1) * x97
+                    - u5 * d
+                        * ((u5 * x112
+                            + (a * (x6 * (2.0 * m2 - 2.0 * m1) - 2.0) - 2.0 * x36) * u2)
+                            * x22 + x114)) * m2,
+            (x5 * x64 * J1 - x107 + x108 - x109) * u2
+                - u5
+                    * (u3 * x22
+                        * (m2
+                            * (x6
+                                * (m2 * (2.0 * a + 2.0 * x14) + (-2.0 * a - 2.0 * x13) * m1)
+                                - 2.0 * a - 2.0 * x14) * d + x5 * x110)
+                        + x6 * m2 * d * d * (x60 * x5 * x19 - x103) * m1 + x67 * u1)
+                + x6 * x6 * m0
+                    * ((x92 * u1 - x19 * d * m1 * u2) * x95
+                        + d
+                            * (x94 * (x89 - u5 * m2 * x22)
+                                + x90 * (x9 * u4 * d * m1 - x93))) - u1 * (x74 - x75 - x76)
+                + (x80 * (x56 * x46 - x53 * x19 * x45)
+                    - u4 * d
+                        * ((x116 + u3 * (a * (x6 * x31 - 2.0) - 2.0 * x44)) * x19 + x117)
+                    + x88 * ((x116 + x45 * x59) * x19 - x9 * x6 * u5 * m2 * d * x22)
+                    + (x9 * u4 * x45 - x46 * x59 - x6 * u5 * m2 * x19 * d * x22) * x85)
+                    * m1
+                + (x50 * x22 * u2 + x60 * (-x50 * x22 - x5 * x64) + x53 * x118) * J2
+                + m2
+                    * (x102 * (x6 * (x66 + x119) * d * m1 - x98 * x50)
+                        + (x64 * x98 + x6 * d * m1 * x105) * x97
+                        + x99 * (x6 * x120 * x19 * m1 + u5 * x22 * x29) * d)
+                + x53 * x56 * J1,
+            x53 * (x56 * J1 + J2 * x118)
+                + d
+                    * (x26 * (x56 * x80 - x85 * x59)
+                        + x6
+                            * (m2
+                                * (x97 * (x9 * (x62 - x63 + u4 * x22) - x104)
+                                    - u5 * d * (x5 * x87 - x82)
+                                    + (x9 * (x48 + x5 * u4 + x49) + x119) * x102
+                                    + x99 * x120 * x19)
+                                + x6 * m0 * (x118 * x95 + (x9 * x90 * d + x94 * x19) * x59))
+                        - u4 * (u3 * x19 * x115 + x117)) * m1,
+            x64 * (x106 * J1 + J2 * x50)
                 + m2 * d
-                    * ((x76 * x68 - x85 * x50) * x29 - u5 * (x108 + x107)
-                        + (m0 * (x21 * x102 * x68 + x104 * x50 + x8 * d * x100 * x80)
-                            * x5
-                            + (x95 * (x8 * (u5 * x13 + x61 + x62) - x89)
-                                + x112 * x98 * x21 - u4 * (x7 * x81 - x77) * d
-                                + x87 * (x8 * (x58 - x7 * u5 - x57) - x92)) * m1) * x5),
+                    * ((x60 * x102 - x64 * x99) * x29 - u5 * (x113 + x114)
+                        + x6
+                            * (m1
+                                * ((x5 * (x52 - x51 - x9 * u5) - x86) * x85
+                                    - u4 * d * (x9 * x96 - x104) + x111 * x80 * x22
+                                    + (x5 * (u5 * x19 + x54 + x55) - x82) * x88)
+                                + x6 * m0
+                                    * (x64 * x94 + x5 * x90 * x77 * d + x60 * x22 * x95))),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -758,9 +763,9 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x2 * x4;
-        dstate[1] = u2 * x1 - u3 * x0;
-        dstate[2] = f64::sin(theta) * x2 * x4 + u1;
+        dstate[0] = x1 * x4;
+        dstate[1] = u2 * x3 - u3 * x2;
+        dstate[2] = f64::sin(theta) * x1 * x4 + u1;
         dstate[3] = u4;
         dstate[4] = u5;
         dstate[5] = force[0];
@@ -805,29 +810,29 @@ pub mod reduced_volterra {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
-        let x5 = f64::sin(gamma2);
-        let x6 = m2 * x5 * x1;
-        let x7 = f64::sin(gamma1);
-        let x8 = x7 * x3 * m1;
-        let x9 = f64::cos(gamma2);
-        let x10 = f64::cos(gamma1);
-        let x11 = m2 * (a + x9 * d) + (-a - x10 * d) * m1;
-        let x12 = (x6 + x8) * x2 * d + x11 * x0;
+        let x4 = f64::cos(gamma1);
+        let x5 = f64::cos(gamma2);
+        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
+        let x7 = f64::sin(gamma2);
+        let x8 = m2 * x7 * x1;
+        let x9 = f64::sin(gamma1);
+        let x10 = x9 * x3 * m1;
+        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
+        let x12 = f64::cos(psi);
         let x13 = f64::sin(psi);
-        let x14 = x4 * x1;
-        let x15 = x0 * x3 * x13;
-        let x16 = -x14 - x15;
-        let x17 = a * x2 * x13;
-        let x18 = x4 * x3;
-        let x19 = x0 * x1 * x13;
-        let x20 = m2 + m0 + m1;
-        let x21 = x0 * x4 * x3;
-        let x22 = x1 * x13;
-        let x23 = x3 * x13 + x0 * x4 * x1;
-        let x24 = x21 - x22;
-        let x25 = x19 - x18;
-        let x26 = a * x4 * x2;
+        let x14 = a * x2 * x13;
+        let x15 = x12 * x3;
+        let x16 = x0 * x1 * x13;
+        let x17 = x12 * x1;
+        let x18 = x0 * x3 * x13;
+        let x19 = -x17 - x18;
+        let x20 = x3 * x13 + x0 * x12 * x1;
+        let x21 = x1 * x13;
+        let x22 = x0 * x12 * x3;
+        let x23 = x22 - x21;
+        let x24 = m2 + m0 + m1;
+        let x25 = a * x12 * x2;
+        let x26 = x16 - x15;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -853,25 +858,25 @@ pub mod reduced_volterra {
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x4 * x12
+            theta_dot * x11 * x12
+                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
+                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
+                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
+                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
+                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
+                + X_dot * x24,
+            Y_dot * x24 + theta_dot * x11 * x13
                 + psi_dot
-                    * (m1 * (d * (x16 * x7 - x10 * x2 * x13) - x17)
-                        + m2 * (x17 - d * (-(x18 - x19) * x5 - x9 * x2 * x13)))
-                + X_dot * x20
-                + ((m2 * (x22 - x21) * x5 + x23 * x7 * m1) * phi_dot
-                    + gamma1_dot * m1 * (x10 * x24 - x4 * x7 * x2)
-                    - m2 * gamma2_dot * (-x4 * x2 * x5 - x9 * x23)) * d,
-            Y_dot * x20
-                + (gamma1_dot * m1 * (x10 * (x14 + x15) - x7 * x2 * x13)
-                    - m2 * gamma2_dot * (-x2 * x5 * x13 - x9 * x25)
-                    + (m2 * x16 * x5 + x7 * x25 * m1) * phi_dot) * d
-                + (m1 * (x26 + d * (x7 * x24 + x10 * x4 * x2))
-                    + m2 * (-x26 - d * (x9 * x4 * x2 - x23 * x5))) * psi_dot
-                + theta_dot * x13 * x12,
-            Z_dot * x20 + theta_dot * (x0 * d * (-x6 - x8) + x11 * x2)
-                + ((x7 * m1 * x1 - m2 * x5 * x3) * x2 * phi_dot
-                    + (x9 * x2 * x1 - x0 * x5) * m2 * gamma2_dot
-                    + (x10 * x2 * x3 + x0 * x7) * gamma1_dot * m1) * d,
+                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
+                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+                + d
+                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
+                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
+                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
+            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
+                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
+                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
+                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -906,41 +911,41 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x0 * u2 + u3 * x1;
-        let x3 = f64::cos(theta);
-        let x4 = 1.0 / x3;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma2);
-        let x8 = f64::cos(gamma2);
-        let x9 = x8 * d;
-        let x10 = -a - x9;
-        let x11 = f64::sin(psi);
-        let x12 = f64::cos(gamma1);
-        let x13 = x0 * x11;
-        let x14 = x5 * x6 * x1;
-        let x15 = x13 + x14;
-        let x16 = x5 * x6 * x0;
-        let x17 = x1 * x11;
-        let x18 = -x13 - x14;
-        let x19 = f64::sin(gamma1);
-        let x20 = x12 * d;
-        let x21 = m2 * x10 + (a + x20) * m1;
-        let x22 = m2 * (a + x9) + (-a - x20) * m1;
-        let x23 = 1.0 / (m2 + m0 + m1);
-        let x24 = x6 * x1;
-        let x25 = x5 * x0 * x11;
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = f64::cos(gamma1);
+        let x8 = f64::sin(psi);
+        let x9 = x3 * x8;
+        let x10 = f64::cos(psi);
+        let x11 = x5 * x10 * x2;
+        let x12 = f64::sin(gamma1);
+        let x13 = x2 * x8;
+        let x14 = x5 * x10 * x3;
+        let x15 = -x13 - x14;
+        let x16 = f64::sin(gamma2);
+        let x17 = f64::cos(gamma2);
+        let x18 = x13 + x14;
+        let x19 = x17 * d;
+        let x20 = -a - x19;
+        let x21 = x7 * d;
+        let x22 = (a + x21) * m1 + m2 * x20;
+        let x23 = (-a - x21) * m1 + m2 * (a + x19);
+        let x24 = x10 * x3;
+        let x25 = x5 * x2 * x8;
         let x26 = -x24 - x25;
-        let x27 = x12 * x26 + x19 * x3 * x11;
+        let x27 = x7 * x26 + x12 * x0 * x8;
         let x28 = x24 + x25;
-        let x29 = x6 * x0;
-        let x30 = x5 * x1 * x11;
-        let x31 = x30 - x29;
-        let x32 = x29 - x30;
-        let x33 = x8 * x32 - x3 * x7 * x11;
-        let value = x3;
+        let x29 = x10 * x2;
+        let x30 = x5 * x3 * x8;
+        let x31 = x29 - x30;
+        let x32 = x17 * x31 - x0 * x16 * x8;
+        let x33 = x30 - x29;
+        let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -959,32 +964,31 @@ pub mod reduced_volterra {
             0.0,
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x2 * x4,
-            u2 * x1 - u3 * x0,
-            x5 * x2 * x4 + u1,
+            x1 * x4,
+            u2 * x3 - u3 * x2,
+            x5 * x1 * x4 + u1,
             u4,
             u5,
-            (G_X
-                + (m2 * (x6 * (x5 * x10 * x1 - x3 * d * x7) + x10 * x0 * x11)
-                    + (x12 * x15 * d + a * x15) * m1) * u2
-                + d
-                    * (u1 * (m2 * (x16 - x17) * x7 + x18 * x19 * m1)
-                        + u4 * m1 * (x6 * x19 * x3 + x12 * (x17 - x16))
-                        + u5 * m2 * (x8 * x18 - x6 * x3 * x7))
-                + u3 * (x21 * x1 * x11 + x6 * (x19 * x3 * d * m1 + x22 * x5 * x0)))
-                * x23,
-            (u3 * (d * (x27 * m1 + x8 * m2 * x28) + a * (m2 * x28 + x26 * m1)) + G_Y
-                + ((x12 * d * x31 + a * x31) * m1 + (a * x32 + d * x33) * m2) * u2
-                + d
-                    * (u4 * x27 * m1 + (m2 * x7 * x28 + x19 * x32 * m1) * u1
-                        + u5 * m2 * x33)) * x23,
-            (G_Z
-                + d
-                    * (x3 * u1 * (m2 * x7 * x0 - x19 * m1 * x1)
-                        + u4 * m1 * (-x12 * x3 * x0 - x5 * x19)
-                        + u5 * m2 * (x5 * x7 - x8 * x3 * x1))
-                + u3 * (x22 * x3 * x0 - x5 * x19 * d * m1)
-                + (x3 * x21 * x1 + m2 * x5 * d * x7) * u2) * x23,
+            x6
+                * (G_X
+                    + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
+                        + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
+                        + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
+                    + ((x7 * d * x18 + a * x18) * m1
+                        + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
+                        * u2
+                    + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
+            ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
+                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a * (x26 * m1 + m2 * x28))
+                + G_Y + (m2 * (d * x32 + x31 * a) + m1 * (x7 * d * x33 + a * x33)) * u2)
+                * x6,
+            x6
+                * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
+                    + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
+                    + d
+                        * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
+                            + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
+                            + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1018,43 +1022,46 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = 1.0 / (m2 + m0 + m1);
-        let x1 = m1 * x0;
-        let x2 = f64::cos(gamma1);
-        let x3 = f64::cos(gamma2);
-        let x4 = m2 * x0;
-        let x5 = x2 * x2;
-        let x6 = x3 * x3;
-        let x7 = f64::sin(gamma1);
-        let x8 = x2 * d;
-        let x9 = x3 * d;
-        let x10 = (m2 * (-a - x9) + (a + x8) * m1) * x0;
-        let x11 = x7 * (x2 * (J1 - J2) + d * m1 * (x10 - a - x8)) - Ixy;
+        let x0 = f64::cos(gamma2);
+        let x1 = 1.0 / (m2 + m0 + m1);
+        let x2 = x1 * m2;
+        let x3 = f64::cos(gamma1);
+        let x4 = x1 * m1;
+        let x5 = x3 * x3;
+        let x6 = x0 * x0;
+        let x7 = x3 * d;
+        let x8 = x0 * d;
+        let x9 = x1 * ((a + x7) * m1 + m2 * (-a - x8));
+        let x10 = f64::sin(gamma1);
+        let x11 = (x3 * (J1 - J2) + d * m1 * (x9 - a - x7)) * x10 - Ixy;
         let x12 = f64::sin(gamma2);
-        let x13 = x12 * (m2 * d * (a + x9 + x10) + x3 * (J2 - J1)) - Ixz;
-        let x14 = x2 * m2 * d * d * x12 * m1 * x0;
-        let x15 = -(x3 * m2 * x7 * d * d * m1 * x0);
-        let x16 = 1.0 - x1;
-        let x17 = d * d * x16 * m1;
-        let x18 = 1.0 - x4;
+        let x13 = (x0 * (J2 - J1) + m2 * d * (a + x8 + x9)) * x12 - Ixz;
+        let x14 = x3 * x1 * m2 * d * d * x12 * m1;
+        let x15 = -(x0 * x1 * m2 * x10 * d * d * m1);
+        let x16 = 1.0 - x4;
+        let x17 = x16 * d * d * m1;
+        let x18 = 1.0 - x2;
         let x19 = m2 * d * d * x18;
         let x20 = a
-            * ((a * x16 + x2 * d * (2.0 - 2.0 * x1)) * m1
-                + m2
-                    * (a
-                        + (d * (2.0 * (x2 * m1) + x3 * (2.0 * m1 - 2.0 * m2))
-                            + a * (2.0 * m1 - m2)) * x0 + 2.0 * x9));
-        let x21 = m2 * x7 * d * d * x12 * m1 * x0;
+            * (m2
+                * (a + 2.0 * x8
+                    + x1
+                        * (a * (2.0 * m1 - m2)
+                            + (x0 * (2.0 * m1 - 2.0 * m2) + 2.0 * (x3 * m1)) * d))
+                + (a * x16 + x3 * d * (2.0 - 2.0 * x4)) * m1);
+        let x21 = x1 * m2 * x10 * d * d * x12 * m1;
         let x22 = x21 - Iyz;
-        let x23 = m2 * (d * x18 + x3 * (x2 * d * m1 * x0 + ((m1 - m2) * x0 + 1.0) * a))
-            * d + J2;
+        let x23 = J2
+            + m2 * (d * x18 + x0 * (x3 * x1 * d * m1 + a * (x1 * (m1 - m2) + 1.0))) * d;
         let x24 = J2
-            + (x2 * (a * ((m2 - m1) * x0 + 1.0) + x3 * m2 * d * x0) + d * x16) * d * m1;
+            + (x16 * d + x3 * (a * (x1 * (m2 - m1) + 1.0) + x0 * x1 * m2 * d)) * d * m1;
         [
             [
-                ((x2 * x2 * (x1 - 1.0) - x1 + 1.0) * m1
-                    + m2 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) * d * d + (x5 + x6) * J1
-                    + Ixx + J2 * (2.0 - x5 - x6),
+                Ixx
+                    + d * d
+                        * (m2 * (x0 * x0 * (x2 - 1.0) - x2 + 1.0)
+                            + m1 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) + (x5 + x6) * J1
+                    + J2 * (2.0 - x5 - x6),
                 x11,
                 x13,
                 x14,
@@ -1062,8 +1069,9 @@ pub mod reduced_volterra {
             ],
             [
                 x11,
-                Iyy + x2 * (x2 * (x17 + J2 - J1) + 2.0 * (x3 * m2 * d * d * m1 * x0))
-                    + J2 + x19 + J1 + x20,
+                Iyy + J2
+                    + x3 * (x3 * (x17 + J2 - J1) + 2.0 * (x0 * x1 * m2 * d * d * m1))
+                    + x19 + x20 + J1,
                 x22,
                 x21,
                 x23,
@@ -1071,9 +1079,8 @@ pub mod reduced_volterra {
             [
                 x13,
                 x22,
-                x17 + J2
-                    + x3 * (x3 * (J2 + x19 - J1) + 2.0 * (x2 * m2 * d * d * m1 * x0))
-                    + Izz + J1 + x20,
+                x17 + x0 * (x0 * (J2 + x19 - J1) + 2.0 * (x3 * x1 * m2 * d * d * m1))
+                    + J2 + Izz + x20 + J1,
                 x24,
                 x21,
             ],

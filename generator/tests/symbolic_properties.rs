@@ -123,3 +123,42 @@ fn named_identities() {
     assert!(zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin(), Limits::default()).is_zero());
     assert!(!zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::number::rat_from_decimal("1e-9").unwrap()), Limits::default()).is_zero());
 }
+
+/// Values near the edge of `i64`, where the machine-integer rationals must move to big ones.
+fn arb_int() -> impl Strategy<Value = i64> {
+    prop_oneof![-20i64..20, any::<i64>(), (0u32..63).prop_map(|k| (1i64 << k) - 1), Just(i64::MIN), Just(i64::MAX)]
+}
+
+fn arb_rat() -> impl Strategy<Value = (i64, i64)> {
+    (arb_int(), arb_int().prop_filter("nonzero denominator", |d| *d != 0))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(0x5EED), ..ProptestConfig::default() })]
+
+    /// The hybrid rationals compute exactly what `BigRational` computes, in every operation.
+    #[test]
+    fn small_rationals_agree_with_big_ones(a in arb_rat(), b in arb_rat(), p in -5i32..6) {
+        use generator::symbolic::number::Rat;
+        use num_bigint::BigInt;
+        use num_rational::BigRational;
+        use num_traits::Zero;
+        let big = |(n, d): (i64, i64)| BigRational::new(BigInt::from(n), BigInt::from(d));
+        let (x, y) = (Rat::from_big(big(a)), Rat::from_big(big(b)));
+        let (bx, by) = (big(a), big(b));
+        prop_assert_eq!((&x + &y).to_big(), &bx + &by);
+        prop_assert_eq!((&x - &y).to_big(), &bx - &by);
+        prop_assert_eq!((&x * &y).to_big(), &bx * &by);
+        if !by.numer().is_zero() {
+            prop_assert_eq!((&x / &y).to_big(), &bx / &by);
+        }
+        prop_assert_eq!(x.cmp(&y), bx.cmp(&by));
+        prop_assert_eq!(x.is_integer(), bx.is_integer());
+        if !(bx.numer().is_zero() && p < 0) {
+            prop_assert_eq!(x.pow(p).to_big(), num_traits::Pow::pow(&bx, p));
+        }
+        // Equal values have equal representations (derived Eq and Hash stay sound).
+        prop_assert_eq!(Rat::from_big((&x + &y).to_big()), &x + &y);
+        prop_assert_eq!(x.to_string(), bx.to_string());
+    }
+}

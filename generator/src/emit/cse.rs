@@ -16,7 +16,6 @@
 //! ```
 
 use crate::symbolic::{Expr, Node};
-use num_traits::{Signed, ToPrimitive};
 use std::collections::HashMap;
 
 fn is_leaf(e: Expr) -> bool {
@@ -37,7 +36,7 @@ pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
         }
         if let Node::Mul { factors, .. } = &*e.node() {
             for (b, ex) in factors {
-                let small = ex.is_integer() && ex.abs().to_integer().to_i64().is_some_and(|n| n == 2 || n == 3);
+                let small = ex.is_integer() && ex.abs().to_i64().is_some_and(|n| n == 2 || n == 3);
                 if small {
                     force.insert(*b);
                 }

@@ -21,7 +21,6 @@
 use super::ops::OpCount;
 use crate::symbolic::number::{Rat, rat_to_f64};
 use crate::symbolic::{Expr, Node, Symbol};
-use num_traits::{One, Signed, ToPrimitive, Zero};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
@@ -203,7 +202,7 @@ fn lower_node(
                 let target = if ex.is_negative() { &mut den } else { &mut num };
                 let ex = ex.abs();
                 if ex.is_integer() {
-                    let n = ex.to_integer().to_i32().unwrap_or(i32::MAX);
+                    let n = ex.to_i32().unwrap_or(i32::MAX);
                     let base = child(*b, ops)?;
                     if n == 1 {
                         target.push(base);
@@ -217,7 +216,7 @@ fn lower_node(
                         ops.call("powi");
                         target.push(Code::Atom(quote!(f64::powi(#bt, #nl))));
                     }
-                } else if ex == Rat::new(1.into(), 2.into()) {
+                } else if ex == Rat::frac(1, 2) {
                     let bt = child(*b, ops)?.tokens();
                     target.push(call("sqrt", bt, ops));
                 } else {

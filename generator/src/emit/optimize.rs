@@ -21,7 +21,6 @@
 use super::cse::post_order;
 use crate::symbolic::number::Rat;
 use crate::symbolic::{Expr, Func, Node, Symbol};
-use num_traits::{One, Signed, Zero};
 use std::collections::HashMap;
 
 /// The named function that emission lowers as `1.0 / x`.

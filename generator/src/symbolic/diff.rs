@@ -9,7 +9,6 @@
 
 use super::expr::{Expr, Func, Node, Symbol, memo_diff_get, memo_diff_put};
 use super::number::Rat;
-use num_traits::One;
 
 impl Expr {
     /// The partial derivative with respect to `x`; memoized across calls.
@@ -30,7 +29,7 @@ impl Expr {
                 }
             }
             Node::Add { terms, .. } => {
-                Expr::make_add(Rat::from_integer(0.into()), terms.iter().map(|(t, c)| (t.diff(x), c.clone())).collect())
+                Expr::make_add(Rat::zero(), terms.iter().map(|(t, c)| (t.diff(x), c.clone())).collect())
             }
             Node::Mul { coefficient, factors } => {
                 let mut terms = Vec::new();
@@ -47,7 +46,7 @@ impl Expr {
                     fs.push((db, Rat::one()));
                     terms.push((Expr::make_mul(coefficient * e, fs), Rat::one()));
                 }
-                Expr::make_add(Rat::from_integer(0.into()), terms)
+                Expr::make_add(Rat::zero(), terms)
             }
             Node::Fun(f, a) => {
                 let da = a.diff(x);

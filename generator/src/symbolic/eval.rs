@@ -11,7 +11,6 @@
 
 use super::expr::{Expr, Node, Symbol};
 use super::number::rat_to_f64;
-use num_traits::{Signed, Zero};
 use std::collections::HashMap;
 
 /// Values of symbols and definitions of named functions for evaluation.

@@ -10,7 +10,6 @@
 use super::expr::{Expr, Node};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::Rat;
-use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
 /// A sum as `(term, coefficient)` pairs; the constant is the term `1`.
@@ -80,7 +79,7 @@ pub(crate) fn expand_rec(e: Expr, budget: &Budget, memo: &mut HashMap<Expr, Expr
                 let bx = expand_rec(*b, budget, memo)?;
                 let is_sum = matches!(&*bx.node(), Node::Add { .. });
                 if is_sum && ex.is_integer() && ex.is_positive() {
-                    let n = ex.to_integer().to_u32().unwrap_or(u32::MAX);
+                    let n = ex.to_i64().and_then(|n| u32::try_from(n).ok()).unwrap_or(u32::MAX);
                     let bt = as_terms(bx);
                     for _ in 0..n {
                         acc = as_terms(multiply(&acc, &bt, budget)?);

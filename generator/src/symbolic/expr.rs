@@ -21,18 +21,21 @@
 //! ```
 
 use super::number::{Rat, rat_from_i64};
-use num_traits::{One, Signed, ToPrimitive, Zero};
+use rustc_hash::FxHashMap;
 use std::cell::RefCell;
-use std::collections::HashMap;
 use std::rc::Rc;
+use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
 
 /// An interned symbol name (coordinate, velocity, parameter, time, ...).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, PartialOrd, Ord)]
 pub struct Symbol(pub(crate) u32);
 
-/// An expression: an id into the thread-local pool.
+/// An expression: an id into the current [`Context`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
-pub struct Expr(pub(crate) u32);
+pub struct Expr {
+    pub(crate) id: u32,
+    pub(crate) cx: u32,
+}
 
 /// Elementary functions of one argument.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, PartialOrd, Ord)]
@@ -103,32 +106,104 @@ pub enum Node {
 }
 
 struct Pool {
+    /// Distinguishes this pool's expressions from another context's.
+    id: u32,
     nodes: Vec<Rc<Node>>,
     keys: Vec<u64>,
     masks: Vec<u128>,
     sizes: Vec<u32>,
-    map: HashMap<Rc<Node>, Expr>,
+    depths: Vec<u32>,
+    map: FxHashMap<Rc<Node>, u32>,
     names: Vec<String>,
-    name_map: HashMap<String, Symbol>,
-    diff_memo: HashMap<(Expr, Symbol), Expr>,
+    name_map: FxHashMap<String, Symbol>,
+    diff_memo: FxHashMap<(Expr, Symbol), Expr>,
+}
+
+static NEXT_CONTEXT: AtomicU32 = AtomicU32::new(1);
+
+impl Pool {
+    fn new() -> Pool {
+        Pool {
+            id: NEXT_CONTEXT.fetch_add(1, AtomicOrdering::Relaxed),
+            nodes: Vec::new(),
+            keys: Vec::new(),
+            masks: Vec::new(),
+            sizes: Vec::new(),
+            depths: Vec::new(),
+            map: FxHashMap::default(),
+            names: Vec::new(),
+            name_map: FxHashMap::default(),
+            diff_memo: FxHashMap::default(),
+        }
+    }
 }
 
 thread_local! {
-    static POOL: RefCell<Pool> = RefCell::new(Pool {
-        nodes: Vec::new(),
-        keys: Vec::new(),
-        masks: Vec::new(),
-        sizes: Vec::new(),
-        map: HashMap::new(),
-        names: Vec::new(),
-        name_map: HashMap::new(),
-        diff_memo: HashMap::new(),
-    });
+    /// The context expressions are built in: the thread's default one, or the one a caller
+    /// entered with [`Context::enter`].
+    static CURRENT: RefCell<Rc<RefCell<Pool>>> = RefCell::new(Rc::new(RefCell::new(Pool::new())));
 }
 
 fn with_pool<R>(f: impl FnOnce(&mut Pool) -> R) -> R {
-    POOL.with(|p| f(&mut p.borrow_mut()))
+    CURRENT.with(|c| f(&mut c.borrow().borrow_mut()))
 }
+
+/// An expression context: the arena that owns every expression built while it is entered,
+/// with its memo tables. Dropping it frees them all, so a library user can derive a model,
+/// emit it, and drop the memory. Expressions are only meaningful in the context that built
+/// them; using one in another context panics with a clear message instead of reading the
+/// wrong node.
+///
+/// Each thread has a default context, used when none is entered (tests and small tools).
+///
+/// ```
+/// use generator::symbolic::{Context, Expr};
+/// let cx = Context::new();
+/// let size = cx.enter(|| (Expr::sym("x").sin() + 1).dag_size());
+/// assert_eq!(size, 3); // the sum, sin(x), x
+/// assert!(cx.nodes() >= 3);
+/// drop(cx); // frees every node built above
+/// ```
+pub struct Context {
+    pool: Rc<RefCell<Pool>>,
+}
+
+impl Default for Context {
+    fn default() -> Self {
+        Context::new()
+    }
+}
+
+impl Context {
+    /// A new, empty context.
+    pub fn new() -> Context {
+        Context { pool: Rc::new(RefCell::new(Pool::new())) }
+    }
+
+    /// Runs `f` with this context as the current one (restored afterwards, also on panic).
+    pub fn enter<R>(&self, f: impl FnOnce() -> R) -> R {
+        struct Restore(Option<Rc<RefCell<Pool>>>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                if let Some(p) = self.0.take() {
+                    CURRENT.with(|c| *c.borrow_mut() = p);
+                }
+            }
+        }
+        let previous = CURRENT.with(|c| std::mem::replace(&mut *c.borrow_mut(), self.pool.clone()));
+        let _restore = Restore(Some(previous));
+        f()
+    }
+
+    /// Number of distinct nodes interned so far.
+    pub fn nodes(&self) -> usize {
+        self.pool.borrow().nodes.len()
+    }
+}
+
+/// Most nodes a chain of nested operations may have: beyond it, recursive passes would run
+/// out of stack. Model input is checked against it when parsed.
+pub const MAX_DEPTH: u32 = 2_000;
 
 /// A 64-bit mixing step (splitmix64's finalizer): stable across runs and toolchains.
 fn mix(h: u64, v: u64) -> u64 {
@@ -143,56 +218,61 @@ fn hash_str(s: &str) -> u64 {
 }
 
 fn hash_rat(r: &Rat) -> u64 {
-    let n = r.numer().to_string();
-    let d = r.denom().to_string();
-    mix(hash_str(&n), hash_str(&d))
+    let (a, b) = r.stable_words();
+    mix(mix(0x7A7, a), b)
 }
 
 impl Pool {
+    fn check(&self, e: Expr) -> usize {
+        assert!(e.cx == self.id, "an expression was used outside the context that built it");
+        e.id as usize
+    }
+
     fn intern(&mut self, node: Node) -> Expr {
-        if let Some(&e) = self.map.get(&node) {
-            return e;
+        if let Some(&id) = self.map.get(&node) {
+            return Expr { id, cx: self.id };
         }
-        let (key, mask, size) = self.summarize(&node);
-        let id = Expr(self.nodes.len() as u32);
+        let (key, mask, size, depth) = self.summarize(&node);
+        let id = self.nodes.len() as u32;
         let rc = Rc::new(node);
         self.nodes.push(rc.clone());
         self.keys.push(key);
         self.masks.push(mask);
         self.sizes.push(size);
+        self.depths.push(depth);
         self.map.insert(rc, id);
-        id
+        Expr { id, cx: self.id }
     }
 
-    /// Structural key (independent of creation order), free-symbol mask and tree size.
-    fn summarize(&self, node: &Node) -> (u64, u128, u32) {
-        let k = |e: &Expr| self.keys[e.0 as usize];
-        let m = |e: &Expr| self.masks[e.0 as usize];
-        let s = |e: &Expr| self.sizes[e.0 as usize];
+    /// Structural key (independent of creation order), free-symbol mask, tree size, depth.
+    fn summarize(&self, node: &Node) -> (u64, u128, u32, u32) {
+        let k = |e: &Expr| self.keys[self.check(*e)];
+        let m = |e: &Expr| self.masks[self.check(*e)];
+        let s = |e: &Expr| self.sizes[self.check(*e)];
+        let d = |e: &Expr| self.depths[self.check(*e)];
         match node {
-            Node::Num(r) => (mix(1, hash_rat(r)), 0, 1),
-            Node::Sym(sym) => (
-                mix(2, hash_str(&self.names[sym.0 as usize])),
-                1u128 << (sym.0 % 128),
-                1,
-            ),
+            Node::Num(r) => (mix(1, hash_rat(r)), 0, 1, 1),
+            Node::Sym(sym) => (mix(2, hash_str(&self.names[sym.0 as usize])), 1u128 << (sym.0 % 128), 1, 1),
             Node::Add { constant, terms } | Node::Mul { coefficient: constant, factors: terms } => {
                 let tag = if matches!(node, Node::Add { .. }) { 3 } else { 4 };
                 let mut h = mix(tag, hash_rat(constant));
                 let mut mask = 0;
                 let mut size = 1u32;
+                let mut depth = 0;
                 for (e, c) in terms {
                     h = mix(mix(h, k(e)), hash_rat(c));
                     mask |= m(e);
                     size = size.saturating_add(s(e));
+                    depth = depth.max(d(e));
                 }
-                (h, mask, size)
+                (h, mask, size, depth + 1)
             }
-            Node::Fun(f, a) => (mix(mix(5, *f as u64), k(a)), m(a), s(a) + 1),
+            Node::Fun(f, a) => (mix(mix(5, *f as u64), k(a)), m(a), s(a).saturating_add(1), d(a) + 1),
             Node::Apply(name, a) => (
                 mix(mix(6, hash_str(&self.names[name.0 as usize])), k(a)),
                 m(a) | (1u128 << (name.0 % 128)),
-                s(a) + 1,
+                s(a).saturating_add(1),
+                d(a) + 1,
             ),
         }
     }
@@ -223,12 +303,21 @@ impl Symbol {
     }
 }
 
+/// Largest integer power of a number folded into a coefficient: beyond it the exact value would
+/// cost more than it is worth (`2^1000000` has 300,000 digits), so the power stays symbolic.
+pub const MAX_FOLDED_POWER: u32 = 64;
+
+/// The exponent as a small integer power that may be folded into a number.
+fn small_power(e: &Rat) -> Option<i32> {
+    e.to_i32().filter(|p| p.unsigned_abs() <= MAX_FOLDED_POWER)
+}
+
 /// Sorts `(expr, rational)` pairs by structural key and merges equal exprs by adding the
 /// rationals; drops pairs whose rational becomes zero.
 fn merge_pairs(mut pairs: Vec<(Expr, Rat)>) -> Vec<(Expr, Rat)> {
-    let keys: Vec<u64> = with_pool(|p| pairs.iter().map(|(e, _)| p.keys[e.0 as usize]).collect());
+    let keys: Vec<u64> = with_pool(|p| pairs.iter().map(|(e, _)| p.keys[p.check(*e)]).collect());
     let mut idx: Vec<usize> = (0..pairs.len()).collect();
-    idx.sort_by_key(|&i| (keys[i], pairs[i].0.0));
+    idx.sort_by_key(|&i| (keys[i], pairs[i].0.id));
     let mut out: Vec<(Expr, Rat)> = Vec::with_capacity(pairs.len());
     let mut taken: Vec<Option<(Expr, Rat)>> = pairs.drain(..).map(Some).collect();
     for i in idx {
@@ -250,22 +339,32 @@ impl Expr {
 
     /// The node behind this expression.
     pub fn node(self) -> Rc<Node> {
-        with_pool(|p| p.nodes[self.0 as usize].clone())
+        with_pool(|p| p.nodes[p.check(self)].clone())
     }
 
     /// Structural key: equal for equal expressions in any pool, used for canonical order.
     pub fn key(self) -> u64 {
-        with_pool(|p| p.keys[self.0 as usize])
+        with_pool(|p| p.keys[p.check(self)])
     }
 
     /// Tree size (number of nodes counted with repetition, saturating).
     pub fn tree_size(self) -> u32 {
-        with_pool(|p| p.sizes[self.0 as usize])
+        with_pool(|p| p.sizes[p.check(self)])
+    }
+
+    /// Length of the longest chain of nested operations below (and including) this node.
+    pub fn depth(self) -> u32 {
+        with_pool(|p| p.depths[p.check(self)])
+    }
+
+    /// A stable id within this context (creation order): a tie-break for sorting.
+    pub fn id(self) -> u32 {
+        self.id
     }
 
     /// A bloom mask of the free symbols: if `sym` may occur, its bit is set.
     pub(crate) fn mask(self) -> u128 {
-        with_pool(|p| p.masks[self.0 as usize])
+        with_pool(|p| p.masks[p.check(self)])
     }
 
     /// True when `sym` might occur in the expression (never false when it does).
@@ -404,16 +503,15 @@ impl Expr {
                         }
                         // 0^negative: keep symbolic so evaluation reports the division by zero.
                         flat.push((b, e));
-                    } else if e.is_integer() {
-                        let p = e.to_integer().to_i32().unwrap_or(i32::MAX);
-                        coefficient *= num_traits::pow::Pow::pow(r.clone(), p);
+                    } else if let Some(p) = small_power(&e) {
+                        coefficient *= r.pow(p);
                     } else {
                         flat.push((b, e));
                     }
                 }
-                Node::Mul { coefficient: k, factors: fs } if e.is_integer() => {
-                    let p = e.to_integer().to_i32().unwrap_or(i32::MAX);
-                    coefficient *= num_traits::pow::Pow::pow(k.clone(), p);
+                Node::Mul { coefficient: k, factors: fs } if small_power(&e).is_some() => {
+                    let p = small_power(&e).expect("checked");
+                    coefficient *= k.pow(p);
                     flat.extend(fs.iter().map(|(fb, fe)| (*fb, fe * &e)));
                 }
                 _ => flat.push((b, e)),
@@ -438,41 +536,36 @@ impl Expr {
         if exponent.is_one() {
             return self;
         }
+        let keep = || Expr::make_mul(Rat::one(), vec![(self, exponent.clone())]);
         match &*self.node() {
             Node::Num(r) if !exponent.is_integer() && !r.is_negative() => {
                 // Exact roots of perfect powers: sqrt(4) = 2, (8/27)^(2/3) = 4/9.
-                let q = exponent.denom().to_u32().unwrap_or(0);
-                let (n, d) = (r.numer().nth_root(q.max(1)), r.denom().nth_root(q.max(1)));
-                if q > 0 && num_traits::pow::Pow::pow(&n, q) == *r.numer() && num_traits::pow::Pow::pow(&d, q) == *r.denom() {
-                    let root = Rat::new(n, d);
-                    let p = exponent.numer().to_i32().unwrap_or(1);
-                    if root.is_zero() && p < 0 {
-                        return Expr::make_mul(Rat::one(), vec![(self, exponent.clone())]);
+                let q = exponent.denom().to_string().parse::<u32>().unwrap_or(0);
+                let p = exponent.numer().to_string().parse::<i32>().ok();
+                match (r.exact_root(q), p) {
+                    (Some(root), Some(p)) if !(root.is_zero() && p < 0) && p.unsigned_abs() <= MAX_FOLDED_POWER => {
+                        Expr::num(root.pow(p))
                     }
-                    return Expr::num(num_traits::pow::Pow::pow(root, p));
+                    _ => keep(),
                 }
-                Expr::make_mul(Rat::one(), vec![(self, exponent.clone())])
             }
-            Node::Num(r) if exponent.is_integer() => {
-                if r.is_zero() && exponent.is_negative() {
-                    return Expr::make_mul(Rat::one(), vec![(self, exponent.clone())]);
-                }
-                let p = exponent.to_integer().to_i32().unwrap_or(i32::MAX);
-                Expr::num(num_traits::pow::Pow::pow(r.clone(), p))
-            }
+            Node::Num(r) if exponent.is_integer() => match small_power(exponent) {
+                Some(p) if !(r.is_zero() && p < 0) => Expr::num(r.pow(p)),
+                _ => keep(),
+            },
             Node::Mul { coefficient, factors }
                 if factors.len() == 1 && coefficient.is_one() && !exponent.is_integer() =>
             {
-                // (b^e1)^e2 = b^(e1 e2) when e1 is odd-free: only safe when e1*e2 keeps sign;
-                // we merge when e1 is an integer power of an odd exponent or e2 is an integer.
+                // (b^e1)^e2 = b^(e1 e2) is safe when e1 is an odd integer (the sign of b^e1 is
+                // the sign of b); otherwise keep the nested power.
                 let (b, e1) = &factors[0];
-                if e1.is_integer() && (e1.to_integer() % 2u8) != num_bigint::BigInt::zero() {
+                if e1.to_i64().is_some_and(|n| n % 2 != 0) {
                     Expr::make_mul(Rat::one(), vec![(*b, e1 * exponent)])
                 } else {
-                    Expr::make_mul(Rat::one(), vec![(self, exponent.clone())])
+                    keep()
                 }
             }
-            _ => Expr::make_mul(Rat::one(), vec![(self, exponent.clone())]),
+            _ => keep(),
         }
     }
 
@@ -483,7 +576,7 @@ impl Expr {
 
     /// Square root.
     pub fn sqrt(self) -> Expr {
-        self.pow_rat(&Rat::new(1.into(), 2.into()))
+        self.pow_rat(&Rat::frac(1, 2))
     }
 
     /// Reciprocal.
@@ -747,7 +840,7 @@ mod tests {
         assert_eq!(Expr::int(2) * Expr::int(3) + Expr::int(1), Expr::int(7));
         assert_eq!(Expr::int(4).sqrt(), Expr::int(2));
         assert_eq!(Expr::int(2).sqrt().tree_size(), 2);
-        assert_eq!(Expr::int(2).powi(-2), Expr::num(Rat::new(1.into(), 4.into())));
+        assert_eq!(Expr::int(2).powi(-2), Expr::num(Rat::frac(1, 4)));
     }
 
     #[test]

@@ -20,7 +20,6 @@ use super::expr::{Expr, Node, Symbol};
 use super::limits::{Limits, StopReason};
 use super::number::Rat;
 use super::trig::zero_test;
-use num_traits::{One, Signed, Zero};
 use std::collections::{BTreeMap, HashSet};
 
 /// A dense matrix of expressions, row-major.
@@ -361,7 +360,7 @@ fn monomial_content(e: Expr) -> Option<BTreeMap<(u64, u32), (Expr, Rat)>> {
         let here: BTreeMap<(u64, u32), (Expr, Rat)> = factors
             .into_iter()
             .filter(|(b, x)| x.is_positive() && !matches!(&*b.node(), Node::Add { .. } | Node::Num(_)))
-            .map(|(b, x)| ((b.key(), b.0), (b, x)))
+            .map(|(b, x)| ((b.key(), b.id()), (b, x)))
             .collect();
         common = Some(match common {
             None => here,

@@ -15,5 +15,5 @@ pub mod print;
 pub mod subs;
 pub mod trig;
 
-pub use expr::{Expr, Func, Node, Symbol};
+pub use expr::{Context, Expr, Func, Node, Symbol};
 pub use matrix::Matrix;

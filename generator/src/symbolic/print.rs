@@ -13,7 +13,7 @@
 
 use super::expr::{Expr, Node};
 use super::number::Rat;
-use num_traits::{One, Signed, Zero};
+use num_traits::{One, Signed};
 use std::fmt;
 
 #[derive(Clone, Copy, PartialEq)]
@@ -149,7 +149,7 @@ fn render_product(coefficient: &Rat, factors: &[(Expr, Rat)], st: Style) -> (Str
 
 fn render_power(b: Expr, x: &Rat, st: Style) -> String {
     let (base, prec) = render(b, st);
-    let half = Rat::new(1.into(), 2.into());
+    let half = Rat::frac(1, 2);
     if *x == half {
         return match st {
             Style::Text => format!("sqrt({base})"),

@@ -19,7 +19,6 @@ use super::expand::expand_rec;
 use super::expr::{Expr, Func, Node, Symbol};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::{Rat, rat_from_i64};
-use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
 /// How a zero verdict was reached.
@@ -129,8 +128,8 @@ impl Normalizer {
             return Ok((arg.sin(), arg.cos()));
         }
         // k = p/q: angle = p * (atom/q), expanded as a multiple of the atomic angle atom/q.
-        let q = Rat::from_integer(k.denom().clone());
-        let p = k.numer().to_i64().unwrap_or(1);
+        let q = Rat::from_big(num_rational::BigRational::from_integer(k.denom()));
+        let p = k.numer().to_string().parse::<i64>().unwrap_or(1);
         let base = atom.scale(&q.recip());
         let (sb, cb) = (base.sin(), base.cos());
         let n = p.unsigned_abs();
@@ -168,7 +167,7 @@ impl Normalizer {
             for (b, x) in factors {
                 let is_sin = matches!(&*b.node(), Node::Fun(Func::Sin, _));
                 if is_sin && x.is_integer() && x >= rat_from_i64(2) {
-                    let n = x.to_integer().to_u32().unwrap_or(0);
+                    let n = x.to_i64().and_then(|n| u32::try_from(n).ok()).unwrap_or(0);
                     let Node::Fun(_, a) = &*b.node() else { unreachable!("checked above") };
                     let one_minus_cos2 = Expr::one() - a.cos().powi(2);
                     kept.push((one_minus_cos2, rat_from_i64((n / 2) as i64)));
@@ -327,7 +326,7 @@ mod tests {
     #[test]
     fn near_misses_are_rejected() {
         let (a, b) = (Expr::sym("a"), Expr::sym("b"));
-        let eps = Expr::num(Rat::new(1.into(), 10_000_000.into()));
+        let eps = Expr::num(Rat::frac(1, 10_000_000));
         assert!(!zero(a.sin().powi(2) + a.cos().powi(2) - 1 - eps));
         assert!(!zero((a - b).cos() - a.cos() * b.cos() + a.sin() * b.sin()));
         assert!(!zero((a + b).cos() - a.cos() * b.cos() - a.sin() * b.sin()));
