@@ -5,7 +5,7 @@
 use generated::{Failure, Model};
 use generator::formulation::{ignorable, mechanics, volterra};
 use generator::model::Model as ModelDef;
-use generator::symbolic::trig::SplitMix;
+use generator::symbolic::zero::SplitMix;
 use generator::symbolic::Expr;
 
 const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];

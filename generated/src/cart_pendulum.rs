@@ -173,15 +173,21 @@ pub fn energy(
     let m2 = params.m2;
     let l = params.l;
     let g = params.g;
-    let x0 = f64::cos(theta1);
-    (0.5 * m2 + 0.5 * M + 0.5 * m1) * x_dot * x_dot
-        + (m2
-            * ((x_dot * theta1_dot - g) * x0
-                + ((0.5 * (f64::cos(theta1 - theta2) * theta2_dot) + 0.5 * theta1_dot)
-                    * theta1_dot + 0.16666666666666666 * (theta2_dot * theta2_dot)) * l
-                + f64::cos(theta2) * (0.5 * (x_dot * theta2_dot) - 0.5 * g))
-            + (theta1_dot * (0.5 * (x_dot * x0) + 0.16666666666666666 * (l * theta1_dot))
-                - 0.5 * (g * x0)) * m1) * l
+    let x0 = f64::cos(theta2);
+    let x1 = f64::cos(theta1);
+    let x2 = f64::sin(theta1) * theta1_dot + 0.5 * (theta2_dot * f64::sin(theta2));
+    let x3 = x_dot + l * (theta1_dot * x1 + 0.5 * (x0 * theta2_dot));
+    l
+        * (m2
+            * (0.041666666666666664 * (l * theta2_dot * theta2_dot)
+                + g * (-0.5 * x0 - x1))
+            + (0.041666666666666664 * (l * theta1_dot * theta1_dot) - 0.5 * (g * x1))
+                * m1)
+        + 0.5
+            * (m1
+                * (l * (x_dot * x1 + 0.25 * (l * theta1_dot)) * theta1_dot
+                    + x_dot * x_dot)) + 0.5 * (m2 * (x2 * x2 * l * l + x3 * x3))
+        + 0.5 * (x_dot * x_dot * M)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -295,9 +301,7 @@ pub mod lagrange {
         let x7 = l * x4;
         let x8 = 0.5 * x2 * m2 * l;
         let x9 = x2 * x0 - x3 * x1;
-        let x10 = x_dot * theta1_dot;
-        let x11 = -m2 - 0.5 * m1;
-        let x12 = theta1_dot - theta2_dot;
+        let x10 = theta1_dot - theta2_dot;
         let mut matrix: [[f64; 4]; 4] = [
             [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
             [x5, 0.3333333333333333 * m2 * l * l, x8, l],
@@ -307,17 +311,14 @@ pub mod lagrange {
         let mut force: [f64; 4] = [
             tau
                 + l
-                    * (m2
-                        * (l * x9 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                            + x0 * (-g - x10))
-                        - theta1_dot
-                            * (x11 * x0 * x_dot - 0.5 * (m2 * l * x9 * theta2_dot))
-                        + x0 * (-0.5 * g - 0.5 * x10) * m1),
+                    * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
+                        - 0.5 * (x0 * g * m1)),
             m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
-            l
-                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
-                    - x11 * x0 * theta1_dot * theta1_dot),
-            x12 * l * x9 * theta1_dot,
+            (0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                - m2
+                    * (-x0 * theta1_dot * theta1_dot
+                        - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
+            x10 * l * x9 * theta1_dot,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -332,7 +333,7 @@ pub mod lagrange {
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
-        dstate[6] = x12 * tau;
+        dstate[6] = x10 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -372,9 +373,7 @@ pub mod lagrange {
         let x7 = l * x4;
         let x8 = 0.5 * x2 * m2 * l;
         let x9 = x2 * x0 - x3 * x1;
-        let x10 = x_dot * theta1_dot;
-        let x11 = -m2 - 0.5 * m1;
-        let x12 = theta1_dot - theta2_dot;
+        let x10 = theta1_dot - theta2_dot;
         let mut matrix: [[f64; 4]; 4] = [
             [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
             [x5, 0.3333333333333333 * m2 * l * l, x8, l],
@@ -384,17 +383,14 @@ pub mod lagrange {
         let mut force: [f64; 4] = [
             tau
                 + l
-                    * (m2
-                        * (l * x9 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                            + x0 * (-g - x10))
-                        - theta1_dot
-                            * (x11 * x0 * x_dot - 0.5 * (m2 * l * x9 * theta2_dot))
-                        + x0 * (-0.5 * g - 0.5 * x10) * m1),
+                    * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
+                        - 0.5 * (x0 * g * m1)),
             m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
-            l
-                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
-                    - x11 * x0 * theta1_dot * theta1_dot),
-            l * (x12 * x9 * theta1_dot - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
+            (0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                - m2
+                    * (-x0 * theta1_dot * theta1_dot
+                        - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
+            l * (x10 * x9 * theta1_dot - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -409,7 +405,7 @@ pub mod lagrange {
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
-        dstate[6] = x12 * tau;
+        dstate[6] = x10 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -587,17 +583,10 @@ pub mod maggi {
         let x8 = x2 + x5;
         let x9 = m2 + 0.5 * m1;
         let x10 = l * x7 * (x9 * x4 - 0.5 * (x3 * m2 * x8));
-        let x11 = theta1_dot - theta2_dot;
-        let x12 = x4 * x1;
-        let x13 = x3 * x0;
-        let x14 = x13 - x12;
-        let x15 = x12 - x13;
-        let x16 = -x14 * theta2_dot - theta1_dot * x15;
-        let x17 = -m2 - 0.5 * m1;
-        let x18 = x_dot * theta1_dot;
-        let x19 = (x7 * x8 - 1.0) * x14 * theta2_dot;
-        let x20 = (x13 - x12 + x7 * x8 * x15) * theta1_dot;
-        let x21 = x19 + x20;
+        let x11 = x3 * x0 - x4 * x1;
+        let x12 = theta1_dot - theta2_dot;
+        let x13 = x7 * x8;
+        let x14 = 1.0 - x13;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -626,29 +615,23 @@ pub mod maggi {
         let mut force: [f64; 2] = [
             x7
                 * (tau
-                    + l
-                        * (m2
-                            * (x0 * (-g - x18)
-                                + l
-                                    * (x14 * theta2_dot * (-0.5 * theta1_dot - 0.5 * theta2_dot)
-                                        - 0.5 * (x21 * x11 * x7 * x8)))
-                            - x11 * l * x7 * x7 * x16 * (m2 + 0.3333333333333333 * m1)
-                            - theta1_dot
-                                * (x17 * x0 * x_dot - 0.5 * (m2 * l * x14 * theta2_dot))
-                            + x0 * (-0.5 * g - 0.5 * x18) * m1)
-                    - x8
-                        * (m2 * l
-                            * (l
-                                * (x11 * x7
-                                    * (-0.5 * (x7 * x8 * x16) - 0.3333333333333333 * x19
-                                        - 0.3333333333333333 * x20)
-                                    + x14 * (0.5 * theta1_dot + 0.5 * theta2_dot) * theta1_dot)
-                                - 0.5 * (g * x1)
-                                - 0.5 * (l * x14 * theta1_dot * theta2_dot)) - tau)),
+                    + ((l * x11
+                        * (-0.5 * (theta2_dot * theta2_dot)
+                            - 0.5 * (x12 * x12 * x14 * x7 * x8)) - x0 * g) * m2
+                        - x12 * x12 * l * x7 * x7 * x11 * (m2 + 0.3333333333333333 * m1)
+                        - 0.5 * (x0 * g * m1)) * l
+                    - (m2 * l
+                        * (l
+                            * (0.5 * (theta1_dot * theta1_dot)
+                                + x12 * x12 * x7
+                                    * (-0.16666666666666666 * x13 - 0.3333333333333333)) * x11
+                            - 0.5 * (g * x1)) - tau) * x8),
             l
-                * (0.5 * (m2 * theta2_dot * theta2_dot * x1)
-                    - x17 * x0 * theta1_dot * theta1_dot
-                    + x11 * (-x7 * x9 * x16 * x4 - 0.5 * (x21 * x3 * m2)) * x7),
+                * (x12 * x12 * x7 * x11 * (-0.5 * (x3 * m2 * x14) - x7 * x9 * x4)
+                    + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                    - m2
+                        * (-x0 * theta1_dot * theta1_dot
+                            - 0.5 * (theta2_dot * theta2_dot * x1))),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -660,10 +643,10 @@ pub mod maggi {
         dstate[0] = theta1_dot;
         dstate[1] = theta2_dot;
         dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x11 * x7 * x7 * x16;
-        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x21 * x11 * x7;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x12 * x12 * x7 * x7 * x11;
+        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x12 * x12 * x14 * x7 * x11;
         dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[6] = x11 * tau;
+        dstate[6] = x12 * tau;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -787,21 +770,19 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
-        let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = 1.0 / (x0 + x3 + 1.0);
-        let x5 = x0 + x3;
-        let x6 = l * x4 * ((m2 + 0.5 * m1) * x2 - 0.5 * (x1 * m2 * x5));
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 1.0 / (x0 + 1.0);
+        let x2 = l
+            * ((m2 + 0.5 * m1) * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * m2 * x0))
+            * x1;
         [
             [
-                l * l * x4 * x4
-                    * (m2 - 0.6666666666666666 * (m2 * x5 * x5)
-                        + 0.3333333333333333 * m1),
-                x6,
+                l * l
+                    * (m2 - 0.6666666666666666 * (m2 * x0 * x0)
+                        + 0.3333333333333333 * m1) * x1 * x1,
+                x2,
             ],
-            [x6, m2 + M + m1],
+            [x2, m2 + M + m1],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -861,28 +842,14 @@ pub mod kane {
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
         let x8 = x2 + x5;
-        let x9 = m2 * x8 * x8;
+        let x9 = 2.0 * theta1 - 2.0 * theta2;
         let x10 = m2 + 0.5 * m1;
         let x11 = l * x7 * (x10 * x4 - 0.5 * (x3 * m2 * x8));
         let x12 = x4 * x1;
         let x13 = x3 * x0;
-        let x14 = x12 - x13;
-        let x15 = x7 * x8 * x14;
-        let x16 = m2 + 0.3333333333333333 * m1;
-        let x17 = m2 - 0.5 * x9 + 0.3333333333333333 * m1;
-        let x18 = x13 - x12;
-        let x19 = x7 * x8;
-        let x20 = 0.5 * x19 - 0.5;
-        let x21 = x8 * x1;
-        let x22 = m2 * (x3 * x20 * x18 + 0.5 * x21) - x7 * x10 * x18 * x4;
-        let x23 = 0.5 * x13 - 0.5 * x12 + 0.5 * x15;
-        let x24 = x3 * x8;
-        let x25 = x3 * x18;
-        let x26 = x3 * m2 * x23;
-        let x27 = x7 * x10 * x4 * x14;
-        let x28 = -m2 - 0.5 * m1;
-        let x29 = x28 * x0;
-        let x30 = x18 * x8;
+        let x14 = f64::sin(x9);
+        let x15 = f64::sin(3.0 * theta1 - 3.0 * theta2);
+        let x16 = x13 - x12;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -902,45 +869,30 @@ pub mod kane {
         let mut matrix: [[f64; 2]; 2] = [
             [
                 l * l * x7 * x7
-                    * (m2 - 0.6666666666666666 * x9 + 0.3333333333333333 * m1),
+                    * (m2 * (0.6666666666666666 - 0.3333333333333333 * f64::cos(x9))
+                        + 0.3333333333333333 * m1),
                 x11,
             ],
             [x11, m2 + M + m1],
         ];
         let mut force: [f64; 2] = [
-            (tau
-                + l
-                    * (x8
-                        * (l * x7 * x18 * u1
-                            * (m2 * (0.3333333333333333 * x19 - 0.3333333333333333) * x8
-                                - x17 * x7 - x7 * x16 + m2 * x8 * (0.5 * x19 - 1.0))
-                            + x22 * u2)
-                        - l
-                            * (m2 * x8 * (x13 - x12 + 0.5 * x15) - x7 * x14 * x16
-                                - x17 * x7 * x14
-                                + m2
-                                    * (0.3333333333333333 * x13 - 0.3333333333333333 * x12
-                                        + 0.3333333333333333 * x15) * x8) * x7 * u1
-                        + m2
-                            * ((x3 * x23 - x0 - x7 * x4 * x14
-                                - (x18 * (x3 * x20 - x7 * x4) + 0.5 * x21) * x8)
-                                * (u2 + (x4 - 0.5 * x24) * l * x7 * u1)
-                                - 0.08333333333333333
-                                    * (l * x7 * x8 * (x13 - x12 - (x19 - 1.0) * x18 * x8 + x15)
-                                        * u1)
-                                + (0.5 * x0 + 0.5 * x25) * l * x7 * u1
-                                    * (0.5 * x4
-                                        + x3 * (0.5 * x2 - 0.5 * (x7 * x18 * x14) + 0.5 * x5)
-                                        - (((-0.5 * x0 - 0.5 * x25) * x7 - 0.5 * x1) * x18
-                                            - 0.5 * x24) * x8 - 0.5 * (x0 * x7 * x14)))
-                        - (x26 - x27 + x29) * u2
-                        + m1
-                            * (0.08333333333333333
-                                * (l * x7 * x7 * (x30 - x12 + x13) * u1) - 0.5 * (x0 * u2)
-                                + x7 * (x4 * u2 + 0.5 * (l * x7 * u1))
-                                    * (0.5 * x30 - 0.5 * x12 + 0.5 * x13))) * x7 * u1
-                + x28 * x0 * l * g - x8 * (-tau - 0.5 * (m2 * l * g * x1))) * x7,
-            (x27 - x26 - x29 + x8 * x22) * l * x7 * x7 * u1 * u1,
+            x7
+                * (tau
+                    + l * l * x7 * x7 * u1 * u1
+                        * ((0.3333333333333333 * x12 - 0.3333333333333333 * x13
+                            - 0.16666666666666666 * x14) * x7 * m1
+                            + m2
+                                * (0.16666666666666666 * x12 - 0.16666666666666666 * x15
+                                    - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
+                                    + (0.8333333333333334 * x12 + 0.16666666666666666 * x15
+                                        + 0.08333333333333333
+                                            * f64::sin(4.0 * theta1 - 4.0 * theta2)
+                                        - 0.8333333333333334 * x13 - 0.3333333333333333 * x14)
+                                        * x7)) + (-m2 - 0.5 * m1) * x0 * l * g
+                    - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
+            l * x7 * u1 * u1
+                * ((0.5 * (x0 * m1) - x10 * x16 * x4 - m2 * (-x0 - 0.5 * (x8 * x8 * x1)))
+                    * x7 - 0.5 * (x3 * m2 * (1.0 - x7 * x8) * x16)),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1078,21 +1030,21 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
-        let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = 1.0 / (x0 + x3 + 1.0);
-        let x5 = x0 + x3;
-        let x6 = l * x4 * ((m2 + 0.5 * m1) * x2 - 0.5 * (x1 * m2 * x5));
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 1.0 / (x0 + 1.0);
+        let x2 = l
+            * ((m2 + 0.5 * m1) * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * m2 * x0))
+            * x1;
         [
             [
-                l * l * x4 * x4
-                    * (m2 - 0.6666666666666666 * (m2 * x5 * x5)
-                        + 0.3333333333333333 * m1),
-                x6,
+                l * l
+                    * (m2
+                        * (0.6666666666666666
+                            - 0.3333333333333333 * f64::cos(2.0 * theta1 - 2.0 * theta2))
+                        + 0.3333333333333333 * m1) * x1 * x1,
+                x2,
             ],
-            [x6, m2 + M + m1],
+            [x2, m2 + M + m1],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1154,44 +1106,18 @@ pub mod reduced_volterra {
         let x8 = x2 + x5 + 1.0;
         let x9 = 1.0 / x8;
         let x10 = x2 + x5;
-        let x11 = 0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4);
-        let x12 = m2 + M + m1;
-        let x13 = x0 * x12 * x1 + m2 + x3 * x12 * x4 + M + m1;
-        let x14 = 1.0 / x13;
-        let x15 = m2 + 0.3333333333333333 * m1;
-        let x16 = m2 + 0.5 * m1;
-        let x17 = x7 * x15 + 0.5 * (m2 * x9 * x10 * x10) + x16 * x4 * x11 * x14;
-        let x18 = 0.5 * (x3 * x11 * x14) + x10 * (0.3333333333333333 * x9 + 0.5 * x7);
-        let x19 = 0.5 * (x3 * m2 * x9 * x10) + x16 * x7 * x4 + x12 * x11 * x14;
-        let x20 = x4 * x1;
-        let x21 = x3 * x0;
-        let x22 = x21 - x20;
-        let x23 = x7 * x4;
-        let x24 = x20 - x21;
-        let x25 = x9 * x10;
-        let x26 = 0.5 - 0.5 * x25;
-        let x27 = m2 * (x3 * (0.5 * x21 - 0.5 * x20) - x0);
-        let x28 = -m2 - M - m1;
-        let x29 = x3 * x0 * x28 + x12 * x4 * x1;
-        let x30 = x29 * x11 * x14;
-        let x31 = x0 * m1;
-        let x32 = x27 - x30 - 0.5 * x31;
-        let x33 = x32 * x14;
-        let x34 = x9 * x10 * x24;
-        let x35 = 0.5 * x20 - 0.5 * x21 - 0.5 * x34;
-        let x36 = x7 * x22 * x4;
-        let x37 = 0.5 * (x0 * x1 * x1) + x3 * (x20 - 0.5 * x21);
-        let x38 = m2 * x37;
-        let x39 = x28 * x4 * x1 + x3 * x0 * x12;
-        let x40 = x39 * x11 * x14;
-        let x41 = x38 - x40;
-        let x42 = x41 * x14;
-        let x43 = x9 * (x3 * x26 * x22 - 0.5 * (x10 * x1));
-        let x44 = x7 * x7 * x4 * x24;
-        let x45 = x11 * x14;
-        let x46 = 1.0 - x25;
-        let x47 = x20 - x21 - x34;
-        let x48 = -m2 - 0.5 * m1;
+        let x11 = theta1 - 2.0 * theta2;
+        let x12 = 0.5 * (x4 * m1) + m2 * (0.75 * x4 - 0.25 * f64::cos(x11));
+        let x13 = m2 + M + m1;
+        let x14 = 1.0 / (m2 + M + m1 + x13 * x10);
+        let x15 = m2 + 0.5 * m1;
+        let x16 = m2 + 0.3333333333333333 * m1;
+        let x17 = x3 * x0 - x4 * x1;
+        let x18 = x9 * x10;
+        let x19 = x7 - x18;
+        let x20 = m2 * (0.25 * (f64::sin(x11) * (x7 - 2.0 * x18)) - 0.75 * (x0 * x7))
+            - x12 * (-m2 - M - m1) * x17 * x14 * x19 - 0.5 * (x0 * x7 * m1);
+        let x21 = x18 - 1.0;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1208,7 +1134,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x13;
+        let value = x0 * x13 * x1 + m2 + x3 * x13 * x4 + M + m1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1217,64 +1143,33 @@ pub mod reduced_volterra {
             });
         }
         let mut matrix: [[f64; 1]; 1] = [
-            [l * l * (x7 * x17 + m2 * x9 * x18 * x10 + x19 * x11 * x14)],
+            [
+                l * l
+                    * (x12
+                        * (0.5 * (x3 * m2 * x9 * x10) + x15 * x7 * x4 + x12 * x13 * x14)
+                        * x14
+                        + m2 * x9 * x10
+                            * (x10 * (0.3333333333333333 * x9 + 0.5 * x7)
+                                + 0.5 * (x3 * x12 * x14))
+                        + x7
+                            * (x7 * x16 + x12 * x15 * x4 * x14
+                                + 0.5 * (m2 * x9 * x10 * x10))),
+            ],
         ];
         let mut force: [f64; 1] = [
-            l * l
-                * (m2
-                    * ((x7
-                        * ((-0.5 * (x9 * x1) - x0 * x7 * x7) * x22 + x23
-                            - 0.5 * (x9 * x9 * x10 * x1 * x24))
-                        + x9
-                            * (x9 * (x26 * x22 * x1 + 0.5 * (x3 * x10))
-                                - x0 * x7 * x7 * x24) * x10)
-                        * (0.5 * (x9 * x10 * x1) + x0 * x7)
-                        + (x7 * (x33 + x3 * x9 * x35 + x7 * (-x0 - x36))
-                            + x9 * x10 * (x42 + x43 - x44))
-                            * (0.5 * (x3 * x9 * x10) + x23 + x45)
-                        + 0.08333333333333333
-                            * (x9 * x9 * x10 * (x46 * x9 * x22 * x10 + x47 * x7)))
-                    + (x7 * x32 + x9 * x10 * x41) * M * x11 * x14 * x14
-                    + (0.08333333333333333 * ((-x34 - x7 * x22) * x7 * x7 * m1)
-                        - ((x12 * x32 * x14 + x7 * (x48 * x0 - x16 * x7 * x22 * x4)
-                            - x19 * x29 * x14 + x3 * m2 * x9 * x35) * x11
-                            + x19 * (x27 - 0.5 * x31)) * x14
-                        - x7
-                            * (m2 * (x20 - x21 - 0.5 * x34) * x9 * x10
-                                - x7 * x7 * x22 * x15
-                                + (x16 * x32 * x4 + x48 * x0 * x11) * x14 - x7 * x17 * x22)
-                        - m2 * x9
-                            * (x10
-                                * (x22
-                                    * (x7 * (-0.5 * (x7 * x10) - 0.5) - 0.3333333333333333 * x9)
-                                    + x3 * (0.5 * x27 - 0.5 * x30 - 0.25 * x31) * x14
-                                    - 0.3333333333333333 * (x9 * x9 * x10 * x24)) + x47 * x18))
-                        * x7
-                    - x9 * x10
-                        * ((x19 * x37 * x14
-                            + x9
-                                * (x10
-                                    * ((0.5 * x7
-                                        + x9 * (0.3333333333333333 - 0.3333333333333333 * x25))
-                                        * x22 - 0.5 * (x7 * x7 * x10 * x24)
-                                        + (x3 * (0.5 * x38 - 0.5 * x40) - 0.5 * (x11 * x1)) * x14)
-                                    + x46 * x18 * x22)) * m2
-                            + (m2
-                                * ((1.0 - 0.5 * x25) * x9 * x22 * x10
-                                    + x16 * x4 * x37 * x14) - x7 * x17 * x24
-                                - x16 * x39 * x4 * x11 * x14 * x14 - x7 * x7 * x24 * x15)
-                                * x7
-                            + (m2 * (x12 * x37 * x14 + x43) - x39 * x12 * x11 * x14 * x14
-                                - x19 * x39 * x14 - x16 * x7 * x7 * x4 * x24) * x11 * x14)
-                    + ((0.5 * x23 + x45)
-                        * ((x42 - 0.5 * x44) * x9 * x10
-                            + x7 * (x33 + x7 * (-0.5 * x0 - 0.5 * x36)))
-                        + 0.5
-                            * (x0 * x7 * x7 * x7
-                                * (0.5 * x4 - 0.5 * (x0 * x7 * x22)
-                                    - 0.5 * (x0 * x9 * x10 * x24)))) * m1) * u1 * u1
+            (((0.5 * (x7 * x7)
+                + x19 * (0.5 * (x7 * x7 * x10) - 0.3333333333333333 * (x21 * x9))) * x17
+                - 0.5 * (x3 * x20 * x14)) * m2 * x9 * x10
+                + (((x7 * x7 * x16 - 0.5 * (m2 * x21 * x9 * x10)) * x19
+                    - 0.5 * (m2 * x9 * x9 * x10 * x10)) * x17 - x15 * x20 * x4 * x14)
+                    * x7
+                + x12
+                    * (0.5 * (x0 * x7 * x7 * m1)
+                        - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
+                        + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x21 * x9)) * x17 * x19
+                        - x13 * x20 * x14) * x14) * l * l * u1 * u1
                 + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
-                + (tau + x48 * x0 * l * g) * x7,
+                + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1285,9 +1180,9 @@ pub mod reduced_volterra {
         }
         dstate[0] = x7 * u1;
         dstate[1] = x9 * x10 * u1;
-        dstate[2] = (x8 * G_x + l * u1 * x11) * x14;
+        dstate[2] = (l * x12 * u1 + x8 * G_x) * x14;
         dstate[3] = force[0];
-        dstate[4] = tau * u1 * (x7 - x25);
+        dstate[4] = tau * u1 * x19;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -1369,9 +1264,9 @@ pub mod reduced_volterra {
         let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
         let x6 = -x2 - x5 - 1.0;
-        let x7 = x2 + x5 + 1.0;
-        let x8 = m2 + M + m1;
-        let x9 = x0 * x8 * x1 + m2 + x3 * x8 * x4 + M + m1;
+        let x7 = x2 + x5;
+        let x8 = x2 + x5 + 1.0;
+        let x9 = m2 + M + m1;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1380,7 +1275,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = l * x7;
+        let value = l * x8;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1388,7 +1283,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x9;
+        let value = x0 * x9 * x1 + m2 + x3 * x9 * x4 + M + m1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1399,10 +1294,11 @@ pub mod reduced_volterra {
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
             u1 / x6,
-            (x2 + x5) * u1 / x7,
-            (x7 * G_x
-                + l * u1 * (0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4)))
-                / x9,
+            x7 * u1 / x8,
+            (l
+                * (0.5 * (x4 * m1)
+                    + m2 * (0.75 * x4 - 0.25 * f64::cos(theta1 - 2.0 * theta2))) * u1
+                + x8 * G_x) / (m2 + M + m1 + x9 * x7),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1427,30 +1323,27 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = 1.0 / (-x2 - x5 - 1.0);
-        let x7 = 1.0 / (x2 + x5 + 1.0);
-        let x8 = x2 + x5;
-        let x9 = m2 + 0.5 * m1;
-        let x10 = 0.5 * (x4 * m1) + m2 * (x3 * (-0.5 * x2 - 0.5 * x5) + x4);
-        let x11 = m2 + M + m1;
-        let x12 = 1.0 / (x0 * x11 * x1 + m2 + x3 * x11 * x4 + M + m1);
+        let x0 = f64::cos(theta1);
+        let x1 = 0.5 * (x0 * m1)
+            + m2 * (0.75 * x0 - 0.25 * f64::cos(theta1 - 2.0 * theta2));
+        let x2 = m2 + M + m1;
+        let x3 = f64::cos(theta1 - theta2);
+        let x4 = 1.0 / (m2 + M + m1 + x2 * x3);
+        let x5 = m2 + 0.5 * m1;
+        let x6 = 1.0 / (-x3 - 1.0);
+        let x7 = f64::cos(theta2);
+        let x8 = 1.0 / (x3 + 1.0);
         [
             [
                 l * l
-                    * (x6
-                        * (x6 * (m2 + 0.3333333333333333 * m1)
-                            + 0.5 * (m2 * x7 * x8 * x8) + x9 * x4 * x10 * x12)
-                        + m2 * x7
-                            * (0.5 * (x3 * x10 * x12)
-                                + x8 * (0.3333333333333333 * x7 + 0.5 * x6)) * x8
-                        + (0.5 * (x3 * m2 * x7 * x8) + x9 * x6 * x4 + x11 * x10 * x12)
-                            * x10 * x12),
+                    * (x1 * x4
+                        * (x1 * x2 * x4 + x5 * x6 * x0 + 0.5 * (x7 * m2 * x3 * x8))
+                        + (0.5 * (m2 * x3 * x3 * x8)
+                            + x6 * (m2 + 0.3333333333333333 * m1) + x1 * x5 * x4 * x0)
+                            * x6
+                        + m2
+                            * (x3 * (0.5 * x6 + 0.3333333333333333 * x8)
+                                + 0.5 * (x7 * x1 * x4)) * x3 * x8),
             ],
         ]
     }

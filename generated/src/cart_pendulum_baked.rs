@@ -141,12 +141,14 @@ pub fn energy(
     let theta1_dot = qdot[0];
     let theta2_dot = qdot[1];
     let x_dot = qdot[2];
-    let x0 = f64::cos(theta2);
-    let x1 = f64::cos(theta1);
-    0.16666666666666666 * (theta2_dot * theta2_dot) - 4.905 * x0
-        + x_dot * (2.0 * x_dot + 1.5 * (theta1_dot * x1) + 0.5 * (x0 * theta2_dot))
-        + (0.5 * (f64::cos(theta1 - theta2) * theta2_dot)
-            + 0.6666666666666666 * theta1_dot) * theta1_dot - 14.715 * x1
+    let x0 = f64::sin(theta1) * theta1_dot + 0.5 * (theta2_dot * f64::sin(theta2));
+    let x1 = f64::cos(theta2);
+    let x2 = f64::cos(theta1);
+    let x3 = theta1_dot * x2;
+    let x4 = x_dot + x3 + 0.5 * (x1 * theta2_dot);
+    0.5 * (x0 * x0) - 4.905 * x1 + x_dot * (1.5 * x_dot + 0.5 * x3)
+        + 0.041666666666666664 * (theta2_dot * theta2_dot)
+        + 0.16666666666666666 * (theta1_dot * theta1_dot) + 0.5 * (x4 * x4) - 14.715 * x2
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -475,14 +477,9 @@ pub mod maggi {
         let x8 = x2 + x5;
         let x9 = x7 * (1.5 * x4 - 0.5 * (x3 * x8));
         let x10 = theta1_dot - theta2_dot;
-        let x11 = x4 * x1;
-        let x12 = x3 * x0;
-        let x13 = x11 - x12;
-        let x14 = x7 * x8 - 1.0;
-        let x15 = x12 - x11;
-        let x16 = (x12 - x11 + x7 * x8 * x13) * theta1_dot;
-        let x17 = x14 * x15 * theta2_dot + x16;
-        let x18 = -x15 * theta2_dot - theta1_dot * x13;
+        let x11 = x7 * x8;
+        let x12 = x3 * x0 - x4 * x1;
+        let x13 = 1.0 - x11;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -505,19 +502,16 @@ pub mod maggi {
         ];
         let mut force: [f64; 2] = [
             x7
-                * (1.3333333333333333 * (x10 * x7 * x7 * theta1_dot * x13) - 14.715 * x0
-                    + x10 * x7
-                        * (1.3333333333333333 * (x7 * x15 * theta2_dot)
-                            - 0.5 * (x17 * x8)) - 0.5 * (x15 * theta2_dot * theta2_dot)
-                    - x8
-                        * (0.5 * (x15 * theta1_dot * theta1_dot)
-                            + x10 * (-0.5 * (x7 * x8 * x18) - 0.3333333333333333 * x16)
-                                * x7
-                            + ((0.5 * theta1_dot - 0.3333333333333333 * (x10 * x14 * x7))
-                                * x15 - 0.5 * (x15 * theta1_dot)) * theta2_dot
-                            - 4.905 * x1)),
-            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1)
-                + x10 * x7 * (-0.5 * (x17 * x3) - 1.5 * (x7 * x18 * x4)),
+                * (x12
+                    * (x10 * x10 * x7 * (-1.3333333333333333 * x7 - 0.5 * (x13 * x8))
+                        - 0.5 * (theta2_dot * theta2_dot)) - 14.715 * x0
+                    - ((0.5 * (theta1_dot * theta1_dot)
+                        + x10 * x10 * x7
+                            * (-0.16666666666666666 * x11 - 0.3333333333333333)) * x12
+                        - 4.905 * x1) * x8),
+            1.5 * (x0 * theta1_dot * theta1_dot)
+                + x10 * x10 * x7 * x12 * (-1.5 * (x7 * x4) - 0.5 * (x3 * x13))
+                + 0.5 * (theta2_dot * theta2_dot * x1),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -529,8 +523,8 @@ pub mod maggi {
         dstate[0] = theta1_dot;
         dstate[1] = theta2_dot;
         dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x10 * x7 * x7 * x18;
-        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x17 * x10 * x7;
+        dstate[3] = x7 * force[0] + 0.0 * force[1] + x10 * x10 * x7 * x7 * x12;
+        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x10 * x10 * x13 * x7 * x12;
         dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -635,16 +629,12 @@ pub mod maggi {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
-        let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = 1.0 / (x0 + x3 + 1.0);
-        let x5 = x0 + x3;
-        let x6 = x4 * (1.5 * x2 - 0.5 * (x1 * x5));
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 1.0 / (x0 + 1.0);
+        let x2 = (1.5 * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * x0)) * x1;
         [
-            [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
-            [x6, 4.0],
+            [(1.3333333333333333 - 0.6666666666666666 * (x0 * x0)) * x1 * x1, x2],
+            [x2, 4.0],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -696,26 +686,14 @@ pub mod kane {
         let x5 = x3 * x4;
         let x6 = x2 + x5 + 1.0;
         let x7 = 1.0 / x6;
-        let x8 = x7 * u1;
-        let x9 = x2 + x5;
-        let x10 = x9 * x9;
-        let x11 = x3 * x9;
-        let x12 = x7 * (1.5 * x4 - 0.5 * x11);
-        let x13 = x4 * x1;
-        let x14 = x3 * x0;
-        let x15 = x14 - x13;
-        let x16 = x7 * x4;
-        let x17 = x7 * x9;
-        let x18 = x3 * (0.5 * x17 - 0.5);
-        let x19 = x9 * x1;
-        let x20 = x15 * (x18 - 1.5 * x16) + 0.5 * x19;
-        let x21 = 1.3333333333333333 - 0.5 * x10;
-        let x22 = x13 - x14;
-        let x23 = x7 * x4 * x22;
-        let x24 = x7 * x9 * x22;
-        let x25 = x3 * (0.5 * x14 - 0.5 * x13 + 0.5 * x24);
-        let x26 = x15 * x9;
-        let x27 = x3 * x15;
+        let x8 = x2 + x5;
+        let x9 = 2.0 * theta1 - 2.0 * theta2;
+        let x10 = x7 * (1.5 * x4 - 0.5 * (x3 * x8));
+        let x11 = x4 * x1;
+        let x12 = f64::sin(3.0 * theta1 - 3.0 * theta2);
+        let x13 = x3 * x0;
+        let x14 = f64::sin(x9);
+        let x15 = x13 - x11;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -733,37 +711,20 @@ pub mod kane {
             });
         }
         let mut matrix: [[f64; 2]; 2] = [
-            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * x10), x12],
-            [x12, 4.0],
+            [x7 * x7 * (1.0 - 0.3333333333333333 * f64::cos(x9)), x10],
+            [x10, 4.0],
         ];
         let mut force: [f64; 2] = [
             x7
-                * (x7 * u1
-                    * (x9
-                        * (x20 * u2
-                            + x7 * x15 * u1
-                                * (x9 * (0.5 * x17 - 1.0) - 1.3333333333333333 * x7
-                                    - x7 * x21
-                                    + (0.3333333333333333 * x17 - 0.3333333333333333) * x9))
-                        - 0.5 * (x0 * u2) - (x25 - 1.5 * x0 - 1.5 * x23) * u2
-                        + (x25 - x0 - x23 - (x15 * (x18 - x16) + 0.5 * x19) * x9)
-                            * ((x4 - 0.5 * x11) * x7 * u1 + u2)
-                        + x7
-                            * ((0.5 * x26 - 0.5 * x13 + 0.5 * x14) * (x4 * u2 + 0.5 * x8)
-                                + (0.08333333333333333 * (x7 * (x26 - x13 + x14))
-                                    - 0.08333333333333333
-                                        * (x9 * (x14 - x13 - (x17 - 1.0) * x15 * x9 + x24))
-                                    + (0.5 * x0 + 0.5 * x27)
-                                        * (0.5 * x4
-                                            + x3 * (0.5 * x2 - 0.5 * (x7 * x15 * x22) + 0.5 * x5)
-                                            - (((-0.5 * x0 - 0.5 * x27) * x7 - 0.5 * x1) * x15
-                                                - 0.5 * x11) * x9 - 0.5 * (x0 * x7 * x22))) * u1)
-                        - ((0.3333333333333333 * x14 - 0.3333333333333333 * x13
-                            + 0.3333333333333333 * x24) * x9 - x7 * x21 * x22
-                            - 1.3333333333333333 * (x7 * x22)
-                            + x9 * (x14 - x13 + 0.5 * x24)) * x7 * u1) - 14.715 * x0
-                    + 4.905 * x19),
-            x7 * x7 * u1 * u1 * (1.5 * x0 + 1.5 * x23 + x9 * x20 - x25),
+                * (x7 * x7 * u1 * u1
+                    * (0.16666666666666666 * x11 - 0.16666666666666666 * x12
+                        - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
+                        + (1.1666666666666667 * x11 + 0.16666666666666666 * x12
+                            + 0.08333333333333333 * f64::sin(4.0 * theta1 - 4.0 * theta2)
+                            - 1.1666666666666667 * x13 - 0.5 * x14) * x7) - 14.715 * x0
+                    + 4.905 * (x8 * x1)),
+            ((1.5 * x0 + 0.5 * (x8 * x8 * x1) - 1.5 * (x15 * x4)) * x7
+                - 0.5 * (x3 * (1.0 - x7 * x8) * x15)) * x7 * u1 * u1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -772,8 +733,8 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x8;
-        dstate[1] = -(x7 * x9 * u1);
+        dstate[0] = x7 * u1;
+        dstate[1] = -(x7 * x8 * u1);
         dstate[2] = u2;
         dstate[3] = force[0];
         dstate[4] = force[1];
@@ -881,16 +842,16 @@ pub mod kane {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
-        let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = 1.0 / (x0 + x3 + 1.0);
-        let x5 = x0 + x3;
-        let x6 = x4 * (1.5 * x2 - 0.5 * (x1 * x5));
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 1.0 / (x0 + 1.0);
+        let x2 = (1.5 * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * x0)) * x1;
         [
-            [x4 * x4 * (1.3333333333333333 - 0.6666666666666666 * (x5 * x5)), x6],
-            [x6, 4.0],
+            [
+                (1.0 - 0.3333333333333333 * f64::cos(2.0 * theta1 - 2.0 * theta2)) * x1
+                    * x1,
+                x2,
+            ],
+            [x2, 4.0],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -947,37 +908,16 @@ pub mod reduced_volterra {
         let x10 = x2 + x5;
         let x11 = 4.0 * x2 + 4.0 * x5 + 4.0;
         let x12 = 1.0 / x11;
-        let x13 = x3 * (-0.5 * x2 - 0.5 * x5) + 1.5 * x4;
-        let x14 = x10 * (0.3333333333333333 * x9 + 0.5 * x7) + 0.5 * (x12 * x3 * x13);
-        let x15 = x3 * x9 * x10;
-        let x16 = x7 * x4;
-        let x17 = x12 * x13;
-        let x18 = 0.5 * x15 + 1.5 * x16 + 4.0 * x17;
-        let x19 = 1.3333333333333333 * x7 + 1.5 * (x12 * x4 * x13)
-            + 0.5 * (x9 * x10 * x10);
-        let x20 = x9 * x10 * x1;
-        let x21 = x9 * x10;
-        let x22 = 0.5 - 0.5 * x21;
-        let x23 = x4 * x1;
-        let x24 = x3 * x0;
-        let x25 = x24 - x23;
-        let x26 = x9 * (x3 * x22 * x25 - 0.5 * (x10 * x1));
-        let x27 = x23 - x24;
-        let x28 = x7 * x7 * x4 * x27;
-        let x29 = x12 * (4.0 * x24 - 4.0 * x23) * x13;
-        let x30 = x0 * x1 * x1;
-        let x31 = x3 * (x23 - 0.5 * x24);
-        let x32 = 0.5 * x30 - x29 + x31;
-        let x33 = x12 * x32;
-        let x34 = x12 * (4.0 * x23 - 4.0 * x24) * x13;
-        let x35 = x3 * (0.5 * x24 - 0.5 * x23);
-        let x36 = x35 - 1.5 * x0 - x34;
-        let x37 = x12 * x36;
-        let x38 = x9 * x10 * x27;
-        let x39 = x3 * x9 * (0.5 * x23 - 0.5 * x24 - 0.5 * x38);
-        let x40 = x7 * x25 * x4;
-        let x41 = x0 * x7;
-        let x42 = 1.0 - x21;
+        let x13 = theta1 - 2.0 * theta2;
+        let x14 = 1.25 * x4 - 0.25 * f64::cos(x13);
+        let x15 = x3 * x0 - x4 * x1;
+        let x16 = x9 * x10;
+        let x17 = x7 - x16;
+        let x18 = f64::sin(x13) * (x7 - 2.0 * x16);
+        let x19 = x0 * x7;
+        let x20 = 4.0 * (x12 * x15 * x14 * x17) + 0.25 * x18 - 1.25 * x19;
+        let x21 = x7 * x7;
+        let x22 = x16 - 1.0;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1002,59 +942,34 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let mut matrix: [[f64; 1]; 1] = [[x9 * x10 * x14 + x12 * x18 * x13 + x19 * x7]];
-        let mut force: [f64; 1] = [
-            ((0.5 * x15 + x16 + x17)
-                * ((x26 - x28 + x33) * x9 * x10 + x7 * (x37 + x39 + x7 * (-x0 - x40)))
-                + ((x37 + x7 * (-0.5 * x0 - 0.5 * x40)) * x7
-                    + x9 * (x33 - 0.5 * x28) * x10) * (0.5 * x16 + x17)
-                + (x7
-                    * ((-0.5 * (x9 * x1) - x0 * x7 * x7) * x25 + x16
-                        - 0.5 * (x9 * x9 * x10 * x1 * x27))
+        let mut matrix: [[f64; 1]; 1] = [
+            [
+                x12 * (0.5 * (x3 * x9 * x10) + 4.0 * (x12 * x14) + 1.5 * (x7 * x4)) * x14
+                    + (1.3333333333333333 * x7 + 0.5 * (x9 * x10 * x10)
+                        + 1.5 * (x12 * x4 * x14)) * x7
                     + x9
-                        * (x9 * (x22 * x25 * x1 + 0.5 * (x3 * x10)) - x0 * x7 * x7 * x27)
-                        * x10) * (0.5 * x20 + x41)
-                + 2.0 * (x12 * x12 * x13 * (x36 * x7 + x32 * x9 * x10))
-                + x7
-                    * (x7 * x7
-                        * (0.5
-                            * (x0
-                                * (0.5 * x4 - 0.5 * (x0 * x7 * x25)
-                                    - 0.5 * (x0 * x9 * x10 * x27))) - 0.08333333333333333 * x38
-                            - 0.08333333333333333 * (x7 * x25))
-                        - x12
-                            * ((x12 * (4.0 * x35 - 6.0 * x0 - 4.0 * x34)
-                                + x7 * (-1.5 * x0 - 1.5 * x40) + x39) * x13 + x18 * x36)
-                        - ((x25
-                            * (x7 * (-0.5 * (x7 * x10) - 0.5) - 0.3333333333333333 * x9)
-                            + x12 * x3 * (0.5 * x35 - 0.75 * x0 - 0.5 * x34)
-                            - 0.3333333333333333 * (x9 * x9 * x10 * x27)
-                            - x9 * x14 * x27) * x10 - x25 * x14) * x9
-                        - x7
-                            * (x25 * (-1.3333333333333333 * (x7 * x7) - x21)
-                                - 0.5 * (x9 * x9 * x10 * x10 * x27) - x19 * x7 * x25
-                                + x12
-                                    * ((1.5 * x35 - 2.25 * x0 - 1.5 * x34) * x4
-                                        - 1.5 * (x0 * x13))))
-                + x9 * x10
-                    * (0.08333333333333333
-                        * (x9 * (x42 * x9 * x25 * x10 + (x23 - x24 - x38) * x7))
-                        - x12
-                            * (x18 * x32
-                                + (x26 + x12 * (2.0 * x30 - 4.0 * x29 + 4.0 * x31)
-                                    - 1.5 * x28) * x13)
-                        - ((1.0 - 0.5 * x21) * x9 * x25 * x10 - x19 * x7 * x27
-                            - 1.3333333333333333 * (x7 * x7 * x27)
-                            + x12 * x4 * (0.75 * x30 - 1.5 * x29 + 1.5 * x31)) * x7
-                        - x9
-                            * (x42 * x25 * x14
-                                + ((0.5 * x7
-                                    + x9 * (0.3333333333333333 - 0.3333333333333333 * x21))
-                                    * x25
-                                    + x12
-                                        * (x3 * (0.25 * x30 - 0.5 * x29 + 0.5 * x31)
-                                            - 0.5 * (x13 * x1)) - 0.5 * (x7 * x7 * x10 * x27)) * x10)))
-                * u1 * u1 - 4.905 * x20 - 14.715 * x41,
+                        * (0.5 * (x12 * x3 * x14)
+                            + x10 * (0.3333333333333333 * x9 + 0.5 * x7)) * x10,
+            ],
+        ];
+        let mut force: [f64; 1] = [
+            u1 * u1
+                * (x7
+                    * (x15
+                        * ((1.3333333333333333 * x21 - 0.5 * (x22 * x9 * x10)) * x17
+                            - 0.5 * (x9 * x9 * x10 * x10)) - 1.5 * (x12 * x20 * x4))
+                    + x9 * x10
+                        * (x15
+                            * (((0.5 * x21 - 0.3333333333333333 * (x9 * x9)) * x10
+                                + 0.3333333333333333 * x9) * x17 + 0.5 * x21)
+                            - 0.5 * (x12 * x3 * x20))
+                    + x12
+                        * (x15
+                            * (1.5 * (x7 * x7 * x4) - 0.5 * (x3 * x22 * x9)
+                                - 16.0 * (x12 * x12 * x14)) * x17
+                            - 4.0 * (x12 * (0.25 * x18 - 1.25 * x19))
+                            + 0.5 * (x9 * x9 * x10 * x10 * x1) + 1.5 * (x0 * x7 * x7))
+                        * x14) - 4.905 * (x9 * x10 * x1) - 14.715 * x19,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1065,7 +980,7 @@ pub mod reduced_volterra {
         }
         dstate[0] = x7 * u1;
         dstate[1] = x9 * x10 * u1;
-        dstate[2] = x12 * (u1 * x13 + x8 * G_x);
+        dstate[2] = x12 * (x8 * G_x + u1 * x14);
         dstate[3] = force[0];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -1131,13 +1046,12 @@ pub mod reduced_volterra {
         let u1 = state[3];
         let G_x = g_i[0];
         let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
-        let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = -x0 - x3 - 1.0;
-        let x5 = x0 + x3 + 1.0;
-        let x6 = 4.0 * x0 + 4.0 * x3 + 4.0;
-        let value = x4;
+        let x1 = f64::cos(theta1);
+        let x2 = f64::cos(theta2) * x1;
+        let x3 = -x0 - x2 - 1.0;
+        let x4 = x0 + x2 + 1.0;
+        let x5 = 4.0 * x0 + 4.0 * x2 + 4.0;
+        let value = x3;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1145,7 +1059,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x5;
+        let value = x4;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1153,7 +1067,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x6;
+        let value = x5;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -1163,9 +1077,9 @@ pub mod reduced_volterra {
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
-            u1 / x4,
-            (x0 + x3) * u1 / x5,
-            (u1 * (x1 * (-0.5 * x0 - 0.5 * x3) + 1.5 * x2) + x5 * G_x) / x6,
+            u1 / x3,
+            (x0 + x2) * u1 / x4,
+            (x4 * G_x + u1 * (1.25 * x1 - 0.25 * f64::cos(theta1 - 2.0 * theta2))) / x5,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1186,23 +1100,21 @@ pub mod reduced_volterra {
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
         let theta1 = state[0];
         let theta2 = state[1];
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2);
+        let x0 = f64::cos(theta1 - theta2);
+        let x1 = 1.0 / (4.0 * x0 + 4.0);
         let x2 = f64::cos(theta1);
-        let x3 = x1 * x2;
-        let x4 = 1.0 / (x0 + x3 + 1.0);
-        let x5 = x0 + x3;
-        let x6 = 1.0 / (-x0 - x3 - 1.0);
-        let x7 = 1.0 / (4.0 * x0 + 4.0 * x3 + 4.0);
-        let x8 = x1 * (-0.5 * x0 - 0.5 * x3) + 1.5 * x2;
+        let x3 = 1.25 * x2 - 0.25 * f64::cos(theta1 - 2.0 * theta2);
+        let x4 = f64::cos(theta2);
+        let x5 = 1.0 / (x0 + 1.0);
+        let x6 = 1.0 / (-x0 - 1.0);
         [
             [
-                x4 * x5
-                    * (x5 * (0.3333333333333333 * x4 + 0.5 * x6) + 0.5 * (x7 * x1 * x8))
-                    + x7 * (0.5 * (x1 * x4 * x5) + 1.5 * (x6 * x2) + 4.0 * (x7 * x8))
-                        * x8
-                    + (1.3333333333333333 * x6 + 1.5 * (x7 * x2 * x8)
-                        + 0.5 * (x4 * x5 * x5)) * x6,
+                x1 * (4.0 * (x1 * x3) + 0.5 * (x4 * x0 * x5) + 1.5 * (x6 * x2)) * x3
+                    + x0 * x5
+                        * (0.5 * (x4 * x1 * x3)
+                            + x0 * (0.5 * x6 + 0.3333333333333333 * x5))
+                    + (0.5 * (x0 * x0 * x5) + 1.5 * (x1 * x2 * x3)
+                        + 1.3333333333333333 * x6) * x6,
             ],
         ]
     }

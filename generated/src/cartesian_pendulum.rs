@@ -443,9 +443,9 @@ pub mod maggi {
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
         let x4 = x * y_dot - x_dot * y;
-        let x5 = 8.0 * (x * x_dot * x3 * y) + (8.0 * (x3 * y * y) - 2.0) * y_dot;
-        let x6 = x3 * x4
-            * ((2.0 - 8.0 * (x * x * x3)) * x_dot - 8.0 * (x * x3 * y * y_dot));
+        let x5 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
+        let x6 = x3 * x4 * (2.0 * x_dot - 2.0 * (x5 * x * x3));
+        let x7 = 2.0 * (x5 * x3 * y) - 2.0 * y_dot;
         let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -456,7 +456,7 @@ pub mod maggi {
         }
         let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
         let mut force: [f64; 1] = [
-            x3 * (2.0 * (x * mb * (-g - x6)) - 2.0 * ((w - mb * x3 * x4 * x5) * y)),
+            (2.0 * (x * mb * (-x6 - g)) - 2.0 * ((w - x7 * mb * x3 * x4) * y)) * x3,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -467,7 +467,7 @@ pub mod maggi {
         }
         dstate[0] = x_dot;
         dstate[1] = y_dot;
-        dstate[2] = -(2.0 * x3 * y) * force[0] + x3 * x4 * x5;
+        dstate[2] = -(2.0 * x3 * y) * force[0] + x7 * x3 * x4;
         dstate[3] = 2.0 * x * x3 * force[0] + x6;
         dstate[4] = w * x_dot;
         for (index, value) in dstate.iter().enumerate() {

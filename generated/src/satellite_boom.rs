@@ -372,144 +372,107 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::cos(theta);
-        let x1 = l * l;
-        let x2 = m * (0.25 * x1 + rho * (rho + l));
-        let x3 = Izz - Iyy;
-        let x4 = f64::cos(phi);
-        let x5 = f64::sin(phi);
-        let x6 = Iyz * x5;
-        let x7 = f64::sin(theta);
-        let x8 = Ixy * x5;
-        let x9 = Ixz * x4;
-        let x10 = 2.0 * x8 + 2.0 * x9;
-        let x11 = Iyy - Izz;
-        let x12 = Iyz * x4;
-        let x13 = Ixy * x4;
-        let x14 = x5 * Ixz;
-        let x15 = x13 - x14;
-        let x16 = (Iyz + (x5 * x11 - 2.0 * x12) * x4) * x0 + x7 * x15;
-        let x17 = -x8 - x9;
-        let x18 = x0 * x17 - x7 * Ixx;
-        let x19 = rho + 0.5 * l;
-        let x20 = f64::sin(psi);
-        let x21 = -(x0 * m * x19 * x20);
-        let x22 = f64::cos(psi);
-        let x23 = x22 * x0 * m * x19;
-        let x24 = x14 - x13;
-        let x25 = -(x7 * x22 * m * x19);
-        let x26 = -(x7 * m * x19 * x20);
-        let x27 = -(x0 * m * x19);
-        let x28 = x22 * x0 * m;
-        let x29 = x0 * m * x20;
-        let x30 = -(x7 * m);
-        let x31 = m + mg;
-        let x32 = x7 * theta_dot * x19 * x20;
-        let x33 = rho_dot * x20;
-        let x34 = x22 * psi_dot * x19;
-        let x35 = Y_dot - x32 + x0 * (x33 + x34);
-        let x36 = x0 * rho_dot;
-        let x37 = x7 * theta_dot * x19;
-        let x38 = x22 * (x36 - x37);
-        let x39 = x0 * psi_dot * x19 * x20;
-        let x40 = x38 - x39;
-        let x41 = -Y_dot * x20 - X_dot * x22;
-        let x42 = X_dot * x20;
-        let x43 = 2.0 * rho + l;
-        let x44 = x22 * Y_dot;
-        let x45 = X_dot + x38 - x39;
-        let x46 = -x33 - x34;
-        let x47 = x0 * x46 + x32;
-        let x48 = x3 * x5;
-        let x49 = ((x48 + 2.0 * x12) * x4 - Iyz) * x7 + x0 * x15;
-        let x50 = x8 + x9;
-        let x51 = x7 * x50 - Ixx * x0;
-        let x52 = (2.0 * Iyy - 2.0 * Izz) * x4;
-        let x53 = x42 - x44;
-        let x54 = Iyz * x4 * x4;
-        let x55 = ((x48 + 4.0 * x12) * x5 + x11 * x4 * x4) * x0 + x7 * x17;
-        let x56 = Z_dot * x0;
-        let x57 = x7 * x41;
-        let x58 = x7 * x46 - theta_dot * x0 * x19 * x20;
-        let x59 = Z_dot - theta_dot * x0 * x19 - x7 * rho_dot;
-        let x60 = x7 * (psi_dot * x19 * x20 - x22 * rho_dot)
-            - theta_dot * x22 * x0 * x19;
-        let x61 = theta_dot * x4;
-        let x62 = x0 * psi_dot * x5;
-        let x63 = x61 + x62;
-        let x64 = phi_dot - x7 * psi_dot;
-        let x65 = x0 * psi_dot * x4 - theta_dot * x5;
-        let x66 = x65 * Iyz;
-        let x67 = Iyy * x63;
-        let x68 = Ixy * x64;
-        let x69 = x65 * Izz - Iyz * x63 - Ixz * x64;
-        let x70 = -x61 - x62;
-        let x71 = f64::cos(0.0485 * t);
-        let x72 = f64::sin(0.089 * t);
-        let x73 = -x7 * theta_dot * x22 - x0 * psi_dot * x20;
-        let x74 = x22 * x0 * psi_dot - x7 * theta_dot * x20;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
+        let x5 = Iyz * x3;
+        let x6 = rho + 0.5 * l;
+        let x7 = f64::cos(psi);
+        let x8 = f64::sin(psi);
+        let x9 = Iyz * x2;
+        let x10 = x2 * Ixz - Ixy * x3;
+        let x11 = -x2 * Izz - x5;
+        let x12 = Iyy * x3 + x9;
+        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
+        let x14 = -(x1 * m * x6 * x8);
+        let x15 = x7 * x1 * m * x6;
+        let x16 = -(x0 * x7 * m * x6);
+        let x17 = -(x0 * m * x6 * x8);
+        let x18 = -(x1 * m * x6);
+        let x19 = x7 * x1 * m;
+        let x20 = x1 * m * x8;
+        let x21 = -(x0 * m);
+        let x22 = m + mg;
+        let x23 = x1 * psi_dot * x3 - theta_dot * x2;
+        let x24 = x0 * psi_dot;
+        let x25 = phi_dot - x24;
+        let x26 = theta_dot * x3 + x1 * psi_dot * x2;
+        let x27 = Ixx * x25 - x23 * Ixz - Ixy * x26;
+        let x28 = -phi_dot - x24;
+        let x29 = theta_dot * x28 * x2 + x1 * psi_dot * phi_dot * x3;
+        let x30 = x23 * Izz - Iyz * x26 - Ixz * x25;
+        let x31 = theta_dot * x28 * x3 - x1 * psi_dot * x2 * phi_dot;
+        let x32 = x23 * x27 + Iyy * x29 - x30 * x25 + Ixy * theta_dot * x1 * psi_dot
+            - x31 * Iyz;
+        let x33 = Iyy * x26 - x23 * Iyz - Ixy * x25;
+        let x34 = theta_dot * x1 * psi_dot * Ixz + x33 * x25 - x26 * x27 - Iyz * x29
+            + x31 * Izz;
+        let x35 = theta_dot * Ixx * x1 * psi_dot;
+        let x36 = x30 * x26;
+        let x37 = x31 * Ixz;
+        let x38 = x23 * x33;
+        let x39 = Ixy * x29;
+        let x40 = 2.0 * theta;
+        let x41 = f64::sin(x40);
+        let x42 = f64::cos(x40);
+        let x43 = theta_dot * rho_dot;
+        let x44 = f64::cos(0.0485 * t);
+        let x45 = f64::sin(0.089 * t);
+        let x46 = rho_dot * x8;
+        let x47 = x7 * psi_dot * x6;
+        let x48 = psi_dot * x6 * x8;
+        let x49 = x7 * rho_dot;
         let mut matrix: [[f64; 7]; 7] = [
             [
-                Ixx
-                    + (x0 * (x2 + Iyy + (x3 * x4 - 2.0 * x6) * x4 - Ixx) + x7 * x10)
-                        * x0,
-                x16,
-                x18,
+                x1
+                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
+                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
+                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
+                x13,
+                x4,
                 0.0,
-                x21,
-                x23,
+                x14,
+                x15,
                 0.0,
             ],
-            [x16, x2 + Izz + (x11 * x4 + 2.0 * x6) * x4, x24, 0.0, x25, x26, x27],
-            [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x28, x29, x30],
-            [x21, x25, 0.0, x28, x31, 0.0, 0.0],
-            [x23, x26, 0.0, x29, 0.0, x31, 0.0],
-            [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
+            [
+                x13,
+                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
+                x10,
+                0.0,
+                x16,
+                x17,
+                x18,
+            ],
+            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x19, x20, x21],
+            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
+            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
+            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
         ];
         let mut force: [f64; 7] = [
-            (x35 * x40
-                + (-x41 * psi_dot * x19 - (x0 * psi_dot * x43 - x42 + x44) * rho_dot)
-                    * x0 + x45 * x47) * m
-                - theta_dot
-                    * (x49 * theta_dot + x51 * phi_dot
-                        + psi_dot
-                            * (x10 * x0 * x0
-                                + x7
-                                    * (x0
-                                        * ((x52 + 4.0 * x6) * x4 - 2.0 * Iyy + 2.0 * Ixx
-                                            + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x1))
-                                        + x7 * (-2.0 * x8 - 2.0 * x9))) + x7 * m * x19 * x53)
-                - phi_dot
-                    * ((((x5 * (x52 + 2.0 * x6) - 2.0 * x54) * x0
-                        + (2.0 * x13 - 2.0 * x14) * x7) * psi_dot + x24 * phi_dot) * x0
-                        + theta_dot * x55),
-            m
-                * (x35 * x58 - (theta_dot * x43 - x56 + x57) * rho_dot
-                    + (x37 - x36) * x59 + x45 * x60)
-                + psi_dot
-                    * (0.5 * ((Ixy * x0 + x7 * (x12 - Iyy * x5)) * x63)
-                        + 0.5 * (x51 * x64)
-                        + 0.5 * ((x7 * (x6 - Izz * x4) + x0 * Ixz) * x65)
-                        - 0.5 * (x0 * (Ixx * x64 - x65 * Ixz - Ixy * x63))
-                        + x7
-                            * (-m * x19 * x53 - 0.5 * ((x67 - x66 - x68) * x5)
-                                - 0.5 * (x69 * x4)))
-                - (theta_dot
-                    * (2.0 * x54 + x5 * ((2.0 * Izz - 2.0 * Iyy) * x4 - 2.0 * x6))
-                    + phi_dot * x50 + psi_dot * x55) * phi_dot
-                - theta_dot * (m * x19 * (Z_dot * x7 + x41 * x0) + x49 * psi_dot),
-            0.5 * (x69 * x70) - (theta_dot * x50 + x24 * x0 * psi_dot) * phi_dot
-                - theta_dot * x51 * psi_dot + 0.5 * (x64 * (-x70 * Ixz - x65 * Ixy))
-                + x65 * (0.5 * x67 - x66 - 0.5 * x68 + 0.5 * (x70 * Izz))
-                + 0.5 * ((x65 * Iyy - Iyz * x70) * x63),
-            0.012 * x71 - 0.018 * x72
-                + m
-                    * (x73 * x45 - x0 * psi_dot * (x44 - x42) - theta_dot * x0 * x59
-                        - theta_dot * (x57 - x56) + x35 * x74),
-            (-psi_dot * x47 - x73 * rho_dot - theta_dot * x60) * m,
-            (-theta_dot * x58 - x74 * rho_dot - psi_dot * x40) * m,
-            theta_dot * m * (2.0 * x36 - x37),
+            x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
+                - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
+                    + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
+                    * psi_dot * m,
+            x34 * x2
+                - (rho * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
+                    + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m - x32 * x3,
+            x35 - x36 + x37 + x38 + x39,
+            0.012 * x44
+                - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                    + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
+                        * psi_dot) * m - 0.018 * x45,
+            -(m
+                * ((-2.0 * x46 - x47) * x1 * psi_dot
+                    + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
+                        * theta_dot)),
+            -((x1 * psi_dot * (2.0 * x49 - x48)
+                + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8) * theta_dot)
+                * m),
+            -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -532,7 +495,7 @@ pub mod lagrange {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
-        dstate[14] = rho_dot * (0.012 * x71 - 0.018 * x72);
+        dstate[14] = rho_dot * (0.012 * x44 - 0.018 * x45);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -571,144 +534,107 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::cos(theta);
-        let x1 = l * l;
-        let x2 = m * (0.25 * x1 + rho * (rho + l));
-        let x3 = Izz - Iyy;
-        let x4 = f64::cos(phi);
-        let x5 = f64::sin(phi);
-        let x6 = Iyz * x5;
-        let x7 = f64::sin(theta);
-        let x8 = Ixy * x5;
-        let x9 = Ixz * x4;
-        let x10 = 2.0 * x8 + 2.0 * x9;
-        let x11 = Iyy - Izz;
-        let x12 = Iyz * x4;
-        let x13 = Ixy * x4;
-        let x14 = x5 * Ixz;
-        let x15 = x13 - x14;
-        let x16 = (Iyz + (x5 * x11 - 2.0 * x12) * x4) * x0 + x7 * x15;
-        let x17 = -x8 - x9;
-        let x18 = x0 * x17 - x7 * Ixx;
-        let x19 = rho + 0.5 * l;
-        let x20 = f64::sin(psi);
-        let x21 = -(x0 * m * x19 * x20);
-        let x22 = f64::cos(psi);
-        let x23 = x22 * x0 * m * x19;
-        let x24 = x14 - x13;
-        let x25 = -(x7 * x22 * m * x19);
-        let x26 = -(x7 * m * x19 * x20);
-        let x27 = -(x0 * m * x19);
-        let x28 = x22 * x0 * m;
-        let x29 = x0 * m * x20;
-        let x30 = -(x7 * m);
-        let x31 = m + mg;
-        let x32 = x7 * theta_dot * x19 * x20;
-        let x33 = rho_dot * x20;
-        let x34 = x22 * psi_dot * x19;
-        let x35 = Y_dot - x32 + x0 * (x33 + x34);
-        let x36 = x0 * rho_dot;
-        let x37 = x7 * theta_dot * x19;
-        let x38 = x22 * (x36 - x37);
-        let x39 = x0 * psi_dot * x19 * x20;
-        let x40 = x38 - x39;
-        let x41 = -Y_dot * x20 - X_dot * x22;
-        let x42 = X_dot * x20;
-        let x43 = 2.0 * rho + l;
-        let x44 = x22 * Y_dot;
-        let x45 = X_dot + x38 - x39;
-        let x46 = -x33 - x34;
-        let x47 = x0 * x46 + x32;
-        let x48 = x3 * x5;
-        let x49 = ((x48 + 2.0 * x12) * x4 - Iyz) * x7 + x0 * x15;
-        let x50 = x8 + x9;
-        let x51 = x7 * x50 - Ixx * x0;
-        let x52 = (2.0 * Iyy - 2.0 * Izz) * x4;
-        let x53 = x42 - x44;
-        let x54 = Iyz * x4 * x4;
-        let x55 = ((x48 + 4.0 * x12) * x5 + x11 * x4 * x4) * x0 + x7 * x17;
-        let x56 = Z_dot * x0;
-        let x57 = x7 * x41;
-        let x58 = x7 * x46 - theta_dot * x0 * x19 * x20;
-        let x59 = Z_dot - theta_dot * x0 * x19 - x7 * rho_dot;
-        let x60 = x7 * (psi_dot * x19 * x20 - x22 * rho_dot)
-            - theta_dot * x22 * x0 * x19;
-        let x61 = theta_dot * x4;
-        let x62 = x0 * psi_dot * x5;
-        let x63 = x61 + x62;
-        let x64 = phi_dot - x7 * psi_dot;
-        let x65 = x0 * psi_dot * x4 - theta_dot * x5;
-        let x66 = x65 * Iyz;
-        let x67 = Iyy * x63;
-        let x68 = Ixy * x64;
-        let x69 = x65 * Izz - Iyz * x63 - Ixz * x64;
-        let x70 = -x61 - x62;
-        let x71 = f64::cos(0.0485 * t);
-        let x72 = f64::sin(0.089 * t);
-        let x73 = -x7 * theta_dot * x22 - x0 * psi_dot * x20;
-        let x74 = x22 * x0 * psi_dot - x7 * theta_dot * x20;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
+        let x5 = Iyz * x3;
+        let x6 = rho + 0.5 * l;
+        let x7 = f64::cos(psi);
+        let x8 = f64::sin(psi);
+        let x9 = Iyz * x2;
+        let x10 = x2 * Ixz - Ixy * x3;
+        let x11 = -x2 * Izz - x5;
+        let x12 = Iyy * x3 + x9;
+        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
+        let x14 = -(x1 * m * x6 * x8);
+        let x15 = x7 * x1 * m * x6;
+        let x16 = -(x0 * x7 * m * x6);
+        let x17 = -(x0 * m * x6 * x8);
+        let x18 = -(x1 * m * x6);
+        let x19 = x7 * x1 * m;
+        let x20 = x1 * m * x8;
+        let x21 = -(x0 * m);
+        let x22 = m + mg;
+        let x23 = x1 * psi_dot * x3 - theta_dot * x2;
+        let x24 = x0 * psi_dot;
+        let x25 = phi_dot - x24;
+        let x26 = theta_dot * x3 + x1 * psi_dot * x2;
+        let x27 = Ixx * x25 - x23 * Ixz - Ixy * x26;
+        let x28 = -phi_dot - x24;
+        let x29 = theta_dot * x28 * x2 + x1 * psi_dot * phi_dot * x3;
+        let x30 = x23 * Izz - Iyz * x26 - Ixz * x25;
+        let x31 = theta_dot * x28 * x3 - x1 * psi_dot * x2 * phi_dot;
+        let x32 = x23 * x27 + Iyy * x29 - x30 * x25 + Ixy * theta_dot * x1 * psi_dot
+            - x31 * Iyz;
+        let x33 = Iyy * x26 - x23 * Iyz - Ixy * x25;
+        let x34 = theta_dot * x1 * psi_dot * Ixz + x33 * x25 - x26 * x27 - Iyz * x29
+            + x31 * Izz;
+        let x35 = theta_dot * Ixx * x1 * psi_dot;
+        let x36 = x30 * x26;
+        let x37 = x31 * Ixz;
+        let x38 = x23 * x33;
+        let x39 = Ixy * x29;
+        let x40 = 2.0 * theta;
+        let x41 = f64::sin(x40);
+        let x42 = f64::cos(x40);
+        let x43 = theta_dot * rho_dot;
+        let x44 = f64::cos(0.0485 * t);
+        let x45 = f64::sin(0.089 * t);
+        let x46 = rho_dot * x8;
+        let x47 = x7 * psi_dot * x6;
+        let x48 = psi_dot * x6 * x8;
+        let x49 = x7 * rho_dot;
         let mut matrix: [[f64; 7]; 7] = [
             [
-                Ixx
-                    + (x0 * (x2 + Iyy + (x3 * x4 - 2.0 * x6) * x4 - Ixx) + x7 * x10)
-                        * x0,
-                x16,
-                x18,
+                x1
+                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
+                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
+                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
+                x13,
+                x4,
                 0.0,
-                x21,
-                x23,
+                x14,
+                x15,
                 0.0,
             ],
-            [x16, x2 + Izz + (x11 * x4 + 2.0 * x6) * x4, x24, 0.0, x25, x26, x27],
-            [x18, x24, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x28, x29, x30],
-            [x21, x25, 0.0, x28, x31, 0.0, 0.0],
-            [x23, x26, 0.0, x29, 0.0, x31, 0.0],
-            [0.0, x27, 0.0, x30, 0.0, 0.0, x31],
+            [
+                x13,
+                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
+                x10,
+                0.0,
+                x16,
+                x17,
+                x18,
+            ],
+            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x19, x20, x21],
+            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
+            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
+            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
         ];
         let mut force: [f64; 7] = [
-            (x35 * x40
-                + (-x41 * psi_dot * x19 - (x0 * psi_dot * x43 - x42 + x44) * rho_dot)
-                    * x0 + x45 * x47) * m
-                - theta_dot
-                    * (x49 * theta_dot + x51 * phi_dot
-                        + psi_dot
-                            * (x10 * x0 * x0
-                                + x7
-                                    * (x0
-                                        * ((x52 + 4.0 * x6) * x4 - 2.0 * Iyy + 2.0 * Ixx
-                                            + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x1))
-                                        + x7 * (-2.0 * x8 - 2.0 * x9))) + x7 * m * x19 * x53)
-                - phi_dot
-                    * ((((x5 * (x52 + 2.0 * x6) - 2.0 * x54) * x0
-                        + (2.0 * x13 - 2.0 * x14) * x7) * psi_dot + x24 * phi_dot) * x0
-                        + theta_dot * x55),
-            m
-                * (x35 * x58 - (theta_dot * x43 - x56 + x57) * rho_dot
-                    + (x37 - x36) * x59 + x45 * x60)
-                + psi_dot
-                    * (0.5 * ((Ixy * x0 + x7 * (x12 - Iyy * x5)) * x63)
-                        + 0.5 * (x51 * x64)
-                        + 0.5 * ((x7 * (x6 - Izz * x4) + x0 * Ixz) * x65)
-                        - 0.5 * (x0 * (Ixx * x64 - x65 * Ixz - Ixy * x63))
-                        + x7
-                            * (-m * x19 * x53 - 0.5 * ((x67 - x66 - x68) * x5)
-                                - 0.5 * (x69 * x4)))
-                - (theta_dot
-                    * (2.0 * x54 + x5 * ((2.0 * Izz - 2.0 * Iyy) * x4 - 2.0 * x6))
-                    + phi_dot * x50 + psi_dot * x55) * phi_dot
-                - theta_dot * (m * x19 * (Z_dot * x7 + x41 * x0) + x49 * psi_dot),
-            0.5 * (x69 * x70) - (theta_dot * x50 + x24 * x0 * psi_dot) * phi_dot
-                - theta_dot * x51 * psi_dot + 0.5 * (x64 * (-x70 * Ixz - x65 * Ixy))
-                + x65 * (0.5 * x67 - x66 - 0.5 * x68 + 0.5 * (x70 * Izz))
-                + 0.5 * ((x65 * Iyy - Iyz * x70) * x63),
-            0.012 * x71 - 0.018 * x72
-                + m
-                    * (x73 * x45 - x0 * psi_dot * (x44 - x42) - theta_dot * x0 * x59
-                        - theta_dot * (x57 - x56) + x35 * x74),
-            (-psi_dot * x47 - x73 * rho_dot - theta_dot * x60) * m,
-            (-theta_dot * x58 - x74 * rho_dot - psi_dot * x40) * m,
-            theta_dot * m * (2.0 * x36 - x37),
+            x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
+                - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
+                    + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
+                    * psi_dot * m,
+            x34 * x2
+                - (rho * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
+                    + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m - x32 * x3,
+            x35 - x36 + x37 + x38 + x39,
+            0.012 * x44
+                - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                    + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
+                        * psi_dot) * m - 0.018 * x45,
+            -(m
+                * ((-2.0 * x46 - x47) * x1 * psi_dot
+                    + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
+                        * theta_dot)),
+            -((x1 * psi_dot * (2.0 * x49 - x48)
+                + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8) * theta_dot)
+                * m),
+            -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -731,7 +657,7 @@ pub mod lagrange {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
-        dstate[14] = rho_dot * (0.012 * x71 - 0.018 * x72);
+        dstate[14] = rho_dot * (0.012 * x44 - 0.018 * x45);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -874,50 +800,56 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::cos(theta);
-        let x1 = m * (0.25 * (l * l) + rho * (rho + l));
-        let x2 = f64::cos(phi);
-        let x3 = f64::sin(phi);
-        let x4 = Iyz * x3;
-        let x5 = f64::sin(theta);
-        let x6 = Ixy * x3;
-        let x7 = Ixz * x2;
-        let x8 = Iyy - Izz;
-        let x9 = Ixy * x2;
-        let x10 = x3 * Ixz;
-        let x11 = (Iyz + (x3 * x8 - 2.0 * (Iyz * x2)) * x2) * x0 + x5 * (x9 - x10);
-        let x12 = x0 * (-x6 - x7) - x5 * Ixx;
-        let x13 = rho + 0.5 * l;
-        let x14 = f64::sin(psi);
-        let x15 = -(x0 * m * x13 * x14);
-        let x16 = f64::cos(psi);
-        let x17 = x16 * x0 * m * x13;
-        let x18 = x10 - x9;
-        let x19 = -(x5 * x16 * m * x13);
-        let x20 = -(x5 * m * x13 * x14);
-        let x21 = -(x0 * m * x13);
-        let x22 = x16 * x0 * m;
-        let x23 = x0 * m * x14;
-        let x24 = -(x5 * m);
-        let x25 = m + mg;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
+        let x5 = Iyz * x3;
+        let x6 = rho + 0.5 * l;
+        let x7 = f64::cos(psi);
+        let x8 = f64::sin(psi);
+        let x9 = Iyz * x2;
+        let x10 = x2 * Ixz - Ixy * x3;
+        let x11 = -x2 * Izz - x5;
+        let x12 = Iyy * x3 + x9;
+        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
+        let x14 = -(x1 * m * x6 * x8);
+        let x15 = x7 * x1 * m * x6;
+        let x16 = -(x0 * x7 * m * x6);
+        let x17 = -(x0 * m * x6 * x8);
+        let x18 = -(x1 * m * x6);
+        let x19 = x7 * x1 * m;
+        let x20 = x1 * m * x8;
+        let x21 = -(x0 * m);
+        let x22 = m + mg;
         [
             [
-                Ixx
-                    + (x0 * (x1 + Iyy + ((Izz - Iyy) * x2 - 2.0 * x4) * x2 - Ixx)
-                        + x5 * (2.0 * x6 + 2.0 * x7)) * x0,
-                x11,
-                x12,
+                x1
+                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
+                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
+                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
+                x13,
+                x4,
                 0.0,
+                x14,
                 x15,
-                x17,
                 0.0,
             ],
-            [x11, x1 + Izz + (x8 * x2 + 2.0 * x4) * x2, x18, 0.0, x19, x20, x21],
-            [x12, x18, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x22, x23, x24],
-            [x15, x19, 0.0, x22, x25, 0.0, 0.0],
-            [x17, x20, 0.0, x23, 0.0, x25, 0.0],
-            [0.0, x21, 0.0, x24, 0.0, 0.0, x25],
+            [
+                x13,
+                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
+                x10,
+                0.0,
+                x16,
+                x17,
+                x18,
+            ],
+            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, m, x19, x20, x21],
+            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
+            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
+            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -990,142 +922,85 @@ pub mod maggi {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(phi);
-        let x1 = Ixy * x0;
-        let x2 = f64::sin(phi);
-        let x3 = x2 * Ixz;
-        let x4 = x3 - x1;
-        let x5 = Ixy * x2;
-        let x6 = Ixz * x0;
-        let x7 = -x5 - x6;
-        let x8 = x4 * x0 + x2 * x7;
-        let x9 = x7 * x0 - x4 * x2;
-        let x10 = Iyy - Izz;
-        let x11 = Iyz * x0;
+        let x1 = f64::sin(phi);
+        let x2 = x1 * Ixz - Ixy * x0;
+        let x3 = -Ixy * x1 - Ixz * x0;
+        let x4 = x2 * x0 + x1 * x3;
+        let x5 = x3 * x0 - x2 * x1;
+        let x6 = f64::sin(theta);
+        let x7 = Iyz * x0;
+        let x8 = -x1 * Izz - x7;
+        let x9 = Iyz * x1;
+        let x10 = Iyy * x0 + x9;
+        let x11 = x8 * x0 + x10 * x1;
         let x12 = f64::cos(theta);
-        let x13 = (Iyz + (x2 * x10 - 2.0 * x11) * x0) * x12;
-        let x14 = f64::sin(theta);
-        let x15 = x1 - x3;
-        let x16 = x14 * x15;
-        let x17 = x13 + x16;
-        let x18 = l * l;
-        let x19 = m * (0.25 * x18 + rho * (rho + l));
-        let x20 = Izz - Iyy;
-        let x21 = Iyz * x2;
-        let x22 = 2.0 * x5 + 2.0 * x6;
-        let x23 = (x12 * (x19 + Iyy + (x20 * x0 - 2.0 * x21) * x0 - Ixx) + x14 * x22)
-            * x12;
-        let x24 = x12 * x7 - x14 * Ixx;
-        let x25 = Ixx + x23 + x14 * x24;
-        let x26 = 1.0 / x12;
-        let x27 = x17 * x0 + x14 * x8 + x25 * x26 * x2;
-        let x28 = x19 + Izz + (x10 * x0 + 2.0 * x21) * x0;
-        let x29 = x13 + x14 * x4 + x16;
-        let x30 = x28 * x0 + x26 * x2 * x29;
-        let x31 = x27 * x26 * x0 - x2 * x30;
-        let x32 = f64::sin(psi);
-        let x33 = f64::cos(psi);
-        let x34 = rho + 0.5 * l;
-        let x35 = (-x2 * x32 - x14 * x33 * x0) * m * x34;
-        let x36 = (x33 * x2 - x14 * x0 * x32) * m * x34;
-        let x37 = -(x12 * m * x34 * x0);
-        let x38 = (x14 * x33 * x2 - x0 * x32) * m * x34;
-        let x39 = m * x34 * (x33 * x0 + x14 * x2 * x32);
-        let x40 = x12 * m * x34 * x2;
-        let x41 = x33 * x12 * m;
-        let x42 = x12 * m * x32;
-        let x43 = -(x14 * m);
-        let x44 = m + mg;
-        let x45 = theta_dot * x0;
-        let x46 = x12 * psi_dot * x2;
-        let x47 = x45 + x46;
-        let x48 = phi_dot - x14 * psi_dot;
-        let x49 = x12 * psi_dot * x0 - theta_dot * x2;
-        let x50 = x49 * Izz - Iyz * x47 - Ixz * x48;
-        let x51 = -x45 - x46;
-        let x52 = x5 + x6;
-        let x53 = x14 * x52 - Ixx * x12;
-        let x54 = x14 * x14 * x26 * x26 + 1.0;
-        let x55 = x47 * x0 - x49 * x2;
-        let x56 = theta_dot * (x54 * x2 * x47 + x49 * x54 * x0)
-            + x14 * x26 * phi_dot * x55;
-        let x57 = x2 * x47;
-        let x58 = x49 * x0;
-        let x59 = -x57 - x58;
-        let x60 = phi_dot * x55 + x14 * theta_dot * x26 * (x57 + x58);
-        let x61 = x49 * Iyz;
-        let x62 = Iyy * x47;
-        let x63 = Ixy * x48;
-        let x64 = 0.5 * (x50 * x51) - theta_dot * x53 * psi_dot - x56 * Ixx
-            + (-x59 * x4 - theta_dot * x52 - x4 * x12 * psi_dot) * phi_dot
-            + 0.5 * (x48 * (-x51 * Ixz - x49 * Ixy)) - x26 * x60 * x24
-            + x49 * (0.5 * x62 - x61 - 0.5 * x63 + 0.5 * (x51 * Izz))
-            + 0.5 * ((x49 * Iyy - Iyz * x51) * x47);
-        let x65 = x14 * theta_dot * x34 * x32;
-        let x66 = rho_dot * x32;
-        let x67 = x33 * psi_dot * x34;
-        let x68 = Y_dot - x65 + x12 * (x66 + x67);
-        let x69 = x12 * rho_dot;
-        let x70 = x14 * theta_dot * x34;
-        let x71 = x33 * (x69 - x70);
-        let x72 = x12 * psi_dot * x34 * x32;
-        let x73 = x71 - x72;
-        let x74 = -Y_dot * x32 - X_dot * x33;
-        let x75 = X_dot * x32;
-        let x76 = 2.0 * rho + l;
-        let x77 = x33 * Y_dot;
-        let x78 = X_dot + x71 - x72;
-        let x79 = -x66 - x67;
-        let x80 = x12 * x79 + x65;
-        let x81 = x20 * x2;
-        let x82 = ((x81 + 2.0 * x11) * x0 - Iyz) * x14 + x12 * x15;
-        let x83 = (2.0 * Iyy - 2.0 * Izz) * x0;
-        let x84 = x75 - x77;
-        let x85 = Iyz * x0 * x0;
-        let x86 = ((x81 + 4.0 * x11) * x2 + x10 * x0 * x0) * x12 + x14 * x7;
-        let x87 = x64 * x14
-            + (x68 * x73
-                + (-x74 * psi_dot * x34 - (x12 * psi_dot * x76 - x75 + x77) * rho_dot)
-                    * x12 + x78 * x80) * m - (Ixx + x23) * x26 * x60
-            - theta_dot
-                * (x82 * theta_dot + x53 * phi_dot
-                    + psi_dot
-                        * (x22 * x12 * x12
-                            + x14
-                                * (x12
-                                    * ((x83 + 4.0 * x21) * x0 - 2.0 * Iyy + 2.0 * Ixx
-                                        + m * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x18))
-                                    + x14 * (-2.0 * x5 - 2.0 * x6))) + x14 * m * x34 * x84)
-            - x56 * x24
-            + (-x59 * x17
-                - (((x2 * (x83 + 2.0 * x21) - 2.0 * x85) * x12
-                    + (2.0 * x1 - 2.0 * x3) * x14) * psi_dot + x4 * phi_dot) * x12
-                - theta_dot * x86) * phi_dot;
-        let x88 = Z_dot * x12;
-        let x89 = x14 * x74;
-        let x90 = x14 * x79 - theta_dot * x12 * x34 * x32;
-        let x91 = Z_dot - theta_dot * x12 * x34 - x14 * rho_dot;
-        let x92 = x14 * (psi_dot * x34 * x32 - x33 * rho_dot)
-            - theta_dot * x33 * x12 * x34;
-        let x93 = m
-            * (x68 * x90 - (theta_dot * x76 - x88 + x89) * rho_dot + (x70 - x69) * x91
-                + x78 * x92) - x56 * x4
-            + psi_dot
-                * (0.5 * ((Ixy * x12 + x14 * (x11 - Iyy * x2)) * x47) + 0.5 * (x53 * x48)
-                    + 0.5 * ((x14 * (x21 - Izz * x0) + x12 * Ixz) * x49)
-                    - 0.5 * (x12 * (Ixx * x48 - x49 * Ixz - Ixy * x47))
-                    + x14
-                        * (-m * x34 * x84 - 0.5 * ((x62 - x61 - x63) * x2)
-                            - 0.5 * (x50 * x0)))
-            - theta_dot * (m * x34 * (Z_dot * x14 + x74 * x12) + x82 * psi_dot)
-            - x26 * x60 * x17
-            + (-x59 * x28
-                - theta_dot
-                    * (2.0 * x85 + x2 * ((2.0 * Izz - 2.0 * Iyy) * x0 - 2.0 * x21))
-                - phi_dot * x52 - psi_dot * x86) * phi_dot;
-        let x94 = f64::cos(0.0485 * t);
-        let x95 = f64::sin(0.089 * t);
-        let x96 = -x14 * theta_dot * x33 - x12 * psi_dot * x32;
-        let x97 = x33 * x12 * psi_dot - x14 * theta_dot * x32;
+        let x13 = x11 * x12 - x6 * x2;
+        let x14 = rho + 0.5 * l;
+        let x15 = f64::cos(psi);
+        let x16 = f64::sin(psi);
+        let x17 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1
+            + x12 * m * x14 * x14 * (x15 * x15 + x16 * x16)
+            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
+        let x18 = x6 * x4 + x0 * x13 + x1 * x17;
+        let x19 = 1.0 / x12;
+        let x20 = m * (0.25 * (l * l) + rho * (rho + l)) - x1 * x8 + x10 * x0;
+        let x21 = x11 * x1 + x20 * x0;
+        let x22 = x18 * x19 * x0 - x1 * x21;
+        let x23 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
+        let x24 = (x15 * x1 - x6 * x0 * x16) * m * x14;
+        let x25 = -(x12 * m * x14 * x0);
+        let x26 = (x6 * x15 * x1 - x0 * x16) * m * x14;
+        let x27 = m * x14 * (x15 * x0 + x6 * x1 * x16);
+        let x28 = x12 * m * x14 * x1;
+        let x29 = x15 * x12 * m;
+        let x30 = x12 * m * x16;
+        let x31 = -(x6 * m);
+        let x32 = m + mg;
+        let x33 = theta_dot * x0 + x12 * psi_dot * x1;
+        let x34 = x6 * psi_dot;
+        let x35 = phi_dot - x34;
+        let x36 = x12 * psi_dot * x0 - theta_dot * x1;
+        let x37 = x36 * Izz - Iyz * x33 - Ixz * x35;
+        let x38 = x37 * x33;
+        let x39 = -phi_dot - x34;
+        let x40 = theta_dot * x39 * x0 - x12 * psi_dot * x1 * phi_dot;
+        let x41 = x40 * Ixz;
+        let x42 = Iyy * x33 - x36 * Iyz - Ixy * x35;
+        let x43 = x36 * x42;
+        let x44 = theta_dot * x39 * x1 + x12 * psi_dot * phi_dot * x0;
+        let x45 = Ixy * x44;
+        let x46 = 2.0 * theta;
+        let x47 = f64::sin(x46);
+        let x48 = 0.5 * (x19 * psi_dot * x47) + phi_dot;
+        let x49 = x12 * x3 - x6 * Ixx;
+        let x50 = (0.25 - 0.25 * (x19 * f64::cos(3.0 * theta))) * psi_dot + x6 * phi_dot;
+        let x51 = x41 - x38 + x43 + x45
+            + (-x48 * x19 * x49 - x50 * Ixx * x19) * theta_dot
+            + x2 * x12 * psi_dot * phi_dot;
+        let x52 = x50 * x19 + x12 * psi_dot;
+        let x53 = Ixx * x35 - x36 * Ixz - Ixy * x33;
+        let x54 = x36 * x53 + Iyy * x44 - x37 * x35 + Ixy * theta_dot * x12 * psi_dot
+            - x40 * Iyz;
+        let x55 = theta_dot * x12 * psi_dot * Ixz + x42 * x35 - x33 * x53 - Iyz * x44
+            + x40 * Izz;
+        let x56 = f64::cos(x46);
+        let x57 = theta_dot * (-x52 * x49 - x48 * x19 * (x12 * x17 - x6 * x49))
+            + x12 * (psi_dot * phi_dot * x13 - x1 * x54 - x55 * x0)
+            + (x38 - theta_dot * Ixx * x12 * psi_dot - x41 - x43 - x45) * x6 + x6 * x51
+            - (l * ((0.5 * x56 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x47))
+                + rho * ((-rho - l) * theta_dot * x47 + rho_dot * (x56 + 1.0))) * psi_dot
+                * m;
+        let x58 = theta_dot * rho_dot;
+        let x59 = theta_dot * (-x48 * x19 * x13 - x2 * x52)
+            - (rho * (2.0 * x58 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x47)
+                + (x58 + 0.125 * (l * psi_dot * psi_dot * x47)) * l) * m
+            + x12 * psi_dot * phi_dot * x20 - x54 * x0 + x55 * x1;
+        let x60 = f64::cos(0.0485 * t);
+        let x61 = f64::sin(0.089 * t);
+        let x62 = rho_dot * x16;
+        let x63 = x15 * psi_dot * x14;
+        let x64 = psi_dot * x14 * x16;
+        let x65 = x15 * rho_dot;
         let value = x12;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1135,37 +1010,41 @@ pub mod maggi {
             });
         }
         let mut matrix: [[f64; 7]; 7] = [
-            [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
-            [x8, x27 * x26 * x2 + x30 * x0, x31, 0.0, x35, x36, x37],
+            [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
+            [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
             [
-                x9,
-                x31,
-                x26 * (x25 * x26 * x0 + x9 * x14 - x2 * x17) * x0
-                    - (x26 * x29 * x0 - x2 * x28) * x2,
+                x5,
+                x22,
+                x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0 - (x11 * x0 - x1 * x20) * x1,
                 0.0,
-                x38,
-                x39,
-                x40,
+                x26,
+                x27,
+                x28,
             ],
-            [0.0, 0.0, 0.0, m, x41, x42, x43],
-            [0.0, x35, x38, x41, x44, 0.0, 0.0],
-            [0.0, x36, x39, x42, 0.0, x44, 0.0],
-            [0.0, x37, x40, x43, 0.0, 0.0, x44],
+            [0.0, 0.0, 0.0, m, x29, x30, x31],
+            [0.0, x23, x26, x29, x32, 0.0, 0.0],
+            [0.0, x24, x27, x30, 0.0, x32, 0.0],
+            [0.0, x25, x28, x31, 0.0, 0.0, x32],
         ];
         let mut force: [f64; 7] = [
-            x64,
-            x26 * x87 * x2 + x93 * x0,
-            x26 * x87 * x0 - x93 * x2,
-            0.012 * x94 - 0.018 * x95
-                + m
-                    * (x96 * x78 - x12 * psi_dot * (x77 - x75) - theta_dot * x12 * x91
-                        - theta_dot * (x89 - x88) + x68 * x97),
+            x51,
+            x57 * x19 * x1 + x0 * x59,
+            x57 * x19 * x0 - x1 * x59,
+            0.012 * x60
+                - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                    + (l * (-0.25 * x56 - 0.25) + rho * (-0.5 * x56 - 0.5)) * psi_dot
+                        * psi_dot) * m - 0.018 * x61,
+            ((theta_dot * x48 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
+                - (-2.0 * x62 - x63) * x12 * psi_dot
+                - (x6 * (2.0 * x64 - 2.0 * x65) - theta_dot * x15 * x12 * x14)
+                    * theta_dot) * m,
+            ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x48 * x15) * x14
+                - x12 * psi_dot * (2.0 * x65 - x64)
+                - (x6 * (-2.0 * x62 - 2.0 * x63) - theta_dot * x12 * x14 * x16)
+                    * theta_dot) * m,
             m
-                * ((x59 * x14 * x33 * phi_dot + x60 * x32) * x34 - psi_dot * x80
-                    - x96 * rho_dot - theta_dot * x92),
-            ((x59 * x14 * phi_dot * x32 - x60 * x33) * x34 - theta_dot * x90
-                - x97 * rho_dot - psi_dot * x73) * m,
-            m * (theta_dot * (2.0 * x69 - x70) + x59 * x12 * x34 * phi_dot),
+                * (-x12 * x12 * psi_dot * x14 * phi_dot
+                    - theta_dot * (x6 * theta_dot * x14 - 2.0 * (x12 * rho_dot))),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1181,14 +1060,15 @@ pub mod maggi {
         dstate[4] = X_dot;
         dstate[5] = Y_dot;
         dstate[6] = Z_dot;
-        dstate[7] = 0.0 * force[0] + x26 * x2 * force[1] + x26 * x0 * force[2]
+        dstate[7] = 0.0 * force[0] + x19 * x1 * force[1] + x19 * x0 * force[2]
             + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + x26 * x60;
-        dstate[8] = 0.0 * force[0] + x0 * force[1] + -x2 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + x59 * phi_dot;
-        dstate[9] = 1.0 * force[0] + x14 * x26 * x2 * force[1]
-            + x14 * x26 * x0 * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + x56;
+            + theta_dot * x48 * x19;
+        dstate[8] = 0.0 * force[0] + x0 * force[1] + -x1 * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
+            + -(x12 * psi_dot * phi_dot);
+        dstate[9] = 1.0 * force[0] + x6 * x19 * x1 * force[1] + x6 * x19 * x0 * force[2]
+            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
+            + theta_dot * x52;
         dstate[10] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
         dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
@@ -1197,7 +1077,7 @@ pub mod maggi {
             + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0;
         dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0;
-        dstate[14] = rho_dot * (0.012 * x94 - 0.018 * x95);
+        dstate[14] = rho_dot * (0.012 * x60 - 0.018 * x61);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -1350,62 +1230,56 @@ pub mod maggi {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(phi);
-        let x1 = Ixy * x0;
-        let x2 = f64::sin(phi);
-        let x3 = x2 * Ixz;
-        let x4 = x3 - x1;
-        let x5 = Ixy * x2;
-        let x6 = Ixz * x0;
-        let x7 = -x5 - x6;
-        let x8 = x4 * x0 + x2 * x7;
-        let x9 = x7 * x0 - x4 * x2;
-        let x10 = Iyy - Izz;
-        let x11 = f64::cos(theta);
-        let x12 = (Iyz + (x2 * x10 - 2.0 * (Iyz * x0)) * x0) * x11;
-        let x13 = f64::sin(theta);
-        let x14 = x13 * (x1 - x3);
-        let x15 = x12 + x14;
-        let x16 = m * (0.25 * (l * l) + rho * (rho + l));
-        let x17 = Iyz * x2;
-        let x18 = Ixx
-            + (x11 * (x16 + Iyy + ((Izz - Iyy) * x0 - 2.0 * x17) * x0 - Ixx)
-                + x13 * (2.0 * x5 + 2.0 * x6)) * x11 + x13 * (x11 * x7 - x13 * Ixx);
-        let x19 = 1.0 / x11;
-        let x20 = x15 * x0 + x13 * x8 + x18 * x19 * x2;
-        let x21 = x16 + Izz + (x10 * x0 + 2.0 * x17) * x0;
-        let x22 = x12 + x13 * x4 + x14;
-        let x23 = x21 * x0 + x19 * x2 * x22;
-        let x24 = x20 * x19 * x0 - x2 * x23;
-        let x25 = f64::sin(psi);
-        let x26 = f64::cos(psi);
-        let x27 = rho + 0.5 * l;
-        let x28 = (-x2 * x25 - x13 * x26 * x0) * m * x27;
-        let x29 = (x26 * x2 - x13 * x0 * x25) * m * x27;
-        let x30 = -(x11 * m * x27 * x0);
-        let x31 = (x13 * x26 * x2 - x0 * x25) * m * x27;
-        let x32 = m * x27 * (x26 * x0 + x13 * x2 * x25);
-        let x33 = x11 * m * x27 * x2;
-        let x34 = x26 * x11 * m;
-        let x35 = x11 * m * x25;
-        let x36 = -(x13 * m);
-        let x37 = m + mg;
+        let x1 = f64::sin(phi);
+        let x2 = x1 * Ixz - Ixy * x0;
+        let x3 = -Ixy * x1 - Ixz * x0;
+        let x4 = x2 * x0 + x1 * x3;
+        let x5 = x3 * x0 - x2 * x1;
+        let x6 = f64::sin(theta);
+        let x7 = Iyz * x0;
+        let x8 = -x1 * Izz - x7;
+        let x9 = Iyz * x1;
+        let x10 = Iyy * x0 + x9;
+        let x11 = x8 * x0 + x10 * x1;
+        let x12 = f64::cos(theta);
+        let x13 = x11 * x12 - x6 * x2;
+        let x14 = rho + 0.5 * l;
+        let x15 = f64::cos(psi);
+        let x16 = f64::sin(psi);
+        let x17 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1
+            + x12 * m * x14 * x14 * (x15 * x15 + x16 * x16)
+            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
+        let x18 = x6 * x4 + x0 * x13 + x1 * x17;
+        let x19 = 1.0 / x12;
+        let x20 = m * (0.25 * (l * l) + rho * (rho + l)) - x1 * x8 + x10 * x0;
+        let x21 = x11 * x1 + x20 * x0;
+        let x22 = x18 * x19 * x0 - x1 * x21;
+        let x23 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
+        let x24 = (x15 * x1 - x6 * x0 * x16) * m * x14;
+        let x25 = -(x12 * m * x14 * x0);
+        let x26 = (x6 * x15 * x1 - x0 * x16) * m * x14;
+        let x27 = m * x14 * (x15 * x0 + x6 * x1 * x16);
+        let x28 = x12 * m * x14 * x1;
+        let x29 = x15 * x12 * m;
+        let x30 = x12 * m * x16;
+        let x31 = -(x6 * m);
+        let x32 = m + mg;
         [
-            [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
-            [x8, x20 * x19 * x2 + x23 * x0, x24, 0.0, x28, x29, x30],
+            [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
+            [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
             [
-                x9,
-                x24,
-                x19 * (x18 * x19 * x0 + x9 * x13 - x2 * x15) * x0
-                    - (x19 * x22 * x0 - x2 * x21) * x2,
+                x5,
+                x22,
+                x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0 - (x11 * x0 - x1 * x20) * x1,
                 0.0,
-                x31,
-                x32,
-                x33,
+                x26,
+                x27,
+                x28,
             ],
-            [0.0, 0.0, 0.0, m, x34, x35, x36],
-            [0.0, x28, x31, x34, x37, 0.0, 0.0],
-            [0.0, x29, x32, x35, 0.0, x37, 0.0],
-            [0.0, x30, x33, x36, 0.0, 0.0, x37],
+            [0.0, 0.0, 0.0, m, x29, x30, x31],
+            [0.0, x23, x26, x29, x32, 0.0, 0.0],
+            [0.0, x24, x27, x30, 0.0, x32, 0.0],
+            [0.0, x25, x28, x31, 0.0, 0.0, x32],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1481,80 +1355,58 @@ pub mod kane {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
-        let x5 = u3 * x2;
-        let x6 = u2 * x3;
-        let x7 = x6 - x5;
+        let x3 = x2 * u2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
         let x8 = f64::sin(theta);
-        let x9 = x8 * x1 * x4 + u1;
+        let x9 = x8 * x1 * x6 + u1;
         let x10 = -Ixy;
         let x11 = -Ixz;
         let x12 = m * (0.25 * (l * l) + rho * (rho + l));
         let x13 = -Iyz;
         let x14 = f64::sin(psi);
-        let x15 = x2 * x14;
-        let x16 = f64::cos(psi);
-        let x17 = x8 * x16 * x3;
-        let x18 = -x15 - x17;
-        let x19 = rho + 0.5 * l;
-        let x20 = x18 * m * x19;
-        let x21 = x16 * x2;
-        let x22 = x8 * x3 * x14;
-        let x23 = x21 - x22;
-        let x24 = x23 * m * x19;
-        let x25 = -(x0 * m * x19 * x3);
-        let x26 = x3 * x14;
-        let x27 = x8 * x16 * x2;
-        let x28 = x27 - x26;
-        let x29 = x28 * m * x19;
-        let x30 = x16 * x3;
-        let x31 = x8 * x2 * x14;
-        let x32 = x30 + x31;
-        let x33 = m * x19 * x32;
-        let x34 = x0 * m * x19 * x2;
-        let x35 = x16 * x0 * m;
-        let x36 = x0 * m * x14;
-        let x37 = -(x8 * m);
-        let x38 = m + mg;
-        let x39 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x40 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x41 = -rho - 0.5 * l;
-        let x42 = u5 * x16;
-        let x43 = u6 * x14;
-        let x44 = x42 + x43;
-        let x45 = u7 * x0;
-        let x46 = x8 * x44 + x45;
-        let x47 = u5 * x14;
-        let x48 = u6 * x16;
-        let x49 = x41 * u2 + x46 * x3 + (x47 - x48) * x2;
-        let x50 = x48 - x47;
-        let x51 = x46 * x2 + u3 * x19 + x50 * x3;
-        let x52 = x44 * x0;
-        let x53 = u7 * x8;
-        let x54 = x52 + u4 - x53;
-        let x55 = x22 - x21;
-        let x56 = -x42 - x43;
-        let x57 = u7 * x0 * x2;
-        let x58 = u5 * x28;
-        let x59 = u6 * x32;
-        let x60 = u7 * x0 * x3;
-        let x61 = 2.0 * rho + l;
-        let x62 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x63 = x15 + x17;
-        let x64 = -x30 - x31;
-        let x65 = f64::cos(0.0485 * t);
-        let x66 = f64::sin(0.089 * t);
-        let x67 = x55 * u2;
-        let x68 = x3 * x7;
-        let x69 = x68 - u2;
-        let x70 = x28 * u3;
-        let x71 = x5 - x6;
-        let x72 = x71 * x0 * x19 - x8 * u4;
-        let x73 = x2 * x7;
-        let x74 = x73 + u3;
-        let x75 = x18 * u2 + x70;
-        let x76 = u3 * x32;
+        let x15 = f64::cos(psi);
+        let x16 = -x2 * x14 - x8 * x15 * x4;
+        let x17 = rho + 0.5 * l;
+        let x18 = x16 * m * x17;
+        let x19 = x15 * x2 - x8 * x4 * x14;
+        let x20 = x19 * m * x17;
+        let x21 = -(x0 * m * x17 * x4);
+        let x22 = x8 * x15 * x2 - x4 * x14;
+        let x23 = x22 * m * x17;
+        let x24 = x15 * x4 + x8 * x2 * x14;
+        let x25 = m * x17 * x24;
+        let x26 = x0 * m * x17 * x2;
+        let x27 = x15 * x0 * m;
+        let x28 = x0 * m * x14;
+        let x29 = -(x8 * m);
+        let x30 = m + mg;
+        let x31 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x32 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x33 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x34 = -x3 - x5;
+        let x35 = -x9 * x8 * x34 - x0 * x7 * x7 - x1 * x6 * x6;
+        let x36 = x8 * x1 * x6 * x7;
+        let x37 = x9 * x7;
+        let x38 = u4 * (-2.0 * (x8 * x15 * x7) - 2.0 * (x6 * x14))
+            + (x15 * x35 + (x36 - x37) * x14) * x17;
+        let x39 = x8 * x17 * x7 * x7 + x0 * (-2.0 * (u4 * x7) - x9 * x17 * x34);
+        let x40 = u4 * (2.0 * (x15 * x6) - 2.0 * (x8 * x7 * x14))
+            + x17 * (x35 * x14 + (x37 - x36) * x15);
+        let x41 = f64::cos(0.0485 * t);
+        let x42 = f64::sin(0.089 * t);
+        let x43 = 2.0 * theta + 2.0 * phi;
+        let x44 = f64::cos(x43);
+        let x45 = 2.0 * phi;
+        let x46 = f64::cos(x45);
+        let x47 = f64::cos(2.0 * theta);
+        let x48 = 2.0 * theta - 2.0 * phi;
+        let x49 = f64::cos(x48);
+        let x50 = f64::sin(x48);
+        let x51 = f64::sin(x45);
+        let x52 = f64::sin(x43);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1565,47 +1417,42 @@ pub mod kane {
         }
         let mut matrix: [[f64; 7]; 7] = [
             [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
-            [x10, x12 + Iyy, x13, 0.0, x20, x24, x25],
-            [x11, x13, x12 + Izz, 0.0, x29, x33, x34],
-            [0.0, 0.0, 0.0, m, x35, x36, x37],
-            [0.0, x20, x29, x35, x38, 0.0, 0.0],
-            [0.0, x24, x33, x36, 0.0, x38, 0.0],
-            [0.0, x25, x34, x37, 0.0, 0.0, x38],
+            [x10, x12 + Iyy, x13, 0.0, x18, x20, x21],
+            [x11, x13, x12 + Izz, 0.0, x23, x25, x26],
+            [0.0, 0.0, 0.0, m, x27, x28, x29],
+            [0.0, x18, x23, x27, x30, 0.0, 0.0],
+            [0.0, x20, x25, x28, 0.0, x30, 0.0],
+            [0.0, x21, x26, x29, 0.0, 0.0, x30],
         ];
         let mut force: [f64; 7] = [
-            u3 * x40 - x39 * u2,
-            x39 * u1
-                + m
-                    * (x41 * (x54 * u2 - x51 * u1) - u4 * x49
-                        + x19
-                            * (-x1 * (u5 * x55 + u6 * x18) * x4
-                                - (x0 * x56 + x53) * x3 * x7 - x9 * (x57 + x58 + x59))
-                        - (u5 * x18 - x60 + x23 * u6 + x61 * u2) * u4) - u3 * x62,
-            m
-                * (x51 * u4
-                    + (-x9 * (x60 + u6 * x55 + u5 * x63)
-                        - x1 * x4 * (u5 * x64 + u6 * x28) - x2 * (x52 - x53) * x7) * x19
-                    - (x57 + u3 * x61 + x58 + x59) * u4 + (u1 * x49 - u3 * x54) * x19)
-                - u1 * x40 + x62 * u2,
-            (x51 * u3 - x49 * u2 - x50 * x4 - (x8 * x56 - x45) * x7) * m + 0.012 * x65
-                - 0.018 * x66,
-            m
-                * ((x23 * x1 * x4 + x28 * u1 + x9 * (x26 - x27) + x69 * x16 * x0) * x49
-                    - x1 * ((u3 * x64 + x67) * x19 - u4 * x0 * x14) * x4
-                    + (x63 * u2 - x8 * x16 * x7 - x4 * x14 - x70) * x54
-                    - x9 * (u3 * x63 + x28 * u2) * x19 - x16 * x72 * x7
-                    + x51 * (x74 * x16 * x0 + x8 * x1 * x63 * x4 + x1 * x64 * x4)
-                    - u4 * x75),
-            m
-                * ((x16 * x4 - x8 * x7 * x14 + x67 - x76) * x54 - x72 * x7 * x14
-                    - x1 * (u4 * x16 * x0 + x19 * x75) * x4
-                    + x51 * (x74 * x0 * x14 + x8 * x1 * x55 * x4 + x28 * x1 * x4)
-                    - u4 * (x23 * u2 + x76)
-                    + x49 * (x69 * x0 * x14 + x9 * x64 + x1 * x63 * x4 + u1 * x32)
-                    - (u3 * x55 + x32 * u2) * x9 * x19),
-            (x51 * (x8 * x4 * x3 + x8 * (-x73 - u3)) - (x8 * x19 * x7 - u4 * x0) * x7
-                + x49 * (x8 * (u2 - x68) - x8 * x1 * x0 * x2 * x4)
-                + (-x71 * u4 - x9 * x19 * x4) * x0) * m,
+            u3 * x32 - x31 * u2,
+            x31 * u1 - u3 * x33 - m * (x38 * x16 - x39 * x0 * x4 + x19 * x40) * x17,
+            x33 * u2 - u1 * x32 - (x39 * x0 * x2 + x40 * x24 + x22 * x38) * m * x17,
+            0.012 * x41 - 0.018 * x42
+                - (x1 * x1
+                    * ((u3
+                        * (l
+                            * (-0.0625 * x44 - 0.125 * x46 - 0.125 * x47 - 0.0625 * x49
+                                - 0.125)
+                            + rho
+                                * (-0.125 * x44 - 0.25 * x46 - 0.25 * x47 - 0.125 * x49
+                                    - 0.25))
+                        + (l * (0.125 * x50 - 0.25 * x51 - 0.125 * x52)
+                            + (0.25 * x50 - 0.5 * x51 - 0.25 * x52) * rho) * u2) * u3
+                        + (rho
+                            * (0.125 * x44 + 0.25 * x46 - 0.25 * x47 + 0.125 * x49
+                                - 0.25)
+                            + l
+                                * (0.0625 * x44 + 0.125 * x46 - 0.125 * x47 + 0.0625 * x49
+                                    - 0.125)) * u2 * u2)
+                    + u3
+                        * (u3 * (rho * (0.5 * x46 - 0.5) + l * (0.25 * x46 - 0.25))
+                            + x17 * x51 * u2)
+                    + (rho * (-0.5 * x46 - 0.5) + (-0.25 * x46 - 0.25) * l) * u2 * u2)
+                    * m,
+            -(x38 * m),
+            -(x40 * m),
+            -(x39 * m),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1614,7 +1461,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x4;
+        dstate[0] = x1 * x6;
         dstate[1] = x7;
         dstate[2] = x9;
         dstate[3] = u4;
@@ -1628,7 +1475,7 @@ pub mod kane {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
-        dstate[14] = u4 * (0.012 * x65 - 0.018 * x66);
+        dstate[14] = u4 * (0.012 * x41 - 0.018 * x42);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -1900,24 +1747,35 @@ pub mod reduced_volterra {
         let x10 = f64::sin(psi);
         let x11 = -Ixy;
         let x12 = -Ixz;
-        let x13 = m * x6;
-        let x14 = 1.0 - x13;
-        let x15 = l * x14;
-        let x16 = rho * x14;
-        let x17 = ((x15 + x16) * rho + l * l * (0.25 - 0.25 * x13)) * m;
+        let x13 = l * l;
+        let x14 = 0.25 * x13 + rho * (rho + l);
+        let x15 = m * x6 * x6 * mg * x14;
+        let x16 = m * x6;
+        let x17 = (0.5 * x16 - 0.5) * l + (x16 - 1.0) * rho;
         let x18 = -Iyz;
-        let x19 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x20 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x21 = Ixy * u2;
-        let x22 = l * (0.5 - 0.5 * x13) + x16;
-        let x23 = (0.5 * x13 - 0.5) * l + (x13 - 1.0) * rho;
-        let x24 = x22 * x23;
-        let x25 = x8 * m * x9 * x6 * x6 * mg;
-        let x26 = Ixx * u1;
-        let x27 = u3 * Ixz;
-        let x28 = x15 + rho * (2.0 - 2.0 * x13);
-        let x29 = f64::cos(0.0485 * t);
-        let x30 = f64::sin(0.089 * t);
+        let x19 = 1.0 - x16;
+        let x20 = l * (0.5 - 0.5 * x16) + rho * x19;
+        let x21 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x22 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x23 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x24 = 2.0 * phi;
+        let x25 = f64::sin(x24);
+        let x26 = -0.5 * rho - 0.25 * l;
+        let x27 = theta - 2.0 * phi;
+        let x28 = f64::cos(x27);
+        let x29 = theta + 2.0 * phi;
+        let x30 = f64::cos(x29);
+        let x31 = -0.25 * x28 - 0.25 * x30;
+        let x32 = f64::sin(x27);
+        let x33 = f64::sin(x29);
+        let x34 = 0.25 * x33 - 0.25 * x32;
+        let x35 = 0.125 * x33 - 0.125 * x32;
+        let x36 = -0.125 * x28 - 0.125 * x30;
+        let x37 = f64::cos(x24);
+        let x38 = (0.25 * x28 + 0.25 * x30) * x1;
+        let x39 = x1 * (0.125 * x28 + 0.125 * x30);
+        let x40 = f64::cos(0.0485 * t);
+        let x41 = f64::sin(0.089 * t);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1928,20 +1786,42 @@ pub mod reduced_volterra {
         }
         let mut matrix: [[f64; 4]; 4] = [
             [Ixx, x11, x12, 0.0],
-            [x11, Iyy + x17, x18, 0.0],
-            [x12, x18, x17 + Izz, 0.0],
-            [0.0, 0.0, 0.0, m * x14],
+            [x11, Iyy + (x15 + x17 * x17) * m, x18, 0.0],
+            [x12, x18, m * (x15 + x20 * x20) + Izz, 0.0],
+            [0.0, 0.0, 0.0, (m * x6 * x6 * mg + x19 * x19) * m],
         ];
         let mut force: [f64; 4] = [
-            u3 * x20 - x19 * u2,
-            x19 * u1 + u3 * (x21 + m * u1 * (-x24 - x25) - x26 + x27)
-                - x28 * u4 * m * u2,
-            (u1 * (x24 + x25) * u2 - x28 * u4 * u3) * m - u1 * x20
-                + (x26 - x21 - x27) * u2,
+            u3 * x22 - x21 * u2,
+            x21 * u1 - u3 * x23
+                + (-(u4
+                    * (u3 * x25 * x26
+                        + ((x31 * u2 + u3 * x34) * rho + l * (u3 * x35 + x36 * u2)) * x1
+                        + ((0.25 * x37 + 1.0) * l + (0.5 * x37 + 2.0) * rho) * u2)
+                    + u3 * u1 * (rho * (-rho - l) - 0.25 * x13)) * m * x6 * x6 * mg
+                    - x17 * (x20 * u3 * u1 + u4 * (2.0 * x16 - 2.0) * u2)) * m,
             m
-                * ((x22 * u3 * u3 - x23 * u2 * u2) * x14
-                    + (x9 * u2 * u2 - x8 * u3 * u3) * m * x6 * x6 * mg) + 0.012 * x29
-                - 0.018 * x30,
+                * (-m * x6 * x6 * mg
+                    * (u1 * u2 * x14
+                        + u4
+                            * ((x1 * (l * x35 + rho * x34) + x25 * x26) * u2
+                                + u3
+                                    * (rho * (x38 - 0.5 * x37 + 2.0)
+                                        + l * (x39 - 0.25 * x37 + 1.0))))
+                    - x20 * (u4 * u3 * (2.0 - 2.0 * x16) - x17 * u1 * u2)) - u1 * x22
+                + x23 * u2,
+            (-(x17 * u2 * u2 - x20 * u3 * u3) * x19
+                - m * x6 * x6 * mg
+                    * ((l * (x39 - 0.25 * x37 - 0.5) + rho * (x38 - 0.5 * x37 - 1.0))
+                        * u2 * u2
+                        + u3
+                            * ((x9 * x25
+                                + x1
+                                    * ((0.25 * x32 - 0.25 * x33) * l
+                                        + rho * (0.5 * x32 - 0.5 * x33))) * u2
+                                + u3
+                                    * (rho * (x31 * x1 + 0.5 * x37 - 1.0)
+                                        + l * (x1 * x36 + 0.25 * x37 - 0.5))))) * m + 0.012 * x40
+                - 0.018 * x41,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1966,7 +1846,7 @@ pub mod reduced_volterra {
         dstate[8] = force[1];
         dstate[9] = force[2];
         dstate[10] = force[3];
-        dstate[11] = u4 * (0.012 * x29 - 0.018 * x30);
+        dstate[11] = u4 * (0.012 * x40 - 0.018 * x41);
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -2139,15 +2019,18 @@ pub mod reduced_volterra {
         let l = params.l;
         let x0 = -Ixy;
         let x1 = -Ixz;
-        let x2 = m / (m + mg);
-        let x3 = 1.0 - x2;
-        let x4 = (rho * (l * x3 + rho * x3) + l * l * (0.25 - 0.25 * x2)) * m;
-        let x5 = -Iyz;
+        let x2 = 1.0 / (m + mg);
+        let x3 = m * x2 * x2 * mg * (0.25 * (l * l) + rho * (rho + l));
+        let x4 = m * x2;
+        let x5 = (0.5 * x4 - 0.5) * l + (x4 - 1.0) * rho;
+        let x6 = -Iyz;
+        let x7 = 1.0 - x4;
+        let x8 = l * (0.5 - 0.5 * x4) + rho * x7;
         [
             [Ixx, x0, x1, 0.0],
-            [x0, Iyy + x4, x5, 0.0],
-            [x1, x5, x4 + Izz, 0.0],
-            [0.0, 0.0, 0.0, x3 * m],
+            [x0, Iyy + (x3 + x5 * x5) * m, x6, 0.0],
+            [x1, x6, m * (x3 + x8 * x8) + Izz, 0.0],
+            [0.0, 0.0, 0.0, (m * x2 * x2 * mg + x7 * x7) * m],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.

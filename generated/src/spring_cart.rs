@@ -179,9 +179,10 @@ pub fn energy(
     let g = params.g;
     let x0 = -x - L0;
     let x1 = f64::sqrt(x0 * x0) - L0;
-    (0.5 * (x_dot * x_dot)
-        + (0.5 * (th_dot * th_dot * lp) + (x_dot * th_dot - g) * f64::cos(th)) * lp) * mp
-        + 0.5 * (x1 * x1 * k) + 0.5 * (mc * x_dot * x_dot)
+    let x2 = f64::cos(th);
+    0.5 * (x1 * x1 * k)
+        + (0.5 * ((x_dot + 2.0 * (x2 * th_dot * lp)) * x_dot) - g * x2 * lp
+            + 0.5 * (th_dot * th_dot * lp * lp)) * mp + 0.5 * (mc * x_dot * x_dot)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -195,9 +196,7 @@ pub fn work_rate(
     let x_dot = qdot[0];
     let c = params.c;
     let L0 = params.L0;
-    let x0 = 2.0 * x + 2.0 * L0;
-    let x1 = -x - L0;
-    -(0.25 * x0 * x0 * c * x_dot * x_dot / (x1 * x1))
+    0.5 * (2.0 * x + 2.0 * L0) * c * x_dot * x_dot / (-x - L0)
 }
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
@@ -270,7 +269,7 @@ pub mod lagrange {
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
             x1
-                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                * (0.5 * (c * x3 * x_dot)
                     - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
                 + x5 * mp * th_dot * th_dot * lp,
             -(x5 * g * mp * lp),
@@ -286,7 +285,7 @@ pub mod lagrange {
         dstate[1] = th_dot;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
+        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -325,7 +324,7 @@ pub mod lagrange {
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
             x1
-                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                * (0.5 * (c * x3 * x_dot)
                     - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
                 + x5 * mp * th_dot * th_dot * lp,
             -(x5 * g * mp * lp),
@@ -341,7 +340,7 @@ pub mod lagrange {
         dstate[1] = th_dot;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
+        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -469,7 +468,7 @@ pub mod maggi {
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
             x1
-                * (-0.25 * (x1 * c * x3 * x3 * x_dot)
+                * (0.5 * (c * x3 * x_dot)
                     - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
                 + x5 * mp * th_dot * th_dot * lp,
             -(x5 * g * mp * lp),
@@ -485,7 +484,7 @@ pub mod maggi {
         dstate[1] = th_dot;
         dstate[2] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
         dstate[3] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[4] = -(0.25 * x1 * x1 * c * x3 * x3 * x_dot * x_dot);
+        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -613,8 +612,9 @@ pub mod kane {
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
             x1 * mp * u2 * u2 * lp
-                + (-0.25 * (x2 * c * x4 * x4 * u1)
-                    - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))) * x2,
+                + x2
+                    * (0.5 * (c * x4 * u1)
+                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
             -(x1 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
@@ -628,7 +628,7 @@ pub mod kane {
         dstate[1] = u2;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x2 * x2 * c * x4 * x4 * u1 * u1);
+        dstate[4] = 0.5 * x2 * c * x4 * u1 * u1;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -756,8 +756,9 @@ pub mod reduced_volterra {
         let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
         let mut force: [f64; 2] = [
             x1 * mp * u2 * u2 * lp
-                + (-0.25 * (x2 * c * x4 * x4 * u1)
-                    - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))) * x2,
+                + x2
+                    * (0.5 * (c * x4 * u1)
+                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
             -(x1 * g * mp * lp),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
@@ -771,7 +772,7 @@ pub mod reduced_volterra {
         dstate[1] = u2;
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = -(0.25 * x2 * x2 * c * x4 * x4 * u1 * u1);
+        dstate[4] = 0.5 * x2 * c * x4 * u1 * u1;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });

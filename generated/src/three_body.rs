@@ -263,72 +263,54 @@ pub fn energy(
     let a = params.a;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::sin(theta);
-    let x1 = phi_dot - x0 * psi_dot;
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::sin(theta);
     let x2 = f64::cos(theta);
-    let x3 = f64::cos(phi);
-    let x4 = x2 * psi_dot * x3;
-    let x5 = f64::sin(phi);
-    let x6 = theta_dot * x5;
-    let x7 = x4 - x6;
-    let x8 = theta_dot * x3;
-    let x9 = x2 * psi_dot * x5;
-    let x10 = x8 + x9;
-    let x11 = f64::cos(psi);
-    let x12 = f64::sin(gamma2);
-    let x13 = f64::cos(gamma2);
-    let x14 = a * x0;
-    let x15 = x14 - (-x2 * x12 * x3 - x13 * x0) * d;
-    let x16 = f64::sin(psi);
-    let x17 = x3 * x16;
-    let x18 = x0 * x11 * x5;
-    let x19 = x5 * x16 + x0 * x11 * x3;
-    let x20 = a * x2 * x16;
-    let x21 = x11 * x5;
-    let x22 = x0 * x3 * x16;
-    let x23 = theta_dot * x11 * x15 + X_dot
-        + (x12 * phi_dot * (x17 - x18) - gamma2_dot * (-x11 * x2 * x12 - x13 * x19)) * d
-        + psi_dot * (x20 - (-x13 * x2 * x16 - (x21 - x22) * x12) * d);
-    let x24 = a * theta_dot * x2;
-    let x25 = Z_dot
-        + d
-            * (x0 * (-gamma2_dot - x8) * x12
-                + (x13 * (gamma2_dot * x3 + theta_dot) - x12 * x5 * phi_dot) * x2) + x24;
-    let x26 = a * x11 * x2;
-    let x27 = x11 * x3;
-    let x28 = x0 * x5 * x16;
-    let x29 = -x27 - x28;
-    let x30 = x22 - x21;
-    let x31 = psi_dot * (-d * (x13 * x11 * x2 - x12 * x19) - x26) + theta_dot * x15 * x16
-        + Y_dot + (x12 * x29 * phi_dot - gamma2_dot * (-x2 * x12 * x16 - x13 * x30)) * d;
-    let x32 = gamma2_dot + x8 + x9;
-    let x33 = f64::cos(gamma1);
-    let x34 = f64::sin(gamma1);
-    let x35 = x33 * x10 - x34 * x1;
-    let x36 = x4 + gamma1_dot - x6;
-    let x37 = x12 * x1 + x13 * x7;
-    let x38 = Z_dot - x24
-        + (x34 * (x0 * (gamma1_dot - x6) + x2 * phi_dot * x3)
-            + x33 * x2 * (gamma1_dot * x5 - theta_dot)) * d;
-    let x39 = x18 - x17;
-    let x40 = (x34 * x2 * x5 - x33 * x0) * d - x14;
-    let x41 = (d * (x34 * x29 - x33 * x2 * x16) - x20) * psi_dot + X_dot
-        + ((x33 * x39 - x11 * x34 * x2) * gamma1_dot + x34 * x19 * phi_dot) * d
-        + theta_dot * x11 * x40;
-    let x42 = d
-        * (x34 * phi_dot * x30 + (x33 * (x27 + x28) - x34 * x2 * x16) * gamma1_dot)
-        + Y_dot + theta_dot * x40 * x16
-        + psi_dot * (d * (x39 * x34 + x33 * x11 * x2) + x26);
-    let x43 = x34 * x10 + x33 * x1;
-    let x44 = x13 * x1 - x7 * x12;
-    0.5 * (x1 * (Ixx * x1 - x7 * Ixz - Ixy * x10))
-        + 0.5 * ((x7 * Izz - Iyz * x10 - Ixz * x1) * x7)
+    let x3 = f64::sin(psi);
+    let x4 = f64::cos(psi);
+    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
+    let x6 = f64::sin(gamma1);
+    let x7 = f64::sin(phi);
+    let x8 = Z_dot * x2 * x7;
+    let x9 = f64::cos(phi);
+    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
+    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
+    let x12 = x2 * psi_dot * x9;
+    let x13 = theta_dot * x7;
+    let x14 = x12 - x13;
+    let x15 = a * x14;
+    let x16 = x8 + x10 + x11 + x15;
+    let x17 = x0 * x5 + x6 * x16;
+    let x18 = x12 + gamma1_dot - x13;
+    let x19 = x0 * x16 - x5 * x6 + x18 * d;
+    let x20 = theta_dot * x9;
+    let x21 = x2 * psi_dot * x7;
+    let x22 = x20 + x21;
+    let x23 = a * x22;
+    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
+    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
+    let x26 = Z_dot * x2 * x9;
+    let x27 = phi_dot - x1 * psi_dot;
+    let x28 = x0 * x22 - x6 * x27;
+    let x29 = x24 - x23 + x25 + x26 - d * x28;
+    let x30 = gamma2_dot + x20 + x21;
+    let x31 = f64::sin(gamma2);
+    let x32 = f64::cos(gamma2);
+    let x33 = x23 + x24 + x25 + x26;
+    let x34 = x30 * d + x5 * x31 + x32 * x33;
+    let x35 = x31 * x27 + x32 * x14;
+    let x36 = x8 + x10 + x11 - x35 * d - x15;
+    let x37 = x5 * x32 - x33 * x31;
+    let x38 = x6 * x22 + x0 * x27;
+    let x39 = x32 * x27 - x14 * x31;
+    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
+        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
+        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (x23 * x23 + x25 * x25 + x31 * x31))
-        + 0.5 * ((Iyy * x10 - x7 * Iyz - Ixy * x1) * x10)
-        + (0.5 * (x32 * x32) + 0.5 * (x35 * x35) + 0.5 * (x36 * x36) + 0.5 * (x37 * x37))
-            * J2 + 0.5 * ((x38 * x38 + x41 * x41 + x42 * x42) * m1)
-        + (0.5 * (x43 * x43) + 0.5 * (x44 * x44)) * J1
+        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
+        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
+        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
+            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -366,52 +348,65 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a = params.a;
-    let x0 = f64::cos(gamma1);
+    let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
-    let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-    let x3 = f64::sin(theta);
-    let x4 = f64::sin(gamma2);
-    let x5 = f64::cos(phi);
-    let x6 = m2 * x4 * x5;
-    let x7 = f64::sin(gamma1);
-    let x8 = f64::sin(phi);
-    let x9 = x7 * x8 * m1;
-    let x10 = f64::cos(theta);
-    let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-    let x12 = f64::cos(psi);
-    let x13 = f64::sin(psi);
-    let x14 = a * x10 * x13;
-    let x15 = x12 * x8;
-    let x16 = x3 * x5 * x13;
-    let x17 = x12 * x5;
-    let x18 = x3 * x8 * x13;
-    let x19 = -x17 - x18;
-    let x20 = x8 * x13 + x3 * x12 * x5;
-    let x21 = x5 * x13;
-    let x22 = x3 * x12 * x8;
-    let x23 = x22 - x21;
-    let x24 = m2 + m0 + m1;
-    let x25 = a * x12 * x10;
-    let x26 = x16 - x15;
+    let x2 = f64::cos(psi);
+    let x3 = f64::cos(theta);
+    let x4 = f64::sin(phi);
+    let x5 = f64::sin(psi);
+    let x6 = f64::sin(theta);
+    let x7 = f64::cos(phi);
+    let x8 = x4 * x5 + x6 * x2 * x7;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a;
+    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a;
+    let x18 = -x17 - d;
+    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
-        theta_dot * x11 * x12
-            + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-            + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d + X_dot * x24,
-        Y_dot * x24 + theta_dot * x11 * x13
-            + psi_dot
-                * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                    + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+        theta_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                    - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                    + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-        (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-            + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-            + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-            + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
+        theta_dot
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
+            + psi_dot
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+        theta_dot
+            * (m2
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                + m1
+                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -498,512 +493,317 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::sin(gamma2);
-        let x2 = f64::cos(phi);
-        let x3 = x0 * x1 * x2;
-        let x4 = f64::cos(gamma2);
-        let x5 = f64::sin(theta);
-        let x6 = x4 * x5;
-        let x7 = -x3 - x6;
-        let x8 = f64::sin(gamma1);
-        let x9 = f64::sin(phi);
-        let x10 = x8 * x0 * x9;
-        let x11 = f64::cos(gamma1);
-        let x12 = x11 * x5;
-        let x13 = x10 - x12;
-        let x14 = f64::cos(psi);
-        let x15 = x4 * x14 * x0;
-        let x16 = f64::sin(psi);
-        let x17 = x9 * x16;
-        let x18 = x5 * x14 * x2;
-        let x19 = x17 + x18;
-        let x20 = x1 * x19;
-        let x21 = d * (x15 - x20);
-        let x22 = a * x14 * x0;
-        let x23 = -x21 - x22;
-        let x24 = a * x0 * x16;
-        let x25 = x4 * x0 * x16;
-        let x26 = x14 * x9;
-        let x27 = x5 * x2 * x16;
-        let x28 = x26 - x27;
-        let x29 = x24 - (-x25 - x28 * x1) * d;
-        let x30 = x11 * x0 * x16;
-        let x31 = x14 * x2;
-        let x32 = x5 * x9 * x16;
-        let x33 = -x31 - x32;
-        let x34 = d * (x8 * x33 - x30) - x24;
-        let x35 = x2 * x16;
-        let x36 = x5 * x14 * x9;
-        let x37 = x36 - x35;
-        let x38 = x37 * x8;
-        let x39 = x11 * x14 * x0;
-        let x40 = d * (x38 + x39);
-        let x41 = x40 + x22;
-        let x42 = x2 * x2;
-        let x43 = x9 * x9;
-        let x44 = x5 * x1;
-        let x45 = x4 * x0 * x2;
-        let x46 = x45 - x44;
-        let x47 = x11 * x0 * x9 + x5 * x8;
-        let x48 = x5 * Ixx;
-        let x49 = Ixy * x9;
-        let x50 = Ixz * x2;
-        let x51 = x0 * (-x49 - x50);
-        let x52 = Iyz * x2;
-        let x53 = Iyy * x9;
-        let x54 = (x53 - x52) * x0;
-        let x55 = x5 * Ixy;
-        let x56 = (x54 + x55) * x9;
-        let x57 = Izz * x2;
-        let x58 = Iyz * x9;
-        let x59 = x0 * (x57 - x58);
-        let x60 = x5 * Ixz;
-        let x61 = (x59 + x60) * x2;
-        let x62 = m2 * d * d;
-        let x63 = x62 + J2 - J1;
-        let x64 = x4 * x63;
-        let x65 = m2 * a * d;
-        let x66 = x64 + x65;
-        let x67 = x66 * x1 - Ixz;
-        let x68 = d * d * m1;
-        let x69 = J2 + x68 - J1;
-        let x70 = a * d * m1;
-        let x71 = x11 * x69 + x70;
-        let x72 = Ixy + x8 * x71;
-        let x73 = J2 - J1;
-        let x74 = J1 - J2;
-        let x75 = x11 * x11;
-        let x76 = (x75 - 1.0) * m1;
-        let x77 = x4 * x4;
-        let x78 = m2 * (1.0 - x77);
-        let x79 = Iyy + x11 * x11 * x73 + x4 * x4 * x74 + d * d * (x76 + x78) - Izz;
-        let x80 = x5 * x67 * x9 + Iyz * x0
-            + (x5 * x72 + (x79 * x9 - 2.0 * x52) * x0) * x2;
-        let x81 = J1 - J2 - x68;
-        let x82 = x11 * x81 - x70;
-        let x83 = x8 * x82 - Ixy;
-        let x84 = x83 * x9 + x67 * x2;
-        let x85 = m2 * (x77 - 1.0);
-        let x86 = (x85 + x76) * d * d - Ixx + (x75 + x77 - 2.0) * J2 + (-x75 - x77) * J1;
-        let x87 = x0 * x84 + x5 * x86;
-        let x88 = x11 * a;
-        let x89 = x0 * (d * (x88 + d) * m1 + J2) * x2;
-        let x90 = x4 * a;
-        let x91 = J2 + m2 * d * (d + x90);
-        let x92 = x0 * x91 * x9;
-        let x93 = m2 * x29 + x34 * m1;
-        let x94 = m1 * x41 + m2 * x23;
-        let x95 = J1 - x62 - J2;
-        let x96 = x4 * x95 - x65;
-        let x97 = x96 * x1 + Ixz;
-        let x98 = x83 * x2 + x9 * x97;
-        let x99 = d * (-x88 - d) * m1 - J2;
-        let x100 = x9 * x99;
-        let x101 = x91 * x2;
-        let x102 = x11 * d;
-        let x103 = x4 * d;
-        let x104 = (-a - x102) * m1 + m2 * (a + x103);
-        let x105 = m2 * x1 * x2;
-        let x106 = x8 * x9 * m1;
-        let x107 = x104 * x5 + (x105 + x106) * x0 * d;
-        let x108 = x107 * x14;
-        let x109 = x107 * x16;
-        let x110 = -x105 - x106;
-        let x111 = x5 * d * x110 + x104 * x0;
-        let x112 = m1 * (1.0 - x75);
-        let x113 = x35 - x36;
-        let x114 = x8 * x19 * m1 + m2 * x1 * x113;
-        let x115 = x114 * d;
-        let x116 = x27 - x26;
-        let x117 = d * (m2 * x1 * x33 + x8 * x116 * m1);
-        let x118 = x8 * m1 * x2;
-        let x119 = m2 * x1 * x9;
-        let x120 = x118 - x119;
-        let x121 = x120 * x0 * d;
-        let x122 = x11 * x37 - x14 * x8 * x0;
-        let x123 = x122 * d * m1;
-        let x124 = x31 + x32;
-        let x125 = x8 * x0 * x16;
-        let x126 = x11 * x124 - x125;
-        let x127 = x126 * d * m1;
-        let x128 = x47 * d * m1;
-        let x129 = -x14 * x0 * x1 - x4 * x19;
-        let x130 = -(m2 * x129 * d);
-        let x131 = x0 * x1 * x16;
-        let x132 = -x131 - x4 * x116;
-        let x133 = -(m2 * d * x132);
-        let x134 = m2 * x46 * d;
-        let x135 = m2 + m0 + m1;
-        let x136 = x12 - x10;
-        let x137 = a * x5;
-        let x138 = d * x136 + x137;
-        let x139 = x11 * x33 + x125;
-        let x140 = (x8 * x113 - x39) * d;
-        let x141 = x140 - x22;
-        let x142 = x34 * psi_dot;
-        let x143 = (x122 * gamma1_dot + x8 * x19 * phi_dot) * d;
-        let x144 = x13 * d - x137;
-        let x145 = theta_dot * x14 * x144;
-        let x146 = x142 + X_dot + x143 + x145;
-        let x147 = d * (x8 * phi_dot * x116 + x126 * gamma1_dot) + Y_dot
-            + theta_dot * x144 * x16 + psi_dot * x41;
-        let x148 = -x17 - x18;
-        let x149 = d * (-x15 - x148 * x1);
-        let x150 = x22 - x149;
-        let x151 = m2 * x150 + x141 * m1;
-        let x152 = m2 * d * (-d - x90) - J2;
-        let x153 = gamma2_dot * x9 * x152;
-        let x154 = gamma1_dot * x99 * x2;
-        let x155 = x137 - x7 * d;
-        let x156 = m1 * x144 + m2 * x155;
-        let x157 = x2 * x97 + x72 * x9;
-        let x158 = x0 * x86 + x5 * x157;
-        let x159 = -d * (x3 + x6) - x137;
-        let x160 = x138 * m1 + m2 * x159;
-        let x161 = x9
-            * ((x85 + x112) * d * d - Iyy + x4 * x4 * x73 + x11 * x11 * x74 + Izz);
-        let x162 = (x5 * (x161 + 2.0 * x52) + x72 * x0) * x2 - x5 * Iyz + x67 * x0 * x9;
-        let x163 = -x4 * x5 * x2 - x0 * x1;
-        let x164 = x8 * x0 - x11 * x5 * x9;
-        let x165 = -x5 * x8 * x9 - x11 * x0;
-        let x166 = x5 * x1 * x2 - x4 * x0;
-        let x167 = Ixy * x0 + x5 * (x52 - x53);
-        let x168 = x5 * (x58 - x57) + x0 * Ixz;
-        let x169 = Ixx * x0;
-        let x170 = x5 * (x49 + x50);
-        let x171 = 2.0 * J1 - 2.0 * J2 - 2.0 * x68;
-        let x172 = x5 * x8 * x8 * x81 + x11 * (x5 * x71 + x8 * x0 * x9 * x171);
-        let x173 = X_dot * x139;
-        let x174 = x122 * Y_dot;
-        let x175 = x11 * (x5 * x8 * x171 + x82 * x0 * x9) + x69 * x8 * x8 * x0 * x9;
-        let x176 = 2.0 * x62 + 2.0 * J2 - 2.0 * J1;
-        let x177 = x5 * x95 * x1 * x1 + x4 * (x0 * x1 * x176 * x2 + x5 * x66);
-        let x178 = x44 - x45;
-        let x179 = x131 - x4 * x28;
-        let x180 = x4 * (x66 * x0 * x2 + x5 * x1 * (2.0 * J1 - 2.0 * x62 - 2.0 * J2))
-            + x95 * x0 * x1 * x1 * x2;
-        let x181 = X_dot * x179;
-        let x182 = x129 * Y_dot;
-        let x183 = m2 * x1 * x124 + x28 * x8 * m1;
-        let x184 = x114 * Y_dot + X_dot * x183;
-        let x185 = x5 * x84 + (x79 * x2 * x2 + (x161 + 4.0 * x52) * x9) * x0;
-        let x186 = psi_dot * x23 + theta_dot * x155 * x16 + Y_dot
-            + (x1 * x33 * phi_dot - gamma2_dot * x132) * d;
-        let x187 = theta_dot * x14 * x155;
-        let x188 = (x1 * phi_dot * x113 - gamma2_dot * x129) * d;
-        let x189 = psi_dot * x29;
-        let x190 = x187 + X_dot + x188 + x189;
-        let x191 = phi_dot - x5 * psi_dot;
-        let x192 = x0 * psi_dot * x2;
-        let x193 = theta_dot * x9;
-        let x194 = x192 - x193;
-        let x195 = x4 * x191 - x194 * x1;
-        let x196 = theta_dot * x2;
-        let x197 = x0 * psi_dot * x9;
-        let x198 = x196 + x197;
-        let x199 = x8 * x198;
-        let x200 = x11 * x191;
-        let x201 = x199 + x200;
-        let x202 = x1 * x191;
-        let x203 = x4 * x194;
-        let x204 = x202 + x203;
-        let x205 = x11 * x198 - x8 * x191;
-        let x206 = x5 * ((a + x102) * m1 + m2 * (-a - x103)) + x0 * d * x110;
-        let x207 = x194 * Iyz;
-        let x208 = Iyy * x198;
-        let x209 = Ixy * x191;
-        let x210 = Iyz * x198;
-        let x211 = Ixz * x191;
-        let x212 = x194 * Izz;
-        let x213 = Y_dot * x16;
-        let x214 = X_dot * x14;
-        let x215 = x213 + x214;
-        let x216 = x119 - x118;
-        let x217 = (x120 * x0 * x215 + x216 * Z_dot * x5) * d;
-        let x218 = x4 * x96 + x1 * x1 * x63;
-        let x219 = Z_dot * x163;
-        let x220 = a * x0;
-        let x221 = d * (-x0 * x1 * x9 * phi_dot - gamma2_dot * x178)
-            + theta_dot * (x220 - x166 * d);
-        let x222 = gamma2_dot * x2;
-        let x223 = -x222 - theta_dot;
-        let x224 = x1 * x9 * phi_dot;
-        let x225 = -gamma2_dot - x196;
-        let x226 = a * x5 * theta_dot;
-        let x227 = a * theta_dot * x0;
-        let x228 = Z_dot + d * (x5 * x225 * x1 + (x4 * (x222 + theta_dot) - x224) * x0)
-            + x227;
-        let x229 = theta_dot * (x165 * d - x220)
-            + d * (x47 * gamma1_dot + x8 * x0 * phi_dot * x2);
-        let x230 = gamma1_dot * x9;
-        let x231 = theta_dot - x230;
-        let x232 = gamma1_dot - x193;
-        let x233 = x5 * x232 + x0 * phi_dot * x2;
-        let x234 = Z_dot - x227 + (x8 * x233 + x11 * x0 * (x230 - theta_dot)) * d;
-        let x235 = x69 * x8 * x8 + x11 * x82;
-        let x236 = Z_dot * x164;
-        let x237 = x47 * x215;
-        let x238 = x0 * x9 * phi_dot;
-        let x239 = -x196 - x197;
-        let x240 = Y_dot * x116 + X_dot * x19 + Z_dot * x0 * x2;
-        let x241 = m2 * x148 * x1 + x8 * m1 * x113;
-        let x242 = x8 * x33 * m1 + x28 * m2 * x1;
-        let x243 = X_dot * x113 - Z_dot * x0 * x9 + Y_dot * x33;
-        let x244 = -x30 - x8 * x124;
-        let x245 = x11 * phi_dot * x116 + x122 * psi_dot + gamma1_dot * x244
-            + theta_dot * x47 * x16;
-        let x246 = -x38 - x39;
-        let x247 = x139 * psi_dot + x11 * x19 * phi_dot + gamma1_dot * x246
-            + theta_dot * x47 * x14;
-        let x248 = x4 * phi_dot * x113;
-        let x249 = x20 - x15;
-        let x250 = gamma2_dot * x249;
-        let x251 = psi_dot * x179;
-        let x252 = x1 * x116 - x25;
-        let x253 = gamma2_dot * x252;
-        let x254 = x129 * psi_dot;
-        let x255 = x4 * x33 * phi_dot;
-        let x256 = theta_dot * x111
-            + d * (x120 * x0 * phi_dot - m2 * gamma2_dot * x178 + x47 * gamma1_dot * m1);
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = -x5 * d - a * x1 * x2;
+        let x7 = x0 * a;
+        let x8 = x7 + d;
+        let x9 = a * a * x4 * x4;
+        let x10 = f64::cos(phi);
+        let x11 = f64::sin(gamma2);
+        let x12 = f64::cos(gamma2);
+        let x13 = x12 * x1 * x10 - x3 * x11;
+        let x14 = -a * x1 * x10 - x13 * d;
+        let x15 = d + x12 * a;
+        let x16 = a * a * x11 * x11 + x15 * x15;
+        let x17 = x12 * x3;
+        let x18 = -x1 * x11 * x10 - x17;
+        let x19 = x0 * x3;
+        let x20 = x4 * x1 * x2 - x19;
+        let x21 = x3 * Ixx;
+        let x22 = x1 * (-Ixy * x2 - Ixz * x10);
+        let x23 = Iyz * x10;
+        let x24 = Iyz * x2;
+        let x25 = a + x12 * d;
+        let x26 = Iyy * x10;
+        let x27 = x2 * Izz;
+        let x28 = -a - x0 * d;
+        let x29 = -x7 - d;
+        let x30 = x2
+            * (m2 * (x1 * x16 * x10 + x25 * x14) - x12 * x13 * J2 + x18 * x11 * J1
+                + (x26 + x24) * x1) - x3 * (x2 * Ixz - Ixy * x10)
+            + (x0 * J2 * x5 + x1 * (-x27 - x23) + x20 * x4 * J1
+                + (x28 * x6 + x1 * x2 * (x8 * x29 - x9)) * m1) * x10;
+        let x31 = x22 - x21 + (x0 * x20 + x12 * x18) * J1 + (x13 * x11 - x5 * x4) * J2
+            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
+        let x32 = x1 * (d * x8 * m1 + J2) * x10;
+        let x33 = J2 + m2 * d * x15;
+        let x34 = x1 * x33 * x2;
+        let x35 = f64::cos(psi);
+        let x36 = f64::sin(psi);
+        let x37 = x3 * x35 * x2 - x10 * x36;
+        let x38 = x0 * x37 - x35 * x4 * x1;
+        let x39 = x37 * x4 + x0 * x35 * x1;
+        let x40 = a * x4 * x39;
+        let x41 = x2 * x36 + x3 * x35 * x10;
+        let x42 = x12 * x35 * x1 - x11 * x41;
+        let x43 = x35 * x1 * x11 + x12 * x41;
+        let x44 = x43 * x15 - a * x11 * x42;
+        let x45 = m1 * (x1 * (x38 * x8 + x40) * x10 + x41 * x6)
+            + m2 * (x1 * x44 * x2 + x37 * x14);
+        let x46 = x35 * x10 + x3 * x2 * x36;
+        let x47 = x0 * x46 - x4 * x1 * x36;
+        let x48 = x0 * x1 * x36 + x4 * x46;
+        let x49 = a * x4 * x48;
+        let x50 = x3 * x10 * x36 - x35 * x2;
+        let x51 = x12 * x1 * x36 - x11 * x50;
+        let x52 = x1 * x11 * x36 + x12 * x50;
+        let x53 = x52 * x15 - a * x51 * x11;
+        let x54 = m1 * (x1 * (x47 * x8 + x49) * x10 + x50 * x6)
+            + m2 * (x1 * x2 * x53 + x46 * x14);
+        let x55 = x0 * x0;
+        let x56 = x12 * x12;
+        let x57 = J1 - J2;
+        let x58 = ((x0 * x57 + x28 * d * m1) * x4 - Ixy) * x10
+            + x2 * ((x12 * x57 - m2 * d * x25) * x11 + Ixz);
+        let x59 = x2 * (d * x29 * m1 - J2);
+        let x60 = x33 * x10;
+        let x61 = m2 * (x44 * x10 + x37 * x25 * x2)
+            + m1 * (x2 * (x38 * x29 - x40) + x28 * x41 * x10);
+        let x62 = m2 * (x53 * x10 + x25 * x2 * x46)
+            + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
+        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a * x18 * x11) * x10)
+            + m1 * ((x5 * x29 - a * x20 * x4) * x2 + x28 * x1 * x10 * x10);
+        let x64 = d * (x4 * x41 * m1 - m2 * x37 * x11);
+        let x65 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
+        let x66 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
+        let x67 = x38 * d * m1;
+        let x68 = x47 * d * m1;
+        let x69 = x5 * d * m1;
+        let x70 = m2 * d * x43;
+        let x71 = m2 * d * x52;
+        let x72 = m2 * x13 * d;
+        let x73 = m2 + m0 + m1;
+        let x74 = theta_dot * x1 * psi_dot * Ixz;
+        let x75 = x1 * psi_dot * x10;
+        let x76 = theta_dot * x2;
+        let x77 = x75 - x76;
+        let x78 = theta_dot * x10;
+        let x79 = x1 * psi_dot * x2;
+        let x80 = x78 + x79;
+        let x81 = x3 * psi_dot;
+        let x82 = phi_dot - x81;
+        let x83 = Iyy * x80 - x77 * Iyz - Ixy * x82;
+        let x84 = x83 * x82;
+        let x85 = -phi_dot - x81;
+        let x86 = theta_dot * x85 * x10;
+        let x87 = x4 * x80 + x0 * x82;
+        let x88 = x0 * x80 - x4 * x82;
+        let x89 = x87 * x88;
+        let x90 = x1 * psi_dot * x2 * phi_dot;
+        let x91 = J2 * (x86 + x89 - x90);
+        let x92 = Ixx * x82 - x77 * Ixz - Ixy * x80;
+        let x93 = x80 * x92;
+        let x94 = theta_dot * x85 * x2;
+        let x95 = x1 * psi_dot * phi_dot * x10;
+        let x96 = x94 + x95;
+        let x97 = Iyz * x96;
+        let x98 = x87 * x88 * J1;
+        let x99 = x86 - x90;
+        let x100 = x99 * Izz;
+        let x101 = x77 * x92;
+        let x102 = Iyy * x96;
+        let x103 = x77 * Izz - Iyz * x80 - Ixz * x82;
+        let x104 = x103 * x82;
+        let x105 = Ixy * theta_dot * x1 * psi_dot;
+        let x106 = x99 * Iyz;
+        let x107 = J2 * x96;
+        let x108 = x12 * x82 - x77 * x11;
+        let x109 = x11 * x82 + x12 * x77;
+        let x110 = x108 * x57 * x109;
+        let x111 = x75 + gamma1_dot - x76;
+        let x112 = x111 * x57 * x87;
+        let x113 = x94 + x95 - gamma1_dot * x82;
+        let x114 = gamma1_dot * x80;
+        let x115 = theta_dot * x1 * psi_dot;
+        let x116 = x0 * x113 + x4 * (x115 - x114);
+        let x117 = J2 * x116;
+        let x118 = x112 + x117;
+        let x119 = gamma2_dot * x82;
+        let x120 = -x77 * gamma2_dot - x115;
+        let x121 = x11 * (x90 - x86 - x119) + x12 * x120;
+        let x122 = x0 * (x114 - x115) + x113 * x4;
+        let x123 = theta_dot * Ixx * x1 * psi_dot;
+        let x124 = x103 * x80;
+        let x125 = x99 * Ixz;
+        let x126 = x77 * x83;
+        let x127 = Ixy * x96;
+        let x128 = Z_dot * x1 * x2;
+        let x129 = x37 * X_dot;
+        let x130 = Y_dot * x46;
+        let x131 = a * x77;
+        let x132 = x128 + x129 + x130 + x131;
+        let x133 = Y_dot * x36;
+        let x134 = X_dot * x35;
+        let x135 = x1 * (x133 + x134) - Z_dot * x3;
+        let x136 = x0 * x132 - x135 * x4 + x111 * d;
+        let x137 = a * x80;
+        let x138 = Y_dot * x50;
+        let x139 = X_dot * x41;
+        let x140 = Z_dot * x1 * x10;
+        let x141 = x138 - x137 + x139 + x140 - d * x88;
+        let x142 = x1 * psi_dot * (x35 * Y_dot - X_dot * x36);
+        let x143 = gamma1_dot * x132;
+        let x144 = theta_dot * (x3 * (-x133 - x134) - Z_dot * x1);
+        let x145 = theta_dot * x1 * x36 + x35 * (x81 - phi_dot);
+        let x146 = x3 * phi_dot;
+        let x147 = x146 - psi_dot;
+        let x148 = Y_dot * (x145 * x2 + x147 * x10 * x36);
+        let x149 = x99 * a;
+        let x150 = Z_dot * (x1 * phi_dot * x10 - x3 * theta_dot * x2);
+        let x151 = X_dot * (x35 * (theta_dot * x1 * x2 + x147 * x10) + x2 * x82 * x36);
+        let x152 = x148 + x149 + x150 + x151 - x135 * gamma1_dot;
+        let x153 = x88 * x141 - x136 * x111 + x0 * (x142 + x143 + x144) + x152 * x4;
+        let x154 = a * x4 * x153;
+        let x155 = x0 * x135 + x4 * x132;
+        let x156 = x99 * d - x87 * x141 + x4 * (-x142 - x143 - x144) + x0 * x152
+            + x111 * x155;
+        let x157 = a * x96;
+        let x158 = psi_dot - x146;
+        let x159 = X_dot * (x82 * x10 * x36 + x35 * (theta_dot * x1 * x10 + x158 * x2));
+        let x160 = Z_dot * (-x1 * x2 * phi_dot - x3 * theta_dot * x10);
+        let x161 = (x158 * x2 * x36 + x145 * x10) * Y_dot;
+        let x162 = x136 * x87 - x157 - d * x116 + x159 + x160 - x155 * x88 + x161;
+        let x163 = J2 - J1;
+        let x164 = gamma2_dot + x78 + x79;
+        let x165 = x163 * x108 * x164;
+        let x166 = x120 * x11 + (x86 - x90 + x119) * x12;
+        let x167 = J2 * x166;
+        let x168 = x165 + x167;
+        let x169 = x137 + x138 + x139 + x140;
+        let x170 = x135 * x12 - x169 * x11;
+        let x171 = x164 * d + x135 * x11 + x12 * x169;
+        let x172 = x148 - x149 + x109 * x170 + x150 + x151 - x108 * x171 - x166 * d;
+        let x173 = x128 + x129 + x130 - x109 * d - x131;
+        let x174 = x135 * gamma2_dot;
+        let x175 = x142 - gamma2_dot * x169 + x144;
+        let x176 = x11 * (-x174 - x157 - x159 - x160 - x161) - x109 * x173 + x12 * x175
+            + x164 * x171;
+        let x177 = x96 * d - x164 * x170 + x12 * (x174 + x157 + x159 + x160 + x161)
+            + x108 * x173 + x11 * x175;
+        let x178 = x177 * x15 - a * x11 * x176;
+        let x179 = a * x3 * theta_dot * theta_dot;
+        let x180 = x12 * x2;
+        let x181 = x11 * x10;
+        let x182 = (-x180 - x181) * x1;
+        let x183 = x1 * (x180 + x181);
+        let x184 = (x181 - x180) * x1;
+        let x185 = (x180 - x181) * x1;
+        let x186 = 0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185 - x17;
+        let x187 = x11 * x2;
+        let x188 = x12 * x10;
+        let x189 = x3 * (x187 + x188);
+        let x190 = x3 * (x188 - x187);
+        let x191 = x3 * x2;
+        let x192 = x1 * x10;
+        let x193 = x0 * (x191 + x192);
+        let x194 = x1 * x2;
+        let x195 = x3 * x10;
+        let x196 = x4 * (x194 - x195);
+        let x197 = x0 * (x192 - x191);
+        let x198 = x4 * (x195 - x194);
+        let x199 = x4 * (x194 + x195);
+        let x200 = (-x194 - x195) * x4;
+        let x201 = 0.25 * x198 - 0.25 * x196 - 0.25 * x199 + x19 + 0.25 * x200;
         let mut matrix: [[f64; 8]; 8] = [
             [
-                (x7 * x7 + x13 * x13) * J1 + m2 * (x23 * x23 + x29 * x29)
-                    + (x34 * x34 + x41 * x41) * m1
-                    + J2 * (x0 * x0 * (x42 + x43) + x46 * x46 + x47 * x47)
-                    - x5 * (x51 - x48) + x0 * (x56 + x61),
-                x80,
-                x87,
-                x89,
-                x92,
-                x93,
-                x94,
+                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
+                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
+                    + (x18 * x18 + x20 * x20) * J1
+                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
+                    - x3 * (x22 - x21)
+                    + x1
+                        * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
+                            + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
+                x30,
+                x31,
+                x32,
+                x34,
+                x45,
+                x54,
                 0.0,
             ],
             [
-                x80,
-                a * (2.0 * (x11 * d * m1) + a * (m2 + m1)) + J2 + x4 * (x64 + 2.0 * x65)
-                    + x68 + Izz + (x79 * x2 + 2.0 * x58) * x2 + J1,
-                x98,
-                x100,
-                x101,
-                x108,
-                x109,
-                x111,
+                x30,
+                J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
+                    + (x4 * x4 * x10 * J1 + x26 + x24) * x10
+                    + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
+                    + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
+                    + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
+                x58,
+                x59,
+                x60,
+                x61,
+                x62,
+                x63,
             ],
             [
-                x87,
-                x98,
-                Ixx + d * d * (x112 + x78) + (x75 + x77) * J1 + J2 * (2.0 - x75 - x77),
+                x31,
+                x58,
+                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
+                    + (x11 * x11 + x4 * x4) * J2,
                 0.0,
                 0.0,
-                x115,
-                x117,
-                x121,
+                x64,
+                x65,
+                x66,
             ],
-            [x89, x100, 0.0, J2 + x68, 0.0, x123, x127, x128],
-            [x92, x101, 0.0, 0.0, x62 + J2, x130, x133, x134],
-            [x93, x108, x115, x123, x130, x135, 0.0, 0.0],
-            [x94, x109, x117, x127, x133, 0.0, x135, 0.0],
-            [0.0, x111, x121, x128, x134, 0.0, 0.0, x135],
+            [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
+            [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
+            [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
+            [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
+            [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
         ];
         let mut force: [f64; 8] = [
-            0.5
-                * (m1
-                    * (2.0
-                        * ((theta_dot * x138 * x16
-                            + d * (x139 * gamma1_dot + x28 * x8 * phi_dot)
-                            + x141 * psi_dot) * x146)
-                        + 2.0 * (x147 * (x142 + x143 + x145))))
-                - psi_dot
-                    * (X_dot * x151 + Y_dot * x93
-                        + psi_dot
-                            * (x34 * m1 * (2.0 * x40 + 2.0 * x140)
-                                + m2 * x29 * (-2.0 * x149 - 2.0 * x21)))
-                - (x5 * (x153 + x154) + x14 * Y_dot * x156 + x158 * phi_dot
-                    + x160 * X_dot * x16 + theta_dot * x162
-                    + ((2.0 * (x46 * x163) + 2.0 * (x47 * x164)) * J2
-                        + m1 * (2.0 * (x34 * x138 * x16) + 2.0 * (x14 * x144 * x41))
-                        + m2 * (2.0 * (x14 * x155 * x23) + 2.0 * (x159 * x29 * x16))
-                        + (2.0 * (x13 * x165) + 2.0 * (x166 * x7)) * J1
-                        + x0 * (x48 - x51 + x9 * x167 + x168 * x2)
-                        + x5
-                            * (x169 - x56 - x61 + (-2.0 * x42 - 2.0 * x43) * J2 * x0
-                                - x170)) * psi_dot) * theta_dot
-                - (theta_dot * x172 * x2
-                    + psi_dot
-                        * ((2.0 * (J2 * x136) + 2.0 * (x13 * J1)) * x47
-                            + (2.0 * (x122 * x41) + 2.0 * (x34 * x139)) * d * m1)
-                    + d * (x173 - a * x8 * x0 * gamma1_dot * x2 + x174) * m1
-                    + x175 * phi_dot) * gamma1_dot
-                - gamma2_dot
-                    * (x177 * theta_dot * x9
-                        + psi_dot
-                            * (x7 * (2.0 * (x178 * J1) + 2.0 * (x46 * J2))
-                                + m2 * (-2.0 * (x179 * x29) - 2.0 * (x129 * x23)) * d)
-                        + x180 * phi_dot
-                        + m2 * d * (-a * gamma2_dot * x0 * x1 * x9 - x181 - x182))
-                - (x184 * d
-                    + psi_dot
-                        * (d
-                            * (x8 * (2.0 * (x19 * x41) + 2.0 * (x28 * x34)) * m1
-                                + m2 * (2.0 * (x113 * x23) + 2.0 * (x29 * x124)) * x1)
-                            + x0
-                                * ((2.0 * (x7 * x1 * J1) - 2.0 * (x4 * x46 * J2) - x59 - x60
-                                    + (Iyy * x2 + x58) * x0) * x9 - x5 * (x9 * Ixz - Ixy * x2)
-                                    + (2.0 * (x11 * J2 * x47) + x0 * (-x9 * Izz - x52) + x54
-                                        + x55 + 2.0 * (x13 * x8 * J1)) * x2)) + theta_dot * x185
-                    + (x98 * phi_dot + gamma1_dot * x9 * x99 + gamma2_dot * x91 * x2)
-                        * x0) * phi_dot
-                + 0.5
-                    * (m2
-                        * (2.0 * (x186 * (x187 + x188 + x189))
-                            + 2.0
-                                * ((d * (x1 * phi_dot * x124 - gamma2_dot * x179)
-                                    + theta_dot * x159 * x16 + x150 * psi_dot) * x190))),
-            psi_dot
-                * ((x166 * x195 + x201 * x165) * J1 + 0.5 * (x167 * x198)
-                    + J2 * (x204 * x163 + x164 * x205) + 0.5 * ((x170 - x169) * x191)
-                    + 0.5 * (x168 * x194) - X_dot * x206 * x16
-                    - 0.5 * (x0 * (Ixx * x191 - x194 * Ixz - Ixy * x198))
-                    + x5
-                        * (J2
-                            * (-(x192 + gamma1_dot - x193) * x2
-                                - (gamma2_dot + x196 + x197) * x9)
-                            - 0.5 * ((x208 - x207 - x209) * x9)
-                            - 0.5 * ((x212 - x210 - x211) * x2)) - x107 * x14 * Y_dot)
-                - (x153 + x217 + x154
-                    + theta_dot
-                        * (2.0 * (Iyz * x2 * x2)
-                            + ((x11 * x11 * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy + 2.0 * Izz
-                                + (m2 * (2.0 * x77 - 2.0) + (2.0 - 2.0 * x75) * m1) * d * d
-                                + x4 * x4 * (2.0 * J2 - 2.0 * J1)) * x2 - 2.0 * x58) * x9)
-                    + psi_dot * x185 + phi_dot * x157) * phi_dot
-                - (theta_dot
-                    * (x4 * (x176 * x2 * x2 - 2.0 * x62 - 2.0 * J2 + 2.0 * J1)
-                        - 2.0 * x65) * x1 + (x177 * psi_dot + phi_dot * x218) * x9
-                    + m2 * d * (x219 + x46 * x215 - a * gamma2_dot * x1 * x2))
-                    * gamma2_dot
-                - theta_dot * (x111 * x215 + Z_dot * x206 + psi_dot * x162)
-                + 0.5
-                    * (m2
-                        * (2.0 * (x186 * (x14 * psi_dot * x155 + x221 * x16))
-                            + 2.0 * ((x221 * x14 + x159 * psi_dot * x16) * x190)
-                            + 2.0
-                                * (((x5 * (x4 * x223 + x224) + x225 * x0 * x1) * d - x226)
-                                    * x228)))
-                + 0.5
-                    * ((2.0 * ((psi_dot * x138 * x16 + x229 * x14) * x146)
-                        + 2.0
-                            * ((d
-                                * (x5 * (x11 * x231 - x8 * phi_dot * x2) + x8 * x0 * x232)
-                                + x226) * x234)
-                        + 2.0 * (x147 * (x14 * psi_dot * x144 + x229 * x16))) * m1)
-                - ((psi_dot * x172 + x235 * phi_dot) * x2
-                    + (x236 + a * x8 * gamma1_dot * x9 + x237) * d * m1
-                    + theta_dot * x8 * (x11 * x2 * x2 * x171 - 2.0 * x70)) * gamma1_dot,
-            d
-                * (0.5
-                    * ((2.0
-                        * (x146
-                            * ((theta_dot * x14 * x0 * x2 + phi_dot * x113
-                                + x28 * psi_dot) * x8 + x11 * gamma1_dot * x19))
-                        + 2.0
-                            * (x234
-                                * (x11 * x0 * gamma1_dot * x2
-                                    + x8 * (-x238 - x5 * theta_dot * x2)))
-                        + 2.0
-                            * ((x8
-                                * (psi_dot * x19 + x33 * phi_dot
-                                    + theta_dot * x0 * x2 * x16) + x11 * gamma1_dot * x116)
-                                * x147)) * m1) - x184 * psi_dot
-                    + 0.5
-                        * (m2
-                            * (2.0
-                                * ((x5 * theta_dot * x1 * x9
-                                    + (-x4 * gamma2_dot * x9 - x1 * phi_dot * x2) * x0) * x228)
-                                + 2.0
-                                    * (x186
-                                        * (x4 * gamma2_dot * x33
-                                            + (x28 * phi_dot - theta_dot * x0 * x9 * x16
-                                                + psi_dot * x113) * x1))
-                                + 2.0
-                                    * (((psi_dot * x124 - theta_dot * x14 * x0 * x9
-                                        + x148 * phi_dot) * x1 + x4 * gamma2_dot * x113) * x190))))
-                + x194
-                    * (x201 * x8 * J1 - x207
-                        + J2 * (gamma2_dot + x196 + x11 * x205 + x197) + 0.5 * x208
-                        - 0.5 * x209 + 0.5 * (x239 * Izz))
-                - gamma1_dot
-                    * (x175 * psi_dot + theta_dot * x235 * x2
-                        + x11
-                            * (x240 * d * m1
-                                + (2.0 * J2 + 2.0 * x68 - 2.0 * J1) * x8 * phi_dot))
-                + x239
-                    * (J2 * (x192 + x4 * x204 + gamma1_dot - x193) - 0.5 * x210
-                        - 0.5 * x211 + 0.5 * x212 - x195 * x1 * J1)
-                + 0.5 * (x191 * (-x239 * Ixz - x194 * Ixy))
-                - (x98 * x0 * psi_dot
-                    + d * (Z_dot * x0 * x110 + X_dot * x241 + Y_dot * x242)
-                    + theta_dot * x157) * phi_dot - (x217 + x158 * psi_dot) * theta_dot
-                - gamma2_dot
-                    * (x4 * (m2 * d * x243 + x1 * phi_dot * x176) + theta_dot * x9 * x218
-                        + x180 * psi_dot) + 0.5 * ((x194 * Iyy - Iyz * x239) * x198),
-            (x201 * J1 + (-x199 - x200) * J2) * x205
-                - (x5 * psi_dot * x99 * x2 + d * (x236 + x237) * m1) * theta_dot
-                - (x99 * x198 + x11 * x240 * d * m1) * phi_dot
-                + d * m1
-                    * (x147 * x245
-                        - (X_dot * x246 + a * x8 * (x193 - x192) + Z_dot * x136
-                            + Y_dot * x244) * gamma1_dot
-                        + x234 * (x231 * x8 * x0 + x11 * x233) + x247 * x146
-                        - psi_dot * (x173 + x174)),
-            x195 * (J2 * x204 + (-x202 - x203) * J1)
-                - phi_dot
-                    * (theta_dot * x9 * x152 + x0 * x91 * psi_dot * x2
-                        + x4 * m2 * d * x243)
-                + m2 * d
-                    * (x190 * (x248 - x250 - theta_dot * x14 * x178 - x251)
-                        - (-x181 - x182) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * x7 - X_dot * x249 + a * x239 * x1 - x252 * Y_dot)
-                        + x186 * (x255 - x253 - x254 - theta_dot * x178 * x16)
-                        + (x223 * x0 * x1 + x4 * (x5 * x225 - x238)) * x228)
-                - (x5 * psi_dot * x9 * x152 + m2 * d * ((-x213 - x214) * x178 + x219))
-                    * theta_dot,
-            (-m2 * gamma2_dot * (theta_dot * x46 * x14 + x248 - x250 - x251)
-                - x247 * gamma1_dot * m1
-                - phi_dot
-                    * (x241 * phi_dot + x11 * gamma1_dot * x19 * m1
-                        + x4 * m2 * gamma2_dot * x113 + theta_dot * x120 * x14 * x0
-                        + psi_dot * x183)) * d
-                - ((phi_dot * x183 - m2 * gamma2_dot * x179 + x139 * gamma1_dot * m1) * d
-                    + theta_dot * x206 * x16 + x151 * psi_dot) * psi_dot
-                - theta_dot * (x160 * psi_dot * x16 + x14 * x256),
-            (-x245 * gamma1_dot * m1
-                - m2 * gamma2_dot * (theta_dot * x46 * x16 - x253 - x254 + x255)
-                - (theta_dot * x120 * x0 * x16 + x11 * gamma1_dot * x116 * m1
-                    + x114 * psi_dot + x242 * phi_dot + x4 * m2 * gamma2_dot * x33)
-                    * phi_dot) * d
-                - psi_dot
-                    * (theta_dot * x107 * x14 + x93 * psi_dot
-                        + (x122 * gamma1_dot * m1 - m2 * gamma2_dot * x129
-                            + x114 * phi_dot) * d)
-                - theta_dot * (x14 * psi_dot * x156 + x256 * x16),
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * x7 + theta_dot * x163 - x4 * x0 * x9 * phi_dot)
-                    - (x216 * x5 * theta_dot
-                        + x0
-                            * (x11 * gamma1_dot * m1 * x2 + phi_dot * x110
-                                - x4 * m2 * gamma2_dot * x9)) * phi_dot
-                    - (theta_dot * x164 + gamma1_dot * x136 + x11 * x0 * phi_dot * x2)
-                        * gamma1_dot * m1)
-                - theta_dot
-                    * (theta_dot * x206
-                        + d
-                            * (gamma1_dot * x164 * m1 + x216 * x5 * phi_dot
-                                + m2 * gamma2_dot * x163)),
+            ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
+                + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1 - x118 * x5
+                + (-x18 * x121 - x20 * x122) * J1
+                + (x124 - x123 - x125 - x126 - x127) * x3
+                - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
+                - m2 * (x172 * x14 + x178 * x1 * x2),
+            x2
+                * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
+                    + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
+                - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
+                + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106 - x107
+                    - x110) * x10,
+            (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
+                + (-x0 * x122 - x12 * x121) * J1 + (m2 * x172 * d - x165 - x167) * x11,
+            J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
+            x163 * x108 * x109 - x107 - m2 * x177 * d,
+            -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
+                - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
+            -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
+                - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
+            -m2
+                * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
+                    * phi_dot
+                    + (theta_dot * x186
+                        + phi_dot
+                            * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
+                                - x190)) * theta_dot
+                    + gamma2_dot
+                        * (phi_dot * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
+                            + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
+                                - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
+                            + gamma2_dot * x186)) * d - x179)
+                - (x179
+                    + (theta_dot
+                        * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
+                            - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
+                            + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
+                                * phi_dot)
+                        + gamma1_dot
+                            * (x201 * gamma1_dot
+                                + phi_dot
+                                    * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
+                                        - 0.5 * x200))
+                        + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1072,512 +872,317 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::sin(gamma2);
-        let x2 = f64::cos(phi);
-        let x3 = x0 * x1 * x2;
-        let x4 = f64::cos(gamma2);
-        let x5 = f64::sin(theta);
-        let x6 = x4 * x5;
-        let x7 = -x3 - x6;
-        let x8 = f64::sin(gamma1);
-        let x9 = f64::sin(phi);
-        let x10 = x8 * x0 * x9;
-        let x11 = f64::cos(gamma1);
-        let x12 = x11 * x5;
-        let x13 = x10 - x12;
-        let x14 = f64::cos(psi);
-        let x15 = x4 * x14 * x0;
-        let x16 = f64::sin(psi);
-        let x17 = x9 * x16;
-        let x18 = x5 * x14 * x2;
-        let x19 = x17 + x18;
-        let x20 = x1 * x19;
-        let x21 = d * (x15 - x20);
-        let x22 = a * x14 * x0;
-        let x23 = -x21 - x22;
-        let x24 = a * x0 * x16;
-        let x25 = x4 * x0 * x16;
-        let x26 = x14 * x9;
-        let x27 = x5 * x2 * x16;
-        let x28 = x26 - x27;
-        let x29 = x24 - (-x25 - x28 * x1) * d;
-        let x30 = x11 * x0 * x16;
-        let x31 = x14 * x2;
-        let x32 = x5 * x9 * x16;
-        let x33 = -x31 - x32;
-        let x34 = d * (x8 * x33 - x30) - x24;
-        let x35 = x2 * x16;
-        let x36 = x5 * x14 * x9;
-        let x37 = x36 - x35;
-        let x38 = x37 * x8;
-        let x39 = x11 * x14 * x0;
-        let x40 = d * (x38 + x39);
-        let x41 = x40 + x22;
-        let x42 = x2 * x2;
-        let x43 = x9 * x9;
-        let x44 = x5 * x1;
-        let x45 = x4 * x0 * x2;
-        let x46 = x45 - x44;
-        let x47 = x11 * x0 * x9 + x5 * x8;
-        let x48 = x5 * Ixx;
-        let x49 = Ixy * x9;
-        let x50 = Ixz * x2;
-        let x51 = x0 * (-x49 - x50);
-        let x52 = Iyz * x2;
-        let x53 = Iyy * x9;
-        let x54 = (x53 - x52) * x0;
-        let x55 = x5 * Ixy;
-        let x56 = (x54 + x55) * x9;
-        let x57 = Izz * x2;
-        let x58 = Iyz * x9;
-        let x59 = x0 * (x57 - x58);
-        let x60 = x5 * Ixz;
-        let x61 = (x59 + x60) * x2;
-        let x62 = m2 * d * d;
-        let x63 = x62 + J2 - J1;
-        let x64 = x4 * x63;
-        let x65 = m2 * a * d;
-        let x66 = x64 + x65;
-        let x67 = x66 * x1 - Ixz;
-        let x68 = d * d * m1;
-        let x69 = J2 + x68 - J1;
-        let x70 = a * d * m1;
-        let x71 = x11 * x69 + x70;
-        let x72 = Ixy + x8 * x71;
-        let x73 = J2 - J1;
-        let x74 = J1 - J2;
-        let x75 = x11 * x11;
-        let x76 = (x75 - 1.0) * m1;
-        let x77 = x4 * x4;
-        let x78 = m2 * (1.0 - x77);
-        let x79 = Iyy + x11 * x11 * x73 + x4 * x4 * x74 + d * d * (x76 + x78) - Izz;
-        let x80 = x5 * x67 * x9 + Iyz * x0
-            + (x5 * x72 + (x79 * x9 - 2.0 * x52) * x0) * x2;
-        let x81 = J1 - J2 - x68;
-        let x82 = x11 * x81 - x70;
-        let x83 = x8 * x82 - Ixy;
-        let x84 = x83 * x9 + x67 * x2;
-        let x85 = m2 * (x77 - 1.0);
-        let x86 = (x85 + x76) * d * d - Ixx + (x75 + x77 - 2.0) * J2 + (-x75 - x77) * J1;
-        let x87 = x0 * x84 + x5 * x86;
-        let x88 = x11 * a;
-        let x89 = x0 * (d * (x88 + d) * m1 + J2) * x2;
-        let x90 = x4 * a;
-        let x91 = J2 + m2 * d * (d + x90);
-        let x92 = x0 * x91 * x9;
-        let x93 = m2 * x29 + x34 * m1;
-        let x94 = m1 * x41 + m2 * x23;
-        let x95 = J1 - x62 - J2;
-        let x96 = x4 * x95 - x65;
-        let x97 = x96 * x1 + Ixz;
-        let x98 = x83 * x2 + x9 * x97;
-        let x99 = d * (-x88 - d) * m1 - J2;
-        let x100 = x9 * x99;
-        let x101 = x91 * x2;
-        let x102 = x11 * d;
-        let x103 = x4 * d;
-        let x104 = (-a - x102) * m1 + m2 * (a + x103);
-        let x105 = m2 * x1 * x2;
-        let x106 = x8 * x9 * m1;
-        let x107 = x104 * x5 + (x105 + x106) * x0 * d;
-        let x108 = x107 * x14;
-        let x109 = x107 * x16;
-        let x110 = -x105 - x106;
-        let x111 = x5 * d * x110 + x104 * x0;
-        let x112 = m1 * (1.0 - x75);
-        let x113 = x35 - x36;
-        let x114 = x8 * x19 * m1 + m2 * x1 * x113;
-        let x115 = x114 * d;
-        let x116 = x27 - x26;
-        let x117 = d * (m2 * x1 * x33 + x8 * x116 * m1);
-        let x118 = x8 * m1 * x2;
-        let x119 = m2 * x1 * x9;
-        let x120 = x118 - x119;
-        let x121 = x120 * x0 * d;
-        let x122 = x11 * x37 - x14 * x8 * x0;
-        let x123 = x122 * d * m1;
-        let x124 = x31 + x32;
-        let x125 = x8 * x0 * x16;
-        let x126 = x11 * x124 - x125;
-        let x127 = x126 * d * m1;
-        let x128 = x47 * d * m1;
-        let x129 = -x14 * x0 * x1 - x4 * x19;
-        let x130 = -(m2 * x129 * d);
-        let x131 = x0 * x1 * x16;
-        let x132 = -x131 - x4 * x116;
-        let x133 = -(m2 * d * x132);
-        let x134 = m2 * x46 * d;
-        let x135 = m2 + m0 + m1;
-        let x136 = x12 - x10;
-        let x137 = a * x5;
-        let x138 = d * x136 + x137;
-        let x139 = x11 * x33 + x125;
-        let x140 = (x8 * x113 - x39) * d;
-        let x141 = x140 - x22;
-        let x142 = x34 * psi_dot;
-        let x143 = (x122 * gamma1_dot + x8 * x19 * phi_dot) * d;
-        let x144 = x13 * d - x137;
-        let x145 = theta_dot * x14 * x144;
-        let x146 = x142 + X_dot + x143 + x145;
-        let x147 = d * (x8 * phi_dot * x116 + x126 * gamma1_dot) + Y_dot
-            + theta_dot * x144 * x16 + psi_dot * x41;
-        let x148 = -x17 - x18;
-        let x149 = d * (-x15 - x148 * x1);
-        let x150 = x22 - x149;
-        let x151 = m2 * x150 + x141 * m1;
-        let x152 = m2 * d * (-d - x90) - J2;
-        let x153 = gamma2_dot * x9 * x152;
-        let x154 = gamma1_dot * x99 * x2;
-        let x155 = x137 - x7 * d;
-        let x156 = m1 * x144 + m2 * x155;
-        let x157 = x2 * x97 + x72 * x9;
-        let x158 = x0 * x86 + x5 * x157;
-        let x159 = -d * (x3 + x6) - x137;
-        let x160 = x138 * m1 + m2 * x159;
-        let x161 = x9
-            * ((x85 + x112) * d * d - Iyy + x4 * x4 * x73 + x11 * x11 * x74 + Izz);
-        let x162 = (x5 * (x161 + 2.0 * x52) + x72 * x0) * x2 - x5 * Iyz + x67 * x0 * x9;
-        let x163 = -x4 * x5 * x2 - x0 * x1;
-        let x164 = x8 * x0 - x11 * x5 * x9;
-        let x165 = -x5 * x8 * x9 - x11 * x0;
-        let x166 = x5 * x1 * x2 - x4 * x0;
-        let x167 = Ixy * x0 + x5 * (x52 - x53);
-        let x168 = x5 * (x58 - x57) + x0 * Ixz;
-        let x169 = Ixx * x0;
-        let x170 = x5 * (x49 + x50);
-        let x171 = 2.0 * J1 - 2.0 * J2 - 2.0 * x68;
-        let x172 = x5 * x8 * x8 * x81 + x11 * (x5 * x71 + x8 * x0 * x9 * x171);
-        let x173 = X_dot * x139;
-        let x174 = x122 * Y_dot;
-        let x175 = x11 * (x5 * x8 * x171 + x82 * x0 * x9) + x69 * x8 * x8 * x0 * x9;
-        let x176 = 2.0 * x62 + 2.0 * J2 - 2.0 * J1;
-        let x177 = x5 * x95 * x1 * x1 + x4 * (x0 * x1 * x176 * x2 + x5 * x66);
-        let x178 = x44 - x45;
-        let x179 = x131 - x4 * x28;
-        let x180 = x4 * (x66 * x0 * x2 + x5 * x1 * (2.0 * J1 - 2.0 * x62 - 2.0 * J2))
-            + x95 * x0 * x1 * x1 * x2;
-        let x181 = X_dot * x179;
-        let x182 = x129 * Y_dot;
-        let x183 = m2 * x1 * x124 + x28 * x8 * m1;
-        let x184 = x114 * Y_dot + X_dot * x183;
-        let x185 = x5 * x84 + (x79 * x2 * x2 + (x161 + 4.0 * x52) * x9) * x0;
-        let x186 = psi_dot * x23 + theta_dot * x155 * x16 + Y_dot
-            + (x1 * x33 * phi_dot - gamma2_dot * x132) * d;
-        let x187 = theta_dot * x14 * x155;
-        let x188 = (x1 * phi_dot * x113 - gamma2_dot * x129) * d;
-        let x189 = psi_dot * x29;
-        let x190 = x187 + X_dot + x188 + x189;
-        let x191 = phi_dot - x5 * psi_dot;
-        let x192 = x0 * psi_dot * x2;
-        let x193 = theta_dot * x9;
-        let x194 = x192 - x193;
-        let x195 = x4 * x191 - x194 * x1;
-        let x196 = theta_dot * x2;
-        let x197 = x0 * psi_dot * x9;
-        let x198 = x196 + x197;
-        let x199 = x8 * x198;
-        let x200 = x11 * x191;
-        let x201 = x199 + x200;
-        let x202 = x1 * x191;
-        let x203 = x4 * x194;
-        let x204 = x202 + x203;
-        let x205 = x11 * x198 - x8 * x191;
-        let x206 = x5 * ((a + x102) * m1 + m2 * (-a - x103)) + x0 * d * x110;
-        let x207 = x194 * Iyz;
-        let x208 = Iyy * x198;
-        let x209 = Ixy * x191;
-        let x210 = Iyz * x198;
-        let x211 = Ixz * x191;
-        let x212 = x194 * Izz;
-        let x213 = Y_dot * x16;
-        let x214 = X_dot * x14;
-        let x215 = x213 + x214;
-        let x216 = x119 - x118;
-        let x217 = (x120 * x0 * x215 + x216 * Z_dot * x5) * d;
-        let x218 = x4 * x96 + x1 * x1 * x63;
-        let x219 = Z_dot * x163;
-        let x220 = a * x0;
-        let x221 = d * (-x0 * x1 * x9 * phi_dot - gamma2_dot * x178)
-            + theta_dot * (x220 - x166 * d);
-        let x222 = gamma2_dot * x2;
-        let x223 = -x222 - theta_dot;
-        let x224 = x1 * x9 * phi_dot;
-        let x225 = -gamma2_dot - x196;
-        let x226 = a * x5 * theta_dot;
-        let x227 = a * theta_dot * x0;
-        let x228 = Z_dot + d * (x5 * x225 * x1 + (x4 * (x222 + theta_dot) - x224) * x0)
-            + x227;
-        let x229 = theta_dot * (x165 * d - x220)
-            + d * (x47 * gamma1_dot + x8 * x0 * phi_dot * x2);
-        let x230 = gamma1_dot * x9;
-        let x231 = theta_dot - x230;
-        let x232 = gamma1_dot - x193;
-        let x233 = x5 * x232 + x0 * phi_dot * x2;
-        let x234 = Z_dot - x227 + (x8 * x233 + x11 * x0 * (x230 - theta_dot)) * d;
-        let x235 = x69 * x8 * x8 + x11 * x82;
-        let x236 = Z_dot * x164;
-        let x237 = x47 * x215;
-        let x238 = x0 * x9 * phi_dot;
-        let x239 = -x196 - x197;
-        let x240 = Y_dot * x116 + X_dot * x19 + Z_dot * x0 * x2;
-        let x241 = m2 * x148 * x1 + x8 * m1 * x113;
-        let x242 = x8 * x33 * m1 + x28 * m2 * x1;
-        let x243 = X_dot * x113 - Z_dot * x0 * x9 + Y_dot * x33;
-        let x244 = -x30 - x8 * x124;
-        let x245 = x11 * phi_dot * x116 + x122 * psi_dot + gamma1_dot * x244
-            + theta_dot * x47 * x16;
-        let x246 = -x38 - x39;
-        let x247 = x139 * psi_dot + x11 * x19 * phi_dot + gamma1_dot * x246
-            + theta_dot * x47 * x14;
-        let x248 = x4 * phi_dot * x113;
-        let x249 = x20 - x15;
-        let x250 = gamma2_dot * x249;
-        let x251 = psi_dot * x179;
-        let x252 = x1 * x116 - x25;
-        let x253 = gamma2_dot * x252;
-        let x254 = x129 * psi_dot;
-        let x255 = x4 * x33 * phi_dot;
-        let x256 = theta_dot * x111
-            + d * (x120 * x0 * phi_dot - m2 * gamma2_dot * x178 + x47 * gamma1_dot * m1);
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = -x5 * d - a * x1 * x2;
+        let x7 = x0 * a;
+        let x8 = x7 + d;
+        let x9 = a * a * x4 * x4;
+        let x10 = f64::cos(phi);
+        let x11 = f64::sin(gamma2);
+        let x12 = f64::cos(gamma2);
+        let x13 = x12 * x1 * x10 - x3 * x11;
+        let x14 = -a * x1 * x10 - x13 * d;
+        let x15 = d + x12 * a;
+        let x16 = a * a * x11 * x11 + x15 * x15;
+        let x17 = x12 * x3;
+        let x18 = -x1 * x11 * x10 - x17;
+        let x19 = x0 * x3;
+        let x20 = x4 * x1 * x2 - x19;
+        let x21 = x3 * Ixx;
+        let x22 = x1 * (-Ixy * x2 - Ixz * x10);
+        let x23 = Iyz * x10;
+        let x24 = Iyz * x2;
+        let x25 = a + x12 * d;
+        let x26 = Iyy * x10;
+        let x27 = x2 * Izz;
+        let x28 = -a - x0 * d;
+        let x29 = -x7 - d;
+        let x30 = x2
+            * (m2 * (x1 * x16 * x10 + x25 * x14) - x12 * x13 * J2 + x18 * x11 * J1
+                + (x26 + x24) * x1) - x3 * (x2 * Ixz - Ixy * x10)
+            + (x0 * J2 * x5 + x1 * (-x27 - x23) + x20 * x4 * J1
+                + (x28 * x6 + x1 * x2 * (x8 * x29 - x9)) * m1) * x10;
+        let x31 = x22 - x21 + (x0 * x20 + x12 * x18) * J1 + (x13 * x11 - x5 * x4) * J2
+            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
+        let x32 = x1 * (d * x8 * m1 + J2) * x10;
+        let x33 = J2 + m2 * d * x15;
+        let x34 = x1 * x33 * x2;
+        let x35 = f64::cos(psi);
+        let x36 = f64::sin(psi);
+        let x37 = x3 * x35 * x2 - x10 * x36;
+        let x38 = x0 * x37 - x35 * x4 * x1;
+        let x39 = x37 * x4 + x0 * x35 * x1;
+        let x40 = a * x4 * x39;
+        let x41 = x2 * x36 + x3 * x35 * x10;
+        let x42 = x12 * x35 * x1 - x11 * x41;
+        let x43 = x35 * x1 * x11 + x12 * x41;
+        let x44 = x43 * x15 - a * x11 * x42;
+        let x45 = m1 * (x1 * (x38 * x8 + x40) * x10 + x41 * x6)
+            + m2 * (x1 * x44 * x2 + x37 * x14);
+        let x46 = x35 * x10 + x3 * x2 * x36;
+        let x47 = x0 * x46 - x4 * x1 * x36;
+        let x48 = x0 * x1 * x36 + x4 * x46;
+        let x49 = a * x4 * x48;
+        let x50 = x3 * x10 * x36 - x35 * x2;
+        let x51 = x12 * x1 * x36 - x11 * x50;
+        let x52 = x1 * x11 * x36 + x12 * x50;
+        let x53 = x52 * x15 - a * x51 * x11;
+        let x54 = m1 * (x1 * (x47 * x8 + x49) * x10 + x50 * x6)
+            + m2 * (x1 * x2 * x53 + x46 * x14);
+        let x55 = x0 * x0;
+        let x56 = x12 * x12;
+        let x57 = J1 - J2;
+        let x58 = ((x0 * x57 + x28 * d * m1) * x4 - Ixy) * x10
+            + x2 * ((x12 * x57 - m2 * d * x25) * x11 + Ixz);
+        let x59 = x2 * (d * x29 * m1 - J2);
+        let x60 = x33 * x10;
+        let x61 = m2 * (x44 * x10 + x37 * x25 * x2)
+            + m1 * (x2 * (x38 * x29 - x40) + x28 * x41 * x10);
+        let x62 = m2 * (x53 * x10 + x25 * x2 * x46)
+            + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
+        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a * x18 * x11) * x10)
+            + m1 * ((x5 * x29 - a * x20 * x4) * x2 + x28 * x1 * x10 * x10);
+        let x64 = d * (x4 * x41 * m1 - m2 * x37 * x11);
+        let x65 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
+        let x66 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
+        let x67 = x38 * d * m1;
+        let x68 = x47 * d * m1;
+        let x69 = x5 * d * m1;
+        let x70 = m2 * d * x43;
+        let x71 = m2 * d * x52;
+        let x72 = m2 * x13 * d;
+        let x73 = m2 + m0 + m1;
+        let x74 = theta_dot * x1 * psi_dot * Ixz;
+        let x75 = x1 * psi_dot * x10;
+        let x76 = theta_dot * x2;
+        let x77 = x75 - x76;
+        let x78 = theta_dot * x10;
+        let x79 = x1 * psi_dot * x2;
+        let x80 = x78 + x79;
+        let x81 = x3 * psi_dot;
+        let x82 = phi_dot - x81;
+        let x83 = Iyy * x80 - x77 * Iyz - Ixy * x82;
+        let x84 = x83 * x82;
+        let x85 = -phi_dot - x81;
+        let x86 = theta_dot * x85 * x10;
+        let x87 = x4 * x80 + x0 * x82;
+        let x88 = x0 * x80 - x4 * x82;
+        let x89 = x87 * x88;
+        let x90 = x1 * psi_dot * x2 * phi_dot;
+        let x91 = J2 * (x86 + x89 - x90);
+        let x92 = Ixx * x82 - x77 * Ixz - Ixy * x80;
+        let x93 = x80 * x92;
+        let x94 = theta_dot * x85 * x2;
+        let x95 = x1 * psi_dot * phi_dot * x10;
+        let x96 = x94 + x95;
+        let x97 = Iyz * x96;
+        let x98 = x87 * x88 * J1;
+        let x99 = x86 - x90;
+        let x100 = x99 * Izz;
+        let x101 = x77 * x92;
+        let x102 = Iyy * x96;
+        let x103 = x77 * Izz - Iyz * x80 - Ixz * x82;
+        let x104 = x103 * x82;
+        let x105 = Ixy * theta_dot * x1 * psi_dot;
+        let x106 = x99 * Iyz;
+        let x107 = J2 * x96;
+        let x108 = x12 * x82 - x77 * x11;
+        let x109 = x11 * x82 + x12 * x77;
+        let x110 = x108 * x57 * x109;
+        let x111 = x75 + gamma1_dot - x76;
+        let x112 = x111 * x57 * x87;
+        let x113 = x94 + x95 - gamma1_dot * x82;
+        let x114 = gamma1_dot * x80;
+        let x115 = theta_dot * x1 * psi_dot;
+        let x116 = x0 * x113 + x4 * (x115 - x114);
+        let x117 = J2 * x116;
+        let x118 = x112 + x117;
+        let x119 = gamma2_dot * x82;
+        let x120 = -x77 * gamma2_dot - x115;
+        let x121 = x11 * (x90 - x86 - x119) + x12 * x120;
+        let x122 = x0 * (x114 - x115) + x113 * x4;
+        let x123 = theta_dot * Ixx * x1 * psi_dot;
+        let x124 = x103 * x80;
+        let x125 = x99 * Ixz;
+        let x126 = x77 * x83;
+        let x127 = Ixy * x96;
+        let x128 = Z_dot * x1 * x2;
+        let x129 = x37 * X_dot;
+        let x130 = Y_dot * x46;
+        let x131 = a * x77;
+        let x132 = x128 + x129 + x130 + x131;
+        let x133 = Y_dot * x36;
+        let x134 = X_dot * x35;
+        let x135 = x1 * (x133 + x134) - Z_dot * x3;
+        let x136 = x0 * x132 - x135 * x4 + x111 * d;
+        let x137 = a * x80;
+        let x138 = Y_dot * x50;
+        let x139 = X_dot * x41;
+        let x140 = Z_dot * x1 * x10;
+        let x141 = x138 - x137 + x139 + x140 - d * x88;
+        let x142 = x1 * psi_dot * (x35 * Y_dot - X_dot * x36);
+        let x143 = gamma1_dot * x132;
+        let x144 = theta_dot * (x3 * (-x133 - x134) - Z_dot * x1);
+        let x145 = theta_dot * x1 * x36 + x35 * (x81 - phi_dot);
+        let x146 = x3 * phi_dot;
+        let x147 = x146 - psi_dot;
+        let x148 = Y_dot * (x145 * x2 + x147 * x10 * x36);
+        let x149 = x99 * a;
+        let x150 = Z_dot * (x1 * phi_dot * x10 - x3 * theta_dot * x2);
+        let x151 = X_dot * (x35 * (theta_dot * x1 * x2 + x147 * x10) + x2 * x82 * x36);
+        let x152 = x148 + x149 + x150 + x151 - x135 * gamma1_dot;
+        let x153 = x88 * x141 - x136 * x111 + x0 * (x142 + x143 + x144) + x152 * x4;
+        let x154 = a * x4 * x153;
+        let x155 = x0 * x135 + x4 * x132;
+        let x156 = x99 * d - x87 * x141 + x4 * (-x142 - x143 - x144) + x0 * x152
+            + x111 * x155;
+        let x157 = a * x96;
+        let x158 = psi_dot - x146;
+        let x159 = X_dot * (x82 * x10 * x36 + x35 * (theta_dot * x1 * x10 + x158 * x2));
+        let x160 = Z_dot * (-x1 * x2 * phi_dot - x3 * theta_dot * x10);
+        let x161 = (x158 * x2 * x36 + x145 * x10) * Y_dot;
+        let x162 = x136 * x87 - x157 - d * x116 + x159 + x160 - x155 * x88 + x161;
+        let x163 = J2 - J1;
+        let x164 = gamma2_dot + x78 + x79;
+        let x165 = x163 * x108 * x164;
+        let x166 = x120 * x11 + (x86 - x90 + x119) * x12;
+        let x167 = J2 * x166;
+        let x168 = x165 + x167;
+        let x169 = x137 + x138 + x139 + x140;
+        let x170 = x135 * x12 - x169 * x11;
+        let x171 = x164 * d + x135 * x11 + x12 * x169;
+        let x172 = x148 - x149 + x109 * x170 + x150 + x151 - x108 * x171 - x166 * d;
+        let x173 = x128 + x129 + x130 - x109 * d - x131;
+        let x174 = x135 * gamma2_dot;
+        let x175 = x142 - gamma2_dot * x169 + x144;
+        let x176 = x11 * (-x174 - x157 - x159 - x160 - x161) - x109 * x173 + x12 * x175
+            + x164 * x171;
+        let x177 = x96 * d - x164 * x170 + x12 * (x174 + x157 + x159 + x160 + x161)
+            + x108 * x173 + x11 * x175;
+        let x178 = x177 * x15 - a * x11 * x176;
+        let x179 = a * x3 * theta_dot * theta_dot;
+        let x180 = x12 * x2;
+        let x181 = x11 * x10;
+        let x182 = (-x180 - x181) * x1;
+        let x183 = x1 * (x180 + x181);
+        let x184 = (x181 - x180) * x1;
+        let x185 = (x180 - x181) * x1;
+        let x186 = 0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185 - x17;
+        let x187 = x11 * x2;
+        let x188 = x12 * x10;
+        let x189 = x3 * (x187 + x188);
+        let x190 = x3 * (x188 - x187);
+        let x191 = x3 * x2;
+        let x192 = x1 * x10;
+        let x193 = x0 * (x191 + x192);
+        let x194 = x1 * x2;
+        let x195 = x3 * x10;
+        let x196 = x4 * (x194 - x195);
+        let x197 = x0 * (x192 - x191);
+        let x198 = x4 * (x195 - x194);
+        let x199 = x4 * (x194 + x195);
+        let x200 = (-x194 - x195) * x4;
+        let x201 = 0.25 * x198 - 0.25 * x196 - 0.25 * x199 + x19 + 0.25 * x200;
         let mut matrix: [[f64; 8]; 8] = [
             [
-                (x7 * x7 + x13 * x13) * J1 + m2 * (x23 * x23 + x29 * x29)
-                    + (x34 * x34 + x41 * x41) * m1
-                    + J2 * (x0 * x0 * (x42 + x43) + x46 * x46 + x47 * x47)
-                    - x5 * (x51 - x48) + x0 * (x56 + x61),
-                x80,
-                x87,
-                x89,
-                x92,
-                x93,
-                x94,
+                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
+                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
+                    + (x18 * x18 + x20 * x20) * J1
+                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
+                    - x3 * (x22 - x21)
+                    + x1
+                        * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
+                            + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
+                x30,
+                x31,
+                x32,
+                x34,
+                x45,
+                x54,
                 0.0,
             ],
             [
-                x80,
-                a * (2.0 * (x11 * d * m1) + a * (m2 + m1)) + J2 + x4 * (x64 + 2.0 * x65)
-                    + x68 + Izz + (x79 * x2 + 2.0 * x58) * x2 + J1,
-                x98,
-                x100,
-                x101,
-                x108,
-                x109,
-                x111,
+                x30,
+                J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
+                    + (x4 * x4 * x10 * J1 + x26 + x24) * x10
+                    + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
+                    + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
+                    + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
+                x58,
+                x59,
+                x60,
+                x61,
+                x62,
+                x63,
             ],
             [
-                x87,
-                x98,
-                Ixx + d * d * (x112 + x78) + (x75 + x77) * J1 + J2 * (2.0 - x75 - x77),
+                x31,
+                x58,
+                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
+                    + (x11 * x11 + x4 * x4) * J2,
                 0.0,
                 0.0,
-                x115,
-                x117,
-                x121,
+                x64,
+                x65,
+                x66,
             ],
-            [x89, x100, 0.0, J2 + x68, 0.0, x123, x127, x128],
-            [x92, x101, 0.0, 0.0, x62 + J2, x130, x133, x134],
-            [x93, x108, x115, x123, x130, x135, 0.0, 0.0],
-            [x94, x109, x117, x127, x133, 0.0, x135, 0.0],
-            [0.0, x111, x121, x128, x134, 0.0, 0.0, x135],
+            [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
+            [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
+            [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
+            [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
+            [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
         ];
         let mut force: [f64; 8] = [
-            0.5
-                * (m1
-                    * (2.0
-                        * ((theta_dot * x138 * x16
-                            + d * (x139 * gamma1_dot + x28 * x8 * phi_dot)
-                            + x141 * psi_dot) * x146)
-                        + 2.0 * (x147 * (x142 + x143 + x145))))
-                - psi_dot
-                    * (X_dot * x151 + Y_dot * x93
-                        + psi_dot
-                            * (x34 * m1 * (2.0 * x40 + 2.0 * x140)
-                                + m2 * x29 * (-2.0 * x149 - 2.0 * x21)))
-                - (x5 * (x153 + x154) + x14 * Y_dot * x156 + x158 * phi_dot
-                    + x160 * X_dot * x16 + theta_dot * x162
-                    + ((2.0 * (x46 * x163) + 2.0 * (x47 * x164)) * J2
-                        + m1 * (2.0 * (x34 * x138 * x16) + 2.0 * (x14 * x144 * x41))
-                        + m2 * (2.0 * (x14 * x155 * x23) + 2.0 * (x159 * x29 * x16))
-                        + (2.0 * (x13 * x165) + 2.0 * (x166 * x7)) * J1
-                        + x0 * (x48 - x51 + x9 * x167 + x168 * x2)
-                        + x5
-                            * (x169 - x56 - x61 + (-2.0 * x42 - 2.0 * x43) * J2 * x0
-                                - x170)) * psi_dot) * theta_dot
-                - (theta_dot * x172 * x2
-                    + psi_dot
-                        * ((2.0 * (J2 * x136) + 2.0 * (x13 * J1)) * x47
-                            + (2.0 * (x122 * x41) + 2.0 * (x34 * x139)) * d * m1)
-                    + d * (x173 - a * x8 * x0 * gamma1_dot * x2 + x174) * m1
-                    + x175 * phi_dot) * gamma1_dot
-                - gamma2_dot
-                    * (x177 * theta_dot * x9
-                        + psi_dot
-                            * (x7 * (2.0 * (x178 * J1) + 2.0 * (x46 * J2))
-                                + m2 * (-2.0 * (x179 * x29) - 2.0 * (x129 * x23)) * d)
-                        + x180 * phi_dot
-                        + m2 * d * (-a * gamma2_dot * x0 * x1 * x9 - x181 - x182))
-                - (x184 * d
-                    + psi_dot
-                        * (d
-                            * (x8 * (2.0 * (x19 * x41) + 2.0 * (x28 * x34)) * m1
-                                + m2 * (2.0 * (x113 * x23) + 2.0 * (x29 * x124)) * x1)
-                            + x0
-                                * ((2.0 * (x7 * x1 * J1) - 2.0 * (x4 * x46 * J2) - x59 - x60
-                                    + (Iyy * x2 + x58) * x0) * x9 - x5 * (x9 * Ixz - Ixy * x2)
-                                    + (2.0 * (x11 * J2 * x47) + x0 * (-x9 * Izz - x52) + x54
-                                        + x55 + 2.0 * (x13 * x8 * J1)) * x2)) + theta_dot * x185
-                    + (x98 * phi_dot + gamma1_dot * x9 * x99 + gamma2_dot * x91 * x2)
-                        * x0) * phi_dot
-                + 0.5
-                    * (m2
-                        * (2.0 * (x186 * (x187 + x188 + x189))
-                            + 2.0
-                                * ((d * (x1 * phi_dot * x124 - gamma2_dot * x179)
-                                    + theta_dot * x159 * x16 + x150 * psi_dot) * x190))),
-            psi_dot
-                * ((x166 * x195 + x201 * x165) * J1 + 0.5 * (x167 * x198)
-                    + J2 * (x204 * x163 + x164 * x205) + 0.5 * ((x170 - x169) * x191)
-                    + 0.5 * (x168 * x194) - X_dot * x206 * x16
-                    - 0.5 * (x0 * (Ixx * x191 - x194 * Ixz - Ixy * x198))
-                    + x5
-                        * (J2
-                            * (-(x192 + gamma1_dot - x193) * x2
-                                - (gamma2_dot + x196 + x197) * x9)
-                            - 0.5 * ((x208 - x207 - x209) * x9)
-                            - 0.5 * ((x212 - x210 - x211) * x2)) - x107 * x14 * Y_dot)
-                - (x153 + x217 + x154
-                    + theta_dot
-                        * (2.0 * (Iyz * x2 * x2)
-                            + ((x11 * x11 * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy + 2.0 * Izz
-                                + (m2 * (2.0 * x77 - 2.0) + (2.0 - 2.0 * x75) * m1) * d * d
-                                + x4 * x4 * (2.0 * J2 - 2.0 * J1)) * x2 - 2.0 * x58) * x9)
-                    + psi_dot * x185 + phi_dot * x157) * phi_dot
-                - (theta_dot
-                    * (x4 * (x176 * x2 * x2 - 2.0 * x62 - 2.0 * J2 + 2.0 * J1)
-                        - 2.0 * x65) * x1 + (x177 * psi_dot + phi_dot * x218) * x9
-                    + m2 * d * (x219 + x46 * x215 - a * gamma2_dot * x1 * x2))
-                    * gamma2_dot
-                - theta_dot * (x111 * x215 + Z_dot * x206 + psi_dot * x162)
-                + 0.5
-                    * (m2
-                        * (2.0 * (x186 * (x14 * psi_dot * x155 + x221 * x16))
-                            + 2.0 * ((x221 * x14 + x159 * psi_dot * x16) * x190)
-                            + 2.0
-                                * (((x5 * (x4 * x223 + x224) + x225 * x0 * x1) * d - x226)
-                                    * x228)))
-                + 0.5
-                    * ((2.0 * ((psi_dot * x138 * x16 + x229 * x14) * x146)
-                        + 2.0
-                            * ((d
-                                * (x5 * (x11 * x231 - x8 * phi_dot * x2) + x8 * x0 * x232)
-                                + x226) * x234)
-                        + 2.0 * (x147 * (x14 * psi_dot * x144 + x229 * x16))) * m1)
-                - ((psi_dot * x172 + x235 * phi_dot) * x2
-                    + (x236 + a * x8 * gamma1_dot * x9 + x237) * d * m1
-                    + theta_dot * x8 * (x11 * x2 * x2 * x171 - 2.0 * x70)) * gamma1_dot,
-            d
-                * (0.5
-                    * ((2.0
-                        * (x146
-                            * ((theta_dot * x14 * x0 * x2 + phi_dot * x113
-                                + x28 * psi_dot) * x8 + x11 * gamma1_dot * x19))
-                        + 2.0
-                            * (x234
-                                * (x11 * x0 * gamma1_dot * x2
-                                    + x8 * (-x238 - x5 * theta_dot * x2)))
-                        + 2.0
-                            * ((x8
-                                * (psi_dot * x19 + x33 * phi_dot
-                                    + theta_dot * x0 * x2 * x16) + x11 * gamma1_dot * x116)
-                                * x147)) * m1) - x184 * psi_dot
-                    + 0.5
-                        * (m2
-                            * (2.0
-                                * ((x5 * theta_dot * x1 * x9
-                                    + (-x4 * gamma2_dot * x9 - x1 * phi_dot * x2) * x0) * x228)
-                                + 2.0
-                                    * (x186
-                                        * (x4 * gamma2_dot * x33
-                                            + (x28 * phi_dot - theta_dot * x0 * x9 * x16
-                                                + psi_dot * x113) * x1))
-                                + 2.0
-                                    * (((psi_dot * x124 - theta_dot * x14 * x0 * x9
-                                        + x148 * phi_dot) * x1 + x4 * gamma2_dot * x113) * x190))))
-                + x194
-                    * (x201 * x8 * J1 - x207
-                        + J2 * (gamma2_dot + x196 + x11 * x205 + x197) + 0.5 * x208
-                        - 0.5 * x209 + 0.5 * (x239 * Izz))
-                - gamma1_dot
-                    * (x175 * psi_dot + theta_dot * x235 * x2
-                        + x11
-                            * (x240 * d * m1
-                                + (2.0 * J2 + 2.0 * x68 - 2.0 * J1) * x8 * phi_dot))
-                + x239
-                    * (J2 * (x192 + x4 * x204 + gamma1_dot - x193) - 0.5 * x210
-                        - 0.5 * x211 + 0.5 * x212 - x195 * x1 * J1)
-                + 0.5 * (x191 * (-x239 * Ixz - x194 * Ixy))
-                - (x98 * x0 * psi_dot
-                    + d * (Z_dot * x0 * x110 + X_dot * x241 + Y_dot * x242)
-                    + theta_dot * x157) * phi_dot - (x217 + x158 * psi_dot) * theta_dot
-                - gamma2_dot
-                    * (x4 * (m2 * d * x243 + x1 * phi_dot * x176) + theta_dot * x9 * x218
-                        + x180 * psi_dot) + 0.5 * ((x194 * Iyy - Iyz * x239) * x198),
-            (x201 * J1 + (-x199 - x200) * J2) * x205
-                - (x5 * psi_dot * x99 * x2 + d * (x236 + x237) * m1) * theta_dot
-                - (x99 * x198 + x11 * x240 * d * m1) * phi_dot
-                + d * m1
-                    * (x147 * x245
-                        - (X_dot * x246 + a * x8 * (x193 - x192) + Z_dot * x136
-                            + Y_dot * x244) * gamma1_dot
-                        + x234 * (x231 * x8 * x0 + x11 * x233) + x247 * x146
-                        - psi_dot * (x173 + x174)),
-            x195 * (J2 * x204 + (-x202 - x203) * J1)
-                - phi_dot
-                    * (theta_dot * x9 * x152 + x0 * x91 * psi_dot * x2
-                        + x4 * m2 * d * x243)
-                + m2 * d
-                    * (x190 * (x248 - x250 - theta_dot * x14 * x178 - x251)
-                        - (-x181 - x182) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * x7 - X_dot * x249 + a * x239 * x1 - x252 * Y_dot)
-                        + x186 * (x255 - x253 - x254 - theta_dot * x178 * x16)
-                        + (x223 * x0 * x1 + x4 * (x5 * x225 - x238)) * x228)
-                - (x5 * psi_dot * x9 * x152 + m2 * d * ((-x213 - x214) * x178 + x219))
-                    * theta_dot,
-            (-m2 * gamma2_dot * (theta_dot * x46 * x14 + x248 - x250 - x251)
-                - x247 * gamma1_dot * m1
-                - phi_dot
-                    * (x241 * phi_dot + x11 * gamma1_dot * x19 * m1
-                        + x4 * m2 * gamma2_dot * x113 + theta_dot * x120 * x14 * x0
-                        + psi_dot * x183)) * d
-                - ((phi_dot * x183 - m2 * gamma2_dot * x179 + x139 * gamma1_dot * m1) * d
-                    + theta_dot * x206 * x16 + x151 * psi_dot) * psi_dot
-                - theta_dot * (x160 * psi_dot * x16 + x14 * x256),
-            (-x245 * gamma1_dot * m1
-                - m2 * gamma2_dot * (theta_dot * x46 * x16 - x253 - x254 + x255)
-                - (theta_dot * x120 * x0 * x16 + x11 * gamma1_dot * x116 * m1
-                    + x114 * psi_dot + x242 * phi_dot + x4 * m2 * gamma2_dot * x33)
-                    * phi_dot) * d
-                - psi_dot
-                    * (theta_dot * x107 * x14 + x93 * psi_dot
-                        + (x122 * gamma1_dot * m1 - m2 * gamma2_dot * x129
-                            + x114 * phi_dot) * d)
-                - theta_dot * (x14 * psi_dot * x156 + x256 * x16),
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * x7 + theta_dot * x163 - x4 * x0 * x9 * phi_dot)
-                    - (x216 * x5 * theta_dot
-                        + x0
-                            * (x11 * gamma1_dot * m1 * x2 + phi_dot * x110
-                                - x4 * m2 * gamma2_dot * x9)) * phi_dot
-                    - (theta_dot * x164 + gamma1_dot * x136 + x11 * x0 * phi_dot * x2)
-                        * gamma1_dot * m1)
-                - theta_dot
-                    * (theta_dot * x206
-                        + d
-                            * (gamma1_dot * x164 * m1 + x216 * x5 * phi_dot
-                                + m2 * gamma2_dot * x163)),
+            ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
+                + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1 - x118 * x5
+                + (-x18 * x121 - x20 * x122) * J1
+                + (x124 - x123 - x125 - x126 - x127) * x3
+                - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
+                - m2 * (x172 * x14 + x178 * x1 * x2),
+            x2
+                * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
+                    + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
+                - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
+                + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106 - x107
+                    - x110) * x10,
+            (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
+                + (-x0 * x122 - x12 * x121) * J1 + (m2 * x172 * d - x165 - x167) * x11,
+            J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
+            x163 * x108 * x109 - x107 - m2 * x177 * d,
+            -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
+                - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
+            -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
+                - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
+            -m2
+                * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
+                    * phi_dot
+                    + (theta_dot * x186
+                        + phi_dot
+                            * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
+                                - x190)) * theta_dot
+                    + gamma2_dot
+                        * (phi_dot * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
+                            + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
+                                - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
+                            + gamma2_dot * x186)) * d - x179)
+                - (x179
+                    + (theta_dot
+                        * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
+                            - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
+                            + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
+                                * phi_dot)
+                        + gamma1_dot
+                            * (x201 * gamma1_dot
+                                + phi_dot
+                                    * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
+                                        - 0.5 * x200))
+                        + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1635,33 +1240,39 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::cos(gamma1);
+        let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
-        let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(phi);
-        let x6 = m2 * x4 * x5;
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::sin(phi);
-        let x9 = x7 * x8 * m1;
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x10 * x13;
-        let x15 = x12 * x8;
-        let x16 = x3 * x5 * x13;
-        let x17 = x12 * x5;
-        let x18 = x3 * x8 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x8 * x13 + x3 * x12 * x5;
-        let x21 = x5 * x13;
-        let x22 = x3 * x12 * x8;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x10;
-        let x26 = x16 - x15;
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a;
+        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1693,25 +1304,31 @@ pub mod lagrange {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                    + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-                + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                    + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                        + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                        + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-                + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-                + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-                + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1791,128 +1408,133 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::sin(gamma2);
-        let x2 = f64::cos(phi);
-        let x3 = f64::cos(gamma2);
-        let x4 = f64::sin(theta);
-        let x5 = -x0 * x1 * x2 - x3 * x4;
-        let x6 = f64::sin(gamma1);
-        let x7 = f64::sin(phi);
-        let x8 = f64::cos(gamma1);
-        let x9 = x6 * x0 * x7 - x8 * x4;
-        let x10 = f64::cos(psi);
-        let x11 = f64::sin(psi);
-        let x12 = x7 * x11 + x4 * x10 * x2;
-        let x13 = a * x10 * x0;
-        let x14 = -d * (x3 * x10 * x0 - x1 * x12) - x13;
-        let x15 = a * x0 * x11;
-        let x16 = x10 * x7;
-        let x17 = x4 * x2 * x11;
-        let x18 = x15 - (-x3 * x0 * x11 - (x16 - x17) * x1) * d;
-        let x19 = x10 * x2;
-        let x20 = x4 * x7 * x11;
-        let x21 = -x19 - x20;
-        let x22 = d * (x6 * x21 - x8 * x0 * x11) - x15;
-        let x23 = x2 * x11;
-        let x24 = x4 * x10 * x7;
-        let x25 = x24 - x23;
-        let x26 = d * (x25 * x6 + x8 * x10 * x0) + x13;
-        let x27 = x3 * x0 * x2 - x4 * x1;
-        let x28 = x8 * x0 * x7 + x4 * x6;
-        let x29 = Iyz * x2;
-        let x30 = Iyz * x7;
-        let x31 = m2 * d * d;
-        let x32 = x3 * (x31 + J2 - J1);
-        let x33 = m2 * a * d;
-        let x34 = (x32 + x33) * x1 - Ixz;
-        let x35 = d * d * m1;
-        let x36 = a * d * m1;
-        let x37 = x8 * x8;
-        let x38 = (x37 - 1.0) * m1;
-        let x39 = x3 * x3;
-        let x40 = m2 * (1.0 - x39);
-        let x41 = Iyy + x8 * x8 * (J2 - J1) + x3 * x3 * (J1 - J2) + d * d * (x38 + x40)
-            - Izz;
-        let x42 = x4 * x34 * x7 + Iyz * x0
-            + (x4 * (Ixy + x6 * (x8 * (J2 + x35 - J1) + x36))
-                + (x41 * x7 - 2.0 * x29) * x0) * x2;
-        let x43 = x6 * (x8 * (J1 - J2 - x35) - x36) - Ixy;
-        let x44 = x0 * (x43 * x7 + x34 * x2)
-            + x4
-                * ((m2 * (x39 - 1.0) + x38) * d * d - Ixx + (x37 + x39 - 2.0) * J2
-                    + (-x37 - x39) * J1);
-        let x45 = x8 * a;
-        let x46 = x0 * (d * (x45 + d) * m1 + J2) * x2;
-        let x47 = J2 + m2 * d * (d + x3 * a);
-        let x48 = x0 * x47 * x7;
-        let x49 = m2 * x18 + x22 * m1;
-        let x50 = m1 * x26 + m2 * x14;
-        let x51 = x43 * x2 + x7 * ((x3 * (J1 - x31 - J2) - x33) * x1 + Ixz);
-        let x52 = x7 * (d * (-x45 - d) * m1 - J2);
-        let x53 = x47 * x2;
-        let x54 = (-a - x8 * d) * m1 + m2 * (a + x3 * d);
-        let x55 = m2 * x1 * x2;
-        let x56 = x6 * x7 * m1;
-        let x57 = x54 * x4 + (x55 + x56) * x0 * d;
-        let x58 = x57 * x10;
-        let x59 = x57 * x11;
-        let x60 = x4 * d * (-x55 - x56) + x54 * x0;
-        let x61 = (x6 * x12 * m1 + m2 * x1 * (x23 - x24)) * d;
-        let x62 = x17 - x16;
-        let x63 = d * (m2 * x1 * x21 + x6 * x62 * m1);
-        let x64 = (x6 * m1 * x2 - m2 * x1 * x7) * x0 * d;
-        let x65 = (x8 * x25 - x10 * x6 * x0) * d * m1;
-        let x66 = (x8 * (x19 + x20) - x6 * x0 * x11) * d * m1;
-        let x67 = x28 * d * m1;
-        let x68 = -(m2 * (-x10 * x0 * x1 - x3 * x12) * d);
-        let x69 = -(m2 * d * (-x0 * x1 * x11 - x3 * x62));
-        let x70 = m2 * x27 * d;
-        let x71 = m2 + m0 + m1;
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x0 * x1 * x2 + x3 * x4;
+        let x6 = -x5 * d - a * x1 * x2;
+        let x7 = x0 * a;
+        let x8 = x7 + d;
+        let x9 = a * a * x4 * x4;
+        let x10 = f64::cos(phi);
+        let x11 = f64::sin(gamma2);
+        let x12 = f64::cos(gamma2);
+        let x13 = x12 * x1 * x10 - x3 * x11;
+        let x14 = -a * x1 * x10 - x13 * d;
+        let x15 = d + x12 * a;
+        let x16 = a * a * x11 * x11 + x15 * x15;
+        let x17 = -x1 * x11 * x10 - x12 * x3;
+        let x18 = x4 * x1 * x2 - x0 * x3;
+        let x19 = x3 * Ixx;
+        let x20 = x1 * (-Ixy * x2 - Ixz * x10);
+        let x21 = Iyz * x10;
+        let x22 = Iyz * x2;
+        let x23 = a + x12 * d;
+        let x24 = Iyy * x10;
+        let x25 = x2 * Izz;
+        let x26 = -a - x0 * d;
+        let x27 = -x7 - d;
+        let x28 = x2
+            * (m2 * (x1 * x16 * x10 + x23 * x14) - x12 * x13 * J2 + x17 * x11 * J1
+                + (x24 + x22) * x1) - x3 * (x2 * Ixz - Ixy * x10)
+            + (x0 * J2 * x5 + x1 * (-x25 - x21) + x18 * x4 * J1
+                + (x26 * x6 + x1 * x2 * (x8 * x27 - x9)) * m1) * x10;
+        let x29 = x20 - x19 + (x0 * x18 + x12 * x17) * J1 + (x13 * x11 - x5 * x4) * J2
+            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
+        let x30 = x1 * (d * x8 * m1 + J2) * x10;
+        let x31 = J2 + m2 * d * x15;
+        let x32 = x1 * x31 * x2;
+        let x33 = f64::cos(psi);
+        let x34 = f64::sin(psi);
+        let x35 = x3 * x33 * x2 - x10 * x34;
+        let x36 = x0 * x35 - x33 * x4 * x1;
+        let x37 = a * x4 * (x35 * x4 + x0 * x33 * x1);
+        let x38 = x2 * x34 + x3 * x33 * x10;
+        let x39 = x33 * x1 * x11 + x12 * x38;
+        let x40 = x39 * x15 - a * x11 * (x12 * x33 * x1 - x11 * x38);
+        let x41 = m1 * (x1 * (x36 * x8 + x37) * x10 + x38 * x6)
+            + m2 * (x1 * x40 * x2 + x35 * x14);
+        let x42 = x33 * x10 + x3 * x2 * x34;
+        let x43 = x0 * x42 - x4 * x1 * x34;
+        let x44 = a * x4 * (x0 * x1 * x34 + x4 * x42);
+        let x45 = x3 * x10 * x34 - x33 * x2;
+        let x46 = x1 * x11 * x34 + x12 * x45;
+        let x47 = x46 * x15 - a * (x12 * x1 * x34 - x11 * x45) * x11;
+        let x48 = m1 * (x1 * (x43 * x8 + x44) * x10 + x45 * x6)
+            + m2 * (x1 * x2 * x47 + x42 * x14);
+        let x49 = x0 * x0;
+        let x50 = x12 * x12;
+        let x51 = J1 - J2;
+        let x52 = ((x0 * x51 + x26 * d * m1) * x4 - Ixy) * x10
+            + x2 * ((x12 * x51 - m2 * d * x23) * x11 + Ixz);
+        let x53 = x2 * (d * x27 * m1 - J2);
+        let x54 = x31 * x10;
+        let x55 = m2 * (x40 * x10 + x35 * x23 * x2)
+            + m1 * (x2 * (x36 * x27 - x37) + x26 * x38 * x10);
+        let x56 = m2 * (x47 * x10 + x23 * x2 * x42)
+            + (x26 * x45 * x10 + (x43 * x27 - x44) * x2) * m1;
+        let x57 = m2 * (x1 * x23 * x2 * x2 + (x13 * x15 - a * x17 * x11) * x10)
+            + m1 * ((x5 * x27 - a * x18 * x4) * x2 + x26 * x1 * x10 * x10);
+        let x58 = d * (x4 * x38 * m1 - m2 * x35 * x11);
+        let x59 = (x4 * x45 * m1 - m2 * x11 * x42) * d;
+        let x60 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
+        let x61 = x36 * d * m1;
+        let x62 = x43 * d * m1;
+        let x63 = x5 * d * m1;
+        let x64 = m2 * d * x39;
+        let x65 = m2 * d * x46;
+        let x66 = m2 * x13 * d;
+        let x67 = m2 + m0 + m1;
         [
             [
-                (x5 * x5 + x9 * x9) * J1 + m2 * (x14 * x14 + x18 * x18)
-                    + (x22 * x22 + x26 * x26) * m1
-                    + J2 * (x0 * x0 * (x2 * x2 + x7 * x7) + x27 * x27 + x28 * x28)
-                    - x4 * (x0 * (-Ixy * x7 - Ixz * x2) - x4 * Ixx)
-                    + x0
-                        * (((Iyy * x7 - x29) * x0 + x4 * Ixy) * x7
-                            + (x0 * (Izz * x2 - x30) + x4 * Ixz) * x2),
-                x42,
-                x44,
-                x46,
+                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
+                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
+                    + (x17 * x17 + x18 * x18) * J1
+                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
+                    - x3 * (x20 - x19)
+                    + x1
+                        * (((Iyy * x2 - x21) * x1 + x3 * Ixy) * x2
+                            + (x1 * (Izz * x10 - x22) + x3 * Ixz) * x10),
+                x28,
+                x29,
+                x30,
+                x32,
+                x41,
                 x48,
-                x49,
-                x50,
                 0.0,
             ],
             [
-                x42,
-                a * (2.0 * (x8 * d * m1) + a * (m2 + m1)) + J2 + x3 * (x32 + 2.0 * x33)
-                    + x35 + Izz + (x41 * x2 + 2.0 * x30) * x2 + J1,
-                x51,
+                x28,
+                J2 * ((x49 + 1.0) * x10 * x10 + (x50 + 1.0) * x2 * x2)
+                    + (x4 * x4 * x10 * J1 + x24 + x22) * x10
+                    + (x16 * x10 * x10 + x23 * x23 * x2 * x2) * m2
+                    + x2 * (x25 + x21 + x11 * x11 * x2 * J1)
+                    + ((x9 + x27 * x27) * x2 * x2 + x26 * x26 * x10 * x10) * m1,
                 x52,
                 x53,
+                x54,
+                x55,
+                x56,
+                x57,
+            ],
+            [
+                x29,
+                x52,
+                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x49 + x50) * J1
+                    + (x11 * x11 + x4 * x4) * J2,
+                0.0,
+                0.0,
                 x58,
                 x59,
                 x60,
             ],
-            [
-                x44,
-                x51,
-                Ixx + d * d * (m1 * (1.0 - x37) + x40) + (x37 + x39) * J1
-                    + J2 * (2.0 - x37 - x39),
-                0.0,
-                0.0,
-                x61,
-                x63,
-                x64,
-            ],
-            [x46, x52, 0.0, J2 + x35, 0.0, x65, x66, x67],
-            [x48, x53, 0.0, 0.0, x31 + J2, x68, x69, x70],
-            [x49, x58, x61, x65, x68, x71, 0.0, 0.0],
-            [x50, x59, x63, x66, x69, 0.0, x71, 0.0],
-            [0.0, x60, x64, x67, x70, 0.0, 0.0, x71],
+            [x30, x53, 0.0, J2 + d * d * m1, 0.0, x61, x62, x63],
+            [x32, x54, 0.0, 0.0, m2 * d * d + J2, x64, x65, x66],
+            [x41, x55, x58, x61, x64, x67, 0.0, 0.0],
+            [x48, x56, x59, x62, x65, 0.0, x67, 0.0],
+            [0.0, x57, x60, x63, x66, 0.0, 0.0, x67],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -1991,467 +1613,291 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = x0 * x0;
-        let x2 = m1 * (1.0 - x1);
-        let x3 = f64::cos(gamma2);
-        let x4 = x3 * x3;
-        let x5 = m2 * (1.0 - x4);
-        let x6 = Ixx + d * d * (x2 + x5) + (x1 + x4) * J1 + J2 * (2.0 - x1 - x4);
-        let x7 = f64::sin(gamma1);
-        let x8 = d * d * m1;
-        let x9 = J1 - J2 - x8;
-        let x10 = a * d * m1;
-        let x11 = x0 * x9 - x10;
-        let x12 = x7 * x11 - Ixy;
-        let x13 = f64::cos(phi);
-        let x14 = f64::sin(phi);
-        let x15 = m2 * d * d;
-        let x16 = J1 - x15 - J2;
-        let x17 = m2 * a * d;
-        let x18 = x3 * x16 - x17;
-        let x19 = f64::sin(gamma2);
-        let x20 = x18 * x19 + Ixz;
-        let x21 = x12 * x13 + x14 * x20;
-        let x22 = f64::cos(theta);
-        let x23 = 1.0 / x22;
-        let x24 = x15 + J2 - J1;
-        let x25 = x3 * x24;
-        let x26 = x25 + x17;
-        let x27 = x26 * x19 - Ixz;
-        let x28 = x12 * x14 + x27 * x13;
-        let x29 = x22 * x28;
-        let x30 = f64::sin(theta);
-        let x31 = m2 * (x4 - 1.0);
-        let x32 = (x1 - 1.0) * m1;
-        let x33 = (x31 + x32) * d * d - Ixx + (x1 + x4 - 2.0) * J2 + (-x1 - x4) * J1;
-        let x34 = x30 * x33;
-        let x35 = x29 + x30 * x6 + x34;
-        let x36 = x21 * x13 + x23 * x35 * x14;
-        let x37 = x23 * x35 * x13 - x21 * x14;
-        let x38 = f64::sin(psi);
-        let x39 = x14 * x38;
-        let x40 = f64::cos(psi);
-        let x41 = x30 * x40 * x13;
-        let x42 = x39 + x41;
-        let x43 = x13 * x38;
-        let x44 = x30 * x40 * x14;
-        let x45 = x43 - x44;
-        let x46 = x7 * x42 * m1 + m2 * x19 * x45;
-        let x47 = x46 * d;
-        let x48 = x40 * x13;
-        let x49 = x30 * x14 * x38;
-        let x50 = -x48 - x49;
-        let x51 = x40 * x14;
-        let x52 = x30 * x13 * x38;
-        let x53 = x52 - x51;
-        let x54 = m2 * x19 * x50 + x7 * x53 * m1;
-        let x55 = d * x54;
-        let x56 = x7 * m1 * x13;
-        let x57 = m2 * x19 * x14;
-        let x58 = x56 - x57;
-        let x59 = x58 * x22 * d;
-        let x60 = J2 - J1;
-        let x61 = J1 - J2;
-        let x62 = Iyy + x0 * x0 * x60 + x3 * x3 * x61 + d * d * (x32 + x5) - Izz;
-        let x63 = Iyz * x14;
-        let x64 = a * (2.0 * (x0 * d * m1) + a * (m2 + m1)) + J2 + x3 * (x25 + 2.0 * x17)
-            + x8 + Izz + (x62 * x13 + 2.0 * x63) * x13 + J1;
-        let x65 = x30 * x27 * x14;
-        let x66 = Iyz * x22;
-        let x67 = J2 + x8 - J1;
-        let x68 = x0 * x67 + x10;
-        let x69 = Ixy + x7 * x68;
-        let x70 = Iyz * x13;
-        let x71 = (x30 * x69 + (x62 * x14 - 2.0 * x70) * x22) * x13;
-        let x72 = x65 + x66 + x71 + x21 * x30;
-        let x73 = x64 * x13 + x23 * x14 * x72;
-        let x74 = x29 + x34;
-        let x75 = x22 * x19 * x13;
-        let x76 = x3 * x30;
-        let x77 = -x75 - x76;
-        let x78 = x7 * x22 * x14;
-        let x79 = x0 * x30;
-        let x80 = x78 - x79;
-        let x81 = (x77 * x77 + x80 * x80) * J1;
-        let x82 = x3 * x40 * x22;
-        let x83 = x19 * x42;
-        let x84 = d * (x82 - x83);
-        let x85 = a * x40 * x22;
-        let x86 = -x84 - x85;
-        let x87 = a * x22 * x38;
-        let x88 = x3 * x22 * x38;
-        let x89 = x51 - x52;
-        let x90 = x87 - (-x88 - x89 * x19) * d;
-        let x91 = m2 * (x86 * x86 + x90 * x90);
-        let x92 = x0 * x22 * x38;
-        let x93 = d * (x7 * x50 - x92) - x87;
-        let x94 = x44 - x43;
-        let x95 = x94 * x7;
-        let x96 = x0 * x40 * x22;
-        let x97 = d * (x95 + x96);
-        let x98 = x97 + x85;
-        let x99 = (x93 * x93 + x98 * x98) * m1;
-        let x100 = x13 * x13;
-        let x101 = x14 * x14;
-        let x102 = x100 + x101;
-        let x103 = x30 * x19;
-        let x104 = x3 * x22 * x13;
-        let x105 = x104 - x103;
-        let x106 = x0 * x22 * x14 + x30 * x7;
-        let x107 = J2 * (x22 * x22 * x102 + x105 * x105 + x106 * x106);
-        let x108 = x30 * Ixx;
-        let x109 = Ixy * x14;
-        let x110 = Ixz * x13;
-        let x111 = x22 * (-x109 - x110);
-        let x112 = x30 * (x111 - x108);
-        let x113 = Iyy * x14;
-        let x114 = (x113 - x70) * x22;
-        let x115 = x30 * Ixy;
-        let x116 = (x114 + x115) * x14;
-        let x117 = Izz * x13;
-        let x118 = x22 * (x117 - x63);
-        let x119 = x30 * Ixz;
-        let x120 = (x118 + x119) * x13;
-        let x121 = x22 * (x116 + x120);
-        let x122 = x30 * x74 + x81 + x91 + x99 + x107 - x112 + x121;
-        let x123 = x65 + x66 + x71;
-        let x124 = x30 * x36 + x23 * x122 * x14 + x123 * x13;
-        let x125 = x23 * x124 * x13 - x14 * x73;
-        let x126 = x0 * a;
-        let x127 = d * (x126 + d) * m1;
-        let x128 = d * (-x126 - d) * m1;
-        let x129 = (x127 + x128) * x14 * x13;
-        let x130 = x3 * a;
-        let x131 = J2 + m2 * d * (d + x130);
-        let x132 = x131 * x102;
-        let x133 = x0 * d;
-        let x134 = x3 * d;
-        let x135 = (-a - x133) * m1 + m2 * (a + x134);
-        let x136 = m2 * x19 * x13;
-        let x137 = x7 * x14 * m1;
-        let x138 = x135 * x30 + (x136 + x137) * x22 * d;
-        let x139 = m2 * x90;
-        let x140 = x93 * m1;
-        let x141 = x139 + x46 * x30 * d + x140;
-        let x142 = x138 * x40 * x13 + x23 * x141 * x14;
-        let x143 = m1 * x98;
-        let x144 = m2 * x86;
-        let x145 = x143 + x144 + x30 * d * x54;
-        let x146 = x23 * x14 * x145 + x138 * x13 * x38;
-        let x147 = -x136 - x137;
-        let x148 = x30 * d * x147 + x135 * x22;
-        let x149 = x148 * x13 + x30 * x58 * d * x14;
-        let x150 = x127 + J2;
-        let x151 = x128 - J2;
-        let x152 = x150 * x13 * x13 - x14 * x14 * x151;
-        let x153 = x23 * x141 * x13 - x138 * x40 * x14;
-        let x154 = x23 * x145 * x13 - x138 * x14 * x38;
-        let x155 = x30 * x58 * d * x13 - x14 * x148;
-        let x156 = x0 * x94 - x40 * x7 * x22;
-        let x157 = x156 * d * m1;
-        let x158 = x48 + x49;
-        let x159 = x7 * x22 * x38;
-        let x160 = x0 * x158 - x159;
-        let x161 = x160 * d * m1;
-        let x162 = x106 * d * m1;
-        let x163 = -x40 * x22 * x19 - x3 * x42;
-        let x164 = -(m2 * x163 * d);
-        let x165 = x22 * x19 * x38;
-        let x166 = -x165 - x3 * x53;
-        let x167 = -(m2 * d * x166);
-        let x168 = m2 * x105 * d;
-        let x169 = m2 + m0 + m1;
-        let x170 = x93 * psi_dot;
-        let x171 = (x156 * gamma1_dot + x7 * x42 * phi_dot) * d;
-        let x172 = a * x30;
-        let x173 = x80 * d - x172;
-        let x174 = theta_dot * x40 * x173;
-        let x175 = x170 + X_dot + x171 + x174;
-        let x176 = a * theta_dot * x22;
-        let x177 = theta_dot * x14;
-        let x178 = gamma1_dot - x177;
-        let x179 = x30 * x178 + x22 * phi_dot * x13;
-        let x180 = gamma1_dot * x14;
-        let x181 = Z_dot - x176 + (x7 * x179 + x0 * x22 * (x180 - theta_dot)) * d;
-        let x182 = x22 * x14 * phi_dot;
-        let x183 = d * (x7 * phi_dot * x53 + x160 * gamma1_dot) + Y_dot
-            + theta_dot * x173 * x38 + psi_dot * x98;
-        let x184 = m2 * x19 * x158 + x89 * x7 * m1;
-        let x185 = x46 * Y_dot + X_dot * x184;
-        let x186 = theta_dot * x13;
-        let x187 = -gamma2_dot - x186;
-        let x188 = gamma2_dot * x13;
-        let x189 = x19 * x14 * phi_dot;
-        let x190 = Z_dot
-            + d * (x30 * x187 * x19 + (x3 * (x188 + theta_dot) - x189) * x22) + x176;
-        let x191 = x172 - x77 * d;
-        let x192 = psi_dot * x86 + theta_dot * x191 * x38 + Y_dot
-            + (x19 * x50 * phi_dot - gamma2_dot * x166) * d;
-        let x193 = -x39 - x41;
-        let x194 = theta_dot * x40 * x191;
-        let x195 = (x19 * phi_dot * x45 - gamma2_dot * x163) * d;
-        let x196 = psi_dot * x90;
-        let x197 = x194 + X_dot + x195 + x196;
-        let x198 = x22 * psi_dot * x13;
-        let x199 = x198 - x177;
-        let x200 = x199 * Iyz;
-        let x201 = x22 * psi_dot * x14;
-        let x202 = x186 + x201;
-        let x203 = x7 * x202;
-        let x204 = phi_dot - x30 * psi_dot;
-        let x205 = x0 * x204;
-        let x206 = x203 + x205;
-        let x207 = x0 * x202 - x7 * x204;
-        let x208 = Iyy * x202;
-        let x209 = Ixy * x204;
-        let x210 = -x186 - x201;
-        let x211 = 2.0 * J1 - 2.0 * J2 - 2.0 * x8;
-        let x212 = x0 * (x30 * x7 * x211 + x11 * x22 * x14) + x67 * x7 * x7 * x22 * x14;
-        let x213 = x67 * x7 * x7 + x0 * x11;
-        let x214 = Y_dot * x53 + X_dot * x42 + Z_dot * x22 * x13;
-        let x215 = Iyz * x202;
-        let x216 = x19 * x204;
-        let x217 = x3 * x199;
-        let x218 = x216 + x217;
-        let x219 = Ixz * x204;
-        let x220 = x199 * Izz;
-        let x221 = x3 * x204 - x199 * x19;
-        let x222 = x202 * x13 - x199 * x14;
-        let x223 = x14 * x202;
-        let x224 = x199 * x13;
-        let x225 = phi_dot * x222 + x30 * theta_dot * x23 * (x223 + x224);
-        let x226 = x30 * x30 * x23 * x23 + 1.0;
-        let x227 = theta_dot * (x226 * x14 * x202 + x199 * x226 * x13)
-            + x30 * x23 * phi_dot * x222;
-        let x228 = Y_dot * x38;
-        let x229 = X_dot * x40;
-        let x230 = x228 + x229;
-        let x231 = x57 - x56;
-        let x232 = (x58 * x22 * x230 + x231 * Z_dot * x30) * d;
-        let x233 = x13 * x20 + x69 * x14;
-        let x234 = x22 * x33 + x30 * x233;
-        let x235 = X_dot * x45 - Z_dot * x22 * x14 + Y_dot * x50;
-        let x236 = 2.0 * x15 + 2.0 * J2 - 2.0 * J1;
-        let x237 = x3 * x18 + x19 * x19 * x24;
-        let x238 = x3 * (x26 * x22 * x13 + x30 * x19 * (2.0 * J1 - 2.0 * x15 - 2.0 * J2))
-            + x16 * x22 * x19 * x19 * x13;
-        let x239 = -x223 - x224;
-        let x240 = m2 * x193 * x19 + x7 * m1 * x45;
-        let x241 = x7 * x50 * m1 + x89 * m2 * x19;
-        let x242 = d
-            * (0.5
-                * ((2.0
-                    * (x175
-                        * ((theta_dot * x40 * x22 * x13 + phi_dot * x45 + x89 * psi_dot)
-                            * x7 + x0 * gamma1_dot * x42))
-                    + 2.0
-                        * (x181
-                            * (x0 * x22 * gamma1_dot * x13
-                                + x7 * (-x182 - x30 * theta_dot * x13)))
-                    + 2.0
-                        * ((x7
-                            * (psi_dot * x42 + x50 * phi_dot
-                                + theta_dot * x22 * x13 * x38) + x0 * gamma1_dot * x53)
-                            * x183)) * m1) - x185 * psi_dot
-                + 0.5
-                    * (m2
-                        * (2.0
-                            * ((x30 * theta_dot * x19 * x14
-                                + (-x3 * gamma2_dot * x14 - x19 * phi_dot * x13) * x22)
-                                * x190)
-                            + 2.0
-                                * (x192
-                                    * (x3 * gamma2_dot * x50
-                                        + (x89 * phi_dot - theta_dot * x22 * x14 * x38
-                                            + psi_dot * x45) * x19))
-                            + 2.0
-                                * (((psi_dot * x158 - theta_dot * x40 * x22 * x14
-                                    + x193 * phi_dot) * x19 + x3 * gamma2_dot * x45) * x197))))
-            + x199
-                * (x206 * x7 * J1 - x200 + J2 * (gamma2_dot + x186 + x0 * x207 + x201)
-                    + 0.5 * x208 - 0.5 * x209 + 0.5 * (x210 * Izz))
-            - gamma1_dot
-                * (x212 * psi_dot + theta_dot * x213 * x13
-                    + x0
-                        * (x214 * d * m1
-                            + (2.0 * J2 + 2.0 * x8 - 2.0 * J1) * x7 * phi_dot))
-            + x210
-                * (J2 * (x198 + x3 * x218 + gamma1_dot - x177) - 0.5 * x215 - 0.5 * x219
-                    + 0.5 * x220 - x221 * x19 * J1)
-            + 0.5 * (x204 * (-x210 * Ixz - x199 * Ixy)) - x74 * x23 * x225 - x227 * x6
-            - (x232 + x234 * psi_dot) * theta_dot
-            - gamma2_dot
-                * (x3 * (m2 * d * x235 + x19 * phi_dot * x236) + theta_dot * x14 * x237
-                    + x238 * psi_dot) + 0.5 * ((x199 * Iyy - Iyz * x210) * x202)
-            + phi_dot
-                * (-x21 * x239 - x21 * x22 * psi_dot
-                    - d * (Z_dot * x22 * x147 + X_dot * x240 + Y_dot * x241)
-                    - theta_dot * x233);
-        let x243 = x79 - x78;
-        let x244 = d * x243 + x172;
-        let x245 = x0 * x50 + x159;
-        let x246 = (x7 * x45 - x96) * d;
-        let x247 = x246 - x85;
-        let x248 = d * (-x82 - x193 * x19);
-        let x249 = x85 - x248;
-        let x250 = m2 * x249 + x247 * m1;
-        let x251 = x139 + x140;
-        let x252 = x14
-            * ((x31 + x2) * d * d - Iyy + x3 * x3 * x60 + x0 * x0 * x61 + Izz);
-        let x253 = x30 * x28 + (x62 * x13 * x13 + (x252 + 4.0 * x70) * x14) * x22;
-        let x254 = m2 * d * (-d - x130) - J2;
-        let x255 = gamma2_dot * x14 * x254;
-        let x256 = gamma1_dot * x151 * x13;
-        let x257 = m1 * x173 + m2 * x191;
-        let x258 = -d * (x75 + x76) - x172;
-        let x259 = x244 * m1 + m2 * x258;
-        let x260 = (x30 * (x252 + 2.0 * x70) + x69 * x22) * x13 - x30 * Iyz
-            + x27 * x22 * x14;
-        let x261 = -x3 * x30 * x13 - x22 * x19;
-        let x262 = x7 * x22 - x0 * x30 * x14;
-        let x263 = -x30 * x7 * x14 - x0 * x22;
-        let x264 = x30 * x19 * x13 - x3 * x22;
-        let x265 = Ixy * x22 + x30 * (x70 - x113);
-        let x266 = x30 * (x63 - x117) + x22 * Ixz;
-        let x267 = Ixx * x22;
-        let x268 = x30 * (x109 + x110);
-        let x269 = x30 * x7 * x7 * x9 + x0 * (x30 * x68 + x7 * x22 * x14 * x211);
-        let x270 = X_dot * x245;
-        let x271 = x156 * Y_dot;
-        let x272 = x30 * x16 * x19 * x19 + x3 * (x22 * x19 * x236 * x13 + x30 * x26);
-        let x273 = x103 - x104;
-        let x274 = x165 - x3 * x89;
-        let x275 = X_dot * x274;
-        let x276 = x163 * Y_dot;
-        let x277 = 0.5
-            * (m1
-                * (2.0
-                    * ((theta_dot * x244 * x38
-                        + d * (x245 * gamma1_dot + x89 * x7 * phi_dot) + x247 * psi_dot)
-                        * x175) + 2.0 * (x183 * (x170 + x171 + x174))))
-            - psi_dot
-                * (X_dot * x250 + Y_dot * x251
-                    + psi_dot
-                        * (x93 * m1 * (2.0 * x97 + 2.0 * x246)
-                            + m2 * x90 * (-2.0 * x248 - 2.0 * x84)))
-            + phi_dot
-                * (-x239 * x123 - x185 * d
-                    - psi_dot
-                        * (d
-                            * (x7 * (2.0 * (x42 * x98) + 2.0 * (x89 * x93)) * m1
-                                + m2 * (2.0 * (x45 * x86) + 2.0 * (x90 * x158)) * x19)
-                            + x22
-                                * ((2.0 * (x77 * x19 * J1) - 2.0 * (x3 * x105 * J2) - x118
-                                    - x119 + (Iyy * x13 + x63) * x22) * x14
-                                    - x30 * (x14 * Ixz - Ixy * x13)
-                                    + (2.0 * (x0 * J2 * x106) + x22 * (-x14 * Izz - x70) + x114
-                                        + x115 + 2.0 * (x80 * x7 * J1)) * x13)) - theta_dot * x253
-                    - (x21 * phi_dot + gamma1_dot * x14 * x151 + gamma2_dot * x131 * x13)
-                        * x22)
-            - (x30 * (x255 + x256) + x40 * Y_dot * x257 + x234 * phi_dot
-                + x259 * X_dot * x38 + theta_dot * x260
-                + ((2.0 * (x105 * x261) + 2.0 * (x106 * x262)) * J2
-                    + m1 * (2.0 * (x93 * x244 * x38) + 2.0 * (x40 * x173 * x98))
-                    + m2 * (2.0 * (x40 * x191 * x86) + 2.0 * (x258 * x90 * x38))
-                    + (2.0 * (x80 * x263) + 2.0 * (x264 * x77)) * J1
-                    + x22 * (x108 - x111 + x14 * x265 + x266 * x13)
-                    + x30
-                        * (x267 - x116 - x120 + (-2.0 * x100 - 2.0 * x101) * J2 * x22
-                            - x268)) * psi_dot) * theta_dot
-            - (theta_dot * x269 * x13
-                + psi_dot
-                    * ((2.0 * (J2 * x243) + 2.0 * (x80 * J1)) * x106
-                        + (2.0 * (x156 * x98) + 2.0 * (x93 * x245)) * d * m1)
-                + d * (x270 - a * x7 * x22 * gamma1_dot * x13 + x271) * m1
-                + x212 * phi_dot) * gamma1_dot
-            - x23 * x225 * (x81 + x91 + x99 + x107 - x112 + x121)
-            - gamma2_dot
-                * (x272 * theta_dot * x14
-                    + psi_dot
-                        * (x77 * (2.0 * (x273 * J1) + 2.0 * (x105 * J2))
-                            + m2 * (-2.0 * (x274 * x90) - 2.0 * (x163 * x86)) * d)
-                    + x238 * phi_dot
-                    + m2 * d * (-a * gamma2_dot * x22 * x19 * x14 - x275 - x276))
-            - x227 * x74 + x30 * x242
-            + 0.5
-                * (m2
-                    * (2.0 * (x192 * (x194 + x195 + x196))
-                        + 2.0
-                            * ((d * (x19 * phi_dot * x158 - gamma2_dot * x274)
-                                + theta_dot * x258 * x38 + x249 * psi_dot) * x197)));
-        let x278 = x30 * ((a + x133) * m1 + m2 * (-a - x134)) + x22 * d * x147;
-        let x279 = Z_dot * x261;
-        let x280 = a * x22;
-        let x281 = d * (-x22 * x19 * x14 * phi_dot - gamma2_dot * x273)
-            + theta_dot * (x280 - x264 * d);
-        let x282 = -x188 - theta_dot;
-        let x283 = a * x30 * theta_dot;
-        let x284 = theta_dot * (x263 * d - x280)
-            + d * (x106 * gamma1_dot + x7 * x22 * phi_dot * x13);
-        let x285 = theta_dot - x180;
-        let x286 = Z_dot * x262;
-        let x287 = x106 * x230;
-        let x288 = (-x255 - x232 - x256 - x64 * x239
-            - theta_dot
-                * (2.0 * (Iyz * x13 * x13)
-                    + ((x0 * x0 * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy + 2.0 * Izz
-                        + (m2 * (2.0 * x4 - 2.0) + (2.0 - 2.0 * x1) * m1) * d * d
-                        + x3 * x3 * (2.0 * J2 - 2.0 * J1)) * x13 - 2.0 * x63) * x14)
-            - psi_dot * x253 - phi_dot * x233) * phi_dot - x23 * x225 * x123
-            + psi_dot
-                * ((x264 * x221 + x206 * x263) * J1 + 0.5 * (x265 * x202)
-                    + J2 * (x218 * x261 + x262 * x207) + 0.5 * ((x268 - x267) * x204)
-                    + 0.5 * (x266 * x199) - X_dot * x278 * x38
-                    - 0.5 * (x22 * (Ixx * x204 - x199 * Ixz - Ixy * x202))
-                    + x30
-                        * (J2
-                            * (-(x198 + gamma1_dot - x177) * x13
-                                - (gamma2_dot + x186 + x201) * x14)
-                            - 0.5 * ((x208 - x200 - x209) * x14)
-                            - 0.5 * ((x220 - x215 - x219) * x13)) - x138 * x40 * Y_dot)
-            - (theta_dot
-                * (x3 * (x236 * x13 * x13 - 2.0 * x15 - 2.0 * J2 + 2.0 * J1) - 2.0 * x17)
-                * x19 + (x272 * psi_dot + phi_dot * x237) * x14
-                + m2 * d * (x279 + x105 * x230 - a * gamma2_dot * x19 * x13))
-                * gamma2_dot - theta_dot * (x148 * x230 + Z_dot * x278 + psi_dot * x260)
-            - x21 * x227
-            + 0.5
-                * (m2
-                    * (2.0 * (x192 * (x40 * psi_dot * x191 + x281 * x38))
-                        + 2.0 * ((x281 * x40 + x258 * psi_dot * x38) * x197)
-                        + 2.0
-                            * (((x30 * (x3 * x282 + x189) + x187 * x22 * x19) * d - x283)
-                                * x190)))
-            + 0.5
-                * ((2.0 * ((psi_dot * x244 * x38 + x284 * x40) * x175)
-                    + 2.0
-                        * ((d
-                            * (x30 * (x0 * x285 - x7 * phi_dot * x13) + x7 * x22 * x178)
-                            + x283) * x181)
-                    + 2.0 * (x183 * (x40 * psi_dot * x173 + x284 * x38))) * m1)
-            - ((psi_dot * x269 + x213 * phi_dot) * x13
-                + (x286 + a * x7 * gamma1_dot * x14 + x287) * d * m1
-                + theta_dot * x7 * (x0 * x13 * x13 * x211 - 2.0 * x10)) * gamma1_dot;
-        let x289 = -x92 - x7 * x158;
-        let x290 = x0 * phi_dot * x53 + x156 * psi_dot + gamma1_dot * x289
-            + theta_dot * x106 * x38;
-        let x291 = -x95 - x96;
-        let x292 = x245 * psi_dot + x0 * x42 * phi_dot + gamma1_dot * x291
-            + theta_dot * x106 * x40;
-        let x293 = x3 * phi_dot * x45;
-        let x294 = x83 - x82;
-        let x295 = gamma2_dot * x294;
-        let x296 = psi_dot * x274;
-        let x297 = x19 * x53 - x88;
-        let x298 = gamma2_dot * x297;
-        let x299 = x163 * psi_dot;
-        let x300 = x3 * x50 * phi_dot;
-        let x301 = theta_dot * x148
-            + d
-                * (x58 * x22 * phi_dot - m2 * gamma2_dot * x273
-                    + x106 * gamma1_dot * m1);
-        let value = x22;
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::sin(gamma1);
+        let x2 = f64::cos(gamma1);
+        let x3 = x2 * x2;
+        let x4 = f64::cos(gamma2);
+        let x5 = x4 * x4;
+        let x6 = Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
+            + (x0 * x0 + x1 * x1) * J2;
+        let x7 = J1 - J2;
+        let x8 = -a - x2 * d;
+        let x9 = f64::cos(phi);
+        let x10 = f64::sin(phi);
+        let x11 = a + x4 * d;
+        let x12 = ((x2 * x7 + x8 * d * m1) * x1 - Ixy) * x9
+            + x10 * ((x4 * x7 - m2 * d * x11) * x0 + Ixz);
+        let x13 = f64::sin(theta);
+        let x14 = x13 * Ixx;
+        let x15 = f64::cos(theta);
+        let x16 = x15 * (-Ixy * x10 - Ixz * x9);
+        let x17 = x2 * x13;
+        let x18 = x1 * x15 * x10 - x17;
+        let x19 = x4 * x13;
+        let x20 = -x15 * x0 * x9 - x19;
+        let x21 = (x2 * x18 + x4 * x20) * J1;
+        let x22 = x4 * x15 * x9 - x13 * x0;
+        let x23 = x2 * x15 * x10 + x13 * x1;
+        let x24 = (x22 * x0 - x23 * x1) * J2;
+        let x25 = -x23 * d - a * x15 * x10;
+        let x26 = -a * x15 * x9 - x22 * d;
+        let x27 = (x1 * m1 * x25 - m2 * x0 * x26) * d;
+        let x28 = x16 - x14 + x21 + x13 * x6 + x24 + x27;
+        let x29 = 1.0 / x15;
+        let x30 = x12 * x9 + x28 * x29 * x10;
+        let x31 = x28 * x29 * x9 - x12 * x10;
+        let x32 = f64::sin(psi);
+        let x33 = f64::cos(psi);
+        let x34 = x10 * x32 + x13 * x33 * x9;
+        let x35 = x13 * x33 * x10 - x9 * x32;
+        let x36 = x1 * x34 * m1 - m2 * x35 * x0;
+        let x37 = d * x36;
+        let x38 = x33 * x9 + x13 * x10 * x32;
+        let x39 = x13 * x9 * x32 - x33 * x10;
+        let x40 = x1 * x39 * m1 - m2 * x0 * x38;
+        let x41 = x40 * d;
+        let x42 = x1 * m1 * x9 - m2 * x0 * x10;
+        let x43 = x42 * x15 * d;
+        let x44 = Iyy * x9;
+        let x45 = Iyz * x10;
+        let x46 = d + x4 * a;
+        let x47 = a * a * x0 * x0 + x46 * x46;
+        let x48 = x10 * Izz;
+        let x49 = Iyz * x9;
+        let x50 = a * a * x1 * x1;
+        let x51 = x2 * a;
+        let x52 = -x51 - d;
+        let x53 = J2 * ((x3 + 1.0) * x9 * x9 + (x5 + 1.0) * x10 * x10)
+            + (x1 * x1 * x9 * J1 + x44 + x45) * x9
+            + (x47 * x9 * x9 + x11 * x11 * x10 * x10) * m2
+            + x10 * (x48 + x49 + x0 * x0 * x10 * J1)
+            + ((x50 + x52 * x52) * x10 * x10 + x8 * x8 * x9 * x9) * m1;
+        let x54 = x10
+            * (m2 * (x15 * x47 * x9 + x11 * x26) - x4 * x22 * J2 + x20 * x0 * J1
+                + (x44 + x45) * x15);
+        let x55 = x13 * (x10 * Ixz - Ixy * x9);
+        let x56 = x51 + d;
+        let x57 = (x2 * J2 * x23 + x15 * (-x48 - x49) + x18 * x1 * J1
+            + (x8 * x25 + x15 * x10 * (x56 * x52 - x50)) * m1) * x9;
+        let x58 = x54 - x55 + x57 + x13 * x12;
+        let x59 = x53 * x9 + x29 * x58 * x10;
+        let x60 = (x25 * x25 + (x56 * x56 + x50) * x15 * x15 * x9 * x9) * m1;
+        let x61 = m2 * (x26 * x26 + x15 * x15 * x10 * x10 * x47);
+        let x62 = (x20 * x20 + x18 * x18) * J1;
+        let x63 = x16 - x14 + x21 + x24 + x27;
+        let x64 = x9 * x9 + x10 * x10;
+        let x65 = J2 * (x15 * x15 * x64 + x22 * x22 + x23 * x23);
+        let x66 = x13 * (x16 - x14);
+        let x67 = x15
+            * (((Iyy * x10 - x49) * x15 + x13 * Ixy) * x10
+                + (x15 * (Izz * x9 - x45) + x13 * Ixz) * x9);
+        let x68 = x60 + x61 + x62 + x13 * x63 + x65 - x66 + x67;
+        let x69 = x54 - x55 + x57;
+        let x70 = x68 * x29 * x10 + x13 * x30 + x69 * x9;
+        let x71 = x29 * x9 * x70 - x59 * x10;
+        let x72 = d * x56 * m1;
+        let x73 = d * x52 * m1;
+        let x74 = (x72 + x73) * x10 * x9;
+        let x75 = J2 + m2 * d * x46;
+        let x76 = x75 * x64;
+        let x77 = x4 * x33 * x15 - x0 * x34;
+        let x78 = x33 * x15 * x0 + x4 * x34;
+        let x79 = x78 * x46 - a * x0 * x77;
+        let x80 = x2 * x35 - x33 * x1 * x15;
+        let x81 = x35 * x1 + x2 * x33 * x15;
+        let x82 = a * x1 * x81;
+        let x83 = m2 * (x79 * x9 + x35 * x11 * x10)
+            + m1 * (x10 * (x80 * x52 - x82) + x8 * x34 * x9);
+        let x84 = m1 * (x15 * (x80 * x56 + x82) * x9 + x34 * x25);
+        let x85 = m2 * (x15 * x79 * x10 + x35 * x26);
+        let x86 = x13 * d * x36 + x84 + x85;
+        let x87 = x83 * x9 + x86 * x29 * x10;
+        let x88 = x4 * x15 * x32 - x0 * x39;
+        let x89 = x15 * x0 * x32 + x4 * x39;
+        let x90 = x89 * x46 - a * x88 * x0;
+        let x91 = x2 * x15 * x32 + x1 * x38;
+        let x92 = a * x1 * x91;
+        let x93 = x2 * x38 - x1 * x15 * x32;
+        let x94 = m2 * (x90 * x9 + x11 * x10 * x38)
+            + (x8 * x39 * x9 + (x93 * x52 - x92) * x10) * m1;
+        let x95 = m1 * (x15 * (x93 * x56 + x92) * x9 + x39 * x25);
+        let x96 = m2 * (x15 * x10 * x90 + x38 * x26);
+        let x97 = x13 * x40 * d + x95 + x96;
+        let x98 = x94 * x9 + x97 * x29 * x10;
+        let x99 = m2 * (x15 * x11 * x10 * x10 + (x22 * x46 - a * x20 * x0) * x9)
+            + m1 * ((x23 * x52 - a * x18 * x1) * x10 + x8 * x15 * x9 * x9);
+        let x100 = x13 * x42 * d * x10 + x99 * x9;
+        let x101 = x72 + J2;
+        let x102 = x73 - J2;
+        let x103 = x101 * x9 * x9 - x10 * x10 * x102;
+        let x104 = x86 * x29 * x9 - x10 * x83;
+        let x105 = x97 * x29 * x9 - x10 * x94;
+        let x106 = x13 * x42 * d * x9 - x99 * x10;
+        let x107 = x80 * d * m1;
+        let x108 = x93 * d * m1;
+        let x109 = x23 * d * m1;
+        let x110 = m2 * d * x78;
+        let x111 = m2 * d * x89;
+        let x112 = m2 * x22 * d;
+        let x113 = m2 + m0 + m1;
+        let x114 = x15 * psi_dot * x9;
+        let x115 = theta_dot * x10;
+        let x116 = x114 + gamma1_dot - x115;
+        let x117 = theta_dot * x9;
+        let x118 = x15 * psi_dot * x10;
+        let x119 = x117 + x118;
+        let x120 = x13 * psi_dot;
+        let x121 = phi_dot - x120;
+        let x122 = x1 * x119 + x2 * x121;
+        let x123 = x116 * x7 * x122;
+        let x124 = Z_dot * x15 * x10;
+        let x125 = x35 * X_dot;
+        let x126 = Y_dot * x38;
+        let x127 = x114 - x115;
+        let x128 = a * x127;
+        let x129 = x124 + x125 + x126 + x128;
+        let x130 = Y_dot * x32;
+        let x131 = X_dot * x33;
+        let x132 = x15 * (x130 + x131) - Z_dot * x13;
+        let x133 = x2 * x129 - x132 * x1 + x116 * d;
+        let x134 = -phi_dot - x120;
+        let x135 = theta_dot * x134 * x10;
+        let x136 = x15 * psi_dot * phi_dot * x9;
+        let x137 = x135 + x136;
+        let x138 = a * x137;
+        let x139 = x135 + x136 - gamma1_dot * x121;
+        let x140 = gamma1_dot * x119;
+        let x141 = theta_dot * x15 * psi_dot;
+        let x142 = x2 * x139 + x1 * (x141 - x140);
+        let x143 = x13 * phi_dot;
+        let x144 = psi_dot - x143;
+        let x145 = X_dot * (x121 * x9 * x32 + x33 * (theta_dot * x15 * x9 + x144 * x10));
+        let x146 = Z_dot * (-x15 * x10 * phi_dot - x13 * theta_dot * x9);
+        let x147 = x2 * x132 + x1 * x129;
+        let x148 = x2 * x119 - x1 * x121;
+        let x149 = theta_dot * x15 * x32 + x33 * (x120 - phi_dot);
+        let x150 = (x144 * x10 * x32 + x149 * x9) * Y_dot;
+        let x151 = x133 * x122 - x138 - d * x142 + x145 + x146 - x147 * x148 + x150;
+        let x152 = J2 * x142;
+        let x153 = x127 * Izz - Iyz * x119 - Ixz * x121;
+        let x154 = x153 * x119;
+        let x155 = theta_dot * x134 * x9;
+        let x156 = x15 * psi_dot * x10 * phi_dot;
+        let x157 = x155 - x156;
+        let x158 = x157 * Ixz;
+        let x159 = Iyy * x119 - x127 * Iyz - Ixy * x121;
+        let x160 = x127 * x159;
+        let x161 = Ixy * x137;
+        let x162 = x2 * (x140 - x141) + x139 * x1;
+        let x163 = gamma2_dot * x121;
+        let x164 = -x127 * gamma2_dot - x141;
+        let x165 = x0 * (x156 - x155 - x163) + x4 * x164;
+        let x166 = J2 - J1;
+        let x167 = x4 * x121 - x127 * x0;
+        let x168 = gamma2_dot + x117 + x118;
+        let x169 = x166 * x167 * x168;
+        let x170 = x143 - psi_dot;
+        let x171 = Y_dot * (x149 * x10 + x170 * x9 * x32);
+        let x172 = x157 * a;
+        let x173 = x0 * x121 + x4 * x127;
+        let x174 = a * x119;
+        let x175 = Y_dot * x39;
+        let x176 = X_dot * x34;
+        let x177 = Z_dot * x15 * x9;
+        let x178 = x174 + x175 + x176 + x177;
+        let x179 = x132 * x4 - x178 * x0;
+        let x180 = Z_dot * (x15 * phi_dot * x9 - x13 * theta_dot * x10);
+        let x181 = X_dot
+            * (x33 * (theta_dot * x15 * x10 + x170 * x9) + x10 * x121 * x32);
+        let x182 = x168 * d + x132 * x0 + x4 * x178;
+        let x183 = x164 * x0 + (x155 - x156 + x163) * x4;
+        let x184 = x171 - x172 + x173 * x179 + x180 + x181 - x167 * x182 - x183 * d;
+        let x185 = J2 * x183;
+        let x186 = ((0.25 - 0.25 * (x29 * f64::cos(3.0 * theta))) * psi_dot + x143) * x29
+            + x15 * psi_dot;
+        let x187 = 0.5 * (x29 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        let x188 = (x123 - x151 * d * m1 + x152) * x1 - x154 + x158 + x160 + x161
+            + x12 * x15 * psi_dot * phi_dot + (-x2 * x162 - x4 * x165) * J1
+            + (m2 * x184 * d - x169 - x185) * x0
+            + theta_dot * (Ixx * x15 * psi_dot - x6 * x186 - x187 * x29 * x63);
+        let x189 = x123 + x152;
+        let x190 = x175 - x174 + x176 + x177 - d * x148;
+        let x191 = x15 * psi_dot * (x33 * Y_dot - X_dot * x32);
+        let x192 = gamma1_dot * x129;
+        let x193 = theta_dot * (x13 * (-x130 - x131) - Z_dot * x15);
+        let x194 = x171 + x172 + x180 + x181 - x132 * gamma1_dot;
+        let x195 = x148 * x190 - x133 * x116 + x2 * (x191 + x192 + x193) + x194 * x1;
+        let x196 = a * x1 * x195;
+        let x197 = x157 * d - x122 * x190 + x1 * (-x191 - x192 - x193) + x2 * x194
+            + x116 * x147;
+        let x198 = theta_dot * x15 * psi_dot * Ixz;
+        let x199 = x159 * x121;
+        let x200 = x122 * x148;
+        let x201 = J2 * (x155 + x200 - x156);
+        let x202 = Ixx * x121 - x127 * Ixz - Ixy * x119;
+        let x203 = x119 * x202;
+        let x204 = Iyz * x137;
+        let x205 = x122 * x148 * J1;
+        let x206 = x157 * Izz;
+        let x207 = x127 * x202;
+        let x208 = Iyy * x137;
+        let x209 = x153 * x121;
+        let x210 = Ixy * theta_dot * x15 * psi_dot;
+        let x211 = x157 * Iyz;
+        let x212 = J2 * x137;
+        let x213 = x167 * x7 * x173;
+        let x214 = x169 + x185;
+        let x215 = x124 + x125 + x126 - x173 * d - x128;
+        let x216 = x132 * gamma2_dot;
+        let x217 = x191 - gamma2_dot * x178 + x193;
+        let x218 = x0 * (-x216 - x138 - x145 - x146 - x150) - x173 * x215 + x4 * x217
+            + x168 * x182;
+        let x219 = x137 * d - x168 * x179 + x4 * (x216 + x138 + x145 + x146 + x150)
+            + x167 * x215 + x0 * x217;
+        let x220 = x219 * x46 - a * x0 * x218;
+        let x221 = x13 * x188 - x189 * x23 + (-x20 * x165 - x18 * x162) * J1
+            + (x154 - theta_dot * Ixx * x15 * psi_dot - x158 - x160 - x161) * x13
+            - ((x196 + x56 * x197) * x15 * x9 + x151 * x25) * m1
+            + x15
+                * (psi_dot * phi_dot * x69
+                    + (x203 - x198 - x199 - x201 + x204 + x205 - x206) * x9
+                    + x10 * (x209 - x207 - x208 - x210 + x211 - x212 - x213))
+            - x214 * x22 - m2 * (x184 * x26 + x220 * x15 * x10)
+            + theta_dot
+                * (-x187 * x29 * (x60 + x61 + x62 + x65 - x66 + x67) - x186 * x63);
+        let x222 = (-x187 * x29 * x69 - x12 * x186) * theta_dot
+            - m2 * (x184 * x11 * x10 + x220 * x9)
+            - (x8 * x151 * x9 + x10 * (x52 * x197 - x196)) * m1
+            + x10
+                * (x198 - x165 * x0 * J1 + x199 + x201 + x4 * x214 - x203 - x204 - x205
+                    + x206) + x15 * psi_dot * x53 * phi_dot
+            + (x209 - x207 - x208 - x1 * J1 * x162 - x210 - x2 * x189 + x211 - x212
+                - x213) * x9;
+        let x223 = a * x13 * theta_dot * theta_dot;
+        let x224 = x4 * x10;
+        let x225 = x0 * x9;
+        let x226 = (-x224 - x225) * x15;
+        let x227 = x15 * (x224 + x225);
+        let x228 = (x225 - x224) * x15;
+        let x229 = (x224 - x225) * x15;
+        let x230 = 0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229 - x19;
+        let x231 = x0 * x10;
+        let x232 = x4 * x9;
+        let x233 = x13 * (x231 + x232);
+        let x234 = x13 * (x232 - x231);
+        let x235 = x13 * x10;
+        let x236 = x15 * x9;
+        let x237 = x2 * (x235 + x236);
+        let x238 = x15 * x10;
+        let x239 = x13 * x9;
+        let x240 = x1 * (x238 - x239);
+        let x241 = x2 * (x236 - x235);
+        let x242 = x1 * (x239 - x238);
+        let x243 = x1 * (x238 + x239);
+        let x244 = (-x238 - x239) * x1;
+        let x245 = 0.25 * x242 - 0.25 * x240 - 0.25 * x243 + x17 + 0.25 * x244;
+        let value = x15;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -2460,90 +1906,68 @@ pub mod maggi {
             });
         }
         let mut matrix: [[f64; 8]; 8] = [
-            [x6, x36, x37, 0.0, 0.0, x47, x55, x59],
-            [x36, x73 * x13 + x23 * x14 * x124, x125, x129, x132, x142, x146, x149],
+            [x6, x30, x31, 0.0, 0.0, x37, x41, x43],
+            [x30, x59 * x9 + x29 * x10 * x70, x71, x74, x76, x87, x98, x100],
             [
-                x37,
-                x125,
-                x23 * (x30 * x37 - x14 * x123 + x23 * x122 * x13) * x13
-                    - x14 * (x23 * x13 * x72 - x64 * x14),
-                x152,
+                x31,
+                x71,
+                x29 * (x68 * x29 * x9 - x10 * x69 + x31 * x13) * x9
+                    - (x29 * x58 * x9 - x53 * x10) * x10,
+                x103,
                 0.0,
-                x153,
-                x154,
-                x155,
+                x104,
+                x105,
+                x106,
             ],
-            [0.0, x129, x152, J2 + x8, 0.0, x157, x161, x162],
-            [0.0, x132, 0.0, 0.0, x15 + J2, x164, x167, x168],
-            [x47, x142, x153, x157, x164, x169, 0.0, 0.0],
-            [x55, x146, x154, x161, x167, 0.0, x169, 0.0],
-            [x59, x149, x155, x162, x168, 0.0, 0.0, x169],
+            [0.0, x74, x103, J2 + d * d * m1, 0.0, x107, x108, x109],
+            [0.0, x76, 0.0, 0.0, m2 * d * d + J2, x110, x111, x112],
+            [x37, x87, x104, x107, x110, x113, 0.0, 0.0],
+            [x41, x98, x105, x108, x111, 0.0, x113, 0.0],
+            [x43, x100, x106, x109, x112, 0.0, 0.0, x113],
         ];
         let mut force: [f64; 8] = [
-            x242,
-            x277 * x23 * x14 + x13 * x288,
-            x277 * x23 * x13 - x14 * x288,
-            phi_dot * (-x239 * x14 * x151 - x151 * x202 - x0 * x214 * d * m1)
-                - (x30 * psi_dot * x151 * x13 + d * (x286 + x287) * m1) * theta_dot
-                - x225 * x150 * x13 + (x206 * J1 + (-x203 - x205) * J2) * x207
-                + d * m1
-                    * (x183 * x290
-                        - (X_dot * x291 + a * x7 * (x177 - x198) + Z_dot * x243
-                            + Y_dot * x289) * gamma1_dot
-                        + x181 * (x285 * x7 * x22 + x0 * x179) + x292 * x175
-                        - psi_dot * (x270 + x271)),
-            x221 * (J2 * x218 + (-x216 - x217) * J1)
-                - phi_dot
-                    * (theta_dot * x14 * x254 + x22 * x131 * psi_dot * x13
-                        + x3 * m2 * d * x235)
-                + m2 * d
-                    * (x197 * (x293 - x295 - theta_dot * x40 * x273 - x296)
-                        - (-x275 - x276) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * x77 - X_dot * x294 + a * x210 * x19
-                                - x297 * Y_dot)
-                        + x192 * (x300 - x298 - x299 - theta_dot * x273 * x38)
-                        + (x282 * x22 * x19 + x3 * (x30 * x187 - x182)) * x190)
-                + x131 * (-x225 * x14 - x239 * phi_dot * x13)
-                - (x30 * psi_dot * x14 * x254 + m2 * d * ((-x228 - x229) * x273 + x279))
-                    * theta_dot,
-            d
-                * (-x46 * x227
-                    - m2 * gamma2_dot * (theta_dot * x105 * x40 + x293 - x295 - x296)
-                    - x292 * gamma1_dot * m1
-                    - phi_dot
-                        * (x240 * phi_dot + x0 * gamma1_dot * x42 * m1
-                            + x3 * m2 * gamma2_dot * x45 + theta_dot * x58 * x40 * x22
-                            + psi_dot * x184))
-                - ((phi_dot * x184 - m2 * gamma2_dot * x274 + x245 * gamma1_dot * m1) * d
-                    + theta_dot * x278 * x38 + x250 * psi_dot) * psi_dot
-                - x23 * x225 * x251 - theta_dot * (x259 * psi_dot * x38 + x40 * x301)
-                - x239 * x138 * x40 * phi_dot,
-            (-x290 * gamma1_dot * m1
-                - m2 * gamma2_dot * (theta_dot * x105 * x38 - x298 - x299 + x300)
-                - (theta_dot * x58 * x22 * x38 + x0 * gamma1_dot * x53 * m1
-                    + x46 * psi_dot + x241 * phi_dot + x3 * m2 * gamma2_dot * x50)
-                    * phi_dot - x227 * x54) * d
-                - psi_dot
-                    * (theta_dot * x138 * x40 + x251 * psi_dot
-                        + (x156 * gamma1_dot * m1 - m2 * gamma2_dot * x163
-                            + x46 * phi_dot) * d)
-                - theta_dot * (x40 * psi_dot * x257 + x301 * x38)
-                - x23 * x225 * (x143 + x144) - x239 * x138 * phi_dot * x38,
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * x77 + theta_dot * x261 - x3 * x22 * x14 * phi_dot)
-                    - (x231 * x30 * theta_dot
-                        + x22
-                            * (x0 * gamma1_dot * m1 * x13 + phi_dot * x147
-                                - x3 * m2 * gamma2_dot * x14)) * phi_dot - x227 * x58 * x22
-                    - (theta_dot * x262 + gamma1_dot * x243 + x0 * x22 * phi_dot * x13)
-                        * gamma1_dot * m1) - x239 * x148 * phi_dot
-                - theta_dot
-                    * (theta_dot * x278
-                        + d
-                            * (gamma1_dot * x262 * m1 + x231 * x30 * phi_dot
-                                + m2 * gamma2_dot * x261)),
+            x188,
+            x29 * x10 * x221 + x222 * x9,
+            x29 * x221 * x9 - x10 * x222,
+            x15 * psi_dot * x10 * x102 * phi_dot - theta_dot * x187 * x101 * x9
+                + J2 * (x156 - x155 - x200) - d * m1 * x197 + x205,
+            x166 * x167 * x173 + (x136 - theta_dot * x187 * x10) * x75 - x212
+                - m2 * x219 * d,
+            theta_dot * (-x186 * d * x36 - (x84 + x85) * x187 * x29)
+                - m2 * (x35 * x184 + x77 * x218 + x219 * x78)
+                - (x151 * x34 + x80 * x197 + x195 * x81) * m1
+                + x15 * psi_dot * phi_dot * x83,
+            (-x40 * x186 * d - x187 * x29 * (x95 + x96)) * theta_dot
+                - m2 * (x184 * x38 + x219 * x89 + x88 * x218)
+                - (x195 * x91 + x151 * x39 + x93 * x197) * m1
+                + x15 * psi_dot * phi_dot * x94,
+            x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x186 * d)
+                - m2
+                    * (((0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229) * phi_dot
+                        * phi_dot
+                        + (theta_dot * x230
+                            + phi_dot
+                                * (x233 - 0.5 * x226 - 0.5 * x227 + 0.5 * x228 + 0.5 * x229
+                                    - x234)) * theta_dot
+                        + gamma2_dot
+                            * (phi_dot
+                                * (0.5 * x226 - 0.5 * x227 + 0.5 * x228 - 0.5 * x229)
+                                + (-x233 - 0.5 * x226 - 0.5 * x227 - 2.0 * (x15 * x0)
+                                    - 0.5 * x228 - 0.5 * x229 - x234) * theta_dot
+                                + gamma2_dot * x230)) * d - x223)
+                - (x223
+                    + (theta_dot
+                        * ((0.5 * x240 - x237 + x241 + 2.0 * (x1 * x15) + 0.5 * x242
+                            - 0.5 * x243 - 0.5 * x244) * gamma1_dot + theta_dot * x245
+                            + (0.5 * x240 - 0.5 * x242 - 0.5 * x243 + 0.5 * x244)
+                                * phi_dot)
+                        + gamma1_dot
+                            * (x245 * gamma1_dot
+                                + phi_dot
+                                    * (x237 - 0.5 * x240 + x241 - 0.5 * x242 - 0.5 * x243
+                                        - 0.5 * x244))
+                        + (0.25 * x242 - 0.25 * x240 - 0.25 * x243 + 0.25 * x244)
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -2560,15 +1984,15 @@ pub mod maggi {
         dstate[5] = X_dot;
         dstate[6] = Y_dot;
         dstate[7] = Z_dot;
-        dstate[8] = 0.0 * force[0] + x23 * x14 * force[1] + x23 * x13 * force[2]
+        dstate[8] = 0.0 * force[0] + x29 * x10 * force[1] + x29 * x9 * force[2]
             + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + 0.0 * force[7] + x23 * x225;
-        dstate[9] = 0.0 * force[0] + x13 * force[1] + -x14 * force[2] + 0.0 * force[3]
+            + 0.0 * force[7] + theta_dot * x187 * x29;
+        dstate[9] = 0.0 * force[0] + x9 * force[1] + -x10 * force[2] + 0.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
-            + x239 * phi_dot;
-        dstate[10] = 1.0 * force[0] + x30 * x23 * x14 * force[1]
-            + x30 * x23 * x13 * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + x227;
+            + -(x15 * psi_dot * phi_dot);
+        dstate[10] = 1.0 * force[0] + x13 * x29 * x10 * force[1]
+            + x13 * x29 * x9 * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + theta_dot * x186;
         dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
         dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
@@ -2612,33 +2036,39 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::cos(gamma1);
+        let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
-        let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(phi);
-        let x6 = m2 * x4 * x5;
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::sin(phi);
-        let x9 = x7 * x8 * m1;
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x10 * x13;
-        let x15 = x12 * x8;
-        let x16 = x3 * x5 * x13;
-        let x17 = x12 * x5;
-        let x18 = x3 * x8 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x8 * x13 + x3 * x12 * x5;
-        let x21 = x5 * x13;
-        let x22 = x3 * x12 * x8;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x10;
-        let x26 = x16 - x15;
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a;
+        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2670,25 +2100,31 @@ pub mod maggi {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                    + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-                + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                    + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                        + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                        + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-                + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-                + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-                + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2777,132 +2213,139 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = x0 * x0;
-        let x2 = f64::cos(gamma2);
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::sin(gamma1);
+        let x2 = f64::cos(gamma1);
         let x3 = x2 * x2;
-        let x4 = m2 * (1.0 - x3);
-        let x5 = Ixx + d * d * (m1 * (1.0 - x1) + x4) + (x1 + x3) * J1
-            + J2 * (2.0 - x1 - x3);
-        let x6 = f64::sin(gamma1);
-        let x7 = d * d * m1;
-        let x8 = a * d * m1;
-        let x9 = x6 * (x0 * (J1 - J2 - x7) - x8) - Ixy;
-        let x10 = f64::cos(phi);
-        let x11 = f64::sin(phi);
-        let x12 = m2 * d * d;
-        let x13 = m2 * a * d;
-        let x14 = f64::sin(gamma2);
-        let x15 = x9 * x10 + x11 * ((x2 * (J1 - x12 - J2) - x13) * x14 + Ixz);
-        let x16 = f64::cos(theta);
-        let x17 = 1.0 / x16;
-        let x18 = x2 * (x12 + J2 - J1);
-        let x19 = (x18 + x13) * x14 - Ixz;
-        let x20 = x16 * (x9 * x11 + x19 * x10);
-        let x21 = f64::sin(theta);
-        let x22 = (x1 - 1.0) * m1;
-        let x23 = x21
-            * ((m2 * (x3 - 1.0) + x22) * d * d - Ixx + (x1 + x3 - 2.0) * J2
-                + (-x1 - x3) * J1);
-        let x24 = x20 + x21 * x5 + x23;
-        let x25 = x15 * x10 + x17 * x24 * x11;
-        let x26 = x17 * x24 * x10 - x15 * x11;
-        let x27 = f64::sin(psi);
-        let x28 = f64::cos(psi);
-        let x29 = x11 * x27 + x21 * x28 * x10;
-        let x30 = x10 * x27;
-        let x31 = x21 * x28 * x11;
-        let x32 = x6 * x29 * m1 + m2 * x14 * (x30 - x31);
-        let x33 = x32 * d;
-        let x34 = x28 * x10;
-        let x35 = x21 * x11 * x27;
-        let x36 = -x34 - x35;
-        let x37 = x28 * x11;
-        let x38 = x21 * x10 * x27;
-        let x39 = x38 - x37;
-        let x40 = m2 * x14 * x36 + x6 * x39 * m1;
-        let x41 = d * x40;
-        let x42 = x6 * m1 * x10 - m2 * x14 * x11;
-        let x43 = x42 * x16 * d;
-        let x44 = Iyy + x0 * x0 * (J2 - J1) + x2 * x2 * (J1 - J2) + d * d * (x22 + x4)
-            - Izz;
-        let x45 = Iyz * x11;
-        let x46 = a * (2.0 * (x0 * d * m1) + a * (m2 + m1)) + J2 + x2 * (x18 + 2.0 * x13)
-            + x7 + Izz + (x44 * x10 + 2.0 * x45) * x10 + J1;
-        let x47 = x21 * x19 * x11;
-        let x48 = Iyz * x16;
-        let x49 = Iyz * x10;
-        let x50 = (x21 * (Ixy + x6 * (x0 * (J2 + x7 - J1) + x8))
-            + (x44 * x11 - 2.0 * x49) * x16) * x10;
-        let x51 = x47 + x48 + x50 + x15 * x21;
-        let x52 = x46 * x10 + x17 * x11 * x51;
-        let x53 = -x16 * x14 * x10 - x2 * x21;
-        let x54 = x6 * x16 * x11 - x0 * x21;
-        let x55 = a * x28 * x16;
-        let x56 = -d * (x2 * x28 * x16 - x14 * x29) - x55;
-        let x57 = a * x16 * x27;
-        let x58 = x57 - (-x2 * x16 * x27 - (x37 - x38) * x14) * d;
-        let x59 = d * (x6 * x36 - x0 * x16 * x27) - x57;
-        let x60 = x31 - x30;
-        let x61 = d * (x60 * x6 + x0 * x28 * x16) + x55;
-        let x62 = x10 * x10 + x11 * x11;
-        let x63 = x2 * x16 * x10 - x21 * x14;
-        let x64 = x0 * x16 * x11 + x21 * x6;
-        let x65 = x21 * (x20 + x23) + (x53 * x53 + x54 * x54) * J1
-            + m2 * (x56 * x56 + x58 * x58) + (x59 * x59 + x61 * x61) * m1
-            + J2 * (x16 * x16 * x62 + x63 * x63 + x64 * x64)
-            - x21 * (x16 * (-Ixy * x11 - Ixz * x10) - x21 * Ixx)
-            + x16
-                * (((Iyy * x11 - x49) * x16 + x21 * Ixy) * x11
-                    + (x16 * (Izz * x10 - x45) + x21 * Ixz) * x10);
-        let x66 = x47 + x48 + x50;
-        let x67 = x21 * x25 + x17 * x65 * x11 + x66 * x10;
-        let x68 = x17 * x67 * x10 - x11 * x52;
-        let x69 = x0 * a;
-        let x70 = d * (x69 + d) * m1;
-        let x71 = d * (-x69 - d) * m1;
-        let x72 = (x70 + x71) * x11 * x10;
-        let x73 = (J2 + m2 * d * (d + x2 * a)) * x62;
-        let x74 = (-a - x0 * d) * m1 + m2 * (a + x2 * d);
-        let x75 = m2 * x14 * x10;
-        let x76 = x6 * x11 * m1;
-        let x77 = x74 * x21 + (x75 + x76) * x16 * d;
-        let x78 = m2 * x58 + x32 * x21 * d + x59 * m1;
-        let x79 = x77 * x28 * x10 + x17 * x78 * x11;
-        let x80 = m1 * x61 + m2 * x56 + x21 * d * x40;
-        let x81 = x17 * x11 * x80 + x77 * x10 * x27;
-        let x82 = x21 * d * (-x75 - x76) + x74 * x16;
-        let x83 = x82 * x10 + x21 * x42 * d * x11;
-        let x84 = (x70 + J2) * x10 * x10 - x11 * x11 * (x71 - J2);
-        let x85 = x17 * x78 * x10 - x77 * x28 * x11;
-        let x86 = x17 * x80 * x10 - x77 * x11 * x27;
-        let x87 = x21 * x42 * d * x10 - x11 * x82;
-        let x88 = (x0 * x60 - x28 * x6 * x16) * d * m1;
-        let x89 = (x0 * (x34 + x35) - x6 * x16 * x27) * d * m1;
-        let x90 = x64 * d * m1;
-        let x91 = -(m2 * (-x28 * x16 * x14 - x2 * x29) * d);
-        let x92 = -(m2 * d * (-x16 * x14 * x27 - x2 * x39));
-        let x93 = m2 * x63 * d;
-        let x94 = m2 + m0 + m1;
+        let x4 = f64::cos(gamma2);
+        let x5 = x4 * x4;
+        let x6 = Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
+            + (x0 * x0 + x1 * x1) * J2;
+        let x7 = J1 - J2;
+        let x8 = -a - x2 * d;
+        let x9 = f64::cos(phi);
+        let x10 = f64::sin(phi);
+        let x11 = a + x4 * d;
+        let x12 = ((x2 * x7 + x8 * d * m1) * x1 - Ixy) * x9
+            + x10 * ((x4 * x7 - m2 * d * x11) * x0 + Ixz);
+        let x13 = f64::sin(theta);
+        let x14 = x13 * Ixx;
+        let x15 = f64::cos(theta);
+        let x16 = x15 * (-Ixy * x10 - Ixz * x9);
+        let x17 = x1 * x15 * x10 - x2 * x13;
+        let x18 = -x15 * x0 * x9 - x4 * x13;
+        let x19 = (x2 * x17 + x4 * x18) * J1;
+        let x20 = x4 * x15 * x9 - x13 * x0;
+        let x21 = x2 * x15 * x10 + x13 * x1;
+        let x22 = (x20 * x0 - x21 * x1) * J2;
+        let x23 = -x21 * d - a * x15 * x10;
+        let x24 = -a * x15 * x9 - x20 * d;
+        let x25 = (x1 * m1 * x23 - m2 * x0 * x24) * d;
+        let x26 = x16 - x14 + x19 + x13 * x6 + x22 + x25;
+        let x27 = 1.0 / x15;
+        let x28 = x12 * x9 + x26 * x27 * x10;
+        let x29 = x26 * x27 * x9 - x12 * x10;
+        let x30 = f64::sin(psi);
+        let x31 = f64::cos(psi);
+        let x32 = x10 * x30 + x13 * x31 * x9;
+        let x33 = x13 * x31 * x10 - x9 * x30;
+        let x34 = x1 * x32 * m1 - m2 * x33 * x0;
+        let x35 = d * x34;
+        let x36 = x31 * x9 + x13 * x10 * x30;
+        let x37 = x13 * x9 * x30 - x31 * x10;
+        let x38 = x1 * x37 * m1 - m2 * x0 * x36;
+        let x39 = x38 * d;
+        let x40 = x1 * m1 * x9 - m2 * x0 * x10;
+        let x41 = x40 * x15 * d;
+        let x42 = Iyy * x9;
+        let x43 = Iyz * x10;
+        let x44 = d + x4 * a;
+        let x45 = a * a * x0 * x0 + x44 * x44;
+        let x46 = x10 * Izz;
+        let x47 = Iyz * x9;
+        let x48 = a * a * x1 * x1;
+        let x49 = x2 * a;
+        let x50 = -x49 - d;
+        let x51 = J2 * ((x3 + 1.0) * x9 * x9 + (x5 + 1.0) * x10 * x10)
+            + (x1 * x1 * x9 * J1 + x42 + x43) * x9
+            + (x45 * x9 * x9 + x11 * x11 * x10 * x10) * m2
+            + x10 * (x46 + x47 + x0 * x0 * x10 * J1)
+            + ((x48 + x50 * x50) * x10 * x10 + x8 * x8 * x9 * x9) * m1;
+        let x52 = x10
+            * (m2 * (x15 * x45 * x9 + x11 * x24) - x4 * x20 * J2 + x18 * x0 * J1
+                + (x42 + x43) * x15);
+        let x53 = x13 * (x10 * Ixz - Ixy * x9);
+        let x54 = x49 + d;
+        let x55 = (x2 * J2 * x21 + x15 * (-x46 - x47) + x17 * x1 * J1
+            + (x8 * x23 + x15 * x10 * (x54 * x50 - x48)) * m1) * x9;
+        let x56 = x52 - x53 + x55 + x13 * x12;
+        let x57 = x51 * x9 + x27 * x56 * x10;
+        let x58 = x9 * x9 + x10 * x10;
+        let x59 = (x23 * x23 + (x54 * x54 + x48) * x15 * x15 * x9 * x9) * m1
+            + m2 * (x24 * x24 + x15 * x15 * x10 * x10 * x45)
+            + (x18 * x18 + x17 * x17) * J1 + x13 * (x16 - x14 + x19 + x22 + x25)
+            + J2 * (x15 * x15 * x58 + x20 * x20 + x21 * x21) - x13 * (x16 - x14)
+            + x15
+                * (((Iyy * x10 - x47) * x15 + x13 * Ixy) * x10
+                    + (x15 * (Izz * x9 - x43) + x13 * Ixz) * x9);
+        let x60 = x52 - x53 + x55;
+        let x61 = x59 * x27 * x10 + x13 * x28 + x60 * x9;
+        let x62 = x27 * x9 * x61 - x57 * x10;
+        let x63 = d * x54 * m1;
+        let x64 = d * x50 * m1;
+        let x65 = (x63 + x64) * x10 * x9;
+        let x66 = (J2 + m2 * d * x44) * x58;
+        let x67 = x31 * x15 * x0 + x4 * x32;
+        let x68 = x67 * x44 - a * x0 * (x4 * x31 * x15 - x0 * x32);
+        let x69 = x2 * x33 - x31 * x1 * x15;
+        let x70 = a * x1 * (x33 * x1 + x2 * x31 * x15);
+        let x71 = m2 * (x68 * x9 + x33 * x11 * x10)
+            + m1 * (x10 * (x69 * x50 - x70) + x8 * x32 * x9);
+        let x72 = x13 * d * x34 + m1 * (x15 * (x69 * x54 + x70) * x9 + x32 * x23)
+            + m2 * (x15 * x68 * x10 + x33 * x24);
+        let x73 = x71 * x9 + x72 * x27 * x10;
+        let x74 = x15 * x0 * x30 + x4 * x37;
+        let x75 = x74 * x44 - a * (x4 * x15 * x30 - x0 * x37) * x0;
+        let x76 = a * x1 * (x2 * x15 * x30 + x1 * x36);
+        let x77 = x2 * x36 - x1 * x15 * x30;
+        let x78 = m2 * (x75 * x9 + x11 * x10 * x36)
+            + (x8 * x37 * x9 + (x77 * x50 - x76) * x10) * m1;
+        let x79 = x13 * x38 * d + m1 * (x15 * (x77 * x54 + x76) * x9 + x37 * x23)
+            + m2 * (x15 * x10 * x75 + x36 * x24);
+        let x80 = x78 * x9 + x79 * x27 * x10;
+        let x81 = m2 * (x15 * x11 * x10 * x10 + (x20 * x44 - a * x18 * x0) * x9)
+            + m1 * ((x21 * x50 - a * x17 * x1) * x10 + x8 * x15 * x9 * x9);
+        let x82 = x13 * x40 * d * x10 + x81 * x9;
+        let x83 = (x63 + J2) * x9 * x9 - x10 * x10 * (x64 - J2);
+        let x84 = x72 * x27 * x9 - x10 * x71;
+        let x85 = x79 * x27 * x9 - x10 * x78;
+        let x86 = x13 * x40 * d * x9 - x81 * x10;
+        let x87 = x69 * d * m1;
+        let x88 = x77 * d * m1;
+        let x89 = x21 * d * m1;
+        let x90 = m2 * d * x67;
+        let x91 = m2 * d * x74;
+        let x92 = m2 * x20 * d;
+        let x93 = m2 + m0 + m1;
         [
-            [x5, x25, x26, 0.0, 0.0, x33, x41, x43],
-            [x25, x52 * x10 + x17 * x11 * x67, x68, x72, x73, x79, x81, x83],
+            [x6, x28, x29, 0.0, 0.0, x35, x39, x41],
+            [x28, x57 * x9 + x27 * x10 * x61, x62, x65, x66, x73, x80, x82],
             [
-                x26,
-                x68,
-                x17 * (x21 * x26 - x11 * x66 + x17 * x65 * x10) * x10
-                    - x11 * (x17 * x10 * x51 - x46 * x11),
-                x84,
+                x29,
+                x62,
+                x27 * (x59 * x27 * x9 - x10 * x60 + x29 * x13) * x9
+                    - (x27 * x56 * x9 - x51 * x10) * x10,
+                x83,
                 0.0,
+                x84,
                 x85,
                 x86,
-                x87,
             ],
-            [0.0, x72, x84, J2 + x7, 0.0, x88, x89, x90],
-            [0.0, x73, 0.0, 0.0, x12 + J2, x91, x92, x93],
-            [x33, x79, x85, x88, x91, x94, 0.0, 0.0],
-            [x41, x81, x86, x89, x92, 0.0, x94, 0.0],
-            [x43, x83, x87, x90, x93, 0.0, 0.0, x94],
+            [0.0, x65, x83, J2 + d * d * m1, 0.0, x87, x88, x89],
+            [0.0, x66, 0.0, 0.0, m2 * d * d + J2, x90, x91, x92],
+            [x35, x73, x84, x87, x90, x93, 0.0, 0.0],
+            [x39, x80, x85, x88, x91, 0.0, x93, 0.0],
+            [x41, x82, x86, x89, x92, 0.0, 0.0, x93],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -2990,202 +2433,228 @@ pub mod kane {
         let x5 = u2 * x3 - u3 * x2;
         let x6 = f64::sin(theta);
         let x7 = x6 * x1 * x4 + u1;
-        let x8 = f64::cos(gamma1);
-        let x9 = x8 * x8;
-        let x10 = f64::cos(gamma2);
+        let x8 = f64::sin(gamma2);
+        let x9 = f64::sin(gamma1);
+        let x10 = f64::cos(gamma1);
         let x11 = x10 * x10;
-        let x12 = f64::sin(gamma1);
-        let x13 = d * d * m1;
-        let x14 = a * d * m1;
-        let x15 = x8 * (J1 - J2 - x13) - x14;
-        let x16 = x12 * x15 - Ixy;
-        let x17 = m2 * d * d;
-        let x18 = x10 * (x17 + J2 - J1);
-        let x19 = m2 * a * d;
-        let x20 = x18 + x19;
-        let x21 = f64::sin(gamma2);
-        let x22 = x20 * x21 - Ixz;
-        let x23 = f64::sin(psi);
-        let x24 = x2 * x23;
-        let x25 = f64::cos(psi);
-        let x26 = x6 * x25 * x3;
-        let x27 = x24 + x26;
-        let x28 = x3 * x23;
-        let x29 = x6 * x25 * x2;
-        let x30 = x28 - x29;
-        let x31 = x12 * x27 * m1 + m2 * x21 * x30;
-        let x32 = x31 * d;
-        let x33 = x25 * x3;
-        let x34 = x6 * x2 * x23;
-        let x35 = -x33 - x34;
-        let x36 = x25 * x2;
-        let x37 = x6 * x3 * x23;
-        let x38 = x37 - x36;
-        let x39 = d * (m2 * x21 * x35 + x12 * x38 * m1);
-        let x40 = x12 * m1 * x3;
-        let x41 = m2 * x21 * x2;
-        let x42 = x40 - x41;
-        let x43 = x42 * x0 * d;
-        let x44 = x10 * d;
-        let x45 = J2 + x13 - J1;
-        let x46 = -Iyz;
-        let x47 = d + x10 * a;
-        let x48 = J2 + m2 * d * x47;
-        let x49 = a + x44;
-        let x50 = -x24 - x26;
-        let x51 = a * x50;
-        let x52 = (x49 * x2 * x23 + x25 * (x0 * d * x21 + x6 * x49 * x3)) * m2
-            + (x51 + x8 * x50 * d) * m1;
-        let x53 = x36 - x37;
-        let x54 = x53 * a;
-        let x55 = x0 * x21 * x23;
-        let x56 = x10 * x38;
-        let x57 = x55 + x56;
-        let x58 = a * x38;
-        let x59 = (x8 * x53 * d + x54) * m1 + m2 * (d * x57 + x58);
-        let x60 = x8 * d;
-        let x61 = -a - x60;
-        let x62 = x61 * m1 + m2 * x49;
-        let x63 = x62 * x0 * x3 - m2 * x6 * d * x21;
-        let x64 = x8 * a + d;
-        let x65 = d * x64 * m1 + J2;
-        let x66 = -a - x44;
-        let x67 = (a + x60) * m1 + m2 * x66;
-        let x68 = x12 * x0 * d * m1;
-        let x69 = x62 * x3 * x23 + x25 * (x6 * x67 * x2 - x68);
-        let x70 = x33 + x34;
-        let x71 = x12 * x0 * x23;
-        let x72 = x8 * x70 - x71;
-        let x73 = a * (m1 * x70 + m2 * x35) + (x10 * m2 * x35 + x72 * m1) * d;
-        let x74 = x6 * x12 * d * m1 + x67 * x0 * x2;
-        let x75 = x29 - x28;
-        let x76 = x8 * x75 - x25 * x12 * x0;
-        let x77 = x76 * d * m1;
-        let x78 = x72 * d * m1;
-        let x79 = x8 * x0 * x2 + x6 * x12;
-        let x80 = x79 * d * m1;
-        let x81 = x25 * x0 * x21;
-        let x82 = x10 * x27;
-        let x83 = -x81 - x82;
-        let x84 = -(m2 * x83 * d);
-        let x85 = -(m2 * d * (-x55 - x56));
-        let x86 = x6 * x21;
-        let x87 = x10 * x0 * x3;
-        let x88 = x87 - x86;
-        let x89 = m2 * x88 * d;
-        let x90 = m2 + m0 + m1;
-        let x91 = x21 * u1;
-        let x92 = x10 * u3;
-        let x93 = x91 + x92;
-        let x94 = x8 * u2;
-        let x95 = x12 * u1;
-        let x96 = x94 - x95;
-        let x97 = x12 * u2;
-        let x98 = x8 * u1;
-        let x99 = x97 + x98;
-        let x100 = u4 + u3;
-        let x101 = u5 + u2;
-        let x102 = u3 * x21;
-        let x103 = x10 * u1;
-        let x104 = x103 - x102;
-        let x105 = Iyz * u2;
-        let x106 = u3 * Izz;
-        let x107 = u1 * Ixz;
-        let x108 = Iyy * u2;
-        let x109 = Iyz * u3;
-        let x110 = Ixy * u1;
-        let x111 = x45 * x12 * x12 + x8 * x15;
-        let x112 = u6 * x27 + u8 * x0 * x3 + u7 * x38;
-        let x113 = x112 * d * m1;
-        let x114 = (J1 - x17 - J2) * x21 * x21 + x10 * x20;
-        let x115 = u8 * x0 * x2;
-        let x116 = u6 * x30 + u7 * x35 - x115;
-        let x117 = x41 - x40;
-        let x118 = u7 * x23;
-        let x119 = u6 * x25;
-        let x120 = x118 + x119;
-        let x121 = x6 * u8;
-        let x122 = x0 * x120 - x121;
-        let x123 = a * u2;
-        let x124 = u7 * x25;
-        let x125 = u6 * x23;
-        let x126 = x2 * (x125 - x124);
-        let x127 = u8 * x0;
-        let x128 = x127 + x6 * x120;
-        let x129 = x128 * x3;
-        let x130 = x21 * x122 + x10 * (x123 + x126 + x129) + x101 * d;
-        let x131 = x104 * x130;
-        let x132 = x124 - x125;
-        let x133 = -x118 - x119;
-        let x134 = x10 * x122 + x21 * (x132 * x2 - x123 + (x6 * x133 - x127) * x3);
-        let x135 = x134 * x93;
-        let x136 = x132 * x3;
-        let x137 = x128 * x2;
-        let x138 = u3 * x66 + x136 + x137 - d * x21 * u1;
-        let x139 = m2 * x21 * x70 + x53 * x12 * m1;
-        let x140 = -m2 * x21 * x3 - x12 * x2 * m1;
-        let x141 = m2 * x50 * x21 + x12 * m1 * x30;
-        let x142 = x12 * x35 * m1 + x53 * m2 * x21;
-        let x143 = x126 - x123 + x129 + d * (x95 - x94);
-        let x144 = a * u3 + x136 + x137;
-        let x145 = x12 * x144 + x8 * x122;
-        let x146 = x8 * x144 + (x0 * x133 + x121) * x12 + d * x100;
-        let x147 = x96 * x145 - x146 * x99;
-        let x148 = -x0 * x21 * x3 - x10 * x6;
-        let x149 = u8 * x148;
-        let x150 = x10 * x0;
-        let x151 = x6 * x21 * x3;
-        let x152 = (x150 - x151) * x25 - x21 * x2 * x23;
-        let x153 = x10 * x0 * x23;
-        let x154 = x153 + x53 * x21;
-        let x155 = -x91 - x92;
-        let x156 = Ixy * u2;
-        let x157 = Ixx * u1;
-        let x158 = u3 * Ixz;
-        let x159 = (x8 * x75 * d + a * x75) * m1 + m2 * (a * x30 + x10 * d * x30);
-        let x160 = (x10 * d * x35 + a * x35) * m2 + (a * x70 + x8 * d * x70) * m1;
-        let x161 = x10 * x53;
-        let x162 = x161 - x55;
-        let x163 = m1 * (x8 * d * x38 + x58);
-        let x164 = m2 * (d * x162 + x54) + x163;
-        let x165 = x6 * x67 * x3 - m2 * x0 * d * x21;
-        let x166 = x62 * x6 * x2 + x68;
-        let x167 = m2 * (x54 + x10 * x53 * d) + x163;
-        let x168 = m2 * (x10 * x50 * d + x51) + (x8 * d * x27 + a * x27) * m1;
-        let x169 = -x97 - x98;
-        let x170 = x8 * x35 + x71;
-        let x171 = (x170 * m1 + x10 * m2 * x70) * d + a * (x35 * m1 + m2 * x70);
-        let x172 = x12 * x0 * x2;
-        let x173 = x8 * x6;
-        let x174 = x173 - x172;
-        let x175 = u8 * x174;
-        let x176 = x8 * x0 * x23;
-        let x177 = x12 * x35 - x176;
-        let x178 = x6 * x12 * x2;
-        let x179 = x8 * x0;
-        let x180 = -x178 - x179;
-        let x181 = x12 * x3 * x23;
-        let x182 = x25 * x180 + x181;
-        let x183 = -x75 * x12 - x8 * x25 * x0;
-        let x184 = x12 * x70;
-        let x185 = -x176 - x184;
-        let x186 = x12 * x0 - x8 * x6 * x2;
-        let x187 = x55 - x161;
-        let x188 = x21 * x27 - x10 * x25 * x0;
-        let x189 = x21 * x38 - x153;
-        let x190 = x86 - x87;
-        let x191 = -x10 * x6 * x3 - x0 * x21;
-        let x192 = x8 * x7 - x97 - x98;
-        let x193 = x25 * (x178 + x179) - x181;
-        let x194 = x172 - x173;
-        let x195 = x7 * x12 + x94 - x95;
-        let x196 = x152 * u2;
-        let x197 = x81 + x82;
-        let x198 = x7 * x21 - x91 - x92;
-        let x199 = (u4 * x79 * m1 - u5 * m2 * x190 + x42 * x0 * u1) * d + x63 * u2
-            + u3 * x74;
-        let x200 = x176 + x184;
-        let x201 = x154 * u2;
+        let x12 = f64::cos(gamma2);
+        let x13 = x12 * x12;
+        let x14 = J1 - J2;
+        let x15 = x10 * d;
+        let x16 = -a - x15;
+        let x17 = (x10 * x14 + x16 * d * m1) * x9 - Ixy;
+        let x18 = J2 - J1;
+        let x19 = x12 * d;
+        let x20 = -a - x19;
+        let x21 = x8 * (x12 * x18 - m2 * d * x20) - Ixz;
+        let x22 = f64::sin(psi);
+        let x23 = x2 * x22;
+        let x24 = f64::cos(psi);
+        let x25 = x23 + x6 * x24 * x3;
+        let x26 = x3 * x22;
+        let x27 = x6 * x24 * x2 - x26;
+        let x28 = d * (x9 * x25 * m1 - m2 * x27 * x8);
+        let x29 = x24 * x3;
+        let x30 = x29 + x6 * x2 * x22;
+        let x31 = x24 * x2;
+        let x32 = x6 * x3 * x22;
+        let x33 = x32 - x31;
+        let x34 = (x9 * x33 * m1 - m2 * x8 * x30) * d;
+        let x35 = (x9 * m1 * x3 - m2 * x8 * x2) * x0 * d;
+        let x36 = d * d;
+        let x37 = -Iyz;
+        let x38 = d + x12 * a;
+        let x39 = J2 + m2 * d * x38;
+        let x40 = (x12 * x0 - x6 * x8 * x3) * x24 - x8 * x2 * x22;
+        let x41 = x24 * x0 * x8 + x12 * x25;
+        let x42 = m2 * (x41 * x38 - a * x40 * x8) + x16 * x25 * m1;
+        let x43 = x12 * x0 * x22 + (x31 - x32) * x8;
+        let x44 = x0 * x8 * x22 + x12 * x33;
+        let x45 = x16 * x33 * m1 + m2 * (x44 * x38 - a * x8 * x43);
+        let x46 = x12 * x6;
+        let x47 = x6 * x8;
+        let x48 = x12 * x0 * x3 - x47;
+        let x49 = m2 * (x48 * x38 - a * (-x0 * x8 * x3 - x46) * x8) + x16 * x0 * m1 * x3;
+        let x50 = x10 * a + d;
+        let x51 = d * x50 * m1 + J2;
+        let x52 = x10 * x27 - x24 * x9 * x0;
+        let x53 = x24 * (x6 * x9 * x2 + x10 * x0) - x9 * x3 * x22;
+        let x54 = m2 * x27 * x20 + (x52 * x50 + a * x53 * x9) * m1;
+        let x55 = x10 * x30 - x9 * x0 * x22;
+        let x56 = x10 * x0 * x22 + x9 * x30;
+        let x57 = (x55 * x50 + a * x9 * x56) * m1 + m2 * x20 * x30;
+        let x58 = x6 * x9;
+        let x59 = x10 * x0 * x2 + x58;
+        let x60 = x10 * x6;
+        let x61 = (x59 * x50 + a * (x9 * x0 * x2 - x60) * x9) * m1 + m2 * x0 * x2 * x20;
+        let x62 = x52 * d * m1;
+        let x63 = x55 * d * m1;
+        let x64 = x59 * d * m1;
+        let x65 = m2 * d * x41;
+        let x66 = m2 * d * x44;
+        let x67 = m2 * x48 * d;
+        let x68 = m2 + m0 + m1;
+        let x69 = x9 * u2;
+        let x70 = x10 * u1;
+        let x71 = u4 * J2 * (-x69 - x70);
+        let x72 = x69 + x70;
+        let x73 = u4 + u3;
+        let x74 = x72 * x14 * x73;
+        let x75 = u7 * x22;
+        let x76 = u6 * x24;
+        let x77 = x75 + x76;
+        let x78 = u8 * x0;
+        let x79 = -x75 - x76;
+        let x80 = x6 * x79 - x78;
+        let x81 = (x1 * x77 * x4 + x7 * x80) * x2;
+        let x82 = x10 * u2;
+        let x83 = x9 * u1;
+        let x84 = x82 - x83;
+        let x85 = a * u3;
+        let x86 = u7 * x24;
+        let x87 = u6 * x22;
+        let x88 = x86 - x87;
+        let x89 = x88 * x3;
+        let x90 = x78 + x6 * x77;
+        let x91 = x90 * x2;
+        let x92 = x85 + x89 + x91;
+        let x93 = x6 * u8;
+        let x94 = x0 * x77 - x93;
+        let x95 = x9 * x92 + x10 * x94;
+        let x96 = x0 * x79 + x93;
+        let x97 = x10 * x92 + x96 * x9 + d * x73;
+        let x98 = x0 * x5 * x22;
+        let x99 = x24 * u1;
+        let x100 = x6 * u8 * x5;
+        let x101 = u1 * x22;
+        let x102 = x24 * x0 * x5;
+        let x103 = u7 * (x98 - x99) - x100 + u6 * (x101 + x102);
+        let x104 = x103 * x3;
+        let x105 = x81 - x84 * x95 + x97 * x72 + x104 + x72 * u4 * d;
+        let x106 = x8 * u1;
+        let x107 = x12 * u3;
+        let x108 = -x106 - x107;
+        let x109 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x110 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x111 = u5 + u2;
+        let x112 = u5 * J2 + x111 * x18;
+        let x113 = u3 * x8;
+        let x114 = x12 * u1;
+        let x115 = x114 - x113;
+        let x116 = x2 * x103;
+        let x117 = x1 * x79 * x4 + x7 * x90;
+        let x118 = x117 * x3;
+        let x119 = a * u2;
+        let x120 = x87 - x86;
+        let x121 = x2 * x120;
+        let x122 = x90 * x3;
+        let x123 = x8 * x94 + x12 * (x119 + x121 + x122) + x111 * d;
+        let x124 = x88 * x2 - x119 + x80 * x3;
+        let x125 = x12 * x94 + x8 * x124;
+        let x126 = x106 + x107;
+        let x127 = x116 + x118 + (x113 - x114) * u5 * d - x115 * x123 + x125 * x126;
+        let x128 = x18 * x115 * x126;
+        let x129 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x130 = u3 * x20 + x89 + x91 - d * x8 * u1;
+        let x131 = x80 * x5;
+        let x132 = x88 * x4;
+        let x133 = x131 + u5 * x124 + x132;
+        let x134 = x115 * x130 - x111 * x125 + x133 * x8 + x12 * (x81 + x104 + u5 * x94);
+        let x135 = x8
+            * (x117 * x2 + x3 * (x100 + u6 * (-x101 - x102) + u7 * (x99 - x98))
+                + u5 * x96) + x12 * x133 - x126 * x130 + x111 * x123;
+        let x136 = x121 - x119 + x122 + d * (x83 - x82);
+        let x137 = x116 + x118 + x96 * u4;
+        let x138 = x95 * x73 - x136 * x72
+            + x9 * (u4 * (x120 * x3 - x85 + x80 * x2) + x90 * x5 + x4 * x120)
+            + x10 * x137;
+        let x139 = x136 * x84 + x10 * (x131 + x132 + u4 * x92) - x97 * x73 + x9 * x137;
+        let x140 = x84 * x72 * x14;
+        let x141 = 2.0 * theta + psi + phi;
+        let x142 = f64::cos(x141);
+        let x143 = 2.0 * theta - psi - phi;
+        let x144 = f64::cos(x143);
+        let x145 = 2.0 * theta + psi - phi;
+        let x146 = f64::cos(x145);
+        let x147 = 2.0 * theta - psi + phi;
+        let x148 = f64::cos(x147);
+        let x149 = x26 + x31;
+        let x150 = x6 * x149;
+        let x151 = x26 - x31;
+        let x152 = x6 * x151;
+        let x153 = x31 - x26;
+        let x154 = x6 * x153;
+        let x155 = -x26 - x31;
+        let x156 = x6 * x155;
+        let x157 = u6
+            * (x1 * (0.125 * x144 - 0.125 * x142 - 0.125 * x146 + 0.125 * x148)
+                - 0.25 * x150 - 0.25 * x152 + 0.25 * x154 + 0.25 * x156);
+        let x158 = x6 * (x23 + x29);
+        let x159 = x155 * x0;
+        let x160 = x6 * (x29 - x23);
+        let x161 = x149 * x0;
+        let x162 = x151 * x0;
+        let x163 = f64::sin(x143);
+        let x164 = f64::sin(x147);
+        let x165 = f64::sin(x145);
+        let x166 = f64::sin(x141);
+        let x167 = x153 * x0;
+        let x168 = (0.5 * x158 + 0.25 * x159 + 0.5 * x160 + 0.25 * x161 + 0.25 * x162
+            + x1 * (-0.125 * x163 - 0.125 * x164 - 0.125 * x165 - 0.125 * x166)
+            + 0.25 * x167) * u7;
+        let x169 = x0 * u1 * x3;
+        let x170 = x6 * u3;
+        let x171 = u6
+            * (x1 * (0.125 * x164 - 0.125 * x163 + 0.125 * x165 - 0.125 * x166)
+                - 0.5 * x158 + 0.25 * x159 + 0.5 * x160 + 0.25 * x161 - 0.25 * x162
+                - 0.25 * x167);
+        let x172 = x6 * u2;
+        let x173 = x0 * x2 * u1;
+        let x174 = u7
+            * ((0.125 * x142 - 0.125 * x144 - 0.125 * x146 + 0.125 * x148) * x1
+                + 0.25 * x150 - 0.25 * x152 + 0.25 * x154 - 0.25 * x156);
+        let x175 = x6 * x2;
+        let x176 = x0 * x3;
+        let x177 = x175 + x176;
+        let x178 = x10 * x177;
+        let x179 = x0 * x2;
+        let x180 = x6 * x3;
+        let x181 = x179 - x180;
+        let x182 = x9 * x181;
+        let x183 = x176 - x175;
+        let x184 = x10 * x183;
+        let x185 = x180 - x179;
+        let x186 = x9 * x185;
+        let x187 = x179 + x180;
+        let x188 = x9 * x187;
+        let x189 = -x179 - x180;
+        let x190 = x189 * x9;
+        let x191 = 0.25 * x186 - 0.25 * x182 - 0.25 * x188 + x60 + 0.25 * x190;
+        let x192 = x10 * x181;
+        let x193 = x10 * x187;
+        let x194 = x10 * x185;
+        let x195 = x183 * x9;
+        let x196 = x10 * x189;
+        let x197 = x177 * x9;
+        let x198 = x12 * x2;
+        let x199 = x8 * x3;
+        let x200 = -x198 - x199;
+        let x201 = x6 * x200;
+        let x202 = x198 + x199;
+        let x203 = x6 * x202;
+        let x204 = x199 - x198;
+        let x205 = x204 * x6;
+        let x206 = x8 * x2;
+        let x207 = x12 * x3;
+        let x208 = x0 * (x207 - x206);
+        let x209 = x198 - x199;
+        let x210 = x6 * x209;
+        let x211 = x0 * (x206 + x207);
+        let x212 = x200 * x0;
+        let x213 = x0 * x202;
+        let x214 = x204 * x0;
+        let x215 = x209 * x0;
+        let x216 = 0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215 - x46;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -3196,164 +2665,98 @@ pub mod kane {
         }
         let mut matrix: [[f64; 8]; 8] = [
             [
-                Ixx + d * d * (m1 * (1.0 - x9) + m2 * (1.0 - x11)) + (x9 + x11) * J1
-                    + J2 * (2.0 - x9 - x11),
-                x16,
-                x22,
+                Ixx + d * d * (m2 * x8 * x8 + x9 * x9 * m1) + (x11 + x13) * J1
+                    + (x8 * x8 + x9 * x9) * J2,
+                x17,
+                x21,
                 0.0,
                 0.0,
-                x32,
+                x28,
+                x34,
+                x35,
+            ],
+            [
+                x17,
+                x9 * x9 * J1 + x16 * x16 * m1 + Iyy + J2 * (x11 + 1.0)
+                    + m2 * (x36 + a * (a + 2.0 * x19)),
+                x37,
+                0.0,
                 x39,
-                x43,
+                x42,
+                x45,
+                x49,
             ],
             [
-                x16,
-                Iyy + J2 + a * a * m1 + m2 * (d * d + a * (a + 2.0 * x44))
-                    + x8 * (x8 * x45 + 2.0 * x14) + J1,
-                x46,
+                x21,
+                x37,
+                x8 * x8 * J1 + (a * (a + 2.0 * x15) + x36) * m1 + m2 * x20 * x20 + Izz
+                    + J2 * (x13 + 1.0),
+                x51,
                 0.0,
-                x48,
-                x52,
-                x59,
-                x63,
+                x54,
+                x57,
+                x61,
             ],
-            [
-                x22,
-                x46,
-                a * (2.0 * (x8 * d * m1) + a * (m2 + m1)) + J2 + x10 * (x18 + 2.0 * x19)
-                    + x13 + Izz + J1,
-                x65,
-                0.0,
-                x69,
-                x73,
-                x74,
-            ],
-            [0.0, 0.0, x65, J2 + x13, 0.0, x77, x78, x80],
-            [0.0, x48, 0.0, 0.0, x17 + J2, x84, x85, x89],
-            [x32, x52, x69, x77, x84, x90, 0.0, 0.0],
-            [x39, x59, x73, x78, x85, 0.0, x90, 0.0],
-            [x43, x63, x74, x80, x89, 0.0, 0.0, x90],
+            [0.0, 0.0, x51, J2 + d * d * m1, 0.0, x62, x63, x64],
+            [0.0, x39, 0.0, 0.0, m2 * d * d + J2, x65, x66, x67],
+            [x28, x42, x54, x62, x65, x68, 0.0, 0.0],
+            [x34, x45, x57, x63, x66, 0.0, x68, 0.0],
+            [x35, x49, x61, x64, x67, 0.0, 0.0, x68],
         ];
         let mut force: [f64; 8] = [
-            J2
-                * (x8 * x96 * u3 - x10 * x93 * u2 + (-x99 * x12 - x8 * x96) * x100
-                    + x101 * (x10 * x93 - x104 * x21))
-                + (x105 - x106 + x107 + x104 * x21 * J1) * u2
-                + u3 * (x108 + x99 * x12 * J1 - x109 - x110)
-                - u4
-                    * (x111 * u2
-                        + x8 * ((2.0 * J2 + 2.0 * x13 - 2.0 * J1) * x12 * u1 + x113))
-                - u5
-                    * (x114 * u3
-                        + x10
-                            * (m2 * d * x116
-                                + x21 * u1 * (2.0 * x17 + 2.0 * J2 - 2.0 * J1)))
-                + d
-                    * (m2 * (x21 * (x135 - x131) - x10 * u5 * x138)
-                        - (x117 * x6 * u8 + x42 * x0 * x120) * x5
-                        - (x31 * u7 + u6 * x139) * x1 * x4
-                        - x7 * (u8 * x0 * x140 + u6 * x141 + u7 * x142)
-                        + (x8 * x143 * u4 + x147 * x12) * m1),
-            ((-a * x93 * x21 - x104 * x47) * x138
-                - u5 * (a * x21 * (-u5 - 2.0 * u2) + x149 + x152 * u6 + u7 * x154) * d
-                + x134 * (x101 * x47 - x10 * u5 * a) + a * x21 * u2 * x130) * m2
-                + J2 * ((x8 * x99 - x96 * x12) * x100 + x96 * u3 * x12 + x104 * x93)
-                + (x106 - x105 - x107) * u1 + (x104 * x155 - x8 * x99 * u3) * J1
-                - u3 * (x157 - x156 - x158)
-                - (x111 * u1
-                    + x12
-                        * (x113
-                            + (x8 * (2.0 * J1 - 2.0 * J2 - 2.0 * x13) - 2.0 * x14) * u2))
-                    * u4 + (x147 * x61 + x143 * u4 * x12 * d) * m1
-                - x7 * (u8 * x67 * x0 * x2 + u6 * x159 + u7 * x160)
-                - x1 * (u6 * x164 + u7 * x52) * x4 - (x63 * x120 + u8 * x165) * x5,
-            (x10 * x104 * J1 - x156 + x157 - x158) * u2
-                - u5
-                    * (x114 * u1
-                        + x21
-                            * ((x10 * (2.0 * J1 - 2.0 * x17 - 2.0 * J2) - 2.0 * x19) * u3
-                                + m2 * d * (x115 + u7 * x70 + u6 * x75)))
-                - (x120 * x74 + u8 * x166) * x5
-                + m2 * (x66 * (x131 - x135) + u5 * d * x21 * x138)
-                - u1 * (x108 - x109 - x110)
-                - x7 * (u7 * x167 + u8 * x67 * x0 * x3 + u6 * x168)
-                + (x93 * x21 * u2 + x101 * (-x93 * x21 - x10 * x104) + x96 * x169) * J2
-                - x1 * x4 * (u6 * x171 + u7 * x69) + x96 * x99 * J1
-                + m1
-                    * (x146 * a * u3 * x12 + (x8 * a * u4 - x64 * x100) * x145
-                        - u4
-                            * (x175 + u7 * x177 + a * x12 * (-u4 - 2.0 * u3) + u6 * x182)
-                            * d + x143 * (x99 * x64 - x96 * a * x12)),
-            x96 * (x99 * J1 + J2 * x169)
-                + (x143 * x99 - x145 * x100 - x8 * x7 * x112
-                    - u4 * (u6 * x183 + x175 - a * u3 * x12 + u7 * x185)
-                    - x1 * (u7 * x76 + u6 * x170) * x4 - (u8 * x186 + x79 * x120) * x5)
-                    * d * m1,
-            x104 * (x155 * J1 + J2 * x93)
-                + m2
-                    * (x101 * x134 - x10 * x7 * x116 - x1 * (-u7 * x83 - u6 * x187) * x4
-                        - (x149 - u6 * x188 - a * x21 * u2 - u7 * x189) * u5
-                        - (x190 * x133 + u8 * x191) * x5 - x104 * x138) * d,
-            (x146
-                * (u4 * x182 + x79 * x25 * x5 + x27 * x192 + x193 * x100
-                    + x1 * x170 * x4) - u4 * d * (x99 * x27 + u4 * x183 + u3 * x182)
-                + x145 * (x1 * x4 * x177 + x25 * x194 * x5 - x76 * u3 + x195 * x27)
-                + x143
-                    * (x53 * x1 * x4 - x96 * x193 + x7 * x30 + x76 * x99
-                        + x25 * x0 * x3 * x5)) * m1
-                - x7
-                    * (d * (x141 * u1 + x8 * u4 * x27 * m1 + x10 * u5 * m2 * x30)
-                        + u3 * x168 + x159 * u2)
-                + (x134
-                    * (x189 * x1 * x4 + x101 * x197 + x75 * x198 + u5 * (x10 * x50 - x81)
-                        + x148 * x25 * x5)
-                    - (x75 * u3 * x21 - u5 * x188 + x196 + x10 * u1 * x30) * u5 * d
-                    + x130
-                        * (x1 * x162 * x4 - x196 + x88 * x25 * x5 + x10 * x7 * x30
-                            + x104 * x75)
-                    + (x25 * x0 * x2 * x5 - x104 * x197 + x7 * x27 + x152 * x93
-                        + x1 * x35 * x4) * x138) * m2 - x25 * x5 * x199
-                - (u3 * x171 + (u4 * x170 * m1 + u1 * x139 - u5 * m2 * x187) * d
-                    + x164 * u2) * x1 * x4,
-            (x146
-                * (u4 * x177 + x79 * x5 * x23 + x76 * x1 * x4 + x200 * x100 + x38 * x192)
-                - u4 * d * (u4 * x185 + u3 * x177 + x99 * x38)
-                + x143
-                    * (x0 * x3 * x5 * x23 - x96 * x200 + x7 * x35 + x99 * x72
-                        + x1 * x27 * x4)
-                + x145 * (x194 * x5 * x23 - x72 * u3 + x195 * x38 + x193 * x1 * x4)) * m1
-                - x5 * x199 * x23
-                - x1
-                    * (u2 * x52 + u3 * x69
-                        + d * (x76 * u4 * m1 - u5 * m2 * x83 + x31 * u1)) * x4
-                - x7
-                    * (u3 * x167 + x160 * u2
-                        + (x10 * u5 * m2 * x35 + x8 * u4 * x38 * m1 + x142 * u1) * d)
-                + m2
-                    * (x134
-                        * (x101 * x57 + u5 * x162 + x152 * x1 * x4 + x70 * x198
-                            + x148 * x5 * x23)
-                        + (x93 * x154 - x104 * x57 + x75 * x1 * x4 + x7 * x38
-                            + x0 * x2 * x5 * x23) * x138
-                        - u5 * (u3 * x21 * x70 - u5 * x189 + x10 * u1 * x35 + x201) * d
-                        + (x88 * x5 * x23 + x104 * x70 + x10 * x7 * x35 - x201
-                            + x1 * x197 * x4) * x130),
-            m2
-                * (x130 * (x191 * x5 - x148 * u2 + (x103 - x102 - x10 * x7) * x0 * x2)
-                    - u5 * (x101 * x148 + (x102 - x103) * x0 * x2) * d
-                    + (x7 * x0 * x3 - x104 * x88 - x6 * x2 * x5 + x148 * x93) * x138
-                    + ((x151 - x150) * x5 + x101 * x88 + x0 * x2 * x198 + u5 * x190)
-                        * x134)
-                - x7 * x0
-                    * ((u1 * x140 - x10 * u5 * m2 * x2 + x8 * u4 * m1 * x3) * d
-                        + x67 * x4)
-                - (u3 * x166 + x165 * u2
-                    + (x117 * x6 * u1 + u4 * x186 * m1 + u5 * m2 * x191) * d) * x5
-                + m1
-                    * (x143 * (x99 * x79 - x6 * x3 * x5 - x7 * x0 * x2 - x96 * x194)
-                        - u4 * d * (x99 * x0 * x3 + x174 * x100)
-                        + x145 * (x180 * x5 - x79 * u3 + x195 * x0 * x3)
-                        + x146 * (x0 * x3 * x192 + x186 * x5 + x194 * x100 + u4 * x174)),
+            x9 * (x71 + x74 - d * m1 * x105) + (-x12 * u5 * x108 - x10 * x84 * u4) * J1
+                - x109 * u2 + u3 * x110 + (m2 * x127 * d - x112 * x115) * x8,
+            x128 + x109 * u1 - x84 * u4 * x9 * J1 - u3 * x129
+                - m2 * (x134 * x38 - a * x135 * x8) - x10 * (x71 + x74)
+                - x16 * m1 * x105,
+            u5 * x108 * x8 * J1 - m2 * x127 * x20 - (x138 * x50 + a * x9 * x139) * m1
+                - u1 * x110 + x140 - x112 * x12 * x115 + x129 * u2,
+            x140 - x138 * d * m1,
+            x128 - m2 * d * x134,
+            -m2 * (x41 * x134 + x27 * x127 + x40 * x135)
+                - (x53 * x139 + x25 * x105 + x52 * x138) * m1,
+            -m1 * (x138 * x55 + x139 * x56 + x33 * x105)
+                - m2 * (x44 * x134 + x127 * x30 + x135 * x43),
+            -(u3 * (x157 + x168 + a * (x169 + x170))
+                + (x171 + a * (x172 + x173) + x174) * u2
+                + ((u1
+                    * (0.5 * x178 - 0.25 * x182 + 0.5 * x184 - 0.25 * x186 - 0.25 * x188
+                        - 0.25 * x190) + x191 * u3
+                    + (0.25 * x192 + 0.25 * x193 + 0.25 * x194 + 0.5 * x195 + 0.25 * x196
+                        + 0.5 * x197) * u2) * u3
+                    + u1
+                        * (u1 * (0.25 * x186 - 0.25 * x182 - 0.25 * x188 + 0.25 * x190)
+                            + (0.25 * x192 + 0.25 * x193 - 0.25 * x194 - x58
+                                - 0.25 * x196) * u2) + x10 * x6 * u2 * u2
+                    + u4
+                        * (u2
+                            * (0.5 * x192 + 0.5 * x193 + 0.5 * x194 + x195 + 0.5 * x196
+                                + x197)
+                            + (0.5 * x186 - 0.5 * x182 - 0.5 * x188 + 2.0 * x60
+                                + 0.5 * x190) * u3
+                            + u1
+                                * (x178 - 0.5 * x182 + x184 - 0.5 * x186 - 0.5 * x188
+                                    - 0.5 * x190) + u4 * x191)) * d) * m1
+                - m2
+                    * ((x171 + a * (-x172 - x173) + x174) * u2
+                        + u3 * (x157 + a * (-x169 - x170) + x168)
+                        + ((u3
+                            * (0.25 * x201 + 0.25 * x203 - x47 + 0.25 * x205 - 0.5 * x208
+                                + 0.25 * x210 - 0.5 * x211)
+                            + u2
+                                * (0.25 * x212 - 0.25 * x213 + 0.25 * x214 - 0.25 * x215)
+                            + (0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215)
+                                * u1) * u1
+                            + u5
+                                * (u1 * (0.5 * x212 - 0.5 * x213 + 0.5 * x214 - 0.5 * x215)
+                                    + u3
+                                        * (0.5 * x201 + 0.5 * x203 - 0.5 * x205 - x208 - 0.5 * x210
+                                            + x211)
+                                    + (0.5 * x212 - 0.5 * x213 - 0.5 * x214 + 0.5 * x215
+                                        - 2.0 * x46) * u2 + u5 * x216)
+                            + ((0.25 * x201 + 0.25 * x203 - 0.25 * x205 - 0.5 * x208
+                                - 0.25 * x210 + 0.5 * x211) * u3 + x216 * u2) * u2
+                            - x12 * x6 * u3 * u3) * d),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -3415,29 +2818,35 @@ pub mod kane {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(gamma1);
+        let x4 = f64::sin(gamma2);
         let x5 = f64::cos(gamma2);
-        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
-        let x7 = f64::sin(gamma2);
-        let x8 = m2 * x7 * x1;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * x3 * m1;
-        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x2 * x13;
-        let x15 = x12 * x3;
-        let x16 = x0 * x1 * x13;
-        let x17 = x12 * x1;
-        let x18 = x0 * x3 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x3 * x13 + x0 * x12 * x1;
-        let x21 = x1 * x13;
-        let x22 = x0 * x12 * x3;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x2;
-        let x26 = x16 - x15;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a;
+        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3469,25 +2878,31 @@ pub mod kane {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
-                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
-                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
-                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
-                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
-                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
-                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
-                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
-                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3582,106 +2997,105 @@ pub mod kane {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = x0 * x0;
-        let x2 = f64::cos(gamma2);
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::sin(gamma1);
+        let x2 = f64::cos(gamma1);
         let x3 = x2 * x2;
-        let x4 = f64::sin(gamma1);
-        let x5 = d * d * m1;
-        let x6 = a * d * m1;
-        let x7 = x4 * (x0 * (J1 - J2 - x5) - x6) - Ixy;
-        let x8 = m2 * d * d;
-        let x9 = x2 * (x8 + J2 - J1);
-        let x10 = m2 * a * d;
-        let x11 = f64::sin(gamma2);
-        let x12 = (x9 + x10) * x11 - Ixz;
-        let x13 = f64::sin(phi);
-        let x14 = f64::sin(psi);
-        let x15 = x13 * x14;
-        let x16 = f64::sin(theta);
-        let x17 = f64::cos(psi);
-        let x18 = f64::cos(phi);
-        let x19 = x16 * x17 * x18;
-        let x20 = x15 + x19;
-        let x21 = x18 * x14;
-        let x22 = x16 * x17 * x13;
-        let x23 = (x4 * x20 * m1 + m2 * x11 * (x21 - x22)) * d;
-        let x24 = x17 * x18;
-        let x25 = x16 * x13 * x14;
-        let x26 = -x24 - x25;
-        let x27 = x17 * x13;
-        let x28 = x16 * x18 * x14;
-        let x29 = x28 - x27;
-        let x30 = d * (m2 * x11 * x26 + x4 * x29 * m1);
-        let x31 = f64::cos(theta);
-        let x32 = (x4 * m1 * x18 - m2 * x11 * x13) * x31 * d;
-        let x33 = x2 * d;
-        let x34 = -Iyz;
-        let x35 = J2 + m2 * d * (d + x2 * a);
-        let x36 = a + x33;
-        let x37 = -x15 - x19;
-        let x38 = (x36 * x13 * x14 + x17 * (x31 * d * x11 + x16 * x36 * x18)) * m2
-            + (a * x37 + x0 * x37 * d) * m1;
-        let x39 = x27 - x28;
-        let x40 = x31 * x11 * x14;
-        let x41 = x2 * x29;
-        let x42 = (x0 * x39 * d + x39 * a) * m1 + m2 * (d * (x40 + x41) + a * x29);
-        let x43 = x0 * d;
-        let x44 = (-a - x43) * m1 + m2 * x36;
-        let x45 = x44 * x31 * x18 - m2 * x16 * d * x11;
-        let x46 = d * (x0 * a + d) * m1 + J2;
-        let x47 = (a + x43) * m1 + m2 * (-a - x33);
-        let x48 = x44 * x18 * x14 + x17 * (x16 * x47 * x13 - x4 * x31 * d * m1);
-        let x49 = x24 + x25;
-        let x50 = x0 * x49 - x4 * x31 * x14;
-        let x51 = a * (m1 * x49 + m2 * x26) + (x2 * m2 * x26 + x50 * m1) * d;
-        let x52 = x16 * x4 * d * m1 + x47 * x31 * x13;
-        let x53 = (x0 * (x22 - x21) - x17 * x4 * x31) * d * m1;
-        let x54 = x50 * d * m1;
-        let x55 = (x0 * x31 * x13 + x16 * x4) * d * m1;
-        let x56 = -(m2 * (-x17 * x31 * x11 - x2 * x20) * d);
-        let x57 = -(m2 * d * (-x40 - x41));
-        let x58 = m2 * (x2 * x31 * x18 - x16 * x11) * d;
-        let x59 = m2 + m0 + m1;
+        let x4 = f64::cos(gamma2);
+        let x5 = x4 * x4;
+        let x6 = x2 * d;
+        let x7 = -a - x6;
+        let x8 = (x2 * (J1 - J2) + x7 * d * m1) * x1 - Ixy;
+        let x9 = x4 * d;
+        let x10 = -a - x9;
+        let x11 = x0 * (x4 * (J2 - J1) - m2 * d * x10) - Ixz;
+        let x12 = f64::sin(phi);
+        let x13 = f64::sin(psi);
+        let x14 = f64::sin(theta);
+        let x15 = f64::cos(psi);
+        let x16 = f64::cos(phi);
+        let x17 = x12 * x13 + x14 * x15 * x16;
+        let x18 = x14 * x15 * x12 - x16 * x13;
+        let x19 = d * (x1 * x17 * m1 - m2 * x18 * x0);
+        let x20 = x15 * x16 + x14 * x12 * x13;
+        let x21 = x15 * x12;
+        let x22 = x14 * x16 * x13;
+        let x23 = x22 - x21;
+        let x24 = (x1 * x23 * m1 - m2 * x0 * x20) * d;
+        let x25 = f64::cos(theta);
+        let x26 = (x1 * m1 * x16 - m2 * x0 * x12) * x25 * d;
+        let x27 = d * d;
+        let x28 = -Iyz;
+        let x29 = d + x4 * a;
+        let x30 = J2 + m2 * d * x29;
+        let x31 = x15 * x25 * x0 + x4 * x17;
+        let x32 = m2
+            * (x31 * x29 - a * ((x4 * x25 - x14 * x0 * x16) * x15 - x0 * x12 * x13) * x0)
+            + x7 * x17 * m1;
+        let x33 = x25 * x0 * x13 + x4 * x23;
+        let x34 = x7 * x23 * m1
+            + m2 * (x33 * x29 - a * x0 * (x4 * x25 * x13 + (x21 - x22) * x0));
+        let x35 = x4 * x25 * x16 - x14 * x0;
+        let x36 = m2 * (x35 * x29 - a * (-x25 * x0 * x16 - x4 * x14) * x0)
+            + x7 * x25 * m1 * x16;
+        let x37 = x2 * a + d;
+        let x38 = d * x37 * m1 + J2;
+        let x39 = x2 * x18 - x15 * x1 * x25;
+        let x40 = m2 * x18 * x10
+            + (x39 * x37 + a * (x15 * (x14 * x1 * x12 + x2 * x25) - x1 * x16 * x13) * x1)
+                * m1;
+        let x41 = x2 * x20 - x1 * x25 * x13;
+        let x42 = (x41 * x37 + a * x1 * (x2 * x25 * x13 + x1 * x20)) * m1
+            + m2 * x10 * x20;
+        let x43 = x2 * x25 * x12 + x14 * x1;
+        let x44 = (x43 * x37 + a * (x1 * x25 * x12 - x2 * x14) * x1) * m1
+            + m2 * x25 * x12 * x10;
+        let x45 = x39 * d * m1;
+        let x46 = x41 * d * m1;
+        let x47 = x43 * d * m1;
+        let x48 = m2 * d * x31;
+        let x49 = m2 * d * x33;
+        let x50 = m2 * x35 * d;
+        let x51 = m2 + m0 + m1;
         [
             [
-                Ixx + d * d * (m1 * (1.0 - x1) + m2 * (1.0 - x3)) + (x1 + x3) * J1
-                    + J2 * (2.0 - x1 - x3),
-                x7,
-                x12,
+                Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
+                    + (x0 * x0 + x1 * x1) * J2,
+                x8,
+                x11,
                 0.0,
                 0.0,
-                x23,
+                x19,
+                x24,
+                x26,
+            ],
+            [
+                x8,
+                x1 * x1 * J1 + x7 * x7 * m1 + Iyy + J2 * (x3 + 1.0)
+                    + m2 * (x27 + a * (a + 2.0 * x9)),
+                x28,
+                0.0,
                 x30,
                 x32,
+                x34,
+                x36,
             ],
             [
-                x7,
-                Iyy + J2 + a * a * m1 + m2 * (d * d + a * (a + 2.0 * x33))
-                    + x0 * (x0 * (J2 + x5 - J1) + 2.0 * x6) + J1,
-                x34,
-                0.0,
-                x35,
+                x11,
+                x28,
+                x0 * x0 * J1 + (a * (a + 2.0 * x6) + x27) * m1 + m2 * x10 * x10 + Izz
+                    + J2 * (x5 + 1.0),
                 x38,
-                x42,
-                x45,
-            ],
-            [
-                x12,
-                x34,
-                a * (2.0 * (x0 * d * m1) + a * (m2 + m1)) + J2 + x2 * (x9 + 2.0 * x10)
-                    + x5 + Izz + J1,
-                x46,
                 0.0,
-                x48,
-                x51,
-                x52,
+                x40,
+                x42,
+                x44,
             ],
-            [0.0, 0.0, x46, J2 + x5, 0.0, x53, x54, x55],
-            [0.0, x35, 0.0, 0.0, x8 + J2, x56, x57, x58],
-            [x23, x38, x48, x53, x56, x59, 0.0, 0.0],
-            [x30, x42, x51, x54, x57, 0.0, x59, 0.0],
-            [x32, x45, x52, x55, x58, 0.0, 0.0, x59],
+            [0.0, 0.0, x38, J2 + d * d * m1, 0.0, x45, x46, x47],
+            [0.0, x30, 0.0, 0.0, m2 * d * d + J2, x48, x49, x50],
+            [x19, x32, x40, x45, x48, x51, 0.0, 0.0],
+            [x24, x34, x42, x46, x49, 0.0, x51, 0.0],
+            [x26, x36, x44, x47, x50, 0.0, 0.0, x51],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
@@ -3794,120 +3208,157 @@ pub mod reduced_volterra {
         let x33 = x30 - x29;
         let x34 = x6 * m2;
         let x35 = x34 - 1.0;
-        let x36 = x6 * m1;
-        let x37 = x7 * x7;
-        let x38 = x17 * x17;
-        let x39 = x6 * x22;
-        let x40 = x39 - a - x21;
-        let x41 = x7 * (J1 - J2) + d * m1 * x40;
-        let x42 = x41 * x12 - Ixy;
-        let x43 = x17 * (J2 - J1) + m2 * d * (a + x19 + x39);
-        let x44 = x43 * x16 - Ixz;
-        let x45 = x7 * x6 * m2 * d * d * x16 * m1;
-        let x46 = -(x17 * x6 * m2 * x12 * d * d * m1);
-        let x47 = 1.0 - x36;
-        let x48 = x47 * d * d * m1;
-        let x49 = x48 + J2 - J1;
-        let x50 = 1.0 - x34;
-        let x51 = m2 * d * d * x50;
-        let x52 = 2.0 * m1 - 2.0 * m2;
-        let x53 = 2.0 - 2.0 * x36;
-        let x54 = a
+        let x36 = x17 * x17;
+        let x37 = x16 * x16;
+        let x38 = x36 + x37;
+        let x39 = x6 * m1;
+        let x40 = 1.0 - x39;
+        let x41 = x7 * x7;
+        let x42 = x12 * x12;
+        let x43 = x41 + x42;
+        let x44 = J1 - J2;
+        let x45 = x7 * x6 * d * m1;
+        let x46 = x6 * (m2 - m1);
+        let x47 = a * (x46 - 1.0) - x45;
+        let x48 = 1.0 - x34;
+        let x49 = m1 - m2;
+        let x50 = x6 * x49;
+        let x51 = x50 + 1.0;
+        let x52 = d * x48 + x17 * (x45 + a * x51);
+        let x53 = x6 * x22 - a - x21;
+        let x54 = x12
+            * (x7 * x44
+                + d * m1
+                    * (x6 * (m2 * (x16 * x16 * x47 - x17 * x52) - x6 * m0 * x22)
+                        + x40 * x53)) - Ixy;
+        let x55 = J2 - J1;
+        let x56 = x46 + 1.0;
+        let x57 = a * x56 + x17 * x6 * m2 * d;
+        let x58 = x40 * d + x7 * x57;
+        let x59 = x23 * x6 - a - x19;
+        let x60 = (x17 * x55
+            + m2 * d
+                * (x6 * (x23 * x6 * m0 + (x12 * x12 * x57 + x7 * x58) * m1) + x59 * x35))
+            * x16 - Ixz;
+        let x61 = x6 * m0;
+        let x62 = 2.0 - x34 - x39 - x61;
+        let x63 = x7 * x6 * m2 * d * d * x16 * x62 * m1;
+        let x64 = x17 * x6 * m2 * x12 * d * d * m1 * (x34 + x39 + x61 - 2.0);
+        let x65 = x12 * x16;
+        let x66 = x7 * x17;
+        let x67 = x66 - x65;
+        let x68 = x66 + x65;
+        let x69 = x6 * m2 * d * d * m1
+            * (2.0 * x65
+                + x6
+                    * (x67 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x68)) - Iyz;
+        let x70 = x6 * m2 * d * d
+            * ((0.5 - 0.5 * x34) * x68 + x12 * x16 * (1.0 - x39 - x61)
+                + x67 * (0.5 * x34 - 0.5)) * m1;
+        let x71 = m2 * d
+            * (x52 * x48
+                + ((x6 * m2 * d * x16 * x16 * x43 - x17 * x53) * m1
+                    + x6 * m0 * (m2 * d * x16 * x16 - x17 * x22)) * x6) + J2;
+        let x72 = d * m1
+            * (x6
+                * (m2 * (x6 * x38 * x12 * x12 * d * m1 - x7 * x59)
+                    + x6 * m0 * (x12 * x12 * d * m1 - x7 * x23)) + x40 * x58) + J2;
+        let x73 = x6
+            * ((1.0 - x34 - x61) * x12 * x16 + x67 * (0.5 * x39 - 0.5)
+                + (0.5 - 0.5 * x39) * x68) * m2 * d * d * m1;
+        let x74 = x6 * m2 * x12 * d * d * x16 * x62 * m1;
+        let x75 = x16 * u1;
+        let x76 = x17 * u3;
+        let x77 = -x75 - x76;
+        let x78 = x7 * u2;
+        let x79 = x12 * u1;
+        let x80 = x78 - x79;
+        let x81 = -u5 - u2;
+        let x82 = x17 * m2 * x81 + x80 * m1;
+        let x83 = u4 * x12 * m1;
+        let x84 = u5 * m2 * x16;
+        let x85 = m2 * x81 * x16;
+        let x86 = u4 + u3;
+        let x87 = x12 * m1 * x86;
+        let x88 = ((x83 - x84 + x85 + x87) * u3 + x17 * u5 * m2 * u1
+            + u4 * u4 * x12 * m1) * d - (a * x49 * u2 + x82 * d) * u1;
+        let x89 = ((m2 * x16 * u1 - x7 * u4 * m1) * d + x23 * u3) * u1
+            + (u5 * u5 * m2 * x16 - x7 * u4 * u1 * m1 + (x84 - x83 - x85 - x87) * u2)
+                * d;
+        let x90 = a * u4 * u3 * x12;
+        let x91 = x7 * x81 + x79;
+        let x92 = a * u3 * x12;
+        let x93 = (m2 * ((x16 * x91 + x17 * u3 * x12) * d + x92) - a * u3 * x12 * m1)
+            * x6 + x92;
+        let x94 = x12 * u2;
+        let x95 = x7 * u1;
+        let x96 = x94 + x95;
+        let x97 = (x79 - x78 + x6 * x82) * d + a * (x50 - 1.0) * u2;
+        let x98 = x7 * x16 * u2;
+        let x99 = x17 * u1;
+        let x100 = u4 - u3;
+        let x101 = u5 + u2;
+        let x102 = x93 * x86 - x90 - x96 * x97
+            + x6
+                * (a * u4 * u3 * x12 * m1
+                    + m2
+                        * (d
+                            * (u4 * (x98 + x12 * x77)
+                                + u5 * (x7 * (x99 + x100 * x16) + x101 * x17 * x12))
+                            - x90));
+        let x103 = x75 + x76;
+        let x104 = x7 * a * u4 * u3;
+        let x105 = (x6
+            * ((-u4 - u3) * m1 + m2 * ((x101 * x12 + x95) * x16 + x7 * x17 * u3)) + u4
+            + u3) * d + x7 * a * x56 * u3;
+        let x106 = x6
             * (m2
-                * (a + 2.0 * x19
-                    + x6 * (a * (2.0 * m1 - m2) + (x17 * x52 + 2.0 * (x7 * m1)) * d))
-                + (a * x47 + x7 * d * x53) * m1);
-        let x55 = x6 * m2 * x12 * d * d * x16 * m1;
-        let x56 = x55 - Iyz;
-        let x57 = x7 * x6 * d * m1;
-        let x58 = m1 - m2;
-        let x59 = x6 * x58;
-        let x60 = x59 + 1.0;
-        let x61 = d * x50 + x17 * (x57 + a * x60);
-        let x62 = J2 + m2 * x61 * d;
-        let x63 = x6 * (m2 - m1);
-        let x64 = x63 + 1.0;
-        let x65 = x17 * x6 * m2 * d;
-        let x66 = a * x64 + x65;
-        let x67 = x47 * d + x7 * x66;
-        let x68 = J2 + x67 * d * m1;
-        let x69 = x16 * u1;
-        let x70 = x17 * u3;
-        let x71 = x69 + x70;
-        let x72 = x7 * u2;
-        let x73 = x12 * u1;
-        let x74 = x72 - x73;
-        let x75 = x12 * u2;
-        let x76 = x7 * u1;
-        let x77 = x75 + x76;
-        let x78 = x77 * x12;
-        let x79 = x7 * x74;
-        let x80 = u4 + u3;
-        let x81 = u5 + u2;
-        let x82 = x17 * x71;
-        let x83 = u3 * x16;
-        let x84 = x17 * u1;
-        let x85 = x84 - x83;
-        let x86 = x85 * x16;
-        let x87 = x7 * x17 * u4;
-        let x88 = x16 * x16 * (m2 * d * d * x35 - J2 + J1) + x17 * x43;
-        let x89 = x7 * x41 + x49 * x12 * x12;
-        let x90 = -u4 - u3;
-        let x91 = x7 * x17 * u5;
-        let x92 = Iyz * u2;
-        let x93 = u3 * Izz;
-        let x94 = u1 * Ixz;
-        let x95 = Iyy * u2;
-        let x96 = Iyz * u3;
-        let x97 = Ixy * u1;
-        let x98 = -u5 - u2;
-        let x99 = x17 * m2 * x98 + x74 * m1;
-        let x100 = x59 - 1.0;
-        let x101 = (x73 - x72 + x6 * x99) * d + a * x100 * u2;
-        let x102 = x17 * u5 * x12;
-        let x103 = x7 * u3 * x16;
-        let x104 = x102 - x103;
-        let x105 = a * u3 * x12;
-        let x106 = (m2 * ((x16 * (x7 * x98 + x73) + x17 * u3 * x12) * d + x105)
-            - a * u3 * x12 * m1) * x6 + x105;
-        let x107 = u3 * x12 * x16;
-        let x108 = x81 * x12 + x76;
-        let x109 = (x6 * (x90 * m1 + m2 * (x108 * x16 + x7 * x17 * u3)) + u4 + u3) * d
-            + x7 * a * x64 * u3;
-        let x110 = x12 * m1 * x80;
-        let x111 = m2 * x98 * x16 + x110;
-        let x112 = m2 * x16 * u1 - x7 * u4 * m1;
-        let x113 = x23 * u3;
-        let x114 = x112 * d + x113;
-        let x115 = a * x58 * u2 + x99 * d;
-        let x116 = x16 * x80 - x84;
-        let x117 = d * (u5 + x6 * ((x7 * x17 * u2 + x116 * x12) * m1 + m2 * x98) + u2)
-            + x17 * a * u2 * x60;
-        let x118 = x23 * x6 - a - x19;
-        let x119 = x118 * u3 + d * (x16 * u1 * x35 - x7 * x6 * u4 * m1);
-        let x120 = a * x16 * u2;
-        let x121 = x17 * x80 + x69;
-        let x122 = x6
-            * (m2 * a * x16 * u2 + (d * (x121 * x12 - x7 * x16 * u2) - x120) * m1)
-            - x120;
-        let x123 = x7 * u4 * x16;
-        let x124 = x17 * x12 * u2;
-        let x125 = x123 - x124;
-        let x126 = -x69 - x70;
-        let x127 = Ixy * u2;
-        let x128 = Ixx * u1;
-        let x129 = u3 * Ixz;
-        let x130 = 2.0 * J1 - 2.0 * J2;
-        let x131 = x78 + u5 + x79;
-        let x132 = a * (x63 - 1.0) - x57;
-        let x133 = x16 * x132 * u2;
-        let x134 = x6 * x121 * x12 * d * m1;
-        let x135 = a * x100 - x65;
-        let x136 = u4 * x135;
-        let x137 = (x7 * x81 - x73) * x6 * m2 * d * x16;
-        let x138 = -x75 - x76;
-        let x139 = x12 * x16 * u2;
-        let x140 = u4 + x82 - x86;
+                * (d
+                    * ((x7 * x103 + x12 * x16 * u2) * u4
+                        + u5 * (x100 * x12 * x16 + x17 * x91)) + x104)
+                - x7 * a * u4 * u3 * m1) + x104 - x105 * x86 + x80 * x97;
+        let x107 = x96 * x105 - x80 * x93
+            + (x101 * x6 * u5 * m2 * x16 + u4 * (x7 * x40 * u1 + x12 * x40 * u2)) * d;
+        let x108 = x99 - u3 * x16;
+        let x109 = x16 * x86 - x99;
+        let x110 = d * (u5 + x6 * ((x7 * x17 * u2 + x109 * x12) * m1 + m2 * x81) + u2)
+            + x17 * a * u2 * x51;
+        let x111 = a * x16 * u2;
+        let x112 = x17 * x86 + x75;
+        let x113 = x6 * (m2 * a * x16 * u2 + (d * (x112 * x12 - x98) - x111) * m1)
+            - x111;
+        let x114 = d
+            * (u5 * (x17 * u1 * x35 + u3 * x16 * x48) + x6 * u4 * x12 * m1 * x86)
+            - x108 * x110 + x103 * x113;
+        let x115 = x59 * u3 + d * (x16 * u1 * x35 - x7 * x6 * u4 * m1);
+        let x116 = u5 * a * x16 * u2;
+        let x117 = x108 * x115 - x101 * x113 - x116
+            + x6
+                * (u5 * m2 * a * x16 * u2
+                    + ((u5 * (x103 * x12 - x98)
+                        + u4 * (x7 * x109 + x17 * x12 * (u5 - u2))) * d - x116) * m1);
+        let x118 = x17 * u5 * a * u2;
+        let x119 = x6
+            * ((d
+                * (u4 * (x12 * x16 * (u2 - u5) + x7 * x112)
+                    + u5 * (x17 * (x79 - x78) - u3 * x12 * x16)) - x118) * m1
+                + x17 * u5 * m2 * a * u2) - x115 * x103 - x118 + x101 * x110;
+        let x120 = u4 * J2 * (-x94 - x95) + x96 * x44 * x86;
+        let x121 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x122 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x123 = u5 * J2 + x101 * x55;
+        let x124 = x55 * x108 * x103;
+        let x125 = u2 * u2;
+        let x126 = u3 * u3;
+        let x127 = a * (m2 * (-x125 - x126) + (x125 + x126) * m1)
+            + d
+                * (m2 * (x17 * (u5 * (-u5 - 2.0 * u2) - x125 - x126) - u3 * x16 * u1)
+                    + (x7 * (x125 + u4 * (u4 + 2.0 * u3) + x126) - x12 * u1 * u2) * m1);
+        let x128 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x129 = x102 * x12 - x7 * x106;
+        let x130 = x80 * x96 * x44;
+        let x131 = x17 * x119 + x16 * x117;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -3920,135 +3371,79 @@ pub mod reduced_volterra {
             [
                 Ixx
                     + d * d
-                        * (m2 * (x17 * x17 * x35 - x34 + 1.0)
-                            + m1 * (x7 * x7 * (x36 - 1.0) - x36 + 1.0))
-                    + (x37 + x38) * J1 + J2 * (2.0 - x37 - x38),
-                x42,
-                x44,
-                x45,
-                x46,
+                        * (m2
+                            * (x16 * x16 * x35 * x35
+                                + x6 * x6 * x38 * x12 * x12 * m1 * m1)
+                            + x6 * x6 * m0 * (m2 * m2 * x16 * x16 + x12 * x12 * m1 * m1)
+                            + (x12 * x12 * x40 * x40
+                                + x6 * x6 * m2 * m2 * x16 * x16 * x43) * m1)
+                    + (x41 + x36) * J1 + (x37 + x42) * J2,
+                x54,
+                x60,
+                x63,
+                x64,
             ],
             [
-                x42,
-                Iyy + J2 + x7 * (x7 * x49 + 2.0 * (x17 * x6 * m2 * d * d * m1)) + x51
-                    + x54 + J1,
-                x56,
-                x55,
-                x62,
+                x54,
+                x12 * x12 * J1 + Iyy + J2 * (x41 + 1.0)
+                    + x6 * x6 * m0 * (m2 * m2 * d * d * x16 * x16 + x22 * x22)
+                    + (x53 * x53 + x6 * x6 * m2 * m2 * d * d * x16 * x16 * x43) * m1
+                    + m2 * (x16 * x16 * x47 * x47 + x52 * x52),
+                x69,
+                x70,
+                x71,
             ],
             [
-                x44,
-                x56,
-                x48 + x17 * (x17 * (J2 + x51 - J1) + 2.0 * (x7 * x6 * m2 * d * d * m1))
-                    + J2 + Izz + x54 + J1,
-                x68,
-                x55,
+                x60,
+                x69,
+                x16 * x16 * J1
+                    + m2 * (x6 * x6 * x38 * x12 * x12 * d * d * m1 * m1 + x59 * x59)
+                    + Izz + x6 * x6 * m0 * (x23 * x23 + x12 * x12 * d * d * m1 * m1)
+                    + J2 * (x36 + 1.0) + m1 * (x58 * x58 + x12 * x12 * x57 * x57),
+                x72,
+                x73,
             ],
-            [x45, x55, x68, x48 + J2, x55],
-            [x46, x62, x55, x55, J2 + x51],
+            [
+                x63,
+                x70,
+                x72,
+                J2 + (x6 * x6 * (m2 + m0) * m1 + x40 * x40) * d * d * m1,
+                x74,
+            ],
+            [
+                x64,
+                x71,
+                x73,
+                x74,
+                J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x48 * x48),
+            ],
         ];
         let mut force: [f64; 5] = [
-            J2
-                * (x7 * x74 * u3 - x17 * x71 * u2 + (-x78 - x79) * x80
-                    + x81 * (x82 - x86))
-                - u5
-                    * (x6 * m2 * d * d * m1 * (x87 + x81 * x12 * x16) + u3 * x88
-                        + x17 * (m2 * d * d * (2.0 - 2.0 * x34) + 2.0 * J2 - 2.0 * J1)
-                            * x16 * u1)
-                - u4
-                    * (x7 * x12 * u1 * (2.0 * J2 + d * d * x53 * m1 - 2.0 * J1)
-                        + x89 * u2 + (x90 * x12 * x16 - x91) * x6 * m2 * d * d * m1)
-                + (x92 - x93 + x94 + x85 * x16 * J1) * u2
-                + u3 * (x95 + x77 * x12 * J1 - x96 - x97)
+            (-x17 * u5 * x77 - x7 * x80 * u4) * J1
                 + d
-                    * (m1
-                        * ((x7 * (x6 * m2 * x77 * x16 + u4 * x47)
-                            - x6 * x74 * m2 * x12 * x16) * x101
-                            + (x74 * x12 * x47 + x6 * m2 * x104) * x106
-                            + (x6 * m2 * (x107 + x91) - x77 * x12 * x47) * x109)
-                        + x6 * x6 * m0
-                            * (x111 * d * (-x12 * m1 * u2 - m2 * u3 * x16)
-                                + (x17 * u5 * m2 + x12 * u1 * m1) * x114 + x112 * x115)
-                        + m2
-                            * (x117
-                                * ((x85 * x35 - x6 * x12 * m1 * u2) * x16
-                                    - x7 * x17 * x6 * u4 * m1)
-                                + x119
-                                    * (x6 * x71 * x12 * x16 * m1
-                                        + x17 * (x6 * x85 * x12 * m1 + u5 * x35))
-                                + x122 * (x6 * m1 * x125 - x71 * x16 * x35))),
-            J2 * ((x7 * x77 - x74 * x12) * x80 + x74 * u3 * x12 + x85 * x71)
-                + ((x111 * (x22 * u2 - x17 * u5 * m2 * d)
-                    + x115 * (x81 * m2 * x16 - u4 * x12 * m1)) * d
-                    + x114 * (-x22 * u1 - m2 * u3 * d * x16)) * x6 * x6 * m0
-                + (x93 - x92 - x94) * u1 + (x85 * x126 - x7 * x77 * u3) * J1
-                - u3 * (x128 - x127 - x129)
-                - (x12
-                    * (x7 * x130
-                        + d
-                            * (x6
-                                * (m2 * (-2.0 * a - 2.0 * x19) + (2.0 * a + 2.0 * x21) * m1)
-                                - 2.0 * a - 2.0 * x21) * m1) * u2 + x89 * u1
-                    + (x7 * x16 * x80 - x102) * x6 * m2 * d * d * m1) * u4
-                + m1
-                    * (x101 * d * (x131 * x6 * m2 * x16 + u4 * x12 * x47)
-                        + (x6 * m2 * d * x104 - x77 * x40) * x109
-                        + (x6 * m2 * (-x107 - x91) * d + x74 * x40) * x106)
-                + (x122 * (x17 * u5 * x132 + x6 * u4 * x12 * d * x16 * m1 + x81 * x61)
-                    + x119 * (x71 * x16 * x132 - x85 * x61)
-                    + (-x133 - x17 * x6 * u4 * x12 * d * m1) * x117
-                    - u5 * d
-                        * ((u5 * x132
-                            + (a * (x6 * (2.0 * m2 - 2.0 * m1) - 2.0) - 2.0 * x57) * u2)
-                            * x16 + x134)) * m2,
-            (x17 * x85 * J1 - x127 + x128 - x129) * u2
-                - u5
-                    * (u3 * x16
-                        * (m2
-                            * (x6
-                                * (m2 * (2.0 * a + 2.0 * x19) + (-2.0 * a - 2.0 * x21) * m1)
-                                - 2.0 * a - 2.0 * x19) * d + x17 * x130)
-                        + x6 * m2 * d * d * (x81 * x17 * x12 - x123) * m1 + x88 * u1)
-                + x6 * x6 * m0
-                    * ((x23 * u1 - x12 * d * m1 * u2) * x115
-                        + d
-                            * (x114 * (x110 - u5 * m2 * x16)
-                                + x111 * (x7 * u4 * d * m1 - x113)))
-                - u1 * (x95 - x96 - x97)
-                + (x101 * (x77 * x67 - x74 * x12 * x66)
-                    - u4 * d
-                        * ((x136 + u3 * (a * (x6 * x52 - 2.0) - 2.0 * x65)) * x12 + x137)
-                    + x109 * ((x136 + x66 * x80) * x12 - x7 * x6 * u5 * m2 * d * x16)
-                    + (x7 * u4 * x66 - x67 * x80 - x6 * u5 * m2 * x12 * d * x16) * x106)
-                    * m1
-                + (x71 * x16 * u2 + x81 * (-x71 * x16 - x17 * x85) + x74 * x138) * J2
-                + m2
-                    * (x122 * (x6 * (x87 + x139) * d * m1 - x118 * x71)
-                        + (x85 * x118 + x6 * d * m1 * x125) * x117
-                        + x119 * (x6 * x140 * x12 * m1 + u5 * x16 * x50) * d)
-                + x74 * x77 * J1,
-            x74 * (x77 * J1 + J2 * x138)
-                + d
-                    * (x47 * (x77 * x101 - x106 * x80)
-                        + x6
-                            * (m2
-                                * (x117 * (x7 * (x83 - x84 + u4 * x16) - x124)
-                                    - u5 * d * (x17 * x108 - x103)
-                                    + (x7 * (x69 + x17 * u4 + x70) + x139) * x122
-                                    + x119 * x140 * x12)
-                                + x6 * m0
-                                    * (x138 * x115 + (x7 * x111 * d + x114 * x12) * x80))
-                        - u4 * (u3 * x12 * x135 + x137)) * m1,
-            x85 * (x126 * J1 + J2 * x71)
+                    * (-x6 * x6 * m0 * (m2 * x88 * x16 - x12 * x89 * m1)
+                        - (x6 * m2 * x16 * (x7 * x102 + x12 * x106) + x12 * x40 * x107)
+                            * m1
+                        - m2
+                            * (x114 * x16 * x35
+                                + x6 * (x16 * x119 - x17 * x117) * x12 * m1)) + x12 * x120
+                - x121 * u2 + u3 * x122 - x123 * x108 * x16,
+            x124 + x121 * u1 - x6 * x6 * m0 * (x22 * x89 - m2 * d * x16 * x127)
+                - m2 * (x52 * x117 + x16 * x119 * x47) - x80 * u4 * x12 * J1 - u3 * x128
+                - (x6 * m2 * x129 * d * x16 + x107 * x53) * m1 - x7 * x120,
+            u5 * x77 * x16 * J1 - x6 * x6 * m0 * (x23 * x88 + x12 * d * m1 * x127)
+                - u1 * x122 + x130 - (x102 * x58 + x12 * x57 * x106) * m1
+                - x123 * x17 * x108 + x128 * u2
+                - m2 * (x114 * x59 + x6 * x12 * d * m1 * x131),
+            x130
+                + (x6
+                    * (-x6 * m0 * (x12 * x127 - x7 * x88)
+                        - m2 * (x12 * x131 - x7 * x114)) - x102 * x40) * d * m1,
+            x124
                 + m2 * d
-                    * ((x81 * x122 - x85 * x119) * x50 - u5 * (x133 + x134)
-                        + x6
-                            * (m1
-                                * ((x17 * (x73 - x72 - x7 * u5) - x107) * x106
-                                    - u4 * d * (x7 * x116 - x124) + x131 * x101 * x16
-                                    + (x17 * (u5 * x12 + x75 + x76) - x103) * x109)
-                                + x6 * m0
-                                    * (x85 * x114 + x17 * x111 * x98 * d + x81 * x16 * x115))),
+                    * (x6
+                        * (-m1 * (x129 * x16 - x17 * x107)
+                            - x6 * m0 * (-x17 * x89 - x16 * x127)) - x117 * x48),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -4123,29 +3518,35 @@ pub mod reduced_volterra {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(gamma1);
+        let x4 = f64::sin(gamma2);
         let x5 = f64::cos(gamma2);
-        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
-        let x7 = f64::sin(gamma2);
-        let x8 = m2 * x7 * x1;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * x3 * m1;
-        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x2 * x13;
-        let x15 = x12 * x3;
-        let x16 = x0 * x1 * x13;
-        let x17 = x12 * x1;
-        let x18 = x0 * x3 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x3 * x13 + x0 * x12 * x1;
-        let x21 = x1 * x13;
-        let x22 = x0 * x12 * x3;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x2;
-        let x26 = x16 - x15;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a;
+        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4174,25 +3575,31 @@ pub mod reduced_volterra {
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
-                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
-                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
-                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
-                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
-                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
-                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
-                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
-                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -4338,70 +3745,118 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma2);
+        let x0 = f64::sin(gamma2);
         let x1 = 1.0 / (m2 + m0 + m1);
         let x2 = x1 * m2;
-        let x3 = f64::cos(gamma1);
-        let x4 = x1 * m1;
-        let x5 = x3 * x3;
+        let x3 = x2 - 1.0;
+        let x4 = f64::cos(gamma2);
+        let x5 = x4 * x4;
         let x6 = x0 * x0;
-        let x7 = x3 * d;
-        let x8 = x0 * d;
-        let x9 = x1 * ((a + x7) * m1 + m2 * (-a - x8));
-        let x10 = f64::sin(gamma1);
-        let x11 = (x3 * (J1 - J2) + d * m1 * (x9 - a - x7)) * x10 - Ixy;
-        let x12 = f64::sin(gamma2);
-        let x13 = (x0 * (J2 - J1) + m2 * d * (a + x8 + x9)) * x12 - Ixz;
-        let x14 = x3 * x1 * m2 * d * d * x12 * m1;
-        let x15 = -(x0 * x1 * m2 * x10 * d * d * m1);
-        let x16 = 1.0 - x4;
-        let x17 = x16 * d * d * m1;
-        let x18 = 1.0 - x2;
-        let x19 = m2 * d * d * x18;
-        let x20 = a
-            * (m2
-                * (a + 2.0 * x8
-                    + x1
-                        * (a * (2.0 * m1 - m2)
-                            + (x0 * (2.0 * m1 - 2.0 * m2) + 2.0 * (x3 * m1)) * d))
-                + (a * x16 + x3 * d * (2.0 - 2.0 * x4)) * m1);
-        let x21 = x1 * m2 * x10 * d * d * x12 * m1;
-        let x22 = x21 - Iyz;
-        let x23 = J2
-            + m2 * (d * x18 + x0 * (x3 * x1 * d * m1 + a * (x1 * (m1 - m2) + 1.0))) * d;
-        let x24 = J2
-            + (x16 * d + x3 * (a * (x1 * (m2 - m1) + 1.0) + x0 * x1 * m2 * d)) * d * m1;
+        let x7 = x5 + x6;
+        let x8 = f64::sin(gamma1);
+        let x9 = x1 * m1;
+        let x10 = 1.0 - x9;
+        let x11 = f64::cos(gamma1);
+        let x12 = x11 * x11;
+        let x13 = x8 * x8;
+        let x14 = x12 + x13;
+        let x15 = x11 * d;
+        let x16 = x4 * d;
+        let x17 = (a + x15) * m1 + m2 * (-a - x16);
+        let x18 = x11 * x1 * d * m1;
+        let x19 = x1 * (m2 - m1);
+        let x20 = a * (x19 - 1.0) - x18;
+        let x21 = 1.0 - x2;
+        let x22 = d * x21 + x4 * (x18 + a * (x1 * (m1 - m2) + 1.0));
+        let x23 = x1 * x17 - a - x15;
+        let x24 = x8
+            * (x11 * (J1 - J2)
+                + d * m1
+                    * (x1 * (m2 * (x0 * x0 * x20 - x4 * x22) - x1 * m0 * x17)
+                        + x10 * x23)) - Ixy;
+        let x25 = (-a - x15) * m1 + m2 * (a + x16);
+        let x26 = a * (x19 + 1.0) + x4 * x1 * m2 * d;
+        let x27 = x10 * d + x11 * x26;
+        let x28 = x25 * x1 - a - x16;
+        let x29 = (x4 * (J2 - J1)
+            + m2 * d
+                * (x1 * (x25 * x1 * m0 + (x8 * x8 * x26 + x11 * x27) * m1) + x28 * x3))
+            * x0 - Ixz;
+        let x30 = x1 * m0;
+        let x31 = 2.0 - x2 - x9 - x30;
+        let x32 = x11 * x1 * m2 * d * d * x0 * x31 * m1;
+        let x33 = x4 * x1 * m2 * x8 * d * d * m1 * (x2 + x9 + x30 - 2.0);
+        let x34 = x8 * x0;
+        let x35 = x11 * x4;
+        let x36 = x35 - x34;
+        let x37 = x35 + x34;
+        let x38 = x1 * m2 * d * d * m1
+            * (2.0 * x34
+                + x1
+                    * (x36 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x37)) - Iyz;
+        let x39 = x1 * m2 * d * d
+            * ((0.5 - 0.5 * x2) * x37 + x8 * x0 * (1.0 - x9 - x30)
+                + x36 * (0.5 * x2 - 0.5)) * m1;
+        let x40 = m2 * d
+            * (x22 * x21
+                + ((x1 * m2 * d * x0 * x0 * x14 - x4 * x23) * m1
+                    + x1 * m0 * (m2 * d * x0 * x0 - x4 * x17)) * x1) + J2;
+        let x41 = d * m1
+            * (x1
+                * (m2 * (x1 * x7 * x8 * x8 * d * m1 - x11 * x28)
+                    + x1 * m0 * (x8 * x8 * d * m1 - x11 * x25)) + x10 * x27) + J2;
+        let x42 = x1
+            * ((1.0 - x2 - x30) * x8 * x0 + x36 * (0.5 * x9 - 0.5)
+                + (0.5 - 0.5 * x9) * x37) * m2 * d * d * m1;
+        let x43 = x1 * m2 * x8 * d * d * x0 * x31 * m1;
         [
             [
                 Ixx
                     + d * d
-                        * (m2 * (x0 * x0 * (x2 - 1.0) - x2 + 1.0)
-                            + m1 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) + (x5 + x6) * J1
-                    + J2 * (2.0 - x5 - x6),
-                x11,
-                x13,
-                x14,
-                x15,
-            ],
-            [
-                x11,
-                Iyy + J2
-                    + x3 * (x3 * (x17 + J2 - J1) + 2.0 * (x0 * x1 * m2 * d * d * m1))
-                    + x19 + x20 + J1,
-                x22,
-                x21,
-                x23,
-            ],
-            [
-                x13,
-                x22,
-                x17 + x0 * (x0 * (J2 + x19 - J1) + 2.0 * (x3 * x1 * m2 * d * d * m1))
-                    + J2 + Izz + x20 + J1,
+                        * (m2 * (x0 * x0 * x3 * x3 + x1 * x1 * x7 * x8 * x8 * m1 * m1)
+                            + x1 * x1 * m0 * (m2 * m2 * x0 * x0 + x8 * x8 * m1 * m1)
+                            + (x8 * x8 * x10 * x10 + x1 * x1 * m2 * m2 * x0 * x0 * x14)
+                                * m1) + (x12 + x5) * J1 + (x6 + x13) * J2,
                 x24,
-                x21,
+                x29,
+                x32,
+                x33,
             ],
-            [x14, x21, x24, x17 + J2, x21],
-            [x15, x23, x21, x21, J2 + x19],
+            [
+                x24,
+                x8 * x8 * J1 + Iyy + J2 * (x12 + 1.0)
+                    + x1 * x1 * m0 * (m2 * m2 * d * d * x0 * x0 + x17 * x17)
+                    + (x23 * x23 + x1 * x1 * m2 * m2 * d * d * x0 * x0 * x14) * m1
+                    + m2 * (x0 * x0 * x20 * x20 + x22 * x22),
+                x38,
+                x39,
+                x40,
+            ],
+            [
+                x29,
+                x38,
+                x0 * x0 * J1
+                    + m2 * (x1 * x1 * x7 * x8 * x8 * d * d * m1 * m1 + x28 * x28) + Izz
+                    + x1 * x1 * m0 * (x25 * x25 + x8 * x8 * d * d * m1 * m1)
+                    + J2 * (x5 + 1.0) + m1 * (x27 * x27 + x8 * x8 * x26 * x26),
+                x41,
+                x42,
+            ],
+            [
+                x32,
+                x39,
+                x41,
+                J2 + (x1 * x1 * (m2 + m0) * m1 + x10 * x10) * d * d * m1,
+                x43,
+            ],
+            [
+                x33,
+                x40,
+                x42,
+                x43,
+                J2 + m2 * d * d * (x1 * x1 * m2 * (m0 + m1) + x21 * x21),
+            ],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.

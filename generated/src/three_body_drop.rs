@@ -263,72 +263,54 @@ pub fn energy(
     let a = params.a;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::sin(theta);
-    let x1 = phi_dot - x0 * psi_dot;
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::sin(theta);
     let x2 = f64::cos(theta);
-    let x3 = f64::cos(phi);
-    let x4 = x2 * psi_dot * x3;
-    let x5 = f64::sin(phi);
-    let x6 = theta_dot * x5;
-    let x7 = x4 - x6;
-    let x8 = theta_dot * x3;
-    let x9 = x2 * psi_dot * x5;
-    let x10 = x8 + x9;
-    let x11 = f64::cos(psi);
-    let x12 = f64::sin(gamma2);
-    let x13 = f64::cos(gamma2);
-    let x14 = a * x0;
-    let x15 = x14 - (-x2 * x12 * x3 - x13 * x0) * d;
-    let x16 = f64::sin(psi);
-    let x17 = x3 * x16;
-    let x18 = x0 * x11 * x5;
-    let x19 = x5 * x16 + x0 * x11 * x3;
-    let x20 = a * x2 * x16;
-    let x21 = x11 * x5;
-    let x22 = x0 * x3 * x16;
-    let x23 = theta_dot * x11 * x15 + X_dot
-        + (x12 * phi_dot * (x17 - x18) - gamma2_dot * (-x11 * x2 * x12 - x13 * x19)) * d
-        + psi_dot * (x20 - (-x13 * x2 * x16 - (x21 - x22) * x12) * d);
-    let x24 = a * theta_dot * x2;
-    let x25 = Z_dot
-        + d
-            * (x0 * (-gamma2_dot - x8) * x12
-                + (x13 * (gamma2_dot * x3 + theta_dot) - x12 * x5 * phi_dot) * x2) + x24;
-    let x26 = a * x11 * x2;
-    let x27 = x11 * x3;
-    let x28 = x0 * x5 * x16;
-    let x29 = -x27 - x28;
-    let x30 = x22 - x21;
-    let x31 = psi_dot * (-d * (x13 * x11 * x2 - x12 * x19) - x26) + theta_dot * x15 * x16
-        + Y_dot + (x12 * x29 * phi_dot - gamma2_dot * (-x2 * x12 * x16 - x13 * x30)) * d;
-    let x32 = gamma2_dot + x8 + x9;
-    let x33 = f64::cos(gamma1);
-    let x34 = f64::sin(gamma1);
-    let x35 = x33 * x10 - x34 * x1;
-    let x36 = x4 + gamma1_dot - x6;
-    let x37 = x12 * x1 + x13 * x7;
-    let x38 = Z_dot - x24
-        + (x34 * (x0 * (gamma1_dot - x6) + x2 * phi_dot * x3)
-            + x33 * x2 * (gamma1_dot * x5 - theta_dot)) * d;
-    let x39 = x18 - x17;
-    let x40 = (x34 * x2 * x5 - x33 * x0) * d - x14;
-    let x41 = (d * (x34 * x29 - x33 * x2 * x16) - x20) * psi_dot + X_dot
-        + ((x33 * x39 - x11 * x34 * x2) * gamma1_dot + x34 * x19 * phi_dot) * d
-        + theta_dot * x11 * x40;
-    let x42 = d
-        * (x34 * phi_dot * x30 + (x33 * (x27 + x28) - x34 * x2 * x16) * gamma1_dot)
-        + Y_dot + theta_dot * x40 * x16
-        + psi_dot * (d * (x39 * x34 + x33 * x11 * x2) + x26);
-    let x43 = x34 * x10 + x33 * x1;
-    let x44 = x13 * x1 - x7 * x12;
-    0.5 * (x1 * (Ixx * x1 - x7 * Ixz - Ixy * x10))
-        + 0.5 * ((x7 * Izz - Iyz * x10 - Ixz * x1) * x7)
+    let x3 = f64::sin(psi);
+    let x4 = f64::cos(psi);
+    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
+    let x6 = f64::sin(gamma1);
+    let x7 = f64::sin(phi);
+    let x8 = Z_dot * x2 * x7;
+    let x9 = f64::cos(phi);
+    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
+    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
+    let x12 = x2 * psi_dot * x9;
+    let x13 = theta_dot * x7;
+    let x14 = x12 - x13;
+    let x15 = a * x14;
+    let x16 = x8 + x10 + x11 + x15;
+    let x17 = x0 * x5 + x6 * x16;
+    let x18 = x12 + gamma1_dot - x13;
+    let x19 = x0 * x16 - x5 * x6 + x18 * d;
+    let x20 = theta_dot * x9;
+    let x21 = x2 * psi_dot * x7;
+    let x22 = x20 + x21;
+    let x23 = a * x22;
+    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
+    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
+    let x26 = Z_dot * x2 * x9;
+    let x27 = phi_dot - x1 * psi_dot;
+    let x28 = x0 * x22 - x6 * x27;
+    let x29 = x24 - x23 + x25 + x26 - d * x28;
+    let x30 = gamma2_dot + x20 + x21;
+    let x31 = f64::sin(gamma2);
+    let x32 = f64::cos(gamma2);
+    let x33 = x23 + x24 + x25 + x26;
+    let x34 = x30 * d + x5 * x31 + x32 * x33;
+    let x35 = x31 * x27 + x32 * x14;
+    let x36 = x8 + x10 + x11 - x35 * d - x15;
+    let x37 = x5 * x32 - x33 * x31;
+    let x38 = x6 * x22 + x0 * x27;
+    let x39 = x32 * x27 - x14 * x31;
+    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
+        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
+        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (x23 * x23 + x25 * x25 + x31 * x31))
-        + 0.5 * ((Iyy * x10 - x7 * Iyz - Ixy * x1) * x10)
-        + (0.5 * (x32 * x32) + 0.5 * (x35 * x35) + 0.5 * (x36 * x36) + 0.5 * (x37 * x37))
-            * J2 + 0.5 * ((x38 * x38 + x41 * x41 + x42 * x42) * m1)
-        + (0.5 * (x43 * x43) + 0.5 * (x44 * x44)) * J1
+        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
+        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
+        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
+            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -366,52 +348,65 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a = params.a;
-    let x0 = f64::cos(gamma1);
+    let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
-    let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-    let x3 = f64::sin(theta);
-    let x4 = f64::sin(gamma2);
-    let x5 = f64::cos(phi);
-    let x6 = m2 * x4 * x5;
-    let x7 = f64::sin(gamma1);
-    let x8 = f64::sin(phi);
-    let x9 = x7 * x8 * m1;
-    let x10 = f64::cos(theta);
-    let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-    let x12 = f64::cos(psi);
-    let x13 = f64::sin(psi);
-    let x14 = a * x10 * x13;
-    let x15 = x12 * x8;
-    let x16 = x3 * x5 * x13;
-    let x17 = x12 * x5;
-    let x18 = x3 * x8 * x13;
-    let x19 = -x17 - x18;
-    let x20 = x8 * x13 + x3 * x12 * x5;
-    let x21 = x5 * x13;
-    let x22 = x3 * x12 * x8;
-    let x23 = x22 - x21;
-    let x24 = m2 + m0 + m1;
-    let x25 = a * x12 * x10;
-    let x26 = x16 - x15;
+    let x2 = f64::cos(psi);
+    let x3 = f64::cos(theta);
+    let x4 = f64::sin(phi);
+    let x5 = f64::sin(psi);
+    let x6 = f64::sin(theta);
+    let x7 = f64::cos(phi);
+    let x8 = x4 * x5 + x6 * x2 * x7;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a;
+    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a;
+    let x18 = -x17 - d;
+    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
-        theta_dot * x11 * x12
-            + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-            + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d + X_dot * x24,
-        Y_dot * x24 + theta_dot * x11 * x13
-            + psi_dot
-                * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                    + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+        theta_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                    - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                    + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-        (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-            + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-            + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-            + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
+        theta_dot
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
+            + psi_dot
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+        theta_dot
+            * (m2
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                + m1
+                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -493,131 +488,164 @@ pub mod reduced_volterra {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
-        let x5 = f64::cos(gamma2);
+        let x5 = f64::sin(gamma2);
         let x6 = 1.0 / (m2 + m0 + m1);
         let x7 = x6 * m2;
         let x8 = x7 - 1.0;
-        let x9 = f64::cos(gamma1);
-        let x10 = x6 * m1;
-        let x11 = x9 * x9;
-        let x12 = x5 * x5;
-        let x13 = x9 * d;
-        let x14 = x5 * d;
-        let x15 = (a + x13) * m1 + m2 * (-a - x14);
-        let x16 = x6 * x15;
-        let x17 = x16 - a - x13;
-        let x18 = x9 * (J1 - J2) + d * m1 * x17;
-        let x19 = f64::sin(gamma1);
-        let x20 = x18 * x19 - Ixy;
-        let x21 = x5 * (J2 - J1) + m2 * d * (a + x14 + x16);
-        let x22 = f64::sin(gamma2);
-        let x23 = x21 * x22 - Ixz;
-        let x24 = x9 * x6 * m2 * d * d * x22 * m1;
-        let x25 = -(x5 * x6 * m2 * x19 * d * d * m1);
-        let x26 = 1.0 - x10;
-        let x27 = x26 * d * d * m1;
-        let x28 = x27 + J2 - J1;
-        let x29 = 1.0 - x7;
-        let x30 = m2 * d * d * x29;
-        let x31 = 2.0 * m1 - 2.0 * m2;
-        let x32 = 2.0 - 2.0 * x10;
-        let x33 = a
+        let x9 = f64::cos(gamma2);
+        let x10 = x9 * x9;
+        let x11 = x5 * x5;
+        let x12 = x10 + x11;
+        let x13 = f64::sin(gamma1);
+        let x14 = x6 * m1;
+        let x15 = 1.0 - x14;
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x16;
+        let x18 = x13 * x13;
+        let x19 = x17 + x18;
+        let x20 = J1 - J2;
+        let x21 = x16 * d;
+        let x22 = x9 * d;
+        let x23 = (a + x21) * m1 + m2 * (-a - x22);
+        let x24 = x16 * x6 * d * m1;
+        let x25 = x6 * (m2 - m1);
+        let x26 = a * (x25 - 1.0) - x24;
+        let x27 = 1.0 - x7;
+        let x28 = m1 - m2;
+        let x29 = x6 * x28;
+        let x30 = x29 + 1.0;
+        let x31 = d * x27 + x9 * (x24 + a * x30);
+        let x32 = x6 * x23 - a - x21;
+        let x33 = x13
+            * (x16 * x20
+                + d * m1
+                    * (x6 * (m2 * (x5 * x5 * x26 - x9 * x31) - x6 * m0 * x23)
+                        + x15 * x32)) - Ixy;
+        let x34 = J2 - J1;
+        let x35 = (-a - x21) * m1 + m2 * (a + x22);
+        let x36 = x25 + 1.0;
+        let x37 = a * x36 + x9 * x6 * m2 * d;
+        let x38 = x15 * d + x16 * x37;
+        let x39 = x35 * x6 - a - x22;
+        let x40 = (x9 * x34
+            + m2 * d
+                * (x6 * (x35 * x6 * m0 + (x13 * x13 * x37 + x16 * x38) * m1) + x39 * x8))
+            * x5 - Ixz;
+        let x41 = x6 * m0;
+        let x42 = 2.0 - x7 - x14 - x41;
+        let x43 = x16 * x6 * m2 * d * d * x5 * x42 * m1;
+        let x44 = x9 * x6 * m2 * x13 * d * d * m1 * (x7 + x14 + x41 - 2.0);
+        let x45 = x13 * x5;
+        let x46 = x16 * x9;
+        let x47 = x46 - x45;
+        let x48 = x46 + x45;
+        let x49 = x6 * m2 * d * d * m1
+            * (2.0 * x45
+                + x6
+                    * (x47 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x48)) - Iyz;
+        let x50 = x6 * m2 * d * d
+            * ((0.5 - 0.5 * x7) * x48 + x13 * x5 * (1.0 - x14 - x41)
+                + x47 * (0.5 * x7 - 0.5)) * m1;
+        let x51 = m2 * d
+            * (x31 * x27
+                + ((x6 * m2 * d * x5 * x5 * x19 - x9 * x32) * m1
+                    + x6 * m0 * (m2 * d * x5 * x5 - x9 * x23)) * x6) + J2;
+        let x52 = d * m1
+            * (x6
+                * (m2 * (x6 * x12 * x13 * x13 * d * m1 - x16 * x39)
+                    + x6 * m0 * (x13 * x13 * d * m1 - x16 * x35)) + x15 * x38) + J2;
+        let x53 = x6
+            * ((1.0 - x7 - x41) * x13 * x5 + x47 * (0.5 * x14 - 0.5)
+                + (0.5 - 0.5 * x14) * x48) * m2 * d * d * m1;
+        let x54 = x6 * m2 * x13 * d * d * x5 * x42 * m1;
+        let x55 = x5 * u1;
+        let x56 = x9 * u3;
+        let x57 = -x55 - x56;
+        let x58 = x16 * u2;
+        let x59 = x13 * u1;
+        let x60 = x58 - x59;
+        let x61 = -u5 - u2;
+        let x62 = x9 * m2 * x61 + x60 * m1;
+        let x63 = u4 * x13 * m1;
+        let x64 = u5 * m2 * x5;
+        let x65 = m2 * x61 * x5;
+        let x66 = u4 + u3;
+        let x67 = x13 * m1 * x66;
+        let x68 = ((x63 - x64 + x65 + x67) * u3 + x9 * u5 * m2 * u1 + u4 * u4 * x13 * m1)
+            * d - (a * x28 * u2 + x62 * d) * u1;
+        let x69 = ((m2 * x5 * u1 - x16 * u4 * m1) * d + x35 * u3) * u1
+            + (u5 * u5 * m2 * x5 - x16 * u4 * u1 * m1 + (x64 - x63 - x65 - x67) * u2)
+                * d;
+        let x70 = a * u4 * u3 * x13;
+        let x71 = x16 * x61 + x59;
+        let x72 = a * u3 * x13;
+        let x73 = (m2 * ((x5 * x71 + x9 * u3 * x13) * d + x72) - a * u3 * x13 * m1) * x6
+            + x72;
+        let x74 = x13 * u2;
+        let x75 = x16 * u1;
+        let x76 = x74 + x75;
+        let x77 = (x59 - x58 + x6 * x62) * d + a * (x29 - 1.0) * u2;
+        let x78 = x16 * x5 * u2;
+        let x79 = x9 * u1;
+        let x80 = u4 - u3;
+        let x81 = u5 + u2;
+        let x82 = x73 * x66 - x70 - x76 * x77
+            + x6
+                * (a * u4 * u3 * x13 * m1
+                    + m2
+                        * (d
+                            * (u4 * (x78 + x13 * x57)
+                                + u5 * (x16 * (x79 + x80 * x5) + x81 * x9 * x13)) - x70));
+        let x83 = x55 + x56;
+        let x84 = x16 * a * u4 * u3;
+        let x85 = (x6 * ((-u4 - u3) * m1 + m2 * ((x81 * x13 + x75) * x5 + x16 * x9 * u3))
+            + u4 + u3) * d + x16 * a * x36 * u3;
+        let x86 = x6
             * (m2
-                * (a + 2.0 * x14
-                    + x6 * (a * (2.0 * m1 - m2) + (x5 * x31 + 2.0 * (x9 * m1)) * d))
-                + (a * x26 + x9 * d * x32) * m1);
-        let x34 = x6 * m2 * x19 * d * d * x22 * m1;
-        let x35 = x34 - Iyz;
-        let x36 = x9 * x6 * d * m1;
-        let x37 = m1 - m2;
-        let x38 = x6 * x37;
-        let x39 = x38 + 1.0;
-        let x40 = d * x29 + x5 * (x36 + a * x39);
-        let x41 = J2 + m2 * x40 * d;
-        let x42 = x6 * (m2 - m1);
-        let x43 = x42 + 1.0;
-        let x44 = x5 * x6 * m2 * d;
-        let x45 = a * x43 + x44;
-        let x46 = x26 * d + x9 * x45;
-        let x47 = J2 + x46 * d * m1;
-        let x48 = x22 * u1;
-        let x49 = x5 * u3;
-        let x50 = x48 + x49;
-        let x51 = x9 * u2;
-        let x52 = x19 * u1;
-        let x53 = x51 - x52;
-        let x54 = x19 * u2;
-        let x55 = x9 * u1;
-        let x56 = x54 + x55;
-        let x57 = x56 * x19;
-        let x58 = x9 * x53;
-        let x59 = u4 + u3;
-        let x60 = u5 + u2;
-        let x61 = x5 * x50;
-        let x62 = u3 * x22;
-        let x63 = x5 * u1;
-        let x64 = x63 - x62;
-        let x65 = x64 * x22;
-        let x66 = x9 * x5 * u4;
-        let x67 = x22 * x22 * (m2 * d * d * x8 - J2 + J1) + x5 * x21;
-        let x68 = x9 * x18 + x28 * x19 * x19;
-        let x69 = -u4 - u3;
-        let x70 = x9 * x5 * u5;
-        let x71 = Iyz * u2;
-        let x72 = u3 * Izz;
-        let x73 = u1 * Ixz;
-        let x74 = Iyy * u2;
-        let x75 = Iyz * u3;
-        let x76 = Ixy * u1;
-        let x77 = -u5 - u2;
-        let x78 = x5 * m2 * x77 + x53 * m1;
-        let x79 = x38 - 1.0;
-        let x80 = (x52 - x51 + x6 * x78) * d + a * x79 * u2;
-        let x81 = x5 * u5 * x19;
-        let x82 = x9 * u3 * x22;
-        let x83 = x81 - x82;
-        let x84 = a * u3 * x19;
-        let x85 = (m2 * ((x22 * (x9 * x77 + x52) + x5 * u3 * x19) * d + x84)
-            - a * u3 * x19 * m1) * x6 + x84;
-        let x86 = u3 * x19 * x22;
-        let x87 = x60 * x19 + x55;
-        let x88 = (x6 * (x69 * m1 + m2 * (x87 * x22 + x9 * x5 * u3)) + u4 + u3) * d
-            + x9 * a * x43 * u3;
-        let x89 = x19 * m1 * x59;
-        let x90 = m2 * x77 * x22 + x89;
-        let x91 = m2 * x22 * u1 - x9 * u4 * m1;
-        let x92 = (-a - x13) * m1 + m2 * (a + x14);
-        let x93 = x92 * u3;
-        let x94 = x91 * d + x93;
-        let x95 = a * x37 * u2 + x78 * d;
-        let x96 = x22 * x59 - x63;
-        let x97 = d * (u5 + x6 * ((x9 * x5 * u2 + x96 * x19) * m1 + m2 * x77) + u2)
-            + x5 * a * u2 * x39;
-        let x98 = x92 * x6 - a - x14;
-        let x99 = x98 * u3 + d * (x22 * u1 * x8 - x9 * x6 * u4 * m1);
-        let x100 = a * x22 * u2;
-        let x101 = x5 * x59 + x48;
-        let x102 = x6
-            * (m2 * a * x22 * u2 + (d * (x101 * x19 - x9 * x22 * u2) - x100) * m1)
-            - x100;
-        let x103 = x9 * u4 * x22;
-        let x104 = x5 * x19 * u2;
-        let x105 = x103 - x104;
-        let x106 = -x48 - x49;
-        let x107 = Ixy * u2;
-        let x108 = Ixx * u1;
-        let x109 = u3 * Ixz;
-        let x110 = 2.0 * J1 - 2.0 * J2;
-        let x111 = x57 + u5 + x58;
-        let x112 = a * (x42 - 1.0) - x36;
-        let x113 = x22 * x112 * u2;
-        let x114 = x6 * x101 * x19 * d * m1;
-        let x115 = a * x79 - x44;
-        let x116 = u4 * x115;
-        let x117 = (x9 * x60 - x52) * x6 * m2 * d * x22;
-        let x118 = -x54 - x55;
-        let x119 = x19 * x22 * u2;
-        let x120 = u4 + x61 - x65;
+                * (d
+                    * ((x16 * x83 + x13 * x5 * u2) * u4
+                        + u5 * (x80 * x13 * x5 + x9 * x71)) + x84)
+                - x16 * a * u4 * u3 * m1) + x84 - x85 * x66 + x60 * x77;
+        let x87 = x76 * x85 - x60 * x73
+            + (x81 * x6 * u5 * m2 * x5 + u4 * (x16 * x15 * u1 + x13 * x15 * u2)) * d;
+        let x88 = x79 - u3 * x5;
+        let x89 = x5 * x66 - x79;
+        let x90 = d * (u5 + x6 * ((x16 * x9 * u2 + x89 * x13) * m1 + m2 * x61) + u2)
+            + x9 * a * u2 * x30;
+        let x91 = a * x5 * u2;
+        let x92 = x9 * x66 + x55;
+        let x93 = x6 * (m2 * a * x5 * u2 + (d * (x92 * x13 - x78) - x91) * m1) - x91;
+        let x94 = d * (u5 * (x9 * u1 * x8 + u3 * x5 * x27) + x6 * u4 * x13 * m1 * x66)
+            - x88 * x90 + x83 * x93;
+        let x95 = x39 * u3 + d * (x5 * u1 * x8 - x16 * x6 * u4 * m1);
+        let x96 = u5 * a * x5 * u2;
+        let x97 = x88 * x95 - x81 * x93 - x96
+            + x6
+                * (u5 * m2 * a * x5 * u2
+                    + ((u5 * (x83 * x13 - x78) + u4 * (x16 * x89 + x9 * x13 * (u5 - u2)))
+                        * d - x96) * m1);
+        let x98 = x9 * u5 * a * u2;
+        let x99 = x6
+            * ((d
+                * (u4 * (x13 * x5 * (u2 - u5) + x16 * x92)
+                    + u5 * (x9 * (x59 - x58) - u3 * x13 * x5)) - x98) * m1
+                + x9 * u5 * m2 * a * u2) - x95 * x83 - x98 + x81 * x90;
+        let x100 = u4 * J2 * (-x74 - x75) + x76 * x20 * x66;
+        let x101 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x102 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x103 = u5 * J2 + x81 * x34;
+        let x104 = x34 * x88 * x83;
+        let x105 = u2 * u2;
+        let x106 = u3 * u3;
+        let x107 = a * (m2 * (-x105 - x106) + (x105 + x106) * m1)
+            + d
+                * (m2 * (x9 * (u5 * (-u5 - 2.0 * u2) - x105 - x106) - u3 * x5 * u1)
+                    + (x16 * (x105 + u4 * (u4 + 2.0 * u3) + x106) - x13 * u1 * u2) * m1);
+        let x108 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x109 = x82 * x13 - x16 * x86;
+        let x110 = x60 * x76 * x20;
+        let x111 = x9 * x99 + x5 * x97;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -630,131 +658,72 @@ pub mod reduced_volterra {
             [
                 Ixx
                     + d * d
-                        * (m2 * (x5 * x5 * x8 - x7 + 1.0)
-                            + m1 * (x9 * x9 * (x10 - 1.0) - x10 + 1.0))
-                    + (x11 + x12) * J1 + J2 * (2.0 - x11 - x12),
-                x20,
-                x23,
-                x24,
-                x25,
+                        * (m2 * (x5 * x5 * x8 * x8 + x6 * x6 * x12 * x13 * x13 * m1 * m1)
+                            + x6 * x6 * m0 * (m2 * m2 * x5 * x5 + x13 * x13 * m1 * m1)
+                            + (x13 * x13 * x15 * x15 + x6 * x6 * m2 * m2 * x5 * x5 * x19)
+                                * m1) + (x17 + x10) * J1 + (x11 + x18) * J2,
+                x33,
+                x40,
+                x43,
+                x44,
             ],
             [
-                x20,
-                Iyy + J2 + x9 * (x9 * x28 + 2.0 * (x5 * x6 * m2 * d * d * m1)) + x30
-                    + x33 + J1,
-                x35,
-                x34,
-                x41,
+                x33,
+                x13 * x13 * J1 + Iyy + J2 * (x17 + 1.0)
+                    + x6 * x6 * m0 * (m2 * m2 * d * d * x5 * x5 + x23 * x23)
+                    + (x32 * x32 + x6 * x6 * m2 * m2 * d * d * x5 * x5 * x19) * m1
+                    + m2 * (x5 * x5 * x26 * x26 + x31 * x31),
+                x49,
+                x50,
+                x51,
             ],
             [
-                x23,
-                x35,
-                x27 + x5 * (x5 * (J2 + x30 - J1) + 2.0 * (x9 * x6 * m2 * d * d * m1))
-                    + J2 + Izz + x33 + J1,
-                x47,
-                x34,
+                x40,
+                x49,
+                x5 * x5 * J1
+                    + m2 * (x6 * x6 * x12 * x13 * x13 * d * d * m1 * m1 + x39 * x39)
+                    + Izz + x6 * x6 * m0 * (x35 * x35 + x13 * x13 * d * d * m1 * m1)
+                    + J2 * (x10 + 1.0) + m1 * (x38 * x38 + x13 * x13 * x37 * x37),
+                x52,
+                x53,
             ],
-            [x24, x34, x47, x27 + J2, x34],
-            [x25, x41, x34, x34, J2 + x30],
+            [
+                x43,
+                x50,
+                x52,
+                J2 + (x6 * x6 * (m2 + m0) * m1 + x15 * x15) * d * d * m1,
+                x54,
+            ],
+            [
+                x44,
+                x51,
+                x53,
+                x54,
+                J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x27 * x27),
+            ],
         ];
         let mut force: [f64; 5] = [
-            J2 * (x9 * x53 * u3 - x5 * x50 * u2 + (-x57 - x58) * x59 + x60 * (x61 - x65))
-                - u5
-                    * (x6 * m2 * d * d * m1 * (x66 + x60 * x19 * x22) + u3 * x67
-                        + x5 * (m2 * d * d * (2.0 - 2.0 * x7) + 2.0 * J2 - 2.0 * J1)
-                            * x22 * u1)
-                - u4
-                    * (x9 * x19 * u1 * (2.0 * J2 + d * d * x32 * m1 - 2.0 * J1)
-                        + x68 * u2 + (x69 * x19 * x22 - x70) * x6 * m2 * d * d * m1)
-                + (x71 - x72 + x73 + x64 * x22 * J1) * u2
-                + u3 * (x74 + x56 * x19 * J1 - x75 - x76)
+            (-x9 * u5 * x57 - x16 * x60 * u4) * J1
                 + d
-                    * (m1
-                        * ((x9 * (x6 * m2 * x56 * x22 + u4 * x26)
-                            - x6 * x53 * m2 * x19 * x22) * x80
-                            + (x53 * x19 * x26 + x6 * m2 * x83) * x85
-                            + (x6 * m2 * (x86 + x70) - x56 * x19 * x26) * x88)
-                        + x6 * x6 * m0
-                            * (x90 * d * (-x19 * m1 * u2 - m2 * u3 * x22)
-                                + (x5 * u5 * m2 + x19 * u1 * m1) * x94 + x91 * x95)
-                        + m2
-                            * (x97
-                                * ((x64 * x8 - x6 * x19 * m1 * u2) * x22
-                                    - x9 * x5 * x6 * u4 * m1)
-                                + x99
-                                    * (x6 * x50 * x19 * x22 * m1
-                                        + x5 * (x6 * x64 * x19 * m1 + u5 * x8))
-                                + x102 * (x6 * m1 * x105 - x50 * x22 * x8))),
-            J2 * ((x9 * x56 - x53 * x19) * x59 + x53 * u3 * x19 + x64 * x50)
-                + ((x90 * (x15 * u2 - x5 * u5 * m2 * d)
-                    + x95 * (x60 * m2 * x22 - u4 * x19 * m1)) * d
-                    + x94 * (-x15 * u1 - m2 * u3 * d * x22)) * x6 * x6 * m0
-                + (x72 - x71 - x73) * u1 + (x64 * x106 - x9 * x56 * u3) * J1
-                - u3 * (x108 - x107 - x109)
-                - (x19
-                    * (x9 * x110
-                        + d
-                            * (x6
-                                * (m2 * (-2.0 * a - 2.0 * x14) + (2.0 * a + 2.0 * x13) * m1)
-                                - 2.0 * a - 2.0 * x13) * m1) * u2 + x68 * u1
-                    + (x9 * x22 * x59 - x81) * x6 * m2 * d * d * m1) * u4
-                + m1
-                    * (x80 * d * (x111 * x6 * m2 * x22 + u4 * x19 * x26)
-                        + (x6 * m2 * d * x83 - x56 * x17) * x88
-                        + (x6 * m2 * (-x86 - x70) * d + x53 * x17) * x85)
-                + (x102 * (x5 * u5 * x112 + x6 * u4 * x19 * d * x22 * m1 + x60 * x40)
-                    + x99 * (x50 * x22 * x112 - x64 * x40)
-                    + (-x113 - x5 * x6 * u4 * x19 * d * m1) * x97
-                    - u5 * d
-                        * ((u5 * x112
-                            + (a * (x6 * (2.0 * m2 - 2.0 * m1) - 2.0) - 2.0 * x36) * u2)
-                            * x22 + x114)) * m2,
-            (x5 * x64 * J1 - x107 + x108 - x109) * u2
-                - u5
-                    * (u3 * x22
-                        * (m2
-                            * (x6
-                                * (m2 * (2.0 * a + 2.0 * x14) + (-2.0 * a - 2.0 * x13) * m1)
-                                - 2.0 * a - 2.0 * x14) * d + x5 * x110)
-                        + x6 * m2 * d * d * (x60 * x5 * x19 - x103) * m1 + x67 * u1)
-                + x6 * x6 * m0
-                    * ((x92 * u1 - x19 * d * m1 * u2) * x95
-                        + d
-                            * (x94 * (x89 - u5 * m2 * x22)
-                                + x90 * (x9 * u4 * d * m1 - x93))) - u1 * (x74 - x75 - x76)
-                + (x80 * (x56 * x46 - x53 * x19 * x45)
-                    - u4 * d
-                        * ((x116 + u3 * (a * (x6 * x31 - 2.0) - 2.0 * x44)) * x19 + x117)
-                    + x88 * ((x116 + x45 * x59) * x19 - x9 * x6 * u5 * m2 * d * x22)
-                    + (x9 * u4 * x45 - x46 * x59 - x6 * u5 * m2 * x19 * d * x22) * x85)
-                    * m1
-                + (x50 * x22 * u2 + x60 * (-x50 * x22 - x5 * x64) + x53 * x118) * J2
-                + m2
-                    * (x102 * (x6 * (x66 + x119) * d * m1 - x98 * x50)
-                        + (x64 * x98 + x6 * d * m1 * x105) * x97
-                        + x99 * (x6 * x120 * x19 * m1 + u5 * x22 * x29) * d)
-                + x53 * x56 * J1,
-            x53 * (x56 * J1 + J2 * x118)
-                + d
-                    * (x26 * (x56 * x80 - x85 * x59)
-                        + x6
-                            * (m2
-                                * (x97 * (x9 * (x62 - x63 + u4 * x22) - x104)
-                                    - u5 * d * (x5 * x87 - x82)
-                                    + (x9 * (x48 + x5 * u4 + x49) + x119) * x102
-                                    + x99 * x120 * x19)
-                                + x6 * m0 * (x118 * x95 + (x9 * x90 * d + x94 * x19) * x59))
-                        - u4 * (u3 * x19 * x115 + x117)) * m1,
-            x64 * (x106 * J1 + J2 * x50)
+                    * (-x6 * x6 * m0 * (m2 * x68 * x5 - x13 * x69 * m1)
+                        - (x6 * m2 * x5 * (x16 * x82 + x13 * x86) + x13 * x15 * x87) * m1
+                        - m2 * (x94 * x5 * x8 + x6 * (x5 * x99 - x9 * x97) * x13 * m1))
+                + x13 * x100 - x101 * u2 + u3 * x102 - x103 * x88 * x5,
+            x104 + x101 * u1 - x6 * x6 * m0 * (x23 * x69 - m2 * d * x5 * x107)
+                - m2 * (x31 * x97 + x5 * x99 * x26) - x60 * u4 * x13 * J1 - u3 * x108
+                - (x6 * m2 * x109 * d * x5 + x87 * x32) * m1 - x16 * x100,
+            u5 * x57 * x5 * J1 - x6 * x6 * m0 * (x35 * x68 + x13 * d * m1 * x107)
+                - u1 * x102 + x110 - (x82 * x38 + x13 * x37 * x86) * m1 - x103 * x9 * x88
+                + x108 * u2 - m2 * (x94 * x39 + x6 * x13 * d * m1 * x111),
+            x110
+                + (x6
+                    * (-x6 * m0 * (x13 * x107 - x16 * x68)
+                        - m2 * (x13 * x111 - x16 * x94)) - x82 * x15) * d * m1,
+            x104
                 + m2 * d
-                    * ((x60 * x102 - x64 * x99) * x29 - u5 * (x113 + x114)
-                        + x6
-                            * (m1
-                                * ((x5 * (x52 - x51 - x9 * u5) - x86) * x85
-                                    - u4 * d * (x9 * x96 - x104) + x111 * x80 * x22
-                                    + (x5 * (u5 * x19 + x54 + x55) - x82) * x88)
-                                + x6 * m0
-                                    * (x64 * x94 + x5 * x90 * x77 * d + x60 * x22 * x95))),
+                    * (x6
+                        * (-m1 * (x109 * x5 - x9 * x87)
+                            - x6 * m0 * (-x9 * x69 - x5 * x107)) - x97 * x27),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -810,29 +779,35 @@ pub mod reduced_volterra {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(gamma1);
+        let x4 = f64::sin(gamma2);
         let x5 = f64::cos(gamma2);
-        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
-        let x7 = f64::sin(gamma2);
-        let x8 = m2 * x7 * x1;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * x3 * m1;
-        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x2 * x13;
-        let x15 = x12 * x3;
-        let x16 = x0 * x1 * x13;
-        let x17 = x12 * x1;
-        let x18 = x0 * x3 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x3 * x13 + x0 * x12 * x1;
-        let x21 = x1 * x13;
-        let x22 = x0 * x12 * x3;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x2;
-        let x26 = x16 - x15;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a;
+        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -858,25 +833,31 @@ pub mod reduced_volterra {
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
-                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
-                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
-                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
-                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
-                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
-                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
-                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
-                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1022,70 +1003,118 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma2);
+        let x0 = f64::sin(gamma2);
         let x1 = 1.0 / (m2 + m0 + m1);
         let x2 = x1 * m2;
-        let x3 = f64::cos(gamma1);
-        let x4 = x1 * m1;
-        let x5 = x3 * x3;
+        let x3 = x2 - 1.0;
+        let x4 = f64::cos(gamma2);
+        let x5 = x4 * x4;
         let x6 = x0 * x0;
-        let x7 = x3 * d;
-        let x8 = x0 * d;
-        let x9 = x1 * ((a + x7) * m1 + m2 * (-a - x8));
-        let x10 = f64::sin(gamma1);
-        let x11 = (x3 * (J1 - J2) + d * m1 * (x9 - a - x7)) * x10 - Ixy;
-        let x12 = f64::sin(gamma2);
-        let x13 = (x0 * (J2 - J1) + m2 * d * (a + x8 + x9)) * x12 - Ixz;
-        let x14 = x3 * x1 * m2 * d * d * x12 * m1;
-        let x15 = -(x0 * x1 * m2 * x10 * d * d * m1);
-        let x16 = 1.0 - x4;
-        let x17 = x16 * d * d * m1;
-        let x18 = 1.0 - x2;
-        let x19 = m2 * d * d * x18;
-        let x20 = a
-            * (m2
-                * (a + 2.0 * x8
-                    + x1
-                        * (a * (2.0 * m1 - m2)
-                            + (x0 * (2.0 * m1 - 2.0 * m2) + 2.0 * (x3 * m1)) * d))
-                + (a * x16 + x3 * d * (2.0 - 2.0 * x4)) * m1);
-        let x21 = x1 * m2 * x10 * d * d * x12 * m1;
-        let x22 = x21 - Iyz;
-        let x23 = J2
-            + m2 * (d * x18 + x0 * (x3 * x1 * d * m1 + a * (x1 * (m1 - m2) + 1.0))) * d;
-        let x24 = J2
-            + (x16 * d + x3 * (a * (x1 * (m2 - m1) + 1.0) + x0 * x1 * m2 * d)) * d * m1;
+        let x7 = x5 + x6;
+        let x8 = f64::sin(gamma1);
+        let x9 = x1 * m1;
+        let x10 = 1.0 - x9;
+        let x11 = f64::cos(gamma1);
+        let x12 = x11 * x11;
+        let x13 = x8 * x8;
+        let x14 = x12 + x13;
+        let x15 = x11 * d;
+        let x16 = x4 * d;
+        let x17 = (a + x15) * m1 + m2 * (-a - x16);
+        let x18 = x11 * x1 * d * m1;
+        let x19 = x1 * (m2 - m1);
+        let x20 = a * (x19 - 1.0) - x18;
+        let x21 = 1.0 - x2;
+        let x22 = d * x21 + x4 * (x18 + a * (x1 * (m1 - m2) + 1.0));
+        let x23 = x1 * x17 - a - x15;
+        let x24 = x8
+            * (x11 * (J1 - J2)
+                + d * m1
+                    * (x1 * (m2 * (x0 * x0 * x20 - x4 * x22) - x1 * m0 * x17)
+                        + x10 * x23)) - Ixy;
+        let x25 = (-a - x15) * m1 + m2 * (a + x16);
+        let x26 = a * (x19 + 1.0) + x4 * x1 * m2 * d;
+        let x27 = x10 * d + x11 * x26;
+        let x28 = x25 * x1 - a - x16;
+        let x29 = (x4 * (J2 - J1)
+            + m2 * d
+                * (x1 * (x25 * x1 * m0 + (x8 * x8 * x26 + x11 * x27) * m1) + x28 * x3))
+            * x0 - Ixz;
+        let x30 = x1 * m0;
+        let x31 = 2.0 - x2 - x9 - x30;
+        let x32 = x11 * x1 * m2 * d * d * x0 * x31 * m1;
+        let x33 = x4 * x1 * m2 * x8 * d * d * m1 * (x2 + x9 + x30 - 2.0);
+        let x34 = x8 * x0;
+        let x35 = x11 * x4;
+        let x36 = x35 - x34;
+        let x37 = x35 + x34;
+        let x38 = x1 * m2 * d * d * m1
+            * (2.0 * x34
+                + x1
+                    * (x36 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x37)) - Iyz;
+        let x39 = x1 * m2 * d * d
+            * ((0.5 - 0.5 * x2) * x37 + x8 * x0 * (1.0 - x9 - x30)
+                + x36 * (0.5 * x2 - 0.5)) * m1;
+        let x40 = m2 * d
+            * (x22 * x21
+                + ((x1 * m2 * d * x0 * x0 * x14 - x4 * x23) * m1
+                    + x1 * m0 * (m2 * d * x0 * x0 - x4 * x17)) * x1) + J2;
+        let x41 = d * m1
+            * (x1
+                * (m2 * (x1 * x7 * x8 * x8 * d * m1 - x11 * x28)
+                    + x1 * m0 * (x8 * x8 * d * m1 - x11 * x25)) + x10 * x27) + J2;
+        let x42 = x1
+            * ((1.0 - x2 - x30) * x8 * x0 + x36 * (0.5 * x9 - 0.5)
+                + (0.5 - 0.5 * x9) * x37) * m2 * d * d * m1;
+        let x43 = x1 * m2 * x8 * d * d * x0 * x31 * m1;
         [
             [
                 Ixx
                     + d * d
-                        * (m2 * (x0 * x0 * (x2 - 1.0) - x2 + 1.0)
-                            + m1 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) + (x5 + x6) * J1
-                    + J2 * (2.0 - x5 - x6),
-                x11,
-                x13,
-                x14,
-                x15,
-            ],
-            [
-                x11,
-                Iyy + J2
-                    + x3 * (x3 * (x17 + J2 - J1) + 2.0 * (x0 * x1 * m2 * d * d * m1))
-                    + x19 + x20 + J1,
-                x22,
-                x21,
-                x23,
-            ],
-            [
-                x13,
-                x22,
-                x17 + x0 * (x0 * (J2 + x19 - J1) + 2.0 * (x3 * x1 * m2 * d * d * m1))
-                    + J2 + Izz + x20 + J1,
+                        * (m2 * (x0 * x0 * x3 * x3 + x1 * x1 * x7 * x8 * x8 * m1 * m1)
+                            + x1 * x1 * m0 * (m2 * m2 * x0 * x0 + x8 * x8 * m1 * m1)
+                            + (x8 * x8 * x10 * x10 + x1 * x1 * m2 * m2 * x0 * x0 * x14)
+                                * m1) + (x12 + x5) * J1 + (x6 + x13) * J2,
                 x24,
-                x21,
+                x29,
+                x32,
+                x33,
             ],
-            [x14, x21, x24, x17 + J2, x21],
-            [x15, x23, x21, x21, J2 + x19],
+            [
+                x24,
+                x8 * x8 * J1 + Iyy + J2 * (x12 + 1.0)
+                    + x1 * x1 * m0 * (m2 * m2 * d * d * x0 * x0 + x17 * x17)
+                    + (x23 * x23 + x1 * x1 * m2 * m2 * d * d * x0 * x0 * x14) * m1
+                    + m2 * (x0 * x0 * x20 * x20 + x22 * x22),
+                x38,
+                x39,
+                x40,
+            ],
+            [
+                x29,
+                x38,
+                x0 * x0 * J1
+                    + m2 * (x1 * x1 * x7 * x8 * x8 * d * d * m1 * m1 + x28 * x28) + Izz
+                    + x1 * x1 * m0 * (x25 * x25 + x8 * x8 * d * d * m1 * m1)
+                    + J2 * (x5 + 1.0) + m1 * (x27 * x27 + x8 * x8 * x26 * x26),
+                x41,
+                x42,
+            ],
+            [
+                x32,
+                x39,
+                x41,
+                J2 + (x1 * x1 * (m2 + m0) * m1 + x10 * x10) * d * d * m1,
+                x43,
+            ],
+            [
+                x33,
+                x40,
+                x42,
+                x43,
+                J2 + m2 * d * d * (x1 * x1 * m2 * (m0 + m1) + x21 * x21),
+            ],
         ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.

@@ -232,47 +232,11 @@ fn solve_dense<const N: usize>(
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
-    t: f64,
-    q: &[f64; NUM_COORDINATES],
-    qdot: &[f64; NUM_COORDINATES],
-    params: &Params,
-) -> f64 {
-    let X_dot = qdot[5];
-    let Y_dot = qdot[6];
-    let Z_dot = qdot[7];
-    let m0 = params.m0;
-    let Ixx = params.Ixx;
-    let Iyy = params.Iyy;
-    let Izz = params.Izz;
-    let Ixy = params.Ixy;
-    let Ixz = params.Ixz;
-    let Iyz = params.Iyz;
-    let m1 = params.m1;
-    let m2 = params.m2;
-    let J1 = params.J1;
-    let J2 = params.J2;
-    let mut v = [0.0f64; 45];
-    energy_part0(t, q, qdot, params, &mut v);
-    energy_part1(t, q, qdot, params, &mut v);
-    0.5 * (v[1] * (Ixx * v[1] - v[7] * Ixz - Ixy * v[10]))
-        + 0.5 * ((v[7] * Izz - Iyz * v[10] - Ixz * v[1]) * v[7])
-        + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (v[23] * v[23] + v[25] * v[25] + v[31] * v[31]))
-        + 0.5 * ((Iyy * v[10] - v[7] * Iyz - Ixy * v[1]) * v[10])
-        + (0.5 * (v[32] * v[32]) + 0.5 * (v[35] * v[35]) + 0.5 * (v[36] * v[36])
-            + 0.5 * (v[37] * v[37])) * J2
-        + 0.5 * ((v[38] * v[38] + v[41] * v[41] + v[42] * v[42]) * m1)
-        + (0.5 * (v[43] * v[43]) + 0.5 * (v[44] * v[44])) * J1
-}
-#[allow(non_snake_case)]
-#[inline(never)]
-fn energy_part0(
     _t: f64,
     q: &[f64; NUM_COORDINATES],
     qdot: &[f64; NUM_COORDINATES],
     params: &Params,
-    v: &mut [f64; 45],
-) {
+) -> f64 {
     let psi = q[0];
     let theta = q[1];
     let phi = q[2];
@@ -286,88 +250,67 @@ fn energy_part0(
     let X_dot = qdot[5];
     let Y_dot = qdot[6];
     let Z_dot = qdot[7];
+    let m0 = params.m0;
+    let Ixx = params.Ixx;
+    let Iyy = params.Iyy;
+    let Izz = params.Izz;
+    let Ixy = params.Ixy;
+    let Ixz = params.Ixz;
+    let Iyz = params.Iyz;
+    let m1 = params.m1;
+    let m2 = params.m2;
     let d = params.d;
     let a = params.a;
-    v[0] = f64::sin(theta);
-    v[1] = phi_dot - v[0] * psi_dot;
-    v[2] = f64::cos(theta);
-    v[3] = f64::cos(phi);
-    v[4] = v[2] * psi_dot * v[3];
-    v[5] = f64::sin(phi);
-    v[6] = theta_dot * v[5];
-    v[7] = v[4] - v[6];
-    v[8] = theta_dot * v[3];
-    v[9] = v[2] * psi_dot * v[5];
-    v[10] = v[8] + v[9];
-    v[11] = f64::cos(psi);
-    v[12] = f64::sin(gamma2);
-    v[13] = f64::cos(gamma2);
-    v[14] = a * v[0];
-    v[15] = v[14] - (-v[2] * v[12] * v[3] - v[13] * v[0]) * d;
-    v[16] = f64::sin(psi);
-    v[17] = v[3] * v[16];
-    v[18] = v[0] * v[11] * v[5];
-    v[19] = v[5] * v[16] + v[0] * v[11] * v[3];
-    v[20] = a * v[2] * v[16];
-    v[21] = v[11] * v[5];
-    v[22] = v[0] * v[3] * v[16];
-    v[23] = theta_dot * v[11] * v[15] + X_dot
-        + (v[12] * phi_dot * (v[17] - v[18])
-            - gamma2_dot * (-v[11] * v[2] * v[12] - v[13] * v[19])) * d
-        + psi_dot * (v[20] - (-v[13] * v[2] * v[16] - (v[21] - v[22]) * v[12]) * d);
-    v[24] = a * theta_dot * v[2];
-    v[25] = Z_dot
-        + d
-            * (v[0] * (-gamma2_dot - v[8]) * v[12]
-                + (v[13] * (gamma2_dot * v[3] + theta_dot) - v[12] * v[5] * phi_dot)
-                    * v[2]) + v[24];
-    v[26] = a * v[11] * v[2];
-    v[27] = v[11] * v[3];
-    v[28] = v[0] * v[5] * v[16];
-    v[29] = -v[27] - v[28];
-    v[30] = v[22] - v[21];
-    v[31] = psi_dot * (-d * (v[13] * v[11] * v[2] - v[12] * v[19]) - v[26])
-        + theta_dot * v[15] * v[16] + Y_dot
-        + (v[12] * v[29] * phi_dot
-            - gamma2_dot * (-v[2] * v[12] * v[16] - v[13] * v[30])) * d;
-    v[32] = gamma2_dot + v[8] + v[9];
-    v[33] = f64::cos(gamma1);
-    v[34] = f64::sin(gamma1);
-    v[35] = v[33] * v[10] - v[34] * v[1];
-    v[36] = v[4] + gamma1_dot - v[6];
-    v[37] = v[12] * v[1] + v[13] * v[7];
-    v[38] = Z_dot - v[24]
-        + (v[34] * (v[0] * (gamma1_dot - v[6]) + v[2] * phi_dot * v[3])
-            + v[33] * v[2] * (gamma1_dot * v[5] - theta_dot)) * d;
-    v[39] = v[18] - v[17];
-}
-#[allow(non_snake_case)]
-#[inline(never)]
-fn energy_part1(
-    _t: f64,
-    _q: &[f64; NUM_COORDINATES],
-    qdot: &[f64; NUM_COORDINATES],
-    params: &Params,
-    v: &mut [f64; 45],
-) {
-    let psi_dot = qdot[0];
-    let theta_dot = qdot[1];
-    let phi_dot = qdot[2];
-    let gamma1_dot = qdot[3];
-    let X_dot = qdot[5];
-    let Y_dot = qdot[6];
-    let d = params.d;
-    v[40] = (v[34] * v[2] * v[5] - v[33] * v[0]) * d - v[14];
-    v[41] = (d * (v[34] * v[29] - v[33] * v[2] * v[16]) - v[20]) * psi_dot + X_dot
-        + ((v[33] * v[39] - v[11] * v[34] * v[2]) * gamma1_dot + v[34] * v[19] * phi_dot)
-            * d + theta_dot * v[11] * v[40];
-    v[42] = d
-        * (v[34] * phi_dot * v[30]
-            + (v[33] * (v[27] + v[28]) - v[34] * v[2] * v[16]) * gamma1_dot) + Y_dot
-        + theta_dot * v[40] * v[16]
-        + psi_dot * (d * (v[39] * v[34] + v[33] * v[11] * v[2]) + v[26]);
-    v[43] = v[34] * v[10] + v[33] * v[1];
-    v[44] = v[13] * v[1] - v[7] * v[12];
+    let J1 = params.J1;
+    let J2 = params.J2;
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::sin(theta);
+    let x2 = f64::cos(theta);
+    let x3 = f64::sin(psi);
+    let x4 = f64::cos(psi);
+    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
+    let x6 = f64::sin(gamma1);
+    let x7 = f64::sin(phi);
+    let x8 = Z_dot * x2 * x7;
+    let x9 = f64::cos(phi);
+    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
+    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
+    let x12 = x2 * psi_dot * x9;
+    let x13 = theta_dot * x7;
+    let x14 = x12 - x13;
+    let x15 = a * x14;
+    let x16 = x8 + x10 + x11 + x15;
+    let x17 = x0 * x5 + x6 * x16;
+    let x18 = x12 + gamma1_dot - x13;
+    let x19 = x0 * x16 - x5 * x6 + x18 * d;
+    let x20 = theta_dot * x9;
+    let x21 = x2 * psi_dot * x7;
+    let x22 = x20 + x21;
+    let x23 = a * x22;
+    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
+    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
+    let x26 = Z_dot * x2 * x9;
+    let x27 = phi_dot - x1 * psi_dot;
+    let x28 = x0 * x22 - x6 * x27;
+    let x29 = x24 - x23 + x25 + x26 - d * x28;
+    let x30 = gamma2_dot + x20 + x21;
+    let x31 = f64::sin(gamma2);
+    let x32 = f64::cos(gamma2);
+    let x33 = x23 + x24 + x25 + x26;
+    let x34 = x30 * d + x5 * x31 + x32 * x33;
+    let x35 = x31 * x27 + x32 * x14;
+    let x36 = x8 + x10 + x11 - x35 * d - x15;
+    let x37 = x5 * x32 - x33 * x31;
+    let x38 = x6 * x22 + x0 * x27;
+    let x39 = x32 * x27 - x14 * x31;
+    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
+        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
+        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
+        + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
+        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
+        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
+        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
+            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -405,52 +348,65 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a = params.a;
-    let x0 = f64::cos(gamma1);
+    let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
-    let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-    let x3 = f64::sin(theta);
-    let x4 = f64::sin(gamma2);
-    let x5 = f64::cos(phi);
-    let x6 = m2 * x4 * x5;
-    let x7 = f64::sin(gamma1);
-    let x8 = f64::sin(phi);
-    let x9 = x7 * x8 * m1;
-    let x10 = f64::cos(theta);
-    let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-    let x12 = f64::cos(psi);
-    let x13 = f64::sin(psi);
-    let x14 = a * x10 * x13;
-    let x15 = x12 * x8;
-    let x16 = x3 * x5 * x13;
-    let x17 = x12 * x5;
-    let x18 = x3 * x8 * x13;
-    let x19 = -x17 - x18;
-    let x20 = x8 * x13 + x3 * x12 * x5;
-    let x21 = x5 * x13;
-    let x22 = x3 * x12 * x8;
-    let x23 = x22 - x21;
-    let x24 = m2 + m0 + m1;
-    let x25 = a * x12 * x10;
-    let x26 = x16 - x15;
+    let x2 = f64::cos(psi);
+    let x3 = f64::cos(theta);
+    let x4 = f64::sin(phi);
+    let x5 = f64::sin(psi);
+    let x6 = f64::sin(theta);
+    let x7 = f64::cos(phi);
+    let x8 = x4 * x5 + x6 * x2 * x7;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a;
+    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a;
+    let x18 = -x17 - d;
+    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
-        theta_dot * x11 * x12
-            + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-            + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d + X_dot * x24,
-        Y_dot * x24 + theta_dot * x11 * x13
-            + psi_dot
-                * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                    + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+        theta_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                    - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                    + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-        (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-            + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-            + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-            + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
+        theta_dot
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
+            + psi_dot
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+        theta_dot
+            * (m2
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                + m1
+                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -524,292 +480,119 @@ pub mod lagrange {
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 257];
+        let mut v = [0.0f64; 202];
         rhs_part0(t, state, params, g_i, dstate, &mut v);
         rhs_part1(t, state, params, g_i, dstate, &mut v);
         rhs_part2(t, state, params, g_i, dstate, &mut v);
         rhs_part3(t, state, params, g_i, dstate, &mut v);
         rhs_part4(t, state, params, g_i, dstate, &mut v);
         rhs_part5(t, state, params, g_i, dstate, &mut v);
-        rhs_part6(t, state, params, g_i, dstate, &mut v);
         let mut matrix: [[f64; 8]; 8] = [
             [
-                (v[7] * v[7] + v[13] * v[13]) * J1 + m2 * (v[23] * v[23] + v[29] * v[29])
-                    + (v[34] * v[34] + v[41] * v[41]) * m1
+                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
+                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
+                    + (v[18] * v[18] + v[20] * v[20]) * J1
                     + J2
-                        * (v[0] * v[0] * (v[42] + v[43]) + v[46] * v[46] + v[47] * v[47])
-                    - v[5] * (v[51] - v[48]) + v[0] * (v[56] + v[61]),
-                v[80],
-                v[87],
-                v[89],
-                v[92],
-                v[93],
-                v[94],
+                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
+                            + v[5] * v[5]) - v[3] * (v[22] - v[21])
+                    + v[1]
+                        * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
+                            + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
+                v[30],
+                v[31],
+                v[32],
+                v[34],
+                v[45],
+                v[54],
                 0.0,
             ],
             [
-                v[80],
-                a * (2.0 * (v[11] * d * m1) + a * (m2 + m1)) + J2
-                    + v[4] * (v[64] + 2.0 * v[65]) + v[68] + Izz
-                    + (v[79] * v[2] + 2.0 * v[58]) * v[2] + J1,
-                v[98],
-                v[100],
-                v[101],
-                v[108],
-                v[109],
-                v[111],
+                v[30],
+                J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
+                    + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
+                    + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
+                    + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
+                    + ((v[9] + v[29] * v[29]) * v[2] * v[2]
+                        + v[28] * v[28] * v[10] * v[10]) * m1,
+                v[58],
+                v[59],
+                v[60],
+                v[61],
+                v[62],
+                v[63],
             ],
             [
-                v[87],
-                v[98],
-                Ixx + d * d * (v[112] + v[78]) + (v[75] + v[77]) * J1
-                    + J2 * (2.0 - v[75] - v[77]),
+                v[31],
+                v[58],
+                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
+                    + (v[55] + v[56]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
                 0.0,
                 0.0,
-                v[115],
-                v[117],
-                v[121],
+                v[64],
+                v[65],
+                v[66],
             ],
-            [v[89], v[100], 0.0, J2 + v[68], 0.0, v[123], v[127], v[128]],
-            [v[92], v[101], 0.0, 0.0, v[62] + J2, v[130], v[133], v[134]],
-            [v[93], v[108], v[115], v[123], v[130], v[135], 0.0, 0.0],
-            [v[94], v[109], v[117], v[127], v[133], 0.0, v[135], 0.0],
-            [0.0, v[111], v[121], v[128], v[134], 0.0, 0.0, v[135]],
+            [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
+            [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
+            [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
+            [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
+            [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
         ];
         let mut force: [f64; 8] = [
-            0.5
-                * (m1
-                    * (2.0
-                        * ((theta_dot * v[138] * v[16]
-                            + d * (v[139] * gamma1_dot + v[28] * v[8] * phi_dot)
-                            + v[141] * psi_dot) * v[146])
-                        + 2.0 * (v[147] * (v[142] + v[143] + v[145]))))
-                - psi_dot
-                    * (X_dot * v[151] + Y_dot * v[93]
-                        + psi_dot
-                            * (v[34] * m1 * (2.0 * v[40] + 2.0 * v[140])
-                                + m2 * v[29] * (-2.0 * v[149] - 2.0 * v[21])))
-                - (v[5] * (v[153] + v[154]) + v[14] * Y_dot * v[156] + v[158] * phi_dot
-                    + v[160] * X_dot * v[16] + theta_dot * v[162]
-                    + ((2.0 * (v[46] * v[163]) + 2.0 * (v[47] * v[164])) * J2
-                        + m1
-                            * (2.0 * (v[34] * v[138] * v[16])
-                                + 2.0 * (v[14] * v[144] * v[41]))
-                        + m2
-                            * (2.0 * (v[14] * v[155] * v[23])
-                                + 2.0 * (v[159] * v[29] * v[16]))
-                        + (2.0 * (v[13] * v[165]) + 2.0 * (v[166] * v[7])) * J1
-                        + v[0] * (v[48] - v[51] + v[9] * v[167] + v[168] * v[2])
-                        + v[5]
-                            * (v[169] - v[56] - v[61]
-                                + (-2.0 * v[42] - 2.0 * v[43]) * J2 * v[0] - v[170]))
-                        * psi_dot) * theta_dot
-                - (theta_dot * v[172] * v[2]
-                    + psi_dot
-                        * ((2.0 * (J2 * v[136]) + 2.0 * (v[13] * J1)) * v[47]
-                            + (2.0 * (v[122] * v[41]) + 2.0 * (v[34] * v[139])) * d * m1)
-                    + d * (v[173] - a * v[8] * v[0] * gamma1_dot * v[2] + v[174]) * m1
-                    + v[175] * phi_dot) * gamma1_dot
-                - gamma2_dot
-                    * (v[177] * theta_dot * v[9]
-                        + psi_dot
-                            * (v[7] * (2.0 * (v[178] * J1) + 2.0 * (v[46] * J2))
-                                + m2 * (-2.0 * (v[179] * v[29]) - 2.0 * (v[129] * v[23]))
-                                    * d) + v[180] * phi_dot
-                        + m2 * d
-                            * (-a * gamma2_dot * v[0] * v[1] * v[9] - v[181] - v[182]))
-                - (v[184] * d
-                    + psi_dot
-                        * (d
-                            * (v[8] * (2.0 * (v[19] * v[41]) + 2.0 * (v[28] * v[34]))
-                                * m1
-                                + m2 * (2.0 * (v[113] * v[23]) + 2.0 * (v[29] * v[124]))
-                                    * v[1])
-                            + v[0]
-                                * ((2.0 * (v[7] * v[1] * J1) - 2.0 * (v[4] * v[46] * J2)
-                                    - v[59] - v[60] + (Iyy * v[2] + v[58]) * v[0]) * v[9]
-                                    - v[5] * (v[9] * Ixz - Ixy * v[2])
-                                    + (2.0 * (v[11] * J2 * v[47]) + v[0] * (-v[9] * Izz - v[52])
-                                        + v[54] + v[55] + 2.0 * (v[13] * v[8] * J1)) * v[2]))
-                    + theta_dot * v[185]
-                    + (v[98] * phi_dot + gamma1_dot * v[9] * v[99]
-                        + gamma2_dot * v[91] * v[2]) * v[0]) * phi_dot
-                + 0.5
-                    * (m2
-                        * (2.0 * (v[186] * (v[187] + v[188] + v[189]))
-                            + 2.0
-                                * ((d * (v[1] * phi_dot * v[124] - gamma2_dot * v[179])
-                                    + theta_dot * v[159] * v[16] + v[150] * psi_dot)
-                                    * v[190]))),
-            psi_dot
-                * ((v[166] * v[195] + v[201] * v[165]) * J1 + 0.5 * (v[167] * v[198])
-                    + J2 * (v[204] * v[163] + v[164] * v[205])
-                    + 0.5 * ((v[170] - v[169]) * v[191]) + 0.5 * (v[168] * v[194])
-                    - X_dot * v[206] * v[16]
-                    - 0.5 * (v[0] * (Ixx * v[191] - v[194] * Ixz - Ixy * v[198]))
-                    + v[5]
-                        * (J2
-                            * (-(v[192] + gamma1_dot - v[193]) * v[2]
-                                - (gamma2_dot + v[196] + v[197]) * v[9])
-                            - 0.5 * ((v[208] - v[207] - v[209]) * v[9])
-                            - 0.5 * ((v[212] - v[210] - v[211]) * v[2]))
-                    - v[107] * v[14] * Y_dot)
-                - (v[153] + v[217] + v[154]
-                    + theta_dot
-                        * (2.0 * (Iyz * v[2] * v[2])
-                            + ((v[11] * v[11] * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy
-                                + 2.0 * Izz
-                                + (m2 * (2.0 * v[77] - 2.0) + (2.0 - 2.0 * v[75]) * m1) * d
-                                    * d + v[4] * v[4] * (2.0 * J2 - 2.0 * J1)) * v[2]
-                                - 2.0 * v[58]) * v[9]) + psi_dot * v[185]
-                    + phi_dot * v[157]) * phi_dot
-                - (theta_dot
-                    * (v[4] * (v[176] * v[2] * v[2] - 2.0 * v[62] - 2.0 * J2 + 2.0 * J1)
-                        - 2.0 * v[65]) * v[1]
-                    + (v[177] * psi_dot + phi_dot * v[218]) * v[9]
-                    + m2 * d * (v[219] + v[46] * v[215] - a * gamma2_dot * v[1] * v[2]))
-                    * gamma2_dot
-                - theta_dot * (v[111] * v[215] + Z_dot * v[206] + psi_dot * v[162])
-                + 0.5
-                    * (m2
-                        * (2.0 * (v[186] * (v[14] * psi_dot * v[155] + v[221] * v[16]))
-                            + 2.0
-                                * ((v[221] * v[14] + v[159] * psi_dot * v[16]) * v[190])
-                            + 2.0
-                                * (((v[5] * (v[4] * v[223] + v[224]) + v[225] * v[0] * v[1])
-                                    * d - v[226]) * v[228])))
-                + 0.5
-                    * ((2.0 * ((psi_dot * v[138] * v[16] + v[229] * v[14]) * v[146])
-                        + 2.0
-                            * ((d
-                                * (v[5] * (v[11] * v[231] - v[8] * phi_dot * v[2])
-                                    + v[8] * v[0] * v[232]) + v[226]) * v[234])
-                        + 2.0 * (v[147] * (v[14] * psi_dot * v[144] + v[229] * v[16])))
-                        * m1)
-                - ((psi_dot * v[172] + v[235] * phi_dot) * v[2]
-                    + (v[236] + a * v[8] * gamma1_dot * v[9] + v[237]) * d * m1
-                    + theta_dot * v[8] * (v[11] * v[2] * v[2] * v[171] - 2.0 * v[70]))
-                    * gamma1_dot,
-            d
-                * (0.5
-                    * ((2.0
-                        * (v[146]
-                            * ((theta_dot * v[14] * v[0] * v[2] + phi_dot * v[113]
-                                + v[28] * psi_dot) * v[8] + v[11] * gamma1_dot * v[19]))
-                        + 2.0
-                            * (v[234]
-                                * (v[11] * v[0] * gamma1_dot * v[2]
-                                    + v[8] * (-v[238] - v[5] * theta_dot * v[2])))
-                        + 2.0
-                            * ((v[8]
-                                * (psi_dot * v[19] + v[33] * phi_dot
-                                    + theta_dot * v[0] * v[2] * v[16])
-                                + v[11] * gamma1_dot * v[116]) * v[147])) * m1)
-                    - v[184] * psi_dot
-                    + 0.5
-                        * (m2
-                            * (2.0
-                                * ((v[5] * theta_dot * v[1] * v[9]
-                                    + (-v[4] * gamma2_dot * v[9] - v[1] * phi_dot * v[2])
-                                        * v[0]) * v[228])
-                                + 2.0
-                                    * (v[186]
-                                        * (v[4] * gamma2_dot * v[33]
-                                            + (v[28] * phi_dot - theta_dot * v[0] * v[9] * v[16]
-                                                + psi_dot * v[113]) * v[1]))
-                                + 2.0
-                                    * (((psi_dot * v[124] - theta_dot * v[14] * v[0] * v[9]
-                                        + v[148] * phi_dot) * v[1] + v[4] * gamma2_dot * v[113])
-                                        * v[190]))))
-                + v[194]
-                    * (v[201] * v[8] * J1 - v[207]
-                        + J2 * (gamma2_dot + v[196] + v[11] * v[205] + v[197])
-                        + 0.5 * v[208] - 0.5 * v[209] + 0.5 * (v[239] * Izz))
-                - gamma1_dot
-                    * (v[175] * psi_dot + theta_dot * v[235] * v[2]
-                        + v[11]
-                            * (v[240] * d * m1
-                                + (2.0 * J2 + 2.0 * v[68] - 2.0 * J1) * v[8] * phi_dot))
-                + v[239]
-                    * (J2 * (v[192] + v[4] * v[204] + gamma1_dot - v[193]) - 0.5 * v[210]
-                        - 0.5 * v[211] + 0.5 * v[212] - v[195] * v[1] * J1)
-                + 0.5 * (v[191] * (-v[239] * Ixz - v[194] * Ixy))
-                - (v[98] * v[0] * psi_dot
-                    + d * (Z_dot * v[0] * v[110] + X_dot * v[241] + Y_dot * v[242])
-                    + theta_dot * v[157]) * phi_dot
-                - (v[217] + v[158] * psi_dot) * theta_dot
-                - gamma2_dot
-                    * (v[4] * (m2 * d * v[243] + v[1] * phi_dot * v[176])
-                        + theta_dot * v[9] * v[218] + v[180] * psi_dot)
-                + 0.5 * ((v[194] * Iyy - Iyz * v[239]) * v[198]),
-            (v[201] * J1 + (-v[199] - v[200]) * J2) * v[205]
-                - (v[5] * psi_dot * v[99] * v[2] + d * (v[236] + v[237]) * m1)
-                    * theta_dot - (v[99] * v[198] + v[11] * v[240] * d * m1) * phi_dot
-                + d * m1
-                    * (v[147] * v[245]
-                        - (X_dot * v[246] + a * v[8] * (v[193] - v[192]) + Z_dot * v[136]
-                            + Y_dot * v[244]) * gamma1_dot
-                        + v[234] * (v[231] * v[8] * v[0] + v[11] * v[233])
-                        + v[247] * v[146] - psi_dot * (v[173] + v[174])),
-            v[195] * (J2 * v[204] + (-v[202] - v[203]) * J1)
-                - phi_dot
-                    * (theta_dot * v[9] * v[152] + v[0] * v[91] * psi_dot * v[2]
-                        + v[4] * m2 * d * v[243])
-                + m2 * d
-                    * (v[190] * (v[248] - v[250] - theta_dot * v[14] * v[178] - v[251])
-                        - (-v[181] - v[182]) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * v[7] - X_dot * v[249] + a * v[239] * v[1]
-                                - v[252] * Y_dot)
-                        + v[186]
-                            * (v[255] - v[253] - v[254] - theta_dot * v[178] * v[16])
-                        + (v[223] * v[0] * v[1] + v[4] * (v[5] * v[225] - v[238]))
-                            * v[228])
-                - (v[5] * psi_dot * v[9] * v[152]
-                    + m2 * d * ((-v[213] - v[214]) * v[178] + v[219])) * theta_dot,
-            (-m2 * gamma2_dot * (theta_dot * v[46] * v[14] + v[248] - v[250] - v[251])
-                - v[247] * gamma1_dot * m1
-                - phi_dot
-                    * (v[241] * phi_dot + v[11] * gamma1_dot * v[19] * m1
-                        + v[4] * m2 * gamma2_dot * v[113]
-                        + theta_dot * v[120] * v[14] * v[0] + psi_dot * v[183])) * d
-                - ((phi_dot * v[183] - m2 * gamma2_dot * v[179]
-                    + v[139] * gamma1_dot * m1) * d + theta_dot * v[206] * v[16]
-                    + v[151] * psi_dot) * psi_dot
-                - theta_dot * (v[160] * psi_dot * v[16] + v[14] * v[256]),
-            (-v[245] * gamma1_dot * m1
-                - m2 * gamma2_dot
-                    * (theta_dot * v[46] * v[16] - v[253] - v[254] + v[255])
-                - (theta_dot * v[120] * v[0] * v[16] + v[11] * gamma1_dot * v[116] * m1
-                    + v[114] * psi_dot + v[242] * phi_dot
-                    + v[4] * m2 * gamma2_dot * v[33]) * phi_dot) * d
-                - psi_dot
-                    * (theta_dot * v[107] * v[14] + v[93] * psi_dot
-                        + (v[122] * gamma1_dot * m1 - m2 * gamma2_dot * v[129]
-                            + v[114] * phi_dot) * d)
-                - theta_dot * (v[14] * psi_dot * v[156] + v[256] * v[16]),
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * v[7] + theta_dot * v[163]
-                        - v[4] * v[0] * v[9] * phi_dot)
-                    - (v[216] * v[5] * theta_dot
-                        + v[0]
-                            * (v[11] * gamma1_dot * m1 * v[2] + phi_dot * v[110]
-                                - v[4] * m2 * gamma2_dot * v[9])) * phi_dot
-                    - (theta_dot * v[164] + gamma1_dot * v[136]
-                        + v[11] * v[0] * phi_dot * v[2]) * gamma1_dot * m1)
-                - theta_dot
-                    * (theta_dot * v[206]
-                        + d
-                            * (gamma1_dot * v[164] * m1 + v[216] * v[5] * phi_dot
-                                + m2 * gamma2_dot * v[163])),
+            ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
+                + v[2] * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
+                * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
+                + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
+                - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
+                - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
+            v[2]
+                * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168] - v[93]
+                    - v[97] - v[98] + v[100])
+                - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
+                - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
+                + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105] - v[0] * v[118]
+                    + v[106] - v[107] - v[110]) * v[10],
+            (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
+                + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
+                + (m2 * v[172] * d - v[165] - v[167]) * v[11],
+            J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
+            v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
+            -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
+                - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
+            -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
+                - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
+            -m2
+                * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
+                    * phi_dot * phi_dot
+                    + (theta_dot * v[186]
+                        + phi_dot
+                            * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
+                                + 0.5 * v[185] - v[190])) * theta_dot
+                    + gamma2_dot
+                        * (phi_dot
+                            * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184] - 0.5 * v[185])
+                            + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
+                                - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
+                                - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
+                - (v[179]
+                    + (theta_dot
+                        * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
+                            + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
+                            + theta_dot * v[201]
+                            + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199] + 0.5 * v[200])
+                                * phi_dot)
+                        + gamma1_dot
+                            * (v[201] * gamma1_dot
+                                + phi_dot
+                                    * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
+                                        - 0.5 * v[199] - 0.5 * v[200]))
+                        + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + 0.25 * v[200])
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -849,66 +632,13 @@ pub mod lagrange {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let d = params.d;
-        let a = params.a;
-        v[0] = f64::cos(theta);
-        v[1] = f64::sin(gamma2);
-        v[2] = f64::cos(phi);
-        v[3] = v[0] * v[1] * v[2];
-        v[4] = f64::cos(gamma2);
-        v[5] = f64::sin(theta);
-        v[6] = v[4] * v[5];
-        v[7] = -v[3] - v[6];
-        v[8] = f64::sin(gamma1);
-        v[9] = f64::sin(phi);
-        v[10] = v[8] * v[0] * v[9];
-        v[11] = f64::cos(gamma1);
-        v[12] = v[11] * v[5];
-        v[13] = v[10] - v[12];
-        v[14] = f64::cos(psi);
-        v[15] = v[4] * v[14] * v[0];
-        v[16] = f64::sin(psi);
-        v[17] = v[9] * v[16];
-        v[18] = v[5] * v[14] * v[2];
-        v[19] = v[17] + v[18];
-        v[20] = v[1] * v[19];
-        v[21] = d * (v[15] - v[20]);
-        v[22] = a * v[14] * v[0];
-        v[23] = -v[21] - v[22];
-        v[24] = a * v[0] * v[16];
-        v[25] = v[4] * v[0] * v[16];
-        v[26] = v[14] * v[9];
-        v[27] = v[5] * v[2] * v[16];
-        v[28] = v[26] - v[27];
-        v[29] = v[24] - (-v[25] - v[28] * v[1]) * d;
-        v[30] = v[11] * v[0] * v[16];
-        v[31] = v[14] * v[2];
-        v[32] = v[5] * v[9] * v[16];
-        v[33] = -v[31] - v[32];
-        v[34] = d * (v[8] * v[33] - v[30]) - v[24];
-        v[35] = v[2] * v[16];
-        v[36] = v[5] * v[14] * v[9];
-        v[37] = v[36] - v[35];
-        v[38] = v[37] * v[8];
-        v[39] = v[11] * v[14] * v[0];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
-    ) {
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -921,110 +651,188 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = d * (v[38] + v[39]);
-        v[41] = v[40] + v[22];
-        v[42] = v[2] * v[2];
-        v[43] = v[9] * v[9];
-        v[44] = v[5] * v[1];
-        v[45] = v[4] * v[0] * v[2];
-        v[46] = v[45] - v[44];
-        v[47] = v[11] * v[0] * v[9] + v[5] * v[8];
-        v[48] = v[5] * Ixx;
-        v[49] = Ixy * v[9];
-        v[50] = Ixz * v[2];
-        v[51] = v[0] * (-v[49] - v[50]);
-        v[52] = Iyz * v[2];
-        v[53] = Iyy * v[9];
-        v[54] = (v[53] - v[52]) * v[0];
-        v[55] = v[5] * Ixy;
-        v[56] = (v[54] + v[55]) * v[9];
-        v[57] = Izz * v[2];
-        v[58] = Iyz * v[9];
-        v[59] = v[0] * (v[57] - v[58]);
-        v[60] = v[5] * Ixz;
-        v[61] = (v[59] + v[60]) * v[2];
-        v[62] = m2 * d * d;
-        v[63] = v[62] + J2 - J1;
-        v[64] = v[4] * v[63];
-        v[65] = m2 * a * d;
-        v[66] = v[64] + v[65];
-        v[67] = v[66] * v[1] - Ixz;
-        v[68] = d * d * m1;
-        v[69] = J2 + v[68] - J1;
-        v[70] = a * d * m1;
-        v[71] = v[11] * v[69] + v[70];
-        v[72] = Ixy + v[8] * v[71];
-        v[73] = J2 - J1;
-        v[74] = J1 - J2;
-        v[75] = v[11] * v[11];
-        v[76] = (v[75] - 1.0) * m1;
-        v[77] = v[4] * v[4];
-        v[78] = m2 * (1.0 - v[77]);
-        v[79] = Iyy + v[11] * v[11] * v[73] + v[4] * v[4] * v[74]
-            + d * d * (v[76] + v[78]) - Izz;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = -v[5] * d - a * v[1] * v[2];
+        v[7] = v[0] * a;
+        v[8] = v[7] + d;
+        v[9] = a * a * v[4] * v[4];
+        v[10] = f64::cos(phi);
+        v[11] = f64::sin(gamma2);
+        v[12] = f64::cos(gamma2);
+        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
+        v[14] = -a * v[1] * v[10] - v[13] * d;
+        v[15] = d + v[12] * a;
+        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
+        v[17] = v[12] * v[3];
+        v[18] = -v[1] * v[11] * v[10] - v[17];
+        v[19] = v[0] * v[3];
+        v[20] = v[4] * v[1] * v[2] - v[19];
+        v[21] = v[3] * Ixx;
+        v[22] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
+        v[23] = Iyz * v[10];
+        v[24] = Iyz * v[2];
+        v[25] = a + v[12] * d;
+        v[26] = Iyy * v[10];
+        v[27] = v[2] * Izz;
+        v[28] = -a - v[0] * d;
+        v[29] = -v[7] - d;
+        v[30] = v[2]
+            * (m2 * (v[1] * v[16] * v[10] + v[25] * v[14]) - v[12] * v[13] * J2
+                + v[18] * v[11] * J1 + (v[26] + v[24]) * v[1])
+            - v[3] * (v[2] * Ixz - Ixy * v[10])
+            + (v[0] * J2 * v[5] + v[1] * (-v[27] - v[23]) + v[20] * v[4] * J1
+                + (v[28] * v[6] + v[1] * v[2] * (v[8] * v[29] - v[9])) * m1) * v[10];
+        v[31] = v[22] - v[21] + (v[0] * v[20] + v[12] * v[18]) * J1
+            + (v[13] * v[11] - v[5] * v[4]) * J2
+            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
+        v[32] = v[1] * (d * v[8] * m1 + J2) * v[10];
+        v[33] = J2 + m2 * d * v[15];
+        v[34] = v[1] * v[33] * v[2];
+        v[35] = f64::cos(psi);
+        v[36] = f64::sin(psi);
+        v[37] = v[3] * v[35] * v[2] - v[10] * v[36];
+        v[38] = v[0] * v[37] - v[35] * v[4] * v[1];
+        v[39] = v[37] * v[4] + v[0] * v[35] * v[1];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
-    fn rhs_part2(
+    fn rhs_part1(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let Ixx = params.Ixx;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[5] * v[67] * v[9] + Iyz * v[0]
-            + (v[5] * v[72] + (v[79] * v[9] - 2.0 * v[52]) * v[0]) * v[2];
-        v[81] = J1 - J2 - v[68];
-        v[82] = v[11] * v[81] - v[70];
-        v[83] = v[8] * v[82] - Ixy;
-        v[84] = v[83] * v[9] + v[67] * v[2];
-        v[85] = m2 * (v[77] - 1.0);
-        v[86] = (v[85] + v[76]) * d * d - Ixx + (v[75] + v[77] - 2.0) * J2
-            + (-v[75] - v[77]) * J1;
-        v[87] = v[0] * v[84] + v[5] * v[86];
-        v[88] = v[11] * a;
-        v[89] = v[0] * (d * (v[88] + d) * m1 + J2) * v[2];
-        v[90] = v[4] * a;
-        v[91] = J2 + m2 * d * (d + v[90]);
-        v[92] = v[0] * v[91] * v[9];
-        v[93] = m2 * v[29] + v[34] * m1;
-        v[94] = m1 * v[41] + m2 * v[23];
-        v[95] = J1 - v[62] - J2;
-        v[96] = v[4] * v[95] - v[65];
-        v[97] = v[96] * v[1] + Ixz;
-        v[98] = v[83] * v[2] + v[9] * v[97];
-        v[99] = d * (-v[88] - d) * m1 - J2;
-        v[100] = v[9] * v[99];
-        v[101] = v[91] * v[2];
-        v[102] = v[11] * d;
-        v[103] = v[4] * d;
-        v[104] = (-a - v[102]) * m1 + m2 * (a + v[103]);
-        v[105] = m2 * v[1] * v[2];
-        v[106] = v[8] * v[9] * m1;
-        v[107] = v[104] * v[5] + (v[105] + v[106]) * v[0] * d;
-        v[108] = v[107] * v[14];
-        v[109] = v[107] * v[16];
-        v[110] = -v[105] - v[106];
-        v[111] = v[5] * d * v[110] + v[104] * v[0];
-        v[112] = m1 * (1.0 - v[75]);
-        v[113] = v[35] - v[36];
-        v[114] = v[8] * v[19] * m1 + m2 * v[1] * v[113];
-        v[115] = v[114] * d;
-        v[116] = v[27] - v[26];
-        v[117] = d * (m2 * v[1] * v[33] + v[8] * v[116] * m1);
-        v[118] = v[8] * m1 * v[2];
-        v[119] = m2 * v[1] * v[9];
+        v[40] = a * v[4] * v[39];
+        v[41] = v[2] * v[36] + v[3] * v[35] * v[10];
+        v[42] = v[12] * v[35] * v[1] - v[11] * v[41];
+        v[43] = v[35] * v[1] * v[11] + v[12] * v[41];
+        v[44] = v[43] * v[15] - a * v[11] * v[42];
+        v[45] = m1 * (v[1] * (v[38] * v[8] + v[40]) * v[10] + v[41] * v[6])
+            + m2 * (v[1] * v[44] * v[2] + v[37] * v[14]);
+        v[46] = v[35] * v[10] + v[3] * v[2] * v[36];
+        v[47] = v[0] * v[46] - v[4] * v[1] * v[36];
+        v[48] = v[0] * v[1] * v[36] + v[4] * v[46];
+        v[49] = a * v[4] * v[48];
+        v[50] = v[3] * v[10] * v[36] - v[35] * v[2];
+        v[51] = v[12] * v[1] * v[36] - v[11] * v[50];
+        v[52] = v[1] * v[11] * v[36] + v[12] * v[50];
+        v[53] = v[52] * v[15] - a * v[51] * v[11];
+        v[54] = m1 * (v[1] * (v[47] * v[8] + v[49]) * v[10] + v[50] * v[6])
+            + m2 * (v[1] * v[2] * v[53] + v[46] * v[14]);
+        v[55] = v[0] * v[0];
+        v[56] = v[12] * v[12];
+        v[57] = J1 - J2;
+        v[58] = ((v[0] * v[57] + v[28] * d * m1) * v[4] - Ixy) * v[10]
+            + v[2] * ((v[12] * v[57] - m2 * d * v[25]) * v[11] + Ixz);
+        v[59] = v[2] * (d * v[29] * m1 - J2);
+        v[60] = v[33] * v[10];
+        v[61] = m2 * (v[44] * v[10] + v[37] * v[25] * v[2])
+            + m1 * (v[2] * (v[38] * v[29] - v[40]) + v[28] * v[41] * v[10]);
+        v[62] = m2 * (v[53] * v[10] + v[25] * v[2] * v[46])
+            + (v[28] * v[50] * v[10] + (v[47] * v[29] - v[49]) * v[2]) * m1;
+        v[63] = m2
+            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a * v[18] * v[11]) * v[10])
+            + m1
+                * ((v[5] * v[29] - a * v[20] * v[4]) * v[2]
+                    + v[28] * v[1] * v[10] * v[10]);
+        v[64] = d * (v[4] * v[41] * m1 - m2 * v[37] * v[11]);
+        v[65] = (v[4] * v[50] * m1 - m2 * v[11] * v[46]) * d;
+        v[66] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
+        v[67] = v[38] * d * m1;
+        v[68] = v[47] * d * m1;
+        v[69] = v[5] * d * m1;
+        v[70] = m2 * d * v[43];
+        v[71] = m2 * d * v[52];
+        v[72] = m2 * v[13] * d;
+        v[73] = m2 + m0 + m1;
+        v[74] = theta_dot * v[1] * psi_dot * Ixz;
+        v[75] = v[1] * psi_dot * v[10];
+        v[76] = theta_dot * v[2];
+        v[77] = v[75] - v[76];
+        v[78] = theta_dot * v[10];
+        v[79] = v[1] * psi_dot * v[2];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part2(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        v: &mut [f64; 202],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = v[78] + v[79];
+        v[81] = v[3] * psi_dot;
+        v[82] = phi_dot - v[81];
+        v[83] = Iyy * v[80] - v[77] * Iyz - Ixy * v[82];
+        v[84] = v[83] * v[82];
+        v[85] = -phi_dot - v[81];
+        v[86] = theta_dot * v[85] * v[10];
+        v[87] = v[4] * v[80] + v[0] * v[82];
+        v[88] = v[0] * v[80] - v[4] * v[82];
+        v[89] = v[87] * v[88];
+        v[90] = v[1] * psi_dot * v[2] * phi_dot;
+        v[91] = J2 * (v[86] + v[89] - v[90]);
+        v[92] = Ixx * v[82] - v[77] * Ixz - Ixy * v[80];
+        v[93] = v[80] * v[92];
+        v[94] = theta_dot * v[85] * v[2];
+        v[95] = v[1] * psi_dot * phi_dot * v[10];
+        v[96] = v[94] + v[95];
+        v[97] = Iyz * v[96];
+        v[98] = v[87] * v[88] * J1;
+        v[99] = v[86] - v[90];
+        v[100] = v[99] * Izz;
+        v[101] = v[77] * v[92];
+        v[102] = Iyy * v[96];
+        v[103] = v[77] * Izz - Iyz * v[80] - Ixz * v[82];
+        v[104] = v[103] * v[82];
+        v[105] = Ixy * theta_dot * v[1] * psi_dot;
+        v[106] = v[99] * Iyz;
+        v[107] = J2 * v[96];
+        v[108] = v[12] * v[82] - v[77] * v[11];
+        v[109] = v[11] * v[82] + v[12] * v[77];
+        v[110] = v[108] * v[57] * v[109];
+        v[111] = v[75] + gamma1_dot - v[76];
+        v[112] = v[111] * v[57] * v[87];
+        v[113] = v[94] + v[95] - gamma1_dot * v[82];
+        v[114] = gamma1_dot * v[80];
+        v[115] = theta_dot * v[1] * psi_dot;
+        v[116] = v[0] * v[113] + v[4] * (v[115] - v[114]);
+        v[117] = J2 * v[116];
+        v[118] = v[112] + v[117];
+        v[119] = gamma2_dot * v[82];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1034,7 +842,7 @@ pub mod lagrange {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
@@ -1043,53 +851,58 @@ pub mod lagrange {
         let gamma2_dot = state[12];
         let X_dot = state[13];
         let Y_dot = state[14];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let d = params.d;
         let a = params.a;
-        let J2 = params.J2;
-        v[120] = v[118] - v[119];
-        v[121] = v[120] * v[0] * d;
-        v[122] = v[11] * v[37] - v[14] * v[8] * v[0];
-        v[123] = v[122] * d * m1;
-        v[124] = v[31] + v[32];
-        v[125] = v[8] * v[0] * v[16];
-        v[126] = v[11] * v[124] - v[125];
-        v[127] = v[126] * d * m1;
-        v[128] = v[47] * d * m1;
-        v[129] = -v[14] * v[0] * v[1] - v[4] * v[19];
-        v[130] = -(m2 * v[129] * d);
-        v[131] = v[0] * v[1] * v[16];
-        v[132] = -v[131] - v[4] * v[116];
-        v[133] = -(m2 * d * v[132]);
-        v[134] = m2 * v[46] * d;
-        v[135] = m2 + m0 + m1;
-        v[136] = v[12] - v[10];
-        v[137] = a * v[5];
-        v[138] = d * v[136] + v[137];
-        v[139] = v[11] * v[33] + v[125];
-        v[140] = (v[8] * v[113] - v[39]) * d;
-        v[141] = v[140] - v[22];
-        v[142] = v[34] * psi_dot;
-        v[143] = (v[122] * gamma1_dot + v[8] * v[19] * phi_dot) * d;
-        v[144] = v[13] * d - v[137];
-        v[145] = theta_dot * v[14] * v[144];
-        v[146] = v[142] + X_dot + v[143] + v[145];
-        v[147] = d * (v[8] * phi_dot * v[116] + v[126] * gamma1_dot) + Y_dot
-            + theta_dot * v[144] * v[16] + psi_dot * v[41];
-        v[148] = -v[17] - v[18];
-        v[149] = d * (-v[15] - v[148] * v[1]);
-        v[150] = v[22] - v[149];
-        v[151] = m2 * v[150] + v[141] * m1;
-        v[152] = m2 * d * (-d - v[90]) - J2;
-        v[153] = gamma2_dot * v[9] * v[152];
-        v[154] = gamma1_dot * v[99] * v[2];
-        v[155] = v[137] - v[7] * d;
-        v[156] = m1 * v[144] + m2 * v[155];
-        v[157] = v[2] * v[97] + v[72] * v[9];
-        v[158] = v[0] * v[86] + v[5] * v[157];
-        v[159] = -d * (v[3] + v[6]) - v[137];
+        v[120] = -v[77] * gamma2_dot - v[115];
+        v[121] = v[11] * (v[90] - v[86] - v[119]) + v[12] * v[120];
+        v[122] = v[0] * (v[114] - v[115]) + v[113] * v[4];
+        v[123] = theta_dot * Ixx * v[1] * psi_dot;
+        v[124] = v[103] * v[80];
+        v[125] = v[99] * Ixz;
+        v[126] = v[77] * v[83];
+        v[127] = Ixy * v[96];
+        v[128] = Z_dot * v[1] * v[2];
+        v[129] = v[37] * X_dot;
+        v[130] = Y_dot * v[46];
+        v[131] = a * v[77];
+        v[132] = v[128] + v[129] + v[130] + v[131];
+        v[133] = Y_dot * v[36];
+        v[134] = X_dot * v[35];
+        v[135] = v[1] * (v[133] + v[134]) - Z_dot * v[3];
+        v[136] = v[0] * v[132] - v[135] * v[4] + v[111] * d;
+        v[137] = a * v[80];
+        v[138] = Y_dot * v[50];
+        v[139] = X_dot * v[41];
+        v[140] = Z_dot * v[1] * v[10];
+        v[141] = v[138] - v[137] + v[139] + v[140] - d * v[88];
+        v[142] = v[1] * psi_dot * (v[35] * Y_dot - X_dot * v[36]);
+        v[143] = gamma1_dot * v[132];
+        v[144] = theta_dot * (v[3] * (-v[133] - v[134]) - Z_dot * v[1]);
+        v[145] = theta_dot * v[1] * v[36] + v[35] * (v[81] - phi_dot);
+        v[146] = v[3] * phi_dot;
+        v[147] = v[146] - psi_dot;
+        v[148] = Y_dot * (v[145] * v[2] + v[147] * v[10] * v[36]);
+        v[149] = v[99] * a;
+        v[150] = Z_dot * (v[1] * phi_dot * v[10] - v[3] * theta_dot * v[2]);
+        v[151] = X_dot
+            * (v[35] * (theta_dot * v[1] * v[2] + v[147] * v[10])
+                + v[2] * v[82] * v[36]);
+        v[152] = v[148] + v[149] + v[150] + v[151] - v[135] * gamma1_dot;
+        v[153] = v[88] * v[141] - v[136] * v[111] + v[0] * (v[142] + v[143] + v[144])
+            + v[152] * v[4];
+        v[154] = a * v[4] * v[153];
+        v[155] = v[0] * v[135] + v[4] * v[132];
+        v[156] = v[99] * d - v[87] * v[141] + v[4] * (-v[142] - v[143] - v[144])
+            + v[0] * v[152] + v[111] * v[155];
+        v[157] = a * v[96];
+        v[158] = psi_dot - v[146];
+        v[159] = X_dot
+            * (v[82] * v[10] * v[36]
+                + v[35] * (theta_dot * v[1] * v[10] + v[158] * v[2]));
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1099,191 +912,75 @@ pub mod lagrange {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma2_dot = state[12];
-        let X_dot = state[13];
         let Y_dot = state[14];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let Z_dot = state[15];
         let d = params.d;
+        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[160] = v[138] * m1 + m2 * v[159];
-        v[161] = v[9]
-            * ((v[85] + v[112]) * d * d - Iyy + v[4] * v[4] * v[73]
-                + v[11] * v[11] * v[74] + Izz);
-        v[162] = (v[5] * (v[161] + 2.0 * v[52]) + v[72] * v[0]) * v[2] - v[5] * Iyz
-            + v[67] * v[0] * v[9];
-        v[163] = -v[4] * v[5] * v[2] - v[0] * v[1];
-        v[164] = v[8] * v[0] - v[11] * v[5] * v[9];
-        v[165] = -v[5] * v[8] * v[9] - v[11] * v[0];
-        v[166] = v[5] * v[1] * v[2] - v[4] * v[0];
-        v[167] = Ixy * v[0] + v[5] * (v[52] - v[53]);
-        v[168] = v[5] * (v[58] - v[57]) + v[0] * Ixz;
-        v[169] = Ixx * v[0];
-        v[170] = v[5] * (v[49] + v[50]);
-        v[171] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[68];
-        v[172] = v[5] * v[8] * v[8] * v[81]
-            + v[11] * (v[5] * v[71] + v[8] * v[0] * v[9] * v[171]);
-        v[173] = X_dot * v[139];
-        v[174] = v[122] * Y_dot;
-        v[175] = v[11] * (v[5] * v[8] * v[171] + v[82] * v[0] * v[9])
-            + v[69] * v[8] * v[8] * v[0] * v[9];
-        v[176] = 2.0 * v[62] + 2.0 * J2 - 2.0 * J1;
-        v[177] = v[5] * v[95] * v[1] * v[1]
-            + v[4] * (v[0] * v[1] * v[176] * v[2] + v[5] * v[66]);
-        v[178] = v[44] - v[45];
-        v[179] = v[131] - v[4] * v[28];
-        v[180] = v[4]
-            * (v[66] * v[0] * v[2] + v[5] * v[1] * (2.0 * J1 - 2.0 * v[62] - 2.0 * J2))
-            + v[95] * v[0] * v[1] * v[1] * v[2];
-        v[181] = X_dot * v[179];
-        v[182] = v[129] * Y_dot;
-        v[183] = m2 * v[1] * v[124] + v[28] * v[8] * m1;
-        v[184] = v[114] * Y_dot + X_dot * v[183];
-        v[185] = v[5] * v[84]
-            + (v[79] * v[2] * v[2] + (v[161] + 4.0 * v[52]) * v[9]) * v[0];
-        v[186] = psi_dot * v[23] + theta_dot * v[155] * v[16] + Y_dot
-            + (v[1] * v[33] * phi_dot - gamma2_dot * v[132]) * d;
-        v[187] = theta_dot * v[14] * v[155];
-        v[188] = (v[1] * phi_dot * v[113] - gamma2_dot * v[129]) * d;
-        v[189] = psi_dot * v[29];
-        v[190] = v[187] + X_dot + v[188] + v[189];
-        v[191] = phi_dot - v[5] * psi_dot;
-        v[192] = v[0] * psi_dot * v[2];
-        v[193] = theta_dot * v[9];
-        v[194] = v[192] - v[193];
-        v[195] = v[4] * v[191] - v[194] * v[1];
-        v[196] = theta_dot * v[2];
-        v[197] = v[0] * psi_dot * v[9];
-        v[198] = v[196] + v[197];
-        v[199] = v[8] * v[198];
+        v[160] = Z_dot * (-v[1] * v[2] * phi_dot - v[3] * theta_dot * v[10]);
+        v[161] = (v[158] * v[2] * v[36] + v[145] * v[10]) * Y_dot;
+        v[162] = v[136] * v[87] - v[157] - d * v[116] + v[159] + v[160] - v[155] * v[88]
+            + v[161];
+        v[163] = J2 - J1;
+        v[164] = gamma2_dot + v[78] + v[79];
+        v[165] = v[163] * v[108] * v[164];
+        v[166] = v[120] * v[11] + (v[86] - v[90] + v[119]) * v[12];
+        v[167] = J2 * v[166];
+        v[168] = v[165] + v[167];
+        v[169] = v[137] + v[138] + v[139] + v[140];
+        v[170] = v[135] * v[12] - v[169] * v[11];
+        v[171] = v[164] * d + v[135] * v[11] + v[12] * v[169];
+        v[172] = v[148] - v[149] + v[109] * v[170] + v[150] + v[151] - v[108] * v[171]
+            - v[166] * d;
+        v[173] = v[128] + v[129] + v[130] - v[109] * d - v[131];
+        v[174] = v[135] * gamma2_dot;
+        v[175] = v[142] - gamma2_dot * v[169] + v[144];
+        v[176] = v[11] * (-v[174] - v[157] - v[159] - v[160] - v[161]) - v[109] * v[173]
+            + v[12] * v[175] + v[164] * v[171];
+        v[177] = v[96] * d - v[164] * v[170]
+            + v[12] * (v[174] + v[157] + v[159] + v[160] + v[161]) + v[108] * v[173]
+            + v[11] * v[175];
+        v[178] = v[177] * v[15] - a * v[11] * v[176];
+        v[179] = a * v[3] * theta_dot * theta_dot;
+        v[180] = v[12] * v[2];
+        v[181] = v[11] * v[10];
+        v[182] = (-v[180] - v[181]) * v[1];
+        v[183] = v[1] * (v[180] + v[181]);
+        v[184] = (v[181] - v[180]) * v[1];
+        v[185] = (v[180] - v[181]) * v[1];
+        v[186] = 0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185] - v[17];
+        v[187] = v[11] * v[2];
+        v[188] = v[12] * v[10];
+        v[189] = v[3] * (v[187] + v[188]);
+        v[190] = v[3] * (v[188] - v[187]);
+        v[191] = v[3] * v[2];
+        v[192] = v[1] * v[10];
+        v[193] = v[0] * (v[191] + v[192]);
+        v[194] = v[1] * v[2];
+        v[195] = v[3] * v[10];
+        v[196] = v[4] * (v[194] - v[195]);
+        v[197] = v[0] * (v[192] - v[191]);
+        v[198] = v[4] * (v[195] - v[194]);
+        v[199] = v[4] * (v[194] + v[195]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part5(
         _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
+        _state: &[f64; STATES],
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        v[200] = v[11] * v[191];
-        v[201] = v[199] + v[200];
-        v[202] = v[1] * v[191];
-        v[203] = v[4] * v[194];
-        v[204] = v[202] + v[203];
-        v[205] = v[11] * v[198] - v[8] * v[191];
-        v[206] = v[5] * ((a + v[102]) * m1 + m2 * (-a - v[103])) + v[0] * d * v[110];
-        v[207] = v[194] * Iyz;
-        v[208] = Iyy * v[198];
-        v[209] = Ixy * v[191];
-        v[210] = Iyz * v[198];
-        v[211] = Ixz * v[191];
-        v[212] = v[194] * Izz;
-        v[213] = Y_dot * v[16];
-        v[214] = X_dot * v[14];
-        v[215] = v[213] + v[214];
-        v[216] = v[119] - v[118];
-        v[217] = (v[120] * v[0] * v[215] + v[216] * Z_dot * v[5]) * d;
-        v[218] = v[4] * v[96] + v[1] * v[1] * v[63];
-        v[219] = Z_dot * v[163];
-        v[220] = a * v[0];
-        v[221] = d * (-v[0] * v[1] * v[9] * phi_dot - gamma2_dot * v[178])
-            + theta_dot * (v[220] - v[166] * d);
-        v[222] = gamma2_dot * v[2];
-        v[223] = -v[222] - theta_dot;
-        v[224] = v[1] * v[9] * phi_dot;
-        v[225] = -gamma2_dot - v[196];
-        v[226] = a * v[5] * theta_dot;
-        v[227] = a * theta_dot * v[0];
-        v[228] = Z_dot
-            + d * (v[5] * v[225] * v[1] + (v[4] * (v[222] + theta_dot) - v[224]) * v[0])
-            + v[227];
-        v[229] = theta_dot * (v[165] * d - v[220])
-            + d * (v[47] * gamma1_dot + v[8] * v[0] * phi_dot * v[2]);
-        v[230] = gamma1_dot * v[9];
-        v[231] = theta_dot - v[230];
-        v[232] = gamma1_dot - v[193];
-        v[233] = v[5] * v[232] + v[0] * phi_dot * v[2];
-        v[234] = Z_dot - v[227]
-            + (v[8] * v[233] + v[11] * v[0] * (v[230] - theta_dot)) * d;
-        v[235] = v[69] * v[8] * v[8] + v[11] * v[82];
-        v[236] = Z_dot * v[164];
-        v[237] = v[47] * v[215];
-        v[238] = v[0] * v[9] * phi_dot;
-        v[239] = -v[196] - v[197];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part6(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        v: &mut [f64; 257],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        v[240] = Y_dot * v[116] + X_dot * v[19] + Z_dot * v[0] * v[2];
-        v[241] = m2 * v[148] * v[1] + v[8] * m1 * v[113];
-        v[242] = v[8] * v[33] * m1 + v[28] * m2 * v[1];
-        v[243] = X_dot * v[113] - Z_dot * v[0] * v[9] + Y_dot * v[33];
-        v[244] = -v[30] - v[8] * v[124];
-        v[245] = v[11] * phi_dot * v[116] + v[122] * psi_dot + gamma1_dot * v[244]
-            + theta_dot * v[47] * v[16];
-        v[246] = -v[38] - v[39];
-        v[247] = v[139] * psi_dot + v[11] * v[19] * phi_dot + gamma1_dot * v[246]
-            + theta_dot * v[47] * v[14];
-        v[248] = v[4] * phi_dot * v[113];
-        v[249] = v[20] - v[15];
-        v[250] = gamma2_dot * v[249];
-        v[251] = psi_dot * v[179];
-        v[252] = v[1] * v[116] - v[25];
-        v[253] = gamma2_dot * v[252];
-        v[254] = v[129] * psi_dot;
-        v[255] = v[4] * v[33] * phi_dot;
-        v[256] = theta_dot * v[111]
-            + d
-                * (v[120] * v[0] * phi_dot - m2 * gamma2_dot * v[178]
-                    + v[47] * gamma1_dot * m1);
+        v[200] = (-v[194] - v[195]) * v[4];
+        v[201] = 0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + v[19] + 0.25 * v[200];
     }
     ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     #[allow(non_snake_case, clippy::all)]
@@ -1309,292 +1006,119 @@ pub mod lagrange {
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 257];
+        let mut v = [0.0f64; 202];
         rhs_baumgarte_part0(t, state, params, g_i, dstate, alpha, beta, &mut v);
         rhs_baumgarte_part1(t, state, params, g_i, dstate, alpha, beta, &mut v);
         rhs_baumgarte_part2(t, state, params, g_i, dstate, alpha, beta, &mut v);
         rhs_baumgarte_part3(t, state, params, g_i, dstate, alpha, beta, &mut v);
         rhs_baumgarte_part4(t, state, params, g_i, dstate, alpha, beta, &mut v);
         rhs_baumgarte_part5(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part6(t, state, params, g_i, dstate, alpha, beta, &mut v);
         let mut matrix: [[f64; 8]; 8] = [
             [
-                (v[7] * v[7] + v[13] * v[13]) * J1 + m2 * (v[23] * v[23] + v[29] * v[29])
-                    + (v[34] * v[34] + v[41] * v[41]) * m1
+                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
+                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
+                    + (v[18] * v[18] + v[20] * v[20]) * J1
                     + J2
-                        * (v[0] * v[0] * (v[42] + v[43]) + v[46] * v[46] + v[47] * v[47])
-                    - v[5] * (v[51] - v[48]) + v[0] * (v[56] + v[61]),
-                v[80],
-                v[87],
-                v[89],
-                v[92],
-                v[93],
-                v[94],
+                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
+                            + v[5] * v[5]) - v[3] * (v[22] - v[21])
+                    + v[1]
+                        * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
+                            + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
+                v[30],
+                v[31],
+                v[32],
+                v[34],
+                v[45],
+                v[54],
                 0.0,
             ],
             [
-                v[80],
-                a * (2.0 * (v[11] * d * m1) + a * (m2 + m1)) + J2
-                    + v[4] * (v[64] + 2.0 * v[65]) + v[68] + Izz
-                    + (v[79] * v[2] + 2.0 * v[58]) * v[2] + J1,
-                v[98],
-                v[100],
-                v[101],
-                v[108],
-                v[109],
-                v[111],
+                v[30],
+                J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
+                    + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
+                    + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
+                    + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
+                    + ((v[9] + v[29] * v[29]) * v[2] * v[2]
+                        + v[28] * v[28] * v[10] * v[10]) * m1,
+                v[58],
+                v[59],
+                v[60],
+                v[61],
+                v[62],
+                v[63],
             ],
             [
-                v[87],
-                v[98],
-                Ixx + d * d * (v[112] + v[78]) + (v[75] + v[77]) * J1
-                    + J2 * (2.0 - v[75] - v[77]),
+                v[31],
+                v[58],
+                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
+                    + (v[55] + v[56]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
                 0.0,
                 0.0,
-                v[115],
-                v[117],
-                v[121],
+                v[64],
+                v[65],
+                v[66],
             ],
-            [v[89], v[100], 0.0, J2 + v[68], 0.0, v[123], v[127], v[128]],
-            [v[92], v[101], 0.0, 0.0, v[62] + J2, v[130], v[133], v[134]],
-            [v[93], v[108], v[115], v[123], v[130], v[135], 0.0, 0.0],
-            [v[94], v[109], v[117], v[127], v[133], 0.0, v[135], 0.0],
-            [0.0, v[111], v[121], v[128], v[134], 0.0, 0.0, v[135]],
+            [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
+            [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
+            [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
+            [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
+            [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
         ];
         let mut force: [f64; 8] = [
-            0.5
-                * (m1
-                    * (2.0
-                        * ((theta_dot * v[138] * v[16]
-                            + d * (v[139] * gamma1_dot + v[28] * v[8] * phi_dot)
-                            + v[141] * psi_dot) * v[146])
-                        + 2.0 * (v[147] * (v[142] + v[143] + v[145]))))
-                - psi_dot
-                    * (X_dot * v[151] + Y_dot * v[93]
-                        + psi_dot
-                            * (v[34] * m1 * (2.0 * v[40] + 2.0 * v[140])
-                                + m2 * v[29] * (-2.0 * v[149] - 2.0 * v[21])))
-                - (v[5] * (v[153] + v[154]) + v[14] * Y_dot * v[156] + v[158] * phi_dot
-                    + v[160] * X_dot * v[16] + theta_dot * v[162]
-                    + ((2.0 * (v[46] * v[163]) + 2.0 * (v[47] * v[164])) * J2
-                        + m1
-                            * (2.0 * (v[34] * v[138] * v[16])
-                                + 2.0 * (v[14] * v[144] * v[41]))
-                        + m2
-                            * (2.0 * (v[14] * v[155] * v[23])
-                                + 2.0 * (v[159] * v[29] * v[16]))
-                        + (2.0 * (v[13] * v[165]) + 2.0 * (v[166] * v[7])) * J1
-                        + v[0] * (v[48] - v[51] + v[9] * v[167] + v[168] * v[2])
-                        + v[5]
-                            * (v[169] - v[56] - v[61]
-                                + (-2.0 * v[42] - 2.0 * v[43]) * J2 * v[0] - v[170]))
-                        * psi_dot) * theta_dot
-                - (theta_dot * v[172] * v[2]
-                    + psi_dot
-                        * ((2.0 * (J2 * v[136]) + 2.0 * (v[13] * J1)) * v[47]
-                            + (2.0 * (v[122] * v[41]) + 2.0 * (v[34] * v[139])) * d * m1)
-                    + d * (v[173] - a * v[8] * v[0] * gamma1_dot * v[2] + v[174]) * m1
-                    + v[175] * phi_dot) * gamma1_dot
-                - gamma2_dot
-                    * (v[177] * theta_dot * v[9]
-                        + psi_dot
-                            * (v[7] * (2.0 * (v[178] * J1) + 2.0 * (v[46] * J2))
-                                + m2 * (-2.0 * (v[179] * v[29]) - 2.0 * (v[129] * v[23]))
-                                    * d) + v[180] * phi_dot
-                        + m2 * d
-                            * (-a * gamma2_dot * v[0] * v[1] * v[9] - v[181] - v[182]))
-                - (v[184] * d
-                    + psi_dot
-                        * (d
-                            * (v[8] * (2.0 * (v[19] * v[41]) + 2.0 * (v[28] * v[34]))
-                                * m1
-                                + m2 * (2.0 * (v[113] * v[23]) + 2.0 * (v[29] * v[124]))
-                                    * v[1])
-                            + v[0]
-                                * ((2.0 * (v[7] * v[1] * J1) - 2.0 * (v[4] * v[46] * J2)
-                                    - v[59] - v[60] + (Iyy * v[2] + v[58]) * v[0]) * v[9]
-                                    - v[5] * (v[9] * Ixz - Ixy * v[2])
-                                    + (2.0 * (v[11] * J2 * v[47]) + v[0] * (-v[9] * Izz - v[52])
-                                        + v[54] + v[55] + 2.0 * (v[13] * v[8] * J1)) * v[2]))
-                    + theta_dot * v[185]
-                    + (v[98] * phi_dot + gamma1_dot * v[9] * v[99]
-                        + gamma2_dot * v[91] * v[2]) * v[0]) * phi_dot
-                + 0.5
-                    * (m2
-                        * (2.0 * (v[186] * (v[187] + v[188] + v[189]))
-                            + 2.0
-                                * ((d * (v[1] * phi_dot * v[124] - gamma2_dot * v[179])
-                                    + theta_dot * v[159] * v[16] + v[150] * psi_dot)
-                                    * v[190]))),
-            psi_dot
-                * ((v[166] * v[195] + v[201] * v[165]) * J1 + 0.5 * (v[167] * v[198])
-                    + J2 * (v[204] * v[163] + v[164] * v[205])
-                    + 0.5 * ((v[170] - v[169]) * v[191]) + 0.5 * (v[168] * v[194])
-                    - X_dot * v[206] * v[16]
-                    - 0.5 * (v[0] * (Ixx * v[191] - v[194] * Ixz - Ixy * v[198]))
-                    + v[5]
-                        * (J2
-                            * (-(v[192] + gamma1_dot - v[193]) * v[2]
-                                - (gamma2_dot + v[196] + v[197]) * v[9])
-                            - 0.5 * ((v[208] - v[207] - v[209]) * v[9])
-                            - 0.5 * ((v[212] - v[210] - v[211]) * v[2]))
-                    - v[107] * v[14] * Y_dot)
-                - (v[153] + v[217] + v[154]
-                    + theta_dot
-                        * (2.0 * (Iyz * v[2] * v[2])
-                            + ((v[11] * v[11] * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy
-                                + 2.0 * Izz
-                                + (m2 * (2.0 * v[77] - 2.0) + (2.0 - 2.0 * v[75]) * m1) * d
-                                    * d + v[4] * v[4] * (2.0 * J2 - 2.0 * J1)) * v[2]
-                                - 2.0 * v[58]) * v[9]) + psi_dot * v[185]
-                    + phi_dot * v[157]) * phi_dot
-                - (theta_dot
-                    * (v[4] * (v[176] * v[2] * v[2] - 2.0 * v[62] - 2.0 * J2 + 2.0 * J1)
-                        - 2.0 * v[65]) * v[1]
-                    + (v[177] * psi_dot + phi_dot * v[218]) * v[9]
-                    + m2 * d * (v[219] + v[46] * v[215] - a * gamma2_dot * v[1] * v[2]))
-                    * gamma2_dot
-                - theta_dot * (v[111] * v[215] + Z_dot * v[206] + psi_dot * v[162])
-                + 0.5
-                    * (m2
-                        * (2.0 * (v[186] * (v[14] * psi_dot * v[155] + v[221] * v[16]))
-                            + 2.0
-                                * ((v[221] * v[14] + v[159] * psi_dot * v[16]) * v[190])
-                            + 2.0
-                                * (((v[5] * (v[4] * v[223] + v[224]) + v[225] * v[0] * v[1])
-                                    * d - v[226]) * v[228])))
-                + 0.5
-                    * ((2.0 * ((psi_dot * v[138] * v[16] + v[229] * v[14]) * v[146])
-                        + 2.0
-                            * ((d
-                                * (v[5] * (v[11] * v[231] - v[8] * phi_dot * v[2])
-                                    + v[8] * v[0] * v[232]) + v[226]) * v[234])
-                        + 2.0 * (v[147] * (v[14] * psi_dot * v[144] + v[229] * v[16])))
-                        * m1)
-                - ((psi_dot * v[172] + v[235] * phi_dot) * v[2]
-                    + (v[236] + a * v[8] * gamma1_dot * v[9] + v[237]) * d * m1
-                    + theta_dot * v[8] * (v[11] * v[2] * v[2] * v[171] - 2.0 * v[70]))
-                    * gamma1_dot,
-            d
-                * (0.5
-                    * ((2.0
-                        * (v[146]
-                            * ((theta_dot * v[14] * v[0] * v[2] + phi_dot * v[113]
-                                + v[28] * psi_dot) * v[8] + v[11] * gamma1_dot * v[19]))
-                        + 2.0
-                            * (v[234]
-                                * (v[11] * v[0] * gamma1_dot * v[2]
-                                    + v[8] * (-v[238] - v[5] * theta_dot * v[2])))
-                        + 2.0
-                            * ((v[8]
-                                * (psi_dot * v[19] + v[33] * phi_dot
-                                    + theta_dot * v[0] * v[2] * v[16])
-                                + v[11] * gamma1_dot * v[116]) * v[147])) * m1)
-                    - v[184] * psi_dot
-                    + 0.5
-                        * (m2
-                            * (2.0
-                                * ((v[5] * theta_dot * v[1] * v[9]
-                                    + (-v[4] * gamma2_dot * v[9] - v[1] * phi_dot * v[2])
-                                        * v[0]) * v[228])
-                                + 2.0
-                                    * (v[186]
-                                        * (v[4] * gamma2_dot * v[33]
-                                            + (v[28] * phi_dot - theta_dot * v[0] * v[9] * v[16]
-                                                + psi_dot * v[113]) * v[1]))
-                                + 2.0
-                                    * (((psi_dot * v[124] - theta_dot * v[14] * v[0] * v[9]
-                                        + v[148] * phi_dot) * v[1] + v[4] * gamma2_dot * v[113])
-                                        * v[190]))))
-                + v[194]
-                    * (v[201] * v[8] * J1 - v[207]
-                        + J2 * (gamma2_dot + v[196] + v[11] * v[205] + v[197])
-                        + 0.5 * v[208] - 0.5 * v[209] + 0.5 * (v[239] * Izz))
-                - gamma1_dot
-                    * (v[175] * psi_dot + theta_dot * v[235] * v[2]
-                        + v[11]
-                            * (v[240] * d * m1
-                                + (2.0 * J2 + 2.0 * v[68] - 2.0 * J1) * v[8] * phi_dot))
-                + v[239]
-                    * (J2 * (v[192] + v[4] * v[204] + gamma1_dot - v[193]) - 0.5 * v[210]
-                        - 0.5 * v[211] + 0.5 * v[212] - v[195] * v[1] * J1)
-                + 0.5 * (v[191] * (-v[239] * Ixz - v[194] * Ixy))
-                - (v[98] * v[0] * psi_dot
-                    + d * (Z_dot * v[0] * v[110] + X_dot * v[241] + Y_dot * v[242])
-                    + theta_dot * v[157]) * phi_dot
-                - (v[217] + v[158] * psi_dot) * theta_dot
-                - gamma2_dot
-                    * (v[4] * (m2 * d * v[243] + v[1] * phi_dot * v[176])
-                        + theta_dot * v[9] * v[218] + v[180] * psi_dot)
-                + 0.5 * ((v[194] * Iyy - Iyz * v[239]) * v[198]),
-            (v[201] * J1 + (-v[199] - v[200]) * J2) * v[205]
-                - (v[5] * psi_dot * v[99] * v[2] + d * (v[236] + v[237]) * m1)
-                    * theta_dot - (v[99] * v[198] + v[11] * v[240] * d * m1) * phi_dot
-                + d * m1
-                    * (v[147] * v[245]
-                        - (X_dot * v[246] + a * v[8] * (v[193] - v[192]) + Z_dot * v[136]
-                            + Y_dot * v[244]) * gamma1_dot
-                        + v[234] * (v[231] * v[8] * v[0] + v[11] * v[233])
-                        + v[247] * v[146] - psi_dot * (v[173] + v[174])),
-            v[195] * (J2 * v[204] + (-v[202] - v[203]) * J1)
-                - phi_dot
-                    * (theta_dot * v[9] * v[152] + v[0] * v[91] * psi_dot * v[2]
-                        + v[4] * m2 * d * v[243])
-                + m2 * d
-                    * (v[190] * (v[248] - v[250] - theta_dot * v[14] * v[178] - v[251])
-                        - (-v[181] - v[182]) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * v[7] - X_dot * v[249] + a * v[239] * v[1]
-                                - v[252] * Y_dot)
-                        + v[186]
-                            * (v[255] - v[253] - v[254] - theta_dot * v[178] * v[16])
-                        + (v[223] * v[0] * v[1] + v[4] * (v[5] * v[225] - v[238]))
-                            * v[228])
-                - (v[5] * psi_dot * v[9] * v[152]
-                    + m2 * d * ((-v[213] - v[214]) * v[178] + v[219])) * theta_dot,
-            (-m2 * gamma2_dot * (theta_dot * v[46] * v[14] + v[248] - v[250] - v[251])
-                - v[247] * gamma1_dot * m1
-                - phi_dot
-                    * (v[241] * phi_dot + v[11] * gamma1_dot * v[19] * m1
-                        + v[4] * m2 * gamma2_dot * v[113]
-                        + theta_dot * v[120] * v[14] * v[0] + psi_dot * v[183])) * d
-                - ((phi_dot * v[183] - m2 * gamma2_dot * v[179]
-                    + v[139] * gamma1_dot * m1) * d + theta_dot * v[206] * v[16]
-                    + v[151] * psi_dot) * psi_dot
-                - theta_dot * (v[160] * psi_dot * v[16] + v[14] * v[256]),
-            (-v[245] * gamma1_dot * m1
-                - m2 * gamma2_dot
-                    * (theta_dot * v[46] * v[16] - v[253] - v[254] + v[255])
-                - (theta_dot * v[120] * v[0] * v[16] + v[11] * gamma1_dot * v[116] * m1
-                    + v[114] * psi_dot + v[242] * phi_dot
-                    + v[4] * m2 * gamma2_dot * v[33]) * phi_dot) * d
-                - psi_dot
-                    * (theta_dot * v[107] * v[14] + v[93] * psi_dot
-                        + (v[122] * gamma1_dot * m1 - m2 * gamma2_dot * v[129]
-                            + v[114] * phi_dot) * d)
-                - theta_dot * (v[14] * psi_dot * v[156] + v[256] * v[16]),
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * v[7] + theta_dot * v[163]
-                        - v[4] * v[0] * v[9] * phi_dot)
-                    - (v[216] * v[5] * theta_dot
-                        + v[0]
-                            * (v[11] * gamma1_dot * m1 * v[2] + phi_dot * v[110]
-                                - v[4] * m2 * gamma2_dot * v[9])) * phi_dot
-                    - (theta_dot * v[164] + gamma1_dot * v[136]
-                        + v[11] * v[0] * phi_dot * v[2]) * gamma1_dot * m1)
-                - theta_dot
-                    * (theta_dot * v[206]
-                        + d
-                            * (gamma1_dot * v[164] * m1 + v[216] * v[5] * phi_dot
-                                + m2 * gamma2_dot * v[163])),
+            ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
+                + v[2] * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
+                * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
+                + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
+                - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
+                - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
+            v[2]
+                * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168] - v[93]
+                    - v[97] - v[98] + v[100])
+                - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
+                - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
+                + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105] - v[0] * v[118]
+                    + v[106] - v[107] - v[110]) * v[10],
+            (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
+                + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
+                + (m2 * v[172] * d - v[165] - v[167]) * v[11],
+            J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
+            v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
+            -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
+                - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
+            -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
+                - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
+            -m2
+                * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
+                    * phi_dot * phi_dot
+                    + (theta_dot * v[186]
+                        + phi_dot
+                            * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
+                                + 0.5 * v[185] - v[190])) * theta_dot
+                    + gamma2_dot
+                        * (phi_dot
+                            * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184] - 0.5 * v[185])
+                            + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
+                                - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
+                                - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
+                - (v[179]
+                    + (theta_dot
+                        * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
+                            + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
+                            + theta_dot * v[201]
+                            + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199] + 0.5 * v[200])
+                                * phi_dot)
+                        + gamma1_dot
+                            * (v[201] * gamma1_dot
+                                + phi_dot
+                                    * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
+                                        - 0.5 * v[199] - 0.5 * v[200]))
+                        + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + 0.25 * v[200])
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -1636,68 +1160,13 @@ pub mod lagrange {
         _dstate: &mut [f64; STATES],
         _alpha: f64,
         _beta: f64,
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let d = params.d;
-        let a = params.a;
-        v[0] = f64::cos(theta);
-        v[1] = f64::sin(gamma2);
-        v[2] = f64::cos(phi);
-        v[3] = v[0] * v[1] * v[2];
-        v[4] = f64::cos(gamma2);
-        v[5] = f64::sin(theta);
-        v[6] = v[4] * v[5];
-        v[7] = -v[3] - v[6];
-        v[8] = f64::sin(gamma1);
-        v[9] = f64::sin(phi);
-        v[10] = v[8] * v[0] * v[9];
-        v[11] = f64::cos(gamma1);
-        v[12] = v[11] * v[5];
-        v[13] = v[10] - v[12];
-        v[14] = f64::cos(psi);
-        v[15] = v[4] * v[14] * v[0];
-        v[16] = f64::sin(psi);
-        v[17] = v[9] * v[16];
-        v[18] = v[5] * v[14] * v[2];
-        v[19] = v[17] + v[18];
-        v[20] = v[1] * v[19];
-        v[21] = d * (v[15] - v[20]);
-        v[22] = a * v[14] * v[0];
-        v[23] = -v[21] - v[22];
-        v[24] = a * v[0] * v[16];
-        v[25] = v[4] * v[0] * v[16];
-        v[26] = v[14] * v[9];
-        v[27] = v[5] * v[2] * v[16];
-        v[28] = v[26] - v[27];
-        v[29] = v[24] - (-v[25] - v[28] * v[1]) * d;
-        v[30] = v[11] * v[0] * v[16];
-        v[31] = v[14] * v[2];
-        v[32] = v[5] * v[9] * v[16];
-        v[33] = -v[31] - v[32];
-        v[34] = d * (v[8] * v[33] - v[30]) - v[24];
-        v[35] = v[2] * v[16];
-        v[36] = v[5] * v[14] * v[9];
-        v[37] = v[36] - v[35];
-        v[38] = v[37] * v[8];
-        v[39] = v[11] * v[14] * v[0];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 257],
-    ) {
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -1710,112 +1179,192 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = d * (v[38] + v[39]);
-        v[41] = v[40] + v[22];
-        v[42] = v[2] * v[2];
-        v[43] = v[9] * v[9];
-        v[44] = v[5] * v[1];
-        v[45] = v[4] * v[0] * v[2];
-        v[46] = v[45] - v[44];
-        v[47] = v[11] * v[0] * v[9] + v[5] * v[8];
-        v[48] = v[5] * Ixx;
-        v[49] = Ixy * v[9];
-        v[50] = Ixz * v[2];
-        v[51] = v[0] * (-v[49] - v[50]);
-        v[52] = Iyz * v[2];
-        v[53] = Iyy * v[9];
-        v[54] = (v[53] - v[52]) * v[0];
-        v[55] = v[5] * Ixy;
-        v[56] = (v[54] + v[55]) * v[9];
-        v[57] = Izz * v[2];
-        v[58] = Iyz * v[9];
-        v[59] = v[0] * (v[57] - v[58]);
-        v[60] = v[5] * Ixz;
-        v[61] = (v[59] + v[60]) * v[2];
-        v[62] = m2 * d * d;
-        v[63] = v[62] + J2 - J1;
-        v[64] = v[4] * v[63];
-        v[65] = m2 * a * d;
-        v[66] = v[64] + v[65];
-        v[67] = v[66] * v[1] - Ixz;
-        v[68] = d * d * m1;
-        v[69] = J2 + v[68] - J1;
-        v[70] = a * d * m1;
-        v[71] = v[11] * v[69] + v[70];
-        v[72] = Ixy + v[8] * v[71];
-        v[73] = J2 - J1;
-        v[74] = J1 - J2;
-        v[75] = v[11] * v[11];
-        v[76] = (v[75] - 1.0) * m1;
-        v[77] = v[4] * v[4];
-        v[78] = m2 * (1.0 - v[77]);
-        v[79] = Iyy + v[11] * v[11] * v[73] + v[4] * v[4] * v[74]
-            + d * d * (v[76] + v[78]) - Izz;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = -v[5] * d - a * v[1] * v[2];
+        v[7] = v[0] * a;
+        v[8] = v[7] + d;
+        v[9] = a * a * v[4] * v[4];
+        v[10] = f64::cos(phi);
+        v[11] = f64::sin(gamma2);
+        v[12] = f64::cos(gamma2);
+        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
+        v[14] = -a * v[1] * v[10] - v[13] * d;
+        v[15] = d + v[12] * a;
+        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
+        v[17] = v[12] * v[3];
+        v[18] = -v[1] * v[11] * v[10] - v[17];
+        v[19] = v[0] * v[3];
+        v[20] = v[4] * v[1] * v[2] - v[19];
+        v[21] = v[3] * Ixx;
+        v[22] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
+        v[23] = Iyz * v[10];
+        v[24] = Iyz * v[2];
+        v[25] = a + v[12] * d;
+        v[26] = Iyy * v[10];
+        v[27] = v[2] * Izz;
+        v[28] = -a - v[0] * d;
+        v[29] = -v[7] - d;
+        v[30] = v[2]
+            * (m2 * (v[1] * v[16] * v[10] + v[25] * v[14]) - v[12] * v[13] * J2
+                + v[18] * v[11] * J1 + (v[26] + v[24]) * v[1])
+            - v[3] * (v[2] * Ixz - Ixy * v[10])
+            + (v[0] * J2 * v[5] + v[1] * (-v[27] - v[23]) + v[20] * v[4] * J1
+                + (v[28] * v[6] + v[1] * v[2] * (v[8] * v[29] - v[9])) * m1) * v[10];
+        v[31] = v[22] - v[21] + (v[0] * v[20] + v[12] * v[18]) * J1
+            + (v[13] * v[11] - v[5] * v[4]) * J2
+            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
+        v[32] = v[1] * (d * v[8] * m1 + J2) * v[10];
+        v[33] = J2 + m2 * d * v[15];
+        v[34] = v[1] * v[33] * v[2];
+        v[35] = f64::cos(psi);
+        v[36] = f64::sin(psi);
+        v[37] = v[3] * v[35] * v[2] - v[10] * v[36];
+        v[38] = v[0] * v[37] - v[35] * v[4] * v[1];
+        v[39] = v[37] * v[4] + v[0] * v[35] * v[1];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
-    fn rhs_baumgarte_part2(
+    fn rhs_baumgarte_part1(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
         _alpha: f64,
         _beta: f64,
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let Ixx = params.Ixx;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[5] * v[67] * v[9] + Iyz * v[0]
-            + (v[5] * v[72] + (v[79] * v[9] - 2.0 * v[52]) * v[0]) * v[2];
-        v[81] = J1 - J2 - v[68];
-        v[82] = v[11] * v[81] - v[70];
-        v[83] = v[8] * v[82] - Ixy;
-        v[84] = v[83] * v[9] + v[67] * v[2];
-        v[85] = m2 * (v[77] - 1.0);
-        v[86] = (v[85] + v[76]) * d * d - Ixx + (v[75] + v[77] - 2.0) * J2
-            + (-v[75] - v[77]) * J1;
-        v[87] = v[0] * v[84] + v[5] * v[86];
-        v[88] = v[11] * a;
-        v[89] = v[0] * (d * (v[88] + d) * m1 + J2) * v[2];
-        v[90] = v[4] * a;
-        v[91] = J2 + m2 * d * (d + v[90]);
-        v[92] = v[0] * v[91] * v[9];
-        v[93] = m2 * v[29] + v[34] * m1;
-        v[94] = m1 * v[41] + m2 * v[23];
-        v[95] = J1 - v[62] - J2;
-        v[96] = v[4] * v[95] - v[65];
-        v[97] = v[96] * v[1] + Ixz;
-        v[98] = v[83] * v[2] + v[9] * v[97];
-        v[99] = d * (-v[88] - d) * m1 - J2;
-        v[100] = v[9] * v[99];
-        v[101] = v[91] * v[2];
-        v[102] = v[11] * d;
-        v[103] = v[4] * d;
-        v[104] = (-a - v[102]) * m1 + m2 * (a + v[103]);
-        v[105] = m2 * v[1] * v[2];
-        v[106] = v[8] * v[9] * m1;
-        v[107] = v[104] * v[5] + (v[105] + v[106]) * v[0] * d;
-        v[108] = v[107] * v[14];
-        v[109] = v[107] * v[16];
-        v[110] = -v[105] - v[106];
-        v[111] = v[5] * d * v[110] + v[104] * v[0];
-        v[112] = m1 * (1.0 - v[75]);
-        v[113] = v[35] - v[36];
-        v[114] = v[8] * v[19] * m1 + m2 * v[1] * v[113];
-        v[115] = v[114] * d;
-        v[116] = v[27] - v[26];
-        v[117] = d * (m2 * v[1] * v[33] + v[8] * v[116] * m1);
-        v[118] = v[8] * m1 * v[2];
-        v[119] = m2 * v[1] * v[9];
+        v[40] = a * v[4] * v[39];
+        v[41] = v[2] * v[36] + v[3] * v[35] * v[10];
+        v[42] = v[12] * v[35] * v[1] - v[11] * v[41];
+        v[43] = v[35] * v[1] * v[11] + v[12] * v[41];
+        v[44] = v[43] * v[15] - a * v[11] * v[42];
+        v[45] = m1 * (v[1] * (v[38] * v[8] + v[40]) * v[10] + v[41] * v[6])
+            + m2 * (v[1] * v[44] * v[2] + v[37] * v[14]);
+        v[46] = v[35] * v[10] + v[3] * v[2] * v[36];
+        v[47] = v[0] * v[46] - v[4] * v[1] * v[36];
+        v[48] = v[0] * v[1] * v[36] + v[4] * v[46];
+        v[49] = a * v[4] * v[48];
+        v[50] = v[3] * v[10] * v[36] - v[35] * v[2];
+        v[51] = v[12] * v[1] * v[36] - v[11] * v[50];
+        v[52] = v[1] * v[11] * v[36] + v[12] * v[50];
+        v[53] = v[52] * v[15] - a * v[51] * v[11];
+        v[54] = m1 * (v[1] * (v[47] * v[8] + v[49]) * v[10] + v[50] * v[6])
+            + m2 * (v[1] * v[2] * v[53] + v[46] * v[14]);
+        v[55] = v[0] * v[0];
+        v[56] = v[12] * v[12];
+        v[57] = J1 - J2;
+        v[58] = ((v[0] * v[57] + v[28] * d * m1) * v[4] - Ixy) * v[10]
+            + v[2] * ((v[12] * v[57] - m2 * d * v[25]) * v[11] + Ixz);
+        v[59] = v[2] * (d * v[29] * m1 - J2);
+        v[60] = v[33] * v[10];
+        v[61] = m2 * (v[44] * v[10] + v[37] * v[25] * v[2])
+            + m1 * (v[2] * (v[38] * v[29] - v[40]) + v[28] * v[41] * v[10]);
+        v[62] = m2 * (v[53] * v[10] + v[25] * v[2] * v[46])
+            + (v[28] * v[50] * v[10] + (v[47] * v[29] - v[49]) * v[2]) * m1;
+        v[63] = m2
+            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a * v[18] * v[11]) * v[10])
+            + m1
+                * ((v[5] * v[29] - a * v[20] * v[4]) * v[2]
+                    + v[28] * v[1] * v[10] * v[10]);
+        v[64] = d * (v[4] * v[41] * m1 - m2 * v[37] * v[11]);
+        v[65] = (v[4] * v[50] * m1 - m2 * v[11] * v[46]) * d;
+        v[66] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
+        v[67] = v[38] * d * m1;
+        v[68] = v[47] * d * m1;
+        v[69] = v[5] * d * m1;
+        v[70] = m2 * d * v[43];
+        v[71] = m2 * d * v[52];
+        v[72] = m2 * v[13] * d;
+        v[73] = m2 + m0 + m1;
+        v[74] = theta_dot * v[1] * psi_dot * Ixz;
+        v[75] = v[1] * psi_dot * v[10];
+        v[76] = theta_dot * v[2];
+        v[77] = v[75] - v[76];
+        v[78] = theta_dot * v[10];
+        v[79] = v[1] * psi_dot * v[2];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_baumgarte_part2(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        _dstate: &mut [f64; STATES],
+        _alpha: f64,
+        _beta: f64,
+        v: &mut [f64; 202],
+    ) {
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = v[78] + v[79];
+        v[81] = v[3] * psi_dot;
+        v[82] = phi_dot - v[81];
+        v[83] = Iyy * v[80] - v[77] * Iyz - Ixy * v[82];
+        v[84] = v[83] * v[82];
+        v[85] = -phi_dot - v[81];
+        v[86] = theta_dot * v[85] * v[10];
+        v[87] = v[4] * v[80] + v[0] * v[82];
+        v[88] = v[0] * v[80] - v[4] * v[82];
+        v[89] = v[87] * v[88];
+        v[90] = v[1] * psi_dot * v[2] * phi_dot;
+        v[91] = J2 * (v[86] + v[89] - v[90]);
+        v[92] = Ixx * v[82] - v[77] * Ixz - Ixy * v[80];
+        v[93] = v[80] * v[92];
+        v[94] = theta_dot * v[85] * v[2];
+        v[95] = v[1] * psi_dot * phi_dot * v[10];
+        v[96] = v[94] + v[95];
+        v[97] = Iyz * v[96];
+        v[98] = v[87] * v[88] * J1;
+        v[99] = v[86] - v[90];
+        v[100] = v[99] * Izz;
+        v[101] = v[77] * v[92];
+        v[102] = Iyy * v[96];
+        v[103] = v[77] * Izz - Iyz * v[80] - Ixz * v[82];
+        v[104] = v[103] * v[82];
+        v[105] = Ixy * theta_dot * v[1] * psi_dot;
+        v[106] = v[99] * Iyz;
+        v[107] = J2 * v[96];
+        v[108] = v[12] * v[82] - v[77] * v[11];
+        v[109] = v[11] * v[82] + v[12] * v[77];
+        v[110] = v[108] * v[57] * v[109];
+        v[111] = v[75] + gamma1_dot - v[76];
+        v[112] = v[111] * v[57] * v[87];
+        v[113] = v[94] + v[95] - gamma1_dot * v[82];
+        v[114] = gamma1_dot * v[80];
+        v[115] = theta_dot * v[1] * psi_dot;
+        v[116] = v[0] * v[113] + v[4] * (v[115] - v[114]);
+        v[117] = J2 * v[116];
+        v[118] = v[112] + v[117];
+        v[119] = gamma2_dot * v[82];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1827,7 +1376,7 @@ pub mod lagrange {
         _dstate: &mut [f64; STATES],
         _alpha: f64,
         _beta: f64,
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
@@ -1836,53 +1385,58 @@ pub mod lagrange {
         let gamma2_dot = state[12];
         let X_dot = state[13];
         let Y_dot = state[14];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let Z_dot = state[15];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let d = params.d;
         let a = params.a;
-        let J2 = params.J2;
-        v[120] = v[118] - v[119];
-        v[121] = v[120] * v[0] * d;
-        v[122] = v[11] * v[37] - v[14] * v[8] * v[0];
-        v[123] = v[122] * d * m1;
-        v[124] = v[31] + v[32];
-        v[125] = v[8] * v[0] * v[16];
-        v[126] = v[11] * v[124] - v[125];
-        v[127] = v[126] * d * m1;
-        v[128] = v[47] * d * m1;
-        v[129] = -v[14] * v[0] * v[1] - v[4] * v[19];
-        v[130] = -(m2 * v[129] * d);
-        v[131] = v[0] * v[1] * v[16];
-        v[132] = -v[131] - v[4] * v[116];
-        v[133] = -(m2 * d * v[132]);
-        v[134] = m2 * v[46] * d;
-        v[135] = m2 + m0 + m1;
-        v[136] = v[12] - v[10];
-        v[137] = a * v[5];
-        v[138] = d * v[136] + v[137];
-        v[139] = v[11] * v[33] + v[125];
-        v[140] = (v[8] * v[113] - v[39]) * d;
-        v[141] = v[140] - v[22];
-        v[142] = v[34] * psi_dot;
-        v[143] = (v[122] * gamma1_dot + v[8] * v[19] * phi_dot) * d;
-        v[144] = v[13] * d - v[137];
-        v[145] = theta_dot * v[14] * v[144];
-        v[146] = v[142] + X_dot + v[143] + v[145];
-        v[147] = d * (v[8] * phi_dot * v[116] + v[126] * gamma1_dot) + Y_dot
-            + theta_dot * v[144] * v[16] + psi_dot * v[41];
-        v[148] = -v[17] - v[18];
-        v[149] = d * (-v[15] - v[148] * v[1]);
-        v[150] = v[22] - v[149];
-        v[151] = m2 * v[150] + v[141] * m1;
-        v[152] = m2 * d * (-d - v[90]) - J2;
-        v[153] = gamma2_dot * v[9] * v[152];
-        v[154] = gamma1_dot * v[99] * v[2];
-        v[155] = v[137] - v[7] * d;
-        v[156] = m1 * v[144] + m2 * v[155];
-        v[157] = v[2] * v[97] + v[72] * v[9];
-        v[158] = v[0] * v[86] + v[5] * v[157];
-        v[159] = -d * (v[3] + v[6]) - v[137];
+        v[120] = -v[77] * gamma2_dot - v[115];
+        v[121] = v[11] * (v[90] - v[86] - v[119]) + v[12] * v[120];
+        v[122] = v[0] * (v[114] - v[115]) + v[113] * v[4];
+        v[123] = theta_dot * Ixx * v[1] * psi_dot;
+        v[124] = v[103] * v[80];
+        v[125] = v[99] * Ixz;
+        v[126] = v[77] * v[83];
+        v[127] = Ixy * v[96];
+        v[128] = Z_dot * v[1] * v[2];
+        v[129] = v[37] * X_dot;
+        v[130] = Y_dot * v[46];
+        v[131] = a * v[77];
+        v[132] = v[128] + v[129] + v[130] + v[131];
+        v[133] = Y_dot * v[36];
+        v[134] = X_dot * v[35];
+        v[135] = v[1] * (v[133] + v[134]) - Z_dot * v[3];
+        v[136] = v[0] * v[132] - v[135] * v[4] + v[111] * d;
+        v[137] = a * v[80];
+        v[138] = Y_dot * v[50];
+        v[139] = X_dot * v[41];
+        v[140] = Z_dot * v[1] * v[10];
+        v[141] = v[138] - v[137] + v[139] + v[140] - d * v[88];
+        v[142] = v[1] * psi_dot * (v[35] * Y_dot - X_dot * v[36]);
+        v[143] = gamma1_dot * v[132];
+        v[144] = theta_dot * (v[3] * (-v[133] - v[134]) - Z_dot * v[1]);
+        v[145] = theta_dot * v[1] * v[36] + v[35] * (v[81] - phi_dot);
+        v[146] = v[3] * phi_dot;
+        v[147] = v[146] - psi_dot;
+        v[148] = Y_dot * (v[145] * v[2] + v[147] * v[10] * v[36]);
+        v[149] = v[99] * a;
+        v[150] = Z_dot * (v[1] * phi_dot * v[10] - v[3] * theta_dot * v[2]);
+        v[151] = X_dot
+            * (v[35] * (theta_dot * v[1] * v[2] + v[147] * v[10])
+                + v[2] * v[82] * v[36]);
+        v[152] = v[148] + v[149] + v[150] + v[151] - v[135] * gamma1_dot;
+        v[153] = v[88] * v[141] - v[136] * v[111] + v[0] * (v[142] + v[143] + v[144])
+            + v[152] * v[4];
+        v[154] = a * v[4] * v[153];
+        v[155] = v[0] * v[135] + v[4] * v[132];
+        v[156] = v[99] * d - v[87] * v[141] + v[4] * (-v[142] - v[143] - v[144])
+            + v[0] * v[152] + v[111] * v[155];
+        v[157] = a * v[96];
+        v[158] = psi_dot - v[146];
+        v[159] = X_dot
+            * (v[82] * v[10] * v[36]
+                + v[35] * (theta_dot * v[1] * v[10] + v[158] * v[2]));
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1894,195 +1448,77 @@ pub mod lagrange {
         _dstate: &mut [f64; STATES],
         _alpha: f64,
         _beta: f64,
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma2_dot = state[12];
-        let X_dot = state[13];
         let Y_dot = state[14];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let Z_dot = state[15];
         let d = params.d;
+        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[160] = v[138] * m1 + m2 * v[159];
-        v[161] = v[9]
-            * ((v[85] + v[112]) * d * d - Iyy + v[4] * v[4] * v[73]
-                + v[11] * v[11] * v[74] + Izz);
-        v[162] = (v[5] * (v[161] + 2.0 * v[52]) + v[72] * v[0]) * v[2] - v[5] * Iyz
-            + v[67] * v[0] * v[9];
-        v[163] = -v[4] * v[5] * v[2] - v[0] * v[1];
-        v[164] = v[8] * v[0] - v[11] * v[5] * v[9];
-        v[165] = -v[5] * v[8] * v[9] - v[11] * v[0];
-        v[166] = v[5] * v[1] * v[2] - v[4] * v[0];
-        v[167] = Ixy * v[0] + v[5] * (v[52] - v[53]);
-        v[168] = v[5] * (v[58] - v[57]) + v[0] * Ixz;
-        v[169] = Ixx * v[0];
-        v[170] = v[5] * (v[49] + v[50]);
-        v[171] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[68];
-        v[172] = v[5] * v[8] * v[8] * v[81]
-            + v[11] * (v[5] * v[71] + v[8] * v[0] * v[9] * v[171]);
-        v[173] = X_dot * v[139];
-        v[174] = v[122] * Y_dot;
-        v[175] = v[11] * (v[5] * v[8] * v[171] + v[82] * v[0] * v[9])
-            + v[69] * v[8] * v[8] * v[0] * v[9];
-        v[176] = 2.0 * v[62] + 2.0 * J2 - 2.0 * J1;
-        v[177] = v[5] * v[95] * v[1] * v[1]
-            + v[4] * (v[0] * v[1] * v[176] * v[2] + v[5] * v[66]);
-        v[178] = v[44] - v[45];
-        v[179] = v[131] - v[4] * v[28];
-        v[180] = v[4]
-            * (v[66] * v[0] * v[2] + v[5] * v[1] * (2.0 * J1 - 2.0 * v[62] - 2.0 * J2))
-            + v[95] * v[0] * v[1] * v[1] * v[2];
-        v[181] = X_dot * v[179];
-        v[182] = v[129] * Y_dot;
-        v[183] = m2 * v[1] * v[124] + v[28] * v[8] * m1;
-        v[184] = v[114] * Y_dot + X_dot * v[183];
-        v[185] = v[5] * v[84]
-            + (v[79] * v[2] * v[2] + (v[161] + 4.0 * v[52]) * v[9]) * v[0];
-        v[186] = psi_dot * v[23] + theta_dot * v[155] * v[16] + Y_dot
-            + (v[1] * v[33] * phi_dot - gamma2_dot * v[132]) * d;
-        v[187] = theta_dot * v[14] * v[155];
-        v[188] = (v[1] * phi_dot * v[113] - gamma2_dot * v[129]) * d;
-        v[189] = psi_dot * v[29];
-        v[190] = v[187] + X_dot + v[188] + v[189];
-        v[191] = phi_dot - v[5] * psi_dot;
-        v[192] = v[0] * psi_dot * v[2];
-        v[193] = theta_dot * v[9];
-        v[194] = v[192] - v[193];
-        v[195] = v[4] * v[191] - v[194] * v[1];
-        v[196] = theta_dot * v[2];
-        v[197] = v[0] * psi_dot * v[9];
-        v[198] = v[196] + v[197];
-        v[199] = v[8] * v[198];
+        v[160] = Z_dot * (-v[1] * v[2] * phi_dot - v[3] * theta_dot * v[10]);
+        v[161] = (v[158] * v[2] * v[36] + v[145] * v[10]) * Y_dot;
+        v[162] = v[136] * v[87] - v[157] - d * v[116] + v[159] + v[160] - v[155] * v[88]
+            + v[161];
+        v[163] = J2 - J1;
+        v[164] = gamma2_dot + v[78] + v[79];
+        v[165] = v[163] * v[108] * v[164];
+        v[166] = v[120] * v[11] + (v[86] - v[90] + v[119]) * v[12];
+        v[167] = J2 * v[166];
+        v[168] = v[165] + v[167];
+        v[169] = v[137] + v[138] + v[139] + v[140];
+        v[170] = v[135] * v[12] - v[169] * v[11];
+        v[171] = v[164] * d + v[135] * v[11] + v[12] * v[169];
+        v[172] = v[148] - v[149] + v[109] * v[170] + v[150] + v[151] - v[108] * v[171]
+            - v[166] * d;
+        v[173] = v[128] + v[129] + v[130] - v[109] * d - v[131];
+        v[174] = v[135] * gamma2_dot;
+        v[175] = v[142] - gamma2_dot * v[169] + v[144];
+        v[176] = v[11] * (-v[174] - v[157] - v[159] - v[160] - v[161]) - v[109] * v[173]
+            + v[12] * v[175] + v[164] * v[171];
+        v[177] = v[96] * d - v[164] * v[170]
+            + v[12] * (v[174] + v[157] + v[159] + v[160] + v[161]) + v[108] * v[173]
+            + v[11] * v[175];
+        v[178] = v[177] * v[15] - a * v[11] * v[176];
+        v[179] = a * v[3] * theta_dot * theta_dot;
+        v[180] = v[12] * v[2];
+        v[181] = v[11] * v[10];
+        v[182] = (-v[180] - v[181]) * v[1];
+        v[183] = v[1] * (v[180] + v[181]);
+        v[184] = (v[181] - v[180]) * v[1];
+        v[185] = (v[180] - v[181]) * v[1];
+        v[186] = 0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185] - v[17];
+        v[187] = v[11] * v[2];
+        v[188] = v[12] * v[10];
+        v[189] = v[3] * (v[187] + v[188]);
+        v[190] = v[3] * (v[188] - v[187]);
+        v[191] = v[3] * v[2];
+        v[192] = v[1] * v[10];
+        v[193] = v[0] * (v[191] + v[192]);
+        v[194] = v[1] * v[2];
+        v[195] = v[3] * v[10];
+        v[196] = v[4] * (v[194] - v[195]);
+        v[197] = v[0] * (v[192] - v[191]);
+        v[198] = v[4] * (v[195] - v[194]);
+        v[199] = v[4] * (v[194] + v[195]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_baumgarte_part5(
         _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
+        _state: &[f64; STATES],
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
         _alpha: f64,
         _beta: f64,
-        v: &mut [f64; 257],
+        v: &mut [f64; 202],
     ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        v[200] = v[11] * v[191];
-        v[201] = v[199] + v[200];
-        v[202] = v[1] * v[191];
-        v[203] = v[4] * v[194];
-        v[204] = v[202] + v[203];
-        v[205] = v[11] * v[198] - v[8] * v[191];
-        v[206] = v[5] * ((a + v[102]) * m1 + m2 * (-a - v[103])) + v[0] * d * v[110];
-        v[207] = v[194] * Iyz;
-        v[208] = Iyy * v[198];
-        v[209] = Ixy * v[191];
-        v[210] = Iyz * v[198];
-        v[211] = Ixz * v[191];
-        v[212] = v[194] * Izz;
-        v[213] = Y_dot * v[16];
-        v[214] = X_dot * v[14];
-        v[215] = v[213] + v[214];
-        v[216] = v[119] - v[118];
-        v[217] = (v[120] * v[0] * v[215] + v[216] * Z_dot * v[5]) * d;
-        v[218] = v[4] * v[96] + v[1] * v[1] * v[63];
-        v[219] = Z_dot * v[163];
-        v[220] = a * v[0];
-        v[221] = d * (-v[0] * v[1] * v[9] * phi_dot - gamma2_dot * v[178])
-            + theta_dot * (v[220] - v[166] * d);
-        v[222] = gamma2_dot * v[2];
-        v[223] = -v[222] - theta_dot;
-        v[224] = v[1] * v[9] * phi_dot;
-        v[225] = -gamma2_dot - v[196];
-        v[226] = a * v[5] * theta_dot;
-        v[227] = a * theta_dot * v[0];
-        v[228] = Z_dot
-            + d * (v[5] * v[225] * v[1] + (v[4] * (v[222] + theta_dot) - v[224]) * v[0])
-            + v[227];
-        v[229] = theta_dot * (v[165] * d - v[220])
-            + d * (v[47] * gamma1_dot + v[8] * v[0] * phi_dot * v[2]);
-        v[230] = gamma1_dot * v[9];
-        v[231] = theta_dot - v[230];
-        v[232] = gamma1_dot - v[193];
-        v[233] = v[5] * v[232] + v[0] * phi_dot * v[2];
-        v[234] = Z_dot - v[227]
-            + (v[8] * v[233] + v[11] * v[0] * (v[230] - theta_dot)) * d;
-        v[235] = v[69] * v[8] * v[8] + v[11] * v[82];
-        v[236] = Z_dot * v[164];
-        v[237] = v[47] * v[215];
-        v[238] = v[0] * v[9] * phi_dot;
-        v[239] = -v[196] - v[197];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part6(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 257],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        v[240] = Y_dot * v[116] + X_dot * v[19] + Z_dot * v[0] * v[2];
-        v[241] = m2 * v[148] * v[1] + v[8] * m1 * v[113];
-        v[242] = v[8] * v[33] * m1 + v[28] * m2 * v[1];
-        v[243] = X_dot * v[113] - Z_dot * v[0] * v[9] + Y_dot * v[33];
-        v[244] = -v[30] - v[8] * v[124];
-        v[245] = v[11] * phi_dot * v[116] + v[122] * psi_dot + gamma1_dot * v[244]
-            + theta_dot * v[47] * v[16];
-        v[246] = -v[38] - v[39];
-        v[247] = v[139] * psi_dot + v[11] * v[19] * phi_dot + gamma1_dot * v[246]
-            + theta_dot * v[47] * v[14];
-        v[248] = v[4] * phi_dot * v[113];
-        v[249] = v[20] - v[15];
-        v[250] = gamma2_dot * v[249];
-        v[251] = psi_dot * v[179];
-        v[252] = v[1] * v[116] - v[25];
-        v[253] = gamma2_dot * v[252];
-        v[254] = v[129] * psi_dot;
-        v[255] = v[4] * v[33] * phi_dot;
-        v[256] = theta_dot * v[111]
-            + d
-                * (v[120] * v[0] * phi_dot - m2 * gamma2_dot * v[178]
-                    + v[47] * gamma1_dot * m1);
+        v[200] = (-v[194] - v[195]) * v[4];
+        v[201] = 0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + v[19] + 0.25 * v[200];
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -2110,33 +1546,39 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::cos(gamma1);
+        let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
-        let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(phi);
-        let x6 = m2 * x4 * x5;
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::sin(phi);
-        let x9 = x7 * x8 * m1;
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x10 * x13;
-        let x15 = x12 * x8;
-        let x16 = x3 * x5 * x13;
-        let x17 = x12 * x5;
-        let x18 = x3 * x8 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x8 * x13 + x3 * x12 * x5;
-        let x21 = x5 * x13;
-        let x22 = x3 * x12 * x8;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x10;
-        let x26 = x16 - x15;
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a;
+        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2168,25 +1610,31 @@ pub mod lagrange {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                    + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-                + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                    + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                        + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                        + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-                + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-                + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-                + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2256,59 +1704,61 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 72];
+        let mut v = [0.0f64; 68];
         matrix_part0(t, state, params, g_i, &mut v);
         matrix_part1(t, state, params, g_i, &mut v);
         [
             [
-                (v[5] * v[5] + v[9] * v[9]) * J1 + m2 * (v[14] * v[14] + v[18] * v[18])
-                    + (v[22] * v[22] + v[26] * v[26]) * m1
+                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
+                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
+                    + (v[17] * v[17] + v[18] * v[18]) * J1
                     + J2
-                        * (v[0] * v[0] * (v[2] * v[2] + v[7] * v[7]) + v[27] * v[27]
-                            + v[28] * v[28])
-                    - v[4] * (v[0] * (-Ixy * v[7] - Ixz * v[2]) - v[4] * Ixx)
-                    + v[0]
-                        * (((Iyy * v[7] - v[29]) * v[0] + v[4] * Ixy) * v[7]
-                            + (v[0] * (Izz * v[2] - v[30]) + v[4] * Ixz) * v[2]),
-                v[42],
-                v[44],
-                v[46],
+                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
+                            + v[5] * v[5]) - v[3] * (v[20] - v[19])
+                    + v[1]
+                        * (((Iyy * v[2] - v[21]) * v[1] + v[3] * Ixy) * v[2]
+                            + (v[1] * (Izz * v[10] - v[22]) + v[3] * Ixz) * v[10]),
+                v[28],
+                v[29],
+                v[30],
+                v[32],
+                v[41],
                 v[48],
-                v[49],
-                v[50],
                 0.0,
             ],
             [
-                v[42],
-                a * (2.0 * (v[8] * d * m1) + a * (m2 + m1)) + J2
-                    + v[3] * (v[32] + 2.0 * v[33]) + v[35] + Izz
-                    + (v[41] * v[2] + 2.0 * v[30]) * v[2] + J1,
-                v[51],
+                v[28],
+                J2 * ((v[49] + 1.0) * v[10] * v[10] + (v[50] + 1.0) * v[2] * v[2])
+                    + (v[4] * v[4] * v[10] * J1 + v[24] + v[22]) * v[10]
+                    + (v[16] * v[10] * v[10] + v[23] * v[23] * v[2] * v[2]) * m2
+                    + v[2] * (v[25] + v[21] + v[11] * v[11] * v[2] * J1)
+                    + ((v[9] + v[27] * v[27]) * v[2] * v[2]
+                        + v[26] * v[26] * v[10] * v[10]) * m1,
                 v[52],
                 v[53],
+                v[54],
+                v[55],
+                v[56],
+                v[57],
+            ],
+            [
+                v[29],
+                v[52],
+                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
+                    + (v[49] + v[50]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
+                0.0,
+                0.0,
                 v[58],
                 v[59],
                 v[60],
             ],
-            [
-                v[44],
-                v[51],
-                Ixx + d * d * (m1 * (1.0 - v[37]) + v[40]) + (v[37] + v[39]) * J1
-                    + J2 * (2.0 - v[37] - v[39]),
-                0.0,
-                0.0,
-                v[61],
-                v[63],
-                v[64],
-            ],
-            [v[46], v[52], 0.0, J2 + v[35], 0.0, v[65], v[66], v[67]],
-            [v[48], v[53], 0.0, 0.0, v[31] + J2, v[68], v[69], v[70]],
-            [v[49], v[58], v[61], v[65], v[68], v[71], 0.0, 0.0],
-            [v[50], v[59], v[63], v[66], v[69], 0.0, v[71], 0.0],
-            [0.0, v[60], v[64], v[67], v[70], 0.0, 0.0, v[71]],
+            [v[30], v[53], 0.0, J2 + d * d * m1, 0.0, v[61], v[62], v[63]],
+            [v[32], v[54], 0.0, 0.0, m2 * d * d + J2, v[64], v[65], v[66]],
+            [v[41], v[55], v[58], v[61], v[64], v[67], 0.0, 0.0],
+            [v[48], v[56], v[59], v[62], v[65], 0.0, v[67], 0.0],
+            [0.0, v[57], v[60], v[63], v[66], 0.0, 0.0, v[67]],
         ]
     }
     #[allow(non_snake_case)]
@@ -2318,72 +1768,13 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 72],
+        v: &mut [f64; 68],
     ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::cos(theta);
-        v[1] = f64::sin(gamma2);
-        v[2] = f64::cos(phi);
-        v[3] = f64::cos(gamma2);
-        v[4] = f64::sin(theta);
-        v[5] = -v[0] * v[1] * v[2] - v[3] * v[4];
-        v[6] = f64::sin(gamma1);
-        v[7] = f64::sin(phi);
-        v[8] = f64::cos(gamma1);
-        v[9] = v[6] * v[0] * v[7] - v[8] * v[4];
-        v[10] = f64::cos(psi);
-        v[11] = f64::sin(psi);
-        v[12] = v[7] * v[11] + v[4] * v[10] * v[2];
-        v[13] = a * v[10] * v[0];
-        v[14] = -d * (v[3] * v[10] * v[0] - v[1] * v[12]) - v[13];
-        v[15] = a * v[0] * v[11];
-        v[16] = v[10] * v[7];
-        v[17] = v[4] * v[2] * v[11];
-        v[18] = v[15] - (-v[3] * v[0] * v[11] - (v[16] - v[17]) * v[1]) * d;
-        v[19] = v[10] * v[2];
-        v[20] = v[4] * v[7] * v[11];
-        v[21] = -v[19] - v[20];
-        v[22] = d * (v[6] * v[21] - v[8] * v[0] * v[11]) - v[15];
-        v[23] = v[2] * v[11];
-        v[24] = v[4] * v[10] * v[7];
-        v[25] = v[24] - v[23];
-        v[26] = d * (v[25] * v[6] + v[8] * v[10] * v[0]) + v[13];
-        v[27] = v[3] * v[0] * v[2] - v[4] * v[1];
-        v[28] = v[8] * v[0] * v[7] + v[4] * v[6];
-        v[29] = Iyz * v[2];
-        v[30] = Iyz * v[7];
-        v[31] = m2 * d * d;
-        v[32] = v[3] * (v[31] + J2 - J1);
-        v[33] = m2 * a * d;
-        v[34] = (v[32] + v[33]) * v[1] - Ixz;
-        v[35] = d * d * m1;
-        v[36] = a * d * m1;
-        v[37] = v[8] * v[8];
-        v[38] = (v[37] - 1.0) * m1;
-        v[39] = v[3] * v[3];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 72],
-    ) {
-        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -2396,44 +1787,109 @@ pub mod lagrange {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = m2 * (1.0 - v[39]);
-        v[41] = Iyy + v[8] * v[8] * (J2 - J1) + v[3] * v[3] * (J1 - J2)
-            + d * d * (v[38] + v[40]) - Izz;
-        v[42] = v[4] * v[34] * v[7] + Iyz * v[0]
-            + (v[4] * (Ixy + v[6] * (v[8] * (J2 + v[35] - J1) + v[36]))
-                + (v[41] * v[7] - 2.0 * v[29]) * v[0]) * v[2];
-        v[43] = v[6] * (v[8] * (J1 - J2 - v[35]) - v[36]) - Ixy;
-        v[44] = v[0] * (v[43] * v[7] + v[34] * v[2])
-            + v[4]
-                * ((m2 * (v[39] - 1.0) + v[38]) * d * d - Ixx
-                    + (v[37] + v[39] - 2.0) * J2 + (-v[37] - v[39]) * J1);
-        v[45] = v[8] * a;
-        v[46] = v[0] * (d * (v[45] + d) * m1 + J2) * v[2];
-        v[47] = J2 + m2 * d * (d + v[3] * a);
-        v[48] = v[0] * v[47] * v[7];
-        v[49] = m2 * v[18] + v[22] * m1;
-        v[50] = m1 * v[26] + m2 * v[14];
-        v[51] = v[43] * v[2] + v[7] * ((v[3] * (J1 - v[31] - J2) - v[33]) * v[1] + Ixz);
-        v[52] = v[7] * (d * (-v[45] - d) * m1 - J2);
-        v[53] = v[47] * v[2];
-        v[54] = (-a - v[8] * d) * m1 + m2 * (a + v[3] * d);
-        v[55] = m2 * v[1] * v[2];
-        v[56] = v[6] * v[7] * m1;
-        v[57] = v[54] * v[4] + (v[55] + v[56]) * v[0] * d;
-        v[58] = v[57] * v[10];
-        v[59] = v[57] * v[11];
-        v[60] = v[4] * d * (-v[55] - v[56]) + v[54] * v[0];
-        v[61] = (v[6] * v[12] * m1 + m2 * v[1] * (v[23] - v[24])) * d;
-        v[62] = v[17] - v[16];
-        v[63] = d * (m2 * v[1] * v[21] + v[6] * v[62] * m1);
-        v[64] = (v[6] * m1 * v[2] - m2 * v[1] * v[7]) * v[0] * d;
-        v[65] = (v[8] * v[25] - v[10] * v[6] * v[0]) * d * m1;
-        v[66] = (v[8] * (v[19] + v[20]) - v[6] * v[0] * v[11]) * d * m1;
-        v[67] = v[28] * d * m1;
-        v[68] = -(m2 * (-v[10] * v[0] * v[1] - v[3] * v[12]) * d);
-        v[69] = -(m2 * d * (-v[0] * v[1] * v[11] - v[3] * v[62]));
-        v[70] = m2 * v[27] * d;
-        v[71] = m2 + m0 + m1;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = f64::sin(theta);
+        v[4] = f64::sin(gamma1);
+        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
+        v[6] = -v[5] * d - a * v[1] * v[2];
+        v[7] = v[0] * a;
+        v[8] = v[7] + d;
+        v[9] = a * a * v[4] * v[4];
+        v[10] = f64::cos(phi);
+        v[11] = f64::sin(gamma2);
+        v[12] = f64::cos(gamma2);
+        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
+        v[14] = -a * v[1] * v[10] - v[13] * d;
+        v[15] = d + v[12] * a;
+        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
+        v[17] = -v[1] * v[11] * v[10] - v[12] * v[3];
+        v[18] = v[4] * v[1] * v[2] - v[0] * v[3];
+        v[19] = v[3] * Ixx;
+        v[20] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
+        v[21] = Iyz * v[10];
+        v[22] = Iyz * v[2];
+        v[23] = a + v[12] * d;
+        v[24] = Iyy * v[10];
+        v[25] = v[2] * Izz;
+        v[26] = -a - v[0] * d;
+        v[27] = -v[7] - d;
+        v[28] = v[2]
+            * (m2 * (v[1] * v[16] * v[10] + v[23] * v[14]) - v[12] * v[13] * J2
+                + v[17] * v[11] * J1 + (v[24] + v[22]) * v[1])
+            - v[3] * (v[2] * Ixz - Ixy * v[10])
+            + (v[0] * J2 * v[5] + v[1] * (-v[25] - v[21]) + v[18] * v[4] * J1
+                + (v[26] * v[6] + v[1] * v[2] * (v[8] * v[27] - v[9])) * m1) * v[10];
+        v[29] = v[20] - v[19] + (v[0] * v[18] + v[12] * v[17]) * J1
+            + (v[13] * v[11] - v[5] * v[4]) * J2
+            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
+        v[30] = v[1] * (d * v[8] * m1 + J2) * v[10];
+        v[31] = J2 + m2 * d * v[15];
+        v[32] = v[1] * v[31] * v[2];
+        v[33] = f64::cos(psi);
+        v[34] = f64::sin(psi);
+        v[35] = v[3] * v[33] * v[2] - v[10] * v[34];
+        v[36] = v[0] * v[35] - v[33] * v[4] * v[1];
+        v[37] = a * v[4] * (v[35] * v[4] + v[0] * v[33] * v[1]);
+        v[38] = v[2] * v[34] + v[3] * v[33] * v[10];
+        v[39] = v[33] * v[1] * v[11] + v[12] * v[38];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 68],
+    ) {
+        let m0 = params.m0;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a = params.a;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = v[39] * v[15] - a * v[11] * (v[12] * v[33] * v[1] - v[11] * v[38]);
+        v[41] = m1 * (v[1] * (v[36] * v[8] + v[37]) * v[10] + v[38] * v[6])
+            + m2 * (v[1] * v[40] * v[2] + v[35] * v[14]);
+        v[42] = v[33] * v[10] + v[3] * v[2] * v[34];
+        v[43] = v[0] * v[42] - v[4] * v[1] * v[34];
+        v[44] = a * v[4] * (v[0] * v[1] * v[34] + v[4] * v[42]);
+        v[45] = v[3] * v[10] * v[34] - v[33] * v[2];
+        v[46] = v[1] * v[11] * v[34] + v[12] * v[45];
+        v[47] = v[46] * v[15] - a * (v[12] * v[1] * v[34] - v[11] * v[45]) * v[11];
+        v[48] = m1 * (v[1] * (v[43] * v[8] + v[44]) * v[10] + v[45] * v[6])
+            + m2 * (v[1] * v[2] * v[47] + v[42] * v[14]);
+        v[49] = v[0] * v[0];
+        v[50] = v[12] * v[12];
+        v[51] = J1 - J2;
+        v[52] = ((v[0] * v[51] + v[26] * d * m1) * v[4] - Ixy) * v[10]
+            + v[2] * ((v[12] * v[51] - m2 * d * v[23]) * v[11] + Ixz);
+        v[53] = v[2] * (d * v[27] * m1 - J2);
+        v[54] = v[31] * v[10];
+        v[55] = m2 * (v[40] * v[10] + v[35] * v[23] * v[2])
+            + m1 * (v[2] * (v[36] * v[27] - v[37]) + v[26] * v[38] * v[10]);
+        v[56] = m2 * (v[47] * v[10] + v[23] * v[2] * v[42])
+            + (v[26] * v[45] * v[10] + (v[43] * v[27] - v[44]) * v[2]) * m1;
+        v[57] = m2
+            * (v[1] * v[23] * v[2] * v[2] + (v[13] * v[15] - a * v[17] * v[11]) * v[10])
+            + m1
+                * ((v[5] * v[27] - a * v[18] * v[4]) * v[2]
+                    + v[26] * v[1] * v[10] * v[10]);
+        v[58] = d * (v[4] * v[38] * m1 - m2 * v[35] * v[11]);
+        v[59] = (v[4] * v[45] * m1 - m2 * v[11] * v[42]) * d;
+        v[60] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
+        v[61] = v[36] * d * m1;
+        v[62] = v[43] * d * m1;
+        v[63] = v[5] * d * m1;
+        v[64] = m2 * d * v[39];
+        v[65] = m2 * d * v[46];
+        v[66] = m2 * v[13] * d;
+        v[67] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -2496,10 +1952,8 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 302];
+        let mut v = [0.0f64; 246];
         rhs_part0(t, state, params, g_i, dstate, &mut v);
         rhs_part1(t, state, params, g_i, dstate, &mut v);
         rhs_part2(t, state, params, g_i, dstate, &mut v);
@@ -2507,8 +1961,7 @@ pub mod maggi {
         rhs_part4(t, state, params, g_i, dstate, &mut v);
         rhs_part5(t, state, params, g_i, dstate, &mut v);
         rhs_part6(t, state, params, g_i, dstate, &mut v);
-        rhs_part7(t, state, params, g_i, dstate, &mut v);
-        let value = v[22];
+        let value = v[15];
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
@@ -2517,109 +1970,80 @@ pub mod maggi {
             });
         }
         let mut matrix: [[f64; 8]; 8] = [
-            [v[6], v[36], v[37], 0.0, 0.0, v[47], v[55], v[59]],
+            [v[6], v[30], v[31], 0.0, 0.0, v[37], v[41], v[43]],
             [
-                v[36],
-                v[73] * v[13] + v[23] * v[14] * v[124],
-                v[125],
-                v[129],
-                v[132],
-                v[142],
-                v[146],
-                v[149],
+                v[30],
+                v[59] * v[9] + v[29] * v[10] * v[70],
+                v[71],
+                v[74],
+                v[76],
+                v[87],
+                v[98],
+                v[100],
             ],
             [
-                v[37],
-                v[125],
-                v[23] * (v[30] * v[37] - v[14] * v[123] + v[23] * v[122] * v[13]) * v[13]
-                    - v[14] * (v[23] * v[13] * v[72] - v[64] * v[14]),
-                v[152],
+                v[31],
+                v[71],
+                v[29] * (v[68] * v[29] * v[9] - v[10] * v[69] + v[31] * v[13]) * v[9]
+                    - (v[29] * v[58] * v[9] - v[53] * v[10]) * v[10],
+                v[103],
                 0.0,
-                v[153],
-                v[154],
-                v[155],
+                v[104],
+                v[105],
+                v[106],
             ],
-            [0.0, v[129], v[152], J2 + v[8], 0.0, v[157], v[161], v[162]],
-            [0.0, v[132], 0.0, 0.0, v[15] + J2, v[164], v[167], v[168]],
-            [v[47], v[142], v[153], v[157], v[164], v[169], 0.0, 0.0],
-            [v[55], v[146], v[154], v[161], v[167], 0.0, v[169], 0.0],
-            [v[59], v[149], v[155], v[162], v[168], 0.0, 0.0, v[169]],
+            [0.0, v[74], v[103], J2 + d * d * m1, 0.0, v[107], v[108], v[109]],
+            [0.0, v[76], 0.0, 0.0, m2 * d * d + J2, v[110], v[111], v[112]],
+            [v[37], v[87], v[104], v[107], v[110], v[113], 0.0, 0.0],
+            [v[41], v[98], v[105], v[108], v[111], 0.0, v[113], 0.0],
+            [v[43], v[100], v[106], v[109], v[112], 0.0, 0.0, v[113]],
         ];
         let mut force: [f64; 8] = [
-            v[242],
-            v[277] * v[23] * v[14] + v[13] * v[288],
-            v[277] * v[23] * v[13] - v[14] * v[288],
-            phi_dot
-                * (-v[239] * v[14] * v[151] - v[151] * v[202] - v[0] * v[214] * d * m1)
-                - (v[30] * psi_dot * v[151] * v[13] + d * (v[286] + v[287]) * m1)
-                    * theta_dot - v[225] * v[150] * v[13]
-                + (v[206] * J1 + (-v[203] - v[205]) * J2) * v[207]
-                + d * m1
-                    * (v[183] * v[290]
-                        - (X_dot * v[291] + a * v[7] * (v[177] - v[198]) + Z_dot * v[243]
-                            + Y_dot * v[289]) * gamma1_dot
-                        + v[181] * (v[285] * v[7] * v[22] + v[0] * v[179])
-                        + v[292] * v[175] - psi_dot * (v[270] + v[271])),
-            v[221] * (J2 * v[218] + (-v[216] - v[217]) * J1)
-                - phi_dot
-                    * (theta_dot * v[14] * v[254] + v[22] * v[131] * psi_dot * v[13]
-                        + v[3] * m2 * d * v[235])
-                + m2 * d
-                    * (v[197] * (v[293] - v[295] - theta_dot * v[40] * v[273] - v[296])
-                        - (-v[275] - v[276]) * psi_dot
-                        - gamma2_dot
-                            * (Z_dot * v[77] - X_dot * v[294] + a * v[210] * v[19]
-                                - v[297] * Y_dot)
-                        + v[192]
-                            * (v[300] - v[298] - v[299] - theta_dot * v[273] * v[38])
-                        + (v[282] * v[22] * v[19] + v[3] * (v[30] * v[187] - v[182]))
-                            * v[190])
-                + v[131] * (-v[225] * v[14] - v[239] * phi_dot * v[13])
-                - (v[30] * psi_dot * v[14] * v[254]
-                    + m2 * d * ((-v[228] - v[229]) * v[273] + v[279])) * theta_dot,
-            d
-                * (-v[46] * v[227]
-                    - m2 * gamma2_dot
-                        * (theta_dot * v[105] * v[40] + v[293] - v[295] - v[296])
-                    - v[292] * gamma1_dot * m1
-                    - phi_dot
-                        * (v[240] * phi_dot + v[0] * gamma1_dot * v[42] * m1
-                            + v[3] * m2 * gamma2_dot * v[45]
-                            + theta_dot * v[58] * v[40] * v[22] + psi_dot * v[184]))
-                - ((phi_dot * v[184] - m2 * gamma2_dot * v[274]
-                    + v[245] * gamma1_dot * m1) * d + theta_dot * v[278] * v[38]
-                    + v[250] * psi_dot) * psi_dot - v[23] * v[225] * v[251]
-                - theta_dot * (v[259] * psi_dot * v[38] + v[40] * v[301])
-                - v[239] * v[138] * v[40] * phi_dot,
-            (-v[290] * gamma1_dot * m1
-                - m2 * gamma2_dot
-                    * (theta_dot * v[105] * v[38] - v[298] - v[299] + v[300])
-                - (theta_dot * v[58] * v[22] * v[38] + v[0] * gamma1_dot * v[53] * m1
-                    + v[46] * psi_dot + v[241] * phi_dot
-                    + v[3] * m2 * gamma2_dot * v[50]) * phi_dot - v[227] * v[54]) * d
-                - psi_dot
-                    * (theta_dot * v[138] * v[40] + v[251] * psi_dot
-                        + (v[156] * gamma1_dot * m1 - m2 * gamma2_dot * v[163]
-                            + v[46] * phi_dot) * d)
-                - theta_dot * (v[40] * psi_dot * v[257] + v[301] * v[38])
-                - v[23] * v[225] * (v[143] + v[144]) - v[239] * v[138] * phi_dot * v[38],
-            d
-                * (-m2 * gamma2_dot
-                    * (gamma2_dot * v[77] + theta_dot * v[261]
-                        - v[3] * v[22] * v[14] * phi_dot)
-                    - (v[231] * v[30] * theta_dot
-                        + v[22]
-                            * (v[0] * gamma1_dot * m1 * v[13] + phi_dot * v[147]
-                                - v[3] * m2 * gamma2_dot * v[14])) * phi_dot
-                    - v[227] * v[58] * v[22]
-                    - (theta_dot * v[262] + gamma1_dot * v[243]
-                        + v[0] * v[22] * phi_dot * v[13]) * gamma1_dot * m1)
-                - v[239] * v[148] * phi_dot
-                - theta_dot
-                    * (theta_dot * v[278]
-                        + d
-                            * (gamma1_dot * v[262] * m1 + v[231] * v[30] * phi_dot
-                                + m2 * gamma2_dot * v[261])),
+            v[188],
+            v[29] * v[10] * v[221] + v[222] * v[9],
+            v[29] * v[221] * v[9] - v[10] * v[222],
+            v[15] * psi_dot * v[10] * v[102] * phi_dot
+                - theta_dot * v[187] * v[101] * v[9] + J2 * (v[156] - v[155] - v[200])
+                - d * m1 * v[197] + v[205],
+            v[166] * v[167] * v[173] + (v[136] - theta_dot * v[187] * v[10]) * v[75]
+                - v[212] - m2 * v[219] * d,
+            theta_dot * (-v[186] * d * v[36] - (v[84] + v[85]) * v[187] * v[29])
+                - m2 * (v[35] * v[184] + v[77] * v[218] + v[219] * v[78])
+                - (v[151] * v[34] + v[80] * v[197] + v[195] * v[81]) * m1
+                + v[15] * psi_dot * phi_dot * v[83],
+            (-v[40] * v[186] * d - v[187] * v[29] * (v[95] + v[96])) * theta_dot
+                - m2 * (v[184] * v[38] + v[219] * v[89] + v[88] * v[218])
+                - (v[195] * v[91] + v[151] * v[39] + v[93] * v[197]) * m1
+                + v[15] * psi_dot * phi_dot * v[94],
+            v[15] * (v[99] * psi_dot * phi_dot - theta_dot * v[42] * v[186] * d)
+                - m2
+                    * (((0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228] + 0.25 * v[229])
+                        * phi_dot * phi_dot
+                        + (theta_dot * v[230]
+                            + phi_dot
+                                * (v[233] - 0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
+                                    + 0.5 * v[229] - v[234])) * theta_dot
+                        + gamma2_dot
+                            * (phi_dot
+                                * (0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
+                                    - 0.5 * v[229])
+                                + (-v[233] - 0.5 * v[226] - 0.5 * v[227]
+                                    - 2.0 * (v[15] * v[0]) - 0.5 * v[228] - 0.5 * v[229]
+                                    - v[234]) * theta_dot + gamma2_dot * v[230])) * d - v[223])
+                - (v[223]
+                    + (theta_dot
+                        * ((0.5 * v[240] - v[237] + v[241] + 2.0 * (v[1] * v[15])
+                            + 0.5 * v[242] - 0.5 * v[243] - 0.5 * v[244]) * gamma1_dot
+                            + theta_dot * v[245]
+                            + (0.5 * v[240] - 0.5 * v[242] - 0.5 * v[243] + 0.5 * v[244])
+                                * phi_dot)
+                        + gamma1_dot
+                            * (v[245] * gamma1_dot
+                                + phi_dot
+                                    * (v[237] - 0.5 * v[240] + v[241] - 0.5 * v[242]
+                                        - 0.5 * v[243] - 0.5 * v[244]))
+                        + (0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243] + 0.25 * v[244])
+                            * phi_dot * phi_dot) * d) * m1,
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -2636,15 +2060,15 @@ pub mod maggi {
         dstate[5] = X_dot;
         dstate[6] = Y_dot;
         dstate[7] = Z_dot;
-        dstate[8] = 0.0 * force[0] + v[23] * v[14] * force[1] + v[23] * v[13] * force[2]
+        dstate[8] = 0.0 * force[0] + v[29] * v[10] * force[1] + v[29] * v[9] * force[2]
             + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + 0.0 * force[7] + v[23] * v[225];
-        dstate[9] = 0.0 * force[0] + v[13] * force[1] + -v[14] * force[2]
-            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + 0.0 * force[7] + v[239] * phi_dot;
-        dstate[10] = 1.0 * force[0] + v[30] * v[23] * v[14] * force[1]
-            + v[30] * v[23] * v[13] * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + v[227];
+            + 0.0 * force[7] + theta_dot * v[187] * v[29];
+        dstate[9] = 0.0 * force[0] + v[9] * force[1] + -v[10] * force[2] + 0.0 * force[3]
+            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
+            + -(v[15] * psi_dot * phi_dot);
+        dstate[10] = 1.0 * force[0] + v[13] * v[29] * v[10] * force[1]
+            + v[13] * v[29] * v[9] * force[2] + 0.0 * force[3] + 0.0 * force[4]
+            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + theta_dot * v[186];
         dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
             + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
         dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
@@ -2670,7 +2094,7 @@ pub mod maggi {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -2686,63 +2110,63 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = v[0] * v[0];
-        v[2] = m1 * (1.0 - v[1]);
-        v[3] = f64::cos(gamma2);
-        v[4] = v[3] * v[3];
-        v[5] = m2 * (1.0 - v[4]);
-        v[6] = Ixx + d * d * (v[2] + v[5]) + (v[1] + v[4]) * J1
-            + J2 * (2.0 - v[1] - v[4]);
-        v[7] = f64::sin(gamma1);
-        v[8] = d * d * m1;
-        v[9] = J1 - J2 - v[8];
-        v[10] = a * d * m1;
-        v[11] = v[0] * v[9] - v[10];
-        v[12] = v[7] * v[11] - Ixy;
-        v[13] = f64::cos(phi);
-        v[14] = f64::sin(phi);
-        v[15] = m2 * d * d;
-        v[16] = J1 - v[15] - J2;
-        v[17] = m2 * a * d;
-        v[18] = v[3] * v[16] - v[17];
-        v[19] = f64::sin(gamma2);
-        v[20] = v[18] * v[19] + Ixz;
-        v[21] = v[12] * v[13] + v[14] * v[20];
-        v[22] = f64::cos(theta);
-        v[23] = 1.0 / v[22];
-        v[24] = v[15] + J2 - J1;
-        v[25] = v[3] * v[24];
-        v[26] = v[25] + v[17];
-        v[27] = v[26] * v[19] - Ixz;
-        v[28] = v[12] * v[14] + v[27] * v[13];
-        v[29] = v[22] * v[28];
-        v[30] = f64::sin(theta);
-        v[31] = m2 * (v[4] - 1.0);
-        v[32] = (v[1] - 1.0) * m1;
-        v[33] = (v[31] + v[32]) * d * d - Ixx + (v[1] + v[4] - 2.0) * J2
-            + (-v[1] - v[4]) * J1;
-        v[34] = v[30] * v[33];
-        v[35] = v[29] + v[30] * v[6] + v[34];
-        v[36] = v[21] * v[13] + v[23] * v[35] * v[14];
-        v[37] = v[23] * v[35] * v[13] - v[21] * v[14];
-        v[38] = f64::sin(psi);
-        v[39] = v[14] * v[38];
+        v[0] = f64::sin(gamma2);
+        v[1] = f64::sin(gamma1);
+        v[2] = f64::cos(gamma1);
+        v[3] = v[2] * v[2];
+        v[4] = f64::cos(gamma2);
+        v[5] = v[4] * v[4];
+        v[6] = Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
+            + (v[0] * v[0] + v[1] * v[1]) * J2;
+        v[7] = J1 - J2;
+        v[8] = -a - v[2] * d;
+        v[9] = f64::cos(phi);
+        v[10] = f64::sin(phi);
+        v[11] = a + v[4] * d;
+        v[12] = ((v[2] * v[7] + v[8] * d * m1) * v[1] - Ixy) * v[9]
+            + v[10] * ((v[4] * v[7] - m2 * d * v[11]) * v[0] + Ixz);
+        v[13] = f64::sin(theta);
+        v[14] = v[13] * Ixx;
+        v[15] = f64::cos(theta);
+        v[16] = v[15] * (-Ixy * v[10] - Ixz * v[9]);
+        v[17] = v[2] * v[13];
+        v[18] = v[1] * v[15] * v[10] - v[17];
+        v[19] = v[4] * v[13];
+        v[20] = -v[15] * v[0] * v[9] - v[19];
+        v[21] = (v[2] * v[18] + v[4] * v[20]) * J1;
+        v[22] = v[4] * v[15] * v[9] - v[13] * v[0];
+        v[23] = v[2] * v[15] * v[10] + v[13] * v[1];
+        v[24] = (v[22] * v[0] - v[23] * v[1]) * J2;
+        v[25] = -v[23] * d - a * v[15] * v[10];
+        v[26] = -a * v[15] * v[9] - v[22] * d;
+        v[27] = (v[1] * m1 * v[25] - m2 * v[0] * v[26]) * d;
+        v[28] = v[16] - v[14] + v[21] + v[13] * v[6] + v[24] + v[27];
+        v[29] = 1.0 / v[15];
+        v[30] = v[12] * v[9] + v[28] * v[29] * v[10];
+        v[31] = v[28] * v[29] * v[9] - v[12] * v[10];
+        v[32] = f64::sin(psi);
+        v[33] = f64::cos(psi);
+        v[34] = v[10] * v[32] + v[13] * v[33] * v[9];
+        v[35] = v[13] * v[33] * v[10] - v[9] * v[32];
+        v[36] = v[1] * v[34] * m1 - m2 * v[35] * v[0];
+        v[37] = d * v[36];
+        v[38] = v[33] * v[9] + v[13] * v[10] * v[32];
+        v[39] = v[13] * v[9] * v[32] - v[33] * v[10];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
-        let psi = state[0];
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -2750,167 +2174,191 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = f64::cos(psi);
-        v[41] = v[30] * v[40] * v[13];
-        v[42] = v[39] + v[41];
-        v[43] = v[13] * v[38];
-        v[44] = v[30] * v[40] * v[14];
-        v[45] = v[43] - v[44];
-        v[46] = v[7] * v[42] * m1 + m2 * v[19] * v[45];
-        v[47] = v[46] * d;
-        v[48] = v[40] * v[13];
-        v[49] = v[30] * v[14] * v[38];
-        v[50] = -v[48] - v[49];
-        v[51] = v[40] * v[14];
-        v[52] = v[30] * v[13] * v[38];
-        v[53] = v[52] - v[51];
-        v[54] = m2 * v[19] * v[50] + v[7] * v[53] * m1;
-        v[55] = d * v[54];
-        v[56] = v[7] * m1 * v[13];
-        v[57] = m2 * v[19] * v[14];
-        v[58] = v[56] - v[57];
-        v[59] = v[58] * v[22] * d;
-        v[60] = J2 - J1;
-        v[61] = J1 - J2;
-        v[62] = Iyy + v[0] * v[0] * v[60] + v[3] * v[3] * v[61] + d * d * (v[32] + v[5])
-            - Izz;
-        v[63] = Iyz * v[14];
-        v[64] = a * (2.0 * (v[0] * d * m1) + a * (m2 + m1)) + J2
-            + v[3] * (v[25] + 2.0 * v[17]) + v[8] + Izz
-            + (v[62] * v[13] + 2.0 * v[63]) * v[13] + J1;
-        v[65] = v[30] * v[27] * v[14];
-        v[66] = Iyz * v[22];
-        v[67] = J2 + v[8] - J1;
-        v[68] = v[0] * v[67] + v[10];
-        v[69] = Ixy + v[7] * v[68];
-        v[70] = Iyz * v[13];
-        v[71] = (v[30] * v[69] + (v[62] * v[14] - 2.0 * v[70]) * v[22]) * v[13];
-        v[72] = v[65] + v[66] + v[71] + v[21] * v[30];
-        v[73] = v[64] * v[13] + v[23] * v[14] * v[72];
-        v[74] = v[29] + v[34];
-        v[75] = v[22] * v[19] * v[13];
-        v[76] = v[3] * v[30];
-        v[77] = -v[75] - v[76];
-        v[78] = v[7] * v[22] * v[14];
-        v[79] = v[0] * v[30];
+        v[40] = v[1] * v[39] * m1 - m2 * v[0] * v[38];
+        v[41] = v[40] * d;
+        v[42] = v[1] * m1 * v[9] - m2 * v[0] * v[10];
+        v[43] = v[42] * v[15] * d;
+        v[44] = Iyy * v[9];
+        v[45] = Iyz * v[10];
+        v[46] = d + v[4] * a;
+        v[47] = a * a * v[0] * v[0] + v[46] * v[46];
+        v[48] = v[10] * Izz;
+        v[49] = Iyz * v[9];
+        v[50] = a * a * v[1] * v[1];
+        v[51] = v[2] * a;
+        v[52] = -v[51] - d;
+        v[53] = J2 * ((v[3] + 1.0) * v[9] * v[9] + (v[5] + 1.0) * v[10] * v[10])
+            + (v[1] * v[1] * v[9] * J1 + v[44] + v[45]) * v[9]
+            + (v[47] * v[9] * v[9] + v[11] * v[11] * v[10] * v[10]) * m2
+            + v[10] * (v[48] + v[49] + v[0] * v[0] * v[10] * J1)
+            + ((v[50] + v[52] * v[52]) * v[10] * v[10] + v[8] * v[8] * v[9] * v[9]) * m1;
+        v[54] = v[10]
+            * (m2 * (v[15] * v[47] * v[9] + v[11] * v[26]) - v[4] * v[22] * J2
+                + v[20] * v[0] * J1 + (v[44] + v[45]) * v[15]);
+        v[55] = v[13] * (v[10] * Ixz - Ixy * v[9]);
+        v[56] = v[51] + d;
+        v[57] = (v[2] * J2 * v[23] + v[15] * (-v[48] - v[49]) + v[18] * v[1] * J1
+            + (v[8] * v[25] + v[15] * v[10] * (v[56] * v[52] - v[50])) * m1) * v[9];
+        v[58] = v[54] - v[55] + v[57] + v[13] * v[12];
+        v[59] = v[53] * v[9] + v[29] * v[58] * v[10];
+        v[60] = (v[25] * v[25] + (v[56] * v[56] + v[50]) * v[15] * v[15] * v[9] * v[9])
+            * m1;
+        v[61] = m2 * (v[26] * v[26] + v[15] * v[15] * v[10] * v[10] * v[47]);
+        v[62] = (v[20] * v[20] + v[18] * v[18]) * J1;
+        v[63] = v[16] - v[14] + v[21] + v[24] + v[27];
+        v[64] = v[9] * v[9] + v[10] * v[10];
+        v[65] = J2 * (v[15] * v[15] * v[64] + v[22] * v[22] + v[23] * v[23]);
+        v[66] = v[13] * (v[16] - v[14]);
+        v[67] = v[15]
+            * (((Iyy * v[10] - v[49]) * v[15] + v[13] * Ixy) * v[10]
+                + (v[15] * (Izz * v[9] - v[45]) + v[13] * Ixz) * v[9]);
+        v[68] = v[60] + v[61] + v[62] + v[13] * v[63] + v[65] - v[66] + v[67];
+        v[69] = v[54] - v[55] + v[57];
+        v[70] = v[68] * v[29] * v[10] + v[13] * v[30] + v[69] * v[9];
+        v[71] = v[29] * v[9] * v[70] - v[59] * v[10];
+        v[72] = d * v[56] * m1;
+        v[73] = d * v[52] * m1;
+        v[74] = (v[72] + v[73]) * v[10] * v[9];
+        v[75] = J2 + m2 * d * v[46];
+        v[76] = v[75] * v[64];
+        v[77] = v[4] * v[33] * v[15] - v[0] * v[34];
+        v[78] = v[33] * v[15] * v[0] + v[4] * v[34];
+        v[79] = v[78] * v[46] - a * v[0] * v[77];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part2(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let gamma1_dot = state[11];
+        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[78] - v[79];
-        v[81] = (v[77] * v[77] + v[80] * v[80]) * J1;
-        v[82] = v[3] * v[40] * v[22];
-        v[83] = v[19] * v[42];
-        v[84] = d * (v[82] - v[83]);
-        v[85] = a * v[40] * v[22];
-        v[86] = -v[84] - v[85];
-        v[87] = a * v[22] * v[38];
-        v[88] = v[3] * v[22] * v[38];
-        v[89] = v[51] - v[52];
-        v[90] = v[87] - (-v[88] - v[89] * v[19]) * d;
-        v[91] = m2 * (v[86] * v[86] + v[90] * v[90]);
-        v[92] = v[0] * v[22] * v[38];
-        v[93] = d * (v[7] * v[50] - v[92]) - v[87];
-        v[94] = v[44] - v[43];
-        v[95] = v[94] * v[7];
-        v[96] = v[0] * v[40] * v[22];
-        v[97] = d * (v[95] + v[96]);
-        v[98] = v[97] + v[85];
-        v[99] = (v[93] * v[93] + v[98] * v[98]) * m1;
-        v[100] = v[13] * v[13];
-        v[101] = v[14] * v[14];
-        v[102] = v[100] + v[101];
-        v[103] = v[30] * v[19];
-        v[104] = v[3] * v[22] * v[13];
-        v[105] = v[104] - v[103];
-        v[106] = v[0] * v[22] * v[14] + v[30] * v[7];
-        v[107] = J2 * (v[22] * v[22] * v[102] + v[105] * v[105] + v[106] * v[106]);
-        v[108] = v[30] * Ixx;
-        v[109] = Ixy * v[14];
-        v[110] = Ixz * v[13];
-        v[111] = v[22] * (-v[109] - v[110]);
-        v[112] = v[30] * (v[111] - v[108]);
-        v[113] = Iyy * v[14];
-        v[114] = (v[113] - v[70]) * v[22];
-        v[115] = v[30] * Ixy;
-        v[116] = (v[114] + v[115]) * v[14];
-        v[117] = Izz * v[13];
-        v[118] = v[22] * (v[117] - v[63]);
-        v[119] = v[30] * Ixz;
+        v[80] = v[2] * v[35] - v[33] * v[1] * v[15];
+        v[81] = v[35] * v[1] + v[2] * v[33] * v[15];
+        v[82] = a * v[1] * v[81];
+        v[83] = m2 * (v[79] * v[9] + v[35] * v[11] * v[10])
+            + m1 * (v[10] * (v[80] * v[52] - v[82]) + v[8] * v[34] * v[9]);
+        v[84] = m1 * (v[15] * (v[80] * v[56] + v[82]) * v[9] + v[34] * v[25]);
+        v[85] = m2 * (v[15] * v[79] * v[10] + v[35] * v[26]);
+        v[86] = v[13] * d * v[36] + v[84] + v[85];
+        v[87] = v[83] * v[9] + v[86] * v[29] * v[10];
+        v[88] = v[4] * v[15] * v[32] - v[0] * v[39];
+        v[89] = v[15] * v[0] * v[32] + v[4] * v[39];
+        v[90] = v[89] * v[46] - a * v[88] * v[0];
+        v[91] = v[2] * v[15] * v[32] + v[1] * v[38];
+        v[92] = a * v[1] * v[91];
+        v[93] = v[2] * v[38] - v[1] * v[15] * v[32];
+        v[94] = m2 * (v[90] * v[9] + v[11] * v[10] * v[38])
+            + (v[8] * v[39] * v[9] + (v[93] * v[52] - v[92]) * v[10]) * m1;
+        v[95] = m1 * (v[15] * (v[93] * v[56] + v[92]) * v[9] + v[39] * v[25]);
+        v[96] = m2 * (v[15] * v[10] * v[90] + v[38] * v[26]);
+        v[97] = v[13] * v[40] * d + v[95] + v[96];
+        v[98] = v[94] * v[9] + v[97] * v[29] * v[10];
+        v[99] = m2
+            * (v[15] * v[11] * v[10] * v[10] + (v[22] * v[46] - a * v[20] * v[0]) * v[9])
+            + m1
+                * ((v[23] * v[52] - a * v[18] * v[1]) * v[10]
+                    + v[8] * v[15] * v[9] * v[9]);
+        v[100] = v[13] * v[42] * d * v[10] + v[99] * v[9];
+        v[101] = v[72] + J2;
+        v[102] = v[73] - J2;
+        v[103] = v[101] * v[9] * v[9] - v[10] * v[10] * v[102];
+        v[104] = v[86] * v[29] * v[9] - v[10] * v[83];
+        v[105] = v[97] * v[29] * v[9] - v[10] * v[94];
+        v[106] = v[13] * v[42] * d * v[9] - v[99] * v[10];
+        v[107] = v[80] * d * m1;
+        v[108] = v[93] * d * m1;
+        v[109] = v[23] * d * m1;
+        v[110] = m2 * d * v[78];
+        v[111] = m2 * d * v[89];
+        v[112] = m2 * v[22] * d;
+        v[113] = m2 + m0 + m1;
+        v[114] = v[15] * psi_dot * v[9];
+        v[115] = theta_dot * v[10];
+        v[116] = v[114] + gamma1_dot - v[115];
+        v[117] = theta_dot * v[9];
+        v[118] = v[15] * psi_dot * v[10];
+        v[119] = v[117] + v[118];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part3(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a = params.a;
         let J2 = params.J2;
-        v[120] = (v[118] + v[119]) * v[13];
-        v[121] = v[22] * (v[116] + v[120]);
-        v[122] = v[30] * v[74] + v[81] + v[91] + v[99] + v[107] - v[112] + v[121];
-        v[123] = v[65] + v[66] + v[71];
-        v[124] = v[30] * v[36] + v[23] * v[122] * v[14] + v[123] * v[13];
-        v[125] = v[23] * v[124] * v[13] - v[14] * v[73];
-        v[126] = v[0] * a;
-        v[127] = d * (v[126] + d) * m1;
-        v[128] = d * (-v[126] - d) * m1;
-        v[129] = (v[127] + v[128]) * v[14] * v[13];
-        v[130] = v[3] * a;
-        v[131] = J2 + m2 * d * (d + v[130]);
-        v[132] = v[131] * v[102];
-        v[133] = v[0] * d;
-        v[134] = v[3] * d;
-        v[135] = (-a - v[133]) * m1 + m2 * (a + v[134]);
-        v[136] = m2 * v[19] * v[13];
-        v[137] = v[7] * v[14] * m1;
-        v[138] = v[135] * v[30] + (v[136] + v[137]) * v[22] * d;
-        v[139] = m2 * v[90];
-        v[140] = v[93] * m1;
-        v[141] = v[139] + v[46] * v[30] * d + v[140];
-        v[142] = v[138] * v[40] * v[13] + v[23] * v[141] * v[14];
-        v[143] = m1 * v[98];
-        v[144] = m2 * v[86];
-        v[145] = v[143] + v[144] + v[30] * d * v[54];
-        v[146] = v[23] * v[14] * v[145] + v[138] * v[13] * v[38];
-        v[147] = -v[136] - v[137];
-        v[148] = v[30] * d * v[147] + v[135] * v[22];
-        v[149] = v[148] * v[13] + v[30] * v[58] * d * v[14];
-        v[150] = v[127] + J2;
-        v[151] = v[128] - J2;
-        v[152] = v[150] * v[13] * v[13] - v[14] * v[14] * v[151];
-        v[153] = v[23] * v[141] * v[13] - v[138] * v[40] * v[14];
-        v[154] = v[23] * v[145] * v[13] - v[138] * v[14] * v[38];
-        v[155] = v[30] * v[58] * d * v[13] - v[14] * v[148];
-        v[156] = v[0] * v[94] - v[40] * v[7] * v[22];
-        v[157] = v[156] * d * m1;
-        v[158] = v[48] + v[49];
-        v[159] = v[7] * v[22] * v[38];
+        v[120] = v[13] * psi_dot;
+        v[121] = phi_dot - v[120];
+        v[122] = v[1] * v[119] + v[2] * v[121];
+        v[123] = v[116] * v[7] * v[122];
+        v[124] = Z_dot * v[15] * v[10];
+        v[125] = v[35] * X_dot;
+        v[126] = Y_dot * v[38];
+        v[127] = v[114] - v[115];
+        v[128] = a * v[127];
+        v[129] = v[124] + v[125] + v[126] + v[128];
+        v[130] = Y_dot * v[32];
+        v[131] = X_dot * v[33];
+        v[132] = v[15] * (v[130] + v[131]) - Z_dot * v[13];
+        v[133] = v[2] * v[129] - v[132] * v[1] + v[116] * d;
+        v[134] = -phi_dot - v[120];
+        v[135] = theta_dot * v[134] * v[10];
+        v[136] = v[15] * psi_dot * phi_dot * v[9];
+        v[137] = v[135] + v[136];
+        v[138] = a * v[137];
+        v[139] = v[135] + v[136] - gamma1_dot * v[121];
+        v[140] = gamma1_dot * v[119];
+        v[141] = theta_dot * v[15] * psi_dot;
+        v[142] = v[2] * v[139] + v[1] * (v[141] - v[140]);
+        v[143] = v[13] * phi_dot;
+        v[144] = psi_dot - v[143];
+        v[145] = X_dot
+            * (v[121] * v[9] * v[32]
+                + v[33] * (theta_dot * v[15] * v[9] + v[144] * v[10]));
+        v[146] = Z_dot * (-v[15] * v[10] * phi_dot - v[13] * theta_dot * v[9]);
+        v[147] = v[2] * v[132] + v[1] * v[129];
+        v[148] = v[2] * v[119] - v[1] * v[121];
+        v[149] = theta_dot * v[15] * v[32] + v[33] * (v[120] - phi_dot);
+        v[150] = (v[144] * v[10] * v[32] + v[149] * v[9]) * Y_dot;
+        v[151] = v[133] * v[122] - v[138] - d * v[142] + v[145] + v[146]
+            - v[147] * v[148] + v[150];
+        v[152] = J2 * v[142];
+        v[153] = v[127] * Izz - Iyz * v[119] - Ixz * v[121];
+        v[154] = v[153] * v[119];
+        v[155] = theta_dot * v[134] * v[9];
+        v[156] = v[15] * psi_dot * v[10] * phi_dot;
+        v[157] = v[155] - v[156];
+        v[158] = v[157] * Ixz;
+        v[159] = Iyy * v[119] - v[127] * Iyz - Ixy * v[121];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2920,8 +2368,9 @@ pub mod maggi {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
+        let theta = state[1];
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
@@ -2930,57 +2379,66 @@ pub mod maggi {
         let X_dot = state[13];
         let Y_dot = state[14];
         let Z_dot = state[15];
-        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        v[160] = v[0] * v[158] - v[159];
-        v[161] = v[160] * d * m1;
-        v[162] = v[106] * d * m1;
-        v[163] = -v[40] * v[22] * v[19] - v[3] * v[42];
-        v[164] = -(m2 * v[163] * d);
-        v[165] = v[22] * v[19] * v[38];
-        v[166] = -v[165] - v[3] * v[53];
-        v[167] = -(m2 * d * v[166]);
-        v[168] = m2 * v[105] * d;
-        v[169] = m2 + m0 + m1;
-        v[170] = v[93] * psi_dot;
-        v[171] = (v[156] * gamma1_dot + v[7] * v[42] * phi_dot) * d;
-        v[172] = a * v[30];
-        v[173] = v[80] * d - v[172];
-        v[174] = theta_dot * v[40] * v[173];
-        v[175] = v[170] + X_dot + v[171] + v[174];
-        v[176] = a * theta_dot * v[22];
-        v[177] = theta_dot * v[14];
-        v[178] = gamma1_dot - v[177];
-        v[179] = v[30] * v[178] + v[22] * phi_dot * v[13];
-        v[180] = gamma1_dot * v[14];
-        v[181] = Z_dot - v[176]
-            + (v[7] * v[179] + v[0] * v[22] * (v[180] - theta_dot)) * d;
-        v[182] = v[22] * v[14] * phi_dot;
-        v[183] = d * (v[7] * phi_dot * v[53] + v[160] * gamma1_dot) + Y_dot
-            + theta_dot * v[173] * v[38] + psi_dot * v[98];
-        v[184] = m2 * v[19] * v[158] + v[89] * v[7] * m1;
-        v[185] = v[46] * Y_dot + X_dot * v[184];
-        v[186] = theta_dot * v[13];
-        v[187] = -gamma2_dot - v[186];
-        v[188] = gamma2_dot * v[13];
-        v[189] = v[19] * v[14] * phi_dot;
-        v[190] = Z_dot
-            + d
-                * (v[30] * v[187] * v[19]
-                    + (v[3] * (v[188] + theta_dot) - v[189]) * v[22]) + v[176];
-        v[191] = v[172] - v[77] * d;
-        v[192] = psi_dot * v[86] + theta_dot * v[191] * v[38] + Y_dot
-            + (v[19] * v[50] * phi_dot - gamma2_dot * v[166]) * d;
-        v[193] = -v[39] - v[41];
-        v[194] = theta_dot * v[40] * v[191];
-        v[195] = (v[19] * phi_dot * v[45] - gamma2_dot * v[163]) * d;
-        v[196] = psi_dot * v[90];
-        v[197] = v[194] + X_dot + v[195] + v[196];
-        v[198] = v[22] * psi_dot * v[13];
-        v[199] = v[198] - v[177];
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[160] = v[127] * v[159];
+        v[161] = Ixy * v[137];
+        v[162] = v[2] * (v[140] - v[141]) + v[139] * v[1];
+        v[163] = gamma2_dot * v[121];
+        v[164] = -v[127] * gamma2_dot - v[141];
+        v[165] = v[0] * (v[156] - v[155] - v[163]) + v[4] * v[164];
+        v[166] = J2 - J1;
+        v[167] = v[4] * v[121] - v[127] * v[0];
+        v[168] = gamma2_dot + v[117] + v[118];
+        v[169] = v[166] * v[167] * v[168];
+        v[170] = v[143] - psi_dot;
+        v[171] = Y_dot * (v[149] * v[10] + v[170] * v[9] * v[32]);
+        v[172] = v[157] * a;
+        v[173] = v[0] * v[121] + v[4] * v[127];
+        v[174] = a * v[119];
+        v[175] = Y_dot * v[39];
+        v[176] = X_dot * v[34];
+        v[177] = Z_dot * v[15] * v[9];
+        v[178] = v[174] + v[175] + v[176] + v[177];
+        v[179] = v[132] * v[4] - v[178] * v[0];
+        v[180] = Z_dot * (v[15] * phi_dot * v[9] - v[13] * theta_dot * v[10]);
+        v[181] = X_dot
+            * (v[33] * (theta_dot * v[15] * v[10] + v[170] * v[9])
+                + v[10] * v[121] * v[32]);
+        v[182] = v[168] * d + v[132] * v[0] + v[4] * v[178];
+        v[183] = v[164] * v[0] + (v[155] - v[156] + v[163]) * v[4];
+        v[184] = v[171] - v[172] + v[173] * v[179] + v[180] + v[181] - v[167] * v[182]
+            - v[183] * d;
+        v[185] = J2 * v[183];
+        v[186] = ((0.25 - 0.25 * (v[29] * f64::cos(3.0 * theta))) * psi_dot + v[143])
+            * v[29] + v[15] * psi_dot;
+        v[187] = 0.5 * (v[29] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        v[188] = (v[123] - v[151] * d * m1 + v[152]) * v[1] - v[154] + v[158] + v[160]
+            + v[161] + v[12] * v[15] * psi_dot * phi_dot
+            + (-v[2] * v[162] - v[4] * v[165]) * J1
+            + (m2 * v[184] * d - v[169] - v[185]) * v[0]
+            + theta_dot
+                * (Ixx * v[15] * psi_dot - v[6] * v[186] - v[187] * v[29] * v[63]);
+        v[189] = v[123] + v[152];
+        v[190] = v[175] - v[174] + v[176] + v[177] - d * v[148];
+        v[191] = v[15] * psi_dot * (v[33] * Y_dot - X_dot * v[32]);
+        v[192] = gamma1_dot * v[129];
+        v[193] = theta_dot * (v[13] * (-v[130] - v[131]) - Z_dot * v[15]);
+        v[194] = v[171] + v[172] + v[180] + v[181] - v[132] * gamma1_dot;
+        v[195] = v[148] * v[190] - v[133] * v[116] + v[2] * (v[191] + v[192] + v[193])
+            + v[194] * v[1];
+        v[196] = a * v[1] * v[195];
+        v[197] = v[157] * d - v[122] * v[190] + v[1] * (-v[191] - v[192] - v[193])
+            + v[2] * v[194] + v[116] * v[147];
+        v[198] = theta_dot * v[15] * psi_dot * Ixz;
+        v[199] = v[159] * v[121];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2990,368 +2448,105 @@ pub mod maggi {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
+        let gamma2_dot = state[12];
+        let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
         let d = params.d;
+        let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[200] = v[199] * Iyz;
-        v[201] = v[22] * psi_dot * v[14];
-        v[202] = v[186] + v[201];
-        v[203] = v[7] * v[202];
-        v[204] = phi_dot - v[30] * psi_dot;
-        v[205] = v[0] * v[204];
-        v[206] = v[203] + v[205];
-        v[207] = v[0] * v[202] - v[7] * v[204];
-        v[208] = Iyy * v[202];
-        v[209] = Ixy * v[204];
-        v[210] = -v[186] - v[201];
-        v[211] = 2.0 * J1 - 2.0 * J2 - 2.0 * v[8];
-        v[212] = v[0] * (v[30] * v[7] * v[211] + v[11] * v[22] * v[14])
-            + v[67] * v[7] * v[7] * v[22] * v[14];
-        v[213] = v[67] * v[7] * v[7] + v[0] * v[11];
-        v[214] = Y_dot * v[53] + X_dot * v[42] + Z_dot * v[22] * v[13];
-        v[215] = Iyz * v[202];
-        v[216] = v[19] * v[204];
-        v[217] = v[3] * v[199];
-        v[218] = v[216] + v[217];
-        v[219] = Ixz * v[204];
-        v[220] = v[199] * Izz;
-        v[221] = v[3] * v[204] - v[199] * v[19];
-        v[222] = v[202] * v[13] - v[199] * v[14];
-        v[223] = v[14] * v[202];
-        v[224] = v[199] * v[13];
-        v[225] = phi_dot * v[222] + v[30] * theta_dot * v[23] * (v[223] + v[224]);
-        v[226] = v[30] * v[30] * v[23] * v[23] + 1.0;
-        v[227] = theta_dot * (v[226] * v[14] * v[202] + v[199] * v[226] * v[13])
-            + v[30] * v[23] * phi_dot * v[222];
-        v[228] = Y_dot * v[38];
-        v[229] = X_dot * v[40];
-        v[230] = v[228] + v[229];
-        v[231] = v[57] - v[56];
-        v[232] = (v[58] * v[22] * v[230] + v[231] * Z_dot * v[30]) * d;
-        v[233] = v[13] * v[20] + v[69] * v[14];
-        v[234] = v[22] * v[33] + v[30] * v[233];
-        v[235] = X_dot * v[45] - Z_dot * v[22] * v[14] + Y_dot * v[50];
-        v[236] = 2.0 * v[15] + 2.0 * J2 - 2.0 * J1;
-        v[237] = v[3] * v[18] + v[19] * v[19] * v[24];
-        v[238] = v[3]
-            * (v[26] * v[22] * v[13]
-                + v[30] * v[19] * (2.0 * J1 - 2.0 * v[15] - 2.0 * J2))
-            + v[16] * v[22] * v[19] * v[19] * v[13];
-        v[239] = -v[223] - v[224];
+        v[200] = v[122] * v[148];
+        v[201] = J2 * (v[155] + v[200] - v[156]);
+        v[202] = Ixx * v[121] - v[127] * Ixz - Ixy * v[119];
+        v[203] = v[119] * v[202];
+        v[204] = Iyz * v[137];
+        v[205] = v[122] * v[148] * J1;
+        v[206] = v[157] * Izz;
+        v[207] = v[127] * v[202];
+        v[208] = Iyy * v[137];
+        v[209] = v[153] * v[121];
+        v[210] = Ixy * theta_dot * v[15] * psi_dot;
+        v[211] = v[157] * Iyz;
+        v[212] = J2 * v[137];
+        v[213] = v[167] * v[7] * v[173];
+        v[214] = v[169] + v[185];
+        v[215] = v[124] + v[125] + v[126] - v[173] * d - v[128];
+        v[216] = v[132] * gamma2_dot;
+        v[217] = v[191] - gamma2_dot * v[178] + v[193];
+        v[218] = v[0] * (-v[216] - v[138] - v[145] - v[146] - v[150]) - v[173] * v[215]
+            + v[4] * v[217] + v[168] * v[182];
+        v[219] = v[137] * d - v[168] * v[179]
+            + v[4] * (v[216] + v[138] + v[145] + v[146] + v[150]) + v[167] * v[215]
+            + v[0] * v[217];
+        v[220] = v[219] * v[46] - a * v[0] * v[218];
+        v[221] = v[13] * v[188] - v[189] * v[23]
+            + (-v[20] * v[165] - v[18] * v[162]) * J1
+            + (v[154] - theta_dot * Ixx * v[15] * psi_dot - v[158] - v[160] - v[161])
+                * v[13]
+            - ((v[196] + v[56] * v[197]) * v[15] * v[9] + v[151] * v[25]) * m1
+            + v[15]
+                * (psi_dot * phi_dot * v[69]
+                    + (v[203] - v[198] - v[199] - v[201] + v[204] + v[205] - v[206])
+                        * v[9]
+                    + v[10]
+                        * (v[209] - v[207] - v[208] - v[210] + v[211] - v[212] - v[213]))
+            - v[214] * v[22] - m2 * (v[184] * v[26] + v[220] * v[15] * v[10])
+            + theta_dot
+                * (-v[187] * v[29] * (v[60] + v[61] + v[62] + v[65] - v[66] + v[67])
+                    - v[186] * v[63]);
+        v[222] = (-v[187] * v[29] * v[69] - v[12] * v[186]) * theta_dot
+            - m2 * (v[184] * v[11] * v[10] + v[220] * v[9])
+            - (v[8] * v[151] * v[9] + v[10] * (v[52] * v[197] - v[196])) * m1
+            + v[10]
+                * (v[198] - v[165] * v[0] * J1 + v[199] + v[201] + v[4] * v[214] - v[203]
+                    - v[204] - v[205] + v[206]) + v[15] * psi_dot * v[53] * phi_dot
+            + (v[209] - v[207] - v[208] - v[1] * J1 * v[162] - v[210] - v[2] * v[189]
+                + v[211] - v[212] - v[213]) * v[9];
+        v[223] = a * v[13] * theta_dot * theta_dot;
+        v[224] = v[4] * v[10];
+        v[225] = v[0] * v[9];
+        v[226] = (-v[224] - v[225]) * v[15];
+        v[227] = v[15] * (v[224] + v[225]);
+        v[228] = (v[225] - v[224]) * v[15];
+        v[229] = (v[224] - v[225]) * v[15];
+        v[230] = 0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228] + 0.25 * v[229] - v[19];
+        v[231] = v[0] * v[10];
+        v[232] = v[4] * v[9];
+        v[233] = v[13] * (v[231] + v[232]);
+        v[234] = v[13] * (v[232] - v[231]);
+        v[235] = v[13] * v[10];
+        v[236] = v[15] * v[9];
+        v[237] = v[2] * (v[235] + v[236]);
+        v[238] = v[15] * v[10];
+        v[239] = v[13] * v[9];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part6(
         _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
+        _state: &[f64; STATES],
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
+        v: &mut [f64; 246],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[240] = m2 * v[193] * v[19] + v[7] * m1 * v[45];
-        v[241] = v[7] * v[50] * m1 + v[89] * m2 * v[19];
-        v[242] = d
-            * (0.5
-                * ((2.0
-                    * (v[175]
-                        * ((theta_dot * v[40] * v[22] * v[13] + phi_dot * v[45]
-                            + v[89] * psi_dot) * v[7] + v[0] * gamma1_dot * v[42]))
-                    + 2.0
-                        * (v[181]
-                            * (v[0] * v[22] * gamma1_dot * v[13]
-                                + v[7] * (-v[182] - v[30] * theta_dot * v[13])))
-                    + 2.0
-                        * ((v[7]
-                            * (psi_dot * v[42] + v[50] * phi_dot
-                                + theta_dot * v[22] * v[13] * v[38])
-                            + v[0] * gamma1_dot * v[53]) * v[183])) * m1)
-                - v[185] * psi_dot
-                + 0.5
-                    * (m2
-                        * (2.0
-                            * ((v[30] * theta_dot * v[19] * v[14]
-                                + (-v[3] * gamma2_dot * v[14] - v[19] * phi_dot * v[13])
-                                    * v[22]) * v[190])
-                            + 2.0
-                                * (v[192]
-                                    * (v[3] * gamma2_dot * v[50]
-                                        + (v[89] * phi_dot - theta_dot * v[22] * v[14] * v[38]
-                                            + psi_dot * v[45]) * v[19]))
-                            + 2.0
-                                * (((psi_dot * v[158] - theta_dot * v[40] * v[22] * v[14]
-                                    + v[193] * phi_dot) * v[19] + v[3] * gamma2_dot * v[45])
-                                    * v[197]))))
-            + v[199]
-                * (v[206] * v[7] * J1 - v[200]
-                    + J2 * (gamma2_dot + v[186] + v[0] * v[207] + v[201]) + 0.5 * v[208]
-                    - 0.5 * v[209] + 0.5 * (v[210] * Izz))
-            - gamma1_dot
-                * (v[212] * psi_dot + theta_dot * v[213] * v[13]
-                    + v[0]
-                        * (v[214] * d * m1
-                            + (2.0 * J2 + 2.0 * v[8] - 2.0 * J1) * v[7] * phi_dot))
-            + v[210]
-                * (J2 * (v[198] + v[3] * v[218] + gamma1_dot - v[177]) - 0.5 * v[215]
-                    - 0.5 * v[219] + 0.5 * v[220] - v[221] * v[19] * J1)
-            + 0.5 * (v[204] * (-v[210] * Ixz - v[199] * Ixy)) - v[74] * v[23] * v[225]
-            - v[227] * v[6] - (v[232] + v[234] * psi_dot) * theta_dot
-            - gamma2_dot
-                * (v[3] * (m2 * d * v[235] + v[19] * phi_dot * v[236])
-                    + theta_dot * v[14] * v[237] + v[238] * psi_dot)
-            + 0.5 * ((v[199] * Iyy - Iyz * v[210]) * v[202])
-            + phi_dot
-                * (-v[21] * v[239] - v[21] * v[22] * psi_dot
-                    - d * (Z_dot * v[22] * v[147] + X_dot * v[240] + Y_dot * v[241])
-                    - theta_dot * v[233]);
-        v[243] = v[79] - v[78];
-        v[244] = d * v[243] + v[172];
-        v[245] = v[0] * v[50] + v[159];
-        v[246] = (v[7] * v[45] - v[96]) * d;
-        v[247] = v[246] - v[85];
-        v[248] = d * (-v[82] - v[193] * v[19]);
-        v[249] = v[85] - v[248];
-        v[250] = m2 * v[249] + v[247] * m1;
-        v[251] = v[139] + v[140];
-        v[252] = v[14]
-            * ((v[31] + v[2]) * d * d - Iyy + v[3] * v[3] * v[60] + v[0] * v[0] * v[61]
-                + Izz);
-        v[253] = v[30] * v[28]
-            + (v[62] * v[13] * v[13] + (v[252] + 4.0 * v[70]) * v[14]) * v[22];
-        v[254] = m2 * d * (-d - v[130]) - J2;
-        v[255] = gamma2_dot * v[14] * v[254];
-        v[256] = gamma1_dot * v[151] * v[13];
-        v[257] = m1 * v[173] + m2 * v[191];
-        v[258] = -d * (v[75] + v[76]) - v[172];
-        v[259] = v[244] * m1 + m2 * v[258];
-        v[260] = (v[30] * (v[252] + 2.0 * v[70]) + v[69] * v[22]) * v[13] - v[30] * Iyz
-            + v[27] * v[22] * v[14];
-        v[261] = -v[3] * v[30] * v[13] - v[22] * v[19];
-        v[262] = v[7] * v[22] - v[0] * v[30] * v[14];
-        v[263] = -v[30] * v[7] * v[14] - v[0] * v[22];
-        v[264] = v[30] * v[19] * v[13] - v[3] * v[22];
-        v[265] = Ixy * v[22] + v[30] * (v[70] - v[113]);
-        v[266] = v[30] * (v[63] - v[117]) + v[22] * Ixz;
-        v[267] = Ixx * v[22];
-        v[268] = v[30] * (v[109] + v[110]);
-        v[269] = v[30] * v[7] * v[7] * v[9]
-            + v[0] * (v[30] * v[68] + v[7] * v[22] * v[14] * v[211]);
-        v[270] = X_dot * v[245];
-        v[271] = v[156] * Y_dot;
-        v[272] = v[30] * v[16] * v[19] * v[19]
-            + v[3] * (v[22] * v[19] * v[236] * v[13] + v[30] * v[26]);
-        v[273] = v[103] - v[104];
-        v[274] = v[165] - v[3] * v[89];
-        v[275] = X_dot * v[274];
-        v[276] = v[163] * Y_dot;
-        v[277] = 0.5
-            * (m1
-                * (2.0
-                    * ((theta_dot * v[244] * v[38]
-                        + d * (v[245] * gamma1_dot + v[89] * v[7] * phi_dot)
-                        + v[247] * psi_dot) * v[175])
-                    + 2.0 * (v[183] * (v[170] + v[171] + v[174]))))
-            - psi_dot
-                * (X_dot * v[250] + Y_dot * v[251]
-                    + psi_dot
-                        * (v[93] * m1 * (2.0 * v[97] + 2.0 * v[246])
-                            + m2 * v[90] * (-2.0 * v[248] - 2.0 * v[84])))
-            + phi_dot
-                * (-v[239] * v[123] - v[185] * d
-                    - psi_dot
-                        * (d
-                            * (v[7] * (2.0 * (v[42] * v[98]) + 2.0 * (v[89] * v[93]))
-                                * m1
-                                + m2 * (2.0 * (v[45] * v[86]) + 2.0 * (v[90] * v[158]))
-                                    * v[19])
-                            + v[22]
-                                * ((2.0 * (v[77] * v[19] * J1) - 2.0 * (v[3] * v[105] * J2)
-                                    - v[118] - v[119] + (Iyy * v[13] + v[63]) * v[22]) * v[14]
-                                    - v[30] * (v[14] * Ixz - Ixy * v[13])
-                                    + (2.0 * (v[0] * J2 * v[106])
-                                        + v[22] * (-v[14] * Izz - v[70]) + v[114] + v[115]
-                                        + 2.0 * (v[80] * v[7] * J1)) * v[13])) - theta_dot * v[253]
-                    - (v[21] * phi_dot + gamma1_dot * v[14] * v[151]
-                        + gamma2_dot * v[131] * v[13]) * v[22])
-            - (v[30] * (v[255] + v[256]) + v[40] * Y_dot * v[257] + v[234] * phi_dot
-                + v[259] * X_dot * v[38] + theta_dot * v[260]
-                + ((2.0 * (v[105] * v[261]) + 2.0 * (v[106] * v[262])) * J2
-                    + m1
-                        * (2.0 * (v[93] * v[244] * v[38])
-                            + 2.0 * (v[40] * v[173] * v[98]))
-                    + m2
-                        * (2.0 * (v[40] * v[191] * v[86])
-                            + 2.0 * (v[258] * v[90] * v[38]))
-                    + (2.0 * (v[80] * v[263]) + 2.0 * (v[264] * v[77])) * J1
-                    + v[22] * (v[108] - v[111] + v[14] * v[265] + v[266] * v[13])
-                    + v[30]
-                        * (v[267] - v[116] - v[120]
-                            + (-2.0 * v[100] - 2.0 * v[101]) * J2 * v[22] - v[268]))
-                    * psi_dot) * theta_dot
-            - (theta_dot * v[269] * v[13]
-                + psi_dot
-                    * ((2.0 * (J2 * v[243]) + 2.0 * (v[80] * J1)) * v[106]
-                        + (2.0 * (v[156] * v[98]) + 2.0 * (v[93] * v[245])) * d * m1)
-                + d * (v[270] - a * v[7] * v[22] * gamma1_dot * v[13] + v[271]) * m1
-                + v[212] * phi_dot) * gamma1_dot
-            - v[23] * v[225] * (v[81] + v[91] + v[99] + v[107] - v[112] + v[121])
-            - gamma2_dot
-                * (v[272] * theta_dot * v[14]
-                    + psi_dot
-                        * (v[77] * (2.0 * (v[273] * J1) + 2.0 * (v[105] * J2))
-                            + m2 * (-2.0 * (v[274] * v[90]) - 2.0 * (v[163] * v[86]))
-                                * d) + v[238] * phi_dot
-                    + m2 * d
-                        * (-a * gamma2_dot * v[22] * v[19] * v[14] - v[275] - v[276]))
-            - v[227] * v[74] + v[30] * v[242]
-            + 0.5
-                * (m2
-                    * (2.0 * (v[192] * (v[194] + v[195] + v[196]))
-                        + 2.0
-                            * ((d * (v[19] * phi_dot * v[158] - gamma2_dot * v[274])
-                                + theta_dot * v[258] * v[38] + v[249] * psi_dot)
-                                * v[197])));
-        v[278] = v[30] * ((a + v[133]) * m1 + m2 * (-a - v[134])) + v[22] * d * v[147];
-        v[279] = Z_dot * v[261];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part7(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        v: &mut [f64; 302],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[280] = a * v[22];
-        v[281] = d * (-v[22] * v[19] * v[14] * phi_dot - gamma2_dot * v[273])
-            + theta_dot * (v[280] - v[264] * d);
-        v[282] = -v[188] - theta_dot;
-        v[283] = a * v[30] * theta_dot;
-        v[284] = theta_dot * (v[263] * d - v[280])
-            + d * (v[106] * gamma1_dot + v[7] * v[22] * phi_dot * v[13]);
-        v[285] = theta_dot - v[180];
-        v[286] = Z_dot * v[262];
-        v[287] = v[106] * v[230];
-        v[288] = (-v[255] - v[232] - v[256] - v[64] * v[239]
-            - theta_dot
-                * (2.0 * (Iyz * v[13] * v[13])
-                    + ((v[0] * v[0] * (2.0 * J1 - 2.0 * J2) - 2.0 * Iyy + 2.0 * Izz
-                        + (m2 * (2.0 * v[4] - 2.0) + (2.0 - 2.0 * v[1]) * m1) * d * d
-                        + v[3] * v[3] * (2.0 * J2 - 2.0 * J1)) * v[13] - 2.0 * v[63])
-                        * v[14]) - psi_dot * v[253] - phi_dot * v[233]) * phi_dot
-            - v[23] * v[225] * v[123]
-            + psi_dot
-                * ((v[264] * v[221] + v[206] * v[263]) * J1 + 0.5 * (v[265] * v[202])
-                    + J2 * (v[218] * v[261] + v[262] * v[207])
-                    + 0.5 * ((v[268] - v[267]) * v[204]) + 0.5 * (v[266] * v[199])
-                    - X_dot * v[278] * v[38]
-                    - 0.5 * (v[22] * (Ixx * v[204] - v[199] * Ixz - Ixy * v[202]))
-                    + v[30]
-                        * (J2
-                            * (-(v[198] + gamma1_dot - v[177]) * v[13]
-                                - (gamma2_dot + v[186] + v[201]) * v[14])
-                            - 0.5 * ((v[208] - v[200] - v[209]) * v[14])
-                            - 0.5 * ((v[220] - v[215] - v[219]) * v[13]))
-                    - v[138] * v[40] * Y_dot)
-            - (theta_dot
-                * (v[3] * (v[236] * v[13] * v[13] - 2.0 * v[15] - 2.0 * J2 + 2.0 * J1)
-                    - 2.0 * v[17]) * v[19]
-                + (v[272] * psi_dot + phi_dot * v[237]) * v[14]
-                + m2 * d * (v[279] + v[105] * v[230] - a * gamma2_dot * v[19] * v[13]))
-                * gamma2_dot
-            - theta_dot * (v[148] * v[230] + Z_dot * v[278] + psi_dot * v[260])
-            - v[21] * v[227]
-            + 0.5
-                * (m2
-                    * (2.0 * (v[192] * (v[40] * psi_dot * v[191] + v[281] * v[38]))
-                        + 2.0 * ((v[281] * v[40] + v[258] * psi_dot * v[38]) * v[197])
-                        + 2.0
-                            * (((v[30] * (v[3] * v[282] + v[189])
-                                + v[187] * v[22] * v[19]) * d - v[283]) * v[190])))
-            + 0.5
-                * ((2.0 * ((psi_dot * v[244] * v[38] + v[284] * v[40]) * v[175])
-                    + 2.0
-                        * ((d
-                            * (v[30] * (v[0] * v[285] - v[7] * phi_dot * v[13])
-                                + v[7] * v[22] * v[178]) + v[283]) * v[181])
-                    + 2.0 * (v[183] * (v[40] * psi_dot * v[173] + v[284] * v[38]))) * m1)
-            - ((psi_dot * v[269] + v[213] * phi_dot) * v[13]
-                + (v[286] + a * v[7] * gamma1_dot * v[14] + v[287]) * d * m1
-                + theta_dot * v[7] * (v[0] * v[13] * v[13] * v[211] - 2.0 * v[10]))
-                * gamma1_dot;
-        v[289] = -v[92] - v[7] * v[158];
-        v[290] = v[0] * phi_dot * v[53] + v[156] * psi_dot + gamma1_dot * v[289]
-            + theta_dot * v[106] * v[38];
-        v[291] = -v[95] - v[96];
-        v[292] = v[245] * psi_dot + v[0] * v[42] * phi_dot + gamma1_dot * v[291]
-            + theta_dot * v[106] * v[40];
-        v[293] = v[3] * phi_dot * v[45];
-        v[294] = v[83] - v[82];
-        v[295] = gamma2_dot * v[294];
-        v[296] = psi_dot * v[274];
-        v[297] = v[19] * v[53] - v[88];
-        v[298] = gamma2_dot * v[297];
-        v[299] = v[163] * psi_dot;
-        v[300] = v[3] * v[50] * phi_dot;
-        v[301] = theta_dot * v[148]
-            + d
-                * (v[58] * v[22] * phi_dot - m2 * gamma2_dot * v[273]
-                    + v[106] * gamma1_dot * m1);
+        v[240] = v[1] * (v[238] - v[239]);
+        v[241] = v[2] * (v[236] - v[235]);
+        v[242] = v[1] * (v[239] - v[238]);
+        v[243] = v[1] * (v[238] + v[239]);
+        v[244] = (-v[238] - v[239]) * v[1];
+        v[245] = 0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243] + v[17] + 0.25 * v[244];
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -3379,33 +2574,39 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let x0 = f64::cos(gamma1);
+        let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
-        let x2 = (-a - x0 * d) * m1 + m2 * (a + x1 * d);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(phi);
-        let x6 = m2 * x4 * x5;
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::sin(phi);
-        let x9 = x7 * x8 * m1;
-        let x10 = f64::cos(theta);
-        let x11 = x2 * x3 + (x6 + x9) * x10 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x10 * x13;
-        let x15 = x12 * x8;
-        let x16 = x3 * x5 * x13;
-        let x17 = x12 * x5;
-        let x18 = x3 * x8 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x8 * x13 + x3 * x12 * x5;
-        let x21 = x5 * x13;
-        let x22 = x3 * x12 * x8;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x10;
-        let x26 = x16 - x15;
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a;
+        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3437,25 +2638,31 @@ pub mod maggi {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x1 * x10 * x13 - (x15 - x16) * x4) * d)
-                    + (d * (x7 * x19 - x0 * x10 * x13) - x14) * m1) * psi_dot
-                + ((x0 * x23 - x12 * x7 * x10) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x10 * x4 - x1 * x20)
-                    + (x7 * x20 * m1 + m2 * x4 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x7 + x0 * x12 * x10) + x25)
-                        + m2 * (-d * (x1 * x12 * x10 - x4 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x4 * x19 + x7 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x10 * x4 * x13 - x1 * x26)
-                        + (x0 * (x17 + x18) - x7 * x10 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x1 * x10 * x5 - x3 * x4)
-                + (x7 * m1 * x5 - m2 * x4 * x8) * x10 * phi_dot
-                + (x0 * x10 * x8 + x3 * x7) * gamma1_dot * m1) * d
-                + theta_dot * (x3 * d * (-x6 - x9) + x2 * x10) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3526,39 +2733,42 @@ pub mod maggi {
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
         let J2 = params.J2;
-        let mut v = [0.0f64; 95];
+        let mut v = [0.0f64; 94];
         matrix_part0(t, state, params, g_i, &mut v);
         matrix_part1(t, state, params, g_i, &mut v);
         matrix_part2(t, state, params, g_i, &mut v);
         [
-            [v[5], v[25], v[26], 0.0, 0.0, v[33], v[41], v[43]],
+            [v[6], v[28], v[29], 0.0, 0.0, v[35], v[39], v[41]],
             [
-                v[25],
-                v[52] * v[10] + v[17] * v[11] * v[67],
-                v[68],
-                v[72],
+                v[28],
+                v[57] * v[9] + v[27] * v[10] * v[61],
+                v[62],
+                v[65],
+                v[66],
                 v[73],
-                v[79],
-                v[81],
-                v[83],
+                v[80],
+                v[82],
             ],
             [
-                v[26],
-                v[68],
-                v[17] * (v[21] * v[26] - v[11] * v[66] + v[17] * v[65] * v[10]) * v[10]
-                    - v[11] * (v[17] * v[10] * v[51] - v[46] * v[11]),
-                v[84],
+                v[29],
+                v[62],
+                v[27] * (v[59] * v[27] * v[9] - v[10] * v[60] + v[29] * v[13]) * v[9]
+                    - (v[27] * v[56] * v[9] - v[51] * v[10]) * v[10],
+                v[83],
                 0.0,
+                v[84],
                 v[85],
                 v[86],
-                v[87],
             ],
-            [0.0, v[72], v[84], J2 + v[7], 0.0, v[88], v[89], v[90]],
-            [0.0, v[73], 0.0, 0.0, v[12] + J2, v[91], v[92], v[93]],
-            [v[33], v[79], v[85], v[88], v[91], v[94], 0.0, 0.0],
-            [v[41], v[81], v[86], v[89], v[92], 0.0, v[94], 0.0],
-            [v[43], v[83], v[87], v[90], v[93], 0.0, 0.0, v[94]],
+            [0.0, v[65], v[83], J2 + d * d * m1, 0.0, v[87], v[88], v[89]],
+            [0.0, v[66], 0.0, 0.0, m2 * d * d + J2, v[90], v[91], v[92]],
+            [v[35], v[73], v[84], v[87], v[90], v[93], 0.0, 0.0],
+            [v[39], v[80], v[85], v[88], v[91], 0.0, v[93], 0.0],
+            [v[41], v[82], v[86], v[89], v[92], 0.0, 0.0, v[93]],
         ]
     }
     #[allow(non_snake_case)]
@@ -3568,7 +2778,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 95],
+        v: &mut [f64; 94],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -3584,50 +2794,48 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = v[0] * v[0];
-        v[2] = f64::cos(gamma2);
+        v[0] = f64::sin(gamma2);
+        v[1] = f64::sin(gamma1);
+        v[2] = f64::cos(gamma1);
         v[3] = v[2] * v[2];
-        v[4] = m2 * (1.0 - v[3]);
-        v[5] = Ixx + d * d * (m1 * (1.0 - v[1]) + v[4]) + (v[1] + v[3]) * J1
-            + J2 * (2.0 - v[1] - v[3]);
-        v[6] = f64::sin(gamma1);
-        v[7] = d * d * m1;
-        v[8] = a * d * m1;
-        v[9] = v[6] * (v[0] * (J1 - J2 - v[7]) - v[8]) - Ixy;
-        v[10] = f64::cos(phi);
-        v[11] = f64::sin(phi);
-        v[12] = m2 * d * d;
-        v[13] = m2 * a * d;
-        v[14] = f64::sin(gamma2);
-        v[15] = v[9] * v[10]
-            + v[11] * ((v[2] * (J1 - v[12] - J2) - v[13]) * v[14] + Ixz);
-        v[16] = f64::cos(theta);
-        v[17] = 1.0 / v[16];
-        v[18] = v[2] * (v[12] + J2 - J1);
-        v[19] = (v[18] + v[13]) * v[14] - Ixz;
-        v[20] = v[16] * (v[9] * v[11] + v[19] * v[10]);
-        v[21] = f64::sin(theta);
-        v[22] = (v[1] - 1.0) * m1;
-        v[23] = v[21]
-            * ((m2 * (v[3] - 1.0) + v[22]) * d * d - Ixx + (v[1] + v[3] - 2.0) * J2
-                + (-v[1] - v[3]) * J1);
-        v[24] = v[20] + v[21] * v[5] + v[23];
-        v[25] = v[15] * v[10] + v[17] * v[24] * v[11];
-        v[26] = v[17] * v[24] * v[10] - v[15] * v[11];
-        v[27] = f64::sin(psi);
-        v[28] = f64::cos(psi);
-        v[29] = v[11] * v[27] + v[21] * v[28] * v[10];
-        v[30] = v[10] * v[27];
-        v[31] = v[21] * v[28] * v[11];
-        v[32] = v[6] * v[29] * m1 + m2 * v[14] * (v[30] - v[31]);
-        v[33] = v[32] * d;
-        v[34] = v[28] * v[10];
-        v[35] = v[21] * v[11] * v[27];
-        v[36] = -v[34] - v[35];
-        v[37] = v[28] * v[11];
-        v[38] = v[21] * v[10] * v[27];
-        v[39] = v[38] - v[37];
+        v[4] = f64::cos(gamma2);
+        v[5] = v[4] * v[4];
+        v[6] = Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
+            + (v[0] * v[0] + v[1] * v[1]) * J2;
+        v[7] = J1 - J2;
+        v[8] = -a - v[2] * d;
+        v[9] = f64::cos(phi);
+        v[10] = f64::sin(phi);
+        v[11] = a + v[4] * d;
+        v[12] = ((v[2] * v[7] + v[8] * d * m1) * v[1] - Ixy) * v[9]
+            + v[10] * ((v[4] * v[7] - m2 * d * v[11]) * v[0] + Ixz);
+        v[13] = f64::sin(theta);
+        v[14] = v[13] * Ixx;
+        v[15] = f64::cos(theta);
+        v[16] = v[15] * (-Ixy * v[10] - Ixz * v[9]);
+        v[17] = v[1] * v[15] * v[10] - v[2] * v[13];
+        v[18] = -v[15] * v[0] * v[9] - v[4] * v[13];
+        v[19] = (v[2] * v[17] + v[4] * v[18]) * J1;
+        v[20] = v[4] * v[15] * v[9] - v[13] * v[0];
+        v[21] = v[2] * v[15] * v[10] + v[13] * v[1];
+        v[22] = (v[20] * v[0] - v[21] * v[1]) * J2;
+        v[23] = -v[21] * d - a * v[15] * v[10];
+        v[24] = -a * v[15] * v[9] - v[20] * d;
+        v[25] = (v[1] * m1 * v[23] - m2 * v[0] * v[24]) * d;
+        v[26] = v[16] - v[14] + v[19] + v[13] * v[6] + v[22] + v[25];
+        v[27] = 1.0 / v[15];
+        v[28] = v[12] * v[9] + v[26] * v[27] * v[10];
+        v[29] = v[26] * v[27] * v[9] - v[12] * v[10];
+        v[30] = f64::sin(psi);
+        v[31] = f64::cos(psi);
+        v[32] = v[10] * v[30] + v[13] * v[31] * v[9];
+        v[33] = v[13] * v[31] * v[10] - v[9] * v[30];
+        v[34] = v[1] * v[32] * m1 - m2 * v[33] * v[0];
+        v[35] = d * v[34];
+        v[36] = v[31] * v[9] + v[13] * v[10] * v[30];
+        v[37] = v[13] * v[9] * v[30] - v[31] * v[10];
+        v[38] = v[1] * v[37] * m1 - m2 * v[0] * v[36];
+        v[39] = v[38] * d;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3636,9 +2844,8 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 95],
+        v: &mut [f64; 94],
     ) {
-        let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
@@ -3650,56 +2857,67 @@ pub mod maggi {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = m2 * v[14] * v[36] + v[6] * v[39] * m1;
-        v[41] = d * v[40];
-        v[42] = v[6] * m1 * v[10] - m2 * v[14] * v[11];
-        v[43] = v[42] * v[16] * d;
-        v[44] = Iyy + v[0] * v[0] * (J2 - J1) + v[2] * v[2] * (J1 - J2)
-            + d * d * (v[22] + v[4]) - Izz;
-        v[45] = Iyz * v[11];
-        v[46] = a * (2.0 * (v[0] * d * m1) + a * (m2 + m1)) + J2
-            + v[2] * (v[18] + 2.0 * v[13]) + v[7] + Izz
-            + (v[44] * v[10] + 2.0 * v[45]) * v[10] + J1;
-        v[47] = v[21] * v[19] * v[11];
-        v[48] = Iyz * v[16];
-        v[49] = Iyz * v[10];
-        v[50] = (v[21] * (Ixy + v[6] * (v[0] * (J2 + v[7] - J1) + v[8]))
-            + (v[44] * v[11] - 2.0 * v[49]) * v[16]) * v[10];
-        v[51] = v[47] + v[48] + v[50] + v[15] * v[21];
-        v[52] = v[46] * v[10] + v[17] * v[11] * v[51];
-        v[53] = -v[16] * v[14] * v[10] - v[2] * v[21];
-        v[54] = v[6] * v[16] * v[11] - v[0] * v[21];
-        v[55] = a * v[28] * v[16];
-        v[56] = -d * (v[2] * v[28] * v[16] - v[14] * v[29]) - v[55];
-        v[57] = a * v[16] * v[27];
-        v[58] = v[57] - (-v[2] * v[16] * v[27] - (v[37] - v[38]) * v[14]) * d;
-        v[59] = d * (v[6] * v[36] - v[0] * v[16] * v[27]) - v[57];
-        v[60] = v[31] - v[30];
-        v[61] = d * (v[60] * v[6] + v[0] * v[28] * v[16]) + v[55];
-        v[62] = v[10] * v[10] + v[11] * v[11];
-        v[63] = v[2] * v[16] * v[10] - v[21] * v[14];
-        v[64] = v[0] * v[16] * v[11] + v[21] * v[6];
-        v[65] = v[21] * (v[20] + v[23]) + (v[53] * v[53] + v[54] * v[54]) * J1
-            + m2 * (v[56] * v[56] + v[58] * v[58]) + (v[59] * v[59] + v[61] * v[61]) * m1
-            + J2 * (v[16] * v[16] * v[62] + v[63] * v[63] + v[64] * v[64])
-            - v[21] * (v[16] * (-Ixy * v[11] - Ixz * v[10]) - v[21] * Ixx)
-            + v[16]
-                * (((Iyy * v[11] - v[49]) * v[16] + v[21] * Ixy) * v[11]
-                    + (v[16] * (Izz * v[10] - v[45]) + v[21] * Ixz) * v[10]);
-        v[66] = v[47] + v[48] + v[50];
-        v[67] = v[21] * v[25] + v[17] * v[65] * v[11] + v[66] * v[10];
-        v[68] = v[17] * v[67] * v[10] - v[11] * v[52];
-        v[69] = v[0] * a;
-        v[70] = d * (v[69] + d) * m1;
-        v[71] = d * (-v[69] - d) * m1;
-        v[72] = (v[70] + v[71]) * v[11] * v[10];
-        v[73] = (J2 + m2 * d * (d + v[2] * a)) * v[62];
-        v[74] = (-a - v[0] * d) * m1 + m2 * (a + v[2] * d);
-        v[75] = m2 * v[14] * v[10];
-        v[76] = v[6] * v[11] * m1;
-        v[77] = v[74] * v[21] + (v[75] + v[76]) * v[16] * d;
-        v[78] = m2 * v[58] + v[32] * v[21] * d + v[59] * m1;
-        v[79] = v[77] * v[28] * v[10] + v[17] * v[78] * v[11];
+        v[40] = v[1] * m1 * v[9] - m2 * v[0] * v[10];
+        v[41] = v[40] * v[15] * d;
+        v[42] = Iyy * v[9];
+        v[43] = Iyz * v[10];
+        v[44] = d + v[4] * a;
+        v[45] = a * a * v[0] * v[0] + v[44] * v[44];
+        v[46] = v[10] * Izz;
+        v[47] = Iyz * v[9];
+        v[48] = a * a * v[1] * v[1];
+        v[49] = v[2] * a;
+        v[50] = -v[49] - d;
+        v[51] = J2 * ((v[3] + 1.0) * v[9] * v[9] + (v[5] + 1.0) * v[10] * v[10])
+            + (v[1] * v[1] * v[9] * J1 + v[42] + v[43]) * v[9]
+            + (v[45] * v[9] * v[9] + v[11] * v[11] * v[10] * v[10]) * m2
+            + v[10] * (v[46] + v[47] + v[0] * v[0] * v[10] * J1)
+            + ((v[48] + v[50] * v[50]) * v[10] * v[10] + v[8] * v[8] * v[9] * v[9]) * m1;
+        v[52] = v[10]
+            * (m2 * (v[15] * v[45] * v[9] + v[11] * v[24]) - v[4] * v[20] * J2
+                + v[18] * v[0] * J1 + (v[42] + v[43]) * v[15]);
+        v[53] = v[13] * (v[10] * Ixz - Ixy * v[9]);
+        v[54] = v[49] + d;
+        v[55] = (v[2] * J2 * v[21] + v[15] * (-v[46] - v[47]) + v[17] * v[1] * J1
+            + (v[8] * v[23] + v[15] * v[10] * (v[54] * v[50] - v[48])) * m1) * v[9];
+        v[56] = v[52] - v[53] + v[55] + v[13] * v[12];
+        v[57] = v[51] * v[9] + v[27] * v[56] * v[10];
+        v[58] = v[9] * v[9] + v[10] * v[10];
+        v[59] = (v[23] * v[23] + (v[54] * v[54] + v[48]) * v[15] * v[15] * v[9] * v[9])
+            * m1 + m2 * (v[24] * v[24] + v[15] * v[15] * v[10] * v[10] * v[45])
+            + (v[18] * v[18] + v[17] * v[17]) * J1
+            + v[13] * (v[16] - v[14] + v[19] + v[22] + v[25])
+            + J2 * (v[15] * v[15] * v[58] + v[20] * v[20] + v[21] * v[21])
+            - v[13] * (v[16] - v[14])
+            + v[15]
+                * (((Iyy * v[10] - v[47]) * v[15] + v[13] * Ixy) * v[10]
+                    + (v[15] * (Izz * v[9] - v[43]) + v[13] * Ixz) * v[9]);
+        v[60] = v[52] - v[53] + v[55];
+        v[61] = v[59] * v[27] * v[10] + v[13] * v[28] + v[60] * v[9];
+        v[62] = v[27] * v[9] * v[61] - v[57] * v[10];
+        v[63] = d * v[54] * m1;
+        v[64] = d * v[50] * m1;
+        v[65] = (v[63] + v[64]) * v[10] * v[9];
+        v[66] = (J2 + m2 * d * v[44]) * v[58];
+        v[67] = v[31] * v[15] * v[0] + v[4] * v[32];
+        v[68] = v[67] * v[44] - a * v[0] * (v[4] * v[31] * v[15] - v[0] * v[32]);
+        v[69] = v[2] * v[33] - v[31] * v[1] * v[15];
+        v[70] = a * v[1] * (v[33] * v[1] + v[2] * v[31] * v[15]);
+        v[71] = m2 * (v[68] * v[9] + v[33] * v[11] * v[10])
+            + m1 * (v[10] * (v[69] * v[50] - v[70]) + v[8] * v[32] * v[9]);
+        v[72] = v[13] * d * v[34]
+            + m1 * (v[15] * (v[69] * v[54] + v[70]) * v[9] + v[32] * v[23])
+            + m2 * (v[15] * v[68] * v[10] + v[33] * v[24]);
+        v[73] = v[71] * v[9] + v[72] * v[27] * v[10];
+        v[74] = v[15] * v[0] * v[30] + v[4] * v[37];
+        v[75] = v[74] * v[44] - a * (v[4] * v[15] * v[30] - v[0] * v[37]) * v[0];
+        v[76] = a * v[1] * (v[2] * v[15] * v[30] + v[1] * v[36]);
+        v[77] = v[2] * v[36] - v[1] * v[15] * v[30];
+        v[78] = m2 * (v[75] * v[9] + v[11] * v[10] * v[36])
+            + (v[8] * v[37] * v[9] + (v[77] * v[50] - v[76]) * v[10]) * m1;
+        v[79] = v[13] * v[38] * d
+            + m1 * (v[15] * (v[77] * v[54] + v[76]) * v[9] + v[37] * v[23])
+            + m2 * (v[15] * v[10] * v[75] + v[36] * v[24]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3708,28 +2926,32 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 95],
+        v: &mut [f64; 94],
     ) {
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
+        let a = params.a;
         let J2 = params.J2;
-        v[80] = m1 * v[61] + m2 * v[56] + v[21] * d * v[40];
-        v[81] = v[17] * v[11] * v[80] + v[77] * v[10] * v[27];
-        v[82] = v[21] * d * (-v[75] - v[76]) + v[74] * v[16];
-        v[83] = v[82] * v[10] + v[21] * v[42] * d * v[11];
-        v[84] = (v[70] + J2) * v[10] * v[10] - v[11] * v[11] * (v[71] - J2);
-        v[85] = v[17] * v[78] * v[10] - v[77] * v[28] * v[11];
-        v[86] = v[17] * v[80] * v[10] - v[77] * v[11] * v[27];
-        v[87] = v[21] * v[42] * d * v[10] - v[11] * v[82];
-        v[88] = (v[0] * v[60] - v[28] * v[6] * v[16]) * d * m1;
-        v[89] = (v[0] * (v[34] + v[35]) - v[6] * v[16] * v[27]) * d * m1;
-        v[90] = v[64] * d * m1;
-        v[91] = -(m2 * (-v[28] * v[16] * v[14] - v[2] * v[29]) * d);
-        v[92] = -(m2 * d * (-v[16] * v[14] * v[27] - v[2] * v[39]));
-        v[93] = m2 * v[63] * d;
-        v[94] = m2 + m0 + m1;
+        v[80] = v[78] * v[9] + v[79] * v[27] * v[10];
+        v[81] = m2
+            * (v[15] * v[11] * v[10] * v[10] + (v[20] * v[44] - a * v[18] * v[0]) * v[9])
+            + m1
+                * ((v[21] * v[50] - a * v[17] * v[1]) * v[10]
+                    + v[8] * v[15] * v[9] * v[9]);
+        v[82] = v[13] * v[40] * d * v[10] + v[81] * v[9];
+        v[83] = (v[63] + J2) * v[9] * v[9] - v[10] * v[10] * (v[64] - J2);
+        v[84] = v[72] * v[27] * v[9] - v[10] * v[71];
+        v[85] = v[79] * v[27] * v[9] - v[10] * v[78];
+        v[86] = v[13] * v[40] * d * v[9] - v[81] * v[10];
+        v[87] = v[69] * d * m1;
+        v[88] = v[77] * d * m1;
+        v[89] = v[21] * d * m1;
+        v[90] = m2 * d * v[67];
+        v[91] = m2 * d * v[74];
+        v[92] = m2 * v[20] * d;
+        v[93] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -3799,7 +3021,7 @@ pub mod kane {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 202];
+        let mut v = [0.0f64; 217];
         rhs_part0(t, state, params, g_i, dstate, &mut v);
         rhs_part1(t, state, params, g_i, dstate, &mut v);
         rhs_part2(t, state, params, g_i, dstate, &mut v);
@@ -3816,197 +3038,105 @@ pub mod kane {
         }
         let mut matrix: [[f64; 8]; 8] = [
             [
-                Ixx + d * d * (m1 * (1.0 - v[9]) + m2 * (1.0 - v[11]))
-                    + (v[9] + v[11]) * J1 + J2 * (2.0 - v[9] - v[11]),
-                v[16],
-                v[22],
+                Ixx + d * d * (m2 * v[8] * v[8] + v[9] * v[9] * m1)
+                    + (v[11] + v[13]) * J1 + (v[8] * v[8] + v[9] * v[9]) * J2,
+                v[17],
+                v[21],
                 0.0,
                 0.0,
-                v[32],
+                v[28],
+                v[34],
+                v[35],
+            ],
+            [
+                v[17],
+                v[9] * v[9] * J1 + v[16] * v[16] * m1 + Iyy + J2 * (v[11] + 1.0)
+                    + m2 * (v[36] + a * (a + 2.0 * v[19])),
+                v[37],
+                0.0,
                 v[39],
-                v[43],
+                v[42],
+                v[45],
+                v[49],
             ],
             [
-                v[16],
-                Iyy + J2 + a * a * m1 + m2 * (d * d + a * (a + 2.0 * v[44]))
-                    + v[8] * (v[8] * v[45] + 2.0 * v[14]) + J1,
-                v[46],
+                v[21],
+                v[37],
+                v[8] * v[8] * J1 + (a * (a + 2.0 * v[15]) + v[36]) * m1
+                    + m2 * v[20] * v[20] + Izz + J2 * (v[13] + 1.0),
+                v[51],
                 0.0,
-                v[48],
-                v[52],
-                v[59],
-                v[63],
+                v[54],
+                v[57],
+                v[61],
             ],
-            [
-                v[22],
-                v[46],
-                a * (2.0 * (v[8] * d * m1) + a * (m2 + m1)) + J2
-                    + v[10] * (v[18] + 2.0 * v[19]) + v[13] + Izz + J1,
-                v[65],
-                0.0,
-                v[69],
-                v[73],
-                v[74],
-            ],
-            [0.0, 0.0, v[65], J2 + v[13], 0.0, v[77], v[78], v[80]],
-            [0.0, v[48], 0.0, 0.0, v[17] + J2, v[84], v[85], v[89]],
-            [v[32], v[52], v[69], v[77], v[84], v[90], 0.0, 0.0],
-            [v[39], v[59], v[73], v[78], v[85], 0.0, v[90], 0.0],
-            [v[43], v[63], v[74], v[80], v[89], 0.0, 0.0, v[90]],
+            [0.0, 0.0, v[51], J2 + d * d * m1, 0.0, v[62], v[63], v[64]],
+            [0.0, v[39], 0.0, 0.0, m2 * d * d + J2, v[65], v[66], v[67]],
+            [v[28], v[42], v[54], v[62], v[65], v[68], 0.0, 0.0],
+            [v[34], v[45], v[57], v[63], v[66], 0.0, v[68], 0.0],
+            [v[35], v[49], v[61], v[64], v[67], 0.0, 0.0, v[68]],
         ];
         let mut force: [f64; 8] = [
-            J2
-                * (v[8] * v[96] * u3 - v[10] * v[93] * u2
-                    + (-v[99] * v[12] - v[8] * v[96]) * v[100]
-                    + v[101] * (v[10] * v[93] - v[104] * v[21]))
-                + (v[105] - v[106] + v[107] + v[104] * v[21] * J1) * u2
-                + u3 * (v[108] + v[99] * v[12] * J1 - v[109] - v[110])
-                - u4
-                    * (v[111] * u2
-                        + v[8]
-                            * ((2.0 * J2 + 2.0 * v[13] - 2.0 * J1) * v[12] * u1
-                                + v[113]))
-                - u5
-                    * (v[114] * u3
-                        + v[10]
-                            * (m2 * d * v[116]
-                                + v[21] * u1 * (2.0 * v[17] + 2.0 * J2 - 2.0 * J1)))
-                + d
-                    * (m2 * (v[21] * (v[135] - v[131]) - v[10] * u5 * v[138])
-                        - (v[117] * v[6] * u8 + v[42] * v[0] * v[120]) * v[5]
-                        - (v[31] * u7 + u6 * v[139]) * v[1] * v[4]
-                        - v[7] * (u8 * v[0] * v[140] + u6 * v[141] + u7 * v[142])
-                        + (v[8] * v[143] * u4 + v[147] * v[12]) * m1),
-            ((-a * v[93] * v[21] - v[104] * v[47]) * v[138]
-                - u5
-                    * (a * v[21] * (-u5 - 2.0 * u2) + v[149] + v[152] * u6 + u7 * v[154])
-                    * d + v[134] * (v[101] * v[47] - v[10] * u5 * a)
-                + a * v[21] * u2 * v[130]) * m2
-                + J2
-                    * ((v[8] * v[99] - v[96] * v[12]) * v[100] + v[96] * u3 * v[12]
-                        + v[104] * v[93]) + (v[106] - v[105] - v[107]) * u1
-                + (v[104] * v[155] - v[8] * v[99] * u3) * J1
-                - u3 * (v[157] - v[156] - v[158])
-                - (v[111] * u1
-                    + v[12]
-                        * (v[113]
-                            + (v[8] * (2.0 * J1 - 2.0 * J2 - 2.0 * v[13]) - 2.0 * v[14])
-                                * u2)) * u4
-                + (v[147] * v[61] + v[143] * u4 * v[12] * d) * m1
-                - v[7] * (u8 * v[67] * v[0] * v[2] + u6 * v[159] + u7 * v[160])
-                - v[1] * (u6 * v[164] + u7 * v[52]) * v[4]
-                - (v[63] * v[120] + u8 * v[165]) * v[5],
-            (v[10] * v[104] * J1 - v[156] + v[157] - v[158]) * u2
-                - u5
-                    * (v[114] * u1
-                        + v[21]
-                            * ((v[10] * (2.0 * J1 - 2.0 * v[17] - 2.0 * J2)
-                                - 2.0 * v[19]) * u3
-                                + m2 * d * (v[115] + u7 * v[70] + u6 * v[75])))
-                - (v[120] * v[74] + u8 * v[166]) * v[5]
-                + m2 * (v[66] * (v[131] - v[135]) + u5 * d * v[21] * v[138])
-                - u1 * (v[108] - v[109] - v[110])
-                - v[7] * (u7 * v[167] + u8 * v[67] * v[0] * v[3] + u6 * v[168])
-                + (v[93] * v[21] * u2 + v[101] * (-v[93] * v[21] - v[10] * v[104])
-                    + v[96] * v[169]) * J2 - v[1] * v[4] * (u6 * v[171] + u7 * v[69])
-                + v[96] * v[99] * J1
-                + m1
-                    * (v[146] * a * u3 * v[12]
-                        + (v[8] * a * u4 - v[64] * v[100]) * v[145]
-                        - u4
-                            * (v[175] + u7 * v[177] + a * v[12] * (-u4 - 2.0 * u3)
-                                + u6 * v[182]) * d
-                        + v[143] * (v[99] * v[64] - v[96] * a * v[12])),
-            v[96] * (v[99] * J1 + J2 * v[169])
-                + (v[143] * v[99] - v[145] * v[100] - v[8] * v[7] * v[112]
-                    - u4 * (u6 * v[183] + v[175] - a * u3 * v[12] + u7 * v[185])
-                    - v[1] * (u7 * v[76] + u6 * v[170]) * v[4]
-                    - (u8 * v[186] + v[79] * v[120]) * v[5]) * d * m1,
-            v[104] * (v[155] * J1 + J2 * v[93])
-                + m2
-                    * (v[101] * v[134] - v[10] * v[7] * v[116]
-                        - v[1] * (-u7 * v[83] - u6 * v[187]) * v[4]
-                        - (v[149] - u6 * v[188] - a * v[21] * u2 - u7 * v[189]) * u5
-                        - (v[190] * v[133] + u8 * v[191]) * v[5] - v[104] * v[138]) * d,
-            (v[146]
-                * (u4 * v[182] + v[79] * v[25] * v[5] + v[27] * v[192] + v[193] * v[100]
-                    + v[1] * v[170] * v[4])
-                - u4 * d * (v[99] * v[27] + u4 * v[183] + u3 * v[182])
-                + v[145]
-                    * (v[1] * v[4] * v[177] + v[25] * v[194] * v[5] - v[76] * u3
-                        + v[195] * v[27])
-                + v[143]
-                    * (v[53] * v[1] * v[4] - v[96] * v[193] + v[7] * v[30]
-                        + v[76] * v[99] + v[25] * v[0] * v[3] * v[5])) * m1
-                - v[7]
-                    * (d
-                        * (v[141] * u1 + v[8] * u4 * v[27] * m1
-                            + v[10] * u5 * m2 * v[30]) + u3 * v[168] + v[159] * u2)
-                + (v[134]
-                    * (v[189] * v[1] * v[4] + v[101] * v[197] + v[75] * v[198]
-                        + u5 * (v[10] * v[50] - v[81]) + v[148] * v[25] * v[5])
-                    - (v[75] * u3 * v[21] - u5 * v[188] + v[196] + v[10] * u1 * v[30])
-                        * u5 * d
-                    + v[130]
-                        * (v[1] * v[162] * v[4] - v[196] + v[88] * v[25] * v[5]
-                            + v[10] * v[7] * v[30] + v[104] * v[75])
-                    + (v[25] * v[0] * v[2] * v[5] - v[104] * v[197] + v[7] * v[27]
-                        + v[152] * v[93] + v[1] * v[35] * v[4]) * v[138]) * m2
-                - v[25] * v[5] * v[199]
-                - (u3 * v[171] + (u4 * v[170] * m1 + u1 * v[139] - u5 * m2 * v[187]) * d
-                    + v[164] * u2) * v[1] * v[4],
-            (v[146]
-                * (u4 * v[177] + v[79] * v[5] * v[23] + v[76] * v[1] * v[4]
-                    + v[200] * v[100] + v[38] * v[192])
-                - u4 * d * (u4 * v[185] + u3 * v[177] + v[99] * v[38])
-                + v[143]
-                    * (v[0] * v[3] * v[5] * v[23] - v[96] * v[200] + v[7] * v[35]
-                        + v[99] * v[72] + v[1] * v[27] * v[4])
-                + v[145]
-                    * (v[194] * v[5] * v[23] - v[72] * u3 + v[195] * v[38]
-                        + v[193] * v[1] * v[4])) * m1 - v[5] * v[199] * v[23]
-                - v[1]
-                    * (u2 * v[52] + u3 * v[69]
-                        + d * (v[76] * u4 * m1 - u5 * m2 * v[83] + v[31] * u1)) * v[4]
-                - v[7]
-                    * (u3 * v[167] + v[160] * u2
-                        + (v[10] * u5 * m2 * v[35] + v[8] * u4 * v[38] * m1
-                            + v[142] * u1) * d)
-                + m2
-                    * (v[134]
-                        * (v[101] * v[57] + u5 * v[162] + v[152] * v[1] * v[4]
-                            + v[70] * v[198] + v[148] * v[5] * v[23])
-                        + (v[93] * v[154] - v[104] * v[57] + v[75] * v[1] * v[4]
-                            + v[7] * v[38] + v[0] * v[2] * v[5] * v[23]) * v[138]
-                        - u5
-                            * (u3 * v[21] * v[70] - u5 * v[189] + v[10] * u1 * v[35]
-                                + v[201]) * d
-                        + (v[88] * v[5] * v[23] + v[104] * v[70] + v[10] * v[7] * v[35]
-                            - v[201] + v[1] * v[197] * v[4]) * v[130]),
-            m2
-                * (v[130]
-                    * (v[191] * v[5] - v[148] * u2
-                        + (v[103] - v[102] - v[10] * v[7]) * v[0] * v[2])
-                    - u5 * (v[101] * v[148] + (v[102] - v[103]) * v[0] * v[2]) * d
-                    + (v[7] * v[0] * v[3] - v[104] * v[88] - v[6] * v[2] * v[5]
-                        + v[148] * v[93]) * v[138]
-                    + ((v[151] - v[150]) * v[5] + v[101] * v[88] + v[0] * v[2] * v[198]
-                        + u5 * v[190]) * v[134])
-                - v[7] * v[0]
-                    * ((u1 * v[140] - v[10] * u5 * m2 * v[2] + v[8] * u4 * m1 * v[3]) * d
-                        + v[67] * v[4])
-                - (u3 * v[166] + v[165] * u2
-                    + (v[117] * v[6] * u1 + u4 * v[186] * m1 + u5 * m2 * v[191]) * d)
-                    * v[5]
-                + m1
-                    * (v[143]
-                        * (v[99] * v[79] - v[6] * v[3] * v[5] - v[7] * v[0] * v[2]
-                            - v[96] * v[194])
-                        - u4 * d * (v[99] * v[0] * v[3] + v[174] * v[100])
-                        + v[145] * (v[180] * v[5] - v[79] * u3 + v[195] * v[0] * v[3])
-                        + v[146]
-                            * (v[0] * v[3] * v[192] + v[186] * v[5] + v[194] * v[100]
-                                + u4 * v[174])),
+            v[9] * (v[71] + v[74] - d * m1 * v[105])
+                + (-v[12] * u5 * v[108] - v[10] * v[84] * u4) * J1 - v[109] * u2
+                + u3 * v[110] + (m2 * v[127] * d - v[112] * v[115]) * v[8],
+            v[128] + v[109] * u1 - v[84] * u4 * v[9] * J1 - u3 * v[129]
+                - m2 * (v[134] * v[38] - a * v[135] * v[8]) - v[10] * (v[71] + v[74])
+                - v[16] * m1 * v[105],
+            u5 * v[108] * v[8] * J1 - m2 * v[127] * v[20]
+                - (v[138] * v[50] + a * v[9] * v[139]) * m1 - u1 * v[110] + v[140]
+                - v[112] * v[12] * v[115] + v[129] * u2,
+            v[140] - v[138] * d * m1,
+            v[128] - m2 * d * v[134],
+            -m2 * (v[41] * v[134] + v[27] * v[127] + v[40] * v[135])
+                - (v[53] * v[139] + v[25] * v[105] + v[52] * v[138]) * m1,
+            -m1 * (v[138] * v[55] + v[139] * v[56] + v[33] * v[105])
+                - m2 * (v[44] * v[134] + v[127] * v[30] + v[135] * v[43]),
+            -(u3 * (v[157] + v[168] + a * (v[169] + v[170]))
+                + (v[171] + a * (v[172] + v[173]) + v[174]) * u2
+                + ((u1
+                    * (0.5 * v[178] - 0.25 * v[182] + 0.5 * v[184] - 0.25 * v[186]
+                        - 0.25 * v[188] - 0.25 * v[190]) + v[191] * u3
+                    + (0.25 * v[192] + 0.25 * v[193] + 0.25 * v[194] + 0.5 * v[195]
+                        + 0.25 * v[196] + 0.5 * v[197]) * u2) * u3
+                    + u1
+                        * (u1
+                            * (0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188]
+                                + 0.25 * v[190])
+                            + (0.25 * v[192] + 0.25 * v[193] - 0.25 * v[194] - v[58]
+                                - 0.25 * v[196]) * u2) + v[10] * v[6] * u2 * u2
+                    + u4
+                        * (u2
+                            * (0.5 * v[192] + 0.5 * v[193] + 0.5 * v[194] + v[195]
+                                + 0.5 * v[196] + v[197])
+                            + (0.5 * v[186] - 0.5 * v[182] - 0.5 * v[188] + 2.0 * v[60]
+                                + 0.5 * v[190]) * u3
+                            + u1
+                                * (v[178] - 0.5 * v[182] + v[184] - 0.5 * v[186]
+                                    - 0.5 * v[188] - 0.5 * v[190]) + u4 * v[191])) * d) * m1
+                - m2
+                    * ((v[171] + a * (-v[172] - v[173]) + v[174]) * u2
+                        + u3 * (v[157] + a * (-v[169] - v[170]) + v[168])
+                        + ((u3
+                            * (0.25 * v[201] + 0.25 * v[203] - v[47] + 0.25 * v[205]
+                                - 0.5 * v[208] + 0.25 * v[210] - 0.5 * v[211])
+                            + u2
+                                * (0.25 * v[212] - 0.25 * v[213] + 0.25 * v[214]
+                                    - 0.25 * v[215])
+                            + (0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214]
+                                + 0.25 * v[215]) * u1) * u1
+                            + u5
+                                * (u1
+                                    * (0.5 * v[212] - 0.5 * v[213] + 0.5 * v[214]
+                                        - 0.5 * v[215])
+                                    + u3
+                                        * (0.5 * v[201] + 0.5 * v[203] - 0.5 * v[205] - v[208]
+                                            - 0.5 * v[210] + v[211])
+                                    + (0.5 * v[212] - 0.5 * v[213] - 0.5 * v[214] + 0.5 * v[215]
+                                        - 2.0 * v[46]) * u2 + u5 * v[216])
+                            + ((0.25 * v[201] + 0.25 * v[203] - 0.25 * v[205]
+                                - 0.5 * v[208] - 0.25 * v[210] + 0.5 * v[211]) * u3
+                                + v[216] * u2) * u2 - v[12] * v[6] * u3 * u3) * d),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -4046,7 +3176,7 @@ pub mod kane {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -4058,6 +3188,7 @@ pub mod kane {
         let u3 = state[10];
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
@@ -4072,97 +3203,104 @@ pub mod kane {
         v[5] = u2 * v[3] - u3 * v[2];
         v[6] = f64::sin(theta);
         v[7] = v[6] * v[1] * v[4] + u1;
-        v[8] = f64::cos(gamma1);
-        v[9] = v[8] * v[8];
-        v[10] = f64::cos(gamma2);
+        v[8] = f64::sin(gamma2);
+        v[9] = f64::sin(gamma1);
+        v[10] = f64::cos(gamma1);
         v[11] = v[10] * v[10];
-        v[12] = f64::sin(gamma1);
-        v[13] = d * d * m1;
-        v[14] = a * d * m1;
-        v[15] = v[8] * (J1 - J2 - v[13]) - v[14];
-        v[16] = v[12] * v[15] - Ixy;
-        v[17] = m2 * d * d;
-        v[18] = v[10] * (v[17] + J2 - J1);
-        v[19] = m2 * a * d;
-        v[20] = v[18] + v[19];
-        v[21] = f64::sin(gamma2);
-        v[22] = v[20] * v[21] - Ixz;
-        v[23] = f64::sin(psi);
-        v[24] = v[2] * v[23];
-        v[25] = f64::cos(psi);
-        v[26] = v[6] * v[25] * v[3];
-        v[27] = v[24] + v[26];
-        v[28] = v[3] * v[23];
-        v[29] = v[6] * v[25] * v[2];
-        v[30] = v[28] - v[29];
-        v[31] = v[12] * v[27] * m1 + m2 * v[21] * v[30];
-        v[32] = v[31] * d;
-        v[33] = v[25] * v[3];
-        v[34] = v[6] * v[2] * v[23];
-        v[35] = -v[33] - v[34];
-        v[36] = v[25] * v[2];
-        v[37] = v[6] * v[3] * v[23];
-        v[38] = v[37] - v[36];
-        v[39] = d * (m2 * v[21] * v[35] + v[12] * v[38] * m1);
+        v[12] = f64::cos(gamma2);
+        v[13] = v[12] * v[12];
+        v[14] = J1 - J2;
+        v[15] = v[10] * d;
+        v[16] = -a - v[15];
+        v[17] = (v[10] * v[14] + v[16] * d * m1) * v[9] - Ixy;
+        v[18] = J2 - J1;
+        v[19] = v[12] * d;
+        v[20] = -a - v[19];
+        v[21] = v[8] * (v[12] * v[18] - m2 * d * v[20]) - Ixz;
+        v[22] = f64::sin(psi);
+        v[23] = v[2] * v[22];
+        v[24] = f64::cos(psi);
+        v[25] = v[23] + v[6] * v[24] * v[3];
+        v[26] = v[3] * v[22];
+        v[27] = v[6] * v[24] * v[2] - v[26];
+        v[28] = d * (v[9] * v[25] * m1 - m2 * v[27] * v[8]);
+        v[29] = v[24] * v[3];
+        v[30] = v[29] + v[6] * v[2] * v[22];
+        v[31] = v[24] * v[2];
+        v[32] = v[6] * v[3] * v[22];
+        v[33] = v[32] - v[31];
+        v[34] = (v[9] * v[33] * m1 - m2 * v[8] * v[30]) * d;
+        v[35] = (v[9] * m1 * v[3] - m2 * v[8] * v[2]) * v[0] * d;
+        v[36] = d * d;
+        v[37] = -Iyz;
+        v[38] = d + v[12] * a;
+        v[39] = J2 + m2 * d * v[38];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
-        let Iyz = params.Iyz;
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u6 = state[13];
+        let u7 = state[14];
+        let u8 = state[15];
+        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[12] * m1 * v[3];
-        v[41] = m2 * v[21] * v[2];
-        v[42] = v[40] - v[41];
-        v[43] = v[42] * v[0] * d;
-        v[44] = v[10] * d;
-        v[45] = J2 + v[13] - J1;
-        v[46] = -Iyz;
-        v[47] = d + v[10] * a;
-        v[48] = J2 + m2 * d * v[47];
-        v[49] = a + v[44];
-        v[50] = -v[24] - v[26];
-        v[51] = a * v[50];
-        v[52] = (v[49] * v[2] * v[23] + v[25] * (v[0] * d * v[21] + v[6] * v[49] * v[3]))
-            * m2 + (v[51] + v[8] * v[50] * d) * m1;
-        v[53] = v[36] - v[37];
-        v[54] = v[53] * a;
-        v[55] = v[0] * v[21] * v[23];
-        v[56] = v[10] * v[38];
-        v[57] = v[55] + v[56];
-        v[58] = a * v[38];
-        v[59] = (v[8] * v[53] * d + v[54]) * m1 + m2 * (d * v[57] + v[58]);
-        v[60] = v[8] * d;
-        v[61] = -a - v[60];
-        v[62] = v[61] * m1 + m2 * v[49];
-        v[63] = v[62] * v[0] * v[3] - m2 * v[6] * d * v[21];
-        v[64] = v[8] * a + d;
-        v[65] = d * v[64] * m1 + J2;
-        v[66] = -a - v[44];
-        v[67] = (a + v[60]) * m1 + m2 * v[66];
-        v[68] = v[12] * v[0] * d * m1;
-        v[69] = v[62] * v[3] * v[23] + v[25] * (v[6] * v[67] * v[2] - v[68]);
-        v[70] = v[33] + v[34];
-        v[71] = v[12] * v[0] * v[23];
-        v[72] = v[8] * v[70] - v[71];
-        v[73] = a * (m1 * v[70] + m2 * v[35]) + (v[10] * m2 * v[35] + v[72] * m1) * d;
-        v[74] = v[6] * v[12] * d * m1 + v[67] * v[0] * v[2];
-        v[75] = v[29] - v[28];
-        v[76] = v[8] * v[75] - v[25] * v[12] * v[0];
-        v[77] = v[76] * d * m1;
-        v[78] = v[72] * d * m1;
-        v[79] = v[8] * v[0] * v[2] + v[6] * v[12];
+        v[40] = (v[12] * v[0] - v[6] * v[8] * v[3]) * v[24] - v[8] * v[2] * v[22];
+        v[41] = v[24] * v[0] * v[8] + v[12] * v[25];
+        v[42] = m2 * (v[41] * v[38] - a * v[40] * v[8]) + v[16] * v[25] * m1;
+        v[43] = v[12] * v[0] * v[22] + (v[31] - v[32]) * v[8];
+        v[44] = v[0] * v[8] * v[22] + v[12] * v[33];
+        v[45] = v[16] * v[33] * m1 + m2 * (v[44] * v[38] - a * v[8] * v[43]);
+        v[46] = v[12] * v[6];
+        v[47] = v[6] * v[8];
+        v[48] = v[12] * v[0] * v[3] - v[47];
+        v[49] = m2 * (v[48] * v[38] - a * (-v[0] * v[8] * v[3] - v[46]) * v[8])
+            + v[16] * v[0] * m1 * v[3];
+        v[50] = v[10] * a + d;
+        v[51] = d * v[50] * m1 + J2;
+        v[52] = v[10] * v[27] - v[24] * v[9] * v[0];
+        v[53] = v[24] * (v[6] * v[9] * v[2] + v[10] * v[0]) - v[9] * v[3] * v[22];
+        v[54] = m2 * v[27] * v[20] + (v[52] * v[50] + a * v[53] * v[9]) * m1;
+        v[55] = v[10] * v[30] - v[9] * v[0] * v[22];
+        v[56] = v[10] * v[0] * v[22] + v[9] * v[30];
+        v[57] = (v[55] * v[50] + a * v[9] * v[56]) * m1 + m2 * v[20] * v[30];
+        v[58] = v[6] * v[9];
+        v[59] = v[10] * v[0] * v[2] + v[58];
+        v[60] = v[10] * v[6];
+        v[61] = (v[59] * v[50] + a * (v[9] * v[0] * v[2] - v[60]) * v[9]) * m1
+            + m2 * v[0] * v[2] * v[20];
+        v[62] = v[52] * d * m1;
+        v[63] = v[55] * d * m1;
+        v[64] = v[59] * d * m1;
+        v[65] = m2 * d * v[41];
+        v[66] = m2 * d * v[44];
+        v[67] = m2 * v[48] * d;
+        v[68] = m2 + m0 + m1;
+        v[69] = v[9] * u2;
+        v[70] = v[10] * u1;
+        v[71] = u4 * J2 * (-v[69] - v[70]);
+        v[72] = v[69] + v[70];
+        v[73] = u4 + u3;
+        v[74] = v[72] * v[14] * v[73];
+        v[75] = u7 * v[22];
+        v[76] = u6 * v[24];
+        v[77] = v[75] + v[76];
+        v[78] = u8 * v[0];
+        v[79] = -v[75] - v[76];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -4172,7 +3310,7 @@ pub mod kane {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
         let u1 = state[8];
         let u2 = state[9];
@@ -4182,57 +3320,54 @@ pub mod kane {
         let u6 = state[13];
         let u7 = state[14];
         let u8 = state[15];
-        let m0 = params.m0;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let d = params.d;
-        let J1 = params.J1;
+        let a = params.a;
         let J2 = params.J2;
-        v[80] = v[79] * d * m1;
-        v[81] = v[25] * v[0] * v[21];
-        v[82] = v[10] * v[27];
-        v[83] = -v[81] - v[82];
-        v[84] = -(m2 * v[83] * d);
-        v[85] = -(m2 * d * (-v[55] - v[56]));
-        v[86] = v[6] * v[21];
-        v[87] = v[10] * v[0] * v[3];
-        v[88] = v[87] - v[86];
-        v[89] = m2 * v[88] * d;
-        v[90] = m2 + m0 + m1;
-        v[91] = v[21] * u1;
-        v[92] = v[10] * u3;
-        v[93] = v[91] + v[92];
-        v[94] = v[8] * u2;
-        v[95] = v[12] * u1;
-        v[96] = v[94] - v[95];
-        v[97] = v[12] * u2;
-        v[98] = v[8] * u1;
-        v[99] = v[97] + v[98];
-        v[100] = u4 + u3;
-        v[101] = u5 + u2;
-        v[102] = u3 * v[21];
-        v[103] = v[10] * u1;
-        v[104] = v[103] - v[102];
-        v[105] = Iyz * u2;
-        v[106] = u3 * Izz;
-        v[107] = u1 * Ixz;
-        v[108] = Iyy * u2;
-        v[109] = Iyz * u3;
-        v[110] = Ixy * u1;
-        v[111] = v[45] * v[12] * v[12] + v[8] * v[15];
-        v[112] = u6 * v[27] + u8 * v[0] * v[3] + u7 * v[38];
-        v[113] = v[112] * d * m1;
-        v[114] = (J1 - v[17] - J2) * v[21] * v[21] + v[10] * v[20];
-        v[115] = u8 * v[0] * v[2];
-        v[116] = u6 * v[30] + u7 * v[35] - v[115];
-        v[117] = v[41] - v[40];
-        v[118] = u7 * v[23];
-        v[119] = u6 * v[25];
+        v[80] = v[6] * v[79] - v[78];
+        v[81] = (v[1] * v[77] * v[4] + v[7] * v[80]) * v[2];
+        v[82] = v[10] * u2;
+        v[83] = v[9] * u1;
+        v[84] = v[82] - v[83];
+        v[85] = a * u3;
+        v[86] = u7 * v[24];
+        v[87] = u6 * v[22];
+        v[88] = v[86] - v[87];
+        v[89] = v[88] * v[3];
+        v[90] = v[78] + v[6] * v[77];
+        v[91] = v[90] * v[2];
+        v[92] = v[85] + v[89] + v[91];
+        v[93] = v[6] * u8;
+        v[94] = v[0] * v[77] - v[93];
+        v[95] = v[9] * v[92] + v[10] * v[94];
+        v[96] = v[0] * v[79] + v[93];
+        v[97] = v[10] * v[92] + v[96] * v[9] + d * v[73];
+        v[98] = v[0] * v[5] * v[22];
+        v[99] = v[24] * u1;
+        v[100] = v[6] * u8 * v[5];
+        v[101] = u1 * v[22];
+        v[102] = v[24] * v[0] * v[5];
+        v[103] = u7 * (v[98] - v[99]) - v[100] + u6 * (v[101] + v[102]);
+        v[104] = v[103] * v[3];
+        v[105] = v[81] - v[84] * v[95] + v[97] * v[72] + v[104] + v[72] * u4 * d;
+        v[106] = v[8] * u1;
+        v[107] = v[12] * u3;
+        v[108] = -v[106] - v[107];
+        v[109] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[110] = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        v[111] = u5 + u2;
+        v[112] = u5 * J2 + v[111] * v[18];
+        v[113] = u3 * v[8];
+        v[114] = v[12] * u1;
+        v[115] = v[114] - v[113];
+        v[116] = v[2] * v[103];
+        v[117] = v[1] * v[79] * v[4] + v[7] * v[90];
+        v[118] = v[117] * v[3];
+        v[119] = a * u2;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -4242,140 +3377,165 @@ pub mod kane {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
         let u6 = state[13];
         let u7 = state[14];
-        let u8 = state[15];
         let Ixx = params.Ixx;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
-        v[120] = v[118] + v[119];
-        v[121] = v[6] * u8;
-        v[122] = v[0] * v[120] - v[121];
-        v[123] = a * u2;
-        v[124] = u7 * v[25];
-        v[125] = u6 * v[23];
-        v[126] = v[2] * (v[125] - v[124]);
-        v[127] = u8 * v[0];
-        v[128] = v[127] + v[6] * v[120];
-        v[129] = v[128] * v[3];
-        v[130] = v[21] * v[122] + v[10] * (v[123] + v[126] + v[129]) + v[101] * d;
-        v[131] = v[104] * v[130];
-        v[132] = v[124] - v[125];
-        v[133] = -v[118] - v[119];
-        v[134] = v[10] * v[122]
-            + v[21] * (v[132] * v[2] - v[123] + (v[6] * v[133] - v[127]) * v[3]);
-        v[135] = v[134] * v[93];
-        v[136] = v[132] * v[3];
-        v[137] = v[128] * v[2];
-        v[138] = u3 * v[66] + v[136] + v[137] - d * v[21] * u1;
-        v[139] = m2 * v[21] * v[70] + v[53] * v[12] * m1;
-        v[140] = -m2 * v[21] * v[3] - v[12] * v[2] * m1;
-        v[141] = m2 * v[50] * v[21] + v[12] * m1 * v[30];
-        v[142] = v[12] * v[35] * m1 + v[53] * m2 * v[21];
-        v[143] = v[126] - v[123] + v[129] + d * (v[95] - v[94]);
-        v[144] = a * u3 + v[136] + v[137];
-        v[145] = v[12] * v[144] + v[8] * v[122];
-        v[146] = v[8] * v[144] + (v[0] * v[133] + v[121]) * v[12] + d * v[100];
-        v[147] = v[96] * v[145] - v[146] * v[99];
-        v[148] = -v[0] * v[21] * v[3] - v[10] * v[6];
-        v[149] = u8 * v[148];
-        v[150] = v[10] * v[0];
-        v[151] = v[6] * v[21] * v[3];
-        v[152] = (v[150] - v[151]) * v[25] - v[21] * v[2] * v[23];
-        v[153] = v[10] * v[0] * v[23];
-        v[154] = v[153] + v[53] * v[21];
-        v[155] = -v[91] - v[92];
-        v[156] = Ixy * u2;
-        v[157] = Ixx * u1;
-        v[158] = u3 * Ixz;
-        v[159] = (v[8] * v[75] * d + a * v[75]) * m1
-            + m2 * (a * v[30] + v[10] * d * v[30]);
+        v[120] = v[87] - v[86];
+        v[121] = v[2] * v[120];
+        v[122] = v[90] * v[3];
+        v[123] = v[8] * v[94] + v[12] * (v[119] + v[121] + v[122]) + v[111] * d;
+        v[124] = v[88] * v[2] - v[119] + v[80] * v[3];
+        v[125] = v[12] * v[94] + v[8] * v[124];
+        v[126] = v[106] + v[107];
+        v[127] = v[116] + v[118] + (v[113] - v[114]) * u5 * d - v[115] * v[123]
+            + v[125] * v[126];
+        v[128] = v[18] * v[115] * v[126];
+        v[129] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[130] = u3 * v[20] + v[89] + v[91] - d * v[8] * u1;
+        v[131] = v[80] * v[5];
+        v[132] = v[88] * v[4];
+        v[133] = v[131] + u5 * v[124] + v[132];
+        v[134] = v[115] * v[130] - v[111] * v[125] + v[133] * v[8]
+            + v[12] * (v[81] + v[104] + u5 * v[94]);
+        v[135] = v[8]
+            * (v[117] * v[2]
+                + v[3] * (v[100] + u6 * (-v[101] - v[102]) + u7 * (v[99] - v[98]))
+                + u5 * v[96]) + v[12] * v[133] - v[126] * v[130] + v[111] * v[123];
+        v[136] = v[121] - v[119] + v[122] + d * (v[83] - v[82]);
+        v[137] = v[116] + v[118] + v[96] * u4;
+        v[138] = v[95] * v[73] - v[136] * v[72]
+            + v[9]
+                * (u4 * (v[120] * v[3] - v[85] + v[80] * v[2]) + v[90] * v[5]
+                    + v[4] * v[120]) + v[10] * v[137];
+        v[139] = v[136] * v[84] + v[10] * (v[131] + v[132] + u4 * v[92]) - v[97] * v[73]
+            + v[9] * v[137];
+        v[140] = v[84] * v[72] * v[14];
+        v[141] = 2.0 * theta + psi + phi;
+        v[142] = f64::cos(v[141]);
+        v[143] = 2.0 * theta - psi - phi;
+        v[144] = f64::cos(v[143]);
+        v[145] = 2.0 * theta + psi - phi;
+        v[146] = f64::cos(v[145]);
+        v[147] = 2.0 * theta - psi + phi;
+        v[148] = f64::cos(v[147]);
+        v[149] = v[26] + v[31];
+        v[150] = v[6] * v[149];
+        v[151] = v[26] - v[31];
+        v[152] = v[6] * v[151];
+        v[153] = v[31] - v[26];
+        v[154] = v[6] * v[153];
+        v[155] = -v[26] - v[31];
+        v[156] = v[6] * v[155];
+        v[157] = u6
+            * (v[1] * (0.125 * v[144] - 0.125 * v[142] - 0.125 * v[146] + 0.125 * v[148])
+                - 0.25 * v[150] - 0.25 * v[152] + 0.25 * v[154] + 0.25 * v[156]);
+        v[158] = v[6] * (v[23] + v[29]);
+        v[159] = v[155] * v[0];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part4(
         _t: f64,
         state: &[f64; STATES],
-        params: &Params,
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let u8 = state[15];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        v[160] = (v[10] * d * v[35] + a * v[35]) * m2
-            + (a * v[70] + v[8] * d * v[70]) * m1;
-        v[161] = v[10] * v[53];
-        v[162] = v[161] - v[55];
-        v[163] = m1 * (v[8] * d * v[38] + v[58]);
-        v[164] = m2 * (d * v[162] + v[54]) + v[163];
-        v[165] = v[6] * v[67] * v[3] - m2 * v[0] * d * v[21];
-        v[166] = v[62] * v[6] * v[2] + v[68];
-        v[167] = m2 * (v[54] + v[10] * v[53] * d) + v[163];
-        v[168] = m2 * (v[10] * v[50] * d + v[51]) + (v[8] * d * v[27] + a * v[27]) * m1;
-        v[169] = -v[97] - v[98];
-        v[170] = v[8] * v[35] + v[71];
-        v[171] = (v[170] * m1 + v[10] * m2 * v[70]) * d + a * (v[35] * m1 + m2 * v[70]);
-        v[172] = v[12] * v[0] * v[2];
-        v[173] = v[8] * v[6];
-        v[174] = v[173] - v[172];
-        v[175] = u8 * v[174];
-        v[176] = v[8] * v[0] * v[23];
-        v[177] = v[12] * v[35] - v[176];
-        v[178] = v[6] * v[12] * v[2];
-        v[179] = v[8] * v[0];
-        v[180] = -v[178] - v[179];
-        v[181] = v[12] * v[3] * v[23];
-        v[182] = v[25] * v[180] + v[181];
-        v[183] = -v[75] * v[12] - v[8] * v[25] * v[0];
-        v[184] = v[12] * v[70];
-        v[185] = -v[176] - v[184];
-        v[186] = v[12] * v[0] - v[8] * v[6] * v[2];
-        v[187] = v[55] - v[161];
-        v[188] = v[21] * v[27] - v[10] * v[25] * v[0];
-        v[189] = v[21] * v[38] - v[153];
-        v[190] = v[86] - v[87];
-        v[191] = -v[10] * v[6] * v[3] - v[0] * v[21];
-        v[192] = v[8] * v[7] - v[97] - v[98];
-        v[193] = v[25] * (v[178] + v[179]) - v[181];
-        v[194] = v[172] - v[173];
-        v[195] = v[7] * v[12] + v[94] - v[95];
-        v[196] = v[152] * u2;
-        v[197] = v[81] + v[82];
-        v[198] = v[7] * v[21] - v[91] - v[92];
-        v[199] = (u4 * v[79] * m1 - u5 * m2 * v[190] + v[42] * v[0] * u1) * d
-            + v[63] * u2 + u3 * v[74];
+        let u6 = state[13];
+        let u7 = state[14];
+        v[160] = v[6] * (v[29] - v[23]);
+        v[161] = v[149] * v[0];
+        v[162] = v[151] * v[0];
+        v[163] = f64::sin(v[143]);
+        v[164] = f64::sin(v[147]);
+        v[165] = f64::sin(v[145]);
+        v[166] = f64::sin(v[141]);
+        v[167] = v[153] * v[0];
+        v[168] = (0.5 * v[158] + 0.25 * v[159] + 0.5 * v[160] + 0.25 * v[161]
+            + 0.25 * v[162]
+            + v[1] * (-0.125 * v[163] - 0.125 * v[164] - 0.125 * v[165] - 0.125 * v[166])
+            + 0.25 * v[167]) * u7;
+        v[169] = v[0] * u1 * v[3];
+        v[170] = v[6] * u3;
+        v[171] = u6
+            * (v[1] * (0.125 * v[164] - 0.125 * v[163] + 0.125 * v[165] - 0.125 * v[166])
+                - 0.5 * v[158] + 0.25 * v[159] + 0.5 * v[160] + 0.25 * v[161]
+                - 0.25 * v[162] - 0.25 * v[167]);
+        v[172] = v[6] * u2;
+        v[173] = v[0] * v[2] * u1;
+        v[174] = u7
+            * ((0.125 * v[142] - 0.125 * v[144] - 0.125 * v[146] + 0.125 * v[148]) * v[1]
+                + 0.25 * v[150] - 0.25 * v[152] + 0.25 * v[154] - 0.25 * v[156]);
+        v[175] = v[6] * v[2];
+        v[176] = v[0] * v[3];
+        v[177] = v[175] + v[176];
+        v[178] = v[10] * v[177];
+        v[179] = v[0] * v[2];
+        v[180] = v[6] * v[3];
+        v[181] = v[179] - v[180];
+        v[182] = v[9] * v[181];
+        v[183] = v[176] - v[175];
+        v[184] = v[10] * v[183];
+        v[185] = v[180] - v[179];
+        v[186] = v[9] * v[185];
+        v[187] = v[179] + v[180];
+        v[188] = v[9] * v[187];
+        v[189] = -v[179] - v[180];
+        v[190] = v[189] * v[9];
+        v[191] = 0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188] + v[60] + 0.25 * v[190];
+        v[192] = v[10] * v[181];
+        v[193] = v[10] * v[187];
+        v[194] = v[10] * v[185];
+        v[195] = v[183] * v[9];
+        v[196] = v[10] * v[189];
+        v[197] = v[177] * v[9];
+        v[198] = v[12] * v[2];
+        v[199] = v[8] * v[3];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part5(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 202],
+        v: &mut [f64; 217],
     ) {
-        let u2 = state[9];
-        v[200] = v[176] + v[184];
-        v[201] = v[154] * u2;
+        v[200] = -v[198] - v[199];
+        v[201] = v[6] * v[200];
+        v[202] = v[198] + v[199];
+        v[203] = v[6] * v[202];
+        v[204] = v[199] - v[198];
+        v[205] = v[204] * v[6];
+        v[206] = v[8] * v[2];
+        v[207] = v[12] * v[3];
+        v[208] = v[0] * (v[207] - v[206]);
+        v[209] = v[198] - v[199];
+        v[210] = v[6] * v[209];
+        v[211] = v[0] * (v[206] + v[207]);
+        v[212] = v[200] * v[0];
+        v[213] = v[0] * v[202];
+        v[214] = v[204] * v[0];
+        v[215] = v[209] * v[0];
+        v[216] = 0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214] + 0.25 * v[215] - v[46];
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -4407,29 +3567,35 @@ pub mod kane {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(gamma1);
+        let x4 = f64::sin(gamma2);
         let x5 = f64::cos(gamma2);
-        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
-        let x7 = f64::sin(gamma2);
-        let x8 = m2 * x7 * x1;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * x3 * m1;
-        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x2 * x13;
-        let x15 = x12 * x3;
-        let x16 = x0 * x1 * x13;
-        let x17 = x12 * x1;
-        let x18 = x0 * x3 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x3 * x13 + x0 * x12 * x1;
-        let x21 = x1 * x13;
-        let x22 = x0 * x12 * x3;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x2;
-        let x26 = x16 - x15;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a;
+        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4461,25 +3627,31 @@ pub mod kane {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
-                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
-                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
-                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
-                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
-                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
-                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
-                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
-                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -4565,48 +3737,48 @@ pub mod kane {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 60];
+        let mut v = [0.0f64; 52];
         matrix_part0(t, state, params, g_i, &mut v);
         matrix_part1(t, state, params, g_i, &mut v);
         [
             [
-                Ixx + d * d * (m1 * (1.0 - v[1]) + m2 * (1.0 - v[3]))
-                    + (v[1] + v[3]) * J1 + J2 * (2.0 - v[1] - v[3]),
-                v[7],
-                v[12],
+                Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
+                    + (v[0] * v[0] + v[1] * v[1]) * J2,
+                v[8],
+                v[11],
                 0.0,
                 0.0,
-                v[23],
+                v[19],
+                v[24],
+                v[26],
+            ],
+            [
+                v[8],
+                v[1] * v[1] * J1 + v[7] * v[7] * m1 + Iyy + J2 * (v[3] + 1.0)
+                    + m2 * (v[27] + a * (a + 2.0 * v[9])),
+                v[28],
+                0.0,
                 v[30],
                 v[32],
+                v[34],
+                v[36],
             ],
             [
-                v[7],
-                Iyy + J2 + a * a * m1 + m2 * (d * d + a * (a + 2.0 * v[33]))
-                    + v[0] * (v[0] * (J2 + v[5] - J1) + 2.0 * v[6]) + J1,
-                v[34],
-                0.0,
-                v[35],
+                v[11],
+                v[28],
+                v[0] * v[0] * J1 + (a * (a + 2.0 * v[6]) + v[27]) * m1
+                    + m2 * v[10] * v[10] + Izz + J2 * (v[5] + 1.0),
                 v[38],
-                v[42],
-                v[45],
-            ],
-            [
-                v[12],
-                v[34],
-                a * (2.0 * (v[0] * d * m1) + a * (m2 + m1)) + J2
-                    + v[2] * (v[9] + 2.0 * v[10]) + v[5] + Izz + J1,
-                v[46],
                 0.0,
-                v[48],
-                v[51],
-                v[52],
+                v[40],
+                v[42],
+                v[44],
             ],
-            [0.0, 0.0, v[46], J2 + v[5], 0.0, v[53], v[54], v[55]],
-            [0.0, v[35], 0.0, 0.0, v[8] + J2, v[56], v[57], v[58]],
-            [v[23], v[38], v[48], v[53], v[56], v[59], 0.0, 0.0],
-            [v[30], v[42], v[51], v[54], v[57], 0.0, v[59], 0.0],
-            [v[32], v[45], v[52], v[55], v[58], 0.0, 0.0, v[59]],
+            [0.0, 0.0, v[38], J2 + d * d * m1, 0.0, v[45], v[46], v[47]],
+            [0.0, v[30], 0.0, 0.0, m2 * d * d + J2, v[48], v[49], v[50]],
+            [v[19], v[32], v[40], v[45], v[48], v[51], 0.0, 0.0],
+            [v[24], v[34], v[42], v[46], v[49], 0.0, v[51], 0.0],
+            [v[26], v[36], v[44], v[47], v[50], 0.0, 0.0, v[51]],
         ]
     }
     #[allow(non_snake_case)]
@@ -4616,7 +3788,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 60],
+        v: &mut [f64; 52],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -4632,48 +3804,54 @@ pub mod kane {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = v[0] * v[0];
-        v[2] = f64::cos(gamma2);
+        v[0] = f64::sin(gamma2);
+        v[1] = f64::sin(gamma1);
+        v[2] = f64::cos(gamma1);
         v[3] = v[2] * v[2];
-        v[4] = f64::sin(gamma1);
-        v[5] = d * d * m1;
-        v[6] = a * d * m1;
-        v[7] = v[4] * (v[0] * (J1 - J2 - v[5]) - v[6]) - Ixy;
-        v[8] = m2 * d * d;
-        v[9] = v[2] * (v[8] + J2 - J1);
-        v[10] = m2 * a * d;
-        v[11] = f64::sin(gamma2);
-        v[12] = (v[9] + v[10]) * v[11] - Ixz;
-        v[13] = f64::sin(phi);
-        v[14] = f64::sin(psi);
-        v[15] = v[13] * v[14];
-        v[16] = f64::sin(theta);
-        v[17] = f64::cos(psi);
-        v[18] = f64::cos(phi);
-        v[19] = v[16] * v[17] * v[18];
-        v[20] = v[15] + v[19];
-        v[21] = v[18] * v[14];
-        v[22] = v[16] * v[17] * v[13];
-        v[23] = (v[4] * v[20] * m1 + m2 * v[11] * (v[21] - v[22])) * d;
-        v[24] = v[17] * v[18];
-        v[25] = v[16] * v[13] * v[14];
-        v[26] = -v[24] - v[25];
-        v[27] = v[17] * v[13];
-        v[28] = v[16] * v[18] * v[14];
-        v[29] = v[28] - v[27];
-        v[30] = d * (m2 * v[11] * v[26] + v[4] * v[29] * m1);
-        v[31] = f64::cos(theta);
-        v[32] = (v[4] * m1 * v[18] - m2 * v[11] * v[13]) * v[31] * d;
-        v[33] = v[2] * d;
-        v[34] = -Iyz;
-        v[35] = J2 + m2 * d * (d + v[2] * a);
-        v[36] = a + v[33];
-        v[37] = -v[15] - v[19];
-        v[38] = (v[36] * v[13] * v[14]
-            + v[17] * (v[31] * d * v[11] + v[16] * v[36] * v[18])) * m2
-            + (a * v[37] + v[0] * v[37] * d) * m1;
-        v[39] = v[27] - v[28];
+        v[4] = f64::cos(gamma2);
+        v[5] = v[4] * v[4];
+        v[6] = v[2] * d;
+        v[7] = -a - v[6];
+        v[8] = (v[2] * (J1 - J2) + v[7] * d * m1) * v[1] - Ixy;
+        v[9] = v[4] * d;
+        v[10] = -a - v[9];
+        v[11] = v[0] * (v[4] * (J2 - J1) - m2 * d * v[10]) - Ixz;
+        v[12] = f64::sin(phi);
+        v[13] = f64::sin(psi);
+        v[14] = f64::sin(theta);
+        v[15] = f64::cos(psi);
+        v[16] = f64::cos(phi);
+        v[17] = v[12] * v[13] + v[14] * v[15] * v[16];
+        v[18] = v[14] * v[15] * v[12] - v[16] * v[13];
+        v[19] = d * (v[1] * v[17] * m1 - m2 * v[18] * v[0]);
+        v[20] = v[15] * v[16] + v[14] * v[12] * v[13];
+        v[21] = v[15] * v[12];
+        v[22] = v[14] * v[16] * v[13];
+        v[23] = v[22] - v[21];
+        v[24] = (v[1] * v[23] * m1 - m2 * v[0] * v[20]) * d;
+        v[25] = f64::cos(theta);
+        v[26] = (v[1] * m1 * v[16] - m2 * v[0] * v[12]) * v[25] * d;
+        v[27] = d * d;
+        v[28] = -Iyz;
+        v[29] = d + v[4] * a;
+        v[30] = J2 + m2 * d * v[29];
+        v[31] = v[15] * v[25] * v[0] + v[4] * v[17];
+        v[32] = m2
+            * (v[31] * v[29]
+                - a
+                    * ((v[4] * v[25] - v[14] * v[0] * v[16]) * v[15]
+                        - v[0] * v[12] * v[13]) * v[0]) + v[7] * v[17] * m1;
+        v[33] = v[25] * v[0] * v[13] + v[4] * v[23];
+        v[34] = v[7] * v[23] * m1
+            + m2
+                * (v[33] * v[29]
+                    - a * v[0] * (v[4] * v[25] * v[13] + (v[21] - v[22]) * v[0]));
+        v[35] = v[4] * v[25] * v[16] - v[14] * v[0];
+        v[36] = m2 * (v[35] * v[29] - a * (-v[25] * v[0] * v[16] - v[4] * v[14]) * v[0])
+            + v[7] * v[25] * m1 * v[16];
+        v[37] = v[2] * a + d;
+        v[38] = d * v[37] * m1 + J2;
+        v[39] = v[2] * v[18] - v[15] * v[1] * v[25];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -4682,36 +3860,31 @@ pub mod kane {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 60],
+        v: &mut [f64; 52],
     ) {
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let J2 = params.J2;
-        v[40] = v[31] * v[11] * v[14];
-        v[41] = v[2] * v[29];
-        v[42] = (v[0] * v[39] * d + v[39] * a) * m1
-            + m2 * (d * (v[40] + v[41]) + a * v[29]);
-        v[43] = v[0] * d;
-        v[44] = (-a - v[43]) * m1 + m2 * v[36];
-        v[45] = v[44] * v[31] * v[18] - m2 * v[16] * d * v[11];
-        v[46] = d * (v[0] * a + d) * m1 + J2;
-        v[47] = (a + v[43]) * m1 + m2 * (-a - v[33]);
-        v[48] = v[44] * v[18] * v[14]
-            + v[17] * (v[16] * v[47] * v[13] - v[4] * v[31] * d * m1);
-        v[49] = v[24] + v[25];
-        v[50] = v[0] * v[49] - v[4] * v[31] * v[14];
-        v[51] = a * (m1 * v[49] + m2 * v[26]) + (v[2] * m2 * v[26] + v[50] * m1) * d;
-        v[52] = v[16] * v[4] * d * m1 + v[47] * v[31] * v[13];
-        v[53] = (v[0] * (v[22] - v[21]) - v[17] * v[4] * v[31]) * d * m1;
-        v[54] = v[50] * d * m1;
-        v[55] = (v[0] * v[31] * v[13] + v[16] * v[4]) * d * m1;
-        v[56] = -(m2 * (-v[17] * v[31] * v[11] - v[2] * v[20]) * d);
-        v[57] = -(m2 * d * (-v[40] - v[41]));
-        v[58] = m2 * (v[2] * v[31] * v[18] - v[16] * v[11]) * d;
-        v[59] = m2 + m0 + m1;
+        v[40] = m2 * v[18] * v[10]
+            + (v[39] * v[37]
+                + a
+                    * (v[15] * (v[14] * v[1] * v[12] + v[2] * v[25])
+                        - v[1] * v[16] * v[13]) * v[1]) * m1;
+        v[41] = v[2] * v[20] - v[1] * v[25] * v[13];
+        v[42] = (v[41] * v[37] + a * v[1] * (v[2] * v[25] * v[13] + v[1] * v[20])) * m1
+            + m2 * v[10] * v[20];
+        v[43] = v[2] * v[25] * v[12] + v[14] * v[1];
+        v[44] = (v[43] * v[37] + a * (v[1] * v[25] * v[12] - v[2] * v[14]) * v[1]) * m1
+            + m2 * v[25] * v[12] * v[10];
+        v[45] = v[39] * d * m1;
+        v[46] = v[41] * d * m1;
+        v[47] = v[43] * d * m1;
+        v[48] = m2 * d * v[31];
+        v[49] = m2 * d * v[33];
+        v[50] = m2 * v[35] * d;
+        v[51] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -4779,7 +3952,7 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let mut v = [0.0f64; 141];
+        let mut v = [0.0f64; 132];
         rhs_part0(t, state, params, g_i, dstate, &mut v);
         rhs_part1(t, state, params, g_i, dstate, &mut v);
         rhs_part2(t, state, params, g_i, dstate, &mut v);
@@ -4796,158 +3969,91 @@ pub mod reduced_volterra {
             [
                 Ixx
                     + d * d
-                        * (m2 * (v[17] * v[17] * v[35] - v[34] + 1.0)
-                            + m1 * (v[7] * v[7] * (v[36] - 1.0) - v[36] + 1.0))
-                    + (v[37] + v[38]) * J1 + J2 * (2.0 - v[37] - v[38]),
-                v[42],
-                v[44],
-                v[45],
-                v[46],
+                        * (m2
+                            * (v[16] * v[16] * v[35] * v[35]
+                                + v[6] * v[6] * v[38] * v[12] * v[12] * m1 * m1)
+                            + v[6] * v[6] * m0
+                                * (m2 * m2 * v[16] * v[16] + v[12] * v[12] * m1 * m1)
+                            + (v[12] * v[12] * v[40] * v[40]
+                                + v[6] * v[6] * m2 * m2 * v[16] * v[16] * v[43]) * m1)
+                    + (v[41] + v[36]) * J1 + (v[37] + v[42]) * J2,
+                v[54],
+                v[60],
+                v[63],
+                v[64],
             ],
             [
-                v[42],
-                Iyy + J2 + v[7] * (v[7] * v[49] + 2.0 * (v[17] * v[6] * m2 * d * d * m1))
-                    + v[51] + v[54] + J1,
-                v[56],
-                v[55],
-                v[62],
+                v[54],
+                v[12] * v[12] * J1 + Iyy + J2 * (v[41] + 1.0)
+                    + v[6] * v[6] * m0
+                        * (m2 * m2 * d * d * v[16] * v[16] + v[22] * v[22])
+                    + (v[53] * v[53]
+                        + v[6] * v[6] * m2 * m2 * d * d * v[16] * v[16] * v[43]) * m1
+                    + m2 * (v[16] * v[16] * v[47] * v[47] + v[52] * v[52]),
+                v[69],
+                v[70],
+                v[71],
             ],
             [
-                v[44],
-                v[56],
-                v[48]
-                    + v[17]
-                        * (v[17] * (J2 + v[51] - J1)
-                            + 2.0 * (v[7] * v[6] * m2 * d * d * m1)) + J2 + Izz + v[54]
-                    + J1,
-                v[68],
-                v[55],
+                v[60],
+                v[69],
+                v[16] * v[16] * J1
+                    + m2
+                        * (v[6] * v[6] * v[38] * v[12] * v[12] * d * d * m1 * m1
+                            + v[59] * v[59]) + Izz
+                    + v[6] * v[6] * m0
+                        * (v[23] * v[23] + v[12] * v[12] * d * d * m1 * m1)
+                    + J2 * (v[36] + 1.0)
+                    + m1 * (v[58] * v[58] + v[12] * v[12] * v[57] * v[57]),
+                v[72],
+                v[73],
             ],
-            [v[45], v[55], v[68], v[48] + J2, v[55]],
-            [v[46], v[62], v[55], v[55], J2 + v[51]],
+            [
+                v[63],
+                v[70],
+                v[72],
+                J2 + (v[6] * v[6] * (m2 + m0) * m1 + v[40] * v[40]) * d * d * m1,
+                v[74],
+            ],
+            [
+                v[64],
+                v[71],
+                v[73],
+                v[74],
+                J2 + m2 * d * d * (v[6] * v[6] * m2 * (m0 + m1) + v[48] * v[48]),
+            ],
         ];
         let mut force: [f64; 5] = [
-            J2
-                * (v[7] * v[74] * u3 - v[17] * v[71] * u2 + (-v[78] - v[79]) * v[80]
-                    + v[81] * (v[82] - v[86]))
-                - u5
-                    * (v[6] * m2 * d * d * m1 * (v[87] + v[81] * v[12] * v[16])
-                        + u3 * v[88]
-                        + v[17]
-                            * (m2 * d * d * (2.0 - 2.0 * v[34]) + 2.0 * J2 - 2.0 * J1)
-                            * v[16] * u1)
-                - u4
-                    * (v[7] * v[12] * u1 * (2.0 * J2 + d * d * v[53] * m1 - 2.0 * J1)
-                        + v[89] * u2
-                        + (v[90] * v[12] * v[16] - v[91]) * v[6] * m2 * d * d * m1)
-                + (v[92] - v[93] + v[94] + v[85] * v[16] * J1) * u2
-                + u3 * (v[95] + v[77] * v[12] * J1 - v[96] - v[97])
+            (-v[17] * u5 * v[77] - v[7] * v[80] * u4) * J1
                 + d
-                    * (m1
-                        * ((v[7] * (v[6] * m2 * v[77] * v[16] + u4 * v[47])
-                            - v[6] * v[74] * m2 * v[12] * v[16]) * v[101]
-                            + (v[74] * v[12] * v[47] + v[6] * m2 * v[104]) * v[106]
-                            + (v[6] * m2 * (v[107] + v[91]) - v[77] * v[12] * v[47])
-                                * v[109])
-                        + v[6] * v[6] * m0
-                            * (v[111] * d * (-v[12] * m1 * u2 - m2 * u3 * v[16])
-                                + (v[17] * u5 * m2 + v[12] * u1 * m1) * v[114]
-                                + v[112] * v[115])
-                        + m2
-                            * (v[117]
-                                * ((v[85] * v[35] - v[6] * v[12] * m1 * u2) * v[16]
-                                    - v[7] * v[17] * v[6] * u4 * m1)
-                                + v[119]
-                                    * (v[6] * v[71] * v[12] * v[16] * m1
-                                        + v[17] * (v[6] * v[85] * v[12] * m1 + u5 * v[35]))
-                                + v[122] * (v[6] * m1 * v[125] - v[71] * v[16] * v[35]))),
-            J2
-                * ((v[7] * v[77] - v[74] * v[12]) * v[80] + v[74] * u3 * v[12]
-                    + v[85] * v[71])
-                + ((v[111] * (v[22] * u2 - v[17] * u5 * m2 * d)
-                    + v[115] * (v[81] * m2 * v[16] - u4 * v[12] * m1)) * d
-                    + v[114] * (-v[22] * u1 - m2 * u3 * d * v[16])) * v[6] * v[6] * m0
-                + (v[93] - v[92] - v[94]) * u1
-                + (v[85] * v[126] - v[7] * v[77] * u3) * J1
-                - u3 * (v[128] - v[127] - v[129])
-                - (v[12]
-                    * (v[7] * v[130]
-                        + d
-                            * (v[6]
-                                * (m2 * (-2.0 * a - 2.0 * v[19])
-                                    + (2.0 * a + 2.0 * v[21]) * m1) - 2.0 * a - 2.0 * v[21])
-                            * m1) * u2 + v[89] * u1
-                    + (v[7] * v[16] * v[80] - v[102]) * v[6] * m2 * d * d * m1) * u4
-                + m1
-                    * (v[101] * d * (v[131] * v[6] * m2 * v[16] + u4 * v[12] * v[47])
-                        + (v[6] * m2 * d * v[104] - v[77] * v[40]) * v[109]
-                        + (v[6] * m2 * (-v[107] - v[91]) * d + v[74] * v[40]) * v[106])
-                + (v[122]
-                    * (v[17] * u5 * v[132] + v[6] * u4 * v[12] * d * v[16] * m1
-                        + v[81] * v[61])
-                    + v[119] * (v[71] * v[16] * v[132] - v[85] * v[61])
-                    + (-v[133] - v[17] * v[6] * u4 * v[12] * d * m1) * v[117]
-                    - u5 * d
-                        * ((u5 * v[132]
-                            + (a * (v[6] * (2.0 * m2 - 2.0 * m1) - 2.0) - 2.0 * v[57])
-                                * u2) * v[16] + v[134])) * m2,
-            (v[17] * v[85] * J1 - v[127] + v[128] - v[129]) * u2
-                - u5
-                    * (u3 * v[16]
-                        * (m2
-                            * (v[6]
-                                * (m2 * (2.0 * a + 2.0 * v[19])
-                                    + (-2.0 * a - 2.0 * v[21]) * m1) - 2.0 * a - 2.0 * v[19])
-                            * d + v[17] * v[130])
-                        + v[6] * m2 * d * d * (v[81] * v[17] * v[12] - v[123]) * m1
-                        + v[88] * u1)
-                + v[6] * v[6] * m0
-                    * ((v[23] * u1 - v[12] * d * m1 * u2) * v[115]
-                        + d
-                            * (v[114] * (v[110] - u5 * m2 * v[16])
-                                + v[111] * (v[7] * u4 * d * m1 - v[113])))
-                - u1 * (v[95] - v[96] - v[97])
-                + (v[101] * (v[77] * v[67] - v[74] * v[12] * v[66])
-                    - u4 * d
-                        * ((v[136] + u3 * (a * (v[6] * v[52] - 2.0) - 2.0 * v[65]))
-                            * v[12] + v[137])
-                    + v[109]
-                        * ((v[136] + v[66] * v[80]) * v[12]
-                            - v[7] * v[6] * u5 * m2 * d * v[16])
-                    + (v[7] * u4 * v[66] - v[67] * v[80]
-                        - v[6] * u5 * m2 * v[12] * d * v[16]) * v[106]) * m1
-                + (v[71] * v[16] * u2 + v[81] * (-v[71] * v[16] - v[17] * v[85])
-                    + v[74] * v[138]) * J2
-                + m2
-                    * (v[122] * (v[6] * (v[87] + v[139]) * d * m1 - v[118] * v[71])
-                        + (v[85] * v[118] + v[6] * d * m1 * v[125]) * v[117]
-                        + v[119] * (v[6] * v[140] * v[12] * m1 + u5 * v[16] * v[50]) * d)
-                + v[74] * v[77] * J1,
-            v[74] * (v[77] * J1 + J2 * v[138])
-                + d
-                    * (v[47] * (v[77] * v[101] - v[106] * v[80])
-                        + v[6]
-                            * (m2
-                                * (v[117] * (v[7] * (v[83] - v[84] + u4 * v[16]) - v[124])
-                                    - u5 * d * (v[17] * v[108] - v[103])
-                                    + (v[7] * (v[69] + v[17] * u4 + v[70]) + v[139]) * v[122]
-                                    + v[119] * v[140] * v[12])
-                                + v[6] * m0
-                                    * (v[138] * v[115]
-                                        + (v[7] * v[111] * d + v[114] * v[12]) * v[80]))
-                        - u4 * (u3 * v[12] * v[135] + v[137])) * m1,
-            v[85] * (v[126] * J1 + J2 * v[71])
+                    * (-v[6] * v[6] * m0 * (m2 * v[88] * v[16] - v[12] * v[89] * m1)
+                        - (v[6] * m2 * v[16] * (v[7] * v[102] + v[12] * v[106])
+                            + v[12] * v[40] * v[107]) * m1
+                        - m2
+                            * (v[114] * v[16] * v[35]
+                                + v[6] * (v[16] * v[119] - v[17] * v[117]) * v[12] * m1))
+                + v[12] * v[120] - v[121] * u2 + u3 * v[122] - v[123] * v[108] * v[16],
+            v[124] + v[121] * u1
+                - v[6] * v[6] * m0 * (v[22] * v[89] - m2 * d * v[16] * v[127])
+                - m2 * (v[52] * v[117] + v[16] * v[119] * v[47])
+                - v[80] * u4 * v[12] * J1 - u3 * v[128]
+                - (v[6] * m2 * v[129] * d * v[16] + v[107] * v[53]) * m1 - v[7] * v[120],
+            u5 * v[77] * v[16] * J1
+                - v[6] * v[6] * m0 * (v[23] * v[88] + v[12] * d * m1 * v[127])
+                - u1 * v[122] + v[130] - (v[102] * v[58] + v[12] * v[57] * v[106]) * m1
+                - v[123] * v[17] * v[108] + v[128] * u2
+                - m2 * (v[114] * v[59] + v[6] * v[12] * d * m1 * v[131]),
+            v[130]
+                + (v[6]
+                    * (-v[6] * m0 * (v[12] * v[127] - v[7] * v[88])
+                        - m2 * (v[12] * v[131] - v[7] * v[114])) - v[102] * v[40]) * d
+                    * m1,
+            v[124]
                 + m2 * d
-                    * ((v[81] * v[122] - v[85] * v[119]) * v[50] - u5 * (v[133] + v[134])
-                        + v[6]
-                            * (m1
-                                * ((v[17] * (v[73] - v[72] - v[7] * u5) - v[107]) * v[106]
-                                    - u4 * d * (v[7] * v[116] - v[124])
-                                    + v[131] * v[101] * v[16]
-                                    + (v[17] * (u5 * v[12] + v[75] + v[76]) - v[103]) * v[109])
-                                + v[6] * m0
-                                    * (v[85] * v[114] + v[17] * v[111] * v[98] * d
-                                        + v[81] * v[16] * v[115]))),
+                    * (v[6]
+                        * (-m1 * (v[129] * v[16] - v[17] * v[107])
+                            - v[6] * m0 * (-v[17] * v[89] - v[16] * v[127]))
+                        - v[117] * v[48]),
         ];
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
@@ -5006,7 +4112,7 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 132],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -5056,10 +4162,10 @@ pub mod reduced_volterra {
         v[33] = v[30] - v[29];
         v[34] = v[6] * m2;
         v[35] = v[34] - 1.0;
-        v[36] = v[6] * m1;
-        v[37] = v[7] * v[7];
-        v[38] = v[17] * v[17];
-        v[39] = v[6] * v[22];
+        v[36] = v[17] * v[17];
+        v[37] = v[16] * v[16];
+        v[38] = v[36] + v[37];
+        v[39] = v[6] * m1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5069,11 +4175,12 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 132],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
@@ -5083,52 +4190,70 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[39] - a - v[21];
-        v[41] = v[7] * (J1 - J2) + d * m1 * v[40];
-        v[42] = v[41] * v[12] - Ixy;
-        v[43] = v[17] * (J2 - J1) + m2 * d * (a + v[19] + v[39]);
-        v[44] = v[43] * v[16] - Ixz;
-        v[45] = v[7] * v[6] * m2 * d * d * v[16] * m1;
-        v[46] = -(v[17] * v[6] * m2 * v[12] * d * d * m1);
-        v[47] = 1.0 - v[36];
-        v[48] = v[47] * d * d * m1;
-        v[49] = v[48] + J2 - J1;
-        v[50] = 1.0 - v[34];
-        v[51] = m2 * d * d * v[50];
-        v[52] = 2.0 * m1 - 2.0 * m2;
-        v[53] = 2.0 - 2.0 * v[36];
-        v[54] = a
-            * (m2
-                * (a + 2.0 * v[19]
-                    + v[6]
-                        * (a * (2.0 * m1 - m2)
-                            + (v[17] * v[52] + 2.0 * (v[7] * m1)) * d))
-                + (a * v[47] + v[7] * d * v[53]) * m1);
-        v[55] = v[6] * m2 * v[12] * d * d * v[16] * m1;
-        v[56] = v[55] - Iyz;
-        v[57] = v[7] * v[6] * d * m1;
-        v[58] = m1 - m2;
-        v[59] = v[6] * v[58];
-        v[60] = v[59] + 1.0;
-        v[61] = d * v[50] + v[17] * (v[57] + a * v[60]);
-        v[62] = J2 + m2 * v[61] * d;
-        v[63] = v[6] * (m2 - m1);
-        v[64] = v[63] + 1.0;
-        v[65] = v[17] * v[6] * m2 * d;
-        v[66] = a * v[64] + v[65];
-        v[67] = v[47] * d + v[7] * v[66];
-        v[68] = J2 + v[67] * d * m1;
-        v[69] = v[16] * u1;
-        v[70] = v[17] * u3;
-        v[71] = v[69] + v[70];
-        v[72] = v[7] * u2;
-        v[73] = v[12] * u1;
-        v[74] = v[72] - v[73];
-        v[75] = v[12] * u2;
-        v[76] = v[7] * u1;
-        v[77] = v[75] + v[76];
-        v[78] = v[77] * v[12];
-        v[79] = v[7] * v[74];
+        v[40] = 1.0 - v[39];
+        v[41] = v[7] * v[7];
+        v[42] = v[12] * v[12];
+        v[43] = v[41] + v[42];
+        v[44] = J1 - J2;
+        v[45] = v[7] * v[6] * d * m1;
+        v[46] = v[6] * (m2 - m1);
+        v[47] = a * (v[46] - 1.0) - v[45];
+        v[48] = 1.0 - v[34];
+        v[49] = m1 - m2;
+        v[50] = v[6] * v[49];
+        v[51] = v[50] + 1.0;
+        v[52] = d * v[48] + v[17] * (v[45] + a * v[51]);
+        v[53] = v[6] * v[22] - a - v[21];
+        v[54] = v[12]
+            * (v[7] * v[44]
+                + d * m1
+                    * (v[6]
+                        * (m2 * (v[16] * v[16] * v[47] - v[17] * v[52])
+                            - v[6] * m0 * v[22]) + v[40] * v[53])) - Ixy;
+        v[55] = J2 - J1;
+        v[56] = v[46] + 1.0;
+        v[57] = a * v[56] + v[17] * v[6] * m2 * d;
+        v[58] = v[40] * d + v[7] * v[57];
+        v[59] = v[23] * v[6] - a - v[19];
+        v[60] = (v[17] * v[55]
+            + m2 * d
+                * (v[6]
+                    * (v[23] * v[6] * m0 + (v[12] * v[12] * v[57] + v[7] * v[58]) * m1)
+                    + v[59] * v[35])) * v[16] - Ixz;
+        v[61] = v[6] * m0;
+        v[62] = 2.0 - v[34] - v[39] - v[61];
+        v[63] = v[7] * v[6] * m2 * d * d * v[16] * v[62] * m1;
+        v[64] = v[17] * v[6] * m2 * v[12] * d * d * m1 * (v[34] + v[39] + v[61] - 2.0);
+        v[65] = v[12] * v[16];
+        v[66] = v[7] * v[17];
+        v[67] = v[66] - v[65];
+        v[68] = v[66] + v[65];
+        v[69] = v[6] * m2 * d * d * m1
+            * (2.0 * v[65]
+                + v[6]
+                    * (v[67] * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * v[68])) - Iyz;
+        v[70] = v[6] * m2 * d * d
+            * ((0.5 - 0.5 * v[34]) * v[68] + v[12] * v[16] * (1.0 - v[39] - v[61])
+                + v[67] * (0.5 * v[34] - 0.5)) * m1;
+        v[71] = m2 * d
+            * (v[52] * v[48]
+                + ((v[6] * m2 * d * v[16] * v[16] * v[43] - v[17] * v[53]) * m1
+                    + v[6] * m0 * (m2 * d * v[16] * v[16] - v[17] * v[22])) * v[6]) + J2;
+        v[72] = d * m1
+            * (v[6]
+                * (m2 * (v[6] * v[38] * v[12] * v[12] * d * m1 - v[7] * v[59])
+                    + v[6] * m0 * (v[12] * v[12] * d * m1 - v[7] * v[23]))
+                + v[40] * v[58]) + J2;
+        v[73] = v[6]
+            * ((1.0 - v[34] - v[61]) * v[12] * v[16] + v[67] * (0.5 * v[39] - 0.5)
+                + (0.5 - 0.5 * v[39]) * v[68]) * m2 * d * d * m1;
+        v[74] = v[6] * m2 * v[12] * d * d * v[16] * v[62] * m1;
+        v[75] = v[16] * u1;
+        v[76] = v[17] * u3;
+        v[77] = -v[75] - v[76];
+        v[78] = v[7] * u2;
+        v[79] = v[12] * u1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5138,69 +4263,94 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 132],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[80] = u4 + u3;
-        v[81] = u5 + u2;
-        v[82] = v[17] * v[71];
-        v[83] = u3 * v[16];
-        v[84] = v[17] * u1;
-        v[85] = v[84] - v[83];
-        v[86] = v[85] * v[16];
-        v[87] = v[7] * v[17] * u4;
-        v[88] = v[16] * v[16] * (m2 * d * d * v[35] - J2 + J1) + v[17] * v[43];
-        v[89] = v[7] * v[41] + v[49] * v[12] * v[12];
-        v[90] = -u4 - u3;
-        v[91] = v[7] * v[17] * u5;
-        v[92] = Iyz * u2;
-        v[93] = u3 * Izz;
-        v[94] = u1 * Ixz;
-        v[95] = Iyy * u2;
-        v[96] = Iyz * u3;
-        v[97] = Ixy * u1;
-        v[98] = -u5 - u2;
-        v[99] = v[17] * m2 * v[98] + v[74] * m1;
-        v[100] = v[59] - 1.0;
-        v[101] = (v[73] - v[72] + v[6] * v[99]) * d + a * v[100] * u2;
-        v[102] = v[17] * u5 * v[12];
-        v[103] = v[7] * u3 * v[16];
-        v[104] = v[102] - v[103];
-        v[105] = a * u3 * v[12];
-        v[106] = (m2
-            * ((v[16] * (v[7] * v[98] + v[73]) + v[17] * u3 * v[12]) * d + v[105])
-            - a * u3 * v[12] * m1) * v[6] + v[105];
-        v[107] = u3 * v[12] * v[16];
-        v[108] = v[81] * v[12] + v[76];
-        v[109] = (v[6] * (v[90] * m1 + m2 * (v[108] * v[16] + v[7] * v[17] * u3)) + u4
-            + u3) * d + v[7] * a * v[64] * u3;
-        v[110] = v[12] * m1 * v[80];
-        v[111] = m2 * v[98] * v[16] + v[110];
-        v[112] = m2 * v[16] * u1 - v[7] * u4 * m1;
-        v[113] = v[23] * u3;
-        v[114] = v[112] * d + v[113];
-        v[115] = a * v[58] * u2 + v[99] * d;
-        v[116] = v[16] * v[80] - v[84];
-        v[117] = d
-            * (u5 + v[6] * ((v[7] * v[17] * u2 + v[116] * v[12]) * m1 + m2 * v[98]) + u2)
-            + v[17] * a * u2 * v[60];
-        v[118] = v[23] * v[6] - a - v[19];
-        v[119] = v[118] * u3 + d * (v[16] * u1 * v[35] - v[7] * v[6] * u4 * m1);
+        v[80] = v[78] - v[79];
+        v[81] = -u5 - u2;
+        v[82] = v[17] * m2 * v[81] + v[80] * m1;
+        v[83] = u4 * v[12] * m1;
+        v[84] = u5 * m2 * v[16];
+        v[85] = m2 * v[81] * v[16];
+        v[86] = u4 + u3;
+        v[87] = v[12] * m1 * v[86];
+        v[88] = ((v[83] - v[84] + v[85] + v[87]) * u3 + v[17] * u5 * m2 * u1
+            + u4 * u4 * v[12] * m1) * d - (a * v[49] * u2 + v[82] * d) * u1;
+        v[89] = ((m2 * v[16] * u1 - v[7] * u4 * m1) * d + v[23] * u3) * u1
+            + (u5 * u5 * m2 * v[16] - v[7] * u4 * u1 * m1
+                + (v[84] - v[83] - v[85] - v[87]) * u2) * d;
+        v[90] = a * u4 * u3 * v[12];
+        v[91] = v[7] * v[81] + v[79];
+        v[92] = a * u3 * v[12];
+        v[93] = (m2 * ((v[16] * v[91] + v[17] * u3 * v[12]) * d + v[92])
+            - a * u3 * v[12] * m1) * v[6] + v[92];
+        v[94] = v[12] * u2;
+        v[95] = v[7] * u1;
+        v[96] = v[94] + v[95];
+        v[97] = (v[79] - v[78] + v[6] * v[82]) * d + a * (v[50] - 1.0) * u2;
+        v[98] = v[7] * v[16] * u2;
+        v[99] = v[17] * u1;
+        v[100] = u4 - u3;
+        v[101] = u5 + u2;
+        v[102] = v[93] * v[86] - v[90] - v[96] * v[97]
+            + v[6]
+                * (a * u4 * u3 * v[12] * m1
+                    + m2
+                        * (d
+                            * (u4 * (v[98] + v[12] * v[77])
+                                + u5
+                                    * (v[7] * (v[99] + v[100] * v[16])
+                                        + v[101] * v[17] * v[12])) - v[90]));
+        v[103] = v[75] + v[76];
+        v[104] = v[7] * a * u4 * u3;
+        v[105] = (v[6]
+            * ((-u4 - u3) * m1
+                + m2 * ((v[101] * v[12] + v[95]) * v[16] + v[7] * v[17] * u3)) + u4 + u3)
+            * d + v[7] * a * v[56] * u3;
+        v[106] = v[6]
+            * (m2
+                * (d
+                    * ((v[7] * v[103] + v[12] * v[16] * u2) * u4
+                        + u5 * (v[100] * v[12] * v[16] + v[17] * v[91])) + v[104])
+                - v[7] * a * u4 * u3 * m1) + v[104] - v[105] * v[86] + v[80] * v[97];
+        v[107] = v[96] * v[105] - v[80] * v[93]
+            + (v[101] * v[6] * u5 * m2 * v[16]
+                + u4 * (v[7] * v[40] * u1 + v[12] * v[40] * u2)) * d;
+        v[108] = v[99] - u3 * v[16];
+        v[109] = v[16] * v[86] - v[99];
+        v[110] = d
+            * (u5 + v[6] * ((v[7] * v[17] * u2 + v[109] * v[12]) * m1 + m2 * v[81]) + u2)
+            + v[17] * a * u2 * v[51];
+        v[111] = a * v[16] * u2;
+        v[112] = v[17] * v[86] + v[75];
+        v[113] = v[6]
+            * (m2 * a * v[16] * u2 + (d * (v[112] * v[12] - v[98]) - v[111]) * m1)
+            - v[111];
+        v[114] = d
+            * (u5 * (v[17] * u1 * v[35] + u3 * v[16] * v[48])
+                + v[6] * u4 * v[12] * m1 * v[86]) - v[108] * v[110] + v[103] * v[113];
+        v[115] = v[59] * u3 + d * (v[16] * u1 * v[35] - v[7] * v[6] * u4 * m1);
+        v[116] = u5 * a * v[16] * u2;
+        v[117] = v[108] * v[115] - v[101] * v[113] - v[116]
+            + v[6]
+                * (u5 * m2 * a * v[16] * u2
+                    + ((u5 * (v[103] * v[12] - v[98])
+                        + u4 * (v[7] * v[109] + v[17] * v[12] * (u5 - u2))) * d - v[116])
+                        * m1);
+        v[118] = v[17] * u5 * a * u2;
+        v[119] = v[6]
+            * ((d
+                * (u4 * (v[12] * v[16] * (u2 - u5) + v[7] * v[112])
+                    + u5 * (v[17] * (v[79] - v[78]) - u3 * v[12] * v[16])) - v[118]) * m1
+                + v[17] * u5 * m2 * a * u2) - v[115] * v[103] - v[118] + v[101] * v[110];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5210,7 +4360,7 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
         _dstate: &mut [f64; STATES],
-        v: &mut [f64; 141],
+        v: &mut [f64; 132],
     ) {
         let u1 = state[8];
         let u2 = state[9];
@@ -5218,37 +4368,34 @@ pub mod reduced_volterra {
         let u4 = state[11];
         let u5 = state[12];
         let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a = params.a;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = a * v[16] * u2;
-        v[121] = v[17] * v[80] + v[69];
-        v[122] = v[6]
-            * (m2 * a * v[16] * u2
-                + (d * (v[121] * v[12] - v[7] * v[16] * u2) - v[120]) * m1) - v[120];
-        v[123] = v[7] * u4 * v[16];
-        v[124] = v[17] * v[12] * u2;
-        v[125] = v[123] - v[124];
-        v[126] = -v[69] - v[70];
-        v[127] = Ixy * u2;
-        v[128] = Ixx * u1;
-        v[129] = u3 * Ixz;
-        v[130] = 2.0 * J1 - 2.0 * J2;
-        v[131] = v[78] + u5 + v[79];
-        v[132] = a * (v[63] - 1.0) - v[57];
-        v[133] = v[16] * v[132] * u2;
-        v[134] = v[6] * v[121] * v[12] * d * m1;
-        v[135] = a * v[100] - v[65];
-        v[136] = u4 * v[135];
-        v[137] = (v[7] * v[81] - v[73]) * v[6] * m2 * d * v[16];
-        v[138] = -v[75] - v[76];
-        v[139] = v[12] * v[16] * u2;
-        v[140] = u4 + v[82] - v[86];
+        v[120] = u4 * J2 * (-v[94] - v[95]) + v[96] * v[44] * v[86];
+        v[121] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[122] = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        v[123] = u5 * J2 + v[101] * v[55];
+        v[124] = v[55] * v[108] * v[103];
+        v[125] = u2 * u2;
+        v[126] = u3 * u3;
+        v[127] = a * (m2 * (-v[125] - v[126]) + (v[125] + v[126]) * m1)
+            + d
+                * (m2
+                    * (v[17] * (u5 * (-u5 - 2.0 * u2) - v[125] - v[126])
+                        - u3 * v[16] * u1)
+                    + (v[7] * (v[125] + u4 * (u4 + 2.0 * u3) + v[126]) - v[12] * u1 * u2)
+                        * m1);
+        v[128] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[129] = v[102] * v[12] - v[7] * v[106];
+        v[130] = v[80] * v[96] * v[44];
+        v[131] = v[17] * v[119] + v[16] * v[117];
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -5280,29 +4427,35 @@ pub mod reduced_volterra {
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(gamma1);
+        let x4 = f64::sin(gamma2);
         let x5 = f64::cos(gamma2);
-        let x6 = (-a - x4 * d) * m1 + m2 * (a + x5 * d);
-        let x7 = f64::sin(gamma2);
-        let x8 = m2 * x7 * x1;
-        let x9 = f64::sin(gamma1);
-        let x10 = x9 * x3 * m1;
-        let x11 = x6 * x0 + (x8 + x10) * x2 * d;
-        let x12 = f64::cos(psi);
-        let x13 = f64::sin(psi);
-        let x14 = a * x2 * x13;
-        let x15 = x12 * x3;
-        let x16 = x0 * x1 * x13;
-        let x17 = x12 * x1;
-        let x18 = x0 * x3 * x13;
-        let x19 = -x17 - x18;
-        let x20 = x3 * x13 + x0 * x12 * x1;
-        let x21 = x1 * x13;
-        let x22 = x0 * x12 * x3;
-        let x23 = x22 - x21;
-        let x24 = m2 + m0 + m1;
-        let x25 = a * x12 * x2;
-        let x26 = x16 - x15;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a;
+        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a;
+        let x18 = -x17 - d;
+        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -5331,25 +4484,31 @@ pub mod reduced_volterra {
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            theta_dot * x11 * x12
-                + (m2 * (x14 - (-x5 * x2 * x13 - (x15 - x16) * x7) * d)
-                    + (d * (x9 * x19 - x4 * x2 * x13) - x14) * m1) * psi_dot
-                + ((x4 * x23 - x12 * x9 * x2) * gamma1_dot * m1
-                    - m2 * gamma2_dot * (-x12 * x2 * x7 - x5 * x20)
-                    + (x9 * x20 * m1 + m2 * x7 * (x21 - x22)) * phi_dot) * d
-                + X_dot * x24,
-            Y_dot * x24 + theta_dot * x11 * x13
-                + psi_dot
-                    * (m1 * (d * (x23 * x9 + x4 * x12 * x2) + x25)
-                        + m2 * (-d * (x5 * x12 * x2 - x7 * x20) - x25))
+            theta_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * ((m2 * x7 * x19 + x9 * x26 * m1) * phi_dot
-                        - m2 * gamma2_dot * (-x2 * x7 * x13 - x5 * x26)
-                        + (x4 * (x17 + x18) - x9 * x2 * x13) * gamma1_dot * m1),
-            (m2 * gamma2_dot * (x5 * x2 * x1 - x0 * x7)
-                + (x9 * m1 * x1 - m2 * x7 * x3) * x2 * phi_dot
-                + (x4 * x2 * x3 + x0 * x9) * gamma1_dot * m1) * d
-                + theta_dot * (x0 * d * (-x8 - x10) + x6 * x2) + Z_dot * x24,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
+            theta_dot
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
+                + psi_dot
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+            theta_dot
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -5475,17 +4634,92 @@ pub mod reduced_volterra {
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
     #[allow(non_snake_case, clippy::all)]
     pub fn matrix(
-        _t: f64,
+        t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
     ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let gamma1 = state[3];
-        let gamma2 = state[4];
         let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let mut v = [0.0f64; 44];
+        matrix_part0(t, state, params, g_i, &mut v);
+        matrix_part1(t, state, params, g_i, &mut v);
+        [
+            [
+                Ixx
+                    + d * d
+                        * (m2
+                            * (v[0] * v[0] * v[3] * v[3]
+                                + v[1] * v[1] * v[7] * v[8] * v[8] * m1 * m1)
+                            + v[1] * v[1] * m0
+                                * (m2 * m2 * v[0] * v[0] + v[8] * v[8] * m1 * m1)
+                            + (v[8] * v[8] * v[10] * v[10]
+                                + v[1] * v[1] * m2 * m2 * v[0] * v[0] * v[14]) * m1)
+                    + (v[12] + v[5]) * J1 + (v[6] + v[13]) * J2,
+                v[24],
+                v[29],
+                v[32],
+                v[33],
+            ],
+            [
+                v[24],
+                v[8] * v[8] * J1 + Iyy + J2 * (v[12] + 1.0)
+                    + v[1] * v[1] * m0 * (m2 * m2 * d * d * v[0] * v[0] + v[17] * v[17])
+                    + (v[23] * v[23]
+                        + v[1] * v[1] * m2 * m2 * d * d * v[0] * v[0] * v[14]) * m1
+                    + m2 * (v[0] * v[0] * v[20] * v[20] + v[22] * v[22]),
+                v[38],
+                v[39],
+                v[40],
+            ],
+            [
+                v[29],
+                v[38],
+                v[0] * v[0] * J1
+                    + m2
+                        * (v[1] * v[1] * v[7] * v[8] * v[8] * d * d * m1 * m1
+                            + v[28] * v[28]) + Izz
+                    + v[1] * v[1] * m0 * (v[25] * v[25] + v[8] * v[8] * d * d * m1 * m1)
+                    + J2 * (v[5] + 1.0)
+                    + m1 * (v[27] * v[27] + v[8] * v[8] * v[26] * v[26]),
+                v[41],
+                v[42],
+            ],
+            [
+                v[32],
+                v[39],
+                v[41],
+                J2 + (v[1] * v[1] * (m2 + m0) * m1 + v[10] * v[10]) * d * d * m1,
+                v[43],
+            ],
+            [
+                v[33],
+                v[40],
+                v[42],
+                v[43],
+                J2 + m2 * d * d * (v[1] * v[1] * m2 * (m0 + m1) + v[21] * v[21]),
+            ],
+        ]
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 44],
+    ) {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
@@ -5495,71 +4729,89 @@ pub mod reduced_volterra {
         let a = params.a;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma2);
-        let x1 = 1.0 / (m2 + m0 + m1);
-        let x2 = x1 * m2;
-        let x3 = f64::cos(gamma1);
-        let x4 = x1 * m1;
-        let x5 = x3 * x3;
-        let x6 = x0 * x0;
-        let x7 = x3 * d;
-        let x8 = x0 * d;
-        let x9 = x1 * ((a + x7) * m1 + m2 * (-a - x8));
-        let x10 = f64::sin(gamma1);
-        let x11 = (x3 * (J1 - J2) + d * m1 * (x9 - a - x7)) * x10 - Ixy;
-        let x12 = f64::sin(gamma2);
-        let x13 = (x0 * (J2 - J1) + m2 * d * (a + x8 + x9)) * x12 - Ixz;
-        let x14 = x3 * x1 * m2 * d * d * x12 * m1;
-        let x15 = -(x0 * x1 * m2 * x10 * d * d * m1);
-        let x16 = 1.0 - x4;
-        let x17 = x16 * d * d * m1;
-        let x18 = 1.0 - x2;
-        let x19 = m2 * d * d * x18;
-        let x20 = a
-            * (m2
-                * (a + 2.0 * x8
-                    + x1
-                        * (a * (2.0 * m1 - m2)
-                            + (x0 * (2.0 * m1 - 2.0 * m2) + 2.0 * (x3 * m1)) * d))
-                + (a * x16 + x3 * d * (2.0 - 2.0 * x4)) * m1);
-        let x21 = x1 * m2 * x10 * d * d * x12 * m1;
-        let x22 = x21 - Iyz;
-        let x23 = J2
-            + m2 * (d * x18 + x0 * (x3 * x1 * d * m1 + a * (x1 * (m1 - m2) + 1.0))) * d;
-        let x24 = J2
-            + (x16 * d + x3 * (a * (x1 * (m2 - m1) + 1.0) + x0 * x1 * m2 * d)) * d * m1;
-        [
-            [
-                Ixx
-                    + d * d
-                        * (m2 * (x0 * x0 * (x2 - 1.0) - x2 + 1.0)
-                            + m1 * (x3 * x3 * (x4 - 1.0) - x4 + 1.0)) + (x5 + x6) * J1
-                    + J2 * (2.0 - x5 - x6),
-                x11,
-                x13,
-                x14,
-                x15,
-            ],
-            [
-                x11,
-                Iyy + J2
-                    + x3 * (x3 * (x17 + J2 - J1) + 2.0 * (x0 * x1 * m2 * d * d * m1))
-                    + x19 + x20 + J1,
-                x22,
-                x21,
-                x23,
-            ],
-            [
-                x13,
-                x22,
-                x17 + x0 * (x0 * (J2 + x19 - J1) + 2.0 * (x3 * x1 * m2 * d * d * m1))
-                    + J2 + Izz + x20 + J1,
-                x24,
-                x21,
-            ],
-            [x14, x21, x24, x17 + J2, x21],
-            [x15, x23, x21, x21, J2 + x19],
-        ]
+        v[0] = f64::sin(gamma2);
+        v[1] = 1.0 / (m2 + m0 + m1);
+        v[2] = v[1] * m2;
+        v[3] = v[2] - 1.0;
+        v[4] = f64::cos(gamma2);
+        v[5] = v[4] * v[4];
+        v[6] = v[0] * v[0];
+        v[7] = v[5] + v[6];
+        v[8] = f64::sin(gamma1);
+        v[9] = v[1] * m1;
+        v[10] = 1.0 - v[9];
+        v[11] = f64::cos(gamma1);
+        v[12] = v[11] * v[11];
+        v[13] = v[8] * v[8];
+        v[14] = v[12] + v[13];
+        v[15] = v[11] * d;
+        v[16] = v[4] * d;
+        v[17] = (a + v[15]) * m1 + m2 * (-a - v[16]);
+        v[18] = v[11] * v[1] * d * m1;
+        v[19] = v[1] * (m2 - m1);
+        v[20] = a * (v[19] - 1.0) - v[18];
+        v[21] = 1.0 - v[2];
+        v[22] = d * v[21] + v[4] * (v[18] + a * (v[1] * (m1 - m2) + 1.0));
+        v[23] = v[1] * v[17] - a - v[15];
+        v[24] = v[8]
+            * (v[11] * (J1 - J2)
+                + d * m1
+                    * (v[1]
+                        * (m2 * (v[0] * v[0] * v[20] - v[4] * v[22]) - v[1] * m0 * v[17])
+                        + v[10] * v[23])) - Ixy;
+        v[25] = (-a - v[15]) * m1 + m2 * (a + v[16]);
+        v[26] = a * (v[19] + 1.0) + v[4] * v[1] * m2 * d;
+        v[27] = v[10] * d + v[11] * v[26];
+        v[28] = v[25] * v[1] - a - v[16];
+        v[29] = (v[4] * (J2 - J1)
+            + m2 * d
+                * (v[1]
+                    * (v[25] * v[1] * m0 + (v[8] * v[8] * v[26] + v[11] * v[27]) * m1)
+                    + v[28] * v[3])) * v[0] - Ixz;
+        v[30] = v[1] * m0;
+        v[31] = 2.0 - v[2] - v[9] - v[30];
+        v[32] = v[11] * v[1] * m2 * d * d * v[0] * v[31] * m1;
+        v[33] = v[4] * v[1] * m2 * v[8] * d * d * m1 * (v[2] + v[9] + v[30] - 2.0);
+        v[34] = v[8] * v[0];
+        v[35] = v[11] * v[4];
+        v[36] = v[35] - v[34];
+        v[37] = v[35] + v[34];
+        v[38] = v[1] * m2 * d * d * m1
+            * (2.0 * v[34]
+                + v[1]
+                    * (v[36] * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
+                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * v[37])) - Iyz;
+        v[39] = v[1] * m2 * d * d
+            * ((0.5 - 0.5 * v[2]) * v[37] + v[8] * v[0] * (1.0 - v[9] - v[30])
+                + v[36] * (0.5 * v[2] - 0.5)) * m1;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn matrix_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 44],
+    ) {
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J2 = params.J2;
+        v[40] = m2 * d
+            * (v[22] * v[21]
+                + ((v[1] * m2 * d * v[0] * v[0] * v[14] - v[4] * v[23]) * m1
+                    + v[1] * m0 * (m2 * d * v[0] * v[0] - v[4] * v[17])) * v[1]) + J2;
+        v[41] = d * m1
+            * (v[1]
+                * (m2 * (v[1] * v[7] * v[8] * v[8] * d * m1 - v[11] * v[28])
+                    + v[1] * m0 * (v[8] * v[8] * d * m1 - v[11] * v[25]))
+                + v[10] * v[27]) + J2;
+        v[42] = v[1]
+            * ((1.0 - v[2] - v[30]) * v[8] * v[0] + v[36] * (0.5 * v[9] - 0.5)
+                + (0.5 - 0.5 * v[9]) * v[37]) * m2 * d * d * m1;
+        v[43] = v[1] * m2 * v[8] * d * d * v[0] * v[31] * m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -113,8 +113,15 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     if !g_names.is_empty() {
         let _ = writeln!(w, "  G_I = [{}]: conserved momenta, computed from the initial state (Eq. 26)", g_names.join(", "));
     }
-    let _ = writeln!(w, "  det [Y_NI; M'; a] = {}", show(v.determinant));
-    let sing: Vec<String> = v.singular_factors.iter().map(|e| show(e.simplify_trig(mechanics::derivation_limits()))).collect();
+    match v.determinant {
+        Some(d) => {
+            let _ = writeln!(w, "  det [Y_NI; M'; a] = {}", show(d));
+        }
+        None => {
+            let _ = writeln!(w, "  det [Y_NI; M'; a]: not expanded ({} x {})", mech.m, mech.m);
+        }
+    }
+    let sing: Vec<String> = v.singular_factors.iter().map(|e| show(mech.tidy.of(*e))).collect();
     if sing.is_empty() {
         let _ = writeln!(w, "  the choice of quasi-velocities is regular at every state");
     } else {

@@ -46,32 +46,7 @@ pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
     order.into_iter().filter(|e| !is_leaf(*e) && (uses[e] >= 2 || force.contains(e))).collect()
 }
 
-/// Every node reachable from `outputs`, children before parents, each once.
-pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
-    let mut seen = std::collections::HashSet::new();
-    let mut order = Vec::new();
-    for &root in outputs {
-        if !seen.insert(root) {
-            continue;
-        }
-        // (node, its children, next child index)
-        let mut stack: Vec<(Expr, Vec<Expr>, usize)> = vec![(root, root.children(), 0)];
-        while let Some((node, children, next)) = stack.last_mut() {
-            if *next < children.len() {
-                let c = children[*next];
-                *next += 1;
-                if seen.insert(c) {
-                    let cc = c.children();
-                    stack.push((c, cc, 0));
-                }
-            } else {
-                order.push(*node);
-                stack.pop();
-            }
-        }
-    }
-    order
-}
+pub use crate::symbolic::expr::post_order;
 
 #[cfg(test)]
 mod tests {

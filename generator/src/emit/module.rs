@@ -503,7 +503,7 @@ impl Emitter<'_> {
         } else {
             let kane = d.kane.as_ref().expect("Maggi needs the Kane derivation");
             let w = kane.w.clone();
-            let drift = classical::maggi_drift(model, kane);
+            let drift = classical::maggi_drift(model, mech, kane);
             let wt = w.transpose();
             let mass = wt.mul(&mech.mass).mul(&w);
             let mc = mech.mass.mul(&Matrix::column(drift.clone()));
@@ -987,12 +987,16 @@ impl Form {
 }
 
 /// `if !(f.abs() > SINGULAR_TOLERANCE) { return Err(..) }` per factor.
+/// Largest singular factor (tree nodes) named by its formula in `EvalError::Singular`.
+const MAX_CONDITION_TREE: u32 = 200;
+
 fn singular_checks(factors: &[Expr], values: &[TokenStream]) -> Vec<TokenStream> {
     factors
         .iter()
         .zip(values)
-        .map(|(f, v)| {
-            let cond = format!("{f} = 0");
+        .enumerate()
+        .map(|(k, (f, v))| {
+            let cond = if f.tree_size() <= MAX_CONDITION_TREE { format!("{f} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) };
             quote! {
                 let value = #v;
                 if !(value.abs() > SINGULAR_TOLERANCE) {

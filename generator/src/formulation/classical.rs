@@ -4,8 +4,8 @@
 //! - Maggi: `q'' = W u' + c` with `W^T M W u' = W^T (f - M c)`, `W` the null-space basis of
 //!   `a` from the full quasi-velocities (the Kane `W`), no multipliers.
 //!
-//! Here `f = Q - dV/dq + dT/dq - (d/dt dT/dq' without M q'')` and `a q'' = gamma`,
-//! `gamma = -(a' q' + b')` (the constraints differentiated once more).
+//! Here `f = Q - dV/dq - h` (`h` the generalized inertia forces, [`Mechanics::inertial`]) and
+//! `a q'' = gamma`, `gamma = -(a' q' + b')` (the constraints differentiated once more).
 //!
 //! ```
 //! use generator::formulation::{classical, mechanics};
@@ -32,22 +32,15 @@ pub struct Classical {
 
 /// Derives `f` and `gamma`.
 pub fn derive(model: &Model, mech: &Mechanics) -> Classical {
-    let m = mech.m;
     let chain = model.position_chain();
-    let force = (0..m)
-        .map(|j| {
-            let q = model.coordinates[j];
-            let momentum = mech.momentum(j, &model.velocities);
-            mech.q_forces[j] - mech.potential.diff(q) + mech.kinetic.diff(q) - chain.dt(momentum)
-        })
-        .collect();
-    let gamma = mech.velocity_residuals(&model.velocities).into_iter().map(|r| -chain.dt(r)).collect();
+    let force = mech.lagrange_force();
+    let gamma = mech.velocity_residuals(&model.velocities).into_iter().map(|r| mech.tidy.of(-chain.dt(r))).collect();
     Classical { force, gamma }
 }
 
 /// Maggi's `c = W' u + X'` (the part of `q''` not proportional to `u'`), in `q`, `q'`, `t`:
 /// the time derivative of `W u + X` at fixed `u`, with `u = Y q' + Z` substituted.
-pub fn maggi_drift(model: &Model, kane: &Volterra) -> Vec<Expr> {
+pub fn maggi_drift(model: &Model, mech: &Mechanics, kane: &Volterra) -> Vec<Expr> {
     let chain = model.position_chain();
     let u_of_qdot: HashMap<Symbol, Expr> = kane
         .u
@@ -58,5 +51,5 @@ pub fn maggi_drift(model: &Model, kane: &Volterra) -> Vec<Expr> {
             (*u, e)
         })
         .collect();
-    kane.qdot.iter().map(|e| chain.dt(*e).subs(&u_of_qdot)).collect()
+    kane.qdot.iter().map(|e| mech.tidy.of(chain.dt(*e).subs(&u_of_qdot))).collect()
 }

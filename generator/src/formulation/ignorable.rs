@@ -11,9 +11,9 @@
 //! assert!(report[2].is_ignorable() && !report[0].is_ignorable());
 //! ```
 
-use super::mechanics::{Mechanics, derivation_limits};
+use super::mechanics::Mechanics;
 use crate::model::{ErrorKind, Model, ModelError};
-use crate::symbolic::trig::zero_test;
+use crate::symbolic::zero::zero_test;
 use crate::symbolic::{Expr, Symbol};
 
 /// Which condition of Definition 1 fails, and on what.
@@ -56,12 +56,13 @@ impl CoordinateReport {
     }
 }
 
-fn depends(e: Expr, q: Symbol) -> Option<Expr> {
+/// `Some(de/dq)` when `e` depends on `q` (decided by the exact zero test).
+pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
     if !e.contains(q) {
         return None;
     }
     let d = e.diff(q);
-    (!zero_test(d, derivation_limits()).is_zero()).then_some(d)
+    (!zero_test(d).is_zero()).then_some(d)
 }
 
 /// Checks Definition 1 for every coordinate.
@@ -73,33 +74,36 @@ pub fn analyze(model: &Model, mech: &Mechanics) -> Vec<CoordinateReport> {
         .enumerate()
         .map(|(j, q)| {
             let mut failure = None;
-            'lag: for r in 0..m {
-                for c in r..m {
-                    if let Some(d) = depends(mech.mass.get(r, c), *q) {
-                        failure = Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d });
-                        break 'lag;
+            // One test on L = T - V; only when it fails, the place it fails at.
+            if depends(mech.kinetic - mech.potential, *q).is_some() {
+                'lag: for r in 0..m {
+                    for c in r..m {
+                        if let Some(d) = depends(mech.mass.get(r, c), *q) {
+                            failure = Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d });
+                            break 'lag;
+                        }
                     }
                 }
-            }
-            if failure.is_none() {
-                let parts = (0..m).map(|k| (format!("N[{}]", k + 1), mech.n[k])).chain([("T0".to_string(), mech.t0), ("V".to_string(), mech.potential)]);
-                for (place, e) in parts {
-                    if let Some(d) = depends(e, *q) {
-                        failure = Some(Failure::InLagrangian { place, derivative: d });
-                        break;
+                if failure.is_none() {
+                    let parts = (0..m).map(|k| (format!("N[{}]", k + 1), mech.n[k])).chain([("T0".to_string(), mech.t0), ("V".to_string(), mech.potential)]);
+                    for (place, e) in parts {
+                        if let Some(d) = depends(e, *q) {
+                            failure = Some(Failure::InLagrangian { place, derivative: d });
+                            break;
+                        }
                     }
                 }
             }
             if failure.is_none() {
                 for i in 0..mech.r {
                     let entry = mech.a.get(i, j);
-                    if !zero_test(entry, derivation_limits()).is_zero() {
+                    if !zero_test(entry).is_zero() {
                         failure = Some(Failure::InConstraint { constraint: mech.constraint_names[i].clone(), entry });
                         break;
                     }
                 }
             }
-            if failure.is_none() && !zero_test(mech.q_forces[j], derivation_limits()).is_zero() {
+            if failure.is_none() && !zero_test(mech.q_forces[j]).is_zero() {
                 failure = Some(Failure::Forced { force: mech.q_forces[j] });
             }
             let mut appears_in = Vec::new();

@@ -1,7 +1,17 @@
 //! The mechanics of a model, to the stage every formulation shares: body velocities
-//! `V_Gi = B_i q' + C_i`, `omega_i = D_i q' + E_i` (paper Eq. 54), the kinetic energy as
+//! `V_Gi = B_i q' + C_i`, `omega_i = D_i q' + E_i` (paper Eq. 54), the kinetic energy
 //! `T = 1/2 q'^T M q' + q'^T N + T0` (Eq. 13), the potential V, the generalized forces Q by
-//! virtual power, and the kinematic constraints `a q' + b = 0` (Eq. 1).
+//! virtual power, the kinematic constraints `a q' + b = 0` (Eq. 1), and the generalized
+//! inertia forces `h(q, q', t)` with `d/dt dT/dq' - dT/dq = M q'' + h`.
+//!
+//! `h` comes from Kane's form of the same identity, `sum_i m_i a_i . dV_i/dq' + (I alpha_i +
+//! omega_i x I omega_i) . d omega_i/dq'` with the accelerations at `q'' = 0`, one forward time
+//! derivative of each body's velocity: linear in the size of the velocities, where
+//! differentiating T (or M) by every coordinate is cubic in the number of bodies.
+//!
+//! Velocities are taken in each body's own components (the relative angles of a chain) or in
+//! world components (translations of a floating base), whichever is smaller; every expression
+//! goes through one shared [`Simplifier`].
 //!
 //! ```
 //! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
@@ -9,16 +19,21 @@
 //! assert_eq!((mech.m, mech.r, mech.p), (3, 1, 2));
 //! ```
 
+use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{Constraint, Force, Model};
-use crate::symbolic::limits::Limits;
+use crate::symbolic::fourier::{FourierLimits, Simplifier, SimplifyReport};
 use crate::symbolic::{Expr, Matrix, Symbol};
+use std::cell::RefCell;
 use std::collections::HashMap;
+use std::rc::Rc;
 
 /// Velocities of one body, split as in Eq. (54).
 #[derive(Clone, Debug)]
 pub struct BodyVelocity {
-    /// Centre-of-mass velocity, world components.
+    /// Centre-of-mass velocity, in world components or (`in_body`) the body frame's.
     pub v: [Expr; 3],
+    /// True when `v`, `b`, `c` and `accel` are in the body frame's components.
+    pub in_body: bool,
     /// Angular velocity, body-frame components.
     pub omega: [Expr; 3],
     /// `B_i = dV/dq'` (3 x m).
@@ -29,6 +44,68 @@ pub struct BodyVelocity {
     pub d: Matrix,
     /// `E_i = omega(q' = 0)`.
     pub e: [Expr; 3],
+    /// Inertial acceleration of the centre of mass at `q'' = 0`, in `v`'s components.
+    pub accel: [Expr; 3],
+    /// Angular acceleration at `q'' = 0`, body components.
+    pub alpha: [Expr; 3],
+}
+
+/// The simplifier a derivation shares, with interior mutability: every stage adds to its memo.
+#[derive(Clone)]
+pub struct Tidy(Rc<RefCell<Simplifier>>);
+
+impl std::fmt::Debug for Tidy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Tidy({:?})", self.0.borrow().report())
+    }
+}
+
+impl Tidy {
+    /// A fresh simplifier under `limits`.
+    pub fn new(limits: FourierLimits) -> Tidy {
+        Tidy(Rc::new(RefCell::new(Simplifier::new(limits))))
+    }
+    /// The simplified form of `e`.
+    pub fn of(&self, e: Expr) -> Expr {
+        self.0.borrow_mut().simplify(e)
+    }
+    /// Each component simplified.
+    pub fn of3(&self, v: [Expr; 3]) -> [Expr; 3] {
+        v.map(|e| self.of(e))
+    }
+    /// Every entry simplified.
+    pub fn matrix(&self, m: &Matrix) -> Matrix {
+        m.map(|e| self.of(*e))
+    }
+    /// [`Tidy::of`], then, for a small expression with a sine or cosine in a denominator
+    /// (`1/cos(theta)` from the ZYX rates), the polynomial normal form too, where such a
+    /// factor cancels against the numerator's (the Fourier form keeps it as an atom). The
+    /// smaller wins.
+    pub fn rational(&self, e: Expr) -> Expr {
+        let f = self.of(e);
+        if f.dag_size() > MAX_RATIONAL_NORMAL || !has_trig_denominator(f) {
+            return f;
+        }
+        let p = self.of(f.simplify_trig(crate::symbolic::limits::Limits { max_terms: 2_000, max_work: 200_000 }));
+        if p.tree_size() < f.tree_size() { p } else { f }
+    }
+    /// What the limits cut so far.
+    pub fn report(&self) -> SimplifyReport {
+        self.0.borrow().report()
+    }
+}
+
+/// Largest expression (distinct nodes) [`Tidy::rational`] puts in the polynomial normal form.
+const MAX_RATIONAL_NORMAL: usize = 300;
+
+/// True when `e` divides by an expression holding a sine or cosine.
+fn has_trig_denominator(e: Expr) -> bool {
+    use crate::symbolic::{Func, Node};
+    let trig = |b: Expr| b.post_order_nodes().iter().any(|n| matches!(&*n.node(), Node::Fun(Func::Sin | Func::Cos | Func::Tan, _)));
+    e.post_order_nodes().iter().any(|n| match &*n.node() {
+        Node::Mul { factors, .. } => factors.iter().any(|(b, x)| x.is_negative() && trig(*b)),
+        _ => false,
+    })
 }
 
 /// Everything derived before a formulation is chosen.
@@ -51,6 +128,10 @@ pub struct Mechanics {
     pub t0: Expr,
     /// Generalized forces of the non-potential forces, Q (may depend on q, q', t).
     pub q_forces: Vec<Expr>,
+    /// `dV/dq`.
+    pub potential_gradient: Vec<Expr>,
+    /// Generalized inertia forces `h`: `d/dt dT/dq' - dT/dq = M q'' + h`.
+    pub inertial: Vec<Expr>,
     /// Constraint Jacobian a (r x m).
     pub a: Matrix,
     /// Constraint bias b (r).
@@ -59,15 +140,17 @@ pub struct Mechanics {
     pub holonomic: Vec<(usize, Expr)>,
     /// Constraint names, in order.
     pub constraint_names: Vec<String>,
+    /// The simplifier every later stage shares.
+    pub tidy: Tidy,
 }
 
 /// Limits for the simplifications made while deriving.
-pub fn derivation_limits() -> Limits {
-    Limits { max_terms: 4000, max_time: std::time::Duration::from_secs(5) }
+pub fn derivation_limits() -> FourierLimits {
+    FourierLimits::default()
 }
 
 /// Splits a velocity-linear expression into `(d/dq', value at q' = 0)`.
-fn split_linear(e: Expr, velocities: &[Symbol], zero: &HashMap<Symbol, Expr>) -> (Vec<Expr>, Expr) {
+pub fn split_linear(e: Expr, velocities: &[Symbol], zero: &HashMap<Symbol, Expr>) -> (Vec<Expr>, Expr) {
     (velocities.iter().map(|v| e.diff(*v)).collect(), e.subs(zero))
 }
 
@@ -75,29 +158,39 @@ fn zero_velocities(model: &Model) -> HashMap<Symbol, Expr> {
     model.velocities.iter().map(|v| (*v, Expr::zero())).collect()
 }
 
-fn dot(a: &[Expr; 3], b: &[Expr; 3]) -> Expr {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+/// Distinct nodes of the three components together.
+fn size3(v: &[Expr; 3]) -> usize {
+    crate::symbolic::expr::post_order(v).len()
+}
+
+/// The time derivative with `q'' = 0`: coordinates move with their rates, rates are constant.
+fn drift_chain(model: &Model) -> TimeChain {
+    model.position_chain()
 }
 
 /// Derives the shared mechanics of a model.
 pub fn derive(model: &Model) -> Mechanics {
-    let lim = derivation_limits();
+    let tidy = Tidy::new(derivation_limits());
     let chain = model.position_chain();
+    let drift = drift_chain(model);
     let zero = zero_velocities(model);
     let m = model.m();
-    let tidy = |e: Expr| e.simplify_trig(lim);
 
     let mut bodies = Vec::new();
-    let mut mass = Matrix::zeros(m, m);
-    let mut n = vec![Expr::zero(); m];
-    let mut t0 = Expr::zero();
-    let mut kinetic = Expr::zero();
-    let mut potential = Expr::zero();
+    // Terms per entry, summed once at the end (adding to a sum one term at a time copies it).
+    let mut mass_terms: Vec<Vec<Expr>> = vec![Vec::new(); m * m];
+    let mut n_terms: Vec<Vec<Expr>> = vec![Vec::new(); m];
+    let mut inertial_terms: Vec<Vec<Expr>> = vec![Vec::new(); m];
+    let mut t0_terms = Vec::new();
+    let mut kinetic_terms = Vec::new();
     for body in &model.bodies {
         let frame = &model.frames[body.frame];
-        let pos = frame.point(&body.com);
-        let v = crate::kinematics::velocity(&pos, &chain).map(tidy);
-        let omega = frame.omega.map(tidy);
+        // The centre of mass's velocity in the body's components and in the world's.
+        let v_body = tidy.of3(frame.point_velocity(&body.com, &chain));
+        let v_world = tidy.of3(chain.dt3(&frame.point(&body.com)));
+        let in_body = size3(&v_body) < size3(&v_world);
+        let v = if in_body { v_body } else { v_world };
+        let omega = tidy.of3(frame.omega);
         let mut bm = Matrix::zeros(3, m);
         let mut dm = Matrix::zeros(3, m);
         let mut c = [Expr::zero(); 3];
@@ -106,40 +199,69 @@ pub fn derive(model: &Model) -> Mechanics {
             let (bk, ck) = split_linear(v[k], &model.velocities, &zero);
             let (dk, ek) = split_linear(omega[k], &model.velocities, &zero);
             for j in 0..m {
-                bm.set(k, j, bk[j]);
-                dm.set(k, j, dk[j]);
+                bm.set(k, j, tidy.of(bk[j]));
+                dm.set(k, j, tidy.of(dk[j]));
             }
-            c[k] = ck;
-            e[k] = ek;
+            c[k] = tidy.of(ck);
+            e[k] = tidy.of(ek);
         }
-        // M += m B^T B + D^T I D; N += m B^T C + D^T I E; T0 += m/2 C.C + 1/2 E.I E.
-        let bt = bm.transpose();
-        mass = mass.add(&bt.mul(&bm).map(|x| *x * body.mass));
-        let cb = bt.mul(&Matrix::column(c.to_vec()));
-        for j in 0..m {
-            n[j] = n[j] + cb.get(j, 0) * body.mass;
-        }
-        t0 = t0 + dot(&c, &c) * body.mass / 2;
-        kinetic = kinetic + dot(&v, &v) * body.mass / 2;
-        if let Some(inertia) = &body.inertia {
-            let dt = dm.transpose();
-            mass = mass.add(&dt.mul(inertia).mul(&dm));
-            let ie = inertia.mul(&Matrix::column(e.to_vec()));
-            let die = dt.mul(&ie);
-            for j in 0..m {
-                n[j] = n[j] + die.get(j, 0);
+        // Accelerations at q'' = 0: a = dV/dt (+ omega x V in body components), alpha = d omega/dt.
+        let dv = drift.dt3(&v);
+        let accel = tidy.of3(if in_body { add3(&dv, &cross(&omega, &v)) } else { dv });
+        let alpha = tidy.of3(drift.dt3(&omega));
+        let mass_expr = body.mass;
+        let (iw, ie, torque) = match &body.inertia {
+            Some(inertia) => {
+                let iw = mat_vec(inertia, &omega);
+                let euler = add3(&mat_vec(inertia, &alpha), &cross(&omega, &iw));
+                (Some(iw), Some(mat_vec(inertia, &e)), Some(tidy.of3(euler)))
             }
-            t0 = t0 + dot(&e, &[ie.get(0, 0), ie.get(1, 0), ie.get(2, 0)]) / 2;
-            let iw = inertia.mul(&Matrix::column(omega.to_vec()));
-            kinetic = kinetic + dot(&omega, &[iw.get(0, 0), iw.get(1, 0), iw.get(2, 0)]) / 2;
+            None => (None, None, None),
+        };
+        let col = |mat: &Matrix, j: usize| [mat.get(0, j), mat.get(1, j), mat.get(2, j)];
+        let moving: Vec<usize> = (0..m).filter(|&j| (0..3).any(|k| !bm.get(k, j).is_zero() || !dm.get(k, j).is_zero())).collect();
+        let i_d: Vec<Option<[Expr; 3]>> = (0..m).map(|j| body.inertia.as_ref().map(|inertia| mat_vec(inertia, &col(&dm, j)))).collect();
+        for (x, &i) in moving.iter().enumerate() {
+            let (bi, di) = (col(&bm, i), col(&dm, i));
+            for &j in &moving[x..] {
+                let mut entry = dot(&bi, &col(&bm, j)) * mass_expr;
+                if let Some(idj) = &i_d[j] {
+                    entry = entry + dot(&di, idj);
+                }
+                if !entry.is_zero() {
+                    mass_terms[i * m + j].push(entry);
+                }
+            }
+            n_terms[i].push(dot(&bi, &c) * mass_expr);
+            inertial_terms[i].push(dot(&bi, &accel) * mass_expr);
+            if let (Some(ie), Some(torque)) = (&ie, &torque) {
+                n_terms[i].push(dot(&di, ie));
+                inertial_terms[i].push(dot(&di, torque));
+            }
         }
-        bodies.push(BodyVelocity { v, omega, b: bm, c, d: dm, e });
+        t0_terms.push(dot(&c, &c) * mass_expr / 2);
+        kinetic_terms.push(dot(&v, &v) * mass_expr / 2);
+        if let Some(iw) = &iw {
+            kinetic_terms.push(dot(&omega, iw) / 2);
+            t0_terms.push(dot(&e, ie.as_ref().expect("with iw")) / 2);
+        }
+        bodies.push(BodyVelocity { v, in_body, omega, b: bm, c, d: dm, e, accel, alpha });
     }
-    let mass = mass.map(|x| tidy(*x));
-    let n: Vec<Expr> = n.into_iter().map(tidy).collect();
-    let t0 = tidy(t0);
+    let mut mass = Matrix::zeros(m, m);
+    for i in 0..m {
+        for j in i..m {
+            let s = tidy.of(Expr::sum(std::mem::take(&mut mass_terms[i * m + j])));
+            mass.set(i, j, s);
+            mass.set(j, i, s);
+        }
+    }
+    let n: Vec<Expr> = n_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
+    let inertial: Vec<Expr> = inertial_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect();
+    let t0 = tidy.of(Expr::sum(t0_terms));
+    let kinetic = tidy.of(Expr::sum(kinetic_terms));
 
     // Forces: potentials into V, the rest into Q by virtual power.
+    let mut potential_terms = Vec::new();
     let mut q_forces = vec![Expr::zero(); m];
     let add_power = |q: &mut Vec<Expr>, force: &[Expr; 3], vel: &[Expr; 3]| {
         for (j, v) in model.velocities.iter().enumerate() {
@@ -152,24 +274,24 @@ pub fn derive(model: &Model) -> Mechanics {
             Force::Gravity { vector } => {
                 for body in &model.bodies {
                     let pos = model.frames[body.frame].point(&body.com);
-                    potential = potential - dot(vector, &pos) * body.mass;
+                    potential_terms.push(-dot(vector, &pos) * body.mass);
                 }
             }
             Force::PointForce { frame, point, force_world, .. } => {
-                let vel = crate::kinematics::velocity(&model.frames[*frame].point(point), &chain);
+                let vel = chain.dt3(&model.frames[*frame].point(point));
                 add_power(&mut q_forces, force_world, &vel);
             }
             Force::Torque { body, torque, .. } => {
-                let omega = model.frames[model.bodies[*body].frame].omega.clone();
+                let omega = model.frames[model.bodies[*body].frame].omega;
                 add_power(&mut q_forces, torque, &omega);
             }
             Force::Spring { a, b, stiffness, rest_length, .. } => {
-                let len = spring_length(model, a, b);
-                potential = potential + (len - *rest_length).powi(2) * *stiffness / 2;
+                let len = spring_length(model, &tidy, a, b);
+                potential_terms.push((len - *rest_length).powi(2) * *stiffness / 2);
             }
             Force::Damper { a, b, damping, .. } => {
                 // Force -c L' along the line: Q_j = -c L' dL/dq_j.
-                let len = spring_length(model, a, b);
+                let len = spring_length(model, &tidy, a, b);
                 let rate = chain.dt(len);
                 for (j, q) in model.coordinates.iter().enumerate() {
                     q_forces[j] = q_forces[j] - *damping * rate * len.diff(*q);
@@ -180,12 +302,12 @@ pub fn derive(model: &Model) -> Mechanics {
                     q_forces[j] = q_forces[j] + components[j];
                 }
             }
-            Force::Potential { expr, .. } => potential = potential + *expr,
+            Force::Potential { expr, .. } => potential_terms.push(*expr),
         }
     }
-    let q_forces: Vec<Expr> = q_forces.into_iter().map(tidy).collect();
-    let potential = tidy(potential);
-    let kinetic = tidy(kinetic);
+    let q_forces: Vec<Expr> = q_forces.into_iter().map(|e| tidy.of(e)).collect();
+    let potential = tidy.of(Expr::sum(potential_terms));
+    let potential_gradient: Vec<Expr> = model.coordinates.iter().map(|q| tidy.of(potential.diff(*q))).collect();
 
     // Constraints a q' + b = 0.
     let r = model.constraints.len();
@@ -204,32 +326,50 @@ pub fn derive(model: &Model) -> Mechanics {
         constraint_names.push(name.clone());
         let (row, bias) = split_linear(rate, &model.velocities, &zero);
         for j in 0..m {
-            a.set(i, j, tidy(row[j]));
+            a.set(i, j, tidy.of(row[j]));
         }
-        b.push(tidy(bias));
+        b.push(tidy.of(bias));
     }
-    Mechanics { m, r, p: m - r, bodies, kinetic, potential, mass, n, t0, q_forces, a, b, holonomic, constraint_names }
+    Mechanics {
+        m,
+        r,
+        p: m - r,
+        bodies,
+        kinetic,
+        potential,
+        mass,
+        n,
+        t0,
+        q_forces,
+        potential_gradient,
+        inertial,
+        a,
+        b,
+        holonomic,
+        constraint_names,
+        tidy,
+    }
 }
 
-fn spring_length(model: &Model, a: &(usize, [Expr; 3]), b: &(usize, [Expr; 3])) -> Expr {
+fn spring_length(model: &Model, tidy: &Tidy, a: &(usize, [Expr; 3]), b: &(usize, [Expr; 3])) -> Expr {
     let pa = model.frames[a.0].point(&a.1);
     let pb = model.frames[b.0].point(&b.1);
     let d = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
-    dot(&d, &d).simplify_trig(derivation_limits()).sqrt()
+    tidy.of(dot(&d, &d)).sqrt()
 }
 
 impl Mechanics {
     /// Kinetic energy rebuilt from M, N, T0 and the velocities (Eq. 13).
     pub fn kinetic_from_matrices(&self, velocities: &[Symbol]) -> Expr {
         let qd: Vec<Expr> = velocities.iter().map(|v| v.expr()).collect();
-        let mut t = self.t0;
+        let mut terms = vec![self.t0];
         for i in 0..self.m {
-            t = t + self.n[i] * qd[i];
+            terms.push(self.n[i] * qd[i]);
             for j in 0..self.m {
-                t = t + self.mass.get(i, j) * qd[i] * qd[j] / 2;
+                terms.push(self.mass.get(i, j) * qd[i] * qd[j] / 2);
             }
         }
-        t
+        Expr::sum(terms)
     }
 
     /// The generalized momentum of coordinate `j`, `dT/dq'_j = M_j q' + N_j` (Eq. 26 for an
@@ -243,5 +383,34 @@ impl Mechanics {
         (0..self.r)
             .map(|i| Expr::sum((0..self.m).map(|j| self.a.get(i, j) * velocities[j].expr())) + self.b[i])
             .collect()
+    }
+
+    /// `f = Q - dV/dq - h`: everything in Lagrange's equations but `M q''` and the constraint
+    /// forces, in `q`, `q'`, `t`.
+    pub fn lagrange_force(&self) -> Vec<Expr> {
+        (0..self.m).map(|j| self.tidy.of(self.q_forces[j] - self.potential_gradient[j] - self.inertial[j])).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::symbolic::zero::zero_test;
+
+    /// `M q'' + h` equals `d/dt dT/dq' - dT/dq` with T from the body velocities, and M, N, T0
+    /// rebuild T, on every reference model.
+    #[test]
+    fn inertia_forces_are_lagranges() {
+        for name in ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"] {
+            let model = crate::model::load(format!("../models/{name}.ron")).unwrap();
+            let mech = derive(&model);
+            assert!(zero_test(mech.kinetic - mech.kinetic_from_matrices(&model.velocities)).is_zero(), "{name}: T");
+            let chain = model.velocity_chain();
+            for j in 0..mech.m {
+                let lagrange = chain.dt(mech.kinetic.diff(model.velocities[j])) - mech.kinetic.diff(model.coordinates[j]);
+                let ours = Expr::sum((0..mech.m).map(|k| mech.mass.get(j, k) * model.accelerations[k].expr())) + mech.inertial[j];
+                assert!(zero_test(lagrange - ours).is_zero(), "{name}: equation {j}");
+            }
+        }
     }
 }

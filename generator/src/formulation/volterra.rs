@@ -4,12 +4,15 @@
 //! - Dynamical constraints `M' q' + N' = 0`, `N' = N2 - G_I` (Eq. 25); `G_I` are symbols,
 //!   runtime inputs computed from the initial state (Eq. 26).
 //! - `q' = W_NI u_NI + X_NI` from `[Y_NI; M'; a]` (Eqs. 43-44), by the symbolic solver.
-//! - `M_NI = W^T M W`, `N_NI = W^T (M X + N)` (Eqs. 47-48).
-//! - `A_NI = d/dt(dT/du)` without the `u'` term (Eq. 52).
-//! - `K_NI = sum_i B_NI_i^T P_i + C_NI_i^T H_Gi` (Eqs. 57-63), where the time derivative of the
-//!   partial angular velocity is inertial: with body-frame components it gets the transport
-//!   term `omega x (.)` (the trap in design.md).
-//! - `U_NI = W^T (Q - dV/dq)`, `L_NI = U_NI + K_NI - A_NI` (Eq. 65), `M_NI u' = L_NI` (Eq. 64).
+//! - `M_NI = W^T M W` (Eq. 47).
+//! - `L_NI = U_NI + K_NI - A_NI` (Eq. 65) with `U_NI = W^T (Q - dV/dq)` (Eq. 33). The inertia
+//!   part `K_NI - A_NI` is evaluated through the identity the paper derives it from (Eqs.
+//!   38-39): `A_NI - K_NI = sum_i m_i a_i . dV_i/du` at `u' = 0`, which with `q'' = W u' + c`,
+//!   `c = d/dt(W u + X)` at `u' = 0`, is `W^T (h + M c)`, `h` the generalized inertia forces
+//!   of [`super::mechanics`]. So `L_NI = W^T (Q - dV/dq - h - M c)`: one product per body and
+//!   quasi-velocity, where differentiating `dT/du` (Eq. 52) costs a derivative of every entry of
+//!   `M_NI` by every coordinate.
+//! - `M_NI u' = L_NI` (Eq. 64).
 //!
 //! ```
 //! use generator::formulation::{mechanics, volterra};
@@ -19,12 +22,12 @@
 //! assert_eq!((v.w.rows, v.w.cols), (3, 1));
 //! ```
 
-use super::mechanics::{Mechanics, derivation_limits};
-use crate::kinematics::TimeChain;
+use super::mechanics::Mechanics;
+use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{ErrorKind, Model, ModelError};
+use crate::symbolic::limits::Limits;
 use crate::symbolic::matrix::{SolveError, SolveOptions, solve};
-use crate::symbolic::eval::magnitude;
-use crate::symbolic::trig::SplitMix;
+use crate::symbolic::zero::zero_test;
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::collections::HashMap;
 
@@ -45,51 +48,44 @@ pub struct Volterra {
     pub x: Vec<Expr>,
     /// Factors of the pivots of `[Y_NI; M'; a]`: singular only where one vanishes.
     pub singular_factors: Vec<Expr>,
-    /// `det [Y_NI; M'; a]`.
-    pub determinant: Expr,
+    /// `det [Y_NI; M'; a]` (`None` when the matrix is too large to expand).
+    pub determinant: Option<Expr>,
     /// `q'` as a function of `(q, u, G, t)`: `W u + X`.
     pub qdot: Vec<Expr>,
+    /// `c = d/dt(W u + X)` at `u' = 0`, so that `q'' = W u' + c`.
+    pub drift: Vec<Expr>,
+    /// `M_NI` (Eq. 47).
     pub mass_ni: Matrix,
-    pub n_ni: Vec<Expr>,
-    pub a_ni: Vec<Expr>,
-    pub k_ni: Vec<Expr>,
+    /// `U_NI = W^T (Q - dV/dq)` (Eq. 33).
     pub u_ni: Vec<Expr>,
+    /// `K_NI - A_NI = -W^T (h + M c)` (Eqs. 51-63 through Eq. 39).
+    pub inertia_ni: Vec<Expr>,
+    /// `L_NI = U_NI + K_NI - A_NI` (Eq. 65).
     pub l_ni: Vec<Expr>,
 }
 
-/// `e` with each symbol in `symbols` it does not depend on (its derivative is identically
-/// zero) set to zero. `L_NI` is polynomial in `G_I`, so this is exact; it removes terms that
-/// cancel only across bodies, such as the total momentum in the relative motion of scene 2.
-///
-/// The test is numeric: the derivative must vanish, against the size of its terms, at three
-/// seeded random points (a symbolic proof on expressions this size costs more than the
-/// whole derivation; an analytic function that vanishes at random points is zero).
-fn drop_absent(model: &Model, e: Expr, symbols: &[Symbol]) -> Expr {
+/// `e` with each symbol in `symbols` it does not depend on set to zero (exact: `L_NI` is
+/// polynomial in `G_I`, and the derivative is decided by the exact zero test). It removes terms
+/// that cancel only across bodies, such as the total momentum in the relative motion of
+/// scene 2.
+fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
     let mut out = e;
     for s in symbols {
-        if out.contains(*s) && vanishes_at_random_points(model, out.diff(*s)) {
+        if out.contains(*s) && zero_test(out.diff(*s)).is_zero() {
             out = out.subs(&HashMap::from([(*s, Expr::zero())]));
         }
     }
     out
 }
 
-fn vanishes_at_random_points(model: &Model, d: Expr) -> bool {
-    let bound = magnitude(d);
-    let mut rng = SplitMix(0x5EED);
-    (0..3).all(|_| {
-        let mut env = model.parameter_env();
-        for s in d.free_symbols() {
-            if env.get(s).is_none() {
-                env.set(s, rng.uniform(-1.0, 1.0));
-            }
-        }
-        match (d.eval(&env), bound.eval(&env)) {
-            (Ok(v), Ok(b)) => v.is_finite() && b.is_finite() && v.abs() <= 1e-12 * b,
-            _ => false,
-        }
-    })
-}
+/// Largest model (coordinates) for which the body route of `inertia_by_bodies` is tried beside
+/// the coordinate route. Measured: it wins on the paper's scenes (scene 2's reduced right-hand
+/// side 1186 operations against 2149), loses from a 6-link floating chain on, and costs more
+/// than the rest of the derivation there.
+const MAX_BODY_ROUTE_COORDINATES: usize = 10;
+
+/// Largest matrix whose determinant is expanded symbolically (for `inspect`).
+const MAX_DETERMINANT_SIZE: usize = 10;
 
 /// Name of the `G` symbol of an ignorable coordinate.
 pub fn momentum_symbol(model: &Model, j: usize) -> Symbol {
@@ -107,8 +103,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let m = mech.m;
     let s = ignorable.len();
     let n_u = mech.p - s;
-    let lim = derivation_limits();
-    let tidy = |e: Expr| e.simplify_trig(lim);
+    let tidy = &mech.tidy;
     let which = if s == 0 { "full" } else { "reduced" };
     if quasi.len() != n_u {
         return Err(model.error(
@@ -125,9 +120,9 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let mut z = Vec::new();
     for (k, e) in quasi.iter().enumerate() {
         for (j, v) in model.velocities.iter().enumerate() {
-            y.set(k, j, tidy(e.diff(*v)));
+            y.set(k, j, tidy.of(e.diff(*v)));
         }
-        z.push(tidy(e.subs(&zero)));
+        z.push(tidy.of(e.subs(&zero)));
     }
     let g: Vec<Symbol> = ignorable.iter().map(|&j| momentum_symbol(model, j)).collect();
     // [Y; M'; a] and the right-hand sides [I | -[Z; N'; b]].
@@ -148,7 +143,11 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     for (i, e) in bias.iter().enumerate() {
         rhs.set(i, n_u, -*e);
     }
-    let opts = SolveOptions { constants: model.constant_symbols().into_iter().chain(g.iter().copied()).collect(), limits: lim };
+    let opts = SolveOptions {
+        constants: model.constant_symbols().into_iter().chain(g.iter().copied()).collect(),
+        limits: Limits { max_terms: 2_000, max_work: 400_000 },
+        determinant: m <= MAX_DETERMINANT_SIZE,
+    };
     let sol = solve(&a_full, &rhs, &opts).map_err(|e| match e {
         SolveError::Singular { rows, .. } => {
             let names: Vec<String> = rows
@@ -181,80 +180,38 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     let mut x = Vec::new();
     for i in 0..m {
         for k in 0..n_u {
-            w.set(i, k, tidy(sol.x.get(i, k)));
+            w.set(i, k, tidy.of(sol.x.get(i, k)));
         }
-        x.push(tidy(sol.x.get(i, n_u)));
+        x.push(tidy.of(sol.x.get(i, n_u)));
     }
     let u: Vec<Symbol> = (0..n_u).map(quasi_symbol).collect();
-    let u_col = Matrix::column(u.iter().map(|s| s.expr()).collect());
-    let wu = w.mul(&u_col);
-    let qdot: Vec<Expr> = (0..m).map(|i| wu.get(i, 0) + x[i]).collect();
-    // Time derivative along the motion: d/dt = d/dt|explicit + sum_k d/dq_k q'_k (q' = W u + X).
-    let chain = TimeChain { t: model.t, pairs: model.coordinates.iter().copied().zip(qdot.iter().copied()).collect() };
-
-    // M_NI, N_NI (Eqs. 47-48).
-    let wt = w.transpose();
-    let mass_ni = wt.mul(&mech.mass).mul(&w).map(|e| tidy(*e));
-    let mx_n = mech.mass.mul(&Matrix::column(x.clone())).add(&Matrix::column(mech.n.clone()));
-    let n_ni: Vec<Expr> = wt.mul(&mx_n).col(0).into_iter().map(tidy).collect();
-    // A_NI (Eq. 52).
-    let dtdu = mass_ni.mul(&u_col).add(&Matrix::column(n_ni.clone()));
-    let a_ni: Vec<Expr> = dtdu.col(0).into_iter().map(|e| chain.dt(e)).collect();
-    // K_NI (Eqs. 57-63).
-    let mut k_ni = vec![Expr::zero(); n_u];
-    let qdot_col = Matrix::column(qdot.clone());
-    for (bi, body) in mech.bodies.iter().zip(&model.bodies) {
-        // Partial velocities and velocities in u, simplified first: the round trip
-        // u -> q' -> omega cancels here (omega of a body whose rates are quasi-velocities
-        // becomes u itself), which keeps everything derived from them small.
-        // Translation in the body's own components (R^T of world components): the dot
-        // products are the same, but the rotation of the body drops out of them. Their
-        // inertial derivative gets the transport term omega x (.), as for the rotation.
-        // Whichever of world and body components is smaller is used (the transport term
-        // vanishes in world components).
-        // (decided on the velocity, the partial velocities follow it).
-        let pv_world = bi.b.mul(&w);
-        let v_world = Matrix::column(bi.b.mul(&qdot_col).col(0).iter().zip(&bi.c).map(|(a, b)| *a + *b).collect());
-        let rt = model.frames[body.frame].rotation.transpose();
-        let v_in_world = v_world.map(|e| tidy(*e));
-        let v_in_body = rt.mul(&v_world).map(|e| tidy(*e));
-        let size = |a: &Matrix| a.data.iter().map(|e| e.dag_size()).sum::<usize>();
-        let body_frame = size(&v_in_body) < size(&v_in_world);
-        let (pv, v) = if body_frame {
-            (rt.mul(&pv_world).map(|e| tidy(*e)), v_in_body)
-        } else {
-            (pv_world.map(|e| tidy(*e)), v_in_world)
-        };
-        let v = v.col(0);
-        let pw = bi.d.mul(&w).map(|e| tidy(*e)); // d omega/du, body components
-        let om = bi.d.mul(&qdot_col).col(0).iter().zip(&bi.e).map(|(a, b)| tidy(*a + *b)).collect::<Vec<_>>();
-        let cross = |a: [Expr; 3], b: [Expr; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-        for k in 0..n_u {
-            // F_NI: m (d/dt dV/du_k, inertial) . V
-            let c = [pv.get(0, k), pv.get(1, k), pv.get(2, k)];
-            let transport = if body_frame { cross([om[0], om[1], om[2]], c) } else { [Expr::zero(); 3] };
-            let dpv: Vec<Expr> = (0..3).map(|r| chain.dt(c[r]) + transport[r]).collect();
-            k_ni[k] = k_ni[k] + (dpv[0] * v[0] + dpv[1] * v[1] + dpv[2] * v[2]) * body.mass;
-            // J_NI: (d/dt dω/du_k, inertial) . H, with H = I ω in body components.
-            if let Some(inertia) = &body.inertia {
-                let c = [pw.get(0, k), pw.get(1, k), pw.get(2, k)];
-                let transport = cross([om[0], om[1], om[2]], c);
-                let dpw: Vec<Expr> = (0..3).map(|r| chain.dt(c[r]) + transport[r]).collect();
-                let h = inertia.mul(&Matrix::column(om.clone()));
-                k_ni[k] = k_ni[k] + dpw[0] * h.get(0, 0) + dpw[1] * h.get(1, 0) + dpw[2] * h.get(2, 0);
-            }
-        }
-    }
-    // U_NI = W^T (Q - dV/dq), with the forces' rates replaced by W u + X.
-    let to_u: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
-    let gen_force: Vec<Expr> = model
-        .coordinates
-        .iter()
-        .enumerate()
-        .map(|(j, q)| mech.q_forces[j].subs(&to_u) - mech.potential.diff(*q))
+    let qdot: Vec<Expr> = (0..m)
+        .map(|i| tidy.of(Expr::sum((0..n_u).filter(|&k| !w.get(i, k).is_zero()).map(|k| w.get(i, k) * u[k].expr())) + x[i]))
         .collect();
-    let u_ni: Vec<Expr> = wt.mul(&Matrix::column(gen_force)).col(0);
-    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(model, u_ni[k] + k_ni[k] - a_ni[k], &g)).collect();
+    // c = d/dt(W u + X) along the motion, u and G constant.
+    let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(qdot.iter().copied()).collect());
+    let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
+    // U_NI = W^T (Q - dV/dq), the rates replaced by W u + X (Eq. 33).
+    let to_u: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
+    let wt = w.transpose();
+    let project = |v: Vec<Expr>| -> Vec<Expr> { wt.mul(&Matrix::column(v)).col(0) };
+    let applied: Vec<Expr> = (0..m).map(|j| mech.q_forces[j] - mech.potential_gradient[j]).collect();
+    let u_ni: Vec<Expr> = project(Expr::subs_all(&applied, &to_u)).into_iter().map(|e| tidy.of(e)).collect();
+    // M_NI and K_NI - A_NI from the coordinates' M and h; where the quasi-velocities are not
+    // plain rates (a body's angular velocity), also from the bodies' velocities in u, which
+    // cancels the rate transformation body by body; the smaller is kept (both are exact).
+    let by_coordinates = inertia_by_coordinates(mech, &w, &drift, &to_u);
+    let rates_only = y.data.iter().all(|e| e.as_num().is_some());
+    let (mass_ni, inertia_ni) = if rates_only || m > MAX_BODY_ROUTE_COORDINATES {
+        by_coordinates
+    } else {
+        let by_bodies = inertia_by_bodies(model, mech, &u, &qdot, &chain);
+        let size = |(mass, inertia): &(Matrix, Vec<Expr>)| {
+            crate::symbolic::expr::post_order(&mass.data.iter().chain(inertia).copied().collect::<Vec<_>>()).len()
+        };
+        if size(&by_bodies) <= size(&by_coordinates) { by_bodies } else { by_coordinates }
+    };
+    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(tidy.of(u_ni[k] + inertia_ni[k]), &g)).collect();
     Ok(Volterra {
         ignorable: ignorable.to_vec(),
         g,
@@ -266,12 +223,83 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         singular_factors: sol.pivots,
         determinant: sol.determinant,
         qdot,
+        drift,
         mass_ni,
-        n_ni,
-        a_ni,
-        k_ni,
         u_ni,
+        inertia_ni,
         l_ni,
     })
 }
 
+/// `M_NI` and `K_NI - A_NI` from the bodies' velocities in the quasi-velocities (Kane's
+/// form of Eqs. 35-39): `M_NI = sum m P^T P + O^T I O`, `K_NI - A_NI = -sum m P^T a + O^T (I
+/// alpha + omega x I omega)`, with `P = dV/du`, `O = d omega/du` and the accelerations at
+/// `u' = 0`. Compact where the quasi-velocities are the bodies' own rates (a base whose
+/// angular velocity is a quasi-velocity has `O = [I 0]`).
+fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr], chain: &TimeChain) -> (Matrix, Vec<Expr>) {
+    let tidy = &mech.tidy;
+    let n_u = u.len();
+    let to_u: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
+    let mut mass_terms: Vec<Vec<Expr>> = vec![Vec::new(); n_u * n_u];
+    let mut inertia_terms: Vec<Vec<Expr>> = vec![Vec::new(); n_u];
+    for (bv, body) in mech.bodies.iter().zip(&model.bodies) {
+        // The velocity in the quasi-velocities, in world or body components, whichever is
+        // smaller here (the momentum rows of W are simplest in world components).
+        let v = Expr::subs_all(&bv.v, &to_u);
+        let v = [v[0], v[1], v[2]];
+        let rot = tidy.matrix(&model.frames[body.frame].rotation);
+        let (v_body, v_world) = if bv.in_body { (v, mat_vec(&rot, &v)) } else { (mat_vec(&rot.transpose(), &v), v) };
+        let v_body = v_body.map(|e| tidy.rational(e));
+        let v_world = v_world.map(|e| tidy.rational(e));
+        let in_body = crate::symbolic::expr::post_order(&v_body).len() < crate::symbolic::expr::post_order(&v_world).len();
+        let v = if in_body { v_body } else { v_world };
+        let om = Expr::subs_all(&bv.omega, &to_u).into_iter().map(|e| tidy.rational(e)).collect::<Vec<_>>();
+        let om = [om[0], om[1], om[2]];
+        let partial = |x: &[Expr; 3], k: usize| x.map(|e| tidy.rational(e.diff(u[k])));
+        let p: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&v, k)).collect();
+        let o: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&om, k)).collect();
+        let dv = chain.dt3(&v);
+        let accel = tidy.of3(if in_body { add3(&dv, &cross(&om, &v)) } else { dv });
+        let torque = body.inertia.as_ref().map(|inertia| {
+            let alpha = chain.dt3(&om);
+            tidy.of3(add3(&mat_vec(inertia, &alpha), &cross(&om, &mat_vec(inertia, &om))))
+        });
+        let io: Vec<Option<[Expr; 3]>> = o.iter().map(|ok| body.inertia.as_ref().map(|i| mat_vec(i, ok))).collect();
+        for k in 0..n_u {
+            for l in k..n_u {
+                let mut e = dot(&p[k], &p[l]) * body.mass;
+                if let Some(iol) = &io[l] {
+                    e = e + dot(&o[k], iol);
+                }
+                if !e.is_zero() {
+                    mass_terms[k * n_u + l].push(e);
+                }
+            }
+            inertia_terms[k].push(-(dot(&p[k], &accel) * body.mass));
+            if let Some(t) = &torque {
+                inertia_terms[k].push(-dot(&o[k], t));
+            }
+        }
+    }
+    let mut mass = Matrix::zeros(n_u, n_u);
+    for k in 0..n_u {
+        for l in k..n_u {
+            let e = tidy.of(Expr::sum(std::mem::take(&mut mass_terms[k * n_u + l])));
+            mass.set(k, l, e);
+            mass.set(l, k, e);
+        }
+    }
+    (mass, inertia_terms.into_iter().map(|t| tidy.of(Expr::sum(t))).collect())
+}
+
+/// `M_NI = W^T M W` and `K_NI - A_NI = -W^T (h + M c)` from the coordinates' mass matrix and
+/// inertia forces: compact where `W` is simple (quasi-velocities that are rates).
+fn inertia_by_coordinates(mech: &Mechanics, w: &Matrix, drift: &[Expr], to_u: &HashMap<Symbol, Expr>) -> (Matrix, Vec<Expr>) {
+    let tidy = &mech.tidy;
+    let wt = w.transpose();
+    let mass = tidy.matrix(&wt.mul(&mech.mass.mul(w)));
+    let inertial = Expr::subs_all(&mech.inertial, to_u);
+    let mc = mech.mass.mul(&Matrix::column(drift.to_vec()));
+    let rest: Vec<Expr> = (0..mech.m).map(|j| -(inertial[j] + mc.get(j, 0))).collect();
+    (mass, wt.mul(&Matrix::column(rest)).col(0).into_iter().map(|e| tidy.of(e)).collect())
+}

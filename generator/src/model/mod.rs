@@ -7,7 +7,9 @@
 //! assert_eq!(model.coordinates.len(), 3);
 //! ```
 
+pub mod builder;
 pub mod error;
+pub mod examples;
 pub mod schema;
 
 pub use error::{ErrorKind, ModelError};
@@ -96,14 +98,14 @@ pub struct Model {
 impl Model {
     /// The time chain `q -> q'` for total time derivatives of position-level expressions.
     pub fn position_chain(&self) -> TimeChain {
-        TimeChain { t: self.t, pairs: self.coordinates.iter().zip(&self.velocities).map(|(q, v)| (*q, v.expr())).collect() }
+        TimeChain::new(self.t, self.coordinates.iter().zip(&self.velocities).map(|(q, v)| (*q, v.expr())).collect())
     }
 
     /// The time chain `q -> q'`, `q' -> q''` for velocity-level expressions.
     pub fn velocity_chain(&self) -> TimeChain {
-        let mut c = self.position_chain();
-        c.pairs.extend(self.velocities.iter().zip(&self.accelerations).map(|(v, a)| (*v, a.expr())));
-        c
+        let mut pairs = self.position_chain().pairs;
+        pairs.extend(self.velocities.iter().zip(&self.accelerations).map(|(v, a)| (*v, a.expr())));
+        TimeChain::new(self.t, pairs)
     }
 
     /// An evaluation environment with the parameters, `pi` and the time functions bound.
@@ -432,7 +434,7 @@ impl<'a> Builder<'a> {
         }
         let velocities: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}'"))).collect();
         let accelerations: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}''"))).collect();
-        let chain = TimeChain { t: self.t, pairs: coordinates.iter().zip(&velocities).map(|(q, v)| (*q, v.expr())).collect() };
+        let chain = TimeChain::new(self.t, coordinates.iter().zip(&velocities).map(|(q, v)| (*q, v.expr())).collect());
 
         // Frames, in dependency order, with cycle and unknown-parent detection.
         let frames = self.frames(&def, &chain, &mut seen)?;
@@ -476,7 +478,7 @@ impl<'a> Builder<'a> {
                         let d1 = e.diff(*v);
                         for w in &velocities {
                             let d2 = d1.diff(*w);
-                            if !crate::symbolic::trig::zero_test(d2, Default::default()).is_zero() {
+                            if !crate::symbolic::zero::zero_test(d2).is_zero() {
                                 return Err(self.err(ErrorKind::NonlinearConstraint, &place, &format!("\"{expr}\""), format!("constraint `{name}` is not linear in the velocities: d²/d{}d{} = {d2}", v.name(), w.name()), "write velocity constraints as a(q,t)*q' + b(q,t) = 0"));
                             }
                         }

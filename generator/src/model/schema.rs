@@ -3,33 +3,33 @@
 //! [`crate::symbolic::parse`].
 
 use indexmap::IndexMap;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// A model file.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Model")]
 pub struct ModelFile {
     /// Identifier of the model (used for generated module names).
     pub name: String,
     /// Free text.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
     /// Parameter names and values. Every symbol must be bound here or be a coordinate.
     pub parameters: IndexMap<String, f64>,
     /// Generalized coordinates, in order.
     pub coordinates: Vec<String>,
     /// Named functions of time: name -> expression in `t` (e.g. a prescribed force `F(t)`).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
     pub time_functions: IndexMap<String, String>,
     /// The kinematic tree; `world` is the implicit root.
     pub frames: Vec<FrameDef>,
     /// Rigid bodies and point masses.
     pub bodies: Vec<BodyDef>,
     /// Kinematic constraints.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub constraints: Vec<ConstraintDef>,
     /// Applied forces and potentials.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub forces: Vec<ForceDef>,
     /// The choice of quasi-velocities.
     pub quasi_velocities: QuasiVelocityDef,
@@ -37,10 +37,10 @@ pub struct ModelFile {
     #[serde(default)]
     pub ignorable: IgnorableDef,
     /// The initial state of the reference run.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial: Option<InitialDef>,
     /// The reference run.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulation: Option<SimulationDef>,
     /// What the generated module contains (default: everything, runtime parameters).
     #[serde(default)]
@@ -48,7 +48,7 @@ pub struct ModelFile {
 }
 
 /// What to emit: the model "models only what a scene requires".
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Emit")]
 pub struct EmitDef {
     /// Formulations to emit, each as a module with its own right-hand side.
@@ -98,7 +98,7 @@ fn default_max_lets() -> usize {
 }
 
 /// A formulation of the equations of motion.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, Serialize)]
 pub enum FormulationDef {
     /// Lagrange's equations with multipliers: state `[q; q']`, m equations (+ r multipliers).
     Lagrange,
@@ -111,7 +111,7 @@ pub enum FormulationDef {
 }
 
 /// An extra emitted function.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, Serialize)]
 pub enum FunctionDef {
     /// `energy(t, q, qdot, params)`: T + V.
     Energy,
@@ -124,7 +124,7 @@ pub enum FunctionDef {
 }
 
 /// How parameters reach the emitted code.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 pub enum ParameterDef {
     /// Fields of `Params`, set at runtime (sweepable).
     #[default]
@@ -135,20 +135,20 @@ pub enum ParameterDef {
 
 /// A frame: its parent frame moved by `translation` (in parent components) and turned by the
 /// `rotation` sequence (applied left to right, each about the current axes).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Frame")]
 pub struct FrameDef {
     pub name: String,
     pub parent: String,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub translation: Option<Vec<String>>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub rotation: Vec<RotationDef>,
 }
 
 /// An elementary rotation by an angle expression, or the ZYX Euler shorthand
 /// `EulerZYX(psi, theta, phi)` = `[Z(psi), Y(theta), X(phi)]`, `R = Rz Ry Rx`.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub enum RotationDef {
     X(String),
@@ -158,20 +158,20 @@ pub enum RotationDef {
 }
 
 /// A body attached to a frame.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Body")]
 pub struct BodyDef {
     pub name: String,
     pub frame: String,
     pub mass: String,
     /// Centre of mass in the frame's components (default: the frame's origin).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub com: Option<Vec<String>>,
     pub inertia: InertiaDef,
 }
 
 /// Inertia about the centre of mass, in the body frame.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub enum InertiaDef {
     /// No rotational inertia.
@@ -185,7 +185,7 @@ pub enum InertiaDef {
 }
 
 /// A kinematic constraint.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub enum ConstraintDef {
     /// Velocity level, `expr = 0`, linear in the velocities `q'` (nonholonomic or not).
@@ -195,7 +195,7 @@ pub enum ConstraintDef {
 }
 
 /// An applied force or a potential.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub enum ForceDef {
     /// Uniform gravity on every body: the acceleration vector in world components.
@@ -206,7 +206,7 @@ pub enum ForceDef {
         frame: String,
         point: Vec<String>,
         force: Vec<String>,
-        #[serde(default)]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         expressed_in: Option<String>,
     },
     /// A torque on a body, in body-frame components.
@@ -232,7 +232,7 @@ pub enum ForceDef {
 /// Quasi-velocities: `full` has p of them (Maggi, Kane/Gibbs-Appell); `reduced` has p - s
 /// (the reduced Volterra method). Expressions in `q`, `q'`, `t` and `omega_x(body)`,
 /// `omega_y(body)`, `omega_z(body)` (body-frame angular velocity components).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "QuasiVelocities")]
 pub struct QuasiVelocityDef {
     pub full: Vec<String>,
@@ -240,7 +240,7 @@ pub struct QuasiVelocityDef {
 }
 
 /// Ignorable coordinates: found automatically, or declared (and verified).
-#[derive(Clone, Debug, Default, Deserialize)]
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub enum IgnorableDef {
     #[default]
@@ -250,7 +250,7 @@ pub enum IgnorableDef {
 
 /// Initial coordinates and velocities: expressions in the parameters; velocity expressions may
 /// also use the initial coordinates and other initial velocities (`theta1'`).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Initial")]
 pub struct InitialDef {
     pub q: IndexMap<String, String>,
@@ -258,7 +258,7 @@ pub struct InitialDef {
 }
 
 /// The reference run.
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Simulation")]
 pub struct SimulationDef {
     #[serde(default)]

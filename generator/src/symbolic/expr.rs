@@ -363,7 +363,7 @@ impl Expr {
     }
 
     /// A bloom mask of the free symbols: if `sym` may occur, its bit is set.
-    pub(crate) fn mask(self) -> u128 {
+    pub fn mask(self) -> u128 {
         with_pool(|p| p.masks[p.check(self)])
     }
 
@@ -693,6 +693,11 @@ impl Expr {
         }
     }
 
+    /// Every node below (and including) this expression, children before parents, each once.
+    pub fn post_order_nodes(self) -> Vec<Expr> {
+        post_order(&[self])
+    }
+
     /// Number of distinct nodes in the DAG below (and including) this expression.
     pub fn dag_size(self) -> usize {
         let mut seen = std::collections::HashSet::new();
@@ -732,6 +737,35 @@ impl Expr {
     pub fn contains(self, sym: Symbol) -> bool {
         self.may_contain(sym) && self.free_symbols().contains(&sym)
     }
+}
+
+/// Every node reachable from `outputs`, children before parents, each once, in a depth-first
+/// order that follows the outputs' order and the canonical child order (so it never depends on
+/// how the expressions were built). Iterative: deep expressions do not exhaust the stack.
+pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
+    let mut seen = rustc_hash::FxHashSet::default();
+    let mut order = Vec::new();
+    for &root in outputs {
+        if !seen.insert(root) {
+            continue;
+        }
+        // (node, its children, next child index)
+        let mut stack: Vec<(Expr, Vec<Expr>, usize)> = vec![(root, root.children(), 0)];
+        while let Some((node, children, next)) = stack.last_mut() {
+            if *next < children.len() {
+                let c = children[*next];
+                *next += 1;
+                if seen.insert(c) {
+                    let cc = c.children();
+                    stack.push((c, cc, 0));
+                }
+            } else {
+                order.push(*node);
+                stack.pop();
+            }
+        }
+    }
+    order
 }
 
 pub(crate) fn memo_diff_get(e: Expr, s: Symbol) -> Option<Expr> {

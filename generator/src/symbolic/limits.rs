@@ -1,30 +1,33 @@
 //! Explicit limits for expensive passes, and the reason a pass stopped early.
 //!
-//! Every pass that can grow (expansion, trigonometric normal form, elimination) takes a
-//! [`Limits`] and, when it stops early, returns a [`StopReason`] naming the limit and where,
-//! like egg's `Runner` and `StopReason`.
+//! Every pass that can grow (expansion, the normal forms, elimination) takes a [`Limits`]
+//! and, when it stops early, returns a [`StopReason`] naming the limit and where, like egg's
+//! `Runner` and `StopReason`. Limits count work (terms, term products), never time, so the
+//! same model gives the same output on any machine, however loaded.
 //!
 //! ```
-//! use generator::symbolic::limits::{Limits, StopReason};
-//! let limits = Limits { max_terms: 10, ..Limits::default() };
-//! let stop = StopReason::TermLimit { limit: limits.max_terms, reached: 12, pass: "expand" };
+//! use generator::symbolic::limits::{Budget, Limits, StopReason};
+//! let budget = Budget::start(Limits { max_terms: 10, max_work: 100 }, "expand");
+//! assert!(budget.check(5).is_ok());
+//! let stop = budget.check(12).unwrap_err();
+//! assert_eq!(stop, StopReason::TermLimit { limit: 10, reached: 12, pass: "expand" });
 //! assert!(stop.to_string().contains("expand"));
 //! ```
 
-use std::time::{Duration, Instant};
+use std::cell::Cell;
 
 /// Limits for one expensive pass.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
-    /// Most terms a sum may reach while expanding.
+    /// Most terms a sum may reach.
     pub max_terms: usize,
-    /// Wall-clock budget for the pass.
-    pub max_time: Duration,
+    /// Most units of work (terms created) the pass may spend in all.
+    pub max_work: u64,
 }
 
 impl Default for Limits {
     fn default() -> Self {
-        Limits { max_terms: 20_000, max_time: Duration::from_secs(10) }
+        Limits { max_terms: 20_000, max_work: 2_000_000 }
     }
 }
 
@@ -34,32 +37,35 @@ pub enum StopReason {
     /// A sum grew past `limit` terms.
     #[error("{pass} stopped: a sum reached {reached} terms (limit {limit})")]
     TermLimit { limit: usize, reached: usize, pass: &'static str },
-    /// The pass ran out of time.
-    #[error("{pass} stopped: time limit of {limit_ms} ms reached")]
-    TimeLimit { limit_ms: u128, pass: &'static str },
+    /// The pass spent its work budget.
+    #[error("{pass} stopped: its work budget of {limit} term products is spent")]
+    WorkLimit { limit: u64, pass: &'static str },
 }
 
 /// A started budget: checks the limits as a pass goes.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Budget {
     limits: Limits,
-    start: Instant,
+    work: Cell<u64>,
     pass: &'static str,
 }
 
 impl Budget {
-    /// Starts the clock for `pass`.
+    /// A fresh budget for `pass`.
     pub fn start(limits: Limits, pass: &'static str) -> Budget {
-        Budget { limits, start: Instant::now(), pass }
+        Budget { limits, work: Cell::new(0), pass }
     }
 
-    /// Fails when `terms` is past the term limit or the time is up.
+    /// Counts `terms` units of work; fails when a sum of `terms` is past the term limit or
+    /// the work budget is spent.
     pub fn check(&self, terms: usize) -> Result<(), StopReason> {
         if terms > self.limits.max_terms {
             return Err(StopReason::TermLimit { limit: self.limits.max_terms, reached: terms, pass: self.pass });
         }
-        if self.start.elapsed() > self.limits.max_time {
-            return Err(StopReason::TimeLimit { limit_ms: self.limits.max_time.as_millis(), pass: self.pass });
+        let w = self.work.get() + terms as u64;
+        self.work.set(w);
+        if w > self.limits.max_work {
+            return Err(StopReason::WorkLimit { limit: self.limits.max_work, pass: self.pass });
         }
         Ok(())
     }

@@ -19,7 +19,7 @@
 use super::expr::{Expr, Node, Symbol};
 use super::limits::{Limits, StopReason};
 use super::number::Rat;
-use super::trig::zero_test;
+use super::zero::zero_test;
 use std::collections::{BTreeMap, HashSet};
 
 /// A dense matrix of expressions, row-major.
@@ -191,12 +191,20 @@ impl Matrix {
 }
 
 /// Options for [`solve`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct SolveOptions {
     /// Symbols that are constants (parameters): pivots free of other symbols are preferred.
     pub constants: HashSet<Symbol>,
     /// Limits for the normal forms computed on the way.
     pub limits: Limits,
+    /// Expand the determinant too (Laplace expansion: for small matrices only).
+    pub determinant: bool,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions { constants: HashSet::new(), limits: Limits::default(), determinant: true }
+    }
 }
 
 /// The solution of `A X = B`.
@@ -207,8 +215,8 @@ pub struct Solution {
     /// The distinct factors of the final pivots (after cancellation): `A` is singular only
     /// where one of them vanishes. Numbers are left out.
     pub pivots: Vec<Expr>,
-    /// `det(A)` as far as it could be simplified.
-    pub determinant: Expr,
+    /// `det(A)` as far as it could be simplified, when asked for.
+    pub determinant: Option<Expr>,
     /// Normal forms that hit a limit on the way (the solve went on without them).
     pub stops: Vec<StopReason>,
 }
@@ -260,7 +268,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
         let mut chosen = None;
         for (_, i, j) in cands {
             let e = rows[i][j];
-            if e.as_num().is_some() || !zero_test(e, opts.limits).is_zero() {
+            if e.as_num().is_some() || !zero_test(e).is_zero() {
                 chosen = Some((i, j));
                 break;
             }
@@ -315,14 +323,21 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             x.set(j, c, cancel_divide(r, d));
         }
     }
-    let determinant = a.determinant(opts.limits);
+    let determinant = opts.determinant.then(|| a.determinant(opts.limits));
     Ok(Solution { x, pivots, determinant, stops })
 }
 
-/// The normal form (canonical, so common factors show), or the expression when a limit
-/// stopped the normal form.
+/// Largest entry (distinct nodes) put in the polynomial normal form: larger ones are kept as
+/// they are (correct, only without cancelled factors).
+const MAX_NORMALIZED_ENTRY: usize = 400;
+
+/// The polynomial normal form (single-angle factors stay visible, so common factors show), or
+/// the expression when it is large or a limit stopped the normal form.
 fn simplify_entry(e: Expr, limits: Limits, stops: &mut Vec<StopReason>) -> Expr {
     if e.is_zero() || e.as_num().is_some() || e.as_sym().is_some() {
+        return e;
+    }
+    if e.dag_size() > MAX_NORMALIZED_ENTRY {
         return e;
     }
     match e.trig_normal(limits) {
@@ -432,7 +447,7 @@ fn cancel_divide(r: Expr, d: Expr) -> Expr {
 mod tests {
     use super::*;
     use crate::symbolic::eval::Env;
-    use crate::symbolic::trig::SplitMix;
+    use crate::symbolic::zero::SplitMix;
 
     fn check_solution(a: &Matrix, b: &Matrix, x: &Matrix, seed: u64) {
         let ax = a.mul(x);
@@ -503,7 +518,7 @@ mod tests {
         let names: Vec<String> = s.pivots.iter().map(|p| p.to_string()).collect();
         assert_eq!(names, vec!["cos(q1)".to_string(), "mass".to_string()]);
         // The determinant is -cos(q1) * 2 mass^3 up to sign.
-        let det = s.determinant.to_string();
+        let det = s.determinant.unwrap().to_string();
         assert!(det.contains("cos(q1)") && det.contains("mass^3"), "{det}");
     }
 
@@ -527,6 +542,6 @@ mod tests {
         env.set(Symbol::new("a2"), 1.0 + std::f64::consts::PI);
         env.set(Symbol::new("l"), 1.0);
         assert!(s.pivots.iter().any(|p| p.eval(&env).unwrap().abs() < 1e-12));
-        assert!(s.determinant.eval(&env).unwrap().abs() < 1e-12);
+        assert!(s.determinant.unwrap().eval(&env).unwrap().abs() < 1e-12);
     }
 }

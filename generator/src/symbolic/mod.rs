@@ -7,6 +7,7 @@ pub mod diff;
 pub mod eval;
 pub mod expand;
 pub mod expr;
+pub mod fourier;
 pub mod limits;
 pub mod matrix;
 pub mod number;
@@ -14,6 +15,7 @@ pub mod parse;
 pub mod print;
 pub mod subs;
 pub mod trig;
+pub mod zero;
 
 pub use expr::{Context, Expr, Func, Node, Symbol};
 pub use matrix::Matrix;

@@ -27,8 +27,15 @@ const SUM: u8 = 1;
 const PRODUCT: u8 = 2;
 const POWER: u8 = 3;
 
+/// Largest tree (nodes counted with repetition) printed in full: an expression DAG of a long
+/// chain can stand for a tree with more nodes than memory holds, and is not read as text.
+pub const MAX_PRINTED_TREE: u32 = 20_000;
+
 impl fmt::Display for Expr {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.tree_size() > MAX_PRINTED_TREE {
+            return write!(f, "<expression of {} distinct nodes, too large to print>", self.dag_size());
+        }
         f.write_str(&render(*self, Style::Text).0)
     }
 }
@@ -36,6 +43,9 @@ impl fmt::Display for Expr {
 impl Expr {
     /// LaTeX source for the expression.
     pub fn to_latex(self) -> String {
+        if self.tree_size() > MAX_PRINTED_TREE {
+            return format!("\\text{{(expression of {} distinct nodes)}}", self.dag_size());
+        }
         render(self, Style::Latex).0
     }
 }

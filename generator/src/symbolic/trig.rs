@@ -1,51 +1,27 @@
-//! Trigonometric normal form and the "identically zero" test.
+//! The polynomial trigonometric normal form: an expression as a polynomial in `sin(x)`,
+//! `cos(x)` of atomic angles and in other atoms. Angle sums and integer multiples are expanded,
+//! tangents become `sin/cos`, everything is multiplied out, and `sin(x)^k` with `k >= 2` is
+//! replaced by `sin(x)^(k mod 2) (1 - cos(x)^2)^(k/2)`.
 //!
-//! The normal form treats an expression as a polynomial in `sin(x)`, `cos(x)` of atomic
-//! angles and in other atoms: angle sums and integer multiples are expanded, tangents become
-//! `sin/cos`, everything is multiplied out, and `sin(x)^k` with `k >= 2` is replaced by
-//! `sin(x)^(k mod 2) (1 - cos(x)^2)^(k/2)`. For polynomials in sin/cos of independent angles
-//! this is canonical, so "identically zero" is decided exactly; a seeded random numeric test
-//! backs it up for everything else (denominators, opaque functions).
+//! Expanding angle sums is exponential in the number of angles, so this form is only for
+//! small expressions, under a term budget: the symbolic solver uses it because single-angle
+//! factors stay visible in it (`cos(theta)` divides every term of a row, and denominators
+//! `cos(theta)^-1` merge with numerators), which is what cancels spurious pivots. Everything
+//! else uses the Fourier form of [`super::fourier`], which never expands, and the exact zero
+//! test of [`super::zero`].
 //!
 //! ```
-//! use generator::symbolic::{Expr, limits::Limits, trig::{zero_test, ZeroVerdict}};
+//! use generator::symbolic::{Expr, limits::Limits};
 //! let (a, b) = (Expr::sym("a"), Expr::sym("b"));
 //! let e = (a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin();
-//! assert!(matches!(zero_test(e, Limits::default()), ZeroVerdict::Zero { .. }));
+//! assert!(e.trig_normal(Limits::default()).unwrap().is_zero());
 //! ```
 
-use super::eval::Env;
 use super::expand::expand_rec;
-use super::expr::{Expr, Func, Node, Symbol};
+use super::expr::{Expr, Func, Node};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::{Rat, rat_from_i64};
 use std::collections::HashMap;
-
-/// How a zero verdict was reached.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ZeroProof {
-    /// The trigonometric normal form is the number zero.
-    NormalForm,
-    /// The normal form was not conclusive (or stopped: see the reason); the expression
-    /// vanished at every random point tried.
-    Numeric { points: usize, stopped: Option<StopReason> },
-}
-
-/// The outcome of [`zero_test`].
-#[derive(Clone, Debug, PartialEq)]
-pub enum ZeroVerdict {
-    /// Identically zero.
-    Zero { proof: ZeroProof },
-    /// Not zero: a point where it is not, with the value there.
-    NonZero { value: f64, at: Vec<(String, f64)> },
-}
-
-impl ZeroVerdict {
-    /// True for [`ZeroVerdict::Zero`].
-    pub fn is_zero(&self) -> bool {
-        matches!(self, ZeroVerdict::Zero { .. })
-    }
-}
 
 impl Expr {
     /// The trigonometric normal form (see the module docs), under `limits`.
@@ -191,156 +167,20 @@ impl Normalizer {
     }
 }
 
-/// A small deterministic random source (splitmix64) for numeric tests.
-#[derive(Clone, Debug)]
-pub struct SplitMix(pub u64);
-
-impl SplitMix {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// A uniform float in `[lo, hi)`.
-    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
-
-/// Number of random points the numeric zero test uses.
-pub const NUMERIC_POINTS: usize = 8;
-
-/// Decides whether `e` is identically zero: normal form first, then a numeric test at random
-/// points (symbols drawn from `[0.1, 2)`, named functions replaced by random smooth ones).
-pub fn zero_test(e: Expr, limits: Limits) -> ZeroVerdict {
-    if e.is_zero() {
-        return ZeroVerdict::Zero { proof: ZeroProof::NormalForm };
-    }
-    let stopped = match e.trig_normal(limits) {
-        Ok(n) if n.is_zero() => return ZeroVerdict::Zero { proof: ZeroProof::NormalForm },
-        // A nonzero polynomial in symbols and sin/cos of symbols is canonical: not zero.
-        Ok(n) if is_canonical_polynomial(n) => return numeric_witness(e),
-        Ok(_) => None,
-        Err(stop) => Some(stop),
-    };
-    numeric_zero_test(e, stopped)
-}
-
-/// True when the normal form is a polynomial in symbols and in sin/cos of (multiples of)
-/// symbols, where it is canonical.
-fn is_canonical_polynomial(n: Expr) -> bool {
-    let atom_ok = |b: Expr| match &*b.node() {
-        Node::Sym(_) => true,
-        Node::Fun(Func::Sin | Func::Cos, a) => a.split_coefficient().1.as_sym().is_some(),
-        _ => false,
-    };
-    let mono_ok = |t: Expr| match &*t.node() {
-        Node::Num(_) => true,
-        Node::Mul { factors, .. } => factors.iter().all(|(b, x)| x.is_integer() && x.is_positive() && atom_ok(*b)),
-        _ => atom_ok(t),
-    };
-    match &*n.node() {
-        Node::Add { terms, .. } => terms.iter().all(|(t, _)| mono_ok(*t)),
-        _ => mono_ok(n),
-    }
-}
-
-/// A point where `e` is not zero (for a verdict already known to be "not zero").
-fn numeric_witness(e: Expr) -> ZeroVerdict {
-    match numeric_zero_test(e, None) {
-        ZeroVerdict::Zero { .. } => ZeroVerdict::NonZero { value: 0.0, at: vec![] },
-        nonzero => nonzero,
-    }
-}
-
-fn numeric_zero_test(e: Expr, stopped: Option<StopReason>) -> ZeroVerdict {
-    let syms = e.free_symbols();
-    let mut rng = SplitMix(0x5EED_0F_2E_4055 ^ e.key());
-    let terms: Vec<Expr> = match &*e.node() {
-        Node::Add { terms, .. } => terms.iter().map(|(t, c)| t.scale(c)).collect(),
-        _ => vec![e],
-    };
-    let mut evaluated = 0;
-    for _ in 0..NUMERIC_POINTS {
-        let mut env = Env::default();
-        let mut at = Vec::new();
-        for s in &syms {
-            let v = rng.uniform(0.1, 2.0);
-            env.set(*s, v);
-            // A named function gets a random smooth definition.
-            let arg = Symbol::new("__arg");
-            let (a, b) = (rng.uniform(0.5, 1.5), rng.uniform(0.0, 1.0));
-            env.define(*s, arg, (arg.expr() * Expr::num(super::number::rat_from_f64(a).unwrap_or_else(Rat::one)) + Expr::num(super::number::rat_from_f64(b).unwrap_or_else(Rat::zero))).sin());
-            at.push((s.name(), v));
-        }
-        let Ok(value) = e.eval(&env) else { continue };
-        let Ok(parts) = Expr::eval_all(&terms, &env) else { continue };
-        if !value.is_finite() {
-            continue;
-        }
-        evaluated += 1;
-        let constant = match &*e.node() {
-            Node::Add { constant, .. } => super::number::rat_to_f64(constant).abs(),
-            _ => 0.0,
-        };
-        let scale: f64 = parts.iter().map(|v| v.abs()).sum::<f64>() + constant;
-        if value.abs() > 1e-10 * scale.max(1e-300) || (scale == 0.0 && value != 0.0) {
-            return ZeroVerdict::NonZero { value, at };
-        }
-    }
-    if evaluated == 0 {
-        return ZeroVerdict::NonZero { value: f64::NAN, at: vec![] };
-    }
-    ZeroVerdict::Zero { proof: ZeroProof::Numeric { points: evaluated, stopped } }
-}
-
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn zero(e: Expr) -> bool {
-        zero_test(e, Limits::default()).is_zero()
-    }
-
     #[test]
-    fn pythagoras_is_zero_by_normal_form() {
-        let x = Expr::sym("x");
-        let e = x.sin().powi(2) + x.cos().powi(2) - 1;
-        assert_eq!(e.trig_normal(Limits::default()).unwrap(), Expr::zero());
-        assert!(zero(e));
-    }
-
-    #[test]
-    fn angle_difference_is_zero() {
-        let (a, b) = (Expr::sym("a"), Expr::sym("b"));
-        let e = (a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin();
-        assert_eq!(e.trig_normal(Limits::default()).unwrap(), Expr::zero());
-        let e2 = (a * 2).sin() - a.sin() * a.cos() * 2;
-        assert_eq!(e2.trig_normal(Limits::default()).unwrap(), Expr::zero());
-    }
-
-    #[test]
-    fn near_misses_are_rejected() {
-        let (a, b) = (Expr::sym("a"), Expr::sym("b"));
-        let eps = Expr::num(Rat::frac(1, 10_000_000));
-        assert!(!zero(a.sin().powi(2) + a.cos().powi(2) - 1 - eps));
-        assert!(!zero((a - b).cos() - a.cos() * b.cos() + a.sin() * b.sin()));
-        assert!(!zero((a + b).cos() - a.cos() * b.cos() - a.sin() * b.sin()));
-        assert!(!zero(a.sin() - a.cos()));
-    }
-
-    #[test]
-    fn rational_functions_fall_back_to_numbers() {
-        let x = Expr::sym("x");
-        // (sin^2 + cos^2)/cos - 1/cos: normal form of the denominators is not a polynomial.
-        let e = (x.sin().powi(2) + x.cos().powi(2)) / x.cos() - x.cos().recip();
-        assert!(zero(e));
-        let ok = (x.tan() * x.cos() - x.sin()).trig_normal(Limits::default()).unwrap();
-        assert!(ok.is_zero(), "{ok}");
+    fn pythagoras_and_angle_sums_vanish() {
+        let (a, b, x) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("x"));
+        let lim = Limits::default();
+        assert_eq!((x.sin().powi(2) + x.cos().powi(2) - 1).trig_normal(lim).unwrap(), Expr::zero());
+        assert_eq!(((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin()).trig_normal(lim).unwrap(), Expr::zero());
+        assert_eq!(((a * 2).sin() - a.sin() * a.cos() * 2).trig_normal(lim).unwrap(), Expr::zero());
+        assert!((x.tan() * x.cos() - x.sin()).trig_normal(lim).unwrap().is_zero());
+        // Denominators are atoms: cos(x) * cos(x)^-1 merges to 1.
+        assert!((x.cos() * (x.sin() / x.cos()) - x.sin()).trig_normal(lim).unwrap().is_zero());
     }
 
     #[test]
@@ -464,6 +304,7 @@ fn contract(e: Expr) -> Expr {
 #[cfg(test)]
 mod contract_tests {
     use super::*;
+    use crate::symbolic::Symbol;
 
     #[test]
     fn products_contract_to_angle_differences() {

@@ -1,0 +1,15 @@
+//! Development probe: derive + emit a chain of size n, print the summary.
+use generator::emit::{generate, Options};
+use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let kind = args[1].as_str();
+    let n: usize = args[2].parse().unwrap();
+    let b = if kind == "pendulum" { n_link_pendulum_on_cart(n) } else { floating_chain(n) };
+    let model = b.build().unwrap();
+    let t = std::time::Instant::now();
+    let out = generate(&model, &Options::from_model(&model)).unwrap();
+    eprintln!("{}", out.summary);
+    eprintln!("total {:.3} s, {} bytes", t.elapsed().as_secs_f64(), out.code.len());
+    if args.len() > 3 { std::fs::write(&args[3], &out.code).unwrap(); }
+}
