@@ -271,15 +271,28 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        power: f64,
+        checks: [f64; 0],
+        residuals: [f64; 1],
+        positions: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let theta1_dot = state[3];
@@ -302,24 +315,47 @@ pub mod lagrange {
         let x8 = 0.5 * x2 * m2 * l;
         let x9 = x2 * x0 - x3 * x1;
         let x10 = theta1_dot - theta2_dot;
-        let mut matrix: [[f64; 4]; 4] = [
-            [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
-            [x5, 0.3333333333333333 * m2 * l * l, x8, l],
-            [x6, x8, m2 + M + m1, 0.0],
-            [x7, l, 0.0, 0.0],
-        ];
-        let mut force: [f64; 4] = [
-            tau
-                + l
-                    * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
-                        - 0.5 * (x0 * g * m1)),
-            m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
-            (0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                - m2
-                    * (-x0 * theta1_dot * theta1_dot
-                        - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
-            x10 * l * x9 * theta1_dot,
-        ];
+        Assembly {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
+                [x5, 0.3333333333333333 * m2 * l * l, x8, l],
+                [x6, x8, m2 + M + m1, 0.0],
+                [x7, l, 0.0, 0.0],
+            ],
+            force: [
+                tau
+                    + l
+                        * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
+                            - 0.5 * (x0 * g * m1)),
+                m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l
+                    - tau,
+                (0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                    - m2
+                        * (-x0 * theta1_dot * theta1_dot
+                            - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
+                x10 * l * x9 * theta1_dot,
+            ],
+            power: x10 * tau,
+            checks: [],
+            residuals: [l * (theta2_dot + x4 * theta1_dot)],
+            positions: [0.0],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -327,13 +363,13 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
-        dstate[6] = x10 * tau;
+        dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -341,77 +377,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
         alpha: f64,
-        _beta: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let theta1_dot = state[3];
-        let theta2_dot = state[4];
-        let x_dot = state[5];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let g = params.g;
-        let tau = params.tau;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = f64::cos(theta2);
-        let x3 = f64::cos(theta1);
-        let x4 = x0 * x1 + x2 * x3;
-        let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = l * (m2 + 0.5 * m1) * x3;
-        let x7 = l * x4;
-        let x8 = 0.5 * x2 * m2 * l;
-        let x9 = x2 * x0 - x3 * x1;
-        let x10 = theta1_dot - theta2_dot;
-        let mut matrix: [[f64; 4]; 4] = [
-            [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
-            [x5, 0.3333333333333333 * m2 * l * l, x8, l],
-            [x6, x8, m2 + M + m1, 0.0],
-            [x7, l, 0.0, 0.0],
-        ];
-        let mut force: [f64; 4] = [
-            tau
-                + l
-                    * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
-                        - 0.5 * (x0 * g * m1)),
-            m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l - tau,
-            (0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                - m2
-                    * (-x0 * theta1_dot * theta1_dot
-                        - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
-            l * (x10 * x9 * theta1_dot - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha)),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..1 {
+            a.force[3 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
-        dstate[3] = force[0];
-        dstate[4] = force[1];
-        dstate[5] = force[2];
-        dstate[6] = x10 * tau;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -492,34 +492,6 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 4;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 0.5 * m2 * l * l * x0;
-        let x2 = l * (m2 + 0.5 * m1) * f64::cos(theta1);
-        let x3 = l * x0;
-        let x4 = 0.5 * f64::cos(theta2) * m2 * l;
-        [
-            [l * l * (m2 + 0.3333333333333333 * m1), x1, x2, x3],
-            [x1, 0.3333333333333333 * m2 * l * l, x4, l],
-            [x2, x4, m2 + M + m1, 0.0],
-            [x3, l, 0.0, 0.0],
-        ]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -552,15 +524,31 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 2] = [
+        "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        w: [[f64; 2]; 3],
+        c: [f64; 3],
+        power: f64,
+        checks: [f64; 2],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let theta1_dot = state[3];
@@ -587,52 +575,62 @@ pub mod maggi {
         let x12 = theta1_dot - theta2_dot;
         let x13 = x7 * x8;
         let x14 = 1.0 - x13;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = l * x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 2]; 2] = [
-            [
-                l * l * x7 * x7
-                    * (m2 - 0.6666666666666666 * (m2 * x8 * x8)
-                        + 0.3333333333333333 * m1),
-                x10,
+        Assembly {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [
+                    l * l * x7 * x7
+                        * (m2
+                            * (0.6666666666666666
+                                - 0.3333333333333333
+                                    * f64::cos(2.0 * theta1 - 2.0 * theta2))
+                            + 0.3333333333333333 * m1),
+                    x10,
+                ],
+                [x10, m2 + M + m1],
             ],
-            [x10, m2 + M + m1],
-        ];
-        let mut force: [f64; 2] = [
-            x7
-                * (tau
-                    + ((l * x11
-                        * (-0.5 * (theta2_dot * theta2_dot)
-                            - 0.5 * (x12 * x12 * x14 * x7 * x8)) - x0 * g) * m2
-                        - x12 * x12 * l * x7 * x7 * x11 * (m2 + 0.3333333333333333 * m1)
-                        - 0.5 * (x0 * g * m1)) * l
-                    - (m2 * l
-                        * (l
-                            * (0.5 * (theta1_dot * theta1_dot)
-                                + x12 * x12 * x7
-                                    * (-0.16666666666666666 * x13 - 0.3333333333333333)) * x11
-                            - 0.5 * (g * x1)) - tau) * x8),
-            l
-                * (x12 * x12 * x7 * x11 * (-0.5 * (x3 * m2 * x14) - x7 * x9 * x4)
-                    + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                    - m2
-                        * (-x0 * theta1_dot * theta1_dot
-                            - 0.5 * (theta2_dot * theta2_dot * x1))),
-        ];
+            force: [
+                x7
+                    * (tau
+                        + ((l * x11
+                            * (-0.5 * (theta2_dot * theta2_dot)
+                                - 0.5 * (x12 * x12 * x14 * x7 * x8)) - x0 * g) * m2
+                            - x12 * x12 * l * x7 * x7 * x11
+                                * (m2 + 0.3333333333333333 * m1) - 0.5 * (x0 * g * m1)) * l
+                        - (m2 * l
+                            * (l
+                                * (0.5 * (theta1_dot * theta1_dot)
+                                    + x12 * x12 * x7
+                                        * (-0.16666666666666666 * x13 - 0.3333333333333333)) * x11
+                                - 0.5 * (g * x1)) - tau) * x8),
+                l
+                    * (x12 * x12 * x7 * x11 * (-0.5 * (x3 * m2 * x14) - x7 * x9 * x4)
+                        + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                        - m2
+                            * (-x0 * theta1_dot * theta1_dot
+                                - 0.5 * (theta2_dot * theta2_dot * x1))),
+            ],
+            w: [[x7, 0.0], [-(x7 * x8), 0.0], [0.0, 1.0]],
+            c: [x12 * x12 * x7 * x7 * x11, x12 * x12 * x14 * x7 * x11, 0.0],
+            power: x12 * tau,
+            checks: [x6, l * x6],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -640,19 +638,38 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x12 * x12 * x7 * x7 * x11;
-        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x12 * x12 * x14 * x7 * x11;
-        dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[6] = x12 * tau;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
+        dstate[4] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
+        dstate[5] = w[2][0] * force[0] + w[2][1] * force[1] + c[2];
+        dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -733,7 +750,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -741,7 +758,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -753,37 +770,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 1.0 / (x0 + 1.0);
-        let x2 = l
-            * ((m2 + 0.5 * m1) * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * m2 * x0))
-            * x1;
-        [
-            [
-                l * l
-                    * (m2 - 0.6666666666666666 * (m2 * x0 * x0)
-                        + 0.3333333333333333 * m1) * x1 * x1,
-                x2,
-            ],
-            [x2, m2 + M + m1],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -814,15 +800,29 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 2] = [
+        "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        power: f64,
+        checks: [f64; 2],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -850,50 +850,55 @@ pub mod kane {
         let x14 = f64::sin(x9);
         let x15 = f64::sin(3.0 * theta1 - 3.0 * theta2);
         let x16 = x13 - x12;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
-        }
-        let value = l * x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 2]; 2] = [
-            [
-                l * l * x7 * x7
-                    * (m2 * (0.6666666666666666 - 0.3333333333333333 * f64::cos(x9))
-                        + 0.3333333333333333 * m1),
-                x11,
+        Assembly {
+            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            matrix: [
+                [
+                    l * l * x7 * x7
+                        * (m2 * (0.6666666666666666 - 0.3333333333333333 * f64::cos(x9))
+                            + 0.3333333333333333 * m1),
+                    x11,
+                ],
+                [x11, m2 + M + m1],
             ],
-            [x11, m2 + M + m1],
-        ];
-        let mut force: [f64; 2] = [
-            x7
-                * (tau
-                    + l * l * x7 * x7 * u1 * u1
-                        * ((0.3333333333333333 * x12 - 0.3333333333333333 * x13
-                            - 0.16666666666666666 * x14) * x7 * m1
-                            + m2
-                                * (0.16666666666666666 * x12 - 0.16666666666666666 * x15
-                                    - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
-                                    + (0.8333333333333334 * x12 + 0.16666666666666666 * x15
-                                        + 0.08333333333333333
-                                            * f64::sin(4.0 * theta1 - 4.0 * theta2)
-                                        - 0.8333333333333334 * x13 - 0.3333333333333333 * x14)
-                                        * x7)) + (-m2 - 0.5 * m1) * x0 * l * g
-                    - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
-            l * x7 * u1 * u1
-                * ((0.5 * (x0 * m1) - x10 * x16 * x4 - m2 * (-x0 - 0.5 * (x8 * x8 * x1)))
-                    * x7 - 0.5 * (x3 * m2 * (1.0 - x7 * x8) * x16)),
-        ];
+            force: [
+                x7
+                    * (tau
+                        + l * l * x7 * x7 * u1 * u1
+                            * ((0.3333333333333333 * x12 - 0.3333333333333333 * x13
+                                - 0.16666666666666666 * x14) * x7 * m1
+                                + m2
+                                    * (0.16666666666666666 * x12 - 0.16666666666666666 * x15
+                                        - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
+                                        + (0.8333333333333334 * x12 + 0.16666666666666666 * x15
+                                            + 0.08333333333333333
+                                                * f64::sin(4.0 * theta1 - 4.0 * theta2)
+                                            - 0.8333333333333334 * x13 - 0.3333333333333333 * x14)
+                                            * x7)) + (-m2 - 0.5 * m1) * x0 * l * g
+                        - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
+                l * x7 * u1 * u1
+                    * ((0.5 * (x0 * m1) - x10 * x16 * x4
+                        - m2 * (-x0 - 0.5 * (x8 * x8 * x1))) * x7
+                        - 0.5 * (x3 * m2 * (1.0 - x7 * x8) * x16)),
+            ],
+            power: tau * u1,
+            checks: [x6, l * x6],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -901,18 +906,37 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x7 * u1;
-        dstate[1] = -(x7 * x8 * u1);
-        dstate[2] = u2;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
         dstate[4] = force[1];
-        dstate[5] = tau * u1;
+        dstate[5] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -993,7 +1017,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1001,7 +1025,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -1013,39 +1037,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 1.0 / (x0 + 1.0);
-        let x2 = l
-            * ((m2 + 0.5 * m1) * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * m2 * x0))
-            * x1;
-        [
-            [
-                l * l
-                    * (m2
-                        * (0.6666666666666666
-                            - 0.3333333333333333 * f64::cos(2.0 * theta1 - 2.0 * theta2))
-                        + 0.3333333333333333 * m1) * x1 * x1,
-                x2,
-            ],
-            [x2, m2 + M + m1],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -1076,15 +1067,30 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 3] = [
+        "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+        "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        power: f64,
+        checks: [f64; 3],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -1118,59 +1124,55 @@ pub mod reduced_volterra {
         let x20 = m2 * (0.25 * (f64::sin(x11) * (x7 - 2.0 * x18)) - 0.75 * (x0 * x7))
             - x12 * (-m2 - M - m1) * x17 * x14 * x19 - 0.5 * (x0 * x7 * m1);
         let x21 = x18 - 1.0;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
-                value,
-            });
-        }
-        let value = l * x8;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let value = x0 * x13 * x1 + m2 + x3 * x13 * x4 + M + m1;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 1]; 1] = [
-            [
-                l * l
-                    * (x12
-                        * (0.5 * (x3 * m2 * x9 * x10) + x15 * x7 * x4 + x12 * x13 * x14)
-                        * x14
-                        + m2 * x9 * x10
-                            * (x10 * (0.3333333333333333 * x9 + 0.5 * x7)
-                                + 0.5 * (x3 * x12 * x14))
-                        + x7
-                            * (x7 * x16 + x12 * x15 * x4 * x14
-                                + 0.5 * (m2 * x9 * x10 * x10))),
+        Assembly {
+            qdot: [x7 * u1, x9 * x10 * u1, (l * x12 * u1 + x8 * G_x) * x14],
+            matrix: [
+                [
+                    l * l
+                        * (x12
+                            * (0.5 * (x3 * m2 * x9 * x10) + x15 * x7 * x4
+                                + x12 * x13 * x14) * x14
+                            + m2 * x9 * x10
+                                * (x10 * (0.3333333333333333 * x9 + 0.5 * x7)
+                                    + 0.5 * (x3 * x12 * x14))
+                            + x7
+                                * (x7 * x16 + x12 * x15 * x4 * x14
+                                    + 0.5 * (m2 * x9 * x10 * x10))),
+                ],
             ],
-        ];
-        let mut force: [f64; 1] = [
-            (((0.5 * (x7 * x7)
-                + x19 * (0.5 * (x7 * x7 * x10) - 0.3333333333333333 * (x21 * x9))) * x17
-                - 0.5 * (x3 * x20 * x14)) * m2 * x9 * x10
-                + (((x7 * x7 * x16 - 0.5 * (m2 * x21 * x9 * x10)) * x19
-                    - 0.5 * (m2 * x9 * x9 * x10 * x10)) * x17 - x15 * x20 * x4 * x14)
-                    * x7
-                + x12
-                    * (0.5 * (x0 * x7 * x7 * m1)
-                        - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
-                        + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x21 * x9)) * x17 * x19
-                        - x13 * x20 * x14) * x14) * l * l * u1 * u1
-                + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
-                + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7,
-        ];
+            force: [
+                (((0.5 * (x7 * x7)
+                    + x19 * (0.5 * (x7 * x7 * x10) - 0.3333333333333333 * (x21 * x9)))
+                    * x17 - 0.5 * (x3 * x20 * x14)) * m2 * x9 * x10
+                    + (((x7 * x7 * x16 - 0.5 * (m2 * x21 * x9 * x10)) * x19
+                        - 0.5 * (m2 * x9 * x9 * x10 * x10)) * x17 - x15 * x20 * x4 * x14)
+                        * x7
+                    + x12
+                        * (0.5 * (x0 * x7 * x7 * m1)
+                            - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
+                            + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x21 * x9)) * x17
+                                * x19 - x13 * x20 * x14) * x14) * l * l * u1 * u1
+                    + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
+                    + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7,
+            ],
+            power: tau * u1 * x19,
+            checks: [x6, l * x8, x0 * x13 * x1 + m2 + x3 * x13 * x4 + M + m1],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1178,17 +1180,36 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x7 * u1;
-        dstate[1] = x9 * x10 * u1;
-        dstate[2] = (l * x12 * u1 + x8 * G_x) * x14;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
-        dstate[4] = tau * u1 * x19;
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1271,7 +1292,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1279,7 +1300,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -1287,7 +1308,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -1306,46 +1327,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let M = params.M;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let l = params.l;
-        let x0 = f64::cos(theta1);
-        let x1 = 0.5 * (x0 * m1)
-            + m2 * (0.75 * x0 - 0.25 * f64::cos(theta1 - 2.0 * theta2));
-        let x2 = m2 + M + m1;
-        let x3 = f64::cos(theta1 - theta2);
-        let x4 = 1.0 / (m2 + M + m1 + x2 * x3);
-        let x5 = m2 + 0.5 * m1;
-        let x6 = 1.0 / (-x3 - 1.0);
-        let x7 = f64::cos(theta2);
-        let x8 = 1.0 / (x3 + 1.0);
-        [
-            [
-                l * l
-                    * (x1 * x4
-                        * (x1 * x2 * x4 + x5 * x6 * x0 + 0.5 * (x7 * m2 * x3 * x8))
-                        + (0.5 * (m2 * x3 * x3 * x8)
-                            + x6 * (m2 + 0.3333333333333333 * m1) + x1 * x5 * x4 * x0)
-                            * x6
-                        + m2
-                            * (x3 * (0.5 * x6 + 0.3333333333333333 * x8)
-                                + 0.5 * (x7 * x1 * x4)) * x3 * x8),
-            ],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -221,15 +221,27 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 0],
+        residuals: [f64; 1],
+        positions: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let theta1_dot = state[3];
@@ -244,18 +256,39 @@ pub mod lagrange {
         let x6 = 1.5 * x3;
         let x7 = 0.5 * x2;
         let x8 = x2 * x0 - x3 * x1;
-        let mut matrix: [[f64; 4]; 4] = [
-            [1.3333333333333333, x5, x6, x4],
-            [x5, 0.3333333333333333, x7, 1.0],
-            [x6, x7, 4.0, 0.0],
-            [x4, 1.0, 0.0, 0.0],
-        ];
-        let mut force: [f64; 4] = [
-            -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
-            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
-            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1),
-            (theta1_dot - theta2_dot) * x8 * theta1_dot,
-        ];
+        Assembly {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [1.3333333333333333, x5, x6, x4],
+                [x5, 0.3333333333333333, x7, 1.0],
+                [x6, x7, 4.0, 0.0],
+                [x4, 1.0, 0.0, 0.0],
+            ],
+            force: [
+                -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
+                0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
+                1.5 * (x0 * theta1_dot * theta1_dot)
+                    + 0.5 * (theta2_dot * theta2_dot * x1),
+                (theta1_dot - theta2_dot) * x8 * theta1_dot,
+            ],
+            checks: [],
+            residuals: [theta2_dot + x4 * theta1_dot],
+            positions: [0.0],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -263,9 +296,9 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
         dstate[4] = force[1];
         dstate[5] = force[2];
@@ -276,63 +309,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
         alpha: f64,
-        _beta: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let theta1_dot = state[3];
-        let theta2_dot = state[4];
-        let x_dot = state[5];
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = f64::cos(theta2);
-        let x3 = f64::cos(theta1);
-        let x4 = x0 * x1 + x2 * x3;
-        let x5 = 0.5 * x4;
-        let x6 = 1.5 * x3;
-        let x7 = 0.5 * x2;
-        let x8 = x2 * x0 - x3 * x1;
-        let mut matrix: [[f64; 4]; 4] = [
-            [1.3333333333333333, x5, x6, x4],
-            [x5, 0.3333333333333333, x7, 1.0],
-            [x6, x7, 4.0, 0.0],
-            [x4, 1.0, 0.0, 0.0],
-        ];
-        let mut force: [f64; 4] = [
-            -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
-            0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
-            1.5 * (x0 * theta1_dot * theta1_dot) + 0.5 * (theta2_dot * theta2_dot * x1),
-            (theta1_dot - theta2_dot) * x8 * theta1_dot
-                - 2.0 * ((theta2_dot + x4 * theta1_dot) * alpha),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..1 {
+            a.force[3 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
-        dstate[3] = force[0];
-        dstate[4] = force[1];
-        dstate[5] = force[2];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -397,29 +408,6 @@ pub mod lagrange {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 4;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 0.5 * x0;
-        let x2 = 1.5 * f64::cos(theta1);
-        let x3 = 0.5 * f64::cos(theta2);
-        [
-            [1.3333333333333333, x1, x2, x0],
-            [x1, 0.3333333333333333, x3, 1.0],
-            [x2, x3, 4.0, 0.0],
-            [x0, 1.0, 0.0, 0.0],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -452,15 +440,30 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 2] = [
+        "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        w: [[f64; 2]; 3],
+        c: [f64; 3],
+        checks: [f64; 2],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let theta1_dot = state[3];
@@ -480,39 +483,50 @@ pub mod maggi {
         let x11 = x7 * x8;
         let x12 = x3 * x0 - x4 * x1;
         let x13 = 1.0 - x11;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
+        Assembly {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [
+                    x7 * x7
+                        * (1.0
+                            - 0.3333333333333333
+                                * f64::cos(2.0 * theta1 - 2.0 * theta2)),
+                    x9,
+                ],
+                [x9, 4.0],
+            ],
+            force: [
+                x7
+                    * (x12
+                        * (x10 * x10 * x7 * (-1.3333333333333333 * x7 - 0.5 * (x13 * x8))
+                            - 0.5 * (theta2_dot * theta2_dot)) - 14.715 * x0
+                        - ((0.5 * (theta1_dot * theta1_dot)
+                            + x10 * x10 * x7
+                                * (-0.16666666666666666 * x11 - 0.3333333333333333)) * x12
+                            - 4.905 * x1) * x8),
+                1.5 * (x0 * theta1_dot * theta1_dot)
+                    + x10 * x10 * x7 * x12 * (-1.5 * (x7 * x4) - 0.5 * (x3 * x13))
+                    + 0.5 * (theta2_dot * theta2_dot * x1),
+            ],
+            w: [[x7, 0.0], [-(x7 * x8), 0.0], [0.0, 1.0]],
+            c: [x10 * x10 * x7 * x7 * x12, x10 * x10 * x13 * x7 * x12, 0.0],
+            checks: [x6, x6],
         }
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
         }
-        let mut matrix: [[f64; 2]; 2] = [
-            [x7 * x7 * (1.3333333333333333 - 0.6666666666666666 * (x8 * x8)), x9],
-            [x9, 4.0],
-        ];
-        let mut force: [f64; 2] = [
-            x7
-                * (x12
-                    * (x10 * x10 * x7 * (-1.3333333333333333 * x7 - 0.5 * (x13 * x8))
-                        - 0.5 * (theta2_dot * theta2_dot)) - 14.715 * x0
-                    - ((0.5 * (theta1_dot * theta1_dot)
-                        + x10 * x10 * x7
-                            * (-0.16666666666666666 * x11 - 0.3333333333333333)) * x12
-                        - 4.905 * x1) * x8),
-            1.5 * (x0 * theta1_dot * theta1_dot)
-                + x10 * x10 * x7 * x12 * (-1.5 * (x7 * x4) - 0.5 * (x3 * x13))
-                + 0.5 * (theta2_dot * theta2_dot * x1),
-        ];
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -520,18 +534,37 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = theta1_dot;
-        dstate[1] = theta2_dot;
-        dstate[2] = x_dot;
-        dstate[3] = x7 * force[0] + 0.0 * force[1] + x10 * x10 * x7 * x7 * x12;
-        dstate[4] = -(x7 * x8) * force[0] + 0.0 * force[1] + x10 * x10 * x13 * x7 * x12;
-        dstate[5] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
+        dstate[4] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
+        dstate[5] = w[2][0] * force[0] + w[2][1] * force[1] + c[2];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -596,7 +629,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -604,7 +637,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -616,26 +649,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 1.0 / (x0 + 1.0);
-        let x2 = (1.5 * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * x0)) * x1;
-        [
-            [(1.3333333333333333 - 0.6666666666666666 * (x0 * x0)) * x1 * x1, x2],
-            [x2, 4.0],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -665,15 +678,28 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 2] = [
+        "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -694,38 +720,41 @@ pub mod kane {
         let x13 = x3 * x0;
         let x14 = f64::sin(x9);
         let x15 = x13 - x11;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
-                value,
-            });
+        Assembly {
+            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            matrix: [
+                [x7 * x7 * (1.0 - 0.3333333333333333 * f64::cos(x9)), x10],
+                [x10, 4.0],
+            ],
+            force: [
+                x7
+                    * (x7 * x7 * u1 * u1
+                        * (0.16666666666666666 * x11 - 0.16666666666666666 * x12
+                            - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
+                            + (1.1666666666666667 * x11 + 0.16666666666666666 * x12
+                                + 0.08333333333333333
+                                    * f64::sin(4.0 * theta1 - 4.0 * theta2)
+                                - 1.1666666666666667 * x13 - 0.5 * x14) * x7) - 14.715 * x0
+                        + 4.905 * (x8 * x1)),
+                ((1.5 * x0 + 0.5 * (x8 * x8 * x1) - 1.5 * (x15 * x4)) * x7
+                    - 0.5 * (x3 * (1.0 - x7 * x8) * x15)) * x7 * u1 * u1,
+            ],
+            checks: [x6, x6],
         }
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
         }
-        let mut matrix: [[f64; 2]; 2] = [
-            [x7 * x7 * (1.0 - 0.3333333333333333 * f64::cos(x9)), x10],
-            [x10, 4.0],
-        ];
-        let mut force: [f64; 2] = [
-            x7
-                * (x7 * x7 * u1 * u1
-                    * (0.16666666666666666 * x11 - 0.16666666666666666 * x12
-                        - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
-                        + (1.1666666666666667 * x11 + 0.16666666666666666 * x12
-                            + 0.08333333333333333 * f64::sin(4.0 * theta1 - 4.0 * theta2)
-                            - 1.1666666666666667 * x13 - 0.5 * x14) * x7) - 14.715 * x0
-                    + 4.905 * (x8 * x1)),
-            ((1.5 * x0 + 0.5 * (x8 * x8 * x1) - 1.5 * (x15 * x4)) * x7
-                - 0.5 * (x3 * (1.0 - x7 * x8) * x15)) * x7 * u1 * u1,
-        ];
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -733,9 +762,9 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x7 * u1;
-        dstate[1] = -(x7 * x8 * u1);
-        dstate[2] = u2;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
         dstate[4] = force[1];
         for (index, value) in dstate.iter().enumerate() {
@@ -744,6 +773,25 @@ pub mod kane {
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -809,7 +857,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta1)*cos(theta2) + sin(theta1)*sin(theta2) + 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -817,7 +865,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -829,30 +877,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 1.0 / (x0 + 1.0);
-        let x2 = (1.5 * f64::cos(theta1) - 0.5 * (f64::cos(theta2) * x0)) * x1;
-        [
-            [
-                (1.0 - 0.3333333333333333 * f64::cos(2.0 * theta1 - 2.0 * theta2)) * x1
-                    * x1,
-                x2,
-            ],
-            [x2, 4.0],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -882,15 +906,29 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 3] = [
+        "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
+        "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+        "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
+    ];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 3],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 3],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         _params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -918,59 +956,54 @@ pub mod reduced_volterra {
         let x20 = 4.0 * (x12 * x15 * x14 * x17) + 0.25 * x18 - 1.25 * x19;
         let x21 = x7 * x7;
         let x22 = x16 - 1.0;
-        let value = x6;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
-                value,
-            });
-        }
-        let value = x8;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let value = x11;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 1]; 1] = [
-            [
-                x12 * (0.5 * (x3 * x9 * x10) + 4.0 * (x12 * x14) + 1.5 * (x7 * x4)) * x14
-                    + (1.3333333333333333 * x7 + 0.5 * (x9 * x10 * x10)
-                        + 1.5 * (x12 * x4 * x14)) * x7
-                    + x9
-                        * (0.5 * (x12 * x3 * x14)
-                            + x10 * (0.3333333333333333 * x9 + 0.5 * x7)) * x10,
+        Assembly {
+            qdot: [x7 * u1, x9 * x10 * u1, x12 * (x8 * G_x + u1 * x14)],
+            matrix: [
+                [
+                    x12 * (0.5 * (x3 * x9 * x10) + 4.0 * (x12 * x14) + 1.5 * (x7 * x4))
+                        * x14
+                        + (1.3333333333333333 * x7 + 0.5 * (x9 * x10 * x10)
+                            + 1.5 * (x12 * x4 * x14)) * x7
+                        + x9
+                            * (0.5 * (x12 * x3 * x14)
+                                + x10 * (0.3333333333333333 * x9 + 0.5 * x7)) * x10,
+                ],
             ],
-        ];
-        let mut force: [f64; 1] = [
-            u1 * u1
-                * (x7
-                    * (x15
-                        * ((1.3333333333333333 * x21 - 0.5 * (x22 * x9 * x10)) * x17
-                            - 0.5 * (x9 * x9 * x10 * x10)) - 1.5 * (x12 * x20 * x4))
-                    + x9 * x10
+            force: [
+                u1 * u1
+                    * (x7
                         * (x15
-                            * (((0.5 * x21 - 0.3333333333333333 * (x9 * x9)) * x10
-                                + 0.3333333333333333 * x9) * x17 + 0.5 * x21)
-                            - 0.5 * (x12 * x3 * x20))
-                    + x12
-                        * (x15
-                            * (1.5 * (x7 * x7 * x4) - 0.5 * (x3 * x22 * x9)
-                                - 16.0 * (x12 * x12 * x14)) * x17
-                            - 4.0 * (x12 * (0.25 * x18 - 1.25 * x19))
-                            + 0.5 * (x9 * x9 * x10 * x10 * x1) + 1.5 * (x0 * x7 * x7))
-                        * x14) - 4.905 * (x9 * x10 * x1) - 14.715 * x19,
-        ];
+                            * ((1.3333333333333333 * x21 - 0.5 * (x22 * x9 * x10)) * x17
+                                - 0.5 * (x9 * x9 * x10 * x10)) - 1.5 * (x12 * x20 * x4))
+                        + x9 * x10
+                            * (x15
+                                * (((0.5 * x21 - 0.3333333333333333 * (x9 * x9)) * x10
+                                    + 0.3333333333333333 * x9) * x17 + 0.5 * x21)
+                                - 0.5 * (x12 * x3 * x20))
+                        + x12
+                            * (x15
+                                * (1.5 * (x7 * x7 * x4) - 0.5 * (x3 * x22 * x9)
+                                    - 16.0 * (x12 * x12 * x14)) * x17
+                                - 4.0 * (x12 * (0.25 * x18 - 1.25 * x19))
+                                + 0.5 * (x9 * x9 * x10 * x10 * x1) + 1.5 * (x0 * x7 * x7))
+                            * x14) - 4.905 * (x9 * x10 * x1) - 14.715 * x19,
+            ],
+            checks: [x6, x8, x11],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -978,9 +1011,9 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x7 * u1;
-        dstate[1] = x9 * x10 * u1;
-        dstate[2] = x12 * (x8 * G_x + u1 * x14);
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
         dstate[3] = force[0];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
@@ -988,6 +1021,25 @@ pub mod reduced_volterra {
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1055,7 +1107,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "-cos(theta1)*cos(theta2) - sin(theta1)*sin(theta2) - 1 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1063,7 +1115,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "l + l*cos(theta1)*cos(theta2) + l*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[1],
                 value,
             });
         }
@@ -1071,7 +1123,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "M + M*cos(theta1)*cos(theta2) + M*sin(theta1)*sin(theta2) + m1 + m1*cos(theta1)*cos(theta2) + m1*sin(theta1)*sin(theta2) + m2 + m2*cos(theta1)*cos(theta2) + m2*sin(theta1)*sin(theta2) = 0",
+                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -1087,36 +1139,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let theta1 = state[0];
-        let theta2 = state[1];
-        let x0 = f64::cos(theta1 - theta2);
-        let x1 = 1.0 / (4.0 * x0 + 4.0);
-        let x2 = f64::cos(theta1);
-        let x3 = 1.25 * x2 - 0.25 * f64::cos(theta1 - 2.0 * theta2);
-        let x4 = f64::cos(theta2);
-        let x5 = 1.0 / (x0 + 1.0);
-        let x6 = 1.0 / (-x0 - 1.0);
-        [
-            [
-                x1 * (4.0 * (x1 * x3) + 0.5 * (x4 * x0 * x5) + 1.5 * (x6 * x2)) * x3
-                    + x0 * x5
-                        * (0.5 * (x4 * x1 * x3)
-                            + x0 * (0.5 * x6 + 0.3333333333333333 * x5))
-                    + (0.5 * (x0 * x0 * x5) + 1.5 * (x1 * x2 * x3)
-                        + 1.3333333333333333 * x6) * x6,
-            ],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

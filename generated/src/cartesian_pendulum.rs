@@ -50,7 +50,7 @@ pub struct Params {
     ///`g` (model value 9.81)
     pub g: f64,
     ///`w` (model value 0.3)
-    pub w: f64,
+    pub w_: f64,
 }
 impl Default for Params {
     fn default() -> Self {
@@ -58,7 +58,7 @@ impl Default for Params {
             mb: 0.5,
             L: 1.2,
             g: 9.81,
-            w: 0.3,
+            w_: 0.3,
         }
     }
 }
@@ -67,7 +67,7 @@ impl Params {
     pub const NAMES: [&'static str; 4] = ["mb", "L", "g", "w"];
     ///The parameters as an array, in the order of `NAMES`.
     pub fn values(&self) -> [f64; 4] {
-        [self.mb, self.L, self.g, self.w]
+        [self.mb, self.L, self.g, self.w_]
     }
     ///Parameters from an array in the order of `NAMES`.
     pub fn from_values(values: &[f64; 4]) -> Self {
@@ -75,7 +75,7 @@ impl Params {
             mb: values[0],
             L: values[1],
             g: values[2],
-            w: values[3],
+            w_: values[3],
         }
     }
 }
@@ -174,8 +174,8 @@ pub fn work_rate(
     params: &Params,
 ) -> f64 {
     let x_dot = qdot[0];
-    let w = params.w;
-    w * x_dot
+    let w_ = params.w_;
+    w_ * x_dot
 }
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
@@ -226,60 +226,28 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
-        let x = state[0];
-        let y = state[1];
-        let x_dot = state[2];
-        let y_dot = state[3];
-        let mb = params.mb;
-        let g = params.g;
-        let w = params.w;
-        let x0 = 2.0 * x;
-        let x1 = 2.0 * y;
-        let mut matrix: [[f64; 3]; 3] = [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]];
-        let mut force: [f64; 3] = [
-            w,
-            -(mb * g),
-            -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
-        }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
-        dstate[2] = force[0];
-        dstate[3] = force[1];
-        dstate[4] = w * x_dot;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 3;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        power: f64,
+        checks: [f64; 0],
+        residuals: [f64; 1],
+        positions: [f64; 1],
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs_baumgarte(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-        alpha: f64,
-        beta: f64,
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let y = state[1];
         let x_dot = state[2];
@@ -287,17 +255,33 @@ pub mod lagrange {
         let mb = params.mb;
         let L = params.L;
         let g = params.g;
-        let w = params.w;
+        let w_ = params.w_;
         let x0 = 2.0 * x;
         let x1 = 2.0 * y;
-        let mut matrix: [[f64; 3]; 3] = [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]];
-        let mut force: [f64; 3] = [
-            w,
-            -(mb * g),
-            -2.0 * ((2.0 * (x * x_dot) + 2.0 * (y * y_dot)) * alpha)
-                - 2.0 * (x_dot * x_dot) - beta * beta * (x * x + y * y - L * L)
-                - 2.0 * (y_dot * y_dot),
-        ];
+        Assembly {
+            qdot: [x_dot, y_dot],
+            matrix: [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]],
+            force: [w_, -(mb * g), -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot)],
+            power: w_ * x_dot,
+            checks: [],
+            residuals: [2.0 * (x * x_dot) + 2.0 * (y * y_dot)],
+            positions: [x * x + y * y - L * L],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -305,17 +289,53 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = w * x_dot;
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    pub fn rhs_baumgarte(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        beta: f64,
+    ) -> Result<(), EvalError> {
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..1 {
+            a.force[2 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
+        }
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -381,23 +401,6 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 3;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let x = state[0];
-        let y = state[1];
-        let mb = params.mb;
-        let x0 = 2.0 * x;
-        let x1 = 2.0 * y;
-        [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -422,22 +425,35 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        w: [[f64; 1]; 2],
+        c: [f64; 2],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let y = state[1];
         let x_dot = state[2];
         let y_dot = state[3];
         let mb = params.mb;
         let g = params.g;
-        let w = params.w;
+        let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
@@ -446,18 +462,33 @@ pub mod maggi {
         let x5 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
         let x6 = x3 * x4 * (2.0 * x_dot - 2.0 * (x5 * x * x3));
         let x7 = 2.0 * (x5 * x3 * y) - 2.0 * y_dot;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "2*x^2 + 2*y^2 = 0",
-                value,
-            });
+        Assembly {
+            qdot: [x_dot, y_dot],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [
+                (2.0 * (x * mb * (-x6 - g)) - 2.0 * ((w_ - x7 * mb * x3 * x4) * y)) * x3,
+            ],
+            w: [[-(2.0 * x3 * y)], [2.0 * x * x3]],
+            c: [x7 * x3 * x4, x6],
+            power: w_ * x_dot,
+            checks: [x2],
         }
-        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [
-            (2.0 * (x * mb * (-x6 - g)) - 2.0 * ((w - x7 * mb * x3 * x4) * y)) * x3,
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -465,17 +496,36 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
-        dstate[2] = -(2.0 * x3 * y) * force[0] + x7 * x3 * x4;
-        dstate[3] = 2.0 * x * x3 * force[0] + x6;
-        dstate[4] = w * x_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = w[0][0] * force[0] + c[0];
+        dstate[3] = w[1][0] * force[0] + c[1];
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -538,7 +588,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "2*x^2 + 2*y^2 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -550,24 +600,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let x = state[0];
-        let y = state[1];
-        let mb = params.mb;
-        let x0 = x * x;
-        let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
-        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -595,35 +627,58 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let y = state[1];
         let u1 = state[2];
         let mb = params.mb;
         let g = params.g;
-        let w = params.w;
+        let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "2*x^2 + 2*y^2 = 0",
-                value,
-            });
+        Assembly {
+            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(-2.0 * (w_ * y) - 2.0 * (x * mb * g)) * x3],
+            power: -(2.0 * w_ * x3 * y * u1),
+            checks: [x2],
         }
-        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [(-2.0 * (w * y) - 2.0 * (x * mb * g)) * x3];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -631,16 +686,35 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = -(2.0 * x3 * y * u1);
-        dstate[1] = 2.0 * x * x3 * u1;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
-        dstate[3] = -(2.0 * w * x3 * y * u1);
+        dstate[3] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -704,7 +778,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "2*x^2 + 2*y^2 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -716,24 +790,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let x = state[0];
-        let y = state[1];
-        let mb = params.mb;
-        let x0 = x * x;
-        let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
-        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -761,35 +817,58 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let y = state[1];
         let u1 = state[2];
         let mb = params.mb;
         let g = params.g;
-        let w = params.w;
+        let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let value = x2;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "2*x^2 + 2*y^2 = 0",
-                value,
-            });
+        Assembly {
+            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(-2.0 * (w_ * y) - 2.0 * (x * mb * g)) * x3],
+            power: -(2.0 * w_ * x3 * y * u1),
+            checks: [x2],
         }
-        let mut matrix: [[f64; 1]; 1] = [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]];
-        let mut force: [f64; 1] = [(-2.0 * (w * y) - 2.0 * (x * mb * g)) * x3];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -797,16 +876,35 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = -(2.0 * x3 * y * u1);
-        dstate[1] = 2.0 * x * x3 * u1;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
-        dstate[3] = -(2.0 * w * x3 * y * u1);
+        dstate[3] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -870,7 +968,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "2*x^2 + 2*y^2 = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -882,24 +980,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let x = state[0];
-        let y = state[1];
-        let mb = params.mb;
-        let x0 = x * x;
-        let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
-        [[mb * (4.0 * x0 + 4.0 * x1) / (x2 * x2)]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

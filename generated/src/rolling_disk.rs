@@ -234,15 +234,28 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 6;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 4],
+        matrix: [[f64; 6]; 6],
+        force: [f64; 6],
+        power: f64,
+        checks: [f64; 0],
+        residuals: [f64; 2],
+        positions: [f64; 2],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[2];
         let x_dot = state[4];
         let y_dot = state[5];
@@ -255,22 +268,44 @@ pub mod lagrange {
         let x1 = -(R * x0);
         let x2 = f64::sin(psi);
         let x3 = -(R * x2);
-        let mut matrix: [[f64; 6]; 6] = [
-            [md, 0.0, 0.0, 0.0, 1.0, 0.0],
-            [0.0, md, 0.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
-            [1.0, 0.0, 0.0, x1, 0.0, 0.0],
-            [0.0, 1.0, 0.0, x3, 0.0, 0.0],
-        ];
-        let mut force: [f64; 6] = [
-            0.0,
-            0.0,
-            0.0,
-            tq,
-            -(R * psi_dot * phi_dot * x2),
-            R * x0 * psi_dot * phi_dot,
-        ];
+        Assembly {
+            qdot: [x_dot, y_dot, psi_dot, phi_dot],
+            matrix: [
+                [md, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, md, 0.0, 0.0, 0.0, 1.0],
+                [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
+                [1.0, 0.0, 0.0, x1, 0.0, 0.0],
+                [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+            ],
+            force: [
+                0.0,
+                0.0,
+                0.0,
+                tq,
+                -(R * psi_dot * phi_dot * x2),
+                R * x0 * psi_dot * phi_dot,
+            ],
+            power: tq * phi_dot,
+            checks: [],
+            residuals: [x_dot - R * x0 * phi_dot, y_dot - R * phi_dot * x2],
+            positions: [0.0, 0.0],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -278,15 +313,15 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
-        dstate[2] = psi_dot;
-        dstate[3] = phi_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
         dstate[4] = force[0];
         dstate[5] = force[1];
         dstate[6] = force[2];
         dstate[7] = force[3];
-        dstate[8] = tq * phi_dot;
+        dstate[8] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -294,67 +329,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
         alpha: f64,
-        _beta: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let psi = state[2];
-        let x_dot = state[4];
-        let y_dot = state[5];
-        let psi_dot = state[6];
-        let phi_dot = state[7];
-        let md = params.md;
-        let R = params.R;
-        let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = -(R * x0);
-        let x2 = f64::sin(psi);
-        let x3 = -(R * x2);
-        let mut matrix: [[f64; 6]; 6] = [
-            [md, 0.0, 0.0, 0.0, 1.0, 0.0],
-            [0.0, md, 0.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
-            [1.0, 0.0, 0.0, x1, 0.0, 0.0],
-            [0.0, 1.0, 0.0, x3, 0.0, 0.0],
-        ];
-        let mut force: [f64; 6] = [
-            0.0,
-            0.0,
-            0.0,
-            tq,
-            -R * psi_dot * phi_dot * x2 - 2.0 * (alpha * (x_dot - R * x0 * phi_dot)),
-            R * x0 * psi_dot * phi_dot - 2.0 * ((y_dot - R * phi_dot * x2) * alpha),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..2 {
+            a.force[4 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
-        dstate[2] = psi_dot;
-        dstate[3] = phi_dot;
-        dstate[4] = force[0];
-        dstate[5] = force[1];
-        dstate[6] = force[2];
-        dstate[7] = force[3];
-        dstate[8] = tq * phi_dot;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -437,30 +446,6 @@ pub mod lagrange {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 6;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[2];
-        let md = params.md;
-        let R = params.R;
-        let x0 = -(R * f64::cos(psi));
-        let x1 = -(R * f64::sin(psi));
-        [
-            [md, 0.0, 0.0, 0.0, 1.0, 0.0],
-            [0.0, md, 0.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 0.5 * md * R * R, x0, x1],
-            [1.0, 0.0, 0.0, x0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, x1, 0.0, 0.0],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -496,15 +481,28 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 4],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        w: [[f64; 2]; 4],
+        c: [f64; 4],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[2];
         let x_dot = state[4];
         let y_dot = state[5];
@@ -515,11 +513,31 @@ pub mod maggi {
         let tq = params.tq;
         let x0 = f64::cos(psi);
         let x1 = f64::sin(psi);
-        let mut matrix: [[f64; 2]; 2] = [
-            [0.25 * md * R * R, 0.0],
-            [0.0, md * R * R * (x0 * x0 + x1 * x1 + 0.5)],
-        ];
-        let mut force: [f64; 2] = [0.0, tq];
+        Assembly {
+            qdot: [x_dot, y_dot, psi_dot, phi_dot],
+            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            force: [0.0, tq],
+            w: [[0.0, R * x0], [0.0, R * x1], [1.0, 0.0], [0.0, 1.0]],
+            c: [-(R * psi_dot * phi_dot * x1), R * x0 * psi_dot * phi_dot, 0.0, 0.0],
+            power: tq * phi_dot,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -527,21 +545,40 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = y_dot;
-        dstate[2] = psi_dot;
-        dstate[3] = phi_dot;
-        dstate[4] = 0.0 * force[0] + R * x0 * force[1] + -(R * psi_dot * phi_dot * x1);
-        dstate[5] = 0.0 * force[0] + R * x1 * force[1] + R * x0 * psi_dot * phi_dot;
-        dstate[6] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
-        dstate[7] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[8] = tq * phi_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
+        dstate[5] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
+        dstate[6] = w[2][0] * force[0] + w[2][1] * force[1] + c[2];
+        dstate[7] = w[3][0] * force[0] + w[3][1] * force[1] + c[3];
+        dstate[8] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -625,23 +662,6 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[2];
-        let md = params.md;
-        let R = params.R;
-        let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        [[0.25 * md * R * R, 0.0], [0.0, md * R * R * (x0 * x0 + x1 * x1 + 0.5)]]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -666,26 +686,54 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 4],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[2];
         let u1 = state[4];
         let u2 = state[5];
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let mut matrix: [[f64; 2]; 2] = [
-            [0.25 * md * R * R, 0.0],
-            [0.0, 1.5 * md * R * R],
-        ];
-        let mut force: [f64; 2] = [0.0, tq];
+        Assembly {
+            qdot: [R * f64::cos(psi) * u2, R * u2 * f64::sin(psi), u1, u2],
+            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            force: [0.0, tq],
+            power: tq * u2,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -693,19 +741,38 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = R * f64::cos(psi) * u2;
-        dstate[1] = R * u2 * f64::sin(psi);
-        dstate[2] = u1;
-        dstate[3] = u2;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
         dstate[4] = force[0];
         dstate[5] = force[1];
-        dstate[6] = tq * u2;
+        dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -784,20 +851,6 @@ pub mod kane {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let md = params.md;
-        let R = params.R;
-        [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -822,23 +875,59 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 1;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 4],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[2];
         let u1 = state[4];
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
         let G_psi = g_i[0];
-        let mut matrix: [[f64; 1]; 1] = [[1.5 * md * R * R]];
-        let mut force: [f64; 1] = [tq];
+        Assembly {
+            qdot: [
+                R * f64::cos(psi) * u1,
+                R * u1 * f64::sin(psi),
+                4.0 * G_psi / (md * R * R),
+                u1,
+            ],
+            matrix: [[1.5 * md * R * R]],
+            force: [tq],
+            power: tq * u1,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -846,18 +935,37 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = R * f64::cos(psi) * u1;
-        dstate[1] = R * u1 * f64::sin(psi);
-        dstate[2] = 4.0 * G_psi / (md * R * R);
-        dstate[3] = u1;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
         dstate[4] = force[0];
-        dstate[5] = tq * u1;
+        dstate[5] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -936,20 +1044,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 1;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let md = params.md;
-        let R = params.R;
-        [[1.5 * md * R * R]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -343,15 +343,28 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        power: f64,
+        checks: [f64; 0],
+        residuals: [f64; 0],
+        positions: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -424,56 +437,80 @@ pub mod lagrange {
         let x47 = x7 * psi_dot * x6;
         let x48 = psi_dot * x6 * x8;
         let x49 = x7 * rho_dot;
-        let mut matrix: [[f64; 7]; 7] = [
-            [
-                x1
-                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
-                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
-                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
-                x13,
-                x4,
-                0.0,
-                x14,
-                x15,
-                0.0,
+        Assembly {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [
+                    x1
+                        * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
+                            + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
+                            + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
+                    x13,
+                    x4,
+                    0.0,
+                    x14,
+                    x15,
+                    0.0,
+                ],
+                [
+                    x13,
+                    m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
+                    x10,
+                    0.0,
+                    x16,
+                    x17,
+                    x18,
+                ],
+                [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x19, x20, x21],
+                [x14, x16, 0.0, x19, x22, 0.0, 0.0],
+                [x15, x17, 0.0, x20, 0.0, x22, 0.0],
+                [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
             ],
-            [
-                x13,
-                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
-                x10,
-                0.0,
-                x16,
-                x17,
-                x18,
+            force: [
+                x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
+                    - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
+                        + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
+                        * psi_dot * m,
+                x34 * x2
+                    - (rho
+                        * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
+                        + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m
+                    - x32 * x3,
+                x35 - x36 + x37 + x38 + x39,
+                0.012 * x44
+                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                        + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
+                            * psi_dot) * m - 0.018 * x45,
+                -(m
+                    * ((-2.0 * x46 - x47) * x1 * psi_dot
+                        + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
+                            * theta_dot)),
+                -((x1 * psi_dot * (2.0 * x49 - x48)
+                    + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8)
+                        * theta_dot) * m),
+                -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
             ],
-            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x19, x20, x21],
-            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
-            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
-            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
-        ];
-        let mut force: [f64; 7] = [
-            x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
-                - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
-                    + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
-                    * psi_dot * m,
-            x34 * x2
-                - (rho * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
-                    + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m - x32 * x3,
-            x35 - x36 + x37 + x38 + x39,
-            0.012 * x44
-                - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                    + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
-                        * psi_dot) * m - 0.018 * x45,
-            -(m
-                * ((-2.0 * x46 - x47) * x1 * psi_dot
-                    + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
-                        * theta_dot)),
-            -((x1 * psi_dot * (2.0 * x49 - x48)
-                + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8) * theta_dot)
-                * m),
-            -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
-        ];
+            power: rho_dot * (0.012 * x44 - 0.018 * x45),
+            checks: [],
+            residuals: [],
+            positions: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -481,13 +518,13 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = rho_dot;
-        dstate[4] = X_dot;
-        dstate[5] = Y_dot;
-        dstate[6] = Z_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
@@ -495,7 +532,7 @@ pub mod lagrange {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
-        dstate[14] = rho_dot * (0.012 * x44 - 0.018 * x45);
+        dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -503,167 +540,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
+        alpha: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let rho = state[3];
-        let psi_dot = state[7];
-        let theta_dot = state[8];
-        let phi_dot = state[9];
-        let rho_dot = state[10];
-        let X_dot = state[11];
-        let Y_dot = state[12];
-        let Z_dot = state[13];
-        let mg = params.mg;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
-        let x5 = Iyz * x3;
-        let x6 = rho + 0.5 * l;
-        let x7 = f64::cos(psi);
-        let x8 = f64::sin(psi);
-        let x9 = Iyz * x2;
-        let x10 = x2 * Ixz - Ixy * x3;
-        let x11 = -x2 * Izz - x5;
-        let x12 = Iyy * x3 + x9;
-        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
-        let x14 = -(x1 * m * x6 * x8);
-        let x15 = x7 * x1 * m * x6;
-        let x16 = -(x0 * x7 * m * x6);
-        let x17 = -(x0 * m * x6 * x8);
-        let x18 = -(x1 * m * x6);
-        let x19 = x7 * x1 * m;
-        let x20 = x1 * m * x8;
-        let x21 = -(x0 * m);
-        let x22 = m + mg;
-        let x23 = x1 * psi_dot * x3 - theta_dot * x2;
-        let x24 = x0 * psi_dot;
-        let x25 = phi_dot - x24;
-        let x26 = theta_dot * x3 + x1 * psi_dot * x2;
-        let x27 = Ixx * x25 - x23 * Ixz - Ixy * x26;
-        let x28 = -phi_dot - x24;
-        let x29 = theta_dot * x28 * x2 + x1 * psi_dot * phi_dot * x3;
-        let x30 = x23 * Izz - Iyz * x26 - Ixz * x25;
-        let x31 = theta_dot * x28 * x3 - x1 * psi_dot * x2 * phi_dot;
-        let x32 = x23 * x27 + Iyy * x29 - x30 * x25 + Ixy * theta_dot * x1 * psi_dot
-            - x31 * Iyz;
-        let x33 = Iyy * x26 - x23 * Iyz - Ixy * x25;
-        let x34 = theta_dot * x1 * psi_dot * Ixz + x33 * x25 - x26 * x27 - Iyz * x29
-            + x31 * Izz;
-        let x35 = theta_dot * Ixx * x1 * psi_dot;
-        let x36 = x30 * x26;
-        let x37 = x31 * Ixz;
-        let x38 = x23 * x33;
-        let x39 = Ixy * x29;
-        let x40 = 2.0 * theta;
-        let x41 = f64::sin(x40);
-        let x42 = f64::cos(x40);
-        let x43 = theta_dot * rho_dot;
-        let x44 = f64::cos(0.0485 * t);
-        let x45 = f64::sin(0.089 * t);
-        let x46 = rho_dot * x8;
-        let x47 = x7 * psi_dot * x6;
-        let x48 = psi_dot * x6 * x8;
-        let x49 = x7 * rho_dot;
-        let mut matrix: [[f64; 7]; 7] = [
-            [
-                x1
-                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
-                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
-                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
-                x13,
-                x4,
-                0.0,
-                x14,
-                x15,
-                0.0,
-            ],
-            [
-                x13,
-                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
-                x10,
-                0.0,
-                x16,
-                x17,
-                x18,
-            ],
-            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x19, x20, x21],
-            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
-            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
-            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
-        ];
-        let mut force: [f64; 7] = [
-            x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
-                - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
-                    + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
-                    * psi_dot * m,
-            x34 * x2
-                - (rho * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
-                    + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m - x32 * x3,
-            x35 - x36 + x37 + x38 + x39,
-            0.012 * x44
-                - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                    + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
-                        * psi_dot) * m - 0.018 * x45,
-            -(m
-                * ((-2.0 * x46 - x47) * x1 * psi_dot
-                    + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
-                        * theta_dot)),
-            -((x1 * psi_dot * (2.0 * x49 - x48)
-                + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8) * theta_dot)
-                * m),
-            -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..0 {
+            a.force[7 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = rho_dot;
-        dstate[4] = X_dot;
-        dstate[5] = Y_dot;
-        dstate[6] = Z_dot;
-        dstate[7] = force[0];
-        dstate[8] = force[1];
-        dstate[9] = force[2];
-        dstate[10] = force[3];
-        dstate[11] = force[4];
-        dstate[12] = force[5];
-        dstate[13] = force[6];
-        dstate[14] = rho_dot * (0.012 * x44 - 0.018 * x45);
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -777,81 +688,6 @@ pub mod lagrange {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 7;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let rho = state[3];
-        let mg = params.mg;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
-        let x5 = Iyz * x3;
-        let x6 = rho + 0.5 * l;
-        let x7 = f64::cos(psi);
-        let x8 = f64::sin(psi);
-        let x9 = Iyz * x2;
-        let x10 = x2 * Ixz - Ixy * x3;
-        let x11 = -x2 * Izz - x5;
-        let x12 = Iyy * x3 + x9;
-        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
-        let x14 = -(x1 * m * x6 * x8);
-        let x15 = x7 * x1 * m * x6;
-        let x16 = -(x0 * x7 * m * x6);
-        let x17 = -(x0 * m * x6 * x8);
-        let x18 = -(x1 * m * x6);
-        let x19 = x7 * x1 * m;
-        let x20 = x1 * m * x8;
-        let x21 = -(x0 * m);
-        let x22 = m + mg;
-        [
-            [
-                x1
-                    * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
-                        + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
-                        + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
-                x13,
-                x4,
-                0.0,
-                x14,
-                x15,
-                0.0,
-            ],
-            [
-                x13,
-                m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
-                x10,
-                0.0,
-                x16,
-                x17,
-                x18,
-            ],
-            [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, m, x19, x20, x21],
-            [x14, x16, 0.0, x19, x22, 0.0, 0.0],
-            [x15, x17, 0.0, x20, 0.0, x22, 0.0],
-            [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
-        ]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -892,15 +728,28 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        w: [[f64; 7]; 7],
+        c: [f64; 7],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -1001,51 +850,83 @@ pub mod maggi {
         let x63 = x15 * psi_dot * x14;
         let x64 = psi_dot * x14 * x16;
         let x65 = x15 * rho_dot;
-        let value = x12;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 7]; 7] = [
-            [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
-            [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
-            [
-                x5,
-                x22,
-                x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0 - (x11 * x0 - x1 * x20) * x1,
-                0.0,
-                x26,
-                x27,
-                x28,
+        Assembly {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
+                [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
+                [
+                    x5,
+                    x22,
+                    x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0
+                        - (x11 * x0 - x1 * x20) * x1,
+                    0.0,
+                    x26,
+                    x27,
+                    x28,
+                ],
+                [0.0, 0.0, 0.0, m, x29, x30, x31],
+                [0.0, x23, x26, x29, x32, 0.0, 0.0],
+                [0.0, x24, x27, x30, 0.0, x32, 0.0],
+                [0.0, x25, x28, x31, 0.0, 0.0, x32],
             ],
-            [0.0, 0.0, 0.0, m, x29, x30, x31],
-            [0.0, x23, x26, x29, x32, 0.0, 0.0],
-            [0.0, x24, x27, x30, 0.0, x32, 0.0],
-            [0.0, x25, x28, x31, 0.0, 0.0, x32],
-        ];
-        let mut force: [f64; 7] = [
-            x51,
-            x57 * x19 * x1 + x0 * x59,
-            x57 * x19 * x0 - x1 * x59,
-            0.012 * x60
-                - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                    + (l * (-0.25 * x56 - 0.25) + rho * (-0.5 * x56 - 0.5)) * psi_dot
-                        * psi_dot) * m - 0.018 * x61,
-            ((theta_dot * x48 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
-                - (-2.0 * x62 - x63) * x12 * psi_dot
-                - (x6 * (2.0 * x64 - 2.0 * x65) - theta_dot * x15 * x12 * x14)
-                    * theta_dot) * m,
-            ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x48 * x15) * x14
-                - x12 * psi_dot * (2.0 * x65 - x64)
-                - (x6 * (-2.0 * x62 - 2.0 * x63) - theta_dot * x12 * x14 * x16)
-                    * theta_dot) * m,
-            m
-                * (-x12 * x12 * psi_dot * x14 * phi_dot
-                    - theta_dot * (x6 * theta_dot * x14 - 2.0 * (x12 * rho_dot))),
-        ];
+            force: [
+                x51,
+                x57 * x19 * x1 + x0 * x59,
+                x57 * x19 * x0 - x1 * x59,
+                0.012 * x60
+                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                        + (l * (-0.25 * x56 - 0.25) + rho * (-0.5 * x56 - 0.5)) * psi_dot
+                            * psi_dot) * m - 0.018 * x61,
+                ((theta_dot * x48 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
+                    - (-2.0 * x62 - x63) * x12 * psi_dot
+                    - (x6 * (2.0 * x64 - 2.0 * x65) - theta_dot * x15 * x12 * x14)
+                        * theta_dot) * m,
+                ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x48 * x15) * x14
+                    - x12 * psi_dot * (2.0 * x65 - x64)
+                    - (x6 * (-2.0 * x62 - 2.0 * x63) - theta_dot * x12 * x14 * x16)
+                        * theta_dot) * m,
+                m
+                    * (-x12 * x12 * psi_dot * x14 * phi_dot
+                        - theta_dot * (x6 * theta_dot * x14 - 2.0 * (x12 * rho_dot))),
+            ],
+            w: [
+                [0.0, x19 * x1, x19 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x0, -x1, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x6 * x19 * x1, x6 * x19 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * x48 * x19,
+                -(x12 * psi_dot * phi_dot),
+                theta_dot * x52,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            power: rho_dot * (0.012 * x60 - 0.018 * x61),
+            checks: [x12],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1053,37 +934,60 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = rho_dot;
-        dstate[4] = X_dot;
-        dstate[5] = Y_dot;
-        dstate[6] = Z_dot;
-        dstate[7] = 0.0 * force[0] + x19 * x1 * force[1] + x19 * x0 * force[2]
-            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + theta_dot * x48 * x19;
-        dstate[8] = 0.0 * force[0] + x0 * force[1] + -x1 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + -(x12 * psi_dot * phi_dot);
-        dstate[9] = 1.0 * force[0] + x6 * x19 * x1 * force[1] + x6 * x19 * x0 * force[2]
-            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + theta_dot * x52;
-        dstate[10] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
-        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0;
-        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0;
-        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0;
-        dstate[14] = rho_dot * (0.012 * x60 - 0.018 * x61);
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2]
+            + w[0][3] * force[3] + w[0][4] * force[4] + w[0][5] * force[5]
+            + w[0][6] * force[6] + c[0];
+        dstate[8] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2]
+            + w[1][3] * force[3] + w[1][4] * force[4] + w[1][5] * force[5]
+            + w[1][6] * force[6] + c[1];
+        dstate[9] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2]
+            + w[2][3] * force[3] + w[2][4] * force[4] + w[2][5] * force[5]
+            + w[2][6] * force[6] + c[2];
+        dstate[10] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2]
+            + w[3][3] * force[3] + w[3][4] * force[4] + w[3][5] * force[5]
+            + w[3][6] * force[6] + c[3];
+        dstate[11] = w[4][0] * force[0] + w[4][1] * force[1] + w[4][2] * force[2]
+            + w[4][3] * force[3] + w[4][4] * force[4] + w[4][5] * force[5]
+            + w[4][6] * force[6] + c[4];
+        dstate[12] = w[5][0] * force[0] + w[5][1] * force[1] + w[5][2] * force[2]
+            + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5]
+            + w[5][6] * force[6] + c[5];
+        dstate[13] = w[6][0] * force[0] + w[6][1] * force[1] + w[6][2] * force[2]
+            + w[6][3] * force[3] + w[6][4] * force[4] + w[6][5] * force[5]
+            + w[6][6] * force[6] + c[6];
+        dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1177,7 +1081,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1205,82 +1109,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 7;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let rho = state[3];
-        let mg = params.mg;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m = params.m;
-        let l = params.l;
-        let x0 = f64::cos(phi);
-        let x1 = f64::sin(phi);
-        let x2 = x1 * Ixz - Ixy * x0;
-        let x3 = -Ixy * x1 - Ixz * x0;
-        let x4 = x2 * x0 + x1 * x3;
-        let x5 = x3 * x0 - x2 * x1;
-        let x6 = f64::sin(theta);
-        let x7 = Iyz * x0;
-        let x8 = -x1 * Izz - x7;
-        let x9 = Iyz * x1;
-        let x10 = Iyy * x0 + x9;
-        let x11 = x8 * x0 + x10 * x1;
-        let x12 = f64::cos(theta);
-        let x13 = x11 * x12 - x6 * x2;
-        let x14 = rho + 0.5 * l;
-        let x15 = f64::cos(psi);
-        let x16 = f64::sin(psi);
-        let x17 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1
-            + x12 * m * x14 * x14 * (x15 * x15 + x16 * x16)
-            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
-        let x18 = x6 * x4 + x0 * x13 + x1 * x17;
-        let x19 = 1.0 / x12;
-        let x20 = m * (0.25 * (l * l) + rho * (rho + l)) - x1 * x8 + x10 * x0;
-        let x21 = x11 * x1 + x20 * x0;
-        let x22 = x18 * x19 * x0 - x1 * x21;
-        let x23 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
-        let x24 = (x15 * x1 - x6 * x0 * x16) * m * x14;
-        let x25 = -(x12 * m * x14 * x0);
-        let x26 = (x6 * x15 * x1 - x0 * x16) * m * x14;
-        let x27 = m * x14 * (x15 * x0 + x6 * x1 * x16);
-        let x28 = x12 * m * x14 * x1;
-        let x29 = x15 * x12 * m;
-        let x30 = x12 * m * x16;
-        let x31 = -(x6 * m);
-        let x32 = m + mg;
-        [
-            [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
-            [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
-            [
-                x5,
-                x22,
-                x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0 - (x11 * x0 - x1 * x20) * x1,
-                0.0,
-                x26,
-                x27,
-                x28,
-            ],
-            [0.0, 0.0, 0.0, m, x29, x30, x31],
-            [0.0, x23, x26, x29, x32, 0.0, 0.0],
-            [0.0, x24, x27, x30, 0.0, x32, 0.0],
-            [0.0, x25, x28, x31, 0.0, 0.0, x32],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -1323,15 +1151,26 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 7;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -1407,53 +1246,65 @@ pub mod kane {
         let x50 = f64::sin(x48);
         let x51 = f64::sin(x45);
         let x52 = f64::sin(x43);
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        Assembly {
+            qdot: [x1 * x6, x7, x9, u4, u5, u6, u7],
+            matrix: [
+                [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
+                [x10, x12 + Iyy, x13, 0.0, x18, x20, x21],
+                [x11, x13, x12 + Izz, 0.0, x23, x25, x26],
+                [0.0, 0.0, 0.0, m, x27, x28, x29],
+                [0.0, x18, x23, x27, x30, 0.0, 0.0],
+                [0.0, x20, x25, x28, 0.0, x30, 0.0],
+                [0.0, x21, x26, x29, 0.0, 0.0, x30],
+            ],
+            force: [
+                u3 * x32 - x31 * u2,
+                x31 * u1 - u3 * x33 - m * (x38 * x16 - x39 * x0 * x4 + x19 * x40) * x17,
+                x33 * u2 - u1 * x32 - (x39 * x0 * x2 + x40 * x24 + x22 * x38) * m * x17,
+                0.012 * x41 - 0.018 * x42
+                    - (x1 * x1
+                        * ((u3
+                            * (l
+                                * (-0.0625 * x44 - 0.125 * x46 - 0.125 * x47 - 0.0625 * x49
+                                    - 0.125)
+                                + rho
+                                    * (-0.125 * x44 - 0.25 * x46 - 0.25 * x47 - 0.125 * x49
+                                        - 0.25))
+                            + (l * (0.125 * x50 - 0.25 * x51 - 0.125 * x52)
+                                + (0.25 * x50 - 0.5 * x51 - 0.25 * x52) * rho) * u2) * u3
+                            + (rho
+                                * (0.125 * x44 + 0.25 * x46 - 0.25 * x47 + 0.125 * x49
+                                    - 0.25)
+                                + l
+                                    * (0.0625 * x44 + 0.125 * x46 - 0.125 * x47 + 0.0625 * x49
+                                        - 0.125)) * u2 * u2)
+                        + u3
+                            * (u3 * (rho * (0.5 * x46 - 0.5) + l * (0.25 * x46 - 0.25))
+                                + x17 * x51 * u2)
+                        + (rho * (-0.5 * x46 - 0.5) + (-0.25 * x46 - 0.25) * l) * u2
+                            * u2) * m,
+                -(x38 * m),
+                -(x40 * m),
+                -(x39 * m),
+            ],
+            power: u4 * (0.012 * x41 - 0.018 * x42),
+            checks: [x0],
         }
-        let mut matrix: [[f64; 7]; 7] = [
-            [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
-            [x10, x12 + Iyy, x13, 0.0, x18, x20, x21],
-            [x11, x13, x12 + Izz, 0.0, x23, x25, x26],
-            [0.0, 0.0, 0.0, m, x27, x28, x29],
-            [0.0, x18, x23, x27, x30, 0.0, 0.0],
-            [0.0, x20, x25, x28, 0.0, x30, 0.0],
-            [0.0, x21, x26, x29, 0.0, 0.0, x30],
-        ];
-        let mut force: [f64; 7] = [
-            u3 * x32 - x31 * u2,
-            x31 * u1 - u3 * x33 - m * (x38 * x16 - x39 * x0 * x4 + x19 * x40) * x17,
-            x33 * u2 - u1 * x32 - (x39 * x0 * x2 + x40 * x24 + x22 * x38) * m * x17,
-            0.012 * x41 - 0.018 * x42
-                - (x1 * x1
-                    * ((u3
-                        * (l
-                            * (-0.0625 * x44 - 0.125 * x46 - 0.125 * x47 - 0.0625 * x49
-                                - 0.125)
-                            + rho
-                                * (-0.125 * x44 - 0.25 * x46 - 0.25 * x47 - 0.125 * x49
-                                    - 0.25))
-                        + (l * (0.125 * x50 - 0.25 * x51 - 0.125 * x52)
-                            + (0.25 * x50 - 0.5 * x51 - 0.25 * x52) * rho) * u2) * u3
-                        + (rho
-                            * (0.125 * x44 + 0.25 * x46 - 0.25 * x47 + 0.125 * x49
-                                - 0.25)
-                            + l
-                                * (0.0625 * x44 + 0.125 * x46 - 0.125 * x47 + 0.0625 * x49
-                                    - 0.125)) * u2 * u2)
-                    + u3
-                        * (u3 * (rho * (0.5 * x46 - 0.5) + l * (0.25 * x46 - 0.25))
-                            + x17 * x51 * u2)
-                    + (rho * (-0.5 * x46 - 0.5) + (-0.25 * x46 - 0.25) * l) * u2 * u2)
-                    * m,
-            -(x38 * m),
-            -(x40 * m),
-            -(x39 * m),
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1461,13 +1312,13 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x6;
-        dstate[1] = x7;
-        dstate[2] = x9;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = u6;
-        dstate[6] = u7;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
@@ -1475,13 +1326,32 @@ pub mod kane {
         dstate[11] = force[4];
         dstate[12] = force[5];
         dstate[13] = force[6];
-        dstate[14] = u4 * (0.012 * x41 - 0.018 * x42);
+        dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1584,7 +1454,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1612,60 +1482,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 7;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let rho = state[3];
-        let mg = params.mg;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m = params.m;
-        let l = params.l;
-        let x0 = -Ixy;
-        let x1 = -Ixz;
-        let x2 = m * (0.25 * (l * l) + rho * (rho + l));
-        let x3 = -Iyz;
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(psi);
-        let x8 = f64::cos(phi);
-        let x9 = rho + 0.5 * l;
-        let x10 = (-x4 * x5 - x6 * x7 * x8) * m * x9;
-        let x11 = (x7 * x4 - x6 * x8 * x5) * m * x9;
-        let x12 = f64::cos(theta);
-        let x13 = -(x12 * m * x9 * x8);
-        let x14 = (x6 * x7 * x4 - x8 * x5) * m * x9;
-        let x15 = m * x9 * (x7 * x8 + x6 * x4 * x5);
-        let x16 = x12 * m * x9 * x4;
-        let x17 = x7 * x12 * m;
-        let x18 = x12 * m * x5;
-        let x19 = -(x6 * m);
-        let x20 = m + mg;
-        [
-            [Ixx, x0, x1, 0.0, 0.0, 0.0, 0.0],
-            [x0, x2 + Iyy, x3, 0.0, x10, x11, x13],
-            [x1, x3, x2 + Izz, 0.0, x14, x15, x16],
-            [0.0, 0.0, 0.0, m, x17, x18, x19],
-            [0.0, x10, x14, x17, x20, 0.0, 0.0],
-            [0.0, x11, x15, x18, 0.0, x20, 0.0],
-            [0.0, x13, x16, x19, 0.0, 0.0, x20],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -1705,15 +1521,26 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 4;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 7],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        power: f64,
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -1737,92 +1564,144 @@ pub mod reduced_volterra {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
-        let x7 = f64::cos(psi);
-        let x8 = -rho - 0.5 * l;
-        let x9 = rho + 0.5 * l;
-        let x10 = f64::sin(psi);
-        let x11 = -Ixy;
-        let x12 = -Ixz;
-        let x13 = l * l;
-        let x14 = 0.25 * x13 + rho * (rho + l);
-        let x15 = m * x6 * x6 * mg * x14;
-        let x16 = m * x6;
-        let x17 = (0.5 * x16 - 0.5) * l + (x16 - 1.0) * rho;
-        let x18 = -Iyz;
-        let x19 = 1.0 - x16;
-        let x20 = l * (0.5 - 0.5 * x16) + rho * x19;
-        let x21 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x22 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x23 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x24 = 2.0 * phi;
-        let x25 = f64::sin(x24);
-        let x26 = -0.5 * rho - 0.25 * l;
-        let x27 = theta - 2.0 * phi;
-        let x28 = f64::cos(x27);
-        let x29 = theta + 2.0 * phi;
-        let x30 = f64::cos(x29);
-        let x31 = -0.25 * x28 - 0.25 * x30;
-        let x32 = f64::sin(x27);
-        let x33 = f64::sin(x29);
-        let x34 = 0.25 * x33 - 0.25 * x32;
-        let x35 = 0.125 * x33 - 0.125 * x32;
-        let x36 = -0.125 * x28 - 0.125 * x30;
-        let x37 = f64::cos(x24);
-        let x38 = (0.25 * x28 + 0.25 * x30) * x1;
-        let x39 = x1 * (0.125 * x28 + 0.125 * x30);
-        let x40 = f64::cos(0.0485 * t);
-        let x41 = f64::sin(0.089 * t);
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        let x3 = x2 * u2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
+        let x8 = f64::sin(theta);
+        let x9 = x8 * x1 * x6 + u1;
+        let x10 = 1.0 / (m + mg);
+        let x11 = f64::cos(psi);
+        let x12 = rho + 0.5 * l;
+        let x13 = f64::sin(psi);
+        let x14 = -x2 * x13 - x8 * x11 * x4;
+        let x15 = x8 * x11 * x2 - x4 * x13;
+        let x16 = x11 * x2 - x8 * x4 * x13;
+        let x17 = x11 * x4 + x8 * x2 * x13;
+        let x18 = -Ixy;
+        let x19 = -Ixz;
+        let x20 = l * l;
+        let x21 = rho * (rho + l);
+        let x22 = m * m * (x0 * x0 * x2 * x4 - x15 * x14 - x16 * x17) * x12 * x12 * x10
+            - Iyz;
+        let x23 = x0 * m * m * (-x11 * x14 - x8 * x4 - x16 * x13) * x12 * x10;
+        let x24 = x0 * m * m * x12 * (x8 * x2 - x15 * x11 - x17 * x13) * x10;
+        let x25 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x26 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x27 = -x3 - x5;
+        let x28 = -x9 * x8 * x27 - x0 * x7 * x7 - x1 * x6 * x6;
+        let x29 = x8 * x1 * x6 * x7;
+        let x30 = x9 * x7;
+        let x31 = u4 * (-2.0 * (x8 * x11 * x7) - 2.0 * (x6 * x13))
+            + (x11 * x28 + (x29 - x30) * x13) * x12;
+        let x32 = x31 * x14;
+        let x33 = x8 * x12 * x7 * x7 + x0 * (-2.0 * (u4 * x7) - x9 * x12 * x27);
+        let x34 = x33 * x0 * x4;
+        let x35 = u4 * (2.0 * (x11 * x6) - 2.0 * (x8 * x7 * x13))
+            + x12 * (x28 * x13 + (x30 - x29) * x11);
+        let x36 = x16 * x35;
+        let x37 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x38 = x33 * x0 * x2;
+        let x39 = x35 * x17;
+        let x40 = x15 * x31;
+        let x41 = 2.0 * theta + 2.0 * phi;
+        let x42 = f64::cos(x41);
+        let x43 = 2.0 * phi;
+        let x44 = f64::cos(x43);
+        let x45 = f64::cos(2.0 * theta);
+        let x46 = 2.0 * theta - 2.0 * phi;
+        let x47 = f64::cos(x46);
+        let x48 = f64::sin(x46);
+        let x49 = f64::sin(x43);
+        let x50 = f64::sin(x41);
+        let x51 = f64::cos(0.0485 * t);
+        let x52 = f64::sin(0.089 * t);
+        Assembly {
+            qdot: [
+                x1 * x6,
+                x7,
+                x9,
+                u4,
+                x10 * (G_X + (x12 * (-x14 * u2 - x15 * u3) - u4 * x11 * x0) * m),
+                x10 * ((x12 * (-x16 * u2 - u3 * x17) - u4 * x0 * x13) * m + G_Y),
+                ((x0 * x12 * x7 + x8 * u4) * m + G_Z) * x10,
+            ],
+            matrix: [
+                [Ixx, x18, x19, 0.0],
+                [
+                    x18,
+                    Iyy
+                        + (m * x12 * x12 * x10
+                            * (-x16 * x16 - x0 * x0 * x4 * x4 - x14 * x14) + 0.25 * x20
+                            + x21) * m,
+                    x22,
+                    x23,
+                ],
+                [
+                    x19,
+                    x22,
+                    m
+                        * (m * x12 * x12 * x10
+                            * (-x0 * x0 * x2 * x2 - x17 * x17 - x15 * x15) + 0.25 * x20
+                            + x21) + Izz,
+                    x24,
+                ],
+                [
+                    0.0,
+                    x23,
+                    x24,
+                    (m * x10 * (x0 * x0 * (-x11 * x11 - x13 * x13) - x8 * x8) + 1.0) * m,
+                ],
+            ],
+            force: [
+                u3 * x26 - x25 * u2,
+                m * (x34 - x32 + m * (x32 - x34 + x36) * x10 - x36) * x12 + x25 * u1
+                    - u3 * x37,
+                m * x12 * ((x38 + x39 + x40) * m * x10 - x38 - x39 - x40) - u1 * x26
+                    + x37 * u2,
+                m
+                    * (m * x10 * ((x35 * x13 + x11 * x31) * x0 - x8 * x33)
+                        - x1 * x1
+                            * ((u3
+                                * (l
+                                    * (-0.0625 * x42 - 0.125 * x44 - 0.125 * x45 - 0.0625 * x47
+                                        - 0.125)
+                                    + rho
+                                        * (-0.125 * x42 - 0.25 * x44 - 0.25 * x45 - 0.125 * x47
+                                            - 0.25))
+                                + (l * (0.125 * x48 - 0.25 * x49 - 0.125 * x50)
+                                    + (0.25 * x48 - 0.5 * x49 - 0.25 * x50) * rho) * u2) * u3
+                                + (rho
+                                    * (0.125 * x42 + 0.25 * x44 - 0.25 * x45 + 0.125 * x47
+                                        - 0.25)
+                                    + l
+                                        * (0.0625 * x42 + 0.125 * x44 - 0.125 * x45 + 0.0625 * x47
+                                            - 0.125)) * u2 * u2)
+                        - u3
+                            * (u3 * (rho * (0.5 * x44 - 0.5) + l * (0.25 * x44 - 0.25))
+                                + x12 * x49 * u2)
+                        - (rho * (-0.5 * x44 - 0.5) + (-0.25 * x44 - 0.25) * l) * u2
+                            * u2) + 0.012 * x51 - 0.018 * x52,
+            ],
+            power: u4 * (0.012 * x51 - 0.018 * x52),
+            checks: [x0],
         }
-        let mut matrix: [[f64; 4]; 4] = [
-            [Ixx, x11, x12, 0.0],
-            [x11, Iyy + (x15 + x17 * x17) * m, x18, 0.0],
-            [x12, x18, m * (x15 + x20 * x20) + Izz, 0.0],
-            [0.0, 0.0, 0.0, (m * x6 * x6 * mg + x19 * x19) * m],
-        ];
-        let mut force: [f64; 4] = [
-            u3 * x22 - x21 * u2,
-            x21 * u1 - u3 * x23
-                + (-(u4
-                    * (u3 * x25 * x26
-                        + ((x31 * u2 + u3 * x34) * rho + l * (u3 * x35 + x36 * u2)) * x1
-                        + ((0.25 * x37 + 1.0) * l + (0.5 * x37 + 2.0) * rho) * u2)
-                    + u3 * u1 * (rho * (-rho - l) - 0.25 * x13)) * m * x6 * x6 * mg
-                    - x17 * (x20 * u3 * u1 + u4 * (2.0 * x16 - 2.0) * u2)) * m,
-            m
-                * (-m * x6 * x6 * mg
-                    * (u1 * u2 * x14
-                        + u4
-                            * ((x1 * (l * x35 + rho * x34) + x25 * x26) * u2
-                                + u3
-                                    * (rho * (x38 - 0.5 * x37 + 2.0)
-                                        + l * (x39 - 0.25 * x37 + 1.0))))
-                    - x20 * (u4 * u3 * (2.0 - 2.0 * x16) - x17 * u1 * u2)) - u1 * x22
-                + x23 * u2,
-            (-(x17 * u2 * u2 - x20 * u3 * u3) * x19
-                - m * x6 * x6 * mg
-                    * ((l * (x39 - 0.25 * x37 - 0.5) + rho * (x38 - 0.5 * x37 - 1.0))
-                        * u2 * u2
-                        + u3
-                            * ((x9 * x25
-                                + x1
-                                    * ((0.25 * x32 - 0.25 * x33) * l
-                                        + rho * (0.5 * x32 - 0.5 * x33))) * u2
-                                + u3
-                                    * (rho * (x31 * x1 + 0.5 * x37 - 1.0)
-                                        + l * (x1 * x36 + 0.25 * x37 - 0.5))))) * m + 0.012 * x40
-                - 0.018 * x41,
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1830,29 +1709,43 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x4;
-        dstate[1] = u2 * x3 - u3 * x2;
-        dstate[2] = x5 * x1 * x4 + u1;
-        dstate[3] = u4;
-        dstate[4] = x6
-            * (G_X
-                + ((x8 * x5 * x7 * x2 + x9 * x3 * x10) * u3 - u4 * x7 * x0
-                    + (x9 * x2 * x10 + x5 * x7 * x9 * x3) * u2) * m);
-        dstate[5] = (G_Y
-            + (u3 * (x8 * x7 * x3 + x8 * x5 * x2 * x10) - u4 * x0 * x10
-                + (x5 * x9 * x3 * x10 + x8 * x7 * x2) * u2) * m) * x6;
-        dstate[6] = x6 * (G_Z + m * ((x8 * u3 * x2 + x9 * u2 * x3) * x0 + x5 * u4));
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
         dstate[7] = force[0];
         dstate[8] = force[1];
         dstate[9] = force[2];
         dstate[10] = force[3];
-        dstate[11] = u4 * (0.012 * x40 - 0.018 * x41);
+        dstate[11] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1953,17 +1846,17 @@ pub mod reduced_volterra {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
-        let x7 = f64::cos(psi);
-        let x8 = -rho - 0.5 * l;
+        let x5 = u2 * x3 - u3 * x2;
+        let x6 = f64::sin(theta);
+        let x7 = 1.0 / (m + mg);
+        let x8 = f64::cos(psi);
         let x9 = rho + 0.5 * l;
         let x10 = f64::sin(psi);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -1978,17 +1871,19 @@ pub mod reduced_volterra {
         ];
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
-            u2 * x3 - u3 * x2,
-            x5 * x1 * x4 + u1,
+            x5,
+            x6 * x1 * x4 + u1,
             u4,
-            x6
+            x7
                 * (G_X
-                    + ((x8 * x5 * x7 * x2 + x9 * x3 * x10) * u3 - u4 * x7 * x0
-                        + (x9 * x2 * x10 + x5 * x7 * x9 * x3) * u2) * m),
-            (G_Y
-                + (u3 * (x8 * x7 * x3 + x8 * x5 * x2 * x10) - u4 * x0 * x10
-                    + (x5 * x9 * x3 * x10 + x8 * x7 * x2) * u2) * m) * x6,
-            x6 * (G_Z + m * ((x8 * u3 * x2 + x9 * u2 * x3) * x0 + x5 * u4)),
+                    + (x9
+                        * (-(-x2 * x10 - x6 * x8 * x3) * u2
+                            - (x6 * x8 * x2 - x3 * x10) * u3) - u4 * x8 * x0) * m),
+            x7
+                * ((x9
+                    * (-(x8 * x2 - x6 * x3 * x10) * u2 - u3 * (x8 * x3 + x6 * x2 * x10))
+                    - u4 * x0 * x10) * m + G_Y),
+            ((x0 * x9 * x5 + x6 * u4) * m + G_Z) * x7,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1996,42 +1891,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 4;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let rho = state[3];
-        let mg = params.mg;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m = params.m;
-        let l = params.l;
-        let x0 = -Ixy;
-        let x1 = -Ixz;
-        let x2 = 1.0 / (m + mg);
-        let x3 = m * x2 * x2 * mg * (0.25 * (l * l) + rho * (rho + l));
-        let x4 = m * x2;
-        let x5 = (0.5 * x4 - 0.5) * l + (x4 - 1.0) * rho;
-        let x6 = -Iyz;
-        let x7 = 1.0 - x4;
-        let x8 = l * (0.5 - 0.5 * x4) + rho * x7;
-        [
-            [Ixx, x0, x1, 0.0],
-            [x0, Iyy + (x3 + x5 * x5) * m, x6, 0.0],
-            [x1, x6, m * (x3 + x8 * x8) + Izz, 0.0],
-            [0.0, 0.0, 0.0, (m * x2 * x2 * mg + x7 * x7) * m],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -49,7 +49,7 @@ pub struct Params {
     ///`k` (model value 20.0)
     pub k: f64,
     ///`c` (model value 0.5)
-    pub c: f64,
+    pub c_: f64,
     ///`L0` (model value 1.0)
     pub L0: f64,
     ///`g` (model value 9.81)
@@ -62,7 +62,7 @@ impl Default for Params {
             mp: 0.4,
             lp: 0.8,
             k: 20.0,
-            c: 0.5,
+            c_: 0.5,
             L0: 1.0,
             g: 9.81,
         }
@@ -73,7 +73,7 @@ impl Params {
     pub const NAMES: [&'static str; 7] = ["mc", "mp", "lp", "k", "c", "L0", "g"];
     ///The parameters as an array, in the order of `NAMES`.
     pub fn values(&self) -> [f64; 7] {
-        [self.mc, self.mp, self.lp, self.k, self.c, self.L0, self.g]
+        [self.mc, self.mp, self.lp, self.k, self.c_, self.L0, self.g]
     }
     ///Parameters from an array in the order of `NAMES`.
     pub fn from_values(values: &[f64; 7]) -> Self {
@@ -82,7 +82,7 @@ impl Params {
             mp: values[1],
             lp: values[2],
             k: values[3],
-            c: values[4],
+            c_: values[4],
             L0: values[5],
             g: values[6],
         }
@@ -194,9 +194,9 @@ pub fn work_rate(
 ) -> f64 {
     let x = q[0];
     let x_dot = qdot[0];
-    let c = params.c;
+    let c_ = params.c_;
     let L0 = params.L0;
-    0.5 * (2.0 * x + 2.0 * L0) * c * x_dot * x_dot / (-x - L0)
+    0.5 * (2.0 * x + 2.0 * L0) * c_ * x_dot * x_dot / (-x - L0)
 }
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
@@ -240,15 +240,28 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        power: f64,
+        checks: [f64; 0],
+        residuals: [f64; 0],
+        positions: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let th = state[1];
         let x_dot = state[2];
@@ -257,7 +270,7 @@ pub mod lagrange {
         let mp = params.mp;
         let lp = params.lp;
         let k = params.k;
-        let c = params.c;
+        let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
@@ -266,14 +279,36 @@ pub mod lagrange {
         let x3 = 1.0 / x2;
         let x4 = x2 * x2;
         let x5 = f64::sin(th);
-        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
-        let mut force: [f64; 2] = [
-            x1
-                * (0.5 * (c * x3 * x_dot)
-                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                + x5 * mp * th_dot * th_dot * lp,
-            -(x5 * g * mp * lp),
-        ];
+        Assembly {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            force: [
+                x1
+                    * (0.5 * (c_ * x3 * x_dot)
+                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + x5 * mp * th_dot * th_dot * lp,
+                -(x5 * g * mp * lp),
+            ],
+            power: 0.5 * x1 * c_ * x3 * x_dot * x_dot,
+            checks: [],
+            residuals: [],
+            positions: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -281,11 +316,11 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = th_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
@@ -293,60 +328,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
+        alpha: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let x = state[0];
-        let th = state[1];
-        let x_dot = state[2];
-        let th_dot = state[3];
-        let mc = params.mc;
-        let mp = params.mp;
-        let lp = params.lp;
-        let k = params.k;
-        let c = params.c;
-        let L0 = params.L0;
-        let g = params.g;
-        let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = 1.0 / x2;
-        let x4 = x2 * x2;
-        let x5 = f64::sin(th);
-        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
-        let mut force: [f64; 2] = [
-            x1
-                * (0.5 * (c * x3 * x_dot)
-                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                + x5 * mp * th_dot * th_dot * lp,
-            -(x5 * g * mp * lp),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..0 {
+            a.force[2 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = x_dot;
-        dstate[1] = th_dot;
-        dstate[2] = force[0];
-        dstate[3] = force[1];
-        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -397,23 +413,6 @@ pub mod lagrange {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let th = state[1];
-        let mc = params.mc;
-        let mp = params.mp;
-        let lp = params.lp;
-        let x0 = mp * f64::cos(th) * lp;
-        [[mc + mp, x0], [x0, mp * lp * lp]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -439,15 +438,28 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        w: [[f64; 2]; 2],
+        c: [f64; 2],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let th = state[1];
         let x_dot = state[2];
@@ -456,7 +468,7 @@ pub mod maggi {
         let mp = params.mp;
         let lp = params.lp;
         let k = params.k;
-        let c = params.c;
+        let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
@@ -465,14 +477,37 @@ pub mod maggi {
         let x3 = 1.0 / x2;
         let x4 = x2 * x2;
         let x5 = f64::sin(th);
-        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
-        let mut force: [f64; 2] = [
-            x1
-                * (0.5 * (c * x3 * x_dot)
-                    - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                + x5 * mp * th_dot * th_dot * lp,
-            -(x5 * g * mp * lp),
-        ];
+        Assembly {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            force: [
+                x1
+                    * (0.5 * (c_ * x3 * x_dot)
+                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + x5 * mp * th_dot * th_dot * lp,
+                -(x5 * g * mp * lp),
+            ],
+            w: [[1.0, 0.0], [0.0, 1.0]],
+            c: [0.0, 0.0],
+            power: 0.5 * x1 * c_ * x3 * x_dot * x_dot,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -480,17 +515,36 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = x_dot;
-        dstate[1] = th_dot;
-        dstate[2] = 1.0 * force[0] + 0.0 * force[1] + 0.0;
-        dstate[3] = 0.0 * force[0] + 1.0 * force[1] + 0.0;
-        dstate[4] = 0.5 * x1 * c * x3 * x_dot * x_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
+        dstate[3] = w[1][0] * force[0] + w[1][1] * force[1] + c[1];
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -542,23 +596,6 @@ pub mod maggi {
         }
         Ok((q, qdot))
     }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let th = state[1];
-        let mc = params.mc;
-        let mp = params.mp;
-        let lp = params.lp;
-        let x0 = mp * f64::cos(th) * lp;
-        [[mc + mp, x0], [x0, mp * lp * lp]]
-    }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
@@ -583,15 +620,26 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let th = state[1];
         let u1 = state[2];
@@ -600,7 +648,7 @@ pub mod kane {
         let mp = params.mp;
         let lp = params.lp;
         let k = params.k;
-        let c = params.c;
+        let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
@@ -609,14 +657,34 @@ pub mod kane {
         let x3 = -x - L0;
         let x4 = 1.0 / x3;
         let x5 = x3 * x3;
-        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
-        let mut force: [f64; 2] = [
-            x1 * mp * u2 * u2 * lp
-                + x2
-                    * (0.5 * (c * x4 * u1)
-                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-            -(x1 * g * mp * lp),
-        ];
+        Assembly {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            force: [
+                x1 * mp * u2 * u2 * lp
+                    + x2
+                        * (0.5 * (c_ * x4 * u1)
+                            - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
+                -(x1 * g * mp * lp),
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -624,17 +692,36 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = u1;
-        dstate[1] = u2;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = 0.5 * x2 * c * x4 * u1 * u1;
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -685,23 +772,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let th = state[1];
-        let mc = params.mc;
-        let mp = params.mp;
-        let lp = params.lp;
-        let x0 = mp * f64::cos(th) * lp;
-        [[mc + mp, x0], [x0, mp * lp * lp]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -727,15 +797,26 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 2;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        power: f64,
+        checks: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let x = state[0];
         let th = state[1];
         let u1 = state[2];
@@ -744,7 +825,7 @@ pub mod reduced_volterra {
         let mp = params.mp;
         let lp = params.lp;
         let k = params.k;
-        let c = params.c;
+        let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
@@ -753,14 +834,34 @@ pub mod reduced_volterra {
         let x3 = -x - L0;
         let x4 = 1.0 / x3;
         let x5 = x3 * x3;
-        let mut matrix: [[f64; 2]; 2] = [[mc + mp, x0], [x0, mp * lp * lp]];
-        let mut force: [f64; 2] = [
-            x1 * mp * u2 * u2 * lp
-                + x2
-                    * (0.5 * (c * x4 * u1)
-                        - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-            -(x1 * g * mp * lp),
-        ];
+        Assembly {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            force: [
+                x1 * mp * u2 * u2 * lp
+                    + x2
+                        * (0.5 * (c_ * x4 * u1)
+                            - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
+                -(x1 * g * mp * lp),
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            checks: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -768,17 +869,36 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = u1;
-        dstate[1] = u2;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
         dstate[2] = force[0];
         dstate[3] = force[1];
-        dstate[4] = 0.5 * x2 * c * x4 * u1 * u1;
+        dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -829,23 +949,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 2;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let th = state[1];
-        let mc = params.mc;
-        let mp = params.mp;
-        let lp = params.lp;
-        let x0 = mp * f64::cos(th) * lp;
-        [[mc + mp, x0], [x0, mp * lp * lp]]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

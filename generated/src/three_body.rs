@@ -79,7 +79,7 @@ pub struct Params {
     ///`d` (model value 0.4)
     pub d: f64,
     ///`a` (model value 0.5)
-    pub a: f64,
+    pub a_: f64,
     ///`J1` (model value 0.02)
     pub J1: f64,
     ///`J2` (model value 0.12)
@@ -98,7 +98,7 @@ impl Default for Params {
             m1: 2.0,
             m2: 2.0,
             d: 0.4,
-            a: 0.5,
+            a_: 0.5,
             J1: 0.02,
             J2: 0.12,
         }
@@ -134,7 +134,7 @@ impl Params {
             self.m1,
             self.m2,
             self.d,
-            self.a,
+            self.a_,
             self.J1,
             self.J2,
         ]
@@ -152,7 +152,7 @@ impl Params {
             m1: values[7],
             m2: values[8],
             d: values[9],
-            a: values[10],
+            a_: values[10],
             J1: values[11],
             J2: values[12],
         }
@@ -260,7 +260,7 @@ pub fn energy(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
     let x0 = f64::cos(gamma1);
@@ -278,7 +278,7 @@ pub fn energy(
     let x12 = x2 * psi_dot * x9;
     let x13 = theta_dot * x7;
     let x14 = x12 - x13;
-    let x15 = a * x14;
+    let x15 = a_ * x14;
     let x16 = x8 + x10 + x11 + x15;
     let x17 = x0 * x5 + x6 * x16;
     let x18 = x12 + gamma1_dot - x13;
@@ -286,7 +286,7 @@ pub fn energy(
     let x20 = theta_dot * x9;
     let x21 = x2 * psi_dot * x7;
     let x22 = x20 + x21;
-    let x23 = a * x22;
+    let x23 = a_ * x22;
     let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
     let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
     let x26 = Z_dot * x2 * x9;
@@ -347,7 +347,7 @@ pub fn momenta(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
     let x2 = f64::cos(psi);
@@ -358,28 +358,28 @@ pub fn momenta(
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
     let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a;
-    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
     let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a + x1 * d;
+    let x13 = a_ + x1 * d;
     let x14 = f64::sin(gamma1);
     let x15 = f64::cos(gamma1);
     let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a;
+    let x17 = x15 * a_;
     let x18 = -x17 - d;
-    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a - x15 * d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
     let x21 = x17 + d;
     let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a * x3 * x4;
+    let x23 = -x22 * d - a_ * x3 * x4;
     let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a * x3 * x7 - x24 * d;
+    let x25 = -a_ * x3 * x7 - x24 * d;
     let x26 = m2 + m0 + m1;
     let x27 = x6 * x7 * x5 - x2 * x4;
     let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
     let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
     let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
@@ -401,9 +401,9 @@ pub fn momenta(
         theta_dot
             * (m2
                 * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                 + m1
-                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                         + x20 * x3 * x7 * x7))
             + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                 + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -458,15 +458,27 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 0],
+        residuals: [f64; 0],
+        positions: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -490,7 +502,7 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::cos(gamma1);
@@ -499,17 +511,17 @@ pub mod lagrange {
         let x3 = f64::sin(theta);
         let x4 = f64::sin(gamma1);
         let x5 = x0 * x1 * x2 + x3 * x4;
-        let x6 = -x5 * d - a * x1 * x2;
-        let x7 = x0 * a;
+        let x6 = -x5 * d - a_ * x1 * x2;
+        let x7 = x0 * a_;
         let x8 = x7 + d;
-        let x9 = a * a * x4 * x4;
+        let x9 = a_ * a_ * x4 * x4;
         let x10 = f64::cos(phi);
         let x11 = f64::sin(gamma2);
         let x12 = f64::cos(gamma2);
         let x13 = x12 * x1 * x10 - x3 * x11;
-        let x14 = -a * x1 * x10 - x13 * d;
-        let x15 = d + x12 * a;
-        let x16 = a * a * x11 * x11 + x15 * x15;
+        let x14 = -a_ * x1 * x10 - x13 * d;
+        let x15 = d + x12 * a_;
+        let x16 = a_ * a_ * x11 * x11 + x15 * x15;
         let x17 = x12 * x3;
         let x18 = -x1 * x11 * x10 - x17;
         let x19 = x0 * x3;
@@ -518,10 +530,10 @@ pub mod lagrange {
         let x22 = x1 * (-Ixy * x2 - Ixz * x10);
         let x23 = Iyz * x10;
         let x24 = Iyz * x2;
-        let x25 = a + x12 * d;
+        let x25 = a_ + x12 * d;
         let x26 = Iyy * x10;
         let x27 = x2 * Izz;
-        let x28 = -a - x0 * d;
+        let x28 = -a_ - x0 * d;
         let x29 = -x7 - d;
         let x30 = x2
             * (m2 * (x1 * x16 * x10 + x25 * x14) - x12 * x13 * J2 + x18 * x11 * J1
@@ -538,21 +550,21 @@ pub mod lagrange {
         let x37 = x3 * x35 * x2 - x10 * x36;
         let x38 = x0 * x37 - x35 * x4 * x1;
         let x39 = x37 * x4 + x0 * x35 * x1;
-        let x40 = a * x4 * x39;
+        let x40 = a_ * x4 * x39;
         let x41 = x2 * x36 + x3 * x35 * x10;
         let x42 = x12 * x35 * x1 - x11 * x41;
         let x43 = x35 * x1 * x11 + x12 * x41;
-        let x44 = x43 * x15 - a * x11 * x42;
+        let x44 = x43 * x15 - a_ * x11 * x42;
         let x45 = m1 * (x1 * (x38 * x8 + x40) * x10 + x41 * x6)
             + m2 * (x1 * x44 * x2 + x37 * x14);
         let x46 = x35 * x10 + x3 * x2 * x36;
         let x47 = x0 * x46 - x4 * x1 * x36;
         let x48 = x0 * x1 * x36 + x4 * x46;
-        let x49 = a * x4 * x48;
+        let x49 = a_ * x4 * x48;
         let x50 = x3 * x10 * x36 - x35 * x2;
         let x51 = x12 * x1 * x36 - x11 * x50;
         let x52 = x1 * x11 * x36 + x12 * x50;
-        let x53 = x52 * x15 - a * x51 * x11;
+        let x53 = x52 * x15 - a_ * x51 * x11;
         let x54 = m1 * (x1 * (x47 * x8 + x49) * x10 + x50 * x6)
             + m2 * (x1 * x2 * x53 + x46 * x14);
         let x55 = x0 * x0;
@@ -566,8 +578,8 @@ pub mod lagrange {
             + m1 * (x2 * (x38 * x29 - x40) + x28 * x41 * x10);
         let x62 = m2 * (x53 * x10 + x25 * x2 * x46)
             + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
-        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a * x18 * x11) * x10)
-            + m1 * ((x5 * x29 - a * x20 * x4) * x2 + x28 * x1 * x10 * x10);
+        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a_ * x18 * x11) * x10)
+            + m1 * ((x5 * x29 - a_ * x20 * x4) * x2 + x28 * x1 * x10 * x10);
         let x64 = d * (x4 * x41 * m1 - m2 * x37 * x11);
         let x65 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
         let x66 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
@@ -635,13 +647,13 @@ pub mod lagrange {
         let x128 = Z_dot * x1 * x2;
         let x129 = x37 * X_dot;
         let x130 = Y_dot * x46;
-        let x131 = a * x77;
+        let x131 = a_ * x77;
         let x132 = x128 + x129 + x130 + x131;
         let x133 = Y_dot * x36;
         let x134 = X_dot * x35;
         let x135 = x1 * (x133 + x134) - Z_dot * x3;
         let x136 = x0 * x132 - x135 * x4 + x111 * d;
-        let x137 = a * x80;
+        let x137 = a_ * x80;
         let x138 = Y_dot * x50;
         let x139 = X_dot * x41;
         let x140 = Z_dot * x1 * x10;
@@ -653,16 +665,16 @@ pub mod lagrange {
         let x146 = x3 * phi_dot;
         let x147 = x146 - psi_dot;
         let x148 = Y_dot * (x145 * x2 + x147 * x10 * x36);
-        let x149 = x99 * a;
+        let x149 = x99 * a_;
         let x150 = Z_dot * (x1 * phi_dot * x10 - x3 * theta_dot * x2);
         let x151 = X_dot * (x35 * (theta_dot * x1 * x2 + x147 * x10) + x2 * x82 * x36);
         let x152 = x148 + x149 + x150 + x151 - x135 * gamma1_dot;
         let x153 = x88 * x141 - x136 * x111 + x0 * (x142 + x143 + x144) + x152 * x4;
-        let x154 = a * x4 * x153;
+        let x154 = a_ * x4 * x153;
         let x155 = x0 * x135 + x4 * x132;
         let x156 = x99 * d - x87 * x141 + x4 * (-x142 - x143 - x144) + x0 * x152
             + x111 * x155;
-        let x157 = a * x96;
+        let x157 = a_ * x96;
         let x158 = psi_dot - x146;
         let x159 = X_dot * (x82 * x10 * x36 + x35 * (theta_dot * x1 * x10 + x158 * x2));
         let x160 = Z_dot * (-x1 * x2 * phi_dot - x3 * theta_dot * x10);
@@ -685,8 +697,8 @@ pub mod lagrange {
             + x164 * x171;
         let x177 = x96 * d - x164 * x170 + x12 * (x174 + x157 + x159 + x160 + x161)
             + x108 * x173 + x11 * x175;
-        let x178 = x177 * x15 - a * x11 * x176;
-        let x179 = a * x3 * theta_dot * theta_dot;
+        let x178 = x177 * x15 - a_ * x11 * x176;
+        let x179 = a_ * x3 * theta_dot * theta_dot;
         let x180 = x12 * x2;
         let x181 = x11 * x10;
         let x182 = (-x180 - x181) * x1;
@@ -709,102 +721,133 @@ pub mod lagrange {
         let x199 = x4 * (x194 + x195);
         let x200 = (-x194 - x195) * x4;
         let x201 = 0.25 * x198 - 0.25 * x196 - 0.25 * x199 + x19 + 0.25 * x200;
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
-                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
-                    + (x18 * x18 + x20 * x20) * J1
-                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
-                    - x3 * (x22 - x21)
-                    + x1
-                        * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
-                            + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
-                x30,
-                x31,
-                x32,
-                x34,
-                x45,
-                x54,
-                0.0,
+        Assembly {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
             ],
-            [
-                x30,
-                J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
-                    + (x4 * x4 * x10 * J1 + x26 + x24) * x10
-                    + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
-                    + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
-                    + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
-                x58,
-                x59,
-                x60,
-                x61,
-                x62,
-                x63,
+            matrix: [
+                [
+                    (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
+                        + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
+                        + (x18 * x18 + x20 * x20) * J1
+                        + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
+                        - x3 * (x22 - x21)
+                        + x1
+                            * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
+                                + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
+                    x30,
+                    x31,
+                    x32,
+                    x34,
+                    x45,
+                    x54,
+                    0.0,
+                ],
+                [
+                    x30,
+                    J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
+                        + (x4 * x4 * x10 * J1 + x26 + x24) * x10
+                        + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
+                        + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
+                        + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
+                    x58,
+                    x59,
+                    x60,
+                    x61,
+                    x62,
+                    x63,
+                ],
+                [
+                    x31,
+                    x58,
+                    Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
+                        + (x11 * x11 + x4 * x4) * J2,
+                    0.0,
+                    0.0,
+                    x64,
+                    x65,
+                    x66,
+                ],
+                [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
+                [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
+                [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
+                [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
+                [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
             ],
-            [
-                x31,
-                x58,
-                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
-                    + (x11 * x11 + x4 * x4) * J2,
-                0.0,
-                0.0,
-                x64,
-                x65,
-                x66,
+            force: [
+                ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
+                    + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1
+                    - x118 * x5 + (-x18 * x121 - x20 * x122) * J1
+                    + (x124 - x123 - x125 - x126 - x127) * x3
+                    - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
+                    - m2 * (x172 * x14 + x178 * x1 * x2),
+                x2
+                    * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
+                        + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
+                    - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
+                    + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106
+                        - x107 - x110) * x10,
+                (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
+                    + (-x0 * x122 - x12 * x121) * J1
+                    + (m2 * x172 * d - x165 - x167) * x11,
+                J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
+                x163 * x108 * x109 - x107 - m2 * x177 * d,
+                -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
+                    - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
+                -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
+                    - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
+                -m2
+                    * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
+                        * phi_dot
+                        + (theta_dot * x186
+                            + phi_dot
+                                * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
+                                    - x190)) * theta_dot
+                        + gamma2_dot
+                            * (phi_dot
+                                * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
+                                + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
+                                    - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
+                                + gamma2_dot * x186)) * d - x179)
+                    - (x179
+                        + (theta_dot
+                            * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
+                                - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
+                                + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
+                                    * phi_dot)
+                            + gamma1_dot
+                                * (x201 * gamma1_dot
+                                    + phi_dot
+                                        * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
+                                            - 0.5 * x200))
+                            + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
+                                * phi_dot * phi_dot) * d) * m1,
             ],
-            [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
-            [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
-            [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
-            [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
-            [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
-        ];
-        let mut force: [f64; 8] = [
-            ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
-                + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1 - x118 * x5
-                + (-x18 * x121 - x20 * x122) * J1
-                + (x124 - x123 - x125 - x126 - x127) * x3
-                - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
-                - m2 * (x172 * x14 + x178 * x1 * x2),
-            x2
-                * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
-                    + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
-                - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
-                + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106 - x107
-                    - x110) * x10,
-            (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
-                + (-x0 * x122 - x12 * x121) * J1 + (m2 * x172 * d - x165 - x167) * x11,
-            J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
-            x163 * x108 * x109 - x107 - m2 * x177 * d,
-            -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
-                - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
-            -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
-                - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
-            -m2
-                * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
-                    * phi_dot
-                    + (theta_dot * x186
-                        + phi_dot
-                            * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
-                                - x190)) * theta_dot
-                    + gamma2_dot
-                        * (phi_dot * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
-                            + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
-                                - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
-                            + gamma2_dot * x186)) * d - x179)
-                - (x179
-                    + (theta_dot
-                        * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
-                            - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
-                            + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
-                                * phi_dot)
-                        + gamma1_dot
-                            * (x201 * gamma1_dot
-                                + phi_dot
-                                    * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
-                                        - 0.5 * x200))
-                        + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
+            checks: [],
+            residuals: [],
+            positions: [],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -812,14 +855,14 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
@@ -835,384 +878,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
     pub fn rhs_baumgarte(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
+        g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
+        alpha: f64,
+        beta: f64,
     ) -> Result<(), EvalError> {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma1);
-        let x5 = x0 * x1 * x2 + x3 * x4;
-        let x6 = -x5 * d - a * x1 * x2;
-        let x7 = x0 * a;
-        let x8 = x7 + d;
-        let x9 = a * a * x4 * x4;
-        let x10 = f64::cos(phi);
-        let x11 = f64::sin(gamma2);
-        let x12 = f64::cos(gamma2);
-        let x13 = x12 * x1 * x10 - x3 * x11;
-        let x14 = -a * x1 * x10 - x13 * d;
-        let x15 = d + x12 * a;
-        let x16 = a * a * x11 * x11 + x15 * x15;
-        let x17 = x12 * x3;
-        let x18 = -x1 * x11 * x10 - x17;
-        let x19 = x0 * x3;
-        let x20 = x4 * x1 * x2 - x19;
-        let x21 = x3 * Ixx;
-        let x22 = x1 * (-Ixy * x2 - Ixz * x10);
-        let x23 = Iyz * x10;
-        let x24 = Iyz * x2;
-        let x25 = a + x12 * d;
-        let x26 = Iyy * x10;
-        let x27 = x2 * Izz;
-        let x28 = -a - x0 * d;
-        let x29 = -x7 - d;
-        let x30 = x2
-            * (m2 * (x1 * x16 * x10 + x25 * x14) - x12 * x13 * J2 + x18 * x11 * J1
-                + (x26 + x24) * x1) - x3 * (x2 * Ixz - Ixy * x10)
-            + (x0 * J2 * x5 + x1 * (-x27 - x23) + x20 * x4 * J1
-                + (x28 * x6 + x1 * x2 * (x8 * x29 - x9)) * m1) * x10;
-        let x31 = x22 - x21 + (x0 * x20 + x12 * x18) * J1 + (x13 * x11 - x5 * x4) * J2
-            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
-        let x32 = x1 * (d * x8 * m1 + J2) * x10;
-        let x33 = J2 + m2 * d * x15;
-        let x34 = x1 * x33 * x2;
-        let x35 = f64::cos(psi);
-        let x36 = f64::sin(psi);
-        let x37 = x3 * x35 * x2 - x10 * x36;
-        let x38 = x0 * x37 - x35 * x4 * x1;
-        let x39 = x37 * x4 + x0 * x35 * x1;
-        let x40 = a * x4 * x39;
-        let x41 = x2 * x36 + x3 * x35 * x10;
-        let x42 = x12 * x35 * x1 - x11 * x41;
-        let x43 = x35 * x1 * x11 + x12 * x41;
-        let x44 = x43 * x15 - a * x11 * x42;
-        let x45 = m1 * (x1 * (x38 * x8 + x40) * x10 + x41 * x6)
-            + m2 * (x1 * x44 * x2 + x37 * x14);
-        let x46 = x35 * x10 + x3 * x2 * x36;
-        let x47 = x0 * x46 - x4 * x1 * x36;
-        let x48 = x0 * x1 * x36 + x4 * x46;
-        let x49 = a * x4 * x48;
-        let x50 = x3 * x10 * x36 - x35 * x2;
-        let x51 = x12 * x1 * x36 - x11 * x50;
-        let x52 = x1 * x11 * x36 + x12 * x50;
-        let x53 = x52 * x15 - a * x51 * x11;
-        let x54 = m1 * (x1 * (x47 * x8 + x49) * x10 + x50 * x6)
-            + m2 * (x1 * x2 * x53 + x46 * x14);
-        let x55 = x0 * x0;
-        let x56 = x12 * x12;
-        let x57 = J1 - J2;
-        let x58 = ((x0 * x57 + x28 * d * m1) * x4 - Ixy) * x10
-            + x2 * ((x12 * x57 - m2 * d * x25) * x11 + Ixz);
-        let x59 = x2 * (d * x29 * m1 - J2);
-        let x60 = x33 * x10;
-        let x61 = m2 * (x44 * x10 + x37 * x25 * x2)
-            + m1 * (x2 * (x38 * x29 - x40) + x28 * x41 * x10);
-        let x62 = m2 * (x53 * x10 + x25 * x2 * x46)
-            + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
-        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a * x18 * x11) * x10)
-            + m1 * ((x5 * x29 - a * x20 * x4) * x2 + x28 * x1 * x10 * x10);
-        let x64 = d * (x4 * x41 * m1 - m2 * x37 * x11);
-        let x65 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
-        let x66 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
-        let x67 = x38 * d * m1;
-        let x68 = x47 * d * m1;
-        let x69 = x5 * d * m1;
-        let x70 = m2 * d * x43;
-        let x71 = m2 * d * x52;
-        let x72 = m2 * x13 * d;
-        let x73 = m2 + m0 + m1;
-        let x74 = theta_dot * x1 * psi_dot * Ixz;
-        let x75 = x1 * psi_dot * x10;
-        let x76 = theta_dot * x2;
-        let x77 = x75 - x76;
-        let x78 = theta_dot * x10;
-        let x79 = x1 * psi_dot * x2;
-        let x80 = x78 + x79;
-        let x81 = x3 * psi_dot;
-        let x82 = phi_dot - x81;
-        let x83 = Iyy * x80 - x77 * Iyz - Ixy * x82;
-        let x84 = x83 * x82;
-        let x85 = -phi_dot - x81;
-        let x86 = theta_dot * x85 * x10;
-        let x87 = x4 * x80 + x0 * x82;
-        let x88 = x0 * x80 - x4 * x82;
-        let x89 = x87 * x88;
-        let x90 = x1 * psi_dot * x2 * phi_dot;
-        let x91 = J2 * (x86 + x89 - x90);
-        let x92 = Ixx * x82 - x77 * Ixz - Ixy * x80;
-        let x93 = x80 * x92;
-        let x94 = theta_dot * x85 * x2;
-        let x95 = x1 * psi_dot * phi_dot * x10;
-        let x96 = x94 + x95;
-        let x97 = Iyz * x96;
-        let x98 = x87 * x88 * J1;
-        let x99 = x86 - x90;
-        let x100 = x99 * Izz;
-        let x101 = x77 * x92;
-        let x102 = Iyy * x96;
-        let x103 = x77 * Izz - Iyz * x80 - Ixz * x82;
-        let x104 = x103 * x82;
-        let x105 = Ixy * theta_dot * x1 * psi_dot;
-        let x106 = x99 * Iyz;
-        let x107 = J2 * x96;
-        let x108 = x12 * x82 - x77 * x11;
-        let x109 = x11 * x82 + x12 * x77;
-        let x110 = x108 * x57 * x109;
-        let x111 = x75 + gamma1_dot - x76;
-        let x112 = x111 * x57 * x87;
-        let x113 = x94 + x95 - gamma1_dot * x82;
-        let x114 = gamma1_dot * x80;
-        let x115 = theta_dot * x1 * psi_dot;
-        let x116 = x0 * x113 + x4 * (x115 - x114);
-        let x117 = J2 * x116;
-        let x118 = x112 + x117;
-        let x119 = gamma2_dot * x82;
-        let x120 = -x77 * gamma2_dot - x115;
-        let x121 = x11 * (x90 - x86 - x119) + x12 * x120;
-        let x122 = x0 * (x114 - x115) + x113 * x4;
-        let x123 = theta_dot * Ixx * x1 * psi_dot;
-        let x124 = x103 * x80;
-        let x125 = x99 * Ixz;
-        let x126 = x77 * x83;
-        let x127 = Ixy * x96;
-        let x128 = Z_dot * x1 * x2;
-        let x129 = x37 * X_dot;
-        let x130 = Y_dot * x46;
-        let x131 = a * x77;
-        let x132 = x128 + x129 + x130 + x131;
-        let x133 = Y_dot * x36;
-        let x134 = X_dot * x35;
-        let x135 = x1 * (x133 + x134) - Z_dot * x3;
-        let x136 = x0 * x132 - x135 * x4 + x111 * d;
-        let x137 = a * x80;
-        let x138 = Y_dot * x50;
-        let x139 = X_dot * x41;
-        let x140 = Z_dot * x1 * x10;
-        let x141 = x138 - x137 + x139 + x140 - d * x88;
-        let x142 = x1 * psi_dot * (x35 * Y_dot - X_dot * x36);
-        let x143 = gamma1_dot * x132;
-        let x144 = theta_dot * (x3 * (-x133 - x134) - Z_dot * x1);
-        let x145 = theta_dot * x1 * x36 + x35 * (x81 - phi_dot);
-        let x146 = x3 * phi_dot;
-        let x147 = x146 - psi_dot;
-        let x148 = Y_dot * (x145 * x2 + x147 * x10 * x36);
-        let x149 = x99 * a;
-        let x150 = Z_dot * (x1 * phi_dot * x10 - x3 * theta_dot * x2);
-        let x151 = X_dot * (x35 * (theta_dot * x1 * x2 + x147 * x10) + x2 * x82 * x36);
-        let x152 = x148 + x149 + x150 + x151 - x135 * gamma1_dot;
-        let x153 = x88 * x141 - x136 * x111 + x0 * (x142 + x143 + x144) + x152 * x4;
-        let x154 = a * x4 * x153;
-        let x155 = x0 * x135 + x4 * x132;
-        let x156 = x99 * d - x87 * x141 + x4 * (-x142 - x143 - x144) + x0 * x152
-            + x111 * x155;
-        let x157 = a * x96;
-        let x158 = psi_dot - x146;
-        let x159 = X_dot * (x82 * x10 * x36 + x35 * (theta_dot * x1 * x10 + x158 * x2));
-        let x160 = Z_dot * (-x1 * x2 * phi_dot - x3 * theta_dot * x10);
-        let x161 = (x158 * x2 * x36 + x145 * x10) * Y_dot;
-        let x162 = x136 * x87 - x157 - d * x116 + x159 + x160 - x155 * x88 + x161;
-        let x163 = J2 - J1;
-        let x164 = gamma2_dot + x78 + x79;
-        let x165 = x163 * x108 * x164;
-        let x166 = x120 * x11 + (x86 - x90 + x119) * x12;
-        let x167 = J2 * x166;
-        let x168 = x165 + x167;
-        let x169 = x137 + x138 + x139 + x140;
-        let x170 = x135 * x12 - x169 * x11;
-        let x171 = x164 * d + x135 * x11 + x12 * x169;
-        let x172 = x148 - x149 + x109 * x170 + x150 + x151 - x108 * x171 - x166 * d;
-        let x173 = x128 + x129 + x130 - x109 * d - x131;
-        let x174 = x135 * gamma2_dot;
-        let x175 = x142 - gamma2_dot * x169 + x144;
-        let x176 = x11 * (-x174 - x157 - x159 - x160 - x161) - x109 * x173 + x12 * x175
-            + x164 * x171;
-        let x177 = x96 * d - x164 * x170 + x12 * (x174 + x157 + x159 + x160 + x161)
-            + x108 * x173 + x11 * x175;
-        let x178 = x177 * x15 - a * x11 * x176;
-        let x179 = a * x3 * theta_dot * theta_dot;
-        let x180 = x12 * x2;
-        let x181 = x11 * x10;
-        let x182 = (-x180 - x181) * x1;
-        let x183 = x1 * (x180 + x181);
-        let x184 = (x181 - x180) * x1;
-        let x185 = (x180 - x181) * x1;
-        let x186 = 0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185 - x17;
-        let x187 = x11 * x2;
-        let x188 = x12 * x10;
-        let x189 = x3 * (x187 + x188);
-        let x190 = x3 * (x188 - x187);
-        let x191 = x3 * x2;
-        let x192 = x1 * x10;
-        let x193 = x0 * (x191 + x192);
-        let x194 = x1 * x2;
-        let x195 = x3 * x10;
-        let x196 = x4 * (x194 - x195);
-        let x197 = x0 * (x192 - x191);
-        let x198 = x4 * (x195 - x194);
-        let x199 = x4 * (x194 + x195);
-        let x200 = (-x194 - x195) * x4;
-        let x201 = 0.25 * x198 - 0.25 * x196 - 0.25 * x199 + x19 + 0.25 * x200;
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
-                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
-                    + (x18 * x18 + x20 * x20) * J1
-                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
-                    - x3 * (x22 - x21)
-                    + x1
-                        * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
-                            + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
-                x30,
-                x31,
-                x32,
-                x34,
-                x45,
-                x54,
-                0.0,
-            ],
-            [
-                x30,
-                J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
-                    + (x4 * x4 * x10 * J1 + x26 + x24) * x10
-                    + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
-                    + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
-                    + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
-                x58,
-                x59,
-                x60,
-                x61,
-                x62,
-                x63,
-            ],
-            [
-                x31,
-                x58,
-                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
-                    + (x11 * x11 + x4 * x4) * J2,
-                0.0,
-                0.0,
-                x64,
-                x65,
-                x66,
-            ],
-            [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
-            [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
-            [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
-            [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
-            [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
-        ];
-        let mut force: [f64; 8] = [
-            ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
-                + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1 - x118 * x5
-                + (-x18 * x121 - x20 * x122) * J1
-                + (x124 - x123 - x125 - x126 - x127) * x3
-                - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
-                - m2 * (x172 * x14 + x178 * x1 * x2),
-            x2
-                * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
-                    + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
-                - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
-                + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106 - x107
-                    - x110) * x10,
-            (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
-                + (-x0 * x122 - x12 * x121) * J1 + (m2 * x172 * d - x165 - x167) * x11,
-            J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
-            x163 * x108 * x109 - x107 - m2 * x177 * d,
-            -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
-                - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
-            -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
-                - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
-            -m2
-                * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
-                    * phi_dot
-                    + (theta_dot * x186
-                        + phi_dot
-                            * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
-                                - x190)) * theta_dot
-                    + gamma2_dot
-                        * (phi_dot * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
-                            + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
-                                - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
-                            + gamma2_dot * x186)) * d - x179)
-                - (x179
-                    + (theta_dot
-                        * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
-                            - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
-                            + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
-                                * phi_dot)
-                        + gamma1_dot
-                            * (x201 * gamma1_dot
-                                + phi_dot
-                                    * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
-                                        - 0.5 * x200))
-                        + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..0 {
+            a.force[8 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
+        finish(t, a, dstate)
+    }
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1239,7 +939,7 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
         let x2 = f64::cos(psi);
@@ -1250,28 +950,28 @@ pub mod lagrange {
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
         let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a;
-        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
         let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a + x1 * d;
+        let x13 = a_ + x1 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a * x3 * x4;
+        let x23 = -x22 * d - a_ * x3 * x4;
         let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a * x3 * x7 - x24 * d;
+        let x25 = -a_ * x3 * x7 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x6 * x7 * x5 - x2 * x4;
         let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
         let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
         let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -1323,9 +1023,9 @@ pub mod lagrange {
             theta_dot
                 * (m2
                     * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                             + x20 * x3 * x7 * x7))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -1379,163 +1079,6 @@ pub mod lagrange {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma1);
-        let x5 = x0 * x1 * x2 + x3 * x4;
-        let x6 = -x5 * d - a * x1 * x2;
-        let x7 = x0 * a;
-        let x8 = x7 + d;
-        let x9 = a * a * x4 * x4;
-        let x10 = f64::cos(phi);
-        let x11 = f64::sin(gamma2);
-        let x12 = f64::cos(gamma2);
-        let x13 = x12 * x1 * x10 - x3 * x11;
-        let x14 = -a * x1 * x10 - x13 * d;
-        let x15 = d + x12 * a;
-        let x16 = a * a * x11 * x11 + x15 * x15;
-        let x17 = -x1 * x11 * x10 - x12 * x3;
-        let x18 = x4 * x1 * x2 - x0 * x3;
-        let x19 = x3 * Ixx;
-        let x20 = x1 * (-Ixy * x2 - Ixz * x10);
-        let x21 = Iyz * x10;
-        let x22 = Iyz * x2;
-        let x23 = a + x12 * d;
-        let x24 = Iyy * x10;
-        let x25 = x2 * Izz;
-        let x26 = -a - x0 * d;
-        let x27 = -x7 - d;
-        let x28 = x2
-            * (m2 * (x1 * x16 * x10 + x23 * x14) - x12 * x13 * J2 + x17 * x11 * J1
-                + (x24 + x22) * x1) - x3 * (x2 * Ixz - Ixy * x10)
-            + (x0 * J2 * x5 + x1 * (-x25 - x21) + x18 * x4 * J1
-                + (x26 * x6 + x1 * x2 * (x8 * x27 - x9)) * m1) * x10;
-        let x29 = x20 - x19 + (x0 * x18 + x12 * x17) * J1 + (x13 * x11 - x5 * x4) * J2
-            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
-        let x30 = x1 * (d * x8 * m1 + J2) * x10;
-        let x31 = J2 + m2 * d * x15;
-        let x32 = x1 * x31 * x2;
-        let x33 = f64::cos(psi);
-        let x34 = f64::sin(psi);
-        let x35 = x3 * x33 * x2 - x10 * x34;
-        let x36 = x0 * x35 - x33 * x4 * x1;
-        let x37 = a * x4 * (x35 * x4 + x0 * x33 * x1);
-        let x38 = x2 * x34 + x3 * x33 * x10;
-        let x39 = x33 * x1 * x11 + x12 * x38;
-        let x40 = x39 * x15 - a * x11 * (x12 * x33 * x1 - x11 * x38);
-        let x41 = m1 * (x1 * (x36 * x8 + x37) * x10 + x38 * x6)
-            + m2 * (x1 * x40 * x2 + x35 * x14);
-        let x42 = x33 * x10 + x3 * x2 * x34;
-        let x43 = x0 * x42 - x4 * x1 * x34;
-        let x44 = a * x4 * (x0 * x1 * x34 + x4 * x42);
-        let x45 = x3 * x10 * x34 - x33 * x2;
-        let x46 = x1 * x11 * x34 + x12 * x45;
-        let x47 = x46 * x15 - a * (x12 * x1 * x34 - x11 * x45) * x11;
-        let x48 = m1 * (x1 * (x43 * x8 + x44) * x10 + x45 * x6)
-            + m2 * (x1 * x2 * x47 + x42 * x14);
-        let x49 = x0 * x0;
-        let x50 = x12 * x12;
-        let x51 = J1 - J2;
-        let x52 = ((x0 * x51 + x26 * d * m1) * x4 - Ixy) * x10
-            + x2 * ((x12 * x51 - m2 * d * x23) * x11 + Ixz);
-        let x53 = x2 * (d * x27 * m1 - J2);
-        let x54 = x31 * x10;
-        let x55 = m2 * (x40 * x10 + x35 * x23 * x2)
-            + m1 * (x2 * (x36 * x27 - x37) + x26 * x38 * x10);
-        let x56 = m2 * (x47 * x10 + x23 * x2 * x42)
-            + (x26 * x45 * x10 + (x43 * x27 - x44) * x2) * m1;
-        let x57 = m2 * (x1 * x23 * x2 * x2 + (x13 * x15 - a * x17 * x11) * x10)
-            + m1 * ((x5 * x27 - a * x18 * x4) * x2 + x26 * x1 * x10 * x10);
-        let x58 = d * (x4 * x38 * m1 - m2 * x35 * x11);
-        let x59 = (x4 * x45 * m1 - m2 * x11 * x42) * d;
-        let x60 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
-        let x61 = x36 * d * m1;
-        let x62 = x43 * d * m1;
-        let x63 = x5 * d * m1;
-        let x64 = m2 * d * x39;
-        let x65 = m2 * d * x46;
-        let x66 = m2 * x13 * d;
-        let x67 = m2 + m0 + m1;
-        [
-            [
-                (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
-                    + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
-                    + (x17 * x17 + x18 * x18) * J1
-                    + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
-                    - x3 * (x20 - x19)
-                    + x1
-                        * (((Iyy * x2 - x21) * x1 + x3 * Ixy) * x2
-                            + (x1 * (Izz * x10 - x22) + x3 * Ixz) * x10),
-                x28,
-                x29,
-                x30,
-                x32,
-                x41,
-                x48,
-                0.0,
-            ],
-            [
-                x28,
-                J2 * ((x49 + 1.0) * x10 * x10 + (x50 + 1.0) * x2 * x2)
-                    + (x4 * x4 * x10 * J1 + x24 + x22) * x10
-                    + (x16 * x10 * x10 + x23 * x23 * x2 * x2) * m2
-                    + x2 * (x25 + x21 + x11 * x11 * x2 * J1)
-                    + ((x9 + x27 * x27) * x2 * x2 + x26 * x26 * x10 * x10) * m1,
-                x52,
-                x53,
-                x54,
-                x55,
-                x56,
-                x57,
-            ],
-            [
-                x29,
-                x52,
-                Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x49 + x50) * J1
-                    + (x11 * x11 + x4 * x4) * J2,
-                0.0,
-                0.0,
-                x58,
-                x59,
-                x60,
-            ],
-            [x30, x53, 0.0, J2 + d * d * m1, 0.0, x61, x62, x63],
-            [x32, x54, 0.0, 0.0, m2 * d * d + J2, x64, x65, x66],
-            [x41, x55, x58, x61, x64, x67, 0.0, 0.0],
-            [x48, x56, x59, x62, x65, 0.0, x67, 0.0],
-            [0.0, x57, x60, x63, x66, 0.0, 0.0, x67],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -1578,15 +1121,27 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        w: [[f64; 8]; 8],
+        c: [f64; 8],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -1610,7 +1165,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::sin(gamma2);
@@ -1622,10 +1177,10 @@ pub mod maggi {
         let x6 = Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
             + (x0 * x0 + x1 * x1) * J2;
         let x7 = J1 - J2;
-        let x8 = -a - x2 * d;
+        let x8 = -a_ - x2 * d;
         let x9 = f64::cos(phi);
         let x10 = f64::sin(phi);
-        let x11 = a + x4 * d;
+        let x11 = a_ + x4 * d;
         let x12 = ((x2 * x7 + x8 * d * m1) * x1 - Ixy) * x9
             + x10 * ((x4 * x7 - m2 * d * x11) * x0 + Ixz);
         let x13 = f64::sin(theta);
@@ -1640,8 +1195,8 @@ pub mod maggi {
         let x22 = x4 * x15 * x9 - x13 * x0;
         let x23 = x2 * x15 * x10 + x13 * x1;
         let x24 = (x22 * x0 - x23 * x1) * J2;
-        let x25 = -x23 * d - a * x15 * x10;
-        let x26 = -a * x15 * x9 - x22 * d;
+        let x25 = -x23 * d - a_ * x15 * x10;
+        let x26 = -a_ * x15 * x9 - x22 * d;
         let x27 = (x1 * m1 * x25 - m2 * x0 * x26) * d;
         let x28 = x16 - x14 + x21 + x13 * x6 + x24 + x27;
         let x29 = 1.0 / x15;
@@ -1661,12 +1216,12 @@ pub mod maggi {
         let x43 = x42 * x15 * d;
         let x44 = Iyy * x9;
         let x45 = Iyz * x10;
-        let x46 = d + x4 * a;
-        let x47 = a * a * x0 * x0 + x46 * x46;
+        let x46 = d + x4 * a_;
+        let x47 = a_ * a_ * x0 * x0 + x46 * x46;
         let x48 = x10 * Izz;
         let x49 = Iyz * x9;
-        let x50 = a * a * x1 * x1;
-        let x51 = x2 * a;
+        let x50 = a_ * a_ * x1 * x1;
+        let x51 = x2 * a_;
         let x52 = -x51 - d;
         let x53 = J2 * ((x3 + 1.0) * x9 * x9 + (x5 + 1.0) * x10 * x10)
             + (x1 * x1 * x9 * J1 + x44 + x45) * x9
@@ -1703,10 +1258,10 @@ pub mod maggi {
         let x76 = x75 * x64;
         let x77 = x4 * x33 * x15 - x0 * x34;
         let x78 = x33 * x15 * x0 + x4 * x34;
-        let x79 = x78 * x46 - a * x0 * x77;
+        let x79 = x78 * x46 - a_ * x0 * x77;
         let x80 = x2 * x35 - x33 * x1 * x15;
         let x81 = x35 * x1 + x2 * x33 * x15;
-        let x82 = a * x1 * x81;
+        let x82 = a_ * x1 * x81;
         let x83 = m2 * (x79 * x9 + x35 * x11 * x10)
             + m1 * (x10 * (x80 * x52 - x82) + x8 * x34 * x9);
         let x84 = m1 * (x15 * (x80 * x56 + x82) * x9 + x34 * x25);
@@ -1715,9 +1270,9 @@ pub mod maggi {
         let x87 = x83 * x9 + x86 * x29 * x10;
         let x88 = x4 * x15 * x32 - x0 * x39;
         let x89 = x15 * x0 * x32 + x4 * x39;
-        let x90 = x89 * x46 - a * x88 * x0;
+        let x90 = x89 * x46 - a_ * x88 * x0;
         let x91 = x2 * x15 * x32 + x1 * x38;
-        let x92 = a * x1 * x91;
+        let x92 = a_ * x1 * x91;
         let x93 = x2 * x38 - x1 * x15 * x32;
         let x94 = m2 * (x90 * x9 + x11 * x10 * x38)
             + (x8 * x39 * x9 + (x93 * x52 - x92) * x10) * m1;
@@ -1725,8 +1280,8 @@ pub mod maggi {
         let x96 = m2 * (x15 * x10 * x90 + x38 * x26);
         let x97 = x13 * x40 * d + x95 + x96;
         let x98 = x94 * x9 + x97 * x29 * x10;
-        let x99 = m2 * (x15 * x11 * x10 * x10 + (x22 * x46 - a * x20 * x0) * x9)
-            + m1 * ((x23 * x52 - a * x18 * x1) * x10 + x8 * x15 * x9 * x9);
+        let x99 = m2 * (x15 * x11 * x10 * x10 + (x22 * x46 - a_ * x20 * x0) * x9)
+            + m1 * ((x23 * x52 - a_ * x18 * x1) * x10 + x8 * x15 * x9 * x9);
         let x100 = x13 * x42 * d * x10 + x99 * x9;
         let x101 = x72 + J2;
         let x102 = x73 - J2;
@@ -1755,7 +1310,7 @@ pub mod maggi {
         let x125 = x35 * X_dot;
         let x126 = Y_dot * x38;
         let x127 = x114 - x115;
-        let x128 = a * x127;
+        let x128 = a_ * x127;
         let x129 = x124 + x125 + x126 + x128;
         let x130 = Y_dot * x32;
         let x131 = X_dot * x33;
@@ -1765,7 +1320,7 @@ pub mod maggi {
         let x135 = theta_dot * x134 * x10;
         let x136 = x15 * psi_dot * phi_dot * x9;
         let x137 = x135 + x136;
-        let x138 = a * x137;
+        let x138 = a_ * x137;
         let x139 = x135 + x136 - gamma1_dot * x121;
         let x140 = gamma1_dot * x119;
         let x141 = theta_dot * x15 * psi_dot;
@@ -1799,9 +1354,9 @@ pub mod maggi {
         let x169 = x166 * x167 * x168;
         let x170 = x143 - psi_dot;
         let x171 = Y_dot * (x149 * x10 + x170 * x9 * x32);
-        let x172 = x157 * a;
+        let x172 = x157 * a_;
         let x173 = x0 * x121 + x4 * x127;
-        let x174 = a * x119;
+        let x174 = a_ * x119;
         let x175 = Y_dot * x39;
         let x176 = X_dot * x34;
         let x177 = Z_dot * x15 * x9;
@@ -1828,7 +1383,7 @@ pub mod maggi {
         let x193 = theta_dot * (x13 * (-x130 - x131) - Z_dot * x15);
         let x194 = x171 + x172 + x180 + x181 - x132 * gamma1_dot;
         let x195 = x148 * x190 - x133 * x116 + x2 * (x191 + x192 + x193) + x194 * x1;
-        let x196 = a * x1 * x195;
+        let x196 = a_ * x1 * x195;
         let x197 = x157 * d - x122 * x190 + x1 * (-x191 - x192 - x193) + x2 * x194
             + x116 * x147;
         let x198 = theta_dot * x15 * psi_dot * Ixz;
@@ -1855,7 +1410,7 @@ pub mod maggi {
             + x168 * x182;
         let x219 = x137 * d - x168 * x179 + x4 * (x216 + x138 + x145 + x146 + x150)
             + x167 * x215 + x0 * x217;
-        let x220 = x219 * x46 - a * x0 * x218;
+        let x220 = x219 * x46 - a_ * x0 * x218;
         let x221 = x13 * x188 - x189 * x23 + (-x20 * x165 - x18 * x162) * J1
             + (x154 - theta_dot * Ixx * x15 * psi_dot - x158 - x160 - x161) * x13
             - ((x196 + x56 * x197) * x15 * x9 + x151 * x25) * m1
@@ -1874,7 +1429,7 @@ pub mod maggi {
                     + x206) + x15 * psi_dot * x53 * phi_dot
             + (x209 - x207 - x208 - x1 * J1 * x162 - x210 - x2 * x189 + x211 - x212
                 - x213) * x9;
-        let x223 = a * x13 * theta_dot * theta_dot;
+        let x223 = a_ * x13 * theta_dot * theta_dot;
         let x224 = x4 * x10;
         let x225 = x0 * x9;
         let x226 = (-x224 - x225) * x15;
@@ -1897,78 +1452,118 @@ pub mod maggi {
         let x243 = x1 * (x238 + x239);
         let x244 = (-x238 - x239) * x1;
         let x245 = 0.25 * x242 - 0.25 * x240 - 0.25 * x243 + x17 + 0.25 * x244;
-        let value = x15;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 8]; 8] = [
-            [x6, x30, x31, 0.0, 0.0, x37, x41, x43],
-            [x30, x59 * x9 + x29 * x10 * x70, x71, x74, x76, x87, x98, x100],
-            [
-                x31,
-                x71,
-                x29 * (x68 * x29 * x9 - x10 * x69 + x31 * x13) * x9
-                    - (x29 * x58 * x9 - x53 * x10) * x10,
-                x103,
-                0.0,
-                x104,
-                x105,
-                x106,
+        Assembly {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
             ],
-            [0.0, x74, x103, J2 + d * d * m1, 0.0, x107, x108, x109],
-            [0.0, x76, 0.0, 0.0, m2 * d * d + J2, x110, x111, x112],
-            [x37, x87, x104, x107, x110, x113, 0.0, 0.0],
-            [x41, x98, x105, x108, x111, 0.0, x113, 0.0],
-            [x43, x100, x106, x109, x112, 0.0, 0.0, x113],
-        ];
-        let mut force: [f64; 8] = [
-            x188,
-            x29 * x10 * x221 + x222 * x9,
-            x29 * x221 * x9 - x10 * x222,
-            x15 * psi_dot * x10 * x102 * phi_dot - theta_dot * x187 * x101 * x9
-                + J2 * (x156 - x155 - x200) - d * m1 * x197 + x205,
-            x166 * x167 * x173 + (x136 - theta_dot * x187 * x10) * x75 - x212
-                - m2 * x219 * d,
-            theta_dot * (-x186 * d * x36 - (x84 + x85) * x187 * x29)
-                - m2 * (x35 * x184 + x77 * x218 + x219 * x78)
-                - (x151 * x34 + x80 * x197 + x195 * x81) * m1
-                + x15 * psi_dot * phi_dot * x83,
-            (-x40 * x186 * d - x187 * x29 * (x95 + x96)) * theta_dot
-                - m2 * (x184 * x38 + x219 * x89 + x88 * x218)
-                - (x195 * x91 + x151 * x39 + x93 * x197) * m1
-                + x15 * psi_dot * phi_dot * x94,
-            x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x186 * d)
-                - m2
-                    * (((0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229) * phi_dot
-                        * phi_dot
-                        + (theta_dot * x230
-                            + phi_dot
-                                * (x233 - 0.5 * x226 - 0.5 * x227 + 0.5 * x228 + 0.5 * x229
-                                    - x234)) * theta_dot
-                        + gamma2_dot
-                            * (phi_dot
-                                * (0.5 * x226 - 0.5 * x227 + 0.5 * x228 - 0.5 * x229)
-                                + (-x233 - 0.5 * x226 - 0.5 * x227 - 2.0 * (x15 * x0)
-                                    - 0.5 * x228 - 0.5 * x229 - x234) * theta_dot
-                                + gamma2_dot * x230)) * d - x223)
-                - (x223
-                    + (theta_dot
-                        * ((0.5 * x240 - x237 + x241 + 2.0 * (x1 * x15) + 0.5 * x242
-                            - 0.5 * x243 - 0.5 * x244) * gamma1_dot + theta_dot * x245
-                            + (0.5 * x240 - 0.5 * x242 - 0.5 * x243 + 0.5 * x244)
-                                * phi_dot)
-                        + gamma1_dot
-                            * (x245 * gamma1_dot
+            matrix: [
+                [x6, x30, x31, 0.0, 0.0, x37, x41, x43],
+                [x30, x59 * x9 + x29 * x10 * x70, x71, x74, x76, x87, x98, x100],
+                [
+                    x31,
+                    x71,
+                    x29 * (x68 * x29 * x9 - x10 * x69 + x31 * x13) * x9
+                        - (x29 * x58 * x9 - x53 * x10) * x10,
+                    x103,
+                    0.0,
+                    x104,
+                    x105,
+                    x106,
+                ],
+                [0.0, x74, x103, J2 + d * d * m1, 0.0, x107, x108, x109],
+                [0.0, x76, 0.0, 0.0, m2 * d * d + J2, x110, x111, x112],
+                [x37, x87, x104, x107, x110, x113, 0.0, 0.0],
+                [x41, x98, x105, x108, x111, 0.0, x113, 0.0],
+                [x43, x100, x106, x109, x112, 0.0, 0.0, x113],
+            ],
+            force: [
+                x188,
+                x29 * x10 * x221 + x222 * x9,
+                x29 * x221 * x9 - x10 * x222,
+                x15 * psi_dot * x10 * x102 * phi_dot - theta_dot * x187 * x101 * x9
+                    + J2 * (x156 - x155 - x200) - d * m1 * x197 + x205,
+                x166 * x167 * x173 + (x136 - theta_dot * x187 * x10) * x75 - x212
+                    - m2 * x219 * d,
+                theta_dot * (-x186 * d * x36 - (x84 + x85) * x187 * x29)
+                    - m2 * (x35 * x184 + x77 * x218 + x219 * x78)
+                    - (x151 * x34 + x80 * x197 + x195 * x81) * m1
+                    + x15 * psi_dot * phi_dot * x83,
+                (-x40 * x186 * d - x187 * x29 * (x95 + x96)) * theta_dot
+                    - m2 * (x184 * x38 + x219 * x89 + x88 * x218)
+                    - (x195 * x91 + x151 * x39 + x93 * x197) * m1
+                    + x15 * psi_dot * phi_dot * x94,
+                x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x186 * d)
+                    - m2
+                        * (((0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229)
+                            * phi_dot * phi_dot
+                            + (theta_dot * x230
                                 + phi_dot
-                                    * (x237 - 0.5 * x240 + x241 - 0.5 * x242 - 0.5 * x243
-                                        - 0.5 * x244))
-                        + (0.25 * x242 - 0.25 * x240 - 0.25 * x243 + 0.25 * x244)
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
+                                    * (x233 - 0.5 * x226 - 0.5 * x227 + 0.5 * x228 + 0.5 * x229
+                                        - x234)) * theta_dot
+                            + gamma2_dot
+                                * (phi_dot
+                                    * (0.5 * x226 - 0.5 * x227 + 0.5 * x228 - 0.5 * x229)
+                                    + (-x233 - 0.5 * x226 - 0.5 * x227 - 2.0 * (x15 * x0)
+                                        - 0.5 * x228 - 0.5 * x229 - x234) * theta_dot
+                                    + gamma2_dot * x230)) * d - x223)
+                    - (x223
+                        + (theta_dot
+                            * ((0.5 * x240 - x237 + x241 + 2.0 * (x1 * x15) + 0.5 * x242
+                                - 0.5 * x243 - 0.5 * x244) * gamma1_dot + theta_dot * x245
+                                + (0.5 * x240 - 0.5 * x242 - 0.5 * x243 + 0.5 * x244)
+                                    * phi_dot)
+                            + gamma1_dot
+                                * (x245 * gamma1_dot
+                                    + phi_dot
+                                        * (x237 - 0.5 * x240 + x241 - 0.5 * x242 - 0.5 * x243
+                                            - 0.5 * x244))
+                            + (0.25 * x242 - 0.25 * x240 - 0.25 * x243 + 0.25 * x244)
+                                * phi_dot * phi_dot) * d) * m1,
+            ],
+            w: [
+                [0.0, x29 * x10, x29 * x9, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x9, -x10, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x13 * x29 * x10, x13 * x29 * x9, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * x187 * x29,
+                -(x15 * psi_dot * phi_dot),
+                theta_dot * x186,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            checks: [x15],
+        }
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1976,39 +1571,63 @@ pub mod maggi {
                 value: column as f64,
             });
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
-        dstate[8] = 0.0 * force[0] + x29 * x10 * force[1] + x29 * x9 * force[2]
-            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + 0.0 * force[7] + theta_dot * x187 * x29;
-        dstate[9] = 0.0 * force[0] + x9 * force[1] + -x10 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
-            + -(x15 * psi_dot * phi_dot);
-        dstate[10] = 1.0 * force[0] + x13 * x29 * x10 * force[1]
-            + x13 * x29 * x9 * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + theta_dot * x186;
-        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[14] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[15] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 1.0 * force[7] + 0.0;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
+        dstate[8] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2]
+            + w[0][3] * force[3] + w[0][4] * force[4] + w[0][5] * force[5]
+            + w[0][6] * force[6] + w[0][7] * force[7] + c[0];
+        dstate[9] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2]
+            + w[1][3] * force[3] + w[1][4] * force[4] + w[1][5] * force[5]
+            + w[1][6] * force[6] + w[1][7] * force[7] + c[1];
+        dstate[10] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2]
+            + w[2][3] * force[3] + w[2][4] * force[4] + w[2][5] * force[5]
+            + w[2][6] * force[6] + w[2][7] * force[7] + c[2];
+        dstate[11] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2]
+            + w[3][3] * force[3] + w[3][4] * force[4] + w[3][5] * force[5]
+            + w[3][6] * force[6] + w[3][7] * force[7] + c[3];
+        dstate[12] = w[4][0] * force[0] + w[4][1] * force[1] + w[4][2] * force[2]
+            + w[4][3] * force[3] + w[4][4] * force[4] + w[4][5] * force[5]
+            + w[4][6] * force[6] + w[4][7] * force[7] + c[4];
+        dstate[13] = w[5][0] * force[0] + w[5][1] * force[1] + w[5][2] * force[2]
+            + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5]
+            + w[5][6] * force[6] + w[5][7] * force[7] + c[5];
+        dstate[14] = w[6][0] * force[0] + w[6][1] * force[1] + w[6][2] * force[2]
+            + w[6][3] * force[3] + w[6][4] * force[4] + w[6][5] * force[5]
+            + w[6][6] * force[6] + w[6][7] * force[7] + c[6];
+        dstate[15] = w[7][0] * force[0] + w[7][1] * force[1] + w[7][2] * force[2]
+            + w[7][3] * force[3] + w[7][4] * force[4] + w[7][5] * force[5]
+            + w[7][6] * force[6] + w[7][7] * force[7] + c[7];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
                 return Err(EvalError::NonFinite { t, index });
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -2035,7 +1654,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
         let x2 = f64::cos(psi);
@@ -2046,28 +1665,28 @@ pub mod maggi {
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
         let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a;
-        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
         let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a + x1 * d;
+        let x13 = a_ + x1 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a * x3 * x4;
+        let x23 = -x22 * d - a_ * x3 * x4;
         let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a * x3 * x7 - x24 * d;
+        let x25 = -a_ * x3 * x7 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x6 * x7 * x5 - x2 * x4;
         let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
         let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
         let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -2119,9 +1738,9 @@ pub mod maggi {
             theta_dot
                 * (m2
                     * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                             + x20 * x3 * x7 * x7))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -2154,7 +1773,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -2184,169 +1803,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::sin(gamma1);
-        let x2 = f64::cos(gamma1);
-        let x3 = x2 * x2;
-        let x4 = f64::cos(gamma2);
-        let x5 = x4 * x4;
-        let x6 = Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
-            + (x0 * x0 + x1 * x1) * J2;
-        let x7 = J1 - J2;
-        let x8 = -a - x2 * d;
-        let x9 = f64::cos(phi);
-        let x10 = f64::sin(phi);
-        let x11 = a + x4 * d;
-        let x12 = ((x2 * x7 + x8 * d * m1) * x1 - Ixy) * x9
-            + x10 * ((x4 * x7 - m2 * d * x11) * x0 + Ixz);
-        let x13 = f64::sin(theta);
-        let x14 = x13 * Ixx;
-        let x15 = f64::cos(theta);
-        let x16 = x15 * (-Ixy * x10 - Ixz * x9);
-        let x17 = x1 * x15 * x10 - x2 * x13;
-        let x18 = -x15 * x0 * x9 - x4 * x13;
-        let x19 = (x2 * x17 + x4 * x18) * J1;
-        let x20 = x4 * x15 * x9 - x13 * x0;
-        let x21 = x2 * x15 * x10 + x13 * x1;
-        let x22 = (x20 * x0 - x21 * x1) * J2;
-        let x23 = -x21 * d - a * x15 * x10;
-        let x24 = -a * x15 * x9 - x20 * d;
-        let x25 = (x1 * m1 * x23 - m2 * x0 * x24) * d;
-        let x26 = x16 - x14 + x19 + x13 * x6 + x22 + x25;
-        let x27 = 1.0 / x15;
-        let x28 = x12 * x9 + x26 * x27 * x10;
-        let x29 = x26 * x27 * x9 - x12 * x10;
-        let x30 = f64::sin(psi);
-        let x31 = f64::cos(psi);
-        let x32 = x10 * x30 + x13 * x31 * x9;
-        let x33 = x13 * x31 * x10 - x9 * x30;
-        let x34 = x1 * x32 * m1 - m2 * x33 * x0;
-        let x35 = d * x34;
-        let x36 = x31 * x9 + x13 * x10 * x30;
-        let x37 = x13 * x9 * x30 - x31 * x10;
-        let x38 = x1 * x37 * m1 - m2 * x0 * x36;
-        let x39 = x38 * d;
-        let x40 = x1 * m1 * x9 - m2 * x0 * x10;
-        let x41 = x40 * x15 * d;
-        let x42 = Iyy * x9;
-        let x43 = Iyz * x10;
-        let x44 = d + x4 * a;
-        let x45 = a * a * x0 * x0 + x44 * x44;
-        let x46 = x10 * Izz;
-        let x47 = Iyz * x9;
-        let x48 = a * a * x1 * x1;
-        let x49 = x2 * a;
-        let x50 = -x49 - d;
-        let x51 = J2 * ((x3 + 1.0) * x9 * x9 + (x5 + 1.0) * x10 * x10)
-            + (x1 * x1 * x9 * J1 + x42 + x43) * x9
-            + (x45 * x9 * x9 + x11 * x11 * x10 * x10) * m2
-            + x10 * (x46 + x47 + x0 * x0 * x10 * J1)
-            + ((x48 + x50 * x50) * x10 * x10 + x8 * x8 * x9 * x9) * m1;
-        let x52 = x10
-            * (m2 * (x15 * x45 * x9 + x11 * x24) - x4 * x20 * J2 + x18 * x0 * J1
-                + (x42 + x43) * x15);
-        let x53 = x13 * (x10 * Ixz - Ixy * x9);
-        let x54 = x49 + d;
-        let x55 = (x2 * J2 * x21 + x15 * (-x46 - x47) + x17 * x1 * J1
-            + (x8 * x23 + x15 * x10 * (x54 * x50 - x48)) * m1) * x9;
-        let x56 = x52 - x53 + x55 + x13 * x12;
-        let x57 = x51 * x9 + x27 * x56 * x10;
-        let x58 = x9 * x9 + x10 * x10;
-        let x59 = (x23 * x23 + (x54 * x54 + x48) * x15 * x15 * x9 * x9) * m1
-            + m2 * (x24 * x24 + x15 * x15 * x10 * x10 * x45)
-            + (x18 * x18 + x17 * x17) * J1 + x13 * (x16 - x14 + x19 + x22 + x25)
-            + J2 * (x15 * x15 * x58 + x20 * x20 + x21 * x21) - x13 * (x16 - x14)
-            + x15
-                * (((Iyy * x10 - x47) * x15 + x13 * Ixy) * x10
-                    + (x15 * (Izz * x9 - x43) + x13 * Ixz) * x9);
-        let x60 = x52 - x53 + x55;
-        let x61 = x59 * x27 * x10 + x13 * x28 + x60 * x9;
-        let x62 = x27 * x9 * x61 - x57 * x10;
-        let x63 = d * x54 * m1;
-        let x64 = d * x50 * m1;
-        let x65 = (x63 + x64) * x10 * x9;
-        let x66 = (J2 + m2 * d * x44) * x58;
-        let x67 = x31 * x15 * x0 + x4 * x32;
-        let x68 = x67 * x44 - a * x0 * (x4 * x31 * x15 - x0 * x32);
-        let x69 = x2 * x33 - x31 * x1 * x15;
-        let x70 = a * x1 * (x33 * x1 + x2 * x31 * x15);
-        let x71 = m2 * (x68 * x9 + x33 * x11 * x10)
-            + m1 * (x10 * (x69 * x50 - x70) + x8 * x32 * x9);
-        let x72 = x13 * d * x34 + m1 * (x15 * (x69 * x54 + x70) * x9 + x32 * x23)
-            + m2 * (x15 * x68 * x10 + x33 * x24);
-        let x73 = x71 * x9 + x72 * x27 * x10;
-        let x74 = x15 * x0 * x30 + x4 * x37;
-        let x75 = x74 * x44 - a * (x4 * x15 * x30 - x0 * x37) * x0;
-        let x76 = a * x1 * (x2 * x15 * x30 + x1 * x36);
-        let x77 = x2 * x36 - x1 * x15 * x30;
-        let x78 = m2 * (x75 * x9 + x11 * x10 * x36)
-            + (x8 * x37 * x9 + (x77 * x50 - x76) * x10) * m1;
-        let x79 = x13 * x38 * d + m1 * (x15 * (x77 * x54 + x76) * x9 + x37 * x23)
-            + m2 * (x15 * x10 * x75 + x36 * x24);
-        let x80 = x78 * x9 + x79 * x27 * x10;
-        let x81 = m2 * (x15 * x11 * x10 * x10 + (x20 * x44 - a * x18 * x0) * x9)
-            + m1 * ((x21 * x50 - a * x17 * x1) * x10 + x8 * x15 * x9 * x9);
-        let x82 = x13 * x40 * d * x10 + x81 * x9;
-        let x83 = (x63 + J2) * x9 * x9 - x10 * x10 * (x64 - J2);
-        let x84 = x72 * x27 * x9 - x10 * x71;
-        let x85 = x79 * x27 * x9 - x10 * x78;
-        let x86 = x13 * x40 * d * x9 - x81 * x10;
-        let x87 = x69 * d * m1;
-        let x88 = x77 * d * m1;
-        let x89 = x21 * d * m1;
-        let x90 = m2 * d * x67;
-        let x91 = m2 * d * x74;
-        let x92 = m2 * x20 * d;
-        let x93 = m2 + m0 + m1;
-        [
-            [x6, x28, x29, 0.0, 0.0, x35, x39, x41],
-            [x28, x57 * x9 + x27 * x10 * x61, x62, x65, x66, x73, x80, x82],
-            [
-                x29,
-                x62,
-                x27 * (x59 * x27 * x9 - x10 * x60 + x29 * x13) * x9
-                    - (x27 * x56 * x9 - x51 * x10) * x10,
-                x83,
-                0.0,
-                x84,
-                x85,
-                x86,
-            ],
-            [0.0, x65, x83, J2 + d * d * m1, 0.0, x87, x88, x89],
-            [0.0, x66, 0.0, 0.0, m2 * d * d + J2, x90, x91, x92],
-            [x35, x73, x84, x87, x90, x93, 0.0, 0.0],
-            [x39, x80, x85, x88, x91, 0.0, x93, 0.0],
-            [x41, x82, x86, x89, x92, 0.0, 0.0, x93],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -2390,15 +1846,25 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -2422,7 +1888,7 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::cos(theta);
@@ -2441,11 +1907,11 @@ pub mod kane {
         let x13 = x12 * x12;
         let x14 = J1 - J2;
         let x15 = x10 * d;
-        let x16 = -a - x15;
+        let x16 = -a_ - x15;
         let x17 = (x10 * x14 + x16 * d * m1) * x9 - Ixy;
         let x18 = J2 - J1;
         let x19 = x12 * d;
-        let x20 = -a - x19;
+        let x20 = -a_ - x19;
         let x21 = x8 * (x12 * x18 - m2 * d * x20) - Ixz;
         let x22 = f64::sin(psi);
         let x23 = x2 * x22;
@@ -2463,30 +1929,31 @@ pub mod kane {
         let x35 = (x9 * m1 * x3 - m2 * x8 * x2) * x0 * d;
         let x36 = d * d;
         let x37 = -Iyz;
-        let x38 = d + x12 * a;
+        let x38 = d + x12 * a_;
         let x39 = J2 + m2 * d * x38;
         let x40 = (x12 * x0 - x6 * x8 * x3) * x24 - x8 * x2 * x22;
         let x41 = x24 * x0 * x8 + x12 * x25;
-        let x42 = m2 * (x41 * x38 - a * x40 * x8) + x16 * x25 * m1;
+        let x42 = m2 * (x41 * x38 - a_ * x40 * x8) + x16 * x25 * m1;
         let x43 = x12 * x0 * x22 + (x31 - x32) * x8;
         let x44 = x0 * x8 * x22 + x12 * x33;
-        let x45 = x16 * x33 * m1 + m2 * (x44 * x38 - a * x8 * x43);
+        let x45 = x16 * x33 * m1 + m2 * (x44 * x38 - a_ * x8 * x43);
         let x46 = x12 * x6;
         let x47 = x6 * x8;
         let x48 = x12 * x0 * x3 - x47;
-        let x49 = m2 * (x48 * x38 - a * (-x0 * x8 * x3 - x46) * x8) + x16 * x0 * m1 * x3;
-        let x50 = x10 * a + d;
+        let x49 = m2 * (x48 * x38 - a_ * (-x0 * x8 * x3 - x46) * x8)
+            + x16 * x0 * m1 * x3;
+        let x50 = x10 * a_ + d;
         let x51 = d * x50 * m1 + J2;
         let x52 = x10 * x27 - x24 * x9 * x0;
         let x53 = x24 * (x6 * x9 * x2 + x10 * x0) - x9 * x3 * x22;
-        let x54 = m2 * x27 * x20 + (x52 * x50 + a * x53 * x9) * m1;
+        let x54 = m2 * x27 * x20 + (x52 * x50 + a_ * x53 * x9) * m1;
         let x55 = x10 * x30 - x9 * x0 * x22;
         let x56 = x10 * x0 * x22 + x9 * x30;
-        let x57 = (x55 * x50 + a * x9 * x56) * m1 + m2 * x20 * x30;
+        let x57 = (x55 * x50 + a_ * x9 * x56) * m1 + m2 * x20 * x30;
         let x58 = x6 * x9;
         let x59 = x10 * x0 * x2 + x58;
         let x60 = x10 * x6;
-        let x61 = (x59 * x50 + a * (x9 * x0 * x2 - x60) * x9) * m1 + m2 * x0 * x2 * x20;
+        let x61 = (x59 * x50 + a_ * (x9 * x0 * x2 - x60) * x9) * m1 + m2 * x0 * x2 * x20;
         let x62 = x52 * d * m1;
         let x63 = x55 * d * m1;
         let x64 = x59 * d * m1;
@@ -2510,7 +1977,7 @@ pub mod kane {
         let x82 = x10 * u2;
         let x83 = x9 * u1;
         let x84 = x82 - x83;
-        let x85 = a * u3;
+        let x85 = a_ * u3;
         let x86 = u7 * x24;
         let x87 = u6 * x22;
         let x88 = x86 - x87;
@@ -2544,7 +2011,7 @@ pub mod kane {
         let x116 = x2 * x103;
         let x117 = x1 * x79 * x4 + x7 * x90;
         let x118 = x117 * x3;
-        let x119 = a * u2;
+        let x119 = a_ * u2;
         let x120 = x87 - x86;
         let x121 = x2 * x120;
         let x122 = x90 * x3;
@@ -2655,109 +2122,122 @@ pub mod kane {
         let x214 = x204 * x0;
         let x215 = x209 * x0;
         let x216 = 0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215 - x46;
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        Assembly {
+            qdot: [x1 * x4, x5, x7, u4, u5, u6, u7, u8],
+            matrix: [
+                [
+                    Ixx + d * d * (m2 * x8 * x8 + x9 * x9 * m1) + (x11 + x13) * J1
+                        + (x8 * x8 + x9 * x9) * J2,
+                    x17,
+                    x21,
+                    0.0,
+                    0.0,
+                    x28,
+                    x34,
+                    x35,
+                ],
+                [
+                    x17,
+                    x9 * x9 * J1 + x16 * x16 * m1 + Iyy + J2 * (x11 + 1.0)
+                        + m2 * (x36 + a_ * (a_ + 2.0 * x19)),
+                    x37,
+                    0.0,
+                    x39,
+                    x42,
+                    x45,
+                    x49,
+                ],
+                [
+                    x21,
+                    x37,
+                    x8 * x8 * J1 + (a_ * (a_ + 2.0 * x15) + x36) * m1 + m2 * x20 * x20
+                        + Izz + J2 * (x13 + 1.0),
+                    x51,
+                    0.0,
+                    x54,
+                    x57,
+                    x61,
+                ],
+                [0.0, 0.0, x51, J2 + d * d * m1, 0.0, x62, x63, x64],
+                [0.0, x39, 0.0, 0.0, m2 * d * d + J2, x65, x66, x67],
+                [x28, x42, x54, x62, x65, x68, 0.0, 0.0],
+                [x34, x45, x57, x63, x66, 0.0, x68, 0.0],
+                [x35, x49, x61, x64, x67, 0.0, 0.0, x68],
+            ],
+            force: [
+                x9 * (x71 + x74 - d * m1 * x105)
+                    + (-x12 * u5 * x108 - x10 * x84 * u4) * J1 - x109 * u2 + u3 * x110
+                    + (m2 * x127 * d - x112 * x115) * x8,
+                x128 + x109 * u1 - x84 * u4 * x9 * J1 - u3 * x129
+                    - m2 * (x134 * x38 - a_ * x135 * x8) - x10 * (x71 + x74)
+                    - x16 * m1 * x105,
+                u5 * x108 * x8 * J1 - m2 * x127 * x20
+                    - (x138 * x50 + a_ * x9 * x139) * m1 - u1 * x110 + x140
+                    - x112 * x12 * x115 + x129 * u2,
+                x140 - x138 * d * m1,
+                x128 - m2 * d * x134,
+                -m2 * (x41 * x134 + x27 * x127 + x40 * x135)
+                    - (x53 * x139 + x25 * x105 + x52 * x138) * m1,
+                -m1 * (x138 * x55 + x139 * x56 + x33 * x105)
+                    - m2 * (x44 * x134 + x127 * x30 + x135 * x43),
+                -(u3 * (x157 + x168 + a_ * (x169 + x170))
+                    + (x171 + a_ * (x172 + x173) + x174) * u2
+                    + ((u1
+                        * (0.5 * x178 - 0.25 * x182 + 0.5 * x184 - 0.25 * x186
+                            - 0.25 * x188 - 0.25 * x190) + x191 * u3
+                        + (0.25 * x192 + 0.25 * x193 + 0.25 * x194 + 0.5 * x195
+                            + 0.25 * x196 + 0.5 * x197) * u2) * u3
+                        + u1
+                            * (u1
+                                * (0.25 * x186 - 0.25 * x182 - 0.25 * x188 + 0.25 * x190)
+                                + (0.25 * x192 + 0.25 * x193 - 0.25 * x194 - x58
+                                    - 0.25 * x196) * u2) + x10 * x6 * u2 * u2
+                        + u4
+                            * (u2
+                                * (0.5 * x192 + 0.5 * x193 + 0.5 * x194 + x195 + 0.5 * x196
+                                    + x197)
+                                + (0.5 * x186 - 0.5 * x182 - 0.5 * x188 + 2.0 * x60
+                                    + 0.5 * x190) * u3
+                                + u1
+                                    * (x178 - 0.5 * x182 + x184 - 0.5 * x186 - 0.5 * x188
+                                        - 0.5 * x190) + u4 * x191)) * d) * m1
+                    - m2
+                        * ((x171 + a_ * (-x172 - x173) + x174) * u2
+                            + u3 * (x157 + a_ * (-x169 - x170) + x168)
+                            + ((u3
+                                * (0.25 * x201 + 0.25 * x203 - x47 + 0.25 * x205
+                                    - 0.5 * x208 + 0.25 * x210 - 0.5 * x211)
+                                + u2
+                                    * (0.25 * x212 - 0.25 * x213 + 0.25 * x214 - 0.25 * x215)
+                                + (0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215)
+                                    * u1) * u1
+                                + u5
+                                    * (u1 * (0.5 * x212 - 0.5 * x213 + 0.5 * x214 - 0.5 * x215)
+                                        + u3
+                                            * (0.5 * x201 + 0.5 * x203 - 0.5 * x205 - x208 - 0.5 * x210
+                                                + x211)
+                                        + (0.5 * x212 - 0.5 * x213 - 0.5 * x214 + 0.5 * x215
+                                            - 2.0 * x46) * u2 + u5 * x216)
+                                + ((0.25 * x201 + 0.25 * x203 - 0.25 * x205 - 0.5 * x208
+                                    - 0.25 * x210 + 0.5 * x211) * u3 + x216 * u2) * u2
+                                - x12 * x6 * u3 * u3) * d),
+            ],
+            checks: [x0],
         }
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                Ixx + d * d * (m2 * x8 * x8 + x9 * x9 * m1) + (x11 + x13) * J1
-                    + (x8 * x8 + x9 * x9) * J2,
-                x17,
-                x21,
-                0.0,
-                0.0,
-                x28,
-                x34,
-                x35,
-            ],
-            [
-                x17,
-                x9 * x9 * J1 + x16 * x16 * m1 + Iyy + J2 * (x11 + 1.0)
-                    + m2 * (x36 + a * (a + 2.0 * x19)),
-                x37,
-                0.0,
-                x39,
-                x42,
-                x45,
-                x49,
-            ],
-            [
-                x21,
-                x37,
-                x8 * x8 * J1 + (a * (a + 2.0 * x15) + x36) * m1 + m2 * x20 * x20 + Izz
-                    + J2 * (x13 + 1.0),
-                x51,
-                0.0,
-                x54,
-                x57,
-                x61,
-            ],
-            [0.0, 0.0, x51, J2 + d * d * m1, 0.0, x62, x63, x64],
-            [0.0, x39, 0.0, 0.0, m2 * d * d + J2, x65, x66, x67],
-            [x28, x42, x54, x62, x65, x68, 0.0, 0.0],
-            [x34, x45, x57, x63, x66, 0.0, x68, 0.0],
-            [x35, x49, x61, x64, x67, 0.0, 0.0, x68],
-        ];
-        let mut force: [f64; 8] = [
-            x9 * (x71 + x74 - d * m1 * x105) + (-x12 * u5 * x108 - x10 * x84 * u4) * J1
-                - x109 * u2 + u3 * x110 + (m2 * x127 * d - x112 * x115) * x8,
-            x128 + x109 * u1 - x84 * u4 * x9 * J1 - u3 * x129
-                - m2 * (x134 * x38 - a * x135 * x8) - x10 * (x71 + x74)
-                - x16 * m1 * x105,
-            u5 * x108 * x8 * J1 - m2 * x127 * x20 - (x138 * x50 + a * x9 * x139) * m1
-                - u1 * x110 + x140 - x112 * x12 * x115 + x129 * u2,
-            x140 - x138 * d * m1,
-            x128 - m2 * d * x134,
-            -m2 * (x41 * x134 + x27 * x127 + x40 * x135)
-                - (x53 * x139 + x25 * x105 + x52 * x138) * m1,
-            -m1 * (x138 * x55 + x139 * x56 + x33 * x105)
-                - m2 * (x44 * x134 + x127 * x30 + x135 * x43),
-            -(u3 * (x157 + x168 + a * (x169 + x170))
-                + (x171 + a * (x172 + x173) + x174) * u2
-                + ((u1
-                    * (0.5 * x178 - 0.25 * x182 + 0.5 * x184 - 0.25 * x186 - 0.25 * x188
-                        - 0.25 * x190) + x191 * u3
-                    + (0.25 * x192 + 0.25 * x193 + 0.25 * x194 + 0.5 * x195 + 0.25 * x196
-                        + 0.5 * x197) * u2) * u3
-                    + u1
-                        * (u1 * (0.25 * x186 - 0.25 * x182 - 0.25 * x188 + 0.25 * x190)
-                            + (0.25 * x192 + 0.25 * x193 - 0.25 * x194 - x58
-                                - 0.25 * x196) * u2) + x10 * x6 * u2 * u2
-                    + u4
-                        * (u2
-                            * (0.5 * x192 + 0.5 * x193 + 0.5 * x194 + x195 + 0.5 * x196
-                                + x197)
-                            + (0.5 * x186 - 0.5 * x182 - 0.5 * x188 + 2.0 * x60
-                                + 0.5 * x190) * u3
-                            + u1
-                                * (x178 - 0.5 * x182 + x184 - 0.5 * x186 - 0.5 * x188
-                                    - 0.5 * x190) + u4 * x191)) * d) * m1
-                - m2
-                    * ((x171 + a * (-x172 - x173) + x174) * u2
-                        + u3 * (x157 + a * (-x169 - x170) + x168)
-                        + ((u3
-                            * (0.25 * x201 + 0.25 * x203 - x47 + 0.25 * x205 - 0.5 * x208
-                                + 0.25 * x210 - 0.5 * x211)
-                            + u2
-                                * (0.25 * x212 - 0.25 * x213 + 0.25 * x214 - 0.25 * x215)
-                            + (0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215)
-                                * u1) * u1
-                            + u5
-                                * (u1 * (0.5 * x212 - 0.5 * x213 + 0.5 * x214 - 0.5 * x215)
-                                    + u3
-                                        * (0.5 * x201 + 0.5 * x203 - 0.5 * x205 - x208 - 0.5 * x210
-                                            + x211)
-                                    + (0.5 * x212 - 0.5 * x213 - 0.5 * x214 + 0.5 * x215
-                                        - 2.0 * x46) * u2 + u5 * x216)
-                            + ((0.25 * x201 + 0.25 * x203 - 0.25 * x205 - 0.5 * x208
-                                - 0.25 * x210 + 0.5 * x211) * u3 + x216 * u2) * u2
-                            - x12 * x6 * u3 * u3) * d),
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -2765,14 +2245,14 @@ pub mod kane {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x4;
-        dstate[1] = x5;
-        dstate[2] = x7;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = u6;
-        dstate[6] = u7;
-        dstate[7] = u8;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
@@ -2787,6 +2267,25 @@ pub mod kane {
             }
         }
         Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -2813,7 +2312,7 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(theta);
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
@@ -2824,28 +2323,28 @@ pub mod kane {
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
         let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a;
-        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
         let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a + x5 * d;
+        let x13 = a_ + x5 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a * x2 * x3;
+        let x23 = -x22 * d - a_ * x2 * x3;
         let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a * x2 * x1 - x24 * d;
+        let x25 = -a_ * x2 * x1 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x0 * x1 * x7 - x6 * x3;
         let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
         let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
         let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -2897,9 +2396,9 @@ pub mod kane {
             theta_dot
                 * (m2
                     * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
                             + x20 * x2 * x1 * x1))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -2938,7 +2437,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -2968,135 +2467,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::sin(gamma1);
-        let x2 = f64::cos(gamma1);
-        let x3 = x2 * x2;
-        let x4 = f64::cos(gamma2);
-        let x5 = x4 * x4;
-        let x6 = x2 * d;
-        let x7 = -a - x6;
-        let x8 = (x2 * (J1 - J2) + x7 * d * m1) * x1 - Ixy;
-        let x9 = x4 * d;
-        let x10 = -a - x9;
-        let x11 = x0 * (x4 * (J2 - J1) - m2 * d * x10) - Ixz;
-        let x12 = f64::sin(phi);
-        let x13 = f64::sin(psi);
-        let x14 = f64::sin(theta);
-        let x15 = f64::cos(psi);
-        let x16 = f64::cos(phi);
-        let x17 = x12 * x13 + x14 * x15 * x16;
-        let x18 = x14 * x15 * x12 - x16 * x13;
-        let x19 = d * (x1 * x17 * m1 - m2 * x18 * x0);
-        let x20 = x15 * x16 + x14 * x12 * x13;
-        let x21 = x15 * x12;
-        let x22 = x14 * x16 * x13;
-        let x23 = x22 - x21;
-        let x24 = (x1 * x23 * m1 - m2 * x0 * x20) * d;
-        let x25 = f64::cos(theta);
-        let x26 = (x1 * m1 * x16 - m2 * x0 * x12) * x25 * d;
-        let x27 = d * d;
-        let x28 = -Iyz;
-        let x29 = d + x4 * a;
-        let x30 = J2 + m2 * d * x29;
-        let x31 = x15 * x25 * x0 + x4 * x17;
-        let x32 = m2
-            * (x31 * x29 - a * ((x4 * x25 - x14 * x0 * x16) * x15 - x0 * x12 * x13) * x0)
-            + x7 * x17 * m1;
-        let x33 = x25 * x0 * x13 + x4 * x23;
-        let x34 = x7 * x23 * m1
-            + m2 * (x33 * x29 - a * x0 * (x4 * x25 * x13 + (x21 - x22) * x0));
-        let x35 = x4 * x25 * x16 - x14 * x0;
-        let x36 = m2 * (x35 * x29 - a * (-x25 * x0 * x16 - x4 * x14) * x0)
-            + x7 * x25 * m1 * x16;
-        let x37 = x2 * a + d;
-        let x38 = d * x37 * m1 + J2;
-        let x39 = x2 * x18 - x15 * x1 * x25;
-        let x40 = m2 * x18 * x10
-            + (x39 * x37 + a * (x15 * (x14 * x1 * x12 + x2 * x25) - x1 * x16 * x13) * x1)
-                * m1;
-        let x41 = x2 * x20 - x1 * x25 * x13;
-        let x42 = (x41 * x37 + a * x1 * (x2 * x25 * x13 + x1 * x20)) * m1
-            + m2 * x10 * x20;
-        let x43 = x2 * x25 * x12 + x14 * x1;
-        let x44 = (x43 * x37 + a * (x1 * x25 * x12 - x2 * x14) * x1) * m1
-            + m2 * x25 * x12 * x10;
-        let x45 = x39 * d * m1;
-        let x46 = x41 * d * m1;
-        let x47 = x43 * d * m1;
-        let x48 = m2 * d * x31;
-        let x49 = m2 * d * x33;
-        let x50 = m2 * x35 * d;
-        let x51 = m2 + m0 + m1;
-        [
-            [
-                Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
-                    + (x0 * x0 + x1 * x1) * J2,
-                x8,
-                x11,
-                0.0,
-                0.0,
-                x19,
-                x24,
-                x26,
-            ],
-            [
-                x8,
-                x1 * x1 * J1 + x7 * x7 * m1 + Iyy + J2 * (x3 + 1.0)
-                    + m2 * (x27 + a * (a + 2.0 * x9)),
-                x28,
-                0.0,
-                x30,
-                x32,
-                x34,
-                x36,
-            ],
-            [
-                x11,
-                x28,
-                x0 * x0 * J1 + (a * (a + 2.0 * x6) + x27) * m1 + m2 * x10 * x10 + Izz
-                    + J2 * (x5 + 1.0),
-                x38,
-                0.0,
-                x40,
-                x42,
-                x44,
-            ],
-            [0.0, 0.0, x38, J2 + d * d * m1, 0.0, x45, x46, x47],
-            [0.0, x30, 0.0, 0.0, m2 * d * d + J2, x48, x49, x50],
-            [x19, x32, x40, x45, x48, x51, 0.0, 0.0],
-            [x24, x34, x42, x46, x49, 0.0, x51, 0.0],
-            [x26, x36, x44, x47, x50, 0.0, 0.0, x51],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -3137,15 +2507,25 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -3166,7 +2546,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let G_X = g_i[0];
@@ -3192,10 +2572,10 @@ pub mod reduced_volterra {
         let x17 = f64::cos(gamma2);
         let x18 = x13 + x14;
         let x19 = x17 * d;
-        let x20 = -a - x19;
+        let x20 = -a_ - x19;
         let x21 = x7 * d;
-        let x22 = (a + x21) * m1 + m2 * x20;
-        let x23 = (-a - x21) * m1 + m2 * (a + x19);
+        let x22 = (a_ + x21) * m1 + m2 * x20;
+        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
         let x24 = x10 * x3;
         let x25 = x5 * x2 * x8;
         let x26 = -x24 - x25;
@@ -3219,13 +2599,13 @@ pub mod reduced_volterra {
         let x44 = J1 - J2;
         let x45 = x7 * x6 * d * m1;
         let x46 = x6 * (m2 - m1);
-        let x47 = a * (x46 - 1.0) - x45;
+        let x47 = a_ * (x46 - 1.0) - x45;
         let x48 = 1.0 - x34;
         let x49 = m1 - m2;
         let x50 = x6 * x49;
         let x51 = x50 + 1.0;
-        let x52 = d * x48 + x17 * (x45 + a * x51);
-        let x53 = x6 * x22 - a - x21;
+        let x52 = d * x48 + x17 * (x45 + a_ * x51);
+        let x53 = x6 * x22 - a_ - x21;
         let x54 = x12
             * (x7 * x44
                 + d * m1
@@ -3233,9 +2613,9 @@ pub mod reduced_volterra {
                         + x40 * x53)) - Ixy;
         let x55 = J2 - J1;
         let x56 = x46 + 1.0;
-        let x57 = a * x56 + x17 * x6 * m2 * d;
+        let x57 = a_ * x56 + x17 * x6 * m2 * d;
         let x58 = x40 * d + x7 * x57;
-        let x59 = x23 * x6 - a - x19;
+        let x59 = x23 * x6 - a_ - x19;
         let x60 = (x17 * x55
             + m2 * d
                 * (x6 * (x23 * x6 * m0 + (x12 * x12 * x57 + x7 * x58) * m1) + x59 * x35))
@@ -3282,68 +2662,68 @@ pub mod reduced_volterra {
         let x86 = u4 + u3;
         let x87 = x12 * m1 * x86;
         let x88 = ((x83 - x84 + x85 + x87) * u3 + x17 * u5 * m2 * u1
-            + u4 * u4 * x12 * m1) * d - (a * x49 * u2 + x82 * d) * u1;
+            + u4 * u4 * x12 * m1) * d - (a_ * x49 * u2 + x82 * d) * u1;
         let x89 = ((m2 * x16 * u1 - x7 * u4 * m1) * d + x23 * u3) * u1
             + (u5 * u5 * m2 * x16 - x7 * u4 * u1 * m1 + (x84 - x83 - x85 - x87) * u2)
                 * d;
-        let x90 = a * u4 * u3 * x12;
+        let x90 = a_ * u4 * u3 * x12;
         let x91 = x7 * x81 + x79;
-        let x92 = a * u3 * x12;
-        let x93 = (m2 * ((x16 * x91 + x17 * u3 * x12) * d + x92) - a * u3 * x12 * m1)
+        let x92 = a_ * u3 * x12;
+        let x93 = (m2 * ((x16 * x91 + x17 * u3 * x12) * d + x92) - a_ * u3 * x12 * m1)
             * x6 + x92;
         let x94 = x12 * u2;
         let x95 = x7 * u1;
         let x96 = x94 + x95;
-        let x97 = (x79 - x78 + x6 * x82) * d + a * (x50 - 1.0) * u2;
+        let x97 = (x79 - x78 + x6 * x82) * d + a_ * (x50 - 1.0) * u2;
         let x98 = x7 * x16 * u2;
         let x99 = x17 * u1;
         let x100 = u4 - u3;
         let x101 = u5 + u2;
         let x102 = x93 * x86 - x90 - x96 * x97
             + x6
-                * (a * u4 * u3 * x12 * m1
+                * (a_ * u4 * u3 * x12 * m1
                     + m2
                         * (d
                             * (u4 * (x98 + x12 * x77)
                                 + u5 * (x7 * (x99 + x100 * x16) + x101 * x17 * x12))
                             - x90));
         let x103 = x75 + x76;
-        let x104 = x7 * a * u4 * u3;
+        let x104 = x7 * a_ * u4 * u3;
         let x105 = (x6
             * ((-u4 - u3) * m1 + m2 * ((x101 * x12 + x95) * x16 + x7 * x17 * u3)) + u4
-            + u3) * d + x7 * a * x56 * u3;
+            + u3) * d + x7 * a_ * x56 * u3;
         let x106 = x6
             * (m2
                 * (d
                     * ((x7 * x103 + x12 * x16 * u2) * u4
                         + u5 * (x100 * x12 * x16 + x17 * x91)) + x104)
-                - x7 * a * u4 * u3 * m1) + x104 - x105 * x86 + x80 * x97;
+                - x7 * a_ * u4 * u3 * m1) + x104 - x105 * x86 + x80 * x97;
         let x107 = x96 * x105 - x80 * x93
             + (x101 * x6 * u5 * m2 * x16 + u4 * (x7 * x40 * u1 + x12 * x40 * u2)) * d;
         let x108 = x99 - u3 * x16;
         let x109 = x16 * x86 - x99;
         let x110 = d * (u5 + x6 * ((x7 * x17 * u2 + x109 * x12) * m1 + m2 * x81) + u2)
-            + x17 * a * u2 * x51;
-        let x111 = a * x16 * u2;
+            + x17 * a_ * u2 * x51;
+        let x111 = a_ * x16 * u2;
         let x112 = x17 * x86 + x75;
-        let x113 = x6 * (m2 * a * x16 * u2 + (d * (x112 * x12 - x98) - x111) * m1)
+        let x113 = x6 * (m2 * a_ * x16 * u2 + (d * (x112 * x12 - x98) - x111) * m1)
             - x111;
         let x114 = d
             * (u5 * (x17 * u1 * x35 + u3 * x16 * x48) + x6 * u4 * x12 * m1 * x86)
             - x108 * x110 + x103 * x113;
         let x115 = x59 * u3 + d * (x16 * u1 * x35 - x7 * x6 * u4 * m1);
-        let x116 = u5 * a * x16 * u2;
+        let x116 = u5 * a_ * x16 * u2;
         let x117 = x108 * x115 - x101 * x113 - x116
             + x6
-                * (u5 * m2 * a * x16 * u2
+                * (u5 * m2 * a_ * x16 * u2
                     + ((u5 * (x103 * x12 - x98)
                         + u4 * (x7 * x109 + x17 * x12 * (u5 - u2))) * d - x116) * m1);
-        let x118 = x17 * u5 * a * u2;
+        let x118 = x17 * u5 * a_ * u2;
         let x119 = x6
             * ((d
                 * (u4 * (x12 * x16 * (u2 - u5) + x7 * x112)
                     + u5 * (x17 * (x79 - x78) - u3 * x12 * x16)) - x118) * m1
-                + x17 * u5 * m2 * a * u2) - x115 * x103 - x118 + x101 * x110;
+                + x17 * u5 * m2 * a_ * u2) - x115 * x103 - x118 + x101 * x110;
         let x120 = u4 * J2 * (-x94 - x95) + x96 * x44 * x86;
         let x121 = u3 * Izz - Iyz * u2 - u1 * Ixz;
         let x122 = Iyy * u2 - Iyz * u3 - Ixy * u1;
@@ -3351,7 +2731,7 @@ pub mod reduced_volterra {
         let x124 = x55 * x108 * x103;
         let x125 = u2 * u2;
         let x126 = u3 * u3;
-        let x127 = a * (m2 * (-x125 - x126) + (x125 + x126) * m1)
+        let x127 = a_ * (m2 * (-x125 - x126) + (x125 + x126) * m1)
             + d
                 * (m2 * (x17 * (u5 * (-u5 - 2.0 * u2) - x125 - x126) - u3 * x16 * u1)
                     + (x7 * (x125 + u4 * (u4 + 2.0 * u3) + x126) - x12 * u1 * u2) * m1);
@@ -3359,92 +2739,133 @@ pub mod reduced_volterra {
         let x129 = x102 * x12 - x7 * x106;
         let x130 = x80 * x96 * x44;
         let x131 = x17 * x119 + x16 * x117;
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        Assembly {
+            qdot: [
+                x1 * x4,
+                u2 * x3 - u3 * x2,
+                x5 * x1 * x4 + u1,
+                u4,
+                u5,
+                x6
+                    * (G_X
+                        + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
+                            + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
+                            + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
+                        + ((x7 * d * x18 + a_ * x18) * m1
+                            + m2
+                                * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
+                            * u2
+                        + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1))
+                            * u3),
+                ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32)
+                    * d
+                    + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
+                    + G_Y
+                    + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
+                    * x6,
+                x6
+                    * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
+                        + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
+                        + d
+                            * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
+                                + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
+                                + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
+            ],
+            matrix: [
+                [
+                    Ixx
+                        + d * d
+                            * (m2
+                                * (x16 * x16 * x35 * x35
+                                    + x6 * x6 * x38 * x12 * x12 * m1 * m1)
+                                + x6 * x6 * m0 * (m2 * m2 * x16 * x16 + x12 * x12 * m1 * m1)
+                                + (x12 * x12 * x40 * x40
+                                    + x6 * x6 * m2 * m2 * x16 * x16 * x43) * m1)
+                        + (x41 + x36) * J1 + (x37 + x42) * J2,
+                    x54,
+                    x60,
+                    x63,
+                    x64,
+                ],
+                [
+                    x54,
+                    x12 * x12 * J1 + Iyy + J2 * (x41 + 1.0)
+                        + x6 * x6 * m0 * (m2 * m2 * d * d * x16 * x16 + x22 * x22)
+                        + (x53 * x53 + x6 * x6 * m2 * m2 * d * d * x16 * x16 * x43) * m1
+                        + m2 * (x16 * x16 * x47 * x47 + x52 * x52),
+                    x69,
+                    x70,
+                    x71,
+                ],
+                [
+                    x60,
+                    x69,
+                    x16 * x16 * J1
+                        + m2 * (x6 * x6 * x38 * x12 * x12 * d * d * m1 * m1 + x59 * x59)
+                        + Izz + x6 * x6 * m0 * (x23 * x23 + x12 * x12 * d * d * m1 * m1)
+                        + J2 * (x36 + 1.0) + m1 * (x58 * x58 + x12 * x12 * x57 * x57),
+                    x72,
+                    x73,
+                ],
+                [
+                    x63,
+                    x70,
+                    x72,
+                    J2 + (x6 * x6 * (m2 + m0) * m1 + x40 * x40) * d * d * m1,
+                    x74,
+                ],
+                [
+                    x64,
+                    x71,
+                    x73,
+                    x74,
+                    J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x48 * x48),
+                ],
+            ],
+            force: [
+                (-x17 * u5 * x77 - x7 * x80 * u4) * J1
+                    + d
+                        * (-x6 * x6 * m0 * (m2 * x88 * x16 - x12 * x89 * m1)
+                            - (x6 * m2 * x16 * (x7 * x102 + x12 * x106)
+                                + x12 * x40 * x107) * m1
+                            - m2
+                                * (x114 * x16 * x35
+                                    + x6 * (x16 * x119 - x17 * x117) * x12 * m1)) + x12 * x120
+                    - x121 * u2 + u3 * x122 - x123 * x108 * x16,
+                x124 + x121 * u1 - x6 * x6 * m0 * (x22 * x89 - m2 * d * x16 * x127)
+                    - m2 * (x52 * x117 + x16 * x119 * x47) - x80 * u4 * x12 * J1
+                    - u3 * x128 - (x6 * m2 * x129 * d * x16 + x107 * x53) * m1
+                    - x7 * x120,
+                u5 * x77 * x16 * J1 - x6 * x6 * m0 * (x23 * x88 + x12 * d * m1 * x127)
+                    - u1 * x122 + x130 - (x102 * x58 + x12 * x57 * x106) * m1
+                    - x123 * x17 * x108 + x128 * u2
+                    - m2 * (x114 * x59 + x6 * x12 * d * m1 * x131),
+                x130
+                    + (x6
+                        * (-x6 * m0 * (x12 * x127 - x7 * x88)
+                            - m2 * (x12 * x131 - x7 * x114)) - x102 * x40) * d * m1,
+                x124
+                    + m2 * d
+                        * (x6
+                            * (-m1 * (x129 * x16 - x17 * x107)
+                                - x6 * m0 * (-x17 * x89 - x16 * x127)) - x117 * x48),
+            ],
+            checks: [x0],
         }
-        let mut matrix: [[f64; 5]; 5] = [
-            [
-                Ixx
-                    + d * d
-                        * (m2
-                            * (x16 * x16 * x35 * x35
-                                + x6 * x6 * x38 * x12 * x12 * m1 * m1)
-                            + x6 * x6 * m0 * (m2 * m2 * x16 * x16 + x12 * x12 * m1 * m1)
-                            + (x12 * x12 * x40 * x40
-                                + x6 * x6 * m2 * m2 * x16 * x16 * x43) * m1)
-                    + (x41 + x36) * J1 + (x37 + x42) * J2,
-                x54,
-                x60,
-                x63,
-                x64,
-            ],
-            [
-                x54,
-                x12 * x12 * J1 + Iyy + J2 * (x41 + 1.0)
-                    + x6 * x6 * m0 * (m2 * m2 * d * d * x16 * x16 + x22 * x22)
-                    + (x53 * x53 + x6 * x6 * m2 * m2 * d * d * x16 * x16 * x43) * m1
-                    + m2 * (x16 * x16 * x47 * x47 + x52 * x52),
-                x69,
-                x70,
-                x71,
-            ],
-            [
-                x60,
-                x69,
-                x16 * x16 * J1
-                    + m2 * (x6 * x6 * x38 * x12 * x12 * d * d * m1 * m1 + x59 * x59)
-                    + Izz + x6 * x6 * m0 * (x23 * x23 + x12 * x12 * d * d * m1 * m1)
-                    + J2 * (x36 + 1.0) + m1 * (x58 * x58 + x12 * x12 * x57 * x57),
-                x72,
-                x73,
-            ],
-            [
-                x63,
-                x70,
-                x72,
-                J2 + (x6 * x6 * (m2 + m0) * m1 + x40 * x40) * d * d * m1,
-                x74,
-            ],
-            [
-                x64,
-                x71,
-                x73,
-                x74,
-                J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x48 * x48),
-            ],
-        ];
-        let mut force: [f64; 5] = [
-            (-x17 * u5 * x77 - x7 * x80 * u4) * J1
-                + d
-                    * (-x6 * x6 * m0 * (m2 * x88 * x16 - x12 * x89 * m1)
-                        - (x6 * m2 * x16 * (x7 * x102 + x12 * x106) + x12 * x40 * x107)
-                            * m1
-                        - m2
-                            * (x114 * x16 * x35
-                                + x6 * (x16 * x119 - x17 * x117) * x12 * m1)) + x12 * x120
-                - x121 * u2 + u3 * x122 - x123 * x108 * x16,
-            x124 + x121 * u1 - x6 * x6 * m0 * (x22 * x89 - m2 * d * x16 * x127)
-                - m2 * (x52 * x117 + x16 * x119 * x47) - x80 * u4 * x12 * J1 - u3 * x128
-                - (x6 * m2 * x129 * d * x16 + x107 * x53) * m1 - x7 * x120,
-            u5 * x77 * x16 * J1 - x6 * x6 * m0 * (x23 * x88 + x12 * d * m1 * x127)
-                - u1 * x122 + x130 - (x102 * x58 + x12 * x57 * x106) * m1
-                - x123 * x17 * x108 + x128 * u2
-                - m2 * (x114 * x59 + x6 * x12 * d * m1 * x131),
-            x130
-                + (x6
-                    * (-x6 * m0 * (x12 * x127 - x7 * x88)
-                        - m2 * (x12 * x131 - x7 * x114)) - x102 * x40) * d * m1,
-            x124
-                + m2 * d
-                    * (x6
-                        * (-m1 * (x129 * x16 - x17 * x107)
-                            - x6 * m0 * (-x17 * x89 - x16 * x127)) - x117 * x48),
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -3452,30 +2873,14 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x4;
-        dstate[1] = u2 * x3 - u3 * x2;
-        dstate[2] = x5 * x1 * x4 + u1;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = x6
-            * (G_X
-                + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
-                    + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
-                    + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                + ((x7 * d * x18 + a * x18) * m1
-                    + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8)) * u2
-                + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3);
-        dstate[6] = ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1)
-            + u5 * m2 * x32) * d
-            + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a * (x26 * m1 + m2 * x28)) + G_Y
-            + (m2 * (d * x32 + x31 * a) + m1 * (x7 * d * x33 + a * x33)) * u2) * x6;
-        dstate[7] = x6
-            * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
-                + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
-                + d
-                    * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
-                        + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
-                        + (-x7 * x0 * x2 - x5 * x12) * u4 * m1));
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
@@ -3487,6 +2892,25 @@ pub mod reduced_volterra {
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -3513,7 +2937,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(theta);
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
@@ -3524,28 +2948,28 @@ pub mod reduced_volterra {
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
         let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a;
-        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
         let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a + x5 * d;
+        let x13 = a_ + x5 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a * x2 * x3;
+        let x23 = -x22 * d - a_ * x2 * x3;
         let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a * x2 * x1 - x24 * d;
+        let x25 = -a_ * x2 * x1 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x0 * x1 * x7 - x6 * x3;
         let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
         let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
         let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -3594,9 +3018,9 @@ pub mod reduced_volterra {
             theta_dot
                 * (m2
                     * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
                             + x20 * x2 * x1 * x1))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -3630,7 +3054,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
@@ -3654,10 +3078,10 @@ pub mod reduced_volterra {
         let x17 = f64::cos(gamma2);
         let x18 = x13 + x14;
         let x19 = x17 * d;
-        let x20 = -a - x19;
+        let x20 = -a_ - x19;
         let x21 = x7 * d;
-        let x22 = (a + x21) * m1 + m2 * x20;
-        let x23 = (-a - x21) * m1 + m2 * (a + x19);
+        let x22 = (a_ + x21) * m1 + m2 * x20;
+        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
         let x24 = x10 * x3;
         let x25 = x5 * x2 * x8;
         let x26 = -x24 - x25;
@@ -3672,7 +3096,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -3697,13 +3121,14 @@ pub mod reduced_volterra {
                     + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
                         + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
                         + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a * x18) * m1
+                    + ((x7 * d * x18 + a_ * x18) * m1
                         + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
                         * u2
                     + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
             ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a * (x26 * m1 + m2 * x28))
-                + G_Y + (m2 * (d * x32 + x31 * a) + m1 * (x7 * d * x33 + a * x33)) * u2)
+                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
+                + G_Y
+                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
                 * x6,
             x6
                 * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
@@ -3719,145 +3144,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 5;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::sin(gamma2);
-        let x1 = 1.0 / (m2 + m0 + m1);
-        let x2 = x1 * m2;
-        let x3 = x2 - 1.0;
-        let x4 = f64::cos(gamma2);
-        let x5 = x4 * x4;
-        let x6 = x0 * x0;
-        let x7 = x5 + x6;
-        let x8 = f64::sin(gamma1);
-        let x9 = x1 * m1;
-        let x10 = 1.0 - x9;
-        let x11 = f64::cos(gamma1);
-        let x12 = x11 * x11;
-        let x13 = x8 * x8;
-        let x14 = x12 + x13;
-        let x15 = x11 * d;
-        let x16 = x4 * d;
-        let x17 = (a + x15) * m1 + m2 * (-a - x16);
-        let x18 = x11 * x1 * d * m1;
-        let x19 = x1 * (m2 - m1);
-        let x20 = a * (x19 - 1.0) - x18;
-        let x21 = 1.0 - x2;
-        let x22 = d * x21 + x4 * (x18 + a * (x1 * (m1 - m2) + 1.0));
-        let x23 = x1 * x17 - a - x15;
-        let x24 = x8
-            * (x11 * (J1 - J2)
-                + d * m1
-                    * (x1 * (m2 * (x0 * x0 * x20 - x4 * x22) - x1 * m0 * x17)
-                        + x10 * x23)) - Ixy;
-        let x25 = (-a - x15) * m1 + m2 * (a + x16);
-        let x26 = a * (x19 + 1.0) + x4 * x1 * m2 * d;
-        let x27 = x10 * d + x11 * x26;
-        let x28 = x25 * x1 - a - x16;
-        let x29 = (x4 * (J2 - J1)
-            + m2 * d
-                * (x1 * (x25 * x1 * m0 + (x8 * x8 * x26 + x11 * x27) * m1) + x28 * x3))
-            * x0 - Ixz;
-        let x30 = x1 * m0;
-        let x31 = 2.0 - x2 - x9 - x30;
-        let x32 = x11 * x1 * m2 * d * d * x0 * x31 * m1;
-        let x33 = x4 * x1 * m2 * x8 * d * d * m1 * (x2 + x9 + x30 - 2.0);
-        let x34 = x8 * x0;
-        let x35 = x11 * x4;
-        let x36 = x35 - x34;
-        let x37 = x35 + x34;
-        let x38 = x1 * m2 * d * d * m1
-            * (2.0 * x34
-                + x1
-                    * (x36 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x37)) - Iyz;
-        let x39 = x1 * m2 * d * d
-            * ((0.5 - 0.5 * x2) * x37 + x8 * x0 * (1.0 - x9 - x30)
-                + x36 * (0.5 * x2 - 0.5)) * m1;
-        let x40 = m2 * d
-            * (x22 * x21
-                + ((x1 * m2 * d * x0 * x0 * x14 - x4 * x23) * m1
-                    + x1 * m0 * (m2 * d * x0 * x0 - x4 * x17)) * x1) + J2;
-        let x41 = d * m1
-            * (x1
-                * (m2 * (x1 * x7 * x8 * x8 * d * m1 - x11 * x28)
-                    + x1 * m0 * (x8 * x8 * d * m1 - x11 * x25)) + x10 * x27) + J2;
-        let x42 = x1
-            * ((1.0 - x2 - x30) * x8 * x0 + x36 * (0.5 * x9 - 0.5)
-                + (0.5 - 0.5 * x9) * x37) * m2 * d * d * m1;
-        let x43 = x1 * m2 * x8 * d * d * x0 * x31 * m1;
-        [
-            [
-                Ixx
-                    + d * d
-                        * (m2 * (x0 * x0 * x3 * x3 + x1 * x1 * x7 * x8 * x8 * m1 * m1)
-                            + x1 * x1 * m0 * (m2 * m2 * x0 * x0 + x8 * x8 * m1 * m1)
-                            + (x8 * x8 * x10 * x10 + x1 * x1 * m2 * m2 * x0 * x0 * x14)
-                                * m1) + (x12 + x5) * J1 + (x6 + x13) * J2,
-                x24,
-                x29,
-                x32,
-                x33,
-            ],
-            [
-                x24,
-                x8 * x8 * J1 + Iyy + J2 * (x12 + 1.0)
-                    + x1 * x1 * m0 * (m2 * m2 * d * d * x0 * x0 + x17 * x17)
-                    + (x23 * x23 + x1 * x1 * m2 * m2 * d * d * x0 * x0 * x14) * m1
-                    + m2 * (x0 * x0 * x20 * x20 + x22 * x22),
-                x38,
-                x39,
-                x40,
-            ],
-            [
-                x29,
-                x38,
-                x0 * x0 * J1
-                    + m2 * (x1 * x1 * x7 * x8 * x8 * d * d * m1 * m1 + x28 * x28) + Izz
-                    + x1 * x1 * m0 * (x25 * x25 + x8 * x8 * d * d * m1 * m1)
-                    + J2 * (x5 + 1.0) + m1 * (x27 * x27 + x8 * x8 * x26 * x26),
-                x41,
-                x42,
-            ],
-            [
-                x32,
-                x39,
-                x41,
-                J2 + (x1 * x1 * (m2 + m0) * m1 + x10 * x10) * d * d * m1,
-                x43,
-            ],
-            [
-                x33,
-                x40,
-                x42,
-                x43,
-                J2 + m2 * d * d * (x1 * x1 * m2 * (m0 + m1) + x21 * x21),
-            ],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -79,7 +79,7 @@ pub struct Params {
     ///`d` (model value 0.4)
     pub d: f64,
     ///`a` (model value 0.5)
-    pub a: f64,
+    pub a_: f64,
     ///`J1` (model value 0.02)
     pub J1: f64,
     ///`J2` (model value 0.12)
@@ -98,7 +98,7 @@ impl Default for Params {
             m1: 2.0,
             m2: 2.0,
             d: 0.4,
-            a: 0.5,
+            a_: 0.5,
             J1: 0.02,
             J2: 0.12,
         }
@@ -134,7 +134,7 @@ impl Params {
             self.m1,
             self.m2,
             self.d,
-            self.a,
+            self.a_,
             self.J1,
             self.J2,
         ]
@@ -152,7 +152,7 @@ impl Params {
             m1: values[7],
             m2: values[8],
             d: values[9],
-            a: values[10],
+            a_: values[10],
             J1: values[11],
             J2: values[12],
         }
@@ -260,7 +260,7 @@ pub fn energy(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
     let x0 = f64::cos(gamma1);
@@ -278,7 +278,7 @@ pub fn energy(
     let x12 = x2 * psi_dot * x9;
     let x13 = theta_dot * x7;
     let x14 = x12 - x13;
-    let x15 = a * x14;
+    let x15 = a_ * x14;
     let x16 = x8 + x10 + x11 + x15;
     let x17 = x0 * x5 + x6 * x16;
     let x18 = x12 + gamma1_dot - x13;
@@ -286,7 +286,7 @@ pub fn energy(
     let x20 = theta_dot * x9;
     let x21 = x2 * psi_dot * x7;
     let x22 = x20 + x21;
-    let x23 = a * x22;
+    let x23 = a_ * x22;
     let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
     let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
     let x26 = Z_dot * x2 * x9;
@@ -347,7 +347,7 @@ pub fn momenta(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
     let x2 = f64::cos(psi);
@@ -358,28 +358,28 @@ pub fn momenta(
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
     let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a;
-    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
     let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a + x1 * d;
+    let x13 = a_ + x1 * d;
     let x14 = f64::sin(gamma1);
     let x15 = f64::cos(gamma1);
     let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a;
+    let x17 = x15 * a_;
     let x18 = -x17 - d;
-    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a - x15 * d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
     let x21 = x17 + d;
     let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a * x3 * x4;
+    let x23 = -x22 * d - a_ * x3 * x4;
     let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a * x3 * x7 - x24 * d;
+    let x25 = -a_ * x3 * x7 - x24 * d;
     let x26 = m2 + m0 + m1;
     let x27 = x6 * x7 * x5 - x2 * x4;
     let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
     let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
     let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
@@ -401,9 +401,9 @@ pub fn momenta(
         theta_dot
             * (m2
                 * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                 + m1
-                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                         + x20 * x3 * x7 * x7))
             + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                 + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -452,15 +452,25 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = false;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 5],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
-        t: f64,
+    fn assemble(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -480,7 +490,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::cos(theta);
@@ -506,27 +516,27 @@ pub mod reduced_volterra {
         let x20 = J1 - J2;
         let x21 = x16 * d;
         let x22 = x9 * d;
-        let x23 = (a + x21) * m1 + m2 * (-a - x22);
+        let x23 = (a_ + x21) * m1 + m2 * (-a_ - x22);
         let x24 = x16 * x6 * d * m1;
         let x25 = x6 * (m2 - m1);
-        let x26 = a * (x25 - 1.0) - x24;
+        let x26 = a_ * (x25 - 1.0) - x24;
         let x27 = 1.0 - x7;
         let x28 = m1 - m2;
         let x29 = x6 * x28;
         let x30 = x29 + 1.0;
-        let x31 = d * x27 + x9 * (x24 + a * x30);
-        let x32 = x6 * x23 - a - x21;
+        let x31 = d * x27 + x9 * (x24 + a_ * x30);
+        let x32 = x6 * x23 - a_ - x21;
         let x33 = x13
             * (x16 * x20
                 + d * m1
                     * (x6 * (m2 * (x5 * x5 * x26 - x9 * x31) - x6 * m0 * x23)
                         + x15 * x32)) - Ixy;
         let x34 = J2 - J1;
-        let x35 = (-a - x21) * m1 + m2 * (a + x22);
+        let x35 = (-a_ - x21) * m1 + m2 * (a_ + x22);
         let x36 = x25 + 1.0;
-        let x37 = a * x36 + x9 * x6 * m2 * d;
+        let x37 = a_ * x36 + x9 * x6 * m2 * d;
         let x38 = x15 * d + x16 * x37;
-        let x39 = x35 * x6 - a - x22;
+        let x39 = x35 * x6 - a_ - x22;
         let x40 = (x9 * x34
             + m2 * d
                 * (x6 * (x35 * x6 * m0 + (x13 * x13 * x37 + x16 * x38) * m1) + x39 * x8))
@@ -573,64 +583,64 @@ pub mod reduced_volterra {
         let x66 = u4 + u3;
         let x67 = x13 * m1 * x66;
         let x68 = ((x63 - x64 + x65 + x67) * u3 + x9 * u5 * m2 * u1 + u4 * u4 * x13 * m1)
-            * d - (a * x28 * u2 + x62 * d) * u1;
+            * d - (a_ * x28 * u2 + x62 * d) * u1;
         let x69 = ((m2 * x5 * u1 - x16 * u4 * m1) * d + x35 * u3) * u1
             + (u5 * u5 * m2 * x5 - x16 * u4 * u1 * m1 + (x64 - x63 - x65 - x67) * u2)
                 * d;
-        let x70 = a * u4 * u3 * x13;
+        let x70 = a_ * u4 * u3 * x13;
         let x71 = x16 * x61 + x59;
-        let x72 = a * u3 * x13;
-        let x73 = (m2 * ((x5 * x71 + x9 * u3 * x13) * d + x72) - a * u3 * x13 * m1) * x6
+        let x72 = a_ * u3 * x13;
+        let x73 = (m2 * ((x5 * x71 + x9 * u3 * x13) * d + x72) - a_ * u3 * x13 * m1) * x6
             + x72;
         let x74 = x13 * u2;
         let x75 = x16 * u1;
         let x76 = x74 + x75;
-        let x77 = (x59 - x58 + x6 * x62) * d + a * (x29 - 1.0) * u2;
+        let x77 = (x59 - x58 + x6 * x62) * d + a_ * (x29 - 1.0) * u2;
         let x78 = x16 * x5 * u2;
         let x79 = x9 * u1;
         let x80 = u4 - u3;
         let x81 = u5 + u2;
         let x82 = x73 * x66 - x70 - x76 * x77
             + x6
-                * (a * u4 * u3 * x13 * m1
+                * (a_ * u4 * u3 * x13 * m1
                     + m2
                         * (d
                             * (u4 * (x78 + x13 * x57)
                                 + u5 * (x16 * (x79 + x80 * x5) + x81 * x9 * x13)) - x70));
         let x83 = x55 + x56;
-        let x84 = x16 * a * u4 * u3;
+        let x84 = x16 * a_ * u4 * u3;
         let x85 = (x6 * ((-u4 - u3) * m1 + m2 * ((x81 * x13 + x75) * x5 + x16 * x9 * u3))
-            + u4 + u3) * d + x16 * a * x36 * u3;
+            + u4 + u3) * d + x16 * a_ * x36 * u3;
         let x86 = x6
             * (m2
                 * (d
                     * ((x16 * x83 + x13 * x5 * u2) * u4
                         + u5 * (x80 * x13 * x5 + x9 * x71)) + x84)
-                - x16 * a * u4 * u3 * m1) + x84 - x85 * x66 + x60 * x77;
+                - x16 * a_ * u4 * u3 * m1) + x84 - x85 * x66 + x60 * x77;
         let x87 = x76 * x85 - x60 * x73
             + (x81 * x6 * u5 * m2 * x5 + u4 * (x16 * x15 * u1 + x13 * x15 * u2)) * d;
         let x88 = x79 - u3 * x5;
         let x89 = x5 * x66 - x79;
         let x90 = d * (u5 + x6 * ((x16 * x9 * u2 + x89 * x13) * m1 + m2 * x61) + u2)
-            + x9 * a * u2 * x30;
-        let x91 = a * x5 * u2;
+            + x9 * a_ * u2 * x30;
+        let x91 = a_ * x5 * u2;
         let x92 = x9 * x66 + x55;
-        let x93 = x6 * (m2 * a * x5 * u2 + (d * (x92 * x13 - x78) - x91) * m1) - x91;
+        let x93 = x6 * (m2 * a_ * x5 * u2 + (d * (x92 * x13 - x78) - x91) * m1) - x91;
         let x94 = d * (u5 * (x9 * u1 * x8 + u3 * x5 * x27) + x6 * u4 * x13 * m1 * x66)
             - x88 * x90 + x83 * x93;
         let x95 = x39 * u3 + d * (x5 * u1 * x8 - x16 * x6 * u4 * m1);
-        let x96 = u5 * a * x5 * u2;
+        let x96 = u5 * a_ * x5 * u2;
         let x97 = x88 * x95 - x81 * x93 - x96
             + x6
-                * (u5 * m2 * a * x5 * u2
+                * (u5 * m2 * a_ * x5 * u2
                     + ((u5 * (x83 * x13 - x78) + u4 * (x16 * x89 + x9 * x13 * (u5 - u2)))
                         * d - x96) * m1);
-        let x98 = x9 * u5 * a * u2;
+        let x98 = x9 * u5 * a_ * u2;
         let x99 = x6
             * ((d
                 * (u4 * (x13 * x5 * (u2 - u5) + x16 * x92)
                     + u5 * (x9 * (x59 - x58) - u3 * x13 * x5)) - x98) * m1
-                + x9 * u5 * m2 * a * u2) - x95 * x83 - x98 + x81 * x90;
+                + x9 * u5 * m2 * a_ * u2) - x95 * x83 - x98 + x81 * x90;
         let x100 = u4 * J2 * (-x74 - x75) + x76 * x20 * x66;
         let x101 = u3 * Izz - Iyz * u2 - u1 * Ixz;
         let x102 = Iyy * u2 - Iyz * u3 - Ixy * u1;
@@ -638,7 +648,7 @@ pub mod reduced_volterra {
         let x104 = x34 * x88 * x83;
         let x105 = u2 * u2;
         let x106 = u3 * u3;
-        let x107 = a * (m2 * (-x105 - x106) + (x105 + x106) * m1)
+        let x107 = a_ * (m2 * (-x105 - x106) + (x105 + x106) * m1)
             + d
                 * (m2 * (x9 * (u5 * (-u5 - 2.0 * u2) - x105 - x106) - u3 * x5 * u1)
                     + (x16 * (x105 + u4 * (u4 + 2.0 * u3) + x106) - x13 * u1 * u2) * m1);
@@ -646,85 +656,100 @@ pub mod reduced_volterra {
         let x109 = x82 * x13 - x16 * x86;
         let x110 = x60 * x76 * x20;
         let x111 = x9 * x99 + x5 * x97;
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        Assembly {
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, f64::sin(theta) * x1 * x4 + u1, u4, u5],
+            matrix: [
+                [
+                    Ixx
+                        + d * d
+                            * (m2
+                                * (x5 * x5 * x8 * x8 + x6 * x6 * x12 * x13 * x13 * m1 * m1)
+                                + x6 * x6 * m0 * (m2 * m2 * x5 * x5 + x13 * x13 * m1 * m1)
+                                + (x13 * x13 * x15 * x15
+                                    + x6 * x6 * m2 * m2 * x5 * x5 * x19) * m1)
+                        + (x17 + x10) * J1 + (x11 + x18) * J2,
+                    x33,
+                    x40,
+                    x43,
+                    x44,
+                ],
+                [
+                    x33,
+                    x13 * x13 * J1 + Iyy + J2 * (x17 + 1.0)
+                        + x6 * x6 * m0 * (m2 * m2 * d * d * x5 * x5 + x23 * x23)
+                        + (x32 * x32 + x6 * x6 * m2 * m2 * d * d * x5 * x5 * x19) * m1
+                        + m2 * (x5 * x5 * x26 * x26 + x31 * x31),
+                    x49,
+                    x50,
+                    x51,
+                ],
+                [
+                    x40,
+                    x49,
+                    x5 * x5 * J1
+                        + m2 * (x6 * x6 * x12 * x13 * x13 * d * d * m1 * m1 + x39 * x39)
+                        + Izz + x6 * x6 * m0 * (x35 * x35 + x13 * x13 * d * d * m1 * m1)
+                        + J2 * (x10 + 1.0) + m1 * (x38 * x38 + x13 * x13 * x37 * x37),
+                    x52,
+                    x53,
+                ],
+                [
+                    x43,
+                    x50,
+                    x52,
+                    J2 + (x6 * x6 * (m2 + m0) * m1 + x15 * x15) * d * d * m1,
+                    x54,
+                ],
+                [
+                    x44,
+                    x51,
+                    x53,
+                    x54,
+                    J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x27 * x27),
+                ],
+            ],
+            force: [
+                (-x9 * u5 * x57 - x16 * x60 * u4) * J1
+                    + d
+                        * (-x6 * x6 * m0 * (m2 * x68 * x5 - x13 * x69 * m1)
+                            - (x6 * m2 * x5 * (x16 * x82 + x13 * x86) + x13 * x15 * x87)
+                                * m1
+                            - m2
+                                * (x94 * x5 * x8 + x6 * (x5 * x99 - x9 * x97) * x13 * m1))
+                    + x13 * x100 - x101 * u2 + u3 * x102 - x103 * x88 * x5,
+                x104 + x101 * u1 - x6 * x6 * m0 * (x23 * x69 - m2 * d * x5 * x107)
+                    - m2 * (x31 * x97 + x5 * x99 * x26) - x60 * u4 * x13 * J1 - u3 * x108
+                    - (x6 * m2 * x109 * d * x5 + x87 * x32) * m1 - x16 * x100,
+                u5 * x57 * x5 * J1 - x6 * x6 * m0 * (x35 * x68 + x13 * d * m1 * x107)
+                    - u1 * x102 + x110 - (x82 * x38 + x13 * x37 * x86) * m1
+                    - x103 * x9 * x88 + x108 * u2
+                    - m2 * (x94 * x39 + x6 * x13 * d * m1 * x111),
+                x110
+                    + (x6
+                        * (-x6 * m0 * (x13 * x107 - x16 * x68)
+                            - m2 * (x13 * x111 - x16 * x94)) - x82 * x15) * d * m1,
+                x104
+                    + m2 * d
+                        * (x6
+                            * (-m1 * (x109 * x5 - x9 * x87)
+                                - x6 * m0 * (-x9 * x69 - x5 * x107)) - x97 * x27),
+            ],
+            checks: [x0],
         }
-        let mut matrix: [[f64; 5]; 5] = [
-            [
-                Ixx
-                    + d * d
-                        * (m2 * (x5 * x5 * x8 * x8 + x6 * x6 * x12 * x13 * x13 * m1 * m1)
-                            + x6 * x6 * m0 * (m2 * m2 * x5 * x5 + x13 * x13 * m1 * m1)
-                            + (x13 * x13 * x15 * x15 + x6 * x6 * m2 * m2 * x5 * x5 * x19)
-                                * m1) + (x17 + x10) * J1 + (x11 + x18) * J2,
-                x33,
-                x40,
-                x43,
-                x44,
-            ],
-            [
-                x33,
-                x13 * x13 * J1 + Iyy + J2 * (x17 + 1.0)
-                    + x6 * x6 * m0 * (m2 * m2 * d * d * x5 * x5 + x23 * x23)
-                    + (x32 * x32 + x6 * x6 * m2 * m2 * d * d * x5 * x5 * x19) * m1
-                    + m2 * (x5 * x5 * x26 * x26 + x31 * x31),
-                x49,
-                x50,
-                x51,
-            ],
-            [
-                x40,
-                x49,
-                x5 * x5 * J1
-                    + m2 * (x6 * x6 * x12 * x13 * x13 * d * d * m1 * m1 + x39 * x39)
-                    + Izz + x6 * x6 * m0 * (x35 * x35 + x13 * x13 * d * d * m1 * m1)
-                    + J2 * (x10 + 1.0) + m1 * (x38 * x38 + x13 * x13 * x37 * x37),
-                x52,
-                x53,
-            ],
-            [
-                x43,
-                x50,
-                x52,
-                J2 + (x6 * x6 * (m2 + m0) * m1 + x15 * x15) * d * d * m1,
-                x54,
-            ],
-            [
-                x44,
-                x51,
-                x53,
-                x54,
-                J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x27 * x27),
-            ],
-        ];
-        let mut force: [f64; 5] = [
-            (-x9 * u5 * x57 - x16 * x60 * u4) * J1
-                + d
-                    * (-x6 * x6 * m0 * (m2 * x68 * x5 - x13 * x69 * m1)
-                        - (x6 * m2 * x5 * (x16 * x82 + x13 * x86) + x13 * x15 * x87) * m1
-                        - m2 * (x94 * x5 * x8 + x6 * (x5 * x99 - x9 * x97) * x13 * m1))
-                + x13 * x100 - x101 * u2 + u3 * x102 - x103 * x88 * x5,
-            x104 + x101 * u1 - x6 * x6 * m0 * (x23 * x69 - m2 * d * x5 * x107)
-                - m2 * (x31 * x97 + x5 * x99 * x26) - x60 * u4 * x13 * J1 - u3 * x108
-                - (x6 * m2 * x109 * d * x5 + x87 * x32) * m1 - x16 * x100,
-            u5 * x57 * x5 * J1 - x6 * x6 * m0 * (x35 * x68 + x13 * d * m1 * x107)
-                - u1 * x102 + x110 - (x82 * x38 + x13 * x37 * x86) * m1 - x103 * x9 * x88
-                + x108 * u2 - m2 * (x94 * x39 + x6 * x13 * d * m1 * x111),
-            x110
-                + (x6
-                    * (-x6 * m0 * (x13 * x107 - x16 * x68)
-                        - m2 * (x13 * x111 - x16 * x94)) - x82 * x15) * d * m1,
-            x104
-                + m2 * d
-                    * (x6
-                        * (-m1 * (x109 * x5 - x9 * x87)
-                            - x6 * m0 * (-x9 * x69 - x5 * x107)) - x97 * x27),
-        ];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -732,11 +757,11 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
-        dstate[0] = x1 * x4;
-        dstate[1] = u2 * x3 - u3 * x2;
-        dstate[2] = f64::sin(theta) * x1 * x4 + u1;
-        dstate[3] = u4;
-        dstate[4] = u5;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
         dstate[5] = force[0];
         dstate[6] = force[1];
         dstate[7] = force[2];
@@ -748,6 +773,25 @@ pub mod reduced_volterra {
             }
         }
         Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -774,7 +818,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(theta);
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
@@ -785,28 +829,28 @@ pub mod reduced_volterra {
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
         let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a;
-        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
         let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a + x5 * d;
+        let x13 = a_ + x5 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a * x2 * x3;
+        let x23 = -x22 * d - a_ * x2 * x3;
         let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a * x2 * x1 - x24 * d;
+        let x25 = -a_ * x2 * x1 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x0 * x1 * x7 - x6 * x3;
         let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
         let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
         let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -852,9 +896,9 @@ pub mod reduced_volterra {
             theta_dot
                 * (m2
                     * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
                             + x20 * x2 * x1 * x1))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -888,7 +932,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
@@ -912,10 +956,10 @@ pub mod reduced_volterra {
         let x17 = f64::cos(gamma2);
         let x18 = x13 + x14;
         let x19 = x17 * d;
-        let x20 = -a - x19;
+        let x20 = -a_ - x19;
         let x21 = x7 * d;
-        let x22 = (a + x21) * m1 + m2 * x20;
-        let x23 = (-a - x21) * m1 + m2 * (a + x19);
+        let x22 = (a_ + x21) * m1 + m2 * x20;
+        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
         let x24 = x10 * x3;
         let x25 = x5 * x2 * x8;
         let x26 = -x24 - x25;
@@ -930,7 +974,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -955,13 +999,14 @@ pub mod reduced_volterra {
                     + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
                         + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
                         + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a * x18) * m1
+                    + ((x7 * d * x18 + a_ * x18) * m1
                         + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
                         * u2
                     + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
             ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a * (x26 * m1 + m2 * x28))
-                + G_Y + (m2 * (d * x32 + x31 * a) + m1 * (x7 * d * x33 + a * x33)) * u2)
+                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
+                + G_Y
+                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
                 * x6,
             x6
                 * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
@@ -977,145 +1022,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 5;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let x0 = f64::sin(gamma2);
-        let x1 = 1.0 / (m2 + m0 + m1);
-        let x2 = x1 * m2;
-        let x3 = x2 - 1.0;
-        let x4 = f64::cos(gamma2);
-        let x5 = x4 * x4;
-        let x6 = x0 * x0;
-        let x7 = x5 + x6;
-        let x8 = f64::sin(gamma1);
-        let x9 = x1 * m1;
-        let x10 = 1.0 - x9;
-        let x11 = f64::cos(gamma1);
-        let x12 = x11 * x11;
-        let x13 = x8 * x8;
-        let x14 = x12 + x13;
-        let x15 = x11 * d;
-        let x16 = x4 * d;
-        let x17 = (a + x15) * m1 + m2 * (-a - x16);
-        let x18 = x11 * x1 * d * m1;
-        let x19 = x1 * (m2 - m1);
-        let x20 = a * (x19 - 1.0) - x18;
-        let x21 = 1.0 - x2;
-        let x22 = d * x21 + x4 * (x18 + a * (x1 * (m1 - m2) + 1.0));
-        let x23 = x1 * x17 - a - x15;
-        let x24 = x8
-            * (x11 * (J1 - J2)
-                + d * m1
-                    * (x1 * (m2 * (x0 * x0 * x20 - x4 * x22) - x1 * m0 * x17)
-                        + x10 * x23)) - Ixy;
-        let x25 = (-a - x15) * m1 + m2 * (a + x16);
-        let x26 = a * (x19 + 1.0) + x4 * x1 * m2 * d;
-        let x27 = x10 * d + x11 * x26;
-        let x28 = x25 * x1 - a - x16;
-        let x29 = (x4 * (J2 - J1)
-            + m2 * d
-                * (x1 * (x25 * x1 * m0 + (x8 * x8 * x26 + x11 * x27) * m1) + x28 * x3))
-            * x0 - Ixz;
-        let x30 = x1 * m0;
-        let x31 = 2.0 - x2 - x9 - x30;
-        let x32 = x11 * x1 * m2 * d * d * x0 * x31 * m1;
-        let x33 = x4 * x1 * m2 * x8 * d * d * m1 * (x2 + x9 + x30 - 2.0);
-        let x34 = x8 * x0;
-        let x35 = x11 * x4;
-        let x36 = x35 - x34;
-        let x37 = x35 + x34;
-        let x38 = x1 * m2 * d * d * m1
-            * (2.0 * x34
-                + x1
-                    * (x36 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x37)) - Iyz;
-        let x39 = x1 * m2 * d * d
-            * ((0.5 - 0.5 * x2) * x37 + x8 * x0 * (1.0 - x9 - x30)
-                + x36 * (0.5 * x2 - 0.5)) * m1;
-        let x40 = m2 * d
-            * (x22 * x21
-                + ((x1 * m2 * d * x0 * x0 * x14 - x4 * x23) * m1
-                    + x1 * m0 * (m2 * d * x0 * x0 - x4 * x17)) * x1) + J2;
-        let x41 = d * m1
-            * (x1
-                * (m2 * (x1 * x7 * x8 * x8 * d * m1 - x11 * x28)
-                    + x1 * m0 * (x8 * x8 * d * m1 - x11 * x25)) + x10 * x27) + J2;
-        let x42 = x1
-            * ((1.0 - x2 - x30) * x8 * x0 + x36 * (0.5 * x9 - 0.5)
-                + (0.5 - 0.5 * x9) * x37) * m2 * d * d * m1;
-        let x43 = x1 * m2 * x8 * d * d * x0 * x31 * m1;
-        [
-            [
-                Ixx
-                    + d * d
-                        * (m2 * (x0 * x0 * x3 * x3 + x1 * x1 * x7 * x8 * x8 * m1 * m1)
-                            + x1 * x1 * m0 * (m2 * m2 * x0 * x0 + x8 * x8 * m1 * m1)
-                            + (x8 * x8 * x10 * x10 + x1 * x1 * m2 * m2 * x0 * x0 * x14)
-                                * m1) + (x12 + x5) * J1 + (x6 + x13) * J2,
-                x24,
-                x29,
-                x32,
-                x33,
-            ],
-            [
-                x24,
-                x8 * x8 * J1 + Iyy + J2 * (x12 + 1.0)
-                    + x1 * x1 * m0 * (m2 * m2 * d * d * x0 * x0 + x17 * x17)
-                    + (x23 * x23 + x1 * x1 * m2 * m2 * d * d * x0 * x0 * x14) * m1
-                    + m2 * (x0 * x0 * x20 * x20 + x22 * x22),
-                x38,
-                x39,
-                x40,
-            ],
-            [
-                x29,
-                x38,
-                x0 * x0 * J1
-                    + m2 * (x1 * x1 * x7 * x8 * x8 * d * d * m1 * m1 + x28 * x28) + Izz
-                    + x1 * x1 * m0 * (x25 * x25 + x8 * x8 * d * d * m1 * m1)
-                    + J2 * (x5 + 1.0) + m1 * (x27 * x27 + x8 * x8 * x26 * x26),
-                x41,
-                x42,
-            ],
-            [
-                x32,
-                x39,
-                x41,
-                J2 + (x1 * x1 * (m2 + m0) * m1 + x10 * x10) * d * d * m1,
-                x43,
-            ],
-            [
-                x33,
-                x40,
-                x42,
-                x43,
-                J2 + m2 * d * d * (x1 * x1 * m2 * (m0 + m1) + x21 * x21),
-            ],
-        ]
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

@@ -79,7 +79,7 @@ pub struct Params {
     ///`d` (model value 0.4)
     pub d: f64,
     ///`a` (model value 0.5)
-    pub a: f64,
+    pub a_: f64,
     ///`J1` (model value 0.02)
     pub J1: f64,
     ///`J2` (model value 0.12)
@@ -98,7 +98,7 @@ impl Default for Params {
             m1: 2.0,
             m2: 2.0,
             d: 0.4,
-            a: 0.5,
+            a_: 0.5,
             J1: 0.02,
             J2: 0.12,
         }
@@ -134,7 +134,7 @@ impl Params {
             self.m1,
             self.m2,
             self.d,
-            self.a,
+            self.a_,
             self.J1,
             self.J2,
         ]
@@ -152,7 +152,7 @@ impl Params {
             m1: values[7],
             m2: values[8],
             d: values[9],
-            a: values[10],
+            a_: values[10],
             J1: values[11],
             J2: values[12],
         }
@@ -260,7 +260,7 @@ pub fn energy(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
     let x0 = f64::cos(gamma1);
@@ -278,7 +278,7 @@ pub fn energy(
     let x12 = x2 * psi_dot * x9;
     let x13 = theta_dot * x7;
     let x14 = x12 - x13;
-    let x15 = a * x14;
+    let x15 = a_ * x14;
     let x16 = x8 + x10 + x11 + x15;
     let x17 = x0 * x5 + x6 * x16;
     let x18 = x12 + gamma1_dot - x13;
@@ -286,7 +286,7 @@ pub fn energy(
     let x20 = theta_dot * x9;
     let x21 = x2 * psi_dot * x7;
     let x22 = x20 + x21;
-    let x23 = a * x22;
+    let x23 = a_ * x22;
     let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
     let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
     let x26 = Z_dot * x2 * x9;
@@ -347,7 +347,7 @@ pub fn momenta(
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
-    let a = params.a;
+    let a_ = params.a_;
     let x0 = f64::sin(gamma2);
     let x1 = f64::cos(gamma2);
     let x2 = f64::cos(psi);
@@ -358,28 +358,28 @@ pub fn momenta(
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
     let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a;
-    let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
     let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a + x1 * d;
+    let x13 = a_ + x1 * d;
     let x14 = f64::sin(gamma1);
     let x15 = f64::cos(gamma1);
     let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a;
+    let x17 = x15 * a_;
     let x18 = -x17 - d;
-    let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a - x15 * d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
     let x21 = x17 + d;
     let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a * x3 * x4;
+    let x23 = -x22 * d - a_ * x3 * x4;
     let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a * x3 * x7 - x24 * d;
+    let x25 = -a_ * x3 * x7 - x24 * d;
     let x26 = m2 + m0 + m1;
     let x27 = x6 * x7 * x5 - x2 * x4;
     let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
     let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
     let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
@@ -401,9 +401,9 @@ pub fn momenta(
         theta_dot
             * (m2
                 * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                 + m1
-                    * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                         + x20 * x3 * x7 * x7))
             + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                 + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -458,15 +458,27 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 0] = [];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 0],
+        residuals: [f64; 0],
+        positions: [f64; 0],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
@@ -486,143 +498,131 @@ pub mod lagrange {
         let J1 = params.J1;
         let J2 = params.J2;
         let mut v = [0.0f64; 202];
-        rhs_part0(t, state, params, g_i, dstate, &mut v);
-        rhs_part1(t, state, params, g_i, dstate, &mut v);
-        rhs_part2(t, state, params, g_i, dstate, &mut v);
-        rhs_part3(t, state, params, g_i, dstate, &mut v);
-        rhs_part4(t, state, params, g_i, dstate, &mut v);
-        rhs_part5(t, state, params, g_i, dstate, &mut v);
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
-                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
-                    + (v[18] * v[18] + v[20] * v[20]) * J1
-                    + J2
-                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
-                            + v[5] * v[5]) - v[3] * (v[22] - v[21])
-                    + v[1]
-                        * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
-                            + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
-                v[30],
-                v[31],
-                v[32],
-                v[34],
-                v[45],
-                v[54],
-                0.0,
+        rhs_part0(t, state, params, g_i, &mut v);
+        rhs_part1(t, state, params, g_i, &mut v);
+        rhs_part2(t, state, params, g_i, &mut v);
+        rhs_part3(t, state, params, g_i, &mut v);
+        rhs_part4(t, state, params, g_i, &mut v);
+        rhs_part5(t, state, params, g_i, &mut v);
+        Assembly {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
             ],
-            [
-                v[30],
-                J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
-                    + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
-                    + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
-                    + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
-                    + ((v[9] + v[29] * v[29]) * v[2] * v[2]
-                        + v[28] * v[28] * v[10] * v[10]) * m1,
-                v[58],
-                v[59],
-                v[60],
-                v[61],
-                v[62],
-                v[63],
+            matrix: [
+                [
+                    (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10])
+                        * m1 + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
+                        + (v[18] * v[18] + v[20] * v[20]) * J1
+                        + J2
+                            * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2])
+                                + v[13] * v[13] + v[5] * v[5]) - v[3] * (v[22] - v[21])
+                        + v[1]
+                            * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
+                                + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
+                    v[30],
+                    v[31],
+                    v[32],
+                    v[34],
+                    v[45],
+                    v[54],
+                    0.0,
+                ],
+                [
+                    v[30],
+                    J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
+                        + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
+                        + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
+                        + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
+                        + ((v[9] + v[29] * v[29]) * v[2] * v[2]
+                            + v[28] * v[28] * v[10] * v[10]) * m1,
+                    v[58],
+                    v[59],
+                    v[60],
+                    v[61],
+                    v[62],
+                    v[63],
+                ],
+                [
+                    v[31],
+                    v[58],
+                    Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
+                        + (v[55] + v[56]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
+                    0.0,
+                    0.0,
+                    v[64],
+                    v[65],
+                    v[66],
+                ],
+                [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
+                [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
+                [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
+                [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
+                [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
             ],
-            [
-                v[31],
-                v[58],
-                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
-                    + (v[55] + v[56]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
-                0.0,
-                0.0,
-                v[64],
-                v[65],
-                v[66],
+            force: [
+                ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
+                    + v[2]
+                        * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
+                    * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
+                    + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
+                    - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
+                    - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
+                v[2]
+                    * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168]
+                        - v[93] - v[97] - v[98] + v[100])
+                    - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
+                    - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
+                    + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105]
+                        - v[0] * v[118] + v[106] - v[107] - v[110]) * v[10],
+                (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
+                    + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
+                    + (m2 * v[172] * d - v[165] - v[167]) * v[11],
+                J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
+                v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
+                -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
+                    - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
+                -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
+                    - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
+                -m2
+                    * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
+                        * phi_dot * phi_dot
+                        + (theta_dot * v[186]
+                            + phi_dot
+                                * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
+                                    + 0.5 * v[185] - v[190])) * theta_dot
+                        + gamma2_dot
+                            * (phi_dot
+                                * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
+                                    - 0.5 * v[185])
+                                + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
+                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
+                                    - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
+                    - (v[179]
+                        + (theta_dot
+                            * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
+                                + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
+                                + theta_dot * v[201]
+                                + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199]
+                                    + 0.5 * v[200]) * phi_dot)
+                            + gamma1_dot
+                                * (v[201] * gamma1_dot
+                                    + phi_dot
+                                        * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
+                                            - 0.5 * v[199] - 0.5 * v[200]))
+                            + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199]
+                                + 0.25 * v[200]) * phi_dot * phi_dot) * d) * m1,
             ],
-            [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
-            [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
-            [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
-            [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
-            [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
-        ];
-        let mut force: [f64; 8] = [
-            ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
-                + v[2] * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
-                * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
-                + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
-                - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
-                - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
-            v[2]
-                * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168] - v[93]
-                    - v[97] - v[98] + v[100])
-                - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
-                - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
-                + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105] - v[0] * v[118]
-                    + v[106] - v[107] - v[110]) * v[10],
-            (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
-                + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
-                + (m2 * v[172] * d - v[165] - v[167]) * v[11],
-            J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
-            v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
-            -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
-                - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
-            -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
-                - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
-            -m2
-                * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
-                    * phi_dot * phi_dot
-                    + (theta_dot * v[186]
-                        + phi_dot
-                            * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
-                                + 0.5 * v[185] - v[190])) * theta_dot
-                    + gamma2_dot
-                        * (phi_dot
-                            * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184] - 0.5 * v[185])
-                            + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
-                                - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
-                                - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
-                - (v[179]
-                    + (theta_dot
-                        * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
-                            + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
-                            + theta_dot * v[201]
-                            + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199] + 0.5 * v[200])
-                                * phi_dot)
-                        + gamma1_dot
-                            * (v[201] * gamma1_dot
-                                + phi_dot
-                                    * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
-                                        - 0.5 * v[199] - 0.5 * v[200]))
-                        + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + 0.25 * v[200])
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "constraint matrix [M a^T; a 0]",
-                value: column as f64,
-            });
+            checks: [],
+            residuals: [],
+            positions: [],
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -631,7 +631,6 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         let psi = state[0];
@@ -648,7 +647,7 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[0] = f64::cos(gamma1);
@@ -657,17 +656,17 @@ pub mod lagrange {
         v[3] = f64::sin(theta);
         v[4] = f64::sin(gamma1);
         v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
-        v[6] = -v[5] * d - a * v[1] * v[2];
-        v[7] = v[0] * a;
+        v[6] = -v[5] * d - a_ * v[1] * v[2];
+        v[7] = v[0] * a_;
         v[8] = v[7] + d;
-        v[9] = a * a * v[4] * v[4];
+        v[9] = a_ * a_ * v[4] * v[4];
         v[10] = f64::cos(phi);
         v[11] = f64::sin(gamma2);
         v[12] = f64::cos(gamma2);
         v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
-        v[14] = -a * v[1] * v[10] - v[13] * d;
-        v[15] = d + v[12] * a;
-        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
+        v[14] = -a_ * v[1] * v[10] - v[13] * d;
+        v[15] = d + v[12] * a_;
+        v[16] = a_ * a_ * v[11] * v[11] + v[15] * v[15];
         v[17] = v[12] * v[3];
         v[18] = -v[1] * v[11] * v[10] - v[17];
         v[19] = v[0] * v[3];
@@ -676,10 +675,10 @@ pub mod lagrange {
         v[22] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
         v[23] = Iyz * v[10];
         v[24] = Iyz * v[2];
-        v[25] = a + v[12] * d;
+        v[25] = a_ + v[12] * d;
         v[26] = Iyy * v[10];
         v[27] = v[2] * Izz;
-        v[28] = -a - v[0] * d;
+        v[28] = -a_ - v[0] * d;
         v[29] = -v[7] - d;
         v[30] = v[2]
             * (m2 * (v[1] * v[16] * v[10] + v[25] * v[14]) - v[12] * v[13] * J2
@@ -706,7 +705,6 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         let psi_dot = state[8];
@@ -717,24 +715,24 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = a * v[4] * v[39];
+        v[40] = a_ * v[4] * v[39];
         v[41] = v[2] * v[36] + v[3] * v[35] * v[10];
         v[42] = v[12] * v[35] * v[1] - v[11] * v[41];
         v[43] = v[35] * v[1] * v[11] + v[12] * v[41];
-        v[44] = v[43] * v[15] - a * v[11] * v[42];
+        v[44] = v[43] * v[15] - a_ * v[11] * v[42];
         v[45] = m1 * (v[1] * (v[38] * v[8] + v[40]) * v[10] + v[41] * v[6])
             + m2 * (v[1] * v[44] * v[2] + v[37] * v[14]);
         v[46] = v[35] * v[10] + v[3] * v[2] * v[36];
         v[47] = v[0] * v[46] - v[4] * v[1] * v[36];
         v[48] = v[0] * v[1] * v[36] + v[4] * v[46];
-        v[49] = a * v[4] * v[48];
+        v[49] = a_ * v[4] * v[48];
         v[50] = v[3] * v[10] * v[36] - v[35] * v[2];
         v[51] = v[12] * v[1] * v[36] - v[11] * v[50];
         v[52] = v[1] * v[11] * v[36] + v[12] * v[50];
-        v[53] = v[52] * v[15] - a * v[51] * v[11];
+        v[53] = v[52] * v[15] - a_ * v[51] * v[11];
         v[54] = m1 * (v[1] * (v[47] * v[8] + v[49]) * v[10] + v[50] * v[6])
             + m2 * (v[1] * v[2] * v[53] + v[46] * v[14]);
         v[55] = v[0] * v[0];
@@ -749,9 +747,9 @@ pub mod lagrange {
         v[62] = m2 * (v[53] * v[10] + v[25] * v[2] * v[46])
             + (v[28] * v[50] * v[10] + (v[47] * v[29] - v[49]) * v[2]) * m1;
         v[63] = m2
-            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a * v[18] * v[11]) * v[10])
+            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a_ * v[18] * v[11]) * v[10])
             + m1
-                * ((v[5] * v[29] - a * v[20] * v[4]) * v[2]
+                * ((v[5] * v[29] - a_ * v[20] * v[4]) * v[2]
                     + v[28] * v[1] * v[10] * v[10]);
         v[64] = d * (v[4] * v[41] * m1 - m2 * v[37] * v[11]);
         v[65] = (v[4] * v[50] * m1 - m2 * v[11] * v[46]) * d;
@@ -777,7 +775,6 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         let psi_dot = state[8];
@@ -841,7 +838,6 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         let psi_dot = state[8];
@@ -856,7 +852,7 @@ pub mod lagrange {
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         v[120] = -v[77] * gamma2_dot - v[115];
         v[121] = v[11] * (v[90] - v[86] - v[119]) + v[12] * v[120];
         v[122] = v[0] * (v[114] - v[115]) + v[113] * v[4];
@@ -868,13 +864,13 @@ pub mod lagrange {
         v[128] = Z_dot * v[1] * v[2];
         v[129] = v[37] * X_dot;
         v[130] = Y_dot * v[46];
-        v[131] = a * v[77];
+        v[131] = a_ * v[77];
         v[132] = v[128] + v[129] + v[130] + v[131];
         v[133] = Y_dot * v[36];
         v[134] = X_dot * v[35];
         v[135] = v[1] * (v[133] + v[134]) - Z_dot * v[3];
         v[136] = v[0] * v[132] - v[135] * v[4] + v[111] * d;
-        v[137] = a * v[80];
+        v[137] = a_ * v[80];
         v[138] = Y_dot * v[50];
         v[139] = X_dot * v[41];
         v[140] = Z_dot * v[1] * v[10];
@@ -886,7 +882,7 @@ pub mod lagrange {
         v[146] = v[3] * phi_dot;
         v[147] = v[146] - psi_dot;
         v[148] = Y_dot * (v[145] * v[2] + v[147] * v[10] * v[36]);
-        v[149] = v[99] * a;
+        v[149] = v[99] * a_;
         v[150] = Z_dot * (v[1] * phi_dot * v[10] - v[3] * theta_dot * v[2]);
         v[151] = X_dot
             * (v[35] * (theta_dot * v[1] * v[2] + v[147] * v[10])
@@ -894,11 +890,11 @@ pub mod lagrange {
         v[152] = v[148] + v[149] + v[150] + v[151] - v[135] * gamma1_dot;
         v[153] = v[88] * v[141] - v[136] * v[111] + v[0] * (v[142] + v[143] + v[144])
             + v[152] * v[4];
-        v[154] = a * v[4] * v[153];
+        v[154] = a_ * v[4] * v[153];
         v[155] = v[0] * v[135] + v[4] * v[132];
         v[156] = v[99] * d - v[87] * v[141] + v[4] * (-v[142] - v[143] - v[144])
             + v[0] * v[152] + v[111] * v[155];
-        v[157] = a * v[96];
+        v[157] = a_ * v[96];
         v[158] = psi_dot - v[146];
         v[159] = X_dot
             * (v[82] * v[10] * v[36]
@@ -911,7 +907,6 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         let theta_dot = state[9];
@@ -920,7 +915,7 @@ pub mod lagrange {
         let Y_dot = state[14];
         let Z_dot = state[15];
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[160] = Z_dot * (-v[1] * v[2] * phi_dot - v[3] * theta_dot * v[10]);
@@ -946,8 +941,8 @@ pub mod lagrange {
         v[177] = v[96] * d - v[164] * v[170]
             + v[12] * (v[174] + v[157] + v[159] + v[160] + v[161]) + v[108] * v[173]
             + v[11] * v[175];
-        v[178] = v[177] * v[15] - a * v[11] * v[176];
-        v[179] = a * v[3] * theta_dot * theta_dot;
+        v[178] = v[177] * v[15] - a_ * v[11] * v[176];
+        v[179] = a_ * v[3] * theta_dot * theta_dot;
         v[180] = v[12] * v[2];
         v[181] = v[11] * v[10];
         v[182] = (-v[180] - v[181]) * v[1];
@@ -976,150 +971,24 @@ pub mod lagrange {
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 202],
     ) {
         v[200] = (-v[194] - v[195]) * v[4];
         v[201] = 0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + v[19] + 0.25 * v[200];
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN. Baumgarte-stabilized: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn rhs_baumgarte(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-        alpha: f64,
-        beta: f64,
-    ) -> Result<(), EvalError> {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let mut v = [0.0f64; 202];
-        rhs_baumgarte_part0(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part1(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part2(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part3(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part4(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        rhs_baumgarte_part5(t, state, params, g_i, dstate, alpha, beta, &mut v);
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
-                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
-                    + (v[18] * v[18] + v[20] * v[20]) * J1
-                    + J2
-                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
-                            + v[5] * v[5]) - v[3] * (v[22] - v[21])
-                    + v[1]
-                        * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
-                            + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
-                v[30],
-                v[31],
-                v[32],
-                v[34],
-                v[45],
-                v[54],
-                0.0,
-            ],
-            [
-                v[30],
-                J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
-                    + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
-                    + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
-                    + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
-                    + ((v[9] + v[29] * v[29]) * v[2] * v[2]
-                        + v[28] * v[28] * v[10] * v[10]) * m1,
-                v[58],
-                v[59],
-                v[60],
-                v[61],
-                v[62],
-                v[63],
-            ],
-            [
-                v[31],
-                v[58],
-                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
-                    + (v[55] + v[56]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
-                0.0,
-                0.0,
-                v[64],
-                v[65],
-                v[66],
-            ],
-            [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
-            [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
-            [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
-            [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
-            [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
-        ];
-        let mut force: [f64; 8] = [
-            ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
-                + v[2] * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
-                * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
-                + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
-                - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
-                - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
-            v[2]
-                * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168] - v[93]
-                    - v[97] - v[98] + v[100])
-                - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
-                - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
-                + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105] - v[0] * v[118]
-                    + v[106] - v[107] - v[110]) * v[10],
-            (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
-                + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
-                + (m2 * v[172] * d - v[165] - v[167]) * v[11],
-            J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
-            v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
-            -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
-                - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
-            -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
-                - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
-            -m2
-                * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
-                    * phi_dot * phi_dot
-                    + (theta_dot * v[186]
-                        + phi_dot
-                            * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
-                                + 0.5 * v[185] - v[190])) * theta_dot
-                    + gamma2_dot
-                        * (phi_dot
-                            * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184] - 0.5 * v[185])
-                            + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
-                                - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
-                                - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
-                - (v[179]
-                    + (theta_dot
-                        * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
-                            + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
-                            + theta_dot * v[201]
-                            + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199] + 0.5 * v[200])
-                                * phi_dot)
-                        + gamma1_dot
-                            * (v[201] * gamma1_dot
-                                + phi_dot
-                                    * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
-                                        - 0.5 * v[199] - 0.5 * v[200]))
-                        + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + 0.25 * v[200])
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(EvalError::Singular {
                 t,
@@ -1127,14 +996,14 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
         dstate[8] = force[0];
         dstate[9] = force[1];
         dstate[10] = force[2];
@@ -1150,375 +1019,41 @@ pub mod lagrange {
         }
         Ok(())
     }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part0(
-        _t: f64,
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = f64::sin(theta);
-        v[4] = f64::sin(gamma1);
-        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
-        v[6] = -v[5] * d - a * v[1] * v[2];
-        v[7] = v[0] * a;
-        v[8] = v[7] + d;
-        v[9] = a * a * v[4] * v[4];
-        v[10] = f64::cos(phi);
-        v[11] = f64::sin(gamma2);
-        v[12] = f64::cos(gamma2);
-        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
-        v[14] = -a * v[1] * v[10] - v[13] * d;
-        v[15] = d + v[12] * a;
-        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
-        v[17] = v[12] * v[3];
-        v[18] = -v[1] * v[11] * v[10] - v[17];
-        v[19] = v[0] * v[3];
-        v[20] = v[4] * v[1] * v[2] - v[19];
-        v[21] = v[3] * Ixx;
-        v[22] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
-        v[23] = Iyz * v[10];
-        v[24] = Iyz * v[2];
-        v[25] = a + v[12] * d;
-        v[26] = Iyy * v[10];
-        v[27] = v[2] * Izz;
-        v[28] = -a - v[0] * d;
-        v[29] = -v[7] - d;
-        v[30] = v[2]
-            * (m2 * (v[1] * v[16] * v[10] + v[25] * v[14]) - v[12] * v[13] * J2
-                + v[18] * v[11] * J1 + (v[26] + v[24]) * v[1])
-            - v[3] * (v[2] * Ixz - Ixy * v[10])
-            + (v[0] * J2 * v[5] + v[1] * (-v[27] - v[23]) + v[20] * v[4] * J1
-                + (v[28] * v[6] + v[1] * v[2] * (v[8] * v[29] - v[9])) * m1) * v[10];
-        v[31] = v[22] - v[21] + (v[0] * v[20] + v[12] * v[18]) * J1
-            + (v[13] * v[11] - v[5] * v[4]) * J2
-            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
-        v[32] = v[1] * (d * v[8] * m1 + J2) * v[10];
-        v[33] = J2 + m2 * d * v[15];
-        v[34] = v[1] * v[33] * v[2];
-        v[35] = f64::cos(psi);
-        v[36] = f64::sin(psi);
-        v[37] = v[3] * v[35] * v[2] - v[10] * v[36];
-        v[38] = v[0] * v[37] - v[35] * v[4] * v[1];
-        v[39] = v[37] * v[4] + v[0] * v[35] * v[1];
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
     }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part1(
-        _t: f64,
+    ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
+    pub fn rhs_baumgarte(
+        t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let m0 = params.m0;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[40] = a * v[4] * v[39];
-        v[41] = v[2] * v[36] + v[3] * v[35] * v[10];
-        v[42] = v[12] * v[35] * v[1] - v[11] * v[41];
-        v[43] = v[35] * v[1] * v[11] + v[12] * v[41];
-        v[44] = v[43] * v[15] - a * v[11] * v[42];
-        v[45] = m1 * (v[1] * (v[38] * v[8] + v[40]) * v[10] + v[41] * v[6])
-            + m2 * (v[1] * v[44] * v[2] + v[37] * v[14]);
-        v[46] = v[35] * v[10] + v[3] * v[2] * v[36];
-        v[47] = v[0] * v[46] - v[4] * v[1] * v[36];
-        v[48] = v[0] * v[1] * v[36] + v[4] * v[46];
-        v[49] = a * v[4] * v[48];
-        v[50] = v[3] * v[10] * v[36] - v[35] * v[2];
-        v[51] = v[12] * v[1] * v[36] - v[11] * v[50];
-        v[52] = v[1] * v[11] * v[36] + v[12] * v[50];
-        v[53] = v[52] * v[15] - a * v[51] * v[11];
-        v[54] = m1 * (v[1] * (v[47] * v[8] + v[49]) * v[10] + v[50] * v[6])
-            + m2 * (v[1] * v[2] * v[53] + v[46] * v[14]);
-        v[55] = v[0] * v[0];
-        v[56] = v[12] * v[12];
-        v[57] = J1 - J2;
-        v[58] = ((v[0] * v[57] + v[28] * d * m1) * v[4] - Ixy) * v[10]
-            + v[2] * ((v[12] * v[57] - m2 * d * v[25]) * v[11] + Ixz);
-        v[59] = v[2] * (d * v[29] * m1 - J2);
-        v[60] = v[33] * v[10];
-        v[61] = m2 * (v[44] * v[10] + v[37] * v[25] * v[2])
-            + m1 * (v[2] * (v[38] * v[29] - v[40]) + v[28] * v[41] * v[10]);
-        v[62] = m2 * (v[53] * v[10] + v[25] * v[2] * v[46])
-            + (v[28] * v[50] * v[10] + (v[47] * v[29] - v[49]) * v[2]) * m1;
-        v[63] = m2
-            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a * v[18] * v[11]) * v[10])
-            + m1
-                * ((v[5] * v[29] - a * v[20] * v[4]) * v[2]
-                    + v[28] * v[1] * v[10] * v[10]);
-        v[64] = d * (v[4] * v[41] * m1 - m2 * v[37] * v[11]);
-        v[65] = (v[4] * v[50] * m1 - m2 * v[11] * v[46]) * d;
-        v[66] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
-        v[67] = v[38] * d * m1;
-        v[68] = v[47] * d * m1;
-        v[69] = v[5] * d * m1;
-        v[70] = m2 * d * v[43];
-        v[71] = m2 * d * v[52];
-        v[72] = m2 * v[13] * d;
-        v[73] = m2 + m0 + m1;
-        v[74] = theta_dot * v[1] * psi_dot * Ixz;
-        v[75] = v[1] * psi_dot * v[10];
-        v[76] = theta_dot * v[2];
-        v[77] = v[75] - v[76];
-        v[78] = theta_dot * v[10];
-        v[79] = v[1] * psi_dot * v[2];
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        alpha: f64,
+        beta: f64,
+    ) -> Result<(), EvalError> {
+        let mut a = assemble(t, state, params, g_i);
+        for i in 0..0 {
+            a.force[8 + i]
+                -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
+        }
+        finish(t, a, dstate)
     }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part2(
-        _t: f64,
+    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[80] = v[78] + v[79];
-        v[81] = v[3] * psi_dot;
-        v[82] = phi_dot - v[81];
-        v[83] = Iyy * v[80] - v[77] * Iyz - Ixy * v[82];
-        v[84] = v[83] * v[82];
-        v[85] = -phi_dot - v[81];
-        v[86] = theta_dot * v[85] * v[10];
-        v[87] = v[4] * v[80] + v[0] * v[82];
-        v[88] = v[0] * v[80] - v[4] * v[82];
-        v[89] = v[87] * v[88];
-        v[90] = v[1] * psi_dot * v[2] * phi_dot;
-        v[91] = J2 * (v[86] + v[89] - v[90]);
-        v[92] = Ixx * v[82] - v[77] * Ixz - Ixy * v[80];
-        v[93] = v[80] * v[92];
-        v[94] = theta_dot * v[85] * v[2];
-        v[95] = v[1] * psi_dot * phi_dot * v[10];
-        v[96] = v[94] + v[95];
-        v[97] = Iyz * v[96];
-        v[98] = v[87] * v[88] * J1;
-        v[99] = v[86] - v[90];
-        v[100] = v[99] * Izz;
-        v[101] = v[77] * v[92];
-        v[102] = Iyy * v[96];
-        v[103] = v[77] * Izz - Iyz * v[80] - Ixz * v[82];
-        v[104] = v[103] * v[82];
-        v[105] = Ixy * theta_dot * v[1] * psi_dot;
-        v[106] = v[99] * Iyz;
-        v[107] = J2 * v[96];
-        v[108] = v[12] * v[82] - v[77] * v[11];
-        v[109] = v[11] * v[82] + v[12] * v[77];
-        v[110] = v[108] * v[57] * v[109];
-        v[111] = v[75] + gamma1_dot - v[76];
-        v[112] = v[111] * v[57] * v[87];
-        v[113] = v[94] + v[95] - gamma1_dot * v[82];
-        v[114] = gamma1_dot * v[80];
-        v[115] = theta_dot * v[1] * psi_dot;
-        v[116] = v[0] * v[113] + v[4] * (v[115] - v[114]);
-        v[117] = J2 * v[116];
-        v[118] = v[112] + v[117];
-        v[119] = gamma2_dot * v[82];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part3(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let d = params.d;
-        let a = params.a;
-        v[120] = -v[77] * gamma2_dot - v[115];
-        v[121] = v[11] * (v[90] - v[86] - v[119]) + v[12] * v[120];
-        v[122] = v[0] * (v[114] - v[115]) + v[113] * v[4];
-        v[123] = theta_dot * Ixx * v[1] * psi_dot;
-        v[124] = v[103] * v[80];
-        v[125] = v[99] * Ixz;
-        v[126] = v[77] * v[83];
-        v[127] = Ixy * v[96];
-        v[128] = Z_dot * v[1] * v[2];
-        v[129] = v[37] * X_dot;
-        v[130] = Y_dot * v[46];
-        v[131] = a * v[77];
-        v[132] = v[128] + v[129] + v[130] + v[131];
-        v[133] = Y_dot * v[36];
-        v[134] = X_dot * v[35];
-        v[135] = v[1] * (v[133] + v[134]) - Z_dot * v[3];
-        v[136] = v[0] * v[132] - v[135] * v[4] + v[111] * d;
-        v[137] = a * v[80];
-        v[138] = Y_dot * v[50];
-        v[139] = X_dot * v[41];
-        v[140] = Z_dot * v[1] * v[10];
-        v[141] = v[138] - v[137] + v[139] + v[140] - d * v[88];
-        v[142] = v[1] * psi_dot * (v[35] * Y_dot - X_dot * v[36]);
-        v[143] = gamma1_dot * v[132];
-        v[144] = theta_dot * (v[3] * (-v[133] - v[134]) - Z_dot * v[1]);
-        v[145] = theta_dot * v[1] * v[36] + v[35] * (v[81] - phi_dot);
-        v[146] = v[3] * phi_dot;
-        v[147] = v[146] - psi_dot;
-        v[148] = Y_dot * (v[145] * v[2] + v[147] * v[10] * v[36]);
-        v[149] = v[99] * a;
-        v[150] = Z_dot * (v[1] * phi_dot * v[10] - v[3] * theta_dot * v[2]);
-        v[151] = X_dot
-            * (v[35] * (theta_dot * v[1] * v[2] + v[147] * v[10])
-                + v[2] * v[82] * v[36]);
-        v[152] = v[148] + v[149] + v[150] + v[151] - v[135] * gamma1_dot;
-        v[153] = v[88] * v[141] - v[136] * v[111] + v[0] * (v[142] + v[143] + v[144])
-            + v[152] * v[4];
-        v[154] = a * v[4] * v[153];
-        v[155] = v[0] * v[135] + v[4] * v[132];
-        v[156] = v[99] * d - v[87] * v[141] + v[4] * (-v[142] - v[143] - v[144])
-            + v[0] * v[152] + v[111] * v[155];
-        v[157] = a * v[96];
-        v[158] = psi_dot - v[146];
-        v[159] = X_dot
-            * (v[82] * v[10] * v[36]
-                + v[35] * (theta_dot * v[1] * v[10] + v[158] * v[2]));
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part4(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma2_dot = state[12];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[160] = Z_dot * (-v[1] * v[2] * phi_dot - v[3] * theta_dot * v[10]);
-        v[161] = (v[158] * v[2] * v[36] + v[145] * v[10]) * Y_dot;
-        v[162] = v[136] * v[87] - v[157] - d * v[116] + v[159] + v[160] - v[155] * v[88]
-            + v[161];
-        v[163] = J2 - J1;
-        v[164] = gamma2_dot + v[78] + v[79];
-        v[165] = v[163] * v[108] * v[164];
-        v[166] = v[120] * v[11] + (v[86] - v[90] + v[119]) * v[12];
-        v[167] = J2 * v[166];
-        v[168] = v[165] + v[167];
-        v[169] = v[137] + v[138] + v[139] + v[140];
-        v[170] = v[135] * v[12] - v[169] * v[11];
-        v[171] = v[164] * d + v[135] * v[11] + v[12] * v[169];
-        v[172] = v[148] - v[149] + v[109] * v[170] + v[150] + v[151] - v[108] * v[171]
-            - v[166] * d;
-        v[173] = v[128] + v[129] + v[130] - v[109] * d - v[131];
-        v[174] = v[135] * gamma2_dot;
-        v[175] = v[142] - gamma2_dot * v[169] + v[144];
-        v[176] = v[11] * (-v[174] - v[157] - v[159] - v[160] - v[161]) - v[109] * v[173]
-            + v[12] * v[175] + v[164] * v[171];
-        v[177] = v[96] * d - v[164] * v[170]
-            + v[12] * (v[174] + v[157] + v[159] + v[160] + v[161]) + v[108] * v[173]
-            + v[11] * v[175];
-        v[178] = v[177] * v[15] - a * v[11] * v[176];
-        v[179] = a * v[3] * theta_dot * theta_dot;
-        v[180] = v[12] * v[2];
-        v[181] = v[11] * v[10];
-        v[182] = (-v[180] - v[181]) * v[1];
-        v[183] = v[1] * (v[180] + v[181]);
-        v[184] = (v[181] - v[180]) * v[1];
-        v[185] = (v[180] - v[181]) * v[1];
-        v[186] = 0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185] - v[17];
-        v[187] = v[11] * v[2];
-        v[188] = v[12] * v[10];
-        v[189] = v[3] * (v[187] + v[188]);
-        v[190] = v[3] * (v[188] - v[187]);
-        v[191] = v[3] * v[2];
-        v[192] = v[1] * v[10];
-        v[193] = v[0] * (v[191] + v[192]);
-        v[194] = v[1] * v[2];
-        v[195] = v[3] * v[10];
-        v[196] = v[4] * (v[194] - v[195]);
-        v[197] = v[0] * (v[192] - v[191]);
-        v[198] = v[4] * (v[195] - v[194]);
-        v[199] = v[4] * (v[194] + v[195]);
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_baumgarte_part5(
-        _t: f64,
-        _state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
-        _alpha: f64,
-        _beta: f64,
-        v: &mut [f64; 202],
-    ) {
-        v[200] = (-v[194] - v[195]) * v[4];
-        v[201] = 0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + v[19] + 0.25 * v[200];
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -1545,7 +1080,7 @@ pub mod lagrange {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
         let x2 = f64::cos(psi);
@@ -1556,28 +1091,28 @@ pub mod lagrange {
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
         let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a;
-        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
         let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a + x1 * d;
+        let x13 = a_ + x1 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a * x3 * x4;
+        let x23 = -x22 * d - a_ * x3 * x4;
         let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a * x3 * x7 - x24 * d;
+        let x25 = -a_ * x3 * x7 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x6 * x7 * x5 - x2 * x4;
         let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
         let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
         let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -1629,9 +1164,9 @@ pub mod lagrange {
             theta_dot
                 * (m2
                     * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                             + x20 * x3 * x7 * x7))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -1685,211 +1220,6 @@ pub mod lagrange {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let mut v = [0.0f64; 68];
-        matrix_part0(t, state, params, g_i, &mut v);
-        matrix_part1(t, state, params, g_i, &mut v);
-        [
-            [
-                (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10]) * m1
-                    + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
-                    + (v[17] * v[17] + v[18] * v[18]) * J1
-                    + J2
-                        * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2]) + v[13] * v[13]
-                            + v[5] * v[5]) - v[3] * (v[20] - v[19])
-                    + v[1]
-                        * (((Iyy * v[2] - v[21]) * v[1] + v[3] * Ixy) * v[2]
-                            + (v[1] * (Izz * v[10] - v[22]) + v[3] * Ixz) * v[10]),
-                v[28],
-                v[29],
-                v[30],
-                v[32],
-                v[41],
-                v[48],
-                0.0,
-            ],
-            [
-                v[28],
-                J2 * ((v[49] + 1.0) * v[10] * v[10] + (v[50] + 1.0) * v[2] * v[2])
-                    + (v[4] * v[4] * v[10] * J1 + v[24] + v[22]) * v[10]
-                    + (v[16] * v[10] * v[10] + v[23] * v[23] * v[2] * v[2]) * m2
-                    + v[2] * (v[25] + v[21] + v[11] * v[11] * v[2] * J1)
-                    + ((v[9] + v[27] * v[27]) * v[2] * v[2]
-                        + v[26] * v[26] * v[10] * v[10]) * m1,
-                v[52],
-                v[53],
-                v[54],
-                v[55],
-                v[56],
-                v[57],
-            ],
-            [
-                v[29],
-                v[52],
-                Ixx + d * d * (m2 * v[11] * v[11] + v[4] * v[4] * m1)
-                    + (v[49] + v[50]) * J1 + (v[11] * v[11] + v[4] * v[4]) * J2,
-                0.0,
-                0.0,
-                v[58],
-                v[59],
-                v[60],
-            ],
-            [v[30], v[53], 0.0, J2 + d * d * m1, 0.0, v[61], v[62], v[63]],
-            [v[32], v[54], 0.0, 0.0, m2 * d * d + J2, v[64], v[65], v[66]],
-            [v[41], v[55], v[58], v[61], v[64], v[67], 0.0, 0.0],
-            [v[48], v[56], v[59], v[62], v[65], 0.0, v[67], 0.0],
-            [0.0, v[57], v[60], v[63], v[66], 0.0, 0.0, v[67]],
-        ]
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part0(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 68],
-    ) {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = f64::sin(theta);
-        v[4] = f64::sin(gamma1);
-        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
-        v[6] = -v[5] * d - a * v[1] * v[2];
-        v[7] = v[0] * a;
-        v[8] = v[7] + d;
-        v[9] = a * a * v[4] * v[4];
-        v[10] = f64::cos(phi);
-        v[11] = f64::sin(gamma2);
-        v[12] = f64::cos(gamma2);
-        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
-        v[14] = -a * v[1] * v[10] - v[13] * d;
-        v[15] = d + v[12] * a;
-        v[16] = a * a * v[11] * v[11] + v[15] * v[15];
-        v[17] = -v[1] * v[11] * v[10] - v[12] * v[3];
-        v[18] = v[4] * v[1] * v[2] - v[0] * v[3];
-        v[19] = v[3] * Ixx;
-        v[20] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
-        v[21] = Iyz * v[10];
-        v[22] = Iyz * v[2];
-        v[23] = a + v[12] * d;
-        v[24] = Iyy * v[10];
-        v[25] = v[2] * Izz;
-        v[26] = -a - v[0] * d;
-        v[27] = -v[7] - d;
-        v[28] = v[2]
-            * (m2 * (v[1] * v[16] * v[10] + v[23] * v[14]) - v[12] * v[13] * J2
-                + v[17] * v[11] * J1 + (v[24] + v[22]) * v[1])
-            - v[3] * (v[2] * Ixz - Ixy * v[10])
-            + (v[0] * J2 * v[5] + v[1] * (-v[25] - v[21]) + v[18] * v[4] * J1
-                + (v[26] * v[6] + v[1] * v[2] * (v[8] * v[27] - v[9])) * m1) * v[10];
-        v[29] = v[20] - v[19] + (v[0] * v[18] + v[12] * v[17]) * J1
-            + (v[13] * v[11] - v[5] * v[4]) * J2
-            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
-        v[30] = v[1] * (d * v[8] * m1 + J2) * v[10];
-        v[31] = J2 + m2 * d * v[15];
-        v[32] = v[1] * v[31] * v[2];
-        v[33] = f64::cos(psi);
-        v[34] = f64::sin(psi);
-        v[35] = v[3] * v[33] * v[2] - v[10] * v[34];
-        v[36] = v[0] * v[35] - v[33] * v[4] * v[1];
-        v[37] = a * v[4] * (v[35] * v[4] + v[0] * v[33] * v[1]);
-        v[38] = v[2] * v[34] + v[3] * v[33] * v[10];
-        v[39] = v[33] * v[1] * v[11] + v[12] * v[38];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 68],
-    ) {
-        let m0 = params.m0;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[40] = v[39] * v[15] - a * v[11] * (v[12] * v[33] * v[1] - v[11] * v[38]);
-        v[41] = m1 * (v[1] * (v[36] * v[8] + v[37]) * v[10] + v[38] * v[6])
-            + m2 * (v[1] * v[40] * v[2] + v[35] * v[14]);
-        v[42] = v[33] * v[10] + v[3] * v[2] * v[34];
-        v[43] = v[0] * v[42] - v[4] * v[1] * v[34];
-        v[44] = a * v[4] * (v[0] * v[1] * v[34] + v[4] * v[42]);
-        v[45] = v[3] * v[10] * v[34] - v[33] * v[2];
-        v[46] = v[1] * v[11] * v[34] + v[12] * v[45];
-        v[47] = v[46] * v[15] - a * (v[12] * v[1] * v[34] - v[11] * v[45]) * v[11];
-        v[48] = m1 * (v[1] * (v[43] * v[8] + v[44]) * v[10] + v[45] * v[6])
-            + m2 * (v[1] * v[2] * v[47] + v[42] * v[14]);
-        v[49] = v[0] * v[0];
-        v[50] = v[12] * v[12];
-        v[51] = J1 - J2;
-        v[52] = ((v[0] * v[51] + v[26] * d * m1) * v[4] - Ixy) * v[10]
-            + v[2] * ((v[12] * v[51] - m2 * d * v[23]) * v[11] + Ixz);
-        v[53] = v[2] * (d * v[27] * m1 - J2);
-        v[54] = v[31] * v[10];
-        v[55] = m2 * (v[40] * v[10] + v[35] * v[23] * v[2])
-            + m1 * (v[2] * (v[36] * v[27] - v[37]) + v[26] * v[38] * v[10]);
-        v[56] = m2 * (v[47] * v[10] + v[23] * v[2] * v[42])
-            + (v[26] * v[45] * v[10] + (v[43] * v[27] - v[44]) * v[2]) * m1;
-        v[57] = m2
-            * (v[1] * v[23] * v[2] * v[2] + (v[13] * v[15] - a * v[17] * v[11]) * v[10])
-            + m1
-                * ((v[5] * v[27] - a * v[18] * v[4]) * v[2]
-                    + v[26] * v[1] * v[10] * v[10]);
-        v[58] = d * (v[4] * v[38] * m1 - m2 * v[35] * v[11]);
-        v[59] = (v[4] * v[45] * m1 - m2 * v[11] * v[42]) * d;
-        v[60] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
-        v[61] = v[36] * d * m1;
-        v[62] = v[43] * d * m1;
-        v[63] = v[5] * d * m1;
-        v[64] = m2 * d * v[39];
-        v[65] = m2 * d * v[46];
-        v[66] = m2 * v[13] * d;
-        v[67] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -1932,15 +1262,27 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        w: [[f64; 8]; 8],
+        c: [f64; 8],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
@@ -1954,137 +1296,131 @@ pub mod maggi {
         let d = params.d;
         let J2 = params.J2;
         let mut v = [0.0f64; 246];
-        rhs_part0(t, state, params, g_i, dstate, &mut v);
-        rhs_part1(t, state, params, g_i, dstate, &mut v);
-        rhs_part2(t, state, params, g_i, dstate, &mut v);
-        rhs_part3(t, state, params, g_i, dstate, &mut v);
-        rhs_part4(t, state, params, g_i, dstate, &mut v);
-        rhs_part5(t, state, params, g_i, dstate, &mut v);
-        rhs_part6(t, state, params, g_i, dstate, &mut v);
-        let value = v[15];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 8]; 8] = [
-            [v[6], v[30], v[31], 0.0, 0.0, v[37], v[41], v[43]],
-            [
-                v[30],
-                v[59] * v[9] + v[29] * v[10] * v[70],
-                v[71],
-                v[74],
-                v[76],
-                v[87],
-                v[98],
-                v[100],
+        rhs_part0(t, state, params, g_i, &mut v);
+        rhs_part1(t, state, params, g_i, &mut v);
+        rhs_part2(t, state, params, g_i, &mut v);
+        rhs_part3(t, state, params, g_i, &mut v);
+        rhs_part4(t, state, params, g_i, &mut v);
+        rhs_part5(t, state, params, g_i, &mut v);
+        rhs_part6(t, state, params, g_i, &mut v);
+        Assembly {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
             ],
-            [
-                v[31],
-                v[71],
-                v[29] * (v[68] * v[29] * v[9] - v[10] * v[69] + v[31] * v[13]) * v[9]
-                    - (v[29] * v[58] * v[9] - v[53] * v[10]) * v[10],
-                v[103],
-                0.0,
-                v[104],
-                v[105],
-                v[106],
+            matrix: [
+                [v[6], v[30], v[31], 0.0, 0.0, v[37], v[41], v[43]],
+                [
+                    v[30],
+                    v[59] * v[9] + v[29] * v[10] * v[70],
+                    v[71],
+                    v[74],
+                    v[76],
+                    v[87],
+                    v[98],
+                    v[100],
+                ],
+                [
+                    v[31],
+                    v[71],
+                    v[29] * (v[68] * v[29] * v[9] - v[10] * v[69] + v[31] * v[13]) * v[9]
+                        - (v[29] * v[58] * v[9] - v[53] * v[10]) * v[10],
+                    v[103],
+                    0.0,
+                    v[104],
+                    v[105],
+                    v[106],
+                ],
+                [0.0, v[74], v[103], J2 + d * d * m1, 0.0, v[107], v[108], v[109]],
+                [0.0, v[76], 0.0, 0.0, m2 * d * d + J2, v[110], v[111], v[112]],
+                [v[37], v[87], v[104], v[107], v[110], v[113], 0.0, 0.0],
+                [v[41], v[98], v[105], v[108], v[111], 0.0, v[113], 0.0],
+                [v[43], v[100], v[106], v[109], v[112], 0.0, 0.0, v[113]],
             ],
-            [0.0, v[74], v[103], J2 + d * d * m1, 0.0, v[107], v[108], v[109]],
-            [0.0, v[76], 0.0, 0.0, m2 * d * d + J2, v[110], v[111], v[112]],
-            [v[37], v[87], v[104], v[107], v[110], v[113], 0.0, 0.0],
-            [v[41], v[98], v[105], v[108], v[111], 0.0, v[113], 0.0],
-            [v[43], v[100], v[106], v[109], v[112], 0.0, 0.0, v[113]],
-        ];
-        let mut force: [f64; 8] = [
-            v[188],
-            v[29] * v[10] * v[221] + v[222] * v[9],
-            v[29] * v[221] * v[9] - v[10] * v[222],
-            v[15] * psi_dot * v[10] * v[102] * phi_dot
-                - theta_dot * v[187] * v[101] * v[9] + J2 * (v[156] - v[155] - v[200])
-                - d * m1 * v[197] + v[205],
-            v[166] * v[167] * v[173] + (v[136] - theta_dot * v[187] * v[10]) * v[75]
-                - v[212] - m2 * v[219] * d,
-            theta_dot * (-v[186] * d * v[36] - (v[84] + v[85]) * v[187] * v[29])
-                - m2 * (v[35] * v[184] + v[77] * v[218] + v[219] * v[78])
-                - (v[151] * v[34] + v[80] * v[197] + v[195] * v[81]) * m1
-                + v[15] * psi_dot * phi_dot * v[83],
-            (-v[40] * v[186] * d - v[187] * v[29] * (v[95] + v[96])) * theta_dot
-                - m2 * (v[184] * v[38] + v[219] * v[89] + v[88] * v[218])
-                - (v[195] * v[91] + v[151] * v[39] + v[93] * v[197]) * m1
-                + v[15] * psi_dot * phi_dot * v[94],
-            v[15] * (v[99] * psi_dot * phi_dot - theta_dot * v[42] * v[186] * d)
-                - m2
-                    * (((0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228] + 0.25 * v[229])
-                        * phi_dot * phi_dot
-                        + (theta_dot * v[230]
-                            + phi_dot
-                                * (v[233] - 0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
-                                    + 0.5 * v[229] - v[234])) * theta_dot
-                        + gamma2_dot
-                            * (phi_dot
-                                * (0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
-                                    - 0.5 * v[229])
-                                + (-v[233] - 0.5 * v[226] - 0.5 * v[227]
-                                    - 2.0 * (v[15] * v[0]) - 0.5 * v[228] - 0.5 * v[229]
-                                    - v[234]) * theta_dot + gamma2_dot * v[230])) * d - v[223])
-                - (v[223]
-                    + (theta_dot
-                        * ((0.5 * v[240] - v[237] + v[241] + 2.0 * (v[1] * v[15])
-                            + 0.5 * v[242] - 0.5 * v[243] - 0.5 * v[244]) * gamma1_dot
-                            + theta_dot * v[245]
-                            + (0.5 * v[240] - 0.5 * v[242] - 0.5 * v[243] + 0.5 * v[244])
-                                * phi_dot)
-                        + gamma1_dot
-                            * (v[245] * gamma1_dot
+            force: [
+                v[188],
+                v[29] * v[10] * v[221] + v[222] * v[9],
+                v[29] * v[221] * v[9] - v[10] * v[222],
+                v[15] * psi_dot * v[10] * v[102] * phi_dot
+                    - theta_dot * v[187] * v[101] * v[9]
+                    + J2 * (v[156] - v[155] - v[200]) - d * m1 * v[197] + v[205],
+                v[166] * v[167] * v[173] + (v[136] - theta_dot * v[187] * v[10]) * v[75]
+                    - v[212] - m2 * v[219] * d,
+                theta_dot * (-v[186] * d * v[36] - (v[84] + v[85]) * v[187] * v[29])
+                    - m2 * (v[35] * v[184] + v[77] * v[218] + v[219] * v[78])
+                    - (v[151] * v[34] + v[80] * v[197] + v[195] * v[81]) * m1
+                    + v[15] * psi_dot * phi_dot * v[83],
+                (-v[40] * v[186] * d - v[187] * v[29] * (v[95] + v[96])) * theta_dot
+                    - m2 * (v[184] * v[38] + v[219] * v[89] + v[88] * v[218])
+                    - (v[195] * v[91] + v[151] * v[39] + v[93] * v[197]) * m1
+                    + v[15] * psi_dot * phi_dot * v[94],
+                v[15] * (v[99] * psi_dot * phi_dot - theta_dot * v[42] * v[186] * d)
+                    - m2
+                        * (((0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228]
+                            + 0.25 * v[229]) * phi_dot * phi_dot
+                            + (theta_dot * v[230]
                                 + phi_dot
-                                    * (v[237] - 0.5 * v[240] + v[241] - 0.5 * v[242]
-                                        - 0.5 * v[243] - 0.5 * v[244]))
-                        + (0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243] + 0.25 * v[244])
-                            * phi_dot * phi_dot) * d) * m1,
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "Maggi matrix W^T M W",
-                value: column as f64,
-            });
+                                    * (v[233] - 0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
+                                        + 0.5 * v[229] - v[234])) * theta_dot
+                            + gamma2_dot
+                                * (phi_dot
+                                    * (0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
+                                        - 0.5 * v[229])
+                                    + (-v[233] - 0.5 * v[226] - 0.5 * v[227]
+                                        - 2.0 * (v[15] * v[0]) - 0.5 * v[228] - 0.5 * v[229]
+                                        - v[234]) * theta_dot + gamma2_dot * v[230])) * d - v[223])
+                    - (v[223]
+                        + (theta_dot
+                            * ((0.5 * v[240] - v[237] + v[241] + 2.0 * (v[1] * v[15])
+                                + 0.5 * v[242] - 0.5 * v[243] - 0.5 * v[244]) * gamma1_dot
+                                + theta_dot * v[245]
+                                + (0.5 * v[240] - 0.5 * v[242] - 0.5 * v[243]
+                                    + 0.5 * v[244]) * phi_dot)
+                            + gamma1_dot
+                                * (v[245] * gamma1_dot
+                                    + phi_dot
+                                        * (v[237] - 0.5 * v[240] + v[241] - 0.5 * v[242]
+                                            - 0.5 * v[243] - 0.5 * v[244]))
+                            + (0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243]
+                                + 0.25 * v[244]) * phi_dot * phi_dot) * d) * m1,
+            ],
+            w: [
+                [0.0, v[29] * v[10], v[29] * v[9], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, v[9], -v[10], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    1.0,
+                    v[13] * v[29] * v[10],
+                    v[13] * v[29] * v[9],
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * v[187] * v[29],
+                -(v[15] * psi_dot * phi_dot),
+                theta_dot * v[186],
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            checks: [v[15]],
         }
-        dstate[0] = psi_dot;
-        dstate[1] = theta_dot;
-        dstate[2] = phi_dot;
-        dstate[3] = gamma1_dot;
-        dstate[4] = gamma2_dot;
-        dstate[5] = X_dot;
-        dstate[6] = Y_dot;
-        dstate[7] = Z_dot;
-        dstate[8] = 0.0 * force[0] + v[29] * v[10] * force[1] + v[29] * v[9] * force[2]
-            + 0.0 * force[3] + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6]
-            + 0.0 * force[7] + theta_dot * v[187] * v[29];
-        dstate[9] = 0.0 * force[0] + v[9] * force[1] + -v[10] * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7]
-            + -(v[15] * psi_dot * phi_dot);
-        dstate[10] = 1.0 * force[0] + v[13] * v[29] * v[10] * force[1]
-            + v[13] * v[29] * v[9] * force[2] + 0.0 * force[3] + 0.0 * force[4]
-            + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + theta_dot * v[186];
-        dstate[11] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 1.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[12] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 1.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[13] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 1.0 * force[5] + 0.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[14] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 1.0 * force[6] + 0.0 * force[7] + 0.0;
-        dstate[15] = 0.0 * force[0] + 0.0 * force[1] + 0.0 * force[2] + 0.0 * force[3]
-            + 0.0 * force[4] + 0.0 * force[5] + 0.0 * force[6] + 1.0 * force[7] + 0.0;
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2093,7 +1429,6 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let psi = state[0];
@@ -2107,7 +1442,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[0] = f64::sin(gamma2);
@@ -2119,10 +1454,10 @@ pub mod maggi {
         v[6] = Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
             + (v[0] * v[0] + v[1] * v[1]) * J2;
         v[7] = J1 - J2;
-        v[8] = -a - v[2] * d;
+        v[8] = -a_ - v[2] * d;
         v[9] = f64::cos(phi);
         v[10] = f64::sin(phi);
-        v[11] = a + v[4] * d;
+        v[11] = a_ + v[4] * d;
         v[12] = ((v[2] * v[7] + v[8] * d * m1) * v[1] - Ixy) * v[9]
             + v[10] * ((v[4] * v[7] - m2 * d * v[11]) * v[0] + Ixz);
         v[13] = f64::sin(theta);
@@ -2137,8 +1472,8 @@ pub mod maggi {
         v[22] = v[4] * v[15] * v[9] - v[13] * v[0];
         v[23] = v[2] * v[15] * v[10] + v[13] * v[1];
         v[24] = (v[22] * v[0] - v[23] * v[1]) * J2;
-        v[25] = -v[23] * d - a * v[15] * v[10];
-        v[26] = -a * v[15] * v[9] - v[22] * d;
+        v[25] = -v[23] * d - a_ * v[15] * v[10];
+        v[26] = -a_ * v[15] * v[9] - v[22] * d;
         v[27] = (v[1] * m1 * v[25] - m2 * v[0] * v[26]) * d;
         v[28] = v[16] - v[14] + v[21] + v[13] * v[6] + v[24] + v[27];
         v[29] = 1.0 / v[15];
@@ -2160,7 +1495,6 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let Iyy = params.Iyy;
@@ -2171,7 +1505,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[40] = v[1] * v[39] * m1 - m2 * v[0] * v[38];
@@ -2180,12 +1514,12 @@ pub mod maggi {
         v[43] = v[42] * v[15] * d;
         v[44] = Iyy * v[9];
         v[45] = Iyz * v[10];
-        v[46] = d + v[4] * a;
-        v[47] = a * a * v[0] * v[0] + v[46] * v[46];
+        v[46] = d + v[4] * a_;
+        v[47] = a_ * a_ * v[0] * v[0] + v[46] * v[46];
         v[48] = v[10] * Izz;
         v[49] = Iyz * v[9];
-        v[50] = a * a * v[1] * v[1];
-        v[51] = v[2] * a;
+        v[50] = a_ * a_ * v[1] * v[1];
+        v[51] = v[2] * a_;
         v[52] = -v[51] - d;
         v[53] = J2 * ((v[3] + 1.0) * v[9] * v[9] + (v[5] + 1.0) * v[10] * v[10])
             + (v[1] * v[1] * v[9] * J1 + v[44] + v[45]) * v[9]
@@ -2223,7 +1557,7 @@ pub mod maggi {
         v[76] = v[75] * v[64];
         v[77] = v[4] * v[33] * v[15] - v[0] * v[34];
         v[78] = v[33] * v[15] * v[0] + v[4] * v[34];
-        v[79] = v[78] * v[46] - a * v[0] * v[77];
+        v[79] = v[78] * v[46] - a_ * v[0] * v[77];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2232,7 +1566,6 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let psi_dot = state[8];
@@ -2242,11 +1575,11 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J2 = params.J2;
         v[80] = v[2] * v[35] - v[33] * v[1] * v[15];
         v[81] = v[35] * v[1] + v[2] * v[33] * v[15];
-        v[82] = a * v[1] * v[81];
+        v[82] = a_ * v[1] * v[81];
         v[83] = m2 * (v[79] * v[9] + v[35] * v[11] * v[10])
             + m1 * (v[10] * (v[80] * v[52] - v[82]) + v[8] * v[34] * v[9]);
         v[84] = m1 * (v[15] * (v[80] * v[56] + v[82]) * v[9] + v[34] * v[25]);
@@ -2255,9 +1588,9 @@ pub mod maggi {
         v[87] = v[83] * v[9] + v[86] * v[29] * v[10];
         v[88] = v[4] * v[15] * v[32] - v[0] * v[39];
         v[89] = v[15] * v[0] * v[32] + v[4] * v[39];
-        v[90] = v[89] * v[46] - a * v[88] * v[0];
+        v[90] = v[89] * v[46] - a_ * v[88] * v[0];
         v[91] = v[2] * v[15] * v[32] + v[1] * v[38];
-        v[92] = a * v[1] * v[91];
+        v[92] = a_ * v[1] * v[91];
         v[93] = v[2] * v[38] - v[1] * v[15] * v[32];
         v[94] = m2 * (v[90] * v[9] + v[11] * v[10] * v[38])
             + (v[8] * v[39] * v[9] + (v[93] * v[52] - v[92]) * v[10]) * m1;
@@ -2266,9 +1599,10 @@ pub mod maggi {
         v[97] = v[13] * v[40] * d + v[95] + v[96];
         v[98] = v[94] * v[9] + v[97] * v[29] * v[10];
         v[99] = m2
-            * (v[15] * v[11] * v[10] * v[10] + (v[22] * v[46] - a * v[20] * v[0]) * v[9])
+            * (v[15] * v[11] * v[10] * v[10]
+                + (v[22] * v[46] - a_ * v[20] * v[0]) * v[9])
             + m1
-                * ((v[23] * v[52] - a * v[18] * v[1]) * v[10]
+                * ((v[23] * v[52] - a_ * v[18] * v[1]) * v[10]
                     + v[8] * v[15] * v[9] * v[9]);
         v[100] = v[13] * v[42] * d * v[10] + v[99] * v[9];
         v[101] = v[72] + J2;
@@ -2298,7 +1632,6 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let psi_dot = state[8];
@@ -2314,7 +1647,7 @@ pub mod maggi {
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J2 = params.J2;
         v[120] = v[13] * psi_dot;
         v[121] = phi_dot - v[120];
@@ -2324,7 +1657,7 @@ pub mod maggi {
         v[125] = v[35] * X_dot;
         v[126] = Y_dot * v[38];
         v[127] = v[114] - v[115];
-        v[128] = a * v[127];
+        v[128] = a_ * v[127];
         v[129] = v[124] + v[125] + v[126] + v[128];
         v[130] = Y_dot * v[32];
         v[131] = X_dot * v[33];
@@ -2334,7 +1667,7 @@ pub mod maggi {
         v[135] = theta_dot * v[134] * v[10];
         v[136] = v[15] * psi_dot * phi_dot * v[9];
         v[137] = v[135] + v[136];
-        v[138] = a * v[137];
+        v[138] = a_ * v[137];
         v[139] = v[135] + v[136] - gamma1_dot * v[121];
         v[140] = gamma1_dot * v[119];
         v[141] = theta_dot * v[15] * psi_dot;
@@ -2367,7 +1700,6 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let theta = state[1];
@@ -2385,7 +1717,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[160] = v[127] * v[159];
@@ -2400,9 +1732,9 @@ pub mod maggi {
         v[169] = v[166] * v[167] * v[168];
         v[170] = v[143] - psi_dot;
         v[171] = Y_dot * (v[149] * v[10] + v[170] * v[9] * v[32]);
-        v[172] = v[157] * a;
+        v[172] = v[157] * a_;
         v[173] = v[0] * v[121] + v[4] * v[127];
-        v[174] = a * v[119];
+        v[174] = a_ * v[119];
         v[175] = Y_dot * v[39];
         v[176] = X_dot * v[34];
         v[177] = Z_dot * v[15] * v[9];
@@ -2434,7 +1766,7 @@ pub mod maggi {
         v[194] = v[171] + v[172] + v[180] + v[181] - v[132] * gamma1_dot;
         v[195] = v[148] * v[190] - v[133] * v[116] + v[2] * (v[191] + v[192] + v[193])
             + v[194] * v[1];
-        v[196] = a * v[1] * v[195];
+        v[196] = a_ * v[1] * v[195];
         v[197] = v[157] * d - v[122] * v[190] + v[1] * (-v[191] - v[192] - v[193])
             + v[2] * v[194] + v[116] * v[147];
         v[198] = theta_dot * v[15] * psi_dot * Ixz;
@@ -2447,7 +1779,6 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         let psi_dot = state[8];
@@ -2463,7 +1794,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[200] = v[122] * v[148];
@@ -2489,7 +1820,7 @@ pub mod maggi {
         v[219] = v[137] * d - v[168] * v[179]
             + v[4] * (v[216] + v[138] + v[145] + v[146] + v[150]) + v[167] * v[215]
             + v[0] * v[217];
-        v[220] = v[219] * v[46] - a * v[0] * v[218];
+        v[220] = v[219] * v[46] - a_ * v[0] * v[218];
         v[221] = v[13] * v[188] - v[189] * v[23]
             + (-v[20] * v[165] - v[18] * v[162]) * J1
             + (v[154] - theta_dot * Ixx * v[15] * psi_dot - v[158] - v[160] - v[161])
@@ -2513,7 +1844,7 @@ pub mod maggi {
                     - v[204] - v[205] + v[206]) + v[15] * psi_dot * v[53] * phi_dot
             + (v[209] - v[207] - v[208] - v[1] * J1 * v[162] - v[210] - v[2] * v[189]
                 + v[211] - v[212] - v[213]) * v[9];
-        v[223] = a * v[13] * theta_dot * theta_dot;
+        v[223] = a_ * v[13] * theta_dot * theta_dot;
         v[224] = v[4] * v[10];
         v[225] = v[0] * v[9];
         v[226] = (-v[224] - v[225]) * v[15];
@@ -2538,7 +1869,6 @@ pub mod maggi {
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 246],
     ) {
         v[240] = v[1] * (v[238] - v[239]);
@@ -2547,6 +1877,85 @@ pub mod maggi {
         v[243] = v[1] * (v[238] + v[239]);
         v[244] = (-v[238] - v[239]) * v[1];
         v[245] = 0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243] + v[17] + 0.25 * v[244];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (w, c) = (a.w, a.c);
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "Maggi matrix W^T M W",
+                value: column as f64,
+            });
+        }
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
+        dstate[8] = w[0][0] * force[0] + w[0][1] * force[1] + w[0][2] * force[2]
+            + w[0][3] * force[3] + w[0][4] * force[4] + w[0][5] * force[5]
+            + w[0][6] * force[6] + w[0][7] * force[7] + c[0];
+        dstate[9] = w[1][0] * force[0] + w[1][1] * force[1] + w[1][2] * force[2]
+            + w[1][3] * force[3] + w[1][4] * force[4] + w[1][5] * force[5]
+            + w[1][6] * force[6] + w[1][7] * force[7] + c[1];
+        dstate[10] = w[2][0] * force[0] + w[2][1] * force[1] + w[2][2] * force[2]
+            + w[2][3] * force[3] + w[2][4] * force[4] + w[2][5] * force[5]
+            + w[2][6] * force[6] + w[2][7] * force[7] + c[2];
+        dstate[11] = w[3][0] * force[0] + w[3][1] * force[1] + w[3][2] * force[2]
+            + w[3][3] * force[3] + w[3][4] * force[4] + w[3][5] * force[5]
+            + w[3][6] * force[6] + w[3][7] * force[7] + c[3];
+        dstate[12] = w[4][0] * force[0] + w[4][1] * force[1] + w[4][2] * force[2]
+            + w[4][3] * force[3] + w[4][4] * force[4] + w[4][5] * force[5]
+            + w[4][6] * force[6] + w[4][7] * force[7] + c[4];
+        dstate[13] = w[5][0] * force[0] + w[5][1] * force[1] + w[5][2] * force[2]
+            + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5]
+            + w[5][6] * force[6] + w[5][7] * force[7] + c[5];
+        dstate[14] = w[6][0] * force[0] + w[6][1] * force[1] + w[6][2] * force[2]
+            + w[6][3] * force[3] + w[6][4] * force[4] + w[6][5] * force[5]
+            + w[6][6] * force[6] + w[6][7] * force[7] + c[6];
+        dstate[15] = w[7][0] * force[0] + w[7][1] * force[1] + w[7][2] * force[2]
+            + w[7][3] * force[3] + w[7][4] * force[4] + w[7][5] * force[5]
+            + w[7][6] * force[6] + w[7][7] * force[7] + c[7];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -2573,7 +1982,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(gamma2);
         let x1 = f64::cos(gamma2);
         let x2 = f64::cos(psi);
@@ -2584,28 +1993,28 @@ pub mod maggi {
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
         let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a;
-        let x11 = x9 * x10 - a * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
         let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a + x1 * d;
+        let x13 = a_ + x1 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a * x3 * x4;
+        let x23 = -x22 * d - a_ * x3 * x4;
         let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a * x3 * x7 - x24 * d;
+        let x25 = -a_ * x3 * x7 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x6 * x7 * x5 - x2 * x4;
         let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
         let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
         let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -2657,9 +2066,9 @@ pub mod maggi {
             theta_dot
                 * (m2
                     * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
                             + x20 * x3 * x7 * x7))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -2692,7 +2101,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -2722,236 +2131,6 @@ pub mod maggi {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let J2 = params.J2;
-        let mut v = [0.0f64; 94];
-        matrix_part0(t, state, params, g_i, &mut v);
-        matrix_part1(t, state, params, g_i, &mut v);
-        matrix_part2(t, state, params, g_i, &mut v);
-        [
-            [v[6], v[28], v[29], 0.0, 0.0, v[35], v[39], v[41]],
-            [
-                v[28],
-                v[57] * v[9] + v[27] * v[10] * v[61],
-                v[62],
-                v[65],
-                v[66],
-                v[73],
-                v[80],
-                v[82],
-            ],
-            [
-                v[29],
-                v[62],
-                v[27] * (v[59] * v[27] * v[9] - v[10] * v[60] + v[29] * v[13]) * v[9]
-                    - (v[27] * v[56] * v[9] - v[51] * v[10]) * v[10],
-                v[83],
-                0.0,
-                v[84],
-                v[85],
-                v[86],
-            ],
-            [0.0, v[65], v[83], J2 + d * d * m1, 0.0, v[87], v[88], v[89]],
-            [0.0, v[66], 0.0, 0.0, m2 * d * d + J2, v[90], v[91], v[92]],
-            [v[35], v[73], v[84], v[87], v[90], v[93], 0.0, 0.0],
-            [v[39], v[80], v[85], v[88], v[91], 0.0, v[93], 0.0],
-            [v[41], v[82], v[86], v[89], v[92], 0.0, 0.0, v[93]],
-        ]
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part0(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 94],
-    ) {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::sin(gamma2);
-        v[1] = f64::sin(gamma1);
-        v[2] = f64::cos(gamma1);
-        v[3] = v[2] * v[2];
-        v[4] = f64::cos(gamma2);
-        v[5] = v[4] * v[4];
-        v[6] = Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
-            + (v[0] * v[0] + v[1] * v[1]) * J2;
-        v[7] = J1 - J2;
-        v[8] = -a - v[2] * d;
-        v[9] = f64::cos(phi);
-        v[10] = f64::sin(phi);
-        v[11] = a + v[4] * d;
-        v[12] = ((v[2] * v[7] + v[8] * d * m1) * v[1] - Ixy) * v[9]
-            + v[10] * ((v[4] * v[7] - m2 * d * v[11]) * v[0] + Ixz);
-        v[13] = f64::sin(theta);
-        v[14] = v[13] * Ixx;
-        v[15] = f64::cos(theta);
-        v[16] = v[15] * (-Ixy * v[10] - Ixz * v[9]);
-        v[17] = v[1] * v[15] * v[10] - v[2] * v[13];
-        v[18] = -v[15] * v[0] * v[9] - v[4] * v[13];
-        v[19] = (v[2] * v[17] + v[4] * v[18]) * J1;
-        v[20] = v[4] * v[15] * v[9] - v[13] * v[0];
-        v[21] = v[2] * v[15] * v[10] + v[13] * v[1];
-        v[22] = (v[20] * v[0] - v[21] * v[1]) * J2;
-        v[23] = -v[21] * d - a * v[15] * v[10];
-        v[24] = -a * v[15] * v[9] - v[20] * d;
-        v[25] = (v[1] * m1 * v[23] - m2 * v[0] * v[24]) * d;
-        v[26] = v[16] - v[14] + v[19] + v[13] * v[6] + v[22] + v[25];
-        v[27] = 1.0 / v[15];
-        v[28] = v[12] * v[9] + v[26] * v[27] * v[10];
-        v[29] = v[26] * v[27] * v[9] - v[12] * v[10];
-        v[30] = f64::sin(psi);
-        v[31] = f64::cos(psi);
-        v[32] = v[10] * v[30] + v[13] * v[31] * v[9];
-        v[33] = v[13] * v[31] * v[10] - v[9] * v[30];
-        v[34] = v[1] * v[32] * m1 - m2 * v[33] * v[0];
-        v[35] = d * v[34];
-        v[36] = v[31] * v[9] + v[13] * v[10] * v[30];
-        v[37] = v[13] * v[9] * v[30] - v[31] * v[10];
-        v[38] = v[1] * v[37] * m1 - m2 * v[0] * v[36];
-        v[39] = v[38] * d;
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 94],
-    ) {
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[40] = v[1] * m1 * v[9] - m2 * v[0] * v[10];
-        v[41] = v[40] * v[15] * d;
-        v[42] = Iyy * v[9];
-        v[43] = Iyz * v[10];
-        v[44] = d + v[4] * a;
-        v[45] = a * a * v[0] * v[0] + v[44] * v[44];
-        v[46] = v[10] * Izz;
-        v[47] = Iyz * v[9];
-        v[48] = a * a * v[1] * v[1];
-        v[49] = v[2] * a;
-        v[50] = -v[49] - d;
-        v[51] = J2 * ((v[3] + 1.0) * v[9] * v[9] + (v[5] + 1.0) * v[10] * v[10])
-            + (v[1] * v[1] * v[9] * J1 + v[42] + v[43]) * v[9]
-            + (v[45] * v[9] * v[9] + v[11] * v[11] * v[10] * v[10]) * m2
-            + v[10] * (v[46] + v[47] + v[0] * v[0] * v[10] * J1)
-            + ((v[48] + v[50] * v[50]) * v[10] * v[10] + v[8] * v[8] * v[9] * v[9]) * m1;
-        v[52] = v[10]
-            * (m2 * (v[15] * v[45] * v[9] + v[11] * v[24]) - v[4] * v[20] * J2
-                + v[18] * v[0] * J1 + (v[42] + v[43]) * v[15]);
-        v[53] = v[13] * (v[10] * Ixz - Ixy * v[9]);
-        v[54] = v[49] + d;
-        v[55] = (v[2] * J2 * v[21] + v[15] * (-v[46] - v[47]) + v[17] * v[1] * J1
-            + (v[8] * v[23] + v[15] * v[10] * (v[54] * v[50] - v[48])) * m1) * v[9];
-        v[56] = v[52] - v[53] + v[55] + v[13] * v[12];
-        v[57] = v[51] * v[9] + v[27] * v[56] * v[10];
-        v[58] = v[9] * v[9] + v[10] * v[10];
-        v[59] = (v[23] * v[23] + (v[54] * v[54] + v[48]) * v[15] * v[15] * v[9] * v[9])
-            * m1 + m2 * (v[24] * v[24] + v[15] * v[15] * v[10] * v[10] * v[45])
-            + (v[18] * v[18] + v[17] * v[17]) * J1
-            + v[13] * (v[16] - v[14] + v[19] + v[22] + v[25])
-            + J2 * (v[15] * v[15] * v[58] + v[20] * v[20] + v[21] * v[21])
-            - v[13] * (v[16] - v[14])
-            + v[15]
-                * (((Iyy * v[10] - v[47]) * v[15] + v[13] * Ixy) * v[10]
-                    + (v[15] * (Izz * v[9] - v[43]) + v[13] * Ixz) * v[9]);
-        v[60] = v[52] - v[53] + v[55];
-        v[61] = v[59] * v[27] * v[10] + v[13] * v[28] + v[60] * v[9];
-        v[62] = v[27] * v[9] * v[61] - v[57] * v[10];
-        v[63] = d * v[54] * m1;
-        v[64] = d * v[50] * m1;
-        v[65] = (v[63] + v[64]) * v[10] * v[9];
-        v[66] = (J2 + m2 * d * v[44]) * v[58];
-        v[67] = v[31] * v[15] * v[0] + v[4] * v[32];
-        v[68] = v[67] * v[44] - a * v[0] * (v[4] * v[31] * v[15] - v[0] * v[32]);
-        v[69] = v[2] * v[33] - v[31] * v[1] * v[15];
-        v[70] = a * v[1] * (v[33] * v[1] + v[2] * v[31] * v[15]);
-        v[71] = m2 * (v[68] * v[9] + v[33] * v[11] * v[10])
-            + m1 * (v[10] * (v[69] * v[50] - v[70]) + v[8] * v[32] * v[9]);
-        v[72] = v[13] * d * v[34]
-            + m1 * (v[15] * (v[69] * v[54] + v[70]) * v[9] + v[32] * v[23])
-            + m2 * (v[15] * v[68] * v[10] + v[33] * v[24]);
-        v[73] = v[71] * v[9] + v[72] * v[27] * v[10];
-        v[74] = v[15] * v[0] * v[30] + v[4] * v[37];
-        v[75] = v[74] * v[44] - a * (v[4] * v[15] * v[30] - v[0] * v[37]) * v[0];
-        v[76] = a * v[1] * (v[2] * v[15] * v[30] + v[1] * v[36]);
-        v[77] = v[2] * v[36] - v[1] * v[15] * v[30];
-        v[78] = m2 * (v[75] * v[9] + v[11] * v[10] * v[36])
-            + (v[8] * v[37] * v[9] + (v[77] * v[50] - v[76]) * v[10]) * m1;
-        v[79] = v[13] * v[38] * d
-            + m1 * (v[15] * (v[77] * v[54] + v[76]) * v[9] + v[37] * v[23])
-            + m2 * (v[15] * v[10] * v[75] + v[36] * v[24]);
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part2(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 94],
-    ) {
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J2 = params.J2;
-        v[80] = v[78] * v[9] + v[79] * v[27] * v[10];
-        v[81] = m2
-            * (v[15] * v[11] * v[10] * v[10] + (v[20] * v[44] - a * v[18] * v[0]) * v[9])
-            + m1
-                * ((v[21] * v[50] - a * v[17] * v[1]) * v[10]
-                    + v[8] * v[15] * v[9] * v[9]);
-        v[82] = v[13] * v[40] * d * v[10] + v[81] * v[9];
-        v[83] = (v[63] + J2) * v[9] * v[9] - v[10] * v[10] * (v[64] - J2);
-        v[84] = v[72] * v[27] * v[9] - v[10] * v[71];
-        v[85] = v[79] * v[27] * v[9] - v[10] * v[78];
-        v[86] = v[13] * v[40] * d * v[9] - v[81] * v[10];
-        v[87] = v[69] * d * m1;
-        v[88] = v[77] * d * m1;
-        v[89] = v[21] * d * m1;
-        v[90] = m2 * d * v[67];
-        v[91] = m2 * d * v[74];
-        v[92] = m2 * v[20] * d;
-        v[93] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -2995,15 +2174,25 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 8;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
@@ -3018,155 +2207,122 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let mut v = [0.0f64; 217];
-        rhs_part0(t, state, params, g_i, dstate, &mut v);
-        rhs_part1(t, state, params, g_i, dstate, &mut v);
-        rhs_part2(t, state, params, g_i, dstate, &mut v);
-        rhs_part3(t, state, params, g_i, dstate, &mut v);
-        rhs_part4(t, state, params, g_i, dstate, &mut v);
-        rhs_part5(t, state, params, g_i, dstate, &mut v);
-        let value = v[0];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
-        }
-        let mut matrix: [[f64; 8]; 8] = [
-            [
-                Ixx + d * d * (m2 * v[8] * v[8] + v[9] * v[9] * m1)
-                    + (v[11] + v[13]) * J1 + (v[8] * v[8] + v[9] * v[9]) * J2,
-                v[17],
-                v[21],
-                0.0,
-                0.0,
-                v[28],
-                v[34],
-                v[35],
+        rhs_part0(t, state, params, g_i, &mut v);
+        rhs_part1(t, state, params, g_i, &mut v);
+        rhs_part2(t, state, params, g_i, &mut v);
+        rhs_part3(t, state, params, g_i, &mut v);
+        rhs_part4(t, state, params, g_i, &mut v);
+        rhs_part5(t, state, params, g_i, &mut v);
+        Assembly {
+            qdot: [v[1] * v[4], v[5], v[7], u4, u5, u6, u7, u8],
+            matrix: [
+                [
+                    Ixx + d * d * (m2 * v[8] * v[8] + v[9] * v[9] * m1)
+                        + (v[11] + v[13]) * J1 + (v[8] * v[8] + v[9] * v[9]) * J2,
+                    v[17],
+                    v[21],
+                    0.0,
+                    0.0,
+                    v[28],
+                    v[34],
+                    v[35],
+                ],
+                [
+                    v[17],
+                    v[9] * v[9] * J1 + v[16] * v[16] * m1 + Iyy + J2 * (v[11] + 1.0)
+                        + m2 * (v[36] + a_ * (a_ + 2.0 * v[19])),
+                    v[37],
+                    0.0,
+                    v[39],
+                    v[42],
+                    v[45],
+                    v[49],
+                ],
+                [
+                    v[21],
+                    v[37],
+                    v[8] * v[8] * J1 + (a_ * (a_ + 2.0 * v[15]) + v[36]) * m1
+                        + m2 * v[20] * v[20] + Izz + J2 * (v[13] + 1.0),
+                    v[51],
+                    0.0,
+                    v[54],
+                    v[57],
+                    v[61],
+                ],
+                [0.0, 0.0, v[51], J2 + d * d * m1, 0.0, v[62], v[63], v[64]],
+                [0.0, v[39], 0.0, 0.0, m2 * d * d + J2, v[65], v[66], v[67]],
+                [v[28], v[42], v[54], v[62], v[65], v[68], 0.0, 0.0],
+                [v[34], v[45], v[57], v[63], v[66], 0.0, v[68], 0.0],
+                [v[35], v[49], v[61], v[64], v[67], 0.0, 0.0, v[68]],
             ],
-            [
-                v[17],
-                v[9] * v[9] * J1 + v[16] * v[16] * m1 + Iyy + J2 * (v[11] + 1.0)
-                    + m2 * (v[36] + a * (a + 2.0 * v[19])),
-                v[37],
-                0.0,
-                v[39],
-                v[42],
-                v[45],
-                v[49],
+            force: [
+                v[9] * (v[71] + v[74] - d * m1 * v[105])
+                    + (-v[12] * u5 * v[108] - v[10] * v[84] * u4) * J1 - v[109] * u2
+                    + u3 * v[110] + (m2 * v[127] * d - v[112] * v[115]) * v[8],
+                v[128] + v[109] * u1 - v[84] * u4 * v[9] * J1 - u3 * v[129]
+                    - m2 * (v[134] * v[38] - a_ * v[135] * v[8])
+                    - v[10] * (v[71] + v[74]) - v[16] * m1 * v[105],
+                u5 * v[108] * v[8] * J1 - m2 * v[127] * v[20]
+                    - (v[138] * v[50] + a_ * v[9] * v[139]) * m1 - u1 * v[110] + v[140]
+                    - v[112] * v[12] * v[115] + v[129] * u2,
+                v[140] - v[138] * d * m1,
+                v[128] - m2 * d * v[134],
+                -m2 * (v[41] * v[134] + v[27] * v[127] + v[40] * v[135])
+                    - (v[53] * v[139] + v[25] * v[105] + v[52] * v[138]) * m1,
+                -m1 * (v[138] * v[55] + v[139] * v[56] + v[33] * v[105])
+                    - m2 * (v[44] * v[134] + v[127] * v[30] + v[135] * v[43]),
+                -(u3 * (v[157] + v[168] + a_ * (v[169] + v[170]))
+                    + (v[171] + a_ * (v[172] + v[173]) + v[174]) * u2
+                    + ((u1
+                        * (0.5 * v[178] - 0.25 * v[182] + 0.5 * v[184] - 0.25 * v[186]
+                            - 0.25 * v[188] - 0.25 * v[190]) + v[191] * u3
+                        + (0.25 * v[192] + 0.25 * v[193] + 0.25 * v[194] + 0.5 * v[195]
+                            + 0.25 * v[196] + 0.5 * v[197]) * u2) * u3
+                        + u1
+                            * (u1
+                                * (0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188]
+                                    + 0.25 * v[190])
+                                + (0.25 * v[192] + 0.25 * v[193] - 0.25 * v[194] - v[58]
+                                    - 0.25 * v[196]) * u2) + v[10] * v[6] * u2 * u2
+                        + u4
+                            * (u2
+                                * (0.5 * v[192] + 0.5 * v[193] + 0.5 * v[194] + v[195]
+                                    + 0.5 * v[196] + v[197])
+                                + (0.5 * v[186] - 0.5 * v[182] - 0.5 * v[188] + 2.0 * v[60]
+                                    + 0.5 * v[190]) * u3
+                                + u1
+                                    * (v[178] - 0.5 * v[182] + v[184] - 0.5 * v[186]
+                                        - 0.5 * v[188] - 0.5 * v[190]) + u4 * v[191])) * d) * m1
+                    - m2
+                        * ((v[171] + a_ * (-v[172] - v[173]) + v[174]) * u2
+                            + u3 * (v[157] + a_ * (-v[169] - v[170]) + v[168])
+                            + ((u3
+                                * (0.25 * v[201] + 0.25 * v[203] - v[47] + 0.25 * v[205]
+                                    - 0.5 * v[208] + 0.25 * v[210] - 0.5 * v[211])
+                                + u2
+                                    * (0.25 * v[212] - 0.25 * v[213] + 0.25 * v[214]
+                                        - 0.25 * v[215])
+                                + (0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214]
+                                    + 0.25 * v[215]) * u1) * u1
+                                + u5
+                                    * (u1
+                                        * (0.5 * v[212] - 0.5 * v[213] + 0.5 * v[214]
+                                            - 0.5 * v[215])
+                                        + u3
+                                            * (0.5 * v[201] + 0.5 * v[203] - 0.5 * v[205] - v[208]
+                                                - 0.5 * v[210] + v[211])
+                                        + (0.5 * v[212] - 0.5 * v[213] - 0.5 * v[214] + 0.5 * v[215]
+                                            - 2.0 * v[46]) * u2 + u5 * v[216])
+                                + ((0.25 * v[201] + 0.25 * v[203] - 0.25 * v[205]
+                                    - 0.5 * v[208] - 0.25 * v[210] + 0.5 * v[211]) * u3
+                                    + v[216] * u2) * u2 - v[12] * v[6] * u3 * u3) * d),
             ],
-            [
-                v[21],
-                v[37],
-                v[8] * v[8] * J1 + (a * (a + 2.0 * v[15]) + v[36]) * m1
-                    + m2 * v[20] * v[20] + Izz + J2 * (v[13] + 1.0),
-                v[51],
-                0.0,
-                v[54],
-                v[57],
-                v[61],
-            ],
-            [0.0, 0.0, v[51], J2 + d * d * m1, 0.0, v[62], v[63], v[64]],
-            [0.0, v[39], 0.0, 0.0, m2 * d * d + J2, v[65], v[66], v[67]],
-            [v[28], v[42], v[54], v[62], v[65], v[68], 0.0, 0.0],
-            [v[34], v[45], v[57], v[63], v[66], 0.0, v[68], 0.0],
-            [v[35], v[49], v[61], v[64], v[67], 0.0, 0.0, v[68]],
-        ];
-        let mut force: [f64; 8] = [
-            v[9] * (v[71] + v[74] - d * m1 * v[105])
-                + (-v[12] * u5 * v[108] - v[10] * v[84] * u4) * J1 - v[109] * u2
-                + u3 * v[110] + (m2 * v[127] * d - v[112] * v[115]) * v[8],
-            v[128] + v[109] * u1 - v[84] * u4 * v[9] * J1 - u3 * v[129]
-                - m2 * (v[134] * v[38] - a * v[135] * v[8]) - v[10] * (v[71] + v[74])
-                - v[16] * m1 * v[105],
-            u5 * v[108] * v[8] * J1 - m2 * v[127] * v[20]
-                - (v[138] * v[50] + a * v[9] * v[139]) * m1 - u1 * v[110] + v[140]
-                - v[112] * v[12] * v[115] + v[129] * u2,
-            v[140] - v[138] * d * m1,
-            v[128] - m2 * d * v[134],
-            -m2 * (v[41] * v[134] + v[27] * v[127] + v[40] * v[135])
-                - (v[53] * v[139] + v[25] * v[105] + v[52] * v[138]) * m1,
-            -m1 * (v[138] * v[55] + v[139] * v[56] + v[33] * v[105])
-                - m2 * (v[44] * v[134] + v[127] * v[30] + v[135] * v[43]),
-            -(u3 * (v[157] + v[168] + a * (v[169] + v[170]))
-                + (v[171] + a * (v[172] + v[173]) + v[174]) * u2
-                + ((u1
-                    * (0.5 * v[178] - 0.25 * v[182] + 0.5 * v[184] - 0.25 * v[186]
-                        - 0.25 * v[188] - 0.25 * v[190]) + v[191] * u3
-                    + (0.25 * v[192] + 0.25 * v[193] + 0.25 * v[194] + 0.5 * v[195]
-                        + 0.25 * v[196] + 0.5 * v[197]) * u2) * u3
-                    + u1
-                        * (u1
-                            * (0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188]
-                                + 0.25 * v[190])
-                            + (0.25 * v[192] + 0.25 * v[193] - 0.25 * v[194] - v[58]
-                                - 0.25 * v[196]) * u2) + v[10] * v[6] * u2 * u2
-                    + u4
-                        * (u2
-                            * (0.5 * v[192] + 0.5 * v[193] + 0.5 * v[194] + v[195]
-                                + 0.5 * v[196] + v[197])
-                            + (0.5 * v[186] - 0.5 * v[182] - 0.5 * v[188] + 2.0 * v[60]
-                                + 0.5 * v[190]) * u3
-                            + u1
-                                * (v[178] - 0.5 * v[182] + v[184] - 0.5 * v[186]
-                                    - 0.5 * v[188] - 0.5 * v[190]) + u4 * v[191])) * d) * m1
-                - m2
-                    * ((v[171] + a * (-v[172] - v[173]) + v[174]) * u2
-                        + u3 * (v[157] + a * (-v[169] - v[170]) + v[168])
-                        + ((u3
-                            * (0.25 * v[201] + 0.25 * v[203] - v[47] + 0.25 * v[205]
-                                - 0.5 * v[208] + 0.25 * v[210] - 0.5 * v[211])
-                            + u2
-                                * (0.25 * v[212] - 0.25 * v[213] + 0.25 * v[214]
-                                    - 0.25 * v[215])
-                            + (0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214]
-                                + 0.25 * v[215]) * u1) * u1
-                            + u5
-                                * (u1
-                                    * (0.5 * v[212] - 0.5 * v[213] + 0.5 * v[214]
-                                        - 0.5 * v[215])
-                                    + u3
-                                        * (0.5 * v[201] + 0.5 * v[203] - 0.5 * v[205] - v[208]
-                                            - 0.5 * v[210] + v[211])
-                                    + (0.5 * v[212] - 0.5 * v[213] - 0.5 * v[214] + 0.5 * v[215]
-                                        - 2.0 * v[46]) * u2 + u5 * v[216])
-                            + ((0.25 * v[201] + 0.25 * v[203] - 0.25 * v[205]
-                                - 0.5 * v[208] - 0.25 * v[210] + 0.5 * v[211]) * u3
-                                + v[216] * u2) * u2 - v[12] * v[6] * u3 * u3) * d),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
-                value: column as f64,
-            });
+            checks: [v[0]],
         }
-        dstate[0] = v[1] * v[4];
-        dstate[1] = v[5];
-        dstate[2] = v[7];
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = u6;
-        dstate[6] = u7;
-        dstate[7] = u8;
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        dstate[13] = force[5];
-        dstate[14] = force[6];
-        dstate[15] = force[7];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3175,7 +2331,6 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         let psi = state[0];
@@ -3192,7 +2347,7 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[0] = f64::cos(theta);
@@ -3211,11 +2366,11 @@ pub mod kane {
         v[13] = v[12] * v[12];
         v[14] = J1 - J2;
         v[15] = v[10] * d;
-        v[16] = -a - v[15];
+        v[16] = -a_ - v[15];
         v[17] = (v[10] * v[14] + v[16] * d * m1) * v[9] - Ixy;
         v[18] = J2 - J1;
         v[19] = v[12] * d;
-        v[20] = -a - v[19];
+        v[20] = -a_ - v[19];
         v[21] = v[8] * (v[12] * v[18] - m2 * d * v[20]) - Ixz;
         v[22] = f64::sin(psi);
         v[23] = v[2] * v[22];
@@ -3233,7 +2388,7 @@ pub mod kane {
         v[35] = (v[9] * m1 * v[3] - m2 * v[8] * v[2]) * v[0] * d;
         v[36] = d * d;
         v[37] = -Iyz;
-        v[38] = d + v[12] * a;
+        v[38] = d + v[12] * a_;
         v[39] = J2 + m2 * d * v[38];
     }
     #[allow(non_snake_case)]
@@ -3243,7 +2398,6 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         let u1 = state[8];
@@ -3257,31 +2411,31 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J2 = params.J2;
         v[40] = (v[12] * v[0] - v[6] * v[8] * v[3]) * v[24] - v[8] * v[2] * v[22];
         v[41] = v[24] * v[0] * v[8] + v[12] * v[25];
-        v[42] = m2 * (v[41] * v[38] - a * v[40] * v[8]) + v[16] * v[25] * m1;
+        v[42] = m2 * (v[41] * v[38] - a_ * v[40] * v[8]) + v[16] * v[25] * m1;
         v[43] = v[12] * v[0] * v[22] + (v[31] - v[32]) * v[8];
         v[44] = v[0] * v[8] * v[22] + v[12] * v[33];
-        v[45] = v[16] * v[33] * m1 + m2 * (v[44] * v[38] - a * v[8] * v[43]);
+        v[45] = v[16] * v[33] * m1 + m2 * (v[44] * v[38] - a_ * v[8] * v[43]);
         v[46] = v[12] * v[6];
         v[47] = v[6] * v[8];
         v[48] = v[12] * v[0] * v[3] - v[47];
-        v[49] = m2 * (v[48] * v[38] - a * (-v[0] * v[8] * v[3] - v[46]) * v[8])
+        v[49] = m2 * (v[48] * v[38] - a_ * (-v[0] * v[8] * v[3] - v[46]) * v[8])
             + v[16] * v[0] * m1 * v[3];
-        v[50] = v[10] * a + d;
+        v[50] = v[10] * a_ + d;
         v[51] = d * v[50] * m1 + J2;
         v[52] = v[10] * v[27] - v[24] * v[9] * v[0];
         v[53] = v[24] * (v[6] * v[9] * v[2] + v[10] * v[0]) - v[9] * v[3] * v[22];
-        v[54] = m2 * v[27] * v[20] + (v[52] * v[50] + a * v[53] * v[9]) * m1;
+        v[54] = m2 * v[27] * v[20] + (v[52] * v[50] + a_ * v[53] * v[9]) * m1;
         v[55] = v[10] * v[30] - v[9] * v[0] * v[22];
         v[56] = v[10] * v[0] * v[22] + v[9] * v[30];
-        v[57] = (v[55] * v[50] + a * v[9] * v[56]) * m1 + m2 * v[20] * v[30];
+        v[57] = (v[55] * v[50] + a_ * v[9] * v[56]) * m1 + m2 * v[20] * v[30];
         v[58] = v[6] * v[9];
         v[59] = v[10] * v[0] * v[2] + v[58];
         v[60] = v[10] * v[6];
-        v[61] = (v[59] * v[50] + a * (v[9] * v[0] * v[2] - v[60]) * v[9]) * m1
+        v[61] = (v[59] * v[50] + a_ * (v[9] * v[0] * v[2] - v[60]) * v[9]) * m1
             + m2 * v[0] * v[2] * v[20];
         v[62] = v[52] * d * m1;
         v[63] = v[55] * d * m1;
@@ -3309,7 +2463,6 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         let u1 = state[8];
@@ -3326,14 +2479,14 @@ pub mod kane {
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J2 = params.J2;
         v[80] = v[6] * v[79] - v[78];
         v[81] = (v[1] * v[77] * v[4] + v[7] * v[80]) * v[2];
         v[82] = v[10] * u2;
         v[83] = v[9] * u1;
         v[84] = v[82] - v[83];
-        v[85] = a * u3;
+        v[85] = a_ * u3;
         v[86] = u7 * v[24];
         v[87] = u6 * v[22];
         v[88] = v[86] - v[87];
@@ -3367,7 +2520,7 @@ pub mod kane {
         v[116] = v[2] * v[103];
         v[117] = v[1] * v[79] * v[4] + v[7] * v[90];
         v[118] = v[117] * v[3];
-        v[119] = a * u2;
+        v[119] = a_ * u2;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3376,7 +2529,6 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         let psi = state[0];
@@ -3452,7 +2604,6 @@ pub mod kane {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         let u1 = state[8];
@@ -3516,7 +2667,6 @@ pub mod kane {
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 217],
     ) {
         v[200] = -v[198] - v[199];
@@ -3536,6 +2686,68 @@ pub mod kane {
         v[214] = v[204] * v[0];
         v[215] = v[209] * v[0];
         v[216] = 0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214] + 0.25 * v[215] - v[46];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        dstate[13] = force[5];
+        dstate[14] = force[6];
+        dstate[15] = force[7];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -3562,7 +2774,7 @@ pub mod kane {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(theta);
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
@@ -3573,28 +2785,28 @@ pub mod kane {
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
         let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a;
-        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
         let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a + x5 * d;
+        let x13 = a_ + x5 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a * x2 * x3;
+        let x23 = -x22 * d - a_ * x2 * x3;
         let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a * x2 * x1 - x24 * d;
+        let x25 = -a_ * x2 * x1 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x0 * x1 * x7 - x6 * x3;
         let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
         let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
         let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -3646,9 +2858,9 @@ pub mod kane {
             theta_dot
                 * (m2
                     * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
                             + x20 * x2 * x1 * x1))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -3687,7 +2899,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -3717,174 +2929,6 @@ pub mod kane {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 8;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let mut v = [0.0f64; 52];
-        matrix_part0(t, state, params, g_i, &mut v);
-        matrix_part1(t, state, params, g_i, &mut v);
-        [
-            [
-                Ixx + d * d * (m2 * v[0] * v[0] + v[1] * v[1] * m1) + (v[3] + v[5]) * J1
-                    + (v[0] * v[0] + v[1] * v[1]) * J2,
-                v[8],
-                v[11],
-                0.0,
-                0.0,
-                v[19],
-                v[24],
-                v[26],
-            ],
-            [
-                v[8],
-                v[1] * v[1] * J1 + v[7] * v[7] * m1 + Iyy + J2 * (v[3] + 1.0)
-                    + m2 * (v[27] + a * (a + 2.0 * v[9])),
-                v[28],
-                0.0,
-                v[30],
-                v[32],
-                v[34],
-                v[36],
-            ],
-            [
-                v[11],
-                v[28],
-                v[0] * v[0] * J1 + (a * (a + 2.0 * v[6]) + v[27]) * m1
-                    + m2 * v[10] * v[10] + Izz + J2 * (v[5] + 1.0),
-                v[38],
-                0.0,
-                v[40],
-                v[42],
-                v[44],
-            ],
-            [0.0, 0.0, v[38], J2 + d * d * m1, 0.0, v[45], v[46], v[47]],
-            [0.0, v[30], 0.0, 0.0, m2 * d * d + J2, v[48], v[49], v[50]],
-            [v[19], v[32], v[40], v[45], v[48], v[51], 0.0, 0.0],
-            [v[24], v[34], v[42], v[46], v[49], 0.0, v[51], 0.0],
-            [v[26], v[36], v[44], v[47], v[50], 0.0, 0.0, v[51]],
-        ]
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part0(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 52],
-    ) {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::sin(gamma2);
-        v[1] = f64::sin(gamma1);
-        v[2] = f64::cos(gamma1);
-        v[3] = v[2] * v[2];
-        v[4] = f64::cos(gamma2);
-        v[5] = v[4] * v[4];
-        v[6] = v[2] * d;
-        v[7] = -a - v[6];
-        v[8] = (v[2] * (J1 - J2) + v[7] * d * m1) * v[1] - Ixy;
-        v[9] = v[4] * d;
-        v[10] = -a - v[9];
-        v[11] = v[0] * (v[4] * (J2 - J1) - m2 * d * v[10]) - Ixz;
-        v[12] = f64::sin(phi);
-        v[13] = f64::sin(psi);
-        v[14] = f64::sin(theta);
-        v[15] = f64::cos(psi);
-        v[16] = f64::cos(phi);
-        v[17] = v[12] * v[13] + v[14] * v[15] * v[16];
-        v[18] = v[14] * v[15] * v[12] - v[16] * v[13];
-        v[19] = d * (v[1] * v[17] * m1 - m2 * v[18] * v[0]);
-        v[20] = v[15] * v[16] + v[14] * v[12] * v[13];
-        v[21] = v[15] * v[12];
-        v[22] = v[14] * v[16] * v[13];
-        v[23] = v[22] - v[21];
-        v[24] = (v[1] * v[23] * m1 - m2 * v[0] * v[20]) * d;
-        v[25] = f64::cos(theta);
-        v[26] = (v[1] * m1 * v[16] - m2 * v[0] * v[12]) * v[25] * d;
-        v[27] = d * d;
-        v[28] = -Iyz;
-        v[29] = d + v[4] * a;
-        v[30] = J2 + m2 * d * v[29];
-        v[31] = v[15] * v[25] * v[0] + v[4] * v[17];
-        v[32] = m2
-            * (v[31] * v[29]
-                - a
-                    * ((v[4] * v[25] - v[14] * v[0] * v[16]) * v[15]
-                        - v[0] * v[12] * v[13]) * v[0]) + v[7] * v[17] * m1;
-        v[33] = v[25] * v[0] * v[13] + v[4] * v[23];
-        v[34] = v[7] * v[23] * m1
-            + m2
-                * (v[33] * v[29]
-                    - a * v[0] * (v[4] * v[25] * v[13] + (v[21] - v[22]) * v[0]));
-        v[35] = v[4] * v[25] * v[16] - v[14] * v[0];
-        v[36] = m2 * (v[35] * v[29] - a * (-v[25] * v[0] * v[16] - v[4] * v[14]) * v[0])
-            + v[7] * v[25] * m1 * v[16];
-        v[37] = v[2] * a + d;
-        v[38] = d * v[37] * m1 + J2;
-        v[39] = v[2] * v[18] - v[15] * v[1] * v[25];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 52],
-    ) {
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        v[40] = m2 * v[18] * v[10]
-            + (v[39] * v[37]
-                + a
-                    * (v[15] * (v[14] * v[1] * v[12] + v[2] * v[25])
-                        - v[1] * v[16] * v[13]) * v[1]) * m1;
-        v[41] = v[2] * v[20] - v[1] * v[25] * v[13];
-        v[42] = (v[41] * v[37] + a * v[1] * (v[2] * v[25] * v[13] + v[1] * v[20])) * m1
-            + m2 * v[10] * v[20];
-        v[43] = v[2] * v[25] * v[12] + v[14] * v[1];
-        v[44] = (v[43] * v[37] + a * (v[1] * v[25] * v[12] - v[2] * v[14]) * v[1]) * m1
-            + m2 * v[25] * v[12] * v[10];
-        v[45] = v[39] * d * m1;
-        v[46] = v[41] * d * m1;
-        v[47] = v[43] * d * m1;
-        v[48] = m2 * d * v[31];
-        v[49] = m2 * d * v[33];
-        v[50] = m2 * v[35] * d;
-        v[51] = m2 + m0 + m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -3925,15 +2969,25 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Size of the matrix `rhs` solves numerically.
+    pub const MATRIX_SIZE: usize = 5;
+    ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    ///Everything the right-hand side evaluates before its solve.
+    struct Assembly {
+        qdot: [f64; 8],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 1],
+    }
+    ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
-    pub fn rhs(
+    fn assemble(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-        dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Assembly {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
@@ -3946,163 +3000,146 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let mut v = [0.0f64; 132];
-        rhs_part0(t, state, params, g_i, dstate, &mut v);
-        rhs_part1(t, state, params, g_i, dstate, &mut v);
-        rhs_part2(t, state, params, g_i, dstate, &mut v);
-        rhs_part3(t, state, params, g_i, dstate, &mut v);
-        let value = v[0];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "cos(theta) = 0",
-                value,
-            });
+        rhs_part0(t, state, params, g_i, &mut v);
+        rhs_part1(t, state, params, g_i, &mut v);
+        rhs_part2(t, state, params, g_i, &mut v);
+        rhs_part3(t, state, params, g_i, &mut v);
+        Assembly {
+            qdot: [
+                v[1] * v[4],
+                u2 * v[3] - u3 * v[2],
+                v[5] * v[1] * v[4] + u1,
+                u4,
+                u5,
+                v[6]
+                    * (G_X
+                        + (u4 * (v[7] * (v[9] - v[11]) + v[10] * v[12] * v[0]) * m1
+                            + (v[12] * v[15] * m1 + m2 * (v[11] - v[9]) * v[16]) * u1
+                            + u5 * m2 * (v[17] * v[15] - v[10] * v[0] * v[16])) * d
+                        + ((v[7] * d * v[18] + a_ * v[18]) * m1
+                            + m2
+                                * (v[10] * (v[5] * v[20] * v[3] - v[0] * d * v[16])
+                                    + v[2] * v[20] * v[8])) * u2
+                        + (v[22] * v[3] * v[8]
+                            + v[10] * (v[23] * v[5] * v[2] + v[12] * v[0] * d * m1))
+                            * u3),
+                ((u4 * v[27] * m1 + u1 * (m2 * v[16] * v[28] + v[31] * v[12] * m1)
+                    + u5 * m2 * v[32]) * d
+                    + u3
+                        * ((v[27] * m1 + v[17] * m2 * v[28]) * d
+                            + a_ * (v[26] * m1 + m2 * v[28])) + G_Y
+                    + (m2 * (d * v[32] + v[31] * a_)
+                        + m1 * (v[7] * d * v[33] + a_ * v[33])) * u2) * v[6],
+                v[6]
+                    * (u3 * (v[23] * v[0] * v[2] - v[5] * v[12] * d * m1) + G_Z
+                        + (v[22] * v[0] * v[3] + m2 * v[5] * d * v[16]) * u2
+                        + d
+                            * (u5 * m2 * (v[5] * v[16] - v[17] * v[0] * v[3])
+                                + (m2 * v[16] * v[2] - v[12] * m1 * v[3]) * v[0] * u1
+                                + (-v[7] * v[0] * v[2] - v[5] * v[12]) * u4 * m1)),
+            ],
+            matrix: [
+                [
+                    Ixx
+                        + d * d
+                            * (m2
+                                * (v[16] * v[16] * v[35] * v[35]
+                                    + v[6] * v[6] * v[38] * v[12] * v[12] * m1 * m1)
+                                + v[6] * v[6] * m0
+                                    * (m2 * m2 * v[16] * v[16] + v[12] * v[12] * m1 * m1)
+                                + (v[12] * v[12] * v[40] * v[40]
+                                    + v[6] * v[6] * m2 * m2 * v[16] * v[16] * v[43]) * m1)
+                        + (v[41] + v[36]) * J1 + (v[37] + v[42]) * J2,
+                    v[54],
+                    v[60],
+                    v[63],
+                    v[64],
+                ],
+                [
+                    v[54],
+                    v[12] * v[12] * J1 + Iyy + J2 * (v[41] + 1.0)
+                        + v[6] * v[6] * m0
+                            * (m2 * m2 * d * d * v[16] * v[16] + v[22] * v[22])
+                        + (v[53] * v[53]
+                            + v[6] * v[6] * m2 * m2 * d * d * v[16] * v[16] * v[43]) * m1
+                        + m2 * (v[16] * v[16] * v[47] * v[47] + v[52] * v[52]),
+                    v[69],
+                    v[70],
+                    v[71],
+                ],
+                [
+                    v[60],
+                    v[69],
+                    v[16] * v[16] * J1
+                        + m2
+                            * (v[6] * v[6] * v[38] * v[12] * v[12] * d * d * m1 * m1
+                                + v[59] * v[59]) + Izz
+                        + v[6] * v[6] * m0
+                            * (v[23] * v[23] + v[12] * v[12] * d * d * m1 * m1)
+                        + J2 * (v[36] + 1.0)
+                        + m1 * (v[58] * v[58] + v[12] * v[12] * v[57] * v[57]),
+                    v[72],
+                    v[73],
+                ],
+                [
+                    v[63],
+                    v[70],
+                    v[72],
+                    J2 + (v[6] * v[6] * (m2 + m0) * m1 + v[40] * v[40]) * d * d * m1,
+                    v[74],
+                ],
+                [
+                    v[64],
+                    v[71],
+                    v[73],
+                    v[74],
+                    J2 + m2 * d * d * (v[6] * v[6] * m2 * (m0 + m1) + v[48] * v[48]),
+                ],
+            ],
+            force: [
+                (-v[17] * u5 * v[77] - v[7] * v[80] * u4) * J1
+                    + d
+                        * (-v[6] * v[6] * m0 * (m2 * v[88] * v[16] - v[12] * v[89] * m1)
+                            - (v[6] * m2 * v[16] * (v[7] * v[102] + v[12] * v[106])
+                                + v[12] * v[40] * v[107]) * m1
+                            - m2
+                                * (v[114] * v[16] * v[35]
+                                    + v[6] * (v[16] * v[119] - v[17] * v[117]) * v[12] * m1))
+                    + v[12] * v[120] - v[121] * u2 + u3 * v[122]
+                    - v[123] * v[108] * v[16],
+                v[124] + v[121] * u1
+                    - v[6] * v[6] * m0 * (v[22] * v[89] - m2 * d * v[16] * v[127])
+                    - m2 * (v[52] * v[117] + v[16] * v[119] * v[47])
+                    - v[80] * u4 * v[12] * J1 - u3 * v[128]
+                    - (v[6] * m2 * v[129] * d * v[16] + v[107] * v[53]) * m1
+                    - v[7] * v[120],
+                u5 * v[77] * v[16] * J1
+                    - v[6] * v[6] * m0 * (v[23] * v[88] + v[12] * d * m1 * v[127])
+                    - u1 * v[122] + v[130]
+                    - (v[102] * v[58] + v[12] * v[57] * v[106]) * m1
+                    - v[123] * v[17] * v[108] + v[128] * u2
+                    - m2 * (v[114] * v[59] + v[6] * v[12] * d * m1 * v[131]),
+                v[130]
+                    + (v[6]
+                        * (-v[6] * m0 * (v[12] * v[127] - v[7] * v[88])
+                            - m2 * (v[12] * v[131] - v[7] * v[114])) - v[102] * v[40])
+                        * d * m1,
+                v[124]
+                    + m2 * d
+                        * (v[6]
+                            * (-m1 * (v[129] * v[16] - v[17] * v[107])
+                                - v[6] * m0 * (-v[17] * v[89] - v[16] * v[127]))
+                            - v[117] * v[48]),
+            ],
+            checks: [v[0]],
         }
-        let mut matrix: [[f64; 5]; 5] = [
-            [
-                Ixx
-                    + d * d
-                        * (m2
-                            * (v[16] * v[16] * v[35] * v[35]
-                                + v[6] * v[6] * v[38] * v[12] * v[12] * m1 * m1)
-                            + v[6] * v[6] * m0
-                                * (m2 * m2 * v[16] * v[16] + v[12] * v[12] * m1 * m1)
-                            + (v[12] * v[12] * v[40] * v[40]
-                                + v[6] * v[6] * m2 * m2 * v[16] * v[16] * v[43]) * m1)
-                    + (v[41] + v[36]) * J1 + (v[37] + v[42]) * J2,
-                v[54],
-                v[60],
-                v[63],
-                v[64],
-            ],
-            [
-                v[54],
-                v[12] * v[12] * J1 + Iyy + J2 * (v[41] + 1.0)
-                    + v[6] * v[6] * m0
-                        * (m2 * m2 * d * d * v[16] * v[16] + v[22] * v[22])
-                    + (v[53] * v[53]
-                        + v[6] * v[6] * m2 * m2 * d * d * v[16] * v[16] * v[43]) * m1
-                    + m2 * (v[16] * v[16] * v[47] * v[47] + v[52] * v[52]),
-                v[69],
-                v[70],
-                v[71],
-            ],
-            [
-                v[60],
-                v[69],
-                v[16] * v[16] * J1
-                    + m2
-                        * (v[6] * v[6] * v[38] * v[12] * v[12] * d * d * m1 * m1
-                            + v[59] * v[59]) + Izz
-                    + v[6] * v[6] * m0
-                        * (v[23] * v[23] + v[12] * v[12] * d * d * m1 * m1)
-                    + J2 * (v[36] + 1.0)
-                    + m1 * (v[58] * v[58] + v[12] * v[12] * v[57] * v[57]),
-                v[72],
-                v[73],
-            ],
-            [
-                v[63],
-                v[70],
-                v[72],
-                J2 + (v[6] * v[6] * (m2 + m0) * m1 + v[40] * v[40]) * d * d * m1,
-                v[74],
-            ],
-            [
-                v[64],
-                v[71],
-                v[73],
-                v[74],
-                J2 + m2 * d * d * (v[6] * v[6] * m2 * (m0 + m1) + v[48] * v[48]),
-            ],
-        ];
-        let mut force: [f64; 5] = [
-            (-v[17] * u5 * v[77] - v[7] * v[80] * u4) * J1
-                + d
-                    * (-v[6] * v[6] * m0 * (m2 * v[88] * v[16] - v[12] * v[89] * m1)
-                        - (v[6] * m2 * v[16] * (v[7] * v[102] + v[12] * v[106])
-                            + v[12] * v[40] * v[107]) * m1
-                        - m2
-                            * (v[114] * v[16] * v[35]
-                                + v[6] * (v[16] * v[119] - v[17] * v[117]) * v[12] * m1))
-                + v[12] * v[120] - v[121] * u2 + u3 * v[122] - v[123] * v[108] * v[16],
-            v[124] + v[121] * u1
-                - v[6] * v[6] * m0 * (v[22] * v[89] - m2 * d * v[16] * v[127])
-                - m2 * (v[52] * v[117] + v[16] * v[119] * v[47])
-                - v[80] * u4 * v[12] * J1 - u3 * v[128]
-                - (v[6] * m2 * v[129] * d * v[16] + v[107] * v[53]) * m1 - v[7] * v[120],
-            u5 * v[77] * v[16] * J1
-                - v[6] * v[6] * m0 * (v[23] * v[88] + v[12] * d * m1 * v[127])
-                - u1 * v[122] + v[130] - (v[102] * v[58] + v[12] * v[57] * v[106]) * m1
-                - v[123] * v[17] * v[108] + v[128] * u2
-                - m2 * (v[114] * v[59] + v[6] * v[12] * d * m1 * v[131]),
-            v[130]
-                + (v[6]
-                    * (-v[6] * m0 * (v[12] * v[127] - v[7] * v[88])
-                        - m2 * (v[12] * v[131] - v[7] * v[114])) - v[102] * v[40]) * d
-                    * m1,
-            v[124]
-                + m2 * d
-                    * (v[6]
-                        * (-m1 * (v[129] * v[16] - v[17] * v[107])
-                            - v[6] * m0 * (-v[17] * v[89] - v[16] * v[127]))
-                        - v[117] * v[48]),
-        ];
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
-                t,
-                condition: "mass matrix M_NI",
-                value: column as f64,
-            });
-        }
-        dstate[0] = v[1] * v[4];
-        dstate[1] = u2 * v[3] - u3 * v[2];
-        dstate[2] = v[5] * v[1] * v[4] + u1;
-        dstate[3] = u4;
-        dstate[4] = u5;
-        dstate[5] = v[6]
-            * (G_X
-                + (u4 * (v[7] * (v[9] - v[11]) + v[10] * v[12] * v[0]) * m1
-                    + (v[12] * v[15] * m1 + m2 * (v[11] - v[9]) * v[16]) * u1
-                    + u5 * m2 * (v[17] * v[15] - v[10] * v[0] * v[16])) * d
-                + ((v[7] * d * v[18] + a * v[18]) * m1
-                    + m2
-                        * (v[10] * (v[5] * v[20] * v[3] - v[0] * d * v[16])
-                            + v[2] * v[20] * v[8])) * u2
-                + (v[22] * v[3] * v[8]
-                    + v[10] * (v[23] * v[5] * v[2] + v[12] * v[0] * d * m1)) * u3);
-        dstate[6] = ((u4 * v[27] * m1 + u1 * (m2 * v[16] * v[28] + v[31] * v[12] * m1)
-            + u5 * m2 * v[32]) * d
-            + u3
-                * ((v[27] * m1 + v[17] * m2 * v[28]) * d + a * (v[26] * m1 + m2 * v[28]))
-            + G_Y
-            + (m2 * (d * v[32] + v[31] * a) + m1 * (v[7] * d * v[33] + a * v[33])) * u2)
-            * v[6];
-        dstate[7] = v[6]
-            * (u3 * (v[23] * v[0] * v[2] - v[5] * v[12] * d * m1) + G_Z
-                + (v[22] * v[0] * v[3] + m2 * v[5] * d * v[16]) * u2
-                + d
-                    * (u5 * m2 * (v[5] * v[16] - v[17] * v[0] * v[3])
-                        + (m2 * v[16] * v[2] - v[12] * m1 * v[3]) * v[0] * u1
-                        + (-v[7] * v[0] * v[2] - v[5] * v[12]) * u4 * m1));
-        dstate[8] = force[0];
-        dstate[9] = force[1];
-        dstate[10] = force[2];
-        dstate[11] = force[3];
-        dstate[12] = force[4];
-        for (index, value) in dstate.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok(())
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -4111,7 +3148,6 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 132],
     ) {
         let psi = state[0];
@@ -4125,7 +3161,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         v[0] = f64::cos(theta);
         v[1] = 1.0 / v[0];
         v[2] = f64::sin(phi);
@@ -4146,10 +3182,10 @@ pub mod reduced_volterra {
         v[17] = f64::cos(gamma2);
         v[18] = v[13] + v[14];
         v[19] = v[17] * d;
-        v[20] = -a - v[19];
+        v[20] = -a_ - v[19];
         v[21] = v[7] * d;
-        v[22] = (a + v[21]) * m1 + m2 * v[20];
-        v[23] = (-a - v[21]) * m1 + m2 * (a + v[19]);
+        v[22] = (a_ + v[21]) * m1 + m2 * v[20];
+        v[23] = (-a_ - v[21]) * m1 + m2 * (a_ + v[19]);
         v[24] = v[10] * v[3];
         v[25] = v[5] * v[2] * v[8];
         v[26] = -v[24] - v[25];
@@ -4174,7 +3210,6 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 132],
     ) {
         let u1 = state[8];
@@ -4187,7 +3222,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
         v[40] = 1.0 - v[39];
@@ -4197,13 +3232,13 @@ pub mod reduced_volterra {
         v[44] = J1 - J2;
         v[45] = v[7] * v[6] * d * m1;
         v[46] = v[6] * (m2 - m1);
-        v[47] = a * (v[46] - 1.0) - v[45];
+        v[47] = a_ * (v[46] - 1.0) - v[45];
         v[48] = 1.0 - v[34];
         v[49] = m1 - m2;
         v[50] = v[6] * v[49];
         v[51] = v[50] + 1.0;
-        v[52] = d * v[48] + v[17] * (v[45] + a * v[51]);
-        v[53] = v[6] * v[22] - a - v[21];
+        v[52] = d * v[48] + v[17] * (v[45] + a_ * v[51]);
+        v[53] = v[6] * v[22] - a_ - v[21];
         v[54] = v[12]
             * (v[7] * v[44]
                 + d * m1
@@ -4212,9 +3247,9 @@ pub mod reduced_volterra {
                             - v[6] * m0 * v[22]) + v[40] * v[53])) - Ixy;
         v[55] = J2 - J1;
         v[56] = v[46] + 1.0;
-        v[57] = a * v[56] + v[17] * v[6] * m2 * d;
+        v[57] = a_ * v[56] + v[17] * v[6] * m2 * d;
         v[58] = v[40] * d + v[7] * v[57];
-        v[59] = v[23] * v[6] - a - v[19];
+        v[59] = v[23] * v[6] - a_ - v[19];
         v[60] = (v[17] * v[55]
             + m2 * d
                 * (v[6]
@@ -4262,7 +3297,6 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 132],
     ) {
         let u1 = state[8];
@@ -4273,7 +3307,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         v[80] = v[78] - v[79];
         v[81] = -u5 - u2;
         v[82] = v[17] * m2 * v[81] + v[80] * m1;
@@ -4283,26 +3317,26 @@ pub mod reduced_volterra {
         v[86] = u4 + u3;
         v[87] = v[12] * m1 * v[86];
         v[88] = ((v[83] - v[84] + v[85] + v[87]) * u3 + v[17] * u5 * m2 * u1
-            + u4 * u4 * v[12] * m1) * d - (a * v[49] * u2 + v[82] * d) * u1;
+            + u4 * u4 * v[12] * m1) * d - (a_ * v[49] * u2 + v[82] * d) * u1;
         v[89] = ((m2 * v[16] * u1 - v[7] * u4 * m1) * d + v[23] * u3) * u1
             + (u5 * u5 * m2 * v[16] - v[7] * u4 * u1 * m1
                 + (v[84] - v[83] - v[85] - v[87]) * u2) * d;
-        v[90] = a * u4 * u3 * v[12];
+        v[90] = a_ * u4 * u3 * v[12];
         v[91] = v[7] * v[81] + v[79];
-        v[92] = a * u3 * v[12];
+        v[92] = a_ * u3 * v[12];
         v[93] = (m2 * ((v[16] * v[91] + v[17] * u3 * v[12]) * d + v[92])
-            - a * u3 * v[12] * m1) * v[6] + v[92];
+            - a_ * u3 * v[12] * m1) * v[6] + v[92];
         v[94] = v[12] * u2;
         v[95] = v[7] * u1;
         v[96] = v[94] + v[95];
-        v[97] = (v[79] - v[78] + v[6] * v[82]) * d + a * (v[50] - 1.0) * u2;
+        v[97] = (v[79] - v[78] + v[6] * v[82]) * d + a_ * (v[50] - 1.0) * u2;
         v[98] = v[7] * v[16] * u2;
         v[99] = v[17] * u1;
         v[100] = u4 - u3;
         v[101] = u5 + u2;
         v[102] = v[93] * v[86] - v[90] - v[96] * v[97]
             + v[6]
-                * (a * u4 * u3 * v[12] * m1
+                * (a_ * u4 * u3 * v[12] * m1
                     + m2
                         * (d
                             * (u4 * (v[98] + v[12] * v[77])
@@ -4310,17 +3344,17 @@ pub mod reduced_volterra {
                                     * (v[7] * (v[99] + v[100] * v[16])
                                         + v[101] * v[17] * v[12])) - v[90]));
         v[103] = v[75] + v[76];
-        v[104] = v[7] * a * u4 * u3;
+        v[104] = v[7] * a_ * u4 * u3;
         v[105] = (v[6]
             * ((-u4 - u3) * m1
                 + m2 * ((v[101] * v[12] + v[95]) * v[16] + v[7] * v[17] * u3)) + u4 + u3)
-            * d + v[7] * a * v[56] * u3;
+            * d + v[7] * a_ * v[56] * u3;
         v[106] = v[6]
             * (m2
                 * (d
                     * ((v[7] * v[103] + v[12] * v[16] * u2) * u4
                         + u5 * (v[100] * v[12] * v[16] + v[17] * v[91])) + v[104])
-                - v[7] * a * u4 * u3 * m1) + v[104] - v[105] * v[86] + v[80] * v[97];
+                - v[7] * a_ * u4 * u3 * m1) + v[104] - v[105] * v[86] + v[80] * v[97];
         v[107] = v[96] * v[105] - v[80] * v[93]
             + (v[101] * v[6] * u5 * m2 * v[16]
                 + u4 * (v[7] * v[40] * u1 + v[12] * v[40] * u2)) * d;
@@ -4328,29 +3362,30 @@ pub mod reduced_volterra {
         v[109] = v[16] * v[86] - v[99];
         v[110] = d
             * (u5 + v[6] * ((v[7] * v[17] * u2 + v[109] * v[12]) * m1 + m2 * v[81]) + u2)
-            + v[17] * a * u2 * v[51];
-        v[111] = a * v[16] * u2;
+            + v[17] * a_ * u2 * v[51];
+        v[111] = a_ * v[16] * u2;
         v[112] = v[17] * v[86] + v[75];
         v[113] = v[6]
-            * (m2 * a * v[16] * u2 + (d * (v[112] * v[12] - v[98]) - v[111]) * m1)
+            * (m2 * a_ * v[16] * u2 + (d * (v[112] * v[12] - v[98]) - v[111]) * m1)
             - v[111];
         v[114] = d
             * (u5 * (v[17] * u1 * v[35] + u3 * v[16] * v[48])
                 + v[6] * u4 * v[12] * m1 * v[86]) - v[108] * v[110] + v[103] * v[113];
         v[115] = v[59] * u3 + d * (v[16] * u1 * v[35] - v[7] * v[6] * u4 * m1);
-        v[116] = u5 * a * v[16] * u2;
+        v[116] = u5 * a_ * v[16] * u2;
         v[117] = v[108] * v[115] - v[101] * v[113] - v[116]
             + v[6]
-                * (u5 * m2 * a * v[16] * u2
+                * (u5 * m2 * a_ * v[16] * u2
                     + ((u5 * (v[103] * v[12] - v[98])
                         + u4 * (v[7] * v[109] + v[17] * v[12] * (u5 - u2))) * d - v[116])
                         * m1);
-        v[118] = v[17] * u5 * a * u2;
+        v[118] = v[17] * u5 * a_ * u2;
         v[119] = v[6]
             * ((d
                 * (u4 * (v[12] * v[16] * (u2 - u5) + v[7] * v[112])
                     + u5 * (v[17] * (v[79] - v[78]) - u3 * v[12] * v[16])) - v[118]) * m1
-                + v[17] * u5 * m2 * a * u2) - v[115] * v[103] - v[118] + v[101] * v[110];
+                + v[17] * u5 * m2 * a_ * u2) - v[115] * v[103] - v[118]
+            + v[101] * v[110];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -4359,7 +3394,6 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        _dstate: &mut [f64; STATES],
         v: &mut [f64; 132],
     ) {
         let u1 = state[8];
@@ -4376,7 +3410,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let J2 = params.J2;
         v[120] = u4 * J2 * (-v[94] - v[95]) + v[96] * v[44] * v[86];
         v[121] = u3 * Izz - Iyz * u2 - u1 * Ixz;
@@ -4385,7 +3419,7 @@ pub mod reduced_volterra {
         v[124] = v[55] * v[108] * v[103];
         v[125] = u2 * u2;
         v[126] = u3 * u3;
-        v[127] = a * (m2 * (-v[125] - v[126]) + (v[125] + v[126]) * m1)
+        v[127] = a_ * (m2 * (-v[125] - v[126]) + (v[125] + v[126]) * m1)
             + d
                 * (m2
                     * (v[17] * (u5 * (-u5 - 2.0 * u2) - v[125] - v[126])
@@ -4396,6 +3430,65 @@ pub mod reduced_volterra {
         v[129] = v[102] * v[12] - v[7] * v[106];
         v[130] = v[80] * v[96] * v[44];
         v[131] = v[17] * v[119] + v[16] * v[117];
+    }
+    ///Checks the singular factors, solves, and writes the state's rates.
+    #[allow(clippy::all)]
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+        for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(EvalError::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+            return Err(EvalError::Singular {
+                t,
+                condition: "mass matrix M_NI",
+                value: column as f64,
+            });
+        }
+        dstate[0] = qdot[0];
+        dstate[1] = qdot[1];
+        dstate[2] = qdot[2];
+        dstate[3] = qdot[3];
+        dstate[4] = qdot[4];
+        dstate[5] = qdot[5];
+        dstate[6] = qdot[6];
+        dstate[7] = qdot[7];
+        dstate[8] = force[0];
+        dstate[9] = force[1];
+        dstate[10] = force[2];
+        dstate[11] = force[3];
+        dstate[12] = force[4];
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok(())
+    }
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    pub fn rhs(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+    ) -> Result<(), EvalError> {
+        finish(t, assemble(t, state, params, g_i), dstate)
+    }
+    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
+    pub fn matrix(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+        assemble(t, state, params, g_i).matrix
     }
     ///The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual.
     #[allow(non_snake_case, clippy::all)]
@@ -4422,7 +3515,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let x0 = f64::sin(theta);
         let x1 = f64::cos(phi);
         let x2 = f64::cos(theta);
@@ -4433,28 +3526,28 @@ pub mod reduced_volterra {
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
         let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a;
-        let x11 = x9 * x10 - a * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
         let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a + x5 * d;
+        let x13 = a_ + x5 * d;
         let x14 = f64::sin(gamma1);
         let x15 = f64::cos(gamma1);
         let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a;
+        let x17 = x15 * a_;
         let x18 = -x17 - d;
-        let x19 = a * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a - x15 * d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
         let x21 = x17 + d;
         let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a * x2 * x3;
+        let x23 = -x22 * d - a_ * x2 * x3;
         let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a * x2 * x1 - x24 * d;
+        let x25 = -a_ * x2 * x1 - x24 * d;
         let x26 = m2 + m0 + m1;
         let x27 = x0 * x1 * x7 - x6 * x3;
         let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
         let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
         let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
@@ -4503,9 +3596,9 @@ pub mod reduced_volterra {
             theta_dot
                 * (m2
                     * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((x22 * x18 - a * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
                             + x20 * x2 * x1 * x1))
                 + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
                     + x22 * gamma1_dot * m1) * d + Z_dot * x26,
@@ -4539,7 +3632,7 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a = params.a;
+        let a_ = params.a_;
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
@@ -4563,10 +3656,10 @@ pub mod reduced_volterra {
         let x17 = f64::cos(gamma2);
         let x18 = x13 + x14;
         let x19 = x17 * d;
-        let x20 = -a - x19;
+        let x20 = -a_ - x19;
         let x21 = x7 * d;
-        let x22 = (a + x21) * m1 + m2 * x20;
-        let x23 = (-a - x21) * m1 + m2 * (a + x19);
+        let x22 = (a_ + x21) * m1 + m2 * x20;
+        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
         let x24 = x10 * x3;
         let x25 = x5 * x2 * x8;
         let x26 = -x24 - x25;
@@ -4581,7 +3674,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
-                condition: "cos(theta) = 0",
+                condition: CONDITIONS[0],
                 value,
             });
         }
@@ -4606,13 +3699,14 @@ pub mod reduced_volterra {
                     + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
                         + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
                         + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a * x18) * m1
+                    + ((x7 * d * x18 + a_ * x18) * m1
                         + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
                         * u2
                     + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
             ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a * (x26 * m1 + m2 * x28))
-                + G_Y + (m2 * (d * x32 + x31 * a) + m1 * (x7 * d * x33 + a * x33)) * u2)
+                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
+                + G_Y
+                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
                 * x6,
             x6
                 * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
@@ -4628,190 +3722,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
-    }
-    ///Size of the matrix `rhs` solves numerically.
-    pub const MATRIX_SIZE: usize = 5;
-    ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
-    #[allow(non_snake_case, clippy::all)]
-    pub fn matrix(
-        t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-    ) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-        let m0 = params.m0;
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let mut v = [0.0f64; 44];
-        matrix_part0(t, state, params, g_i, &mut v);
-        matrix_part1(t, state, params, g_i, &mut v);
-        [
-            [
-                Ixx
-                    + d * d
-                        * (m2
-                            * (v[0] * v[0] * v[3] * v[3]
-                                + v[1] * v[1] * v[7] * v[8] * v[8] * m1 * m1)
-                            + v[1] * v[1] * m0
-                                * (m2 * m2 * v[0] * v[0] + v[8] * v[8] * m1 * m1)
-                            + (v[8] * v[8] * v[10] * v[10]
-                                + v[1] * v[1] * m2 * m2 * v[0] * v[0] * v[14]) * m1)
-                    + (v[12] + v[5]) * J1 + (v[6] + v[13]) * J2,
-                v[24],
-                v[29],
-                v[32],
-                v[33],
-            ],
-            [
-                v[24],
-                v[8] * v[8] * J1 + Iyy + J2 * (v[12] + 1.0)
-                    + v[1] * v[1] * m0 * (m2 * m2 * d * d * v[0] * v[0] + v[17] * v[17])
-                    + (v[23] * v[23]
-                        + v[1] * v[1] * m2 * m2 * d * d * v[0] * v[0] * v[14]) * m1
-                    + m2 * (v[0] * v[0] * v[20] * v[20] + v[22] * v[22]),
-                v[38],
-                v[39],
-                v[40],
-            ],
-            [
-                v[29],
-                v[38],
-                v[0] * v[0] * J1
-                    + m2
-                        * (v[1] * v[1] * v[7] * v[8] * v[8] * d * d * m1 * m1
-                            + v[28] * v[28]) + Izz
-                    + v[1] * v[1] * m0 * (v[25] * v[25] + v[8] * v[8] * d * d * m1 * m1)
-                    + J2 * (v[5] + 1.0)
-                    + m1 * (v[27] * v[27] + v[8] * v[8] * v[26] * v[26]),
-                v[41],
-                v[42],
-            ],
-            [
-                v[32],
-                v[39],
-                v[41],
-                J2 + (v[1] * v[1] * (m2 + m0) * m1 + v[10] * v[10]) * d * d * m1,
-                v[43],
-            ],
-            [
-                v[33],
-                v[40],
-                v[42],
-                v[43],
-                J2 + m2 * d * d * (v[1] * v[1] * m2 * (m0 + m1) + v[21] * v[21]),
-            ],
-        ]
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part0(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 44],
-    ) {
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a = params.a;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[0] = f64::sin(gamma2);
-        v[1] = 1.0 / (m2 + m0 + m1);
-        v[2] = v[1] * m2;
-        v[3] = v[2] - 1.0;
-        v[4] = f64::cos(gamma2);
-        v[5] = v[4] * v[4];
-        v[6] = v[0] * v[0];
-        v[7] = v[5] + v[6];
-        v[8] = f64::sin(gamma1);
-        v[9] = v[1] * m1;
-        v[10] = 1.0 - v[9];
-        v[11] = f64::cos(gamma1);
-        v[12] = v[11] * v[11];
-        v[13] = v[8] * v[8];
-        v[14] = v[12] + v[13];
-        v[15] = v[11] * d;
-        v[16] = v[4] * d;
-        v[17] = (a + v[15]) * m1 + m2 * (-a - v[16]);
-        v[18] = v[11] * v[1] * d * m1;
-        v[19] = v[1] * (m2 - m1);
-        v[20] = a * (v[19] - 1.0) - v[18];
-        v[21] = 1.0 - v[2];
-        v[22] = d * v[21] + v[4] * (v[18] + a * (v[1] * (m1 - m2) + 1.0));
-        v[23] = v[1] * v[17] - a - v[15];
-        v[24] = v[8]
-            * (v[11] * (J1 - J2)
-                + d * m1
-                    * (v[1]
-                        * (m2 * (v[0] * v[0] * v[20] - v[4] * v[22]) - v[1] * m0 * v[17])
-                        + v[10] * v[23])) - Ixy;
-        v[25] = (-a - v[15]) * m1 + m2 * (a + v[16]);
-        v[26] = a * (v[19] + 1.0) + v[4] * v[1] * m2 * d;
-        v[27] = v[10] * d + v[11] * v[26];
-        v[28] = v[25] * v[1] - a - v[16];
-        v[29] = (v[4] * (J2 - J1)
-            + m2 * d
-                * (v[1]
-                    * (v[25] * v[1] * m0 + (v[8] * v[8] * v[26] + v[11] * v[27]) * m1)
-                    + v[28] * v[3])) * v[0] - Ixz;
-        v[30] = v[1] * m0;
-        v[31] = 2.0 - v[2] - v[9] - v[30];
-        v[32] = v[11] * v[1] * m2 * d * d * v[0] * v[31] * m1;
-        v[33] = v[4] * v[1] * m2 * v[8] * d * d * m1 * (v[2] + v[9] + v[30] - 2.0);
-        v[34] = v[8] * v[0];
-        v[35] = v[11] * v[4];
-        v[36] = v[35] - v[34];
-        v[37] = v[35] + v[34];
-        v[38] = v[1] * m2 * d * d * m1
-            * (2.0 * v[34]
-                + v[1]
-                    * (v[36] * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * v[37])) - Iyz;
-        v[39] = v[1] * m2 * d * d
-            * ((0.5 - 0.5 * v[2]) * v[37] + v[8] * v[0] * (1.0 - v[9] - v[30])
-                + v[36] * (0.5 * v[2] - 0.5)) * m1;
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn matrix_part1(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 44],
-    ) {
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let J2 = params.J2;
-        v[40] = m2 * d
-            * (v[22] * v[21]
-                + ((v[1] * m2 * d * v[0] * v[0] * v[14] - v[4] * v[23]) * m1
-                    + v[1] * m0 * (m2 * d * v[0] * v[0] - v[4] * v[17])) * v[1]) + J2;
-        v[41] = d * m1
-            * (v[1]
-                * (m2 * (v[1] * v[7] * v[8] * v[8] * d * m1 - v[11] * v[28])
-                    + v[1] * m0 * (v[8] * v[8] * d * m1 - v[11] * v[25]))
-                + v[10] * v[27]) + J2;
-        v[42] = v[1]
-            * ((1.0 - v[2] - v[30]) * v[8] * v[0] + v[36] * (0.5 * v[9] - 0.5)
-                + (0.5 - 0.5 * v[9]) * v[37]) * m2 * d * d * m1;
-        v[43] = v[1] * m2 * v[8] * d * d * v[0] * v[31] * m1;
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]

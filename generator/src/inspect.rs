@@ -6,16 +6,23 @@
 //! assert!(text.contains("s = 1"));
 //! ```
 
-use crate::formulation::{ignorable, mechanics, volterra};
+use crate::formulation::{Derivation, Request, ignorable};
 use crate::model::{Model, ModelError};
 use crate::symbolic::Expr;
 use std::fmt::Write;
 
-/// Renders the derivation report for a model.
+/// Renders the derivation report for a model: one derivation of all four formulations, the
+/// same one the generator emits from.
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
-    let mech = mechanics::derive(model);
-    let reports = ignorable::analyze(model, &mech);
-    let chosen = ignorable::choose(model, &reports)?;
+    let d = crate::formulation::derive(model, &Request::all())?;
+    Ok(report(model, &d, latex))
+}
+
+/// The report of a derivation, as text or LaTeX.
+pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
+    let mech = &d.mechanics;
+    let reports = &d.reports;
+    let chosen = &d.ignorable;
     let s = chosen.len();
     let show = |e: Expr| if latex { e.to_latex() } else { e.to_string() };
     let names: Vec<String> = model.coordinates.iter().map(|q| q.name()).collect();
@@ -33,15 +40,10 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     );
     // The paper's Table 1: states and equations per method (the work integral adds a state
     // where applied forces can do work).
-    let work = usize::from(mech.q_forces.iter().any(|q| !q.is_zero()));
-    let _ = writeln!(w, "\nstates and equations per formulation (paper Table 1){}:", if work == 1 { ", the work integral W included" } else { "" });
-    for (name, states, eqs) in [
-        ("lagrange", 2 * mech.m, mech.m),
-        ("maggi", 2 * mech.m, mech.m),
-        ("kane", mech.m + mech.p, mech.p),
-        ("reduced_volterra", mech.m + mech.p - s, mech.p - s),
-    ] {
-        let _ = writeln!(w, "  {name:<17} {:>3} states, {eqs:>3} equations", states + work);
+    let work = mech.q_forces.iter().any(|q| !q.is_zero());
+    let _ = writeln!(w, "\nstates and equations per formulation (paper Table 1){}:", if work { ", the work integral W included" } else { "" });
+    for e in &d.equations {
+        let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name, e.states(work), e.equations);
     }
     let (open, close, eq) = if latex { ("\\begin{aligned}", "\\end{aligned}\n", " &= ") } else { ("", "", " = ") };
     let line = |w: &mut String, lhs: &str, rhs: String| {
@@ -106,9 +108,10 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
         }
     }
     let _ = write!(w, "{close}");
-    let v = volterra::derive(model, &mech, &chosen, &model.quasi_reduced)?;
+    let v = d.reduced.as_ref().expect("inspect derives the reduced form");
     let u_names: Vec<String> = v.u.iter().zip(&model.quasi_reduced).map(|(u, e)| format!("{} = {}", u.name(), show(*e))).collect();
     let _ = writeln!(w, "\nreduced Volterra method (Eqs. 42-67), u_NI: {}", u_names.join("; "));
+    let _ = writeln!(w, "  elimination: {}", v.route);
     let g_names: Vec<String> = v.g.iter().map(|g| g.name()).collect();
     if !g_names.is_empty() {
         let _ = writeln!(w, "  G_I = [{}]: conserved momenta, computed from the initial state (Eq. 26)", g_names.join(", "));
@@ -156,7 +159,7 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     }
     let _ = write!(w, "{close}");
     let _ = writeln!(w, "\nDefinition 1, coordinate by coordinate:");
-    for r in &reports {
+    for r in reports {
         match &r.failure {
             None => {
                 let drop = if r.appears_in.is_empty() {
@@ -171,7 +174,7 @@ pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
             }
         }
     }
-    Ok(out)
+    out
 }
 
 fn latex_failure(f: &ignorable::Failure) -> String {

@@ -13,9 +13,11 @@
 //! ```
 
 pub mod cse;
+pub mod form;
 pub mod function;
 pub mod lower;
 pub mod module;
+pub mod names;
 pub mod ops;
 pub mod optimize;
 pub mod prepare;
@@ -64,6 +66,21 @@ pub struct Generated {
     pub summary: Summary,
 }
 
+/// What one emitted function costs: the operations of its straight-line body and, for a
+/// right-hand side, of its dense solve (worst case), counted apart so they compare with
+/// SymPy's `count_ops` of `cse([M, F])` (assembly only).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FunctionCost {
+    /// `energy`, `kane::rhs`, ...
+    pub name: String,
+    /// Common subexpressions bound.
+    pub lets: usize,
+    /// Operations of the body: assembling the matrix and forcing, for a right-hand side.
+    pub ops: OpCount,
+    /// Operations of the dense solve (zero for functions that solve nothing).
+    pub solve: OpCount,
+}
+
 /// Sizes and costs, printed by the command line to stderr.
 #[derive(Clone, Debug)]
 pub struct Summary {
@@ -74,29 +91,50 @@ pub struct Summary {
     pub s: usize,
     /// Per formulation: name, states, equations.
     pub formulations: Vec<(String, usize, usize)>,
-    /// Per emitted function: name, common subexpressions bound, operations.
-    pub functions: Vec<(String, usize, OpCount)>,
+    /// Per formulation: how its velocity transformation was eliminated.
+    pub eliminations: Vec<(String, String)>,
+    /// Per emitted function: its cost.
+    pub functions: Vec<FunctionCost>,
+    /// What the simplifier's limits cut (nodes kept as built: correct, only less compact).
+    pub simplifier: crate::symbolic::fourier::SimplifyReport,
+    /// Time per derivation stage.
+    pub stages: Vec<(&'static str, Duration)>,
     /// Time spent deriving (mechanics and formulations) and emitting.
     pub derive_time: Duration,
     pub emit_time: Duration,
 }
 
 impl Summary {
-    /// The operation count of the function called `name` (e.g. `"kane::rhs"`).
-    pub fn ops(&self, name: &str) -> Option<&OpCount> {
-        self.functions.iter().find(|(n, _, _)| n == name).map(|(_, _, o)| o)
+    /// The cost of the function called `name` (e.g. `"kane::rhs"`).
+    pub fn ops(&self, name: &str) -> Option<&FunctionCost> {
+        self.functions.iter().find(|f| f.name == name)
     }
 }
 
 impl Summary {
-    /// Sizes and operation counts without the timings: deterministic, for golden files.
+    /// Sizes, eliminations and operation counts without the timings: deterministic, for golden
+    /// files.
     pub fn work_counters(&self) -> String {
         let mut out = format!("model {}: m = {}, r = {}, p = {}, s = {}\n", self.model, self.m, self.r, self.p, self.s);
         for (name, states, eqs) in &self.formulations {
             out += &format!("  {name:<18} {states:>3} states, {eqs:>3} equations\n");
         }
-        for (name, lets, ops) in &self.functions {
-            out += &format!("  {name:<32} {lets:>5} lets, {ops}\n");
+        for (name, how) in &self.eliminations {
+            out += &format!("  {name:<18} {how}\n");
+        }
+        for f in &self.functions {
+            if f.solve.total() == 0 {
+                out += &format!("  {:<32} {:>5} lets, {}\n", f.name, f.lets, f.ops);
+            } else {
+                out += &format!("  {:<32} {:>5} lets, assembly {} + solve {} ops\n", f.name, f.lets, f.ops, f.solve.total());
+            }
+        }
+        if self.simplifier.over_term_limit > 0 || self.simplifier.work_limit_reached {
+            out += &format!(
+                "  simplifier: {} nodes over the term limit{} (kept as built)\n",
+                self.simplifier.over_term_limit,
+                if self.simplifier.work_limit_reached { ", work limit reached" } else { "" }
+            );
         }
         out
     }
@@ -105,10 +143,12 @@ impl Summary {
 impl fmt::Display for Summary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.work_counters())?;
+        let stages: Vec<String> = self.stages.iter().map(|(n, d)| format!("{n} {:.1}", d.as_secs_f64() * 1e3)).collect();
         write!(
             f,
-            "  derived in {:.1} ms, emitted in {:.1} ms",
+            "  derived in {:.1} ms ({} ms), emitted in {:.1} ms",
             self.derive_time.as_secs_f64() * 1e3,
+            stages.join(", "),
             self.emit_time.as_secs_f64() * 1e3
         )
     }

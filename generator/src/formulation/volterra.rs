@@ -62,6 +62,8 @@ pub struct Volterra {
     pub inertia_ni: Vec<Expr>,
     /// `L_NI = U_NI + K_NI - A_NI` (Eq. 65).
     pub l_ni: Vec<Expr>,
+    /// How `q' = W u + X` was eliminated and the inertia terms formed.
+    pub route: &'static str,
 }
 
 /// `e` with each symbol in `symbols` it does not depend on set to zero (exact: `L_NI` is
@@ -78,11 +80,17 @@ fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
     out
 }
 
-/// Largest model (coordinates) for which the body route of `inertia_by_bodies` is tried beside
-/// the coordinate route. Measured: it wins on the paper's scenes (scene 2's reduced right-hand
-/// side 1186 operations against 2149), loses from a 6-link floating chain on, and costs more
-/// than the rest of the derivation there.
+/// Largest model (coordinates) for which the body route of `inertia_by_bodies` is taken, when the
+/// quasi-velocities are not plain rates. Measured (distinct nodes of `M_NI` and `L_NI`): the
+/// body route is smaller on scenes 2 and 3 (scene 2's Kane form 844 against 2008) and on the
+/// floating chain up to 3 links, the coordinate route from 6 links on.
 const MAX_BODY_ROUTE_COORDINATES: usize = 10;
+
+/// Largest model (coordinates) for which the reduced equations are also derived directly
+/// (Eqs. 43-65) beside the Schur complement of Kane's, and the smaller kept. Measured: the
+/// direct derivation gives scene 2's reduced right-hand side in 1186 operations against 1337,
+/// at three times the derivation time; on larger models the Schur complement is smaller.
+const MAX_DIRECT_REDUCED_COORDINATES: usize = 8;
 
 /// Largest matrix whose determinant is expanded symbolically (for `inspect`).
 const MAX_DETERMINANT_SIZE: usize = 10;
@@ -97,8 +105,172 @@ pub fn quasi_symbol(k: usize) -> Symbol {
     Symbol::new(&format!("u{}", k + 1))
 }
 
+/// `Y` and `Z` of `u = Y q' + Z` (Eq. 42).
+fn quasi_matrices(model: &Model, mech: &Mechanics, quasi: &[Expr]) -> (Matrix, Vec<Expr>) {
+    let zero: HashMap<Symbol, Expr> = model.velocities.iter().map(|v| (*v, Expr::zero())).collect();
+    let mut y = Matrix::zeros(quasi.len(), mech.m);
+    let mut z = Vec::new();
+    for (k, e) in quasi.iter().enumerate() {
+        for (j, v) in model.velocities.iter().enumerate() {
+            y.set(k, j, mech.tidy.of(e.diff(*v)));
+        }
+        z.push(mech.tidy.of(e.subs(&zero)));
+    }
+    (y, z)
+}
+
+/// Distinct nodes of everything a Volterra form's right-hand side evaluates.
+fn rhs_size(v: &Volterra) -> usize {
+    let all: Vec<Expr> = v.mass_ni.data.iter().chain(&v.l_ni).chain(&v.qdot).copied().collect();
+    crate::symbolic::expr::post_order(&all).len()
+}
+
+/// The reduced Volterra equations for `quasi` with the ignorable set `ignorable`, given the
+/// Kane form of the same model. Where the reduced quasi-velocities are Kane's without the
+/// ignorable rates (the scenes' choice), they come from Kane's equations by eliminating the
+/// ignorable rates with the conserved momenta ([`by_schur_complement`]); for small models the
+/// direct derivation of Eqs. 43-65 ([`derive`]) is done too and the smaller kept.
+pub fn derive_reduced(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Result<Volterra, ModelError> {
+    if ignorable.is_empty() {
+        return derive(model, mech, ignorable, quasi);
+    }
+    match by_schur_complement(model, mech, ignorable, quasi, kane) {
+        None => derive(model, mech, ignorable, quasi),
+        Some(schur) if mech.m > MAX_DIRECT_REDUCED_COORDINATES => Ok(schur),
+        Some(schur) => {
+            let direct = derive(model, mech, ignorable, quasi)?;
+            Ok(if rhs_size(&schur) < rhs_size(&direct) { schur } else { direct })
+        }
+    }
+}
+
+/// The reduced equations as the Schur complement of Kane's, `None` unless Kane's
+/// quasi-velocities are the reduced ones (in any order) plus the ignorable rates `q_I'`.
+///
+/// With `u = [u_N; v_I]`, `v_I = q_I'`, Kane's equations are `M_K u' = L_K`. The momenta
+/// `G_I = dT/dq_I'` are linear in `u`, `G = K_N u_N + K_I v_I + n`, which gives `v_I` from
+/// `(u_N, G)`; eliminating `v_I'` between the two blocks of Kane's equations leaves
+/// `(M_NN - M_NI M_II^-1 M_IN) u_N' = L_N - M_NI M_II^-1 L_I`: p - s equations, exactly the
+/// reduced Volterra equations for `u_N` (the same `M_NI`, since `K_I = M_II` when `u_N` does
+/// not involve `q_I'`), at the cost of Kane's assembly and an s x s elimination.
+pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Option<Volterra> {
+    let tidy = &mech.tidy;
+    let (m, s) = (mech.m, ignorable.len());
+    let n_u = quasi.len();
+    if n_u + s != kane.u.len() {
+        return None;
+    }
+    let (y, z) = quasi_matrices(model, mech, quasi);
+    let row = |mat: &Matrix, r: usize| mat.row(r);
+    // Each reduced quasi-velocity is one of Kane's; each ignorable rate is one of Kane's.
+    let mut used = vec![false; kane.u.len()];
+    let mut map = Vec::with_capacity(n_u);
+    for k in 0..n_u {
+        let r = (0..kane.u.len()).find(|&r| !used[r] && row(&kane.y, r) == row(&y, k) && kane.z[r] == z[k])?;
+        used[r] = true;
+        map.push(r);
+    }
+    let mut rates = Vec::with_capacity(s);
+    for &j in ignorable {
+        if (0..n_u).any(|k| !y.get(k, j).is_zero()) {
+            return None;
+        }
+        let unit: Vec<Expr> = (0..m).map(|c| if c == j { Expr::one() } else { Expr::zero() }).collect();
+        let r = (0..kane.u.len()).find(|&r| !used[r] && row(&kane.y, r) == unit && kane.z[r].is_zero())?;
+        used[r] = true;
+        rates.push(r);
+    }
+    let g: Vec<Symbol> = ignorable.iter().map(|&j| momentum_symbol(model, j)).collect();
+    let u: Vec<Symbol> = (0..n_u).map(quasi_symbol).collect();
+    // The momenta in Kane's quasi-velocities: T = u^T M_K u / 2 + u^T N_K + T0 and u_N free of
+    // q_I', so G = dT/dv_I = M_II v_I + M_IN u_N + n with n = M_I X_K + N_I (the momenta at
+    // u = 0). Solved for v_I; M_K's own entries keep the DAG shared with the Schur complement.
+    let mk = &kane.mass_ni;
+    let mut m_ii = Matrix::zeros(s, s);
+    let mut rhs = Matrix::zeros(s, 1);
+    for (a, &j) in ignorable.iter().enumerate() {
+        for (b, &rb) in rates.iter().enumerate() {
+            m_ii.set(a, b, mk.get(rates[a], rb));
+        }
+        let n = tidy.of(Expr::sum((0..m).map(|c| mech.mass.get(j, c) * kane.x[c])) + mech.n[j]);
+        let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
+        rhs.set(a, 0, tidy.of(g[a].expr() - n - coupled));
+    }
+    let opts = SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false };
+    let v_i = solve(&m_ii, &rhs, &opts).ok()?;
+    // Kane's quasi-velocities in the reduced ones: u_N renamed, v_I from the momenta.
+    let mut sigma: HashMap<Symbol, Expr> = HashMap::new();
+    for (k, &r) in map.iter().enumerate() {
+        sigma.insert(kane.u[r], u[k].expr());
+    }
+    // Built from M_K's entries, which the right-hand side computes anyway: simplifying the
+    // combination would only copy them.
+    for (b, &r) in rates.iter().enumerate() {
+        sigma.insert(kane.u[r], v_i.x.get(b, 0));
+    }
+    let sub = |items: &[Expr]| -> Vec<Expr> { Expr::subs_all(items, &sigma) };
+    let qdot = sub(&kane.qdot);
+    let (l_k, u_k) = (sub(&kane.l_ni), sub(&kane.u_ni));
+    // Schur complement: M_II Z = [M_IN | L_I | U_I].
+    let mut right = Matrix::zeros(s, n_u + 2);
+    for (a, &ra) in rates.iter().enumerate() {
+        for (k, &rk) in map.iter().enumerate() {
+            right.set(a, k, mk.get(ra, rk));
+        }
+        right.set(a, n_u, l_k[ra]);
+        right.set(a, n_u + 1, u_k[ra]);
+    }
+    let zs = solve(&m_ii, &right, &opts).ok()?;
+    let mut mass_ni = Matrix::zeros(n_u, n_u);
+    let coupling = |k: usize, col: usize| Expr::sum((0..s).map(|a| mk.get(map[k], rates[a]) * zs.x.get(a, col)));
+    for k in 0..n_u {
+        for l in k..n_u {
+            let e = mk.get(map[k], map[l]) - coupling(k, l);
+            mass_ni.set(k, l, e);
+            mass_ni.set(l, k, e);
+        }
+    }
+    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(l_k[map[k]] - coupling(k, n_u), &g)).collect();
+    let u_ni: Vec<Expr> = (0..n_u).map(|k| u_k[map[k]] - coupling(k, n_u + 1)).collect();
+    let inertia_ni: Vec<Expr> = (0..n_u).map(|k| l_ni[k] - u_ni[k]).collect();
+    let mut w = Matrix::zeros(m, n_u);
+    let zero_n: HashMap<Symbol, Expr> = u.iter().map(|s| (*s, Expr::zero())).collect();
+    for i in 0..m {
+        for k in 0..n_u {
+            w.set(i, k, tidy.of(qdot[i].diff(u[k])));
+        }
+    }
+    let x: Vec<Expr> = qdot.iter().map(|e| tidy.of(e.subs(&zero_n))).collect();
+    let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(qdot.iter().copied()).collect());
+    let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
+    let mut singular_factors = kane.singular_factors.clone();
+    for f in v_i.pivots.iter().chain(&zs.pivots) {
+        if !singular_factors.contains(f) {
+            singular_factors.push(*f);
+        }
+    }
+    Some(Volterra {
+        ignorable: ignorable.to_vec(),
+        g,
+        u,
+        y,
+        z,
+        w,
+        x,
+        singular_factors,
+        determinant: None,
+        qdot,
+        drift,
+        mass_ni,
+        u_ni,
+        inertia_ni,
+        l_ni,
+        route: "Schur complement of Kane's equations: the momenta eliminate the ignorable rates",
+    })
+}
+
 /// Derives the Volterra equations for the quasi-velocities `quasi` with the ignorable set
-/// `ignorable` (empty for the standard form).
+/// `ignorable` (empty for the standard form), directly from Eqs. 43-65.
 pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr]) -> Result<Volterra, ModelError> {
     let m = mech.m;
     let s = ignorable.len();
@@ -114,16 +286,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
             format!("list exactly {n_u} quasi-velocities under `{which}`"),
         ));
     }
-    let zero: HashMap<Symbol, Expr> = model.velocities.iter().map(|v| (*v, Expr::zero())).collect();
-    // Y_NI, Z_NI.
-    let mut y = Matrix::zeros(n_u, m);
-    let mut z = Vec::new();
-    for (k, e) in quasi.iter().enumerate() {
-        for (j, v) in model.velocities.iter().enumerate() {
-            y.set(k, j, tidy.of(e.diff(*v)));
-        }
-        z.push(tidy.of(e.subs(&zero)));
-    }
+    let (y, z) = quasi_matrices(model, mech, quasi);
     let g: Vec<Symbol> = ignorable.iter().map(|&j| momentum_symbol(model, j)).collect();
     // [Y; M'; a] and the right-hand sides [I | -[Z; N'; b]].
     let mut mp = Matrix::zeros(s, m);
@@ -200,16 +363,17 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // M_NI and K_NI - A_NI from the coordinates' M and h; where the quasi-velocities are not
     // plain rates (a body's angular velocity), also from the bodies' velocities in u, which
     // cancels the rate transformation body by body; the smaller is kept (both are exact).
-    let by_coordinates = inertia_by_coordinates(mech, &w, &drift, &to_u);
     let rates_only = y.data.iter().all(|e| e.as_num().is_some());
-    let (mass_ni, inertia_ni) = if rates_only || m > MAX_BODY_ROUTE_COORDINATES {
-        by_coordinates
+    let by_bodies = !rates_only && m <= MAX_BODY_ROUTE_COORDINATES;
+    let (mass_ni, inertia_ni) = if by_bodies {
+        inertia_by_bodies(model, mech, &u, &qdot, &chain)
     } else {
-        let by_bodies = inertia_by_bodies(model, mech, &u, &qdot, &chain);
-        let size = |(mass, inertia): &(Matrix, Vec<Expr>)| {
-            crate::symbolic::expr::post_order(&mass.data.iter().chain(inertia).copied().collect::<Vec<_>>()).len()
-        };
-        if size(&by_bodies) <= size(&by_coordinates) { by_bodies } else { by_coordinates }
+        inertia_by_coordinates(mech, &w, &drift, &to_u)
+    };
+    let route = if by_bodies {
+        "symbolic elimination of [Y; M'; a]; M_NI and L_NI from the bodies' velocities in u"
+    } else {
+        "symbolic elimination of [Y; M'; a]; M_NI = W^T M W, L_NI = W^T (Q - dV/dq - h - M c)"
     };
     let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(tidy.of(u_ni[k] + inertia_ni[k]), &g)).collect();
     Ok(Volterra {
@@ -228,6 +392,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         u_ni,
         inertia_ni,
         l_ni,
+        route,
     })
 }
 

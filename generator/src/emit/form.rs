@@ -1,0 +1,464 @@
+//! One formulation's submodule, from its [`Equations`]: a private `assemble` that evaluates
+//! everything the right-hand side needs (the rates of the kept coordinates, the matrix and
+//! forcing to solve, the singular factors), and the public functions built on it: `rhs`
+//! (assemble, check, solve, write), `rhs_baumgarte` for Lagrange (assemble, stabilize, solve),
+//! `matrix` (for conditioning monitors), plus `initial_state`, `velocities` and
+//! `singular_margin`. Each big expression is emitted once per formulation.
+
+use super::FunctionCost;
+use super::function::{Arg, Input, arg_list};
+use super::module::{Emitter, doc, momenta, usize_lit};
+use super::ops::OpCount;
+use crate::formulation::{Derivation, Equations};
+use crate::model::ModelError;
+use crate::symbolic::eval::magnitude;
+use crate::symbolic::{Expr, Symbol};
+use proc_macro2::{Literal, TokenStream};
+use quote::quote;
+use std::collections::{BTreeSet, HashMap};
+
+/// Largest singular factor (tree nodes) named by its formula in `EvalError::Singular`.
+const MAX_CONDITION_TREE: u32 = 200;
+
+/// The worst-case cost of `solve_dense` for `n` unknowns.
+pub fn solve_cost(n: usize) -> OpCount {
+    let elim_div = n * n.saturating_sub(1) / 2;
+    let elim_mul: usize = (0..n).map(|c| (n - 1 - c) * (n - c)).sum();
+    let back = n * n.saturating_sub(1) / 2;
+    OpCount { add: elim_mul + back, mul: elim_mul + back, div: elim_div + n, neg: 0, calls: Default::default() }
+}
+
+fn state_args() -> Vec<Arg> {
+    vec![
+        Arg::new("t", quote!(f64)),
+        Arg::new("state", quote!(&[f64; STATES])),
+        Arg::new("params", quote!(&Params)),
+        Arg::new("g_i", quote!(&[f64; NUM_IGNORABLE])),
+    ]
+}
+
+fn ident(name: &str) -> proc_macro2::Ident {
+    super::function::ident(name)
+}
+
+impl Emitter<'_> {
+    /// The identifier of a state or input symbol.
+    fn symbol_ident(&self, s: Symbol) -> String {
+        self.names.of.get(&s).cloned().unwrap_or_else(|| s.name())
+    }
+
+    /// Inputs of the functions of a state: `t`, kept coordinates and speeds from `state`
+    /// (argument 1), parameters (argument 2), `G_I` (argument 3).
+    fn state_inputs(&self, f: &Equations) -> Vec<Input> {
+        let model = self.model;
+        let mut inputs = vec![self.time_input()];
+        for (pos, &j) in f.kept.iter().enumerate() {
+            let l = usize_lit(pos);
+            inputs.push(Input::new(model.coordinates[j], &self.names.coordinates[j], 1, quote!(state[#l])));
+        }
+        for (k, s) in f.speeds.iter().enumerate() {
+            let l = usize_lit(f.kept.len() + k);
+            inputs.push(Input::new(*s, &self.symbol_ident(*s), 1, quote!(state[#l])));
+        }
+        inputs.extend(self.parameter_inputs(2));
+        for (k, g) in f.momenta.iter().enumerate() {
+            let l = usize_lit(k);
+            inputs.push(Input::new(*g, &self.symbol_ident(*g), 3, quote!(g_i[#l])));
+        }
+        inputs
+    }
+
+    /// The factors of the elimination's pivots that vary with the state: checked at runtime.
+    fn runtime_factors(&mut self, f: &Equations) -> Vec<Expr> {
+        let model = self.model;
+        let varying: BTreeSet<Symbol> =
+            model.coordinates.iter().chain(&f.speeds).chain(&f.momenta).chain([&model.t]).copied().collect();
+        let mut out: Vec<Expr> = Vec::new();
+        for s in &f.singular {
+            let p = self.prep.prepare(*s);
+            if p.free_symbols().iter().any(|x| varying.contains(x)) && !out.contains(s) {
+                out.push(*s);
+            }
+        }
+        out
+    }
+
+    /// A formulation's submodule (see the module docs).
+    pub(super) fn form(&mut self, f: &Equations, d: &Derivation) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let m = model.m();
+        let name = f.name;
+        let work = self.work;
+        let n_states = f.states(work);
+        let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
+        state_names.extend(f.speeds.iter().map(|s| s.name()));
+        if work {
+            state_names.push("W".into());
+        }
+        let checks = self.runtime_factors(f);
+        let assemble = self.assemble(f, d, &checks)?;
+        let init = self.initial_state(f, d)?;
+        let vel = self.velocities_fn(f, &checks)?;
+        let margin = self.singular_margin(f, &checks)?;
+        let module = ident(name);
+        let states_l = usize_lit(n_states);
+        let eqs = usize_lit(f.equations);
+        let integrates = f.kept.len() == m;
+        let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
+        self.forms.push((name.to_string(), n_states, f.equations));
+        Ok(quote! {
+            #mod_doc
+            pub mod #module {
+                use super::*;
+                #[doc = "Length of the state: kept coordinates, speeds, and the work integral when forces do work."]
+                pub const STATES: usize = #states_l;
+                #[doc = "Number of dynamical equations, counted as the paper's Table 1 does."]
+                pub const EQUATIONS: usize = #eqs;
+                #[doc = "Names of the state entries."]
+                pub const STATE_NAMES: [&str; STATES] = [#(#state_names),*];
+                #[doc = "False when the ignorable coordinates are left out of the state."]
+                pub const INTEGRATES_IGNORABLE: bool = #integrates;
+                #[doc = "True when the last state entry is the work integral `W` of Eq. 80."]
+                pub const HAS_WORK_STATE: bool = #work;
+                #assemble
+                #init
+                #vel
+                #margin
+            }
+        })
+    }
+
+    /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`.
+    fn assemble(&mut self, f: &Equations, d: &Derivation, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let name = f.name;
+        let work = self.work;
+        let n_states = f.states(work);
+        let nq = f.kept.len();
+        let n_speeds = f.speeds.len();
+        let n = f.mass.rows;
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
+        // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
+        // the constraint residuals for Baumgarte.
+        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
+        for i in 0..n {
+            for j in 0..n {
+                outputs.push(f.mass.get(i.min(j), i.max(j)));
+            }
+        }
+        outputs.extend(f.forcing.iter().copied());
+        if let Some((w, c)) = &f.post {
+            outputs.extend(w.data.iter().copied());
+            outputs.extend(c.iter().copied());
+        }
+        if work {
+            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
+            outputs.push(Expr::sum(d.mechanics.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
+        }
+        outputs.extend(checks.iter().copied());
+        if let Some(stab) = &f.stabilization {
+            outputs.extend(stab.iter().map(|(r, _)| *r));
+            outputs.extend(stab.iter().map(|(_, p)| *p));
+        }
+        let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
+        self.functions.last_mut().expect("just pushed").solve = solve_cost(n);
+        let o = &b.outputs;
+        let mut at = 0;
+        let mut take = |k: usize| {
+            let s = &o[at..at + k];
+            at += k;
+            s
+        };
+        let qd_out = take(nq);
+        let rows: Vec<TokenStream> = take(n * n).chunks(n).map(|r| quote!([#(#r),*])).collect();
+        let force_out = take(n);
+        let (n_l, nq_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(checks.len()));
+        let mut fields = vec![quote!(qdot: [f64; #nq_l]), quote!(matrix: [[f64; #n_l]; #n_l]), quote!(force: [f64; #n_l])];
+        let mut values = vec![quote!(qdot: [#(#qd_out),*]), quote!(matrix: [#(#rows),*]), quote!(force: [#(#force_out),*])];
+        // The speeds' rates from the solution x (in `force` after the solve).
+        let speed_values: Vec<TokenStream> = match &f.post {
+            None => (0..n_speeds).map(|k| {
+                let l = usize_lit(k);
+                quote!(force[#l])
+            }).collect(),
+            Some((w, _)) => {
+                let (rw, cw) = (w.rows, w.cols);
+                let w_out = take(rw * cw);
+                let c_out = take(rw);
+                let (rw_l, cw_l) = (usize_lit(rw), usize_lit(cw));
+                let w_rows: Vec<TokenStream> = w_out.chunks(cw).map(|r| quote!([#(#r),*])).collect();
+                fields.push(quote!(w: [[f64; #cw_l]; #rw_l]));
+                fields.push(quote!(c: [f64; #rw_l]));
+                values.push(quote!(w: [#(#w_rows),*]));
+                values.push(quote!(c: [#(#c_out),*]));
+                (0..rw)
+                    .map(|j| {
+                        let jl = usize_lit(j);
+                        let terms: Vec<TokenStream> = (0..cw).map(|k| {
+                            let kl = usize_lit(k);
+                            quote!(w[#jl][#kl] * force[#kl])
+                        }).collect();
+                        quote!(#(#terms +)* c[#jl])
+                    })
+                    .collect()
+            }
+        };
+        let power_stmt = if work {
+            let p = &take(1)[0];
+            fields.push(quote!(power: f64));
+            values.push(quote!(power: #p));
+            let l = usize_lit(n_states - 1);
+            quote!(dstate[#l] = power;)
+        } else {
+            TokenStream::new()
+        };
+        let check_out = take(checks.len());
+        fields.push(quote!(checks: [f64; #nc_l]));
+        values.push(quote!(checks: [#(#check_out),*]));
+        let conditions: Vec<String> = checks
+            .iter()
+            .enumerate()
+            .map(|(k, c)| if c.tree_size() <= MAX_CONDITION_TREE { format!("{c} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) })
+            .collect();
+        let stabilized = match &f.stabilization {
+            None => TokenStream::new(),
+            Some(stab) => {
+                let r = stab.len();
+                let (res, pos) = (take(r).to_vec(), take(r).to_vec());
+                let r_l = usize_lit(r);
+                fields.push(quote!(residuals: [f64; #r_l]));
+                fields.push(quote!(positions: [f64; #r_l]));
+                values.push(quote!(residuals: [#(#res),*]));
+                values.push(quote!(positions: [#(#pos),*]));
+                let m_l = usize_lit(model.m());
+                let extra = OpCount { add: 2 * r, mul: 4 * r + 1, ..OpCount::default() };
+                let mut cost = self.functions.last().expect("rhs").clone();
+                cost.name = format!("{name}::rhs_baumgarte");
+                cost.ops.merge(&extra);
+                self.functions.push(cost);
+                quote! {
+                    #[doc = "Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`."]
+                    pub fn rhs_baumgarte(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], alpha: f64, beta: f64) -> Result<(), EvalError> {
+                        let mut a = assemble(t, state, params, g_i);
+                        for i in 0..#r_l {
+                            a.force[#m_l + i] -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
+                        }
+                        finish(t, a, dstate)
+                    }
+                }
+            }
+        };
+        let stmts = &b.stmts;
+        let helpers = &b.helpers;
+        let fn_args = arg_list(&args, &b.used_args);
+        let matrix_name = f.matrix_name;
+        let qd_idx: Vec<Literal> = (0..nq).map(usize_lit).collect();
+        let s_idx: Vec<Literal> = (0..n_speeds).map(|k| usize_lit(nq + k)).collect();
+        let unpack_post = if f.post.is_some() { quote!(let (w, c) = (a.w, a.c);) } else { TokenStream::new() };
+        let unpack_power = if work { quote!(let power = a.power;) } else { TokenStream::new() };
+        let rhs_doc = doc(&format!(
+            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.",
+            f.label,
+            if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
+            if work { " and the power `W' = Q . q'` last" } else { "" },
+            if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
+        ));
+        let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
+        Ok(quote! {
+            #[doc = "Size of the matrix `rhs` solves numerically."]
+            pub const MATRIX_SIZE: usize = #n_l;
+            #[doc = "What each checked singular factor's vanishing means, in the order of `Assembly::checks`."]
+            const CONDITIONS: [&str; #nc_l] = [#(#conditions),*];
+            #[doc = "Everything the right-hand side evaluates before its solve."]
+            struct Assembly {
+                #(#fields,)*
+            }
+            #[doc = "Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors."]
+            #[allow(non_snake_case, clippy::all)]
+            fn assemble(#(#fn_args),*) -> Assembly {
+                #(#stmts)*
+                Assembly { #(#values,)* }
+            }
+            #(#helpers)*
+            #[doc = "Checks the singular factors, solves, and writes the state's rates."]
+            #[allow(clippy::all)]
+            fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+                for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
+                    if !(value.abs() > SINGULAR_TOLERANCE) {
+                        return Err(EvalError::Singular { t, condition, value });
+                    }
+                }
+                let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+                #unpack_post
+                #unpack_power
+                if let Err(column) = solve_dense(&mut matrix, &mut force) {
+                    return Err(EvalError::Singular { t, condition: #matrix_name, value: column as f64 });
+                }
+                #(dstate[#qd_idx] = qdot[#qd_idx];)*
+                #(dstate[#s_idx] = #speed_values;)*
+                #power_stmt
+                for (index, value) in dstate.iter().enumerate() {
+                    if !value.is_finite() {
+                        return Err(EvalError::NonFinite { t, index });
+                    }
+                }
+                Ok(())
+            }
+            #rhs_doc
+            pub fn rhs(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+                finish(t, assemble(t, state, params, g_i), dstate)
+            }
+            #stabilized
+            #matrix_doc
+            pub fn matrix(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE]) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+                assemble(t, state, params, g_i).matrix
+            }
+        })
+    }
+
+    fn initial_state(&mut self, f: &Equations, d: &Derivation) -> Result<TokenStream, ModelError> {
+        let work = self.work;
+        let model = self.model;
+        let mech = &d.mechanics;
+        let name = f.name;
+        let (args, inputs) = self.q_qdot_inputs(true);
+        let u = &f.speeds_from_qdot;
+        let g = momenta(mech, &d.ignorable, &model.velocities);
+        let residuals = mech.velocity_residuals(&model.velocities);
+        let bounds: Vec<Expr> = (0..mech.r)
+            .map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * model.velocities[j].expr()))) + magnitude(mech.b[i]))
+            .collect();
+        let positions: Vec<Expr> = mech.holonomic.iter().map(|(_, e)| *e).collect();
+        let pos_bounds: Vec<Expr> = positions.iter().map(|e| magnitude(*e)).collect();
+        let mut outputs = u.clone();
+        outputs.extend(g.iter().copied());
+        outputs.extend(residuals.iter().copied());
+        outputs.extend(bounds.iter().copied());
+        outputs.extend(positions.iter().copied());
+        outputs.extend(pos_bounds.iter().copied());
+        let b = self.body(&format!("{name}::initial_state"), &outputs, &inputs, &args)?;
+        let o = &b.outputs;
+        let (nu, ng, nr, nh) = (u.len(), g.len(), mech.r, positions.len());
+        let u_out = &o[..nu];
+        let g_out = &o[nu..nu + ng];
+        let r_out = &o[nu + ng..nu + ng + nr];
+        let rb_out = &o[nu + ng + nr..nu + ng + 2 * nr];
+        let h_out = &o[nu + ng + 2 * nr..nu + ng + 2 * nr + nh];
+        let hb_out = &o[nu + ng + 2 * nr + nh..];
+        let names: Vec<&String> = mech.constraint_names.iter().collect();
+        let h_names: Vec<&String> = mech.holonomic.iter().map(|(i, _)| &mech.constraint_names[*i]).collect();
+        let q_idx: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
+        let w0 = if work { quote!(, 0.0) } else { TokenStream::new() };
+        let stmts = &b.stmts;
+        let used: BTreeSet<usize> = b.used_args.iter().copied().chain([0, 1, 2]).collect();
+        let fn_args = arg_list(&args, &used);
+
+        Ok(quote! {
+            #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
+            #[allow(non_snake_case, clippy::all)]
+            pub fn initial_state(#(#fn_args),*) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+                #(#stmts)*
+                let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [#((#names, #r_out, #rb_out)),*];
+                let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [#((#h_names, #h_out, #hb_out)),*];
+                for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
+                    let tolerance = CONSTRAINT_TOLERANCE * bound;
+                    if !(residual.abs() <= tolerance) {
+                        return Err(EvalError::ConstraintViolated { constraint, residual, tolerance });
+                    }
+                }
+                let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
+                let g_i: [f64; NUM_IGNORABLE] = [#(#g_out),*];
+                for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+                    if !value.is_finite() {
+                        return Err(EvalError::NonFinite { t, index });
+                    }
+                }
+                Ok((state, g_i))
+            }
+        })
+    }
+
+    fn velocities_fn(&mut self, f: &Equations, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+        let model = self.model;
+        let m = model.m();
+        let name = f.name;
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        let mut outputs = f.qdot.clone();
+        outputs.extend(checks.iter().copied());
+        let b = self.body(&format!("{name}::velocities"), &outputs, &inputs, &args)?;
+        let qd = &b.outputs[..m];
+        let check_stmts: Vec<TokenStream> = b.outputs[m..]
+            .iter()
+            .enumerate()
+            .map(|(k, v)| {
+                let l = usize_lit(k);
+                quote! {
+                    let value = #v;
+                    if !(value.abs() > SINGULAR_TOLERANCE) {
+                        return Err(EvalError::Singular { t, condition: CONDITIONS[#l], value });
+                    }
+                }
+            })
+            .collect();
+        let q_items: Vec<TokenStream> = (0..m)
+            .map(|j| match f.kept.iter().position(|&k| k == j) {
+                Some(pos) => {
+                    let l = usize_lit(pos);
+                    quote!(state[#l])
+                }
+                None => quote!(0.0),
+            })
+            .collect();
+        let stmts = &b.stmts;
+        let helpers = &b.helpers;
+        let fn_args = arg_list(&args, &b.used_args.iter().copied().chain([0, 1]).collect());
+        Ok(quote! {
+            #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
+            #[allow(non_snake_case, clippy::all)]
+            pub fn velocities(#(#fn_args),*) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+                #(#stmts)*
+                #(#check_stmts)*
+                let q: [f64; NUM_COORDINATES] = [#(#q_items),*];
+                let qdot: [f64; NUM_COORDINATES] = [#(#qd),*];
+                for (index, value) in qdot.iter().enumerate() {
+                    if !value.is_finite() {
+                        return Err(EvalError::NonFinite { t, index });
+                    }
+                }
+                Ok((q, qdot))
+            }
+            #(#helpers)*
+        })
+    }
+
+    /// `singular_margin`: the smallest singular factor of what was solved symbolically.
+    fn singular_margin(&mut self, f: &Equations, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        let b = self.body(&format!("{}::singular_margin", f.name), checks, &inputs, &args)?;
+        let stmts = &b.stmts;
+        let values = &b.outputs;
+        let helpers = &b.helpers;
+        let fn_args = arg_list(&args, &b.used_args);
+        let body = if values.is_empty() { quote!(f64::INFINITY) } else { quote!(f64::INFINITY #(.min(f64::abs(#values)))*) };
+        Ok(quote! {
+            #[doc = "The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`."]
+            #[allow(non_snake_case, clippy::all)]
+            pub fn singular_margin(#(#fn_args),*) -> f64 {
+                #(#stmts)*
+                #body
+            }
+            #(#helpers)*
+        })
+    }
+}
+
+impl FunctionCost {
+    /// Assembly and solve together.
+    pub fn total(&self) -> usize {
+        self.ops.total() + self.solve.total()
+    }
+}

@@ -1,0 +1,80 @@
+//! The paper's reduced Volterra equations, state `[q; u_NI]` (or `[q_NI; u_NI]` with the
+//! ignorable coordinates left out): `M_NI u_NI' = L_NI` (Eqs. 64-67; Table 1: p - s equations).
+//!
+//! ```
+//! use generator::formulation::{derive, Request};
+//! let model = generator::model::load("../models/three_body.ron").unwrap();
+//! let d = derive(&model, &Request::all()).unwrap();
+//! assert_eq!(d.equations("reduced_volterra").unwrap().equations, 5);
+//! ```
+
+use super::Shared;
+use super::equations::{Equations, Method};
+use super::ignorable::depends;
+use super::kane::speeds_from_qdot;
+use crate::model::{ErrorKind, ModelError};
+use crate::symbolic::{Expr, Matrix};
+use std::collections::HashMap;
+
+/// The reduced Volterra equations.
+pub struct ReducedVolterra;
+
+impl Method for ReducedVolterra {
+    fn name(&self) -> &'static str {
+        "reduced_volterra"
+    }
+
+    fn equations(&self, shared: &Shared) -> Result<Equations, ModelError> {
+        let (model, v) = (shared.model, shared.reduced.expect("the reduced form is derived"));
+        let m = model.m();
+        let mut qdot = v.qdot.clone();
+        let mut mass = v.mass_ni.clone();
+        let mut forcing = v.l_ni.clone();
+        let mut singular = v.singular_factors.clone();
+        let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
+        if !shared.integrate_ignorable {
+            // Every expression the state's rates need must be free of the ignorable coordinates
+            // (decided exactly); then they are set to zero where they only appear formally.
+            let places = (0..m)
+                .map(|j| (format!("q'_{} = W u + X", model.coordinates[j].name()), qdot[j]))
+                .chain(forcing.iter().enumerate().map(|(k, e)| (format!("L_NI[{}]", k + 1), *e)))
+                .chain(mass.data.iter().map(|e| ("M_NI".to_string(), *e)));
+            let places: Vec<(String, Expr)> = places.collect();
+            let mut zero = HashMap::new();
+            for &j in &v.ignorable {
+                let q = model.coordinates[j];
+                if let Some((place, _)) = places.iter().find(|(_, e)| depends(*e, q).is_some()) {
+                    return Err(model.error(
+                        ErrorKind::IgnorableNeeded,
+                        "emit.integrate_ignorable",
+                        "integrate_ignorable",
+                        format!("`{}` cannot leave the state: {place} depends on it", q.name()),
+                        "set `integrate_ignorable: true` in `emit`".into(),
+                    ));
+                }
+                zero.insert(q, Expr::zero());
+            }
+            qdot = Expr::subs_all(&qdot, &zero);
+            forcing = Expr::subs_all(&forcing, &zero);
+            mass = Matrix { rows: mass.rows, cols: mass.cols, data: Expr::subs_all(&mass.data, &zero) };
+            singular = Expr::subs_all(&singular, &zero);
+        }
+        Ok(Equations {
+            name: self.name(),
+            label: "the reduced Volterra equations (paper Eqs. 64-67)",
+            kept,
+            speeds: v.u.clone(),
+            momenta: v.g.clone(),
+            qdot,
+            speeds_from_qdot: speeds_from_qdot(model, v),
+            mass,
+            forcing,
+            post: None,
+            singular,
+            equations: v.u.len(),
+            matrix_name: "mass matrix M_NI",
+            stabilization: None,
+            elimination: v.route,
+        })
+    }
+}
