@@ -8,7 +8,7 @@ use generator::model::Model as ModelDef;
 use generator::symbolic::zero::SplitMix;
 use generator::symbolic::Expr;
 
-const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];
+const MODELS: [&str; 7] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5"];
 
 mod common;
 use common::{accelerations_from as accelerations, load};

@@ -7,33 +7,10 @@ use generator::symbolic::eval::Env;
 use generator::symbolic::zero::SplitMix;
 use generator::symbolic::Expr;
 
-const MODELS: [&str; 6] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart"];
+const MODELS: [&str; 7] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5"];
 
 mod common;
-use common::{accelerations_from, load};
-
-/// Solves a small dense system by Gaussian elimination with partial pivoting.
-fn lin_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
-    let n = b.len();
-    for c in 0..n {
-        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap();
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..n {
-            let f = a[r][c] / a[c][c];
-            for k in c..n {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|k| a[r][k] * x[k]).sum();
-        x[r] = (b[r] - s) / a[r][r];
-    }
-    x
-}
+use common::{accelerations_from, lin_solve, load};
 
 /// q'' implied by a Volterra form at the state in `env` (q, u, G, t set): returns (q', q'').
 fn accelerations(v: &volterra::Volterra, env: &Env, model: &Model) -> (Vec<f64>, Vec<f64>) {

@@ -175,8 +175,9 @@ pub fn energy(
     let g = params.g;
     let x0 = f64::cos(theta2);
     let x1 = f64::cos(theta1);
-    let x2 = f64::sin(theta1) * theta1_dot + 0.5 * (theta2_dot * f64::sin(theta2));
-    let x3 = x_dot + l * (theta1_dot * x1 + 0.5 * (x0 * theta2_dot));
+    let x2 = theta1 - theta2;
+    let x3 = l * f64::sin(x2) * theta1_dot - x_dot * f64::sin(theta2);
+    let x4 = l * (theta1_dot * f64::cos(x2) + 0.5 * theta2_dot) + x0 * x_dot;
     l
         * (m2
             * (0.041666666666666664 * (l * theta2_dot * theta2_dot)
@@ -186,7 +187,7 @@ pub fn energy(
         + 0.5
             * (m1
                 * (l * (x_dot * x1 + 0.25 * (l * theta1_dot)) * theta1_dot
-                    + x_dot * x_dot)) + 0.5 * (m2 * (x2 * x2 * l * l + x3 * x3))
+                    + x_dot * x_dot)) + 0.5 * (m2 * (x3 * x3 + x4 * x4))
         + 0.5 * (x_dot * x_dot * M)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).

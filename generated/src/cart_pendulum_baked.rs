@@ -141,14 +141,14 @@ pub fn energy(
     let theta1_dot = qdot[0];
     let theta2_dot = qdot[1];
     let x_dot = qdot[2];
-    let x0 = f64::sin(theta1) * theta1_dot + 0.5 * (theta2_dot * f64::sin(theta2));
-    let x1 = f64::cos(theta2);
-    let x2 = f64::cos(theta1);
-    let x3 = theta1_dot * x2;
-    let x4 = x_dot + x3 + 0.5 * (x1 * theta2_dot);
-    0.5 * (x0 * x0) - 4.905 * x1 + x_dot * (1.5 * x_dot + 0.5 * x3)
-        + 0.041666666666666664 * (theta2_dot * theta2_dot)
-        + 0.16666666666666666 * (theta1_dot * theta1_dot) + 0.5 * (x4 * x4) - 14.715 * x2
+    let x0 = f64::cos(theta2);
+    let x1 = f64::cos(theta1);
+    let x2 = theta1 - theta2;
+    let x3 = f64::sin(x2) * theta1_dot - x_dot * f64::sin(theta2);
+    let x4 = theta1_dot * f64::cos(x2) + x0 * x_dot + 0.5 * theta2_dot;
+    x_dot * (1.5 * x_dot + 0.5 * (theta1_dot * x1)) - 4.905 * x0
+        + 0.041666666666666664 * (theta2_dot * theta2_dot) + 0.5 * (x3 * x3)
+        + 0.5 * (x4 * x4) + 0.16666666666666666 * (theta1_dot * theta1_dot) - 14.715 * x1
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]

@@ -25,6 +25,8 @@ pub mod cart_pendulum_baked;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod cartesian_pendulum;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+pub mod pendulum_on_cart_5;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod rolling_disk;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 pub mod satellite_boom;

@@ -259,6 +259,7 @@ failure_from!(satellite_boom);
 failure_from!(cartesian_pendulum);
 failure_from!(rolling_disk);
 failure_from!(spring_cart);
+failure_from!(pendulum_on_cart_5);
 failure_from!(cart_pendulum_baked);
 failure_from!(three_body_split);
 failure_from!(three_body_drop);
@@ -272,6 +273,7 @@ pub fn models() -> Vec<Model> {
         model!(cartesian_pendulum, [lagrange, maggi, kane, reduced_volterra]),
         model!(rolling_disk, [lagrange, maggi, kane, reduced_volterra]),
         model!(spring_cart, [lagrange, maggi, kane, reduced_volterra]),
+        model!(pendulum_on_cart_5, [lagrange, maggi, kane, reduced_volterra]),
         model!(cart_pendulum_baked, [lagrange, maggi, kane, reduced_volterra]),
         model!(three_body_split, [lagrange, maggi, kane, reduced_volterra]),
         model!(three_body_drop, [reduced_volterra]),

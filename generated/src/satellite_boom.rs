@@ -1194,100 +1194,59 @@ pub mod kane {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = x2 * u2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
-        let x9 = x8 * x1 * x6 + u1;
-        let x10 = -Ixy;
-        let x11 = -Ixz;
-        let x12 = m * (0.25 * (l * l) + rho * (rho + l));
-        let x13 = -Iyz;
-        let x14 = f64::sin(psi);
-        let x15 = f64::cos(psi);
-        let x16 = -x2 * x14 - x8 * x15 * x4;
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let x5 = f64::sin(theta);
+        let x6 = -Ixy;
+        let x7 = -Ixz;
+        let x8 = -rho - 0.5 * l;
+        let x9 = -Iyz;
+        let x10 = f64::sin(psi);
+        let x11 = f64::cos(psi);
+        let x12 = x2 * x10 + x5 * x11 * x3;
+        let x13 = x8 * m * x12;
+        let x14 = x5 * x3 * x10 - x11 * x2;
+        let x15 = x8 * m * x14;
+        let x16 = x8 * x0 * m * x3;
         let x17 = rho + 0.5 * l;
-        let x18 = x16 * m * x17;
-        let x19 = x15 * x2 - x8 * x4 * x14;
-        let x20 = x19 * m * x17;
-        let x21 = -(x0 * m * x17 * x4);
-        let x22 = x8 * x15 * x2 - x4 * x14;
-        let x23 = x22 * m * x17;
-        let x24 = x15 * x4 + x8 * x2 * x14;
-        let x25 = m * x17 * x24;
-        let x26 = x0 * m * x17 * x2;
-        let x27 = x15 * x0 * m;
-        let x28 = x0 * m * x14;
-        let x29 = -(x8 * m);
-        let x30 = m + mg;
-        let x31 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x32 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x33 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x34 = -x3 - x5;
-        let x35 = -x9 * x8 * x34 - x0 * x7 * x7 - x1 * x6 * x6;
-        let x36 = x8 * x1 * x6 * x7;
-        let x37 = x9 * x7;
-        let x38 = u4 * (-2.0 * (x8 * x15 * x7) - 2.0 * (x6 * x14))
-            + (x15 * x35 + (x36 - x37) * x14) * x17;
-        let x39 = x8 * x17 * x7 * x7 + x0 * (-2.0 * (u4 * x7) - x9 * x17 * x34);
-        let x40 = u4 * (2.0 * (x15 * x6) - 2.0 * (x8 * x7 * x14))
-            + x17 * (x35 * x14 + (x37 - x36) * x15);
-        let x41 = f64::cos(0.0485 * t);
-        let x42 = f64::sin(0.089 * t);
-        let x43 = 2.0 * theta + 2.0 * phi;
-        let x44 = f64::cos(x43);
-        let x45 = 2.0 * phi;
-        let x46 = f64::cos(x45);
-        let x47 = f64::cos(2.0 * theta);
-        let x48 = 2.0 * theta - 2.0 * phi;
-        let x49 = f64::cos(x48);
-        let x50 = f64::sin(x48);
-        let x51 = f64::sin(x45);
-        let x52 = f64::sin(x43);
+        let x18 = x5 * x11 * x2 - x3 * x10;
+        let x19 = x18 * m * x17;
+        let x20 = x11 * x3 + x5 * x2 * x10;
+        let x21 = m * x17 * x20;
+        let x22 = x0 * m * x17 * x2;
+        let x23 = x11 * x0 * m;
+        let x24 = x0 * m * x10;
+        let x25 = -(x5 * m);
+        let x26 = m + mg;
+        let x27 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x28 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x29 = u3 * x17 * u1 - 2.0 * (u4 * u2);
+        let x30 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x31 = 2.0 * (u4 * u3) - x8 * u1 * u2;
+        let x32 = f64::cos(0.0485 * t);
+        let x33 = x8 * u2 * u2 - u3 * u3 * x17;
+        let x34 = f64::sin(0.089 * t);
         Assembly {
-            qdot: [x1 * x6, x7, x9, u4, u5, u6, u7],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7],
             matrix: [
-                [Ixx, x10, x11, 0.0, 0.0, 0.0, 0.0],
-                [x10, x12 + Iyy, x13, 0.0, x18, x20, x21],
-                [x11, x13, x12 + Izz, 0.0, x23, x25, x26],
-                [0.0, 0.0, 0.0, m, x27, x28, x29],
-                [0.0, x18, x23, x27, x30, 0.0, 0.0],
-                [0.0, x20, x25, x28, 0.0, x30, 0.0],
-                [0.0, x21, x26, x29, 0.0, 0.0, x30],
+                [Ixx, x6, x7, 0.0, 0.0, 0.0, 0.0],
+                [x6, Iyy + x8 * x8 * m, x9, 0.0, x13, x15, x16],
+                [x7, x9, m * x17 * x17 + Izz, 0.0, x19, x21, x22],
+                [0.0, 0.0, 0.0, m, x23, x24, x25],
+                [0.0, x13, x19, x23, x26, 0.0, 0.0],
+                [0.0, x15, x21, x24, 0.0, x26, 0.0],
+                [0.0, x16, x22, x25, 0.0, 0.0, x26],
             ],
             force: [
-                u3 * x32 - x31 * u2,
-                x31 * u1 - u3 * x33 - m * (x38 * x16 - x39 * x0 * x4 + x19 * x40) * x17,
-                x33 * u2 - u1 * x32 - (x39 * x0 * x2 + x40 * x24 + x22 * x38) * m * x17,
-                0.012 * x41 - 0.018 * x42
-                    - (x1 * x1
-                        * ((u3
-                            * (l
-                                * (-0.0625 * x44 - 0.125 * x46 - 0.125 * x47 - 0.0625 * x49
-                                    - 0.125)
-                                + rho
-                                    * (-0.125 * x44 - 0.25 * x46 - 0.25 * x47 - 0.125 * x49
-                                        - 0.25))
-                            + (l * (0.125 * x50 - 0.25 * x51 - 0.125 * x52)
-                                + (0.25 * x50 - 0.5 * x51 - 0.25 * x52) * rho) * u2) * u3
-                            + (rho
-                                * (0.125 * x44 + 0.25 * x46 - 0.25 * x47 + 0.125 * x49
-                                    - 0.25)
-                                + l
-                                    * (0.0625 * x44 + 0.125 * x46 - 0.125 * x47 + 0.0625 * x49
-                                        - 0.125)) * u2 * u2)
-                        + u3
-                            * (u3 * (rho * (0.5 * x46 - 0.5) + l * (0.25 * x46 - 0.25))
-                                + x17 * x51 * u2)
-                        + (rho * (-0.5 * x46 - 0.5) + (-0.25 * x46 - 0.25) * l) * u2
-                            * u2) * m,
-                -(x38 * m),
-                -(x40 * m),
-                -(x39 * m),
+                u3 * x28 - x27 * u2,
+                x27 * u1 - x8 * m * x29 - u3 * x30,
+                x30 * u2 - u1 * x28 - m * x17 * x31,
+                0.012 * x32 - x33 * m - 0.018 * x34,
+                -((x18 * x31 + x11 * x0 * x33 + x12 * x29) * m),
+                -(m * (x0 * x33 * x10 + x31 * x20 + x29 * x14)),
+                -((x0 * (x2 * x31 + x29 * x3) - x5 * x33) * m),
             ],
-            power: u4 * (0.012 * x41 - 0.018 * x42),
+            power: u4 * (0.012 * x32 - 0.018 * x34),
             checks: [x0],
         }
     }
@@ -1564,127 +1523,66 @@ pub mod reduced_volterra {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = x2 * u2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
-        let x9 = x8 * x1 * x6 + u1;
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = -rho - 0.5 * l;
+        let x8 = f64::sin(psi);
+        let x9 = rho + 0.5 * l;
         let x10 = 1.0 / (m + mg);
-        let x11 = f64::cos(psi);
-        let x12 = rho + 0.5 * l;
-        let x13 = f64::sin(psi);
-        let x14 = -x2 * x13 - x8 * x11 * x4;
-        let x15 = x8 * x11 * x2 - x4 * x13;
-        let x16 = x11 * x2 - x8 * x4 * x13;
-        let x17 = x11 * x4 + x8 * x2 * x13;
-        let x18 = -Ixy;
-        let x19 = -Ixz;
-        let x20 = l * l;
-        let x21 = rho * (rho + l);
-        let x22 = m * m * (x0 * x0 * x2 * x4 - x15 * x14 - x16 * x17) * x12 * x12 * x10
-            - Iyz;
-        let x23 = x0 * m * m * (-x11 * x14 - x8 * x4 - x16 * x13) * x12 * x10;
-        let x24 = x0 * m * m * x12 * (x8 * x2 - x15 * x11 - x17 * x13) * x10;
-        let x25 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x26 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x27 = -x3 - x5;
-        let x28 = -x9 * x8 * x27 - x0 * x7 * x7 - x1 * x6 * x6;
-        let x29 = x8 * x1 * x6 * x7;
-        let x30 = x9 * x7;
-        let x31 = u4 * (-2.0 * (x8 * x11 * x7) - 2.0 * (x6 * x13))
-            + (x11 * x28 + (x29 - x30) * x13) * x12;
-        let x32 = x31 * x14;
-        let x33 = x8 * x12 * x7 * x7 + x0 * (-2.0 * (u4 * x7) - x9 * x12 * x27);
-        let x34 = x33 * x0 * x4;
-        let x35 = u4 * (2.0 * (x11 * x6) - 2.0 * (x8 * x7 * x13))
-            + x12 * (x28 * x13 + (x30 - x29) * x11);
-        let x36 = x16 * x35;
-        let x37 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x38 = x33 * x0 * x2;
-        let x39 = x35 * x17;
-        let x40 = x15 * x31;
-        let x41 = 2.0 * theta + 2.0 * phi;
-        let x42 = f64::cos(x41);
-        let x43 = 2.0 * phi;
-        let x44 = f64::cos(x43);
-        let x45 = f64::cos(2.0 * theta);
-        let x46 = 2.0 * theta - 2.0 * phi;
-        let x47 = f64::cos(x46);
-        let x48 = f64::sin(x46);
-        let x49 = f64::sin(x43);
-        let x50 = f64::sin(x41);
-        let x51 = f64::cos(0.0485 * t);
-        let x52 = f64::sin(0.089 * t);
+        let x11 = -Ixy;
+        let x12 = -Ixz;
+        let x13 = m * x10;
+        let x14 = 1.0 - x13;
+        let x15 = ((l * x14 + rho * x14) * rho + l * l * (0.25 - 0.25 * x13)) * m;
+        let x16 = -Iyz;
+        let x17 = Iyz * u3;
+        let x18 = Ixy * u1;
+        let x19 = Ixy * u2;
+        let x20 = u3 * Ixz;
+        let x21 = 2.0 * x13 - 2.0;
+        let x22 = x13 - 1.0;
+        let x23 = x22 * l;
+        let x24 = u2 * u2;
+        let x25 = u3 * u3;
+        let x26 = f64::cos(0.0485 * t);
+        let x27 = f64::sin(0.089 * t);
         Assembly {
             qdot: [
-                x1 * x6,
-                x7,
-                x9,
+                x1 * x4,
+                u2 * x3 - u3 * x2,
+                x5 * x1 * x4 + u1,
                 u4,
-                x10 * (G_X + (x12 * (-x14 * u2 - x15 * u3) - u4 * x11 * x0) * m),
-                x10 * ((x12 * (-x16 * u2 - u3 * x17) - u4 * x0 * x13) * m + G_Y),
-                ((x0 * x12 * x7 + x8 * u4) * m + G_Z) * x10,
+                (G_X
+                    + m
+                        * (-u4 * x6 * x0 - x7 * (x2 * x8 + x5 * x6 * x3) * u2
+                            - (x5 * x6 * x2 - x3 * x8) * u3 * x9)) * x10,
+                ((-u4 * x0 * x8 - x7 * (x5 * x3 * x8 - x6 * x2) * u2
+                    - u3 * x9 * (x6 * x3 + x5 * x2 * x8)) * m + G_Y) * x10,
+                (G_Z + m * ((-u3 * x9 * x2 - x7 * u2 * x3) * x0 + x5 * u4)) * x10,
             ],
             matrix: [
-                [Ixx, x18, x19, 0.0],
-                [
-                    x18,
-                    Iyy
-                        + (m * x12 * x12 * x10
-                            * (-x16 * x16 - x0 * x0 * x4 * x4 - x14 * x14) + 0.25 * x20
-                            + x21) * m,
-                    x22,
-                    x23,
-                ],
-                [
-                    x19,
-                    x22,
-                    m
-                        * (m * x12 * x12 * x10
-                            * (-x0 * x0 * x2 * x2 - x17 * x17 - x15 * x15) + 0.25 * x20
-                            + x21) + Izz,
-                    x24,
-                ],
-                [
-                    0.0,
-                    x23,
-                    x24,
-                    (m * x10 * (x0 * x0 * (-x11 * x11 - x13 * x13) - x8 * x8) + 1.0) * m,
-                ],
+                [Ixx, x11, x12, 0.0],
+                [x11, Iyy + x15, x16, 0.0],
+                [x12, x16, x15 + Izz, 0.0],
+                [0.0, 0.0, 0.0, m * x14],
             ],
             force: [
-                u3 * x26 - x25 * u2,
-                m * (x34 - x32 + m * (x32 - x34 + x36) * x10 - x36) * x12 + x25 * u1
-                    - u3 * x37,
-                m * x12 * ((x38 + x39 + x40) * m * x10 - x38 - x39 - x40) - u1 * x26
-                    + x37 * u2,
+                u3 * (Iyy * u2 - x17 - x18) - (u3 * Izz - Iyz * u2 - u1 * Ixz) * u2,
+                u3 * ((x15 - Ixx + Izz) * u1 + x19 + x20) - u1 * u1 * Ixz
+                    + (u4 * m * (rho * x21 + x23) - Iyz * u1) * u2,
+                (x17 + x18 + (Ixx - Iyy) * u2) * u1
+                    + (rho * (u4 * u3 * x21 + u1 * (x22 * rho + x23) * u2)
+                        + l * (l * (0.25 * x13 - 0.25) * u1 * u2 + x22 * u4 * u3)) * m
+                    + (-x19 - x20) * u2,
                 m
-                    * (m * x10 * ((x35 * x13 + x11 * x31) * x0 - x8 * x33)
-                        - x1 * x1
-                            * ((u3
-                                * (l
-                                    * (-0.0625 * x42 - 0.125 * x44 - 0.125 * x45 - 0.0625 * x47
-                                        - 0.125)
-                                    + rho
-                                        * (-0.125 * x42 - 0.25 * x44 - 0.25 * x45 - 0.125 * x47
-                                            - 0.25))
-                                + (l * (0.125 * x48 - 0.25 * x49 - 0.125 * x50)
-                                    + (0.25 * x48 - 0.5 * x49 - 0.25 * x50) * rho) * u2) * u3
-                                + (rho
-                                    * (0.125 * x42 + 0.25 * x44 - 0.25 * x45 + 0.125 * x47
-                                        - 0.25)
-                                    + l
-                                        * (0.0625 * x42 + 0.125 * x44 - 0.125 * x45 + 0.0625 * x47
-                                            - 0.125)) * u2 * u2)
-                        - u3
-                            * (u3 * (rho * (0.5 * x44 - 0.5) + l * (0.25 * x44 - 0.25))
-                                + x12 * x49 * u2)
-                        - (rho * (-0.5 * x44 - 0.5) + (-0.25 * x44 - 0.25) * l) * u2
-                            * u2) + 0.012 * x51 - 0.018 * x52,
+                    * (rho * ((-x24 - x25) * m * x10 + x24 + x25)
+                        + l
+                            * (m * x10 * (-0.5 * x24 - 0.5 * x25) + 0.5 * x24
+                                + 0.5 * x25)) + 0.012 * x26 - 0.018 * x27,
             ],
-            power: u4 * (0.012 * x51 - 0.018 * x52),
+            power: u4 * (0.012 * x26 - 0.018 * x27),
             checks: [x0],
         }
     }
@@ -1846,12 +1744,12 @@ pub mod reduced_volterra {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
-        let x5 = u2 * x3 - u3 * x2;
-        let x6 = f64::sin(theta);
-        let x7 = 1.0 / (m + mg);
-        let x8 = f64::cos(psi);
+        let x5 = f64::sin(theta);
+        let x6 = f64::cos(psi);
+        let x7 = -rho - 0.5 * l;
+        let x8 = f64::sin(psi);
         let x9 = rho + 0.5 * l;
-        let x10 = f64::sin(psi);
+        let x10 = 1.0 / (m + mg);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
@@ -1871,19 +1769,16 @@ pub mod reduced_volterra {
         ];
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
-            x5,
-            x6 * x1 * x4 + u1,
+            u2 * x3 - u3 * x2,
+            x5 * x1 * x4 + u1,
             u4,
-            x7
-                * (G_X
-                    + (x9
-                        * (-(-x2 * x10 - x6 * x8 * x3) * u2
-                            - (x6 * x8 * x2 - x3 * x10) * u3) - u4 * x8 * x0) * m),
-            x7
-                * ((x9
-                    * (-(x8 * x2 - x6 * x3 * x10) * u2 - u3 * (x8 * x3 + x6 * x2 * x10))
-                    - u4 * x0 * x10) * m + G_Y),
-            ((x0 * x9 * x5 + x6 * u4) * m + G_Z) * x7,
+            (G_X
+                + m
+                    * (-u4 * x6 * x0 - x7 * (x2 * x8 + x5 * x6 * x3) * u2
+                        - (x5 * x6 * x2 - x3 * x8) * u3 * x9)) * x10,
+            ((-u4 * x0 * x8 - x7 * (x5 * x3 * x8 - x6 * x2) * u2
+                - u3 * x9 * (x6 * x3 + x5 * x2 * x8)) * m + G_Y) * x10,
+            (G_Z + m * ((-u3 * x9 * x2 - x7 * u2 * x3) * x0 + x5 * u4)) * x10,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

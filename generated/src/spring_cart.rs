@@ -180,9 +180,11 @@ pub fn energy(
     let x0 = -x - L0;
     let x1 = f64::sqrt(x0 * x0) - L0;
     let x2 = f64::cos(th);
+    let x3 = th_dot * lp + x_dot * x2;
+    let x4 = f64::sin(th);
     0.5 * (x1 * x1 * k)
-        + (0.5 * ((x_dot + 2.0 * (x2 * th_dot * lp)) * x_dot) - g * x2 * lp
-            + 0.5 * (th_dot * th_dot * lp * lp)) * mp + 0.5 * (mc * x_dot * x_dot)
+        + mp * (0.5 * (x3 * x3) - g * x2 * lp + 0.5 * (x4 * x4 * x_dot * x_dot))
+        + 0.5 * (mc * x_dot * x_dot)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]

@@ -357,56 +357,70 @@ pub fn momenta(
     let x6 = f64::sin(theta);
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
+    let x9 = x1 * x2 * x3 - x0 * x8;
+    let x10 = x2 * x3 * x0 + x1 * x8;
+    let x11 = d + x1 * a_;
+    let x12 = x10 * x11 - a_ * x0 * x9;
+    let x13 = x6 * x2 * x4 - x7 * x5;
+    let x14 = a_ + x1 * d;
+    let x15 = f64::sin(gamma1);
+    let x16 = f64::cos(gamma1);
+    let x17 = x16 * x13 - x2 * x15 * x3;
+    let x18 = x16 * a_;
+    let x19 = -x18 - d;
+    let x20 = x13 * x15 + x16 * x2 * x3;
+    let x21 = a_ * x15 * x20;
+    let x22 = -a_ - x16 * d;
+    let x23 = x2 * x7 + x6 * x4 * x5;
+    let x24 = x16 * x23 - x15 * x3 * x5;
+    let x25 = x16 * x3 * x5 + x15 * x23;
+    let x26 = x6 * x7 * x5 - x2 * x4;
+    let x27 = x3 * x0 * x5 + x1 * x26;
+    let x28 = x1 * x3 * x5 - x0 * x26;
+    let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+        + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+    let x30 = x18 + d;
+    let x31 = x16 * x3 * x4 + x6 * x15;
+    let x32 = -x31 * d - a_ * x3 * x4;
+    let x33 = x1 * x3 * x7 - x6 * x0;
+    let x34 = -a_ * x3 * x7 - x33 * d;
+    let x35 = x15 * x3 * x4 - x16 * x6;
+    let x36 = -x3 * x0 * x7 - x1 * x6;
+    let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
+        + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
+    let x38 = x27 * x11 - a_ * x28 * x0;
+    let x39 = a_ * x15 * x25;
+    let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
+        + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
     [
         theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+            * (m2 * (x12 * x7 + x13 * x14 * x4)
+                + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
+            + X_dot
+                * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                    + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+            + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
+                + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
             + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
+                * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x10) + Z_dot * x37,
         theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
+            * (m2 * (x38 * x7 + x14 * x4 * x23)
+                + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
+            + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
+                + x24 * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+                * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
+                    + m2 * (x3 * x4 * x38 + x23 * x34))
+            + Y_dot
+                * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                    + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
         theta_dot
-            * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+            * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
+                + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+            + X_dot * x37,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -589,138 +603,108 @@ pub mod lagrange {
         let x70 = m2 * d * x43;
         let x71 = m2 * d * x52;
         let x72 = m2 * x13 * d;
-        let x73 = m2 + m0 + m1;
-        let x74 = theta_dot * x1 * psi_dot * Ixz;
-        let x75 = x1 * psi_dot * x10;
-        let x76 = theta_dot * x2;
-        let x77 = x75 - x76;
-        let x78 = theta_dot * x10;
-        let x79 = x1 * psi_dot * x2;
-        let x80 = x78 + x79;
-        let x81 = x3 * psi_dot;
-        let x82 = phi_dot - x81;
-        let x83 = Iyy * x80 - x77 * Iyz - Ixy * x82;
-        let x84 = x83 * x82;
-        let x85 = -phi_dot - x81;
-        let x86 = theta_dot * x85 * x10;
-        let x87 = x4 * x80 + x0 * x82;
-        let x88 = x0 * x80 - x4 * x82;
-        let x89 = x87 * x88;
-        let x90 = x1 * psi_dot * x2 * phi_dot;
-        let x91 = J2 * (x86 + x89 - x90);
-        let x92 = Ixx * x82 - x77 * Ixz - Ixy * x80;
-        let x93 = x80 * x92;
-        let x94 = theta_dot * x85 * x2;
-        let x95 = x1 * psi_dot * phi_dot * x10;
-        let x96 = x94 + x95;
-        let x97 = Iyz * x96;
-        let x98 = x87 * x88 * J1;
-        let x99 = x86 - x90;
-        let x100 = x99 * Izz;
-        let x101 = x77 * x92;
-        let x102 = Iyy * x96;
-        let x103 = x77 * Izz - Iyz * x80 - Ixz * x82;
-        let x104 = x103 * x82;
-        let x105 = Ixy * theta_dot * x1 * psi_dot;
-        let x106 = x99 * Iyz;
-        let x107 = J2 * x96;
-        let x108 = x12 * x82 - x77 * x11;
-        let x109 = x11 * x82 + x12 * x77;
-        let x110 = x108 * x57 * x109;
-        let x111 = x75 + gamma1_dot - x76;
-        let x112 = x111 * x57 * x87;
-        let x113 = x94 + x95 - gamma1_dot * x82;
-        let x114 = gamma1_dot * x80;
-        let x115 = theta_dot * x1 * psi_dot;
-        let x116 = x0 * x113 + x4 * (x115 - x114);
-        let x117 = J2 * x116;
-        let x118 = x112 + x117;
-        let x119 = gamma2_dot * x82;
-        let x120 = -x77 * gamma2_dot - x115;
-        let x121 = x11 * (x90 - x86 - x119) + x12 * x120;
-        let x122 = x0 * (x114 - x115) + x113 * x4;
-        let x123 = theta_dot * Ixx * x1 * psi_dot;
-        let x124 = x103 * x80;
-        let x125 = x99 * Ixz;
-        let x126 = x77 * x83;
-        let x127 = Ixy * x96;
-        let x128 = Z_dot * x1 * x2;
-        let x129 = x37 * X_dot;
-        let x130 = Y_dot * x46;
-        let x131 = a_ * x77;
-        let x132 = x128 + x129 + x130 + x131;
-        let x133 = Y_dot * x36;
-        let x134 = X_dot * x35;
-        let x135 = x1 * (x133 + x134) - Z_dot * x3;
-        let x136 = x0 * x132 - x135 * x4 + x111 * d;
-        let x137 = a_ * x80;
-        let x138 = Y_dot * x50;
-        let x139 = X_dot * x41;
-        let x140 = Z_dot * x1 * x10;
-        let x141 = x138 - x137 + x139 + x140 - d * x88;
-        let x142 = x1 * psi_dot * (x35 * Y_dot - X_dot * x36);
-        let x143 = gamma1_dot * x132;
-        let x144 = theta_dot * (x3 * (-x133 - x134) - Z_dot * x1);
-        let x145 = theta_dot * x1 * x36 + x35 * (x81 - phi_dot);
-        let x146 = x3 * phi_dot;
-        let x147 = x146 - psi_dot;
-        let x148 = Y_dot * (x145 * x2 + x147 * x10 * x36);
-        let x149 = x99 * a_;
-        let x150 = Z_dot * (x1 * phi_dot * x10 - x3 * theta_dot * x2);
-        let x151 = X_dot * (x35 * (theta_dot * x1 * x2 + x147 * x10) + x2 * x82 * x36);
-        let x152 = x148 + x149 + x150 + x151 - x135 * gamma1_dot;
-        let x153 = x88 * x141 - x136 * x111 + x0 * (x142 + x143 + x144) + x152 * x4;
-        let x154 = a_ * x4 * x153;
-        let x155 = x0 * x135 + x4 * x132;
-        let x156 = x99 * d - x87 * x141 + x4 * (-x142 - x143 - x144) + x0 * x152
-            + x111 * x155;
-        let x157 = a_ * x96;
-        let x158 = psi_dot - x146;
-        let x159 = X_dot * (x82 * x10 * x36 + x35 * (theta_dot * x1 * x10 + x158 * x2));
-        let x160 = Z_dot * (-x1 * x2 * phi_dot - x3 * theta_dot * x10);
-        let x161 = (x158 * x2 * x36 + x145 * x10) * Y_dot;
-        let x162 = x136 * x87 - x157 - d * x116 + x159 + x160 - x155 * x88 + x161;
-        let x163 = J2 - J1;
-        let x164 = gamma2_dot + x78 + x79;
-        let x165 = x163 * x108 * x164;
-        let x166 = x120 * x11 + (x86 - x90 + x119) * x12;
-        let x167 = J2 * x166;
-        let x168 = x165 + x167;
-        let x169 = x137 + x138 + x139 + x140;
-        let x170 = x135 * x12 - x169 * x11;
-        let x171 = x164 * d + x135 * x11 + x12 * x169;
-        let x172 = x148 - x149 + x109 * x170 + x150 + x151 - x108 * x171 - x166 * d;
-        let x173 = x128 + x129 + x130 - x109 * d - x131;
-        let x174 = x135 * gamma2_dot;
-        let x175 = x142 - gamma2_dot * x169 + x144;
-        let x176 = x11 * (-x174 - x157 - x159 - x160 - x161) - x109 * x173 + x12 * x175
-            + x164 * x171;
-        let x177 = x96 * d - x164 * x170 + x12 * (x174 + x157 + x159 + x160 + x161)
-            + x108 * x173 + x11 * x175;
-        let x178 = x177 * x15 - a_ * x11 * x176;
-        let x179 = a_ * x3 * theta_dot * theta_dot;
-        let x180 = x12 * x2;
-        let x181 = x11 * x10;
-        let x182 = (-x180 - x181) * x1;
-        let x183 = x1 * (x180 + x181);
-        let x184 = (x181 - x180) * x1;
-        let x185 = (x180 - x181) * x1;
-        let x186 = 0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185 - x17;
-        let x187 = x11 * x2;
-        let x188 = x12 * x10;
-        let x189 = x3 * (x187 + x188);
-        let x190 = x3 * (x188 - x187);
-        let x191 = x3 * x2;
-        let x192 = x1 * x10;
-        let x193 = x0 * (x191 + x192);
-        let x194 = x1 * x2;
-        let x195 = x3 * x10;
-        let x196 = x4 * (x194 - x195);
-        let x197 = x0 * (x192 - x191);
-        let x198 = x4 * (x195 - x194);
-        let x199 = x4 * (x194 + x195);
-        let x200 = (-x194 - x195) * x4;
-        let x201 = 0.25 * x198 - 0.25 * x196 - 0.25 * x199 + x19 + 0.25 * x200;
+        let x73 = (x38 * x47 + x39 * x48 + x41 * x50) * m1
+            + m2 * (x37 * x46 + x52 * x43 + x51 * x42);
+        let x74 = m1 * (x20 * x39 + x38 * x5 + x1 * x41 * x10)
+            + (x18 * x42 + x13 * x43 + x37 * x1 * x2) * m2;
+        let x75 = m2 * (x51 * x18 + x13 * x52 + x1 * x2 * x46)
+            + (x1 * x50 * x10 + x20 * x48 + x47 * x5) * m1;
+        let x76 = theta_dot * x1 * psi_dot * Ixz;
+        let x77 = x1 * psi_dot * x10;
+        let x78 = theta_dot * x2;
+        let x79 = x77 - x78;
+        let x80 = theta_dot * x10;
+        let x81 = x1 * psi_dot * x2;
+        let x82 = x80 + x81;
+        let x83 = x3 * psi_dot;
+        let x84 = phi_dot - x83;
+        let x85 = Iyy * x82 - x79 * Iyz - Ixy * x84;
+        let x86 = x85 * x84;
+        let x87 = -phi_dot - x83;
+        let x88 = theta_dot * x87 * x10;
+        let x89 = x4 * x82 + x0 * x84;
+        let x90 = x0 * x82 - x4 * x84;
+        let x91 = x89 * x90;
+        let x92 = x1 * psi_dot * x2 * phi_dot;
+        let x93 = J2 * (x88 + x91 - x92);
+        let x94 = Ixx * x84 - x79 * Ixz - Ixy * x82;
+        let x95 = x82 * x94;
+        let x96 = theta_dot * x87 * x2;
+        let x97 = x1 * psi_dot * phi_dot * x10;
+        let x98 = x96 + x97;
+        let x99 = Iyz * x98;
+        let x100 = x89 * x90 * J1;
+        let x101 = x88 - x92;
+        let x102 = x101 * Izz;
+        let x103 = x79 * x94;
+        let x104 = Iyy * x98;
+        let x105 = x79 * Izz - Iyz * x82 - Ixz * x84;
+        let x106 = x105 * x84;
+        let x107 = Ixy * theta_dot * x1 * psi_dot;
+        let x108 = x101 * Iyz;
+        let x109 = J2 * x98;
+        let x110 = x12 * x84 - x79 * x11;
+        let x111 = x11 * x84 + x12 * x79;
+        let x112 = x110 * x57 * x111;
+        let x113 = x77 + gamma1_dot - x78;
+        let x114 = x113 * x57 * x89;
+        let x115 = x96 + x97 - gamma1_dot * x84;
+        let x116 = gamma1_dot * x82;
+        let x117 = theta_dot * x1 * psi_dot;
+        let x118 = x0 * x115 + x4 * (x117 - x116);
+        let x119 = J2 * x118;
+        let x120 = x114 + x119;
+        let x121 = gamma2_dot * x84;
+        let x122 = -x79 * gamma2_dot - x117;
+        let x123 = x11 * (x92 - x88 - x121) + x12 * x122;
+        let x124 = x0 * (x116 - x117) + x115 * x4;
+        let x125 = x0 * a_ * x79 + x113 * d;
+        let x126 = -a_ * x82 - d * x90;
+        let x127 = x126 * x90 - x113 * x125 + a_ * (x0 * x79 * gamma1_dot + x101 * x4);
+        let x128 = a_ * x4 * x127;
+        let x129 = x101 * d - x89 * x126 + a_ * (x0 * x101 + x79 * x79 * x4);
+        let x130 = x89 * x125 - d * x118 + a_ * (-x79 * x4 * x90 - x96 - x97);
+        let x131 = theta_dot * Ixx * x1 * psi_dot;
+        let x132 = x105 * x82;
+        let x133 = x101 * Ixz;
+        let x134 = x79 * x85;
+        let x135 = Ixy * x98;
+        let x136 = J2 - J1;
+        let x137 = gamma2_dot + x80 + x81;
+        let x138 = x136 * x110 * x137;
+        let x139 = x122 * x11 + (x88 - x92 + x121) * x12;
+        let x140 = J2 * x139;
+        let x141 = x138 + x140;
+        let x142 = -x111 * d - a_ * x79;
+        let x143 = x137 * d + x12 * a_ * x82;
+        let x144 = a_ * (-x12 * gamma2_dot * x82 - x98 * x11) - x111 * x142
+            + x143 * x137;
+        let x145 = x98 * d + x110 * x142 + a_ * (x12 * x98 + x11 * x82 * x82);
+        let x146 = x145 * x15 - a_ * x11 * x144;
+        let x147 = a_ * (x92 - x88 - x111 * x11 * x82) - x143 * x110 - x139 * d;
+        let x148 = a_ * x3 * theta_dot * theta_dot;
+        let x149 = x12 * x2;
+        let x150 = x11 * x10;
+        let x151 = (-x149 - x150) * x1;
+        let x152 = x1 * (x149 + x150);
+        let x153 = (x150 - x149) * x1;
+        let x154 = (x149 - x150) * x1;
+        let x155 = 0.25 * x151 - 0.25 * x152 - 0.25 * x153 + 0.25 * x154 - x17;
+        let x156 = x11 * x2;
+        let x157 = x12 * x10;
+        let x158 = x3 * (x156 + x157);
+        let x159 = x3 * (x157 - x156);
+        let x160 = x3 * x2;
+        let x161 = x1 * x10;
+        let x162 = x0 * (x160 + x161);
+        let x163 = x1 * x2;
+        let x164 = x3 * x10;
+        let x165 = x4 * (x163 - x164);
+        let x166 = x0 * (x161 - x160);
+        let x167 = x4 * (x164 - x163);
+        let x168 = x4 * (x163 + x164);
+        let x169 = (-x163 - x164) * x4;
+        let x170 = 0.25 * x167 - 0.25 * x165 - 0.25 * x168 + x19 + 0.25 * x169;
         Assembly {
             qdot: [
                 psi_dot,
@@ -777,57 +761,77 @@ pub mod lagrange {
                 ],
                 [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
                 [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
-                [x45, x61, x64, x67, x70, x73, 0.0, 0.0],
-                [x54, x62, x65, x68, x71, 0.0, x73, 0.0],
-                [0.0, x63, x66, x69, x72, 0.0, 0.0, x73],
+                [
+                    x45,
+                    x61,
+                    x64,
+                    x67,
+                    x70,
+                    m0 + m1 * (x38 * x38 + x39 * x39 + x41 * x41)
+                        + m2 * (x43 * x43 + x42 * x42 + x37 * x37),
+                    x73,
+                    x74,
+                ],
+                [
+                    x54,
+                    x62,
+                    x65,
+                    x68,
+                    x71,
+                    x73,
+                    (x47 * x47 + x48 * x48 + x50 * x50) * m1 + m0
+                        + m2 * (x46 * x46 + x52 * x52 + x51 * x51),
+                    x75,
+                ],
+                [0.0, x63, x66, x69, x72, x74, x75, m2 + m0 + m1],
             ],
             force: [
-                ((x93 - x74 - x84 - x91 + x97 + x98 - x100) * x10
-                    + x2 * (x104 - x101 - x102 - x105 + x106 - x107 - x110)) * x1
-                    - x118 * x5 + (-x18 * x121 - x20 * x122) * J1
-                    + (x124 - x123 - x125 - x126 - x127) * x3
-                    - ((x154 + x8 * x156) * x1 * x10 + x162 * x6) * m1 - x168 * x13
-                    - m2 * (x172 * x14 + x178 * x1 * x2),
+                ((x95 - x76 - x86 - x93 + x99 + x100 - x102) * x10
+                    + x2 * (x106 - x103 - x104 - x107 + x108 - x109 - x112)) * x1
+                    - x120 * x5 + (-x18 * x123 - x20 * x124) * J1
+                    - ((x128 + x129 * x8) * x1 * x10 + x130 * x6) * m1
+                    + (x132 - x131 - x133 - x134 - x135) * x3 - x141 * x13
+                    - m2 * (x146 * x1 * x2 + x147 * x14),
                 x2
-                    * (x74 - x121 * x11 * J1 + x84 + x91 + x12 * x168 - x93 - x97 - x98
-                        + x100) - m2 * (x172 * x25 * x2 + x178 * x10)
-                    - (x28 * x162 * x10 + x2 * (x29 * x156 - x154)) * m1
-                    + (x104 - x101 - x102 - x4 * J1 * x122 - x105 - x0 * x118 + x106
-                        - x107 - x110) * x10,
-                (x112 - x162 * d * m1 + x117) * x4 + x123 - x124 + x125 + x126 + x127
-                    + (-x0 * x122 - x12 * x121) * J1
-                    + (m2 * x172 * d - x165 - x167) * x11,
-                J2 * (x90 - x86 - x89) - d * m1 * x156 + x98,
-                x163 * x108 * x109 - x107 - m2 * x177 * d,
-                -m2 * (x37 * x172 + x42 * x176 + x177 * x43)
-                    - (x162 * x41 + x38 * x156 + x153 * x39) * m1,
-                -m2 * (x172 * x46 + x177 * x52 + x51 * x176)
-                    - (x153 * x48 + x162 * x50 + x47 * x156) * m1,
+                    * (x76 - x123 * x11 * J1 + x86 + x93 + x12 * x141 - x95 - x99 - x100
+                        + x102) - (x2 * (x129 * x29 - x128) + x130 * x28 * x10) * m1
+                    - m2 * (x146 * x10 + x147 * x25 * x2)
+                    + (x106 - x103 - x104 - x4 * J1 * x124 - x107 - x0 * x120 + x108
+                        - x109 - x112) * x10,
+                x131 - x132 + x133 + x134 + x135 + x11 * (m2 * x147 * d - x138 - x140)
+                    + x4 * (x114 - x130 * d * m1 + x119)
+                    + (-x0 * x124 - x12 * x123) * J1,
+                J2 * (x92 - x88 - x91) - x129 * d * m1 + x100,
+                x136 * x110 * x111 - x109 - m2 * x145 * d,
+                -m2 * (x145 * x43 + x37 * x147 + x42 * x144)
+                    - (x127 * x39 + x38 * x129 + x130 * x41) * m1,
+                -m2 * (x147 * x46 + x51 * x144 + x145 * x52)
+                    - (x127 * x48 + x129 * x47 + x130 * x50) * m1,
                 -m2
-                    * (((0.25 * x182 - 0.25 * x183 - 0.25 * x184 + 0.25 * x185) * phi_dot
+                    * (((0.25 * x151 - 0.25 * x152 - 0.25 * x153 + 0.25 * x154) * phi_dot
                         * phi_dot
-                        + (theta_dot * x186
+                        + (theta_dot * x155
                             + phi_dot
-                                * (x189 - 0.5 * x182 - 0.5 * x183 + 0.5 * x184 + 0.5 * x185
-                                    - x190)) * theta_dot
+                                * (x158 - 0.5 * x151 - 0.5 * x152 + 0.5 * x153 + 0.5 * x154
+                                    - x159)) * theta_dot
                         + gamma2_dot
                             * (phi_dot
-                                * (0.5 * x182 - 0.5 * x183 + 0.5 * x184 - 0.5 * x185)
-                                + (-x189 - 0.5 * x182 - 0.5 * x183 - 2.0 * (x1 * x11)
-                                    - 0.5 * x184 - 0.5 * x185 - x190) * theta_dot
-                                + gamma2_dot * x186)) * d - x179)
-                    - (x179
+                                * (0.5 * x151 - 0.5 * x152 + 0.5 * x153 - 0.5 * x154)
+                                + (-x158 - 0.5 * x151 - 0.5 * x152 - 2.0 * (x1 * x11)
+                                    - 0.5 * x153 - 0.5 * x154 - x159) * theta_dot
+                                + gamma2_dot * x155)) * d - x148)
+                    - (x148
                         + (theta_dot
-                            * ((0.5 * x196 - x193 + x197 + 2.0 * (x4 * x1) + 0.5 * x198
-                                - 0.5 * x199 - 0.5 * x200) * gamma1_dot + theta_dot * x201
-                                + (0.5 * x196 - 0.5 * x198 - 0.5 * x199 + 0.5 * x200)
+                            * ((0.5 * x165 - x162 + x166 + 2.0 * (x4 * x1) + 0.5 * x167
+                                - 0.5 * x168 - 0.5 * x169) * gamma1_dot + theta_dot * x170
+                                + (0.5 * x165 - 0.5 * x167 - 0.5 * x168 + 0.5 * x169)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x201 * gamma1_dot
+                                * (x170 * gamma1_dot
                                     + phi_dot
-                                        * (x193 - 0.5 * x196 + x197 - 0.5 * x198 - 0.5 * x199
-                                            - 0.5 * x200))
-                            + (0.25 * x198 - 0.25 * x196 - 0.25 * x199 + 0.25 * x200)
+                                        * (x162 - 0.5 * x165 + x166 - 0.5 * x167 - 0.5 * x168
+                                            - 0.5 * x169))
+                            + (0.25 * x167 - 0.25 * x165 - 0.25 * x168 + 0.25 * x169)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             checks: [],
@@ -949,30 +953,41 @@ pub mod lagrange {
         let x6 = f64::sin(theta);
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let x9 = x1 * x2 * x3 - x0 * x8;
+        let x10 = x2 * x3 * x0 + x1 * x8;
+        let x11 = d + x1 * a_;
+        let x12 = x10 * x11 - a_ * x0 * x9;
+        let x13 = x6 * x2 * x4 - x7 * x5;
+        let x14 = a_ + x1 * d;
+        let x15 = f64::sin(gamma1);
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x13 - x2 * x15 * x3;
+        let x18 = x16 * a_;
+        let x19 = -x18 - d;
+        let x20 = x13 * x15 + x16 * x2 * x3;
+        let x21 = a_ * x15 * x20;
+        let x22 = -a_ - x16 * d;
+        let x23 = x2 * x7 + x6 * x4 * x5;
+        let x24 = x16 * x23 - x15 * x3 * x5;
+        let x25 = x16 * x3 * x5 + x15 * x23;
+        let x26 = x6 * x7 * x5 - x2 * x4;
+        let x27 = x3 * x0 * x5 + x1 * x26;
+        let x28 = x1 * x3 * x5 - x0 * x26;
+        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+        let x30 = x18 + d;
+        let x31 = x16 * x3 * x4 + x6 * x15;
+        let x32 = -x31 * d - a_ * x3 * x4;
+        let x33 = x1 * x3 * x7 - x6 * x0;
+        let x34 = -a_ * x3 * x7 - x33 * d;
+        let x35 = x15 * x3 * x4 - x16 * x6;
+        let x36 = -x3 * x0 * x7 - x1 * x6;
+        let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
+            + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
+        let x38 = x27 * x11 - a_ * x28 * x0;
+        let x39 = a_ * x15 * x25;
+        let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
+            + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1005,30 +1020,33 @@ pub mod lagrange {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * (m2 * (x12 * x7 + x13 * x14 * x4)
+                    + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
+                + X_dot
+                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+                + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
+                    + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x10) + Z_dot * x37,
             theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (x38 * x7 + x14 * x4 * x23)
+                    + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
+                + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
+                    + x24 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+                    * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
+                        + m2 * (x3 * x4 * x38 + x23 * x34))
+                + Y_dot
+                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
             theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
+                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+                + X_dot * x37,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1295,163 +1313,133 @@ pub mod maggi {
         let x110 = m2 * d * x78;
         let x111 = m2 * d * x89;
         let x112 = m2 * x22 * d;
-        let x113 = m2 + m0 + m1;
-        let x114 = x15 * psi_dot * x9;
-        let x115 = theta_dot * x10;
-        let x116 = x114 + gamma1_dot - x115;
-        let x117 = theta_dot * x9;
-        let x118 = x15 * psi_dot * x10;
-        let x119 = x117 + x118;
-        let x120 = x13 * psi_dot;
-        let x121 = phi_dot - x120;
-        let x122 = x1 * x119 + x2 * x121;
-        let x123 = x116 * x7 * x122;
-        let x124 = Z_dot * x15 * x10;
-        let x125 = x35 * X_dot;
-        let x126 = Y_dot * x38;
-        let x127 = x114 - x115;
-        let x128 = a_ * x127;
-        let x129 = x124 + x125 + x126 + x128;
-        let x130 = Y_dot * x32;
-        let x131 = X_dot * x33;
-        let x132 = x15 * (x130 + x131) - Z_dot * x13;
-        let x133 = x2 * x129 - x132 * x1 + x116 * d;
-        let x134 = -phi_dot - x120;
-        let x135 = theta_dot * x134 * x10;
-        let x136 = x15 * psi_dot * phi_dot * x9;
-        let x137 = x135 + x136;
-        let x138 = a_ * x137;
-        let x139 = x135 + x136 - gamma1_dot * x121;
-        let x140 = gamma1_dot * x119;
-        let x141 = theta_dot * x15 * psi_dot;
-        let x142 = x2 * x139 + x1 * (x141 - x140);
-        let x143 = x13 * phi_dot;
-        let x144 = psi_dot - x143;
-        let x145 = X_dot * (x121 * x9 * x32 + x33 * (theta_dot * x15 * x9 + x144 * x10));
-        let x146 = Z_dot * (-x15 * x10 * phi_dot - x13 * theta_dot * x9);
-        let x147 = x2 * x132 + x1 * x129;
-        let x148 = x2 * x119 - x1 * x121;
-        let x149 = theta_dot * x15 * x32 + x33 * (x120 - phi_dot);
-        let x150 = (x144 * x10 * x32 + x149 * x9) * Y_dot;
-        let x151 = x133 * x122 - x138 - d * x142 + x145 + x146 - x147 * x148 + x150;
-        let x152 = J2 * x142;
-        let x153 = x127 * Izz - Iyz * x119 - Ixz * x121;
-        let x154 = x153 * x119;
-        let x155 = theta_dot * x134 * x9;
-        let x156 = x15 * psi_dot * x10 * phi_dot;
-        let x157 = x155 - x156;
-        let x158 = x157 * Ixz;
-        let x159 = Iyy * x119 - x127 * Iyz - Ixy * x121;
-        let x160 = x127 * x159;
-        let x161 = Ixy * x137;
-        let x162 = x2 * (x140 - x141) + x139 * x1;
-        let x163 = gamma2_dot * x121;
-        let x164 = -x127 * gamma2_dot - x141;
-        let x165 = x0 * (x156 - x155 - x163) + x4 * x164;
-        let x166 = J2 - J1;
-        let x167 = x4 * x121 - x127 * x0;
-        let x168 = gamma2_dot + x117 + x118;
-        let x169 = x166 * x167 * x168;
-        let x170 = x143 - psi_dot;
-        let x171 = Y_dot * (x149 * x10 + x170 * x9 * x32);
-        let x172 = x157 * a_;
-        let x173 = x0 * x121 + x4 * x127;
-        let x174 = a_ * x119;
-        let x175 = Y_dot * x39;
-        let x176 = X_dot * x34;
-        let x177 = Z_dot * x15 * x9;
-        let x178 = x174 + x175 + x176 + x177;
-        let x179 = x132 * x4 - x178 * x0;
-        let x180 = Z_dot * (x15 * phi_dot * x9 - x13 * theta_dot * x10);
-        let x181 = X_dot
-            * (x33 * (theta_dot * x15 * x10 + x170 * x9) + x10 * x121 * x32);
-        let x182 = x168 * d + x132 * x0 + x4 * x178;
-        let x183 = x164 * x0 + (x155 - x156 + x163) * x4;
-        let x184 = x171 - x172 + x173 * x179 + x180 + x181 - x167 * x182 - x183 * d;
-        let x185 = J2 * x183;
-        let x186 = ((0.25 - 0.25 * (x29 * f64::cos(3.0 * theta))) * psi_dot + x143) * x29
-            + x15 * psi_dot;
-        let x187 = 0.5 * (x29 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        let x188 = (x123 - x151 * d * m1 + x152) * x1 - x154 + x158 + x160 + x161
-            + x12 * x15 * psi_dot * phi_dot + (-x2 * x162 - x4 * x165) * J1
-            + (m2 * x184 * d - x169 - x185) * x0
-            + theta_dot * (Ixx * x15 * psi_dot - x6 * x186 - x187 * x29 * x63);
-        let x189 = x123 + x152;
-        let x190 = x175 - x174 + x176 + x177 - d * x148;
-        let x191 = x15 * psi_dot * (x33 * Y_dot - X_dot * x32);
-        let x192 = gamma1_dot * x129;
-        let x193 = theta_dot * (x13 * (-x130 - x131) - Z_dot * x15);
-        let x194 = x171 + x172 + x180 + x181 - x132 * gamma1_dot;
-        let x195 = x148 * x190 - x133 * x116 + x2 * (x191 + x192 + x193) + x194 * x1;
-        let x196 = a_ * x1 * x195;
-        let x197 = x157 * d - x122 * x190 + x1 * (-x191 - x192 - x193) + x2 * x194
-            + x116 * x147;
-        let x198 = theta_dot * x15 * psi_dot * Ixz;
-        let x199 = x159 * x121;
-        let x200 = x122 * x148;
-        let x201 = J2 * (x155 + x200 - x156);
-        let x202 = Ixx * x121 - x127 * Ixz - Ixy * x119;
-        let x203 = x119 * x202;
-        let x204 = Iyz * x137;
-        let x205 = x122 * x148 * J1;
-        let x206 = x157 * Izz;
-        let x207 = x127 * x202;
-        let x208 = Iyy * x137;
-        let x209 = x153 * x121;
-        let x210 = Ixy * theta_dot * x15 * psi_dot;
-        let x211 = x157 * Iyz;
-        let x212 = J2 * x137;
-        let x213 = x167 * x7 * x173;
-        let x214 = x169 + x185;
-        let x215 = x124 + x125 + x126 - x173 * d - x128;
-        let x216 = x132 * gamma2_dot;
-        let x217 = x191 - gamma2_dot * x178 + x193;
-        let x218 = x0 * (-x216 - x138 - x145 - x146 - x150) - x173 * x215 + x4 * x217
-            + x168 * x182;
-        let x219 = x137 * d - x168 * x179 + x4 * (x216 + x138 + x145 + x146 + x150)
-            + x167 * x215 + x0 * x217;
-        let x220 = x219 * x46 - a_ * x0 * x218;
-        let x221 = x13 * x188 - x189 * x23 + (-x20 * x165 - x18 * x162) * J1
-            + (x154 - theta_dot * Ixx * x15 * psi_dot - x158 - x160 - x161) * x13
-            - ((x196 + x56 * x197) * x15 * x9 + x151 * x25) * m1
+        let x113 = (x80 * x93 + x81 * x91 + x34 * x39) * m1
+            + m2 * (x35 * x38 + x89 * x78 + x88 * x77);
+        let x114 = m1 * (x18 * x81 + x80 * x23 + x15 * x34 * x9)
+            + (x20 * x77 + x22 * x78 + x35 * x15 * x10) * m2;
+        let x115 = m2 * (x88 * x20 + x22 * x89 + x15 * x10 * x38)
+            + (x15 * x39 * x9 + x18 * x91 + x93 * x23) * m1;
+        let x116 = theta_dot * x9;
+        let x117 = x15 * psi_dot * x10;
+        let x118 = x116 + x117;
+        let x119 = x13 * psi_dot;
+        let x120 = phi_dot - x119;
+        let x121 = x15 * psi_dot * x9;
+        let x122 = theta_dot * x10;
+        let x123 = x121 - x122;
+        let x124 = x123 * Izz - Iyz * x118 - Ixz * x120;
+        let x125 = x124 * x118;
+        let x126 = -phi_dot - x119;
+        let x127 = theta_dot * x126 * x9;
+        let x128 = x15 * psi_dot * x10 * phi_dot;
+        let x129 = x127 - x128;
+        let x130 = x129 * Ixz;
+        let x131 = Iyy * x118 - x123 * Iyz - Ixy * x120;
+        let x132 = x123 * x131;
+        let x133 = theta_dot * x126 * x10;
+        let x134 = x15 * psi_dot * phi_dot * x9;
+        let x135 = x133 + x134;
+        let x136 = Ixy * x135;
+        let x137 = J2 - J1;
+        let x138 = x4 * x120 - x123 * x0;
+        let x139 = gamma2_dot + x116 + x117;
+        let x140 = x137 * x138 * x139;
+        let x141 = x139 * d + x4 * a_ * x118;
+        let x142 = theta_dot * x15 * psi_dot;
+        let x143 = -x123 * gamma2_dot - x142;
+        let x144 = gamma2_dot * x120;
+        let x145 = x143 * x0 + (x127 - x128 + x144) * x4;
+        let x146 = x0 * x120 + x4 * x123;
+        let x147 = a_ * (x128 - x127 - x146 * x0 * x118) - x141 * x138 - x145 * d;
+        let x148 = J2 * x145;
+        let x149 = x1 * x118 + x2 * x120;
+        let x150 = x121 + gamma1_dot - x122;
+        let x151 = x2 * a_ * x123 + x150 * d;
+        let x152 = x133 + x134 - gamma1_dot * x120;
+        let x153 = gamma1_dot * x118;
+        let x154 = x2 * x152 + x1 * (x142 - x153);
+        let x155 = x2 * x118 - x1 * x120;
+        let x156 = x149 * x151 - d * x154 + a_ * (-x123 * x1 * x155 - x133 - x134);
+        let x157 = x150 * x7 * x149;
+        let x158 = J2 * x154;
+        let x159 = x2 * (x153 - x142) + x152 * x1;
+        let x160 = x0 * (x128 - x127 - x144) + x4 * x143;
+        let x161 = ((0.25 - 0.25 * (x29 * f64::cos(3.0 * theta))) * psi_dot
+            + x13 * phi_dot) * x29 + x15 * psi_dot;
+        let x162 = 0.5 * (x29 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        let x163 = x130 - x125 + x132 + x136 + x0 * (m2 * x147 * d - x140 - x148)
+            + x12 * x15 * psi_dot * phi_dot + x1 * (x157 - x156 * d * m1 + x158)
+            + (-x2 * x159 - x4 * x160) * J1
+            + theta_dot * (Ixx * x15 * psi_dot - x6 * x161 - x162 * x29 * x63);
+        let x164 = -a_ * x118 - d * x155;
+        let x165 = x164 * x155 - x150 * x151 + a_ * (x2 * x123 * gamma1_dot + x129 * x1);
+        let x166 = a_ * x1 * x165;
+        let x167 = x129 * d - x149 * x164 + a_ * (x2 * x129 + x123 * x123 * x1);
+        let x168 = theta_dot * x15 * psi_dot * Ixz;
+        let x169 = x131 * x120;
+        let x170 = x149 * x155;
+        let x171 = J2 * (x127 + x170 - x128);
+        let x172 = x140 + x148;
+        let x173 = Ixx * x120 - x123 * Ixz - Ixy * x118;
+        let x174 = x118 * x173;
+        let x175 = Iyz * x135;
+        let x176 = x149 * x155 * J1;
+        let x177 = x129 * Izz;
+        let x178 = -x146 * d - a_ * x123;
+        let x179 = a_ * (-x4 * gamma2_dot * x118 - x135 * x0) - x146 * x178
+            + x141 * x139;
+        let x180 = x135 * d + x138 * x178 + a_ * (x4 * x135 + x0 * x118 * x118);
+        let x181 = x180 * x46 - a_ * x0 * x179;
+        let x182 = x123 * x173;
+        let x183 = Iyy * x135;
+        let x184 = x124 * x120;
+        let x185 = Ixy * theta_dot * x15 * psi_dot;
+        let x186 = x157 + x158;
+        let x187 = x129 * Iyz;
+        let x188 = J2 * x135;
+        let x189 = x138 * x7 * x146;
+        let x190 = (-x162 * x29 * x69 - x12 * x161) * theta_dot
+            - (x10 * (x167 * x52 - x166) + x156 * x8 * x9) * m1
+            + x10
+                * (x168 - x160 * x0 * J1 + x169 + x171 + x4 * x172 - x174 - x175 - x176
+                    + x177) - m2 * (x181 * x9 + x147 * x11 * x10)
+            + x15 * psi_dot * x53 * phi_dot
+            + (x184 - x182 - x183 - x1 * J1 * x159 - x185 - x2 * x186 + x187 - x188
+                - x189) * x9;
+        let x191 = (-x20 * x160 - x18 * x159) * J1 - x186 * x23
+            - ((x166 + x167 * x56) * x15 * x9 + x156 * x25) * m1
+            + (x125 - theta_dot * Ixx * x15 * psi_dot - x130 - x132 - x136) * x13
             + x15
                 * (psi_dot * phi_dot * x69
-                    + (x203 - x198 - x199 - x201 + x204 + x205 - x206) * x9
-                    + x10 * (x209 - x207 - x208 - x210 + x211 - x212 - x213))
-            - x214 * x22 - m2 * (x184 * x26 + x220 * x15 * x10)
+                    + (x174 - x168 - x169 - x171 + x175 + x176 - x177) * x9
+                    + x10 * (x184 - x182 - x183 - x185 + x187 - x188 - x189))
+            - x172 * x22 + x13 * x163
             + theta_dot
-                * (-x187 * x29 * (x60 + x61 + x62 + x65 - x66 + x67) - x186 * x63);
-        let x222 = (-x187 * x29 * x69 - x12 * x186) * theta_dot
-            - m2 * (x184 * x11 * x10 + x220 * x9)
-            - (x8 * x151 * x9 + x10 * (x52 * x197 - x196)) * m1
-            + x10
-                * (x198 - x165 * x0 * J1 + x199 + x201 + x4 * x214 - x203 - x204 - x205
-                    + x206) + x15 * psi_dot * x53 * phi_dot
-            + (x209 - x207 - x208 - x1 * J1 * x162 - x210 - x2 * x189 + x211 - x212
-                - x213) * x9;
-        let x223 = a_ * x13 * theta_dot * theta_dot;
-        let x224 = x4 * x10;
-        let x225 = x0 * x9;
-        let x226 = (-x224 - x225) * x15;
-        let x227 = x15 * (x224 + x225);
-        let x228 = (x225 - x224) * x15;
-        let x229 = (x224 - x225) * x15;
-        let x230 = 0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229 - x19;
-        let x231 = x0 * x10;
-        let x232 = x4 * x9;
-        let x233 = x13 * (x231 + x232);
-        let x234 = x13 * (x232 - x231);
-        let x235 = x13 * x10;
-        let x236 = x15 * x9;
-        let x237 = x2 * (x235 + x236);
-        let x238 = x15 * x10;
-        let x239 = x13 * x9;
-        let x240 = x1 * (x238 - x239);
-        let x241 = x2 * (x236 - x235);
-        let x242 = x1 * (x239 - x238);
-        let x243 = x1 * (x238 + x239);
-        let x244 = (-x238 - x239) * x1;
-        let x245 = 0.25 * x242 - 0.25 * x240 - 0.25 * x243 + x17 + 0.25 * x244;
+                * (-x162 * x29 * (x60 + x61 + x62 + x65 - x66 + x67) - x161 * x63)
+            - m2 * (x181 * x15 * x10 + x147 * x26);
+        let x192 = a_ * x13 * theta_dot * theta_dot;
+        let x193 = x4 * x10;
+        let x194 = x0 * x9;
+        let x195 = (-x193 - x194) * x15;
+        let x196 = x15 * (x193 + x194);
+        let x197 = (x194 - x193) * x15;
+        let x198 = (x193 - x194) * x15;
+        let x199 = 0.25 * x195 - 0.25 * x196 - 0.25 * x197 + 0.25 * x198 - x19;
+        let x200 = x0 * x10;
+        let x201 = x4 * x9;
+        let x202 = x13 * (x200 + x201);
+        let x203 = x13 * (x201 - x200);
+        let x204 = x13 * x10;
+        let x205 = x15 * x9;
+        let x206 = x2 * (x204 + x205);
+        let x207 = x15 * x10;
+        let x208 = x13 * x9;
+        let x209 = x1 * (x207 - x208);
+        let x210 = x2 * (x205 - x204);
+        let x211 = x1 * (x208 - x207);
+        let x212 = x1 * (x207 + x208);
+        let x213 = (-x207 - x208) * x1;
+        let x214 = 0.25 * x211 - 0.25 * x209 - 0.25 * x212 + x17 + 0.25 * x213;
         Assembly {
             qdot: [
                 psi_dot,
@@ -1479,52 +1467,72 @@ pub mod maggi {
                 ],
                 [0.0, x74, x103, J2 + d * d * m1, 0.0, x107, x108, x109],
                 [0.0, x76, 0.0, 0.0, m2 * d * d + J2, x110, x111, x112],
-                [x37, x87, x104, x107, x110, x113, 0.0, 0.0],
-                [x41, x98, x105, x108, x111, 0.0, x113, 0.0],
-                [x43, x100, x106, x109, x112, 0.0, 0.0, x113],
+                [
+                    x37,
+                    x87,
+                    x104,
+                    x107,
+                    x110,
+                    m0 + m1 * (x80 * x80 + x81 * x81 + x34 * x34)
+                        + m2 * (x78 * x78 + x77 * x77 + x35 * x35),
+                    x113,
+                    x114,
+                ],
+                [
+                    x41,
+                    x98,
+                    x105,
+                    x108,
+                    x111,
+                    x113,
+                    (x93 * x93 + x91 * x91 + x39 * x39) * m1 + m0
+                        + m2 * (x38 * x38 + x89 * x89 + x88 * x88),
+                    x115,
+                ],
+                [x43, x100, x106, x109, x112, x114, x115, m2 + m0 + m1],
             ],
             force: [
-                x188,
-                x29 * x10 * x221 + x222 * x9,
-                x29 * x221 * x9 - x10 * x222,
-                x15 * psi_dot * x10 * x102 * phi_dot - theta_dot * x187 * x101 * x9
-                    + J2 * (x156 - x155 - x200) - d * m1 * x197 + x205,
-                x166 * x167 * x173 + (x136 - theta_dot * x187 * x10) * x75 - x212
-                    - m2 * x219 * d,
-                theta_dot * (-x186 * d * x36 - (x84 + x85) * x187 * x29)
-                    - m2 * (x35 * x184 + x77 * x218 + x219 * x78)
-                    - (x151 * x34 + x80 * x197 + x195 * x81) * m1
+                x163,
+                x190 * x9 + x29 * x191 * x10,
+                x29 * x191 * x9 - x10 * x190,
+                x15 * psi_dot * x10 * x102 * phi_dot - x167 * d * m1
+                    - theta_dot * x162 * x101 * x9 + J2 * (x128 - x127 - x170) + x176,
+                x137 * x138 * x146 + (x134 - theta_dot * x162 * x10) * x75 - x188
+                    - m2 * x180 * d,
+                theta_dot * (-x161 * d * x36 - (x84 + x85) * x162 * x29)
+                    - m2 * (x180 * x78 + x35 * x147 + x77 * x179)
+                    - (x165 * x81 + x80 * x167 + x156 * x34) * m1
                     + x15 * psi_dot * phi_dot * x83,
-                (-x40 * x186 * d - x187 * x29 * (x95 + x96)) * theta_dot
-                    - m2 * (x184 * x38 + x219 * x89 + x88 * x218)
-                    - (x195 * x91 + x151 * x39 + x93 * x197) * m1
-                    + x15 * psi_dot * phi_dot * x94,
-                x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x186 * d)
+                (-x40 * x161 * d - x162 * x29 * (x95 + x96)) * theta_dot
+                    + x15 * psi_dot * phi_dot * x94
+                    - m2 * (x147 * x38 + x88 * x179 + x180 * x89)
+                    - (x165 * x91 + x167 * x93 + x156 * x39) * m1,
+                x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x161 * d)
                     - m2
-                        * (((0.25 * x226 - 0.25 * x227 - 0.25 * x228 + 0.25 * x229)
+                        * (((0.25 * x195 - 0.25 * x196 - 0.25 * x197 + 0.25 * x198)
                             * phi_dot * phi_dot
-                            + (theta_dot * x230
+                            + (theta_dot * x199
                                 + phi_dot
-                                    * (x233 - 0.5 * x226 - 0.5 * x227 + 0.5 * x228 + 0.5 * x229
-                                        - x234)) * theta_dot
+                                    * (x202 - 0.5 * x195 - 0.5 * x196 + 0.5 * x197 + 0.5 * x198
+                                        - x203)) * theta_dot
                             + gamma2_dot
                                 * (phi_dot
-                                    * (0.5 * x226 - 0.5 * x227 + 0.5 * x228 - 0.5 * x229)
-                                    + (-x233 - 0.5 * x226 - 0.5 * x227 - 2.0 * (x15 * x0)
-                                        - 0.5 * x228 - 0.5 * x229 - x234) * theta_dot
-                                    + gamma2_dot * x230)) * d - x223)
-                    - (x223
+                                    * (0.5 * x195 - 0.5 * x196 + 0.5 * x197 - 0.5 * x198)
+                                    + (-x202 - 0.5 * x195 - 0.5 * x196 - 2.0 * (x15 * x0)
+                                        - 0.5 * x197 - 0.5 * x198 - x203) * theta_dot
+                                    + gamma2_dot * x199)) * d - x192)
+                    - (x192
                         + (theta_dot
-                            * ((0.5 * x240 - x237 + x241 + 2.0 * (x1 * x15) + 0.5 * x242
-                                - 0.5 * x243 - 0.5 * x244) * gamma1_dot + theta_dot * x245
-                                + (0.5 * x240 - 0.5 * x242 - 0.5 * x243 + 0.5 * x244)
+                            * ((0.5 * x209 - x206 + x210 + 2.0 * (x1 * x15) + 0.5 * x211
+                                - 0.5 * x212 - 0.5 * x213) * gamma1_dot + theta_dot * x214
+                                + (0.5 * x209 - 0.5 * x211 - 0.5 * x212 + 0.5 * x213)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x245 * gamma1_dot
+                                * (x214 * gamma1_dot
                                     + phi_dot
-                                        * (x237 - 0.5 * x240 + x241 - 0.5 * x242 - 0.5 * x243
-                                            - 0.5 * x244))
-                            + (0.25 * x242 - 0.25 * x240 - 0.25 * x243 + 0.25 * x244)
+                                        * (x206 - 0.5 * x209 + x210 - 0.5 * x211 - 0.5 * x212
+                                            - 0.5 * x213))
+                            + (0.25 * x211 - 0.25 * x209 - 0.25 * x212 + 0.25 * x213)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             w: [
@@ -1538,9 +1546,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * x187 * x29,
+                theta_dot * x162 * x29,
                 -(x15 * psi_dot * phi_dot),
-                theta_dot * x186,
+                theta_dot * x161,
                 0.0,
                 0.0,
                 0.0,
@@ -1664,30 +1672,41 @@ pub mod maggi {
         let x6 = f64::sin(theta);
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let x9 = x1 * x2 * x3 - x0 * x8;
+        let x10 = x2 * x3 * x0 + x1 * x8;
+        let x11 = d + x1 * a_;
+        let x12 = x10 * x11 - a_ * x0 * x9;
+        let x13 = x6 * x2 * x4 - x7 * x5;
+        let x14 = a_ + x1 * d;
+        let x15 = f64::sin(gamma1);
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x13 - x2 * x15 * x3;
+        let x18 = x16 * a_;
+        let x19 = -x18 - d;
+        let x20 = x13 * x15 + x16 * x2 * x3;
+        let x21 = a_ * x15 * x20;
+        let x22 = -a_ - x16 * d;
+        let x23 = x2 * x7 + x6 * x4 * x5;
+        let x24 = x16 * x23 - x15 * x3 * x5;
+        let x25 = x16 * x3 * x5 + x15 * x23;
+        let x26 = x6 * x7 * x5 - x2 * x4;
+        let x27 = x3 * x0 * x5 + x1 * x26;
+        let x28 = x1 * x3 * x5 - x0 * x26;
+        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+        let x30 = x18 + d;
+        let x31 = x16 * x3 * x4 + x6 * x15;
+        let x32 = -x31 * d - a_ * x3 * x4;
+        let x33 = x1 * x3 * x7 - x6 * x0;
+        let x34 = -a_ * x3 * x7 - x33 * d;
+        let x35 = x15 * x3 * x4 - x16 * x6;
+        let x36 = -x3 * x0 * x7 - x1 * x6;
+        let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
+            + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
+        let x38 = x27 * x11 - a_ * x28 * x0;
+        let x39 = a_ * x15 * x25;
+        let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
+            + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1720,30 +1739,33 @@ pub mod maggi {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * (m2 * (x12 * x7 + x13 * x14 * x4)
+                    + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
+                + X_dot
+                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+                + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
+                    + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x10) + Z_dot * x37,
             theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (x38 * x7 + x14 * x4 * x23)
+                    + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
+                + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
+                    + x24 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+                    * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
+                        + m2 * (x3 * x4 * x38 + x23 * x34))
+                + Y_dot
+                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
             theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
+                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+                + X_dot * x37,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1896,331 +1918,196 @@ pub mod kane {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
-        let x5 = u2 * x3 - u3 * x2;
-        let x6 = f64::sin(theta);
-        let x7 = x6 * x1 * x4 + u1;
-        let x8 = f64::sin(gamma2);
-        let x9 = f64::sin(gamma1);
-        let x10 = f64::cos(gamma1);
+        let x5 = f64::sin(theta);
+        let x6 = f64::sin(gamma2);
+        let x7 = f64::sin(gamma1);
+        let x8 = f64::cos(gamma1);
+        let x9 = x8 * x8;
+        let x10 = f64::cos(gamma2);
         let x11 = x10 * x10;
-        let x12 = f64::cos(gamma2);
-        let x13 = x12 * x12;
-        let x14 = J1 - J2;
-        let x15 = x10 * d;
-        let x16 = -a_ - x15;
-        let x17 = (x10 * x14 + x16 * d * m1) * x9 - Ixy;
-        let x18 = J2 - J1;
-        let x19 = x12 * d;
-        let x20 = -a_ - x19;
-        let x21 = x8 * (x12 * x18 - m2 * d * x20) - Ixz;
-        let x22 = f64::sin(psi);
-        let x23 = x2 * x22;
-        let x24 = f64::cos(psi);
-        let x25 = x23 + x6 * x24 * x3;
-        let x26 = x3 * x22;
-        let x27 = x6 * x24 * x2 - x26;
-        let x28 = d * (x9 * x25 * m1 - m2 * x27 * x8);
-        let x29 = x24 * x3;
-        let x30 = x29 + x6 * x2 * x22;
-        let x31 = x24 * x2;
-        let x32 = x6 * x3 * x22;
-        let x33 = x32 - x31;
-        let x34 = (x9 * x33 * m1 - m2 * x8 * x30) * d;
-        let x35 = (x9 * m1 * x3 - m2 * x8 * x2) * x0 * d;
-        let x36 = d * d;
-        let x37 = -Iyz;
-        let x38 = d + x12 * a_;
-        let x39 = J2 + m2 * d * x38;
-        let x40 = (x12 * x0 - x6 * x8 * x3) * x24 - x8 * x2 * x22;
-        let x41 = x24 * x0 * x8 + x12 * x25;
-        let x42 = m2 * (x41 * x38 - a_ * x40 * x8) + x16 * x25 * m1;
-        let x43 = x12 * x0 * x22 + (x31 - x32) * x8;
-        let x44 = x0 * x8 * x22 + x12 * x33;
-        let x45 = x16 * x33 * m1 + m2 * (x44 * x38 - a_ * x8 * x43);
-        let x46 = x12 * x6;
-        let x47 = x6 * x8;
-        let x48 = x12 * x0 * x3 - x47;
-        let x49 = m2 * (x48 * x38 - a_ * (-x0 * x8 * x3 - x46) * x8)
-            + x16 * x0 * m1 * x3;
-        let x50 = x10 * a_ + d;
-        let x51 = d * x50 * m1 + J2;
-        let x52 = x10 * x27 - x24 * x9 * x0;
-        let x53 = x24 * (x6 * x9 * x2 + x10 * x0) - x9 * x3 * x22;
-        let x54 = m2 * x27 * x20 + (x52 * x50 + a_ * x53 * x9) * m1;
-        let x55 = x10 * x30 - x9 * x0 * x22;
-        let x56 = x10 * x0 * x22 + x9 * x30;
-        let x57 = (x55 * x50 + a_ * x9 * x56) * m1 + m2 * x20 * x30;
-        let x58 = x6 * x9;
-        let x59 = x10 * x0 * x2 + x58;
-        let x60 = x10 * x6;
-        let x61 = (x59 * x50 + a_ * (x9 * x0 * x2 - x60) * x9) * m1 + m2 * x0 * x2 * x20;
-        let x62 = x52 * d * m1;
-        let x63 = x55 * d * m1;
-        let x64 = x59 * d * m1;
-        let x65 = m2 * d * x41;
-        let x66 = m2 * d * x44;
-        let x67 = m2 * x48 * d;
-        let x68 = m2 + m0 + m1;
-        let x69 = x9 * u2;
-        let x70 = x10 * u1;
-        let x71 = u4 * J2 * (-x69 - x70);
-        let x72 = x69 + x70;
-        let x73 = u4 + u3;
-        let x74 = x72 * x14 * x73;
-        let x75 = u7 * x22;
-        let x76 = u6 * x24;
-        let x77 = x75 + x76;
-        let x78 = u8 * x0;
-        let x79 = -x75 - x76;
-        let x80 = x6 * x79 - x78;
-        let x81 = (x1 * x77 * x4 + x7 * x80) * x2;
-        let x82 = x10 * u2;
-        let x83 = x9 * u1;
-        let x84 = x82 - x83;
-        let x85 = a_ * u3;
-        let x86 = u7 * x24;
-        let x87 = u6 * x22;
-        let x88 = x86 - x87;
-        let x89 = x88 * x3;
-        let x90 = x78 + x6 * x77;
-        let x91 = x90 * x2;
-        let x92 = x85 + x89 + x91;
-        let x93 = x6 * u8;
-        let x94 = x0 * x77 - x93;
-        let x95 = x9 * x92 + x10 * x94;
-        let x96 = x0 * x79 + x93;
-        let x97 = x10 * x92 + x96 * x9 + d * x73;
-        let x98 = x0 * x5 * x22;
-        let x99 = x24 * u1;
-        let x100 = x6 * u8 * x5;
-        let x101 = u1 * x22;
-        let x102 = x24 * x0 * x5;
-        let x103 = u7 * (x98 - x99) - x100 + u6 * (x101 + x102);
-        let x104 = x103 * x3;
-        let x105 = x81 - x84 * x95 + x97 * x72 + x104 + x72 * u4 * d;
-        let x106 = x8 * u1;
-        let x107 = x12 * u3;
-        let x108 = -x106 - x107;
-        let x109 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x110 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x111 = u5 + u2;
-        let x112 = u5 * J2 + x111 * x18;
-        let x113 = u3 * x8;
-        let x114 = x12 * u1;
-        let x115 = x114 - x113;
-        let x116 = x2 * x103;
-        let x117 = x1 * x79 * x4 + x7 * x90;
-        let x118 = x117 * x3;
-        let x119 = a_ * u2;
-        let x120 = x87 - x86;
-        let x121 = x2 * x120;
-        let x122 = x90 * x3;
-        let x123 = x8 * x94 + x12 * (x119 + x121 + x122) + x111 * d;
-        let x124 = x88 * x2 - x119 + x80 * x3;
-        let x125 = x12 * x94 + x8 * x124;
-        let x126 = x106 + x107;
-        let x127 = x116 + x118 + (x113 - x114) * u5 * d - x115 * x123 + x125 * x126;
-        let x128 = x18 * x115 * x126;
-        let x129 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x130 = u3 * x20 + x89 + x91 - d * x8 * u1;
-        let x131 = x80 * x5;
-        let x132 = x88 * x4;
-        let x133 = x131 + u5 * x124 + x132;
-        let x134 = x115 * x130 - x111 * x125 + x133 * x8 + x12 * (x81 + x104 + u5 * x94);
-        let x135 = x8
-            * (x117 * x2 + x3 * (x100 + u6 * (-x101 - x102) + u7 * (x99 - x98))
-                + u5 * x96) + x12 * x133 - x126 * x130 + x111 * x123;
-        let x136 = x121 - x119 + x122 + d * (x83 - x82);
-        let x137 = x116 + x118 + x96 * u4;
-        let x138 = x95 * x73 - x136 * x72
-            + x9 * (u4 * (x120 * x3 - x85 + x80 * x2) + x90 * x5 + x4 * x120)
-            + x10 * x137;
-        let x139 = x136 * x84 + x10 * (x131 + x132 + u4 * x92) - x97 * x73 + x9 * x137;
-        let x140 = x84 * x72 * x14;
-        let x141 = 2.0 * theta + psi + phi;
-        let x142 = f64::cos(x141);
-        let x143 = 2.0 * theta - psi - phi;
-        let x144 = f64::cos(x143);
-        let x145 = 2.0 * theta + psi - phi;
-        let x146 = f64::cos(x145);
-        let x147 = 2.0 * theta - psi + phi;
-        let x148 = f64::cos(x147);
-        let x149 = x26 + x31;
-        let x150 = x6 * x149;
-        let x151 = x26 - x31;
-        let x152 = x6 * x151;
-        let x153 = x31 - x26;
-        let x154 = x6 * x153;
-        let x155 = -x26 - x31;
-        let x156 = x6 * x155;
-        let x157 = u6
-            * (x1 * (0.125 * x144 - 0.125 * x142 - 0.125 * x146 + 0.125 * x148)
-                - 0.25 * x150 - 0.25 * x152 + 0.25 * x154 + 0.25 * x156);
-        let x158 = x6 * (x23 + x29);
-        let x159 = x155 * x0;
-        let x160 = x6 * (x29 - x23);
-        let x161 = x149 * x0;
-        let x162 = x151 * x0;
-        let x163 = f64::sin(x143);
-        let x164 = f64::sin(x147);
-        let x165 = f64::sin(x145);
-        let x166 = f64::sin(x141);
-        let x167 = x153 * x0;
-        let x168 = (0.5 * x158 + 0.25 * x159 + 0.5 * x160 + 0.25 * x161 + 0.25 * x162
-            + x1 * (-0.125 * x163 - 0.125 * x164 - 0.125 * x165 - 0.125 * x166)
-            + 0.25 * x167) * u7;
-        let x169 = x0 * u1 * x3;
-        let x170 = x6 * u3;
-        let x171 = u6
-            * (x1 * (0.125 * x164 - 0.125 * x163 + 0.125 * x165 - 0.125 * x166)
-                - 0.5 * x158 + 0.25 * x159 + 0.5 * x160 + 0.25 * x161 - 0.25 * x162
-                - 0.25 * x167);
-        let x172 = x6 * u2;
-        let x173 = x0 * x2 * u1;
-        let x174 = u7
-            * ((0.125 * x142 - 0.125 * x144 - 0.125 * x146 + 0.125 * x148) * x1
-                + 0.25 * x150 - 0.25 * x152 + 0.25 * x154 - 0.25 * x156);
-        let x175 = x6 * x2;
-        let x176 = x0 * x3;
-        let x177 = x175 + x176;
-        let x178 = x10 * x177;
-        let x179 = x0 * x2;
-        let x180 = x6 * x3;
-        let x181 = x179 - x180;
-        let x182 = x9 * x181;
-        let x183 = x176 - x175;
-        let x184 = x10 * x183;
-        let x185 = x180 - x179;
-        let x186 = x9 * x185;
-        let x187 = x179 + x180;
-        let x188 = x9 * x187;
-        let x189 = -x179 - x180;
-        let x190 = x189 * x9;
-        let x191 = 0.25 * x186 - 0.25 * x182 - 0.25 * x188 + x60 + 0.25 * x190;
-        let x192 = x10 * x181;
-        let x193 = x10 * x187;
-        let x194 = x10 * x185;
-        let x195 = x183 * x9;
-        let x196 = x10 * x189;
-        let x197 = x177 * x9;
-        let x198 = x12 * x2;
-        let x199 = x8 * x3;
-        let x200 = -x198 - x199;
-        let x201 = x6 * x200;
-        let x202 = x198 + x199;
-        let x203 = x6 * x202;
-        let x204 = x199 - x198;
-        let x205 = x204 * x6;
-        let x206 = x8 * x2;
-        let x207 = x12 * x3;
-        let x208 = x0 * (x207 - x206);
-        let x209 = x198 - x199;
-        let x210 = x6 * x209;
-        let x211 = x0 * (x206 + x207);
-        let x212 = x200 * x0;
-        let x213 = x0 * x202;
-        let x214 = x204 * x0;
-        let x215 = x209 * x0;
-        let x216 = 0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215 - x46;
+        let x12 = J1 - J2;
+        let x13 = x8 * d;
+        let x14 = -a_ - x13;
+        let x15 = (x8 * x12 + x14 * d * m1) * x7 - Ixy;
+        let x16 = J2 - J1;
+        let x17 = x10 * d;
+        let x18 = -a_ - x17;
+        let x19 = x6 * (x10 * x16 - m2 * d * x18) - Ixz;
+        let x20 = f64::sin(psi);
+        let x21 = f64::cos(psi);
+        let x22 = x2 * x20 + x5 * x21 * x3;
+        let x23 = x5 * x21 * x2 - x3 * x20;
+        let x24 = d * (x7 * x22 * m1 - m2 * x23 * x6);
+        let x25 = x21 * x3 + x5 * x2 * x20;
+        let x26 = x21 * x2;
+        let x27 = x5 * x3 * x20;
+        let x28 = x27 - x26;
+        let x29 = (x7 * x28 * m1 - m2 * x6 * x25) * d;
+        let x30 = (x7 * m1 * x3 - m2 * x6 * x2) * x0 * d;
+        let x31 = d * d;
+        let x32 = -Iyz;
+        let x33 = d + x10 * a_;
+        let x34 = J2 + m2 * d * x33;
+        let x35 = (x10 * x0 - x5 * x6 * x3) * x21 - x6 * x2 * x20;
+        let x36 = x21 * x0 * x6 + x10 * x22;
+        let x37 = m2 * (x36 * x33 - a_ * x35 * x6) + x14 * x22 * m1;
+        let x38 = x10 * x0 * x20 + (x26 - x27) * x6;
+        let x39 = x0 * x6 * x20 + x10 * x28;
+        let x40 = x14 * x28 * m1 + m2 * (x39 * x33 - a_ * x6 * x38);
+        let x41 = -x0 * x6 * x3 - x10 * x5;
+        let x42 = x10 * x0 * x3 - x5 * x6;
+        let x43 = m2 * (x42 * x33 - a_ * x41 * x6) + x14 * x0 * m1 * x3;
+        let x44 = x8 * a_ + d;
+        let x45 = d * x44 * m1 + J2;
+        let x46 = x8 * x23 - x21 * x7 * x0;
+        let x47 = x21 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x20;
+        let x48 = m2 * x23 * x18 + (x46 * x44 + a_ * x47 * x7) * m1;
+        let x49 = x8 * x25 - x7 * x0 * x20;
+        let x50 = x8 * x0 * x20 + x7 * x25;
+        let x51 = (x49 * x44 + a_ * x7 * x50) * m1 + m2 * x18 * x25;
+        let x52 = x8 * x0 * x2 + x5 * x7;
+        let x53 = x7 * x0 * x2 - x8 * x5;
+        let x54 = (x52 * x44 + a_ * x53 * x7) * m1 + m2 * x0 * x2 * x18;
+        let x55 = x46 * d * m1;
+        let x56 = x49 * d * m1;
+        let x57 = x52 * d * m1;
+        let x58 = m2 * d * x36;
+        let x59 = m2 * d * x39;
+        let x60 = m2 * x42 * d;
+        let x61 = m1 * (x46 * x49 + x22 * x28 + x47 * x50)
+            + m2 * (x35 * x38 + x23 * x25 + x39 * x36);
+        let x62 = (x47 * x53 + x46 * x52 + x0 * x22 * x3) * m1
+            + m2 * (x42 * x36 + x23 * x0 * x2 + x35 * x41);
+        let x63 = m2 * (x42 * x39 + x41 * x38 + x0 * x2 * x25)
+            + (x0 * x28 * x3 + x53 * x50 + x49 * x52) * m1;
+        let x64 = x6 * u1;
+        let x65 = x10 * u3;
+        let x66 = -x64 - x65;
+        let x67 = x8 * u2;
+        let x68 = x7 * u1;
+        let x69 = x67 - x68;
+        let x70 = x7 * u2;
+        let x71 = x8 * u1;
+        let x72 = u4 * J2 * (-x70 - x71);
+        let x73 = 2.0 * u4 + u3;
+        let x74 = d * (x8 * x73 * u1 + x73 * x7 * u2) + a_ * u3 * u1;
+        let x75 = x70 + x71;
+        let x76 = u4 + u3;
+        let x77 = x75 * x12 * x76;
+        let x78 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x79 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x80 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
+            - a_ * u1 * u2;
+        let x81 = u5 + u2;
+        let x82 = u5 * J2 + x81 * x16;
+        let x83 = x10 * u1 - u3 * x6;
+        let x84 = x64 + x65;
+        let x85 = x16 * x83 * x84;
+        let x86 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x87 = u1 * u1;
+        let x88 = 2.0 * gamma2;
+        let x89 = f64::sin(x88);
+        let x90 = x69 * x75 * x12;
+        let x91 = 2.0 * gamma1;
+        let x92 = f64::sin(x91);
+        let x93 = d * (x68 - x67) - a_ * u2;
+        let x94 = a_ * u3 * u3 * x7 - x75 * x93;
+        let x95 = u3 * x18 - d * x6 * u1;
+        let x96 = x83 * x95 + a_ * x6 * u2 * u2;
+        let x97 = x81 * (x10 * a_ * u2 + x81 * d) - x84 * x95 - x10 * u5 * a_ * u2;
+        let x98 = x69 * x93 - (u3 * x44 + u4 * d) * x76 + x8 * a_ * u4 * u3;
         Assembly {
-            qdot: [x1 * x4, x5, x7, u4, u5, u6, u7, u8],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + d * d * (m2 * x8 * x8 + x9 * x9 * m1) + (x11 + x13) * J1
-                        + (x8 * x8 + x9 * x9) * J2,
-                    x17,
-                    x21,
+                    Ixx + d * d * (m2 * x6 * x6 + x7 * x7 * m1) + (x9 + x11) * J1
+                        + (x6 * x6 + x7 * x7) * J2,
+                    x15,
+                    x19,
                     0.0,
                     0.0,
-                    x28,
+                    x24,
+                    x29,
+                    x30,
+                ],
+                [
+                    x15,
+                    x7 * x7 * J1 + x14 * x14 * m1 + Iyy + J2 * (x9 + 1.0)
+                        + m2 * (x31 + a_ * (a_ + 2.0 * x17)),
+                    x32,
+                    0.0,
                     x34,
-                    x35,
+                    x37,
+                    x40,
+                    x43,
                 ],
                 [
-                    x17,
-                    x9 * x9 * J1 + x16 * x16 * m1 + Iyy + J2 * (x11 + 1.0)
-                        + m2 * (x36 + a_ * (a_ + 2.0 * x19)),
-                    x37,
-                    0.0,
-                    x39,
-                    x42,
+                    x19,
+                    x32,
+                    x6 * x6 * J1 + (a_ * (a_ + 2.0 * x13) + x31) * m1 + m2 * x18 * x18
+                        + Izz + J2 * (x11 + 1.0),
                     x45,
-                    x49,
+                    0.0,
+                    x48,
+                    x51,
+                    x54,
+                ],
+                [0.0, 0.0, x45, J2 + d * d * m1, 0.0, x55, x56, x57],
+                [0.0, x34, 0.0, 0.0, m2 * d * d + J2, x58, x59, x60],
+                [
+                    x24,
+                    x37,
+                    x48,
+                    x55,
+                    x58,
+                    m0 + (x46 * x46 + x47 * x47 + x22 * x22) * m1
+                        + m2 * (x36 * x36 + x35 * x35 + x23 * x23),
+                    x61,
+                    x62,
                 ],
                 [
-                    x21,
-                    x37,
-                    x8 * x8 * J1 + (a_ * (a_ + 2.0 * x15) + x36) * m1 + m2 * x20 * x20
-                        + Izz + J2 * (x13 + 1.0),
+                    x29,
+                    x40,
                     x51,
-                    0.0,
-                    x54,
-                    x57,
+                    x56,
+                    x59,
                     x61,
+                    (x49 * x49 + x50 * x50 + x28 * x28) * m1 + m0
+                        + (x25 * x25 + x39 * x39 + x38 * x38) * m2,
+                    x63,
                 ],
-                [0.0, 0.0, x51, J2 + d * d * m1, 0.0, x62, x63, x64],
-                [0.0, x39, 0.0, 0.0, m2 * d * d + J2, x65, x66, x67],
-                [x28, x42, x54, x62, x65, x68, 0.0, 0.0],
-                [x34, x45, x57, x63, x66, 0.0, x68, 0.0],
-                [x35, x49, x61, x64, x67, 0.0, 0.0, x68],
+                [x30, x43, x54, x57, x60, x62, x63, m2 + m0 + m1],
             ],
             force: [
-                x9 * (x71 + x74 - d * m1 * x105)
-                    + (-x12 * u5 * x108 - x10 * x84 * u4) * J1 - x109 * u2 + u3 * x110
-                    + (m2 * x127 * d - x112 * x115) * x8,
-                x128 + x109 * u1 - x84 * u4 * x9 * J1 - u3 * x129
-                    - m2 * (x134 * x38 - a_ * x135 * x8) - x10 * (x71 + x74)
-                    - x16 * m1 * x105,
-                u5 * x108 * x8 * J1 - m2 * x127 * x20
-                    - (x138 * x50 + a_ * x9 * x139) * m1 - u1 * x110 + x140
-                    - x112 * x12 * x115 + x129 * u2,
-                x140 - x138 * d * m1,
-                x128 - m2 * d * x134,
-                -m2 * (x41 * x134 + x27 * x127 + x40 * x135)
-                    - (x53 * x139 + x25 * x105 + x52 * x138) * m1,
-                -m1 * (x138 * x55 + x139 * x56 + x33 * x105)
-                    - m2 * (x44 * x134 + x127 * x30 + x135 * x43),
-                -(u3 * (x157 + x168 + a_ * (x169 + x170))
-                    + (x171 + a_ * (x172 + x173) + x174) * u2
-                    + ((u1
-                        * (0.5 * x178 - 0.25 * x182 + 0.5 * x184 - 0.25 * x186
-                            - 0.25 * x188 - 0.25 * x190) + x191 * u3
-                        + (0.25 * x192 + 0.25 * x193 + 0.25 * x194 + 0.5 * x195
-                            + 0.25 * x196 + 0.5 * x197) * u2) * u3
-                        + u1
-                            * (u1
-                                * (0.25 * x186 - 0.25 * x182 - 0.25 * x188 + 0.25 * x190)
-                                + (0.25 * x192 + 0.25 * x193 - 0.25 * x194 - x58
-                                    - 0.25 * x196) * u2) + x10 * x6 * u2 * u2
-                        + u4
-                            * (u2
-                                * (0.5 * x192 + 0.5 * x193 + 0.5 * x194 + x195 + 0.5 * x196
-                                    + x197)
-                                + (0.5 * x186 - 0.5 * x182 - 0.5 * x188 + 2.0 * x60
-                                    + 0.5 * x190) * u3
-                                + u1
-                                    * (x178 - 0.5 * x182 + x184 - 0.5 * x186 - 0.5 * x188
-                                        - 0.5 * x190) + u4 * x191)) * d) * m1
+                (-x10 * u5 * x66 - x8 * x69 * u4) * J1 + x7 * (x72 - d * m1 * x74 + x77)
+                    - x78 * u2 + u3 * x79 + (m2 * d * x80 - x82 * x83) * x6,
+                x85 + x78 * u1 - x69 * u4 * x7 * J1 - u3 * x86 - x14 * m1 * x74
+                    - x8 * (x72 + x77)
                     - m2
-                        * ((x171 + a_ * (-x172 - x173) + x174) * u2
-                            + u3 * (x157 + a_ * (-x169 - x170) + x168)
-                            + ((u3
-                                * (0.25 * x201 + 0.25 * x203 - x47 + 0.25 * x205
-                                    - 0.5 * x208 + 0.25 * x210 - 0.5 * x211)
-                                + u2
-                                    * (0.25 * x212 - 0.25 * x213 + 0.25 * x214 - 0.25 * x215)
-                                + (0.25 * x212 - 0.25 * x213 - 0.25 * x214 + 0.25 * x215)
-                                    * u1) * u1
-                                + u5
-                                    * (u1 * (0.5 * x212 - 0.5 * x213 + 0.5 * x214 - 0.5 * x215)
-                                        + u3
-                                            * (0.5 * x201 + 0.5 * x203 - 0.5 * x205 - x208 - 0.5 * x210
-                                                + x211)
-                                        + (0.5 * x212 - 0.5 * x213 - 0.5 * x214 + 0.5 * x215
-                                            - 2.0 * x46) * u2 + u5 * x216)
-                                + ((0.25 * x201 + 0.25 * x203 - 0.25 * x205 - 0.5 * x208
-                                    - 0.25 * x210 + 0.5 * x211) * u3 + x216 * u2) * u2
-                                - x12 * x6 * u3 * u3) * d),
+                        * (d
+                            * (a_
+                                * (x6 * (u3 * u3 - x87 + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (x10 * u3 * u1))
+                                + d
+                                    * ((0.5 * (u3 * x89) - f64::cos(x88) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x89))) - a_ * a_ * u3 * u1),
+                u5 * x66 * x6 * J1 - m2 * x18 * x80 - u1 * x79 + x90 - x82 * x10 * x83
+                    + x86 * u2
+                    - (a_ * a_ * u1 * u2
+                        + d
+                            * (a_
+                                * (2.0 * (x8 * u1 * u2)
+                                    + (u2 * u2 - x87 + u4 * (-u4 - 2.0 * u3)) * x7)
+                                + (0.5 * (x92 * u2 * u2)
+                                    + (f64::cos(x91) * u2 - 0.5 * (u1 * x92)) * u1) * d)) * m1,
+                x90 - d * m1 * x94,
+                x85 - m2 * x96 * d,
+                -m2 * (x23 * x80 + x96 * x36 + x35 * x97)
+                    - (x46 * x94 + x22 * x74 + x47 * x98) * m1,
+                -m2 * (x38 * x97 + x96 * x39 + x25 * x80)
+                    - (x49 * x94 + x28 * x74 + x98 * x50) * m1,
+                -(x52 * x94 + x53 * x98 + x0 * x3 * x74) * m1
+                    - m2 * (x0 * x2 * x80 + x96 * x42 + x41 * x97),
             ],
             checks: [x0],
         }
@@ -2322,30 +2209,41 @@ pub mod kane {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x9 = x5 * x6 * x2 - x4 * x8;
+        let x10 = x6 * x2 * x4 + x5 * x8;
+        let x11 = d + x5 * a_;
+        let x12 = x10 * x11 - a_ * x4 * x9;
+        let x13 = x0 * x6 * x3 - x1 * x7;
+        let x14 = a_ + x5 * d;
+        let x15 = f64::sin(gamma1);
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x13 - x6 * x15 * x2;
+        let x18 = x16 * a_;
+        let x19 = -x18 - d;
+        let x20 = x13 * x15 + x16 * x6 * x2;
+        let x21 = a_ * x15 * x20;
+        let x22 = -a_ - x16 * d;
+        let x23 = x6 * x1 + x0 * x3 * x7;
+        let x24 = x16 * x23 - x15 * x2 * x7;
+        let x25 = x16 * x2 * x7 + x15 * x23;
+        let x26 = x0 * x1 * x7 - x6 * x3;
+        let x27 = x2 * x4 * x7 + x5 * x26;
+        let x28 = x5 * x2 * x7 - x4 * x26;
+        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+        let x30 = x18 + d;
+        let x31 = x16 * x2 * x3 + x0 * x15;
+        let x32 = -x31 * d - a_ * x2 * x3;
+        let x33 = x5 * x2 * x1 - x0 * x4;
+        let x34 = -a_ * x2 * x1 - x33 * d;
+        let x35 = x15 * x2 * x3 - x16 * x0;
+        let x36 = -x2 * x4 * x1 - x5 * x0;
+        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
+            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
+        let x38 = x27 * x11 - a_ * x28 * x4;
+        let x39 = a_ * x15 * x25;
+        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
+            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2378,30 +2276,33 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
+                * (m2 * (x12 * x1 + x13 * x14 * x3)
+                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
+                + X_dot
+                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
+                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x10) + Z_dot * x37,
             theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (x38 * x1 + x14 * x3 * x23)
+                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
+                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
+                    + x24 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
+                        + m2 * (x2 * x3 * x38 + x23 * x34))
+                + Y_dot
+                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
+                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+                + X_dot * x37,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2510,13 +2411,17 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    const CONDITIONS: [&str; 3] = [
+        "cos(theta) = 0",
+        "pivot factor 2 of the velocity transformation vanishes",
+        "pivot factor 3 of the velocity transformation vanishes",
+    ];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 8],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 1],
+        checks: [f64; 3],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -2558,187 +2463,136 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma1);
-        let x8 = f64::sin(psi);
-        let x9 = x3 * x8;
-        let x10 = f64::cos(psi);
-        let x11 = x5 * x10 * x2;
-        let x12 = f64::sin(gamma1);
-        let x13 = x2 * x8;
-        let x14 = x5 * x10 * x3;
-        let x15 = -x13 - x14;
-        let x16 = f64::sin(gamma2);
-        let x17 = f64::cos(gamma2);
-        let x18 = x13 + x14;
-        let x19 = x17 * d;
-        let x20 = -a_ - x19;
-        let x21 = x7 * d;
-        let x22 = (a_ + x21) * m1 + m2 * x20;
-        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
-        let x24 = x10 * x3;
-        let x25 = x5 * x2 * x8;
-        let x26 = -x24 - x25;
-        let x27 = x7 * x26 + x12 * x0 * x8;
-        let x28 = x24 + x25;
-        let x29 = x10 * x2;
-        let x30 = x5 * x3 * x8;
-        let x31 = x29 - x30;
-        let x32 = x17 * x31 - x0 * x16 * x8;
-        let x33 = x30 - x29;
-        let x34 = x6 * m2;
-        let x35 = x34 - 1.0;
-        let x36 = x17 * x17;
-        let x37 = x16 * x16;
-        let x38 = x36 + x37;
-        let x39 = x6 * m1;
-        let x40 = 1.0 - x39;
-        let x41 = x7 * x7;
-        let x42 = x12 * x12;
-        let x43 = x41 + x42;
-        let x44 = J1 - J2;
-        let x45 = x7 * x6 * d * m1;
-        let x46 = x6 * (m2 - m1);
-        let x47 = a_ * (x46 - 1.0) - x45;
-        let x48 = 1.0 - x34;
-        let x49 = m1 - m2;
-        let x50 = x6 * x49;
-        let x51 = x50 + 1.0;
-        let x52 = d * x48 + x17 * (x45 + a_ * x51);
-        let x53 = x6 * x22 - a_ - x21;
-        let x54 = x12
-            * (x7 * x44
-                + d * m1
-                    * (x6 * (m2 * (x16 * x16 * x47 - x17 * x52) - x6 * m0 * x22)
-                        + x40 * x53)) - Ixy;
-        let x55 = J2 - J1;
-        let x56 = x46 + 1.0;
-        let x57 = a_ * x56 + x17 * x6 * m2 * d;
-        let x58 = x40 * d + x7 * x57;
-        let x59 = x23 * x6 - a_ - x19;
-        let x60 = (x17 * x55
-            + m2 * d
-                * (x6 * (x23 * x6 * m0 + (x12 * x12 * x57 + x7 * x58) * m1) + x59 * x35))
-            * x16 - Ixz;
-        let x61 = x6 * m0;
-        let x62 = 2.0 - x34 - x39 - x61;
-        let x63 = x7 * x6 * m2 * d * d * x16 * x62 * m1;
-        let x64 = x17 * x6 * m2 * x12 * d * d * m1 * (x34 + x39 + x61 - 2.0);
-        let x65 = x12 * x16;
-        let x66 = x7 * x17;
-        let x67 = x66 - x65;
-        let x68 = x66 + x65;
-        let x69 = x6 * m2 * d * d * m1
-            * (2.0 * x65
-                + x6
-                    * (x67 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x68)) - Iyz;
-        let x70 = x6 * m2 * d * d
-            * ((0.5 - 0.5 * x34) * x68 + x12 * x16 * (1.0 - x39 - x61)
-                + x67 * (0.5 * x34 - 0.5)) * m1;
-        let x71 = m2 * d
-            * (x52 * x48
-                + ((x6 * m2 * d * x16 * x16 * x43 - x17 * x53) * m1
-                    + x6 * m0 * (m2 * d * x16 * x16 - x17 * x22)) * x6) + J2;
-        let x72 = d * m1
-            * (x6
-                * (m2 * (x6 * x38 * x12 * x12 * d * m1 - x7 * x59)
-                    + x6 * m0 * (x12 * x12 * d * m1 - x7 * x23)) + x40 * x58) + J2;
-        let x73 = x6
-            * ((1.0 - x34 - x61) * x12 * x16 + x67 * (0.5 * x39 - 0.5)
-                + (0.5 - 0.5 * x39) * x68) * m2 * d * d * m1;
-        let x74 = x6 * m2 * x12 * d * d * x16 * x62 * m1;
-        let x75 = x16 * u1;
-        let x76 = x17 * u3;
-        let x77 = -x75 - x76;
-        let x78 = x7 * u2;
-        let x79 = x12 * u1;
-        let x80 = x78 - x79;
-        let x81 = -u5 - u2;
-        let x82 = x17 * m2 * x81 + x80 * m1;
-        let x83 = u4 * x12 * m1;
-        let x84 = u5 * m2 * x16;
-        let x85 = m2 * x81 * x16;
-        let x86 = u4 + u3;
-        let x87 = x12 * m1 * x86;
-        let x88 = ((x83 - x84 + x85 + x87) * u3 + x17 * u5 * m2 * u1
-            + u4 * u4 * x12 * m1) * d - (a_ * x49 * u2 + x82 * d) * u1;
-        let x89 = ((m2 * x16 * u1 - x7 * u4 * m1) * d + x23 * u3) * u1
-            + (u5 * u5 * m2 * x16 - x7 * u4 * u1 * m1 + (x84 - x83 - x85 - x87) * u2)
-                * d;
-        let x90 = a_ * u4 * u3 * x12;
-        let x91 = x7 * x81 + x79;
-        let x92 = a_ * u3 * x12;
-        let x93 = (m2 * ((x16 * x91 + x17 * u3 * x12) * d + x92) - a_ * u3 * x12 * m1)
-            * x6 + x92;
-        let x94 = x12 * u2;
-        let x95 = x7 * u1;
-        let x96 = x94 + x95;
-        let x97 = (x79 - x78 + x6 * x82) * d + a_ * (x50 - 1.0) * u2;
-        let x98 = x7 * x16 * u2;
-        let x99 = x17 * u1;
-        let x100 = u4 - u3;
-        let x101 = u5 + u2;
-        let x102 = x93 * x86 - x90 - x96 * x97
-            + x6
-                * (a_ * u4 * u3 * x12 * m1
-                    + m2
-                        * (d
-                            * (u4 * (x98 + x12 * x77)
-                                + u5 * (x7 * (x99 + x100 * x16) + x101 * x17 * x12))
-                            - x90));
-        let x103 = x75 + x76;
-        let x104 = x7 * a_ * u4 * u3;
-        let x105 = (x6
-            * ((-u4 - u3) * m1 + m2 * ((x101 * x12 + x95) * x16 + x7 * x17 * u3)) + u4
-            + u3) * d + x7 * a_ * x56 * u3;
-        let x106 = x6
-            * (m2
-                * (d
-                    * ((x7 * x103 + x12 * x16 * u2) * u4
-                        + u5 * (x100 * x12 * x16 + x17 * x91)) + x104)
-                - x7 * a_ * u4 * u3 * m1) + x104 - x105 * x86 + x80 * x97;
-        let x107 = x96 * x105 - x80 * x93
-            + (x101 * x6 * u5 * m2 * x16 + u4 * (x7 * x40 * u1 + x12 * x40 * u2)) * d;
-        let x108 = x99 - u3 * x16;
-        let x109 = x16 * x86 - x99;
-        let x110 = d * (u5 + x6 * ((x7 * x17 * u2 + x109 * x12) * m1 + m2 * x81) + u2)
-            + x17 * a_ * u2 * x51;
-        let x111 = a_ * x16 * u2;
-        let x112 = x17 * x86 + x75;
-        let x113 = x6 * (m2 * a_ * x16 * u2 + (d * (x112 * x12 - x98) - x111) * m1)
-            - x111;
-        let x114 = d
-            * (u5 * (x17 * u1 * x35 + u3 * x16 * x48) + x6 * u4 * x12 * m1 * x86)
-            - x108 * x110 + x103 * x113;
-        let x115 = x59 * u3 + d * (x16 * u1 * x35 - x7 * x6 * u4 * m1);
-        let x116 = u5 * a_ * x16 * u2;
-        let x117 = x108 * x115 - x101 * x113 - x116
-            + x6
-                * (u5 * m2 * a_ * x16 * u2
-                    + ((u5 * (x103 * x12 - x98)
-                        + u4 * (x7 * x109 + x17 * x12 * (u5 - u2))) * d - x116) * m1);
-        let x118 = x17 * u5 * a_ * u2;
-        let x119 = x6
-            * ((d
-                * (u4 * (x12 * x16 * (u2 - u5) + x7 * x112)
-                    + u5 * (x17 * (x79 - x78) - u3 * x12 * x16)) - x118) * m1
-                + x17 * u5 * m2 * a_ * u2) - x115 * x103 - x118 + x101 * x110;
-        let x120 = u4 * J2 * (-x94 - x95) + x96 * x44 * x86;
-        let x121 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x122 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x123 = u5 * J2 + x101 * x55;
-        let x124 = x55 * x108 * x103;
-        let x125 = u2 * u2;
-        let x126 = u3 * u3;
-        let x127 = a_ * (m2 * (-x125 - x126) + (x125 + x126) * m1)
-            + d
-                * (m2 * (x17 * (u5 * (-u5 - 2.0 * u2) - x125 - x126) - u3 * x16 * u1)
-                    + (x7 * (x125 + u4 * (u4 + 2.0 * u3) + x126) - x12 * u1 * u2) * m1);
-        let x128 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x129 = x102 * x12 - x7 * x106;
-        let x130 = x80 * x96 * x44;
-        let x131 = x17 * x119 + x16 * x117;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma1);
+        let x8 = f64::cos(gamma1);
+        let x9 = f64::sin(psi);
+        let x10 = x5 * x6 * x2 - x3 * x9;
+        let x11 = x8 * x10 - x6 * x7 * x0;
+        let x12 = x11 * x11;
+        let x13 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
+        let x14 = x2 * x9 + x5 * x6 * x3;
+        let x15 = f64::sin(gamma2);
+        let x16 = f64::cos(gamma2);
+        let x17 = x6 * x0 * x15 + x16 * x14;
+        let x18 = x17 * x17;
+        let x19 = (x16 * x0 - x5 * x15 * x3) * x6 - x15 * x2 * x9;
+        let x20 = m2 + m0 + m1;
+        let x21 = x7 * x0 * x2 - x8 * x5;
+        let x22 = x8 * x0 * x2 + x5 * x7;
+        let x23 = x16 * x0 * x3 - x5 * x15;
+        let x24 = -x0 * x15 * x3 - x16 * x5;
+        let x25 = (x13 * x21 + x11 * x22 + x0 * x14 * x3) * m1
+            + m2 * (x23 * x17 + x10 * x0 * x2 + x19 * x24);
+        let x26 = (m0 + (x12 + x13 * x13 + x14 * x14) * m1
+            + m2 * (x18 + x19 * x19 + x10 * x10)) * x20 - x25 * x25;
+        let x27 = 1.0 / x26;
+        let x28 = x16 * d;
+        let x29 = -a_ - x28;
+        let x30 = x8 * a_;
+        let x31 = x30 + d;
+        let x32 = m2 * x10 * x29 + (x11 * x31 + a_ * x13 * x7) * m1;
+        let x33 = x16 * a_;
+        let x34 = d + x33;
+        let x35 = x8 * d;
+        let x36 = -a_ - x35;
+        let x37 = m2 * (x17 * x34 - a_ * x19 * x15) + x36 * x14 * m1;
+        let x38 = x7 * x14 * m1 - m2 * x10 * x15;
+        let x39 = x7 * m1 * x3 - m2 * x15 * x2;
+        let x40 = m2 * (x23 * x34 - a_ * x24 * x15) + x36 * x0 * m1 * x3;
+        let x41 = (x22 * x31 + a_ * x21 * x7) * m1 + m2 * x0 * x2 * x29;
+        let x42 = (-u4 * x22 * m1 - x39 * x0 * u1 - u5 * m2 * x23) * d - x40 * u2
+            - u3 * x41 + G_Z;
+        let x43 = x20
+            * (G_X - u3 * x32 - x37 * u2
+                + d * (-x11 * u4 * m1 - u1 * x38 - u5 * m2 * x17)) - x25 * x42;
+        let x44 = x6 * x3 + x5 * x2 * x9;
+        let x45 = x8 * x44 - x7 * x0 * x9;
+        let x46 = x45 * x45;
+        let x47 = x8 * x0 * x9 + x7 * x44;
+        let x48 = x6 * x2;
+        let x49 = x5 * x3 * x9;
+        let x50 = x49 - x48;
+        let x51 = x0 * x15 * x9 + x16 * x50;
+        let x52 = x51 * x51;
+        let x53 = x16 * x0 * x9 + (x48 - x49) * x15;
+        let x54 = m2 * (x23 * x51 + x24 * x53 + x0 * x2 * x44)
+            + (x0 * x50 * x3 + x21 * x47 + x45 * x22) * m1;
+        let x55 = x20
+            * (m1 * (x11 * x45 + x14 * x50 + x13 * x47)
+                + m2 * (x19 * x53 + x10 * x44 + x51 * x17)) - x25 * x54;
+        let x56 = x26
+            * (((x46 + x47 * x47 + x50 * x50) * m1 + m0
+                + (x44 * x44 + x52 + x53 * x53) * m2) * x20 - x54 * x54) - x55 * x55;
+        let x57 = x36 * x50 * m1 + m2 * (x51 * x34 - a_ * x15 * x53);
+        let x58 = x7 * x50 * m1 - m2 * x15 * x44;
+        let x59 = (x45 * x31 + a_ * x7 * x47) * m1 + m2 * x29 * x44;
+        let x60 = ((G_Y - x57 * u2 + (-u4 * x45 * m1 - u5 * m2 * x51 - x58 * u1) * d
+            - x59 * u3) * x20 - x42 * x54) * x26 - x43 * x55;
+        let x61 = 1.0 / x56;
+        let x62 = 1.0 / x20;
+        let x63 = x8 * x8;
+        let x64 = x16 * x16;
+        let x65 = J1 - J2;
+        let x66 = x8 * x65 * x7 - Ixy
+            + d * ((-x37 * x38 - x58 * x57 - x40 * x39 * x0) * x62 + x36 * x7 * m1);
+        let x67 = J2 - J1;
+        let x68 = (x62 * (-x59 * x58 - x32 * x38 - x39 * x0 * x41) - m2 * x15 * x29) * d
+            + x16 * x67 * x15 - Ixz;
+        let x69 = x62 * d * d * (-x39 * x22 * x0 - x11 * x38 - x58 * x45) * m1;
+        let x70 = x62 * m2 * d * d * (-x17 * x38 - x58 * x51 - x23 * x39 * x0);
+        let x71 = d * d;
+        let x72 = (-x37 * x32 - x59 * x57 - x40 * x41) * x62 - Iyz;
+        let x73 = x62 * d * m1 * (-x37 * x11 - x40 * x22 - x45 * x57);
+        let x74 = m2 * (x62 * (-x23 * x40 - x37 * x17 - x57 * x51) + d + x33) * d + J2;
+        let x75 = J2 + d * m1 * (x30 + d + (-x11 * x32 - x22 * x41 - x59 * x45) * x62);
+        let x76 = x62 * m2 * d * (-x17 * x32 - x23 * x41 - x59 * x51);
+        let x77 = x62 * m2 * d * d * m1 * (-x11 * x17 - x23 * x22 - x45 * x51);
+        let x78 = x15 * u1;
+        let x79 = x16 * u3;
+        let x80 = -x78 - x79;
+        let x81 = x8 * u2;
+        let x82 = x7 * u1;
+        let x83 = x81 - x82;
+        let x84 = x7 * u2;
+        let x85 = x8 * u1;
+        let x86 = x84 + x85;
+        let x87 = u4 + u3;
+        let x88 = u4 * J2 * (-x84 - x85) + x86 * x65 * x87;
+        let x89 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x90 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x91 = d * (x16 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x15)
+            - a_ * u1 * u2;
+        let x92 = 2.0 * u4 + u3;
+        let x93 = d * (x8 * x92 * u1 + x92 * x7 * u2) + a_ * u3 * u1;
+        let x94 = d * (x82 - x81) - a_ * u2;
+        let x95 = x86 * x94;
+        let x96 = a_ * u3 * u3 * x7;
+        let x97 = x96 - x95;
+        let x98 = x83 * x94 - (u3 * x31 + u4 * d) * x87 + x8 * a_ * u4 * u3;
+        let x99 = x16 * u1 - u3 * x15;
+        let x100 = u3 * x29 - d * x15 * u1;
+        let x101 = x99 * x100;
+        let x102 = a_ * x15 * u2 * u2;
+        let x103 = x101 + x102;
+        let x104 = x78 + x79;
+        let x105 = u5 + u2;
+        let x106 = x105 * (x16 * a_ * u2 + x105 * d) - x104 * x100 - x16 * u5 * a_ * u2;
+        let x107 = -(x22 * x97 + x21 * x98 + x0 * x3 * x93) * m1
+            - m2 * (x0 * x2 * x91 + x103 * x23 + x24 * x106);
+        let x108 = -m2 * (x10 * x91 + x103 * x17 + x19 * x106)
+            - (x11 * x97 + x14 * x93 + x13 * x98) * m1;
+        let x109 = -m2 * (x53 * x106 + x103 * x51 + x44 * x91)
+            - (x45 * x97 + x50 * x93 + x98 * x47) * m1;
+        let x110 = u5 * J2 + x105 * x67;
+        let x111 = x67 * x99 * x104;
+        let x112 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x113 = u1 * u1;
+        let x114 = 2.0 * gamma2;
+        let x115 = f64::sin(x114);
+        let x116 = x83 * x86 * x65;
+        let x117 = 2.0 * gamma1;
+        let x118 = f64::sin(x117);
         Assembly {
             qdot: [
                 x1 * x4,
@@ -2746,111 +2600,92 @@ pub mod reduced_volterra {
                 x5 * x1 * x4 + u1,
                 u4,
                 u5,
-                x6
-                    * (G_X
-                        + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
-                            + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
-                            + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                        + ((x7 * d * x18 + a_ * x18) * m1
-                            + m2
-                                * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
-                            * u2
-                        + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1))
-                            * u3),
-                ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32)
-                    * d
-                    + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
-                    + G_Y
-                    + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
-                    * x6,
-                x6
-                    * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
-                        + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
-                        + d
-                            * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
-                                + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
-                                + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
+                x27 * (x43 * x56 - x55 * x60) * x61,
+                x61 * x60,
+                x27 * x62 * x61
+                    * ((x26 * x42 - x43 * x25) * x56 - x60 * (x26 * x54 - x55 * x25)),
             ],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2
-                                * (x16 * x16 * x35 * x35
-                                    + x6 * x6 * x38 * x12 * x12 * m1 * m1)
-                                + x6 * x6 * m0 * (m2 * m2 * x16 * x16 + x12 * x12 * m1 * m1)
-                                + (x12 * x12 * x40 * x40
-                                    + x6 * x6 * m2 * m2 * x16 * x16 * x43) * m1)
-                        + (x41 + x36) * J1 + (x37 + x42) * J2,
-                    x54,
-                    x60,
-                    x63,
-                    x64,
-                ],
-                [
-                    x54,
-                    x12 * x12 * J1 + Iyy + J2 * (x41 + 1.0)
-                        + x6 * x6 * m0 * (m2 * m2 * d * d * x16 * x16 + x22 * x22)
-                        + (x53 * x53 + x6 * x6 * m2 * m2 * d * d * x16 * x16 * x43) * m1
-                        + m2 * (x16 * x16 * x47 * x47 + x52 * x52),
+                            * (m2 * x15 * x15
+                                + x62 * (-x58 * x58 - x39 * x39 * x0 * x0 - x38 * x38)
+                                + x7 * x7 * m1) + (x63 + x64) * J1
+                        + (x15 * x15 + x7 * x7) * J2,
+                    x66,
+                    x68,
                     x69,
                     x70,
-                    x71,
                 ],
                 [
-                    x60,
-                    x69,
-                    x16 * x16 * J1
-                        + m2 * (x6 * x6 * x38 * x12 * x12 * d * d * m1 * m1 + x59 * x59)
-                        + Izz + x6 * x6 * m0 * (x23 * x23 + x12 * x12 * d * d * m1 * m1)
-                        + J2 * (x36 + 1.0) + m1 * (x58 * x58 + x12 * x12 * x57 * x57),
+                    x66,
+                    x7 * x7 * J1 + x36 * x36 * m1 + Iyy + J2 * (x63 + 1.0)
+                        + x62 * (-x37 * x37 - x57 * x57 - x40 * x40)
+                        + m2 * (x71 + a_ * (a_ + 2.0 * x28)),
                     x72,
                     x73,
-                ],
-                [
-                    x63,
-                    x70,
-                    x72,
-                    J2 + (x6 * x6 * (m2 + m0) * m1 + x40 * x40) * d * d * m1,
                     x74,
                 ],
                 [
-                    x64,
-                    x71,
+                    x68,
+                    x72,
+                    x62 * (-x59 * x59 - x32 * x32 - x41 * x41) + x15 * x15 * J1
+                        + (a_ * (a_ + 2.0 * x35) + x71) * m1 + m2 * x29 * x29 + Izz
+                        + J2 * (x64 + 1.0),
+                    x75,
+                    x76,
+                ],
+                [
+                    x69,
                     x73,
+                    x75,
+                    d * d * (x62 * (-x12 - x46 - x22 * x22) * m1 + 1.0) * m1 + J2,
+                    x77,
+                ],
+                [
+                    x70,
                     x74,
-                    J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x48 * x48),
+                    x76,
+                    x77,
+                    J2 + m2 * (x62 * m2 * (-x18 - x23 * x23 - x52) + 1.0) * d * d,
                 ],
             ],
             force: [
-                (-x17 * u5 * x77 - x7 * x80 * u4) * J1
-                    + d
-                        * (-x6 * x6 * m0 * (m2 * x88 * x16 - x12 * x89 * m1)
-                            - (x6 * m2 * x16 * (x7 * x102 + x12 * x106)
-                                + x12 * x40 * x107) * m1
-                            - m2
-                                * (x114 * x16 * x35
-                                    + x6 * (x16 * x119 - x17 * x117) * x12 * m1)) + x12 * x120
-                    - x121 * u2 + u3 * x122 - x123 * x108 * x16,
-                x124 + x121 * u1 - x6 * x6 * m0 * (x22 * x89 - m2 * d * x16 * x127)
-                    - m2 * (x52 * x117 + x16 * x119 * x47) - x80 * u4 * x12 * J1
-                    - u3 * x128 - (x6 * m2 * x129 * d * x16 + x107 * x53) * m1
-                    - x7 * x120,
-                u5 * x77 * x16 * J1 - x6 * x6 * m0 * (x23 * x88 + x12 * d * m1 * x127)
-                    - u1 * x122 + x130 - (x102 * x58 + x12 * x57 * x106) * m1
-                    - x123 * x17 * x108 + x128 * u2
-                    - m2 * (x114 * x59 + x6 * x12 * d * m1 * x131),
-                x130
-                    + (x6
-                        * (-x6 * m0 * (x12 * x127 - x7 * x88)
-                            - m2 * (x12 * x131 - x7 * x114)) - x102 * x40) * d * m1,
-                x124
+                (-x16 * u5 * x80 - x8 * x83 * u4) * J1 + x7 * x88 - x89 * u2 + u3 * x90
+                    + (m2 * x15 * x91 - x7 * m1 * x93
+                        + (-x39 * x0 * x107 - x108 * x38 - x109 * x58) * x62) * d
+                    - x110 * x99 * x15,
+                x111 + x89 * u1 - x83 * u4 * x7 * J1 - u3 * x112 - x36 * m1 * x93
+                    - x8 * x88
+                    - m2
+                        * (d
+                            * (a_
+                                * (x15 * (u3 * u3 - x113 + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (x16 * u3 * u1))
+                                + d
+                                    * ((0.5 * (u3 * x115) - f64::cos(x114) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x115))) - a_ * a_ * u3 * u1)
+                    + x62 * (-x109 * x57 - x40 * x107 - x37 * x108),
+                u5 * x80 * x15 * J1 - m2 * x29 * x91 - u1 * x90
+                    + x62 * (-x109 * x59 - x41 * x107 - x108 * x32) + x116
+                    - x110 * x16 * x99 + x112 * u2
+                    - (a_ * a_ * u1 * u2
+                        + d
+                            * (a_
+                                * (2.0 * (x8 * u1 * u2)
+                                    + (u2 * u2 - x113 + u4 * (-u4 - 2.0 * u3)) * x7)
+                                + (0.5 * (x118 * u2 * u2)
+                                    + (f64::cos(x117) * u2 - 0.5 * (u1 * x118)) * u1) * d))
+                        * m1,
+                x116
+                    + d * (x62 * (-x22 * x107 - x11 * x108 - x109 * x45) + x95 - x96)
+                        * m1,
+                x111
                     + m2 * d
-                        * (x6
-                            * (-m1 * (x129 * x16 - x17 * x107)
-                                - x6 * m0 * (-x17 * x89 - x16 * x127)) - x117 * x48),
+                        * (x62 * (-x23 * x107 - x108 * x17 - x109 * x51) - x101 - x102),
             ],
-            checks: [x0],
+            checks: [x0, x26, x56],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -2947,30 +2782,41 @@ pub mod reduced_volterra {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x9 = x5 * x6 * x2 - x4 * x8;
+        let x10 = x6 * x2 * x4 + x5 * x8;
+        let x11 = d + x5 * a_;
+        let x12 = x10 * x11 - a_ * x4 * x9;
+        let x13 = x0 * x6 * x3 - x1 * x7;
+        let x14 = a_ + x5 * d;
+        let x15 = f64::sin(gamma1);
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x13 - x6 * x15 * x2;
+        let x18 = x16 * a_;
+        let x19 = -x18 - d;
+        let x20 = x13 * x15 + x16 * x6 * x2;
+        let x21 = a_ * x15 * x20;
+        let x22 = -a_ - x16 * d;
+        let x23 = x6 * x1 + x0 * x3 * x7;
+        let x24 = x16 * x23 - x15 * x2 * x7;
+        let x25 = x16 * x2 * x7 + x15 * x23;
+        let x26 = x0 * x1 * x7 - x6 * x3;
+        let x27 = x2 * x4 * x7 + x5 * x26;
+        let x28 = x5 * x2 * x7 - x4 * x26;
+        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+        let x30 = x18 + d;
+        let x31 = x16 * x2 * x3 + x0 * x15;
+        let x32 = -x31 * d - a_ * x2 * x3;
+        let x33 = x5 * x2 * x1 - x0 * x4;
+        let x34 = -a_ * x2 * x1 - x33 * d;
+        let x35 = x15 * x2 * x3 - x16 * x0;
+        let x36 = -x2 * x4 * x1 - x5 * x0;
+        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
+            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
+        let x38 = x27 * x11 - a_ * x28 * x4;
+        let x39 = a_ * x15 * x25;
+        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
+            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3000,30 +2846,33 @@ pub mod reduced_volterra {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
+                * (m2 * (x12 * x1 + x13 * x14 * x3)
+                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
+                + X_dot
+                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
+                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x10) + Z_dot * x37,
             theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (x38 * x1 + x14 * x3 * x23)
+                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
+                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
+                    + x24 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
+                        + m2 * (x2 * x3 * x38 + x23 * x34))
+                + Y_dot
+                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
+                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+                + X_dot * x37,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3064,39 +2913,85 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma1);
-        let x8 = f64::sin(psi);
-        let x9 = x3 * x8;
-        let x10 = f64::cos(psi);
-        let x11 = x5 * x10 * x2;
-        let x12 = f64::sin(gamma1);
-        let x13 = x2 * x8;
-        let x14 = x5 * x10 * x3;
-        let x15 = -x13 - x14;
-        let x16 = f64::sin(gamma2);
-        let x17 = f64::cos(gamma2);
-        let x18 = x13 + x14;
-        let x19 = x17 * d;
-        let x20 = -a_ - x19;
-        let x21 = x7 * d;
-        let x22 = (a_ + x21) * m1 + m2 * x20;
-        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
-        let x24 = x10 * x3;
-        let x25 = x5 * x2 * x8;
-        let x26 = -x24 - x25;
-        let x27 = x7 * x26 + x12 * x0 * x8;
-        let x28 = x24 + x25;
-        let x29 = x10 * x2;
-        let x30 = x5 * x3 * x8;
-        let x31 = x29 - x30;
-        let x32 = x17 * x31 - x0 * x16 * x8;
-        let x33 = x30 - x29;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma1);
+        let x8 = f64::cos(gamma1);
+        let x9 = f64::sin(psi);
+        let x10 = x5 * x6 * x2 - x3 * x9;
+        let x11 = x8 * x10 - x6 * x7 * x0;
+        let x12 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
+        let x13 = x2 * x9 + x5 * x6 * x3;
+        let x14 = f64::sin(gamma2);
+        let x15 = f64::cos(gamma2);
+        let x16 = x6 * x0 * x14 + x15 * x13;
+        let x17 = (x15 * x0 - x5 * x14 * x3) * x6 - x14 * x2 * x9;
+        let x18 = m2 + m0 + m1;
+        let x19 = x7 * x0 * x2 - x8 * x5;
+        let x20 = x8 * x0 * x2 + x5 * x7;
+        let x21 = x15 * x0 * x3 - x5 * x14;
+        let x22 = -x0 * x14 * x3 - x15 * x5;
+        let x23 = (x12 * x19 + x11 * x20 + x0 * x13 * x3) * m1
+            + m2 * (x21 * x16 + x10 * x0 * x2 + x17 * x22);
+        let x24 = (m0 + (x11 * x11 + x12 * x12 + x13 * x13) * m1
+            + m2 * (x16 * x16 + x17 * x17 + x10 * x10)) * x18 - x23 * x23;
+        let x25 = 1.0 / x24;
+        let x26 = -a_ - x15 * d;
+        let x27 = x8 * a_ + d;
+        let x28 = d + x15 * a_;
+        let x29 = -a_ - x8 * d;
+        let x30 = (-u4 * x20 * m1 - (x7 * m1 * x3 - m2 * x14 * x2) * x0 * u1
+            - u5 * m2 * x21) * d
+            - (m2 * (x21 * x28 - a_ * x22 * x14) + x29 * x0 * m1 * x3) * u2
+            - u3 * ((x20 * x27 + a_ * x19 * x7) * m1 + m2 * x0 * x2 * x26) + G_Z;
+        let x31 = x18
+            * (G_X - u3 * (m2 * x10 * x26 + (x11 * x27 + a_ * x12 * x7) * m1)
+                - (m2 * (x16 * x28 - a_ * x17 * x14) + x29 * x13 * m1) * u2
+                + d
+                    * (-x11 * u4 * m1 - u1 * (x7 * x13 * m1 - m2 * x10 * x14)
+                        - u5 * m2 * x16)) - x23 * x30;
+        let x32 = x6 * x3 + x5 * x2 * x9;
+        let x33 = x8 * x32 - x7 * x0 * x9;
+        let x34 = x8 * x0 * x9 + x7 * x32;
+        let x35 = x6 * x2;
+        let x36 = x5 * x3 * x9;
+        let x37 = x36 - x35;
+        let x38 = x0 * x14 * x9 + x15 * x37;
+        let x39 = x15 * x0 * x9 + (x35 - x36) * x14;
+        let x40 = m2 * (x21 * x38 + x22 * x39 + x0 * x2 * x32)
+            + (x0 * x37 * x3 + x19 * x34 + x33 * x20) * m1;
+        let x41 = x18
+            * (m1 * (x11 * x33 + x13 * x37 + x12 * x34)
+                + m2 * (x17 * x39 + x10 * x32 + x38 * x16)) - x23 * x40;
+        let x42 = x24
+            * (((x33 * x33 + x34 * x34 + x37 * x37) * m1 + m0
+                + (x32 * x32 + x38 * x38 + x39 * x39) * m2) * x18 - x40 * x40)
+            - x41 * x41;
+        let x43 = ((G_Y - (x29 * x37 * m1 + m2 * (x38 * x28 - a_ * x14 * x39)) * u2
+            + (-u4 * x33 * m1 - u5 * m2 * x38 - (x7 * x37 * m1 - m2 * x14 * x32) * u1)
+                * d - ((x33 * x27 + a_ * x7 * x34) * m1 + m2 * x26 * x32) * u3) * x18
+            - x30 * x40) * x24 - x31 * x41;
+        let x44 = 1.0 / x42;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
                 condition: CONDITIONS[0],
+                value,
+            });
+        }
+        let value = x24;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[1],
+                value,
+            });
+        }
+        let value = x42;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -3116,27 +3011,10 @@ pub mod reduced_volterra {
             x5 * x1 * x4 + u1,
             u4,
             u5,
-            x6
-                * (G_X
-                    + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
-                        + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
-                        + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a_ * x18) * m1
-                        + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
-                        * u2
-                    + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
-            ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
-                + G_Y
-                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
-                * x6,
-            x6
-                * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
-                    + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
-                    + d
-                        * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
-                            + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
-                            + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
+            x25 * (x31 * x42 - x41 * x43) * x44,
+            x44 * x43,
+            x25 * x44 * ((x24 * x30 - x31 * x23) * x42 - x43 * (x24 * x40 - x41 * x23))
+                / x18,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -3150,10 +3028,65 @@ pub mod reduced_volterra {
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        _params: &Params,
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
+        let psi = state[0];
         let theta = state[1];
-        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let x0 = f64::cos(theta);
+        let x1 = f64::cos(psi);
+        let x2 = f64::sin(gamma1);
+        let x3 = f64::cos(gamma1);
+        let x4 = f64::cos(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::sin(phi);
+        let x8 = x6 * x1 * x7 - x4 * x5;
+        let x9 = x3 * x8 - x1 * x2 * x0;
+        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
+        let x11 = x7 * x5 + x6 * x1 * x4;
+        let x12 = f64::sin(gamma2);
+        let x13 = f64::cos(gamma2);
+        let x14 = x1 * x0 * x12 + x13 * x11;
+        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
+        let x16 = m2 + m0 + m1;
+        let x17 = x2 * x0 * x7 - x3 * x6;
+        let x18 = x3 * x0 * x7 + x6 * x2;
+        let x19 = x13 * x0 * x4 - x6 * x12;
+        let x20 = -x0 * x12 * x4 - x13 * x6;
+        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
+            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
+        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
+            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
+        let x23 = x1 * x4 + x6 * x7 * x5;
+        let x24 = x3 * x23 - x2 * x0 * x5;
+        let x25 = x3 * x0 * x5 + x2 * x23;
+        let x26 = x1 * x7;
+        let x27 = x6 * x4 * x5;
+        let x28 = x27 - x26;
+        let x29 = x0 * x12 * x5 + x13 * x28;
+        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
+        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
+            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
+        let x32 = x16
+            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
+                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
+        f64::INFINITY
+            .min(f64::abs(x0))
+            .min(f64::abs(x22))
+            .min(
+                f64::abs(
+                    x22
+                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
+                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
+                            - x31 * x31) - x32 * x32,
+                ),
+            )
     }
 }

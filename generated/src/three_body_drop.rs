@@ -357,56 +357,70 @@ pub fn momenta(
     let x6 = f64::sin(theta);
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
+    let x9 = x1 * x2 * x3 - x0 * x8;
+    let x10 = x2 * x3 * x0 + x1 * x8;
+    let x11 = d + x1 * a_;
+    let x12 = x10 * x11 - a_ * x0 * x9;
+    let x13 = x6 * x2 * x4 - x7 * x5;
+    let x14 = a_ + x1 * d;
+    let x15 = f64::sin(gamma1);
+    let x16 = f64::cos(gamma1);
+    let x17 = x16 * x13 - x2 * x15 * x3;
+    let x18 = x16 * a_;
+    let x19 = -x18 - d;
+    let x20 = x13 * x15 + x16 * x2 * x3;
+    let x21 = a_ * x15 * x20;
+    let x22 = -a_ - x16 * d;
+    let x23 = x2 * x7 + x6 * x4 * x5;
+    let x24 = x16 * x23 - x15 * x3 * x5;
+    let x25 = x16 * x3 * x5 + x15 * x23;
+    let x26 = x6 * x7 * x5 - x2 * x4;
+    let x27 = x3 * x0 * x5 + x1 * x26;
+    let x28 = x1 * x3 * x5 - x0 * x26;
+    let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+        + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+    let x30 = x18 + d;
+    let x31 = x16 * x3 * x4 + x6 * x15;
+    let x32 = -x31 * d - a_ * x3 * x4;
+    let x33 = x1 * x3 * x7 - x6 * x0;
+    let x34 = -a_ * x3 * x7 - x33 * d;
+    let x35 = x15 * x3 * x4 - x16 * x6;
+    let x36 = -x3 * x0 * x7 - x1 * x6;
+    let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
+        + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
+    let x38 = x27 * x11 - a_ * x28 * x0;
+    let x39 = a_ * x15 * x25;
+    let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
+        + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
     [
         theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+            * (m2 * (x12 * x7 + x13 * x14 * x4)
+                + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
+            + X_dot
+                * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                    + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+            + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
+                + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
             + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
+                * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x10) + Z_dot * x37,
         theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
+            * (m2 * (x38 * x7 + x14 * x4 * x23)
+                + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
+            + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
+                + x24 * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+                * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
+                    + m2 * (x3 * x4 * x38 + x23 * x34))
+            + Y_dot
+                * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                    + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
         theta_dot
-            * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+            * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
+                + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+            + X_dot * x37,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -455,13 +469,17 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    const CONDITIONS: [&str; 3] = [
+        "cos(theta) = 0",
+        "pivot factor 2 of the velocity transformation vanishes",
+        "pivot factor 3 of the velocity transformation vanishes",
+    ];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 5],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 1],
+        checks: [f64; 3],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -471,6 +489,7 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> Assembly {
+        let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -498,243 +517,211 @@ pub mod reduced_volterra {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
-        let x5 = f64::sin(gamma2);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = x6 * m2;
-        let x8 = x7 - 1.0;
-        let x9 = f64::cos(gamma2);
-        let x10 = x9 * x9;
-        let x11 = x5 * x5;
-        let x12 = x10 + x11;
-        let x13 = f64::sin(gamma1);
-        let x14 = x6 * m1;
-        let x15 = 1.0 - x14;
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x16;
-        let x18 = x13 * x13;
-        let x19 = x17 + x18;
-        let x20 = J1 - J2;
-        let x21 = x16 * d;
-        let x22 = x9 * d;
-        let x23 = (a_ + x21) * m1 + m2 * (-a_ - x22);
-        let x24 = x16 * x6 * d * m1;
-        let x25 = x6 * (m2 - m1);
-        let x26 = a_ * (x25 - 1.0) - x24;
-        let x27 = 1.0 - x7;
-        let x28 = m1 - m2;
-        let x29 = x6 * x28;
-        let x30 = x29 + 1.0;
-        let x31 = d * x27 + x9 * (x24 + a_ * x30);
-        let x32 = x6 * x23 - a_ - x21;
-        let x33 = x13
-            * (x16 * x20
-                + d * m1
-                    * (x6 * (m2 * (x5 * x5 * x26 - x9 * x31) - x6 * m0 * x23)
-                        + x15 * x32)) - Ixy;
-        let x34 = J2 - J1;
-        let x35 = (-a_ - x21) * m1 + m2 * (a_ + x22);
-        let x36 = x25 + 1.0;
-        let x37 = a_ * x36 + x9 * x6 * m2 * d;
-        let x38 = x15 * d + x16 * x37;
-        let x39 = x35 * x6 - a_ - x22;
-        let x40 = (x9 * x34
-            + m2 * d
-                * (x6 * (x35 * x6 * m0 + (x13 * x13 * x37 + x16 * x38) * m1) + x39 * x8))
-            * x5 - Ixz;
-        let x41 = x6 * m0;
-        let x42 = 2.0 - x7 - x14 - x41;
-        let x43 = x16 * x6 * m2 * d * d * x5 * x42 * m1;
-        let x44 = x9 * x6 * m2 * x13 * d * d * m1 * (x7 + x14 + x41 - 2.0);
-        let x45 = x13 * x5;
-        let x46 = x16 * x9;
-        let x47 = x46 - x45;
-        let x48 = x46 + x45;
-        let x49 = x6 * m2 * d * d * m1
-            * (2.0 * x45
-                + x6
-                    * (x47 * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * x48)) - Iyz;
-        let x50 = x6 * m2 * d * d
-            * ((0.5 - 0.5 * x7) * x48 + x13 * x5 * (1.0 - x14 - x41)
-                + x47 * (0.5 * x7 - 0.5)) * m1;
-        let x51 = m2 * d
-            * (x31 * x27
-                + ((x6 * m2 * d * x5 * x5 * x19 - x9 * x32) * m1
-                    + x6 * m0 * (m2 * d * x5 * x5 - x9 * x23)) * x6) + J2;
-        let x52 = d * m1
-            * (x6
-                * (m2 * (x6 * x12 * x13 * x13 * d * m1 - x16 * x39)
-                    + x6 * m0 * (x13 * x13 * d * m1 - x16 * x35)) + x15 * x38) + J2;
-        let x53 = x6
-            * ((1.0 - x7 - x41) * x13 * x5 + x47 * (0.5 * x14 - 0.5)
-                + (0.5 - 0.5 * x14) * x48) * m2 * d * d * m1;
-        let x54 = x6 * m2 * x13 * d * d * x5 * x42 * m1;
-        let x55 = x5 * u1;
-        let x56 = x9 * u3;
-        let x57 = -x55 - x56;
-        let x58 = x16 * u2;
-        let x59 = x13 * u1;
-        let x60 = x58 - x59;
-        let x61 = -u5 - u2;
-        let x62 = x9 * m2 * x61 + x60 * m1;
-        let x63 = u4 * x13 * m1;
-        let x64 = u5 * m2 * x5;
-        let x65 = m2 * x61 * x5;
-        let x66 = u4 + u3;
-        let x67 = x13 * m1 * x66;
-        let x68 = ((x63 - x64 + x65 + x67) * u3 + x9 * u5 * m2 * u1 + u4 * u4 * x13 * m1)
-            * d - (a_ * x28 * u2 + x62 * d) * u1;
-        let x69 = ((m2 * x5 * u1 - x16 * u4 * m1) * d + x35 * u3) * u1
-            + (u5 * u5 * m2 * x5 - x16 * u4 * u1 * m1 + (x64 - x63 - x65 - x67) * u2)
-                * d;
-        let x70 = a_ * u4 * u3 * x13;
-        let x71 = x16 * x61 + x59;
-        let x72 = a_ * u3 * x13;
-        let x73 = (m2 * ((x5 * x71 + x9 * u3 * x13) * d + x72) - a_ * u3 * x13 * m1) * x6
-            + x72;
-        let x74 = x13 * u2;
-        let x75 = x16 * u1;
+        let x5 = f64::sin(theta);
+        let x6 = f64::sin(gamma2);
+        let x7 = m2 + m0 + m1;
+        let x8 = 1.0 / x7;
+        let x9 = f64::cos(psi);
+        let x10 = f64::sin(psi);
+        let x11 = x9 * x3 + x5 * x2 * x10;
+        let x12 = f64::sin(gamma1);
+        let x13 = x9 * x2;
+        let x14 = x5 * x3 * x10;
+        let x15 = x14 - x13;
+        let x16 = x12 * x15 * m1 - m2 * x6 * x11;
+        let x17 = x12 * m1 * x3 - m2 * x6 * x2;
+        let x18 = x2 * x10 + x5 * x9 * x3;
+        let x19 = x5 * x9 * x2 - x3 * x10;
+        let x20 = x12 * x18 * m1 - m2 * x19 * x6;
+        let x21 = f64::cos(gamma1);
+        let x22 = x21 * x21;
+        let x23 = f64::cos(gamma2);
+        let x24 = x23 * x23;
+        let x25 = J1 - J2;
+        let x26 = (x23 * x0 - x5 * x6 * x3) * x9 - x6 * x2 * x10;
+        let x27 = x9 * x0 * x6 + x23 * x18;
+        let x28 = x23 * a_;
+        let x29 = d + x28;
+        let x30 = x21 * d;
+        let x31 = -a_ - x30;
+        let x32 = m2 * (x27 * x29 - a_ * x26 * x6) + x31 * x18 * m1;
+        let x33 = x23 * x0 * x10 + (x13 - x14) * x6;
+        let x34 = x0 * x6 * x10 + x23 * x15;
+        let x35 = x31 * x15 * m1 + m2 * (x34 * x29 - a_ * x6 * x33);
+        let x36 = -x0 * x6 * x3 - x23 * x5;
+        let x37 = x23 * x0 * x3 - x5 * x6;
+        let x38 = m2 * (x37 * x29 - a_ * x36 * x6) + x31 * x0 * m1 * x3;
+        let x39 = x21 * x25 * x12 - Ixy
+            + d * ((-x32 * x20 - x16 * x35 - x38 * x17 * x0) * x8 + x31 * x12 * m1);
+        let x40 = x23 * d;
+        let x41 = -a_ - x40;
+        let x42 = x21 * x11 - x12 * x0 * x10;
+        let x43 = x21 * a_;
+        let x44 = x43 + d;
+        let x45 = x21 * x0 * x10 + x12 * x11;
+        let x46 = (x42 * x44 + a_ * x12 * x45) * m1 + m2 * x41 * x11;
+        let x47 = x21 * x19 - x9 * x12 * x0;
+        let x48 = x9 * (x5 * x12 * x2 + x21 * x0) - x12 * x3 * x10;
+        let x49 = m2 * x19 * x41 + (x47 * x44 + a_ * x48 * x12) * m1;
+        let x50 = x21 * x0 * x2 + x5 * x12;
+        let x51 = x12 * x0 * x2 - x21 * x5;
+        let x52 = (x50 * x44 + a_ * x51 * x12) * m1 + m2 * x0 * x2 * x41;
+        let x53 = J2 - J1;
+        let x54 = (x8 * (-x46 * x16 - x49 * x20 - x17 * x0 * x52) - m2 * x6 * x41) * d
+            + x23 * x53 * x6 - Ixz;
+        let x55 = x8 * d * d * (-x17 * x50 * x0 - x47 * x20 - x16 * x42) * m1;
+        let x56 = x8 * m2 * d * d * (-x27 * x20 - x16 * x34 - x37 * x17 * x0);
+        let x57 = d * d;
+        let x58 = (-x32 * x49 - x46 * x35 - x38 * x52) * x8 - Iyz;
+        let x59 = x8 * d * m1 * (-x32 * x47 - x38 * x50 - x42 * x35);
+        let x60 = m2 * (x8 * (-x37 * x38 - x32 * x27 - x35 * x34) + d + x28) * d + J2;
+        let x61 = J2 + d * m1 * (x43 + d + (-x47 * x49 - x50 * x52 - x46 * x42) * x8);
+        let x62 = x8 * m2 * d * (-x27 * x49 - x37 * x52 - x46 * x34);
+        let x63 = x47 * x47;
+        let x64 = x42 * x42;
+        let x65 = x8 * m2 * d * d * m1 * (-x47 * x27 - x37 * x50 - x42 * x34);
+        let x66 = x27 * x27;
+        let x67 = x34 * x34;
+        let x68 = x6 * u1;
+        let x69 = x23 * u3;
+        let x70 = -x68 - x69;
+        let x71 = x21 * u2;
+        let x72 = x12 * u1;
+        let x73 = x71 - x72;
+        let x74 = x12 * u2;
+        let x75 = x21 * u1;
         let x76 = x74 + x75;
-        let x77 = (x59 - x58 + x6 * x62) * d + a_ * (x29 - 1.0) * u2;
-        let x78 = x16 * x5 * u2;
-        let x79 = x9 * u1;
-        let x80 = u4 - u3;
-        let x81 = u5 + u2;
-        let x82 = x73 * x66 - x70 - x76 * x77
-            + x6
-                * (a_ * u4 * u3 * x13 * m1
-                    + m2
-                        * (d
-                            * (u4 * (x78 + x13 * x57)
-                                + u5 * (x16 * (x79 + x80 * x5) + x81 * x9 * x13)) - x70));
-        let x83 = x55 + x56;
-        let x84 = x16 * a_ * u4 * u3;
-        let x85 = (x6 * ((-u4 - u3) * m1 + m2 * ((x81 * x13 + x75) * x5 + x16 * x9 * u3))
-            + u4 + u3) * d + x16 * a_ * x36 * u3;
-        let x86 = x6
-            * (m2
-                * (d
-                    * ((x16 * x83 + x13 * x5 * u2) * u4
-                        + u5 * (x80 * x13 * x5 + x9 * x71)) + x84)
-                - x16 * a_ * u4 * u3 * m1) + x84 - x85 * x66 + x60 * x77;
-        let x87 = x76 * x85 - x60 * x73
-            + (x81 * x6 * u5 * m2 * x5 + u4 * (x16 * x15 * u1 + x13 * x15 * u2)) * d;
-        let x88 = x79 - u3 * x5;
-        let x89 = x5 * x66 - x79;
-        let x90 = d * (u5 + x6 * ((x16 * x9 * u2 + x89 * x13) * m1 + m2 * x61) + u2)
-            + x9 * a_ * u2 * x30;
-        let x91 = a_ * x5 * u2;
-        let x92 = x9 * x66 + x55;
-        let x93 = x6 * (m2 * a_ * x5 * u2 + (d * (x92 * x13 - x78) - x91) * m1) - x91;
-        let x94 = d * (u5 * (x9 * u1 * x8 + u3 * x5 * x27) + x6 * u4 * x13 * m1 * x66)
-            - x88 * x90 + x83 * x93;
-        let x95 = x39 * u3 + d * (x5 * u1 * x8 - x16 * x6 * u4 * m1);
-        let x96 = u5 * a_ * x5 * u2;
-        let x97 = x88 * x95 - x81 * x93 - x96
-            + x6
-                * (u5 * m2 * a_ * x5 * u2
-                    + ((u5 * (x83 * x13 - x78) + u4 * (x16 * x89 + x9 * x13 * (u5 - u2)))
-                        * d - x96) * m1);
-        let x98 = x9 * u5 * a_ * u2;
-        let x99 = x6
-            * ((d
-                * (u4 * (x13 * x5 * (u2 - u5) + x16 * x92)
-                    + u5 * (x9 * (x59 - x58) - u3 * x13 * x5)) - x98) * m1
-                + x9 * u5 * m2 * a_ * u2) - x95 * x83 - x98 + x81 * x90;
-        let x100 = u4 * J2 * (-x74 - x75) + x76 * x20 * x66;
-        let x101 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x102 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x103 = u5 * J2 + x81 * x34;
-        let x104 = x34 * x88 * x83;
-        let x105 = u2 * u2;
-        let x106 = u3 * u3;
-        let x107 = a_ * (m2 * (-x105 - x106) + (x105 + x106) * m1)
-            + d
-                * (m2 * (x9 * (u5 * (-u5 - 2.0 * u2) - x105 - x106) - u3 * x5 * u1)
-                    + (x16 * (x105 + u4 * (u4 + 2.0 * u3) + x106) - x13 * u1 * u2) * m1);
-        let x108 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x109 = x82 * x13 - x16 * x86;
-        let x110 = x60 * x76 * x20;
-        let x111 = x9 * x99 + x5 * x97;
+        let x77 = u4 + u3;
+        let x78 = u4 * J2 * (-x74 - x75) + x76 * x25 * x77;
+        let x79 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x80 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x81 = d * (x23 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
+            - a_ * u1 * u2;
+        let x82 = 2.0 * u4 + u3;
+        let x83 = d * (x21 * x82 * u1 + x82 * x12 * u2) + a_ * u3 * u1;
+        let x84 = d * (x72 - x71) - a_ * u2;
+        let x85 = x76 * x84;
+        let x86 = a_ * u3 * u3 * x12;
+        let x87 = x86 - x85;
+        let x88 = x73 * x84 - (u3 * x44 + u4 * d) * x77 + x21 * a_ * u4 * u3;
+        let x89 = x23 * u1 - u3 * x6;
+        let x90 = u3 * x41 - d * x6 * u1;
+        let x91 = x89 * x90;
+        let x92 = a_ * x6 * u2 * u2;
+        let x93 = x91 + x92;
+        let x94 = x68 + x69;
+        let x95 = u5 + u2;
+        let x96 = x95 * (x23 * a_ * u2 + x95 * d) - x94 * x90 - x23 * u5 * a_ * u2;
+        let x97 = -(x50 * x87 + x51 * x88 + x0 * x3 * x83) * m1
+            - m2 * (x0 * x2 * x81 + x93 * x37 + x36 * x96);
+        let x98 = -m2 * (x19 * x81 + x93 * x27 + x26 * x96)
+            - (x47 * x87 + x18 * x83 + x48 * x88) * m1;
+        let x99 = -m2 * (x33 * x96 + x93 * x34 + x11 * x81)
+            - (x42 * x87 + x15 * x83 + x88 * x45) * m1;
+        let x100 = u5 * J2 + x95 * x53;
+        let x101 = x53 * x89 * x94;
+        let x102 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x103 = u1 * u1;
+        let x104 = 2.0 * gamma2;
+        let x105 = f64::sin(x104);
+        let x106 = x73 * x76 * x25;
+        let x107 = 2.0 * gamma1;
+        let x108 = f64::sin(x107);
+        let x109 = (x48 * x51 + x47 * x50 + x0 * x18 * x3) * m1
+            + m2 * (x37 * x27 + x19 * x0 * x2 + x26 * x36);
+        let x110 = (m0 + (x63 + x48 * x48 + x18 * x18) * m1
+            + m2 * (x66 + x26 * x26 + x19 * x19)) * x7 - x109 * x109;
+        let x111 = m2 * (x37 * x34 + x36 * x33 + x0 * x2 * x11)
+            + (x0 * x15 * x3 + x51 * x45 + x42 * x50) * m1;
+        let x112 = x7
+            * (m1 * (x47 * x42 + x18 * x15 + x48 * x45)
+                + m2 * (x26 * x33 + x19 * x11 + x34 * x27)) - x109 * x111;
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, f64::sin(theta) * x1 * x4 + u1, u4, u5],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2
-                                * (x5 * x5 * x8 * x8 + x6 * x6 * x12 * x13 * x13 * m1 * m1)
-                                + x6 * x6 * m0 * (m2 * m2 * x5 * x5 + x13 * x13 * m1 * m1)
-                                + (x13 * x13 * x15 * x15
-                                    + x6 * x6 * m2 * m2 * x5 * x5 * x19) * m1)
-                        + (x17 + x10) * J1 + (x11 + x18) * J2,
-                    x33,
-                    x40,
-                    x43,
-                    x44,
-                ],
-                [
-                    x33,
-                    x13 * x13 * J1 + Iyy + J2 * (x17 + 1.0)
-                        + x6 * x6 * m0 * (m2 * m2 * d * d * x5 * x5 + x23 * x23)
-                        + (x32 * x32 + x6 * x6 * m2 * m2 * d * d * x5 * x5 * x19) * m1
-                        + m2 * (x5 * x5 * x26 * x26 + x31 * x31),
-                    x49,
-                    x50,
-                    x51,
-                ],
-                [
-                    x40,
-                    x49,
-                    x5 * x5 * J1
-                        + m2 * (x6 * x6 * x12 * x13 * x13 * d * d * m1 * m1 + x39 * x39)
-                        + Izz + x6 * x6 * m0 * (x35 * x35 + x13 * x13 * d * d * m1 * m1)
-                        + J2 * (x10 + 1.0) + m1 * (x38 * x38 + x13 * x13 * x37 * x37),
-                    x52,
-                    x53,
-                ],
-                [
-                    x43,
-                    x50,
-                    x52,
-                    J2 + (x6 * x6 * (m2 + m0) * m1 + x15 * x15) * d * d * m1,
+                            * (m2 * x6 * x6
+                                + x8 * (-x16 * x16 - x17 * x17 * x0 * x0 - x20 * x20)
+                                + x12 * x12 * m1) + (x22 + x24) * J1
+                        + (x6 * x6 + x12 * x12) * J2,
+                    x39,
                     x54,
+                    x55,
+                    x56,
                 ],
                 [
-                    x44,
-                    x51,
-                    x53,
+                    x39,
+                    x12 * x12 * J1 + x31 * x31 * m1 + Iyy + J2 * (x22 + 1.0)
+                        + x8 * (-x32 * x32 - x35 * x35 - x38 * x38)
+                        + m2 * (x57 + a_ * (a_ + 2.0 * x40)),
+                    x58,
+                    x59,
+                    x60,
+                ],
+                [
                     x54,
-                    J2 + m2 * d * d * (x6 * x6 * m2 * (m0 + m1) + x27 * x27),
+                    x58,
+                    x8 * (-x46 * x46 - x49 * x49 - x52 * x52) + x6 * x6 * J1
+                        + (a_ * (a_ + 2.0 * x30) + x57) * m1 + m2 * x41 * x41 + Izz
+                        + J2 * (x24 + 1.0),
+                    x61,
+                    x62,
+                ],
+                [
+                    x55,
+                    x59,
+                    x61,
+                    d * d * (x8 * (-x63 - x64 - x50 * x50) * m1 + 1.0) * m1 + J2,
+                    x65,
+                ],
+                [
+                    x56,
+                    x60,
+                    x62,
+                    x65,
+                    J2 + m2 * (x8 * m2 * (-x66 - x37 * x37 - x67) + 1.0) * d * d,
                 ],
             ],
             force: [
-                (-x9 * u5 * x57 - x16 * x60 * u4) * J1
-                    + d
-                        * (-x6 * x6 * m0 * (m2 * x68 * x5 - x13 * x69 * m1)
-                            - (x6 * m2 * x5 * (x16 * x82 + x13 * x86) + x13 * x15 * x87)
-                                * m1
-                            - m2
-                                * (x94 * x5 * x8 + x6 * (x5 * x99 - x9 * x97) * x13 * m1))
-                    + x13 * x100 - x101 * u2 + u3 * x102 - x103 * x88 * x5,
-                x104 + x101 * u1 - x6 * x6 * m0 * (x23 * x69 - m2 * d * x5 * x107)
-                    - m2 * (x31 * x97 + x5 * x99 * x26) - x60 * u4 * x13 * J1 - u3 * x108
-                    - (x6 * m2 * x109 * d * x5 + x87 * x32) * m1 - x16 * x100,
-                u5 * x57 * x5 * J1 - x6 * x6 * m0 * (x35 * x68 + x13 * d * m1 * x107)
-                    - u1 * x102 + x110 - (x82 * x38 + x13 * x37 * x86) * m1
-                    - x103 * x9 * x88 + x108 * u2
-                    - m2 * (x94 * x39 + x6 * x13 * d * m1 * x111),
-                x110
-                    + (x6
-                        * (-x6 * m0 * (x13 * x107 - x16 * x68)
-                            - m2 * (x13 * x111 - x16 * x94)) - x82 * x15) * d * m1,
-                x104
-                    + m2 * d
-                        * (x6
-                            * (-m1 * (x109 * x5 - x9 * x87)
-                                - x6 * m0 * (-x9 * x69 - x5 * x107)) - x97 * x27),
+                (-x23 * u5 * x70 - x21 * x73 * u4) * J1 + x12 * x78 - x79 * u2 + u3 * x80
+                    + (m2 * x6 * x81 - x12 * m1 * x83
+                        + (-x17 * x0 * x97 - x98 * x20 - x99 * x16) * x8) * d
+                    - x100 * x89 * x6,
+                x101 + x79 * u1 - x73 * u4 * x12 * J1 - u3 * x102 - x31 * m1 * x83
+                    - x21 * x78
+                    - m2
+                        * (d
+                            * (a_
+                                * (x6 * (u3 * u3 - x103 + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (x23 * u3 * u1))
+                                + d
+                                    * ((0.5 * (u3 * x105) - f64::cos(x104) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x105))) - a_ * a_ * u3 * u1)
+                    + x8 * (-x99 * x35 - x38 * x97 - x32 * x98),
+                u5 * x70 * x6 * J1 - m2 * x41 * x81 - u1 * x80
+                    + x8 * (-x99 * x46 - x52 * x97 - x98 * x49) + x106 - x100 * x23 * x89
+                    + x102 * u2
+                    - (a_ * a_ * u1 * u2
+                        + d
+                            * (a_
+                                * (2.0 * (x21 * u1 * u2)
+                                    + (u2 * u2 - x103 + u4 * (-u4 - 2.0 * u3)) * x12)
+                                + (0.5 * (x108 * u2 * u2)
+                                    + (f64::cos(x107) * u2 - 0.5 * (u1 * x108)) * u1) * d))
+                        * m1,
+                x106 + d * (x8 * (-x50 * x97 - x47 * x98 - x99 * x42) + x85 - x86) * m1,
+                x101 + m2 * d * (x8 * (-x37 * x97 - x98 * x27 - x99 * x34) - x91 - x92),
             ],
-            checks: [x0],
+            checks: [
+                x0,
+                x110,
+                x110
+                    * (((x64 + x45 * x45 + x15 * x15) * m1 + m0
+                        + (x11 * x11 + x67 + x33 * x33) * m2) * x7 - x111 * x111)
+                    - x112 * x112,
+            ],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -828,30 +815,41 @@ pub mod reduced_volterra {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x9 = x5 * x6 * x2 - x4 * x8;
+        let x10 = x6 * x2 * x4 + x5 * x8;
+        let x11 = d + x5 * a_;
+        let x12 = x10 * x11 - a_ * x4 * x9;
+        let x13 = x0 * x6 * x3 - x1 * x7;
+        let x14 = a_ + x5 * d;
+        let x15 = f64::sin(gamma1);
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * x13 - x6 * x15 * x2;
+        let x18 = x16 * a_;
+        let x19 = -x18 - d;
+        let x20 = x13 * x15 + x16 * x6 * x2;
+        let x21 = a_ * x15 * x20;
+        let x22 = -a_ - x16 * d;
+        let x23 = x6 * x1 + x0 * x3 * x7;
+        let x24 = x16 * x23 - x15 * x2 * x7;
+        let x25 = x16 * x2 * x7 + x15 * x23;
+        let x26 = x0 * x1 * x7 - x6 * x3;
+        let x27 = x2 * x4 * x7 + x5 * x26;
+        let x28 = x5 * x2 * x7 - x4 * x26;
+        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
+            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
+        let x30 = x18 + d;
+        let x31 = x16 * x2 * x3 + x0 * x15;
+        let x32 = -x31 * d - a_ * x2 * x3;
+        let x33 = x5 * x2 * x1 - x0 * x4;
+        let x34 = -a_ * x2 * x1 - x33 * d;
+        let x35 = x15 * x2 * x3 - x16 * x0;
+        let x36 = -x2 * x4 * x1 - x5 * x0;
+        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
+            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
+        let x38 = x27 * x11 - a_ * x28 * x4;
+        let x39 = a_ * x15 * x25;
+        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
+            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -878,30 +876,33 @@ pub mod reduced_volterra {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
+                * (m2 * (x12 * x1 + x13 * x14 * x3)
+                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
+                + X_dot
+                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
+                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
+                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
+                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x10) + Z_dot * x37,
             theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (x38 * x1 + x14 * x3 * x23)
+                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
+                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
+                    + x24 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
+                        + m2 * (x2 * x3 * x38 + x23 * x34))
+                + Y_dot
+                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
+                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
+                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
+                + X_dot * x37,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -942,39 +943,85 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma1);
-        let x8 = f64::sin(psi);
-        let x9 = x3 * x8;
-        let x10 = f64::cos(psi);
-        let x11 = x5 * x10 * x2;
-        let x12 = f64::sin(gamma1);
-        let x13 = x2 * x8;
-        let x14 = x5 * x10 * x3;
-        let x15 = -x13 - x14;
-        let x16 = f64::sin(gamma2);
-        let x17 = f64::cos(gamma2);
-        let x18 = x13 + x14;
-        let x19 = x17 * d;
-        let x20 = -a_ - x19;
-        let x21 = x7 * d;
-        let x22 = (a_ + x21) * m1 + m2 * x20;
-        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
-        let x24 = x10 * x3;
-        let x25 = x5 * x2 * x8;
-        let x26 = -x24 - x25;
-        let x27 = x7 * x26 + x12 * x0 * x8;
-        let x28 = x24 + x25;
-        let x29 = x10 * x2;
-        let x30 = x5 * x3 * x8;
-        let x31 = x29 - x30;
-        let x32 = x17 * x31 - x0 * x16 * x8;
-        let x33 = x30 - x29;
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(gamma1);
+        let x8 = f64::cos(gamma1);
+        let x9 = f64::sin(psi);
+        let x10 = x5 * x6 * x2 - x3 * x9;
+        let x11 = x8 * x10 - x6 * x7 * x0;
+        let x12 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
+        let x13 = x2 * x9 + x5 * x6 * x3;
+        let x14 = f64::sin(gamma2);
+        let x15 = f64::cos(gamma2);
+        let x16 = x6 * x0 * x14 + x15 * x13;
+        let x17 = (x15 * x0 - x5 * x14 * x3) * x6 - x14 * x2 * x9;
+        let x18 = m2 + m0 + m1;
+        let x19 = x7 * x0 * x2 - x8 * x5;
+        let x20 = x8 * x0 * x2 + x5 * x7;
+        let x21 = x15 * x0 * x3 - x5 * x14;
+        let x22 = -x0 * x14 * x3 - x15 * x5;
+        let x23 = (x12 * x19 + x11 * x20 + x0 * x13 * x3) * m1
+            + m2 * (x21 * x16 + x10 * x0 * x2 + x17 * x22);
+        let x24 = (m0 + (x11 * x11 + x12 * x12 + x13 * x13) * m1
+            + m2 * (x16 * x16 + x17 * x17 + x10 * x10)) * x18 - x23 * x23;
+        let x25 = 1.0 / x24;
+        let x26 = -a_ - x15 * d;
+        let x27 = x8 * a_ + d;
+        let x28 = d + x15 * a_;
+        let x29 = -a_ - x8 * d;
+        let x30 = (-u4 * x20 * m1 - (x7 * m1 * x3 - m2 * x14 * x2) * x0 * u1
+            - u5 * m2 * x21) * d
+            - (m2 * (x21 * x28 - a_ * x22 * x14) + x29 * x0 * m1 * x3) * u2
+            - u3 * ((x20 * x27 + a_ * x19 * x7) * m1 + m2 * x0 * x2 * x26) + G_Z;
+        let x31 = x18
+            * (G_X - u3 * (m2 * x10 * x26 + (x11 * x27 + a_ * x12 * x7) * m1)
+                - (m2 * (x16 * x28 - a_ * x17 * x14) + x29 * x13 * m1) * u2
+                + d
+                    * (-x11 * u4 * m1 - u1 * (x7 * x13 * m1 - m2 * x10 * x14)
+                        - u5 * m2 * x16)) - x23 * x30;
+        let x32 = x6 * x3 + x5 * x2 * x9;
+        let x33 = x8 * x32 - x7 * x0 * x9;
+        let x34 = x8 * x0 * x9 + x7 * x32;
+        let x35 = x6 * x2;
+        let x36 = x5 * x3 * x9;
+        let x37 = x36 - x35;
+        let x38 = x0 * x14 * x9 + x15 * x37;
+        let x39 = x15 * x0 * x9 + (x35 - x36) * x14;
+        let x40 = m2 * (x21 * x38 + x22 * x39 + x0 * x2 * x32)
+            + (x0 * x37 * x3 + x19 * x34 + x33 * x20) * m1;
+        let x41 = x18
+            * (m1 * (x11 * x33 + x13 * x37 + x12 * x34)
+                + m2 * (x17 * x39 + x10 * x32 + x38 * x16)) - x23 * x40;
+        let x42 = x24
+            * (((x33 * x33 + x34 * x34 + x37 * x37) * m1 + m0
+                + (x32 * x32 + x38 * x38 + x39 * x39) * m2) * x18 - x40 * x40)
+            - x41 * x41;
+        let x43 = ((G_Y - (x29 * x37 * m1 + m2 * (x38 * x28 - a_ * x14 * x39)) * u2
+            + (-u4 * x33 * m1 - u5 * m2 * x38 - (x7 * x37 * m1 - m2 * x14 * x32) * u1)
+                * d - ((x33 * x27 + a_ * x7 * x34) * m1 + m2 * x26 * x32) * u3) * x18
+            - x30 * x40) * x24 - x31 * x41;
+        let x44 = 1.0 / x42;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
                 condition: CONDITIONS[0],
+                value,
+            });
+        }
+        let value = x24;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[1],
+                value,
+            });
+        }
+        let value = x42;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -994,27 +1041,10 @@ pub mod reduced_volterra {
             x5 * x1 * x4 + u1,
             u4,
             u5,
-            x6
-                * (G_X
-                    + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
-                        + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
-                        + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a_ * x18) * m1
-                        + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
-                        * u2
-                    + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
-            ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
-                + G_Y
-                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
-                * x6,
-            x6
-                * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
-                    + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
-                    + d
-                        * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
-                            + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
-                            + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
+            x25 * (x31 * x42 - x41 * x43) * x44,
+            x44 * x43,
+            x25 * x44 * ((x24 * x30 - x31 * x23) * x42 - x43 * (x24 * x40 - x41 * x23))
+                / x18,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1028,10 +1058,65 @@ pub mod reduced_volterra {
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        _params: &Params,
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
+        let psi = state[0];
         let theta = state[1];
-        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let x0 = f64::cos(theta);
+        let x1 = f64::cos(psi);
+        let x2 = f64::sin(gamma1);
+        let x3 = f64::cos(gamma1);
+        let x4 = f64::cos(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::sin(phi);
+        let x8 = x6 * x1 * x7 - x4 * x5;
+        let x9 = x3 * x8 - x1 * x2 * x0;
+        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
+        let x11 = x7 * x5 + x6 * x1 * x4;
+        let x12 = f64::sin(gamma2);
+        let x13 = f64::cos(gamma2);
+        let x14 = x1 * x0 * x12 + x13 * x11;
+        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
+        let x16 = m2 + m0 + m1;
+        let x17 = x2 * x0 * x7 - x3 * x6;
+        let x18 = x3 * x0 * x7 + x6 * x2;
+        let x19 = x13 * x0 * x4 - x6 * x12;
+        let x20 = -x0 * x12 * x4 - x13 * x6;
+        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
+            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
+        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
+            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
+        let x23 = x1 * x4 + x6 * x7 * x5;
+        let x24 = x3 * x23 - x2 * x0 * x5;
+        let x25 = x3 * x0 * x5 + x2 * x23;
+        let x26 = x1 * x7;
+        let x27 = x6 * x4 * x5;
+        let x28 = x27 - x26;
+        let x29 = x0 * x12 * x5 + x13 * x28;
+        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
+        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
+            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
+        let x32 = x16
+            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
+                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
+        f64::INFINITY
+            .min(f64::abs(x0))
+            .min(f64::abs(x22))
+            .min(
+                f64::abs(
+                    x22
+                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
+                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
+                            - x31 * x31) - x32 * x32,
+                ),
+            )
     }
 }

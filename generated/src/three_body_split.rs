@@ -325,16 +325,11 @@ pub fn work_rate(
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
 pub fn momenta(
-    _t: f64,
+    t: f64,
     q: &[f64; NUM_COORDINATES],
     qdot: &[f64; NUM_COORDINATES],
     params: &Params,
 ) -> [f64; NUM_IGNORABLE] {
-    let psi = q[0];
-    let theta = q[1];
-    let phi = q[2];
-    let gamma1 = q[3];
-    let gamma2 = q[4];
     let psi_dot = qdot[0];
     let theta_dot = qdot[1];
     let phi_dot = qdot[2];
@@ -348,66 +343,122 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let x0 = f64::sin(gamma2);
-    let x1 = f64::cos(gamma2);
-    let x2 = f64::cos(psi);
-    let x3 = f64::cos(theta);
-    let x4 = f64::sin(phi);
-    let x5 = f64::sin(psi);
-    let x6 = f64::sin(theta);
-    let x7 = f64::cos(phi);
-    let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
+    let mut v = [0.0f64; 41];
+    momenta_part0(t, q, qdot, params, &mut v);
+    momenta_part1(t, q, qdot, params, &mut v);
     [
         theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+            * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
+                + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
+            + v[29] * Y_dot
+            + X_dot
+                * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
+                    + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
+            + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
+                + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
             + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
+                * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
+                    + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10]) + Z_dot * v[37],
         theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
+            * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
+                + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
+            + v[29] * X_dot
+            + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
+                + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
+                * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
+                    + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
+            + Y_dot
+                * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
+                    + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
+            + Z_dot * v[40],
         theta_dot
             * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                * (v[3] * v[14] * v[4] * v[4]
+                    + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
                 + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                    * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
+                        + v[22] * v[3] * v[7] * v[7]))
+            + (m2 * gamma2_dot * v[33]
+                + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
+                + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + v[40] * Y_dot
+            + X_dot * v[37],
     ]
+}
+#[allow(non_snake_case)]
+#[inline(never)]
+fn momenta_part0(
+    _t: f64,
+    q: &[f64; NUM_COORDINATES],
+    _qdot: &[f64; NUM_COORDINATES],
+    params: &Params,
+    v: &mut [f64; 41],
+) {
+    let psi = q[0];
+    let theta = q[1];
+    let phi = q[2];
+    let gamma1 = q[3];
+    let gamma2 = q[4];
+    let m1 = params.m1;
+    let m2 = params.m2;
+    let d = params.d;
+    let a_ = params.a_;
+    v[0] = f64::sin(gamma2);
+    v[1] = f64::cos(gamma2);
+    v[2] = f64::cos(psi);
+    v[3] = f64::cos(theta);
+    v[4] = f64::sin(phi);
+    v[5] = f64::sin(psi);
+    v[6] = f64::sin(theta);
+    v[7] = f64::cos(phi);
+    v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
+    v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
+    v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
+    v[11] = d + v[1] * a_;
+    v[12] = v[10] * v[11] - a_ * v[0] * v[9];
+    v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
+    v[14] = a_ + v[1] * d;
+    v[15] = f64::sin(gamma1);
+    v[16] = f64::cos(gamma1);
+    v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
+    v[18] = v[16] * a_;
+    v[19] = -v[18] - d;
+    v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
+    v[21] = a_ * v[15] * v[20];
+    v[22] = -a_ - v[16] * d;
+    v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
+    v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
+    v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
+    v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
+    v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
+    v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
+    v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
+        + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
+    v[30] = v[18] + d;
+    v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
+    v[32] = -v[31] * d - a_ * v[3] * v[4];
+    v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
+    v[34] = -a_ * v[3] * v[7] - v[33] * d;
+    v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
+    v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
+    v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
+        + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
+    v[38] = v[27] * v[11] - a_ * v[28] * v[0];
+    v[39] = a_ * v[15] * v[25];
+}
+#[allow(non_snake_case)]
+#[inline(never)]
+fn momenta_part1(
+    _t: f64,
+    _q: &[f64; NUM_COORDINATES],
+    _qdot: &[f64; NUM_COORDINATES],
+    params: &Params,
+    v: &mut [f64; 41],
+) {
+    let m1 = params.m1;
+    let m2 = params.m2;
+    v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
+        + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
 #[allow(non_snake_case, clippy::all)]
@@ -487,6 +538,7 @@ pub mod lagrange {
         let X_dot = state[13];
         let Y_dot = state[14];
         let Z_dot = state[15];
+        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -497,13 +549,12 @@ pub mod lagrange {
         let d = params.d;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 202];
+        let mut v = [0.0f64; 171];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
         rhs_part3(t, state, params, g_i, &mut v);
         rhs_part4(t, state, params, g_i, &mut v);
-        rhs_part5(t, state, params, g_i, &mut v);
         Assembly {
             qdot: [
                 psi_dot,
@@ -562,62 +613,83 @@ pub mod lagrange {
                 ],
                 [v[32], v[59], 0.0, J2 + d * d * m1, 0.0, v[67], v[68], v[69]],
                 [v[34], v[60], 0.0, 0.0, m2 * d * d + J2, v[70], v[71], v[72]],
-                [v[45], v[61], v[64], v[67], v[70], v[73], 0.0, 0.0],
-                [v[54], v[62], v[65], v[68], v[71], 0.0, v[73], 0.0],
-                [0.0, v[63], v[66], v[69], v[72], 0.0, 0.0, v[73]],
+                [
+                    v[45],
+                    v[61],
+                    v[64],
+                    v[67],
+                    v[70],
+                    m0 + m1 * (v[38] * v[38] + v[39] * v[39] + v[41] * v[41])
+                        + m2 * (v[43] * v[43] + v[42] * v[42] + v[37] * v[37]),
+                    v[73],
+                    v[74],
+                ],
+                [
+                    v[54],
+                    v[62],
+                    v[65],
+                    v[68],
+                    v[71],
+                    v[73],
+                    (v[47] * v[47] + v[48] * v[48] + v[50] * v[50]) * m1 + m0
+                        + m2 * (v[46] * v[46] + v[52] * v[52] + v[51] * v[51]),
+                    v[75],
+                ],
+                [0.0, v[63], v[66], v[69], v[72], v[74], v[75], m2 + m0 + m1],
             ],
             force: [
-                ((v[93] - v[74] - v[84] - v[91] + v[97] + v[98] - v[100]) * v[10]
+                ((v[95] - v[76] - v[86] - v[93] + v[99] + v[100] - v[102]) * v[10]
                     + v[2]
-                        * (v[104] - v[101] - v[102] - v[105] + v[106] - v[107] - v[110]))
-                    * v[1] - v[118] * v[5] + (-v[18] * v[121] - v[20] * v[122]) * J1
-                    + (v[124] - v[123] - v[125] - v[126] - v[127]) * v[3]
-                    - ((v[154] + v[8] * v[156]) * v[1] * v[10] + v[162] * v[6]) * m1
-                    - v[168] * v[13] - m2 * (v[172] * v[14] + v[178] * v[1] * v[2]),
+                        * (v[106] - v[103] - v[104] - v[107] + v[108] - v[109] - v[112]))
+                    * v[1] - v[120] * v[5] + (-v[18] * v[123] - v[20] * v[124]) * J1
+                    - ((v[128] + v[129] * v[8]) * v[1] * v[10] + v[130] * v[6]) * m1
+                    + (v[132] - v[131] - v[133] - v[134] - v[135]) * v[3]
+                    - v[141] * v[13] - m2 * (v[146] * v[1] * v[2] + v[147] * v[14]),
                 v[2]
-                    * (v[74] - v[121] * v[11] * J1 + v[84] + v[91] + v[12] * v[168]
-                        - v[93] - v[97] - v[98] + v[100])
-                    - m2 * (v[172] * v[25] * v[2] + v[178] * v[10])
-                    - (v[28] * v[162] * v[10] + v[2] * (v[29] * v[156] - v[154])) * m1
-                    + (v[104] - v[101] - v[102] - v[4] * J1 * v[122] - v[105]
-                        - v[0] * v[118] + v[106] - v[107] - v[110]) * v[10],
-                (v[112] - v[162] * d * m1 + v[117]) * v[4] + v[123] - v[124] + v[125]
-                    + v[126] + v[127] + (-v[0] * v[122] - v[12] * v[121]) * J1
-                    + (m2 * v[172] * d - v[165] - v[167]) * v[11],
-                J2 * (v[90] - v[86] - v[89]) - d * m1 * v[156] + v[98],
-                v[163] * v[108] * v[109] - v[107] - m2 * v[177] * d,
-                -m2 * (v[37] * v[172] + v[42] * v[176] + v[177] * v[43])
-                    - (v[162] * v[41] + v[38] * v[156] + v[153] * v[39]) * m1,
-                -m2 * (v[172] * v[46] + v[177] * v[52] + v[51] * v[176])
-                    - (v[153] * v[48] + v[162] * v[50] + v[47] * v[156]) * m1,
+                    * (v[76] - v[123] * v[11] * J1 + v[86] + v[93] + v[12] * v[141]
+                        - v[95] - v[99] - v[100] + v[102])
+                    - (v[2] * (v[129] * v[29] - v[128]) + v[130] * v[28] * v[10]) * m1
+                    - m2 * (v[146] * v[10] + v[147] * v[25] * v[2])
+                    + (v[106] - v[103] - v[104] - v[4] * J1 * v[124] - v[107]
+                        - v[0] * v[120] + v[108] - v[109] - v[112]) * v[10],
+                v[131] - v[132] + v[133] + v[134] + v[135]
+                    + v[11] * (m2 * v[147] * d - v[138] - v[140])
+                    + v[4] * (v[114] - v[130] * d * m1 + v[119])
+                    + (-v[0] * v[124] - v[12] * v[123]) * J1,
+                J2 * (v[92] - v[88] - v[91]) - v[129] * d * m1 + v[100],
+                v[136] * v[110] * v[111] - v[109] - m2 * v[145] * d,
+                -m2 * (v[145] * v[43] + v[37] * v[147] + v[42] * v[144])
+                    - (v[127] * v[39] + v[38] * v[129] + v[130] * v[41]) * m1,
+                -m2 * (v[147] * v[46] + v[51] * v[144] + v[145] * v[52])
+                    - (v[127] * v[48] + v[129] * v[47] + v[130] * v[50]) * m1,
                 -m2
-                    * (((0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185])
+                    * (((0.25 * v[151] - 0.25 * v[152] - 0.25 * v[153] + 0.25 * v[154])
                         * phi_dot * phi_dot
-                        + (theta_dot * v[186]
+                        + (theta_dot * v[155]
                             + phi_dot
-                                * (v[189] - 0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
-                                    + 0.5 * v[185] - v[190])) * theta_dot
+                                * (v[158] - 0.5 * v[151] - 0.5 * v[152] + 0.5 * v[153]
+                                    + 0.5 * v[154] - v[159])) * theta_dot
                         + gamma2_dot
                             * (phi_dot
-                                * (0.5 * v[182] - 0.5 * v[183] + 0.5 * v[184]
-                                    - 0.5 * v[185])
-                                + (-v[189] - 0.5 * v[182] - 0.5 * v[183]
-                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[184] - 0.5 * v[185]
-                                    - v[190]) * theta_dot + gamma2_dot * v[186])) * d - v[179])
-                    - (v[179]
+                                * (0.5 * v[151] - 0.5 * v[152] + 0.5 * v[153]
+                                    - 0.5 * v[154])
+                                + (-v[158] - 0.5 * v[151] - 0.5 * v[152]
+                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[153] - 0.5 * v[154]
+                                    - v[159]) * theta_dot + gamma2_dot * v[155])) * d - v[148])
+                    - (v[148]
                         + (theta_dot
-                            * ((0.5 * v[196] - v[193] + v[197] + 2.0 * (v[4] * v[1])
-                                + 0.5 * v[198] - 0.5 * v[199] - 0.5 * v[200]) * gamma1_dot
-                                + theta_dot * v[201]
-                                + (0.5 * v[196] - 0.5 * v[198] - 0.5 * v[199]
-                                    + 0.5 * v[200]) * phi_dot)
+                            * ((0.5 * v[165] - v[162] + v[166] + 2.0 * (v[4] * v[1])
+                                + 0.5 * v[167] - 0.5 * v[168] - 0.5 * v[169]) * gamma1_dot
+                                + theta_dot * v[170]
+                                + (0.5 * v[165] - 0.5 * v[167] - 0.5 * v[168]
+                                    + 0.5 * v[169]) * phi_dot)
                             + gamma1_dot
-                                * (v[201] * gamma1_dot
+                                * (v[170] * gamma1_dot
                                     + phi_dot
-                                        * (v[193] - 0.5 * v[196] + v[197] - 0.5 * v[198]
-                                            - 0.5 * v[199] - 0.5 * v[200]))
-                            + (0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199]
-                                + 0.25 * v[200]) * phi_dot * phi_dot) * d) * m1,
+                                        * (v[162] - 0.5 * v[165] + v[166] - 0.5 * v[167]
+                                            - 0.5 * v[168] - 0.5 * v[169]))
+                            + (0.25 * v[167] - 0.25 * v[165] - 0.25 * v[168]
+                                + 0.25 * v[169]) * phi_dot * phi_dot) * d) * m1,
             ],
             checks: [],
             residuals: [],
@@ -631,7 +703,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
+        v: &mut [f64; 171],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -705,11 +777,10 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
+        v: &mut [f64; 171],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
-        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let m1 = params.m1;
@@ -760,13 +831,16 @@ pub mod lagrange {
         v[70] = m2 * d * v[43];
         v[71] = m2 * d * v[52];
         v[72] = m2 * v[13] * d;
-        v[73] = m2 + m0 + m1;
-        v[74] = theta_dot * v[1] * psi_dot * Ixz;
-        v[75] = v[1] * psi_dot * v[10];
-        v[76] = theta_dot * v[2];
-        v[77] = v[75] - v[76];
-        v[78] = theta_dot * v[10];
-        v[79] = v[1] * psi_dot * v[2];
+        v[73] = (v[38] * v[47] + v[39] * v[48] + v[41] * v[50]) * m1
+            + m2 * (v[37] * v[46] + v[52] * v[43] + v[51] * v[42]);
+        v[74] = m1 * (v[20] * v[39] + v[38] * v[5] + v[1] * v[41] * v[10])
+            + (v[18] * v[42] + v[13] * v[43] + v[37] * v[1] * v[2]) * m2;
+        v[75] = m2 * (v[51] * v[18] + v[13] * v[52] + v[1] * v[2] * v[46])
+            + (v[1] * v[50] * v[10] + v[20] * v[48] + v[47] * v[5]) * m1;
+        v[76] = theta_dot * v[1] * psi_dot * Ixz;
+        v[77] = v[1] * psi_dot * v[10];
+        v[78] = theta_dot * v[2];
+        v[79] = v[77] - v[78];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -775,13 +849,12 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
+        v: &mut [f64; 171],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -790,46 +863,46 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[78] + v[79];
-        v[81] = v[3] * psi_dot;
-        v[82] = phi_dot - v[81];
-        v[83] = Iyy * v[80] - v[77] * Iyz - Ixy * v[82];
-        v[84] = v[83] * v[82];
-        v[85] = -phi_dot - v[81];
-        v[86] = theta_dot * v[85] * v[10];
-        v[87] = v[4] * v[80] + v[0] * v[82];
-        v[88] = v[0] * v[80] - v[4] * v[82];
-        v[89] = v[87] * v[88];
-        v[90] = v[1] * psi_dot * v[2] * phi_dot;
-        v[91] = J2 * (v[86] + v[89] - v[90]);
-        v[92] = Ixx * v[82] - v[77] * Ixz - Ixy * v[80];
-        v[93] = v[80] * v[92];
-        v[94] = theta_dot * v[85] * v[2];
-        v[95] = v[1] * psi_dot * phi_dot * v[10];
-        v[96] = v[94] + v[95];
-        v[97] = Iyz * v[96];
-        v[98] = v[87] * v[88] * J1;
-        v[99] = v[86] - v[90];
-        v[100] = v[99] * Izz;
-        v[101] = v[77] * v[92];
-        v[102] = Iyy * v[96];
-        v[103] = v[77] * Izz - Iyz * v[80] - Ixz * v[82];
-        v[104] = v[103] * v[82];
-        v[105] = Ixy * theta_dot * v[1] * psi_dot;
-        v[106] = v[99] * Iyz;
-        v[107] = J2 * v[96];
-        v[108] = v[12] * v[82] - v[77] * v[11];
-        v[109] = v[11] * v[82] + v[12] * v[77];
-        v[110] = v[108] * v[57] * v[109];
-        v[111] = v[75] + gamma1_dot - v[76];
-        v[112] = v[111] * v[57] * v[87];
-        v[113] = v[94] + v[95] - gamma1_dot * v[82];
-        v[114] = gamma1_dot * v[80];
-        v[115] = theta_dot * v[1] * psi_dot;
-        v[116] = v[0] * v[113] + v[4] * (v[115] - v[114]);
-        v[117] = J2 * v[116];
-        v[118] = v[112] + v[117];
-        v[119] = gamma2_dot * v[82];
+        v[80] = theta_dot * v[10];
+        v[81] = v[1] * psi_dot * v[2];
+        v[82] = v[80] + v[81];
+        v[83] = v[3] * psi_dot;
+        v[84] = phi_dot - v[83];
+        v[85] = Iyy * v[82] - v[79] * Iyz - Ixy * v[84];
+        v[86] = v[85] * v[84];
+        v[87] = -phi_dot - v[83];
+        v[88] = theta_dot * v[87] * v[10];
+        v[89] = v[4] * v[82] + v[0] * v[84];
+        v[90] = v[0] * v[82] - v[4] * v[84];
+        v[91] = v[89] * v[90];
+        v[92] = v[1] * psi_dot * v[2] * phi_dot;
+        v[93] = J2 * (v[88] + v[91] - v[92]);
+        v[94] = Ixx * v[84] - v[79] * Ixz - Ixy * v[82];
+        v[95] = v[82] * v[94];
+        v[96] = theta_dot * v[87] * v[2];
+        v[97] = v[1] * psi_dot * phi_dot * v[10];
+        v[98] = v[96] + v[97];
+        v[99] = Iyz * v[98];
+        v[100] = v[89] * v[90] * J1;
+        v[101] = v[88] - v[92];
+        v[102] = v[101] * Izz;
+        v[103] = v[79] * v[94];
+        v[104] = Iyy * v[98];
+        v[105] = v[79] * Izz - Iyz * v[82] - Ixz * v[84];
+        v[106] = v[105] * v[84];
+        v[107] = Ixy * theta_dot * v[1] * psi_dot;
+        v[108] = v[101] * Iyz;
+        v[109] = J2 * v[98];
+        v[110] = v[12] * v[84] - v[79] * v[11];
+        v[111] = v[11] * v[84] + v[12] * v[79];
+        v[112] = v[110] * v[57] * v[111];
+        v[113] = v[77] + gamma1_dot - v[78];
+        v[114] = v[113] * v[57] * v[89];
+        v[115] = v[96] + v[97] - gamma1_dot * v[84];
+        v[116] = gamma1_dot * v[82];
+        v[117] = theta_dot * v[1] * psi_dot;
+        v[118] = v[0] * v[115] + v[4] * (v[117] - v[116]);
+        v[119] = J2 * v[118];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -838,143 +911,86 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
+        v: &mut [f64; 171],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
-        let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
         let Ixx = params.Ixx;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let d = params.d;
         let a_ = params.a_;
-        v[120] = -v[77] * gamma2_dot - v[115];
-        v[121] = v[11] * (v[90] - v[86] - v[119]) + v[12] * v[120];
-        v[122] = v[0] * (v[114] - v[115]) + v[113] * v[4];
-        v[123] = theta_dot * Ixx * v[1] * psi_dot;
-        v[124] = v[103] * v[80];
-        v[125] = v[99] * Ixz;
-        v[126] = v[77] * v[83];
-        v[127] = Ixy * v[96];
-        v[128] = Z_dot * v[1] * v[2];
-        v[129] = v[37] * X_dot;
-        v[130] = Y_dot * v[46];
-        v[131] = a_ * v[77];
-        v[132] = v[128] + v[129] + v[130] + v[131];
-        v[133] = Y_dot * v[36];
-        v[134] = X_dot * v[35];
-        v[135] = v[1] * (v[133] + v[134]) - Z_dot * v[3];
-        v[136] = v[0] * v[132] - v[135] * v[4] + v[111] * d;
-        v[137] = a_ * v[80];
-        v[138] = Y_dot * v[50];
-        v[139] = X_dot * v[41];
-        v[140] = Z_dot * v[1] * v[10];
-        v[141] = v[138] - v[137] + v[139] + v[140] - d * v[88];
-        v[142] = v[1] * psi_dot * (v[35] * Y_dot - X_dot * v[36]);
-        v[143] = gamma1_dot * v[132];
-        v[144] = theta_dot * (v[3] * (-v[133] - v[134]) - Z_dot * v[1]);
-        v[145] = theta_dot * v[1] * v[36] + v[35] * (v[81] - phi_dot);
-        v[146] = v[3] * phi_dot;
-        v[147] = v[146] - psi_dot;
-        v[148] = Y_dot * (v[145] * v[2] + v[147] * v[10] * v[36]);
-        v[149] = v[99] * a_;
-        v[150] = Z_dot * (v[1] * phi_dot * v[10] - v[3] * theta_dot * v[2]);
-        v[151] = X_dot
-            * (v[35] * (theta_dot * v[1] * v[2] + v[147] * v[10])
-                + v[2] * v[82] * v[36]);
-        v[152] = v[148] + v[149] + v[150] + v[151] - v[135] * gamma1_dot;
-        v[153] = v[88] * v[141] - v[136] * v[111] + v[0] * (v[142] + v[143] + v[144])
-            + v[152] * v[4];
-        v[154] = a_ * v[4] * v[153];
-        v[155] = v[0] * v[135] + v[4] * v[132];
-        v[156] = v[99] * d - v[87] * v[141] + v[4] * (-v[142] - v[143] - v[144])
-            + v[0] * v[152] + v[111] * v[155];
-        v[157] = a_ * v[96];
-        v[158] = psi_dot - v[146];
-        v[159] = X_dot
-            * (v[82] * v[10] * v[36]
-                + v[35] * (theta_dot * v[1] * v[10] + v[158] * v[2]));
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[120] = v[114] + v[119];
+        v[121] = gamma2_dot * v[84];
+        v[122] = -v[79] * gamma2_dot - v[117];
+        v[123] = v[11] * (v[92] - v[88] - v[121]) + v[12] * v[122];
+        v[124] = v[0] * (v[116] - v[117]) + v[115] * v[4];
+        v[125] = v[0] * a_ * v[79] + v[113] * d;
+        v[126] = -a_ * v[82] - d * v[90];
+        v[127] = v[126] * v[90] - v[113] * v[125]
+            + a_ * (v[0] * v[79] * gamma1_dot + v[101] * v[4]);
+        v[128] = a_ * v[4] * v[127];
+        v[129] = v[101] * d - v[89] * v[126]
+            + a_ * (v[0] * v[101] + v[79] * v[79] * v[4]);
+        v[130] = v[89] * v[125] - d * v[118]
+            + a_ * (-v[79] * v[4] * v[90] - v[96] - v[97]);
+        v[131] = theta_dot * Ixx * v[1] * psi_dot;
+        v[132] = v[105] * v[82];
+        v[133] = v[101] * Ixz;
+        v[134] = v[79] * v[85];
+        v[135] = Ixy * v[98];
+        v[136] = J2 - J1;
+        v[137] = gamma2_dot + v[80] + v[81];
+        v[138] = v[136] * v[110] * v[137];
+        v[139] = v[122] * v[11] + (v[88] - v[92] + v[121]) * v[12];
+        v[140] = J2 * v[139];
+        v[141] = v[138] + v[140];
+        v[142] = -v[111] * d - a_ * v[79];
+        v[143] = v[137] * d + v[12] * a_ * v[82];
+        v[144] = a_ * (-v[12] * gamma2_dot * v[82] - v[98] * v[11]) - v[111] * v[142]
+            + v[143] * v[137];
+        v[145] = v[98] * d + v[110] * v[142]
+            + a_ * (v[12] * v[98] + v[11] * v[82] * v[82]);
+        v[146] = v[145] * v[15] - a_ * v[11] * v[144];
+        v[147] = a_ * (v[92] - v[88] - v[111] * v[11] * v[82]) - v[143] * v[110]
+            - v[139] * d;
+        v[148] = a_ * v[3] * theta_dot * theta_dot;
+        v[149] = v[12] * v[2];
+        v[150] = v[11] * v[10];
+        v[151] = (-v[149] - v[150]) * v[1];
+        v[152] = v[1] * (v[149] + v[150]);
+        v[153] = (v[150] - v[149]) * v[1];
+        v[154] = (v[149] - v[150]) * v[1];
+        v[155] = 0.25 * v[151] - 0.25 * v[152] - 0.25 * v[153] + 0.25 * v[154] - v[17];
+        v[156] = v[11] * v[2];
+        v[157] = v[12] * v[10];
+        v[158] = v[3] * (v[156] + v[157]);
+        v[159] = v[3] * (v[157] - v[156]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part4(
         _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
-    ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma2_dot = state[12];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[160] = Z_dot * (-v[1] * v[2] * phi_dot - v[3] * theta_dot * v[10]);
-        v[161] = (v[158] * v[2] * v[36] + v[145] * v[10]) * Y_dot;
-        v[162] = v[136] * v[87] - v[157] - d * v[116] + v[159] + v[160] - v[155] * v[88]
-            + v[161];
-        v[163] = J2 - J1;
-        v[164] = gamma2_dot + v[78] + v[79];
-        v[165] = v[163] * v[108] * v[164];
-        v[166] = v[120] * v[11] + (v[86] - v[90] + v[119]) * v[12];
-        v[167] = J2 * v[166];
-        v[168] = v[165] + v[167];
-        v[169] = v[137] + v[138] + v[139] + v[140];
-        v[170] = v[135] * v[12] - v[169] * v[11];
-        v[171] = v[164] * d + v[135] * v[11] + v[12] * v[169];
-        v[172] = v[148] - v[149] + v[109] * v[170] + v[150] + v[151] - v[108] * v[171]
-            - v[166] * d;
-        v[173] = v[128] + v[129] + v[130] - v[109] * d - v[131];
-        v[174] = v[135] * gamma2_dot;
-        v[175] = v[142] - gamma2_dot * v[169] + v[144];
-        v[176] = v[11] * (-v[174] - v[157] - v[159] - v[160] - v[161]) - v[109] * v[173]
-            + v[12] * v[175] + v[164] * v[171];
-        v[177] = v[96] * d - v[164] * v[170]
-            + v[12] * (v[174] + v[157] + v[159] + v[160] + v[161]) + v[108] * v[173]
-            + v[11] * v[175];
-        v[178] = v[177] * v[15] - a_ * v[11] * v[176];
-        v[179] = a_ * v[3] * theta_dot * theta_dot;
-        v[180] = v[12] * v[2];
-        v[181] = v[11] * v[10];
-        v[182] = (-v[180] - v[181]) * v[1];
-        v[183] = v[1] * (v[180] + v[181]);
-        v[184] = (v[181] - v[180]) * v[1];
-        v[185] = (v[180] - v[181]) * v[1];
-        v[186] = 0.25 * v[182] - 0.25 * v[183] - 0.25 * v[184] + 0.25 * v[185] - v[17];
-        v[187] = v[11] * v[2];
-        v[188] = v[12] * v[10];
-        v[189] = v[3] * (v[187] + v[188]);
-        v[190] = v[3] * (v[188] - v[187]);
-        v[191] = v[3] * v[2];
-        v[192] = v[1] * v[10];
-        v[193] = v[0] * (v[191] + v[192]);
-        v[194] = v[1] * v[2];
-        v[195] = v[3] * v[10];
-        v[196] = v[4] * (v[194] - v[195]);
-        v[197] = v[0] * (v[192] - v[191]);
-        v[198] = v[4] * (v[195] - v[194]);
-        v[199] = v[4] * (v[194] + v[195]);
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part5(
-        _t: f64,
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 202],
+        v: &mut [f64; 171],
     ) {
-        v[200] = (-v[194] - v[195]) * v[4];
-        v[201] = 0.25 * v[198] - 0.25 * v[196] - 0.25 * v[199] + v[19] + 0.25 * v[200];
+        v[160] = v[3] * v[2];
+        v[161] = v[1] * v[10];
+        v[162] = v[0] * (v[160] + v[161]);
+        v[163] = v[1] * v[2];
+        v[164] = v[3] * v[10];
+        v[165] = v[4] * (v[163] - v[164]);
+        v[166] = v[0] * (v[161] - v[160]);
+        v[167] = v[4] * (v[164] - v[163]);
+        v[168] = v[4] * (v[163] + v[164]);
+        v[169] = (-v[163] - v[164]) * v[4];
+        v[170] = 0.25 * v[167] - 0.25 * v[165] - 0.25 * v[168] + v[19] + 0.25 * v[169];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -1063,11 +1079,6 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -1081,39 +1092,9 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
-        let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let mut v = [0.0f64; 41];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1146,30 +1127,42 @@ pub mod lagrange {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
+                    + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
+                + v[29] * Y_dot
+                + X_dot
+                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
+                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
+                + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
+                    + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
+                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
+                + Z_dot * v[37],
             theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
+                    + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
+                + v[29] * X_dot
+                + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
+                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+                    * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
+                        + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
+                + Y_dot
+                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
+                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
+                + Z_dot * v[40],
             theta_dot
                 * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    * (v[3] * v[14] * v[4] * v[4]
+                        + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
                     + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
+                            + v[22] * v[3] * v[7] * v[7]))
+                + (m2 * gamma2_dot * v[33]
+                    + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
+                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
+                + v[40] * Y_dot + X_dot * v[37],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1177,6 +1170,81 @@ pub mod lagrange {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(gamma2);
+        v[1] = f64::cos(gamma2);
+        v[2] = f64::cos(psi);
+        v[3] = f64::cos(theta);
+        v[4] = f64::sin(phi);
+        v[5] = f64::sin(psi);
+        v[6] = f64::sin(theta);
+        v[7] = f64::cos(phi);
+        v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
+        v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
+        v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
+        v[11] = d + v[1] * a_;
+        v[12] = v[10] * v[11] - a_ * v[0] * v[9];
+        v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
+        v[14] = a_ + v[1] * d;
+        v[15] = f64::sin(gamma1);
+        v[16] = f64::cos(gamma1);
+        v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
+        v[18] = v[16] * a_;
+        v[19] = -v[18] - d;
+        v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
+        v[21] = a_ * v[15] * v[20];
+        v[22] = -a_ - v[16] * d;
+        v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
+        v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
+        v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
+        v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
+        v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
+        v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
+        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
+            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
+        v[30] = v[18] + d;
+        v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
+        v[32] = -v[31] * d - a_ * v[3] * v[4];
+        v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
+        v[34] = -a_ * v[3] * v[7] - v[33] * d;
+        v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
+        v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
+        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
+            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
+        v[38] = v[27] * v[11] - a_ * v[28] * v[0];
+        v[39] = a_ * v[15] * v[25];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
+            + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -1291,18 +1359,18 @@ pub mod maggi {
         let X_dot = state[13];
         let Y_dot = state[14];
         let Z_dot = state[15];
+        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let J2 = params.J2;
-        let mut v = [0.0f64; 246];
+        let mut v = [0.0f64; 215];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
         rhs_part3(t, state, params, g_i, &mut v);
         rhs_part4(t, state, params, g_i, &mut v);
         rhs_part5(t, state, params, g_i, &mut v);
-        rhs_part6(t, state, params, g_i, &mut v);
         Assembly {
             qdot: [
                 psi_dot,
@@ -1339,56 +1407,76 @@ pub mod maggi {
                 ],
                 [0.0, v[74], v[103], J2 + d * d * m1, 0.0, v[107], v[108], v[109]],
                 [0.0, v[76], 0.0, 0.0, m2 * d * d + J2, v[110], v[111], v[112]],
-                [v[37], v[87], v[104], v[107], v[110], v[113], 0.0, 0.0],
-                [v[41], v[98], v[105], v[108], v[111], 0.0, v[113], 0.0],
-                [v[43], v[100], v[106], v[109], v[112], 0.0, 0.0, v[113]],
+                [
+                    v[37],
+                    v[87],
+                    v[104],
+                    v[107],
+                    v[110],
+                    m0 + m1 * (v[80] * v[80] + v[81] * v[81] + v[34] * v[34])
+                        + m2 * (v[78] * v[78] + v[77] * v[77] + v[35] * v[35]),
+                    v[113],
+                    v[114],
+                ],
+                [
+                    v[41],
+                    v[98],
+                    v[105],
+                    v[108],
+                    v[111],
+                    v[113],
+                    (v[93] * v[93] + v[91] * v[91] + v[39] * v[39]) * m1 + m0
+                        + m2 * (v[38] * v[38] + v[89] * v[89] + v[88] * v[88]),
+                    v[115],
+                ],
+                [v[43], v[100], v[106], v[109], v[112], v[114], v[115], m2 + m0 + m1],
             ],
             force: [
-                v[188],
-                v[29] * v[10] * v[221] + v[222] * v[9],
-                v[29] * v[221] * v[9] - v[10] * v[222],
-                v[15] * psi_dot * v[10] * v[102] * phi_dot
-                    - theta_dot * v[187] * v[101] * v[9]
-                    + J2 * (v[156] - v[155] - v[200]) - d * m1 * v[197] + v[205],
-                v[166] * v[167] * v[173] + (v[136] - theta_dot * v[187] * v[10]) * v[75]
-                    - v[212] - m2 * v[219] * d,
-                theta_dot * (-v[186] * d * v[36] - (v[84] + v[85]) * v[187] * v[29])
-                    - m2 * (v[35] * v[184] + v[77] * v[218] + v[219] * v[78])
-                    - (v[151] * v[34] + v[80] * v[197] + v[195] * v[81]) * m1
+                v[163],
+                v[190] * v[9] + v[29] * v[191] * v[10],
+                v[29] * v[191] * v[9] - v[10] * v[190],
+                v[15] * psi_dot * v[10] * v[102] * phi_dot - v[167] * d * m1
+                    - theta_dot * v[162] * v[101] * v[9]
+                    + J2 * (v[128] - v[127] - v[170]) + v[176],
+                v[137] * v[138] * v[146] + (v[134] - theta_dot * v[162] * v[10]) * v[75]
+                    - v[188] - m2 * v[180] * d,
+                theta_dot * (-v[161] * d * v[36] - (v[84] + v[85]) * v[162] * v[29])
+                    - m2 * (v[180] * v[78] + v[35] * v[147] + v[77] * v[179])
+                    - (v[165] * v[81] + v[80] * v[167] + v[156] * v[34]) * m1
                     + v[15] * psi_dot * phi_dot * v[83],
-                (-v[40] * v[186] * d - v[187] * v[29] * (v[95] + v[96])) * theta_dot
-                    - m2 * (v[184] * v[38] + v[219] * v[89] + v[88] * v[218])
-                    - (v[195] * v[91] + v[151] * v[39] + v[93] * v[197]) * m1
-                    + v[15] * psi_dot * phi_dot * v[94],
-                v[15] * (v[99] * psi_dot * phi_dot - theta_dot * v[42] * v[186] * d)
+                (-v[40] * v[161] * d - v[162] * v[29] * (v[95] + v[96])) * theta_dot
+                    + v[15] * psi_dot * phi_dot * v[94]
+                    - m2 * (v[147] * v[38] + v[88] * v[179] + v[180] * v[89])
+                    - (v[165] * v[91] + v[167] * v[93] + v[156] * v[39]) * m1,
+                v[15] * (v[99] * psi_dot * phi_dot - theta_dot * v[42] * v[161] * d)
                     - m2
-                        * (((0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228]
-                            + 0.25 * v[229]) * phi_dot * phi_dot
-                            + (theta_dot * v[230]
+                        * (((0.25 * v[195] - 0.25 * v[196] - 0.25 * v[197]
+                            + 0.25 * v[198]) * phi_dot * phi_dot
+                            + (theta_dot * v[199]
                                 + phi_dot
-                                    * (v[233] - 0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
-                                        + 0.5 * v[229] - v[234])) * theta_dot
+                                    * (v[202] - 0.5 * v[195] - 0.5 * v[196] + 0.5 * v[197]
+                                        + 0.5 * v[198] - v[203])) * theta_dot
                             + gamma2_dot
                                 * (phi_dot
-                                    * (0.5 * v[226] - 0.5 * v[227] + 0.5 * v[228]
-                                        - 0.5 * v[229])
-                                    + (-v[233] - 0.5 * v[226] - 0.5 * v[227]
-                                        - 2.0 * (v[15] * v[0]) - 0.5 * v[228] - 0.5 * v[229]
-                                        - v[234]) * theta_dot + gamma2_dot * v[230])) * d - v[223])
-                    - (v[223]
+                                    * (0.5 * v[195] - 0.5 * v[196] + 0.5 * v[197]
+                                        - 0.5 * v[198])
+                                    + (-v[202] - 0.5 * v[195] - 0.5 * v[196]
+                                        - 2.0 * (v[15] * v[0]) - 0.5 * v[197] - 0.5 * v[198]
+                                        - v[203]) * theta_dot + gamma2_dot * v[199])) * d - v[192])
+                    - (v[192]
                         + (theta_dot
-                            * ((0.5 * v[240] - v[237] + v[241] + 2.0 * (v[1] * v[15])
-                                + 0.5 * v[242] - 0.5 * v[243] - 0.5 * v[244]) * gamma1_dot
-                                + theta_dot * v[245]
-                                + (0.5 * v[240] - 0.5 * v[242] - 0.5 * v[243]
-                                    + 0.5 * v[244]) * phi_dot)
+                            * ((0.5 * v[209] - v[206] + v[210] + 2.0 * (v[1] * v[15])
+                                + 0.5 * v[211] - 0.5 * v[212] - 0.5 * v[213]) * gamma1_dot
+                                + theta_dot * v[214]
+                                + (0.5 * v[209] - 0.5 * v[211] - 0.5 * v[212]
+                                    + 0.5 * v[213]) * phi_dot)
                             + gamma1_dot
-                                * (v[245] * gamma1_dot
+                                * (v[214] * gamma1_dot
                                     + phi_dot
-                                        * (v[237] - 0.5 * v[240] + v[241] - 0.5 * v[242]
-                                            - 0.5 * v[243] - 0.5 * v[244]))
-                            + (0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243]
-                                + 0.25 * v[244]) * phi_dot * phi_dot) * d) * m1,
+                                        * (v[206] - 0.5 * v[209] + v[210] - 0.5 * v[211]
+                                            - 0.5 * v[212] - 0.5 * v[213]))
+                            + (0.25 * v[211] - 0.25 * v[209] - 0.25 * v[212]
+                                + 0.25 * v[213]) * phi_dot * phi_dot) * d) * m1,
             ],
             w: [
                 [0.0, v[29] * v[10], v[29] * v[9], 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1410,9 +1498,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * v[187] * v[29],
+                theta_dot * v[162] * v[29],
                 -(v[15] * psi_dot * phi_dot),
-                theta_dot * v[186],
+                theta_dot * v[161],
                 0.0,
                 0.0,
                 0.0,
@@ -1429,7 +1517,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -1495,7 +1583,7 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -1566,12 +1654,10 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
-        let gamma1_dot = state[11];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
@@ -1617,13 +1703,16 @@ pub mod maggi {
         v[110] = m2 * d * v[78];
         v[111] = m2 * d * v[89];
         v[112] = m2 * v[22] * d;
-        v[113] = m2 + m0 + m1;
-        v[114] = v[15] * psi_dot * v[9];
-        v[115] = theta_dot * v[10];
-        v[116] = v[114] + gamma1_dot - v[115];
-        v[117] = theta_dot * v[9];
-        v[118] = v[15] * psi_dot * v[10];
-        v[119] = v[117] + v[118];
+        v[113] = (v[80] * v[93] + v[81] * v[91] + v[34] * v[39]) * m1
+            + m2 * (v[35] * v[38] + v[89] * v[78] + v[88] * v[77]);
+        v[114] = m1 * (v[18] * v[81] + v[80] * v[23] + v[15] * v[34] * v[9])
+            + (v[20] * v[77] + v[22] * v[78] + v[35] * v[15] * v[10]) * m2;
+        v[115] = m2 * (v[88] * v[20] + v[22] * v[89] + v[15] * v[10] * v[38])
+            + (v[15] * v[39] * v[9] + v[18] * v[91] + v[93] * v[23]) * m1;
+        v[116] = theta_dot * v[9];
+        v[117] = v[15] * psi_dot * v[10];
+        v[118] = v[116] + v[117];
+        v[119] = v[13] * psi_dot;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1632,15 +1721,13 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
+        let gamma2_dot = state[12];
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
@@ -1648,50 +1735,50 @@ pub mod maggi {
         let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
+        let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[13] * psi_dot;
-        v[121] = phi_dot - v[120];
-        v[122] = v[1] * v[119] + v[2] * v[121];
-        v[123] = v[116] * v[7] * v[122];
-        v[124] = Z_dot * v[15] * v[10];
-        v[125] = v[35] * X_dot;
-        v[126] = Y_dot * v[38];
-        v[127] = v[114] - v[115];
-        v[128] = a_ * v[127];
-        v[129] = v[124] + v[125] + v[126] + v[128];
-        v[130] = Y_dot * v[32];
-        v[131] = X_dot * v[33];
-        v[132] = v[15] * (v[130] + v[131]) - Z_dot * v[13];
-        v[133] = v[2] * v[129] - v[132] * v[1] + v[116] * d;
-        v[134] = -phi_dot - v[120];
-        v[135] = theta_dot * v[134] * v[10];
-        v[136] = v[15] * psi_dot * phi_dot * v[9];
-        v[137] = v[135] + v[136];
-        v[138] = a_ * v[137];
-        v[139] = v[135] + v[136] - gamma1_dot * v[121];
-        v[140] = gamma1_dot * v[119];
-        v[141] = theta_dot * v[15] * psi_dot;
-        v[142] = v[2] * v[139] + v[1] * (v[141] - v[140]);
-        v[143] = v[13] * phi_dot;
-        v[144] = psi_dot - v[143];
-        v[145] = X_dot
-            * (v[121] * v[9] * v[32]
-                + v[33] * (theta_dot * v[15] * v[9] + v[144] * v[10]));
-        v[146] = Z_dot * (-v[15] * v[10] * phi_dot - v[13] * theta_dot * v[9]);
-        v[147] = v[2] * v[132] + v[1] * v[129];
-        v[148] = v[2] * v[119] - v[1] * v[121];
-        v[149] = theta_dot * v[15] * v[32] + v[33] * (v[120] - phi_dot);
-        v[150] = (v[144] * v[10] * v[32] + v[149] * v[9]) * Y_dot;
-        v[151] = v[133] * v[122] - v[138] - d * v[142] + v[145] + v[146]
-            - v[147] * v[148] + v[150];
-        v[152] = J2 * v[142];
-        v[153] = v[127] * Izz - Iyz * v[119] - Ixz * v[121];
-        v[154] = v[153] * v[119];
-        v[155] = theta_dot * v[134] * v[9];
-        v[156] = v[15] * psi_dot * v[10] * phi_dot;
-        v[157] = v[155] - v[156];
-        v[158] = v[157] * Ixz;
-        v[159] = Iyy * v[119] - v[127] * Iyz - Ixy * v[121];
+        v[120] = phi_dot - v[119];
+        v[121] = v[15] * psi_dot * v[9];
+        v[122] = theta_dot * v[10];
+        v[123] = v[121] - v[122];
+        v[124] = v[123] * Izz - Iyz * v[118] - Ixz * v[120];
+        v[125] = v[124] * v[118];
+        v[126] = -phi_dot - v[119];
+        v[127] = theta_dot * v[126] * v[9];
+        v[128] = v[15] * psi_dot * v[10] * phi_dot;
+        v[129] = v[127] - v[128];
+        v[130] = v[129] * Ixz;
+        v[131] = Iyy * v[118] - v[123] * Iyz - Ixy * v[120];
+        v[132] = v[123] * v[131];
+        v[133] = theta_dot * v[126] * v[10];
+        v[134] = v[15] * psi_dot * phi_dot * v[9];
+        v[135] = v[133] + v[134];
+        v[136] = Ixy * v[135];
+        v[137] = J2 - J1;
+        v[138] = v[4] * v[120] - v[123] * v[0];
+        v[139] = gamma2_dot + v[116] + v[117];
+        v[140] = v[137] * v[138] * v[139];
+        v[141] = v[139] * d + v[4] * a_ * v[118];
+        v[142] = theta_dot * v[15] * psi_dot;
+        v[143] = -v[123] * gamma2_dot - v[142];
+        v[144] = gamma2_dot * v[120];
+        v[145] = v[143] * v[0] + (v[127] - v[128] + v[144]) * v[4];
+        v[146] = v[0] * v[120] + v[4] * v[123];
+        v[147] = a_ * (v[128] - v[127] - v[146] * v[0] * v[118]) - v[141] * v[138]
+            - v[145] * d;
+        v[148] = J2 * v[145];
+        v[149] = v[1] * v[118] + v[2] * v[120];
+        v[150] = v[121] + gamma1_dot - v[122];
+        v[151] = v[2] * a_ * v[123] + v[150] * d;
+        v[152] = v[133] + v[134] - gamma1_dot * v[120];
+        v[153] = gamma1_dot * v[118];
+        v[154] = v[2] * v[152] + v[1] * (v[142] - v[153]);
+        v[155] = v[2] * v[118] - v[1] * v[120];
+        v[156] = v[149] * v[151] - d * v[154]
+            + a_ * (-v[123] * v[1] * v[155] - v[133] - v[134]);
+        v[157] = v[150] * v[7] * v[149];
+        v[158] = J2 * v[154];
+        v[159] = v[2] * (v[153] - v[142]) + v[152] * v[1];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1700,90 +1787,13 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
         let theta = state[1];
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let X_dot = state[13];
-        let Y_dot = state[14];
-        let Z_dot = state[15];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[160] = v[127] * v[159];
-        v[161] = Ixy * v[137];
-        v[162] = v[2] * (v[140] - v[141]) + v[139] * v[1];
-        v[163] = gamma2_dot * v[121];
-        v[164] = -v[127] * gamma2_dot - v[141];
-        v[165] = v[0] * (v[156] - v[155] - v[163]) + v[4] * v[164];
-        v[166] = J2 - J1;
-        v[167] = v[4] * v[121] - v[127] * v[0];
-        v[168] = gamma2_dot + v[117] + v[118];
-        v[169] = v[166] * v[167] * v[168];
-        v[170] = v[143] - psi_dot;
-        v[171] = Y_dot * (v[149] * v[10] + v[170] * v[9] * v[32]);
-        v[172] = v[157] * a_;
-        v[173] = v[0] * v[121] + v[4] * v[127];
-        v[174] = a_ * v[119];
-        v[175] = Y_dot * v[39];
-        v[176] = X_dot * v[34];
-        v[177] = Z_dot * v[15] * v[9];
-        v[178] = v[174] + v[175] + v[176] + v[177];
-        v[179] = v[132] * v[4] - v[178] * v[0];
-        v[180] = Z_dot * (v[15] * phi_dot * v[9] - v[13] * theta_dot * v[10]);
-        v[181] = X_dot
-            * (v[33] * (theta_dot * v[15] * v[10] + v[170] * v[9])
-                + v[10] * v[121] * v[32]);
-        v[182] = v[168] * d + v[132] * v[0] + v[4] * v[178];
-        v[183] = v[164] * v[0] + (v[155] - v[156] + v[163]) * v[4];
-        v[184] = v[171] - v[172] + v[173] * v[179] + v[180] + v[181] - v[167] * v[182]
-            - v[183] * d;
-        v[185] = J2 * v[183];
-        v[186] = ((0.25 - 0.25 * (v[29] * f64::cos(3.0 * theta))) * psi_dot + v[143])
-            * v[29] + v[15] * psi_dot;
-        v[187] = 0.5 * (v[29] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        v[188] = (v[123] - v[151] * d * m1 + v[152]) * v[1] - v[154] + v[158] + v[160]
-            + v[161] + v[12] * v[15] * psi_dot * phi_dot
-            + (-v[2] * v[162] - v[4] * v[165]) * J1
-            + (m2 * v[184] * d - v[169] - v[185]) * v[0]
-            + theta_dot
-                * (Ixx * v[15] * psi_dot - v[6] * v[186] - v[187] * v[29] * v[63]);
-        v[189] = v[123] + v[152];
-        v[190] = v[175] - v[174] + v[176] + v[177] - d * v[148];
-        v[191] = v[15] * psi_dot * (v[33] * Y_dot - X_dot * v[32]);
-        v[192] = gamma1_dot * v[129];
-        v[193] = theta_dot * (v[13] * (-v[130] - v[131]) - Z_dot * v[15]);
-        v[194] = v[171] + v[172] + v[180] + v[181] - v[132] * gamma1_dot;
-        v[195] = v[148] * v[190] - v[133] * v[116] + v[2] * (v[191] + v[192] + v[193])
-            + v[194] * v[1];
-        v[196] = a_ * v[1] * v[195];
-        v[197] = v[157] * d - v[122] * v[190] + v[1] * (-v[191] - v[192] - v[193])
-            + v[2] * v[194] + v[116] * v[147];
-        v[198] = theta_dot * v[15] * psi_dot * Ixz;
-        v[199] = v[159] * v[121];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part5(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
         let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
@@ -1797,86 +1807,103 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[200] = v[122] * v[148];
-        v[201] = J2 * (v[155] + v[200] - v[156]);
-        v[202] = Ixx * v[121] - v[127] * Ixz - Ixy * v[119];
-        v[203] = v[119] * v[202];
-        v[204] = Iyz * v[137];
-        v[205] = v[122] * v[148] * J1;
-        v[206] = v[157] * Izz;
-        v[207] = v[127] * v[202];
-        v[208] = Iyy * v[137];
-        v[209] = v[153] * v[121];
-        v[210] = Ixy * theta_dot * v[15] * psi_dot;
-        v[211] = v[157] * Iyz;
-        v[212] = J2 * v[137];
-        v[213] = v[167] * v[7] * v[173];
-        v[214] = v[169] + v[185];
-        v[215] = v[124] + v[125] + v[126] - v[173] * d - v[128];
-        v[216] = v[132] * gamma2_dot;
-        v[217] = v[191] - gamma2_dot * v[178] + v[193];
-        v[218] = v[0] * (-v[216] - v[138] - v[145] - v[146] - v[150]) - v[173] * v[215]
-            + v[4] * v[217] + v[168] * v[182];
-        v[219] = v[137] * d - v[168] * v[179]
-            + v[4] * (v[216] + v[138] + v[145] + v[146] + v[150]) + v[167] * v[215]
-            + v[0] * v[217];
-        v[220] = v[219] * v[46] - a_ * v[0] * v[218];
-        v[221] = v[13] * v[188] - v[189] * v[23]
-            + (-v[20] * v[165] - v[18] * v[162]) * J1
-            + (v[154] - theta_dot * Ixx * v[15] * psi_dot - v[158] - v[160] - v[161])
+        v[160] = v[0] * (v[128] - v[127] - v[144]) + v[4] * v[143];
+        v[161] = ((0.25 - 0.25 * (v[29] * f64::cos(3.0 * theta))) * psi_dot
+            + v[13] * phi_dot) * v[29] + v[15] * psi_dot;
+        v[162] = 0.5 * (v[29] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        v[163] = v[130] - v[125] + v[132] + v[136]
+            + v[0] * (m2 * v[147] * d - v[140] - v[148])
+            + v[12] * v[15] * psi_dot * phi_dot
+            + v[1] * (v[157] - v[156] * d * m1 + v[158])
+            + (-v[2] * v[159] - v[4] * v[160]) * J1
+            + theta_dot
+                * (Ixx * v[15] * psi_dot - v[6] * v[161] - v[162] * v[29] * v[63]);
+        v[164] = -a_ * v[118] - d * v[155];
+        v[165] = v[164] * v[155] - v[150] * v[151]
+            + a_ * (v[2] * v[123] * gamma1_dot + v[129] * v[1]);
+        v[166] = a_ * v[1] * v[165];
+        v[167] = v[129] * d - v[149] * v[164]
+            + a_ * (v[2] * v[129] + v[123] * v[123] * v[1]);
+        v[168] = theta_dot * v[15] * psi_dot * Ixz;
+        v[169] = v[131] * v[120];
+        v[170] = v[149] * v[155];
+        v[171] = J2 * (v[127] + v[170] - v[128]);
+        v[172] = v[140] + v[148];
+        v[173] = Ixx * v[120] - v[123] * Ixz - Ixy * v[118];
+        v[174] = v[118] * v[173];
+        v[175] = Iyz * v[135];
+        v[176] = v[149] * v[155] * J1;
+        v[177] = v[129] * Izz;
+        v[178] = -v[146] * d - a_ * v[123];
+        v[179] = a_ * (-v[4] * gamma2_dot * v[118] - v[135] * v[0]) - v[146] * v[178]
+            + v[141] * v[139];
+        v[180] = v[135] * d + v[138] * v[178]
+            + a_ * (v[4] * v[135] + v[0] * v[118] * v[118]);
+        v[181] = v[180] * v[46] - a_ * v[0] * v[179];
+        v[182] = v[123] * v[173];
+        v[183] = Iyy * v[135];
+        v[184] = v[124] * v[120];
+        v[185] = Ixy * theta_dot * v[15] * psi_dot;
+        v[186] = v[157] + v[158];
+        v[187] = v[129] * Iyz;
+        v[188] = J2 * v[135];
+        v[189] = v[138] * v[7] * v[146];
+        v[190] = (-v[162] * v[29] * v[69] - v[12] * v[161]) * theta_dot
+            - (v[10] * (v[167] * v[52] - v[166]) + v[156] * v[8] * v[9]) * m1
+            + v[10]
+                * (v[168] - v[160] * v[0] * J1 + v[169] + v[171] + v[4] * v[172] - v[174]
+                    - v[175] - v[176] + v[177])
+            - m2 * (v[181] * v[9] + v[147] * v[11] * v[10])
+            + v[15] * psi_dot * v[53] * phi_dot
+            + (v[184] - v[182] - v[183] - v[1] * J1 * v[159] - v[185] - v[2] * v[186]
+                + v[187] - v[188] - v[189]) * v[9];
+        v[191] = (-v[20] * v[160] - v[18] * v[159]) * J1 - v[186] * v[23]
+            - ((v[166] + v[167] * v[56]) * v[15] * v[9] + v[156] * v[25]) * m1
+            + (v[125] - theta_dot * Ixx * v[15] * psi_dot - v[130] - v[132] - v[136])
                 * v[13]
-            - ((v[196] + v[56] * v[197]) * v[15] * v[9] + v[151] * v[25]) * m1
             + v[15]
                 * (psi_dot * phi_dot * v[69]
-                    + (v[203] - v[198] - v[199] - v[201] + v[204] + v[205] - v[206])
+                    + (v[174] - v[168] - v[169] - v[171] + v[175] + v[176] - v[177])
                         * v[9]
                     + v[10]
-                        * (v[209] - v[207] - v[208] - v[210] + v[211] - v[212] - v[213]))
-            - v[214] * v[22] - m2 * (v[184] * v[26] + v[220] * v[15] * v[10])
+                        * (v[184] - v[182] - v[183] - v[185] + v[187] - v[188] - v[189]))
+            - v[172] * v[22] + v[13] * v[163]
             + theta_dot
-                * (-v[187] * v[29] * (v[60] + v[61] + v[62] + v[65] - v[66] + v[67])
-                    - v[186] * v[63]);
-        v[222] = (-v[187] * v[29] * v[69] - v[12] * v[186]) * theta_dot
-            - m2 * (v[184] * v[11] * v[10] + v[220] * v[9])
-            - (v[8] * v[151] * v[9] + v[10] * (v[52] * v[197] - v[196])) * m1
-            + v[10]
-                * (v[198] - v[165] * v[0] * J1 + v[199] + v[201] + v[4] * v[214] - v[203]
-                    - v[204] - v[205] + v[206]) + v[15] * psi_dot * v[53] * phi_dot
-            + (v[209] - v[207] - v[208] - v[1] * J1 * v[162] - v[210] - v[2] * v[189]
-                + v[211] - v[212] - v[213]) * v[9];
-        v[223] = a_ * v[13] * theta_dot * theta_dot;
-        v[224] = v[4] * v[10];
-        v[225] = v[0] * v[9];
-        v[226] = (-v[224] - v[225]) * v[15];
-        v[227] = v[15] * (v[224] + v[225]);
-        v[228] = (v[225] - v[224]) * v[15];
-        v[229] = (v[224] - v[225]) * v[15];
-        v[230] = 0.25 * v[226] - 0.25 * v[227] - 0.25 * v[228] + 0.25 * v[229] - v[19];
-        v[231] = v[0] * v[10];
-        v[232] = v[4] * v[9];
-        v[233] = v[13] * (v[231] + v[232]);
-        v[234] = v[13] * (v[232] - v[231]);
-        v[235] = v[13] * v[10];
-        v[236] = v[15] * v[9];
-        v[237] = v[2] * (v[235] + v[236]);
-        v[238] = v[15] * v[10];
-        v[239] = v[13] * v[9];
+                * (-v[162] * v[29] * (v[60] + v[61] + v[62] + v[65] - v[66] + v[67])
+                    - v[161] * v[63]) - m2 * (v[181] * v[15] * v[10] + v[147] * v[26]);
+        v[192] = a_ * v[13] * theta_dot * theta_dot;
+        v[193] = v[4] * v[10];
+        v[194] = v[0] * v[9];
+        v[195] = (-v[193] - v[194]) * v[15];
+        v[196] = v[15] * (v[193] + v[194]);
+        v[197] = (v[194] - v[193]) * v[15];
+        v[198] = (v[193] - v[194]) * v[15];
+        v[199] = 0.25 * v[195] - 0.25 * v[196] - 0.25 * v[197] + 0.25 * v[198] - v[19];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
-    fn rhs_part6(
+    fn rhs_part5(
         _t: f64,
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 246],
+        v: &mut [f64; 215],
     ) {
-        v[240] = v[1] * (v[238] - v[239]);
-        v[241] = v[2] * (v[236] - v[235]);
-        v[242] = v[1] * (v[239] - v[238]);
-        v[243] = v[1] * (v[238] + v[239]);
-        v[244] = (-v[238] - v[239]) * v[1];
-        v[245] = 0.25 * v[242] - 0.25 * v[240] - 0.25 * v[243] + v[17] + 0.25 * v[244];
+        v[200] = v[0] * v[10];
+        v[201] = v[4] * v[9];
+        v[202] = v[13] * (v[200] + v[201]);
+        v[203] = v[13] * (v[201] - v[200]);
+        v[204] = v[13] * v[10];
+        v[205] = v[15] * v[9];
+        v[206] = v[2] * (v[204] + v[205]);
+        v[207] = v[15] * v[10];
+        v[208] = v[13] * v[9];
+        v[209] = v[1] * (v[207] - v[208]);
+        v[210] = v[2] * (v[205] - v[204]);
+        v[211] = v[1] * (v[208] - v[207]);
+        v[212] = v[1] * (v[207] + v[208]);
+        v[213] = (-v[207] - v[208]) * v[1];
+        v[214] = 0.25 * v[211] - 0.25 * v[209] - 0.25 * v[212] + v[17] + 0.25 * v[213];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -1965,11 +1992,6 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -1983,39 +2005,9 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
-        let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let mut v = [0.0f64; 41];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2048,30 +2040,42 @@ pub mod maggi {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
+                    + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
+                + v[29] * Y_dot
+                + X_dot
+                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
+                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
+                + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
+                    + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
+                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
+                + Z_dot * v[37],
             theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
+                    + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
+                + v[29] * X_dot
+                + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
+                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
+                    * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
+                        + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
+                + Y_dot
+                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
+                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
+                + Z_dot * v[40],
             theta_dot
                 * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    * (v[3] * v[14] * v[4] * v[4]
+                        + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
                     + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
+                            + v[22] * v[3] * v[7] * v[7]))
+                + (m2 * gamma2_dot * v[33]
+                    + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
+                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
+                + v[40] * Y_dot + X_dot * v[37],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2079,6 +2083,81 @@ pub mod maggi {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(gamma2);
+        v[1] = f64::cos(gamma2);
+        v[2] = f64::cos(psi);
+        v[3] = f64::cos(theta);
+        v[4] = f64::sin(phi);
+        v[5] = f64::sin(psi);
+        v[6] = f64::sin(theta);
+        v[7] = f64::cos(phi);
+        v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
+        v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
+        v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
+        v[11] = d + v[1] * a_;
+        v[12] = v[10] * v[11] - a_ * v[0] * v[9];
+        v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
+        v[14] = a_ + v[1] * d;
+        v[15] = f64::sin(gamma1);
+        v[16] = f64::cos(gamma1);
+        v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
+        v[18] = v[16] * a_;
+        v[19] = -v[18] - d;
+        v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
+        v[21] = a_ * v[15] * v[20];
+        v[22] = -a_ - v[16] * d;
+        v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
+        v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
+        v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
+        v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
+        v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
+        v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
+        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
+            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
+        v[30] = v[18] + d;
+        v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
+        v[32] = -v[31] * d - a_ * v[3] * v[4];
+        v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
+        v[34] = -a_ * v[3] * v[7] - v[33] * d;
+        v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
+        v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
+        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
+            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
+        v[38] = v[27] * v[11] - a_ * v[28] * v[0];
+        v[39] = a_ * v[15] * v[25];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
+            + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -2201,6 +2280,7 @@ pub mod kane {
         let u6 = state[13];
         let u7 = state[14];
         let u8 = state[15];
+        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -2210,116 +2290,113 @@ pub mod kane {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 217];
+        let mut v = [0.0f64; 99];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
-        rhs_part3(t, state, params, g_i, &mut v);
-        rhs_part4(t, state, params, g_i, &mut v);
-        rhs_part5(t, state, params, g_i, &mut v);
         Assembly {
-            qdot: [v[1] * v[4], v[5], v[7], u4, u5, u6, u7, u8],
+            qdot: [
+                v[1] * v[4],
+                u2 * v[3] - u3 * v[2],
+                v[5] * v[1] * v[4] + u1,
+                u4,
+                u5,
+                u6,
+                u7,
+                u8,
+            ],
             matrix: [
                 [
-                    Ixx + d * d * (m2 * v[8] * v[8] + v[9] * v[9] * m1)
-                        + (v[11] + v[13]) * J1 + (v[8] * v[8] + v[9] * v[9]) * J2,
-                    v[17],
-                    v[21],
+                    Ixx + d * d * (m2 * v[6] * v[6] + v[7] * v[7] * m1)
+                        + (v[9] + v[11]) * J1 + (v[6] * v[6] + v[7] * v[7]) * J2,
+                    v[15],
+                    v[19],
                     0.0,
                     0.0,
-                    v[28],
+                    v[24],
+                    v[29],
+                    v[30],
+                ],
+                [
+                    v[15],
+                    v[7] * v[7] * J1 + v[14] * v[14] * m1 + Iyy + J2 * (v[9] + 1.0)
+                        + m2 * (v[31] + a_ * (a_ + 2.0 * v[17])),
+                    v[32],
+                    0.0,
                     v[34],
-                    v[35],
+                    v[37],
+                    v[40],
+                    v[43],
                 ],
                 [
-                    v[17],
-                    v[9] * v[9] * J1 + v[16] * v[16] * m1 + Iyy + J2 * (v[11] + 1.0)
-                        + m2 * (v[36] + a_ * (a_ + 2.0 * v[19])),
-                    v[37],
-                    0.0,
-                    v[39],
-                    v[42],
+                    v[19],
+                    v[32],
+                    v[6] * v[6] * J1 + (a_ * (a_ + 2.0 * v[13]) + v[31]) * m1
+                        + m2 * v[18] * v[18] + Izz + J2 * (v[11] + 1.0),
                     v[45],
-                    v[49],
+                    0.0,
+                    v[48],
+                    v[51],
+                    v[54],
+                ],
+                [0.0, 0.0, v[45], J2 + d * d * m1, 0.0, v[55], v[56], v[57]],
+                [0.0, v[34], 0.0, 0.0, m2 * d * d + J2, v[58], v[59], v[60]],
+                [
+                    v[24],
+                    v[37],
+                    v[48],
+                    v[55],
+                    v[58],
+                    m0 + (v[46] * v[46] + v[47] * v[47] + v[22] * v[22]) * m1
+                        + m2 * (v[36] * v[36] + v[35] * v[35] + v[23] * v[23]),
+                    v[61],
+                    v[62],
                 ],
                 [
-                    v[21],
-                    v[37],
-                    v[8] * v[8] * J1 + (a_ * (a_ + 2.0 * v[15]) + v[36]) * m1
-                        + m2 * v[20] * v[20] + Izz + J2 * (v[13] + 1.0),
+                    v[29],
+                    v[40],
                     v[51],
-                    0.0,
-                    v[54],
-                    v[57],
+                    v[56],
+                    v[59],
                     v[61],
+                    (v[49] * v[49] + v[50] * v[50] + v[28] * v[28]) * m1 + m0
+                        + (v[25] * v[25] + v[39] * v[39] + v[38] * v[38]) * m2,
+                    v[63],
                 ],
-                [0.0, 0.0, v[51], J2 + d * d * m1, 0.0, v[62], v[63], v[64]],
-                [0.0, v[39], 0.0, 0.0, m2 * d * d + J2, v[65], v[66], v[67]],
-                [v[28], v[42], v[54], v[62], v[65], v[68], 0.0, 0.0],
-                [v[34], v[45], v[57], v[63], v[66], 0.0, v[68], 0.0],
-                [v[35], v[49], v[61], v[64], v[67], 0.0, 0.0, v[68]],
+                [v[30], v[43], v[54], v[57], v[60], v[62], v[63], m2 + m0 + m1],
             ],
             force: [
-                v[9] * (v[71] + v[74] - d * m1 * v[105])
-                    + (-v[12] * u5 * v[108] - v[10] * v[84] * u4) * J1 - v[109] * u2
-                    + u3 * v[110] + (m2 * v[127] * d - v[112] * v[115]) * v[8],
-                v[128] + v[109] * u1 - v[84] * u4 * v[9] * J1 - u3 * v[129]
-                    - m2 * (v[134] * v[38] - a_ * v[135] * v[8])
-                    - v[10] * (v[71] + v[74]) - v[16] * m1 * v[105],
-                u5 * v[108] * v[8] * J1 - m2 * v[127] * v[20]
-                    - (v[138] * v[50] + a_ * v[9] * v[139]) * m1 - u1 * v[110] + v[140]
-                    - v[112] * v[12] * v[115] + v[129] * u2,
-                v[140] - v[138] * d * m1,
-                v[128] - m2 * d * v[134],
-                -m2 * (v[41] * v[134] + v[27] * v[127] + v[40] * v[135])
-                    - (v[53] * v[139] + v[25] * v[105] + v[52] * v[138]) * m1,
-                -m1 * (v[138] * v[55] + v[139] * v[56] + v[33] * v[105])
-                    - m2 * (v[44] * v[134] + v[127] * v[30] + v[135] * v[43]),
-                -(u3 * (v[157] + v[168] + a_ * (v[169] + v[170]))
-                    + (v[171] + a_ * (v[172] + v[173]) + v[174]) * u2
-                    + ((u1
-                        * (0.5 * v[178] - 0.25 * v[182] + 0.5 * v[184] - 0.25 * v[186]
-                            - 0.25 * v[188] - 0.25 * v[190]) + v[191] * u3
-                        + (0.25 * v[192] + 0.25 * v[193] + 0.25 * v[194] + 0.5 * v[195]
-                            + 0.25 * v[196] + 0.5 * v[197]) * u2) * u3
-                        + u1
-                            * (u1
-                                * (0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188]
-                                    + 0.25 * v[190])
-                                + (0.25 * v[192] + 0.25 * v[193] - 0.25 * v[194] - v[58]
-                                    - 0.25 * v[196]) * u2) + v[10] * v[6] * u2 * u2
-                        + u4
-                            * (u2
-                                * (0.5 * v[192] + 0.5 * v[193] + 0.5 * v[194] + v[195]
-                                    + 0.5 * v[196] + v[197])
-                                + (0.5 * v[186] - 0.5 * v[182] - 0.5 * v[188] + 2.0 * v[60]
-                                    + 0.5 * v[190]) * u3
-                                + u1
-                                    * (v[178] - 0.5 * v[182] + v[184] - 0.5 * v[186]
-                                        - 0.5 * v[188] - 0.5 * v[190]) + u4 * v[191])) * d) * m1
+                (-v[10] * u5 * v[66] - v[8] * v[69] * u4) * J1
+                    + v[7] * (v[72] - d * m1 * v[74] + v[77]) - v[78] * u2 + u3 * v[79]
+                    + (m2 * d * v[80] - v[82] * v[83]) * v[6],
+                v[85] + v[78] * u1 - v[69] * u4 * v[7] * J1 - u3 * v[86]
+                    - v[14] * m1 * v[74] - v[8] * (v[72] + v[77])
                     - m2
-                        * ((v[171] + a_ * (-v[172] - v[173]) + v[174]) * u2
-                            + u3 * (v[157] + a_ * (-v[169] - v[170]) + v[168])
-                            + ((u3
-                                * (0.25 * v[201] + 0.25 * v[203] - v[47] + 0.25 * v[205]
-                                    - 0.5 * v[208] + 0.25 * v[210] - 0.5 * v[211])
-                                + u2
-                                    * (0.25 * v[212] - 0.25 * v[213] + 0.25 * v[214]
-                                        - 0.25 * v[215])
-                                + (0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214]
-                                    + 0.25 * v[215]) * u1) * u1
-                                + u5
-                                    * (u1
-                                        * (0.5 * v[212] - 0.5 * v[213] + 0.5 * v[214]
-                                            - 0.5 * v[215])
-                                        + u3
-                                            * (0.5 * v[201] + 0.5 * v[203] - 0.5 * v[205] - v[208]
-                                                - 0.5 * v[210] + v[211])
-                                        + (0.5 * v[212] - 0.5 * v[213] - 0.5 * v[214] + 0.5 * v[215]
-                                            - 2.0 * v[46]) * u2 + u5 * v[216])
-                                + ((0.25 * v[201] + 0.25 * v[203] - 0.25 * v[205]
-                                    - 0.5 * v[208] - 0.25 * v[210] + 0.5 * v[211]) * u3
-                                    + v[216] * u2) * u2 - v[12] * v[6] * u3 * u3) * d),
+                        * (d
+                            * (a_
+                                * (v[6] * (u3 * u3 - v[87] + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (v[10] * u3 * u1))
+                                + d
+                                    * ((0.5 * (u3 * v[89]) - f64::cos(v[88]) * u1) * u3
+                                        - 0.5 * (u1 * u1 * v[89]))) - a_ * a_ * u3 * u1),
+                u5 * v[66] * v[6] * J1 - m2 * v[18] * v[80] - u1 * v[79] + v[90]
+                    - v[82] * v[10] * v[83] + v[86] * u2
+                    - (a_ * a_ * u1 * u2
+                        + d
+                            * (a_
+                                * (2.0 * (v[8] * u1 * u2)
+                                    + (u2 * u2 - v[87] + u4 * (-u4 - 2.0 * u3)) * v[7])
+                                + (0.5 * (v[92] * u2 * u2)
+                                    + (f64::cos(v[91]) * u2 - 0.5 * (u1 * v[92])) * u1) * d))
+                        * m1,
+                v[90] - d * m1 * v[94],
+                v[85] - m2 * v[96] * d,
+                -m2 * (v[23] * v[80] + v[96] * v[36] + v[35] * v[97])
+                    - (v[46] * v[94] + v[22] * v[74] + v[47] * v[98]) * m1,
+                -m2 * (v[38] * v[97] + v[96] * v[39] + v[25] * v[80])
+                    - (v[49] * v[94] + v[28] * v[74] + v[98] * v[50]) * m1,
+                -(v[52] * v[94] + v[53] * v[98] + v[0] * v[3] * v[74]) * m1
+                    - m2 * (v[0] * v[2] * v[80] + v[96] * v[42] + v[41] * v[97]),
             ],
             checks: [v[0]],
         }
@@ -2331,14 +2408,13 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
+        v: &mut [f64; 99],
     ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
         let gamma2 = state[4];
-        let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let Ixy = params.Ixy;
@@ -2355,41 +2431,41 @@ pub mod kane {
         v[2] = f64::sin(phi);
         v[3] = f64::cos(phi);
         v[4] = v[2] * u2 + u3 * v[3];
-        v[5] = u2 * v[3] - u3 * v[2];
-        v[6] = f64::sin(theta);
-        v[7] = v[6] * v[1] * v[4] + u1;
-        v[8] = f64::sin(gamma2);
-        v[9] = f64::sin(gamma1);
-        v[10] = f64::cos(gamma1);
+        v[5] = f64::sin(theta);
+        v[6] = f64::sin(gamma2);
+        v[7] = f64::sin(gamma1);
+        v[8] = f64::cos(gamma1);
+        v[9] = v[8] * v[8];
+        v[10] = f64::cos(gamma2);
         v[11] = v[10] * v[10];
-        v[12] = f64::cos(gamma2);
-        v[13] = v[12] * v[12];
-        v[14] = J1 - J2;
-        v[15] = v[10] * d;
-        v[16] = -a_ - v[15];
-        v[17] = (v[10] * v[14] + v[16] * d * m1) * v[9] - Ixy;
-        v[18] = J2 - J1;
-        v[19] = v[12] * d;
-        v[20] = -a_ - v[19];
-        v[21] = v[8] * (v[12] * v[18] - m2 * d * v[20]) - Ixz;
-        v[22] = f64::sin(psi);
-        v[23] = v[2] * v[22];
-        v[24] = f64::cos(psi);
-        v[25] = v[23] + v[6] * v[24] * v[3];
-        v[26] = v[3] * v[22];
-        v[27] = v[6] * v[24] * v[2] - v[26];
-        v[28] = d * (v[9] * v[25] * m1 - m2 * v[27] * v[8]);
-        v[29] = v[24] * v[3];
-        v[30] = v[29] + v[6] * v[2] * v[22];
-        v[31] = v[24] * v[2];
-        v[32] = v[6] * v[3] * v[22];
-        v[33] = v[32] - v[31];
-        v[34] = (v[9] * v[33] * m1 - m2 * v[8] * v[30]) * d;
-        v[35] = (v[9] * m1 * v[3] - m2 * v[8] * v[2]) * v[0] * d;
-        v[36] = d * d;
-        v[37] = -Iyz;
-        v[38] = d + v[12] * a_;
-        v[39] = J2 + m2 * d * v[38];
+        v[12] = J1 - J2;
+        v[13] = v[8] * d;
+        v[14] = -a_ - v[13];
+        v[15] = (v[8] * v[12] + v[14] * d * m1) * v[7] - Ixy;
+        v[16] = J2 - J1;
+        v[17] = v[10] * d;
+        v[18] = -a_ - v[17];
+        v[19] = v[6] * (v[10] * v[16] - m2 * d * v[18]) - Ixz;
+        v[20] = f64::sin(psi);
+        v[21] = f64::cos(psi);
+        v[22] = v[2] * v[20] + v[5] * v[21] * v[3];
+        v[23] = v[5] * v[21] * v[2] - v[3] * v[20];
+        v[24] = d * (v[7] * v[22] * m1 - m2 * v[23] * v[6]);
+        v[25] = v[21] * v[3] + v[5] * v[2] * v[20];
+        v[26] = v[21] * v[2];
+        v[27] = v[5] * v[3] * v[20];
+        v[28] = v[27] - v[26];
+        v[29] = (v[7] * v[28] * m1 - m2 * v[6] * v[25]) * d;
+        v[30] = (v[7] * m1 * v[3] - m2 * v[6] * v[2]) * v[0] * d;
+        v[31] = d * d;
+        v[32] = -Iyz;
+        v[33] = d + v[10] * a_;
+        v[34] = J2 + m2 * d * v[33];
+        v[35] = (v[10] * v[0] - v[5] * v[6] * v[3]) * v[21] - v[6] * v[2] * v[20];
+        v[36] = v[21] * v[0] * v[6] + v[10] * v[22];
+        v[37] = m2 * (v[36] * v[33] - a_ * v[35] * v[6]) + v[14] * v[22] * m1;
+        v[38] = v[10] * v[0] * v[20] + (v[26] - v[27]) * v[6];
+        v[39] = v[0] * v[6] * v[20] + v[10] * v[28];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2398,63 +2474,65 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
+        v: &mut [f64; 99],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
-        let u6 = state[13];
-        let u7 = state[14];
-        let u8 = state[15];
-        let m0 = params.m0;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J2 = params.J2;
-        v[40] = (v[12] * v[0] - v[6] * v[8] * v[3]) * v[24] - v[8] * v[2] * v[22];
-        v[41] = v[24] * v[0] * v[8] + v[12] * v[25];
-        v[42] = m2 * (v[41] * v[38] - a_ * v[40] * v[8]) + v[16] * v[25] * m1;
-        v[43] = v[12] * v[0] * v[22] + (v[31] - v[32]) * v[8];
-        v[44] = v[0] * v[8] * v[22] + v[12] * v[33];
-        v[45] = v[16] * v[33] * m1 + m2 * (v[44] * v[38] - a_ * v[8] * v[43]);
-        v[46] = v[12] * v[6];
-        v[47] = v[6] * v[8];
-        v[48] = v[12] * v[0] * v[3] - v[47];
-        v[49] = m2 * (v[48] * v[38] - a_ * (-v[0] * v[8] * v[3] - v[46]) * v[8])
-            + v[16] * v[0] * m1 * v[3];
-        v[50] = v[10] * a_ + d;
-        v[51] = d * v[50] * m1 + J2;
-        v[52] = v[10] * v[27] - v[24] * v[9] * v[0];
-        v[53] = v[24] * (v[6] * v[9] * v[2] + v[10] * v[0]) - v[9] * v[3] * v[22];
-        v[54] = m2 * v[27] * v[20] + (v[52] * v[50] + a_ * v[53] * v[9]) * m1;
-        v[55] = v[10] * v[30] - v[9] * v[0] * v[22];
-        v[56] = v[10] * v[0] * v[22] + v[9] * v[30];
-        v[57] = (v[55] * v[50] + a_ * v[9] * v[56]) * m1 + m2 * v[20] * v[30];
-        v[58] = v[6] * v[9];
-        v[59] = v[10] * v[0] * v[2] + v[58];
-        v[60] = v[10] * v[6];
-        v[61] = (v[59] * v[50] + a_ * (v[9] * v[0] * v[2] - v[60]) * v[9]) * m1
-            + m2 * v[0] * v[2] * v[20];
-        v[62] = v[52] * d * m1;
-        v[63] = v[55] * d * m1;
-        v[64] = v[59] * d * m1;
-        v[65] = m2 * d * v[41];
-        v[66] = m2 * d * v[44];
-        v[67] = m2 * v[48] * d;
-        v[68] = m2 + m0 + m1;
-        v[69] = v[9] * u2;
-        v[70] = v[10] * u1;
-        v[71] = u4 * J2 * (-v[69] - v[70]);
-        v[72] = v[69] + v[70];
-        v[73] = u4 + u3;
-        v[74] = v[72] * v[14] * v[73];
-        v[75] = u7 * v[22];
-        v[76] = u6 * v[24];
-        v[77] = v[75] + v[76];
-        v[78] = u8 * v[0];
-        v[79] = -v[75] - v[76];
+        v[40] = v[14] * v[28] * m1 + m2 * (v[39] * v[33] - a_ * v[6] * v[38]);
+        v[41] = -v[0] * v[6] * v[3] - v[10] * v[5];
+        v[42] = v[10] * v[0] * v[3] - v[5] * v[6];
+        v[43] = m2 * (v[42] * v[33] - a_ * v[41] * v[6]) + v[14] * v[0] * m1 * v[3];
+        v[44] = v[8] * a_ + d;
+        v[45] = d * v[44] * m1 + J2;
+        v[46] = v[8] * v[23] - v[21] * v[7] * v[0];
+        v[47] = v[21] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[20];
+        v[48] = m2 * v[23] * v[18] + (v[46] * v[44] + a_ * v[47] * v[7]) * m1;
+        v[49] = v[8] * v[25] - v[7] * v[0] * v[20];
+        v[50] = v[8] * v[0] * v[20] + v[7] * v[25];
+        v[51] = (v[49] * v[44] + a_ * v[7] * v[50]) * m1 + m2 * v[18] * v[25];
+        v[52] = v[8] * v[0] * v[2] + v[5] * v[7];
+        v[53] = v[7] * v[0] * v[2] - v[8] * v[5];
+        v[54] = (v[52] * v[44] + a_ * v[53] * v[7]) * m1 + m2 * v[0] * v[2] * v[18];
+        v[55] = v[46] * d * m1;
+        v[56] = v[49] * d * m1;
+        v[57] = v[52] * d * m1;
+        v[58] = m2 * d * v[36];
+        v[59] = m2 * d * v[39];
+        v[60] = m2 * v[42] * d;
+        v[61] = m1 * (v[46] * v[49] + v[22] * v[28] + v[47] * v[50])
+            + m2 * (v[35] * v[38] + v[23] * v[25] + v[39] * v[36]);
+        v[62] = (v[47] * v[53] + v[46] * v[52] + v[0] * v[22] * v[3]) * m1
+            + m2 * (v[42] * v[36] + v[23] * v[0] * v[2] + v[35] * v[41]);
+        v[63] = m2 * (v[42] * v[39] + v[41] * v[38] + v[0] * v[2] * v[25])
+            + (v[0] * v[28] * v[3] + v[53] * v[50] + v[49] * v[52]) * m1;
+        v[64] = v[6] * u1;
+        v[65] = v[10] * u3;
+        v[66] = -v[64] - v[65];
+        v[67] = v[8] * u2;
+        v[68] = v[7] * u1;
+        v[69] = v[67] - v[68];
+        v[70] = v[7] * u2;
+        v[71] = v[8] * u1;
+        v[72] = u4 * J2 * (-v[70] - v[71]);
+        v[73] = 2.0 * u4 + u3;
+        v[74] = d * (v[8] * v[73] * u1 + v[73] * v[7] * u2) + a_ * u3 * u1;
+        v[75] = v[70] + v[71];
+        v[76] = u4 + u3;
+        v[77] = v[75] * v[12] * v[76];
+        v[78] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[79] = Iyy * u2 - Iyz * u3 - Ixy * u1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2463,229 +2541,42 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
+        v: &mut [f64; 99],
     ) {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let u6 = state[13];
-        let u7 = state[14];
-        let u8 = state[15];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let d = params.d;
-        let a_ = params.a_;
-        let J2 = params.J2;
-        v[80] = v[6] * v[79] - v[78];
-        v[81] = (v[1] * v[77] * v[4] + v[7] * v[80]) * v[2];
-        v[82] = v[10] * u2;
-        v[83] = v[9] * u1;
-        v[84] = v[82] - v[83];
-        v[85] = a_ * u3;
-        v[86] = u7 * v[24];
-        v[87] = u6 * v[22];
-        v[88] = v[86] - v[87];
-        v[89] = v[88] * v[3];
-        v[90] = v[78] + v[6] * v[77];
-        v[91] = v[90] * v[2];
-        v[92] = v[85] + v[89] + v[91];
-        v[93] = v[6] * u8;
-        v[94] = v[0] * v[77] - v[93];
-        v[95] = v[9] * v[92] + v[10] * v[94];
-        v[96] = v[0] * v[79] + v[93];
-        v[97] = v[10] * v[92] + v[96] * v[9] + d * v[73];
-        v[98] = v[0] * v[5] * v[22];
-        v[99] = v[24] * u1;
-        v[100] = v[6] * u8 * v[5];
-        v[101] = u1 * v[22];
-        v[102] = v[24] * v[0] * v[5];
-        v[103] = u7 * (v[98] - v[99]) - v[100] + u6 * (v[101] + v[102]);
-        v[104] = v[103] * v[3];
-        v[105] = v[81] - v[84] * v[95] + v[97] * v[72] + v[104] + v[72] * u4 * d;
-        v[106] = v[8] * u1;
-        v[107] = v[12] * u3;
-        v[108] = -v[106] - v[107];
-        v[109] = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        v[110] = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        v[111] = u5 + u2;
-        v[112] = u5 * J2 + v[111] * v[18];
-        v[113] = u3 * v[8];
-        v[114] = v[12] * u1;
-        v[115] = v[114] - v[113];
-        v[116] = v[2] * v[103];
-        v[117] = v[1] * v[79] * v[4] + v[7] * v[90];
-        v[118] = v[117] * v[3];
-        v[119] = a_ * u2;
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part3(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
-    ) {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let u6 = state[13];
-        let u7 = state[14];
         let Ixx = params.Ixx;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let d = params.d;
-        v[120] = v[87] - v[86];
-        v[121] = v[2] * v[120];
-        v[122] = v[90] * v[3];
-        v[123] = v[8] * v[94] + v[12] * (v[119] + v[121] + v[122]) + v[111] * d;
-        v[124] = v[88] * v[2] - v[119] + v[80] * v[3];
-        v[125] = v[12] * v[94] + v[8] * v[124];
-        v[126] = v[106] + v[107];
-        v[127] = v[116] + v[118] + (v[113] - v[114]) * u5 * d - v[115] * v[123]
-            + v[125] * v[126];
-        v[128] = v[18] * v[115] * v[126];
-        v[129] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        v[130] = u3 * v[20] + v[89] + v[91] - d * v[8] * u1;
-        v[131] = v[80] * v[5];
-        v[132] = v[88] * v[4];
-        v[133] = v[131] + u5 * v[124] + v[132];
-        v[134] = v[115] * v[130] - v[111] * v[125] + v[133] * v[8]
-            + v[12] * (v[81] + v[104] + u5 * v[94]);
-        v[135] = v[8]
-            * (v[117] * v[2]
-                + v[3] * (v[100] + u6 * (-v[101] - v[102]) + u7 * (v[99] - v[98]))
-                + u5 * v[96]) + v[12] * v[133] - v[126] * v[130] + v[111] * v[123];
-        v[136] = v[121] - v[119] + v[122] + d * (v[83] - v[82]);
-        v[137] = v[116] + v[118] + v[96] * u4;
-        v[138] = v[95] * v[73] - v[136] * v[72]
-            + v[9]
-                * (u4 * (v[120] * v[3] - v[85] + v[80] * v[2]) + v[90] * v[5]
-                    + v[4] * v[120]) + v[10] * v[137];
-        v[139] = v[136] * v[84] + v[10] * (v[131] + v[132] + u4 * v[92]) - v[97] * v[73]
-            + v[9] * v[137];
-        v[140] = v[84] * v[72] * v[14];
-        v[141] = 2.0 * theta + psi + phi;
-        v[142] = f64::cos(v[141]);
-        v[143] = 2.0 * theta - psi - phi;
-        v[144] = f64::cos(v[143]);
-        v[145] = 2.0 * theta + psi - phi;
-        v[146] = f64::cos(v[145]);
-        v[147] = 2.0 * theta - psi + phi;
-        v[148] = f64::cos(v[147]);
-        v[149] = v[26] + v[31];
-        v[150] = v[6] * v[149];
-        v[151] = v[26] - v[31];
-        v[152] = v[6] * v[151];
-        v[153] = v[31] - v[26];
-        v[154] = v[6] * v[153];
-        v[155] = -v[26] - v[31];
-        v[156] = v[6] * v[155];
-        v[157] = u6
-            * (v[1] * (0.125 * v[144] - 0.125 * v[142] - 0.125 * v[146] + 0.125 * v[148])
-                - 0.25 * v[150] - 0.25 * v[152] + 0.25 * v[154] + 0.25 * v[156]);
-        v[158] = v[6] * (v[23] + v[29]);
-        v[159] = v[155] * v[0];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part4(
-        _t: f64,
-        state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
-    ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u6 = state[13];
-        let u7 = state[14];
-        v[160] = v[6] * (v[29] - v[23]);
-        v[161] = v[149] * v[0];
-        v[162] = v[151] * v[0];
-        v[163] = f64::sin(v[143]);
-        v[164] = f64::sin(v[147]);
-        v[165] = f64::sin(v[145]);
-        v[166] = f64::sin(v[141]);
-        v[167] = v[153] * v[0];
-        v[168] = (0.5 * v[158] + 0.25 * v[159] + 0.5 * v[160] + 0.25 * v[161]
-            + 0.25 * v[162]
-            + v[1] * (-0.125 * v[163] - 0.125 * v[164] - 0.125 * v[165] - 0.125 * v[166])
-            + 0.25 * v[167]) * u7;
-        v[169] = v[0] * u1 * v[3];
-        v[170] = v[6] * u3;
-        v[171] = u6
-            * (v[1] * (0.125 * v[164] - 0.125 * v[163] + 0.125 * v[165] - 0.125 * v[166])
-                - 0.5 * v[158] + 0.25 * v[159] + 0.5 * v[160] + 0.25 * v[161]
-                - 0.25 * v[162] - 0.25 * v[167]);
-        v[172] = v[6] * u2;
-        v[173] = v[0] * v[2] * u1;
-        v[174] = u7
-            * ((0.125 * v[142] - 0.125 * v[144] - 0.125 * v[146] + 0.125 * v[148]) * v[1]
-                + 0.25 * v[150] - 0.25 * v[152] + 0.25 * v[154] - 0.25 * v[156]);
-        v[175] = v[6] * v[2];
-        v[176] = v[0] * v[3];
-        v[177] = v[175] + v[176];
-        v[178] = v[10] * v[177];
-        v[179] = v[0] * v[2];
-        v[180] = v[6] * v[3];
-        v[181] = v[179] - v[180];
-        v[182] = v[9] * v[181];
-        v[183] = v[176] - v[175];
-        v[184] = v[10] * v[183];
-        v[185] = v[180] - v[179];
-        v[186] = v[9] * v[185];
-        v[187] = v[179] + v[180];
-        v[188] = v[9] * v[187];
-        v[189] = -v[179] - v[180];
-        v[190] = v[189] * v[9];
-        v[191] = 0.25 * v[186] - 0.25 * v[182] - 0.25 * v[188] + v[60] + 0.25 * v[190];
-        v[192] = v[10] * v[181];
-        v[193] = v[10] * v[187];
-        v[194] = v[10] * v[185];
-        v[195] = v[183] * v[9];
-        v[196] = v[10] * v[189];
-        v[197] = v[177] * v[9];
-        v[198] = v[12] * v[2];
-        v[199] = v[8] * v[3];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part5(
-        _t: f64,
-        _state: &[f64; STATES],
-        _params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 217],
-    ) {
-        v[200] = -v[198] - v[199];
-        v[201] = v[6] * v[200];
-        v[202] = v[198] + v[199];
-        v[203] = v[6] * v[202];
-        v[204] = v[199] - v[198];
-        v[205] = v[204] * v[6];
-        v[206] = v[8] * v[2];
-        v[207] = v[12] * v[3];
-        v[208] = v[0] * (v[207] - v[206]);
-        v[209] = v[198] - v[199];
-        v[210] = v[6] * v[209];
-        v[211] = v[0] * (v[206] + v[207]);
-        v[212] = v[200] * v[0];
-        v[213] = v[0] * v[202];
-        v[214] = v[204] * v[0];
-        v[215] = v[209] * v[0];
-        v[216] = 0.25 * v[212] - 0.25 * v[213] - 0.25 * v[214] + 0.25 * v[215] - v[46];
+        let a_ = params.a_;
+        let J2 = params.J2;
+        v[80] = d * (v[10] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[6])
+            - a_ * u1 * u2;
+        v[81] = u5 + u2;
+        v[82] = u5 * J2 + v[81] * v[16];
+        v[83] = v[10] * u1 - u3 * v[6];
+        v[84] = v[64] + v[65];
+        v[85] = v[16] * v[83] * v[84];
+        v[86] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[87] = u1 * u1;
+        v[88] = 2.0 * gamma2;
+        v[89] = f64::sin(v[88]);
+        v[90] = v[69] * v[75] * v[12];
+        v[91] = 2.0 * gamma1;
+        v[92] = f64::sin(v[91]);
+        v[93] = d * (v[68] - v[67]) - a_ * u2;
+        v[94] = a_ * u3 * u3 * v[7] - v[75] * v[93];
+        v[95] = u3 * v[18] - d * v[6] * u1;
+        v[96] = v[83] * v[95] + a_ * v[6] * u2 * u2;
+        v[97] = v[81] * (v[10] * a_ * u2 + v[81] * d) - v[84] * v[95]
+            - v[10] * u5 * a_ * u2;
+        v[98] = v[69] * v[93] - (u3 * v[44] + u4 * d) * v[76] + v[8] * a_ * u4 * u3;
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -2757,11 +2648,6 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -2775,39 +2661,9 @@ pub mod kane {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let mut v = [0.0f64; 41];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2829,9 +2685,9 @@ pub mod kane {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            phi_dot - v[0] * psi_dot,
+            theta_dot * v[1] + v[2] * psi_dot * v[3],
+            v[2] * psi_dot * v[1] - theta_dot * v[3],
             gamma1_dot,
             gamma2_dot,
             X_dot,
@@ -2840,30 +2696,42 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
+                * (m2 * (v[12] * v[1] + v[13] * v[14] * v[3])
+                    + m1 * (v[3] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[1]))
+                + v[29] * Y_dot
+                + X_dot
+                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
+                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
+                + (m1 * (v[2] * (v[17] * v[30] + v[21]) * v[1] + v[8] * v[32])
+                    + m2 * (v[2] * v[12] * v[3] + v[13] * v[34])) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[4])
+                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
+                + Z_dot * v[37],
             theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (v[38] * v[1] + v[14] * v[3] * v[23])
+                    + (v[22] * v[26] * v[1] + (v[24] * v[19] - v[39]) * v[3]) * m1)
+                + v[29] * X_dot
+                + ((v[15] * v[26] * m1 - m2 * v[4] * v[23]) * phi_dot
+                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m1 * (v[2] * (v[24] * v[30] + v[39]) * v[1] + v[26] * v[32])
+                        + m2 * (v[2] * v[3] * v[38] + v[23] * v[34]))
+                + Y_dot
+                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
+                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
+                + Z_dot * v[40],
             theta_dot
                 * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    * (v[2] * v[14] * v[3] * v[3]
+                        + (v[33] * v[11] - a_ * v[36] * v[4]) * v[1])
                     + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[3]
+                            + v[22] * v[2] * v[1] * v[1]))
+                + (m2 * gamma2_dot * v[33]
+                    + (v[15] * m1 * v[1] - m2 * v[4] * v[3]) * v[2] * phi_dot
+                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
+                + v[40] * Y_dot + X_dot * v[37],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2871,6 +2739,81 @@ pub mod kane {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(theta);
+        v[1] = f64::cos(phi);
+        v[2] = f64::cos(theta);
+        v[3] = f64::sin(phi);
+        v[4] = f64::sin(gamma2);
+        v[5] = f64::cos(gamma2);
+        v[6] = f64::cos(psi);
+        v[7] = f64::sin(psi);
+        v[8] = v[3] * v[7] + v[0] * v[6] * v[1];
+        v[9] = v[5] * v[6] * v[2] - v[4] * v[8];
+        v[10] = v[6] * v[2] * v[4] + v[5] * v[8];
+        v[11] = d + v[5] * a_;
+        v[12] = v[10] * v[11] - a_ * v[4] * v[9];
+        v[13] = v[0] * v[6] * v[3] - v[1] * v[7];
+        v[14] = a_ + v[5] * d;
+        v[15] = f64::sin(gamma1);
+        v[16] = f64::cos(gamma1);
+        v[17] = v[16] * v[13] - v[6] * v[15] * v[2];
+        v[18] = v[16] * a_;
+        v[19] = -v[18] - d;
+        v[20] = v[13] * v[15] + v[16] * v[6] * v[2];
+        v[21] = a_ * v[15] * v[20];
+        v[22] = -a_ - v[16] * d;
+        v[23] = v[6] * v[1] + v[0] * v[3] * v[7];
+        v[24] = v[16] * v[23] - v[15] * v[2] * v[7];
+        v[25] = v[16] * v[2] * v[7] + v[15] * v[23];
+        v[26] = v[0] * v[1] * v[7] - v[6] * v[3];
+        v[27] = v[2] * v[4] * v[7] + v[5] * v[26];
+        v[28] = v[5] * v[2] * v[7] - v[4] * v[26];
+        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
+            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
+        v[30] = v[18] + d;
+        v[31] = v[16] * v[2] * v[3] + v[0] * v[15];
+        v[32] = -v[31] * d - a_ * v[2] * v[3];
+        v[33] = v[5] * v[2] * v[1] - v[0] * v[4];
+        v[34] = -a_ * v[2] * v[1] - v[33] * d;
+        v[35] = v[15] * v[2] * v[3] - v[16] * v[0];
+        v[36] = -v[2] * v[4] * v[1] - v[5] * v[0];
+        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[2] * v[8] * v[1])
+            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[2] * v[3]) * m2;
+        v[38] = v[27] * v[11] - a_ * v[28] * v[4];
+        v[39] = a_ * v[15] * v[25];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[2] * v[3] * v[23])
+            + (v[2] * v[26] * v[1] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -2972,13 +2915,17 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
+    const CONDITIONS: [&str; 3] = [
+        "cos(theta) = 0",
+        "pivot factor 2 of the velocity transformation vanishes",
+        "pivot factor 3 of the velocity transformation vanishes",
+    ];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 8],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 1],
+        checks: [f64; 3],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -2993,7 +2940,6 @@ pub mod reduced_volterra {
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -3003,14 +2949,10 @@ pub mod reduced_volterra {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        let mut v = [0.0f64; 132];
+        let mut v = [0.0f64; 119];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
-        rhs_part3(t, state, params, g_i, &mut v);
         Assembly {
             qdot: [
                 v[1] * v[4],
@@ -3018,127 +2960,100 @@ pub mod reduced_volterra {
                 v[5] * v[1] * v[4] + u1,
                 u4,
                 u5,
-                v[6]
-                    * (G_X
-                        + (u4 * (v[7] * (v[9] - v[11]) + v[10] * v[12] * v[0]) * m1
-                            + (v[12] * v[15] * m1 + m2 * (v[11] - v[9]) * v[16]) * u1
-                            + u5 * m2 * (v[17] * v[15] - v[10] * v[0] * v[16])) * d
-                        + ((v[7] * d * v[18] + a_ * v[18]) * m1
-                            + m2
-                                * (v[10] * (v[5] * v[20] * v[3] - v[0] * d * v[16])
-                                    + v[2] * v[20] * v[8])) * u2
-                        + (v[22] * v[3] * v[8]
-                            + v[10] * (v[23] * v[5] * v[2] + v[12] * v[0] * d * m1))
-                            * u3),
-                ((u4 * v[27] * m1 + u1 * (m2 * v[16] * v[28] + v[31] * v[12] * m1)
-                    + u5 * m2 * v[32]) * d
-                    + u3
-                        * ((v[27] * m1 + v[17] * m2 * v[28]) * d
-                            + a_ * (v[26] * m1 + m2 * v[28])) + G_Y
-                    + (m2 * (d * v[32] + v[31] * a_)
-                        + m1 * (v[7] * d * v[33] + a_ * v[33])) * u2) * v[6],
-                v[6]
-                    * (u3 * (v[23] * v[0] * v[2] - v[5] * v[12] * d * m1) + G_Z
-                        + (v[22] * v[0] * v[3] + m2 * v[5] * d * v[16]) * u2
-                        + d
-                            * (u5 * m2 * (v[5] * v[16] - v[17] * v[0] * v[3])
-                                + (m2 * v[16] * v[2] - v[12] * m1 * v[3]) * v[0] * u1
-                                + (-v[7] * v[0] * v[2] - v[5] * v[12]) * u4 * m1)),
+                v[27] * (v[43] * v[56] - v[55] * v[60]) * v[61],
+                v[61] * v[60],
+                v[27] * v[62] * v[61]
+                    * ((v[26] * v[42] - v[43] * v[25]) * v[56]
+                        - v[60] * (v[26] * v[54] - v[55] * v[25])),
             ],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2
-                                * (v[16] * v[16] * v[35] * v[35]
-                                    + v[6] * v[6] * v[38] * v[12] * v[12] * m1 * m1)
-                                + v[6] * v[6] * m0
-                                    * (m2 * m2 * v[16] * v[16] + v[12] * v[12] * m1 * m1)
-                                + (v[12] * v[12] * v[40] * v[40]
-                                    + v[6] * v[6] * m2 * m2 * v[16] * v[16] * v[43]) * m1)
-                        + (v[41] + v[36]) * J1 + (v[37] + v[42]) * J2,
-                    v[54],
-                    v[60],
-                    v[63],
-                    v[64],
-                ],
-                [
-                    v[54],
-                    v[12] * v[12] * J1 + Iyy + J2 * (v[41] + 1.0)
-                        + v[6] * v[6] * m0
-                            * (m2 * m2 * d * d * v[16] * v[16] + v[22] * v[22])
-                        + (v[53] * v[53]
-                            + v[6] * v[6] * m2 * m2 * d * d * v[16] * v[16] * v[43]) * m1
-                        + m2 * (v[16] * v[16] * v[47] * v[47] + v[52] * v[52]),
+                            * (m2 * v[15] * v[15]
+                                + v[62]
+                                    * (-v[58] * v[58] - v[39] * v[39] * v[0] * v[0]
+                                        - v[38] * v[38]) + v[7] * v[7] * m1) + (v[63] + v[64]) * J1
+                        + (v[15] * v[15] + v[7] * v[7]) * J2,
+                    v[66],
+                    v[68],
                     v[69],
                     v[70],
-                    v[71],
                 ],
                 [
-                    v[60],
-                    v[69],
-                    v[16] * v[16] * J1
-                        + m2
-                            * (v[6] * v[6] * v[38] * v[12] * v[12] * d * d * m1 * m1
-                                + v[59] * v[59]) + Izz
-                        + v[6] * v[6] * m0
-                            * (v[23] * v[23] + v[12] * v[12] * d * d * m1 * m1)
-                        + J2 * (v[36] + 1.0)
-                        + m1 * (v[58] * v[58] + v[12] * v[12] * v[57] * v[57]),
+                    v[66],
+                    v[7] * v[7] * J1 + v[36] * v[36] * m1 + Iyy + J2 * (v[63] + 1.0)
+                        + v[62] * (-v[37] * v[37] - v[57] * v[57] - v[40] * v[40])
+                        + m2 * (v[71] + a_ * (a_ + 2.0 * v[28])),
                     v[72],
                     v[73],
-                ],
-                [
-                    v[63],
-                    v[70],
-                    v[72],
-                    J2 + (v[6] * v[6] * (m2 + m0) * m1 + v[40] * v[40]) * d * d * m1,
                     v[74],
                 ],
                 [
-                    v[64],
-                    v[71],
+                    v[68],
+                    v[72],
+                    v[62] * (-v[59] * v[59] - v[32] * v[32] - v[41] * v[41])
+                        + v[15] * v[15] * J1 + (a_ * (a_ + 2.0 * v[35]) + v[71]) * m1
+                        + m2 * v[29] * v[29] + Izz + J2 * (v[64] + 1.0),
+                    v[75],
+                    v[76],
+                ],
+                [
+                    v[69],
                     v[73],
+                    v[75],
+                    d * d * (v[62] * (-v[12] - v[46] - v[22] * v[22]) * m1 + 1.0) * m1
+                        + J2,
+                    v[77],
+                ],
+                [
+                    v[70],
                     v[74],
-                    J2 + m2 * d * d * (v[6] * v[6] * m2 * (m0 + m1) + v[48] * v[48]),
+                    v[76],
+                    v[77],
+                    J2
+                        + m2 * (v[62] * m2 * (-v[18] - v[23] * v[23] - v[52]) + 1.0) * d
+                            * d,
                 ],
             ],
             force: [
-                (-v[17] * u5 * v[77] - v[7] * v[80] * u4) * J1
+                (-v[16] * u5 * v[80] - v[8] * v[83] * u4) * J1 + v[7] * v[88]
+                    - v[89] * u2 + u3 * v[90]
+                    + (m2 * v[15] * v[91] - v[7] * m1 * v[93]
+                        + (-v[39] * v[0] * v[107] - v[108] * v[38] - v[109] * v[58])
+                            * v[62]) * d - v[110] * v[99] * v[15],
+                v[111] + v[89] * u1 - v[83] * u4 * v[7] * J1 - u3 * v[112]
+                    - v[36] * m1 * v[93] - v[8] * v[88]
+                    - m2
+                        * (d
+                            * (a_
+                                * (v[15] * (u3 * u3 - v[113] + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (v[16] * u3 * u1))
+                                + d
+                                    * ((0.5 * (u3 * v[115]) - f64::cos(v[114]) * u1) * u3
+                                        - 0.5 * (u1 * u1 * v[115]))) - a_ * a_ * u3 * u1)
+                    + v[62] * (-v[109] * v[57] - v[40] * v[107] - v[37] * v[108]),
+                u5 * v[80] * v[15] * J1 - m2 * v[29] * v[91] - u1 * v[90]
+                    + v[62] * (-v[109] * v[59] - v[41] * v[107] - v[108] * v[32])
+                    + v[116] - v[110] * v[16] * v[99] + v[112] * u2
+                    - (a_ * a_ * u1 * u2
+                        + d
+                            * (a_
+                                * (2.0 * (v[8] * u1 * u2)
+                                    + (u2 * u2 - v[113] + u4 * (-u4 - 2.0 * u3)) * v[7])
+                                + (0.5 * (v[118] * u2 * u2)
+                                    + (f64::cos(v[117]) * u2 - 0.5 * (u1 * v[118])) * u1) * d))
+                        * m1,
+                v[116]
                     + d
-                        * (-v[6] * v[6] * m0 * (m2 * v[88] * v[16] - v[12] * v[89] * m1)
-                            - (v[6] * m2 * v[16] * (v[7] * v[102] + v[12] * v[106])
-                                + v[12] * v[40] * v[107]) * m1
-                            - m2
-                                * (v[114] * v[16] * v[35]
-                                    + v[6] * (v[16] * v[119] - v[17] * v[117]) * v[12] * m1))
-                    + v[12] * v[120] - v[121] * u2 + u3 * v[122]
-                    - v[123] * v[108] * v[16],
-                v[124] + v[121] * u1
-                    - v[6] * v[6] * m0 * (v[22] * v[89] - m2 * d * v[16] * v[127])
-                    - m2 * (v[52] * v[117] + v[16] * v[119] * v[47])
-                    - v[80] * u4 * v[12] * J1 - u3 * v[128]
-                    - (v[6] * m2 * v[129] * d * v[16] + v[107] * v[53]) * m1
-                    - v[7] * v[120],
-                u5 * v[77] * v[16] * J1
-                    - v[6] * v[6] * m0 * (v[23] * v[88] + v[12] * d * m1 * v[127])
-                    - u1 * v[122] + v[130]
-                    - (v[102] * v[58] + v[12] * v[57] * v[106]) * m1
-                    - v[123] * v[17] * v[108] + v[128] * u2
-                    - m2 * (v[114] * v[59] + v[6] * v[12] * d * m1 * v[131]),
-                v[130]
-                    + (v[6]
-                        * (-v[6] * m0 * (v[12] * v[127] - v[7] * v[88])
-                            - m2 * (v[12] * v[131] - v[7] * v[114])) - v[102] * v[40])
-                        * d * m1,
-                v[124]
+                        * (v[62] * (-v[22] * v[107] - v[11] * v[108] - v[109] * v[45])
+                            + v[95] - v[96]) * m1,
+                v[111]
                     + m2 * d
-                        * (v[6]
-                            * (-m1 * (v[129] * v[16] - v[17] * v[107])
-                                - v[6] * m0 * (-v[17] * v[89] - v[16] * v[127]))
-                            - v[117] * v[48]),
+                        * (v[62] * (-v[23] * v[107] - v[108] * v[17] - v[109] * v[51])
+                            - v[101] - v[102]),
             ],
-            checks: [v[0]],
+            checks: [v[0], v[26], v[56]],
         }
     }
     #[allow(non_snake_case)]
@@ -3148,7 +3063,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 132],
+        v: &mut [f64; 119],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -3168,40 +3083,42 @@ pub mod reduced_volterra {
         v[3] = f64::cos(phi);
         v[4] = v[2] * u2 + u3 * v[3];
         v[5] = f64::sin(theta);
-        v[6] = 1.0 / (m2 + m0 + m1);
-        v[7] = f64::cos(gamma1);
-        v[8] = f64::sin(psi);
-        v[9] = v[3] * v[8];
-        v[10] = f64::cos(psi);
-        v[11] = v[5] * v[10] * v[2];
-        v[12] = f64::sin(gamma1);
-        v[13] = v[2] * v[8];
-        v[14] = v[5] * v[10] * v[3];
-        v[15] = -v[13] - v[14];
-        v[16] = f64::sin(gamma2);
-        v[17] = f64::cos(gamma2);
-        v[18] = v[13] + v[14];
-        v[19] = v[17] * d;
-        v[20] = -a_ - v[19];
-        v[21] = v[7] * d;
-        v[22] = (a_ + v[21]) * m1 + m2 * v[20];
-        v[23] = (-a_ - v[21]) * m1 + m2 * (a_ + v[19]);
-        v[24] = v[10] * v[3];
-        v[25] = v[5] * v[2] * v[8];
-        v[26] = -v[24] - v[25];
-        v[27] = v[7] * v[26] + v[12] * v[0] * v[8];
-        v[28] = v[24] + v[25];
-        v[29] = v[10] * v[2];
-        v[30] = v[5] * v[3] * v[8];
-        v[31] = v[29] - v[30];
-        v[32] = v[17] * v[31] - v[0] * v[16] * v[8];
-        v[33] = v[30] - v[29];
-        v[34] = v[6] * m2;
-        v[35] = v[34] - 1.0;
-        v[36] = v[17] * v[17];
-        v[37] = v[16] * v[16];
-        v[38] = v[36] + v[37];
-        v[39] = v[6] * m1;
+        v[6] = f64::cos(psi);
+        v[7] = f64::sin(gamma1);
+        v[8] = f64::cos(gamma1);
+        v[9] = f64::sin(psi);
+        v[10] = v[5] * v[6] * v[2] - v[3] * v[9];
+        v[11] = v[8] * v[10] - v[6] * v[7] * v[0];
+        v[12] = v[11] * v[11];
+        v[13] = v[6] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[9];
+        v[14] = v[2] * v[9] + v[5] * v[6] * v[3];
+        v[15] = f64::sin(gamma2);
+        v[16] = f64::cos(gamma2);
+        v[17] = v[6] * v[0] * v[15] + v[16] * v[14];
+        v[18] = v[17] * v[17];
+        v[19] = (v[16] * v[0] - v[5] * v[15] * v[3]) * v[6] - v[15] * v[2] * v[9];
+        v[20] = m2 + m0 + m1;
+        v[21] = v[7] * v[0] * v[2] - v[8] * v[5];
+        v[22] = v[8] * v[0] * v[2] + v[5] * v[7];
+        v[23] = v[16] * v[0] * v[3] - v[5] * v[15];
+        v[24] = -v[0] * v[15] * v[3] - v[16] * v[5];
+        v[25] = (v[13] * v[21] + v[11] * v[22] + v[0] * v[14] * v[3]) * m1
+            + m2 * (v[23] * v[17] + v[10] * v[0] * v[2] + v[19] * v[24]);
+        v[26] = (m0 + (v[12] + v[13] * v[13] + v[14] * v[14]) * m1
+            + m2 * (v[18] + v[19] * v[19] + v[10] * v[10])) * v[20] - v[25] * v[25];
+        v[27] = 1.0 / v[26];
+        v[28] = v[16] * d;
+        v[29] = -a_ - v[28];
+        v[30] = v[8] * a_;
+        v[31] = v[30] + d;
+        v[32] = m2 * v[10] * v[29] + (v[11] * v[31] + a_ * v[13] * v[7]) * m1;
+        v[33] = v[16] * a_;
+        v[34] = d + v[33];
+        v[35] = v[8] * d;
+        v[36] = -a_ - v[35];
+        v[37] = m2 * (v[17] * v[34] - a_ * v[19] * v[15]) + v[36] * v[14] * m1;
+        v[38] = v[7] * v[14] * m1 - m2 * v[10] * v[15];
+        v[39] = v[7] * m1 * v[3] - m2 * v[15] * v[2];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3209,12 +3126,14 @@ pub mod reduced_volterra {
         _t: f64,
         state: &[f64; STATES],
         params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 132],
+        g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 119],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
         let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
@@ -3225,70 +3144,71 @@ pub mod reduced_volterra {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = 1.0 - v[39];
-        v[41] = v[7] * v[7];
-        v[42] = v[12] * v[12];
-        v[43] = v[41] + v[42];
-        v[44] = J1 - J2;
-        v[45] = v[7] * v[6] * d * m1;
-        v[46] = v[6] * (m2 - m1);
-        v[47] = a_ * (v[46] - 1.0) - v[45];
-        v[48] = 1.0 - v[34];
-        v[49] = m1 - m2;
-        v[50] = v[6] * v[49];
-        v[51] = v[50] + 1.0;
-        v[52] = d * v[48] + v[17] * (v[45] + a_ * v[51]);
-        v[53] = v[6] * v[22] - a_ - v[21];
-        v[54] = v[12]
-            * (v[7] * v[44]
-                + d * m1
-                    * (v[6]
-                        * (m2 * (v[16] * v[16] * v[47] - v[17] * v[52])
-                            - v[6] * m0 * v[22]) + v[40] * v[53])) - Ixy;
-        v[55] = J2 - J1;
-        v[56] = v[46] + 1.0;
-        v[57] = a_ * v[56] + v[17] * v[6] * m2 * d;
-        v[58] = v[40] * d + v[7] * v[57];
-        v[59] = v[23] * v[6] - a_ - v[19];
-        v[60] = (v[17] * v[55]
-            + m2 * d
-                * (v[6]
-                    * (v[23] * v[6] * m0 + (v[12] * v[12] * v[57] + v[7] * v[58]) * m1)
-                    + v[59] * v[35])) * v[16] - Ixz;
-        v[61] = v[6] * m0;
-        v[62] = 2.0 - v[34] - v[39] - v[61];
-        v[63] = v[7] * v[6] * m2 * d * d * v[16] * v[62] * m1;
-        v[64] = v[17] * v[6] * m2 * v[12] * d * d * m1 * (v[34] + v[39] + v[61] - 2.0);
-        v[65] = v[12] * v[16];
-        v[66] = v[7] * v[17];
-        v[67] = v[66] - v[65];
-        v[68] = v[66] + v[65];
-        v[69] = v[6] * m2 * d * d * m1
-            * (2.0 * v[65]
-                + v[6]
-                    * (v[67] * (0.5 * m2 + 0.5 * m0 + 0.5 * m1)
-                        + (-0.5 * m2 - 0.5 * m0 - 0.5 * m1) * v[68])) - Iyz;
-        v[70] = v[6] * m2 * d * d
-            * ((0.5 - 0.5 * v[34]) * v[68] + v[12] * v[16] * (1.0 - v[39] - v[61])
-                + v[67] * (0.5 * v[34] - 0.5)) * m1;
-        v[71] = m2 * d
-            * (v[52] * v[48]
-                + ((v[6] * m2 * d * v[16] * v[16] * v[43] - v[17] * v[53]) * m1
-                    + v[6] * m0 * (m2 * d * v[16] * v[16] - v[17] * v[22])) * v[6]) + J2;
-        v[72] = d * m1
-            * (v[6]
-                * (m2 * (v[6] * v[38] * v[12] * v[12] * d * m1 - v[7] * v[59])
-                    + v[6] * m0 * (v[12] * v[12] * d * m1 - v[7] * v[23]))
-                + v[40] * v[58]) + J2;
-        v[73] = v[6]
-            * ((1.0 - v[34] - v[61]) * v[12] * v[16] + v[67] * (0.5 * v[39] - 0.5)
-                + (0.5 - 0.5 * v[39]) * v[68]) * m2 * d * d * m1;
-        v[74] = v[6] * m2 * v[12] * d * d * v[16] * v[62] * m1;
-        v[75] = v[16] * u1;
-        v[76] = v[17] * u3;
-        v[77] = -v[75] - v[76];
-        v[78] = v[7] * u2;
-        v[79] = v[12] * u1;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        v[40] = m2 * (v[23] * v[34] - a_ * v[24] * v[15]) + v[36] * v[0] * m1 * v[3];
+        v[41] = (v[22] * v[31] + a_ * v[21] * v[7]) * m1 + m2 * v[0] * v[2] * v[29];
+        v[42] = (-u4 * v[22] * m1 - v[39] * v[0] * u1 - u5 * m2 * v[23]) * d - v[40] * u2
+            - u3 * v[41] + G_Z;
+        v[43] = v[20]
+            * (G_X - u3 * v[32] - v[37] * u2
+                + d * (-v[11] * u4 * m1 - u1 * v[38] - u5 * m2 * v[17])) - v[25] * v[42];
+        v[44] = v[6] * v[3] + v[5] * v[2] * v[9];
+        v[45] = v[8] * v[44] - v[7] * v[0] * v[9];
+        v[46] = v[45] * v[45];
+        v[47] = v[8] * v[0] * v[9] + v[7] * v[44];
+        v[48] = v[6] * v[2];
+        v[49] = v[5] * v[3] * v[9];
+        v[50] = v[49] - v[48];
+        v[51] = v[0] * v[15] * v[9] + v[16] * v[50];
+        v[52] = v[51] * v[51];
+        v[53] = v[16] * v[0] * v[9] + (v[48] - v[49]) * v[15];
+        v[54] = m2 * (v[23] * v[51] + v[24] * v[53] + v[0] * v[2] * v[44])
+            + (v[0] * v[50] * v[3] + v[21] * v[47] + v[45] * v[22]) * m1;
+        v[55] = v[20]
+            * (m1 * (v[11] * v[45] + v[14] * v[50] + v[13] * v[47])
+                + m2 * (v[19] * v[53] + v[10] * v[44] + v[51] * v[17])) - v[25] * v[54];
+        v[56] = v[26]
+            * (((v[46] + v[47] * v[47] + v[50] * v[50]) * m1 + m0
+                + (v[44] * v[44] + v[52] + v[53] * v[53]) * m2) * v[20] - v[54] * v[54])
+            - v[55] * v[55];
+        v[57] = v[36] * v[50] * m1 + m2 * (v[51] * v[34] - a_ * v[15] * v[53]);
+        v[58] = v[7] * v[50] * m1 - m2 * v[15] * v[44];
+        v[59] = (v[45] * v[31] + a_ * v[7] * v[47]) * m1 + m2 * v[29] * v[44];
+        v[60] = ((G_Y - v[57] * u2
+            + (-u4 * v[45] * m1 - u5 * m2 * v[51] - v[58] * u1) * d - v[59] * u3) * v[20]
+            - v[42] * v[54]) * v[26] - v[43] * v[55];
+        v[61] = 1.0 / v[56];
+        v[62] = 1.0 / v[20];
+        v[63] = v[8] * v[8];
+        v[64] = v[16] * v[16];
+        v[65] = J1 - J2;
+        v[66] = v[8] * v[65] * v[7] - Ixy
+            + d
+                * ((-v[37] * v[38] - v[58] * v[57] - v[40] * v[39] * v[0]) * v[62]
+                    + v[36] * v[7] * m1);
+        v[67] = J2 - J1;
+        v[68] = (v[62] * (-v[59] * v[58] - v[32] * v[38] - v[39] * v[0] * v[41])
+            - m2 * v[15] * v[29]) * d + v[16] * v[67] * v[15] - Ixz;
+        v[69] = v[62] * d * d * (-v[39] * v[22] * v[0] - v[11] * v[38] - v[58] * v[45])
+            * m1;
+        v[70] = v[62] * m2 * d * d
+            * (-v[17] * v[38] - v[58] * v[51] - v[23] * v[39] * v[0]);
+        v[71] = d * d;
+        v[72] = (-v[37] * v[32] - v[59] * v[57] - v[40] * v[41]) * v[62] - Iyz;
+        v[73] = v[62] * d * m1 * (-v[37] * v[11] - v[40] * v[22] - v[45] * v[57]);
+        v[74] = m2
+            * (v[62] * (-v[23] * v[40] - v[37] * v[17] - v[57] * v[51]) + d + v[33]) * d
+            + J2;
+        v[75] = J2
+            + d * m1
+                * (v[30] + d + (-v[11] * v[32] - v[22] * v[41] - v[59] * v[45]) * v[62]);
+        v[76] = v[62] * m2 * d * (-v[17] * v[32] - v[23] * v[41] - v[59] * v[51]);
+        v[77] = v[62] * m2 * d * d * m1
+            * (-v[11] * v[17] - v[23] * v[22] - v[45] * v[51]);
+        v[78] = v[15] * u1;
+        v[79] = v[16] * u3;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3297,105 +3217,10 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 132],
+        v: &mut [f64; 119],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[80] = v[78] - v[79];
-        v[81] = -u5 - u2;
-        v[82] = v[17] * m2 * v[81] + v[80] * m1;
-        v[83] = u4 * v[12] * m1;
-        v[84] = u5 * m2 * v[16];
-        v[85] = m2 * v[81] * v[16];
-        v[86] = u4 + u3;
-        v[87] = v[12] * m1 * v[86];
-        v[88] = ((v[83] - v[84] + v[85] + v[87]) * u3 + v[17] * u5 * m2 * u1
-            + u4 * u4 * v[12] * m1) * d - (a_ * v[49] * u2 + v[82] * d) * u1;
-        v[89] = ((m2 * v[16] * u1 - v[7] * u4 * m1) * d + v[23] * u3) * u1
-            + (u5 * u5 * m2 * v[16] - v[7] * u4 * u1 * m1
-                + (v[84] - v[83] - v[85] - v[87]) * u2) * d;
-        v[90] = a_ * u4 * u3 * v[12];
-        v[91] = v[7] * v[81] + v[79];
-        v[92] = a_ * u3 * v[12];
-        v[93] = (m2 * ((v[16] * v[91] + v[17] * u3 * v[12]) * d + v[92])
-            - a_ * u3 * v[12] * m1) * v[6] + v[92];
-        v[94] = v[12] * u2;
-        v[95] = v[7] * u1;
-        v[96] = v[94] + v[95];
-        v[97] = (v[79] - v[78] + v[6] * v[82]) * d + a_ * (v[50] - 1.0) * u2;
-        v[98] = v[7] * v[16] * u2;
-        v[99] = v[17] * u1;
-        v[100] = u4 - u3;
-        v[101] = u5 + u2;
-        v[102] = v[93] * v[86] - v[90] - v[96] * v[97]
-            + v[6]
-                * (a_ * u4 * u3 * v[12] * m1
-                    + m2
-                        * (d
-                            * (u4 * (v[98] + v[12] * v[77])
-                                + u5
-                                    * (v[7] * (v[99] + v[100] * v[16])
-                                        + v[101] * v[17] * v[12])) - v[90]));
-        v[103] = v[75] + v[76];
-        v[104] = v[7] * a_ * u4 * u3;
-        v[105] = (v[6]
-            * ((-u4 - u3) * m1
-                + m2 * ((v[101] * v[12] + v[95]) * v[16] + v[7] * v[17] * u3)) + u4 + u3)
-            * d + v[7] * a_ * v[56] * u3;
-        v[106] = v[6]
-            * (m2
-                * (d
-                    * ((v[7] * v[103] + v[12] * v[16] * u2) * u4
-                        + u5 * (v[100] * v[12] * v[16] + v[17] * v[91])) + v[104])
-                - v[7] * a_ * u4 * u3 * m1) + v[104] - v[105] * v[86] + v[80] * v[97];
-        v[107] = v[96] * v[105] - v[80] * v[93]
-            + (v[101] * v[6] * u5 * m2 * v[16]
-                + u4 * (v[7] * v[40] * u1 + v[12] * v[40] * u2)) * d;
-        v[108] = v[99] - u3 * v[16];
-        v[109] = v[16] * v[86] - v[99];
-        v[110] = d
-            * (u5 + v[6] * ((v[7] * v[17] * u2 + v[109] * v[12]) * m1 + m2 * v[81]) + u2)
-            + v[17] * a_ * u2 * v[51];
-        v[111] = a_ * v[16] * u2;
-        v[112] = v[17] * v[86] + v[75];
-        v[113] = v[6]
-            * (m2 * a_ * v[16] * u2 + (d * (v[112] * v[12] - v[98]) - v[111]) * m1)
-            - v[111];
-        v[114] = d
-            * (u5 * (v[17] * u1 * v[35] + u3 * v[16] * v[48])
-                + v[6] * u4 * v[12] * m1 * v[86]) - v[108] * v[110] + v[103] * v[113];
-        v[115] = v[59] * u3 + d * (v[16] * u1 * v[35] - v[7] * v[6] * u4 * m1);
-        v[116] = u5 * a_ * v[16] * u2;
-        v[117] = v[108] * v[115] - v[101] * v[113] - v[116]
-            + v[6]
-                * (u5 * m2 * a_ * v[16] * u2
-                    + ((u5 * (v[103] * v[12] - v[98])
-                        + u4 * (v[7] * v[109] + v[17] * v[12] * (u5 - u2))) * d - v[116])
-                        * m1);
-        v[118] = v[17] * u5 * a_ * u2;
-        v[119] = v[6]
-            * ((d
-                * (u4 * (v[12] * v[16] * (u2 - u5) + v[7] * v[112])
-                    + u5 * (v[17] * (v[79] - v[78]) - u3 * v[12] * v[16])) - v[118]) * m1
-                + v[17] * u5 * m2 * a_ * u2) - v[115] * v[103] - v[118]
-            + v[101] * v[110];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part3(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 132],
-    ) {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
@@ -3412,24 +3237,50 @@ pub mod reduced_volterra {
         let d = params.d;
         let a_ = params.a_;
         let J2 = params.J2;
-        v[120] = u4 * J2 * (-v[94] - v[95]) + v[96] * v[44] * v[86];
-        v[121] = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        v[122] = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        v[123] = u5 * J2 + v[101] * v[55];
-        v[124] = v[55] * v[108] * v[103];
-        v[125] = u2 * u2;
-        v[126] = u3 * u3;
-        v[127] = a_ * (m2 * (-v[125] - v[126]) + (v[125] + v[126]) * m1)
-            + d
-                * (m2
-                    * (v[17] * (u5 * (-u5 - 2.0 * u2) - v[125] - v[126])
-                        - u3 * v[16] * u1)
-                    + (v[7] * (v[125] + u4 * (u4 + 2.0 * u3) + v[126]) - v[12] * u1 * u2)
-                        * m1);
-        v[128] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        v[129] = v[102] * v[12] - v[7] * v[106];
-        v[130] = v[80] * v[96] * v[44];
-        v[131] = v[17] * v[119] + v[16] * v[117];
+        v[80] = -v[78] - v[79];
+        v[81] = v[8] * u2;
+        v[82] = v[7] * u1;
+        v[83] = v[81] - v[82];
+        v[84] = v[7] * u2;
+        v[85] = v[8] * u1;
+        v[86] = v[84] + v[85];
+        v[87] = u4 + u3;
+        v[88] = u4 * J2 * (-v[84] - v[85]) + v[86] * v[65] * v[87];
+        v[89] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[90] = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        v[91] = d * (v[16] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[15])
+            - a_ * u1 * u2;
+        v[92] = 2.0 * u4 + u3;
+        v[93] = d * (v[8] * v[92] * u1 + v[92] * v[7] * u2) + a_ * u3 * u1;
+        v[94] = d * (v[82] - v[81]) - a_ * u2;
+        v[95] = v[86] * v[94];
+        v[96] = a_ * u3 * u3 * v[7];
+        v[97] = v[96] - v[95];
+        v[98] = v[83] * v[94] - (u3 * v[31] + u4 * d) * v[87] + v[8] * a_ * u4 * u3;
+        v[99] = v[16] * u1 - u3 * v[15];
+        v[100] = u3 * v[29] - d * v[15] * u1;
+        v[101] = v[99] * v[100];
+        v[102] = a_ * v[15] * u2 * u2;
+        v[103] = v[101] + v[102];
+        v[104] = v[78] + v[79];
+        v[105] = u5 + u2;
+        v[106] = v[105] * (v[16] * a_ * u2 + v[105] * d) - v[104] * v[100]
+            - v[16] * u5 * a_ * u2;
+        v[107] = -(v[22] * v[97] + v[21] * v[98] + v[0] * v[3] * v[93]) * m1
+            - m2 * (v[0] * v[2] * v[91] + v[103] * v[23] + v[24] * v[106]);
+        v[108] = -m2 * (v[10] * v[91] + v[103] * v[17] + v[19] * v[106])
+            - (v[11] * v[97] + v[14] * v[93] + v[13] * v[98]) * m1;
+        v[109] = -m2 * (v[53] * v[106] + v[103] * v[51] + v[44] * v[91])
+            - (v[45] * v[97] + v[50] * v[93] + v[98] * v[47]) * m1;
+        v[110] = u5 * J2 + v[105] * v[67];
+        v[111] = v[67] * v[99] * v[104];
+        v[112] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[113] = u1 * u1;
+        v[114] = 2.0 * gamma2;
+        v[115] = f64::sin(v[114]);
+        v[116] = v[83] * v[86] * v[65];
+        v[117] = 2.0 * gamma1;
+        v[118] = f64::sin(v[117]);
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -3498,11 +3349,6 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -3516,39 +3362,9 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let mut v = [0.0f64; 41];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3570,38 +3386,50 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            phi_dot - v[0] * psi_dot,
+            theta_dot * v[1] + v[2] * psi_dot * v[3],
+            v[2] * psi_dot * v[1] - theta_dot * v[3],
             gamma1_dot,
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
+                * (m2 * (v[12] * v[1] + v[13] * v[14] * v[3])
+                    + m1 * (v[3] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[1]))
+                + v[29] * Y_dot
+                + X_dot
+                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
+                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
+                + (m1 * (v[2] * (v[17] * v[30] + v[21]) * v[1] + v[8] * v[32])
+                    + m2 * (v[2] * v[12] * v[3] + v[13] * v[34])) * psi_dot
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
+                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[4])
+                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
+                + Z_dot * v[37],
             theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * (m2 * (v[38] * v[1] + v[14] * v[3] * v[23])
+                    + (v[22] * v[26] * v[1] + (v[24] * v[19] - v[39]) * v[3]) * m1)
+                + v[29] * X_dot
+                + ((v[15] * v[26] * m1 - m2 * v[4] * v[23]) * phi_dot
+                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m1 * (v[2] * (v[24] * v[30] + v[39]) * v[1] + v[26] * v[32])
+                        + m2 * (v[2] * v[3] * v[38] + v[23] * v[34]))
+                + Y_dot
+                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
+                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
+                + Z_dot * v[40],
             theta_dot
                 * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    * (v[2] * v[14] * v[3] * v[3]
+                        + (v[33] * v[11] - a_ * v[36] * v[4]) * v[1])
                     + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[3]
+                            + v[22] * v[2] * v[1] * v[1]))
+                + (m2 * gamma2_dot * v[33]
+                    + (v[15] * m1 * v[1] - m2 * v[4] * v[3]) * v[2] * phi_dot
+                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
+                + v[40] * Y_dot + X_dot * v[37],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3609,6 +3437,81 @@ pub mod reduced_volterra {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(theta);
+        v[1] = f64::cos(phi);
+        v[2] = f64::cos(theta);
+        v[3] = f64::sin(phi);
+        v[4] = f64::sin(gamma2);
+        v[5] = f64::cos(gamma2);
+        v[6] = f64::cos(psi);
+        v[7] = f64::sin(psi);
+        v[8] = v[3] * v[7] + v[0] * v[6] * v[1];
+        v[9] = v[5] * v[6] * v[2] - v[4] * v[8];
+        v[10] = v[6] * v[2] * v[4] + v[5] * v[8];
+        v[11] = d + v[5] * a_;
+        v[12] = v[10] * v[11] - a_ * v[4] * v[9];
+        v[13] = v[0] * v[6] * v[3] - v[1] * v[7];
+        v[14] = a_ + v[5] * d;
+        v[15] = f64::sin(gamma1);
+        v[16] = f64::cos(gamma1);
+        v[17] = v[16] * v[13] - v[6] * v[15] * v[2];
+        v[18] = v[16] * a_;
+        v[19] = -v[18] - d;
+        v[20] = v[13] * v[15] + v[16] * v[6] * v[2];
+        v[21] = a_ * v[15] * v[20];
+        v[22] = -a_ - v[16] * d;
+        v[23] = v[6] * v[1] + v[0] * v[3] * v[7];
+        v[24] = v[16] * v[23] - v[15] * v[2] * v[7];
+        v[25] = v[16] * v[2] * v[7] + v[15] * v[23];
+        v[26] = v[0] * v[1] * v[7] - v[6] * v[3];
+        v[27] = v[2] * v[4] * v[7] + v[5] * v[26];
+        v[28] = v[5] * v[2] * v[7] - v[4] * v[26];
+        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
+            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
+        v[30] = v[18] + d;
+        v[31] = v[16] * v[2] * v[3] + v[0] * v[15];
+        v[32] = -v[31] * d - a_ * v[2] * v[3];
+        v[33] = v[5] * v[2] * v[1] - v[0] * v[4];
+        v[34] = -a_ * v[2] * v[1] - v[33] * d;
+        v[35] = v[15] * v[2] * v[3] - v[16] * v[0];
+        v[36] = -v[2] * v[4] * v[1] - v[5] * v[0];
+        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[2] * v[8] * v[1])
+            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[2] * v[3]) * m2;
+        v[38] = v[27] * v[11] - a_ * v[28] * v[4];
+        v[39] = a_ * v[15] * v[25];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 41],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[2] * v[3] * v[23])
+            + (v[2] * v[26] * v[1] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -3618,6 +3521,76 @@ pub mod reduced_volterra {
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
     ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let mut v = [0.0f64; 45];
+        velocities_part0(t, state, params, g_i, &mut v);
+        velocities_part1(t, state, params, g_i, &mut v);
+        let value = v[0];
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[0],
+                value,
+            });
+        }
+        let value = v[24];
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[1],
+                value,
+            });
+        }
+        let value = v[42];
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[2],
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            v[1] * v[4],
+            u2 * v[3] - u3 * v[2],
+            v[5] * v[1] * v[4] + u1,
+            u4,
+            u5,
+            v[25] * (v[31] * v[42] - v[41] * v[43]) * v[44],
+            v[44] * v[43],
+            v[25] * v[44]
+                * ((v[24] * v[30] - v[31] * v[23]) * v[42]
+                    - v[43] * (v[24] * v[40] - v[41] * v[23])) / v[18],
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn velocities_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 45],
+    ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -3634,104 +3607,161 @@ pub mod reduced_volterra {
         let d = params.d;
         let a_ = params.a_;
         let G_X = g_i[0];
-        let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma1);
-        let x8 = f64::sin(psi);
-        let x9 = x3 * x8;
-        let x10 = f64::cos(psi);
-        let x11 = x5 * x10 * x2;
-        let x12 = f64::sin(gamma1);
-        let x13 = x2 * x8;
-        let x14 = x5 * x10 * x3;
-        let x15 = -x13 - x14;
-        let x16 = f64::sin(gamma2);
-        let x17 = f64::cos(gamma2);
-        let x18 = x13 + x14;
-        let x19 = x17 * d;
-        let x20 = -a_ - x19;
-        let x21 = x7 * d;
-        let x22 = (a_ + x21) * m1 + m2 * x20;
-        let x23 = (-a_ - x21) * m1 + m2 * (a_ + x19);
-        let x24 = x10 * x3;
-        let x25 = x5 * x2 * x8;
-        let x26 = -x24 - x25;
-        let x27 = x7 * x26 + x12 * x0 * x8;
-        let x28 = x24 + x25;
-        let x29 = x10 * x2;
-        let x30 = x5 * x3 * x8;
-        let x31 = x29 - x30;
-        let x32 = x17 * x31 - x0 * x16 * x8;
-        let x33 = x30 - x29;
-        let value = x0;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[0],
-                value,
-            });
-        }
-        let q: [f64; NUM_COORDINATES] = [
-            state[0],
-            state[1],
-            state[2],
-            state[3],
-            state[4],
-            state[5],
-            state[6],
-            state[7],
-        ];
-        let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            x5 * x1 * x4 + u1,
-            u4,
-            u5,
-            x6
-                * (G_X
-                    + (u4 * (x7 * (x9 - x11) + x10 * x12 * x0) * m1
-                        + (x12 * x15 * m1 + m2 * (x11 - x9) * x16) * u1
-                        + u5 * m2 * (x17 * x15 - x10 * x0 * x16)) * d
-                    + ((x7 * d * x18 + a_ * x18) * m1
-                        + m2 * (x10 * (x5 * x20 * x3 - x0 * d * x16) + x2 * x20 * x8))
-                        * u2
-                    + (x22 * x3 * x8 + x10 * (x23 * x5 * x2 + x12 * x0 * d * m1)) * u3),
-            ((u4 * x27 * m1 + u1 * (m2 * x16 * x28 + x31 * x12 * m1) + u5 * m2 * x32) * d
-                + u3 * ((x27 * m1 + x17 * m2 * x28) * d + a_ * (x26 * m1 + m2 * x28))
-                + G_Y
-                + (m2 * (d * x32 + x31 * a_) + m1 * (x7 * d * x33 + a_ * x33)) * u2)
-                * x6,
-            x6
-                * (u3 * (x23 * x0 * x2 - x5 * x12 * d * m1) + G_Z
-                    + (x22 * x0 * x3 + m2 * x5 * d * x16) * u2
-                    + d
-                        * (u5 * m2 * (x5 * x16 - x17 * x0 * x3)
-                            + (m2 * x16 * x2 - x12 * m1 * x3) * x0 * u1
-                            + (-x7 * x0 * x2 - x5 * x12) * u4 * m1)),
-        ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((q, qdot))
+        v[0] = f64::cos(theta);
+        v[1] = 1.0 / v[0];
+        v[2] = f64::sin(phi);
+        v[3] = f64::cos(phi);
+        v[4] = v[2] * u2 + u3 * v[3];
+        v[5] = f64::sin(theta);
+        v[6] = f64::cos(psi);
+        v[7] = f64::sin(gamma1);
+        v[8] = f64::cos(gamma1);
+        v[9] = f64::sin(psi);
+        v[10] = v[5] * v[6] * v[2] - v[3] * v[9];
+        v[11] = v[8] * v[10] - v[6] * v[7] * v[0];
+        v[12] = v[6] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[9];
+        v[13] = v[2] * v[9] + v[5] * v[6] * v[3];
+        v[14] = f64::sin(gamma2);
+        v[15] = f64::cos(gamma2);
+        v[16] = v[6] * v[0] * v[14] + v[15] * v[13];
+        v[17] = (v[15] * v[0] - v[5] * v[14] * v[3]) * v[6] - v[14] * v[2] * v[9];
+        v[18] = m2 + m0 + m1;
+        v[19] = v[7] * v[0] * v[2] - v[8] * v[5];
+        v[20] = v[8] * v[0] * v[2] + v[5] * v[7];
+        v[21] = v[15] * v[0] * v[3] - v[5] * v[14];
+        v[22] = -v[0] * v[14] * v[3] - v[15] * v[5];
+        v[23] = (v[12] * v[19] + v[11] * v[20] + v[0] * v[13] * v[3]) * m1
+            + m2 * (v[21] * v[16] + v[10] * v[0] * v[2] + v[17] * v[22]);
+        v[24] = (m0 + (v[11] * v[11] + v[12] * v[12] + v[13] * v[13]) * m1
+            + m2 * (v[16] * v[16] + v[17] * v[17] + v[10] * v[10])) * v[18]
+            - v[23] * v[23];
+        v[25] = 1.0 / v[24];
+        v[26] = -a_ - v[15] * d;
+        v[27] = v[8] * a_ + d;
+        v[28] = d + v[15] * a_;
+        v[29] = -a_ - v[8] * d;
+        v[30] = (-u4 * v[20] * m1 - (v[7] * m1 * v[3] - m2 * v[14] * v[2]) * v[0] * u1
+            - u5 * m2 * v[21]) * d
+            - (m2 * (v[21] * v[28] - a_ * v[22] * v[14]) + v[29] * v[0] * m1 * v[3]) * u2
+            - u3 * ((v[20] * v[27] + a_ * v[19] * v[7]) * m1 + m2 * v[0] * v[2] * v[26])
+            + G_Z;
+        v[31] = v[18]
+            * (G_X - u3 * (m2 * v[10] * v[26] + (v[11] * v[27] + a_ * v[12] * v[7]) * m1)
+                - (m2 * (v[16] * v[28] - a_ * v[17] * v[14]) + v[29] * v[13] * m1) * u2
+                + d
+                    * (-v[11] * u4 * m1 - u1 * (v[7] * v[13] * m1 - m2 * v[10] * v[14])
+                        - u5 * m2 * v[16])) - v[23] * v[30];
+        v[32] = v[6] * v[3] + v[5] * v[2] * v[9];
+        v[33] = v[8] * v[32] - v[7] * v[0] * v[9];
+        v[34] = v[8] * v[0] * v[9] + v[7] * v[32];
+        v[35] = v[6] * v[2];
+        v[36] = v[5] * v[3] * v[9];
+        v[37] = v[36] - v[35];
+        v[38] = v[0] * v[14] * v[9] + v[15] * v[37];
+        v[39] = v[15] * v[0] * v[9] + (v[35] - v[36]) * v[14];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn velocities_part1(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 45],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let G_Y = g_i[1];
+        v[40] = m2 * (v[21] * v[38] + v[22] * v[39] + v[0] * v[2] * v[32])
+            + (v[0] * v[37] * v[3] + v[19] * v[34] + v[33] * v[20]) * m1;
+        v[41] = v[18]
+            * (m1 * (v[11] * v[33] + v[13] * v[37] + v[12] * v[34])
+                + m2 * (v[17] * v[39] + v[10] * v[32] + v[38] * v[16])) - v[23] * v[40];
+        v[42] = v[24]
+            * (((v[33] * v[33] + v[34] * v[34] + v[37] * v[37]) * m1 + m0
+                + (v[32] * v[32] + v[38] * v[38] + v[39] * v[39]) * m2) * v[18]
+                - v[40] * v[40]) - v[41] * v[41];
+        v[43] = ((G_Y
+            - (v[29] * v[37] * m1 + m2 * (v[38] * v[28] - a_ * v[14] * v[39])) * u2
+            + (-u4 * v[33] * m1 - u5 * m2 * v[38]
+                - (v[7] * v[37] * m1 - m2 * v[14] * v[32]) * u1) * d
+            - ((v[33] * v[27] + a_ * v[7] * v[34]) * m1 + m2 * v[26] * v[32]) * u3)
+            * v[18] - v[30] * v[40]) * v[24] - v[31] * v[41];
+        v[44] = 1.0 / v[42];
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        _params: &Params,
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
+        let psi = state[0];
         let theta = state[1];
-        f64::INFINITY.min(f64::abs(f64::cos(theta)))
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let x0 = f64::cos(theta);
+        let x1 = f64::cos(psi);
+        let x2 = f64::sin(gamma1);
+        let x3 = f64::cos(gamma1);
+        let x4 = f64::cos(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::sin(phi);
+        let x8 = x6 * x1 * x7 - x4 * x5;
+        let x9 = x3 * x8 - x1 * x2 * x0;
+        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
+        let x11 = x7 * x5 + x6 * x1 * x4;
+        let x12 = f64::sin(gamma2);
+        let x13 = f64::cos(gamma2);
+        let x14 = x1 * x0 * x12 + x13 * x11;
+        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
+        let x16 = m2 + m0 + m1;
+        let x17 = x2 * x0 * x7 - x3 * x6;
+        let x18 = x3 * x0 * x7 + x6 * x2;
+        let x19 = x13 * x0 * x4 - x6 * x12;
+        let x20 = -x0 * x12 * x4 - x13 * x6;
+        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
+            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
+        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
+            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
+        let x23 = x1 * x4 + x6 * x7 * x5;
+        let x24 = x3 * x23 - x2 * x0 * x5;
+        let x25 = x3 * x0 * x5 + x2 * x23;
+        let x26 = x1 * x7;
+        let x27 = x6 * x4 * x5;
+        let x28 = x27 - x26;
+        let x29 = x0 * x12 * x5 + x13 * x28;
+        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
+        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
+            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
+        let x32 = x16
+            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
+                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
+        f64::INFINITY
+            .min(f64::abs(x0))
+            .min(f64::abs(x22))
+            .min(
+                f64::abs(
+                    x22
+                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
+                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
+                            - x31 * x31) - x32 * x32,
+                ),
+            )
     }
 }

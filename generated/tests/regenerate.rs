@@ -12,6 +12,7 @@ fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("cartesian_pendulum", "cartesian_pendulum", |_| {}),
         ("rolling_disk", "rolling_disk", |_| {}),
         ("spring_cart", "spring_cart", |_| {}),
+        ("pendulum_on_cart_5", "pendulum_on_cart_5", |_| {}),
         // `--baked`
         ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
         // `--max-lets 40`

@@ -352,6 +352,7 @@ impl Emitter<'_> {
         let q_idx: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let w0 = if work { quote!(, 0.0) } else { TokenStream::new() };
         let stmts = &b.stmts;
+        let helpers = &b.helpers;
         let used: BTreeSet<usize> = b.used_args.iter().copied().chain([0, 1, 2]).collect();
         let fn_args = arg_list(&args, &used);
 
@@ -377,6 +378,7 @@ impl Emitter<'_> {
                 }
                 Ok((state, g_i))
             }
+            #(#helpers)*
         })
     }
 

@@ -48,6 +48,9 @@ pub struct BodyVelocity {
     pub accel: [Expr; 3],
     /// Angular acceleration at `q'' = 0`, body components.
     pub alpha: [Expr; 3],
+    /// The centre of mass's velocity in the body's components and in the world's, as the
+    /// kinematics built them (for formulations that choose their own components).
+    pub v_both: ([Expr; 3], [Expr; 3]),
 }
 
 /// The simplifier a derivation shares, with interior mutability: every stage adds to its memo.
@@ -92,6 +95,61 @@ impl Tidy {
     /// What the limits cut so far.
     pub fn report(&self) -> SimplifyReport {
         self.0.borrow().report()
+    }
+    /// The limits it runs under.
+    pub fn limits(&self) -> FourierLimits {
+        self.0.borrow().limits()
+    }
+}
+
+/// A point's velocity in the components where it is cheapest, with what the formulations
+/// need of it: the partial velocities by each rate and the acceleration with the rates'
+/// derivatives zero.
+#[derive(Clone, Debug)]
+pub struct Translation {
+    pub v: [Expr; 3],
+    /// True for the body frame's components (the acceleration then has the transport term).
+    pub in_body: bool,
+    /// `dv/d rate_j`, one per rate.
+    pub partials: Vec<[Expr; 3]>,
+    pub accel: [Expr; 3],
+}
+
+impl Translation {
+    /// The velocity, given in the frame's components and in the world's, with partials by
+    /// `rates` and the acceleration along `chain` (`omega` the frame's angular velocity in its
+    /// own components); the one with fewer operations
+    /// ([`crate::symbolic::expr::dag_ops`]) wins. A body moved by translation rates (a floating
+    /// base) is cheapest in world components, where their derivatives vanish at once; a link of
+    /// a chain in its own, where only its joints' relative angles appear.
+    ///
+    /// In the frame's components the acceleration is taken two ways, `dv/dt + omega x v` and
+    /// the world acceleration turned into the frame, `R^T dV/dt`: translation rates (a floating
+    /// base's) vanish from the second at once, where the first needs the rotation's identities
+    /// to cancel them.
+    pub fn cheaper(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], rotation: &Matrix, omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
+        let partials = |v: &[Expr; 3]| -> Vec<[Expr; 3]> { rates.iter().map(|r| v.map(|e| tidy.rational(e.diff(*r)))).collect() };
+        let (vb, vw) = (v_body.map(|e| tidy.rational(e)), v_world.map(|e| tidy.rational(e)));
+        let world_accel = tidy.of3(chain.dt3(&vw));
+        let transport = tidy.of3(add3(&chain.dt3(&vb), &cross(omega, &vb)));
+        let turned = tidy.of3(mat_vec(&rotation.transpose(), &world_accel));
+        let ops = |p: &[[Expr; 3]], a: &[Expr; 3]| {
+            let all: Vec<Expr> = p.iter().flatten().chain(a).copied().collect();
+            crate::symbolic::expr::dag_ops(&all)
+        };
+        // The transport form holds translation rates formally: the acceleration is R^T times the
+        // world's, so a rate absent from the world acceleration is absent from it too, and is set
+        // to zero (exact, no test needed).
+        let absent: HashMap<Symbol, Expr> =
+            rates.iter().filter(|r| !world_accel.iter().any(|e| e.contains(**r))).map(|r| (*r, Expr::zero())).collect();
+        let transport = if absent.is_empty() { transport } else { transport.map(|e| tidy.of(e.subs(&absent))) };
+        let (pb, pw) = (partials(&vb), partials(&vw));
+        let body_accel = if ops(&pb, &turned) < ops(&pb, &transport) { turned } else { transport };
+        if ops(&pb, &body_accel) < ops(&pw, &world_accel) {
+            Translation { v: vb, in_body: true, partials: pb, accel: body_accel }
+        } else {
+            Translation { v: vw, in_body: false, partials: pw, accel: world_accel }
+        }
     }
 }
 
@@ -158,11 +216,6 @@ fn zero_velocities(model: &Model) -> HashMap<Symbol, Expr> {
     model.velocities.iter().map(|v| (*v, Expr::zero())).collect()
 }
 
-/// Distinct nodes of the three components together.
-fn size3(v: &[Expr; 3]) -> usize {
-    crate::symbolic::expr::post_order(v).len()
-}
-
 /// The time derivative with `q'' = 0`: coordinates move with their rates, rates are constant.
 fn drift_chain(model: &Model) -> TimeChain {
     model.position_chain()
@@ -186,28 +239,27 @@ pub fn derive(model: &Model) -> Mechanics {
     for body in &model.bodies {
         let frame = &model.frames[body.frame];
         // The centre of mass's velocity in the body's components and in the world's.
-        let v_body = tidy.of3(frame.point_velocity(&body.com, &chain));
-        let v_world = tidy.of3(chain.dt3(&frame.point(&body.com)));
-        let in_body = size3(&v_body) < size3(&v_world);
-        let v = if in_body { v_body } else { v_world };
+        // The centre of mass's velocity, partial velocities and acceleration, in the body's
+        // components or the world's, whichever is cheaper.
+        let v_body = frame.point_velocity(&body.com, &chain);
+        let v_world = chain.dt3(&frame.point(&body.com));
+        let rotation = tidy.matrix(&frame.rotation);
+        let translation = Translation::cheaper(&tidy, &v_body, &v_world, &rotation, &frame.omega, &model.velocities, &drift);
+        let (v, in_body, accel) = (translation.v, translation.in_body, translation.accel);
         let omega = tidy.of3(frame.omega);
         let mut bm = Matrix::zeros(3, m);
         let mut dm = Matrix::zeros(3, m);
         let mut c = [Expr::zero(); 3];
         let mut e = [Expr::zero(); 3];
         for k in 0..3 {
-            let (bk, ck) = split_linear(v[k], &model.velocities, &zero);
             let (dk, ek) = split_linear(omega[k], &model.velocities, &zero);
             for j in 0..m {
-                bm.set(k, j, tidy.of(bk[j]));
+                bm.set(k, j, translation.partials[j][k]);
                 dm.set(k, j, tidy.of(dk[j]));
             }
-            c[k] = tidy.of(ck);
+            c[k] = tidy.of(v[k].subs(&zero));
             e[k] = tidy.of(ek);
         }
-        // Accelerations at q'' = 0: a = dV/dt (+ omega x V in body components), alpha = d omega/dt.
-        let dv = drift.dt3(&v);
-        let accel = tidy.of3(if in_body { add3(&dv, &cross(&omega, &v)) } else { dv });
         let alpha = tidy.of3(drift.dt3(&omega));
         let mass_expr = body.mass;
         let (iw, ie, torque) = match &body.inertia {
@@ -245,7 +297,7 @@ pub fn derive(model: &Model) -> Mechanics {
             kinetic_terms.push(dot(&omega, iw) / 2);
             t0_terms.push(dot(&e, ie.as_ref().expect("with iw")) / 2);
         }
-        bodies.push(BodyVelocity { v, in_body, omega, b: bm, c, d: dm, e, accel, alpha });
+        bodies.push(BodyVelocity { v, in_body, omega, b: bm, c, d: dm, e, accel, alpha, v_both: (v_body, v_world) });
     }
     let mut mass = Matrix::zeros(m, m);
     for i in 0..m {

@@ -22,7 +22,7 @@
 //! assert_eq!((v.w.rows, v.w.cols), (3, 1));
 //! ```
 
-use super::mechanics::Mechanics;
+use super::mechanics::{Mechanics, Translation};
 use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::limits::Limits;
@@ -83,14 +83,14 @@ fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
 /// Largest model (coordinates) for which the body route of `inertia_by_bodies` is taken, when the
 /// quasi-velocities are not plain rates. Measured (distinct nodes of `M_NI` and `L_NI`): the
 /// body route is smaller on scenes 2 and 3 (scene 2's Kane form 844 against 2008) and on the
-/// floating chain up to 3 links, the coordinate route from 6 links on.
-const MAX_BODY_ROUTE_COORDINATES: usize = 10;
+/// floating chain with 2 links (2620 against 2983), the coordinate route from 3 links on.
+const MAX_BODY_ROUTE_COORDINATES: usize = 8;
 
-/// Largest model (coordinates) for which the reduced equations are also derived directly
-/// (Eqs. 43-65) beside the Schur complement of Kane's, and the smaller kept. Measured: the
-/// direct derivation gives scene 2's reduced right-hand side in 1186 operations against 1337,
-/// at three times the derivation time; on larger models the Schur complement is smaller.
-const MAX_DIRECT_REDUCED_COORDINATES: usize = 8;
+/// Largest model (coordinates) on which the Schur complement's entries get a simplifier that
+/// combines up to four angles: enough to find that a free system's locked inertia does not depend
+/// on its absolute orientation (scene 2's reduced right-hand side: 978 operations against 1132),
+/// too costly for long chains.
+const MAX_LOCAL_SIMPLIFY_COORDINATES: usize = 8;
 
 /// Largest matrix whose determinant is expanded symbolically (for `inspect`).
 const MAX_DETERMINANT_SIZE: usize = 10;
@@ -119,28 +119,19 @@ fn quasi_matrices(model: &Model, mech: &Mechanics, quasi: &[Expr]) -> (Matrix, V
     (y, z)
 }
 
-/// Distinct nodes of everything a Volterra form's right-hand side evaluates.
-fn rhs_size(v: &Volterra) -> usize {
-    let all: Vec<Expr> = v.mass_ni.data.iter().chain(&v.l_ni).chain(&v.qdot).copied().collect();
-    crate::symbolic::expr::post_order(&all).len()
-}
-
 /// The reduced Volterra equations for `quasi` with the ignorable set `ignorable`, given the
 /// Kane form of the same model. Where the reduced quasi-velocities are Kane's without the
 /// ignorable rates (the scenes' choice), they come from Kane's equations by eliminating the
-/// ignorable rates with the conserved momenta ([`by_schur_complement`]); for small models the
-/// direct derivation of Eqs. 43-65 ([`derive`]) is done too and the smaller kept.
+/// ignorable rates with the conserved momenta ([`by_schur_complement`]); otherwise directly
+/// from Eqs. 43-65 ([`derive`]). Measured: the Schur route gives scene 2's reduced right-hand
+/// side in 978 operations against 3100 by the direct route, and scene 3's in 255 against 641.
 pub fn derive_reduced(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Result<Volterra, ModelError> {
     if ignorable.is_empty() {
         return derive(model, mech, ignorable, quasi);
     }
     match by_schur_complement(model, mech, ignorable, quasi, kane) {
+        Some(schur) => Ok(schur),
         None => derive(model, mech, ignorable, quasi),
-        Some(schur) if mech.m > MAX_DIRECT_REDUCED_COORDINATES => Ok(schur),
-        Some(schur) => {
-            let direct = derive(model, mech, ignorable, quasi)?;
-            Ok(if rhs_size(&schur) < rhs_size(&direct) { schur } else { direct })
-        }
     }
 }
 
@@ -196,7 +187,7 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
         rhs.set(a, 0, tidy.of(g[a].expr() - n - coupled));
     }
-    let opts = SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false };
+    let opts = SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
     let v_i = solve(&m_ii, &rhs, &opts).ok()?;
     // Kane's quasi-velocities in the reduced ones: u_N renamed, v_I from the momenta.
     let mut sigma: HashMap<Symbol, Expr> = HashMap::new();
@@ -223,24 +214,38 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
     let zs = solve(&m_ii, &right, &opts).ok()?;
     let mut mass_ni = Matrix::zeros(n_u, n_u);
     let coupling = |k: usize, col: usize| Expr::sum((0..s).map(|a| mk.get(map[k], rates[a]) * zs.x.get(a, col)));
+    // The Schur complement combines the ignorable rows' entries, which carry the absolute
+    // orientation, into entries that do not (the locked inertia of a free system depends on its
+    // shape only): on small models a simplifier that combines more angles finds that.
+    let local = (m <= MAX_LOCAL_SIMPLIFY_COORDINATES).then(|| {
+        let limits = crate::symbolic::fourier::FourierLimits { max_angle_atoms: 4, ..mech.tidy.limits() };
+        super::mechanics::Tidy::new(limits)
+    });
+    let simplify = |e: Expr| match &local {
+        Some(t) => {
+            let s = t.of(e);
+            if crate::symbolic::expr::dag_ops(&[s]) < crate::symbolic::expr::dag_ops(&[e]) { s } else { e }
+        }
+        None => e,
+    };
     for k in 0..n_u {
         for l in k..n_u {
-            let e = mk.get(map[k], map[l]) - coupling(k, l);
+            let e = simplify(mk.get(map[k], map[l]) - coupling(k, l));
             mass_ni.set(k, l, e);
             mass_ni.set(l, k, e);
         }
     }
-    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(l_k[map[k]] - coupling(k, n_u), &g)).collect();
+    let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(simplify(l_k[map[k]] - coupling(k, n_u)), &g)).collect();
     let u_ni: Vec<Expr> = (0..n_u).map(|k| u_k[map[k]] - coupling(k, n_u + 1)).collect();
     let inertia_ni: Vec<Expr> = (0..n_u).map(|k| l_ni[k] - u_ni[k]).collect();
     let mut w = Matrix::zeros(m, n_u);
     let zero_n: HashMap<Symbol, Expr> = u.iter().map(|s| (*s, Expr::zero())).collect();
     for i in 0..m {
         for k in 0..n_u {
-            w.set(i, k, tidy.of(qdot[i].diff(u[k])));
+            w.set(i, k, qdot[i].diff(u[k]));
         }
     }
-    let x: Vec<Expr> = qdot.iter().map(|e| tidy.of(e.subs(&zero_n))).collect();
+    let x: Vec<Expr> = Expr::subs_all(&qdot, &zero_n);
     let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(qdot.iter().copied()).collect());
     let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
     let mut singular_factors = kane.singular_factors.clone();
@@ -310,6 +315,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         constants: model.constant_symbols().into_iter().chain(g.iter().copied()).collect(),
         limits: Limits { max_terms: 2_000, max_work: 400_000 },
         determinant: m <= MAX_DETERMINANT_SIZE,
+        normalize: true,
     };
     let sol = solve(&a_full, &rhs, &opts).map_err(|e| match e {
         SolveError::Singular { rows, .. } => {
@@ -409,22 +415,15 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
     let mut inertia_terms: Vec<Vec<Expr>> = vec![Vec::new(); n_u];
     for (bv, body) in mech.bodies.iter().zip(&model.bodies) {
         // The velocity in the quasi-velocities, in world or body components, whichever is
-        // smaller here (the momentum rows of W are simplest in world components).
-        let v = Expr::subs_all(&bv.v, &to_u);
-        let v = [v[0], v[1], v[2]];
-        let rot = tidy.matrix(&model.frames[body.frame].rotation);
-        let (v_body, v_world) = if bv.in_body { (v, mat_vec(&rot, &v)) } else { (mat_vec(&rot.transpose(), &v), v) };
-        let v_body = v_body.map(|e| tidy.rational(e));
-        let v_world = v_world.map(|e| tidy.rational(e));
-        let in_body = crate::symbolic::expr::post_order(&v_body).len() < crate::symbolic::expr::post_order(&v_world).len();
-        let v = if in_body { v_body } else { v_world };
+        // cheaper here (the momentum rows of W are simplest in world components).
+        let both = Expr::subs_all(&[bv.v_both.0, bv.v_both.1].concat(), &to_u);
         let om = Expr::subs_all(&bv.omega, &to_u).into_iter().map(|e| tidy.rational(e)).collect::<Vec<_>>();
         let om = [om[0], om[1], om[2]];
+        let rotation = tidy.matrix(&model.frames[body.frame].rotation);
+        let translation = Translation::cheaper(tidy, &[both[0], both[1], both[2]], &[both[3], both[4], both[5]], &rotation, &om, u, chain);
+        let (p, accel) = (translation.partials, translation.accel);
         let partial = |x: &[Expr; 3], k: usize| x.map(|e| tidy.rational(e.diff(u[k])));
-        let p: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&v, k)).collect();
         let o: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&om, k)).collect();
-        let dv = chain.dt3(&v);
-        let accel = tidy.of3(if in_body { add3(&dv, &cross(&om, &v)) } else { dv });
         let torque = body.inertia.as_ref().map(|inertia| {
             let alpha = chain.dt3(&om);
             tidy.of3(add3(&mat_vec(inertia, &alpha), &cross(&om, &mat_vec(inertia, &om))))

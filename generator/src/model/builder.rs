@@ -267,7 +267,8 @@ impl ModelBuilder {
         let config = ron::ser::PrettyConfig::new()
             .struct_names(true)
             .extensions(ron::extensions::Extensions::IMPLICIT_SOME)
-            .indentor("    ".to_string());
+            .indentor("    ".to_string())
+            .escape_strings(false);
         // Serializing plain data with string keys cannot fail.
         ron::ser::to_string_pretty(&self.def, config).expect("a model definition serializes to RON")
     }

@@ -768,6 +768,26 @@ pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
     order
 }
 
+/// The operations it takes to evaluate `outputs` with every shared node computed once: per
+/// distinct node, one addition per term beyond the first, one multiplication per factor beyond
+/// the first and per coefficient other than +-1, one per integer power, one per call. An
+/// estimate of emitted cost that, unlike a node count, sees the size of sums and products.
+pub fn dag_ops(outputs: &[Expr]) -> usize {
+    post_order(outputs)
+        .into_iter()
+        .map(|e| match &*e.node() {
+            Node::Num(_) | Node::Sym(_) => 0,
+            Node::Add { constant, terms } => {
+                terms.len() - 1 + usize::from(!constant.is_zero()) + terms.iter().filter(|(_, c)| !c.abs().is_one()).count()
+            }
+            Node::Mul { coefficient, factors } => {
+                factors.len() - 1 + usize::from(!coefficient.abs().is_one()) + factors.iter().filter(|(_, x)| !x.is_one()).count()
+            }
+            Node::Fun(..) | Node::Apply(..) => 1,
+        })
+        .sum()
+}
+
 pub(crate) fn memo_diff_get(e: Expr, s: Symbol) -> Option<Expr> {
     with_pool(|p| p.diff_memo.get(&(e, s)).copied())
 }

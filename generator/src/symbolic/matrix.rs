@@ -199,11 +199,14 @@ pub struct SolveOptions {
     pub limits: Limits,
     /// Expand the determinant too (Laplace expansion: for small matrices only).
     pub determinant: bool,
+    /// Put eliminated entries in the polynomial normal form, so that common factors show and
+    /// cancel (off for systems built from already simplified pieces).
+    pub normalize: bool,
 }
 
 impl Default for SolveOptions {
     fn default() -> Self {
-        SolveOptions { constants: HashSet::new(), limits: Limits::default(), determinant: true }
+        SolveOptions { constants: HashSet::new(), limits: Limits::default(), determinant: true, normalize: true }
     }
 }
 
@@ -295,8 +298,11 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             } else {
                 rows[i].iter().zip(&prow).map(|(x, y)| if y.is_zero() { p * *x } else { p * *x - f * *y }).collect()
             };
-            let mut updated: Vec<Expr> =
-                updated.into_iter().map(|e| simplify_entry(e, opts.limits, &mut stops)).collect();
+            let mut updated: Vec<Expr> = if opts.normalize {
+                updated.into_iter().map(|e| simplify_entry(e, opts.limits, &mut stops)).collect()
+            } else {
+                updated
+            };
             updated[pj] = Expr::zero();
             if p.as_num().is_none() {
                 let content = common_content(&updated);

@@ -94,6 +94,30 @@ pub fn zero_test(e: Expr) -> ZeroVerdict {
     }
 }
 
+/// `e` with each symbol of `symbols` it only depends on formally (its partial derivative is
+/// identically zero) set to zero: exact, and it removes terms that cancel only through
+/// identities a simplifier missed.
+///
+/// ```
+/// use generator::symbolic::{Expr, Symbol, zero::prune_absent};
+/// let (a, v) = (Expr::sym("a"), Symbol::new("v"));
+/// let e = v.expr() * (a.sin().powi(2) + a.cos().powi(2)) - v.expr() + a;
+/// assert_eq!(prune_absent(e, &[v]), a);
+/// ```
+pub fn prune_absent(e: Expr, symbols: &[Symbol]) -> Expr {
+    let mut out = e;
+    let mut zero = std::collections::HashMap::new();
+    for s in symbols {
+        if out.contains(*s) && zero_test(out.diff(*s)).is_zero() {
+            zero.insert(*s, Expr::zero());
+        }
+    }
+    if !zero.is_empty() {
+        out = out.subs(&zero);
+    }
+    out
+}
+
 /// `zero_test(e).is_zero()`.
 pub fn is_identically_zero(e: Expr) -> bool {
     zero_test(e).is_zero()
