@@ -9,6 +9,7 @@
 use crate::formulation::{Derivation, Request, ignorable};
 use crate::model::{Model, ModelError};
 use crate::symbolic::Expr;
+use crate::symbolic::print::render_shared;
 use std::fmt::Write;
 
 /// Renders the derivation report for a model: one derivation of all four formulations, the
@@ -45,69 +46,28 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     for e in &d.equations {
         let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name, e.states(work), e.equations);
     }
-    let (open, close, eq) = if latex { ("\\begin{aligned}", "\\end{aligned}\n", " &= ") } else { ("", "", " = ") };
-    let line = |w: &mut String, lhs: &str, rhs: String| {
-        let _ = writeln!(w, "  {lhs}{eq}{rhs}{}", if latex { " \\\\" } else { "" });
-    };
-    let _ = writeln!(w, "\nenergies:");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
-    line(w, "T", show(mech.kinetic));
-    line(w, "V", show(mech.potential));
-    let _ = write!(w, "{close}");
-    let _ = writeln!(w, "\nmass matrix M (nonzero entries, upper triangle):");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
+    let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];
+    section(w, "energies:", &mut items, latex);
+    let mut items = Vec::new();
     for i in 0..mech.m {
         for j in i..mech.m {
-            let e = mech.mass.get(i, j);
-            if !e.is_zero() {
-                line(w, &sub("M", &[i + 1, j + 1], latex), show(e));
-            }
+            items.push((sub("M", &[i + 1, j + 1], latex), mech.mass.get(i, j)));
         }
     }
-    let _ = write!(w, "{close}");
-    let _ = writeln!(w, "\nN and T0 (nonzero entries):");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
-    for i in 0..mech.m {
-        if !mech.n[i].is_zero() {
-            line(w, &sub("N", &[i + 1], latex), show(mech.n[i]));
-        }
-    }
-    if !mech.t0.is_zero() {
-        line(w, if latex { "T_{0}" } else { "T0" }, show(mech.t0));
-    }
-    let _ = write!(w, "{close}");
-    let _ = writeln!(w, "\ngeneralized forces Q (nonzero entries; potential forces are in V):");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
-    for i in 0..mech.m {
-        if !mech.q_forces[i].is_zero() {
-            line(w, &sub("Q", &[i + 1], latex), show(mech.q_forces[i]));
-        }
-    }
-    let _ = write!(w, "{close}");
-    let _ = writeln!(w, "\nconstraints a q' + b = 0 (nonzero entries):");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
+    section(w, "mass matrix M (nonzero entries, upper triangle):", &mut items, latex);
+    let mut items: Vec<(String, Expr)> = (0..mech.m).map(|i| (sub("N", &[i + 1], latex), mech.n[i])).collect();
+    items.push((if latex { "T_{0}" } else { "T0" }.to_string(), mech.t0));
+    section(w, "N and T0 (nonzero entries):", &mut items, latex);
+    let mut items: Vec<(String, Expr)> = (0..mech.m).map(|i| (sub("Q", &[i + 1], latex), mech.q_forces[i])).collect();
+    section(w, "generalized forces Q (nonzero entries; potential forces are in V):", &mut items, latex);
+    let mut items = Vec::new();
     for i in 0..mech.r {
         for j in 0..mech.m {
-            let e = mech.a.get(i, j);
-            if !e.is_zero() {
-                line(w, &sub("a", &[i + 1, j + 1], latex), show(e));
-            }
+            items.push((sub("a", &[i + 1, j + 1], latex), mech.a.get(i, j)));
         }
-        if !mech.b[i].is_zero() {
-            line(w, &sub("b", &[i + 1], latex), show(mech.b[i]));
-        }
+        items.push((sub("b", &[i + 1], latex), mech.b[i]));
     }
-    let _ = write!(w, "{close}");
+    section(w, "constraints a q' + b = 0 (nonzero entries):", &mut items, latex);
     let v = d.reduced.as_ref().expect("inspect derives the reduced form");
     let u_names: Vec<String> = v.u.iter().zip(&model.quasi_reduced).map(|(u, e)| format!("{} = {}", u.name(), show(*e))).collect();
     let _ = writeln!(w, "\nreduced Volterra method (Eqs. 42-67), u_NI: {}", u_names.join("; "));
@@ -130,34 +90,24 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     } else {
         let _ = writeln!(w, "  singular only where one of these vanishes: {}", sing.join(", "));
     }
-    let _ = writeln!(w, "q' = W_NI u_NI + X_NI (nonzero entries):");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
+    let mut items = Vec::new();
     for i in 0..mech.m {
         for k in 0..v.u.len() {
-            if !v.w.get(i, k).is_zero() {
-                line(w, &sub("W", &[i + 1, k + 1], latex), show(v.w.get(i, k)));
-            }
+            items.push((sub("W", &[i + 1, k + 1], latex), v.w.get(i, k)));
         }
-        if !v.x[i].is_zero() {
-            line(w, &sub("X", &[i + 1], latex), show(v.x[i]));
-        }
+        items.push((sub("X", &[i + 1], latex), v.x[i]));
     }
-    let _ = write!(w, "{close}");
-    let _ = writeln!(w, "M_NI u_NI' = L_NI:");
-    if latex {
-        let _ = writeln!(w, "{open}");
-    }
+    section(w, "q' = W_NI u_NI + X_NI (nonzero entries):", &mut items, latex);
+    let mut items = Vec::new();
     for i in 0..v.u.len() {
         for j in i..v.u.len() {
-            line(w, &sub("M_NI", &[i + 1, j + 1], latex), show(v.mass_ni.get(i, j)));
+            items.push((sub("M_NI", &[i + 1, j + 1], latex), v.mass_ni.get(i, j)));
         }
     }
     for i in 0..v.u.len() {
-        line(w, &sub("L_NI", &[i + 1], latex), show(v.l_ni[i]));
+        items.push((sub("L_NI", &[i + 1], latex), v.l_ni[i]));
     }
-    let _ = write!(w, "{close}");
+    section(w, "M_NI u_NI' = L_NI:", &mut items, latex);
     let _ = writeln!(w, "\nDefinition 1, coordinate by coordinate:");
     for r in reports {
         match &r.failure {
@@ -175,6 +125,35 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
         }
     }
     out
+}
+
+/// Subexpressions at most this large (tree nodes) are printed in place, larger shared ones once
+/// under a name.
+const INLINE_TREE: u32 = 40;
+
+/// A titled list of `lhs = rhs` lines (zero entries left out), with the shared
+/// subexpressions of the whole list named once after it.
+fn section(w: &mut String, title: &str, items: &mut Vec<(String, Expr)>, latex: bool) {
+    items.retain(|(_, e)| !e.is_zero());
+    let _ = writeln!(w, "\n{title}");
+    let exprs: Vec<Expr> = items.iter().map(|(_, e)| *e).collect();
+    let (texts, defs) = render_shared(&exprs, latex, INLINE_TREE);
+    let (eq, end) = if latex { (" &= ", " \\\\") } else { (" = ", "") };
+    if latex {
+        let _ = writeln!(w, "\\begin{{aligned}}");
+    }
+    for ((lhs, _), rhs) in items.iter().zip(&texts) {
+        let _ = writeln!(w, "  {lhs}{eq}{rhs}{end}");
+    }
+    if !defs.is_empty() {
+        let _ = writeln!(w, "  {}", if latex { "\\text{where}" } else { "where" });
+        for (name, text) in &defs {
+            let _ = writeln!(w, "  {name}{eq}{text}{end}");
+        }
+    }
+    if latex {
+        let _ = writeln!(w, "\\end{{aligned}}");
+    }
 }
 
 fn latex_failure(f: &ignorable::Failure) -> String {

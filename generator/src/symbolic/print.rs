@@ -14,9 +14,10 @@
 use super::expr::{Expr, Node};
 use super::number::Rat;
 use num_traits::{One, Signed};
+use std::collections::HashMap;
 use std::fmt;
 
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
 enum Style {
     Text,
     Latex,
@@ -36,7 +37,7 @@ impl fmt::Display for Expr {
         if self.tree_size() > MAX_PRINTED_TREE {
             return write!(f, "<expression of {} distinct nodes, too large to print>", self.dag_size());
         }
-        f.write_str(&render(*self, Style::Text).0)
+        f.write_str(&Renderer::default().render(*self, Style::Text).0)
     }
 }
 
@@ -46,63 +47,207 @@ impl Expr {
         if self.tree_size() > MAX_PRINTED_TREE {
             return format!("\\text{{(expression of {} distinct nodes)}}", self.dag_size());
         }
-        render(self, Style::Latex).0
+        Renderer::default().render(self, Style::Latex).0
     }
 }
 
-/// Renders with its precedence.
-fn render(e: Expr, st: Style) -> (String, u8) {
-    match &*e.node() {
-        Node::Num(r) => render_rat(r, st),
-        Node::Sym(s) => (symbol_name(&s.name(), st), 10),
-        Node::Fun(f, a) => {
-            let arg = render(*a, st).0;
-            match st {
-                Style::Text => (format!("{}({arg})", f.name()), 10),
-                Style::Latex => {
-                    let name = match f.name() {
-                        "abs" => return (format!("\\left|{arg}\\right|"), 10),
-                        "ln" => "\\ln".to_string(),
-                        n => format!("\\{n}"),
-                    };
-                    (format!("{name}\\left({arg}\\right)"), 10)
+/// Expressions printed with their shared subexpressions named once: `(one string per item,
+/// definitions "name = expression" in an order where each uses only names before it)`.
+/// Subexpressions larger than `inline` tree nodes that occur more than once get a name
+/// (`#1`, `#2`, ... in text, `x_{1}`, ... in LaTeX), so the output grows with the number of
+/// distinct nodes, not with the tree a DAG stands for.
+///
+/// ```
+/// use generator::symbolic::{Expr, print::render_shared};
+/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+/// let shared = (x + y * y).sin();
+/// let (items, defs) = render_shared(&[shared + x, shared * y], false, 4);
+/// assert_eq!(defs, vec![("#1".to_string(), "sin(x + y^2)".to_string())]);
+/// assert_eq!(items, vec!["#1 + x".to_string(), "y*#1".to_string()]);
+/// ```
+pub fn render_shared(items: &[Expr], latex: bool, inline: u32) -> (Vec<String>, Vec<(String, String)>) {
+    let st = if latex { Style::Latex } else { Style::Text };
+    let order = super::expr::post_order(items);
+    let mut uses: HashMap<Expr, usize> = HashMap::new();
+    for e in &order {
+        for c in e.children() {
+            *uses.entry(c).or_default() += 1;
+        }
+    }
+    let mut r = Renderer::default();
+    let mut defs = Vec::new();
+    for e in order {
+        let shared = uses.get(&e).copied().unwrap_or(0) >= 2 && e.tree_size() > inline;
+        let huge = e.tree_size() > MAX_PRINTED_TREE / 4 && !items.contains(&e);
+        if shared || huge {
+            let text = r.render(e, st).0;
+            let k = defs.len() + 1;
+            let name = if latex { format!("x_{{{k}}}") } else { format!("#{k}") };
+            defs.push((name.clone(), text));
+            r.names.insert(e, name);
+            // Everything rendered so far may have inlined it: renders from here on use the name.
+            r.memo.clear();
+        }
+    }
+    let out = items.iter().map(|e| r.render_inner(*e, st).0).collect();
+    (out, defs)
+}
+
+/// Renders expressions, memoized per node and style, with names for some subexpressions.
+#[derive(Default)]
+struct Renderer {
+    memo: HashMap<(Expr, Style), (String, u8)>,
+    names: HashMap<Expr, String>,
+}
+
+impl Renderer {
+    /// Renders with its precedence (a named subexpression as its name).
+    fn render(&mut self, e: Expr, st: Style) -> (String, u8) {
+        if let Some(n) = self.names.get(&e) {
+            return (n.clone(), 10);
+        }
+        self.render_inner(e, st)
+    }
+
+    /// Renders the node itself even when it has a name.
+    fn render_inner(&mut self, e: Expr, st: Style) -> (String, u8) {
+        if let Some(r) = self.memo.get(&(e, st)) {
+            return r.clone();
+        }
+        let r = self.node(e, st);
+        self.memo.insert((e, st), r.clone());
+        r
+    }
+
+    fn node(&mut self, e: Expr, st: Style) -> (String, u8) {
+        match &*e.node() {
+            Node::Num(r) => render_rat(r, st),
+            Node::Sym(s) => (symbol_name(&s.name(), st), 10),
+            Node::Fun(f, a) => {
+                let arg = self.render(*a, st).0;
+                match st {
+                    Style::Text => (format!("{}({arg})", f.name()), 10),
+                    Style::Latex => {
+                        let name = match f.name() {
+                            "abs" => return (format!("\\left|{arg}\\right|"), 10),
+                            "ln" => "\\ln".to_string(),
+                            n => format!("\\{n}"),
+                        };
+                        (format!("{name}\\left({arg}\\right)"), 10)
+                    }
                 }
             }
-        }
-        Node::Apply(n, a) => {
-            let arg = render(*a, st).0;
-            match st {
-                Style::Text => (format!("{}({arg})", n.name()), 10),
-                Style::Latex => (format!("{}\\left({arg}\\right)", symbol_name(&n.name(), st)), 10),
-            }
-        }
-        Node::Add { constant, terms } => {
-            let mut parts: Vec<(String, bool, String)> = terms
-                .iter()
-                .map(|(t, c)| {
-                    let neg = c.is_negative();
-                    let body = render(t.scale(&c.abs()), st);
-                    (render(*t, Style::Text).0, neg, body.0)
-                })
-                .collect();
-            parts.sort();
-            let mut parts: Vec<(bool, String)> = parts.into_iter().map(|(_, n, b)| (n, b)).collect();
-            if !constant.is_zero() {
-                parts.push((constant.is_negative(), render_rat(&constant.abs(), st).0));
-            }
-            let mut out = String::new();
-            for (i, (neg, body)) in parts.iter().enumerate() {
-                match (i, neg) {
-                    (0, true) => out.push('-'),
-                    (0, false) => {}
-                    (_, true) => out.push_str(" - "),
-                    (_, false) => out.push_str(" + "),
+            Node::Apply(n, a) => {
+                let arg = self.render(*a, st).0;
+                match st {
+                    Style::Text => (format!("{}({arg})", n.name()), 10),
+                    Style::Latex => (format!("{}\\left({arg}\\right)", symbol_name(&n.name(), st)), 10),
                 }
-                out.push_str(body);
             }
-            (out, SUM)
+            Node::Add { constant, terms } => {
+                let mut parts: Vec<(String, bool, String)> = terms
+                    .iter()
+                    .map(|(t, c)| {
+                        let neg = c.is_negative();
+                        let body = self.render(t.scale(&c.abs()), st);
+                        (self.render(*t, Style::Text).0, neg, body.0)
+                    })
+                    .collect();
+                parts.sort();
+                let mut parts: Vec<(bool, String)> = parts.into_iter().map(|(_, n, b)| (n, b)).collect();
+                if !constant.is_zero() {
+                    parts.push((constant.is_negative(), render_rat(&constant.abs(), st).0));
+                }
+                let mut out = String::new();
+                for (i, (neg, body)) in parts.iter().enumerate() {
+                    match (i, neg) {
+                        (0, true) => out.push('-'),
+                        (0, false) => {}
+                        (_, true) => out.push_str(" - "),
+                        (_, false) => out.push_str(" + "),
+                    }
+                    out.push_str(body);
+                }
+                (out, SUM)
+            }
+            Node::Mul { coefficient, factors } => self.product(coefficient, factors, st),
         }
-        Node::Mul { coefficient, factors } => render_product(coefficient, factors, st),
+    }
+
+    fn product(&mut self, coefficient: &Rat, factors: &[(Expr, Rat)], st: Style) -> (String, u8) {
+        // Symbols first (by name), then the rest, each group in text order.
+        let mut num: Vec<(bool, String, String)> = Vec::new();
+        let mut den: Vec<(bool, String, String)> = Vec::new();
+        for (b, x) in factors {
+            let key = (b.as_sym().is_none(), self.render(*b, Style::Text).0);
+            let power = self.power(*b, &x.abs(), st);
+            let target = if x.is_negative() { &mut den } else { &mut num };
+            target.push((key.0, key.1, power));
+        }
+        num.sort();
+        den.sort();
+        let mut num: Vec<String> = num.into_iter().map(|t| t.2).collect();
+        let mut den: Vec<String> = den.into_iter().map(|t| t.2).collect();
+        let neg = coefficient.is_negative();
+        let (cn, cd) = (coefficient.numer().abs(), coefficient.denom().clone());
+        if !cn.is_one() {
+            num.insert(0, cn.to_string());
+        }
+        if !cd.is_one() {
+            den.insert(0, cd.to_string());
+        }
+        let sep = if st == Style::Text { "*" } else { " " };
+        let numerator = if num.is_empty() { "1".to_string() } else { num.join(sep) };
+        let body = if den.is_empty() {
+            numerator
+        } else {
+            match st {
+                Style::Text => {
+                    let d = if den.len() == 1 { den[0].clone() } else { format!("({})", den.join("*")) };
+                    format!("{numerator}/{d}")
+                }
+                Style::Latex => format!("\\frac{{{numerator}}}{{{}}}", den.join(" ")),
+            }
+        };
+        if neg { (format!("-{body}"), SUM) } else { (body, PRODUCT) }
+    }
+
+    fn power(&mut self, b: Expr, x: &Rat, st: Style) -> String {
+        let (base, prec) = self.render(b, st);
+        let half = Rat::frac(1, 2);
+        if *x == half {
+            return match st {
+                Style::Text => format!("sqrt({base})"),
+                Style::Latex => format!("\\sqrt{{{base}}}"),
+            };
+        }
+        let base = if x.is_one() {
+            if prec < PRODUCT || (prec == PRODUCT && st == Style::Text && base.contains('/')) {
+                paren(&base, st)
+            } else {
+                base
+            }
+        } else if prec <= POWER {
+            paren(&base, st)
+        } else {
+            base
+        };
+        if x.is_one() {
+            return base;
+        }
+        match st {
+            Style::Text => {
+                if x.denom().is_one() {
+                    format!("{base}^{}", x.numer())
+                } else {
+                    format!("{base}^({}/{})", x.numer(), x.denom())
+                }
+            }
+            Style::Latex => {
+                let e = if x.denom().is_one() { x.numer().to_string() } else { format!("{}/{}", x.numer(), x.denom()) };
+                format!("{base}^{{{e}}}")
+            }
+        }
     }
 }
 
@@ -117,80 +262,6 @@ fn render_rat(r: &Rat, st: Style) -> (String, u8) {
         Style::Latex => {
             let sign = if r.is_negative() { "-" } else { "" };
             (format!("{sign}\\frac{{{}}}{{{}}}", r.numer().abs(), r.denom()), PRODUCT)
-        }
-    }
-}
-
-fn render_product(coefficient: &Rat, factors: &[(Expr, Rat)], st: Style) -> (String, u8) {
-    // Symbols first (by name), then the rest, each group in text order.
-    let mut num: Vec<(bool, String, String)> = Vec::new();
-    let mut den: Vec<(bool, String, String)> = Vec::new();
-    for (b, x) in factors {
-        let target = if x.is_negative() { &mut den } else { &mut num };
-        target.push((b.as_sym().is_none(), render(*b, Style::Text).0, render_power(*b, &x.abs(), st)));
-    }
-    num.sort();
-    den.sort();
-    let mut num: Vec<String> = num.into_iter().map(|t| t.2).collect();
-    let mut den: Vec<String> = den.into_iter().map(|t| t.2).collect();
-    let neg = coefficient.is_negative();
-    let (cn, cd) = (coefficient.numer().abs(), coefficient.denom().clone());
-    if !cn.is_one() {
-        num.insert(0, cn.to_string());
-    }
-    if !cd.is_one() {
-        den.insert(0, cd.to_string());
-    }
-    let sep = if st == Style::Text { "*" } else { " " };
-    let numerator = if num.is_empty() { "1".to_string() } else { num.join(sep) };
-    let body = if den.is_empty() {
-        numerator
-    } else {
-        match st {
-            Style::Text => {
-                let d = if den.len() == 1 { den[0].clone() } else { format!("({})", den.join("*")) };
-                format!("{numerator}/{d}")
-            }
-            Style::Latex => format!("\\frac{{{numerator}}}{{{}}}", den.join(" ")),
-        }
-    };
-    if neg { (format!("-{body}"), SUM) } else { (body, PRODUCT) }
-}
-
-fn render_power(b: Expr, x: &Rat, st: Style) -> String {
-    let (base, prec) = render(b, st);
-    let half = Rat::frac(1, 2);
-    if *x == half {
-        return match st {
-            Style::Text => format!("sqrt({base})"),
-            Style::Latex => format!("\\sqrt{{{base}}}"),
-        };
-    }
-    let base = if x.is_one() {
-        if prec < PRODUCT || (prec == PRODUCT && st == Style::Text && base.contains('/')) {
-            paren(&base, st)
-        } else {
-            base
-        }
-    } else if prec <= POWER {
-        paren(&base, st)
-    } else {
-        base
-    };
-    if x.is_one() {
-        return base;
-    }
-    match st {
-        Style::Text => {
-            if x.denom().is_one() {
-                format!("{base}^{}", x.numer())
-            } else {
-                format!("{base}^({}/{})", x.numer(), x.denom())
-            }
-        }
-        Style::Latex => {
-            let e = if x.denom().is_one() { x.numer().to_string() } else { format!("{}/{}", x.numer(), x.denom()) };
-            format!("{base}^{{{e}}}")
         }
     }
 }
