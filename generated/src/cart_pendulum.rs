@@ -327,8 +327,8 @@ pub mod lagrange {
             force: [
                 tau
                     + l
-                        * (m2 * (-0.5 * (l * x9 * theta2_dot * theta2_dot) - x0 * g)
-                            - 0.5 * (x0 * g * m1)),
+                        * ((-m2 - 0.5 * m1) * x0 * g
+                            - 0.5 * (m2 * l * x9 * theta2_dot * theta2_dot)),
                 m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l
                     - tau,
                 (0.5 * (x0 * theta1_dot * theta1_dot * m1)
@@ -572,10 +572,10 @@ pub mod maggi {
         let x8 = x2 + x5;
         let x9 = m2 + 0.5 * m1;
         let x10 = l * x7 * (x9 * x4 - 0.5 * (x3 * m2 * x8));
-        let x11 = x3 * x0 - x4 * x1;
-        let x12 = theta1_dot - theta2_dot;
-        let x13 = x7 * x8;
-        let x14 = 1.0 - x13;
+        let x11 = theta1_dot - theta2_dot;
+        let x12 = x7 * x8;
+        let x13 = 1.0 - x12;
+        let x14 = x3 * x0 - x4 * x1;
         Assembly {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
@@ -593,27 +593,29 @@ pub mod maggi {
             force: [
                 x7
                     * (tau
-                        + ((l * x11
-                            * (-0.5 * (theta2_dot * theta2_dot)
-                                - 0.5 * (x12 * x12 * x14 * x7 * x8)) - x0 * g) * m2
-                            - x12 * x12 * l * x7 * x7 * x11
-                                * (m2 + 0.3333333333333333 * m1) - 0.5 * (x0 * g * m1)) * l
+                        + l
+                            * (l
+                                * (x11 * x11
+                                    * (-x7 * (m2 + 0.3333333333333333 * m1)
+                                        - 0.5 * (m2 * x13 * x8)) * x7
+                                    - 0.5 * (m2 * theta2_dot * theta2_dot)) * x14
+                                + (-m2 - 0.5 * m1) * x0 * g)
                         - (m2 * l
                             * (l
                                 * (0.5 * (theta1_dot * theta1_dot)
-                                    + x12 * x12 * x7
-                                        * (-0.16666666666666666 * x13 - 0.3333333333333333)) * x11
+                                    + x11 * x11 * x7
+                                        * (-0.16666666666666666 * x12 - 0.3333333333333333)) * x14
                                 - 0.5 * (g * x1)) - tau) * x8),
                 l
-                    * (x12 * x12 * x7 * x11 * (-0.5 * (x3 * m2 * x14) - x7 * x9 * x4)
+                    * (x11 * x11 * x7 * x14 * (-0.5 * (x3 * m2 * x13) - x7 * x9 * x4)
                         + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
                         - m2
                             * (-x0 * theta1_dot * theta1_dot
                                 - 0.5 * (theta2_dot * theta2_dot * x1))),
             ],
             w: [[x7, 0.0], [-(x7 * x8), 0.0], [0.0, 1.0]],
-            c: [x12 * x12 * x7 * x7 * x11, x12 * x12 * x14 * x7 * x11, 0.0],
-            power: x12 * tau,
+            c: [x11 * x11 * x7 * x7 * x14, x11 * x11 * x13 * x7 * x14, 0.0],
+            power: x11 * tau,
             checks: [x6, l * x6],
         }
     }
@@ -1122,9 +1124,10 @@ pub mod reduced_volterra {
         let x17 = x3 * x0 - x4 * x1;
         let x18 = x9 * x10;
         let x19 = x7 - x18;
-        let x20 = m2 * (0.25 * (f64::sin(x11) * (x7 - 2.0 * x18)) - 0.75 * (x0 * x7))
-            - x12 * (-m2 - M - m1) * x17 * x14 * x19 - 0.5 * (x0 * x7 * m1);
-        let x21 = x18 - 1.0;
+        let x20 = x18 - 1.0;
+        let x21 = (-0.75 * m2 - 0.5 * m1) * x0 * x7
+            - x12 * (-m2 - M - m1) * x17 * x14 * x19
+            + 0.25 * (m2 * f64::sin(x11) * (x7 - 2.0 * x18));
         Assembly {
             qdot: [x7 * u1, x9 * x10 * u1, (l * x12 * u1 + x8 * G_x) * x14],
             matrix: [
@@ -1142,17 +1145,23 @@ pub mod reduced_volterra {
                 ],
             ],
             force: [
-                (((0.5 * (x7 * x7)
-                    + x19 * (0.5 * (x7 * x7 * x10) - 0.3333333333333333 * (x21 * x9)))
-                    * x17 - 0.5 * (x3 * x20 * x14)) * m2 * x9 * x10
-                    + (((x7 * x7 * x16 - 0.5 * (m2 * x21 * x9 * x10)) * x19
-                        - 0.5 * (m2 * x9 * x9 * x10 * x10)) * x17 - x15 * x20 * x4 * x14)
-                        * x7
-                    + x12
-                        * (0.5 * (x0 * x7 * x7 * m1)
-                            - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
-                            + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x21 * x9)) * x17
-                                * x19 - x13 * x20 * x14) * x14) * l * l * u1 * u1
+                l * l
+                    * (m2 * x9 * x10
+                        * (x17
+                            * (x7 * x7 * (0.5 * (x10 * x19) + 0.5)
+                                - 0.3333333333333333 * (x20 * x9 * x19))
+                            - 0.5 * (x3 * x21 * x14))
+                        + x12
+                            * (0.5 * (x0 * x7 * x7 * m1)
+                                - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
+                                - x13 * x21 * x14
+                                + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x20 * x9)) * x17
+                                    * x19) * x14
+                        + x7
+                            * (x17
+                                * (x7 * x7 * x19 * x16
+                                    + (-0.5 * (x20 * x19) - 0.5 * x18) * m2 * x9 * x10)
+                                - x15 * x21 * x4 * x14)) * u1 * u1
                     + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
                     + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7,
             ],

@@ -472,9 +472,8 @@ pub mod lagrange {
         let x50 = x16 * x8 - x21 * x4;
         let x51 = x48 * q3_dot * q3_dot * l2;
         let x52 = l0 * q1_dot * q1_dot * x37;
-        let x53 = g * x18;
-        let x54 = l1 * q2_dot * q2_dot * x43;
-        let x55 = x6 * x21 - x18 * x8;
+        let x53 = l1 * q2_dot * q2_dot * x43;
+        let x54 = x6 * x21 - x18 * x8;
         Assembly {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
@@ -498,10 +497,9 @@ pub mod lagrange {
                         - m4 * (x44 - x40 - x42) + x11 * g * x13 - (-x40 - x42) * m3),
                 ((x47 - x46) * m3 + x15 * x16 * g - m4 * (x49 + x46 - x47)
                     - (x49 + x46 - x47 + x50 * q5_dot * q5_dot * l4) * m5) * l2,
-                l3
-                    * (m4 * (x51 + x52 + x53 + x54)
-                        + (q5_dot * q5_dot * l4 * x55 + x51 + x52 + x53 + x54) * m5),
-                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x55
+                (m4 * (x51 + x52 + x53) + g * x18 * x19
+                    - (-q5_dot * q5_dot * l4 * x54 - x51 - x52 - x53) * m5) * l3,
+                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x54
                     + x50 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x45) * m5 * l4,
             ],
             checks: [],
@@ -826,9 +824,8 @@ pub mod maggi {
         let x50 = x16 * x8 - x21 * x4;
         let x51 = x48 * q3_dot * q3_dot * l2;
         let x52 = l0 * q1_dot * q1_dot * x37;
-        let x53 = g * x18;
-        let x54 = l1 * q2_dot * q2_dot * x43;
-        let x55 = x6 * x21 - x18 * x8;
+        let x53 = l1 * q2_dot * q2_dot * x43;
+        let x54 = x6 * x21 - x18 * x8;
         Assembly {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
@@ -852,10 +849,9 @@ pub mod maggi {
                         - m4 * (x44 - x40 - x42) + x11 * g * x13 - (-x40 - x42) * m3),
                 ((x47 - x46) * m3 + x15 * x16 * g - m4 * (x49 + x46 - x47)
                     - (x49 + x46 - x47 + x50 * q5_dot * q5_dot * l4) * m5) * l2,
-                l3
-                    * (m4 * (x51 + x52 + x53 + x54)
-                        + (q5_dot * q5_dot * l4 * x55 + x51 + x52 + x53 + x54) * m5),
-                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x55
+                (m4 * (x51 + x52 + x53) + g * x18 * x19
+                    - (-q5_dot * q5_dot * l4 * x54 - x51 - x52 - x53) * m5) * l3,
+                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x54
                     + x50 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x45) * m5 * l4,
             ],
             w: [
@@ -1173,11 +1169,10 @@ pub mod kane {
         let x48 = l0 * x34 * u2 * u2;
         let x49 = l1 * u3 * u3 * x42;
         let x50 = x16 * x8 - x21 * x4;
-        let x51 = l0 * x37 * u2 * u2;
-        let x52 = u4 * u4 * x46 * l2;
-        let x53 = g * x18;
+        let x51 = x6 * x21 - x18 * x8;
+        let x52 = l0 * x37 * u2 * u2;
+        let x53 = u4 * u4 * x46 * l2;
         let x54 = l1 * x40 * u3 * u3;
-        let x55 = x6 * x21 - x18 * x8;
         Assembly {
             qdot: [u1, u2, u3, u4, u5, u6],
             matrix: [
@@ -1202,9 +1197,10 @@ pub mod kane {
                         + m2 * l0 * x33 * u2 * u2 - (-x43 - x44) * m3),
                 (x15 * x16 * g - m4 * (x47 - x48 + x49) + (x48 - x49) * m3
                     - (x47 - x48 + x49 + x50 * u6 * u6 * l4) * m5) * l2,
-                (m4 * (x51 + x52 + x53 + x54)
-                    + (u6 * u6 * l4 * x55 + x51 + x52 + x53 + x54) * m5) * l3,
-                (x21 * g - u5 * u5 * l3 * x55 - l1 * u3 * u3 * x45 + x50 * u4 * u4 * l2
+                l3
+                    * (m4 * (x52 + x53 + x54)
+                        - (-u6 * u6 * l4 * x51 - x52 - x53 - x54) * m5 + g * x18 * x19),
+                (x21 * g - u5 * u5 * l3 * x51 - l1 * u3 * u3 * x45 + x50 * u4 * u4 * l2
                     + x39 * l0 * u2 * u2) * m5 * l4,
             ],
             checks: [],
@@ -1502,9 +1498,8 @@ pub mod reduced_volterra {
         let x50 = u4 * u4 * x49 * l3;
         let x51 = x49 * u3 * u3 * l2;
         let x52 = l1 * x40 * u2 * u2;
-        let x53 = g * x17;
-        let x54 = l0 * u1 * u1 * x32;
-        let x55 = x6 * x20 - x17 * x5;
+        let x53 = l0 * u1 * u1 * x32;
+        let x54 = x6 * x20 - x17 * x5;
         Assembly {
             qdot: [
                 x0
@@ -1550,9 +1545,10 @@ pub mod reduced_volterra {
                         - (x46 + u5 * u5 * x48 * l4 + x50 - x47) * m5
                         - m4 * (x46 + x50 - x47)),
                 l3
-                    * (m4 * (x51 + x52 + x53 + x54) - x6 * x38 * x7 * x0
-                        + m5 * (x51 + x52 + u5 * u5 * l4 * x55 + x53 + x54)),
-                (x39 * l0 * u1 * u1 - u4 * u4 * l3 * x55 + x20 * g - l1 * x45 * u2 * u2
+                    * (m4 * (x51 + x52 + x53) + g * x17 * x18
+                        - m5 * (-x51 - x52 - u5 * u5 * l4 * x54 - x53)
+                        - x6 * x38 * x7 * x0),
+                (x39 * l0 * u1 * u1 - u4 * u4 * l3 * x54 + x20 * g - l1 * x45 * u2 * u2
                     + x48 * u3 * u3 * l2 + x38 * x0 * x5) * m5 * l4,
             ],
             checks: [],

@@ -401,36 +401,36 @@ pub mod lagrange {
         let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
         let x14 = -(x1 * m * x6 * x8);
         let x15 = x7 * x1 * m * x6;
-        let x16 = -(x0 * x7 * m * x6);
-        let x17 = -(x0 * m * x6 * x8);
-        let x18 = -(x1 * m * x6);
-        let x19 = x7 * x1 * m;
-        let x20 = x1 * m * x8;
-        let x21 = -(x0 * m);
-        let x22 = m + mg;
-        let x23 = x1 * psi_dot * x3 - theta_dot * x2;
-        let x24 = x0 * psi_dot;
-        let x25 = phi_dot - x24;
-        let x26 = theta_dot * x3 + x1 * psi_dot * x2;
-        let x27 = Ixx * x25 - x23 * Ixz - Ixy * x26;
-        let x28 = -phi_dot - x24;
-        let x29 = theta_dot * x28 * x2 + x1 * psi_dot * phi_dot * x3;
-        let x30 = x23 * Izz - Iyz * x26 - Ixz * x25;
-        let x31 = theta_dot * x28 * x3 - x1 * psi_dot * x2 * phi_dot;
-        let x32 = x23 * x27 + Iyy * x29 - x30 * x25 + Ixy * theta_dot * x1 * psi_dot
-            - x31 * Iyz;
-        let x33 = Iyy * x26 - x23 * Iyz - Ixy * x25;
-        let x34 = theta_dot * x1 * psi_dot * Ixz + x33 * x25 - x26 * x27 - Iyz * x29
-            + x31 * Izz;
-        let x35 = theta_dot * Ixx * x1 * psi_dot;
-        let x36 = x30 * x26;
-        let x37 = x31 * Ixz;
-        let x38 = x23 * x33;
-        let x39 = Ixy * x29;
-        let x40 = 2.0 * theta;
-        let x41 = f64::sin(x40);
-        let x42 = f64::cos(x40);
-        let x43 = theta_dot * rho_dot;
+        let x16 = l * l;
+        let x17 = -(x0 * x7 * m * x6);
+        let x18 = -(x0 * m * x6 * x8);
+        let x19 = -(x1 * m * x6);
+        let x20 = x7 * x1 * m;
+        let x21 = x1 * m * x8;
+        let x22 = -(x0 * m);
+        let x23 = m + mg;
+        let x24 = x1 * psi_dot * x3 - theta_dot * x2;
+        let x25 = x0 * psi_dot;
+        let x26 = phi_dot - x25;
+        let x27 = theta_dot * x3 + x1 * psi_dot * x2;
+        let x28 = Ixx * x26 - x24 * Ixz - Ixy * x27;
+        let x29 = -phi_dot - x25;
+        let x30 = theta_dot * x29 * x2 + x1 * psi_dot * phi_dot * x3;
+        let x31 = x24 * Izz - Iyz * x27 - Ixz * x26;
+        let x32 = theta_dot * x29 * x3 - x1 * psi_dot * x2 * phi_dot;
+        let x33 = x24 * x28 + Iyy * x30 - x31 * x26 + Ixy * theta_dot * x1 * psi_dot
+            - x32 * Iyz;
+        let x34 = Iyy * x27 - x24 * Iyz - Ixy * x26;
+        let x35 = theta_dot * x1 * psi_dot * Ixz + x34 * x26 - x27 * x28 - Iyz * x30
+            + x32 * Izz;
+        let x36 = theta_dot * Ixx * x1 * psi_dot;
+        let x37 = x31 * x27;
+        let x38 = x32 * Ixz;
+        let x39 = x24 * x34;
+        let x40 = Ixy * x30;
+        let x41 = 2.0 * theta;
+        let x42 = f64::sin(x41);
+        let x43 = f64::cos(x41);
         let x44 = f64::cos(0.0485 * t);
         let x45 = f64::sin(0.089 * t);
         let x46 = rho_dot * x8;
@@ -454,33 +454,31 @@ pub mod lagrange {
                 ],
                 [
                     x13,
-                    m * (0.25 * (l * l) + rho * (rho + l)) - x2 * x11 + x12 * x3,
+                    m * (0.25 * x16 + rho * (rho + l)) - x2 * x11 + x12 * x3,
                     x10,
                     0.0,
-                    x16,
                     x17,
                     x18,
+                    x19,
                 ],
                 [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, m, x19, x20, x21],
-                [x14, x16, 0.0, x19, x22, 0.0, 0.0],
-                [x15, x17, 0.0, x20, 0.0, x22, 0.0],
-                [0.0, x18, 0.0, x21, 0.0, 0.0, x22],
+                [0.0, 0.0, 0.0, m, x20, x21, x22],
+                [x14, x17, 0.0, x20, x23, 0.0, 0.0],
+                [x15, x18, 0.0, x21, 0.0, x23, 0.0],
+                [0.0, x19, 0.0, x22, 0.0, 0.0, x23],
             ],
             force: [
-                x1 * (-x2 * x32 - x34 * x3) + (x36 - x35 - x37 - x38 - x39) * x0
-                    - (l * ((0.5 * x42 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x41))
-                        + rho * ((-rho - l) * theta_dot * x41 + rho_dot * (x42 + 1.0)))
+                x1 * (-x2 * x33 - x35 * x3) + (x37 - x36 - x38 - x39 - x40) * x0
+                    - (l * ((0.5 * x43 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x42))
+                        + rho * ((-rho - l) * theta_dot * x42 + rho_dot * (x43 + 1.0)))
                         * psi_dot * m,
-                x34 * x2
-                    - (rho
-                        * (2.0 * x43 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x41)
-                        + (x43 + 0.125 * (l * psi_dot * psi_dot * x41)) * l) * m
-                    - x32 * x3,
-                x35 - x36 + x37 + x38 + x39,
+                x35 * x2
+                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x16) * psi_dot * psi_dot
+                        * x42 + theta_dot * (2.0 * rho + l) * rho_dot) * m - x33 * x3,
+                x36 - x37 + x38 + x39 + x40,
                 0.012 * x44
                     - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x42 - 0.25) + rho * (-0.5 * x42 - 0.5)) * psi_dot
+                        + (l * (-0.25 * x43 - 0.25) + rho * (-0.5 * x43 - 0.5)) * psi_dot
                             * psi_dot) * m - 0.018 * x45,
                 -(m
                     * ((-2.0 * x46 - x47) * x1 * psi_dot
@@ -792,58 +790,58 @@ pub mod maggi {
             + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
         let x18 = x6 * x4 + x0 * x13 + x1 * x17;
         let x19 = 1.0 / x12;
-        let x20 = m * (0.25 * (l * l) + rho * (rho + l)) - x1 * x8 + x10 * x0;
-        let x21 = x11 * x1 + x20 * x0;
-        let x22 = x18 * x19 * x0 - x1 * x21;
-        let x23 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
-        let x24 = (x15 * x1 - x6 * x0 * x16) * m * x14;
-        let x25 = -(x12 * m * x14 * x0);
-        let x26 = (x6 * x15 * x1 - x0 * x16) * m * x14;
-        let x27 = m * x14 * (x15 * x0 + x6 * x1 * x16);
-        let x28 = x12 * m * x14 * x1;
-        let x29 = x15 * x12 * m;
-        let x30 = x12 * m * x16;
-        let x31 = -(x6 * m);
-        let x32 = m + mg;
-        let x33 = theta_dot * x0 + x12 * psi_dot * x1;
-        let x34 = x6 * psi_dot;
-        let x35 = phi_dot - x34;
-        let x36 = x12 * psi_dot * x0 - theta_dot * x1;
-        let x37 = x36 * Izz - Iyz * x33 - Ixz * x35;
-        let x38 = x37 * x33;
-        let x39 = -phi_dot - x34;
-        let x40 = theta_dot * x39 * x0 - x12 * psi_dot * x1 * phi_dot;
-        let x41 = x40 * Ixz;
-        let x42 = Iyy * x33 - x36 * Iyz - Ixy * x35;
-        let x43 = x36 * x42;
-        let x44 = theta_dot * x39 * x1 + x12 * psi_dot * phi_dot * x0;
-        let x45 = Ixy * x44;
-        let x46 = 2.0 * theta;
-        let x47 = f64::sin(x46);
-        let x48 = 0.5 * (x19 * psi_dot * x47) + phi_dot;
-        let x49 = x12 * x3 - x6 * Ixx;
-        let x50 = (0.25 - 0.25 * (x19 * f64::cos(3.0 * theta))) * psi_dot + x6 * phi_dot;
-        let x51 = x41 - x38 + x43 + x45
-            + (-x48 * x19 * x49 - x50 * Ixx * x19) * theta_dot
+        let x20 = l * l;
+        let x21 = m * (0.25 * x20 + rho * (rho + l)) - x1 * x8 + x10 * x0;
+        let x22 = x11 * x1 + x21 * x0;
+        let x23 = x18 * x19 * x0 - x1 * x22;
+        let x24 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
+        let x25 = (x15 * x1 - x6 * x0 * x16) * m * x14;
+        let x26 = -(x12 * m * x14 * x0);
+        let x27 = (x6 * x15 * x1 - x0 * x16) * m * x14;
+        let x28 = m * x14 * (x15 * x0 + x6 * x1 * x16);
+        let x29 = x12 * m * x14 * x1;
+        let x30 = x15 * x12 * m;
+        let x31 = x12 * m * x16;
+        let x32 = -(x6 * m);
+        let x33 = m + mg;
+        let x34 = theta_dot * x0 + x12 * psi_dot * x1;
+        let x35 = x6 * psi_dot;
+        let x36 = phi_dot - x35;
+        let x37 = x12 * psi_dot * x0 - theta_dot * x1;
+        let x38 = x37 * Izz - Iyz * x34 - Ixz * x36;
+        let x39 = x38 * x34;
+        let x40 = -phi_dot - x35;
+        let x41 = theta_dot * x40 * x0 - x12 * psi_dot * x1 * phi_dot;
+        let x42 = x41 * Ixz;
+        let x43 = Iyy * x34 - x37 * Iyz - Ixy * x36;
+        let x44 = x37 * x43;
+        let x45 = theta_dot * x40 * x1 + x12 * psi_dot * phi_dot * x0;
+        let x46 = Ixy * x45;
+        let x47 = 2.0 * theta;
+        let x48 = f64::sin(x47);
+        let x49 = 0.5 * (x19 * psi_dot * x48) + phi_dot;
+        let x50 = x12 * x3 - x6 * Ixx;
+        let x51 = (0.25 - 0.25 * (x19 * f64::cos(3.0 * theta))) * psi_dot + x6 * phi_dot;
+        let x52 = x42 - x39 + x44 + x46
+            + (-x49 * x19 * x50 - x51 * Ixx * x19) * theta_dot
             + x2 * x12 * psi_dot * phi_dot;
-        let x52 = x50 * x19 + x12 * psi_dot;
-        let x53 = Ixx * x35 - x36 * Ixz - Ixy * x33;
-        let x54 = x36 * x53 + Iyy * x44 - x37 * x35 + Ixy * theta_dot * x12 * psi_dot
-            - x40 * Iyz;
-        let x55 = theta_dot * x12 * psi_dot * Ixz + x42 * x35 - x33 * x53 - Iyz * x44
-            + x40 * Izz;
-        let x56 = f64::cos(x46);
-        let x57 = theta_dot * (-x52 * x49 - x48 * x19 * (x12 * x17 - x6 * x49))
-            + x12 * (psi_dot * phi_dot * x13 - x1 * x54 - x55 * x0)
-            + (x38 - theta_dot * Ixx * x12 * psi_dot - x41 - x43 - x45) * x6 + x6 * x51
-            - (l * ((0.5 * x56 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x47))
-                + rho * ((-rho - l) * theta_dot * x47 + rho_dot * (x56 + 1.0))) * psi_dot
+        let x53 = x51 * x19 + x12 * psi_dot;
+        let x54 = Ixx * x36 - x37 * Ixz - Ixy * x34;
+        let x55 = x37 * x54 + Iyy * x45 - x38 * x36 + Ixy * theta_dot * x12 * psi_dot
+            - x41 * Iyz;
+        let x56 = theta_dot * x12 * psi_dot * Ixz + x43 * x36 - x34 * x54 - Iyz * x45
+            + x41 * Izz;
+        let x57 = f64::cos(x47);
+        let x58 = theta_dot * (-x53 * x50 - x49 * x19 * (x12 * x17 - x6 * x50))
+            + x12 * (psi_dot * phi_dot * x13 - x1 * x55 - x56 * x0)
+            + (x39 - theta_dot * Ixx * x12 * psi_dot - x42 - x44 - x46) * x6 + x6 * x52
+            - (l * ((0.5 * x57 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x48))
+                + rho * ((-rho - l) * theta_dot * x48 + rho_dot * (x57 + 1.0))) * psi_dot
                 * m;
-        let x58 = theta_dot * rho_dot;
-        let x59 = theta_dot * (-x48 * x19 * x13 - x2 * x52)
-            - (rho * (2.0 * x58 + psi_dot * psi_dot * (0.5 * rho + 0.5 * l) * x47)
-                + (x58 + 0.125 * (l * psi_dot * psi_dot * x47)) * l) * m
-            + x12 * psi_dot * phi_dot * x20 - x54 * x0 + x55 * x1;
+        let x59 = theta_dot * (-x49 * x19 * x13 - x2 * x53)
+            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x20) * psi_dot * psi_dot * x48
+                + theta_dot * (2.0 * rho + l) * rho_dot) * m
+            + x12 * psi_dot * phi_dot * x21 - x55 * x0 + x56 * x1;
         let x60 = f64::cos(0.0485 * t);
         let x61 = f64::sin(0.089 * t);
         let x62 = rho_dot * x16;
@@ -854,35 +852,35 @@ pub mod maggi {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
-                [x4, x18 * x19 * x1 + x21 * x0, x22, 0.0, x23, x24, x25],
+                [x4, x18 * x19 * x1 + x22 * x0, x23, 0.0, x24, x25, x26],
                 [
                     x5,
-                    x22,
+                    x23,
                     x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0
-                        - (x11 * x0 - x1 * x20) * x1,
+                        - (x11 * x0 - x1 * x21) * x1,
                     0.0,
-                    x26,
                     x27,
                     x28,
+                    x29,
                 ],
-                [0.0, 0.0, 0.0, m, x29, x30, x31],
-                [0.0, x23, x26, x29, x32, 0.0, 0.0],
-                [0.0, x24, x27, x30, 0.0, x32, 0.0],
-                [0.0, x25, x28, x31, 0.0, 0.0, x32],
+                [0.0, 0.0, 0.0, m, x30, x31, x32],
+                [0.0, x24, x27, x30, x33, 0.0, 0.0],
+                [0.0, x25, x28, x31, 0.0, x33, 0.0],
+                [0.0, x26, x29, x32, 0.0, 0.0, x33],
             ],
             force: [
-                x51,
-                x57 * x19 * x1 + x0 * x59,
-                x57 * x19 * x0 - x1 * x59,
+                x52,
+                x58 * x19 * x1 + x59 * x0,
+                x58 * x19 * x0 - x59 * x1,
                 0.012 * x60
                     - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x56 - 0.25) + rho * (-0.5 * x56 - 0.5)) * psi_dot
+                        + (l * (-0.25 * x57 - 0.25) + rho * (-0.5 * x57 - 0.5)) * psi_dot
                             * psi_dot) * m - 0.018 * x61,
-                ((theta_dot * x48 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
+                ((theta_dot * x49 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
                     - (-2.0 * x62 - x63) * x12 * psi_dot
                     - (x6 * (2.0 * x64 - 2.0 * x65) - theta_dot * x15 * x12 * x14)
                         * theta_dot) * m,
-                ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x48 * x15) * x14
+                ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x49 * x15) * x14
                     - x12 * psi_dot * (2.0 * x65 - x64)
                     - (x6 * (-2.0 * x62 - 2.0 * x63) - theta_dot * x12 * x14 * x16)
                         * theta_dot) * m,
@@ -900,9 +898,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * x48 * x19,
+                theta_dot * x49 * x19,
                 -(x12 * psi_dot * phi_dot),
-                theta_dot * x52,
+                theta_dot * x53,
                 0.0,
                 0.0,
                 0.0,
@@ -1534,20 +1532,16 @@ pub mod reduced_volterra {
         let x11 = -Ixy;
         let x12 = -Ixz;
         let x13 = m * x10;
-        let x14 = 1.0 - x13;
-        let x15 = ((l * x14 + rho * x14) * rho + l * l * (0.25 - 0.25 * x13)) * m;
-        let x16 = -Iyz;
-        let x17 = Iyz * u3;
-        let x18 = Ixy * u1;
-        let x19 = Ixy * u2;
-        let x20 = u3 * Ixz;
-        let x21 = 2.0 * x13 - 2.0;
-        let x22 = x13 - 1.0;
-        let x23 = x22 * l;
-        let x24 = u2 * u2;
-        let x25 = u3 * u3;
-        let x26 = f64::cos(0.0485 * t);
-        let x27 = f64::sin(0.089 * t);
+        let x14 = m
+            * (rho * ((-rho - l) * m * x10 + rho + l) + l * l * (0.25 - 0.25 * x13));
+        let x15 = -Iyz;
+        let x16 = Iyz * u3;
+        let x17 = Ixy * u1;
+        let x18 = Ixy * u2;
+        let x19 = u3 * Ixz;
+        let x20 = m * (2.0 * rho + l) * x10 - 2.0 * rho - l;
+        let x21 = f64::cos(0.0485 * t);
+        let x22 = f64::sin(0.089 * t);
         Assembly {
             qdot: [
                 x1 * x4,
@@ -1564,25 +1558,24 @@ pub mod reduced_volterra {
             ],
             matrix: [
                 [Ixx, x11, x12, 0.0],
-                [x11, Iyy + x15, x16, 0.0],
-                [x12, x16, x15 + Izz, 0.0],
-                [0.0, 0.0, 0.0, m * x14],
+                [x11, Iyy + x14, x15, 0.0],
+                [x12, x15, x14 + Izz, 0.0],
+                [0.0, 0.0, 0.0, m * (1.0 - x13)],
             ],
             force: [
-                u3 * (Iyy * u2 - x17 - x18) - (u3 * Izz - Iyz * u2 - u1 * Ixz) * u2,
-                u3 * ((x15 - Ixx + Izz) * u1 + x19 + x20) - u1 * u1 * Ixz
-                    + (u4 * m * (rho * x21 + x23) - Iyz * u1) * u2,
-                (x17 + x18 + (Ixx - Iyy) * u2) * u1
-                    + (rho * (u4 * u3 * x21 + u1 * (x22 * rho + x23) * u2)
-                        + l * (l * (0.25 * x13 - 0.25) * u1 * u2 + x22 * u4 * u3)) * m
-                    + (-x19 - x20) * u2,
+                u3 * (Iyy * u2 - x16 - x17) - (u3 * Izz - Iyz * u2 - u1 * Ixz) * u2,
+                u3 * ((x14 - Ixx + Izz) * u1 + x18 + x19)
+                    + (u4 * x20 * m - Iyz * u1) * u2 - u1 * u1 * Ixz,
                 m
-                    * (rho * ((-x24 - x25) * m * x10 + x24 + x25)
-                        + l
-                            * (m * x10 * (-0.5 * x24 - 0.5 * x25) + 0.5 * x24
-                                + 0.5 * x25)) + 0.012 * x26 - 0.018 * x27,
+                    * (u4 * u3 * x20
+                        + (l * l * (0.25 * x13 - 0.25)
+                            + rho * ((rho + l) * m * x10 - rho - l)) * u1 * u2)
+                    + (x16 + x17 + (Ixx - Iyy) * u2) * u1 + (-x18 - x19) * u2,
+                0.012 * x21 - 0.018 * x22
+                    + (m * (x7 * u3 * u3 + x7 * u2 * u2) * x10 + x9 * u2 * u2
+                        + u3 * u3 * x9) * m,
             ],
-            power: u4 * (0.012 * x26 - 0.018 * x27),
+            power: u4 * (0.012 * x21 - 0.018 * x22),
             checks: [x0],
         }
     }

@@ -594,117 +594,118 @@ pub mod lagrange {
             + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
         let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a_ * x18 * x11) * x10)
             + m1 * ((x5 * x29 - a_ * x20 * x4) * x2 + x28 * x1 * x10 * x10);
-        let x64 = d * (x4 * x41 * m1 - m2 * x37 * x11);
-        let x65 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
-        let x66 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
-        let x67 = x38 * d * m1;
-        let x68 = x47 * d * m1;
-        let x69 = x5 * d * m1;
-        let x70 = m2 * d * x43;
-        let x71 = m2 * d * x52;
-        let x72 = m2 * x13 * d;
-        let x73 = (x38 * x47 + x39 * x48 + x41 * x50) * m1
+        let x64 = J2 + d * d * m1;
+        let x65 = m2 * d * d + J2;
+        let x66 = d * (x4 * x41 * m1 - m2 * x37 * x11);
+        let x67 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
+        let x68 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
+        let x69 = x38 * d * m1;
+        let x70 = x47 * d * m1;
+        let x71 = x5 * d * m1;
+        let x72 = m2 * d * x43;
+        let x73 = m2 * d * x52;
+        let x74 = m2 * x13 * d;
+        let x75 = (x38 * x47 + x39 * x48 + x41 * x50) * m1
             + m2 * (x37 * x46 + x52 * x43 + x51 * x42);
-        let x74 = m1 * (x20 * x39 + x38 * x5 + x1 * x41 * x10)
+        let x76 = m1 * (x20 * x39 + x38 * x5 + x1 * x41 * x10)
             + (x18 * x42 + x13 * x43 + x37 * x1 * x2) * m2;
-        let x75 = m2 * (x51 * x18 + x13 * x52 + x1 * x2 * x46)
+        let x77 = m2 * (x51 * x18 + x13 * x52 + x1 * x2 * x46)
             + (x1 * x50 * x10 + x20 * x48 + x47 * x5) * m1;
-        let x76 = theta_dot * x1 * psi_dot * Ixz;
-        let x77 = x1 * psi_dot * x10;
-        let x78 = theta_dot * x2;
-        let x79 = x77 - x78;
-        let x80 = theta_dot * x10;
-        let x81 = x1 * psi_dot * x2;
-        let x82 = x80 + x81;
-        let x83 = x3 * psi_dot;
-        let x84 = phi_dot - x83;
-        let x85 = Iyy * x82 - x79 * Iyz - Ixy * x84;
-        let x86 = x85 * x84;
-        let x87 = -phi_dot - x83;
-        let x88 = theta_dot * x87 * x10;
-        let x89 = x4 * x82 + x0 * x84;
-        let x90 = x0 * x82 - x4 * x84;
-        let x91 = x89 * x90;
-        let x92 = x1 * psi_dot * x2 * phi_dot;
-        let x93 = J2 * (x88 + x91 - x92);
-        let x94 = Ixx * x84 - x79 * Ixz - Ixy * x82;
-        let x95 = x82 * x94;
-        let x96 = theta_dot * x87 * x2;
-        let x97 = x1 * psi_dot * phi_dot * x10;
-        let x98 = x96 + x97;
-        let x99 = Iyz * x98;
-        let x100 = x89 * x90 * J1;
-        let x101 = x88 - x92;
-        let x102 = x101 * Izz;
-        let x103 = x79 * x94;
-        let x104 = Iyy * x98;
-        let x105 = x79 * Izz - Iyz * x82 - Ixz * x84;
-        let x106 = x105 * x84;
-        let x107 = Ixy * theta_dot * x1 * psi_dot;
-        let x108 = x101 * Iyz;
-        let x109 = J2 * x98;
-        let x110 = x12 * x84 - x79 * x11;
-        let x111 = x11 * x84 + x12 * x79;
-        let x112 = x110 * x57 * x111;
-        let x113 = x77 + gamma1_dot - x78;
-        let x114 = x113 * x57 * x89;
-        let x115 = x96 + x97 - gamma1_dot * x84;
-        let x116 = gamma1_dot * x82;
-        let x117 = theta_dot * x1 * psi_dot;
-        let x118 = x0 * x115 + x4 * (x117 - x116);
-        let x119 = J2 * x118;
-        let x120 = x114 + x119;
-        let x121 = gamma2_dot * x84;
-        let x122 = -x79 * gamma2_dot - x117;
-        let x123 = x11 * (x92 - x88 - x121) + x12 * x122;
-        let x124 = x0 * (x116 - x117) + x115 * x4;
-        let x125 = x0 * a_ * x79 + x113 * d;
-        let x126 = -a_ * x82 - d * x90;
-        let x127 = x126 * x90 - x113 * x125 + a_ * (x0 * x79 * gamma1_dot + x101 * x4);
-        let x128 = a_ * x4 * x127;
-        let x129 = x101 * d - x89 * x126 + a_ * (x0 * x101 + x79 * x79 * x4);
-        let x130 = x89 * x125 - d * x118 + a_ * (-x79 * x4 * x90 - x96 - x97);
-        let x131 = theta_dot * Ixx * x1 * psi_dot;
-        let x132 = x105 * x82;
-        let x133 = x101 * Ixz;
-        let x134 = x79 * x85;
-        let x135 = Ixy * x98;
-        let x136 = J2 - J1;
-        let x137 = gamma2_dot + x80 + x81;
-        let x138 = x136 * x110 * x137;
-        let x139 = x122 * x11 + (x88 - x92 + x121) * x12;
-        let x140 = J2 * x139;
-        let x141 = x138 + x140;
-        let x142 = -x111 * d - a_ * x79;
-        let x143 = x137 * d + x12 * a_ * x82;
-        let x144 = a_ * (-x12 * gamma2_dot * x82 - x98 * x11) - x111 * x142
-            + x143 * x137;
-        let x145 = x98 * d + x110 * x142 + a_ * (x12 * x98 + x11 * x82 * x82);
-        let x146 = x145 * x15 - a_ * x11 * x144;
-        let x147 = a_ * (x92 - x88 - x111 * x11 * x82) - x143 * x110 - x139 * d;
-        let x148 = a_ * x3 * theta_dot * theta_dot;
-        let x149 = x12 * x2;
-        let x150 = x11 * x10;
-        let x151 = (-x149 - x150) * x1;
-        let x152 = x1 * (x149 + x150);
-        let x153 = (x150 - x149) * x1;
-        let x154 = (x149 - x150) * x1;
-        let x155 = 0.25 * x151 - 0.25 * x152 - 0.25 * x153 + 0.25 * x154 - x17;
-        let x156 = x11 * x2;
-        let x157 = x12 * x10;
-        let x158 = x3 * (x156 + x157);
-        let x159 = x3 * (x157 - x156);
-        let x160 = x3 * x2;
-        let x161 = x1 * x10;
-        let x162 = x0 * (x160 + x161);
-        let x163 = x1 * x2;
-        let x164 = x3 * x10;
-        let x165 = x4 * (x163 - x164);
-        let x166 = x0 * (x161 - x160);
-        let x167 = x4 * (x164 - x163);
-        let x168 = x4 * (x163 + x164);
-        let x169 = (-x163 - x164) * x4;
-        let x170 = 0.25 * x167 - 0.25 * x165 - 0.25 * x168 + x19 + 0.25 * x169;
+        let x78 = x1 * psi_dot * x10;
+        let x79 = theta_dot * x2;
+        let x80 = x78 + gamma1_dot - x79;
+        let x81 = theta_dot * x10;
+        let x82 = x1 * psi_dot * x2;
+        let x83 = x81 + x82;
+        let x84 = x3 * psi_dot;
+        let x85 = phi_dot - x84;
+        let x86 = x4 * x83 + x0 * x85;
+        let x87 = x80 * x57 * x86;
+        let x88 = -phi_dot - x84;
+        let x89 = theta_dot * x88 * x2;
+        let x90 = x1 * psi_dot * phi_dot * x10;
+        let x91 = x89 + x90 - gamma1_dot * x85;
+        let x92 = gamma1_dot * x83;
+        let x93 = theta_dot * x1 * psi_dot;
+        let x94 = x0 * x91 + x4 * (x93 - x92);
+        let x95 = J2 * x94;
+        let x96 = x87 + x95;
+        let x97 = theta_dot * x88 * x10;
+        let x98 = x1 * psi_dot * x2 * phi_dot;
+        let x99 = gamma2_dot * x85;
+        let x100 = x78 - x79;
+        let x101 = -x100 * gamma2_dot - x93;
+        let x102 = x11 * (x98 - x97 - x99) + x12 * x101;
+        let x103 = x0 * (x92 - x93) + x91 * x4;
+        let x104 = x0 * a_ * x100 + x80 * d;
+        let x105 = x0 * x83 - x4 * x85;
+        let x106 = -a_ * x83 - d * x105;
+        let x107 = x97 - x98;
+        let x108 = x106 * x105 - x80 * x104 + a_ * (x0 * x100 * gamma1_dot + x107 * x4);
+        let x109 = a_ * x4 * x108;
+        let x110 = x107 * d - x86 * x106 + a_ * (x0 * x107 + x100 * x100 * x4);
+        let x111 = x86 * x104 - d * x94 + a_ * (-x100 * x4 * x105 - x89 - x90);
+        let x112 = Ixx * x85 - x100 * Ixz - Ixy * x83;
+        let x113 = x100 * x112;
+        let x114 = x89 + x90;
+        let x115 = Iyy * x114;
+        let x116 = x100 * Izz - Iyz * x83 - Ixz * x85;
+        let x117 = x116 * x85;
+        let x118 = Ixy * theta_dot * x1 * psi_dot;
+        let x119 = x107 * Iyz;
+        let x120 = J2 * x114;
+        let x121 = x12 * x85 - x100 * x11;
+        let x122 = x11 * x85 + x12 * x100;
+        let x123 = x121 * x57 * x122;
+        let x124 = theta_dot * x1 * psi_dot * Ixz;
+        let x125 = J2 - J1;
+        let x126 = x125 * x86 * x105;
+        let x127 = Iyy * x83 - x100 * Iyz - Ixy * x85;
+        let x128 = x127 * x85;
+        let x129 = x83 * x112;
+        let x130 = Iyz * x114;
+        let x131 = x107 * J2;
+        let x132 = x107 * Izz;
+        let x133 = theta_dot * Ixx * x1 * psi_dot;
+        let x134 = x116 * x83;
+        let x135 = x107 * Ixz;
+        let x136 = x100 * x127;
+        let x137 = Ixy * x114;
+        let x138 = gamma2_dot + x81 + x82;
+        let x139 = x125 * x121 * x138;
+        let x140 = x101 * x11 + (x97 - x98 + x99) * x12;
+        let x141 = J2 * x140;
+        let x142 = x139 + x141;
+        let x143 = -x122 * d - a_ * x100;
+        let x144 = x138 * d + x12 * a_ * x83;
+        let x145 = a_ * (-x12 * gamma2_dot * x83 - x114 * x11) - x122 * x143
+            + x144 * x138;
+        let x146 = x114 * d + x121 * x143 + a_ * (x12 * x114 + x11 * x83 * x83);
+        let x147 = x146 * x15 - a_ * x11 * x145;
+        let x148 = a_ * (x98 - x97 - x122 * x11 * x83) - x144 * x121 - x140 * d;
+        let x149 = a_ * x3 * theta_dot * theta_dot;
+        let x150 = x12 * x2;
+        let x151 = x11 * x10;
+        let x152 = (-x150 - x151) * x1;
+        let x153 = x1 * (x150 + x151);
+        let x154 = (x151 - x150) * x1;
+        let x155 = (x150 - x151) * x1;
+        let x156 = 0.25 * x152 - 0.25 * x153 - 0.25 * x154 + 0.25 * x155 - x17;
+        let x157 = x11 * x2;
+        let x158 = x12 * x10;
+        let x159 = x3 * (x157 + x158);
+        let x160 = x3 * (x158 - x157);
+        let x161 = x3 * x2;
+        let x162 = x1 * x10;
+        let x163 = x0 * (x161 + x162);
+        let x164 = x1 * x2;
+        let x165 = x3 * x10;
+        let x166 = x4 * (x164 - x165);
+        let x167 = x0 * (x162 - x161);
+        let x168 = x4 * (x165 - x164);
+        let x169 = x4 * (x164 + x165);
+        let x170 = (-x164 - x165) * x4;
+        let x171 = 0.25 * x168 - 0.25 * x166 - 0.25 * x169 + x19 + 0.25 * x170;
         Assembly {
             qdot: [
                 psi_dot,
@@ -751,87 +752,87 @@ pub mod lagrange {
                 [
                     x31,
                     x58,
-                    Ixx + d * d * (m2 * x11 * x11 + x4 * x4 * m1) + (x55 + x56) * J1
-                        + (x11 * x11 + x4 * x4) * J2,
+                    Ixx + x64 * x4 * x4 + (x55 + x56) * J1 + x11 * x11 * x65,
                     0.0,
                     0.0,
-                    x64,
-                    x65,
                     x66,
+                    x67,
+                    x68,
                 ],
-                [x32, x59, 0.0, J2 + d * d * m1, 0.0, x67, x68, x69],
-                [x34, x60, 0.0, 0.0, m2 * d * d + J2, x70, x71, x72],
+                [x32, x59, 0.0, x64, 0.0, x69, x70, x71],
+                [x34, x60, 0.0, 0.0, x65, x72, x73, x74],
                 [
                     x45,
                     x61,
-                    x64,
-                    x67,
-                    x70,
+                    x66,
+                    x69,
+                    x72,
                     m0 + m1 * (x38 * x38 + x39 * x39 + x41 * x41)
                         + m2 * (x43 * x43 + x42 * x42 + x37 * x37),
-                    x73,
-                    x74,
+                    x75,
+                    x76,
                 ],
                 [
                     x54,
                     x62,
-                    x65,
-                    x68,
-                    x71,
+                    x67,
+                    x70,
                     x73,
+                    x75,
                     (x47 * x47 + x48 * x48 + x50 * x50) * m1 + m0
                         + m2 * (x46 * x46 + x52 * x52 + x51 * x51),
-                    x75,
+                    x77,
                 ],
-                [0.0, x63, x66, x69, x72, x74, x75, m2 + m0 + m1],
+                [0.0, x63, x68, x71, x74, x76, x77, m2 + m0 + m1],
             ],
             force: [
-                ((x95 - x76 - x86 - x93 + x99 + x100 - x102) * x10
-                    + x2 * (x106 - x103 - x104 - x107 + x108 - x109 - x112)) * x1
-                    - x120 * x5 + (-x18 * x123 - x20 * x124) * J1
-                    - ((x128 + x129 * x8) * x1 * x10 + x130 * x6) * m1
-                    + (x132 - x131 - x133 - x134 - x135) * x3 - x141 * x13
-                    - m2 * (x146 * x1 * x2 + x147 * x14),
+                (-x18 * x102 - x20 * x103) * J1 - x96 * x5
+                    - ((x109 + x110 * x8) * x1 * x10 + x111 * x6) * m1
+                    + x1
+                        * (x2 * (x117 - x113 - x115 - x118 + x119 - x120 - x123)
+                            + (x129 - x124 - x126 - x128 + x130 - x131 - x132) * x10)
+                    + (x134 - x133 - x135 - x136 - x137) * x3 - x142 * x13
+                    - m2 * (x147 * x1 * x2 + x148 * x14),
                 x2
-                    * (x76 - x123 * x11 * J1 + x86 + x93 + x12 * x141 - x95 - x99 - x100
-                        + x102) - (x2 * (x129 * x29 - x128) + x130 * x28 * x10) * m1
-                    - m2 * (x146 * x10 + x147 * x25 * x2)
-                    + (x106 - x103 - x104 - x4 * J1 * x124 - x107 - x0 * x120 + x108
-                        - x109 - x112) * x10,
-                x131 - x132 + x133 + x134 + x135 + x11 * (m2 * x147 * d - x138 - x140)
-                    + x4 * (x114 - x130 * d * m1 + x119)
-                    + (-x0 * x124 - x12 * x123) * J1,
-                J2 * (x92 - x88 - x91) - x129 * d * m1 + x100,
-                x136 * x110 * x111 - x109 - m2 * x145 * d,
-                -m2 * (x145 * x43 + x37 * x147 + x42 * x144)
-                    - (x127 * x39 + x38 * x129 + x130 * x41) * m1,
-                -m2 * (x147 * x46 + x51 * x144 + x145 * x52)
-                    - (x127 * x48 + x129 * x47 + x130 * x50) * m1,
+                    * (x124 - x102 * x11 * J1 + x126 + x128 + x12 * x142 - x129 - x130
+                        + x131 + x132)
+                    - (x2 * (x110 * x29 - x109) + x111 * x28 * x10) * m1
+                    - m2 * (x147 * x10 + x148 * x25 * x2)
+                    + (x117 - x113 - x115 - x4 * J1 * x103 - x118 - x0 * x96 + x119
+                        - x120 - x123) * x10,
+                x133 - x134 + x135 + x136 + x137 + x11 * (m2 * x148 * d - x139 - x141)
+                    + x4 * (x87 - x111 * d * m1 + x95) + (-x0 * x103 - x12 * x102) * J1,
+                x57 * x86 * x105 - x110 * d * m1 - x131,
+                x125 * x121 * x122 - x120 - m2 * x146 * d,
+                -m2 * (x146 * x43 + x37 * x148 + x42 * x145)
+                    - (x108 * x39 + x38 * x110 + x111 * x41) * m1,
+                -m2 * (x148 * x46 + x51 * x145 + x146 * x52)
+                    - (x108 * x48 + x110 * x47 + x111 * x50) * m1,
                 -m2
-                    * (((0.25 * x151 - 0.25 * x152 - 0.25 * x153 + 0.25 * x154) * phi_dot
+                    * (((0.25 * x152 - 0.25 * x153 - 0.25 * x154 + 0.25 * x155) * phi_dot
                         * phi_dot
-                        + (theta_dot * x155
+                        + (theta_dot * x156
                             + phi_dot
-                                * (x158 - 0.5 * x151 - 0.5 * x152 + 0.5 * x153 + 0.5 * x154
-                                    - x159)) * theta_dot
+                                * (x159 - 0.5 * x152 - 0.5 * x153 + 0.5 * x154 + 0.5 * x155
+                                    - x160)) * theta_dot
                         + gamma2_dot
                             * (phi_dot
-                                * (0.5 * x151 - 0.5 * x152 + 0.5 * x153 - 0.5 * x154)
-                                + (-x158 - 0.5 * x151 - 0.5 * x152 - 2.0 * (x1 * x11)
-                                    - 0.5 * x153 - 0.5 * x154 - x159) * theta_dot
-                                + gamma2_dot * x155)) * d - x148)
-                    - (x148
+                                * (0.5 * x152 - 0.5 * x153 + 0.5 * x154 - 0.5 * x155)
+                                + (-x159 - 0.5 * x152 - 0.5 * x153 - 2.0 * (x1 * x11)
+                                    - 0.5 * x154 - 0.5 * x155 - x160) * theta_dot
+                                + gamma2_dot * x156)) * d - x149)
+                    - (x149
                         + (theta_dot
-                            * ((0.5 * x165 - x162 + x166 + 2.0 * (x4 * x1) + 0.5 * x167
-                                - 0.5 * x168 - 0.5 * x169) * gamma1_dot + theta_dot * x170
-                                + (0.5 * x165 - 0.5 * x167 - 0.5 * x168 + 0.5 * x169)
+                            * ((0.5 * x166 - x163 + x167 + 2.0 * (x4 * x1) + 0.5 * x168
+                                - 0.5 * x169 - 0.5 * x170) * gamma1_dot + theta_dot * x171
+                                + (0.5 * x166 - 0.5 * x168 - 0.5 * x169 + 0.5 * x170)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x170 * gamma1_dot
+                                * (x171 * gamma1_dot
                                     + phi_dot
-                                        * (x162 - 0.5 * x165 + x166 - 0.5 * x167 - 0.5 * x168
-                                            - 0.5 * x169))
-                            + (0.25 * x167 - 0.25 * x165 - 0.25 * x168 + 0.25 * x169)
+                                        * (x163 - 0.5 * x166 + x167 - 0.5 * x168 - 0.5 * x169
+                                            - 0.5 * x170))
+                            + (0.25 * x168 - 0.25 * x166 - 0.25 * x169 + 0.25 * x170)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             checks: [],
@@ -1186,260 +1187,260 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::sin(gamma2);
+        let x0 = J2 + d * d * m1;
         let x1 = f64::sin(gamma1);
         let x2 = f64::cos(gamma1);
         let x3 = x2 * x2;
         let x4 = f64::cos(gamma2);
         let x5 = x4 * x4;
-        let x6 = Ixx + d * d * (m2 * x0 * x0 + x1 * x1 * m1) + (x3 + x5) * J1
-            + (x0 * x0 + x1 * x1) * J2;
-        let x7 = J1 - J2;
-        let x8 = -a_ - x2 * d;
-        let x9 = f64::cos(phi);
-        let x10 = f64::sin(phi);
-        let x11 = a_ + x4 * d;
-        let x12 = ((x2 * x7 + x8 * d * m1) * x1 - Ixy) * x9
-            + x10 * ((x4 * x7 - m2 * d * x11) * x0 + Ixz);
-        let x13 = f64::sin(theta);
-        let x14 = x13 * Ixx;
+        let x6 = f64::sin(gamma2);
+        let x7 = m2 * d * d + J2;
+        let x8 = Ixx + x0 * x1 * x1 + (x3 + x5) * J1 + x6 * x6 * x7;
+        let x9 = J1 - J2;
+        let x10 = -a_ - x2 * d;
+        let x11 = f64::cos(phi);
+        let x12 = f64::sin(phi);
+        let x13 = a_ + x4 * d;
+        let x14 = ((x2 * x9 + x10 * d * m1) * x1 - Ixy) * x11
+            + x12 * ((x4 * x9 - m2 * d * x13) * x6 + Ixz);
         let x15 = f64::cos(theta);
-        let x16 = x15 * (-Ixy * x10 - Ixz * x9);
-        let x17 = x2 * x13;
-        let x18 = x1 * x15 * x10 - x17;
-        let x19 = x4 * x13;
-        let x20 = -x15 * x0 * x9 - x19;
-        let x21 = (x2 * x18 + x4 * x20) * J1;
-        let x22 = x4 * x15 * x9 - x13 * x0;
-        let x23 = x2 * x15 * x10 + x13 * x1;
-        let x24 = (x22 * x0 - x23 * x1) * J2;
-        let x25 = -x23 * d - a_ * x15 * x10;
-        let x26 = -a_ * x15 * x9 - x22 * d;
-        let x27 = (x1 * m1 * x25 - m2 * x0 * x26) * d;
-        let x28 = x16 - x14 + x21 + x13 * x6 + x24 + x27;
-        let x29 = 1.0 / x15;
-        let x30 = x12 * x9 + x28 * x29 * x10;
-        let x31 = x28 * x29 * x9 - x12 * x10;
-        let x32 = f64::sin(psi);
-        let x33 = f64::cos(psi);
-        let x34 = x10 * x32 + x13 * x33 * x9;
-        let x35 = x13 * x33 * x10 - x9 * x32;
-        let x36 = x1 * x34 * m1 - m2 * x35 * x0;
-        let x37 = d * x36;
-        let x38 = x33 * x9 + x13 * x10 * x32;
-        let x39 = x13 * x9 * x32 - x33 * x10;
-        let x40 = x1 * x39 * m1 - m2 * x0 * x38;
-        let x41 = x40 * d;
-        let x42 = x1 * m1 * x9 - m2 * x0 * x10;
-        let x43 = x42 * x15 * d;
-        let x44 = Iyy * x9;
-        let x45 = Iyz * x10;
-        let x46 = d + x4 * a_;
-        let x47 = a_ * a_ * x0 * x0 + x46 * x46;
-        let x48 = x10 * Izz;
-        let x49 = Iyz * x9;
-        let x50 = a_ * a_ * x1 * x1;
-        let x51 = x2 * a_;
-        let x52 = -x51 - d;
-        let x53 = J2 * ((x3 + 1.0) * x9 * x9 + (x5 + 1.0) * x10 * x10)
-            + (x1 * x1 * x9 * J1 + x44 + x45) * x9
-            + (x47 * x9 * x9 + x11 * x11 * x10 * x10) * m2
-            + x10 * (x48 + x49 + x0 * x0 * x10 * J1)
-            + ((x50 + x52 * x52) * x10 * x10 + x8 * x8 * x9 * x9) * m1;
-        let x54 = x10
-            * (m2 * (x15 * x47 * x9 + x11 * x26) - x4 * x22 * J2 + x20 * x0 * J1
-                + (x44 + x45) * x15);
-        let x55 = x13 * (x10 * Ixz - Ixy * x9);
-        let x56 = x51 + d;
-        let x57 = (x2 * J2 * x23 + x15 * (-x48 - x49) + x18 * x1 * J1
-            + (x8 * x25 + x15 * x10 * (x56 * x52 - x50)) * m1) * x9;
-        let x58 = x54 - x55 + x57 + x13 * x12;
-        let x59 = x53 * x9 + x29 * x58 * x10;
-        let x60 = (x25 * x25 + (x56 * x56 + x50) * x15 * x15 * x9 * x9) * m1;
-        let x61 = m2 * (x26 * x26 + x15 * x15 * x10 * x10 * x47);
-        let x62 = (x20 * x20 + x18 * x18) * J1;
-        let x63 = x16 - x14 + x21 + x24 + x27;
-        let x64 = x9 * x9 + x10 * x10;
-        let x65 = J2 * (x15 * x15 * x64 + x22 * x22 + x23 * x23);
-        let x66 = x13 * (x16 - x14);
-        let x67 = x15
-            * (((Iyy * x10 - x49) * x15 + x13 * Ixy) * x10
-                + (x15 * (Izz * x9 - x45) + x13 * Ixz) * x9);
-        let x68 = x60 + x61 + x62 + x13 * x63 + x65 - x66 + x67;
-        let x69 = x54 - x55 + x57;
-        let x70 = x68 * x29 * x10 + x13 * x30 + x69 * x9;
-        let x71 = x29 * x9 * x70 - x59 * x10;
-        let x72 = d * x56 * m1;
-        let x73 = d * x52 * m1;
-        let x74 = (x72 + x73) * x10 * x9;
-        let x75 = J2 + m2 * d * x46;
-        let x76 = x75 * x64;
-        let x77 = x4 * x33 * x15 - x0 * x34;
-        let x78 = x33 * x15 * x0 + x4 * x34;
-        let x79 = x78 * x46 - a_ * x0 * x77;
-        let x80 = x2 * x35 - x33 * x1 * x15;
-        let x81 = x35 * x1 + x2 * x33 * x15;
-        let x82 = a_ * x1 * x81;
-        let x83 = m2 * (x79 * x9 + x35 * x11 * x10)
-            + m1 * (x10 * (x80 * x52 - x82) + x8 * x34 * x9);
-        let x84 = m1 * (x15 * (x80 * x56 + x82) * x9 + x34 * x25);
-        let x85 = m2 * (x15 * x79 * x10 + x35 * x26);
-        let x86 = x13 * d * x36 + x84 + x85;
-        let x87 = x83 * x9 + x86 * x29 * x10;
-        let x88 = x4 * x15 * x32 - x0 * x39;
-        let x89 = x15 * x0 * x32 + x4 * x39;
-        let x90 = x89 * x46 - a_ * x88 * x0;
-        let x91 = x2 * x15 * x32 + x1 * x38;
-        let x92 = a_ * x1 * x91;
-        let x93 = x2 * x38 - x1 * x15 * x32;
-        let x94 = m2 * (x90 * x9 + x11 * x10 * x38)
-            + (x8 * x39 * x9 + (x93 * x52 - x92) * x10) * m1;
-        let x95 = m1 * (x15 * (x93 * x56 + x92) * x9 + x39 * x25);
-        let x96 = m2 * (x15 * x10 * x90 + x38 * x26);
-        let x97 = x13 * x40 * d + x95 + x96;
-        let x98 = x94 * x9 + x97 * x29 * x10;
-        let x99 = m2 * (x15 * x11 * x10 * x10 + (x22 * x46 - a_ * x20 * x0) * x9)
-            + m1 * ((x23 * x52 - a_ * x18 * x1) * x10 + x8 * x15 * x9 * x9);
-        let x100 = x13 * x42 * d * x10 + x99 * x9;
-        let x101 = x72 + J2;
-        let x102 = x73 - J2;
-        let x103 = x101 * x9 * x9 - x10 * x10 * x102;
-        let x104 = x86 * x29 * x9 - x10 * x83;
-        let x105 = x97 * x29 * x9 - x10 * x94;
-        let x106 = x13 * x42 * d * x9 - x99 * x10;
-        let x107 = x80 * d * m1;
-        let x108 = x93 * d * m1;
-        let x109 = x23 * d * m1;
-        let x110 = m2 * d * x78;
-        let x111 = m2 * d * x89;
-        let x112 = m2 * x22 * d;
-        let x113 = (x80 * x93 + x81 * x91 + x34 * x39) * m1
-            + m2 * (x35 * x38 + x89 * x78 + x88 * x77);
-        let x114 = m1 * (x18 * x81 + x80 * x23 + x15 * x34 * x9)
-            + (x20 * x77 + x22 * x78 + x35 * x15 * x10) * m2;
-        let x115 = m2 * (x88 * x20 + x22 * x89 + x15 * x10 * x38)
-            + (x15 * x39 * x9 + x18 * x91 + x93 * x23) * m1;
-        let x116 = theta_dot * x9;
-        let x117 = x15 * psi_dot * x10;
-        let x118 = x116 + x117;
-        let x119 = x13 * psi_dot;
-        let x120 = phi_dot - x119;
-        let x121 = x15 * psi_dot * x9;
-        let x122 = theta_dot * x10;
-        let x123 = x121 - x122;
-        let x124 = x123 * Izz - Iyz * x118 - Ixz * x120;
-        let x125 = x124 * x118;
-        let x126 = -phi_dot - x119;
-        let x127 = theta_dot * x126 * x9;
-        let x128 = x15 * psi_dot * x10 * phi_dot;
-        let x129 = x127 - x128;
-        let x130 = x129 * Ixz;
-        let x131 = Iyy * x118 - x123 * Iyz - Ixy * x120;
-        let x132 = x123 * x131;
-        let x133 = theta_dot * x126 * x10;
-        let x134 = x15 * psi_dot * phi_dot * x9;
-        let x135 = x133 + x134;
-        let x136 = Ixy * x135;
-        let x137 = J2 - J1;
-        let x138 = x4 * x120 - x123 * x0;
-        let x139 = gamma2_dot + x116 + x117;
-        let x140 = x137 * x138 * x139;
-        let x141 = x139 * d + x4 * a_ * x118;
-        let x142 = theta_dot * x15 * psi_dot;
-        let x143 = -x123 * gamma2_dot - x142;
-        let x144 = gamma2_dot * x120;
-        let x145 = x143 * x0 + (x127 - x128 + x144) * x4;
-        let x146 = x0 * x120 + x4 * x123;
-        let x147 = a_ * (x128 - x127 - x146 * x0 * x118) - x141 * x138 - x145 * d;
-        let x148 = J2 * x145;
-        let x149 = x1 * x118 + x2 * x120;
-        let x150 = x121 + gamma1_dot - x122;
-        let x151 = x2 * a_ * x123 + x150 * d;
-        let x152 = x133 + x134 - gamma1_dot * x120;
-        let x153 = gamma1_dot * x118;
-        let x154 = x2 * x152 + x1 * (x142 - x153);
-        let x155 = x2 * x118 - x1 * x120;
-        let x156 = x149 * x151 - d * x154 + a_ * (-x123 * x1 * x155 - x133 - x134);
-        let x157 = x150 * x7 * x149;
-        let x158 = J2 * x154;
-        let x159 = x2 * (x153 - x142) + x152 * x1;
-        let x160 = x0 * (x128 - x127 - x144) + x4 * x143;
-        let x161 = ((0.25 - 0.25 * (x29 * f64::cos(3.0 * theta))) * psi_dot
-            + x13 * phi_dot) * x29 + x15 * psi_dot;
-        let x162 = 0.5 * (x29 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        let x163 = x130 - x125 + x132 + x136 + x0 * (m2 * x147 * d - x140 - x148)
-            + x12 * x15 * psi_dot * phi_dot + x1 * (x157 - x156 * d * m1 + x158)
-            + (-x2 * x159 - x4 * x160) * J1
-            + theta_dot * (Ixx * x15 * psi_dot - x6 * x161 - x162 * x29 * x63);
-        let x164 = -a_ * x118 - d * x155;
-        let x165 = x164 * x155 - x150 * x151 + a_ * (x2 * x123 * gamma1_dot + x129 * x1);
-        let x166 = a_ * x1 * x165;
-        let x167 = x129 * d - x149 * x164 + a_ * (x2 * x129 + x123 * x123 * x1);
-        let x168 = theta_dot * x15 * psi_dot * Ixz;
-        let x169 = x131 * x120;
-        let x170 = x149 * x155;
-        let x171 = J2 * (x127 + x170 - x128);
-        let x172 = x140 + x148;
-        let x173 = Ixx * x120 - x123 * Ixz - Ixy * x118;
-        let x174 = x118 * x173;
-        let x175 = Iyz * x135;
-        let x176 = x149 * x155 * J1;
-        let x177 = x129 * Izz;
-        let x178 = -x146 * d - a_ * x123;
-        let x179 = a_ * (-x4 * gamma2_dot * x118 - x135 * x0) - x146 * x178
-            + x141 * x139;
-        let x180 = x135 * d + x138 * x178 + a_ * (x4 * x135 + x0 * x118 * x118);
-        let x181 = x180 * x46 - a_ * x0 * x179;
-        let x182 = x123 * x173;
-        let x183 = Iyy * x135;
-        let x184 = x124 * x120;
-        let x185 = Ixy * theta_dot * x15 * psi_dot;
-        let x186 = x157 + x158;
-        let x187 = x129 * Iyz;
-        let x188 = J2 * x135;
-        let x189 = x138 * x7 * x146;
-        let x190 = (-x162 * x29 * x69 - x12 * x161) * theta_dot
-            - (x10 * (x167 * x52 - x166) + x156 * x8 * x9) * m1
-            + x10
-                * (x168 - x160 * x0 * J1 + x169 + x171 + x4 * x172 - x174 - x175 - x176
-                    + x177) - m2 * (x181 * x9 + x147 * x11 * x10)
-            + x15 * psi_dot * x53 * phi_dot
-            + (x184 - x182 - x183 - x1 * J1 * x159 - x185 - x2 * x186 + x187 - x188
-                - x189) * x9;
-        let x191 = (-x20 * x160 - x18 * x159) * J1 - x186 * x23
-            - ((x166 + x167 * x56) * x15 * x9 + x156 * x25) * m1
-            + (x125 - theta_dot * Ixx * x15 * psi_dot - x130 - x132 - x136) * x13
-            + x15
-                * (psi_dot * phi_dot * x69
-                    + (x174 - x168 - x169 - x171 + x175 + x176 - x177) * x9
-                    + x10 * (x184 - x182 - x183 - x185 + x187 - x188 - x189))
-            - x172 * x22 + x13 * x163
+        let x16 = 1.0 / x15;
+        let x17 = f64::sin(theta);
+        let x18 = x17 * Ixx;
+        let x19 = x15 * (-Ixy * x12 - Ixz * x11);
+        let x20 = x2 * x17;
+        let x21 = x1 * x15 * x12 - x20;
+        let x22 = x4 * x17;
+        let x23 = -x15 * x6 * x11 - x22;
+        let x24 = (x2 * x21 + x4 * x23) * J1;
+        let x25 = x4 * x15 * x11 - x17 * x6;
+        let x26 = x2 * x15 * x12 + x17 * x1;
+        let x27 = (x25 * x6 - x26 * x1) * J2;
+        let x28 = -x26 * d - a_ * x15 * x12;
+        let x29 = -a_ * x15 * x11 - x25 * d;
+        let x30 = (x1 * m1 * x28 - m2 * x6 * x29) * d;
+        let x31 = x19 - x18 + x24 + x27 + x30 + x17 * x8;
+        let x32 = x14 * x11 + x16 * x31 * x12;
+        let x33 = x16 * x31 * x11 - x14 * x12;
+        let x34 = f64::sin(psi);
+        let x35 = f64::cos(psi);
+        let x36 = x12 * x34 + x17 * x35 * x11;
+        let x37 = x17 * x35 * x12 - x11 * x34;
+        let x38 = x1 * x36 * m1 - m2 * x37 * x6;
+        let x39 = d * x38;
+        let x40 = x35 * x11 + x17 * x12 * x34;
+        let x41 = x17 * x11 * x34 - x35 * x12;
+        let x42 = x1 * x41 * m1 - m2 * x6 * x40;
+        let x43 = x42 * d;
+        let x44 = x1 * m1 * x11 - m2 * x6 * x12;
+        let x45 = x44 * x15 * d;
+        let x46 = x2 * a_;
+        let x47 = x46 + d;
+        let x48 = a_ * a_ * x1 * x1;
+        let x49 = (x28 * x28 + (x47 * x47 + x48) * x15 * x15 * x11 * x11) * m1;
+        let x50 = d + x4 * a_;
+        let x51 = a_ * a_ * x6 * x6 + x50 * x50;
+        let x52 = m2 * (x29 * x29 + x15 * x15 * x12 * x12 * x51);
+        let x53 = (x23 * x23 + x21 * x21) * J1;
+        let x54 = x19 - x18 + x24 + x27 + x30;
+        let x55 = x11 * x11 + x12 * x12;
+        let x56 = J2 * (x15 * x15 * x55 + x25 * x25 + x26 * x26);
+        let x57 = x17 * (x19 - x18);
+        let x58 = Iyz * x11;
+        let x59 = Iyz * x12;
+        let x60 = x15
+            * (((Iyy * x12 - x58) * x15 + x17 * Ixy) * x12
+                + (x15 * (Izz * x11 - x59) + x17 * Ixz) * x11);
+        let x61 = x49 + x52 + x53 + x17 * x54 + x56 - x57 + x60;
+        let x62 = Iyy * x11;
+        let x63 = x12
+            * (m2 * (x15 * x51 * x11 + x13 * x29) - x4 * x25 * J2 + x23 * x6 * J1
+                + (x62 + x59) * x15);
+        let x64 = x17 * (x12 * Ixz - Ixy * x11);
+        let x65 = x12 * Izz;
+        let x66 = -x46 - d;
+        let x67 = (x2 * J2 * x26 + x15 * (-x65 - x58) + x21 * x1 * J1
+            + (x10 * x28 + x15 * x12 * (x47 * x66 - x48)) * m1) * x11;
+        let x68 = x63 - x64 + x67;
+        let x69 = x61 * x16 * x12 + x17 * x32 + x68 * x11;
+        let x70 = J2 * ((x3 + 1.0) * x11 * x11 + (x5 + 1.0) * x12 * x12)
+            + (x1 * x1 * x11 * J1 + x62 + x59) * x11
+            + (x51 * x11 * x11 + x13 * x13 * x12 * x12) * m2
+            + x12 * (x65 + x58 + x6 * x6 * x12 * J1)
+            + ((x48 + x66 * x66) * x12 * x12 + x10 * x10 * x11 * x11) * m1;
+        let x71 = x63 - x64 + x67 + x17 * x14;
+        let x72 = x70 * x11 + x16 * x71 * x12;
+        let x73 = x16 * x69 * x11 - x72 * x12;
+        let x74 = d * x47 * m1;
+        let x75 = d * x66 * m1;
+        let x76 = (x74 + x75) * x12 * x11;
+        let x77 = J2 + m2 * d * x50;
+        let x78 = x77 * x55;
+        let x79 = x4 * x35 * x15 - x6 * x36;
+        let x80 = x35 * x15 * x6 + x4 * x36;
+        let x81 = x80 * x50 - a_ * x6 * x79;
+        let x82 = x2 * x37 - x35 * x1 * x15;
+        let x83 = x37 * x1 + x2 * x35 * x15;
+        let x84 = a_ * x1 * x83;
+        let x85 = m2 * (x81 * x11 + x37 * x13 * x12)
+            + m1 * (x12 * (x82 * x66 - x84) + x10 * x36 * x11);
+        let x86 = m1 * (x15 * (x82 * x47 + x84) * x11 + x36 * x28);
+        let x87 = m2 * (x15 * x81 * x12 + x37 * x29);
+        let x88 = x17 * d * x38 + x86 + x87;
+        let x89 = x85 * x11 + x88 * x16 * x12;
+        let x90 = x4 * x15 * x34 - x6 * x41;
+        let x91 = x15 * x6 * x34 + x4 * x41;
+        let x92 = x91 * x50 - a_ * x90 * x6;
+        let x93 = x2 * x15 * x34 + x1 * x40;
+        let x94 = a_ * x1 * x93;
+        let x95 = x2 * x40 - x1 * x15 * x34;
+        let x96 = m2 * (x92 * x11 + x13 * x12 * x40)
+            + (x10 * x41 * x11 + (x95 * x66 - x94) * x12) * m1;
+        let x97 = m1 * (x15 * (x95 * x47 + x94) * x11 + x41 * x28);
+        let x98 = m2 * (x15 * x12 * x92 + x40 * x29);
+        let x99 = x17 * x42 * d + x97 + x98;
+        let x100 = x96 * x11 + x99 * x16 * x12;
+        let x101 = m2 * (x15 * x13 * x12 * x12 + (x25 * x50 - a_ * x23 * x6) * x11)
+            + m1 * ((x26 * x66 - a_ * x21 * x1) * x12 + x10 * x15 * x11 * x11);
+        let x102 = x17 * x44 * d * x12 + x101 * x11;
+        let x103 = x74 + J2;
+        let x104 = x75 - J2;
+        let x105 = x103 * x11 * x11 - x12 * x12 * x104;
+        let x106 = x88 * x16 * x11 - x12 * x85;
+        let x107 = x99 * x16 * x11 - x12 * x96;
+        let x108 = x17 * x44 * d * x11 - x101 * x12;
+        let x109 = x82 * d * m1;
+        let x110 = x95 * d * m1;
+        let x111 = x26 * d * m1;
+        let x112 = m2 * d * x80;
+        let x113 = m2 * d * x91;
+        let x114 = m2 * x25 * d;
+        let x115 = (x82 * x95 + x83 * x93 + x36 * x41) * m1
+            + m2 * (x37 * x40 + x91 * x80 + x90 * x79);
+        let x116 = m1 * (x21 * x83 + x82 * x26 + x15 * x36 * x11)
+            + (x23 * x79 + x25 * x80 + x37 * x15 * x12) * m2;
+        let x117 = m2 * (x90 * x23 + x25 * x91 + x15 * x12 * x40)
+            + (x15 * x41 * x11 + x21 * x93 + x95 * x26) * m1;
+        let x118 = theta_dot * x11;
+        let x119 = x15 * psi_dot * x12;
+        let x120 = x118 + x119;
+        let x121 = x17 * psi_dot;
+        let x122 = phi_dot - x121;
+        let x123 = x15 * psi_dot * x11;
+        let x124 = theta_dot * x12;
+        let x125 = x123 - x124;
+        let x126 = x125 * Izz - Iyz * x120 - Ixz * x122;
+        let x127 = x126 * x120;
+        let x128 = -phi_dot - x121;
+        let x129 = theta_dot * x128 * x11;
+        let x130 = x15 * psi_dot * x12 * phi_dot;
+        let x131 = x129 - x130;
+        let x132 = x131 * Ixz;
+        let x133 = Iyy * x120 - x125 * Iyz - Ixy * x122;
+        let x134 = x125 * x133;
+        let x135 = theta_dot * x128 * x12;
+        let x136 = x15 * psi_dot * phi_dot * x11;
+        let x137 = x135 + x136;
+        let x138 = Ixy * x137;
+        let x139 = J2 - J1;
+        let x140 = x4 * x122 - x125 * x6;
+        let x141 = gamma2_dot + x118 + x119;
+        let x142 = x139 * x140 * x141;
+        let x143 = x141 * d + x4 * a_ * x120;
+        let x144 = theta_dot * x15 * psi_dot;
+        let x145 = -x125 * gamma2_dot - x144;
+        let x146 = gamma2_dot * x122;
+        let x147 = x145 * x6 + (x129 - x130 + x146) * x4;
+        let x148 = x6 * x122 + x4 * x125;
+        let x149 = a_ * (x130 - x129 - x148 * x6 * x120) - x143 * x140 - x147 * d;
+        let x150 = J2 * x147;
+        let x151 = x1 * x120 + x2 * x122;
+        let x152 = x123 + gamma1_dot - x124;
+        let x153 = x2 * a_ * x125 + x152 * d;
+        let x154 = x135 + x136 - gamma1_dot * x122;
+        let x155 = gamma1_dot * x120;
+        let x156 = x2 * x154 + x1 * (x144 - x155);
+        let x157 = x2 * x120 - x1 * x122;
+        let x158 = x151 * x153 - d * x156 + a_ * (-x125 * x1 * x157 - x135 - x136);
+        let x159 = x152 * x9 * x151;
+        let x160 = J2 * x156;
+        let x161 = x2 * (x155 - x144) + x154 * x1;
+        let x162 = x6 * (x130 - x129 - x146) + x4 * x145;
+        let x163 = 0.5 * (x16 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        let x164 = ((0.25 - 0.25 * (x16 * f64::cos(3.0 * theta))) * psi_dot
+            + x17 * phi_dot) * x16 + x15 * psi_dot;
+        let x165 = x132 - x127 + x134 + x138 + x6 * (m2 * x149 * d - x142 - x150)
+            + x14 * x15 * psi_dot * phi_dot + x1 * (x159 - x158 * d * m1 + x160)
+            + (-x2 * x161 - x4 * x162) * J1
+            + (Ixx * x15 * psi_dot - x163 * x16 * x54 - x164 * x8) * theta_dot;
+        let x166 = -a_ * x120 - d * x157;
+        let x167 = x166 * x157 - x152 * x153 + a_ * (x2 * x125 * gamma1_dot + x131 * x1);
+        let x168 = a_ * x1 * x167;
+        let x169 = x131 * d - x151 * x166 + a_ * (x2 * x131 + x125 * x125 * x1);
+        let x170 = theta_dot * x15 * psi_dot * Ixz;
+        let x171 = x139 * x151 * x157;
+        let x172 = x133 * x122;
+        let x173 = x142 + x150;
+        let x174 = Ixx * x122 - x125 * Ixz - Ixy * x120;
+        let x175 = x120 * x174;
+        let x176 = Iyz * x137;
+        let x177 = x131 * J2;
+        let x178 = x131 * Izz;
+        let x179 = -x148 * d - a_ * x125;
+        let x180 = a_ * (-x4 * gamma2_dot * x120 - x137 * x6) - x148 * x179
+            + x143 * x141;
+        let x181 = x137 * d + x140 * x179 + a_ * (x4 * x137 + x6 * x120 * x120);
+        let x182 = x181 * x50 - a_ * x6 * x180;
+        let x183 = x125 * x174;
+        let x184 = Iyy * x137;
+        let x185 = x126 * x122;
+        let x186 = Ixy * theta_dot * x15 * psi_dot;
+        let x187 = x159 + x160;
+        let x188 = x131 * Iyz;
+        let x189 = J2 * x137;
+        let x190 = x140 * x9 * x148;
+        let x191 = x12
+            * (x170 - x162 * x6 * J1 + x171 + x172 + x4 * x173 - x175 - x176 + x177
+                + x178) - (x12 * (x169 * x66 - x168) + x158 * x10 * x11) * m1
+            + (-x163 * x16 * x68 - x14 * x164) * theta_dot
+            - m2 * (x182 * x11 + x149 * x13 * x12) + x15 * psi_dot * x70 * phi_dot
+            + (x185 - x183 - x184 - x1 * J1 * x161 - x186 - x2 * x187 + x188 - x189
+                - x190) * x11;
+        let x192 = (-x23 * x162 - x21 * x161) * J1 - x187 * x26
+            - ((x168 + x169 * x47) * x15 * x11 + x158 * x28) * m1
+            + (x127 - theta_dot * Ixx * x15 * psi_dot - x132 - x134 - x138) * x17
+            - x173 * x25
             + theta_dot
-                * (-x162 * x29 * (x60 + x61 + x62 + x65 - x66 + x67) - x161 * x63)
-            - m2 * (x181 * x15 * x10 + x147 * x26);
-        let x192 = a_ * x13 * theta_dot * theta_dot;
-        let x193 = x4 * x10;
-        let x194 = x0 * x9;
-        let x195 = (-x193 - x194) * x15;
-        let x196 = x15 * (x193 + x194);
-        let x197 = (x194 - x193) * x15;
-        let x198 = (x193 - x194) * x15;
-        let x199 = 0.25 * x195 - 0.25 * x196 - 0.25 * x197 + 0.25 * x198 - x19;
-        let x200 = x0 * x10;
-        let x201 = x4 * x9;
-        let x202 = x13 * (x200 + x201);
-        let x203 = x13 * (x201 - x200);
-        let x204 = x13 * x10;
-        let x205 = x15 * x9;
-        let x206 = x2 * (x204 + x205);
-        let x207 = x15 * x10;
-        let x208 = x13 * x9;
-        let x209 = x1 * (x207 - x208);
-        let x210 = x2 * (x205 - x204);
-        let x211 = x1 * (x208 - x207);
-        let x212 = x1 * (x207 + x208);
-        let x213 = (-x207 - x208) * x1;
-        let x214 = 0.25 * x211 - 0.25 * x209 - 0.25 * x212 + x17 + 0.25 * x213;
+                * (-x163 * x16 * (x49 + x52 + x53 + x56 - x57 + x60) - x164 * x54)
+            + x17 * x165
+            + x15
+                * (psi_dot * phi_dot * x68
+                    + x12 * (x185 - x183 - x184 - x186 + x188 - x189 - x190)
+                    + (x175 - x170 - x171 - x172 + x176 - x177 - x178) * x11)
+            - m2 * (x182 * x15 * x12 + x149 * x29);
+        let x193 = a_ * x17 * theta_dot * theta_dot;
+        let x194 = x4 * x12;
+        let x195 = x6 * x11;
+        let x196 = (-x194 - x195) * x15;
+        let x197 = x15 * (x194 + x195);
+        let x198 = (x195 - x194) * x15;
+        let x199 = (x194 - x195) * x15;
+        let x200 = 0.25 * x196 - 0.25 * x197 - 0.25 * x198 + 0.25 * x199 - x22;
+        let x201 = x6 * x12;
+        let x202 = x4 * x11;
+        let x203 = x17 * (x201 + x202);
+        let x204 = x17 * (x202 - x201);
+        let x205 = x17 * x12;
+        let x206 = x15 * x11;
+        let x207 = x2 * (x205 + x206);
+        let x208 = x15 * x12;
+        let x209 = x17 * x11;
+        let x210 = x1 * (x208 - x209);
+        let x211 = x2 * (x206 - x205);
+        let x212 = x1 * (x209 - x208);
+        let x213 = x1 * (x208 + x209);
+        let x214 = (-x208 - x209) * x1;
+        let x215 = 0.25 * x212 - 0.25 * x210 - 0.25 * x213 + x20 + 0.25 * x214;
         Assembly {
             qdot: [
                 psi_dot,
@@ -1452,93 +1453,93 @@ pub mod maggi {
                 Z_dot,
             ],
             matrix: [
-                [x6, x30, x31, 0.0, 0.0, x37, x41, x43],
-                [x30, x59 * x9 + x29 * x10 * x70, x71, x74, x76, x87, x98, x100],
+                [x8, x32, x33, 0.0, 0.0, x39, x43, x45],
+                [x32, x16 * x12 * x69 + x72 * x11, x73, x76, x78, x89, x100, x102],
                 [
-                    x31,
-                    x71,
-                    x29 * (x68 * x29 * x9 - x10 * x69 + x31 * x13) * x9
-                        - (x29 * x58 * x9 - x53 * x10) * x10,
-                    x103,
-                    0.0,
-                    x104,
+                    x33,
+                    x73,
+                    (x61 * x16 * x11 - x12 * x68 + x17 * x33) * x16 * x11
+                        - (x16 * x71 * x11 - x70 * x12) * x12,
                     x105,
+                    0.0,
                     x106,
+                    x107,
+                    x108,
                 ],
-                [0.0, x74, x103, J2 + d * d * m1, 0.0, x107, x108, x109],
-                [0.0, x76, 0.0, 0.0, m2 * d * d + J2, x110, x111, x112],
+                [0.0, x76, x105, x0, 0.0, x109, x110, x111],
+                [0.0, x78, 0.0, 0.0, x7, x112, x113, x114],
                 [
-                    x37,
-                    x87,
-                    x104,
+                    x39,
+                    x89,
+                    x106,
+                    x109,
+                    x112,
+                    m0 + m1 * (x82 * x82 + x83 * x83 + x36 * x36)
+                        + m2 * (x80 * x80 + x79 * x79 + x37 * x37),
+                    x115,
+                    x116,
+                ],
+                [
+                    x43,
+                    x100,
                     x107,
                     x110,
-                    m0 + m1 * (x80 * x80 + x81 * x81 + x34 * x34)
-                        + m2 * (x78 * x78 + x77 * x77 + x35 * x35),
                     x113,
-                    x114,
-                ],
-                [
-                    x41,
-                    x98,
-                    x105,
-                    x108,
-                    x111,
-                    x113,
-                    (x93 * x93 + x91 * x91 + x39 * x39) * m1 + m0
-                        + m2 * (x38 * x38 + x89 * x89 + x88 * x88),
                     x115,
+                    (x95 * x95 + x93 * x93 + x41 * x41) * m1 + m0
+                        + m2 * (x40 * x40 + x91 * x91 + x90 * x90),
+                    x117,
                 ],
-                [x43, x100, x106, x109, x112, x114, x115, m2 + m0 + m1],
+                [x45, x102, x108, x111, x114, x116, x117, m2 + m0 + m1],
             ],
             force: [
-                x163,
-                x190 * x9 + x29 * x191 * x10,
-                x29 * x191 * x9 - x10 * x190,
-                x15 * psi_dot * x10 * x102 * phi_dot - x167 * d * m1
-                    - theta_dot * x162 * x101 * x9 + J2 * (x128 - x127 - x170) + x176,
-                x137 * x138 * x146 + (x134 - theta_dot * x162 * x10) * x75 - x188
-                    - m2 * x180 * d,
-                theta_dot * (-x161 * d * x36 - (x84 + x85) * x162 * x29)
-                    - m2 * (x180 * x78 + x35 * x147 + x77 * x179)
-                    - (x165 * x81 + x80 * x167 + x156 * x34) * m1
-                    + x15 * psi_dot * phi_dot * x83,
-                (-x40 * x161 * d - x162 * x29 * (x95 + x96)) * theta_dot
-                    + x15 * psi_dot * phi_dot * x94
-                    - m2 * (x147 * x38 + x88 * x179 + x180 * x89)
-                    - (x165 * x91 + x167 * x93 + x156 * x39) * m1,
-                x15 * (x99 * psi_dot * phi_dot - theta_dot * x42 * x161 * d)
+                x165,
+                x191 * x11 + x16 * x192 * x12,
+                x16 * x192 * x11 - x191 * x12,
+                x15 * psi_dot * x12 * x104 * phi_dot - x169 * d * m1
+                    - theta_dot * x163 * x103 * x11 - x177 + x9 * x151 * x157,
+                x139 * x140 * x148 + (x136 - theta_dot * x163 * x12) * x77 - x189
+                    - m2 * x181 * d,
+                theta_dot * (-x164 * d * x38 - (x86 + x87) * x163 * x16)
+                    - m2 * (x181 * x80 + x37 * x149 + x79 * x180)
+                    - (x167 * x83 + x82 * x169 + x158 * x36) * m1
+                    + x15 * psi_dot * phi_dot * x85,
+                (-x42 * x164 * d - x163 * x16 * (x97 + x98)) * theta_dot
+                    + x15 * psi_dot * phi_dot * x96
+                    - m2 * (x149 * x40 + x90 * x180 + x181 * x91)
+                    - (x167 * x93 + x169 * x95 + x158 * x41) * m1,
+                x15 * (x101 * psi_dot * phi_dot - theta_dot * x44 * x164 * d)
                     - m2
-                        * (((0.25 * x195 - 0.25 * x196 - 0.25 * x197 + 0.25 * x198)
+                        * (((0.25 * x196 - 0.25 * x197 - 0.25 * x198 + 0.25 * x199)
                             * phi_dot * phi_dot
-                            + (theta_dot * x199
+                            + (theta_dot * x200
                                 + phi_dot
-                                    * (x202 - 0.5 * x195 - 0.5 * x196 + 0.5 * x197 + 0.5 * x198
-                                        - x203)) * theta_dot
+                                    * (x203 - 0.5 * x196 - 0.5 * x197 + 0.5 * x198 + 0.5 * x199
+                                        - x204)) * theta_dot
                             + gamma2_dot
                                 * (phi_dot
-                                    * (0.5 * x195 - 0.5 * x196 + 0.5 * x197 - 0.5 * x198)
-                                    + (-x202 - 0.5 * x195 - 0.5 * x196 - 2.0 * (x15 * x0)
-                                        - 0.5 * x197 - 0.5 * x198 - x203) * theta_dot
-                                    + gamma2_dot * x199)) * d - x192)
-                    - (x192
+                                    * (0.5 * x196 - 0.5 * x197 + 0.5 * x198 - 0.5 * x199)
+                                    + (-x203 - 0.5 * x196 - 0.5 * x197 - 2.0 * (x15 * x6)
+                                        - 0.5 * x198 - 0.5 * x199 - x204) * theta_dot
+                                    + gamma2_dot * x200)) * d - x193)
+                    - (x193
                         + (theta_dot
-                            * ((0.5 * x209 - x206 + x210 + 2.0 * (x1 * x15) + 0.5 * x211
-                                - 0.5 * x212 - 0.5 * x213) * gamma1_dot + theta_dot * x214
-                                + (0.5 * x209 - 0.5 * x211 - 0.5 * x212 + 0.5 * x213)
+                            * ((0.5 * x210 - x207 + x211 + 2.0 * (x1 * x15) + 0.5 * x212
+                                - 0.5 * x213 - 0.5 * x214) * gamma1_dot + theta_dot * x215
+                                + (0.5 * x210 - 0.5 * x212 - 0.5 * x213 + 0.5 * x214)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x214 * gamma1_dot
+                                * (x215 * gamma1_dot
                                     + phi_dot
-                                        * (x206 - 0.5 * x209 + x210 - 0.5 * x211 - 0.5 * x212
-                                            - 0.5 * x213))
-                            + (0.25 * x211 - 0.25 * x209 - 0.25 * x212 + 0.25 * x213)
+                                        * (x207 - 0.5 * x210 + x211 - 0.5 * x212 - 0.5 * x213
+                                            - 0.5 * x214))
+                            + (0.25 * x212 - 0.25 * x210 - 0.25 * x213 + 0.25 * x214)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             w: [
-                [0.0, x29 * x10, x29 * x9, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x9, -x10, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x13 * x29 * x10, x13 * x29 * x9, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x16 * x12, x16 * x11, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x11, -x12, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x17 * x16 * x12, x17 * x16 * x11, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -1546,9 +1547,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * x162 * x29,
+                theta_dot * x163 * x16,
                 -(x15 * psi_dot * phi_dot),
-                theta_dot * x161,
+                theta_dot * x164,
                 0.0,
                 0.0,
                 0.0,
@@ -1919,195 +1920,196 @@ pub mod kane {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::sin(gamma2);
+        let x6 = J2 + d * d * m1;
         let x7 = f64::sin(gamma1);
         let x8 = f64::cos(gamma1);
         let x9 = x8 * x8;
         let x10 = f64::cos(gamma2);
         let x11 = x10 * x10;
-        let x12 = J1 - J2;
-        let x13 = x8 * d;
-        let x14 = -a_ - x13;
-        let x15 = (x8 * x12 + x14 * d * m1) * x7 - Ixy;
-        let x16 = J2 - J1;
-        let x17 = x10 * d;
-        let x18 = -a_ - x17;
-        let x19 = x6 * (x10 * x16 - m2 * d * x18) - Ixz;
-        let x20 = f64::sin(psi);
-        let x21 = f64::cos(psi);
-        let x22 = x2 * x20 + x5 * x21 * x3;
-        let x23 = x5 * x21 * x2 - x3 * x20;
-        let x24 = d * (x7 * x22 * m1 - m2 * x23 * x6);
-        let x25 = x21 * x3 + x5 * x2 * x20;
-        let x26 = x21 * x2;
-        let x27 = x5 * x3 * x20;
-        let x28 = x27 - x26;
-        let x29 = (x7 * x28 * m1 - m2 * x6 * x25) * d;
-        let x30 = (x7 * m1 * x3 - m2 * x6 * x2) * x0 * d;
-        let x31 = d * d;
-        let x32 = -Iyz;
-        let x33 = d + x10 * a_;
-        let x34 = J2 + m2 * d * x33;
-        let x35 = (x10 * x0 - x5 * x6 * x3) * x21 - x6 * x2 * x20;
-        let x36 = x21 * x0 * x6 + x10 * x22;
-        let x37 = m2 * (x36 * x33 - a_ * x35 * x6) + x14 * x22 * m1;
-        let x38 = x10 * x0 * x20 + (x26 - x27) * x6;
-        let x39 = x0 * x6 * x20 + x10 * x28;
-        let x40 = x14 * x28 * m1 + m2 * (x39 * x33 - a_ * x6 * x38);
-        let x41 = -x0 * x6 * x3 - x10 * x5;
-        let x42 = x10 * x0 * x3 - x5 * x6;
-        let x43 = m2 * (x42 * x33 - a_ * x41 * x6) + x14 * x0 * m1 * x3;
-        let x44 = x8 * a_ + d;
-        let x45 = d * x44 * m1 + J2;
-        let x46 = x8 * x23 - x21 * x7 * x0;
-        let x47 = x21 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x20;
-        let x48 = m2 * x23 * x18 + (x46 * x44 + a_ * x47 * x7) * m1;
-        let x49 = x8 * x25 - x7 * x0 * x20;
-        let x50 = x8 * x0 * x20 + x7 * x25;
-        let x51 = (x49 * x44 + a_ * x7 * x50) * m1 + m2 * x18 * x25;
-        let x52 = x8 * x0 * x2 + x5 * x7;
-        let x53 = x7 * x0 * x2 - x8 * x5;
-        let x54 = (x52 * x44 + a_ * x53 * x7) * m1 + m2 * x0 * x2 * x18;
-        let x55 = x46 * d * m1;
-        let x56 = x49 * d * m1;
-        let x57 = x52 * d * m1;
-        let x58 = m2 * d * x36;
-        let x59 = m2 * d * x39;
-        let x60 = m2 * x42 * d;
-        let x61 = m1 * (x46 * x49 + x22 * x28 + x47 * x50)
-            + m2 * (x35 * x38 + x23 * x25 + x39 * x36);
-        let x62 = (x47 * x53 + x46 * x52 + x0 * x22 * x3) * m1
-            + m2 * (x42 * x36 + x23 * x0 * x2 + x35 * x41);
-        let x63 = m2 * (x42 * x39 + x41 * x38 + x0 * x2 * x25)
-            + (x0 * x28 * x3 + x53 * x50 + x49 * x52) * m1;
-        let x64 = x6 * u1;
-        let x65 = x10 * u3;
-        let x66 = -x64 - x65;
-        let x67 = x8 * u2;
-        let x68 = x7 * u1;
-        let x69 = x67 - x68;
-        let x70 = x7 * u2;
-        let x71 = x8 * u1;
-        let x72 = u4 * J2 * (-x70 - x71);
-        let x73 = 2.0 * u4 + u3;
-        let x74 = d * (x8 * x73 * u1 + x73 * x7 * u2) + a_ * u3 * u1;
-        let x75 = x70 + x71;
-        let x76 = u4 + u3;
-        let x77 = x75 * x12 * x76;
-        let x78 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x79 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x80 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
+        let x12 = f64::sin(gamma2);
+        let x13 = m2 * d * d + J2;
+        let x14 = J1 - J2;
+        let x15 = x8 * d;
+        let x16 = -a_ - x15;
+        let x17 = (x8 * x14 + x16 * d * m1) * x7 - Ixy;
+        let x18 = J2 - J1;
+        let x19 = x10 * d;
+        let x20 = -a_ - x19;
+        let x21 = x12 * (x10 * x18 - m2 * d * x20) - Ixz;
+        let x22 = f64::sin(psi);
+        let x23 = f64::cos(psi);
+        let x24 = x2 * x22 + x5 * x23 * x3;
+        let x25 = x5 * x23 * x2 - x3 * x22;
+        let x26 = d * (x7 * x24 * m1 - m2 * x25 * x12);
+        let x27 = x23 * x3 + x5 * x2 * x22;
+        let x28 = x23 * x2;
+        let x29 = x5 * x3 * x22;
+        let x30 = x29 - x28;
+        let x31 = (x7 * x30 * m1 - m2 * x12 * x27) * d;
+        let x32 = (x7 * m1 * x3 - m2 * x12 * x2) * x0 * d;
+        let x33 = d * d;
+        let x34 = -Iyz;
+        let x35 = d + x10 * a_;
+        let x36 = J2 + m2 * d * x35;
+        let x37 = (x10 * x0 - x5 * x12 * x3) * x23 - x12 * x2 * x22;
+        let x38 = x23 * x0 * x12 + x10 * x24;
+        let x39 = m2 * (x38 * x35 - a_ * x37 * x12) + x16 * x24 * m1;
+        let x40 = x10 * x0 * x22 + (x28 - x29) * x12;
+        let x41 = x0 * x12 * x22 + x10 * x30;
+        let x42 = x16 * x30 * m1 + m2 * (x41 * x35 - a_ * x12 * x40);
+        let x43 = -x0 * x12 * x3 - x10 * x5;
+        let x44 = x10 * x0 * x3 - x5 * x12;
+        let x45 = m2 * (x44 * x35 - a_ * x43 * x12) + x16 * x0 * m1 * x3;
+        let x46 = x8 * a_ + d;
+        let x47 = d * x46 * m1 + J2;
+        let x48 = x8 * x25 - x23 * x7 * x0;
+        let x49 = x23 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x22;
+        let x50 = m2 * x25 * x20 + (x48 * x46 + a_ * x49 * x7) * m1;
+        let x51 = x8 * x27 - x7 * x0 * x22;
+        let x52 = x8 * x0 * x22 + x7 * x27;
+        let x53 = (x51 * x46 + a_ * x7 * x52) * m1 + m2 * x20 * x27;
+        let x54 = x8 * x0 * x2 + x5 * x7;
+        let x55 = x7 * x0 * x2 - x8 * x5;
+        let x56 = (x54 * x46 + a_ * x55 * x7) * m1 + m2 * x0 * x2 * x20;
+        let x57 = x48 * d * m1;
+        let x58 = x51 * d * m1;
+        let x59 = x54 * d * m1;
+        let x60 = m2 * d * x38;
+        let x61 = m2 * d * x41;
+        let x62 = m2 * x44 * d;
+        let x63 = m1 * (x48 * x51 + x24 * x30 + x49 * x52)
+            + m2 * (x37 * x40 + x25 * x27 + x41 * x38);
+        let x64 = (x49 * x55 + x48 * x54 + x0 * x24 * x3) * m1
+            + m2 * (x44 * x38 + x25 * x0 * x2 + x37 * x43);
+        let x65 = m2 * (x44 * x41 + x43 * x40 + x0 * x2 * x27)
+            + (x0 * x30 * x3 + x55 * x52 + x51 * x54) * m1;
+        let x66 = x12 * u1;
+        let x67 = x10 * u3;
+        let x68 = -x66 - x67;
+        let x69 = x8 * u2;
+        let x70 = x7 * u1;
+        let x71 = x69 - x70;
+        let x72 = x7 * u2;
+        let x73 = x8 * u1;
+        let x74 = u4 * J2 * (-x72 - x73);
+        let x75 = 2.0 * u4 + u3;
+        let x76 = d * (x8 * x75 * u1 + x75 * x7 * u2) + a_ * u3 * u1;
+        let x77 = x72 + x73;
+        let x78 = u4 + u3;
+        let x79 = x77 * x14 * x78;
+        let x80 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x81 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x82 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x12)
             - a_ * u1 * u2;
-        let x81 = u5 + u2;
-        let x82 = u5 * J2 + x81 * x16;
-        let x83 = x10 * u1 - u3 * x6;
-        let x84 = x64 + x65;
-        let x85 = x16 * x83 * x84;
-        let x86 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x87 = u1 * u1;
-        let x88 = 2.0 * gamma2;
-        let x89 = f64::sin(x88);
-        let x90 = x69 * x75 * x12;
-        let x91 = 2.0 * gamma1;
-        let x92 = f64::sin(x91);
-        let x93 = d * (x68 - x67) - a_ * u2;
-        let x94 = a_ * u3 * u3 * x7 - x75 * x93;
-        let x95 = u3 * x18 - d * x6 * u1;
-        let x96 = x83 * x95 + a_ * x6 * u2 * u2;
-        let x97 = x81 * (x10 * a_ * u2 + x81 * d) - x84 * x95 - x10 * u5 * a_ * u2;
-        let x98 = x69 * x93 - (u3 * x44 + u4 * d) * x76 + x8 * a_ * u4 * u3;
+        let x83 = u5 + u2;
+        let x84 = u5 * J2 + x83 * x18;
+        let x85 = x10 * u1 - u3 * x12;
+        let x86 = x66 + x67;
+        let x87 = x18 * x85 * x86;
+        let x88 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x89 = u1 * u1;
+        let x90 = 2.0 * gamma2;
+        let x91 = f64::sin(x90);
+        let x92 = x71 * x77 * x14;
+        let x93 = 2.0 * gamma1;
+        let x94 = f64::sin(x93);
+        let x95 = d * (x70 - x69) - a_ * u2;
+        let x96 = a_ * u3 * u3 * x7 - x77 * x95;
+        let x97 = u3 * x20 - d * x12 * u1;
+        let x98 = x85 * x97 + a_ * x12 * u2 * u2;
+        let x99 = x83 * (x10 * a_ * u2 + x83 * d) - x86 * x97 - x10 * u5 * a_ * u2;
+        let x100 = x71 * x95 - (u3 * x46 + u4 * d) * x78 + x8 * a_ * u4 * u3;
         Assembly {
             qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + d * d * (m2 * x6 * x6 + x7 * x7 * m1) + (x9 + x11) * J1
-                        + (x6 * x6 + x7 * x7) * J2,
-                    x15,
-                    x19,
+                    Ixx + x6 * x7 * x7 + (x9 + x11) * J1 + x12 * x12 * x13,
+                    x17,
+                    x21,
                     0.0,
                     0.0,
-                    x24,
-                    x29,
-                    x30,
+                    x26,
+                    x31,
+                    x32,
                 ],
                 [
-                    x15,
-                    x7 * x7 * J1 + x14 * x14 * m1 + Iyy + J2 * (x9 + 1.0)
-                        + m2 * (x31 + a_ * (a_ + 2.0 * x17)),
-                    x32,
-                    0.0,
+                    x17,
+                    x7 * x7 * J1 + x16 * x16 * m1 + Iyy + J2 * (x9 + 1.0)
+                        + m2 * (x33 + a_ * (a_ + 2.0 * x19)),
                     x34,
-                    x37,
-                    x40,
-                    x43,
-                ],
-                [
-                    x19,
-                    x32,
-                    x6 * x6 * J1 + (a_ * (a_ + 2.0 * x13) + x31) * m1 + m2 * x18 * x18
-                        + Izz + J2 * (x11 + 1.0),
-                    x45,
                     0.0,
-                    x48,
-                    x51,
-                    x54,
-                ],
-                [0.0, 0.0, x45, J2 + d * d * m1, 0.0, x55, x56, x57],
-                [0.0, x34, 0.0, 0.0, m2 * d * d + J2, x58, x59, x60],
-                [
-                    x24,
-                    x37,
-                    x48,
-                    x55,
-                    x58,
-                    m0 + (x46 * x46 + x47 * x47 + x22 * x22) * m1
-                        + m2 * (x36 * x36 + x35 * x35 + x23 * x23),
-                    x61,
-                    x62,
+                    x36,
+                    x39,
+                    x42,
+                    x45,
                 ],
                 [
-                    x29,
-                    x40,
-                    x51,
+                    x21,
+                    x34,
+                    x12 * x12 * J1 + (a_ * (a_ + 2.0 * x15) + x33) * m1 + m2 * x20 * x20
+                        + Izz + J2 * (x11 + 1.0),
+                    x47,
+                    0.0,
+                    x50,
+                    x53,
                     x56,
-                    x59,
-                    x61,
-                    (x49 * x49 + x50 * x50 + x28 * x28) * m1 + m0
-                        + (x25 * x25 + x39 * x39 + x38 * x38) * m2,
-                    x63,
                 ],
-                [x30, x43, x54, x57, x60, x62, x63, m2 + m0 + m1],
+                [0.0, 0.0, x47, x6, 0.0, x57, x58, x59],
+                [0.0, x36, 0.0, 0.0, x13, x60, x61, x62],
+                [
+                    x26,
+                    x39,
+                    x50,
+                    x57,
+                    x60,
+                    m0 + (x48 * x48 + x49 * x49 + x24 * x24) * m1
+                        + m2 * (x38 * x38 + x37 * x37 + x25 * x25),
+                    x63,
+                    x64,
+                ],
+                [
+                    x31,
+                    x42,
+                    x53,
+                    x58,
+                    x61,
+                    x63,
+                    (x51 * x51 + x52 * x52 + x30 * x30) * m1 + m0
+                        + (x27 * x27 + x41 * x41 + x40 * x40) * m2,
+                    x65,
+                ],
+                [x32, x45, x56, x59, x62, x64, x65, m2 + m0 + m1],
             ],
             force: [
-                (-x10 * u5 * x66 - x8 * x69 * u4) * J1 + x7 * (x72 - d * m1 * x74 + x77)
-                    - x78 * u2 + u3 * x79 + (m2 * d * x80 - x82 * x83) * x6,
-                x85 + x78 * u1 - x69 * u4 * x7 * J1 - u3 * x86 - x14 * m1 * x74
-                    - x8 * (x72 + x77)
+                (-x10 * u5 * x68 - x8 * x71 * u4) * J1 + x7 * (x74 - d * m1 * x76 + x79)
+                    - x80 * u2 + u3 * x81 + (m2 * d * x82 - x84 * x85) * x12,
+                x87 + x80 * u1 - x71 * u4 * x7 * J1 - u3 * x88 - x16 * m1 * x76
+                    - x8 * (x74 + x79)
                     - m2
                         * (d
                             * (a_
-                                * (x6 * (u3 * u3 - x87 + u5 * (-u5 - 2.0 * u2))
+                                * (x12 * (u3 * u3 - x89 + u5 * (-u5 - 2.0 * u2))
                                     - 2.0 * (x10 * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * x89) - f64::cos(x88) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x89))) - a_ * a_ * u3 * u1),
-                u5 * x66 * x6 * J1 - m2 * x18 * x80 - u1 * x79 + x90 - x82 * x10 * x83
-                    + x86 * u2
+                                    * ((0.5 * (u3 * x91) - f64::cos(x90) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x91))) - a_ * a_ * u3 * u1),
+                u5 * x68 * x12 * J1 - m2 * x20 * x82 - u1 * x81 + x92 - x84 * x10 * x85
+                    + x88 * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
                                 * (2.0 * (x8 * u1 * u2)
-                                    + (u2 * u2 - x87 + u4 * (-u4 - 2.0 * u3)) * x7)
-                                + (0.5 * (x92 * u2 * u2)
-                                    + (f64::cos(x91) * u2 - 0.5 * (u1 * x92)) * u1) * d)) * m1,
-                x90 - d * m1 * x94,
-                x85 - m2 * x96 * d,
-                -m2 * (x23 * x80 + x96 * x36 + x35 * x97)
-                    - (x46 * x94 + x22 * x74 + x47 * x98) * m1,
-                -m2 * (x38 * x97 + x96 * x39 + x25 * x80)
-                    - (x49 * x94 + x28 * x74 + x98 * x50) * m1,
-                -(x52 * x94 + x53 * x98 + x0 * x3 * x74) * m1
-                    - m2 * (x0 * x2 * x80 + x96 * x42 + x41 * x97),
+                                    + (u2 * u2 - x89 + u4 * (-u4 - 2.0 * u3)) * x7)
+                                + (0.5 * (x94 * u2 * u2)
+                                    + (f64::cos(x93) * u2 - 0.5 * (u1 * x94)) * u1) * d)) * m1,
+                x92 - d * m1 * x96,
+                x87 - m2 * x98 * d,
+                -m2 * (x25 * x82 + x98 * x38 + x37 * x99)
+                    - (x48 * x96 + x24 * x76 + x49 * x100) * m1,
+                -m2 * (x40 * x99 + x98 * x41 + x27 * x82)
+                    - (x51 * x96 + x30 * x76 + x100 * x52) * m1,
+                -(x54 * x96 + x55 * x100 + x0 * x3 * x76) * m1
+                    - m2 * (x0 * x2 * x82 + x98 * x44 + x43 * x99),
             ],
             checks: [x0],
         }

@@ -42,6 +42,9 @@ fn from_term(t: &Term) -> Expr {
     Expr::make_mul(t.0.clone(), t.1.clone())
 }
 
+/// Most tied factors [`horner`] compares by how many factors their terms share.
+const HORNER_CANDIDATES: usize = 8;
+
 /// Horner form of a sum of terms (constant kept apart).
 fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
     // Count, for each (base, sign of exponent), the terms holding it with an integer exponent.
@@ -53,11 +56,39 @@ fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
             }
         }
     }
-    let best = count
+    // The factor held by the most terms; among ties (and near-ties), the one whose terms share
+    // the most factors besides it, so that they come out together: x l m1 u^2 + x l m2 u^2
+    // + y m2 becomes x l u^2 (m1 + m2) + y m2, not m2 (x l u^2 + y) + x l m1 u^2.
+    let mut ranked: Vec<((Expr, bool), usize)> = count.iter().filter(|(_, n)| **n >= 2).map(|(k, n)| (*k, *n)).collect();
+    ranked.sort_by(|(ka, na), (kb, nb)| nb.cmp(na).then_with(|| ka.0.key().cmp(&kb.0.key())).then_with(|| ka.1.cmp(&kb.1)));
+    let top = ranked.first().map_or(0, |(_, n)| *n);
+    let shared_with = |base: Expr, negative: bool| -> usize {
+        let mut common: Option<HashMap<(Expr, bool), i64>> = None;
+        for (_, factors) in &terms {
+            if !factors.iter().any(|(b, e)| *b == base && e.is_integer() && e.is_negative() == negative && !e.is_zero()) {
+                continue;
+            }
+            let here: HashMap<(Expr, bool), i64> = factors
+                .iter()
+                .filter_map(|(b, e)| e.to_i64().filter(|n| *n != 0).map(|n| ((*b, n < 0), n.abs())))
+                .collect();
+            common = Some(match common {
+                None => here,
+                Some(c) => c.into_iter().filter_map(|(k, n)| here.get(&k).map(|m| (k, n.min(*m)))).collect(),
+            });
+        }
+        common.map_or(0, |c| c.values().map(|n| *n as usize).sum())
+    };
+    let best = ranked
         .iter()
-        .filter(|(_, n)| **n >= 2)
-        .max_by(|(ka, na), (kb, nb)| na.cmp(nb).then_with(|| kb.0.key().cmp(&ka.0.key())).then_with(|| kb.1.cmp(&ka.1)))
-        .map(|(k, _)| *k);
+        .take_while(|(_, n)| *n == top)
+        .take(HORNER_CANDIDATES)
+        .map(|(k, _)| (*k, shared_with(k.0, k.1)))
+        .fold(None::<((Expr, bool), usize)>, |acc, (k, score)| match acc {
+            Some((_, best)) if best >= score => acc,
+            _ => Some((k, score)),
+        })
+        .map(|(k, _)| k);
     let Some((base, negative)) = best else {
         return Expr::make_add(constant, terms.iter().map(|t| (from_term(t), Rat::one())).collect());
     };

@@ -150,3 +150,19 @@ pub fn choose(model: &Model, reports: &[CoordinateReport]) -> Result<Vec<usize>,
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The expression the reduced `L_NI` of a free body held: it contains `a` but is `G u3`.
+    #[test]
+    fn formal_dependence_is_not_dependence() {
+        let (a, g, u1, u3) = (Expr::sym("ia"), Expr::sym("iG"), Expr::sym("iu1"), Expr::sym("iu3"));
+        let e = g * (a.cos() * (u1 * a.sin() + u3 * a.cos()) - a.sin() * (u1 * a.cos() - u3 * a.sin()));
+        let q = a.as_sym().unwrap();
+        assert!(e.contains(q));
+        assert!(depends(e, q).is_none());
+        assert!(depends(e + u1 * a.sin(), q).is_some());
+    }
+}

@@ -1,0 +1,317 @@
+//! The scaling benchmark: the n-link pendulum on a cart and the spatial chain on a floating
+//! base (`generator::model::examples`), derived and emitted at growing n. Writes
+//! `docs/scaling.md` (a table per model: derive time per stage, emit time, peak memory,
+//! operations per formulation split into assembly and solve, rustc time, ns per call) and
+//! `docs/plots/scaling.svg` (log-log: derive + emit time and assembly operations against n).
+//!
+//! ```sh
+//! cargo bench -p generator --bench scaling                      # default sizes
+//! cargo bench -p generator --bench scaling -- --sympy           # SymPy's KanesMethod beside it
+//! cargo bench -p generator --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --compile-up-to 20 --out /tmp/x
+//! ```
+//!
+//! Each size runs in a child process (this program, re-invoked), so peak memory is its own and
+//! no memo carries over. `--sympy` runs `docs/scaling/sympy_kane.py` in the same run (needs
+//! python3 with SymPy), so the ratios are side by side.
+
+use generator::emit::{Options, generate};
+use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+const FORMS: [&str; 4] = ["lagrange", "maggi", "kane", "reduced_volterra"];
+
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+struct Record {
+    model: String,
+    n: usize,
+    derive_ms: f64,
+    stages_ms: Vec<(String, f64)>,
+    emit_ms: f64,
+    peak_mb: f64,
+    /// Per formulation: (name, assembly ops, solve ops).
+    ops: Vec<(String, usize, usize)>,
+    code_bytes: usize,
+    rustc_s: Option<f64>,
+    /// Per formulation: ns per right-hand-side call.
+    ns_per_call: Vec<(String, f64)>,
+}
+
+#[derive(Clone, Debug, Default, serde::Deserialize)]
+struct SympyRecord {
+    n: usize,
+    derive_seconds: f64,
+    cse_seconds: f64,
+    assembly_ops: usize,
+}
+
+fn peak_mb() -> f64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    status
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))
+        .and_then(|l| l.split_whitespace().nth(1))
+        .and_then(|kb| kb.parse::<f64>().ok())
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+
+/// The child: one model at one size.
+fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
+    let builder = if kind == "pendulum" { n_link_pendulum_on_cart(n) } else { floating_chain(n) };
+    let model = builder.build().expect("the benchmark models are valid");
+    let out = generate(&model, &Options::from_model(&model)).expect("the benchmark models generate");
+    let s = &out.summary;
+    let mut record = Record {
+        model: kind.to_string(),
+        n,
+        derive_ms: s.derive_time.as_secs_f64() * 1e3,
+        stages_ms: s.stages.iter().map(|(k, d)| (k.to_string(), d.as_secs_f64() * 1e3)).collect(),
+        emit_ms: s.emit_time.as_secs_f64() * 1e3,
+        peak_mb: peak_mb(),
+        ops: FORMS
+            .iter()
+            .filter_map(|f| s.ops(&format!("{f}::rhs")).map(|c| (f.to_string(), c.ops.total(), c.solve.total())))
+            .collect(),
+        code_bytes: out.code.len(),
+        ..Record::default()
+    };
+    if compile {
+        let dir = work.join(format!("{kind}_{n}"));
+        std::fs::create_dir_all(&dir).expect("a scratch directory");
+        std::fs::write(dir.join("model.rs"), &out.code).expect("the module is written");
+        std::fs::write(dir.join("main.rs"), timing_program()).expect("the timing program is written");
+        let start = Instant::now();
+        let status = Command::new("rustc")
+            .args(["--edition", "2024", "-C", "opt-level=3", "-o"])
+            .arg(dir.join("timing"))
+            .arg(dir.join("main.rs"))
+            .status()
+            .expect("rustc runs");
+        record.rustc_s = Some(start.elapsed().as_secs_f64());
+        assert!(status.success(), "the emitted module compiles");
+        let run = Command::new(dir.join("timing")).output().expect("the timing program runs");
+        for line in String::from_utf8_lossy(&run.stdout).lines() {
+            if let Some((f, ns)) = line.split_once(' ') {
+                record.ns_per_call.push((f.to_string(), ns.parse().unwrap_or(f64::NAN)));
+            }
+        }
+    }
+    record
+}
+
+/// A program that times each formulation's `rhs` at the model's initial state.
+fn timing_program() -> String {
+    let mut s = String::from(
+        "#[allow(dead_code, non_snake_case, clippy::all)]\n#[path = \"model.rs\"]\nmod model;\nuse std::time::Instant;\n\
+         fn time<F: FnMut()>(mut f: F) -> f64 {\n    let mut best = f64::INFINITY;\n    for _ in 0..7 {\n        let n = 200;\n        let t = Instant::now();\n        for _ in 0..n { f(); }\n        best = best.min(t.elapsed().as_secs_f64() * 1e9 / n as f64);\n    }\n    best\n}\nfn main() {\n    let p = model::Params::default();\n",
+    );
+    for f in FORMS {
+        s += &format!(
+            "    {{\n        let (state, g) = model::{f}::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &p).unwrap();\n        let mut d = [0.0; model::{f}::STATES];\n        let ns = time(|| {{ model::{f}::rhs(0.0, std::hint::black_box(&state), &p, &g, &mut d).unwrap(); std::hint::black_box(&d); }});\n        println!(\"{f} {{ns}}\");\n    }}\n"
+        );
+    }
+    s + "}\n"
+}
+
+fn list(s: &str) -> Vec<usize> {
+    s.split(',').filter_map(|x| x.trim().parse().ok()).collect()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    if args.first().map(String::as_str) == Some("--one") {
+        let (kind, n, compile, work) = (&args[1], args[2].parse().unwrap(), args[3] == "compile", PathBuf::from(&args[4]));
+        println!("{}", serde_json::to_string(&measure(kind, n, compile, &work)).unwrap());
+        return;
+    }
+    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
+    let mut pendulum = vec![2, 5, 10, 20, 30, 50];
+    let mut floating = vec![2, 4, 6, 8, 12, 20];
+    let mut compile_up_to = 20;
+    let mut out = root.join("docs");
+    let mut sympy = false;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--pendulum" => pendulum = list(it.next().expect("--pendulum needs sizes")),
+            "--floating" => floating = list(it.next().expect("--floating needs sizes")),
+            "--compile-up-to" => compile_up_to = it.next().and_then(|s| s.parse().ok()).expect("--compile-up-to needs a size"),
+            "--out" => out = PathBuf::from(it.next().expect("--out needs a directory")),
+            "--sympy" => sympy = true,
+            other => panic!("unknown option `{other}`"),
+        }
+    }
+    let work = std::env::temp_dir().join(format!("multibody-scaling-{}", std::process::id()));
+    std::fs::create_dir_all(&work).expect("a scratch directory");
+    let exe = std::env::current_exe().expect("this program's path");
+    let mut records = Vec::new();
+    for (kind, sizes) in [("pendulum", &pendulum), ("floating", &floating)] {
+        for &n in sizes {
+            eprintln!("scaling: {kind} n = {n} ...");
+            let compile = if n <= compile_up_to { "compile" } else { "no" };
+            let child = Command::new(&exe).args(["--one", kind, &n.to_string(), compile]).arg(&work).output().expect("the child runs");
+            assert!(child.status.success(), "{kind} n = {n} failed: {}", String::from_utf8_lossy(&child.stderr));
+            let r: Record = serde_json::from_slice(&child.stdout).expect("the child's record");
+            eprintln!("scaling: {kind} n = {n}: derive {:.0} ms, emit {:.0} ms, {:.0} MB", r.derive_ms, r.emit_ms, r.peak_mb);
+            records.push(r);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    let mut peers: Vec<(String, Vec<SympyRecord>)> = Vec::new();
+    if sympy {
+        for (kind, sizes) in [("pendulum", &pendulum), ("floating", &floating)] {
+            // SymPy takes minutes beyond these sizes (8 links of the spatial chain: about 45 s).
+            let limit = if kind == "pendulum" { 30 } else { 8 };
+            let sizes: Vec<String> = sizes.iter().filter(|&&n| n <= limit).map(|n| n.to_string()).collect();
+            let json = std::env::temp_dir().join(format!("sympy-{kind}-{}.json", std::process::id()));
+            eprintln!("scaling: SymPy {kind} {} ...", sizes.join(","));
+            let status = Command::new("python3")
+                .arg(root.join("docs/scaling/sympy_kane.py"))
+                .args(["--model", kind, "--sizes", &sizes.join(","), "--json"])
+                .arg(&json)
+                .status();
+            if matches!(status, Ok(s) if s.success()) {
+                #[derive(serde::Deserialize)]
+                struct File {
+                    records: Vec<SympyRecord>,
+                }
+                let f: File = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+                peers.push((kind.to_string(), f.records));
+            } else {
+                eprintln!("scaling: SymPy not measured (python3 with sympy needed)");
+            }
+        }
+    }
+    std::fs::create_dir_all(out.join("plots")).expect("the output directory");
+    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &pendulum, &floating, compile_up_to, sympy));
+    plot(&out.join("plots/scaling.svg"), &records, &peers);
+    std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
+    std::fs::write(out.join("scaling/ours.json"), serde_json::to_string_pretty(&records).unwrap()).expect("the records are written");
+    eprintln!("scaling: wrote {} and {}", out.join("scaling.md").display(), out.join("plots/scaling.svg").display());
+}
+
+/// Writes through a temporary file in the same directory, renamed over the target.
+fn write_atomic(path: &Path, text: &str) {
+    let tmp = path.with_extension("md.tmp");
+    std::fs::write(&tmp, text).expect("the report is written");
+    std::fs::rename(&tmp, path).expect("the report replaces the old one");
+}
+
+fn ops_of(r: &Record, f: &str) -> Option<(usize, usize)> {
+    r.ops.iter().find(|(n, _, _)| n == f).map(|(_, a, s)| (*a, *s))
+}
+
+fn report(records: &[Record], peers: &[(String, Vec<SympyRecord>)], pendulum: &[usize], floating: &[usize], compile_up_to: usize, sympy: bool) -> String {
+    let mut md = String::from("# Scaling\n\n");
+    md += "Measured by `cargo bench -p generator --bench scaling";
+    if sympy {
+        md += " -- --sympy";
+    }
+    md += &format!(
+        "` (sizes: pendulum {:?}, floating {:?}; modules compiled up to n = {compile_up_to}), every size in a fresh process. \
+         Times are wall-clock on the machine that ran it, one run; operation counts are deterministic. \
+         \"Assembly\" is what a right-hand side computes before its dense solve (comparable with SymPy's \
+         `count_ops(cse([M, F]))`), \"solve\" the worst case of the emitted LU with partial pivoting.\n\n",
+        pendulum, floating
+    );
+    let title = |k: &str| if k == "pendulum" { "The n-link pendulum on a cart (s = 1)" } else { "The spatial chain on a floating base (s = 3)" };
+    for kind in ["pendulum", "floating"] {
+        md += &format!("## {}\n\n", title(kind));
+        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced |\n";
+        md += "|---|---|---|---|---|---|---|---|---|\n";
+        for r in records.iter().filter(|r| r.model == kind) {
+            let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();
+            let asm: Vec<String> = FORMS.iter().map(|f| ops_of(r, f).map_or("-".into(), |(a, _)| a.to_string())).collect();
+            let solve: Vec<String> = ["kane", "reduced_volterra"].iter().map(|f| ops_of(r, f).map_or("-".into(), |(_, s)| s.to_string())).collect();
+            let ns: Vec<String> = FORMS
+                .iter()
+                .map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}")))
+                .collect();
+            md += &format!(
+                "| {} | {:.0} ({}) | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} |\n",
+                r.n,
+                r.derive_ms,
+                stages.join(" / "),
+                r.emit_ms,
+                r.peak_mb,
+                asm.join(" / "),
+                solve.join(" / "),
+                r.code_bytes as f64 / 1024.0,
+                r.rustc_s.map_or("-".into(), |s| format!("{s:.1}")),
+                ns.join(" / "),
+            );
+        }
+        if let Some((_, peer)) = peers.iter().find(|(k, _)| k == kind) {
+            md += "\nSymPy's `KanesMethod` on the same model, in the same run (`docs/scaling/sympy_kane.py`):\n\n";
+            md += "| n | SymPy derive + cse s | ours derive + emit s | ratio (SymPy / ours) | SymPy assembly ops | our Kane assembly ops | ratio (ours / SymPy) |\n|---|---|---|---|---|---|---|\n";
+            for p in peer {
+                if let Some(r) = records.iter().find(|r| r.model == kind && r.n == p.n) {
+                    let ours = (r.derive_ms + r.emit_ms) / 1e3;
+                    let theirs = p.derive_seconds + p.cse_seconds;
+                    let kane = ops_of(r, "kane").map_or(0, |(a, _)| a);
+                    md += &format!(
+                        "| {} | {:.2} | {:.3} | {:.1} | {} | {} | {:.2} |\n",
+                        p.n,
+                        theirs,
+                        ours,
+                        theirs / ours,
+                        p.assembly_ops,
+                        kane,
+                        kane as f64 / p.assembly_ops as f64
+                    );
+                }
+            }
+        }
+        md += "\n";
+    }
+    md += "![scaling](plots/scaling.svg)\n";
+    md
+}
+
+fn plot(path: &Path, records: &[Record], peers: &[(String, Vec<SympyRecord>)]) {
+    let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
+    root.fill(&WHITE).expect("a white background");
+    let (left, right) = root.split_horizontally(500);
+    let colors = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40)];
+    let mut series_time: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    let mut series_ops: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for kind in ["pendulum", "floating"] {
+        let rs: Vec<&Record> = records.iter().filter(|r| r.model == kind).collect();
+        series_time.push((format!("ours, {kind}"), rs.iter().map(|r| (r.n as f64, (r.derive_ms + r.emit_ms) / 1e3)).collect()));
+        series_ops.push((format!("ours (Kane), {kind}"), rs.iter().filter_map(|r| ops_of(r, "kane").map(|(a, _)| (r.n as f64, a as f64))).collect()));
+        if let Some((_, p)) = peers.iter().find(|(k, _)| k == kind) {
+            series_time.push((format!("SymPy, {kind}"), p.iter().map(|x| (x.n as f64, x.derive_seconds + x.cse_seconds)).collect()));
+            series_ops.push((format!("SymPy, {kind}"), p.iter().map(|x| (x.n as f64, x.assembly_ops as f64)).collect()));
+        }
+    }
+    for (area, title, ylabel, series) in [(&left, "derive + emit time", "s", &series_time), (&right, "assembly operations", "ops", &series_ops)] {
+        let pts: Vec<(f64, f64)> = series.iter().flat_map(|(_, s)| s.iter().copied()).filter(|(_, y)| *y > 0.0).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let (x0, x1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), (x, _)| (a.min(*x), b.max(*x)));
+        let (y0, y1) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), (_, y)| (a.min(*y), b.max(*y)));
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d((x0 / 1.2..x1 * 1.2).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
+            .expect("a chart");
+        chart.configure_mesh().x_desc("n").y_desc(ylabel).draw().expect("the mesh");
+        for (k, (name, s)) in series.iter().enumerate() {
+            let color = colors[k % colors.len()];
+            let points: Vec<(f64, f64)> = s.iter().copied().filter(|(_, y)| *y > 0.0).collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+                .expect("a series")
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+            chart.draw_series(points.into_iter().map(|p| Circle::new(p, 3, color.filled()))).expect("the points");
+        }
+        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).position(SeriesLabelPosition::UpperLeft).draw().expect("the legend");
+    }
+    root.present().expect("the plot is written");
+}
