@@ -357,70 +357,56 @@ pub fn momenta(
     let x6 = f64::sin(theta);
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x1 * x2 * x3 - x0 * x8;
-    let x10 = x2 * x3 * x0 + x1 * x8;
-    let x11 = d + x1 * a_;
-    let x12 = x10 * x11 - a_ * x0 * x9;
-    let x13 = x6 * x2 * x4 - x7 * x5;
-    let x14 = a_ + x1 * d;
-    let x15 = f64::sin(gamma1);
-    let x16 = f64::cos(gamma1);
-    let x17 = x16 * x13 - x2 * x15 * x3;
-    let x18 = x16 * a_;
-    let x19 = -x18 - d;
-    let x20 = x13 * x15 + x16 * x2 * x3;
-    let x21 = a_ * x15 * x20;
-    let x22 = -a_ - x16 * d;
-    let x23 = x2 * x7 + x6 * x4 * x5;
-    let x24 = x16 * x23 - x15 * x3 * x5;
-    let x25 = x16 * x3 * x5 + x15 * x23;
-    let x26 = x6 * x7 * x5 - x2 * x4;
-    let x27 = x3 * x0 * x5 + x1 * x26;
-    let x28 = x1 * x3 * x5 - x0 * x26;
-    let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-        + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-    let x30 = x18 + d;
-    let x31 = x16 * x3 * x4 + x6 * x15;
-    let x32 = -x31 * d - a_ * x3 * x4;
-    let x33 = x1 * x3 * x7 - x6 * x0;
-    let x34 = -a_ * x3 * x7 - x33 * d;
-    let x35 = x15 * x3 * x4 - x16 * x6;
-    let x36 = -x3 * x0 * x7 - x1 * x6;
-    let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
-        + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
-    let x38 = x27 * x11 - a_ * x28 * x0;
-    let x39 = a_ * x15 * x25;
-    let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
-        + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a_ + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a_;
+    let x18 = -x17 - d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a_ * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a_ * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
-            * (m2 * (x12 * x7 + x13 * x14 * x4)
-                + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
-            + X_dot
-                * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                    + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-            + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
-                + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x10) + Z_dot * x37,
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
         theta_dot
-            * (m2 * (x38 * x7 + x14 * x4 * x23)
-                + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
-            + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
-                + x24 * gamma1_dot * m1) * d
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
-                    + m2 * (x3 * x4 * x38 + x23 * x34))
-            + Y_dot
-                * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                    + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
         theta_dot
-            * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
-                + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-            + X_dot * x37,
+            * (m2
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                + m1
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -605,107 +591,102 @@ pub mod lagrange {
         let x72 = m2 * d * x43;
         let x73 = m2 * d * x52;
         let x74 = m2 * x13 * d;
-        let x75 = (x38 * x47 + x39 * x48 + x41 * x50) * m1
-            + m2 * (x37 * x46 + x52 * x43 + x51 * x42);
-        let x76 = m1 * (x20 * x39 + x38 * x5 + x1 * x41 * x10)
-            + (x18 * x42 + x13 * x43 + x37 * x1 * x2) * m2;
-        let x77 = m2 * (x51 * x18 + x13 * x52 + x1 * x2 * x46)
-            + (x1 * x50 * x10 + x20 * x48 + x47 * x5) * m1;
-        let x78 = x1 * psi_dot * x10;
-        let x79 = theta_dot * x2;
-        let x80 = x78 + gamma1_dot - x79;
-        let x81 = theta_dot * x10;
-        let x82 = x1 * psi_dot * x2;
-        let x83 = x81 + x82;
-        let x84 = x3 * psi_dot;
-        let x85 = phi_dot - x84;
-        let x86 = x4 * x83 + x0 * x85;
-        let x87 = x80 * x57 * x86;
-        let x88 = -phi_dot - x84;
-        let x89 = theta_dot * x88 * x2;
-        let x90 = x1 * psi_dot * phi_dot * x10;
-        let x91 = x89 + x90 - gamma1_dot * x85;
-        let x92 = gamma1_dot * x83;
-        let x93 = theta_dot * x1 * psi_dot;
-        let x94 = x0 * x91 + x4 * (x93 - x92);
-        let x95 = J2 * x94;
-        let x96 = x87 + x95;
-        let x97 = theta_dot * x88 * x10;
-        let x98 = x1 * psi_dot * x2 * phi_dot;
-        let x99 = gamma2_dot * x85;
-        let x100 = x78 - x79;
-        let x101 = -x100 * gamma2_dot - x93;
-        let x102 = x11 * (x98 - x97 - x99) + x12 * x101;
-        let x103 = x0 * (x92 - x93) + x91 * x4;
-        let x104 = x0 * a_ * x100 + x80 * d;
-        let x105 = x0 * x83 - x4 * x85;
-        let x106 = -a_ * x83 - d * x105;
-        let x107 = x97 - x98;
-        let x108 = x106 * x105 - x80 * x104 + a_ * (x0 * x100 * gamma1_dot + x107 * x4);
-        let x109 = a_ * x4 * x108;
-        let x110 = x107 * d - x86 * x106 + a_ * (x0 * x107 + x100 * x100 * x4);
-        let x111 = x86 * x104 - d * x94 + a_ * (-x100 * x4 * x105 - x89 - x90);
-        let x112 = Ixx * x85 - x100 * Ixz - Ixy * x83;
-        let x113 = x100 * x112;
-        let x114 = x89 + x90;
-        let x115 = Iyy * x114;
-        let x116 = x100 * Izz - Iyz * x83 - Ixz * x85;
-        let x117 = x116 * x85;
-        let x118 = Ixy * theta_dot * x1 * psi_dot;
-        let x119 = x107 * Iyz;
-        let x120 = J2 * x114;
-        let x121 = x12 * x85 - x100 * x11;
-        let x122 = x11 * x85 + x12 * x100;
-        let x123 = x121 * x57 * x122;
-        let x124 = theta_dot * x1 * psi_dot * Ixz;
-        let x125 = J2 - J1;
-        let x126 = x125 * x86 * x105;
-        let x127 = Iyy * x83 - x100 * Iyz - Ixy * x85;
-        let x128 = x127 * x85;
-        let x129 = x83 * x112;
-        let x130 = Iyz * x114;
-        let x131 = x107 * J2;
-        let x132 = x107 * Izz;
-        let x133 = theta_dot * Ixx * x1 * psi_dot;
-        let x134 = x116 * x83;
-        let x135 = x107 * Ixz;
-        let x136 = x100 * x127;
-        let x137 = Ixy * x114;
-        let x138 = gamma2_dot + x81 + x82;
-        let x139 = x125 * x121 * x138;
-        let x140 = x101 * x11 + (x97 - x98 + x99) * x12;
-        let x141 = J2 * x140;
-        let x142 = x139 + x141;
-        let x143 = -x122 * d - a_ * x100;
-        let x144 = x138 * d + x12 * a_ * x83;
-        let x145 = a_ * (-x12 * gamma2_dot * x83 - x114 * x11) - x122 * x143
-            + x144 * x138;
-        let x146 = x114 * d + x121 * x143 + a_ * (x12 * x114 + x11 * x83 * x83);
-        let x147 = x146 * x15 - a_ * x11 * x145;
-        let x148 = a_ * (x98 - x97 - x122 * x11 * x83) - x144 * x121 - x140 * d;
-        let x149 = a_ * x3 * theta_dot * theta_dot;
-        let x150 = x12 * x2;
-        let x151 = x11 * x10;
-        let x152 = (-x150 - x151) * x1;
-        let x153 = x1 * (x150 + x151);
-        let x154 = (x151 - x150) * x1;
-        let x155 = (x150 - x151) * x1;
-        let x156 = 0.25 * x152 - 0.25 * x153 - 0.25 * x154 + 0.25 * x155 - x17;
-        let x157 = x11 * x2;
-        let x158 = x12 * x10;
-        let x159 = x3 * (x157 + x158);
-        let x160 = x3 * (x158 - x157);
-        let x161 = x3 * x2;
-        let x162 = x1 * x10;
-        let x163 = x0 * (x161 + x162);
-        let x164 = x1 * x2;
-        let x165 = x3 * x10;
-        let x166 = x4 * (x164 - x165);
-        let x167 = x0 * (x162 - x161);
-        let x168 = x4 * (x165 - x164);
-        let x169 = x4 * (x164 + x165);
-        let x170 = (-x164 - x165) * x4;
-        let x171 = 0.25 * x168 - 0.25 * x166 - 0.25 * x169 + x19 + 0.25 * x170;
+        let x75 = m2 + m0 + m1;
+        let x76 = x1 * psi_dot * x10;
+        let x77 = theta_dot * x2;
+        let x78 = x76 + gamma1_dot - x77;
+        let x79 = theta_dot * x10;
+        let x80 = x1 * psi_dot * x2;
+        let x81 = x79 + x80;
+        let x82 = x3 * psi_dot;
+        let x83 = phi_dot - x82;
+        let x84 = x4 * x81 + x0 * x83;
+        let x85 = x78 * x57 * x84;
+        let x86 = -phi_dot - x82;
+        let x87 = theta_dot * x86 * x2;
+        let x88 = x1 * psi_dot * phi_dot * x10;
+        let x89 = x87 + x88 - gamma1_dot * x83;
+        let x90 = gamma1_dot * x81;
+        let x91 = theta_dot * x1 * psi_dot;
+        let x92 = x0 * x89 + x4 * (x91 - x90);
+        let x93 = J2 * x92;
+        let x94 = x85 + x93;
+        let x95 = theta_dot * x86 * x10;
+        let x96 = x1 * psi_dot * x2 * phi_dot;
+        let x97 = gamma2_dot * x83;
+        let x98 = x76 - x77;
+        let x99 = -x98 * gamma2_dot - x91;
+        let x100 = x11 * (x96 - x95 - x97) + x12 * x99;
+        let x101 = x0 * (x90 - x91) + x89 * x4;
+        let x102 = x0 * a_ * x98 + x78 * d;
+        let x103 = x0 * x81 - x4 * x83;
+        let x104 = -a_ * x81 - d * x103;
+        let x105 = x95 - x96;
+        let x106 = x104 * x103 - x78 * x102 + a_ * (x0 * x98 * gamma1_dot + x105 * x4);
+        let x107 = a_ * x4 * x106;
+        let x108 = x105 * d - x84 * x104 + a_ * (x0 * x105 + x98 * x98 * x4);
+        let x109 = x84 * x102 - d * x92 + a_ * (-x98 * x4 * x103 - x87 - x88);
+        let x110 = Ixx * x83 - x98 * Ixz - Ixy * x81;
+        let x111 = x98 * x110;
+        let x112 = x87 + x88;
+        let x113 = Iyy * x112;
+        let x114 = x98 * Izz - Iyz * x81 - Ixz * x83;
+        let x115 = x114 * x83;
+        let x116 = Ixy * theta_dot * x1 * psi_dot;
+        let x117 = x105 * Iyz;
+        let x118 = J2 * x112;
+        let x119 = x12 * x83 - x98 * x11;
+        let x120 = x11 * x83 + x12 * x98;
+        let x121 = x119 * x57 * x120;
+        let x122 = theta_dot * x1 * psi_dot * Ixz;
+        let x123 = J2 - J1;
+        let x124 = x123 * x84 * x103;
+        let x125 = Iyy * x81 - x98 * Iyz - Ixy * x83;
+        let x126 = x125 * x83;
+        let x127 = x81 * x110;
+        let x128 = Iyz * x112;
+        let x129 = x105 * J2;
+        let x130 = x105 * Izz;
+        let x131 = theta_dot * Ixx * x1 * psi_dot;
+        let x132 = x114 * x81;
+        let x133 = x105 * Ixz;
+        let x134 = x98 * x125;
+        let x135 = Ixy * x112;
+        let x136 = gamma2_dot + x79 + x80;
+        let x137 = x123 * x119 * x136;
+        let x138 = x99 * x11 + (x95 - x96 + x97) * x12;
+        let x139 = J2 * x138;
+        let x140 = x137 + x139;
+        let x141 = -x120 * d - a_ * x98;
+        let x142 = x136 * d + x12 * a_ * x81;
+        let x143 = a_ * (-x12 * gamma2_dot * x81 - x112 * x11) - x120 * x141
+            + x142 * x136;
+        let x144 = x112 * d + x119 * x141 + a_ * (x12 * x112 + x11 * x81 * x81);
+        let x145 = x144 * x15 - a_ * x11 * x143;
+        let x146 = a_ * (x96 - x95 - x120 * x11 * x81) - x142 * x119 - x138 * d;
+        let x147 = a_ * x3 * theta_dot * theta_dot;
+        let x148 = x12 * x2;
+        let x149 = x11 * x10;
+        let x150 = (-x148 - x149) * x1;
+        let x151 = x1 * (x148 + x149);
+        let x152 = (x149 - x148) * x1;
+        let x153 = (x148 - x149) * x1;
+        let x154 = 0.25 * x150 - 0.25 * x151 - 0.25 * x152 + 0.25 * x153 - x17;
+        let x155 = x11 * x2;
+        let x156 = x12 * x10;
+        let x157 = x3 * (x155 + x156);
+        let x158 = x3 * (x156 - x155);
+        let x159 = x3 * x2;
+        let x160 = x1 * x10;
+        let x161 = x0 * (x159 + x160);
+        let x162 = x1 * x2;
+        let x163 = x3 * x10;
+        let x164 = x4 * (x162 - x163);
+        let x165 = x0 * (x160 - x159);
+        let x166 = x4 * (x163 - x162);
+        let x167 = x4 * (x162 + x163);
+        let x168 = (-x162 - x163) * x4;
+        let x169 = 0.25 * x166 - 0.25 * x164 - 0.25 * x167 + x19 + 0.25 * x168;
         Assembly {
             qdot: [
                 psi_dot,
@@ -761,78 +742,58 @@ pub mod lagrange {
                 ],
                 [x32, x59, 0.0, x64, 0.0, x69, x70, x71],
                 [x34, x60, 0.0, 0.0, x65, x72, x73, x74],
-                [
-                    x45,
-                    x61,
-                    x66,
-                    x69,
-                    x72,
-                    m0 + m1 * (x38 * x38 + x39 * x39 + x41 * x41)
-                        + m2 * (x43 * x43 + x42 * x42 + x37 * x37),
-                    x75,
-                    x76,
-                ],
-                [
-                    x54,
-                    x62,
-                    x67,
-                    x70,
-                    x73,
-                    x75,
-                    (x47 * x47 + x48 * x48 + x50 * x50) * m1 + m0
-                        + m2 * (x46 * x46 + x52 * x52 + x51 * x51),
-                    x77,
-                ],
-                [0.0, x63, x68, x71, x74, x76, x77, m2 + m0 + m1],
+                [x45, x61, x66, x69, x72, x75, 0.0, 0.0],
+                [x54, x62, x67, x70, x73, 0.0, x75, 0.0],
+                [0.0, x63, x68, x71, x74, 0.0, 0.0, x75],
             ],
             force: [
-                (-x18 * x102 - x20 * x103) * J1 - x96 * x5
-                    - ((x109 + x110 * x8) * x1 * x10 + x111 * x6) * m1
+                (-x18 * x100 - x20 * x101) * J1 - x94 * x5
+                    - ((x107 + x108 * x8) * x1 * x10 + x109 * x6) * m1
                     + x1
-                        * (x2 * (x117 - x113 - x115 - x118 + x119 - x120 - x123)
-                            + (x129 - x124 - x126 - x128 + x130 - x131 - x132) * x10)
-                    + (x134 - x133 - x135 - x136 - x137) * x3 - x142 * x13
-                    - m2 * (x147 * x1 * x2 + x148 * x14),
+                        * (x2 * (x115 - x111 - x113 - x116 + x117 - x118 - x121)
+                            + (x127 - x122 - x124 - x126 + x128 - x129 - x130) * x10)
+                    + (x132 - x131 - x133 - x134 - x135) * x3 - x140 * x13
+                    - m2 * (x145 * x1 * x2 + x146 * x14),
                 x2
-                    * (x124 - x102 * x11 * J1 + x126 + x128 + x12 * x142 - x129 - x130
-                        + x131 + x132)
-                    - (x2 * (x110 * x29 - x109) + x111 * x28 * x10) * m1
-                    - m2 * (x147 * x10 + x148 * x25 * x2)
-                    + (x117 - x113 - x115 - x4 * J1 * x103 - x118 - x0 * x96 + x119
-                        - x120 - x123) * x10,
-                x133 - x134 + x135 + x136 + x137 + x11 * (m2 * x148 * d - x139 - x141)
-                    + x4 * (x87 - x111 * d * m1 + x95) + (-x0 * x103 - x12 * x102) * J1,
-                x57 * x86 * x105 - x110 * d * m1 - x131,
-                x125 * x121 * x122 - x120 - m2 * x146 * d,
-                -m2 * (x146 * x43 + x37 * x148 + x42 * x145)
-                    - (x108 * x39 + x38 * x110 + x111 * x41) * m1,
-                -m2 * (x148 * x46 + x51 * x145 + x146 * x52)
-                    - (x108 * x48 + x110 * x47 + x111 * x50) * m1,
+                    * (x122 - x100 * x11 * J1 + x124 + x126 + x12 * x140 - x127 - x128
+                        + x129 + x130)
+                    - (x2 * (x108 * x29 - x107) + x109 * x28 * x10) * m1
+                    - m2 * (x145 * x10 + x146 * x25 * x2)
+                    + (x115 - x111 - x113 - x4 * J1 * x101 - x116 - x0 * x94 + x117
+                        - x118 - x121) * x10,
+                x131 - x132 + x133 + x134 + x135 + x11 * (m2 * x146 * d - x137 - x139)
+                    + x4 * (x85 - x109 * d * m1 + x93) + (-x0 * x101 - x12 * x100) * J1,
+                x57 * x84 * x103 - x108 * d * m1 - x129,
+                x123 * x119 * x120 - x118 - m2 * x144 * d,
+                -m2 * (x144 * x43 + x37 * x146 + x42 * x143)
+                    - (x106 * x39 + x38 * x108 + x109 * x41) * m1,
+                -m2 * (x146 * x46 + x51 * x143 + x144 * x52)
+                    - (x106 * x48 + x108 * x47 + x109 * x50) * m1,
                 -m2
-                    * (((0.25 * x152 - 0.25 * x153 - 0.25 * x154 + 0.25 * x155) * phi_dot
+                    * (((0.25 * x150 - 0.25 * x151 - 0.25 * x152 + 0.25 * x153) * phi_dot
                         * phi_dot
-                        + (theta_dot * x156
+                        + (theta_dot * x154
                             + phi_dot
-                                * (x159 - 0.5 * x152 - 0.5 * x153 + 0.5 * x154 + 0.5 * x155
-                                    - x160)) * theta_dot
+                                * (x157 - 0.5 * x150 - 0.5 * x151 + 0.5 * x152 + 0.5 * x153
+                                    - x158)) * theta_dot
                         + gamma2_dot
                             * (phi_dot
-                                * (0.5 * x152 - 0.5 * x153 + 0.5 * x154 - 0.5 * x155)
-                                + (-x159 - 0.5 * x152 - 0.5 * x153 - 2.0 * (x1 * x11)
-                                    - 0.5 * x154 - 0.5 * x155 - x160) * theta_dot
-                                + gamma2_dot * x156)) * d - x149)
-                    - (x149
+                                * (0.5 * x150 - 0.5 * x151 + 0.5 * x152 - 0.5 * x153)
+                                + (-x157 - 0.5 * x150 - 0.5 * x151 - 2.0 * (x1 * x11)
+                                    - 0.5 * x152 - 0.5 * x153 - x158) * theta_dot
+                                + gamma2_dot * x154)) * d - x147)
+                    - (x147
                         + (theta_dot
-                            * ((0.5 * x166 - x163 + x167 + 2.0 * (x4 * x1) + 0.5 * x168
-                                - 0.5 * x169 - 0.5 * x170) * gamma1_dot + theta_dot * x171
-                                + (0.5 * x166 - 0.5 * x168 - 0.5 * x169 + 0.5 * x170)
+                            * ((0.5 * x164 - x161 + x165 + 2.0 * (x4 * x1) + 0.5 * x166
+                                - 0.5 * x167 - 0.5 * x168) * gamma1_dot + theta_dot * x169
+                                + (0.5 * x164 - 0.5 * x166 - 0.5 * x167 + 0.5 * x168)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x171 * gamma1_dot
+                                * (x169 * gamma1_dot
                                     + phi_dot
-                                        * (x163 - 0.5 * x166 + x167 - 0.5 * x168 - 0.5 * x169
-                                            - 0.5 * x170))
-                            + (0.25 * x168 - 0.25 * x166 - 0.25 * x169 + 0.25 * x170)
+                                        * (x161 - 0.5 * x164 + x165 - 0.5 * x166 - 0.5 * x167
+                                            - 0.5 * x168))
+                            + (0.25 * x166 - 0.25 * x164 - 0.25 * x167 + 0.25 * x168)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             checks: [],
@@ -954,41 +915,30 @@ pub mod lagrange {
         let x6 = f64::sin(theta);
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x1 * x2 * x3 - x0 * x8;
-        let x10 = x2 * x3 * x0 + x1 * x8;
-        let x11 = d + x1 * a_;
-        let x12 = x10 * x11 - a_ * x0 * x9;
-        let x13 = x6 * x2 * x4 - x7 * x5;
-        let x14 = a_ + x1 * d;
-        let x15 = f64::sin(gamma1);
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x13 - x2 * x15 * x3;
-        let x18 = x16 * a_;
-        let x19 = -x18 - d;
-        let x20 = x13 * x15 + x16 * x2 * x3;
-        let x21 = a_ * x15 * x20;
-        let x22 = -a_ - x16 * d;
-        let x23 = x2 * x7 + x6 * x4 * x5;
-        let x24 = x16 * x23 - x15 * x3 * x5;
-        let x25 = x16 * x3 * x5 + x15 * x23;
-        let x26 = x6 * x7 * x5 - x2 * x4;
-        let x27 = x3 * x0 * x5 + x1 * x26;
-        let x28 = x1 * x3 * x5 - x0 * x26;
-        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-        let x30 = x18 + d;
-        let x31 = x16 * x3 * x4 + x6 * x15;
-        let x32 = -x31 * d - a_ * x3 * x4;
-        let x33 = x1 * x3 * x7 - x6 * x0;
-        let x34 = -a_ * x3 * x7 - x33 * d;
-        let x35 = x15 * x3 * x4 - x16 * x6;
-        let x36 = -x3 * x0 * x7 - x1 * x6;
-        let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
-            + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
-        let x38 = x27 * x11 - a_ * x28 * x0;
-        let x39 = a_ * x15 * x25;
-        let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
-            + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a_ + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a_ * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a_ * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1021,33 +971,30 @@ pub mod lagrange {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x12 * x7 + x13 * x14 * x4)
-                    + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
-                + X_dot
-                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-                + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
-                    + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x10) + Z_dot * x37,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (x38 * x7 + x14 * x4 * x23)
-                    + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
-                + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
-                    + x24 * gamma1_dot * m1) * d
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
-                        + m2 * (x3 * x4 * x38 + x23 * x34))
-                + Y_dot
-                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
             theta_dot
-                * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
-                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-                + X_dot * x37,
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1315,132 +1262,127 @@ pub mod maggi {
         let x112 = m2 * d * x80;
         let x113 = m2 * d * x91;
         let x114 = m2 * x25 * d;
-        let x115 = (x82 * x95 + x83 * x93 + x36 * x41) * m1
-            + m2 * (x37 * x40 + x91 * x80 + x90 * x79);
-        let x116 = m1 * (x21 * x83 + x82 * x26 + x15 * x36 * x11)
-            + (x23 * x79 + x25 * x80 + x37 * x15 * x12) * m2;
-        let x117 = m2 * (x90 * x23 + x25 * x91 + x15 * x12 * x40)
-            + (x15 * x41 * x11 + x21 * x93 + x95 * x26) * m1;
-        let x118 = theta_dot * x11;
-        let x119 = x15 * psi_dot * x12;
-        let x120 = x118 + x119;
-        let x121 = x17 * psi_dot;
-        let x122 = phi_dot - x121;
-        let x123 = x15 * psi_dot * x11;
-        let x124 = theta_dot * x12;
-        let x125 = x123 - x124;
-        let x126 = x125 * Izz - Iyz * x120 - Ixz * x122;
-        let x127 = x126 * x120;
-        let x128 = -phi_dot - x121;
-        let x129 = theta_dot * x128 * x11;
-        let x130 = x15 * psi_dot * x12 * phi_dot;
-        let x131 = x129 - x130;
-        let x132 = x131 * Ixz;
-        let x133 = Iyy * x120 - x125 * Iyz - Ixy * x122;
-        let x134 = x125 * x133;
-        let x135 = theta_dot * x128 * x12;
-        let x136 = x15 * psi_dot * phi_dot * x11;
-        let x137 = x135 + x136;
-        let x138 = Ixy * x137;
-        let x139 = J2 - J1;
-        let x140 = x4 * x122 - x125 * x6;
-        let x141 = gamma2_dot + x118 + x119;
-        let x142 = x139 * x140 * x141;
-        let x143 = x141 * d + x4 * a_ * x120;
-        let x144 = theta_dot * x15 * psi_dot;
-        let x145 = -x125 * gamma2_dot - x144;
-        let x146 = gamma2_dot * x122;
-        let x147 = x145 * x6 + (x129 - x130 + x146) * x4;
-        let x148 = x6 * x122 + x4 * x125;
-        let x149 = a_ * (x130 - x129 - x148 * x6 * x120) - x143 * x140 - x147 * d;
-        let x150 = J2 * x147;
-        let x151 = x1 * x120 + x2 * x122;
-        let x152 = x123 + gamma1_dot - x124;
-        let x153 = x2 * a_ * x125 + x152 * d;
-        let x154 = x135 + x136 - gamma1_dot * x122;
-        let x155 = gamma1_dot * x120;
-        let x156 = x2 * x154 + x1 * (x144 - x155);
-        let x157 = x2 * x120 - x1 * x122;
-        let x158 = x151 * x153 - d * x156 + a_ * (-x125 * x1 * x157 - x135 - x136);
-        let x159 = x152 * x9 * x151;
-        let x160 = J2 * x156;
-        let x161 = x2 * (x155 - x144) + x154 * x1;
-        let x162 = x6 * (x130 - x129 - x146) + x4 * x145;
-        let x163 = 0.5 * (x16 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        let x164 = ((0.25 - 0.25 * (x16 * f64::cos(3.0 * theta))) * psi_dot
+        let x115 = m2 + m0 + m1;
+        let x116 = theta_dot * x11;
+        let x117 = x15 * psi_dot * x12;
+        let x118 = x116 + x117;
+        let x119 = x17 * psi_dot;
+        let x120 = phi_dot - x119;
+        let x121 = x15 * psi_dot * x11;
+        let x122 = theta_dot * x12;
+        let x123 = x121 - x122;
+        let x124 = x123 * Izz - Iyz * x118 - Ixz * x120;
+        let x125 = x124 * x118;
+        let x126 = -phi_dot - x119;
+        let x127 = theta_dot * x126 * x11;
+        let x128 = x15 * psi_dot * x12 * phi_dot;
+        let x129 = x127 - x128;
+        let x130 = x129 * Ixz;
+        let x131 = Iyy * x118 - x123 * Iyz - Ixy * x120;
+        let x132 = x123 * x131;
+        let x133 = theta_dot * x126 * x12;
+        let x134 = x15 * psi_dot * phi_dot * x11;
+        let x135 = x133 + x134;
+        let x136 = Ixy * x135;
+        let x137 = J2 - J1;
+        let x138 = x4 * x120 - x123 * x6;
+        let x139 = gamma2_dot + x116 + x117;
+        let x140 = x137 * x138 * x139;
+        let x141 = x139 * d + x4 * a_ * x118;
+        let x142 = theta_dot * x15 * psi_dot;
+        let x143 = -x123 * gamma2_dot - x142;
+        let x144 = gamma2_dot * x120;
+        let x145 = x143 * x6 + (x127 - x128 + x144) * x4;
+        let x146 = x6 * x120 + x4 * x123;
+        let x147 = a_ * (x128 - x127 - x146 * x6 * x118) - x141 * x138 - x145 * d;
+        let x148 = J2 * x145;
+        let x149 = x1 * x118 + x2 * x120;
+        let x150 = x121 + gamma1_dot - x122;
+        let x151 = x2 * a_ * x123 + x150 * d;
+        let x152 = x133 + x134 - gamma1_dot * x120;
+        let x153 = gamma1_dot * x118;
+        let x154 = x2 * x152 + x1 * (x142 - x153);
+        let x155 = x2 * x118 - x1 * x120;
+        let x156 = x149 * x151 - d * x154 + a_ * (-x123 * x1 * x155 - x133 - x134);
+        let x157 = x150 * x9 * x149;
+        let x158 = J2 * x154;
+        let x159 = x2 * (x153 - x142) + x152 * x1;
+        let x160 = x6 * (x128 - x127 - x144) + x4 * x143;
+        let x161 = 0.5 * (x16 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        let x162 = ((0.25 - 0.25 * (x16 * f64::cos(3.0 * theta))) * psi_dot
             + x17 * phi_dot) * x16 + x15 * psi_dot;
-        let x165 = x132 - x127 + x134 + x138 + x6 * (m2 * x149 * d - x142 - x150)
-            + x14 * x15 * psi_dot * phi_dot + x1 * (x159 - x158 * d * m1 + x160)
-            + (-x2 * x161 - x4 * x162) * J1
-            + (Ixx * x15 * psi_dot - x163 * x16 * x54 - x164 * x8) * theta_dot;
-        let x166 = -a_ * x120 - d * x157;
-        let x167 = x166 * x157 - x152 * x153 + a_ * (x2 * x125 * gamma1_dot + x131 * x1);
-        let x168 = a_ * x1 * x167;
-        let x169 = x131 * d - x151 * x166 + a_ * (x2 * x131 + x125 * x125 * x1);
-        let x170 = theta_dot * x15 * psi_dot * Ixz;
-        let x171 = x139 * x151 * x157;
-        let x172 = x133 * x122;
-        let x173 = x142 + x150;
-        let x174 = Ixx * x122 - x125 * Ixz - Ixy * x120;
-        let x175 = x120 * x174;
-        let x176 = Iyz * x137;
-        let x177 = x131 * J2;
-        let x178 = x131 * Izz;
-        let x179 = -x148 * d - a_ * x125;
-        let x180 = a_ * (-x4 * gamma2_dot * x120 - x137 * x6) - x148 * x179
-            + x143 * x141;
-        let x181 = x137 * d + x140 * x179 + a_ * (x4 * x137 + x6 * x120 * x120);
-        let x182 = x181 * x50 - a_ * x6 * x180;
-        let x183 = x125 * x174;
-        let x184 = Iyy * x137;
-        let x185 = x126 * x122;
-        let x186 = Ixy * theta_dot * x15 * psi_dot;
-        let x187 = x159 + x160;
-        let x188 = x131 * Iyz;
-        let x189 = J2 * x137;
-        let x190 = x140 * x9 * x148;
-        let x191 = x12
-            * (x170 - x162 * x6 * J1 + x171 + x172 + x4 * x173 - x175 - x176 + x177
-                + x178) - (x12 * (x169 * x66 - x168) + x158 * x10 * x11) * m1
-            + (-x163 * x16 * x68 - x14 * x164) * theta_dot
-            - m2 * (x182 * x11 + x149 * x13 * x12) + x15 * psi_dot * x70 * phi_dot
-            + (x185 - x183 - x184 - x1 * J1 * x161 - x186 - x2 * x187 + x188 - x189
-                - x190) * x11;
-        let x192 = (-x23 * x162 - x21 * x161) * J1 - x187 * x26
-            - ((x168 + x169 * x47) * x15 * x11 + x158 * x28) * m1
-            + (x127 - theta_dot * Ixx * x15 * psi_dot - x132 - x134 - x138) * x17
-            - x173 * x25
+        let x163 = x130 - x125 + x132 + x136 + x6 * (m2 * x147 * d - x140 - x148)
+            + x14 * x15 * psi_dot * phi_dot + x1 * (x157 - x156 * d * m1 + x158)
+            + (-x2 * x159 - x4 * x160) * J1
+            + (Ixx * x15 * psi_dot - x161 * x16 * x54 - x162 * x8) * theta_dot;
+        let x164 = -a_ * x118 - d * x155;
+        let x165 = x164 * x155 - x150 * x151 + a_ * (x2 * x123 * gamma1_dot + x129 * x1);
+        let x166 = a_ * x1 * x165;
+        let x167 = x129 * d - x149 * x164 + a_ * (x2 * x129 + x123 * x123 * x1);
+        let x168 = theta_dot * x15 * psi_dot * Ixz;
+        let x169 = x137 * x149 * x155;
+        let x170 = x131 * x120;
+        let x171 = x140 + x148;
+        let x172 = Ixx * x120 - x123 * Ixz - Ixy * x118;
+        let x173 = x118 * x172;
+        let x174 = Iyz * x135;
+        let x175 = x129 * J2;
+        let x176 = x129 * Izz;
+        let x177 = -x146 * d - a_ * x123;
+        let x178 = a_ * (-x4 * gamma2_dot * x118 - x135 * x6) - x146 * x177
+            + x141 * x139;
+        let x179 = x135 * d + x138 * x177 + a_ * (x4 * x135 + x6 * x118 * x118);
+        let x180 = x179 * x50 - a_ * x6 * x178;
+        let x181 = x123 * x172;
+        let x182 = Iyy * x135;
+        let x183 = x124 * x120;
+        let x184 = Ixy * theta_dot * x15 * psi_dot;
+        let x185 = x157 + x158;
+        let x186 = x129 * Iyz;
+        let x187 = J2 * x135;
+        let x188 = x138 * x9 * x146;
+        let x189 = x12
+            * (x168 - x160 * x6 * J1 + x169 + x170 + x4 * x171 - x173 - x174 + x175
+                + x176) - (x12 * (x167 * x66 - x166) + x156 * x10 * x11) * m1
+            + (-x161 * x16 * x68 - x14 * x162) * theta_dot
+            - m2 * (x180 * x11 + x147 * x13 * x12) + x15 * psi_dot * x70 * phi_dot
+            + (x183 - x181 - x182 - x1 * J1 * x159 - x184 - x2 * x185 + x186 - x187
+                - x188) * x11;
+        let x190 = (-x23 * x160 - x21 * x159) * J1 - x185 * x26
+            - ((x166 + x167 * x47) * x15 * x11 + x156 * x28) * m1
+            + (x125 - theta_dot * Ixx * x15 * psi_dot - x130 - x132 - x136) * x17
+            - x171 * x25
             + theta_dot
-                * (-x163 * x16 * (x49 + x52 + x53 + x56 - x57 + x60) - x164 * x54)
-            + x17 * x165
+                * (-x161 * x16 * (x49 + x52 + x53 + x56 - x57 + x60) - x162 * x54)
+            + x17 * x163
             + x15
                 * (psi_dot * phi_dot * x68
-                    + x12 * (x185 - x183 - x184 - x186 + x188 - x189 - x190)
-                    + (x175 - x170 - x171 - x172 + x176 - x177 - x178) * x11)
-            - m2 * (x182 * x15 * x12 + x149 * x29);
-        let x193 = a_ * x17 * theta_dot * theta_dot;
-        let x194 = x4 * x12;
-        let x195 = x6 * x11;
-        let x196 = (-x194 - x195) * x15;
-        let x197 = x15 * (x194 + x195);
-        let x198 = (x195 - x194) * x15;
-        let x199 = (x194 - x195) * x15;
-        let x200 = 0.25 * x196 - 0.25 * x197 - 0.25 * x198 + 0.25 * x199 - x22;
-        let x201 = x6 * x12;
-        let x202 = x4 * x11;
-        let x203 = x17 * (x201 + x202);
-        let x204 = x17 * (x202 - x201);
-        let x205 = x17 * x12;
-        let x206 = x15 * x11;
-        let x207 = x2 * (x205 + x206);
-        let x208 = x15 * x12;
-        let x209 = x17 * x11;
-        let x210 = x1 * (x208 - x209);
-        let x211 = x2 * (x206 - x205);
-        let x212 = x1 * (x209 - x208);
-        let x213 = x1 * (x208 + x209);
-        let x214 = (-x208 - x209) * x1;
-        let x215 = 0.25 * x212 - 0.25 * x210 - 0.25 * x213 + x20 + 0.25 * x214;
+                    + x12 * (x183 - x181 - x182 - x184 + x186 - x187 - x188)
+                    + (x173 - x168 - x169 - x170 + x174 - x175 - x176) * x11)
+            - m2 * (x180 * x15 * x12 + x147 * x29);
+        let x191 = a_ * x17 * theta_dot * theta_dot;
+        let x192 = x4 * x12;
+        let x193 = x6 * x11;
+        let x194 = (-x192 - x193) * x15;
+        let x195 = x15 * (x192 + x193);
+        let x196 = (x193 - x192) * x15;
+        let x197 = (x192 - x193) * x15;
+        let x198 = 0.25 * x194 - 0.25 * x195 - 0.25 * x196 + 0.25 * x197 - x22;
+        let x199 = x6 * x12;
+        let x200 = x4 * x11;
+        let x201 = x17 * (x199 + x200);
+        let x202 = x17 * (x200 - x199);
+        let x203 = x17 * x12;
+        let x204 = x15 * x11;
+        let x205 = x2 * (x203 + x204);
+        let x206 = x15 * x12;
+        let x207 = x17 * x11;
+        let x208 = x1 * (x206 - x207);
+        let x209 = x2 * (x204 - x203);
+        let x210 = x1 * (x207 - x206);
+        let x211 = x1 * (x206 + x207);
+        let x212 = (-x206 - x207) * x1;
+        let x213 = 0.25 * x210 - 0.25 * x208 - 0.25 * x211 + x20 + 0.25 * x212;
         Assembly {
             qdot: [
                 psi_dot,
@@ -1468,72 +1410,52 @@ pub mod maggi {
                 ],
                 [0.0, x76, x105, x0, 0.0, x109, x110, x111],
                 [0.0, x78, 0.0, 0.0, x7, x112, x113, x114],
-                [
-                    x39,
-                    x89,
-                    x106,
-                    x109,
-                    x112,
-                    m0 + m1 * (x82 * x82 + x83 * x83 + x36 * x36)
-                        + m2 * (x80 * x80 + x79 * x79 + x37 * x37),
-                    x115,
-                    x116,
-                ],
-                [
-                    x43,
-                    x100,
-                    x107,
-                    x110,
-                    x113,
-                    x115,
-                    (x95 * x95 + x93 * x93 + x41 * x41) * m1 + m0
-                        + m2 * (x40 * x40 + x91 * x91 + x90 * x90),
-                    x117,
-                ],
-                [x45, x102, x108, x111, x114, x116, x117, m2 + m0 + m1],
+                [x39, x89, x106, x109, x112, x115, 0.0, 0.0],
+                [x43, x100, x107, x110, x113, 0.0, x115, 0.0],
+                [x45, x102, x108, x111, x114, 0.0, 0.0, x115],
             ],
             force: [
-                x165,
-                x191 * x11 + x16 * x192 * x12,
-                x16 * x192 * x11 - x191 * x12,
-                x15 * psi_dot * x12 * x104 * phi_dot - x169 * d * m1
-                    - theta_dot * x163 * x103 * x11 - x177 + x9 * x151 * x157,
-                x139 * x140 * x148 + (x136 - theta_dot * x163 * x12) * x77 - x189
-                    - m2 * x181 * d,
-                theta_dot * (-x164 * d * x38 - (x86 + x87) * x163 * x16)
-                    - m2 * (x181 * x80 + x37 * x149 + x79 * x180)
-                    - (x167 * x83 + x82 * x169 + x158 * x36) * m1
+                x163,
+                x189 * x11 + x16 * x190 * x12,
+                x16 * x190 * x11 - x189 * x12,
+                x15 * psi_dot * x12 * x104 * phi_dot - x167 * d * m1
+                    - theta_dot * x161 * x103 * x11 - x175 + x9 * x149 * x155,
+                x137 * x138 * x146 + (x134 - theta_dot * x161 * x12) * x77 - x187
+                    - m2 * x179 * d,
+                theta_dot * (-x162 * d * x38 - (x86 + x87) * x161 * x16)
+                    - m2 * (x179 * x80 + x37 * x147 + x79 * x178)
+                    - (x165 * x83 + x82 * x167 + x156 * x36) * m1
                     + x15 * psi_dot * phi_dot * x85,
-                (-x42 * x164 * d - x163 * x16 * (x97 + x98)) * theta_dot
+                (-x42 * x162 * d - x161 * x16 * (x97 + x98)) * theta_dot
                     + x15 * psi_dot * phi_dot * x96
-                    - m2 * (x149 * x40 + x90 * x180 + x181 * x91)
-                    - (x167 * x93 + x169 * x95 + x158 * x41) * m1,
-                x15 * (x101 * psi_dot * phi_dot - theta_dot * x44 * x164 * d)
+                    - m2 * (x147 * x40 + x90 * x178 + x179 * x91)
+                    - (x165 * x93 + x167 * x95 + x156 * x41) * m1,
+                x15 * (x101 * psi_dot * phi_dot - theta_dot * x44 * x162 * d)
                     - m2
-                        * (((0.25 * x196 - 0.25 * x197 - 0.25 * x198 + 0.25 * x199)
+                        * (((0.25 * x194 - 0.25 * x195 - 0.25 * x196 + 0.25 * x197)
                             * phi_dot * phi_dot
-                            + (theta_dot * x200
+                            + (theta_dot * x198
                                 + phi_dot
-                                    * (x203 - 0.5 * x196 - 0.5 * x197 + 0.5 * x198 + 0.5 * x199
-                                        - x204)) * theta_dot
+                                    * (x201 - 0.5 * x194 - 0.5 * x195 + 0.5 * x196 + 0.5 * x197
+                                        - x202)) * theta_dot
                             + gamma2_dot
                                 * (phi_dot
-                                    * (0.5 * x196 - 0.5 * x197 + 0.5 * x198 - 0.5 * x199)
-                                    + (-x203 - 0.5 * x196 - 0.5 * x197 - 2.0 * (x15 * x6)
-                                        - 0.5 * x198 - 0.5 * x199 - x204) * theta_dot
-                                    + gamma2_dot * x200)) * d - x193)
-                    - (x193
+                                    * (0.5 * x194 - 0.5 * x195 + 0.5 * x196 - 0.5 * x197)
+                                    + (-x201 - 0.5 * x194 - 0.5 * x195 - 2.0 * (x15 * x6)
+                                        - 0.5 * x196 - 0.5 * x197 - x202) * theta_dot
+                                    + gamma2_dot * x198)) * d - x191)
+                    - (x191
                         + (theta_dot
-                            * ((0.5 * x210 - x207 + x211 + 2.0 * (x1 * x15) + 0.5 * x212
-                                - 0.5 * x213 - 0.5 * x214) * gamma1_dot + theta_dot * x215
-                                + (0.5 * x210 - 0.5 * x212 - 0.5 * x213 + 0.5 * x214)
+                            * ((0.5 * x208 - x205 + x209 + 2.0 * (x1 * x15) + 0.5 * x210
+                                - 0.5 * x211 - 0.5 * x212) * gamma1_dot + theta_dot * x213
+                                + (0.5 * x208 - 0.5 * x210 - 0.5 * x211 + 0.5 * x212)
                                     * phi_dot)
                             + gamma1_dot
-                                * (x215 * gamma1_dot
+                                * (x213 * gamma1_dot
                                     + phi_dot
-                                        * (x207 - 0.5 * x210 + x211 - 0.5 * x212 - 0.5 * x213
-                                            - 0.5 * x214))
-                            + (0.25 * x212 - 0.25 * x210 - 0.25 * x213 + 0.25 * x214)
+                                        * (x205 - 0.5 * x208 + x209 - 0.5 * x210 - 0.5 * x211
+                                            - 0.5 * x212))
+                            + (0.25 * x210 - 0.25 * x208 - 0.25 * x211 + 0.25 * x212)
                                 * phi_dot * phi_dot) * d) * m1,
             ],
             w: [
@@ -1547,9 +1469,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * x163 * x16,
+                theta_dot * x161 * x16,
                 -(x15 * psi_dot * phi_dot),
-                theta_dot * x164,
+                theta_dot * x162,
                 0.0,
                 0.0,
                 0.0,
@@ -1673,41 +1595,30 @@ pub mod maggi {
         let x6 = f64::sin(theta);
         let x7 = f64::cos(phi);
         let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x1 * x2 * x3 - x0 * x8;
-        let x10 = x2 * x3 * x0 + x1 * x8;
-        let x11 = d + x1 * a_;
-        let x12 = x10 * x11 - a_ * x0 * x9;
-        let x13 = x6 * x2 * x4 - x7 * x5;
-        let x14 = a_ + x1 * d;
-        let x15 = f64::sin(gamma1);
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x13 - x2 * x15 * x3;
-        let x18 = x16 * a_;
-        let x19 = -x18 - d;
-        let x20 = x13 * x15 + x16 * x2 * x3;
-        let x21 = a_ * x15 * x20;
-        let x22 = -a_ - x16 * d;
-        let x23 = x2 * x7 + x6 * x4 * x5;
-        let x24 = x16 * x23 - x15 * x3 * x5;
-        let x25 = x16 * x3 * x5 + x15 * x23;
-        let x26 = x6 * x7 * x5 - x2 * x4;
-        let x27 = x3 * x0 * x5 + x1 * x26;
-        let x28 = x1 * x3 * x5 - x0 * x26;
-        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-        let x30 = x18 + d;
-        let x31 = x16 * x3 * x4 + x6 * x15;
-        let x32 = -x31 * d - a_ * x3 * x4;
-        let x33 = x1 * x3 * x7 - x6 * x0;
-        let x34 = -a_ * x3 * x7 - x33 * d;
-        let x35 = x15 * x3 * x4 - x16 * x6;
-        let x36 = -x3 * x0 * x7 - x1 * x6;
-        let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
-            + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
-        let x38 = x27 * x11 - a_ * x28 * x0;
-        let x39 = a_ * x15 * x25;
-        let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
-            + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a_ + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a_ * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a_ * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1740,33 +1651,30 @@ pub mod maggi {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x12 * x7 + x13 * x14 * x4)
-                    + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
-                + X_dot
-                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-                + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
-                    + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x10) + Z_dot * x37,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (x38 * x7 + x14 * x4 * x23)
-                    + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
-                + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
-                    + x24 * gamma1_dot * m1) * d
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
-                        + m2 * (x3 * x4 * x38 + x23 * x34))
-                + Y_dot
-                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
             theta_dot
-                * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
-                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-                + X_dot * x37,
+                * (m2
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                    + m1
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1977,48 +1885,43 @@ pub mod kane {
         let x60 = m2 * d * x38;
         let x61 = m2 * d * x41;
         let x62 = m2 * x44 * d;
-        let x63 = m1 * (x48 * x51 + x24 * x30 + x49 * x52)
-            + m2 * (x37 * x40 + x25 * x27 + x41 * x38);
-        let x64 = (x49 * x55 + x48 * x54 + x0 * x24 * x3) * m1
-            + m2 * (x44 * x38 + x25 * x0 * x2 + x37 * x43);
-        let x65 = m2 * (x44 * x41 + x43 * x40 + x0 * x2 * x27)
-            + (x0 * x30 * x3 + x55 * x52 + x51 * x54) * m1;
-        let x66 = x12 * u1;
-        let x67 = x10 * u3;
-        let x68 = -x66 - x67;
-        let x69 = x8 * u2;
-        let x70 = x7 * u1;
-        let x71 = x69 - x70;
-        let x72 = x7 * u2;
-        let x73 = x8 * u1;
-        let x74 = u4 * J2 * (-x72 - x73);
-        let x75 = 2.0 * u4 + u3;
-        let x76 = d * (x8 * x75 * u1 + x75 * x7 * u2) + a_ * u3 * u1;
-        let x77 = x72 + x73;
-        let x78 = u4 + u3;
-        let x79 = x77 * x14 * x78;
-        let x80 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x81 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x82 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x12)
+        let x63 = m2 + m0 + m1;
+        let x64 = x12 * u1;
+        let x65 = x10 * u3;
+        let x66 = -x64 - x65;
+        let x67 = x8 * u2;
+        let x68 = x7 * u1;
+        let x69 = x67 - x68;
+        let x70 = x7 * u2;
+        let x71 = x8 * u1;
+        let x72 = u4 * J2 * (-x70 - x71);
+        let x73 = 2.0 * u4 + u3;
+        let x74 = d * (x8 * x73 * u1 + x73 * x7 * u2) + a_ * u3 * u1;
+        let x75 = x70 + x71;
+        let x76 = u4 + u3;
+        let x77 = x75 * x14 * x76;
+        let x78 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x79 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x80 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x12)
             - a_ * u1 * u2;
-        let x83 = u5 + u2;
-        let x84 = u5 * J2 + x83 * x18;
-        let x85 = x10 * u1 - u3 * x12;
-        let x86 = x66 + x67;
-        let x87 = x18 * x85 * x86;
-        let x88 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x89 = u1 * u1;
-        let x90 = 2.0 * gamma2;
-        let x91 = f64::sin(x90);
-        let x92 = x71 * x77 * x14;
-        let x93 = 2.0 * gamma1;
-        let x94 = f64::sin(x93);
-        let x95 = d * (x70 - x69) - a_ * u2;
-        let x96 = a_ * u3 * u3 * x7 - x77 * x95;
-        let x97 = u3 * x20 - d * x12 * u1;
-        let x98 = x85 * x97 + a_ * x12 * u2 * u2;
-        let x99 = x83 * (x10 * a_ * u2 + x83 * d) - x86 * x97 - x10 * u5 * a_ * u2;
-        let x100 = x71 * x95 - (u3 * x46 + u4 * d) * x78 + x8 * a_ * u4 * u3;
+        let x81 = u5 + u2;
+        let x82 = u5 * J2 + x81 * x18;
+        let x83 = x10 * u1 - u3 * x12;
+        let x84 = x64 + x65;
+        let x85 = x18 * x83 * x84;
+        let x86 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x87 = u1 * u1;
+        let x88 = 2.0 * gamma2;
+        let x89 = f64::sin(x88);
+        let x90 = x69 * x75 * x14;
+        let x91 = 2.0 * gamma1;
+        let x92 = f64::sin(x91);
+        let x93 = d * (x68 - x67) - a_ * u2;
+        let x94 = a_ * u3 * u3 * x7 - x75 * x93;
+        let x95 = u3 * x20 - d * x12 * u1;
+        let x96 = x83 * x95 + a_ * x12 * u2 * u2;
+        let x97 = x81 * (x10 * a_ * u2 + x81 * d) - x84 * x95 - x10 * u5 * a_ * u2;
+        let x98 = x69 * x93 - (u3 * x46 + u4 * d) * x76 + x8 * a_ * u4 * u3;
         Assembly {
             qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7, u8],
             matrix: [
@@ -2056,60 +1959,40 @@ pub mod kane {
                 ],
                 [0.0, 0.0, x47, x6, 0.0, x57, x58, x59],
                 [0.0, x36, 0.0, 0.0, x13, x60, x61, x62],
-                [
-                    x26,
-                    x39,
-                    x50,
-                    x57,
-                    x60,
-                    m0 + (x48 * x48 + x49 * x49 + x24 * x24) * m1
-                        + m2 * (x38 * x38 + x37 * x37 + x25 * x25),
-                    x63,
-                    x64,
-                ],
-                [
-                    x31,
-                    x42,
-                    x53,
-                    x58,
-                    x61,
-                    x63,
-                    (x51 * x51 + x52 * x52 + x30 * x30) * m1 + m0
-                        + (x27 * x27 + x41 * x41 + x40 * x40) * m2,
-                    x65,
-                ],
-                [x32, x45, x56, x59, x62, x64, x65, m2 + m0 + m1],
+                [x26, x39, x50, x57, x60, x63, 0.0, 0.0],
+                [x31, x42, x53, x58, x61, 0.0, x63, 0.0],
+                [x32, x45, x56, x59, x62, 0.0, 0.0, x63],
             ],
             force: [
-                (-x10 * u5 * x68 - x8 * x71 * u4) * J1 + x7 * (x74 - d * m1 * x76 + x79)
-                    - x80 * u2 + u3 * x81 + (m2 * d * x82 - x84 * x85) * x12,
-                x87 + x80 * u1 - x71 * u4 * x7 * J1 - u3 * x88 - x16 * m1 * x76
-                    - x8 * (x74 + x79)
+                (-x10 * u5 * x66 - x8 * x69 * u4) * J1 + x7 * (x72 - d * m1 * x74 + x77)
+                    - x78 * u2 + u3 * x79 + (m2 * d * x80 - x82 * x83) * x12,
+                x85 + x78 * u1 - x69 * u4 * x7 * J1 - u3 * x86 - x16 * m1 * x74
+                    - x8 * (x72 + x77)
                     - m2
                         * (d
                             * (a_
-                                * (x12 * (u3 * u3 - x89 + u5 * (-u5 - 2.0 * u2))
+                                * (x12 * (u3 * u3 - x87 + u5 * (-u5 - 2.0 * u2))
                                     - 2.0 * (x10 * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * x91) - f64::cos(x90) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x91))) - a_ * a_ * u3 * u1),
-                u5 * x68 * x12 * J1 - m2 * x20 * x82 - u1 * x81 + x92 - x84 * x10 * x85
-                    + x88 * u2
+                                    * ((0.5 * (u3 * x89) - f64::cos(x88) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x89))) - a_ * a_ * u3 * u1),
+                u5 * x66 * x12 * J1 - m2 * x20 * x80 - u1 * x79 + x90 - x82 * x10 * x83
+                    + x86 * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
                                 * (2.0 * (x8 * u1 * u2)
-                                    + (u2 * u2 - x89 + u4 * (-u4 - 2.0 * u3)) * x7)
-                                + (0.5 * (x94 * u2 * u2)
-                                    + (f64::cos(x93) * u2 - 0.5 * (u1 * x94)) * u1) * d)) * m1,
-                x92 - d * m1 * x96,
-                x87 - m2 * x98 * d,
-                -m2 * (x25 * x82 + x98 * x38 + x37 * x99)
-                    - (x48 * x96 + x24 * x76 + x49 * x100) * m1,
-                -m2 * (x40 * x99 + x98 * x41 + x27 * x82)
-                    - (x51 * x96 + x30 * x76 + x100 * x52) * m1,
-                -(x54 * x96 + x55 * x100 + x0 * x3 * x76) * m1
-                    - m2 * (x0 * x2 * x82 + x98 * x44 + x43 * x99),
+                                    + (u2 * u2 - x87 + u4 * (-u4 - 2.0 * u3)) * x7)
+                                + (0.5 * (x92 * u2 * u2)
+                                    + (f64::cos(x91) * u2 - 0.5 * (u1 * x92)) * u1) * d)) * m1,
+                x90 - d * m1 * x94,
+                x85 - m2 * x96 * d,
+                -m2 * (x25 * x80 + x96 * x38 + x37 * x97)
+                    - (x48 * x94 + x24 * x74 + x49 * x98) * m1,
+                -m2 * (x40 * x97 + x96 * x41 + x27 * x80)
+                    - (x51 * x94 + x30 * x74 + x98 * x52) * m1,
+                -(x54 * x94 + x55 * x98 + x0 * x3 * x74) * m1
+                    - m2 * (x0 * x2 * x80 + x96 * x44 + x43 * x97),
             ],
             checks: [x0],
         }
@@ -2211,41 +2094,30 @@ pub mod kane {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x5 * x6 * x2 - x4 * x8;
-        let x10 = x6 * x2 * x4 + x5 * x8;
-        let x11 = d + x5 * a_;
-        let x12 = x10 * x11 - a_ * x4 * x9;
-        let x13 = x0 * x6 * x3 - x1 * x7;
-        let x14 = a_ + x5 * d;
-        let x15 = f64::sin(gamma1);
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x13 - x6 * x15 * x2;
-        let x18 = x16 * a_;
-        let x19 = -x18 - d;
-        let x20 = x13 * x15 + x16 * x6 * x2;
-        let x21 = a_ * x15 * x20;
-        let x22 = -a_ - x16 * d;
-        let x23 = x6 * x1 + x0 * x3 * x7;
-        let x24 = x16 * x23 - x15 * x2 * x7;
-        let x25 = x16 * x2 * x7 + x15 * x23;
-        let x26 = x0 * x1 * x7 - x6 * x3;
-        let x27 = x2 * x4 * x7 + x5 * x26;
-        let x28 = x5 * x2 * x7 - x4 * x26;
-        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-        let x30 = x18 + d;
-        let x31 = x16 * x2 * x3 + x0 * x15;
-        let x32 = -x31 * d - a_ * x2 * x3;
-        let x33 = x5 * x2 * x1 - x0 * x4;
-        let x34 = -a_ * x2 * x1 - x33 * d;
-        let x35 = x15 * x2 * x3 - x16 * x0;
-        let x36 = -x2 * x4 * x1 - x5 * x0;
-        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
-            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
-        let x38 = x27 * x11 - a_ * x28 * x4;
-        let x39 = a_ * x15 * x25;
-        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
-            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a_ + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a_ * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a_ * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2278,33 +2150,30 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x12 * x1 + x13 * x14 * x3)
-                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
-                + X_dot
-                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
-                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x10) + Z_dot * x37,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (x38 * x1 + x14 * x3 * x23)
-                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
-                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
-                    + x24 * gamma1_dot * m1) * d
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
-                        + m2 * (x2 * x3 * x38 + x23 * x34))
-                + Y_dot
-                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
             theta_dot
-                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
-                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-                + X_dot * x37,
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2413,17 +2282,13 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 3] = [
-        "cos(theta) = 0",
-        "pivot factor 2 of the velocity transformation vanishes",
-        "pivot factor 3 of the velocity transformation vanishes",
-    ];
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 8],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 3],
+        checks: [f64; 1],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -2465,136 +2330,110 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::cos(gamma1);
-        let x9 = f64::sin(psi);
-        let x10 = x5 * x6 * x2 - x3 * x9;
-        let x11 = x8 * x10 - x6 * x7 * x0;
-        let x12 = x11 * x11;
-        let x13 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
-        let x14 = x2 * x9 + x5 * x6 * x3;
-        let x15 = f64::sin(gamma2);
-        let x16 = f64::cos(gamma2);
-        let x17 = x6 * x0 * x15 + x16 * x14;
-        let x18 = x17 * x17;
-        let x19 = (x16 * x0 - x5 * x15 * x3) * x6 - x15 * x2 * x9;
-        let x20 = m2 + m0 + m1;
-        let x21 = x7 * x0 * x2 - x8 * x5;
-        let x22 = x8 * x0 * x2 + x5 * x7;
-        let x23 = x16 * x0 * x3 - x5 * x15;
-        let x24 = -x0 * x15 * x3 - x16 * x5;
-        let x25 = (x13 * x21 + x11 * x22 + x0 * x14 * x3) * m1
-            + m2 * (x23 * x17 + x10 * x0 * x2 + x19 * x24);
-        let x26 = (m0 + (x12 + x13 * x13 + x14 * x14) * m1
-            + m2 * (x18 + x19 * x19 + x10 * x10)) * x20 - x25 * x25;
-        let x27 = 1.0 / x26;
-        let x28 = x16 * d;
-        let x29 = -a_ - x28;
-        let x30 = x8 * a_;
-        let x31 = x30 + d;
-        let x32 = m2 * x10 * x29 + (x11 * x31 + a_ * x13 * x7) * m1;
-        let x33 = x16 * a_;
-        let x34 = d + x33;
-        let x35 = x8 * d;
-        let x36 = -a_ - x35;
-        let x37 = m2 * (x17 * x34 - a_ * x19 * x15) + x36 * x14 * m1;
-        let x38 = x7 * x14 * m1 - m2 * x10 * x15;
-        let x39 = x7 * m1 * x3 - m2 * x15 * x2;
-        let x40 = m2 * (x23 * x34 - a_ * x24 * x15) + x36 * x0 * m1 * x3;
-        let x41 = (x22 * x31 + a_ * x21 * x7) * m1 + m2 * x0 * x2 * x29;
-        let x42 = (-u4 * x22 * m1 - x39 * x0 * u1 - u5 * m2 * x23) * d - x40 * u2
-            - u3 * x41 + G_Z;
-        let x43 = x20
-            * (G_X - u3 * x32 - x37 * u2
-                + d * (-x11 * u4 * m1 - u1 * x38 - u5 * m2 * x17)) - x25 * x42;
-        let x44 = x6 * x3 + x5 * x2 * x9;
-        let x45 = x8 * x44 - x7 * x0 * x9;
-        let x46 = x45 * x45;
-        let x47 = x8 * x0 * x9 + x7 * x44;
-        let x48 = x6 * x2;
-        let x49 = x5 * x3 * x9;
-        let x50 = x49 - x48;
-        let x51 = x0 * x15 * x9 + x16 * x50;
-        let x52 = x51 * x51;
-        let x53 = x16 * x0 * x9 + (x48 - x49) * x15;
-        let x54 = m2 * (x23 * x51 + x24 * x53 + x0 * x2 * x44)
-            + (x0 * x50 * x3 + x21 * x47 + x45 * x22) * m1;
-        let x55 = x20
-            * (m1 * (x11 * x45 + x14 * x50 + x13 * x47)
-                + m2 * (x19 * x53 + x10 * x44 + x51 * x17)) - x25 * x54;
-        let x56 = x26
-            * (((x46 + x47 * x47 + x50 * x50) * m1 + m0
-                + (x44 * x44 + x52 + x53 * x53) * m2) * x20 - x54 * x54) - x55 * x55;
-        let x57 = x36 * x50 * m1 + m2 * (x51 * x34 - a_ * x15 * x53);
-        let x58 = x7 * x50 * m1 - m2 * x15 * x44;
-        let x59 = (x45 * x31 + a_ * x7 * x47) * m1 + m2 * x29 * x44;
-        let x60 = ((G_Y - x57 * u2 + (-u4 * x45 * m1 - u5 * m2 * x51 - x58 * u1) * d
-            - x59 * u3) * x20 - x42 * x54) * x26 - x43 * x55;
-        let x61 = 1.0 / x56;
-        let x62 = 1.0 / x20;
-        let x63 = x8 * x8;
-        let x64 = x16 * x16;
-        let x65 = J1 - J2;
-        let x66 = x8 * x65 * x7 - Ixy
-            + d * ((-x37 * x38 - x58 * x57 - x40 * x39 * x0) * x62 + x36 * x7 * m1);
-        let x67 = J2 - J1;
-        let x68 = (x62 * (-x59 * x58 - x32 * x38 - x39 * x0 * x41) - m2 * x15 * x29) * d
-            + x16 * x67 * x15 - Ixz;
-        let x69 = x62 * d * d * (-x39 * x22 * x0 - x11 * x38 - x58 * x45) * m1;
-        let x70 = x62 * m2 * d * d * (-x17 * x38 - x58 * x51 - x23 * x39 * x0);
-        let x71 = d * d;
-        let x72 = (-x37 * x32 - x59 * x57 - x40 * x41) * x62 - Iyz;
-        let x73 = x62 * d * m1 * (-x37 * x11 - x40 * x22 - x45 * x57);
-        let x74 = m2 * (x62 * (-x23 * x40 - x37 * x17 - x57 * x51) + d + x33) * d + J2;
-        let x75 = J2 + d * m1 * (x30 + d + (-x11 * x32 - x22 * x41 - x59 * x45) * x62);
-        let x76 = x62 * m2 * d * (-x17 * x32 - x23 * x41 - x59 * x51);
-        let x77 = x62 * m2 * d * d * m1 * (-x11 * x17 - x23 * x22 - x45 * x51);
-        let x78 = x15 * u1;
-        let x79 = x16 * u3;
-        let x80 = -x78 - x79;
-        let x81 = x8 * u2;
-        let x82 = x7 * u1;
-        let x83 = x81 - x82;
-        let x84 = x7 * u2;
-        let x85 = x8 * u1;
-        let x86 = x84 + x85;
-        let x87 = u4 + u3;
-        let x88 = u4 * J2 * (-x84 - x85) + x86 * x65 * x87;
-        let x89 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x90 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x91 = d * (x16 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x15)
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
+        let x9 = x5 * x8 * x2 - x3 * x7;
+        let x10 = f64::cos(gamma2);
+        let x11 = x10 * d;
+        let x12 = -a_ - x11;
+        let x13 = f64::sin(gamma1);
+        let x14 = f64::cos(gamma1);
+        let x15 = x14 * x9 - x8 * x13 * x0;
+        let x16 = x14 * a_;
+        let x17 = x16 + d;
+        let x18 = x8 * (x5 * x13 * x2 + x14 * x0) - x13 * x3 * x7;
+        let x19 = m2 * x9 * x12 + (x15 * x17 + a_ * x18 * x13) * m1;
+        let x20 = f64::sin(gamma2);
+        let x21 = (x10 * x0 - x5 * x20 * x3) * x8 - x20 * x2 * x7;
+        let x22 = x2 * x7 + x5 * x8 * x3;
+        let x23 = x8 * x0 * x20 + x10 * x22;
+        let x24 = x10 * a_;
+        let x25 = d + x24;
+        let x26 = x14 * d;
+        let x27 = -a_ - x26;
+        let x28 = m2 * (x23 * x25 - a_ * x21 * x20) + x27 * x22 * m1;
+        let x29 = x13 * x22 * m1 - m2 * x9 * x20;
+        let x30 = x8 * x2;
+        let x31 = x5 * x3 * x7;
+        let x32 = x31 - x30;
+        let x33 = x10 * x0 * x7 + (x30 - x31) * x20;
+        let x34 = x0 * x20 * x7 + x10 * x32;
+        let x35 = x27 * x32 * m1 + m2 * (x34 * x25 - a_ * x20 * x33);
+        let x36 = x8 * x3 + x5 * x2 * x7;
+        let x37 = x14 * x36 - x13 * x0 * x7;
+        let x38 = x13 * x32 * m1 - m2 * x20 * x36;
+        let x39 = x14 * x0 * x7 + x13 * x36;
+        let x40 = (x37 * x17 + a_ * x13 * x39) * m1 + m2 * x12 * x36;
+        let x41 = x14 * x0 * x2 + x5 * x13;
+        let x42 = x13 * m1 * x3 - m2 * x20 * x2;
+        let x43 = x10 * x0 * x3 - x5 * x20;
+        let x44 = -x0 * x20 * x3 - x10 * x5;
+        let x45 = m2 * (x43 * x25 - a_ * x44 * x20) + x27 * x0 * m1 * x3;
+        let x46 = x13 * x0 * x2 - x14 * x5;
+        let x47 = (x41 * x17 + a_ * x46 * x13) * m1 + m2 * x0 * x2 * x12;
+        let x48 = x14 * x14;
+        let x49 = x10 * x10;
+        let x50 = J1 - J2;
+        let x51 = x14 * x50 * x13 - Ixy
+            + d * ((-x28 * x29 - x38 * x35 - x45 * x42 * x0) * x6 + x27 * x13 * m1);
+        let x52 = J2 - J1;
+        let x53 = (x6 * (-x40 * x38 - x19 * x29 - x42 * x0 * x47) - m2 * x20 * x12) * d
+            + x10 * x52 * x20 - Ixz;
+        let x54 = x6 * d * d * (-x42 * x41 * x0 - x15 * x29 - x38 * x37) * m1;
+        let x55 = x6 * m2 * d * d * (-x23 * x29 - x38 * x34 - x43 * x42 * x0);
+        let x56 = d * d;
+        let x57 = (-x28 * x19 - x40 * x35 - x45 * x47) * x6 - Iyz;
+        let x58 = x6 * d * m1 * (-x28 * x15 - x45 * x41 - x37 * x35);
+        let x59 = m2 * (x6 * (-x43 * x45 - x28 * x23 - x35 * x34) + d + x24) * d + J2;
+        let x60 = J2 + d * m1 * (x16 + d + (-x15 * x19 - x41 * x47 - x40 * x37) * x6);
+        let x61 = x6 * m2 * d * (-x23 * x19 - x43 * x47 - x40 * x34);
+        let x62 = x6 * m2 * d * d * m1 * (-x15 * x23 - x43 * x41 - x37 * x34);
+        let x63 = x20 * u1;
+        let x64 = x10 * u3;
+        let x65 = -x63 - x64;
+        let x66 = x14 * u2;
+        let x67 = x13 * u1;
+        let x68 = x66 - x67;
+        let x69 = x13 * u2;
+        let x70 = x14 * u1;
+        let x71 = x69 + x70;
+        let x72 = u4 + u3;
+        let x73 = u4 * J2 * (-x69 - x70) + x71 * x50 * x72;
+        let x74 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x75 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x76 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x20)
             - a_ * u1 * u2;
-        let x92 = 2.0 * u4 + u3;
-        let x93 = d * (x8 * x92 * u1 + x92 * x7 * u2) + a_ * u3 * u1;
-        let x94 = d * (x82 - x81) - a_ * u2;
-        let x95 = x86 * x94;
-        let x96 = a_ * u3 * u3 * x7;
-        let x97 = x96 - x95;
-        let x98 = x83 * x94 - (u3 * x31 + u4 * d) * x87 + x8 * a_ * u4 * u3;
-        let x99 = x16 * u1 - u3 * x15;
-        let x100 = u3 * x29 - d * x15 * u1;
-        let x101 = x99 * x100;
-        let x102 = a_ * x15 * u2 * u2;
-        let x103 = x101 + x102;
-        let x104 = x78 + x79;
-        let x105 = u5 + u2;
-        let x106 = x105 * (x16 * a_ * u2 + x105 * d) - x104 * x100 - x16 * u5 * a_ * u2;
-        let x107 = -(x22 * x97 + x21 * x98 + x0 * x3 * x93) * m1
-            - m2 * (x0 * x2 * x91 + x103 * x23 + x24 * x106);
-        let x108 = -m2 * (x10 * x91 + x103 * x17 + x19 * x106)
-            - (x11 * x97 + x14 * x93 + x13 * x98) * m1;
-        let x109 = -m2 * (x53 * x106 + x103 * x51 + x44 * x91)
-            - (x45 * x97 + x50 * x93 + x98 * x47) * m1;
-        let x110 = u5 * J2 + x105 * x67;
-        let x111 = x67 * x99 * x104;
-        let x112 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x113 = u1 * u1;
-        let x114 = 2.0 * gamma2;
-        let x115 = f64::sin(x114);
-        let x116 = x83 * x86 * x65;
-        let x117 = 2.0 * gamma1;
-        let x118 = f64::sin(x117);
+        let x77 = 2.0 * u4 + u3;
+        let x78 = d * (x14 * x77 * u1 + x77 * x13 * u2) + a_ * u3 * u1;
+        let x79 = d * (x67 - x66) - a_ * u2;
+        let x80 = x71 * x79;
+        let x81 = a_ * u3 * u3 * x13;
+        let x82 = x81 - x80;
+        let x83 = x68 * x79 - (u3 * x17 + u4 * d) * x72 + x14 * a_ * u4 * u3;
+        let x84 = x10 * u1 - u3 * x20;
+        let x85 = u3 * x12 - d * x20 * u1;
+        let x86 = x84 * x85;
+        let x87 = a_ * x20 * u2 * u2;
+        let x88 = x86 + x87;
+        let x89 = x63 + x64;
+        let x90 = u5 + u2;
+        let x91 = x90 * (x10 * a_ * u2 + x90 * d) - x89 * x85 - x10 * u5 * a_ * u2;
+        let x92 = -(x41 * x82 + x46 * x83 + x0 * x3 * x78) * m1
+            - m2 * (x0 * x2 * x76 + x88 * x43 + x44 * x91);
+        let x93 = -m2 * (x9 * x76 + x88 * x23 + x21 * x91)
+            - (x15 * x82 + x22 * x78 + x18 * x83) * m1;
+        let x94 = -m2 * (x33 * x91 + x88 * x34 + x36 * x76)
+            - (x37 * x82 + x32 * x78 + x83 * x39) * m1;
+        let x95 = u5 * J2 + x90 * x52;
+        let x96 = x52 * x84 * x89;
+        let x97 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x98 = u1 * u1;
+        let x99 = 2.0 * gamma2;
+        let x100 = f64::sin(x99);
+        let x101 = x68 * x71 * x50;
+        let x102 = 2.0 * gamma1;
+        let x103 = f64::sin(x102);
         Assembly {
             qdot: [
                 x1 * x4,
@@ -2602,92 +2441,81 @@ pub mod reduced_volterra {
                 x5 * x1 * x4 + u1,
                 u4,
                 u5,
-                x27 * (x43 * x56 - x55 * x60) * x61,
-                x61 * x60,
-                x27 * x62 * x61
-                    * ((x26 * x42 - x43 * x25) * x56 - x60 * (x26 * x54 - x55 * x25)),
+                x6
+                    * (G_X - u3 * x19 - x28 * u2
+                        + d * (-x15 * u4 * m1 - u1 * x29 - u5 * m2 * x23)),
+                x6
+                    * (G_Y - x35 * u2 + (-u4 * x37 * m1 - u5 * m2 * x34 - x38 * u1) * d
+                        - x40 * u3),
+                x6
+                    * ((-u4 * x41 * m1 - x42 * x0 * u1 - u5 * m2 * x43) * d - x45 * u2
+                        - u3 * x47 + G_Z),
             ],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2 * x15 * x15
-                                + x62 * (-x58 * x58 - x39 * x39 * x0 * x0 - x38 * x38)
-                                + x7 * x7 * m1) + (x63 + x64) * J1
-                        + (x15 * x15 + x7 * x7) * J2,
-                    x66,
-                    x68,
-                    x69,
-                    x70,
+                            * (m2 * x20 * x20
+                                + x6 * (-x38 * x38 - x42 * x42 * x0 * x0 - x29 * x29)
+                                + x13 * x13 * m1) + (x48 + x49) * J1
+                        + (x20 * x20 + x13 * x13) * J2,
+                    x51,
+                    x53,
+                    x54,
+                    x55,
                 ],
                 [
-                    x66,
-                    x7 * x7 * J1 + x36 * x36 * m1 + Iyy + J2 * (x63 + 1.0)
-                        + x62 * (-x37 * x37 - x57 * x57 - x40 * x40)
-                        + m2 * (x71 + a_ * (a_ + 2.0 * x28)),
-                    x72,
-                    x73,
-                    x74,
+                    x51,
+                    x13 * x13 * J1 + x27 * x27 * m1 + Iyy + J2 * (x48 + 1.0)
+                        + x6 * (-x28 * x28 - x35 * x35 - x45 * x45)
+                        + m2 * (x56 + a_ * (a_ + 2.0 * x11)),
+                    x57,
+                    x58,
+                    x59,
                 ],
                 [
-                    x68,
-                    x72,
-                    x62 * (-x59 * x59 - x32 * x32 - x41 * x41) + x15 * x15 * J1
-                        + (a_ * (a_ + 2.0 * x35) + x71) * m1 + m2 * x29 * x29 + Izz
-                        + J2 * (x64 + 1.0),
-                    x75,
-                    x76,
+                    x53,
+                    x57,
+                    x6 * (-x40 * x40 - x19 * x19 - x47 * x47) + x20 * x20 * J1
+                        + (a_ * (a_ + 2.0 * x26) + x56) * m1 + m2 * x12 * x12 + Izz
+                        + J2 * (x49 + 1.0),
+                    x60,
+                    x61,
                 ],
-                [
-                    x69,
-                    x73,
-                    x75,
-                    d * d * (x62 * (-x12 - x46 - x22 * x22) * m1 + 1.0) * m1 + J2,
-                    x77,
-                ],
-                [
-                    x70,
-                    x74,
-                    x76,
-                    x77,
-                    J2 + m2 * (x62 * m2 * (-x18 - x23 * x23 - x52) + 1.0) * d * d,
-                ],
+                [x54, x58, x60, (1.0 - x6 * m1) * d * d * m1 + J2, x62],
+                [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x6 * m2)],
             ],
             force: [
-                (-x16 * u5 * x80 - x8 * x83 * u4) * J1 + x7 * x88 - x89 * u2 + u3 * x90
-                    + (m2 * x15 * x91 - x7 * m1 * x93
-                        + (-x39 * x0 * x107 - x108 * x38 - x109 * x58) * x62) * d
-                    - x110 * x99 * x15,
-                x111 + x89 * u1 - x83 * u4 * x7 * J1 - u3 * x112 - x36 * m1 * x93
-                    - x8 * x88
+                (-x10 * u5 * x65 - x14 * x68 * u4) * J1 + x13 * x73 - x74 * u2 + u3 * x75
+                    + (m2 * x20 * x76 - x13 * m1 * x78
+                        + (-x42 * x0 * x92 - x93 * x29 - x94 * x38) * x6) * d
+                    - x95 * x84 * x20,
+                x96 + x74 * u1 - x68 * u4 * x13 * J1 - u3 * x97 - x27 * m1 * x78
+                    - x14 * x73
                     - m2
                         * (d
                             * (a_
-                                * (x15 * (u3 * u3 - x113 + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (x16 * u3 * u1))
+                                * (x20 * (u3 * u3 - x98 + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (x10 * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * x115) - f64::cos(x114) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x115))) - a_ * a_ * u3 * u1)
-                    + x62 * (-x109 * x57 - x40 * x107 - x37 * x108),
-                u5 * x80 * x15 * J1 - m2 * x29 * x91 - u1 * x90
-                    + x62 * (-x109 * x59 - x41 * x107 - x108 * x32) + x116
-                    - x110 * x16 * x99 + x112 * u2
+                                    * ((0.5 * (u3 * x100) - f64::cos(x99) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x100))) - a_ * a_ * u3 * u1)
+                    + x6 * (-x94 * x35 - x45 * x92 - x28 * x93),
+                u5 * x65 * x20 * J1 - m2 * x12 * x76 - u1 * x75
+                    + x6 * (-x94 * x40 - x47 * x92 - x93 * x19) + x101 - x95 * x10 * x84
+                    + x97 * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
-                                * (2.0 * (x8 * u1 * u2)
-                                    + (u2 * u2 - x113 + u4 * (-u4 - 2.0 * u3)) * x7)
-                                + (0.5 * (x118 * u2 * u2)
-                                    + (f64::cos(x117) * u2 - 0.5 * (u1 * x118)) * u1) * d))
+                                * (2.0 * (x14 * u1 * u2)
+                                    + (u2 * u2 - x98 + u4 * (-u4 - 2.0 * u3)) * x13)
+                                + (0.5 * (x103 * u2 * u2)
+                                    + (f64::cos(x102) * u2 - 0.5 * (u1 * x103)) * u1) * d))
                         * m1,
-                x116
-                    + d * (x62 * (-x22 * x107 - x11 * x108 - x109 * x45) + x95 - x96)
-                        * m1,
-                x111
-                    + m2 * d
-                        * (x62 * (-x23 * x107 - x108 * x17 - x109 * x51) - x101 - x102),
+                x101 + d * (x6 * (-x41 * x92 - x15 * x93 - x94 * x37) + x80 - x81) * m1,
+                x96 + m2 * d * (x6 * (-x43 * x92 - x93 * x23 - x94 * x34) - x86 - x87),
             ],
-            checks: [x0, x26, x56],
+            checks: [x0],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -2784,41 +2612,30 @@ pub mod reduced_volterra {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x5 * x6 * x2 - x4 * x8;
-        let x10 = x6 * x2 * x4 + x5 * x8;
-        let x11 = d + x5 * a_;
-        let x12 = x10 * x11 - a_ * x4 * x9;
-        let x13 = x0 * x6 * x3 - x1 * x7;
-        let x14 = a_ + x5 * d;
-        let x15 = f64::sin(gamma1);
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x13 - x6 * x15 * x2;
-        let x18 = x16 * a_;
-        let x19 = -x18 - d;
-        let x20 = x13 * x15 + x16 * x6 * x2;
-        let x21 = a_ * x15 * x20;
-        let x22 = -a_ - x16 * d;
-        let x23 = x6 * x1 + x0 * x3 * x7;
-        let x24 = x16 * x23 - x15 * x2 * x7;
-        let x25 = x16 * x2 * x7 + x15 * x23;
-        let x26 = x0 * x1 * x7 - x6 * x3;
-        let x27 = x2 * x4 * x7 + x5 * x26;
-        let x28 = x5 * x2 * x7 - x4 * x26;
-        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-        let x30 = x18 + d;
-        let x31 = x16 * x2 * x3 + x0 * x15;
-        let x32 = -x31 * d - a_ * x2 * x3;
-        let x33 = x5 * x2 * x1 - x0 * x4;
-        let x34 = -a_ * x2 * x1 - x33 * d;
-        let x35 = x15 * x2 * x3 - x16 * x0;
-        let x36 = -x2 * x4 * x1 - x5 * x0;
-        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
-            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
-        let x38 = x27 * x11 - a_ * x28 * x4;
-        let x39 = a_ * x15 * x25;
-        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
-            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a_ + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a_ * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a_ * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2848,33 +2665,30 @@ pub mod reduced_volterra {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x12 * x1 + x13 * x14 * x3)
-                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
-                + X_dot
-                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
-                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x10) + Z_dot * x37,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (x38 * x1 + x14 * x3 * x23)
-                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
-                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
-                    + x24 * gamma1_dot * m1) * d
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
-                        + m2 * (x2 * x3 * x38 + x23 * x34))
-                + Y_dot
-                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
             theta_dot
-                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
-                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-                + X_dot * x37,
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2915,85 +2729,34 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::cos(gamma1);
-        let x9 = f64::sin(psi);
-        let x10 = x5 * x6 * x2 - x3 * x9;
-        let x11 = x8 * x10 - x6 * x7 * x0;
-        let x12 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
-        let x13 = x2 * x9 + x5 * x6 * x3;
-        let x14 = f64::sin(gamma2);
-        let x15 = f64::cos(gamma2);
-        let x16 = x6 * x0 * x14 + x15 * x13;
-        let x17 = (x15 * x0 - x5 * x14 * x3) * x6 - x14 * x2 * x9;
-        let x18 = m2 + m0 + m1;
-        let x19 = x7 * x0 * x2 - x8 * x5;
-        let x20 = x8 * x0 * x2 + x5 * x7;
-        let x21 = x15 * x0 * x3 - x5 * x14;
-        let x22 = -x0 * x14 * x3 - x15 * x5;
-        let x23 = (x12 * x19 + x11 * x20 + x0 * x13 * x3) * m1
-            + m2 * (x21 * x16 + x10 * x0 * x2 + x17 * x22);
-        let x24 = (m0 + (x11 * x11 + x12 * x12 + x13 * x13) * m1
-            + m2 * (x16 * x16 + x17 * x17 + x10 * x10)) * x18 - x23 * x23;
-        let x25 = 1.0 / x24;
-        let x26 = -a_ - x15 * d;
-        let x27 = x8 * a_ + d;
-        let x28 = d + x15 * a_;
-        let x29 = -a_ - x8 * d;
-        let x30 = (-u4 * x20 * m1 - (x7 * m1 * x3 - m2 * x14 * x2) * x0 * u1
-            - u5 * m2 * x21) * d
-            - (m2 * (x21 * x28 - a_ * x22 * x14) + x29 * x0 * m1 * x3) * u2
-            - u3 * ((x20 * x27 + a_ * x19 * x7) * m1 + m2 * x0 * x2 * x26) + G_Z;
-        let x31 = x18
-            * (G_X - u3 * (m2 * x10 * x26 + (x11 * x27 + a_ * x12 * x7) * m1)
-                - (m2 * (x16 * x28 - a_ * x17 * x14) + x29 * x13 * m1) * u2
-                + d
-                    * (-x11 * u4 * m1 - u1 * (x7 * x13 * m1 - m2 * x10 * x14)
-                        - u5 * m2 * x16)) - x23 * x30;
-        let x32 = x6 * x3 + x5 * x2 * x9;
-        let x33 = x8 * x32 - x7 * x0 * x9;
-        let x34 = x8 * x0 * x9 + x7 * x32;
-        let x35 = x6 * x2;
-        let x36 = x5 * x3 * x9;
-        let x37 = x36 - x35;
-        let x38 = x0 * x14 * x9 + x15 * x37;
-        let x39 = x15 * x0 * x9 + (x35 - x36) * x14;
-        let x40 = m2 * (x21 * x38 + x22 * x39 + x0 * x2 * x32)
-            + (x0 * x37 * x3 + x19 * x34 + x33 * x20) * m1;
-        let x41 = x18
-            * (m1 * (x11 * x33 + x13 * x37 + x12 * x34)
-                + m2 * (x17 * x39 + x10 * x32 + x38 * x16)) - x23 * x40;
-        let x42 = x24
-            * (((x33 * x33 + x34 * x34 + x37 * x37) * m1 + m0
-                + (x32 * x32 + x38 * x38 + x39 * x39) * m2) * x18 - x40 * x40)
-            - x41 * x41;
-        let x43 = ((G_Y - (x29 * x37 * m1 + m2 * (x38 * x28 - a_ * x14 * x39)) * u2
-            + (-u4 * x33 * m1 - u5 * m2 * x38 - (x7 * x37 * m1 - m2 * x14 * x32) * u1)
-                * d - ((x33 * x27 + a_ * x7 * x34) * m1 + m2 * x26 * x32) * u3) * x18
-            - x30 * x40) * x24 - x31 * x41;
-        let x44 = 1.0 / x42;
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
+        let x9 = x5 * x8 * x2 - x3 * x7;
+        let x10 = f64::cos(gamma2);
+        let x11 = -a_ - x10 * d;
+        let x12 = f64::sin(gamma1);
+        let x13 = f64::cos(gamma1);
+        let x14 = x13 * x9 - x8 * x12 * x0;
+        let x15 = x13 * a_ + d;
+        let x16 = f64::sin(gamma2);
+        let x17 = x2 * x7 + x5 * x8 * x3;
+        let x18 = x8 * x0 * x16 + x10 * x17;
+        let x19 = d + x10 * a_;
+        let x20 = -a_ - x13 * d;
+        let x21 = x8 * x2;
+        let x22 = x5 * x3 * x7;
+        let x23 = x22 - x21;
+        let x24 = x0 * x16 * x7 + x10 * x23;
+        let x25 = x8 * x3 + x5 * x2 * x7;
+        let x26 = x13 * x25 - x12 * x0 * x7;
+        let x27 = x13 * x0 * x2 + x5 * x12;
+        let x28 = x10 * x0 * x3 - x5 * x16;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
                 condition: CONDITIONS[0],
-                value,
-            });
-        }
-        let value = x24;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[1],
-                value,
-            });
-        }
-        let value = x42;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -3013,10 +2776,38 @@ pub mod reduced_volterra {
             x5 * x1 * x4 + u1,
             u4,
             u5,
-            x25 * (x31 * x42 - x41 * x43) * x44,
-            x44 * x43,
-            x25 * x44 * ((x24 * x30 - x31 * x23) * x42 - x43 * (x24 * x40 - x41 * x23))
-                / x18,
+            x6
+                * (G_X
+                    - u3
+                        * (m2 * x9 * x11
+                            + (x14 * x15
+                                + a_ * (x8 * (x5 * x12 * x2 + x13 * x0) - x12 * x3 * x7)
+                                    * x12) * m1)
+                    - (m2
+                        * (x18 * x19
+                            - a_ * ((x10 * x0 - x5 * x16 * x3) * x8 - x16 * x2 * x7)
+                                * x16) + x20 * x17 * m1) * u2
+                    + d
+                        * (-x14 * u4 * m1 - u1 * (x12 * x17 * m1 - m2 * x9 * x16)
+                            - u5 * m2 * x18)),
+            x6
+                * (G_Y
+                    - (x20 * x23 * m1
+                        + m2
+                            * (x24 * x19
+                                - a_ * x16 * (x10 * x0 * x7 + (x21 - x22) * x16))) * u2
+                    + (-u4 * x26 * m1 - u5 * m2 * x24
+                        - (x12 * x23 * m1 - m2 * x16 * x25) * u1) * d
+                    - ((x26 * x15 + a_ * x12 * (x13 * x0 * x7 + x12 * x25)) * m1
+                        + m2 * x11 * x25) * u3),
+            x6
+                * ((-u4 * x27 * m1 - (x12 * m1 * x3 - m2 * x16 * x2) * x0 * u1
+                    - u5 * m2 * x28) * d
+                    - (m2 * (x28 * x19 - a_ * (-x0 * x16 * x3 - x10 * x5) * x16)
+                        + x20 * x0 * m1 * x3) * u2
+                    - u3
+                        * ((x27 * x15 + a_ * (x12 * x0 * x2 - x13 * x5) * x12) * m1
+                            + m2 * x0 * x2 * x11) + G_Z),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -3030,65 +2821,10 @@ pub mod reduced_volterra {
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        params: &Params,
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
-        let psi = state[0];
         let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::cos(psi);
-        let x2 = f64::sin(gamma1);
-        let x3 = f64::cos(gamma1);
-        let x4 = f64::cos(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::sin(phi);
-        let x8 = x6 * x1 * x7 - x4 * x5;
-        let x9 = x3 * x8 - x1 * x2 * x0;
-        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
-        let x11 = x7 * x5 + x6 * x1 * x4;
-        let x12 = f64::sin(gamma2);
-        let x13 = f64::cos(gamma2);
-        let x14 = x1 * x0 * x12 + x13 * x11;
-        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
-        let x16 = m2 + m0 + m1;
-        let x17 = x2 * x0 * x7 - x3 * x6;
-        let x18 = x3 * x0 * x7 + x6 * x2;
-        let x19 = x13 * x0 * x4 - x6 * x12;
-        let x20 = -x0 * x12 * x4 - x13 * x6;
-        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
-            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
-        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
-            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
-        let x23 = x1 * x4 + x6 * x7 * x5;
-        let x24 = x3 * x23 - x2 * x0 * x5;
-        let x25 = x3 * x0 * x5 + x2 * x23;
-        let x26 = x1 * x7;
-        let x27 = x6 * x4 * x5;
-        let x28 = x27 - x26;
-        let x29 = x0 * x12 * x5 + x13 * x28;
-        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
-        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
-            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
-        let x32 = x16
-            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
-                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
-        f64::INFINITY
-            .min(f64::abs(x0))
-            .min(f64::abs(x22))
-            .min(
-                f64::abs(
-                    x22
-                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
-                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
-                            - x31 * x31) - x32 * x32,
-                ),
-            )
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

@@ -357,70 +357,56 @@ pub fn momenta(
     let x6 = f64::sin(theta);
     let x7 = f64::cos(phi);
     let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x1 * x2 * x3 - x0 * x8;
-    let x10 = x2 * x3 * x0 + x1 * x8;
-    let x11 = d + x1 * a_;
-    let x12 = x10 * x11 - a_ * x0 * x9;
-    let x13 = x6 * x2 * x4 - x7 * x5;
-    let x14 = a_ + x1 * d;
-    let x15 = f64::sin(gamma1);
-    let x16 = f64::cos(gamma1);
-    let x17 = x16 * x13 - x2 * x15 * x3;
-    let x18 = x16 * a_;
-    let x19 = -x18 - d;
-    let x20 = x13 * x15 + x16 * x2 * x3;
-    let x21 = a_ * x15 * x20;
-    let x22 = -a_ - x16 * d;
-    let x23 = x2 * x7 + x6 * x4 * x5;
-    let x24 = x16 * x23 - x15 * x3 * x5;
-    let x25 = x16 * x3 * x5 + x15 * x23;
-    let x26 = x6 * x7 * x5 - x2 * x4;
-    let x27 = x3 * x0 * x5 + x1 * x26;
-    let x28 = x1 * x3 * x5 - x0 * x26;
-    let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-        + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-    let x30 = x18 + d;
-    let x31 = x16 * x3 * x4 + x6 * x15;
-    let x32 = -x31 * d - a_ * x3 * x4;
-    let x33 = x1 * x3 * x7 - x6 * x0;
-    let x34 = -a_ * x3 * x7 - x33 * d;
-    let x35 = x15 * x3 * x4 - x16 * x6;
-    let x36 = -x3 * x0 * x7 - x1 * x6;
-    let x37 = m1 * (x35 * x20 + x17 * x31 + x3 * x8 * x7)
-        + (x36 * x9 + x33 * x10 + x13 * x3 * x4) * m2;
-    let x38 = x27 * x11 - a_ * x28 * x0;
-    let x39 = a_ * x15 * x25;
-    let x40 = m2 * (x28 * x36 + x33 * x27 + x3 * x4 * x23)
-        + (x3 * x26 * x7 + x35 * x25 + x24 * x31) * m1;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a_ + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a_;
+    let x18 = -x17 - d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a_ * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a_ * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
-            * (m2 * (x12 * x7 + x13 * x14 * x4)
-                + m1 * (x4 * (x17 * x19 - x21) + x22 * x8 * x7)) + x29 * Y_dot
-            + X_dot
-                * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                    + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-            + (m1 * (x3 * (x17 * x30 + x21) * x7 + x8 * x32)
-                + m2 * (x3 * x12 * x4 + x13 * x34)) * psi_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x0) + x17 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x10) + Z_dot * x37,
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
         theta_dot
-            * (m2 * (x38 * x7 + x14 * x4 * x23)
-                + (x22 * x26 * x7 + (x24 * x19 - x39) * x4) * m1) + x29 * X_dot
-            + ((x15 * x26 * m1 - m2 * x0 * x23) * phi_dot + m2 * gamma2_dot * x27
-                + x24 * gamma1_dot * m1) * d
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (x3 * (x24 * x30 + x39) * x7 + x26 * x32)
-                    + m2 * (x3 * x4 * x38 + x23 * x34))
-            + Y_dot
-                * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                    + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
         theta_dot
-            * (m2 * (x3 * x14 * x4 * x4 + (x33 * x11 - a_ * x36 * x0) * x7)
-                + m1 * ((x31 * x19 - a_ * x35 * x15) * x4 + x22 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x33 + (x15 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-            + X_dot * x37,
+            * (m2
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
+                + m1
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -469,17 +455,13 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 3] = [
-        "cos(theta) = 0",
-        "pivot factor 2 of the velocity transformation vanishes",
-        "pivot factor 3 of the velocity transformation vanishes",
-    ];
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 5],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 3],
+        checks: [f64; 1],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -519,123 +501,109 @@ pub mod reduced_volterra {
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = f64::sin(gamma2);
-        let x7 = m2 + m0 + m1;
-        let x8 = 1.0 / x7;
-        let x9 = f64::cos(psi);
-        let x10 = f64::sin(psi);
-        let x11 = x9 * x3 + x5 * x2 * x10;
-        let x12 = f64::sin(gamma1);
-        let x13 = x9 * x2;
-        let x14 = x5 * x3 * x10;
-        let x15 = x14 - x13;
-        let x16 = x12 * x15 * m1 - m2 * x6 * x11;
-        let x17 = x12 * m1 * x3 - m2 * x6 * x2;
-        let x18 = x2 * x10 + x5 * x9 * x3;
-        let x19 = x5 * x9 * x2 - x3 * x10;
-        let x20 = x12 * x18 * m1 - m2 * x19 * x6;
-        let x21 = f64::cos(gamma1);
-        let x22 = x21 * x21;
-        let x23 = f64::cos(gamma2);
-        let x24 = x23 * x23;
-        let x25 = J1 - J2;
-        let x26 = (x23 * x0 - x5 * x6 * x3) * x9 - x6 * x2 * x10;
-        let x27 = x9 * x0 * x6 + x23 * x18;
-        let x28 = x23 * a_;
-        let x29 = d + x28;
-        let x30 = x21 * d;
-        let x31 = -a_ - x30;
-        let x32 = m2 * (x27 * x29 - a_ * x26 * x6) + x31 * x18 * m1;
-        let x33 = x23 * x0 * x10 + (x13 - x14) * x6;
-        let x34 = x0 * x6 * x10 + x23 * x15;
-        let x35 = x31 * x15 * m1 + m2 * (x34 * x29 - a_ * x6 * x33);
-        let x36 = -x0 * x6 * x3 - x23 * x5;
-        let x37 = x23 * x0 * x3 - x5 * x6;
-        let x38 = m2 * (x37 * x29 - a_ * x36 * x6) + x31 * x0 * m1 * x3;
-        let x39 = x21 * x25 * x12 - Ixy
-            + d * ((-x32 * x20 - x16 * x35 - x38 * x17 * x0) * x8 + x31 * x12 * m1);
-        let x40 = x23 * d;
-        let x41 = -a_ - x40;
-        let x42 = x21 * x11 - x12 * x0 * x10;
-        let x43 = x21 * a_;
-        let x44 = x43 + d;
-        let x45 = x21 * x0 * x10 + x12 * x11;
-        let x46 = (x42 * x44 + a_ * x12 * x45) * m1 + m2 * x41 * x11;
-        let x47 = x21 * x19 - x9 * x12 * x0;
-        let x48 = x9 * (x5 * x12 * x2 + x21 * x0) - x12 * x3 * x10;
-        let x49 = m2 * x19 * x41 + (x47 * x44 + a_ * x48 * x12) * m1;
-        let x50 = x21 * x0 * x2 + x5 * x12;
-        let x51 = x12 * x0 * x2 - x21 * x5;
-        let x52 = (x50 * x44 + a_ * x51 * x12) * m1 + m2 * x0 * x2 * x41;
-        let x53 = J2 - J1;
-        let x54 = (x8 * (-x46 * x16 - x49 * x20 - x17 * x0 * x52) - m2 * x6 * x41) * d
-            + x23 * x53 * x6 - Ixz;
-        let x55 = x8 * d * d * (-x17 * x50 * x0 - x47 * x20 - x16 * x42) * m1;
-        let x56 = x8 * m2 * d * d * (-x27 * x20 - x16 * x34 - x37 * x17 * x0);
-        let x57 = d * d;
-        let x58 = (-x32 * x49 - x46 * x35 - x38 * x52) * x8 - Iyz;
-        let x59 = x8 * d * m1 * (-x32 * x47 - x38 * x50 - x42 * x35);
-        let x60 = m2 * (x8 * (-x37 * x38 - x32 * x27 - x35 * x34) + d + x28) * d + J2;
-        let x61 = J2 + d * m1 * (x43 + d + (-x47 * x49 - x50 * x52 - x46 * x42) * x8);
-        let x62 = x8 * m2 * d * (-x27 * x49 - x37 * x52 - x46 * x34);
-        let x63 = x47 * x47;
-        let x64 = x42 * x42;
-        let x65 = x8 * m2 * d * d * m1 * (-x47 * x27 - x37 * x50 - x42 * x34);
-        let x66 = x27 * x27;
-        let x67 = x34 * x34;
-        let x68 = x6 * u1;
-        let x69 = x23 * u3;
-        let x70 = -x68 - x69;
-        let x71 = x21 * u2;
-        let x72 = x12 * u1;
-        let x73 = x71 - x72;
-        let x74 = x12 * u2;
-        let x75 = x21 * u1;
-        let x76 = x74 + x75;
-        let x77 = u4 + u3;
-        let x78 = u4 * J2 * (-x74 - x75) + x76 * x25 * x77;
-        let x79 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x80 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x81 = d * (x23 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
+        let x7 = 1.0 / (m2 + m0 + m1);
+        let x8 = f64::cos(psi);
+        let x9 = f64::sin(psi);
+        let x10 = x8 * x3 + x5 * x2 * x9;
+        let x11 = f64::sin(gamma1);
+        let x12 = x8 * x2;
+        let x13 = x5 * x3 * x9;
+        let x14 = x13 - x12;
+        let x15 = x11 * x14 * m1 - m2 * x6 * x10;
+        let x16 = x11 * m1 * x3 - m2 * x6 * x2;
+        let x17 = x2 * x9 + x5 * x8 * x3;
+        let x18 = x5 * x8 * x2 - x3 * x9;
+        let x19 = x11 * x17 * m1 - m2 * x18 * x6;
+        let x20 = f64::cos(gamma1);
+        let x21 = x20 * x20;
+        let x22 = f64::cos(gamma2);
+        let x23 = x22 * x22;
+        let x24 = J1 - J2;
+        let x25 = (x22 * x0 - x5 * x6 * x3) * x8 - x6 * x2 * x9;
+        let x26 = x8 * x0 * x6 + x22 * x17;
+        let x27 = x22 * a_;
+        let x28 = d + x27;
+        let x29 = x20 * d;
+        let x30 = -a_ - x29;
+        let x31 = m2 * (x26 * x28 - a_ * x25 * x6) + x30 * x17 * m1;
+        let x32 = x22 * x0 * x9 + (x12 - x13) * x6;
+        let x33 = x0 * x6 * x9 + x22 * x14;
+        let x34 = x30 * x14 * m1 + m2 * (x33 * x28 - a_ * x6 * x32);
+        let x35 = -x0 * x6 * x3 - x22 * x5;
+        let x36 = x22 * x0 * x3 - x5 * x6;
+        let x37 = m2 * (x36 * x28 - a_ * x35 * x6) + x30 * x0 * m1 * x3;
+        let x38 = x20 * x24 * x11 - Ixy
+            + d * ((-x31 * x19 - x15 * x34 - x37 * x16 * x0) * x7 + x30 * x11 * m1);
+        let x39 = x22 * d;
+        let x40 = -a_ - x39;
+        let x41 = x20 * x10 - x11 * x0 * x9;
+        let x42 = x20 * a_;
+        let x43 = x42 + d;
+        let x44 = x20 * x0 * x9 + x11 * x10;
+        let x45 = (x41 * x43 + a_ * x11 * x44) * m1 + m2 * x40 * x10;
+        let x46 = x20 * x18 - x8 * x11 * x0;
+        let x47 = x8 * (x5 * x11 * x2 + x20 * x0) - x11 * x3 * x9;
+        let x48 = m2 * x18 * x40 + (x46 * x43 + a_ * x47 * x11) * m1;
+        let x49 = x20 * x0 * x2 + x5 * x11;
+        let x50 = x11 * x0 * x2 - x20 * x5;
+        let x51 = (x49 * x43 + a_ * x50 * x11) * m1 + m2 * x0 * x2 * x40;
+        let x52 = J2 - J1;
+        let x53 = (x7 * (-x45 * x15 - x48 * x19 - x16 * x0 * x51) - m2 * x6 * x40) * d
+            + x22 * x52 * x6 - Ixz;
+        let x54 = x7 * d * d * (-x16 * x49 * x0 - x46 * x19 - x15 * x41) * m1;
+        let x55 = x7 * m2 * d * d * (-x26 * x19 - x15 * x33 - x36 * x16 * x0);
+        let x56 = d * d;
+        let x57 = (-x31 * x48 - x45 * x34 - x37 * x51) * x7 - Iyz;
+        let x58 = x7 * d * m1 * (-x31 * x46 - x37 * x49 - x41 * x34);
+        let x59 = m2 * (x7 * (-x36 * x37 - x31 * x26 - x34 * x33) + d + x27) * d + J2;
+        let x60 = J2 + d * m1 * (x42 + d + (-x46 * x48 - x49 * x51 - x45 * x41) * x7);
+        let x61 = x7 * m2 * d * (-x26 * x48 - x36 * x51 - x45 * x33);
+        let x62 = x7 * m2 * d * d * m1 * (-x46 * x26 - x36 * x49 - x41 * x33);
+        let x63 = x6 * u1;
+        let x64 = x22 * u3;
+        let x65 = -x63 - x64;
+        let x66 = x20 * u2;
+        let x67 = x11 * u1;
+        let x68 = x66 - x67;
+        let x69 = x11 * u2;
+        let x70 = x20 * u1;
+        let x71 = x69 + x70;
+        let x72 = u4 + u3;
+        let x73 = u4 * J2 * (-x69 - x70) + x71 * x24 * x72;
+        let x74 = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        let x75 = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        let x76 = d * (x22 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
             - a_ * u1 * u2;
-        let x82 = 2.0 * u4 + u3;
-        let x83 = d * (x21 * x82 * u1 + x82 * x12 * u2) + a_ * u3 * u1;
-        let x84 = d * (x72 - x71) - a_ * u2;
-        let x85 = x76 * x84;
-        let x86 = a_ * u3 * u3 * x12;
-        let x87 = x86 - x85;
-        let x88 = x73 * x84 - (u3 * x44 + u4 * d) * x77 + x21 * a_ * u4 * u3;
-        let x89 = x23 * u1 - u3 * x6;
-        let x90 = u3 * x41 - d * x6 * u1;
-        let x91 = x89 * x90;
-        let x92 = a_ * x6 * u2 * u2;
-        let x93 = x91 + x92;
-        let x94 = x68 + x69;
-        let x95 = u5 + u2;
-        let x96 = x95 * (x23 * a_ * u2 + x95 * d) - x94 * x90 - x23 * u5 * a_ * u2;
-        let x97 = -(x50 * x87 + x51 * x88 + x0 * x3 * x83) * m1
-            - m2 * (x0 * x2 * x81 + x93 * x37 + x36 * x96);
-        let x98 = -m2 * (x19 * x81 + x93 * x27 + x26 * x96)
-            - (x47 * x87 + x18 * x83 + x48 * x88) * m1;
-        let x99 = -m2 * (x33 * x96 + x93 * x34 + x11 * x81)
-            - (x42 * x87 + x15 * x83 + x88 * x45) * m1;
-        let x100 = u5 * J2 + x95 * x53;
-        let x101 = x53 * x89 * x94;
-        let x102 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x103 = u1 * u1;
-        let x104 = 2.0 * gamma2;
-        let x105 = f64::sin(x104);
-        let x106 = x73 * x76 * x25;
-        let x107 = 2.0 * gamma1;
-        let x108 = f64::sin(x107);
-        let x109 = (x48 * x51 + x47 * x50 + x0 * x18 * x3) * m1
-            + m2 * (x37 * x27 + x19 * x0 * x2 + x26 * x36);
-        let x110 = (m0 + (x63 + x48 * x48 + x18 * x18) * m1
-            + m2 * (x66 + x26 * x26 + x19 * x19)) * x7 - x109 * x109;
-        let x111 = m2 * (x37 * x34 + x36 * x33 + x0 * x2 * x11)
-            + (x0 * x15 * x3 + x51 * x45 + x42 * x50) * m1;
-        let x112 = x7
-            * (m1 * (x47 * x42 + x18 * x15 + x48 * x45)
-                + m2 * (x26 * x33 + x19 * x11 + x34 * x27)) - x109 * x111;
+        let x77 = 2.0 * u4 + u3;
+        let x78 = d * (x20 * x77 * u1 + x77 * x11 * u2) + a_ * u3 * u1;
+        let x79 = d * (x67 - x66) - a_ * u2;
+        let x80 = x71 * x79;
+        let x81 = a_ * u3 * u3 * x11;
+        let x82 = x81 - x80;
+        let x83 = x68 * x79 - (u3 * x43 + u4 * d) * x72 + x20 * a_ * u4 * u3;
+        let x84 = x22 * u1 - u3 * x6;
+        let x85 = u3 * x40 - d * x6 * u1;
+        let x86 = x84 * x85;
+        let x87 = a_ * x6 * u2 * u2;
+        let x88 = x86 + x87;
+        let x89 = x63 + x64;
+        let x90 = u5 + u2;
+        let x91 = x90 * (x22 * a_ * u2 + x90 * d) - x89 * x85 - x22 * u5 * a_ * u2;
+        let x92 = -(x49 * x82 + x50 * x83 + x0 * x3 * x78) * m1
+            - m2 * (x0 * x2 * x76 + x88 * x36 + x35 * x91);
+        let x93 = -m2 * (x18 * x76 + x88 * x26 + x25 * x91)
+            - (x46 * x82 + x17 * x78 + x47 * x83) * m1;
+        let x94 = -m2 * (x32 * x91 + x88 * x33 + x10 * x76)
+            - (x41 * x82 + x14 * x78 + x83 * x44) * m1;
+        let x95 = u5 * J2 + x90 * x52;
+        let x96 = x52 * x84 * x89;
+        let x97 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        let x98 = u1 * u1;
+        let x99 = 2.0 * gamma2;
+        let x100 = f64::sin(x99);
+        let x101 = x68 * x71 * x24;
+        let x102 = 2.0 * gamma1;
+        let x103 = f64::sin(x102);
         Assembly {
             qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5],
             matrix: [
@@ -643,85 +611,66 @@ pub mod reduced_volterra {
                     Ixx
                         + d * d
                             * (m2 * x6 * x6
-                                + x8 * (-x16 * x16 - x17 * x17 * x0 * x0 - x20 * x20)
-                                + x12 * x12 * m1) + (x22 + x24) * J1
-                        + (x6 * x6 + x12 * x12) * J2,
-                    x39,
+                                + x7 * (-x15 * x15 - x16 * x16 * x0 * x0 - x19 * x19)
+                                + x11 * x11 * m1) + (x21 + x23) * J1
+                        + (x6 * x6 + x11 * x11) * J2,
+                    x38,
+                    x53,
                     x54,
                     x55,
-                    x56,
                 ],
                 [
-                    x39,
-                    x12 * x12 * J1 + x31 * x31 * m1 + Iyy + J2 * (x22 + 1.0)
-                        + x8 * (-x32 * x32 - x35 * x35 - x38 * x38)
-                        + m2 * (x57 + a_ * (a_ + 2.0 * x40)),
+                    x38,
+                    x11 * x11 * J1 + x30 * x30 * m1 + Iyy + J2 * (x21 + 1.0)
+                        + x7 * (-x31 * x31 - x34 * x34 - x37 * x37)
+                        + m2 * (x56 + a_ * (a_ + 2.0 * x39)),
+                    x57,
                     x58,
                     x59,
+                ],
+                [
+                    x53,
+                    x57,
+                    x7 * (-x45 * x45 - x48 * x48 - x51 * x51) + x6 * x6 * J1
+                        + (a_ * (a_ + 2.0 * x29) + x56) * m1 + m2 * x40 * x40 + Izz
+                        + J2 * (x23 + 1.0),
                     x60,
-                ],
-                [
-                    x54,
-                    x58,
-                    x8 * (-x46 * x46 - x49 * x49 - x52 * x52) + x6 * x6 * J1
-                        + (a_ * (a_ + 2.0 * x30) + x57) * m1 + m2 * x41 * x41 + Izz
-                        + J2 * (x24 + 1.0),
                     x61,
-                    x62,
                 ],
-                [
-                    x55,
-                    x59,
-                    x61,
-                    d * d * (x8 * (-x63 - x64 - x50 * x50) * m1 + 1.0) * m1 + J2,
-                    x65,
-                ],
-                [
-                    x56,
-                    x60,
-                    x62,
-                    x65,
-                    J2 + m2 * (x8 * m2 * (-x66 - x37 * x37 - x67) + 1.0) * d * d,
-                ],
+                [x54, x58, x60, (1.0 - x7 * m1) * d * d * m1 + J2, x62],
+                [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x7 * m2)],
             ],
             force: [
-                (-x23 * u5 * x70 - x21 * x73 * u4) * J1 + x12 * x78 - x79 * u2 + u3 * x80
-                    + (m2 * x6 * x81 - x12 * m1 * x83
-                        + (-x17 * x0 * x97 - x98 * x20 - x99 * x16) * x8) * d
-                    - x100 * x89 * x6,
-                x101 + x79 * u1 - x73 * u4 * x12 * J1 - u3 * x102 - x31 * m1 * x83
-                    - x21 * x78
+                (-x22 * u5 * x65 - x20 * x68 * u4) * J1 + x11 * x73 - x74 * u2 + u3 * x75
+                    + (m2 * x6 * x76 - x11 * m1 * x78
+                        + (-x16 * x0 * x92 - x93 * x19 - x94 * x15) * x7) * d
+                    - x95 * x84 * x6,
+                x96 + x74 * u1 - x68 * u4 * x11 * J1 - u3 * x97 - x30 * m1 * x78
+                    - x20 * x73
                     - m2
                         * (d
                             * (a_
-                                * (x6 * (u3 * u3 - x103 + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (x23 * u3 * u1))
+                                * (x6 * (u3 * u3 - x98 + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (x22 * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * x105) - f64::cos(x104) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x105))) - a_ * a_ * u3 * u1)
-                    + x8 * (-x99 * x35 - x38 * x97 - x32 * x98),
-                u5 * x70 * x6 * J1 - m2 * x41 * x81 - u1 * x80
-                    + x8 * (-x99 * x46 - x52 * x97 - x98 * x49) + x106 - x100 * x23 * x89
-                    + x102 * u2
+                                    * ((0.5 * (u3 * x100) - f64::cos(x99) * u1) * u3
+                                        - 0.5 * (u1 * u1 * x100))) - a_ * a_ * u3 * u1)
+                    + x7 * (-x94 * x34 - x37 * x92 - x31 * x93),
+                u5 * x65 * x6 * J1 - m2 * x40 * x76 - u1 * x75
+                    + x7 * (-x94 * x45 - x51 * x92 - x93 * x48) + x101 - x95 * x22 * x84
+                    + x97 * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
-                                * (2.0 * (x21 * u1 * u2)
-                                    + (u2 * u2 - x103 + u4 * (-u4 - 2.0 * u3)) * x12)
-                                + (0.5 * (x108 * u2 * u2)
-                                    + (f64::cos(x107) * u2 - 0.5 * (u1 * x108)) * u1) * d))
+                                * (2.0 * (x20 * u1 * u2)
+                                    + (u2 * u2 - x98 + u4 * (-u4 - 2.0 * u3)) * x11)
+                                + (0.5 * (x103 * u2 * u2)
+                                    + (f64::cos(x102) * u2 - 0.5 * (u1 * x103)) * u1) * d))
                         * m1,
-                x106 + d * (x8 * (-x50 * x97 - x47 * x98 - x99 * x42) + x85 - x86) * m1,
-                x101 + m2 * d * (x8 * (-x37 * x97 - x98 * x27 - x99 * x34) - x91 - x92),
+                x101 + d * (x7 * (-x49 * x92 - x46 * x93 - x94 * x41) + x80 - x81) * m1,
+                x96 + m2 * d * (x7 * (-x36 * x92 - x93 * x26 - x94 * x33) - x86 - x87),
             ],
-            checks: [
-                x0,
-                x110,
-                x110
-                    * (((x64 + x45 * x45 + x15 * x15) * m1 + m0
-                        + (x11 * x11 + x67 + x33 * x33) * m2) * x7 - x111 * x111)
-                    - x112 * x112,
-            ],
+            checks: [x0],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -815,41 +764,30 @@ pub mod reduced_volterra {
         let x6 = f64::cos(psi);
         let x7 = f64::sin(psi);
         let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x5 * x6 * x2 - x4 * x8;
-        let x10 = x6 * x2 * x4 + x5 * x8;
-        let x11 = d + x5 * a_;
-        let x12 = x10 * x11 - a_ * x4 * x9;
-        let x13 = x0 * x6 * x3 - x1 * x7;
-        let x14 = a_ + x5 * d;
-        let x15 = f64::sin(gamma1);
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * x13 - x6 * x15 * x2;
-        let x18 = x16 * a_;
-        let x19 = -x18 - d;
-        let x20 = x13 * x15 + x16 * x6 * x2;
-        let x21 = a_ * x15 * x20;
-        let x22 = -a_ - x16 * d;
-        let x23 = x6 * x1 + x0 * x3 * x7;
-        let x24 = x16 * x23 - x15 * x2 * x7;
-        let x25 = x16 * x2 * x7 + x15 * x23;
-        let x26 = x0 * x1 * x7 - x6 * x3;
-        let x27 = x2 * x4 * x7 + x5 * x26;
-        let x28 = x5 * x2 * x7 - x4 * x26;
-        let x29 = (x17 * x24 + x20 * x25 + x8 * x26) * m1
-            + m2 * (x13 * x23 + x27 * x10 + x28 * x9);
-        let x30 = x18 + d;
-        let x31 = x16 * x2 * x3 + x0 * x15;
-        let x32 = -x31 * d - a_ * x2 * x3;
-        let x33 = x5 * x2 * x1 - x0 * x4;
-        let x34 = -a_ * x2 * x1 - x33 * d;
-        let x35 = x15 * x2 * x3 - x16 * x0;
-        let x36 = -x2 * x4 * x1 - x5 * x0;
-        let x37 = m1 * (x35 * x20 + x17 * x31 + x2 * x8 * x1)
-            + (x36 * x9 + x33 * x10 + x13 * x2 * x3) * m2;
-        let x38 = x27 * x11 - a_ * x28 * x4;
-        let x39 = a_ * x15 * x25;
-        let x40 = m2 * (x28 * x36 + x33 * x27 + x2 * x3 * x23)
-            + (x2 * x26 * x1 + x35 * x25 + x24 * x31) * m1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a_ + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a_ * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a_ * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -876,33 +814,30 @@ pub mod reduced_volterra {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x12 * x1 + x13 * x14 * x3)
-                    + m1 * (x3 * (x17 * x19 - x21) + x22 * x8 * x1)) + x29 * Y_dot
-                + X_dot
-                    * (m0 + m1 * (x17 * x17 + x20 * x20 + x8 * x8)
-                        + m2 * (x10 * x10 + x9 * x9 + x13 * x13))
-                + (m1 * (x2 * (x17 * x30 + x21) * x1 + x8 * x32)
-                    + m2 * (x2 * x12 * x3 + x13 * x34)) * psi_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (x15 * x8 * m1 - m2 * x13 * x4) + x17 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x10) + Z_dot * x37,
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (x38 * x1 + x14 * x3 * x23)
-                    + (x22 * x26 * x1 + (x24 * x19 - x39) * x3) * m1) + x29 * X_dot
-                + ((x15 * x26 * m1 - m2 * x4 * x23) * phi_dot + m2 * gamma2_dot * x27
-                    + x24 * gamma1_dot * m1) * d
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (x2 * (x24 * x30 + x39) * x1 + x26 * x32)
-                        + m2 * (x2 * x3 * x38 + x23 * x34))
-                + Y_dot
-                    * ((x24 * x24 + x25 * x25 + x26 * x26) * m1 + m0
-                        + m2 * (x23 * x23 + x27 * x27 + x28 * x28)) + Z_dot * x40,
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
             theta_dot
-                * (m2 * (x2 * x14 * x3 * x3 + (x33 * x11 - a_ * x36 * x4) * x1)
-                    + m1 * ((x31 * x19 - a_ * x35 * x15) * x3 + x22 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x33 + (x15 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x31 * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + x40 * Y_dot
-                + X_dot * x37,
+                * (m2
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
+                    + m1
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -943,85 +878,34 @@ pub mod reduced_volterra {
         let x3 = f64::cos(phi);
         let x4 = x2 * u2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(gamma1);
-        let x8 = f64::cos(gamma1);
-        let x9 = f64::sin(psi);
-        let x10 = x5 * x6 * x2 - x3 * x9;
-        let x11 = x8 * x10 - x6 * x7 * x0;
-        let x12 = x6 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x9;
-        let x13 = x2 * x9 + x5 * x6 * x3;
-        let x14 = f64::sin(gamma2);
-        let x15 = f64::cos(gamma2);
-        let x16 = x6 * x0 * x14 + x15 * x13;
-        let x17 = (x15 * x0 - x5 * x14 * x3) * x6 - x14 * x2 * x9;
-        let x18 = m2 + m0 + m1;
-        let x19 = x7 * x0 * x2 - x8 * x5;
-        let x20 = x8 * x0 * x2 + x5 * x7;
-        let x21 = x15 * x0 * x3 - x5 * x14;
-        let x22 = -x0 * x14 * x3 - x15 * x5;
-        let x23 = (x12 * x19 + x11 * x20 + x0 * x13 * x3) * m1
-            + m2 * (x21 * x16 + x10 * x0 * x2 + x17 * x22);
-        let x24 = (m0 + (x11 * x11 + x12 * x12 + x13 * x13) * m1
-            + m2 * (x16 * x16 + x17 * x17 + x10 * x10)) * x18 - x23 * x23;
-        let x25 = 1.0 / x24;
-        let x26 = -a_ - x15 * d;
-        let x27 = x8 * a_ + d;
-        let x28 = d + x15 * a_;
-        let x29 = -a_ - x8 * d;
-        let x30 = (-u4 * x20 * m1 - (x7 * m1 * x3 - m2 * x14 * x2) * x0 * u1
-            - u5 * m2 * x21) * d
-            - (m2 * (x21 * x28 - a_ * x22 * x14) + x29 * x0 * m1 * x3) * u2
-            - u3 * ((x20 * x27 + a_ * x19 * x7) * m1 + m2 * x0 * x2 * x26) + G_Z;
-        let x31 = x18
-            * (G_X - u3 * (m2 * x10 * x26 + (x11 * x27 + a_ * x12 * x7) * m1)
-                - (m2 * (x16 * x28 - a_ * x17 * x14) + x29 * x13 * m1) * u2
-                + d
-                    * (-x11 * u4 * m1 - u1 * (x7 * x13 * m1 - m2 * x10 * x14)
-                        - u5 * m2 * x16)) - x23 * x30;
-        let x32 = x6 * x3 + x5 * x2 * x9;
-        let x33 = x8 * x32 - x7 * x0 * x9;
-        let x34 = x8 * x0 * x9 + x7 * x32;
-        let x35 = x6 * x2;
-        let x36 = x5 * x3 * x9;
-        let x37 = x36 - x35;
-        let x38 = x0 * x14 * x9 + x15 * x37;
-        let x39 = x15 * x0 * x9 + (x35 - x36) * x14;
-        let x40 = m2 * (x21 * x38 + x22 * x39 + x0 * x2 * x32)
-            + (x0 * x37 * x3 + x19 * x34 + x33 * x20) * m1;
-        let x41 = x18
-            * (m1 * (x11 * x33 + x13 * x37 + x12 * x34)
-                + m2 * (x17 * x39 + x10 * x32 + x38 * x16)) - x23 * x40;
-        let x42 = x24
-            * (((x33 * x33 + x34 * x34 + x37 * x37) * m1 + m0
-                + (x32 * x32 + x38 * x38 + x39 * x39) * m2) * x18 - x40 * x40)
-            - x41 * x41;
-        let x43 = ((G_Y - (x29 * x37 * m1 + m2 * (x38 * x28 - a_ * x14 * x39)) * u2
-            + (-u4 * x33 * m1 - u5 * m2 * x38 - (x7 * x37 * m1 - m2 * x14 * x32) * u1)
-                * d - ((x33 * x27 + a_ * x7 * x34) * m1 + m2 * x26 * x32) * u3) * x18
-            - x30 * x40) * x24 - x31 * x41;
-        let x44 = 1.0 / x42;
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
+        let x9 = x5 * x8 * x2 - x3 * x7;
+        let x10 = f64::cos(gamma2);
+        let x11 = -a_ - x10 * d;
+        let x12 = f64::sin(gamma1);
+        let x13 = f64::cos(gamma1);
+        let x14 = x13 * x9 - x8 * x12 * x0;
+        let x15 = x13 * a_ + d;
+        let x16 = f64::sin(gamma2);
+        let x17 = x2 * x7 + x5 * x8 * x3;
+        let x18 = x8 * x0 * x16 + x10 * x17;
+        let x19 = d + x10 * a_;
+        let x20 = -a_ - x13 * d;
+        let x21 = x8 * x2;
+        let x22 = x5 * x3 * x7;
+        let x23 = x22 - x21;
+        let x24 = x0 * x16 * x7 + x10 * x23;
+        let x25 = x8 * x3 + x5 * x2 * x7;
+        let x26 = x13 * x25 - x12 * x0 * x7;
+        let x27 = x13 * x0 * x2 + x5 * x12;
+        let x28 = x10 * x0 * x3 - x5 * x16;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(EvalError::Singular {
                 t,
                 condition: CONDITIONS[0],
-                value,
-            });
-        }
-        let value = x24;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[1],
-                value,
-            });
-        }
-        let value = x42;
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[2],
                 value,
             });
         }
@@ -1041,10 +925,38 @@ pub mod reduced_volterra {
             x5 * x1 * x4 + u1,
             u4,
             u5,
-            x25 * (x31 * x42 - x41 * x43) * x44,
-            x44 * x43,
-            x25 * x44 * ((x24 * x30 - x31 * x23) * x42 - x43 * (x24 * x40 - x41 * x23))
-                / x18,
+            x6
+                * (G_X
+                    - u3
+                        * (m2 * x9 * x11
+                            + (x14 * x15
+                                + a_ * (x8 * (x5 * x12 * x2 + x13 * x0) - x12 * x3 * x7)
+                                    * x12) * m1)
+                    - (m2
+                        * (x18 * x19
+                            - a_ * ((x10 * x0 - x5 * x16 * x3) * x8 - x16 * x2 * x7)
+                                * x16) + x20 * x17 * m1) * u2
+                    + d
+                        * (-x14 * u4 * m1 - u1 * (x12 * x17 * m1 - m2 * x9 * x16)
+                            - u5 * m2 * x18)),
+            x6
+                * (G_Y
+                    - (x20 * x23 * m1
+                        + m2
+                            * (x24 * x19
+                                - a_ * x16 * (x10 * x0 * x7 + (x21 - x22) * x16))) * u2
+                    + (-u4 * x26 * m1 - u5 * m2 * x24
+                        - (x12 * x23 * m1 - m2 * x16 * x25) * u1) * d
+                    - ((x26 * x15 + a_ * x12 * (x13 * x0 * x7 + x12 * x25)) * m1
+                        + m2 * x11 * x25) * u3),
+            x6
+                * ((-u4 * x27 * m1 - (x12 * m1 * x3 - m2 * x16 * x2) * x0 * u1
+                    - u5 * m2 * x28) * d
+                    - (m2 * (x28 * x19 - a_ * (-x0 * x16 * x3 - x10 * x5) * x16)
+                        + x20 * x0 * m1 * x3) * u2
+                    - u3
+                        * ((x27 * x15 + a_ * (x12 * x0 * x2 - x13 * x5) * x12) * m1
+                            + m2 * x0 * x2 * x11) + G_Z),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1058,65 +970,10 @@ pub mod reduced_volterra {
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        params: &Params,
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
-        let psi = state[0];
         let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::cos(psi);
-        let x2 = f64::sin(gamma1);
-        let x3 = f64::cos(gamma1);
-        let x4 = f64::cos(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::sin(phi);
-        let x8 = x6 * x1 * x7 - x4 * x5;
-        let x9 = x3 * x8 - x1 * x2 * x0;
-        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
-        let x11 = x7 * x5 + x6 * x1 * x4;
-        let x12 = f64::sin(gamma2);
-        let x13 = f64::cos(gamma2);
-        let x14 = x1 * x0 * x12 + x13 * x11;
-        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
-        let x16 = m2 + m0 + m1;
-        let x17 = x2 * x0 * x7 - x3 * x6;
-        let x18 = x3 * x0 * x7 + x6 * x2;
-        let x19 = x13 * x0 * x4 - x6 * x12;
-        let x20 = -x0 * x12 * x4 - x13 * x6;
-        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
-            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
-        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
-            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
-        let x23 = x1 * x4 + x6 * x7 * x5;
-        let x24 = x3 * x23 - x2 * x0 * x5;
-        let x25 = x3 * x0 * x5 + x2 * x23;
-        let x26 = x1 * x7;
-        let x27 = x6 * x4 * x5;
-        let x28 = x27 - x26;
-        let x29 = x0 * x12 * x5 + x13 * x28;
-        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
-        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
-            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
-        let x32 = x16
-            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
-                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
-        f64::INFINITY
-            .min(f64::abs(x0))
-            .min(f64::abs(x22))
-            .min(
-                f64::abs(
-                    x22
-                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
-                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
-                            - x31 * x31) - x32 * x32,
-                ),
-            )
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

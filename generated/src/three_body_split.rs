@@ -325,11 +325,16 @@ pub fn work_rate(
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
 pub fn momenta(
-    t: f64,
+    _t: f64,
     q: &[f64; NUM_COORDINATES],
     qdot: &[f64; NUM_COORDINATES],
     params: &Params,
 ) -> [f64; NUM_IGNORABLE] {
+    let psi = q[0];
+    let theta = q[1];
+    let phi = q[2];
+    let gamma1 = q[3];
+    let gamma2 = q[4];
     let psi_dot = qdot[0];
     let theta_dot = qdot[1];
     let phi_dot = qdot[2];
@@ -343,122 +348,66 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let mut v = [0.0f64; 41];
-    momenta_part0(t, q, qdot, params, &mut v);
-    momenta_part1(t, q, qdot, params, &mut v);
+    let x0 = f64::sin(gamma2);
+    let x1 = f64::cos(gamma2);
+    let x2 = f64::cos(psi);
+    let x3 = f64::cos(theta);
+    let x4 = f64::sin(phi);
+    let x5 = f64::sin(psi);
+    let x6 = f64::sin(theta);
+    let x7 = f64::cos(phi);
+    let x8 = x4 * x5 + x6 * x2 * x7;
+    let x9 = x2 * x3 * x0 + x1 * x8;
+    let x10 = d + x1 * a_;
+    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+    let x12 = x6 * x2 * x4 - x7 * x5;
+    let x13 = a_ + x1 * d;
+    let x14 = f64::sin(gamma1);
+    let x15 = f64::cos(gamma1);
+    let x16 = x15 * x12 - x2 * x14 * x3;
+    let x17 = x15 * a_;
+    let x18 = -x17 - d;
+    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+    let x20 = -a_ - x15 * d;
+    let x21 = x17 + d;
+    let x22 = x15 * x3 * x4 + x6 * x14;
+    let x23 = -x22 * d - a_ * x3 * x4;
+    let x24 = x1 * x3 * x7 - x6 * x0;
+    let x25 = -a_ * x3 * x7 - x24 * d;
+    let x26 = m2 + m0 + m1;
+    let x27 = x6 * x7 * x5 - x2 * x4;
+    let x28 = x3 * x0 * x5 + x1 * x27;
+    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+    let x30 = x2 * x7 + x6 * x4 * x5;
+    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+    let x32 = x15 * x30 - x14 * x3 * x5;
     [
         theta_dot
-            * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
-                + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
-            + v[29] * Y_dot
-            + X_dot
-                * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
-                    + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
-            + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
-                + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
+            * (m2 * (x11 * x7 + x12 * x13 * x4)
+                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
             + d
-                * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
-                    + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10]) + Z_dot * v[37],
+                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                    + m2 * gamma2_dot * x9) + X_dot * x26,
         theta_dot
-            * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
-                + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
-            + v[29] * X_dot
-            + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
-                + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
+            * (m2 * (x29 * x7 + x13 * x4 * x30)
+                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                + x32 * gamma1_dot * m1) * d
             + psi_dot
-                * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
-                    + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
-            + Y_dot
-                * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
-                    + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
-            + Z_dot * v[40],
+                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                    + m2 * (x3 * x4 * x29 + x30 * x25)),
         theta_dot
             * (m2
-                * (v[3] * v[14] * v[4] * v[4]
-                    + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
+                * (x3 * x13 * x4 * x4
+                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                 + m1
-                    * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
-                        + v[22] * v[3] * v[7] * v[7]))
-            + (m2 * gamma2_dot * v[33]
-                + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
-                + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1) + v[40] * Y_dot
-            + X_dot * v[37],
+                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                        + x20 * x3 * x7 * x7))
+            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
     ]
-}
-#[allow(non_snake_case)]
-#[inline(never)]
-fn momenta_part0(
-    _t: f64,
-    q: &[f64; NUM_COORDINATES],
-    _qdot: &[f64; NUM_COORDINATES],
-    params: &Params,
-    v: &mut [f64; 41],
-) {
-    let psi = q[0];
-    let theta = q[1];
-    let phi = q[2];
-    let gamma1 = q[3];
-    let gamma2 = q[4];
-    let m1 = params.m1;
-    let m2 = params.m2;
-    let d = params.d;
-    let a_ = params.a_;
-    v[0] = f64::sin(gamma2);
-    v[1] = f64::cos(gamma2);
-    v[2] = f64::cos(psi);
-    v[3] = f64::cos(theta);
-    v[4] = f64::sin(phi);
-    v[5] = f64::sin(psi);
-    v[6] = f64::sin(theta);
-    v[7] = f64::cos(phi);
-    v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
-    v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
-    v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
-    v[11] = d + v[1] * a_;
-    v[12] = v[10] * v[11] - a_ * v[0] * v[9];
-    v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
-    v[14] = a_ + v[1] * d;
-    v[15] = f64::sin(gamma1);
-    v[16] = f64::cos(gamma1);
-    v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
-    v[18] = v[16] * a_;
-    v[19] = -v[18] - d;
-    v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
-    v[21] = a_ * v[15] * v[20];
-    v[22] = -a_ - v[16] * d;
-    v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
-    v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
-    v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
-    v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
-    v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
-    v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
-    v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
-        + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
-    v[30] = v[18] + d;
-    v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
-    v[32] = -v[31] * d - a_ * v[3] * v[4];
-    v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
-    v[34] = -a_ * v[3] * v[7] - v[33] * d;
-    v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
-    v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
-    v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
-        + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
-    v[38] = v[27] * v[11] - a_ * v[28] * v[0];
-    v[39] = a_ * v[15] * v[25];
-}
-#[allow(non_snake_case)]
-#[inline(never)]
-fn momenta_part1(
-    _t: f64,
-    _q: &[f64; NUM_COORDINATES],
-    _qdot: &[f64; NUM_COORDINATES],
-    params: &Params,
-    v: &mut [f64; 41],
-) {
-    let m1 = params.m1;
-    let m2 = params.m2;
-    v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
-        + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
 #[allow(non_snake_case, clippy::all)]
@@ -538,7 +487,6 @@ pub mod lagrange {
         let X_dot = state[13];
         let Y_dot = state[14];
         let Z_dot = state[15];
-        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -549,7 +497,7 @@ pub mod lagrange {
         let d = params.d;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 172];
+        let mut v = [0.0f64; 170];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -613,86 +561,66 @@ pub mod lagrange {
                 ],
                 [v[32], v[59], 0.0, v[64], 0.0, v[69], v[70], v[71]],
                 [v[34], v[60], 0.0, 0.0, v[65], v[72], v[73], v[74]],
-                [
-                    v[45],
-                    v[61],
-                    v[66],
-                    v[69],
-                    v[72],
-                    m0 + m1 * (v[38] * v[38] + v[39] * v[39] + v[41] * v[41])
-                        + m2 * (v[43] * v[43] + v[42] * v[42] + v[37] * v[37]),
-                    v[75],
-                    v[76],
-                ],
-                [
-                    v[54],
-                    v[62],
-                    v[67],
-                    v[70],
-                    v[73],
-                    v[75],
-                    (v[47] * v[47] + v[48] * v[48] + v[50] * v[50]) * m1 + m0
-                        + m2 * (v[46] * v[46] + v[52] * v[52] + v[51] * v[51]),
-                    v[77],
-                ],
-                [0.0, v[63], v[68], v[71], v[74], v[76], v[77], m2 + m0 + m1],
+                [v[45], v[61], v[66], v[69], v[72], v[75], 0.0, 0.0],
+                [v[54], v[62], v[67], v[70], v[73], 0.0, v[75], 0.0],
+                [0.0, v[63], v[68], v[71], v[74], 0.0, 0.0, v[75]],
             ],
             force: [
-                (-v[18] * v[102] - v[20] * v[103]) * J1 - v[96] * v[5]
-                    - ((v[109] + v[110] * v[8]) * v[1] * v[10] + v[111] * v[6]) * m1
+                (-v[18] * v[100] - v[20] * v[101]) * J1 - v[94] * v[5]
+                    - ((v[107] + v[108] * v[8]) * v[1] * v[10] + v[109] * v[6]) * m1
                     + v[1]
                         * (v[2]
-                            * (v[117] - v[113] - v[115] - v[118] + v[119] - v[120]
-                                - v[123])
-                            + (v[129] - v[124] - v[126] - v[128] + v[130] - v[131]
-                                - v[132]) * v[10])
-                    + (v[134] - v[133] - v[135] - v[136] - v[137]) * v[3]
-                    - v[142] * v[13] - m2 * (v[147] * v[1] * v[2] + v[148] * v[14]),
+                            * (v[115] - v[111] - v[113] - v[116] + v[117] - v[118]
+                                - v[121])
+                            + (v[127] - v[122] - v[124] - v[126] + v[128] - v[129]
+                                - v[130]) * v[10])
+                    + (v[132] - v[131] - v[133] - v[134] - v[135]) * v[3]
+                    - v[140] * v[13] - m2 * (v[145] * v[1] * v[2] + v[146] * v[14]),
                 v[2]
-                    * (v[124] - v[102] * v[11] * J1 + v[126] + v[128] + v[12] * v[142]
-                        - v[129] - v[130] + v[131] + v[132])
-                    - (v[2] * (v[110] * v[29] - v[109]) + v[111] * v[28] * v[10]) * m1
-                    - m2 * (v[147] * v[10] + v[148] * v[25] * v[2])
-                    + (v[117] - v[113] - v[115] - v[4] * J1 * v[103] - v[118]
-                        - v[0] * v[96] + v[119] - v[120] - v[123]) * v[10],
-                v[133] - v[134] + v[135] + v[136] + v[137]
-                    + v[11] * (m2 * v[148] * d - v[139] - v[141])
-                    + v[4] * (v[87] - v[111] * d * m1 + v[95])
-                    + (-v[0] * v[103] - v[12] * v[102]) * J1,
-                v[57] * v[86] * v[105] - v[110] * d * m1 - v[131],
-                v[125] * v[121] * v[122] - v[120] - m2 * v[146] * d,
-                -m2 * (v[146] * v[43] + v[37] * v[148] + v[42] * v[145])
-                    - (v[108] * v[39] + v[38] * v[110] + v[111] * v[41]) * m1,
-                -m2 * (v[148] * v[46] + v[51] * v[145] + v[146] * v[52])
-                    - (v[108] * v[48] + v[110] * v[47] + v[111] * v[50]) * m1,
+                    * (v[122] - v[100] * v[11] * J1 + v[124] + v[126] + v[12] * v[140]
+                        - v[127] - v[128] + v[129] + v[130])
+                    - (v[2] * (v[108] * v[29] - v[107]) + v[109] * v[28] * v[10]) * m1
+                    - m2 * (v[145] * v[10] + v[146] * v[25] * v[2])
+                    + (v[115] - v[111] - v[113] - v[4] * J1 * v[101] - v[116]
+                        - v[0] * v[94] + v[117] - v[118] - v[121]) * v[10],
+                v[131] - v[132] + v[133] + v[134] + v[135]
+                    + v[11] * (m2 * v[146] * d - v[137] - v[139])
+                    + v[4] * (v[85] - v[109] * d * m1 + v[93])
+                    + (-v[0] * v[101] - v[12] * v[100]) * J1,
+                v[57] * v[84] * v[103] - v[108] * d * m1 - v[129],
+                v[123] * v[119] * v[120] - v[118] - m2 * v[144] * d,
+                -m2 * (v[144] * v[43] + v[37] * v[146] + v[42] * v[143])
+                    - (v[106] * v[39] + v[38] * v[108] + v[109] * v[41]) * m1,
+                -m2 * (v[146] * v[46] + v[51] * v[143] + v[144] * v[52])
+                    - (v[106] * v[48] + v[108] * v[47] + v[109] * v[50]) * m1,
                 -m2
-                    * (((0.25 * v[152] - 0.25 * v[153] - 0.25 * v[154] + 0.25 * v[155])
+                    * (((0.25 * v[150] - 0.25 * v[151] - 0.25 * v[152] + 0.25 * v[153])
                         * phi_dot * phi_dot
-                        + (theta_dot * v[156]
+                        + (theta_dot * v[154]
                             + phi_dot
-                                * (v[159] - 0.5 * v[152] - 0.5 * v[153] + 0.5 * v[154]
-                                    + 0.5 * v[155] - v[160])) * theta_dot
+                                * (v[157] - 0.5 * v[150] - 0.5 * v[151] + 0.5 * v[152]
+                                    + 0.5 * v[153] - v[158])) * theta_dot
                         + gamma2_dot
                             * (phi_dot
-                                * (0.5 * v[152] - 0.5 * v[153] + 0.5 * v[154]
-                                    - 0.5 * v[155])
-                                + (-v[159] - 0.5 * v[152] - 0.5 * v[153]
-                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[154] - 0.5 * v[155]
-                                    - v[160]) * theta_dot + gamma2_dot * v[156])) * d - v[149])
-                    - (v[149]
+                                * (0.5 * v[150] - 0.5 * v[151] + 0.5 * v[152]
+                                    - 0.5 * v[153])
+                                + (-v[157] - 0.5 * v[150] - 0.5 * v[151]
+                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[152] - 0.5 * v[153]
+                                    - v[158]) * theta_dot + gamma2_dot * v[154])) * d - v[147])
+                    - (v[147]
                         + (theta_dot
-                            * ((0.5 * v[166] - v[163] + v[167] + 2.0 * (v[4] * v[1])
-                                + 0.5 * v[168] - 0.5 * v[169] - 0.5 * v[170]) * gamma1_dot
-                                + theta_dot * v[171]
-                                + (0.5 * v[166] - 0.5 * v[168] - 0.5 * v[169]
-                                    + 0.5 * v[170]) * phi_dot)
+                            * ((0.5 * v[164] - v[161] + v[165] + 2.0 * (v[4] * v[1])
+                                + 0.5 * v[166] - 0.5 * v[167] - 0.5 * v[168]) * gamma1_dot
+                                + theta_dot * v[169]
+                                + (0.5 * v[164] - 0.5 * v[166] - 0.5 * v[167]
+                                    + 0.5 * v[168]) * phi_dot)
                             + gamma1_dot
-                                * (v[171] * gamma1_dot
+                                * (v[169] * gamma1_dot
                                     + phi_dot
-                                        * (v[163] - 0.5 * v[166] + v[167] - 0.5 * v[168]
-                                            - 0.5 * v[169] - 0.5 * v[170]))
-                            + (0.25 * v[168] - 0.25 * v[166] - 0.25 * v[169]
-                                + 0.25 * v[170]) * phi_dot * phi_dot) * d) * m1,
+                                        * (v[161] - 0.5 * v[164] + v[165] - 0.5 * v[166]
+                                            - 0.5 * v[167] - 0.5 * v[168]))
+                            + (0.25 * v[166] - 0.25 * v[164] - 0.25 * v[167]
+                                + 0.25 * v[168]) * phi_dot * phi_dot) * d) * m1,
             ],
             checks: [],
             residuals: [],
@@ -706,7 +634,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 172],
+        v: &mut [f64; 170],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -780,10 +708,12 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 172],
+        v: &mut [f64; 170],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
+        let gamma1_dot = state[11];
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let m1 = params.m1;
@@ -836,14 +766,11 @@ pub mod lagrange {
         v[72] = m2 * d * v[43];
         v[73] = m2 * d * v[52];
         v[74] = m2 * v[13] * d;
-        v[75] = (v[38] * v[47] + v[39] * v[48] + v[41] * v[50]) * m1
-            + m2 * (v[37] * v[46] + v[52] * v[43] + v[51] * v[42]);
-        v[76] = m1 * (v[20] * v[39] + v[38] * v[5] + v[1] * v[41] * v[10])
-            + (v[18] * v[42] + v[13] * v[43] + v[37] * v[1] * v[2]) * m2;
-        v[77] = m2 * (v[51] * v[18] + v[13] * v[52] + v[1] * v[2] * v[46])
-            + (v[1] * v[50] * v[10] + v[20] * v[48] + v[47] * v[5]) * m1;
-        v[78] = v[1] * psi_dot * v[10];
-        v[79] = theta_dot * v[2];
+        v[75] = m2 + m0 + m1;
+        v[76] = v[1] * psi_dot * v[10];
+        v[77] = theta_dot * v[2];
+        v[78] = v[76] + gamma1_dot - v[77];
+        v[79] = theta_dot * v[10];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -852,7 +779,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 172],
+        v: &mut [f64; 170],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
@@ -868,49 +795,49 @@ pub mod lagrange {
         let d = params.d;
         let a_ = params.a_;
         let J2 = params.J2;
-        v[80] = v[78] + gamma1_dot - v[79];
-        v[81] = theta_dot * v[10];
-        v[82] = v[1] * psi_dot * v[2];
-        v[83] = v[81] + v[82];
-        v[84] = v[3] * psi_dot;
-        v[85] = phi_dot - v[84];
-        v[86] = v[4] * v[83] + v[0] * v[85];
-        v[87] = v[80] * v[57] * v[86];
-        v[88] = -phi_dot - v[84];
-        v[89] = theta_dot * v[88] * v[2];
-        v[90] = v[1] * psi_dot * phi_dot * v[10];
-        v[91] = v[89] + v[90] - gamma1_dot * v[85];
-        v[92] = gamma1_dot * v[83];
-        v[93] = theta_dot * v[1] * psi_dot;
-        v[94] = v[0] * v[91] + v[4] * (v[93] - v[92]);
-        v[95] = J2 * v[94];
-        v[96] = v[87] + v[95];
-        v[97] = theta_dot * v[88] * v[10];
-        v[98] = v[1] * psi_dot * v[2] * phi_dot;
-        v[99] = gamma2_dot * v[85];
-        v[100] = v[78] - v[79];
-        v[101] = -v[100] * gamma2_dot - v[93];
-        v[102] = v[11] * (v[98] - v[97] - v[99]) + v[12] * v[101];
-        v[103] = v[0] * (v[92] - v[93]) + v[91] * v[4];
-        v[104] = v[0] * a_ * v[100] + v[80] * d;
-        v[105] = v[0] * v[83] - v[4] * v[85];
-        v[106] = -a_ * v[83] - d * v[105];
-        v[107] = v[97] - v[98];
-        v[108] = v[106] * v[105] - v[80] * v[104]
-            + a_ * (v[0] * v[100] * gamma1_dot + v[107] * v[4]);
-        v[109] = a_ * v[4] * v[108];
-        v[110] = v[107] * d - v[86] * v[106]
-            + a_ * (v[0] * v[107] + v[100] * v[100] * v[4]);
-        v[111] = v[86] * v[104] - d * v[94]
-            + a_ * (-v[100] * v[4] * v[105] - v[89] - v[90]);
-        v[112] = Ixx * v[85] - v[100] * Ixz - Ixy * v[83];
-        v[113] = v[100] * v[112];
-        v[114] = v[89] + v[90];
-        v[115] = Iyy * v[114];
-        v[116] = v[100] * Izz - Iyz * v[83] - Ixz * v[85];
-        v[117] = v[116] * v[85];
-        v[118] = Ixy * theta_dot * v[1] * psi_dot;
-        v[119] = v[107] * Iyz;
+        v[80] = v[1] * psi_dot * v[2];
+        v[81] = v[79] + v[80];
+        v[82] = v[3] * psi_dot;
+        v[83] = phi_dot - v[82];
+        v[84] = v[4] * v[81] + v[0] * v[83];
+        v[85] = v[78] * v[57] * v[84];
+        v[86] = -phi_dot - v[82];
+        v[87] = theta_dot * v[86] * v[2];
+        v[88] = v[1] * psi_dot * phi_dot * v[10];
+        v[89] = v[87] + v[88] - gamma1_dot * v[83];
+        v[90] = gamma1_dot * v[81];
+        v[91] = theta_dot * v[1] * psi_dot;
+        v[92] = v[0] * v[89] + v[4] * (v[91] - v[90]);
+        v[93] = J2 * v[92];
+        v[94] = v[85] + v[93];
+        v[95] = theta_dot * v[86] * v[10];
+        v[96] = v[1] * psi_dot * v[2] * phi_dot;
+        v[97] = gamma2_dot * v[83];
+        v[98] = v[76] - v[77];
+        v[99] = -v[98] * gamma2_dot - v[91];
+        v[100] = v[11] * (v[96] - v[95] - v[97]) + v[12] * v[99];
+        v[101] = v[0] * (v[90] - v[91]) + v[89] * v[4];
+        v[102] = v[0] * a_ * v[98] + v[78] * d;
+        v[103] = v[0] * v[81] - v[4] * v[83];
+        v[104] = -a_ * v[81] - d * v[103];
+        v[105] = v[95] - v[96];
+        v[106] = v[104] * v[103] - v[78] * v[102]
+            + a_ * (v[0] * v[98] * gamma1_dot + v[105] * v[4]);
+        v[107] = a_ * v[4] * v[106];
+        v[108] = v[105] * d - v[84] * v[104]
+            + a_ * (v[0] * v[105] + v[98] * v[98] * v[4]);
+        v[109] = v[84] * v[102] - d * v[92]
+            + a_ * (-v[98] * v[4] * v[103] - v[87] - v[88]);
+        v[110] = Ixx * v[83] - v[98] * Ixz - Ixy * v[81];
+        v[111] = v[98] * v[110];
+        v[112] = v[87] + v[88];
+        v[113] = Iyy * v[112];
+        v[114] = v[98] * Izz - Iyz * v[81] - Ixz * v[83];
+        v[115] = v[114] * v[83];
+        v[116] = Ixy * theta_dot * v[1] * psi_dot;
+        v[117] = v[105] * Iyz;
+        v[118] = J2 * v[112];
+        v[119] = v[12] * v[83] - v[98] * v[11];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -919,7 +846,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 172],
+        v: &mut [f64; 170],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
@@ -934,49 +861,49 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = J2 * v[114];
-        v[121] = v[12] * v[85] - v[100] * v[11];
-        v[122] = v[11] * v[85] + v[12] * v[100];
-        v[123] = v[121] * v[57] * v[122];
-        v[124] = theta_dot * v[1] * psi_dot * Ixz;
-        v[125] = J2 - J1;
-        v[126] = v[125] * v[86] * v[105];
-        v[127] = Iyy * v[83] - v[100] * Iyz - Ixy * v[85];
-        v[128] = v[127] * v[85];
-        v[129] = v[83] * v[112];
-        v[130] = Iyz * v[114];
-        v[131] = v[107] * J2;
-        v[132] = v[107] * Izz;
-        v[133] = theta_dot * Ixx * v[1] * psi_dot;
-        v[134] = v[116] * v[83];
-        v[135] = v[107] * Ixz;
-        v[136] = v[100] * v[127];
-        v[137] = Ixy * v[114];
-        v[138] = gamma2_dot + v[81] + v[82];
-        v[139] = v[125] * v[121] * v[138];
-        v[140] = v[101] * v[11] + (v[97] - v[98] + v[99]) * v[12];
-        v[141] = J2 * v[140];
-        v[142] = v[139] + v[141];
-        v[143] = -v[122] * d - a_ * v[100];
-        v[144] = v[138] * d + v[12] * a_ * v[83];
-        v[145] = a_ * (-v[12] * gamma2_dot * v[83] - v[114] * v[11]) - v[122] * v[143]
-            + v[144] * v[138];
-        v[146] = v[114] * d + v[121] * v[143]
-            + a_ * (v[12] * v[114] + v[11] * v[83] * v[83]);
-        v[147] = v[146] * v[15] - a_ * v[11] * v[145];
-        v[148] = a_ * (v[98] - v[97] - v[122] * v[11] * v[83]) - v[144] * v[121]
-            - v[140] * d;
-        v[149] = a_ * v[3] * theta_dot * theta_dot;
-        v[150] = v[12] * v[2];
-        v[151] = v[11] * v[10];
-        v[152] = (-v[150] - v[151]) * v[1];
-        v[153] = v[1] * (v[150] + v[151]);
-        v[154] = (v[151] - v[150]) * v[1];
-        v[155] = (v[150] - v[151]) * v[1];
-        v[156] = 0.25 * v[152] - 0.25 * v[153] - 0.25 * v[154] + 0.25 * v[155] - v[17];
-        v[157] = v[11] * v[2];
-        v[158] = v[12] * v[10];
-        v[159] = v[3] * (v[157] + v[158]);
+        v[120] = v[11] * v[83] + v[12] * v[98];
+        v[121] = v[119] * v[57] * v[120];
+        v[122] = theta_dot * v[1] * psi_dot * Ixz;
+        v[123] = J2 - J1;
+        v[124] = v[123] * v[84] * v[103];
+        v[125] = Iyy * v[81] - v[98] * Iyz - Ixy * v[83];
+        v[126] = v[125] * v[83];
+        v[127] = v[81] * v[110];
+        v[128] = Iyz * v[112];
+        v[129] = v[105] * J2;
+        v[130] = v[105] * Izz;
+        v[131] = theta_dot * Ixx * v[1] * psi_dot;
+        v[132] = v[114] * v[81];
+        v[133] = v[105] * Ixz;
+        v[134] = v[98] * v[125];
+        v[135] = Ixy * v[112];
+        v[136] = gamma2_dot + v[79] + v[80];
+        v[137] = v[123] * v[119] * v[136];
+        v[138] = v[99] * v[11] + (v[95] - v[96] + v[97]) * v[12];
+        v[139] = J2 * v[138];
+        v[140] = v[137] + v[139];
+        v[141] = -v[120] * d - a_ * v[98];
+        v[142] = v[136] * d + v[12] * a_ * v[81];
+        v[143] = a_ * (-v[12] * gamma2_dot * v[81] - v[112] * v[11]) - v[120] * v[141]
+            + v[142] * v[136];
+        v[144] = v[112] * d + v[119] * v[141]
+            + a_ * (v[12] * v[112] + v[11] * v[81] * v[81]);
+        v[145] = v[144] * v[15] - a_ * v[11] * v[143];
+        v[146] = a_ * (v[96] - v[95] - v[120] * v[11] * v[81]) - v[142] * v[119]
+            - v[138] * d;
+        v[147] = a_ * v[3] * theta_dot * theta_dot;
+        v[148] = v[12] * v[2];
+        v[149] = v[11] * v[10];
+        v[150] = (-v[148] - v[149]) * v[1];
+        v[151] = v[1] * (v[148] + v[149]);
+        v[152] = (v[149] - v[148]) * v[1];
+        v[153] = (v[148] - v[149]) * v[1];
+        v[154] = 0.25 * v[150] - 0.25 * v[151] - 0.25 * v[152] + 0.25 * v[153] - v[17];
+        v[155] = v[11] * v[2];
+        v[156] = v[12] * v[10];
+        v[157] = v[3] * (v[155] + v[156]);
+        v[158] = v[3] * (v[156] - v[155]);
+        v[159] = v[3] * v[2];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -985,20 +912,18 @@ pub mod lagrange {
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 172],
+        v: &mut [f64; 170],
     ) {
-        v[160] = v[3] * (v[158] - v[157]);
-        v[161] = v[3] * v[2];
-        v[162] = v[1] * v[10];
-        v[163] = v[0] * (v[161] + v[162]);
-        v[164] = v[1] * v[2];
-        v[165] = v[3] * v[10];
-        v[166] = v[4] * (v[164] - v[165]);
-        v[167] = v[0] * (v[162] - v[161]);
-        v[168] = v[4] * (v[165] - v[164]);
-        v[169] = v[4] * (v[164] + v[165]);
-        v[170] = (-v[164] - v[165]) * v[4];
-        v[171] = 0.25 * v[168] - 0.25 * v[166] - 0.25 * v[169] + v[19] + 0.25 * v[170];
+        v[160] = v[1] * v[10];
+        v[161] = v[0] * (v[159] + v[160]);
+        v[162] = v[1] * v[2];
+        v[163] = v[3] * v[10];
+        v[164] = v[4] * (v[162] - v[163]);
+        v[165] = v[0] * (v[160] - v[159]);
+        v[166] = v[4] * (v[163] - v[162]);
+        v[167] = v[4] * (v[162] + v[163]);
+        v[168] = (-v[162] - v[163]) * v[4];
+        v[169] = 0.25 * v[166] - 0.25 * v[164] - 0.25 * v[167] + v[19] + 0.25 * v[168];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -1087,6 +1012,11 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -1100,9 +1030,39 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let mut v = [0.0f64; 41];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::cos(gamma2);
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a_ + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a_ * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a_ * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1135,42 +1095,30 @@ pub mod lagrange {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
-                    + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
-                + v[29] * Y_dot
-                + X_dot
-                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
-                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
-                + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
-                    + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
-                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
-                + Z_dot * v[37],
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
-                    + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
-                + v[29] * X_dot
-                + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
-                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
-                        + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
-                + Y_dot
-                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
-                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
-                + Z_dot * v[40],
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
             theta_dot
                 * (m2
-                    * (v[3] * v[14] * v[4] * v[4]
-                        + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
-                            + v[22] * v[3] * v[7] * v[7]))
-                + (m2 * gamma2_dot * v[33]
-                    + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
-                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
-                + v[40] * Y_dot + X_dot * v[37],
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1178,81 +1126,6 @@ pub mod lagrange {
             }
         }
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(gamma2);
-        v[1] = f64::cos(gamma2);
-        v[2] = f64::cos(psi);
-        v[3] = f64::cos(theta);
-        v[4] = f64::sin(phi);
-        v[5] = f64::sin(psi);
-        v[6] = f64::sin(theta);
-        v[7] = f64::cos(phi);
-        v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
-        v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
-        v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
-        v[11] = d + v[1] * a_;
-        v[12] = v[10] * v[11] - a_ * v[0] * v[9];
-        v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
-        v[14] = a_ + v[1] * d;
-        v[15] = f64::sin(gamma1);
-        v[16] = f64::cos(gamma1);
-        v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
-        v[18] = v[16] * a_;
-        v[19] = -v[18] - d;
-        v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
-        v[21] = a_ * v[15] * v[20];
-        v[22] = -a_ - v[16] * d;
-        v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
-        v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
-        v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
-        v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
-        v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
-        v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
-        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
-            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
-        v[30] = v[18] + d;
-        v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
-        v[32] = -v[31] * d - a_ * v[3] * v[4];
-        v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
-        v[34] = -a_ * v[3] * v[7] - v[33] * d;
-        v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
-        v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
-        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
-            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
-        v[38] = v[27] * v[11] - a_ * v[28] * v[0];
-        v[39] = a_ * v[15] * v[25];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
-            + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -1367,11 +1240,10 @@ pub mod maggi {
         let X_dot = state[13];
         let Y_dot = state[14];
         let Z_dot = state[15];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let mut v = [0.0f64; 216];
+        let mut v = [0.0f64; 214];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -1414,76 +1286,56 @@ pub mod maggi {
                 ],
                 [0.0, v[76], v[105], v[0], 0.0, v[109], v[110], v[111]],
                 [0.0, v[78], 0.0, 0.0, v[7], v[112], v[113], v[114]],
-                [
-                    v[39],
-                    v[89],
-                    v[106],
-                    v[109],
-                    v[112],
-                    m0 + m1 * (v[82] * v[82] + v[83] * v[83] + v[36] * v[36])
-                        + m2 * (v[80] * v[80] + v[79] * v[79] + v[37] * v[37]),
-                    v[115],
-                    v[116],
-                ],
-                [
-                    v[43],
-                    v[100],
-                    v[107],
-                    v[110],
-                    v[113],
-                    v[115],
-                    (v[95] * v[95] + v[93] * v[93] + v[41] * v[41]) * m1 + m0
-                        + m2 * (v[40] * v[40] + v[91] * v[91] + v[90] * v[90]),
-                    v[117],
-                ],
-                [v[45], v[102], v[108], v[111], v[114], v[116], v[117], m2 + m0 + m1],
+                [v[39], v[89], v[106], v[109], v[112], v[115], 0.0, 0.0],
+                [v[43], v[100], v[107], v[110], v[113], 0.0, v[115], 0.0],
+                [v[45], v[102], v[108], v[111], v[114], 0.0, 0.0, v[115]],
             ],
             force: [
-                v[165],
-                v[191] * v[11] + v[16] * v[192] * v[12],
-                v[16] * v[192] * v[11] - v[191] * v[12],
-                v[15] * psi_dot * v[12] * v[104] * phi_dot - v[169] * d * m1
-                    - theta_dot * v[163] * v[103] * v[11] - v[177]
-                    + v[9] * v[151] * v[157],
-                v[139] * v[140] * v[148] + (v[136] - theta_dot * v[163] * v[12]) * v[77]
-                    - v[189] - m2 * v[181] * d,
-                theta_dot * (-v[164] * d * v[38] - (v[86] + v[87]) * v[163] * v[16])
-                    - m2 * (v[181] * v[80] + v[37] * v[149] + v[79] * v[180])
-                    - (v[167] * v[83] + v[82] * v[169] + v[158] * v[36]) * m1
+                v[163],
+                v[189] * v[11] + v[16] * v[190] * v[12],
+                v[16] * v[190] * v[11] - v[189] * v[12],
+                v[15] * psi_dot * v[12] * v[104] * phi_dot - v[167] * d * m1
+                    - theta_dot * v[161] * v[103] * v[11] - v[175]
+                    + v[9] * v[149] * v[155],
+                v[137] * v[138] * v[146] + (v[134] - theta_dot * v[161] * v[12]) * v[77]
+                    - v[187] - m2 * v[179] * d,
+                theta_dot * (-v[162] * d * v[38] - (v[86] + v[87]) * v[161] * v[16])
+                    - m2 * (v[179] * v[80] + v[37] * v[147] + v[79] * v[178])
+                    - (v[165] * v[83] + v[82] * v[167] + v[156] * v[36]) * m1
                     + v[15] * psi_dot * phi_dot * v[85],
-                (-v[42] * v[164] * d - v[163] * v[16] * (v[97] + v[98])) * theta_dot
+                (-v[42] * v[162] * d - v[161] * v[16] * (v[97] + v[98])) * theta_dot
                     + v[15] * psi_dot * phi_dot * v[96]
-                    - m2 * (v[149] * v[40] + v[90] * v[180] + v[181] * v[91])
-                    - (v[167] * v[93] + v[169] * v[95] + v[158] * v[41]) * m1,
-                v[15] * (v[101] * psi_dot * phi_dot - theta_dot * v[44] * v[164] * d)
+                    - m2 * (v[147] * v[40] + v[90] * v[178] + v[179] * v[91])
+                    - (v[165] * v[93] + v[167] * v[95] + v[156] * v[41]) * m1,
+                v[15] * (v[101] * psi_dot * phi_dot - theta_dot * v[44] * v[162] * d)
                     - m2
-                        * (((0.25 * v[196] - 0.25 * v[197] - 0.25 * v[198]
-                            + 0.25 * v[199]) * phi_dot * phi_dot
-                            + (theta_dot * v[200]
+                        * (((0.25 * v[194] - 0.25 * v[195] - 0.25 * v[196]
+                            + 0.25 * v[197]) * phi_dot * phi_dot
+                            + (theta_dot * v[198]
                                 + phi_dot
-                                    * (v[203] - 0.5 * v[196] - 0.5 * v[197] + 0.5 * v[198]
-                                        + 0.5 * v[199] - v[204])) * theta_dot
+                                    * (v[201] - 0.5 * v[194] - 0.5 * v[195] + 0.5 * v[196]
+                                        + 0.5 * v[197] - v[202])) * theta_dot
                             + gamma2_dot
                                 * (phi_dot
-                                    * (0.5 * v[196] - 0.5 * v[197] + 0.5 * v[198]
-                                        - 0.5 * v[199])
-                                    + (-v[203] - 0.5 * v[196] - 0.5 * v[197]
-                                        - 2.0 * (v[15] * v[6]) - 0.5 * v[198] - 0.5 * v[199]
-                                        - v[204]) * theta_dot + gamma2_dot * v[200])) * d - v[193])
-                    - (v[193]
+                                    * (0.5 * v[194] - 0.5 * v[195] + 0.5 * v[196]
+                                        - 0.5 * v[197])
+                                    + (-v[201] - 0.5 * v[194] - 0.5 * v[195]
+                                        - 2.0 * (v[15] * v[6]) - 0.5 * v[196] - 0.5 * v[197]
+                                        - v[202]) * theta_dot + gamma2_dot * v[198])) * d - v[191])
+                    - (v[191]
                         + (theta_dot
-                            * ((0.5 * v[210] - v[207] + v[211] + 2.0 * (v[1] * v[15])
-                                + 0.5 * v[212] - 0.5 * v[213] - 0.5 * v[214]) * gamma1_dot
-                                + theta_dot * v[215]
-                                + (0.5 * v[210] - 0.5 * v[212] - 0.5 * v[213]
-                                    + 0.5 * v[214]) * phi_dot)
+                            * ((0.5 * v[208] - v[205] + v[209] + 2.0 * (v[1] * v[15])
+                                + 0.5 * v[210] - 0.5 * v[211] - 0.5 * v[212]) * gamma1_dot
+                                + theta_dot * v[213]
+                                + (0.5 * v[208] - 0.5 * v[210] - 0.5 * v[211]
+                                    + 0.5 * v[212]) * phi_dot)
                             + gamma1_dot
-                                * (v[215] * gamma1_dot
+                                * (v[213] * gamma1_dot
                                     + phi_dot
-                                        * (v[207] - 0.5 * v[210] + v[211] - 0.5 * v[212]
-                                            - 0.5 * v[213] - 0.5 * v[214]))
-                            + (0.25 * v[212] - 0.25 * v[210] - 0.25 * v[213]
-                                + 0.25 * v[214]) * phi_dot * phi_dot) * d) * m1,
+                                        * (v[205] - 0.5 * v[208] + v[209] - 0.5 * v[210]
+                                            - 0.5 * v[211] - 0.5 * v[212]))
+                            + (0.25 * v[210] - 0.25 * v[208] - 0.25 * v[211]
+                                + 0.25 * v[212]) * phi_dot * phi_dot) * d) * m1,
             ],
             w: [
                 [0.0, v[16] * v[12], v[16] * v[11], 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1505,9 +1357,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * v[163] * v[16],
+                theta_dot * v[161] * v[16],
                 -(v[15] * psi_dot * phi_dot),
-                theta_dot * v[164],
+                theta_dot * v[162],
                 0.0,
                 0.0,
                 0.0,
@@ -1524,7 +1376,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -1589,7 +1441,7 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -1661,10 +1513,11 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
+        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
@@ -1712,14 +1565,11 @@ pub mod maggi {
         v[112] = m2 * d * v[80];
         v[113] = m2 * d * v[91];
         v[114] = m2 * v[25] * d;
-        v[115] = (v[82] * v[95] + v[83] * v[93] + v[36] * v[41]) * m1
-            + m2 * (v[37] * v[40] + v[91] * v[80] + v[90] * v[79]);
-        v[116] = m1 * (v[21] * v[83] + v[82] * v[26] + v[15] * v[36] * v[11])
-            + (v[23] * v[79] + v[25] * v[80] + v[37] * v[15] * v[12]) * m2;
-        v[117] = m2 * (v[90] * v[23] + v[25] * v[91] + v[15] * v[12] * v[40])
-            + (v[15] * v[41] * v[11] + v[21] * v[93] + v[95] * v[26]) * m1;
-        v[118] = theta_dot * v[11];
-        v[119] = v[15] * psi_dot * v[12];
+        v[115] = m2 + m0 + m1;
+        v[116] = theta_dot * v[11];
+        v[117] = v[15] * psi_dot * v[12];
+        v[118] = v[116] + v[117];
+        v[119] = v[17] * psi_dot;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1728,7 +1578,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
@@ -1744,48 +1594,48 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[118] + v[119];
-        v[121] = v[17] * psi_dot;
-        v[122] = phi_dot - v[121];
-        v[123] = v[15] * psi_dot * v[11];
-        v[124] = theta_dot * v[12];
-        v[125] = v[123] - v[124];
-        v[126] = v[125] * Izz - Iyz * v[120] - Ixz * v[122];
-        v[127] = v[126] * v[120];
-        v[128] = -phi_dot - v[121];
-        v[129] = theta_dot * v[128] * v[11];
-        v[130] = v[15] * psi_dot * v[12] * phi_dot;
-        v[131] = v[129] - v[130];
-        v[132] = v[131] * Ixz;
-        v[133] = Iyy * v[120] - v[125] * Iyz - Ixy * v[122];
-        v[134] = v[125] * v[133];
-        v[135] = theta_dot * v[128] * v[12];
-        v[136] = v[15] * psi_dot * phi_dot * v[11];
-        v[137] = v[135] + v[136];
-        v[138] = Ixy * v[137];
-        v[139] = J2 - J1;
-        v[140] = v[4] * v[122] - v[125] * v[6];
-        v[141] = gamma2_dot + v[118] + v[119];
-        v[142] = v[139] * v[140] * v[141];
-        v[143] = v[141] * d + v[4] * a_ * v[120];
-        v[144] = theta_dot * v[15] * psi_dot;
-        v[145] = -v[125] * gamma2_dot - v[144];
-        v[146] = gamma2_dot * v[122];
-        v[147] = v[145] * v[6] + (v[129] - v[130] + v[146]) * v[4];
-        v[148] = v[6] * v[122] + v[4] * v[125];
-        v[149] = a_ * (v[130] - v[129] - v[148] * v[6] * v[120]) - v[143] * v[140]
-            - v[147] * d;
-        v[150] = J2 * v[147];
-        v[151] = v[1] * v[120] + v[2] * v[122];
-        v[152] = v[123] + gamma1_dot - v[124];
-        v[153] = v[2] * a_ * v[125] + v[152] * d;
-        v[154] = v[135] + v[136] - gamma1_dot * v[122];
-        v[155] = gamma1_dot * v[120];
-        v[156] = v[2] * v[154] + v[1] * (v[144] - v[155]);
-        v[157] = v[2] * v[120] - v[1] * v[122];
-        v[158] = v[151] * v[153] - d * v[156]
-            + a_ * (-v[125] * v[1] * v[157] - v[135] - v[136]);
-        v[159] = v[152] * v[9] * v[151];
+        v[120] = phi_dot - v[119];
+        v[121] = v[15] * psi_dot * v[11];
+        v[122] = theta_dot * v[12];
+        v[123] = v[121] - v[122];
+        v[124] = v[123] * Izz - Iyz * v[118] - Ixz * v[120];
+        v[125] = v[124] * v[118];
+        v[126] = -phi_dot - v[119];
+        v[127] = theta_dot * v[126] * v[11];
+        v[128] = v[15] * psi_dot * v[12] * phi_dot;
+        v[129] = v[127] - v[128];
+        v[130] = v[129] * Ixz;
+        v[131] = Iyy * v[118] - v[123] * Iyz - Ixy * v[120];
+        v[132] = v[123] * v[131];
+        v[133] = theta_dot * v[126] * v[12];
+        v[134] = v[15] * psi_dot * phi_dot * v[11];
+        v[135] = v[133] + v[134];
+        v[136] = Ixy * v[135];
+        v[137] = J2 - J1;
+        v[138] = v[4] * v[120] - v[123] * v[6];
+        v[139] = gamma2_dot + v[116] + v[117];
+        v[140] = v[137] * v[138] * v[139];
+        v[141] = v[139] * d + v[4] * a_ * v[118];
+        v[142] = theta_dot * v[15] * psi_dot;
+        v[143] = -v[123] * gamma2_dot - v[142];
+        v[144] = gamma2_dot * v[120];
+        v[145] = v[143] * v[6] + (v[127] - v[128] + v[144]) * v[4];
+        v[146] = v[6] * v[120] + v[4] * v[123];
+        v[147] = a_ * (v[128] - v[127] - v[146] * v[6] * v[118]) - v[141] * v[138]
+            - v[145] * d;
+        v[148] = J2 * v[145];
+        v[149] = v[1] * v[118] + v[2] * v[120];
+        v[150] = v[121] + gamma1_dot - v[122];
+        v[151] = v[2] * a_ * v[123] + v[150] * d;
+        v[152] = v[133] + v[134] - gamma1_dot * v[120];
+        v[153] = gamma1_dot * v[118];
+        v[154] = v[2] * v[152] + v[1] * (v[142] - v[153]);
+        v[155] = v[2] * v[118] - v[1] * v[120];
+        v[156] = v[149] * v[151] - d * v[154]
+            + a_ * (-v[123] * v[1] * v[155] - v[133] - v[134]);
+        v[157] = v[150] * v[9] * v[149];
+        v[158] = J2 * v[154];
+        v[159] = v[2] * (v[153] - v[142]) + v[152] * v[1];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1794,7 +1644,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
         let theta = state[1];
         let psi_dot = state[8];
@@ -1814,77 +1664,77 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[160] = J2 * v[156];
-        v[161] = v[2] * (v[155] - v[144]) + v[154] * v[1];
-        v[162] = v[6] * (v[130] - v[129] - v[146]) + v[4] * v[145];
-        v[163] = 0.5 * (v[16] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        v[164] = ((0.25 - 0.25 * (v[16] * f64::cos(3.0 * theta))) * psi_dot
+        v[160] = v[6] * (v[128] - v[127] - v[144]) + v[4] * v[143];
+        v[161] = 0.5 * (v[16] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        v[162] = ((0.25 - 0.25 * (v[16] * f64::cos(3.0 * theta))) * psi_dot
             + v[17] * phi_dot) * v[16] + v[15] * psi_dot;
-        v[165] = v[132] - v[127] + v[134] + v[138]
-            + v[6] * (m2 * v[149] * d - v[142] - v[150])
+        v[163] = v[130] - v[125] + v[132] + v[136]
+            + v[6] * (m2 * v[147] * d - v[140] - v[148])
             + v[14] * v[15] * psi_dot * phi_dot
-            + v[1] * (v[159] - v[158] * d * m1 + v[160])
-            + (-v[2] * v[161] - v[4] * v[162]) * J1
-            + (Ixx * v[15] * psi_dot - v[163] * v[16] * v[54] - v[164] * v[8])
+            + v[1] * (v[157] - v[156] * d * m1 + v[158])
+            + (-v[2] * v[159] - v[4] * v[160]) * J1
+            + (Ixx * v[15] * psi_dot - v[161] * v[16] * v[54] - v[162] * v[8])
                 * theta_dot;
-        v[166] = -a_ * v[120] - d * v[157];
-        v[167] = v[166] * v[157] - v[152] * v[153]
-            + a_ * (v[2] * v[125] * gamma1_dot + v[131] * v[1]);
-        v[168] = a_ * v[1] * v[167];
-        v[169] = v[131] * d - v[151] * v[166]
-            + a_ * (v[2] * v[131] + v[125] * v[125] * v[1]);
-        v[170] = theta_dot * v[15] * psi_dot * Ixz;
-        v[171] = v[139] * v[151] * v[157];
-        v[172] = v[133] * v[122];
-        v[173] = v[142] + v[150];
-        v[174] = Ixx * v[122] - v[125] * Ixz - Ixy * v[120];
-        v[175] = v[120] * v[174];
-        v[176] = Iyz * v[137];
-        v[177] = v[131] * J2;
-        v[178] = v[131] * Izz;
-        v[179] = -v[148] * d - a_ * v[125];
-        v[180] = a_ * (-v[4] * gamma2_dot * v[120] - v[137] * v[6]) - v[148] * v[179]
-            + v[143] * v[141];
-        v[181] = v[137] * d + v[140] * v[179]
-            + a_ * (v[4] * v[137] + v[6] * v[120] * v[120]);
-        v[182] = v[181] * v[50] - a_ * v[6] * v[180];
-        v[183] = v[125] * v[174];
-        v[184] = Iyy * v[137];
-        v[185] = v[126] * v[122];
-        v[186] = Ixy * theta_dot * v[15] * psi_dot;
-        v[187] = v[159] + v[160];
-        v[188] = v[131] * Iyz;
-        v[189] = J2 * v[137];
-        v[190] = v[140] * v[9] * v[148];
-        v[191] = v[12]
-            * (v[170] - v[162] * v[6] * J1 + v[171] + v[172] + v[4] * v[173] - v[175]
-                - v[176] + v[177] + v[178])
-            - (v[12] * (v[169] * v[66] - v[168]) + v[158] * v[10] * v[11]) * m1
-            + (-v[163] * v[16] * v[68] - v[14] * v[164]) * theta_dot
-            - m2 * (v[182] * v[11] + v[149] * v[13] * v[12])
+        v[164] = -a_ * v[118] - d * v[155];
+        v[165] = v[164] * v[155] - v[150] * v[151]
+            + a_ * (v[2] * v[123] * gamma1_dot + v[129] * v[1]);
+        v[166] = a_ * v[1] * v[165];
+        v[167] = v[129] * d - v[149] * v[164]
+            + a_ * (v[2] * v[129] + v[123] * v[123] * v[1]);
+        v[168] = theta_dot * v[15] * psi_dot * Ixz;
+        v[169] = v[137] * v[149] * v[155];
+        v[170] = v[131] * v[120];
+        v[171] = v[140] + v[148];
+        v[172] = Ixx * v[120] - v[123] * Ixz - Ixy * v[118];
+        v[173] = v[118] * v[172];
+        v[174] = Iyz * v[135];
+        v[175] = v[129] * J2;
+        v[176] = v[129] * Izz;
+        v[177] = -v[146] * d - a_ * v[123];
+        v[178] = a_ * (-v[4] * gamma2_dot * v[118] - v[135] * v[6]) - v[146] * v[177]
+            + v[141] * v[139];
+        v[179] = v[135] * d + v[138] * v[177]
+            + a_ * (v[4] * v[135] + v[6] * v[118] * v[118]);
+        v[180] = v[179] * v[50] - a_ * v[6] * v[178];
+        v[181] = v[123] * v[172];
+        v[182] = Iyy * v[135];
+        v[183] = v[124] * v[120];
+        v[184] = Ixy * theta_dot * v[15] * psi_dot;
+        v[185] = v[157] + v[158];
+        v[186] = v[129] * Iyz;
+        v[187] = J2 * v[135];
+        v[188] = v[138] * v[9] * v[146];
+        v[189] = v[12]
+            * (v[168] - v[160] * v[6] * J1 + v[169] + v[170] + v[4] * v[171] - v[173]
+                - v[174] + v[175] + v[176])
+            - (v[12] * (v[167] * v[66] - v[166]) + v[156] * v[10] * v[11]) * m1
+            + (-v[161] * v[16] * v[68] - v[14] * v[162]) * theta_dot
+            - m2 * (v[180] * v[11] + v[147] * v[13] * v[12])
             + v[15] * psi_dot * v[70] * phi_dot
-            + (v[185] - v[183] - v[184] - v[1] * J1 * v[161] - v[186] - v[2] * v[187]
-                + v[188] - v[189] - v[190]) * v[11];
-        v[192] = (-v[23] * v[162] - v[21] * v[161]) * J1 - v[187] * v[26]
-            - ((v[168] + v[169] * v[47]) * v[15] * v[11] + v[158] * v[28]) * m1
-            + (v[127] - theta_dot * Ixx * v[15] * psi_dot - v[132] - v[134] - v[138])
-                * v[17] - v[173] * v[25]
+            + (v[183] - v[181] - v[182] - v[1] * J1 * v[159] - v[184] - v[2] * v[185]
+                + v[186] - v[187] - v[188]) * v[11];
+        v[190] = (-v[23] * v[160] - v[21] * v[159]) * J1 - v[185] * v[26]
+            - ((v[166] + v[167] * v[47]) * v[15] * v[11] + v[156] * v[28]) * m1
+            + (v[125] - theta_dot * Ixx * v[15] * psi_dot - v[130] - v[132] - v[136])
+                * v[17] - v[171] * v[25]
             + theta_dot
-                * (-v[163] * v[16] * (v[49] + v[52] + v[53] + v[56] - v[57] + v[60])
-                    - v[164] * v[54]) + v[17] * v[165]
+                * (-v[161] * v[16] * (v[49] + v[52] + v[53] + v[56] - v[57] + v[60])
+                    - v[162] * v[54]) + v[17] * v[163]
             + v[15]
                 * (psi_dot * phi_dot * v[68]
                     + v[12]
-                        * (v[185] - v[183] - v[184] - v[186] + v[188] - v[189] - v[190])
-                    + (v[175] - v[170] - v[171] - v[172] + v[176] - v[177] - v[178])
-                        * v[11]) - m2 * (v[182] * v[15] * v[12] + v[149] * v[29]);
-        v[193] = a_ * v[17] * theta_dot * theta_dot;
-        v[194] = v[4] * v[12];
-        v[195] = v[6] * v[11];
-        v[196] = (-v[194] - v[195]) * v[15];
-        v[197] = v[15] * (v[194] + v[195]);
-        v[198] = (v[195] - v[194]) * v[15];
-        v[199] = (v[194] - v[195]) * v[15];
+                        * (v[183] - v[181] - v[182] - v[184] + v[186] - v[187] - v[188])
+                    + (v[173] - v[168] - v[169] - v[170] + v[174] - v[175] - v[176])
+                        * v[11]) - m2 * (v[180] * v[15] * v[12] + v[147] * v[29]);
+        v[191] = a_ * v[17] * theta_dot * theta_dot;
+        v[192] = v[4] * v[12];
+        v[193] = v[6] * v[11];
+        v[194] = (-v[192] - v[193]) * v[15];
+        v[195] = v[15] * (v[192] + v[193]);
+        v[196] = (v[193] - v[192]) * v[15];
+        v[197] = (v[192] - v[193]) * v[15];
+        v[198] = 0.25 * v[194] - 0.25 * v[195] - 0.25 * v[196] + 0.25 * v[197] - v[22];
+        v[199] = v[6] * v[12];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -1893,24 +1743,22 @@ pub mod maggi {
         _state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 216],
+        v: &mut [f64; 214],
     ) {
-        v[200] = 0.25 * v[196] - 0.25 * v[197] - 0.25 * v[198] + 0.25 * v[199] - v[22];
-        v[201] = v[6] * v[12];
-        v[202] = v[4] * v[11];
-        v[203] = v[17] * (v[201] + v[202]);
-        v[204] = v[17] * (v[202] - v[201]);
-        v[205] = v[17] * v[12];
-        v[206] = v[15] * v[11];
-        v[207] = v[2] * (v[205] + v[206]);
-        v[208] = v[15] * v[12];
-        v[209] = v[17] * v[11];
-        v[210] = v[1] * (v[208] - v[209]);
-        v[211] = v[2] * (v[206] - v[205]);
-        v[212] = v[1] * (v[209] - v[208]);
-        v[213] = v[1] * (v[208] + v[209]);
-        v[214] = (-v[208] - v[209]) * v[1];
-        v[215] = 0.25 * v[212] - 0.25 * v[210] - 0.25 * v[213] + v[20] + 0.25 * v[214];
+        v[200] = v[4] * v[11];
+        v[201] = v[17] * (v[199] + v[200]);
+        v[202] = v[17] * (v[200] - v[199]);
+        v[203] = v[17] * v[12];
+        v[204] = v[15] * v[11];
+        v[205] = v[2] * (v[203] + v[204]);
+        v[206] = v[15] * v[12];
+        v[207] = v[17] * v[11];
+        v[208] = v[1] * (v[206] - v[207]);
+        v[209] = v[2] * (v[204] - v[203]);
+        v[210] = v[1] * (v[207] - v[206]);
+        v[211] = v[1] * (v[206] + v[207]);
+        v[212] = (-v[206] - v[207]) * v[1];
+        v[213] = 0.25 * v[210] - 0.25 * v[208] - 0.25 * v[211] + v[20] + 0.25 * v[212];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -1999,6 +1847,11 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -2012,9 +1865,39 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let mut v = [0.0f64; 41];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::sin(gamma2);
+        let x1 = f64::cos(gamma2);
+        let x2 = f64::cos(psi);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = f64::sin(psi);
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(phi);
+        let x8 = x4 * x5 + x6 * x2 * x7;
+        let x9 = x2 * x3 * x0 + x1 * x8;
+        let x10 = d + x1 * a_;
+        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
+        let x12 = x6 * x2 * x4 - x7 * x5;
+        let x13 = a_ + x1 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x2 * x14 * x3;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x3 * x4 + x6 * x14;
+        let x23 = -x22 * d - a_ * x3 * x4;
+        let x24 = x1 * x3 * x7 - x6 * x0;
+        let x25 = -a_ * x3 * x7 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x6 * x7 * x5 - x2 * x4;
+        let x28 = x3 * x0 * x5 + x1 * x27;
+        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
+        let x30 = x2 * x7 + x6 * x4 * x5;
+        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x3 * x5;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2047,42 +1930,30 @@ pub mod maggi {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (v[12] * v[7] + v[13] * v[14] * v[4])
-                    + m1 * (v[4] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[7]))
-                + v[29] * Y_dot
-                + X_dot
-                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
-                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
-                + (m1 * (v[3] * (v[17] * v[30] + v[21]) * v[7] + v[8] * v[32])
-                    + m2 * (v[3] * v[12] * v[4] + v[13] * v[34])) * psi_dot
+                * (m2 * (x11 * x7 + x12 * x13 * x4)
+                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
+                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
+                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[0])
-                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
-                + Z_dot * v[37],
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (v[38] * v[7] + v[14] * v[4] * v[23])
-                    + (v[22] * v[26] * v[7] + (v[24] * v[19] - v[39]) * v[4]) * m1)
-                + v[29] * X_dot
-                + ((v[15] * v[26] * m1 - m2 * v[0] * v[23]) * phi_dot
-                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
+                * (m2 * (x29 * x7 + x13 * x4 * x30)
+                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (v[3] * (v[24] * v[30] + v[39]) * v[7] + v[26] * v[32])
-                        + m2 * (v[3] * v[4] * v[38] + v[23] * v[34]))
-                + Y_dot
-                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
-                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
-                + Z_dot * v[40],
+                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
+                        + m2 * (x3 * x4 * x29 + x30 * x25)),
             theta_dot
                 * (m2
-                    * (v[3] * v[14] * v[4] * v[4]
-                        + (v[33] * v[11] - a_ * v[36] * v[0]) * v[7])
+                    * (x3 * x13 * x4 * x4
+                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
                     + m1
-                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[4]
-                            + v[22] * v[3] * v[7] * v[7]))
-                + (m2 * gamma2_dot * v[33]
-                    + (v[15] * m1 * v[7] - m2 * v[0] * v[4]) * v[3] * phi_dot
-                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
-                + v[40] * Y_dot + X_dot * v[37],
+                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
+                            + x20 * x3 * x7 * x7))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2090,81 +1961,6 @@ pub mod maggi {
             }
         }
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(gamma2);
-        v[1] = f64::cos(gamma2);
-        v[2] = f64::cos(psi);
-        v[3] = f64::cos(theta);
-        v[4] = f64::sin(phi);
-        v[5] = f64::sin(psi);
-        v[6] = f64::sin(theta);
-        v[7] = f64::cos(phi);
-        v[8] = v[4] * v[5] + v[6] * v[2] * v[7];
-        v[9] = v[1] * v[2] * v[3] - v[0] * v[8];
-        v[10] = v[2] * v[3] * v[0] + v[1] * v[8];
-        v[11] = d + v[1] * a_;
-        v[12] = v[10] * v[11] - a_ * v[0] * v[9];
-        v[13] = v[6] * v[2] * v[4] - v[7] * v[5];
-        v[14] = a_ + v[1] * d;
-        v[15] = f64::sin(gamma1);
-        v[16] = f64::cos(gamma1);
-        v[17] = v[16] * v[13] - v[2] * v[15] * v[3];
-        v[18] = v[16] * a_;
-        v[19] = -v[18] - d;
-        v[20] = v[13] * v[15] + v[16] * v[2] * v[3];
-        v[21] = a_ * v[15] * v[20];
-        v[22] = -a_ - v[16] * d;
-        v[23] = v[2] * v[7] + v[6] * v[4] * v[5];
-        v[24] = v[16] * v[23] - v[15] * v[3] * v[5];
-        v[25] = v[16] * v[3] * v[5] + v[15] * v[23];
-        v[26] = v[6] * v[7] * v[5] - v[2] * v[4];
-        v[27] = v[3] * v[0] * v[5] + v[1] * v[26];
-        v[28] = v[1] * v[3] * v[5] - v[0] * v[26];
-        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
-            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
-        v[30] = v[18] + d;
-        v[31] = v[16] * v[3] * v[4] + v[6] * v[15];
-        v[32] = -v[31] * d - a_ * v[3] * v[4];
-        v[33] = v[1] * v[3] * v[7] - v[6] * v[0];
-        v[34] = -a_ * v[3] * v[7] - v[33] * d;
-        v[35] = v[15] * v[3] * v[4] - v[16] * v[6];
-        v[36] = -v[3] * v[0] * v[7] - v[1] * v[6];
-        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[3] * v[8] * v[7])
-            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[3] * v[4]) * m2;
-        v[38] = v[27] * v[11] - a_ * v[28] * v[0];
-        v[39] = a_ * v[15] * v[25];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[3] * v[4] * v[23])
-            + (v[3] * v[26] * v[7] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -2287,7 +2083,6 @@ pub mod kane {
         let u6 = state[13];
         let u7 = state[14];
         let u8 = state[15];
-        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -2297,7 +2092,7 @@ pub mod kane {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 101];
+        let mut v = [0.0f64; 99];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -2348,62 +2143,42 @@ pub mod kane {
                 ],
                 [0.0, 0.0, v[47], v[6], 0.0, v[57], v[58], v[59]],
                 [0.0, v[36], 0.0, 0.0, v[13], v[60], v[61], v[62]],
-                [
-                    v[26],
-                    v[39],
-                    v[50],
-                    v[57],
-                    v[60],
-                    m0 + (v[48] * v[48] + v[49] * v[49] + v[24] * v[24]) * m1
-                        + m2 * (v[38] * v[38] + v[37] * v[37] + v[25] * v[25]),
-                    v[63],
-                    v[64],
-                ],
-                [
-                    v[31],
-                    v[42],
-                    v[53],
-                    v[58],
-                    v[61],
-                    v[63],
-                    (v[51] * v[51] + v[52] * v[52] + v[30] * v[30]) * m1 + m0
-                        + (v[27] * v[27] + v[41] * v[41] + v[40] * v[40]) * m2,
-                    v[65],
-                ],
-                [v[32], v[45], v[56], v[59], v[62], v[64], v[65], m2 + m0 + m1],
+                [v[26], v[39], v[50], v[57], v[60], v[63], 0.0, 0.0],
+                [v[31], v[42], v[53], v[58], v[61], 0.0, v[63], 0.0],
+                [v[32], v[45], v[56], v[59], v[62], 0.0, 0.0, v[63]],
             ],
             force: [
-                (-v[10] * u5 * v[68] - v[8] * v[71] * u4) * J1
-                    + v[7] * (v[74] - d * m1 * v[76] + v[79]) - v[80] * u2 + u3 * v[81]
-                    + (m2 * d * v[82] - v[84] * v[85]) * v[12],
-                v[87] + v[80] * u1 - v[71] * u4 * v[7] * J1 - u3 * v[88]
-                    - v[16] * m1 * v[76] - v[8] * (v[74] + v[79])
+                (-v[10] * u5 * v[66] - v[8] * v[69] * u4) * J1
+                    + v[7] * (v[72] - d * m1 * v[74] + v[77]) - v[78] * u2 + u3 * v[79]
+                    + (m2 * d * v[80] - v[82] * v[83]) * v[12],
+                v[85] + v[78] * u1 - v[69] * u4 * v[7] * J1 - u3 * v[86]
+                    - v[16] * m1 * v[74] - v[8] * (v[72] + v[77])
                     - m2
                         * (d
                             * (a_
-                                * (v[12] * (u3 * u3 - v[89] + u5 * (-u5 - 2.0 * u2))
+                                * (v[12] * (u3 * u3 - v[87] + u5 * (-u5 - 2.0 * u2))
                                     - 2.0 * (v[10] * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * v[91]) - f64::cos(v[90]) * u1) * u3
-                                        - 0.5 * (u1 * u1 * v[91]))) - a_ * a_ * u3 * u1),
-                u5 * v[68] * v[12] * J1 - m2 * v[20] * v[82] - u1 * v[81] + v[92]
-                    - v[84] * v[10] * v[85] + v[88] * u2
+                                    * ((0.5 * (u3 * v[89]) - f64::cos(v[88]) * u1) * u3
+                                        - 0.5 * (u1 * u1 * v[89]))) - a_ * a_ * u3 * u1),
+                u5 * v[66] * v[12] * J1 - m2 * v[20] * v[80] - u1 * v[79] + v[90]
+                    - v[82] * v[10] * v[83] + v[86] * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
                                 * (2.0 * (v[8] * u1 * u2)
-                                    + (u2 * u2 - v[89] + u4 * (-u4 - 2.0 * u3)) * v[7])
-                                + (0.5 * (v[94] * u2 * u2)
-                                    + (f64::cos(v[93]) * u2 - 0.5 * (u1 * v[94])) * u1) * d))
+                                    + (u2 * u2 - v[87] + u4 * (-u4 - 2.0 * u3)) * v[7])
+                                + (0.5 * (v[92] * u2 * u2)
+                                    + (f64::cos(v[91]) * u2 - 0.5 * (u1 * v[92])) * u1) * d))
                         * m1,
-                v[92] - d * m1 * v[96],
-                v[87] - m2 * v[98] * d,
-                -m2 * (v[25] * v[82] + v[98] * v[38] + v[37] * v[99])
-                    - (v[48] * v[96] + v[24] * v[76] + v[49] * v[100]) * m1,
-                -m2 * (v[40] * v[99] + v[98] * v[41] + v[27] * v[82])
-                    - (v[51] * v[96] + v[30] * v[76] + v[100] * v[52]) * m1,
-                -(v[54] * v[96] + v[55] * v[100] + v[0] * v[3] * v[76]) * m1
-                    - m2 * (v[0] * v[2] * v[82] + v[98] * v[44] + v[43] * v[99]),
+                v[90] - d * m1 * v[94],
+                v[85] - m2 * v[96] * d,
+                -m2 * (v[25] * v[80] + v[96] * v[38] + v[37] * v[97])
+                    - (v[48] * v[94] + v[24] * v[74] + v[49] * v[98]) * m1,
+                -m2 * (v[40] * v[97] + v[96] * v[41] + v[27] * v[80])
+                    - (v[51] * v[94] + v[30] * v[74] + v[98] * v[52]) * m1,
+                -(v[54] * v[94] + v[55] * v[98] + v[0] * v[3] * v[74]) * m1
+                    - m2 * (v[0] * v[2] * v[80] + v[96] * v[44] + v[43] * v[97]),
             ],
             checks: [v[0]],
         }
@@ -2415,7 +2190,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 101],
+        v: &mut [f64; 99],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -2481,12 +2256,18 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 101],
+        v: &mut [f64; 99],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
+        let m0 = params.m0;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
@@ -2515,26 +2296,23 @@ pub mod kane {
         v[60] = m2 * d * v[38];
         v[61] = m2 * d * v[41];
         v[62] = m2 * v[44] * d;
-        v[63] = m1 * (v[48] * v[51] + v[24] * v[30] + v[49] * v[52])
-            + m2 * (v[37] * v[40] + v[25] * v[27] + v[41] * v[38]);
-        v[64] = (v[49] * v[55] + v[48] * v[54] + v[0] * v[24] * v[3]) * m1
-            + m2 * (v[44] * v[38] + v[25] * v[0] * v[2] + v[37] * v[43]);
-        v[65] = m2 * (v[44] * v[41] + v[43] * v[40] + v[0] * v[2] * v[27])
-            + (v[0] * v[30] * v[3] + v[55] * v[52] + v[51] * v[54]) * m1;
-        v[66] = v[12] * u1;
-        v[67] = v[10] * u3;
-        v[68] = -v[66] - v[67];
-        v[69] = v[8] * u2;
-        v[70] = v[7] * u1;
-        v[71] = v[69] - v[70];
-        v[72] = v[7] * u2;
-        v[73] = v[8] * u1;
-        v[74] = u4 * J2 * (-v[72] - v[73]);
-        v[75] = 2.0 * u4 + u3;
-        v[76] = d * (v[8] * v[75] * u1 + v[75] * v[7] * u2) + a_ * u3 * u1;
-        v[77] = v[72] + v[73];
-        v[78] = u4 + u3;
-        v[79] = v[77] * v[14] * v[78];
+        v[63] = m2 + m0 + m1;
+        v[64] = v[12] * u1;
+        v[65] = v[10] * u3;
+        v[66] = -v[64] - v[65];
+        v[67] = v[8] * u2;
+        v[68] = v[7] * u1;
+        v[69] = v[67] - v[68];
+        v[70] = v[7] * u2;
+        v[71] = v[8] * u1;
+        v[72] = u4 * J2 * (-v[70] - v[71]);
+        v[73] = 2.0 * u4 + u3;
+        v[74] = d * (v[8] * v[73] * u1 + v[73] * v[7] * u2) + a_ * u3 * u1;
+        v[75] = v[70] + v[71];
+        v[76] = u4 + u3;
+        v[77] = v[75] * v[14] * v[76];
+        v[78] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[79] = Iyy * u2 - Iyz * u3 - Ixy * u1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2543,7 +2321,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 101],
+        v: &mut [f64; 99],
     ) {
         let gamma1 = state[3];
         let gamma2 = state[4];
@@ -2553,37 +2331,32 @@ pub mod kane {
         let u4 = state[11];
         let u5 = state[12];
         let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
         let J2 = params.J2;
-        v[80] = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        v[81] = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        v[82] = d * (v[10] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[12])
+        v[80] = d * (v[10] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[12])
             - a_ * u1 * u2;
-        v[83] = u5 + u2;
-        v[84] = u5 * J2 + v[83] * v[18];
-        v[85] = v[10] * u1 - u3 * v[12];
-        v[86] = v[66] + v[67];
-        v[87] = v[18] * v[85] * v[86];
-        v[88] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        v[89] = u1 * u1;
-        v[90] = 2.0 * gamma2;
-        v[91] = f64::sin(v[90]);
-        v[92] = v[71] * v[77] * v[14];
-        v[93] = 2.0 * gamma1;
-        v[94] = f64::sin(v[93]);
-        v[95] = d * (v[70] - v[69]) - a_ * u2;
-        v[96] = a_ * u3 * u3 * v[7] - v[77] * v[95];
-        v[97] = u3 * v[20] - d * v[12] * u1;
-        v[98] = v[85] * v[97] + a_ * v[12] * u2 * u2;
-        v[99] = v[83] * (v[10] * a_ * u2 + v[83] * d) - v[86] * v[97]
+        v[81] = u5 + u2;
+        v[82] = u5 * J2 + v[81] * v[18];
+        v[83] = v[10] * u1 - u3 * v[12];
+        v[84] = v[64] + v[65];
+        v[85] = v[18] * v[83] * v[84];
+        v[86] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[87] = u1 * u1;
+        v[88] = 2.0 * gamma2;
+        v[89] = f64::sin(v[88]);
+        v[90] = v[69] * v[75] * v[14];
+        v[91] = 2.0 * gamma1;
+        v[92] = f64::sin(v[91]);
+        v[93] = d * (v[68] - v[67]) - a_ * u2;
+        v[94] = a_ * u3 * u3 * v[7] - v[75] * v[93];
+        v[95] = u3 * v[20] - d * v[12] * u1;
+        v[96] = v[83] * v[95] + a_ * v[12] * u2 * u2;
+        v[97] = v[81] * (v[10] * a_ * u2 + v[81] * d) - v[84] * v[95]
             - v[10] * u5 * a_ * u2;
-        v[100] = v[71] * v[95] - (u3 * v[46] + u4 * d) * v[78] + v[8] * a_ * u4 * u3;
+        v[98] = v[69] * v[93] - (u3 * v[46] + u4 * d) * v[76] + v[8] * a_ * u4 * u3;
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -2655,6 +2428,11 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -2668,9 +2446,39 @@ pub mod kane {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let mut v = [0.0f64; 41];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(phi);
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = f64::sin(gamma2);
+        let x5 = f64::cos(gamma2);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a_ + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a_ * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a_ * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2692,9 +2500,9 @@ pub mod kane {
             q[5],
             q[6],
             q[7],
-            phi_dot - v[0] * psi_dot,
-            theta_dot * v[1] + v[2] * psi_dot * v[3],
-            v[2] * psi_dot * v[1] - theta_dot * v[3],
+            phi_dot - x0 * psi_dot,
+            theta_dot * x1 + x2 * psi_dot * x3,
+            x2 * psi_dot * x1 - theta_dot * x3,
             gamma1_dot,
             gamma2_dot,
             X_dot,
@@ -2703,42 +2511,30 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (v[12] * v[1] + v[13] * v[14] * v[3])
-                    + m1 * (v[3] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[1]))
-                + v[29] * Y_dot
-                + X_dot
-                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
-                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
-                + (m1 * (v[2] * (v[17] * v[30] + v[21]) * v[1] + v[8] * v[32])
-                    + m2 * (v[2] * v[12] * v[3] + v[13] * v[34])) * psi_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[4])
-                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
-                + Z_dot * v[37],
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (v[38] * v[1] + v[14] * v[3] * v[23])
-                    + (v[22] * v[26] * v[1] + (v[24] * v[19] - v[39]) * v[3]) * m1)
-                + v[29] * X_dot
-                + ((v[15] * v[26] * m1 - m2 * v[4] * v[23]) * phi_dot
-                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (v[2] * (v[24] * v[30] + v[39]) * v[1] + v[26] * v[32])
-                        + m2 * (v[2] * v[3] * v[38] + v[23] * v[34]))
-                + Y_dot
-                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
-                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
-                + Z_dot * v[40],
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
             theta_dot
                 * (m2
-                    * (v[2] * v[14] * v[3] * v[3]
-                        + (v[33] * v[11] - a_ * v[36] * v[4]) * v[1])
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[3]
-                            + v[22] * v[2] * v[1] * v[1]))
-                + (m2 * gamma2_dot * v[33]
-                    + (v[15] * m1 * v[1] - m2 * v[4] * v[3]) * v[2] * phi_dot
-                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
-                + v[40] * Y_dot + X_dot * v[37],
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2746,81 +2542,6 @@ pub mod kane {
             }
         }
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(theta);
-        v[1] = f64::cos(phi);
-        v[2] = f64::cos(theta);
-        v[3] = f64::sin(phi);
-        v[4] = f64::sin(gamma2);
-        v[5] = f64::cos(gamma2);
-        v[6] = f64::cos(psi);
-        v[7] = f64::sin(psi);
-        v[8] = v[3] * v[7] + v[0] * v[6] * v[1];
-        v[9] = v[5] * v[6] * v[2] - v[4] * v[8];
-        v[10] = v[6] * v[2] * v[4] + v[5] * v[8];
-        v[11] = d + v[5] * a_;
-        v[12] = v[10] * v[11] - a_ * v[4] * v[9];
-        v[13] = v[0] * v[6] * v[3] - v[1] * v[7];
-        v[14] = a_ + v[5] * d;
-        v[15] = f64::sin(gamma1);
-        v[16] = f64::cos(gamma1);
-        v[17] = v[16] * v[13] - v[6] * v[15] * v[2];
-        v[18] = v[16] * a_;
-        v[19] = -v[18] - d;
-        v[20] = v[13] * v[15] + v[16] * v[6] * v[2];
-        v[21] = a_ * v[15] * v[20];
-        v[22] = -a_ - v[16] * d;
-        v[23] = v[6] * v[1] + v[0] * v[3] * v[7];
-        v[24] = v[16] * v[23] - v[15] * v[2] * v[7];
-        v[25] = v[16] * v[2] * v[7] + v[15] * v[23];
-        v[26] = v[0] * v[1] * v[7] - v[6] * v[3];
-        v[27] = v[2] * v[4] * v[7] + v[5] * v[26];
-        v[28] = v[5] * v[2] * v[7] - v[4] * v[26];
-        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
-            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
-        v[30] = v[18] + d;
-        v[31] = v[16] * v[2] * v[3] + v[0] * v[15];
-        v[32] = -v[31] * d - a_ * v[2] * v[3];
-        v[33] = v[5] * v[2] * v[1] - v[0] * v[4];
-        v[34] = -a_ * v[2] * v[1] - v[33] * d;
-        v[35] = v[15] * v[2] * v[3] - v[16] * v[0];
-        v[36] = -v[2] * v[4] * v[1] - v[5] * v[0];
-        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[2] * v[8] * v[1])
-            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[2] * v[3]) * m2;
-        v[38] = v[27] * v[11] - a_ * v[28] * v[4];
-        v[39] = a_ * v[15] * v[25];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[2] * v[3] * v[23])
-            + (v[2] * v[26] * v[1] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -2922,17 +2643,13 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 3] = [
-        "cos(theta) = 0",
-        "pivot factor 2 of the velocity transformation vanishes",
-        "pivot factor 3 of the velocity transformation vanishes",
-    ];
+    const CONDITIONS: [&str; 1] = ["cos(theta) = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 8],
         matrix: [[f64; 5]; 5],
         force: [f64; 5],
-        checks: [f64; 3],
+        checks: [f64; 1],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -2956,7 +2673,10 @@ pub mod reduced_volterra {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 119];
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let mut v = [0.0f64; 104];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -2967,100 +2687,90 @@ pub mod reduced_volterra {
                 v[5] * v[1] * v[4] + u1,
                 u4,
                 u5,
-                v[27] * (v[43] * v[56] - v[55] * v[60]) * v[61],
-                v[61] * v[60],
-                v[27] * v[62] * v[61]
-                    * ((v[26] * v[42] - v[43] * v[25]) * v[56]
-                        - v[60] * (v[26] * v[54] - v[55] * v[25])),
+                v[6]
+                    * (G_X - u3 * v[19] - v[28] * u2
+                        + d * (-v[15] * u4 * m1 - u1 * v[29] - u5 * m2 * v[23])),
+                v[6]
+                    * (G_Y - v[35] * u2
+                        + (-u4 * v[37] * m1 - u5 * m2 * v[34] - v[38] * u1) * d
+                        - v[40] * u3),
+                v[6]
+                    * ((-u4 * v[41] * m1 - v[42] * v[0] * u1 - u5 * m2 * v[43]) * d
+                        - v[45] * u2 - u3 * v[47] + G_Z),
             ],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2 * v[15] * v[15]
-                                + v[62]
-                                    * (-v[58] * v[58] - v[39] * v[39] * v[0] * v[0]
-                                        - v[38] * v[38]) + v[7] * v[7] * m1) + (v[63] + v[64]) * J1
-                        + (v[15] * v[15] + v[7] * v[7]) * J2,
-                    v[66],
-                    v[68],
-                    v[69],
-                    v[70],
+                            * (m2 * v[20] * v[20]
+                                + v[6]
+                                    * (-v[38] * v[38] - v[42] * v[42] * v[0] * v[0]
+                                        - v[29] * v[29]) + v[13] * v[13] * m1)
+                        + (v[48] + v[49]) * J1 + (v[20] * v[20] + v[13] * v[13]) * J2,
+                    v[51],
+                    v[53],
+                    v[54],
+                    v[55],
                 ],
                 [
-                    v[66],
-                    v[7] * v[7] * J1 + v[36] * v[36] * m1 + Iyy + J2 * (v[63] + 1.0)
-                        + v[62] * (-v[37] * v[37] - v[57] * v[57] - v[40] * v[40])
-                        + m2 * (v[71] + a_ * (a_ + 2.0 * v[28])),
-                    v[72],
-                    v[73],
-                    v[74],
+                    v[51],
+                    v[13] * v[13] * J1 + v[27] * v[27] * m1 + Iyy + J2 * (v[48] + 1.0)
+                        + v[6] * (-v[28] * v[28] - v[35] * v[35] - v[45] * v[45])
+                        + m2 * (v[56] + a_ * (a_ + 2.0 * v[11])),
+                    v[57],
+                    v[58],
+                    v[59],
                 ],
                 [
-                    v[68],
-                    v[72],
-                    v[62] * (-v[59] * v[59] - v[32] * v[32] - v[41] * v[41])
-                        + v[15] * v[15] * J1 + (a_ * (a_ + 2.0 * v[35]) + v[71]) * m1
-                        + m2 * v[29] * v[29] + Izz + J2 * (v[64] + 1.0),
-                    v[75],
-                    v[76],
+                    v[53],
+                    v[57],
+                    v[6] * (-v[40] * v[40] - v[19] * v[19] - v[47] * v[47])
+                        + v[20] * v[20] * J1 + (a_ * (a_ + 2.0 * v[26]) + v[56]) * m1
+                        + m2 * v[12] * v[12] + Izz + J2 * (v[49] + 1.0),
+                    v[60],
+                    v[61],
                 ],
-                [
-                    v[69],
-                    v[73],
-                    v[75],
-                    d * d * (v[62] * (-v[12] - v[46] - v[22] * v[22]) * m1 + 1.0) * m1
-                        + J2,
-                    v[77],
-                ],
-                [
-                    v[70],
-                    v[74],
-                    v[76],
-                    v[77],
-                    J2
-                        + m2 * (v[62] * m2 * (-v[18] - v[23] * v[23] - v[52]) + 1.0) * d
-                            * d,
-                ],
+                [v[54], v[58], v[60], (1.0 - v[6] * m1) * d * d * m1 + J2, v[62]],
+                [v[55], v[59], v[61], v[62], J2 + m2 * d * d * (1.0 - v[6] * m2)],
             ],
             force: [
-                (-v[16] * u5 * v[80] - v[8] * v[83] * u4) * J1 + v[7] * v[88]
-                    - v[89] * u2 + u3 * v[90]
-                    + (m2 * v[15] * v[91] - v[7] * m1 * v[93]
-                        + (-v[39] * v[0] * v[107] - v[108] * v[38] - v[109] * v[58])
-                            * v[62]) * d - v[110] * v[99] * v[15],
-                v[111] + v[89] * u1 - v[83] * u4 * v[7] * J1 - u3 * v[112]
-                    - v[36] * m1 * v[93] - v[8] * v[88]
+                (-v[10] * u5 * v[65] - v[14] * v[68] * u4) * J1 + v[13] * v[73]
+                    - v[74] * u2 + u3 * v[75]
+                    + (m2 * v[20] * v[76] - v[13] * m1 * v[78]
+                        + (-v[42] * v[0] * v[92] - v[93] * v[29] - v[94] * v[38]) * v[6])
+                        * d - v[95] * v[84] * v[20],
+                v[96] + v[74] * u1 - v[68] * u4 * v[13] * J1 - u3 * v[97]
+                    - v[27] * m1 * v[78] - v[14] * v[73]
                     - m2
                         * (d
                             * (a_
-                                * (v[15] * (u3 * u3 - v[113] + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (v[16] * u3 * u1))
+                                * (v[20] * (u3 * u3 - v[98] + u5 * (-u5 - 2.0 * u2))
+                                    - 2.0 * (v[10] * u3 * u1))
                                 + d
-                                    * ((0.5 * (u3 * v[115]) - f64::cos(v[114]) * u1) * u3
-                                        - 0.5 * (u1 * u1 * v[115]))) - a_ * a_ * u3 * u1)
-                    + v[62] * (-v[109] * v[57] - v[40] * v[107] - v[37] * v[108]),
-                u5 * v[80] * v[15] * J1 - m2 * v[29] * v[91] - u1 * v[90]
-                    + v[62] * (-v[109] * v[59] - v[41] * v[107] - v[108] * v[32])
-                    + v[116] - v[110] * v[16] * v[99] + v[112] * u2
+                                    * ((0.5 * (u3 * v[100]) - f64::cos(v[99]) * u1) * u3
+                                        - 0.5 * (u1 * u1 * v[100]))) - a_ * a_ * u3 * u1)
+                    + v[6] * (-v[94] * v[35] - v[45] * v[92] - v[28] * v[93]),
+                u5 * v[65] * v[20] * J1 - m2 * v[12] * v[76] - u1 * v[75]
+                    + v[6] * (-v[94] * v[40] - v[47] * v[92] - v[93] * v[19]) + v[101]
+                    - v[95] * v[10] * v[84] + v[97] * u2
                     - (a_ * a_ * u1 * u2
                         + d
                             * (a_
-                                * (2.0 * (v[8] * u1 * u2)
-                                    + (u2 * u2 - v[113] + u4 * (-u4 - 2.0 * u3)) * v[7])
-                                + (0.5 * (v[118] * u2 * u2)
-                                    + (f64::cos(v[117]) * u2 - 0.5 * (u1 * v[118])) * u1) * d))
+                                * (2.0 * (v[14] * u1 * u2)
+                                    + (u2 * u2 - v[98] + u4 * (-u4 - 2.0 * u3)) * v[13])
+                                + (0.5 * (v[103] * u2 * u2)
+                                    + (f64::cos(v[102]) * u2 - 0.5 * (u1 * v[103])) * u1) * d))
                         * m1,
-                v[116]
+                v[101]
                     + d
-                        * (v[62] * (-v[22] * v[107] - v[11] * v[108] - v[109] * v[45])
-                            + v[95] - v[96]) * m1,
-                v[111]
+                        * (v[6] * (-v[41] * v[92] - v[15] * v[93] - v[94] * v[37])
+                            + v[80] - v[81]) * m1,
+                v[96]
                     + m2 * d
-                        * (v[62] * (-v[23] * v[107] - v[108] * v[17] - v[109] * v[51])
-                            - v[101] - v[102]),
+                        * (v[6] * (-v[43] * v[92] - v[93] * v[23] - v[94] * v[34])
+                            - v[86] - v[87]),
             ],
-            checks: [v[0], v[26], v[56]],
+            checks: [v[0]],
         }
     }
     #[allow(non_snake_case)]
@@ -3070,7 +2780,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 119],
+        v: &mut [f64; 104],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -3090,42 +2800,40 @@ pub mod reduced_volterra {
         v[3] = f64::cos(phi);
         v[4] = v[2] * u2 + u3 * v[3];
         v[5] = f64::sin(theta);
-        v[6] = f64::cos(psi);
-        v[7] = f64::sin(gamma1);
-        v[8] = f64::cos(gamma1);
-        v[9] = f64::sin(psi);
-        v[10] = v[5] * v[6] * v[2] - v[3] * v[9];
-        v[11] = v[8] * v[10] - v[6] * v[7] * v[0];
-        v[12] = v[11] * v[11];
-        v[13] = v[6] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[9];
-        v[14] = v[2] * v[9] + v[5] * v[6] * v[3];
-        v[15] = f64::sin(gamma2);
-        v[16] = f64::cos(gamma2);
-        v[17] = v[6] * v[0] * v[15] + v[16] * v[14];
-        v[18] = v[17] * v[17];
-        v[19] = (v[16] * v[0] - v[5] * v[15] * v[3]) * v[6] - v[15] * v[2] * v[9];
-        v[20] = m2 + m0 + m1;
-        v[21] = v[7] * v[0] * v[2] - v[8] * v[5];
-        v[22] = v[8] * v[0] * v[2] + v[5] * v[7];
-        v[23] = v[16] * v[0] * v[3] - v[5] * v[15];
-        v[24] = -v[0] * v[15] * v[3] - v[16] * v[5];
-        v[25] = (v[13] * v[21] + v[11] * v[22] + v[0] * v[14] * v[3]) * m1
-            + m2 * (v[23] * v[17] + v[10] * v[0] * v[2] + v[19] * v[24]);
-        v[26] = (m0 + (v[12] + v[13] * v[13] + v[14] * v[14]) * m1
-            + m2 * (v[18] + v[19] * v[19] + v[10] * v[10])) * v[20] - v[25] * v[25];
-        v[27] = 1.0 / v[26];
-        v[28] = v[16] * d;
-        v[29] = -a_ - v[28];
-        v[30] = v[8] * a_;
-        v[31] = v[30] + d;
-        v[32] = m2 * v[10] * v[29] + (v[11] * v[31] + a_ * v[13] * v[7]) * m1;
-        v[33] = v[16] * a_;
-        v[34] = d + v[33];
-        v[35] = v[8] * d;
-        v[36] = -a_ - v[35];
-        v[37] = m2 * (v[17] * v[34] - a_ * v[19] * v[15]) + v[36] * v[14] * m1;
-        v[38] = v[7] * v[14] * m1 - m2 * v[10] * v[15];
-        v[39] = v[7] * m1 * v[3] - m2 * v[15] * v[2];
+        v[6] = 1.0 / (m2 + m0 + m1);
+        v[7] = f64::sin(psi);
+        v[8] = f64::cos(psi);
+        v[9] = v[5] * v[8] * v[2] - v[3] * v[7];
+        v[10] = f64::cos(gamma2);
+        v[11] = v[10] * d;
+        v[12] = -a_ - v[11];
+        v[13] = f64::sin(gamma1);
+        v[14] = f64::cos(gamma1);
+        v[15] = v[14] * v[9] - v[8] * v[13] * v[0];
+        v[16] = v[14] * a_;
+        v[17] = v[16] + d;
+        v[18] = v[8] * (v[5] * v[13] * v[2] + v[14] * v[0]) - v[13] * v[3] * v[7];
+        v[19] = m2 * v[9] * v[12] + (v[15] * v[17] + a_ * v[18] * v[13]) * m1;
+        v[20] = f64::sin(gamma2);
+        v[21] = (v[10] * v[0] - v[5] * v[20] * v[3]) * v[8] - v[20] * v[2] * v[7];
+        v[22] = v[2] * v[7] + v[5] * v[8] * v[3];
+        v[23] = v[8] * v[0] * v[20] + v[10] * v[22];
+        v[24] = v[10] * a_;
+        v[25] = d + v[24];
+        v[26] = v[14] * d;
+        v[27] = -a_ - v[26];
+        v[28] = m2 * (v[23] * v[25] - a_ * v[21] * v[20]) + v[27] * v[22] * m1;
+        v[29] = v[13] * v[22] * m1 - m2 * v[9] * v[20];
+        v[30] = v[8] * v[2];
+        v[31] = v[5] * v[3] * v[7];
+        v[32] = v[31] - v[30];
+        v[33] = v[10] * v[0] * v[7] + (v[30] - v[31]) * v[20];
+        v[34] = v[0] * v[20] * v[7] + v[10] * v[32];
+        v[35] = v[27] * v[32] * m1 + m2 * (v[34] * v[25] - a_ * v[20] * v[33]);
+        v[36] = v[8] * v[3] + v[5] * v[2] * v[7];
+        v[37] = v[14] * v[36] - v[13] * v[0] * v[7];
+        v[38] = v[13] * v[32] * m1 - m2 * v[20] * v[36];
+        v[39] = v[14] * v[0] * v[7] + v[13] * v[36];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3133,107 +2841,14 @@ pub mod reduced_volterra {
         _t: f64,
         state: &[f64; STATES],
         params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 119],
-    ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m0 = params.m0;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        let G_X = g_i[0];
-        let G_Y = g_i[1];
-        let G_Z = g_i[2];
-        v[40] = m2 * (v[23] * v[34] - a_ * v[24] * v[15]) + v[36] * v[0] * m1 * v[3];
-        v[41] = (v[22] * v[31] + a_ * v[21] * v[7]) * m1 + m2 * v[0] * v[2] * v[29];
-        v[42] = (-u4 * v[22] * m1 - v[39] * v[0] * u1 - u5 * m2 * v[23]) * d - v[40] * u2
-            - u3 * v[41] + G_Z;
-        v[43] = v[20]
-            * (G_X - u3 * v[32] - v[37] * u2
-                + d * (-v[11] * u4 * m1 - u1 * v[38] - u5 * m2 * v[17])) - v[25] * v[42];
-        v[44] = v[6] * v[3] + v[5] * v[2] * v[9];
-        v[45] = v[8] * v[44] - v[7] * v[0] * v[9];
-        v[46] = v[45] * v[45];
-        v[47] = v[8] * v[0] * v[9] + v[7] * v[44];
-        v[48] = v[6] * v[2];
-        v[49] = v[5] * v[3] * v[9];
-        v[50] = v[49] - v[48];
-        v[51] = v[0] * v[15] * v[9] + v[16] * v[50];
-        v[52] = v[51] * v[51];
-        v[53] = v[16] * v[0] * v[9] + (v[48] - v[49]) * v[15];
-        v[54] = m2 * (v[23] * v[51] + v[24] * v[53] + v[0] * v[2] * v[44])
-            + (v[0] * v[50] * v[3] + v[21] * v[47] + v[45] * v[22]) * m1;
-        v[55] = v[20]
-            * (m1 * (v[11] * v[45] + v[14] * v[50] + v[13] * v[47])
-                + m2 * (v[19] * v[53] + v[10] * v[44] + v[51] * v[17])) - v[25] * v[54];
-        v[56] = v[26]
-            * (((v[46] + v[47] * v[47] + v[50] * v[50]) * m1 + m0
-                + (v[44] * v[44] + v[52] + v[53] * v[53]) * m2) * v[20] - v[54] * v[54])
-            - v[55] * v[55];
-        v[57] = v[36] * v[50] * m1 + m2 * (v[51] * v[34] - a_ * v[15] * v[53]);
-        v[58] = v[7] * v[50] * m1 - m2 * v[15] * v[44];
-        v[59] = (v[45] * v[31] + a_ * v[7] * v[47]) * m1 + m2 * v[29] * v[44];
-        v[60] = ((G_Y - v[57] * u2
-            + (-u4 * v[45] * m1 - u5 * m2 * v[51] - v[58] * u1) * d - v[59] * u3) * v[20]
-            - v[42] * v[54]) * v[26] - v[43] * v[55];
-        v[61] = 1.0 / v[56];
-        v[62] = 1.0 / v[20];
-        v[63] = v[8] * v[8];
-        v[64] = v[16] * v[16];
-        v[65] = J1 - J2;
-        v[66] = v[8] * v[65] * v[7] - Ixy
-            + d
-                * ((-v[37] * v[38] - v[58] * v[57] - v[40] * v[39] * v[0]) * v[62]
-                    + v[36] * v[7] * m1);
-        v[67] = J2 - J1;
-        v[68] = (v[62] * (-v[59] * v[58] - v[32] * v[38] - v[39] * v[0] * v[41])
-            - m2 * v[15] * v[29]) * d + v[16] * v[67] * v[15] - Ixz;
-        v[69] = v[62] * d * d * (-v[39] * v[22] * v[0] - v[11] * v[38] - v[58] * v[45])
-            * m1;
-        v[70] = v[62] * m2 * d * d
-            * (-v[17] * v[38] - v[58] * v[51] - v[23] * v[39] * v[0]);
-        v[71] = d * d;
-        v[72] = (-v[37] * v[32] - v[59] * v[57] - v[40] * v[41]) * v[62] - Iyz;
-        v[73] = v[62] * d * m1 * (-v[37] * v[11] - v[40] * v[22] - v[45] * v[57]);
-        v[74] = m2
-            * (v[62] * (-v[23] * v[40] - v[37] * v[17] - v[57] * v[51]) + d + v[33]) * d
-            + J2;
-        v[75] = J2
-            + d * m1
-                * (v[30] + d + (-v[11] * v[32] - v[22] * v[41] - v[59] * v[45]) * v[62]);
-        v[76] = v[62] * m2 * d * (-v[17] * v[32] - v[23] * v[41] - v[59] * v[51]);
-        v[77] = v[62] * m2 * d * d * m1
-            * (-v[11] * v[17] - v[23] * v[22] - v[45] * v[51]);
-        v[78] = v[15] * u1;
-        v[79] = v[16] * u3;
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn rhs_part2(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 119],
+        v: &mut [f64; 104],
     ) {
-        let gamma1 = state[3];
-        let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
@@ -3243,51 +2858,113 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
+        let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = -v[78] - v[79];
-        v[81] = v[8] * u2;
-        v[82] = v[7] * u1;
-        v[83] = v[81] - v[82];
-        v[84] = v[7] * u2;
-        v[85] = v[8] * u1;
-        v[86] = v[84] + v[85];
-        v[87] = u4 + u3;
-        v[88] = u4 * J2 * (-v[84] - v[85]) + v[86] * v[65] * v[87];
-        v[89] = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        v[90] = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        v[91] = d * (v[16] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[15])
+        v[40] = (v[37] * v[17] + a_ * v[13] * v[39]) * m1 + m2 * v[12] * v[36];
+        v[41] = v[14] * v[0] * v[2] + v[5] * v[13];
+        v[42] = v[13] * m1 * v[3] - m2 * v[20] * v[2];
+        v[43] = v[10] * v[0] * v[3] - v[5] * v[20];
+        v[44] = -v[0] * v[20] * v[3] - v[10] * v[5];
+        v[45] = m2 * (v[43] * v[25] - a_ * v[44] * v[20]) + v[27] * v[0] * m1 * v[3];
+        v[46] = v[13] * v[0] * v[2] - v[14] * v[5];
+        v[47] = (v[41] * v[17] + a_ * v[46] * v[13]) * m1 + m2 * v[0] * v[2] * v[12];
+        v[48] = v[14] * v[14];
+        v[49] = v[10] * v[10];
+        v[50] = J1 - J2;
+        v[51] = v[14] * v[50] * v[13] - Ixy
+            + d
+                * ((-v[28] * v[29] - v[38] * v[35] - v[45] * v[42] * v[0]) * v[6]
+                    + v[27] * v[13] * m1);
+        v[52] = J2 - J1;
+        v[53] = (v[6] * (-v[40] * v[38] - v[19] * v[29] - v[42] * v[0] * v[47])
+            - m2 * v[20] * v[12]) * d + v[10] * v[52] * v[20] - Ixz;
+        v[54] = v[6] * d * d * (-v[42] * v[41] * v[0] - v[15] * v[29] - v[38] * v[37])
+            * m1;
+        v[55] = v[6] * m2 * d * d
+            * (-v[23] * v[29] - v[38] * v[34] - v[43] * v[42] * v[0]);
+        v[56] = d * d;
+        v[57] = (-v[28] * v[19] - v[40] * v[35] - v[45] * v[47]) * v[6] - Iyz;
+        v[58] = v[6] * d * m1 * (-v[28] * v[15] - v[45] * v[41] - v[37] * v[35]);
+        v[59] = m2
+            * (v[6] * (-v[43] * v[45] - v[28] * v[23] - v[35] * v[34]) + d + v[24]) * d
+            + J2;
+        v[60] = J2
+            + d * m1
+                * (v[16] + d + (-v[15] * v[19] - v[41] * v[47] - v[40] * v[37]) * v[6]);
+        v[61] = v[6] * m2 * d * (-v[23] * v[19] - v[43] * v[47] - v[40] * v[34]);
+        v[62] = v[6] * m2 * d * d * m1
+            * (-v[15] * v[23] - v[43] * v[41] - v[37] * v[34]);
+        v[63] = v[20] * u1;
+        v[64] = v[10] * u3;
+        v[65] = -v[63] - v[64];
+        v[66] = v[14] * u2;
+        v[67] = v[13] * u1;
+        v[68] = v[66] - v[67];
+        v[69] = v[13] * u2;
+        v[70] = v[14] * u1;
+        v[71] = v[69] + v[70];
+        v[72] = u4 + u3;
+        v[73] = u4 * J2 * (-v[69] - v[70]) + v[71] * v[50] * v[72];
+        v[74] = u3 * Izz - Iyz * u2 - u1 * Ixz;
+        v[75] = Iyy * u2 - Iyz * u3 - Ixy * u1;
+        v[76] = d * (v[10] * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * v[20])
             - a_ * u1 * u2;
-        v[92] = 2.0 * u4 + u3;
-        v[93] = d * (v[8] * v[92] * u1 + v[92] * v[7] * u2) + a_ * u3 * u1;
-        v[94] = d * (v[82] - v[81]) - a_ * u2;
-        v[95] = v[86] * v[94];
-        v[96] = a_ * u3 * u3 * v[7];
-        v[97] = v[96] - v[95];
-        v[98] = v[83] * v[94] - (u3 * v[31] + u4 * d) * v[87] + v[8] * a_ * u4 * u3;
-        v[99] = v[16] * u1 - u3 * v[15];
-        v[100] = u3 * v[29] - d * v[15] * u1;
-        v[101] = v[99] * v[100];
-        v[102] = a_ * v[15] * u2 * u2;
-        v[103] = v[101] + v[102];
-        v[104] = v[78] + v[79];
-        v[105] = u5 + u2;
-        v[106] = v[105] * (v[16] * a_ * u2 + v[105] * d) - v[104] * v[100]
-            - v[16] * u5 * a_ * u2;
-        v[107] = -(v[22] * v[97] + v[21] * v[98] + v[0] * v[3] * v[93]) * m1
-            - m2 * (v[0] * v[2] * v[91] + v[103] * v[23] + v[24] * v[106]);
-        v[108] = -m2 * (v[10] * v[91] + v[103] * v[17] + v[19] * v[106])
-            - (v[11] * v[97] + v[14] * v[93] + v[13] * v[98]) * m1;
-        v[109] = -m2 * (v[53] * v[106] + v[103] * v[51] + v[44] * v[91])
-            - (v[45] * v[97] + v[50] * v[93] + v[98] * v[47]) * m1;
-        v[110] = u5 * J2 + v[105] * v[67];
-        v[111] = v[67] * v[99] * v[104];
-        v[112] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        v[113] = u1 * u1;
-        v[114] = 2.0 * gamma2;
-        v[115] = f64::sin(v[114]);
-        v[116] = v[83] * v[86] * v[65];
-        v[117] = 2.0 * gamma1;
-        v[118] = f64::sin(v[117]);
+        v[77] = 2.0 * u4 + u3;
+        v[78] = d * (v[14] * v[77] * u1 + v[77] * v[13] * u2) + a_ * u3 * u1;
+        v[79] = d * (v[67] - v[66]) - a_ * u2;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part2(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 104],
+    ) {
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J2 = params.J2;
+        v[80] = v[71] * v[79];
+        v[81] = a_ * u3 * u3 * v[13];
+        v[82] = v[81] - v[80];
+        v[83] = v[68] * v[79] - (u3 * v[17] + u4 * d) * v[72] + v[14] * a_ * u4 * u3;
+        v[84] = v[10] * u1 - u3 * v[20];
+        v[85] = u3 * v[12] - d * v[20] * u1;
+        v[86] = v[84] * v[85];
+        v[87] = a_ * v[20] * u2 * u2;
+        v[88] = v[86] + v[87];
+        v[89] = v[63] + v[64];
+        v[90] = u5 + u2;
+        v[91] = v[90] * (v[10] * a_ * u2 + v[90] * d) - v[89] * v[85]
+            - v[10] * u5 * a_ * u2;
+        v[92] = -(v[41] * v[82] + v[46] * v[83] + v[0] * v[3] * v[78]) * m1
+            - m2 * (v[0] * v[2] * v[76] + v[88] * v[43] + v[44] * v[91]);
+        v[93] = -m2 * (v[9] * v[76] + v[88] * v[23] + v[21] * v[91])
+            - (v[15] * v[82] + v[22] * v[78] + v[18] * v[83]) * m1;
+        v[94] = -m2 * (v[33] * v[91] + v[88] * v[34] + v[36] * v[76])
+            - (v[37] * v[82] + v[32] * v[78] + v[83] * v[39]) * m1;
+        v[95] = u5 * J2 + v[90] * v[52];
+        v[96] = v[52] * v[84] * v[89];
+        v[97] = Ixx * u1 - Ixy * u2 - u3 * Ixz;
+        v[98] = u1 * u1;
+        v[99] = 2.0 * gamma2;
+        v[100] = f64::sin(v[99]);
+        v[101] = v[68] * v[71] * v[50];
+        v[102] = 2.0 * gamma1;
+        v[103] = f64::sin(v[102]);
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -3356,6 +3033,11 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -3369,9 +3051,39 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let mut v = [0.0f64; 41];
-        initial_state_part0(t, q, qdot, params, &mut v);
-        initial_state_part1(t, q, qdot, params, &mut v);
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(phi);
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = f64::sin(gamma2);
+        let x5 = f64::cos(gamma2);
+        let x6 = f64::cos(psi);
+        let x7 = f64::sin(psi);
+        let x8 = x3 * x7 + x0 * x6 * x1;
+        let x9 = x6 * x2 * x4 + x5 * x8;
+        let x10 = d + x5 * a_;
+        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
+        let x12 = x0 * x6 * x3 - x1 * x7;
+        let x13 = a_ + x5 * d;
+        let x14 = f64::sin(gamma1);
+        let x15 = f64::cos(gamma1);
+        let x16 = x15 * x12 - x6 * x14 * x2;
+        let x17 = x15 * a_;
+        let x18 = -x17 - d;
+        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
+        let x20 = -a_ - x15 * d;
+        let x21 = x17 + d;
+        let x22 = x15 * x2 * x3 + x0 * x14;
+        let x23 = -x22 * d - a_ * x2 * x3;
+        let x24 = x5 * x2 * x1 - x0 * x4;
+        let x25 = -a_ * x2 * x1 - x24 * d;
+        let x26 = m2 + m0 + m1;
+        let x27 = x0 * x1 * x7 - x6 * x3;
+        let x28 = x2 * x4 * x7 + x5 * x27;
+        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
+        let x30 = x6 * x1 + x0 * x3 * x7;
+        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
+        let x32 = x15 * x30 - x14 * x2 * x7;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3393,50 +3105,38 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - v[0] * psi_dot,
-            theta_dot * v[1] + v[2] * psi_dot * v[3],
-            v[2] * psi_dot * v[1] - theta_dot * v[3],
+            phi_dot - x0 * psi_dot,
+            theta_dot * x1 + x2 * psi_dot * x3,
+            x2 * psi_dot * x1 - theta_dot * x3,
             gamma1_dot,
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (v[12] * v[1] + v[13] * v[14] * v[3])
-                    + m1 * (v[3] * (v[17] * v[19] - v[21]) + v[22] * v[8] * v[1]))
-                + v[29] * Y_dot
-                + X_dot
-                    * (m0 + m1 * (v[17] * v[17] + v[20] * v[20] + v[8] * v[8])
-                        + m2 * (v[10] * v[10] + v[9] * v[9] + v[13] * v[13]))
-                + (m1 * (v[2] * (v[17] * v[30] + v[21]) * v[1] + v[8] * v[32])
-                    + m2 * (v[2] * v[12] * v[3] + v[13] * v[34])) * psi_dot
+                * (m2 * (x11 * x1 + x12 * x13 * x3)
+                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
+                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
+                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
                 + d
-                    * (phi_dot * (v[15] * v[8] * m1 - m2 * v[13] * v[4])
-                        + v[17] * gamma1_dot * m1 + m2 * gamma2_dot * v[10])
-                + Z_dot * v[37],
+                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
+                        + m2 * gamma2_dot * x9) + X_dot * x26,
             theta_dot
-                * (m2 * (v[38] * v[1] + v[14] * v[3] * v[23])
-                    + (v[22] * v[26] * v[1] + (v[24] * v[19] - v[39]) * v[3]) * m1)
-                + v[29] * X_dot
-                + ((v[15] * v[26] * m1 - m2 * v[4] * v[23]) * phi_dot
-                    + m2 * gamma2_dot * v[27] + v[24] * gamma1_dot * m1) * d
+                * (m2 * (x29 * x1 + x13 * x3 * x30)
+                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
+                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
+                    + x32 * gamma1_dot * m1) * d
                 + psi_dot
-                    * (m1 * (v[2] * (v[24] * v[30] + v[39]) * v[1] + v[26] * v[32])
-                        + m2 * (v[2] * v[3] * v[38] + v[23] * v[34]))
-                + Y_dot
-                    * ((v[24] * v[24] + v[25] * v[25] + v[26] * v[26]) * m1 + m0
-                        + m2 * (v[23] * v[23] + v[27] * v[27] + v[28] * v[28]))
-                + Z_dot * v[40],
+                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
+                        + m2 * (x2 * x3 * x29 + x30 * x25)),
             theta_dot
                 * (m2
-                    * (v[2] * v[14] * v[3] * v[3]
-                        + (v[33] * v[11] - a_ * v[36] * v[4]) * v[1])
+                    * (x2 * x13 * x3 * x3
+                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
                     + m1
-                        * ((v[31] * v[19] - a_ * v[35] * v[15]) * v[3]
-                            + v[22] * v[2] * v[1] * v[1]))
-                + (m2 * gamma2_dot * v[33]
-                    + (v[15] * m1 * v[1] - m2 * v[4] * v[3]) * v[2] * phi_dot
-                    + v[31] * gamma1_dot * m1) * d + Z_dot * (m2 + m0 + m1)
-                + v[40] * Y_dot + X_dot * v[37],
+                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
+                            + x20 * x2 * x1 * x1))
+                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
+                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3444,81 +3144,6 @@ pub mod reduced_volterra {
             }
         }
         Ok((state, g_i))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part0(
-        _t: f64,
-        q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[0] = f64::sin(theta);
-        v[1] = f64::cos(phi);
-        v[2] = f64::cos(theta);
-        v[3] = f64::sin(phi);
-        v[4] = f64::sin(gamma2);
-        v[5] = f64::cos(gamma2);
-        v[6] = f64::cos(psi);
-        v[7] = f64::sin(psi);
-        v[8] = v[3] * v[7] + v[0] * v[6] * v[1];
-        v[9] = v[5] * v[6] * v[2] - v[4] * v[8];
-        v[10] = v[6] * v[2] * v[4] + v[5] * v[8];
-        v[11] = d + v[5] * a_;
-        v[12] = v[10] * v[11] - a_ * v[4] * v[9];
-        v[13] = v[0] * v[6] * v[3] - v[1] * v[7];
-        v[14] = a_ + v[5] * d;
-        v[15] = f64::sin(gamma1);
-        v[16] = f64::cos(gamma1);
-        v[17] = v[16] * v[13] - v[6] * v[15] * v[2];
-        v[18] = v[16] * a_;
-        v[19] = -v[18] - d;
-        v[20] = v[13] * v[15] + v[16] * v[6] * v[2];
-        v[21] = a_ * v[15] * v[20];
-        v[22] = -a_ - v[16] * d;
-        v[23] = v[6] * v[1] + v[0] * v[3] * v[7];
-        v[24] = v[16] * v[23] - v[15] * v[2] * v[7];
-        v[25] = v[16] * v[2] * v[7] + v[15] * v[23];
-        v[26] = v[0] * v[1] * v[7] - v[6] * v[3];
-        v[27] = v[2] * v[4] * v[7] + v[5] * v[26];
-        v[28] = v[5] * v[2] * v[7] - v[4] * v[26];
-        v[29] = (v[17] * v[24] + v[20] * v[25] + v[8] * v[26]) * m1
-            + m2 * (v[13] * v[23] + v[27] * v[10] + v[28] * v[9]);
-        v[30] = v[18] + d;
-        v[31] = v[16] * v[2] * v[3] + v[0] * v[15];
-        v[32] = -v[31] * d - a_ * v[2] * v[3];
-        v[33] = v[5] * v[2] * v[1] - v[0] * v[4];
-        v[34] = -a_ * v[2] * v[1] - v[33] * d;
-        v[35] = v[15] * v[2] * v[3] - v[16] * v[0];
-        v[36] = -v[2] * v[4] * v[1] - v[5] * v[0];
-        v[37] = m1 * (v[35] * v[20] + v[17] * v[31] + v[2] * v[8] * v[1])
-            + (v[36] * v[9] + v[33] * v[10] + v[13] * v[2] * v[3]) * m2;
-        v[38] = v[27] * v[11] - a_ * v[28] * v[4];
-        v[39] = a_ * v[15] * v[25];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn initial_state_part1(
-        _t: f64,
-        _q: &[f64; NUM_COORDINATES],
-        _qdot: &[f64; NUM_COORDINATES],
-        params: &Params,
-        v: &mut [f64; 41],
-    ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        v[40] = m2 * (v[28] * v[36] + v[33] * v[27] + v[2] * v[3] * v[23])
-            + (v[2] * v[26] * v[1] + v[35] * v[25] + v[24] * v[31]) * m1;
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -3528,76 +3153,6 @@ pub mod reduced_volterra {
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
     ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let mut v = [0.0f64; 45];
-        velocities_part0(t, state, params, g_i, &mut v);
-        velocities_part1(t, state, params, g_i, &mut v);
-        let value = v[0];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[0],
-                value,
-            });
-        }
-        let value = v[24];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[1],
-                value,
-            });
-        }
-        let value = v[42];
-        if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
-                t,
-                condition: CONDITIONS[2],
-                value,
-            });
-        }
-        let q: [f64; NUM_COORDINATES] = [
-            state[0],
-            state[1],
-            state[2],
-            state[3],
-            state[4],
-            state[5],
-            state[6],
-            state[7],
-        ];
-        let qdot: [f64; NUM_COORDINATES] = [
-            v[1] * v[4],
-            u2 * v[3] - u3 * v[2],
-            v[5] * v[1] * v[4] + u1,
-            u4,
-            u5,
-            v[25] * (v[31] * v[42] - v[41] * v[43]) * v[44],
-            v[44] * v[43],
-            v[25] * v[44]
-                * ((v[24] * v[30] - v[31] * v[23]) * v[42]
-                    - v[43] * (v[24] * v[40] - v[41] * v[23])) / v[18],
-        ];
-        for (index, value) in qdot.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
-            }
-        }
-        Ok((q, qdot))
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn velocities_part0(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 45],
-    ) {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -3614,161 +3169,110 @@ pub mod reduced_volterra {
         let d = params.d;
         let a_ = params.a_;
         let G_X = g_i[0];
-        let G_Z = g_i[2];
-        v[0] = f64::cos(theta);
-        v[1] = 1.0 / v[0];
-        v[2] = f64::sin(phi);
-        v[3] = f64::cos(phi);
-        v[4] = v[2] * u2 + u3 * v[3];
-        v[5] = f64::sin(theta);
-        v[6] = f64::cos(psi);
-        v[7] = f64::sin(gamma1);
-        v[8] = f64::cos(gamma1);
-        v[9] = f64::sin(psi);
-        v[10] = v[5] * v[6] * v[2] - v[3] * v[9];
-        v[11] = v[8] * v[10] - v[6] * v[7] * v[0];
-        v[12] = v[6] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[9];
-        v[13] = v[2] * v[9] + v[5] * v[6] * v[3];
-        v[14] = f64::sin(gamma2);
-        v[15] = f64::cos(gamma2);
-        v[16] = v[6] * v[0] * v[14] + v[15] * v[13];
-        v[17] = (v[15] * v[0] - v[5] * v[14] * v[3]) * v[6] - v[14] * v[2] * v[9];
-        v[18] = m2 + m0 + m1;
-        v[19] = v[7] * v[0] * v[2] - v[8] * v[5];
-        v[20] = v[8] * v[0] * v[2] + v[5] * v[7];
-        v[21] = v[15] * v[0] * v[3] - v[5] * v[14];
-        v[22] = -v[0] * v[14] * v[3] - v[15] * v[5];
-        v[23] = (v[12] * v[19] + v[11] * v[20] + v[0] * v[13] * v[3]) * m1
-            + m2 * (v[21] * v[16] + v[10] * v[0] * v[2] + v[17] * v[22]);
-        v[24] = (m0 + (v[11] * v[11] + v[12] * v[12] + v[13] * v[13]) * m1
-            + m2 * (v[16] * v[16] + v[17] * v[17] + v[10] * v[10])) * v[18]
-            - v[23] * v[23];
-        v[25] = 1.0 / v[24];
-        v[26] = -a_ - v[15] * d;
-        v[27] = v[8] * a_ + d;
-        v[28] = d + v[15] * a_;
-        v[29] = -a_ - v[8] * d;
-        v[30] = (-u4 * v[20] * m1 - (v[7] * m1 * v[3] - m2 * v[14] * v[2]) * v[0] * u1
-            - u5 * m2 * v[21]) * d
-            - (m2 * (v[21] * v[28] - a_ * v[22] * v[14]) + v[29] * v[0] * m1 * v[3]) * u2
-            - u3 * ((v[20] * v[27] + a_ * v[19] * v[7]) * m1 + m2 * v[0] * v[2] * v[26])
-            + G_Z;
-        v[31] = v[18]
-            * (G_X - u3 * (m2 * v[10] * v[26] + (v[11] * v[27] + a_ * v[12] * v[7]) * m1)
-                - (m2 * (v[16] * v[28] - a_ * v[17] * v[14]) + v[29] * v[13] * m1) * u2
-                + d
-                    * (-v[11] * u4 * m1 - u1 * (v[7] * v[13] * m1 - m2 * v[10] * v[14])
-                        - u5 * m2 * v[16])) - v[23] * v[30];
-        v[32] = v[6] * v[3] + v[5] * v[2] * v[9];
-        v[33] = v[8] * v[32] - v[7] * v[0] * v[9];
-        v[34] = v[8] * v[0] * v[9] + v[7] * v[32];
-        v[35] = v[6] * v[2];
-        v[36] = v[5] * v[3] * v[9];
-        v[37] = v[36] - v[35];
-        v[38] = v[0] * v[14] * v[9] + v[15] * v[37];
-        v[39] = v[15] * v[0] * v[9] + (v[35] - v[36]) * v[14];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn velocities_part1(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 45],
-    ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
         let G_Y = g_i[1];
-        v[40] = m2 * (v[21] * v[38] + v[22] * v[39] + v[0] * v[2] * v[32])
-            + (v[0] * v[37] * v[3] + v[19] * v[34] + v[33] * v[20]) * m1;
-        v[41] = v[18]
-            * (m1 * (v[11] * v[33] + v[13] * v[37] + v[12] * v[34])
-                + m2 * (v[17] * v[39] + v[10] * v[32] + v[38] * v[16])) - v[23] * v[40];
-        v[42] = v[24]
-            * (((v[33] * v[33] + v[34] * v[34] + v[37] * v[37]) * m1 + m0
-                + (v[32] * v[32] + v[38] * v[38] + v[39] * v[39]) * m2) * v[18]
-                - v[40] * v[40]) - v[41] * v[41];
-        v[43] = ((G_Y
-            - (v[29] * v[37] * m1 + m2 * (v[38] * v[28] - a_ * v[14] * v[39])) * u2
-            + (-u4 * v[33] * m1 - u5 * m2 * v[38]
-                - (v[7] * v[37] * m1 - m2 * v[14] * v[32]) * u1) * d
-            - ((v[33] * v[27] + a_ * v[7] * v[34]) * m1 + m2 * v[26] * v[32]) * u3)
-            * v[18] - v[30] * v[40]) * v[24] - v[31] * v[41];
-        v[44] = 1.0 / v[42];
+        let G_Z = g_i[2];
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x2 * u2 + u3 * x3;
+        let x5 = f64::sin(theta);
+        let x6 = 1.0 / (m2 + m0 + m1);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
+        let x9 = x5 * x8 * x2 - x3 * x7;
+        let x10 = f64::cos(gamma2);
+        let x11 = -a_ - x10 * d;
+        let x12 = f64::sin(gamma1);
+        let x13 = f64::cos(gamma1);
+        let x14 = x13 * x9 - x8 * x12 * x0;
+        let x15 = x13 * a_ + d;
+        let x16 = f64::sin(gamma2);
+        let x17 = x2 * x7 + x5 * x8 * x3;
+        let x18 = x8 * x0 * x16 + x10 * x17;
+        let x19 = d + x10 * a_;
+        let x20 = -a_ - x13 * d;
+        let x21 = x8 * x2;
+        let x22 = x5 * x3 * x7;
+        let x23 = x22 - x21;
+        let x24 = x0 * x16 * x7 + x10 * x23;
+        let x25 = x8 * x3 + x5 * x2 * x7;
+        let x26 = x13 * x25 - x12 * x0 * x7;
+        let x27 = x13 * x0 * x2 + x5 * x12;
+        let x28 = x10 * x0 * x3 - x5 * x16;
+        let value = x0;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(EvalError::Singular {
+                t,
+                condition: CONDITIONS[0],
+                value,
+            });
+        }
+        let q: [f64; NUM_COORDINATES] = [
+            state[0],
+            state[1],
+            state[2],
+            state[3],
+            state[4],
+            state[5],
+            state[6],
+            state[7],
+        ];
+        let qdot: [f64; NUM_COORDINATES] = [
+            x1 * x4,
+            u2 * x3 - u3 * x2,
+            x5 * x1 * x4 + u1,
+            u4,
+            u5,
+            x6
+                * (G_X
+                    - u3
+                        * (m2 * x9 * x11
+                            + (x14 * x15
+                                + a_ * (x8 * (x5 * x12 * x2 + x13 * x0) - x12 * x3 * x7)
+                                    * x12) * m1)
+                    - (m2
+                        * (x18 * x19
+                            - a_ * ((x10 * x0 - x5 * x16 * x3) * x8 - x16 * x2 * x7)
+                                * x16) + x20 * x17 * m1) * u2
+                    + d
+                        * (-x14 * u4 * m1 - u1 * (x12 * x17 * m1 - m2 * x9 * x16)
+                            - u5 * m2 * x18)),
+            x6
+                * (G_Y
+                    - (x20 * x23 * m1
+                        + m2
+                            * (x24 * x19
+                                - a_ * x16 * (x10 * x0 * x7 + (x21 - x22) * x16))) * u2
+                    + (-u4 * x26 * m1 - u5 * m2 * x24
+                        - (x12 * x23 * m1 - m2 * x16 * x25) * u1) * d
+                    - ((x26 * x15 + a_ * x12 * (x13 * x0 * x7 + x12 * x25)) * m1
+                        + m2 * x11 * x25) * u3),
+            x6
+                * ((-u4 * x27 * m1 - (x12 * m1 * x3 - m2 * x16 * x2) * x0 * u1
+                    - u5 * m2 * x28) * d
+                    - (m2 * (x28 * x19 - a_ * (-x0 * x16 * x3 - x10 * x5) * x16)
+                        + x20 * x0 * m1 * x3) * u2
+                    - u3
+                        * ((x27 * x15 + a_ * (x12 * x0 * x2 - x13 * x5) * x12) * m1
+                            + m2 * x0 * x2 * x11) + G_Z),
+        ];
+        for (index, value) in qdot.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(EvalError::NonFinite { t, index });
+            }
+        }
+        Ok((q, qdot))
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
     pub fn singular_margin(
         _t: f64,
         state: &[f64; STATES],
-        params: &Params,
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
-        let psi = state[0];
         let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
-        let m0 = params.m0;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let x0 = f64::cos(theta);
-        let x1 = f64::cos(psi);
-        let x2 = f64::sin(gamma1);
-        let x3 = f64::cos(gamma1);
-        let x4 = f64::cos(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::sin(phi);
-        let x8 = x6 * x1 * x7 - x4 * x5;
-        let x9 = x3 * x8 - x1 * x2 * x0;
-        let x10 = x1 * (x6 * x2 * x7 + x3 * x0) - x2 * x4 * x5;
-        let x11 = x7 * x5 + x6 * x1 * x4;
-        let x12 = f64::sin(gamma2);
-        let x13 = f64::cos(gamma2);
-        let x14 = x1 * x0 * x12 + x13 * x11;
-        let x15 = (x13 * x0 - x6 * x12 * x4) * x1 - x12 * x7 * x5;
-        let x16 = m2 + m0 + m1;
-        let x17 = x2 * x0 * x7 - x3 * x6;
-        let x18 = x3 * x0 * x7 + x6 * x2;
-        let x19 = x13 * x0 * x4 - x6 * x12;
-        let x20 = -x0 * x12 * x4 - x13 * x6;
-        let x21 = (x10 * x17 + x9 * x18 + x0 * x11 * x4) * m1
-            + m2 * (x19 * x14 + x8 * x0 * x7 + x15 * x20);
-        let x22 = (m0 + (x9 * x9 + x10 * x10 + x11 * x11) * m1
-            + m2 * (x14 * x14 + x15 * x15 + x8 * x8)) * x16 - x21 * x21;
-        let x23 = x1 * x4 + x6 * x7 * x5;
-        let x24 = x3 * x23 - x2 * x0 * x5;
-        let x25 = x3 * x0 * x5 + x2 * x23;
-        let x26 = x1 * x7;
-        let x27 = x6 * x4 * x5;
-        let x28 = x27 - x26;
-        let x29 = x0 * x12 * x5 + x13 * x28;
-        let x30 = x13 * x0 * x5 + (x26 - x27) * x12;
-        let x31 = m2 * (x19 * x29 + x20 * x30 + x0 * x7 * x23)
-            + (x0 * x28 * x4 + x17 * x25 + x24 * x18) * m1;
-        let x32 = x16
-            * (m1 * (x9 * x24 + x11 * x28 + x10 * x25)
-                + m2 * (x15 * x30 + x8 * x23 + x29 * x14)) - x21 * x31;
-        f64::INFINITY
-            .min(f64::abs(x0))
-            .min(f64::abs(x22))
-            .min(
-                f64::abs(
-                    x22
-                        * (((x24 * x24 + x25 * x25 + x28 * x28) * m1 + m0
-                            + (x23 * x23 + x29 * x29 + x30 * x30) * m2) * x16
-                            - x31 * x31) - x32 * x32,
-                ),
-            )
+        f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
 }

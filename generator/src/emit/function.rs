@@ -17,7 +17,7 @@
 
 use super::cse::plan;
 use super::lower::{LowerError, lower};
-use super::optimize::{expand_angle_sums, factor_sums, share_reciprocals};
+use super::optimize::{expand_angle_sums, factor_sums_with, share_reciprocals};
 use super::ops::OpCount;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
@@ -92,7 +92,19 @@ pub fn arg_list(args: &[Arg], used: &BTreeSet<usize>) -> Vec<TokenStream> {
 /// Builds the body computing `outputs`. Above `max_lets` bound subexpressions the work goes to
 /// helper functions `<name>_part<k>` that fill a scratch array.
 pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize) -> Result<Body, LowerError> {
-    let outputs = &share_reciprocals(&factor_sums(&expand_angle_sums(outputs)));
+    body_with(name, outputs, inputs, args, max_lets, &mut HashMap::new())
+}
+
+/// [`body`] with the Horner memo of [`factor_sums_with`] kept by the caller (one per module).
+pub fn body_with(
+    name: &str,
+    outputs: &[Expr],
+    inputs: &[Input],
+    args: &[Arg],
+    max_lets: usize,
+    horner: &mut HashMap<Expr, Expr>,
+) -> Result<Body, LowerError> {
+    let outputs = &share_reciprocals(&factor_sums_with(&expand_angle_sums(outputs), horner));
     let bound = plan(outputs);
     let by_symbol: HashMap<Symbol, &Input> = inputs.iter().map(|i| (i.symbol, i)).collect();
     let taken: HashSet<String> = inputs.iter().map(|i| i.ident.clone()).chain(args.iter().map(|a| a.name.clone())).collect();

@@ -2,7 +2,7 @@
 //! rate, momenta, constraint residuals) and one submodule per formulation ([`super::form`]).
 //! It only emits: everything it writes comes from one [`Derivation`].
 
-use super::function::{Arg, Body, Input, arg_list, body, ident};
+use super::function::{Arg, Body, Input, arg_list, body_with, ident};
 use super::lower::literal;
 use super::names::Names;
 use super::prepare::Preparer;
@@ -45,6 +45,8 @@ pub(super) struct Emitter<'a> {
     pub forms: Vec<(String, usize, usize)>,
     /// The states end with the work integral `W`.
     pub work: bool,
+    /// Horner forms, shared by every function of the module.
+    pub horner: HashMap<Expr, Expr>,
 }
 
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
@@ -78,6 +80,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         functions: Vec::new(),
         forms: Vec::new(),
         work: false,
+        horner: HashMap::new(),
     };
     // Applied non-potential forces can do work (Q not identically zero once prepared): every
     // formulation then carries the work integral W as its last state.
@@ -305,7 +308,7 @@ impl Emitter<'_> {
     pub(super) fn body(&mut self, name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg]) -> Result<Body, ModelError> {
         let prepared = self.prep.prepare_all(outputs);
         let short = name.rsplit("::").next().unwrap_or(name);
-        let b = body(short, &prepared, inputs, args, self.options.max_lets_per_function)
+        let b = body_with(short, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner)
             .map_err(|e| self.emission_error(name, e))?;
         self.functions.push(FunctionCost { name: name.to_string(), lets: b.lets, ops: b.ops.clone(), solve: Default::default() });
         Ok(b)

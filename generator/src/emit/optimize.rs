@@ -122,8 +122,16 @@ fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
 
 /// Horner-factors every sum in `outputs` (bottom-up, shared across outputs).
 pub fn factor_sums(outputs: &[Expr]) -> Vec<Expr> {
-    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    factor_sums_with(outputs, &mut HashMap::new())
+}
+
+/// [`factor_sums`] with a memo kept by the caller: the Horner form of a node does not depend on
+/// where it occurs, so the functions of one module share it.
+pub fn factor_sums_with(outputs: &[Expr], memo: &mut HashMap<Expr, Expr>) -> Vec<Expr> {
     for e in post_order(outputs) {
+        if memo.contains_key(&e) {
+            continue;
+        }
         let rebuilt = e.map_children(|c| memo[&c]);
         let r = match &*rebuilt.node() {
             Node::Add { constant, terms } if terms.len() >= 2 => {

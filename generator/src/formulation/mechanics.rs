@@ -122,31 +122,25 @@ impl Translation {
     /// ([`crate::symbolic::expr::dag_ops`]) wins. A body moved by translation rates (a floating
     /// base) is cheapest in world components, where their derivatives vanish at once; a link of
     /// a chain in its own, where only its joints' relative angles appear.
-    ///
-    /// In the frame's components the acceleration is taken two ways, `dv/dt + omega x v` and
-    /// the world acceleration turned into the frame, `R^T dV/dt`: translation rates (a floating
-    /// base's) vanish from the second at once, where the first needs the rotation's identities
-    /// to cancel them.
-    pub fn cheaper(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], rotation: &Matrix, omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
+    pub fn cheaper(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
         let partials = |v: &[Expr; 3]| -> Vec<[Expr; 3]> { rates.iter().map(|r| v.map(|e| tidy.rational(e.diff(*r)))).collect() };
         let (vb, vw) = (v_body.map(|e| tidy.rational(e)), v_world.map(|e| tidy.rational(e)));
         let world_accel = tidy.of3(chain.dt3(&vw));
         let transport = tidy.of3(add3(&chain.dt3(&vb), &cross(omega, &vb)));
-        let turned = tidy.of3(mat_vec(&rotation.transpose(), &world_accel));
         let ops = |p: &[[Expr; 3]], a: &[Expr; 3]| {
             let all: Vec<Expr> = p.iter().flatten().chain(a).copied().collect();
             crate::symbolic::expr::dag_ops(&all)
         };
-        // The transport form holds translation rates formally: the acceleration is R^T times the
-        // world's, so a rate absent from the world acceleration is absent from it too, and is set
-        // to zero (exact, no test needed).
+        // The transport form `dv/dt + omega x v` holds translation rates (a floating base's)
+        // formally, where only the rotation's identities cancel them; but the acceleration is
+        // R^T times the world's, so a rate absent from the world acceleration is absent from it
+        // too, and is set to zero (exact, no test needed).
         let absent: HashMap<Symbol, Expr> =
             rates.iter().filter(|r| !world_accel.iter().any(|e| e.contains(**r))).map(|r| (*r, Expr::zero())).collect();
         let transport = if absent.is_empty() { transport } else { transport.map(|e| tidy.of(e.subs(&absent))) };
         let (pb, pw) = (partials(&vb), partials(&vw));
-        let body_accel = if ops(&pb, &turned) < ops(&pb, &transport) { turned } else { transport };
-        if ops(&pb, &body_accel) < ops(&pw, &world_accel) {
-            Translation { v: vb, in_body: true, partials: pb, accel: body_accel }
+        if ops(&pb, &transport) < ops(&pw, &world_accel) {
+            Translation { v: vb, in_body: true, partials: pb, accel: transport }
         } else {
             Translation { v: vw, in_body: false, partials: pw, accel: world_accel }
         }
@@ -202,9 +196,16 @@ pub struct Mechanics {
     pub tidy: Tidy,
 }
 
-/// Limits for the simplifications made while deriving.
-pub fn derivation_limits() -> FourierLimits {
-    FourierLimits::default()
+/// Largest model (coordinates) whose simplifier combines four angles in one harmonic instead of
+/// three: enough to find that a free system's locked inertia does not depend on its absolute
+/// orientation (three ZYX angles and a joint), too costly on long chains (see
+/// [`FourierLimits::max_angle_atoms`]).
+pub const MAX_FOUR_ANGLE_COORDINATES: usize = 8;
+
+/// Limits for the simplifications made while deriving a model with `m` coordinates.
+pub fn derivation_limits(m: usize) -> FourierLimits {
+    let limits = FourierLimits::default();
+    if m <= MAX_FOUR_ANGLE_COORDINATES { FourierLimits { max_angle_atoms: 4, ..limits } } else { limits }
 }
 
 /// Splits a velocity-linear expression into `(d/dq', value at q' = 0)`.
@@ -223,7 +224,7 @@ fn drift_chain(model: &Model) -> TimeChain {
 
 /// Derives the shared mechanics of a model.
 pub fn derive(model: &Model) -> Mechanics {
-    let tidy = Tidy::new(derivation_limits());
+    let tidy = Tidy::new(derivation_limits(model.m()));
     let chain = model.position_chain();
     let drift = drift_chain(model);
     let zero = zero_velocities(model);
@@ -243,8 +244,7 @@ pub fn derive(model: &Model) -> Mechanics {
         // components or the world's, whichever is cheaper.
         let v_body = frame.point_velocity(&body.com, &chain);
         let v_world = chain.dt3(&frame.point(&body.com));
-        let rotation = tidy.matrix(&frame.rotation);
-        let translation = Translation::cheaper(&tidy, &v_body, &v_world, &rotation, &frame.omega, &model.velocities, &drift);
+        let translation = Translation::cheaper(&tidy, &v_body, &v_world, &frame.omega, &model.velocities, &drift);
         let (v, in_body, accel) = (translation.v, translation.in_body, translation.accel);
         let omega = tidy.of3(frame.omega);
         let mut bm = Matrix::zeros(3, m);

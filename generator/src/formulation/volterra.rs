@@ -86,12 +86,6 @@ fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
 /// floating chain with 2 links (2620 against 2983), the coordinate route from 3 links on.
 const MAX_BODY_ROUTE_COORDINATES: usize = 8;
 
-/// Largest model (coordinates) on which the Schur complement's entries get a simplifier that
-/// combines up to four angles: enough to find that a free system's locked inertia does not depend
-/// on its absolute orientation (scene 2's reduced right-hand side: 978 operations against 1132),
-/// too costly for long chains.
-const MAX_LOCAL_SIMPLIFY_COORDINATES: usize = 8;
-
 /// Largest matrix whose determinant is expanded symbolically (for `inspect`).
 const MAX_DETERMINANT_SIZE: usize = 10;
 
@@ -216,17 +210,10 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
     let coupling = |k: usize, col: usize| Expr::sum((0..s).map(|a| mk.get(map[k], rates[a]) * zs.x.get(a, col)));
     // The Schur complement combines the ignorable rows' entries, which carry the absolute
     // orientation, into entries that do not (the locked inertia of a free system depends on its
-    // shape only): on small models a simplifier that combines more angles finds that.
-    let local = (m <= MAX_LOCAL_SIMPLIFY_COORDINATES).then(|| {
-        let limits = crate::symbolic::fourier::FourierLimits { max_angle_atoms: 4, ..mech.tidy.limits() };
-        super::mechanics::Tidy::new(limits)
-    });
-    let simplify = |e: Expr| match &local {
-        Some(t) => {
-            let s = t.of(e);
-            if crate::symbolic::expr::dag_ops(&[s]) < crate::symbolic::expr::dag_ops(&[e]) { s } else { e }
-        }
-        None => e,
+    // shape only): simplified, and kept where that is smaller.
+    let simplify = |e: Expr| {
+        let s = tidy.of(e);
+        if crate::symbolic::expr::dag_ops(&[s]) < crate::symbolic::expr::dag_ops(&[e]) { s } else { e }
     };
     for k in 0..n_u {
         for l in k..n_u {
@@ -419,8 +406,7 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
         let both = Expr::subs_all(&[bv.v_both.0, bv.v_both.1].concat(), &to_u);
         let om = Expr::subs_all(&bv.omega, &to_u).into_iter().map(|e| tidy.rational(e)).collect::<Vec<_>>();
         let om = [om[0], om[1], om[2]];
-        let rotation = tidy.matrix(&model.frames[body.frame].rotation);
-        let translation = Translation::cheaper(tidy, &[both[0], both[1], both[2]], &[both[3], both[4], both[5]], &rotation, &om, u, chain);
+        let translation = Translation::cheaper(tidy, &[both[0], both[1], both[2]], &[both[3], both[4], both[5]], &om, u, chain);
         let (p, accel) = (translation.partials, translation.accel);
         let partial = |x: &[Expr; 3], k: usize| x.map(|e| tidy.rational(e.diff(u[k])));
         let o: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&om, k)).collect();
