@@ -403,7 +403,14 @@ fn plot(path: &Path, records: &[Record], peers: &[(String, Vec<SympyRecord>)]) {
             .y_label_area_size(60)
             .build_cartesian_2d((x0 / 1.2..x1 * 1.2).log_scale(), (y0 / 2.0..y1 * 2.0).log_scale())
             .expect("a chart");
-        chart.configure_mesh().x_desc("n").y_desc(ylabel).draw().expect("the mesh");
+        chart
+            .configure_mesh()
+            .x_desc("n")
+            .y_desc(ylabel)
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|y| if *y >= 1.0 { format!("{y:.0}") } else { format!("{y}") })
+            .draw()
+            .expect("the mesh");
         for (k, (name, s)) in series.iter().enumerate() {
             let color = colors[k % colors.len()];
             let points: Vec<(f64, f64)> = s.iter().copied().filter(|(_, y)| *y > 0.0).collect();

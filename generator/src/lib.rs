@@ -10,3 +10,4 @@ pub mod model;
 pub mod formulation;
 pub mod inspect;
 pub mod emit;
+pub mod output;

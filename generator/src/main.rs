@@ -1,22 +1,88 @@
 //! The generator's command line: generate a model's Rust module, or `inspect` what is derived.
 
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use generator::emit::{self, Formulation, Options, Parameters};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-const USAGE: &str = "usage:
-  generator MODEL.ron [-o PATH] [OPTIONS]  generate the Rust module (to stdout, or to PATH)
-  generator inspect MODEL.ron [--latex]    show what is derived from a model
+/// Derives a multibody model's equations of motion symbolically and writes them as a Rust module
+/// (to stdout, or to the file given with -o); a summary of sizes, operation counts and timings
+/// goes to stderr.
+#[derive(Parser, Debug)]
+#[command(name = "generator", version, args_conflicts_with_subcommands = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    generate: GenerateArgs,
+}
 
-options (each overrides the model's `emit` section):
-  --formulations LIST   comma-separated: lagrange, maggi, kane, reduced_volterra
-  --baked               fold the parameters into the code as constants
-  --runtime-params      keep the parameters as fields of `Params`
-  --drop-ignorable      leave the ignorable coordinates out of the reduced state
-  --max-lets N          split functions with more than N common subexpressions";
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Shows what is derived from a model: T, M, N, Q, the constraints, Definition 1 per
+    /// coordinate, and the reduced method's W_NI, X_NI, M_NI, L_NI.
+    Inspect {
+        /// The model file (RON).
+        model: PathBuf,
+        /// Print LaTeX instead of text.
+        #[arg(long)]
+        latex: bool,
+    },
+}
+
+/// A formulation, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum FormulationArg {
+    Lagrange,
+    Maggi,
+    Kane,
+    #[value(alias = "reduced", alias = "reduced_volterra")]
+    ReducedVolterra,
+}
+
+impl From<FormulationArg> for Formulation {
+    fn from(f: FormulationArg) -> Formulation {
+        match f {
+            FormulationArg::Lagrange => Formulation::Lagrange,
+            FormulationArg::Maggi => Formulation::Maggi,
+            FormulationArg::Kane => Formulation::Kane,
+            FormulationArg::ReducedVolterra => Formulation::ReducedVolterra,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+struct GenerateArgs {
+    /// The model file (RON).
+    model: Option<PathBuf>,
+    /// Write the module to this file (atomically: a temporary file renamed over it) instead of
+    /// stdout.
+    #[arg(short, long, value_name = "PATH")]
+    output: Option<PathBuf>,
+    /// Allow an output path that ends in `.ron` or is the model itself.
+    #[arg(long)]
+    force: bool,
+    /// The formulations to emit (overrides the model's `emit` section).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    formulations: Option<Vec<FormulationArg>>,
+    /// Fold the parameters into the code as constants.
+    #[arg(long, conflicts_with = "runtime_params")]
+    baked: bool,
+    /// Keep the parameters as fields of `Params`.
+    #[arg(long)]
+    runtime_params: bool,
+    /// Leave the ignorable coordinates out of the reduced method's state.
+    #[arg(long)]
+    drop_ignorable: bool,
+    /// Split functions with more than N common subexpressions into helpers.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_lets: Option<u64>,
+}
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match run(&args) {
+    let cli = Cli::parse();
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(msg) => {
             eprintln!("{msg}");
@@ -25,76 +91,80 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(args: &[String]) -> Result<(), String> {
-    match args.first().map(String::as_str) {
-        Some("inspect") => {
-            let latex = args.iter().any(|a| a == "--latex");
-            let files: Vec<&String> = args[1..].iter().filter(|a| !a.starts_with("--")).collect();
-            let [file] = files.as_slice() else { return Err(USAGE.into()) };
-            if let Some(bad) = args[1..].iter().find(|a| a.starts_with("--") && *a != "--latex") {
-                return Err(format!("unknown option `{bad}`\n{USAGE}"));
-            }
-            let model = generator::model::load(file).map_err(|e| e.to_string())?;
-            let text = generator::inspect::inspect(&model, latex).map_err(|e| e.to_string())?;
-            print!("{text}");
-            Ok(())
-        }
-        Some("-h") | Some("--help") | None => Err(USAGE.into()),
-        Some(_) => generate(args),
+/// Writes to stdout; a closed pipe (`generator m.ron | head -1`) ends the program quietly.
+fn print_stdout(text: &str) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        other => other.map_err(|e| format!("error: cannot write to stdout: {e}")),
     }
 }
 
-fn generate(args: &[String]) -> Result<(), String> {
-    let mut file = None;
-    let mut output = None;
-    let mut edits: Vec<Box<dyn Fn(&mut Options)>> = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut value = |name: &str| it.next().cloned().ok_or_else(|| format!("`{name}` needs a value\n{USAGE}"));
-        match a.as_str() {
-            "-o" | "--output" => output = Some(value(a)?),
-            "--baked" => edits.push(Box::new(|o| o.parameters = Parameters::Baked)),
-            "--runtime-params" => edits.push(Box::new(|o| o.parameters = Parameters::Runtime)),
-            "--drop-ignorable" => edits.push(Box::new(|o| o.integrate_ignorable = false)),
-            "--max-lets" => {
-                let v = value(a)?;
-                let n: usize = v.parse().map_err(|_| format!("`--max-lets` needs a positive integer, not `{v}`"))?;
-                edits.push(Box::new(move |o| o.max_lets_per_function = n.max(1)));
-            }
-            "--formulations" => {
-                let v = value(a)?;
-                let mut list = Vec::new();
-                for name in v.split(',') {
-                    list.push(match name.trim() {
-                        "reduced_volterra" | "reduced" => Formulation::ReducedVolterra,
-                        "kane" => Formulation::Kane,
-                        "lagrange" => Formulation::Lagrange,
-                        "maggi" => Formulation::Maggi,
-                        other => {
-                            return Err(format!("unknown formulation `{other}`: use lagrange, maggi, kane or reduced_volterra"));
-                        }
-                    });
-                }
-                list.sort();
-                list.dedup();
-                edits.push(Box::new(move |o| o.formulations = list.clone()));
-            }
-            s if s.starts_with('-') => return Err(format!("unknown option `{s}`\n{USAGE}")),
-            s if file.is_none() => file = Some(s.to_string()),
-            s => return Err(format!("unexpected argument `{s}`\n{USAGE}")),
-        }
+fn run(cli: Cli) -> Result<(), String> {
+    if let Some(Command::Inspect { model, latex }) = cli.command {
+        let model = generator::model::load(&model).map_err(|e| e.to_string())?;
+        let text = generator::inspect::inspect(&model, latex).map_err(|e| e.to_string())?;
+        return print_stdout(&text);
     }
-    let file = file.ok_or_else(|| USAGE.to_string())?;
+    let args = cli.generate;
+    let Some(file) = args.model else {
+        return Err("error: a model file is needed: `generator MODEL.ron [-o PATH]` (see --help)".into());
+    };
+    if let Some(out) = &args.output {
+        refuse_overwriting_a_model(&file, out, args.force)?;
+    }
     let model = generator::model::load(&file).map_err(|e| e.to_string())?;
     let mut options = Options::from_model(&model);
-    for edit in &edits {
-        edit(&mut options);
+    if let Some(list) = &args.formulations {
+        let mut f: Vec<Formulation> = list.iter().map(|x| (*x).into()).collect();
+        f.sort();
+        f.dedup();
+        options.formulations = f;
+    }
+    if args.baked {
+        options.parameters = Parameters::Baked;
+    }
+    if args.runtime_params {
+        options.parameters = Parameters::Runtime;
+    }
+    if args.drop_ignorable {
+        options.integrate_ignorable = false;
+    }
+    if let Some(n) = args.max_lets {
+        options.max_lets_per_function = n as usize;
     }
     let out = emit::generate(&model, &options).map_err(|e| e.to_string())?;
-    match output {
-        Some(path) => std::fs::write(&path, &out.code).map_err(|e| format!("error: cannot write `{path}`: {e}"))?,
-        None => print!("{}", out.code),
+    match &args.output {
+        Some(path) => {
+            generator::output::write_atomic(path, out.code.as_bytes()).map_err(|e| format!("error: {e}"))?;
+            eprintln!("wrote {}", path.display());
+        }
+        None => print_stdout(&out.code)?,
     }
     eprintln!("{}", out.summary);
+    Ok(())
+}
+
+/// Refuses to write Rust over the model itself, or over any `.ron` file, unless `force`.
+fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Result<(), String> {
+    if force {
+        return Ok(());
+    }
+    let same = match (std::fs::canonicalize(input), std::fs::canonicalize(output)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => input == output,
+    };
+    if same {
+        return Err(format!(
+            "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o (or --force if you mean it)",
+            output.display()
+        ));
+    }
+    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+        return Err(format!(
+            "error: the output `{}` is a `.ron` file: the generator writes Rust, and this would replace a model\n  help: write to a `.rs` path (or pass --force if you mean it)",
+            output.display()
+        ));
+    }
     Ok(())
 }

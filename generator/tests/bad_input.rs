@@ -164,9 +164,71 @@ fn generation_writes_the_module_and_a_summary_or_a_clear_error() {
     assert_eq!(String::from_utf8_lossy(&out.stdout), code);
     // Unknown options and formulations are refused with the usage.
     let out = run_generator(&[model.as_os_str(), "--fast".as_ref()]);
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unknown option `--fast`"));
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unexpected argument '--fast'"));
     let out = run_generator(&[model.as_os_str(), "--formulations".as_ref(), "hamilton".as_ref()]);
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unknown formulation `hamilton`"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("invalid value 'hamilton'") && err.contains("reduced-volterra"), "{err}");
+    // A repeated -o is an error, not the last one winning.
+    let out = run_generator(&[model.as_os_str(), "-o".as_ref(), out_path.as_os_str(), "-o".as_ref(), out_path.as_os_str()]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("cannot be used multiple times"));
+}
+
+#[test]
+fn the_command_line_speaks_like_a_rust_cli() {
+    let out = run_generator(&["--help".as_ref()]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && help.contains("Usage: generator") && help.contains("inspect") && help.contains("--max-lets <N>"), "{help}");
+    let out = run_generator(&["--version".as_ref()]);
+    assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).starts_with("generator "));
+    let out = run_generator(&["inspect".as_ref(), "--help".as_ref()]);
+    assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).contains("--latex"));
+    let out = run_generator(&[]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("a model file is needed"));
+}
+
+#[test]
+fn output_never_destroys_a_model_or_a_file() {
+    let dir = std::env::temp_dir().join(format!("gen-guard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("m.ron");
+    std::fs::write(&model, scene1()).unwrap();
+    // The model itself, or any .ron file, is not an output unless forced.
+    for target in [model.clone(), dir.join("other.ron")] {
+        let out = run_generator(&[model.as_os_str(), "-o".as_ref(), target.as_os_str()]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("help:"), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&model).unwrap(), scene1());
+    assert!(!dir.join("other.ron").exists());
+    let forced = dir.join("forced.ron");
+    let out = run_generator(&[model.as_os_str(), "-o".as_ref(), forced.as_os_str(), "--force".as_ref()]);
+    assert!(out.status.success() && std::fs::read_to_string(&forced).unwrap().contains("pub fn rhs("));
+    // A write that fails (the target is a directory) leaves the target as it was, and no
+    // temporary file behind.
+    let blocked = dir.join("blocked.rs");
+    std::fs::create_dir_all(blocked.join("inside")).unwrap();
+    let out = run_generator(&[model.as_os_str(), "-o".as_ref(), blocked.as_os_str()]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("cannot write"));
+    assert!(blocked.join("inside").is_dir());
+    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().ends_with(".tmp")).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_closed_pipe_ends_the_generator_quietly() {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/three_body.ron");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_generator")).arg(model).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap();
+    // Read one byte, then close the pipe (as `| head -c 1` does).
+    let mut stdout = child.stdout.take().unwrap();
+    let mut one = [0u8; 1];
+    stdout.read_exact(&mut one).unwrap();
+    drop(stdout);
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "exit {:?}: {}", out.status.code(), String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
 }
 
 #[test]
@@ -189,4 +251,71 @@ fn quasi_velocities_dependent_on_the_constraints_are_refused_naming_the_rows() {
     let options = generator::emit::Options::from_model(&model);
     let e = generator::emit::generate(&model, &options).expect_err("a singular choice must not generate");
     check(&e, ErrorKind::SingularQuasiVelocities, &["constraint `wheel` depends on the other rows", "quasi_velocities.reduced", "choose quasi-velocities independent"]);
+}
+
+#[test]
+fn deep_and_huge_expressions_are_refused_with_the_limit() {
+    for (what, expr) in [
+        ("parentheses", format!("{}l{}", "(".repeat(10_000), ")".repeat(10_000))),
+        ("signs", format!("{}l", "-".repeat(50_000))),
+        ("calls", format!("{}l{}", "sin(".repeat(300), ")".repeat(300))),
+    ] {
+        let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", &format!("\"{expr}\", \"0\""));
+        let text = e.to_string();
+        assert_eq!(e.kind, ErrorKind::ExpressionSyntax, "{what}: {text}");
+        assert!(text.contains("nested more than 200 levels") || text.contains("bytes, more than the 20000"), "{what}: {text}");
+    }
+    let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", "\"m1*l^1e18\", \"0\"");
+    check(&e, ErrorKind::ExpressionSyntax, &["exponent", "larger than 1000"]);
+}
+
+#[test]
+fn numbers_outside_f64_are_refused_at_parse_time() {
+    for number in ["1e10000", "1e999999999", "1e400"] {
+        let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", &format!("\"m1*{number}\", \"0\""));
+        check(&e, ErrorKind::ExpressionSyntax, &["malformed number", number]);
+    }
+    let digits = "9".repeat(50_000);
+    let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", &format!("\"m1*{digits}\", \"0\""));
+    assert_eq!(e.kind, ErrorKind::ExpressionSyntax);
+}
+
+#[test]
+fn time_functions_that_call_themselves_are_a_cycle() {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/satellite_boom.ron")).unwrap();
+    let from = "\"F\": \"-0.018*sin(0.089*t) + 0.012*cos(0.0485*t)\"";
+    let e = broken(&src, from, "\"F\": \"F(t) + 1\"");
+    check(&e, ErrorKind::Cycle, &["`F` calls itself", "F -> F"]);
+    let e = broken(&src, from, "\"F\": \"G(t)\", \"G\": \"2*F(t)\"");
+    check(&e, ErrorKind::Cycle, &["calls itself"]);
+}
+
+#[test]
+fn model_names_must_be_identifiers() {
+    for name in ["cp\\npub fn evil() -> u32 { 7 }\\n//", "cart\\rpendulum", "1cart", ""] {
+        let e = broken(&scene1(), "name: \"cart_pendulum\"", &format!("name: \"{name}\""));
+        check(&e, ErrorKind::BadValue, &["is not an identifier"]);
+    }
+}
+
+#[test]
+fn values_without_a_finite_number_are_refused() {
+    let e = broken(&scene1(), "t_end: 50.0", "t_end: inf");
+    check(&e, ErrorKind::BadValue, &["not a run"]);
+    let e = broken(&scene1(), "\"theta1\": \"0.5\"", "\"theta1\": \"sqrt(-1)\"");
+    check(&e, ErrorKind::InitialState, &["initial value of `theta1`", "not a finite number"]);
+    let e = broken(&scene1(), "\"x\": \"0.3\"", "\"x\": \"ln(0)\"");
+    check(&e, ErrorKind::InitialState, &["initial rate of `x`", "not a finite number"]);
+}
+
+#[test]
+fn a_key_given_twice_is_an_error() {
+    let e = broken(&scene1(), "\"M\": 2.0,", "\"M\": 2.0, \"M\": 3.0,");
+    check(&e, ErrorKind::Syntax, &["the key `M` is given twice"]);
+}
+
+#[test]
+fn an_initial_state_off_its_constraint_is_refused() {
+    let e = broken(&scene1(), "\"theta2\": \"-cos(theta1 - theta2)*theta1'\"", "\"theta2\": \"0.1\"");
+    check(&e, ErrorKind::InitialState, &["violates constraint `wheel`"]);
 }

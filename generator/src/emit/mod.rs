@@ -165,14 +165,14 @@ pub enum WriteError {
     /// The model is invalid or cannot be emitted.
     #[error("{0}")]
     Model(#[from] ModelError),
-    /// The output could not be written.
-    #[error("cannot write `{path}`: {source}")]
-    Io { path: String, source: std::io::Error },
+    /// The output could not be written (the old file is unchanged).
+    #[error("{0}")]
+    Io(#[from] crate::output::OutputError),
 }
 
 /// Loads `model`, generates its module with the model's own options, and writes it to `out`
-/// only if it changed (so a `build.rs` does not trigger needless rebuilds). For a downstream
-/// crate's `build.rs`:
+/// atomically, and only if it changed (so a `build.rs` does not trigger needless rebuilds). For
+/// a downstream crate's `build.rs`:
 ///
 /// ```no_run
 /// let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("cart_pendulum.rs");
@@ -184,7 +184,7 @@ pub fn write_module(model: impl AsRef<std::path::Path>, out: impl AsRef<std::pat
     let generated = generate(&model, &Options::from_model(&model))?;
     let out = out.as_ref();
     if std::fs::read_to_string(out).ok().as_deref() != Some(generated.code.as_str()) {
-        std::fs::write(out, &generated.code).map_err(|source| WriteError::Io { path: out.display().to_string(), source })?;
+        crate::output::write_atomic(out, generated.code.as_bytes())?;
     }
     Ok(generated.summary)
 }

@@ -141,7 +141,11 @@ pub(super) fn f64_lit(x: f64) -> TokenStream {
     }
 }
 
+/// A doc attribute. prettyplease prints it as `///` lines, so a line break in the text would end
+/// the comment and let the rest through as code: every control character (model names and
+/// descriptions come from the user) becomes a space.
 pub(super) fn doc(text: &str) -> TokenStream {
+    let text: String = text.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
     quote!(#[doc = #text])
 }
 

@@ -20,6 +20,8 @@ pub enum ErrorKind {
     UnknownFrame,
     /// The frame tree has a cycle.
     FrameCycle,
+    /// Time functions that call each other in a cycle.
+    Cycle,
     /// A name used twice.
     Duplicate,
     /// A mass that is not positive.

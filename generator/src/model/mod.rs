@@ -388,6 +388,17 @@ impl<'a> Builder<'a> {
 
     fn build(mut self) -> Result<Model, ModelError> {
         let def = self.def.clone();
+        let valid_name = def.name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+            && def.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        if !valid_name {
+            return Err(self.err(
+                ErrorKind::BadValue,
+                "name",
+                "name",
+                format!("the model name {:?} is not an identifier", def.name),
+                "name the model with letters, digits and `_`, starting with a letter (it names the generated module)",
+            ));
+        }
         // Names.
         let mut seen = HashSet::new();
         let mut parameters = Vec::new();
@@ -432,6 +443,7 @@ impl<'a> Builder<'a> {
             }
             time_functions.push((self.time_fns[name], e));
         }
+        self.check_time_function_cycles(&time_functions)?;
         let velocities: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}'"))).collect();
         let accelerations: Vec<Symbol> = def.coordinates.iter().map(|n| Symbol::new(&format!("{n}''"))).collect();
         let chain = TimeChain::new(self.t, coordinates.iter().zip(&velocities).map(|(q, v)| (*q, v.expr())).collect());
@@ -543,8 +555,11 @@ impl<'a> Builder<'a> {
             None => None,
             Some(init) => Some(self.initial(init, &def.coordinates, &parameters)?),
         };
+        if let Some((q0, qd0)) = &initial {
+            self.check_initial_constraints(&constraints, &coordinates, &velocities, q0, qd0, &parameters, &time_functions)?;
+        }
         if let Some(sim) = &def.simulation
-            && !(sim.t_end > sim.t_start && sim.dt_out > 0.0 && sim.dt_out.is_finite())
+            && !(sim.t_start.is_finite() && sim.t_end.is_finite() && sim.t_end > sim.t_start && sim.dt_out > 0.0 && sim.dt_out.is_finite())
         {
             return Err(self.err(ErrorKind::BadValue, "simulation", "simulation", format!("simulation from {} to {} every {} is not a run", sim.t_start, sim.t_end, sim.dt_out), "use t_end > t_start and dt_out > 0"));
         }
@@ -570,6 +585,81 @@ impl<'a> Builder<'a> {
             simulation: def.simulation.clone(),
             def,
         })
+    }
+
+    /// A time function that calls itself, directly or through others, has no value.
+    fn check_time_function_cycles(&self, functions: &[(Symbol, Expr)]) -> Result<(), ModelError> {
+        let calls = |e: Expr| -> Vec<Symbol> {
+            e.post_order_nodes().iter().filter_map(|n| if let crate::symbolic::Node::Apply(f, _) = &*n.node() { Some(*f) } else { None }).collect()
+        };
+        let graph: HashMap<Symbol, Vec<Symbol>> = functions.iter().map(|(f, e)| (*f, calls(*e))).collect();
+        for (start, _) in functions {
+            // Depth-first from `start`: reaching it again is a cycle.
+            let mut stack: Vec<(Symbol, Vec<Symbol>)> = vec![(*start, vec![*start])];
+            let mut seen = HashSet::new();
+            while let Some((f, path)) = stack.pop() {
+                for g in graph.get(&f).into_iter().flatten() {
+                    if g == start {
+                        let names: Vec<String> = path.iter().chain([g]).map(|s| s.name()).collect();
+                        let name = start.name();
+                        return Err(self.err(
+                            ErrorKind::Cycle,
+                            &format!("time_functions.{name}"),
+                            &format!("\"{name}\""),
+                            format!("time function `{name}` calls itself: {}", names.join(" -> ")),
+                            "define every time function in terms of `t`, parameters and functions that do not call it back",
+                        ));
+                    }
+                    if seen.insert(*g) {
+                        let mut p = path.clone();
+                        p.push(*g);
+                        stack.push((*g, p));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The model's own initial state must satisfy its constraints (the reference run starts
+    /// there): each residual within `1e-9` of its magnitude.
+    #[allow(clippy::too_many_arguments)]
+    fn check_initial_constraints(
+        &self,
+        constraints: &[Constraint],
+        coordinates: &[Symbol],
+        velocities: &[Symbol],
+        q0: &[f64],
+        qd0: &[f64],
+        parameters: &[(Symbol, f64)],
+        time_functions: &[(Symbol, Expr)],
+    ) -> Result<(), ModelError> {
+        let mut env = self.param_env(parameters);
+        for (f, body) in time_functions {
+            env.define(*f, self.t, *body);
+        }
+        env.set(self.t, self.def.simulation.as_ref().map_or(0.0, |s| s.t_start));
+        for (s, v) in coordinates.iter().zip(q0).chain(velocities.iter().zip(qd0)) {
+            env.set(*s, *v);
+        }
+        for c in constraints {
+            let (name, e) = match c {
+                Constraint::Velocity { name, expr } => (name, *expr),
+                Constraint::Position { name, expr } => (name, *expr),
+            };
+            let residual = e.eval(&env).unwrap_or(f64::NAN);
+            let bound = crate::symbolic::eval::magnitude(e).eval(&env).unwrap_or(f64::NAN);
+            if !(residual.abs() <= 1e-9 * bound.max(1e-300)) {
+                return Err(self.err(
+                    ErrorKind::InitialState,
+                    "initial",
+                    "initial",
+                    format!("the initial state violates constraint `{name}`: its residual is {residual:e}"),
+                    "give initial values that satisfy every constraint (a rate may be written in terms of others, as in scene 1)",
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn param_env(&self, parameters: &[(Symbol, f64)]) -> Env {
@@ -747,6 +837,15 @@ impl<'a> Builder<'a> {
                 self.err(ErrorKind::InitialState, "initial.q", "initial", format!("no initial value for coordinate `{c}`"), "give every coordinate an initial value under initial.q")
             })?;
             let v = self.expr(src, &format!("initial.q.{c}"), Scope::Parameters)?.eval(&env).unwrap_or(f64::NAN);
+            if !v.is_finite() {
+                return Err(self.err(
+                    ErrorKind::InitialState,
+                    &format!("initial.q.{c}"),
+                    &format!("\"{src}\""),
+                    format!("the initial value of `{c}`, `{src}`, is not a finite number ({v})"),
+                    "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)",
+                ));
+            }
             env.set(Symbol::new(c), v);
             q.push(v);
         }
@@ -767,6 +866,15 @@ impl<'a> Builder<'a> {
                 })?;
                 let e = self.expr(src, &format!("initial.qdot.{c}"), Scope::Velocity)?;
                 if let Ok(v) = e.eval(&env) {
+                    if !v.is_finite() {
+                        return Err(self.err(
+                            ErrorKind::InitialState,
+                            &format!("initial.qdot.{c}"),
+                            &format!("\"{src}\""),
+                            format!("the initial rate of `{c}`, `{src}`, is not a finite number ({v})"),
+                            "give a value with a real, finite result (sqrt of a negative number and ln of zero have none)",
+                        ));
+                    }
                     qd[i] = v;
                     env.set(Symbol::new(&format!("{c}'")), v);
                 }

@@ -3,7 +3,34 @@
 //! [`crate::symbolic::parse`].
 
 use indexmap::IndexMap;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
+
+/// A map whose keys must be distinct: a key written twice is an error, not a silent
+/// overwrite of the first value.
+fn unique_keys<'de, D, V>(d: D) -> Result<IndexMap<String, V>, D::Error>
+where
+    D: Deserializer<'de>,
+    V: Deserialize<'de>,
+{
+    struct Visitor<V>(std::marker::PhantomData<V>);
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for Visitor<V> {
+        type Value = IndexMap<String, V>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a map with distinct keys")
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+            let mut out = IndexMap::new();
+            while let Some((k, v)) = map.next_entry::<String, V>()? {
+                if out.contains_key(&k) {
+                    return Err(serde::de::Error::custom(format!("the key `{k}` is given twice")));
+                }
+                out.insert(k, v);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_map(Visitor(std::marker::PhantomData))
+}
 
 /// A model file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -15,11 +42,12 @@ pub struct ModelFile {
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub description: String,
     /// Parameter names and values. Every symbol must be bound here or be a coordinate.
+    #[serde(deserialize_with = "unique_keys")]
     pub parameters: IndexMap<String, f64>,
     /// Generalized coordinates, in order.
     pub coordinates: Vec<String>,
     /// Named functions of time: name -> expression in `t` (e.g. a prescribed force `F(t)`).
-    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty", deserialize_with = "unique_keys")]
     pub time_functions: IndexMap<String, String>,
     /// The kinematic tree; `world` is the implicit root.
     pub frames: Vec<FrameDef>,
@@ -224,7 +252,11 @@ pub enum ForceDef {
     /// A linear damper between two points fixed in frames.
     Damper { name: String, frame_a: String, point_a: Vec<String>, frame_b: String, point_b: Vec<String>, damping: String },
     /// Generalized forces given directly: coordinate -> expression.
-    Generalized { name: String, components: IndexMap<String, String> },
+    Generalized {
+        name: String,
+        #[serde(deserialize_with = "unique_keys")]
+        components: IndexMap<String, String>,
+    },
     /// A potential energy given directly.
     Potential { name: String, expr: String },
 }
@@ -253,7 +285,9 @@ pub enum IgnorableDef {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename = "Initial")]
 pub struct InitialDef {
+    #[serde(deserialize_with = "unique_keys")]
     pub q: IndexMap<String, String>,
+    #[serde(deserialize_with = "unique_keys")]
     pub qdot: IndexMap<String, String>,
 }
 

@@ -122,13 +122,32 @@ struct Parser<'a> {
     tok: Tok,
     start: usize,
     end: usize,
+    /// Nesting depth of parentheses, calls, signs and powers so far.
+    depth: usize,
 }
+
+/// Most levels of nesting (parentheses, calls, signs, powers) an expression may have: deeper
+/// input would exhaust the stack of the recursive passes. Models need a handful.
+pub const MAX_NESTING: usize = 200;
+
+/// Largest exponent (in magnitude) a power may have: `x^1e18` would only cost time and lose
+/// every digit in f64.
+pub const MAX_EXPONENT: i64 = 1000;
+
+/// Longest expression (in bytes) a model may give.
+pub const MAX_EXPRESSION_LEN: usize = 20_000;
 
 /// Parses one expression.
 pub fn parse(src: &str) -> Result<Ast, ParseError> {
+    if src.len() > MAX_EXPRESSION_LEN {
+        return Err(ParseError {
+            column: MAX_EXPRESSION_LEN + 1,
+            message: format!("the expression has {} bytes, more than the {MAX_EXPRESSION_LEN} an expression may have", src.len()),
+        });
+    }
     let mut lex = Lexer { src, pos: 0 };
     let (tok, start, end) = lex.next()?;
-    let mut p = Parser { lex, tok, start, end };
+    let mut p = Parser { lex, tok, start, end, depth: 0 };
     if p.tok == Tok::End {
         return Err(ParseError { column: 1, message: "empty expression".into() });
     }
@@ -145,6 +164,18 @@ impl<'a> Parser<'a> {
         self.tok = t;
         self.start = s;
         self.end = e;
+        Ok(())
+    }
+
+    /// Enters one level of nesting; fails past [`MAX_NESTING`].
+    fn nest(&mut self) -> Result<(), ParseError> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(ParseError {
+                column: self.start + 1,
+                message: format!("the expression is nested more than {MAX_NESTING} levels deep (parentheses, calls, signs and powers)"),
+            });
+        }
         Ok(())
     }
 
@@ -179,8 +210,10 @@ impl<'a> Parser<'a> {
     fn unary(&mut self) -> Result<Ast, ParseError> {
         if let Tok::Op(op @ ('-' | '+')) = self.tok {
             let start = self.start;
+            self.nest()?;
             self.bump()?;
             let inner = self.unary()?;
+            self.depth -= 1;
             if op == '+' {
                 return Ok(inner);
             }
@@ -192,8 +225,10 @@ impl<'a> Parser<'a> {
     fn power(&mut self) -> Result<Ast, ParseError> {
         let base = self.atom()?;
         if self.tok == Tok::Op('^') {
+            self.nest()?;
             self.bump()?;
             let exp = self.unary()?; // right-associative, allows x^-1
+            self.depth -= 1;
             return Ok(Ast { start: base.start, end: exp.end, kind: AstKind::Binary('^', Box::new(base), Box::new(exp)) });
         }
         Ok(base)
@@ -209,6 +244,7 @@ impl<'a> Parser<'a> {
             Tok::Name(name, primes) => {
                 self.bump()?;
                 if self.tok == Tok::Op('(') && primes == 0 {
+                    self.nest()?;
                     self.bump()?;
                     let mut args = Vec::new();
                     if self.tok != Tok::Op(')') {
@@ -226,17 +262,20 @@ impl<'a> Parser<'a> {
                     }
                     let end = self.end;
                     self.bump()?;
+                    self.depth -= 1;
                     return Ok(Ast { kind: AstKind::Call(name, args), start, end });
                 }
                 Ok(Ast { kind: AstKind::Name(name, primes), start, end })
             }
             Tok::Op('(') => {
+                self.nest()?;
                 self.bump()?;
                 let inner = self.expr()?;
                 if self.tok != Tok::Op(')') {
                     return Err(self.unexpected("`)`"));
                 }
                 self.bump()?;
+                self.depth -= 1;
                 Ok(inner)
             }
             _ => Err(self.unexpected("a number, a name or `(`")),
@@ -275,6 +314,14 @@ pub fn lower(ast: &Ast, r: &dyn Resolver) -> Result<Expr, LowerError> {
                     x / y
                 }
                 _ => {
+                    if let Some(e) = y.as_num()
+                        && e.abs() > crate::symbolic::number::Rat::int(MAX_EXPONENT)
+                    {
+                        return Err(LowerError {
+                            column: b.start + 1,
+                            message: format!("exponent `{y}` is larger than {MAX_EXPONENT} in magnitude"),
+                        });
+                    }
                     let Some(e) = y.as_num() else {
                         return Err(LowerError {
                             column: b.start + 1,
