@@ -182,3 +182,24 @@ fn every_model_inspects_in_text_and_latex() {
         assert!(tex.contains("\\begin{aligned}") && tex.contains("M_{11}"), "{name}");
     }
 }
+
+#[test]
+fn inspect_and_the_drop_option_agree_on_every_model() {
+    use generator::emit::{Formulation, Options, generate};
+    for name in SCENES.iter().chain(OWN.iter()).chain(["pendulum_on_cart_5"].iter()) {
+        let m = load(name);
+        let text = generator::inspect::inspect(&m, false).unwrap();
+        let says_can = text.contains("it can leave the integrated state");
+        let says_cannot = text.contains("it must stay in the integrated state");
+        let options = Options { integrate_ignorable: false, formulations: vec![Formulation::ReducedVolterra], ..Options::from_model(&m) };
+        let dropped = generate(&m, &options);
+        let s = generator::formulation::derive(&m, &generator::formulation::Request::all()).unwrap().ignorable.len();
+        if s == 0 {
+            // Nothing to leave out: no verdict, and dropping is a no-op.
+            assert!(!says_can && !says_cannot && dropped.is_ok(), "{name}");
+            continue;
+        }
+        assert!(says_can || says_cannot, "{name}: no verdict in\n{text}");
+        assert_eq!(dropped.is_ok(), says_can && !says_cannot, "{name}: inspect says can {says_can}, cannot {says_cannot}; generation {:?}", dropped.err());
+    }
+}

@@ -108,14 +108,17 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
         items.push((sub("L_NI", &[i + 1], latex), v.l_ni[i]));
     }
     section(w, "M_NI u_NI' = L_NI:", &mut items, latex);
+    let needed = crate::formulation::reduced::needed(model, v);
     let _ = writeln!(w, "\nDefinition 1, coordinate by coordinate:");
     for r in reports {
         match &r.failure {
             None => {
-                let drop = if r.appears_in.is_empty() {
-                    "a, b and Q are free of it too (it can leave the integrated state)".to_string()
-                } else {
-                    format!("but it appears in {} (it must stay in the integrated state)", r.appears_in.join(", "))
+                let verdict = needed.iter().find(|(j, _)| *j == r.index).map(|(_, p)| p.clone());
+                let drop = match (&verdict, r.appears_in.is_empty()) {
+                    (Some(None), _) => "the reduced equations are free of it (it can leave the integrated state)".to_string(),
+                    (Some(Some(place)), _) => format!("but {place} depends on it (it must stay in the integrated state)"),
+                    (None, true) => "a, b and Q are free of it too (not used by the reduced method)".to_string(),
+                    (None, false) => format!("but it appears in {} (not used by the reduced method)", r.appears_in.join(", ")),
                 };
                 let _ = writeln!(w, "  {}: ignorable; {drop}", r.name);
             }

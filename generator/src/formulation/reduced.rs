@@ -12,12 +12,32 @@ use super::Shared;
 use super::equations::{Equations, Method};
 use super::ignorable::depends;
 use super::kane::speeds_from_qdot;
-use crate::model::{ErrorKind, ModelError};
-use crate::symbolic::{Expr, Matrix};
+use super::volterra::Volterra;
+use crate::model::{ErrorKind, Model, ModelError};
+use crate::symbolic::{Expr, Matrix, Symbol};
 use std::collections::HashMap;
 
 /// The reduced Volterra equations.
 pub struct ReducedVolterra;
+
+/// For each ignorable coordinate of the reduced form, the first place its state's rates need
+/// it (`None`: it can leave the integrated state): `q' = W u + X`, `L_NI`, `M_NI`, each decided
+/// by the exact zero test. `inspect` reports the same verdicts the generator acts on.
+pub fn needed(model: &Model, v: &Volterra) -> Vec<(usize, Option<String>)> {
+    let m = model.m();
+    let places: Vec<(String, Expr)> = (0..m)
+        .map(|j| (format!("q'_{} = W u + X", model.coordinates[j].name()), v.qdot[j]))
+        .chain(v.l_ni.iter().enumerate().map(|(k, e)| (format!("L_NI[{}]", k + 1), *e)))
+        .chain(v.mass_ni.data.iter().map(|e| ("M_NI".to_string(), *e)))
+        .collect();
+    v.ignorable
+        .iter()
+        .map(|&j| {
+            let q = model.coordinates[j];
+            (j, places.iter().find(|(_, e)| depends(*e, q).is_some()).map(|(p, _)| p.clone()))
+        })
+        .collect()
+}
 
 impl Method for ReducedVolterra {
     fn name(&self) -> &'static str {
@@ -33,27 +53,18 @@ impl Method for ReducedVolterra {
         let mut singular = v.singular_factors.clone();
         let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
         if !shared.integrate_ignorable {
-            // Every expression the state's rates need must be free of the ignorable coordinates
-            // (decided exactly); then they are set to zero where they only appear formally.
-            let places = (0..m)
-                .map(|j| (format!("q'_{} = W u + X", model.coordinates[j].name()), qdot[j]))
-                .chain(forcing.iter().enumerate().map(|(k, e)| (format!("L_NI[{}]", k + 1), *e)))
-                .chain(mass.data.iter().map(|e| ("M_NI".to_string(), *e)));
-            let places: Vec<(String, Expr)> = places.collect();
-            let mut zero = HashMap::new();
-            for &j in &v.ignorable {
+            if let Some((j, place)) = needed(model, v).into_iter().find_map(|(j, p)| p.map(|p| (j, p))) {
                 let q = model.coordinates[j];
-                if let Some((place, _)) = places.iter().find(|(_, e)| depends(*e, q).is_some()) {
-                    return Err(model.error(
-                        ErrorKind::IgnorableNeeded,
-                        "emit.integrate_ignorable",
-                        "integrate_ignorable",
-                        format!("`{}` cannot leave the state: {place} depends on it", q.name()),
-                        "set `integrate_ignorable: true` in `emit`".into(),
-                    ));
-                }
-                zero.insert(q, Expr::zero());
+                return Err(model.error(
+                    ErrorKind::IgnorableNeeded,
+                    "emit.integrate_ignorable",
+                    "integrate_ignorable",
+                    format!("`{}` cannot leave the state: {place} depends on it", q.name()),
+                    "set `integrate_ignorable: true` in `emit`".into(),
+                ));
             }
+            // Free of them (decided exactly): set to zero where they only appear formally.
+            let zero: HashMap<Symbol, Expr> = v.ignorable.iter().map(|&j| (model.coordinates[j], Expr::zero())).collect();
             qdot = Expr::subs_all(&qdot, &zero);
             forcing = Expr::subs_all(&forcing, &zero);
             mass = Matrix { rows: mass.rows, cols: mass.cols, data: Expr::subs_all(&mass.data, &zero) };
