@@ -125,7 +125,11 @@ fn main() {
         let path = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../models")).join(format!("{}.ron", args[1]));
         let start = Instant::now();
         let model = generator::model::load(&path).expect("the scene loads");
-        generate(&model, &Options::from_model(&model)).expect("the scene generates");
+        if args.get(2).map(String::as_str) == Some("inspect") {
+            generator::inspect::inspect(&model, false).expect("the scene inspects");
+        } else {
+            generate(&model, &Options::from_model(&model)).expect("the scene generates");
+        }
         println!("{}", start.elapsed().as_secs_f64() * 1e3);
         return;
     }
@@ -169,15 +173,20 @@ fn main() {
     let _ = std::fs::remove_dir_all(&work);
     // The paper's scenes: load, derive and emit, from a fresh process, best of five.
     let mut scenes = Vec::new();
+    let mut inspects = Vec::new();
     for scene in ["cart_pendulum", "three_body", "satellite_boom"] {
-        let best = (0..5)
-            .map(|_| {
-                let out = Command::new(&exe).args(["--scene", scene]).output().expect("the child runs");
-                String::from_utf8_lossy(&out.stdout).trim().parse::<f64>().unwrap_or(f64::NAN)
-            })
-            .fold(f64::INFINITY, f64::min);
-        eprintln!("scaling: {scene}: {best:.1} ms");
-        scenes.push((scene, best));
+        let best = |extra: &[&str]| {
+            (0..5)
+                .map(|_| {
+                    let out = Command::new(&exe).args(["--scene", scene]).args(extra).output().expect("the child runs");
+                    String::from_utf8_lossy(&out.stdout).trim().parse::<f64>().unwrap_or(f64::NAN)
+                })
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (generate_ms, inspect_ms) = (best(&[]), best(&["inspect"]));
+        eprintln!("scaling: {scene}: generate {generate_ms:.1} ms, inspect {inspect_ms:.1} ms");
+        scenes.push((scene, generate_ms));
+        inspects.push((scene, inspect_ms));
     }
     let mut peers: Vec<(String, Vec<SympyRecord>)> = Vec::new();
     if sympy {
@@ -205,7 +214,7 @@ fn main() {
         }
     }
     std::fs::create_dir_all(out.join("plots")).expect("the output directory");
-    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &scenes, &pendulum, &floating, compile_up_to, sympy));
+    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &scenes, &inspects, &pendulum, &floating, compile_up_to, sympy));
     plot(&out.join("plots/scaling.svg"), &records, &peers);
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
     std::fs::write(out.join("scaling/ours.json"), serde_json::to_string_pretty(&records).unwrap()).expect("the records are written");
@@ -231,7 +240,7 @@ fn growth(records: &[Record], kind: &str) -> Option<f64> {
     Some((t(b) / t(a)).ln() / (b.n as f64 / a.n as f64).ln())
 }
 
-fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&str, f64)]) -> String {
+fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&str, f64)], inspects: &[(&str, f64)]) -> String {
     let find = |kind: &str, n: usize| records.iter().find(|r| r.model == kind && r.n == n);
     let total = |r: &Record| (r.derive_ms + r.emit_ms) / 1e3;
     let verdict = |ok: bool, reason: &str| if ok { "met".to_string() } else { format!("missed: {reason}") };
@@ -276,6 +285,13 @@ fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&s
             "scene 2 (three bodies free in space) simplifies with four-angle harmonics so that its reduced mass matrix comes out free of the absolute orientation, and emits four formulations; its derivation alone is under 40 ms"
         )
     );
+    let ins: Vec<String> = inspects
+        .iter()
+        .zip(scenes)
+        .map(|((s, i), (_, g))| format!("{s} {i:.0} against {g:.0} ms"))
+        .collect();
+    let ins_ok = inspects.iter().zip(scenes).all(|((_, i), (_, g))| i <= g);
+    md += &format!("| `inspect` costs no more than generation (one shared derivation) | inspect <= generate | {} | {} |\n", ins.join(", "), verdict(ins_ok, "printing"));
     let mut worst: Option<(String, usize, f64)> = None;
     for (kind, p) in peers {
         for x in p {
@@ -305,7 +321,17 @@ fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&s
     md
 }
 
-fn report(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&str, f64)], pendulum: &[usize], floating: &[usize], compile_up_to: usize, sympy: bool) -> String {
+#[allow(clippy::too_many_arguments)]
+fn report(
+    records: &[Record],
+    peers: &[(String, Vec<SympyRecord>)],
+    scenes: &[(&str, f64)],
+    inspects: &[(&str, f64)],
+    pendulum: &[usize],
+    floating: &[usize],
+    compile_up_to: usize,
+    sympy: bool,
+) -> String {
     let mut md = String::from("# Scaling\n\n");
     md += "Measured by `cargo bench -p generator --bench scaling";
     if sympy {
@@ -318,7 +344,7 @@ fn report(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&
          `count_ops(cse([M, F]))`), \"solve\" the worst case of the emitted LU with partial pivoting.\n\n",
         pendulum, floating
     );
-    md += &goals(records, peers, scenes);
+    md += &goals(records, peers, scenes, inspects);
     let title = |k: &str| if k == "pendulum" { "The n-link pendulum on a cart (s = 1)" } else { "The spatial chain on a floating base (s = 3)" };
     for kind in ["pendulum", "floating"] {
         md += &format!("## {}\n\n", title(kind));
