@@ -2,7 +2,6 @@
 
 use generator::formulation::{ignorable, mechanics};
 use generator::model::Model;
-use generator::symbolic::limits::Limits;
 use generator::symbolic::parse::{lower, parse, Resolver};
 use generator::symbolic::zero::{SplitMix, zero_test};
 use generator::symbolic::{Expr, Symbol};

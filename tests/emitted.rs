@@ -72,7 +72,7 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
             })
             .collect();
         let e = emitted(name);
-        let params = (e.default_params)();
+        let params = e.default_params.to_vec();
         let (red, kf) = (e.formulation("reduced_volterra").unwrap(), e.formulation("kane").unwrap());
         let (m, s) = (mech.m, chosen.len());
         let w = usize::from(red.has_work_state);
@@ -170,7 +170,7 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
 /// Evaluates a formulation's right-hand side from `q, q'`.
 fn rhs_at(e: &Model, form: &str, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f64>, Failure> {
     let f = e.formulation(form).unwrap();
-    let params = (e.default_params)();
+    let params = e.default_params.to_vec();
     let mut state = vec![0.0; f.states];
     let mut g = vec![0.0; e.ignorable.len()];
     (f.initial_state)(t, q, qd, &params, &mut state, &mut g)?;
@@ -182,7 +182,7 @@ fn rhs_at(e: &Model, form: &str, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f6
 #[test]
 fn variants_compute_the_same_right_hand_sides() {
     let full = emitted("three_body");
-    let (q, qd) = full.initial;
+    let (q, qd) = full.initial.unwrap();
     for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&full, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&emitted("three_body_split"), form, 0.0, q, qd).unwrap();
@@ -203,7 +203,7 @@ fn variants_compute_the_same_right_hand_sides() {
     // Baked parameters: the same numbers, and no runtime parameters.
     let (runtime, baked) = (emitted("cart_pendulum"), emitted("cart_pendulum_baked"));
     assert!(baked.parameter_names.is_empty() && !runtime.parameter_names.is_empty());
-    let (q, qd) = runtime.initial;
+    let (q, qd) = runtime.initial.unwrap();
     for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&runtime, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&baked, form, 0.0, q, qd).unwrap();
@@ -218,8 +218,8 @@ fn variants_compute_the_same_right_hand_sides() {
 fn runtime_parameters_change_the_motion() {
     let e = emitted("cart_pendulum");
     let f = e.formulation("reduced_volterra").unwrap();
-    let (q, qd) = e.initial;
-    let mut params = (e.default_params)();
+    let (q, qd) = e.initial.unwrap();
+    let mut params = e.default_params.to_vec();
     let g_index = e.parameter_names.iter().position(|n| *n == "g").unwrap();
     let mut state = vec![0.0; f.states];
     let mut g = vec![0.0; 1];
@@ -235,7 +235,7 @@ fn runtime_parameters_change_the_motion() {
 #[test]
 fn bad_states_are_reported_not_computed() {
     let e = emitted("cart_pendulum");
-    let (q, qd) = e.initial;
+    let (q, qd) = e.initial.unwrap();
     // Velocities that violate the wheel constraint: rejected with the residual.
     let mut bad = qd.to_vec();
     bad[1] += 0.1;
@@ -250,13 +250,13 @@ fn bad_states_are_reported_not_computed() {
     }
     // Positions that violate a holonomic constraint.
     let p = emitted("cartesian_pendulum");
-    let (q, qd) = p.initial;
+    let (q, qd) = p.initial.unwrap();
     let mut moved = q.to_vec();
     moved[0] += 0.01;
     assert!(matches!(rhs_at(&p, "reduced_volterra", 0.0, &moved, qd), Err(Failure::ConstraintViolated { .. })));
     // Scene 1 at cos(theta1 - theta2) = -1: singular, reported with the condition.
     let f = e.formulation("reduced_volterra").unwrap();
-    let params = (e.default_params)();
+    let params = e.default_params.to_vec();
     let state = [0.3, 0.3 + std::f64::consts::PI, 0.0, 0.5, 0.0];
     let mut ds = [0.0; 5];
     match (f.rhs)(1.5, &state, &params, &[0.2], &mut ds) {

@@ -45,7 +45,7 @@ fn scene1_near_its_singular_set_succeeds_with_the_margin_reported_or_stops_there
         let (t1, t2) = (0.3, 0.3 + std::f64::consts::PI - delta);
         let qd = [0.5, -(t1 - t2).cos() * 0.5, 0.1];
         let s = Settings::paper(5.0);
-        let (sys, out) = simulate(&m, "reduced_volterra", (m.default_params)(), &[t1, t2, 0.0], &qd, 5.0, 0.01, &s);
+        let (sys, out) = simulate(&m, "reduced_volterra", m.default_params.to_vec(), &[t1, t2, 0.0], &qd, 5.0, 0.01, &s);
         finite_or_reported(&format!("delta {delta:e}"), &out, 5.0);
         eprintln!("delta {delta:e}: {}", match &out { Ok(s) => format!("finished, {} steps", s.stats.steps), Err(e) => e.to_string() });
         match &out {
@@ -70,12 +70,12 @@ fn scene1_near_its_singular_set_succeeds_with_the_margin_reported_or_stops_there
 fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
     // Scene 2's quasi-velocities are body rates; the ZYX rates divide by cos(theta).
     let m = model("three_body");
-    let (q0, qd0) = m.initial;
+    let (q0, qd0) = m.initial.unwrap();
     for (theta, must_stop) in [(std::f64::consts::FRAC_PI_2, true), (std::f64::consts::FRAC_PI_2 - 1e-3, false)] {
         let mut q = q0.to_vec();
         q[1] = theta;
         for form in ["kane", "reduced_volterra"] {
-            let (_, out) = simulate(&m, form, (m.default_params)(), &q, qd0, 2.0, 0.1, &Settings::paper(2.0));
+            let (_, out) = simulate(&m, form, m.default_params.to_vec(), &q, qd0, 2.0, 0.1, &Settings::paper(2.0));
             finite_or_reported(&format!("{form} theta {theta}"), &out, 2.0);
             if must_stop {
                 let e = out.unwrap_err();
@@ -88,11 +88,11 @@ fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
 #[test]
 fn mass_and_inertia_ratios_from_1e_minus_6_to_1e6_keep_the_invariants() {
     let m = model("three_body");
-    let (q0, qd0) = m.initial;
+    let (q0, qd0) = m.initial.unwrap();
     let (m1, m2, j1, j2) = (param(&m, "m1"), param(&m, "m2"), param(&m, "J1"), param(&m, "J2"));
     let s = Settings { method: Method::Dop853, rtol: 1e-10, atol: 1e-10, h_max: 1.0, ..Settings::default() };
     for ratio in [1e-6, 1e-3, 1e3, 1e6] {
-        let mut p = (m.default_params)();
+        let mut p = m.default_params.to_vec();
         for i in [m1, m2, j1, j2] {
             p[i] *= ratio;
         }
@@ -113,10 +113,10 @@ fn mass_and_inertia_ratios_from_1e_minus_6_to_1e6_keep_the_invariants() {
 fn very_small_and_very_large_lengths_scale_the_motion() {
     // Scene 1 with l from 1e-3 to 1e3: time scales as sqrt(l), the invariants still hold.
     let m = model("cart_pendulum");
-    let (q0, qd0) = m.initial;
+    let (q0, qd0) = m.initial.unwrap();
     let l = param(&m, "l");
     for length in [1e-3, 1e3] {
-        let mut p = (m.default_params)();
+        let mut p = m.default_params.to_vec();
         p[l] = length;
         let scale = length.sqrt();
         let qd: Vec<f64> = qd0.iter().map(|v| v / scale).collect();
@@ -133,8 +133,8 @@ fn very_small_and_very_large_lengths_scale_the_motion() {
 #[test]
 fn a_massless_system_stops_with_a_singular_mass_matrix() {
     let m = model("cart_pendulum");
-    let (q0, qd0) = m.initial;
-    let mut p = (m.default_params)();
+    let (q0, qd0) = m.initial.unwrap();
+    let mut p = m.default_params.to_vec();
     for name in ["M", "m1", "m2"] {
         p[param(&m, name)] = 0.0;
     }
@@ -149,7 +149,7 @@ fn a_massless_system_stops_with_a_singular_mass_matrix() {
 #[test]
 fn extreme_integrator_settings_end_or_report() {
     let m = model("satellite_boom");
-    let (t0, t1, _) = m.run;
+    let (t0, t1, _) = m.run.unwrap();
     // rtol 1e-14: completes (no endless loop) or reports the step-size underflow.
     let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000, ..Settings::default() };
     match run(&m, "reduced_volterra", &tight, 1) {
@@ -163,9 +163,9 @@ fn extreme_integrator_settings_end_or_report() {
     // A fixed step far too large for scene 1: the run stops, the divergence (or the singular
     // configuration it runs into) reported with the time.
     let cart = model("cart_pendulum");
-    let (q0, qd0) = cart.initial;
+    let (q0, qd0) = cart.initial.unwrap();
     for form in ["lagrange", "kane", "reduced_volterra"] {
-        let (_, out) = simulate(&cart, form, (cart.default_params)(), q0, qd0, 1000.0, 2.0, &Settings { method: Method::Rk4 { h: 2.0 }, ..Settings::default() });
+        let (_, out) = simulate(&cart, form, cart.default_params.to_vec(), q0, qd0, 1000.0, 2.0, &Settings { method: Method::Rk4 { h: 2.0 }, ..Settings::default() });
         let e = out.expect_err("a 2 s RK4 step cannot follow a 2 s pendulum");
         eprintln!("{form}: {e}");
         assert!(matches!(e.reason, Reason::Diverged | Reason::Rhs(_)), "{form}: {e}");
@@ -178,8 +178,8 @@ fn scene2_over_1e5_seconds_keeps_its_energy_drift_bounded_as_documented() {
     // docs/work-precision.md: at the paper's settings the relative energy error of the reduced
     // method grows to about 0.1 by 1e4 s and stays there to 1e5 s; its momenta stay at round-off.
     let m = model("three_body");
-    let (q0, qd0) = m.initial;
-    let (sys, out) = simulate(&m, "reduced_volterra", (m.default_params)(), q0, qd0, 1e5, 100.0, &Settings::paper(50.0));
+    let (q0, qd0) = m.initial.unwrap();
+    let (sys, out) = simulate(&m, "reduced_volterra", m.default_params.to_vec(), q0, qd0, 1e5, 100.0, &Settings::paper(50.0));
     let sol = out.unwrap();
     let inv = monitor(&sys, &sol).unwrap();
     let rel = |upto: usize| inv.energy_error[..=upto].iter().map(|x| x.abs()).fold(0.0, f64::max) / inv.energy0.abs();
@@ -197,16 +197,16 @@ fn high_spin_rates_and_large_velocities_keep_the_invariants() {
     // Scene 3 spun up a hundredfold; scene 1 thrown fifty times harder.
     let s = Settings { method: Method::Dop853, rtol: 1e-10, atol: 1e-10, h_max: 0.5, ..Settings::default() };
     let boom = model("satellite_boom");
-    let (q0, qd0) = boom.initial;
+    let (q0, qd0) = boom.initial.unwrap();
     let fast: Vec<f64> = qd0.iter().enumerate().map(|(j, v)| if j < 3 { 100.0 * v } else { *v }).collect();
-    let (sys, out) = simulate(&boom, "reduced_volterra", (boom.default_params)(), q0, &fast, 10.0, 0.05, &s);
+    let (sys, out) = simulate(&boom, "reduced_volterra", boom.default_params.to_vec(), q0, &fast, 10.0, 0.05, &s);
     let inv = monitor(&sys, &out.unwrap()).unwrap();
     let g = inv.momentum0.iter().map(|x| x.abs()).fold(0.0, f64::max);
     assert!(inv.momentum_error.iter().flatten().all(|x| x.abs() <= 1e-12 * g));
     let cart = model("cart_pendulum");
-    let (q0, qd0) = cart.initial;
+    let (q0, qd0) = cart.initial.unwrap();
     let thrown: Vec<f64> = qd0.iter().map(|v| 50.0 * v).collect();
-    let (sys, out) = simulate(&cart, "reduced_volterra", (cart.default_params)(), q0, &thrown, 2.0, 0.001, &s);
+    let (sys, out) = simulate(&cart, "reduced_volterra", cart.default_params.to_vec(), q0, &thrown, 2.0, 0.001, &s);
     let sol = out.unwrap_or_else(|e| panic!("thrown: {e}"));
     let inv = monitor(&sys, &sol).unwrap();
     assert!(inv.velocity_constraint.iter().all(|c| *c < 1e-10), "constraint at high speed");

@@ -1,7 +1,7 @@
 //! The emitted formulations integrated by the runtime: they follow the independent reference
 //! trajectories, agree with each other, and keep the invariants the paper claims.
 
-use runtime::compare::{Options, compare, output_times, run, run_with};
+use runtime::compare::{Options, Reference, compare, run, run_with};
 use runtime::system::Drift;
 use runtime::integrate::{Method, Settings};
 
@@ -27,9 +27,9 @@ fn every_formulation_follows_the_reference_trajectories_at_tight_tolerance() {
     for scene in SCENES {
         let model = generated::find(scene).unwrap();
         let (times, rows) = reference(scene);
-        assert_eq!(times.len(), output_times(&model).len(), "{scene}: sample count");
+        assert_eq!(times.len(), Reference::of(&model).unwrap().times().len(), "{scene}: sample count");
         let m = model.coordinates.len();
-        let (t0, t1, _) = model.run;
+        let (t0, t1, _) = model.run.unwrap();
         let settings = Settings { method: Method::Dop853, rtol: 1e-10, atol: 1e-10, h_max: 0.1 * (t1 - t0), ..Settings::default() };
         for method in METHODS {
             let r = run(&model, method, &settings, 1).unwrap();
@@ -51,7 +51,7 @@ fn every_formulation_follows_the_reference_trajectories_at_tight_tolerance() {
 fn the_four_formulations_agree_to_their_tolerance() {
     for scene in SCENES {
         let model = generated::find(scene).unwrap();
-        let (t0, t1, _) = model.run;
+        let (t0, t1, _) = model.run.unwrap();
         let options = Options { settings: Settings { rtol: 1e-8, atol: 1e-8, ..Settings::paper(t1 - t0) }, repeats: 1, formulations: vec![], drift: Drift::None };
         let runs = compare(&model, &options).unwrap();
         assert_eq!(runs.len(), 4);
@@ -108,7 +108,7 @@ fn at_the_papers_settings_the_reduced_method_keeps_constraint_and_momenta_to_rou
 fn the_work_integral_balances_the_energy_of_a_driven_system() {
     // Scene 3's boom is driven by F(t): mechanical energy changes, E = T + V - W does not.
     let model = generated::find("satellite_boom").unwrap();
-    let (t0, t1, _) = model.run;
+    let (t0, t1, _) = model.run.unwrap();
     let settings = Settings { method: Method::Dop853, rtol: 1e-11, atol: 1e-11, h_max: 0.1 * (t1 - t0), ..Settings::default() };
     let r = run(&model, "reduced_volterra", &settings, 1).unwrap();
     let form = model.formulation("reduced_volterra").unwrap();
@@ -142,7 +142,7 @@ fn drift_control_keeps_the_classical_methods_nearer_the_constraint() {
     // At the end of every step the projected state is on the constraint: with outputs only at
     // step ends (RK4 stepping by the output interval) the residual is round-off.
     let holonomic = generated::find("cartesian_pendulum").unwrap();
-    let (_, _, dt) = holonomic.run;
+    let (_, _, dt) = holonomic.run.unwrap();
     let settings = Settings { method: Method::Rk4 { h: dt }, ..Settings::default() };
     let r = run_with(&holonomic, "lagrange", &settings, 1, Drift::Projection).unwrap();
     assert!(r.record.position_constraint_error_norm < 1e-10, "position residual {:e}", r.record.position_constraint_error_norm);
@@ -157,7 +157,7 @@ fn a_singular_configuration_stops_the_run_with_time_and_reason() {
     let model = generated::find("cart_pendulum").unwrap();
     let q0 = [0.3, 0.3 + std::f64::consts::PI, 0.0];
     let qd0 = [0.2, 0.2, 0.1]; // l cos(pi) theta1' + l theta2' = 0
-    let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", (model.default_params)(), &q0, &qd0).unwrap();
+    let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", model.default_params.to_vec(), &q0, &qd0).unwrap();
     let err = runtime::integrate::integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &[0.0, 1.0], &Settings::default()).unwrap_err();
     assert_eq!(err.t, 0.0);
     assert!(matches!(&err.reason, runtime::integrate::Reason::Rhs(m) if m.contains("singular") && m.contains("theta1")), "{err}");

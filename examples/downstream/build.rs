@@ -1,12 +1,12 @@
-//! Generates the module of `models/cart_pendulum.ron` into `OUT_DIR`, as prost-build does for
-//! `.proto` files.
+//! Generates `models/gantry_crane.ron` into `OUT_DIR`, as prost-build does for `.proto` files.
+//! The builder prints `cargo:rerun-if-changed` itself; the emitted code names the seam through
+//! the runtime (`runtime::seam`), so this crate depends on the runtime only.
 
 fn main() {
-    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/cart_pendulum.ron");
-    let out = std::path::Path::new(&std::env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("cart_pendulum.rs");
-    if let Err(e) = generator::emit::write_module(model, &out) {
-        // The error names the file, the place and the fix.
-        panic!("{e}");
-    }
-    println!("cargo:rerun-if-changed={model}");
+    generator::Builder::new()
+        .model("models/gantry_crane.ron")
+        .seam_path("runtime::seam")
+        .generate()
+        // The error names the file, the line and column, the place in the model and the fix.
+        .unwrap_or_else(|e| panic!("{e}"));
 }

@@ -55,25 +55,29 @@ pub struct Params {
 }
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            M: 2.0,
-            m1: 1.0,
-            m2: 1.0,
-            l: 1.0,
-            g: 9.81,
-            tau: 0.0,
-        }
+        Params::DEFAULT
     }
 }
+///The model file's parameter values, in the order of `Params::NAMES`.
+pub const DEFAULT_PARAMS: [f64; 6] = Params::DEFAULT.values();
 impl Params {
+    ///The values from the model file.
+    pub const DEFAULT: Params = Params {
+        M: 2.0,
+        m1: 1.0,
+        m2: 1.0,
+        l: 1.0,
+        g: 9.81,
+        tau: 0.0,
+    };
     ///Parameter names, in the order of `values` and `from_values`.
     pub const NAMES: [&'static str; 6] = ["M", "m1", "m2", "l", "g", "tau"];
     ///The parameters as an array, in the order of `NAMES`.
-    pub fn values(&self) -> [f64; 6] {
+    pub const fn values(&self) -> [f64; 6] {
         [self.M, self.m1, self.m2, self.l, self.g, self.tau]
     }
     ///Parameters from an array in the order of `NAMES`.
-    pub fn from_values(values: &[f64; 6]) -> Self {
+    pub const fn from_values(values: &[f64; 6]) -> Self {
         Params {
             M: values[0],
             m1: values[1],
@@ -84,37 +88,8 @@ impl Params {
         }
     }
 }
-///Why an emitted function could not produce a value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EvalError {
-    ///The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix).
-    Singular { t: f64, condition: &'static str, value: f64 },
-    ///Output `index` is not a finite number at time `t`.
-    NonFinite { t: f64, index: usize },
-    ///A state violates `constraint`: its residual exceeds the tolerance.
-    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-}
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            EvalError::Singular { t, condition, value } => {
-                write!(
-                    f, "singular configuration at t = {t}: {condition} (value {value:e})"
-                )
-            }
-            EvalError::NonFinite { t, index } => {
-                write!(f, "non-finite value in output {index} at t = {t}")
-            }
-            EvalError::ConstraintViolated { constraint, residual, tolerance } => {
-                write!(
-                    f,
-                    "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"
-                )
-            }
-        }
-    }
-}
-impl std::error::Error for EvalError {}
+///Why an emitted function could not produce a value (the seam's error type, shared by every module).
+pub use ::seam::Failure;
 ///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
 fn solve_dense<const N: usize>(
     a: &mut [[f64; N]; N],
@@ -345,10 +320,10 @@ pub mod lagrange {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -358,7 +333,7 @@ pub mod lagrange {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
@@ -373,19 +348,19 @@ pub mod lagrange {
         dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
@@ -397,7 +372,7 @@ pub mod lagrange {
         dstate: &mut [f64; STATES],
         alpha: f64,
         beta: f64,
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
         for i in 0..1 {
             a.force[3 + i]
@@ -421,7 +396,7 @@ pub mod lagrange {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
         let theta1_dot = qdot[0];
@@ -444,7 +419,7 @@ pub mod lagrange {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -468,7 +443,7 @@ pub mod lagrange {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -480,7 +455,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta1_dot = state[3];
         let theta2_dot = state[4];
         let x_dot = state[5];
@@ -488,7 +463,7 @@ pub mod lagrange {
         let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -503,6 +478,85 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "lagrange",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: Some(|t, state, params, g_i, dstate, alpha, beta| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs_baumgarte(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                alpha,
+                beta,
+            )
+        }),
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Maggi's equations: 7 states, 3 equations.
 pub mod maggi {
@@ -621,10 +675,10 @@ pub mod maggi {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -635,7 +689,7 @@ pub mod maggi {
         let (w, c) = (a.w, a.c);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W",
                 value: column as f64,
@@ -650,19 +704,19 @@ pub mod maggi {
         dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
@@ -681,7 +735,7 @@ pub mod maggi {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
         let theta1_dot = qdot[0];
@@ -704,7 +758,7 @@ pub mod maggi {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -728,7 +782,7 @@ pub mod maggi {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -740,7 +794,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta1 = state[0];
         let theta2 = state[1];
         let theta1_dot = state[3];
@@ -751,7 +805,7 @@ pub mod maggi {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -759,7 +813,7 @@ pub mod maggi {
         }
         let value = l * x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[1],
                 value,
@@ -769,7 +823,7 @@ pub mod maggi {
         let qdot: [f64; NUM_COORDINATES] = [theta1_dot, theta2_dot, x_dot];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -789,6 +843,74 @@ pub mod maggi {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "maggi",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 6 states, 2 equations.
 pub mod kane {
@@ -890,10 +1012,10 @@ pub mod kane {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -903,7 +1025,7 @@ pub mod kane {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -917,19 +1039,19 @@ pub mod kane {
         dstate[5] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -948,7 +1070,7 @@ pub mod kane {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
         let theta1_dot = qdot[0];
@@ -971,7 +1093,7 @@ pub mod kane {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -994,7 +1116,7 @@ pub mod kane {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1006,7 +1128,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -1018,7 +1140,7 @@ pub mod kane {
         let x3 = 1.0 / x2;
         let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -1026,7 +1148,7 @@ pub mod kane {
         }
         let value = l * x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[1],
                 value,
@@ -1036,7 +1158,7 @@ pub mod kane {
         let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -(x3 * (x0 + x1) * u1), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1056,6 +1178,74 @@ pub mod kane {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "kane",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 1 equations.
 pub mod reduced_volterra {
@@ -1171,10 +1361,10 @@ pub mod reduced_volterra {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -1184,7 +1374,7 @@ pub mod reduced_volterra {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -1197,19 +1387,19 @@ pub mod reduced_volterra {
         dstate[4] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -1228,7 +1418,7 @@ pub mod reduced_volterra {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let theta1 = q[0];
         let theta2 = q[1];
         let theta1_dot = qdot[0];
@@ -1251,7 +1441,7 @@ pub mod reduced_volterra {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1267,7 +1457,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1279,7 +1469,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta1 = state[0];
         let theta2 = state[1];
         let u1 = state[3];
@@ -1300,7 +1490,7 @@ pub mod reduced_volterra {
         let x9 = m2 + M + m1;
         let value = x6;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -1308,7 +1498,7 @@ pub mod reduced_volterra {
         }
         let value = l * x8;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[1],
                 value,
@@ -1316,7 +1506,7 @@ pub mod reduced_volterra {
         }
         let value = x0 * x9 * x1 + m2 + x3 * x9 * x4 + M + m1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[2],
                 value,
@@ -1333,7 +1523,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1363,5 +1553,145 @@ pub mod reduced_volterra {
             .min(f64::abs(-x2 - x5 - 1.0))
             .min(f64::abs(l * (x2 + x5 + 1.0)))
             .min(f64::abs(x0 * x6 * x1 + m2 + x3 * x6 * x4 + M + m1))
+    }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "reduced_volterra",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
+}
+///Every emitted formulation through slices.
+pub const FORMULATIONS: [::seam::Formulation; 4] = [
+    lagrange::FORMULATION,
+    maggi::FORMULATION,
+    kane::FORMULATION,
+    reduced_volterra::FORMULATION,
+];
+///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
+pub fn model() -> ::seam::Model {
+    ::seam::Model {
+        module: "cart_pendulum",
+        name: MODEL,
+        coordinates: &COORDINATES,
+        constraints: &CONSTRAINTS,
+        ignorable: &IGNORABLE,
+        holonomic: NUM_HOLONOMIC,
+        parameter_names: &Params::NAMES,
+        default_params: &DEFAULT_PARAMS,
+        initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
+        run: Some((T_START, T_END, DT_OUT)),
+        energy: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = energy(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        work_rate: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = work_rate(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        momenta: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_IGNORABLE>("out", out)? = momenta(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        constraint_residuals: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_CONSTRAINTS>("out", out)? = constraint_residuals(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        position_residuals: |t, q, _qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(
+                t,
+                ::seam::array("q", q)?,
+                &p,
+            );
+            Ok(())
+        },
+        formulations: &FORMULATIONS,
     }
 }

@@ -1,6 +1,6 @@
-//! The emitted module of every model in `models/`, committed, and a registry that lets code
-//! that does not know a model at compile time (the runtime, the workspace tests) call them
-//! through slices.
+//! The emitted module of every model in `models/`, committed: the list of built-in models.
+//! Each module describes itself as a `seam::Model` (`model()`), so that code which does not
+//! know a model at compile time (the runtime, the workspace tests) calls it through slices.
 //!
 //! Each module is the generator's output, byte for byte (`tests/regenerate.rs` checks it;
 //! `REGENERATE=1 cargo test -p generated --test regenerate` rewrites them). Use a module
@@ -40,4 +40,5 @@ pub mod three_body_drop;
 pub mod three_body_split;
 
 mod registry;
-pub use registry::{Failure, Formulation, Model, find, models};
+pub use registry::{find, models};
+pub use seam::{Failure, Formulation, Model};

@@ -74,23 +74,27 @@ pub struct Params {
 }
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            m0: 1.0,
-            m1: 1.0,
-            m2: 1.0,
-            m3: 1.0,
-            m4: 1.0,
-            m5: 1.0,
-            l0: 1.0,
-            l1: 1.0,
-            l2: 1.0,
-            l3: 1.0,
-            l4: 1.0,
-            g: 9.81,
-        }
+        Params::DEFAULT
     }
 }
+///The model file's parameter values, in the order of `Params::NAMES`.
+pub const DEFAULT_PARAMS: [f64; 12] = Params::DEFAULT.values();
 impl Params {
+    ///The values from the model file.
+    pub const DEFAULT: Params = Params {
+        m0: 1.0,
+        m1: 1.0,
+        m2: 1.0,
+        m3: 1.0,
+        m4: 1.0,
+        m5: 1.0,
+        l0: 1.0,
+        l1: 1.0,
+        l2: 1.0,
+        l3: 1.0,
+        l4: 1.0,
+        g: 9.81,
+    };
     ///Parameter names, in the order of `values` and `from_values`.
     pub const NAMES: [&'static str; 12] = [
         "m0",
@@ -107,7 +111,7 @@ impl Params {
         "g",
     ];
     ///The parameters as an array, in the order of `NAMES`.
-    pub fn values(&self) -> [f64; 12] {
+    pub const fn values(&self) -> [f64; 12] {
         [
             self.m0,
             self.m1,
@@ -124,7 +128,7 @@ impl Params {
         ]
     }
     ///Parameters from an array in the order of `NAMES`.
-    pub fn from_values(values: &[f64; 12]) -> Self {
+    pub const fn from_values(values: &[f64; 12]) -> Self {
         Params {
             m0: values[0],
             m1: values[1],
@@ -141,37 +145,8 @@ impl Params {
         }
     }
 }
-///Why an emitted function could not produce a value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EvalError {
-    ///The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix).
-    Singular { t: f64, condition: &'static str, value: f64 },
-    ///Output `index` is not a finite number at time `t`.
-    NonFinite { t: f64, index: usize },
-    ///A state violates `constraint`: its residual exceeds the tolerance.
-    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-}
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            EvalError::Singular { t, condition, value } => {
-                write!(
-                    f, "singular configuration at t = {t}: {condition} (value {value:e})"
-                )
-            }
-            EvalError::NonFinite { t, index } => {
-                write!(f, "non-finite value in output {index} at t = {t}")
-            }
-            EvalError::ConstraintViolated { constraint, residual, tolerance } => {
-                write!(
-                    f,
-                    "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"
-                )
-            }
-        }
-    }
-}
-impl std::error::Error for EvalError {}
+///Why an emitted function could not produce a value (the seam's error type, shared by every module).
+pub use ::seam::Failure;
 ///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
 fn solve_dense<const N: usize>(
     a: &mut [[f64; N]; N],
@@ -509,10 +484,10 @@ pub mod lagrange {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -521,7 +496,7 @@ pub mod lagrange {
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
@@ -541,19 +516,19 @@ pub mod lagrange {
         dstate[11] = force[5];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
@@ -565,7 +540,7 @@ pub mod lagrange {
         dstate: &mut [f64; STATES],
         alpha: f64,
         beta: f64,
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
         for i in 0..0 {
             a.force[6 + i]
@@ -589,7 +564,7 @@ pub mod lagrange {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let q1 = q[1];
         let q2 = q[2];
         let q3 = q[3];
@@ -617,7 +592,7 @@ pub mod lagrange {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -648,7 +623,7 @@ pub mod lagrange {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -660,7 +635,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let q0_dot = state[6];
         let q1_dot = state[7];
         let q2_dot = state[8];
@@ -685,7 +660,7 @@ pub mod lagrange {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -700,6 +675,85 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "lagrange",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: Some(|t, state, params, g_i, dstate, alpha, beta| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs_baumgarte(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                alpha,
+                beta,
+            )
+        }),
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Maggi's equations: 12 states, 6 equations.
 pub mod maggi {
@@ -868,10 +922,10 @@ pub mod maggi {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -881,7 +935,7 @@ pub mod maggi {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let (w, c) = (a.w, a.c);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W",
                 value: column as f64,
@@ -907,19 +961,19 @@ pub mod maggi {
             + w[5][3] * force[3] + w[5][4] * force[4] + w[5][5] * force[5] + c[5];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
@@ -938,7 +992,7 @@ pub mod maggi {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let q1 = q[1];
         let q2 = q[2];
         let q3 = q[3];
@@ -966,7 +1020,7 @@ pub mod maggi {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -997,7 +1051,7 @@ pub mod maggi {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1009,7 +1063,7 @@ pub mod maggi {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let q0_dot = state[6];
         let q1_dot = state[7];
         let q2_dot = state[8];
@@ -1034,7 +1088,7 @@ pub mod maggi {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1049,6 +1103,74 @@ pub mod maggi {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "maggi",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 12 states, 6 equations.
 pub mod kane {
@@ -1208,10 +1330,10 @@ pub mod kane {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -1220,7 +1342,7 @@ pub mod kane {
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -1240,19 +1362,19 @@ pub mod kane {
         dstate[11] = force[5];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -1271,7 +1393,7 @@ pub mod kane {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let q1 = q[1];
         let q2 = q[2];
         let q3 = q[3];
@@ -1299,7 +1421,7 @@ pub mod kane {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1330,7 +1452,7 @@ pub mod kane {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1342,7 +1464,7 @@ pub mod kane {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let u1 = state[6];
         let u2 = state[7];
         let u3 = state[8];
@@ -1360,7 +1482,7 @@ pub mod kane {
         let qdot: [f64; NUM_COORDINATES] = [u1, u2, u3, u4, u5, u6];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1375,6 +1497,74 @@ pub mod kane {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "kane",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 11 states, 5 equations.
 pub mod reduced_volterra {
@@ -1556,10 +1746,10 @@ pub mod reduced_volterra {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -1568,7 +1758,7 @@ pub mod reduced_volterra {
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -1587,19 +1777,19 @@ pub mod reduced_volterra {
         dstate[10] = force[4];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -1618,7 +1808,7 @@ pub mod reduced_volterra {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let q1 = q[1];
         let q2 = q[2];
         let q3 = q[3];
@@ -1646,7 +1836,7 @@ pub mod reduced_volterra {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1676,7 +1866,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1688,7 +1878,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let q1 = state[1];
         let q2 = state[2];
         let q3 = state[3];
@@ -1733,7 +1923,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1747,5 +1937,145 @@ pub mod reduced_volterra {
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
         f64::INFINITY
+    }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "reduced_volterra",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
+}
+///Every emitted formulation through slices.
+pub const FORMULATIONS: [::seam::Formulation; 4] = [
+    lagrange::FORMULATION,
+    maggi::FORMULATION,
+    kane::FORMULATION,
+    reduced_volterra::FORMULATION,
+];
+///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
+pub fn model() -> ::seam::Model {
+    ::seam::Model {
+        module: "pendulum_on_cart_5",
+        name: MODEL,
+        coordinates: &COORDINATES,
+        constraints: &CONSTRAINTS,
+        ignorable: &IGNORABLE,
+        holonomic: NUM_HOLONOMIC,
+        parameter_names: &Params::NAMES,
+        default_params: &DEFAULT_PARAMS,
+        initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
+        run: Some((T_START, T_END, DT_OUT)),
+        energy: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = energy(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        work_rate: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = work_rate(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        momenta: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_IGNORABLE>("out", out)? = momenta(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        constraint_residuals: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_CONSTRAINTS>("out", out)? = constraint_residuals(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        position_residuals: |t, q, _qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(
+                t,
+                ::seam::array("q", q)?,
+                &p,
+            );
+            Ok(())
+        },
+        formulations: &FORMULATIONS,
     }
 }

@@ -54,18 +54,22 @@ pub struct Params {
 }
 impl Default for Params {
     fn default() -> Self {
-        Params { md: 1.5, R: 0.3, tq: 0.0 }
+        Params::DEFAULT
     }
 }
+///The model file's parameter values, in the order of `Params::NAMES`.
+pub const DEFAULT_PARAMS: [f64; 3] = Params::DEFAULT.values();
 impl Params {
+    ///The values from the model file.
+    pub const DEFAULT: Params = Params { md: 1.5, R: 0.3, tq: 0.0 };
     ///Parameter names, in the order of `values` and `from_values`.
     pub const NAMES: [&'static str; 3] = ["md", "R", "tq"];
     ///The parameters as an array, in the order of `NAMES`.
-    pub fn values(&self) -> [f64; 3] {
+    pub const fn values(&self) -> [f64; 3] {
         [self.md, self.R, self.tq]
     }
     ///Parameters from an array in the order of `NAMES`.
-    pub fn from_values(values: &[f64; 3]) -> Self {
+    pub const fn from_values(values: &[f64; 3]) -> Self {
         Params {
             md: values[0],
             R: values[1],
@@ -73,37 +77,8 @@ impl Params {
         }
     }
 }
-///Why an emitted function could not produce a value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EvalError {
-    ///The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix).
-    Singular { t: f64, condition: &'static str, value: f64 },
-    ///Output `index` is not a finite number at time `t`.
-    NonFinite { t: f64, index: usize },
-    ///A state violates `constraint`: its residual exceeds the tolerance.
-    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-}
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            EvalError::Singular { t, condition, value } => {
-                write!(
-                    f, "singular configuration at t = {t}: {condition} (value {value:e})"
-                )
-            }
-            EvalError::NonFinite { t, index } => {
-                write!(f, "non-finite value in output {index} at t = {t}")
-            }
-            EvalError::ConstraintViolated { constraint, residual, tolerance } => {
-                write!(
-                    f,
-                    "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"
-                )
-            }
-        }
-    }
-}
-impl std::error::Error for EvalError {}
+///Why an emitted function could not produce a value (the seam's error type, shared by every module).
+pub use ::seam::Failure;
 ///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
 fn solve_dense<const N: usize>(
     a: &mut [[f64; N]; N],
@@ -294,10 +269,10 @@ pub mod lagrange {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -307,7 +282,7 @@ pub mod lagrange {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
@@ -324,19 +299,19 @@ pub mod lagrange {
         dstate[8] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
@@ -348,7 +323,7 @@ pub mod lagrange {
         dstate: &mut [f64; STATES],
         alpha: f64,
         beta: f64,
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
         for i in 0..2 {
             a.force[4 + i]
@@ -372,7 +347,7 @@ pub mod lagrange {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[2];
         let x_dot = qdot[0];
         let y_dot = qdot[1];
@@ -400,7 +375,7 @@ pub mod lagrange {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -421,7 +396,7 @@ pub mod lagrange {
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -433,7 +408,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let x_dot = state[4];
         let y_dot = state[5];
         let psi_dot = state[6];
@@ -442,7 +417,7 @@ pub mod lagrange {
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -457,6 +432,85 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "lagrange",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: Some(|t, state, params, g_i, dstate, alpha, beta| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs_baumgarte(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                alpha,
+                beta,
+            )
+        }),
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Maggi's equations: 9 states, 4 equations.
 pub mod maggi {
@@ -525,10 +579,10 @@ pub mod maggi {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -539,7 +593,7 @@ pub mod maggi {
         let (w, c) = (a.w, a.c);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W",
                 value: column as f64,
@@ -556,19 +610,19 @@ pub mod maggi {
         dstate[8] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
@@ -587,7 +641,7 @@ pub mod maggi {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[2];
         let x_dot = qdot[0];
         let y_dot = qdot[1];
@@ -615,7 +669,7 @@ pub mod maggi {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -636,7 +690,7 @@ pub mod maggi {
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -648,7 +702,7 @@ pub mod maggi {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let x_dot = state[4];
         let y_dot = state[5];
         let psi_dot = state[6];
@@ -657,7 +711,7 @@ pub mod maggi {
         let qdot: [f64; NUM_COORDINATES] = [x_dot, y_dot, psi_dot, phi_dot];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -672,6 +726,74 @@ pub mod maggi {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "maggi",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 7 states, 2 equations.
 pub mod kane {
@@ -722,10 +844,10 @@ pub mod kane {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -735,7 +857,7 @@ pub mod kane {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -750,19 +872,19 @@ pub mod kane {
         dstate[6] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -781,7 +903,7 @@ pub mod kane {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[2];
         let x_dot = qdot[0];
         let y_dot = qdot[1];
@@ -809,7 +931,7 @@ pub mod kane {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -820,7 +942,7 @@ pub mod kane {
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -832,7 +954,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let psi = state[2];
         let u1 = state[4];
         let u2 = state[5];
@@ -846,7 +968,7 @@ pub mod kane {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -861,6 +983,74 @@ pub mod kane {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "kane",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 6 states, 1 equations.
 pub mod reduced_volterra {
@@ -916,10 +1106,10 @@ pub mod reduced_volterra {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -929,7 +1119,7 @@ pub mod reduced_volterra {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -943,19 +1133,19 @@ pub mod reduced_volterra {
         dstate[5] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -974,7 +1164,7 @@ pub mod reduced_volterra {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[2];
         let x_dot = qdot[0];
         let y_dot = qdot[1];
@@ -1002,7 +1192,7 @@ pub mod reduced_volterra {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1013,7 +1203,7 @@ pub mod reduced_volterra {
         let g_i: [f64; NUM_IGNORABLE] = [0.25 * md * R * R * psi_dot];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1025,7 +1215,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let psi = state[2];
         let u1 = state[4];
         let md = params.md;
@@ -1040,7 +1230,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1054,5 +1244,145 @@ pub mod reduced_volterra {
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> f64 {
         f64::INFINITY
+    }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "reduced_volterra",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
+}
+///Every emitted formulation through slices.
+pub const FORMULATIONS: [::seam::Formulation; 4] = [
+    lagrange::FORMULATION,
+    maggi::FORMULATION,
+    kane::FORMULATION,
+    reduced_volterra::FORMULATION,
+];
+///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
+pub fn model() -> ::seam::Model {
+    ::seam::Model {
+        module: "rolling_disk",
+        name: MODEL,
+        coordinates: &COORDINATES,
+        constraints: &CONSTRAINTS,
+        ignorable: &IGNORABLE,
+        holonomic: NUM_HOLONOMIC,
+        parameter_names: &Params::NAMES,
+        default_params: &DEFAULT_PARAMS,
+        initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
+        run: Some((T_START, T_END, DT_OUT)),
+        energy: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = energy(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        work_rate: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = work_rate(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        momenta: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_IGNORABLE>("out", out)? = momenta(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        constraint_residuals: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_CONSTRAINTS>("out", out)? = constraint_residuals(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        position_residuals: |t, q, _qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(
+                t,
+                ::seam::array("q", q)?,
+                &p,
+            );
+            Ok(())
+        },
+        formulations: &FORMULATIONS,
     }
 }

@@ -77,20 +77,24 @@ pub struct Params {
 }
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            mg: 2000.0,
-            Ixx: 1400.0,
-            Iyy: 900.0,
-            Izz: 1100.0,
-            Ixy: 5.0,
-            Ixz: 8.0,
-            Iyz: 3.0,
-            m: 1.0,
-            l: 2.5,
-        }
+        Params::DEFAULT
     }
 }
+///The model file's parameter values, in the order of `Params::NAMES`.
+pub const DEFAULT_PARAMS: [f64; 9] = Params::DEFAULT.values();
 impl Params {
+    ///The values from the model file.
+    pub const DEFAULT: Params = Params {
+        mg: 2000.0,
+        Ixx: 1400.0,
+        Iyy: 900.0,
+        Izz: 1100.0,
+        Ixy: 5.0,
+        Ixz: 8.0,
+        Iyz: 3.0,
+        m: 1.0,
+        l: 2.5,
+    };
     ///Parameter names, in the order of `values` and `from_values`.
     pub const NAMES: [&'static str; 9] = [
         "mg",
@@ -104,7 +108,7 @@ impl Params {
         "l",
     ];
     ///The parameters as an array, in the order of `NAMES`.
-    pub fn values(&self) -> [f64; 9] {
+    pub const fn values(&self) -> [f64; 9] {
         [
             self.mg,
             self.Ixx,
@@ -118,7 +122,7 @@ impl Params {
         ]
     }
     ///Parameters from an array in the order of `NAMES`.
-    pub fn from_values(values: &[f64; 9]) -> Self {
+    pub const fn from_values(values: &[f64; 9]) -> Self {
         Params {
             mg: values[0],
             Ixx: values[1],
@@ -132,37 +136,8 @@ impl Params {
         }
     }
 }
-///Why an emitted function could not produce a value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EvalError {
-    ///The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix).
-    Singular { t: f64, condition: &'static str, value: f64 },
-    ///Output `index` is not a finite number at time `t`.
-    NonFinite { t: f64, index: usize },
-    ///A state violates `constraint`: its residual exceeds the tolerance.
-    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-}
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            EvalError::Singular { t, condition, value } => {
-                write!(
-                    f, "singular configuration at t = {t}: {condition} (value {value:e})"
-                )
-            }
-            EvalError::NonFinite { t, index } => {
-                write!(f, "non-finite value in output {index} at t = {t}")
-            }
-            EvalError::ConstraintViolated { constraint, residual, tolerance } => {
-                write!(
-                    f,
-                    "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"
-                )
-            }
-        }
-    }
-}
-impl std::error::Error for EvalError {}
+///Why an emitted function could not produce a value (the seam's error type, shared by every module).
+pub use ::seam::Failure;
 ///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
 fn solve_dense<const N: usize>(
     a: &mut [[f64; N]; N],
@@ -497,10 +472,10 @@ pub mod lagrange {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -510,7 +485,7 @@ pub mod lagrange {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "constraint matrix [M a^T; a 0]",
                 value: column as f64,
@@ -533,19 +508,19 @@ pub mod lagrange {
         dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Lagrange's equations with multipliers: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`.
@@ -557,7 +532,7 @@ pub mod lagrange {
         dstate: &mut [f64; STATES],
         alpha: f64,
         beta: f64,
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         let mut a = assemble(t, state, params, g_i);
         for i in 0..0 {
             a.force[7 + i]
@@ -581,7 +556,7 @@ pub mod lagrange {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[0];
         let theta = q[1];
         let rho = q[3];
@@ -606,7 +581,7 @@ pub mod lagrange {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -641,7 +616,7 @@ pub mod lagrange {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -653,7 +628,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let psi_dot = state[7];
         let theta_dot = state[8];
         let phi_dot = state[9];
@@ -681,7 +656,7 @@ pub mod lagrange {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -696,6 +671,85 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "lagrange",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: Some(|t, state, params, g_i, dstate, alpha, beta| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs_baumgarte(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                alpha,
+                beta,
+            )
+        }),
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Maggi's equations: 15 states, 7 equations.
 pub mod maggi {
@@ -912,10 +966,10 @@ pub mod maggi {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -926,7 +980,7 @@ pub mod maggi {
         let (w, c) = (a.w, a.c);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W",
                 value: column as f64,
@@ -963,19 +1017,19 @@ pub mod maggi {
         dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Maggi's equations: `dstate = [q'; q'']` and the power `W' = Q . q'` last for `state = [q; q']`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (Maggi matrix W^T M W), for monitoring its conditioning.
@@ -994,7 +1048,7 @@ pub mod maggi {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[0];
         let theta = q[1];
         let rho = q[3];
@@ -1019,7 +1073,7 @@ pub mod maggi {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1054,7 +1108,7 @@ pub mod maggi {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1066,7 +1120,7 @@ pub mod maggi {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta = state[1];
         let psi_dot = state[7];
         let theta_dot = state[8];
@@ -1077,7 +1131,7 @@ pub mod maggi {
         let Z_dot = state[13];
         let value = f64::cos(theta);
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -1103,7 +1157,7 @@ pub mod maggi {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1119,6 +1173,74 @@ pub mod maggi {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "maggi",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 15 states, 7 equations.
 pub mod kane {
@@ -1250,10 +1372,10 @@ pub mod kane {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -1263,7 +1385,7 @@ pub mod kane {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -1286,19 +1408,19 @@ pub mod kane {
         dstate[14] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of Kane / Gibbs-Appell (standard Volterra): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -1317,7 +1439,7 @@ pub mod kane {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[0];
         let theta = q[1];
         let phi = q[2];
@@ -1345,7 +1467,7 @@ pub mod kane {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1380,7 +1502,7 @@ pub mod kane {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1392,7 +1514,7 @@ pub mod kane {
         state: &[f64; STATES],
         _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let theta = state[1];
         let phi = state[2];
         let u1 = state[7];
@@ -1409,7 +1531,7 @@ pub mod kane {
         let x4 = x2 * u2 + u3 * x3;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -1435,7 +1557,7 @@ pub mod kane {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1451,6 +1573,74 @@ pub mod kane {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "kane",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 12 states, 4 equations.
 pub mod reduced_volterra {
@@ -1581,10 +1771,10 @@ pub mod reduced_volterra {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -1594,7 +1784,7 @@ pub mod reduced_volterra {
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -1614,19 +1804,19 @@ pub mod reduced_volterra {
         dstate[11] = power;
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` and the power `W' = Q . q'` last for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -1645,7 +1835,7 @@ pub mod reduced_volterra {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[0];
         let theta = q[1];
         let phi = q[2];
@@ -1673,7 +1863,7 @@ pub mod reduced_volterra {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -1705,7 +1895,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -1717,7 +1907,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -1745,7 +1935,7 @@ pub mod reduced_volterra {
         let x10 = 1.0 / (m + mg);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -1775,7 +1965,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -1790,5 +1980,145 @@ pub mod reduced_volterra {
     ) -> f64 {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "reduced_volterra",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
+}
+///Every emitted formulation through slices.
+pub const FORMULATIONS: [::seam::Formulation; 4] = [
+    lagrange::FORMULATION,
+    maggi::FORMULATION,
+    kane::FORMULATION,
+    reduced_volterra::FORMULATION,
+];
+///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
+pub fn model() -> ::seam::Model {
+    ::seam::Model {
+        module: "satellite_boom",
+        name: MODEL,
+        coordinates: &COORDINATES,
+        constraints: &CONSTRAINTS,
+        ignorable: &IGNORABLE,
+        holonomic: NUM_HOLONOMIC,
+        parameter_names: &Params::NAMES,
+        default_params: &DEFAULT_PARAMS,
+        initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
+        run: Some((T_START, T_END, DT_OUT)),
+        energy: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = energy(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        work_rate: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = work_rate(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        momenta: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_IGNORABLE>("out", out)? = momenta(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        constraint_residuals: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_CONSTRAINTS>("out", out)? = constraint_residuals(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        position_residuals: |t, q, _qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(
+                t,
+                ::seam::array("q", q)?,
+                &p,
+            );
+            Ok(())
+        },
+        formulations: &FORMULATIONS,
     }
 }

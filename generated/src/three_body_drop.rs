@@ -87,24 +87,28 @@ pub struct Params {
 }
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            m0: 10.0,
-            Ixx: 1.2,
-            Iyy: 1.5,
-            Izz: 1.8,
-            Ixy: 0.05,
-            Ixz: 0.03,
-            Iyz: 0.02,
-            m1: 2.0,
-            m2: 2.0,
-            d: 0.4,
-            a_: 0.5,
-            J1: 0.02,
-            J2: 0.12,
-        }
+        Params::DEFAULT
     }
 }
+///The model file's parameter values, in the order of `Params::NAMES`.
+pub const DEFAULT_PARAMS: [f64; 13] = Params::DEFAULT.values();
 impl Params {
+    ///The values from the model file.
+    pub const DEFAULT: Params = Params {
+        m0: 10.0,
+        Ixx: 1.2,
+        Iyy: 1.5,
+        Izz: 1.8,
+        Ixy: 0.05,
+        Ixz: 0.03,
+        Iyz: 0.02,
+        m1: 2.0,
+        m2: 2.0,
+        d: 0.4,
+        a_: 0.5,
+        J1: 0.02,
+        J2: 0.12,
+    };
     ///Parameter names, in the order of `values` and `from_values`.
     pub const NAMES: [&'static str; 13] = [
         "m0",
@@ -122,7 +126,7 @@ impl Params {
         "J2",
     ];
     ///The parameters as an array, in the order of `NAMES`.
-    pub fn values(&self) -> [f64; 13] {
+    pub const fn values(&self) -> [f64; 13] {
         [
             self.m0,
             self.Ixx,
@@ -140,7 +144,7 @@ impl Params {
         ]
     }
     ///Parameters from an array in the order of `NAMES`.
-    pub fn from_values(values: &[f64; 13]) -> Self {
+    pub const fn from_values(values: &[f64; 13]) -> Self {
         Params {
             m0: values[0],
             Ixx: values[1],
@@ -158,37 +162,8 @@ impl Params {
         }
     }
 }
-///Why an emitted function could not produce a value.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum EvalError {
-    ///The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix).
-    Singular { t: f64, condition: &'static str, value: f64 },
-    ///Output `index` is not a finite number at time `t`.
-    NonFinite { t: f64, index: usize },
-    ///A state violates `constraint`: its residual exceeds the tolerance.
-    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-}
-impl core::fmt::Display for EvalError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            EvalError::Singular { t, condition, value } => {
-                write!(
-                    f, "singular configuration at t = {t}: {condition} (value {value:e})"
-                )
-            }
-            EvalError::NonFinite { t, index } => {
-                write!(f, "non-finite value in output {index} at t = {t}")
-            }
-            EvalError::ConstraintViolated { constraint, residual, tolerance } => {
-                write!(
-                    f,
-                    "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"
-                )
-            }
-        }
-    }
-}
-impl std::error::Error for EvalError {}
+///Why an emitted function could not produce a value (the seam's error type, shared by every module).
+pub use ::seam::Failure;
 ///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
 fn solve_dense<const N: usize>(
     a: &mut [[f64; N]; N],
@@ -675,10 +650,10 @@ pub mod reduced_volterra {
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
-    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+    fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
         for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
             if !(value.abs() > SINGULAR_TOLERANCE) {
-                return Err(EvalError::Singular {
+                return Err(Failure::Singular {
                     t,
                     condition,
                     value,
@@ -687,7 +662,7 @@ pub mod reduced_volterra {
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI",
                 value: column as f64,
@@ -705,19 +680,19 @@ pub mod reduced_volterra {
         dstate[9] = force[4];
         for (index, value) in dstate.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok(())
     }
-    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.
+    ///Right-hand side of the reduced Volterra equations (paper Eqs. 64-67): `dstate = [q'; u']` for `state = [q; u]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.
     pub fn rhs(
         t: f64,
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
         dstate: &mut [f64; STATES],
-    ) -> Result<(), EvalError> {
+    ) -> Result<(), Failure> {
         finish(t, assemble(t, state, params, g_i), dstate)
     }
     ///The matrix `rhs` solves numerically (mass matrix M_NI), for monitoring its conditioning.
@@ -736,7 +711,7 @@ pub mod reduced_volterra {
         q: &[f64; NUM_COORDINATES],
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
-    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+    ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
         let psi = q[0];
         let theta = q[1];
         let phi = q[2];
@@ -793,7 +768,7 @@ pub mod reduced_volterra {
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
-                return Err(EvalError::ConstraintViolated {
+                return Err(Failure::ConstraintViolated {
                     constraint,
                     residual,
                     tolerance,
@@ -841,7 +816,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((state, g_i))
@@ -853,7 +828,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
-    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+    ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
         let psi = state[0];
         let theta = state[1];
         let phi = state[2];
@@ -903,7 +878,7 @@ pub mod reduced_volterra {
         let x28 = x10 * x0 * x3 - x5 * x16;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
-            return Err(EvalError::Singular {
+            return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0],
                 value,
@@ -960,7 +935,7 @@ pub mod reduced_volterra {
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
-                return Err(EvalError::NonFinite { t, index });
+                return Err(Failure::NonFinite { t, index });
             }
         }
         Ok((q, qdot))
@@ -975,5 +950,140 @@ pub mod reduced_volterra {
     ) -> f64 {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
+    }
+    ///This formulation through slices, for code that picks a model at run time.
+    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
+        name: "reduced_volterra",
+        states: STATES,
+        equations: EQUATIONS,
+        integrates_ignorable: INTEGRATES_IGNORABLE,
+        has_work_state: HAS_WORK_STATE,
+        state_names: &STATE_NAMES,
+        rhs: |t, state, params, g_i, dstate| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            rhs(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+            )
+        },
+        rhs_baumgarte: None,
+        initial_state: |t, q, qdot, params, state, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (s, g) = initial_state(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            )?;
+            *::seam::array_mut::<STATES>("state", state)? = s;
+            *::seam::array_mut::<NUM_IGNORABLE>("g_i", g_i)? = g;
+            Ok(())
+        },
+        velocities: |t, state, params, g_i, q, qdot| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let (a, b) = velocities(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+            )?;
+            *::seam::array_mut::<NUM_COORDINATES>("q", q)? = a;
+            *::seam::array_mut::<NUM_COORDINATES>("qdot", qdot)? = b;
+            Ok(())
+        },
+        matrix_size: MATRIX_SIZE,
+        matrix: |t, state, params, g_i, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::copy_matrix(
+                &matrix(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+                out,
+            )
+        },
+        singular_margin: |t, state, params, g_i| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            Ok(
+                singular_margin(
+                    t,
+                    ::seam::array("state", state)?,
+                    &p,
+                    ::seam::array("g_i", g_i)?,
+                ),
+            )
+        },
+    };
+}
+///Every emitted formulation through slices.
+pub const FORMULATIONS: [::seam::Formulation; 1] = [reduced_volterra::FORMULATION];
+///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
+pub fn model() -> ::seam::Model {
+    ::seam::Model {
+        module: "three_body_drop",
+        name: MODEL,
+        coordinates: &COORDINATES,
+        constraints: &CONSTRAINTS,
+        ignorable: &IGNORABLE,
+        holonomic: NUM_HOLONOMIC,
+        parameter_names: &Params::NAMES,
+        default_params: &DEFAULT_PARAMS,
+        initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
+        run: Some((T_START, T_END, DT_OUT)),
+        energy: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = energy(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        work_rate: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            ::seam::array_mut::<1>("out", out)?[0] = work_rate(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        momenta: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_IGNORABLE>("out", out)? = momenta(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        constraint_residuals: |t, q, qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_CONSTRAINTS>("out", out)? = constraint_residuals(
+                t,
+                ::seam::array("q", q)?,
+                ::seam::array("qdot", qdot)?,
+                &p,
+            );
+            Ok(())
+        },
+        position_residuals: |t, q, _qdot, params, out| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            *::seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(
+                t,
+                ::seam::array("q", q)?,
+                &p,
+            );
+            Ok(())
+        },
+        formulations: &FORMULATIONS,
     }
 }

@@ -33,7 +33,7 @@ fn committed_modules_match_the_generator() {
     let mut counters = String::from("# Work counters of the committed modules (regenerated with them).\n");
     for (module, model, edit) in variants() {
         let m = generator::model::load(format!("{root}/models/{model}.ron")).unwrap();
-        let mut options = Options::from_model(&m);
+        let mut options = Options { module_name: Some(module.to_string()), ..Options::from_model(&m) };
         edit(&mut options);
         let out = generate(&m, &options).unwrap();
         counters += &format!("\n[{module}]\n{}", out.summary.work_counters());

@@ -11,3 +11,5 @@ pub mod formulation;
 pub mod inspect;
 pub mod emit;
 pub mod output;
+
+pub use emit::Builder;

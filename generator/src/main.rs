@@ -78,6 +78,16 @@ struct GenerateArgs {
     /// Split functions with more than N common subexpressions into helpers.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     max_lets: Option<u64>,
+    /// The seam crate's path in the emitted code: `::seam`, or a re-export such as
+    /// `runtime::seam` for a crate that depends on the runtime only.
+    #[arg(long, value_name = "PATH", default_value = emit::DEFAULT_SEAM_PATH)]
+    seam_path: String,
+    /// The name the module reports as `model().module` (default: the model's name).
+    #[arg(long, value_name = "NAME")]
+    module_name: Option<String>,
+    /// Print no summary to stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 fn main() -> ExitCode {
@@ -133,15 +143,27 @@ fn run(cli: Cli) -> Result<(), String> {
     if let Some(n) = args.max_lets {
         options.max_lets_per_function = n as usize;
     }
+    options.seam_path = args.seam_path.clone();
+    options.module_name = args.module_name.clone();
     let out = emit::generate(&model, &options).map_err(|e| e.to_string())?;
     match &args.output {
+        // An unchanged file is left alone, so builds that depend on it stay fresh.
+        Some(path) if std::fs::read(path).ok().as_deref() == Some(out.code.as_bytes()) => {
+            if !args.quiet {
+                eprintln!("unchanged {}", path.display());
+            }
+        }
         Some(path) => {
             generator::output::write_atomic(path, out.code.as_bytes()).map_err(|e| format!("error: {e}"))?;
-            eprintln!("wrote {}", path.display());
+            if !args.quiet {
+                eprintln!("wrote {}", path.display());
+            }
         }
         None => print_stdout(&out.code)?,
     }
-    eprintln!("{}", out.summary);
+    if !args.quiet {
+        eprintln!("{}", out.summary);
+    }
     Ok(())
 }
 

@@ -4,13 +4,17 @@
 
 use generator::emit::{Formulation, Options, Parameters, generate};
 
+mod support {
+    pub mod rustc;
+}
+
 fn compile(name: &str, code: &str) {
     let dir = std::env::temp_dir().join(format!("emitted-compiles-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("module.rs");
     std::fs::write(&file, format!("#![deny(warnings)]\n#![allow(clippy::all)]\n{code}")).unwrap();
-    let out = std::process::Command::new("rustc")
-        .args(["--edition", "2024", "--crate-type", "lib", "-C", "opt-level=0", "--out-dir"])
+    let out = support::rustc::rustc()
+        .args(["--crate-type", "lib", "-C", "opt-level=0", "--out-dir"])
         .arg(&dir)
         .arg(&file)
         .output()

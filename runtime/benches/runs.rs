@@ -5,7 +5,7 @@
 //! `cargo bench -p runtime --bench runs`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use runtime::compare::output_times;
+use runtime::compare::Reference;
 use runtime::integrate::{Projector, Settings, integrate, integrate_projected};
 use runtime::system::{Drift, System};
 use std::hint::black_box;
@@ -15,12 +15,11 @@ fn whole_runs(c: &mut Criterion) {
         let model = generated::find(scene).unwrap();
         let mut group = c.benchmark_group(format!("run/{scene}"));
         group.sample_size(20);
-        let (t0, t1, _) = model.run;
-        let settings = Settings::paper(t1 - t0);
-        let times = output_times(&model);
+        let r = Reference::of(&model).unwrap();
+        let settings = Settings::paper(r.t_end - r.t_start);
+        let times = r.times();
         for form in model.formulations {
-            let (q0, qd0) = model.initial;
-            let (sys, y0) = System::start(model, form.name, (model.default_params)(), q0, qd0).unwrap();
+            let (sys, y0) = System::start(model, form.name, model.default_params.to_vec(), r.q0, r.qd0).unwrap();
             group.bench_function(form.name, |b| {
                 b.iter(|| integrate(&mut |t, y, dy| sys.rhs(t, y, dy), black_box(&y0), &times, &settings).unwrap().stats.rhs_calls)
             });
@@ -31,17 +30,17 @@ fn whole_runs(c: &mut Criterion) {
     // only (no monitors).
     let model = generated::find("cart_pendulum").unwrap();
     let settings = Settings::paper(50.0);
-    let times = output_times(&model);
+    let r = Reference::of(&model).unwrap();
+    let times = r.times();
     let mut group = c.benchmark_group("run/cart_pendulum_drift");
     group.sample_size(20);
     for (label, drift) in [("none", Drift::None), ("baumgarte", Drift::Baumgarte { alpha: 10.0, beta: 10.0 }), ("projection", Drift::Projection)] {
-        let (q0, qd0) = model.initial;
-        let (sys, y0) = System::start(model, "lagrange", (model.default_params)(), q0, qd0).unwrap();
+        let (sys, y0) = System::start(model, "lagrange", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
         let sys = sys.with_drift(drift).unwrap();
         group.bench_function(label, |b| {
             b.iter(|| {
                 let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
-                let projector: Option<Projector<generated::Failure>> = if drift == Drift::Projection { Some(&mut project) } else { None };
+                let projector: Option<Projector<seam::Failure>> = if drift == Drift::Projection { Some(&mut project) } else { None };
                 integrate_projected(&mut |t, y, dy| sys.rhs(t, y, dy), projector, black_box(&y0), &times, &settings).unwrap().stats.rhs_calls
             })
         });

@@ -13,7 +13,7 @@
 use crate::integrate::{Projector, RunError, Settings, Solution, integrate_projected};
 use crate::monitor::{Invariants, monitor, norm};
 use crate::system::{Drift, SetupError, System};
-use generated::{Failure, Model};
+use seam::{Failure, Model};
 use std::time::Instant;
 
 /// What to run.
@@ -31,8 +31,9 @@ pub struct Options {
 impl Options {
     /// The paper's settings for the model's reference run, 5 repeats.
     pub fn paper(model: &Model) -> Options {
-        let (t0, t1, _) = model.run;
-        Options { settings: Settings::paper(t1 - t0), repeats: 5, formulations: vec![], drift: Drift::None }
+        // Without a reference run there is nothing to run; `run` says so.
+        let span = model.run.map_or(1.0, |(t0, t1, _)| t1 - t0);
+        Options { settings: Settings::paper(span), repeats: 5, formulations: vec![], drift: Drift::None }
     }
 }
 
@@ -90,14 +91,44 @@ pub enum CompareError {
     Run { method: String, source: RunError },
     #[error("{method}: monitor failed: {source}")]
     Monitor { method: String, source: Failure },
+    #[error("model `{model}` has no reference run: its file has no `{section}` section (add `{section}: {example}` to run it)")]
+    NoReference { model: String, section: &'static str, example: &'static str },
 }
 
-/// The model's output times: `t_start, t_start + dt, ..., t_end`.
-pub fn output_times(model: &Model) -> Vec<f64> {
-    let (t0, t1, dt) = model.run;
-    let n = ((t1 - t0) / dt).round() as usize;
-    (0..=n).map(|i| t0 + i as f64 * dt).collect()
+/// A model's reference run, from its file's `initial` and `simulation` sections.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reference {
+    pub q0: &'static [f64],
+    pub qd0: &'static [f64],
+    pub t_start: f64,
+    pub t_end: f64,
+    pub dt_out: f64,
 }
+
+impl Reference {
+    /// The reference run of `model`, or [`CompareError::NoReference`] naming the missing section.
+    ///
+    /// ```
+    /// let model = generated::find("cart_pendulum").unwrap();
+    /// let r = runtime::compare::Reference::of(&model).unwrap();
+    /// assert_eq!((r.t_end, r.dt_out), (50.0, 0.01));
+    /// let bare = seam::Model { initial: None, ..model };
+    /// assert!(runtime::compare::Reference::of(&bare).unwrap_err().to_string().contains("`initial`"));
+    /// ```
+    pub fn of(model: &Model) -> Result<Reference, CompareError> {
+        let missing = |section, example| CompareError::NoReference { model: model.module.to_string(), section, example };
+        let (q0, qd0) = model.initial.ok_or_else(|| missing("initial", "Initial(q: [...], qdot: [...])"))?;
+        let (t_start, t_end, dt_out) = model.run.ok_or_else(|| missing("simulation", "Simulation(t_end: 10.0, dt_out: 0.01)"))?;
+        Ok(Reference { q0, qd0, t_start, t_end, dt_out })
+    }
+
+    /// The output times `t_start, t_start + dt_out, ..., t_end`.
+    pub fn times(&self) -> Vec<f64> {
+        let n = ((self.t_end - self.t_start) / self.dt_out).round() as usize;
+        (0..=n).map(|i| self.t_start + i as f64 * self.dt_out).collect()
+    }
+}
+
 
 /// Runs one formulation.
 pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
@@ -106,16 +137,16 @@ pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> 
 
 /// Runs one formulation with drift control.
 pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize, drift: Drift) -> Result<Run, CompareError> {
-    let (q0, qd0) = model.initial;
+    let reference = Reference::of(model)?;
     let setup = |source| CompareError::Setup { method: method.into(), source };
-    let (sys, y0) = System::start(*model, method, (model.default_params)(), q0, qd0).map_err(setup)?;
+    let (sys, y0) = System::start(*model, method, model.default_params.to_vec(), reference.q0, reference.qd0).map_err(setup)?;
     let sys = sys.with_drift(drift).map_err(setup)?;
     let label = match drift {
         Drift::None => method.to_string(),
         Drift::Baumgarte { .. } => format!("{method}+baumgarte"),
         Drift::Projection => format!("{method}+projection"),
     };
-    let times = output_times(model);
+    let times = reference.times();
     let mut cpu = Vec::new();
     let mut solution = None;
     for _ in 0..repeats.max(1) {

@@ -8,7 +8,7 @@
 
 use crate::integrate::Solution;
 use crate::system::System;
-use generated::Failure;
+use seam::Failure;
 
 /// Error series at the output times.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -2,6 +2,8 @@
 //! constraint and momentum errors over time, one curve per method. SVG needs no font files.
 
 use crate::compare::Run;
+use crate::output::write_atomic;
+use seam::Model;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -47,17 +49,18 @@ fn panel(area: &DrawingArea<SVGBackend, plotters::coord::Shift>, title: &str, ti
 }
 
 /// Writes `<scene>_coordinates.svg` and `<scene>_errors.svg` into `dir`; returns their paths.
-pub fn write_plots(runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     std::fs::create_dir_all(dir).map_err(|e| err(dir, e))?;
     let Some(first) = runs.first() else { return Ok(vec![]) };
     let scene = &first.record.scene;
     let times = &first.solution.times;
     let m = first.invariants.coordinates.first().map_or(0, |q| q.len());
-    let names = generated::find(scene).map(|model| model.coordinates.to_vec()).unwrap_or_default();
+    let names = model.coordinates;
     // Coordinates: one panel per coordinate.
     let path = dir.join(format!("{scene}_coordinates.svg"));
     let rows = m.div_ceil(2).max(1);
-    let root = SVGBackend::new(path.as_path(), (1100, 260 * rows as u32)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1100, 260 * rows as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&path, e))?;
     for (j, area) in root.split_evenly((rows, 2)).iter().enumerate().take(m) {
         let series: Vec<(&str, Vec<f64>)> =
@@ -67,9 +70,11 @@ pub fn write_plots(runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> 
     }
     root.present().map_err(|e| err(&path, e))?;
     drop(root);
+    write_atomic(&path, svg.as_bytes()).map_err(|e| err(&path, e.source))?;
     // Errors: energy, constraint, momentum.
     let epath = dir.join(format!("{scene}_errors.svg"));
-    let root = SVGBackend::new(epath.as_path(), (1100, 780)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1100, 780)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&epath, e))?;
     let areas = root.split_evenly((3, 1));
     let energy: Vec<(&str, Vec<f64>)> = runs.iter().map(|r| (r.record.method.as_str(), r.invariants.energy_error.clone())).collect();
@@ -88,6 +93,7 @@ pub fn write_plots(runs: &[Run], dir: &Path) -> Result<Vec<PathBuf>, PlotError> 
     root.present().map_err(|e| err(&epath, e))?;
     drop(areas);
     drop(root);
+    write_atomic(&epath, svg.as_bytes()).map_err(|e| err(&epath, e.source))?;
     Ok(vec![path, epath])
 }
 
@@ -107,7 +113,8 @@ pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Resu
         return Err(err(path, "no successful runs to plot"));
     }
     let scene = &ok[0].scene;
-    let root = SVGBackend::new(path, (1000, 700)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1000, 700)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(path, e))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(format!("{scene}: work-precision (max |q - q_ref| against CPU time per run)"), ("sans-serif", 16))
@@ -159,5 +166,7 @@ pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Resu
     }
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw().map_err(|e| err(path, e))?;
     root.present().map_err(|e| err(path, e))?;
-    Ok(())
+    drop(chart);
+    drop(root);
+    write_atomic(path, svg.as_bytes()).map_err(|e| err(path, e.source))
 }

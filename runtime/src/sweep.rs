@@ -9,10 +9,10 @@
 //! assert!(points.iter().any(|p| p.method == "reduced_volterra"));
 //! ```
 
-use crate::compare::{CompareError, run_with};
+use crate::compare::{CompareError, Reference, run_with};
 use crate::integrate::{Method, Settings};
 use crate::system::Drift;
-use generated::Model;
+use seam::Model;
 
 /// What to sweep.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,9 +66,9 @@ fn max_error(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 }
 
 /// The settings a sweep runs, with labels.
-pub fn plan(model: &Model, options: &SweepOptions) -> Vec<Settings> {
-    let (t0, t1, dt) = model.run;
-    let h_max = 0.1 * (t1 - t0);
+pub fn plan(model: &Model, options: &SweepOptions) -> Result<Vec<Settings>, CompareError> {
+    let r = Reference::of(model)?;
+    let (h_max, dt) = (0.1 * (r.t_end - r.t_start), r.dt_out);
     let mut out = Vec::new();
     for method in [Method::Dopri5, Method::Dop853] {
         for &tol in &options.tolerances {
@@ -78,27 +78,29 @@ pub fn plan(model: &Model, options: &SweepOptions) -> Vec<Settings> {
     for &f in &options.rk4_steps {
         out.push(Settings { method: Method::Rk4 { h: f * dt }, h_max, ..Settings::default() });
     }
-    out
+    Ok(out)
 }
 
 /// Runs the sweep; `progress(done, total, label)` is called before each run.
 pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usize, usize, &str)) -> Result<Vec<Point>, CompareError> {
-    let (t0, t1, _) = model.run;
+    let r = Reference::of(model)?;
     let reference_settings = Settings {
         method: Method::Dop853,
         rtol: options.reference_tolerance,
         atol: options.reference_tolerance,
-        h_max: 0.1 * (t1 - t0),
+        h_max: 0.1 * (r.t_end - r.t_start),
         ..Settings::default()
     };
-    let reference = run_with(model, "reduced_volterra", &reference_settings, 1, Drift::None)?.invariants.coordinates;
+    // The reference solution: the reduced method when the module has it, else the first.
+    let reference_form = model.formulation("reduced_volterra").or(model.formulations.first()).map_or("reduced_volterra", |f| f.name);
+    let reference = run_with(model, reference_form, &reference_settings, 1, Drift::None)?.invariants.coordinates;
     let forms: Vec<&str> = model
         .formulations
         .iter()
         .map(|f| f.name)
         .filter(|n| options.formulations.is_empty() || options.formulations.iter().any(|o| o == n))
         .collect();
-    let settings = plan(model, options);
+    let settings = plan(model, options)?;
     let total = forms.len() * settings.len();
     let mut points = Vec::new();
     for form in &forms {

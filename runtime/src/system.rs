@@ -3,14 +3,14 @@
 //!
 //! ```
 //! let model = generated::find("cart_pendulum").unwrap();
-//! let (q0, qd0) = model.initial;
-//! let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", (model.default_params)(), q0, qd0).unwrap();
+//! let (q0, qd0) = model.initial.unwrap();
+//! let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", model.default_params.to_vec(), q0, qd0).unwrap();
 //! let mut dy = vec![0.0; y0.len()];
 //! sys.rhs(0.0, &y0, &mut dy).unwrap();
 //! assert_eq!(y0.len(), sys.form.states);
 //! ```
 
-use generated::{Failure, Formulation, Model};
+use seam::{Failure, Formulation, Model};
 
 /// Drift control for the classical methods (Lagrange, Maggi), off by default so the paper's
 /// comparison stays honest.

@@ -46,11 +46,13 @@ fn bad_arguments_are_refused_with_the_reason() {
     let out = compare(&["no_such_model"]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("no emitted model `no_such_model`") && err.contains("cart_pendulum"), "{err}");
+    assert!(err.contains("no model `no_such_model`") && err.contains("cart_pendulum"), "{err}");
     let out = compare(&["cart_pendulum", "--rtol", "-1"]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("positive number"));
     let out = compare(&["cart_pendulum", "--method", "rk4"]);
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("needs `--h`"));
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--h"));
+    let out = compare(&["cart_pendulum", "--formulations", "hamilton"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("reduced_volterra"));
 }
 
 #[test]
@@ -78,4 +80,90 @@ fn the_sweep_writes_its_table_and_diagram_and_shows_progress() {
     assert_eq!(json.as_array().unwrap().len(), 36);
     let svg = std::fs::read_to_string(dir.join("satellite_boom_work_precision.svg")).unwrap();
     assert!(svg.contains("work-precision") && svg.contains("reduced_volterra DOP853"));
+}
+
+/// A scratch directory outside the repository holding `my_model.ron`: the downstream example's
+/// crane under another name, a model the project has never compiled.
+fn user_model(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("user-model-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let crane = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/downstream/models/gantry_crane.ron")).unwrap();
+    std::fs::write(dir.join("my_model.ron"), crane.replace("name: \"gantry_crane\"", "name: \"my_model\"")).unwrap();
+    dir
+}
+
+#[test]
+fn a_model_file_of_the_user_s_own_is_compared_from_compiled_code_and_cached_by_content() {
+    let dir = user_model("compare");
+    let model = dir.join("my_model.ron");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_compare")).arg(&model).args(["--repeats", "1"]).args(extra).current_dir(&dir).output().unwrap()
+    };
+    let out = run(&["--json", "out.json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = String::from_utf8_lossy(&out.stdout);
+    for row in ["| lagrange | 6 | 3 |", "| maggi | 6 | 3 |", "| kane | 6 | 3 |", "| reduced_volterra | 5 | 2 |"] {
+        assert!(table.contains(row), "{row} in\n{table}");
+    }
+    assert!(table.starts_with("my_model: DOPRI5"), "{table}");
+    let records: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("out.json")).unwrap()).unwrap();
+    let records = records.as_array().unwrap();
+    assert_eq!(records.len(), 4);
+    assert!(records.iter().all(|r| r["scene"] == "my_model" && r["momenta"][0]["coordinate"] == "x"));
+    // The reduced method holds the trolley's momentum exactly.
+    assert!(records[3]["momentum_error_norm"].as_f64().unwrap() < 1e-12);
+
+    // Unchanged: nothing is generated anew or compiled.
+    let again = run(&["--formulations", "reduced"]);
+    assert!(again.status.success(), "{}", String::from_utf8_lossy(&again.stderr));
+    assert!(!String::from_utf8_lossy(&again.stderr).contains("compiling"), "{}", String::from_utf8_lossy(&again.stderr));
+    assert!(String::from_utf8_lossy(&again.stdout).contains("| reduced_volterra | 5 | 2 |"));
+
+    // Changed content: rebuilt, and the new parameters are what runs.
+    let text = std::fs::read_to_string(&model).unwrap().replace("\"mt\": 5.0", "\"mt\": 50.0");
+    std::fs::write(&model, text).unwrap();
+    let changed = run(&["--json", "-", "--formulations", "kane"]);
+    assert!(changed.status.success(), "{}", String::from_utf8_lossy(&changed.stderr));
+    assert!(String::from_utf8_lossy(&changed.stderr).contains("compiling"));
+    let stdout = String::from_utf8_lossy(&changed.stdout);
+    let heavy: serde_json::Value = serde_json::from_str(&stdout[stdout.find('[').unwrap()..]).unwrap();
+    assert_ne!(heavy[0]["energy_error_norm"], records[2]["energy_error_norm"], "a heavier trolley is a different run");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_model_file_is_swept_the_same_way() {
+    let dir = user_model("sweep");
+    let out = Command::new(env!("CARGO_BIN_EXE_sweep"))
+        .arg(dir.join("my_model.ron"))
+        .args(["--quick", "--repeats", "1", "--formulations", "kane,reduced", "--out"])
+        .arg(dir.join("results"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = std::fs::read_to_string(dir.join("results/my_model_work_precision.csv")).unwrap();
+    // 2 formulations x 9 settings.
+    assert_eq!(csv.lines().count(), 1 + 18, "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.starts_with("my_model,kane,") || l.starts_with("my_model,reduced_volterra,")), "{csv}");
+    assert!(std::fs::read_to_string(dir.join("results/my_model_work_precision.svg")).unwrap().contains("<svg"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_wrong_model_file_gets_the_generator_s_located_error_and_no_build_log() {
+    let dir = user_model("bad");
+    let bad = dir.join("my_model.ron");
+    let text = std::fs::read_to_string(&bad).unwrap().replace("forces: [Gravity", "forcse: [Gravity");
+    std::fs::write(&bad, text).unwrap();
+    for bin in [env!("CARGO_BIN_EXE_compare"), env!("CARGO_BIN_EXE_sweep")] {
+        let out = Command::new(bin).arg(&bad).output().unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("my_model.ron:") && err.contains("forcse") && err.contains("help:"), "{err}");
+        assert!(!err.contains("Compiling") && !err.contains("error[E"), "no build log:\n{err}");
+    }
+    let missing = Command::new(env!("CARGO_BIN_EXE_compare")).arg(dir.join("nothing.ron")).output().unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("cannot read model file"), "{}", String::from_utf8_lossy(&missing.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,68 +1,79 @@
-//! A crate that uses a generated module: `build.rs` writes it to `OUT_DIR`, and it is
-//! included here. [`step`] advances the reduced Volterra equations of scene 1 by one
-//! classical Runge-Kutta step.
+//! A crate with a model of its own (`models/gantry_crane.ron`, not one of the project's):
+//! `build.rs` generates its module into `OUT_DIR` and it is included here; the runtime's
+//! integrators, monitors and comparison run it through the seam (`gantry_crane::model()`).
 //!
 //! ```
-//! use downstream::cart_pendulum as model;
-//! let params = model::Params::default();
-//! let (mut state, g_i) = model::reduced_volterra::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &params).unwrap();
-//! downstream::step(0.0, 1e-3, &mut state, &params, &g_i).unwrap();
+//! let table = downstream::comparison(1).unwrap();
+//! assert!(table.contains("| reduced_volterra | 5 | 2 |"), "{table}");
 //! ```
 
 #![forbid(unsafe_code)]
 #![deny(warnings)]
 
-/// Scene 1, generated at build time.
+/// The gantry crane, generated at build time.
 #[allow(clippy::all)]
-pub mod cart_pendulum {
-    include!(concat!(env!("OUT_DIR"), "/cart_pendulum.rs"));
+pub mod gantry_crane {
+    include!(concat!(env!("OUT_DIR"), "/gantry_crane.rs"));
 }
 
-use cart_pendulum::reduced_volterra::{STATES, rhs};
-use cart_pendulum::{EvalError, NUM_IGNORABLE, Params};
+use runtime::compare::{CompareError, Options, compare, table};
 
-/// One RK4 step of size `h` from time `t`, in place.
-pub fn step(t: f64, h: f64, state: &mut [f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE]) -> Result<(), EvalError> {
-    let mut k = [[0.0; STATES]; 4];
-    let mut y = *state;
-    rhs(t, &y, params, g_i, &mut k[0])?;
-    for (i, c) in [0.5, 0.5, 1.0].into_iter().enumerate() {
-        for j in 0..STATES {
-            y[j] = state[j] + c * h * k[i][j];
-        }
-        let mut next = [0.0; STATES];
-        rhs(t + c * h, &y, params, g_i, &mut next)?;
-        k[i + 1] = next;
-    }
-    for j in 0..STATES {
-        state[j] += h / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
-    }
-    Ok(())
+/// Every formulation of the crane at the paper's integrator settings, as the comparison table
+/// (CPU time the median of `repeats` runs).
+pub fn comparison(repeats: usize) -> Result<String, CompareError> {
+    let model = gantry_crane::model();
+    let runs = compare(&model, &Options { repeats, ..Options::paper(&model) })?;
+    Ok(table(&runs))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use cart_pendulum as model;
+    use super::gantry_crane as crane;
+    use runtime::compare::{Options, Reference, compare};
+    use runtime::integrate::{Settings, integrate};
+    use runtime::monitor::{monitor, norm};
+    use runtime::system::System;
 
     #[test]
-    fn a_short_simulation_keeps_energy_momentum_and_the_constraint() {
-        let params = Params::default();
-        let (mut state, g_i) =
-            model::reduced_volterra::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &params).unwrap();
-        let energy = |s: &[f64; STATES]| {
-            let (q, qd) = model::reduced_volterra::velocities(0.0, s, &params, &g_i).unwrap();
-            (model::energy(0.0, &q, &qd, &params), model::momenta(0.0, &q, &qd, &params)[0], model::constraint_residuals(0.0, &q, &qd, &params)[0])
-        };
-        let (e0, _, _) = energy(&state);
-        let h = 1e-3;
-        for n in 0..1000 {
-            step(n as f64 * h, h, &mut state, &params, &g_i).unwrap();
+    fn the_runtime_integrates_the_crate_s_own_model_and_its_invariants_hold() {
+        let model = crane::model();
+        let r = Reference::of(&model).unwrap();
+        let settings = Settings { rtol: 1e-10, atol: 1e-10, ..Settings::paper(r.t_end - r.t_start) };
+        let (sys, y0) = System::start(model, "reduced_volterra", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
+        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times(), &settings).unwrap();
+        let inv = monitor(&sys, &sol).unwrap();
+        assert!(norm(&inv.energy_error) < 1e-6 * inv.energy0.abs().max(1.0), "energy drift {}", norm(&inv.energy_error));
+        // The trolley's momentum is what the reduced method holds fixed; Lagrange integrates it.
+        assert!(inv.momentum_error[0].iter().all(|e| e.abs() < 1e-12));
+        let swing = inv.coordinates.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
+        assert!(swing > 0.59, "the cable swings: max phi {swing}");
+    }
+
+    #[test]
+    fn the_four_formulations_agree_on_the_crane() {
+        let model = crane::model();
+        let tight = Options { settings: Settings { rtol: 1e-11, atol: 1e-11, ..Options::paper(&model).settings }, repeats: 1, ..Options::paper(&model) };
+        let runs = compare(&model, &tight).unwrap();
+        assert_eq!(runs.len(), 4);
+        let last = |i: usize| runs[i].invariants.coordinates.last().unwrap().clone();
+        let reduced = last(3);
+        for i in 0..3 {
+            let other = last(i);
+            // Coordinates the reduced method keeps (phi, psi) and the reconstructed x.
+            for j in 0..3 {
+                assert!((other[j] - reduced[j]).abs() < 1e-6, "{} q{j}: {} against {}", runs[i].record.method, other[j], reduced[j]);
+            }
         }
-        let (e1, g1, c1) = energy(&state);
-        assert!((e1 - e0).abs() < 1e-9 * e0.abs(), "energy {e0} -> {e1}");
-        assert!((g1 - g_i[0]).abs() < 1e-13, "momentum {} -> {g1}", g_i[0]);
-        assert!(c1.abs() < 1e-13, "constraint residual {c1}");
-        assert!((state[0] - model::INITIAL_Q[0]).abs() > 1e-3, "the pendulum moved");
+    }
+
+    #[test]
+    fn a_wrong_slice_length_and_an_inadmissible_state_are_typed_errors() {
+        let model = crane::model();
+        let lagrange = model.formulation("lagrange").unwrap();
+        let mut dy = [0.0; 6];
+        let e = (lagrange.rhs)(0.0, &[0.0; 5], model.default_params, &[0.0], &mut dy).unwrap_err();
+        assert_eq!(e, runtime::seam::Failure::Dimension { argument: "state", expected: 6, got: 5 });
+        let e = System::start(model, "kane", vec![1.0; 2], &[0.0; 3], &[0.0; 3]).unwrap_err();
+        assert!(e.to_string().contains("`params` has 2 entries, 6 expected"), "{e}");
     }
 }

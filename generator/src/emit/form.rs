@@ -17,7 +17,7 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::{BTreeSet, HashMap};
 
-/// Largest singular factor (tree nodes) named by its formula in `EvalError::Singular`.
+/// Largest singular factor (tree nodes) named by its formula in `Failure::Singular`.
 const MAX_CONDITION_TREE: u32 = 200;
 
 /// The worst-case cost of `solve_dense` for `n` unknowns.
@@ -106,6 +106,7 @@ impl Emitter<'_> {
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
+        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some());
         Ok(quote! {
             #mod_doc
             pub mod #module {
@@ -124,6 +125,7 @@ impl Emitter<'_> {
                 #init
                 #vel
                 #margin
+                #seam_const
             }
         })
     }
@@ -240,7 +242,7 @@ impl Emitter<'_> {
                 self.functions.push(cost);
                 quote! {
                     #[doc = "Right-hand side with Baumgarte stabilization: the constraints at acceleration level become `a q'' = gamma - 2 alpha (a q' + b) - beta^2 h` (h: holonomic residuals); `alpha = beta = 0` is `rhs`."]
-                    pub fn rhs_baumgarte(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], alpha: f64, beta: f64) -> Result<(), EvalError> {
+                    pub fn rhs_baumgarte(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], alpha: f64, beta: f64) -> Result<(), Failure> {
                         let mut a = assemble(t, state, params, g_i);
                         for i in 0..#r_l {
                             a.force[#m_l + i] -= 2.0 * alpha * a.residuals[i] + beta * beta * a.positions[i];
@@ -259,7 +261,7 @@ impl Emitter<'_> {
         let unpack_post = if f.post.is_some() { quote!(let (w, c) = (a.w, a.c);) } else { TokenStream::new() };
         let unpack_power = if work { quote!(let power = a.power;) } else { TokenStream::new() };
         let rhs_doc = doc(&format!(
-            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `EvalError::Singular` where the equations are singular and `EvalError::NonFinite` instead of writing NaN.",
+            "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.",
             f.label,
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
             if work { " and the power `W' = Q . q'` last" } else { "" },
@@ -284,30 +286,30 @@ impl Emitter<'_> {
             #(#helpers)*
             #[doc = "Checks the singular factors, solves, and writes the state's rates."]
             #[allow(clippy::all)]
-            fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+            fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
                 for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
                     if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(EvalError::Singular { t, condition, value });
+                        return Err(Failure::Singular { t, condition, value });
                     }
                 }
                 let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
                 #unpack_post
                 #unpack_power
                 if let Err(column) = solve_dense(&mut matrix, &mut force) {
-                    return Err(EvalError::Singular { t, condition: #matrix_name, value: column as f64 });
+                    return Err(Failure::Singular { t, condition: #matrix_name, value: column as f64 });
                 }
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*
                 #(dstate[#s_idx] = #speed_values;)*
                 #power_stmt
                 for (index, value) in dstate.iter().enumerate() {
                     if !value.is_finite() {
-                        return Err(EvalError::NonFinite { t, index });
+                        return Err(Failure::NonFinite { t, index });
                     }
                 }
                 Ok(())
             }
             #rhs_doc
-            pub fn rhs(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES]) -> Result<(), EvalError> {
+            pub fn rhs(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES]) -> Result<(), Failure> {
                 finish(t, assemble(t, state, params, g_i), dstate)
             }
             #stabilized
@@ -359,21 +361,21 @@ impl Emitter<'_> {
         Ok(quote! {
             #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
             #[allow(non_snake_case, clippy::all)]
-            pub fn initial_state(#(#fn_args),*) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), EvalError> {
+            pub fn initial_state(#(#fn_args),*) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
                 #(#stmts)*
                 let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [#((#names, #r_out, #rb_out)),*];
                 let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [#((#h_names, #h_out, #hb_out)),*];
                 for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
                     let tolerance = CONSTRAINT_TOLERANCE * bound;
                     if !(residual.abs() <= tolerance) {
-                        return Err(EvalError::ConstraintViolated { constraint, residual, tolerance });
+                        return Err(Failure::ConstraintViolated { constraint, residual, tolerance });
                     }
                 }
                 let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
                 let g_i: [f64; NUM_IGNORABLE] = [#(#g_out),*];
                 for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
                     if !value.is_finite() {
-                        return Err(EvalError::NonFinite { t, index });
+                        return Err(Failure::NonFinite { t, index });
                     }
                 }
                 Ok((state, g_i))
@@ -400,7 +402,7 @@ impl Emitter<'_> {
                 quote! {
                     let value = #v;
                     if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(EvalError::Singular { t, condition: CONDITIONS[#l], value });
+                        return Err(Failure::Singular { t, condition: CONDITIONS[#l], value });
                     }
                 }
             })
@@ -420,14 +422,14 @@ impl Emitter<'_> {
         Ok(quote! {
             #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
             #[allow(non_snake_case, clippy::all)]
-            pub fn velocities(#(#fn_args),*) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), EvalError> {
+            pub fn velocities(#(#fn_args),*) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
                 #(#stmts)*
                 #(#check_stmts)*
                 let q: [f64; NUM_COORDINATES] = [#(#q_items),*];
                 let qdot: [f64; NUM_COORDINATES] = [#(#qd),*];
                 for (index, value) in qdot.iter().enumerate() {
                     if !value.is_finite() {
-                        return Err(EvalError::NonFinite { t, index });
+                        return Err(Failure::NonFinite { t, index });
                     }
                 }
                 Ok((q, qdot))

@@ -12,6 +12,7 @@
 //! eprintln!("{}", out.summary);
 //! ```
 
+pub mod builder;
 pub mod cse;
 pub mod form;
 pub mod function;
@@ -21,7 +22,9 @@ pub mod names;
 pub mod ops;
 pub mod optimize;
 pub mod prepare;
+pub mod seam;
 
+pub use builder::{BuildError, Builder, Built};
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
 use crate::model::{Model, ModelError};
 use ops::OpCount;
@@ -36,7 +39,16 @@ pub struct Options {
     pub parameters: Parameters,
     pub integrate_ignorable: bool,
     pub max_lets_per_function: usize,
+    /// The name the module is emitted under, written into `model().module` (the model's name
+    /// when `None`; a variant such as `cart_pendulum_baked` otherwise).
+    pub module_name: Option<String>,
+    /// The path of the seam crate in emitted code: `::seam` when the crate depends on `seam`
+    /// itself, or a re-export such as `runtime::seam`.
+    pub seam_path: String,
 }
+
+/// The seam crate's path when nothing else is asked for.
+pub const DEFAULT_SEAM_PATH: &str = "::seam";
 
 impl Options {
     /// The options the model file asks for.
@@ -54,6 +66,8 @@ impl Options {
             parameters: e.parameters,
             integrate_ignorable: e.integrate_ignorable,
             max_lets_per_function: e.max_lets_per_function,
+            module_name: None,
+            seam_path: DEFAULT_SEAM_PATH.to_string(),
         }
     }
 }
@@ -159,32 +173,3 @@ pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelErro
     module::generate(model, options)
 }
 
-/// Why [`write_module`] failed.
-#[derive(Debug, thiserror::Error)]
-pub enum WriteError {
-    /// The model is invalid or cannot be emitted.
-    #[error("{0}")]
-    Model(#[from] ModelError),
-    /// The output could not be written (the old file is unchanged).
-    #[error("{0}")]
-    Io(#[from] crate::output::OutputError),
-}
-
-/// Loads `model`, generates its module with the model's own options, and writes it to `out`
-/// atomically, and only if it changed (so a `build.rs` does not trigger needless rebuilds). For
-/// a downstream crate's `build.rs`:
-///
-/// ```no_run
-/// let out = std::path::Path::new(&std::env::var("OUT_DIR").unwrap()).join("cart_pendulum.rs");
-/// generator::emit::write_module("models/cart_pendulum.ron", &out).unwrap();
-/// println!("cargo:rerun-if-changed=models/cart_pendulum.ron");
-/// ```
-pub fn write_module(model: impl AsRef<std::path::Path>, out: impl AsRef<std::path::Path>) -> Result<Summary, WriteError> {
-    let model = crate::model::load(model)?;
-    let generated = generate(&model, &Options::from_model(&model))?;
-    let out = out.as_ref();
-    if std::fs::read_to_string(out).ok().as_deref() != Some(generated.code.as_str()) {
-        crate::output::write_atomic(out, generated.code.as_bytes())?;
-    }
-    Ok(generated.summary)
-}

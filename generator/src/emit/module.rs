@@ -1,4 +1,4 @@
-//! The generated module: sizes, `Params`, `EvalError`, the shared functions (energy, work
+//! The generated module: sizes, `Params`, the seam's `Failure`, the shared functions (energy, work
 //! rate, momenta, constraint residuals) and one submodule per formulation ([`super::form`]).
 //! It only emits: everything it writes comes from one [`Derivation`].
 
@@ -47,6 +47,8 @@ pub(super) struct Emitter<'a> {
     pub work: bool,
     /// Horner forms, shared by every function of the module.
     pub horner: HashMap<Expr, Expr>,
+    /// The seam crate's path in emitted code.
+    pub seam: syn::Path,
 }
 
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
@@ -55,6 +57,15 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     let d = formulation::derive(model, &request)?;
     let derive_time = start.elapsed();
     let start = Instant::now();
+    let seam: syn::Path = syn::parse_str(&options.seam_path).map_err(|e| {
+        model.error(
+            ErrorKind::Emission,
+            "emit",
+            "seam_path",
+            format!("`{}` is not a Rust path: {e}", options.seam_path),
+            "give the seam crate's path, such as `::seam` or `runtime::seam`".into(),
+        )
+    })?;
     let mut names = Names::new();
     let parameters = model.parameters.iter().map(|(s, _)| names.fresh(&s.name())).collect();
     let coordinates: Vec<String> = model.coordinates.iter().map(|s| names.fresh(&s.name())).collect();
@@ -81,13 +92,14 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         forms: Vec::new(),
         work: false,
         horner: HashMap::new(),
+        seam,
     };
     // Applied non-potential forces can do work (Q not identically zero once prepared): every
     // formulation then carries the work integral W as its last state.
     em.work = d.mechanics.q_forces.iter().any(|q| !em.prep.prepare(*q).is_zero());
     let mut items = vec![em.header(&d)];
     items.push(em.params());
-    items.push(error_type());
+    items.push(super::seam::failure_import(&em.seam));
     if !options.formulations.is_empty() {
         items.push(solve_dense());
     }
@@ -97,6 +109,15 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     for eqs in &d.equations {
         items.push(em.form(eqs, &d)?);
     }
+    let module_name = options.module_name.clone().unwrap_or_else(|| model.name.clone());
+    items.push(super::seam::model_fn(&super::seam::SeamParts {
+        seam: &em.seam,
+        module: &module_name,
+        formulations: d.equations.iter().map(|e| e.name.to_string()).collect(),
+        functions: &options.functions,
+        has_initial: model.initial.is_some(),
+        has_run: model.simulation.is_some(),
+    }));
     let tokens = quote!(#(#items)*);
     let file: syn::File = syn::parse2(tokens).map_err(|e| {
         model.error(ErrorKind::Emission, "emit", "emit", format!("internal: emitted tokens do not parse: {e}"), String::new())
@@ -249,18 +270,22 @@ impl Emitter<'_> {
             }
             impl Default for Params {
                 fn default() -> Self {
-                    Params { #(#fields: #values,)* }
+                    Params::DEFAULT
                 }
             }
+            #[doc = "The model file's parameter values, in the order of `Params::NAMES`."]
+            pub const DEFAULT_PARAMS: [f64; #kl] = Params::DEFAULT.values();
             impl Params {
+                #[doc = "The values from the model file."]
+                pub const DEFAULT: Params = Params { #(#fields: #values,)* };
                 #[doc = "Parameter names, in the order of `values` and `from_values`."]
                 pub const NAMES: [&'static str; #kl] = [#(#names),*];
                 #[doc = "The parameters as an array, in the order of `NAMES`."]
-                pub fn values(&self) -> [f64; #kl] {
+                pub const fn values(&self) -> [f64; #kl] {
                     [#(self.#fields),*]
                 }
                 #[doc = "Parameters from an array in the order of `NAMES`."]
-                pub fn from_values(#values_arg: &[f64; #kl]) -> Self {
+                pub const fn from_values(#values_arg: &[f64; #kl]) -> Self {
                     Params { #(#fields: values[#idx],)* }
                 }
             }
@@ -409,31 +434,6 @@ fn simple_fn(
             #value
         }
         #(#helpers)*
-    }
-}
-
-fn error_type() -> TokenStream {
-    quote! {
-        #[doc = "Why an emitted function could not produce a value."]
-        #[derive(Clone, Copy, Debug, PartialEq)]
-        pub enum EvalError {
-            #[doc = "The equations are singular at time `t`: `condition` vanishes (its value, or the pivot column for the mass matrix)."]
-            Singular { t: f64, condition: &'static str, value: f64 },
-            #[doc = "Output `index` is not a finite number at time `t`."]
-            NonFinite { t: f64, index: usize },
-            #[doc = "A state violates `constraint`: its residual exceeds the tolerance."]
-            ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
-        }
-        impl core::fmt::Display for EvalError {
-            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-                match self {
-                    EvalError::Singular { t, condition, value } => write!(f, "singular configuration at t = {t}: {condition} (value {value:e})"),
-                    EvalError::NonFinite { t, index } => write!(f, "non-finite value in output {index} at t = {t}"),
-                    EvalError::ConstraintViolated { constraint, residual, tolerance } => write!(f, "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}"),
-                }
-            }
-        }
-        impl std::error::Error for EvalError {}
     }
 }
 

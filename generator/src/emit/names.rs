@@ -23,13 +23,13 @@ const RUST_WORDS: &[&str] = &[
 const ITEM_NAMES: &[&str] = &[
     "MODEL", "NUM_COORDINATES", "NUM_CONSTRAINTS", "NUM_QUASI", "NUM_IGNORABLE", "NUM_HOLONOMIC", "COORDINATES",
     "CONSTRAINTS", "IGNORABLE", "INITIAL_Q", "INITIAL_QDOT", "T_START", "T_END", "DT_OUT", "PARAMETERS_BAKED",
-    "SINGULAR_TOLERANCE", "PIVOT_TOLERANCE", "CONSTRAINT_TOLERANCE", "Params", "EvalError", "solve_dense", "energy",
+    "SINGULAR_TOLERANCE", "PIVOT_TOLERANCE", "CONSTRAINT_TOLERANCE", "Params", "solve_dense", "energy",
     "work_rate", "momenta", "constraint_residuals", "position_residuals", "reduced_volterra", "kane", "STATES",
     "EQUATIONS", "STATE_NAMES", "INTEGRATES_IGNORABLE", "HAS_WORK_STATE", "rhs", "initial_state", "velocities", "t",
     "state", "params", "g_i", "dstate", "q", "qdot", "v", "mass", "force", "value", "residual", "tolerance", "column",
     "index", "constraint", "bound", "residuals", "positions", "alpha", "beta", "rhs_baumgarte", "lagrange", "maggi",
     "matrix", "singular_margin", "MATRIX_SIZE", "Assembly", "assemble", "finish", "a", "w", "c", "power", "checks",
-    "CONDITIONS", "condition",
+    "CONDITIONS", "condition", "Failure", "FORMULATION", "FORMULATIONS", "DEFAULT_PARAMS", "DEFAULT", "model", "seam",
 ];
 
 /// A set of identifiers handed out so far.

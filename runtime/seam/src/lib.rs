@@ -1,0 +1,276 @@
+//! What an emitted model is, for code that picks one at run time.
+//!
+//! Every module the generator emits ends with `pub fn model() -> seam::Model`: its sizes and
+//! names, its parameters as values, each formulation's functions over slices, and the shared
+//! functions (energy, work rate, momenta, constraint residuals). Every function returns the one
+//! error type of this crate, [`Failure`], both through the slices and through the module's own
+//! fixed-size functions. The runtime (integrators, monitors, the comparison of formulations)
+//! depends on this crate only, never on a particular model.
+//!
+//! The crate has no dependencies, so that a crate holding one generated module compiles it and
+//! this file, nothing more.
+//!
+//! ```
+//! // A hand-written one-coordinate model (x'' = -x), as an emitted module would describe it.
+//! use seam::{Failure, Formulation, Model, array, array_mut};
+//!
+//! fn rhs(_t: f64, state: &[f64], _params: &[f64], _g_i: &[f64], dstate: &mut [f64]) -> Result<(), Failure> {
+//!     let [x, v] = *array::<2>("state", state)?;
+//!     *array_mut::<2>("dstate", dstate)? = [v, -x];
+//!     Ok(())
+//! }
+//! static FORMULATIONS: [Formulation; 1] =
+//!     [Formulation { name: "lagrange", states: 2, equations: 1, rhs, ..Formulation::EMPTY }];
+//! let model = Model { name: "oscillator", coordinates: &["x"], formulations: &FORMULATIONS, ..Model::EMPTY };
+//!
+//! let lagrange = model.formulation("lagrange").unwrap();
+//! let mut dy = [0.0; 2];
+//! (lagrange.rhs)(0.0, &[1.0, 0.0], &[], &[], &mut dy).unwrap();
+//! assert_eq!(dy, [0.0, -1.0]);
+//! let short = (lagrange.rhs)(0.0, &[1.0], &[], &[], &mut dy);
+//! assert_eq!(short, Err(Failure::Dimension { argument: "state", expected: 2, got: 1 }));
+//! assert!((model.energy)(0.0, &[1.0], &[0.0], &[], &mut [0.0]).is_err());
+//! ```
+
+#![forbid(unsafe_code)]
+
+use std::fmt;
+
+/// Why an emitted function could not produce a value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Failure {
+    /// The equations are singular at time `t`: `condition` vanishes (its value, or the pivot
+    /// column for the mass matrix).
+    Singular { t: f64, condition: &'static str, value: f64 },
+    /// Output `index` is not a finite number at time `t`.
+    NonFinite { t: f64, index: usize },
+    /// A state violates `constraint`: its residual exceeds the tolerance.
+    ConstraintViolated { constraint: &'static str, residual: f64, tolerance: f64 },
+    /// A slice argument has the wrong length.
+    Dimension { argument: &'static str, expected: usize, got: usize },
+    /// The module was emitted without this function (the model file's `emit.functions`).
+    Missing { function: &'static str },
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Failure::Singular { t, condition, value } => {
+                write!(f, "singular configuration at t = {t}: {condition} (value {value:e})")
+            }
+            Failure::NonFinite { t, index } => write!(f, "non-finite value in output {index} at t = {t}"),
+            Failure::ConstraintViolated { constraint, residual, tolerance } => {
+                write!(f, "constraint `{constraint}` is violated: residual {residual:e} exceeds {tolerance:e}")
+            }
+            Failure::Dimension { argument, expected, got } => {
+                write!(f, "`{argument}` has {got} entries, {expected} expected")
+            }
+            Failure::Missing { function } => {
+                write!(f, "the module was emitted without `{function}`: add it to `emit.functions` in the model file")
+            }
+        }
+    }
+}
+
+impl std::error::Error for Failure {}
+
+/// `rhs(t, state, params, g_i, dstate)`: `dstate = f(t, state)`.
+pub type RhsFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
+/// `rhs_baumgarte(t, state, params, g_i, dstate, alpha, beta)`.
+pub type StabilizedFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], f64, f64) -> Result<(), Failure>;
+/// `matrix(t, state, params, g_i, out)`: the matrix `rhs` solves, row-major.
+pub type MatrixFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
+/// `singular_margin(t, state, params, g_i)`: distance to the singular set of what was solved
+/// symbolically (infinite when nothing was).
+pub type MarginFn = fn(f64, &[f64], &[f64], &[f64]) -> Result<f64, Failure>;
+/// `initial_state(t, q, qdot, params, state, g_i)`: the state and the conserved momenta `G_I`
+/// of `q(t), q'(t)`; [`Failure::ConstraintViolated`] when `q'` is not admissible.
+pub type InitialFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
+/// `velocities(t, state, params, g_i, q, qdot)`: `q` and `q'` at a state.
+pub type VelocitiesFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
+/// A function of `(t, q, qdot, params)` writing its outputs.
+pub type PointFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
+
+/// One formulation of a model: its sizes and its functions over slices.
+#[derive(Clone, Copy, Debug)]
+pub struct Formulation {
+    /// `lagrange`, `maggi`, `kane` or `reduced_volterra`.
+    pub name: &'static str,
+    /// Length of the state.
+    pub states: usize,
+    /// Number of second-order equations solved.
+    pub equations: usize,
+    /// The ignorable coordinates are integrated (otherwise they left the state).
+    pub integrates_ignorable: bool,
+    /// The last state entry is the work integral `W` (Eq. 80).
+    pub has_work_state: bool,
+    pub state_names: &'static [&'static str],
+    pub rhs: RhsFn,
+    /// Lagrange only: the Baumgarte-stabilized right-hand side.
+    pub rhs_baumgarte: Option<StabilizedFn>,
+    pub initial_state: InitialFn,
+    pub velocities: VelocitiesFn,
+    /// Size of the matrix `rhs` solves numerically.
+    pub matrix_size: usize,
+    pub matrix: MatrixFn,
+    pub singular_margin: MarginFn,
+}
+
+/// One emitted model.
+#[derive(Clone, Copy, Debug)]
+pub struct Model {
+    /// The module's name: the model's name, or the name it was emitted under (a variant such as
+    /// `cart_pendulum_baked`).
+    pub module: &'static str,
+    /// The model's own name.
+    pub name: &'static str,
+    pub coordinates: &'static [&'static str],
+    pub constraints: &'static [&'static str],
+    /// Indices of the ignorable coordinates in `coordinates`.
+    pub ignorable: &'static [usize],
+    /// Number of holonomic (position-level) constraints, the first of `constraints`.
+    pub holonomic: usize,
+    pub parameter_names: &'static [&'static str],
+    /// The model file's parameter values (empty when they were baked into the code).
+    pub default_params: &'static [f64],
+    /// `(q(0), q'(0))` of the reference run, when the model file gives one.
+    pub initial: Option<(&'static [f64], &'static [f64])>,
+    /// `(t_start, t_end, dt_out)` of the reference run, when the model file gives one.
+    pub run: Option<(f64, f64, f64)>,
+    /// `T + V`: one output.
+    pub energy: PointFn,
+    /// `Q . q'`: one output.
+    pub work_rate: PointFn,
+    /// One output per ignorable coordinate.
+    pub momenta: PointFn,
+    /// One output per constraint.
+    pub constraint_residuals: PointFn,
+    /// One output per holonomic constraint (`qdot` is ignored).
+    pub position_residuals: PointFn,
+    pub formulations: &'static [Formulation],
+}
+
+impl Model {
+    /// A model with no coordinates and no formulations, whose functions all fail with
+    /// [`Failure::Missing`]: the base to fill in with struct update syntax.
+    pub const EMPTY: Model = Model {
+        module: "",
+        name: "",
+        coordinates: &[],
+        constraints: &[],
+        ignorable: &[],
+        holonomic: 0,
+        parameter_names: &[],
+        default_params: &[],
+        initial: None,
+        run: None,
+        energy: missing_energy,
+        work_rate: missing_work_rate,
+        momenta: missing_momenta,
+        constraint_residuals: missing_constraint_residuals,
+        position_residuals: missing_position_residuals,
+        formulations: &[],
+    };
+
+    /// The formulation called `name`.
+    pub fn formulation(&self, name: &str) -> Option<&'static Formulation> {
+        self.formulations.iter().find(|f| f.name == name)
+    }
+}
+
+impl Formulation {
+    /// A formulation of no states whose functions all fail with [`Failure::Missing`].
+    pub const EMPTY: Formulation = Formulation {
+        name: "",
+        states: 0,
+        equations: 0,
+        integrates_ignorable: true,
+        has_work_state: false,
+        state_names: &[],
+        rhs: |_, _, _, _, _| Err(Failure::Missing { function: "rhs" }),
+        rhs_baumgarte: None,
+        initial_state: |_, _, _, _, _, _| Err(Failure::Missing { function: "initial_state" }),
+        velocities: |_, _, _, _, _, _| Err(Failure::Missing { function: "velocities" }),
+        matrix_size: 0,
+        matrix: |_, _, _, _, _| Err(Failure::Missing { function: "matrix" }),
+        singular_margin: |_, _, _, _| Err(Failure::Missing { function: "singular_margin" }),
+    };
+}
+
+/// Stand-ins for shared functions a module was emitted without.
+fn missing_energy(_: f64, _: &[f64], _: &[f64], _: &[f64], _: &mut [f64]) -> Result<(), Failure> {
+    Err(Failure::Missing { function: "energy" })
+}
+fn missing_work_rate(_: f64, _: &[f64], _: &[f64], _: &[f64], _: &mut [f64]) -> Result<(), Failure> {
+    Err(Failure::Missing { function: "work_rate" })
+}
+fn missing_momenta(_: f64, _: &[f64], _: &[f64], _: &[f64], _: &mut [f64]) -> Result<(), Failure> {
+    Err(Failure::Missing { function: "momenta" })
+}
+fn missing_constraint_residuals(_: f64, _: &[f64], _: &[f64], _: &[f64], _: &mut [f64]) -> Result<(), Failure> {
+    Err(Failure::Missing { function: "constraint_residuals" })
+}
+fn missing_position_residuals(_: f64, _: &[f64], _: &[f64], _: &[f64], _: &mut [f64]) -> Result<(), Failure> {
+    Err(Failure::Missing { function: "position_residuals" })
+}
+
+/// `slice` as an array of `N`, or [`Failure::Dimension`] naming `argument`.
+///
+/// ```
+/// assert_eq!(seam::array::<2>("q", &[1.0, 2.0]), Ok(&[1.0, 2.0]));
+/// assert!(seam::array::<2>("q", &[1.0]).is_err());
+/// ```
+pub fn array<'a, const N: usize>(argument: &'static str, slice: &'a [f64]) -> Result<&'a [f64; N], Failure> {
+    slice.try_into().map_err(|_| Failure::Dimension { argument, expected: N, got: slice.len() })
+}
+
+/// `slice` as a mutable array of `N`, or [`Failure::Dimension`] naming `argument`.
+///
+/// ```
+/// let mut out = [0.0; 2];
+/// *seam::array_mut::<2>("out", &mut out).unwrap() = [3.0, 4.0];
+/// assert_eq!(out, [3.0, 4.0]);
+/// ```
+pub fn array_mut<'a, const N: usize>(argument: &'static str, slice: &'a mut [f64]) -> Result<&'a mut [f64; N], Failure> {
+    let got = slice.len();
+    slice.try_into().map_err(|_| Failure::Dimension { argument, expected: N, got })
+}
+
+/// Copies a row-major `N x N` matrix into `out`, or [`Failure::Dimension`] when `out` does not
+/// hold `N * N` entries.
+///
+/// ```
+/// let mut out = [0.0; 4];
+/// seam::copy_matrix(&[[1.0, 2.0], [3.0, 4.0]], &mut out).unwrap();
+/// assert_eq!(out, [1.0, 2.0, 3.0, 4.0]);
+/// ```
+pub fn copy_matrix<const N: usize>(a: &[[f64; N]; N], out: &mut [f64]) -> Result<(), Failure> {
+    if out.len() != N * N {
+        return Err(Failure::Dimension { argument: "out", expected: N * N, got: out.len() });
+    }
+    for (row, chunk) in a.iter().zip(out.chunks_mut(N.max(1))) {
+        chunk.copy_from_slice(row);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_model_reports_missing_functions() {
+        let mut out = [0.0];
+        let e = (Model::EMPTY.energy)(0.0, &[], &[], &[], &mut out).unwrap_err();
+        assert_eq!(e, Failure::Missing { function: "energy" });
+        assert!(e.to_string().contains("emit.functions"), "{e}");
+        assert!((Formulation::EMPTY.rhs)(0.0, &[], &[], &[], &mut []).is_err());
+    }
+
+    #[test]
+    fn dimension_errors_name_the_argument() {
+        let e = array_mut::<3>("dstate", &mut [0.0; 2]).unwrap_err();
+        assert_eq!(e.to_string(), "`dstate` has 2 entries, 3 expected");
+        assert!(copy_matrix(&[[1.0]], &mut [0.0; 2]).is_err());
+    }
+}

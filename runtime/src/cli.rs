@@ -1,0 +1,276 @@
+//! The `compare` and `sweep` commands, run on a model compiled into the calling program.
+//!
+//! The binaries `compare` and `sweep` are drivers ([`crate::driver`]): they turn their MODEL
+//! argument into a small program with that model's module compiled in, optimized, and run it;
+//! [`run_compiled`] is that program's `main`. A crate with a generated module of its own calls
+//! [`compare_command`] or [`sweep_command`] directly.
+//!
+//! ```
+//! use clap::Parser;
+//! let args = runtime::cli::CompareArgs::try_parse_from(["compare", "my_model.ron", "--rtol", "1e-8"]).unwrap();
+//! assert_eq!((args.model.as_str(), args.rtol), ("my_model.ron", Some(1e-8)));
+//! assert!(runtime::cli::CompareArgs::try_parse_from(["compare", "m.ron", "--rtol", "-1"]).is_err());
+//! ```
+
+use crate::compare::{CompareError, Options, compare, table};
+use crate::integrate::Method;
+use crate::output::{OutputError, write_atomic};
+use crate::plot::PlotError;
+use crate::sweep::{SweepOptions, csv, sweep};
+use crate::system::Drift;
+use clap::{Parser, ValueEnum};
+use seam::Model;
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Every formulation of a model under the same integrator settings, as a table shaped like the
+/// paper's Tables 2, 3 and 6 (default: the paper's settings, Dormand-Prince 5(4), rtol 1e-3,
+/// atol 1e-6, h_max = span / 10).
+#[derive(Parser, Debug, Clone, PartialEq)]
+#[command(name = "compare", version)]
+pub struct CompareArgs {
+    /// A model file (`path/to/my_model.ron`) or the name of one in `models/` (cart_pendulum,
+    /// three_body, satellite_boom, ...).
+    pub model: String,
+    /// The integrator.
+    #[arg(long, value_enum, default_value_t = MethodArg::Dopri5)]
+    pub method: MethodArg,
+    /// Relative tolerance (adaptive methods).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance (adaptive methods).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub atol: Option<f64>,
+    /// The step of `--method rk4`.
+    #[arg(long, value_parser = positive, allow_hyphen_values = true, required_if_eq("method", "rk4"))]
+    pub h: Option<f64>,
+    /// The largest step.
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub h_max: Option<f64>,
+    /// CPU time is the median of N runs.
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeats: u32,
+    /// A comma-separated subset of the formulations (default: all the module has).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub formulations: Vec<FormulationArg>,
+    /// Baumgarte stabilization of Lagrange.
+    #[arg(long, value_name = "ALPHA,BETA", value_parser = pair, allow_hyphen_values = true, conflicts_with = "projection")]
+    pub baumgarte: Option<(f64, f64)>,
+    /// Project Lagrange and Maggi onto the constraints after every step.
+    #[arg(long)]
+    pub projection: bool,
+    /// Also write the records as JSON (`-` for stdout), atomically.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Also write SVG plots of the coordinates and errors into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
+}
+
+/// The work-precision sweep of a model: every formulation under DOPRI5 and DOP853 over a range
+/// of tolerances and RK4 over a range of steps, written as CSV, JSON and an SVG diagram
+/// (`DIR/<model>_work_precision.{csv,json,svg}`); progress on stderr.
+#[derive(Parser, Debug, Clone, PartialEq)]
+#[command(name = "sweep", version)]
+pub struct SweepArgs {
+    /// A model file (`path/to/my_model.ron`) or the name of one in `models/`.
+    pub model: String,
+    /// The directory the results are written to.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+    /// CPU time is the median of N runs.
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeats: u32,
+    /// Three tolerances and three RK4 steps instead of ten and seven.
+    #[arg(long)]
+    pub quick: bool,
+    /// A comma-separated subset of the formulations (default: all the module has).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub formulations: Vec<FormulationArg>,
+}
+
+/// An integrator, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    Dopri5,
+    Dop853,
+    Rk4,
+}
+
+/// A formulation, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FormulationArg {
+    Lagrange,
+    Maggi,
+    Kane,
+    #[value(name = "reduced_volterra", alias = "reduced", alias = "reduced-volterra")]
+    ReducedVolterra,
+}
+
+impl FormulationArg {
+    /// The formulation's name in emitted modules.
+    pub fn name(self) -> &'static str {
+        match self {
+            FormulationArg::Lagrange => "lagrange",
+            FormulationArg::Maggi => "maggi",
+            FormulationArg::Kane => "kane",
+            FormulationArg::ReducedVolterra => "reduced_volterra",
+        }
+    }
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("needs a positive number, not `{s}`"))
+}
+
+fn pair(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| format!("needs `alpha,beta`, not `{s}`"))?;
+    match parts[..] {
+        [a, b] if a.is_finite() && b.is_finite() && a >= 0.0 && b >= 0.0 => Ok((a, b)),
+        _ => Err(format!("needs two non-negative numbers `alpha,beta`, not `{s}`")),
+    }
+}
+
+/// Why a command failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    #[error(transparent)]
+    Compare(#[from] CompareError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+    #[error("model `{model}` has no formulation `{name}` (it has: {available})")]
+    UnknownFormulation { model: String, name: String, available: String },
+    #[error("cannot write to stdout: {0}")]
+    Stdout(std::io::Error),
+}
+
+/// The requested formulations, checked against what the module has.
+fn formulations(model: &Model, list: &[FormulationArg]) -> Result<Vec<String>, CliError> {
+    list.iter()
+        .map(|f| {
+            model.formulation(f.name()).map(|_| f.name().to_string()).ok_or_else(|| CliError::UnknownFormulation {
+                model: model.module.to_string(),
+                name: f.name().to_string(),
+                available: model.formulations.iter().map(|f| f.name).collect::<Vec<_>>().join(", "),
+            })
+        })
+        .collect()
+}
+
+/// The options `args` ask for.
+pub fn compare_options(model: &Model, args: &CompareArgs) -> Result<Options, CliError> {
+    let mut options = Options::paper(model);
+    let s = &mut options.settings;
+    s.method = match args.method {
+        MethodArg::Dopri5 => Method::Dopri5,
+        MethodArg::Dop853 => Method::Dop853,
+        // clap requires `--h` with `rk4`.
+        MethodArg::Rk4 => Method::Rk4 { h: args.h.unwrap_or(s.h_max) },
+    };
+    if let Some(x) = args.rtol {
+        s.rtol = x;
+    }
+    if let Some(x) = args.atol {
+        s.atol = x;
+    }
+    if let Some(x) = args.h_max {
+        s.h_max = x;
+    }
+    options.repeats = args.repeats as usize;
+    options.formulations = formulations(model, &args.formulations)?;
+    if let Some((alpha, beta)) = args.baumgarte {
+        options.drift = Drift::Baumgarte { alpha, beta };
+    }
+    if args.projection {
+        options.drift = Drift::Projection;
+    }
+    Ok(options)
+}
+
+fn print(text: &str) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        // A closed pipe (`compare m | head`) ends the program quietly.
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        other => other.map_err(CliError::Stdout),
+    }
+}
+
+/// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
+pub fn compare_command(model: &Model, args: &CompareArgs) -> Result<(), CliError> {
+    let options = compare_options(model, args)?;
+    let runs = compare(model, &options)?;
+    let s = &options.settings;
+    let header = format!(
+        "{}: {}, rtol {:e}, atol {:e}, h_max {}, {} outputs, CPU time median of {}\n\n",
+        model.module,
+        s.method,
+        s.rtol,
+        s.atol,
+        s.h_max,
+        runs.first().map_or(0, |r| r.solution.times.len()),
+        options.repeats
+    );
+    print(&(header + &table(&runs)))?;
+    if let Some(path) = &args.json {
+        let records: Vec<_> = runs.iter().map(|r| &r.record).collect();
+        let text = serde_json::to_string_pretty(&records).expect("records serialize");
+        if path.as_os_str() == "-" {
+            print(&(text + "\n"))?;
+        } else {
+            write_atomic(path, text.as_bytes())?;
+        }
+    }
+    if let Some(dir) = &args.plots {
+        for p in crate::plot::write_plots(model, &runs, dir)? {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+/// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
+pub fn sweep_command(model: &Model, args: &SweepArgs) -> Result<(), CliError> {
+    let mut options = SweepOptions { repeats: args.repeats as usize, formulations: formulations(model, &args.formulations)?, ..SweepOptions::default() };
+    if args.quick {
+        options.tolerances = vec![1e-3, 1e-6, 1e-9];
+        options.rk4_steps = vec![1.0, 0.1, 0.01];
+    }
+    let mut stderr = std::io::stderr();
+    let points = sweep(model, &options, &mut |done, total, label| {
+        let _ = write!(stderr, "\r[{done:>3}/{total}] {label:<48}");
+        let _ = stderr.flush();
+    })?;
+    eprintln!();
+    let base = args.out.join(format!("{}_work_precision", model.module));
+    write_atomic(&base.with_extension("csv"), csv(&points).as_bytes())?;
+    write_atomic(&base.with_extension("json"), serde_json::to_string_pretty(&points).expect("points serialize").as_bytes())?;
+    crate::plot::write_work_precision(&points, &base.with_extension("svg"))?;
+    let failed = points.iter().filter(|p| p.failure.is_some()).count();
+    print(&format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), base.display()))
+}
+
+/// The `main` of a program with `model` compiled in: its first argument names the command
+/// (`compare` or `sweep`), the rest are that command's arguments.
+pub fn run_compiled(model: Model) -> ExitCode {
+    let mut args = std::env::args_os().skip(1);
+    let command = args.next().map(|a| a.to_string_lossy().into_owned()).unwrap_or_default();
+    let result = match command.as_str() {
+        "compare" => compare_command(&model, &CompareArgs::parse_from(std::iter::once("compare".into()).chain(args))),
+        "sweep" => sweep_command(&model, &SweepArgs::parse_from(std::iter::once("sweep".into()).chain(args))),
+        other => {
+            eprintln!("error: unknown command `{other}`: use `compare` or `sweep`");
+            return ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
