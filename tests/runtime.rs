@@ -160,6 +160,51 @@ fn a_singular_configuration_stops_the_run_with_time_and_reason() {
     let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", model.default_params.to_vec(), &q0, &qd0).unwrap();
     let err = runtime::integrate::integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &[0.0, 1.0], &Settings::default()).unwrap_err();
     assert_eq!(err.t, 0.0);
-    assert!(matches!(&err.reason, runtime::integrate::Reason::Rhs(m) if m.contains("singular") && m.contains("theta1")), "{err}");
+    assert!(
+        matches!(err.reason, runtime::integrate::Reason::Rhs(runtime::seam::Failure::Singular { t, condition, .. }) if t == 0.0 && condition.contains("theta1")),
+        "{err}"
+    );
     assert_eq!(err.state, y0);
+}
+
+#[test]
+fn the_same_typed_errors_come_through_every_path() {
+    use runtime::seam::Failure;
+    use runtime::system::{SetupError, System};
+    let model = generated::find("cart_pendulum").unwrap();
+    let (q0, qd0) = model.initial.unwrap();
+    let params = model.default_params.to_vec();
+    // An initial state off the wheel constraint.
+    let off = [qd0[0], qd0[1] + 0.1, qd0[2]];
+    for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
+        match System::start(model, form, params.clone(), q0, &off) {
+            Err(SetupError::Initial(Failure::ConstraintViolated { constraint: "wheel", residual, .. })) => {
+                assert!((residual.abs() - 0.1).abs() < 1e-9, "{form}: residual {residual}")
+            }
+            other => panic!("{form}: {other:?}"),
+        }
+    }
+    // Slices of the wrong length, named.
+    assert!(matches!(
+        System::start(model, "kane", vec![1.0; 2], q0, qd0),
+        Err(SetupError::Initial(Failure::Dimension { argument: "params", expected: 6, got: 2 }))
+    ));
+    assert!(matches!(
+        System::start(model, "kane", params.clone(), &q0[..2], qd0),
+        Err(SetupError::Initial(Failure::Dimension { argument: "q", expected: 3, got: 2 }))
+    ));
+    let (sys, y0) = System::start(model, "kane", params.clone(), q0, qd0).unwrap();
+    let mut dy = vec![0.0; y0.len()];
+    assert_eq!(sys.rhs(0.0, &y0[1..], &mut dy), Err(Failure::Dimension { argument: "state", expected: y0.len(), got: y0.len() - 1 }));
+    assert!(matches!(sys.rhs(0.0, &y0, &mut dy[1..]), Err(Failure::Dimension { argument: "dstate", .. })));
+    // A singular configuration during a run, through the comparison: the run error keeps the
+    // model's failure typed.
+    let singular = runtime::seam::Model { initial: Some((&[0.3, 3.441592653589793, 0.0], &[0.2, 0.2, 0.1])), ..model };
+    let settings = Settings::paper(1.0);
+    match run(&singular, "reduced_volterra", &settings, 1) {
+        Err(runtime::compare::CompareError::Run { source, .. }) => {
+            assert!(matches!(source.reason, runtime::integrate::Reason::Rhs(Failure::Singular { .. })), "{source}")
+        }
+        other => panic!("{:?}", other.map(|r| r.record)),
+    }
 }

@@ -40,7 +40,7 @@ fn whole_runs(c: &mut Criterion) {
         group.bench_function(label, |b| {
             b.iter(|| {
                 let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
-                let projector: Option<Projector<seam::Failure>> = if drift == Drift::Projection { Some(&mut project) } else { None };
+                let projector: Option<Projector> = if drift == Drift::Projection { Some(&mut project) } else { None };
                 integrate_projected(&mut |t, y, dy| sys.rhs(t, y, dy), projector, black_box(&y0), &times, &settings).unwrap().stats.rhs_calls
             })
         });

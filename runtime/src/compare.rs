@@ -152,7 +152,7 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
         let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
-        let projector: Option<Projector<Failure>> = if drift == Drift::Projection { Some(&mut project) } else { None };
+        let projector: Option<Projector> = if drift == Drift::Projection { Some(&mut project) } else { None };
         let sol = integrate_projected(&mut |t, y, dy| sys.rhs(t, y, dy), projector, &y0, &times, settings)
             .map_err(|source| CompareError::Run { method: method.into(), source })?;
         cpu.push(start.elapsed().as_secs_f64());

@@ -9,7 +9,7 @@
 //! ```
 //! use runtime::integrate::{Method, Settings, integrate};
 //! // y'' = -y from (1, 0): y(t) = cos t.
-//! let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+//! let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), seam::Failure> {
 //!     dy[0] = y[1];
 //!     dy[1] = -y[0];
 //!     Ok(())
@@ -24,6 +24,7 @@ mod dop853;
 mod dopri5;
 mod rk4;
 
+use seam::Failure;
 use std::fmt;
 
 /// The integration method.
@@ -156,9 +157,10 @@ pub struct RunError {
 /// The reason a run stopped.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Reason {
-    /// The right-hand side refused (singular configuration, non-finite value, ...).
+    /// The right-hand side (or the projection) refused: a singular configuration, a
+    /// non-finite value, a wrong slice length, typed as the model reported it.
     #[error("{0}")]
-    Rhs(String),
+    Rhs(Failure),
     /// The step size fell below what the time's resolution allows.
     #[error("step size {h:e} underflows at this time (tolerance too tight?)")]
     StepSizeTooSmall { h: f64 },
@@ -175,8 +177,8 @@ pub enum Reason {
 
 /// Integrates `y' = f(t, y)` from `y0` at `outputs[0]` and returns the state at each output
 /// time.
-pub fn integrate<E: fmt::Display>(
-    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), E>,
+pub fn integrate(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
     y0: &[f64],
     outputs: &[f64],
     settings: &Settings,
@@ -186,12 +188,12 @@ pub fn integrate<E: fmt::Display>(
 
 /// A map applied to the state after every accepted step (drift control by projection onto
 /// the constraints). It returns `true` when it changed the state.
-pub type Projector<'a, E> = &'a mut dyn FnMut(f64, &mut [f64]) -> Result<bool, E>;
+pub type Projector<'a> = &'a mut dyn FnMut(f64, &mut [f64]) -> Result<bool, Failure>;
 
 /// [`integrate`], with `project` applied after every accepted step.
-pub fn integrate_projected<E: fmt::Display>(
-    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), E>,
-    mut project: Option<Projector<E>>,
+pub fn integrate_projected(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
+    mut project: Option<Projector>,
     y0: &[f64],
     outputs: &[f64],
     settings: &Settings,
@@ -201,11 +203,11 @@ pub fn integrate_projected<E: fmt::Display>(
     }
     let mut counted = |t: f64, y: &[f64], dy: &mut [f64], stats: &mut Stats| -> Result<(), Reason> {
         stats.rhs_calls += 1;
-        f(t, y, dy).map_err(|e| Reason::Rhs(e.to_string()))
+        f(t, y, dy).map_err(Reason::Rhs)
     };
     let mut projector = |t: f64, y: &mut [f64]| -> Result<bool, Reason> {
         match project.as_mut() {
-            Some(p) => p(t, y).map_err(|e| Reason::Rhs(e.to_string())),
+            Some(p) => p(t, y).map_err(Reason::Rhs),
             None => Ok(false),
         }
     };
@@ -327,7 +329,7 @@ mod tests {
     use super::*;
 
     /// `y'' = -y`, `y(0) = 1`: `y = cos t`.
-    fn oscillator(_t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+    fn oscillator(_t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
         dy[0] = y[1];
         dy[1] = -y[0];
         Ok(())
@@ -389,7 +391,7 @@ mod tests {
         let err = integrate(&mut oscillator, &[1.0, 0.0], &out, &tight).unwrap_err();
         assert!(matches!(err.reason, Reason::StepSizeTooSmall { .. } | Reason::TooManySteps(_)), "{err}");
         // A fixed step far too large for a stiff decay diverges and says so.
-        let mut stiff = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+        let mut stiff = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
             dy[0] = -1000.0 * y[0];
             Ok(())
         };
@@ -397,15 +399,15 @@ mod tests {
         assert_eq!(err.reason, Reason::Diverged);
         assert!(err.t > 0.0);
         // A right-hand side that refuses: its message, the time, the last good state.
-        let mut refuses = |t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), String> {
+        let mut refuses = |t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
             if t > 0.5 {
-                return Err(format!("singular at t = {t}"));
+                return Err(Failure::Singular { t, condition: "t - 1/2", value: 0.5 - t });
             }
             dy[0] = y[0];
             Ok(())
         };
         let err = integrate(&mut refuses, &[1.0], &out, &Settings::default()).unwrap_err();
-        assert!(matches!(&err.reason, Reason::Rhs(m) if m.contains("singular")), "{err}");
+        assert!(matches!(err.reason, Reason::Rhs(Failure::Singular { condition: "t - 1/2", .. })), "{err}");
         assert!(err.t <= 0.5 + 1e-12 && err.state[0] > 1.0);
         // Output times that go backwards.
         assert_eq!(integrate(&mut oscillator, &[1.0, 0.0], &[0.0, 1.0, 0.5], &Settings::default()).unwrap_err().reason, Reason::BadOutputTimes);

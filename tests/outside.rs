@@ -1,0 +1,42 @@
+//! The example crate outside the workspace (`examples/outside`, its own Cargo project that
+//! depends on the generator and the runtime by path): it builds, its tests pass, it prints its
+//! model's comparison table, and it compiles none of the project's committed modules.
+//!
+//! Nested cargo commands use `target/models`, the directory the `compare` driver builds in:
+//! `cargo test` holds the lock of the workspace's own target directory while tests run.
+
+use std::path::Path;
+use std::process::Command;
+
+fn cargo(args: &[&str]) -> std::process::Output {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+        .args(args)
+        .arg("--manifest-path")
+        .arg(root.join("examples/outside/Cargo.toml"))
+        .env("CARGO_TARGET_DIR", root.join("target/models"))
+        .output()
+        .expect("cargo runs")
+}
+
+#[test]
+fn the_example_outside_the_workspace_builds_tests_runs_and_uses_no_committed_module() {
+    let tree = cargo(&["tree", "--edges", "normal,build", "--prefix", "none"]);
+    assert!(tree.status.success(), "{}", String::from_utf8_lossy(&tree.stderr));
+    let tree = String::from_utf8_lossy(&tree.stdout);
+    assert!(tree.lines().any(|l| l.starts_with("runtime v")) && tree.lines().any(|l| l.starts_with("generator v")), "{tree}");
+    assert!(tree.lines().any(|l| l.starts_with("seam v")), "{tree}");
+    assert!(!tree.lines().any(|l| l.starts_with("generated v")), "the committed modules are not a dependency:\n{tree}");
+
+    let test = cargo(&["test", "--release"]);
+    let log = String::from_utf8_lossy(&test.stdout);
+    assert!(test.status.success(), "{log}\n{}", String::from_utf8_lossy(&test.stderr));
+    assert!(log.contains("the_damper_s_work_balances_the_energy ... ok") && log.contains("the_typed_functions_and_the_seam_agree ... ok"), "{log}");
+
+    let run = cargo(&["run", "--release", "-q"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let table = String::from_utf8_lossy(&run.stdout);
+    for row in ["| lagrange | 5 | 2 |", "| kane | 5 | 2 |", "| reduced_volterra | 5 | 2 |"] {
+        assert!(table.contains(row), "{row} in\n{table}");
+    }
+}
