@@ -46,3 +46,28 @@ fn the_pendulum_model_file_is_the_builders() {
     let text = std::fs::read_to_string(format!("{}/models/pendulum_on_cart_5.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
     assert_eq!(text, n_link_pendulum_on_cart(5).to_ron());
 }
+
+#[test]
+fn parameters_named_like_the_generator_s_own_symbols_do_not_alias_them() {
+    // Scene 1 with its cart mass called `u1` (the name of the first quasi-velocity) and its motor
+    // torque called `G_x` (the name of the momentum of x): the same system, so the same
+    // equations, and the emitted module compiles with both.
+    let text = std::fs::read_to_string(format!("{}/models/cart_pendulum.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let renamed = text
+        .replace("\"M\": 2.0", "\"u1\": 2.0")
+        .replace("mass: \"M\"", "mass: \"u1\"")
+        .replace("\"tau\": 0.0", "\"G_x\": 0.3")
+        .replace("{\"theta1\": \"tau\", \"theta2\": \"-tau\"}", "{\"theta1\": \"G_x\", \"theta2\": \"-G_x\"}");
+    assert_eq!(renamed.matches("u1").count(), 2, "both places renamed");
+    let dir = std::env::temp_dir().join(format!("aliases-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("cart_pendulum.ron");
+    std::fs::write(&file, &renamed).unwrap();
+    let model = generator::model::load(&file).unwrap();
+    let d = derive(&model, &Request::all()).unwrap();
+    assert_eq!(d.ignorable, vec![2], "x stays ignorable");
+    check_formulations_agree("cart_pendulum with u1 and G_x", &d, &model, 4, 23);
+    let code = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap().code;
+    assert!(code.contains("pub u1: f64") && code.contains("pub G_x: f64"), "the parameters keep their names");
+    let _ = std::fs::remove_dir_all(&dir);
+}

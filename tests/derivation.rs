@@ -2,7 +2,7 @@
 
 use generator::formulation::{ignorable, mechanics};
 use generator::model::Model;
-use generator::symbolic::parse::{lower, parse, Resolver};
+use generator::symbolic::parse::{Resolver, lower, parse};
 use generator::symbolic::zero::{SplitMix, zero_test};
 use generator::symbolic::{Expr, Symbol};
 

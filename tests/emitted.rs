@@ -5,8 +5,8 @@
 use generated::{Failure, Model};
 use generator::formulation::{ignorable, mechanics, volterra};
 use generator::model::Model as ModelDef;
-use generator::symbolic::zero::SplitMix;
 use generator::symbolic::Expr;
+use generator::symbolic::zero::SplitMix;
 
 const MODELS: [&str; 7] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5"];
 
@@ -65,8 +65,7 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
         let lagrange: Vec<(Expr, Expr)> = (0..mech.m)
             .map(|j| {
                 let p = mech.kinetic.diff(def.velocities[j]);
-                let full = def.velocity_chain().dt(p) - mech.kinetic.diff(def.coordinates[j]) + mech.potential.diff(def.coordinates[j])
-                    - mech.q_forces[j];
+                let full = def.velocity_chain().dt(p) - mech.kinetic.diff(def.coordinates[j]) + mech.potential.diff(def.coordinates[j]) - mech.q_forces[j];
                 let inertia = Expr::sum((0..mech.m).map(|k| mech.mass.get(j, k) * def.accelerations[k].expr()));
                 (full, inertia)
             })
@@ -78,10 +77,8 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
         let w = usize::from(red.has_work_state);
         // The paper's Table 1: states 2m, 2m, m + p, m + p - s (+1 for the work integral);
         // equations m, m, p, p - s.
-        let counts: Vec<(usize, usize)> = ["lagrange", "maggi", "kane", "reduced_volterra"]
-            .iter()
-            .map(|f| e.formulation(f).map(|f| (f.states, f.equations)).unwrap())
-            .collect();
+        let counts: Vec<(usize, usize)> =
+            ["lagrange", "maggi", "kane", "reduced_volterra"].iter().map(|f| e.formulation(f).map(|f| (f.states, f.equations)).unwrap()).collect();
         assert_eq!(counts, vec![(2 * m + w, m), (2 * m + w, m), (m + mech.p + w, mech.p), (m + mech.p - s + w, mech.p - s)], "{name}");
         let mut rng = SplitMix(7);
         for trial in 0..5 {

@@ -47,7 +47,13 @@ fn scene1_near_its_singular_set_succeeds_with_the_margin_reported_or_stops_there
         let s = Settings::paper(5.0);
         let (sys, out) = simulate(&m, "reduced_volterra", m.default_params.to_vec(), &[t1, t2, 0.0], &qd, 5.0, 0.01, &s);
         finite_or_reported(&format!("delta {delta:e}"), &out, 5.0);
-        eprintln!("delta {delta:e}: {}", match &out { Ok(s) => format!("finished, {} steps", s.stats.steps), Err(e) => e.to_string() });
+        eprintln!(
+            "delta {delta:e}: {}",
+            match &out {
+                Ok(s) => format!("finished, {} steps", s.stats.steps),
+                Err(e) => e.to_string(),
+            }
+        );
         match &out {
             Ok(sol) => {
                 // Reported: how close the run came to the singular set.
@@ -165,7 +171,8 @@ fn extreme_integrator_settings_end_or_report() {
     let cart = model("cart_pendulum");
     let (q0, qd0) = cart.initial.unwrap();
     for form in ["lagrange", "kane", "reduced_volterra"] {
-        let (_, out) = simulate(&cart, form, cart.default_params.to_vec(), q0, qd0, 1000.0, 2.0, &Settings { method: Method::Rk4 { h: 2.0 }, ..Settings::default() });
+        let (_, out) =
+            simulate(&cart, form, cart.default_params.to_vec(), q0, qd0, 1000.0, 2.0, &Settings { method: Method::Rk4 { h: 2.0 }, ..Settings::default() });
         let e = out.expect_err("a 2 s RK4 step cannot follow a 2 s pendulum");
         eprintln!("{form}: {e}");
         assert!(matches!(e.reason, Reason::Diverged | Reason::Rhs(_)), "{form}: {e}");

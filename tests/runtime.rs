@@ -2,8 +2,8 @@
 //! trajectories, agree with each other, and keep the invariants the paper claims.
 
 use runtime::compare::{Options, Reference, compare, run, run_with};
-use runtime::system::Drift;
 use runtime::integrate::{Method, Settings};
+use runtime::system::Drift;
 
 const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
 const METHODS: [&str; 4] = ["lagrange", "maggi", "kane", "reduced_volterra"];
@@ -52,18 +52,13 @@ fn the_four_formulations_agree_to_their_tolerance() {
     for scene in SCENES {
         let model = generated::find(scene).unwrap();
         let (t0, t1, _) = model.run.unwrap();
-        let options = Options { settings: Settings { rtol: 1e-8, atol: 1e-8, ..Settings::paper(t1 - t0) }, repeats: 1, formulations: vec![], drift: Drift::None };
+        let options =
+            Options { settings: Settings { rtol: 1e-8, atol: 1e-8, ..Settings::paper(t1 - t0) }, repeats: 1, formulations: vec![], drift: Drift::None };
         let runs = compare(&model, &options).unwrap();
         assert_eq!(runs.len(), 4);
         let base = &runs[3].invariants.coordinates;
         for r in &runs[..3] {
-            let d = r
-                .invariants
-                .coordinates
-                .iter()
-                .zip(base)
-                .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
-                .fold(0.0, f64::max);
+            let d = r.invariants.coordinates.iter().zip(base).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs())).fold(0.0, f64::max);
             // Local tolerance 1e-8; over 50 s the global error grows by up to about 1e4 (scene 1 is
             // a lively double pendulum): 1e-3 is what the tolerance allows, and a wrong
             // formulation misses it by orders of magnitude.

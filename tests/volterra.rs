@@ -3,9 +3,9 @@
 
 use generator::formulation::{ignorable, mechanics, volterra};
 use generator::model::Model;
+use generator::symbolic::Expr;
 use generator::symbolic::eval::Env;
 use generator::symbolic::zero::SplitMix;
-use generator::symbolic::Expr;
 
 const MODELS: [&str; 7] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5"];
 

@@ -1319,7 +1319,7 @@ pub mod reduced_volterra {
             - x12 * (-m2 - M - m1) * x17 * x14 * x19
             + 0.25 * (m2 * f64::sin(x11) * (x7 - 2.0 * x18));
         Assembly {
-            qdot: [x7 * u1, x9 * x10 * u1, (l * x12 * u1 + x8 * G_x) * x14],
+            qdot: [x7 * u1, x9 * x10 * u1, (l * x12 * u1 + G_x * x8) * x14],
             matrix: [
                 [
                     l * l
@@ -1335,25 +1335,25 @@ pub mod reduced_volterra {
                 ],
             ],
             force: [
-                l * l
-                    * (m2 * x9 * x10
-                        * (x17
-                            * (x7 * x7 * (0.5 * (x10 * x19) + 0.5)
-                                - 0.3333333333333333 * (x20 * x9 * x19))
-                            - 0.5 * (x3 * x21 * x14))
-                        + x12
-                            * (0.5 * (x0 * x7 * x7 * m1)
-                                - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
-                                - x13 * x21 * x14
-                                + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x20 * x9)) * x17
-                                    * x19) * x14
-                        + x7
+                x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
+                    + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7
+                    + l * l
+                        * (m2 * x9 * x10
                             * (x17
-                                * (x7 * x7 * x19 * x16
-                                    + (-0.5 * (x20 * x19) - 0.5 * x18) * m2 * x9 * x10)
-                                - x15 * x21 * x4 * x14)) * u1 * u1
-                    + x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
-                    + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7,
+                                * (x7 * x7 * (0.5 * (x10 * x19) + 0.5)
+                                    - 0.3333333333333333 * (x20 * x9 * x19))
+                                - 0.5 * (x3 * x21 * x14))
+                            + x12
+                                * (0.5 * (x0 * x7 * x7 * m1)
+                                    - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
+                                    - x13 * x21 * x14
+                                    + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x20 * x9)) * x17
+                                        * x19) * x14
+                            + x7
+                                * (x17
+                                    * (x7 * x7 * x19 * x16
+                                        + (-0.5 * (x20 * x19) - 0.5 * x18) * m2 * x9 * x10)
+                                    - x15 * x21 * x4 * x14)) * u1 * u1,
             ],
             power: tau * u1 * x19,
             checks: [x6, l * x8, x0 * x13 * x1 + m2 + x3 * x13 * x4 + M + m1],
@@ -1519,7 +1519,7 @@ pub mod reduced_volterra {
             (l
                 * (0.5 * (x4 * m1)
                     + m2 * (0.75 * x4 - 0.25 * f64::cos(theta1 - 2.0 * theta2))) * u1
-                + x8 * G_x) / (m2 + M + m1 + x9 * x7),
+                + G_x * x8) / (m2 + M + m1 + x9 * x7),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

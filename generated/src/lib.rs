@@ -19,24 +19,34 @@
 #![deny(warnings)]
 
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod cart_pendulum;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod cart_pendulum_baked;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod cartesian_pendulum;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod pendulum_on_cart_5;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod rolling_disk;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod satellite_boom;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod spring_cart;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body_drop;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body_split;
 
 mod registry;

@@ -1269,32 +1269,32 @@ pub mod kane {
         let x26 = (x6 * x4 + x16 * x18) * l3 * x19 * l2;
         let x27 = m5 * l4 * (x21 * x16 + x4 * x8) * l2;
         let x28 = (x6 * x8 + x21 * x18) * l3 * m5 * l4;
-        let x29 = x12 * l0 * u2 * u2;
-        let x30 = u4 * u4 * x16 * l2;
-        let x31 = u5 * u5 * l3 * x18;
-        let x32 = l1 * u3 * u3 * x13;
+        let x29 = u2 * u2 * x12 * l0;
+        let x30 = l1 * u3 * u3 * x13;
+        let x31 = x16 * u4 * u4 * l2;
+        let x32 = u5 * u5 * l3 * x18;
         let x33 = x12 * x2 - x0 * x13;
-        let x34 = x12 * x4 - x0 * x16;
-        let x35 = u4 * u4 * x34 * l2;
-        let x36 = l1 * u3 * u3 * x33;
+        let x34 = l1 * u3 * u3 * x33;
+        let x35 = x12 * x4 - x0 * x16;
+        let x36 = x35 * u4 * u4 * l2;
         let x37 = x6 * x12 - x0 * x18;
         let x38 = u5 * u5 * l3 * x37;
         let x39 = x12 * x8 - x21 * x0;
-        let x40 = x6 * x13 - x18 * x2;
-        let x41 = u5 * u5 * x40 * l3;
-        let x42 = x16 * x2 - x4 * x13;
-        let x43 = u4 * u4 * x42 * l2;
-        let x44 = l0 * x33 * u2 * u2;
+        let x40 = x16 * x2 - x4 * x13;
+        let x41 = u4 * u4 * x40 * l2;
+        let x42 = x6 * x13 - x18 * x2;
+        let x43 = u5 * u5 * x42 * l3;
+        let x44 = u2 * u2 * l0 * x33;
         let x45 = x21 * x2 - x13 * x8;
         let x46 = x6 * x16 - x4 * x18;
         let x47 = u5 * u5 * x46 * l3;
-        let x48 = l0 * x34 * u2 * u2;
-        let x49 = l1 * u3 * u3 * x42;
+        let x48 = l1 * u3 * u3 * x40;
+        let x49 = u2 * u2 * l0 * x35;
         let x50 = x16 * x8 - x21 * x4;
-        let x51 = x6 * x21 - x18 * x8;
-        let x52 = l0 * x37 * u2 * u2;
-        let x53 = u4 * u4 * x46 * l2;
-        let x54 = l1 * x40 * u3 * u3;
+        let x51 = l1 * x42 * u3 * u3;
+        let x52 = u2 * u2 * l0 * x37;
+        let x53 = x46 * u4 * u4 * l2;
+        let x54 = x6 * x21 - x18 * x8;
         Assembly {
             qdot: [u1, u2, u3, u4, u5, u6],
             matrix: [
@@ -1306,24 +1306,24 @@ pub mod kane {
                 [x9, x22, x25, x27, x28, m5 * l4 * l4],
             ],
             force: [
-                -x12 * l0 * m1 * u2 * u2
-                    - m5 * (x29 + x30 + u6 * u6 * x21 * l4 + x31 + x32)
-                    - m4 * (x29 + x30 + x31 + x32) - (x29 + x30 + x32) * m3
-                    - (x29 + x32) * m2,
-                (x12 * g * x10 - m2 * l1 * u3 * u3 * x33 - (x35 + x36) * m3
-                    - m4 * (x35 + x36 + x38)
-                    - m5 * (x35 + u6 * u6 * x39 * l4 + x36 + x38)) * l0,
+                -m2 * (x29 + x30) - u2 * u2 * x12 * l0 * m1
+                    - (x21 * u6 * u6 * l4 + x29 + x31 + x30 + x32) * m5
+                    - m4 * (x29 + x31 + x30 + x32) - (x29 + x31 + x30) * m3,
+                (x12 * g * x10 - (x34 + x36) * m3 - m2 * l1 * u3 * u3 * x33
+                    - m5 * (x38 + x34 + x36 + x39 * u6 * u6 * l4)
+                    - m4 * (x38 + x34 + x36)) * l0,
                 l1
-                    * (x11 * g * x13 - m4 * (x41 - x43 - x44)
-                        - m5 * (x41 - u6 * u6 * x45 * l4 - x43 - x44)
-                        + m2 * l0 * x33 * u2 * u2 - (-x43 - x44) * m3),
-                (x15 * x16 * g - m4 * (x47 - x48 + x49) + (x48 - x49) * m3
-                    - (x47 - x48 + x49 + x50 * u6 * u6 * l4) * m5) * l2,
+                    * (x11 * g * x13 - (x43 - x41 - x44) * m4
+                        - m5 * (x43 - x41 - u6 * u6 * x45 * l4 - x44) - (-x41 - x44) * m3
+                        + m2 * u2 * u2 * l0 * x33),
+                (x15 * x16 * g - (x47 + x48 - x49 + x50 * u6 * u6 * l4) * m5
+                    - m4 * (x47 + x48 - x49) + (x49 - x48) * m3) * l2,
                 l3
-                    * (m4 * (x52 + x53 + x54)
-                        - (-u6 * u6 * l4 * x51 - x52 - x53 - x54) * m5 + g * x18 * x19),
-                (x21 * g - u5 * u5 * l3 * x51 - l1 * u3 * u3 * x45 + x50 * u4 * u4 * l2
-                    + x39 * l0 * u2 * u2) * m5 * l4,
+                    * (g * x18 * x19 + (x51 + x52 + x53) * m4
+                        - (-x51 - x52 - u6 * u6 * l4 * x54 - x53) * m5),
+                m5
+                    * (x50 * u4 * u4 * l2 - l1 * u3 * u3 * x45 + x21 * g
+                        - u5 * u5 * l3 * x54 + u2 * u2 * x39 * l0) * l4,
             ],
             checks: [],
         }
@@ -1634,67 +1634,67 @@ pub mod reduced_volterra {
         let g = params.g;
         let G_q0 = g_i[0];
         let x0 = 1.0 / (m2 + m0 + m4 + m5 + m1 + m3);
-        let x1 = -m2 - m4 - m5 - m3;
-        let x2 = f64::cos(q2);
-        let x3 = -m4 - m5 - m3;
-        let x4 = f64::cos(q3);
-        let x5 = f64::cos(q5);
-        let x6 = f64::cos(q4);
-        let x7 = -m4 - m5;
-        let x8 = f64::cos(q1);
-        let x9 = -m2 - m4 - m5 - m1 - m3;
+        let x1 = f64::cos(q4);
+        let x2 = -m4 - m5;
+        let x3 = f64::cos(q5);
+        let x4 = -m2 - m4 - m5 - m3;
+        let x5 = f64::cos(q2);
+        let x6 = f64::cos(q1);
+        let x7 = -m2 - m4 - m5 - m1 - m3;
+        let x8 = -m4 - m5 - m3;
+        let x9 = f64::cos(q3);
         let x10 = m2 + m4 + m5 + m3;
         let x11 = f64::sin(q1);
         let x12 = f64::sin(q2);
-        let x13 = l1 * (x10 * (x11 * x12 + x8 * x2) - x8 * x1 * x0 * x9 * x2) * l0;
+        let x13 = l1 * (x10 * (x11 * x12 + x6 * x5) - x6 * x4 * x0 * x7 * x5) * l0;
         let x14 = m4 + m5 + m3;
         let x15 = f64::sin(q3);
-        let x16 = (x14 * (x8 * x4 + x11 * x15) - x8 * x3 * x4 * x0 * x9) * l0 * l2;
+        let x16 = (x14 * (x6 * x9 + x11 * x15) - x6 * x8 * x9 * x0 * x7) * l0 * l2;
         let x17 = f64::sin(q4);
         let x18 = m4 + m5;
-        let x19 = l0 * l3 * ((x6 * x8 + x11 * x17) * x18 - x6 * x8 * x7 * x0 * x9);
+        let x19 = l0 * l3 * ((x1 * x6 + x11 * x17) * x18 - x1 * x6 * x2 * x0 * x7);
         let x20 = f64::sin(q5);
-        let x21 = l0 * m5 * (x8 * x5 + x11 * x20 + x8 * x0 * x9 * x5) * l4;
-        let x22 = (x14 * (x4 * x2 + x15 * x12) - x3 * x4 * x1 * x0 * x2) * l1 * l2;
-        let x23 = l1 * l3 * ((x6 * x2 + x12 * x17) * x18 - x6 * x7 * x1 * x0 * x2);
-        let x24 = l1 * m5 * (x20 * x12 + x1 * x0 * x2 * x5 + x2 * x5) * l4;
-        let x25 = l3 * ((x6 * x4 + x15 * x17) * x18 - x6 * x3 * x4 * x7 * x0) * l2;
-        let x26 = m5 * l4 * l2 * (x20 * x15 + x4 * x5 + x3 * x4 * x0 * x5);
-        let x27 = (x6 * x5 + x6 * x7 * x0 * x5 + x20 * x17) * l3 * m5 * l4;
-        let x28 = x11 * x4 - x8 * x15;
-        let x29 = u3 * u3 * x28 * l2;
-        let x30 = x11 * x2 - x8 * x12;
-        let x31 = l1 * x30 * u2 * u2;
-        let x32 = x6 * x11 - x8 * x17;
-        let x33 = u4 * u4 * l3 * x32;
-        let x34 = l1 * x12 * u2 * u2;
-        let x35 = x15 * u3 * u3 * l2;
+        let x21 = l0 * m5 * (x6 * x3 + x11 * x20 + x6 * x0 * x7 * x3) * l4;
+        let x22 = (x14 * (x9 * x5 + x15 * x12) - x8 * x9 * x4 * x0 * x5) * l1 * l2;
+        let x23 = l1 * l3 * ((x1 * x5 + x12 * x17) * x18 - x1 * x2 * x4 * x0 * x5);
+        let x24 = l1 * m5 * (x20 * x12 + x4 * x0 * x5 * x3 + x5 * x3) * l4;
+        let x25 = l3 * ((x1 * x9 + x15 * x17) * x18 - x1 * x8 * x9 * x2 * x0) * l2;
+        let x26 = m5 * l4 * l2 * (x20 * x15 + x9 * x3 + x8 * x9 * x0 * x3);
+        let x27 = (x1 * x3 + x1 * x2 * x0 * x3 + x20 * x17) * l3 * m5 * l4;
+        let x28 = x11 * x9 - x6 * x15;
+        let x29 = x28 * u3 * u3 * l2;
+        let x30 = x11 * x5 - x6 * x12;
+        let x31 = u2 * u2 * l1 * x30;
+        let x32 = x11 * x3 - x20 * x6;
+        let x33 = x1 * x11 - x6 * x17;
+        let x34 = l3 * u4 * u4 * x33;
+        let x35 = u2 * u2 * l1 * x12;
         let x36 = x11 * l0 * u1 * u1;
-        let x37 = u4 * u4 * l3 * x17;
-        let x38 = -(x34 + x35 + x36) * m3
-            - (x34 + x35 + x36 + u5 * u5 * x20 * l4 + x37) * m5 - x11 * l0 * u1 * u1 * m1
-            - m4 * (x34 + x35 + x36 + x37) - m2 * (x34 + x36);
-        let x39 = x11 * x5 - x20 * x8;
-        let x40 = x6 * x12 - x17 * x2;
-        let x41 = u4 * u4 * x40 * l3;
-        let x42 = x15 * x2 - x4 * x12;
-        let x43 = u3 * u3 * x42 * l2;
-        let x44 = l0 * x30 * u1 * u1;
-        let x45 = x20 * x2 - x12 * x5;
-        let x46 = l1 * x42 * u2 * u2;
-        let x47 = l0 * x28 * u1 * u1;
-        let x48 = x15 * x5 - x20 * x4;
-        let x49 = x6 * x15 - x4 * x17;
-        let x50 = u4 * u4 * x49 * l3;
-        let x51 = x49 * u3 * u3 * l2;
-        let x52 = l1 * x40 * u2 * u2;
-        let x53 = l0 * u1 * u1 * x32;
-        let x54 = x6 * x20 - x17 * x5;
+        let x37 = l3 * u4 * u4 * x17;
+        let x38 = x15 * u3 * u3 * l2;
+        let x39 = -x11 * l0 * u1 * u1 * m1 - m2 * (x35 + x36)
+            - m4 * (x35 + x36 + x37 + x38) - (x35 + x36 + x38) * m3
+            - m5 * (x35 + x36 + x37 + u5 * u5 * x20 * l4 + x38);
+        let x40 = x1 * x12 - x17 * x5;
+        let x41 = x40 * l3 * u4 * u4;
+        let x42 = x20 * x5 - x12 * x3;
+        let x43 = l0 * x30 * u1 * u1;
+        let x44 = x15 * x5 - x9 * x12;
+        let x45 = u3 * u3 * x44 * l2;
+        let x46 = x1 * x15 - x9 * x17;
+        let x47 = x46 * l3 * u4 * u4;
+        let x48 = u2 * u2 * l1 * x44;
+        let x49 = l0 * x28 * u1 * u1;
+        let x50 = x15 * x3 - x20 * x9;
+        let x51 = x1 * x20 - x17 * x3;
+        let x52 = u2 * u2 * l1 * x40;
+        let x53 = x46 * u3 * u3 * l2;
+        let x54 = l0 * u1 * u1 * x33;
         Assembly {
             qdot: [
                 x0
-                    * (G_q0 - l1 * x1 * u2 * x2 - x3 * u3 * x4 * l2 + u5 * m5 * l4 * x5
-                        - x6 * u4 * l3 * x7 - x8 * l0 * u1 * x9),
+                    * (u5 * m5 * l4 * x3 - x1 * l3 * x2 * u4 + G_q0 - u2 * l1 * x4 * x5
+                        - x6 * l0 * u1 * x7 - x8 * x9 * u3 * l2),
                 u1,
                 u2,
                 u3,
@@ -1703,7 +1703,7 @@ pub mod reduced_volterra {
             ],
             matrix: [
                 [
-                    l0 * l0 * (m2 + m4 + m5 + m1 - x8 * x8 * x0 * x9 * x9 + m3),
+                    l0 * l0 * (m2 + m4 + m5 + m1 - x6 * x6 * x0 * x7 * x7 + m3),
                     x13,
                     x16,
                     x19,
@@ -1711,35 +1711,32 @@ pub mod reduced_volterra {
                 ],
                 [
                     x13,
-                    l1 * l1 * (m2 - x1 * x1 * x0 * x2 * x2 + m4 + m5 + m3),
+                    l1 * l1 * (m2 - x4 * x4 * x0 * x5 * x5 + m4 + m5 + m3),
                     x22,
                     x23,
                     x24,
                 ],
-                [x16, x22, (m4 + m5 - x3 * x3 * x4 * x4 * x0 + m3) * l2 * l2, x25, x26],
-                [x19, x23, x25, l3 * l3 * (m4 - x6 * x6 * x7 * x7 * x0 + m5), x27],
-                [x21, x24, x26, x27, m5 * (1.0 - m5 * x0 * x5 * x5) * l4 * l4],
+                [x16, x22, (m4 + m5 - x8 * x8 * x9 * x9 * x0 + m3) * l2 * l2, x25, x26],
+                [x19, x23, x25, l3 * l3 * (m4 - x1 * x1 * x2 * x2 * x0 + m5), x27],
+                [x21, x24, x26, x27, m5 * (1.0 - m5 * x0 * x3 * x3) * l4 * l4],
             ],
             force: [
-                l0
-                    * (x11 * g * (m2 + m4 + m5 + m1 + m3) - (x29 + x31) * m3
-                        - m4 * (x33 + x29 + x31) - x38 * x8 * x0 * x9
-                        - m5 * (x33 + x29 + x31 + u5 * u5 * x39 * l4)
-                        - m2 * l1 * x30 * u2 * u2),
+                (x11 * g * (m2 + m4 + m5 + m1 + m3)
+                    - m5 * (x29 + x31 + u5 * u5 * x32 * l4 + x34)
+                    - m2 * u2 * u2 * l1 * x30 - (x29 + x31) * m3 - x6 * x39 * x0 * x7
+                    - m4 * (x29 + x31 + x34)) * l0,
                 l1
-                    * (x10 * g * x12 - m4 * (x41 - x43 - x44) - x38 * x1 * x0 * x2
-                        - (x41 - u5 * u5 * x45 * l4 - x43 - x44) * m5 - (-x43 - x44) * m3
-                        + m2 * l0 * x30 * u1 * u1),
-                l2
-                    * ((x47 - x46) * m3 + x14 * x15 * g - x38 * x3 * x4 * x0
-                        - (x46 + u5 * u5 * x48 * l4 + x50 - x47) * m5
-                        - m4 * (x46 + x50 - x47)),
+                    * (x10 * g * x12 - (x41 - u5 * u5 * x42 * l4 - x43 - x45) * m5
+                        - (x41 - x43 - x45) * m4 + m2 * l0 * x30 * u1 * u1
+                        - (-x43 - x45) * m3 - x39 * x4 * x0 * x5),
+                (x14 * x15 * g - (x47 + x48 - x49) * m4 + (x49 - x48) * m3
+                    - m5 * (u5 * u5 * x50 * l4 + x47 + x48 - x49) - x8 * x9 * x39 * x0)
+                    * l2,
                 l3
-                    * (m4 * (x51 + x52 + x53) + g * x17 * x18
-                        - m5 * (-x51 - x52 - u5 * u5 * l4 * x54 - x53)
-                        - x6 * x38 * x7 * x0),
-                (x39 * l0 * u1 * u1 - u4 * u4 * l3 * x54 + x20 * g - l1 * x45 * u2 * u2
-                    + x48 * u3 * u3 * l2 + x38 * x0 * x5) * m5 * l4,
+                    * (g * x17 * x18 - (-u5 * u5 * l4 * x51 - x52 - x53 - x54) * m5
+                        + m4 * (x52 + x53 + x54) - x1 * x2 * x39 * x0),
+                (x39 * x0 * x3 + x50 * u3 * u3 * l2 + x32 * l0 * u1 * u1 + x20 * g
+                    - l3 * u4 * u4 * x51 - u2 * u2 * l1 * x42) * m5 * l4,
             ],
             checks: [],
         }
@@ -1910,10 +1907,10 @@ pub mod reduced_volterra {
             state[5],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            (G_q0 - l1 * (-m2 - m4 - m5 - m3) * u2 * f64::cos(q2)
-                - (-m4 - m5 - m3) * u3 * f64::cos(q3) * l2 + u5 * m5 * l4 * f64::cos(q5)
-                - f64::cos(q4) * u4 * l3 * (-m4 - m5)
-                - f64::cos(q1) * l0 * u1 * (-m2 - m4 - m5 - m1 - m3))
+            (u5 * m5 * l4 * f64::cos(q5) - f64::cos(q4) * l3 * (-m4 - m5) * u4 + G_q0
+                - u2 * l1 * (-m2 - m4 - m5 - m3) * f64::cos(q2)
+                - f64::cos(q1) * l0 * u1 * (-m2 - m4 - m5 - m1 - m3)
+                - (-m4 - m5 - m3) * f64::cos(q3) * u3 * l2)
                 / (m2 + m0 + m4 + m5 + m1 + m3),
             u1,
             u2,

@@ -835,10 +835,10 @@ pub mod kane {
         let R = params.R;
         let tq = params.tq;
         Assembly {
-            qdot: [R * f64::cos(psi) * u2, R * u2 * f64::sin(psi), u1, u2],
+            qdot: [u2 * R * f64::cos(psi), u2 * R * f64::sin(psi), u1, u2],
             matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
             force: [0.0, tq],
-            power: tq * u2,
+            power: u2 * tq,
             checks: [],
         }
     }
@@ -961,8 +961,8 @@ pub mod kane {
         let R = params.R;
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
         let qdot: [f64; NUM_COORDINATES] = [
-            R * f64::cos(psi) * u2,
-            R * u2 * f64::sin(psi),
+            u2 * R * f64::cos(psi),
+            u2 * R * f64::sin(psi),
             u1,
             u2,
         ];

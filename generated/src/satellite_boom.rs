@@ -1315,7 +1315,7 @@ pub mod kane {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = -Ixy;
         let x7 = -Ixz;
@@ -1338,16 +1338,16 @@ pub mod kane {
         let x24 = x0 * m * x10;
         let x25 = -(x5 * m);
         let x26 = m + mg;
-        let x27 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x28 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x29 = u3 * x17 * u1 - 2.0 * (u4 * u2);
-        let x30 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x31 = 2.0 * (u4 * u3) - x8 * u1 * u2;
-        let x32 = f64::cos(0.0485 * t);
-        let x33 = x8 * u2 * u2 - u3 * u3 * x17;
+        let x27 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x28 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x29 = u3 * x17 * u1 - 2.0 * (u2 * u4);
+        let x30 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x31 = 2.0 * (u3 * u4) - x8 * u2 * u1;
+        let x32 = x8 * u2 * u2 - u3 * u3 * x17;
+        let x33 = f64::cos(0.0485 * t);
         let x34 = f64::sin(0.089 * t);
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5, u6, u7],
             matrix: [
                 [Ixx, x6, x7, 0.0, 0.0, 0.0, 0.0],
                 [x6, Iyy + x8 * x8 * m, x9, 0.0, x13, x15, x16],
@@ -1358,15 +1358,15 @@ pub mod kane {
                 [0.0, x16, x22, x25, 0.0, 0.0, x26],
             ],
             force: [
-                u3 * x28 - x27 * u2,
-                x27 * u1 - x8 * m * x29 - u3 * x30,
-                x30 * u2 - u1 * x28 - m * x17 * x31,
-                0.012 * x32 - x33 * m - 0.018 * x34,
-                -((x18 * x31 + x11 * x0 * x33 + x12 * x29) * m),
-                -(m * (x0 * x33 * x10 + x31 * x20 + x29 * x14)),
-                -((x0 * (x2 * x31 + x29 * x3) - x5 * x33) * m),
+                x28 * u3 - u2 * x27,
+                x27 * u1 - x8 * m * x29 - x30 * u3,
+                u2 * x30 - m * x17 * x31 - x28 * u1,
+                0.012 * x33 - m * x32 - 0.018 * x34,
+                -((x11 * x0 * x32 + x12 * x29 + x18 * x31) * m),
+                -((x20 * x31 + x0 * x32 * x10 + x14 * x29) * m),
+                -(((x3 * x29 + x2 * x31) * x0 - x5 * x32) * m),
             ],
-            power: u4 * (0.012 * x32 - 0.018 * x34),
+            power: u4 * (0.012 * x33 - 0.018 * x34),
             checks: [x0],
         }
     }
@@ -1528,7 +1528,7 @@ pub mod kane {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -1549,7 +1549,7 @@ pub mod kane {
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
             u2 * x3 - u3 * x2,
-            f64::sin(theta) * x1 * x4 + u1,
+            u1 + f64::sin(theta) * x1 * x4,
             u4,
             u5,
             u6,
@@ -1712,39 +1712,41 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = -rho - 0.5 * l;
-        let x8 = f64::sin(psi);
+        let x6 = 1.0 / (m + mg);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
         let x9 = rho + 0.5 * l;
-        let x10 = 1.0 / (m + mg);
+        let x10 = -rho - 0.5 * l;
         let x11 = -Ixy;
         let x12 = -Ixz;
-        let x13 = m * x10;
+        let x13 = m * x6;
         let x14 = m
-            * (rho * ((-rho - l) * m * x10 + rho + l) + l * l * (0.25 - 0.25 * x13));
+            * (rho * ((-rho - l) * m * x6 + rho + l) + l * l * (0.25 - 0.25 * x13));
         let x15 = -Iyz;
-        let x16 = Iyz * u3;
-        let x17 = Ixy * u1;
-        let x18 = Ixy * u2;
-        let x19 = u3 * Ixz;
-        let x20 = m * (2.0 * rho + l) * x10 - 2.0 * rho - l;
+        let x16 = u3 * Ixz;
+        let x17 = u2 * Ixy;
+        let x18 = Iyz * u1;
+        let x19 = (m * (2.0 * rho + l) * x6 - 2.0 * rho - l) * m * u4;
+        let x20 = rho + 0.5 * l + x10 * m * x6;
         let x21 = f64::cos(0.0485 * t);
         let x22 = f64::sin(0.089 * t);
         Assembly {
             qdot: [
                 x1 * x4,
                 u2 * x3 - u3 * x2,
-                x5 * x1 * x4 + u1,
+                u1 + x5 * x1 * x4,
                 u4,
-                (G_X
-                    + m
-                        * (-u4 * x6 * x0 - x7 * (x2 * x8 + x5 * x6 * x3) * u2
-                            - (x5 * x6 * x2 - x3 * x8) * u3 * x9)) * x10,
-                ((-u4 * x0 * x8 - x7 * (x5 * x3 * x8 - x6 * x2) * u2
-                    - u3 * x9 * (x6 * x3 + x5 * x2 * x8)) * m + G_Y) * x10,
-                (G_Z + m * ((-u3 * x9 * x2 - x7 * u2 * x3) * x0 + x5 * u4)) * x10,
+                x6
+                    * (G_X
+                        + m
+                            * (-(x5 * x8 * x2 - x3 * x7) * u3 * x9 - x8 * x0 * u4
+                                - x10 * u2 * (x2 * x7 + x5 * x8 * x3))),
+                ((-u3 * x9 * (x8 * x3 + x5 * x2 * x7)
+                    - x10 * u2 * (x5 * x3 * x7 - x8 * x2) - x0 * u4 * x7) * m + G_Y)
+                    * x6,
+                x6 * ((x5 * u4 + (-x10 * u2 * x3 - u3 * x9 * x2) * x0) * m + G_Z),
             ],
             matrix: [
                 [Ixx, x11, x12, 0.0],
@@ -1753,17 +1755,18 @@ pub mod reduced_volterra {
                 [0.0, 0.0, 0.0, m * (1.0 - x13)],
             ],
             force: [
-                u3 * (Iyy * u2 - x16 - x17) - (u3 * Izz - Iyz * u2 - u1 * Ixz) * u2,
-                u3 * ((x14 - Ixx + Izz) * u1 + x18 + x19)
-                    + (u4 * x20 * m - Iyz * u1) * u2 - u1 * u1 * Ixz,
-                m
-                    * (u4 * u3 * x20
-                        + (l * l * (0.25 * x13 - 0.25)
-                            + rho * ((rho + l) * m * x10 - rho - l)) * u1 * u2)
-                    + (x16 + x17 + (Ixx - Iyy) * u2) * u1 + (-x18 - x19) * u2,
-                0.012 * x21 - 0.018 * x22
-                    + (m * (x7 * u3 * u3 + x7 * u2 * u2) * x10 + x9 * u2 * u2
-                        + u3 * u3 * x9) * m,
+                (u2 * Iyy - Iyz * u3 - Ixy * u1) * u3
+                    - u2 * (u3 * Izz - u2 * Iyz - u1 * Ixz),
+                u3 * (x16 + x17 + (x14 - Ixx + Izz) * u1) - u1 * u1 * Ixz
+                    + u2 * (x19 - x18),
+                Ixy * u1 * u1
+                    + u2
+                        * (u1
+                            * (Ixx - Iyy
+                                + (l * l * (0.25 * x13 - 0.25)
+                                    + rho * ((rho + l) * m * x6 - rho - l)) * m) - x16 - x17)
+                    + (x18 + x19) * u3,
+                (u3 * u3 * x20 + u2 * u2 * x20) * m + 0.012 * x21 - 0.018 * x22,
             ],
             power: u4 * (0.012 * x21 - 0.018 * x22),
             checks: [x0],
@@ -1926,13 +1929,13 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
-        let x6 = f64::cos(psi);
-        let x7 = -rho - 0.5 * l;
-        let x8 = f64::sin(psi);
+        let x6 = 1.0 / (m + mg);
+        let x7 = f64::sin(psi);
+        let x8 = f64::cos(psi);
         let x9 = rho + 0.5 * l;
-        let x10 = 1.0 / (m + mg);
+        let x10 = -rho - 0.5 * l;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -1953,15 +1956,16 @@ pub mod reduced_volterra {
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
             u2 * x3 - u3 * x2,
-            x5 * x1 * x4 + u1,
+            u1 + x5 * x1 * x4,
             u4,
-            (G_X
-                + m
-                    * (-u4 * x6 * x0 - x7 * (x2 * x8 + x5 * x6 * x3) * u2
-                        - (x5 * x6 * x2 - x3 * x8) * u3 * x9)) * x10,
-            ((-u4 * x0 * x8 - x7 * (x5 * x3 * x8 - x6 * x2) * u2
-                - u3 * x9 * (x6 * x3 + x5 * x2 * x8)) * m + G_Y) * x10,
-            (G_Z + m * ((-u3 * x9 * x2 - x7 * u2 * x3) * x0 + x5 * u4)) * x10,
+            x6
+                * (G_X
+                    + m
+                        * (-(x5 * x8 * x2 - x3 * x7) * u3 * x9 - x8 * x0 * u4
+                            - x10 * u2 * (x2 * x7 + x5 * x8 * x3))),
+            ((-u3 * x9 * (x8 * x3 + x5 * x2 * x7) - x10 * u2 * (x5 * x3 * x7 - x8 * x2)
+                - x0 * u4 * x7) * m + G_Y) * x6,
+            x6 * ((x5 * u4 + (-x10 * u2 * x3 - u3 * x9 * x2) * x0) * m + G_Z),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

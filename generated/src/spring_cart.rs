@@ -776,22 +776,22 @@ pub mod kane {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = f64::sin(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = x3 * x3;
+        let x1 = 2.0 * x + 2.0 * L0;
+        let x2 = -x - L0;
+        let x3 = 1.0 / x2;
+        let x4 = x2 * x2;
+        let x5 = f64::sin(th);
         Assembly {
             qdot: [u1, u2],
             matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
             force: [
-                x1 * mp * u2 * u2 * lp
-                    + x2
-                        * (0.5 * (c_ * x4 * u1)
-                            - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-                -(x1 * g * mp * lp),
+                x1
+                    * (0.5 * (c_ * x3 * u1)
+                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + u2 * u2 * x5 * mp * lp,
+                -(x5 * g * mp * lp),
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            power: 0.5 * x1 * c_ * x3 * u1 * u1,
             checks: [],
         }
     }
@@ -1021,22 +1021,22 @@ pub mod reduced_volterra {
         let L0 = params.L0;
         let g = params.g;
         let x0 = mp * f64::cos(th) * lp;
-        let x1 = f64::sin(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = x3 * x3;
+        let x1 = 2.0 * x + 2.0 * L0;
+        let x2 = -x - L0;
+        let x3 = 1.0 / x2;
+        let x4 = x2 * x2;
+        let x5 = f64::sin(th);
         Assembly {
             qdot: [u1, u2],
             matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
             force: [
-                x1 * mp * u2 * u2 * lp
-                    + x2
-                        * (0.5 * (c_ * x4 * u1)
-                            - 0.5 * ((f64::sqrt(x5) - L0) * k / f64::sqrt(x5))),
-                -(x1 * g * mp * lp),
+                x1
+                    * (0.5 * (c_ * x3 * u1)
+                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + u2 * u2 * x5 * mp * lp,
+                -(x5 * g * mp * lp),
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            power: 0.5 * x1 * c_ * x3 * u1 * u1,
             checks: [],
         }
     }

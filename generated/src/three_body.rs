@@ -1948,7 +1948,7 @@ pub mod kane {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = J2 + d * d * m1;
         let x7 = f64::sin(gamma1);
@@ -2008,44 +2008,42 @@ pub mod kane {
         let x61 = m2 * d * x41;
         let x62 = m2 * x44 * d;
         let x63 = m2 + m0 + m1;
-        let x64 = x12 * u1;
-        let x65 = x10 * u3;
-        let x66 = -x64 - x65;
-        let x67 = x8 * u2;
-        let x68 = x7 * u1;
-        let x69 = x67 - x68;
-        let x70 = x7 * u2;
+        let x64 = x8 * u2 - x7 * u1;
+        let x65 = x12 * u1;
+        let x66 = x10 * u3;
+        let x67 = -x65 - x66;
+        let x68 = u3 + 2.0 * u4;
+        let x69 = d * (x8 * x68 * u1 + x68 * u2 * x7) + a_ * u3 * u1;
+        let x70 = u2 * x7;
         let x71 = x8 * u1;
-        let x72 = u4 * J2 * (-x70 - x71);
-        let x73 = 2.0 * u4 + u3;
-        let x74 = d * (x8 * x73 * u1 + x73 * x7 * u2) + a_ * u3 * u1;
-        let x75 = x70 + x71;
-        let x76 = u4 + u3;
-        let x77 = x75 * x14 * x76;
-        let x78 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x79 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x80 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x12)
-            - a_ * u1 * u2;
-        let x81 = u5 + u2;
-        let x82 = u5 * J2 + x81 * x18;
-        let x83 = x10 * u1 - u3 * x12;
-        let x84 = x64 + x65;
-        let x85 = x18 * x83 * x84;
-        let x86 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x87 = u1 * u1;
-        let x88 = 2.0 * gamma2;
-        let x89 = f64::sin(x88);
-        let x90 = x69 * x75 * x14;
-        let x91 = 2.0 * gamma1;
-        let x92 = f64::sin(x91);
-        let x93 = d * (x68 - x67) - a_ * u2;
-        let x94 = a_ * u3 * u3 * x7 - x75 * x93;
-        let x95 = u3 * x20 - d * x12 * u1;
-        let x96 = x83 * x95 + a_ * x12 * u2 * u2;
-        let x97 = x81 * (x10 * a_ * u2 + x81 * d) - x84 * x95 - x10 * u5 * a_ * u2;
-        let x98 = x69 * x93 - (u3 * x46 + u4 * d) * x76 + x8 * a_ * u4 * u3;
+        let x72 = J2 * (-x70 - x71) * u4;
+        let x73 = u3 + u4;
+        let x74 = x70 + x71;
+        let x75 = x73 * x74 * x14;
+        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x77 = u5 + u2;
+        let x78 = 2.0 * u5 + u2;
+        let x79 = x78 * J2 - J1 * x77;
+        let x80 = x10 * u1 - u3 * x12;
+        let x81 = d * (x10 * (-2.0 * u5 - u2) * u1 + x78 * u3 * x12) - a_ * u2 * u1;
+        let x82 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x83 = x65 + x66;
+        let x84 = x18 * x80 * x83;
+        let x85 = u1 * u1;
+        let x86 = 2.0 * gamma2;
+        let x87 = f64::sin(x86);
+        let x88 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x89 = 2.0 * gamma1;
+        let x90 = f64::sin(x89);
+        let x91 = x74 * x14 * x64;
+        let x92 = u2 * x16 + x7 * d * u1;
+        let x93 = a_ * u3 * u3 * x7 - x92 * x74;
+        let x94 = u3 * x20 - d * x12 * u1;
+        let x95 = a_ * u2 * u2 * x12 + x80 * x94;
+        let x96 = x92 * x64 + x8 * a_ * u3 * u4 - (u3 * x46 + d * u4) * x73;
+        let x97 = (u5 * d + u2 * x35) * x77 - x10 * u5 * a_ * u2 - x94 * x83;
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5, u6, u7, u8],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5, u6, u7, u8],
             matrix: [
                 [
                     Ixx + x6 * x7 * x7 + (x9 + x11) * J1 + x12 * x12 * x13,
@@ -2086,35 +2084,33 @@ pub mod kane {
                 [x32, x45, x56, x59, x62, 0.0, 0.0, x63],
             ],
             force: [
-                (-x10 * u5 * x66 - x8 * x69 * u4) * J1 + x7 * (x72 - d * m1 * x74 + x77)
-                    - x78 * u2 + u3 * x79 + (m2 * d * x80 - x82 * x83) * x12,
-                x85 + x78 * u1 - x69 * u4 * x7 * J1 - u3 * x86 - x16 * m1 * x74
-                    - x8 * (x72 + x77)
+                (-x8 * u4 * x64 - x10 * u5 * x67) * J1 + (x72 - d * m1 * x69 + x75) * x7
+                    - u2 * x76 + x12 * (m2 * d * x81 - x79 * x80) + x82 * u3,
+                x84 - x8 * (x72 + x75) - x16 * m1 * x69 + x76 * u1 - x7 * u4 * x64 * J1
                     - m2
-                        * (d
-                            * (a_
-                                * (x12 * (u3 * u3 - x87 + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (x10 * u3 * u1))
-                                + d
-                                    * ((0.5 * (u3 * x89) - f64::cos(x88) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x89))) - a_ * a_ * u3 * u1),
-                u5 * x66 * x12 * J1 - m2 * x20 * x80 - u1 * x79 + x90 - x82 * x10 * x83
-                    + x86 * u2
-                    - (a_ * a_ * u1 * u2
-                        + d
-                            * (a_
-                                * (2.0 * (x8 * u1 * u2)
-                                    + (u2 * u2 - x87 + u4 * (-u4 - 2.0 * u3)) * x7)
-                                + (0.5 * (x92 * u2 * u2)
-                                    + (f64::cos(x91) * u2 - 0.5 * (u1 * x92)) * u1) * d)) * m1,
-                x90 - d * m1 * x94,
-                x85 - m2 * x96 * d,
-                -m2 * (x25 * x80 + x96 * x38 + x37 * x97)
-                    - (x48 * x94 + x24 * x74 + x49 * x98) * m1,
-                -m2 * (x40 * x97 + x96 * x41 + x27 * x80)
-                    - (x51 * x94 + x30 * x74 + x98 * x52) * m1,
-                -(x54 * x94 + x55 * x98 + x0 * x3 * x74) * m1
-                    - m2 * (x0 * x2 * x80 + x96 * x44 + x43 * x97),
+                        * ((a_
+                            * (x12 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x85)
+                                - 2.0 * (x10 * u3 * u1))
+                            + ((0.5 * (u3 * x87) - f64::cos(x86) * u1) * u3
+                                - 0.5 * (u1 * u1 * x87)) * d) * d - a_ * a_ * u3 * u1)
+                    - x88 * u3,
+                u2 * x88 - m2 * x20 * x81
+                    - (d
+                        * (a_
+                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x85) * x7
+                                + 2.0 * (x8 * u2 * u1))
+                            + d
+                                * (u2 * (0.5 * (u2 * x90) + u1 * f64::cos(x89))
+                                    - 0.5 * (u1 * u1 * x90))) + a_ * a_ * u2 * u1) * m1
+                    - x10 * x79 * x80 + u5 * x12 * x67 * J1 - x82 * u1 + x91,
+                x91 - x93 * d * m1,
+                x84 - m2 * x95 * d,
+                -m1 * (x49 * x96 + x48 * x93 + x24 * x69)
+                    - m2 * (x37 * x97 + x95 * x38 + x25 * x81),
+                -(x95 * x41 + x97 * x40 + x27 * x81) * m2
+                    - m1 * (x30 * x69 + x93 * x51 + x96 * x52),
+                -m2 * (x0 * x2 * x81 + x95 * x44 + x43 * x97)
+                    - (x0 * x69 * x3 + x55 * x96 + x93 * x54) * m1,
             ],
             checks: [x0],
         }
@@ -2326,7 +2322,7 @@ pub mod kane {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -2348,7 +2344,7 @@ pub mod kane {
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
             u2 * x3 - u3 * x2,
-            f64::sin(theta) * x1 * x4 + u1,
+            u1 + f64::sin(theta) * x1 * x4,
             u4,
             u5,
             u6,
@@ -2518,137 +2514,135 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::sin(psi);
-        let x8 = f64::cos(psi);
-        let x9 = x5 * x8 * x2 - x3 * x7;
-        let x10 = f64::cos(gamma2);
-        let x11 = x10 * d;
-        let x12 = -a_ - x11;
-        let x13 = f64::sin(gamma1);
-        let x14 = f64::cos(gamma1);
-        let x15 = x14 * x9 - x8 * x13 * x0;
-        let x16 = x14 * a_;
-        let x17 = x16 + d;
-        let x18 = x8 * (x5 * x13 * x2 + x14 * x0) - x13 * x3 * x7;
-        let x19 = m2 * x9 * x12 + (x15 * x17 + a_ * x18 * x13) * m1;
-        let x20 = f64::sin(gamma2);
-        let x21 = (x10 * x0 - x5 * x20 * x3) * x8 - x20 * x2 * x7;
-        let x22 = x2 * x7 + x5 * x8 * x3;
-        let x23 = x8 * x0 * x20 + x10 * x22;
-        let x24 = x10 * a_;
-        let x25 = d + x24;
-        let x26 = x14 * d;
-        let x27 = -a_ - x26;
-        let x28 = m2 * (x23 * x25 - a_ * x21 * x20) + x27 * x22 * m1;
-        let x29 = x13 * x22 * m1 - m2 * x9 * x20;
-        let x30 = x8 * x2;
-        let x31 = x5 * x3 * x7;
-        let x32 = x31 - x30;
-        let x33 = x10 * x0 * x7 + (x30 - x31) * x20;
-        let x34 = x0 * x20 * x7 + x10 * x32;
-        let x35 = x27 * x32 * m1 + m2 * (x34 * x25 - a_ * x20 * x33);
-        let x36 = x8 * x3 + x5 * x2 * x7;
-        let x37 = x14 * x36 - x13 * x0 * x7;
-        let x38 = x13 * x32 * m1 - m2 * x20 * x36;
-        let x39 = x14 * x0 * x7 + x13 * x36;
-        let x40 = (x37 * x17 + a_ * x13 * x39) * m1 + m2 * x12 * x36;
-        let x41 = x14 * x0 * x2 + x5 * x13;
-        let x42 = x13 * m1 * x3 - m2 * x20 * x2;
-        let x43 = x10 * x0 * x3 - x5 * x20;
-        let x44 = -x0 * x20 * x3 - x10 * x5;
-        let x45 = m2 * (x43 * x25 - a_ * x44 * x20) + x27 * x0 * m1 * x3;
-        let x46 = x13 * x0 * x2 - x14 * x5;
-        let x47 = (x41 * x17 + a_ * x46 * x13) * m1 + m2 * x0 * x2 * x12;
-        let x48 = x14 * x14;
-        let x49 = x10 * x10;
+        let x7 = f64::cos(gamma2);
+        let x8 = f64::sin(gamma2);
+        let x9 = f64::cos(psi);
+        let x10 = f64::sin(psi);
+        let x11 = (x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10;
+        let x12 = x2 * x10 + x5 * x9 * x3;
+        let x13 = x9 * x0 * x8 + x7 * x12;
+        let x14 = x7 * a_;
+        let x15 = d + x14;
+        let x16 = f64::cos(gamma1);
+        let x17 = x16 * d;
+        let x18 = -a_ - x17;
+        let x19 = m2 * (x13 * x15 - a_ * x11 * x8) + x18 * x12 * m1;
+        let x20 = x5 * x9 * x2 - x3 * x10;
+        let x21 = x7 * d;
+        let x22 = -a_ - x21;
+        let x23 = f64::sin(gamma1);
+        let x24 = x16 * x20 - x9 * x23 * x0;
+        let x25 = x16 * a_;
+        let x26 = x25 + d;
+        let x27 = x9 * (x5 * x23 * x2 + x16 * x0) - x23 * x3 * x10;
+        let x28 = m2 * x20 * x22 + (x24 * x26 + a_ * x27 * x23) * m1;
+        let x29 = x23 * x12 * m1 - m2 * x20 * x8;
+        let x30 = x9 * x3 + x5 * x2 * x10;
+        let x31 = x16 * x30 - x23 * x0 * x10;
+        let x32 = x16 * x0 * x10 + x23 * x30;
+        let x33 = (x31 * x26 + a_ * x23 * x32) * m1 + m2 * x22 * x30;
+        let x34 = x9 * x2;
+        let x35 = x5 * x3 * x10;
+        let x36 = x35 - x34;
+        let x37 = x7 * x0 * x10 + (x34 - x35) * x8;
+        let x38 = x0 * x8 * x10 + x7 * x36;
+        let x39 = x18 * x36 * m1 + m2 * (x38 * x15 - a_ * x8 * x37);
+        let x40 = x23 * x36 * m1 - m2 * x8 * x30;
+        let x41 = x16 * x0 * x2 + x5 * x23;
+        let x42 = x23 * x0 * x2 - x16 * x5;
+        let x43 = (x41 * x26 + a_ * x42 * x23) * m1 + m2 * x0 * x2 * x22;
+        let x44 = -x0 * x8 * x3 - x7 * x5;
+        let x45 = x7 * x0 * x3 - x5 * x8;
+        let x46 = m2 * (x45 * x15 - a_ * x44 * x8) + x18 * x0 * m1 * x3;
+        let x47 = x23 * m1 * x3 - m2 * x8 * x2;
+        let x48 = x16 * x16;
+        let x49 = x7 * x7;
         let x50 = J1 - J2;
-        let x51 = x14 * x50 * x13 - Ixy
-            + d * ((-x28 * x29 - x38 * x35 - x45 * x42 * x0) * x6 + x27 * x13 * m1);
+        let x51 = x16 * x50 * x23 - Ixy
+            + d * ((-x19 * x29 - x40 * x39 - x46 * x47 * x0) * x6 + x18 * x23 * m1);
         let x52 = J2 - J1;
-        let x53 = (x6 * (-x40 * x38 - x19 * x29 - x42 * x0 * x47) - m2 * x20 * x12) * d
-            + x10 * x52 * x20 - Ixz;
-        let x54 = x6 * d * d * (-x42 * x41 * x0 - x15 * x29 - x38 * x37) * m1;
-        let x55 = x6 * m2 * d * d * (-x23 * x29 - x38 * x34 - x43 * x42 * x0);
+        let x53 = (x6 * (-x33 * x40 - x28 * x29 - x47 * x0 * x43) - m2 * x8 * x22) * d
+            + x7 * x52 * x8 - Ixz;
+        let x54 = x6 * d * d * (-x47 * x41 * x0 - x24 * x29 - x40 * x31) * m1;
+        let x55 = x6 * m2 * d * d * (-x13 * x29 - x40 * x38 - x45 * x47 * x0);
         let x56 = d * d;
-        let x57 = (-x28 * x19 - x40 * x35 - x45 * x47) * x6 - Iyz;
-        let x58 = x6 * d * m1 * (-x28 * x15 - x45 * x41 - x37 * x35);
-        let x59 = m2 * (x6 * (-x43 * x45 - x28 * x23 - x35 * x34) + d + x24) * d + J2;
-        let x60 = J2 + d * m1 * (x16 + d + (-x15 * x19 - x41 * x47 - x40 * x37) * x6);
-        let x61 = x6 * m2 * d * (-x23 * x19 - x43 * x47 - x40 * x34);
-        let x62 = x6 * m2 * d * d * m1 * (-x15 * x23 - x43 * x41 - x37 * x34);
-        let x63 = x20 * u1;
-        let x64 = x10 * u3;
-        let x65 = -x63 - x64;
-        let x66 = x14 * u2;
-        let x67 = x13 * u1;
-        let x68 = x66 - x67;
-        let x69 = x13 * u2;
-        let x70 = x14 * u1;
-        let x71 = x69 + x70;
-        let x72 = u4 + u3;
-        let x73 = u4 * J2 * (-x69 - x70) + x71 * x50 * x72;
-        let x74 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x75 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x76 = d * (x10 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x20)
-            - a_ * u1 * u2;
-        let x77 = 2.0 * u4 + u3;
-        let x78 = d * (x14 * x77 * u1 + x77 * x13 * u2) + a_ * u3 * u1;
-        let x79 = d * (x67 - x66) - a_ * u2;
-        let x80 = x71 * x79;
-        let x81 = a_ * u3 * u3 * x13;
-        let x82 = x81 - x80;
-        let x83 = x68 * x79 - (u3 * x17 + u4 * d) * x72 + x14 * a_ * u4 * u3;
-        let x84 = x10 * u1 - u3 * x20;
-        let x85 = u3 * x12 - d * x20 * u1;
-        let x86 = x84 * x85;
-        let x87 = a_ * x20 * u2 * u2;
-        let x88 = x86 + x87;
-        let x89 = x63 + x64;
-        let x90 = u5 + u2;
-        let x91 = x90 * (x10 * a_ * u2 + x90 * d) - x89 * x85 - x10 * u5 * a_ * u2;
-        let x92 = -(x41 * x82 + x46 * x83 + x0 * x3 * x78) * m1
-            - m2 * (x0 * x2 * x76 + x88 * x43 + x44 * x91);
-        let x93 = -m2 * (x9 * x76 + x88 * x23 + x21 * x91)
-            - (x15 * x82 + x22 * x78 + x18 * x83) * m1;
-        let x94 = -m2 * (x33 * x91 + x88 * x34 + x36 * x76)
-            - (x37 * x82 + x32 * x78 + x83 * x39) * m1;
-        let x95 = u5 * J2 + x90 * x52;
-        let x96 = x52 * x84 * x89;
-        let x97 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x98 = u1 * u1;
-        let x99 = 2.0 * gamma2;
-        let x100 = f64::sin(x99);
-        let x101 = x68 * x71 * x50;
-        let x102 = 2.0 * gamma1;
-        let x103 = f64::sin(x102);
+        let x57 = (-x19 * x28 - x33 * x39 - x46 * x43) * x6 - Iyz;
+        let x58 = x6 * d * m1 * (-x19 * x24 - x46 * x41 - x31 * x39);
+        let x59 = m2 * (x6 * (-x45 * x46 - x19 * x13 - x39 * x38) + d + x14) * d + J2;
+        let x60 = J2 + d * m1 * (x25 + d + (-x24 * x28 - x41 * x43 - x33 * x31) * x6);
+        let x61 = x6 * m2 * d * (-x13 * x28 - x45 * x43 - x33 * x38);
+        let x62 = x6 * m2 * d * d * m1 * (-x24 * x13 - x45 * x41 - x31 * x38);
+        let x63 = u5 + u2;
+        let x64 = 2.0 * u5 + u2;
+        let x65 = x64 * J2 - J1 * x63;
+        let x66 = x7 * u1 - u3 * x8;
+        let x67 = u2 * x23;
+        let x68 = x16 * u1;
+        let x69 = u3 + u4;
+        let x70 = x67 + x68;
+        let x71 = J2 * (-x67 - x68) * u4 + x69 * x70 * x50;
+        let x72 = x16 * u2 - x23 * u1;
+        let x73 = x8 * u1;
+        let x74 = x7 * u3;
+        let x75 = -x73 - x74;
+        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x77 = d * (x7 * (-2.0 * u5 - u2) * u1 + x64 * u3 * x8) - a_ * u2 * u1;
+        let x78 = u3 + 2.0 * u4;
+        let x79 = d * (x16 * x78 * u1 + x78 * u2 * x23) + a_ * u3 * u1;
+        let x80 = a_ * u2 * u2 * x8;
+        let x81 = u3 * x22 - d * x8 * u1;
+        let x82 = x66 * x81;
+        let x83 = x80 + x82;
+        let x84 = x73 + x74;
+        let x85 = (u5 * d + u2 * x15) * x63 - x7 * u5 * a_ * u2 - x81 * x84;
+        let x86 = a_ * u3 * u3 * x23;
+        let x87 = u2 * x18 + x23 * d * u1;
+        let x88 = x87 * x70;
+        let x89 = x86 - x88;
+        let x90 = x87 * x72 + x16 * a_ * u3 * u4 - (u3 * x26 + d * u4) * x69;
+        let x91 = -(x83 * x38 + x85 * x37 + x30 * x77) * m2
+            - m1 * (x36 * x79 + x89 * x31 + x90 * x32);
+        let x92 = -m1 * (x27 * x90 + x24 * x89 + x12 * x79)
+            - m2 * (x11 * x85 + x83 * x13 + x20 * x77);
+        let x93 = -m2 * (x0 * x2 * x77 + x83 * x45 + x44 * x85)
+            - (x0 * x79 * x3 + x42 * x90 + x89 * x41) * m1;
+        let x94 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x95 = x52 * x66 * x84;
+        let x96 = u1 * u1;
+        let x97 = 2.0 * gamma2;
+        let x98 = f64::sin(x97);
+        let x99 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x100 = 2.0 * gamma1;
+        let x101 = f64::sin(x100);
+        let x102 = x70 * x50 * x72;
         Assembly {
             qdot: [
                 x1 * x4,
                 u2 * x3 - u3 * x2,
-                x5 * x1 * x4 + u1,
+                u1 + x5 * x1 * x4,
                 u4,
                 u5,
                 x6
-                    * (G_X - u3 * x19 - x28 * u2
-                        + d * (-x15 * u4 * m1 - u1 * x29 - u5 * m2 * x23)),
+                    * (G_X - x19 * u2 - u3 * x28
+                        + d * (-u5 * m2 * x13 - u1 * x29 - x24 * u4 * m1)),
                 x6
-                    * (G_Y - x35 * u2 + (-u4 * x37 * m1 - u5 * m2 * x34 - x38 * u1) * d
-                        - x40 * u3),
+                    * (G_Y - x33 * u3 - u2 * x39
+                        + d * (-x31 * u4 * m1 - u5 * m2 * x38 - x40 * u1)),
                 x6
-                    * ((-u4 * x41 * m1 - x42 * x0 * u1 - u5 * m2 * x43) * d - x45 * u2
-                        - u3 * x47 + G_Z),
+                    * (G_Z - u3 * x43 - u2 * x46
+                        + d * (-x41 * u4 * m1 - u5 * m2 * x45 - x47 * x0 * u1)),
             ],
             matrix: [
                 [
                     Ixx
                         + d * d
-                            * (m2 * x20 * x20
-                                + x6 * (-x38 * x38 - x42 * x42 * x0 * x0 - x29 * x29)
-                                + x13 * x13 * m1) + (x48 + x49) * J1
-                        + (x20 * x20 + x13 * x13) * J2,
+                            * (m2 * x8 * x8
+                                + x6 * (-x40 * x40 - x47 * x47 * x0 * x0 - x29 * x29)
+                                + x23 * x23 * m1) + (x48 + x49) * J1
+                        + (x8 * x8 + x23 * x23) * J2,
                     x51,
                     x53,
                     x54,
@@ -2656,9 +2650,9 @@ pub mod reduced_volterra {
                 ],
                 [
                     x51,
-                    x13 * x13 * J1 + x27 * x27 * m1 + Iyy + J2 * (x48 + 1.0)
-                        + x6 * (-x28 * x28 - x35 * x35 - x45 * x45)
-                        + m2 * (x56 + a_ * (a_ + 2.0 * x11)),
+                    x23 * x23 * J1 + x18 * x18 * m1 + Iyy + J2 * (x48 + 1.0)
+                        + x6 * (-x19 * x19 - x39 * x39 - x46 * x46)
+                        + m2 * (x56 + a_ * (a_ + 2.0 * x21)),
                     x57,
                     x58,
                     x59,
@@ -2666,8 +2660,8 @@ pub mod reduced_volterra {
                 [
                     x53,
                     x57,
-                    x6 * (-x40 * x40 - x19 * x19 - x47 * x47) + x20 * x20 * J1
-                        + (a_ * (a_ + 2.0 * x26) + x56) * m1 + m2 * x12 * x12 + Izz
+                    x6 * (-x33 * x33 - x28 * x28 - x43 * x43) + x8 * x8 * J1
+                        + (a_ * (a_ + 2.0 * x17) + x56) * m1 + m2 * x22 * x22 + Izz
                         + J2 * (x49 + 1.0),
                     x60,
                     x61,
@@ -2676,34 +2670,30 @@ pub mod reduced_volterra {
                 [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x6 * m2)],
             ],
             force: [
-                (-x10 * u5 * x65 - x14 * x68 * u4) * J1 + x13 * x73 - x74 * u2 + u3 * x75
-                    + (m2 * x20 * x76 - x13 * m1 * x78
-                        + (-x42 * x0 * x92 - x93 * x29 - x94 * x38) * x6) * d
-                    - x95 * x84 * x20,
-                x96 + x74 * u1 - x68 * u4 * x13 * J1 - u3 * x97 - x27 * m1 * x78
-                    - x14 * x73
+                x71 * x23 - x65 * x66 * x8 + (-x16 * u4 * x72 - x7 * u5 * x75) * J1
+                    - u2 * x76
+                    + (m2 * x8 * x77 - x23 * m1 * x79
+                        + x6 * (-x40 * x91 - x92 * x29 - x47 * x93 * x0)) * d + x94 * u3,
+                x95 - x16 * x71 - x18 * m1 * x79 + x76 * u1
+                    + x6 * (-x46 * x93 - x92 * x19 - x91 * x39) - x23 * u4 * x72 * J1
                     - m2
-                        * (d
-                            * (a_
-                                * (x20 * (u3 * u3 - x98 + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (x10 * u3 * u1))
-                                + d
-                                    * ((0.5 * (u3 * x100) - f64::cos(x99) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x100))) - a_ * a_ * u3 * u1)
-                    + x6 * (-x94 * x35 - x45 * x92 - x28 * x93),
-                u5 * x65 * x20 * J1 - m2 * x12 * x76 - u1 * x75
-                    + x6 * (-x94 * x40 - x47 * x92 - x93 * x19) + x101 - x95 * x10 * x84
-                    + x97 * u2
-                    - (a_ * a_ * u1 * u2
-                        + d
-                            * (a_
-                                * (2.0 * (x14 * u1 * u2)
-                                    + (u2 * u2 - x98 + u4 * (-u4 - 2.0 * u3)) * x13)
-                                + (0.5 * (x103 * u2 * u2)
-                                    + (f64::cos(x102) * u2 - 0.5 * (u1 * x103)) * u1) * d))
-                        * m1,
-                x101 + d * (x6 * (-x41 * x92 - x15 * x93 - x94 * x37) + x80 - x81) * m1,
-                x96 + m2 * d * (x6 * (-x43 * x92 - x93 * x23 - x94 * x34) - x86 - x87),
+                        * ((a_
+                            * (x8 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x96)
+                                - 2.0 * (x7 * u3 * u1))
+                            + ((0.5 * (u3 * x98) - f64::cos(x97) * u1) * u3
+                                - 0.5 * (u1 * u1 * x98)) * d) * d - a_ * a_ * u3 * u1)
+                    - x99 * u3,
+                x6 * (-x93 * x43 - x92 * x28 - x33 * x91) - m2 * x22 * x77
+                    - (d
+                        * (a_
+                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x96) * x23
+                                + 2.0 * (x16 * u2 * u1))
+                            + d
+                                * (u2 * (0.5 * (u2 * x101) + u1 * f64::cos(x100))
+                                    - 0.5 * (u1 * u1 * x101))) + a_ * a_ * u2 * u1) * m1
+                    - x7 * x65 * x66 + u2 * x99 + u5 * x8 * x75 * J1 - x94 * u1 + x102,
+                d * m1 * (x6 * (-x93 * x41 - x92 * x24 - x31 * x91) - x86 + x88) + x102,
+                x95 + m2 * (x6 * (-x91 * x38 - x92 * x13 - x45 * x93) - x80 - x82) * d,
             ],
             checks: [x0],
         }
@@ -2917,31 +2907,31 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::sin(psi);
-        let x8 = f64::cos(psi);
-        let x9 = x5 * x8 * x2 - x3 * x7;
-        let x10 = f64::cos(gamma2);
-        let x11 = -a_ - x10 * d;
-        let x12 = f64::sin(gamma1);
-        let x13 = f64::cos(gamma1);
-        let x14 = x13 * x9 - x8 * x12 * x0;
-        let x15 = x13 * a_ + d;
-        let x16 = f64::sin(gamma2);
-        let x17 = x2 * x7 + x5 * x8 * x3;
-        let x18 = x8 * x0 * x16 + x10 * x17;
-        let x19 = d + x10 * a_;
-        let x20 = -a_ - x13 * d;
-        let x21 = x8 * x2;
-        let x22 = x5 * x3 * x7;
-        let x23 = x22 - x21;
-        let x24 = x0 * x16 * x7 + x10 * x23;
-        let x25 = x8 * x3 + x5 * x2 * x7;
-        let x26 = x13 * x25 - x12 * x0 * x7;
-        let x27 = x13 * x0 * x2 + x5 * x12;
-        let x28 = x10 * x0 * x3 - x5 * x16;
+        let x7 = f64::cos(gamma2);
+        let x8 = f64::sin(gamma2);
+        let x9 = f64::cos(psi);
+        let x10 = f64::sin(psi);
+        let x11 = x2 * x10 + x5 * x9 * x3;
+        let x12 = x9 * x0 * x8 + x7 * x11;
+        let x13 = d + x7 * a_;
+        let x14 = f64::cos(gamma1);
+        let x15 = -a_ - x14 * d;
+        let x16 = x5 * x9 * x2 - x3 * x10;
+        let x17 = -a_ - x7 * d;
+        let x18 = f64::sin(gamma1);
+        let x19 = x14 * x16 - x9 * x18 * x0;
+        let x20 = x14 * a_ + d;
+        let x21 = x9 * x3 + x5 * x2 * x10;
+        let x22 = x14 * x21 - x18 * x0 * x10;
+        let x23 = x9 * x2;
+        let x24 = x5 * x3 * x10;
+        let x25 = x24 - x23;
+        let x26 = x0 * x8 * x10 + x7 * x25;
+        let x27 = x14 * x0 * x2 + x5 * x18;
+        let x28 = x7 * x0 * x3 - x5 * x8;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -2963,41 +2953,46 @@ pub mod reduced_volterra {
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
             u2 * x3 - u3 * x2,
-            x5 * x1 * x4 + u1,
+            u1 + x5 * x1 * x4,
             u4,
             u5,
             x6
                 * (G_X
-                    - u3
-                        * (m2 * x9 * x11
-                            + (x14 * x15
-                                + a_ * (x8 * (x5 * x12 * x2 + x13 * x0) - x12 * x3 * x7)
-                                    * x12) * m1)
                     - (m2
-                        * (x18 * x19
-                            - a_ * ((x10 * x0 - x5 * x16 * x3) * x8 - x16 * x2 * x7)
-                                * x16) + x20 * x17 * m1) * u2
+                        * (x12 * x13
+                            - a_ * ((x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10) * x8)
+                        + x15 * x11 * m1) * u2
+                    - u3
+                        * (m2 * x16 * x17
+                            + (x19 * x20
+                                + a_ * (x9 * (x5 * x18 * x2 + x14 * x0) - x18 * x3 * x10)
+                                    * x18) * m1)
                     + d
-                        * (-x14 * u4 * m1 - u1 * (x12 * x17 * m1 - m2 * x9 * x16)
-                            - u5 * m2 * x18)),
+                        * (-u5 * m2 * x12 - u1 * (x18 * x11 * m1 - m2 * x16 * x8)
+                            - x19 * u4 * m1)),
             x6
                 * (G_Y
-                    - (x20 * x23 * m1
-                        + m2
-                            * (x24 * x19
-                                - a_ * x16 * (x10 * x0 * x7 + (x21 - x22) * x16))) * u2
-                    + (-u4 * x26 * m1 - u5 * m2 * x24
-                        - (x12 * x23 * m1 - m2 * x16 * x25) * u1) * d
-                    - ((x26 * x15 + a_ * x12 * (x13 * x0 * x7 + x12 * x25)) * m1
-                        + m2 * x11 * x25) * u3),
+                    - ((x22 * x20 + a_ * x18 * (x14 * x0 * x10 + x18 * x21)) * m1
+                        + m2 * x17 * x21) * u3
+                    - u2
+                        * (x15 * x25 * m1
+                            + m2
+                                * (x26 * x13
+                                    - a_ * x8 * (x7 * x0 * x10 + (x23 - x24) * x8)))
+                    + d
+                        * (-x22 * u4 * m1 - u5 * m2 * x26
+                            - (x18 * x25 * m1 - m2 * x8 * x21) * u1)),
             x6
-                * ((-u4 * x27 * m1 - (x12 * m1 * x3 - m2 * x16 * x2) * x0 * u1
-                    - u5 * m2 * x28) * d
-                    - (m2 * (x28 * x19 - a_ * (-x0 * x16 * x3 - x10 * x5) * x16)
-                        + x20 * x0 * m1 * x3) * u2
+                * (G_Z
                     - u3
-                        * ((x27 * x15 + a_ * (x12 * x0 * x2 - x13 * x5) * x12) * m1
-                            + m2 * x0 * x2 * x11) + G_Z),
+                        * ((x27 * x20 + a_ * (x18 * x0 * x2 - x14 * x5) * x18) * m1
+                            + m2 * x0 * x2 * x17)
+                    - u2
+                        * (m2 * (x28 * x13 - a_ * (-x0 * x8 * x3 - x7 * x5) * x8)
+                            + x15 * x0 * m1 * x3)
+                    + d
+                        * (-x27 * u4 * m1 - u5 * m2 * x28
+                            - (x18 * m1 * x3 - m2 * x8 * x2) * x0 * u1)),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

@@ -473,7 +473,7 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = f64::sin(gamma2);
         let x7 = 1.0 / (m2 + m0 + m1);
@@ -534,53 +534,51 @@ pub mod reduced_volterra {
         let x60 = J2 + d * m1 * (x42 + d + (-x46 * x48 - x49 * x51 - x45 * x41) * x7);
         let x61 = x7 * m2 * d * (-x26 * x48 - x36 * x51 - x45 * x33);
         let x62 = x7 * m2 * d * d * m1 * (-x46 * x26 - x36 * x49 - x41 * x33);
-        let x63 = x6 * u1;
-        let x64 = x22 * u3;
-        let x65 = -x63 - x64;
-        let x66 = x20 * u2;
-        let x67 = x11 * u1;
-        let x68 = x66 - x67;
-        let x69 = x11 * u2;
-        let x70 = x20 * u1;
-        let x71 = x69 + x70;
-        let x72 = u4 + u3;
-        let x73 = u4 * J2 * (-x69 - x70) + x71 * x24 * x72;
-        let x74 = u3 * Izz - Iyz * u2 - u1 * Ixz;
-        let x75 = Iyy * u2 - Iyz * u3 - Ixy * u1;
-        let x76 = d * (x22 * u1 * (-2.0 * u5 - u2) + (2.0 * u5 + u2) * u3 * x6)
-            - a_ * u1 * u2;
-        let x77 = 2.0 * u4 + u3;
-        let x78 = d * (x20 * x77 * u1 + x77 * x11 * u2) + a_ * u3 * u1;
-        let x79 = d * (x67 - x66) - a_ * u2;
-        let x80 = x71 * x79;
-        let x81 = a_ * u3 * u3 * x11;
-        let x82 = x81 - x80;
-        let x83 = x68 * x79 - (u3 * x43 + u4 * d) * x72 + x20 * a_ * u4 * u3;
-        let x84 = x22 * u1 - u3 * x6;
-        let x85 = u3 * x40 - d * x6 * u1;
-        let x86 = x84 * x85;
-        let x87 = a_ * x6 * u2 * u2;
-        let x88 = x86 + x87;
-        let x89 = x63 + x64;
-        let x90 = u5 + u2;
-        let x91 = x90 * (x22 * a_ * u2 + x90 * d) - x89 * x85 - x22 * u5 * a_ * u2;
-        let x92 = -(x49 * x82 + x50 * x83 + x0 * x3 * x78) * m1
-            - m2 * (x0 * x2 * x76 + x88 * x36 + x35 * x91);
-        let x93 = -m2 * (x18 * x76 + x88 * x26 + x25 * x91)
-            - (x46 * x82 + x17 * x78 + x47 * x83) * m1;
-        let x94 = -m2 * (x32 * x91 + x88 * x33 + x10 * x76)
-            - (x41 * x82 + x14 * x78 + x83 * x44) * m1;
-        let x95 = u5 * J2 + x90 * x52;
-        let x96 = x52 * x84 * x89;
-        let x97 = Ixx * u1 - Ixy * u2 - u3 * Ixz;
-        let x98 = u1 * u1;
-        let x99 = 2.0 * gamma2;
-        let x100 = f64::sin(x99);
-        let x101 = x68 * x71 * x24;
-        let x102 = 2.0 * gamma1;
-        let x103 = f64::sin(x102);
+        let x63 = u5 + u2;
+        let x64 = 2.0 * u5 + u2;
+        let x65 = x64 * J2 - J1 * x63;
+        let x66 = x22 * u1 - u3 * x6;
+        let x67 = u2 * x11;
+        let x68 = x20 * u1;
+        let x69 = u3 + u4;
+        let x70 = x67 + x68;
+        let x71 = J2 * (-x67 - x68) * u4 + x69 * x70 * x24;
+        let x72 = x20 * u2 - x11 * u1;
+        let x73 = x6 * u1;
+        let x74 = x22 * u3;
+        let x75 = -x73 - x74;
+        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x77 = d * (x22 * (-2.0 * u5 - u2) * u1 + x64 * u3 * x6) - a_ * u2 * u1;
+        let x78 = u3 + 2.0 * u4;
+        let x79 = d * (x20 * x78 * u1 + x78 * u2 * x11) + a_ * u3 * u1;
+        let x80 = a_ * u2 * u2 * x6;
+        let x81 = u3 * x40 - d * x6 * u1;
+        let x82 = x66 * x81;
+        let x83 = x80 + x82;
+        let x84 = x73 + x74;
+        let x85 = (u5 * d + u2 * x28) * x63 - x22 * u5 * a_ * u2 - x81 * x84;
+        let x86 = a_ * u3 * u3 * x11;
+        let x87 = u2 * x30 + x11 * d * u1;
+        let x88 = x87 * x70;
+        let x89 = x86 - x88;
+        let x90 = x87 * x72 + x20 * a_ * u3 * u4 - (u3 * x43 + d * u4) * x69;
+        let x91 = -(x83 * x33 + x85 * x32 + x10 * x77) * m2
+            - m1 * (x14 * x79 + x89 * x41 + x90 * x44);
+        let x92 = -m1 * (x47 * x90 + x46 * x89 + x17 * x79)
+            - m2 * (x25 * x85 + x83 * x26 + x18 * x77);
+        let x93 = -m2 * (x0 * x2 * x77 + x83 * x36 + x35 * x85)
+            - (x0 * x79 * x3 + x50 * x90 + x89 * x49) * m1;
+        let x94 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x95 = x52 * x66 * x84;
+        let x96 = u1 * u1;
+        let x97 = 2.0 * gamma2;
+        let x98 = f64::sin(x97);
+        let x99 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x100 = 2.0 * gamma1;
+        let x101 = f64::sin(x100);
+        let x102 = x70 * x24 * x72;
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, x5 * x1 * x4 + u1, u4, u5],
+            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5],
             matrix: [
                 [
                     Ixx
@@ -616,34 +614,30 @@ pub mod reduced_volterra {
                 [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x7 * m2)],
             ],
             force: [
-                (-x22 * u5 * x65 - x20 * x68 * u4) * J1 + x11 * x73 - x74 * u2 + u3 * x75
-                    + (m2 * x6 * x76 - x11 * m1 * x78
-                        + (-x16 * x0 * x92 - x93 * x19 - x94 * x15) * x7) * d
-                    - x95 * x84 * x6,
-                x96 + x74 * u1 - x68 * u4 * x11 * J1 - u3 * x97 - x30 * m1 * x78
-                    - x20 * x73
+                x71 * x11 - x65 * x66 * x6 + (-x20 * u4 * x72 - x22 * u5 * x75) * J1
+                    - u2 * x76
+                    + (m2 * x6 * x77 - x11 * m1 * x79
+                        + x7 * (-x15 * x91 - x92 * x19 - x16 * x93 * x0)) * d + x94 * u3,
+                x95 - x20 * x71 - x30 * m1 * x79 + x76 * u1
+                    + x7 * (-x37 * x93 - x92 * x31 - x91 * x34) - x11 * u4 * x72 * J1
                     - m2
-                        * (d
-                            * (a_
-                                * (x6 * (u3 * u3 - x98 + u5 * (-u5 - 2.0 * u2))
-                                    - 2.0 * (x22 * u3 * u1))
-                                + d
-                                    * ((0.5 * (u3 * x100) - f64::cos(x99) * u1) * u3
-                                        - 0.5 * (u1 * u1 * x100))) - a_ * a_ * u3 * u1)
-                    + x7 * (-x94 * x34 - x37 * x92 - x31 * x93),
-                u5 * x65 * x6 * J1 - m2 * x40 * x76 - u1 * x75
-                    + x7 * (-x94 * x45 - x51 * x92 - x93 * x48) + x101 - x95 * x22 * x84
-                    + x97 * u2
-                    - (a_ * a_ * u1 * u2
-                        + d
-                            * (a_
-                                * (2.0 * (x20 * u1 * u2)
-                                    + (u2 * u2 - x98 + u4 * (-u4 - 2.0 * u3)) * x11)
-                                + (0.5 * (x103 * u2 * u2)
-                                    + (f64::cos(x102) * u2 - 0.5 * (u1 * x103)) * u1) * d))
-                        * m1,
-                x101 + d * (x7 * (-x49 * x92 - x46 * x93 - x94 * x41) + x80 - x81) * m1,
-                x96 + m2 * d * (x7 * (-x36 * x92 - x93 * x26 - x94 * x33) - x86 - x87),
+                        * ((a_
+                            * (x6 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x96)
+                                - 2.0 * (x22 * u3 * u1))
+                            + ((0.5 * (u3 * x98) - f64::cos(x97) * u1) * u3
+                                - 0.5 * (u1 * u1 * x98)) * d) * d - a_ * a_ * u3 * u1)
+                    - x99 * u3,
+                x7 * (-x93 * x51 - x92 * x48 - x45 * x91) - m2 * x40 * x77
+                    - (d
+                        * (a_
+                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x96) * x11
+                                + 2.0 * (x20 * u2 * u1))
+                            + d
+                                * (u2 * (0.5 * (u2 * x101) + u1 * f64::cos(x100))
+                                    - 0.5 * (u1 * u1 * x101))) + a_ * a_ * u2 * u1) * m1
+                    - x22 * x65 * x66 + u2 * x99 + u5 * x6 * x75 * J1 - x94 * u1 + x102,
+                d * m1 * (x7 * (-x93 * x49 - x92 * x46 - x41 * x91) - x86 + x88) + x102,
+                x95 + m2 * (x7 * (-x91 * x33 - x92 * x26 - x36 * x93) - x80 - x82) * d,
             ],
             checks: [x0],
         }
@@ -851,31 +845,31 @@ pub mod reduced_volterra {
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
-        let x4 = x2 * u2 + u3 * x3;
+        let x4 = u2 * x2 + u3 * x3;
         let x5 = f64::sin(theta);
         let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::sin(psi);
-        let x8 = f64::cos(psi);
-        let x9 = x5 * x8 * x2 - x3 * x7;
-        let x10 = f64::cos(gamma2);
-        let x11 = -a_ - x10 * d;
-        let x12 = f64::sin(gamma1);
-        let x13 = f64::cos(gamma1);
-        let x14 = x13 * x9 - x8 * x12 * x0;
-        let x15 = x13 * a_ + d;
-        let x16 = f64::sin(gamma2);
-        let x17 = x2 * x7 + x5 * x8 * x3;
-        let x18 = x8 * x0 * x16 + x10 * x17;
-        let x19 = d + x10 * a_;
-        let x20 = -a_ - x13 * d;
-        let x21 = x8 * x2;
-        let x22 = x5 * x3 * x7;
-        let x23 = x22 - x21;
-        let x24 = x0 * x16 * x7 + x10 * x23;
-        let x25 = x8 * x3 + x5 * x2 * x7;
-        let x26 = x13 * x25 - x12 * x0 * x7;
-        let x27 = x13 * x0 * x2 + x5 * x12;
-        let x28 = x10 * x0 * x3 - x5 * x16;
+        let x7 = f64::cos(gamma2);
+        let x8 = f64::sin(gamma2);
+        let x9 = f64::cos(psi);
+        let x10 = f64::sin(psi);
+        let x11 = x2 * x10 + x5 * x9 * x3;
+        let x12 = x9 * x0 * x8 + x7 * x11;
+        let x13 = d + x7 * a_;
+        let x14 = f64::cos(gamma1);
+        let x15 = -a_ - x14 * d;
+        let x16 = x5 * x9 * x2 - x3 * x10;
+        let x17 = -a_ - x7 * d;
+        let x18 = f64::sin(gamma1);
+        let x19 = x14 * x16 - x9 * x18 * x0;
+        let x20 = x14 * a_ + d;
+        let x21 = x9 * x3 + x5 * x2 * x10;
+        let x22 = x14 * x21 - x18 * x0 * x10;
+        let x23 = x9 * x2;
+        let x24 = x5 * x3 * x10;
+        let x25 = x24 - x23;
+        let x26 = x0 * x8 * x10 + x7 * x25;
+        let x27 = x14 * x0 * x2 + x5 * x18;
+        let x28 = x7 * x0 * x3 - x5 * x8;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -897,41 +891,46 @@ pub mod reduced_volterra {
         let qdot: [f64; NUM_COORDINATES] = [
             x1 * x4,
             u2 * x3 - u3 * x2,
-            x5 * x1 * x4 + u1,
+            u1 + x5 * x1 * x4,
             u4,
             u5,
             x6
                 * (G_X
-                    - u3
-                        * (m2 * x9 * x11
-                            + (x14 * x15
-                                + a_ * (x8 * (x5 * x12 * x2 + x13 * x0) - x12 * x3 * x7)
-                                    * x12) * m1)
                     - (m2
-                        * (x18 * x19
-                            - a_ * ((x10 * x0 - x5 * x16 * x3) * x8 - x16 * x2 * x7)
-                                * x16) + x20 * x17 * m1) * u2
+                        * (x12 * x13
+                            - a_ * ((x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10) * x8)
+                        + x15 * x11 * m1) * u2
+                    - u3
+                        * (m2 * x16 * x17
+                            + (x19 * x20
+                                + a_ * (x9 * (x5 * x18 * x2 + x14 * x0) - x18 * x3 * x10)
+                                    * x18) * m1)
                     + d
-                        * (-x14 * u4 * m1 - u1 * (x12 * x17 * m1 - m2 * x9 * x16)
-                            - u5 * m2 * x18)),
+                        * (-u5 * m2 * x12 - u1 * (x18 * x11 * m1 - m2 * x16 * x8)
+                            - x19 * u4 * m1)),
             x6
                 * (G_Y
-                    - (x20 * x23 * m1
-                        + m2
-                            * (x24 * x19
-                                - a_ * x16 * (x10 * x0 * x7 + (x21 - x22) * x16))) * u2
-                    + (-u4 * x26 * m1 - u5 * m2 * x24
-                        - (x12 * x23 * m1 - m2 * x16 * x25) * u1) * d
-                    - ((x26 * x15 + a_ * x12 * (x13 * x0 * x7 + x12 * x25)) * m1
-                        + m2 * x11 * x25) * u3),
+                    - ((x22 * x20 + a_ * x18 * (x14 * x0 * x10 + x18 * x21)) * m1
+                        + m2 * x17 * x21) * u3
+                    - u2
+                        * (x15 * x25 * m1
+                            + m2
+                                * (x26 * x13
+                                    - a_ * x8 * (x7 * x0 * x10 + (x23 - x24) * x8)))
+                    + d
+                        * (-x22 * u4 * m1 - u5 * m2 * x26
+                            - (x18 * x25 * m1 - m2 * x8 * x21) * u1)),
             x6
-                * ((-u4 * x27 * m1 - (x12 * m1 * x3 - m2 * x16 * x2) * x0 * u1
-                    - u5 * m2 * x28) * d
-                    - (m2 * (x28 * x19 - a_ * (-x0 * x16 * x3 - x10 * x5) * x16)
-                        + x20 * x0 * m1 * x3) * u2
+                * (G_Z
                     - u3
-                        * ((x27 * x15 + a_ * (x12 * x0 * x2 - x13 * x5) * x12) * m1
-                            + m2 * x0 * x2 * x11) + G_Z),
+                        * ((x27 * x20 + a_ * (x18 * x0 * x2 - x14 * x5) * x18) * m1
+                            + m2 * x0 * x2 * x17)
+                    - u2
+                        * (m2 * (x28 * x13 - a_ * (-x0 * x8 * x3 - x7 * x5) * x8)
+                            + x15 * x0 * m1 * x3)
+                    + d
+                        * (-x27 * u4 * m1 - u5 * m2 * x28
+                            - (x18 * m1 * x3 - m2 * x8 * x2) * x0 * u1)),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {

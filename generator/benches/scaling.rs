@@ -73,10 +73,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         stages_ms: s.stages.iter().map(|(k, d)| (k.to_string(), d.as_secs_f64() * 1e3)).collect(),
         emit_ms: s.emit_time.as_secs_f64() * 1e3,
         peak_mb: peak_mb(),
-        ops: FORMS
-            .iter()
-            .filter_map(|f| s.ops(&format!("{f}::rhs")).map(|c| (f.to_string(), c.ops.total(), c.solve.total())))
-            .collect(),
+        ops: FORMS.iter().filter_map(|f| s.ops(&format!("{f}::rhs")).map(|c| (f.to_string(), c.ops.total(), c.solve.total()))).collect(),
         code_bytes: out.code.len(),
         ..Record::default()
     };
@@ -87,12 +84,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         std::fs::write(dir.join("main.rs"), timing_program()).expect("the timing program is written");
         rustc_support::seam_rlib(); // built once, outside the timing
         let start = Instant::now();
-        let status = rustc_support::rustc()
-            .args(["-C", "opt-level=3", "-o"])
-            .arg(dir.join("timing"))
-            .arg(dir.join("main.rs"))
-            .status()
-            .expect("rustc runs");
+        let status = rustc_support::rustc().args(["-C", "opt-level=3", "-o"]).arg(dir.join("timing")).arg(dir.join("main.rs")).status().expect("rustc runs");
         record.rustc_s = Some(start.elapsed().as_secs_f64());
         assert!(status.success(), "the emitted module compiles");
         let run = Command::new(dir.join("timing")).output().expect("the timing program runs");
@@ -289,13 +281,13 @@ fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&s
             "scene 2 (three bodies free in space) simplifies with four-angle harmonics so that its reduced mass matrix comes out free of the absolute orientation, and emits four formulations; its derivation alone is under 40 ms"
         )
     );
-    let ins: Vec<String> = inspects
-        .iter()
-        .zip(scenes)
-        .map(|((s, i), (_, g))| format!("{s} {i:.0} against {g:.0} ms"))
-        .collect();
+    let ins: Vec<String> = inspects.iter().zip(scenes).map(|((s, i), (_, g))| format!("{s} {i:.0} against {g:.0} ms")).collect();
     let ins_ok = inspects.iter().zip(scenes).all(|((_, i), (_, g))| i <= g);
-    md += &format!("| `inspect` costs no more than generation (one shared derivation) | inspect <= generate | {} | {} |\n", ins.join(", "), verdict(ins_ok, "printing"));
+    md += &format!(
+        "| `inspect` costs no more than generation (one shared derivation) | inspect <= generate | {} | {} |\n",
+        ins.join(", "),
+        verdict(ins_ok, "printing")
+    );
     let mut worst: Option<(String, usize, f64)> = None;
     for (kind, p) in peers {
         for x in p {
@@ -358,10 +350,7 @@ fn report(
             let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();
             let asm: Vec<String> = FORMS.iter().map(|f| ops_of(r, f).map_or("-".into(), |(a, _)| a.to_string())).collect();
             let solve: Vec<String> = ["kane", "reduced_volterra"].iter().map(|f| ops_of(r, f).map_or("-".into(), |(_, s)| s.to_string())).collect();
-            let ns: Vec<String> = FORMS
-                .iter()
-                .map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}")))
-                .collect();
+            let ns: Vec<String> = FORMS.iter().map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}"))).collect();
             md += &format!(
                 "| {} | {:.0} ({}) | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} |\n",
                 r.n,
@@ -451,7 +440,13 @@ fn plot(path: &Path, records: &[Record], peers: &[(String, Vec<SympyRecord>)]) {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
             chart.draw_series(points.into_iter().map(|p| Circle::new(p, 3, color.filled()))).expect("the points");
         }
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).position(SeriesLabelPosition::UpperLeft).draw().expect("the legend");
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .expect("the legend");
     }
     root.present().expect("the plot is written");
 }

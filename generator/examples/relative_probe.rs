@@ -1,9 +1,11 @@
-use generator::emit::{generate, Options};
+use generator::emit::{Options, generate};
 use generator::model::builder::{Body, Frame, ModelBuilder};
 fn main() {
     let n: usize = std::env::args().nth(1).unwrap().parse().unwrap();
     let mut b = ModelBuilder::new("rel").coordinate("x").parameter("g", 9.81).parameter("l", 1.0).parameter("m", 1.0);
-    for i in 1..=n { b = b.coordinate(format!("q{i}")); }
+    for i in 1..=n {
+        b = b.coordinate(format!("q{i}"));
+    }
     b = b.frame(Frame::new("cart", "world").translation(["x", "0", "0"])).body(Body::new("cart", "cart", "m"));
     for i in 1..=n {
         let parent = if i == 1 { "cart".to_string() } else { format!("L{}", i - 1) };
@@ -14,6 +16,10 @@ fn main() {
     let model = b.gravity(["0", "-g", "0"]).quasi_velocities(rates.clone(), rates[1..].to_vec()).ignorable(["x"]).build().unwrap();
     let t = std::time::Instant::now();
     let out = generate(&model, &Options::from_model(&model)).unwrap();
-    for f in &out.summary.functions { if f.name.ends_with("::rhs") { eprintln!("{} assembly {} solve {}", f.name, f.ops.total(), f.solve.total()); } }
+    for f in &out.summary.functions {
+        if f.name.ends_with("::rhs") {
+            eprintln!("{} assembly {} solve {}", f.name, f.ops.total(), f.solve.total());
+        }
+    }
     eprintln!("total {:.3} s", t.elapsed().as_secs_f64());
 }

@@ -1,5 +1,5 @@
 //! Development probe: derive + emit a chain of size n, print the summary.
-use generator::emit::{generate, Options};
+use generator::emit::{Options, generate};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -11,5 +11,7 @@ fn main() {
     let out = generate(&model, &Options::from_model(&model)).unwrap();
     eprintln!("{}", out.summary);
     eprintln!("total {:.3} s, {} bytes", t.elapsed().as_secs_f64(), out.code.len());
-    if args.len() > 3 { std::fs::write(&args[3], &out.code).unwrap(); }
+    if args.len() > 3 {
+        std::fs::write(&args[3], &out.code).unwrap();
+    }
 }

@@ -4,12 +4,12 @@
 //! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
 //! formulations) → [`emit`] (flat Rust). [`symbolic`] is the engine underneath.
 
-pub mod symbolic;
-pub mod kinematics;
-pub mod model;
+pub mod emit;
 pub mod formulation;
 pub mod inspect;
-pub mod emit;
+pub mod kinematics;
+pub mod model;
 pub mod output;
+pub mod symbolic;
 
 pub use emit::Builder;

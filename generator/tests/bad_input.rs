@@ -101,7 +101,8 @@ fn declared_ignorable_that_is_not() {
     let e = broken(&scene1(), "ignorable: Declared([\"x\"])", "ignorable: Declared([\"theta1\", \"x\"])");
     check(&e, ErrorKind::NotIgnorable, &["`theta1` is declared ignorable but is not", "M[1][2]"]);
     // A spring on x breaks it through V.
-    let e = broken(&scene1(), "Gravity(vector: [\"0\", \"-g\", \"0\"]),", "Gravity(vector: [\"0\", \"-g\", \"0\"]), Potential(name: \"tether\", expr: \"x^2\"),");
+    let e =
+        broken(&scene1(), "Gravity(vector: [\"0\", \"-g\", \"0\"]),", "Gravity(vector: [\"0\", \"-g\", \"0\"]), Potential(name: \"tether\", expr: \"x^2\"),");
     check(&e, ErrorKind::NotIgnorable, &["`x`", "through V"]);
     // A force on x breaks it through Q.
     let e = broken(&scene1(), "{\"theta1\": \"tau\", \"theta2\": \"-tau\"}", "{\"theta1\": \"tau\", \"theta2\": \"-tau\", \"x\": \"tau\"}");
@@ -250,7 +251,11 @@ fn quasi_velocities_dependent_on_the_constraints_are_refused_naming_the_rows() {
     let model = from_source("models/broken.ron", &src).unwrap();
     let options = generator::emit::Options::from_model(&model);
     let e = generator::emit::generate(&model, &options).expect_err("a singular choice must not generate");
-    check(&e, ErrorKind::SingularQuasiVelocities, &["constraint `wheel` depends on the other rows", "quasi_velocities.reduced", "choose quasi-velocities independent"]);
+    check(
+        &e,
+        ErrorKind::SingularQuasiVelocities,
+        &["constraint `wheel` depends on the other rows", "quasi_velocities.reduced", "choose quasi-velocities independent"],
+    );
 }
 
 #[test]

@@ -13,12 +13,7 @@ fn compile(name: &str, code: &str) {
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("module.rs");
     std::fs::write(&file, format!("#![deny(warnings)]\n#![allow(clippy::all)]\n{code}")).unwrap();
-    let out = support::rustc::rustc()
-        .args(["--crate-type", "lib", "-C", "opt-level=0", "--out-dir"])
-        .arg(&dir)
-        .arg(&file)
-        .output()
-        .expect("rustc runs");
+    let out = support::rustc::rustc().args(["--crate-type", "lib", "-C", "opt-level=0", "--out-dir"]).arg(&dir).arg(&file).output().expect("rustc runs");
     let _ = std::fs::remove_dir_all(&dir);
     assert!(out.status.success(), "{name} does not compile:\n{}", String::from_utf8_lossy(&out.stderr));
 }
@@ -52,7 +47,8 @@ fn subsets_and_baked_modules_compile() {
 fn odd_names_become_valid_identifiers() {
     // A parameter called `_`, names that are Rust keywords or the module's own items.
     let src = std::fs::read_to_string(format!("{}/../models/cart_pendulum.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let src = src.replace("\"tau\": 0.0", "\"tau\": 0.0, \"_\": 1.0, \"fn\": 2.0, \"rhs\": 3.0, \"state\": 4.0").replace("\"M\": 2.0", "\"M\": 2.0, \"Params\": 1.0");
+    let src =
+        src.replace("\"tau\": 0.0", "\"tau\": 0.0, \"_\": 1.0, \"fn\": 2.0, \"rhs\": 3.0, \"state\": 4.0").replace("\"M\": 2.0", "\"M\": 2.0, \"Params\": 1.0");
     let src = src.replace("mass: \"M\",", "mass: \"M*_*fn/2*rhs/3*state/4*Params\",");
     assert!(src.contains("M*_*fn"), "test edit not applied");
     let m = generator::model::from_source("odd.ron", &src).unwrap();

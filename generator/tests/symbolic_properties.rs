@@ -12,10 +12,7 @@ const VARS: [&str; 3] = ["pa", "pb", "pc"];
 
 /// Random expressions over three symbols with sums, products, small powers and trig.
 fn arb_expr() -> impl Strategy<Value = Expr> {
-    let leaf = prop_oneof![
-        (0usize..3).prop_map(|i| Expr::sym(VARS[i])),
-        (-3i64..4).prop_map(Expr::int),
-    ];
+    let leaf = prop_oneof![(0usize..3).prop_map(|i| Expr::sym(VARS[i])), (-3i64..4).prop_map(Expr::int),];
     leaf.prop_recursive(4, 24, 3, |inner| {
         prop_oneof![
             (inner.clone(), inner.clone()).prop_map(|(a, b)| a + b),
@@ -164,7 +161,9 @@ fn named_identities() {
     let (a, b) = (Expr::sym("a"), Expr::sym("b"));
     assert!(zero_test(a.sin().powi(2) + a.cos().powi(2) - 1).is_zero());
     assert!(zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin()).is_zero());
-    assert!(!zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::number::rat_from_decimal("1e-9").unwrap())).is_zero());
+    assert!(
+        !zero_test((a - b).cos() - a.cos() * b.cos() - a.sin() * b.sin() + Expr::num(generator::symbolic::number::rat_from_decimal("1e-9").unwrap())).is_zero()
+    );
 }
 
 /// Values near the edge of `i64`, where the machine-integer rationals must move to big ones.

@@ -60,7 +60,8 @@ pub struct CompareArgs {
     /// Project Lagrange and Maggi onto the constraints after every step.
     #[arg(long)]
     pub projection: bool,
-    /// Also write the records as JSON (`-` for stdout), atomically.
+    /// Also write the records as JSON, atomically; `-` writes them to stdout, alone (the table
+    /// then goes to stderr).
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
     /// Also write SVG plots of the coordinates and errors into DIR.
@@ -214,11 +215,17 @@ pub fn compare_command(model: &Model, args: &CompareArgs) -> Result<(), CliError
         runs.first().map_or(0, |r| r.solution.times.len()),
         options.repeats
     );
-    print(&(header + &table(&runs)))?;
+    let json_to_stdout = args.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    if json_to_stdout {
+        // stdout carries the JSON alone, so that it can be piped; the table goes to stderr.
+        eprint!("{header}{}", table(&runs));
+    } else {
+        print(&(header + &table(&runs)))?;
+    }
     if let Some(path) = &args.json {
         let records: Vec<_> = runs.iter().map(|r| &r.record).collect();
         let text = serde_json::to_string_pretty(&records).expect("records serialize");
-        if path.as_os_str() == "-" {
+        if json_to_stdout {
             print(&(text + "\n"))?;
         } else {
             write_atomic(path, text.as_bytes())?;

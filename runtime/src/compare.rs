@@ -129,7 +129,6 @@ impl Reference {
     }
 }
 
-
 /// Runs one formulation.
 pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
     run_with(model, method, settings, repeats, Drift::None)

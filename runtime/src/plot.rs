@@ -3,11 +3,12 @@
 
 use crate::compare::Run;
 use crate::output::write_atomic;
-use seam::Model;
 use plotters::prelude::*;
+use seam::Model;
 use std::path::{Path, PathBuf};
 
-const COLORS: [RGBColor; 6] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189), RGBColor(140, 86, 75)];
+const COLORS: [RGBColor; 6] =
+    [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189), RGBColor(140, 86, 75)];
 
 /// Why a plot could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -63,8 +64,7 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
     let root = SVGBackend::with_string(&mut svg, (1100, 260 * rows as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&path, e))?;
     for (j, area) in root.split_evenly((rows, 2)).iter().enumerate().take(m) {
-        let series: Vec<(&str, Vec<f64>)> =
-            runs.iter().map(|r| (r.record.method.as_str(), r.invariants.coordinates.iter().map(|q| q[j]).collect())).collect();
+        let series: Vec<(&str, Vec<f64>)> = runs.iter().map(|r| (r.record.method.as_str(), r.invariants.coordinates.iter().map(|q| q[j]).collect())).collect();
         let title = names.get(j).map_or(format!("q{j}"), |n| n.to_string());
         panel(area, &title, times, &series).map_err(|e| err(&path, e))?;
     }
@@ -141,11 +141,8 @@ pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Resu
     for (mi, method) in methods.iter().enumerate() {
         let color = COLORS[mi % COLORS.len()];
         for (ii, integrator) in integrators.iter().enumerate() {
-            let mut curve: Vec<(f64, f64)> = ok
-                .iter()
-                .filter(|p| p.method == *method && p.integrator == *integrator)
-                .map(|p| (p.cpu_seconds, p.error.max(floor)))
-                .collect();
+            let mut curve: Vec<(f64, f64)> =
+                ok.iter().filter(|p| p.method == *method && p.integrator == *integrator).map(|p| (p.cpu_seconds, p.error.max(floor))).collect();
             curve.sort_by(|a, b| a.0.total_cmp(&b.0));
             if curve.is_empty() {
                 continue;

@@ -94,12 +94,8 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
     // The reference solution: the reduced method when the module has it, else the first.
     let reference_form = model.formulation("reduced_volterra").or(model.formulations.first()).map_or("reduced_volterra", |f| f.name);
     let reference = run_with(model, reference_form, &reference_settings, 1, Drift::None)?.invariants.coordinates;
-    let forms: Vec<&str> = model
-        .formulations
-        .iter()
-        .map(|f| f.name)
-        .filter(|n| options.formulations.is_empty() || options.formulations.iter().any(|o| o == n))
-        .collect();
+    let forms: Vec<&str> =
+        model.formulations.iter().map(|f| f.name).filter(|n| options.formulations.is_empty() || options.formulations.iter().any(|o| o == n)).collect();
     let settings = plan(model, options)?;
     let total = forms.len() * settings.len();
     let mut points = Vec::new();
@@ -154,9 +150,8 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
 
 /// The points as CSV.
 pub fn csv(points: &[Point]) -> String {
-    let mut out = String::from(
-        "scene,method,integrator,setting,cpu_seconds,rhs_calls,steps,error,energy_error_norm,momentum_error_norm,constraint_error_norm,failure\n",
-    );
+    let mut out =
+        String::from("scene,method,integrator,setting,cpu_seconds,rhs_calls,steps,error,energy_error_norm,momentum_error_norm,constraint_error_norm,failure\n");
     for p in points {
         out += &format!(
             "{},{},{},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}\n",

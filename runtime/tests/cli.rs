@@ -10,9 +10,9 @@ fn compare(args: &[&str]) -> std::process::Output {
 fn json_records_carry_the_documented_fields() {
     let out = compare(&["satellite_boom", "--repeats", "1", "--json", "-"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8_lossy(&out.stdout);
-    let json_start = text.find('[').unwrap();
-    let records: serde_json::Value = serde_json::from_str(&text[json_start..]).unwrap();
+    // stdout is the JSON alone; the table went to stderr.
+    let records: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
     let records = records.as_array().unwrap();
     assert_eq!(records.len(), 4);
     for r in records {
@@ -58,10 +58,7 @@ fn bad_arguments_are_refused_with_the_reason() {
 #[test]
 fn the_sweep_writes_its_table_and_diagram_and_shows_progress() {
     let dir = std::env::temp_dir().join(format!("sweep-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_sweep"))
-        .args(["satellite_boom", "--quick", "--repeats", "1", "--out", dir.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_sweep")).args(["satellite_boom", "--quick", "--repeats", "1", "--out", dir.to_str().unwrap()]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stderr).contains("[ 35/36]"), "progress on stderr");
     let csv = std::fs::read_to_string(dir.join("satellite_boom_work_precision.csv")).unwrap();
@@ -69,11 +66,7 @@ fn the_sweep_writes_its_table_and_diagram_and_shows_progress() {
     // 4 formulations x (3 DOPRI5 + 3 DOP853 + 3 RK4) settings.
     assert_eq!(rows.len(), 36);
     // Tighter tolerance, smaller error against the reference (DOP853, reduced Volterra).
-    let errors: Vec<f64> = rows
-        .iter()
-        .filter(|r| r[1] == "reduced_volterra" && r[2] == "DOP853")
-        .map(|r| r[7].parse().unwrap())
-        .collect();
+    let errors: Vec<f64> = rows.iter().filter(|r| r[1] == "reduced_volterra" && r[2] == "DOP853").map(|r| r[7].parse().unwrap()).collect();
     assert_eq!(errors.len(), 3);
     assert!(errors[0] > errors[1] && errors[1] > errors[2], "{errors:?}");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("satellite_boom_work_precision.json")).unwrap()).unwrap();
@@ -96,9 +89,7 @@ fn user_model(tag: &str) -> std::path::PathBuf {
 fn a_model_file_of_the_user_s_own_is_compared_from_compiled_code_and_cached_by_content() {
     let dir = user_model("compare");
     let model = dir.join("my_model.ron");
-    let run = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_compare")).arg(&model).args(["--repeats", "1"]).args(extra).current_dir(&dir).output().unwrap()
-    };
+    let run = |extra: &[&str]| Command::new(env!("CARGO_BIN_EXE_compare")).arg(&model).args(["--repeats", "1"]).args(extra).current_dir(&dir).output().unwrap();
     let out = run(&["--json", "out.json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let table = String::from_utf8_lossy(&out.stdout);
@@ -125,8 +116,7 @@ fn a_model_file_of_the_user_s_own_is_compared_from_compiled_code_and_cached_by_c
     let changed = run(&["--json", "-", "--formulations", "kane"]);
     assert!(changed.status.success(), "{}", String::from_utf8_lossy(&changed.stderr));
     assert!(String::from_utf8_lossy(&changed.stderr).contains("compiling"));
-    let stdout = String::from_utf8_lossy(&changed.stdout);
-    let heavy: serde_json::Value = serde_json::from_str(&stdout[stdout.find('[').unwrap()..]).unwrap();
+    let heavy: serde_json::Value = serde_json::from_slice(&changed.stdout).unwrap();
     assert_ne!(heavy[0]["energy_error_norm"], records[2]["energy_error_norm"], "a heavier trolley is a different run");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -71,8 +71,7 @@ impl Emitter<'_> {
     /// The factors of the elimination's pivots that vary with the state: checked at runtime.
     fn runtime_factors(&mut self, f: &Equations) -> Vec<Expr> {
         let model = self.model;
-        let varying: BTreeSet<Symbol> =
-            model.coordinates.iter().chain(&f.speeds).chain(&f.momenta).chain([&model.t]).copied().collect();
+        let varying: BTreeSet<Symbol> = model.coordinates.iter().chain(&f.speeds).chain(&f.momenta).chain([&model.t]).copied().collect();
         let mut out: Vec<Expr> = Vec::new();
         for s in &f.singular {
             let p = self.prep.prepare(*s);
@@ -181,10 +180,12 @@ impl Emitter<'_> {
         let mut values = vec![quote!(qdot: [#(#qd_out),*]), quote!(matrix: [#(#rows),*]), quote!(force: [#(#force_out),*])];
         // The speeds' rates from the solution x (in `force` after the solve).
         let speed_values: Vec<TokenStream> = match &f.post {
-            None => (0..n_speeds).map(|k| {
-                let l = usize_lit(k);
-                quote!(force[#l])
-            }).collect(),
+            None => (0..n_speeds)
+                .map(|k| {
+                    let l = usize_lit(k);
+                    quote!(force[#l])
+                })
+                .collect(),
             Some((w, _)) => {
                 let (rw, cw) = (w.rows, w.cols);
                 let w_out = take(rw * cw);
@@ -198,10 +199,12 @@ impl Emitter<'_> {
                 (0..rw)
                     .map(|j| {
                         let jl = usize_lit(j);
-                        let terms: Vec<TokenStream> = (0..cw).map(|k| {
-                            let kl = usize_lit(k);
-                            quote!(w[#jl][#kl] * force[#kl])
-                        }).collect();
+                        let terms: Vec<TokenStream> = (0..cw)
+                            .map(|k| {
+                                let kl = usize_lit(k);
+                                quote!(w[#jl][#kl] * force[#kl])
+                            })
+                            .collect();
                         quote!(#(#terms +)* c[#jl])
                     })
                     .collect()
@@ -222,7 +225,9 @@ impl Emitter<'_> {
         let conditions: Vec<String> = checks
             .iter()
             .enumerate()
-            .map(|(k, c)| if c.tree_size() <= MAX_CONDITION_TREE { format!("{c} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) })
+            .map(|(k, c)| {
+                if c.tree_size() <= MAX_CONDITION_TREE { format!("{c} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) }
+            })
             .collect();
         let stabilized = match &f.stabilization {
             None => TokenStream::new(),
@@ -329,9 +334,8 @@ impl Emitter<'_> {
         let u = &f.speeds_from_qdot;
         let g = momenta(mech, &d.ignorable, &model.velocities);
         let residuals = mech.velocity_residuals(&model.velocities);
-        let bounds: Vec<Expr> = (0..mech.r)
-            .map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * model.velocities[j].expr()))) + magnitude(mech.b[i]))
-            .collect();
+        let bounds: Vec<Expr> =
+            (0..mech.r).map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * model.velocities[j].expr()))) + magnitude(mech.b[i])).collect();
         let positions: Vec<Expr> = mech.holonomic.iter().map(|(_, e)| *e).collect();
         let pos_bounds: Vec<Expr> = positions.iter().map(|e| magnitude(*e)).collect();
         let mut outputs = u.clone();

@@ -24,9 +24,9 @@ pub mod optimize;
 pub mod prepare;
 pub mod seam;
 
-pub use builder::{BuildError, Builder, Built};
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
 use crate::model::{Model, ModelError};
+pub use builder::{BuildError, Builder, Built};
 use ops::OpCount;
 use std::fmt;
 use std::time::Duration;
@@ -172,4 +172,3 @@ impl fmt::Display for Summary {
 pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
     module::generate(model, options)
 }
-

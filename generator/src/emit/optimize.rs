@@ -68,10 +68,7 @@ fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
             if !factors.iter().any(|(b, e)| *b == base && e.is_integer() && e.is_negative() == negative && !e.is_zero()) {
                 continue;
             }
-            let here: HashMap<(Expr, bool), i64> = factors
-                .iter()
-                .filter_map(|(b, e)| e.to_i64().filter(|n| *n != 0).map(|n| ((*b, n < 0), n.abs())))
-                .collect();
+            let here: HashMap<(Expr, bool), i64> = factors.iter().filter_map(|(b, e)| e.to_i64().filter(|n| *n != 0).map(|n| ((*b, n < 0), n.abs()))).collect();
             common = Some(match common {
                 None => here,
                 Some(c) => c.into_iter().filter_map(|(k, n)| here.get(&k).map(|m| (k, n.min(*m)))).collect(),
@@ -134,9 +131,7 @@ pub fn factor_sums_with(outputs: &[Expr], memo: &mut HashMap<Expr, Expr>) -> Vec
         }
         let rebuilt = e.map_children(|c| memo[&c]);
         let r = match &*rebuilt.node() {
-            Node::Add { constant, terms } if terms.len() >= 2 => {
-                horner(constant.clone(), terms.iter().map(|(t, c)| as_term(*t, c)).collect())
-            }
+            Node::Add { constant, terms } if terms.len() >= 2 => horner(constant.clone(), terms.iter().map(|(t, c)| as_term(*t, c)).collect()),
             _ => rebuilt,
         };
         memo.insert(e, r);
@@ -166,11 +161,7 @@ pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
                     .iter()
                     .map(|(b, ex)| {
                         let nb = memo[b];
-                        if ex.is_negative() && ex.is_integer() && uses[b] >= 2 {
-                            (Expr::apply_named(recip, nb), -ex)
-                        } else {
-                            (nb, ex.clone())
-                        }
+                        if ex.is_negative() && ex.is_integer() && uses[b] >= 2 { (Expr::apply_named(recip, nb), -ex) } else { (nb, ex.clone()) }
                     })
                     .collect();
                 Expr::make_mul(coefficient.clone(), f)
@@ -252,7 +243,7 @@ mod tests {
         for (s, v) in [("a", 0.3), ("b", -1.7), ("x", 2.5), ("y", 0.9)] {
             env.set(Symbol::new(s), v);
         }
-        env.define(reciprocal_symbol(), Symbol::new("arg"), Symbol::new("arg").expr().recip());
+        env.define(reciprocal_symbol(), Symbol::internal("arg"), Symbol::internal("arg").expr().recip());
         let want = e.eval(&env).unwrap();
         let f = factor_sums(&[e]);
         let g = share_reciprocals(&f);

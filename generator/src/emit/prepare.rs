@@ -64,4 +64,3 @@ impl Preparer {
         items.iter().map(|e| self.prepare(*e)).collect()
     }
 }
-

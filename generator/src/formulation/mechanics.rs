@@ -135,8 +135,7 @@ impl Translation {
         // formally, where only the rotation's identities cancel them; but the acceleration is
         // R^T times the world's, so a rate absent from the world acceleration is absent from it
         // too, and is set to zero (exact, no test needed).
-        let absent: HashMap<Symbol, Expr> =
-            rates.iter().filter(|r| !world_accel.iter().any(|e| e.contains(**r))).map(|r| (*r, Expr::zero())).collect();
+        let absent: HashMap<Symbol, Expr> = rates.iter().filter(|r| !world_accel.iter().any(|e| e.contains(**r))).map(|r| (*r, Expr::zero())).collect();
         let transport = if absent.is_empty() { transport } else { transport.map(|e| tidy.of(e.subs(&absent))) };
         let (pb, pw) = (partials(&vb), partials(&vw));
         if ops(&pb, &transport) < ops(&pw, &world_accel) {
@@ -382,25 +381,7 @@ pub fn derive(model: &Model) -> Mechanics {
         }
         b.push(tidy.of(bias));
     }
-    Mechanics {
-        m,
-        r,
-        p: m - r,
-        bodies,
-        kinetic,
-        potential,
-        mass,
-        n,
-        t0,
-        q_forces,
-        potential_gradient,
-        inertial,
-        a,
-        b,
-        holonomic,
-        constraint_names,
-        tidy,
-    }
+    Mechanics { m, r, p: m - r, bodies, kinetic, potential, mass, n, t0, q_forces, potential_gradient, inertial, a, b, holonomic, constraint_names, tidy }
 }
 
 fn spring_length(model: &Model, tidy: &Tidy, a: &(usize, [Expr; 3]), b: &(usize, [Expr; 3])) -> Expr {
@@ -432,9 +413,7 @@ impl Mechanics {
 
     /// The residuals `a q' + b` of the kinematic constraints, one per constraint.
     pub fn velocity_residuals(&self, velocities: &[Symbol]) -> Vec<Expr> {
-        (0..self.r)
-            .map(|i| Expr::sum((0..self.m).map(|j| self.a.get(i, j) * velocities[j].expr())) + self.b[i])
-            .collect()
+        (0..self.r).map(|i| Expr::sum((0..self.m).map(|j| self.a.get(i, j) * velocities[j].expr())) + self.b[i]).collect()
     }
 
     /// `f = Q - dV/dq - h`: everything in Lagrange's equations but `M q''` and the constraint

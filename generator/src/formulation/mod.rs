@@ -113,14 +113,8 @@ pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError
         _ => None,
     };
     stage("reduced", &mut stages);
-    let shared = Shared {
-        model,
-        mech: &mech,
-        ignorable: &chosen,
-        kane: kane.as_ref(),
-        reduced: reduced.as_ref(),
-        integrate_ignorable: request.integrate_ignorable,
-    };
+    let shared =
+        Shared { model, mech: &mech, ignorable: &chosen, kane: kane.as_ref(), reduced: reduced.as_ref(), integrate_ignorable: request.integrate_ignorable };
     let methods: [(FormulationDef, &dyn Method); 4] = [
         (FormulationDef::Lagrange, &lagrange::Lagrange),
         (FormulationDef::Maggi, &maggi::Maggi),

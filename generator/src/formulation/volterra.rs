@@ -91,12 +91,12 @@ const MAX_DETERMINANT_SIZE: usize = 10;
 
 /// Name of the `G` symbol of an ignorable coordinate.
 pub fn momentum_symbol(model: &Model, j: usize) -> Symbol {
-    Symbol::new(&format!("G_{}", model.coordinates[j].name()))
+    Symbol::internal(&format!("G_{}", model.coordinates[j].name()))
 }
 
 /// Name of the j-th quasi-velocity symbol.
 pub fn quasi_symbol(k: usize) -> Symbol {
-    Symbol::new(&format!("u{}", k + 1))
+    Symbol::internal(&format!("u{}", k + 1))
 }
 
 /// `Y` and `Z` of `u = Y q' + Z` (Eq. 42).
@@ -181,7 +181,8 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         let coupled = Expr::sum(map.iter().zip(&u).map(|(&r, uk)| mk.get(rates[a], r) * uk.expr()));
         rhs.set(a, 0, tidy.of(g[a].expr() - n - coupled));
     }
-    let opts = SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    let opts =
+        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
     let v_i = solve(&m_ii, &rhs, &opts).ok()?;
     // Kane's quasi-velocities in the reduced ones: u_N renamed, v_I from the momenta.
     let mut sigma: HashMap<Symbol, Expr> = HashMap::new();
@@ -347,9 +348,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         x.push(tidy.of(sol.x.get(i, n_u)));
     }
     let u: Vec<Symbol> = (0..n_u).map(quasi_symbol).collect();
-    let qdot: Vec<Expr> = (0..m)
-        .map(|i| tidy.of(Expr::sum((0..n_u).filter(|&k| !w.get(i, k).is_zero()).map(|k| w.get(i, k) * u[k].expr())) + x[i]))
-        .collect();
+    let qdot: Vec<Expr> = (0..m).map(|i| tidy.of(Expr::sum((0..n_u).filter(|&k| !w.get(i, k).is_zero()).map(|k| w.get(i, k) * u[k].expr())) + x[i])).collect();
     // c = d/dt(W u + X) along the motion, u and G constant.
     let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(qdot.iter().copied()).collect());
     let drift: Vec<Expr> = qdot.iter().map(|e| tidy.of(chain.dt(*e))).collect();
@@ -364,11 +363,7 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // cancels the rate transformation body by body; the smaller is kept (both are exact).
     let rates_only = y.data.iter().all(|e| e.as_num().is_some());
     let by_bodies = !rates_only && m <= MAX_BODY_ROUTE_COORDINATES;
-    let (mass_ni, inertia_ni) = if by_bodies {
-        inertia_by_bodies(model, mech, &u, &qdot, &chain)
-    } else {
-        inertia_by_coordinates(mech, &w, &drift, &to_u)
-    };
+    let (mass_ni, inertia_ni) = if by_bodies { inertia_by_bodies(model, mech, &u, &qdot, &chain) } else { inertia_by_coordinates(mech, &w, &drift, &to_u) };
     let route = if by_bodies {
         "symbolic elimination of [Y; M'; a]; M_NI and L_NI from the bodies' velocities in u"
     } else {

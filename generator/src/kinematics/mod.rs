@@ -82,11 +82,7 @@ impl TimeChain {
 /// `a x b`.
 pub fn cross(a: &[Expr; 3], b: &[Expr; 3]) -> [Expr; 3] {
     let term = |x: Expr, y: Expr| if x.is_zero() || y.is_zero() { Expr::zero() } else { x * y };
-    [
-        term(a[1], b[2]) - term(a[2], b[1]),
-        term(a[2], b[0]) - term(a[0], b[2]),
-        term(a[0], b[1]) - term(a[1], b[0]),
-    ]
+    [term(a[1], b[2]) - term(a[2], b[1]), term(a[2], b[0]) - term(a[0], b[2]), term(a[0], b[1]) - term(a[1], b[0])]
 }
 
 /// `a . b`.
@@ -148,13 +144,7 @@ impl FrameKinematics {
         }
         // v_child = R_pc^T (v_parent + omega_parent x t + t').
         let moving = add3(&add3(&self.velocity, &cross(&self.omega, translation)), &chain.dt3(translation));
-        FrameKinematics {
-            name: name.to_string(),
-            origin,
-            rotation: self.rotation.mul(&r_pc),
-            omega,
-            velocity: mat_vec(&r_cp, &moving),
-        }
+        FrameKinematics { name: name.to_string(), origin, rotation: self.rotation.mul(&r_pc), omega, velocity: mat_vec(&r_cp, &moving) }
     }
 
     /// World position of a point with coordinates `p` in this frame.
@@ -196,18 +186,9 @@ mod tests {
         let qd: Vec<Expr> = names.iter().map(|n| Expr::sym(&format!("{n}'"))).collect();
         let chain = TimeChain::new(Symbol::new("t"), q.iter().copied().zip(qd.iter().copied()).collect());
         let z = [Expr::zero(), Expr::zero(), Expr::zero()];
-        let f = FrameKinematics::world().child(
-            "m",
-            &z,
-            &[(Axis::Z, q[0].expr()), (Axis::Y, q[1].expr()), (Axis::X, q[2].expr())],
-            &chain,
-        );
+        let f = FrameKinematics::world().child("m", &z, &[(Axis::Z, q[0].expr()), (Axis::Y, q[1].expr()), (Axis::X, q[2].expr())], &chain);
         let (th, ph) = (q[1].expr(), q[2].expr());
-        let expected = [
-            qd[2] - th.sin() * qd[0],
-            ph.cos() * qd[1] + ph.sin() * th.cos() * qd[0],
-            -ph.sin() * qd[1] + ph.cos() * th.cos() * qd[0],
-        ];
+        let expected = [qd[2] - th.sin() * qd[0], ph.cos() * qd[1] + ph.sin() * th.cos() * qd[0], -ph.sin() * qd[1] + ph.cos() * th.cos() * qd[0]];
         for k in 0..3 {
             assert!(zero_test(f.omega[k] - expected[k]).is_zero(), "omega[{k}] = {}", f.omega[k]);
         }

@@ -46,11 +46,7 @@ pub fn n_link_pendulum_on_cart(n: usize) -> ModelBuilder {
     let rates: Vec<String> = (0..=n).map(|i| format!("q{i}'")).collect();
     let q0: Vec<(String, String)> = (0..=n).map(|i| (format!("q{i}"), if i == 0 { "0".into() } else { format!("{}", 0.1 * i as f64) })).collect();
     let qd0: Vec<(String, String)> = (0..=n).map(|i| (format!("q{i}"), if i == 0 { "0.2".into() } else { "0".into() })).collect();
-    b.gravity(["0", "-g", "0"])
-        .quasi_velocities(rates.clone(), rates[1..].to_vec())
-        .ignorable(["q0"])
-        .initial(q0, qd0)
-        .simulation(10.0, 0.01)
+    b.gravity(["0", "-g", "0"]).quasi_velocities(rates.clone(), rates[1..].to_vec()).ignorable(["q0"]).initial(q0, qd0).simulation(10.0, 0.01)
 }
 
 /// A spatial chain on a floating base: a rigid base (ZYX angles `psi, theta, phi`, centre of
@@ -61,8 +57,7 @@ pub fn n_link_pendulum_on_cart(n: usize) -> ModelBuilder {
 /// `X, Y, Z` are ignorable (s = 3). The quasi-velocities are scene 2's: the base's body-frame
 /// angular velocity, the joint rates, and the translation rates.
 pub fn floating_chain(n: usize) -> ModelBuilder {
-    let mut b = ModelBuilder::new(format!("floating_chain_{n}"))
-        .description(format!("spatial {n}-link chain on a floating base (z and y joints alternating)"));
+    let mut b = ModelBuilder::new(format!("floating_chain_{n}")).description(format!("spatial {n}-link chain on a floating base (z and y joints alternating)"));
     for (name, value) in [("mb", 10.0), ("Ibx", 1.2), ("Iby", 1.5), ("Ibz", 1.8), ("h", 0.5), ("m", 1.0), ("L", 0.8), ("J1", 0.01), ("J2", 0.06)] {
         b = b.parameter(name, value);
     }

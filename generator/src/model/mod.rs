@@ -135,14 +135,7 @@ impl Model {
 
     /// An error located at `needle` in the file.
     pub fn error(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: String) -> ModelError {
-        ModelError {
-            kind,
-            file: self.file.clone(),
-            location: error::locate(&self.source, needle, None),
-            place: place.to_string(),
-            message,
-            help,
-        }
+        ModelError { kind, file: self.file.clone(), location: error::locate(&self.source, needle, None), place: place.to_string(), message, help }
     }
 }
 
@@ -279,9 +272,7 @@ impl Resolver for ScopedResolver<'_, '_> {
                 format!("`{body}` is not a body (bodies: {})", known.join(", "))
             });
         }
-        Err(format!(
-            "unknown function `{name}` (functions: sin, cos, tan, exp, ln, sqrt, abs, omega_x/y/z(body), and the model's time functions)"
-        ))
+        Err(format!("unknown function `{name}` (functions: sin, cos, tan, exp, ln, sqrt, abs, omega_x/y/z(body), and the model's time functions)"))
     }
 }
 
@@ -325,11 +316,8 @@ impl<'a> Builder<'a> {
             help: "expressions use + - * / ^, parentheses, numbers, names, calls like sin(x), and q' for a rate".into(),
         })?;
         parse::lower(&ast, &ScopedResolver { b: self, scope }).map_err(|e| {
-            let kind = if e.message.starts_with("unknown") || e.message.contains("is not a body") {
-                ErrorKind::UnknownName
-            } else {
-                ErrorKind::ExpressionSyntax
-            };
+            let kind =
+                if e.message.starts_with("unknown") || e.message.contains("is not a body") { ErrorKind::UnknownName } else { ErrorKind::ExpressionSyntax };
             ModelError {
                 kind,
                 file: self.file.to_string(),
@@ -363,8 +351,7 @@ impl<'a> Builder<'a> {
     }
 
     fn check_name(&self, seen: &mut HashSet<String>, name: &str, place: &str, what: &str) -> Result<(), ModelError> {
-        let valid = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
-            && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        let valid = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
         if !valid {
             return Err(self.err(
                 ErrorKind::BadValue,
@@ -388,8 +375,7 @@ impl<'a> Builder<'a> {
 
     fn build(mut self) -> Result<Model, ModelError> {
         let def = self.def.clone();
-        let valid_name = def.name.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
-            && def.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+        let valid_name = def.name.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) && def.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
         if !valid_name {
             return Err(self.err(
                 ErrorKind::BadValue,
@@ -419,7 +405,13 @@ impl<'a> Builder<'a> {
             parameters.push((s, *value));
         }
         if def.coordinates.is_empty() {
-            return Err(self.err(ErrorKind::Dimension, "coordinates", "coordinates", "the model has no coordinates".into(), "list the generalized coordinates, as in coordinates: [\"theta1\", \"x\"]"));
+            return Err(self.err(
+                ErrorKind::Dimension,
+                "coordinates",
+                "coordinates",
+                "the model has no coordinates".into(),
+                "list the generalized coordinates, as in coordinates: [\"theta1\", \"x\"]",
+            ));
         }
         let mut coordinates = Vec::new();
         for (i, name) in def.coordinates.iter().enumerate() {
@@ -439,7 +431,13 @@ impl<'a> Builder<'a> {
         for (name, src) in &def.time_functions {
             let e = self.expr(src, &format!("time_functions.{name}"), Scope::Position)?;
             if e.free_symbols().iter().any(|s| coordinates.contains(s)) {
-                return Err(self.err(ErrorKind::BadValue, &format!("time_functions.{name}"), &format!("\"{src}\""), format!("time function `{name}` depends on a coordinate"), "a time function may use only `t` and parameters; put state-dependent forces under `forces`"));
+                return Err(self.err(
+                    ErrorKind::BadValue,
+                    &format!("time_functions.{name}"),
+                    &format!("\"{src}\""),
+                    format!("time function `{name}` depends on a coordinate"),
+                    "a time function may use only `t` and parameters; put state-dependent forces under `forces`",
+                ));
             }
             time_functions.push((self.time_fns[name], e));
         }
@@ -460,13 +458,25 @@ impl<'a> Builder<'a> {
             let place = format!("bodies[{i}] ({})", b.name);
             self.check_name(&mut body_names, &b.name, &place, "body")?;
             let frame = frame_index(&b.frame).ok_or_else(|| {
-                self.err(ErrorKind::UnknownFrame, &format!("{place}.frame"), &format!("\"{}\"", b.frame), format!("body `{}` is on frame `{}`, which is not defined", b.name, b.frame), "define the frame under `frames` or use `world`")
+                self.err(
+                    ErrorKind::UnknownFrame,
+                    &format!("{place}.frame"),
+                    &format!("\"{}\"", b.frame),
+                    format!("body `{}` is on frame `{}`, which is not defined", b.name, b.frame),
+                    "define the frame under `frames` or use `world`",
+                )
             })?;
             let mass = self.expr(&b.mass, &format!("{place}.mass"), Scope::Parameters)?;
             let env = self.param_env(&parameters);
             let mv = mass.eval(&env).unwrap_or(f64::NAN);
             if mv.is_nan() || mv <= 0.0 {
-                return Err(self.err(ErrorKind::NonPositiveMass, &format!("{place}.mass"), &format!("\"{}\"", b.mass), format!("body `{}` has mass {} = {mv}, which is not positive", b.name, b.mass), "give every body a positive mass; model a massless point as a frame, not a body"));
+                return Err(self.err(
+                    ErrorKind::NonPositiveMass,
+                    &format!("{place}.mass"),
+                    &format!("\"{}\"", b.mass),
+                    format!("body `{}` has mass {} = {mv}, which is not positive", b.name, b.mass),
+                    "give every body a positive mass; model a massless point as a frame, not a body",
+                ));
             }
             let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
             let com = self.vec3(b.com.as_ref().unwrap_or(&zero()), &format!("{place}.com"), Scope::Position)?;
@@ -491,7 +501,13 @@ impl<'a> Builder<'a> {
                         for w in &velocities {
                             let d2 = d1.diff(*w);
                             if !crate::symbolic::zero::zero_test(d2).is_zero() {
-                                return Err(self.err(ErrorKind::NonlinearConstraint, &place, &format!("\"{expr}\""), format!("constraint `{name}` is not linear in the velocities: d²/d{}d{} = {d2}", v.name(), w.name()), "write velocity constraints as a(q,t)*q' + b(q,t) = 0"));
+                                return Err(self.err(
+                                    ErrorKind::NonlinearConstraint,
+                                    &place,
+                                    &format!("\"{expr}\""),
+                                    format!("constraint `{name}` is not linear in the velocities: d²/d{}d{} = {d2}", v.name(), w.name()),
+                                    "write velocity constraints as a(q,t)*q' + b(q,t) = 0",
+                                ));
                             }
                         }
                     }
@@ -511,7 +527,13 @@ impl<'a> Builder<'a> {
             });
         }
         if constraints.len() >= coordinates.len() {
-            return Err(self.err(ErrorKind::Dimension, "constraints", "constraints", format!("{} constraints on {} coordinates leave no freedom", constraints.len(), coordinates.len()), "remove constraints or add coordinates"));
+            return Err(self.err(
+                ErrorKind::Dimension,
+                "constraints",
+                "constraints",
+                format!("{} constraints on {} coordinates leave no freedom", constraints.len(), coordinates.len()),
+                "remove constraints or add coordinates",
+            ));
         }
 
         // Forces.
@@ -529,7 +551,13 @@ impl<'a> Builder<'a> {
                 let mut idx = Vec::new();
                 for (k, n) in list.iter().enumerate() {
                     let i = def.coordinates.iter().position(|c| c == n).ok_or_else(|| {
-                        self.err(ErrorKind::UnknownName, &format!("ignorable[{k}]"), &format!("\"{n}\""), format!("`{n}` is declared ignorable but is not a coordinate"), "declare only coordinates as ignorable")
+                        self.err(
+                            ErrorKind::UnknownName,
+                            &format!("ignorable[{k}]"),
+                            &format!("\"{n}\""),
+                            format!("`{n}` is declared ignorable but is not a coordinate"),
+                            "declare only coordinates as ignorable",
+                        )
                     })?;
                     idx.push(i);
                 }
@@ -546,7 +574,13 @@ impl<'a> Builder<'a> {
         for (k, u) in quasi_full.iter().chain(&quasi_reduced).enumerate() {
             for v in &velocities {
                 if u.diff(*v).free_symbols().iter().any(|s| velocities.contains(s)) {
-                    return Err(self.err(ErrorKind::NonlinearConstraint, "quasi_velocities", "quasi_velocities", format!("quasi-velocity {k} is not linear in the velocities"), "quasi-velocities are u = Y(q,t) q' + Z(q,t)"));
+                    return Err(self.err(
+                        ErrorKind::NonlinearConstraint,
+                        "quasi_velocities",
+                        "quasi_velocities",
+                        format!("quasi-velocity {k} is not linear in the velocities"),
+                        "quasi-velocities are u = Y(q,t) q' + Z(q,t)",
+                    ));
                 }
             }
         }
@@ -561,7 +595,13 @@ impl<'a> Builder<'a> {
         if let Some(sim) = &def.simulation
             && !(sim.t_start.is_finite() && sim.t_end.is_finite() && sim.t_end > sim.t_start && sim.dt_out > 0.0 && sim.dt_out.is_finite())
         {
-            return Err(self.err(ErrorKind::BadValue, "simulation", "simulation", format!("simulation from {} to {} every {} is not a run", sim.t_start, sim.t_end, sim.dt_out), "use t_end > t_start and dt_out > 0"));
+            return Err(self.err(
+                ErrorKind::BadValue,
+                "simulation",
+                "simulation",
+                format!("simulation from {} to {} every {} is not a run", sim.t_start, sim.t_end, sim.dt_out),
+                "use t_end > t_start and dt_out > 0",
+            ));
         }
         Ok(Model {
             file: self.file.to_string(),
@@ -684,7 +724,13 @@ impl<'a> Builder<'a> {
                 let f = &def.frames[i];
                 let Some(parent) = done.iter().find(|d| d.name == f.parent).cloned() else {
                     if !def.frames.iter().any(|g| g.name == f.parent) {
-                        return Err(self.err(ErrorKind::UnknownFrame, &format!("frames[{i}] ({}).parent", f.name), &format!("\"{}\"", f.parent), format!("frame `{}` has parent `{}`, which is not defined", f.name, f.parent), "use `world` or the name of another frame"));
+                        return Err(self.err(
+                            ErrorKind::UnknownFrame,
+                            &format!("frames[{i}] ({}).parent", f.name),
+                            &format!("\"{}\"", f.parent),
+                            format!("frame `{}` has parent `{}`, which is not defined", f.name, f.parent),
+                            "use `world` or the name of another frame",
+                        ));
                     }
                     still.push(i);
                     continue;
@@ -710,7 +756,13 @@ impl<'a> Builder<'a> {
             }
             if still.len() == before {
                 let names: Vec<&str> = still.iter().map(|i| def.frames[*i].name.as_str()).collect();
-                return Err(self.err(ErrorKind::FrameCycle, "frames", &format!("\"{}\"", names[0]), format!("the frames {} form a cycle (each is an ancestor of itself)", names.join(", ")), "every chain of parents must end at `world`"));
+                return Err(self.err(
+                    ErrorKind::FrameCycle,
+                    "frames",
+                    &format!("\"{}\"", names[0]),
+                    format!("the frames {} form a cycle (each is an ancestor of itself)", names.join(", ")),
+                    "every chain of parents must end at `world`",
+                ));
             }
             pending = still;
         }
@@ -734,7 +786,13 @@ impl<'a> Builder<'a> {
             }
             InertiaDef::Matrix(rows) => {
                 if rows.len() != 3 || rows.iter().any(|r| r.len() != 3) {
-                    return Err(self.err(ErrorKind::Dimension, &p, "Matrix", format!("an inertia matrix is 3x3, found {} rows of lengths {:?}", rows.len(), rows.iter().map(Vec::len).collect::<Vec<_>>()), "give three rows of three entries"));
+                    return Err(self.err(
+                        ErrorKind::Dimension,
+                        &p,
+                        "Matrix",
+                        format!("an inertia matrix is 3x3, found {} rows of lengths {:?}", rows.len(), rows.iter().map(Vec::len).collect::<Vec<_>>()),
+                        "give three rows of three entries",
+                    ));
                 }
                 let mut out = Vec::new();
                 for (i, r) in rows.iter().enumerate() {
@@ -748,7 +806,13 @@ impl<'a> Builder<'a> {
         let min_eig = min_eigenvalue_sym3(&vals);
         let scale = vals.iter().map(|v| v.abs()).fold(0.0, f64::max);
         if !sym || vals.iter().any(|v| !v.is_finite()) || min_eig < -1e-12 * scale.max(1e-300) {
-            return Err(self.err(ErrorKind::InertiaNotPsd, &p, "inertia", format!("the inertia of {place} is not symmetric positive semi-definite (smallest eigenvalue {min_eig:.3e}, symmetric: {sym})"), "check the values and the sign convention: Products(...) takes the paper's Eq. (75) form, [[Ixx, -Ixy, -Ixz], ...]"));
+            return Err(self.err(
+                ErrorKind::InertiaNotPsd,
+                &p,
+                "inertia",
+                format!("the inertia of {place} is not symmetric positive semi-definite (smallest eigenvalue {min_eig:.3e}, symmetric: {sym})"),
+                "check the values and the sign convention: Products(...) takes the paper's Eq. (75) form, [[Ixx, -Ixy, -Ixz], ...]",
+            ));
         }
         Ok(Some(m))
     }
@@ -756,7 +820,13 @@ impl<'a> Builder<'a> {
     fn force(&self, f: &ForceDef, i: usize, frames: &[FrameKinematics], bodies: &[Body], coords: &[Symbol]) -> Result<Force, ModelError> {
         let frame = |name: &str, place: &str| {
             frames.iter().position(|f| f.name == name).ok_or_else(|| {
-                self.err(ErrorKind::UnknownFrame, place, &format!("\"{name}\""), format!("frame `{name}` is not defined"), "use `world` or a frame defined under `frames`")
+                self.err(
+                    ErrorKind::UnknownFrame,
+                    place,
+                    &format!("\"{name}\""),
+                    format!("frame `{name}` is not defined"),
+                    "use `world` or a frame defined under `frames`",
+                )
             })
         };
         // A point fixed in a frame, the end `end` of a spring or damper.
@@ -776,7 +846,13 @@ impl<'a> Builder<'a> {
             ForceDef::Torque { name, body, torque } => {
                 let place = format!("forces[{i}] ({name})");
                 let bi = bodies.iter().position(|b| &b.name == body).ok_or_else(|| {
-                    self.err(ErrorKind::UnknownFrame, &format!("{place}.body"), &format!("\"{body}\""), format!("body `{body}` is not defined"), "name a body defined under `bodies`")
+                    self.err(
+                        ErrorKind::UnknownFrame,
+                        &format!("{place}.body"),
+                        &format!("\"{body}\""),
+                        format!("body `{body}` is not defined"),
+                        "name a body defined under `bodies`",
+                    )
                 })?;
                 Force::Torque { name: name.clone(), body: bi, torque: self.vec3(torque, &format!("{place}.torque"), Scope::Velocity)? }
             }
@@ -794,25 +870,28 @@ impl<'a> Builder<'a> {
             ForceDef::Damper { name, frame_a, point_a, frame_b, point_b, damping } => {
                 let place = format!("forces[{i}] ({name})");
                 let (a, b) = (attach(frame_a, point_a, "a", &place)?, attach(frame_b, point_b, "b", &place)?);
-                Force::Damper {
-                    name: name.clone(),
-                    a,
-                    b,
-                    damping: self.expr(damping, &format!("{place}.damping"), Scope::Parameters)?,
-                }
+                Force::Damper { name: name.clone(), a, b, damping: self.expr(damping, &format!("{place}.damping"), Scope::Parameters)? }
             }
             ForceDef::Generalized { name, components } => {
                 let place = format!("forces[{i}] ({name})");
                 let mut v = vec![Expr::zero(); coords.len()];
                 for (c, src) in components {
                     let k = self.coords.iter().position(|x| x == c).ok_or_else(|| {
-                        self.err(ErrorKind::UnknownName, &format!("{place}.components"), &format!("\"{c}\""), format!("`{c}` is not a coordinate"), "key generalized forces by coordinate name")
+                        self.err(
+                            ErrorKind::UnknownName,
+                            &format!("{place}.components"),
+                            &format!("\"{c}\""),
+                            format!("`{c}` is not a coordinate"),
+                            "key generalized forces by coordinate name",
+                        )
                     })?;
                     v[k] = v[k] + self.expr(src, &format!("{place}.components.{c}"), Scope::Velocity)?;
                 }
                 Force::Generalized { name: name.clone(), components: v }
             }
-            ForceDef::Potential { name, expr } => Force::Potential { name: name.clone(), expr: self.expr(expr, &format!("forces[{i}] ({name})"), Scope::Position)? },
+            ForceDef::Potential { name, expr } => {
+                Force::Potential { name: name.clone(), expr: self.expr(expr, &format!("forces[{i}] ({name})"), Scope::Position)? }
+            }
         })
     }
 
@@ -834,7 +913,13 @@ impl<'a> Builder<'a> {
         let mut q = Vec::new();
         for c in coords {
             let src = init.q.get(c).ok_or_else(|| {
-                self.err(ErrorKind::InitialState, "initial.q", "initial", format!("no initial value for coordinate `{c}`"), "give every coordinate an initial value under initial.q")
+                self.err(
+                    ErrorKind::InitialState,
+                    "initial.q",
+                    "initial",
+                    format!("no initial value for coordinate `{c}`"),
+                    "give every coordinate an initial value under initial.q",
+                )
             })?;
             let v = self.expr(src, &format!("initial.q.{c}"), Scope::Parameters)?.eval(&env).unwrap_or(f64::NAN);
             if !v.is_finite() {
@@ -851,7 +936,13 @@ impl<'a> Builder<'a> {
         }
         for k in init.q.keys().chain(init.qdot.keys()) {
             if !coords.contains(k) {
-                return Err(self.err(ErrorKind::UnknownName, "initial", &format!("\"{k}\""), format!("`{k}` is not a coordinate"), "key initial values by coordinate name"));
+                return Err(self.err(
+                    ErrorKind::UnknownName,
+                    "initial",
+                    &format!("\"{k}\""),
+                    format!("`{k}` is not a coordinate"),
+                    "key initial values by coordinate name",
+                ));
             }
         }
         // Velocities may refer to one another (theta2' = -cos(..)*theta1'): evaluate in order.
@@ -862,7 +953,13 @@ impl<'a> Builder<'a> {
                     continue;
                 }
                 let src = init.qdot.get(c).ok_or_else(|| {
-                    self.err(ErrorKind::InitialState, "initial.qdot", "qdot", format!("no initial velocity for coordinate `{c}`"), "give every coordinate an initial rate under initial.qdot")
+                    self.err(
+                        ErrorKind::InitialState,
+                        "initial.qdot",
+                        "qdot",
+                        format!("no initial velocity for coordinate `{c}`"),
+                        "give every coordinate an initial rate under initial.qdot",
+                    )
                 })?;
                 let e = self.expr(src, &format!("initial.qdot.{c}"), Scope::Velocity)?;
                 if let Ok(v) = e.eval(&env) {
@@ -881,7 +978,13 @@ impl<'a> Builder<'a> {
             }
         }
         if let Some(i) = qd.iter().position(|v| v.is_nan()) {
-            return Err(self.err(ErrorKind::InitialState, &format!("initial.qdot.{}", coords[i]), "qdot", format!("the initial velocity of `{}` cannot be evaluated (circular or undefined)", coords[i]), "write each initial rate in terms of parameters, coordinates and rates given before it"));
+            return Err(self.err(
+                ErrorKind::InitialState,
+                &format!("initial.qdot.{}", coords[i]),
+                "qdot",
+                format!("the initial velocity of `{}` cannot be evaluated (circular or undefined)", coords[i]),
+                "write each initial rate in terms of parameters, coordinates and rates given before it",
+            ));
         }
         Ok((q, qd))
     }

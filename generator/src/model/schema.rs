@@ -240,15 +240,7 @@ pub enum ForceDef {
     /// A torque on a body, in body-frame components.
     Torque { name: String, body: String, torque: Vec<String> },
     /// A linear spring between two points fixed in frames.
-    Spring {
-        name: String,
-        frame_a: String,
-        point_a: Vec<String>,
-        frame_b: String,
-        point_b: Vec<String>,
-        stiffness: String,
-        rest_length: String,
-    },
+    Spring { name: String, frame_a: String, point_a: Vec<String>, frame_b: String, point_b: Vec<String>, stiffness: String, rest_length: String },
     /// A linear damper between two points fixed in frames.
     Damper { name: String, frame_a: String, point_a: Vec<String>, frame_b: String, point_b: Vec<String>, damping: String },
     /// Generalized forces given directly: coordinate -> expression.

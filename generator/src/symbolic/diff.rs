@@ -28,9 +28,7 @@ impl Expr {
                     Expr::zero()
                 }
             }
-            Node::Add { terms, .. } => {
-                Expr::make_add(Rat::zero(), terms.iter().map(|(t, c)| (t.diff(x), c.clone())).collect())
-            }
+            Node::Add { terms, .. } => Expr::make_add(Rat::zero(), terms.iter().map(|(t, c)| (t.diff(x), c.clone())).collect()),
             Node::Mul { coefficient, factors } => {
                 let mut terms = Vec::new();
                 for (i, (b, e)) in factors.iter().enumerate() {
@@ -38,11 +36,8 @@ impl Expr {
                     if db.is_zero() {
                         continue;
                     }
-                    let mut fs: Vec<(Expr, Rat)> = factors
-                        .iter()
-                        .enumerate()
-                        .map(|(j, (bj, ej))| if j == i { (*bj, ej - Rat::one()) } else { (*bj, ej.clone()) })
-                        .collect();
+                    let mut fs: Vec<(Expr, Rat)> =
+                        factors.iter().enumerate().map(|(j, (bj, ej))| if j == i { (*bj, ej - Rat::one()) } else { (*bj, ej.clone()) }).collect();
                     fs.push((db, Rat::one()));
                     terms.push((Expr::make_mul(coefficient * e, fs), Rat::one()));
                 }
@@ -172,11 +167,8 @@ impl TimeDerivative {
                     if db.is_zero() {
                         continue;
                     }
-                    let mut fs: Vec<(Expr, Rat)> = factors
-                        .iter()
-                        .enumerate()
-                        .map(|(j, (bj, xj))| if j == i { (*bj, xj - Rat::one()) } else { (*bj, xj.clone()) })
-                        .collect();
+                    let mut fs: Vec<(Expr, Rat)> =
+                        factors.iter().enumerate().map(|(j, (bj, xj))| if j == i { (*bj, xj - Rat::one()) } else { (*bj, xj.clone()) }).collect();
                     fs.push((db, Rat::one()));
                     terms.push((Expr::make_mul(coefficient * x, fs), Rat::one()));
                 }

@@ -85,8 +85,7 @@ fn eval_rec(e: Expr, env: &Env, memo: &mut HashMap<Expr, f64>) -> Result<f64, Ev
         Node::Fun(f, a) => f.apply(eval_rec(*a, env, memo)?),
         Node::Apply(name, a) => {
             let av = eval_rec(*a, env, memo)?;
-            let (param, body) =
-                env.functions.get(name).ok_or_else(|| EvalError::UndefinedFunction(name.name()))?;
+            let (param, body) = env.functions.get(name).ok_or_else(|| EvalError::UndefinedFunction(name.name()))?;
             let mut inner = env.clone();
             inner.set(*param, av);
             body.eval(&inner)?

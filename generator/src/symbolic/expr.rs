@@ -268,12 +268,9 @@ impl Pool {
                 (h, mask, size, depth + 1)
             }
             Node::Fun(f, a) => (mix(mix(5, *f as u64), k(a)), m(a), s(a).saturating_add(1), d(a) + 1),
-            Node::Apply(name, a) => (
-                mix(mix(6, hash_str(&self.names[name.0 as usize])), k(a)),
-                m(a) | (1u128 << (name.0 % 128)),
-                s(a).saturating_add(1),
-                d(a) + 1,
-            ),
+            Node::Apply(name, a) => {
+                (mix(mix(6, hash_str(&self.names[name.0 as usize])), k(a)), m(a) | (1u128 << (name.0 % 128)), s(a).saturating_add(1), d(a) + 1)
+            }
         }
     }
 
@@ -288,14 +285,38 @@ impl Pool {
     }
 }
 
+/// The mark that keeps internal symbols apart from a model's: a character no identifier has.
+const INTERNAL: char = '\u{1}';
+
 impl Symbol {
     /// Interns a symbol name.
     pub fn new(name: &str) -> Symbol {
         with_pool(|p| p.symbol(name))
     }
-    /// The symbol's name.
+    /// Interns a symbol of the generator's own (a quasi-velocity `u1`, a momentum `G_x`): it
+    /// prints as `name` but is never the symbol a model file's `name` parses to, so a
+    /// parameter called `u1` cannot alias a quasi-velocity.
+    ///
+    /// ```
+    /// use generator::symbolic::Symbol;
+    /// let internal = Symbol::internal("u1");
+    /// assert_ne!(internal, Symbol::new("u1"));
+    /// assert_eq!(internal.name(), "u1");
+    /// assert_eq!(internal, Symbol::internal("u1"));
+    /// ```
+    pub fn internal(name: &str) -> Symbol {
+        with_pool(|p| p.symbol(&format!("{INTERNAL}{name}")))
+    }
+    /// The symbol's name (without the mark of an internal symbol).
     pub fn name(self) -> String {
-        with_pool(|p| p.names[self.0 as usize].clone())
+        with_pool(|p| {
+            let n = &p.names[self.0 as usize];
+            n.strip_prefix(INTERNAL).unwrap_or(n).to_string()
+        })
+    }
+    /// True for a symbol made by [`Symbol::internal`].
+    pub fn is_internal(self) -> bool {
+        with_pool(|p| p.names[self.0 as usize].starts_with(INTERNAL))
     }
     /// The symbol as an expression.
     pub fn expr(self) -> Expr {
@@ -427,9 +448,7 @@ impl Expr {
     pub fn split_coefficient(self) -> (Rat, Expr) {
         match &*self.node() {
             Node::Num(r) => (r.clone(), Expr::one()),
-            Node::Mul { coefficient, factors } if !coefficient.is_one() => {
-                (coefficient.clone(), Expr::make_mul(Rat::one(), factors.clone()))
-            }
+            Node::Mul { coefficient, factors } if !coefficient.is_one() => (coefficient.clone(), Expr::make_mul(Rat::one(), factors.clone())),
             _ => (Rat::one(), self),
         }
     }
@@ -543,9 +562,7 @@ impl Expr {
                 let q = exponent.denom().to_string().parse::<u32>().unwrap_or(0);
                 let p = exponent.numer().to_string().parse::<i32>().ok();
                 match (r.exact_root(q), p) {
-                    (Some(root), Some(p)) if !(root.is_zero() && p < 0) && p.unsigned_abs() <= MAX_FOLDED_POWER => {
-                        Expr::num(root.pow(p))
-                    }
+                    (Some(root), Some(p)) if !(root.is_zero() && p < 0) && p.unsigned_abs() <= MAX_FOLDED_POWER => Expr::num(root.pow(p)),
                     _ => keep(),
                 }
             }
@@ -553,17 +570,11 @@ impl Expr {
                 Some(p) if !(r.is_zero() && p < 0) => Expr::num(r.pow(p)),
                 _ => keep(),
             },
-            Node::Mul { coefficient, factors }
-                if factors.len() == 1 && coefficient.is_one() && !exponent.is_integer() =>
-            {
+            Node::Mul { coefficient, factors } if factors.len() == 1 && coefficient.is_one() && !exponent.is_integer() => {
                 // (b^e1)^e2 = b^(e1 e2) is safe when e1 is an odd integer (the sign of b^e1 is
                 // the sign of b); otherwise keep the nested power.
                 let (b, e1) = &factors[0];
-                if e1.to_i64().is_some_and(|n| n % 2 != 0) {
-                    Expr::make_mul(Rat::one(), vec![(*b, e1 * exponent)])
-                } else {
-                    keep()
-                }
+                if e1.to_i64().is_some_and(|n| n % 2 != 0) { Expr::make_mul(Rat::one(), vec![(*b, e1 * exponent)]) } else { keep() }
             }
             _ => keep(),
         }
@@ -681,13 +692,8 @@ impl Expr {
     pub fn map_children(self, mut f: impl FnMut(Expr) -> Expr) -> Expr {
         match &*self.node() {
             Node::Num(_) | Node::Sym(_) => self,
-            Node::Add { constant, terms } => {
-                Expr::make_add(constant.clone(), terms.iter().map(|(t, c)| (f(*t), c.clone())).collect())
-            }
-            Node::Mul { coefficient, factors } => Expr::make_mul(
-                coefficient.clone(),
-                factors.iter().map(|(b, e)| (f(*b), e.clone())).collect(),
-            ),
+            Node::Add { constant, terms } => Expr::make_add(constant.clone(), terms.iter().map(|(t, c)| (f(*t), c.clone())).collect()),
+            Node::Mul { coefficient, factors } => Expr::make_mul(coefficient.clone(), factors.iter().map(|(b, e)| (f(*b), e.clone())).collect()),
             Node::Fun(func, a) => Expr::apply(*func, f(*a)),
             Node::Apply(name, a) => Expr::apply_named(*name, f(*a)),
         }
@@ -777,9 +783,7 @@ pub fn dag_ops(outputs: &[Expr]) -> usize {
         .into_iter()
         .map(|e| match &*e.node() {
             Node::Num(_) | Node::Sym(_) => 0,
-            Node::Add { constant, terms } => {
-                terms.len() - 1 + usize::from(!constant.is_zero()) + terms.iter().filter(|(_, c)| !c.abs().is_one()).count()
-            }
+            Node::Add { constant, terms } => terms.len() - 1 + usize::from(!constant.is_zero()) + terms.iter().filter(|(_, c)| !c.abs().is_one()).count(),
             Node::Mul { coefficient, factors } => {
                 factors.len() - 1 + usize::from(!coefficient.abs().is_one()) + factors.iter().filter(|(_, x)| !x.is_one()).count()
             }

@@ -348,7 +348,13 @@ impl Simplifier {
                 if ka == 0 || kb == 0 {
                     // e^{i0} is real: one product, still canonical.
                     let k = if ka == 0 { kb } else { ka };
-                    let c = if ka == 0 && kb == 0 { C::real(&ca.re * &cb.re) } else if ka == 0 { cb.scale(&ca.re) } else { ca.scale(&cb.re) };
+                    let c = if ka == 0 && kb == 0 {
+                        C::real(&ca.re * &cb.re)
+                    } else if ka == 0 {
+                        cb.scale(&ca.re)
+                    } else {
+                        ca.scale(&cb.re)
+                    };
                     out.add_term((m, k), c);
                     continue;
                 }

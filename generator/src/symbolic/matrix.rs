@@ -245,8 +245,7 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
     let k = b.cols;
     let mut stops = Vec::new();
     // Augmented rows [A | B].
-    let mut rows: Vec<Vec<Expr>> =
-        (0..n).map(|i| a.row(i).into_iter().chain(b.row(i)).collect()).collect();
+    let mut rows: Vec<Vec<Expr>> = (0..n).map(|i| a.row(i).into_iter().chain(b.row(i)).collect()).collect();
     let mut row_used = vec![false; n];
     let mut col_used = vec![false; n];
     let mut pivot_of_col = vec![usize::MAX; n];
@@ -298,11 +297,8 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             } else {
                 rows[i].iter().zip(&prow).map(|(x, y)| if y.is_zero() { p * *x } else { p * *x - f * *y }).collect()
             };
-            let mut updated: Vec<Expr> = if opts.normalize {
-                updated.into_iter().map(|e| simplify_entry(e, opts.limits, &mut stops)).collect()
-            } else {
-                updated
-            };
+            let mut updated: Vec<Expr> =
+                if opts.normalize { updated.into_iter().map(|e| simplify_entry(e, opts.limits, &mut stops)).collect() } else { updated };
             updated[pj] = Expr::zero();
             if p.as_num().is_none() {
                 let content = common_content(&updated);
@@ -385,10 +381,7 @@ fn monomial_content(e: Expr) -> Option<BTreeMap<(u64, u32), (Expr, Rat)>> {
             .collect();
         common = Some(match common {
             None => here,
-            Some(c) => c
-                .into_iter()
-                .filter_map(|(key, (b, x))| here.get(&key).map(|(_, y)| (key, (b, if *y < x { y.clone() } else { x }))))
-                .collect(),
+            Some(c) => c.into_iter().filter_map(|(key, (b, x))| here.get(&key).map(|(_, y)| (key, (b, if *y < x { y.clone() } else { x })))).collect(),
         });
     }
     common
@@ -405,10 +398,7 @@ fn common_content(items: &[Expr]) -> Expr {
         let Some(c) = monomial_content(*e) else { continue };
         common = Some(match common {
             None => c,
-            Some(acc) => acc
-                .into_iter()
-                .filter_map(|(key, (b, x))| c.get(&key).map(|(_, y)| (key, (b, if *y < x { y.clone() } else { x }))))
-                .collect(),
+            Some(acc) => acc.into_iter().filter_map(|(key, (b, x))| c.get(&key).map(|(_, y)| (key, (b, if *y < x { y.clone() } else { x })))).collect(),
         });
     }
     common.map_or(Expr::one(), |c| content_of(&c))
@@ -421,9 +411,7 @@ fn divide_content(e: Expr, content: Expr) -> Expr {
     }
     let inv = content.recip();
     match &*e.node() {
-        Node::Add { constant, terms } => {
-            Expr::make_add(constant.clone(), terms.iter().map(|(t, c)| (*t * inv, c.clone())).collect())
-        }
+        Node::Add { constant, terms } => Expr::make_add(constant.clone(), terms.iter().map(|(t, c)| (*t * inv, c.clone())).collect()),
         _ => e * inv,
     }
 }

@@ -244,8 +244,7 @@ impl Rat {
         }
         let (n, d) = (self.numer(), self.denom());
         let (rn, rd) = (n.nth_root(q), d.nth_root(q));
-        (num_traits::pow(rn.clone(), q as usize) == n && num_traits::pow(rd.clone(), q as usize) == d)
-            .then(|| Rat::from_big(BigRational::new(rn, rd)))
+        (num_traits::pow(rn.clone(), q as usize) == n && num_traits::pow(rd.clone(), q as usize) == d).then(|| Rat::from_big(BigRational::new(rn, rd)))
     }
 
     /// The nearest float (infinite when out of range).

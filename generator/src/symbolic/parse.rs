@@ -92,8 +92,7 @@ impl<'a> Lexer<'a> {
                 }
             }
             let text = &self.src[start..self.pos];
-            let r = rat_from_decimal(text)
-                .ok_or_else(|| ParseError { column: start + 1, message: format!("malformed number `{text}`") })?;
+            let r = rat_from_decimal(text).ok_or_else(|| ParseError { column: start + 1, message: format!("malformed number `{text}`") })?;
             return Ok((Tok::Num(r), start, self.pos));
         }
         if c.is_ascii_alphabetic() || c == b'_' {
@@ -317,17 +316,12 @@ pub fn lower(ast: &Ast, r: &dyn Resolver) -> Result<Expr, LowerError> {
                     if let Some(e) = y.as_num()
                         && e.abs() > crate::symbolic::number::Rat::int(MAX_EXPONENT)
                     {
-                        return Err(LowerError {
-                            column: b.start + 1,
-                            message: format!("exponent `{y}` is larger than {MAX_EXPONENT} in magnitude"),
-                        });
+                        return Err(LowerError { column: b.start + 1, message: format!("exponent `{y}` is larger than {MAX_EXPONENT} in magnitude") });
                     }
                     let Some(e) = y.as_num() else {
                         return Err(LowerError {
                             column: b.start + 1,
-                            message: format!(
-                                "exponent `{y}` must be a rational number (write exp(y*ln(x)) for x^y)"
-                            ),
+                            message: format!("exponent `{y}` must be a rational number (write exp(y*ln(x)) for x^y)"),
                         });
                     };
                     x.pow_rat(&e)

@@ -222,11 +222,7 @@ impl Renderer {
             };
         }
         let base = if x.is_one() {
-            if prec < PRODUCT || (prec == PRODUCT && st == Style::Text && base.contains('/')) {
-                paren(&base, st)
-            } else {
-                base
-            }
+            if prec < PRODUCT || (prec == PRODUCT && st == Style::Text && base.contains('/')) { paren(&base, st) } else { base }
         } else if prec <= POWER {
             paren(&base, st)
         } else {
@@ -274,9 +270,8 @@ fn paren(s: &str, st: Style) -> String {
 }
 
 const GREEK: &[&str] = &[
-    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa", "lambda", "mu",
-    "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi", "omega", "Gamma", "Delta",
-    "Theta", "Lambda", "Xi", "Pi", "Sigma", "Phi", "Psi", "Omega",
+    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa", "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon",
+    "phi", "chi", "psi", "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Phi", "Psi", "Omega",
 ];
 
 /// A symbol name in the given style: LaTeX gets Greek letters, subscripts and dots.

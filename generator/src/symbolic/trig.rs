@@ -252,8 +252,7 @@ fn contract(e: Expr) -> Expr {
                         continue;
                     }
                     // Term i has fx(ax) fy(ay) K. Look for the partner with the other functions.
-                    let rest: Vec<(Expr, Rat)> =
-                        terms[i].0.iter().enumerate().filter(|(k, _)| k != x && k != y).map(|(_, f)| f.clone()).collect();
+                    let rest: Vec<(Expr, Rat)> = terms[i].0.iter().enumerate().filter(|(k, _)| k != x && k != y).map(|(_, f)| f.clone()).collect();
                     let other = |f: Func| if f == Func::Sin { Func::Cos } else { Func::Sin };
                     let (gx, gy) = (other(*fx), other(*fy));
                     let want_x = Expr::apply(gx, *ax);

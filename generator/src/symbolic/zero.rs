@@ -180,10 +180,7 @@ enum Failure {
 
 fn rat_mod(r: &Rat) -> Result<u64, Failure> {
     let (n, d) = match r.as_i64_pair() {
-        Some((n, d)) => (
-            if n < 0 { subm(0, n.unsigned_abs() % P) } else { n as u64 % P },
-            d as u64 % P,
-        ),
+        Some((n, d)) => (if n < 0 { subm(0, n.unsigned_abs() % P) } else { n as u64 % P }, d as u64 % P),
         None => {
             let m = num_bigint::BigInt::from(P);
             let to = |x: num_bigint::BigInt| -> u64 {
@@ -445,7 +442,7 @@ fn numeric_witness(e: Expr) -> ZeroVerdict {
 fn random_env(syms: &[Symbol], rng: &mut SplitMix) -> (Env, Vec<(String, f64)>) {
     let mut env = Env::default();
     let mut at = Vec::new();
-    let arg = Symbol::new("__arg");
+    let arg = Symbol::internal("arg");
     for s in syms {
         let v = rng.uniform(0.1, 2.0);
         env.set(*s, v);

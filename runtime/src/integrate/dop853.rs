@@ -362,8 +362,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             t = t_new;
             std::mem::swap(&mut y, &mut y_new);
             let (first, rest) = k.split_at_mut(1);
-            finish_step(f, project, t, &mut y, &rest[11], &mut first[0], &mut states, outputs[next - 1], &mut stats)
-                .map_err(|r| stop(t, &y, r))?;
+            finish_step(f, project, t, &mut y, &rest[11], &mut first[0], &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
             h = grown_step(h_new, h, s, rejected_last);
             rejected_last = false;
         } else {

@@ -1,7 +1,9 @@
 //! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, error_norm, finish_step, grown_step, initial_step, next_step_size};
+use super::{
+    Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, error_norm, finish_step, grown_step, initial_step, next_step_size,
+};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -93,8 +95,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             t = t_new;
             std::mem::swap(&mut y, &mut y_new);
             let (first, rest) = k.split_at_mut(1);
-            finish_step(f, project, t, &mut y, &rest[5], &mut first[0], &mut states, outputs[next - 1], &mut stats)
-                .map_err(|r| stop(t, &y, r))?;
+            finish_step(f, project, t, &mut y, &rest[5], &mut first[0], &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
             h = grown_step(h_new, h, s, rejected_last);
             rejected_last = false;
         } else {

@@ -1,6 +1,6 @@
 //! Classical fourth-order Runge-Kutta with a fixed step, shortened to land on output times.
 
-use super::{Project, Reason, States, Rhs, RunError, Solution, Stats, finite};
+use super::{Project, Reason, Rhs, RunError, Solution, States, Stats, finite};
 
 pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], h: f64, max_steps: usize) -> Result<Solution, RunError> {
     let n = y0.len();
