@@ -17,6 +17,7 @@ fn param(m: &Model, name: &str) -> usize {
 }
 
 /// Runs `form` from `(q0, qd0)` with `params` over `[0, t_end]` every `dt`.
+#[allow(clippy::too_many_arguments)]
 fn simulate(m: &Model, form: &str, params: Vec<f64>, q0: &[f64], qd0: &[f64], t_end: f64, dt: f64, s: &Settings) -> (System, Result<Solution, RunError>) {
     let (sys, y0) = System::start(*m, form, params, q0, qd0).unwrap();
     let times: Vec<f64> = (0..=((t_end / dt).round() as usize)).map(|i| i as f64 * dt).collect();
@@ -157,7 +158,7 @@ fn extreme_integrator_settings_end_or_report() {
     let m = model("satellite_boom");
     let (t0, t1, _) = m.run.unwrap();
     // rtol 1e-14: completes (no endless loop) or reports the step-size underflow.
-    let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000, ..Settings::default() };
+    let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000 };
     match run(&m, "reduced_volterra", &tight, 1) {
         Ok(r) => assert!(r.record.energy_error_rel < 1e-10, "rtol 1e-14: energy {:e}", r.record.energy_error_rel),
         Err(e) => assert!(e.to_string().contains("underflow"), "{e}"),

@@ -4,12 +4,16 @@
 //! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
 //! formulations) → [`emit`] (flat Rust). [`symbolic`] is the engine underneath.
 
-pub mod emit;
-pub mod formulation;
-pub mod inspect;
+// A `ModelError` carries the file, the line and column, the place in the model, the message
+// and the fix: large, returned once per run, never on a hot path.
+#![allow(clippy::result_large_err)]
+
+pub mod symbolic;
 pub mod kinematics;
 pub mod model;
+pub mod formulation;
+pub mod inspect;
+pub mod emit;
 pub mod output;
-pub mod symbolic;
 
 pub use emit::Builder;

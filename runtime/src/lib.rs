@@ -11,15 +11,15 @@
 
 #![forbid(unsafe_code)]
 
-pub mod cli;
-pub mod compare;
-pub mod driver;
 pub mod integrate;
-pub mod monitor;
-pub mod output;
-pub mod plot;
-pub mod sweep;
 pub mod system;
+pub mod monitor;
+pub mod compare;
+pub mod sweep;
+pub mod plot;
+pub mod output;
+pub mod cli;
+pub mod driver;
 
 /// The seam crate, for generated modules emitted with `seam_path = "runtime::seam"`.
 pub use seam;

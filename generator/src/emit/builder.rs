@@ -19,14 +19,12 @@ use std::path::{Path, PathBuf};
 /// Generates the modules of model files, for a build script.
 ///
 /// ```no_run
-/// // build.rs
-/// fn main() {
-///     generator::Builder::new()
-///         .model("models/my_model.ron")
-///         .seam_path("runtime::seam") // the crate depends on `runtime`, which re-exports the seam
-///         .generate()
-///         .unwrap_or_else(|e| panic!("{e}"));
-/// }
+/// // build.rs, inside `fn main()`:
+/// generator::Builder::new()
+///     .model("models/my_model.ron")
+///     .seam_path("runtime::seam") // the crate depends on `runtime`, which re-exports the seam
+///     .generate()
+///     .unwrap_or_else(|e| panic!("{e}"));
 /// // src/lib.rs:
 /// // pub mod my_model { include!(concat!(env!("OUT_DIR"), "/my_model.rs")); }
 /// ```

@@ -277,7 +277,7 @@ pub fn derive(model: &Model) -> Mechanics {
             for &j in &moving[x..] {
                 let mut entry = dot(&bi, &col(&bm, j)) * mass_expr;
                 if let Some(idj) = &i_d[j] {
-                    entry = entry + dot(&di, idj);
+                    entry += dot(&di, idj);
                 }
                 if !entry.is_zero() {
                     mass_terms[i * m + j].push(entry);
@@ -317,7 +317,7 @@ pub fn derive(model: &Model) -> Mechanics {
     let add_power = |q: &mut Vec<Expr>, force: &[Expr; 3], vel: &[Expr; 3]| {
         for (j, v) in model.velocities.iter().enumerate() {
             let partial = [vel[0].diff(*v), vel[1].diff(*v), vel[2].diff(*v)];
-            q[j] = q[j] + dot(force, &partial);
+            q[j] += dot(force, &partial);
         }
     };
     for f in &model.forces {
@@ -350,7 +350,7 @@ pub fn derive(model: &Model) -> Mechanics {
             }
             Force::Generalized { components, .. } => {
                 for j in 0..m {
-                    q_forces[j] = q_forces[j] + components[j];
+                    q_forces[j] += components[j];
                 }
             }
             Force::Potential { expr, .. } => potential_terms.push(*expr),

@@ -420,7 +420,7 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
             for l in k..n_u {
                 let mut e = dot(&p[k], &p[l]) * body.mass;
                 if let Some(iol) = &io[l] {
-                    e = e + dot(&o[k], iol);
+                    e += dot(&o[k], iol);
                 }
                 if !e.is_zero() {
                     mass_terms[k * n_u + l].push(e);

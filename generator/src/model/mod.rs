@@ -481,7 +481,7 @@ impl<'a> Builder<'a> {
             let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
             let com = self.vec3(b.com.as_ref().unwrap_or(&zero()), &format!("{place}.com"), Scope::Position)?;
             let inertia = self.inertia(&b.inertia, &place, &env)?;
-            self.body_omega.insert(b.name.clone(), frames[frame].omega.clone());
+            self.body_omega.insert(b.name.clone(), frames[frame].omega);
             bodies.push(Body { name: b.name.clone(), frame, mass, com, inertia });
         }
         if bodies.is_empty() {
@@ -885,7 +885,7 @@ impl<'a> Builder<'a> {
                             "key generalized forces by coordinate name",
                         )
                     })?;
-                    v[k] = v[k] + self.expr(src, &format!("{place}.components.{c}"), Scope::Velocity)?;
+                    v[k] += self.expr(src, &format!("{place}.components.{c}"), Scope::Velocity)?;
                 }
                 Force::Generalized { name: name.clone(), components: v }
             }

@@ -121,7 +121,7 @@ pub fn magnitude(e: Expr) -> Expr {
         Node::Add { constant, terms } => {
             let mut out = Expr::num(constant.abs());
             for (t, c) in terms {
-                out = out + magnitude(*t).scale(&c.abs());
+                out += magnitude(*t).scale(&c.abs());
             }
             out
         }

@@ -432,10 +432,11 @@ impl Simplifier {
     /// folded, a single monomial distributed (`(x y)^-1 = x^-1 y^-1`), anything else an atom.
     fn power(&mut self, base: Expr, x: &Rat) -> Form {
         let chosen = self.memo[&base].chosen;
-        if let (Some(r), Some(p)) = (chosen.as_num(), x.to_i32()) {
-            if !r.is_zero() && p.unsigned_abs() <= crate::symbolic::expr::MAX_FOLDED_POWER {
-                return self.constant(&r.pow(p));
-            }
+        if let (Some(r), Some(p)) = (chosen.as_num(), x.to_i32())
+            && !r.is_zero()
+            && p.unsigned_abs() <= crate::symbolic::expr::MAX_FOLDED_POWER
+        {
+            return self.constant(&r.pow(p));
         }
         let form = self.memo[&base].form.clone();
         if let (Some(p), true) = (x.to_i32(), form.len() == 1) {

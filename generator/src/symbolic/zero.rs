@@ -399,7 +399,7 @@ fn modular_zero(e: Expr) -> Result<bool, &'static str> {
         Err(Failure::Unsupported(r)) => return Err(r),
         Err(Failure::Pole) => unreachable!("no evaluation yet"),
     };
-    let mut rng = SplitMix(0x5EED_0F_2E40 ^ e.key());
+    let mut rng = SplitMix(0x5E_ED0F_2E40 ^ e.key());
     let mut zeros = 0;
     for _ in 0..16 {
         let seed = rng.next_u64();
@@ -424,7 +424,7 @@ fn modular_zero(e: Expr) -> Result<bool, &'static str> {
 /// may be NaN where the expression has no real value there.
 fn numeric_witness(e: Expr) -> ZeroVerdict {
     let syms = e.free_symbols();
-    let mut rng = SplitMix(0x3177_E55 ^ e.key());
+    let mut rng = SplitMix(0x317_7E55 ^ e.key());
     let mut last = (f64::NAN, vec![]);
     for _ in 0..NUMERIC_POINTS {
         let (env, at) = random_env(&syms, &mut rng);
@@ -457,7 +457,7 @@ fn random_env(syms: &[Symbol], rng: &mut SplitMix) -> (Env, Vec<(String, f64)>) 
 /// The floating-point fallback: the value must vanish against the size of its terms.
 fn numeric_zero_test(e: Expr, reason: &'static str) -> ZeroVerdict {
     let syms = e.free_symbols();
-    let mut rng = SplitMix(0x5EED_0F_2E_4055 ^ e.key());
+    let mut rng = SplitMix(0x5EED_0F2E_4055 ^ e.key());
     let terms: Vec<Expr> = match &*e.node() {
         Node::Add { terms, .. } => terms.iter().map(|(t, c)| t.scale(c)).collect(),
         _ => vec![e],

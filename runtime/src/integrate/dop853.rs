@@ -3,7 +3,8 @@
 //! only for steps that contain an output time).
 //!
 //! Coefficients: Hairer, Nørsett & Wanner, "Solving Ordinary Differential Equations I", the
-//! published DOP853 tableau.
+//! published DOP853 tableau, digit for digit (hence more digits than an `f64` holds).
+#![allow(clippy::excessive_precision)]
 
 use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, finish_step, grown_step, initial_step, next_step_size};
 

@@ -109,7 +109,7 @@ impl States {
     }
     /// Number of states.
     pub fn len(&self) -> usize {
-        if self.dim == 0 { 0 } else { self.data.len() / self.dim }
+        self.data.len().checked_div(self.dim).unwrap_or(0)
     }
     /// True when empty.
     pub fn is_empty(&self) -> bool {
