@@ -4,10 +4,6 @@
 //! velocities) → [`formulation`] (T, M, N, Q, constraints, ignorable coordinates, and the
 //! formulations) → [`emit`] (flat Rust). [`symbolic`] is the engine underneath.
 
-// A `ModelError` carries the file, the line and column, the place in the model, the message
-// and the fix: large, returned once per run, never on a hot path.
-#![allow(clippy::result_large_err)]
-
 pub mod symbolic;
 pub mod kinematics;
 pub mod model;

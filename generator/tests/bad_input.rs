@@ -113,6 +113,33 @@ fn declared_ignorable_that_is_not() {
 fn nonlinear_velocity_constraints() {
     let e = broken(&scene1(), "l*theta2'\"", "l*theta2'^2\"");
     check(&e, ErrorKind::NonlinearConstraint, &["not linear in the velocities"]);
+    // Linear away from theta1' = 0 only: its second derivative vanishes there, its coefficient
+    // does not lose the velocity.
+    let e = broken(&scene1(), "l*cos(theta1 - theta2)*theta1'", "l*cos(theta1 - theta2)*abs(theta1')");
+    check(&e, ErrorKind::NonlinearConstraint, &["not linear in the velocities", "coefficient of theta1'"]);
+}
+
+#[test]
+fn inspect_and_generation_refuse_the_same_models_with_the_same_error() {
+    let edits = [
+        ("l*cos(theta1 - theta2)*theta1'", "l*cos(theta1 - theta2)*abs(theta1')"),
+        ("full: [\"theta1' - theta2'\", \"x'\"]", "full: [\"theta1' - theta2'\", \"2*theta1' - 2*theta2'\"]"),
+        ("\"tau\": 0.0,", "\"tau\": 0.0, \"_\": 1.0, \"u1\": 2.0,"),
+        ("coordinates: [\"theta1\", \"theta2\", \"x\"],", "coordinates: [\"theta1\", \"theta2\", \"x\"],\n    time_functions: {\"F\": \"F(t) + 1\"},"),
+    ];
+    for (from, to) in edits {
+        let src = scene1();
+        assert!(src.contains(from), "test edit `{from}` not found");
+        let text = src.replacen(from, to, 1);
+        let generated =
+            from_source("models/broken.ron", &text).and_then(|m| generator::emit::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()));
+        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ()));
+        match (generated, inspected) {
+            (Ok(()), Ok(())) => assert!(to.contains("\"_\""), "`{to}` should be refused"),
+            (Err(g), Err(i)) => assert_eq!(g.to_string(), i.to_string(), "`{to}`"),
+            (g, i) => panic!("`{to}`: generation {:?}, inspect {:?}", g.map_err(|e| e.to_string()), i.map_err(|e| e.to_string())),
+        }
+    }
 }
 
 #[test]
@@ -269,6 +296,8 @@ fn deep_and_huge_expressions_are_refused_with_the_limit() {
         let text = e.to_string();
         assert_eq!(e.kind, ErrorKind::ExpressionSyntax, "{what}: {text}");
         assert!(text.contains("nested more than 200 levels") || text.contains("bytes, more than the 20000"), "{what}: {text}");
+        // The message quotes an excerpt, not the whole input.
+        assert!(text.len() < 600, "{what}: {} bytes of error", text.len());
     }
     let e = broken(&scene1(), "\"m1*l^2/12\", \"0\"", "\"m1*l^1e18\", \"0\"");
     check(&e, ErrorKind::ExpressionSyntax, &["exponent", "larger than 1000"]);
@@ -323,4 +352,35 @@ fn a_key_given_twice_is_an_error() {
 fn an_initial_state_off_its_constraint_is_refused() {
     let e = broken(&scene1(), "\"theta2\": \"-cos(theta1 - theta2)*theta1'\"", "\"theta2\": \"0.1\"");
     check(&e, ErrorKind::InitialState, &["violates constraint `wheel`"]);
+}
+
+#[test]
+fn a_byte_order_mark_is_accepted_and_bad_bytes_are_located_without_echoing_them() {
+    let dir = std::env::temp_dir().join(format!("bad-bytes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    };
+    // A UTF-8 byte-order mark (written by some editors) is not part of the model.
+    let mut with_bom = b"\xEF\xBB\xBF".to_vec();
+    with_bom.extend_from_slice(scene1().as_bytes());
+    let model = generator::model::load(write("bom.ron", &with_bom)).unwrap();
+    assert_eq!(model.name, "cart_pendulum");
+    // Latin-1 in a description: the line and column of the first bad byte.
+    let latin1 = scene1().replacen("description: \"Cart", "description: \"Caf\u{e9}", 1).replace('\u{e9}', "\u{1}");
+    let mut bytes = latin1.into_bytes();
+    let at = bytes.iter().position(|b| *b == 1).unwrap();
+    bytes[at] = 0xE9;
+    let e = generator::model::load(write("latin1.ron", &bytes)).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("latin1.ron:5:") && text.contains("not UTF-8") && text.contains("0xE9") && text.contains("help:"), "{text}");
+    // Binary garbage: one short sentence, not the bytes.
+    let mut garbage: Vec<u8> = (0..4096u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+    garbage[100] = 0;
+    let e = generator::model::load(write("garbage.ron", &garbage)).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("binary") && text.len() < 300, "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -132,3 +132,32 @@ mod tests {
         assert_eq!(closest("zzz", ["theta1"]), None);
     }
 }
+
+/// At most 60 characters of an expression around `column` (1-based), with `…` where cut, so
+/// that an error about a 20,000-character input stays one readable line.
+///
+/// ```
+/// use generator::model::error::excerpt;
+/// assert_eq!(excerpt("l*cos(q)", 3), "l*cos(q)");
+/// let long = format!("{}x{}", "sin(".repeat(300), ")".repeat(300));
+/// let cut = excerpt(&long, 804);
+/// assert!(cut.starts_with('…') && cut.ends_with('…') && cut.chars().count() <= 62, "{cut}");
+/// ```
+pub fn excerpt(src: &str, column: usize) -> String {
+    const WIDTH: usize = 60;
+    let chars: Vec<char> = src.chars().collect();
+    if chars.len() <= WIDTH {
+        return src.to_string();
+    }
+    let start = column.saturating_sub(1 + WIDTH / 2).min(chars.len() - WIDTH);
+    let end = start + WIDTH;
+    let mut out = String::new();
+    if start > 0 {
+        out.push('…');
+    }
+    out.extend(&chars[start..end]);
+    if end < chars.len() {
+        out.push('…');
+    }
+    out
+}

@@ -143,7 +143,7 @@ impl Model {
 pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let source = std::fs::read_to_string(path).map_err(|e| ModelError {
+    let bytes = std::fs::read(path).map_err(|e| ModelError {
         kind: ErrorKind::Io,
         file: file.clone(),
         location: None,
@@ -151,7 +151,44 @@ pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
         message: format!("cannot read the file: {e}"),
         help: "check the path; models live in `models/`".into(),
     })?;
-    from_source(&file, &source)
+    let source = text_of(&file, &bytes)?;
+    from_source(&file, source)
+}
+
+/// The model text in `bytes`: UTF-8, without a leading byte-order mark (editors that write one
+/// are common, and it carries no meaning). Binary data and invalid UTF-8 get a short message
+/// with the place of the first bad byte, never the bytes themselves.
+///
+/// ```
+/// use generator::model::text_of;
+/// assert_eq!(text_of("m.ron", b"\xEF\xBB\xBFModel(").unwrap(), "Model(");
+/// let e = text_of("m.ron", b"Model(\n  name: \"x\xFF\"").unwrap_err();
+/// assert!(e.to_string().contains("m.ron:2:11") && e.to_string().contains("0xFF"), "{e}");
+/// assert!(text_of("m.ron", b"\x7FELF\x02\x01\x00\x00").unwrap_err().to_string().contains("binary"));
+/// ```
+pub fn text_of<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, ModelError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let place = |at: usize| {
+        let before = &bytes[..at];
+        let line = before.iter().filter(|b| **b == b'\n').count() + 1;
+        let col = at - before.iter().rposition(|b| *b == b'\n').map_or(0, |p| p + 1) + 1;
+        (line, col)
+    };
+    let error = |at: usize, message: String, help: &str| ModelError {
+        kind: ErrorKind::Syntax,
+        file: file.to_string(),
+        location: Some(place(at)),
+        place: String::new(),
+        message,
+        help: help.into(),
+    };
+    if let Some(at) = bytes.iter().position(|b| *b == 0) {
+        return Err(error(at, "the file is binary data (a NUL byte), not a model".into(), "give a model file: RON text, as in `models/`"));
+    }
+    std::str::from_utf8(bytes).map_err(|e| {
+        let at = e.valid_up_to();
+        error(at, format!("the file is not UTF-8 text: byte 0x{:02X} here", bytes[at]), "save the model as UTF-8")
+    })
 }
 
 /// Parses and validates model text; `file` names it in errors.
@@ -312,7 +349,7 @@ impl<'a> Builder<'a> {
             file: self.file.to_string(),
             location: at(e.column),
             place: place.to_string(),
-            message: format!("in expression `{src}`, column {}: {}", e.column, e.message),
+            message: format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
             help: "expressions use + - * / ^, parentheses, numbers, names, calls like sin(x), and q' for a rate".into(),
         })?;
         parse::lower(&ast, &ScopedResolver { b: self, scope }).map_err(|e| {
@@ -323,7 +360,7 @@ impl<'a> Builder<'a> {
                 file: self.file.to_string(),
                 location: at(e.column),
                 place: place.to_string(),
-                message: format!("in expression `{src}`, column {}: {}", e.column, e.message),
+                message: format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
                 help: match kind {
                     ErrorKind::UnknownName => "declare it under `parameters` (with a value), `coordinates` or `time_functions`, or fix the spelling".into(),
                     _ => "rewrite the expression as the message says".into(),
@@ -495,20 +532,23 @@ impl<'a> Builder<'a> {
                 ConstraintDef::Velocity { name, expr } => {
                     let place = format!("constraints[{i}] ({name})");
                     let e = self.expr(expr, &place, Scope::Velocity)?;
-                    // Linear in the velocities: every second derivative vanishes.
+                    // Linear in the velocities: no coefficient `d expr / d q'` contains a
+                    // velocity. (A vanishing second derivative is not enough: `abs(q')` has one
+                    // away from q' = 0.)
                     for v in &velocities {
                         let d1 = e.diff(*v);
-                        for w in &velocities {
-                            let d2 = d1.diff(*w);
-                            if !crate::symbolic::zero::zero_test(d2).is_zero() {
-                                return Err(self.err(
-                                    ErrorKind::NonlinearConstraint,
-                                    &place,
-                                    &format!("\"{expr}\""),
-                                    format!("constraint `{name}` is not linear in the velocities: d²/d{}d{} = {d2}", v.name(), w.name()),
-                                    "write velocity constraints as a(q,t)*q' + b(q,t) = 0",
-                                ));
-                            }
+                        if let Some(w) = d1.free_symbols().into_iter().find(|s| velocities.contains(s)) {
+                            return Err(self.err(
+                                ErrorKind::NonlinearConstraint,
+                                &place,
+                                &format!("\"{expr}\""),
+                                format!(
+                                    "constraint `{name}` is not linear in the velocities: its coefficient of {} is {d1}, which contains {}",
+                                    v.name(),
+                                    w.name()
+                                ),
+                                "write velocity constraints as a(q,t)*q' + b(q,t) = 0",
+                            ));
                         }
                     }
                     Constraint::Velocity { name: name.clone(), expr: e }
