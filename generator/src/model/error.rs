@@ -120,19 +120,6 @@ fn edit_distance(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn locates_and_suggests() {
-        let src = "a: \"x\",\nb: \"l/2\",\n";
-        assert_eq!(locate(src, "\"l/2\"", None), Some((2, 4)));
-        assert_eq!(closest("thta1", ["theta1", "theta2", "x"]), Some("theta1"));
-        assert_eq!(closest("zzz", ["theta1"]), None);
-    }
-}
-
 /// At most 60 characters of an expression around `column` (1-based), with `…` where cut, so
 /// that an error about a 20,000-character input stays one readable line.
 ///
@@ -160,4 +147,17 @@ pub fn excerpt(src: &str, column: usize) -> String {
         out.push('…');
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locates_and_suggests() {
+        let src = "a: \"x\",\nb: \"l/2\",\n";
+        assert_eq!(locate(src, "\"l/2\"", None), Some((2, 4)));
+        assert_eq!(closest("thta1", ["theta1", "theta2", "x"]), Some("theta1"));
+        assert_eq!(closest("zzz", ["theta1"]), None);
+    }
 }
