@@ -384,3 +384,46 @@ fn a_byte_order_mark_is_accepted_and_bad_bytes_are_located_without_echoing_them(
     assert!(text.contains("binary") && text.len() < 300, "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The 1-based line of the first line of `src` containing `text`.
+fn line_of(src: &str, text: &str) -> usize {
+    src.lines().position(|l| l.contains(text)).unwrap_or_else(|| panic!("`{text}` not in the model")) + 1
+}
+
+#[test]
+fn errors_point_at_the_value_they_are_about_not_at_the_first_equal_text() {
+    let src = scene1();
+    // bar1 and bar2 have the same text for mass-like pieces: the error is on bar2's line.
+    let e = broken(&src, "Body(name: \"bar2\", frame: \"bar2\", mass: \"m2\"", "Body(name: \"bar2\", frame: \"bar2\", mass: \"0\"");
+    assert_eq!(e.location.unwrap().0, line_of(&src, "Body(name: \"bar2\""), "{e}");
+    // A two-entry centre of mass on bar2, not bar1 (whose com reads the same).
+    let e = broken(&src, "frame: \"bar2\", mass: \"m2\", com: [\"0\", \"-l/2\", \"0\"]", "frame: \"bar2\", mass: \"m2\", com: [\"0\", \"-l/2\"]");
+    assert_eq!(e.kind, ErrorKind::Dimension, "{e}");
+    assert_eq!(e.location.unwrap().0, line_of(&src, "Body(name: \"bar2\""), "{e}");
+    // A coordinate wrongly declared ignorable: at `ignorable`, on the coordinate's name there.
+    let e = broken(&src, "ignorable: Declared([\"x\"])", "ignorable: Declared([\"x\", \"theta1\"])");
+    assert_eq!(e.kind, ErrorKind::NotIgnorable, "{e}");
+    let (line, col) = e.location.unwrap();
+    assert_eq!(line, line_of(&src, "ignorable: Declared"), "{e}");
+    assert_eq!(col, "    ignorable: Declared([\"x\", ".len() + 1, "{e}");
+    // An expression error: the column of the bad character inside the string.
+    let e = broken(&src, "\"m1*l^2/12\", \"0\"", "\"m1*l^2/12 + L\", \"0\"");
+    let (line, col) = e.location.unwrap();
+    let bad = src.lines().nth(line - 1).unwrap();
+    assert!(bad.contains("m1*l^2/12"), "{e}");
+    assert_eq!(&bad.replacen("m1*l^2/12\"", "m1*l^2/12 + L\"", 1)[col - 1..col], "L", "{e}");
+    // `L` with `l` defined: the same name in another case is the suggestion.
+    assert!(e.to_string().contains("did you mean `l`?"), "{e}");
+}
+
+#[test]
+fn constants_beyond_f64_are_located_at_the_extreme_number() {
+    let src = scene1();
+    let text = src.replacen("com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2*1e200\", \"0\"]", 1);
+    let model = from_source("models/broken.ron", &text).unwrap();
+    let e = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap_err();
+    check(&e, ErrorKind::Emission, &["10^", "not a finite f64", "bodies[1].com[1]"]);
+    let (line, col) = e.location.unwrap();
+    assert_eq!(&text.lines().nth(line - 1).unwrap()[col - 1..col + 4], "1e200", "{e}");
+    assert!(e.to_string().len() < 400, "{e}");
+}

@@ -33,9 +33,19 @@ pub enum LowerError {
     /// A named function left after inlining the time functions.
     #[error("function `{0}` has no definition")]
     UndefinedFunction(String),
-    /// A number that is not a finite float.
-    #[error("the number {0} is not a finite f64")]
+    /// A number that is not a finite float (its order of magnitude, `10^600`).
+    #[error("a constant of about {0} is not a finite f64 (the model's numbers multiply beyond the range of f64)")]
     NotFinite(String),
+}
+
+/// `10^k` for a rational far outside the range of `f64`, from the digit counts of its
+/// numerator and denominator (the number itself can have thousands of digits).
+fn order_of_magnitude(r: &Rat) -> String {
+    let text = r.to_string();
+    let text = text.trim_start_matches('-');
+    let (num, den) = text.split_once('/').unwrap_or((text, "1"));
+    let k = num.len() as i64 - den.len() as i64;
+    format!("10^{k}")
 }
 
 /// Rust expression tree, before printing: just enough structure for precedence.
@@ -127,7 +137,7 @@ fn join_mul(den: &[Code]) -> TokenStream {
 /// A float literal for a rational number.
 pub fn literal(r: &Rat) -> Result<TokenStream, LowerError> {
     let v = rat_to_f64(r);
-    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(r.to_string()))?;
+    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(order_of_magnitude(r)))?;
     Ok(if v < 0.0 { quote!(-#lit) } else { quote!(#lit) })
 }
 
@@ -143,7 +153,7 @@ fn magnitude_literal(v: f64) -> Option<Literal> {
 
 fn num_code(r: &Rat) -> Result<Code, LowerError> {
     let v = rat_to_f64(r);
-    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(r.to_string()))?;
+    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(order_of_magnitude(r)))?;
     Ok(if v < 0.0 { Code::Neg(Box::new(Code::Atom(quote!(#lit)))) } else { Code::Atom(quote!(#lit)) })
 }
 

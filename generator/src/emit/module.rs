@@ -141,6 +141,49 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     Ok(Generated { code, summary })
 }
 
+/// The first number in `source` whose magnitude is beyond `1e150` or below `1e-150` (but not
+/// zero): products of two such numbers leave the range of `f64`.
+///
+/// ```ignore
+/// assert_eq!(extreme_literal("m: \"2*1e200\""), Some(6..11));
+/// ```
+fn extreme_literal(source: &str) -> Option<std::ops::Range<usize>> {
+    let bytes = source.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        let starts = bytes[i].is_ascii_digit() && (i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_' || bytes[i - 1] == b'.'));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < bytes.len() && (bytes[i].is_ascii_digit() || bytes[i] == b'.') {
+            i += 1;
+        }
+        if i < bytes.len() && (bytes[i] == b'e' || bytes[i] == b'E') {
+            let mut j = i + 1;
+            if j < bytes.len() && (bytes[j] == b'-' || bytes[j] == b'+') {
+                j += 1;
+            }
+            if j < bytes.len() && bytes[j].is_ascii_digit() {
+                i = j;
+                while i < bytes.len() && bytes[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+        }
+        let text = &source[start..i];
+        let digits = text.split(['e', 'E']).next().unwrap_or("").trim_start_matches('0').trim_start_matches('.').len();
+        let exponent: i64 = text.split(['e', 'E']).nth(1).and_then(|x| x.parse().ok()).unwrap_or(0);
+        let magnitude = exponent + digits as i64;
+        let nonzero = text.split(['e', 'E']).next().is_some_and(|m| m.chars().any(|c| ('1'..='9').contains(&c)));
+        if nonzero && !(-150..=150).contains(&magnitude) {
+            return Some(start..i);
+        }
+    }
+    None
+}
+
 /// The model file's name without directories, so output does not depend on where it was run.
 fn model_file_name(model: &Model) -> String {
     std::path::Path::new(&model.file).file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
@@ -167,11 +210,28 @@ pub(super) fn doc(text: &str) -> TokenStream {
 
 impl Emitter<'_> {
     pub(super) fn emission_error(&self, what: &str, e: impl std::fmt::Display) -> ModelError {
+        let message = format!("cannot emit {what}: {e}");
+        let source = &self.model.source;
+        // A constant beyond f64 comes from the model's own extreme numbers: point at the first.
+        if message.contains("is not a finite f64")
+            && let Some(span) = extreme_literal(source)
+        {
+            let place = crate::model::spans::Spans::new(source).path_at(span.start).unwrap_or_default();
+            return ModelError::at(
+                ErrorKind::Emission,
+                &self.model.file,
+                source,
+                Some(span),
+                &place,
+                message,
+                "scale the model (other units) so that its numbers and their products stay within about 1e-150 to 1e150".into(),
+            );
+        }
         self.model.error(
             ErrorKind::Emission,
             "emit",
             "emit",
-            format!("cannot emit {what}: {e}"),
+            message,
             "check the model's expressions for numbers too large for f64 and functions without a definition".into(),
         )
     }

@@ -1,7 +1,10 @@
 //! Errors in model files: each names the file, the place (line and column where it can be
 //! found, and the path inside the model), what is wrong, and the fix.
 
+use super::spans::Spans;
 use std::fmt;
+use std::ops::Range;
+use std::sync::Arc;
 
 /// The classes of bad input, so callers and tests can tell them apart.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +65,56 @@ pub struct ModelError {
     pub message: String,
     /// How to fix it.
     pub help: String,
+    /// The bytes of the file the error is about, when known.
+    pub span: Option<Range<usize>>,
+    /// The file's text, for a labelled excerpt (see [`ModelError::render`]).
+    pub source_text: Option<Arc<str>>,
+}
+
+impl ModelError {
+    /// An error about `span` of `source`; the line and column come from the span.
+    pub fn at(kind: ErrorKind, file: &str, source: &str, span: Option<Range<usize>>, place: &str, message: String, help: String) -> ModelError {
+        ModelError {
+            kind,
+            file: file.to_string(),
+            location: span.as_ref().map(|r| line_col(source, r.start)),
+            place: place.to_string(),
+            message,
+            help,
+            span,
+            source_text: Some(Arc::from(source)),
+        }
+    }
+
+    /// An error with no place in a file (the file cannot be read, for instance).
+    pub fn unlocated(kind: ErrorKind, file: &str, message: String, help: String) -> ModelError {
+        ModelError { kind, file: file.to_string(), location: None, place: String::new(), message, help, span: None, source_text: None }
+    }
+}
+
+/// The bytes an error at `place` is about: the value at that path in the file (or its deepest
+/// enclosing value), narrowed to the first occurrence of `needle` inside it when there is one;
+/// without a path that resolves, the first occurrence of `needle` in the file.
+///
+/// ```
+/// use generator::model::{error::place_span, spans::Spans};
+/// let src = "Model(bodies: [Body(mass: \"0\"), Body(mass: \"0\")])";
+/// let r = place_span(src, &Spans::new(src), "bodies[1] (b).mass", "\"0\"").unwrap();
+/// assert_eq!(r.start, src.rfind("\"0\"").unwrap());
+/// ```
+pub fn place_span(source: &str, spans: &Spans, place: &str, needle: &str) -> Option<Range<usize>> {
+    match spans.find(place) {
+        Some(r) => {
+            if !needle.is_empty()
+                && let Some(i) = source.get(r.clone()).and_then(|text| text.find(needle))
+            {
+                return Some(r.start + i..r.start + i + needle.len());
+            }
+            Some(r)
+        }
+        None if !needle.is_empty() => source.find(needle).map(|i| i..i + needle.len()),
+        None => None,
+    }
 }
 
 impl fmt::Display for ModelError {
@@ -103,7 +156,13 @@ pub fn line_col(source: &str, idx: usize) -> (usize, usize) {
 }
 
 /// The candidate closest to `name` by edit distance, if any is close.
+///
+/// The same name in another case wins over every other candidate (`L` for `l`, not `M`).
 pub fn closest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    let candidates: Vec<&'a str> = candidates.into_iter().collect();
+    if let Some(same) = candidates.iter().find(|c| c.eq_ignore_ascii_case(name)) {
+        return Some(same);
+    }
     candidates.into_iter().map(|c| (edit_distance(name, c), c)).filter(|(d, c)| *d <= 2.max(c.len() / 3)).min().map(|(_, c)| c)
 }
 

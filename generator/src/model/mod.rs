@@ -11,6 +11,7 @@ pub mod builder;
 pub mod error;
 pub mod examples;
 pub mod schema;
+pub mod spans;
 
 pub use error::{ErrorKind, ModelError};
 pub use schema::*;
@@ -133,9 +134,11 @@ impl Model {
         self.coordinates.len()
     }
 
-    /// An error located at `needle` in the file.
+    /// An error at `place` in the file (a path such as `quasi_velocities.full`), narrowed to
+    /// `needle` inside it (see [`error::place_span`]).
     pub fn error(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: String) -> ModelError {
-        ModelError { kind, file: self.file.clone(), location: error::locate(&self.source, needle, None), place: place.to_string(), message, help }
+        let span = error::place_span(&self.source, &spans::Spans::new(&self.source), place, needle);
+        ModelError::at(kind, &self.file, &self.source, span, place, message, help)
     }
 }
 
@@ -143,14 +146,8 @@ impl Model {
 pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| ModelError {
-        kind: ErrorKind::Io,
-        file: file.clone(),
-        location: None,
-        place: String::new(),
-        message: format!("cannot read the file: {e}"),
-        help: "check the path; models live in `models/`".into(),
-    })?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| ModelError::unlocated(ErrorKind::Io, &file, format!("cannot read the file: {e}"), "check the path; models live in `models/`".into()))?;
     let source = text_of(&file, &bytes)?;
     from_source(&file, source)
 }
@@ -175,12 +172,9 @@ pub fn text_of<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, ModelError> {
         (line, col)
     };
     let error = |at: usize, message: String, help: &str| ModelError {
-        kind: ErrorKind::Syntax,
-        file: file.to_string(),
         location: Some(place(at)),
-        place: String::new(),
-        message,
-        help: help.into(),
+        span: Some(at..at + 1),
+        ..ModelError::unlocated(ErrorKind::Syntax, file, message, help.into())
     };
     if let Some(at) = bytes.iter().position(|b| *b == 0) {
         return Err(error(at, "the file is binary data (a NUL byte), not a model".into(), "give a model file: RON text, as in `models/`"));
@@ -189,6 +183,13 @@ pub fn text_of<'a>(file: &str, bytes: &'a [u8]) -> Result<&'a str, ModelError> {
         let at = e.valid_up_to();
         error(at, format!("the file is not UTF-8 text: byte 0x{:02X} here", bytes[at]), "save the model as UTF-8")
     })
+}
+
+/// The byte offset of 1-based `line` and `col` (characters) in `source`.
+fn offset_of(source: &str, line: usize, col: usize) -> usize {
+    let start: usize = source.split_inclusive('\n').take(line.saturating_sub(1)).map(str::len).sum();
+    let rest = &source[start.min(source.len())..];
+    start + rest.chars().take(col.saturating_sub(1)).map(char::len_utf8).sum::<usize>()
 }
 
 /// Parses and validates model text; `file` names it in errors.
@@ -204,14 +205,8 @@ pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
         } else {
             "fix the RON syntax at this place (strings in double quotes, items separated by commas, balanced brackets)".to_string()
         };
-        ModelError {
-            kind: ErrorKind::Syntax,
-            file: file.to_string(),
-            location: Some((line, col)),
-            place: String::new(),
-            message: format!("malformed model: {code}"),
-            help,
-        }
+        let at = offset_of(source, line, col);
+        ModelError::at(ErrorKind::Syntax, file, source, Some(at..(at + 1).min(source.len()).max(at)), "", format!("malformed model: {code}"), help)
     })?;
     Builder::new(file, source, def).build()
 }
@@ -239,6 +234,8 @@ struct Builder<'a> {
     time_fns: HashMap<String, Symbol>,
     body_omega: HashMap<String, [Expr; 3]>,
     t: Symbol,
+    /// Where each value of the file is, for errors.
+    spans: std::cell::OnceCell<spans::Spans>,
 }
 
 struct ScopedResolver<'b, 'a> {
@@ -325,47 +322,62 @@ impl<'a> Builder<'a> {
             time_fns: HashMap::new(),
             body_omega: HashMap::new(),
             t: Symbol::new("t"),
+            spans: std::cell::OnceCell::new(),
         }
     }
 
+    /// The spans of the file's values, scanned on the first error.
+    fn spans(&self) -> &spans::Spans {
+        self.spans.get_or_init(|| spans::Spans::new(self.source))
+    }
+
     fn err(&self, kind: ErrorKind, place: &str, needle: &str, message: String, help: &str) -> ModelError {
-        ModelError {
-            kind,
-            file: self.file.to_string(),
-            location: error::locate(self.source, needle, None),
-            place: place.to_string(),
-            message,
-            help: help.to_string(),
-        }
+        let span = error::place_span(self.source, self.spans(), place, needle);
+        ModelError::at(kind, self.file, self.source, span, place, message, help.to_string())
+    }
+
+    /// The byte span of character `col` (1-based) of the expression `src` found at `place`.
+    fn expr_span(&self, src: &str, place: &str, col: usize) -> Option<std::ops::Range<usize>> {
+        let quoted = format!("\"{src}\"");
+        let string = self
+            .spans()
+            .get(place)
+            .filter(|r| self.source.get(r.clone()) == Some(quoted.as_str()))
+            .or_else(|| error::place_span(self.source, self.spans(), place, &quoted))?;
+        let offset: usize = src.chars().take(col.saturating_sub(1)).map(char::len_utf8).sum();
+        let at = string.start + 1 + offset;
+        let width = src[offset.min(src.len())..].chars().next().map_or(1, char::len_utf8);
+        Some(at..at + width)
     }
 
     /// Parses and resolves one expression string found at `place`.
     fn expr(&self, src: &str, place: &str, scope: Scope) -> Result<Expr, ModelError> {
-        let quoted = format!("\"{src}\"");
-        let base = error::locate(self.source, &quoted, None);
-        let at = |col: usize| base.map(|(l, c)| (l, c + col));
-        let ast = parse::parse(src).map_err(|e| ModelError {
-            kind: ErrorKind::ExpressionSyntax,
-            file: self.file.to_string(),
-            location: at(e.column),
-            place: place.to_string(),
-            message: format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
-            help: "expressions use + - * / ^, parentheses, numbers, names, calls like sin(x), and q' for a rate".into(),
+        let ast = parse::parse(src).map_err(|e| {
+            ModelError::at(
+                ErrorKind::ExpressionSyntax,
+                self.file,
+                self.source,
+                self.expr_span(src, place, e.column),
+                place,
+                format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
+                "expressions use + - * / ^, parentheses, numbers, names, calls like sin(x), and q' for a rate".into(),
+            )
         })?;
         parse::lower(&ast, &ScopedResolver { b: self, scope }).map_err(|e| {
             let kind =
                 if e.message.starts_with("unknown") || e.message.contains("is not a body") { ErrorKind::UnknownName } else { ErrorKind::ExpressionSyntax };
-            ModelError {
+            ModelError::at(
                 kind,
-                file: self.file.to_string(),
-                location: at(e.column),
-                place: place.to_string(),
-                message: format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
-                help: match kind {
+                self.file,
+                self.source,
+                self.expr_span(src, place, e.column),
+                place,
+                format!("in expression `{}`, column {}: {}", error::excerpt(src, e.column), e.column, e.message),
+                match kind {
                     ErrorKind::UnknownName => "declare it under `parameters` (with a value), `coordinates` or `time_functions`, or fix the spelling".into(),
                     _ => "rewrite the expression as the message says".into(),
                 },
-            }
+            )
         })
     }
 
