@@ -90,11 +90,35 @@ struct GenerateArgs {
     quiet: bool,
 }
 
+/// Why the command failed: a model error (rendered with its excerpt) or another message.
+enum Failure {
+    Model(generator::model::ModelError),
+    Message(String),
+}
+
+impl From<String> for Failure {
+    fn from(m: String) -> Failure {
+        Failure::Message(m)
+    }
+}
+
+impl From<generator::model::ModelError> for Failure {
+    fn from(e: generator::model::ModelError) -> Failure {
+        Failure::Model(e)
+    }
+}
+
 fn main() -> ExitCode {
+    use std::io::IsTerminal;
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
+        Err(Failure::Model(e)) => {
+            // Colour only on a terminal; a labelled excerpt of the file either way.
+            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
+            ExitCode::FAILURE
+        }
+        Err(Failure::Message(msg)) => {
             eprintln!("{msg}");
             ExitCode::FAILURE
         }
@@ -102,28 +126,28 @@ fn main() -> ExitCode {
 }
 
 /// Writes to stdout; a closed pipe (`generator m.ron | head -1`) ends the program quietly.
-fn print_stdout(text: &str) -> Result<(), String> {
+fn print_stdout(text: &str) -> Result<(), Failure> {
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
-        other => other.map_err(|e| format!("error: cannot write to stdout: {e}")),
+        other => other.map_err(|e| Failure::Message(format!("error: cannot write to stdout: {e}"))),
     }
 }
 
-fn run(cli: Cli) -> Result<(), String> {
+fn run(cli: Cli) -> Result<(), Failure> {
     if let Some(Command::Inspect { model, latex }) = cli.command {
-        let model = generator::model::load(&model).map_err(|e| e.to_string())?;
-        let text = generator::inspect::inspect(&model, latex).map_err(|e| e.to_string())?;
+        let model = generator::model::load(&model)?;
+        let text = generator::inspect::inspect(&model, latex)?;
         return print_stdout(&text);
     }
     let args = cli.generate;
     let Some(file) = args.model else {
-        return Err("error: a model file is needed: `generator MODEL.ron [-o PATH]` (see --help)".into());
+        return Err(Failure::Message("error: a model file is needed: `generator MODEL.ron [-o PATH]` (see --help)".into()));
     };
     if let Some(out) = &args.output {
         refuse_overwriting_a_model(&file, out, args.force)?;
     }
-    let model = generator::model::load(&file).map_err(|e| e.to_string())?;
+    let model = generator::model::load(&file)?;
     let mut options = Options::from_model(&model);
     if let Some(list) = &args.formulations {
         let mut f: Vec<Formulation> = list.iter().map(|x| (*x).into()).collect();
@@ -145,7 +169,7 @@ fn run(cli: Cli) -> Result<(), String> {
     }
     options.seam_path = args.seam_path.clone();
     options.module_name = args.module_name.clone();
-    let out = emit::generate(&model, &options).map_err(|e| e.to_string())?;
+    let out = emit::generate(&model, &options)?;
     match &args.output {
         // An unchanged file is left alone, so builds that depend on it stay fresh.
         Some(path) if std::fs::read(path).ok().as_deref() == Some(out.code.as_bytes()) => {
@@ -154,7 +178,7 @@ fn run(cli: Cli) -> Result<(), String> {
             }
         }
         Some(path) => {
-            generator::output::write_atomic(path, out.code.as_bytes()).map_err(|e| format!("error: {e}"))?;
+            generator::output::write_atomic(path, out.code.as_bytes()).map_err(|e| Failure::Message(format!("error: {e}")))?;
             if !args.quiet {
                 eprintln!("wrote {}", path.display());
             }

@@ -164,6 +164,9 @@ fn the_cli_exits_non_zero_with_the_message() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("broken.ron:") && err.contains("not positive") && err.contains("help:"), "{err}");
+    // A labelled excerpt of the file, without colour codes on a pipe.
+    assert!(err.contains("Body(name: \"bar2\", frame: \"bar2\", mass: \"m2\"") && err.contains("╰──"), "{err}");
+    assert!(!err.contains('\u{1b}'), "no colour codes when stderr is not a terminal: {err}");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_generator")).arg("inspect").arg(dir.join("missing.ron")).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read the file"));

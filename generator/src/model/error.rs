@@ -92,6 +92,71 @@ impl ModelError {
     }
 }
 
+impl ModelError {
+    /// The error as a report with a labelled excerpt of the file and the fix (rendered by
+    /// miette), in colour when `color` (a terminal); without a place in a text, the one-line
+    /// form of `Display`.
+    ///
+    /// ```
+    /// let src = "Model(\n  name: \"m\",\n  typo: 3,\n)";
+    /// let e = generator::model::from_source("m.ron", src).unwrap_err();
+    /// let report = e.render(false);
+    /// assert!(report.contains("m.ron:3:3") && report.contains("typo: 3") && report.contains("help:"), "{report}");
+    /// ```
+    pub fn render(&self, color: bool) -> String {
+        let (Some(text), Some(span)) = (&self.source_text, &self.span) else { return self.to_string() };
+        let excerpt = Excerpt {
+            error: self,
+            source: miette::NamedSource::new(&self.file, text.to_string()),
+            span: (span.start.min(text.len()), span.len().min(text.len().saturating_sub(span.start))).into(),
+        };
+        let theme = if color { miette::GraphicalTheme::unicode() } else { miette::GraphicalTheme::unicode_nocolor() };
+        let handler = miette::GraphicalReportHandler::new_themed(theme).with_wrap_lines(false).with_context_lines(1);
+        let mut out = String::new();
+        match handler.render_report(&mut out, &excerpt) {
+            Ok(()) => format!("error: {}", out.trim_start().trim_start_matches('×').trim_start()),
+            Err(_) => self.to_string(),
+        }
+    }
+}
+
+/// A [`ModelError`] as a miette diagnostic: its header, the labelled span, the fix.
+#[derive(Debug)]
+struct Excerpt<'a> {
+    error: &'a ModelError,
+    source: miette::NamedSource<String>,
+    span: miette::SourceSpan,
+}
+
+impl fmt::Display for Excerpt<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let e = self.error;
+        write!(f, "{}", e.file)?;
+        if let Some((l, c)) = e.location {
+            write!(f, ":{l}:{c}")?;
+        }
+        if !e.place.is_empty() {
+            write!(f, ": in {}", e.place)?;
+        }
+        write!(f, ": {}", e.message)
+    }
+}
+
+impl std::error::Error for Excerpt<'_> {}
+
+impl miette::Diagnostic for Excerpt<'_> {
+    fn help<'a>(&'a self) -> Option<Box<dyn fmt::Display + 'a>> {
+        (!self.error.help.is_empty()).then(|| Box::new(&self.error.help) as Box<dyn fmt::Display>)
+    }
+    fn source_code(&self) -> Option<&dyn miette::SourceCode> {
+        Some(&self.source)
+    }
+    fn labels(&self) -> Option<Box<dyn Iterator<Item = miette::LabeledSpan> + '_>> {
+        let label = if self.error.place.is_empty() { "here".to_string() } else { self.error.place.clone() };
+        Some(Box::new(std::iter::once(miette::LabeledSpan::new_with_span(Some(label), self.span))))
+    }
+}
+
 /// The bytes an error at `place` is about: the value at that path in the file (or its deepest
 /// enclosing value), narrowed to the first occurrence of `needle` inside it when there is one;
 /// without a path that resolves, the first occurrence of `needle` in the file.
