@@ -430,3 +430,19 @@ fn constants_beyond_f64_are_located_at_the_extreme_number() {
     assert_eq!(&text.lines().nth(line - 1).unwrap()[col - 1..col + 4], "1e200", "{e}");
     assert!(e.to_string().len() < 400, "{e}");
 }
+
+#[test]
+fn an_expensive_expression_stays_within_the_simplifier_s_work_budget() {
+    // (theta1 + theta2)^30 in a centre of mass: its Fourier form has hundreds of harmonics per
+    // entry. The simplifier stops at its term and work limits, keeps those nodes as built
+    // (correct, only less compact), reports them, and generation finishes.
+    let text = scene1().replacen("com: [\"0\", \"-l/2\", \"0\"]", "com: [\"0\", \"-l/2 + (theta1 + theta2)^30/1000\", \"0\"]", 1);
+    let model = from_source("models/heavy.ron", &text).unwrap();
+    let out = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let report = &out.summary.simplifier;
+    let limits = generator::symbolic::fourier::FourierLimits::default();
+    assert!(report.work <= limits.max_work + limits.max_terms as u64 * limits.max_terms as u64, "{report:?}");
+    assert!(report.over_term_limit > 0 || report.work_limit_reached, "the limits were reached: {report:?}");
+    assert!(out.summary.work_counters().contains("kept as built"));
+    assert!(!out.code.contains("NAN"));
+}

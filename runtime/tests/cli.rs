@@ -157,3 +157,19 @@ fn a_wrong_model_file_gets_the_generator_s_located_error_and_no_build_log() {
     assert!(String::from_utf8_lossy(&missing.stderr).contains("cannot read model file"), "{}", String::from_utf8_lossy(&missing.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn help_and_version_answer_on_stdout_before_anything_is_built() {
+    for bin in [env!("CARGO_BIN_EXE_compare"), env!("CARGO_BIN_EXE_sweep")] {
+        let help = Command::new(bin).arg("--help").output().unwrap();
+        assert!(help.status.success());
+        let text = String::from_utf8_lossy(&help.stdout);
+        assert!(text.contains("Usage:") && text.contains("<MODEL>") && text.contains("[default: "), "{text}");
+        assert!(text.contains("work-precision") || text.contains("paper's Tables"), "a sentence on what it does: {text}");
+        let version = Command::new(bin).arg("--version").output().unwrap();
+        assert!(version.status.success() && String::from_utf8_lossy(&version.stdout).contains(env!("CARGO_PKG_VERSION")));
+        // A repeated single-valued option is refused.
+        let twice = Command::new(bin).args(["cart_pendulum", "--repeats", "1", "--repeats", "2"]).output().unwrap();
+        assert!(!twice.status.success() && String::from_utf8_lossy(&twice.stderr).contains("cannot be used multiple times"));
+    }
+}
