@@ -130,6 +130,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -478,6 +527,244 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 4]; 4]; 6],
+        d_force: [[f64; 4]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * m2 * l * l * x4;
+        let x6 = m2 + 0.5 * m1;
+        let x7 = l * x6 * x3;
+        let x8 = l * x4;
+        let x9 = 0.5 * x2 * m2 * l;
+        let x10 = -m2 - 0.5 * m1;
+        let x11 = x2 * x0 - x3 * x1;
+        let x12 = theta1_dot - theta2_dot;
+        let x13 = -(0.5 * m2 * l * l * x11);
+        let x14 = x10 * x0 * l;
+        let x15 = -(l * x11);
+        let x16 = 0.5 * m2 * l * l * x11;
+        let x17 = l * x11;
+        let x18 = -(0.5 * m2 * l * x1);
+        Derivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [l * l * (m2 + 0.3333333333333333 * m1), x5, x7, x8],
+                [x5, 0.3333333333333333 * m2 * l * l, x9, l],
+                [x7, x9, m2 + M + m1, 0.0],
+                [x8, l, 0.0, 0.0],
+            ],
+            force: [
+                tau
+                    + l
+                        * (x10 * x0 * g
+                            - 0.5 * (m2 * l * x11 * theta2_dot * theta2_dot)),
+                m2 * (0.5 * (l * x11 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l
+                    - tau,
+                (0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                    - m2
+                        * (-x0 * theta1_dot * theta1_dot
+                            - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
+                x12 * l * x11 * theta1_dot,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, x13, x14, x15],
+                    [x13, 0.0, 0.0, 0.0],
+                    [x14, 0.0, 0.0, 0.0],
+                    [x15, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x16, 0.0, x17],
+                    [x16, 0.0, x18, 0.0],
+                    [0.0, x18, 0.0, 0.0],
+                    [x17, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    l * (x10 * g * x3 - 0.5 * (m2 * l * x4 * theta2_dot * theta2_dot)),
+                    0.5 * m2 * l * l * x4 * theta1_dot * theta1_dot,
+                    l * x6 * theta1_dot * theta1_dot * x3,
+                    x12 * l * x4 * theta1_dot,
+                ],
+                [
+                    0.5 * m2 * l * l * x4 * theta2_dot * theta2_dot,
+                    m2 * l
+                        * (-0.5 * (x2 * g) - 0.5 * (l * x4 * theta1_dot * theta1_dot)),
+                    0.5 * x2 * m2 * l * theta2_dot * theta2_dot,
+                    -(x12 * l * x4 * theta1_dot),
+                ],
+                [0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    m2 * l * l * x11 * theta1_dot,
+                    x0 * l * theta1_dot * (2.0 * m2 + m1),
+                    l * x11 * (2.0 * theta1_dot - theta2_dot),
+                ],
+                [
+                    -(m2 * l * l * x11 * theta2_dot),
+                    0.0,
+                    m2 * l * theta2_dot * x1,
+                    -(l * x11 * theta1_dot),
+                ],
+                [0.0, 0.0, 0.0, 0.0],
+            ],
+            power: x12 * tau,
+            d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..6 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 4];
+            for i in 0..4 {
+                let mut s = d_force[k][i];
+                for j in 0..4 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -556,6 +843,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 7 states, 3 equations.
@@ -843,6 +1143,330 @@ pub mod maggi {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 2]; 2]; 6],
+        d_force: [[f64; 2]; 6],
+        w: [[f64; 2]; 3],
+        c: [f64; 3],
+        d_w: [[[f64; 2]; 3]; 6],
+        d_c: [[f64; 3]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = 2.0 * theta1 - 2.0 * theta2;
+        let x9 = f64::cos(x8);
+        let x10 = x2 + x5;
+        let x11 = m2 + 0.5 * m1;
+        let x12 = l * x7 * (x11 * x4 - 0.5 * (x3 * m2 * x10));
+        let x13 = theta1_dot - theta2_dot;
+        let x14 = m2 + 0.3333333333333333 * m1;
+        let x15 = x7 * x14;
+        let x16 = x7 * x10;
+        let x17 = 1.0 - x16;
+        let x18 = x3 * x0 - x4 * x1;
+        let x19 = -m2 - 0.5 * m1;
+        let x20 = l
+            * (l
+                * (x13 * x13 * (-x15 - 0.5 * (m2 * x17 * x10)) * x7
+                    - 0.5 * (m2 * theta2_dot * theta2_dot)) * x18 + x19 * x0 * g);
+        let x21 = m2 * l
+            * (l
+                * (0.5 * (theta1_dot * theta1_dot)
+                    + x13 * x13 * x7 * (-0.16666666666666666 * x16 - 0.3333333333333333))
+                * x18 - 0.5 * (g * x1)) - tau;
+        let x22 = x7 * x11 * x4;
+        let x23 = m2 * f64::sin(x8);
+        let x24 = (x19 * x0 + x18 * (x3 * m2 * (0.5 - 0.5 * x16) + x22)) * l * x7;
+        let x25 = x10 * theta1_dot * theta1_dot;
+        let x26 = x10 * x10;
+        let x27 = x7 * x18 * x18;
+        let x28 = -x2 - 2.0 * x27 - x5;
+        let x29 = (x7 * x28 + 1.0) * x10;
+        let x30 = m2 * x10 * theta2_dot * theta2_dot;
+        let x31 = 2.0 * x27 + x29;
+        let x32 = x7 * x7 * x14;
+        let x33 = m2 * x17;
+        let x34 = x7 * (tau + x20);
+        let x35 = x2 + 2.0 * x27 + x5;
+        let x36 = l * x7
+            * (m2 * (x3 * (0.5 * x16 - 0.5) * x18 + 0.5 * (x10 * x1))
+                - x7 * x11 * x18 * x4);
+        let x37 = x16 - 1.0;
+        let x38 = x10 * (x35 * x7 - 1.0);
+        let x39 = x38 - 2.0 * x27;
+        let x40 = 2.0 - 2.0 * x16;
+        let x41 = 2.0 * x16 - 2.0;
+        Derivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [
+                    l * l * x7 * x7
+                        * (m2 * (0.6666666666666666 - 0.3333333333333333 * x9)
+                            + 0.3333333333333333 * m1),
+                    x12,
+                ],
+                [x12, m2 + M + m1],
+            ],
+            force: [
+                x7 * (tau + x20 - x21 * x10),
+                l
+                    * (x13 * x13 * x7 * x18 * (-0.5 * (x3 * m2 * x17) - x22)
+                        + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
+                        - m2
+                            * (-x0 * theta1_dot * theta1_dot
+                                - 0.5 * (theta2_dot * theta2_dot * x1))),
+            ],
+            checks: [x6, l * x6],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        l * l * x7 * x7
+                            * (0.6666666666666666 * x23
+                                + (m2 * (1.3333333333333333 - 0.6666666666666666 * x9)
+                                    + 0.6666666666666666 * m1) * x7 * x18),
+                        x24,
+                    ],
+                    [x24, 0.0],
+                ],
+                [
+                    [
+                        l * l * x7 * x7
+                            * ((m2 * (0.6666666666666666 * x9 - 1.3333333333333333)
+                                - 0.6666666666666666 * m1) * x7 * x18
+                                - 0.6666666666666666 * x23),
+                        x36,
+                    ],
+                    [x36, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    ((l
+                        * (((-0.5 * (m2 * x31) - x15) * x10
+                            + (0.5 * x33 - 2.0 * x32) * x18 * x18) * x13 * x13 * x7
+                            - 0.5 * x30)
+                        - m2 * l * x10
+                            * (0.5 * x25
+                                + (x7 * ((0.5 - x16) * x18 * x18 - 0.5 * x26)
+                                    - 0.6666666666666666 * x27 - 0.3333333333333333 * x29) * x13
+                                    * x13 * x7) + x19 * g * x4) * l + x18 * (x34 + x21 * x17))
+                        * x7,
+                    l
+                        * (x11 * theta1_dot * theta1_dot * x4
+                            + x13 * x13 * x7
+                                * (x7 * (x11 * x28 * x4 - x19 * x0 * x18)
+                                    - 0.5 * (x3 * m2 * x31))),
+                ],
+                [
+                    x7
+                        * (x18 * (x21 * x37 - x34)
+                            + l
+                                * ((0.5 * x30
+                                    + x13 * x13 * x7
+                                        * (x10 * (x15 - 0.5 * (m2 * x39))
+                                            + x18 * x18 * (2.0 * x32 - 0.5 * x33))) * l
+                                    - m2 * x10
+                                        * (l
+                                            * (x13 * x13 * x7
+                                                * (0.6666666666666666 * x27 - 0.3333333333333333 * x38
+                                                    + x7 * (0.5 * x26 + x18 * x18 * (x16 - 0.5))) - 0.5 * x25)
+                                            - 0.5 * (x3 * g)))),
+                    l
+                        * (0.5 * (x3 * m2 * theta2_dot * theta2_dot)
+                            + x13 * x13 * x7
+                                * (x35 * x7 * x11 * x4
+                                    + m2 * (0.5 * (x17 * x18 * x1) - 0.5 * (x3 * x39)))),
+                ],
+                [0.0, 0.0],
+                [
+                    l * l * x7 * x18
+                        * (x13 * x7 * (-0.5 * (m2 * x10 * x40) - 2.0 * x15)
+                            - m2 * x10
+                                * (x13 * x7
+                                    * (-0.3333333333333333 * x16 - 0.6666666666666666)
+                                    + theta1_dot)),
+                    l
+                        * (x0 * theta1_dot * (2.0 * m2 + m1)
+                            + x13 * (-0.5 * (x3 * m2 * x40) - 2.0 * x22) * x7 * x18),
+                ],
+                [
+                    l * l
+                        * (x13 * x7 * (2.0 * x15 - 0.5 * (m2 * x10 * x41))
+                            - x13 * m2 * x7 * x10
+                                * (0.3333333333333333 * x16 + 0.6666666666666666)
+                            - m2 * theta2_dot) * x7 * x18,
+                    l
+                        * (x13 * x7 * x18 * (2.0 * x22 - 0.5 * (x3 * m2 * x41))
+                            + m2 * theta2_dot * x1),
+                ],
+                [0.0, 0.0],
+            ],
+            w: [[x7, 0.0], [-(x7 * x10), 0.0], [0.0, 1.0]],
+            c: [x13 * x13 * x7 * x7 * x18, x13 * x13 * x17 * x7 * x18, 0.0],
+            d_w: [
+                [[x7 * x7 * x18, 0.0], [x17 * x7 * x18, 0.0], [0.0, 0.0]],
+                [[-(x7 * x7 * x18), 0.0], [x37 * x7 * x18, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [
+                [x35 * x13 * x13 * x7 * x7, x13 * x13 * x31 * x7, 0.0],
+                [x13 * x13 * x7 * x7 * x28, x13 * x13 * x39 * x7, 0.0],
+                [0.0, 0.0, 0.0],
+                [2.0 * x13 * x7 * x7 * x18, x13 * x7 * x18 * x40, 0.0],
+                [-(2.0 * x13 * x7 * x7 * x18), x13 * x7 * x18 * x41, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            power: x13 * tau,
+            d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[3 + j] = s;
+        }
+        dstate[6] = power;
+        for k in 0..6 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[3 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -910,6 +1534,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 6 states, 2 equations.
@@ -1178,6 +1815,318 @@ pub mod kane {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(l * x0))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 5],
+        d_matrix: [[[f64; 2]; 2]; 5],
+        d_force: [[f64; 2]; 5],
+        power: f64,
+        d_power: [f64; 5],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = 2.0 * theta1 - 2.0 * theta2;
+        let x10 = f64::cos(x9);
+        let x11 = m2 + 0.5 * m1;
+        let x12 = l * x7 * (x11 * x4 - 0.5 * (x3 * m2 * x8));
+        let x13 = x4 * x1;
+        let x14 = x3 * x0;
+        let x15 = f64::sin(x9);
+        let x16 = 3.0 * theta1 - 3.0 * theta2;
+        let x17 = f64::sin(x16);
+        let x18 = 4.0 * theta1 - 4.0 * theta2;
+        let x19 = f64::sin(x18);
+        let x20 = -m2 - 0.5 * m1;
+        let x21 = x20 * x0 * l * g;
+        let x22 = -tau - 0.5 * (m2 * l * g * x1);
+        let x23 = x8 * x22;
+        let x24 = x14 - x13;
+        let x25 = x11 * x24 * x4;
+        let x26 = x8 * x8 * x1;
+        let x27 = x0 * m1;
+        let x28 = x7 * x8;
+        let x29 = 1.0 - x28;
+        let x30 = m2 * x15;
+        let x31 = (x20 * x0 + x24 * (x3 * m2 * (0.5 - 0.5 * x28) + x7 * x11 * x4)) * l
+            * x7;
+        let x32 = f64::cos(x16);
+        let x33 = f64::cos(x18);
+        let x34 = x24 * x22;
+        let x35 = x7 * x24 * x24;
+        let x36 = x7 * x11 * x24 * x4;
+        let x37 = x0 * x7;
+        let x38 = x28 - 1.0;
+        let x39 = l * x7 * (m2 * (x3 * (0.5 * x28 - 0.5) * x24 + 0.5 * (x8 * x1)) - x36);
+        let x40 = x7 * (-x2 - x5 - 1.0);
+        let x41 = 1.0 - x40;
+        Derivatives {
+            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            matrix: [
+                [
+                    l * l * x7 * x7
+                        * (m2 * (0.6666666666666666 - 0.3333333333333333 * x10)
+                            + 0.3333333333333333 * m1),
+                    x12,
+                ],
+                [x12, m2 + M + m1],
+            ],
+            force: [
+                x7
+                    * (tau
+                        + l * l * x7 * x7 * u1 * u1
+                            * ((0.3333333333333333 * x13 - 0.3333333333333333 * x14
+                                - 0.16666666666666666 * x15) * x7 * m1
+                                + m2
+                                    * (0.16666666666666666 * x13 - 0.16666666666666666 * x17
+                                        - 0.16666666666666666 * x14 - 0.3333333333333333 * x15
+                                        + (0.8333333333333334 * x13 + 0.16666666666666666 * x17
+                                            + 0.08333333333333333 * x19 - 0.8333333333333334 * x14
+                                            - 0.3333333333333333 * x15) * x7)) + x21 - x23),
+                l * x7 * u1 * u1
+                    * ((0.5 * x27 - x25 - m2 * (-x0 - 0.5 * x26)) * x7
+                        - 0.5 * (x3 * m2 * x29 * x24)),
+            ],
+            checks: [x6, l * x6],
+            d_qdot: [
+                [x7 * x7 * x24 * u1, x29 * x7 * x24 * u1, 0.0],
+                [-(x7 * x7 * x24 * u1), x38 * x7 * x24 * u1, 0.0],
+                [0.0, 0.0, 0.0],
+                [x7, -(x7 * x8), 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        l * l * x7 * x7
+                            * (0.6666666666666666 * x30
+                                + (m2 * (1.3333333333333333 - 0.6666666666666666 * x10)
+                                    + 0.6666666666666666 * m1) * x7 * x24),
+                        x31,
+                    ],
+                    [x31, 0.0],
+                ],
+                [
+                    [
+                        l * l * x7 * x7
+                            * ((m2 * (0.6666666666666666 * x10 - 1.3333333333333333)
+                                - 0.6666666666666666 * m1) * x7 * x24
+                                - 0.6666666666666666 * x30),
+                        x39,
+                    ],
+                    [x39, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x7
+                        * (x20 * l * g * x4
+                            + (x24 * (tau + x21 - x23)
+                                + l * l
+                                    * (x7
+                                        * (m2
+                                            * (x24
+                                                * (0.5 * x13 - 0.5 * x17 - 0.5 * x14
+                                                    + x7
+                                                        * (3.3333333333333335 * x13 + 0.6666666666666666 * x17
+                                                            + 0.3333333333333333 * x19 - 3.3333333333333335 * x14
+                                                            - 1.3333333333333333 * x15) - x15)
+                                                - 0.6666666666666666 * x10 - 0.8333333333333334 * x2
+                                                - 0.8333333333333334 * x5 + 0.5 * x32
+                                                + 0.3333333333333333 * x33)
+                                            + m1
+                                                * (x7 * x24
+                                                    * (1.3333333333333333 * x13 - 1.3333333333333333 * x14
+                                                        - 0.6666666666666666 * x15) - 0.3333333333333333 * x10
+                                                    - 0.3333333333333333 * x2 - 0.3333333333333333 * x5))
+                                        + m2
+                                            * (-0.6666666666666666 * x10 - 0.16666666666666666 * x2
+                                                - 0.16666666666666666 * x5 - 0.5 * x32)) * x7 * u1 * u1)
+                                * x7 + x34),
+                    l * x7
+                        * (x7
+                            * (x24 * (x0 * (x7 * m1 + m2 + 0.5 * m1) - 2.0 * x36)
+                                + x4 * (0.5 * m1 - x11 * x8)
+                                - m2 * ((x29 * x8 * x1 - 2.0 * x37) * x24 - x4))
+                            - 0.5
+                                * (x3 * m2
+                                    * (2.0 * x35 + (x7 * (-x2 - 2.0 * x35 - x5) + 1.0) * x8)))
+                        * u1 * u1,
+                ],
+                [
+                    x7
+                        * (0.5 * (x3 * m2 * l * g * x8)
+                            + (l * l * x7 * u1 * u1
+                                * (m2
+                                    * (0.6666666666666666 * x10 + 0.16666666666666666 * x2
+                                        + 0.16666666666666666 * x5 + 0.5 * x32)
+                                    + (m2
+                                        * (0.6666666666666666 * x10 + 0.8333333333333334 * x2
+                                            + x24
+                                                * (0.5 * x17 - 0.5 * x13 + 0.5 * x14
+                                                    + (3.3333333333333335 * x14 - 3.3333333333333335 * x13
+                                                        - 0.6666666666666666 * x17 - 0.3333333333333333 * x19
+                                                        + 1.3333333333333333 * x15) * x7 + x15)
+                                            + 0.8333333333333334 * x5 - 0.5 * x32
+                                            - 0.3333333333333333 * x33)
+                                        + (0.3333333333333333 * x10 + 0.3333333333333333 * x2
+                                            + (1.3333333333333333 * x14 - 1.3333333333333333 * x13
+                                                + 0.6666666666666666 * x15) * x7 * x24
+                                            + 0.3333333333333333 * x5) * m1) * x7)
+                                + x24 * (x23 - tau - x21)) * x7 - x34),
+                    l * x7
+                        * (x7
+                            * (x11 * x4 * (x2 + x7 * x24 * x24 * x41 + x5)
+                                - m2
+                                    * ((x38 * x8 * x1 + 2.0 * x37) * x24 - 0.5 * (x3 * x8 * x8))
+                                - x0 * x7 * x24 * m1)
+                            + m2
+                                * (0.5 * (x29 * x24 * x1)
+                                    - 0.5
+                                        * (x3
+                                            * ((x24 * x24 * (x40 + x7 * x41 * x8 - 1.0) + x8 * x8) * x7
+                                                - x2 - x5)))) * u1 * u1,
+                ],
+                [0.0, 0.0],
+                [
+                    l * l * x7 * x7 * x7
+                        * (m2
+                            * (x7
+                                * (1.6666666666666667 * x13 + 0.3333333333333333 * x17
+                                    + 0.16666666666666666 * x19 - 1.6666666666666667 * x14
+                                    - 0.6666666666666666 * x15) + 0.3333333333333333 * x13
+                                - 0.3333333333333333 * x17 - 0.3333333333333333 * x14
+                                - 0.6666666666666666 * x15)
+                            + (0.6666666666666666 * x13 - 0.6666666666666666 * x14
+                                - 0.3333333333333333 * x15) * x7 * m1) * u1,
+                    l * x7 * u1
+                        * (x7 * (x27 - 2.0 * x25 - m2 * (-2.0 * x0 - x26))
+                            - 0.5 * (x3 * m2 * x24 * (2.0 - 2.0 * x28))),
+                ],
+                [0.0, 0.0],
+            ],
+            power: tau * u1,
+            d_power: [0.0, tau * x7 * x24 * (x40 + 1.0) * u1, 0.0, tau, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[5] = power;
+        for k in 0..5 {
+            jac[5][k] = d_power[k];
+        }
+        for k in 0..5 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1245,6 +2194,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 1 equations.
@@ -1554,6 +2516,365 @@ pub mod reduced_volterra {
             .min(f64::abs(l * (x2 + x5 + 1.0)))
             .min(f64::abs(x0 * x6 * x1 + m2 + x3 * x6 * x4 + M + m1))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 3],
+        d_qdot: [[f64; 3]; 4],
+        d_matrix: [[[f64; 1]; 1]; 4],
+        d_force: [[f64; 1]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let G_x = g_i[0];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = -x2 - x5 - 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5 + 1.0;
+        let x9 = 1.0 / x8;
+        let x10 = x2 + x5;
+        let x11 = theta1 - 2.0 * theta2;
+        let x12 = f64::cos(x11);
+        let x13 = 0.5 * (x4 * m1) + m2 * (0.75 * x4 - 0.25 * x12);
+        let x14 = l * x13 * u1;
+        let x15 = G_x * x8;
+        let x16 = m2 + M + m1;
+        let x17 = 1.0 / (m2 + M + m1 + x16 * x10);
+        let x18 = m2 + 0.5 * m1;
+        let x19 = 0.5 * (x3 * m2 * x9 * x10) + x18 * x7 * x4 + x13 * x16 * x17;
+        let x20 = x10 * (0.3333333333333333 * x9 + 0.5 * x7) + 0.5 * (x3 * x13 * x17);
+        let x21 = m2 + 0.3333333333333333 * m1;
+        let x22 = x7 * x21 + x13 * x18 * x4 * x17 + 0.5 * (m2 * x9 * x10 * x10);
+        let x23 = -tau - 0.5 * (m2 * l * g * x1);
+        let x24 = -m2 - 0.5 * m1;
+        let x25 = tau + x24 * x0 * l * g;
+        let x26 = x3 * x0 - x4 * x1;
+        let x27 = x9 * x10;
+        let x28 = x7 - x27;
+        let x29 = x10 * x28;
+        let x30 = 0.5 * x29 + 0.5;
+        let x31 = x27 - 1.0;
+        let x32 = -m2 - M - m1;
+        let x33 = x13 * x32 * x26 * x17 * x28;
+        let x34 = (-0.75 * m2 - 0.5 * m1) * x0 * x7;
+        let x35 = f64::sin(x11);
+        let x36 = x7 - 2.0 * x27;
+        let x37 = m2 * x35 * x36;
+        let x38 = x34 - x33 + 0.25 * x37;
+        let x39 = x26 * (x7 * x7 * x30 - 0.3333333333333333 * (x31 * x9 * x28))
+            - 0.5 * (x3 * x38 * x17);
+        let x40 = x0 * x7 * x7 * m1;
+        let x41 = x9 * x9 * x10 * x10 * x1;
+        let x42 = x0 * x7 * x7;
+        let x43 = x18 * x7 * x7 * x4;
+        let x44 = 0.5 * x40 - m2 * (-0.5 * x41 - x42) - x16 * x38 * x17
+            + (x43 - 0.5 * (x3 * m2 * x31 * x9)) * x26 * x28;
+        let x45 = x7 * x7 * x28 * x21;
+        let x46 = x26 * (x45 + (-0.5 * (x31 * x28) - 0.5 * x27) * m2 * x9 * x10)
+            - x18 * x38 * x4 * x17;
+        let x47 = m2 * (0.25 * x35 - 0.75 * x0);
+        let x48 = x0 * m1;
+        let x49 = x47 - 0.5 * x48;
+        let x50 = -x14 - x15;
+        let x51 = x7 * x7;
+        let x52 = x9 * x9;
+        let x53 = x7 * x7 * x21;
+        let x54 = 2.0 - 2.0 * x27;
+        let x55 = x12 * x36;
+        let x56 = 1.0 - x27;
+        let x57 = x56 * x9;
+        let x58 = x57 - x51;
+        let x59 = x7 * (0.5 * (x0 * x7 * x26) - 0.5 * x4) * m1
+            + m2
+                * ((0.25 * (x35 * (x9 * x54 - x51)) + 0.75 * x42) * x26
+                    - 0.75 * (x7 * x4) + 0.25 * x55)
+            + (x32 * x26
+                * ((2.0 * (x13 * x32 * x26 * x17) - x47 + 0.5 * x48) * x28 - x34
+                    - 0.25 * x37) - x13 * (x32 * x10 * x28 + x58 * x32 * x26 * x26))
+                * x17;
+        let x60 = 2.0 * x27 - 2.0;
+        let x61 = x60 * x28;
+        let x62 = x58 * x10;
+        let x63 = (x51 + x9 * (x61 + x62) - x57) * x26 * x26;
+        let x64 = x31 * x10 * x28;
+        let x65 = x63 + x64;
+        let x66 = x7 * x10;
+        let x67 = x31 * x26 * x26 * x28;
+        let x68 = x10 * x10;
+        let x69 = x7 * x28;
+        let x70 = x57 - 2.0 * x69 - x51;
+        let x71 = x25 * x7 * x7;
+        let x72 = x56 * x10 * x28;
+        let x73 = x31 * x9;
+        let x74 = x51 + x73;
+        let x75 = x10 * x74;
+        let x76 = x26 * x26 * (x9 * (x75 + x28 * x54) - x51 - x73);
+        let x77 = x72 + x76;
+        let x78 = (2.0 * x69 + x51 + x73) * x26 * x26 - x29;
+        let x79 = m2 * (x26 * (0.25 * (x35 * (x51 + x9 * x60)) - 0.75 * x42) - 0.5 * x55)
+            + ((x32 * x28 * (0.5 * (m2 * x35) + 2.0 * (x13 * x26 * x16 * x17))
+                - x16 * (x34 + 0.25 * x37)) * x26
+                - x13 * (x32 * x26 * x26 * x74 + x16 * x10 * x28)) * x17
+            - 0.5 * (x0 * x7 * x7 * x26 * m1);
+        let x80 = 2.0 * x34 - 2.0 * x33 + 0.5 * x37;
+        Derivatives {
+            qdot: [x7 * u1, x9 * x10 * u1, (x14 + x15) * x17],
+            matrix: [[l * l * (x13 * x19 * x17 + m2 * x9 * x10 * x20 + x7 * x22)]],
+            force: [
+                x9 * x10 * x23 + x25 * x7
+                    + l * l * (m2 * x9 * x10 * x39 + x13 * x44 * x17 + x7 * x46) * u1
+                        * u1,
+            ],
+            checks: [x6, l * x8, x0 * x16 * x1 + m2 + x3 * x16 * x4 + M + m1],
+            d_qdot: [
+                [
+                    -(x7 * x7 * x26 * u1),
+                    x31 * x9 * x26 * u1,
+                    (l * u1 * x49 + x26 * (x50 * x32 * x17 - G_x)) * x17,
+                ],
+                [
+                    x7 * x7 * x26 * u1,
+                    x56 * x9 * x26 * u1,
+                    x17 * (x26 * (G_x + x50 * x16 * x17) - 0.5 * (m2 * x35 * l * u1)),
+                ],
+                [0.0, 0.0, 0.0],
+                [x7, x27, l * x13 * x17],
+            ],
+            d_matrix: [
+                [
+                    [
+                        l * l
+                            * (x26
+                                * (m2 * x31 * x9 * x20 - x7 * x7 * x22
+                                    - x13 * x19 * x32 * x17 * x17)
+                                + x17
+                                    * (x19 * x49
+                                        + (x24 * x0 * x7 + x16 * x49 * x17
+                                            + x26
+                                                * (x3 * m2 * (0.5 * x27 - 0.5) * x9
+                                                    - x13 * x32 * x16 * x17 * x17 - x43)) * x13)
+                                + m2 * x9
+                                    * (((0.3333333333333333 * x52 - 0.5 * x51) * x10
+                                        - 0.3333333333333333 * x9 - 0.5 * x7
+                                        - 0.5 * (x3 * x13 * x32 * x17 * x17)) * x26
+                                        + 0.5 * (x3 * x49 * x17)) * x10
+                                + ((x24 * x0 * x13 + x18 * x4 * x49) * x17
+                                    + (m2 * x9 * x10 * (0.5 * x27 - 1.0) - x53
+                                        - x13 * x18 * x32 * x4 * x17 * x17) * x26) * x7),
+                    ],
+                ],
+                [
+                    [
+                        l * l
+                            * (x13
+                                * (m2
+                                    * (x9 * (x3 * (0.5 - 0.5 * x27) * x26 - 0.5 * (x10 * x1))
+                                        - 0.5 * (x35 * x16 * x17)) - x19 * x26 * x16 * x17
+                                    + (x43 - x13 * x16 * x16 * x17 * x17) * x26) * x17
+                                + m2
+                                    * (x9
+                                        * (x10
+                                            * ((-0.5 * (x13 * x1) - 0.25 * (x3 * m2 * x35)) * x17
+                                                + x26
+                                                    * ((0.5 * x51 - 0.3333333333333333 * x52) * x10
+                                                        + 0.3333333333333333 * x9 + 0.5 * x7
+                                                        - 0.5 * (x3 * x13 * x16 * x17 * x17))) + x56 * x26 * x20)
+                                        - 0.5 * (x35 * x19 * x17))
+                                + ((x53 - x13 * x18 * x16 * x4 * x17 * x17
+                                    + m2 * (1.0 - 0.5 * x27) * x9 * x10) * x26 + x7 * x26 * x22
+                                    - 0.5 * (m2 * x35 * x18 * x4 * x17)) * x7),
+                    ],
+                ],
+                [[0.0]],
+                [[0.0]],
+            ],
+            d_force: [
+                [
+                    l
+                        * (x24 * x7 * g * x4
+                            + l * u1 * u1
+                                * (m2 * x9
+                                    * (x7 * x7
+                                        * (x30 * x10
+                                            + x26 * x26 * ((-x66 - 0.5) * x28 - x7 + 0.5 * x62))
+                                        - 0.5 * (x3 * x59 * x17) - 0.3333333333333333 * (x9 * x65))
+                                    * x10
+                                    + x7
+                                        * (m2 * x9
+                                            * (0.5 * x67
+                                                + (x9 * (x56 * x26 * x26 - 0.5 * x68) - 0.5 * x63
+                                                    - 0.5 * x64) * x10)
+                                            + x7 * x7 * (x70 * x26 * x26 + x29) * x21
+                                            + (-x59 * x18 * x4 - x24 * x0 * x38) * x17)
+                                    + (x13
+                                        * (m2
+                                            * (x7 * x7 * x4
+                                                - x26
+                                                    * (x56 * x9 * x9 * x10 * x1 + 2.0 * (x0 * x7 * x7 * x7))
+                                                - 0.5 * (x3 * x9 * x65)) - x59 * x16 * x17
+                                            + x7 * x7
+                                                * ((x18 * x10 * x28 + 0.5 * m1) * x4
+                                                    + (x70 * x18 * x26 * x4 + x0 * (x24 * x28 - x7 * m1))
+                                                        * x26)) + x44 * x49) * x17
+                                    + (m2 * x31 * x9 * x39 - x13 * x44 * x32 * x17 * x17
+                                        - x7 * x7 * x46) * x26)) + (x31 * x9 * x23 - x71) * x26,
+                ],
+                [
+                    (x71 + x56 * x9 * x23) * x26
+                        + l
+                            * (l * u1 * u1
+                                * (x13
+                                    * (m2
+                                        * (2.0 * (x0 * x7 * x7 * x7 * x26)
+                                            - x9 * x9 * (x31 * x26 * x1 - 0.5 * (x3 * x10)) * x10
+                                            + x9 * (0.5 * (x31 * x26 * x1 * x28) - 0.5 * (x3 * x77)))
+                                        + (x18 * x78 * x4 + x0 * x7 * x26 * m1) * x7 * x7
+                                        - x44 * x26 * x16 * x17 - x16 * x79 * x17) * x17
+                                    + x7
+                                        * (x78 * x7 * x7 * x21 - x18 * x79 * x4 * x17
+                                            + m2
+                                                * ((x9 * (0.5 * x68 + x31 * x26 * x26) - 0.5 * x72
+                                                    - 0.5 * x76) * x10 - 0.5 * x67) * x9 + x7 * x26 * x46)
+                                    + m2
+                                        * ((((x26 * x26 * (0.5 * x75 + x7 + (x66 + 0.5) * x28)
+                                            + x10 * (-0.5 * x29 - 0.5)) * x7 * x7
+                                            - 0.3333333333333333 * (x9 * x77)
+                                            + (0.5 * (x38 * x1) - 0.5 * (x3 * x79)) * x17) * x10
+                                            + x56 * x26 * x39) * x9 - 0.5 * (x35 * x44 * x17)))
+                                - 0.5 * (x3 * m2 * x9 * g * x10)),
+                ],
+                [0.0],
+                [
+                    l * l * u1
+                        * (x7
+                            * ((2.0 * x45 + (-x27 - 0.5 * x61) * m2 * x9 * x10) * x26
+                                - x18 * x80 * x4 * x17)
+                            + x13
+                                * (x40 - x16 * x80 * x17 - m2 * (-x41 - 2.0 * x42)
+                                    + x26 * x28 * (2.0 * x43 - 0.5 * (x3 * m2 * x9 * x60)))
+                                * x17
+                            + m2 * x9 * x10
+                                * (x26
+                                    * ((x29 + 1.0) * x7 * x7
+                                        - 0.3333333333333333 * (x9 * x60 * x28))
+                                    - 0.5 * (x3 * x80 * x17))),
+                ],
+            ],
+            power: tau * u1 * x28,
+            d_power: [tau * x58 * x26 * u1, tau * x26 * u1 * x74, 0.0, tau * x28],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -1621,6 +2942,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

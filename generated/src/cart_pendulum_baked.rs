@@ -103,6 +103,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -394,6 +443,209 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 4]; 4]; 6],
+        d_force: [[f64; 4]; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * x4;
+        let x6 = 1.5 * x3;
+        let x7 = 0.5 * x2;
+        let x8 = x2 * x0 - x3 * x1;
+        let x9 = theta1_dot - theta2_dot;
+        let x10 = -(0.5 * x8);
+        let x11 = -(1.5 * x0);
+        let x12 = -x8;
+        let x13 = 0.5 * x8;
+        let x14 = -(0.5 * x1);
+        Derivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [1.3333333333333333, x5, x6, x4],
+                [x5, 0.3333333333333333, x7, 1.0],
+                [x6, x7, 4.0, 0.0],
+                [x4, 1.0, 0.0, 0.0],
+            ],
+            force: [
+                -14.715 * x0 - 0.5 * (x8 * theta2_dot * theta2_dot),
+                0.5 * (x8 * theta1_dot * theta1_dot) - 4.905 * x1,
+                1.5 * (x0 * theta1_dot * theta1_dot)
+                    + 0.5 * (theta2_dot * theta2_dot * x1),
+                x9 * x8 * theta1_dot,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, x10, x11, x12],
+                    [x10, 0.0, 0.0, 0.0],
+                    [x11, 0.0, 0.0, 0.0],
+                    [x12, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x13, 0.0, x8],
+                    [x13, 0.0, x14, 0.0],
+                    [0.0, x14, 0.0, 0.0],
+                    [x8, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    -0.5 * (x4 * theta2_dot * theta2_dot) - 14.715 * x3,
+                    0.5 * x4 * theta1_dot * theta1_dot,
+                    1.5 * theta1_dot * theta1_dot * x3,
+                    x9 * x4 * theta1_dot,
+                ],
+                [
+                    0.5 * x4 * theta2_dot * theta2_dot,
+                    -4.905 * x2 - 0.5 * (x4 * theta1_dot * theta1_dot),
+                    0.5 * x2 * theta2_dot * theta2_dot,
+                    -(x9 * x4 * theta1_dot),
+                ],
+                [0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    x8 * theta1_dot,
+                    3.0 * x0 * theta1_dot,
+                    x8 * (2.0 * theta1_dot - theta2_dot),
+                ],
+                [-(x8 * theta2_dot), 0.0, theta2_dot * x1, -(x8 * theta1_dot)],
+                [0.0, 0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 4];
+            for i in 0..4 {
+                let mut s = d_force[k][i];
+                for j in 0..4 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -472,6 +724,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 6 states, 3 equations.
@@ -718,6 +983,287 @@ pub mod maggi {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 2]; 2]; 6],
+        d_force: [[f64; 2]; 6],
+        w: [[f64; 2]; 3],
+        c: [f64; 3],
+        d_w: [[[f64; 2]; 3]; 6],
+        d_c: [[f64; 3]; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = 2.0 * theta1 - 2.0 * theta2;
+        let x9 = f64::cos(x8);
+        let x10 = x2 + x5;
+        let x11 = x7 * (1.5 * x4 - 0.5 * (x3 * x10));
+        let x12 = theta1_dot - theta2_dot;
+        let x13 = x7 * x10;
+        let x14 = x3 * x0 - x4 * x1;
+        let x15 = (0.5 * (theta1_dot * theta1_dot)
+            + x12 * x12 * x7 * (-0.16666666666666666 * x13 - 0.3333333333333333)) * x14
+            - 4.905 * x1;
+        let x16 = 1.0 - x13;
+        let x17 = x14
+            * (x12 * x12 * x7 * (-1.3333333333333333 * x7 - 0.5 * (x16 * x10))
+                - 0.5 * (theta2_dot * theta2_dot));
+        let x18 = x7 * x4;
+        let x19 = f64::sin(x8);
+        let x20 = ((1.5 * x18 + x3 * (0.5 - 0.5 * x13)) * x14 - 1.5 * x0) * x7;
+        let x21 = x10 * theta1_dot * theta1_dot;
+        let x22 = x7 * x14 * x14;
+        let x23 = -x2 - 2.0 * x22 - x5;
+        let x24 = (x7 * x23 + 1.0) * x10;
+        let x25 = x7 * x7;
+        let x26 = (x17 - 14.715 * x0) * x7;
+        let x27 = x10 * theta2_dot * theta2_dot;
+        let x28 = 2.0 * x22 + x24;
+        let x29 = x2 + 2.0 * x22 + x5;
+        let x30 = x7 * (x14 * (x3 * (0.5 * x13 - 0.5) - 1.5 * x18) + 0.5 * (x10 * x1));
+        let x31 = x13 - 1.0;
+        let x32 = x10 * (x29 * x7 - 1.0);
+        let x33 = x32 - 2.0 * x22;
+        let x34 = 2.0 - 2.0 * x13;
+        let x35 = 2.0 * x13 - 2.0;
+        Derivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [[x7 * x7 * (1.0 - 0.3333333333333333 * x9), x11], [x11, 4.0]],
+            force: [
+                x7 * (x17 - 14.715 * x0 - x15 * x10),
+                1.5 * (x0 * theta1_dot * theta1_dot)
+                    + x12 * x12 * x7 * x14 * (-1.5 * x18 - 0.5 * (x3 * x16))
+                    + 0.5 * (theta2_dot * theta2_dot * x1),
+            ],
+            checks: [x6, x6],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        x7 * x7
+                            * ((2.0 - 0.6666666666666666 * x9) * x7 * x14
+                                + 0.6666666666666666 * x19),
+                        x20,
+                    ],
+                    [x20, 0.0],
+                ],
+                [
+                    [
+                        x7 * x7
+                            * (x7 * x14 * (0.6666666666666666 * x9 - 2.0)
+                                - 0.6666666666666666 * x19),
+                        x30,
+                    ],
+                    [x30, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x7
+                        * (x12 * x12 * x7
+                            * ((-1.3333333333333333 * x7 - x22 - 0.5 * x24) * x10
+                                + x14 * x14 * (0.5 - 0.5 * x13 - 2.6666666666666665 * x25))
+                            - (0.5 * x21
+                                + x12 * x12
+                                    * (x10
+                                        * (x7
+                                            * (-0.16666666666666666 * x2 - 0.3333333333333333 * x22
+                                                - 0.16666666666666666 * x5) - 0.3333333333333333)
+                                        - 0.16666666666666666 * x22) * x7) * x10
+                            + x14 * (x26 + x16 * x15) - 0.5 * x27 - 14.715 * x4),
+                    1.5 * (theta1_dot * theta1_dot * x4)
+                        + x12 * x12 * x7
+                            * (x7
+                                * (x14 * (1.5 * x0 - 3.0 * (x7 * x14 * x4))
+                                    - 1.5 * (x10 * x4)) - 0.5 * (x3 * x28)),
+                ],
+                [
+                    x7
+                        * (x14 * (x15 * x31 - x26)
+                            - (x12 * x12 * x7
+                                * (0.16666666666666666 * x22
+                                    + x10
+                                        * (x7
+                                            * (0.16666666666666666 * x2 + 0.3333333333333333 * x22
+                                                + 0.16666666666666666 * x5) + 0.3333333333333333))
+                                - 4.905 * x3 - 0.5 * x21) * x10 + 0.5 * x27
+                            + ((0.5 * x13 + 2.6666666666666665 * x25 - 0.5) * x14 * x14
+                                + x10 * (1.3333333333333333 * x7 + x22 - 0.5 * x32)) * x12
+                                * x12 * x7),
+                    x12 * x12 * x7
+                        * ((1.5 * x2 + 3.0 * x22 + 1.5 * x5) * x7 * x4 - 0.5 * (x3 * x33)
+                            + 0.5 * (x16 * x14 * x1))
+                        + 0.5 * (x3 * theta2_dot * theta2_dot),
+                ],
+                [0.0, 0.0],
+                [
+                    x7 * x14
+                        * (x12 * x7 * (-2.6666666666666665 * x7 - 0.5 * (x10 * x34))
+                            - x10
+                                * (x12 * x7
+                                    * (-0.3333333333333333 * x13 - 0.6666666666666666)
+                                    + theta1_dot)),
+                    3.0 * (x0 * theta1_dot)
+                        + x12 * x7 * x14 * (-3.0 * x18 - 0.5 * (x3 * x34)),
+                ],
+                [
+                    (x12 * x7 * (2.6666666666666665 * x7 - 0.5 * (x10 * x35))
+                        - theta2_dot
+                        - x12 * x7 * x10
+                            * (0.3333333333333333 * x13 + 0.6666666666666666)) * x7
+                        * x14,
+                    theta2_dot * x1 + x12 * x7 * (3.0 * x18 - 0.5 * (x3 * x35)) * x14,
+                ],
+                [0.0, 0.0],
+            ],
+            w: [[x7, 0.0], [-(x7 * x10), 0.0], [0.0, 1.0]],
+            c: [x12 * x12 * x7 * x7 * x14, x12 * x12 * x16 * x7 * x14, 0.0],
+            d_w: [
+                [[x7 * x7 * x14, 0.0], [x16 * x7 * x14, 0.0], [0.0, 0.0]],
+                [[-(x7 * x7 * x14), 0.0], [x31 * x7 * x14, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [
+                [x29 * x12 * x12 * x7 * x7, x12 * x12 * x28 * x7, 0.0],
+                [x12 * x12 * x7 * x7 * x23, x12 * x12 * x33 * x7, 0.0],
+                [0.0, 0.0, 0.0],
+                [2.0 * x12 * x7 * x7 * x14, x12 * x7 * x14 * x34, 0.0],
+                [-(2.0 * x12 * x7 * x7 * x14), x12 * x7 * x14 * x35, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[3 + j] = s;
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[3 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -785,6 +1331,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
@@ -1014,6 +1573,252 @@ pub mod kane {
             + f64::cos(theta2) * f64::cos(theta1) + 1.0;
         f64::INFINITY.min(f64::abs(x0)).min(f64::abs(x0))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 5],
+        d_matrix: [[[f64; 2]; 2]; 5],
+        d_force: [[f64; 2]; 5],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = 2.0 * theta1 - 2.0 * theta2;
+        let x10 = f64::cos(x9);
+        let x11 = x3 * x8;
+        let x12 = x7 * (1.5 * x4 - 0.5 * x11);
+        let x13 = x4 * x1;
+        let x14 = 3.0 * theta1 - 3.0 * theta2;
+        let x15 = f64::sin(x14);
+        let x16 = x3 * x0;
+        let x17 = f64::sin(x9);
+        let x18 = 4.0 * theta1 - 4.0 * theta2;
+        let x19 = f64::sin(x18);
+        let x20 = x8 * x1;
+        let x21 = x7 * x8;
+        let x22 = 1.0 - x21;
+        let x23 = x16 - x13;
+        let x24 = x8 * x8 * x1;
+        let x25 = x23 * x4;
+        let x26 = x7 * x4;
+        let x27 = ((1.5 * x26 + x3 * (0.5 - 0.5 * x21)) * x23 - 1.5 * x0) * x7;
+        let x28 = f64::cos(x14);
+        let x29 = f64::cos(x18);
+        let x30 = x23 * x1;
+        let x31 = x7 * (3.0 * x0 + x24 - 3.0 * x25);
+        let x32 = x7 * x23 * x23;
+        let x33 = x7 * (x23 * (x3 * (0.5 * x21 - 0.5) - 1.5 * x26) + 0.5 * x20);
+        let x34 = x7 * (-x2 - x5 - 1.0);
+        Derivatives {
+            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            matrix: [[x7 * x7 * (1.0 - 0.3333333333333333 * x10), x12], [x12, 4.0]],
+            force: [
+                x7
+                    * (x7 * x7 * u1 * u1
+                        * (0.16666666666666666 * x13 - 0.16666666666666666 * x15
+                            - 0.16666666666666666 * x16 - 0.3333333333333333 * x17
+                            + (1.1666666666666667 * x13 + 0.16666666666666666 * x15
+                                + 0.08333333333333333 * x19 - 1.1666666666666667 * x16
+                                - 0.5 * x17) * x7) - 14.715 * x0 + 4.905 * x20),
+                ((1.5 * x0 + 0.5 * x24 - 1.5 * x25) * x7 - 0.5 * (x3 * x22 * x23)) * x7
+                    * u1 * u1,
+            ],
+            checks: [x6, x6],
+            d_qdot: [
+                [x7 * x7 * x23 * u1, x22 * x7 * x23 * u1, 0.0],
+                [-(x7 * x7 * x23 * u1), (x21 - 1.0) * x7 * x23 * u1, 0.0],
+                [0.0, 0.0, 0.0],
+                [x7, -(x7 * x8), 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        x7 * x7
+                            * ((2.0 - 0.6666666666666666 * x10) * x7 * x23
+                                + 0.6666666666666666 * x17),
+                        x27,
+                    ],
+                    [x27, 0.0],
+                ],
+                [
+                    [
+                        x7 * x7
+                            * (x7 * x23 * (0.6666666666666666 * x10 - 2.0)
+                                - 0.6666666666666666 * x17),
+                        x33,
+                    ],
+                    [x33, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x7
+                        * (x7
+                            * (x7
+                                * (x7
+                                    * (x23
+                                        * (0.5 * x13 - 0.5 * x15
+                                            + x7
+                                                * (4.666666666666667 * x13 + 0.6666666666666666 * x15
+                                                    + 0.3333333333333333 * x19 - 4.666666666666667 * x16
+                                                    - 2.0 * x17) - 0.5 * x16 - x17) - x10
+                                        - 1.1666666666666667 * x2 - 1.1666666666666667 * x5
+                                        + 0.5 * x28 + 0.3333333333333333 * x29)
+                                    - 0.6666666666666666 * x10 - 0.16666666666666666 * x2
+                                    - 0.16666666666666666 * x5 - 0.5 * x28) * u1 * u1
+                                + (4.905 * x20 - 14.715 * x0) * x23) - 4.905 * x30
+                            - 14.715 * x4),
+                    x7 * u1 * u1
+                        * (x7
+                            * (x23 * (x31 + 1.5 * x0 - x20)
+                                + (1.5 - 1.5 * x2 - 1.5 * x5) * x4)
+                            - 0.5
+                                * (x3
+                                    * (2.0 * x32 + (x7 * (-x2 - 2.0 * x32 - x5) + 1.0) * x8))),
+                ],
+                [
+                    x7
+                        * (4.905 * x11 + 4.905 * x30
+                            + x7
+                                * (x23 * (14.715 * x0 - 4.905 * x20)
+                                    + x7 * u1 * u1
+                                        * (0.6666666666666666 * x10
+                                            + (x10 + 1.1666666666666667 * x2 + 1.1666666666666667 * x5
+                                                - 0.5 * x28 - 0.3333333333333333 * x29
+                                                + x23
+                                                    * (0.5 * x15 - 0.5 * x13
+                                                        + (4.666666666666667 * x16 - 4.666666666666667 * x13
+                                                            - 0.6666666666666666 * x15 - 0.3333333333333333 * x19
+                                                            + 2.0 * x17) * x7 + 0.5 * x16 + x17)) * x7
+                                            + 0.16666666666666666 * x2 + 0.16666666666666666 * x5
+                                            + 0.5 * x28))),
+                    x7
+                        * (((0.5 * x11 + 1.5 * x4) * x8
+                            + (x7 * (x23 * (1.5 - 1.5 * x34) * x4 - 3.0 * x0 - x24)
+                                + x20) * x23) * x7
+                            - 0.5
+                                * (x3
+                                    * ((x23 * x23 * (x34 + x7 * (1.0 - x34) * x8 - 1.0)
+                                        + x8 * x8) * x7 - x2 - x5)) + 0.5 * (x22 * x23 * x1)) * u1
+                        * u1,
+                ],
+                [0.0, 0.0],
+                [
+                    (0.3333333333333333 * x13 - 0.3333333333333333 * x15
+                        - 0.3333333333333333 * x16 - 0.6666666666666666 * x17
+                        + x7
+                            * (2.3333333333333335 * x13 + 0.3333333333333333 * x15
+                                + 0.16666666666666666 * x19 - 2.3333333333333335 * x16
+                                - x17)) * x7 * x7 * x7 * u1,
+                    (x31 - 0.5 * (x3 * x23 * (2.0 - 2.0 * x21))) * x7 * u1,
+                ],
+                [0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[3 + j] = x[j];
+        }
+        for k in 0..5 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1081,6 +1886,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
@@ -1347,6 +2165,345 @@ pub mod reduced_volterra {
             .min(f64::abs(x0 + x1 + 1.0))
             .min(f64::abs(4.0 * x0 + 4.0 * x1 + 4.0))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 3],
+        d_qdot: [[f64; 3]; 4],
+        d_matrix: [[[f64; 1]; 1]; 4],
+        d_force: [[f64; 1]; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        _params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let G_x = g_i[0];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = -x2 - x5 - 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5 + 1.0;
+        let x9 = 1.0 / x8;
+        let x10 = x2 + x5;
+        let x11 = 4.0 * x2 + 4.0 * x5 + 4.0;
+        let x12 = 1.0 / x11;
+        let x13 = theta1 - 2.0 * theta2;
+        let x14 = f64::cos(x13);
+        let x15 = 1.25 * x4 - 0.25 * x14;
+        let x16 = x3 * x9 * x10;
+        let x17 = x12 * x15;
+        let x18 = x7 * x4;
+        let x19 = 0.5 * x16 + 4.0 * x17 + 1.5 * x18;
+        let x20 = x9 * x10 * x10;
+        let x21 = 1.3333333333333333 * x7 + 0.5 * x20 + 1.5 * (x12 * x4 * x15);
+        let x22 = 0.5 * (x12 * x3 * x15) + x10 * (0.3333333333333333 * x9 + 0.5 * x7);
+        let x23 = x9 * x10 * x1;
+        let x24 = x3 * x0 - x4 * x1;
+        let x25 = x9 * x10;
+        let x26 = x7 - x25;
+        let x27 = x12 * x24 * x15 * x26;
+        let x28 = f64::sin(x13);
+        let x29 = x7 - 2.0 * x25;
+        let x30 = x28 * x29;
+        let x31 = x0 * x7;
+        let x32 = 4.0 * x27 + 0.25 * x30 - 1.25 * x31;
+        let x33 = x7 * x7;
+        let x34 = x9 * x9;
+        let x35 = (0.5 * x33 - 0.3333333333333333 * x34) * x10;
+        let x36 = (x35 + 0.3333333333333333 * x9) * x26 + 0.5 * x33;
+        let x37 = x24 * x36 - 0.5 * (x12 * x3 * x32);
+        let x38 = 0.25 * x30 - 1.25 * x31;
+        let x39 = x12 * x38;
+        let x40 = x25 - 1.0;
+        let x41 = x12 * x12 * x15;
+        let x42 = x7 * x7 * x4;
+        let x43 = x9 * x9 * x10 * x10 * x1;
+        let x44 = x0 * x7 * x7;
+        let x45 = x24 * (1.5 * x42 - 0.5 * (x3 * x40 * x9) - 16.0 * x41) * x26
+            - 4.0 * x39 + 0.5 * x43 + 1.5 * x44;
+        let x46 = x40 * x26;
+        let x47 = x7 * x7 * x26;
+        let x48 = x24 * ((-0.5 * x46 - 0.5 * x25) * x9 * x10 + 1.3333333333333333 * x47)
+            - 1.5 * (x12 * x32 * x4);
+        let x49 = x12 * x8;
+        let x50 = x12 * u1 * x15;
+        let x51 = 0.25 * x28 - 1.25 * x0;
+        let x52 = (0.3333333333333333 * x34 - 0.5 * x33) * x10;
+        let x53 = x12 * x12 * x3 * x15;
+        let x54 = x12 * x12 * x4 * x15;
+        let x55 = x21 * x7 * x7;
+        let x56 = x12 * x12 * x19 * x15;
+        let x57 = 2.0 - 2.0 * x25;
+        let x58 = x24 * (0.25 * (x28 * (x9 * x57 - x33)) + 1.25 * x44);
+        let x59 = x10 * x26;
+        let x60 = 1.0 - x25;
+        let x61 = x60 * x9;
+        let x62 = x61 - x33;
+        let x63 = -4.0 * x59 - 4.0 * (x62 * x24 * x24);
+        let x64 = x14 * x29;
+        let x65 = x12 * x24 * x15;
+        let x66 = x7 * x26;
+        let x67 = 2.0 * x25 - 2.0;
+        let x68 = x67 * x26;
+        let x69 = x62 * x10;
+        let x70 = (x33 + x9 * (x68 + x69) - x61) * x24 * x24;
+        let x71 = x40 * x10 * x26;
+        let x72 = x58
+            + x12
+                * ((x30 + (x28 - 5.0 * x0 + 32.0 * x65) * x26 - 5.0 * x31) * x24
+                    - x15 * x63) - 1.25 * x18 + 0.25 * x64;
+        let x73 = x7 * x10;
+        let x74 = x12 * x12 * x45 * x15;
+        let x75 = x48 * x7 * x7;
+        let x76 = x40 * x9;
+        let x77 = x33 + x76;
+        let x78 = 4.0 * x59 - 4.0 * (x24 * x24 * x77);
+        let x79 = x24 * (0.25 * (x28 * (x33 + x9 * x67)) - 1.25 * x44);
+        let x80 = x10 * x77;
+        let x81 = 0.5 * x20 - 0.5 * (x60 * x10 * x26)
+            - 0.5 * (x24 * x24 * (x9 * (x80 + x26 * x57) - x33 - x76));
+        let x82 = x12
+            * (((-2.0 * x28 - 32.0 * x65) * x26 - x30 + 5.0 * x31) * x24 - x78 * x15)
+            + x79 - 0.5 * x64;
+        let x83 = 8.0 * x27 + 0.5 * x30 - 2.5 * x31;
+        Derivatives {
+            qdot: [x7 * u1, x9 * x10 * u1, x12 * (G_x * x8 + u1 * x15)],
+            matrix: [[x12 * x19 * x15 + x21 * x7 + x9 * x22 * x10]],
+            force: [
+                (x9 * x10 * x37 + x12 * x45 * x15 + x48 * x7) * u1 * u1 - 4.905 * x23
+                    - 14.715 * x31,
+            ],
+            checks: [x6, x8, x11],
+            d_qdot: [
+                [
+                    -(x7 * x7 * x24 * u1),
+                    x40 * x9 * x24 * u1,
+                    x12 * ((G_x * (4.0 * x49 - 1.0) + 4.0 * x50) * x24 + u1 * x51),
+                ],
+                [
+                    x7 * x7 * x24 * u1,
+                    x60 * x9 * x24 * u1,
+                    x12
+                        * ((G_x * (1.0 - 4.0 * x49) - 4.0 * x50) * x24
+                            - 0.5 * (x28 * u1)),
+                ],
+                [0.0, 0.0, 0.0],
+                [x7, x25, x17],
+            ],
+            d_matrix: [
+                [
+                    [
+                        x9
+                            * (0.5 * (x12 * x3 * x51)
+                                + x24
+                                    * (x52 - 0.3333333333333333 * x9 - 0.5 * x7 + 2.0 * x53))
+                            * x10
+                            + x7
+                                * (x12 * (1.5 * (x4 * x51) - 1.5 * (x0 * x15))
+                                    + (6.0 * x54 - 1.3333333333333333 * x33
+                                        + x9 * x10 * (0.5 * x25 - 1.0)) * x24)
+                            + ((4.0 * (x12 * x51)
+                                + x24
+                                    * (16.0 * x41 - 1.5 * x42 + x3 * (0.5 * x25 - 0.5) * x9)
+                                - 1.5 * x31) * x15 + x51 * x19) * x12
+                            + x24 * (x40 * x9 * x22 - x55 + 4.0 * x56),
+                    ],
+                ],
+                [
+                    [
+                        x9 * x10
+                            * ((-0.25 * (x3 * x28) - 0.5 * (x1 * x15)) * x12
+                                + x24
+                                    * (x35 + 0.3333333333333333 * x9 + 0.5 * x7 - 2.0 * x53))
+                            + (((x3 * (0.5 - 0.5 * x25) * x9 - 16.0 * x41 + 1.5 * x42)
+                                * x24 - 0.5 * x23 - 2.0 * (x12 * x28)) * x15
+                                - 0.5 * (x28 * x19)) * x12
+                            + x24 * (x55 + x60 * x9 * x22 - 4.0 * x56)
+                            + (x24
+                                * (1.3333333333333333 * x33 - 6.0 * x54
+                                    + (1.0 - 0.5 * x25) * x9 * x10) - 0.75 * (x12 * x28 * x4))
+                                * x7,
+                    ],
+                ],
+                [[0.0]],
+                [[0.0]],
+            ],
+            d_force: [
+                [
+                    x24 * (14.715 * x44 + (4.905 - 4.905 * x25) * x9 * x1)
+                        + u1 * u1
+                            * (x12
+                                * (x15
+                                    * (x12
+                                        * (5.0 * x18 - 4.0 * x58 + 4.0 * (x12 * x15 * x63) - x64)
+                                        + x7 * x7 * (1.5 * x59 + 1.5) * x4
+                                        + (x12 * x12
+                                            * (20.0 * x31 - 4.0 * x30
+                                                + (20.0 * x0 - 4.0 * x28 - 128.0 * x65) * x26)
+                                            + x40 * x9 * x9 * x10 * x1
+                                            + (x24 * x4 * (1.5 * x61 - 3.0 * x66 - 1.5 * x33)
+                                                + x0 * (1.5 * x25 - 4.5 * x7)) * x7 * x7) * x24
+                                        - 0.5 * (x3 * x9 * (x70 + x71))) + x51 * x45)
+                                + x7
+                                    * (x24 * x24
+                                        * ((0.5 * x46 + x60 * x9 * x10) * x9
+                                            + x7 * x7
+                                                * (1.3333333333333333 * x61 - 2.6666666666666665 * x66
+                                                    - 1.3333333333333333 * x33))
+                                        + x12 * (1.5 * (x0 * x32) - 1.5 * (x4 * x72))
+                                        + x10
+                                            * (x9 * (-0.5 * x70 - 0.5 * x71 - 0.5 * x20)
+                                                + 1.3333333333333333 * x47))
+                                + (((x9
+                                    * ((0.6666666666666666 - 0.6666666666666666 * x25) * x26
+                                        - 0.3333333333333333 * x69) - 0.3333333333333333 * x33
+                                    + 0.3333333333333333 * x61) * x9
+                                    + x7 * x7 * ((-x73 - 0.5) * x26 - x7 + 0.5 * x69)) * x24
+                                    * x24 - 0.5 * (x12 * x3 * x72) + x10 * x36) * x9 * x10
+                                + (x40 * x9 * x37 + 4.0 * x74 - x75) * x24) - 14.715 * x18,
+                ],
+                [
+                    x24 * ((4.905 * x25 - 4.905) * x9 * x1 - 14.715 * x44) - 4.905 * x16
+                        + u1 * u1
+                            * (x12
+                                * (x15
+                                    * ((16.0 * (x12 * x12 * x38)
+                                        + (0.5 * (x40 * x9 * x1)
+                                            + x12 * x12 * (8.0 * x28 + 128.0 * x65)
+                                            + 3.0 * (x7 * x7 * x7 * x24 * x4)) * x26
+                                        + x60 * x9 * x9 * x10 * x1
+                                        + (1.5 * (x24 * x4 * x77) + 3.0 * x31) * x7 * x7) * x24
+                                        + x12 * (4.0 * (x12 * x78 * x15) - 4.0 * x79 + 2.0 * x64)
+                                        - 1.5 * (x7 * x7 * x10 * x4 * x26) + x3 * x81 * x9)
+                                    - 0.5 * (x28 * x45))
+                                + (x60 * x9 * x37 - 4.0 * x74 + x75) * x24
+                                + (((x52 - 0.3333333333333333 * x9) * x26 - 0.5 * x33) * x10
+                                    + x12 * (0.5 * (x32 * x1) - 0.5 * (x82 * x3))
+                                    + (x7 * x7 * (0.5 * x80 + x7 + (x73 + 0.5) * x26)
+                                        + x9
+                                            * (0.3333333333333333 * x33
+                                                + x9
+                                                    * ((0.6666666666666666 * x25 - 0.6666666666666666) * x26
+                                                        - 0.3333333333333333 * x80) + 0.3333333333333333 * x76))
+                                        * x24 * x24) * x9 * x10
+                                + (x10 * (x81 * x9 - 1.3333333333333333 * x47)
+                                    - 1.5 * (x82 * x12 * x4)
+                                    + (x7 * x7
+                                        * (2.6666666666666665 * x66 + 1.3333333333333333 * x33
+                                            + 1.3333333333333333 * x76)
+                                        + x9 * (x40 * x9 * x10 - 0.5 * x46)) * x24 * x24) * x7),
+                ],
+                [0.0],
+                [
+                    u1
+                        * (x9 * x10
+                            * (x24
+                                * (x33
+                                    + (0.6666666666666666 * x9
+                                        + x10 * (x33 - 0.6666666666666666 * x34)) * x26)
+                                - 0.5 * (x12 * x3 * x83))
+                            + x12 * x15
+                                * (x43 - 8.0 * x39 + 3.0 * x44
+                                    + (3.0 * x42 - 32.0 * x41 - 0.5 * (x3 * x9 * x67)) * x24
+                                        * x26)
+                            + (x24
+                                * ((-x25 - 0.5 * x68) * x9 * x10 + 2.6666666666666665 * x47)
+                                - 1.5 * (x12 * x4 * x83)) * x7),
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[3 + j] = x[j];
+        }
+        for k in 0..4 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -1414,6 +2571,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

@@ -125,6 +125,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -386,6 +435,144 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 3]; 3]; 4],
+        d_force: [[f64; 3]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let y = state[1];
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let mb = params.mb;
+        let g = params.g;
+        let w_ = params.w_;
+        let x0 = 2.0 * x;
+        let x1 = 2.0 * y;
+        Derivatives {
+            qdot: [x_dot, y_dot],
+            matrix: [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]],
+            force: [w_, -(mb * g), -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot)],
+            checks: [],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[0.0, 0.0, 2.0], [0.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, -(4.0 * x_dot)],
+                [0.0, 0.0, -(4.0 * y_dot)],
+            ],
+            power: w_ * x_dot,
+            d_power: [0.0, 0.0, w_, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 3];
+            for i in 0..3 {
+                let mut s = d_force[k][i];
+                for j in 0..3 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -464,6 +651,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 5 states, 2 equations.
@@ -667,6 +867,223 @@ pub mod maggi {
         let y = state[1];
         f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 1],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 1]; 1]; 4],
+        d_force: [[f64; 1]; 4],
+        w: [[f64; 1]; 2],
+        c: [f64; 2],
+        d_w: [[[f64; 1]; 2]; 4],
+        d_c: [[f64; 2]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let y = state[1];
+        let x_dot = state[2];
+        let y_dot = state[3];
+        let mb = params.mb;
+        let g = params.g;
+        let w_ = params.w_;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x3 = 1.0 / x2;
+        let x4 = x_dot * y;
+        let x5 = x * y_dot;
+        let x6 = x5 - x4;
+        let x7 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
+        let x8 = x3 * x6 * (2.0 * x_dot - 2.0 * (x7 * x * x3));
+        let x9 = -x8 - g;
+        let x10 = 2.0 * (x7 * x3 * y) - 2.0 * y_dot;
+        let x11 = x10 * mb * x3 * x6;
+        let x12 = w_ - x11;
+        let x13 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
+        let x14 = x * x3 * x6;
+        let x15 = (y * (8.0 * (x_dot * x6) + x7 * (2.0 * y_dot - 16.0 * x14))
+            + 8.0 * (x * x6 * y_dot)) * x3 - 2.0 * (y_dot * y_dot);
+        let x16 = x3
+            * (x7 * (2.0 * x4 - 2.0 * x5 + (16.0 * x14 - 2.0 * y_dot) * x)
+                - 16.0 * (x * x_dot * x6));
+        let x17 = x_dot * y_dot;
+        let x18 = x3 * y * x6;
+        let x19 = x3
+            * (x7 * (2.0 * x5 - 2.0 * x4 + y * (-16.0 * x18 - 2.0 * x_dot))
+                + 16.0 * (y * x6 * y_dot)) + 2.0 * x17;
+        let x20 = (x * ((16.0 * x18 + 2.0 * x_dot) * x7 - 8.0 * (x6 * y_dot))
+            - 8.0 * (x_dot * y * x6)) * x3;
+        let x21 = x_dot * x_dot;
+        let x22 = x7 * y;
+        let x23 = x * x6;
+        let x24 = 2.0 * x5 - 4.0 * x4 + x * x3 * (2.0 * x22 - 8.0 * x23);
+        let x25 = (8.0 * x23 - 2.0 * x22) * x3 + 2.0 * y_dot;
+        let x26 = x7 * x;
+        let x27 = y * x6;
+        let x28 = 2.0 * x4 - 4.0 * x5 + (2.0 * x26 + 8.0 * x27) * x3 * y;
+        let x29 = (-2.0 * x26 - 8.0 * x27) * x3 + 2.0 * x_dot;
+        Derivatives {
+            qdot: [x_dot, y_dot],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(2.0 * (x * mb * x9) - 2.0 * (x12 * y)) * x3],
+            checks: [x2],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[x * mb * x3 * x3 * x13]],
+                [[mb * x3 * x3 * y * x13]],
+                [[0.0]],
+                [[0.0]],
+            ],
+            d_force: [
+                [
+                    (8.0 * (x * x12 * x3 * y)
+                        + mb
+                            * (x3
+                                * (2.0 * (x15 * y)
+                                    + x * (-2.0 * x16 - 4.0 * x17 - 8.0 * (x * x9))) - 2.0 * x8
+                                - 2.0 * g)) * x3,
+                ],
+                [
+                    x3
+                        * (x3
+                            * (8.0 * (x12 * y * y)
+                                + mb
+                                    * (2.0 * (x19 * y)
+                                        + x * (4.0 * x21 - 2.0 * x20 - 8.0 * (y * x9)))) - 2.0 * w_
+                            + 2.0 * x11),
+                ],
+                [(2.0 * (x25 * y * y) - 2.0 * (x24 * x)) * mb * x3 * x3],
+                [mb * (2.0 * (x28 * y) - 2.0 * (x * x * x29)) * x3 * x3],
+            ],
+            w: [[-(2.0 * x3 * y)], [2.0 * x * x3]],
+            c: [x10 * x3 * x6, x8],
+            d_w: [
+                [[8.0 * x * x3 * x3 * y], [(2.0 - 8.0 * (x * x * x3)) * x3]],
+                [[(8.0 * (x3 * y * y) - 2.0) * x3], [-(8.0 * x * x3 * x3 * y)]],
+                [[0.0], [0.0]],
+                [[0.0], [0.0]],
+            ],
+            d_c: [
+                [x15 * x3, (x16 + 2.0 * x17) * x3],
+                [x19 * x3, x3 * (x20 - 2.0 * x21)],
+                [x25 * x3 * y, x24 * x3],
+                [x28 * x3, x * x29 * x3],
+            ],
+            power: w_ * x_dot,
+            d_power: [0.0, 0.0, w_, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            let mut s = c[j];
+            for i in 0..1 {
+                s += w[j][i] * x[i];
+            }
+            dstate[2 + j] = s;
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                let mut s = d_c[k][j];
+                for i in 0..1 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[2 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -734,6 +1151,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 4 states, 1 equations.
@@ -925,6 +1355,152 @@ pub mod kane {
         let y = state[1];
         f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 1],
+        d_qdot: [[f64; 2]; 3],
+        d_matrix: [[[f64; 1]; 1]; 3],
+        d_force: [[f64; 1]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let y = state[1];
+        let u1 = state[2];
+        let mb = params.mb;
+        let g = params.g;
+        let w_ = params.w_;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x3 = 1.0 / x2;
+        let x4 = w_ * y;
+        let x5 = x * mb * g;
+        let x6 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
+        let x7 = 8.0 * x4 + 8.0 * x5;
+        let x8 = 8.0 * (x3 * y * y) - 2.0;
+        Derivatives {
+            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(-2.0 * x4 - 2.0 * x5) * x3],
+            checks: [x2],
+            d_qdot: [
+                [8.0 * x * x3 * x3 * y * u1, (2.0 - 8.0 * (x * x * x3)) * x3 * u1],
+                [x8 * x3 * u1, -(8.0 * x * x3 * x3 * y * u1)],
+                [-(2.0 * x3 * y), 2.0 * x * x3],
+            ],
+            d_matrix: [[[x * mb * x3 * x3 * x6]], [[mb * x3 * x3 * y * x6]], [[0.0]]],
+            d_force: [
+                [x3 * (x * x3 * x7 - 2.0 * (mb * g))],
+                [(x3 * y * x7 - 2.0 * w_) * x3],
+                [0.0],
+            ],
+            power: -(2.0 * w_ * x3 * y * u1),
+            d_power: [
+                8.0 * x * w_ * x3 * x3 * y * u1,
+                x8 * w_ * x3 * u1,
+                -(2.0 * w_ * x3 * y),
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[3] = power;
+        for k in 0..3 {
+            jac[3][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -992,6 +1568,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
@@ -1183,6 +1772,152 @@ pub mod reduced_volterra {
         let y = state[1];
         f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 1],
+        d_qdot: [[f64; 2]; 3],
+        d_matrix: [[[f64; 1]; 1]; 3],
+        d_force: [[f64; 1]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let y = state[1];
+        let u1 = state[2];
+        let mb = params.mb;
+        let g = params.g;
+        let w_ = params.w_;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x3 = 1.0 / x2;
+        let x4 = w_ * y;
+        let x5 = x * mb * g;
+        let x6 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
+        let x7 = 8.0 * x4 + 8.0 * x5;
+        let x8 = 8.0 * (x3 * y * y) - 2.0;
+        Derivatives {
+            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(-2.0 * x4 - 2.0 * x5) * x3],
+            checks: [x2],
+            d_qdot: [
+                [8.0 * x * x3 * x3 * y * u1, (2.0 - 8.0 * (x * x * x3)) * x3 * u1],
+                [x8 * x3 * u1, -(8.0 * x * x3 * x3 * y * u1)],
+                [-(2.0 * x3 * y), 2.0 * x * x3],
+            ],
+            d_matrix: [[[x * mb * x3 * x3 * x6]], [[mb * x3 * x3 * y * x6]], [[0.0]]],
+            d_force: [
+                [x3 * (x * x3 * x7 - 2.0 * (mb * g))],
+                [(x3 * y * x7 - 2.0 * w_) * x3],
+                [0.0],
+            ],
+            power: -(2.0 * w_ * x3 * y * u1),
+            d_power: [
+                8.0 * x * w_ * x3 * x3 * y * u1,
+                x8 * w_ * x3 * u1,
+                -(2.0 * w_ * x3 * y),
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[3] = power;
+        for k in 0..3 {
+            jac[3][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -1250,6 +1985,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

@@ -187,6 +187,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -675,6 +724,476 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 6],
+        matrix: [[f64; 6]; 6],
+        force: [f64; 6],
+        checks: [f64; 0],
+        d_qdot: [[f64; 6]; 12],
+        d_matrix: [[[f64; 6]; 6]; 12],
+        d_force: [[f64; 6]; 12],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let q1 = state[1];
+        let q2 = state[2];
+        let q3 = state[3];
+        let q4 = state[4];
+        let q5 = state[5];
+        let q0_dot = state[6];
+        let q1_dot = state[7];
+        let q2_dot = state[8];
+        let q3_dot = state[9];
+        let q4_dot = state[10];
+        let q5_dot = state[11];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let m3 = params.m3;
+        let m4 = params.m4;
+        let m5 = params.m5;
+        let l0 = params.l0;
+        let l1 = params.l1;
+        let l2 = params.l2;
+        let l3 = params.l3;
+        let l4 = params.l4;
+        let g = params.g;
+        let x0 = f64::cos(q1);
+        let x1 = -m2 - m4 - m5 - m1 - m3;
+        let x2 = x0 * l0 * x1;
+        let x3 = -m2 - m4 - m5 - m3;
+        let x4 = f64::cos(q2);
+        let x5 = l1 * x3 * x4;
+        let x6 = -m4 - m5 - m3;
+        let x7 = f64::cos(q3);
+        let x8 = x6 * x7 * l2;
+        let x9 = f64::cos(q4);
+        let x10 = -m4 - m5;
+        let x11 = x9 * l3 * x10;
+        let x12 = f64::cos(q5);
+        let x13 = -(m5 * l4 * x12);
+        let x14 = m2 + m4 + m5 + m1 + m3;
+        let x15 = m2 + m4 + m5 + m3;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x16 * x17 + x0 * x4;
+        let x19 = x15 * l1 * l0 * x18;
+        let x20 = m4 + m5 + m3;
+        let x21 = f64::sin(q3);
+        let x22 = x0 * x7 + x16 * x21;
+        let x23 = x20 * l0 * x22 * l2;
+        let x24 = f64::sin(q4);
+        let x25 = x9 * x0 + x16 * x24;
+        let x26 = m4 + m5;
+        let x27 = l0 * l3 * x25 * x26;
+        let x28 = f64::sin(q5);
+        let x29 = x0 * x12 + x16 * x28;
+        let x30 = l0 * m5 * l4 * x29;
+        let x31 = x7 * x4 + x21 * x17;
+        let x32 = x20 * l1 * x31 * l2;
+        let x33 = x9 * x4 + x17 * x24;
+        let x34 = l1 * l3 * x33 * x26;
+        let x35 = x28 * x17 + x4 * x12;
+        let x36 = l1 * m5 * x35 * l4;
+        let x37 = x9 * x7 + x21 * x24;
+        let x38 = x37 * l3 * x26 * l2;
+        let x39 = x28 * x21 + x7 * x12;
+        let x40 = m5 * l4 * x39 * l2;
+        let x41 = x9 * x12 + x28 * x24;
+        let x42 = x41 * l3 * m5 * l4;
+        let x43 = x21 * q3_dot * q3_dot * l2;
+        let x44 = l1 * q2_dot * q2_dot * x17;
+        let x45 = x16 * l0 * q1_dot * q1_dot;
+        let x46 = l3 * q4_dot * q4_dot * x24;
+        let x47 = x16 * x7 - x0 * x21;
+        let x48 = x47 * q3_dot * q3_dot * l2;
+        let x49 = x16 * x4 - x0 * x17;
+        let x50 = l1 * q2_dot * q2_dot * x49;
+        let x51 = x9 * x16 - x0 * x24;
+        let x52 = l3 * q4_dot * q4_dot * x51;
+        let x53 = x16 * x12 - x28 * x0;
+        let x54 = l0 * q1_dot * q1_dot * x49;
+        let x55 = x21 * x4 - x7 * x17;
+        let x56 = x55 * q3_dot * q3_dot * l2;
+        let x57 = x9 * x17 - x24 * x4;
+        let x58 = x57 * l3 * q4_dot * q4_dot;
+        let x59 = x28 * x4 - x17 * x12;
+        let x60 = l1 * q2_dot * q2_dot * x55;
+        let x61 = l0 * x47 * q1_dot * q1_dot;
+        let x62 = x9 * x21 - x7 * x24;
+        let x63 = x62 * l3 * q4_dot * q4_dot;
+        let x64 = x21 * x12 - x28 * x7;
+        let x65 = x62 * q3_dot * q3_dot * l2;
+        let x66 = l0 * q1_dot * q1_dot * x51;
+        let x67 = l1 * q2_dot * q2_dot * x57;
+        let x68 = x9 * x28 - x24 * x12;
+        let x69 = x16 * l0 * x14;
+        let x70 = l1 * l0 * x3 * x49;
+        let x71 = l0 * x6 * x47 * l2;
+        let x72 = l0 * l3 * x10 * x51;
+        let x73 = -(x53 * l0 * m5 * l4);
+        let x74 = l1 * q2_dot * q2_dot * x18;
+        let x75 = q3_dot * q3_dot * x22 * l2;
+        let x76 = l3 * x25 * q4_dot * q4_dot;
+        let x77 = x15 * l1 * x17;
+        let x78 = x15 * l1 * l0 * x49;
+        let x79 = x20 * l1 * x55 * l2;
+        let x80 = l1 * x57 * l3 * x10;
+        let x81 = l1 * m5 * x59 * l4;
+        let x82 = x31 * q3_dot * q3_dot * l2;
+        let x83 = l3 * x33 * q4_dot * q4_dot;
+        let x84 = l0 * q1_dot * q1_dot * x18;
+        let x85 = x20 * x21 * l2;
+        let x86 = x20 * l0 * x47 * l2;
+        let x87 = l1 * x6 * x55 * l2;
+        let x88 = x62 * l3 * x10 * l2;
+        let x89 = -(x64 * m5 * l4 * l2);
+        let x90 = l1 * q2_dot * q2_dot * x31;
+        let x91 = x37 * l3 * q4_dot * q4_dot;
+        let x92 = l0 * q1_dot * q1_dot * x22;
+        let x93 = l3 * x24 * x26;
+        let x94 = l0 * l3 * x51 * x26;
+        let x95 = l1 * x57 * l3 * x26;
+        let x96 = x62 * l3 * x26 * l2;
+        let x97 = l3 * m5 * l4 * x68;
+        let x98 = x37 * q3_dot * q3_dot * l2;
+        let x99 = l1 * q2_dot * q2_dot * x33;
+        let x100 = l0 * q1_dot * q1_dot * x25;
+        let x101 = x28 * m5 * l4;
+        let x102 = x53 * l0 * m5 * l4;
+        let x103 = -(l1 * m5 * x59 * l4);
+        let x104 = x64 * m5 * l4 * l2;
+        let x105 = -(l3 * m5 * l4 * x68);
+        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
+        let x107 = 2.0 * m4 + 2.0 * m5;
+        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x110 = -2.0 * m4 - 2.0 * m5;
+        Derivatives {
+            qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
+            matrix: [
+                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
+                [x2, l0 * l0 * x14, x19, x23, x27, x30],
+                [x5, x19, x15 * l1 * l1, x32, x34, x36],
+                [x8, x23, x32, x20 * l2 * l2, x38, x40],
+                [x11, x27, x34, x38, l3 * l3 * x26, x42],
+                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+            ],
+            force: [
+                -m3 * (x43 + x44 + x45) - x16 * l0 * q1_dot * q1_dot * m1
+                    - (x46 + x43 + x44 + x45) * m4 - m2 * (x44 + x45)
+                    - m5 * (x46 + x43 + x44 + x45 + x28 * q5_dot * q5_dot * l4),
+                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * q2_dot * q2_dot * x49
+                    - m4 * (x48 + x50 + x52)
+                    - (x53 * q5_dot * q5_dot * l4 + x48 + x50 + x52) * m5) * l0,
+                l1
+                    * (m2 * l0 * q1_dot * q1_dot * x49
+                        - m5 * (x58 - x54 - x56 - q5_dot * q5_dot * x59 * l4)
+                        - m4 * (x58 - x54 - x56) + x15 * g * x17 - (-x54 - x56) * m3),
+                ((x61 - x60) * m3 + x20 * x21 * g - m4 * (x63 + x60 - x61)
+                    - (x63 + x60 - x61 + x64 * q5_dot * q5_dot * l4) * m5) * l2,
+                (m4 * (x65 + x66 + x67) + g * x24 * x26
+                    - (-q5_dot * q5_dot * l4 * x68 - x65 - x66 - x67) * m5) * l3,
+                (x53 * l0 * q1_dot * q1_dot + x28 * g - l3 * q4_dot * q4_dot * x68
+                    + x64 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x59) * m5 * l4,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
+                    [x69, 0.0, x70, x71, x72, x73],
+                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
+                    [x77, x78, 0.0, x79, x80, x81],
+                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
+                    [x85, x86, x87, 0.0, x88, x89],
+                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
+                    [x93, x94, x95, x96, 0.0, x97],
+                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x103],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
+                    [x101, x102, x103, x104, x105, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x0 * l0 * q1_dot * q1_dot * x1,
+                    l0
+                        * (x0 * g * x14 - (x74 + x75) * m3
+                            - m2 * l1 * q2_dot * q2_dot * x18 - m4 * (x74 + x75 + x76)
+                            - (x74 + x75 + x76 + q5_dot * q5_dot * l4 * x29) * m5),
+                    x15 * l1 * l0 * q1_dot * q1_dot * x18,
+                    x20 * l0 * q1_dot * q1_dot * x22 * l2,
+                    l0 * l3 * q1_dot * q1_dot * x25 * x26,
+                    l0 * m5 * q1_dot * q1_dot * l4 * x29,
+                ],
+                [
+                    l1 * q2_dot * q2_dot * x3 * x4,
+                    x15 * l1 * q2_dot * q2_dot * l0 * x18,
+                    l1
+                        * (x15 * g * x4 - (x82 + x83 + x84) * m4
+                            - m5 * (x82 + x83 + x84 + q5_dot * q5_dot * x35 * l4)
+                            - (x82 + x84) * m3 - m2 * l0 * q1_dot * q1_dot * x18),
+                    x20 * l1 * q2_dot * q2_dot * x31 * l2,
+                    l1 * q2_dot * q2_dot * l3 * x33 * x26,
+                    l1 * q2_dot * q2_dot * m5 * x35 * l4,
+                ],
+                [
+                    x6 * x7 * q3_dot * q3_dot * l2,
+                    x20 * l0 * q3_dot * q3_dot * x22 * l2,
+                    x20 * l1 * x31 * q3_dot * q3_dot * l2,
+                    ((-x90 - x92) * m3 - m4 * (x90 + x91 + x92)
+                        - m5 * (x90 + q5_dot * q5_dot * l4 * x39 + x91 + x92)
+                        + x20 * x7 * g) * l2,
+                    x37 * l3 * q3_dot * q3_dot * x26 * l2,
+                    m5 * q3_dot * q3_dot * l4 * x39 * l2,
+                ],
+                [
+                    x9 * l3 * x10 * q4_dot * q4_dot,
+                    l0 * l3 * x25 * q4_dot * q4_dot * x26,
+                    l1 * l3 * x33 * q4_dot * q4_dot * x26,
+                    x37 * l3 * q4_dot * q4_dot * x26 * l2,
+                    l3
+                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
+                            - (x98 + x99 + x41 * q5_dot * q5_dot * l4 + x100) * m5),
+                    x41 * l3 * m5 * q4_dot * q4_dot * l4,
+                ],
+                [
+                    -(q5_dot * q5_dot * m5 * l4 * x12),
+                    l0 * q5_dot * q5_dot * m5 * l4 * x29,
+                    l1 * q5_dot * q5_dot * m5 * x35 * l4,
+                    q5_dot * q5_dot * m5 * l4 * x39 * l2,
+                    x41 * l3 * q5_dot * q5_dot * m5 * l4,
+                    (g * x12 - q3_dot * q3_dot * x39 * l2 - l0 * q1_dot * q1_dot * x29
+                        - x41 * l3 * q4_dot * q4_dot - l1 * q2_dot * q2_dot * x35) * m5
+                        * l4,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x16 * l0 * q1_dot
+                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    0.0,
+                    l1 * l0 * q1_dot * x49 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
+                    l0 * x47 * q1_dot * x106 * l2,
+                    l0 * l3 * q1_dot * x51 * x107,
+                    2.0 * x53 * l0 * m5 * q1_dot * l4,
+                ],
+                [
+                    l1 * q2_dot * x108 * x17,
+                    l1 * q2_dot * x108 * l0 * x49,
+                    0.0,
+                    l1 * q2_dot * x55 * x109 * l2,
+                    l1 * q2_dot * x57 * l3 * x107,
+                    -(2.0 * l1 * q2_dot * m5 * x59 * l4),
+                ],
+                [
+                    x21 * q3_dot * x109 * l2,
+                    l0 * x47 * q3_dot * x109 * l2,
+                    l1 * x55 * x106 * q3_dot * l2,
+                    0.0,
+                    x62 * l3 * q3_dot * x107 * l2,
+                    2.0 * x64 * m5 * q3_dot * l4 * l2,
+                ],
+                [
+                    l3 * q4_dot * x24 * x110,
+                    l0 * l3 * q4_dot * x51 * x110,
+                    l1 * x57 * l3 * q4_dot * x110,
+                    x62 * l3 * q4_dot * x110 * l2,
+                    0.0,
+                    -(2.0 * l3 * m5 * q4_dot * l4 * x68),
+                ],
+                [
+                    -(2.0 * x28 * q5_dot * m5 * l4),
+                    -(2.0 * x53 * l0 * q5_dot * m5 * l4),
+                    2.0 * l1 * q5_dot * m5 * x59 * l4,
+                    -(2.0 * x64 * q5_dot * m5 * l4 * l2),
+                    2.0 * l3 * q5_dot * m5 * l4 * x68,
+                    0.0,
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..6 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..6 {
+            dstate[6 + j] = x[j];
+        }
+        for k in 0..12 {
+            for j in 0..6 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 6];
+            for i in 0..6 {
+                let mut s = d_force[k][i];
+                for j in 0..6 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..6 {
+                jac[6 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -753,6 +1272,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 12 states, 6 equations.
@@ -1103,6 +1635,616 @@ pub mod maggi {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 6],
+        matrix: [[f64; 6]; 6],
+        force: [f64; 6],
+        checks: [f64; 0],
+        d_qdot: [[f64; 6]; 12],
+        d_matrix: [[[f64; 6]; 6]; 12],
+        d_force: [[f64; 6]; 12],
+        w: [[f64; 6]; 6],
+        c: [f64; 6],
+        d_w: [[[f64; 6]; 6]; 12],
+        d_c: [[f64; 6]; 12],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let q1 = state[1];
+        let q2 = state[2];
+        let q3 = state[3];
+        let q4 = state[4];
+        let q5 = state[5];
+        let q0_dot = state[6];
+        let q1_dot = state[7];
+        let q2_dot = state[8];
+        let q3_dot = state[9];
+        let q4_dot = state[10];
+        let q5_dot = state[11];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let m3 = params.m3;
+        let m4 = params.m4;
+        let m5 = params.m5;
+        let l0 = params.l0;
+        let l1 = params.l1;
+        let l2 = params.l2;
+        let l3 = params.l3;
+        let l4 = params.l4;
+        let g = params.g;
+        let x0 = f64::cos(q1);
+        let x1 = -m2 - m4 - m5 - m1 - m3;
+        let x2 = x0 * l0 * x1;
+        let x3 = -m2 - m4 - m5 - m3;
+        let x4 = f64::cos(q2);
+        let x5 = l1 * x3 * x4;
+        let x6 = -m4 - m5 - m3;
+        let x7 = f64::cos(q3);
+        let x8 = x6 * x7 * l2;
+        let x9 = f64::cos(q4);
+        let x10 = -m4 - m5;
+        let x11 = x9 * l3 * x10;
+        let x12 = f64::cos(q5);
+        let x13 = -(m5 * l4 * x12);
+        let x14 = m2 + m4 + m5 + m1 + m3;
+        let x15 = m2 + m4 + m5 + m3;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x16 * x17 + x0 * x4;
+        let x19 = x15 * l1 * l0 * x18;
+        let x20 = m4 + m5 + m3;
+        let x21 = f64::sin(q3);
+        let x22 = x0 * x7 + x16 * x21;
+        let x23 = x20 * l0 * x22 * l2;
+        let x24 = f64::sin(q4);
+        let x25 = x9 * x0 + x16 * x24;
+        let x26 = m4 + m5;
+        let x27 = l0 * l3 * x25 * x26;
+        let x28 = f64::sin(q5);
+        let x29 = x0 * x12 + x16 * x28;
+        let x30 = l0 * m5 * l4 * x29;
+        let x31 = x7 * x4 + x21 * x17;
+        let x32 = x20 * l1 * x31 * l2;
+        let x33 = x9 * x4 + x17 * x24;
+        let x34 = l1 * l3 * x33 * x26;
+        let x35 = x28 * x17 + x4 * x12;
+        let x36 = l1 * m5 * x35 * l4;
+        let x37 = x9 * x7 + x21 * x24;
+        let x38 = x37 * l3 * x26 * l2;
+        let x39 = x28 * x21 + x7 * x12;
+        let x40 = m5 * l4 * x39 * l2;
+        let x41 = x9 * x12 + x28 * x24;
+        let x42 = x41 * l3 * m5 * l4;
+        let x43 = x21 * q3_dot * q3_dot * l2;
+        let x44 = l1 * q2_dot * q2_dot * x17;
+        let x45 = x16 * l0 * q1_dot * q1_dot;
+        let x46 = l3 * q4_dot * q4_dot * x24;
+        let x47 = x16 * x7 - x0 * x21;
+        let x48 = x47 * q3_dot * q3_dot * l2;
+        let x49 = x16 * x4 - x0 * x17;
+        let x50 = l1 * q2_dot * q2_dot * x49;
+        let x51 = x9 * x16 - x0 * x24;
+        let x52 = l3 * q4_dot * q4_dot * x51;
+        let x53 = x16 * x12 - x28 * x0;
+        let x54 = l0 * q1_dot * q1_dot * x49;
+        let x55 = x21 * x4 - x7 * x17;
+        let x56 = x55 * q3_dot * q3_dot * l2;
+        let x57 = x9 * x17 - x24 * x4;
+        let x58 = x57 * l3 * q4_dot * q4_dot;
+        let x59 = x28 * x4 - x17 * x12;
+        let x60 = l1 * q2_dot * q2_dot * x55;
+        let x61 = l0 * x47 * q1_dot * q1_dot;
+        let x62 = x9 * x21 - x7 * x24;
+        let x63 = x62 * l3 * q4_dot * q4_dot;
+        let x64 = x21 * x12 - x28 * x7;
+        let x65 = x62 * q3_dot * q3_dot * l2;
+        let x66 = l0 * q1_dot * q1_dot * x51;
+        let x67 = l1 * q2_dot * q2_dot * x57;
+        let x68 = x9 * x28 - x24 * x12;
+        let x69 = x16 * l0 * x14;
+        let x70 = l1 * l0 * x3 * x49;
+        let x71 = l0 * x6 * x47 * l2;
+        let x72 = l0 * l3 * x10 * x51;
+        let x73 = -(x53 * l0 * m5 * l4);
+        let x74 = l1 * q2_dot * q2_dot * x18;
+        let x75 = q3_dot * q3_dot * x22 * l2;
+        let x76 = l3 * x25 * q4_dot * q4_dot;
+        let x77 = x15 * l1 * x17;
+        let x78 = x15 * l1 * l0 * x49;
+        let x79 = x20 * l1 * x55 * l2;
+        let x80 = l1 * x57 * l3 * x10;
+        let x81 = l1 * m5 * x59 * l4;
+        let x82 = x31 * q3_dot * q3_dot * l2;
+        let x83 = l3 * x33 * q4_dot * q4_dot;
+        let x84 = l0 * q1_dot * q1_dot * x18;
+        let x85 = x20 * x21 * l2;
+        let x86 = x20 * l0 * x47 * l2;
+        let x87 = l1 * x6 * x55 * l2;
+        let x88 = x62 * l3 * x10 * l2;
+        let x89 = -(x64 * m5 * l4 * l2);
+        let x90 = l1 * q2_dot * q2_dot * x31;
+        let x91 = x37 * l3 * q4_dot * q4_dot;
+        let x92 = l0 * q1_dot * q1_dot * x22;
+        let x93 = l3 * x24 * x26;
+        let x94 = l0 * l3 * x51 * x26;
+        let x95 = l1 * x57 * l3 * x26;
+        let x96 = x62 * l3 * x26 * l2;
+        let x97 = l3 * m5 * l4 * x68;
+        let x98 = x37 * q3_dot * q3_dot * l2;
+        let x99 = l1 * q2_dot * q2_dot * x33;
+        let x100 = l0 * q1_dot * q1_dot * x25;
+        let x101 = x28 * m5 * l4;
+        let x102 = x53 * l0 * m5 * l4;
+        let x103 = -(l1 * m5 * x59 * l4);
+        let x104 = x64 * m5 * l4 * l2;
+        let x105 = -(l3 * m5 * l4 * x68);
+        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
+        let x107 = 2.0 * m4 + 2.0 * m5;
+        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x110 = -2.0 * m4 - 2.0 * m5;
+        Derivatives {
+            qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
+            matrix: [
+                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
+                [x2, l0 * l0 * x14, x19, x23, x27, x30],
+                [x5, x19, x15 * l1 * l1, x32, x34, x36],
+                [x8, x23, x32, x20 * l2 * l2, x38, x40],
+                [x11, x27, x34, x38, l3 * l3 * x26, x42],
+                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+            ],
+            force: [
+                -m3 * (x43 + x44 + x45) - x16 * l0 * q1_dot * q1_dot * m1
+                    - (x46 + x43 + x44 + x45) * m4 - m2 * (x44 + x45)
+                    - m5 * (x46 + x43 + x44 + x45 + x28 * q5_dot * q5_dot * l4),
+                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * q2_dot * q2_dot * x49
+                    - m4 * (x48 + x50 + x52)
+                    - (x53 * q5_dot * q5_dot * l4 + x48 + x50 + x52) * m5) * l0,
+                l1
+                    * (m2 * l0 * q1_dot * q1_dot * x49
+                        - m5 * (x58 - x54 - x56 - q5_dot * q5_dot * x59 * l4)
+                        - m4 * (x58 - x54 - x56) + x15 * g * x17 - (-x54 - x56) * m3),
+                ((x61 - x60) * m3 + x20 * x21 * g - m4 * (x63 + x60 - x61)
+                    - (x63 + x60 - x61 + x64 * q5_dot * q5_dot * l4) * m5) * l2,
+                (m4 * (x65 + x66 + x67) + g * x24 * x26
+                    - (-q5_dot * q5_dot * l4 * x68 - x65 - x66 - x67) * m5) * l3,
+                (x53 * l0 * q1_dot * q1_dot + x28 * g - l3 * q4_dot * q4_dot * x68
+                    + x64 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x59) * m5 * l4,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
+                    [x69, 0.0, x70, x71, x72, x73],
+                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
+                    [x77, x78, 0.0, x79, x80, x81],
+                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
+                    [x85, x86, x87, 0.0, x88, x89],
+                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
+                    [x93, x94, x95, x96, 0.0, x97],
+                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x103],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
+                    [x101, x102, x103, x104, x105, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x0 * l0 * q1_dot * q1_dot * x1,
+                    l0
+                        * (x0 * g * x14 - (x74 + x75) * m3
+                            - m2 * l1 * q2_dot * q2_dot * x18 - m4 * (x74 + x75 + x76)
+                            - (x74 + x75 + x76 + q5_dot * q5_dot * l4 * x29) * m5),
+                    x15 * l1 * l0 * q1_dot * q1_dot * x18,
+                    x20 * l0 * q1_dot * q1_dot * x22 * l2,
+                    l0 * l3 * q1_dot * q1_dot * x25 * x26,
+                    l0 * m5 * q1_dot * q1_dot * l4 * x29,
+                ],
+                [
+                    l1 * q2_dot * q2_dot * x3 * x4,
+                    x15 * l1 * q2_dot * q2_dot * l0 * x18,
+                    l1
+                        * (x15 * g * x4 - (x82 + x83 + x84) * m4
+                            - m5 * (x82 + x83 + x84 + q5_dot * q5_dot * x35 * l4)
+                            - (x82 + x84) * m3 - m2 * l0 * q1_dot * q1_dot * x18),
+                    x20 * l1 * q2_dot * q2_dot * x31 * l2,
+                    l1 * q2_dot * q2_dot * l3 * x33 * x26,
+                    l1 * q2_dot * q2_dot * m5 * x35 * l4,
+                ],
+                [
+                    x6 * x7 * q3_dot * q3_dot * l2,
+                    x20 * l0 * q3_dot * q3_dot * x22 * l2,
+                    x20 * l1 * x31 * q3_dot * q3_dot * l2,
+                    ((-x90 - x92) * m3 - m4 * (x90 + x91 + x92)
+                        - m5 * (x90 + q5_dot * q5_dot * l4 * x39 + x91 + x92)
+                        + x20 * x7 * g) * l2,
+                    x37 * l3 * q3_dot * q3_dot * x26 * l2,
+                    m5 * q3_dot * q3_dot * l4 * x39 * l2,
+                ],
+                [
+                    x9 * l3 * x10 * q4_dot * q4_dot,
+                    l0 * l3 * x25 * q4_dot * q4_dot * x26,
+                    l1 * l3 * x33 * q4_dot * q4_dot * x26,
+                    x37 * l3 * q4_dot * q4_dot * x26 * l2,
+                    l3
+                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
+                            - (x98 + x99 + x41 * q5_dot * q5_dot * l4 + x100) * m5),
+                    x41 * l3 * m5 * q4_dot * q4_dot * l4,
+                ],
+                [
+                    -(q5_dot * q5_dot * m5 * l4 * x12),
+                    l0 * q5_dot * q5_dot * m5 * l4 * x29,
+                    l1 * q5_dot * q5_dot * m5 * x35 * l4,
+                    q5_dot * q5_dot * m5 * l4 * x39 * l2,
+                    x41 * l3 * q5_dot * q5_dot * m5 * l4,
+                    (g * x12 - q3_dot * q3_dot * x39 * l2 - l0 * q1_dot * q1_dot * x29
+                        - x41 * l3 * q4_dot * q4_dot - l1 * q2_dot * q2_dot * x35) * m5
+                        * l4,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x16 * l0 * q1_dot
+                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    0.0,
+                    l1 * l0 * q1_dot * x49 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
+                    l0 * x47 * q1_dot * x106 * l2,
+                    l0 * l3 * q1_dot * x51 * x107,
+                    2.0 * x53 * l0 * m5 * q1_dot * l4,
+                ],
+                [
+                    l1 * q2_dot * x108 * x17,
+                    l1 * q2_dot * x108 * l0 * x49,
+                    0.0,
+                    l1 * q2_dot * x55 * x109 * l2,
+                    l1 * q2_dot * x57 * l3 * x107,
+                    -(2.0 * l1 * q2_dot * m5 * x59 * l4),
+                ],
+                [
+                    x21 * q3_dot * x109 * l2,
+                    l0 * x47 * q3_dot * x109 * l2,
+                    l1 * x55 * x106 * q3_dot * l2,
+                    0.0,
+                    x62 * l3 * q3_dot * x107 * l2,
+                    2.0 * x64 * m5 * q3_dot * l4 * l2,
+                ],
+                [
+                    l3 * q4_dot * x24 * x110,
+                    l0 * l3 * q4_dot * x51 * x110,
+                    l1 * x57 * l3 * q4_dot * x110,
+                    x62 * l3 * q4_dot * x110 * l2,
+                    0.0,
+                    -(2.0 * l3 * m5 * q4_dot * l4 * x68),
+                ],
+                [
+                    -(2.0 * x28 * q5_dot * m5 * l4),
+                    -(2.0 * x53 * l0 * q5_dot * m5 * l4),
+                    2.0 * l1 * q5_dot * m5 * x59 * l4,
+                    -(2.0 * x64 * q5_dot * m5 * l4 * l2),
+                    2.0 * l3 * q5_dot * m5 * l4 * x68,
+                    0.0,
+                ],
+            ],
+            w: [
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            d_w: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..6 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..6 {
+            let mut s = c[j];
+            for i in 0..6 {
+                s += w[j][i] * x[i];
+            }
+            dstate[6 + j] = s;
+        }
+        for k in 0..12 {
+            for j in 0..6 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 6];
+            for i in 0..6 {
+                let mut s = d_force[k][i];
+                for j in 0..6 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..6 {
+                let mut s = d_c[k][j];
+                for i in 0..6 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[6 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1170,6 +2312,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 12 states, 6 equations.
@@ -1497,6 +2652,475 @@ pub mod kane {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 6],
+        matrix: [[f64; 6]; 6],
+        force: [f64; 6],
+        checks: [f64; 0],
+        d_qdot: [[f64; 6]; 12],
+        d_matrix: [[[f64; 6]; 6]; 12],
+        d_force: [[f64; 6]; 12],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let q1 = state[1];
+        let q2 = state[2];
+        let q3 = state[3];
+        let q4 = state[4];
+        let q5 = state[5];
+        let u1 = state[6];
+        let u2 = state[7];
+        let u3 = state[8];
+        let u4 = state[9];
+        let u5 = state[10];
+        let u6 = state[11];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let m3 = params.m3;
+        let m4 = params.m4;
+        let m5 = params.m5;
+        let l0 = params.l0;
+        let l1 = params.l1;
+        let l2 = params.l2;
+        let l3 = params.l3;
+        let l4 = params.l4;
+        let g = params.g;
+        let x0 = f64::cos(q1);
+        let x1 = -m2 - m4 - m5 - m1 - m3;
+        let x2 = x0 * l0 * x1;
+        let x3 = -m2 - m4 - m5 - m3;
+        let x4 = f64::cos(q2);
+        let x5 = l1 * x3 * x4;
+        let x6 = -m4 - m5 - m3;
+        let x7 = f64::cos(q3);
+        let x8 = x6 * x7 * l2;
+        let x9 = f64::cos(q4);
+        let x10 = -m4 - m5;
+        let x11 = x9 * l3 * x10;
+        let x12 = f64::cos(q5);
+        let x13 = -(m5 * l4 * x12);
+        let x14 = m2 + m4 + m5 + m1 + m3;
+        let x15 = m2 + m4 + m5 + m3;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x16 * x17 + x0 * x4;
+        let x19 = x15 * l1 * l0 * x18;
+        let x20 = m4 + m5 + m3;
+        let x21 = f64::sin(q3);
+        let x22 = x0 * x7 + x16 * x21;
+        let x23 = x20 * l0 * x22 * l2;
+        let x24 = f64::sin(q4);
+        let x25 = x9 * x0 + x16 * x24;
+        let x26 = m4 + m5;
+        let x27 = l0 * l3 * x25 * x26;
+        let x28 = f64::sin(q5);
+        let x29 = x0 * x12 + x16 * x28;
+        let x30 = l0 * m5 * l4 * x29;
+        let x31 = x7 * x4 + x21 * x17;
+        let x32 = x20 * l1 * x31 * l2;
+        let x33 = x9 * x4 + x17 * x24;
+        let x34 = l1 * l3 * x33 * x26;
+        let x35 = x28 * x17 + x4 * x12;
+        let x36 = l1 * m5 * x35 * l4;
+        let x37 = x9 * x7 + x21 * x24;
+        let x38 = x37 * l3 * x26 * l2;
+        let x39 = x28 * x21 + x7 * x12;
+        let x40 = m5 * l4 * x39 * l2;
+        let x41 = x9 * x12 + x28 * x24;
+        let x42 = x41 * l3 * m5 * l4;
+        let x43 = u2 * u2 * x16 * l0;
+        let x44 = l1 * u3 * u3 * x17;
+        let x45 = x21 * u4 * u4 * l2;
+        let x46 = u5 * u5 * l3 * x24;
+        let x47 = x16 * x4 - x0 * x17;
+        let x48 = l1 * u3 * u3 * x47;
+        let x49 = x16 * x7 - x0 * x21;
+        let x50 = x49 * u4 * u4 * l2;
+        let x51 = x9 * x16 - x0 * x24;
+        let x52 = u5 * u5 * l3 * x51;
+        let x53 = x16 * x12 - x28 * x0;
+        let x54 = x21 * x4 - x7 * x17;
+        let x55 = u4 * u4 * x54 * l2;
+        let x56 = x9 * x17 - x24 * x4;
+        let x57 = u5 * u5 * x56 * l3;
+        let x58 = u2 * u2 * l0 * x47;
+        let x59 = x28 * x4 - x17 * x12;
+        let x60 = x9 * x21 - x7 * x24;
+        let x61 = u5 * u5 * x60 * l3;
+        let x62 = l1 * u3 * u3 * x54;
+        let x63 = u2 * u2 * l0 * x49;
+        let x64 = x21 * x12 - x28 * x7;
+        let x65 = l1 * x56 * u3 * u3;
+        let x66 = u2 * u2 * l0 * x51;
+        let x67 = x60 * u4 * u4 * l2;
+        let x68 = x9 * x28 - x24 * x12;
+        let x69 = x16 * l0 * x14;
+        let x70 = l1 * l0 * x3 * x47;
+        let x71 = l0 * x6 * x49 * l2;
+        let x72 = l0 * l3 * x10 * x51;
+        let x73 = -(x53 * l0 * m5 * l4);
+        let x74 = u5 * u5 * l3 * x25;
+        let x75 = u4 * u4 * x22 * l2;
+        let x76 = l1 * u3 * u3 * x18;
+        let x77 = x15 * l1 * x17;
+        let x78 = x15 * l1 * l0 * x47;
+        let x79 = x20 * l1 * x54 * l2;
+        let x80 = l1 * x56 * l3 * x10;
+        let x81 = l1 * m5 * x59 * l4;
+        let x82 = u5 * u5 * l3 * x33;
+        let x83 = u2 * u2 * l0 * x18;
+        let x84 = x31 * u4 * u4 * l2;
+        let x85 = x20 * x21 * l2;
+        let x86 = x20 * l0 * x49 * l2;
+        let x87 = l1 * x6 * x54 * l2;
+        let x88 = x60 * l3 * x10 * l2;
+        let x89 = -(x64 * m5 * l4 * l2);
+        let x90 = u5 * u5 * x37 * l3;
+        let x91 = l1 * x31 * u3 * u3;
+        let x92 = u2 * u2 * l0 * x22;
+        let x93 = l3 * x24 * x26;
+        let x94 = l0 * l3 * x51 * x26;
+        let x95 = l1 * x56 * l3 * x26;
+        let x96 = x60 * l3 * x26 * l2;
+        let x97 = l3 * m5 * l4 * x68;
+        let x98 = u2 * u2 * l0 * x25;
+        let x99 = l1 * u3 * u3 * x33;
+        let x100 = x37 * u4 * u4 * l2;
+        let x101 = x28 * m5 * l4;
+        let x102 = x53 * l0 * m5 * l4;
+        let x103 = -(l1 * m5 * x59 * l4);
+        let x104 = x64 * m5 * l4 * l2;
+        let x105 = -(l3 * m5 * l4 * x68);
+        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
+        let x107 = 2.0 * m4 + 2.0 * m5;
+        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x110 = -2.0 * m4 - 2.0 * m5;
+        Derivatives {
+            qdot: [u1, u2, u3, u4, u5, u6],
+            matrix: [
+                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
+                [x2, l0 * l0 * x14, x19, x23, x27, x30],
+                [x5, x19, x15 * l1 * l1, x32, x34, x36],
+                [x8, x23, x32, x20 * l2 * l2, x38, x40],
+                [x11, x27, x34, x38, l3 * l3 * x26, x42],
+                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+            ],
+            force: [
+                -m2 * (x43 + x44) - u2 * u2 * x16 * l0 * m1
+                    - (x28 * u6 * u6 * l4 + x43 + x45 + x44 + x46) * m5
+                    - m4 * (x43 + x45 + x44 + x46) - (x43 + x45 + x44) * m3,
+                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * u3 * u3 * x47
+                    - m5 * (x52 + x48 + x50 + x53 * u6 * u6 * l4)
+                    - m4 * (x52 + x48 + x50)) * l0,
+                l1
+                    * (x15 * g * x17 - (x57 - x55 - x58) * m4
+                        - m5 * (x57 - x55 - u6 * u6 * x59 * l4 - x58) - (-x55 - x58) * m3
+                        + m2 * u2 * u2 * l0 * x47),
+                (x20 * x21 * g - (x61 + x62 - x63 + x64 * u6 * u6 * l4) * m5
+                    - m4 * (x61 + x62 - x63) + (x63 - x62) * m3) * l2,
+                l3
+                    * (g * x24 * x26 + (x65 + x66 + x67) * m4
+                        - (-x65 - x66 - u6 * u6 * l4 * x68 - x67) * m5),
+                m5
+                    * (x64 * u4 * u4 * l2 - l1 * u3 * u3 * x59 + x28 * g
+                        - u5 * u5 * l3 * x68 + u2 * u2 * x53 * l0) * l4,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
+                    [x69, 0.0, x70, x71, x72, x73],
+                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
+                    [x77, x78, 0.0, x79, x80, x81],
+                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
+                    [x85, x86, x87, 0.0, x88, x89],
+                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
+                    [x93, x94, x95, x96, 0.0, x97],
+                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x103],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
+                    [x101, x102, x103, x104, x105, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    u2 * u2 * x0 * l0 * x1,
+                    (x0 * g * x14 - m5 * (x74 + x75 + u6 * u6 * l4 * x29 + x76)
+                        - m2 * l1 * u3 * u3 * x18 - (x75 + x76) * m3
+                        - m4 * (x74 + x75 + x76)) * l0,
+                    x15 * u2 * u2 * l1 * l0 * x18,
+                    u2 * u2 * x20 * l0 * x22 * l2,
+                    u2 * u2 * l0 * l3 * x25 * x26,
+                    u2 * u2 * l0 * m5 * l4 * x29,
+                ],
+                [
+                    l1 * u3 * u3 * x3 * x4,
+                    x15 * l1 * l0 * u3 * u3 * x18,
+                    (x15 * g * x4 - m2 * u2 * u2 * l0 * x18
+                        - (x82 + x83 + x84 + u6 * u6 * x35 * l4) * m5 - (x83 + x84) * m3
+                        - m4 * (x82 + x83 + x84)) * l1,
+                    x20 * l1 * x31 * u3 * u3 * l2,
+                    l1 * l3 * u3 * u3 * x33 * x26,
+                    l1 * u3 * u3 * m5 * x35 * l4,
+                ],
+                [
+                    x6 * x7 * u4 * u4 * l2,
+                    x20 * l0 * u4 * u4 * x22 * l2,
+                    x20 * l1 * x31 * u4 * u4 * l2,
+                    (x20 * x7 * g - m5 * (x90 + u6 * u6 * l4 * x39 + x91 + x92)
+                        - m4 * (x90 + x91 + x92) + (-x91 - x92) * m3) * l2,
+                    x37 * l3 * u4 * u4 * x26 * l2,
+                    m5 * u4 * u4 * l4 * x39 * l2,
+                ],
+                [
+                    x9 * u5 * u5 * l3 * x10,
+                    u5 * u5 * l0 * l3 * x25 * x26,
+                    u5 * u5 * l1 * l3 * x33 * x26,
+                    u5 * u5 * x37 * l3 * x26 * l2,
+                    l3
+                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
+                            - m5 * (x98 + x99 + x41 * u6 * u6 * l4 + x100)),
+                    x41 * u5 * u5 * l3 * m5 * l4,
+                ],
+                [
+                    -(u6 * u6 * m5 * l4 * x12),
+                    l0 * u6 * u6 * m5 * l4 * x29,
+                    l1 * u6 * u6 * m5 * x35 * l4,
+                    u6 * u6 * m5 * l4 * x39 * l2,
+                    x41 * l3 * u6 * u6 * m5 * l4,
+                    m5
+                        * (g * x12 - x41 * u5 * u5 * l3 - l1 * u3 * u3 * x35
+                            - u2 * u2 * l0 * x29 - u4 * u4 * x39 * l2) * l4,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    u2 * x16 * l0
+                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    0.0,
+                    u2 * l1 * l0 * x47 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
+                    u2 * l0 * x49 * x106 * l2,
+                    u2 * l0 * l3 * x51 * x107,
+                    2.0 * u2 * x53 * l0 * m5 * l4,
+                ],
+                [
+                    l1 * x108 * u3 * x17,
+                    l1 * x108 * l0 * u3 * x47,
+                    0.0,
+                    l1 * u3 * x54 * x109 * l2,
+                    l1 * x56 * l3 * u3 * x107,
+                    -(2.0 * l1 * u3 * m5 * x59 * l4),
+                ],
+                [
+                    x21 * u4 * x109 * l2,
+                    l0 * x49 * u4 * x109 * l2,
+                    l1 * u4 * x54 * x106 * l2,
+                    0.0,
+                    x60 * l3 * u4 * x107 * l2,
+                    2.0 * x64 * m5 * u4 * l4 * l2,
+                ],
+                [
+                    u5 * l3 * x24 * x110,
+                    u5 * l0 * l3 * x51 * x110,
+                    u5 * l1 * x56 * l3 * x110,
+                    u5 * x60 * l3 * x110 * l2,
+                    0.0,
+                    -(2.0 * u5 * l3 * m5 * l4 * x68),
+                ],
+                [
+                    -(2.0 * x28 * u6 * m5 * l4),
+                    -(2.0 * x53 * l0 * u6 * m5 * l4),
+                    2.0 * l1 * u6 * m5 * x59 * l4,
+                    -(2.0 * x64 * u6 * m5 * l4 * l2),
+                    2.0 * l3 * u6 * m5 * l4 * x68,
+                    0.0,
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..6 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..6 {
+            dstate[6 + j] = x[j];
+        }
+        for k in 0..12 {
+            for j in 0..6 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 6];
+            for i in 0..6 {
+                let mut s = d_force[k][i];
+                for j in 0..6 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..6 {
+                jac[6 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1564,6 +3188,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 11 states, 5 equations.
@@ -1935,6 +3572,507 @@ pub mod reduced_volterra {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 6],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 0],
+        d_qdot: [[f64; 6]; 11],
+        d_matrix: [[[f64; 5]; 5]; 11],
+        d_force: [[f64; 5]; 11],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let q1 = state[1];
+        let q2 = state[2];
+        let q3 = state[3];
+        let q4 = state[4];
+        let q5 = state[5];
+        let u1 = state[6];
+        let u2 = state[7];
+        let u3 = state[8];
+        let u4 = state[9];
+        let u5 = state[10];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let m3 = params.m3;
+        let m4 = params.m4;
+        let m5 = params.m5;
+        let l0 = params.l0;
+        let l1 = params.l1;
+        let l2 = params.l2;
+        let l3 = params.l3;
+        let l4 = params.l4;
+        let g = params.g;
+        let G_q0 = g_i[0];
+        let x0 = 1.0 / (m2 + m0 + m4 + m5 + m1 + m3);
+        let x1 = f64::cos(q4);
+        let x2 = -m4 - m5;
+        let x3 = f64::cos(q5);
+        let x4 = -m2 - m4 - m5 - m3;
+        let x5 = f64::cos(q2);
+        let x6 = f64::cos(q1);
+        let x7 = -m2 - m4 - m5 - m1 - m3;
+        let x8 = -m4 - m5 - m3;
+        let x9 = f64::cos(q3);
+        let x10 = m2 + m4 + m5 + m3;
+        let x11 = f64::sin(q1);
+        let x12 = f64::sin(q2);
+        let x13 = x11 * x12 + x6 * x5;
+        let x14 = x10 * x13 - x6 * x4 * x0 * x7 * x5;
+        let x15 = l1 * x14 * l0;
+        let x16 = m4 + m5 + m3;
+        let x17 = f64::sin(q3);
+        let x18 = x6 * x9 + x11 * x17;
+        let x19 = x16 * x18 - x6 * x8 * x9 * x0 * x7;
+        let x20 = x19 * l0 * l2;
+        let x21 = f64::sin(q4);
+        let x22 = x1 * x6 + x11 * x21;
+        let x23 = m4 + m5;
+        let x24 = x22 * x23 - x1 * x6 * x2 * x0 * x7;
+        let x25 = l0 * l3 * x24;
+        let x26 = x6 * x3;
+        let x27 = f64::sin(q5);
+        let x28 = x11 * x27;
+        let x29 = x26 + x28 + x6 * x0 * x7 * x3;
+        let x30 = l0 * m5 * x29 * l4;
+        let x31 = x9 * x5 + x17 * x12;
+        let x32 = x16 * x31 - x8 * x9 * x4 * x0 * x5;
+        let x33 = x32 * l1 * l2;
+        let x34 = x1 * x5 + x12 * x21;
+        let x35 = x34 * x23 - x1 * x2 * x4 * x0 * x5;
+        let x36 = l1 * l3 * x35;
+        let x37 = x27 * x12;
+        let x38 = x5 * x3;
+        let x39 = x37 + x4 * x0 * x5 * x3 + x38;
+        let x40 = l1 * m5 * x39 * l4;
+        let x41 = x1 * x9 + x17 * x21;
+        let x42 = x41 * x23 - x1 * x8 * x9 * x2 * x0;
+        let x43 = l3 * x42 * l2;
+        let x44 = x27 * x17;
+        let x45 = x9 * x3;
+        let x46 = x44 + x45 + x8 * x9 * x0 * x3;
+        let x47 = m5 * l4 * l2 * x46;
+        let x48 = x1 * x3;
+        let x49 = x27 * x21;
+        let x50 = x48 + x1 * x2 * x0 * x3 + x49;
+        let x51 = x50 * l3 * m5 * l4;
+        let x52 = x11 * x9 - x6 * x17;
+        let x53 = x52 * u3 * u3 * l2;
+        let x54 = x11 * x5 - x6 * x12;
+        let x55 = u2 * u2 * l1 * x54;
+        let x56 = x27 * x6;
+        let x57 = x11 * x3;
+        let x58 = x57 - x56;
+        let x59 = x1 * x11 - x6 * x21;
+        let x60 = l3 * u4 * u4 * x59;
+        let x61 = u2 * u2 * l1 * x12;
+        let x62 = x11 * l0 * u1 * u1;
+        let x63 = l3 * u4 * u4 * x21;
+        let x64 = x17 * u3 * u3 * l2;
+        let x65 = -x11 * l0 * u1 * u1 * m1 - m2 * (x61 + x62)
+            - m4 * (x61 + x62 + x63 + x64) - (x61 + x62 + x64) * m3
+            - m5 * (x61 + x62 + x63 + u5 * u5 * x27 * l4 + x64);
+        let x66 = m2 + m4 + m5 + m1 + m3;
+        let x67 = x1 * x12 - x21 * x5;
+        let x68 = x67 * l3 * u4 * u4;
+        let x69 = x27 * x5;
+        let x70 = x12 * x3;
+        let x71 = x69 - x70;
+        let x72 = l0 * x54 * u1 * u1;
+        let x73 = x17 * x5 - x9 * x12;
+        let x74 = u3 * u3 * x73 * l2;
+        let x75 = x1 * x17 - x9 * x21;
+        let x76 = x75 * l3 * u4 * u4;
+        let x77 = u2 * u2 * l1 * x73;
+        let x78 = l0 * x52 * u1 * u1;
+        let x79 = x27 * x9;
+        let x80 = x17 * x3;
+        let x81 = x80 - x79;
+        let x82 = x21 * x3;
+        let x83 = x1 * x27;
+        let x84 = x83 - x82;
+        let x85 = u2 * u2 * l1 * x67;
+        let x86 = x75 * u3 * u3 * l2;
+        let x87 = l0 * u1 * u1 * x59;
+        let x88 = l1 * l0 * (x4 * x54 - x11 * x66 * x4 * x0 * x5);
+        let x89 = l0 * (x8 * x52 - x11 * x8 * x9 * x66 * x0) * l2;
+        let x90 = (x2 * x59 - x1 * x11 * x2 * x66 * x0) * l0 * l3;
+        let x91 = (x56 + x11 * x66 * x0 * x3 - x57) * l0 * m5 * l4;
+        let x92 = l3 * u4 * u4 * x22;
+        let x93 = u3 * u3 * x18 * l2;
+        let x94 = u2 * u2 * l1 * x13;
+        let x95 = x26 + x28;
+        let x96 = l1 * l0 * (x10 * x54 - x10 * x6 * x0 * x12 * x7);
+        let x97 = (x16 * x73 - x10 * x8 * x9 * x0 * x12) * l1 * l2;
+        let x98 = l1 * l3 * (x67 * x2 - x1 * x10 * x2 * x0 * x12);
+        let x99 = (x69 + x10 * x0 * x12 * x3 - x70) * l1 * m5 * l4;
+        let x100 = l0 * x13 * u1 * u1;
+        let x101 = x31 * u3 * u3 * l2;
+        let x102 = l3 * u4 * u4 * x34;
+        let x103 = x37 + x38;
+        let x104 = l0 * (x16 * x52 - x16 * x6 * x17 * x0 * x7) * l2;
+        let x105 = (x8 * x73 - x16 * x17 * x4 * x0 * x5) * l1 * l2;
+        let x106 = l3 * (x75 * x2 - x1 * x16 * x17 * x2 * x0) * l2;
+        let x107 = m5 * l4 * (x16 * x17 * x0 * x3 + x79 - x80) * l2;
+        let x108 = u2 * u2 * l1 * x31;
+        let x109 = l0 * u1 * u1 * x18;
+        let x110 = x41 * l3 * u4 * u4;
+        let x111 = x44 + x45;
+        let x112 = l0 * l3 * (x59 * x23 - x6 * x0 * x21 * x23 * x7);
+        let x113 = l1 * l3 * (x67 * x23 - x4 * x0 * x21 * x23 * x5);
+        let x114 = (x75 * x23 - x8 * x9 * x0 * x21 * x23) * l3 * l2;
+        let x115 = l3 * m5 * (x0 * x21 * x23 * x3 - x82 + x83) * l4;
+        let x116 = l0 * x22 * u1 * u1;
+        let x117 = x48 + x49;
+        let x118 = u2 * u2 * l1 * x34;
+        let x119 = x41 * u3 * u3 * l2;
+        let x120 = x27 * x6 * x0 * x7;
+        let x121 = l0 * m5 * (x57 - x56 - x120) * l4;
+        let x122 = x27 * x4 * x0 * x5;
+        let x123 = l1 * m5 * (x70 - x69 - x122) * l4;
+        let x124 = x27 * x8 * x9 * x0;
+        let x125 = m5 * l4 * (x80 - x79 - x124) * l2;
+        let x126 = x1 * x27 * x2 * x0;
+        let x127 = l3 * m5 * l4 * (x82 - x83 - x126);
+        let x128 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3;
+        let x129 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
+        let x130 = 2.0 * m4 + 2.0 * m5;
+        let x131 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x132 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
+        let x133 = -2.0 * m4 - 2.0 * m5;
+        Derivatives {
+            qdot: [
+                x0
+                    * (u5 * m5 * l4 * x3 - x1 * l3 * x2 * u4 + G_q0 - u2 * l1 * x4 * x5
+                        - x6 * l0 * u1 * x7 - x8 * x9 * u3 * l2),
+                u1,
+                u2,
+                u3,
+                u4,
+                u5,
+            ],
+            matrix: [
+                [
+                    l0 * l0 * (m2 + m4 + m5 + m1 - x6 * x6 * x0 * x7 * x7 + m3),
+                    x15,
+                    x20,
+                    x25,
+                    x30,
+                ],
+                [
+                    x15,
+                    l1 * l1 * (m2 - x4 * x4 * x0 * x5 * x5 + m4 + m5 + m3),
+                    x33,
+                    x36,
+                    x40,
+                ],
+                [x20, x33, (m4 + m5 - x8 * x8 * x9 * x9 * x0 + m3) * l2 * l2, x43, x47],
+                [x25, x36, x43, l3 * l3 * (m4 - x1 * x1 * x2 * x2 * x0 + m5), x51],
+                [x30, x40, x47, x51, m5 * (1.0 - m5 * x0 * x3 * x3) * l4 * l4],
+            ],
+            force: [
+                (x11 * g * x66 - m5 * (x53 + x55 + u5 * u5 * x58 * l4 + x60)
+                    - m2 * u2 * u2 * l1 * x54 - (x53 + x55) * m3 - x6 * x65 * x0 * x7
+                    - m4 * (x53 + x55 + x60)) * l0,
+                l1
+                    * (x10 * g * x12 - (x68 - u5 * u5 * x71 * l4 - x72 - x74) * m5
+                        - (x68 - x72 - x74) * m4 + m2 * l0 * x54 * u1 * u1
+                        - (-x72 - x74) * m3 - x65 * x4 * x0 * x5),
+                (x16 * x17 * g - (x76 + x77 - x78) * m4 + (x78 - x77) * m3
+                    - m5 * (u5 * u5 * x81 * l4 + x76 + x77 - x78) - x8 * x9 * x65 * x0)
+                    * l2,
+                l3
+                    * (g * x21 * x23 - (-u5 * u5 * l4 * x84 - x85 - x86 - x87) * m5
+                        + m4 * (x85 + x86 + x87) - x1 * x2 * x65 * x0),
+                (x65 * x0 * x3 + x81 * u3 * u3 * l2 + x58 * l0 * u1 * u1 + x27 * g
+                    - l3 * u4 * u4 * x84 - u2 * u2 * l1 * x71) * m5 * l4,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x11 * l0 * x66 * x0 * u1), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x10 * u2 * l1 * x0 * x12), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x16 * x17 * u3 * x0 * l2), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(l3 * u4 * x0 * x21 * x23), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(u5 * x27 * m5 * x0 * l4), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x6 * l0 * x66 * x0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [x10 * l1 * x0 * x5, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [x16 * x9 * x0 * l2, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [x1 * l3 * x0 * x23, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [m5 * x0 * l4 * x3, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [-(2.0 * x11 * x6 * l0 * l0 * x66 * x0 * x7), x88, x89, x90, x91],
+                    [x88, 0.0, 0.0, 0.0, 0.0],
+                    [x89, 0.0, 0.0, 0.0, 0.0],
+                    [x90, 0.0, 0.0, 0.0, 0.0],
+                    [x91, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x96, 0.0, 0.0, 0.0],
+                    [x96, -(2.0 * x10 * l1 * l1 * x4 * x0 * x12 * x5), x97, x98, x99],
+                    [0.0, x97, 0.0, 0.0, 0.0],
+                    [0.0, x98, 0.0, 0.0, 0.0],
+                    [0.0, x99, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x104, 0.0, 0.0],
+                    [0.0, 0.0, x105, 0.0, 0.0],
+                    [
+                        x104,
+                        x105,
+                        -(2.0 * x16 * x8 * x17 * x9 * x0 * l2 * l2),
+                        x106,
+                        x107,
+                    ],
+                    [0.0, 0.0, x106, 0.0, 0.0],
+                    [0.0, 0.0, x107, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, x112, 0.0],
+                    [0.0, 0.0, 0.0, x113, 0.0],
+                    [0.0, 0.0, 0.0, x114, 0.0],
+                    [
+                        x112,
+                        x113,
+                        x114,
+                        -(2.0 * x1 * l3 * l3 * x2 * x0 * x21 * x23),
+                        x115,
+                    ],
+                    [0.0, 0.0, 0.0, x115, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, x121],
+                    [0.0, 0.0, 0.0, 0.0, x123],
+                    [0.0, 0.0, 0.0, 0.0, x125],
+                    [0.0, 0.0, 0.0, 0.0, x127],
+                    [x121, x123, x125, x127, 2.0 * x27 * m5 * m5 * x0 * l4 * l4 * x3],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    l0
+                        * (x6 * (g * x66 - x6 * l0 * x0 * u1 * u1 * x7 * x7)
+                            - m2 * u2 * u2 * l1 * x13 - m4 * (x92 + x93 + x94)
+                            - (x93 + x94) * m3 - x11 * x65 * x66 * x0
+                            - m5 * (x92 + x93 + x94 + u5 * u5 * l4 * x95)),
+                    l1 * x14 * l0 * u1 * u1,
+                    x19 * l0 * u1 * u1 * l2,
+                    l0 * l3 * u1 * u1 * x24,
+                    l0 * m5 * x29 * u1 * u1 * l4,
+                ],
+                [
+                    u2 * u2 * l1 * x14 * l0,
+                    ((x10 * g - u2 * u2 * l1 * x4 * x4 * x0 * x5) * x5
+                        - x10 * x65 * x0 * x12 - (x100 + x101) * m3
+                        - m2 * l0 * x13 * u1 * u1 - (x100 + x101 + x102) * m4
+                        - m5 * (x100 + u5 * u5 * x103 * l4 + x101 + x102)) * l1,
+                    x32 * u2 * u2 * l1 * l2,
+                    u2 * u2 * l1 * l3 * x35,
+                    u2 * u2 * l1 * m5 * x39 * l4,
+                ],
+                [
+                    x19 * l0 * u3 * u3 * l2,
+                    x32 * l1 * u3 * u3 * l2,
+                    ((-x108 - x109) * m3 - x16 * x17 * x65 * x0
+                        - m4 * (x110 + x108 + x109)
+                        + x9 * (x16 * g - x8 * x8 * x9 * u3 * u3 * x0 * l2)
+                        - m5 * (x110 + u5 * u5 * l4 * x111 + x108 + x109)) * l2,
+                    l3 * u3 * u3 * x42 * l2,
+                    u3 * u3 * m5 * l4 * l2 * x46,
+                ],
+                [
+                    l0 * l3 * u4 * u4 * x24,
+                    l1 * l3 * u4 * u4 * x35,
+                    l3 * x42 * u4 * u4 * l2,
+                    l3
+                        * (x1 * (g * x23 - x1 * l3 * x2 * x2 * u4 * u4 * x0)
+                            - x65 * x0 * x21 * x23
+                            - (x116 + x117 * u5 * u5 * l4 + x118 + x119) * m5
+                            + m4 * (-x116 - x118 - x119)),
+                    x50 * l3 * m5 * u4 * u4 * l4,
+                ],
+                [
+                    u5 * u5 * l0 * m5 * x29 * l4,
+                    u5 * u5 * l1 * m5 * x39 * l4,
+                    u5 * u5 * m5 * l4 * l2 * x46,
+                    u5 * u5 * x50 * l3 * m5 * l4,
+                    m5
+                        * (g * x3 + (-x27 * x65 - u5 * u5 * m5 * l4 * x3 * x3) * x0
+                            - u2 * u2 * l1 * x103 - u3 * u3 * x111 * l2
+                            - l0 * u1 * u1 * x95 - x117 * l3 * u4 * u4) * l4,
+                ],
+                [
+                    -(x11 * x6 * l0 * l0 * x128 * x0 * u1 * x7),
+                    l1 * l0 * u1
+                        * (x54 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3)
+                            - x11 * x128 * x4 * x0 * x5),
+                    (x52 * x129 - x11 * x8 * x9 * x128 * x0) * l0 * u1 * l2,
+                    l0 * l3 * (x59 * x130 - x1 * x11 * x2 * x128 * x0) * u1,
+                    l0 * m5 * (2.0 * x57 - 2.0 * x56 + x11 * x128 * x0 * x3) * u1 * l4,
+                ],
+                [
+                    (x131 * x54 - x6 * x131 * x0 * x12 * x7) * u2 * l1 * l0,
+                    -(u2 * l1 * l1 * x131 * x4 * x0 * x12 * x5),
+                    (x73 * x132 - x131 * x8 * x9 * x0 * x12) * u2 * l1 * l2,
+                    u2 * l1 * (x67 * x130 - x1 * x131 * x2 * x0 * x12) * l3,
+                    (x131 * x0 * x12 * x3 - 2.0 * x69 + 2.0 * x70) * u2 * l1 * m5 * l4,
+                ],
+                [
+                    l0 * u3 * (x52 * x132 - x6 * x17 * x132 * x0 * x7) * l2,
+                    l1 * u3 * (x73 * x129 - x17 * x132 * x4 * x0 * x5) * l2,
+                    -(x8 * x17 * x9 * u3 * x132 * x0 * l2 * l2),
+                    l3 * u3 * (x75 * x130 - x1 * x17 * x2 * x132 * x0) * l2,
+                    (x17 * x132 * x0 * x3 - 2.0 * x79 + 2.0 * x80) * u3 * m5 * l4 * l2,
+                ],
+                [
+                    (x59 * x133 - x6 * x0 * x21 * x133 * x7) * l0 * l3 * u4,
+                    l1 * l3 * (x67 * x133 - x4 * x0 * x21 * x133 * x5) * u4,
+                    (x75 * x133 - x8 * x9 * x0 * x21 * x133) * l3 * u4 * l2,
+                    -(x1 * l3 * l3 * x2 * u4 * x0 * x21 * x133),
+                    l3 * m5 * u4 * (2.0 * x82 + x0 * x21 * x133 * x3 - 2.0 * x83) * l4,
+                ],
+                [
+                    u5 * l0 * (2.0 * x56 + 2.0 * x120 - 2.0 * x57) * m5 * l4,
+                    u5 * l1 * m5 * (2.0 * x69 + 2.0 * x122 - 2.0 * x70) * l4,
+                    u5 * m5 * l4 * (2.0 * x79 + 2.0 * x124 - 2.0 * x80) * l2,
+                    u5 * l3 * m5 * (2.0 * x83 - 2.0 * x82 + 2.0 * x126) * l4,
+                    -(2.0 * u5 * x27 * m5 * m5 * x0 * l4 * l4 * x3),
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..6 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..5 {
+            dstate[6 + j] = x[j];
+        }
+        for k in 0..11 {
+            for j in 0..6 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 5];
+            for i in 0..5 {
+                let mut s = d_force[k][i];
+                for j in 0..5 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..5 {
+                jac[6 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2002,6 +4140,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

@@ -178,6 +178,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -671,6 +720,651 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 0],
+        d_qdot: [[f64; 7]; 14],
+        d_matrix: [[[f64; 7]; 7]; 14],
+        d_force: [[f64; 7]; 14],
+        power: f64,
+        d_power: [f64; 14],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(theta);
+        let x1 = x0 * Ixx;
+        let x2 = f64::cos(theta);
+        let x3 = f64::sin(phi);
+        let x4 = Ixy * x3;
+        let x5 = f64::cos(phi);
+        let x6 = Ixz * x5;
+        let x7 = -x4 - x6;
+        let x8 = x2 * x7;
+        let x9 = x8 - x1;
+        let x10 = Iyz * x5;
+        let x11 = Iyy * x3;
+        let x12 = x11 - x10;
+        let x13 = x12 * x2 + x0 * Ixy;
+        let x14 = x13 * x3;
+        let x15 = rho + 0.5 * l;
+        let x16 = f64::cos(psi);
+        let x17 = x16 * x16;
+        let x18 = f64::sin(psi);
+        let x19 = x18 * x18;
+        let x20 = Izz * x5;
+        let x21 = Iyz * x3;
+        let x22 = x20 - x21;
+        let x23 = x2 * x22 + x0 * Ixz;
+        let x24 = x23 * x5;
+        let x25 = x3 * Ixz - Ixy * x5;
+        let x26 = x0 * x25;
+        let x27 = x3 * Izz;
+        let x28 = -x27 - x10;
+        let x29 = x28 * x5;
+        let x30 = Iyy * x5;
+        let x31 = x30 + x21;
+        let x32 = x31 * x3;
+        let x33 = (x29 + x32) * x2;
+        let x34 = x33 - x26;
+        let x35 = -(x2 * m * x15 * x18);
+        let x36 = x16 * x2 * m * x15;
+        let x37 = l * l;
+        let x38 = 0.25 * x37 + rho * (rho + l);
+        let x39 = -(x0 * x16 * m * x15);
+        let x40 = -(x0 * m * x15 * x18);
+        let x41 = -(x2 * m * x15);
+        let x42 = x16 * x2 * m;
+        let x43 = x2 * m * x18;
+        let x44 = -(x0 * m);
+        let x45 = m + mg;
+        let x46 = x2 * psi_dot * x5 - theta_dot * x3;
+        let x47 = x0 * psi_dot;
+        let x48 = phi_dot - x47;
+        let x49 = theta_dot * x5;
+        let x50 = x2 * psi_dot * x3;
+        let x51 = x49 + x50;
+        let x52 = Ixx * x48 - x46 * Ixz - Ixy * x51;
+        let x53 = -phi_dot - x47;
+        let x54 = x2 * psi_dot * phi_dot * x5;
+        let x55 = theta_dot * x53 * x3 + x54;
+        let x56 = Iyy * x55;
+        let x57 = Iyz * x51;
+        let x58 = Ixz * x48;
+        let x59 = x46 * Izz;
+        let x60 = x59 - x57 - x58;
+        let x61 = x60 * x48;
+        let x62 = Ixy * theta_dot * x2 * psi_dot;
+        let x63 = theta_dot * x53 * x5 - x2 * psi_dot * x3 * phi_dot;
+        let x64 = x63 * Iyz;
+        let x65 = x46 * x52 + x56 - x61 + x62 - x64;
+        let x66 = x3 * x65;
+        let x67 = theta_dot * x2 * psi_dot * Ixz;
+        let x68 = x46 * Iyz;
+        let x69 = Ixy * x48;
+        let x70 = Iyy * x51 - x68 - x69;
+        let x71 = x70 * x48;
+        let x72 = x51 * x52;
+        let x73 = Iyz * x55;
+        let x74 = x63 * Izz;
+        let x75 = x67 + x71 - x72 - x73 + x74;
+        let x76 = x75 * x5;
+        let x77 = theta_dot * Ixx * x2 * psi_dot;
+        let x78 = x60 * x51;
+        let x79 = x63 * Ixz;
+        let x80 = x46 * x70;
+        let x81 = Ixy * x55;
+        let x82 = x78 - x77 - x79 - x80 - x81;
+        let x83 = 2.0 * theta;
+        let x84 = f64::sin(x83);
+        let x85 = f64::cos(x83);
+        let x86 = 0.5 * x85 + 0.5;
+        let x87 = -rho - l;
+        let x88 = x85 + 1.0;
+        let x89 = rho_dot * x88;
+        let x90 = l * (x86 * rho_dot - 0.25 * (l * theta_dot * x84))
+            + rho * (x87 * theta_dot * x84 + x89);
+        let x91 = 2.0 * rho + l;
+        let x92 = -0.5 * x85 - 0.5;
+        let x93 = f64::cos(0.0485 * t);
+        let x94 = f64::sin(0.089 * t);
+        let x95 = rho_dot * x18;
+        let x96 = x16 * psi_dot * x15;
+        let x97 = psi_dot * x15 * x18;
+        let x98 = x16 * rho_dot;
+        let x99 = 2.0 * x97 - 2.0 * x98;
+        let x100 = x0 * x99;
+        let x101 = theta_dot * x16 * x2 * x15;
+        let x102 = -(m
+            * ((-2.0 * x95 - x96) * x2 * psi_dot + (x100 - x101) * theta_dot));
+        let x103 = -2.0 * x95 - 2.0 * x96;
+        let x104 = x0 * x103;
+        let x105 = theta_dot * x2 * x15 * x18;
+        let x106 = x2 * rho_dot;
+        let x107 = x0 * theta_dot * x15;
+        let x108 = 0.012 * x93 - 0.018 * x94;
+        let x109 = -(x16 * x2 * m * x15);
+        let x110 = x0 * m * x15 * x18;
+        let x111 = -(x2 * m * x18);
+        let x112 = Ixx * x2;
+        let x113 = x4 + x6;
+        let x114 = x0 * x113;
+        let x115 = Ixy * x2 + x0 * (x10 - x11);
+        let x116 = x0 * (x21 - x20) + x2 * Ixz;
+        let x117 = x25 * x2;
+        let x118 = x0 * (-x29 - x32) - x117;
+        let x119 = x114 - x112;
+        let x120 = x0 * m * x15;
+        let x121 = -(x0 * x16 * m);
+        let x122 = -(x0 * m * x18);
+        let x123 = -(x2 * m);
+        let x124 = -2.0 * rho - l;
+        let x125 = x0 * x3 * phi_dot - theta_dot * x2 * x5;
+        let x126 = -theta_dot * x2 * x3 - x0 * phi_dot * x5;
+        let x127 = Ixy * theta_dot;
+        let x128 = x5 * x52;
+        let x129 = Iyy * x126 - Iyz * x125 - x116 * x48 + x46 * x119 + x60 * x2
+            + x0 * (-x127 - x128);
+        let x130 = theta_dot * Ixz;
+        let x131 = x3 * x52;
+        let x132 = x48 * x115 + x125 * Izz - x119 * x51 - Iyz * x126 - x70 * x2
+            + x0 * (x131 - x130);
+        let x133 = x125 * Ixz;
+        let x134 = Ixy * x126;
+        let x135 = x46 * x115;
+        let x136 = x116 * x51;
+        let x137 = x60 * x3;
+        let x138 = theta_dot * Ixx;
+        let x139 = x70 * x5;
+        let x140 = x138 - x137 + x139;
+        let x141 = x137 - x138 - x139;
+        let x142 = theta_dot * theta_dot;
+        let x143 = psi_dot * psi_dot;
+        let x144 = x142 + x143;
+        let x145 = x27 + 2.0 * x10 - x11;
+        let x146 = x2 * (x145 * x3 + (x30 - x20 + 2.0 * x21) * x5) - x114;
+        let x147 = -x49 - x50;
+        let x148 = x147 * Izz;
+        let x149 = x148 - x68;
+        let x150 = x149 * x51;
+        let x151 = x70 * x147;
+        let x152 = theta_dot * (phi_dot + x47) * x3 - x54;
+        let x153 = x152 * Ixz;
+        let x154 = x46 * Iyy;
+        let x155 = Iyz * x147;
+        let x156 = x63 * Ixy;
+        let x157 = -x147 * Ixz - x46 * Ixy;
+        let x158 = Iyz * x152 - x147 * x52 - x63 * Iyy + x67 + x71 - x72 - x73
+            + x149 * x48 + x74 - x46 * x157;
+        let x159 = (x154 - x155) * x48;
+        let x160 = x51 * x157;
+        let x161 = x152 * Izz;
+        let x162 = -x142 - x143;
+        let x163 = -x2 * x3 * phi_dot - x0 * theta_dot * x5;
+        let x164 = x2 * phi_dot * x5 - x0 * theta_dot * x3;
+        let x165 = Izz * x163 + x13 * x48 - x164 * Iyz + (x130 - x131) * x2 - x51 * x9
+            - x0 * x70;
+        let x166 = x46 * x9 - Iyz * x163 - x23 * x48 + x164 * Iyy + x60 * x0
+            + x2 * (x127 + x128);
+        let x167 = x23 * x51;
+        let x168 = Ixz * x163;
+        let x169 = x46 * x13;
+        let x170 = Ixy * x164;
+        let x171 = x28 * x51;
+        let x172 = Ixx * x2 * psi_dot;
+        let x173 = x70 * x3;
+        let x174 = x60 * x5;
+        let x175 = x46 * x31;
+        let x176 = Ixy * x2 * psi_dot - x131 - x28 * x48 + x46 * x25 + x12 * x53;
+        let x177 = x2 * psi_dot * Ixz - x25 * x51 - x128 + x53 * x22 + x31 * x48;
+        let x178 = x148 - 2.0 * x68 - 2.0 * x69 + (Iyy - Ixx) * x51;
+        let x179 = 2.0 * x58 + Iyz * (2.0 * x49 + 2.0 * x50) + x46 * (Iyy + Ixx - Izz);
+        Derivatives {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [
+                    x2 * (x14 + x2 * m * x15 * x15 * (x17 + x19) + x24) - x0 * x9,
+                    x34,
+                    x9,
+                    0.0,
+                    x35,
+                    x36,
+                    0.0,
+                ],
+                [x34, m * x38 - x3 * x28 + x31 * x5, x25, 0.0, x39, x40, x41],
+                [x9, x25, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x42, x43, x44],
+                [x35, x39, 0.0, x42, x45, 0.0, 0.0],
+                [x36, x40, 0.0, x43, 0.0, x45, 0.0],
+                [0.0, x41, 0.0, x44, 0.0, 0.0, x45],
+            ],
+            force: [
+                x2 * (-x66 - x76) + x82 * x0 - x90 * psi_dot * m,
+                x75 * x3
+                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x37) * psi_dot * psi_dot
+                        * x84 + theta_dot * x91 * rho_dot) * m - x65 * x5,
+                x77 - x78 + x79 + x80 + x81,
+                0.012 * x93
+                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                        + (l * (-0.25 * x85 - 0.25) + rho * x92) * psi_dot * psi_dot) * m
+                    - 0.018 * x94,
+                x102,
+                -((x2 * psi_dot * (2.0 * x98 - x97) + (x104 - x105) * theta_dot) * m),
+                -(theta_dot * m * (x107 - 2.0 * x106)),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, x109, x35, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x110, x39, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x111, x42, 0.0],
+                    [x109, x110, 0.0, x111, 0.0, 0.0, 0.0],
+                    [x35, x39, 0.0, x42, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x0
+                            * (x112 - x14 - x24
+                                + x2 * m * x15 * x15 * (-2.0 * x17 - 2.0 * x19) - x114)
+                            + x2 * (x1 - x8 + x3 * x115 + x116 * x5),
+                        x118,
+                        x119,
+                        0.0,
+                        x110,
+                        x39,
+                        0.0,
+                    ],
+                    [x118, 0.0, 0.0, 0.0, x109, x35, x120],
+                    [x119, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x121, x122, x123],
+                    [x110, x109, 0.0, x121, 0.0, 0.0, 0.0],
+                    [x39, x35, 0.0, x122, 0.0, 0.0, 0.0],
+                    [0.0, x120, 0.0, x123, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        (x13 * x5 - x26 - x23 * x3 + x33) * x2,
+                        x146,
+                        x117,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x146,
+                        (x20 - x30 - 2.0 * x21) * x3 + x145 * x5,
+                        x113,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [x117, x113, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x2 * x2 * m * x15 * (2.0 * x17 + 2.0 * x19),
+                        0.0,
+                        0.0,
+                        0.0,
+                        x111,
+                        x42,
+                        0.0,
+                    ],
+                    [0.0, m * x91, 0.0, 0.0, x121, x122, x123],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x111, x121, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x42, x122, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x123, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -((theta_dot * (x0 * (2.0 * x95 + 2.0 * x96) + x105)
+                        + (x97 - 2.0 * x98) * x2 * psi_dot) * m),
+                    x102,
+                    0.0,
+                ],
+                [
+                    psi_dot
+                        * (x2 * (-x129 * x3 - x132 * x5)
+                            - (theta_dot * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x37)
+                                * x85 + x124 * rho_dot * x84) * m
+                            + x0 * (x136 - x133 - x134 - x135 + x0 * x140))
+                        + x0 * (x66 + x76) + x82 * x2,
+                    (x132 * x3 - psi_dot * m * x85 * x38 - x129 * x5) * psi_dot,
+                    (x133 + x134 + x135 + x141 * x0 - x136) * psi_dot,
+                    -(psi_dot * psi_dot * m * x15 * x84),
+                    -(m
+                        * (theta_dot * x2 * x99
+                            + x0
+                                * (x144 * x16 * x15 + 2.0 * (psi_dot * rho_dot * x18)))),
+                    -((x0 * (x144 * x15 * x18 - 2.0 * (x16 * psi_dot * rho_dot))
+                        + theta_dot * x103 * x2) * m),
+                    -(theta_dot * (theta_dot * x2 * x15 + 2.0 * (x0 * rho_dot)) * m),
+                ],
+                [
+                    x0
+                        * (x150 - x151 - x153 + x46 * (x155 - x154 - x57 - x58 + x59)
+                            - x156)
+                        + x2
+                            * (x158 * x3
+                                + (x61 - x159 - x56 + x160 - x62 + 2.0 * x64 - x161) * x5),
+                    (x159 + x56 - x61 - x160 + x62 - 2.0 * x64 + x161) * x3 + x158 * x5,
+                    x46 * (x154 + x57 - x155 + x58 - x59) - x150 + x151 + x153 + x156,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    -(psi_dot * m * (x124 * theta_dot * x84 + x89)),
+                    -(m * (2.0 * (theta_dot * rho_dot) + psi_dot * psi_dot * x15 * x84)),
+                    0.0,
+                    -(m * (psi_dot * psi_dot * x92 - x142)),
+                    -((x16 * x2 * x162 + 2.0 * (x0 * theta_dot * psi_dot * x18)) * m),
+                    -(m * (x2 * x18 * x162 - 2.0 * (x0 * theta_dot * x16 * psi_dot))),
+                    -(x0 * theta_dot * theta_dot * m),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    (-x165 * x5 - x166 * x3) * x2
+                        + (x167 - x168 - x169 + x141 * x2 - x170) * x0 - x90 * m,
+                    x165 * x3 - x166 * x5 - psi_dot * m * x84 * x38,
+                    x140 * x2 - x167 + x168 + x169 + x170,
+                    -((rho * (-x85 - 1.0) + l * x92) * psi_dot * m),
+                    -(m * (x103 * x2 + 2.0 * (x0 * theta_dot * x15 * x18))),
+                    -(((2.0 * x106 - 2.0 * x107) * x16
+                        - 2.0 * (x2 * psi_dot * x15 * x18)) * m),
+                    0.0,
+                ],
+                [
+                    (x171 + x53 * x7 - x172 + x173 + x174 - x175) * x0
+                        + x2 * (-x176 * x3 - x177 * x5)
+                        - psi_dot * m * (rho * x87 - 0.25 * x37) * x84,
+                    x3 * x177 - m * x91 * rho_dot - x176 * x5,
+                    x172 - x171 + x53 * x113 - x173 - x174 + x175,
+                    -(x124 * theta_dot * m),
+                    -(m * (x100 - 2.0 * x101)),
+                    -((x104 - 2.0 * x105) * m),
+                    -((2.0 * x107 - 2.0 * x106) * m),
+                ],
+                [
+                    x2 * (-x178 * x5 - x179 * x3),
+                    x178 * x3 - x179 * x5,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    -(psi_dot * m * (rho * x88 + l * x86)),
+                    -(theta_dot * m * x91),
+                    0.0,
+                    0.0,
+                    -((-2.0 * (x0 * theta_dot * x16) - 2.0 * (x2 * psi_dot * x18)) * m),
+                    -((2.0 * (x16 * x2 * psi_dot) - 2.0 * (x0 * theta_dot * x18)) * m),
+                    2.0 * theta_dot * x2 * m,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            power: rho_dot * x108,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                x108,
+                0.0,
+                0.0,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[14] = power;
+        for k in 0..14 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..14 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -749,6 +1443,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 15 states, 7 equations.
@@ -1173,6 +1880,1056 @@ pub mod maggi {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 14],
+        d_matrix: [[[f64; 7]; 7]; 14],
+        d_force: [[f64; 7]; 14],
+        w: [[f64; 7]; 7],
+        c: [f64; 7],
+        d_w: [[[f64; 7]; 7]; 14],
+        d_c: [[f64; 7]; 14],
+        power: f64,
+        d_power: [f64; 14],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::cos(phi);
+        let x1 = Ixy * x0;
+        let x2 = f64::sin(phi);
+        let x3 = x2 * Ixz;
+        let x4 = x3 - x1;
+        let x5 = x4 * x0;
+        let x6 = Ixy * x2;
+        let x7 = Ixz * x0;
+        let x8 = -x6 - x7;
+        let x9 = x2 * x8;
+        let x10 = x5 + x9;
+        let x11 = x8 * x0;
+        let x12 = x4 * x2;
+        let x13 = x11 - x12;
+        let x14 = f64::sin(theta);
+        let x15 = x14 * x10;
+        let x16 = x14 * x4;
+        let x17 = x2 * Izz;
+        let x18 = Iyz * x0;
+        let x19 = -x17 - x18;
+        let x20 = x19 * x0;
+        let x21 = Iyy * x0;
+        let x22 = Iyz * x2;
+        let x23 = x21 + x22;
+        let x24 = x23 * x2;
+        let x25 = x20 + x24;
+        let x26 = f64::cos(theta);
+        let x27 = x25 * x26;
+        let x28 = x27 - x16;
+        let x29 = x0 * x28;
+        let x30 = Iyy * x2;
+        let x31 = x30 - x18;
+        let x32 = x31 * x26 + x14 * Ixy;
+        let x33 = x32 * x2;
+        let x34 = rho + 0.5 * l;
+        let x35 = f64::cos(psi);
+        let x36 = x35 * x35;
+        let x37 = f64::sin(psi);
+        let x38 = x37 * x37;
+        let x39 = x26 * m * x34 * x34 * (x36 + x38);
+        let x40 = Izz * x0;
+        let x41 = x40 - x22;
+        let x42 = x26 * x41 + x14 * Ixz;
+        let x43 = x42 * x0;
+        let x44 = x33 + x39 + x43;
+        let x45 = x2 * x44;
+        let x46 = x15 + x29 + x45;
+        let x47 = 1.0 / x26;
+        let x48 = l * l;
+        let x49 = 0.25 * x48 + rho * (rho + l);
+        let x50 = m * x49 - x2 * x19 + x23 * x0;
+        let x51 = x50 * x0;
+        let x52 = x25 * x2 + x51;
+        let x53 = x52 * x0;
+        let x54 = x2 * x52;
+        let x55 = x46 * x47 * x0 - x54;
+        let x56 = x2 * x37;
+        let x57 = x14 * x35 * x0;
+        let x58 = -x56 - x57;
+        let x59 = x58 * m * x34;
+        let x60 = x35 * x2;
+        let x61 = x14 * x0 * x37;
+        let x62 = x60 - x61;
+        let x63 = x62 * m * x34;
+        let x64 = -(x26 * m * x34 * x0);
+        let x65 = x2 * x50;
+        let x66 = x25 * x0 - x65;
+        let x67 = x44 * x0;
+        let x68 = x2 * x28;
+        let x69 = x67 - x68 + x13 * x14;
+        let x70 = x14 * x35 * x2 - x0 * x37;
+        let x71 = x70 * m * x34;
+        let x72 = x35 * x0;
+        let x73 = x14 * x2 * x37;
+        let x74 = x72 + x73;
+        let x75 = m * x34 * x74;
+        let x76 = x26 * m * x34 * x2;
+        let x77 = x35 * x26 * m;
+        let x78 = x26 * m * x37;
+        let x79 = -(x14 * m);
+        let x80 = m + mg;
+        let x81 = theta_dot * x0;
+        let x82 = x26 * psi_dot * x2;
+        let x83 = x81 + x82;
+        let x84 = Iyz * x83;
+        let x85 = x14 * psi_dot;
+        let x86 = phi_dot - x85;
+        let x87 = Ixz * x86;
+        let x88 = x26 * psi_dot * x0 - theta_dot * x2;
+        let x89 = x88 * Izz;
+        let x90 = x89 - x84 - x87;
+        let x91 = x90 * x83;
+        let x92 = -phi_dot - x85;
+        let x93 = theta_dot * x92 * x0 - x26 * psi_dot * x2 * phi_dot;
+        let x94 = x93 * Ixz;
+        let x95 = x88 * Iyz;
+        let x96 = Ixy * x86;
+        let x97 = Iyy * x83 - x95 - x96;
+        let x98 = x88 * x97;
+        let x99 = x26 * psi_dot * phi_dot * x0;
+        let x100 = theta_dot * x92 * x2 + x99;
+        let x101 = Ixy * x100;
+        let x102 = 2.0 * theta;
+        let x103 = f64::sin(x102);
+        let x104 = x47 * psi_dot * x103;
+        let x105 = 0.5 * x104 + phi_dot;
+        let x106 = x14 * Ixx;
+        let x107 = x26 * x8;
+        let x108 = x107 - x106;
+        let x109 = x105 * x47 * x108;
+        let x110 = 3.0 * theta;
+        let x111 = x47 * f64::cos(x110);
+        let x112 = 0.25 - 0.25 * x111;
+        let x113 = x14 * phi_dot;
+        let x114 = x112 * psi_dot + x113;
+        let x115 = x114 * Ixx * x47;
+        let x116 = (-x109 - x115) * theta_dot;
+        let x117 = x4 * x26 * psi_dot * phi_dot;
+        let x118 = x94 - x91 + x98 + x101 + x116 + x117;
+        let x119 = x114 * x47 + x26 * psi_dot;
+        let x120 = x119 * x108;
+        let x121 = x26 * x44 - x14 * x108;
+        let x122 = x105 * x47 * x121;
+        let x123 = theta_dot * (-x120 - x122);
+        let x124 = Ixx * x86 - x88 * Ixz - Ixy * x83;
+        let x125 = Iyy * x100;
+        let x126 = x90 * x86;
+        let x127 = Ixy * theta_dot * x26 * psi_dot;
+        let x128 = x93 * Iyz;
+        let x129 = x88 * x124 + x125 - x126 + x127 - x128;
+        let x130 = x2 * x129;
+        let x131 = theta_dot * x26 * psi_dot * Ixz;
+        let x132 = x97 * x86;
+        let x133 = x83 * x124;
+        let x134 = Iyz * x100;
+        let x135 = x93 * Izz;
+        let x136 = x131 + x132 - x133 - x134 + x135;
+        let x137 = x136 * x0;
+        let x138 = x26 * (psi_dot * phi_dot * x28 - x130 - x137);
+        let x139 = x91 - theta_dot * Ixx * x26 * psi_dot - x94 - x98 - x101;
+        let x140 = x139 * x14;
+        let x141 = f64::cos(x102);
+        let x142 = 0.5 * x141 + 0.5;
+        let x143 = -rho - l;
+        let x144 = x141 + 1.0;
+        let x145 = rho_dot * x144;
+        let x146 = l * (x142 * rho_dot - 0.25 * (l * theta_dot * x103))
+            + rho * (x143 * theta_dot * x103 + x145);
+        let x147 = x146 * psi_dot * m;
+        let x148 = x123 + x138 + x140 + x14 * x118 - x147;
+        let x149 = 2.0 * rho + l;
+        let x150 = x105 * x47 * x28;
+        let x151 = x4 * x119;
+        let x152 = theta_dot * (-x150 - x151)
+            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x48) * psi_dot * psi_dot * x103
+                + theta_dot * x149 * rho_dot) * m + x26 * psi_dot * phi_dot * x50
+            - x129 * x0 + x136 * x2;
+        let x153 = x152 * x0;
+        let x154 = x152 * x2;
+        let x155 = -0.5 * x141 - 0.5;
+        let x156 = f64::cos(0.0485 * t);
+        let x157 = f64::sin(0.089 * t);
+        let x158 = rho_dot * x37;
+        let x159 = x35 * psi_dot * x34;
+        let x160 = psi_dot * x34 * x37;
+        let x161 = x35 * rho_dot;
+        let x162 = 2.0 * x160 - 2.0 * x161;
+        let x163 = x14 * x162;
+        let x164 = theta_dot * x35 * x26 * x34;
+        let x165 = x14 * x35 * x26 * psi_dot * phi_dot;
+        let x166 = theta_dot * x105 * x37;
+        let x167 = ((x166 - x165) * x34 - (-2.0 * x158 - x159) * x26 * psi_dot
+            - (x163 - x164) * theta_dot) * m;
+        let x168 = x14 * x26 * psi_dot * phi_dot * x37;
+        let x169 = theta_dot * x105 * x35;
+        let x170 = -2.0 * x158 - 2.0 * x159;
+        let x171 = x14 * x170;
+        let x172 = theta_dot * x26 * x34 * x37;
+        let x173 = x26 * rho_dot;
+        let x174 = x14 * theta_dot * x34;
+        let x175 = x47 * x0;
+        let x176 = -x2;
+        let x177 = x14 * x47 * x0;
+        let x178 = 0.012 * x156 - 0.018 * x157;
+        let x179 = m * x34 * (x61 - x60);
+        let x180 = m * x34 * (-x72 - x73);
+        let x181 = -(x26 * m * x37);
+        let x182 = Ixx * x26;
+        let x183 = x6 + x7;
+        let x184 = x14 * x183;
+        let x185 = Ixx + x47 * (x184 - x182 + x14 * x8);
+        let x186 = x185 * x2;
+        let x187 = x185 * x0;
+        let x188 = x14
+            * (x182 - x33 - x43 + x26 * m * x34 * x34 * (-2.0 * x36 - 2.0 * x38) - x184);
+        let x189 = Ixy * x26 + x14 * (x18 - x30);
+        let x190 = x14 * (x22 - x40) + x26 * Ixz;
+        let x191 = x26 * (x106 - x107 + x2 * x189 + x190 * x0);
+        let x192 = x107 - x106
+            + x47 * (x14 * (x33 + x39 + x43 - x182 + x184) + x188 + x191);
+        let x193 = x4 * x26;
+        let x194 = x14 * (-x20 - x24);
+        let x195 = x194 - x193;
+        let x196 = x47 * (x2 * x192 + x195 * x0 + (x46 * x47 + x186) * x14);
+        let x197 = x47 * (x25 * x14 - x193 + x194) - x1 + x3;
+        let x198 = (x196 + x5 + x9) * x0 - x197 * x2 * x2;
+        let x199 = -(x35 * x26 * m * x34 * x0);
+        let x200 = -(x26 * m * x34 * x0 * x37);
+        let x201 = x14 * m * x34 * x0;
+        let x202 = x35 * x26 * m * x34 * x2;
+        let x203 = x26 * m * x34 * x2 * x37;
+        let x204 = -(x14 * m * x34 * x2);
+        let x205 = -(x14 * x35 * m);
+        let x206 = -(x14 * m * x37);
+        let x207 = -(x26 * m);
+        let x208 = psi_dot * x141;
+        let x209 = x14 * (x104 + phi_dot);
+        let x210 = x208 + x209;
+        let x211 = x184 - x182;
+        let x212 = x47 * x47
+            * (x14 * ((0.25 - 0.5 * x111) * psi_dot + x113)
+                + 0.75 * (psi_dot * f64::sin(x110))) + phi_dot - x85;
+        let x213 = theta_dot * (x47 * (-x210 * x47 * x108 - x105 * x211) - Ixx * x212);
+        let x214 = x14 * x2 * phi_dot - theta_dot * x26 * x0;
+        let x215 = x214 * Ixz;
+        let x216 = -theta_dot * x26 * x2 - x14 * phi_dot * x0;
+        let x217 = Ixy * x216;
+        let x218 = x90 * x2;
+        let x219 = x4 * phi_dot;
+        let x220 = theta_dot * Ixx;
+        let x221 = x97 * x0;
+        let x222 = x88 * x189;
+        let x223 = x190 * x83;
+        let x224 = (x215 + x217 + x14 * (x218 - x219 - x220 - x221) + x222 - x223)
+            * psi_dot;
+        let x225 = -2.0 * rho - l;
+        let x226 = phi_dot * x28;
+        let x227 = Ixy * theta_dot;
+        let x228 = x0 * x124;
+        let x229 = Iyy * x216 - Iyz * x214 - x190 * x86 + x88 * x211 + x90 * x26
+            + x14 * (-x227 - x228);
+        let x230 = theta_dot * Ixz;
+        let x231 = x2 * x124;
+        let x232 = x86 * x189 + x214 * Izz - x211 * x83 - Iyz * x216 - x97 * x26
+            + x14 * (x231 - x230);
+        let x233 = x94 - x91 + x98 + x101
+            + x47
+                * (x14 * (x148 * x47 + x213 + x224)
+                    + theta_dot
+                        * (x47 * (-x105 * (x188 + x191) - x210 * x47 * x121)
+                            - x212 * x108 - x119 * x211)
+                    + (x14
+                        * (x223 - x215 - x217 - x222 + x14 * (x220 - x218 + x221) - x226)
+                        - (theta_dot * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x48) * x141
+                            + x225 * rho_dot * x103) * m
+                        + (x195 * phi_dot - x229 * x2 - x232 * x0) * x26) * psi_dot
+                    + x14 * (x130 + x137) + x139 * x26) + x116 + x117;
+        let x234 = ((-x210 * x47 * x28 - x195 * x105) * x47 - x4 * x212) * theta_dot
+            + (x232 * x2 - x14 * phi_dot * x50 - psi_dot * m * x141 * x49 - x229 * x0)
+                * psi_dot;
+        let x235 = x14 * x14 - x26 * x26;
+        let x236 = x14 * x105;
+        let x237 = theta_dot * theta_dot;
+        let x238 = psi_dot * psi_dot;
+        let x239 = x237 + x238;
+        let x240 = x14 * x14 * x47 * x47 + 1.0;
+        let x241 = -x6 - x47 * x26 * x8 - x7;
+        let x242 = x241 * x2;
+        let x243 = x17 + 2.0 * x18 - x30;
+        let x244 = (x40 - x21 - 2.0 * x22) * x2 + x243 * x0;
+        let x245 = x26 * (x243 * x2 + (x21 - x40 + 2.0 * x22) * x0);
+        let x246 = x245 - x184;
+        let x247 = x244 * x0 - x65 + x47 * (x14 * (x5 + x2 * x183) + x246 * x2 + x29);
+        let x248 = x32 * x0;
+        let x249 = x42 * x2;
+        let x250 = x248 + x16 - x249;
+        let x251 = x250 * x2 + (x33 + x39 + x43 + x245 - x184) * x0;
+        let x252 = x47 * (x2 * (-x15 - x29 - x45) + x251 * x0) - x53 - x247 * x2;
+        let x253 = m * x34 * (x56 + x57);
+        let x254 = x26 * m * x34 * x0;
+        let x255 = -x81 - x82;
+        let x256 = x255 * Izz;
+        let x257 = x256 - x95;
+        let x258 = x257 * x83;
+        let x259 = x88 * Iyy;
+        let x260 = Iyz * x255;
+        let x261 = x97 * x255;
+        let x262 = theta_dot * (phi_dot + x85) * x2 - x99;
+        let x263 = x262 * Ixz;
+        let x264 = x93 * Ixy;
+        let x265 = x88 * (x259 + x84 - x260 + x87 - x89) - theta_dot * x4 * x105 - x258
+            + x261 + x263 + x26 * psi_dot * phi_dot * x183 + x264;
+        let x266 = x123 + x138 + x140 - x147;
+        let x267 = -x255 * Ixz - x88 * Ixy;
+        let x268 = Iyz * x262 - x255 * x124 - x93 * Iyy + x131 + x132 - x133 - x134
+            + x257 * x86 + x135 - x88 * x267;
+        let x269 = (x259 - x260) * x86;
+        let x270 = x83 * x267;
+        let x271 = x262 * Izz;
+        let x272 = x14
+            * (x258 - x261 - x263 + x88 * (x260 - x259 - x84 - x87 + x89) - x264)
+            - theta_dot * x105 * (x248 - x16 - x249 + x27)
+            + (x268 * x2 + (x126 - x269 - x125 + x270 - x127 + 2.0 * x128 - x271) * x0
+                - theta_dot * x4 * x119 + x246 * psi_dot * phi_dot) * x26;
+        let x273 = (x269 + x125 - x126 - x270 + x127 - 2.0 * x128 + x271) * x2
+            + theta_dot * (-x105 * x47 * x246 - x119 * x183) + x268 * x0
+            + x26 * psi_dot * x244 * phi_dot;
+        let x274 = 2.0 * x36 + 2.0 * x38;
+        let x275 = m * x2 * (x34 * x274 - 2.0 * rho - l) * x0;
+        let x276 = x58 * m;
+        let x277 = x62 * m;
+        let x278 = -(x26 * m * x0);
+        let x279 = x70 * m;
+        let x280 = m * x74;
+        let x281 = x26 * m * x2;
+        let x282 = x26 * psi_dot * x149 * phi_dot - 2.0 * (theta_dot * rho_dot)
+            - psi_dot * psi_dot * x34 * x103;
+        let x283 = -theta_dot * x105 * x26 * x34 * x274
+            - psi_dot * (x225 * theta_dot * x103 + x145);
+        let x284 = -x237 - x238;
+        let x285 = x42 * x83;
+        let x286 = -x26 * x2 * phi_dot - x14 * theta_dot * x0;
+        let x287 = Ixz * x286;
+        let x288 = x88 * x32;
+        let x289 = x26 * phi_dot * x0 - x14 * theta_dot * x2;
+        let x290 = Ixy * x289;
+        let x291 = x26 + x112 * x47;
+        let x292 = x287 - x285 + x288 + x290 + (x219 - x218 + x220 + x221) * x26
+            + theta_dot * (-Ixx * x291 - 0.5 * (x47 * x47 * x103 * x108));
+        let x293 = Izz * x286 + x32 * x86 - x289 * Iyz + (x230 - x231) * x26 - x83 * x108
+            - x14 * x97;
+        let x294 = x88 * x108 - Iyz * x286 - x42 * x86 + x289 * Iyy + x90 * x14
+            + x26 * (x227 + x228);
+        let x295 = (x285 - x287 - x288 + (x218 - x220 - x221) * x26 - x290) * x14
+            - x146 * m + theta_dot * (-x291 * x108 - 0.5 * (x47 * x47 * x121 * x103))
+            + x14 * x292 + (x226 - x293 * x0 - x294 * x2) * x26;
+        let x296 = theta_dot * (-0.5 * (x47 * x47 * x28 * x103) - x4 * x291) - x294 * x0
+            - psi_dot * m * x103 * x49 + x293 * x2 + x26 * phi_dot * x50;
+        let x297 = x19 * x83;
+        let x298 = x97 * x2;
+        let x299 = x90 * x0;
+        let x300 = x88 * x23;
+        let x301 = x92 * x183 - x297 - x109 - x298 - x299 + x300 - x115;
+        let x302 = Ixy * x26 * psi_dot - x231 - x19 * x86 + x88 * x4 + x31 * x92;
+        let x303 = x26 * psi_dot * Ixz - x4 * x83 - x228 + x92 * x41 + x23 * x86;
+        let x304 = x14 * x301 - x120
+            + (x297 + x92 * x8 - Ixx * x26 * psi_dot + x298 + x299 - x300) * x14
+            + x26 * (-x302 * x2 - x303 * x0) - x122
+            - psi_dot * m * (rho * x143 - 0.25 * x48) * x103;
+        let x305 = x2 * x303 - m * x149 * rho_dot - x150 - x302 * x0 - x151;
+        let x306 = x4 * x26 * psi_dot - theta_dot * x47 * x26 * x8;
+        let x307 = 2.0 * x87 + Iyz * (2.0 * x81 + 2.0 * x82) + x88 * (Iyy + Ixx - Izz);
+        let x308 = x256 - 2.0 * x95 - 2.0 * x96 + (Iyy - Ixx) * x83;
+        let x309 = x26 * psi_dot * x50 - x307 * x0 - x25 * theta_dot * x47 * x26
+            + x308 * x2;
+        let x310 = (psi_dot * x28 - x308 * x0 - x307 * x2) * x26
+            - theta_dot * x47 * x26 * x44 + x14 * x306;
+        let x311 = rho * x144 + l * x142;
+        Derivatives {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [Ixx, x10, x13, 0.0, 0.0, 0.0, 0.0],
+                [x10, x46 * x47 * x2 + x53, x55, 0.0, x59, x63, x64],
+                [x13, x55, x47 * x69 * x0 - x66 * x2, 0.0, x71, x75, x76],
+                [0.0, 0.0, 0.0, m, x77, x78, x79],
+                [0.0, x59, x71, x77, x80, 0.0, 0.0],
+                [0.0, x63, x75, x78, 0.0, x80, 0.0],
+                [0.0, x64, x76, x79, 0.0, 0.0, x80],
+            ],
+            force: [
+                x118,
+                x148 * x47 * x2 + x153,
+                x148 * x47 * x0 - x154,
+                0.012 * x156
+                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
+                        + (l * (-0.25 * x141 - 0.25) + rho * x155) * psi_dot * psi_dot)
+                        * m - 0.018 * x157,
+                x167,
+                ((-x168 - x169) * x34 - x26 * psi_dot * (2.0 * x161 - x160)
+                    - (x171 - x172) * theta_dot) * m,
+                m
+                    * (-x26 * x26 * psi_dot * x34 * phi_dot
+                        - theta_dot * (x174 - 2.0 * x173)),
+            ],
+            checks: [x26],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x179, x59, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x180, x71, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x181, x77, 0.0],
+                    [0.0, x179, x180, x181, 0.0, 0.0, 0.0],
+                    [0.0, x59, x71, x77, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x186, x187, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x186,
+                        (x196 + x5 + x9 + x197 * x0) * x2,
+                        x198,
+                        0.0,
+                        x199,
+                        x200,
+                        x201,
+                    ],
+                    [
+                        x187,
+                        x198,
+                        (x11 - x197 * x2
+                            + x47 * (x14 * (x47 * x69 + x187) + x192 * x0 - x195 * x2)
+                            - x12) * x0,
+                        0.0,
+                        x202,
+                        x203,
+                        x204,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, x205, x206, x207],
+                    [0.0, x199, x202, x205, 0.0, 0.0, 0.0],
+                    [0.0, x200, x203, x206, 0.0, 0.0, 0.0],
+                    [0.0, x201, x204, x207, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x242, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        0.0,
+                        x247 * x0 - x54 + (x46 * x0 + x251 * x2) * x47,
+                        x252,
+                        0.0,
+                        x71,
+                        x75,
+                        x76,
+                    ],
+                    [
+                        x242,
+                        x252,
+                        x47
+                            * (x2 * (x68 - x67 + x14 * (x241 * x0 - x11 + x12))
+                                + ((x184 - x245 - x47 * x26 * x44) * x2 + x250 * x0) * x0)
+                            - x66 * x0
+                            - x2
+                                * ((x246 * x0 - x68 + x14 * (x0 * x183 - x12)) * x47
+                                    - x244 * x2 - x51),
+                        0.0,
+                        x253,
+                        x179,
+                        x254,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, x253, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x75, x179, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x76, x254, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        0.0,
+                        m * (x34 * x2 * x2 * x274 + x149 * x0 * x0),
+                        x275,
+                        0.0,
+                        x276,
+                        x277,
+                        x278,
+                    ],
+                    [
+                        0.0,
+                        x275,
+                        m * (x149 * x2 * x2 + x34 * x274 * x0 * x0),
+                        0.0,
+                        x279,
+                        x280,
+                        x281,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x276, x279, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x277, x280, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x278, x281, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    m
+                        * (x34 * (x168 + x169)
+                            - theta_dot * (x14 * (2.0 * x158 + 2.0 * x159) + x172)
+                            - (x160 - 2.0 * x161) * x26 * psi_dot),
+                    x167,
+                    0.0,
+                ],
+                [
+                    x213 + x224,
+                    x2 * x233 + x234 * x0,
+                    x233 * x0 - x234 * x2,
+                    -(psi_dot * psi_dot * m * x34 * x103),
+                    m
+                        * (x34
+                            * (x35 * psi_dot * phi_dot * x235
+                                + theta_dot * x47 * (x208 + x209 - x236) * x37)
+                            - theta_dot * x26 * x162
+                            - x14
+                                * (x239 * x35 * x34 + 2.0 * (psi_dot * rho_dot * x37))),
+                    ((psi_dot * phi_dot * x235 * x37
+                        + (x236 - x208 - x209) * theta_dot * x47 * x35) * x34
+                        - x14 * (x239 * x34 * x37 - 2.0 * (x35 * psi_dot * rho_dot))
+                        - theta_dot * x170 * x26) * m,
+                    m
+                        * (2.0 * (x14 * x26 * psi_dot * x34 * phi_dot)
+                            - theta_dot
+                                * (theta_dot * x26 * x34 + 2.0 * (x14 * rho_dot))),
+                ],
+                [
+                    x265,
+                    x47 * (x14 * (x265 * x2 + x118 * x0) + x0 * x266 + x272 * x2)
+                        + x273 * x0 - x154,
+                    ((x265 * x0 - x2 * x118) * x14 - x2 * x266 + x272 * x0) * x47
+                        - x2 * x273 - x153,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    0.0,
+                    m * (x0 * x282 + x47 * x2 * x283),
+                    (x47 * x0 * x283 - x2 * x282) * m,
+                    -(m * (psi_dot * psi_dot * x155 - x237)),
+                    m
+                        * (x166 - x165 - x35 * x26 * x284
+                            - 2.0 * (x14 * theta_dot * psi_dot * x37)),
+                    m
+                        * (2.0 * (x14 * theta_dot * x35 * psi_dot) - x26 * x37 * x284
+                            - x168 - x169),
+                    (-x26 * x26 * psi_dot * phi_dot - x14 * theta_dot * theta_dot) * m,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x292,
+                    x47 * x2 * x295 + x296 * x0,
+                    x47 * x295 * x0 - x296 * x2,
+                    -((rho * (-x141 - 1.0) + l * x155) * psi_dot * m),
+                    (x34
+                        * (0.5 * (theta_dot * x47 * x37 * x103)
+                            - x14 * x35 * x26 * phi_dot) - x170 * x26
+                        - 2.0 * (x14 * theta_dot * x34 * x37)) * m,
+                    m
+                        * ((-x14 * x26 * phi_dot * x37
+                            - 0.5 * (theta_dot * x47 * x35 * x103)) * x34
+                            - (2.0 * x173 - 2.0 * x174) * x35
+                            + 2.0 * (x26 * psi_dot * x34 * x37)),
+                    -(x26 * x26 * m * x34 * phi_dot),
+                ],
+                [
+                    x301,
+                    x304 * x47 * x2 + x305 * x0,
+                    x304 * x47 * x0 - x305 * x2,
+                    -(x225 * theta_dot * m),
+                    (x105 * x34 * x37 - x163 + 2.0 * x164) * m,
+                    m * (2.0 * x172 - x105 * x35 * x34 - x171),
+                    -((2.0 * x174 - 2.0 * x173) * m),
+                ],
+                [
+                    x306,
+                    x309 * x0 + x47 * x2 * x310,
+                    x47 * x310 * x0 - x309 * x2,
+                    0.0,
+                    (theta_dot * x37 - x14 * x35 * x26 * psi_dot) * m * x34,
+                    m * x34 * (-theta_dot * x35 - x14 * x26 * psi_dot * x37),
+                    -(x26 * x26 * psi_dot * m * x34),
+                ],
+                [
+                    0.0,
+                    m * (-theta_dot * x149 * x0 - x47 * psi_dot * x2 * x311),
+                    (theta_dot * x149 * x2 - x47 * psi_dot * x311 * x0) * m,
+                    0.0,
+                    -((-2.0 * (x14 * theta_dot * x35) - 2.0 * (x26 * psi_dot * x37))
+                        * m),
+                    -((2.0 * (x35 * x26 * psi_dot) - 2.0 * (x14 * theta_dot * x37)) * m),
+                    2.0 * theta_dot * x26 * m,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            w: [
+                [0.0, x47 * x2, x175, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x0, x176, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x14 * x47 * x2, x177, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * x105 * x47,
+                -(x26 * psi_dot * phi_dot),
+                theta_dot * x119,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            d_w: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        0.0,
+                        x14 * x47 * x47 * x2,
+                        x14 * x47 * x47 * x0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x240 * x2, x240 * x0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x175, -(x47 * x2), 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x176, -x0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x177, -(x14 * x47 * x2), 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x210 * theta_dot * x47 * x47,
+                    x14 * psi_dot * phi_dot,
+                    theta_dot * x212,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    0.5 * theta_dot * x47 * x47 * x103,
+                    -(x26 * phi_dot),
+                    theta_dot * x291,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [x105 * x47, 0.0, x119, 0.0, 0.0, 0.0, 0.0],
+                [
+                    theta_dot * x47,
+                    -(x26 * psi_dot),
+                    x14 * theta_dot * x47,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            power: rho_dot * x178,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                x178,
+                0.0,
+                0.0,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            let mut s = c[j];
+            for i in 0..7 {
+                s += w[j][i] * x[i];
+            }
+            dstate[7 + j] = s;
+        }
+        dstate[14] = power;
+        for k in 0..14 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..14 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                let mut s = d_c[k][j];
+                for i in 0..7 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[7 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1240,6 +2997,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 15 states, 7 equations.
@@ -1573,6 +3343,497 @@ pub mod kane {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 14],
+        d_matrix: [[[f64; 7]; 7]; 14],
+        d_force: [[f64; 7]; 14],
+        power: f64,
+        d_power: [f64; 14],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let u5 = state[11];
+        let u6 = state[12];
+        let u7 = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u3 * x2;
+        let x8 = u2 * x4;
+        let x9 = x8 - x7;
+        let x10 = f64::sin(theta);
+        let x11 = -Ixy;
+        let x12 = -Ixz;
+        let x13 = -rho - 0.5 * l;
+        let x14 = -Iyz;
+        let x15 = f64::sin(psi);
+        let x16 = f64::cos(psi);
+        let x17 = x2 * x15 + x10 * x16 * x4;
+        let x18 = x13 * m * x17;
+        let x19 = x16 * x2;
+        let x20 = x10 * x4 * x15;
+        let x21 = x20 - x19;
+        let x22 = x13 * m * x21;
+        let x23 = x13 * x0 * m * x4;
+        let x24 = rho + 0.5 * l;
+        let x25 = m * x24 * x24;
+        let x26 = x4 * x15;
+        let x27 = x10 * x16 * x2;
+        let x28 = x27 - x26;
+        let x29 = x28 * m * x24;
+        let x30 = x16 * x4;
+        let x31 = x10 * x2 * x15;
+        let x32 = x30 + x31;
+        let x33 = m * x24 * x32;
+        let x34 = x0 * m * x24 * x2;
+        let x35 = x16 * x0 * m;
+        let x36 = x0 * m * x15;
+        let x37 = -(x10 * m);
+        let x38 = m + mg;
+        let x39 = u2 * Iyz;
+        let x40 = u1 * Ixz;
+        let x41 = u3 * Izz - x39 - x40;
+        let x42 = Iyz * u3;
+        let x43 = Ixy * u1;
+        let x44 = u2 * Iyy - x42 - x43;
+        let x45 = u2 * u4;
+        let x46 = u3 * x24 * u1;
+        let x47 = x46 - 2.0 * x45;
+        let x48 = u3 * Ixz;
+        let x49 = u2 * Ixy;
+        let x50 = Ixx * u1 - x48 - x49;
+        let x51 = u3 * u4;
+        let x52 = x13 * u2 * u1;
+        let x53 = 2.0 * x51 - x52;
+        let x54 = x13 * u2 * u2 - u3 * u3 * x24;
+        let x55 = f64::cos(0.0485 * t);
+        let x56 = f64::sin(0.089 * t);
+        let x57 = -((x16 * x0 * x54 + x17 * x47 + x28 * x53) * m);
+        let x58 = x0 * x54 * x15;
+        let x59 = x4 * x47;
+        let x60 = x2 * x53;
+        let x61 = (x59 + x60) * x0 - x10 * x54;
+        let x62 = 0.012 * x55 - 0.018 * x56;
+        let x63 = x19 - x20;
+        let x64 = x13 * x63 * m;
+        let x65 = -x30 - x31;
+        let x66 = m * x24 * x65;
+        let x67 = -(x0 * m * x15);
+        let x68 = x13 * x16 * x0 * m * x4;
+        let x69 = x13 * x0 * m * x4 * x15;
+        let x70 = -(x13 * x10 * m * x4);
+        let x71 = x16 * x0 * m * x24 * x2;
+        let x72 = x0 * m * x24 * x2 * x15;
+        let x73 = -(x10 * m * x24 * x2);
+        let x74 = -(x10 * x16 * m);
+        let x75 = -(x10 * m * x15);
+        let x76 = -(x0 * m);
+        let x77 = x26 - x27;
+        let x78 = x13 * m * x77;
+        let x79 = x13 * m * x65;
+        let x80 = -(x13 * x0 * m * x2);
+        let x81 = m * x24 * x17;
+        let x82 = m * x24 * x21;
+        let x83 = x0 * m * x24 * x4;
+        let x84 = -(m * x17);
+        let x85 = -(m * x21);
+        let x86 = -(x0 * m * x4);
+        let x87 = x28 * m;
+        let x88 = m * x32;
+        let x89 = x0 * m * x2;
+        let x90 = -u2 * u2 - u3 * u3;
+        let x91 = u2 * x28 + u3 * x17;
+        let x92 = u2 * x32 + u3 * x21;
+        let x93 = Ixy * u3;
+        let x94 = u2 * Ixz;
+        let x95 = x13 * m * x24;
+        let x96 = Izz - Ixx - x95;
+        let x97 = Iyy - Izz;
+        let x98 = Iyz * u1;
+        let x99 = -2.0 * rho - l;
+        Derivatives {
+            qdot: [x1 * x6, x9, u1 + x10 * x1 * x6, u4, u5, u6, u7],
+            matrix: [
+                [Ixx, x11, x12, 0.0, 0.0, 0.0, 0.0],
+                [x11, Iyy + x13 * x13 * m, x14, 0.0, x18, x22, x23],
+                [x12, x14, x25 + Izz, 0.0, x29, x33, x34],
+                [0.0, 0.0, 0.0, m, x35, x36, x37],
+                [0.0, x18, x29, x35, x38, 0.0, 0.0],
+                [0.0, x22, x33, x36, 0.0, x38, 0.0],
+                [0.0, x23, x34, x37, 0.0, 0.0, x38],
+            ],
+            force: [
+                x44 * u3 - u2 * x41,
+                x41 * u1 - x13 * m * x47 - x50 * u3,
+                u2 * x50 - m * x24 * x53 - x44 * u1,
+                0.012 * x55 - m * x54 - 0.018 * x56,
+                x57,
+                -((x32 * x53 + x58 + x21 * x47) * m),
+                -(x61 * m),
+            ],
+            checks: [x0],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x10 * x1 * x1 * x6,
+                    0.0,
+                    x3 + x10 * x10 * x1 * x1 * x6 + x5,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [x1 * x9, -x3 - x5, x10 * x1 * x9, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x4, x10 * x1 * x2, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x4, -x2, x10 * x1 * x4, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x64, x18, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x66, x29, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x67, x35, 0.0],
+                    [0.0, x64, x66, x67, 0.0, 0.0, 0.0],
+                    [0.0, x18, x29, x35, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x68, x69, x70],
+                    [0.0, 0.0, 0.0, 0.0, x71, x72, x73],
+                    [0.0, 0.0, 0.0, 0.0, x74, x75, x76],
+                    [0.0, x68, x71, x74, 0.0, 0.0, 0.0],
+                    [0.0, x69, x72, x75, 0.0, 0.0, 0.0],
+                    [0.0, x70, x73, x76, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x78, x79, x80],
+                    [0.0, 0.0, 0.0, 0.0, x81, x82, x83],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x78, x81, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x79, x82, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x80, x83, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, -(2.0 * x13 * m), 0.0, 0.0, x84, x85, x86],
+                    [0.0, 0.0, 2.0 * m * x24, 0.0, x87, x88, x89],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x84, x87, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x85, x88, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x86, x89, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, -(m * (x63 * x47 + x65 * x53 - x58)), x57, 0.0],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -(x61 * x16 * m),
+                    -(x61 * m * x15),
+                    -((x10 * (-x59 - x60) - x0 * x54) * m),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -((x77 * x47 + x17 * x53) * m),
+                    -((x65 * x47 + x21 * x53) * m),
+                    -((x53 * x4 - x2 * x47) * x0 * m),
+                ],
+                [
+                    0.0,
+                    m * (x46 - 2.0 * x45 - x13 * u3 * u1),
+                    m * (x52 - 2.0 * x51 - u2 * x24 * u1),
+                    -(m * x90),
+                    -((u1 * x91 + x16 * x0 * x90) * m),
+                    -(m * (x92 * u1 + x0 * x90 * x15)),
+                    -(m * (x0 * u1 * x6 - x10 * x90)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x94 - x93,
+                    u3 * x96 - x39 - 2.0 * x40,
+                    u2 * (Ixx - Iyy - x25) + x42 + 2.0 * x43,
+                    0.0,
+                    -(m * x24 * x91),
+                    -(x92 * m * x24),
+                    -(x0 * m * x24 * x6),
+                ],
+                [
+                    2.0 * x39 + x40 + u3 * x97,
+                    2.0 * (x13 * m * u4) + x93 - x98,
+                    u1 * (Ixx - Iyy + x95) - x48 - 2.0 * x49,
+                    -(u2 * x99 * m),
+                    -(m * (u2 * x99 * x16 * x0 - 2.0 * (u4 * x17) - x13 * x28 * u1)),
+                    -(m * (u2 * x99 * x0 * x15 - x13 * u1 * x32 - 2.0 * (u4 * x21))),
+                    -(m * ((-x13 * x2 * u1 - 2.0 * (u4 * x4)) * x0 - u2 * x99 * x10)),
+                ],
+                [
+                    u2 * x97 - 2.0 * x42 - x43,
+                    2.0 * x48 + u1 * x96 + x49,
+                    x98 - 2.0 * (m * u4 * x24) - x94,
+                    -(x99 * u3 * m),
+                    -((x99 * x16 * u3 * x0 + x24 * u1 * x17 + 2.0 * (x28 * u4)) * m),
+                    -((x99 * u3 * x0 * x15 + 2.0 * (u4 * x32) + x24 * u1 * x21) * m),
+                    -(m * (x0 * (x24 * u1 * x4 + 2.0 * (u4 * x2)) - x99 * x10 * u3)),
+                ],
+                [
+                    0.0,
+                    2.0 * x13 * u2 * m,
+                    -(2.0 * u3 * m * x24),
+                    0.0,
+                    -((2.0 * (x28 * u3) - 2.0 * (u2 * x17)) * m),
+                    -(m * (2.0 * (u3 * x32) - 2.0 * (u2 * x21))),
+                    -(x0 * m * (2.0 * x7 - 2.0 * x8)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            power: u4 * x62,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                x62,
+                0.0,
+                0.0,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[14] = power;
+        for k in 0..14 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..14 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1640,6 +3901,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 12 states, 4 equations.
@@ -1985,6 +4259,386 @@ pub mod reduced_volterra {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 11],
+        d_matrix: [[[f64; 4]; 4]; 11],
+        d_force: [[f64; 4]; 11],
+        power: f64,
+        d_power: [f64; 11],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
+        let x8 = f64::sin(theta);
+        let x9 = 1.0 / (m + mg);
+        let x10 = f64::sin(psi);
+        let x11 = x4 * x10;
+        let x12 = f64::cos(psi);
+        let x13 = x8 * x12 * x2;
+        let x14 = x13 - x11;
+        let x15 = rho + 0.5 * l;
+        let x16 = -rho - 0.5 * l;
+        let x17 = x2 * x10 + x8 * x12 * x4;
+        let x18 = -x14 * u3 * x15 - x12 * x0 * u4 - x16 * u2 * x17;
+        let x19 = x12 * x4;
+        let x20 = x8 * x2 * x10;
+        let x21 = x19 + x20;
+        let x22 = x12 * x2;
+        let x23 = x8 * x4 * x10;
+        let x24 = x23 - x22;
+        let x25 = x0 * u4 * x10;
+        let x26 = x16 * u2 * x4;
+        let x27 = u3 * x15 * x2;
+        let x28 = x8 * u4 + (-x26 - x27) * x0;
+        let x29 = -Ixy;
+        let x30 = -Ixz;
+        let x31 = m * x9;
+        let x32 = m
+            * (rho * ((-rho - l) * m * x9 + rho + l) + l * l * (0.25 - 0.25 * x31));
+        let x33 = -Iyz;
+        let x34 = 1.0 - x31;
+        let x35 = u2 * Iyz;
+        let x36 = u1 * Ixz;
+        let x37 = Iyz * u3;
+        let x38 = Ixy * u1;
+        let x39 = u3 * Ixz;
+        let x40 = u2 * Ixy;
+        let x41 = x32 - Ixx + Izz;
+        let x42 = x41 * u1;
+        let x43 = Iyz * u1;
+        let x44 = m * (2.0 * rho + l) * x9 - 2.0 * rho - l;
+        let x45 = x44 * m * u4;
+        let x46 = Ixx - Iyy
+            + (l * l * (0.25 * x31 - 0.25) + rho * ((rho + l) * m * x9 - rho - l)) * m;
+        let x47 = u1 * x46;
+        let x48 = rho + 0.5 * l + x16 * m * x9;
+        let x49 = f64::cos(0.0485 * t);
+        let x50 = f64::sin(0.089 * t);
+        let x51 = 0.012 * x49 - 0.018 * x50;
+        let x52 = -x19 - x20;
+        let x53 = 2.0 * rho + l + (-2.0 * rho - l) * m * x9;
+        let x54 = x53 * m;
+        let x55 = 2.0 * x31 - 2.0;
+        let x56 = Ixy * u3;
+        let x57 = u2 * Ixz;
+        let x58 = Iyy - Izz;
+        Derivatives {
+            qdot: [
+                x1 * x6,
+                x7,
+                u1 + x8 * x1 * x6,
+                u4,
+                x9 * (G_X + m * x18),
+                ((-u3 * x15 * x21 - x16 * u2 * x24 - x25) * m + G_Y) * x9,
+                x9 * (x28 * m + G_Z),
+            ],
+            matrix: [
+                [Ixx, x29, x30, 0.0],
+                [x29, Iyy + x32, x33, 0.0],
+                [x30, x33, x32 + Izz, 0.0],
+                [0.0, 0.0, 0.0, m * x34],
+            ],
+            force: [
+                (u2 * Iyy - x37 - x38) * u3 - u2 * (u3 * Izz - x35 - x36),
+                u3 * (x39 + x40 + x42) - u1 * u1 * Ixz + u2 * (x45 - x43),
+                Ixy * u1 * u1 + u2 * (x47 - x39 - x40) + (x43 + x45) * u3,
+                (u3 * u3 * x48 + u2 * u2 * x48) * m + 0.012 * x49 - 0.018 * x50,
+            ],
+            checks: [x0],
+            d_qdot: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    m * x9 * (x25 - x16 * (x22 - x23) * u2 - u3 * x15 * x52),
+                    m * x18 * x9,
+                    0.0,
+                ],
+                [
+                    x8 * x1 * x1 * x6,
+                    0.0,
+                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
+                    0.0,
+                    x28 * x12 * m * x9,
+                    x28 * m * x9 * x10,
+                    m * x9 * (x0 * u4 + x8 * (x26 + x27)),
+                ],
+                [
+                    x1 * x7,
+                    -x3 - x5,
+                    x8 * x1 * x7,
+                    0.0,
+                    m * (-u3 * x15 * x17 - x16 * u2 * (x11 - x13)) * x9,
+                    (-x16 * u2 * x52 - u3 * x15 * x24) * m * x9,
+                    (x16 * u2 * x2 - u3 * x15 * x4) * x0 * m * x9,
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    m * x9 * (u2 * x17 - x14 * u3),
+                    m * x9 * (u2 * x24 - u3 * x21),
+                    x0 * m * x7 * x9,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x1 * x2,
+                    x4,
+                    x8 * x1 * x2,
+                    0.0,
+                    -(x16 * m * x9 * x17),
+                    -(x16 * m * x9 * x24),
+                    -(x16 * x0 * m * x9 * x4),
+                ],
+                [
+                    x1 * x4,
+                    -x2,
+                    x8 * x1 * x4,
+                    0.0,
+                    -(x14 * m * x15 * x9),
+                    -(m * x15 * x9 * x21),
+                    -(x0 * m * x15 * x2 * x9),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0,
+                    -(x12 * x0 * m * x9),
+                    -(x0 * m * x9 * x10),
+                    x8 * m * x9,
+                ],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, x54, 0.0, 0.0],
+                    [0.0, 0.0, x54, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    m * (u3 * x53 * u1 + u2 * x55 * u4),
+                    m * (u2 * x44 * u1 + u3 * x55 * u4),
+                    m * (u3 * u3 * x34 + u2 * u2 * x34),
+                ],
+                [0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+                [x57 - x56, x41 * u3 - x35 - 2.0 * x36, x37 + 2.0 * x38 + u2 * x46, 0.0],
+                [
+                    2.0 * x35 + x36 + u3 * x58,
+                    x56 - x43 + x45,
+                    x47 - x39 - 2.0 * x40,
+                    u2 * x53 * m,
+                ],
+                [
+                    u2 * x58 - 2.0 * x37 - x38,
+                    2.0 * x39 + x40 + x42,
+                    x43 - x57 + x45,
+                    u3 * x53 * m,
+                ],
+                [0.0, u2 * x44 * m, u3 * x44 * m, 0.0],
+            ],
+            power: u4 * x51,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x51],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..4 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[11] = power;
+        for k in 0..11 {
+            jac[11][k] = d_power[k];
+        }
+        for k in 0..11 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 4];
+            for i in 0..4 {
+                let mut s = d_force[k][i];
+                for j in 0..4 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..4 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2052,6 +4706,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

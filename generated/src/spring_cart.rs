@@ -134,6 +134,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -401,6 +450,171 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 2]; 2]; 4],
+        d_force: [[f64; 2]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * x_dot;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = -(x9 * mp * lp);
+        Derivatives {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x10], [x10, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x2
+                        * (0.5 * (c_ * x4 * x4 * x_dot)
+                            + x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
+                                * k) + x5 - x8,
+                    0.0,
+                ],
+                [mp * x0 * th_dot * th_dot * lp, -(g * mp * x0 * lp)],
+                [0.5 * x2 * c_ * x4, 0.0],
+                [2.0 * x9 * mp * th_dot * lp, 0.0],
+            ],
+            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            d_power: [
+                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+                x2 * c_ * x4 * x_dot,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -479,6 +693,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 5 states, 2 equations.
@@ -662,6 +889,196 @@ pub mod maggi {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 2]; 2]; 4],
+        d_force: [[f64; 2]; 4],
+        w: [[f64; 2]; 2],
+        c: [f64; 2],
+        d_w: [[[f64; 2]; 2]; 4],
+        d_c: [[f64; 2]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * x_dot;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = -(x9 * mp * lp);
+        Derivatives {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x10], [x10, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x2
+                        * (0.5 * (c_ * x4 * x4 * x_dot)
+                            + x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
+                                * k) + x5 - x8,
+                    0.0,
+                ],
+                [mp * x0 * th_dot * th_dot * lp, -(g * mp * x0 * lp)],
+                [0.5 * x2 * c_ * x4, 0.0],
+                [2.0 * x9 * mp * th_dot * lp, 0.0],
+            ],
+            w: [[1.0, 0.0], [0.0, 1.0]],
+            c: [0.0, 0.0],
+            d_w: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            d_power: [
+                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+                x2 * c_ * x4 * x_dot,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[2 + j] = s;
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[2 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -729,6 +1146,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 5 states, 2 equations.
@@ -907,6 +1337,171 @@ pub mod kane {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 2]; 2]; 4],
+        d_force: [[f64; 2]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let th = state[1];
+        let u1 = state[2];
+        let u2 = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * u1;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = -(x9 * mp * lp);
+        Derivatives {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x10], [x10, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x5
+                        + x2
+                            * (x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
+                                * k + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    0.0,
+                ],
+                [u2 * u2 * mp * x0 * lp, -(g * mp * x0 * lp)],
+                [0.5 * x2 * c_ * x4, 0.0],
+                [2.0 * u2 * x9 * mp * lp, 0.0],
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            d_power: [
+                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+                x2 * c_ * x4 * u1,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -974,6 +1569,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 5 states, 2 equations.
@@ -1152,6 +1760,171 @@ pub mod reduced_volterra {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 4],
+        d_matrix: [[[f64; 2]; 2]; 4],
+        d_force: [[f64; 2]; 4],
+        power: f64,
+        d_power: [f64; 4],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let x = state[0];
+        let th = state[1];
+        let u1 = state[2];
+        let u2 = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * u1;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = -(x9 * mp * lp);
+        Derivatives {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x10], [x10, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [
+                    x5
+                        + x2
+                            * (x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
+                                * k + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    0.0,
+                ],
+                [u2 * u2 * mp * x0 * lp, -(g * mp * x0 * lp)],
+                [0.5 * x2 * c_ * x4, 0.0],
+                [2.0 * u2 * x9 * mp * lp, 0.0],
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            d_power: [
+                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+                x2 * c_ * x4 * u1,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..4 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..4 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -1219,6 +1992,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

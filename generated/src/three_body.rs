@@ -204,6 +204,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -1031,6 +1080,1665 @@ pub mod lagrange {
     ) -> f64 {
         f64::INFINITY
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 0],
+        d_qdot: [[f64; 8]; 16],
+        d_matrix: [[[f64; 8]; 8]; 16],
+        d_force: [[f64; 8]; 16],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(theta);
+        let x4 = f64::sin(gamma1);
+        let x5 = x3 * x4;
+        let x6 = x0 * x1 * x2 + x5;
+        let x7 = x6 * d;
+        let x8 = a_ * x1 * x2;
+        let x9 = -x7 - x8;
+        let x10 = x0 * a_;
+        let x11 = x10 + d;
+        let x12 = a_ * a_ * x4 * x4;
+        let x13 = f64::cos(phi);
+        let x14 = a_ * x1 * x13;
+        let x15 = f64::sin(gamma2);
+        let x16 = x3 * x15;
+        let x17 = f64::cos(gamma2);
+        let x18 = x17 * x1 * x13;
+        let x19 = x18 - x16;
+        let x20 = x19 * d;
+        let x21 = -x14 - x20;
+        let x22 = a_ * a_ * x15 * x15;
+        let x23 = x17 * a_;
+        let x24 = d + x23;
+        let x25 = x24 * x24;
+        let x26 = x22 + x25;
+        let x27 = x17 * x3;
+        let x28 = -x1 * x15 * x13 - x27;
+        let x29 = x4 * x1 * x2;
+        let x30 = x0 * x3;
+        let x31 = x29 - x30;
+        let x32 = x13 * x13;
+        let x33 = x2 * x2;
+        let x34 = x3 * Ixx;
+        let x35 = Ixy * x2;
+        let x36 = Ixz * x13;
+        let x37 = -x35 - x36;
+        let x38 = x1 * x37;
+        let x39 = x38 - x34;
+        let x40 = Iyz * x13;
+        let x41 = Iyy * x2;
+        let x42 = x41 - x40;
+        let x43 = x42 * x1;
+        let x44 = x3 * Ixy;
+        let x45 = x43 + x44;
+        let x46 = x45 * x2;
+        let x47 = Izz * x13;
+        let x48 = Iyz * x2;
+        let x49 = x47 - x48;
+        let x50 = x1 * x49;
+        let x51 = x3 * Ixz;
+        let x52 = x50 + x51;
+        let x53 = x52 * x13;
+        let x54 = x17 * x19 * J2;
+        let x55 = x17 * d;
+        let x56 = a_ + x55;
+        let x57 = x56 * x21;
+        let x58 = x28 * x15 * J1;
+        let x59 = Iyy * x13;
+        let x60 = x59 + x48;
+        let x61 = x60 * x1;
+        let x62 = x2 * Ixz - Ixy * x13;
+        let x63 = x3 * x62;
+        let x64 = x0 * J2 * x6;
+        let x65 = x2 * Izz;
+        let x66 = -x65 - x40;
+        let x67 = x1 * x66;
+        let x68 = x31 * x4 * J1;
+        let x69 = x0 * d;
+        let x70 = -a_ - x69;
+        let x71 = x70 * x9;
+        let x72 = -x10 - d;
+        let x73 = x11 * x72;
+        let x74 = x2 * (m2 * (x1 * x26 * x13 + x57) - x54 + x58 + x61) - x63
+            + (x64 + x67 + x68 + (x71 + x1 * x2 * (x73 - x12)) * m1) * x13;
+        let x75 = x38 - x34 + (x0 * x31 + x17 * x28) * J1 + (x19 * x15 - x6 * x4) * J2
+            + (x4 * m1 * x9 - m2 * x15 * x21) * d;
+        let x76 = x1 * (d * x11 * m1 + J2) * x13;
+        let x77 = J2 + m2 * d * x24;
+        let x78 = x1 * x77 * x2;
+        let x79 = f64::cos(psi);
+        let x80 = f64::sin(psi);
+        let x81 = x13 * x80;
+        let x82 = x3 * x79 * x2;
+        let x83 = x82 - x81;
+        let x84 = x0 * x83 - x79 * x4 * x1;
+        let x85 = x83 * x4;
+        let x86 = x0 * x79 * x1;
+        let x87 = x85 + x86;
+        let x88 = a_ * x4 * x87;
+        let x89 = x2 * x80 + x3 * x79 * x13;
+        let x90 = x17 * x79 * x1 - x15 * x89;
+        let x91 = a_ * x15 * x90;
+        let x92 = x79 * x1 * x15;
+        let x93 = x17 * x89;
+        let x94 = x92 + x93;
+        let x95 = x94 * x24 - x91;
+        let x96 = m1 * (x1 * (x84 * x11 + x88) * x13 + x89 * x9)
+            + m2 * (x1 * x95 * x2 + x83 * x21);
+        let x97 = x79 * x13;
+        let x98 = x3 * x2 * x80;
+        let x99 = x97 + x98;
+        let x100 = x4 * x1 * x80;
+        let x101 = x0 * x99 - x100;
+        let x102 = x0 * x1 * x80;
+        let x103 = x4 * x99;
+        let x104 = x102 + x103;
+        let x105 = a_ * x4 * x104;
+        let x106 = x79 * x2;
+        let x107 = x3 * x13 * x80;
+        let x108 = x107 - x106;
+        let x109 = x17 * x1 * x80;
+        let x110 = x109 - x15 * x108;
+        let x111 = a_ * x110 * x15;
+        let x112 = x1 * x15 * x80;
+        let x113 = x17 * x108;
+        let x114 = x112 + x113;
+        let x115 = x114 * x24 - x111;
+        let x116 = m1 * (x1 * (x101 * x11 + x105) * x13 + x108 * x9)
+            + m2 * (x1 * x2 * x115 + x99 * x21);
+        let x117 = x0 * x0;
+        let x118 = x17 * x17;
+        let x119 = x26 * x13 * x13;
+        let x120 = x72 * x72;
+        let x121 = x12 + x120;
+        let x122 = x121 * x2 * x2;
+        let x123 = J1 - J2;
+        let x124 = x0 * x123 + x70 * d * m1;
+        let x125 = x17 * x123 - m2 * d * x56;
+        let x126 = x125 * x15 + Ixz;
+        let x127 = (x124 * x4 - Ixy) * x13 + x2 * x126;
+        let x128 = d * x72 * m1 - J2;
+        let x129 = x2 * x128;
+        let x130 = x77 * x13;
+        let x131 = x95 * x13;
+        let x132 = x84 * x72;
+        let x133 = x132 - x88;
+        let x134 = x2 * x133;
+        let x135 = m2 * (x131 + x83 * x56 * x2) + m1 * (x134 + x70 * x89 * x13);
+        let x136 = x115 * x13;
+        let x137 = x101 * x72;
+        let x138 = x137 - x105;
+        let x139 = x138 * x2;
+        let x140 = m2 * (x136 + x56 * x2 * x99) + (x70 * x108 * x13 + x139) * m1;
+        let x141 = a_ * x28 * x15;
+        let x142 = x19 * x24;
+        let x143 = a_ * x31 * x4;
+        let x144 = x6 * x72;
+        let x145 = m2 * (x1 * x56 * x2 * x2 + (x142 - x141) * x13)
+            + m1 * ((x144 - x143) * x2 + x70 * x1 * x13 * x13);
+        let x146 = d * d * m1;
+        let x147 = J2 + x146;
+        let x148 = m2 * d * d;
+        let x149 = x148 + J2;
+        let x150 = d * (x4 * x89 * m1 - m2 * x83 * x15);
+        let x151 = (x4 * x108 * m1 - m2 * x15 * x99) * d;
+        let x152 = x4 * m1 * x13;
+        let x153 = m2 * x15 * x2;
+        let x154 = x152 - x153;
+        let x155 = x154 * x1 * d;
+        let x156 = x84 * d * m1;
+        let x157 = x101 * d * m1;
+        let x158 = x6 * d * m1;
+        let x159 = m2 * d * x94;
+        let x160 = m2 * d * x114;
+        let x161 = m2 * x19 * d;
+        let x162 = m2 + m0 + m1;
+        let x163 = x1 * psi_dot * x13;
+        let x164 = theta_dot * x2;
+        let x165 = x163 + gamma1_dot - x164;
+        let x166 = theta_dot * x13;
+        let x167 = x1 * psi_dot * x2;
+        let x168 = x166 + x167;
+        let x169 = x4 * x168;
+        let x170 = x3 * psi_dot;
+        let x171 = phi_dot - x170;
+        let x172 = x0 * x171;
+        let x173 = x169 + x172;
+        let x174 = x165 * x123 * x173;
+        let x175 = -phi_dot - x170;
+        let x176 = theta_dot * x175 * x2;
+        let x177 = x1 * psi_dot * phi_dot * x13;
+        let x178 = gamma1_dot * x171;
+        let x179 = x176 + x177 - x178;
+        let x180 = gamma1_dot * x168;
+        let x181 = theta_dot * x1 * psi_dot;
+        let x182 = x181 - x180;
+        let x183 = x0 * x179 + x4 * x182;
+        let x184 = J2 * x183;
+        let x185 = x174 + x184;
+        let x186 = theta_dot * x175 * x13;
+        let x187 = x1 * psi_dot * x2 * phi_dot;
+        let x188 = gamma2_dot * x171;
+        let x189 = x187 - x186 - x188;
+        let x190 = x163 - x164;
+        let x191 = x190 * gamma2_dot;
+        let x192 = -x191 - x181;
+        let x193 = x15 * x189 + x17 * x192;
+        let x194 = x0 * (x180 - x181) + x179 * x4;
+        let x195 = x0 * a_ * x190;
+        let x196 = x165 * d;
+        let x197 = x195 + x196;
+        let x198 = x165 * x197;
+        let x199 = a_ * x168;
+        let x200 = x0 * x168 - x4 * x171;
+        let x201 = d * x200;
+        let x202 = -x199 - x201;
+        let x203 = x202 * x200;
+        let x204 = x186 - x187;
+        let x205 = x204 * x4;
+        let x206 = x0 * x190 * gamma1_dot + x205;
+        let x207 = a_ * x206;
+        let x208 = x203 - x198 + x207;
+        let x209 = a_ * x4 * x208;
+        let x210 = x204 * d;
+        let x211 = x173 * x202;
+        let x212 = x0 * x204;
+        let x213 = a_ * (x212 + x190 * x190 * x4);
+        let x214 = x210 - x211 + x213;
+        let x215 = x173 * x197 - d * x183 + a_ * (-x190 * x4 * x200 - x176 - x177);
+        let x216 = Ixx * x171 - x190 * Ixz - Ixy * x168;
+        let x217 = x190 * x216;
+        let x218 = x176 + x177;
+        let x219 = Iyy * x218;
+        let x220 = Iyz * x168;
+        let x221 = Ixz * x171;
+        let x222 = x190 * Izz;
+        let x223 = x222 - x220 - x221;
+        let x224 = x223 * x171;
+        let x225 = Ixy * theta_dot * x1 * psi_dot;
+        let x226 = x204 * Iyz;
+        let x227 = J2 * x218;
+        let x228 = x17 * x171 - x190 * x15;
+        let x229 = x15 * x171;
+        let x230 = x17 * x190;
+        let x231 = x229 + x230;
+        let x232 = x228 * x123 * x231;
+        let x233 = theta_dot * x1 * psi_dot * Ixz;
+        let x234 = J2 - J1;
+        let x235 = x234 * x173 * x200;
+        let x236 = x190 * Iyz;
+        let x237 = Ixy * x171;
+        let x238 = Iyy * x168 - x236 - x237;
+        let x239 = x238 * x171;
+        let x240 = x168 * x216;
+        let x241 = Iyz * x218;
+        let x242 = x204 * J2;
+        let x243 = x204 * Izz;
+        let x244 = theta_dot * Ixx * x1 * psi_dot;
+        let x245 = x223 * x168;
+        let x246 = x204 * Ixz;
+        let x247 = x190 * x238;
+        let x248 = Ixy * x218;
+        let x249 = x245 - x244 - x246 - x247 - x248;
+        let x250 = gamma2_dot + x166 + x167;
+        let x251 = x234 * x228 * x250;
+        let x252 = x192 * x15 + (x186 - x187 + x188) * x17;
+        let x253 = J2 * x252;
+        let x254 = x251 + x253;
+        let x255 = x231 * d;
+        let x256 = a_ * x190;
+        let x257 = -x255 - x256;
+        let x258 = x218 * x15;
+        let x259 = x250 * d;
+        let x260 = x17 * a_ * x168;
+        let x261 = x259 + x260;
+        let x262 = a_ * (-x17 * gamma2_dot * x168 - x258) - x231 * x257 + x261 * x250;
+        let x263 = a_ * x15 * x262;
+        let x264 = x218 * d;
+        let x265 = x228 * x257;
+        let x266 = x17 * x218;
+        let x267 = a_ * (x266 + x15 * x168 * x168);
+        let x268 = x264 + x265 + x267;
+        let x269 = x268 * x24 - x263;
+        let x270 = a_ * (x187 - x186 - x231 * x15 * x168) - x261 * x228 - x252 * d;
+        let x271 = x214 * x72;
+        let x272 = x2 * (x271 - x209);
+        let x273 = x193 * x15 * J1;
+        let x274 = x17 * x254;
+        let x275 = x269 * x13;
+        let x276 = x4 * J1 * x194;
+        let x277 = x0 * x185;
+        let x278 = m2 * x270 * d;
+        let x279 = x215 * d * m1;
+        let x280 = -m2 * (x268 * x94 + x83 * x270 + x90 * x262)
+            - (x208 * x87 + x84 * x214 + x215 * x89) * m1;
+        let x281 = a_ * x3 * theta_dot * theta_dot;
+        let x282 = x17 * x2;
+        let x283 = x15 * x13;
+        let x284 = -x282 - x283;
+        let x285 = x284 * x1;
+        let x286 = x282 + x283;
+        let x287 = x1 * x286;
+        let x288 = x283 - x282;
+        let x289 = x288 * x1;
+        let x290 = x282 - x283;
+        let x291 = x290 * x1;
+        let x292 = 0.25 * x285 - 0.25 * x287 - 0.25 * x289 + 0.25 * x291 - x27;
+        let x293 = x15 * x2;
+        let x294 = x17 * x13;
+        let x295 = x293 + x294;
+        let x296 = x3 * x295;
+        let x297 = x294 - x293;
+        let x298 = x3 * x297;
+        let x299 = x296 - 0.5 * x285 - 0.5 * x287 + 0.5 * x289 + 0.5 * x291 - x298;
+        let x300 = phi_dot * x299;
+        let x301 = 0.5 * x285 - 0.5 * x287 + 0.5 * x289 - 0.5 * x291;
+        let x302 = phi_dot * x301;
+        let x303 = x1 * x15;
+        let x304 = -x296 - 0.5 * x285 - 0.5 * x287 - 2.0 * x303 - 0.5 * x289 - 0.5 * x291
+            - x298;
+        let x305 = x304 * theta_dot;
+        let x306 = x3 * x2;
+        let x307 = x1 * x13;
+        let x308 = x306 + x307;
+        let x309 = x0 * x308;
+        let x310 = x1 * x2;
+        let x311 = x3 * x13;
+        let x312 = x310 - x311;
+        let x313 = x4 * x312;
+        let x314 = x307 - x306;
+        let x315 = x0 * x314;
+        let x316 = x4 * x1;
+        let x317 = x311 - x310;
+        let x318 = x4 * x317;
+        let x319 = x310 + x311;
+        let x320 = x4 * x319;
+        let x321 = -x310 - x311;
+        let x322 = x321 * x4;
+        let x323 = 0.5 * x313 - x309 + x315 + 2.0 * x316 + 0.5 * x318 - 0.5 * x320
+            - 0.5 * x322;
+        let x324 = x323 * gamma1_dot;
+        let x325 = 0.25 * x318 - 0.25 * x313 - 0.25 * x320 + x30 + 0.25 * x322;
+        let x326 = 0.5 * x313 - 0.5 * x318 - 0.5 * x320 + 0.5 * x322;
+        let x327 = x326 * phi_dot;
+        let x328 = x309 - 0.5 * x313 + x315 - 0.5 * x318 - 0.5 * x320 - 0.5 * x322;
+        let x329 = phi_dot * x328;
+        let x330 = -x97 - x98;
+        let x331 = x0 * x330 + x100;
+        let x332 = x4 * x330 - x102;
+        let x333 = a_ * x4 * x332;
+        let x334 = x106 - x107;
+        let x335 = x17 * x334 - x112;
+        let x336 = -x109 - x334 * x15;
+        let x337 = x335 * x24 - a_ * x336 * x15;
+        let x338 = (x1 * (x331 * x11 + x333) * x13 + x334 * x9) * m1
+            + m2 * (x337 * x1 * x2 + x330 * x21);
+        let x339 = ((x331 * x72 - x333) * x2 + x334 * x70 * x13) * m1
+            + m2 * (x337 * x13 + x56 * x2 * x330);
+        let x340 = d * (x334 * x4 * m1 - m2 * x15 * x330);
+        let x341 = d * x331 * m1;
+        let x342 = m2 * d * x335;
+        let x343 = -d - x23;
+        let x344 = x343 * x24;
+        let x345 = -x17 * x3 * x13 - x303;
+        let x346 = a_ * x3 * x13 - d * x345;
+        let x347 = x316 - x0 * x3 * x2;
+        let x348 = x0 * x1;
+        let x349 = -x3 * x4 * x2 - x348;
+        let x350 = x17 * x1;
+        let x351 = x3 * x15 * x13 - x350;
+        let x352 = a_ * x3 * x2 - d * x347;
+        let x353 = 2.0 * x73 - 2.0 * x12;
+        let x354 = Ixy * x1 + x3 * (x40 - x41);
+        let x355 = x3 * (x48 - x47) + x1 * Ixz;
+        let x356 = Ixx * x1;
+        let x357 = x35 + x36;
+        let x358 = x3 * x357;
+        let x359 = (x351 * x15 * J1 + (x3 * (x344 - x22) * x13 + x56 * x346) * m2
+            - x3 * x60 - x17 * J2 * x345) * x2 - x62 * x1
+            + (x0 * J2 * x347 - x3 * x66 + (x70 * x352 + x3 * x121 * x2) * m1
+                + x349 * x4 * J1) * x13;
+        let x360 = d * (x352 * x4 * m1 - m2 * x15 * x346) - x356
+            + (x0 * x349 + x17 * x351) * J1 + J2 * (x15 * x345 - x4 * x347) + x358;
+        let x361 = x3 * x128 * x13;
+        let x362 = m2 * d * x343 - J2;
+        let x363 = x3 * x2 * x362;
+        let x364 = x6 * x11 + x143 - x7 - x8;
+        let x365 = x142 - x141 - x14 - x20;
+        let x366 = x343 * x94;
+        let x367 = (x352 * x89 + x13 * (x364 * x79 * x1 + x3 * x133)) * m1
+            + m2 * ((x79 * x1 * x365 + x3 * (x366 + x91)) * x2 + x83 * x346);
+        let x368 = x343 * x114;
+        let x369 = m2 * (x2 * (x1 * x365 * x80 + x3 * (x111 + x368)) + x99 * x346)
+            + ((x3 * x138 + x364 * x1 * x80) * x13 + x352 * x108) * m1;
+        let x370 = x145 * x79;
+        let x371 = x145 * x80;
+        let x372 = ((x345 * x24 - x351 * a_ * x15) * x13 - x3 * x56 * x2 * x2) * m2
+            + m1 * ((x347 * x72 - a_ * x349 * x4) * x2 - x3 * x70 * x13 * x13);
+        let x373 = x154 * x79 * x1 * d;
+        let x374 = x154 * x1 * d * x80;
+        let x375 = (x153 - x152) * x3 * d;
+        let x376 = x6 * x79 * d * m1;
+        let x377 = x6 * d * m1 * x80;
+        let x378 = d * x347 * m1;
+        let x379 = m2 * x19 * x79 * d;
+        let x380 = m2 * x19 * d * x80;
+        let x381 = m2 * d * x345;
+        let x382 = theta_dot * x1 * x13;
+        let x383 = gamma2_dot * x1;
+        let x384 = x3 * x2 * phi_dot;
+        let x385 = x17 * (x384 - x382 - x383);
+        let x386 = x228 * x3 * x2;
+        let x387 = gamma2_dot * x13;
+        let x388 = x387 + theta_dot;
+        let x389 = x388 * x3 * x15;
+        let x390 = x351 * x250;
+        let x391 = (x385 - x386 + x389 + x390) * J2;
+        let x392 = (x386 - x390) * J1;
+        let x393 = x391 + x392;
+        let x394 = x17 * x388 * x3 + (x382 + x383 - x384) * x15;
+        let x395 = gamma1_dot * x2;
+        let x396 = theta_dot - x395;
+        let x397 = theta_dot * x1 * x2;
+        let x398 = x3 * phi_dot * x13;
+        let x399 = x1 * gamma1_dot - x397 - x398;
+        let x400 = x0 * x3 * x396 + x4 * x399;
+        let x401 = x384 - x382;
+        let x402 = Iyz * x401;
+        let x403 = x355 * x171;
+        let x404 = -x397 - x398;
+        let x405 = Iyy * x404;
+        let x406 = x358 - x356;
+        let x407 = x190 * x406;
+        let x408 = x223 * x1;
+        let x409 = Ixy * theta_dot;
+        let x410 = x13 * x216;
+        let x411 = x3 * (-x409 - x410);
+        let x412 = x351 * x231;
+        let x413 = x228 * x345;
+        let x414 = (-x397 - x412 - x398 - x413) * J2;
+        let x415 = (x412 + x413) * J1;
+        let x416 = x171 * x354;
+        let x417 = x401 * Izz;
+        let x418 = x406 * x168;
+        let x419 = x173 * x347;
+        let x420 = x349 * x200;
+        let x421 = (-x419 - x420) * J1;
+        let x422 = (x419 - x382 + x420 + x384) * J2;
+        let x423 = Iyz * x404;
+        let x424 = x238 * x1;
+        let x425 = theta_dot * Ixz;
+        let x426 = x2 * x216;
+        let x427 = x3 * (x426 - x425);
+        let x428 = x401 * Ixz;
+        let x429 = Ixy * x404;
+        let x430 = x190 * x354;
+        let x431 = x355 * x168;
+        let x432 = x223 * x2;
+        let x433 = theta_dot * Ixx;
+        let x434 = x238 * x13;
+        let x435 = x433 - x432 + x434;
+        let x436 = x3 * x173 * x13;
+        let x437 = x165 * x349;
+        let x438 = (x437 - x436) * J1;
+        let x439 = x0 * x399;
+        let x440 = x395 - theta_dot;
+        let x441 = x3 * x4 * x440;
+        let x442 = J2 * (x439 + x441 + x436 - x437);
+        let x443 = x438 + x442;
+        let x444 = a_ * (x382 + x15 * (x3 * x231 * x2 - x345 * x168) - x384)
+            - x228 * x3 * x2 * x343 - (x385 + x389) * d - x261 * x351;
+        let x445 = x228 * x346 + x404 * d + x351 * x257
+            + a_ * (x17 * x404 + x3 * (-2.0 * x166 - 2.0 * x167) * x15 * x2);
+        let x446 = x17 * a_ * gamma2_dot;
+        let x447 = x3 * x2 * (x446 - x259 + x250 * x343 - x260) - a_ * x404 * x15
+            - x231 * x346 - x257 * x345;
+        let x448 = a_ * (x397 + x398 + (x3 * x200 * x13 - x190 * x347) * x4)
+            + x349 * x197 - d * (x439 + x441) + x3 * x173 * x72 * x13;
+        let x449 = x0 * a_ * gamma1_dot;
+        let x450 = x195 - x165 * x72 + x196 - x449;
+        let x451 = x202 * x347 + a_ * x401 * x4 + x3 * x13 * x450 + x352 * x200;
+        let x452 = 2.0 * x164 - 2.0 * x163;
+        let x453 = x401 * d - x349 * x202 - x352 * x173
+            + a_ * (x0 * x401 + x3 * x452 * x4 * x13);
+        let x454 = x432 - x433 - x434;
+        let x455 = x215 * x1 * x13 + x31 * x208 + x214 * x6;
+        let x456 = x270 * x1 * x2 + x28 * x262 + x19 * x268;
+        let x457 = a_ * theta_dot * theta_dot * x1;
+        let x458 = x0 * x312;
+        let x459 = x0 * x319;
+        let x460 = x0 * x317;
+        let x461 = x0 * x321;
+        let x462 = x314 * x4;
+        let x463 = x308 * x4;
+        let x464 = (-0.5 * x458 - 0.5 * x459 - 0.5 * x460 - x462 - 0.5 * x461 - x463)
+            * phi_dot;
+        let x465 = 0.25 * x458 - 0.25 * x459 + 0.25 * x460 - 0.5 * x462 + x348
+            - 0.25 * x461 + 0.5 * x463;
+        let x466 = 0.5 * x458 - 0.5 * x459 - 0.5 * x460 + 0.5 * x461;
+        let x467 = x466 * phi_dot;
+        let x468 = x3 * x284;
+        let x469 = x3 * x286;
+        let x470 = x288 * x3;
+        let x471 = x1 * x297;
+        let x472 = x3 * x290;
+        let x473 = x1 * x295;
+        let x474 = (0.5 * x468 + 0.5 * x469 - 0.5 * x470 - x471 - 0.5 * x472 + x473)
+            * phi_dot;
+        let x475 = 0.25 * x469 - 0.25 * x468 - x350 + 0.25 * x470 - 0.25 * x472;
+        let x476 = 0.5 * x469 - 0.5 * x468 - 0.5 * x470 + 0.5 * x472;
+        let x477 = phi_dot * x476;
+        let x478 = x56 * x56;
+        let x479 = a_ + x69;
+        let x480 = m2 * (x1 * (x119 + x2 * x2 * (x478 - x22 + x344)) + x56 * x21 * x13)
+            + ((x122 + (x73 - x12 + x70 * x70) * x13 * x13) * x1 + x479 * x2 * x9) * m1
+            + (x28 * x15 * x13 - x31 * x4 * x2) * J1
+            + J2 * (-x17 * x19 * x13 - x0 * x6 * x2) - x358
+            + x1
+                * (((x4 * x4 * J1 + x0 * x0 * J2) * x13 + x59 - x47 + 2.0 * x48) * x13
+                    + (x65 + 2.0 * x40 + (x15 * x15 * J1 + x17 * x17 * J2) * x2 - x41)
+                        * x2);
+        let x481 = x127 * x1;
+        let x482 = x1 * x2 * x128;
+        let x483 = x1 * x77 * x13;
+        let x484 = a_ * x4 * x4;
+        let x485 = x484 - a_ + x0 * x11 - x69;
+        let x486 = x81 - x82;
+        let x487 = x17 * x24;
+        let x488 = a_ * x15 * x15;
+        let x489 = x487 + x488;
+        let x490 = x489 * x486 + x83 * x56;
+        let x491 = ((x89 * x485 * x13 + x134) * x1 + x486 * x9) * m1
+            + m2 * (x89 * x21 + (x131 + x490 * x2) * x1);
+        let x492 = x56 * x99 + x330 * x489;
+        let x493 = (x1 * (x139 + x485 * x108 * x13) + x330 * x9) * m1
+            + m2 * (x1 * (x136 + x492 * x2) + x108 * x21);
+        let x494 = x4 * x4;
+        let x495 = (Ixy + x4 * (x0 * x234 + x479 * d * m1)) * x2 + x126 * x13;
+        let x496 = x128 * x13;
+        let x497 = x2 * x362;
+        let x498 = x0 * x72;
+        let x499 = a_ - x484 + x69 + x498;
+        let x500 = ((x366 + x56 * x89 + x91) * x2 + x490 * x13) * m2
+            + ((x132 - x88 + x70 * x486) * x13 + x499 * x2 * x89) * m1;
+        let x501 = m2 * (x2 * (x111 + x56 * x108 + x368) + x492 * x13)
+            + ((x137 - x105 + x70 * x330) * x13 + x499 * x2 * x108) * m1;
+        let x502 = m2 * x2
+            * (x141 + (2.0 * a_ - x487 + 2.0 * x55 - x488) * x1 * x13 + x19 * x343)
+            + (x144 - x143 + x1 * (2.0 * a_ - x484 + 2.0 * x69 + x498) * x2) * m1 * x13;
+        let x503 = d * (x4 * m1 * x486 - m2 * x15 * x89);
+        let x504 = d * (x4 * x330 * m1 - m2 * x15 * x108);
+        let x505 = x1 * d * (-m2 * x15 * x13 - x4 * x2 * m1);
+        let x506 = x0 * d * x89 * m1;
+        let x507 = x0 * d * x108 * m1;
+        let x508 = x0 * x1 * d * m1 * x13;
+        let x509 = x17 * m2 * d * x486;
+        let x510 = x17 * m2 * d * x330;
+        let x511 = -(x17 * m2 * x1 * d * x2);
+        let x512 = -x166 - x167;
+        let x513 = theta_dot * (phi_dot + x170) * x2;
+        let x514 = x513 - x177;
+        let x515 = x17 * x514;
+        let x516 = gamma2_dot * x512 * x15;
+        let x517 = x261 * x512 * x15
+            + a_ * (x15 * (-x17 * x512 * x168 - x190 * x231) - x513 + x177)
+            - x228 * x190 * x24 - d * (x515 - x516);
+        let x518 = x15 * x257;
+        let x519 = -a_ - x55;
+        let x520 = 2.0 * x166 + 2.0 * x167;
+        let x521 = x210 + x512 * (x228 * x519 - x518)
+            + a_ * (x190 * x520 * x15 + x17 * x204);
+        let x522 = x17 * x257;
+        let x523 = x259 - x446 + x250 * x24 + x260;
+        let x524 = x512 * (-x231 * x519 - x522) + x190 * x523 - x204 * a_ * x15;
+        let x525 = x521 * x24 - a_ * x15 * x524 + x270 * x56;
+        let x526 = x512 * Izz;
+        let x527 = x526 - x236;
+        let x528 = x527 * x168;
+        let x529 = x238 * x512;
+        let x530 = x514 * Ixz;
+        let x531 = x190 * Iyy;
+        let x532 = Iyz * x512;
+        let x533 = x204 * Ixy;
+        let x534 = x190 * x4 * gamma1_dot;
+        let x535 = x512 * x173;
+        let x536 = x190 * x165 * x4;
+        let x537 = J2 * (x212 - x534 - x535 - x536);
+        let x538 = J1 * (x535 + x536);
+        let x539 = x537 + x538;
+        let x540 = 2.0 * x163 - 2.0 * x164;
+        let x541 = x4 * x202;
+        let x542 = x70 * x173;
+        let x543 = d * x514 + a_ * (x512 * x4 * x540 + x0 * x514)
+            + x190 * (-x541 - x542);
+        let x544 = x0 * x202;
+        let x545 = x70 * x200;
+        let x546 = x449 - x165 * x11 - x195 - x196;
+        let x547 = x190 * (x544 + x545) + x512 * x546 + a_ * x4 * x514;
+        let x548 = a_ * x4 * x547;
+        let x549 = x512 * x173 * x11;
+        let x550 = d * (x212 - x534);
+        let x551 = x0 * x190 * x190;
+        let x552 = a_ * ((-x512 * x200 - x551) * x4 - x186 + x187);
+        let x553 = x190 * x4 * x197;
+        let x554 = x549 - x550 + x552 + x553;
+        let x555 = -x514 * x15 - x17 * gamma2_dot * x512;
+        let x556 = x512 * (x17 * x228 * x123 + x234 * x231 * x15);
+        let x557 = Iyz * x514;
+        let x558 = x512 * x216;
+        let x559 = x204 * Iyy;
+        let x560 = x527 * x171;
+        let x561 = -x512 * Ixz - x190 * Ixy;
+        let x562 = x190 * x561;
+        let x563 = (x531 - x532) * x171;
+        let x564 = x168 * x561;
+        let x565 = J2 * x514;
+        let x566 = x514 * Izz;
+        let x567 = x190 * (x234 * x4 * x200 + x0 * x234 * x173);
+        let x568 = x228 * x190;
+        let x569 = x250 * x512 * x15;
+        let x570 = (x568 + x515 - x516 - x569) * J2;
+        let x571 = (x569 - x568) * J1;
+        let x572 = x570 + x571;
+        let x573 = x549 - x550 + x0 * x214 + x552 + x553 + x4 * x208;
+        let x574 = x17 * x268 - x15 * x262;
+        let x575 = 0.25 * x468 + 0.25 * x469 - 0.25 * x470 - 0.5 * x471 - 0.25 * x472
+            + 0.5 * x473;
+        let x576 = -0.25 * x458 - 0.25 * x459 - 0.25 * x460 - 0.5 * x462 - 0.25 * x461
+            - 0.5 * x463;
+        let x577 = x30 - x29;
+        let x578 = J2 * x577;
+        let x579 = x31 * J1;
+        let x580 = (x0 * (x578 + x579)
+            + ((d * x9 + 2.0 * (a_ * x1 * d * x2)) * x4 - x70 * d * x577) * m1
+            + x6 * x123 * x4) * x13;
+        let x581 = x0 * (d * m1 * x9 + x6 * x123) + ((-J2 - x146) * x577 - x579) * x4;
+        let x582 = -(a_ * x4 * x1 * d * m1 * x13);
+        let x583 = x0 * a_ * x87;
+        let x584 = -x85 - x86;
+        let x585 = ((x583 + x11 * x584) * x1 * x13 - d * x89 * x577) * m1;
+        let x586 = x0 * a_ * x104;
+        let x587 = -x102 - x103;
+        let x588 = (x1 * (x586 + x11 * x587) * x13 - d * x108 * x577) * m1;
+        let x589 = 2.0 * J1 - 2.0 * J2;
+        let x590 = x13 * ((J2 + x146 - J1) * x4 * x4 + x0 * x124);
+        let x591 = a_ * x4 * d * x2 * m1;
+        let x592 = (x2 * (x72 * x584 - x583) + x4 * d * x89 * x13) * m1;
+        let x593 = ((x587 * x72 - x586) * x2 + x4 * d * x108 * x13) * m1;
+        let x594 = (x4 * x1 * d * x13 * x13 + (x72 * x577 - x0 * a_ * x31) * x2) * m1;
+        let x595 = d * m1 * x584;
+        let x596 = d * x587 * m1;
+        let x597 = d * m1 * x577;
+        let x598 = -x169 - x172;
+        let x599 = x598 * x234 * x173 + x234 * x200 * x200;
+        let x600 = J1 * x194;
+        let x601 = x0 * x182 + (x178 - x176 - x177) * x4;
+        let x602 = J2 * x601;
+        let x603 = x165 * x123 * x200;
+        let x604 = -x600 - x602 - x603;
+        let x605 = x598 * (-x199 - 2.0 * x201);
+        let x606 = x0 * x208;
+        let x607 = a_ * (x551 - x205);
+        let x608 = x598 * x173 * d;
+        let x609 = x607 - x203 + x608;
+        let x610 = x197 * x200 - x0 * a_ * x190 * x200 - d * x601;
+        let x611 = x183 * J1;
+        let x612 = x607 - x198 + x608 + x207;
+        let x613 = x605 + x213;
+        let x614 = 0.25 * x460 - 0.25 * x458 - 0.25 * x459 - x5 + 0.25 * x461;
+        let x615 = x16 - x18;
+        let x616 = x615 * J1;
+        let x617 = x19 * J2;
+        let x618 = x2
+            * (x17 * x28 * x123
+                + m2 * (x15 * (-d * x21 - 2.0 * (a_ * x1 * d * x13)) - x28 * d * x56)
+                + x15 * (x616 + x617));
+        let x619 = x148 + J2 - J1;
+        let x620 = (x616 + x617 - m2 * d * x21) * x17 + x28 * x15 * x619;
+        let x621 = -(m2 * a_ * x1 * d * x15 * x2);
+        let x622 = x90 * x24 - x17 * a_ * x90;
+        let x623 = m2 * (x1 * x622 * x2 - x83 * x28 * d);
+        let x624 = x110 * x24 - x17 * a_ * x110;
+        let x625 = m2 * (x624 * x1 * x2 - x28 * d * x99);
+        let x626 = x2 * (x125 * x17 + x15 * x15 * x619);
+        let x627 = -(m2 * a_ * d * x15 * x13);
+        let x628 = (x622 * x13 - x83 * d * x15 * x2) * m2;
+        let x629 = m2 * (x624 * x13 - d * x15 * x2 * x99);
+        let x630 = m2 * ((x28 * x24 - x17 * a_ * x28) * x13 - x1 * d * x15 * x2 * x2);
+        let x631 = -(x17 * m2 * x83 * d);
+        let x632 = -(x17 * m2 * d * x99);
+        let x633 = m2 * d * x90;
+        let x634 = m2 * x110 * d;
+        let x635 = m2 * x28 * d;
+        let x636 = -x229 - x230;
+        let x637 = x228 * x228 * x123 + x123 * x231 * x636;
+        let x638 = x234 * x250 * x636;
+        let x639 = J2 * x193;
+        let x640 = (x17 * x189 + (x191 + x181) * x15) * J1;
+        let x641 = -x251 - x253 - x640;
+        let x642 = x228 * (2.0 * x255 + x256);
+        let x643 = a_ * (x512 * x15 * x168 - x266);
+        let x644 = a_ * (x17 * x168 * x168 - x258) - x228 * x228 * d + x257 * x636;
+        let x645 = a_ * (x15 * (-x642 - x264 - x265 - x643 - x267) - x17 * x262)
+            + x24 * x644;
+        let x646 = -x261 * x636 - x17 * a_ * x231 * x168 - x193 * d;
+        let x647 = x193 * J1;
+        let x648 = x642 + x264 + x265 + x643 + x267;
+        let x649 = 0.25 * x468 + 0.25 * x469 + x16 + 0.25 * x470 - 0.5 * x471
+            + 0.25 * x472 - 0.5 * x473;
+        let x650 = x396 * x4 * x1;
+        let x651 = x165 * x31;
+        let x652 = x1 * phi_dot * x13;
+        let x653 = x3 * theta_dot * x2;
+        let x654 = x652 - x653 + x3 * gamma1_dot;
+        let x655 = x0 * x654;
+        let x656 = x173 * x1 * x13;
+        let x657 = J2 * (x650 - x651 + x655 - x656);
+        let x658 = (x651 + x656) * J1;
+        let x659 = x657 + x658;
+        let x660 = x52 * x168;
+        let x661 = x1 * x2 * phi_dot;
+        let x662 = x3 * theta_dot * x13;
+        let x663 = -x661 - x662;
+        let x664 = Ixz * x663;
+        let x665 = x190 * x45;
+        let x666 = x652 - x653;
+        let x667 = Ixy * x666;
+        let x668 = gamma2_dot * x3;
+        let x669 = -x387 - theta_dot;
+        let x670 = (x661 + x668 + x662) * x15 + x17 * x669 * x1;
+        let x671 = x654 * x4 + x0 * x1 * x440;
+        let x672 = x228 * x21;
+        let x673 = a_ * (x17 * x666 + x1 * x520 * x15 * x2) + x672 + x666 * d
+            + x28 * x257;
+        let x674 = x1 * x523 * x2 - a_ * x666 * x15 - x19 * x257 - x231 * x21;
+        let x675 = x673 * x24 - a_ * x15 * x674;
+        let x676 = x669 * x1 * x15;
+        let x677 = x17 * (-x661 - x668 - x662);
+        let x678 = a_ * (x661 + (-x19 * x168 - x231 * x1 * x2) * x15 + x662) - x261 * x28
+            - x228 * x1 * x2 * x24 - (x676 + x677) * d;
+        let x679 = x200 * x9 + x6 * x202 + a_ * x4 * x663 + x1 * x546 * x13;
+        let x680 = a_ * x679 * x4;
+        let x681 = d * x663 - x31 * x202 - x173 * x9
+            + a_ * (x4 * x1 * x540 * x13 + x0 * x663);
+        let x682 = x31 * x197 - (x650 + x655) * d
+            + a_ * (x653 - x652 + (-x190 * x6 - x1 * x200 * x13) * x4)
+            + x173 * x1 * x11 * x13;
+        let x683 = x228 * x19;
+        let x684 = x28 * x231;
+        let x685 = (x683 + x684) * J1;
+        let x686 = Iyz * x663;
+        let x687 = J2 * (x652 - x683 - x653 - x684);
+        let x688 = x52 * x171;
+        let x689 = x190 * x39;
+        let x690 = x666 * Iyy;
+        let x691 = x223 * x3;
+        let x692 = x1 * (x409 + x410);
+        let x693 = Izz * x663;
+        let x694 = x45 * x171;
+        let x695 = x666 * Iyz;
+        let x696 = (x425 - x426) * x1;
+        let x697 = x168 * x39;
+        let x698 = x6 * x173;
+        let x699 = x31 * x200;
+        let x700 = (-x698 - x699) * J1;
+        let x701 = x3 * x238;
+        let x702 = J2 * (x698 + x699 - x661 - x662);
+        let x703 = x228 * x1 * x2;
+        let x704 = x250 * x28;
+        let x705 = (x676 + x677 + x703 + x704) * J2;
+        let x706 = (-x703 - x704) * J1;
+        let x707 = x705 + x706;
+        let x708 = x165 * x4 * x13;
+        let x709 = x173 * x2;
+        let x710 = (x708 - x709) * J1;
+        let x711 = gamma1_dot * x13;
+        let x712 = x1 * psi_dot;
+        let x713 = x4 * (x712 - x711);
+        let x714 = x0 * x175 * x2;
+        let x715 = J2 * (x709 - x708 + x713 + x714);
+        let x716 = x710 + x715;
+        let x717 = x66 * x168;
+        let x718 = Ixx * x1 * psi_dot;
+        let x719 = x238 * x2;
+        let x720 = x223 * x13;
+        let x721 = x190 * x60;
+        let x722 = x175 * d;
+        let x723 = x2 * (x518 + x228 * x56 + x722)
+            + a_ * (x520 * x15 * x13 + x17 * x175 * x2);
+        let x724 = (x522 - a_ * x175 * x15 - x231 * x56) * x2 + x523 * x13;
+        let x725 = x723 * x24 - a_ * x724 * x15;
+        let x726 = gamma2_dot * x2 - x712;
+        let x727 = x15 * x726;
+        let x728 = x17 * x175 * x13;
+        let x729 = a_ * ((x17 * x2 * x168 - x231 * x13) * x15 - x175 * x13)
+            - x261 * x15 * x2 - x228 * x24 * x13 - (x727 + x728) * d;
+        let x730 = x4 * x200;
+        let x731 = x0 * x173;
+        let x732 = (-x730 - x731) * J1;
+        let x733 = (x730 + x731 - phi_dot - x170) * J2;
+        let x734 = x1 * psi_dot * Ixz;
+        let x735 = x62 * x168;
+        let x736 = x175 * x49;
+        let x737 = x60 * x171;
+        let x738 = Ixy * x1 * psi_dot;
+        let x739 = x66 * x171;
+        let x740 = x190 * x62;
+        let x741 = x17 * x228;
+        let x742 = x231 * x15;
+        let x743 = J2 * (x741 - x742 - phi_dot - x170);
+        let x744 = (x742 - x741) * J1;
+        let x745 = x42 * x175;
+        let x746 = x2 * x450 + (x544 + x545 + a_ * x175 * x4) * x13;
+        let x747 = a_ * x4 * x746;
+        let x748 = a_ * (x0 * x175 * x13 + x452 * x4 * x2) + (x722 - x541 - x542) * x13;
+        let x749 = x173 * x2 * x72 - d * (x713 + x714)
+            + a_ * (x4 * (x2 * x200 - x0 * x190 * x13) - x175 * x2) + x4 * x197 * x13;
+        let x750 = x228 * x13;
+        let x751 = x250 * x15 * x2;
+        let x752 = J2 * (x727 + x750 + x728 + x751);
+        let x753 = (-x750 - x751) * J1;
+        let x754 = x752 + x753;
+        let x755 = x17 * x726 - x175 * x15 * x13;
+        let x756 = x0 * (x711 - x712) + x175 * x4 * x2;
+        let x757 = 0.5 * x318 - 0.5 * x313 - 0.5 * x320 + 2.0 * x30 + 0.5 * x322;
+        let x758 = a_ * x3 * theta_dot;
+        let x759 = 0.5 * x285 - 0.5 * x287 - 0.5 * x289 + 0.5 * x291 - 2.0 * x27;
+        let x760 = gamma2_dot - x166 - x167;
+        let x761 = J2 * x760;
+        let x762 = x234 * x250;
+        let x763 = x761 + x762;
+        let x764 = x166 - gamma2_dot + x167;
+        let x765 = x163 - gamma1_dot - x164;
+        let x766 = a_ * x512;
+        let x767 = x199 + 2.0 * x201 + x766;
+        let x768 = a_ * x767 * x4 * x4;
+        let x769 = x173 * x4;
+        let x770 = d * (-x166 - x769 - x167) + x0 * (x199 + x201 + x766);
+        let x771 = x0 * (x195 - x765 * d + x196) + a_ * x190 * (x494 - 1.0);
+        let x772 = x0 * x200;
+        let x773 = (x769 - x772) * J1;
+        let x774 = J2 * (x772 - x166 - x769 - x167);
+        let x775 = (Iyy - Ixx) * x168;
+        let x776 = x17 * x231;
+        let x777 = x228 * x15;
+        let x778 = J2 * (x163 - x776 - x777 - x164);
+        let x779 = Iyz * x520;
+        let x780 = x190 * (Iyy + Ixx - Izz);
+        let x781 = (x776 + x777) * J1;
+        let x782 = d * (x163 - x777 - x164) - x17 * x231 * d;
+        let x783 = x782 * x24 - 2.0 * (a_ * x231 * d * x15 * x15);
+        let x784 = x17 * (-x259 - d * x760 - x260)
+            + a_ * (x166 - x15 * x15 * x168 + x167);
+        let x785 = J2 * x765;
+        let x786 = x165 * x123;
+        let x787 = x785 + x786;
+        let x788 = 2.0 * x169 + 2.0 * x172;
+        let x789 = x173 * J1;
+        let x790 = (-2.0 * x169 - 2.0 * x172) * J2;
+        let x791 = x789 + x790;
+        let x792 = 2.0 * J2 - J1;
+        Derivatives {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
+            ],
+            matrix: [
+                [
+                    (x9 * x9 + (x11 * x11 + x12) * x1 * x1 * x13 * x13) * m1
+                        + m2 * (x21 * x21 + x1 * x1 * x2 * x2 * x26)
+                        + (x28 * x28 + x31 * x31) * J1
+                        + J2 * (x1 * x1 * (x32 + x33) + x19 * x19 + x6 * x6) - x3 * x39
+                        + x1 * (x46 + x53),
+                    x74,
+                    x75,
+                    x76,
+                    x78,
+                    x96,
+                    x116,
+                    0.0,
+                ],
+                [
+                    x74,
+                    J2 * ((x117 + 1.0) * x13 * x13 + (x118 + 1.0) * x2 * x2)
+                        + (x4 * x4 * x13 * J1 + x59 + x48) * x13
+                        + (x119 + x56 * x56 * x2 * x2) * m2
+                        + x2 * (x65 + x40 + x15 * x15 * x2 * J1)
+                        + (x122 + x70 * x70 * x13 * x13) * m1,
+                    x127,
+                    x129,
+                    x130,
+                    x135,
+                    x140,
+                    x145,
+                ],
+                [
+                    x75,
+                    x127,
+                    Ixx + x147 * x4 * x4 + (x117 + x118) * J1 + x15 * x15 * x149,
+                    0.0,
+                    0.0,
+                    x150,
+                    x151,
+                    x155,
+                ],
+                [x76, x129, 0.0, x147, 0.0, x156, x157, x158],
+                [x78, x130, 0.0, 0.0, x149, x159, x160, x161],
+                [x96, x135, x150, x156, x159, x162, 0.0, 0.0],
+                [x116, x140, x151, x157, x160, 0.0, x162, 0.0],
+                [0.0, x145, x155, x158, x161, 0.0, 0.0, x162],
+            ],
+            force: [
+                (-x28 * x193 - x31 * x194) * J1 - x185 * x6
+                    - ((x209 + x214 * x11) * x1 * x13 + x215 * x9) * m1
+                    + x1
+                        * (x2 * (x224 - x217 - x219 - x225 + x226 - x227 - x232)
+                            + (x240 - x233 - x235 - x239 + x241 - x242 - x243) * x13)
+                    + x249 * x3 - x254 * x19 - m2 * (x269 * x1 * x2 + x270 * x21),
+                x2 * (x233 - x273 + x235 + x239 + x274 - x240 - x241 + x242 + x243)
+                    - (x272 + x215 * x70 * x13) * m1 - m2 * (x275 + x270 * x56 * x2)
+                    + (x224 - x217 - x219 - x276 - x225 - x277 + x226 - x227 - x232)
+                        * x13,
+                x244 - x245 + x246 + x247 + x248 + x15 * (x278 - x251 - x253)
+                    + x4 * (x174 - x279 + x184) + (-x0 * x194 - x17 * x193) * J1,
+                x123 * x173 * x200 - x214 * d * m1 - x242,
+                x234 * x228 * x231 - x227 - m2 * x268 * d,
+                x280,
+                -m2 * (x270 * x99 + x110 * x262 + x268 * x114)
+                    - (x208 * x104 + x214 * x101 + x215 * x108) * m1,
+                -m2
+                    * (((0.25 * x285 - 0.25 * x287 - 0.25 * x289 + 0.25 * x291) * phi_dot
+                        * phi_dot + (theta_dot * x292 + x300) * theta_dot
+                        + gamma2_dot * (x302 + x305 + gamma2_dot * x292)) * d - x281)
+                    - (x281
+                        + (theta_dot * (x324 + theta_dot * x325 + x327)
+                            + gamma1_dot * (x325 * gamma1_dot + x329)
+                            + (0.25 * x318 - 0.25 * x313 - 0.25 * x320 + 0.25 * x322)
+                                * phi_dot * phi_dot) * d) * m1,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x338, x96, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x339, x135, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x340, x150, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x341, x156, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x342, x159, 0.0],
+                    [x338, x339, x340, x341, x342, 0.0, 0.0, 0.0],
+                    [x96, x135, x150, x156, x159, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        m2
+                            * (x3 * x1 * (2.0 * x344 - 2.0 * x22) * x2 * x2
+                                + 2.0 * (x21 * x346))
+                            + (2.0 * (x19 * x345) + 2.0 * (x6 * x347)) * J2
+                            + (2.0 * (x31 * x349) + 2.0 * (x351 * x28)) * J1
+                            + m1 * (2.0 * (x352 * x9) + x3 * x353 * x1 * x13 * x13)
+                            + x1 * (x34 - x38 + x2 * x354 + x355 * x13)
+                            + x3
+                                * (x356 - x46 - x53 + (-2.0 * x32 - 2.0 * x33) * J2 * x1
+                                    - x358),
+                        x359,
+                        x360,
+                        x361,
+                        x363,
+                        x367,
+                        x369,
+                        0.0,
+                    ],
+                    [x359, 0.0, 0.0, 0.0, 0.0, x370, x371, x372],
+                    [x360, 0.0, 0.0, 0.0, 0.0, x373, x374, x375],
+                    [x361, 0.0, 0.0, 0.0, 0.0, x376, x377, x378],
+                    [x363, 0.0, 0.0, 0.0, 0.0, x379, x380, x381],
+                    [x367, x370, x373, x376, x379, 0.0, 0.0, 0.0],
+                    [x369, x371, x374, x377, x380, 0.0, 0.0, 0.0],
+                    [0.0, x372, x375, x378, x381, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x1
+                            * ((2.0 * x64 + x67 + x43 + m1 * (2.0 * x71 + x353 * x1 * x2)
+                                + x44 + 2.0 * x68) * x13 - x63
+                                + (2.0 * x58 - 2.0 * x54 - x50 - x51
+                                    + m2 * (x1 * (2.0 * x22 + 2.0 * x25) * x13 + 2.0 * x57)
+                                    + x61) * x2),
+                        x480,
+                        x481,
+                        x482,
+                        x483,
+                        x491,
+                        x493,
+                        0.0,
+                    ],
+                    [
+                        x480,
+                        (x65 + 2.0 * x40 - x41) * x13
+                            + (x13
+                                * ((2.0 * x478 - 2.0 * x22 + 2.0 * x344) * m2
+                                    + m1 * (2.0 * x12 + 2.0 * (x479 * x70) + 2.0 * x120)
+                                    + J2 * (2.0 * x118 - 2.0 * x117)
+                                    + (2.0 * (x15 * x15) - 2.0 * x494) * J1) - x59 + x47
+                                - 2.0 * x48) * x2,
+                        x495,
+                        x496,
+                        x497,
+                        x500,
+                        x501,
+                        x502,
+                    ],
+                    [x481, x495, 0.0, 0.0, 0.0, x503, x504, x505],
+                    [x482, x496, 0.0, 0.0, 0.0, x506, x507, x508],
+                    [x483, x497, 0.0, 0.0, 0.0, x509, x510, x511],
+                    [x491, x500, x503, x506, x509, 0.0, 0.0, 0.0],
+                    [x493, x501, x504, x507, x510, 0.0, 0.0, 0.0],
+                    [0.0, x502, x505, x508, x511, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        (-2.0 * (a_ * x4 * x1 * x1 * d * x13 * x13)
+                            - 2.0 * (d * x577 * x9)) * m1
+                            + (2.0 * x578 + 2.0 * x579) * x6,
+                        x580,
+                        x581,
+                        x582,
+                        0.0,
+                        x585,
+                        x588,
+                        0.0,
+                    ],
+                    [
+                        x580,
+                        (x0 * x589 * x13 * x13
+                            + (2.0 * (x70 * d * x13 * x13) - 2.0 * (a_ * d * x2 * x2))
+                                * m1) * x4,
+                        x590,
+                        x591,
+                        0.0,
+                        x592,
+                        x593,
+                        x594,
+                    ],
+                    [
+                        x581,
+                        x590,
+                        x0 * (2.0 * J2 + 2.0 * x146 - 2.0 * J1) * x4,
+                        0.0,
+                        0.0,
+                        x506,
+                        x507,
+                        x508,
+                    ],
+                    [x582, x591, 0.0, 0.0, 0.0, x595, x596, x597],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x585, x592, x506, x595, 0.0, 0.0, 0.0, 0.0],
+                    [x588, x593, x507, x596, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x594, x508, x597, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x28 * (2.0 * x616 + 2.0 * x617)
+                            + (-2.0 * (x28 * d * x21)
+                                - 2.0 * (a_ * x1 * x1 * d * x15 * x2 * x2)) * m2,
+                        x618,
+                        x620,
+                        0.0,
+                        x621,
+                        x623,
+                        x625,
+                        0.0,
+                    ],
+                    [
+                        x618,
+                        x15
+                            * (x17 * x589 * x2 * x2
+                                + m2
+                                    * (-2.0 * (d * x56 * x2 * x2)
+                                        - 2.0 * (a_ * d * x13 * x13))),
+                        x626,
+                        0.0,
+                        x627,
+                        x628,
+                        x629,
+                        x630,
+                    ],
+                    [
+                        x620,
+                        x626,
+                        x17 * x15 * (2.0 * x148 + 2.0 * J2 - 2.0 * J1),
+                        0.0,
+                        0.0,
+                        x631,
+                        x632,
+                        x511,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x621, x627, 0.0, 0.0, 0.0, x633, x634, x635],
+                    [x623, x628, x631, 0.0, x633, 0.0, 0.0, 0.0],
+                    [x625, x629, x632, 0.0, x634, 0.0, 0.0, 0.0],
+                    [0.0, x630, x511, 0.0, x635, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -(x208 * x332 + x214 * x331 + x215 * x334) * m1
+                        - m2 * (x270 * x330 + x336 * x262 + x268 * x335),
+                    x280,
+                    0.0,
+                ],
+                [
+                    (-x351 * x193 - x349 * x194) * J1
+                        + psi_dot
+                            * ((-x28 * x394 - x31 * x400) * J1 - x19 * x393
+                                + ((x402 + x403 - x405 - x407 - x408 - x411 - x414 - x415)
+                                    * x2
+                                    + (x418 - x416 - x417 - x421 - x422 + x423 + x424 - x427)
+                                        * x13) * x1 + x3 * (x431 - x428 - x429 - x430 + x3 * x435)
+                                - x6 * x443)
+                        + ((x217 + x219 - x224 + x225 - x226 + x227 + x232) * x2
+                            + x13 * (x233 + x235 + x239 - x240 - x241 + x242 + x243))
+                            * x3 - x185 * x347
+                        - m2
+                            * (psi_dot * x21 * x444
+                                + (x3 * x268 * x343 + x1 * psi_dot * x445 * x24
+                                    + a_ * x15 * (x3 * x262 - x1 * psi_dot * x447)) * x2
+                                + x270 * x346)
+                        - (x448 * psi_dot * x9
+                            + (x3 * x214 * x72
+                                + a_ * (x1 * psi_dot * x451 - x3 * x208) * x4
+                                + x1 * psi_dot * x11 * x453) * x13 + x215 * x352) * m1
+                        + x249 * x1 - x254 * x345,
+                    (x2
+                        * (x416 - x394 * x15 * J1 + x417 - x418 + x17 * x393 + x421
+                            + x422 - x423 - x424 + x427)
+                        - m2 * ((x445 * x24 - a_ * x15 * x447) * x13 + x56 * x2 * x444)
+                        - m1 * (x448 * x70 * x13 + x2 * (x72 * x453 - a_ * x4 * x451))
+                        + (x402 + x403 - x405 - x407 - x408 - x4 * x400 * J1 - x0 * x443
+                            - x411 - x414 - x415) * x13) * psi_dot,
+                    (x428 + x429 + (m2 * d * x444 - x391 - x392) * x15 + x430 + x454 * x3
+                        + (-x17 * x394 - x0 * x400) * J1
+                        + x4 * (x438 - x448 * d * m1 + x442) - x431) * psi_dot,
+                    psi_dot
+                        * (J2 * (x382 - x419 - x420 - x384) - d * m1 * x453
+                            + (x419 + x420) * J1),
+                    psi_dot
+                        * (J1 * (-x412 - x413) - m2 * d * x445
+                            + J2 * (x397 + x412 + x398 + x413)),
+                    -(x455 * x79 + psi_dot * (x84 * x453 + x451 * x87 + x448 * x89)) * m1
+                        - m2
+                            * (x79 * x456
+                                + psi_dot * (x83 * x444 + x90 * x447 + x94 * x445)),
+                    -m2
+                        * (x456 * x80
+                            + psi_dot * (x114 * x445 + x99 * x444 + x110 * x447))
+                        - m1
+                            * ((x101 * x453 + x448 * x108 + x451 * x104) * psi_dot
+                                + x455 * x80),
+                    -(x457
+                        + d
+                            * (theta_dot
+                                * ((0.5 * x460 - 0.5 * x458 - 0.5 * x459 - 2.0 * x5
+                                    + 0.5 * x461) * gamma1_dot + x464 + theta_dot * x465)
+                                + (0.25 * x458 - 0.25 * x459 + 0.25 * x460 - 0.5 * x462
+                                    - 0.25 * x461 + 0.5 * x463) * phi_dot * phi_dot
+                                + gamma1_dot * (x467 + gamma1_dot * x465))) * m1
+                        - m2
+                            * ((theta_dot * (x474 + x475 * theta_dot)
+                                + (0.25 * x469 - 0.25 * x468 + 0.25 * x470 - 0.25 * x472)
+                                    * phi_dot * phi_dot
+                                + gamma2_dot
+                                    * (theta_dot
+                                        * (0.5 * x468 + 0.5 * x469 + 2.0 * x16 + 0.5 * x470 - x471
+                                            + 0.5 * x472 - x473) + x475 * gamma2_dot + x477)) * d
+                                - x457),
+                ],
+                [
+                    x3
+                        * (x528 - x529 - x530 + x190 * (x532 - x531 - x220 - x221 + x222)
+                            - x533) - m2 * (x517 * x21 + x1 * (x275 + x525 * x2))
+                        - x539 * x6
+                        - (((x543 * x11 + x548 + x215 * x70) * x13 + x272) * x1
+                            + x554 * x9) * m1 + (-x206 * x31 - x28 * x555) * J1
+                        + ((x557 - x556 - x558 - x273 - x559 + x233 + x235 + x239 + x274
+                            - x240 - x241 + x560 + x243 - x562) * x2
+                            + x13
+                                * (x224 - x563 - x219 + x564 - x276 - x225 - x277
+                                    + 2.0 * x226 - x565 - x227 - x232 - x566 - x567)) * x1
+                        - x19 * x572,
+                    (x557 - x0 * x539 - x556 - x558 - x559 + x233 + x235 + x239 + x274
+                        - x240 - x241 + x560 + (-x206 * x4 - x193 * x15) * J1 + x243
+                        - x562) * x13
+                        - m2 * (x525 * x13 + (x517 * x56 + x263 + x268 * x343) * x2)
+                        - ((x271 - x209 + x70 * x554) * x13
+                            + x2 * (x543 * x72 - x548 + x215 * x479)) * m1
+                        + x2
+                            * (x563 + x219 - x224 - x564 + x225 + x277 + x17 * x572
+                                - 2.0 * x226 + x565 + x227 + (x4 * x194 - x555 * x15) * J1
+                                + x232 + x566 + x567),
+                    (m2 * d * x517 - x570 - x571) * x15 + J1 * (-x0 * x206 - x17 * x555)
+                        + (x537 - d * x554 * m1 + x538) * x4 - x528
+                        + x190 * (x531 + x220 - x532 + x221 - x222) + x529 + x530 + x533,
+                    x190 * (x123 * x4 * x200 + x0 * x123 * x173) - x543 * d * m1 - x565,
+                    x512 * (x123 * x231 * x15 + x17 * x234 * x228) - m2 * d * x521
+                        - x242,
+                    -(x547 * x87 + x543 * x84 + x89 * x573 + x215 * x486) * m1
+                        - m2
+                            * (x270 * x89 + x94 * x521 + x574 * x486 + x90 * x524
+                                + x83 * x517),
+                    -m2
+                        * (x114 * x521 + x110 * x524 + x270 * x108 + x517 * x99
+                            + x574 * x330)
+                        - (x108 * x573 + x543 * x101 + x547 * x104 + x215 * x330) * m1,
+                    d
+                        * (-m2
+                            * (gamma2_dot
+                                * (gamma2_dot * x575
+                                    + (0.5 * x468 + 0.5 * x469 + 0.5 * x470 - x471 + 0.5 * x472
+                                        - x473) * phi_dot + theta_dot * x476)
+                                + theta_dot
+                                    * (phi_dot
+                                        * (0.5 * x469 - 0.5 * x468 + 0.5 * x470 - 0.5 * x472)
+                                        + theta_dot * x575) + x575 * phi_dot * phi_dot)
+                            - m1
+                                * ((x466 * gamma1_dot + theta_dot * x576
+                                    + phi_dot
+                                        * (0.5 * x458 - 0.5 * x459 + 0.5 * x460 - x462 - 0.5 * x461
+                                            + x463)) * theta_dot
+                                    + gamma1_dot
+                                        * (x576 * gamma1_dot
+                                            + (0.5 * x460 - 0.5 * x458 - 0.5 * x459 + 0.5 * x461)
+                                                * phi_dot) + x576 * phi_dot * phi_dot)),
+                ],
+                [
+                    x604 * x6 - x599 * x1 * x13 - x31 * x183 * J1 - x185 * x577
+                        - ((a_ * (x4 * (x211 - x210 + x605) + x606) + x11 * x609) * x1
+                            * x13 - x215 * d * x577 + x610 * x9) * m1,
+                    x599 * x2
+                        - (x2 * (a_ * (x4 * (x210 - x211 - x605) - x606) + x72 * x609)
+                            + (x215 * x4 * d + x610 * x70) * x13) * m1
+                        + (x0 * x604 + (x174 + x184 - x611) * x4) * x13,
+                    x4 * (x600 - x610 * d * m1 + x602 + x603)
+                        + x0 * (x174 - x279 + x184 - x611),
+                    x598 * x123 * x173 - d * m1 * x609 + x123 * x200 * x200,
+                    0.0,
+                    -((x610 * x89 + x214 * x584 + x84 * x612 + x613 * x87) * m1),
+                    -((x613 * x104 + x101 * x612 + x214 * x587 + x610 * x108) * m1),
+                    -(d
+                        * (phi_dot * phi_dot
+                            * (0.25 * x460 - 0.25 * x458 - 0.25 * x459 + 0.25 * x461)
+                            + gamma1_dot * (x614 * gamma1_dot + x464)
+                            + theta_dot
+                                * (x467 + theta_dot * x614
+                                    + (0.5 * x458 - 0.5 * x459 + 0.5 * x460 - x462 + 2.0 * x348
+                                        - 0.5 * x461 + x463) * gamma1_dot)) * m1),
+                ],
+                [
+                    x641 * x28 - x1 * x637 * x2 - (x638 + x639) * x19 - x193 * x615 * J1
+                        - m2 * (x1 * x2 * x645 - x270 * x28 * d + x646 * x21),
+                    x2 * (x641 * x15 + x17 * (x638 + x639 - x647)) - x637 * x13
+                        - m2 * (x2 * (x646 * x56 - x270 * d * x15) + x13 * x645),
+                    x17 * (x278 - x251 - x253 - x640)
+                        + x15 * (x647 - x638 - x639 + m2 * x646 * d),
+                    0.0,
+                    x234 * x228 * x228 + x234 * x231 * x636 - m2 * d * x644,
+                    -(m2 * (x94 * x644 + x83 * x646 + x90 * x648 + (-x92 - x93) * x262)),
+                    -(m2
+                        * (x114 * x644 + x646 * x99 + x262 * (-x112 - x113)
+                            + x110 * x648)),
+                    -(m2 * d
+                        * (gamma2_dot
+                            * (x474
+                                + theta_dot
+                                    * (0.5 * x469 - 0.5 * x468 - 2.0 * x350 + 0.5 * x470
+                                        - 0.5 * x472) + gamma2_dot * x649)
+                            + theta_dot * (x477 + theta_dot * x649)
+                            + (0.25 * x468 + 0.25 * x469 + 0.25 * x470 - 0.5 * x471
+                                + 0.25 * x472 - 0.5 * x473) * phi_dot * phi_dot)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    (x660 - x664 - x665 + x454 * x1 - x667) * x3 - x6 * x659
+                        + (-x670 * x28 - x31 * x671) * J1
+                        - m2 * (x675 * x1 * x2 + x678 * x21)
+                        - (x1 * x13 * (x680 + x681 * x11) + x682 * x9) * m1
+                        + x1
+                            * (x2
+                                * (x686 - x685 - x687 + x688 - x689 - x690 - x691 - x692)
+                                + (x695 - x693 - x694 - x696 + x697 - x700 + x701 - x702)
+                                    * x13) - x19 * x707,
+                    (x693 + x694 - x670 * x15 * J1 + x17 * x707 - x695 + x696 - x697
+                        + x700 - x701 + x702) * x2 - m2 * (x675 * x13 + x678 * x56 * x2)
+                        - (x682 * x70 * x13 + (x681 * x72 - x680) * x2) * m1
+                        + (x686 - x685 - x687 + x688 - x689 - x0 * x659 - x4 * x671 * J1
+                            - x690 - x691 - x692) * x13,
+                    x435 * x1 - x660 + (m2 * x678 * d - x705 - x706) * x15 + x664 + x665
+                        + x667 + x4 * (x657 - x682 * d * m1 + x658)
+                        + (-x0 * x671 - x17 * x670) * J1,
+                    (x698 + x699) * J1 - d * x681 * m1
+                        + (x661 - x698 - x699 + x662) * J2,
+                    (-x683 - x684) * J1 - m2 * x673 * d
+                        + (x683 - x652 + x653 + x684) * J2,
+                    -(x682 * x89 + x84 * x681 + x679 * x87) * m1
+                        - (x90 * x674 + x673 * x94 + x83 * x678) * m2,
+                    -(x679 * x104 + x682 * x108 + x101 * x681) * m1
+                        - (x673 * x114 + x678 * x99 + x110 * x674) * m2,
+                    0.0,
+                ],
+                [
+                    (x717 + x175 * x37 - x718 + x719 + x720 - x721) * x3 - x6 * x716
+                        - m2 * (x1 * x2 * x725 + x729 * x21)
+                        + x1
+                            * ((x735 - (x732 + x733) * x13 - x734 + x410 - x736 - x737)
+                                * x13
+                                + (x426 - x738 + x739 - x740 - (x743 + x744) * x2 - x745)
+                                    * x2) - (x1 * (x747 + x748 * x11) * x13 + x749 * x9) * m1
+                        - x19 * x754 + (-x28 * x755 - x31 * x756) * J1,
+                    (x734 - x735 - x410 + (x732 - x743 - x744 + x733) * x13
+                        - x15 * x755 * J1 + x736 + x17 * x754 + x737) * x2
+                        - (x70 * x749 * x13 + x2 * (x748 * x72 - x747)) * m1
+                        - m2 * (x13 * x725 + x56 * x2 * x729)
+                        + (x426 - x0 * x716 - x738 + x739 - x740 - x745 - x4 * x756 * J1)
+                            * x13,
+                    x4 * (x710 - x749 * d * m1 + x715) - x717
+                        + (-x0 * x756 - x17 * x755) * J1 + x718
+                        + x15 * (m2 * d * x729 - x752 - x753) + x175 * x357 - x719 - x720
+                        + x721,
+                    (J2 * (phi_dot - x730 - x731 + x170) + (x730 + x731) * J1) * x13
+                        - x748 * d * m1,
+                    x2 * (J2 * (x742 - x741 + phi_dot + x170) + (x741 - x742) * J1)
+                        - m2 * d * x723,
+                    -m2 * (x723 * x94 + x724 * x90 + x83 * x729)
+                        - (x749 * x89 + x87 * x746 + x84 * x748) * m1,
+                    -m2 * (x729 * x99 + x110 * x724 + x723 * x114)
+                        - m1 * (x104 * x746 + x749 * x108 + x748 * x101),
+                    -(d * (x324 + x757 * theta_dot + x327) + 2.0 * x758) * m1
+                        - m2
+                            * ((theta_dot * x759 + x300 + x304 * gamma2_dot) * d
+                                - 2.0 * x758),
+                ],
+                [
+                    (-x28 * x15 * x764 - x765 * x31 * x4) * J1 - x17 * x19 * x763
+                        - (x1 * (x768 + x11 * x770) * x13 + x771 * x9) * m1
+                        + ((2.0 * x236 - x773 + 2.0 * x237 - x526 - x774 - x775) * x13
+                            + x2 * (-x778 - 2.0 * x221 - x779 - x780 - x781)) * x1
+                        - m2 * (x1 * x2 * x783 + x21 * x784) - x0 * x787 * x6,
+                    (-x778 - x0 * x0 * x787 - x765 * x4 * x4 * J1 - 2.0 * x221 - x779
+                        - x780 - x781) * x13 - m2 * (x56 * x2 * x784 + x783 * x13)
+                        - m1 * (x70 * x771 * x13 + x2 * (x72 * x770 - x768))
+                        + x2
+                            * (x773 - 2.0 * x236 - 2.0 * x237 - x15 * x15 * x764 * J1
+                                + x526 + x774 + x17 * x17 * x763 + x775),
+                    x15 * (m2 * d * x784 + x17 * (-x764 * J1 - x761 - x762))
+                        + (x0 * (x785 - x765 * J1 + x786) - d * x771 * m1) * x4,
+                    (x772 - x769) * J1 + (x166 - x772 + x769 + x167) * J2
+                        - d * m1 * x770,
+                    (-x776 - x777) * J1 - x782 * m2 * d
+                        + J2 * (x776 - x163 + x777 + x164),
+                    -m2 * (2.0 * (x231 * d * x15 * x90) + x83 * x784 + x782 * x94)
+                        - m1 * (x767 * x4 * x87 + x771 * x89 + x84 * x770),
+                    -m1 * (x767 * x4 * x104 + x101 * x770 + x771 * x108)
+                        - m2
+                            * (x782 * x114 + 2.0 * (x110 * x231 * d * x15) + x99 * x784),
+                    (-m2
+                        * (gamma2_dot * x301 + theta_dot * x299
+                            + phi_dot
+                                * (0.5 * x285 - 0.5 * x287 - 0.5 * x289 + 0.5 * x291))
+                        - (gamma1_dot * x328
+                            + phi_dot
+                                * (0.5 * x318 - 0.5 * x313 - 0.5 * x320 + 0.5 * x322)
+                            + theta_dot * x326) * m1) * d,
+                ],
+                [
+                    -x31 * x200 * J1
+                        - (x788 * x9 - 2.0 * (a_ * x165 * x4 * x1 * x13)) * d * m1
+                        - x791 * x6,
+                    (-x4 * x200 * J1 - x0 * x791) * x13
+                        - d * (2.0 * (a_ * x165 * x4 * x2) + x788 * x70 * x13) * m1,
+                    x4 * (x789 - x788 * d * d * m1 + x790) - x0 * x200 * J1,
+                    0.0,
+                    0.0,
+                    -(d * m1 * (x788 * x89 - 2.0 * (x165 * x87))),
+                    -(d * (x788 * x108 - 2.0 * (x165 * x104)) * m1),
+                    -(d * m1 * (x757 * gamma1_dot + x323 * theta_dot + x329)),
+                ],
+                [
+                    -x228 * x19 * x792 - x28 * x636 * J1
+                        - m2 * d * (-2.0 * x672 - 2.0 * (a_ * x250 * x1 * x15 * x2)),
+                    x2 * (x17 * x228 * x792 - x15 * x636 * J1)
+                        - m2 * d
+                            * (-2.0 * (x228 * x56 * x2) - 2.0 * (a_ * x250 * x15 * x13)),
+                    x228 * x15 * (J1 - 2.0 * x148 - 2.0 * J2) - x17 * x636 * J1,
+                    0.0,
+                    0.0,
+                    -(m2 * d * (2.0 * (x250 * x90) - 2.0 * (x228 * x83))),
+                    -(m2 * (2.0 * (x110 * x250) - 2.0 * (x228 * x99)) * d),
+                    -(m2 * d * (gamma2_dot * x759 + x302 + x305)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..8 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..8 {
+            dstate[8 + j] = x[j];
+        }
+        for k in 0..16 {
+            for j in 0..8 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 8];
+            for i in 0..8 {
+                let mut s = d_force[k][i];
+                for j in 0..8 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..8 {
+                jac[8 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "lagrange",
@@ -1109,6 +2817,19 @@ pub mod lagrange {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Maggi's equations: 16 states, 8 equations.
@@ -1800,6 +3521,2234 @@ pub mod maggi {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 1],
+        d_qdot: [[f64; 8]; 16],
+        d_matrix: [[[f64; 8]; 8]; 16],
+        d_force: [[f64; 8]; 16],
+        w: [[f64; 8]; 8],
+        c: [f64; 8],
+        d_w: [[[f64; 8]; 8]; 16],
+        d_c: [[f64; 8]; 16],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let X_dot = state[13];
+        let Y_dot = state[14];
+        let Z_dot = state[15];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = d * d * m1;
+        let x1 = J2 + x0;
+        let x2 = f64::sin(gamma1);
+        let x3 = x1 * x2 * x2;
+        let x4 = f64::cos(gamma1);
+        let x5 = x4 * x4;
+        let x6 = f64::cos(gamma2);
+        let x7 = x6 * x6;
+        let x8 = (x5 + x7) * J1;
+        let x9 = f64::sin(gamma2);
+        let x10 = m2 * d * d;
+        let x11 = x10 + J2;
+        let x12 = x9 * x9 * x11;
+        let x13 = Ixx + x3 + x8 + x12;
+        let x14 = J1 - J2;
+        let x15 = x4 * d;
+        let x16 = -a_ - x15;
+        let x17 = x4 * x14 + x16 * d * m1;
+        let x18 = f64::cos(phi);
+        let x19 = (x17 * x2 - Ixy) * x18;
+        let x20 = f64::sin(phi);
+        let x21 = x6 * d;
+        let x22 = a_ + x21;
+        let x23 = x6 * x14 - m2 * d * x22;
+        let x24 = x23 * x9 + Ixz;
+        let x25 = x20 * x24;
+        let x26 = x19 + x25;
+        let x27 = x26 * x18;
+        let x28 = f64::cos(theta);
+        let x29 = 1.0 / x28;
+        let x30 = f64::sin(theta);
+        let x31 = x30 * Ixx;
+        let x32 = Ixy * x20;
+        let x33 = Ixz * x18;
+        let x34 = -x32 - x33;
+        let x35 = x28 * x34;
+        let x36 = x2 * x28 * x20;
+        let x37 = x4 * x30;
+        let x38 = x36 - x37;
+        let x39 = x6 * x30;
+        let x40 = -x28 * x9 * x18 - x39;
+        let x41 = (x4 * x38 + x6 * x40) * J1;
+        let x42 = x30 * x9;
+        let x43 = x6 * x28 * x18;
+        let x44 = x43 - x42;
+        let x45 = x30 * x2;
+        let x46 = x4 * x28 * x20 + x45;
+        let x47 = (x44 * x9 - x46 * x2) * J2;
+        let x48 = x46 * d;
+        let x49 = a_ * x28 * x20;
+        let x50 = -x48 - x49;
+        let x51 = a_ * x28 * x18;
+        let x52 = x44 * d;
+        let x53 = -x51 - x52;
+        let x54 = (x2 * m1 * x50 - m2 * x9 * x53) * d;
+        let x55 = x30 * x13;
+        let x56 = x35 - x31 + x41 + x47 + x54 + x55;
+        let x57 = x29 * x56 * x20;
+        let x58 = x27 + x57;
+        let x59 = x26 * x20;
+        let x60 = x29 * x56 * x18;
+        let x61 = x60 - x59;
+        let x62 = f64::sin(psi);
+        let x63 = f64::cos(psi);
+        let x64 = x20 * x62 + x30 * x63 * x18;
+        let x65 = x18 * x62;
+        let x66 = x30 * x63 * x20;
+        let x67 = x66 - x65;
+        let x68 = x2 * x64 * m1 - m2 * x67 * x9;
+        let x69 = d * x68;
+        let x70 = x63 * x18;
+        let x71 = x30 * x20 * x62;
+        let x72 = x70 + x71;
+        let x73 = x63 * x20;
+        let x74 = x30 * x18 * x62;
+        let x75 = x74 - x73;
+        let x76 = x2 * x75 * m1 - m2 * x9 * x72;
+        let x77 = x76 * d;
+        let x78 = x2 * m1 * x18;
+        let x79 = m2 * x9 * x20;
+        let x80 = x78 - x79;
+        let x81 = x80 * x28 * d;
+        let x82 = x4 * a_;
+        let x83 = x82 + d;
+        let x84 = a_ * a_ * x2 * x2;
+        let x85 = (x50 * x50 + (x83 * x83 + x84) * x28 * x28 * x18 * x18) * m1;
+        let x86 = a_ * a_ * x9 * x9;
+        let x87 = x6 * a_;
+        let x88 = d + x87;
+        let x89 = x88 * x88;
+        let x90 = x86 + x89;
+        let x91 = m2 * (x53 * x53 + x28 * x28 * x20 * x20 * x90);
+        let x92 = (x40 * x40 + x38 * x38) * J1;
+        let x93 = x35 - x31 + x41 + x47 + x54;
+        let x94 = x30 * x93;
+        let x95 = x18 * x18;
+        let x96 = x20 * x20;
+        let x97 = x95 + x96;
+        let x98 = J2 * (x28 * x28 * x97 + x44 * x44 + x46 * x46);
+        let x99 = x35 - x31;
+        let x100 = x30 * x99;
+        let x101 = Iyz * x18;
+        let x102 = Iyy * x20;
+        let x103 = x102 - x101;
+        let x104 = x103 * x28;
+        let x105 = x30 * Ixy;
+        let x106 = x104 + x105;
+        let x107 = x106 * x20;
+        let x108 = Izz * x18;
+        let x109 = Iyz * x20;
+        let x110 = x108 - x109;
+        let x111 = x28 * x110;
+        let x112 = x30 * Ixz;
+        let x113 = x111 + x112;
+        let x114 = x113 * x18;
+        let x115 = x28 * (x107 + x114);
+        let x116 = x85 + x91 + x92 + x94 + x98 - x100 + x115;
+        let x117 = x116 * x29 * x20;
+        let x118 = x6 * x44 * J2;
+        let x119 = x22 * x53;
+        let x120 = x40 * x9 * J1;
+        let x121 = Iyy * x18;
+        let x122 = x121 + x109;
+        let x123 = x122 * x28;
+        let x124 = x20 * (m2 * (x28 * x90 * x18 + x119) - x118 + x120 + x123);
+        let x125 = x20 * Ixz - Ixy * x18;
+        let x126 = x30 * x125;
+        let x127 = x4 * J2 * x46;
+        let x128 = x20 * Izz;
+        let x129 = -x128 - x101;
+        let x130 = x28 * x129;
+        let x131 = x38 * x2 * J1;
+        let x132 = x16 * x50;
+        let x133 = -x82 - d;
+        let x134 = x83 * x133;
+        let x135 = (x127 + x130 + x131 + (x132 + x28 * x20 * (x134 - x84)) * m1) * x18;
+        let x136 = x124 - x126 + x135;
+        let x137 = x136 * x18;
+        let x138 = x117 + x30 * x58 + x137;
+        let x139 = x90 * x18 * x18;
+        let x140 = x133 * x133;
+        let x141 = x84 + x140;
+        let x142 = x141 * x20 * x20;
+        let x143 = J2 * ((x5 + 1.0) * x18 * x18 + (x7 + 1.0) * x20 * x20)
+            + (x2 * x2 * x18 * J1 + x121 + x109) * x18
+            + (x139 + x22 * x22 * x20 * x20) * m2
+            + x20 * (x128 + x101 + x9 * x9 * x20 * J1)
+            + (x142 + x16 * x16 * x18 * x18) * m1;
+        let x144 = x143 * x18;
+        let x145 = x30 * x26;
+        let x146 = x124 - x126 + x135 + x145;
+        let x147 = x144 + x29 * x146 * x20;
+        let x148 = x147 * x18;
+        let x149 = x147 * x20;
+        let x150 = x29 * x138 * x18 - x149;
+        let x151 = d * x83 * m1;
+        let x152 = d * x133 * m1;
+        let x153 = x151 + x152;
+        let x154 = x153 * x20 * x18;
+        let x155 = m2 * d * x88;
+        let x156 = J2 + x155;
+        let x157 = x156 * x97;
+        let x158 = x6 * x63 * x28 - x9 * x64;
+        let x159 = a_ * x9 * x158;
+        let x160 = x63 * x28 * x9;
+        let x161 = x6 * x64;
+        let x162 = x160 + x161;
+        let x163 = x162 * x88 - x159;
+        let x164 = x163 * x18;
+        let x165 = x4 * x67 - x63 * x2 * x28;
+        let x166 = x165 * x133;
+        let x167 = x67 * x2;
+        let x168 = x4 * x63 * x28;
+        let x169 = x167 + x168;
+        let x170 = a_ * x2 * x169;
+        let x171 = x166 - x170;
+        let x172 = x20 * x171;
+        let x173 = m2 * (x164 + x67 * x22 * x20) + m1 * (x172 + x16 * x64 * x18);
+        let x174 = x173 * x18;
+        let x175 = x30 * d * x68;
+        let x176 = m1 * (x28 * (x165 * x83 + x170) * x18 + x64 * x50);
+        let x177 = m2 * (x28 * x163 * x20 + x67 * x53);
+        let x178 = x175 + x176 + x177;
+        let x179 = x174 + x178 * x29 * x20;
+        let x180 = x6 * x28 * x62;
+        let x181 = x180 - x9 * x75;
+        let x182 = a_ * x181 * x9;
+        let x183 = x28 * x9 * x62;
+        let x184 = x6 * x75;
+        let x185 = x183 + x184;
+        let x186 = x185 * x88 - x182;
+        let x187 = x186 * x18;
+        let x188 = x4 * x28 * x62;
+        let x189 = x2 * x72;
+        let x190 = x188 + x189;
+        let x191 = a_ * x2 * x190;
+        let x192 = x2 * x28 * x62;
+        let x193 = x4 * x72 - x192;
+        let x194 = x193 * x133;
+        let x195 = x194 - x191;
+        let x196 = x195 * x20;
+        let x197 = m2 * (x187 + x22 * x20 * x72) + (x16 * x75 * x18 + x196) * m1;
+        let x198 = x197 * x18;
+        let x199 = x30 * x76 * d;
+        let x200 = m1 * (x28 * (x193 * x83 + x191) * x18 + x75 * x50);
+        let x201 = m2 * (x28 * x20 * x186 + x72 * x53);
+        let x202 = x199 + x200 + x201;
+        let x203 = x198 + x202 * x29 * x20;
+        let x204 = a_ * x40 * x9;
+        let x205 = x44 * x88;
+        let x206 = a_ * x38 * x2;
+        let x207 = x46 * x133;
+        let x208 = m2 * (x28 * x22 * x20 * x20 + (x205 - x204) * x18)
+            + m1 * ((x207 - x206) * x20 + x16 * x28 * x18 * x18);
+        let x209 = x208 * x18;
+        let x210 = x30 * x80 * d * x20 + x209;
+        let x211 = x143 * x20;
+        let x212 = x29 * x146 * x18 - x211;
+        let x213 = x116 * x29 * x18;
+        let x214 = x20 * x136;
+        let x215 = x213 - x214 + x30 * x61;
+        let x216 = x151 + J2;
+        let x217 = x152 - J2;
+        let x218 = x216 * x18 * x18 - x20 * x20 * x217;
+        let x219 = x20 * x173;
+        let x220 = x178 * x29 * x18 - x219;
+        let x221 = x20 * x197;
+        let x222 = x202 * x29 * x18 - x221;
+        let x223 = x208 * x20;
+        let x224 = x30 * x80 * d * x18 - x223;
+        let x225 = x165 * d * m1;
+        let x226 = x193 * d * m1;
+        let x227 = x46 * d * m1;
+        let x228 = m2 * d * x162;
+        let x229 = m2 * d * x185;
+        let x230 = m2 * x44 * d;
+        let x231 = m2 + m0 + m1;
+        let x232 = theta_dot * x18;
+        let x233 = x28 * psi_dot * x20;
+        let x234 = x232 + x233;
+        let x235 = Iyz * x234;
+        let x236 = x30 * psi_dot;
+        let x237 = phi_dot - x236;
+        let x238 = Ixz * x237;
+        let x239 = x28 * psi_dot * x18;
+        let x240 = theta_dot * x20;
+        let x241 = x239 - x240;
+        let x242 = x241 * Izz;
+        let x243 = x242 - x235 - x238;
+        let x244 = x243 * x234;
+        let x245 = -phi_dot - x236;
+        let x246 = theta_dot * x245 * x18;
+        let x247 = x28 * psi_dot * x20 * phi_dot;
+        let x248 = x246 - x247;
+        let x249 = x248 * Ixz;
+        let x250 = x241 * Iyz;
+        let x251 = Ixy * x237;
+        let x252 = Iyy * x234 - x250 - x251;
+        let x253 = x241 * x252;
+        let x254 = theta_dot * x245 * x20;
+        let x255 = x28 * psi_dot * phi_dot * x18;
+        let x256 = x254 + x255;
+        let x257 = Ixy * x256;
+        let x258 = J2 - J1;
+        let x259 = x6 * x237 - x241 * x9;
+        let x260 = gamma2_dot + x232 + x233;
+        let x261 = x258 * x259 * x260;
+        let x262 = x260 * d;
+        let x263 = x6 * a_ * x234;
+        let x264 = x262 + x263;
+        let x265 = x241 * gamma2_dot;
+        let x266 = theta_dot * x28 * psi_dot;
+        let x267 = -x265 - x266;
+        let x268 = gamma2_dot * x237;
+        let x269 = x267 * x9 + (x246 - x247 + x268) * x6;
+        let x270 = x9 * x237;
+        let x271 = x6 * x241;
+        let x272 = x270 + x271;
+        let x273 = a_ * (x247 - x246 - x272 * x9 * x234) - x264 * x259 - x269 * d;
+        let x274 = m2 * x273 * d;
+        let x275 = J2 * x269;
+        let x276 = x9 * (x274 - x261 - x275);
+        let x277 = x26 * x28 * psi_dot * phi_dot;
+        let x278 = x2 * x234;
+        let x279 = x4 * x237;
+        let x280 = x278 + x279;
+        let x281 = x4 * a_ * x241;
+        let x282 = x239 + gamma1_dot - x240;
+        let x283 = x282 * d;
+        let x284 = x281 + x283;
+        let x285 = gamma1_dot * x237;
+        let x286 = x254 + x255 - x285;
+        let x287 = gamma1_dot * x234;
+        let x288 = x266 - x287;
+        let x289 = x4 * x286 + x2 * x288;
+        let x290 = x4 * x234 - x2 * x237;
+        let x291 = x280 * x284 - d * x289 + a_ * (-x241 * x2 * x290 - x254 - x255);
+        let x292 = x291 * d * m1;
+        let x293 = x282 * x14 * x280;
+        let x294 = J2 * x289;
+        let x295 = x2 * (x293 - x292 + x294);
+        let x296 = x4 * (x287 - x266) + x286 * x2;
+        let x297 = x247 - x246 - x268;
+        let x298 = x9 * x297 + x6 * x267;
+        let x299 = (-x4 * x296 - x6 * x298) * J1;
+        let x300 = Ixx * x28 * psi_dot;
+        let x301 = 2.0 * theta;
+        let x302 = f64::sin(x301);
+        let x303 = x29 * psi_dot * x302;
+        let x304 = 0.5 * x303 + phi_dot;
+        let x305 = x304 * x29 * x93;
+        let x306 = 3.0 * theta;
+        let x307 = x29 * f64::cos(x306);
+        let x308 = 0.25 - 0.25 * x307;
+        let x309 = x30 * phi_dot;
+        let x310 = x28 * psi_dot;
+        let x311 = (x308 * psi_dot + x309) * x29 + x310;
+        let x312 = x311 * x13;
+        let x313 = (x300 - x305 - x312) * theta_dot;
+        let x314 = x249 - x244 + x253 + x257 + x276 + x277 + x295 + x299 + x313;
+        let x315 = x282 * x284;
+        let x316 = a_ * x234;
+        let x317 = d * x290;
+        let x318 = -x316 - x317;
+        let x319 = x318 * x290;
+        let x320 = x248 * x2;
+        let x321 = x4 * x241 * gamma1_dot + x320;
+        let x322 = a_ * x321;
+        let x323 = x319 - x315 + x322;
+        let x324 = a_ * x2 * x323;
+        let x325 = x248 * d;
+        let x326 = x280 * x318;
+        let x327 = x4 * x248;
+        let x328 = a_ * (x327 + x241 * x241 * x2);
+        let x329 = x325 - x326 + x328;
+        let x330 = x329 * x133;
+        let x331 = x20 * (x330 - x324);
+        let x332 = x298 * x9 * J1;
+        let x333 = theta_dot * x28 * psi_dot * Ixz;
+        let x334 = x258 * x280 * x290;
+        let x335 = x252 * x237;
+        let x336 = x261 + x275;
+        let x337 = x6 * x336;
+        let x338 = Ixx * x237 - x241 * Ixz - Ixy * x234;
+        let x339 = x234 * x338;
+        let x340 = Iyz * x256;
+        let x341 = x248 * J2;
+        let x342 = x248 * Izz;
+        let x343 = x304 * x29 * x136;
+        let x344 = x26 * x311;
+        let x345 = x272 * d;
+        let x346 = a_ * x241;
+        let x347 = -x345 - x346;
+        let x348 = x256 * x9;
+        let x349 = a_ * (-x6 * gamma2_dot * x234 - x348) - x272 * x347 + x264 * x260;
+        let x350 = a_ * x9 * x349;
+        let x351 = x256 * d;
+        let x352 = x259 * x347;
+        let x353 = x6 * x256;
+        let x354 = a_ * (x353 + x9 * x234 * x234);
+        let x355 = x351 + x352 + x354;
+        let x356 = x355 * x88 - x350;
+        let x357 = x356 * x18;
+        let x358 = x241 * x338;
+        let x359 = Iyy * x256;
+        let x360 = x243 * x237;
+        let x361 = x2 * J1 * x296;
+        let x362 = Ixy * theta_dot * x28 * psi_dot;
+        let x363 = x293 + x294;
+        let x364 = x4 * x363;
+        let x365 = x248 * Iyz;
+        let x366 = J2 * x256;
+        let x367 = x259 * x14 * x272;
+        let x368 = x20 * (x333 - x332 + x334 + x335 + x337 - x339 - x340 + x341 + x342)
+            - (x331 + x291 * x16 * x18) * m1 + (-x343 - x344) * theta_dot
+            - m2 * (x357 + x273 * x22 * x20) + x28 * psi_dot * x143 * phi_dot
+            + (x360 - x358 - x359 - x361 - x362 - x364 + x365 - x366 - x367) * x18;
+        let x369 = x368 * x18;
+        let x370 = x363 * x46;
+        let x371 = (-x40 * x298 - x38 * x296) * J1;
+        let x372 = ((x324 + x329 * x83) * x28 * x18 + x291 * x50) * m1;
+        let x373 = x244 - theta_dot * Ixx * x28 * psi_dot - x249 - x253 - x257;
+        let x374 = x373 * x30;
+        let x375 = x336 * x44;
+        let x376 = x85 + x91 + x92 + x98 - x100 + x115;
+        let x377 = x304 * x29 * x376;
+        let x378 = x311 * x93;
+        let x379 = theta_dot * (-x377 - x378);
+        let x380 = x28
+            * (psi_dot * phi_dot * x136
+                + x20 * (x360 - x358 - x359 - x362 + x365 - x366 - x367)
+                + (x339 - x333 - x334 - x335 + x340 - x341 - x342) * x18);
+        let x381 = m2 * (x356 * x28 * x20 + x273 * x53);
+        let x382 = x371 - x370 - x372 + x374 - x375 + x379 + x30 * x314 + x380 - x381;
+        let x383 = x368 * x20;
+        let x384 = theta_dot * x304 * x20;
+        let x385 = x255 - x384;
+        let x386 = x311 * d * x68;
+        let x387 = x176 + x177;
+        let x388 = x387 * x304 * x29;
+        let x389 = theta_dot * (-x386 - x388)
+            - m2 * (x355 * x162 + x67 * x273 + x158 * x349)
+            - (x323 * x169 + x165 * x329 + x291 * x64) * m1
+            + x28 * psi_dot * phi_dot * x173;
+        let x390 = x76 * x311 * d;
+        let x391 = x200 + x201;
+        let x392 = x304 * x29 * x391;
+        let x393 = a_ * x30 * theta_dot * theta_dot;
+        let x394 = x6 * x20;
+        let x395 = x9 * x18;
+        let x396 = -x394 - x395;
+        let x397 = x396 * x28;
+        let x398 = x394 + x395;
+        let x399 = x28 * x398;
+        let x400 = x395 - x394;
+        let x401 = x400 * x28;
+        let x402 = x394 - x395;
+        let x403 = x402 * x28;
+        let x404 = 0.25 * x397 - 0.25 * x399 - 0.25 * x401 + 0.25 * x403 - x39;
+        let x405 = x9 * x20;
+        let x406 = x6 * x18;
+        let x407 = x405 + x406;
+        let x408 = x30 * x407;
+        let x409 = x406 - x405;
+        let x410 = x30 * x409;
+        let x411 = x408 - 0.5 * x397 - 0.5 * x399 + 0.5 * x401 + 0.5 * x403 - x410;
+        let x412 = phi_dot * x411;
+        let x413 = 0.5 * x397 - 0.5 * x399 + 0.5 * x401 - 0.5 * x403;
+        let x414 = phi_dot * x413;
+        let x415 = x28 * x9;
+        let x416 = -x408 - 0.5 * x397 - 0.5 * x399 - 2.0 * x415 - 0.5 * x401 - 0.5 * x403
+            - x410;
+        let x417 = x416 * theta_dot;
+        let x418 = x30 * x20;
+        let x419 = x28 * x18;
+        let x420 = x418 + x419;
+        let x421 = x4 * x420;
+        let x422 = x28 * x20;
+        let x423 = x30 * x18;
+        let x424 = x422 - x423;
+        let x425 = x2 * x424;
+        let x426 = x419 - x418;
+        let x427 = x4 * x426;
+        let x428 = x2 * x28;
+        let x429 = x423 - x422;
+        let x430 = x2 * x429;
+        let x431 = x422 + x423;
+        let x432 = x2 * x431;
+        let x433 = -x422 - x423;
+        let x434 = x433 * x2;
+        let x435 = 0.5 * x425 - x421 + x427 + 2.0 * x428 + 0.5 * x430 - 0.5 * x432
+            - 0.5 * x434;
+        let x436 = x435 * gamma1_dot;
+        let x437 = 0.25 * x430 - 0.25 * x425 - 0.25 * x432 + x37 + 0.25 * x434;
+        let x438 = 0.5 * x425 - 0.5 * x430 - 0.5 * x432 + 0.5 * x434;
+        let x439 = x438 * phi_dot;
+        let x440 = x421 - 0.5 * x425 + x427 - 0.5 * x430 - 0.5 * x432 - 0.5 * x434;
+        let x441 = phi_dot * x440;
+        let x442 = x29 * x18;
+        let x443 = -x20;
+        let x444 = x30 * x29 * x18;
+        let x445 = -x70 - x71;
+        let x446 = x73 - x74;
+        let x447 = x446 * x2 * m1 - m2 * x9 * x445;
+        let x448 = d * x447;
+        let x449 = x4 * x445 + x192;
+        let x450 = x2 * x445 - x188;
+        let x451 = a_ * x2 * x450;
+        let x452 = (x28 * (x449 * x83 + x451) * x18 + x446 * x50) * m1;
+        let x453 = x6 * x446 - x183;
+        let x454 = -x180 - x446 * x9;
+        let x455 = x453 * x88 - a_ * x454 * x9;
+        let x456 = m2 * (x455 * x28 * x20 + x445 * x53);
+        let x457 = x452 + x30 * d * x447 + x456;
+        let x458 = ((x449 * x133 - x451) * x20 + x446 * x16 * x18) * m1
+            + m2 * (x455 * x18 + x22 * x20 * x445);
+        let x459 = x457 * x29 * x20 + x458 * x18;
+        let x460 = x457 * x29 * x18 - x20 * x458;
+        let x461 = d * x449 * m1;
+        let x462 = m2 * d * x453;
+        let x463 = -x6 * x30 * x18 - x415;
+        let x464 = a_ * x30 * x18 - d * x463;
+        let x465 = x428 - x4 * x30 * x20;
+        let x466 = a_ * x30 * x20 - d * x465;
+        let x467 = d * (x466 * x2 * m1 - m2 * x9 * x464);
+        let x468 = Ixx * x28;
+        let x469 = x4 * x28;
+        let x470 = -x30 * x2 * x20 - x469;
+        let x471 = x6 * x28;
+        let x472 = x30 * x9 * x18 - x471;
+        let x473 = (x4 * x470 + x6 * x472) * J1;
+        let x474 = J2 * (x9 * x463 - x2 * x465);
+        let x475 = x32 + x33;
+        let x476 = x30 * x475;
+        let x477 = Ixx + x3 + x8 + x12
+            + (x30 * x29 * x56 + x467 - x468 + x473 + x474 + x476) * x29;
+        let x478 = x477 * x20;
+        let x479 = x477 * x18;
+        let x480 = x80 * x63 * x28 * d;
+        let x481 = x80 * x28 * d * x62;
+        let x482 = x79 - x78;
+        let x483 = x482 * x30 * d;
+        let x484 = -d - x87;
+        let x485 = x484 * x88;
+        let x486 = (x472 * x9 * J1 + (x30 * (x485 - x86) * x18 + x22 * x464) * m2
+            - x30 * x122 - x6 * J2 * x463) * x20;
+        let x487 = x125 * x28;
+        let x488 = (x4 * J2 * x465 - x30 * x129 + (x16 * x466 + x30 * x141 * x20) * m1
+            + x470 * x2 * J1) * x18;
+        let x489 = x486 - x487 + x488;
+        let x490 = m2
+            * (x30 * x28 * (2.0 * x485 - 2.0 * x86) * x20 * x20 + 2.0 * (x53 * x464));
+        let x491 = (2.0 * (x44 * x463) + 2.0 * (x46 * x465)) * J2;
+        let x492 = x116 * x29;
+        let x493 = (2.0 * (x38 * x470) + 2.0 * (x472 * x40)) * J1;
+        let x494 = 2.0 * x134 - 2.0 * x84;
+        let x495 = m1 * (2.0 * (x466 * x50) + x30 * x494 * x28 * x18 * x18);
+        let x496 = Ixy * x28 + x30 * (x101 - x102);
+        let x497 = x30 * (x109 - x108) + x28 * Ixz;
+        let x498 = x28 * (x31 - x35 + x20 * x496 + x497 * x18);
+        let x499 = x30
+            * (x468 - x107 - x114 + (-2.0 * x95 - 2.0 * x96) * J2 * x28 - x476);
+        let x500 = x35 - x31 + x41 + x47
+            + x29
+                * (x490 + x491 + x30 * (x467 + x492 - x468 + x473 + x474 + x476) + x493
+                    + x495 + x498 + x499) + x54;
+        let x501 = x29 * (x30 * (x29 * x138 + x478) + x18 * x489 + x500 * x20);
+        let x502 = x29 * (x486 - x487 + x30 * x29 * x146 + x488) + x19 + x25;
+        let x503 = (x27 + x501 + x57) * x18 - x20 * x20 * x502;
+        let x504 = x30 * x153 * x29 * x20 * x18;
+        let x505 = m2 * d * x484;
+        let x506 = x155 + x505;
+        let x507 = x30 * x29 * x20 * x20 * x506;
+        let x508 = x46 * x83 + x206 - x48 - x49;
+        let x509 = x205 - x204 - x51 - x52;
+        let x510 = x484 * x162;
+        let x511 = (x466 * x64 + x18 * (x508 * x63 * x28 + x30 * x171)) * m1
+            + m2 * ((x63 * x28 * x509 + x30 * (x510 + x159)) * x20 + x67 * x464);
+        let x512 = x30 * (x178 * x29 * x29 + x80 * x63 * d) + x511 * x29 + x69;
+        let x513 = x512 * x20 + x208 * x63 * x18;
+        let x514 = x484 * x185;
+        let x515 = m2 * (x20 * (x28 * x509 * x62 + x30 * (x182 + x514)) + x72 * x464)
+            + ((x30 * x195 + x508 * x28 * x62) * x18 + x466 * x75) * m1;
+        let x516 = x29 * x515 + x30 * (x80 * d * x62 + x202 * x29 * x29) + x77;
+        let x517 = x516 * x20 + x208 * x18 * x62;
+        let x518 = ((x463 * x88 - x472 * a_ * x9) * x18 - x30 * x22 * x20 * x20) * m2
+            + m1 * ((x465 * x133 - a_ * x470 * x2) * x20 - x30 * x16 * x18 * x18);
+        let x519 = x80 * x28 * d * x20 + x518 * x18;
+        let x520 = x30 * x153 * x29 * x18 * x18;
+        let x521 = x30 * x29 * x20 * x506 * x18;
+        let x522 = x512 * x18 - x208 * x63 * x20;
+        let x523 = x516 * x18 - x208 * x20 * x62;
+        let x524 = x80 * x28 * d * x18 - x20 * x518;
+        let x525 = x46 * x63 * d * m1;
+        let x526 = x46 * d * m1 * x62;
+        let x527 = d * x465 * m1;
+        let x528 = m2 * x44 * x63 * d;
+        let x529 = m2 * x44 * d * x62;
+        let x530 = m2 * d * x463;
+        let x531 = x29 * x29
+            * (x30 * ((0.25 - 0.5 * x307) * psi_dot + x309)
+                + 0.75 * (psi_dot * f64::sin(x306))) + phi_dot - x236;
+        let x532 = psi_dot * f64::cos(x301) + x30 * (x303 + phi_dot);
+        let x533 = x467 - x468 + x473 + x474 + x476;
+        let x534 = (x29 * (-x532 * x29 * x93 - x304 * x533) - x531 * x13) * theta_dot;
+        let x535 = theta_dot * x28 * x18;
+        let x536 = x30 * x20 * phi_dot;
+        let x537 = x536 - x535;
+        let x538 = x537 * Ixz;
+        let x539 = theta_dot * x28 * x20;
+        let x540 = x30 * phi_dot * x18;
+        let x541 = -x539 - x540;
+        let x542 = Ixy * x541;
+        let x543 = gamma2_dot * x28;
+        let x544 = x6 * (x536 - x535 - x543);
+        let x545 = x259 * x30 * x20;
+        let x546 = gamma2_dot * x18;
+        let x547 = x546 + theta_dot;
+        let x548 = x547 * x30 * x9;
+        let x549 = x472 * x260;
+        let x550 = (x544 - x545 + x548 + x549) * J2;
+        let x551 = (x545 - x549) * J1;
+        let x552 = a_ * (x535 + x9 * (x30 * x272 * x20 - x463 * x234) - x536)
+            - x259 * x30 * x20 * x484 - (x544 + x548) * d - x264 * x472;
+        let x553 = x26 * phi_dot;
+        let x554 = x243 * x20;
+        let x555 = theta_dot * Ixx;
+        let x556 = x252 * x18;
+        let x557 = x241 * x496;
+        let x558 = x6 * x547 * x30 + (x535 + x543 - x536) * x9;
+        let x559 = gamma1_dot * x20;
+        let x560 = theta_dot - x559;
+        let x561 = x28 * gamma1_dot - x539 - x540;
+        let x562 = x4 * x30 * x560 + x2 * x561;
+        let x563 = x30 * x280 * x18;
+        let x564 = x282 * x470;
+        let x565 = (x564 - x563) * J1;
+        let x566 = x4 * x561;
+        let x567 = x559 - theta_dot;
+        let x568 = x30 * x2 * x567;
+        let x569 = a_ * (x539 + x540 + (x30 * x290 * x18 - x241 * x465) * x2)
+            + x470 * x284 - d * (x566 + x568) + x30 * x280 * x133 * x18;
+        let x570 = J2 * (x566 + x568 + x563 - x564);
+        let x571 = x497 * x234;
+        let x572 = (x538 + x542 + (m2 * d * x552 - x550 - x551) * x9
+            + x30 * (x554 - x553 - x555 - x556) + x557 + (-x6 * x558 - x4 * x562) * J1
+            + x2 * (x565 - x569 * d * m1 + x570) - x571) * psi_dot;
+        let x573 = x6 * a_ * gamma2_dot;
+        let x574 = x30 * x20 * (x573 - x262 + x260 * x484 - x263) - a_ * x541 * x9
+            - x272 * x464 - x347 * x463;
+        let x575 = x259 * x464 + x541 * d + x472 * x347
+            + a_ * (x6 * x541 + x30 * (-2.0 * x232 - 2.0 * x233) * x9 * x20);
+        let x576 = x237 * x496;
+        let x577 = x537 * Izz;
+        let x578 = x476 - x468;
+        let x579 = x578 * x234;
+        let x580 = x550 + x551;
+        let x581 = x280 * x465;
+        let x582 = x470 * x290;
+        let x583 = (-x581 - x582) * J1;
+        let x584 = (x581 - x535 + x582 + x536) * J2;
+        let x585 = Iyz * x541;
+        let x586 = x252 * x28;
+        let x587 = theta_dot * Ixz;
+        let x588 = x20 * x338;
+        let x589 = x30 * (x588 - x587);
+        let x590 = 2.0 * x240 - 2.0 * x239;
+        let x591 = x537 * d - x470 * x318 - x466 * x280
+            + a_ * (x4 * x537 + x30 * x590 * x2 * x18);
+        let x592 = x4 * a_ * gamma1_dot;
+        let x593 = x281 - x282 * x133 + x283 - x592;
+        let x594 = x318 * x465 + a_ * x537 * x2 + x30 * x18 * x593 + x466 * x290;
+        let x595 = Iyz * x537;
+        let x596 = x497 * x237;
+        let x597 = Iyy * x541;
+        let x598 = x241 * x578;
+        let x599 = x243 * x28;
+        let x600 = x565 + x570;
+        let x601 = Ixy * theta_dot;
+        let x602 = x18 * x338;
+        let x603 = x30 * (-x601 - x602);
+        let x604 = x472 * x272;
+        let x605 = x259 * x463;
+        let x606 = (-x539 - x604 - x540 - x605) * J2;
+        let x607 = (x604 + x605) * J1;
+        let x608 = psi_dot
+            * (x20
+                * (x576 - x558 * x9 * J1 + x577 - x579 + x6 * x580 + x583 + x584 - x585
+                    - x586 + x589)
+                - m2 * ((x575 * x88 - a_ * x9 * x574) * x18 + x22 * x20 * x552)
+                - m1 * (x569 * x16 * x18 + x20 * (x133 * x591 - a_ * x2 * x594))
+                - x30 * x143 * phi_dot
+                + (x595 + x596 - x597 - x598 - x599 - x2 * x562 * J1 - x4 * x600 - x603
+                    - x606 - x607) * x18)
+            + theta_dot * (x29 * (-x532 * x29 * x136 - x304 * x489) - x531 * x26);
+        let x609 = phi_dot * x136;
+        let x610 = x249 - x244 + x253 + x257 + x276 + x277 + x295 + x299
+            + x29
+                * ((x534 + x572 + x29 * x382) * x30 + (-x472 * x298 - x470 * x296) * J1
+                    + psi_dot
+                        * (x30
+                            * (x571 - x538 - x542 - x609 - x557
+                                + x30 * (x555 - x554 + x556)) - x44 * x580
+                            + ((x595 + x596 - x597 - x598 - x599 - x603 - x606 - x607)
+                                * x20
+                                + (x579 - x576 - x577 - x583 - x584 + x585 + x586 - x589)
+                                    * x18 + phi_dot * x489) * x28
+                            + (-x40 * x558 - x38 * x562) * J1 - x46 * x600)
+                    + ((x358 + x359 - x360 + x362 - x365 + x366 + x367) * x20
+                        + x18 * (x333 + x334 + x335 - x339 - x340 + x341 + x342)) * x30
+                    - x363 * x465
+                    - m2
+                        * (psi_dot * x53 * x552
+                            + (x30 * x355 * x484 + x28 * psi_dot * x575 * x88
+                                + a_ * x9 * (x30 * x349 - x28 * psi_dot * x574)) * x20
+                            + x273 * x464)
+                    - (x569 * psi_dot * x50
+                        + (x30 * x329 * x133
+                            + a_ * (x28 * psi_dot * x594 - x30 * x323) * x2
+                            + x28 * psi_dot * x83 * x591) * x18 + x291 * x466) * m1
+                    + x373 * x28
+                    + theta_dot
+                        * (x29
+                            * (-x304 * (x490 + x491 + x493 + x495 + x498 + x499)
+                                - x532 * x29 * x376) - x311 * x533 - x531 * x93)
+                    - x336 * x463) + x313;
+        let x611 = x505 - J2;
+        let x612 = x291 * x28 * x18 + x38 * x323 + x329 * x46;
+        let x613 = x273 * x28 * x20 + x40 * x349 + x44 * x355;
+        let x614 = a_ * theta_dot * theta_dot * x28;
+        let x615 = x4 * x424;
+        let x616 = x4 * x431;
+        let x617 = x4 * x429;
+        let x618 = x4 * x433;
+        let x619 = x426 * x2;
+        let x620 = x420 * x2;
+        let x621 = (-0.5 * x615 - 0.5 * x616 - 0.5 * x617 - x619 - 0.5 * x618 - x620)
+            * phi_dot;
+        let x622 = 0.25 * x615 - 0.25 * x616 + 0.25 * x617 - 0.5 * x619 + x469
+            - 0.25 * x618 + 0.5 * x620;
+        let x623 = 0.5 * x615 - 0.5 * x616 - 0.5 * x617 + 0.5 * x618;
+        let x624 = x623 * phi_dot;
+        let x625 = x30 * x396;
+        let x626 = x30 * x398;
+        let x627 = x400 * x30;
+        let x628 = x28 * x409;
+        let x629 = x30 * x402;
+        let x630 = x28 * x407;
+        let x631 = (0.5 * x625 + 0.5 * x626 - 0.5 * x627 - x628 - 0.5 * x629 + x630)
+            * phi_dot;
+        let x632 = 0.25 * x626 - 0.25 * x625 - x471 + 0.25 * x627 - 0.25 * x629;
+        let x633 = 0.5 * x626 - 0.5 * x625 - 0.5 * x627 + 0.5 * x629;
+        let x634 = phi_dot * x633;
+        let x635 = x30 * x30 * x29 * x29 + 1.0;
+        let x636 = a_ + x15;
+        let x637 = (Ixy + x2 * (x4 * x258 + x636 * d * m1)) * x20;
+        let x638 = x24 * x18;
+        let x639 = x29 * x56 + x637 + x638;
+        let x640 = x639 * x18;
+        let x641 = x31 - x35 - x41 - x47 - x54 - x55;
+        let x642 = x641 * x29 - x637 - x638;
+        let x643 = x642 * x20;
+        let x644 = x65 - x66;
+        let x645 = x2 * m1 * x644 - m2 * x9 * x64;
+        let x646 = d * x645;
+        let x647 = x2 * x445 * m1 - m2 * x9 * x75;
+        let x648 = d * x647;
+        let x649 = -m2 * x9 * x18 - x2 * x20 * m1;
+        let x650 = x28 * d * x649;
+        let x651 = (2.0 * x127 + x130 + x104 + m1 * (2.0 * x132 + x494 * x28 * x20)
+            + x105 + 2.0 * x131) * x18;
+        let x652 = (2.0 * x120 - 2.0 * x118 - x111 - x112
+            + m2 * (x28 * (2.0 * x86 + 2.0 * x89) * x18 + 2.0 * x119) + x123) * x20;
+        let x653 = x651 - x124 - x135 + x145 + x652;
+        let x654 = x22 * x22;
+        let x655 = m2
+            * (x28 * (x139 + x20 * x20 * (x654 - x86 + x485)) + x22 * x53 * x18);
+        let x656 = ((x142 + (x134 - x84 + x16 * x16) * x18 * x18) * x28
+            + x636 * x20 * x50) * m1;
+        let x657 = (x40 * x9 * x18 - x38 * x2 * x20) * J1;
+        let x658 = J2 * (-x6 * x44 * x18 - x4 * x46 * x20);
+        let x659 = x28
+            * (((x2 * x2 * J1 + x4 * x4 * J2) * x18 + x121 - x108 + 2.0 * x109) * x18
+                + (x128 + 2.0 * x101 + (x9 * x9 * J1 + x6 * x6 * J2) * x20 - x102)
+                    * x20);
+        let x660 = x20 * x653 + (x655 + x656 + x492 + x657 + x658 - x476 + x659) * x18;
+        let x661 = x655 + x656 + x657 + x658 - x476 + x659;
+        let x662 = x637 + x638;
+        let x663 = x2 * x2;
+        let x664 = (x128 + 2.0 * x101 - x102) * x18
+            + (x18
+                * ((2.0 * x654 - 2.0 * x86 + 2.0 * x485) * m2
+                    + m1 * (2.0 * x84 + 2.0 * (x636 * x16) + 2.0 * x140)
+                    + J2 * (2.0 * x7 - 2.0 * x5) + (2.0 * (x9 * x9) - 2.0 * x663) * J1)
+                - x121 + x108 - 2.0 * x109) * x20;
+        let x665 = (x20 * x661 + x30 * (x662 * x20 + x27) + x137) * x29 - x211
+            + x664 * x18;
+        let x666 = x29
+            * (x30 * (x639 * x18 * x18 - x58 * x20) + x660 * x18 - x20 * (x117 + x137))
+            - x20 * x665 - x148;
+        let x667 = x153 * x18 * x18;
+        let x668 = x20 * x506 * x18;
+        let x669 = x6 * x88;
+        let x670 = a_ * x9 * x9;
+        let x671 = x669 + x670;
+        let x672 = x671 * x644 + x67 * x22;
+        let x673 = a_ * x2 * x2;
+        let x674 = x4 * x133;
+        let x675 = a_ - x673 + x15 + x674;
+        let x676 = ((x510 + x22 * x64 + x159) * x20 + x672 * x18) * m2
+            + ((x166 - x170 + x16 * x644) * x18 + x675 * x20 * x64) * m1;
+        let x677 = x673 - a_ + x4 * x83 - x15;
+        let x678 = ((x64 * x677 * x18 + x172) * x28 + x644 * x50) * m1
+            + m2 * (x64 * x53 + (x164 + x672 * x20) * x28);
+        let x679 = x676 * x18 - x219
+            + x29 * (x678 * x20 + x30 * (x20 * x645 + x68 * x18) * d + x387 * x18);
+        let x680 = x22 * x72 + x445 * x671;
+        let x681 = m2 * (x20 * (x182 + x22 * x75 + x514) + x680 * x18)
+            + ((x194 - x191 + x16 * x445) * x18 + x675 * x20 * x75) * m1;
+        let x682 = (x28 * (x196 + x677 * x75 * x18) + x445 * x50) * m1
+            + m2 * (x28 * (x187 + x680 * x20) + x75 * x53);
+        let x683 = x681 * x18 - x221
+            + (x391 * x18 + x682 * x20 + x30 * d * (x20 * x647 + x76 * x18)) * x29;
+        let x684 = m2 * x20
+            * (x204 + (2.0 * a_ - x669 + 2.0 * x21 - x670) * x28 * x18 + x44 * x484)
+            + (x207 - x206 + x28 * (2.0 * a_ - x673 + 2.0 * x15 + x674) * x20) * m1
+                * x18;
+        let x685 = x30 * (x20 * x649 + x80 * x18) * d + x684 * x18 - x223;
+        let x686 = x100 - x85 - x91 - x92 - x94 - x98 - x115;
+        let x687 = (-x151 - x152) * x20 * x18;
+        let x688 = (-x155 - x505) * x20 * x20;
+        let x689 = x29 * (x30 * (x18 * x645 - x20 * x68) * d - x387 * x20 + x678 * x18)
+            - x174 - x676 * x20;
+        let x690 = x29 * (x30 * d * (x18 * x647 - x76 * x20) - x20 * x391 + x682 * x18)
+            - x681 * x20 - x198;
+        let x691 = (x649 * x18 - x80 * x20) * x30 * d - x684 * x20 - x209;
+        let x692 = x4 * d * x64 * m1;
+        let x693 = x4 * d * x75 * m1;
+        let x694 = x4 * x28 * d * m1 * x18;
+        let x695 = x6 * m2 * d * x644;
+        let x696 = x6 * m2 * d * x445;
+        let x697 = -(x6 * m2 * x28 * d * x20);
+        let x698 = x259 * x241;
+        let x699 = theta_dot * (phi_dot + x236) * x20;
+        let x700 = x699 - x255;
+        let x701 = x6 * x700;
+        let x702 = -x232 - x233;
+        let x703 = gamma2_dot * x702 * x9;
+        let x704 = x260 * x702 * x9;
+        let x705 = (x698 + x701 - x703 - x704) * J2;
+        let x706 = (x704 - x698) * J1;
+        let x707 = x264 * x702 * x9
+            + a_ * (x9 * (-x6 * x702 * x234 - x241 * x272) - x699 + x255)
+            - x259 * x241 * x88 - d * (x701 - x703);
+        let x708 = -x700 * x9 - x6 * gamma2_dot * x702;
+        let x709 = x702 * x280 * x83;
+        let x710 = x241 * x2 * gamma1_dot;
+        let x711 = d * (x327 - x710);
+        let x712 = x4 * x241 * x241;
+        let x713 = a_ * ((-x702 * x290 - x712) * x2 - x246 + x247);
+        let x714 = x241 * x2 * x284;
+        let x715 = x709 - x711 + x713 + x714;
+        let x716 = x702 * x280;
+        let x717 = x241 * x282 * x2;
+        let x718 = J2 * (x327 - x710 - x716 - x717);
+        let x719 = J1 * (x716 + x717);
+        let x720 = x702 * Izz;
+        let x721 = x720 - x250;
+        let x722 = x721 * x234;
+        let x723 = x241 * Iyy;
+        let x724 = Iyz * x702;
+        let x725 = x252 * x702;
+        let x726 = x700 * Ixz;
+        let x727 = x248 * Ixy;
+        let x728 = (m2 * d * x707 - x705 - x706) * x9 - theta_dot * x304 * x26
+            + J1 * (-x4 * x321 - x6 * x708) + (x718 - d * x715 * m1 + x719) * x2
+            + x28 * psi_dot * x662 * phi_dot - x722
+            + x241 * (x723 + x235 - x724 + x238 - x242) + x725 + x726 + x727;
+        let x729 = x9 * x347;
+        let x730 = -a_ - x21;
+        let x731 = 2.0 * x232 + 2.0 * x233;
+        let x732 = x325 + x702 * (x259 * x730 - x729)
+            + a_ * (x241 * x731 * x9 + x6 * x248);
+        let x733 = x6 * x347;
+        let x734 = x262 - x573 + x260 * x88 + x263;
+        let x735 = x702 * (-x272 * x730 - x733) + x241 * x734 - x248 * a_ * x9;
+        let x736 = x732 * x88 - a_ * x9 * x735 + x273 * x22;
+        let x737 = x718 + x719;
+        let x738 = 2.0 * x239 - 2.0 * x240;
+        let x739 = x2 * x318;
+        let x740 = x16 * x280;
+        let x741 = d * x700 + a_ * (x702 * x2 * x738 + x4 * x700)
+            + x241 * (-x739 - x740);
+        let x742 = x4 * x318;
+        let x743 = x16 * x290;
+        let x744 = x592 - x282 * x83 - x281 - x283;
+        let x745 = x241 * (x742 + x743) + x702 * x744 + a_ * x2 * x700;
+        let x746 = a_ * x2 * x745;
+        let x747 = x702 * (x6 * x259 * x14 + x258 * x272 * x9);
+        let x748 = Iyz * x700;
+        let x749 = x702 * x338;
+        let x750 = x248 * Iyy;
+        let x751 = x721 * x237;
+        let x752 = -x702 * Ixz - x241 * Ixy;
+        let x753 = x241 * x752;
+        let x754 = (x723 - x724) * x237;
+        let x755 = x234 * x752;
+        let x756 = J2 * x700;
+        let x757 = x700 * Izz;
+        let x758 = x241 * (x258 * x2 * x290 + x4 * x258 * x280);
+        let x759 = x705 + x706;
+        let x760 = x30
+            * (x722 - x725 - x726 + x241 * (x724 - x723 - x235 - x238 + x242) - x727)
+            - m2 * (x707 * x53 + x28 * (x357 + x736 * x20)) - x737 * x46
+            - theta_dot * x304 * (x651 - x126 + x652)
+            - (((x741 * x83 + x746 + x291 * x16) * x18 + x331) * x28 + x715 * x50) * m1
+            + ((x748 - x747 - x749 - x332 - x750 + x333 + x334 + x335 + x337 - x339
+                - x340 + x751 + x342 - x753) * x20 + psi_dot * phi_dot * x661
+                - theta_dot * x26 * x311
+                + x18
+                    * (x360 - x754 - x359 + x755 - x361 - x362 - x364 + 2.0 * x365 - x756
+                        - x366 - x367 - x757 - x758)) * x28
+            + (-x321 * x38 - x40 * x708) * J1 - x44 * x759;
+        let x761 = x371 - x370 - x372 + x374 - x375 + x379 + x380 - x381;
+        let x762 = (x748 - x4 * x737 - x747 - x749 - x750 + x333 + x334 + x335 + x337
+            - x339 - x340 + x751 + (-x321 * x2 - x298 * x9) * J1 + x342 - x753) * x18
+            - m2 * (x736 * x18 + (x707 * x22 + x350 + x355 * x484) * x20)
+            + theta_dot * (-x311 * x662 - x304 * x29 * x661)
+            + x28 * psi_dot * phi_dot * x664
+            - ((x330 - x324 + x16 * x715) * x18
+                + x20 * (x741 * x133 - x746 + x291 * x636)) * m1
+            + x20
+                * (x754 + x359 - x360 - x755 + x362 + x364 + x6 * x759 - 2.0 * x365
+                    + x756 + x366 + (x2 * x296 - x708 * x9) * J1 + x367 + x757 + x758);
+        let x763 = x709 - x711 + x4 * x329 + x713 + x714 + x2 * x323;
+        let x764 = x6 * x355 - x9 * x349;
+        let x765 = 0.25 * x625 + 0.25 * x626 - 0.25 * x627 - 0.5 * x628 - 0.25 * x629
+            + 0.5 * x630;
+        let x766 = -0.25 * x615 - 0.25 * x616 - 0.25 * x617 - 0.5 * x619 - 0.25 * x618
+            - 0.5 * x620;
+        let x767 = 2.0 * J2 + 2.0 * x0 - 2.0 * J1;
+        let x768 = (J2 + x0 - J1) * x2 * x2 + x4 * x17;
+        let x769 = x4 * (d * m1 * x50 + x46 * x14);
+        let x770 = x37 - x36;
+        let x771 = x38 * J1;
+        let x772 = ((-J2 - x0) * x770 - x771) * x2;
+        let x773 = x769 + x772 + x4 * x30 * x767 * x2;
+        let x774 = x18 * x18 * x768 + x29 * x20 * x773;
+        let x775 = x29 * x773 - x20 * x768;
+        let x776 = x18 * x775;
+        let x777 = 2.0 * J1 - 2.0 * J2;
+        let x778 = x4 * x777 * x18 * x18
+            + (2.0 * (x16 * d * x18 * x18) - 2.0 * (a_ * d * x20 * x20)) * m1;
+        let x779 = J2 * x770;
+        let x780 = x4 * (x779 + x771);
+        let x781 = ((d * x50 + 2.0 * (a_ * x28 * d * x20)) * x2 - x16 * d * x770) * m1;
+        let x782 = x46 * x14 * x2;
+        let x783 = x780 + x781 + x782 + x30 * x768;
+        let x784 = x778 * x2 + x783 * x29 * x20;
+        let x785 = (-2.0 * (a_ * x2 * x28 * x28 * d * x18 * x18)
+            - 2.0 * (d * x770 * x50)) * m1;
+        let x786 = x769 + x772;
+        let x787 = (2.0 * x779 + 2.0 * x771) * x46;
+        let x788 = x785 + x30 * x786 + x787;
+        let x789 = x780 + x781 + x782;
+        let x790 = x29 * x20 * x788 + x789 * x18 * x18 + x30 * x774;
+        let x791 = (x29 * x790 - x20 * x784) * x18;
+        let x792 = x4 * a_ * x169;
+        let x793 = -x167 - x168;
+        let x794 = (x792 + x83 * x793) * x28 * x18;
+        let x795 = d * x64 * x770;
+        let x796 = x794 - x795 + x4 * x30 * d * x64;
+        let x797 = x20 * (x133 * x793 - x792) + x2 * d * x64 * x18;
+        let x798 = m1 * (x796 * x29 * x20 + x797 * x18);
+        let x799 = d * x75 * x770;
+        let x800 = x4 * a_ * x190;
+        let x801 = -x188 - x189;
+        let x802 = x28 * (x800 + x83 * x801) * x18;
+        let x803 = x802 - x799 + x4 * x30 * d * x75;
+        let x804 = (x801 * x133 - x800) * x20 + x2 * d * x75 * x18;
+        let x805 = m1 * (x803 * x29 * x20 + x804 * x18);
+        let x806 = x2 * x28 * d * x18 * x18;
+        let x807 = (x133 * x770 - x4 * a_ * x38) * x20;
+        let x808 = (x4 * x30 * d * x20 + x806 + x807) * m1 * x18;
+        let x809 = -x95 - x96;
+        let x810 = a_ * x809 * x2 * d * m1;
+        let x811 = (x796 * x29 * x18 - x797 * x20) * m1;
+        let x812 = (x803 * x29 * x18 - x20 * x804) * m1;
+        let x813 = x806 + x807;
+        let x814 = (x4 * x30 * d * x18 * x18 - x813 * x20) * m1;
+        let x815 = d * m1 * x793;
+        let x816 = d * x801 * m1;
+        let x817 = d * m1 * x770;
+        let x818 = x4 * x288 + (x285 - x254 - x255) * x2;
+        let x819 = x284 * x290 - x4 * a_ * x241 * x290 - d * x818;
+        let x820 = J1 * x296;
+        let x821 = J2 * x818;
+        let x822 = x282 * x14 * x290;
+        let x823 = x289 * J1;
+        let x824 = x2 * (x820 - x819 * d * m1 + x821 + x822)
+            + x4 * (x293 - x292 + x294 - x823 - theta_dot * x767 * x311 * x2)
+            - theta_dot * x304 * x29 * x786 + x28 * psi_dot * phi_dot * x18 * x768;
+        let x825 = -x278 - x279;
+        let x826 = x825 * x258 * x280;
+        let x827 = x258 * x290 * x290;
+        let x828 = x825 * (-x316 - 2.0 * x317);
+        let x829 = x4 * x323;
+        let x830 = a_ * (x712 - x320);
+        let x831 = x825 * x280 * d;
+        let x832 = x830 - x319 + x831;
+        let x833 = -x820 - x821 - x822;
+        let x834 = (x826 + x827) * x20 + x778 * x2 * x28 * psi_dot * phi_dot
+            - (x20 * (a_ * (x2 * (x325 - x326 - x828) - x829) + x133 * x832)
+                + (x291 * x2 * d + x819 * x16) * x18) * m1
+            + (x4 * x833 + theta_dot * (-x304 * x29 * x789 - x311 * x768)
+                + (x293 + x294 - x823) * x2) * x18;
+        let x835 = theta_dot * (-x311 * x786 - (x785 + x787) * x304 * x29)
+            - x38 * x289 * J1 + x833 * x46 - x363 * x770 + x30 * x824
+            - ((a_ * (x2 * (x326 - x325 + x828) + x829) + x83 * x832) * x28 * x18
+                - x291 * d * x770 + x819 * x50) * m1
+            + x28 * (psi_dot * x789 * phi_dot - x826 - x827) * x18;
+        let x836 = x830 - x315 + x831 + x322;
+        let x837 = x828 + x328;
+        let x838 = 0.25 * x617 - 0.25 * x615 - 0.25 * x616 - x45 + 0.25 * x618;
+        let x839 = 2.0 * x10 + 2.0 * J2 - 2.0 * J1;
+        let x840 = x42 - x43;
+        let x841 = x840 * J1;
+        let x842 = x44 * J2;
+        let x843 = (x841 + x842 - m2 * d * x53) * x6;
+        let x844 = x10 + J2 - J1;
+        let x845 = x40 * x9 * x844;
+        let x846 = x843 + x845 + x6 * x30 * x9 * x839;
+        let x847 = x23 * x6 + x9 * x9 * x844;
+        let x848 = x846 * x29 + x847 * x18;
+        let x849 = x20 * x848;
+        let x850 = x846 * x29 * x18 - x20 * x20 * x847;
+        let x851 = -(x6 * m2 * x67 * d);
+        let x852 = -(x6 * m2 * d * x72);
+        let x853 = x6 * x40 * x14;
+        let x854 = m2 * (x9 * (-d * x53 - 2.0 * (a_ * x28 * d * x18)) - x40 * d * x22);
+        let x855 = x9 * (x841 + x842);
+        let x856 = x853 + x854 + x30 * x847 + x855;
+        let x857 = x29 * x856 * x20 * x20;
+        let x858 = x6 * x777 * x20 * x20
+            + m2 * (-2.0 * (d * x22 * x20 * x20) - 2.0 * (a_ * d * x18 * x18));
+        let x859 = x9 * x858 * x18;
+        let x860 = x853 + x854 + x855;
+        let x861 = x40 * (2.0 * x841 + 2.0 * x842);
+        let x862 = (-2.0 * (x40 * d * x53) - 2.0 * (a_ * x28 * x28 * d * x9 * x20 * x20))
+            * m2;
+        let x863 = x843 + x845;
+        let x864 = x861 + x862 + x30 * x863;
+        let x865 = x30 * x848 + x860 * x18 + x29 * x864;
+        let x866 = x20 * (x29 * x18 * x865 - x857 - x859);
+        let x867 = m2 * a_ * x809 * d * x9;
+        let x868 = x67 * x40 * d;
+        let x869 = x158 * x88 - x6 * a_ * x158;
+        let x870 = x28 * x869 * x20;
+        let x871 = x870 - x868 - x6 * x30 * x67 * d;
+        let x872 = x869 * x18 - x67 * d * x9 * x20;
+        let x873 = (x29 * x20 * x871 + x872 * x18) * m2;
+        let x874 = x181 * x88 - x6 * a_ * x181;
+        let x875 = x874 * x18 - d * x9 * x20 * x72;
+        let x876 = x40 * d * x72;
+        let x877 = x874 * x28 * x20;
+        let x878 = x877 - x876 - x6 * x30 * d * x72;
+        let x879 = m2 * (x875 * x18 + x29 * x20 * x878);
+        let x880 = x28 * d * x9 * x20 * x20;
+        let x881 = (x40 * x88 - x6 * a_ * x40) * x18;
+        let x882 = x881 - x880;
+        let x883 = m2 * (x882 * x18 - x6 * x30 * d * x20 * x20);
+        let x884 = m2 * (x29 * x871 * x18 - x872 * x20);
+        let x885 = m2 * (x29 * x878 * x18 - x20 * x875);
+        let x886 = (x880 - x881 - x6 * x30 * d * x18) * m2 * x20;
+        let x887 = m2 * d * x158;
+        let x888 = m2 * x181 * d;
+        let x889 = m2 * x40 * d;
+        let x890 = -x270 - x271;
+        let x891 = x258 * x260 * x890;
+        let x892 = J2 * x298;
+        let x893 = x298 * J1;
+        let x894 = -x264 * x890 - x6 * a_ * x272 * x234 - x298 * d;
+        let x895 = (x6 * x297 + (x265 + x266) * x9) * J1;
+        let x896 = x9 * (x893 - x891 - x892 + m2 * x894 * d)
+            - theta_dot * x304 * x29 * x863
+            + x6 * (x274 - x261 - x275 - x895 - theta_dot * x311 * x9 * x839)
+            + x28 * psi_dot * x20 * phi_dot * x847;
+        let x897 = x259 * x259 * x14;
+        let x898 = x14 * x272 * x890;
+        let x899 = -x261 - x275 - x895;
+        let x900 = x259 * (2.0 * x345 + x346);
+        let x901 = a_ * (x702 * x9 * x234 - x353);
+        let x902 = a_ * (x6 * x234 * x234 - x348);
+        let x903 = x259 * x259 * d;
+        let x904 = x347 * x890;
+        let x905 = x902 - x903 + x904;
+        let x906 = a_ * (x9 * (-x900 - x351 - x352 - x901 - x354) - x6 * x349)
+            + x88 * x905;
+        let x907 = x28 * (psi_dot * phi_dot * x860 - x897 - x898) * x20 + x30 * x896
+            + (-(x861 + x862) * x304 * x29 - x311 * x863) * theta_dot
+            - (x891 + x892) * x44 - x298 * x840 * J1 + x899 * x40
+            - m2 * (x28 * x20 * x906 - x273 * x40 * d + x894 * x53);
+        let x908 = (x899 * x9 + theta_dot * (-x311 * x847 - x304 * x29 * x860)
+            + x6 * (x891 + x892 - x893)) * x20 - (x897 + x898) * x18
+            - m2 * (x20 * (x894 * x22 - x273 * d * x9) + x18 * x906)
+            + x28 * x9 * psi_dot * phi_dot * x858;
+        let x909 = x900 + x351 + x352 + x901 + x354;
+        let x910 = 0.25 * x625 + 0.25 * x626 + x42 + 0.25 * x627 - 0.5 * x628
+            + 0.25 * x629 - 0.5 * x630;
+        let x911 = x113 * x234;
+        let x912 = -x546 - theta_dot;
+        let x913 = x912 * x28 * x9;
+        let x914 = x28 * x20 * phi_dot;
+        let x915 = gamma2_dot * x30;
+        let x916 = x30 * theta_dot * x18;
+        let x917 = x6 * (-x914 - x915 - x916);
+        let x918 = x259 * x28 * x20;
+        let x919 = x260 * x40;
+        let x920 = (x913 + x917 + x918 + x919) * J2;
+        let x921 = a_ * (x914 + (-x44 * x234 - x272 * x28 * x20) * x9 + x916)
+            - x264 * x40 - x259 * x28 * x20 * x88 - (x913 + x917) * d;
+        let x922 = (-x918 - x919) * J1;
+        let x923 = -x914 - x916;
+        let x924 = Ixz * x923;
+        let x925 = x241 * x106;
+        let x926 = x28 * phi_dot * x18;
+        let x927 = x30 * theta_dot * x20;
+        let x928 = x926 - x927;
+        let x929 = Ixy * x928;
+        let x930 = x560 * x2 * x28;
+        let x931 = x926 - x927 + x30 * gamma1_dot;
+        let x932 = x4 * x931;
+        let x933 = x38 * x284 - (x930 + x932) * d
+            + a_ * (x927 - x926 + (-x241 * x46 - x28 * x290 * x18) * x2)
+            + x280 * x28 * x83 * x18;
+        let x934 = x282 * x38;
+        let x935 = x280 * x28 * x18;
+        let x936 = J2 * (x930 - x934 + x932 - x935);
+        let x937 = (x934 + x935) * J1;
+        let x938 = x28 + x308 * x29;
+        let x939 = x931 * x2 + x4 * x28 * x567;
+        let x940 = (x914 + x915 + x916) * x9 + x6 * x912 * x28;
+        let x941 = x28 * (x553 - x554 + x555 + x556) - x911
+            + (m2 * x921 * d - x920 - x922) * x9 + x924 + x925 + x929
+            + x2 * (x936 - x933 * d * m1 + x937)
+            + theta_dot * (-0.5 * (x29 * x29 * x93 * x302) - x13 * x938)
+            + (-x4 * x939 - x6 * x940) * J1;
+        let x942 = x259 * x53;
+        let x943 = a_ * (x6 * x928 + x28 * x731 * x9 * x20) + x942 + x928 * d
+            + x40 * x347;
+        let x944 = x28 * x734 * x20 - a_ * x928 * x9 - x44 * x347 - x272 * x53;
+        let x945 = x943 * x88 - a_ * x9 * x944;
+        let x946 = x290 * x50 + x46 * x318 + a_ * x2 * x923 + x28 * x744 * x18;
+        let x947 = a_ * x946 * x2;
+        let x948 = d * x923 - x38 * x318 - x280 * x50
+            + a_ * (x2 * x28 * x738 * x18 + x4 * x923);
+        let x949 = Izz * x923;
+        let x950 = x106 * x237;
+        let x951 = x920 + x922;
+        let x952 = x928 * Iyz;
+        let x953 = (x587 - x588) * x28;
+        let x954 = x234 * x99;
+        let x955 = x46 * x280;
+        let x956 = x38 * x290;
+        let x957 = (-x955 - x956) * J1;
+        let x958 = x30 * x252;
+        let x959 = J2 * (x955 + x956 - x914 - x916);
+        let x960 = x259 * x44;
+        let x961 = x40 * x272;
+        let x962 = (x960 + x961) * J1;
+        let x963 = Iyz * x923;
+        let x964 = J2 * (x926 - x960 - x927 - x961);
+        let x965 = x113 * x237;
+        let x966 = x241 * x99;
+        let x967 = x936 + x937;
+        let x968 = x928 * Iyy;
+        let x969 = x243 * x30;
+        let x970 = x28 * (x601 + x602);
+        let x971 = x28 * x143 * phi_dot - m2 * (x945 * x18 + x921 * x22 * x20)
+            - (x933 * x16 * x18 + (x948 * x133 - x947) * x20) * m1
+            + theta_dot * (-x26 * x938 - 0.5 * (x29 * x29 * x136 * x302))
+            + (x949 + x950 - x940 * x9 * J1 + x6 * x951 - x952 + x953 - x954 + x957
+                - x958 + x959) * x20
+            + (x963 - x962 - x964 + x965 - x966 - x4 * x967 - x2 * x939 * J1 - x968
+                - x969 - x970) * x18;
+        let x972 = (x911 - x924 - x925 + (x554 - x555 - x556) * x28 - x929) * x30
+            - x46 * x967 + (-x940 * x40 - x38 * x939) * J1
+            - m2 * (x945 * x28 * x20 + x921 * x53) + x30 * x941
+            - (x28 * x18 * (x947 + x948 * x83) + x933 * x50) * m1
+            + theta_dot * (-0.5 * (x29 * x29 * x376 * x302) - x93 * x938)
+            + (x609 + x20 * (x963 - x962 - x964 + x965 - x966 - x968 - x969 - x970)
+                + (x952 - x949 - x950 - x953 + x954 - x957 + x958 - x959) * x18) * x28
+            - x44 * x951;
+        let x973 = gamma1_dot * x18;
+        let x974 = x2 * (x310 - x973);
+        let x975 = x4 * x245 * x20;
+        let x976 = x280 * x20 * x133 - d * (x974 + x975)
+            + a_ * (x2 * (x20 * x290 - x4 * x241 * x18) - x245 * x20) + x2 * x284 * x18;
+        let x977 = x282 * x2 * x18;
+        let x978 = x280 * x20;
+        let x979 = (x977 - x978) * J1;
+        let x980 = J2 * (x978 - x977 + x974 + x975);
+        let x981 = x129 * x234;
+        let x982 = x4 * (x973 - x310) + x245 * x2 * x20;
+        let x983 = gamma2_dot * x20 - x310;
+        let x984 = x6 * x983 - x245 * x9 * x18;
+        let x985 = x9 * x983;
+        let x986 = x6 * x245 * x18;
+        let x987 = a_ * ((x6 * x20 * x234 - x272 * x18) * x9 - x245 * x18)
+            - x264 * x9 * x20 - x259 * x88 * x18 - (x985 + x986) * d;
+        let x988 = x259 * x18;
+        let x989 = x260 * x9 * x20;
+        let x990 = J2 * (x985 + x988 + x986 + x989);
+        let x991 = (-x988 - x989) * J1;
+        let x992 = x252 * x20;
+        let x993 = x243 * x18;
+        let x994 = x241 * x122;
+        let x995 = x2 * (x979 - x976 * d * m1 + x980) - x981
+            + (-x4 * x982 - x6 * x984) * J1 + x300 + x9 * (m2 * d * x987 - x990 - x991)
+            - x305 + x245 * x475 - x992 - x993 + x994 - x312;
+        let x996 = x979 + x980;
+        let x997 = x245 * d;
+        let x998 = x20 * (x729 + x259 * x22 + x997)
+            + a_ * (x731 * x9 * x18 + x6 * x245 * x20);
+        let x999 = (x733 - a_ * x245 * x9 - x272 * x22) * x20 + x734 * x18;
+        let x1000 = x998 * x88 - a_ * x999 * x9;
+        let x1001 = x2 * x290;
+        let x1002 = x4 * x280;
+        let x1003 = (-x1001 - x1002) * J1;
+        let x1004 = (x1001 + x1002 - phi_dot - x236) * J2;
+        let x1005 = x28 * psi_dot * Ixz;
+        let x1006 = x125 * x234;
+        let x1007 = x245 * x110;
+        let x1008 = x122 * x237;
+        let x1009 = Ixy * x28 * psi_dot;
+        let x1010 = x129 * x237;
+        let x1011 = x241 * x125;
+        let x1012 = x6 * x259;
+        let x1013 = x272 * x9;
+        let x1014 = J2 * (x1012 - x1013 - phi_dot - x236);
+        let x1015 = (x1013 - x1012) * J1;
+        let x1016 = x103 * x245;
+        let x1017 = x20 * x593 + (x742 + x743 + a_ * x245 * x2) * x18;
+        let x1018 = a_ * x2 * x1017;
+        let x1019 = a_ * (x4 * x245 * x18 + x590 * x2 * x20)
+            + (x997 - x739 - x740) * x18;
+        let x1020 = x990 + x991;
+        let x1021 = (x981 + x245 * x34 - x300 + x992 + x993 - x994) * x30 - x46 * x996
+            - m2 * (x28 * x20 * x1000 + x987 * x53) - x377 - x378
+            + x28
+                * ((x1006 - (x1003 + x1004) * x18 - x1005 + x602 - x1007 - x1008) * x18
+                    + (x588 - x1009 + x1010 - x1011 - (x1014 + x1015) * x20 - x1016)
+                        * x20) + x995 * x30
+            - (x28 * (x1018 + x1019 * x83) * x18 + x976 * x50) * m1 - x44 * x1020
+            + (-x40 * x984 - x38 * x982) * J1;
+        let x1022 = (x1005 - x1006 - x602 + (x1003 - x1014 - x1015 + x1004) * x18
+            - x9 * x984 * J1 + x1007 + x6 * x1020 + x1008) * x20 - x343
+            - (x16 * x976 * x18 + x20 * (x1019 * x133 - x1018)) * m1 - x344
+            - m2 * (x18 * x1000 + x22 * x20 * x987)
+            + (x588 - x4 * x996 - x1009 + x1010 - x1011 - x1016 - x2 * x982 * J1) * x18;
+        let x1023 = 0.5 * x430 - 0.5 * x425 - 0.5 * x432 + 2.0 * x37 + 0.5 * x434;
+        let x1024 = a_ * x30 * theta_dot;
+        let x1025 = 0.5 * x397 - 0.5 * x399 - 0.5 * x401 + 0.5 * x403 - 2.0 * x39;
+        let x1026 = gamma2_dot - x232 - x233;
+        let x1027 = x6 * (-x262 - d * x1026 - x263)
+            + a_ * (x232 - x9 * x9 * x234 + x233);
+        let x1028 = x232 - gamma2_dot + x233;
+        let x1029 = J2 * x1026;
+        let x1030 = x258 * x260;
+        let x1031 = x239 - gamma1_dot - x240;
+        let x1032 = x4 * (x281 - x1031 * d + x283) + a_ * x241 * (x663 - 1.0);
+        let x1033 = J2 * x1031;
+        let x1034 = x282 * x14;
+        let x1035 = x9 * (m2 * d * x1027 + x6 * (-x1028 * J1 - x1029 - x1030))
+            + x26 * x28 * psi_dot
+            + (x4 * (x1033 - x1031 * J1 + x1034) - d * x1032 * m1) * x2
+            + x641 * theta_dot * x29;
+        let x1036 = x1029 + x1030;
+        let x1037 = a_ * x702;
+        let x1038 = x316 + 2.0 * x317 + x1037;
+        let x1039 = a_ * x1038 * x2 * x2;
+        let x1040 = x280 * x2;
+        let x1041 = d * (-x232 - x1040 - x233) + x4 * (x316 + x317 + x1037);
+        let x1042 = x4 * x290;
+        let x1043 = (x1040 - x1042) * J1;
+        let x1044 = J2 * (x1042 - x232 - x1040 - x233);
+        let x1045 = (Iyy - Ixx) * x234;
+        let x1046 = x6 * x272;
+        let x1047 = x259 * x9;
+        let x1048 = J2 * (x239 - x1046 - x1047 - x240);
+        let x1049 = Iyz * x731;
+        let x1050 = x241 * (Iyy + Ixx - Izz);
+        let x1051 = (x1046 + x1047) * J1;
+        let x1052 = d * (x239 - x1047 - x240) - x6 * x272 * d;
+        let x1053 = x1052 * x88 - 2.0 * (a_ * x272 * d * x9 * x9);
+        let x1054 = x1033 + x1034;
+        let x1055 = theta_dot * x29 * x686 - x6 * x44 * x1036
+            + (-x40 * x9 * x1028 - x1031 * x38 * x2) * J1
+            - (x28 * (x1039 + x83 * x1041) * x18 + x1032 * x50) * m1 + x30 * x1035
+            + (psi_dot * x136
+                + (2.0 * x250 - x1043 + 2.0 * x251 - x720 - x1044 - x1045) * x18
+                + x20 * (-x1048 - 2.0 * x238 - x1049 - x1050 - x1051)) * x28
+            - m2 * (x28 * x20 * x1053 + x53 * x1027) - x4 * x1054 * x46;
+        let x1056 = theta_dot * x29 * (x126 - x124 - x135 - x145)
+            + (-x1048 - x4 * x4 * x1054 - x1031 * x2 * x2 * J1 - 2.0 * x238 - x1049
+                - x1050 - x1051) * x18 - m2 * (x22 * x20 * x1027 + x1053 * x18)
+            + x28 * psi_dot * x143
+            - m1 * (x16 * x1032 * x18 + x20 * (x133 * x1041 - x1039))
+            + x20
+                * (x1043 - 2.0 * x250 - 2.0 * x251 - x9 * x9 * x1028 * J1 + x720 + x1044
+                    + x6 * x6 * x1036 + x1045);
+        let x1057 = x280 * J1;
+        let x1058 = 2.0 * x278 + 2.0 * x279;
+        let x1059 = (-2.0 * x278 - 2.0 * x279) * J2;
+        let x1060 = x2 * (x1057 - x1058 * d * d * m1 + x1059) - x4 * x290 * J1;
+        let x1061 = x1057 + x1059;
+        let x1062 = x30 * x1060 - x38 * x290 * J1
+            - (x1058 * x50 - 2.0 * (a_ * x282 * x2 * x28 * x18)) * d * m1 - x1061 * x46;
+        let x1063 = (-x2 * x290 * J1 - x4 * x1061) * x18
+            - d * (2.0 * (a_ * x282 * x2 * x20) + x1058 * x16 * x18) * m1;
+        let x1064 = x259 * x9 * (J1 - 2.0 * x10 - 2.0 * J2) - x6 * x890 * J1;
+        let x1065 = 2.0 * J2 - J1;
+        let x1066 = x20 * (x6 * x259 * x1065 - x9 * x890 * J1)
+            - m2 * d * (-2.0 * (x259 * x22 * x20) - 2.0 * (a_ * x260 * x9 * x18));
+        let x1067 = x30 * x1064 - x259 * x44 * x1065 - x40 * x890 * J1
+            - m2 * d * (-2.0 * x942 - 2.0 * (a_ * x260 * x28 * x9 * x20));
+        Derivatives {
+            qdot: [
+                psi_dot,
+                theta_dot,
+                phi_dot,
+                gamma1_dot,
+                gamma2_dot,
+                X_dot,
+                Y_dot,
+                Z_dot,
+            ],
+            matrix: [
+                [x13, x58, x61, 0.0, 0.0, x69, x77, x81],
+                [x58, x29 * x20 * x138 + x148, x150, x154, x157, x179, x203, x210],
+                [x61, x150, x215 * x29 * x18 - x212 * x20, x218, 0.0, x220, x222, x224],
+                [0.0, x154, x218, x1, 0.0, x225, x226, x227],
+                [0.0, x157, 0.0, 0.0, x11, x228, x229, x230],
+                [x69, x179, x220, x225, x228, x231, 0.0, 0.0],
+                [x77, x203, x222, x226, x229, 0.0, x231, 0.0],
+                [x81, x210, x224, x227, x230, 0.0, 0.0, x231],
+            ],
+            force: [
+                x314,
+                x369 + x29 * x382 * x20,
+                x29 * x382 * x18 - x383,
+                x28 * psi_dot * x20 * x217 * phi_dot - x329 * d * m1
+                    - theta_dot * x304 * x216 * x18 - x341 + x14 * x280 * x290,
+                x258 * x259 * x272 + x385 * x156 - x366 - m2 * x355 * d,
+                x389,
+                (-x390 - x392) * theta_dot + x28 * psi_dot * phi_dot * x197
+                    - m2 * (x273 * x72 + x181 * x349 + x355 * x185)
+                    - (x323 * x190 + x329 * x193 + x291 * x75) * m1,
+                x28 * (x208 * psi_dot * phi_dot - theta_dot * x80 * x311 * d)
+                    - m2
+                        * (((0.25 * x397 - 0.25 * x399 - 0.25 * x401 + 0.25 * x403)
+                            * phi_dot * phi_dot + (theta_dot * x404 + x412) * theta_dot
+                            + gamma2_dot * (x414 + x417 + gamma2_dot * x404)) * d - x393)
+                    - (x393
+                        + (theta_dot * (x436 + theta_dot * x437 + x439)
+                            + gamma1_dot * (x437 * gamma1_dot + x441)
+                            + (0.25 * x430 - 0.25 * x425 - 0.25 * x432 + 0.25 * x434)
+                                * phi_dot * phi_dot) * d) * m1,
+            ],
+            checks: [x28],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x448, x69, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x459, x179, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x460, x220, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x461, x225, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x462, x228, 0.0],
+                    [x448, x459, x460, x461, x462, 0.0, 0.0, 0.0],
+                    [x69, x179, x220, x225, x228, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x478, x479, 0.0, 0.0, x480, x481, x483],
+                    [
+                        x478,
+                        (x27 + x501 + x502 * x18 + x57) * x20,
+                        x503,
+                        x504,
+                        x507,
+                        x513,
+                        x517,
+                        x519,
+                    ],
+                    [
+                        x479,
+                        x503,
+                        (x60 - x20 * x502 - x59
+                            + x29
+                                * (x30 * (x479 + x215 * x29) + x500 * x18 - x20 * x489))
+                            * x18,
+                        x520,
+                        x521,
+                        x522,
+                        x523,
+                        x524,
+                    ],
+                    [0.0, x504, x520, 0.0, 0.0, x525, x526, x527],
+                    [0.0, x507, x521, 0.0, 0.0, x528, x529, x530],
+                    [x480, x513, x522, x525, x528, 0.0, 0.0, 0.0],
+                    [x481, x517, x523, x526, x529, 0.0, 0.0, 0.0],
+                    [x483, x519, x524, x527, x530, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x640, x643, 0.0, 0.0, x646, x648, x650],
+                    [
+                        x640,
+                        x29
+                            * ((x117 + x30 * (x639 * x20 + x27 + x57) + x137) * x18
+                                + x20 * x660) + x665 * x18 - x149,
+                        x666,
+                        x667,
+                        x668,
+                        x679,
+                        x683,
+                        x685,
+                    ],
+                    [
+                        x643,
+                        x666,
+                        x29
+                            * ((x653 * x18
+                                + (x29 * x686 - x655 - x656 - x657 - x658 + x476 - x659)
+                                    * x20) * x18
+                                + (x214 - x213 + x30 * (x59 - x60 + x642 * x18)) * x20)
+                            - x212 * x18
+                            - (x29 * (x661 * x18 - x214 + x30 * (x662 * x18 - x59))
+                                - x144 - x20 * x664) * x20,
+                        x687,
+                        x688,
+                        x689,
+                        x690,
+                        x691,
+                    ],
+                    [0.0, x667, x687, 0.0, 0.0, x692, x693, x694],
+                    [0.0, x668, x688, 0.0, 0.0, x695, x696, x697],
+                    [x646, x679, x689, x692, x695, 0.0, 0.0, 0.0],
+                    [x648, x683, x690, x693, x696, 0.0, 0.0, 0.0],
+                    [x650, x685, x691, x694, x697, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x4 * x767 * x2, x774, x776, 0.0, 0.0, x692, x693, x694],
+                    [
+                        x774,
+                        x784 * x18 * x18 + x29 * x20 * x790,
+                        x791,
+                        0.0,
+                        0.0,
+                        x798,
+                        x805,
+                        x808,
+                    ],
+                    [
+                        x776,
+                        x791,
+                        x29 * (x30 * x775 - x20 * x789 + x29 * x788) * x18 * x18
+                            - (x783 * x29 * x18 * x18 - x778 * x2 * x20) * x20,
+                        x810,
+                        0.0,
+                        x811,
+                        x812,
+                        x814,
+                    ],
+                    [0.0, 0.0, x810, 0.0, 0.0, x815, x816, x817],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x692, x798, x811, x815, 0.0, 0.0, 0.0, 0.0],
+                    [x693, x805, x812, x816, 0.0, 0.0, 0.0, 0.0],
+                    [x694, x808, x814, x817, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x6 * x9 * x839, x849, x850, 0.0, 0.0, x851, x852, x697],
+                    [
+                        x849,
+                        (x857 + x859) * x18 + x29 * x20 * x20 * x865,
+                        x866,
+                        0.0,
+                        x867,
+                        x873,
+                        x879,
+                        x883,
+                    ],
+                    [
+                        x850,
+                        x866,
+                        x29 * (x30 * x850 - x20 * x20 * x860 + x29 * x864 * x18) * x18
+                            - (x29 * x856 * x18 - x9 * x858) * x20 * x20,
+                        0.0,
+                        0.0,
+                        x884,
+                        x885,
+                        x886,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x867, 0.0, 0.0, 0.0, x887, x888, x889],
+                    [x851, x873, x884, 0.0, x887, 0.0, 0.0, 0.0],
+                    [x852, x879, x885, 0.0, x888, 0.0, 0.0, 0.0],
+                    [x697, x883, x886, 0.0, x889, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    theta_dot * (-x311 * d * x447 - x304 * x29 * (x452 + x456))
+                        - (x323 * x450 + x329 * x449 + x291 * x446) * m1
+                        + x28 * psi_dot * phi_dot * x458
+                        - m2 * (x273 * x445 + x454 * x349 + x355 * x453),
+                    x389,
+                    0.0,
+                ],
+                [
+                    x534 + x572,
+                    x608 * x18 + x610 * x20,
+                    x610 * x18 - x608 * x20,
+                    (J2 * (x535 - x581 - x582 - x536) - d * m1 * x591
+                        - x30 * x20 * x217 * phi_dot + (x581 + x582) * J1) * psi_dot
+                        + (-x30 * x304 * x217 - x532 * x216) * theta_dot * x29 * x18,
+                    (J1 * (-x604 - x605) - x30 * x156 * phi_dot * x18 - m2 * d * x575
+                        + J2 * (x539 + x604 + x540 + x605)) * psi_dot
+                        + theta_dot * (-x30 * x304 * x611 - x532 * x156) * x29 * x20,
+                    psi_dot * (x208 * x63 * x28 - x30 * x173) * phi_dot
+                        - (x612 * x63
+                            + psi_dot * (x165 * x591 + x594 * x169 + x569 * x64)) * m1
+                        + theta_dot
+                            * (d * (-x531 * x68 - x80 * x63 * x311 * x28)
+                                + x29 * (-x511 * x304 - x532 * x387 * x29))
+                        - m2
+                            * (x63 * x613
+                                + psi_dot * (x67 * x552 + x158 * x574 + x162 * x575)),
+                    (x208 * x28 * x62 - x30 * x197) * psi_dot * phi_dot
+                        - m2
+                            * (x613 * x62
+                                + psi_dot * (x185 * x575 + x72 * x552 + x181 * x574))
+                        + (x29 * (-x304 * x515 - x532 * x29 * x391)
+                            + (-x80 * x311 * x28 * x62 - x76 * x531) * d) * theta_dot
+                        - m1
+                            * ((x193 * x591 + x569 * x75 + x594 * x190) * psi_dot
+                                + x612 * x62),
+                    psi_dot * phi_dot * (x28 * x518 - x30 * x208)
+                        + theta_dot * (-x482 * x30 * x311 - x531 * x80 * x28) * d
+                        - (x614
+                            + d
+                                * (theta_dot
+                                    * ((0.5 * x617 - 0.5 * x615 - 0.5 * x616 - 2.0 * x45
+                                        + 0.5 * x618) * gamma1_dot + x621 + theta_dot * x622)
+                                    + (0.25 * x615 - 0.25 * x616 + 0.25 * x617 - 0.5 * x619
+                                        - 0.25 * x618 + 0.5 * x620) * phi_dot * phi_dot
+                                    + gamma1_dot * (x624 + gamma1_dot * x622))) * m1
+                        - m2
+                            * ((theta_dot * (x631 + x632 * theta_dot)
+                                + (0.25 * x626 - 0.25 * x625 + 0.25 * x627 - 0.25 * x629)
+                                    * phi_dot * phi_dot
+                                + gamma2_dot
+                                    * (theta_dot
+                                        * (0.5 * x625 + 0.5 * x626 + 2.0 * x42 + 0.5 * x627 - x628
+                                            + 0.5 * x629 - x630) + x632 * gamma2_dot + x634)) * d
+                                - x614),
+                ],
+                [
+                    x728,
+                    x29 * (x20 * x760 + x30 * (x314 * x18 + x728 * x20) + x761 * x18)
+                        + x762 * x18 - x383,
+                    x29 * (x760 * x18 - x761 * x20 + x30 * (x728 * x18 - x314 * x20))
+                        - x762 * x20 - x369,
+                    x385 * x217 - x741 * d * m1 - x756
+                        + x241 * (x14 * x2 * x290 + x4 * x14 * x280),
+                    x702 * (x14 * x272 * x9 + x6 * x258 * x259)
+                        - theta_dot * x304 * x156 * x18 - m2 * d * x732
+                        + x28 * psi_dot * x20 * x611 * phi_dot - x341,
+                    x28 * x676 * psi_dot * phi_dot
+                        - (x745 * x169 + x741 * x165 + x64 * x763 + x291 * x644) * m1
+                        + (-x678 * x304 * x29 - x311 * d * x645) * theta_dot
+                        - m2
+                            * (x273 * x64 + x162 * x732 + x764 * x644 + x158 * x735
+                                + x67 * x707),
+                    (-x311 * d * x647 - x304 * x29 * x682) * theta_dot
+                        - m2
+                            * (x185 * x732 + x181 * x735 + x273 * x75 + x707 * x72
+                                + x764 * x445)
+                        - (x75 * x763 + x741 * x193 + x745 * x190 + x291 * x445) * m1
+                        + x681 * x28 * psi_dot * phi_dot,
+                    (-theta_dot * x311 * x28 * x649
+                        - m2
+                            * (gamma2_dot
+                                * (gamma2_dot * x765
+                                    + (0.5 * x625 + 0.5 * x626 + 0.5 * x627 - x628 + 0.5 * x629
+                                        - x630) * phi_dot + theta_dot * x633)
+                                + theta_dot
+                                    * (phi_dot
+                                        * (0.5 * x626 - 0.5 * x625 + 0.5 * x627 - 0.5 * x629)
+                                        + theta_dot * x765) + x765 * phi_dot * phi_dot)
+                        - m1
+                            * ((x623 * gamma1_dot + theta_dot * x766
+                                + phi_dot
+                                    * (0.5 * x615 - 0.5 * x616 + 0.5 * x617 - x619 - 0.5 * x618
+                                        + x620)) * theta_dot
+                                + gamma1_dot
+                                    * (x766 * gamma1_dot
+                                        + (0.5 * x617 - 0.5 * x615 - 0.5 * x616 + 0.5 * x618)
+                                            * phi_dot) + x766 * phi_dot * phi_dot)) * d
+                        + x684 * x28 * psi_dot * phi_dot,
+                ],
+                [
+                    x824,
+                    x834 * x18 + x835 * x29 * x20,
+                    x835 * x29 * x18 - x834 * x20,
+                    x825 * x14 * x280
+                        + d
+                            * (x319 - x830 - x831
+                                + a_ * (x247 + theta_dot * x304 * x18) * x2) * m1
+                        + x14 * x290 * x290,
+                    0.0,
+                    (theta_dot * (-x4 * x311 * d * x64 - x304 * x29 * (x794 - x795))
+                        - x819 * x64 - x329 * x793 - x165 * x836 - x837 * x169
+                        + x28 * psi_dot * x797 * phi_dot) * m1,
+                    (theta_dot * (-x4 * x311 * d * x75 - (x802 - x799) * x304 * x29)
+                        - x837 * x190 - x193 * x836 - x329 * x801
+                        + x28 * psi_dot * x804 * phi_dot - x819 * x75) * m1,
+                    (x28 * (x813 * psi_dot * phi_dot - x4 * theta_dot * x311 * d * x18)
+                        - d
+                            * (phi_dot * phi_dot
+                                * (0.25 * x617 - 0.25 * x615 - 0.25 * x616 + 0.25 * x618)
+                                + gamma1_dot * (x838 * gamma1_dot + x621)
+                                + theta_dot
+                                    * (x624 + theta_dot * x838
+                                        + (0.5 * x615 - 0.5 * x616 + 0.5 * x617 - x619 + 2.0 * x469
+                                            - 0.5 * x618 + x620) * gamma1_dot))) * m1,
+                ],
+                [
+                    x896,
+                    x29 * x20 * x907 + x908 * x18,
+                    x29 * x907 * x18 - x908 * x20,
+                    0.0,
+                    x258 * x259 * x259 + x258 * x272 * x890
+                        + m2 * (a_ * (x384 - x255) * x9 - x902 + x903 - x904) * d,
+                    (x872 * x28 * psi_dot * phi_dot - x162 * x905 - x67 * x894
+                        - x158 * x909
+                        + theta_dot * (x6 * x67 * x311 * d - x304 * x29 * (x870 - x868))
+                        - (-x160 - x161) * x349) * m2,
+                    m2
+                        * ((x6 * x311 * d * x72 - x304 * x29 * (x877 - x876)) * theta_dot
+                            - x185 * x905 - x894 * x72 - x349 * (-x183 - x184)
+                            - x181 * x909 + x28 * psi_dot * phi_dot * x875),
+                    m2
+                        * ((x882 * psi_dot * phi_dot + x6 * theta_dot * x311 * d * x20)
+                            * x28
+                            - d
+                                * (gamma2_dot
+                                    * (x631
+                                        + theta_dot
+                                            * (0.5 * x626 - 0.5 * x625 - 2.0 * x471 + 0.5 * x627
+                                                - 0.5 * x629) + gamma2_dot * x910)
+                                    + theta_dot * (x634 + theta_dot * x910)
+                                    + (0.25 * x625 + 0.25 * x626 + 0.25 * x627 - 0.5 * x628
+                                        + 0.25 * x629 - 0.5 * x630) * phi_dot * phi_dot)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x941,
+                    x971 * x18 + x29 * x972 * x20,
+                    x29 * x972 * x18 - x971 * x20,
+                    (x955 + x956) * J1 - 0.5 * (theta_dot * x29 * x216 * x18 * x302)
+                        - d * x948 * m1 + x28 * x20 * x217 * phi_dot
+                        + (x914 - x955 - x956 + x916) * J2,
+                    (-x960 - x961) * J1
+                        + (x926 - 0.5 * (theta_dot * x29 * x20 * x302)) * x156
+                        - m2 * x943 * d + (x960 - x926 + x927 + x961) * J2,
+                    x28 * phi_dot * x173 - (x933 * x64 + x165 * x948 + x946 * x169) * m1
+                        + theta_dot * (-d * x938 * x68 - 0.5 * (x387 * x29 * x29 * x302))
+                        - (x158 * x944 + x943 * x162 + x67 * x921) * m2,
+                    x28 * phi_dot * x197 - (x946 * x190 + x933 * x75 + x193 * x948) * m1
+                        + (-x76 * d * x938 - 0.5 * (x29 * x29 * x391 * x302)) * theta_dot
+                        - (x943 * x185 + x921 * x72 + x181 * x944) * m2,
+                    x28 * (x208 * phi_dot - theta_dot * x80 * d * x938),
+                ],
+                [
+                    x995,
+                    x1021 * x29 * x20 + x1022 * x18,
+                    x1021 * x29 * x18 - x1022 * x20,
+                    (J2 * (phi_dot - x1001 - x1002 + x236) + (x1001 + x1002) * J1
+                        - x304 * x216) * x18 - x1019 * d * m1,
+                    (J2 * (x1013 - x1012 + phi_dot + x236) - x304 * x156
+                        + (x1012 - x1013) * J1) * x20 - m2 * d * x998,
+                    -x386 - m2 * (x998 * x162 + x999 * x158 + x67 * x987)
+                        - (x976 * x64 + x169 * x1017 + x165 * x1019) * m1 - x388,
+                    -m2 * (x987 * x72 + x181 * x999 + x998 * x185) - x390
+                        - m1 * (x190 * x1017 + x976 * x75 + x1019 * x193) - x392,
+                    -(d * (x436 + x1023 * theta_dot + x439) + 2.0 * x1024) * m1
+                        - x80 * x311 * x28 * d
+                        - m2
+                            * ((theta_dot * x1025 + x412 + x416 * gamma2_dot) * d
+                                - 2.0 * x1024),
+                ],
+                [
+                    x1035,
+                    x29 * x20 * x1055 + x1056 * x18,
+                    x29 * x1055 * x18 - x20 * x1056,
+                    (x1042 - x1040) * J1 - theta_dot * x216 * x18
+                        + (x232 - x1042 + x1040 + x233) * J2 + x28 * psi_dot * x20 * x217
+                        - d * m1 * x1041,
+                    (-x1046 - x1047) * J1 - x1052 * m2 * d + x241 * x156
+                        + J2 * (x1046 - x239 + x1047 + x240),
+                    x28 * psi_dot * x173
+                        - m2
+                            * (2.0 * (x272 * d * x9 * x158) + x67 * x1027 + x1052 * x162)
+                        + (-x175 - x176 - x177) * theta_dot * x29
+                        - m1 * (x1038 * x2 * x169 + x1032 * x64 + x165 * x1041),
+                    theta_dot * x29 * (-x199 - x200 - x201)
+                        - m1 * (x1038 * x2 * x190 + x193 * x1041 + x1032 * x75)
+                        - m2
+                            * (x1052 * x185 + 2.0 * (x181 * x272 * d * x9) + x72 * x1027)
+                        + x28 * psi_dot * x197,
+                    d
+                        * (-x30 * theta_dot * x80
+                            - m2
+                                * (gamma2_dot * x413 + theta_dot * x411
+                                    + phi_dot
+                                        * (0.5 * x397 - 0.5 * x399 - 0.5 * x401 + 0.5 * x403))
+                            - (gamma1_dot * x440
+                                + phi_dot
+                                    * (0.5 * x430 - 0.5 * x425 - 0.5 * x432 + 0.5 * x434)
+                                + theta_dot * x438) * m1) + x208 * x28 * psi_dot,
+                ],
+                [
+                    x1060,
+                    x1062 * x29 * x20 + x1063 * x18,
+                    x1062 * x29 * x18 - x1063 * x20,
+                    0.0,
+                    0.0,
+                    -(d * m1 * (x1058 * x64 - 2.0 * (x282 * x169))),
+                    -(d * (x1058 * x75 - 2.0 * (x282 * x190)) * m1),
+                    -(d * m1 * (x1023 * gamma1_dot + x435 * theta_dot + x441)),
+                ],
+                [
+                    x1064,
+                    x1066 * x18 + x1067 * x29 * x20,
+                    x1067 * x29 * x18 - x20 * x1066,
+                    0.0,
+                    0.0,
+                    -(m2 * d * (2.0 * (x260 * x158) - 2.0 * (x259 * x67))),
+                    -(m2 * (2.0 * (x181 * x260) - 2.0 * (x259 * x72)) * d),
+                    -(m2 * d * (gamma2_dot * x1025 + x414 + x417)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            w: [
+                [0.0, x29 * x20, x442, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x18, x443, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x30 * x29 * x20, x444, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * x304 * x29,
+                -(x28 * psi_dot * phi_dot),
+                theta_dot * x311,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            d_w: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        0.0,
+                        x30 * x29 * x29 * x20,
+                        x30 * x29 * x29 * x18,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x635 * x20, x635 * x18, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x442, -(x29 * x20), 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x443, -x18, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x444, -(x30 * x29 * x20), 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x532 * theta_dot * x29 * x29,
+                    x30 * psi_dot * phi_dot,
+                    theta_dot * x531,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    0.5 * theta_dot * x29 * x29 * x302,
+                    -(x28 * phi_dot),
+                    theta_dot * x938,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [x304 * x29, 0.0, x311, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    theta_dot * x29,
+                    -(x28 * psi_dot),
+                    x30 * theta_dot * x29,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+        } = assemble_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..8 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..8 {
+            let mut s = c[j];
+            for i in 0..8 {
+                s += w[j][i] * x[i];
+            }
+            dstate[8 + j] = s;
+        }
+        for k in 0..16 {
+            for j in 0..8 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 8];
+            for i in 0..8 {
+                let mut s = d_force[k][i];
+                for j in 0..8 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..8 {
+                let mut s = d_c[k][j];
+                for i in 0..8 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[8 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1867,6 +5816,19 @@ pub mod maggi {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
@@ -2369,6 +6331,887 @@ pub mod kane {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 8],
+        matrix: [[f64; 8]; 8],
+        force: [f64; 8],
+        checks: [f64; 1],
+        d_qdot: [[f64; 8]; 16],
+        d_matrix: [[[f64; 8]; 8]; 16],
+        d_force: [[f64; 8]; 16],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let u6 = state[13];
+        let u7 = state[14];
+        let u8 = state[15];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
+        let x8 = f64::sin(theta);
+        let x9 = d * d * m1;
+        let x10 = J2 + x9;
+        let x11 = f64::sin(gamma1);
+        let x12 = f64::cos(gamma1);
+        let x13 = x12 * x12;
+        let x14 = f64::cos(gamma2);
+        let x15 = x14 * x14;
+        let x16 = f64::sin(gamma2);
+        let x17 = m2 * d * d;
+        let x18 = x17 + J2;
+        let x19 = J1 - J2;
+        let x20 = x12 * d;
+        let x21 = -a_ - x20;
+        let x22 = x21 * d * m1;
+        let x23 = x12 * x19 + x22;
+        let x24 = x23 * x11 - Ixy;
+        let x25 = J2 - J1;
+        let x26 = x14 * d;
+        let x27 = -a_ - x26;
+        let x28 = m2 * d * x27;
+        let x29 = x14 * x25 - x28;
+        let x30 = x16 * x29 - Ixz;
+        let x31 = f64::sin(psi);
+        let x32 = x2 * x31;
+        let x33 = f64::cos(psi);
+        let x34 = x8 * x33 * x4;
+        let x35 = x32 + x34;
+        let x36 = x4 * x31;
+        let x37 = x8 * x33 * x2;
+        let x38 = x37 - x36;
+        let x39 = d * (x11 * x35 * m1 - m2 * x38 * x16);
+        let x40 = x33 * x4;
+        let x41 = x8 * x2 * x31;
+        let x42 = x40 + x41;
+        let x43 = x33 * x2;
+        let x44 = x8 * x4 * x31;
+        let x45 = x44 - x43;
+        let x46 = (x11 * x45 * m1 - m2 * x16 * x42) * d;
+        let x47 = x11 * m1 * x4;
+        let x48 = m2 * x16 * x2;
+        let x49 = x47 - x48;
+        let x50 = x49 * x0 * d;
+        let x51 = d * d;
+        let x52 = -Iyz;
+        let x53 = d + x14 * a_;
+        let x54 = J2 + m2 * d * x53;
+        let x55 = x14 * x0;
+        let x56 = x8 * x16 * x4;
+        let x57 = (x55 - x56) * x33 - x16 * x2 * x31;
+        let x58 = x33 * x0 * x16;
+        let x59 = x14 * x35;
+        let x60 = x58 + x59;
+        let x61 = m2 * (x60 * x53 - a_ * x57 * x16) + x21 * x35 * m1;
+        let x62 = x14 * x0 * x31;
+        let x63 = x43 - x44;
+        let x64 = x62 + x63 * x16;
+        let x65 = x0 * x16 * x31;
+        let x66 = x14 * x45;
+        let x67 = x65 + x66;
+        let x68 = x21 * x45 * m1 + m2 * (x67 * x53 - a_ * x16 * x64);
+        let x69 = -x0 * x16 * x4 - x14 * x8;
+        let x70 = x8 * x16;
+        let x71 = x14 * x0 * x4;
+        let x72 = x71 - x70;
+        let x73 = m2 * (x72 * x53 - a_ * x69 * x16) + x21 * x0 * m1 * x4;
+        let x74 = x12 * a_ + d;
+        let x75 = d * x74 * m1 + J2;
+        let x76 = x12 * x38 - x33 * x11 * x0;
+        let x77 = x8 * x11 * x2;
+        let x78 = x12 * x0;
+        let x79 = x11 * x4 * x31;
+        let x80 = x33 * (x77 + x78) - x79;
+        let x81 = m2 * x38 * x27 + (x76 * x74 + a_ * x80 * x11) * m1;
+        let x82 = x11 * x0 * x31;
+        let x83 = x12 * x42 - x82;
+        let x84 = x12 * x0 * x31;
+        let x85 = x84 + x11 * x42;
+        let x86 = (x83 * x74 + a_ * x11 * x85) * m1 + m2 * x27 * x42;
+        let x87 = x12 * x0 * x2 + x8 * x11;
+        let x88 = x11 * x0 * x2;
+        let x89 = x12 * x8;
+        let x90 = x88 - x89;
+        let x91 = (x87 * x74 + a_ * x90 * x11) * m1 + m2 * x0 * x2 * x27;
+        let x92 = x76 * d * m1;
+        let x93 = x83 * d * m1;
+        let x94 = x87 * d * m1;
+        let x95 = m2 * d * x60;
+        let x96 = m2 * d * x67;
+        let x97 = m2 * x72 * d;
+        let x98 = m2 + m0 + m1;
+        let x99 = x11 * u1;
+        let x100 = x12 * u2;
+        let x101 = x100 - x99;
+        let x102 = x16 * u1;
+        let x103 = x14 * u3;
+        let x104 = -x102 - x103;
+        let x105 = u3 + 2.0 * u4;
+        let x106 = d * (x12 * x105 * u1 + x105 * u2 * x11) + a_ * u3 * u1;
+        let x107 = d * m1 * x106;
+        let x108 = u2 * x11;
+        let x109 = x12 * u1;
+        let x110 = -x108 - x109;
+        let x111 = J2 * x110 * u4;
+        let x112 = u3 + u4;
+        let x113 = x108 + x109;
+        let x114 = x112 * x113 * x19;
+        let x115 = u2 * Iyz;
+        let x116 = u1 * Ixz;
+        let x117 = u3 * Izz - x115 - x116;
+        let x118 = u5 + u2;
+        let x119 = J1 * x118;
+        let x120 = 2.0 * u5 + u2;
+        let x121 = x120 * J2;
+        let x122 = x121 - x119;
+        let x123 = u3 * x16;
+        let x124 = x14 * u1;
+        let x125 = x124 - x123;
+        let x126 = x122 * x125;
+        let x127 = -2.0 * u5 - u2;
+        let x128 = d * (x14 * x127 * u1 + x120 * u3 * x16) - a_ * u2 * u1;
+        let x129 = m2 * d * x128;
+        let x130 = Iyz * u3;
+        let x131 = Ixy * u1;
+        let x132 = u2 * Iyy - x130 - x131;
+        let x133 = x102 + x103;
+        let x134 = x25 * x125 * x133;
+        let x135 = u3 * u3;
+        let x136 = u1 * u1;
+        let x137 = u5 * (-u5 - 2.0 * u2) + x135 - x136;
+        let x138 = 2.0 * gamma2;
+        let x139 = f64::sin(x138);
+        let x140 = u3 * x139;
+        let x141 = f64::cos(x138);
+        let x142 = x141 * u1;
+        let x143 = u3 * Ixz;
+        let x144 = u2 * Ixy;
+        let x145 = Ixx * u1 - x143 - x144;
+        let x146 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x136;
+        let x147 = 2.0 * gamma1;
+        let x148 = f64::sin(x147);
+        let x149 = u2 * x148;
+        let x150 = f64::cos(x147);
+        let x151 = u1 * x150;
+        let x152 = x113 * x19 * x101;
+        let x153 = a_ * u3 * u3 * x11;
+        let x154 = u2 * x21;
+        let x155 = x11 * d * u1;
+        let x156 = x154 + x155;
+        let x157 = x153 - x156 * x113;
+        let x158 = d * x16 * u1;
+        let x159 = u3 * x27;
+        let x160 = x159 - x158;
+        let x161 = a_ * u2 * u2 * x16 + x125 * x160;
+        let x162 = x156 * x101;
+        let x163 = x12 * a_ * u3 * u4;
+        let x164 = (u3 * x74 + d * u4) * x112;
+        let x165 = x162 + x163 - x164;
+        let x166 = (u5 * d + u2 * x53) * x118 - x14 * u5 * a_ * u2 - x160 * x133;
+        let x167 = -m1 * (x80 * x165 + x76 * x157 + x35 * x106)
+            - m2 * (x57 * x166 + x161 * x60 + x38 * x128);
+        let x168 = -m2 * (x0 * x2 * x128 + x161 * x72 + x69 * x166)
+            - (x0 * x106 * x4 + x90 * x165 + x157 * x87) * m1;
+        let x169 = -x40 - x41;
+        let x170 = d * (x63 * x11 * m1 - m2 * x16 * x169);
+        let x171 = x16 * x45 - x62;
+        let x172 = x14 * x63;
+        let x173 = x172 - x65;
+        let x174 = m2 * (x173 * x53 - a_ * x171 * x16) + x63 * x21 * m1;
+        let x175 = x12 * x169 + x82;
+        let x176 = x11 * x169 - x84;
+        let x177 = (x175 * x74 + a_ * x11 * x176) * m1 + m2 * x169 * x27;
+        let x178 = d * x175 * m1;
+        let x179 = m2 * d * x173;
+        let x180 = x49 * x33 * x0 * d;
+        let x181 = x49 * x0 * d * x31;
+        let x182 = (x48 - x47) * x8 * d;
+        let x183 = x73 * x33;
+        let x184 = x73 * x31;
+        let x185 = -x14 * x8 * x4 - x0 * x16;
+        let x186 = x56 - x55;
+        let x187 = m2 * (x185 * x53 - x186 * a_ * x16) - x8 * x21 * m1 * x4;
+        let x188 = x33 * x91;
+        let x189 = x91 * x31;
+        let x190 = -x77 - x78;
+        let x191 = x11 * x0 - x12 * x8 * x2;
+        let x192 = (a_ * x190 * x11 + x191 * x74) * m1 - m2 * x8 * x2 * x27;
+        let x193 = x87 * x33 * d * m1;
+        let x194 = x87 * d * m1 * x31;
+        let x195 = d * x191 * m1;
+        let x196 = m2 * x72 * x33 * d;
+        let x197 = m2 * x72 * d * x31;
+        let x198 = m2 * d * x185;
+        let x199 = x36 - x37;
+        let x200 = d * (x11 * m1 * x199 - m2 * x16 * x35);
+        let x201 = d * (x11 * x169 * m1 - m2 * x16 * x45);
+        let x202 = x0 * d * (-m2 * x16 * x4 - x11 * x2 * m1);
+        let x203 = m2 * (x14 * x53 * x199 - a_ * x38 * x16 * x16) + x21 * m1 * x199;
+        let x204 = m2 * (x14 * x169 * x53 - a_ * x16 * x16 * x42) + x21 * x169 * m1;
+        let x205 = x0 * x2 * (m2 * (-x14 * x53 - a_ * x16 * x16) - x21 * m1);
+        let x206 = m2 * x27 + (a_ * x11 * x11 + x12 * x74) * m1;
+        let x207 = x206 * x35;
+        let x208 = x206 * x45;
+        let x209 = x206 * x0 * x4;
+        let x210 = x12 * d * x35 * m1;
+        let x211 = x12 * d * x45 * m1;
+        let x212 = x12 * x0 * d * m1 * x4;
+        let x213 = x14 * m2 * d * x199;
+        let x214 = x14 * m2 * d * x169;
+        let x215 = -(x14 * m2 * x0 * d * x2);
+        let x216 = x11 * x165 + x12 * x157;
+        let x217 = (J2 + x9 - J1) * x11 * x11 + x12 * x23;
+        let x218 = 2.0 * J1 - 2.0 * J2;
+        let x219 = x11 * d * x35 * m1;
+        let x220 = x11 * d * x45 * m1;
+        let x221 = x11 * x0 * d * m1 * x4;
+        let x222 = -(a_ * x11 * d * m1);
+        let x223 = x33 * x190 + x79;
+        let x224 = m1 * (x12 * a_ * x80 + x74 * x223);
+        let x225 = (x12 * a_ * x85 + x74 * x176) * m1;
+        let x226 = x89 - x88;
+        let x227 = (x12 * a_ * x90 + x74 * x226) * m1;
+        let x228 = d * x223 * m1;
+        let x229 = d * m1 * x176;
+        let x230 = d * m1 * x226;
+        let x231 = x112 * x19 * x101;
+        let x232 = x12 * x105 * u2 + x11 * u1 * (-u3 - 2.0 * u4);
+        let x233 = u4 * x101 * J1;
+        let x234 = (x99 - x100) * J2 * u4;
+        let x235 = x111 - x107 + x114 - x110 * u4 * J1;
+        let x236 = u1 * x148;
+        let x237 = u2 * x150;
+        let x238 = x113 * x19 * x110;
+        let x239 = x19 * x101 * x101;
+        let x240 = x113 * x113 * d;
+        let x241 = x12 * a_ * u3 * u3;
+        let x242 = x241 - x240 + x163 - x164;
+        let x243 = x153 + x113 * d * x101 + x156 * x110;
+        let x244 = x14 * x29 + (J1 - x17 - J2) * x16 * x16;
+        let x245 = -(x14 * m2 * x38 * d);
+        let x246 = -(x14 * m2 * d * x42);
+        let x247 = -(m2 * a_ * d * x16);
+        let x248 = x14 * (-x32 - x34);
+        let x249 = m2 * (x57 * x53 + a_ * (x16 * (-x59 - x248) - x14 * x57));
+        let x250 = m2 * (x64 * x53 + a_ * ((-x66 - x172) * x16 - x14 * x64));
+        let x251 = m2 * (x69 * x53 - x14 * a_ * x69);
+        let x252 = m2 * x38 * d * x16;
+        let x253 = m2 * d * x16 * x42;
+        let x254 = m2 * x0 * d * x16 * x2;
+        let x255 = m2 * x57 * d;
+        let x256 = m2 * d * x64;
+        let x257 = m2 * x69 * d;
+        let x258 = u5 * J1;
+        let x259 = x119 - x121 + x258;
+        let x260 = x14 * x120 * u3 + x120 * x16 * u1;
+        let x261 = x123 - x124;
+        let x262 = u5 * x261 * J1;
+        let x263 = x25 * x125 * x125;
+        let x264 = x25 * x133 * x104;
+        let x265 = x14 * a_ * u2 * u2 + x125 * d * x261 + x160 * x104;
+        let x266 = a_ * u3 + x12 * x105 * d;
+        let x267 = x112 * x19;
+        let x268 = J2 * u4;
+        let x269 = u4 * J1;
+        let x270 = Ixy * u3;
+        let x271 = x14 * d * x127 - a_ * u2;
+        let x272 = u2 * Ixz;
+        let x273 = x14 * x133;
+        let x274 = x125 * x16;
+        let x275 = Izz - Ixx;
+        let x276 = x12 * x101;
+        let x277 = x113 * x11;
+        let x278 = Ixx - Iyy;
+        let x279 = x12 * x156;
+        let x280 = -x279 - x113 * x11 * d;
+        let x281 = x14 * x160;
+        let x282 = x281 - x125 * d * x16;
+        let x283 = d * x101 - x154 - x155;
+        let x284 = x158 - x159 + d * x133;
+        let x285 = Iyy - Izz;
+        let x286 = a_ * u1;
+        let x287 = d * x261 - x286;
+        let x288 = Iyz * u1;
+        let x289 = x12 * x113 * x19;
+        let x290 = a_ * a_ * u1;
+        let x291 = 2.0 * x108 + 2.0 * x109;
+        let x292 = x14 * x25 * x125;
+        let x293 = x19 * x11 * x101;
+        let x294 = -x156 * x11 - x21 * x113;
+        let x295 = d * x118 + x14 * a_ * (u2 - u5) + x53 * x118;
+        let x296 = x21 * x101 + x279;
+        let x297 = J2 * x127;
+        let x298 = x113 * d + x286;
+        let x299 = x113 * x19;
+        let x300 = 2.0 * x123 - 2.0 * x124;
+        let x301 = x19 * x16 * x133;
+        let x302 = x125 * x27 - x16 * x160;
+        let x303 = (-u3 - u4) * d - x112 * x74 + x12 * a_ * (u4 - u3);
+        let x304 = -x281 - x133 * x27;
+        let x305 = J2 * x110;
+        let x306 = -2.0 * u3 - 2.0 * u4;
+        let x307 = 2.0 * J2 - J1;
+        let x308 = 2.0 * u5 + 2.0 * u2;
+        Derivatives {
+            qdot: [x1 * x6, x7, u1 + x8 * x1 * x6, u4, u5, u6, u7, u8],
+            matrix: [
+                [
+                    Ixx + x10 * x11 * x11 + (x13 + x15) * J1 + x16 * x16 * x18,
+                    x24,
+                    x30,
+                    0.0,
+                    0.0,
+                    x39,
+                    x46,
+                    x50,
+                ],
+                [
+                    x24,
+                    x11 * x11 * J1 + x21 * x21 * m1 + Iyy + J2 * (x13 + 1.0)
+                        + m2 * (x51 + a_ * (a_ + 2.0 * x26)),
+                    x52,
+                    0.0,
+                    x54,
+                    x61,
+                    x68,
+                    x73,
+                ],
+                [
+                    x30,
+                    x52,
+                    x16 * x16 * J1 + (a_ * (a_ + 2.0 * x20) + x51) * m1 + m2 * x27 * x27
+                        + Izz + J2 * (x15 + 1.0),
+                    x75,
+                    0.0,
+                    x81,
+                    x86,
+                    x91,
+                ],
+                [0.0, 0.0, x75, x10, 0.0, x92, x93, x94],
+                [0.0, x54, 0.0, 0.0, x18, x95, x96, x97],
+                [x39, x61, x81, x92, x95, x98, 0.0, 0.0],
+                [x46, x68, x86, x93, x96, 0.0, x98, 0.0],
+                [x50, x73, x91, x94, x97, 0.0, 0.0, x98],
+            ],
+            force: [
+                (-x12 * u4 * x101 - x14 * u5 * x104) * J1 + (x111 - x107 + x114) * x11
+                    - u2 * x117 + x16 * (x129 - x126) + x132 * u3,
+                x134 - x12 * (x111 + x114) - x21 * m1 * x106 + x117 * u1
+                    - x11 * u4 * x101 * J1
+                    - m2
+                        * ((a_ * (x16 * x137 - 2.0 * (x14 * u3 * u1))
+                            + ((0.5 * x140 - x142) * u3 - 0.5 * (u1 * u1 * x139)) * d)
+                            * d - a_ * a_ * u3 * u1) - x145 * u3,
+                u2 * x145 - m2 * x27 * x128
+                    - (d
+                        * (a_ * (x146 * x11 + 2.0 * (x12 * u2 * u1))
+                            + d * (u2 * (0.5 * x149 + x151) - 0.5 * (u1 * u1 * x148)))
+                        + a_ * a_ * u2 * u1) * m1 - x14 * x122 * x125
+                    + u5 * x16 * x104 * J1 - x132 * u1 + x152,
+                x152 - x157 * d * m1,
+                x134 - m2 * x161 * d,
+                x167,
+                -(x161 * x67 + x166 * x64 + x42 * x128) * m2
+                    - m1 * (x45 * x106 + x157 * x83 + x165 * x85),
+                x168,
+            ],
+            checks: [x0],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x8 * x1 * x1 * x6,
+                    0.0,
+                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [x1 * x7, -x3 - x5, x8 * x1 * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x4, x8 * x1 * x2, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x4, -x2, x8 * x1 * x4, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x170, x39, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x174, x61, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x177, x81, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x178, x92, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x179, x95, 0.0],
+                    [x170, x174, x177, x178, x179, 0.0, 0.0, 0.0],
+                    [x39, x61, x81, x92, x95, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x180, x181, x182],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x183, x184, x187],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x188, x189, x192],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x193, x194, x195],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x196, x197, x198],
+                    [x180, x183, x188, x193, x196, 0.0, 0.0, 0.0],
+                    [x181, x184, x189, x194, x197, 0.0, 0.0, 0.0],
+                    [x182, x187, x192, x195, x198, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x200, x201, x202],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x203, x204, x205],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x207, x208, x209],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x210, x211, x212],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x213, x214, x215],
+                    [x200, x203, x207, x210, x213, 0.0, 0.0, 0.0],
+                    [x201, x204, x208, x211, x214, 0.0, 0.0, 0.0],
+                    [x202, x205, x209, x212, x215, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x12 * (2.0 * J2 + 2.0 * x9 - 2.0 * J1) * x11,
+                        x217,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x210,
+                        x211,
+                        x212,
+                    ],
+                    [
+                        x217,
+                        x11 * (2.0 * x22 + x12 * x218),
+                        0.0,
+                        0.0,
+                        0.0,
+                        x219,
+                        x220,
+                        x221,
+                    ],
+                    [0.0, 0.0, -(2.0 * a_ * x11 * d * m1), x222, 0.0, x224, x225, x227],
+                    [0.0, 0.0, x222, 0.0, 0.0, x228, x229, x230],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x210, x219, x224, x228, 0.0, 0.0, 0.0, 0.0],
+                    [x211, x220, x225, x229, 0.0, 0.0, 0.0, 0.0],
+                    [x212, x221, x227, x230, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x14 * x16 * (2.0 * x17 + 2.0 * J2 - 2.0 * J1),
+                        0.0,
+                        x244,
+                        0.0,
+                        0.0,
+                        x245,
+                        x246,
+                        x215,
+                    ],
+                    [0.0, -(2.0 * m2 * a_ * d * x16), 0.0, 0.0, x247, x249, x250, x251],
+                    [
+                        x244,
+                        0.0,
+                        x16 * (2.0 * x28 + x14 * x218),
+                        0.0,
+                        0.0,
+                        x252,
+                        x253,
+                        x254,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x247, 0.0, 0.0, 0.0, x255, x256, x257],
+                    [x245, x249, x252, 0.0, x255, 0.0, 0.0, 0.0],
+                    [x246, x250, x253, 0.0, x256, 0.0, 0.0, 0.0],
+                    [x215, x251, x254, 0.0, x257, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -(x157 * x175 + x165 * x176 + x63 * x106) * m1
+                        - m2 * (x169 * x128 + x171 * x166 + x161 * x173),
+                    x167,
+                    0.0,
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    x168 * x33,
+                    x168 * x31,
+                    -m1 * (x190 * x165 - x8 * x106 * x4 + x157 * x191)
+                        - m2 * (x186 * x166 - x8 * x2 * x128 + x161 * x185),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -(x38 * x166 * x16 + x35 * x128 + x14 * x161 * x199) * m2
+                        - m1 * (x35 * x216 + x106 * x199),
+                    -(x45 * x216 + x169 * x106) * m1
+                        - m2 * (x166 * x16 * x42 + x45 * x128 + x14 * x161 * x169),
+                    x0
+                        * (-(x4 * x216 - x2 * x106) * m1
+                            - m2 * (x128 * x4 + x2 * (x166 * x16 - x14 * x161))),
+                ],
+                [
+                    (x231 - d * d * x232 * m1 + x233 + x234) * x11 + x12 * x235,
+                    x11 * x235 - x21 * d * x232 * m1 + x12 * (-x231 - x233 - x234),
+                    x238
+                        - d * m1
+                            * (d * ((x237 - 2.0 * x236) * u2 - u1 * u1 * x150)
+                                + a_ * (x12 * x146 - 2.0 * (u2 * x11 * u1))) + x239,
+                    x238 - d * (x241 - x162 - x240) * m1 + x239,
+                    0.0,
+                    -((x242 * x76 + x157 * x223 + x243 * x80 + d * x232 * x35) * m1),
+                    -((x242 * x83 + x243 * x85 + x157 * x176 + d * x232 * x45) * m1),
+                    -((x242 * x87 + x0 * d * x232 * x4 + x157 * x226 + x243 * x90) * m1),
+                ],
+                [
+                    x16 * (x259 * x104 + m2 * x260 * d * d) + x14 * (x129 - x262 - x126),
+                    x263 + x264
+                        - m2 * d
+                            * (a_ * (2.0 * (u3 * x16 * u1) + x14 * x137)
+                                + (x141 * (x135 - x136) + 2.0 * (u3 * u1 * x139)) * d),
+                    (x262 + x126 - x129) * x16 - m2 * x260 * d * x27 + x14 * x259 * x104,
+                    0.0,
+                    x263 - m2 * d * x265 + x264,
+                    -(m2
+                        * (x265 * x60 - x57 * d * x261 * x133 + x166 * (x248 - x58)
+                            + x260 * x38 * d)),
+                    -(m2
+                        * (x166 * x173 - d * x261 * x64 * x133 + x265 * x67
+                            + x260 * d * x42)),
+                    -(m2
+                        * (x166 * (x70 - x71) - x69 * d * x261 * x133
+                            + x260 * x0 * d * x2 + x72 * x265)),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    (x12 * (x267 - x268 + x269) - d * x266 * m1) * x11 - x270
+                        + (m2 * d * x271 + x14 * x259) * x16 + x272,
+                    J2 * (x273 + x274) + x275 * u3 + (x11 * x11 * u4 - x273 - x274) * J1
+                        - m2
+                            * ((a_ * (-2.0 * x102 - 2.0 * x103)
+                                + d * (-u1 * x139 - x141 * u3)) * d - a_ * a_ * u3)
+                        - x12 * x12 * (x267 - x268) - x115 - 2.0 * x116
+                        - x21 * x266 * m1,
+                    (x276 - u5 * x16 * x16 - x277) * J1 - m2 * x271 * x27
+                        - x14 * x14 * x122 + u2 * x278 + (x277 - x276) * J2
+                        - m1
+                            * (((2.0 * x100 - 2.0 * x99) * a_ + d * (x237 - x236)) * d
+                                + a_ * a_ * u2) + x130 + 2.0 * x131,
+                    x25 * x113 * x11 + x12 * x19 * x101 - d * m1 * x280,
+                    x14 * x25 * x133 + x25 * x125 * x16 - m2 * d * x282,
+                    -m1 * (x80 * x11 * x283 + x76 * x280 + x266 * x35)
+                        - m2 * (x282 * x60 + x38 * x271 + x57 * x16 * x284),
+                    -(x266 * x45 + x83 * x280 + x11 * x283 * x85) * m1
+                        - m2 * (x271 * x42 + x67 * x282 + x16 * x64 * x284),
+                    -m2 * (x69 * x16 * x284 + x72 * x282 + x0 * x2 * x271)
+                        - (x0 * x266 * x4 + x87 * x280 + x90 * x11 * x283) * m1,
+                ],
+                [
+                    x11 * x11 * (x267 - x105 * d * d * m1 - x268) - x12 * x12 * u4 * J1
+                        + 2.0 * x115 + x116 + u3 * x285
+                        + x16 * (m2 * d * x287 - x25 * x125),
+                    2.0 * (u5 * m2 * a_ * d * x16) + x270
+                        + x11 * (x12 * (x268 - x267 - x269) - x105 * x21 * d * m1)
+                        - x288,
+                    x289 - x143 + x278 * u1 - 2.0 * x144
+                        - m1 * (x290 + d * (d * (x149 + x151) + a_ * x291)) - x292 + x293
+                        - m2 * x27 * x287,
+                    x289 - d * x294 * m1 + x293,
+                    -(2.0 * m2 * a_ * u2 * d * x16),
+                    -m2 * (x38 * x287 + 2.0 * (a_ * u2 * x16 * x60) + x57 * x295)
+                        - m1 * (x76 * x294 + x80 * x296 + x105 * x11 * d * x35),
+                    -(x105 * x11 * d * x45 + x296 * x85 + x83 * x294) * m1
+                        - m2 * (x42 * x287 + x295 * x64 + 2.0 * (a_ * u2 * x16 * x67)),
+                    -m2 * (2.0 * (a_ * u2 * x72 * x16) + x69 * x295 + x0 * x2 * x287)
+                        - (x90 * x296 + x105 * x11 * x0 * d * x4 + x87 * x294) * m1,
+                ],
+                [
+                    u2 * x285 + (m2 * x120 * d * d - x119 - x297) * x16 * x16
+                        + x14 * x14 * u5 * J1 - 2.0 * x130 - x131
+                        + (x299 - x298 * d * m1) * x11,
+                    2.0 * x143 - x289 + x275 * u1
+                        - m2 * ((d * (x140 - x142) + a_ * x300) * d - x290) + x144 + x292
+                        - x298 * x21 * m1 + x301,
+                    x16 * (x14 * (-x119 - x297 - x258) - m2 * x120 * d * x27) - x272
+                        + 2.0 * (a_ * x11 * d * u4 * m1) + x288,
+                    -(2.0 * a_ * u3 * x11 * d * m1),
+                    x292 - m2 * d * x302 + x301,
+                    -m1 * (x298 * x35 + 2.0 * (a_ * x76 * u3 * x11) + x80 * x303)
+                        - m2 * (x60 * x302 + x38 * x120 * d * x16 + x57 * x304),
+                    -m2 * (x120 * d * x16 * x42 + x304 * x64 + x67 * x302)
+                        - (x298 * x45 + 2.0 * (a_ * x83 * u3 * x11) + x303 * x85) * m1,
+                    -m2 * (x72 * x302 + x69 * x304 + x120 * x0 * d * x16 * x2)
+                        - (x298 * x0 * x4 + x90 * x303 + 2.0 * (a_ * x87 * u3 * x11))
+                            * m1,
+                ],
+                [
+                    (x305 + x299 - d * d * x291 * m1) * x11 - x12 * x101 * J1,
+                    -x21 * d * x291 * m1 - x11 * x101 * J1 - x12 * (x305 + x299),
+                    -(a_ * x11 * d * x306 * m1),
+                    0.0,
+                    0.0,
+                    -((x35 * x291 + x80 * x306) * d * m1),
+                    -(d * m1 * (x306 * x85 + x291 * x45)),
+                    -((x0 * x291 * x4 + x90 * x306) * d * m1),
+                ],
+                [
+                    (m2 * d * d * x300 - x125 * x307) * x16 - x14 * x104 * J1,
+                    -(m2 * a_ * d * x16 * (-2.0 * u5 - 2.0 * u2)),
+                    x16 * x104 * J1 - x14 * x125 * x307 - m2 * d * x300 * x27,
+                    0.0,
+                    0.0,
+                    -(m2 * (x38 * x300 + x57 * x308) * d),
+                    -(m2 * d * (x300 * x42 + x64 * x308)),
+                    -(m2 * (x69 * x308 + x0 * x2 * x300) * d),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..8 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..8 {
+            dstate[8 + j] = x[j];
+        }
+        for k in 0..16 {
+            for j in 0..8 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 8];
+            for i in 0..8 {
+                let mut s = d_force[k][i];
+                for j in 0..8 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..8 {
+                jac[8 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -2436,6 +7279,19 @@ pub mod kane {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
@@ -3012,6 +7868,1174 @@ pub mod reduced_volterra {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 8],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 1],
+        d_qdot: [[f64; 8]; 13],
+        d_matrix: [[[f64; 5]; 5]; 13],
+        d_force: [[f64; 5]; 13],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
+        let x8 = f64::sin(theta);
+        let x9 = 1.0 / (m2 + m0 + m1);
+        let x10 = f64::cos(gamma2);
+        let x11 = x10 * x0;
+        let x12 = f64::sin(gamma2);
+        let x13 = x8 * x12 * x4;
+        let x14 = f64::cos(psi);
+        let x15 = f64::sin(psi);
+        let x16 = (x11 - x13) * x14 - x12 * x2 * x15;
+        let x17 = x14 * x0 * x12;
+        let x18 = x2 * x15;
+        let x19 = x8 * x14 * x4;
+        let x20 = x18 + x19;
+        let x21 = x10 * x20;
+        let x22 = x17 + x21;
+        let x23 = x10 * a_;
+        let x24 = d + x23;
+        let x25 = m2 * (x22 * x24 - a_ * x16 * x12);
+        let x26 = f64::cos(gamma1);
+        let x27 = x26 * d;
+        let x28 = -a_ - x27;
+        let x29 = x28 * x20 * m1;
+        let x30 = x25 + x29;
+        let x31 = x30 * u2;
+        let x32 = x4 * x15;
+        let x33 = x8 * x14 * x2;
+        let x34 = x33 - x32;
+        let x35 = x10 * d;
+        let x36 = -a_ - x35;
+        let x37 = m2 * x34 * x36;
+        let x38 = f64::sin(gamma1);
+        let x39 = x26 * x34 - x14 * x38 * x0;
+        let x40 = x26 * a_;
+        let x41 = x40 + d;
+        let x42 = x8 * x38 * x2;
+        let x43 = x26 * x0;
+        let x44 = x38 * x4 * x15;
+        let x45 = x14 * (x42 + x43) - x44;
+        let x46 = (x39 * x41 + a_ * x45 * x38) * m1;
+        let x47 = x37 + x46;
+        let x48 = u3 * x47;
+        let x49 = x38 * x20 * m1;
+        let x50 = m2 * x34 * x12;
+        let x51 = x49 - x50;
+        let x52 = d * (-u5 * m2 * x22 - u1 * x51 - x39 * u4 * m1);
+        let x53 = x14 * x4;
+        let x54 = x8 * x2 * x15;
+        let x55 = x53 + x54;
+        let x56 = x26 * x55;
+        let x57 = x38 * x0 * x15;
+        let x58 = x56 - x57;
+        let x59 = x26 * x0 * x15;
+        let x60 = x59 + x38 * x55;
+        let x61 = (x58 * x41 + a_ * x38 * x60) * m1;
+        let x62 = m2 * x36 * x55;
+        let x63 = x61 + x62;
+        let x64 = x14 * x2;
+        let x65 = x8 * x4 * x15;
+        let x66 = x65 - x64;
+        let x67 = x28 * x66 * m1;
+        let x68 = x10 * x0 * x15;
+        let x69 = x64 - x65;
+        let x70 = x68 + x69 * x12;
+        let x71 = x0 * x12 * x15;
+        let x72 = x10 * x66;
+        let x73 = x71 + x72;
+        let x74 = m2 * (x73 * x24 - a_ * x12 * x70);
+        let x75 = x67 + x74;
+        let x76 = m2 * x12 * x55;
+        let x77 = x38 * x66 * m1;
+        let x78 = x77 - x76;
+        let x79 = x26 * x0 * x2 + x8 * x38;
+        let x80 = x38 * x0 * x2;
+        let x81 = x26 * x8;
+        let x82 = x80 - x81;
+        let x83 = (x79 * x41 + a_ * x82 * x38) * m1;
+        let x84 = m2 * x0 * x2 * x36;
+        let x85 = x83 + x84;
+        let x86 = u3 * x85;
+        let x87 = -x0 * x12 * x4 - x10 * x8;
+        let x88 = x8 * x12;
+        let x89 = x10 * x0 * x4;
+        let x90 = x89 - x88;
+        let x91 = m2 * (x90 * x24 - a_ * x87 * x12);
+        let x92 = x28 * x0 * m1 * x4;
+        let x93 = x91 + x92;
+        let x94 = u2 * x93;
+        let x95 = x38 * m1 * x4;
+        let x96 = m2 * x12 * x2;
+        let x97 = x95 - x96;
+        let x98 = d * (-x79 * u4 * m1 - u5 * m2 * x90 - x97 * x0 * u1);
+        let x99 = x26 * x26;
+        let x100 = x10 * x10;
+        let x101 = J1 - J2;
+        let x102 = x26 * x101 * x38 - Ixy
+            + d * ((-x30 * x51 - x78 * x75 - x93 * x97 * x0) * x9 + x28 * x38 * m1);
+        let x103 = J2 - J1;
+        let x104 = (x9 * (-x63 * x78 - x47 * x51 - x97 * x0 * x85) - m2 * x12 * x36) * d
+            + x10 * x103 * x12 - Ixz;
+        let x105 = x9 * d * d * (-x97 * x79 * x0 - x39 * x51 - x78 * x58) * m1;
+        let x106 = x9 * m2 * d * d * (-x22 * x51 - x78 * x73 - x90 * x97 * x0);
+        let x107 = d * d;
+        let x108 = (-x30 * x47 - x63 * x75 - x93 * x85) * x9 - Iyz;
+        let x109 = x9 * d * m1 * (-x30 * x39 - x93 * x79 - x58 * x75);
+        let x110 = m2 * (x9 * (-x90 * x93 - x30 * x22 - x75 * x73) + d + x23) * d + J2;
+        let x111 = J2 + d * m1 * (x40 + d + (-x39 * x47 - x79 * x85 - x63 * x58) * x9);
+        let x112 = x9 * m2 * d * (-x22 * x47 - x90 * x85 - x63 * x73);
+        let x113 = x9 * m2 * d * d * m1 * (-x39 * x22 - x90 * x79 - x58 * x73);
+        let x114 = u5 + u2;
+        let x115 = J1 * x114;
+        let x116 = 2.0 * u5 + u2;
+        let x117 = x116 * J2;
+        let x118 = x117 - x115;
+        let x119 = u3 * x12;
+        let x120 = x10 * u1;
+        let x121 = x120 - x119;
+        let x122 = u2 * x38;
+        let x123 = x26 * u1;
+        let x124 = -x122 - x123;
+        let x125 = u3 + u4;
+        let x126 = x122 + x123;
+        let x127 = J2 * x124 * u4 + x125 * x126 * x101;
+        let x128 = x127 * x38;
+        let x129 = x38 * u1;
+        let x130 = x26 * u2;
+        let x131 = x130 - x129;
+        let x132 = x12 * u1;
+        let x133 = x10 * u3;
+        let x134 = -x132 - x133;
+        let x135 = u2 * Iyz;
+        let x136 = u1 * Ixz;
+        let x137 = u3 * Izz - x135 - x136;
+        let x138 = -2.0 * u5 - u2;
+        let x139 = d * (x10 * x138 * u1 + x116 * u3 * x12) - a_ * u2 * u1;
+        let x140 = u3 + 2.0 * u4;
+        let x141 = d * (x26 * x140 * u1 + x140 * u2 * x38) + a_ * u3 * u1;
+        let x142 = a_ * u2 * u2 * x12;
+        let x143 = d * x12 * u1;
+        let x144 = u3 * x36;
+        let x145 = x144 - x143;
+        let x146 = x121 * x145;
+        let x147 = x142 + x146;
+        let x148 = x132 + x133;
+        let x149 = (u5 * d + u2 * x24) * x114 - x10 * u5 * a_ * u2 - x145 * x148;
+        let x150 = (x147 * x73 + x149 * x70 + x55 * x139) * m2;
+        let x151 = a_ * u3 * u3 * x38;
+        let x152 = u2 * x28;
+        let x153 = x38 * d * u1;
+        let x154 = x152 + x153;
+        let x155 = x154 * x126;
+        let x156 = x151 - x155;
+        let x157 = x154 * x131;
+        let x158 = x26 * a_ * u3 * u4;
+        let x159 = (u3 * x41 + d * u4) * x125;
+        let x160 = x157 + x158 - x159;
+        let x161 = m1 * (x66 * x141 + x156 * x58 + x160 * x60);
+        let x162 = -x150 - x161;
+        let x163 = -m1 * (x45 * x160 + x39 * x156 + x20 * x141)
+            - m2 * (x16 * x149 + x147 * x22 + x34 * x139);
+        let x164 = -m2 * (x0 * x2 * x139 + x147 * x90 + x87 * x149)
+            - (x0 * x141 * x4 + x82 * x160 + x156 * x79) * m1;
+        let x165 = Iyz * u3;
+        let x166 = Ixy * u1;
+        let x167 = u2 * Iyy - x165 - x166;
+        let x168 = x103 * x121 * x148;
+        let x169 = x26 * x127;
+        let x170 = u3 * u3;
+        let x171 = u1 * u1;
+        let x172 = u5 * (-u5 - 2.0 * u2) + x170 - x171;
+        let x173 = 2.0 * gamma2;
+        let x174 = f64::sin(x173);
+        let x175 = u3 * x174;
+        let x176 = f64::cos(x173);
+        let x177 = x176 * u1;
+        let x178 = u3 * Ixz;
+        let x179 = u2 * Ixy;
+        let x180 = Ixx * u1 - x178 - x179;
+        let x181 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x171;
+        let x182 = 2.0 * gamma1;
+        let x183 = f64::sin(x182);
+        let x184 = u2 * x183;
+        let x185 = f64::cos(x182);
+        let x186 = u1 * x185;
+        let x187 = x126 * x101 * x131;
+        let x188 = x10 * x69;
+        let x189 = x188 - x71;
+        let x190 = -x53 - x54;
+        let x191 = x26 * x190;
+        let x192 = x191 + x57;
+        let x193 = m2 * x12 * x190;
+        let x194 = x69 * x38 * m1;
+        let x195 = x12 * x66 - x68;
+        let x196 = m2 * (x189 * x24 - a_ * x195 * x12);
+        let x197 = x69 * x28 * m1;
+        let x198 = x38 * x190 - x59;
+        let x199 = (x192 * x41 + a_ * x38 * x198) * m1;
+        let x200 = m2 * x190 * x36;
+        let x201 = x193 + x76 - x194 - x77;
+        let x202 = -x67 - x74 - x196 - x197;
+        let x203 = x9 * (x30 * x201 + x202 * x51) * d;
+        let x204 = -x61 - x199 - x200 - x62;
+        let x205 = x9 * (x204 * x51 + x201 * x47) * d;
+        let x206 = -x191 - x56;
+        let x207 = x9 * (x206 * x51 + x39 * x201) * d * d * m1;
+        let x208 = -x72 - x188;
+        let x209 = x9 * m2 * d * d * (x201 * x22 + x208 * x51);
+        let x210 = x9 * (x30 * x204 + x202 * x47);
+        let x211 = (x202 * x39 + x30 * x206) * x9 * d * m1;
+        let x212 = x9 * m2 * d * (x202 * x22 + x30 * x208);
+        let x213 = x9 * (x206 * x47 + x39 * x204) * d * m1;
+        let x214 = x9 * m2 * (x208 * x47 + x22 * x204) * d;
+        let x215 = x9 * m2 * d * d * m1 * (x39 * x208 + x206 * x22);
+        let x216 = x150 + x161 + (x156 * x192 + x160 * x198 + x69 * x141) * m1
+            + m2 * (x190 * x139 + x195 * x149 + x147 * x189);
+        let x217 = x98 - x86 - x94;
+        let x218 = x8 * x28 * m1 * x4;
+        let x219 = x10 * x8 * x4;
+        let x220 = x0 * x12;
+        let x221 = -x219 - x220;
+        let x222 = x13 - x11;
+        let x223 = m2 * (x221 * x24 - x222 * a_ * x12);
+        let x224 = m2 * x8 * x2 * x36;
+        let x225 = -x42 - x43;
+        let x226 = x26 * x8 * x2;
+        let x227 = x38 * x0;
+        let x228 = x227 - x226;
+        let x229 = (a_ * x225 * x38 + x228 * x41) * m1;
+        let x230 = x96 - x95;
+        let x231 = x14 * x51;
+        let x232 = x78 * x15;
+        let x233 = x230 * x8;
+        let x234 = -x231 - x232 - x233;
+        let x235 = x75 * x15;
+        let x236 = x30 * x14;
+        let x237 = x218 - x235 - x236 - x223;
+        let x238 = x9 * (x93 * x234 + x97 * x0 * x237) * d;
+        let x239 = x14 * x47;
+        let x240 = x63 * x15;
+        let x241 = x224 - x239 - x229 - x240;
+        let x242 = x9 * (x97 * x0 * x241 + x234 * x85) * d;
+        let x243 = x226 - x58 * x15 - x39 * x14 - x227;
+        let x244 = x9 * (x79 * x234 + x243 * x97 * x0) * d * d * m1;
+        let x245 = x219 - x14 * x22 - x73 * x15 + x220;
+        let x246 = x9 * m2 * (x97 * x245 * x0 + x90 * x234) * d * d;
+        let x247 = x9 * (x237 * x85 + x93 * x241);
+        let x248 = x9 * d * m1 * (x243 * x93 + x79 * x237);
+        let x249 = (x93 * x245 + x90 * x237) * x9 * m2 * d;
+        let x250 = x9 * d * m1 * (x79 * x241 + x243 * x85);
+        let x251 = x9 * m2 * (x245 * x85 + x90 * x241) * d;
+        let x252 = x9 * m2 * d * d * m1 * (x79 * x245 + x243 * x90);
+        let x253 = m1 * (x225 * x160 - x8 * x141 * x4 + x156 * x228) - x162 * x15
+            + m2 * (x222 * x149 - x8 * x2 * x139 + x147 * x221) - x163 * x14;
+        let x254 = m2 * x36 + (a_ * x38 * x38 + x26 * x41) * m1;
+        let x255 = x32 - x33;
+        let x256 = x38 * m1 * x255 - m2 * x12 * x20;
+        let x257 = m2 * (x10 * x24 * x255 - a_ * x34 * x12 * x12) + x28 * m1 * x255;
+        let x258 = m2 * (x10 * x190 * x24 - a_ * x12 * x12 * x55) + x28 * x190 * m1;
+        let x259 = x38 * x190 * m1 - m2 * x12 * x66;
+        let x260 = -m2 * x12 * x4 - x38 * x2 * m1;
+        let x261 = m2 * (-x10 * x24 - a_ * x12 * x12) - x28 * m1;
+        let x262 = x9
+            * (x0 * (-x93 * x260 - x97 * x0 * x2 * x261) - x75 * x259 - x257 * x51
+                - x30 * x256 - x78 * x258) * d;
+        let x263 = x78 * x66;
+        let x264 = x20 * x51;
+        let x265 = x97 * x0 * x0 * x4;
+        let x266 = -x263 - x264 - x265;
+        let x267 = x9 * (x254 * x266 - x47 * x256 - x63 * x259 - x0 * x85 * x260) * d;
+        let x268 = x9 * (x26 * x266 - x79 * x0 * x260 - x58 * x259 - x39 * x256) * d * d
+            * m1;
+        let x269 = x97 * x0 * x0 * x2;
+        let x270 = x9 * m2 * d * d
+            * (x10 * (x269 - x78 * x190 - x51 * x255) - x22 * x256 - x90 * x0 * x260
+                - x73 * x259);
+        let x271 = x75 * x66;
+        let x272 = x30 * x20;
+        let x273 = x93 * x0 * x4;
+        let x274 = -x271 - x272 - x273;
+        let x275 = x9 * (x254 * x274 - x257 * x47 - x63 * x258 - x0 * x2 * x261 * x85);
+        let x276 = x26 * x274;
+        let x277 = x9 * (x276 - x58 * x258 - x79 * x0 * x2 * x261 - x257 * x39) * d * m1;
+        let x278 = x93 * x0 * x2;
+        let x279 = (x10 * (x278 - x75 * x190 - x30 * x255) - x90 * x0 * x2 * x261
+            - x73 * x258 - x257 * x22) * x9 * m2 * d;
+        let x280 = x63 * x66;
+        let x281 = x0 * x85 * x4;
+        let x282 = x20 * x47;
+        let x283 = -x280 - x281 - x282;
+        let x284 = x26 * x283;
+        let x285 = -x79 * x0 * x4 - x39 * x20 - x58 * x66;
+        let x286 = (x284 + x254 * x285) * x9 * d * m1;
+        let x287 = x0 * x2 * x85;
+        let x288 = -x73 * x66 - x20 * x22 - x90 * x0 * x4;
+        let x289 = (x10 * (x287 - x47 * x255 - x63 * x190) + x254 * x288) * x9 * m2 * d;
+        let x290 = x79 * x0 * x2;
+        let x291 = (x10 * (x290 - x39 * x255 - x58 * x190) + x26 * x288) * x9 * m2 * d
+            * d * m1;
+        let x292 = x38 * x160 + x26 * x156;
+        let x293 = -(x66 * x292 + x190 * x141) * m1
+            - m2 * (x149 * x12 * x55 + x66 * x139 + x10 * x147 * x190);
+        let x294 = -(x34 * x149 * x12 + x20 * x139 + x10 * x147 * x255) * m2
+            - m1 * (x20 * x292 + x141 * x255);
+        let x295 = -(x4 * x292 - x2 * x141) * m1
+            - m2 * (x139 * x4 + x2 * (x149 * x12 - x10 * x147));
+        let x296 = -x163 * x20 - x164 * x0 * x4 - x162 * x66;
+        let x297 = x26 * x296;
+        let x298 = x164 * x0 * x2;
+        let x299 = x14 * x225 + x44;
+        let x300 = x26 * a_ * x45 + x41 * x299;
+        let x301 = x26 * a_ * x60 + x41 * x198;
+        let x302 = x81 - x80;
+        let x303 = x26 * a_ * x82 + x41 * x302;
+        let x304 = 2.0 * J2 - 2.0 * J1;
+        let x305 = x26 * x26 * x101
+            + (x26 * x28 + x9 * (x38 * d * x266 + x276) + x38 * x38 * d) * d * m1
+            + x103 * x38 * x38;
+        let x306 = x9 * d * m1 * (x284 - x51 * x300 - x97 * x0 * x303 - x78 * x301);
+        let x307 = x9 * (x26 * m1 * x285 - x299 * x51 - x97 * x0 * x302 - x78 * x198) * d
+            * d * m1;
+        let x308 = x26 * x9 * m2 * d * d * x288 * m1;
+        let x309 = 2.0 * J1 - 2.0 * J2;
+        let x310 = x9 * (x283 * x38 * d - x93 * x303 - x30 * x300 - x301 * x75) * m1;
+        let x311 = x9 * d * m1
+            * (x38 * d * m1 * x285 - x75 * x198 - x30 * x299 - x93 * x302);
+        let x312 = x9 * m2 * x38 * d * d * x288 * m1;
+        let x313 = d * m1
+            * (x9
+                * ((-x79 * x303 - x39 * x300 - x58 * x301) * m1 - x63 * x198 - x85 * x302
+                    - x299 * x47) - a_ * x38);
+        let x314 = x9 * m2 * (-x22 * x300 - x90 * x303 - x301 * x73) * d * m1;
+        let x315 = x9 * m2 * d * d * m1 * (-x73 * x198 - x299 * x22 - x90 * x302);
+        let x316 = x125 * x101 * x131 + (x129 - x130) * J2 * u4;
+        let x317 = x126 * x126 * d;
+        let x318 = x26 * a_ * u3 * u3;
+        let x319 = x318 - x317 + x158 - x159;
+        let x320 = x26 * x140 * u2 + x38 * u1 * (-u3 - 2.0 * u4);
+        let x321 = x151 + x126 * d * x131 + x154 * x124;
+        let x322 = x319 * x79 + x0 * d * x320 * x4 + x156 * x302 + x321 * x82;
+        let x323 = x319 * x39 + x156 * x299 + x321 * x45 + d * x320 * x20;
+        let x324 = x319 * x58 + x321 * x60 + x156 * x198 + d * x320 * x66;
+        let x325 = x26 * x131;
+        let x326 = x126 * x101 * x124;
+        let x327 = u1 * x183;
+        let x328 = u2 * x185;
+        let x329 = x101 * x131 * x131;
+        let x330 = x10 * (-x18 - x19);
+        let x331 = x16 * x24 + a_ * (x12 * (-x21 - x330) - x10 * x16);
+        let x332 = x70 * x24 + a_ * (x208 * x12 - x10 * x70);
+        let x333 = x87 * x24 - x10 * a_ * x87;
+        let x334 = x78 * x55;
+        let x335 = x34 * x51;
+        let x336 = x75 * x55;
+        let x337 = x30 * x34;
+        let x338 = x9 * m2
+            * (x10 * (x336 + x337 + x278) - x97 * x333 * x0 - x51 * x331 - x78 * x332)
+            * d;
+        let x339 = x34 * x47;
+        let x340 = x63 * x55;
+        let x341 = m2
+            * (x9 * ((-x334 - x269 - x335) * d * x12 + x10 * (x287 + x339 + x340))
+                - d * x12 * x12 - x10 * x36) * d + x10 * x10 * x103 + x101 * x12 * x12;
+        let x342 = x34 * x39;
+        let x343 = x58 * x55;
+        let x344 = x10 * x9 * m2 * d * d * m1 * (x342 + x343 + x290);
+        let x345 = x90 * x0 * x2;
+        let x346 = x73 * x55;
+        let x347 = x34 * x22;
+        let x348 = x9 * m2
+            * ((x345 + x346 + x347) * x10 * m2 - x97 * x87 * x0 - x78 * x70 - x16 * x51)
+            * d * d;
+        let x349 = x9 * m2
+            * ((-x336 - x337 - x278) * d * x12 - x47 * x331 - x333 * x85 - x63 * x332);
+        let x350 = (-x39 * x331 - x79 * x333 - x58 * x332) * x9 * m2 * d * m1;
+        let x351 = m2 * d
+            * (x9
+                * (m2 * (-x73 * x332 - x22 * x331 - x90 * x333) - x93 * x87 - x75 * x70
+                    - x30 * x16) - a_ * x12);
+        let x352 = x9 * m2 * d * d * x12 * (-x342 - x343 - x290) * m1;
+        let x353 = x9 * m2 * d
+            * (m2 * d * x12 * (-x345 - x346 - x347) - x87 * x85 - x16 * x47 - x63 * x70);
+        let x354 = x9 * m2 * (-x58 * x70 - x16 * x39 - x87 * x79) * d * d * m1;
+        let x355 = x119 - x120;
+        let x356 = x12 * x134;
+        let x357 = x10 * x116 * u3 + x116 * x12 * u1;
+        let x358 = x163 * x34;
+        let x359 = x162 * x55;
+        let x360 = x10 * a_ * u2 * u2;
+        let x361 = x121 * d * x355;
+        let x362 = x145 * x134;
+        let x363 = x360 + x361 + x362;
+        let x364 = x363 * x22 - x16 * d * x355 * x148 + x149 * (x330 - x17)
+            + x357 * x34 * d;
+        let x365 = x149 * (x88 - x89) - x87 * d * x355 * x148 + x357 * x0 * d * x2
+            + x90 * x363;
+        let x366 = x149 * x189 - d * x355 * x70 * x148 + x363 * x73 + x357 * d * x55;
+        let x367 = x103 * x121 * x121;
+        let x368 = x103 * x148 * x134;
+        let x369 = u5 * J1;
+        let x370 = x115 - x117 + x369;
+        let x371 = x125 * x101;
+        let x372 = J2 * u4;
+        let x373 = u4 * J1;
+        let x374 = Ixy * u3;
+        let x375 = u2 * Ixz;
+        let x376 = a_ * u3 + x26 * x140 * d;
+        let x377 = x10 * d * x138 - a_ * u2;
+        let x378 = d * x131 - x152 - x153;
+        let x379 = x26 * x154;
+        let x380 = x126 * x38 * d;
+        let x381 = -x379 - x380;
+        let x382 = x10 * x145;
+        let x383 = x121 * d * x12;
+        let x384 = x382 - x383;
+        let x385 = x143 - x144 + d * x148;
+        let x386 = -m1 * (x45 * x38 * x378 + x39 * x381 + x376 * x20)
+            - m2 * (x384 * x22 + x34 * x377 + x16 * x12 * x385);
+        let x387 = -(x376 * x66 + x58 * x381 + x38 * x378 * x60) * m1
+            - m2 * (x377 * x55 + x73 * x384 + x12 * x70 * x385);
+        let x388 = -m2 * (x87 * x12 * x385 + x90 * x384 + x0 * x2 * x377)
+            - (x0 * x376 * x4 + x79 * x381 + x82 * x38 * x378) * m1;
+        let x389 = x10 * x148;
+        let x390 = x121 * x12;
+        let x391 = Izz - Ixx;
+        let x392 = x371 - x372;
+        let x393 = x126 * x38;
+        let x394 = Ixx - Iyy;
+        let x395 = x103 * x121 * x12;
+        let x396 = x28 * x131 + x379;
+        let x397 = x154 * x38;
+        let x398 = x28 * x126;
+        let x399 = -x397 - x398;
+        let x400 = a_ * u1;
+        let x401 = d * x355 - x400;
+        let x402 = d * x114 + x10 * a_ * (u2 - u5) + x24 * x114;
+        let x403 = -(x140 * x38 * d * x66 + x396 * x60 + x58 * x399) * m1
+            - m2 * (x55 * x401 + x402 * x70 + 2.0 * (a_ * u2 * x12 * x73));
+        let x404 = -m2 * (2.0 * (a_ * u2 * x90 * x12) + x87 * x402 + x0 * x2 * x401)
+            - (x82 * x396 + x140 * x38 * x0 * d * x4 + x79 * x399) * m1;
+        let x405 = -m2 * (x34 * x401 + 2.0 * (a_ * u2 * x12 * x22) + x16 * x402)
+            - m1 * (x39 * x399 + x45 * x396 + x140 * x38 * d * x20);
+        let x406 = Iyy - Izz;
+        let x407 = Iyz * u1;
+        let x408 = x26 * x126 * x101;
+        let x409 = a_ * a_ * u1;
+        let x410 = 2.0 * x122 + 2.0 * x123;
+        let x411 = x10 * x103 * x121;
+        let x412 = x101 * x38 * x131;
+        let x413 = J2 * x138;
+        let x414 = x12 * x145;
+        let x415 = x121 * x36;
+        let x416 = x415 - x414;
+        let x417 = -x382 - x148 * x36;
+        let x418 = x126 * d + x400;
+        let x419 = (-u3 - u4) * d - x125 * x41 + x26 * a_ * (u4 - u3);
+        let x420 = -m2 * (x90 * x416 + x87 * x417 + x116 * x0 * d * x12 * x2)
+            - (x418 * x0 * x4 + x82 * x419 + 2.0 * (a_ * x79 * u3 * x38)) * m1;
+        let x421 = -m1 * (x418 * x20 + 2.0 * (a_ * x39 * u3 * x38) + x45 * x419)
+            - m2 * (x22 * x416 + x34 * x116 * d * x12 + x16 * x417);
+        let x422 = -m2 * (x116 * d * x12 * x55 + x417 * x70 + x73 * x416)
+            - (x418 * x66 + 2.0 * (a_ * x58 * u3 * x38) + x419 * x60) * m1;
+        let x423 = 2.0 * x119 - 2.0 * x120;
+        let x424 = x101 * x12 * x148;
+        let x425 = J2 * x124 + x126 * x101;
+        let x426 = -2.0 * u3 - 2.0 * u4;
+        let x427 = x0 * x410 * x4 + x82 * x426;
+        let x428 = x20 * x410 + x45 * x426;
+        let x429 = x426 * x60 + x410 * x66;
+        let x430 = 2.0 * u5 + 2.0 * u2;
+        let x431 = x423 * x55 + x70 * x430;
+        let x432 = x34 * x423 + x16 * x430;
+        let x433 = x87 * x430 + x0 * x2 * x423;
+        let x434 = 2.0 * J2 - J1;
+        Derivatives {
+            qdot: [
+                x1 * x6,
+                x7,
+                u1 + x8 * x1 * x6,
+                u4,
+                u5,
+                x9 * (G_X - x31 - x48 + x52),
+                x9
+                    * (G_Y - x63 * u3 - u2 * x75
+                        + d * (-x58 * u4 * m1 - u5 * m2 * x73 - x78 * u1)),
+                x9 * (G_Z - x86 - x94 + x98),
+            ],
+            matrix: [
+                [
+                    Ixx
+                        + d * d
+                            * (m2 * x12 * x12
+                                + x9 * (-x78 * x78 - x97 * x97 * x0 * x0 - x51 * x51)
+                                + x38 * x38 * m1) + (x99 + x100) * J1
+                        + (x12 * x12 + x38 * x38) * J2,
+                    x102,
+                    x104,
+                    x105,
+                    x106,
+                ],
+                [
+                    x102,
+                    x38 * x38 * J1 + x28 * x28 * m1 + Iyy + J2 * (x99 + 1.0)
+                        + x9 * (-x30 * x30 - x75 * x75 - x93 * x93)
+                        + m2 * (x107 + a_ * (a_ + 2.0 * x35)),
+                    x108,
+                    x109,
+                    x110,
+                ],
+                [
+                    x104,
+                    x108,
+                    x9 * (-x63 * x63 - x47 * x47 - x85 * x85) + x12 * x12 * J1
+                        + (a_ * (a_ + 2.0 * x27) + x107) * m1 + m2 * x36 * x36 + Izz
+                        + J2 * (x100 + 1.0),
+                    x111,
+                    x112,
+                ],
+                [x105, x109, x111, (1.0 - x9 * m1) * d * d * m1 + J2, x113],
+                [x106, x110, x112, x113, J2 + m2 * d * d * (1.0 - x9 * m2)],
+            ],
+            force: [
+                x128 - x118 * x121 * x12 + (-x26 * u4 * x131 - x10 * u5 * x134) * J1
+                    - u2 * x137
+                    + (m2 * x12 * x139 - x38 * m1 * x141
+                        + x9 * (-x78 * x162 - x163 * x51 - x97 * x164 * x0)) * d
+                    + x167 * u3,
+                x168 - x169 - x28 * m1 * x141 + x137 * u1
+                    + x9 * (-x93 * x164 - x163 * x30 - x162 * x75) - x38 * u4 * x131 * J1
+                    - m2
+                        * ((a_ * (x12 * x172 - 2.0 * (x10 * u3 * u1))
+                            + ((0.5 * x175 - x177) * u3 - 0.5 * (u1 * u1 * x174)) * d)
+                            * d - a_ * a_ * u3 * u1) - x180 * u3,
+                x9 * (-x164 * x85 - x163 * x47 - x63 * x162) - m2 * x36 * x139
+                    - (d
+                        * (a_ * (x181 * x38 + 2.0 * (x26 * u2 * u1))
+                            + d * (u2 * (0.5 * x184 + x186) - 0.5 * (u1 * u1 * x183)))
+                        + a_ * a_ * u2 * u1) * m1 - x10 * x118 * x121 + u2 * x180
+                    + u5 * x12 * x134 * J1 - x167 * u1 + x187,
+                d * m1 * (x9 * (-x164 * x79 - x163 * x39 - x58 * x162) - x151 + x155)
+                    + x187,
+                x168
+                    + m2 * (x9 * (-x162 * x73 - x163 * x22 - x90 * x164) - x142 - x146)
+                        * d,
+            ],
+            checks: [x0],
+            d_qdot: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    x9
+                        * (d * (-u5 * m2 * x189 - x192 * u4 * m1 - u1 * (x194 - x193))
+                            - (x196 + x197) * u2 - (x199 + x200) * u3),
+                    x9 * (x52 - x31 - x48),
+                    0.0,
+                ],
+                [
+                    x8 * x1 * x1 * x6,
+                    0.0,
+                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
+                    0.0,
+                    0.0,
+                    x9 * x14 * x217,
+                    x9 * x217 * x15,
+                    x9
+                        * ((-x230 * x8 * u1 - u4 * x228 * m1 - u5 * m2 * x221) * d
+                            - u2 * (x223 - x218) - u3 * (x229 - x224)),
+                ],
+                [
+                    x1 * x7,
+                    -x3 - x5,
+                    x8 * x1 * x7,
+                    0.0,
+                    0.0,
+                    x9
+                        * (d * (-x26 * u4 * x20 * m1 - x10 * u5 * m2 * x255 - u1 * x256)
+                            - x254 * u3 * x20 - x257 * u2),
+                    x9
+                        * (d * (-x10 * u5 * m2 * x190 - u1 * x259 - x26 * u4 * x66 * m1)
+                            - u2 * x258 - x254 * u3 * x66),
+                    x9 * x0
+                        * (d * (x10 * u5 * m2 * x2 - x26 * u4 * m1 * x4 - u1 * x260)
+                            - x254 * u3 * x4 - u2 * x2 * x261),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    ((x124 * x20 - u4 * x299) * d - u3 * x300) * x9 * m1,
+                    x9 * m1 * (d * (x124 * x66 - u4 * x198) - x301 * u3),
+                    x9 * (d * (x124 * x0 * x4 - u4 * x302) - u3 * x303) * m1,
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    x9 * m2 * ((x34 * x121 - u5 * x16) * d - u2 * x331),
+                    x9 * m2 * (d * (x121 * x55 - u5 * x70) - u2 * x332),
+                    x9 * m2 * (d * (x121 * x0 * x2 - u5 * x87) - u2 * x333),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    0.0,
+                    1.0,
+                    0.0,
+                    0.0,
+                    x9 * (x50 - x49) * d,
+                    x9 * d * (x76 - x77),
+                    x230 * x9 * x0 * d,
+                ],
+                [
+                    x1 * x2,
+                    x4,
+                    x8 * x1 * x2,
+                    0.0,
+                    0.0,
+                    x9 * (-x25 - x29),
+                    x9 * (-x67 - x74),
+                    x9 * (-x91 - x92),
+                ],
+                [
+                    x1 * x4,
+                    -x2,
+                    x8 * x1 * x4,
+                    0.0,
+                    0.0,
+                    (-x37 - x46) * x9,
+                    (-x61 - x62) * x9,
+                    x9 * (-x83 - x84),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0,
+                    0.0,
+                    -(x9 * x39 * d * m1),
+                    -(x9 * x58 * d * m1),
+                    -(x9 * x79 * d * m1),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0,
+                    -(x9 * m2 * d * x22),
+                    -(x9 * m2 * d * x73),
+                    -(x9 * m2 * x90 * d),
+                ],
+            ],
+            d_matrix: [
+                [
+                    [
+                        (2.0 * x193 + 2.0 * x76 - 2.0 * x194 - 2.0 * x77) * x9 * d * d
+                            * x51,
+                        x203,
+                        x205,
+                        x207,
+                        x209,
+                    ],
+                    [
+                        x203,
+                        (-2.0 * x67 - 2.0 * x74 - 2.0 * x196 - 2.0 * x197) * x9 * x30,
+                        x210,
+                        x211,
+                        x212,
+                    ],
+                    [
+                        x205,
+                        x210,
+                        x9 * (-2.0 * x61 - 2.0 * x199 - 2.0 * x200 - 2.0 * x62) * x47,
+                        x213,
+                        x214,
+                    ],
+                    [x207, x211, x213, 0.0, x215],
+                    [x209, x212, x214, x215, 0.0],
+                ],
+                [
+                    [
+                        x9 * (-2.0 * x231 - 2.0 * x232 - 2.0 * x233) * x97 * x0 * d * d,
+                        x238,
+                        x242,
+                        x244,
+                        x246,
+                    ],
+                    [
+                        x238,
+                        x9 * (2.0 * x218 - 2.0 * x235 - 2.0 * x236 - 2.0 * x223) * x93,
+                        x247,
+                        x248,
+                        x249,
+                    ],
+                    [
+                        x242,
+                        x247,
+                        (2.0 * x224 - 2.0 * x239 - 2.0 * x229 - 2.0 * x240) * x9 * x85,
+                        x250,
+                        x251,
+                    ],
+                    [x244, x248, x250, 0.0, x252],
+                    [x246, x249, x251, x252, 0.0],
+                ],
+                [
+                    [
+                        x9 * d * d
+                            * (-2.0 * (x78 * x259) - 2.0 * (x51 * x256)
+                                - 2.0 * (x97 * x0 * x0 * x260)),
+                        x262,
+                        x267,
+                        x268,
+                        x270,
+                    ],
+                    [
+                        x262,
+                        x9
+                            * (-2.0 * (x75 * x258) - 2.0 * (x93 * x0 * x2 * x261)
+                                - 2.0 * (x257 * x30)),
+                        x275,
+                        x277,
+                        x279,
+                    ],
+                    [
+                        x267,
+                        x275,
+                        x254 * x9 * (-2.0 * x280 - 2.0 * x281 - 2.0 * x282),
+                        x286,
+                        x289,
+                    ],
+                    [x268, x277, x286, 0.0, x291],
+                    [x270, x279, x289, x291, 0.0],
+                ],
+                [
+                    [
+                        x26
+                            * (x304 * x38
+                                + d * d
+                                    * (x9 * (-2.0 * x263 - 2.0 * x264 - 2.0 * x265) + 2.0 * x38)
+                                    * m1),
+                        x305,
+                        x306,
+                        x307,
+                        x308,
+                    ],
+                    [
+                        x305,
+                        x38
+                            * (x26 * x309
+                                + d
+                                    * (x9 * (-2.0 * x271 - 2.0 * x272 - 2.0 * x273) - 2.0 * a_
+                                        - 2.0 * x27) * m1),
+                        x310,
+                        x311,
+                        x312,
+                    ],
+                    [
+                        x306,
+                        x310,
+                        (x9
+                            * (-2.0 * (x85 * x303) - 2.0 * (x47 * x300)
+                                - 2.0 * (x63 * x301)) - 2.0 * (a_ * x38 * d)) * m1,
+                        x313,
+                        x314,
+                    ],
+                    [x307, x311, x313, 0.0, x315],
+                    [x308, x312, x314, x315, 0.0],
+                ],
+                [
+                    [
+                        x10
+                            * (m2 * d * d
+                                * (2.0 * x12 + x9 * (2.0 * x334 + 2.0 * x269 + 2.0 * x335))
+                                + x304 * x12),
+                        x338,
+                        x341,
+                        x344,
+                        x348,
+                    ],
+                    [
+                        x338,
+                        m2
+                            * (x9
+                                * (-2.0 * (x30 * x331) - 2.0 * (x75 * x332)
+                                    - 2.0 * (x93 * x333)) - 2.0 * (a_ * d * x12)),
+                        x349,
+                        x350,
+                        x351,
+                    ],
+                    [
+                        x341,
+                        x349,
+                        x12
+                            * (x10 * x309
+                                + m2 * d
+                                    * (x9 * (-2.0 * x287 - 2.0 * x339 - 2.0 * x340) - 2.0 * a_
+                                        - 2.0 * x35)),
+                        x352,
+                        x353,
+                    ],
+                    [x344, x350, x352, 0.0, x354],
+                    [x348, x351, x353, x354, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    x9 * d * (x216 * x51 + x163 * x201),
+                    x9 * (x163 * x202 + x30 * x216),
+                    x9 * (x216 * x47 + x163 * x204),
+                    x9 * d * m1 * (x39 * x216 + x163 * x206),
+                    x9 * m2 * (x163 * x208 + x216 * x22) * d,
+                ],
+                [
+                    x9 * (x253 * x97 * x0 + x164 * x234) * d,
+                    x9 * (x253 * x93 + x164 * x237),
+                    x9 * (x164 * x241 + x253 * x85),
+                    x9 * (x253 * x79 + x243 * x164) * d * m1,
+                    (x164 * x245 + x253 * x90) * x9 * m2 * d,
+                ],
+                [
+                    x9 * d
+                        * ((-x97 * x0 * x295 - x164 * x260) * x0 - x293 * x78
+                            - x163 * x256 - x294 * x51 - x162 * x259),
+                    (x0 * (-x164 * x2 * x261 - x93 * x295) - x293 * x75 - x30 * x294
+                        - x162 * x258 - x163 * x257) * x9,
+                    x9 * (x254 * x296 - x294 * x47 - x0 * x85 * x295 - x293 * x63),
+                    x9 * d * m1 * (x297 - x39 * x294 - x293 * x58 - x79 * x0 * x295),
+                    x9 * m2
+                        * (x10 * (x298 - x162 * x190 - x163 * x255) - x293 * x73
+                            - x294 * x22 - x90 * x0 * x295) * d,
+                ],
+                [
+                    x169 + (x38 * x131 - x26 * x124) * u4 * J1 + x316 * x38
+                        + d * m1
+                            * (x9 * (x97 * x322 * x0 + x297 + x323 * x51 + x78 * x324)
+                                - x26 * x141 - x38 * d * x320),
+                    m1
+                        * (x9 * (x30 * x323 + x93 * x322 + x324 * x75 + x296 * x38 * d)
+                            + (-x28 * x320 - x38 * x141) * d) + x128
+                        + u4 * (-x325 - x38 * x124) * J1 - x26 * x316,
+                    x326
+                        + (x9
+                            * (x323 * x47 + x63 * x324 - x162 * x301 + x322 * x85
+                                - x163 * x300 - x164 * x303)
+                            - d
+                                * (d * ((x328 - 2.0 * x327) * u2 - u1 * u1 * x185)
+                                    + a_ * (x26 * x181 - 2.0 * (u2 * x38 * u1)))) * m1 + x329,
+                    x326
+                        + d
+                            * (x157
+                                + x9
+                                    * (m1 * (x58 * x324 + x322 * x79 + x39 * x323) - x163 * x299
+                                        - x164 * x302 - x162 * x198) + x317 - x318) * m1 + x329,
+                    (x324 * x73 + x90 * x322 + x323 * x22) * x9 * m2 * d * m1,
+                ],
+                [
+                    u5 * (x356 - x10 * x355) * J1
+                        + m2
+                            * (x357 * d * x12 + x10 * x139
+                                + x9
+                                    * (x10 * (x298 + x358 + x359) + x51 * x364 + x97 * x365 * x0
+                                        + x78 * x366)) * d + x118 * (-x10 * x121 - x356),
+                    x367 + x368
+                        + m2
+                            * (x9
+                                * (x30 * x364 - x162 * x332 - x164 * x333 + x93 * x365
+                                    - x163 * x331 + x75 * x366)
+                                - d
+                                    * (a_ * (2.0 * (u3 * x12 * u1) + x10 * x172)
+                                        + (x176 * (x170 - x171) + 2.0 * (u3 * u1 * x174)) * d)),
+                    x12 * (u5 * x355 * J1 + x118 * x121)
+                        + m2
+                            * (x9
+                                * (x365 * x85 + x47 * x364 + d * x12 * (-x298 - x358 - x359)
+                                    + x63 * x366) + d * (-x357 * x36 - x12 * x139))
+                        + x10 * x370 * x134,
+                    (x39 * x364 + x79 * x365 + x58 * x366) * x9 * m2 * d * m1,
+                    m2 * d
+                        * (x9
+                            * (m2 * (x73 * x366 + x90 * x365 + x22 * x364) - x163 * x16
+                                - x164 * x87 - x162 * x70) - x360 - x361 - x362) + x367
+                        + x368,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x26 * x38 * (x371 - x372 + x373) - x374 + x10 * x12 * x370 + x375
+                        + d
+                            * (m2 * x12 * x377 - x38 * x376 * m1
+                                + x9 * (-x386 * x51 - x78 * x387 - x97 * x0 * x388)),
+                    J2 * (x389 + x390) + x391 * u3 + (x38 * x38 * u4 - x389 - x390) * J1
+                        - m2
+                            * ((a_ * (-2.0 * x132 - 2.0 * x133)
+                                + d * (-u1 * x174 - x176 * u3)) * d - a_ * a_ * u3)
+                        - x26 * x26 * x392 - x135
+                        + x9 * (-x387 * x75 - x93 * x388 - x30 * x386) - 2.0 * x136
+                        - x28 * x376 * m1,
+                    (x325 - u5 * x12 * x12 - x393) * J1 - m2 * x377 * x36
+                        + x9 * (-x85 * x388 - x63 * x387 - x386 * x47) - x10 * x10 * x118
+                        + u2 * x394 + (x393 - x325) * J2
+                        - m1
+                            * (((2.0 * x130 - 2.0 * x129) * a_ + d * (x328 - x327)) * d
+                                + a_ * a_ * u2) + x165 + 2.0 * x166,
+                    d * m1 * (x379 + x380 + x9 * (-x58 * x387 - x79 * x388 - x39 * x386))
+                        + x103 * x126 * x38 + x26 * x101 * x131,
+                    x10 * x103 * x148
+                        + m2 * d
+                            * (x383 - x382
+                                + x9 * (-x387 * x73 - x90 * x388 - x386 * x22)) + x395,
+                ],
+                [
+                    (x9 * (-x78 * x403 - x97 * x0 * x404 - x405 * x51)
+                        - x140 * x38 * x38 * d * m1 + m2 * x12 * x401) * d
+                        - x26 * x26 * u4 * J1 + x38 * x38 * x392 + 2.0 * x135 - x395
+                        + x136 + u3 * x406,
+                    2.0 * (u5 * m2 * a_ * d * x12) + x374
+                        + (-x93 * x404 - x403 * x75 - x30 * x405) * x9
+                        + x38 * (x26 * (x372 - x371 - x373) - x140 * x28 * d * m1)
+                        - x407,
+                    x408 - x178 + x394 * u1 - 2.0 * x179
+                        + x9 * (-x85 * x404 - x63 * x403 - x405 * x47)
+                        - m1 * (x409 + d * (d * (x184 + x186) + a_ * x410)) - x411 + x412
+                        - m2 * x36 * x401,
+                    x408
+                        + (x397 + x9 * (-x79 * x404 - x39 * x405 - x58 * x403) + x398)
+                            * d * m1 + x412,
+                    m2 * d
+                        * (x9 * (-x403 * x73 - x90 * x404 - x405 * x22)
+                            - 2.0 * (a_ * u2 * x12)),
+                ],
+                [
+                    x126 * x101 * x38 + u2 * x406 - x12 * x12 * (x115 + x413)
+                        + x10 * x10 * u5 * J1 - 2.0 * x165 - x166
+                        + (x9 * (-x97 * x0 * x420 - x421 * x51 - x78 * x422)
+                            + m2 * x116 * d * x12 * x12 - x418 * x38 * m1) * d,
+                    2.0 * x178 - x408 + x391 * u1
+                        - m2 * ((d * (x175 - x177) + a_ * x423) * d - x409) + x179
+                        + x9 * (-x422 * x75 - x93 * x420 - x30 * x421) + x411
+                        - x418 * x28 * m1 + x424,
+                    x12 * (x10 * (-x115 - x413 - x369) - m2 * x116 * d * x36)
+                        + x9 * (-x421 * x47 - x420 * x85 - x63 * x422) - x375
+                        + 2.0 * (a_ * x38 * d * u4 * m1) + x407,
+                    (x9 * (-x79 * x420 - x58 * x422 - x39 * x421)
+                        - 2.0 * (a_ * u3 * x38)) * d * m1,
+                    m2 * d * (x414 + x9 * (-x90 * x420 - x22 * x421 - x422 * x73) - x415)
+                        + x411 + x424,
+                ],
+                [
+                    x425 * x38 - x26 * x131 * J1
+                        + d * d
+                            * (x9 * (x427 * x97 * x0 + x428 * x51 + x78 * x429)
+                                - x38 * x410) * m1,
+                    (x9 * (x30 * x428 + x427 * x93 + x75 * x429) - x28 * x410) * d * m1
+                        - x38 * x131 * J1 - x26 * x425,
+                    (x9 * (x428 * x47 + x427 * x85 + x63 * x429) - a_ * x38 * x426) * d
+                        * m1,
+                    (x427 * x79 + x428 * x39 + x58 * x429) * x9 * d * d * m1 * m1,
+                    x9 * m2 * d * d * (x427 * x90 + x73 * x429 + x428 * x22) * m1,
+                ],
+                [
+                    m2 * d * d
+                        * (x9 * (x78 * x431 + x432 * x51 + x433 * x97 * x0) + x12 * x423)
+                        - x10 * x134 * J1 - x121 * x12 * x434,
+                    m2 * d
+                        * (x9 * (x433 * x93 + x75 * x431 + x30 * x432)
+                            - a_ * x12 * (-2.0 * u5 - 2.0 * u2)),
+                    m2 * (x9 * (x433 * x85 + x432 * x47 + x63 * x431) - x423 * x36) * d
+                        - x10 * x121 * x434 + x12 * x134 * J1,
+                    x9 * m2 * d * d * m1 * (x433 * x79 + x432 * x39 + x58 * x431),
+                    x9 * m2 * m2 * (x433 * x90 + x432 * x22 + x73 * x431) * d * d,
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..8 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..5 {
+            dstate[8 + j] = x[j];
+        }
+        for k in 0..13 {
+            for j in 0..8 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 5];
+            for i in 0..5 {
+                let mut s = d_force[k][i];
+                for j in 0..5 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..5 {
+                jac[8 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -3079,6 +9103,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

@@ -204,6 +204,55 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+    let mut scale = 0.0f64;
+    for row in a.iter() {
+        for x in row.iter() {
+            scale = scale.max(x.abs());
+        }
+    }
+    let mut pivots = [0usize; N];
+    for c in 0..N {
+        let mut p = c;
+        for r in c + 1..N {
+            if a[r][c].abs() > a[p][c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        a.swap(c, p);
+        for r in c + 1..N {
+            let f = a[r][c] / a[c][c];
+            a[r][c] = f;
+            for k in c + 1..N {
+                a[r][k] -= f * a[c][k];
+            }
+        }
+    }
+    Ok(pivots)
+}
+///Solves `a x = b` in place with the factors of `lu_factor`.
+fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+    for c in 0..N {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..N {
+        for r in c + 1..N {
+            b[r] -= a[r][c] * b[c];
+        }
+    }
+    for r in (0..N).rev() {
+        let mut s = b[r];
+        for k in r + 1..N {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -950,6 +999,1019 @@ pub mod reduced_volterra {
         let theta = state[1];
         f64::INFINITY.min(f64::abs(f64::cos(theta)))
     }
+    ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
+    struct Derivatives {
+        qdot: [f64; 5],
+        matrix: [[f64; 5]; 5],
+        force: [f64; 5],
+        checks: [f64; 1],
+        d_qdot: [[f64; 5]; 10],
+        d_matrix: [[[f64; 5]; 5]; 10],
+        d_force: [[f64; 5]; 10],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> Derivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u1 = state[5];
+        let u2 = state[6];
+        let u3 = state[7];
+        let u4 = state[8];
+        let u5 = state[9];
+        let m0 = params.m0;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = u2 * x4 - u3 * x2;
+        let x8 = f64::sin(theta);
+        let x9 = f64::sin(gamma2);
+        let x10 = 1.0 / (m2 + m0 + m1);
+        let x11 = f64::cos(psi);
+        let x12 = x11 * x4;
+        let x13 = f64::sin(psi);
+        let x14 = x8 * x2 * x13;
+        let x15 = x12 + x14;
+        let x16 = m2 * x9 * x15;
+        let x17 = f64::sin(gamma1);
+        let x18 = x11 * x2;
+        let x19 = x8 * x4 * x13;
+        let x20 = x19 - x18;
+        let x21 = x17 * x20 * m1;
+        let x22 = x21 - x16;
+        let x23 = x17 * m1 * x4;
+        let x24 = m2 * x9 * x2;
+        let x25 = x23 - x24;
+        let x26 = x2 * x13;
+        let x27 = x8 * x11 * x4;
+        let x28 = x26 + x27;
+        let x29 = x4 * x13;
+        let x30 = x8 * x11 * x2;
+        let x31 = x30 - x29;
+        let x32 = x17 * x28 * m1 - m2 * x31 * x9;
+        let x33 = f64::cos(gamma1);
+        let x34 = x33 * x33;
+        let x35 = f64::cos(gamma2);
+        let x36 = x35 * x35;
+        let x37 = J1 - J2;
+        let x38 = x35 * x0;
+        let x39 = x8 * x9 * x4;
+        let x40 = (x38 - x39) * x11 - x9 * x2 * x13;
+        let x41 = x11 * x0 * x9;
+        let x42 = x35 * x28;
+        let x43 = x41 + x42;
+        let x44 = x35 * a_;
+        let x45 = d + x44;
+        let x46 = x33 * d;
+        let x47 = -a_ - x46;
+        let x48 = m2 * (x43 * x45 - a_ * x40 * x9) + x47 * x28 * m1;
+        let x49 = x47 * x20 * m1;
+        let x50 = x35 * x0 * x13;
+        let x51 = x18 - x19;
+        let x52 = x50 + x51 * x9;
+        let x53 = x0 * x9 * x13;
+        let x54 = x35 * x20;
+        let x55 = x53 + x54;
+        let x56 = m2 * (x55 * x45 - a_ * x9 * x52);
+        let x57 = x49 + x56;
+        let x58 = -x0 * x9 * x4 - x35 * x8;
+        let x59 = x8 * x9;
+        let x60 = x35 * x0 * x4;
+        let x61 = x60 - x59;
+        let x62 = m2 * (x61 * x45 - a_ * x58 * x9) + x47 * x0 * m1 * x4;
+        let x63 = x33 * x37 * x17 - Ixy
+            + d * ((-x48 * x32 - x22 * x57 - x62 * x25 * x0) * x10 + x47 * x17 * m1);
+        let x64 = x35 * d;
+        let x65 = -a_ - x64;
+        let x66 = x33 * x15;
+        let x67 = x17 * x0 * x13;
+        let x68 = x66 - x67;
+        let x69 = x33 * a_;
+        let x70 = x69 + d;
+        let x71 = x33 * x0 * x13;
+        let x72 = x71 + x17 * x15;
+        let x73 = (x68 * x70 + a_ * x17 * x72) * m1;
+        let x74 = m2 * x65 * x15;
+        let x75 = x73 + x74;
+        let x76 = x33 * x31 - x11 * x17 * x0;
+        let x77 = x8 * x17 * x2;
+        let x78 = x33 * x0;
+        let x79 = x17 * x4 * x13;
+        let x80 = x11 * (x77 + x78) - x79;
+        let x81 = m2 * x31 * x65 + (x76 * x70 + a_ * x80 * x17) * m1;
+        let x82 = x33 * x0 * x2 + x8 * x17;
+        let x83 = x17 * x0 * x2;
+        let x84 = x33 * x8;
+        let x85 = x83 - x84;
+        let x86 = (x82 * x70 + a_ * x85 * x17) * m1 + m2 * x0 * x2 * x65;
+        let x87 = J2 - J1;
+        let x88 = (x10 * (-x75 * x22 - x81 * x32 - x25 * x0 * x86) - m2 * x9 * x65) * d
+            + x35 * x87 * x9 - Ixz;
+        let x89 = x10 * d * d * (-x25 * x82 * x0 - x76 * x32 - x22 * x68) * m1;
+        let x90 = x10 * m2 * d * d * (-x43 * x32 - x22 * x55 - x61 * x25 * x0);
+        let x91 = d * d;
+        let x92 = (-x48 * x81 - x75 * x57 - x62 * x86) * x10 - Iyz;
+        let x93 = x10 * d * m1 * (-x48 * x76 - x62 * x82 - x68 * x57);
+        let x94 = m2 * (x10 * (-x61 * x62 - x48 * x43 - x57 * x55) + d + x44) * d + J2;
+        let x95 = J2 + d * m1 * (x69 + d + (-x76 * x81 - x82 * x86 - x75 * x68) * x10);
+        let x96 = x10 * m2 * d * (-x43 * x81 - x61 * x86 - x75 * x55);
+        let x97 = x10 * m2 * d * d * m1 * (-x76 * x43 - x61 * x82 - x68 * x55);
+        let x98 = u5 + u2;
+        let x99 = J1 * x98;
+        let x100 = 2.0 * u5 + u2;
+        let x101 = x100 * J2;
+        let x102 = x101 - x99;
+        let x103 = u3 * x9;
+        let x104 = x35 * u1;
+        let x105 = x104 - x103;
+        let x106 = u2 * x17;
+        let x107 = x33 * u1;
+        let x108 = -x106 - x107;
+        let x109 = u3 + u4;
+        let x110 = x106 + x107;
+        let x111 = J2 * x108 * u4 + x109 * x110 * x37;
+        let x112 = x111 * x17;
+        let x113 = x17 * u1;
+        let x114 = x33 * u2;
+        let x115 = x114 - x113;
+        let x116 = x9 * u1;
+        let x117 = x35 * u3;
+        let x118 = -x116 - x117;
+        let x119 = u2 * Iyz;
+        let x120 = u1 * Ixz;
+        let x121 = u3 * Izz - x119 - x120;
+        let x122 = -2.0 * u5 - u2;
+        let x123 = d * (x35 * x122 * u1 + x100 * u3 * x9) - a_ * u2 * u1;
+        let x124 = u3 + 2.0 * u4;
+        let x125 = d * (x33 * x124 * u1 + x124 * u2 * x17) + a_ * u3 * u1;
+        let x126 = a_ * u2 * u2 * x9;
+        let x127 = d * x9 * u1;
+        let x128 = u3 * x65;
+        let x129 = x128 - x127;
+        let x130 = x105 * x129;
+        let x131 = x126 + x130;
+        let x132 = x116 + x117;
+        let x133 = (u5 * d + u2 * x45) * x98 - x35 * u5 * a_ * u2 - x129 * x132;
+        let x134 = (x131 * x55 + x133 * x52 + x15 * x123) * m2;
+        let x135 = a_ * u3 * u3 * x17;
+        let x136 = u2 * x47;
+        let x137 = x17 * d * u1;
+        let x138 = x136 + x137;
+        let x139 = x138 * x110;
+        let x140 = x135 - x139;
+        let x141 = x138 * x115;
+        let x142 = x33 * a_ * u3 * u4;
+        let x143 = (u3 * x70 + d * u4) * x109;
+        let x144 = x141 + x142 - x143;
+        let x145 = m1 * (x20 * x125 + x140 * x68 + x144 * x72);
+        let x146 = -x134 - x145;
+        let x147 = -m1 * (x80 * x144 + x76 * x140 + x28 * x125)
+            - m2 * (x40 * x133 + x131 * x43 + x31 * x123);
+        let x148 = -m2 * (x0 * x2 * x123 + x131 * x61 + x58 * x133)
+            - (x0 * x125 * x4 + x85 * x144 + x140 * x82) * m1;
+        let x149 = Iyz * u3;
+        let x150 = Ixy * u1;
+        let x151 = u2 * Iyy - x149 - x150;
+        let x152 = x87 * x105 * x132;
+        let x153 = x33 * x111;
+        let x154 = u3 * u3;
+        let x155 = u1 * u1;
+        let x156 = u5 * (-u5 - 2.0 * u2) + x154 - x155;
+        let x157 = 2.0 * gamma2;
+        let x158 = f64::sin(x157);
+        let x159 = u3 * x158;
+        let x160 = f64::cos(x157);
+        let x161 = x160 * u1;
+        let x162 = u3 * Ixz;
+        let x163 = u2 * Ixy;
+        let x164 = Ixx * u1 - x162 - x163;
+        let x165 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x155;
+        let x166 = 2.0 * gamma1;
+        let x167 = f64::sin(x166);
+        let x168 = u2 * x167;
+        let x169 = f64::cos(x166);
+        let x170 = u1 * x169;
+        let x171 = x110 * x37 * x115;
+        let x172 = -x12 - x14;
+        let x173 = m2 * x9 * x172;
+        let x174 = x51 * x17 * m1;
+        let x175 = x173 + x16 - x174 - x21;
+        let x176 = x9 * x20 - x50;
+        let x177 = x35 * x51;
+        let x178 = x177 - x53;
+        let x179 = m2 * (x178 * x45 - a_ * x176 * x9);
+        let x180 = x51 * x47 * m1;
+        let x181 = -x49 - x56 - x179 - x180;
+        let x182 = x10 * (x48 * x175 + x181 * x32) * d;
+        let x183 = x33 * x172;
+        let x184 = x183 + x67;
+        let x185 = x17 * x172 - x71;
+        let x186 = (x184 * x70 + a_ * x17 * x185) * m1;
+        let x187 = m2 * x172 * x65;
+        let x188 = -x73 - x186 - x187 - x74;
+        let x189 = x10 * (x188 * x32 + x175 * x81) * d;
+        let x190 = -x183 - x66;
+        let x191 = x10 * (x190 * x32 + x76 * x175) * d * d * m1;
+        let x192 = -x54 - x177;
+        let x193 = x10 * m2 * d * d * (x175 * x43 + x192 * x32);
+        let x194 = x10 * (x48 * x188 + x181 * x81);
+        let x195 = (x181 * x76 + x48 * x190) * x10 * d * m1;
+        let x196 = x10 * m2 * d * (x181 * x43 + x48 * x192);
+        let x197 = x10 * (x190 * x81 + x76 * x188) * d * m1;
+        let x198 = x10 * m2 * (x192 * x81 + x43 * x188) * d;
+        let x199 = x10 * m2 * d * d * m1 * (x76 * x192 + x190 * x43);
+        let x200 = x134 + x145 + (x140 * x184 + x144 * x185 + x51 * x125) * m1
+            + m2 * (x172 * x123 + x176 * x133 + x131 * x178);
+        let x201 = x11 * x32;
+        let x202 = x22 * x13;
+        let x203 = (x24 - x23) * x8;
+        let x204 = -x201 - x202 - x203;
+        let x205 = x8 * x47 * m1 * x4;
+        let x206 = x57 * x13;
+        let x207 = x48 * x11;
+        let x208 = x35 * x8 * x4;
+        let x209 = x0 * x9;
+        let x210 = -x208 - x209;
+        let x211 = x39 - x38;
+        let x212 = m2 * (x210 * x45 - x211 * a_ * x9);
+        let x213 = x205 - x206 - x207 - x212;
+        let x214 = x10 * (x62 * x204 + x25 * x0 * x213) * d;
+        let x215 = m2 * x8 * x2 * x65;
+        let x216 = x11 * x81;
+        let x217 = -x77 - x78;
+        let x218 = x33 * x8 * x2;
+        let x219 = x17 * x0;
+        let x220 = x219 - x218;
+        let x221 = (a_ * x217 * x17 + x220 * x70) * m1;
+        let x222 = x75 * x13;
+        let x223 = x215 - x216 - x221 - x222;
+        let x224 = x10 * (x25 * x0 * x223 + x204 * x86) * d;
+        let x225 = x218 - x68 * x13 - x76 * x11 - x219;
+        let x226 = x10 * (x82 * x204 + x225 * x25 * x0) * d * d * m1;
+        let x227 = x208 - x11 * x43 - x55 * x13 + x209;
+        let x228 = x10 * m2 * (x25 * x227 * x0 + x61 * x204) * d * d;
+        let x229 = x10 * (x213 * x86 + x62 * x223);
+        let x230 = x10 * d * m1 * (x225 * x62 + x82 * x213);
+        let x231 = (x62 * x227 + x61 * x213) * x10 * m2 * d;
+        let x232 = x10 * d * m1 * (x82 * x223 + x225 * x86);
+        let x233 = x10 * m2 * (x227 * x86 + x61 * x223) * d;
+        let x234 = x10 * m2 * d * d * m1 * (x82 * x227 + x225 * x61);
+        let x235 = m1 * (x217 * x144 - x8 * x125 * x4 + x140 * x220) - x146 * x13
+            + m2 * (x211 * x133 - x8 * x2 * x123 + x131 * x210) - x147 * x11;
+        let x236 = x17 * x172 * m1 - m2 * x9 * x20;
+        let x237 = x29 - x30;
+        let x238 = x17 * m1 * x237 - m2 * x9 * x28;
+        let x239 = -m2 * x9 * x4 - x17 * x2 * m1;
+        let x240 = m2 * (x35 * x45 * x237 - a_ * x31 * x9 * x9) + x47 * m1 * x237;
+        let x241 = m2 * (x35 * x172 * x45 - a_ * x9 * x9 * x15) + x47 * x172 * m1;
+        let x242 = m2 * (-x35 * x45 - a_ * x9 * x9) - x47 * m1;
+        let x243 = x10
+            * (x0 * (-x62 * x239 - x25 * x0 * x2 * x242) - x57 * x236 - x240 * x32
+                - x48 * x238 - x22 * x241) * d;
+        let x244 = m2 * x65 + (a_ * x17 * x17 + x33 * x70) * m1;
+        let x245 = x22 * x20;
+        let x246 = x28 * x32;
+        let x247 = x25 * x0 * x0 * x4;
+        let x248 = -x245 - x246 - x247;
+        let x249 = x10 * (x244 * x248 - x81 * x238 - x75 * x236 - x0 * x86 * x239) * d;
+        let x250 = x10 * (x33 * x248 - x82 * x0 * x239 - x68 * x236 - x76 * x238) * d * d
+            * m1;
+        let x251 = x25 * x0 * x0 * x2;
+        let x252 = x10 * m2 * d * d
+            * (x35 * (x251 - x22 * x172 - x32 * x237) - x43 * x238 - x61 * x0 * x239
+                - x55 * x236);
+        let x253 = x57 * x20;
+        let x254 = x48 * x28;
+        let x255 = x62 * x0 * x4;
+        let x256 = -x253 - x254 - x255;
+        let x257 = x10 * (x244 * x256 - x240 * x81 - x75 * x241 - x0 * x2 * x242 * x86);
+        let x258 = x33 * x256;
+        let x259 = x10 * (x258 - x68 * x241 - x82 * x0 * x2 * x242 - x240 * x76) * d
+            * m1;
+        let x260 = x62 * x0 * x2;
+        let x261 = (x35 * (x260 - x57 * x172 - x48 * x237) - x61 * x0 * x2 * x242
+            - x55 * x241 - x240 * x43) * x10 * m2 * d;
+        let x262 = x75 * x20;
+        let x263 = x0 * x86 * x4;
+        let x264 = x28 * x81;
+        let x265 = -x262 - x263 - x264;
+        let x266 = x33 * x265;
+        let x267 = -x82 * x0 * x4 - x76 * x28 - x68 * x20;
+        let x268 = (x266 + x244 * x267) * x10 * d * m1;
+        let x269 = x0 * x2 * x86;
+        let x270 = -x55 * x20 - x28 * x43 - x61 * x0 * x4;
+        let x271 = (x35 * (x269 - x81 * x237 - x75 * x172) + x244 * x270) * x10 * m2 * d;
+        let x272 = x82 * x0 * x2;
+        let x273 = (x35 * (x272 - x76 * x237 - x68 * x172) + x33 * x270) * x10 * m2 * d
+            * d * m1;
+        let x274 = x17 * x144 + x33 * x140;
+        let x275 = -(x20 * x274 + x172 * x125) * m1
+            - m2 * (x133 * x9 * x15 + x20 * x123 + x35 * x131 * x172);
+        let x276 = -(x31 * x133 * x9 + x28 * x123 + x35 * x131 * x237) * m2
+            - m1 * (x28 * x274 + x125 * x237);
+        let x277 = -(x4 * x274 - x2 * x125) * m1
+            - m2 * (x123 * x4 + x2 * (x133 * x9 - x35 * x131));
+        let x278 = -x147 * x28 - x148 * x0 * x4 - x146 * x20;
+        let x279 = x33 * x278;
+        let x280 = x148 * x0 * x2;
+        let x281 = 2.0 * J2 - 2.0 * J1;
+        let x282 = x33 * x33 * x37
+            + (x33 * x47 + x10 * (x17 * d * x248 + x258) + x17 * x17 * d) * d * m1
+            + x87 * x17 * x17;
+        let x283 = x11 * x217 + x79;
+        let x284 = x33 * a_ * x80 + x70 * x283;
+        let x285 = x84 - x83;
+        let x286 = x33 * a_ * x85 + x70 * x285;
+        let x287 = x33 * a_ * x72 + x70 * x185;
+        let x288 = x10 * d * m1 * (x266 - x32 * x284 - x25 * x0 * x286 - x22 * x287);
+        let x289 = x10 * (x33 * m1 * x267 - x283 * x32 - x25 * x0 * x285 - x22 * x185)
+            * d * d * m1;
+        let x290 = x33 * x10 * m2 * d * d * x270 * m1;
+        let x291 = 2.0 * J1 - 2.0 * J2;
+        let x292 = x10 * (x265 * x17 * d - x62 * x286 - x48 * x284 - x287 * x57) * m1;
+        let x293 = x10 * d * m1
+            * (x17 * d * m1 * x267 - x57 * x185 - x48 * x283 - x62 * x285);
+        let x294 = x10 * m2 * x17 * d * d * x270 * m1;
+        let x295 = d * m1
+            * (x10
+                * ((-x82 * x286 - x76 * x284 - x68 * x287) * m1 - x75 * x185 - x86 * x285
+                    - x283 * x81) - a_ * x17);
+        let x296 = x10 * m2 * (-x43 * x284 - x61 * x286 - x287 * x55) * d * m1;
+        let x297 = x10 * m2 * d * d * m1 * (-x55 * x185 - x283 * x43 - x61 * x285);
+        let x298 = x109 * x37 * x115 + (x113 - x114) * J2 * u4;
+        let x299 = x110 * x110 * d;
+        let x300 = x33 * a_ * u3 * u3;
+        let x301 = x300 - x299 + x142 - x143;
+        let x302 = x33 * x124 * u2 + x17 * u1 * (-u3 - 2.0 * u4);
+        let x303 = x135 + x110 * d * x115 + x138 * x108;
+        let x304 = x301 * x82 + x0 * d * x302 * x4 + x140 * x285 + x303 * x85;
+        let x305 = x301 * x76 + x140 * x283 + x303 * x80 + d * x302 * x28;
+        let x306 = x301 * x68 + x303 * x72 + x140 * x185 + d * x302 * x20;
+        let x307 = x33 * x115;
+        let x308 = x110 * x37 * x108;
+        let x309 = u1 * x167;
+        let x310 = u2 * x169;
+        let x311 = x37 * x115 * x115;
+        let x312 = x22 * x15;
+        let x313 = x31 * x32;
+        let x314 = x58 * x45 - x35 * a_ * x58;
+        let x315 = x35 * (-x26 - x27);
+        let x316 = x40 * x45 + a_ * (x9 * (-x42 - x315) - x35 * x40);
+        let x317 = x52 * x45 + a_ * (x192 * x9 - x35 * x52);
+        let x318 = x57 * x15;
+        let x319 = x48 * x31;
+        let x320 = x10 * m2
+            * (x35 * (x318 + x319 + x260) - x25 * x314 * x0 - x32 * x316 - x22 * x317)
+            * d;
+        let x321 = x31 * x81;
+        let x322 = x75 * x15;
+        let x323 = m2
+            * (x10 * ((-x312 - x251 - x313) * d * x9 + x35 * (x269 + x321 + x322))
+                - d * x9 * x9 - x35 * x65) * d + x35 * x35 * x87 + x37 * x9 * x9;
+        let x324 = x31 * x76;
+        let x325 = x68 * x15;
+        let x326 = x35 * x10 * m2 * d * d * m1 * (x324 + x325 + x272);
+        let x327 = x61 * x0 * x2;
+        let x328 = x55 * x15;
+        let x329 = x31 * x43;
+        let x330 = x10 * m2
+            * ((x327 + x328 + x329) * x35 * m2 - x25 * x58 * x0 - x22 * x52 - x40 * x32)
+            * d * d;
+        let x331 = x10 * m2
+            * ((-x318 - x319 - x260) * d * x9 - x81 * x316 - x314 * x86 - x75 * x317);
+        let x332 = (-x76 * x316 - x82 * x314 - x68 * x317) * x10 * m2 * d * m1;
+        let x333 = m2 * d
+            * (x10
+                * (m2 * (-x55 * x317 - x43 * x316 - x61 * x314) - x62 * x58 - x57 * x52
+                    - x48 * x40) - a_ * x9);
+        let x334 = x10 * m2 * d * d * x9 * (-x324 - x325 - x272) * m1;
+        let x335 = x10 * m2 * d
+            * (m2 * d * x9 * (-x327 - x328 - x329) - x58 * x86 - x40 * x81 - x75 * x52);
+        let x336 = x10 * m2 * (-x68 * x52 - x40 * x76 - x58 * x82) * d * d * m1;
+        let x337 = x103 - x104;
+        let x338 = x9 * x118;
+        let x339 = x35 * x100 * u3 + x100 * x9 * u1;
+        let x340 = x147 * x31;
+        let x341 = x146 * x15;
+        let x342 = x35 * a_ * u2 * u2;
+        let x343 = x105 * d * x337;
+        let x344 = x129 * x118;
+        let x345 = x342 + x343 + x344;
+        let x346 = x345 * x43 - x40 * d * x337 * x132 + x133 * (x315 - x41)
+            + x339 * x31 * d;
+        let x347 = x133 * (x59 - x60) - x58 * d * x337 * x132 + x339 * x0 * d * x2
+            + x61 * x345;
+        let x348 = x133 * x178 - d * x337 * x52 * x132 + x345 * x55 + x339 * d * x15;
+        let x349 = x87 * x105 * x105;
+        let x350 = x87 * x132 * x118;
+        let x351 = u5 * J1;
+        let x352 = x99 - x101 + x351;
+        let x353 = x109 * x37;
+        let x354 = J2 * u4;
+        let x355 = u4 * J1;
+        let x356 = Ixy * u3;
+        let x357 = u2 * Ixz;
+        let x358 = a_ * u3 + x33 * x124 * d;
+        let x359 = x35 * d * x122 - a_ * u2;
+        let x360 = d * x115 - x136 - x137;
+        let x361 = x33 * x138;
+        let x362 = x110 * x17 * d;
+        let x363 = -x361 - x362;
+        let x364 = x35 * x129;
+        let x365 = x105 * d * x9;
+        let x366 = x364 - x365;
+        let x367 = x127 - x128 + d * x132;
+        let x368 = -m1 * (x80 * x17 * x360 + x76 * x363 + x358 * x28)
+            - m2 * (x366 * x43 + x31 * x359 + x40 * x9 * x367);
+        let x369 = -(x358 * x20 + x68 * x363 + x17 * x360 * x72) * m1
+            - m2 * (x359 * x15 + x55 * x366 + x9 * x52 * x367);
+        let x370 = -m2 * (x58 * x9 * x367 + x61 * x366 + x0 * x2 * x359)
+            - (x0 * x358 * x4 + x82 * x363 + x85 * x17 * x360) * m1;
+        let x371 = x35 * x132;
+        let x372 = x105 * x9;
+        let x373 = Izz - Ixx;
+        let x374 = x353 - x354;
+        let x375 = x110 * x17;
+        let x376 = Ixx - Iyy;
+        let x377 = x87 * x105 * x9;
+        let x378 = x47 * x115 + x361;
+        let x379 = x138 * x17;
+        let x380 = x47 * x110;
+        let x381 = -x379 - x380;
+        let x382 = a_ * u1;
+        let x383 = d * x337 - x382;
+        let x384 = d * x98 + x35 * a_ * (u2 - u5) + x45 * x98;
+        let x385 = -(x124 * x17 * d * x20 + x378 * x72 + x68 * x381) * m1
+            - m2 * (x15 * x383 + x384 * x52 + 2.0 * (a_ * u2 * x9 * x55));
+        let x386 = -m2 * (2.0 * (a_ * u2 * x61 * x9) + x58 * x384 + x0 * x2 * x383)
+            - (x85 * x378 + x124 * x17 * x0 * d * x4 + x82 * x381) * m1;
+        let x387 = -m2 * (x31 * x383 + 2.0 * (a_ * u2 * x9 * x43) + x40 * x384)
+            - m1 * (x76 * x381 + x80 * x378 + x124 * x17 * d * x28);
+        let x388 = Iyy - Izz;
+        let x389 = Iyz * u1;
+        let x390 = x33 * x110 * x37;
+        let x391 = a_ * a_ * u1;
+        let x392 = 2.0 * x106 + 2.0 * x107;
+        let x393 = x35 * x87 * x105;
+        let x394 = x37 * x17 * x115;
+        let x395 = J2 * x122;
+        let x396 = x9 * x129;
+        let x397 = x105 * x65;
+        let x398 = x397 - x396;
+        let x399 = -x364 - x132 * x65;
+        let x400 = x110 * d + x382;
+        let x401 = (-u3 - u4) * d - x109 * x70 + x33 * a_ * (u4 - u3);
+        let x402 = -m2 * (x61 * x398 + x58 * x399 + x100 * x0 * d * x9 * x2)
+            - (x400 * x0 * x4 + x85 * x401 + 2.0 * (a_ * x82 * u3 * x17)) * m1;
+        let x403 = -m1 * (x400 * x28 + 2.0 * (a_ * x76 * u3 * x17) + x80 * x401)
+            - m2 * (x43 * x398 + x31 * x100 * d * x9 + x40 * x399);
+        let x404 = -m2 * (x100 * d * x9 * x15 + x399 * x52 + x55 * x398)
+            - (x400 * x20 + 2.0 * (a_ * x68 * u3 * x17) + x401 * x72) * m1;
+        let x405 = 2.0 * x103 - 2.0 * x104;
+        let x406 = x37 * x9 * x132;
+        let x407 = J2 * x108 + x110 * x37;
+        let x408 = -2.0 * u3 - 2.0 * u4;
+        let x409 = x0 * x392 * x4 + x85 * x408;
+        let x410 = x28 * x392 + x80 * x408;
+        let x411 = x408 * x72 + x392 * x20;
+        let x412 = 2.0 * u5 + 2.0 * u2;
+        let x413 = x405 * x15 + x52 * x412;
+        let x414 = x31 * x405 + x40 * x412;
+        let x415 = x58 * x412 + x0 * x2 * x405;
+        let x416 = 2.0 * J2 - J1;
+        Derivatives {
+            qdot: [x1 * x6, x7, u1 + x8 * x1 * x6, u4, u5],
+            matrix: [
+                [
+                    Ixx
+                        + d * d
+                            * (m2 * x9 * x9
+                                + x10 * (-x22 * x22 - x25 * x25 * x0 * x0 - x32 * x32)
+                                + x17 * x17 * m1) + (x34 + x36) * J1
+                        + (x9 * x9 + x17 * x17) * J2,
+                    x63,
+                    x88,
+                    x89,
+                    x90,
+                ],
+                [
+                    x63,
+                    x17 * x17 * J1 + x47 * x47 * m1 + Iyy + J2 * (x34 + 1.0)
+                        + x10 * (-x48 * x48 - x57 * x57 - x62 * x62)
+                        + m2 * (x91 + a_ * (a_ + 2.0 * x64)),
+                    x92,
+                    x93,
+                    x94,
+                ],
+                [
+                    x88,
+                    x92,
+                    x10 * (-x75 * x75 - x81 * x81 - x86 * x86) + x9 * x9 * J1
+                        + (a_ * (a_ + 2.0 * x46) + x91) * m1 + m2 * x65 * x65 + Izz
+                        + J2 * (x36 + 1.0),
+                    x95,
+                    x96,
+                ],
+                [x89, x93, x95, (1.0 - x10 * m1) * d * d * m1 + J2, x97],
+                [x90, x94, x96, x97, J2 + m2 * d * d * (1.0 - x10 * m2)],
+            ],
+            force: [
+                x112 - x102 * x105 * x9 + (-x33 * u4 * x115 - x35 * u5 * x118) * J1
+                    - u2 * x121
+                    + (m2 * x9 * x123 - x17 * m1 * x125
+                        + x10 * (-x22 * x146 - x147 * x32 - x25 * x148 * x0)) * d
+                    + x151 * u3,
+                x152 - x153 - x47 * m1 * x125 + x121 * u1
+                    + x10 * (-x62 * x148 - x147 * x48 - x146 * x57)
+                    - x17 * u4 * x115 * J1
+                    - m2
+                        * ((a_ * (x9 * x156 - 2.0 * (x35 * u3 * u1))
+                            + ((0.5 * x159 - x161) * u3 - 0.5 * (u1 * u1 * x158)) * d)
+                            * d - a_ * a_ * u3 * u1) - x164 * u3,
+                x10 * (-x148 * x86 - x147 * x81 - x75 * x146) - m2 * x65 * x123
+                    - (d
+                        * (a_ * (x165 * x17 + 2.0 * (x33 * u2 * u1))
+                            + d * (u2 * (0.5 * x168 + x170) - 0.5 * (u1 * u1 * x167)))
+                        + a_ * a_ * u2 * u1) * m1 - x35 * x102 * x105 + u2 * x164
+                    + u5 * x9 * x118 * J1 - x151 * u1 + x171,
+                d * m1 * (x10 * (-x148 * x82 - x147 * x76 - x68 * x146) - x135 + x139)
+                    + x171,
+                x152
+                    + m2 * (x10 * (-x146 * x55 - x147 * x43 - x61 * x148) - x126 - x130)
+                        * d,
+            ],
+            checks: [x0],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [x8 * x1 * x1 * x6, 0.0, x3 + x8 * x8 * x1 * x1 * x6 + x5, 0.0, 0.0],
+                [x1 * x7, -x3 - x5, x8 * x1 * x7, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0, 0.0],
+                [x1 * x2, x4, x8 * x1 * x2, 0.0, 0.0],
+                [x1 * x4, -x2, x8 * x1 * x4, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        (2.0 * x173 + 2.0 * x16 - 2.0 * x174 - 2.0 * x21) * x10 * d * d
+                            * x32,
+                        x182,
+                        x189,
+                        x191,
+                        x193,
+                    ],
+                    [
+                        x182,
+                        (-2.0 * x49 - 2.0 * x56 - 2.0 * x179 - 2.0 * x180) * x10 * x48,
+                        x194,
+                        x195,
+                        x196,
+                    ],
+                    [
+                        x189,
+                        x194,
+                        x10 * (-2.0 * x73 - 2.0 * x186 - 2.0 * x187 - 2.0 * x74) * x81,
+                        x197,
+                        x198,
+                    ],
+                    [x191, x195, x197, 0.0, x199],
+                    [x193, x196, x198, x199, 0.0],
+                ],
+                [
+                    [
+                        x10 * (-2.0 * x201 - 2.0 * x202 - 2.0 * x203) * x25 * x0 * d * d,
+                        x214,
+                        x224,
+                        x226,
+                        x228,
+                    ],
+                    [
+                        x214,
+                        x10 * (2.0 * x205 - 2.0 * x206 - 2.0 * x207 - 2.0 * x212) * x62,
+                        x229,
+                        x230,
+                        x231,
+                    ],
+                    [
+                        x224,
+                        x229,
+                        (2.0 * x215 - 2.0 * x216 - 2.0 * x221 - 2.0 * x222) * x10 * x86,
+                        x232,
+                        x233,
+                    ],
+                    [x226, x230, x232, 0.0, x234],
+                    [x228, x231, x233, x234, 0.0],
+                ],
+                [
+                    [
+                        x10 * d * d
+                            * (-2.0 * (x22 * x236) - 2.0 * (x32 * x238)
+                                - 2.0 * (x25 * x0 * x0 * x239)),
+                        x243,
+                        x249,
+                        x250,
+                        x252,
+                    ],
+                    [
+                        x243,
+                        x10
+                            * (-2.0 * (x57 * x241) - 2.0 * (x62 * x0 * x2 * x242)
+                                - 2.0 * (x240 * x48)),
+                        x257,
+                        x259,
+                        x261,
+                    ],
+                    [
+                        x249,
+                        x257,
+                        x244 * x10 * (-2.0 * x262 - 2.0 * x263 - 2.0 * x264),
+                        x268,
+                        x271,
+                    ],
+                    [x250, x259, x268, 0.0, x273],
+                    [x252, x261, x271, x273, 0.0],
+                ],
+                [
+                    [
+                        x33
+                            * (x281 * x17
+                                + d * d
+                                    * (x10 * (-2.0 * x245 - 2.0 * x246 - 2.0 * x247)
+                                        + 2.0 * x17) * m1),
+                        x282,
+                        x288,
+                        x289,
+                        x290,
+                    ],
+                    [
+                        x282,
+                        x17
+                            * (x33 * x291
+                                + d
+                                    * (x10 * (-2.0 * x253 - 2.0 * x254 - 2.0 * x255) - 2.0 * a_
+                                        - 2.0 * x46) * m1),
+                        x292,
+                        x293,
+                        x294,
+                    ],
+                    [
+                        x288,
+                        x292,
+                        (x10
+                            * (-2.0 * (x86 * x286) - 2.0 * (x81 * x284)
+                                - 2.0 * (x75 * x287)) - 2.0 * (a_ * x17 * d)) * m1,
+                        x295,
+                        x296,
+                    ],
+                    [x289, x293, x295, 0.0, x297],
+                    [x290, x294, x296, x297, 0.0],
+                ],
+                [
+                    [
+                        x35
+                            * (m2 * d * d
+                                * (2.0 * x9 + x10 * (2.0 * x312 + 2.0 * x251 + 2.0 * x313))
+                                + x281 * x9),
+                        x320,
+                        x323,
+                        x326,
+                        x330,
+                    ],
+                    [
+                        x320,
+                        m2
+                            * (x10
+                                * (-2.0 * (x48 * x316) - 2.0 * (x57 * x317)
+                                    - 2.0 * (x62 * x314)) - 2.0 * (a_ * d * x9)),
+                        x331,
+                        x332,
+                        x333,
+                    ],
+                    [
+                        x323,
+                        x331,
+                        x9
+                            * (x35 * x291
+                                + m2 * d
+                                    * (x10 * (-2.0 * x269 - 2.0 * x321 - 2.0 * x322) - 2.0 * a_
+                                        - 2.0 * x64)),
+                        x334,
+                        x335,
+                    ],
+                    [x326, x332, x334, 0.0, x336],
+                    [x330, x333, x335, x336, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    x10 * d * (x200 * x32 + x147 * x175),
+                    x10 * (x147 * x181 + x48 * x200),
+                    x10 * (x200 * x81 + x147 * x188),
+                    x10 * d * m1 * (x76 * x200 + x147 * x190),
+                    x10 * m2 * (x147 * x192 + x200 * x43) * d,
+                ],
+                [
+                    x10 * (x235 * x25 * x0 + x148 * x204) * d,
+                    x10 * (x235 * x62 + x148 * x213),
+                    x10 * (x148 * x223 + x235 * x86),
+                    x10 * (x235 * x82 + x225 * x148) * d * m1,
+                    (x148 * x227 + x235 * x61) * x10 * m2 * d,
+                ],
+                [
+                    x10 * d
+                        * ((-x25 * x0 * x277 - x148 * x239) * x0 - x275 * x22
+                            - x147 * x238 - x276 * x32 - x146 * x236),
+                    (x0 * (-x148 * x2 * x242 - x62 * x277) - x275 * x57 - x48 * x276
+                        - x146 * x241 - x147 * x240) * x10,
+                    x10 * (x244 * x278 - x276 * x81 - x0 * x86 * x277 - x275 * x75),
+                    x10 * d * m1 * (x279 - x76 * x276 - x275 * x68 - x82 * x0 * x277),
+                    x10 * m2
+                        * (x35 * (x280 - x146 * x172 - x147 * x237) - x275 * x55
+                            - x276 * x43 - x61 * x0 * x277) * d,
+                ],
+                [
+                    x153 + (x17 * x115 - x33 * x108) * u4 * J1 + x298 * x17
+                        + d * m1
+                            * (x10 * (x25 * x304 * x0 + x279 + x305 * x32 + x22 * x306)
+                                - x33 * x125 - x17 * d * x302),
+                    m1
+                        * (x10 * (x48 * x305 + x62 * x304 + x306 * x57 + x278 * x17 * d)
+                            + (-x47 * x302 - x17 * x125) * d) + x112
+                        + u4 * (-x307 - x17 * x108) * J1 - x33 * x298,
+                    x308
+                        + (x10
+                            * (x305 * x81 + x75 * x306 - x146 * x287 + x304 * x86
+                                - x147 * x284 - x148 * x286)
+                            - d
+                                * (d * ((x310 - 2.0 * x309) * u2 - u1 * u1 * x169)
+                                    + a_ * (x33 * x165 - 2.0 * (u2 * x17 * u1)))) * m1 + x311,
+                    x308
+                        + d
+                            * (x141
+                                + x10
+                                    * (m1 * (x68 * x306 + x304 * x82 + x76 * x305) - x147 * x283
+                                        - x148 * x285 - x146 * x185) + x299 - x300) * m1 + x311,
+                    (x306 * x55 + x61 * x304 + x305 * x43) * x10 * m2 * d * m1,
+                ],
+                [
+                    u5 * (x338 - x35 * x337) * J1
+                        + m2
+                            * (x339 * d * x9 + x35 * x123
+                                + x10
+                                    * (x35 * (x280 + x340 + x341) + x32 * x346 + x25 * x347 * x0
+                                        + x22 * x348)) * d + x102 * (-x35 * x105 - x338),
+                    x349 + x350
+                        + m2
+                            * (x10
+                                * (x48 * x346 - x146 * x317 - x148 * x314 + x62 * x347
+                                    - x147 * x316 + x57 * x348)
+                                - d
+                                    * (a_ * (2.0 * (u3 * x9 * u1) + x35 * x156)
+                                        + (x160 * (x154 - x155) + 2.0 * (u3 * u1 * x158)) * d)),
+                    x9 * (u5 * x337 * J1 + x102 * x105)
+                        + m2
+                            * (x10
+                                * (x347 * x86 + x81 * x346 + d * x9 * (-x280 - x340 - x341)
+                                    + x75 * x348) + d * (-x339 * x65 - x9 * x123))
+                        + x35 * x352 * x118,
+                    (x76 * x346 + x82 * x347 + x68 * x348) * x10 * m2 * d * m1,
+                    m2 * d
+                        * (x10
+                            * (m2 * (x55 * x348 + x61 * x347 + x43 * x346) - x147 * x40
+                                - x148 * x58 - x146 * x52) - x342 - x343 - x344) + x349
+                        + x350,
+                ],
+                [
+                    x33 * x17 * (x353 - x354 + x355) - x356 + x35 * x9 * x352 + x357
+                        + d
+                            * (m2 * x9 * x359 - x17 * x358 * m1
+                                + x10 * (-x368 * x32 - x22 * x369 - x25 * x0 * x370)),
+                    J2 * (x371 + x372) + x373 * u3 + (x17 * x17 * u4 - x371 - x372) * J1
+                        - m2
+                            * ((a_ * (-2.0 * x116 - 2.0 * x117)
+                                + d * (-u1 * x158 - x160 * u3)) * d - a_ * a_ * u3)
+                        - x33 * x33 * x374 - x119
+                        + x10 * (-x369 * x57 - x62 * x370 - x48 * x368) - 2.0 * x120
+                        - x47 * x358 * m1,
+                    (x307 - u5 * x9 * x9 - x375) * J1 - m2 * x359 * x65
+                        + x10 * (-x86 * x370 - x75 * x369 - x368 * x81)
+                        - x35 * x35 * x102 + u2 * x376 + (x375 - x307) * J2
+                        - m1
+                            * (((2.0 * x114 - 2.0 * x113) * a_ + d * (x310 - x309)) * d
+                                + a_ * a_ * u2) + x149 + 2.0 * x150,
+                    d * m1
+                        * (x361 + x362 + x10 * (-x68 * x369 - x82 * x370 - x76 * x368))
+                        + x87 * x110 * x17 + x33 * x37 * x115,
+                    x35 * x87 * x132
+                        + m2 * d
+                            * (x365 - x364
+                                + x10 * (-x369 * x55 - x61 * x370 - x368 * x43)) + x377,
+                ],
+                [
+                    (x10 * (-x22 * x385 - x25 * x0 * x386 - x387 * x32)
+                        - x124 * x17 * x17 * d * m1 + m2 * x9 * x383) * d
+                        - x33 * x33 * u4 * J1 + x17 * x17 * x374 + 2.0 * x119 - x377
+                        + x120 + u3 * x388,
+                    2.0 * (u5 * m2 * a_ * d * x9) + x356
+                        + (-x62 * x386 - x385 * x57 - x48 * x387) * x10
+                        + x17 * (x33 * (x354 - x353 - x355) - x124 * x47 * d * m1)
+                        - x389,
+                    x390 - x162 + x376 * u1 - 2.0 * x163
+                        + x10 * (-x86 * x386 - x75 * x385 - x387 * x81)
+                        - m1 * (x391 + d * (d * (x168 + x170) + a_ * x392)) - x393 + x394
+                        - m2 * x65 * x383,
+                    x390
+                        + (x379 + x10 * (-x82 * x386 - x76 * x387 - x68 * x385) + x380)
+                            * d * m1 + x394,
+                    m2 * d
+                        * (x10 * (-x385 * x55 - x61 * x386 - x387 * x43)
+                            - 2.0 * (a_ * u2 * x9)),
+                ],
+                [
+                    x110 * x37 * x17 + u2 * x388 - x9 * x9 * (x99 + x395)
+                        + x35 * x35 * u5 * J1 - 2.0 * x149 - x150
+                        + (x10 * (-x25 * x0 * x402 - x403 * x32 - x22 * x404)
+                            + m2 * x100 * d * x9 * x9 - x400 * x17 * m1) * d,
+                    2.0 * x162 - x390 + x373 * u1
+                        - m2 * ((d * (x159 - x161) + a_ * x405) * d - x391) + x163
+                        + x10 * (-x404 * x57 - x62 * x402 - x48 * x403) + x393
+                        - x400 * x47 * m1 + x406,
+                    x9 * (x35 * (-x99 - x395 - x351) - m2 * x100 * d * x65)
+                        + x10 * (-x403 * x81 - x402 * x86 - x75 * x404) - x357
+                        + 2.0 * (a_ * x17 * d * u4 * m1) + x389,
+                    (x10 * (-x82 * x402 - x68 * x404 - x76 * x403)
+                        - 2.0 * (a_ * u3 * x17)) * d * m1,
+                    m2 * d
+                        * (x396 + x10 * (-x61 * x402 - x43 * x403 - x404 * x55) - x397)
+                        + x393 + x406,
+                ],
+                [
+                    x407 * x17 - x33 * x115 * J1
+                        + d * d
+                            * (x10 * (x409 * x25 * x0 + x410 * x32 + x22 * x411)
+                                - x17 * x392) * m1,
+                    (x10 * (x48 * x410 + x409 * x62 + x57 * x411) - x47 * x392) * d * m1
+                        - x17 * x115 * J1 - x33 * x407,
+                    (x10 * (x410 * x81 + x409 * x86 + x75 * x411) - a_ * x17 * x408) * d
+                        * m1,
+                    (x409 * x82 + x410 * x76 + x68 * x411) * x10 * d * d * m1 * m1,
+                    x10 * m2 * d * d * (x409 * x61 + x55 * x411 + x410 * x43) * m1,
+                ],
+                [
+                    m2 * d * d
+                        * (x10 * (x22 * x413 + x414 * x32 + x415 * x25 * x0) + x9 * x405)
+                        - x35 * x118 * J1 - x105 * x9 * x416,
+                    m2 * d
+                        * (x10 * (x415 * x62 + x57 * x413 + x48 * x414)
+                            - a_ * x9 * (-2.0 * u5 - 2.0 * u2)),
+                    m2 * (x10 * (x415 * x86 + x414 * x81 + x75 * x413) - x405 * x65) * d
+                        - x35 * x105 * x416 + x9 * x118 * J1,
+                    x10 * m2 * d * d * m1 * (x415 * x82 + x414 * x76 + x68 * x413),
+                    x10 * m2 * m2 * (x415 * x61 + x414 * x43 + x55 * x413) * d * d,
+                ],
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    #[allow(clippy::all)]
+    pub fn jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; STATES]; STATES],
+    ) -> Result<(), Failure> {
+        let Derivatives { qdot, mut matrix, force, checks, d_qdot, d_matrix, d_force } = assemble_derivatives(
+            t,
+            state,
+            params,
+            g_i,
+        );
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; STATES]; STATES];
+        for j in 0..5 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..5 {
+            dstate[5 + j] = x[j];
+        }
+        for k in 0..10 {
+            for j in 0..5 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 5];
+            for i in 0..5 {
+                let mut s = d_force[k][i];
+                for j in 0..5 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..5 {
+                jac[5 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -1017,6 +2079,19 @@ pub mod reduced_volterra {
                 ),
             )
         },
+        jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; STATES]; STATES];
+            jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_matrix(&j, jac)
+        }),
     };
 }
 ///Every emitted formulation through slices.

@@ -33,7 +33,8 @@ fn committed_modules_match_the_generator() {
     let mut counters = String::from("# Work counters of the committed modules (regenerated with them).\n");
     for (module, model, edit) in variants() {
         let m = generator::model::load(format!("{root}/models/{model}.ron")).unwrap();
-        let mut options = Options { module_name: Some(module.to_string()), ..Options::from_model(&m) };
+        // The committed modules carry their Jacobians (`--jacobian`): the tests check them.
+        let mut options = Options { module_name: Some(module.to_string()), jacobian: true, ..Options::from_model(&m) };
         edit(&mut options);
         let out = generate(&m, &options).unwrap();
         counters += &format!("\n[{module}]\n{}", out.summary.work_counters());

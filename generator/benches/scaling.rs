@@ -14,6 +14,10 @@
 //! no memo carries over. `--sympy` runs `docs/scaling/sympy_kane.py` in the same run (needs
 //! python3 with SymPy), so the ratios are side by side.
 
+/// As the generator's command line (`generator/src/main.rs`).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 use generator::emit::{Options, generate};
 use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
 use plotters::prelude::*;

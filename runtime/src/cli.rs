@@ -14,6 +14,7 @@
 
 use crate::compare::{CompareError, Options, compare, table};
 use crate::integrate::Method;
+use crate::linearize::{LinearizeError, Operating, Swept, crossings, growth, linearize};
 use crate::output::{OutputError, write_atomic};
 use crate::plot::PlotError;
 use crate::sweep::{SweepOptions, csv, sweep};
@@ -89,6 +90,115 @@ pub struct SweepArgs {
     /// A comma-separated subset of the formulations (default: all the module has).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     pub formulations: Vec<FormulationArg>,
+    /// The integrators to sweep (default: dopri5,dop853,rk4; add ros23 for a stiff model).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST", default_value = "dopri5,dop853,rk4")]
+    pub methods: Vec<MethodArg>,
+}
+
+/// The linear model `x' = A x` of a formulation about an operating point (the model's initial
+/// state, with `--q`, `--qdot` and `--param` overrides), and its eigenvalues; with `--sweep`,
+/// the eigenvalues over a range of one parameter or one initial rate, written as CSV, JSON
+/// and an SVG plot (`DIR/<model>_eigenvalues.{csv,json,svg}`), with the values where a real
+/// part crosses zero.
+#[derive(Parser, Debug, Clone, PartialEq)]
+#[command(name = "linearize", version)]
+pub struct LinearizeArgs {
+    /// A model file (`path/to/my_model.ron`) or the name of one in `models/`.
+    pub model: String,
+    /// The formulation whose state is linearized.
+    #[arg(long, value_enum, default_value_t = FormulationArg::Kane)]
+    pub formulation: FormulationArg,
+    /// A coordinate's value at the operating point, `NAME=VALUE` (repeatable).
+    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub q: Vec<(String, f64)>,
+    /// A coordinate's rate at the operating point, `NAME=VALUE` (repeatable).
+    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub qdot: Vec<(String, f64)>,
+    /// A parameter's value, `NAME=VALUE` (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub param: Vec<(String, f64)>,
+    /// Sweep a parameter (`k`) or a coordinate's rate (`x'`) from `--from` to `--to`.
+    #[arg(long, value_name = "NAME", requires_all = ["from", "to"])]
+    pub sweep: Option<String>,
+    #[arg(long, allow_hyphen_values = true, requires = "sweep")]
+    pub from: Option<f64>,
+    #[arg(long, allow_hyphen_values = true, requires = "sweep")]
+    pub to: Option<f64>,
+    /// Number of values in the sweep.
+    #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    pub steps: u32,
+    /// The directory a sweep's results are written to.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+}
+
+fn assignment(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s.split_once('=').ok_or_else(|| format!("needs `NAME=VALUE`, not `{s}`"))?;
+    let v: f64 = value.trim().parse().map_err(|_| format!("`{value}` is not a number (in `{s}`)"))?;
+    if !v.is_finite() {
+        return Err(format!("`{value}` is not finite (in `{s}`)"));
+    }
+    Ok((name.trim().to_string(), v))
+}
+
+/// The operating point `args` describe: the model's initial state and parameters with the
+/// overrides applied.
+pub fn operating_point(model: &Model, args: &LinearizeArgs) -> Result<Operating, CliError> {
+    let m = model.coordinates.len();
+    let (mut q, mut qdot) = match model.initial {
+        Some((q, qd)) => (q.to_vec(), qd.to_vec()),
+        None => (vec![0.0; m], vec![0.0; m]),
+    };
+    let mut params = model.default_params.to_vec();
+    let find = |names: &[&str], name: &str, what: &'static str| {
+        names.iter().position(|n| *n == name).ok_or_else(|| CliError::UnknownName { what, name: name.to_string(), known: names.join(", ") })
+    };
+    for (name, v) in &args.q {
+        q[find(model.coordinates, name, "coordinate")?] = *v;
+    }
+    for (name, v) in &args.qdot {
+        qdot[find(model.coordinates, name, "coordinate")?] = *v;
+    }
+    for (name, v) in &args.param {
+        params[find(model.parameter_names, name, "parameter")?] = *v;
+    }
+    Ok(Operating { q, qdot, params })
+}
+
+/// `linearize`: the eigenvalues at the operating point, or the sweep's files.
+pub fn linearize_command(model: &Model, args: &LinearizeArgs) -> Result<(), CliError> {
+    let form = formulations(model, &[args.formulation])?.remove(0);
+    let at = operating_point(model, args)?;
+    let Some(name) = &args.sweep else {
+        let lin = linearize(model, &form, &at)?;
+        let mut text = format!(
+            "{} {form}: A is {n} x {n} ({}), largest nonzero real part {:e}\n",
+            model.module,
+            if lin.exact { "exact Jacobian" } else { "finite differences" },
+            growth(&lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect::<Vec<_>>()),
+            n = lin.a.nrows()
+        );
+        for l in &lin.eigenvalues {
+            text += &format!("  {:+.12e} {:+.12e}i\n", l.re, l.im);
+        }
+        return print(&text);
+    };
+    let swept = Swept::find(model, name)?;
+    let (a, b) = (args.from.expect("clap requires --from"), args.to.expect("clap requires --to"));
+    let k = args.steps as usize;
+    let values: Vec<f64> = (0..k).map(|i| a + (b - a) * i as f64 / (k - 1) as f64).collect();
+    let rows = crate::linearize::sweep(model, &form, &at, swept, &values)?;
+    let cross = crossings(model, &form, &at, swept, &rows)?;
+    let base = args.out.join(format!("{}_eigenvalues", model.module));
+    write_atomic(&base.with_extension("csv"), crate::linearize::csv(name, &rows).as_bytes())?;
+    let json = serde_json::json!({ "model": model.module, "formulation": form, "swept": name, "crossings": cross, "rows": rows });
+    write_atomic(&base.with_extension("json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
+    crate::plot::write_eigenvalues(&format!("{} ({form})", model.module), name, &rows, &base.with_extension("svg"))?;
+    let mut text = format!("{} {form}: {} values of {name} from {a} to {b}; written {}.{{csv,json,svg}}\n", model.module, k, base.display());
+    for c in &cross {
+        text += &format!("  the largest nonzero real part crosses zero at {name} = {c:.12}\n");
+    }
+    print(&text)
 }
 
 /// An integrator, as named on the command line.
@@ -97,6 +207,9 @@ pub enum MethodArg {
     Dopri5,
     Dop853,
     Rk4,
+    /// Rosenbrock 2(3) (`ode23s`) for stiff models, with the exact Jacobian when the module
+    /// has one (`generator --jacobian`), else finite differences.
+    Ros23,
 }
 
 /// A formulation, as named on the command line.
@@ -142,6 +255,10 @@ pub enum CliError {
     Output(#[from] OutputError),
     #[error(transparent)]
     Plot(#[from] PlotError),
+    #[error(transparent)]
+    Linearize(#[from] LinearizeError),
+    #[error("no {what} `{name}` (known: {known})")]
+    UnknownName { what: &'static str, name: String, known: String },
     #[error("model `{model}` has no formulation `{name}` (it has: {available})")]
     UnknownFormulation { model: String, name: String, available: String },
     #[error("cannot write to stdout: {0}")]
@@ -170,6 +287,7 @@ pub fn compare_options(model: &Model, args: &CompareArgs) -> Result<Options, Cli
         MethodArg::Dop853 => Method::Dop853,
         // clap requires `--h` with `rk4`.
         MethodArg::Rk4 => Method::Rk4 { h: args.h.unwrap_or(s.h_max) },
+        MethodArg::Ros23 => Method::Rosenbrock23,
     };
     if let Some(x) = args.rtol {
         s.rtol = x;
@@ -242,9 +360,19 @@ pub fn compare_command(model: &Model, args: &CompareArgs) -> Result<(), CliError
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep_command(model: &Model, args: &SweepArgs) -> Result<(), CliError> {
     let mut options = SweepOptions { repeats: args.repeats as usize, formulations: formulations(model, &args.formulations)?, ..SweepOptions::default() };
+    options.adaptive = [(MethodArg::Dopri5, Method::Dopri5), (MethodArg::Dop853, Method::Dop853), (MethodArg::Ros23, Method::Rosenbrock23)]
+        .into_iter()
+        .filter(|(a, _)| args.methods.contains(a))
+        .map(|(_, m)| m)
+        .collect();
+    if !args.methods.contains(&MethodArg::Rk4) {
+        options.rk4_steps.clear();
+    }
     if args.quick {
         options.tolerances = vec![1e-3, 1e-6, 1e-9];
-        options.rk4_steps = vec![1.0, 0.1, 0.01];
+        if !options.rk4_steps.is_empty() {
+            options.rk4_steps = vec![1.0, 0.1, 0.01];
+        }
     }
     let mut stderr = std::io::stderr();
     let points = sweep(model, &options, &mut |done, total, label| {
@@ -268,8 +396,9 @@ pub fn run_compiled(model: Model) -> ExitCode {
     let result = match command.as_str() {
         "compare" => compare_command(&model, &CompareArgs::parse_from(std::iter::once("compare".into()).chain(args))),
         "sweep" => sweep_command(&model, &SweepArgs::parse_from(std::iter::once("sweep".into()).chain(args))),
+        "linearize" => linearize_command(&model, &LinearizeArgs::parse_from(std::iter::once("linearize".into()).chain(args))),
         other => {
-            eprintln!("error: unknown command `{other}`: use `compare` or `sweep`");
+            eprintln!("error: unknown command `{other}`: use `compare`, `sweep` or `linearize`");
             return ExitCode::from(2);
         }
     };

@@ -10,7 +10,7 @@
 //! assert!(reduced.record.constraint_error_norm < 1e-12);
 //! ```
 
-use crate::integrate::{Projector, RunError, Settings, Solution, integrate_projected};
+use crate::integrate::{JacobianFn, Projector, RunError, Settings, Solution, integrate_with_jacobian};
 use crate::monitor::{Invariants, monitor, norm};
 use crate::system::{Drift, SetupError, System};
 use seam::{Failure, Model};
@@ -152,7 +152,9 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         let start = Instant::now();
         let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
         let projector: Option<Projector> = if drift == Drift::Projection { Some(&mut project) } else { None };
-        let sol = integrate_projected(&mut |t, y, dy| sys.rhs(t, y, dy), projector, &y0, &times, settings)
+        let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| sys.jacobian(t, y, dy, j);
+        let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
+        let sol = integrate_with_jacobian(&mut |t, y, dy| sys.rhs(t, y, dy), jacobian, projector, &y0, &times, settings)
             .map_err(|source| CompareError::Run { method: method.into(), source })?;
         cpu.push(start.elapsed().as_secs_f64());
         solution = Some(sol);

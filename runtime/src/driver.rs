@@ -27,6 +27,7 @@ const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 pub enum Tool {
     Compare,
     Sweep,
+    Linearize,
 }
 
 impl Tool {
@@ -34,6 +35,7 @@ impl Tool {
         match self {
             Tool::Compare => "compare",
             Tool::Sweep => "sweep",
+            Tool::Linearize => "linearize",
         }
     }
 }
@@ -161,7 +163,7 @@ pub fn program_for(file: &Path) -> Result<PathBuf, DriverError> {
         cmd.arg("-q");
     }
     cmd.arg("--manifest-path").arg(workspace.join("Cargo.toml")).arg("--target-dir").arg(&target);
-    cmd.arg("--").arg(file).arg("-o").arg(&module).args(["--seam-path", "runtime::seam", "--quiet"]);
+    cmd.arg("--").arg(file).arg("-o").arg(&module).args(["--seam-path", "runtime::seam", "--jacobian", "--quiet"]);
     let st = status(cmd, "cargo run -p generator")?;
     if !st.success() {
         return Err(DriverError::Refused { path: file.to_path_buf(), code: st.code().unwrap_or(1) });
@@ -212,6 +214,7 @@ pub fn main(tool: Tool) -> ExitCode {
     let model = match tool {
         Tool::Compare => crate::cli::CompareArgs::parse_from(&args).model,
         Tool::Sweep => crate::cli::SweepArgs::parse_from(&args).model,
+        Tool::Linearize => crate::cli::LinearizeArgs::parse_from(&args).model,
     };
     let program = match resolve(&model).and_then(|file| program_for(&file)) {
         Ok(p) => p,

@@ -16,6 +16,7 @@ pub mod system;
 pub mod monitor;
 pub mod compare;
 pub mod sweep;
+pub mod linearize;
 pub mod plot;
 pub mod output;
 pub mod cli;

@@ -167,3 +167,35 @@ pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Resu
     drop(root);
     write_atomic(path, svg.as_bytes()).map_err(|e| err(path, e.source))
 }
+
+/// The eigenvalues of a linearization sweep against the swept value: real parts (top) and
+/// imaginary parts (bottom), one dot per eigenvalue, like the bicycle benchmark's figure.
+pub fn write_eigenvalues(title: &str, swept: &str, rows: &[crate::linearize::SweepRow], path: &Path) -> Result<(), PlotError> {
+    let (v0, v1) = (rows.first().map_or(0.0, |r| r.value), rows.last().map_or(1.0, |r| r.value));
+    let (v0, v1) = if v1 > v0 { (v0, v1) } else { (v0 - 1.0, v0 + 1.0) };
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1000, 760)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(path, e))?;
+    let areas = root.split_evenly((2, 1));
+    for (area, (label, part)) in areas.iter().zip([("real part", 0usize), ("imaginary part", 1)]) {
+        let values: Vec<(f64, f64)> =
+            rows.iter().flat_map(|r| r.eigenvalues.iter().map(move |e| (r.value, if part == 0 { e.0 } else { e.1 }))).filter(|(_, y)| y.is_finite()).collect();
+        let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (_, y)| (a.min(*y), b.max(*y)));
+        let (lo, hi) = if lo.is_finite() && hi > lo { (lo, hi) } else { (-1.0, 1.0) };
+        let pad = 0.05 * (hi - lo);
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("{title}: eigenvalues, {label}"), ("sans-serif", 15))
+            .margin(10)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(v0..v1, (lo - pad)..(hi + pad))
+            .map_err(|e| err(path, e))?;
+        chart.configure_mesh().x_desc(swept).y_desc(label).draw().map_err(|e| err(path, e))?;
+        chart.draw_series(std::iter::once(PathElement::new(vec![(v0, 0.0), (v1, 0.0)], BLACK.stroke_width(1)))).map_err(|e| err(path, e))?;
+        chart.draw_series(values.iter().map(|&(x, y)| Circle::new((x, y), 2, COLORS[part].filled()))).map_err(|e| err(path, e))?;
+    }
+    root.present().map_err(|e| err(path, e))?;
+    drop(areas);
+    drop(root);
+    write_atomic(path, svg.as_bytes()).map_err(|e| err(path, e.source))
+}

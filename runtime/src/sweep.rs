@@ -17,7 +17,9 @@ use seam::Model;
 /// What to sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepOptions {
-    /// Tolerances (rtol = atol) for DOPRI5 and DOP853.
+    /// The adaptive integrators (default DOPRI5 and DOP853).
+    pub adaptive: Vec<Method>,
+    /// Tolerances (rtol = atol) for the adaptive integrators.
     pub tolerances: Vec<f64>,
     /// RK4 steps, as fractions of the output interval.
     pub rk4_steps: Vec<f64>,
@@ -31,6 +33,7 @@ pub struct SweepOptions {
 impl Default for SweepOptions {
     fn default() -> Self {
         SweepOptions {
+            adaptive: vec![Method::Dopri5, Method::Dop853],
             tolerances: (3..=12).map(|k| 10f64.powi(-k)).collect(),
             // Two decades of steps.
             rk4_steps: vec![1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01],
@@ -70,7 +73,7 @@ pub fn plan(model: &Model, options: &SweepOptions) -> Result<Vec<Settings>, Comp
     let r = Reference::of(model)?;
     let (h_max, dt) = (0.1 * (r.t_end - r.t_start), r.dt_out);
     let mut out = Vec::new();
-    for method in [Method::Dopri5, Method::Dop853] {
+    for &method in &options.adaptive {
         for &tol in &options.tolerances {
             out.push(Settings { method, rtol: tol, atol: tol, h_max, ..Settings::default() });
         }

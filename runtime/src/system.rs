@@ -85,6 +85,21 @@ impl System {
         }
     }
 
+    /// True when `jacobian` is the model's exact one (emitted with `--jacobian`, and no
+    /// Baumgarte terms, which it does not include).
+    pub fn has_exact_jacobian(&self) -> bool {
+        self.form.jacobian.is_some() && !matches!(self.drift, Drift::Baumgarte { .. })
+    }
+
+    /// `dy = f(t, y)` and `jac = df/dy` (row-major) from the emitted `jacobian`;
+    /// `Failure::Missing` when the module has none (see [`System::has_exact_jacobian`]).
+    pub fn jacobian(&self, t: f64, y: &[f64], dy: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
+        match self.form.jacobian {
+            Some(j) if self.has_exact_jacobian() => j(t, y, &self.params, &self.g_i, dy, jac),
+            _ => Err(Failure::Missing { function: "jacobian" }),
+        }
+    }
+
     /// Projection onto the constraints for [`Drift::Projection`] (state `[q; q'; W]`); returns
     /// whether the state changed.
     pub fn project(&self, t: f64, y: &mut [f64]) -> Result<bool, Failure> {

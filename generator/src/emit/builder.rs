@@ -36,6 +36,7 @@ pub struct Builder {
     parameters: Option<Parameters>,
     integrate_ignorable: Option<bool>,
     max_lets_per_function: Option<usize>,
+    jacobian: Option<bool>,
     seam_path: String,
     cargo_metadata: bool,
 }
@@ -83,6 +84,7 @@ impl Builder {
             parameters: None,
             integrate_ignorable: None,
             max_lets_per_function: None,
+            jacobian: None,
             seam_path: super::DEFAULT_SEAM_PATH.to_string(),
             cargo_metadata: true,
         }
@@ -128,6 +130,13 @@ impl Builder {
         self
     }
 
+    /// Emit each formulation's exact `jacobian` (`true`) or leave it out, instead of each
+    /// model file's choice.
+    pub fn jacobian(mut self, emit: bool) -> Builder {
+        self.jacobian = Some(emit);
+        self
+    }
+
     /// The seam crate's path in the emitted code (default `::seam`; `runtime::seam` for a crate
     /// that depends on the runtime only).
     pub fn seam_path(mut self, path: impl Into<String>) -> Builder {
@@ -155,6 +164,9 @@ impl Builder {
         }
         if let Some(n) = self.max_lets_per_function {
             o.max_lets_per_function = n;
+        }
+        if let Some(j) = self.jacobian {
+            o.jacobian = j;
         }
         o.seam_path = self.seam_path.clone();
         o

@@ -28,7 +28,7 @@ pub fn solve_cost(n: usize) -> OpCount {
     OpCount { add: elim_mul + back, mul: elim_mul + back, div: elim_div + n, neg: 0, calls: Default::default() }
 }
 
-fn state_args() -> Vec<Arg> {
+pub(super) fn state_args() -> Vec<Arg> {
     vec![
         Arg::new("t", quote!(f64)),
         Arg::new("state", quote!(&[f64; STATES])),
@@ -49,7 +49,7 @@ impl Emitter<'_> {
 
     /// Inputs of the functions of a state: `t`, kept coordinates and speeds from `state`
     /// (argument 1), parameters (argument 2), `G_I` (argument 3).
-    fn state_inputs(&self, f: &Equations) -> Vec<Input> {
+    pub(super) fn state_inputs(&self, f: &Equations) -> Vec<Input> {
         let model = self.model;
         let mut inputs = vec![self.time_input()];
         for (pos, &j) in f.kept.iter().enumerate() {
@@ -69,7 +69,7 @@ impl Emitter<'_> {
     }
 
     /// The factors of the elimination's pivots that vary with the state: checked at runtime.
-    fn runtime_factors(&mut self, f: &Equations) -> Vec<Expr> {
+    pub(super) fn runtime_factors(&mut self, f: &Equations) -> Vec<Expr> {
         let model = self.model;
         let varying: BTreeSet<Symbol> = model.coordinates.iter().chain(&f.speeds).chain(&f.momenta).chain([&model.t]).copied().collect();
         let mut out: Vec<Expr> = Vec::new();
@@ -99,13 +99,14 @@ impl Emitter<'_> {
         let init = self.initial_state(f, d)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
+        let jacobian = if self.options.jacobian { self.jacobian_fn(f, d, &checks)? } else { TokenStream::new() };
         let module = ident(name);
         let states_l = usize_lit(n_states);
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
-        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some());
+        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some(), self.options.jacobian);
         Ok(quote! {
             #mod_doc
             pub mod #module {
@@ -124,9 +125,34 @@ impl Emitter<'_> {
                 #init
                 #vel
                 #margin
+                #jacobian
                 #seam_const
             }
         })
+    }
+
+    /// What the state's rates are computed from, in order: the kept coordinates' rates, the
+    /// matrix (both triangles read the upper entry, so CSE binds it once), the forcing, Maggi's
+    /// `W` and `c`, and the power `Q . q'` when forces do work.
+    pub(super) fn rate_outputs(&self, f: &Equations, d: &Derivation) -> Vec<Expr> {
+        let model = self.model;
+        let n = f.mass.rows;
+        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
+        for i in 0..n {
+            for j in 0..n {
+                outputs.push(f.mass.get(i.min(j), i.max(j)));
+            }
+        }
+        outputs.extend(f.forcing.iter().copied());
+        if let Some((w, c)) = &f.post {
+            outputs.extend(w.data.iter().copied());
+            outputs.extend(c.iter().copied());
+        }
+        if self.work {
+            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
+            outputs.push(Expr::sum(d.mechanics.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
+        }
+        outputs
     }
 
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`.
@@ -143,21 +169,7 @@ impl Emitter<'_> {
         // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
         // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
         // the constraint residuals for Baumgarte.
-        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
-        for i in 0..n {
-            for j in 0..n {
-                outputs.push(f.mass.get(i.min(j), i.max(j)));
-            }
-        }
-        outputs.extend(f.forcing.iter().copied());
-        if let Some((w, c)) = &f.post {
-            outputs.extend(w.data.iter().copied());
-            outputs.extend(c.iter().copied());
-        }
-        if work {
-            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
-            outputs.push(Expr::sum(d.mechanics.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
-        }
+        let mut outputs = self.rate_outputs(f, d);
         outputs.extend(checks.iter().copied());
         if let Some(stab) = &f.stabilization {
             outputs.extend(stab.iter().map(|(r, _)| *r));
@@ -285,10 +297,10 @@ impl Emitter<'_> {
             #[doc = "Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors."]
             #[allow(non_snake_case, clippy::all)]
             fn assemble(#(#fn_args),*) -> Assembly {
-                #(#stmts)*
+                #stmts
                 Assembly { #(#values,)* }
             }
-            #(#helpers)*
+            #helpers
             #[doc = "Checks the singular factors, solves, and writes the state's rates."]
             #[allow(clippy::all)]
             fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -366,7 +378,7 @@ impl Emitter<'_> {
             #[doc = "The initial state and the conserved momenta `G_I` (Eq. 26) from `q(0), q'(0)`. Rejects velocities (or positions) that violate a constraint, with the residual."]
             #[allow(non_snake_case, clippy::all)]
             pub fn initial_state(#(#fn_args),*) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-                #(#stmts)*
+                #stmts
                 let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [#((#names, #r_out, #rb_out)),*];
                 let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [#((#h_names, #h_out, #hb_out)),*];
                 for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -384,7 +396,7 @@ impl Emitter<'_> {
                 }
                 Ok((state, g_i))
             }
-            #(#helpers)*
+            #helpers
         })
     }
 
@@ -427,7 +439,7 @@ impl Emitter<'_> {
             #[doc = "Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0."]
             #[allow(non_snake_case, clippy::all)]
             pub fn velocities(#(#fn_args),*) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
-                #(#stmts)*
+                #stmts
                 #(#check_stmts)*
                 let q: [f64; NUM_COORDINATES] = [#(#q_items),*];
                 let qdot: [f64; NUM_COORDINATES] = [#(#qd),*];
@@ -438,7 +450,7 @@ impl Emitter<'_> {
                 }
                 Ok((q, qdot))
             }
-            #(#helpers)*
+            #helpers
         })
     }
 
@@ -456,10 +468,10 @@ impl Emitter<'_> {
             #[doc = "The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`."]
             #[allow(non_snake_case, clippy::all)]
             pub fn singular_margin(#(#fn_args),*) -> f64 {
-                #(#stmts)*
+                #stmts
                 #body
             }
-            #(#helpers)*
+            #helpers
         })
     }
 }

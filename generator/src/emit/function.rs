@@ -19,6 +19,7 @@ use super::cse::plan;
 use super::lower::{LowerError, lower};
 use super::ops::OpCount;
 use super::optimize::{expand_angle_sums, factor_sums_with, share_reciprocals};
+use super::syntax;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
@@ -56,15 +57,15 @@ impl Input {
     }
 }
 
-/// The pieces of a function body.
-#[derive(Clone, Debug)]
+/// The pieces of a function body, as syntax trees.
+#[derive(Clone)]
 pub struct Body {
     /// Statements: input bindings, then the `let`s (or the calls of the helper parts).
-    pub stmts: Vec<TokenStream>,
+    pub stmts: Vec<syn::Stmt>,
     /// One expression per output, in terms of the `let`s and inputs.
-    pub outputs: Vec<TokenStream>,
+    pub outputs: Vec<syn::Expr>,
     /// Helper functions (the parts of a split body), to place beside the function.
-    pub helpers: Vec<TokenStream>,
+    pub helpers: Vec<syn::Item>,
     /// Arguments the statements and outputs read.
     pub used_args: BTreeSet<usize>,
     /// Operations of the whole body.
@@ -106,18 +107,12 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
         let names = let_names(bound.len(), &taken);
         let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
         let symbols = SymbolUse::new(&by_symbol);
-        let reference = |e: Expr| {
-            index.get(&e).map(|&k| {
-                let i = ident(&names[k]);
-                quote!(#i)
-            })
-        };
+        let reference = |e: Expr| index.get(&e).map(|&k| syntax::ident(&names[k]));
         let mut lets = Vec::new();
         for (k, e) in bound.iter().enumerate() {
             let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
             ops.merge(&o);
-            let i = ident(&names[k]);
-            lets.push(quote!(let #i = #t;));
+            lets.push(syntax::let_stmt(&names[k], t));
         }
         let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
         let used = symbols.used.into_inner();
@@ -128,12 +123,7 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
     // Split: v[k] holds bound subexpression k; part j computes a contiguous range of them.
     let n = bound.len();
     let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
-    let reference = |e: Expr| {
-        index.get(&e).map(|&k| {
-            let l = Literal::usize_unsuffixed(k);
-            quote!(v[#l])
-        })
-    };
+    let reference = |e: Expr| index.get(&e).map(|&k| syntax::index("v", k));
     let size = Literal::usize_unsuffixed(n);
     let mut helpers = Vec::new();
     let mut calls = Vec::new();
@@ -145,30 +135,29 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
             let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
             ops.merge(&o);
             let target = reference(*e).expect("bound");
-            lines.push(quote!(#target = #t;));
+            lines.push(syntax::assign_stmt(target, t));
         }
         let (ins, used_args) = input_lets(inputs, &symbols.used.into_inner());
         all_used_args.extend(used_args.iter().copied());
         let part = ident(&format!("{name}_part{j}"));
         let param_types = arg_list(args, &used_args);
-        helpers.push(quote! {
+        let mut helper: syn::ItemFn = syn::parse_quote! {
             #[allow(non_snake_case)]
             #[inline(never)]
-            fn #part(#(#param_types,)* v: &mut [f64; #size]) {
-                #(#ins)*
-                #(#lines)*
-            }
-        });
+            fn #part(#(#param_types,)* v: &mut [f64; #size]) {}
+        };
+        helper.block.stmts = ins.into_iter().chain(lines).collect();
+        helpers.push(syn::Item::Fn(helper));
         // Pass every argument (the part's signature has them all, unused ones prefixed).
         let all: Vec<Ident> = args.iter().map(|a| ident(&a.name)).collect();
-        calls.push(quote!(#part(#(#all,)* &mut v);));
+        calls.push(syn::parse_quote!(#part(#(#all,)* &mut v);));
         all_used_args.extend(0..args.len());
     }
     let symbols = SymbolUse::new(&by_symbol);
     let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
     let (mut stmts, used_args) = input_lets(inputs, &symbols.used.into_inner());
     all_used_args.extend(used_args);
-    stmts.push(quote!(let mut v = [0.0f64; #size];));
+    stmts.push(syn::parse_quote!(let mut v = [0.0f64; #size];));
     stmts.extend(calls);
     Ok(Body { stmts, outputs: outs, helpers, used_args: all_used_args, ops, lets: n })
 }
@@ -184,11 +173,10 @@ impl<'a> SymbolUse<'a> {
         SymbolUse { by_symbol, used: RefCell::new(BTreeSet::new()) }
     }
 
-    fn lookup(&self, s: Symbol) -> Option<TokenStream> {
+    fn lookup(&self, s: Symbol) -> Option<syn::Expr> {
         let inp = self.by_symbol.get(&s)?;
         self.used.borrow_mut().insert(s);
-        let i = ident(&inp.ident);
-        Some(quote!(#i))
+        Some(syntax::ident(&inp.ident))
     }
 }
 
@@ -196,9 +184,9 @@ impl<'a> SymbolUse<'a> {
 fn lower_outputs(
     outputs: &[Expr],
     symbols: &SymbolUse,
-    reference: &dyn Fn(Expr) -> Option<TokenStream>,
+    reference: &dyn Fn(Expr) -> Option<syn::Expr>,
     ops: &mut OpCount,
-) -> Result<Vec<TokenStream>, LowerError> {
+) -> Result<Vec<syn::Expr>, LowerError> {
     let mut outs = Vec::with_capacity(outputs.len());
     for e in outputs {
         let (t, o) = match reference(*e) {
@@ -212,7 +200,7 @@ fn lower_outputs(
 }
 
 /// `let x = source;` for each used input, in the inputs' order; and the arguments they read.
-fn input_lets(inputs: &[Input], used: &BTreeSet<Symbol>) -> (Vec<TokenStream>, BTreeSet<usize>) {
+fn input_lets(inputs: &[Input], used: &BTreeSet<Symbol>) -> (Vec<syn::Stmt>, BTreeSet<usize>) {
     let mut stmts = Vec::new();
     let mut args = BTreeSet::new();
     for inp in inputs.iter().filter(|i| used.contains(&i.symbol)) {
@@ -221,7 +209,7 @@ fn input_lets(inputs: &[Input], used: &BTreeSet<Symbol>) -> (Vec<TokenStream>, B
         if !inp.source.is_empty() {
             let i = ident(&inp.ident);
             let src = &inp.source;
-            stmts.push(quote!(let #i = #src;));
+            stmts.push(syn::parse_quote!(let #i = #src;));
         }
     }
     (stmts, args)

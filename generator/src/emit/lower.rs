@@ -1,4 +1,4 @@
-//! Lowering one expression node to Rust tokens, with its operation count.
+//! Lowering one expression node to a Rust syntax tree, with its operation count.
 //!
 //! Children that are bound to `let`s (or are inputs) appear as identifiers; everything else is
 //! inlined. Parentheses are written only where Rust's precedence needs them, so the output
@@ -9,16 +9,14 @@
 //! use generator::symbolic::Expr;
 //! let x = Expr::sym("x");
 //! let e = x.sin() * 3 - x;
-//! let name = |s: generator::symbolic::Symbol| {
-//!     let i = proc_macro2::Ident::new(&s.name(), proc_macro2::Span::call_site());
-//!     Some(quote::quote!(#i))
-//! };
-//! let (tokens, ops) = lower(e, &name, &|_| None).unwrap();
-//! assert_eq!(tokens.to_string(), "3.0 * f64 :: sin (x) - x");
+//! let name = |s: generator::symbolic::Symbol| Some(generator::emit::syntax::ident(&s.name()));
+//! let (tree, ops) = lower(e, &name, &|_| None).unwrap();
+//! assert_eq!(quote::ToTokens::to_token_stream(&tree).to_string(), "3.0 * f64 :: sin (x) - x");
 //! assert_eq!(ops.total(), 3);
 //! ```
 
 use super::ops::OpCount;
+use super::syntax;
 use crate::symbolic::number::{Rat, rat_to_f64};
 use crate::symbolic::{Expr, Node, Symbol};
 use proc_macro2::{Literal, TokenStream};
@@ -50,7 +48,7 @@ fn order_of_magnitude(r: &Rat) -> String {
 
 /// Rust expression tree, before printing: just enough structure for precedence.
 enum Code {
-    Atom(TokenStream),
+    Atom(syn::Expr),
     /// Terms with their signs (true = subtract).
     Sum(Vec<(bool, Code)>),
     /// Numerator and denominator factors (all atoms or calls or parenthesized sums).
@@ -79,59 +77,62 @@ impl Code {
         }
     }
 
-    /// Tokens, parenthesized if this binds looser than `min`.
-    fn tokens_at(&self, min: Prec) -> TokenStream {
-        let t = self.tokens();
-        if self.prec() < min { quote!((#t)) } else { t }
+    /// The syntax tree, parenthesized if this binds looser than `min`.
+    fn expr_at(&self, min: Prec) -> syn::Expr {
+        let e = self.expr();
+        if self.prec() < min { syntax::paren(e) } else { e }
     }
 
-    fn tokens(&self) -> TokenStream {
+    /// The syntax tree `syn` would parse from this code's text (left-associative operators,
+    /// unary minus binding tightest), so printing it gives the same bytes.
+    fn expr(&self) -> syn::Expr {
         match self {
-            Code::Atom(t) => t.clone(),
+            Code::Atom(e) => e.clone(),
             Code::Sum(terms) => {
-                let mut out = TokenStream::new();
-                for (i, (minus, c)) in terms.iter().enumerate() {
-                    let t = c.tokens_at(Prec::Product);
-                    out.extend(match (i, minus) {
-                        (0, false) => t,
-                        (0, true) => quote!(-#t),
-                        (_, false) => quote!(+ #t),
-                        (_, true) => quote!(- #t),
+                let mut out: Option<syn::Expr> = None;
+                for (minus, c) in terms {
+                    let t = c.expr_at(Prec::Product);
+                    out = Some(match (out, minus) {
+                        (None, false) => t,
+                        (None, true) => syntax::neg(t),
+                        (Some(acc), false) => syntax::binary(acc, syn::BinOp::Add(Default::default()), t),
+                        (Some(acc), true) => syntax::binary(acc, syn::BinOp::Sub(Default::default()), t),
                     });
                 }
-                out
+                out.unwrap_or_else(|| syntax::float("0.0"))
             }
             Code::Product(num, den) => {
-                let mut out = TokenStream::new();
-                if num.is_empty() {
-                    out.extend(quote!(1.0));
-                }
+                let mut out: Option<syn::Expr> = if num.is_empty() { Some(syntax::float("1.0")) } else { None };
                 for (i, c) in num.iter().enumerate() {
                     // `a * b / c`: later factors must bind tighter than `*` (left associative).
-                    let t = c.tokens_at(if i == 0 { Prec::Product } else { Prec::Unary });
-                    out.extend(if i == 0 { t } else { quote!(* #t) });
+                    let t = c.expr_at(if i == 0 { Prec::Product } else { Prec::Unary });
+                    out = Some(match out {
+                        None => t,
+                        Some(acc) => syntax::binary(acc, syn::BinOp::Mul(Default::default()), t),
+                    });
                 }
+                let mut out = out.expect("a product has a first factor");
                 if !den.is_empty() {
-                    let d = if den.len() == 1 { den[0].tokens_at(Prec::Atom) } else { join_mul(den) };
-                    out.extend(quote!(/ #d));
+                    let d = if den.len() == 1 { den[0].expr_at(Prec::Atom) } else { join_mul(den) };
+                    out = syntax::binary(out, syn::BinOp::Div(Default::default()), d);
                 }
                 out
             }
-            Code::Neg(c) => {
-                let t = c.tokens_at(Prec::Unary);
-                quote!(-#t)
-            }
+            Code::Neg(c) => syntax::neg(c.expr_at(Prec::Unary)),
         }
     }
 }
 
-fn join_mul(den: &[Code]) -> TokenStream {
-    let mut inner = TokenStream::new();
-    for (i, c) in den.iter().enumerate() {
-        let t = c.tokens_at(Prec::Unary);
-        inner.extend(if i == 0 { t } else { quote!(* #t) });
+fn join_mul(den: &[Code]) -> syn::Expr {
+    let mut inner: Option<syn::Expr> = None;
+    for c in den {
+        let t = c.expr_at(Prec::Unary);
+        inner = Some(match inner {
+            None => t,
+            Some(acc) => syntax::binary(acc, syn::BinOp::Mul(Default::default()), t),
+        });
     }
-    quote!((#inner))
+    syntax::paren(inner.expect("a denominator has a factor"))
 }
 
 /// A float literal for a rational number.
@@ -154,20 +155,20 @@ fn magnitude_literal(v: f64) -> Option<Literal> {
 fn num_code(r: &Rat) -> Result<Code, LowerError> {
     let v = rat_to_f64(r);
     let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(order_of_magnitude(r)))?;
-    Ok(if v < 0.0 { Code::Neg(Box::new(Code::Atom(quote!(#lit)))) } else { Code::Atom(quote!(#lit)) })
+    let atom = Code::Atom(syntax::literal(lit));
+    Ok(if v < 0.0 { Code::Neg(Box::new(atom)) } else { atom })
 }
 
-fn call(name: &'static str, args: TokenStream, ops: &mut OpCount) -> Code {
+fn call(name: &'static str, args: Vec<syn::Expr>, ops: &mut OpCount) -> Code {
     ops.call(name);
-    let f = proc_macro2::Ident::new(name, proc_macro2::Span::call_site());
-    Code::Atom(quote!(f64::#f(#args)))
+    Code::Atom(syntax::call(&["f64", name], args))
 }
 
 /// Lowers the top node of `e`; children go through `child`.
 fn lower_node(
     e: Expr,
     ops: &mut OpCount,
-    symbol: &dyn Fn(Symbol) -> Option<TokenStream>,
+    symbol: &dyn Fn(Symbol) -> Option<syn::Expr>,
     child: &mut dyn FnMut(Expr, &mut OpCount) -> Result<Code, LowerError>,
 ) -> Result<Code, LowerError> {
     Ok(match &*e.node() {
@@ -218,22 +219,19 @@ fn lower_node(
                         target.push(base);
                     } else if (n == 2 || n == 3) && matches!(base, Code::Atom(_)) {
                         for _ in 0..n {
-                            target.push(Code::Atom(base.tokens()));
+                            target.push(Code::Atom(base.expr()));
                         }
                     } else {
-                        let bt = base.tokens();
-                        let nl = Literal::i32_unsuffixed(n);
-                        ops.call("powi");
-                        target.push(Code::Atom(quote!(f64::powi(#bt, #nl))));
+                        let bt = base.expr();
+                        target.push(call("powi", vec![bt, syntax::literal(Literal::i32_unsuffixed(n))], ops));
                     }
                 } else if ex == Rat::frac(1, 2) {
-                    let bt = child(*b, ops)?.tokens();
-                    target.push(call("sqrt", bt, ops));
+                    let bt = child(*b, ops)?.expr();
+                    target.push(call("sqrt", vec![bt], ops));
                 } else {
-                    let bt = child(*b, ops)?.tokens();
-                    let et = literal(&ex)?;
-                    ops.call("powf");
-                    target.push(Code::Atom(quote!(f64::powf(#bt, #et))));
+                    let bt = child(*b, ops)?.expr();
+                    let et = num_code(&ex)?.expr();
+                    target.push(call("powf", vec![bt, et], ops));
                 }
             }
             ops.mul += num.len().saturating_sub(1) + den.len().saturating_sub(1);
@@ -249,8 +247,8 @@ fn lower_node(
             }
         }
         Node::Fun(f, a) => {
-            let at = child(*a, ops)?.tokens();
-            call(f.name(), at, ops)
+            let at = child(*a, ops)?.expr();
+            call(f.name(), vec![at], ops)
         }
         Node::Apply(name, a) if *name == super::optimize::reciprocal_symbol() => {
             ops.div += 1;
@@ -260,24 +258,20 @@ fn lower_node(
     })
 }
 
-/// Lowers `e` to tokens: `symbol` names inputs, `bound` names subexpressions already held in
+/// Lowers `e` to a syntax tree: `symbol` names inputs, `bound` names subexpressions already held in
 /// a `let` (returns `None` for those to inline). The root itself is never looked up in
 /// `bound`, so a `let`'s own right-hand side can be lowered with the same closure.
-pub fn lower(
-    e: Expr,
-    symbol: &dyn Fn(Symbol) -> Option<TokenStream>,
-    bound: &dyn Fn(Expr) -> Option<TokenStream>,
-) -> Result<(TokenStream, OpCount), LowerError> {
+pub fn lower(e: Expr, symbol: &dyn Fn(Symbol) -> Option<syn::Expr>, bound: &dyn Fn(Expr) -> Option<syn::Expr>) -> Result<(syn::Expr, OpCount), LowerError> {
     let mut ops = OpCount::default();
     let code = lower_rec(e, true, symbol, bound, &mut ops)?;
-    Ok((code.tokens(), ops))
+    Ok((code.expr(), ops))
 }
 
 fn lower_rec(
     e: Expr,
     root: bool,
-    symbol: &dyn Fn(Symbol) -> Option<TokenStream>,
-    bound: &dyn Fn(Expr) -> Option<TokenStream>,
+    symbol: &dyn Fn(Symbol) -> Option<syn::Expr>,
+    bound: &dyn Fn(Expr) -> Option<syn::Expr>,
     ops: &mut OpCount,
 ) -> Result<Code, LowerError> {
     if !root && let Some(t) = bound(e) {
@@ -292,10 +286,7 @@ mod tests {
 
     /// The lowered expression as prettyplease prints it.
     fn show(e: Expr) -> String {
-        let name = |s: Symbol| {
-            let i = proc_macro2::Ident::new(&s.name(), proc_macro2::Span::call_site());
-            Some(quote!(#i))
-        };
+        let name = |s: Symbol| Some(syntax::ident(&s.name()));
         let (t, _) = lower(e, &name, &|_| None).unwrap();
         let file: syn::File = syn::parse2(quote!(fn f() { let _ = #t; })).unwrap();
         let text = prettyplease::unparse(&file);

@@ -15,6 +15,7 @@
 pub mod builder;
 pub mod cse;
 pub mod form;
+pub mod jacobian;
 pub mod function;
 pub mod lower;
 pub mod module;
@@ -23,6 +24,8 @@ pub mod ops;
 pub mod optimize;
 pub mod prepare;
 pub mod seam;
+pub mod splice;
+pub mod syntax;
 
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
 use crate::model::{Model, ModelError};
@@ -39,6 +42,8 @@ pub struct Options {
     pub parameters: Parameters,
     pub integrate_ignorable: bool,
     pub max_lets_per_function: usize,
+    /// Emit each formulation's exact `jacobian` (see [`jacobian`]).
+    pub jacobian: bool,
     /// The name the module is emitted under, written into `model().module` (the model's name
     /// when `None`; a variant such as `cart_pendulum_baked` otherwise).
     pub module_name: Option<String>,
@@ -66,6 +71,7 @@ impl Options {
             parameters: e.parameters,
             integrate_ignorable: e.integrate_ignorable,
             max_lets_per_function: e.max_lets_per_function,
+            jacobian: e.jacobian,
             module_name: None,
             seam_path: DEFAULT_SEAM_PATH.to_string(),
         }

@@ -95,6 +95,11 @@ pub struct EmitDef {
     /// Above this many common subexpressions, a function's work is split into helpers.
     #[serde(default = "default_max_lets")]
     pub max_lets_per_function: usize,
+    /// Emit each formulation's exact `jacobian` (the right-hand side and its derivative by
+    /// the state), which the stiff integrator and linearization use (default: off; they fall
+    /// back to finite differences without it).
+    #[serde(default)]
+    pub jacobian: bool,
 }
 
 impl Default for EmitDef {
@@ -105,6 +110,7 @@ impl Default for EmitDef {
             parameters: ParameterDef::Runtime,
             integrate_ignorable: true,
             max_lets_per_function: default_max_lets(),
+            jacobian: false,
         }
     }
 }

@@ -89,6 +89,9 @@ pub type InitialFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> 
 /// `velocities(t, state, params, g_i, q, qdot)`: `q` and `q'` at a state.
 pub type VelocitiesFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
 /// A function of `(t, q, qdot, params)` writing its outputs.
+/// `(t, state, params, g_i, dstate, jac)`: the right-hand side and its Jacobian by the state,
+/// row-major (`jac[i * states + k] = d dstate[i] / d state[k]`).
+pub type JacobianFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
 pub type PointFn = fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
 
 /// One formulation of a model: its sizes and its functions over slices.
@@ -114,6 +117,8 @@ pub struct Formulation {
     pub matrix_size: usize,
     pub matrix: MatrixFn,
     pub singular_margin: MarginFn,
+    /// The exact Jacobian, when the module was emitted with it.
+    pub jacobian: Option<JacobianFn>,
 }
 
 /// One emitted model.
@@ -194,6 +199,7 @@ impl Formulation {
         matrix_size: 0,
         matrix: |_, _, _, _, _| Err(Failure::Missing { function: "matrix" }),
         singular_margin: |_, _, _, _| Err(Failure::Missing { function: "singular_margin" }),
+        jacobian: None,
     };
 }
 

@@ -23,6 +23,7 @@
 mod dop853;
 mod dopri5;
 mod rk4;
+mod rosenbrock;
 
 use seam::Failure;
 use std::fmt;
@@ -36,6 +37,9 @@ pub enum Method {
     Dopri5,
     /// Dormand-Prince 8(5,3) with its seventh-order dense output.
     Dop853,
+    /// Shampine and Reichelt's `ode23s` Rosenbrock 2(3), L-stable, for stiff systems: the
+    /// model's exact Jacobian when given, else finite differences.
+    Rosenbrock23,
 }
 
 impl fmt::Display for Method {
@@ -44,6 +48,7 @@ impl fmt::Display for Method {
             Method::Rk4 { h } => write!(f, "RK4 h={h}"),
             Method::Dopri5 => write!(f, "DOPRI5"),
             Method::Dop853 => write!(f, "DOP853"),
+            Method::Rosenbrock23 => write!(f, "ROS23"),
         }
     }
 }
@@ -80,6 +85,10 @@ pub struct Stats {
     pub steps: usize,
     pub rejected: usize,
     pub rhs_calls: usize,
+    /// Jacobian evaluations (stiff method; finite differences count their calls as rhs calls).
+    pub jacobians: usize,
+    /// LU factorizations of the iteration matrix (stiff method).
+    pub factorizations: usize,
 }
 
 /// The states at the requested output times.
@@ -190,9 +199,46 @@ pub fn integrate(
 /// the constraints). It returns `true` when it changed the state.
 pub type Projector<'a> = &'a mut dyn FnMut(f64, &mut [f64]) -> Result<bool, Failure>;
 
+/// The exact Jacobian of the right-hand side: `(t, y, dy, jac)` writes `dy = f(t, y)` and
+/// `jac[i * n + k] = d f_i / d y_k` (the emitted `jacobian` through the seam).
+pub type JacobianFn<'a> = &'a mut dyn FnMut(f64, &[f64], &mut [f64], &mut [f64]) -> Result<(), Failure>;
+
 /// [`integrate`], with `project` applied after every accepted step.
 pub fn integrate_projected(
     f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
+    project: Option<Projector>,
+    y0: &[f64],
+    outputs: &[f64],
+    settings: &Settings,
+) -> Result<Solution, RunError> {
+    integrate_with_jacobian(f, None, project, y0, outputs, settings)
+}
+
+/// [`integrate_projected`] with the right-hand side's exact Jacobian for the stiff method
+/// (without it, [`Method::Rosenbrock23`] uses forward differences; the explicit methods
+/// ignore it).
+///
+/// ```
+/// use runtime::integrate::{Method, Settings, integrate_with_jacobian};
+/// // A stiff decay towards cos t: y' = -1e6 (y - cos t).
+/// let mut f = |t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), seam::Failure> {
+///     dy[0] = -1e6 * (y[0] - t.cos());
+///     Ok(())
+/// };
+/// let mut jac = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| -> Result<(), seam::Failure> {
+///     dy[0] = -1e6 * (y[0] - t.cos());
+///     j[0] = -1e6;
+///     Ok(())
+/// };
+/// let s = Settings { method: Method::Rosenbrock23, rtol: 1e-5, atol: 1e-8, ..Settings::default() };
+/// let sol = integrate_with_jacobian(&mut f, Some(&mut jac), None, &[1.0], &[0.0, 10.0], &s).unwrap();
+/// assert!((sol.states[1][0] - 10f64.cos()).abs() < 1e-5);
+/// // An explicit method is held to steps of about 3e-6 by stability: millions of them.
+/// assert!(sol.stats.steps < 5000, "{:?}", sol.stats);
+/// ```
+pub fn integrate_with_jacobian(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
+    mut jacobian: Option<JacobianFn>,
     mut project: Option<Projector>,
     y0: &[f64],
     outputs: &[f64],
@@ -215,8 +261,27 @@ pub fn integrate_projected(
         Method::Rk4 { h } => rk4::run(&mut counted, &mut projector, y0, outputs, h, settings.max_steps),
         Method::Dopri5 => dopri5::run(&mut counted, &mut projector, y0, outputs, settings),
         Method::Dop853 => dop853::run(&mut counted, &mut projector, y0, outputs, settings),
+        Method::Rosenbrock23 => {
+            let n = y0.len();
+            let (mut dy, mut flat) = (vec![0.0; n], vec![0.0; n * n]);
+            let mut jac = |t: f64, y: &[f64], j: &mut nalgebra::DMatrix<f64>| -> Result<bool, Reason> {
+                let Some(exact) = jacobian.as_mut() else { return Ok(false) };
+                exact(t, y, &mut dy, &mut flat).map_err(Reason::Rhs)?;
+                for i in 0..n {
+                    for k in 0..n {
+                        j[(i, k)] = flat[i * n + k];
+                    }
+                }
+                Ok(true)
+            };
+            rosenbrock::run(&mut counted, &mut jac, &mut projector, y0, outputs, settings)
+        }
     }
 }
+
+/// The exact Jacobian as the stiff stepper sees it: fills `J` and returns true, or returns
+/// false when there is none (the stepper then differences the right-hand side).
+type Jacobian<'a> = dyn FnMut(f64, &[f64], &mut nalgebra::DMatrix<f64>) -> Result<bool, Reason> + 'a;
 
 /// The projection hook as the steppers see it.
 type Project<'a> = dyn FnMut(f64, &mut [f64]) -> Result<bool, Reason> + 'a;
@@ -371,6 +436,53 @@ mod tests {
         }
         let (e, _) = max_error(&Settings { method: Method::Dop853, rtol: 1e-13, atol: 1e-13, ..Settings::default() }, &grid(20.0, 0.01));
         assert!(e < 1e-11, "DOP853 at 1e-13: {e:e}");
+    }
+
+    #[test]
+    fn rosenbrock_meets_its_tolerance_with_exact_or_differenced_jacobians() {
+        let out = grid(10.0, 0.05);
+        let mut last = f64::INFINITY;
+        for rtol in [1e-3, 1e-5, 1e-7] {
+            let s = Settings { method: Method::Rosenbrock23, rtol, atol: rtol, ..Settings::default() };
+            let (e, stats) = max_error(&s, &out);
+            // Second order with local error control: the global error over 1.6 periods is a few
+            // hundred tolerances.
+            assert!(e < 1000.0 * rtol, "rtol {rtol}: error {e:e}");
+            assert!(e < last);
+            assert_eq!(stats.jacobians, stats.steps, "one Jacobian per accepted step: {stats:?}");
+            last = e;
+            // The exact Jacobian of the oscillator: the same steps, fewer right-hand sides.
+            let mut jac = |_t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| -> Result<(), Failure> {
+                oscillator(0.0, y, dy)?;
+                j.copy_from_slice(&[0.0, 1.0, -1.0, 0.0]);
+                Ok(())
+            };
+            let exact = integrate_with_jacobian(&mut oscillator, Some(&mut jac), None, &[1.0, 0.0], &out, &s).unwrap();
+            assert_eq!(exact.stats.steps, stats.steps);
+            assert_eq!(exact.stats.rhs_calls + 2 * stats.jacobians, stats.rhs_calls);
+        }
+    }
+
+    /// A stiff linear system with a slow mode: `y1' = -k (y1 - y2)`, `y2' = -y2`, `k = 1e6`.
+    /// DOPRI5's steps are bounded by stability (about `3.3 / k`); the Rosenbrock method's by
+    /// the slow mode's accuracy.
+    #[test]
+    fn the_stiff_method_takes_accuracy_bound_steps_where_explicit_ones_cannot() {
+        let k = 1e6;
+        let mut f = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
+            dy[0] = -k * (y[0] - y[1]);
+            dy[1] = -y[1];
+            Ok(())
+        };
+        let out = [0.0, 0.5, 1.0];
+        let stiff = integrate(&mut f, &[2.0, 1.0], &out, &Settings { method: Method::Rosenbrock23, rtol: 1e-6, atol: 1e-9, ..Settings::default() }).unwrap();
+        // y2 = exp(-t); y1 follows it: y1 = y2 k / (k - 1) + transient.
+        let exact = (-1.0f64).exp();
+        assert!((stiff.states[2][1] - exact).abs() < 1e-5, "{:?}", &stiff.states[2]);
+        assert!((stiff.states[2][0] - exact * k / (k - 1.0)).abs() < 1e-5);
+        assert!(stiff.stats.steps < 500, "{:?}", stiff.stats);
+        let explicit = integrate(&mut f, &[2.0, 1.0], &out, &Settings { method: Method::Dopri5, rtol: 1e-6, atol: 1e-9, ..Settings::default() }).unwrap();
+        assert!(explicit.stats.steps > 100 * stiff.stats.steps, "DOPRI5 {:?} against {:?}", explicit.stats, stiff.stats);
     }
 
     #[test]

@@ -1,0 +1,311 @@
+//! A formulation's exact Jacobian: `jacobian` returns the right-hand side and its derivative
+//! by the state, from one body that evaluates the assembly (rates, matrix, forcing) and the
+//! assembly's partial derivatives by every state entry, differentiated on the expression graph
+//! and bound with one CSE over both.
+//!
+//! The solved rates `x = A^-1 F` are differentiated numerically-exactly after the solve:
+//! `dx/ds_k = A^-1 (dF/ds_k - dA/ds_k x)`, with the LU factors of `A` computed once and reused
+//! for every column. Maggi's speeds `W x + c` add `dW/ds_k x + W dx/ds_k + dc/ds_k`.
+
+use super::form::{solve_cost, state_args};
+use super::module::{Emitter, usize_lit};
+use super::ops::OpCount;
+use crate::formulation::{Derivation, Equations};
+use crate::model::ModelError;
+use crate::symbolic::Expr;
+use proc_macro2::TokenStream;
+use quote::quote;
+
+/// The worst-case cost of the Jacobian's numeric part for an `n` by `n` matrix and `v` state
+/// variables: one factorization, `v + 1` solves, and the products `dA/ds_k x`.
+pub fn jacobian_solve_cost(n: usize, v: usize) -> OpCount {
+    let mut c = solve_cost(n);
+    let per_solve = n * n; // forward and back substitution: about n^2 multiply-adds
+    c.add += v * (per_solve + n * n);
+    c.mul += v * (per_solve + n * n);
+    c.div += v * n;
+    c
+}
+
+impl Emitter<'_> {
+    /// `jacobian`: the right-hand side `dstate` and `jac[i][k] = d dstate_i / d state_k`.
+    pub(super) fn jacobian_fn(&mut self, f: &Equations, d: &Derivation, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+        let name = f.name;
+        let work = self.work;
+        let n_states = f.states(work);
+        let nq = f.kept.len();
+        let n_speeds = f.speeds.len();
+        let n = f.mass.rows;
+        let (rw, cw) = f.post.as_ref().map(|(w, _)| (w.rows, w.cols)).unwrap_or((0, 0));
+        let rates = self.rate_outputs(f, d);
+        let variables: Vec<_> = f.kept.iter().map(|&j| self.model.coordinates[j]).chain(f.speeds.iter().copied()).collect();
+        let nv = variables.len();
+        let mut outputs = rates.clone();
+        outputs.extend(checks.iter().copied());
+        for v in &variables {
+            outputs.extend(rates.iter().map(|e| e.diff(*v)));
+        }
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        let b = self.body(&format!("{name}::jacobian"), &outputs, &inputs, &args)?;
+        self.functions.last_mut().expect("just pushed").solve = jacobian_solve_cost(n, nv);
+        let mut it = b.outputs.iter().cloned();
+        let dims = Dims { nq, n, rw, cw, work };
+        let (qd0, m0, f0, w0, c0, p0) = dims.block(&mut it);
+        let check_out: Vec<TokenStream> = it.by_ref().take(checks.len()).collect();
+        let mut d_qd = Vec::new();
+        let mut d_m = Vec::new();
+        let mut d_f = Vec::new();
+        let mut d_w = Vec::new();
+        let mut d_c = Vec::new();
+        let mut d_p = Vec::new();
+        for _ in 0..nv {
+            let (a, b_, c_, w_, cc, p) = dims.block(&mut it);
+            d_qd.push(a);
+            d_m.push(b_);
+            d_f.push(c_);
+            d_w.push(w_);
+            d_c.push(cc);
+            d_p.push(p);
+        }
+        let (n_l, nq_l, nv_l, rw_l, cw_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(nv), usize_lit(rw), usize_lit(cw), usize_lit(checks.len()));
+        let ns_l = usize_lit(n_speeds);
+        let last = usize_lit(n_states.saturating_sub(1));
+        let stmts = &b.stmts;
+        let helpers = &b.helpers;
+        let fn_args = super::function::arg_list(&args, &b.used_args);
+        let matrix_name = f.matrix_name;
+        // Rates and their columns: speeds are `x` itself, or Maggi's `W x + c`.
+        let speeds = if f.post.is_some() {
+            quote! {
+                for j in 0..#rw_l {
+                    let mut s = c[j];
+                    for i in 0..#cw_l {
+                        s += w[j][i] * x[i];
+                    }
+                    dstate[#nq_l + j] = s;
+                }
+            }
+        } else {
+            quote! {
+                for j in 0..#ns_l {
+                    dstate[#nq_l + j] = x[j];
+                }
+            }
+        };
+        let speed_columns = if f.post.is_some() {
+            quote! {
+                for j in 0..#rw_l {
+                    let mut s = d_c[k][j];
+                    for i in 0..#cw_l {
+                        s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                    }
+                    jac[#nq_l + j][k] = s;
+                }
+            }
+        } else {
+            quote! {
+                for j in 0..#ns_l {
+                    jac[#nq_l + j][k] = dx[j];
+                }
+            }
+        };
+        let power = if work {
+            quote! {
+                dstate[#last] = power;
+                for k in 0..#nv_l {
+                    jac[#last][k] = d_power[k];
+                }
+            }
+        } else {
+            TokenStream::new()
+        };
+        let mut fields: Vec<(&str, TokenStream, TokenStream)> = vec![
+            ("qdot", quote!([f64; #nq_l]), qd0),
+            ("matrix", quote!([[f64; #n_l]; #n_l]), m0),
+            ("force", quote!([f64; #n_l]), f0),
+            ("checks", quote!([f64; #nc_l]), quote!([#(#check_out),*])),
+            ("d_qdot", quote!([[f64; #nq_l]; #nv_l]), quote!([#(#d_qd),*])),
+            ("d_matrix", quote!([[[f64; #n_l]; #n_l]; #nv_l]), quote!([#(#d_m),*])),
+            ("d_force", quote!([[f64; #n_l]; #nv_l]), quote!([#(#d_f),*])),
+        ];
+        if f.post.is_some() {
+            fields.push(("w", quote!([[f64; #cw_l]; #rw_l]), w0));
+            fields.push(("c", quote!([f64; #rw_l]), c0));
+            fields.push(("d_w", quote!([[[f64; #cw_l]; #rw_l]; #nv_l]), quote!([#(#d_w),*])));
+            fields.push(("d_c", quote!([[f64; #rw_l]; #nv_l]), quote!([#(#d_c),*])));
+        }
+        if work {
+            fields.push(("power", quote!(f64), p0));
+            fields.push(("d_power", quote!([f64; #nv_l]), quote!([#(#d_p),*])));
+        }
+        let field_types: Vec<TokenStream> = fields
+            .iter()
+            .map(|(n, ty, _)| {
+                let i = super::function::ident(n);
+                quote!(#i: #ty)
+            })
+            .collect();
+        let field_values: Vec<TokenStream> = fields
+            .iter()
+            .map(|(n, _, v)| {
+                let i = super::function::ident(n);
+                quote!(#i: #v)
+            })
+            .collect();
+        let field_names: Vec<TokenStream> = fields
+            .iter()
+            .map(|(n, _, _)| {
+                let i = super::function::ident(n);
+                if *n == "matrix" { quote!(mut #i) } else { quote!(#i) }
+            })
+            .collect();
+        Ok(quote! {
+            #[doc = "Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds)."]
+            struct Derivatives {
+                #(#field_types,)*
+            }
+            #[doc = "Evaluates the assembly and its partial derivatives, with one set of common subexpressions."]
+            #[allow(non_snake_case, clippy::all)]
+            fn assemble_derivatives(#(#fn_args),*) -> Derivatives {
+                #stmts
+                Derivatives {
+                    #(#field_values,)*
+                }
+            }
+            #helpers
+            #[doc = "The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it."]
+            #[allow(clippy::all)]
+            pub fn jacobian(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], jac: &mut [[f64; STATES]; STATES]) -> Result<(), Failure> {
+                let Derivatives { #(#field_names),* } = assemble_derivatives(t, state, params, g_i);
+                let mut x = force;
+                for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+                    if !(value.abs() > SINGULAR_TOLERANCE) {
+                        return Err(Failure::Singular { t, condition, value });
+                    }
+                }
+                let pivots = match lu_factor(&mut matrix) {
+                    Ok(p) => p,
+                    Err(column) => return Err(Failure::Singular { t, condition: #matrix_name, value: column as f64 }),
+                };
+                lu_solve(&matrix, &pivots, &mut x);
+                *jac = [[0.0; STATES]; STATES];
+                for j in 0..#nq_l {
+                    dstate[j] = qdot[j];
+                }
+                #speeds
+                #power
+                for k in 0..#nv_l {
+                    for j in 0..#nq_l {
+                        jac[j][k] = d_qdot[k][j];
+                    }
+                    let mut dx = [0.0f64; #n_l];
+                    for i in 0..#n_l {
+                        let mut s = d_force[k][i];
+                        for j in 0..#n_l {
+                            s -= d_matrix[k][i][j] * x[j];
+                        }
+                        dx[i] = s;
+                    }
+                    lu_solve(&matrix, &pivots, &mut dx);
+                    #speed_columns
+                }
+                for (index, value) in dstate.iter().enumerate() {
+                    if !value.is_finite() {
+                        return Err(Failure::NonFinite { t, index });
+                    }
+                }
+                for (row, values) in jac.iter().enumerate() {
+                    for (column, value) in values.iter().enumerate() {
+                        if !value.is_finite() {
+                            return Err(Failure::NonFinite { t, index: STATES + row * STATES + column });
+                        }
+                    }
+                }
+                Ok(())
+            }
+        })
+    }
+}
+
+/// The sizes of one block of rates.
+struct Dims {
+    nq: usize,
+    n: usize,
+    rw: usize,
+    cw: usize,
+    work: bool,
+}
+
+type Block = (TokenStream, TokenStream, TokenStream, TokenStream, TokenStream, TokenStream);
+
+impl Dims {
+    /// One block of rates (the values, or one variable's derivatives) as array literals:
+    /// kept rates, matrix, forcing, `W`, `c`, power.
+    fn block(&self, it: &mut impl Iterator<Item = TokenStream>) -> Block {
+        let mut take = |k: usize| -> Vec<TokenStream> { it.by_ref().take(k).collect() };
+        let qd = take(self.nq);
+        let rows: Vec<TokenStream> = take(self.n * self.n).chunks(self.n.max(1)).map(|r| quote!([#(#r),*])).collect();
+        let force = take(self.n);
+        let w_rows: Vec<TokenStream> = take(self.rw * self.cw).chunks(self.cw.max(1)).map(|r| quote!([#(#r),*])).collect();
+        let c = take(self.rw);
+        let power = if self.work { take(1).remove(0) } else { quote!(0.0) };
+        (quote!([#(#qd),*]), quote!([#(#rows),*]), quote!([#(#force),*]), quote!([#(#w_rows),*]), quote!([#(#c),*]), power)
+    }
+}
+
+/// `lu_factor` and `lu_solve`: the factorization `solve_dense` performs, kept for many
+/// right-hand sides.
+pub(super) fn lu_items() -> TokenStream {
+    quote! {
+        #[doc = "Factors `a` in place (`P a = L U`, partial pivoting, `L` unit lower below the diagonal); the row taken at each step, or `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry."]
+        fn lu_factor<const N: usize>(a: &mut [[f64; N]; N]) -> Result<[usize; N], usize> {
+            let mut scale = 0.0f64;
+            for row in a.iter() {
+                for x in row.iter() {
+                    scale = scale.max(x.abs());
+                }
+            }
+            let mut pivots = [0usize; N];
+            for c in 0..N {
+                let mut p = c;
+                for r in c + 1..N {
+                    if a[r][c].abs() > a[p][c].abs() {
+                        p = r;
+                    }
+                }
+                if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
+                    return Err(c);
+                }
+                pivots[c] = p;
+                a.swap(c, p);
+                for r in c + 1..N {
+                    let f = a[r][c] / a[c][c];
+                    a[r][c] = f;
+                    for k in c + 1..N {
+                        a[r][k] -= f * a[c][k];
+                    }
+                }
+            }
+            Ok(pivots)
+        }
+        #[doc = "Solves `a x = b` in place with the factors of `lu_factor`."]
+        fn lu_solve<const N: usize>(a: &[[f64; N]; N], pivots: &[usize; N], b: &mut [f64; N]) {
+            for c in 0..N {
+                b.swap(c, pivots[c]);
+            }
+            for c in 0..N {
+                for r in c + 1..N {
+                    b[r] -= a[r][c] * b[c];
+                }
+            }
+            for r in (0..N).rev() {
+                let mut s = b[r];
+                for k in r + 1..N {
+                    s -= a[r][k] * b[k];
+                }
+                b[r] = s / a[r][r];
+            }
+        }
+    }
+}

@@ -1,0 +1,112 @@
+//! The Rosenbrock method of Shampine and Reichelt's `ode23s` (SIAM J. Sci. Comput. 18 (1997)
+//! 1-22): order 2 with an order-3 error estimate, L-stable, one Jacobian and one LU
+//! factorization of `W = I - h d J` per step, three right-hand sides (the last one is the next
+//! step's first), and its own second-order dense output.
+//!
+//! For stiff systems (a stiff spring, a large mass ratio): its step is set by the accuracy
+//! asked for, not by the fastest eigenvalue, where an explicit method's stability limit
+//! forces steps of order `1/|lambda_max|`. The Jacobian is the model's exact one when given,
+//! otherwise forward differences of the right-hand side (`n` extra calls per step).
+
+use super::{Jacobian, Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, error_norm, finish_step, initial_step, next_step_size};
+use nalgebra::{DMatrix, DVector};
+
+/// `d = 1 / (2 + sqrt 2)`.
+const D: f64 = 0.292_893_218_813_452_5;
+/// `e32 = 6 + sqrt 2`.
+const E32: f64 = 7.414_213_562_373_095;
+
+pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
+    let n = y0.len();
+    let mut stats = Stats::default();
+    let t_end = *outputs.last().expect("checked");
+    let mut t = outputs[0];
+    let mut y = y0.to_vec();
+    let mut states = States::new(n, outputs.len());
+    states.push(&y);
+    let mut next = 1;
+    let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
+    let mut f0 = vec![0.0; n];
+    f(t, &y, &mut f0, &mut stats).map_err(|r| stop(t, &y, r))?;
+    let mut h = initial_step(f, t, &y, &f0.clone(), 3, s, &mut stats).map_err(|r| stop(t, &y, r))?;
+    let (mut f1, mut f2, mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut j = DMatrix::<f64>::zeros(n, n);
+    let mut dfdt = vec![0.0; n];
+    let mut fresh_jacobian = false;
+    while next < outputs.len() {
+        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
+        if !fresh_jacobian {
+            if !jac(t, &y, &mut j).map_err(|r| stop(t, &y, r))? {
+                // Forward differences, one right-hand side per column.
+                tmp.copy_from_slice(&y);
+                for k in 0..n {
+                    let d = f64::EPSILON.sqrt() * y[k].abs().max(1.0);
+                    tmp[k] = y[k] + d;
+                    f(t, &tmp, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
+                    for i in 0..n {
+                        j[(i, k)] = (f1[i] - f0[i]) / d;
+                    }
+                    tmp[k] = y[k];
+                }
+            }
+            // df/dt by a forward difference (zero for autonomous models).
+            let dt = f64::EPSILON.sqrt() * t.abs().max(1.0);
+            f(t + dt, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
+            for i in 0..n {
+                dfdt[i] = (tmp[i] - f0[i]) / dt;
+            }
+            stats.jacobians += 1;
+            fresh_jacobian = true;
+        }
+        let w = DMatrix::<f64>::identity(n, n) - &j * (h * D);
+        let lu = w.lu();
+        let solve = |b: Vec<f64>| -> Option<Vec<f64>> { lu.solve(&DVector::from_vec(b)).map(|x| x.as_slice().to_vec()) };
+        stats.factorizations += 1;
+        let Some(k1) = solve((0..n).map(|i| f0[i] + h * D * dfdt[i]).collect()) else {
+            stats.rejected += 1;
+            h *= 0.5;
+            continue;
+        };
+        for i in 0..n {
+            tmp[i] = y[i] + 0.5 * h * k1[i];
+        }
+        f(t + 0.5 * h, &tmp, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
+        let k2: Vec<f64> = solve((0..n).map(|i| f1[i] - k1[i]).collect()).expect("factored above").iter().zip(&k1).map(|(a, b)| a + b).collect();
+        for i in 0..n {
+            y_new[i] = y[i] + h * k2[i];
+        }
+        f(t + h, &y_new, &mut f2, &mut stats).map_err(|r| stop(t, &y, r))?;
+        let k3 = solve((0..n).map(|i| f2[i] - E32 * (k2[i] - f1[i]) - 2.0 * (k1[i] - f0[i]) + h * D * dfdt[i]).collect()).expect("factored above");
+        let err: Vec<f64> = (0..n).map(|i| h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])).collect();
+        let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
+        if !e.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
+            stats.rejected += 1;
+            h *= 0.1;
+            continue;
+        }
+        if e <= 1.0 {
+            stats.steps += 1;
+            let t_new = if h == t_end - t { t_end } else { t + h };
+            // ode23s's interpolant: y + h (s (1 - s) k1 + s (s - 2d) k2) / (1 - 2d).
+            while next < outputs.len() && outputs[next] <= t_new {
+                let th = (outputs[next] - t) / h;
+                let (a, b) = (th * (1.0 - th) / (1.0 - 2.0 * D), th * (th - 2.0 * D) / (1.0 - 2.0 * D));
+                for i in 0..n {
+                    tmp[i] = y[i] + h * (a * k1[i] + b * k2[i]);
+                }
+                states.push(&tmp);
+                next += 1;
+            }
+            t = t_new;
+            std::mem::swap(&mut y, &mut y_new);
+            finish_step(f, project, t, &mut y, &f2, &mut f0, &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
+            fresh_jacobian = false;
+            let grow = if e == 0.0 { 5.0 } else { (0.8 * e.powf(-1.0 / 3.0)).min(5.0) };
+            h = (h * grow).min(s.h_max);
+        } else {
+            stats.rejected += 1;
+            h *= (0.8 * e.powf(-1.0 / 3.0)).max(0.1);
+        }
+    }
+    Ok(Solution { times: outputs.to_vec(), states, stats })
+}
