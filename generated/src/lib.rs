@@ -41,6 +41,9 @@ pub mod satellite_boom;
 pub mod spring_cart;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod stiff_pendulum;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs

@@ -13,6 +13,7 @@ fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("rolling_disk", "rolling_disk", |_| {}),
         ("spring_cart", "spring_cart", |_| {}),
         ("pendulum_on_cart_5", "pendulum_on_cart_5", |_| {}),
+        ("stiff_pendulum", "stiff_pendulum", |_| {}),
         // `--baked`
         ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
         // `--max-lets 40`
