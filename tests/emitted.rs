@@ -8,7 +8,8 @@ use generator::model::Model as ModelDef;
 use generator::symbolic::Expr;
 use generator::symbolic::zero::SplitMix;
 
-const MODELS: [&str; 8] = ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5", "stiff_pendulum"];
+const MODELS: [&str; 8] =
+    ["cart_pendulum", "three_body", "satellite_boom", "cartesian_pendulum", "rolling_disk", "spring_cart", "pendulum_on_cart_5", "stiff_pendulum"];
 
 mod common;
 use common::{accelerations_from as accelerations, load};

@@ -35,6 +35,12 @@ fn jacobians_match_finite_differences_on_every_model() {
     let mut checked = 0;
     for m in generated::models().iter().copied() {
         for f in m.formulations {
+            // Every committed module carries its Jacobians but the bicycle's (250000 operations
+            // each; its linearization differences the right-hand side).
+            if f.jacobian.is_none() {
+                assert_eq!(m.module, "bicycle", "{} {} has no jacobian", m.module, f.name);
+                continue;
+            }
             for _ in 0..4 {
                 let (state, g) = random_state(&m, f, &mut rng, 0.05);
                 let params = m.default_params;
@@ -61,5 +67,5 @@ fn jacobians_match_finite_differences_on_every_model() {
             }
         }
     }
-    assert!(checked >= 4 * 4 * 9, "only {checked} states checked");
+    assert!(checked >= 4 * 4 * 10, "only {checked} states checked");
 }

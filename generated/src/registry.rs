@@ -18,6 +18,7 @@ pub fn models() -> Vec<Model> {
         crate::spring_cart::model(),
         crate::pendulum_on_cart_5::model(),
         crate::stiff_pendulum::model(),
+        crate::bicycle::model(),
         crate::cart_pendulum_baked::model(),
         crate::three_body_split::model(),
         crate::three_body_drop::model(),

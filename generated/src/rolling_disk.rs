@@ -15,7 +15,7 @@ pub const NUM_HOLONOMIC: usize = 0;
 ///Names of the generalized coordinates, in state order.
 pub const COORDINATES: [&str; NUM_COORDINATES] = ["x", "y", "psi", "phi"];
 ///Names of the constraints.
-pub const CONSTRAINTS: [&str; NUM_CONSTRAINTS] = ["roll_forward", "roll_sideways"];
+pub const CONSTRAINTS: [&str; NUM_CONSTRAINTS] = ["contact_x", "contact_y"];
 ///Indices of the ignorable coordinates in `COORDINATES`.
 pub const IGNORABLE: [usize; NUM_IGNORABLE] = [2];
 ///A singular factor of `[Y; M'; a]` smaller than this in magnitude stops the right-hand side.
@@ -410,12 +410,12 @@ pub mod lagrange {
         let x3 = f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
-                "roll_forward",
+                "contact_x",
                 x_dot - R * x0 * phi_dot,
                 f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
             ),
             (
-                "roll_sideways",
+                "contact_y",
                 y_dot - R * phi_dot * x1,
                 f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
             ),
@@ -940,12 +940,12 @@ pub mod maggi {
         let x3 = f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
-                "roll_forward",
+                "contact_x",
                 x_dot - R * x0 * phi_dot,
                 f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
             ),
             (
-                "roll_sideways",
+                "contact_y",
                 y_dot - R * phi_dot * x1,
                 f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
             ),
@@ -1411,12 +1411,12 @@ pub mod kane {
         let x3 = f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
-                "roll_forward",
+                "contact_x",
                 x_dot - R * x0 * phi_dot,
                 f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
             ),
             (
-                "roll_sideways",
+                "contact_y",
                 y_dot - R * phi_dot * x1,
                 f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
             ),
@@ -1834,12 +1834,12 @@ pub mod reduced_volterra {
         let x3 = f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
-                "roll_forward",
+                "contact_x",
                 x_dot - R * x0 * phi_dot,
                 f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
             ),
             (
-                "roll_sideways",
+                "contact_y",
                 y_dot - R * phi_dot * x1,
                 f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
             ),

@@ -29,7 +29,9 @@ fn main() {
     let (q0, qd0) = model.initial.expect("an initial state");
     let k_index = model.parameter_names.iter().position(|p| *p == "k").expect("k");
     let times: Vec<f64> = (0..=200).map(|i| i as f64 * 0.01).collect();
-    println!("| k | DOPRI5 steps | DOPRI5 rhs calls | DOPRI5 ms | DOPRI5 error | ROS23 steps | ROS23 rhs calls + Jacobians | ROS23 ms | ROS23 error | CPU DOPRI5 / ROS23 |");
+    println!(
+        "| k | DOPRI5 steps | DOPRI5 rhs calls | DOPRI5 ms | DOPRI5 error | ROS23 steps | ROS23 rhs calls + Jacobians | ROS23 ms | ROS23 error | CPU DOPRI5 / ROS23 |"
+    );
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for e in 3..=9 {
         let k = 10f64.powi(e);
@@ -37,9 +39,8 @@ fn main() {
         params[k_index] = k;
         let (sys, y0) = System::start(model, "kane", params, q0, qd0).expect("starts");
         let (reference, _) = solve(&sys, &y0, &times, Method::Rosenbrock23, 1e-9);
-        let error = |s: &Solution| {
-            s.states.iter().zip(&reference.states).flat_map(|(a, b)| a[..3].iter().zip(&b[..3]).map(|(x, y)| (x - y).abs())).fold(0.0, f64::max)
-        };
+        let error =
+            |s: &Solution| s.states.iter().zip(&reference.states).flat_map(|(a, b)| a[..3].iter().zip(&b[..3]).map(|(x, y)| (x - y).abs())).fold(0.0, f64::max);
         let (d, dt) = solve(&sys, &y0, &times, Method::Dopri5, 1e-4);
         let (r, rt) = solve(&sys, &y0, &times, Method::Rosenbrock23, 1e-4);
         println!(

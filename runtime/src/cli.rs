@@ -111,7 +111,8 @@ pub struct LinearizeArgs {
     /// A coordinate's value at the operating point, `NAME=VALUE` (repeatable).
     #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
     pub q: Vec<(String, f64)>,
-    /// A coordinate's rate at the operating point, `NAME=VALUE` (repeatable).
+    /// A coordinate's rate at the operating point, `NAME=VALUE` (repeatable). With velocity
+    /// constraints, the rates not given (nor swept) are solved from them.
     #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
     pub qdot: Vec<(String, f64)>,
     /// A parameter's value, `NAME=VALUE` (repeatable).
@@ -156,13 +157,16 @@ pub fn operating_point(model: &Model, args: &LinearizeArgs) -> Result<Operating,
     for (name, v) in &args.q {
         q[find(model.coordinates, name, "coordinate")?] = *v;
     }
+    let mut held = Vec::new();
     for (name, v) in &args.qdot {
-        qdot[find(model.coordinates, name, "coordinate")?] = *v;
+        let j = find(model.coordinates, name, "coordinate")?;
+        qdot[j] = *v;
+        held.push(j);
     }
     for (name, v) in &args.param {
         params[find(model.parameter_names, name, "parameter")?] = *v;
     }
-    Ok(Operating { q, qdot, params })
+    Ok(Operating { q, qdot, params, held })
 }
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.

@@ -163,7 +163,7 @@ pub fn program_for(file: &Path) -> Result<PathBuf, DriverError> {
         cmd.arg("-q");
     }
     cmd.arg("--manifest-path").arg(workspace.join("Cargo.toml")).arg("--target-dir").arg(&target);
-    cmd.arg("--").arg(file).arg("-o").arg(&module).args(["--seam-path", "runtime::seam", "--jacobian", "--quiet"]);
+    cmd.arg("--").arg(file).arg("-o").arg(&module).args(["--seam-path", "runtime::seam", "--quiet"]);
     let st = status(cmd, "cargo run -p generator")?;
     if !st.success() {
         return Err(DriverError::Refused { path: file.to_path_buf(), code: st.code().unwrap_or(1) });

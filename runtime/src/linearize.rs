@@ -8,7 +8,7 @@
 //! // The spring cart at rest: every eigenvalue has a negative real part (its damper) or none.
 //! let model = generated::find("spring_cart").unwrap();
 //! let (q0, _) = model.initial.unwrap();
-//! let at = Operating { q: vec![0.0; q0.len()], qdot: vec![0.0; q0.len()], params: model.default_params.to_vec() };
+//! let at = Operating { q: vec![0.0; q0.len()], qdot: vec![0.0; q0.len()], params: model.default_params.to_vec(), held: vec![] };
 //! let lin = linearize(&model, "kane", &at).unwrap();
 //! assert_eq!(lin.eigenvalues.len(), 4);
 //! assert!(lin.eigenvalues.iter().all(|l| l.re < 1e-9));
@@ -18,12 +18,53 @@ use crate::system::{SetupError, System};
 use nalgebra::{Complex, DMatrix};
 use seam::{Failure, Model};
 
-/// Where to linearize: coordinates, their rates and the parameters.
+/// Where to linearize: coordinates, their rates and the parameters. When `held` names some
+/// rates (indices into `qdot`) and the model has velocity constraints, the other rates are
+/// solved from the constraints (`a q' + b = 0`, least squares), so that giving the forward
+/// speed of a bicycle sets its wheels' rates.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Operating {
     pub q: Vec<f64>,
     pub qdot: Vec<f64>,
     pub params: Vec<f64>,
+    pub held: Vec<usize>,
+}
+
+impl Operating {
+    /// The rates with the free ones solved from the constraints (see [`Operating`]).
+    pub fn consistent_rates(&self, model: &Model) -> Result<Vec<f64>, LinearizeError> {
+        let (m, r) = (model.coordinates.len(), model.constraints.len());
+        if self.held.is_empty() || r == 0 {
+            return Ok(self.qdot.clone());
+        }
+        let residual = |qd: &[f64]| -> Result<Vec<f64>, LinearizeError> {
+            let mut out = vec![0.0; r];
+            (model.constraint_residuals)(0.0, &self.q, qd, &self.params, &mut out).map_err(LinearizeError::Rhs)?;
+            Ok(out)
+        };
+        let b = residual(&vec![0.0; m])?;
+        let free: Vec<usize> = (0..m).filter(|j| !self.held.contains(j)).collect();
+        let mut a = DMatrix::zeros(r, free.len());
+        let mut rhs = nalgebra::DVector::from_iterator(r, b.iter().map(|x| -x));
+        for j in 0..m {
+            let mut e = vec![0.0; m];
+            e[j] = 1.0;
+            let col: Vec<f64> = residual(&e)?.iter().zip(&b).map(|(x, y)| x - y).collect();
+            match free.iter().position(|&f| f == j) {
+                Some(k) => a.set_column(k, &nalgebra::DVector::from_vec(col)),
+                None => rhs -= nalgebra::DVector::from_vec(col) * self.qdot[j],
+            }
+        }
+        let x = a.svd(true, true).solve(&rhs, 1e-12).map_err(|e| LinearizeError::Rates(e.to_string()))?;
+        // Round-off of the solve (below 1e-13 of the rates given) is no motion: at rest the
+        // rates come out exactly zero, as the constraints' own check expects.
+        let scale = self.held.iter().fold(0.0f64, |m, &j| m.max(self.qdot[j].abs())).max(x.amax());
+        let mut qd = self.qdot.clone();
+        for (k, &j) in free.iter().enumerate() {
+            qd[j] = if x[k].abs() <= 1e-13 * scale { 0.0 } else { x[k] };
+        }
+        Ok(qd)
+    }
 }
 
 /// The linear model about an operating point.
@@ -35,7 +76,11 @@ pub struct Linear {
     pub rates: Vec<f64>,
     /// `A = d f / d state`.
     pub a: DMatrix<f64>,
-    /// The eigenvalues of `A`, sorted by real part, then imaginary part, descending.
+    /// State entries nothing depends on (their column of `A` vanishes: positions, headings,
+    /// wheel angles), each a zero eigenvalue, left out of `eigenvalues`.
+    pub cyclic: Vec<usize>,
+    /// The eigenvalues of `A` without the cyclic entries, sorted by real part, then imaginary
+    /// part, descending.
     pub eigenvalues: Vec<Complex<f64>>,
     /// True when `A` came from the emitted Jacobian, false for finite differences.
     pub exact: bool,
@@ -48,13 +93,16 @@ pub enum LinearizeError {
     Setup(#[from] SetupError),
     #[error("the right-hand side failed at the operating point: {0}")]
     Rhs(Failure),
+    #[error("the rates cannot be made consistent with the constraints: {0}")]
+    Rates(String),
     #[error("`{name}` is neither a parameter nor a coordinate's rate `q'` of model `{model}` (parameters: {parameters}; coordinates: {coordinates})")]
     UnknownSweep { name: String, model: String, parameters: String, coordinates: String },
 }
 
 /// The linear model of formulation `formulation` of `model` at `at`.
 pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Linear, LinearizeError> {
-    let (sys, y0) = System::start(*model, formulation, at.params.clone(), &at.q, &at.qdot)?;
+    let qdot = at.consistent_rates(model)?;
+    let (sys, y0) = System::start(*model, formulation, at.params.clone(), &at.q, &qdot)?;
     let n = sys.form.states;
     let k = if sys.form.has_work_state { n - 1 } else { n };
     let mut dy = vec![0.0; n];
@@ -64,10 +112,11 @@ pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Lin
         sys.jacobian(0.0, &y0, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
     } else {
         sys.rhs(0.0, &y0, &mut dy).map_err(LinearizeError::Rhs)?;
-        // Central differences, one column per state entry.
+        // Central differences, one column per state entry, at the step that balances
+        // truncation (h^2) against round-off (eps / h).
         let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
         for c in 0..k {
-            let h = 1e-6 * (1.0 + y0[c].abs());
+            let h = f64::EPSILON.cbrt() * (1.0 + y0[c].abs());
             let mut y = y0.clone();
             y[c] += h;
             sys.rhs(0.0, &y, &mut up).map_err(LinearizeError::Rhs)?;
@@ -79,9 +128,24 @@ pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Lin
         }
     }
     let a = DMatrix::from_fn(k, k, |r, c| flat[r * n + c]);
-    let mut eigenvalues: Vec<Complex<f64>> = a.complex_eigenvalues().iter().copied().collect();
+    let (kept, cyclic) = cyclic_entries(&a, if exact { 1e-12 } else { 1e-8 });
+    let reduced = DMatrix::from_fn(kept.len(), kept.len(), |r, c| a[(kept[r], kept[c])]);
+    let mut eigenvalues: Vec<Complex<f64>> = reduced.complex_eigenvalues().iter().copied().collect();
     eigenvalues.sort_by(|x, y| y.re.total_cmp(&x.re).then(y.im.total_cmp(&x.im)));
-    Ok(Linear { state: y0[..k].to_vec(), rates: dy[..k].to_vec(), a, eigenvalues, exact })
+    Ok(Linear { state: y0[..k].to_vec(), rates: dy[..k].to_vec(), a, cyclic, eigenvalues, exact })
+}
+
+/// The entries whose column of `a` (among the rows still kept) is below `tol` times the
+/// largest entry, removed until none is left: `(kept, cyclic)`. Removing such an entry leaves
+/// the other eigenvalues as they are (the matrix is block triangular) and takes out one zero.
+fn cyclic_entries(a: &DMatrix<f64>, tol: f64) -> (Vec<usize>, Vec<usize>) {
+    let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(f64::MIN_POSITIVE);
+    let mut kept: Vec<usize> = (0..a.nrows()).collect();
+    while let Some(pos) = kept.iter().position(|&c| kept.iter().all(|&r| a[(r, c)].abs() <= tol * scale)) {
+        kept.remove(pos);
+    }
+    let cyclic = (0..a.nrows()).filter(|i| !kept.contains(i)).collect();
+    (kept, cyclic)
 }
 
 /// What a sweep varies: a parameter, or the initial rate of a coordinate.
@@ -108,12 +172,17 @@ impl Swept {
         })
     }
 
-    /// `at` with the swept value set to `v`.
+    /// `at` with the swept value set to `v` (a swept rate is held).
     pub fn apply(self, at: &Operating, v: f64) -> Operating {
         let mut out = at.clone();
         match self {
             Swept::Parameter(i) => out.params[i] = v,
-            Swept::Rate(i) => out.qdot[i] = v,
+            Swept::Rate(i) => {
+                out.qdot[i] = v;
+                if !out.held.contains(&i) {
+                    out.held.push(i);
+                }
+            }
         }
         out
     }
@@ -138,29 +207,44 @@ pub fn sweep(model: &Model, formulation: &str, at: &Operating, swept: Swept, val
         .collect()
 }
 
-/// The largest real part among the eigenvalues that are not zero (`|lambda| > 1e-8`): zero
-/// eigenvalues belong to the coordinates nothing depends on (positions, headings), not to
-/// the stability of the motion.
+/// The largest real part among the eigenvalues that are not zero (`|lambda|` above `1e-6`
+/// times the largest): zero eigenvalues belong to conserved quantities (a constraint's value,
+/// the speed of a steady motion), not to the stability of the motion.
 pub fn growth(eigenvalues: &[(f64, f64)]) -> f64 {
-    eigenvalues.iter().filter(|(re, im)| re.hypot(*im) > 1e-8).map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
+    growth_without(eigenvalues, trivial_zeros(eigenvalues))
+}
+
+/// How many eigenvalues are zero (`|lambda|` below `1e-6` times the largest).
+pub fn trivial_zeros(eigenvalues: &[(f64, f64)]) -> usize {
+    let scale = eigenvalues.iter().fold(0.0f64, |m, (re, im)| m.max(re.hypot(*im)));
+    eigenvalues.iter().filter(|(re, im)| re.hypot(*im) <= 1e-6 * scale).count()
+}
+
+/// The largest real part once the `zeros` eigenvalues of smallest magnitude are set aside.
+fn growth_without(eigenvalues: &[(f64, f64)], zeros: usize) -> f64 {
+    let mut by_size: Vec<&(f64, f64)> = eigenvalues.iter().collect();
+    by_size.sort_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
+    by_size.iter().skip(zeros).map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
 }
 
 /// The values between neighbouring rows where [`growth`] changes sign, each refined by
-/// bisection (re-linearizing) to a relative width of `1e-12`.
+/// bisection (re-linearizing) to a relative width of `1e-11`. Near a crossing the crossing
+/// eigenvalue itself is small, so the zeros set aside are counted at the bracket's ends.
 pub fn crossings(model: &Model, formulation: &str, at: &Operating, swept: Swept, rows: &[SweepRow]) -> Result<Vec<f64>, LinearizeError> {
-    let sign = |v: f64| -> Result<bool, LinearizeError> {
-        let lin = linearize(model, formulation, &swept.apply(at, v))?;
-        let e: Vec<(f64, f64)> = lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect();
-        Ok(growth(&e) > 0.0)
-    };
     let mut out = Vec::new();
     for w in rows.windows(2) {
         let (s0, s1) = (growth(&w[0].eigenvalues) > 0.0, growth(&w[1].eigenvalues) > 0.0);
         if s0 == s1 {
             continue;
         }
+        let zeros = trivial_zeros(&w[0].eigenvalues).min(trivial_zeros(&w[1].eigenvalues));
+        let sign = |v: f64| -> Result<bool, LinearizeError> {
+            let lin = linearize(model, formulation, &swept.apply(at, v))?;
+            let e: Vec<(f64, f64)> = lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect();
+            Ok(growth_without(&e, zeros) > 0.0)
+        };
         let (mut lo, mut hi) = (w[0].value, w[1].value);
-        while (hi - lo).abs() > 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        while (hi - lo).abs() > 1e-11 * lo.abs().max(hi.abs()).max(1e-300) {
             let mid = 0.5 * (lo + hi);
             if mid <= lo || mid >= hi {
                 break;

@@ -8,7 +8,7 @@ use runtime::linearize::{Operating, Swept, crossings, growth, linearize, sweep};
 
 fn rest(model: &seam::Model) -> Operating {
     let m = model.coordinates.len();
-    Operating { q: vec![0.0; m], qdot: vec![0.0; m], params: model.default_params.to_vec() }
+    Operating { q: vec![0.0; m], qdot: vec![0.0; m], params: model.default_params.to_vec(), held: vec![] }
 }
 
 fn param(model: &seam::Model, at: &Operating, name: &str) -> f64 {

@@ -17,6 +17,8 @@
 //! assert_eq!(r.get(0, 1), -Expr::sym("a").sin());
 //! ```
 
+pub mod rolling;
+
 use crate::symbolic::diff::TimeDerivative;
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::cell::RefCell;

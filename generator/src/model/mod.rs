@@ -540,7 +540,7 @@ impl<'a> Builder<'a> {
         // Constraints.
         let mut constraints = Vec::new();
         for (i, c) in def.constraints.iter().enumerate() {
-            constraints.push(match c {
+            let one = match c {
                 ConstraintDef::Velocity { name, expr } => {
                     let place = format!("constraints[{i}] ({name})");
                     let e = self.expr(expr, &place, Scope::Velocity)?;
@@ -576,7 +576,52 @@ impl<'a> Builder<'a> {
                     })?;
                     Constraint::Position { name: name.clone(), expr: e }
                 }
-            });
+                ConstraintDef::Rolling { name, frame, radius, axle, center } => {
+                    let place = format!("constraints[{i}] ({name})");
+                    let f = frame_index(frame).ok_or_else(|| {
+                        self.err(
+                            ErrorKind::UnknownFrame,
+                            &format!("{place}.frame"),
+                            &format!("\"{frame}\""),
+                            format!("wheel `{name}` turns with frame `{frame}`, which is not defined"),
+                            "name the frame that turns with the wheel (its spin included)",
+                        )
+                    })?;
+                    let r = self.expr(radius, &format!("{place}.radius"), Scope::Parameters)?;
+                    let rv = r.eval(&self.param_env(&parameters)).unwrap_or(f64::NAN);
+                    if !(rv > 0.0) {
+                        return Err(self.err(
+                            ErrorKind::BadValue,
+                            &format!("{place}.radius"),
+                            &format!("\"{radius}\""),
+                            format!("wheel `{name}` has radius {radius} = {rv}, which is not positive"),
+                            "give the wheel a positive radius",
+                        ));
+                    }
+                    let axis = self.vec3(axle, &format!("{place}.axle"), Scope::Parameters)?;
+                    let env = self.param_env(&parameters);
+                    let len = axis.iter().map(|a| a.eval(&env).unwrap_or(f64::NAN).powi(2)).sum::<f64>().sqrt();
+                    if !((len - 1.0).abs() < 1e-12) {
+                        return Err(self.err(
+                            ErrorKind::BadValue,
+                            &format!("{place}.axle"),
+                            &format!("\"{}\"", axle.first().cloned().unwrap_or_default()),
+                            format!("wheel `{name}`'s axle has length {len}, not 1"),
+                            "give the axle as a unit vector in the frame's components, such as [\"0\", \"1\", \"0\"]",
+                        ));
+                    }
+                    let zero = || vec!["0".to_string(), "0".to_string(), "0".to_string()];
+                    let c = self.vec3(center.as_ref().unwrap_or(&zero()), &format!("{place}.center"), Scope::Position)?;
+                    let rolling = crate::kinematics::rolling::contact(&frames[f], &c, &axis, r, &chain);
+                    constraints.push(Constraint::Velocity { name: format!("{name}_x"), expr: rolling.slip[0] });
+                    constraints.push(Constraint::Velocity { name: format!("{name}_y"), expr: rolling.slip[1] });
+                    if crate::kinematics::rolling::on_the_ground(rolling.height, &coordinates, &env) {
+                        continue;
+                    }
+                    Constraint::Position { name: format!("{name}_height"), expr: rolling.height }
+                }
+            };
+            constraints.push(one);
         }
         if constraints.len() >= coordinates.len() {
             return Err(self.err(

@@ -226,6 +226,19 @@ pub enum ConstraintDef {
     Velocity { name: String, expr: String },
     /// Position level, `expr(q, t) = 0` (holonomic); differentiated by the generator.
     Position { name: String, expr: String },
+    /// A wheel (a thin disk of `radius` about `center`, turning about `axle`, both in
+    /// `frame`'s components; `frame` turns with the wheel) rolling without slip on the ground
+    /// plane `z = 0` of the world: the generator finds the contact point and emits the two
+    /// no-slip constraints `{name}_x`, `{name}_y`, and the height constraint `{name}_height`
+    /// where the frames do not already keep the wheel on the ground.
+    Rolling {
+        name: String,
+        frame: String,
+        radius: String,
+        axle: Vec<String>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        center: Option<Vec<String>>,
+    },
 }
 
 /// An applied force or a potential.
