@@ -69,3 +69,44 @@ fn jacobians_match_finite_differences_on_every_model() {
     }
     assert!(checked >= 4 * 4 * 10, "only {checked} states checked");
 }
+
+/// Every emitted `parameter_jacobian` against central differences over the parameters.
+#[test]
+fn parameter_jacobians_match_finite_differences() {
+    let mut rng = SplitMix(5);
+    let mut modules = Vec::new();
+    for m in generated::models().iter().copied() {
+        for f in m.formulations {
+            let Some(pj) = f.parameter_jacobian else { continue };
+            modules.push(m.module);
+            let (n, np) = (f.states, m.default_params.len());
+            for _ in 0..3 {
+                let (state, g) = random_state(&m, f, &mut rng, 0.05);
+                let params = m.default_params.to_vec();
+                let (mut ds, mut jac) = (vec![0.0; n], vec![0.0; n * np]);
+                pj(0.3, &state, &params, &g, &mut ds, &mut jac).unwrap();
+                let scale = jac.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+                for k in 0..np {
+                    let h = 1e-6 * (1.0 + params[k].abs());
+                    let (mut up, mut down) = (params.clone(), params.clone());
+                    up[k] += h;
+                    down[k] -= h;
+                    let (a, b) = (rhs(f, &up, &g, &state), rhs(f, &down, &g, &state));
+                    for i in 0..n {
+                        let fd = (a[i] - b[i]) / (2.0 * h);
+                        assert!(
+                            (fd - jac[i * np + k]).abs() <= 1e-6 * scale,
+                            "{} {}: d dstate[{i}] / d {} = {} exact, {fd} by differences",
+                            m.module,
+                            f.name,
+                            m.parameter_names[k],
+                            jac[i * np + k]
+                        );
+                    }
+                }
+            }
+        }
+    }
+    modules.dedup();
+    assert_eq!(modules, ["cart_pendulum", "satellite_boom", "rolling_disk", "spring_cart", "stiff_pendulum"]);
+}

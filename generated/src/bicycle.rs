@@ -2121,6 +2121,7 @@ pub mod lagrange {
             )
         },
         jacobian: None,
+        parameter_jacobian: None,
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 11 states, 3 equations.
@@ -13790,6 +13791,7 @@ pub mod kane {
             )
         },
         jacobian: None,
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

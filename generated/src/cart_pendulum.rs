@@ -678,7 +678,7 @@ pub mod lagrange {
             d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -759,6 +759,231 @@ pub mod lagrange {
                     return Err(Failure::NonFinite {
                         t,
                         index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 4]; 4]; 6],
+        d_force: [[f64; 4]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = 0.5 * m2 * l * l * x4;
+        let x6 = m2 + 0.5 * m1;
+        let x7 = l * x6 * x3;
+        let x8 = l * x4;
+        let x9 = 0.5 * x2 * m2 * l;
+        let x10 = -m2 - 0.5 * m1;
+        let x11 = x10 * x0 * g;
+        let x12 = x2 * x0 - x3 * x1;
+        let x13 = m2 * l * x12 * theta2_dot * theta2_dot;
+        let x14 = g * x1;
+        let x15 = l * x12 * theta1_dot * theta1_dot;
+        let x16 = 0.5 * x15 - 0.5 * x14;
+        let x17 = x0 * theta1_dot * theta1_dot;
+        let x18 = theta2_dot * theta2_dot * x1;
+        let x19 = 0.5 * (x0 * theta1_dot * theta1_dot * m1) - m2 * (-x17 - 0.5 * x18);
+        let x20 = theta1_dot - theta2_dot;
+        let x21 = 0.3333333333333333 * l * l;
+        let x22 = 0.5 * l * x3;
+        let x23 = 0.5 * l * l * x4;
+        let x24 = l * x3;
+        let x25 = 0.5 * x2 * l;
+        let x26 = m2 * l * x4;
+        let x27 = x6 * x3;
+        let x28 = 0.5 * x2 * m2;
+        ParameterDerivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [l * l * (m2 + 0.3333333333333333 * m1), x5, x7, x8],
+                [x5, 0.3333333333333333 * m2 * l * l, x9, l],
+                [x7, x9, m2 + M + m1, 0.0],
+                [x8, l, 0.0, 0.0],
+            ],
+            force: [
+                tau + l * (x11 - 0.5 * x13),
+                m2 * x16 * l - tau,
+                x19 * l,
+                x20 * l * x12 * theta1_dot,
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x21, 0.0, x22, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [x22, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [l * l, x23, x24, 0.0],
+                    [x23, x21, x25, 0.0],
+                    [x24, x25, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [l * (2.0 * m2 + 0.6666666666666666 * m1), x26, x27, x4],
+                    [x26, 0.6666666666666666 * m2 * l, x28, 1.0],
+                    [x27, x28, 0.0, 0.0],
+                    [x4, 1.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0],
+                [-(0.5 * x0 * l * g), 0.0, 0.5 * x0 * l * theta1_dot * theta1_dot, 0.0],
+                [
+                    (-0.5 * (l * x12 * theta2_dot * theta2_dot) - x0 * g) * l,
+                    x16 * l,
+                    (x17 + 0.5 * x18) * l,
+                    0.0,
+                ],
+                [x11 - x13, m2 * (x15 - 0.5 * x14), x19, x20 * x12 * theta1_dot],
+                [x10 * x0 * l, -(0.5 * m2 * l * x1), 0.0, 0.0],
+                [1.0, -1.0, 0.0, 0.0],
+            ],
+            power: x20 * tau,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x20],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 6]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 6]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..6 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 4];
+            for i in 0..4 {
+                let mut s = d_force[k][i];
+                for j in 0..4 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 6 + column,
                     });
                 }
             }
@@ -855,6 +1080,19 @@ pub mod lagrange {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1368,7 +1606,7 @@ pub mod maggi {
             d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1467,6 +1705,270 @@ pub mod maggi {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 2]; 2]; 6],
+        d_force: [[f64; 2]; 6],
+        w: [[f64; 2]; 3],
+        c: [f64; 3],
+        d_w: [[[f64; 2]; 3]; 6],
+        d_c: [[f64; 3]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let theta1_dot = state[3];
+        let theta2_dot = state[4];
+        let x_dot = state[5];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = f64::cos(2.0 * theta1 - 2.0 * theta2);
+        let x9 = 0.6666666666666666 - 0.3333333333333333 * x8;
+        let x10 = x2 + x5;
+        let x11 = m2 + 0.5 * m1;
+        let x12 = x11 * x4 - 0.5 * (x3 * m2 * x10);
+        let x13 = l * x7 * x12;
+        let x14 = theta1_dot - theta2_dot;
+        let x15 = x7 * x10;
+        let x16 = 1.0 - x15;
+        let x17 = m2 * x16 * x10;
+        let x18 = m2 * theta2_dot * theta2_dot;
+        let x19 = x3 * x0 - x4 * x1;
+        let x20 = -m2 - 0.5 * m1;
+        let x21 = x20 * x0 * g;
+        let x22 = g * x1;
+        let x23 = theta1_dot * theta1_dot;
+        let x24 = l
+            * (0.5 * x23
+                + x14 * x14 * x7 * (-0.16666666666666666 * x15 - 0.3333333333333333))
+            * x19 - 0.5 * x22;
+        let x25 = x0 * theta1_dot * theta1_dot;
+        let x26 = theta2_dot * theta2_dot * x1;
+        let x27 = x14 * x14 * x7 * x19 * (-0.5 * (x3 * m2 * x16) - x7 * x11 * x4)
+            + 0.5 * (x0 * theta1_dot * theta1_dot * m1) - m2 * (-x25 - 0.5 * x26);
+        let x28 = 0.5 * l * x7 * x4;
+        let x29 = x0 * g;
+        let x30 = (x4 - 0.5 * (x3 * x10)) * l * x7;
+        let x31 = x7 * x12;
+        ParameterDerivatives {
+            qdot: [theta1_dot, theta2_dot, x_dot],
+            matrix: [
+                [l * l * x7 * x7 * (m2 * x9 + 0.3333333333333333 * m1), x13],
+                [x13, m2 + M + m1],
+            ],
+            force: [
+                x7
+                    * (tau
+                        + l
+                            * (l
+                                * (x14 * x14
+                                    * (-x7 * (m2 + 0.3333333333333333 * m1) - 0.5 * x17) * x7
+                                    - 0.5 * x18) * x19 + x21) - (m2 * l * x24 - tau) * x10),
+                l * x27,
+            ],
+            checks: [x6, l * x6],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 1.0]],
+                [[0.3333333333333333 * l * l * x7 * x7, x28], [x28, 1.0]],
+                [[l * l * x7 * x7 * x9, x30], [x30, 1.0]],
+                [
+                    [
+                        l
+                            * (m2 * (1.3333333333333333 - 0.6666666666666666 * x8)
+                                + 0.6666666666666666 * m1) * x7 * x7,
+                        x31,
+                    ],
+                    [x31, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [
+                    l * x7
+                        * (-0.5 * x29
+                            - 0.3333333333333333 * (x14 * x14 * l * x7 * x7 * x19)),
+                    (0.5 * x25 - 0.5 * (x14 * x14 * x7 * x7 * x19 * x4)) * l,
+                ],
+                [
+                    (l
+                        * (x14 * x14 * x7 * (-x7 - 0.5 * (x16 * x10))
+                            - 0.5 * (theta2_dot * theta2_dot)) * x19 - x29 - x10 * x24)
+                        * l * x7,
+                    l
+                        * (x14 * x14 * x7 * x19 * (-x7 * x4 - 0.5 * (x3 * x16)) + x25
+                            + 0.5 * x26),
+                ],
+                [
+                    (l * x19
+                        * (x14 * x14 * x7
+                            * (-x7 * (2.0 * m2 + 0.6666666666666666 * m1) - x17) - x18)
+                        - (l * x19
+                            * (x23
+                                + x14 * x14 * x7
+                                    * (-0.3333333333333333 * x15 - 0.6666666666666666))
+                            - 0.5 * x22) * m2 * x10 + x21) * x7,
+                    x27,
+                ],
+                [l * x7 * (0.5 * (m2 * x10 * x1) + x20 * x0), 0.0],
+                [1.0, 0.0],
+            ],
+            w: [[x7, 0.0], [-(x7 * x10), 0.0], [0.0, 1.0]],
+            c: [x14 * x14 * x7 * x7 * x19, x14 * x14 * x16 * x7 * x19, 0.0],
+            d_w: [
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            power: x14 * tau,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x14],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 6]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 6]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[3 + j] = s;
+        }
+        dstate[6] = power;
+        for k in 0..6 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[3 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 6 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1546,6 +2048,19 @@ pub mod maggi {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -2040,7 +2555,7 @@ pub mod kane {
             d_power: [0.0, tau * x7 * x24 * (x40 + 1.0) * u1, 0.0, tau, 0.0],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2127,6 +2642,231 @@ pub mod kane {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 2],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 2]; 2]; 6],
+        d_force: [[f64; 2]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let u2 = state[4];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = x2 + x5 + 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5;
+        let x9 = 2.0 * theta1 - 2.0 * theta2;
+        let x10 = f64::cos(x9);
+        let x11 = 0.6666666666666666 - 0.3333333333333333 * x10;
+        let x12 = m2 + 0.5 * m1;
+        let x13 = x12 * x4 - 0.5 * (x3 * m2 * x8);
+        let x14 = l * x7 * x13;
+        let x15 = x4 * x1;
+        let x16 = x3 * x0;
+        let x17 = f64::sin(x9);
+        let x18 = 0.3333333333333333 * x15 - 0.3333333333333333 * x16
+            - 0.16666666666666666 * x17;
+        let x19 = f64::sin(3.0 * theta1 - 3.0 * theta2);
+        let x20 = f64::sin(4.0 * theta1 - 4.0 * theta2);
+        let x21 = 0.16666666666666666 * x15 - 0.16666666666666666 * x19
+            - 0.16666666666666666 * x16 - 0.3333333333333333 * x17
+            + (0.8333333333333334 * x15 + 0.16666666666666666 * x19
+                + 0.08333333333333333 * x20 - 0.8333333333333334 * x16
+                - 0.3333333333333333 * x17) * x7;
+        let x22 = -m2 - 0.5 * m1;
+        let x23 = x16 - x15;
+        let x24 = x8 * x8 * x1;
+        let x25 = 1.0 - x7 * x8;
+        let x26 = (0.5 * (x0 * m1) - x12 * x23 * x4 - m2 * (-x0 - 0.5 * x24)) * x7
+            - 0.5 * (x3 * m2 * x25 * x23);
+        let x27 = 0.5 * l * x7 * x4;
+        let x28 = x23 * x4;
+        let x29 = (x4 - 0.5 * (x3 * x8)) * l * x7;
+        let x30 = x7 * x13;
+        let x31 = 0.5 * (m2 * x8 * x1) + x22 * x0;
+        ParameterDerivatives {
+            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            matrix: [
+                [l * l * x7 * x7 * (m2 * x11 + 0.3333333333333333 * m1), x14],
+                [x14, m2 + M + m1],
+            ],
+            force: [
+                x7
+                    * (tau + l * l * x7 * x7 * u1 * u1 * (x18 * x7 * m1 + m2 * x21)
+                        + x22 * x0 * l * g - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
+                l * x7 * u1 * u1 * x26,
+            ],
+            checks: [x6, l * x6],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[0.0, 0.0], [0.0, 1.0]],
+                [[0.3333333333333333 * l * l * x7 * x7, x27], [x27, 1.0]],
+                [[l * l * x7 * x7 * x11, x29], [x29, 1.0]],
+                [
+                    [
+                        l
+                            * (m2 * (1.3333333333333333 - 0.6666666666666666 * x10)
+                                + 0.6666666666666666 * m1) * x7 * x7,
+                        x30,
+                    ],
+                    [x30, 0.0],
+                ],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [
+                    l * x7 * (x18 * l * x7 * x7 * x7 * u1 * u1 - 0.5 * (x0 * g)),
+                    l * x7 * x7 * u1 * u1 * (0.5 * x0 - 0.5 * x28),
+                ],
+                [
+                    l * x7 * ((0.5 * (x8 * x1) - x0) * g + l * x7 * x7 * u1 * u1 * x21),
+                    l * (x7 * (x0 + 0.5 * x24 - x28) - 0.5 * (x3 * x25 * x23)) * x7 * u1
+                        * u1,
+                ],
+                [
+                    x7
+                        * (g * x31
+                            + l * x7 * x7
+                                * (m2
+                                    * (x7
+                                        * (1.6666666666666667 * x15 + 0.3333333333333333 * x19
+                                            + 0.16666666666666666 * x20 - 1.6666666666666667 * x16
+                                            - 0.6666666666666666 * x17) + 0.3333333333333333 * x15
+                                        - 0.3333333333333333 * x19 - 0.3333333333333333 * x16
+                                        - 0.6666666666666666 * x17)
+                                    + (0.6666666666666666 * x15 - 0.6666666666666666 * x16
+                                        - 0.3333333333333333 * x17) * x7 * m1) * u1 * u1),
+                    x7 * u1 * u1 * x26,
+                ],
+                [l * x7 * x31, 0.0],
+                [1.0, 0.0],
+            ],
+            power: tau * u1,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, u1],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 6]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 6]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[5] = power;
+        for k in 0..6 {
+            jac[5][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 6 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -2206,6 +2946,19 @@ pub mod kane {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -2788,7 +3541,7 @@ pub mod reduced_volterra {
             d_power: [tau * x58 * x26 * u1, tau * x26 * u1 * x74, 0.0, tau * x28],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2875,6 +3628,324 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 3],
+        d_qdot: [[f64; 3]; 6],
+        d_matrix: [[[f64; 1]; 1]; 6],
+        d_force: [[f64; 1]; 6],
+        power: f64,
+        d_power: [f64; 6],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let theta1 = state[0];
+        let theta2 = state[1];
+        let u1 = state[3];
+        let M = params.M;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let g = params.g;
+        let tau = params.tau;
+        let G_x = g_i[0];
+        let x0 = f64::sin(theta1);
+        let x1 = f64::sin(theta2);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x3 * x4;
+        let x6 = -x2 - x5 - 1.0;
+        let x7 = 1.0 / x6;
+        let x8 = x2 + x5 + 1.0;
+        let x9 = 1.0 / x8;
+        let x10 = x2 + x5;
+        let x11 = x4 * m1;
+        let x12 = theta1 - 2.0 * theta2;
+        let x13 = f64::cos(x12);
+        let x14 = 0.75 * x4 - 0.25 * x13;
+        let x15 = m2 * x14;
+        let x16 = 0.5 * x11 + x15;
+        let x17 = l * x16 * u1;
+        let x18 = G_x * x8;
+        let x19 = m2 + M + m1;
+        let x20 = 1.0 / (m2 + M + m1 + x19 * x10);
+        let x21 = x3 * m2 * x9 * x10;
+        let x22 = m2 + 0.5 * m1;
+        let x23 = x22 * x7 * x4;
+        let x24 = x16 * x19 * x20;
+        let x25 = 0.5 * x21 + x23 + x24;
+        let x26 = x16 * x25 * x20;
+        let x27 = x10 * (0.3333333333333333 * x9 + 0.5 * x7);
+        let x28 = x3 * x16 * x20;
+        let x29 = m2 + 0.3333333333333333 * m1;
+        let x30 = x16 * x22 * x4 * x20;
+        let x31 = m2 * x9 * x10 * x10;
+        let x32 = -m2 - 0.5 * m1;
+        let x33 = x3 * x0 - x4 * x1;
+        let x34 = x9 * x10;
+        let x35 = x7 - x34;
+        let x36 = x10 * x35;
+        let x37 = x34 - 1.0;
+        let x38 = x37 * x9 * x35;
+        let x39 = x33 * (x7 * x7 * (0.5 * x36 + 0.5) - 0.3333333333333333 * x38);
+        let x40 = -m2 - M - m1;
+        let x41 = x16 * x40 * x33 * x20 * x35;
+        let x42 = (-0.75 * m2 - 0.5 * m1) * x0 * x7;
+        let x43 = f64::sin(x12);
+        let x44 = x7 - 2.0 * x34;
+        let x45 = m2 * x43 * x44;
+        let x46 = x42 - x41 + 0.25 * x45;
+        let x47 = x3 * x46 * x20;
+        let x48 = x9 * x9 * x10 * x10 * x1;
+        let x49 = x0 * x7 * x7;
+        let x50 = 0.5 * (x0 * x7 * x7 * m1) - m2 * (-0.5 * x48 - x49) - x19 * x46 * x20
+            + (x22 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x37 * x9)) * x33 * x35;
+        let x51 = x16 * x50 * x20;
+        let x52 = x22 * x46 * x4 * x20;
+        let x53 = x37 * x35;
+        let x54 = -0.5 * x53 - 0.5 * x34;
+        let x55 = (1.0 - x19 * x8 * x20) * x16;
+        let x56 = x8 * (x42 + 0.25 * x45);
+        let x57 = 2.0 * (x40 * x8 * x20) + 1.0;
+        let x58 = x16 * x33 * x57 * x35 - x56;
+        let x59 = x16 * x8 * x20;
+        let x60 = 0.5 * x4 - x59;
+        let x61 = G_x * x8 * x8 * x20;
+        let x62 = x7 * x4;
+        let x63 = x22 * x8 * x20;
+        let x64 = x50 * x8 * x20;
+        let x65 = x16 * x57;
+        let x66 = x0 * x7;
+        let x67 = (x33 * (x65 - 0.5 * (x40 * x4)) * x35 - x56) * x20 - 0.5 * x66;
+        let x68 = 0.75 * x4 - x59 - 0.25 * x13;
+        let x69 = 0.25 * (x43 * x44) + x20 * ((x65 - x14 * x40) * x33 * x35 - x56)
+            - 0.75 * x66;
+        let x70 = 2.0 * m2 + 0.6666666666666666 * m1;
+        let x71 = x32 * x0 * x7 - 0.5 * (m2 * x9 * x10 * x1);
+        ParameterDerivatives {
+            qdot: [x7 * u1, x9 * x10 * u1, (x17 + x18) * x20],
+            matrix: [
+                [
+                    l * l
+                        * (x26 + m2 * x9 * x10 * (x27 + 0.5 * x28)
+                            + x7 * (x7 * x29 + x30 + 0.5 * x31)),
+                ],
+            ],
+            force: [
+                x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
+                    + (tau + x32 * x0 * l * g) * x7
+                    + l * l
+                        * (m2 * x9 * x10 * (x39 - 0.5 * x47) + x51
+                            + x7
+                                * (x33 * (x7 * x7 * x35 * x29 + x54 * m2 * x9 * x10) - x52))
+                        * u1 * u1,
+            ],
+            checks: [x6, l * x8, x0 * x19 * x1 + m2 + x3 * x19 * x4 + M + m1],
+            d_qdot: [
+                [0.0, 0.0, (-x17 - x18) * x8 * x20 * x20],
+                [0.0, 0.0, (x60 * l * u1 - x61) * x20],
+                [0.0, 0.0, (l * u1 * x68 - x61) * x20],
+                [0.0, 0.0, x16 * u1 * x20],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [
+                    [
+                        l * l * x16 * x20 * x20
+                            * (x8 * (-0.5 * x21 - 2.0 * x23 - x24)
+                                - 0.5 * (x3 * m2 * x10) + x55),
+                    ],
+                ],
+                [
+                    [
+                        l * l
+                            * ((x3 * (0.25 * x4 - 0.5 * x59) * m2 * x9 * x10 + x60 * x25
+                                + (0.5 * x62 + (0.5 * (x19 * x4) + x55) * x20) * x16) * x20
+                                + x7
+                                    * (0.3333333333333333 * x7
+                                        + (x16 * (0.5 - x63) + 0.5 * (x22 * x4)) * x4 * x20)),
+                    ],
+                ],
+                [
+                    [
+                        l * l
+                            * (x9 * x10
+                                * (x27
+                                    + x3
+                                        * (0.25 * x11 + m2 * (0.375 * x4 - 0.5 * x59 - 0.125 * x13)
+                                            + 0.5 * x15) * x20)
+                                + (x25 * x68
+                                    + x16
+                                        * (0.5 * (x3 * x9 * x10) + (x14 * x19 + x55) * x20 + x62))
+                                    * x20
+                                + x7
+                                    * (x4 * x20 * (x14 * x22 + x16 * (1.0 - x63)) + x7
+                                        + 0.5 * (x9 * x10 * x10))),
+                    ],
+                ],
+                [
+                    [
+                        l
+                            * ((x7 * x70 + 2.0 * x30 + x31) * x7 + 2.0 * x26
+                                + ((0.6666666666666666 * x9 + x7) * x10 + x28) * m2 * x9
+                                    * x10),
+                    ],
+                ],
+                [[0.0]],
+                [[0.0]],
+            ],
+            d_force: [
+                [
+                    (x58 * (-0.5 * x21 - x23)
+                        + x16
+                            * (x20 * (x16 * x40 * x33 * x35 - x58 * x19) - x50 * x8 - x42
+                                - 0.25 * x45)) * l * l * u1 * u1 * x20 * x20,
+                ],
+                [
+                    (l * u1 * u1
+                        * ((x16
+                            * ((x41 - x19 * x67 - x42 - 0.25 * x45) * x20 - x64
+                                + x7 * x7 * (0.5 * x0 + 0.5 * (x33 * x4 * x35)))
+                            + 0.5 * (x50 * x4) - 0.5 * (x3 * m2 * x9 * x10 * x67)) * x20
+                            + (0.3333333333333333 * (x7 * x7 * x33 * x35)
+                                + (0.5 * x41 - x22 * x67 - 0.5 * x42 - 0.125 * x45) * x4
+                                    * x20) * x7) - 0.5 * (x0 * x7 * g)) * l,
+                ],
+                [
+                    l
+                        * (l * u1 * u1
+                            * (x7
+                                * ((x54 * x9 * x10 + x7 * x7 * x35) * x33
+                                    + (x41 - x22 * x69 - x42 - 0.25 * x45) * x4 * x20)
+                                + (x16
+                                    * ((-x19 * x69 - x42 - 0.25 * x45) * x20 - x64 + 0.5 * x48
+                                        + x49
+                                        + x33
+                                            * (x16 * x40 * x20 * x20 - 0.5 * (x3 * x37 * x9)
+                                                + x7 * x7 * x4) * x35) + x14 * x50) * x20
+                                + x9 * x10
+                                    * (x39
+                                        + x3
+                                            * (0.5 * x41 - 0.5 * (m2 * x69) - 0.5 * x42 - 0.125 * x45)
+                                            * x20)) + (-0.5 * (x9 * x10 * x1) - x66) * g),
+                ],
+                [
+                    g * x71
+                        + l
+                            * (2.0 * x51
+                                + x7
+                                    * (x33
+                                        * (x7 * x7 * x35 * x70 + (-x53 - x34) * m2 * x9 * x10)
+                                        - 2.0 * x52)
+                                + m2 * x9 * x10
+                                    * (((x36 + 1.0) * x7 * x7 - 0.6666666666666666 * x38) * x33
+                                        - x47)) * u1 * u1,
+                ],
+                [l * x71],
+                [x35],
+            ],
+            power: tau * u1 * x35,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, u1 * x35],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 6]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 6]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..6 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..6 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 6 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2954,6 +4025,19 @@ pub mod reduced_volterra {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }

@@ -486,7 +486,7 @@ pub mod lagrange {
             d_power: [0.0, 0.0, w_, 0.0],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -664,6 +664,7 @@ pub mod lagrange {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Maggi's equations: 5 states, 2 equations.
@@ -985,7 +986,7 @@ pub mod maggi {
             d_power: [0.0, 0.0, w_, 0.0],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1164,6 +1165,7 @@ pub mod maggi {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 4 states, 1 equations.
@@ -1414,7 +1416,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1581,6 +1583,7 @@ pub mod kane {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 4 states, 1 equations.
@@ -1831,7 +1834,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1998,6 +2001,7 @@ pub mod reduced_volterra {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

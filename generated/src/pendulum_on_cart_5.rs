@@ -1116,7 +1116,7 @@ pub mod lagrange {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1285,6 +1285,7 @@ pub mod lagrange {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Maggi's equations: 12 states, 6 equations.
@@ -2152,7 +2153,7 @@ pub mod maggi {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2325,6 +2326,7 @@ pub mod maggi {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 12 states, 6 equations.
@@ -3043,7 +3045,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -3201,6 +3203,7 @@ pub mod kane {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 11 states, 5 equations.
@@ -3995,7 +3998,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -4153,6 +4156,7 @@ pub mod reduced_volterra {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

@@ -617,7 +617,7 @@ pub mod lagrange {
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tq],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -698,6 +698,182 @@ pub mod lagrange {
                     return Err(Failure::NonFinite {
                         t,
                         index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 4],
+        matrix: [[f64; 6]; 6],
+        force: [f64; 6],
+        checks: [f64; 0],
+        d_qdot: [[f64; 4]; 3],
+        d_matrix: [[[f64; 6]; 6]; 3],
+        d_force: [[f64; 6]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[2];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let x0 = f64::cos(psi);
+        let x1 = -(R * x0);
+        let x2 = f64::sin(psi);
+        let x3 = -(R * x2);
+        let x4 = -x0;
+        let x5 = -x2;
+        ParameterDerivatives {
+            qdot: [x_dot, y_dot, psi_dot, phi_dot],
+            matrix: [
+                [md, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, md, 0.0, 0.0, 0.0, 1.0],
+                [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
+                [1.0, 0.0, 0.0, x1, 0.0, 0.0],
+                [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+            ],
+            force: [
+                0.0,
+                0.0,
+                0.0,
+                tq,
+                -(R * psi_dot * phi_dot * x2),
+                R * x0 * psi_dot * phi_dot,
+            ],
+            checks: [],
+            d_qdot: [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
+            d_matrix: [
+                [
+                    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.25 * R * R, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.5 * R * R, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.5 * md * R, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, md * R, x4, x5],
+                    [0.0, 0.0, 0.0, x4, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x5, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, -(psi_dot * phi_dot * x2), x0 * psi_dot * phi_dot],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+            ],
+            power: tq * phi_dot,
+            d_power: [0.0, 0.0, phi_dot],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 3]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 3]; STATES];
+        for j in 0..4 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..4 {
+            dstate[4 + j] = x[j];
+        }
+        dstate[8] = power;
+        for k in 0..3 {
+            jac[8][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..4 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 6];
+            for i in 0..6 {
+                let mut s = d_force[k][i];
+                for j in 0..6 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..4 {
+                jac[4 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 3 + column,
                     });
                 }
             }
@@ -794,6 +970,19 @@ pub mod lagrange {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1108,7 +1297,7 @@ pub mod maggi {
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tq],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1207,6 +1396,167 @@ pub mod maggi {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 4],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 4]; 3],
+        d_matrix: [[[f64; 2]; 2]; 3],
+        d_force: [[f64; 2]; 3],
+        w: [[f64; 2]; 4],
+        c: [f64; 4],
+        d_w: [[[f64; 2]; 4]; 3],
+        d_c: [[f64; 4]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[2];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let psi_dot = state[6];
+        let phi_dot = state[7];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        ParameterDerivatives {
+            qdot: [x_dot, y_dot, psi_dot, phi_dot],
+            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            force: [0.0, tq],
+            checks: [],
+            d_qdot: [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
+            d_matrix: [
+                [[0.25 * R * R, 0.0], [0.0, 1.5 * R * R]],
+                [[0.5 * md * R, 0.0], [0.0, 3.0 * md * R]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [[0.0, 0.0], [0.0, 0.0], [0.0, 1.0]],
+            w: [[0.0, R * x0], [0.0, R * x1], [1.0, 0.0], [0.0, 1.0]],
+            c: [-(R * psi_dot * phi_dot * x1), R * x0 * psi_dot * phi_dot, 0.0, 0.0],
+            d_w: [
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x0], [0.0, x1], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0, 0.0],
+                [-(psi_dot * phi_dot * x1), x0 * psi_dot * phi_dot, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+            ],
+            power: tq * phi_dot,
+            d_power: [0.0, 0.0, phi_dot],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 3]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 3]; STATES];
+        for j in 0..4 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..4 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[4 + j] = s;
+        }
+        dstate[8] = power;
+        for k in 0..3 {
+            jac[8][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..4 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..4 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[4 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 3 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1286,6 +1636,19 @@ pub mod maggi {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1539,7 +1902,7 @@ pub mod kane {
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, tq],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1626,6 +1989,141 @@ pub mod kane {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 4],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 4]; 3],
+        d_matrix: [[[f64; 2]; 2]; 3],
+        d_force: [[f64; 2]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[2];
+        let u1 = state[4];
+        let u2 = state[5];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        ParameterDerivatives {
+            qdot: [u2 * R * x0, u2 * R * x1, u1, u2],
+            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            force: [0.0, tq],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0],
+                [u2 * x0, u2 * x1, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[0.25 * R * R, 0.0], [0.0, 1.5 * R * R]],
+                [[0.5 * md * R, 0.0], [0.0, 3.0 * md * R]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [[0.0, 0.0], [0.0, 0.0], [0.0, 1.0]],
+            power: u2 * tq,
+            d_power: [0.0, 0.0, u2],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 3]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 3]; STATES];
+        for j in 0..4 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[4 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..3 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..4 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[4 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 3 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1705,6 +2203,19 @@ pub mod kane {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1948,7 +2459,7 @@ pub mod reduced_volterra {
             d_power: [0.0, 0.0, 0.0, 0.0, tq],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2035,6 +2546,139 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 4],
+        matrix: [[f64; 1]; 1],
+        force: [f64; 1],
+        checks: [f64; 0],
+        d_qdot: [[f64; 4]; 3],
+        d_matrix: [[[f64; 1]; 1]; 3],
+        d_force: [[f64; 1]; 3],
+        power: f64,
+        d_power: [f64; 3],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[2];
+        let u1 = state[4];
+        let md = params.md;
+        let R = params.R;
+        let tq = params.tq;
+        let G_psi = g_i[0];
+        let x0 = f64::cos(psi);
+        let x1 = f64::sin(psi);
+        let x2 = 1.0 / R;
+        let x3 = 1.0 / md;
+        ParameterDerivatives {
+            qdot: [R * x0 * u1, R * u1 * x1, 4.0 * x2 * x2 * x3 * G_psi, u1],
+            matrix: [[1.5 * md * R * R]],
+            force: [tq],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, -(4.0 * x2 * x2 * x3 * x3 * G_psi), 0.0],
+                [x0 * u1, u1 * x1, -(8.0 * x2 * x2 * x2 * x3 * G_psi), 0.0],
+                [0.0, 0.0, 0.0, 0.0],
+            ],
+            d_matrix: [[[1.5 * R * R]], [[3.0 * md * R]], [[0.0]]],
+            d_force: [[0.0], [0.0], [1.0]],
+            power: tq * u1,
+            d_power: [0.0, 0.0, u1],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 3]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 3]; STATES];
+        for j in 0..4 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..1 {
+            dstate[4 + j] = x[j];
+        }
+        dstate[5] = power;
+        for k in 0..3 {
+            jac[5][k] = d_power[k];
+        }
+        for k in 0..3 {
+            for j in 0..4 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 1];
+            for i in 0..1 {
+                let mut s = d_force[k][i];
+                for j in 0..1 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..1 {
+                jac[4 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 3 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2114,6 +2758,19 @@ pub mod reduced_volterra {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }

@@ -1278,7 +1278,7 @@ pub mod lagrange {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1359,6 +1359,472 @@ pub mod lagrange {
                     return Err(Failure::NonFinite {
                         t,
                         index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 0],
+        d_qdot: [[f64; 7]; 9],
+        d_matrix: [[[f64; 7]; 7]; 9],
+        d_force: [[f64; 7]; 9],
+        power: f64,
+        d_power: [f64; 9],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::sin(theta);
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
+        let x5 = Iyz * x3;
+        let x6 = rho + 0.5 * l;
+        let x7 = f64::cos(psi);
+        let x8 = f64::sin(psi);
+        let x9 = x7 * x7 + x8 * x8;
+        let x10 = Iyz * x2;
+        let x11 = x2 * Ixz - Ixy * x3;
+        let x12 = -x2 * Izz - x5;
+        let x13 = Iyy * x3 + x10;
+        let x14 = (x12 * x3 + x13 * x2) * x1 - x0 * x11;
+        let x15 = -(x1 * m * x6 * x8);
+        let x16 = x7 * x1 * m * x6;
+        let x17 = l * l;
+        let x18 = rho + l;
+        let x19 = 0.25 * x17 + rho * x18;
+        let x20 = -(x0 * x7 * m * x6);
+        let x21 = -(x0 * m * x6 * x8);
+        let x22 = -(x1 * m * x6);
+        let x23 = x7 * x1 * m;
+        let x24 = x1 * m * x8;
+        let x25 = -(x0 * m);
+        let x26 = m + mg;
+        let x27 = x1 * psi_dot * x3;
+        let x28 = theta_dot * x2;
+        let x29 = x27 - x28;
+        let x30 = x0 * psi_dot;
+        let x31 = phi_dot - x30;
+        let x32 = theta_dot * x3;
+        let x33 = x1 * psi_dot * x2;
+        let x34 = x32 + x33;
+        let x35 = Ixx * x31 - x29 * Ixz - Ixy * x34;
+        let x36 = -phi_dot - x30;
+        let x37 = theta_dot * x36 * x2;
+        let x38 = x1 * psi_dot * phi_dot * x3;
+        let x39 = x37 + x38;
+        let x40 = x29 * Izz - Iyz * x34 - Ixz * x31;
+        let x41 = theta_dot * x36 * x3;
+        let x42 = x1 * psi_dot * x2 * phi_dot;
+        let x43 = x41 - x42;
+        let x44 = x29 * x35 + Iyy * x39 - x40 * x31 + Ixy * theta_dot * x1 * psi_dot
+            - x43 * Iyz;
+        let x45 = Iyy * x34 - x29 * Iyz - Ixy * x31;
+        let x46 = theta_dot * x1 * psi_dot * Ixz + x45 * x31 - x34 * x35 - Iyz * x39
+            + x43 * Izz;
+        let x47 = theta_dot * Ixx * x1 * psi_dot;
+        let x48 = x40 * x34;
+        let x49 = x43 * Ixz;
+        let x50 = x29 * x45;
+        let x51 = Ixy * x39;
+        let x52 = 2.0 * theta;
+        let x53 = f64::sin(x52);
+        let x54 = l * theta_dot * x53;
+        let x55 = f64::cos(x52);
+        let x56 = 0.5 * x55 + 0.5;
+        let x57 = x56 * rho_dot;
+        let x58 = -rho - 0.5 * l;
+        let x59 = -0.25 * x55 - 0.25;
+        let x60 = -0.5 * x55 - 0.5;
+        let x61 = f64::cos(0.0485 * t);
+        let x62 = f64::sin(0.089 * t);
+        let x63 = rho_dot * x8;
+        let x64 = x7 * psi_dot * x6;
+        let x65 = psi_dot * x6 * x8;
+        let x66 = x7 * rho_dot;
+        let x67 = theta_dot * x7 * x1 * x6;
+        let x68 = theta_dot * x1 * x6 * x8;
+        let x69 = x1 * rho_dot;
+        let x70 = x0 * theta_dot * x6;
+        let x71 = -x0;
+        let x72 = theta_dot * x1 * psi_dot;
+        let x73 = x1 * x2 * x3;
+        let x74 = x3 * x3;
+        let x75 = -(x1 * x2 * x3);
+        let x76 = x2 * x2;
+        let x77 = x0 * x3;
+        let x78 = -(x1 * x2);
+        let x79 = -x3;
+        let x80 = -x32 - x33;
+        let x81 = x29 * x80 + x72;
+        let x82 = x30 - phi_dot;
+        let x83 = x31 * x82;
+        let x84 = x80 * x34;
+        let x85 = x83 - x84;
+        let x86 = phi_dot + x30;
+        let x87 = theta_dot * x86 * x2;
+        let x88 = x29 * x82;
+        let x89 = -(x0 * x2);
+        let x90 = -(x1 * x3);
+        let x91 = x28 - x27;
+        let x92 = x29 * x91;
+        let x93 = x92 - x83;
+        let x94 = x72 - x91 * x34;
+        let x95 = x82 * x34;
+        let x96 = theta_dot * x86 * x3;
+        let x97 = (x76 - x74) * x1;
+        let x98 = x87 + x91 * x31 - x38;
+        let x99 = x42 - x80 * x31 + x96;
+        let x100 = -(x1 * x6 * x8);
+        let x101 = x7 * x1 * x6;
+        let x102 = -(x0 * x7 * x6);
+        let x103 = -(x0 * x6 * x8);
+        let x104 = -(x1 * x6);
+        let x105 = x7 * x1;
+        let x106 = x1 * x8;
+        let x107 = -(0.5 * x1 * m * x8);
+        let x108 = 0.5 * x7 * x1 * m;
+        let x109 = -(0.5 * x0 * x7 * m);
+        let x110 = -(0.5 * x0 * m * x8);
+        let x111 = -(0.5 * x1 * m);
+        let x112 = theta_dot * theta_dot;
+        let x113 = -0.5 * x112 - 0.5 * (psi_dot * psi_dot);
+        ParameterDerivatives {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [
+                    x1
+                        * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2 + x1 * m * x6 * x6 * x9
+                            + (x1 * (Izz * x3 - x10) + x0 * Ixz) * x3) - x0 * x4,
+                    x14,
+                    x4,
+                    0.0,
+                    x15,
+                    x16,
+                    0.0,
+                ],
+                [x14, m * x19 - x2 * x12 + x13 * x3, x11, 0.0, x20, x21, x22],
+                [x4, x11, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x23, x24, x25],
+                [x15, x20, 0.0, x23, x26, 0.0, 0.0],
+                [x16, x21, 0.0, x24, 0.0, x26, 0.0],
+                [0.0, x22, 0.0, x25, 0.0, 0.0, x26],
+            ],
+            force: [
+                x1 * (-x2 * x44 - x46 * x3) + (x48 - x47 - x49 - x50 - x51) * x0
+                    - (l * (x57 - 0.25 * x54)
+                        + rho * ((-rho - l) * theta_dot * x53 + rho_dot * (x55 + 1.0)))
+                        * psi_dot * m,
+                x46 * x2
+                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x17) * psi_dot * psi_dot
+                        * x53 + theta_dot * (2.0 * rho + l) * rho_dot) * m - x44 * x3,
+                x47 - x48 + x49 + x50 + x51,
+                0.012 * x61
+                    - (x58 * theta_dot * theta_dot
+                        + (l * x59 + rho * x60) * psi_dot * psi_dot) * m - 0.018 * x62,
+                -(m
+                    * ((-2.0 * x63 - x64) * x1 * psi_dot
+                        + (x0 * (2.0 * x65 - 2.0 * x66) - x67) * theta_dot)),
+                -((x1 * psi_dot * (2.0 * x66 - x65)
+                    + (x0 * (-2.0 * x63 - 2.0 * x64) - x68) * theta_dot) * m),
+                -(theta_dot * m * (x70 - 2.0 * x69)),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [x0 * x0, 0.0, x71, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x71, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x1 * x1 * x2 * x2, x73, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x73, x74, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x1 * x1 * x3 * x3, x75, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x75, x76, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [2.0 * x0 * x1 * x2, x77, x78, 0.0, 0.0, 0.0, 0.0],
+                    [x77, 0.0, x79, 0.0, 0.0, 0.0, 0.0],
+                    [x78, x79, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [2.0 * x0 * x1 * x3, x89, x90, 0.0, 0.0, 0.0, 0.0],
+                    [x89, 0.0, x2, 0.0, 0.0, 0.0, 0.0],
+                    [x90, x2, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [-(2.0 * x1 * x1 * x2 * x3), x97, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x97, 2.0 * x2 * x3, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x1 * x1 * x6 * x6 * x9, 0.0, 0.0, 0.0, x100, x101, 0.0],
+                    [0.0, x19, 0.0, 0.0, x102, x103, x104],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 1.0, x105, x106, x71],
+                    [x100, x102, 0.0, x105, 1.0, 0.0, 0.0],
+                    [x101, x103, 0.0, x106, 0.0, 1.0, 0.0],
+                    [0.0, x104, 0.0, x71, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [x1 * x1 * m * x6 * x9, 0.0, 0.0, 0.0, x107, x108, 0.0],
+                    [0.0, m * x6, 0.0, 0.0, x109, x110, x111],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x107, x109, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x108, x110, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x111, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    ((x34 * x3 - x29 * x2) * x31 - x0 * theta_dot * psi_dot) * x1,
+                    (-x2 * x34 - x29 * x3) * x31,
+                    x72,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x1 * (-x31 * x34 * x3 - x39 * x2) - x29 * x0 * x34,
+                    x2 * x31 * x34 - x39 * x3,
+                    x29 * x34,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x29 * (x1 * x2 * x31 + x0 * x34) - x43 * x1 * x3,
+                    x43 * x2 + x29 * x31 * x3,
+                    -(x29 * x34),
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x1 * (-x81 * x2 - x85 * x3) + x0 * (x87 - x88 - x38),
+                    x85 * x2 - x81 * x3,
+                    x88 + x37 + x38,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    (-x93 * x2 - x94 * x3) * x1 + x0 * (x42 + x95 + x96),
+                    x94 * x2 - x93 * x3,
+                    x41 - x42 - x95,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x1 * (-x98 * x3 - x99 * x2) + x0 * (x84 - x92),
+                    x2 * x98 - x99 * x3,
+                    x92 - x84,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    psi_dot
+                        * ((rho_dot * x60 + 0.25 * x54) * l
+                            + rho * ((-x55 - 1.0) * rho_dot + theta_dot * x18 * x53)),
+                    (-2.0 * rho - l) * theta_dot * rho_dot
+                        + psi_dot * psi_dot
+                            * ((-0.5 * rho - 0.5 * l) * rho - 0.125 * x17) * x53,
+                    0.0,
+                    theta_dot * theta_dot * x6
+                        + (rho * x56 + l * (0.25 * x55 + 0.25)) * psi_dot * psi_dot,
+                    theta_dot * (x0 * (2.0 * x66 - 2.0 * x65) + x67)
+                        + (2.0 * x63 + x64) * x1 * psi_dot,
+                    theta_dot * (x0 * (2.0 * x63 + 2.0 * x64) + x68)
+                        + (x65 - 2.0 * x66) * x1 * psi_dot,
+                    theta_dot * (2.0 * x69 - x70),
+                ],
+                [
+                    -(psi_dot * m * (x58 * theta_dot * x53 + x57)),
+                    -(m
+                        * (theta_dot * rho_dot
+                            + psi_dot * psi_dot * (0.5 * rho + 0.25 * l) * x53)),
+                    0.0,
+                    -((psi_dot * psi_dot * x59 - 0.5 * x112) * m),
+                    -((x113 * x7 * x1 + x0 * theta_dot * psi_dot * x8) * m),
+                    -(m * (x113 * x1 * x8 - x0 * theta_dot * x7 * psi_dot)),
+                    -(0.5 * x0 * theta_dot * theta_dot * m),
+                ],
+            ],
+            power: rho_dot * (0.012 * x61 - 0.018 * x62),
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 9]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 9]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[14] = power;
+        for k in 0..9 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..9 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 9 + column,
                     });
                 }
             }
@@ -1455,6 +1921,19 @@ pub mod lagrange {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -2831,7 +3310,7 @@ pub mod maggi {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2930,6 +3409,705 @@ pub mod maggi {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 9],
+        d_matrix: [[[f64; 7]; 7]; 9],
+        d_force: [[f64; 7]; 9],
+        w: [[f64; 7]; 7],
+        c: [f64; 7],
+        d_w: [[[f64; 7]; 7]; 9],
+        d_c: [[f64; 7]; 9],
+        power: f64,
+        d_power: [f64; 9],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let psi_dot = state[7];
+        let theta_dot = state[8];
+        let phi_dot = state[9];
+        let rho_dot = state[10];
+        let X_dot = state[11];
+        let Y_dot = state[12];
+        let Z_dot = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::cos(phi);
+        let x1 = f64::sin(phi);
+        let x2 = x1 * Ixz - Ixy * x0;
+        let x3 = -Ixy * x1 - Ixz * x0;
+        let x4 = x2 * x0 + x1 * x3;
+        let x5 = x3 * x0 - x2 * x1;
+        let x6 = f64::sin(theta);
+        let x7 = Iyz * x0;
+        let x8 = -x1 * Izz - x7;
+        let x9 = Iyz * x1;
+        let x10 = Iyy * x0 + x9;
+        let x11 = x8 * x0 + x10 * x1;
+        let x12 = f64::cos(theta);
+        let x13 = x11 * x12 - x6 * x2;
+        let x14 = rho + 0.5 * l;
+        let x15 = f64::cos(psi);
+        let x16 = x15 * x15;
+        let x17 = f64::sin(psi);
+        let x18 = x17 * x17;
+        let x19 = x16 + x18;
+        let x20 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1 + x12 * m * x14 * x14 * x19
+            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
+        let x21 = x6 * x4 + x0 * x13 + x1 * x20;
+        let x22 = 1.0 / x12;
+        let x23 = l * l;
+        let x24 = rho + l;
+        let x25 = rho * x24;
+        let x26 = 0.25 * x23 + x25;
+        let x27 = m * x26 - x1 * x8 + x10 * x0;
+        let x28 = x11 * x1 + x27 * x0;
+        let x29 = x21 * x22 * x0 - x1 * x28;
+        let x30 = x1 * x17;
+        let x31 = x6 * x15 * x0;
+        let x32 = -x30 - x31;
+        let x33 = x32 * m * x14;
+        let x34 = x15 * x1;
+        let x35 = x6 * x0 * x17;
+        let x36 = x34 - x35;
+        let x37 = x36 * m * x14;
+        let x38 = -(x12 * m * x14 * x0);
+        let x39 = x0 * x17;
+        let x40 = x6 * x15 * x1;
+        let x41 = x40 - x39;
+        let x42 = x41 * m * x14;
+        let x43 = x15 * x0;
+        let x44 = x6 * x1 * x17;
+        let x45 = x43 + x44;
+        let x46 = m * x14 * x45;
+        let x47 = x12 * m * x14 * x1;
+        let x48 = x15 * x12 * m;
+        let x49 = x12 * m * x17;
+        let x50 = -(x6 * m);
+        let x51 = m + mg;
+        let x52 = theta_dot * x0;
+        let x53 = x12 * psi_dot * x1;
+        let x54 = x52 + x53;
+        let x55 = x6 * psi_dot;
+        let x56 = phi_dot - x55;
+        let x57 = x12 * psi_dot * x0;
+        let x58 = theta_dot * x1;
+        let x59 = x57 - x58;
+        let x60 = x59 * Izz - Iyz * x54 - Ixz * x56;
+        let x61 = x60 * x54;
+        let x62 = -phi_dot - x55;
+        let x63 = theta_dot * x62 * x0;
+        let x64 = x12 * psi_dot * x1 * phi_dot;
+        let x65 = x63 - x64;
+        let x66 = x65 * Ixz;
+        let x67 = Iyy * x54 - x59 * Iyz - Ixy * x56;
+        let x68 = x59 * x67;
+        let x69 = theta_dot * x62 * x1;
+        let x70 = x12 * psi_dot * phi_dot * x0;
+        let x71 = x69 + x70;
+        let x72 = Ixy * x71;
+        let x73 = 2.0 * theta;
+        let x74 = f64::sin(x73);
+        let x75 = x22 * psi_dot * x74;
+        let x76 = 0.5 * x75 + phi_dot;
+        let x77 = x12 * x3 - x6 * Ixx;
+        let x78 = x22 * f64::cos(3.0 * theta);
+        let x79 = x6 * phi_dot;
+        let x80 = (0.25 - 0.25 * x78) * psi_dot + x79;
+        let x81 = x66 - x61 + x68 + x72
+            + (-x76 * x22 * x77 - x80 * Ixx * x22) * theta_dot
+            + x2 * x12 * psi_dot * phi_dot;
+        let x82 = x80 * x22;
+        let x83 = x12 * psi_dot;
+        let x84 = x82 + x83;
+        let x85 = Ixx * x56 - x59 * Ixz - Ixy * x54;
+        let x86 = x59 * x85 + Iyy * x71 - x60 * x56 + Ixy * theta_dot * x12 * psi_dot
+            - x65 * Iyz;
+        let x87 = theta_dot * x12 * psi_dot * Ixz + x67 * x56 - x54 * x85 - Iyz * x71
+            + x65 * Izz;
+        let x88 = l * theta_dot * x74;
+        let x89 = f64::cos(x73);
+        let x90 = 0.5 * x89 + 0.5;
+        let x91 = x90 * rho_dot;
+        let x92 = theta_dot * (-x84 * x77 - x76 * x22 * (x12 * x20 - x6 * x77))
+            + x12 * (psi_dot * phi_dot * x13 - x1 * x86 - x87 * x0)
+            + (x61 - theta_dot * Ixx * x12 * psi_dot - x66 - x68 - x72) * x6 + x6 * x81
+            - (l * (x91 - 0.25 * x88)
+                + rho * ((-rho - l) * theta_dot * x74 + rho_dot * (x89 + 1.0))) * psi_dot
+                * m;
+        let x93 = theta_dot * (-x76 * x22 * x13 - x2 * x84)
+            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x23) * psi_dot * psi_dot * x74
+                + theta_dot * (2.0 * rho + l) * rho_dot) * m
+            + x12 * psi_dot * phi_dot * x27 - x86 * x0 + x87 * x1;
+        let x94 = -rho - 0.5 * l;
+        let x95 = -0.25 * x89 - 0.25;
+        let x96 = -0.5 * x89 - 0.5;
+        let x97 = f64::cos(0.0485 * t);
+        let x98 = f64::sin(0.089 * t);
+        let x99 = rho_dot * x17;
+        let x100 = x15 * psi_dot * x14;
+        let x101 = psi_dot * x14 * x17;
+        let x102 = x15 * rho_dot;
+        let x103 = x6 * x15 * x12 * psi_dot * phi_dot;
+        let x104 = theta_dot * x76 * x17;
+        let x105 = x6 * x12 * psi_dot * phi_dot * x17;
+        let x106 = theta_dot * x76 * x15;
+        let x107 = x12 * x12 * psi_dot * x14 * phi_dot;
+        let x108 = x12 * rho_dot;
+        let x109 = x6 * theta_dot * x14;
+        let x110 = theta_dot * x84;
+        let x111 = 0.5 * (x6 * x22 * psi_dot * x74) + (0.25 * x78 - 0.25) * psi_dot;
+        let x112 = x6 * x76 * x22;
+        let x113 = x111 * x6 * theta_dot * x22 + x6 * (x82 - x112) * theta_dot
+            + x12 * (x54 * x0 - x59 * x1) * x56;
+        let x114 = -x1 * x54 - x59 * x0;
+        let x115 = x0 * x0;
+        let x116 = x1 * x1;
+        let x117 = x115 + x116;
+        let x118 = theta_dot * x76 * x1;
+        let x119 = -x118 - x69;
+        let x120 = x119 * x0 + x1 * x56 * x54;
+        let x121 = x1 * x119 - x56 * x54 * x0;
+        let x122 = -x115 - x116;
+        let x123 = theta_dot * x76 * x0;
+        let x124 = (-x63 - x123) * x0 + x59 * x1 * x56;
+        let x125 = x59 * x56 * x0 + (x63 + x123) * x1;
+        let x126 = x55 - phi_dot;
+        let x127 = x59 * x126;
+        let x128 = 0.5 * x75 - x55;
+        let x129 = x127 + theta_dot * x128 * x1;
+        let x130 = x56 * x126;
+        let x131 = -x52 - x53;
+        let x132 = x131 * x54;
+        let x133 = x59 * x131;
+        let x134 = theta_dot * x12 * psi_dot;
+        let x135 = (x130 - x132) * x1
+            + (theta_dot * (x82 - x112 + x83) - x133 - x134) * x0;
+        let x136 = phi_dot + x55;
+        let x137 = theta_dot * x136 * x1;
+        let x138 = x6 * psi_dot * phi_dot;
+        let x139 = x6 * (x137 - x127 - 2.0 * x118 - x70) + x6 * x129
+            + x12 * ((x138 - x130 + x132) * x0 + x1 * (x110 - x133 - x134));
+        let x140 = x126 * x54;
+        let x141 = theta_dot * x128 * x0 - x140;
+        let x142 = x58 - x57;
+        let x143 = x59 * x142;
+        let x144 = x142 * x54;
+        let x145 = x1 * (theta_dot * (x112 - x82 - x83) - x144 + x134)
+            - (x143 - x130) * x0;
+        let x146 = theta_dot * x136 * x0;
+        let x147 = x12 * ((x144 + x110 - x134) * x0 + (x130 - x138 - x143) * x1)
+            + x6 * (x64 - 2.0 * x123 + x140 + x146) + x6 * x141;
+        let x148 = x122 * x0 * x0 - x1 * x1 * x117;
+        let x149 = x143 - x132;
+        let x150 = x131 * x56;
+        let x151 = x142 * x56;
+        let x152 = x116 - x115;
+        let x153 = x1 * (x137 + x151 + x70) - (x64 - x150 + x146) * x0
+            - x152 * theta_dot * x76;
+        let x154 = x6 * (x132 - x143) + x6 * x149
+            + ((x150 - x64 + 2.0 * x123 - x146) * x1 - (x137 + x151 - x70) * x0
+                + x152 * x12 * psi_dot * phi_dot) * x12;
+        let x155 = (x14 * x14 * x19 - 0.25 * x23 - x25) * x1 * x0;
+        let x156 = x32 * x14;
+        let x157 = x36 * x14;
+        let x158 = -(x12 * x14 * x0);
+        let x159 = x41 * x14;
+        let x160 = x14 * x45;
+        let x161 = x12 * x14 * x1;
+        let x162 = x15 * x12;
+        let x163 = x12 * x17;
+        let x164 = -x6;
+        let x165 = (-2.0 * rho - l) * theta_dot * rho_dot
+            + psi_dot
+                * (x12 * phi_dot * x26
+                    + psi_dot * ((-0.5 * rho - 0.5 * l) * rho - 0.125 * x23) * x74);
+        let x166 = psi_dot
+            * ((rho_dot * x96 + 0.25 * x88) * l
+                + rho * ((-x89 - 1.0) * rho_dot + theta_dot * x24 * x74))
+            - theta_dot * x76 * x12 * x14 * x14 * x19;
+        let x167 = theta_dot * theta_dot;
+        let x168 = x167 + (psi_dot - x79) * psi_dot;
+        let x169 = m * x14 * x1 * (x16 + x18 - 1.0) * x0;
+        let x170 = (-0.5 * x30 - 0.5 * x31) * m;
+        let x171 = (0.5 * x34 - 0.5 * x35) * m;
+        let x172 = -(0.5 * x12 * m * x0);
+        let x173 = (0.5 * x40 - 0.5 * x39) * m;
+        let x174 = m * (0.5 * x43 + 0.5 * x44);
+        let x175 = 0.5 * x12 * m * x1;
+        let x176 = -psi_dot * (x94 * theta_dot * x74 + x91)
+            - theta_dot * x76 * x12 * x14 * x19;
+        let x177 = x12 * psi_dot * x14 * phi_dot - theta_dot * rho_dot
+            - psi_dot * psi_dot * (0.5 * rho + 0.25 * l) * x74;
+        let x178 = -0.5 * x167 - 0.5 * (psi_dot * psi_dot);
+        ParameterDerivatives {
+            qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
+            matrix: [
+                [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
+                [x4, x21 * x22 * x1 + x28 * x0, x29, 0.0, x33, x37, x38],
+                [
+                    x5,
+                    x29,
+                    x22 * (x20 * x0 - x1 * x13 + x5 * x6) * x0
+                        - (x11 * x0 - x1 * x27) * x1,
+                    0.0,
+                    x42,
+                    x46,
+                    x47,
+                ],
+                [0.0, 0.0, 0.0, m, x48, x49, x50],
+                [0.0, x33, x42, x48, x51, 0.0, 0.0],
+                [0.0, x37, x46, x49, 0.0, x51, 0.0],
+                [0.0, x38, x47, x50, 0.0, 0.0, x51],
+            ],
+            force: [
+                x81,
+                x92 * x22 * x1 + x93 * x0,
+                x92 * x22 * x0 - x93 * x1,
+                0.012 * x97
+                    - (x94 * theta_dot * theta_dot
+                        + (l * x95 + rho * x96) * psi_dot * psi_dot) * m - 0.018 * x98,
+                ((x104 - x103) * x14 - (-2.0 * x99 - x100) * x12 * psi_dot
+                    - (x6 * (2.0 * x101 - 2.0 * x102) - theta_dot * x15 * x12 * x14)
+                        * theta_dot) * m,
+                ((-x105 - x106) * x14 - x12 * psi_dot * (2.0 * x102 - x101)
+                    - (x6 * (-2.0 * x99 - 2.0 * x100) - theta_dot * x12 * x14 * x17)
+                        * theta_dot) * m,
+                m * (-x107 - theta_dot * (x109 - 2.0 * x108)),
+            ],
+            checks: [x12],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x117 * x117, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x117 * x0 * x0 - x122 * x1 * x1, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, x122, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x122, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, x122, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x122, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x148, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x148, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        0.0,
+                        x14 * x14 * x19 * x1 * x1 + x0 * x0 * x26,
+                        x155,
+                        0.0,
+                        x156,
+                        x157,
+                        x158,
+                    ],
+                    [
+                        0.0,
+                        x155,
+                        x14 * x14 * x19 * x0 * x0 + x1 * x1 * x26,
+                        0.0,
+                        x159,
+                        x160,
+                        x161,
+                    ],
+                    [0.0, 0.0, 0.0, 1.0, x162, x163, x164],
+                    [0.0, x156, x159, x162, 1.0, 0.0, 0.0],
+                    [0.0, x157, x160, x163, 0.0, 1.0, 0.0],
+                    [0.0, x158, x161, x164, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, (x19 * x1 * x1 + x115) * m * x14, x169, 0.0, x170, x171, x172],
+                    [0.0, x169, m * x14 * (x19 * x0 * x0 + x116), 0.0, x173, x174, x175],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x170, x173, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x171, x174, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x172, x175, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    x111 * theta_dot * x22,
+                    x113 * x22 * x1 + x114 * x56 * x0,
+                    x113 * x22 * x0 - x114 * x1 * x56,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x59 * x54,
+                    x120 * x0 + x1 * x121,
+                    x121 * x0 - x1 * x120,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    -(x59 * x54),
+                    x124 * x1 + x125 * x0,
+                    x124 * x0 - x125 * x1,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x129,
+                    x0 * x135 + x22 * x1 * x139,
+                    x22 * x139 * x0 - x1 * x135,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x141,
+                    x145 * x0 + x22 * x1 * x147,
+                    x22 * x147 * x0 - x145 * x1,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    x149,
+                    x153 * x0 + x22 * x1 * x154,
+                    x22 * x154 * x0 - x153 * x1,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [
+                    0.0,
+                    x0 * x165 + x22 * x1 * x166,
+                    x22 * x166 * x0 - x1 * x165,
+                    theta_dot * theta_dot * x14
+                        + (rho * x90 + l * (0.25 * x89 + 0.25)) * psi_dot * psi_dot,
+                    (2.0 * (x6 * theta_dot * x15) + 2.0 * (x12 * psi_dot * x17))
+                        * rho_dot
+                        + ((0.5 * x75 + phi_dot - 2.0 * x55) * theta_dot * x17
+                            + x168 * x15 * x12) * x14,
+                    (x168 * x12 * x17
+                        + (2.0 * x55 - 0.5 * x75 - phi_dot) * theta_dot * x15) * x14
+                        + (2.0 * (x6 * theta_dot * x17) - 2.0 * (x15 * x12 * psi_dot))
+                            * rho_dot,
+                    theta_dot * (2.0 * x108 - x109) - x107,
+                ],
+                [
+                    0.0,
+                    (x176 * x22 * x1 + x177 * x0) * m,
+                    (x176 * x22 * x0 - x177 * x1) * m,
+                    -((psi_dot * psi_dot * x95 - 0.5 * x167) * m),
+                    (0.5 * x104 - 0.5 * x103 - x178 * x15 * x12
+                        - x6 * theta_dot * psi_dot * x17) * m,
+                    (x6 * theta_dot * x15 * psi_dot - x178 * x12 * x17 - 0.5 * x105
+                        - 0.5 * x106) * m,
+                    m
+                        * (-0.5 * (x12 * x12 * psi_dot * phi_dot)
+                            - 0.5 * (x6 * theta_dot * theta_dot)),
+                ],
+            ],
+            w: [
+                [0.0, x22 * x1, x22 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x0, -x1, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x6 * x22 * x1, x6 * x22 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            ],
+            c: [
+                theta_dot * x76 * x22,
+                -(x12 * psi_dot * phi_dot),
+                x110,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ],
+            d_w: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            power: rho_dot * (0.012 * x97 - 0.018 * x98),
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 9]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 9]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            let mut s = c[j];
+            for i in 0..7 {
+                s += w[j][i] * x[i];
+            }
+            dstate[7 + j] = s;
+        }
+        dstate[14] = power;
+        for k in 0..9 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..9 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                let mut s = d_c[k][j];
+                for i in 0..7 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[7 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 9 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -3009,6 +4187,19 @@ pub mod maggi {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -3747,7 +4938,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -3834,6 +5025,356 @@ pub mod kane {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 7]; 7],
+        force: [f64; 7],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 9],
+        d_matrix: [[[f64; 7]; 7]; 9],
+        d_force: [[f64; 7]; 9],
+        power: f64,
+        d_power: [f64; 9],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let u5 = state[11];
+        let u6 = state[12];
+        let u7 = state[13];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = u2 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = u3 * x4;
+        let x6 = x3 + x5;
+        let x7 = f64::sin(theta);
+        let x8 = -Ixy;
+        let x9 = -Ixz;
+        let x10 = -rho - 0.5 * l;
+        let x11 = -Iyz;
+        let x12 = f64::sin(psi);
+        let x13 = f64::cos(psi);
+        let x14 = x2 * x12 + x7 * x13 * x4;
+        let x15 = x10 * m * x14;
+        let x16 = x7 * x4 * x12 - x13 * x2;
+        let x17 = x10 * m * x16;
+        let x18 = x10 * x0 * m * x4;
+        let x19 = rho + 0.5 * l;
+        let x20 = x7 * x13 * x2 - x4 * x12;
+        let x21 = x20 * m * x19;
+        let x22 = x13 * x4 + x7 * x2 * x12;
+        let x23 = m * x19 * x22;
+        let x24 = x0 * m * x19 * x2;
+        let x25 = x13 * x0 * m;
+        let x26 = x0 * m * x12;
+        let x27 = -(x7 * m);
+        let x28 = m + mg;
+        let x29 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x30 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x31 = u2 * u4;
+        let x32 = u3 * x19 * u1;
+        let x33 = x32 - 2.0 * x31;
+        let x34 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x35 = u3 * u4;
+        let x36 = x10 * u2 * u1;
+        let x37 = 2.0 * x35 - x36;
+        let x38 = x10 * u2 * u2;
+        let x39 = u3 * u3 * x19;
+        let x40 = x38 - x39;
+        let x41 = f64::cos(0.0485 * t);
+        let x42 = f64::sin(0.089 * t);
+        let x43 = x13 * x0 * x40;
+        let x44 = x14 * x33;
+        let x45 = x20 * x37;
+        let x46 = x22 * x37;
+        let x47 = x0 * x40 * x12;
+        let x48 = x16 * x33;
+        let x49 = x4 * x33;
+        let x50 = x2 * x37;
+        let x51 = x7 * x40;
+        let x52 = -(u3 * u1);
+        let x53 = u2 * u1;
+        let x54 = u2 * u3;
+        let x55 = -(u2 * u1);
+        let x56 = -(u2 * u3);
+        let x57 = u3 * u1;
+        let x58 = u2 * u2;
+        let x59 = u1 * u1;
+        let x60 = u3 * u3;
+        let x61 = x10 * x14;
+        let x62 = x10 * x16;
+        let x63 = x10 * x0 * x4;
+        let x64 = x20 * x19;
+        let x65 = x19 * x22;
+        let x66 = x0 * x19 * x2;
+        let x67 = x13 * x0;
+        let x68 = x0 * x12;
+        let x69 = -x7;
+        let x70 = -(0.5 * m * x14);
+        let x71 = -(0.5 * m * x16);
+        let x72 = -(0.5 * x0 * m * x4);
+        let x73 = 0.5 * x20 * m;
+        let x74 = 0.5 * m * x22;
+        let x75 = 0.5 * x0 * m * x2;
+        let x76 = -0.5 * x58 - 0.5 * x60;
+        ParameterDerivatives {
+            qdot: [x1 * x6, u2 * x4 - u3 * x2, u1 + x7 * x1 * x6, u4, u5, u6, u7],
+            matrix: [
+                [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
+                [x8, Iyy + x10 * x10 * m, x11, 0.0, x15, x17, x18],
+                [x9, x11, m * x19 * x19 + Izz, 0.0, x21, x23, x24],
+                [0.0, 0.0, 0.0, m, x25, x26, x27],
+                [0.0, x15, x21, x25, x28, 0.0, 0.0],
+                [0.0, x17, x23, x26, 0.0, x28, 0.0],
+                [0.0, x18, x24, x27, 0.0, 0.0, x28],
+            ],
+            force: [
+                x30 * u3 - u2 * x29,
+                x29 * u1 - x10 * m * x33 - x34 * u3,
+                u2 * x34 - m * x19 * x37 - x30 * u1,
+                0.012 * x41 - m * x40 - 0.018 * x42,
+                -((x43 + x44 + x45) * m),
+                -((x46 + x47 + x48) * m),
+                -(((x49 + x50) * x0 - x51) * m),
+            ],
+            checks: [x0],
+            d_qdot: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x10 * x10, 0.0, 0.0, x61, x62, x63],
+                    [0.0, 0.0, x19 * x19, 0.0, x64, x65, x66],
+                    [0.0, 0.0, 0.0, 1.0, x67, x68, x69],
+                    [0.0, x61, x64, x67, 1.0, 0.0, 0.0],
+                    [0.0, x62, x65, x68, 0.0, 1.0, 0.0],
+                    [0.0, x63, x66, x69, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, -(x10 * m), 0.0, 0.0, x70, x71, x72],
+                    [0.0, 0.0, m * x19, 0.0, x73, x74, x75],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x70, x73, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, x74, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, x75, 0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x52, x53, 0.0, 0.0, 0.0, 0.0],
+                [x54, 0.0, x55, 0.0, 0.0, 0.0, 0.0],
+                [x56, x57, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x52, x54, x59 - x58, 0.0, 0.0, 0.0, 0.0],
+                [x53, x60 - x59, x56, 0.0, 0.0, 0.0, 0.0],
+                [x58 - x60, x55, x57, 0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    -(x10 * x33),
+                    -(x19 * x37),
+                    x39 - x38,
+                    -x43 - x44 - x45,
+                    -x46 - x47 - x48,
+                    (-x49 - x50) * x0 + x51,
+                ],
+                [
+                    0.0,
+                    m * (0.5 * x32 - x31 - 0.5 * (x10 * u3 * u1)),
+                    m * (0.5 * x36 - x35 - 0.5 * (u2 * x19 * u1)),
+                    -(x76 * m),
+                    -((u1 * (0.5 * (u2 * x20) + 0.5 * (u3 * x14)) + x76 * x13 * x0) * m),
+                    -((u1 * (0.5 * (u2 * x22) + 0.5 * (u3 * x16)) + x76 * x0 * x12) * m),
+                    -(m * ((0.5 * x3 + 0.5 * x5) * x0 * u1 - x7 * x76)),
+                ],
+            ],
+            power: u4 * (0.012 * x41 - 0.018 * x42),
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 9]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 9]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..7 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[14] = power;
+        for k in 0..9 {
+            jac[14][k] = d_power[k];
+        }
+        for k in 0..9 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 7];
+            for i in 0..7 {
+                let mut s = d_force[k][i];
+                for j in 0..7 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..7 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 9 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -3913,6 +5454,19 @@ pub mod kane {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -4552,7 +6106,7 @@ pub mod reduced_volterra {
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x51],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -4639,6 +6193,354 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 7],
+        matrix: [[f64; 4]; 4],
+        force: [f64; 4],
+        checks: [f64; 1],
+        d_qdot: [[f64; 7]; 9],
+        d_matrix: [[[f64; 4]; 4]; 9],
+        d_force: [[f64; 4]; 9],
+        power: f64,
+        d_power: [f64; 9],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let rho = state[3];
+        let u1 = state[7];
+        let u2 = state[8];
+        let u3 = state[9];
+        let u4 = state[10];
+        let mg = params.mg;
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m = params.m;
+        let l = params.l;
+        let G_X = g_i[0];
+        let G_Y = g_i[1];
+        let G_Z = g_i[2];
+        let x0 = f64::cos(theta);
+        let x1 = 1.0 / x0;
+        let x2 = f64::sin(phi);
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = u3 * x2;
+        let x6 = u2 * x3;
+        let x7 = f64::sin(theta);
+        let x8 = 1.0 / (m + mg);
+        let x9 = f64::sin(psi);
+        let x10 = f64::cos(psi);
+        let x11 = x7 * x10 * x2 - x3 * x9;
+        let x12 = rho + 0.5 * l;
+        let x13 = x11 * u3 * x12;
+        let x14 = x10 * x0 * u4;
+        let x15 = -rho - 0.5 * l;
+        let x16 = x2 * x9 + x7 * x10 * x3;
+        let x17 = x15 * u2 * x16;
+        let x18 = G_X + m * (-x13 - x14 - x17);
+        let x19 = x8 * x18;
+        let x20 = x10 * x3 + x7 * x2 * x9;
+        let x21 = u3 * x12 * x20;
+        let x22 = x7 * x3 * x9 - x10 * x2;
+        let x23 = x15 * u2 * x22;
+        let x24 = x0 * u4 * x9;
+        let x25 = (-x21 - x23 - x24) * m + G_Y;
+        let x26 = x25 * x8;
+        let x27 = x7 * u4;
+        let x28 = (-x15 * u2 * x3 - u3 * x12 * x2) * x0;
+        let x29 = (x27 + x28) * m + G_Z;
+        let x30 = x8 * x29;
+        let x31 = -Ixy;
+        let x32 = -Ixz;
+        let x33 = -rho - l;
+        let x34 = x33 * m * x8;
+        let x35 = m * x8;
+        let x36 = m * (rho * (x34 + rho + l) + l * l * (0.25 - 0.25 * x35));
+        let x37 = -Iyz;
+        let x38 = u3 * Ixz;
+        let x39 = u2 * Ixy;
+        let x40 = Iyz * u1;
+        let x41 = (m * (2.0 * rho + l) * x8 - 2.0 * rho - l) * m * u4;
+        let x42 = rho + l;
+        let x43 = x42 * m * x8;
+        let x44 = rho + 0.5 * l + x15 * m * x8;
+        let x45 = f64::cos(0.0485 * t);
+        let x46 = f64::sin(0.089 * t);
+        let x47 = l * l;
+        let x48 = rho * x42;
+        let x49 = 0.25 * x47 + x48;
+        let x50 = m * m * x8 * x8 * x49;
+        let x51 = u3 * u1 * x49;
+        let x52 = -2.0 * rho - l;
+        let x53 = u2 * x52 * u4;
+        let x54 = x52 * u3 * u4;
+        let x55 = u2 * u1 * (rho * x33 - 0.25 * x47);
+        let x56 = u2 * u2 * x12;
+        let x57 = u3 * u3 * x12;
+        let x58 = -(u3 * u1);
+        let x59 = u2 * u1;
+        let x60 = u2 * u3;
+        let x61 = -(u2 * u1);
+        let x62 = -(u2 * u3);
+        let x63 = u3 * u1;
+        let x64 = u2 * u2;
+        let x65 = u1 * u1;
+        let x66 = u3 * u3;
+        let x67 = l * l * (0.25 * x35 - 0.5) + rho * (x43 - 2.0 * rho - 2.0 * l);
+        let x68 = m * x67 * x8 + 0.25 * x47 + x48;
+        let x69 = 4.0 * rho + 2.0 * l + x52 * m * x8;
+        let x70 = m * x12 * x8;
+        let x71 = x70 - 2.0 * rho - l;
+        let x72 = x44 * m;
+        let x73 = x35 - 1.0;
+        let x74 = 0.5 - 0.5 * x35;
+        ParameterDerivatives {
+            qdot: [x1 * x4, x6 - x5, u1 + x7 * x1 * x4, u4, x19, x26, x30],
+            matrix: [
+                [Ixx, x31, x32, 0.0],
+                [x31, Iyy + x36, x37, 0.0],
+                [x32, x37, x36 + Izz, 0.0],
+                [0.0, 0.0, 0.0, m * (1.0 - x35)],
+            ],
+            force: [
+                (u2 * Iyy - Iyz * u3 - Ixy * u1) * u3
+                    - u2 * (u3 * Izz - u2 * Iyz - u1 * Ixz),
+                u3 * (x38 + x39 + (x36 - Ixx + Izz) * u1) - u1 * u1 * Ixz
+                    + u2 * (x41 - x40),
+                Ixy * u1 * u1
+                    + u2
+                        * (u1
+                            * (Ixx - Iyy
+                                + (l * l * (0.25 * x35 - 0.25) + rho * (x43 - rho - l)) * m)
+                            - x38 - x39) + (x40 + x41) * u3,
+                (u3 * u3 * x44 + u2 * u2 * x44) * m + 0.012 * x45 - 0.018 * x46,
+            ],
+            checks: [x0],
+            d_qdot: [
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    -(x8 * x8 * x18),
+                    -(x25 * x8 * x8),
+                    -(x8 * x8 * x29),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    (-x19 - x13 - x14 - x17) * x8,
+                    (-x26 - x21 - x23 - x24) * x8,
+                    x8 * (x27 + x28 - x30),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    (0.5 * (u2 * x16) - 0.5 * (x11 * u3)) * m * x8,
+                    m * x8 * (0.5 * (u2 * x22) - 0.5 * (u3 * x20)),
+                    (0.5 * x6 - 0.5 * x5) * x0 * m * x8,
+                ],
+            ],
+            d_matrix: [
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, x50, 0.0, 0.0],
+                    [0.0, 0.0, x50, 0.0],
+                    [0.0, 0.0, 0.0, m * m * x8 * x8],
+                ],
+                [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, -1.0, 0.0, 0.0],
+                    [-1.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, -1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                    [-1.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, -1.0, 0.0],
+                    [0.0, -1.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, x68, 0.0, 0.0],
+                    [0.0, 0.0, x68, 0.0],
+                    [0.0, 0.0, 0.0, m * x8 * (x35 - 2.0) + 1.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, 0.0, 0.0],
+                    [0.0, 0.0, x72, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+            ],
+            d_force: [
+                [
+                    0.0,
+                    m * m * x8 * x8 * (x51 + x53),
+                    m * m * (x54 + x55) * x8 * x8,
+                    (x56 + x57) * m * m * x8 * x8,
+                ],
+                [0.0, x58, x59, 0.0],
+                [x60, 0.0, x61, 0.0],
+                [x62, x63, 0.0, 0.0],
+                [x58, x60, x65 - x64, 0.0],
+                [x59, x66 - x65, x62, 0.0],
+                [x64 - x66, x61, x63, 0.0],
+                [
+                    0.0,
+                    x51 + x53 + (u3 * x67 * u1 + u2 * u4 * x69) * m * x8,
+                    x54
+                        + ((rho * (x34 + 2.0 * rho + 2.0 * l)
+                            + l * l * (0.5 - 0.25 * x35)) * u2 * u1 + u3 * u4 * x69) * m
+                            * x8 + x55,
+                    (u2 * u2 * x71 + x71 * u3 * u3) * m * x8 + x56 + x57,
+                ],
+                [
+                    0.0,
+                    m * (u3 * x44 * u1 + x73 * u2 * u4),
+                    (u2 * u1 * (x70 - rho - 0.5 * l) + x73 * u3 * u4) * m,
+                    m * (u3 * u3 * x74 + u2 * u2 * x74),
+                ],
+            ],
+            power: u4 * (0.012 * x45 - 0.018 * x46),
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 9]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 9]; STATES];
+        for j in 0..7 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..4 {
+            dstate[7 + j] = x[j];
+        }
+        dstate[11] = power;
+        for k in 0..9 {
+            jac[11][k] = d_power[k];
+        }
+        for k in 0..9 {
+            for j in 0..7 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 4];
+            for i in 0..4 {
+                let mut s = d_force[k][i];
+                for j in 0..4 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..4 {
+                jac[7 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 9 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -4718,6 +6620,19 @@ pub mod reduced_volterra {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }

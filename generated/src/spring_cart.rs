@@ -528,7 +528,7 @@ pub mod lagrange {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -609,6 +609,192 @@ pub mod lagrange {
                     return Err(Failure::NonFinite {
                         t,
                         index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 7],
+        d_matrix: [[[f64; 2]; 2]; 7],
+        d_force: [[f64; 2]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * x_dot;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = x0 * lp;
+        let x11 = mp * x0;
+        ParameterDerivatives {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+            d_matrix: [
+                [[1.0, 0.0], [0.0, 0.0]],
+                [[1.0, x10], [x10, lp * lp]],
+                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [x9 * th_dot * th_dot * lp, -(x9 * g * lp)],
+                [x9 * mp * th_dot * th_dot, -(x9 * g * mp)],
+                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
+                [0.5 * x2 * x4 * x_dot, 0.0],
+                [
+                    x5
+                        + x2
+                            * (0.5 * (c_ * x4 * x4 * x_dot)
+                                + (0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                                    - 0.5
+                                        * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k)
+                        - x8,
+                    0.0,
+                ],
+                [0.0, -(x9 * mp * lp)],
+            ],
+            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.5 * x2 * x4 * x_dot * x_dot,
+                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..7 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
                     });
                 }
             }
@@ -705,6 +891,19 @@ pub mod lagrange {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -980,7 +1179,7 @@ pub mod maggi {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1079,6 +1278,228 @@ pub mod maggi {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 7],
+        d_matrix: [[[f64; 2]; 2]; 7],
+        d_force: [[f64; 2]; 7],
+        w: [[f64; 2]; 2],
+        c: [f64; 2],
+        d_w: [[[f64; 2]; 2]; 7],
+        d_c: [[f64; 2]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let x = state[0];
+        let th = state[1];
+        let x_dot = state[2];
+        let th_dot = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * x_dot;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = x0 * lp;
+        let x11 = mp * x0;
+        ParameterDerivatives {
+            qdot: [x_dot, th_dot],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+            d_matrix: [
+                [[1.0, 0.0], [0.0, 0.0]],
+                [[1.0, x10], [x10, lp * lp]],
+                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [x9 * th_dot * th_dot * lp, -(x9 * g * lp)],
+                [x9 * mp * th_dot * th_dot, -(x9 * g * mp)],
+                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
+                [0.5 * x2 * x4 * x_dot, 0.0],
+                [
+                    x5
+                        + x2
+                            * (0.5 * (c_ * x4 * x4 * x_dot)
+                                + (0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                                    - 0.5
+                                        * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k)
+                        - x8,
+                    0.0,
+                ],
+                [0.0, -(x9 * mp * lp)],
+            ],
+            w: [[1.0, 0.0], [0.0, 1.0]],
+            c: [0.0, 0.0],
+            d_w: [
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_c: [
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.5 * x2 * x4 * x_dot * x_dot,
+                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            let mut s = c[j];
+            for i in 0..2 {
+                s += w[j][i] * x[i];
+            }
+            dstate[2 + j] = s;
+        }
+        dstate[4] = power;
+        for k in 0..7 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                let mut s = d_c[k][j];
+                for i in 0..2 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[2 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1158,6 +1579,19 @@ pub mod maggi {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1415,7 +1849,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1502,6 +1936,191 @@ pub mod kane {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 7],
+        d_matrix: [[[f64; 2]; 2]; 7],
+        d_force: [[f64; 2]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let x = state[0];
+        let th = state[1];
+        let u1 = state[2];
+        let u2 = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * u1;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = x0 * lp;
+        let x11 = mp * x0;
+        ParameterDerivatives {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+            d_matrix: [
+                [[1.0, 0.0], [0.0, 0.0]],
+                [[1.0, x10], [x10, lp * lp]],
+                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [u2 * u2 * x9 * lp, -(x9 * g * lp)],
+                [u2 * u2 * x9 * mp, -(x9 * g * mp)],
+                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
+                [0.5 * x2 * x4 * u1, 0.0],
+                [
+                    x5
+                        + x2
+                            * ((0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                                - 0.5
+                                    * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k
+                                + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    0.0,
+                ],
+                [0.0, -(x9 * mp * lp)],
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.5 * x2 * x4 * u1 * u1,
+                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..7 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1581,6 +2200,19 @@ pub mod kane {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1838,7 +2470,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1925,6 +2557,191 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 2],
+        matrix: [[f64; 2]; 2],
+        force: [f64; 2],
+        checks: [f64; 0],
+        d_qdot: [[f64; 2]; 7],
+        d_matrix: [[[f64; 2]; 2]; 7],
+        d_force: [[f64; 2]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let x = state[0];
+        let th = state[1];
+        let u1 = state[2];
+        let u2 = state[3];
+        let mc = params.mc;
+        let mp = params.mp;
+        let lp = params.lp;
+        let k = params.k;
+        let c_ = params.c_;
+        let L0 = params.L0;
+        let g = params.g;
+        let x0 = f64::cos(th);
+        let x1 = mp * x0 * lp;
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = -x - L0;
+        let x4 = 1.0 / x3;
+        let x5 = c_ * x4 * u1;
+        let x6 = x3 * x3;
+        let x7 = f64::sqrt(x6) - L0;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = f64::sin(th);
+        let x10 = x0 * lp;
+        let x11 = mp * x0;
+        ParameterDerivatives {
+            qdot: [u1, u2],
+            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
+            force: [
+                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
+                -(x9 * g * mp * lp),
+            ],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+                [0.0, 0.0],
+            ],
+            d_matrix: [
+                [[1.0, 0.0], [0.0, 0.0]],
+                [[1.0, x10], [x10, lp * lp]],
+                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+                [[0.0, 0.0], [0.0, 0.0]],
+            ],
+            d_force: [
+                [0.0, 0.0],
+                [u2 * u2 * x9 * lp, -(x9 * g * lp)],
+                [u2 * u2 * x9 * mp, -(x9 * g * mp)],
+                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
+                [0.5 * x2 * x4 * u1, 0.0],
+                [
+                    x5
+                        + x2
+                            * ((0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                                - 0.5
+                                    * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k
+                                + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    0.0,
+                ],
+                [0.0, -(x9 * mp * lp)],
+            ],
+            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            d_power: [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                0.5 * x2 * x4 * u1 * u1,
+                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..2 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..2 {
+            dstate[2 + j] = x[j];
+        }
+        dstate[4] = power;
+        for k in 0..7 {
+            jac[4][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..2 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 2];
+            for i in 0..2 {
+                let mut s = d_force[k][i];
+                for j in 0..2 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..2 {
+                jac[2 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2004,6 +2821,19 @@ pub mod reduced_volterra {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }

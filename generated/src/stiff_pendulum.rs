@@ -663,7 +663,7 @@ pub mod lagrange {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -744,6 +744,236 @@ pub mod lagrange {
                     return Err(Failure::NonFinite {
                         t,
                         index: STATES + row * STATES + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 7],
+        d_matrix: [[[f64; 3]; 3]; 7],
+        d_force: [[f64; 3]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let th = state[0];
+        let x = state[1];
+        let y = state[2];
+        let th_dot = state[3];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let L = params.L;
+        let k = params.k;
+        let zeta = params.zeta;
+        let g = params.g;
+        let x0 = f64::sin(th);
+        let x1 = l * x0;
+        let x2 = x1 - x;
+        let x3 = f64::cos(th);
+        let x4 = l * x3;
+        let x5 = -x4 - y;
+        let x6 = x2 * x2 + x5 * x5;
+        let x7 = f64::sqrt(x6) - L;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = l * x0 * th_dot;
+        let x10 = l * x3 * th_dot;
+        let x11 = 2.0 * ((x9 - y_dot) * x5) + 2.0 * (x2 * (x10 - x_dot));
+        let x12 = m2 * k;
+        let x13 = 1.0 / x6;
+        let x14 = x11 * zeta * f64::sqrt(x12) * x13;
+        let x15 = -0.5 * x8 - 0.5 * x14;
+        let x16 = -2.0 * (x0 * y) - 2.0 * (x * x3);
+        let x17 = x0 * g * m1;
+        let x18 = 2.0 * x - 2.0 * x1;
+        let x19 = 2.0 * x4 + 2.0 * y;
+        let x20 = f64::sqrt(x12) * y_dot * x19;
+        let x21 = l * f64::sqrt(x12) * th_dot * x16;
+        let x22 = f64::sqrt(x12) * x18 * x_dot;
+        let x23 = -0.5 * x20 - 0.5 * x21 - 0.5 * x22;
+        let x24 = -0.25 * (x18 * x_dot / f64::sqrt(x12))
+            - 0.25 * (l * th_dot * x16 / f64::sqrt(x12))
+            - 0.25 * (y_dot * x19 / f64::sqrt(x12));
+        let x25 = 2.0 * (x2 * x0) - 2.0 * (x5 * x3);
+        let x26 = x3 * (2.0 * (x2 * th_dot) + 2.0 * y_dot - 2.0 * x9)
+            + (2.0 * x10 - 2.0 * x_dot + 2.0 * (x5 * th_dot)) * x0;
+        let x27 = 0.25 * (x7 * x25 * k / f64::powf(x6, 1.5))
+            + x13
+                * (zeta
+                    * (0.5 * (x11 * f64::sqrt(x12) * x13 * x25)
+                        - 0.5 * (x26 * f64::sqrt(x12))) - 0.25 * (x25 * k));
+        let x28 = -0.5 * (x7 / f64::sqrt(x6))
+            - 0.25 * (x11 * zeta * m2 * x13 / f64::sqrt(x12));
+        ParameterDerivatives {
+            qdot: [th_dot, x_dot, y_dot],
+            matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
+            force: [l * (x15 * x16 - x17), x15 * x18, x15 * x19 - m2 * g],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[l * l, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [[2.0 * l * m1, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_force: [
+                [-(l * x0 * g), 0.0, 0.0],
+                [
+                    -(0.25 * x11 * zeta * l * x13 * k * x16 / f64::sqrt(x12)),
+                    -(0.25 * x11 * zeta * x18 * x13 * k / f64::sqrt(x12)),
+                    -g - 0.25 * (x11 * zeta * x13 * k * x19 / f64::sqrt(x12)),
+                ],
+                [
+                    (l * x27 - 0.5 * x8 - 0.5 * x14) * x16 - x17,
+                    x0 * (x8 + x14) + x18 * x27,
+                    x7 * (0.25 * (x25 * x19 / f64::powf(x6, 1.5)) - x3 / f64::sqrt(x6))
+                        * k
+                        + x13
+                            * (zeta
+                                * (x11
+                                    * (0.5 * (f64::sqrt(x12) * x13 * x25 * x19)
+                                        - f64::sqrt(x12) * x3) - 0.5 * (x26 * f64::sqrt(x12) * x19))
+                                - 0.25 * (x25 * k * x19)),
+                ],
+                [
+                    0.5 * l * k * x16 / f64::sqrt(x6),
+                    0.5 * x18 * k / f64::sqrt(x6),
+                    0.5 * k * x19 / f64::sqrt(x6),
+                ],
+                [x28 * l * x16, x28 * x18, x28 * x19],
+                [
+                    -(0.5 * x11 * l * f64::sqrt(x12) * x13 * x16),
+                    -(0.5 * x11 * f64::sqrt(x12) * x18 * x13),
+                    -(0.5 * x11 * f64::sqrt(x12) * x13 * x19),
+                ],
+                [-(l * x0 * m1), 0.0, -m2],
+            ],
+            power: x11 * zeta * x23 * x13,
+            d_power: [
+                0.0,
+                x11 * zeta * x24 * x13 * k,
+                zeta * x13
+                    * (x23 * x26
+                        + x11
+                            * (f64::sqrt(x12) * x0 * x_dot
+                                - 0.5 * (f64::sqrt(x12) * th_dot * x16)
+                                - f64::sqrt(x12) * y_dot * x3
+                                + x13 * x25 * (0.5 * x20 + 0.5 * x21 + 0.5 * x22))),
+                0.0,
+                x11 * zeta * m2 * x24 * x13,
+                x11 * x23 * x13,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "constraint matrix [M a^T; a 0]",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..7 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 3];
+            for i in 0..3 {
+                let mut s = d_force[k][i];
+                for j in 0..3 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
                     });
                 }
             }
@@ -840,6 +1070,19 @@ pub mod lagrange {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1238,7 +1481,7 @@ pub mod maggi {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1337,6 +1580,272 @@ pub mod maggi {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 7],
+        d_matrix: [[[f64; 3]; 3]; 7],
+        d_force: [[f64; 3]; 7],
+        w: [[f64; 3]; 3],
+        c: [f64; 3],
+        d_w: [[[f64; 3]; 3]; 7],
+        d_c: [[f64; 3]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let th = state[0];
+        let x = state[1];
+        let y = state[2];
+        let th_dot = state[3];
+        let x_dot = state[4];
+        let y_dot = state[5];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let L = params.L;
+        let k = params.k;
+        let zeta = params.zeta;
+        let g = params.g;
+        let x0 = f64::sin(th);
+        let x1 = l * x0;
+        let x2 = x1 - x;
+        let x3 = f64::cos(th);
+        let x4 = l * x3;
+        let x5 = -x4 - y;
+        let x6 = x2 * x2 + x5 * x5;
+        let x7 = f64::sqrt(x6) - L;
+        let x8 = x7 * k / f64::sqrt(x6);
+        let x9 = l * x0 * th_dot;
+        let x10 = l * x3 * th_dot;
+        let x11 = 2.0 * ((x9 - y_dot) * x5) + 2.0 * (x2 * (x10 - x_dot));
+        let x12 = m2 * k;
+        let x13 = 1.0 / x6;
+        let x14 = x11 * zeta * f64::sqrt(x12) * x13;
+        let x15 = -0.5 * x8 - 0.5 * x14;
+        let x16 = -2.0 * (x0 * y) - 2.0 * (x * x3);
+        let x17 = x0 * g * m1;
+        let x18 = 2.0 * x - 2.0 * x1;
+        let x19 = 2.0 * x4 + 2.0 * y;
+        let x20 = f64::sqrt(x12) * y_dot * x19;
+        let x21 = l * f64::sqrt(x12) * th_dot * x16;
+        let x22 = f64::sqrt(x12) * x18 * x_dot;
+        let x23 = -0.5 * x20 - 0.5 * x21 - 0.5 * x22;
+        let x24 = -0.25 * (x18 * x_dot / f64::sqrt(x12))
+            - 0.25 * (l * th_dot * x16 / f64::sqrt(x12))
+            - 0.25 * (y_dot * x19 / f64::sqrt(x12));
+        let x25 = 2.0 * (x2 * x0) - 2.0 * (x5 * x3);
+        let x26 = x3 * (2.0 * (x2 * th_dot) + 2.0 * y_dot - 2.0 * x9)
+            + (2.0 * x10 - 2.0 * x_dot + 2.0 * (x5 * th_dot)) * x0;
+        let x27 = 0.25 * (x7 * x25 * k / f64::powf(x6, 1.5))
+            + x13
+                * (zeta
+                    * (0.5 * (x11 * f64::sqrt(x12) * x13 * x25)
+                        - 0.5 * (x26 * f64::sqrt(x12))) - 0.25 * (x25 * k));
+        let x28 = -0.5 * (x7 / f64::sqrt(x6))
+            - 0.25 * (x11 * zeta * m2 * x13 / f64::sqrt(x12));
+        ParameterDerivatives {
+            qdot: [th_dot, x_dot, y_dot],
+            matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
+            force: [l * (x15 * x16 - x17), x15 * x18, x15 * x19 - m2 * g],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[l * l, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [[2.0 * l * m1, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_force: [
+                [-(l * x0 * g), 0.0, 0.0],
+                [
+                    -(0.25 * x11 * zeta * l * x13 * k * x16 / f64::sqrt(x12)),
+                    -(0.25 * x11 * zeta * x18 * x13 * k / f64::sqrt(x12)),
+                    -g - 0.25 * (x11 * zeta * x13 * k * x19 / f64::sqrt(x12)),
+                ],
+                [
+                    (l * x27 - 0.5 * x8 - 0.5 * x14) * x16 - x17,
+                    x0 * (x8 + x14) + x18 * x27,
+                    x7 * (0.25 * (x25 * x19 / f64::powf(x6, 1.5)) - x3 / f64::sqrt(x6))
+                        * k
+                        + x13
+                            * (zeta
+                                * (x11
+                                    * (0.5 * (f64::sqrt(x12) * x13 * x25 * x19)
+                                        - f64::sqrt(x12) * x3) - 0.5 * (x26 * f64::sqrt(x12) * x19))
+                                - 0.25 * (x25 * k * x19)),
+                ],
+                [
+                    0.5 * l * k * x16 / f64::sqrt(x6),
+                    0.5 * x18 * k / f64::sqrt(x6),
+                    0.5 * k * x19 / f64::sqrt(x6),
+                ],
+                [x28 * l * x16, x28 * x18, x28 * x19],
+                [
+                    -(0.5 * x11 * l * f64::sqrt(x12) * x13 * x16),
+                    -(0.5 * x11 * f64::sqrt(x12) * x18 * x13),
+                    -(0.5 * x11 * f64::sqrt(x12) * x13 * x19),
+                ],
+                [-(l * x0 * m1), 0.0, -m2],
+            ],
+            w: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            c: [0.0, 0.0, 0.0],
+            d_w: [
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_c: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            power: x11 * zeta * x23 * x13,
+            d_power: [
+                0.0,
+                x11 * zeta * x24 * x13 * k,
+                zeta * x13
+                    * (x23 * x26
+                        + x11
+                            * (f64::sqrt(x12) * x0 * x_dot
+                                - 0.5 * (f64::sqrt(x12) * th_dot * x16)
+                                - f64::sqrt(x12) * y_dot * x3
+                                + x13 * x25 * (0.5 * x20 + 0.5 * x21 + 0.5 * x22))),
+                0.0,
+                x11 * zeta * m2 * x24 * x13,
+                x11 * x23 * x13,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            w,
+            c,
+            d_w,
+            d_c,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "Maggi matrix W^T M W",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            let mut s = c[j];
+            for i in 0..3 {
+                s += w[j][i] * x[i];
+            }
+            dstate[3 + j] = s;
+        }
+        dstate[6] = power;
+        for k in 0..7 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 3];
+            for i in 0..3 {
+                let mut s = d_force[k][i];
+                for j in 0..3 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                let mut s = d_c[k][j];
+                for i in 0..3 {
+                    s += d_w[k][j][i] * x[i] + w[j][i] * dx[i];
+                }
+                jac[3 + j][k] = s;
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "maggi",
@@ -1416,6 +1925,19 @@ pub mod maggi {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -1783,7 +2305,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -1870,6 +2392,232 @@ pub mod kane {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 7],
+        d_matrix: [[[f64; 3]; 3]; 7],
+        d_force: [[f64; 3]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let th = state[0];
+        let x = state[1];
+        let y = state[2];
+        let u1 = state[3];
+        let u2 = state[4];
+        let u3 = state[5];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let L = params.L;
+        let k = params.k;
+        let zeta = params.zeta;
+        let g = params.g;
+        let x0 = m2 * k;
+        let x1 = f64::sin(th);
+        let x2 = l * x1;
+        let x3 = x2 - x;
+        let x4 = f64::cos(th);
+        let x5 = l * x4;
+        let x6 = -x5 - y;
+        let x7 = x3 * x3 + x6 * x6;
+        let x8 = 1.0 / x7;
+        let x9 = l * x1 * u1;
+        let x10 = l * u1 * x4;
+        let x11 = 2.0 * (x6 * (x9 - u3)) + 2.0 * (x3 * (x10 - u2));
+        let x12 = zeta * f64::sqrt(x0) * x8 * x11;
+        let x13 = f64::sqrt(x7) - L;
+        let x14 = x13 * k / f64::sqrt(x7);
+        let x15 = -0.5 * x12 - 0.5 * x14;
+        let x16 = -2.0 * (x1 * y) - 2.0 * (x * x4);
+        let x17 = x1 * g * m1;
+        let x18 = 2.0 * x - 2.0 * x2;
+        let x19 = 2.0 * x5 + 2.0 * y;
+        let x20 = u2 * f64::sqrt(x0) * x18;
+        let x21 = l * f64::sqrt(x0) * u1 * x16;
+        let x22 = f64::sqrt(x0) * u3 * x19;
+        let x23 = -0.5 * x20 - 0.5 * x21 - 0.5 * x22;
+        let x24 = -0.25 * (u3 * x19 / f64::sqrt(x0))
+            - 0.25 * (l * u1 * x16 / f64::sqrt(x0)) - 0.25 * (u2 * x18 / f64::sqrt(x0));
+        let x25 = 2.0 * (x3 * x1) - 2.0 * (x6 * x4);
+        let x26 = (2.0 * x10 - 2.0 * u2 + 2.0 * (x6 * u1)) * x1
+            + (2.0 * (x3 * u1) - 2.0 * x9 + 2.0 * u3) * x4;
+        let x27 = 0.25 * (x13 * x25 * k / f64::powf(x7, 1.5))
+            + (zeta
+                * (0.5 * (f64::sqrt(x0) * x8 * x25 * x11) - 0.5 * (x26 * f64::sqrt(x0)))
+                - 0.25 * (x25 * k)) * x8;
+        let x28 = -0.5 * (x13 / f64::sqrt(x7))
+            - 0.25 * (zeta * m2 * x8 * x11 / f64::sqrt(x0));
+        ParameterDerivatives {
+            qdot: [u1, u2, u3],
+            matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
+            force: [l * (x15 * x16 - x17), x15 * x18, x15 * x19 - m2 * g],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[l * l, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [[2.0 * l * m1, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_force: [
+                [-(l * x1 * g), 0.0, 0.0],
+                [
+                    -(0.25 * zeta * l * x8 * x11 * k * x16 / f64::sqrt(x0)),
+                    -(0.25 * zeta * x18 * x8 * x11 * k / f64::sqrt(x0)),
+                    -g - 0.25 * (zeta * x8 * x11 * k * x19 / f64::sqrt(x0)),
+                ],
+                [
+                    (l * x27 - 0.5 * x12 - 0.5 * x14) * x16 - x17,
+                    x1 * (x12 + x14) + x27 * x18,
+                    x13 * (0.25 * (x25 * x19 / f64::powf(x7, 1.5)) - x4 / f64::sqrt(x7))
+                        * k
+                        + x8
+                            * (zeta
+                                * ((0.5 * (f64::sqrt(x0) * x8 * x25 * x19)
+                                    - f64::sqrt(x0) * x4) * x11
+                                    - 0.5 * (x26 * f64::sqrt(x0) * x19))
+                                - 0.25 * (x25 * k * x19)),
+                ],
+                [
+                    0.5 * l * k * x16 / f64::sqrt(x7),
+                    0.5 * x18 * k / f64::sqrt(x7),
+                    0.5 * k * x19 / f64::sqrt(x7),
+                ],
+                [l * x28 * x16, x18 * x28, x28 * x19],
+                [
+                    -(0.5 * l * f64::sqrt(x0) * x8 * x11 * x16),
+                    -(0.5 * f64::sqrt(x0) * x18 * x8 * x11),
+                    -(0.5 * f64::sqrt(x0) * x8 * x11 * x19),
+                ],
+                [-(l * x1 * m1), 0.0, -m2],
+            ],
+            power: zeta * x23 * x8 * x11,
+            d_power: [
+                0.0,
+                zeta * x8 * x24 * x11 * k,
+                zeta * x8
+                    * (x26 * x23
+                        + (x8 * x25 * (0.5 * x20 + 0.5 * x21 + 0.5 * x22)
+                            + u2 * f64::sqrt(x0) * x1 - f64::sqrt(x0) * u3 * x4
+                            - 0.5 * (f64::sqrt(x0) * u1 * x16)) * x11),
+                0.0,
+                zeta * m2 * x8 * x24 * x11,
+                x23 * x8 * x11,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..7 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 3];
+            for i in 0..3 {
+                let mut s = d_force[k][i];
+                for j in 0..3 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "kane",
@@ -1949,6 +2697,19 @@ pub mod kane {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }
@@ -2316,7 +3077,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2403,6 +3164,232 @@ pub mod reduced_volterra {
         }
         Ok(())
     }
+    ///Everything `parameter_jacobian` evaluates before its solves: the assembly and its derivatives by each parameter, in `Params::NAMES` order.
+    struct ParameterDerivatives {
+        qdot: [f64; 3],
+        matrix: [[f64; 3]; 3],
+        force: [f64; 3],
+        checks: [f64; 0],
+        d_qdot: [[f64; 3]; 7],
+        d_matrix: [[[f64; 3]; 3]; 7],
+        d_force: [[f64; 3]; 7],
+        power: f64,
+        d_power: [f64; 7],
+    }
+    ///Evaluates the assembly and its partial derivatives, with one set of common subexpressions.
+    #[allow(non_snake_case, clippy::all)]
+    fn assemble_parameter_derivatives(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+    ) -> ParameterDerivatives {
+        let th = state[0];
+        let x = state[1];
+        let y = state[2];
+        let u1 = state[3];
+        let u2 = state[4];
+        let u3 = state[5];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let l = params.l;
+        let L = params.L;
+        let k = params.k;
+        let zeta = params.zeta;
+        let g = params.g;
+        let x0 = m2 * k;
+        let x1 = f64::sin(th);
+        let x2 = l * x1;
+        let x3 = x2 - x;
+        let x4 = f64::cos(th);
+        let x5 = l * x4;
+        let x6 = -x5 - y;
+        let x7 = x3 * x3 + x6 * x6;
+        let x8 = 1.0 / x7;
+        let x9 = l * x1 * u1;
+        let x10 = l * u1 * x4;
+        let x11 = 2.0 * (x6 * (x9 - u3)) + 2.0 * (x3 * (x10 - u2));
+        let x12 = zeta * f64::sqrt(x0) * x8 * x11;
+        let x13 = f64::sqrt(x7) - L;
+        let x14 = x13 * k / f64::sqrt(x7);
+        let x15 = -0.5 * x12 - 0.5 * x14;
+        let x16 = -2.0 * (x1 * y) - 2.0 * (x * x4);
+        let x17 = x1 * g * m1;
+        let x18 = 2.0 * x - 2.0 * x2;
+        let x19 = 2.0 * x5 + 2.0 * y;
+        let x20 = u2 * f64::sqrt(x0) * x18;
+        let x21 = l * f64::sqrt(x0) * u1 * x16;
+        let x22 = f64::sqrt(x0) * u3 * x19;
+        let x23 = -0.5 * x20 - 0.5 * x21 - 0.5 * x22;
+        let x24 = -0.25 * (u3 * x19 / f64::sqrt(x0))
+            - 0.25 * (l * u1 * x16 / f64::sqrt(x0)) - 0.25 * (u2 * x18 / f64::sqrt(x0));
+        let x25 = 2.0 * (x3 * x1) - 2.0 * (x6 * x4);
+        let x26 = (2.0 * x10 - 2.0 * u2 + 2.0 * (x6 * u1)) * x1
+            + (2.0 * (x3 * u1) - 2.0 * x9 + 2.0 * u3) * x4;
+        let x27 = 0.25 * (x13 * x25 * k / f64::powf(x7, 1.5))
+            + (zeta
+                * (0.5 * (f64::sqrt(x0) * x8 * x25 * x11) - 0.5 * (x26 * f64::sqrt(x0)))
+                - 0.25 * (x25 * k)) * x8;
+        let x28 = -0.5 * (x13 / f64::sqrt(x7))
+            - 0.25 * (zeta * m2 * x8 * x11 / f64::sqrt(x0));
+        ParameterDerivatives {
+            qdot: [u1, u2, u3],
+            matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
+            force: [l * (x15 * x16 - x17), x15 * x18, x15 * x19 - m2 * g],
+            checks: [],
+            d_qdot: [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+            ],
+            d_matrix: [
+                [[l * l, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [[2.0 * l * m1, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            ],
+            d_force: [
+                [-(l * x1 * g), 0.0, 0.0],
+                [
+                    -(0.25 * zeta * l * x8 * x11 * k * x16 / f64::sqrt(x0)),
+                    -(0.25 * zeta * x18 * x8 * x11 * k / f64::sqrt(x0)),
+                    -g - 0.25 * (zeta * x8 * x11 * k * x19 / f64::sqrt(x0)),
+                ],
+                [
+                    (l * x27 - 0.5 * x12 - 0.5 * x14) * x16 - x17,
+                    x1 * (x12 + x14) + x27 * x18,
+                    x13 * (0.25 * (x25 * x19 / f64::powf(x7, 1.5)) - x4 / f64::sqrt(x7))
+                        * k
+                        + x8
+                            * (zeta
+                                * ((0.5 * (f64::sqrt(x0) * x8 * x25 * x19)
+                                    - f64::sqrt(x0) * x4) * x11
+                                    - 0.5 * (x26 * f64::sqrt(x0) * x19))
+                                - 0.25 * (x25 * k * x19)),
+                ],
+                [
+                    0.5 * l * k * x16 / f64::sqrt(x7),
+                    0.5 * x18 * k / f64::sqrt(x7),
+                    0.5 * k * x19 / f64::sqrt(x7),
+                ],
+                [l * x28 * x16, x18 * x28, x28 * x19],
+                [
+                    -(0.5 * l * f64::sqrt(x0) * x8 * x11 * x16),
+                    -(0.5 * f64::sqrt(x0) * x18 * x8 * x11),
+                    -(0.5 * f64::sqrt(x0) * x8 * x11 * x19),
+                ],
+                [-(l * x1 * m1), 0.0, -m2],
+            ],
+            power: zeta * x23 * x8 * x11,
+            d_power: [
+                0.0,
+                zeta * x8 * x24 * x11 * k,
+                zeta * x8
+                    * (x26 * x23
+                        + (x8 * x25 * (0.5 * x20 + 0.5 * x21 + 0.5 * x22)
+                            + u2 * f64::sqrt(x0) * x1 - f64::sqrt(x0) * u3 * x4
+                            - 0.5 * (f64::sqrt(x0) * u1 * x16)) * x11),
+                0.0,
+                zeta * m2 * x8 * x24 * x11,
+                x23 * x8 * x11,
+                0.0,
+            ],
+        }
+    }
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
+    #[allow(clippy::all)]
+    pub fn parameter_jacobian(
+        t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        g_i: &[f64; NUM_IGNORABLE],
+        dstate: &mut [f64; STATES],
+        jac: &mut [[f64; 7]; STATES],
+    ) -> Result<(), Failure> {
+        let ParameterDerivatives {
+            qdot,
+            mut matrix,
+            force,
+            checks,
+            d_qdot,
+            d_matrix,
+            d_force,
+            power,
+            d_power,
+        } = assemble_parameter_derivatives(t, state, params, g_i);
+        let mut x = force;
+        for (condition, value) in CONDITIONS.into_iter().zip(checks) {
+            if !(value.abs() > SINGULAR_TOLERANCE) {
+                return Err(Failure::Singular {
+                    t,
+                    condition,
+                    value,
+                });
+            }
+        }
+        let pivots = match lu_factor(&mut matrix) {
+            Ok(p) => p,
+            Err(column) => {
+                return Err(Failure::Singular {
+                    t,
+                    condition: "mass matrix M_NI",
+                    value: column as f64,
+                });
+            }
+        };
+        lu_solve(&matrix, &pivots, &mut x);
+        *jac = [[0.0; 7]; STATES];
+        for j in 0..3 {
+            dstate[j] = qdot[j];
+        }
+        for j in 0..3 {
+            dstate[3 + j] = x[j];
+        }
+        dstate[6] = power;
+        for k in 0..7 {
+            jac[6][k] = d_power[k];
+        }
+        for k in 0..7 {
+            for j in 0..3 {
+                jac[j][k] = d_qdot[k][j];
+            }
+            let mut dx = [0.0f64; 3];
+            for i in 0..3 {
+                let mut s = d_force[k][i];
+                for j in 0..3 {
+                    s -= d_matrix[k][i][j] * x[j];
+                }
+                dx[i] = s;
+            }
+            lu_solve(&matrix, &pivots, &mut dx);
+            for j in 0..3 {
+                jac[3 + j][k] = dx[j];
+            }
+        }
+        for (index, value) in dstate.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Failure::NonFinite { t, index });
+            }
+        }
+        for (row, values) in jac.iter().enumerate() {
+            for (column, value) in values.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite {
+                        t,
+                        index: STATES + row * 7 + column,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
     ///This formulation through slices, for code that picks a model at run time.
     pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
         name: "reduced_volterra",
@@ -2482,6 +3469,19 @@ pub mod reduced_volterra {
                 &mut j,
             )?;
             ::seam::copy_matrix(&j, jac)
+        }),
+        parameter_jacobian: Some(|t, state, params, g_i, dstate, jac| {
+            let p = Params::from_values(::seam::array("params", params)?);
+            let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+            parameter_jacobian(
+                t,
+                ::seam::array("state", state)?,
+                &p,
+                ::seam::array("g_i", g_i)?,
+                ::seam::array_mut("dstate", dstate)?,
+                &mut j,
+            )?;
+            ::seam::copy_rows(&j, jac)
         }),
     };
 }

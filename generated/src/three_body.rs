@@ -2661,7 +2661,7 @@ pub mod lagrange {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2830,6 +2830,7 @@ pub mod lagrange {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Maggi's equations: 16 states, 8 equations.
@@ -5656,7 +5657,7 @@ pub mod maggi {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -5829,6 +5830,7 @@ pub mod maggi {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
@@ -7134,7 +7136,7 @@ pub mod kane {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -7292,6 +7294,7 @@ pub mod kane {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
@@ -8958,7 +8961,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -9116,6 +9119,7 @@ pub mod reduced_volterra {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

@@ -1934,7 +1934,7 @@ pub mod reduced_volterra {
             ],
         }
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -2092,6 +2092,7 @@ pub mod reduced_volterra {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

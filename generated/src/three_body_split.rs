@@ -3313,7 +3313,7 @@ pub mod lagrange {
         v[791] = v[789] + v[790];
         v[792] = 2.0 * J2 - J1;
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -3482,6 +3482,7 @@ pub mod lagrange {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Maggi's equations: 16 states, 8 equations.
@@ -7218,7 +7219,7 @@ pub mod maggi {
         v[1067] = v[30] * v[1064] - v[259] * v[44] * v[1065] - v[40] * v[890] * J1
             - m2 * d * (-2.0 * v[942] - 2.0 * (a_ * v[260] * v[28] * v[9] * v[20]));
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -7391,6 +7392,7 @@ pub mod maggi {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Kane / Gibbs-Appell (standard Volterra): 16 states, 8 equations.
@@ -9020,7 +9022,7 @@ pub mod kane {
         v[307] = 2.0 * J2 - J1;
         v[308] = 2.0 * u5 + 2.0 * u2;
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -9178,6 +9180,7 @@ pub mod kane {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///the reduced Volterra equations (paper Eqs. 64-67): 13 states, 5 equations.
@@ -11265,7 +11268,7 @@ pub mod reduced_volterra {
         v[433] = v[87] * v[430] + v[0] * v[2] * v[423];
         v[434] = 2.0 * J2 - J1;
     }
-    ///The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
+    ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
     pub fn jacobian(
         t: f64,
@@ -11423,6 +11426,7 @@ pub mod reduced_volterra {
             )?;
             ::seam::copy_matrix(&j, jac)
         }),
+        parameter_jacobian: None,
     };
 }
 ///Every emitted formulation through slices.

@@ -84,6 +84,10 @@ struct GenerateArgs {
     /// state) for the stiff integrator and linearization.
     #[arg(long)]
     jacobian: bool,
+    /// Emit each formulation's `parameter_jacobian`, the right-hand side's derivative by the
+    /// runtime parameters.
+    #[arg(long)]
+    parameter_jacobian: bool,
     /// Split functions with more than N common subexpressions into helpers.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     max_lets: Option<u64>,
@@ -175,6 +179,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
     }
     if args.jacobian {
         options.jacobian = true;
+    }
+    if args.parameter_jacobian {
+        options.parameter_jacobian = true;
     }
     if let Some(n) = args.max_lets {
         options.max_lets_per_function = n as usize;

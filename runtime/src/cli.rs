@@ -118,6 +118,10 @@ pub struct LinearizeArgs {
     /// A parameter's value, `NAME=VALUE` (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
     pub param: Vec<(String, f64)>,
+    /// A parameter to treat as an input `u` (repeatable): prints the input matrix `B` of
+    /// `x' = A x + B u` beside the eigenvalues.
+    #[arg(long = "input", value_name = "NAME")]
+    pub input: Vec<String>,
     /// Sweep a parameter (`k`) or a coordinate's rate (`x'`) from `--from` to `--to`.
     #[arg(long, value_name = "NAME", requires_all = ["from", "to"])]
     pub sweep: Option<String>,
@@ -184,6 +188,22 @@ pub fn linearize_command(model: &Model, args: &LinearizeArgs) -> Result<(), CliE
         );
         for l in &lin.eigenvalues {
             text += &format!("  {:+.12e} {:+.12e}i\n", l.re, l.im);
+        }
+        if !args.input.is_empty() {
+            let find = |name: &str| {
+                model.parameter_names.iter().position(|n| *n == name).ok_or_else(|| CliError::UnknownName {
+                    what: "parameter",
+                    name: name.to_string(),
+                    known: model.parameter_names.join(", "),
+                })
+            };
+            let inputs: Vec<usize> = args.input.iter().map(|n| find(n)).collect::<Result<_, _>>()?;
+            let (b, exact) = crate::linearize::input_matrix(model, &form, &at, &inputs)?;
+            text += &format!("B ({}), columns {}:\n", if exact { "exact" } else { "finite differences" }, args.input.join(", "));
+            for (r, name) in (0..b.nrows()).zip(model.formulation(&form).map_or(&[][..], |f| f.state_names)) {
+                let row: Vec<String> = b.row(r).iter().map(|x| format!("{x:+.9e}")).collect();
+                text += &format!("  {name:>12}: {}\n", row.join(" "));
+            }
         }
         return print(&text);
     };

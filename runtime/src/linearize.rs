@@ -135,6 +135,58 @@ pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Lin
     Ok(Linear { state: y0[..k].to_vec(), rates: dy[..k].to_vec(), a, cyclic, eigenvalues, exact })
 }
 
+/// The input matrix `B = d f / d p` of the parameters `inputs` (indices into the parameters)
+/// at `at`, in the state of [`linearize`] (without `W`): `x' = A x + B u` with `u` the inputs'
+/// deviations. From the emitted `parameter_jacobian` when the module has one
+/// (`generator --parameter-jacobian`), else central differences; the flag says which.
+///
+/// ```
+/// use runtime::linearize::{Operating, input_matrix};
+/// // Scene 1's motor torque tau drives the two bars' rates, nothing else.
+/// let model = generated::find("cart_pendulum").unwrap();
+/// let (q0, qd0) = model.initial.unwrap();
+/// let at = Operating { q: q0.to_vec(), qdot: qd0.to_vec(), params: model.default_params.to_vec(), held: vec![] };
+/// let tau = model.parameter_names.iter().position(|p| *p == "tau").unwrap();
+/// let (b, exact) = input_matrix(&model, "kane", &at, &[tau]).unwrap();
+/// assert!(exact && b.column(0).iter().any(|x| x.abs() > 1e-3));
+/// ```
+pub fn input_matrix(model: &Model, formulation: &str, at: &Operating, inputs: &[usize]) -> Result<(DMatrix<f64>, bool), LinearizeError> {
+    let qdot = at.consistent_rates(model)?;
+    let (sys, y0) = System::start(*model, formulation, at.params.clone(), &at.q, &qdot)?;
+    let n = sys.form.states;
+    let k = if sys.form.has_work_state { n - 1 } else { n };
+    let np = at.params.len();
+    let mut b = DMatrix::zeros(k, inputs.len());
+    let mut dy = vec![0.0; n];
+    match sys.form.parameter_jacobian {
+        Some(pj) => {
+            let mut flat = vec![0.0; n * np];
+            pj(0.0, &y0, &at.params, &sys.g_i, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
+            for (c, &p) in inputs.iter().enumerate() {
+                for r in 0..k {
+                    b[(r, c)] = flat[r * np + p];
+                }
+            }
+            Ok((b, true))
+        }
+        None => {
+            let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
+            for (c, &p) in inputs.iter().enumerate() {
+                let h = f64::EPSILON.cbrt() * (1.0 + at.params[p].abs());
+                let mut params = at.params.clone();
+                params[p] += h;
+                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, &mut up).map_err(LinearizeError::Rhs)?;
+                params[p] -= 2.0 * h;
+                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, &mut down).map_err(LinearizeError::Rhs)?;
+                for r in 0..k {
+                    b[(r, c)] = (up[r] - down[r]) / (2.0 * h);
+                }
+            }
+            Ok((b, false))
+        }
+    }
+}
+
 /// The entries whose column of `a` (among the rows still kept) is below `tol` times the
 /// largest entry, removed until none is left: `(kept, cyclic)`. Removing such an entry leaves
 /// the other eigenvalues as they are (the matrix is block triangular) and takes out one zero.

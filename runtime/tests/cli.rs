@@ -136,6 +136,35 @@ fn a_model_file_is_swept_the_same_way() {
     assert_eq!(csv.lines().count(), 1 + 18, "{csv}");
     assert!(csv.lines().skip(1).all(|l| l.starts_with("my_model,kane,") || l.starts_with("my_model,reduced_volterra,")), "{csv}");
     assert!(std::fs::read_to_string(dir.join("results/my_model_work_precision.svg")).unwrap().contains("<svg"));
+    // And linearized, from the same compiled program: hanging at rest, nothing grows or decays
+    // (a conservative system: the pendulum mode is a purely imaginary pair; the free trolley's
+    // drift a double zero, split by the differences' round-off) and the trolley's position is
+    // set aside; a sweep of the rope length writes its table, data and figure.
+    let linearize = |extra: &[&str]| Command::new(env!("CARGO_BIN_EXE_linearize")).arg(dir.join("my_model.ron")).args(extra).output().unwrap();
+    let rest = ["--q", "phi=0", "--q", "psi=0", "--qdot", "x=0", "--qdot", "phi=0", "--qdot", "psi=0"];
+    let out = linearize(&[&rest[..], &["--input", "g"]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let eigen: Vec<(f64, f64)> = text
+        .lines()
+        .filter_map(|l| l.trim().strip_suffix('i'))
+        .map(|l| {
+            let mut it = l.split_whitespace().map(|x| x.parse::<f64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect();
+    assert!(!eigen.is_empty() && eigen.iter().all(|(re, _)| re.abs() < 1e-4), "{text}");
+    assert!(eigen.iter().any(|(_, im)| *im > 0.1), "{text}");
+    assert!(text.contains("B (finite differences), columns g:"), "{text}");
+    let out = linearize(&[&rest[..], &["--sweep", "L", "--from", "1", "--to", "3", "--steps", "5", "--out"], &[dir.join("lin").to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = std::fs::read_to_string(dir.join("lin/my_model_eigenvalues.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 5, "{csv}");
+    assert!(csv.starts_with("L,re_1,im_1"), "{csv}");
+    assert!(std::fs::read_to_string(dir.join("lin/my_model_eigenvalues.svg")).unwrap().contains("<svg"));
+    // Names it does not know are refused with what it knows.
+    let bad = linearize(&["--sweep", "length", "--from", "1", "--to", "2"]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("parameters: mt, mc, L"), "{}", String::from_utf8_lossy(&bad.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -160,16 +189,17 @@ fn a_wrong_model_file_gets_the_generator_s_located_error_and_no_build_log() {
 
 #[test]
 fn help_and_version_answer_on_stdout_before_anything_is_built() {
-    for bin in [env!("CARGO_BIN_EXE_compare"), env!("CARGO_BIN_EXE_sweep")] {
+    for bin in [env!("CARGO_BIN_EXE_compare"), env!("CARGO_BIN_EXE_sweep"), env!("CARGO_BIN_EXE_linearize")] {
         let help = Command::new(bin).arg("--help").output().unwrap();
         assert!(help.status.success());
         let text = String::from_utf8_lossy(&help.stdout);
         assert!(text.contains("Usage:") && text.contains("<MODEL>") && text.contains("[default: "), "{text}");
-        assert!(text.contains("work-precision") || text.contains("paper's Tables"), "a sentence on what it does: {text}");
+        assert!(text.contains("work-precision") || text.contains("paper's Tables") || text.contains("eigenvalues"), "a sentence on what it does: {text}");
         let version = Command::new(bin).arg("--version").output().unwrap();
         assert!(version.status.success() && String::from_utf8_lossy(&version.stdout).contains(env!("CARGO_PKG_VERSION")));
         // A repeated single-valued option is refused.
-        let twice = Command::new(bin).args(["cart_pendulum", "--repeats", "1", "--repeats", "2"]).output().unwrap();
+        let repeated = if bin == env!("CARGO_BIN_EXE_linearize") { "--steps" } else { "--repeats" };
+        let twice = Command::new(bin).args(["cart_pendulum", repeated, "3", repeated, "4"]).output().unwrap();
         assert!(!twice.status.success() && String::from_utf8_lossy(&twice.stderr).contains("cannot be used multiple times"));
     }
 }

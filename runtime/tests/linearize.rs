@@ -81,3 +81,24 @@ fn finite_differences_agree_with_the_exact_jacobian() {
         assert!((x - y).norm() < 1e-6 * x.norm(), "{x} against {y}");
     }
 }
+
+/// The input matrix from the emitted parameter Jacobian equals the differenced one.
+#[test]
+fn the_input_matrix_is_the_same_exact_or_differenced() {
+    let model = generated::find("cart_pendulum").unwrap();
+    let (q0, qd0) = model.initial.unwrap();
+    let at = Operating { q: q0.to_vec(), qdot: qd0.to_vec(), params: model.default_params.to_vec(), held: vec![] };
+    let tau = model.parameter_names.iter().position(|p| *p == "tau").unwrap();
+    let mut forms: Vec<seam::Formulation> = model.formulations.to_vec();
+    for f in &mut forms {
+        f.parameter_jacobian = None;
+    }
+    let plain = seam::Model { formulations: Box::leak(forms.into_boxed_slice()), ..model };
+    for f in model.formulations {
+        let (exact, e) = runtime::linearize::input_matrix(&model, f.name, &at, &[tau]).unwrap();
+        let (differenced, d) = runtime::linearize::input_matrix(&plain, f.name, &at, &[tau]).unwrap();
+        assert!(e && !d);
+        assert!((&exact - &differenced).amax() < 1e-7 * exact.amax().max(1.0), "{}: {exact} against {differenced}", f.name);
+        assert!(exact.amax() > 1e-3, "{}: the torque drives the bars", f.name);
+    }
+}

@@ -37,6 +37,7 @@ pub struct Builder {
     integrate_ignorable: Option<bool>,
     max_lets_per_function: Option<usize>,
     jacobian: Option<bool>,
+    parameter_jacobian: Option<bool>,
     seam_path: String,
     cargo_metadata: bool,
 }
@@ -85,6 +86,7 @@ impl Builder {
             integrate_ignorable: None,
             max_lets_per_function: None,
             jacobian: None,
+            parameter_jacobian: None,
             seam_path: super::DEFAULT_SEAM_PATH.to_string(),
             cargo_metadata: true,
         }
@@ -137,6 +139,13 @@ impl Builder {
         self
     }
 
+    /// Emit each formulation's `parameter_jacobian` (`true`) or not, instead of each model
+    /// file's choice.
+    pub fn parameter_jacobian(mut self, emit: bool) -> Builder {
+        self.parameter_jacobian = Some(emit);
+        self
+    }
+
     /// The seam crate's path in the emitted code (default `::seam`; `runtime::seam` for a crate
     /// that depends on the runtime only).
     pub fn seam_path(mut self, path: impl Into<String>) -> Builder {
@@ -167,6 +176,9 @@ impl Builder {
         }
         if let Some(j) = self.jacobian {
             o.jacobian = j;
+        }
+        if let Some(j) = self.parameter_jacobian {
+            o.parameter_jacobian = j;
         }
         o.seam_path = self.seam_path.clone();
         o

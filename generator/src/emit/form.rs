@@ -7,6 +7,7 @@
 
 use super::FunctionCost;
 use super::function::{Arg, Input, arg_list};
+use super::jacobian::Wrt;
 use super::module::{Emitter, doc, momenta, usize_lit};
 use super::ops::OpCount;
 use crate::formulation::{Derivation, Equations};
@@ -99,14 +100,15 @@ impl Emitter<'_> {
         let init = self.initial_state(f, d)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
-        let jacobian = if self.options.jacobian { self.jacobian_fn(f, d, &checks)? } else { TokenStream::new() };
+        let jacobian = if self.options.jacobian { self.jacobian_fn(f, d, &checks, Wrt::State)? } else { TokenStream::new() };
+        let parameter_jacobian = if self.emits_parameter_jacobian() { self.jacobian_fn(f, d, &checks, Wrt::Parameters)? } else { TokenStream::new() };
         let module = ident(name);
         let states_l = usize_lit(n_states);
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
-        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some(), self.options.jacobian);
+        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
         Ok(quote! {
             #mod_doc
             pub mod #module {
@@ -126,6 +128,7 @@ impl Emitter<'_> {
                 #vel
                 #margin
                 #jacobian
+                #parameter_jacobian
                 #seam_const
             }
         })

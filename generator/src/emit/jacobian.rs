@@ -27,9 +27,19 @@ pub fn jacobian_solve_cost(n: usize, v: usize) -> OpCount {
     c
 }
 
+/// What a Jacobian differentiates by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Wrt {
+    /// The state's variables (kept coordinates, then speeds): `jacobian`.
+    State,
+    /// The runtime parameters, in `Params` order: `parameter_jacobian`.
+    Parameters,
+}
+
 impl Emitter<'_> {
-    /// `jacobian`: the right-hand side `dstate` and `jac[i][k] = d dstate_i / d state_k`.
-    pub(super) fn jacobian_fn(&mut self, f: &Equations, d: &Derivation, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+    /// `jacobian` (`jac[i][k] = d dstate_i / d state_k`) or `parameter_jacobian`
+    /// (`jac[i][k] = d dstate_i / d params_k`), each with the right-hand side `dstate`.
+    pub(super) fn jacobian_fn(&mut self, f: &Equations, d: &Derivation, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
         let name = f.name;
         let work = self.work;
         let n_states = f.states(work);
@@ -38,7 +48,15 @@ impl Emitter<'_> {
         let n = f.mass.rows;
         let (rw, cw) = f.post.as_ref().map(|(w, _)| (w.rows, w.cols)).unwrap_or((0, 0));
         let rates = self.rate_outputs(f, d);
-        let variables: Vec<_> = f.kept.iter().map(|&j| self.model.coordinates[j]).chain(f.speeds.iter().copied()).collect();
+        let variables: Vec<_> = match wrt {
+            Wrt::State => f.kept.iter().map(|&j| self.model.coordinates[j]).chain(f.speeds.iter().copied()).collect(),
+            Wrt::Parameters => self.model.parameters.iter().map(|(s, _)| *s).collect(),
+        };
+        let (function, structure, assemble) = match wrt {
+            Wrt::State => ("jacobian", "Derivatives", "assemble_derivatives"),
+            Wrt::Parameters => ("parameter_jacobian", "ParameterDerivatives", "assemble_parameter_derivatives"),
+        };
+        let (function_i, structure_i, assemble_i) = (super::function::ident(function), super::function::ident(structure), super::function::ident(assemble));
         let nv = variables.len();
         let mut outputs = rates.clone();
         outputs.extend(checks.iter().copied());
@@ -47,7 +65,7 @@ impl Emitter<'_> {
         }
         let args = state_args();
         let inputs = self.state_inputs(f);
-        let b = self.body(&format!("{name}::jacobian"), &outputs, &inputs, &args)?;
+        let b = self.body(&format!("{name}::{function}"), &outputs, &inputs, &args)?;
         self.functions.last_mut().expect("just pushed").solve = jacobian_solve_cost(n, nv);
         let mut it = b.outputs.iter().cloned();
         let dims = Dims { nq, n, rw, cw, work };
@@ -160,24 +178,38 @@ impl Emitter<'_> {
                 if *n == "matrix" { quote!(mut #i) } else { quote!(#i) }
             })
             .collect();
+        let (columns, what, zero_column) = match wrt {
+            Wrt::State => (quote!(STATES), "state[k]", " The work integral's column is zero: nothing depends on it."),
+            Wrt::Parameters => (quote!(#nv_l), "params.values()[k]", ""),
+        };
+        let struct_doc = format!(
+            "Everything `{function}` evaluates before its solves: the assembly and its derivatives by each {}.",
+            match wrt {
+                Wrt::State => "state variable (kept coordinates, then speeds)",
+                Wrt::Parameters => "parameter, in `Params::NAMES` order",
+            }
+        );
+        let fn_doc = format!(
+            "The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d {what}`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.{zero_column}"
+        );
         Ok(quote! {
-            #[doc = "Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds)."]
-            struct Derivatives {
+            #[doc = #struct_doc]
+            struct #structure_i {
                 #(#field_types,)*
             }
             #[doc = "Evaluates the assembly and its partial derivatives, with one set of common subexpressions."]
             #[allow(non_snake_case, clippy::all)]
-            fn assemble_derivatives(#(#fn_args),*) -> Derivatives {
+            fn #assemble_i(#(#fn_args),*) -> #structure_i {
                 #stmts
-                Derivatives {
+                #structure_i {
                     #(#field_values,)*
                 }
             }
             #helpers
-            #[doc = "The right-hand side (as `rhs` writes it) and its exact Jacobian `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it."]
+            #[doc = #fn_doc]
             #[allow(clippy::all)]
-            pub fn jacobian(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], jac: &mut [[f64; STATES]; STATES]) -> Result<(), Failure> {
-                let Derivatives { #(#field_names),* } = assemble_derivatives(t, state, params, g_i);
+            pub fn #function_i(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE], dstate: &mut [f64; STATES], jac: &mut [[f64; #columns]; STATES]) -> Result<(), Failure> {
+                let #structure_i { #(#field_names),* } = #assemble_i(t, state, params, g_i);
                 let mut x = force;
                 for (condition, value) in CONDITIONS.into_iter().zip(checks) {
                     if !(value.abs() > SINGULAR_TOLERANCE) {
@@ -189,7 +221,7 @@ impl Emitter<'_> {
                     Err(column) => return Err(Failure::Singular { t, condition: #matrix_name, value: column as f64 }),
                 };
                 lu_solve(&matrix, &pivots, &mut x);
-                *jac = [[0.0; STATES]; STATES];
+                *jac = [[0.0; #columns]; STATES];
                 for j in 0..#nq_l {
                     dstate[j] = qdot[j];
                 }
@@ -218,7 +250,7 @@ impl Emitter<'_> {
                 for (row, values) in jac.iter().enumerate() {
                     for (column, value) in values.iter().enumerate() {
                         if !value.is_finite() {
-                            return Err(Failure::NonFinite { t, index: STATES + row * STATES + column });
+                            return Err(Failure::NonFinite { t, index: STATES + row * #columns + column });
                         }
                     }
                 }

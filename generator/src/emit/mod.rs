@@ -44,6 +44,8 @@ pub struct Options {
     pub max_lets_per_function: usize,
     /// Emit each formulation's exact `jacobian` (see [`jacobian`]).
     pub jacobian: bool,
+    /// Emit each formulation's `parameter_jacobian` (runtime parameters only).
+    pub parameter_jacobian: bool,
     /// The name the module is emitted under, written into `model().module` (the model's name
     /// when `None`; a variant such as `cart_pendulum_baked` otherwise).
     pub module_name: Option<String>,
@@ -72,6 +74,7 @@ impl Options {
             integrate_ignorable: e.integrate_ignorable,
             max_lets_per_function: e.max_lets_per_function,
             jacobian: e.jacobian,
+            parameter_jacobian: e.parameter_jacobian,
             module_name: None,
             seam_path: DEFAULT_SEAM_PATH.to_string(),
         }

@@ -115,7 +115,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     items.push(super::seam::failure_import(&em.seam));
     if !options.formulations.is_empty() {
         items.push(solve_dense());
-        if options.jacobian {
+        if options.jacobian || options.parameter_jacobian {
             items.push(super::jacobian::lu_items());
         }
     }
@@ -410,6 +410,12 @@ impl Emitter<'_> {
         let b = body_with(short, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner).map_err(|e| self.emission_error(name, e))?;
         self.functions.push(FunctionCost { name: name.to_string(), lets: b.lets, ops: b.ops.clone(), solve: Default::default() });
         Ok(self.place(b))
+    }
+
+    /// True when the formulations get `parameter_jacobian`: asked for, and the parameters
+    /// are `Params` fields (not baked) and there are some.
+    pub(super) fn emits_parameter_jacobian(&self) -> bool {
+        self.options.parameter_jacobian && self.options.parameters == Parameters::Runtime && !self.model.parameters.is_empty()
     }
 
     /// Leaves `b`'s trees in the splices, returning their placeholders.

@@ -22,7 +22,19 @@ pub(super) fn failure_import(seam: &syn::Path) -> TokenStream {
 
 /// `FORMULATION` of the formulation submodule `name`; `stabilized` when it has
 /// `rhs_baumgarte`.
-pub(super) fn formulation_const(seam: &syn::Path, name: &str, stabilized: bool, jacobian: bool) -> TokenStream {
+pub(super) fn formulation_const(seam: &syn::Path, name: &str, stabilized: bool, jacobian: bool, parameter_jacobian: bool) -> TokenStream {
+    let parameter_jacobian = if parameter_jacobian {
+        quote! {
+            Some(|t, state, params, g_i, dstate, jac| {
+                let p = Params::from_values(#seam::array("params", params)?);
+                let mut j = [[0.0f64; Params::NAMES.len()]; STATES];
+                parameter_jacobian(t, #seam::array("state", state)?, &p, #seam::array("g_i", g_i)?, #seam::array_mut("dstate", dstate)?, &mut j)?;
+                #seam::copy_rows(&j, jac)
+            })
+        }
+    } else {
+        quote!(None)
+    };
     let jacobian = if jacobian {
         quote! {
             Some(|t, state, params, g_i, dstate, jac| {
@@ -83,6 +95,7 @@ pub(super) fn formulation_const(seam: &syn::Path, name: &str, stabilized: bool, 
                 Ok(singular_margin(t, #seam::array("state", state)?, &p, #seam::array("g_i", g_i)?))
             },
             jacobian: #jacobian,
+            parameter_jacobian: #parameter_jacobian,
         };
     }
 }

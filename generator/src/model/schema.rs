@@ -100,6 +100,10 @@ pub struct EmitDef {
     /// back to finite differences without it).
     #[serde(default)]
     pub jacobian: bool,
+    /// Emit each formulation's `parameter_jacobian` (the right-hand side's derivative by the
+    /// runtime parameters, for sensitivities and input matrices).
+    #[serde(default)]
+    pub parameter_jacobian: bool,
 }
 
 impl Default for EmitDef {
@@ -111,6 +115,7 @@ impl Default for EmitDef {
             integrate_ignorable: true,
             max_lets_per_function: default_max_lets(),
             jacobian: false,
+            parameter_jacobian: false,
         }
     }
 }

@@ -119,6 +119,8 @@ pub struct Formulation {
     pub singular_margin: MarginFn,
     /// The exact Jacobian, when the module was emitted with it.
     pub jacobian: Option<JacobianFn>,
+    /// The exact derivative by the parameters (`jac[i * parameters + k]`), when emitted.
+    pub parameter_jacobian: Option<JacobianFn>,
 }
 
 /// One emitted model.
@@ -200,6 +202,7 @@ impl Formulation {
         matrix: |_, _, _, _, _| Err(Failure::Missing { function: "matrix" }),
         singular_margin: |_, _, _, _| Err(Failure::Missing { function: "singular_margin" }),
         jacobian: None,
+        parameter_jacobian: None,
     };
 }
 
@@ -255,6 +258,17 @@ pub fn copy_matrix<const N: usize>(a: &[[f64; N]; N], out: &mut [f64]) -> Result
         return Err(Failure::Dimension { argument: "out", expected: N * N, got: out.len() });
     }
     for (row, chunk) in a.iter().zip(out.chunks_mut(N.max(1))) {
+        chunk.copy_from_slice(row);
+    }
+    Ok(())
+}
+
+/// Copies `a`, `R` rows of `C` entries, into the row-major slice `out` (`R * C` long).
+pub fn copy_rows<const R: usize, const C: usize>(a: &[[f64; C]; R], out: &mut [f64]) -> Result<(), Failure> {
+    if out.len() != R * C {
+        return Err(Failure::Dimension { argument: "jac", expected: R * C, got: out.len() });
+    }
+    for (row, chunk) in a.iter().zip(out.chunks_mut(C.max(1))) {
         chunk.copy_from_slice(row);
     }
     Ok(())
