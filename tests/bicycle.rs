@@ -2,8 +2,9 @@
 //! (2007) 1955-1982) from the generated nonlinear equations of `models/bicycle.ron`: the
 //! linearized lean and steer eigenvalues at 0, 5 and 10 m/s against the published ones, the
 //! weave and capsize speeds, and nonlinear runs where a small lean perturbation decays (5 m/s)
-//! and grows (2 m/s). The eigenvalues come from central differences of the emitted Kane and
-//! Lagrange right-hand sides; they match the published values to about 10 significant digits.
+//! and grows (2 m/s). From central differences of the emitted Kane and Lagrange right-hand
+//! sides the eigenvalues match the published values to about 10 significant digits; from the
+//! exact Jacobian of `bicycle_lagrange`, to the 13 to 15 digits published.
 
 use runtime::integrate::{Method, Settings, integrate};
 use runtime::linearize::{Operating, Swept, crossings, linearize, sweep};
@@ -55,6 +56,33 @@ fn eigenvalues_match_the_benchmark_to_nine_digits() {
             }
         }
     }
+}
+
+/// With the exact Jacobian (`bicycle_lagrange`: Lagrange's form emitted with `--jacobian`)
+/// the eigenvalues agree with the published ones to about 13 digits, as independent
+/// implementations do.
+#[test]
+fn with_the_exact_jacobian_the_eigenvalues_match_to_twelve_digits() {
+    let model = generated::find("bicycle_lagrange").unwrap();
+    for v in [0.0, 5.0, 10.0] {
+        let lin = linearize(&model, "lagrange", &upright(&model, v, 0.0)).unwrap();
+        assert!(lin.exact);
+        let nonzero: Vec<_> = lin.eigenvalues.iter().filter(|l| l.norm() > 1e-6).collect();
+        assert_eq!(nonzero.len(), 4, "at {v} m/s: {:?}", lin.eigenvalues);
+        for (got, want) in nonzero.iter().zip(&published(v)) {
+            let err = (got.re - want.0).hypot(got.im - want.1);
+            eprintln!("{v} m/s: {got} against {want:?}: {err:e}");
+            assert!(err < 1e-12 * want.0.hypot(want.1).max(1.0), "at {v} m/s: {got} against {want:?} ({err:e})");
+        }
+    }
+    let at = upright(&model, 0.0, 0.0);
+    let swept = Swept::find(&model, "x'").unwrap();
+    let values: Vec<f64> = (0..=20).map(|i| 0.5 * i as f64).collect();
+    let rows = sweep(&model, "lagrange", &at, swept, &values).unwrap();
+    let cross = crossings(&model, "lagrange", &at, swept, &rows).unwrap();
+    eprintln!("weave {} capsize {}", cross[0], cross[1]);
+    assert!((cross[0] / 4.29238253634111 - 1.0).abs() < 1e-12, "weave speed {}", cross[0]);
+    assert!((cross[1] / 6.02426201538837 - 1.0).abs() < 1e-12, "capsize speed {}", cross[1]);
 }
 
 #[test]

@@ -22,6 +22,7 @@ pub fn models() -> Vec<Model> {
         crate::cart_pendulum_baked::model(),
         crate::three_body_split::model(),
         crate::three_body_drop::model(),
+        crate::bicycle_lagrange::model(),
     ]
 }
 

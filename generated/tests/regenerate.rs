@@ -17,6 +17,9 @@ fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("stiff_pendulum", "stiff_pendulum", |o| o.parameter_jacobian = true),
         // The bicycle's exact Jacobians would be 250000 operations each: left out.
         ("bicycle", "bicycle", |o| o.jacobian = false),
+        // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
+        // Jacobian (12136 operations), for linearization to round-off.
+        ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),
         // `--baked`
         ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
         // `--max-lets 40`

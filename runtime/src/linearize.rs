@@ -280,7 +280,7 @@ fn growth_without(eigenvalues: &[(f64, f64)], zeros: usize) -> f64 {
 }
 
 /// The values between neighbouring rows where [`growth`] changes sign, each refined by
-/// bisection (re-linearizing) to a relative width of `1e-11`. Near a crossing the crossing
+/// bisection (re-linearizing) to a relative width of `1e-13`. Near a crossing the crossing
 /// eigenvalue itself is small, so the zeros set aside are counted at the bracket's ends.
 pub fn crossings(model: &Model, formulation: &str, at: &Operating, swept: Swept, rows: &[SweepRow]) -> Result<Vec<f64>, LinearizeError> {
     let mut out = Vec::new();
@@ -296,7 +296,7 @@ pub fn crossings(model: &Model, formulation: &str, at: &Operating, swept: Swept,
             Ok(growth_without(&e, zeros) > 0.0)
         };
         let (mut lo, mut hi) = (w[0].value, w[1].value);
-        while (hi - lo).abs() > 1e-11 * lo.abs().max(hi.abs()).max(1e-300) {
+        while (hi - lo).abs() > 1e-13 * lo.abs().max(hi.abs()).max(1e-300) {
             let mid = 0.5 * (lo + hi);
             if mid <= lo || mid >= hi {
                 break;
