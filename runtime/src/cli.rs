@@ -155,9 +155,7 @@ pub fn operating_point(model: &Model, args: &LinearizeArgs) -> Result<Operating,
         None => (vec![0.0; m], vec![0.0; m]),
     };
     let mut params = model.default_params.to_vec();
-    let find = |names: &[&str], name: &str, what: &'static str| {
-        names.iter().position(|n| *n == name).ok_or_else(|| CliError::UnknownName { what, name: name.to_string(), known: names.join(", ") })
-    };
+    let find = index_of;
     for (name, v) in &args.q {
         q[find(model.coordinates, name, "coordinate")?] = *v;
     }
@@ -171,6 +169,11 @@ pub fn operating_point(model: &Model, args: &LinearizeArgs) -> Result<Operating,
         params[find(model.parameter_names, name, "parameter")?] = *v;
     }
     Ok(Operating { q, qdot, params, held })
+}
+
+/// The position of `name` among `names` (a model's coordinates or parameters).
+fn index_of(names: &[&str], name: &str, what: &'static str) -> Result<usize, CliError> {
+    names.iter().position(|n| *n == name).ok_or_else(|| CliError::UnknownName { what, name: name.to_string(), known: names.join(", ") })
 }
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
@@ -190,14 +193,7 @@ pub fn linearize_command(model: &Model, args: &LinearizeArgs) -> Result<(), CliE
             text += &format!("  {:+.12e} {:+.12e}i\n", l.re, l.im);
         }
         if !args.input.is_empty() {
-            let find = |name: &str| {
-                model.parameter_names.iter().position(|n| *n == name).ok_or_else(|| CliError::UnknownName {
-                    what: "parameter",
-                    name: name.to_string(),
-                    known: model.parameter_names.join(", "),
-                })
-            };
-            let inputs: Vec<usize> = args.input.iter().map(|n| find(n)).collect::<Result<_, _>>()?;
+            let inputs: Vec<usize> = args.input.iter().map(|n| index_of(model.parameter_names, n, "parameter")).collect::<Result<_, _>>()?;
             let (b, exact) = crate::linearize::input_matrix(model, &form, &at, &inputs)?;
             text += &format!("B ({}), columns {}:\n", if exact { "exact" } else { "finite differences" }, args.input.join(", "));
             for (r, name) in (0..b.nrows()).zip(model.formulation(&form).map_or(&[][..], |f| f.state_names)) {
@@ -234,6 +230,18 @@ pub enum MethodArg {
     /// Rosenbrock 2(3) (`ode23s`) for stiff models, with the exact Jacobian when the module
     /// has one (`generator --jacobian`), else finite differences.
     Ros23,
+}
+
+impl MethodArg {
+    /// The adaptive integrator it names (`None` for RK4, which needs its step).
+    pub fn adaptive(self) -> Option<Method> {
+        match self {
+            MethodArg::Dopri5 => Some(Method::Dopri5),
+            MethodArg::Dop853 => Some(Method::Dop853),
+            MethodArg::Ros23 => Some(Method::Rosenbrock23),
+            MethodArg::Rk4 => None,
+        }
+    }
 }
 
 /// A formulation, as named on the command line.
@@ -306,13 +314,8 @@ fn formulations(model: &Model, list: &[FormulationArg]) -> Result<Vec<String>, C
 pub fn compare_options(model: &Model, args: &CompareArgs) -> Result<Options, CliError> {
     let mut options = Options::paper(model);
     let s = &mut options.settings;
-    s.method = match args.method {
-        MethodArg::Dopri5 => Method::Dopri5,
-        MethodArg::Dop853 => Method::Dop853,
-        // clap requires `--h` with `rk4`.
-        MethodArg::Rk4 => Method::Rk4 { h: args.h.unwrap_or(s.h_max) },
-        MethodArg::Ros23 => Method::Rosenbrock23,
-    };
+    // clap requires `--h` with `rk4`.
+    s.method = args.method.adaptive().unwrap_or(Method::Rk4 { h: args.h.unwrap_or(s.h_max) });
     if let Some(x) = args.rtol {
         s.rtol = x;
     }
@@ -384,11 +387,8 @@ pub fn compare_command(model: &Model, args: &CompareArgs) -> Result<(), CliError
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep_command(model: &Model, args: &SweepArgs) -> Result<(), CliError> {
     let mut options = SweepOptions { repeats: args.repeats as usize, formulations: formulations(model, &args.formulations)?, ..SweepOptions::default() };
-    options.adaptive = [(MethodArg::Dopri5, Method::Dopri5), (MethodArg::Dop853, Method::Dop853), (MethodArg::Ros23, Method::Rosenbrock23)]
-        .into_iter()
-        .filter(|(a, _)| args.methods.contains(a))
-        .map(|(_, m)| m)
-        .collect();
+    options.adaptive =
+        [MethodArg::Dopri5, MethodArg::Dop853, MethodArg::Ros23].into_iter().filter(|a| args.methods.contains(a)).filter_map(MethodArg::adaptive).collect();
     if !args.methods.contains(&MethodArg::Rk4) {
         options.rk4_steps.clear();
     }

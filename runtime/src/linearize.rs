@@ -37,24 +37,10 @@ impl Operating {
         if self.held.is_empty() || r == 0 {
             return Ok(self.qdot.clone());
         }
-        let residual = |qd: &[f64]| -> Result<Vec<f64>, LinearizeError> {
-            let mut out = vec![0.0; r];
-            (model.constraint_residuals)(0.0, &self.q, qd, &self.params, &mut out).map_err(LinearizeError::Rhs)?;
-            Ok(out)
-        };
-        let b = residual(&vec![0.0; m])?;
+        let (a_all, b) = crate::system::constraint_matrix(model, 0.0, &self.q, &self.params).map_err(LinearizeError::Rhs)?;
         let free: Vec<usize> = (0..m).filter(|j| !self.held.contains(j)).collect();
-        let mut a = DMatrix::zeros(r, free.len());
-        let mut rhs = nalgebra::DVector::from_iterator(r, b.iter().map(|x| -x));
-        for j in 0..m {
-            let mut e = vec![0.0; m];
-            e[j] = 1.0;
-            let col: Vec<f64> = residual(&e)?.iter().zip(&b).map(|(x, y)| x - y).collect();
-            match free.iter().position(|&f| f == j) {
-                Some(k) => a.set_column(k, &nalgebra::DVector::from_vec(col)),
-                None => rhs -= nalgebra::DVector::from_vec(col) * self.qdot[j],
-            }
-        }
+        let a = DMatrix::from_fn(r, free.len(), |i, k| a_all[(i, free[k])]);
+        let rhs = nalgebra::DVector::from_iterator(r, (0..r).map(|i| -b[i] - self.held.iter().map(|&j| a_all[(i, j)] * self.qdot[j]).sum::<f64>()));
         let x = a.svd(true, true).solve(&rhs, 1e-12).map_err(|e| LinearizeError::Rates(e.to_string()))?;
         // Round-off of the solve (below 1e-13 of the rates given) is no motion: at rest the
         // rates come out exactly zero, as the constraints' own check expects.
@@ -112,18 +98,10 @@ pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Lin
         sys.jacobian(0.0, &y0, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
     } else {
         sys.rhs(0.0, &y0, &mut dy).map_err(LinearizeError::Rhs)?;
-        // Central differences, one column per state entry, at the step that balances
-        // truncation (h^2) against round-off (eps / h).
-        let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
-        for c in 0..k {
-            let h = f64::EPSILON.cbrt() * (1.0 + y0[c].abs());
-            let mut y = y0.clone();
-            y[c] += h;
-            sys.rhs(0.0, &y, &mut up).map_err(LinearizeError::Rhs)?;
-            y[c] -= 2.0 * h;
-            sys.rhs(0.0, &y, &mut down).map_err(LinearizeError::Rhs)?;
+        let columns = central_differences(&y0, k, n, |y, out| sys.rhs(0.0, y, out))?;
+        for (c, col) in columns.iter().enumerate() {
             for r in 0..n {
-                flat[r * n + c] = (up[r] - down[r]) / (2.0 * h);
+                flat[r * n + c] = col[r];
             }
         }
     }
@@ -170,21 +148,44 @@ pub fn input_matrix(model: &Model, formulation: &str, at: &Operating, inputs: &[
             Ok((b, true))
         }
         None => {
-            let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
-            for (c, &p) in inputs.iter().enumerate() {
-                let h = f64::EPSILON.cbrt() * (1.0 + at.params[p].abs());
+            let chosen: Vec<f64> = inputs.iter().map(|&p| at.params[p]).collect();
+            let columns = central_differences(&chosen, inputs.len(), n, |values, out| {
                 let mut params = at.params.clone();
-                params[p] += h;
-                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, &mut up).map_err(LinearizeError::Rhs)?;
-                params[p] -= 2.0 * h;
-                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, &mut down).map_err(LinearizeError::Rhs)?;
+                for (&p, v) in inputs.iter().zip(values) {
+                    params[p] = *v;
+                }
+                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, out)
+            })?;
+            for (c, col) in columns.iter().enumerate() {
                 for r in 0..k {
-                    b[(r, c)] = (up[r] - down[r]) / (2.0 * h);
+                    b[(r, c)] = col[r];
                 }
             }
             Ok((b, false))
         }
     }
+}
+
+/// `d f / d x_c` for the first `columns` entries of `x`, by central differences at the step
+/// that balances truncation (`h^2`) against round-off (`eps / h`); `f` writes `n` values.
+fn central_differences(
+    x: &[f64],
+    columns: usize,
+    n: usize,
+    mut f: impl FnMut(&[f64], &mut [f64]) -> Result<(), Failure>,
+) -> Result<Vec<Vec<f64>>, LinearizeError> {
+    let (mut up, mut down) = (vec![0.0; n], vec![0.0; n]);
+    (0..columns)
+        .map(|c| {
+            let h = f64::EPSILON.cbrt() * (1.0 + x[c].abs());
+            let mut moved = x.to_vec();
+            moved[c] += h;
+            f(&moved, &mut up).map_err(LinearizeError::Rhs)?;
+            moved[c] -= 2.0 * h;
+            f(&moved, &mut down).map_err(LinearizeError::Rhs)?;
+            Ok(up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+        })
+        .collect()
 }
 
 /// The entries whose column of `a` (among the rows still kept) is below `tol` times the

@@ -30,34 +30,32 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&dir).map_err(err)?;
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(err)?;
+    // The result keeps the target's permissions; a new file gets what `File::create` gives
+    // (0666 less the umask), where a temporary file would be private (0600).
+    let mut builder = tempfile::Builder::new();
+    if let Some(p) = new_file_permissions() {
+        builder.permissions(p);
+    }
+    let mut tmp = builder.tempfile_in(&dir).map_err(err)?;
+    if let Ok(m) = std::fs::metadata(path) {
+        tmp.as_file().set_permissions(m.permissions()).map_err(err)?;
+    }
     tmp.write_all(bytes).and_then(|()| tmp.as_file().sync_all()).map_err(err)?;
-    // The temporary file is private (0600); the result gets the target's permissions, or a
-    // new file's usual ones.
-    let permissions = match std::fs::metadata(path) {
-        Ok(m) => m.permissions(),
-        Err(_) => new_file_permissions(tmp.as_file()).map_err(err)?,
-    };
-    tmp.as_file().set_permissions(permissions).map_err(err)?;
     tmp.persist(path).map_err(|e| err(e.error))?;
     Ok(())
 }
 
-/// Read and write for everyone the process's umask allows (what `File::create` gives).
+/// The mode `File::create` asks for; the kernel applies the umask when the file is created.
 #[cfg(unix)]
-fn new_file_permissions(_file: &std::fs::File) -> std::io::Result<std::fs::Permissions> {
+fn new_file_permissions() -> Option<std::fs::Permissions> {
     use std::os::unix::fs::PermissionsExt;
-    // The umask is only readable by setting it; a file created the usual way shows it.
-    let dir = tempfile::tempdir()?;
-    let p = dir.path().join("probe");
-    std::fs::File::create(&p)?;
-    let mode = std::fs::metadata(&p)?.permissions().mode();
-    Ok(std::fs::Permissions::from_mode(mode & 0o777))
+    Some(std::fs::Permissions::from_mode(0o666))
 }
 
+/// Elsewhere a temporary file is not made private: nothing to widen.
 #[cfg(not(unix))]
-fn new_file_permissions(file: &std::fs::File) -> std::io::Result<std::fs::Permissions> {
-    Ok(file.metadata()?.permissions())
+fn new_file_permissions() -> Option<std::fs::Permissions> {
+    None
 }
 
 #[cfg(test)]

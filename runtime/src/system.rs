@@ -138,16 +138,7 @@ impl System {
         // Velocities: a q' + b is linear in q', so a and b come out exactly.
         if r > 0 {
             let q = y[..m].to_vec();
-            let b = self.velocity_residuals(t, &q, &vec![0.0; m])?;
-            let mut a = nalgebra::DMatrix::zeros(r, m);
-            for j in 0..m {
-                let mut e = vec![0.0; m];
-                e[j] = 1.0;
-                let col = self.velocity_residuals(t, &q, &e)?;
-                for i in 0..r {
-                    a[(i, j)] = col[i] - b[i];
-                }
-            }
+            let (a, _) = constraint_matrix(&self.model, t, &q, &self.params)?;
             let res = self.velocity_residuals(t, &q, &y[m..2 * m])?;
             let dv = minimal_norm(&a, &res);
             for j in 0..m {
@@ -165,9 +156,7 @@ impl System {
     }
 
     fn velocity_residuals(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f64>, Failure> {
-        let mut out = vec![0.0; self.model.constraints.len()];
-        (self.model.constraint_residuals)(t, q, qd, &self.params, &mut out)?;
-        Ok(out)
+        velocity_residuals(&self.model, t, q, qd, &self.params)
     }
 
     /// `(q, q')` at a state.
@@ -182,6 +171,30 @@ impl System {
     pub fn work(&self, y: &[f64]) -> f64 {
         if self.form.has_work_state { y[self.form.states - 1] } else { 0.0 }
     }
+}
+
+/// `a q' + b` of the model's velocity constraints.
+fn velocity_residuals(model: &Model, t: f64, q: &[f64], qd: &[f64], params: &[f64]) -> Result<Vec<f64>, Failure> {
+    let mut out = vec![0.0; model.constraints.len()];
+    (model.constraint_residuals)(t, q, qd, params, &mut out)?;
+    Ok(out)
+}
+
+/// `(a, b)` of the velocity constraints `a q' + b = 0` at `q`: they are linear in `q'`, so the
+/// residuals at `q' = 0` and at the unit rates give them exactly.
+pub fn constraint_matrix(model: &Model, t: f64, q: &[f64], params: &[f64]) -> Result<(nalgebra::DMatrix<f64>, Vec<f64>), Failure> {
+    let (m, r) = (q.len(), model.constraints.len());
+    let b = velocity_residuals(model, t, q, &vec![0.0; m], params)?;
+    let mut a = nalgebra::DMatrix::zeros(r, m);
+    for j in 0..m {
+        let mut e = vec![0.0; m];
+        e[j] = 1.0;
+        let col = velocity_residuals(model, t, q, &e, params)?;
+        for i in 0..r {
+            a[(i, j)] = col[i] - b[i];
+        }
+    }
+    Ok((a, b))
 }
 
 /// `J^T (J J^T)^-1 r`: the smallest correction `d` with `J d = r`.

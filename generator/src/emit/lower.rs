@@ -20,7 +20,6 @@ use super::syntax;
 use crate::symbolic::number::{Rat, rat_to_f64};
 use crate::symbolic::{Expr, Node, Symbol};
 use proc_macro2::{Literal, TokenStream};
-use quote::quote;
 
 /// Why an expression could not be lowered.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -137,9 +136,7 @@ fn join_mul(den: &[Code]) -> syn::Expr {
 
 /// A float literal for a rational number.
 pub fn literal(r: &Rat) -> Result<TokenStream, LowerError> {
-    let v = rat_to_f64(r);
-    let lit = magnitude_literal(v).ok_or_else(|| LowerError::NotFinite(order_of_magnitude(r)))?;
-    Ok(if v < 0.0 { quote!(-#lit) } else { quote!(#lit) })
+    Ok(quote::ToTokens::into_token_stream(num_code(r)?.expr()))
 }
 
 /// `|v|` as the shortest literal that reads back to it (`0.5`, `1e-12`, `1.0`).
@@ -283,6 +280,7 @@ fn lower_rec(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use quote::quote;
 
     /// The lowered expression as prettyplease prints it.
     fn show(e: Expr) -> String {

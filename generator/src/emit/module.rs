@@ -115,7 +115,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     items.push(super::seam::failure_import(&em.seam));
     if !options.formulations.is_empty() {
         items.push(solve_dense());
-        if options.jacobian || options.parameter_jacobian {
+        if options.jacobian || em.emits_parameter_jacobian() {
             items.push(super::jacobian::lu_items());
         }
     }

@@ -588,7 +588,8 @@ impl<'a> Builder<'a> {
                         )
                     })?;
                     let r = self.expr(radius, &format!("{place}.radius"), Scope::Parameters)?;
-                    let rv = r.eval(&self.param_env(&parameters)).unwrap_or(f64::NAN);
+                    let env = self.param_env(&parameters);
+                    let rv = r.eval(&env).unwrap_or(f64::NAN);
                     if !(rv > 0.0) {
                         return Err(self.err(
                             ErrorKind::BadValue,
@@ -599,7 +600,6 @@ impl<'a> Builder<'a> {
                         ));
                     }
                     let axis = self.vec3(axle, &format!("{place}.axle"), Scope::Parameters)?;
-                    let env = self.param_env(&parameters);
                     let len = axis.iter().map(|a| a.eval(&env).unwrap_or(f64::NAN).powi(2)).sum::<f64>().sqrt();
                     if !((len - 1.0).abs() < 1e-12) {
                         return Err(self.err(

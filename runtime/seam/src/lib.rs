@@ -254,19 +254,25 @@ pub fn array_mut<'a, const N: usize>(argument: &'static str, slice: &'a mut [f64
 /// assert_eq!(out, [1.0, 2.0, 3.0, 4.0]);
 /// ```
 pub fn copy_matrix<const N: usize>(a: &[[f64; N]; N], out: &mut [f64]) -> Result<(), Failure> {
-    if out.len() != N * N {
-        return Err(Failure::Dimension { argument: "out", expected: N * N, got: out.len() });
-    }
-    for (row, chunk) in a.iter().zip(out.chunks_mut(N.max(1))) {
-        chunk.copy_from_slice(row);
-    }
-    Ok(())
+    copy_into("out", a, out)
 }
 
-/// Copies `a`, `R` rows of `C` entries, into the row-major slice `out` (`R * C` long).
-pub fn copy_rows<const R: usize, const C: usize>(a: &[[f64; C]; R], out: &mut [f64]) -> Result<(), Failure> {
+/// Copies `a`, `R` rows of `C` entries, into the row-major slice `jac` (`R * C` long).
+///
+/// ```
+/// let mut jac = [0.0; 6];
+/// seam::copy_rows(&[[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]], &mut jac).unwrap();
+/// assert_eq!(jac, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+/// assert!(seam::copy_rows(&[[1.0, 2.0]], &mut [0.0; 3]).is_err());
+/// ```
+pub fn copy_rows<const R: usize, const C: usize>(a: &[[f64; C]; R], jac: &mut [f64]) -> Result<(), Failure> {
+    copy_into("jac", a, jac)
+}
+
+/// `a` into the row-major slice `out`, named `argument` when its length is wrong.
+fn copy_into<const R: usize, const C: usize>(argument: &'static str, a: &[[f64; C]; R], out: &mut [f64]) -> Result<(), Failure> {
     if out.len() != R * C {
-        return Err(Failure::Dimension { argument: "jac", expected: R * C, got: out.len() });
+        return Err(Failure::Dimension { argument, expected: R * C, got: out.len() });
     }
     for (row, chunk) in a.iter().zip(out.chunks_mut(C.max(1))) {
         chunk.copy_from_slice(row);
