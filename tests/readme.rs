@@ -1,0 +1,54 @@
+//! The README's commands leave tracked files alone: every output path they name (`-o PATH`,
+//! `--out DIR`) in a shell block is neither a tracked file nor a directory holding tracked
+//! files. (The text names the commands that regenerate `docs/` on purpose, outside the blocks.)
+
+use std::process::Command;
+
+/// The output paths named in the README's ```sh blocks.
+fn output_paths(readme: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut in_block = false;
+    for line in readme.lines() {
+        if line.trim_start().starts_with("```") {
+            in_block = line.trim() == "```sh" && !in_block;
+            continue;
+        }
+        if !in_block {
+            continue;
+        }
+        let words: Vec<&str> = line.split_whitespace().collect();
+        for w in words.windows(2) {
+            if w[0] == "-o" || w[0] == "--out" {
+                out.push(w[1].to_string());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn readme_commands_write_only_untracked_paths() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let readme = std::fs::read_to_string(format!("{root}/README.md")).unwrap();
+    let paths = output_paths(&readme);
+    assert!(paths.len() >= 3, "the README's commands name their outputs: {paths:?}");
+    for path in paths {
+        // Outside the checkout nothing is tracked.
+        if std::path::Path::new(&path).is_absolute() && !path.starts_with(root) {
+            continue;
+        }
+        let listed = Command::new("git").args(["ls-files", "--", &path]).current_dir(root).output().expect("git runs in a checkout");
+        assert!(listed.status.success());
+        let tracked = String::from_utf8_lossy(&listed.stdout);
+        assert!(tracked.trim().is_empty(), "the README's command writes `{path}`, which holds tracked files:\n{tracked}");
+    }
+}
+
+/// The scan itself finds a tracked target when there is one.
+#[test]
+fn a_tracked_target_would_be_found() {
+    let paths = output_paths("text\n```sh\ncargo run -p runtime --bin sweep -- m --out docs/plots\n```\n--out ignored\n");
+    assert_eq!(paths, ["docs/plots"]);
+    let listed = Command::new("git").args(["ls-files", "--", "docs/plots"]).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap();
+    assert!(!String::from_utf8_lossy(&listed.stdout).trim().is_empty());
+}
