@@ -29,9 +29,11 @@ pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[
     let mut f0 = vec![0.0; n];
     f(t, &y, &mut f0, &mut stats).map_err(|r| stop(t, &y, r))?;
     let mut h = initial_step(f, t, &y, &f0.clone(), 3, s, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let (mut f1, mut f2, mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut f1, mut f2, mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut j = DMatrix::<f64>::zeros(n, n);
     let mut dfdt = vec![0.0; n];
+    // The stages, reused from step to step.
+    let (mut k1, mut k2, mut k3) = (DVector::<f64>::zeros(n), DVector::<f64>::zeros(n), DVector::<f64>::zeros(n));
     let mut fresh_jacobian = false;
     while next < outputs.len() {
         h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
@@ -60,24 +62,35 @@ pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[
         }
         let w = DMatrix::<f64>::identity(n, n) - &j * (h * D);
         let lu = w.lu();
-        let solve = |b: Vec<f64>| -> Option<Vec<f64>> { lu.solve(&DVector::from_vec(b)).map(|x| x.as_slice().to_vec()) };
         stats.factorizations += 1;
-        let Some(k1) = solve((0..n).map(|i| f0[i] + h * D * dfdt[i]).collect()) else {
+        for i in 0..n {
+            k1[i] = f0[i] + h * D * dfdt[i];
+        }
+        if !lu.solve_mut(&mut k1) {
             stats.rejected += 1;
             h *= 0.5;
             continue;
-        };
+        }
         for i in 0..n {
             tmp[i] = y[i] + 0.5 * h * k1[i];
         }
         f(t + 0.5 * h, &tmp, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
-        let k2: Vec<f64> = solve((0..n).map(|i| f1[i] - k1[i]).collect()).expect("factored above").iter().zip(&k1).map(|(a, b)| a + b).collect();
+        for i in 0..n {
+            k2[i] = f1[i] - k1[i];
+        }
+        lu.solve_mut(&mut k2);
+        k2 += &k1;
         for i in 0..n {
             y_new[i] = y[i] + h * k2[i];
         }
         f(t + h, &y_new, &mut f2, &mut stats).map_err(|r| stop(t, &y, r))?;
-        let k3 = solve((0..n).map(|i| f2[i] - E32 * (k2[i] - f1[i]) - 2.0 * (k1[i] - f0[i]) + h * D * dfdt[i]).collect()).expect("factored above");
-        let err: Vec<f64> = (0..n).map(|i| h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i])).collect();
+        for i in 0..n {
+            k3[i] = f2[i] - E32 * (k2[i] - f1[i]) - 2.0 * (k1[i] - f0[i]) + h * D * dfdt[i];
+        }
+        lu.solve_mut(&mut k3);
+        for i in 0..n {
+            err[i] = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]);
+        }
         let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
         if !e.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
             stats.rejected += 1;
