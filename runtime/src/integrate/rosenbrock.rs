@@ -28,7 +28,7 @@ pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
     let mut f0 = vec![0.0; n];
     f(t, &y, &mut f0, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let mut h = initial_step(f, t, &y, &f0.clone(), 3, s, &mut stats).map_err(|r| stop(t, &y, r))?;
+    let mut h = initial_step(f, t, &y, &f0, 3, s, &mut stats).map_err(|r| stop(t, &y, r))?;
     let (mut f1, mut f2, mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut j = DMatrix::<f64>::zeros(n, n);
     let mut dfdt = vec![0.0; n];
