@@ -391,100 +391,89 @@ pub fn energy(
     let mF = params.mF;
     let IFxx = params.IFxx;
     let IFyy = params.IFyy;
-    let x0 = f64::sin(delta);
-    let x1 = f64::sin(phi);
-    let x2 = psi_dot * x1;
-    let x3 = theta_dot + x2;
-    let x4 = f64::cos(delta);
-    let x5 = f64::sin(theta);
-    let x6 = f64::cos(phi);
-    let x7 = x5 * psi_dot * x6;
-    let x8 = f64::cos(theta);
-    let x9 = x8 * phi_dot;
-    let x10 = x9 - x7;
-    let x11 = f64::cos(lam);
-    let x12 = f64::sin(lam);
-    let x13 = x8 * psi_dot * x6 + x5 * phi_dot;
-    let x14 = x10 * x11 + x12 * x13;
-    let x15 = x0 * x3 + x4 * x14;
-    let x16 = f64::cos(thF);
-    let x17 = f64::sin(thF);
-    let x18 = x11 * x13 + delta_dot - x12 * x10;
-    let x19 = x15 * x16 - x17 * x18;
-    let x20 = x15 * x17 + x18 * x16;
-    let x21 = f64::cos(psi);
-    let x22 = f64::sin(psi);
-    let x23 = rR * (x21 * psi_dot * x1 + phi_dot * x6 * x22) + x_dot;
-    let x24 = rR * (psi_dot * x1 * x22 - x21 * phi_dot * x6) + y_dot;
-    let x25 = x12 * c_ + rF * x11;
-    let x26 = c_ + w_;
-    let x27 = x21 * y_dot - x_dot * x22;
-    let x28 = x6 * x27;
-    let x29 = rR * (x9 - x7 - phi_dot) + x26 * x13 + x28;
-    let x30 = x4 * x29;
-    let x31 = y_dot * x22 + x21 * x_dot + rR * psi_dot * x1;
-    let x32 = x31 * x8;
-    let x33 = x5 * x1 * x27;
-    let x34 = x32 + x33 - rR * x3;
-    let x35 = x5 * x31;
-    let x36 = x8 * x1 * x27;
-    let x37 = x35 - x26 * x3 - x36;
-    let x38 = x34 * x11 + x12 * x37;
-    let x39 = x38 * x0;
-    let x40 = x12 * rF - c_ * x11;
-    let x41 = x30 - x15 * x25 - x39 + x18 * x40;
-    let x42 = x38 * x4;
-    let x43 = x3 * x4;
-    let x44 = x0 * x14;
-    let x45 = x43 - x44;
-    let x46 = x0 * x29;
-    let x47 = x42 + x25 * x45 + x46;
-    let x48 = x12 * x34;
-    let x49 = x37 * x11;
-    let x50 = x49 - x40 * x45 - x48;
-    let x51 = x47 * x16 - x17 * x50;
-    let x52 = x47 * x17 + x50 * x16;
-    let x53 = x43 + thF_dot - x44;
-    let x54 = x35 - x3 * xB - x36;
-    let x55 = -rR - zB;
-    let x56 = xB * x13 - x10 * x55 + x28 - rR * phi_dot;
-    let x57 = x3 * x55 + x32 + x33;
-    let x58 = thR_dot + theta_dot + x2;
-    let x59 = (xH - c_ - w_) * x11 - x12 * zH;
-    let x60 = x0 * x1 + x4 * (x12 * x8 - x5 * x11) * x6;
-    let x61 = rR * (1.0 - x8);
-    let x62 = x5 * x26;
-    let x63 = x12 * (c_ + w_ - xH) - x11 * zH;
-    let x64 = x8 * x11 + x12 * x5;
-    let x65 = f64::cos(thR);
-    let x66 = f64::sin(thR);
-    let x67 = x65 * x10 - x66 * x13;
-    let x68 = x10 * x66 + x65 * x13;
-    let x69 = IHxz * x11;
-    let x70 = x12 * x11 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
-    let x71 = x49 - x48 - x59 * x45;
-    let x72 = x42 + x63 * x45 + x46;
-    let x73 = x30 - x15 * x63 + x59 * x18 - x39;
-    (0.5 * (x19 * x19) + 0.5 * (x20 * x20)) * IFxx
-        + 0.5 * (mR * (x23 * x23 + x24 * x24 + rR * rR * x1 * x1 * phi_dot * phi_dot))
-        + 0.5 * ((x41 * x41 + x51 * x51 + x52 * x52) * mF) + 0.5 * (IHyy * x45 * x45)
-        + 0.5 * (x3 * x3 * IByy) + 0.5 * (x53 * x53 * IFyy)
-        + 0.5 * ((x54 * x54 + x56 * x56 + x57 * x57) * mB) + 0.5 * (IRyy * x58 * x58)
-        + g
-            * ((mB * (x8 * x55 + rR - x5 * xB) + rR * mR) * x6
-                + mH * (x59 * x60 + (x61 - x62 + x63 * x64) * x6)
-                + mF * (x60 * x40 + (x61 + x25 * x64 - x62) * x6))
-        + (0.5 * (x67 * x67) + 0.5 * (x68 * x68)) * IRxx
-        + 0.5
-            * (x15
-                * (x15 * (x12 * (x12 * IHzz - 2.0 * x69) + IHxx * x11 * x11)
-                    + x18 * x70)) + 0.5 * (x10 * (x10 * IBxx - IBxz * x13))
-        + 0.5 * ((IBzz * x13 - x10 * IBxz) * x13)
-        + 0.5 * ((x71 * x71 + x72 * x72 + x73 * x73) * mH)
-        + 0.5
-            * (x18
-                * (x18 * (IHzz * x11 * x11 + x12 * (2.0 * x69 + x12 * IHxx))
-                    + x15 * x70))
+    let x0 = f64::sin(phi);
+    let x1 = psi_dot * x0;
+    let x2 = x1 + theta_dot;
+    let x3 = f64::sin(theta);
+    let x4 = f64::sin(psi);
+    let x5 = f64::cos(psi);
+    let x6 = x1 * rR + y_dot * x4 + x5 * x_dot;
+    let x7 = x5 * y_dot - x_dot * x4;
+    let x8 = x0 * x7;
+    let x9 = f64::cos(theta);
+    let x10 = x3 * x6 - x8 * x9;
+    let x11 = x10 - xB * x2;
+    let x12 = rR * phi_dot;
+    let x13 = f64::cos(phi);
+    let x14 = psi_dot * x13;
+    let x15 = x3 * phi_dot + x9 * x14;
+    let x16 = x13 * x7;
+    let x17 = x9 * phi_dot - x3 * x14;
+    let x18 = rR + zB;
+    let x19 = x15 * xB - x12 + x16 + x17 * x18;
+    let x20 = x9 * x6 + x3 * x8;
+    let x21 = x20 - x2 * x18;
+    let x22 = f64::sin(thF);
+    let x23 = f64::sin(delta);
+    let x24 = f64::cos(delta);
+    let x25 = f64::sin(lam);
+    let x26 = f64::cos(lam);
+    let x27 = x25 * x15 + x17 * x26;
+    let x28 = x23 * x2 + x24 * x27;
+    let x29 = delta_dot - x25 * x17 + x15 * x26;
+    let x30 = f64::cos(thF);
+    let x31 = x22 * x28 + x29 * x30;
+    let x32 = x28 * x30 - x22 * x29;
+    let x33 = (xH - c_ - w_) * x26 - x25 * zH;
+    let x34 = c_ + w_;
+    let x35 = x15 * x34 + x16 + rR * (x17 - phi_dot);
+    let x36 = x10 - x2 * x34;
+    let x37 = x20 - rR * x2;
+    let x38 = x25 * x36 + x37 * x26;
+    let x39 = x35 * x24 - x23 * x38;
+    let x40 = x25 * (x34 - xH) - x26 * zH;
+    let x41 = x33 * x29 + x39 - x28 * x40;
+    let x42 = x24 * x2 - x23 * x27;
+    let x43 = x36 * x26 - x25 * x37;
+    let x44 = x43 - x42 * x33;
+    let x45 = x24 * x38 + x35 * x23;
+    let x46 = x45 + x42 * x40;
+    let x47 = thF_dot + x42;
+    let x48 = thR_dot + x2;
+    let x49 = phi_dot * x13;
+    let x50 = rR * (x1 * x4 - x5 * x49) + y_dot;
+    let x51 = rR * (x49 * x4 + x1 * x5) + x_dot;
+    let x52 = IHxz * x26;
+    let x53 = x26 * x26;
+    let x54 = x25 * x26 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+    let x55 = x23 * x0 + x24 * (x25 * x9 - x3 * x26) * x13;
+    let x56 = x25 * rF - c_ * x26;
+    let x57 = rR * (1.0 - x9) - x3 * x34;
+    let x58 = x25 * c_ + rF * x26;
+    let x59 = x9 * x26 + x25 * x3;
+    let x60 = x43 - x42 * x56;
+    let x61 = x45 + x42 * x58;
+    let x62 = x61 * x30 - x22 * x60;
+    let x63 = x29 * x56 + x39 - x28 * x58;
+    let x64 = x60 * x30 + x22 * x61;
+    let x65 = f64::sin(thR);
+    let x66 = f64::cos(thR);
+    let x67 = x65 * x17 + x15 * x66;
+    let x68 = x66 * x17 - x15 * x65;
+    0.5 * (mB * (x11 * x11 + x19 * x19 + x21 * x21))
+        + (0.5 * (x31 * x31) + 0.5 * (x32 * x32)) * IFxx
+        + 0.5 * ((x41 * x41 + x44 * x44 + x46 * x46) * mH) + 0.5 * (x47 * x47 * IFyy)
+        + 0.5 * (IRyy * x48 * x48)
+        + 0.5 * ((x50 * x50 + x12 * x12 * x0 * x0 + x51 * x51) * mR)
+        + 0.5 * (x28 * (x28 * (x25 * (x25 * IHzz - 2.0 * x52) + x53 * IHxx) + x29 * x54))
+        + ((x55 * x56 + (x57 + x58 * x59) * x13) * mF
+            + (mB * (rR - x9 * x18 - x3 * xB) + rR * mR) * x13
+            + mH * (x33 * x55 + (x57 + x40 * x59) * x13)) * g
+        + 0.5 * (mF * (x62 * x62 + x63 * x63 + x64 * x64)) + 0.5 * (x2 * x2 * IByy)
+        + 0.5 * (x29 * (x29 * (x25 * (2.0 * x52 + x25 * IHxx) + x53 * IHzz) + x28 * x54))
+        + 0.5 * (x42 * x42 * IHyy) + (0.5 * (x67 * x67) + 0.5 * (x68 * x68)) * IRxx
+        + 0.5 * (x15 * (x15 * IBzz - x17 * IBxz))
+        + 0.5 * ((x17 * IBxx - x15 * IBxz) * x17)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -532,125 +521,126 @@ pub fn constraint_residuals(
     let lam = params.lam;
     let rR = params.rR;
     let rF = params.rF;
-    let x0 = f64::sin(phi);
-    let x1 = f64::cos(phi);
-    let x2 = x1 * x1;
-    let x3 = f64::sqrt(x2);
-    let x4 = x3 - x1;
-    let x5 = -thR_dot - theta_dot;
-    let x6 = f64::cos(psi);
-    let x7 = f64::sin(psi);
-    let x8 = f64::cos(delta);
-    let x9 = f64::sin(delta);
-    let x10 = f64::sin(lam);
-    let x11 = f64::cos(theta);
-    let x12 = x10 * x11;
-    let x13 = f64::sin(theta);
-    let x14 = f64::cos(lam);
-    let x15 = x13 * x14;
-    let x16 = x12 - x15;
-    let x17 = x8 * x0 - x9 * x16 * x1;
-    let x18 = x17 * x17;
-    let x19 = 1.0 - x18;
-    let x20 = x6 * x11 - x13 * x0 * x7;
-    let x21 = c_ + w_;
-    let x22 = x11 * x0 * x7;
-    let x23 = x13 * x6;
-    let x24 = -x22 - x23;
-    let x25 = x14 * x20;
-    let x26 = x10 * c_ + rF * x14;
-    let x27 = x10 * x20;
-    let x28 = x10 * rF;
-    let x29 = c_ * x14;
-    let x30 = x28 - x29;
-    let x31 = f64::sin(thF);
-    let x32 = x9 * x0;
-    let x33 = x8 * x16 * x1;
-    let x34 = x32 + x33;
-    let x35 = x11 * x14;
-    let x36 = x10 * x13;
-    let x37 = x35 + x36;
-    let x38 = f64::cos(thF);
-    let x39 = x31 * x34 + x37 * x38 * x1;
-    let x40 = x34 * x38 - x31 * x37 * x1;
-    let x41 = x8 * x17 + (x31 * x39 + x40 * x38) * x9;
-    let x42 = x11 * x7;
-    let x43 = x13 * x6 * x0;
-    let x44 = x42 + x43;
-    let x45 = x44 * x14;
-    let x46 = x6 * x11 * x0;
-    let x47 = x13 * x7;
-    let x48 = x47 - x46;
-    let x49 = x45 + x10 * x48;
-    let x50 = x6 * x8 * x1 - x9 * x49;
-    let x51 = x40 * x40 + x39 * x39 + x18;
-    let x52 = x9 * x6 * x1;
-    let x53 = x8 * x49 + x52;
-    let x54 = x10 * x44;
-    let x55 = x48 * x14 - x54;
-    let x56 = x53 * x38 - x31 * x55;
-    let x57 = x55 * x38 + x31 * x53;
-    let x58 = x46 - x47;
-    let x59 = x10 * x58;
-    let x60 = -x42 - x43;
-    let x61 = x14 * x58;
-    let x62 = x22 + x23;
-    let x63 = x25 + x10 * x62;
-    let x64 = -x8 * x1 * x7 - x9 * x63;
-    let x65 = x31 * x31 + x38 * x38;
-    let x66 = x11 * x14 * x1 + x10 * x13 * x1;
-    let x67 = x13 * x21;
-    let x68 = x15 - x12;
-    let x69 = x8 * x37 * x38 - x31 * x68;
-    let x70 = x31 * x8 * x37 + x68 * x38;
-    let x71 = x39 * x70 + x40 * x69 - x9 * x17 * x37;
-    let x72 = x62 * x14 - x27;
-    let x73 = x8 * x63 - x9 * x1 * x7;
-    let x74 = x73 * x38 - x31 * x72;
-    let x75 = x72 * x38 + x31 * x73;
-    let x76 = -x35 - x36;
-    let x77 = (x11 - 1.0) * rR + x67 + x26 * x76;
+    let x0 = f64::cos(phi);
+    let x1 = x0 * x0;
+    let x2 = f64::cos(psi);
+    let x3 = f64::sqrt(x1);
+    let x4 = x3 - x0;
+    let x5 = psi_dot * x4;
+    let x6 = f64::sin(phi);
+    let x7 = thR_dot + theta_dot;
+    let x8 = f64::sin(psi);
+    let x9 = x0 * x8;
+    let x10 = x6 * x8;
+    let x11 = rF * thF_dot;
+    let x12 = f64::cos(lam);
+    let x13 = f64::cos(theta);
+    let x14 = f64::sin(theta);
+    let x15 = x2 * x6;
+    let x16 = x13 * x8 + x14 * x15;
+    let x17 = x12 * x16;
+    let x18 = f64::sin(lam);
+    let x19 = x14 * x8;
+    let x20 = x15 * x13;
+    let x21 = x19 - x20;
+    let x22 = x17 + x18 * x21;
+    let x23 = f64::sin(delta);
+    let x24 = f64::cos(delta);
+    let x25 = x24 * x0;
+    let x26 = x25 * x2 - x22 * x23;
+    let x27 = x18 * c_ + rF * x12;
+    let x28 = x20 - x19;
+    let x29 = x18 * x16;
+    let x30 = x28 * x12 + x29;
+    let x31 = x18 * rF - c_ * x12;
+    let x32 = x18 * x28;
+    let x33 = x23 * x0;
+    let x34 = x2 * x33;
+    let x35 = c_ + w_;
+    let x36 = x24 * x6;
+    let x37 = x18 * x13;
+    let x38 = x14 * x12;
+    let x39 = x37 - x38;
+    let x40 = x36 - x39 * x33;
+    let x41 = x40 * x40;
+    let x42 = 1.0 - x41;
+    let x43 = x13 * x12;
+    let x44 = x18 * x14;
+    let x45 = x43 + x44;
+    let x46 = x45 * x0;
+    let x47 = f64::cos(thF);
+    let x48 = f64::sin(thF);
+    let x49 = x23 * x6;
+    let x50 = x25 * x39 + x49;
+    let x51 = x46 * x47 + x48 * x50;
+    let x52 = x50 * x47 - x48 * x46;
+    let x53 = x51 * x51 + x41 + x52 * x52;
+    let x54 = x40 * x26;
+    let x55 = x21 * x12 - x29;
+    let x56 = x34 + x22 * x24;
+    let x57 = x55 * x47 + x48 * x56;
+    let x58 = x56 * x47 - x48 * x55;
+    let x59 = x13 * x10;
+    let x60 = x14 * x2;
+    let x61 = x59 + x60;
+    let x62 = x31 * x24;
+    let x63 = x2 * x13 - x14 * x10;
+    let x64 = x18 * x63;
+    let x65 = x12 * x61;
+    let x66 = x18 * x61 + x12 * x63;
+    let x67 = (x48 * x51 + x52 * x47) * x23 + x24 * x40;
+    let x68 = x45 * x27;
+    let x69 = x14 * x35;
+    let x70 = x38 - x37;
+    let x71 = x45 * x24;
+    let x72 = x47 * x71 - x48 * x70;
+    let x73 = x45 * x23;
+    let x74 = x48 * x71 + x70 * x47;
+    let x75 = x72 * x52 - x73 * x40 + x74 * x51;
+    let x76 = x23 * x66 + x25 * x8;
+    let x77 = (x48 * x48 + x47 * x47) * x42;
+    let x78 = x44 * x0 + x43 * x0;
+    let x79 = x24 * x66 - x33 * x8;
+    let x80 = x65 - x64;
+    let x81 = x48 * x79 + x80 * x47;
+    let x82 = x79 * x47 - x80 * x48;
+    let x83 = -(x76 * x40);
+    let x84 = (x13 - 1.0) * rR - x68 + x69;
+    let x85 = rF * x40;
     [
-        rR * ((psi_dot * x0 * x4 + x5 * x1) * x6 + phi_dot * x4 * x1 * x7)
-            + f64::sqrt(x2) * x_dot,
-        rR * ((x5 * x7 + (x1 - x3) * x6 * phi_dot) * x1 + psi_dot * x0 * x4 * x7)
-            + f64::sqrt(x2) * y_dot,
-        theta_dot
-            * (f64::sqrt(x19)
-                * (x21 * x24 - rR * x20 + (x25 - x10 * x24) * x26
-                    + (x24 * x14 + x27) * x8 * x30)
-                - rF * (x19 * x6 * x1 + x41 * x50 * x17)) + f64::sqrt(x19) * x_dot
-            + psi_dot
-                * (f64::sqrt(x19)
-                    * (((x59 + x14 * x60) * x8 - x52) * x30 + rR * (x6 * x0 - x46 + x47)
-                        + x26 * (x61 - x10 * x60) + x21 * x60)
-                    - (x50 * x17 * x51 + x19 * (x40 * x56 + x39 * x57 + x50 * x17)) * rF)
-            + (f64::sqrt(x19) * x64 * x30 - rF * (x65 * x19 * x55 + x50 * x17 * x66))
-                * delta_dot - rF * thF_dot * x50
-            + (f64::sqrt(x19) * (x34 * x30 + (rR * (1.0 - x11) + x26 * x37 - x67) * x1)
-                * x7
-                - rF
-                    * (x19 * (x56 * x69 + x57 * x70 - x9 * x50 * x37) + x50 * x17 * x71))
-                * phi_dot,
-        (f64::sqrt(x19) * x50 * x30 - (-x72 * x65 * x19 - x64 * x17 * x66) * rF)
-            * delta_dot + f64::sqrt(x19) * y_dot
-            + (f64::sqrt(x19)
-                * (x73 * x30 + rR * (x0 * x7 - x22 - x23) + x72 * x26 + x21 * x20)
-                - (-x19 * (x40 * x74 + x75 * x39 + x64 * x17) - x64 * x17 * x51) * rF)
-                * psi_dot
+        f64::sqrt(x1) * x_dot + rR * (x2 * (x5 * x6 - x7 * x0) + phi_dot * x4 * x9),
+        rR * (x5 * x10 + ((x0 - x3) * x2 * phi_dot - x7 * x8) * x0)
+            + f64::sqrt(x1) * y_dot,
+        psi_dot
+            * ((x27 * x30 + x31 * (x24 * (x32 - x17) - x34) + rR * (x21 + x15)
+                - x35 * x16) * f64::sqrt(x42)
+                - rF * (x53 * x54 + (x54 + x51 * x57 + x58 * x52) * x42)) - x11 * x26
             + theta_dot
-                * (f64::sqrt(x19)
-                    * ((x45 - x59) * x26 + (x61 + x54) * x8 * x30 - rR * x44 + x21 * x58)
-                    - rF * (x19 * x1 * x7 - x41 * x64 * x17)) + rF * thF_dot * x64
-            + ((x77 * x1 + (x8 * x68 * x1 - x32) * x30) * f64::sqrt(x19) * x6
-                - (-x19 * (x69 * x74 - x9 * x64 * x37 + x75 * x70) - x64 * x17 * x71)
-                    * rF) * phi_dot,
-        theta_dot * x1
-            * (x16 * x26 + x13 * rR + (x8 * x30 - rF * x9 * x17 / f64::sqrt(x19)) * x76
-                - x21 * x11)
-            + ((x9 * x1 + x8 * x68 * x0) * x30 + x77 * x0
-                + (x8 * x1 - x9 * x68 * x0) * rF * x17 / f64::sqrt(x19)) * phi_dot
-            + delta_dot * x17 * (x28 + rF * (-x32 - x33) / f64::sqrt(x19) - x29),
+                * (f64::sqrt(x42)
+                    * (x62 * (x64 - x65) - x35 * x61 - rR * x63 + x27 * x66)
+                    - rF * (x42 * x2 * x0 + x67 * x54))
+            + (((x68 + rR * (1.0 - x13) - x69) * x0 + x31 * x50) * f64::sqrt(x42) * x8
+                - rF * (x75 * x54 + x42 * (x74 * x57 + x72 * x58 - x73 * x26))) * phi_dot
+            + f64::sqrt(x42) * x_dot
+            + delta_dot * (-f64::sqrt(x42) * x31 * x76 - rF * (x55 * x77 + x78 * x54)),
+        ((x42 * (x76 * x73 + x81 * x74 + x72 * x82) + x83 * x75) * rF
+            + f64::sqrt(x42) * x2 * (x84 * x0 + x31 * (x25 * x70 - x49))) * phi_dot
+            + psi_dot
+                * ((rR * (x10 - x59 - x60) + x80 * x27 + x35 * x63 + x31 * x79)
+                    * f64::sqrt(x42)
+                    + rF * (x42 * (x82 * x52 + x83 + x81 * x51) + x83 * x53))
+            + f64::sqrt(x42) * y_dot
+            + delta_dot * (rF * (x78 * x83 + x80 * x77) + f64::sqrt(x42) * x31 * x26)
+            - x11 * x76
+            + theta_dot
+                * (f64::sqrt(x42)
+                    * (x35 * x28 + x27 * (x17 - x32) - rR * x16 + x62 * x30)
+                    - rF * (x42 * x9 - x67 * x83)),
+        theta_dot
+            * (x39 * x27 - x45 * (x62 - x23 * x85 / f64::sqrt(x42)) + x14 * rR
+                - x35 * x13) * x0 + delta_dot * (x31 - rF * x50 / f64::sqrt(x42)) * x40
+            + (x84 * x6 + x31 * (x33 + x36 * x70)
+                + (x25 - x70 * x49) * x85 / f64::sqrt(x42)) * phi_dot,
     ]
 }
 ///Position-level residuals of the holonomic constraints.
@@ -668,20 +658,20 @@ pub fn position_residuals(
     let lam = params.lam;
     let rR = params.rR;
     let rF = params.rF;
-    let x0 = f64::cos(delta);
-    let x1 = f64::sin(phi);
-    let x2 = f64::sin(delta);
-    let x3 = f64::sin(lam);
-    let x4 = f64::cos(theta);
-    let x5 = f64::sin(theta);
-    let x6 = f64::cos(lam);
-    let x7 = x3 * x4 - x5 * x6;
-    let x8 = f64::cos(phi);
-    let x9 = x0 * x1 - x2 * x7 * x8;
+    let x0 = f64::sin(delta);
+    let x1 = f64::sin(lam);
+    let x2 = f64::cos(theta);
+    let x3 = f64::sin(theta);
+    let x4 = f64::cos(lam);
+    let x5 = f64::cos(phi);
+    let x6 = (x1 * x2 - x3 * x4) * x5;
+    let x7 = f64::cos(delta);
+    let x8 = f64::sin(phi);
+    let x9 = x7 * x8 - x0 * x6;
     [
-        (x2 * x1 + x0 * x7 * x8) * (x3 * rF - c_ * x6) - f64::sqrt(1.0 - x9 * x9) * rF
-            + (rR * (1.0 - x4) + (x3 * c_ + rF * x6) * (x4 * x6 + x3 * x5)
-                - x5 * (c_ + w_)) * x8,
+        (x0 * x8 + x7 * x6) * (x1 * rF - c_ * x4) - rF * f64::sqrt(1.0 - x9 * x9)
+            + (rR * (1.0 - x2) + (x1 * c_ + rF * x4) * (x2 * x4 + x1 * x3)
+                - x3 * (c_ + w_)) * x5,
     ]
 }
 ///Lagrange's equations with multipliers: 16 states, 8 equations.
@@ -775,517 +765,507 @@ pub mod lagrange {
         let mF = params.mF;
         let IFxx = params.IFxx;
         let IFyy = params.IFyy;
-        let x0 = f64::cos(theta);
-        let x1 = f64::sin(phi);
-        let x2 = f64::sin(psi);
-        let x3 = x0 * x1 * x2;
-        let x4 = f64::sin(theta);
+        let x0 = f64::sin(thF);
+        let x1 = f64::sin(theta);
+        let x2 = f64::sin(phi);
+        let x3 = f64::sin(psi);
+        let x4 = x2 * x3;
         let x5 = f64::cos(psi);
-        let x6 = x4 * x5;
-        let x7 = x3 + x6;
-        let x8 = f64::cos(lam);
-        let x9 = f64::sin(lam);
-        let x10 = x5 * x0 - x4 * x1 * x2;
-        let x11 = x9 * x10;
-        let x12 = x7 * x8 - x11;
-        let x13 = f64::cos(delta);
-        let x14 = x8 * x10;
-        let x15 = x14 + x9 * x7;
+        let x6 = f64::cos(theta);
+        let x7 = x5 * x6;
+        let x8 = x7 - x1 * x4;
+        let x9 = f64::cos(lam);
+        let x10 = f64::sin(lam);
+        let x11 = x6 * x4;
+        let x12 = x1 * x5;
+        let x13 = x11 + x12;
+        let x14 = x8 * x9 + x10 * x13;
+        let x15 = f64::cos(delta);
         let x16 = f64::sin(delta);
         let x17 = f64::cos(phi);
-        let x18 = x13 * x15 - x16 * x17 * x2;
-        let x19 = -x13 * x17 * x2 - x16 * x15;
-        let x20 = x19 * x19;
-        let x21 = f64::sin(thF);
-        let x22 = f64::cos(thF);
-        let x23 = x18 * x22 - x21 * x12;
-        let x24 = x12 * x22 + x21 * x18;
-        let x25 = x0 * x2;
-        let x26 = x4 * x5 * x1;
-        let x27 = x25 + x26;
-        let x28 = x27 * x8;
-        let x29 = x5 * x0 * x1;
-        let x30 = x4 * x2;
-        let x31 = x30 - x29;
-        let x32 = x28 + x9 * x31;
-        let x33 = x16 * x5 * x17;
-        let x34 = x13 * x32 + x33;
-        let x35 = x9 * x27;
-        let x36 = x31 * x8 - x35;
-        let x37 = x34 * x22 - x21 * x36;
-        let x38 = x5 * x13 * x17 - x16 * x32;
-        let x39 = x19 * x38;
-        let x40 = x36 * x22 + x21 * x34;
-        let x41 = (x37 * x23 + x39 + x24 * x40) * mF
-            + mH * (x18 * x34 + x39 + x12 * x36);
-        let x42 = rR * x0;
-        let x43 = x42 - rR - zB;
-        let x44 = x4 * rR;
-        let x45 = x44 - xB;
-        let x46 = x0 * xB;
-        let x47 = -rR - zB;
-        let x48 = x4 * x47;
-        let x49 = x46 + x48;
-        let x50 = x0 - 1.0;
-        let x51 = x44 - c_ - w_;
-        let x52 = x50 * rR * x8 + x9 * x51;
-        let x53 = x16 * x1 * x52;
-        let x54 = x9 * (c_ + w_ - xH);
-        let x55 = x8 * zH;
-        let x56 = x54 - x55;
-        let x57 = x16 * x1;
-        let x58 = x9 * x0;
-        let x59 = x4 * x8;
-        let x60 = x58 - x59;
-        let x61 = x13 * x60 * x17;
-        let x62 = x57 + x61;
-        let x63 = c_ + w_;
-        let x64 = x63 * x0;
-        let x65 = x64 - x44;
-        let x66 = x65 * x13;
-        let x67 = (xH - c_ - w_) * x8 - x9 * zH;
-        let x68 = x0 * x8;
-        let x69 = x9 * x4;
-        let x70 = x68 + x69;
-        let x71 = (x66 + x67 * x70) * x17 - x53 - x56 * x62;
-        let x72 = x13 * x1 * x52;
-        let x73 = x13 * x1 - x16 * x60 * x17;
-        let x74 = x16 * x65 * x17;
-        let x75 = x72 + x56 * x73 + x74;
-        let x76 = (x51 * x8 - x9 * x50 * rR) * x1;
-        let x77 = x76 - x67 * x73;
-        let x78 = x9 * rF;
-        let x79 = c_ * x8;
-        let x80 = x78 - x79;
-        let x81 = x76 - x73 * x80;
-        let x82 = x9 * c_;
-        let x83 = rF * x8;
+        let x18 = x17 * x3;
+        let x19 = x14 * x15 - x16 * x18;
+        let x20 = x10 * x8;
+        let x21 = x9 * x13;
+        let x22 = x21 - x20;
+        let x23 = f64::cos(thF);
+        let x24 = x0 * x19 + x22 * x23;
+        let x25 = x15 * x18 + x14 * x16;
+        let x26 = x25 * x25;
+        let x27 = x19 * x23 - x0 * x22;
+        let x28 = mR + mB;
+        let x29 = x5 * x2;
+        let x30 = x6 * x3;
+        let x31 = x1 * x29 + x30;
+        let x32 = x9 * x31;
+        let x33 = x1 * x3;
+        let x34 = x29 * x6;
+        let x35 = x33 - x34;
+        let x36 = x32 + x10 * x35;
+        let x37 = x5 * x17;
+        let x38 = x16 * x37;
+        let x39 = x15 * x36 + x38;
+        let x40 = x10 * x31;
+        let x41 = x35 * x9 - x40;
+        let x42 = x15 * x37 - x16 * x36;
+        let x43 = x25 * x42;
+        let x44 = x41 * x23 + x0 * x39;
+        let x45 = x39 * x23 - x0 * x41;
+        let x46 = mH * (x39 * x19 + x41 * x22 - x43)
+            + (x44 * x24 + x45 * x27 - x43) * mF;
+        let x47 = c_ + w_;
+        let x48 = x10 * (x47 - xH);
+        let x49 = x9 * zH;
+        let x50 = x48 - x49;
+        let x51 = x15 * x17;
+        let x52 = x10 * x6;
+        let x53 = x1 * x9;
+        let x54 = x52 - x53;
+        let x55 = x16 * x2;
+        let x56 = x51 * x54 + x55;
+        let x57 = x6 * x47;
+        let x58 = x1 * rR;
+        let x59 = x57 - x58;
+        let x60 = x15 * x59;
+        let x61 = x6 * x9;
+        let x62 = x10 * x1;
+        let x63 = x61 + x62;
+        let x64 = -c_ - w_;
+        let x65 = x9 * (x64 + xH) - x10 * zH;
+        let x66 = x63 * x65;
+        let x67 = x64 + x58;
+        let x68 = x6 - 1.0;
+        let x69 = rR * x9;
+        let x70 = x10 * x67 + x68 * x69;
+        let x71 = x70 * x55;
+        let x72 = (x60 + x66) * x17 - x50 * x56 - x71;
+        let x73 = x15 * x2;
+        let x74 = x16 * x17;
+        let x75 = x73 - x54 * x74;
+        let x76 = x59 * x74 + x70 * x73;
+        let x77 = x75 * x50 + x76;
+        let x78 = x10 * rR;
+        let x79 = (x9 * x67 - x68 * x78) * x2;
+        let x80 = x79 - x65 * x75;
+        let x81 = rR * mR;
+        let x82 = x10 * c_;
+        let x83 = rF * x9;
         let x84 = x82 + x83;
-        let x85 = x72 + x74 + x73 * x84;
-        let x86 = x81 * x22 + x21 * x85;
-        let x87 = x85 * x22 - x21 * x81;
-        let x88 = (x66 + x80 * x70) * x17 - x53 - x84 * x62;
-        let x89 = mB * (x1 * (x43 * x10 + x7 * x45) - x49 * x17 * x17 * x2)
-            + (x19 * x71 + x75 * x18 + x12 * x77) * mH + rR * mR * x5 * x1
-            + mF * (x86 * x24 + x87 * x23 + x19 * x88);
-        let x90 = x59 - x58;
-        let x91 = x50 * rR;
-        let x92 = x4 * x63;
-        let x93 = x91 + x92 - x56 * x70;
-        let x94 = x67 * x90 + x13 * x93;
-        let x95 = x84 * x70;
-        let x96 = x91 - x95 + x92;
-        let x97 = x96 * x13 + x90 * x80;
-        let x98 = x96 * x22 - x21 * x80 * x70;
-        let x99 = x80 * x70 * x22 + x21 * x96;
-        let x100 = x4 * xB - x0 * x47 - rR;
-        let x101 = x100 * mB;
-        let x102 = rR * mR;
-        let x103 = x102 - x101;
-        let x104 = mH * (x19 * x94 + (x18 * x93 + x12 * x67 * x70) * x16)
-            + (x97 * x19 + (x98 * x23 + x99 * x24) * x16) * mF + x103 * x17 * x2;
-        let x105 = -c_ - w_;
-        let x106 = x9 * x105;
-        let x107 = rR * x8;
-        let x108 = x107 - x82 - x106 - x83;
-        let x109 = x13 * x80;
-        let x110 = x8 * x105;
-        let x111 = x9 * rR;
-        let x112 = x110 - x109 + x111;
-        let x113 = x82 + x106 + x83 - x107;
-        let x114 = x13 * x22 * x113 - x21 * x112;
-        let x115 = x21 * x13 * x113 + x112 * x22;
-        let x116 = x110 - x67 * x13 + x111;
-        let x117 = x107 - x106 - x54 + x55;
-        let x118 = x106 - x107 + x54 - x55;
-        let x119 = (x10 * x47 - x7 * xB) * mB
-            + mF * (x108 * x16 * x19 + x114 * x23 + x24 * x115)
-            + mH * (x12 * x116 + x16 * x19 * x117 + x13 * x18 * x118);
-        let x120 = x67 * mH + mF * x80;
-        let x121 = x19 * x120;
-        let x122 = x17 * x17;
-        let x123 = f64::sqrt(x122);
-        let x124 = x73 * x73;
-        let x125 = 1.0 - x124;
-        let x126 = f64::sqrt(x125);
-        let x127 = x38 * x38;
-        let x128 = mH * (x77 * x36 + x75 * x34 + x38 * x71)
-            + ((x43 * x27 + x31 * x45) * x1 + x5 * x49 * x17 * x17) * mB
-            + rR * mR * x1 * x2 + mF * (x86 * x40 + x87 * x37 + x38 * x88);
-        let x129 = (x38 * x94 + x16 * (x93 * x34 + x67 * x36 * x70)) * mH
-            + (x101 - x102) * x5 * x17
-            + ((x99 * x40 + x98 * x37) * x16 + x97 * x38) * mF;
-        let x130 = mF * (x115 * x40 + x108 * x16 * x38 + x37 * x114)
-            + (x13 * x118 * x34 + x16 * x38 * x117 + x116 * x36) * mH
-            + mB * (x27 * x47 - x31 * xB);
-        let x131 = x38 * x120;
-        let x132 = 2.0 * phi;
-        let x133 = f64::cos(thR);
-        let x134 = x4 * x133;
-        let x135 = f64::sin(thR);
-        let x136 = x135 * x0;
-        let x137 = -x134 - x136;
-        let x138 = x133 * x0 - x4 * x135;
-        let x139 = x138 * x138;
-        let x140 = x4 * IBxz;
-        let x141 = x0 * IBxz;
-        let x142 = IHxz * f64::cos(2.0 * lam);
-        let x143 = x9 * x8 * (IHzz - IHxx);
-        let x144 = x143 - x142;
-        let x145 = x144 * x62;
-        let x146 = IHzz * x8 * x8;
-        let x147 = IHxz * x8;
-        let x148 = x9 * (2.0 * x147 + x9 * IHxx);
-        let x149 = x146 + x148;
-        let x150 = x149 * x70 * x17;
-        let x151 = x62 * x22 - x21 * x70 * x17;
-        let x152 = x151 * x151;
-        let x153 = x21 * x62 + x70 * x22 * x17;
-        let x154 = x153 * x153;
-        let x155 = x9 * (x9 * IHzz - 2.0 * x147);
-        let x156 = IHxx * x8 * x8;
-        let x157 = x155 + x156;
-        let x158 = x62 * x157;
-        let x159 = x144 * x70 * x17;
-        let x160 = IHyy + IFyy;
-        let x161 = x144 * x90;
-        let x162 = x13 * x70 * x157 + x161;
-        let x163 = x4 * IBzz - x141;
-        let x164 = x90 * x149;
-        let x165 = x13 * x144 * x70;
-        let x166 = x164 + x165;
-        let x167 = x0 * IBxx - x140;
-        let x168 = x21 * x13 * x70 + x90 * x22;
-        let x169 = x153 * x168;
-        let x170 = x13 * x70 * x22 - x21 * x90;
-        let x171 = x151 * x170;
-        let x172 = x16 * x73 * x70 * (-IHyy - IFyy) + x162 * x62
-            + (x100 * x49 * mB + x163 * x0 + x166 * x70 - x4 * x167) * x17
-            + (x71 * x94 + x16 * (x67 * x77 * x70 + x75 * x93)) * mH
-            + mF * (x16 * (x86 * x99 + x87 * x98) + x97 * x88) + (x169 + x171) * IFxx;
-        let x173 = x21 * x153 + x151 * x22;
-        let x174 = x160 * x13 * x73
-            + (x13 * x75 * x118 + x16 * x117 * x71 + x116 * x77) * mH
-            + (x87 * x114 + x108 * x16 * x88 + x86 * x115) * mF
-            + (mB * (x43 * x47 - x45 * xB) + IRyy + IByy) * x1
-            + (x158 + x159 + x173 * IFxx) * x16;
-        let x175 = x1 * IRyy;
-        let x176 = x145 + x67 * x71 * mH + IFxx * (x153 * x22 - x21 * x151)
-            + mF * x88 * x80 + x150;
-        let x177 = x73 * IFyy;
-        let x178 = x123 - x17;
-        let x179 = rR * x5 * x1 * x178;
-        let x180 = rR * x1 * x178 * x2;
-        let x181 = x152 + x154 + x124;
-        let x182 = x151 * x37 + x153 * x40 + x38 * x73;
-        let x183 = x29 - x30;
-        let x184 = x9 * x183;
-        let x185 = -x25 - x26;
-        let x186 = x184 + x8 * x185;
-        let x187 = x5 * x1;
-        let x188 = x8 * x183;
-        let x189 = (x186 * x13 - x33) * x80 + rR * (x187 - x29 + x30)
-            + x84 * (x188 - x9 * x185) + x63 * x185;
-        let x190 = f64::sqrt(x125) * x189 - (x38 * x73 * x181 + x125 * x182) * rF;
-        let x191 = x1 * x2;
-        let x192 = x18 * x80 + rR * (x191 - x3 - x6) + x12 * x84 + x63 * x10;
-        let x193 = x151 * x23 + x24 * x153 + x19 * x73;
-        let x194 = f64::sqrt(x125) * x192 - (-x125 * x193 - x19 * x73 * x181) * rF;
-        let x195 = x134 + x136;
-        let x196 = (mF * (x108 * x97 + x98 * x114 + x99 * x115) + x161
-            + x13 * (x155 - IHyy - IFyy + x156) * x70
-            + (x117 * x94 + x13 * x93 * x118 + x67 * x116 * x70) * mH
-            + IFxx * (x21 * x168 + x170 * x22)) * x16;
-        let x197 = x67 * mH * x94 + IFxx * (x168 * x22 - x21 * x170) + x164 + x165
-            + x97 * mF * x80;
-        let x198 = -(x16 * IFyy * x70);
-        let x199 = rR * x178 * x17 * x2;
-        let x200 = x17 - x123;
-        let x201 = x200 * rR * x5 * x17;
-        let x202 = x62 * x80;
-        let x203 = 1.0 - x0;
-        let x204 = (rR * x203 + x95 - x92) * x17;
-        let x205 = x202 + x204;
-        let x206 = x37 * x170 + x40 * x168 - x16 * x38 * x70;
-        let x207 = x169 + x171 - x16 * x73 * x70;
-        let x208 = f64::sqrt(x125) * x205 * x2 - rF * (x125 * x206 + x38 * x73 * x207);
-        let x209 = x170 * x23 - x16 * x19 * x70 + x24 * x168;
-        let x210 = -x68 - x69;
-        let x211 = x91 + x92 + x84 * x210;
-        let x212 = x211 * x17 + (x13 * x90 * x17 - x57) * x80;
-        let x213 = x212 * f64::sqrt(x125) * x5 - (-x125 * x209 - x19 * x73 * x207) * rF;
-        let x214 = x16 * x17 + x13 * x90 * x1;
-        let x215 = x214 * x80;
-        let x216 = x211 * x1;
-        let x217 = x13 * x17 - x16 * x90 * x1;
-        let x218 = x215 + x216 + x217 * rF * x73 / f64::sqrt(x125);
-        let x219 = x21 * x21 + x22 * x22;
-        let x220 = x219 * IFxx;
-        let x221 = x16 * (x67 * x117 * mH + x108 * mF * x80 - x142 + x143);
-        let x222 = x13 * IFyy;
-        let x223 = -(rR * x5 * x17);
-        let x224 = -(rR * x17 * x2);
-        let x225 = -x3 - x6;
-        let x226 = x225 * x8 + x11;
-        let x227 = x63 * x225 - rR * x10 + (x14 - x9 * x225) * x84 + x226 * x13 * x80;
-        let x228 = x13 * x73 + x173 * x16;
-        let x229 = f64::sqrt(x125) * x227 - rF * (x125 * x5 * x17 + x228 * x38 * x73);
-        let x230 = x188 + x35;
-        let x231 = (x28 - x184) * x84 + x230 * x13 * x80 - rR * x27 + x63 * x183;
-        let x232 = f64::sqrt(x125) * x231 - rF * (x125 * x17 * x2 - x228 * x19 * x73);
-        let x233 = x60 * x84;
-        let x234 = x109 - rF * x16 * x73 / f64::sqrt(x125);
-        let x235 = x233 + x44 + x234 * x210 - x64;
-        let x236 = x17 * x235;
-        let x237 = x0 * x8 * x17 + x9 * x4 * x17;
-        let x238 = f64::sqrt(x125) * x19 * x80
-            - rF * (x219 * x125 * x36 + x38 * x73 * x237);
-        let x239 = f64::sqrt(x125) * x38 * x80
-            - (-x12 * x219 * x125 - x19 * x73 * x237) * rF;
-        let x240 = -x57 - x61;
-        let x241 = x78 + rF * x240 / f64::sqrt(x125) - x79;
-        let x242 = x73 * x241;
-        let x243 = -(rF * x38);
-        let x244 = rF * x19;
-        let x245 = psi_dot * x1;
-        let x246 = theta_dot + x245;
-        let x247 = x16 * x246;
-        let x248 = x4 * psi_dot * x17;
-        let x249 = x0 * phi_dot;
-        let x250 = x249 - x248;
-        let x251 = x0 * psi_dot * x17 + x4 * phi_dot;
-        let x252 = x250 * x8 + x9 * x251;
-        let x253 = x13 * x252;
-        let x254 = x4 * (x245 - theta_dot) * phi_dot - theta_dot * x0 * psi_dot * x17;
-        let x255 = x0 * phi_dot * (theta_dot - x245) - x4 * theta_dot * psi_dot * x17;
-        let x256 = x8 * x254 + x9 * x255;
-        let x257 = x13 * psi_dot * phi_dot * x17 + delta_dot * (-x247 - x253)
-            - x16 * x256;
-        let x258 = x4 * rR * psi_dot * x1;
-        let x259 = x258 - x63 * x246;
-        let x260 = x0 * psi_dot * x1 - theta_dot - x245;
-        let x261 = x9 * x259 + rR * x260 * x8;
-        let x262 = x16 * x261;
-        let x263 = rR * (x249 - x248 - phi_dot) + x63 * x251;
-        let x264 = x263 * x13;
-        let x265 = (x264 - x262) * delta_dot;
-        let x266 = rR * x254 + x63 * x255;
-        let x267 = x266 * x16;
-        let x268 = x50 * phi_dot * x17 - x4 * theta_dot * x1;
-        let x269 = rR * theta_dot * x0 * x1;
-        let x270 = x269 + x51 * phi_dot * x17;
-        let x271 = x268 * rR * x8 + x9 * x270;
-        let x272 = x13 * psi_dot * x271;
-        let x273 = x257 * x84 + x265 + x267 + x272;
-        let x274 = psi_dot * (x270 * x8 - x9 * x268 * rR);
-        let x275 = x274 - x257 * x80;
-        let x276 = x9 * rR * x260;
-        let x277 = x8 * x259;
-        let x278 = x246 * x13;
-        let x279 = x16 * x252;
-        let x280 = x278 - x279;
-        let x281 = x277 - x276 - x80 * x280;
-        let x282 = x16 * x263;
-        let x283 = x13 * x261;
-        let x284 = x282 + x84 * x280 + x283;
-        let x285 = x22 * x281 + x284 * x21;
-        let x286 = x247 + x253;
-        let x287 = x8 * x251 + delta_dot - x9 * x250;
-        let x288 = x286 * x21 + x287 * x22;
-        let x289 = x264 - x286 * x84 - x262 + x287 * x80;
-        let x290 = x273 * x22 - x21 * x275 + x285 * x280 - x288 * x289;
-        let x291 = x266 * x13;
-        let x292 = x286 * x22 - x21 * x287;
-        let x293 = x292 * x285;
-        let x294 = delta_dot * (-x282 - x283);
-        let x295 = x8 * x255;
-        let x296 = x9 * x254;
-        let x297 = x295 - x296;
-        let x298 = x297 * x80;
-        let x299 = x256 * x13;
-        let x300 = delta_dot * x280;
-        let x301 = x16 * psi_dot * phi_dot * x17;
-        let x302 = x299 + x300 + x301;
-        let x303 = x84 * x302;
-        let x304 = x284 * x22 - x21 * x281;
-        let x305 = x304 * x288;
-        let x306 = x16 * psi_dot * x271;
-        let x307 = x291 - x293 + x294 + x298 - x303 + x305 - x306;
-        let x308 = x275 * x22 - x304 * x280 + x21 * x273 + x292 * x289;
-        let x309 = x282 + x283 + x56 * x280;
-        let x310 = x287 * x309;
-        let x311 = x67 * x297;
-        let x312 = x56 * x302;
-        let x313 = x277 - x276 - x67 * x280;
-        let x314 = x286 * x313;
-        let x315 = x291 + x294 + x310 + x311 - x312 - x314 - x306;
-        let x316 = x67 * x287 - x286 * x56 - x262 + x264;
-        let x317 = x313 * x280 + x56 * x257 + x265 - x287 * x316 + x267 + x272;
-        let x318 = x274 - x280 * x309 + x286 * x316 - x67 * x257;
-        let x319 = x258 - x246 * xB;
-        let x320 = x246 * x47 + rR * x0 * psi_dot * x1;
-        let x321 = x251 * x320 - x254 * x47 - x250 * x319 + xB * x255;
-        let x322 = xB * x251 - x250 * x47 - rR * phi_dot;
-        let x323 = psi_dot * (x43 * phi_dot * x17 - x4 * rR * theta_dot * x1)
-            - x322 * x251 + x246 * x319;
-        let x324 = x250 * x322 - x246 * x320 + psi_dot * (x269 + x45 * phi_dot * x17);
-        let x325 = phi_dot * phi_dot;
-        let x326 = psi_dot * psi_dot;
-        let x327 = x286 * x157;
-        let x328 = x287 * x144;
-        let x329 = x287 * (x327 + x328);
-        let x330 = x257 * IHyy;
-        let x331 = x287 * x149;
-        let x332 = x286 * x144;
-        let x333 = x286 * (x331 + x332);
-        let x334 = x257 * IFyy;
-        let x335 = x333 - x329 - x330 - x334;
-        let x336 = IBxz * x251;
-        let x337 = x250 * IBxx;
-        let x338 = (x337 - x336) * x251;
-        let x339 = x250 * IBxz;
-        let x340 = IBzz * x251;
-        let x341 = x250 * (x340 - x339);
-        let x342 = (x340 - x339 - IByy * x251) * x246 - IBxz * x255 + IBxx * x254;
-        let x343 = x246 * (x336 + x250 * IByy - x337) - IBxz * x254 + IBzz * x255;
-        let x344 = x286 * IHyy;
-        let x345 = x144 * x302;
-        let x346 = x149 * x297;
-        let x347 = (x344 - x327 - x328) * x280 + x345 + x346;
-        let x348 = x250 * x135;
-        let x349 = x133 * x251;
-        let x350 = thR_dot + theta_dot + x245;
-        let x351 = (x348 + x349) * x350 * (IRxx - IRyy)
-            + (thR_dot * (-x348 - x349) - x135 * x255 + x133 * x254) * IRxx;
-        let x352 = x133 * x250 - x135 * x251;
-        let x353 = x352 * x350 * (IRyy - IRxx)
-            + (x133 * x255 + thR_dot * x352 + x135 * x254) * IRxx;
-        let x354 = f64::sin(x132);
-        let x355 = x280 * (x331 - x287 * IHyy + x332);
-        let x356 = x302 * x157;
-        let x357 = x144 * x297;
-        let x358 = x355 + x356 + x357;
-        let x359 = x299 - thF_dot * x287 + x300 + x301;
-        let x360 = x286 * thF_dot;
-        let x361 = x278 + thF_dot - x279;
-        let x362 = IFxx * (x21 * x359 + (x360 + x295 - x296) * x22)
-            + x361 * x292 * (IFyy - IFxx);
-        let x363 = x361 * x288 * (IFxx - IFyy)
-            + IFxx * (x22 * x359 + x21 * (x296 - x360 - x295));
-        let x364 = g * x73;
-        let x365 = x17 / f64::sqrt(x122);
-        let x366 = -thR_dot - theta_dot;
-        let x367 = (x123 - x1 * x1 / f64::sqrt(x122) - x17) * x17 + x1 * x1;
-        let x368 = delta_dot * x60;
-        let x369 = phi_dot - x368;
-        let x370 = x13 * x369 * x17;
-        let x371 = theta_dot * x210 * x17;
-        let x372 = delta_dot * x1;
-        let x373 = x90 * x1 * phi_dot;
-        let x374 = -x371 - x372 - x373;
-        let x375 = x374 * x16;
-        let x376 = x370 + x375;
-        let x377 = psi_dot * x17 * x2;
-        let x378 = x5 * x1 * phi_dot;
-        let x379 = theta_dot * x1;
-        let x380 = -psi_dot - x379;
-        let x381 = x5 * phi_dot * x17;
-        let x382 = x5 * x0 * x380 + x4 * (x246 * x2 - x381);
-        let x383 = delta_dot * x5 * x17;
-        let x384 = x0 * phi_dot * x17;
-        let x385 = x5 * (x384 + x4 * x380);
-        let x386 = -theta_dot - x245;
-        let x387 = x386 * x0 * x2;
-        let x388 = x385 + x387;
-        let x389 = x9 * x388;
-        let x390 = psi_dot * x1 * x2;
-        let x391 = x388 * x8;
-        let x392 = (x371 + x372 + x373) * x13 - thF_dot * x70 * x17 + x16 * x369 * x17;
-        let x393 = x21 * x392;
-        let x394 = theta_dot * x60 * x17;
-        let x395 = x1 * phi_dot * x210;
-        let x396 = thF_dot * x62;
-        let x397 = (x394 + x395 + x396) * x22;
-        let x398 = x393 + x397;
-        let x399 = x21 * (-x394 - x395 - x396);
-        let x400 = x392 * x22;
-        let x401 = x399 + x400;
-        let x402 = 2.0 * (x398 * x153) + 2.0 * (x73 * x376) + 2.0 * (x151 * x401);
-        let x403 = psi_dot + x379;
-        let x404 = x5 * x0 * x403 + x4 * (x381 + x386 * x2);
-        let x405 = x8 * x404;
-        let x406 = x246 * x0 * x2 + x5 * (x4 * x403 - x384);
-        let x407 = x9 * x406;
-        let x408 = -x377 - delta_dot * x32 - x378;
-        let x409 = x16 * (-x383 - x405 - x407) + x408 * x13;
-        let x410 = thF_dot * x34;
-        let x411 = x9 * x404;
-        let x412 = x406 * x8;
-        let x413 = x16 * x408 - thF_dot * x36 + x13 * (x383 + x405 + x407);
-        let x414 = (x410 - x411 + x412) * x22 + x21 * x413;
-        let x415 = x22 * x413 + x21 * (x411 - x410 - x412);
-        let x416 = x13 * (delta_dot * x173 + x370 + x375)
-            + (x21 * (x393 + x397 - x151 * thF_dot) - delta_dot * x73
-                + (x399 + thF_dot * x153 + x400) * x22) * x16;
-        let x417 = x17 * x2;
-        let x418 = psi_dot - phi_dot;
-        let x419 = psi_dot + phi_dot;
-        let x420 = x21 * x16;
-        let x421 = x13 * x22;
-        let x422 = x16 * x22;
-        let x423 = x21 * x13;
-        let x424 = x21
-            * (-0.5 * (delta_dot * (x420 + x421)) - 0.5 * (delta_dot * (x421 - x420)))
-            + (0.5 * ((x422 + x423) * delta_dot) - 0.5 * (delta_dot * (x422 - x423)))
-                * x22;
-        let x425 = phi_dot * x17 * x2;
-        let x426 = x5 * x386 - x425;
-        let x427 = x0 * x426 + x4 * x403 * x2;
-        let x428 = x0 * x380 * x2 + x4 * x426;
-        let x429 = x9 * x428;
-        let x430 = x8 * x428;
-        let x431 = x9 * x1;
-        let x432 = x8 * x17;
-        let x433 = x9 * x17;
-        let x434 = x8 * x1;
-        let x435 = -0.5
-            * ((theta_dot + phi_dot) * (x4 * (x431 + x432) + (x434 - x433) * x0))
-            - 0.5 * ((x0 * (-x433 - x434) + x4 * (x432 - x431)) * (theta_dot - phi_dot));
-        let x436 = x5 * psi_dot * x17;
-        let x437 = x1 * phi_dot * x2;
-        let x438 = x437 - delta_dot * x15 - x436;
-        let x439 = delta_dot * x17 * x2;
-        let x440 = x4 * x380 * x2;
-        let x441 = (x246 * x5 + x425) * x0;
-        let x442 = x440 + x441;
+        let x85 = x10 * rF - c_ * x9;
+        let x86 = x63 * x85;
+        let x87 = (x60 + x86) * x17 - x56 * x84 - x71;
+        let x88 = x75 * x84 + x76;
+        let x89 = x79 - x85 * x75;
+        let x90 = x88 * x23 - x0 * x89;
+        let x91 = x89 * x23 + x0 * x88;
+        let x92 = rR + zB;
+        let x93 = x6 * xB - x1 * x92;
+        let x94 = x17 * x93;
+        let x95 = rR * x6;
+        let x96 = x95 - rR - zB;
+        let x97 = x58 - xB;
+        let x98 = mH * (x77 * x19 - x25 * x72 + x80 * x22) + x81 * x29
+            + mF * (x90 * x27 - x25 * x87 + x91 * x24)
+            + mB * (x2 * (x8 * x96 + x13 * x97) - x94 * x18);
+        let x99 = x63 * x84;
+        let x100 = x1 * x47;
+        let x101 = x100 + x68 * rR;
+        let x102 = x101 - x99;
+        let x103 = x53 - x52;
+        let x104 = x15 * x102 + x85 * x103;
+        let x105 = x102 * x23 - x0 * x86;
+        let x106 = x0 * x102 + x86 * x23;
+        let x107 = x101 - x63 * x50;
+        let x108 = x15 * x107 + x65 * x103;
+        let x109 = x6 * x92 - rR + x1 * xB;
+        let x110 = mB * x109;
+        let x111 = x81 - x110;
+        let x112 = mF * (x16 * (x105 * x27 + x106 * x24) - x25 * x104)
+            + mH * (x16 * (x107 * x19 + x66 * x22) - x25 * x108) + x111 * x18;
+        let x113 = x78 - x9 * x47;
+        let x114 = x85 * x15;
+        let x115 = x113 - x114;
+        let x116 = x15 * x23;
+        let x117 = x10 * x47;
+        let x118 = -x69 - x117;
+        let x119 = x118 + x84;
+        let x120 = x116 * x119 - x0 * x115;
+        let x121 = x0 * x15;
+        let x122 = x121 * x119 + x115 * x23;
+        let x123 = x69 + x117;
+        let x124 = x123 - x82 - x83;
+        let x125 = x16 * x124;
+        let x126 = x123 - x48 + x49;
+        let x127 = x16 * x126;
+        let x128 = x65 * x15;
+        let x129 = x113 - x128;
+        let x130 = (x118 + x50) * x15;
+        let x131 = (-x13 * xB - x8 * x92) * mB
+            + mF * (x27 * x120 + x122 * x24 - x25 * x125)
+            + (x22 * x129 - x127 * x25 + x130 * x19) * mH;
+        let x132 = x65 * mH;
+        let x133 = x85 * mF;
+        let x134 = x132 + x133;
+        let x135 = -(x25 * x134);
+        let x136 = x17 * x17;
+        let x137 = f64::sqrt(x136);
+        let x138 = x75 * x75;
+        let x139 = 1.0 - x138;
+        let x140 = f64::sqrt(x139);
+        let x141 = x42 * x42;
+        let x142 = x81 * x4 + mB * (x94 * x37 + (x31 * x96 + x35 * x97) * x2)
+            + mH * (x80 * x41 + x77 * x39 + x72 * x42)
+            + mF * (x90 * x45 + x87 * x42 + x44 * x91);
+        let x143 = (x104 * x42 + x16 * (x105 * x45 + x44 * x106)) * mF
+            + (x16 * (x66 * x41 + x39 * x107) + x108 * x42) * mH + (x110 - x81) * x37;
+        let x144 = mF * (x45 * x120 + x44 * x122 + x125 * x42)
+            + (x127 * x42 + x39 * x130 + x41 * x129) * mH + mB * (-x35 * xB - x31 * x92);
+        let x145 = x134 * x42;
+        let x146 = x1 * IBxz;
+        let x147 = f64::cos(thR);
+        let x148 = f64::sin(thR);
+        let x149 = x1 * x147 + x148 * x6;
+        let x150 = x147 * x6 - x1 * x148;
+        let x151 = IRxx * (x149 * x149 + x150 * x150);
+        let x152 = x6 * IBxz;
+        let x153 = x10 * x9 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+        let x154 = x63 * x17;
+        let x155 = IHxz * x9;
+        let x156 = x9 * x9;
+        let x157 = x10 * (2.0 * x155 + x10 * IHxx) + x156 * IHzz;
+        let x158 = x153 * x56 + x154 * x157;
+        let x159 = IHyy + IFyy;
+        let x160 = x2 * x2;
+        let x161 = IRyy + IByy;
+        let x162 = x154 * x23 + x0 * x56;
+        let x163 = x56 * x23 - x0 * x154;
+        let x164 = x162 * x162 + x163 * x163;
+        let x165 = x81 * rR;
+        let x166 = 2.0 * phi;
+        let x167 = x10 * (x10 * IHzz - 2.0 * x155) + x156 * IHxx;
+        let x168 = x56 * x167 + x154 * x153;
+        let x169 = x63 * x15;
+        let x170 = x103 * x153;
+        let x171 = x167 * x169 + x170;
+        let x172 = x23 * x169 - x0 * x103;
+        let x173 = x103 * x23;
+        let x174 = x173 + x0 * x169;
+        let x175 = x172 * x163 + x162 * x174;
+        let x176 = x1 * IBzz - x152;
+        let x177 = x103 * x157 + x153 * x169;
+        let x178 = x6 * IBxx - x146;
+        let x179 = x63 * x16;
+        let x180 = x179 * x75;
+        let x181 = mF * (x87 * x104 + x16 * (x91 * x106 + x105 * x90)) + x171 * x56
+            + x175 * IFxx + (x110 * x93 + x176 * x6 + x63 * x177 - x1 * x178) * x17
+            + (x16 * (x66 * x80 + x77 * x107) + x72 * x108) * mH - x180 * x159;
+        let x182 = x0 * x162 + x163 * x23;
+        let x183 = x15 * x75;
+        let x184 = (x80 * x129 + x77 * x130 + x127 * x72) * mH
+            + ((-xB * x97 - x92 * x96) * mB + x161) * x2
+            + (x90 * x120 + x125 * x87 + x122 * x91) * mF + x16 * (x182 * IFxx + x168)
+            + x183 * x159;
+        let x185 = x2 * IRyy;
+        let x186 = x72 * x132 + x158 + (x162 * x23 - x0 * x163) * IFxx + x87 * x133;
+        let x187 = x75 * IFyy;
+        let x188 = x137 - x17;
+        let x189 = rR * x188;
+        let x190 = x29 * x189;
+        let x191 = x4 * x189;
+        let x192 = x34 - x33;
+        let x193 = x192 * x9 + x40;
+        let x194 = x10 * x192;
+        let x195 = x194 - x32;
+        let x196 = x193 * x84 - x31 * x47 + rR * (x35 + x29) + x85 * (x195 * x15 - x38);
+        let x197 = x75 * x42;
+        let x198 = x162 * x44 + x45 * x163 + x197;
+        let x199 = x138 + x164;
+        let x200 = x196 * f64::sqrt(x139) - rF * (x139 * x198 + x199 * x197);
+        let x201 = x22 * x84 + rR * (x4 - x11 - x12) + x8 * x47 + x85 * x19;
+        let x202 = -(x25 * x75);
+        let x203 = x27 * x163 + x202 + x162 * x24;
+        let x204 = f64::sqrt(x139) * x201 + rF * (x203 * x139 + x199 * x202);
+        let x205 = x16 * x16;
+        let x206 = (mH * (x107 * x130 + x66 * x129 + x126 * x108)
+            + IFxx * (x172 * x23 + x0 * x174)
+            + (x104 * x124 + x122 * x106 + x105 * x120) * mF + x170
+            + (x167 - IHyy - IFyy) * x169) * x16;
+        let x207 = x177 + x104 * x133 + x132 * x108 + (x174 * x23 - x0 * x172) * IFxx;
+        let x208 = -(x179 * IFyy);
+        let x209 = x18 * x189;
+        let x210 = x17 - x137;
+        let x211 = rR * x37;
+        let x212 = x210 * x211;
+        let x213 = 1.0 - x6;
+        let x214 = (rR * x213 + x99 - x100) * x17 + x85 * x56;
+        let x215 = x214 * x3;
+        let x216 = x44 * x174 - x179 * x42 + x172 * x45;
+        let x217 = x175 - x180;
+        let x218 = x215 * f64::sqrt(x139) - rF * (x139 * x216 + x217 * x197);
+        let x219 = x172 * x27 + x174 * x24 + x25 * x179;
+        let x220 = (x85 * (x51 * x103 - x55) + x102 * x17) * x5;
+        let x221 = rF * (x202 * x217 + x219 * x139) + x220 * f64::sqrt(x139);
+        let x222 = x51 - x103 * x55;
+        let x223 = rF * x75;
+        let x224 = x74 + x73 * x103;
+        let x225 = x102 * x2 + x85 * x224;
+        let x226 = x222 * x223 / f64::sqrt(x139) + x225;
+        let x227 = x0 * x0 + x23 * x23;
+        let x228 = x227 * IFxx;
+        let x229 = (x126 * x132 + x124 * x133 + x153) * x16;
+        let x230 = x15 * IFyy;
+        let x231 = -x211;
+        let x232 = -(rR * x18);
+        let x233 = x182 * x16 + x183;
+        let x234 = x20 - x21;
+        let x235 = x234 * x114 - x13 * x47 - rR * x8 + x14 * x84;
+        let x236 = f64::sqrt(x139) * x235 - rF * (x233 * x197 + x139 * x37);
+        let x237 = x192 * x47 - rR * x31 + x114 * x193 + (x32 - x194) * x84;
+        let x238 = x237 * f64::sqrt(x139) - rF * (x139 * x18 - x202 * x233);
+        let x239 = x114 - x16 * x223 / f64::sqrt(x139);
+        let x240 = x58 - x57;
+        let x241 = x240 + x54 * x84;
+        let x242 = x241 - x63 * x239;
+        let x243 = x242 * x17;
+        let x244 = x62 * x17 + x61 * x17;
+        let x245 = x227 * x139;
+        let x246 = -x25 * x85 * f64::sqrt(x139) - rF * (x244 * x197 + x41 * x245);
+        let x247 = x85 * f64::sqrt(x139) * x42 + rF * (x244 * x202 + x22 * x245);
+        let x248 = x85 - rF * x56 / f64::sqrt(x139);
+        let x249 = x248 * x75;
+        let x250 = -(rF * x42);
+        let x251 = -(x25 * rF);
+        let x252 = psi_dot * x2;
+        let x253 = x252 + theta_dot;
+        let x254 = x252 * x58;
+        let x255 = x254 - xB * x253;
+        let x256 = x1 * psi_dot;
+        let x257 = x6 * phi_dot;
+        let x258 = x257 - x256 * x17;
+        let x259 = x6 * psi_dot;
+        let x260 = x1 * phi_dot;
+        let x261 = x259 * x17 + x260;
+        let x262 = x92 * x258 + x261 * xB - rR * phi_dot;
+        let x263 = theta_dot * x2;
+        let x264 = phi_dot * x17;
+        let x265 = x253 * x255 - x262 * x261 + psi_dot * (x264 * x96 - x263 * x58);
+        let x266 = x263 * x95;
+        let x267 = x252 * x95 - x253 * x92;
+        let x268 = x262 * x258 + psi_dot * (x266 + x264 * x97) - x253 * x267;
+        let x269 = theta_dot * x17;
+        let x270 = (theta_dot - x252) * x257 - x256 * x269;
+        let x271 = x260 * (x252 - theta_dot) - x259 * x269;
+        let x272 = x270 * xB - x255 * x258 + x271 * x92 + x261 * x267;
+        let x273 = rR * x271 + x270 * x47;
+        let x274 = x261 * x47 + rR * (x258 - phi_dot);
+        let x275 = x254 - x253 * x47;
+        let x276 = x252 * x6 - x252 - theta_dot;
+        let x277 = x10 * x275 + x276 * x69;
+        let x278 = x15 * x274 - x277 * x16;
+        let x279 = x68 * x264 - x1 * x263;
+        let x280 = x266 + x264 * x67;
+        let x281 = (x69 * x279 + x10 * x280) * psi_dot;
+        let x282 = (x16 * x273 + delta_dot * x278) + x281 * x15;
+        let x283 = x271 * x9 + x10 * x270;
+        let x284 = x264 * psi_dot;
+        let x285 = x10 * x261 + x9 * x258;
+        let x286 = x16 * x253 + x285 * x15;
+        let x287 = x284 * x15 - x16 * x283 - delta_dot * x286;
+        let x288 = x282 + x287 * x84;
+        let x289 = x15 * x253 - x16 * x285;
+        let x290 = x9 * x275 - x276 * x78;
+        let x291 = x290 - x85 * x289;
+        let x292 = x16 * x274 + x277 * x15;
+        let x293 = x292 + x289 * x84;
+        let x294 = x291 * x23 + x0 * x293;
+        let x295 = (x9 * x280 - x78 * x279) * psi_dot;
+        let x296 = x295 - x85 * x287;
+        let x297 = delta_dot - x10 * x258 + x261 * x9;
+        let x298 = x85 * x297 - x286 * x84 + x278;
+        let x299 = x297 * x23 + x0 * x286;
+        let x300 = x23 * x288 + x294 * x289 - x0 * x296 - x298 * x299;
+        let x301 = x286 * x23 - x0 * x297;
+        let x302 = x293 * x23 - x291 * x0;
+        let x303 = x298 * x301 + x0 * x288 + x296 * x23 - x302 * x289;
+        let x304 = (delta_dot * x289 + x15 * x283) + x284 * x16;
+        let x305 = x304 * x84;
+        let x306 = x281 * x16;
+        let x307 = delta_dot * x292;
+        let x308 = x15 * x273;
+        let x309 = (x308 - x307) - x306;
+        let x310 = x301 * x294;
+        let x311 = x10 * x271;
+        let x312 = x270 * x9;
+        let x313 = x312 - x311;
+        let x314 = x85 * x313;
+        let x315 = x299 * x302;
+        let x316 = x309 - x305 - x310 + x314 + x315;
+        let x317 = x65 * x297 - x286 * x50 + x278;
+        let x318 = x292 + x289 * x50;
+        let x319 = x295 + x286 * x317 - x318 * x289 - x65 * x287;
+        let x320 = x318 * x297;
+        let x321 = x304 * x50;
+        let x322 = x290 - x65 * x289;
+        let x323 = x286 * x322;
+        let x324 = x65 * x313;
+        let x325 = x320 + x309 - x321 - x323 + x324;
+        let x326 = x282 - x317 * x297 + x50 * x287 + x289 * x322;
+        let x327 = psi_dot * psi_dot;
+        let x328 = phi_dot * phi_dot + x327;
+        let x329 = psi_dot * phi_dot;
+        let x330 = psi_dot * x18;
+        let x331 = x297 * x157 + x286 * x153;
+        let x332 = (x304 * x167 + (x331 - IHyy * x297) * x289) + x153 * x313;
+        let x333 = IBxx * x258;
+        let x334 = x261 * IBxz;
+        let x335 = x261 * (x333 - x334);
+        let x336 = IBzz * x261 - IBxz * x258;
+        let x337 = x336 * x258;
+        let x338 = x286 * x167;
+        let x339 = x153 * x297;
+        let x340 = x338 + x339;
+        let x341 = x297 * x340;
+        let x342 = IFyy * x287;
+        let x343 = x286 * x331;
+        let x344 = IHyy * x287;
+        let x345 = x343 - x341 - x342 - x344;
+        let x346 = thF_dot + x289;
+        let x347 = thF_dot * x286;
+        let x348 = x304 - thF_dot * x297;
+        let x349 = x301 * (IFyy - IFxx) * x346
+            + IFxx * ((x347 + x313) * x23 + x0 * x348);
+        let x350 = x165 * f64::sin(x166);
+        let x351 = (x348 * x23 + x0 * (x311 - x347 - x312)) * IFxx
+            + x299 * x346 * (IFxx - IFyy);
+        let x352 = x271 * IBxx - x270 * IBxz + (x336 - x261 * IByy) * x253;
+        let x353 = x147 * x261 + x148 * x258;
+        let x354 = thR_dot + x253;
+        let x355 = (x147 * x271 - x270 * x148 - thR_dot * x353) * IRxx
+            + x353 * x354 * (IRxx - IRyy);
+        let x356 = x147 * x258 - x261 * x148;
+        let x357 = (x270 * x147 + x148 * x271 + thR_dot * x356) * IRxx
+            + x356 * x354 * (IRyy - IRxx);
+        let x358 = x270 * IBzz - x271 * IBxz + (IByy * x258 - x333 + x334) * x253;
+        let x359 = x2 * phi_dot;
+        let x360 = x313 * x157;
+        let x361 = x286 * IHyy;
+        let x362 = x304 * x153;
+        let x363 = x360 + x289 * (x361 - x338 - x339) + x362;
+        let x364 = (x307 + x306) + (-g * x75 - x308);
+        let x365 = psi_dot * x4;
+        let x366 = (x188 - x160 / f64::sqrt(x136)) * x17 + x160;
+        let x367 = x5 * phi_dot;
+        let x368 = thR_dot + theta_dot;
+        let x369 = x359 * x3;
+        let x370 = x17 / f64::sqrt(x136);
+        let x371 = x5 * psi_dot;
+        let x372 = x359 * x17;
+        let x373 = psi_dot * x188;
+        let x374 = x359 * x5;
+        let x375 = x263 + psi_dot;
+        let x376 = x375 * x7;
+        let x377 = phi_dot * x37;
+        let x378 = x253 * x3;
+        let x379 = x376 + x1 * (x377 - x378);
+        let x380 = x10 * x379;
+        let x381 = x30 * x253;
+        let x382 = x264 * x6;
+        let x383 = x375 * x1;
+        let x384 = x381 + (x383 - x382) * x5;
+        let x385 = x384 * x9;
+        let x386 = x385 - x380;
+        let x387 = x63 * x269;
+        let x388 = x359 * x103 - x387;
+        let x389 = delta_dot * x2 + x388;
+        let x390 = delta_dot * x54;
+        let x391 = phi_dot - x390;
+        let x392 = x51 * x391 - x16 * x389;
+        let x393 = x227 * x392;
+        let x394 = x10 * x2;
+        let x395 = x9 * x17;
+        let x396 = x10 * x17;
+        let x397 = x9 * x2;
+        let x398 = 0.5
+            * ((theta_dot + phi_dot) * (x1 * (x394 + x395) + (x397 - x396) * x6))
+            + 0.5 * ((theta_dot - phi_dot) * (x1 * (x395 - x394) - (x396 + x397) * x6));
+        let x399 = x379 * x9;
+        let x400 = delta_dot * x37;
+        let x401 = x10 * x384 + (x399 + x400);
+        let x402 = x374 + x330;
+        let x403 = x402 + delta_dot * x36;
+        let x404 = -x16 * x401 - x403 * x15;
+        let x405 = x392 * x42;
+        let x406 = x75 * x392;
+        let x407 = x5 * x253;
+        let x408 = phi_dot * x18;
+        let x409 = -x407 - x408;
+        let x410 = x1 * x409 - x375 * x30;
+        let x411 = x9 * x410;
+        let x412 = delta_dot * x18;
+        let x413 = x375 * x33;
+        let x414 = (x407 + x408) * x6;
+        let x415 = x414 - x413;
+        let x416 = x10 * x415;
+        let x417 = x369 - psi_dot * x37;
+        let x418 = x417 - delta_dot * x14;
+        let x419 = x16 * (x412 - x411 - x416) + x15 * x418;
+        let x420 = x10 * x410;
+        let x421 = x6 * x409 + x413;
+        let x422 = delta_dot * x16;
+        let x423 = psi_dot - phi_dot;
+        let x424 = psi_dot + phi_dot;
+        let x425 = x0 * x16;
+        let x426 = x16 * x23;
+        let x427 = (0.5 * (delta_dot * (x121 + x426))
+            - 0.5 * ((x426 - x121) * delta_dot)) * x23
+            - x0
+                * (0.5 * (delta_dot * (x425 + x116))
+                    + 0.5 * (delta_dot * (x116 - x425)));
+        let x428 = x63 * x359;
+        let x429 = thF_dot * x56 + (x54 * x269 - x428);
+        let x430 = x389 * x15;
+        let x431 = x430 - thF_dot * x154 + x391 * x74;
+        let x432 = x431 * x23 - x0 * x429;
+        let x433 = delta_dot * x75;
+        let x434 = x0 * x431 + x429 * x23;
+        let x435 = x15 * (x182 * delta_dot + x392)
+            + x16
+                * ((x432 + thF_dot * x162) * x23 - x433 + x0 * (x434 - thF_dot * x163));
+        let x436 = x15 * x401 - thF_dot * x41 - x16 * x403;
+        let x437 = thF_dot * x39;
+        let x438 = x0 * x436 + (x386 + x437) * x23;
+        let x439 = x0 * (x380 - x437 - x385) + x436 * x23;
+        let x440 = 2.0 * (x162 * x434) + 2.0 * (x432 * x163) + 2.0 * x406;
+        let x441 = x5 * (x382 - x383);
+        let x442 = x441 - x381;
         let x443 = x9 * x442;
-        let x444 = x438 * x13 + x16 * (x439 - x430 - x443);
-        let x445 = thF_dot * x13;
-        let x446 = -thF_dot - theta_dot * x13;
-        let x447 = (x21 * (-theta_dot - x445) - delta_dot * x16 * x22) * x70
-            + x446 * x90 * x22;
-        let x448 = x21 * (x446 * x90 - delta_dot * x16 * x70)
-            + (theta_dot + x445) * x70 * x22;
-        let x449 = x448 * x153 + x16 * (theta_dot * x73 * x90 - x70 * x376) + x401 * x170
-            + x398 * x168 - delta_dot * x13 * x73 * x70 + x151 * x447;
-        let x450 = x5 * psi_dot * x1;
-        let x451 = (x430 - x439 + x443) * x13;
-        let x452 = x438 * x16;
-        let x453 = x451 + x452 - x12 * thF_dot;
-        let x454 = x442 * x8;
-        let x455 = thF_dot * x18;
-        let x456 = x21 * x453 + (x454 - x429 + x455) * x22;
-        let x457 = x21 * (x429 - x454 - x455) + x453 * x22;
-        let x458 = -delta_dot * x90 - phi_dot;
-        let x459 = theta_dot * x90 * x17 + x1 * phi_dot * x70;
-        let x460 = x454 - x429;
-        let x461 = x5 * x17;
-        let x462 = x73 * x73 / f64::powf(x125, 1.5);
-        let x463 = 1.0 / f64::sqrt(x125);
-        let x464 = x90 * phi_dot * x17;
-        let x465 = delta_dot * x17;
-        let x466 = theta_dot * x1 * x70;
-        let x467 = x462 + x463;
+        let x444 = x1 * (x378 - x377) - x376;
+        let x445 = x10 * x442;
+        let x446 = theta_dot * x6;
+        let x447 = x29 * psi_dot;
+        let x448 = theta_dot * x3;
+        let x449 = theta_dot + thF_dot * x15;
+        let x450 = thF_dot + theta_dot * x15;
+        let x451 = x63 * (-x422 * x23 - x0 * x449) - x173 * x450;
+        let x452 = delta_dot * x169;
+        let x453 = x63 * x449 * x23 + x0 * (-x450 * x103 - delta_dot * x179);
+        let x454 = theta_dot * x103;
+        let x455 = x172 * x432 + x16 * (x75 * x454 - x63 * x392) + x434 * x174
+            + x163 * x451 + x162 * x453 - x433 * x169;
+        let x456 = rF * thF_dot;
+        let x457 = x9 * x415;
+        let x458 = x457 - x420;
+        let x459 = -(x25 * x392);
+        let x460 = x428 + x103 * x269;
+        let x461 = delta_dot * x103 + phi_dot;
+        let x462 = x16 * x418 + x15 * (x411 - x412 + x416);
+        let x463 = x462 - thF_dot * x22;
+        let x464 = thF_dot * x19;
+        let x465 = x23 * x463 + x0 * (x420 - x457 - x464);
+        let x466 = x0 * x463 + (x458 + x464) * x23;
+        let x467 = 1.0 / f64::sqrt(x139) + x138 / f64::powf(x139, 1.5);
+        let x468 = x392 * x467;
+        let x469 = x63 * x263 + (delta_dot * x17 + x264 * x103);
         Assembly {
             qdot: [
                 x_dot,
@@ -1299,314 +1279,277 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    mR + mB + (x12 * x12 + x18 * x18 + x20) * mH
-                        + (x23 * x23 + x24 * x24 + x20) * mF,
-                    x41,
-                    x89,
-                    x104,
-                    x119,
-                    0.0,
-                    x121,
-                    0.0,
-                    x123,
-                    0.0,
-                    x126,
-                    0.0,
-                    0.0,
-                ],
-                [
-                    x41,
-                    mF * (x127 + x37 * x37 + x40 * x40) + mR + mB
-                        + mH * (x127 + x34 * x34 + x36 * x36),
-                    x128,
-                    x129,
-                    x130,
-                    0.0,
+                    mF * (x24 * x24 + x26 + x27 * x27)
+                        + (x22 * x22 + x19 * x19 + x26) * mH + x28,
+                    x46,
+                    x98,
+                    x112,
                     x131,
                     0.0,
+                    x135,
                     0.0,
-                    x123,
+                    x137,
                     0.0,
-                    x126,
+                    x140,
+                    0.0,
                     0.0,
                 ],
                 [
-                    x89,
-                    x128,
-                    rR * rR * mR * (0.5 - 0.5 * f64::cos(x132))
-                        + ((x43 * x43 + x45 * x45) * x1 * x1 + x49 * x49 * x17 * x17)
-                            * mB
-                        + (((x137 * x137 + x139) * IRxx + (x140 + IBzz * x0) * x0
-                            - x4 * (-x141 - x4 * IBxx)) * x17 + (x145 + x150) * x70)
-                            * x17 + (x152 + x154) * IFxx
-                        + (x86 * x86 + x87 * x87 + x88 * x88) * mF + (x158 + x159) * x62
-                        + (x71 * x71 + x75 * x75 + x77 * x77) * mH
-                        + (IRyy + IByy) * x1 * x1 + x160 * x73 * x73,
-                    x172,
-                    x174,
-                    x175,
-                    x176,
-                    x177,
-                    x179,
-                    x180,
+                    x46,
+                    (x41 * x41 + x141 + x39 * x39) * mH + x28
+                        + mF * (x45 * x45 + x141 + x44 * x44),
+                    x142,
+                    x143,
+                    x144,
+                    0.0,
+                    x145,
+                    0.0,
+                    0.0,
+                    x137,
+                    0.0,
+                    x140,
+                    0.0,
+                ],
+                [
+                    x98,
+                    x142,
+                    mH * (x80 * x80 + x77 * x77 + x72 * x72)
+                        + (((x146 + IBzz * x6) * x6 + x151 + x1 * (x152 + x1 * IBxx))
+                            * x17 + x63 * x158) * x17
+                        + mF * (x90 * x90 + x91 * x91 + x87 * x87) + x138 * x159
+                        + x160 * x161 + ((x97 * x97 + x96 * x96) * x160 + x94 * x94) * mB
+                        + IFxx * x164 + x165 * (0.5 - 0.5 * f64::cos(x166)) + x56 * x168,
+                    x181,
+                    x184,
+                    x185,
+                    x186,
+                    x187,
                     x190,
-                    x194,
+                    x191,
+                    x200,
+                    x204,
                     0.0,
                 ],
                 [
-                    x104,
-                    x129,
-                    x172,
-                    rR * rR * mR + x0 * x167 + (x195 * x195 + x139) * IRxx
-                        + (x16 * x16 * (x67 * x67 * x70 * x70 + x93 * x93) + x94 * x94)
-                            * mH + x4 * x163 + x166 * x90
-                        + mF * (x16 * x16 * (x98 * x98 + x99 * x99) + x97 * x97)
-                        + x100 * x100 * mB + (x160 * x16 * x16 * x70 + x13 * x162) * x70
-                        + (x168 * x168 + x170 * x170) * IFxx,
-                    x196,
+                    x112,
+                    x143,
+                    x181,
+                    x6 * x178 + x110 * x109 + x177 * x103 + x1 * x176 + x165 + x151
+                        + mH * (x108 * x108 + x205 * (x66 * x66 + x107 * x107))
+                        + (x174 * x174 + x172 * x172) * IFxx
+                        + mF * ((x106 * x106 + x105 * x105) * x205 + x104 * x104)
+                        + x63 * (x16 * x179 * x159 + x15 * x171),
+                    x206,
                     0.0,
-                    x197,
-                    x198,
-                    x199,
-                    x201,
+                    x207,
                     x208,
-                    x213,
+                    x209,
+                    x212,
                     x218,
+                    x221,
+                    x226,
                 ],
                 [
-                    x119,
-                    x130,
-                    x174,
-                    x196,
-                    (x47 * x47 + xB * xB) * mB
-                        + mF * (x114 * x114 + x115 * x115 + x108 * x108 * x16 * x16)
-                        + x160 * x13 * x13
-                        + (x16 * x16 * x117 * x117 + x116 * x116
-                            + x13 * x13 * x118 * x118) * mH + IRyy
-                        + (x155 + x220 + x156) * x16 * x16 + IByy,
+                    x131,
+                    x144,
+                    x184,
+                    x206,
+                    (x130 * x130 + x129 * x129 + x126 * x126 * x205) * mH
+                        + (x92 * x92 + xB * xB) * mB + x15 * x15 * x159
+                        + (x228 + x167) * x205 + x161
+                        + mF * (x205 * x124 * x124 + x122 * x122 + x120 * x120),
                     IRyy,
-                    x221,
-                    x222,
-                    x223,
-                    x224,
                     x229,
+                    x230,
+                    x231,
                     x232,
                     x236,
-                ],
-                [0.0, 0.0, x175, 0.0, IRyy, IRyy, 0.0, 0.0, x223, x224, 0.0, 0.0, 0.0],
-                [
-                    x121,
-                    x131,
-                    x176,
-                    x197,
-                    x221,
-                    0.0,
-                    x146 + x220 + x148 + x67 * x67 * mH + mF * x80 * x80,
-                    0.0,
-                    0.0,
-                    0.0,
                     x238,
-                    x239,
-                    x242,
+                    x243,
                 ],
-                [0.0, 0.0, x177, x198, x222, 0.0, 0.0, IFyy, 0.0, 0.0, x243, x244, 0.0],
-                [x123, 0.0, x179, x199, x223, x223, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x123, x180, x201, x224, x224, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x126, 0.0, x190, x208, x229, 0.0, x238, x243, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x126, x194, x213, x232, 0.0, x239, x244, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, x218, x236, 0.0, x242, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x185, 0.0, IRyy, IRyy, 0.0, 0.0, x231, x232, 0.0, 0.0, 0.0],
+                [
+                    x135,
+                    x145,
+                    x186,
+                    x207,
+                    x229,
+                    0.0,
+                    x228 + x65 * x132 + x157 + x85 * x133,
+                    0.0,
+                    0.0,
+                    0.0,
+                    x246,
+                    x247,
+                    x249,
+                ],
+                [0.0, 0.0, x187, x208, x230, 0.0, 0.0, IFyy, 0.0, 0.0, x250, x251, 0.0],
+                [x137, 0.0, x190, x209, x231, x231, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x137, x191, x212, x232, x232, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x140, 0.0, x200, x218, x236, 0.0, x246, x250, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x140, x204, x221, x238, 0.0, x247, x251, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, x226, x243, 0.0, x249, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                -mF * (x290 * x23 + x19 * x307 + x24 * x308)
-                    - (x19 * x315 + x317 * x18 + x12 * x318) * mH
-                    - mB * (x10 * x323 - x321 * x17 * x2 + x7 * x324)
-                    - (2.0 * (x5 * psi_dot * phi_dot * x17) + x1 * x2 * (-x325 - x326))
-                        * rR * mR,
-                -(x38 * x315 + x317 * x34 + x318 * x36) * mH
-                    - rR * mR
-                        * (2.0 * (psi_dot * phi_dot * x17 * x2)
-                            + (x325 + x326) * x5 * x1)
-                    - mF * (x40 * x308 + x290 * x37 + x38 * x307)
-                    - (x27 * x323 + x31 * x324 + x321 * x5 * x17) * mB,
-                x73 * x335 - mF * (x88 * x307 + x290 * x87 + x86 * x308)
-                    - (x338 + psi_dot * phi_dot * IByy * x17 - x341) * x1
-                    + (x4 * x342 - psi_dot * x1 * IRyy * phi_dot - x0 * x343 - x347 * x70
-                        - x137 * x351 - x138 * x353) * x17
-                    - mB * (x321 * x49 * x17 + (x43 * x323 + x45 * x324) * x1)
-                    - rR * rR * mR * psi_dot * phi_dot * x354
-                    - (x71 * x315 + x317 * x75 + x318 * x77) * mH - x62 * x358
-                    - x362 * x153 - x151 * x363,
-                (x1 * x103 - ((x56 * x210 + x91 + x92) * x1 + x214 * x67) * mH
-                    - mF * (x215 + x216)) * g - x138 * x351 - x0 * x342
-                    - (x94 * x315 + (x317 * x93 + x318 * x67 * x70) * x16) * mH
-                    - x195 * x353
-                    + ((x329 + x330 - x333 + x334) * x16 - x13 * x358) * x70
-                    - x170 * x363 - mF * (x97 * x307 + x16 * (x99 * x308 + x290 * x98))
-                    - x362 * x168 - x321 * x100 * mB
-                    + 0.5 * (rR * rR * mR * psi_dot * psi_dot * x354) - x90 * x347
-                    - x4 * x343,
-                x13 * x335 - x338 + x16 * (-x355 - x356 - x357 - x21 * x362 - x363 * x22)
-                    - (x323 * x47 - xB * x324) * mB
-                    + ((-IRyy - IByy) * psi_dot * phi_dot
-                        + (-mF * (x13 * x80 * x210 + x233 + x44 - x64)
-                            - (-x46 - x48) * mB
-                            - (x44 + x56 * x60 + x67 * x13 * x210 - x64) * mH) * g) * x17
-                    + x341 - (x108 * x16 * x307 + x290 * x114 + x115 * x308) * mF
-                    - (x318 * x116 + x16 * x117 * x315 + x317 * x13 * x118) * mH,
-                -(psi_dot * IRyy * phi_dot * x17),
-                x21 * x363
-                    + mF * x80 * (x293 - x364 - x291 - x294 - x298 + x303 - x305 + x306)
-                    - x345 - x346
-                    + (x312 - x364 - x291 - x294 - x310 - x311 + x314 + x306) * x67 * mH
-                    - x362 * x22 + x280 * (x327 + x328 - x344),
-                -(x257 * IFyy),
-                x_dot * x1 * phi_dot * x17 / f64::sqrt(x122)
-                    + rR
-                        * (phi_dot
-                            * (f64::sqrt(x122) * x1 * phi_dot * x2
-                                - (x1 * phi_dot * (2.0 - x365) * x2 + x5 * psi_dot * x178)
-                                    * x17 + x366 * x5 * x1)
-                            + psi_dot
-                                * (x366 * x17 * x2 - x200 * psi_dot * x1 * x2
-                                    - x5 * x367 * phi_dot)),
+                -((x8 * x265 + x268 * x13 - x272 * x18) * mB
+                    + mF * (x300 * x27 + x303 * x24 - x25 * x316)
+                    + (x319 * x22 - x25 * x325 + x326 * x19) * mH
+                    + x81 * (2.0 * (x329 * x37) - x4 * x328)),
+                -((x325 * x42 + x319 * x41 + x326 * x39) * mH
+                    + x81 * (2.0 * (phi_dot * x330) + x29 * x328)
+                    + mF * (x45 * x300 + x44 * x303 + x316 * x42)
+                    + (x272 * x37 + x35 * x268 + x265 * x31) * mB),
+                x345 * x75 - x332 * x56 - (x335 + x284 * IByy - x337) * x2 - x162 * x349
+                    - (x72 * x325 + x77 * x326 + x319 * x80) * mH
+                    - (x94 * x272 + x2 * (x268 * x97 + x265 * x96)) * mB - x329 * x350
+                    - mF * (x303 * x91 + x87 * x316 + x90 * x300) - x163 * x351
+                    + (x1 * x352 + x355 * x149 - x150 * x357 - x6 * x358
+                        - x359 * psi_dot * IRyy - x63 * x363) * x17,
+                x63 * (x16 * (x341 + x342 - x343 + x344) - x332 * x15) - x149 * x357
+                    - x363 * x103 - x172 * x351
+                    + g * (x2 * x111 - x225 * mF - (x107 * x2 + x224 * x65) * mH)
+                    + 0.5 * (x350 * x327) - x355 * x150
+                    - (x104 * x316 + x16 * (x303 * x106 + x105 * x300)) * mF
+                    - x174 * x349 - x1 * x358 - x352 * x6
+                    - mH * (x16 * (x326 * x107 + x319 * x66) + x325 * x108)
+                    - x110 * x272,
+                x345 * x15 - x16 * (x351 * x23 + x0 * x349 + x332) - x335
+                    - mF * (x122 * x303 + x300 * x120 + x125 * x316)
+                    - mB * (-x268 * xB - x265 * x92)
+                    - mH * (x127 * x325 + x319 * x129 + x326 * x130)
+                    + x17
+                        * (-x329 * x161
+                            - g
+                                * (mF * (x241 - x63 * x114) - mB * x93
+                                    + mH * (x240 + x54 * x50 - x63 * x128))) + x337,
+                -(x284 * IRyy),
+                (x321 - x320 + x323 - x324 + x364) * x132 - x360 - x349 * x23
+                    + x289 * (x340 - x361) - x362
+                    + (x305 + x310 - x314 - x315 + x364) * x133 + x0 * x351,
+                -x342,
                 rR
-                    * ((x366 * x1 * x2 - x5 * f64::sqrt(x122) * x1 * phi_dot
-                        - ((x365 - 2.0) * x5 * x1 * phi_dot + psi_dot * x178 * x2) * x17)
-                        * phi_dot
-                        + psi_dot
-                            * (x5 * (thR_dot + theta_dot) * x17 - x367 * phi_dot * x2
-                                - x5 * psi_dot * x1 * x178))
-                    + x1 * y_dot * phi_dot * x17 / f64::sqrt(x122),
-                x73 * x_dot * x376 / f64::sqrt(x125)
-                    - (f64::sqrt(x125)
-                        * ((x16 * (x377 + x378 - delta_dot * x186)
-                            + (x8 * x382 - x383 + x389) * x13) * x80 + x63 * x382
-                            + rR * (x381 - x385 - x387 - x390)
-                            + x84 * (x391 - x9 * x382))
-                        - x189 * x73 * x376 / f64::sqrt(x125)
-                        - rF
-                            * ((x38 * x402 - 2.0 * (x182 * x376) + x181 * x409) * x73
-                                + x125
-                                    * (x414 * x153 + x151 * x415 + x398 * x40 + x38 * x376
-                                        + x401 * x37 + x73 * x409) + x38 * x181 * x376)) * psi_dot
-                    + rF * thF_dot * x409
-                    - (f64::sqrt(x125)
-                        * (x63 * x427
-                            + (x13 * (x429 + x8 * x427) - delta_dot * x226 * x16) * x80
-                            + (x430 - x9 * x427) * x84 - rR * x428)
-                        - rF
-                            * ((x228 * x409 + x38 * x416 - 2.0 * (x5 * x17 * x376)) * x73
-                                + x228 * x38 * x376
-                                + (x424 * x36 - 0.5 * ((x417 - x187) * x418)
-                                    - 0.5 * ((x417 + x187) * x419)) * x125)
-                        - x227 * x73 * x376 / f64::sqrt(x125)) * theta_dot
+                    * (psi_dot * (-x210 * x365 - x366 * x367 - x368 * x18)
+                        + (x369 * f64::sqrt(x136)
+                            - x17 * (x369 * (2.0 - x370) + x371 * x188) - x368 * x29)
+                            * phi_dot) + x372 * x_dot / f64::sqrt(x136),
+                (psi_dot * (x368 * x37 - x366 * phi_dot * x3 - x29 * x373)
+                    + (-x368 * x4 - f64::sqrt(x136) * x374
+                        - ((x370 - 2.0) * x374 + x373 * x3) * x17) * phi_dot) * rR
+                    + x372 * y_dot / f64::sqrt(x136),
+                x_dot * x406 / f64::sqrt(x139)
                     - delta_dot
-                        * ((f64::sqrt(x125) * x444 - x19 * x73 * x376 / f64::sqrt(x125))
-                            * x80
+                        * ((x25 * x406 / f64::sqrt(x139) + f64::sqrt(x139) * x419) * x85
                             - rF
-                                * (x38 * x237 * x376
-                                    + x73
-                                        * (x38 * x435 - 2.0 * (x219 * x36 * x376) + x237 * x409)
-                                    + x219 * x125 * (x412 - x411)))
-                    - (f64::sqrt(x125)
-                        * (x63 * (x4 * (x437 - x436) - theta_dot * x0 * x17 * x2)
-                            + rR
-                                * ((x5 * psi_dot * x203 + x4 * theta_dot * x2) * x17
-                                    + x50 * x1 * phi_dot * x2)
-                            + x84
-                                * (x1 * phi_dot * x210 * x2
-                                    + (theta_dot * x60 * x2 + x5 * psi_dot * x70) * x17)
-                            + (x16 * (x369 * x17 * x2 + x450)
-                                + ((x5 * x60 * psi_dot + theta_dot * x210 * x2) * x17
-                                    + delta_dot * x1 * x2 + x90 * x1 * phi_dot * x2) * x13)
-                                * x80)
+                                * (x386 * x245
+                                    + x75 * (x244 * x404 - 2.0 * (x393 * x41) - x398 * x42)
+                                    + x244 * x405))
+                    - (f64::sqrt(x139)
+                        * (x85 * (x15 * (x420 + x421 * x9) - x422 * x234)
+                            + (x411 - x421 * x10) * x84 + x421 * x47 - rR * x410)
+                        - x235 * x406 / f64::sqrt(x139)
                         - rF
-                            * (x125
-                                * (x415 * x170 - delta_dot * x38 * x13 * x70 + x37 * x447
-                                    + x16 * (theta_dot * x38 * x90 - x70 * x409) + x448 * x40
-                                    + x414 * x168)
-                                + (x207 * x409 - 2.0 * (x206 * x376) + x38 * x449) * x73
-                                + x38 * x207 * x376)
-                        - x73 * x205 * x376 * x2 / f64::sqrt(x125)) * phi_dot,
-                x73 * y_dot * x376 / f64::sqrt(x125)
-                    - (f64::sqrt(x125)
-                        * (rR
-                            * (x5 * (x1 * phi_dot * x203 - x4 * theta_dot * x17)
-                                + psi_dot * x203 * x17 * x2)
-                            + (x13
-                                * (x60 * psi_dot * x17 * x2
-                                    + x5 * (theta_dot * x70 * x17 + x60 * x1 * phi_dot)
-                                    - delta_dot * x5 * x1) + x16 * (x5 * x458 * x17 + x390))
-                                * x80 + x84 * (x5 * x459 + psi_dot * x70 * x17 * x2)
-                            + x63 * (theta_dot * x5 * x0 * x17 + (-x377 - x378) * x4))
-                        - x212 * x5 * x73 * x376 / f64::sqrt(x125)
-                        - rF
-                            * (x73 * (2.0 * (x209 * x376) - x19 * x449 - x207 * x444)
-                                - x125
-                                    * ((theta_dot * x19 * x90 - x444 * x70) * x16
-                                        - delta_dot * x19 * x13 * x70 + x456 * x168 + x170 * x457
-                                        + x447 * x23 + x24 * x448) - x19 * x207 * x376)) * phi_dot
-                    - delta_dot
-                        * ((f64::sqrt(x125) * x409 - x38 * x73 * x376 / f64::sqrt(x125))
-                            * x80
-                            - (x73
-                                * (2.0 * (x12 * x219 * x376) - x19 * x435 - x237 * x444)
-                                - x460 * x219 * x125 - x19 * x237 * x376) * rF)
-                    - rF * thF_dot * x444
-                    - theta_dot
-                        * (f64::sqrt(x125)
-                            * (x80 * (x13 * (x391 + x411) - delta_dot * x16 * x230)
-                                - rR * x404 + x388 * x63 + x84 * (x405 - x389))
-                            - rF
-                                * ((-2.0 * (x17 * x376 * x2) - x228 * x444 - x19 * x416)
-                                    * x73 - x228 * x19 * x376
-                                    - x125
-                                        * (x424 * x12 - 0.5 * ((x461 - x191) * x419)
-                                            - 0.5 * ((x191 + x461) * x418)))
-                            - x73 * x231 * x376 / f64::sqrt(x125))
+                            * (x405 * x233
+                                + x139
+                                    * (x41 * x427 - 0.5 * ((x18 - x29) * x423)
+                                        - 0.5 * ((x29 + x18) * x424))
+                                + (x233 * x404 + x435 * x42 - 2.0 * (x392 * x37)) * x75))
+                        * theta_dot
                     - psi_dot
-                        * (f64::sqrt(x125)
-                            * ((x451 + x452) * x80 + x63 * x428 + x460 * x84
-                                + rR * (x450 - x440 - x441 + x425))
-                            - x192 * x73 * x376 / f64::sqrt(x125)
+                        * (((x443 - x10 * x444) * x84 + rR * (x381 - x441 + x377 - x365)
+                            + x444 * x47
+                            + x85
+                                * (x16 * (x402 - x195 * delta_dot)
+                                    + x15 * (x445 - x400 + x444 * x9))) * f64::sqrt(x139)
+                            - x196 * x406 / f64::sqrt(x139)
                             - rF
-                                * (x73 * (2.0 * (x193 * x376) - x19 * x402 - x444 * x181)
-                                    - x19 * x181 * x376
-                                    - (x24 * x398 + x19 * x376 + x73 * x444 + x151 * x457
-                                        + x456 * x153 + x401 * x23) * x125)),
-                -theta_dot
-                    * (x65 * x1 * phi_dot + x84 * (x371 + x373)
-                        + ((rF
-                            * (x16 * (-x462 - x463) * x376
-                                - delta_dot * x13 * x73 / f64::sqrt(x125))
-                            - delta_dot * x16 * x80) * x210 + theta_dot * (x42 + x92))
-                            * x17 + x459 * x234)
-                    - ((phi_dot * x210 * x17 + theta_dot * x90 * x1) * x84
-                        + (x91 + x92) * phi_dot * x17
-                        + (x16 * x458 * x1 + x13 * (x464 + x465 + x466)) * x80
-                        + (x217 * x467 * x376
-                            + x73 * (x16 * (-x464 - x465 - x466) + x458 * x13 * x1)
-                                / f64::sqrt(x125)) * rF + theta_dot * x65 * x1) * phi_dot
-                    - (x80 * x376
+                                * (x199 * x405
+                                    + x139
+                                        * (x162 * x438 + x405 + x163 * x439 + x44 * x434
+                                            + x432 * x45 + x75 * x404)
+                                    + (x199 * x404 - 2.0 * (x392 * x198) + x440 * x42) * x75))
+                    - (f64::sqrt(x139)
+                        * ((x417 * x1 - x446 * x18) * x47
+                            + x85
+                                * (x16 * (x391 * x18 + x447)
+                                    + x15
+                                        * (x369 * x103 + (x54 * x371 - x63 * x448) * x17
+                                            + delta_dot * x4))
+                            + ((x448 * x54 + x63 * x371) * x17 - x369 * x63) * x84
+                            + rR * (x369 * x68 + (x371 * x213 + theta_dot * x33) * x17))
+                        - x215 * x406 / f64::sqrt(x139)
+                        - rF
+                            * (x405 * x217
+                                + (x45 * x451 - x452 * x42 + x438 * x174 + x44 * x453
+                                    + x172 * x439 + x16 * (x454 * x42 - x63 * x404)) * x139
+                                + (x217 * x404 + x455 * x42 - 2.0 * (x392 * x216)) * x75))
+                        * phi_dot + x456 * x404,
+                y_dot * x406 / f64::sqrt(x139)
+                    - delta_dot
+                        * (x85 * (f64::sqrt(x139) * x404 - x406 * x42 / f64::sqrt(x139))
+                            - ((2.0 * (x393 * x22) - x244 * x419 - x25 * x398) * x75
+                                - x458 * x245 - x244 * x459) * rF)
+                    - ((rR * ((x359 * x213 - x1 * x269) * x5 + x213 * x330)
+                        + (x5 * x460 + x63 * x330) * x84 + (x446 * x37 - x1 * x402) * x47
+                        + x85
+                            * (x16 * (x365 - x461 * x37)
+                                + x15
+                                    * (x54 * x330 - delta_dot * x29
+                                        + (x387 + x359 * x54) * x5))) * f64::sqrt(x139)
+                        - x220 * x406 / f64::sqrt(x139)
+                        - rF
+                            * (x75 * (x25 * x455 - x217 * x419 + 2.0 * (x219 * x392))
+                                - x217 * x459
+                                - (x172 * x465 + x27 * x451 + x25 * x452 + x466 * x174
+                                    + x16 * (-x25 * x454 - x63 * x419) + x453 * x24) * x139))
+                        * phi_dot
+                    - psi_dot
+                        * ((rR * (x413 - x414 + x408 + x447) + x410 * x47 + x85 * x462
+                            + x458 * x84) * f64::sqrt(x139)
+                            - rF
+                                * ((x25 * x440 - x199 * x419 + 2.0 * (x203 * x392)) * x75
+                                    - x199 * x459
+                                    - x139
+                                        * (x434 * x24 + x466 * x162 + x465 * x163 + x459
+                                            + x432 * x27 + x75 * x419)) - x406 * x201 / f64::sqrt(x139))
+                    - theta_dot
+                        * ((x85 * (x15 * (x443 + x380) - x422 * x193) - rR * x379
+                            + x442 * x47 + (x399 - x445) * x84) * f64::sqrt(x139)
+                            - x237 * x406 / f64::sqrt(x139)
+                            - rF
+                                * (-(x233 * x419 - x25 * x435 + 2.0 * (x392 * x18)) * x75
+                                    - x139
+                                        * (x22 * x427 - 0.5 * ((x37 - x4) * x424)
+                                            - 0.5 * ((x4 + x37) * x423)) - x459 * x233)) - x456 * x419,
+                -(delta_dot
+                    * (x85 * x392
                         + rF
-                            * (x240 * x467 * x376
-                                + x73 * (x374 * x13 + x16 * (x368 - phi_dot) * x17)
-                                    / f64::sqrt(x125))) * delta_dot,
+                            * (((x390 - phi_dot) * x74 - x430) * x75 / f64::sqrt(x139)
+                                - x56 * x468))
+                    + theta_dot
+                        * ((theta_dot * (x100 + x95)
+                            - x63
+                                * (rF * (-x433 * x15 / f64::sqrt(x139) - x16 * x392 * x467)
+                                    - x422 * x85)) * x17 + x388 * x84 + x239 * x460
+                            + x359 * x59)
+                    + ((x263 * x103 - x63 * x264) * x84 + x263 * x59
+                        + x85 * (x15 * x469 - x461 * x55) + x264 * x101
+                        + (x222 * x468
+                            + (-x16 * x469 - x461 * x73) * x75 / f64::sqrt(x139)) * rF)
+                        * phi_dot),
             ],
             checks: [],
             residuals: [
-                rR
-                    * ((psi_dot * x1 * x178 + x366 * x17) * x5
-                        + phi_dot * x178 * x17 * x2) + f64::sqrt(x122) * x_dot,
-                rR * ((x366 * x2 + x200 * x5 * phi_dot) * x17 + psi_dot * x1 * x178 * x2)
-                    + f64::sqrt(x122) * y_dot,
-                theta_dot * x229 + f64::sqrt(x125) * x_dot + psi_dot * x190
-                    + x238 * delta_dot - rF * thF_dot * x38 + x208 * phi_dot,
-                x239 * delta_dot + f64::sqrt(x125) * y_dot + x194 * psi_dot
-                    + theta_dot * x232 + rF * thF_dot * x19 + x213 * phi_dot,
-                theta_dot * x17 * x235 + x218 * phi_dot + delta_dot * x73 * x241,
+                f64::sqrt(x136) * x_dot
+                    + rR * (x188 * x408 + x5 * (x252 * x188 - x368 * x17)),
+                rR * (x4 * x373 + (x210 * x367 - x368 * x3) * x17)
+                    + f64::sqrt(x136) * y_dot,
+                x200 * psi_dot - x456 * x42 + delta_dot * x246 + x236 * theta_dot
+                    + x218 * phi_dot + x_dot * f64::sqrt(x139),
+                x221 * phi_dot - x25 * x456 + theta_dot * x238 + psi_dot * x204
+                    + f64::sqrt(x139) * y_dot + delta_dot * x247,
+                x242 * x269 + x433 * x248 + x226 * phi_dot,
             ],
-            positions: [0.0, 0.0, 0.0, 0.0, x202 - f64::sqrt(x125) * rF + x204],
+            positions: [0.0, 0.0, 0.0, 0.0, x214 - rF * f64::sqrt(x139)],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -1714,292 +1657,290 @@ pub mod lagrange {
         let lam = params.lam;
         let rR = params.rR;
         let rF = params.rF;
-        let x0 = f64::sin(phi);
-        let x1 = f64::cos(phi);
-        let x2 = x1 * x1;
-        let x3 = f64::sqrt(x2);
-        let x4 = x3 - x1;
-        let x5 = -thR_dot - theta_dot;
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = f64::cos(delta);
-        let x9 = f64::sin(delta);
-        let x10 = f64::sin(lam);
-        let x11 = f64::cos(theta);
-        let x12 = x10 * x11;
-        let x13 = f64::sin(theta);
-        let x14 = f64::cos(lam);
+        let x0 = f64::cos(phi);
+        let x1 = x0 * x0;
+        let x2 = f64::cos(psi);
+        let x3 = f64::sqrt(x1);
+        let x4 = x3 - x0;
+        let x5 = psi_dot * x4;
+        let x6 = f64::sin(phi);
+        let x7 = thR_dot + theta_dot;
+        let x8 = f64::sin(psi);
+        let x9 = x0 * x8;
+        let x10 = x6 * x8;
+        let x11 = f64::cos(delta);
+        let x12 = x11 * x6;
+        let x13 = f64::sin(lam);
+        let x14 = f64::cos(theta);
         let x15 = x13 * x14;
-        let x16 = x12 - x15;
-        let x17 = x8 * x0 - x9 * x16 * x1;
-        let x18 = x17 * x17;
-        let x19 = 1.0 - x18;
-        let x20 = x6 * x11 - x13 * x0 * x7;
-        let x21 = c_ + w_;
-        let x22 = x11 * x0 * x7;
-        let x23 = x13 * x6;
-        let x24 = -x22 - x23;
-        let x25 = x14 * x20;
-        let x26 = x10 * c_ + rF * x14;
-        let x27 = x10 * x20;
-        let x28 = x10 * rF;
-        let x29 = c_ * x14;
-        let x30 = x28 - x29;
-        let x31 = f64::sin(thF);
-        let x32 = x9 * x0;
-        let x33 = x8 * x16 * x1;
-        let x34 = x32 + x33;
-        let x35 = x11 * x14;
-        let x36 = x10 * x13;
-        let x37 = x35 + x36;
-        let x38 = f64::cos(thF);
-        let x39 = x31 * x34 + x37 * x38 * x1;
-        let x40 = x34 * x38 - x31 * x37 * x1;
-        let x41 = x8 * x17 + (x31 * x39 + x40 * x38) * x9;
-        let x42 = x11 * x7;
-        let x43 = x13 * x6 * x0;
-        let x44 = x42 + x43;
-        let x45 = x44 * x14;
-        let x46 = x6 * x11 * x0;
-        let x47 = x13 * x7;
-        let x48 = x47 - x46;
-        let x49 = x45 + x10 * x48;
-        let x50 = x6 * x8 * x1 - x9 * x49;
-        let x51 = x40 * x40 + x39 * x39 + x18;
-        let x52 = x9 * x6 * x1;
-        let x53 = x8 * x49 + x52;
-        let x54 = x10 * x44;
-        let x55 = x48 * x14 - x54;
-        let x56 = x53 * x38 - x31 * x55;
-        let x57 = x55 * x38 + x31 * x53;
-        let x58 = x46 - x47;
-        let x59 = x10 * x58;
-        let x60 = -x42 - x43;
-        let x61 = x6 * x0;
-        let x62 = x14 * x58;
-        let x63 = x22 + x23;
-        let x64 = x25 + x10 * x63;
-        let x65 = -x8 * x1 * x7 - x9 * x64;
-        let x66 = x31 * x31 + x38 * x38;
-        let x67 = x11 * x14 * x1 + x10 * x13 * x1;
-        let x68 = x34 * x30;
-        let x69 = x13 * x21;
-        let x70 = (rR * (1.0 - x11) + x26 * x37 - x69) * x1;
-        let x71 = x15 - x12;
-        let x72 = x8 * x37 * x38 - x31 * x71;
-        let x73 = x31 * x8 * x37 + x71 * x38;
-        let x74 = x39 * x73 + x40 * x72 - x9 * x17 * x37;
-        let x75 = x63 * x14 - x27;
-        let x76 = x8 * x64 - x9 * x1 * x7;
-        let x77 = x0 * x7;
-        let x78 = x76 * x38 - x31 * x75;
-        let x79 = x75 * x38 + x31 * x76;
-        let x80 = -x35 - x36;
-        let x81 = (x11 - 1.0) * rR + x69 + x26 * x80;
-        let x82 = f64::abs(x2);
-        let x83 = f64::abs(x_dot);
-        let x84 = f64::abs(x1);
-        let x85 = x84 + f64::sqrt(x82);
-        let x86 = f64::abs(x0);
-        let x87 = f64::abs(x6);
-        let x88 = f64::abs(psi_dot);
-        let x89 = f64::abs(theta_dot);
-        let x90 = f64::abs(thR_dot) + x89;
-        let x91 = f64::abs(phi_dot);
-        let x92 = f64::abs(x7);
-        let x93 = f64::abs(rR);
-        let x94 = f64::abs(y_dot);
-        let x95 = f64::abs(x10);
-        let x96 = f64::abs(c_);
-        let x97 = f64::abs(rF);
-        let x98 = f64::abs(x14);
-        let x99 = x95 * x96 + x97 * x98;
-        let x100 = f64::abs(x13);
-        let x101 = f64::abs(x11);
-        let x102 = x86 * x100 * x87 + x101 * x92;
-        let x103 = x86 * x87 * x101;
-        let x104 = x100 * x92;
-        let x105 = x103 + x104;
-        let x106 = x95 * x102 + x105 * x98;
-        let x107 = f64::abs(w_) + x96;
-        let x108 = f64::abs(x8);
-        let x109 = x102 * x98 + x95 * x105;
-        let x110 = f64::abs(x9);
-        let x111 = x108 * x109 + x110 * x84 * x87;
-        let x112 = x95 * x97;
-        let x113 = x96 * x98;
-        let x114 = x112 + x113;
-        let x115 = f64::abs(x18 - 1.0);
-        let x116 = x84 * x108 * x87 + x110 * x109;
-        let x117 = x100 * x95 + x101 * x98;
-        let x118 = f64::abs(x31);
-        let x119 = f64::abs(x38);
-        let x120 = x95 * x101 + x100 * x98;
-        let x121 = x86 * x110 + x120 * x84 * x108;
-        let x122 = x84 * x117 * x118 + x119 * x121;
-        let x123 = x86 * x108 + x120 * x110 * x84;
-        let x124 = x123 * x123;
-        let x125 = x118 * x121 + x119 * x84 * x117;
-        let x126 = x122 * x122 + x124 + x125 * x125;
-        let x127 = x111 * x119 + x118 * x106;
-        let x128 = x119 * x106 + x111 * x118;
-        let x129 = x124 + 1.0;
-        let x130 = x9 * x38;
-        let x131 = x31 * x8;
-        let x132 = x31 * x9;
-        let x133 = x8 * x38;
-        let x134 = (0.5 * f64::abs(x130 - x131) + 0.5 * f64::abs(x130 + x131)) * x118
-            + x119 * (0.5 * f64::abs(x132 - x133) + 0.5 * f64::abs(x132 + x133));
-        let x135 = x6 * x1;
-        let x136 = x108 * x123 + x110 * (x125 * x118 + x119 * x122);
-        let x137 = x100 * x87;
-        let x138 = x86 * x101 * x92;
-        let x139 = x137 + x138;
-        let x140 = x87 * x101 + x86 * x100 * x92;
-        let x141 = x140 * x98 + x95 * x139;
-        let x142 = x95 * x140 + x139 * x98;
-        let x143 = x121 * x114;
-        let x144 = x107 * x100 + x93 * (x101 + 1.0) + x117 * x99;
-        let x145 = x144 * x84;
-        let x146 = x143 + x145;
-        let x147 = f64::abs(x37);
-        let x148 = f64::abs(x16);
-        let x149 = x147 * x108 * x118 + x119 * x148;
-        let x150 = x118 * x148 + x119 * x147 * x108;
-        let x151 = x125 * x149 + x150 * x122 + x110 * x147 * x123;
-        let x152 = f64::abs(delta_dot);
-        let x153 = x110 * x141 + x84 * x108 * x92;
-        let x154 = x10 * x1;
-        let x155 = x14 * x0;
-        let x156 = x10 * x0;
-        let x157 = x14 * x1;
-        let x158 = 0.5 * f64::abs(x13 * (x155 - x154) - (x156 + x157) * x11)
-            + 0.5 * f64::abs(x11 * (x157 - x156) - x13 * (-x154 - x155));
-        let x159 = x118 * x118 + x119 * x119;
-        let x160 = f64::abs(thF_dot);
-        let x161 = 2.0 * x124 + 1.0;
-        let x162 = x1 * x7;
-        let x163 = x108 * x141 + x110 * x84 * x92;
-        let x164 = x118 * x163 + x119 * x142;
-        let x165 = x119 * x163 + x118 * x142;
+        let x16 = f64::sin(theta);
+        let x17 = f64::cos(lam);
+        let x18 = x16 * x17;
+        let x19 = x15 - x18;
+        let x20 = f64::sin(delta);
+        let x21 = x20 * x0;
+        let x22 = x12 - x19 * x21;
+        let x23 = x22 * x22;
+        let x24 = 1.0 - x23;
+        let x25 = x13 * c_ + rF * x17;
+        let x26 = x16 * x8;
+        let x27 = x2 * x6;
+        let x28 = x27 * x14;
+        let x29 = x28 - x26;
+        let x30 = x14 * x8 + x16 * x27;
+        let x31 = x13 * x30;
+        let x32 = x29 * x17 + x31;
+        let x33 = x13 * rF - c_ * x17;
+        let x34 = x17 * x30;
+        let x35 = x13 * x29;
+        let x36 = x2 * x0;
+        let x37 = x20 * x36;
+        let x38 = x26 - x28;
+        let x39 = c_ + w_;
+        let x40 = x38 * x17 - x31;
+        let x41 = f64::cos(thF);
+        let x42 = f64::sin(thF);
+        let x43 = x34 + x13 * x38;
+        let x44 = x43 * x11 + x37;
+        let x45 = x40 * x41 + x42 * x44;
+        let x46 = x14 * x17 + x13 * x16;
+        let x47 = x46 * x0;
+        let x48 = x11 * x0;
+        let x49 = x20 * x6;
+        let x50 = x48 * x19 + x49;
+        let x51 = x47 * x41 + x42 * x50;
+        let x52 = x50 * x41 - x42 * x47;
+        let x53 = x44 * x41 - x42 * x40;
+        let x54 = x11 * x36 - x43 * x20;
+        let x55 = x54 * x22;
+        let x56 = x51 * x51 + x23 + x52 * x52;
+        let x57 = x11 * x22 + x20 * (x52 * x41 + x42 * x51);
+        let x58 = x14 * x10;
+        let x59 = x16 * x2;
+        let x60 = x58 + x59;
+        let x61 = x33 * x11;
+        let x62 = x2 * x14 - x16 * x10;
+        let x63 = x13 * x62;
+        let x64 = x17 * x60;
+        let x65 = x13 * x60 + x17 * x62;
+        let x66 = x16 * x39;
+        let x67 = x46 * x25;
+        let x68 = (rR * (1.0 - x14) - x66 + x67) * x0 + x33 * x50;
+        let x69 = x20 * x46;
+        let x70 = x18 - x15;
+        let x71 = x11 * x41;
+        let x72 = x71 * x46 - x42 * x70;
+        let x73 = x42 * x11;
+        let x74 = x70 * x41 + x73 * x46;
+        let x75 = x52 * x72 - x22 * x69 + x74 * x51;
+        let x76 = rF * thF_dot;
+        let x77 = x20 * x65 + x11 * x9;
+        let x78 = x13 * x0;
+        let x79 = x17 * x0;
+        let x80 = x16 * x78 + x79 * x14;
+        let x81 = (x42 * x42 + x41 * x41) * x24;
+        let x82 = -(x77 * x22);
+        let x83 = x11 * x65 - x20 * x9;
+        let x84 = x64 - x63;
+        let x85 = x42 * x83 + x84 * x41;
+        let x86 = x83 * x41 - x84 * x42;
+        let x87 = (x14 - 1.0) * rR + x66 - x67;
+        let x88 = rF * x22;
+        let x89 = f64::abs(x0);
+        let x90 = f64::abs(x1);
+        let x91 = x89 + f64::sqrt(x90);
+        let x92 = f64::abs(phi_dot);
+        let x93 = x91 * x92;
+        let x94 = f64::abs(x8);
+        let x95 = f64::abs(theta_dot);
+        let x96 = f64::abs(thR_dot) + x95;
+        let x97 = f64::abs(x2);
+        let x98 = f64::abs(psi_dot);
+        let x99 = x91 * x98;
+        let x100 = f64::abs(x6);
+        let x101 = x100 * x97;
+        let x102 = f64::abs(rR);
+        let x103 = f64::abs(x_dot);
+        let x104 = x100 * x94;
+        let x105 = f64::abs(y_dot);
+        let x106 = f64::abs(x23 - 1.0);
+        let x107 = f64::abs(x16);
+        let x108 = f64::abs(x14);
+        let x109 = x107 * x97 + x104 * x108;
+        let x110 = f64::abs(x17);
+        let x111 = f64::abs(x13);
+        let x112 = x104 * x107 + x97 * x108;
+        let x113 = x109 * x110 + x111 * x112;
+        let x114 = f64::abs(x11);
+        let x115 = f64::abs(rF);
+        let x116 = f64::abs(c_);
+        let x117 = x111 * x115 + x116 * x110;
+        let x118 = x114 * x117;
+        let x119 = x111 * x116 + x115 * x110;
+        let x120 = x112 * x110 + x111 * x109;
+        let x121 = f64::abs(w_) + x116;
+        let x122 = f64::abs(x42);
+        let x123 = x20 * x41;
+        let x124 = f64::abs(x41);
+        let x125 = x42 * x20;
+        let x126 = x122 * (0.5 * f64::abs(x73 - x123) + 0.5 * f64::abs(x73 + x123))
+            + x124 * (0.5 * f64::abs(x125 - x71) + 0.5 * f64::abs(x125 + x71));
+        let x127 = x107 * x101 + x108 * x94;
+        let x128 = x108 * x101 + x107 * x94;
+        let x129 = x111 * x127 + x128 * x110;
+        let x130 = x100 * x114;
+        let x131 = x111 * x108 + x107 * x110;
+        let x132 = f64::abs(x20);
+        let x133 = x132 * x89;
+        let x134 = x130 + x131 * x133;
+        let x135 = x134 * x134;
+        let x136 = x135 + 1.0;
+        let x137 = x107 * x111 + x108 * x110;
+        let x138 = x89 * x137;
+        let x139 = x100 * x132;
+        let x140 = x89 * x114;
+        let x141 = x139 + x131 * x140;
+        let x142 = x122 * x138 + x124 * x141;
+        let x143 = x124 * x138 + x122 * x141;
+        let x144 = x134 * x114 + x132 * (x124 * x142 + x143 * x122);
+        let x145 = x128 * x111 + x127 * x110;
+        let x146 = x132 * x145 + x140 * x97;
+        let x147 = x134 * x146;
+        let x148 = f64::abs(delta_dot);
+        let x149 = x140 * x94 + x132 * x120;
+        let x150 = x13 * x6;
+        let x151 = x17 * x6;
+        let x152 = 0.5 * f64::abs(x14 * (x79 - x150) + x16 * (x151 + x78))
+            + 0.5 * f64::abs(x14 * (x79 + x150) - x16 * (x151 - x78));
+        let x153 = x136 * (x122 * x122 + x124 * x124);
+        let x154 = x145 * x114 + x97 * x133;
+        let x155 = x124 * x129 + x122 * x154;
+        let x156 = x122 * x129 + x124 * x154;
+        let x157 = x142 * x142 + x135 + x143 * x143;
+        let x158 = (2.0 * x135 + 1.0) * (f64::abs(thF_dot) * x115);
+        let x159 = x121 * x107 + x102 * (x108 + 1.0) + x137 * x119;
+        let x160 = x141 * x117 + x159 * x89;
+        let x161 = f64::abs(x46);
+        let x162 = x114 * x161;
+        let x163 = f64::abs(x19);
+        let x164 = x162 * x122 + x124 * x163;
+        let x165 = x132 * x161;
+        let x166 = x124 * x162 + x122 * x163;
+        let x167 = x143 * x164 + x166 * x142 + x134 * x165;
+        let x168 = x114 * x120 + x133 * x94;
+        let x169 = x168 * x122 + x124 * x113;
+        let x170 = x134 * x149;
+        let x171 = x124 * x168 + x113 * x122;
+        let x172 = x134 * x115;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
             (
                 "rear_contact_x",
-                rR * ((psi_dot * x0 * x4 + x5 * x1) * x6 + phi_dot * x4 * x1 * x7)
-                    + f64::sqrt(x2) * x_dot,
-                f64::sqrt(x82) * x83
-                    + (x85 * x86 * x87 * x88 + x84 * (x90 * x87 + x85 * x91 * x92)) * x93,
+                f64::sqrt(x1) * x_dot
+                    + rR * (x2 * (x5 * x6 - x7 * x0) + phi_dot * x4 * x9),
+                (x89 * (x93 * x94 + x96 * x97) + x99 * x101) * x102
+                    + f64::sqrt(x90) * x103,
             ),
             (
                 "rear_contact_y",
-                rR * ((x5 * x7 + (x1 - x3) * x6 * phi_dot) * x1 + psi_dot * x0 * x4 * x7)
-                    + f64::sqrt(x2) * y_dot,
-                f64::sqrt(x82) * x94
-                    + (x85 * x86 * x88 * x92 + x84 * (x90 * x92 + x85 * x91 * x87)) * x93,
+                rR * (x5 * x10 + ((x0 - x3) * x2 * phi_dot - x7 * x8) * x0)
+                    + f64::sqrt(x1) * y_dot,
+                x102 * (x89 * (x96 * x94 + x97 * x93) + x104 * x99)
+                    + f64::sqrt(x90) * x105,
             ),
             (
                 "front_contact_x",
-                theta_dot
-                    * (f64::sqrt(x19)
-                        * (x21 * x24 - rR * x20 + (x25 - x10 * x24) * x26
-                            + (x24 * x14 + x27) * x8 * x30)
-                        - rF * (x19 * x6 * x1 + x41 * x50 * x17))
-                    + f64::sqrt(x19) * x_dot
-                    + psi_dot
-                        * (f64::sqrt(x19)
-                            * (((x59 + x14 * x60) * x8 - x52) * x30
-                                + rR * (x61 - x46 + x47) + x26 * (x62 - x10 * x60)
-                                + x21 * x60)
-                            - (x50 * x17 * x51
-                                + x19 * (x40 * x56 + x39 * x57 + x50 * x17)) * rF)
-                    + (f64::sqrt(x19) * x65 * x30
-                        - rF * (x66 * x19 * x55 + x50 * x17 * x67)) * delta_dot
-                    - rF * thF_dot * x50
-                    + (f64::sqrt(x19) * (x68 + x70) * x7
-                        - rF
-                            * (x19 * (x56 * x72 + x57 * x73 - x9 * x50 * x37)
-                                + x50 * x17 * x74)) * phi_dot,
-                ((x99 * x106 + x107 * x102 + x93 * (x86 * x87 + x103 + x104)
-                    + x111 * x114) * f64::sqrt(x115)
-                    + (x116 * x126 * x123
-                        + (x116 * x123 + x127 * x122 + x125 * x128) * x129) * x97) * x88
-                    + x83 * f64::sqrt(x115)
-                    + x89
-                        * (x97
-                            * ((x134 * x106 + 0.5 * f64::abs(x77 + x135)
-                                + 0.5 * f64::abs(x77 - x135)) * x129 + x136 * x116 * x123)
-                            + (x107 * x139 + x99 * x141 + x108 * x142 * x114
-                                + x140 * x93) * f64::sqrt(x115))
-                    + x91
-                        * (x146 * f64::sqrt(x115) * x92
-                            + x97
-                                * (x116 * x123 * x151
-                                    + x129 * (x128 * x149 + x127 * x150 + x116 * x110 * x147)))
-                    + x152
-                        * (x153 * x114 * f64::sqrt(x115)
-                            + x97 * (x116 * x158 * x123 + x129 * x106 * x159))
-                    + x116 * x160 * x97 * x161,
+                (f64::sqrt(x24)
+                    * (x25 * x32 + x33 * (x11 * (x35 - x34) - x37) + rR * (x38 + x27)
+                        - x39 * x30)
+                    - rF * (x24 * (x45 * x51 + x52 * x53 + x55) + x55 * x56)) * psi_dot
+                    + theta_dot
+                        * (f64::sqrt(x24)
+                            * (x61 * (x63 - x64) - x39 * x60 - rR * x62 + x25 * x65)
+                            - rF * (x57 * x55 + x24 * x36))
+                    + phi_dot
+                        * (f64::sqrt(x24) * x68 * x8
+                            - rF
+                                * (x24 * (x53 * x72 - x54 * x69 + x45 * x74) + x55 * x75))
+                    + f64::sqrt(x24) * x_dot - x76 * x54
+                    + delta_dot
+                        * (-f64::sqrt(x24) * x33 * x77 - (x55 * x80 + x40 * x81) * rF),
+                x95
+                    * (f64::sqrt(x106)
+                        * (x113 * x118 + x119 * x120 + x121 * x109 + x112 * x102)
+                        + ((0.5 * f64::abs(x10 + x36) + 0.5 * f64::abs(x10 - x36)
+                            + x126 * x129) * x136 + x144 * x147) * x115)
+                    + x148
+                        * (f64::sqrt(x106) * x149 * x117
+                            + (x152 * x147 + x153 * x129) * x115)
+                    + x98
+                        * ((x119 * x129 + x154 * x117 + x121 * x127
+                            + (x128 + x101) * x102) * f64::sqrt(x106)
+                            + x115
+                                * ((x155 * x143 + x142 * x156 + x147) * x136 + x157 * x147))
+                    + x146 * x158
+                    + x92
+                        * (f64::sqrt(x106) * x160 * x94
+                            + x115
+                                * ((x155 * x164 + x146 * x165 + x166 * x156) * x136
+                                    + x167 * x147)) + x103 * f64::sqrt(x106),
             ),
             (
                 "front_contact_y",
-                (f64::sqrt(x19) * x50 * x30 - (-x75 * x66 * x19 - x65 * x17 * x67) * rF)
-                    * delta_dot + f64::sqrt(x19) * y_dot
-                    + (f64::sqrt(x19)
-                        * (x76 * x30 + rR * (x77 - x22 - x23) + x75 * x26 + x21 * x20)
-                        - (-x19 * (x40 * x78 + x79 * x39 + x65 * x17) - x65 * x17 * x51)
-                            * rF) * psi_dot
+                f64::sqrt(x24) * y_dot - x76 * x77
+                    + ((x75 * x82 + x24 * (x85 * x74 + x77 * x69 + x86 * x72)) * rF
+                        + f64::sqrt(x24) * x2 * (x87 * x0 + x33 * (x48 * x70 - x49)))
+                        * phi_dot
                     + theta_dot
-                        * (f64::sqrt(x19)
-                            * ((x45 - x59) * x26 + (x62 + x54) * x8 * x30 - rR * x44
-                                + x21 * x58) - rF * (x19 * x1 * x7 - x41 * x65 * x17))
-                    + rF * thF_dot * x65
-                    + ((x81 * x1 + (x8 * x71 * x1 - x32) * x30) * f64::sqrt(x19) * x6
-                        - (-x19 * (x72 * x78 - x9 * x65 * x37 + x79 * x73)
-                            - x65 * x17 * x74) * rF) * phi_dot,
-                (f64::sqrt(x115)
-                    * (x99 * x109 + x107 * x105 + x108 * x106 * x114 + x93 * x102)
-                    + (x129
-                        * (x134 * x142 + 0.5 * f64::abs(x162 + x61)
-                            + 0.5 * f64::abs(x162 - x61)) + x136 * x153 * x123) * x97)
-                    * x89
-                    + x152
-                        * (x116 * x114 * f64::sqrt(x115)
-                            + x97 * (x153 * x158 * x123 + x129 * x142 * x159))
-                    + x94 * f64::sqrt(x115)
-                    + ((x129 * (x125 * x164 + x153 * x123 + x165 * x122)
-                        + x153 * x126 * x123) * x97
-                        + (x99 * x142 + x107 * x140 + x114 * x163
-                            + (x137 + x86 * x92 + x138) * x93) * f64::sqrt(x115)) * x88
-                    + x160 * x153 * x97 * x161
-                    + x91
-                        * ((x153 * x123 * x151
-                            + x129 * (x164 * x149 + x165 * x150 + x153 * x110 * x147))
-                            * x97 + x87 * x146 * f64::sqrt(x115)),
+                        * (f64::sqrt(x24)
+                            * (x39 * x29 + x25 * (x34 - x35) - rR * x30 + x61 * x32)
+                            - rF * (x24 * x9 - x57 * x82))
+                    + delta_dot
+                        * (rF * (x80 * x82 + x84 * x81) + f64::sqrt(x24) * x33 * x54)
+                    + (rF * (x24 * (x85 * x51 + x52 * x86 + x82) + x56 * x82)
+                        + (rR * (x10 - x58 - x59) + x84 * x25 + x39 * x62 + x33 * x83)
+                            * f64::sqrt(x24)) * psi_dot,
+                (x115 * (x136 * (x143 * x169 + x170 + x171 * x142) + x157 * x170)
+                    + f64::sqrt(x106)
+                        * (x168 * x117 + x121 * x112 + x113 * x119
+                            + (x104 + x109) * x102)) * x98
+                    + x148
+                        * (x146 * f64::sqrt(x106) * x117
+                            + x115 * (x152 * x170 + x153 * x113))
+                    + ((x102 * x127 + x145 * x119 + x121 * x128 + x118 * x129)
+                        * f64::sqrt(x106)
+                        + x115
+                            * (x144 * x170
+                                + (0.5 * f64::abs(x27 - x9) + x126 * x113
+                                    + 0.5 * f64::abs(x27 + x9)) * x136)) * x95 + x158 * x149
+                    + x105 * f64::sqrt(x106)
+                    + x92
+                        * (f64::sqrt(x106) * x160 * x97
+                            + ((x164 * x169 + x149 * x165 + x166 * x171) * x136
+                                + x167 * x170) * x115),
             ),
             (
                 "front_contact_height",
-                theta_dot * x1
-                    * (x16 * x26 + x13 * rR
-                        + (x8 * x30 - rF * x9 * x17 / f64::sqrt(x19)) * x80 - x21 * x11)
-                    + ((x9 * x1 + x8 * x71 * x0) * x30 + x81 * x0
-                        + (x8 * x1 - x9 * x71 * x0) * rF * x17 / f64::sqrt(x19))
-                        * phi_dot
-                    + delta_dot * x17 * (x28 + rF * (-x32 - x33) / f64::sqrt(x19) - x29),
-                (x144 * x86
-                    + (x84 * x108 + x120 * x86 * x110) * x97 * x123 / f64::sqrt(x115)
-                    + (x110 * x84 + x120 * x86 * x108) * x114) * x91
-                    + x152 * (x112 + x113 + x121 * x97 / f64::sqrt(x115)) * x123
-                    + x84
-                        * (x120 * x99 + x107 * x101 + x100 * x93
-                            + x117 * (x110 * x97 * x123 / f64::sqrt(x115) + x108 * x114))
-                        * x89,
+                theta_dot
+                    * (x19 * x25 + x16 * rR - x46 * (x61 - x20 * x88 / f64::sqrt(x24))
+                        - x39 * x14) * x0
+                    + delta_dot * (x33 - rF * x50 / f64::sqrt(x24)) * x22
+                    + (x33 * (x21 + x12 * x70) + (x48 - x70 * x49) * x88 / f64::sqrt(x24)
+                        + x87 * x6) * phi_dot,
+                x92
+                    * (x159 * x100 + x172 * (x131 * x139 + x140) / f64::sqrt(x106)
+                        + (x131 * x130 + x133) * x117)
+                    + x89
+                        * (x131 * x119 + x121 * x108
+                            + x137 * (x132 * x172 / f64::sqrt(x106) + x118)
+                            + x107 * x102) * x95
+                    + x148 * x134 * (x115 * x141 / f64::sqrt(x106) + x117),
             ),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [
             (
                 "front_contact_height",
-                x68 - f64::sqrt(x19) * rF + x70,
-                x143 + x145 + x97 * f64::sqrt(x115),
+                x68 - rF * f64::sqrt(x24),
+                x115 * f64::sqrt(x106) + x160,
             ),
         ];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2149,2186 +2090,2110 @@ pub mod lagrange {
         let mF = params.mF;
         let IFxx = params.IFxx;
         let IFyy = params.IFyy;
-        let x0 = f64::cos(theta);
-        let x1 = f64::sin(phi);
+        let x0 = f64::cos(delta);
+        let x1 = f64::cos(phi);
         let x2 = f64::sin(psi);
-        let x3 = x0 * x1 * x2;
+        let x3 = x1 * x2;
         let x4 = f64::sin(theta);
-        let x5 = f64::cos(psi);
-        let x6 = x4 * x5;
-        let x7 = x3 + x6;
-        let x8 = f64::cos(lam);
-        let x9 = f64::sin(lam);
-        let x10 = x4 * x1 * x2;
-        let x11 = x5 * x0;
-        let x12 = x11 - x10;
-        let x13 = x9 * x12;
-        let x14 = x7 * x8 - x13;
-        let x15 = x14 * x14;
-        let x16 = f64::cos(delta);
-        let x17 = x8 * x12;
-        let x18 = x17 + x9 * x7;
-        let x19 = x16 * x18;
-        let x20 = f64::sin(delta);
-        let x21 = f64::cos(phi);
-        let x22 = x20 * x21 * x2;
-        let x23 = x19 - x22;
-        let x24 = x23 * x23;
-        let x25 = -x16 * x21 * x2 - x20 * x18;
-        let x26 = x25 * x25;
-        let x27 = f64::sin(thF);
-        let x28 = f64::cos(thF);
-        let x29 = x23 * x28 - x27 * x14;
-        let x30 = x29 * x29;
-        let x31 = x14 * x28;
-        let x32 = x27 * x23;
-        let x33 = x31 + x32;
-        let x34 = x33 * x33;
-        let x35 = x0 * x2;
-        let x36 = x4 * x5 * x1;
-        let x37 = x35 + x36;
-        let x38 = x37 * x8;
-        let x39 = x5 * x0 * x1;
-        let x40 = x4 * x2;
-        let x41 = x40 - x39;
-        let x42 = x9 * x41;
+        let x5 = f64::sin(phi);
+        let x6 = x5 * x2;
+        let x7 = x4 * x6;
+        let x8 = f64::cos(psi);
+        let x9 = f64::cos(theta);
+        let x10 = x8 * x9;
+        let x11 = x10 - x7;
+        let x12 = f64::cos(lam);
+        let x13 = f64::sin(lam);
+        let x14 = x9 * x6;
+        let x15 = x4 * x8;
+        let x16 = x14 + x15;
+        let x17 = x13 * x16;
+        let x18 = x11 * x12 + x17;
+        let x19 = f64::sin(delta);
+        let x20 = x0 * x3 + x18 * x19;
+        let x21 = x20 * x20;
+        let x22 = f64::sin(thF);
+        let x23 = x13 * x11;
+        let x24 = x12 * x16;
+        let x25 = x24 - x23;
+        let x26 = x18 * x0;
+        let x27 = x19 * x3;
+        let x28 = x26 - x27;
+        let x29 = f64::cos(thF);
+        let x30 = x28 * x29 - x22 * x25;
+        let x31 = x22 * x28 + x25 * x29;
+        let x32 = (x21 + x30 * x30) + x31 * x31;
+        let x33 = (x25 * x25 + x28 * x28) + x21;
+        let x34 = mR + mB;
+        let x35 = x8 * x5;
+        let x36 = x9 * x2;
+        let x37 = x4 * x35 + x36;
+        let x38 = x12 * x37;
+        let x39 = x4 * x2;
+        let x40 = x35 * x9;
+        let x41 = x39 - x40;
+        let x42 = x13 * x41;
         let x43 = x38 + x42;
-        let x44 = x16 * x43;
-        let x45 = x20 * x5 * x21;
-        let x46 = x44 + x45;
-        let x47 = x41 * x8;
-        let x48 = x9 * x37;
-        let x49 = x47 - x48;
-        let x50 = x46 * x28 - x27 * x49;
-        let x51 = x50 * x29;
-        let x52 = x5 * x16 * x21;
-        let x53 = x52 - x20 * x43;
-        let x54 = x25 * x53;
-        let x55 = x49 * x28;
-        let x56 = x27 * x46;
-        let x57 = x55 + x56;
-        let x58 = x33 * x57;
-        let x59 = x23 * x46;
-        let x60 = x14 * x49;
-        let x61 = (x51 + x54 + x58) * mF + mH * (x59 + x54 + x60);
-        let x62 = rR * x0;
-        let x63 = x62 - rR - zB;
-        let x64 = x63 * x12;
-        let x65 = x4 * rR;
-        let x66 = x65 - xB;
-        let x67 = x7 * x66;
-        let x68 = x0 * xB;
-        let x69 = -rR - zB;
-        let x70 = x4 * x69;
-        let x71 = x68 + x70;
-        let x72 = x0 - 1.0;
-        let x73 = x65 - c_ - w_;
-        let x74 = x72 * rR * x8 + x9 * x73;
-        let x75 = x20 * x1 * x74;
-        let x76 = x9 * (c_ + w_ - xH);
-        let x77 = x8 * zH;
-        let x78 = x76 - x77;
-        let x79 = x20 * x1;
-        let x80 = x9 * x0;
-        let x81 = x4 * x8;
-        let x82 = x80 - x81;
-        let x83 = x16 * x82 * x21;
-        let x84 = x79 + x83;
-        let x85 = c_ + w_;
-        let x86 = x85 * x0;
-        let x87 = x86 - x65;
-        let x88 = x87 * x16;
-        let x89 = (xH - c_ - w_) * x8 - x9 * zH;
-        let x90 = x0 * x8;
-        let x91 = x9 * x4;
-        let x92 = x90 + x91;
-        let x93 = x89 * x92;
-        let x94 = (x88 + x93) * x21 - x75 - x78 * x84;
-        let x95 = x16 * x1 * x74;
-        let x96 = x16 * x1;
-        let x97 = x20 * x82 * x21;
-        let x98 = x96 - x97;
-        let x99 = x78 * x98;
-        let x100 = x20 * x87 * x21;
-        let x101 = x95 + x99 + x100;
-        let x102 = x73 * x8 - x9 * x72 * rR;
-        let x103 = x102 * x1;
-        let x104 = x103 - x89 * x98;
-        let x105 = x9 * rF;
-        let x106 = c_ * x8;
-        let x107 = x105 - x106;
-        let x108 = x103 - x98 * x107;
-        let x109 = x108 * x28;
-        let x110 = x9 * c_;
-        let x111 = rF * x8;
-        let x112 = x110 + x111;
-        let x113 = x98 * x112;
-        let x114 = x95 + x100 + x113;
-        let x115 = x27 * x114;
-        let x116 = x109 + x115;
-        let x117 = x114 * x28 - x27 * x108;
-        let x118 = x107 * x92;
-        let x119 = (x88 + x118) * x21 - x75 - x112 * x84;
-        let x120 = mB * (x1 * (x64 + x67) - x71 * x21 * x21 * x2)
-            + (x25 * x94 + x101 * x23 + x14 * x104) * mH + rR * mR * x5 * x1
-            + mF * (x116 * x33 + x117 * x29 + x25 * x119);
-        let x121 = x81 - x80;
-        let x122 = x72 * rR;
-        let x123 = x4 * x85;
-        let x124 = x78 * x92;
-        let x125 = x122 + x123 - x124;
-        let x126 = x89 * x121 + x16 * x125;
-        let x127 = x23 * x125 + x14 * x89 * x92;
-        let x128 = x112 * x92;
-        let x129 = x122 - x128 + x123;
-        let x130 = x129 * x16 + x121 * x107;
-        let x131 = x129 * x28 - x27 * x107 * x92;
-        let x132 = x107 * x92 * x28;
-        let x133 = x27 * x129;
-        let x134 = x132 + x133;
-        let x135 = x131 * x29 + x134 * x33;
-        let x136 = x0 * x69;
-        let x137 = x4 * xB;
-        let x138 = x137 - x136 - rR;
-        let x139 = x138 * mB;
-        let x140 = rR * mR;
-        let x141 = x140 - x139;
-        let x142 = mH * (x25 * x126 + x127 * x20) + (x130 * x25 + x135 * x20) * mF
-            + x141 * x21 * x2;
-        let x143 = -c_ - w_;
-        let x144 = x9 * x143;
-        let x145 = rR * x8;
-        let x146 = x145 - x110 - x144 - x111;
-        let x147 = x16 * x107;
-        let x148 = x8 * x143;
-        let x149 = x9 * rR;
-        let x150 = x148 - x147 + x149;
-        let x151 = x110 + x144 + x111 - x145;
-        let x152 = x16 * x28 * x151 - x27 * x150;
-        let x153 = x27 * x16 * x151;
-        let x154 = x150 * x28;
-        let x155 = x153 + x154;
-        let x156 = x148 - x89 * x16 + x149;
-        let x157 = x145 - x144 - x76 + x77;
-        let x158 = x144 - x145 + x76 - x77;
-        let x159 = (x12 * x69 - x7 * xB) * mB
-            + mF * (x146 * x20 * x25 + x152 * x29 + x33 * x155)
-            + mH * (x14 * x156 + x20 * x25 * x157 + x16 * x23 * x158);
-        let x160 = x89 * mH;
-        let x161 = mF * x107;
-        let x162 = x160 + x161;
-        let x163 = x25 * x162;
-        let x164 = x21 * x21;
-        let x165 = f64::sqrt(x164);
-        let x166 = x98 * x98;
-        let x167 = 1.0 - x166;
-        let x168 = f64::sqrt(x167);
-        let x169 = x53 * x53;
-        let x170 = x63 * x37;
-        let x171 = x41 * x66;
-        let x172 = x5 * x71 * x21 * x21;
-        let x173 = rR * mR * x1 * x2;
-        let x174 = mH * (x104 * x49 + x101 * x46 + x53 * x94)
-            + ((x170 + x171) * x1 + x172) * mB + x173
-            + mF * (x116 * x57 + x117 * x50 + x53 * x119);
-        let x175 = x125 * x46 + x89 * x49 * x92;
-        let x176 = x139 - x140;
-        let x177 = x134 * x57 + x131 * x50;
-        let x178 = (x53 * x126 + x20 * x175) * mH + x176 * x5 * x21
-            + (x177 * x20 + x130 * x53) * mF;
-        let x179 = mF * (x155 * x57 + x146 * x20 * x53 + x50 * x152)
-            + (x16 * x158 * x46 + x20 * x53 * x157 + x156 * x49) * mH
-            + mB * (x37 * x69 - x41 * xB);
-        let x180 = x53 * x162;
-        let x181 = 2.0 * phi;
-        let x182 = f64::cos(x181);
-        let x183 = x63 * x63;
-        let x184 = x66 * x66;
-        let x185 = f64::cos(thR);
-        let x186 = x4 * x185;
-        let x187 = f64::sin(thR);
-        let x188 = x187 * x0;
-        let x189 = -x186 - x188;
-        let x190 = x185 * x0;
-        let x191 = x4 * x187;
-        let x192 = x190 - x191;
-        let x193 = x192 * x192;
-        let x194 = x4 * IBxz;
-        let x195 = IBzz * x0;
-        let x196 = x194 + x195;
-        let x197 = x0 * IBxz;
-        let x198 = x4 * IBxx;
-        let x199 = -x197 - x198;
-        let x200 = IHxz * f64::cos(2.0 * lam);
-        let x201 = x9 * x8 * (IHzz - IHxx);
-        let x202 = x201 - x200;
-        let x203 = x202 * x84;
-        let x204 = IHzz * x8 * x8;
-        let x205 = IHxz * x8;
-        let x206 = x9 * (2.0 * x205 + x9 * IHxx);
-        let x207 = x204 + x206;
-        let x208 = x207 * x92 * x21;
-        let x209 = x203 + x208;
-        let x210 = x84 * x28 - x27 * x92 * x21;
-        let x211 = x210 * x210;
-        let x212 = x27 * x84;
-        let x213 = x92 * x28 * x21;
-        let x214 = x212 + x213;
-        let x215 = x214 * x214;
-        let x216 = x9 * (x9 * IHzz - 2.0 * x205);
-        let x217 = IHxx * x8 * x8;
-        let x218 = x216 + x217;
-        let x219 = x84 * x218;
-        let x220 = x202 * x92 * x21;
+        let x44 = x0 * x43;
+        let x45 = x8 * x1;
+        let x46 = x19 * x45;
+        let x47 = x44 + x46;
+        let x48 = x13 * x37;
+        let x49 = x41 * x12 - x48;
+        let x50 = x22 * x47 + x49 * x29;
+        let x51 = x31 * x50;
+        let x52 = x29 * x47 - x22 * x49;
+        let x53 = x52 * x30;
+        let x54 = x0 * x45;
+        let x55 = x54 - x19 * x43;
+        let x56 = x20 * x55;
+        let x57 = x28 * x47;
+        let x58 = x49 * x25;
+        let x59 = mF * (x51 + x53 - x56) + (x57 + x58 - x56) * mH;
+        let x60 = rR * mR;
+        let x61 = x9 - 1.0;
+        let x62 = x13 * rR;
+        let x63 = -c_ - w_;
+        let x64 = x4 * rR;
+        let x65 = x63 + x64;
+        let x66 = x12 * x65 - x61 * x62;
+        let x67 = x66 * x5;
+        let x68 = x13 * rF - c_ * x12;
+        let x69 = x13 * x9;
+        let x70 = x4 * x12;
+        let x71 = x69 - x70;
+        let x72 = x19 * x1;
+        let x73 = x71 * x72;
+        let x74 = x0 * x5;
+        let x75 = x74 - x73;
+        let x76 = x68 * x75;
+        let x77 = x67 - x76;
+        let x78 = c_ + w_;
+        let x79 = x9 * x78;
+        let x80 = x79 - x64;
+        let x81 = x80 * x72;
+        let x82 = rR * x12;
+        let x83 = x61 * x82 + x13 * x65;
+        let x84 = x74 * x83;
+        let x85 = x81 + x84;
+        let x86 = x13 * c_;
+        let x87 = rF * x12;
+        let x88 = x86 + x87;
+        let x89 = x75 * x88;
+        let x90 = x85 + x89;
+        let x91 = x77 * x29 + x22 * x90;
+        let x92 = x0 * x1;
+        let x93 = x92 * x71;
+        let x94 = x19 * x5;
+        let x95 = x93 + x94;
+        let x96 = x95 * x88;
+        let x97 = x13 * x4;
+        let x98 = x97 + x9 * x12;
+        let x99 = x68 * x98;
+        let x100 = x80 * x0;
+        let x101 = x83 * x94;
+        let x102 = (x99 + x100) * x1 - x96 - x101;
+        let x103 = x90 * x29 - x22 * x77;
+        let x104 = x13 * (x78 - xH);
+        let x105 = x12 * zH;
+        let x106 = x104 - x105;
+        let x107 = x85 + x75 * x106;
+        let x108 = x95 * x106;
+        let x109 = x12 * (x63 + xH) - x13 * zH;
+        let x110 = x109 * x98;
+        let x111 = x110;
+        let x112 = (x111 + x100) * x1 - x108 - x101;
+        let x113 = x67 - x109 * x75;
+        let x114 = x9 * xB;
+        let x115 = rR + zB;
+        let x116 = x4 * x115;
+        let x117 = x114 - x116;
+        let x118 = x1 * x117;
+        let x119 = x64 - xB;
+        let x120 = rR * x9;
+        let x121 = x120 - rR - zB;
+        let x122 = x119 * x16 + x121 * x11;
+        let x123 = x60 * x35 + (x31 * x91 - x20 * x102 + x103 * x30) * mF
+            + (x107 * x28 - x20 * x112 + x113 * x25) * mH + mB * (x5 * x122 - x118 * x3);
+        let x124 = x9 * x115;
+        let x125 = x4 * xB;
+        let x126 = x124 + x125;
+        let x127 = x126 - rR;
+        let x128 = mB * x127;
+        let x129 = x60 - x128;
+        let x130 = x4 * x78;
+        let x131 = x61 * rR;
+        let x132 = x130 + x131;
+        let x133 = x106 * x98;
+        let x134 = x132 - x133;
+        let x135 = x25 * x111 + x134 * x28;
+        let x136 = x70 - x69;
+        let x137 = x109 * x136;
+        let x138 = x137 + x134 * x0;
+        let x139 = x98 * x88;
+        let x140 = x132 - x139;
+        let x141 = x22 * x68;
+        let x142 = x140 * x29 - x141 * x98;
+        let x143 = x98 * x29;
+        let x144 = x22 * x140 + x68 * x143;
+        let x145 = x30 * x142 + x31 * x144;
+        let x146 = x68 * x136;
+        let x147 = x0 * x140 + x146;
+        let x148 = x129 * x3 + (x19 * x135 - x20 * x138) * mH
+            + (x19 * x145 - x20 * x147) * mF;
+        let x149 = x13 * x78;
+        let x150 = x82 + x149;
+        let x151 = x150 - x86 - x87;
+        let x152 = x19 * x151;
+        let x153 = x62 - x12 * x78;
+        let x154 = x68 * x0;
+        let x155 = x153 - x154;
+        let x156 = x0 * x29;
+        let x157 = -x82 - x149;
+        let x158 = x157 + x88;
+        let x159 = x156 * x158 - x22 * x155;
+        let x160 = x22 * x0;
+        let x161 = x160 * x158 + x155 * x29;
+        let x162 = x150 - x104 + x105;
+        let x163 = x19 * x162;
+        let x164 = x157 + x106;
+        let x165 = x164 * x0;
+        let x166 = x153 - x109 * x0;
+        let x167 = (-x16 * xB - x11 * x115) * mB
+            + mF * (x30 * x159 - x20 * x152 + x31 * x161)
+            + mH * (x165 * x28 - x163 * x20 + x25 * x166);
+        let x168 = x109 * mH;
+        let x169 = x68 * mF;
+        let x170 = x168 + x169;
+        let x171 = -(x20 * x170);
+        let x172 = x1 * x1;
+        let x173 = f64::sqrt(x172);
+        let x174 = x75 * x75;
+        let x175 = 1.0 - x174;
+        let x176 = f64::sqrt(x175);
+        let x177 = x55 * x55;
+        let x178 = x60 * x6;
+        let x179 = x121 * x37;
+        let x180 = x41 * x119 + x179;
+        let x181 = x118 * x45;
+        let x182 = x178 + (x180 * x5 + x181) * mB
+            + mH * (x112 * x55 + x113 * x49 + x107 * x47)
+            + mF * (x50 * x91 + x52 * x103 + x102 * x55);
+        let x183 = x128 - x60;
+        let x184 = x49 * x111 + x134 * x47;
+        let x185 = x144 * x50 + x52 * x142;
+        let x186 = x183 * x45 + (x19 * x184 + x138 * x55) * mH
+            + mF * (x147 * x55 + x19 * x185);
+        let x187 = x37 * x115;
+        let x188 = (x163 * x55 + x165 * x47 + x49 * x166) * mH
+            + mF * (x52 * x159 + x152 * x55 + x50 * x161) + mB * (-x41 * xB - x187);
+        let x189 = x170 * x55;
+        let x190 = x121 * x121;
+        let x191 = x119 * x119;
+        let x192 = x5 * x5;
+        let x193 = x98 * x1;
+        let x194 = x13 * x12 * (IHzz - IHxx) - IHxz * f64::cos(2.0 * lam);
+        let x195 = x193 * x194;
+        let x196 = IHxz * x12;
+        let x197 = x13 * (x13 * IHzz - 2.0 * x196);
+        let x198 = x12 * x12;
+        let x199 = x198 * IHxx;
+        let x200 = x197 + x199;
+        let x201 = x95 * x200;
+        let x202 = x195 + x201;
+        let x203 = x13 * (2.0 * x196 + x13 * IHxx);
+        let x204 = x198 * IHzz;
+        let x205 = x203 + x204;
+        let x206 = x95 * x194 + x193 * x205;
+        let x207 = x206 * x98;
+        let x208 = x9 * IBxz;
+        let x209 = x4 * IBxx;
+        let x210 = x208 + x209;
+        let x211 = x4 * IBxz;
+        let x212 = IBzz * x9;
+        let x213 = x211 + x212;
+        let x214 = f64::sin(thR);
+        let x215 = x4 * x214;
+        let x216 = f64::cos(thR);
+        let x217 = x216 * x9;
+        let x218 = x217 - x215;
+        let x219 = x4 * x216;
+        let x220 = x214 * x9;
         let x221 = x219 + x220;
-        let x222 = IRyy + IByy;
-        let x223 = IHyy + IFyy;
-        let x224 = -IHyy - IFyy;
-        let x225 = x16 * x92 * x218;
-        let x226 = x202 * x121;
-        let x227 = x225 + x226;
-        let x228 = x138 * x71 * mB;
-        let x229 = x4 * IBzz;
-        let x230 = x229 - x197;
-        let x231 = x230 * x0;
-        let x232 = x121 * x207;
-        let x233 = x16 * x202 * x92;
-        let x234 = x232 + x233;
-        let x235 = x0 * IBxx;
-        let x236 = x235 - x194;
-        let x237 = x4 * x236;
-        let x238 = x89 * x104 * x92 + x101 * x125;
-        let x239 = x116 * x134 + x117 * x131;
-        let x240 = x27 * x16 * x92;
-        let x241 = x121 * x28;
-        let x242 = x240 + x241;
-        let x243 = x214 * x242;
-        let x244 = x16 * x92 * x28 - x27 * x121;
-        let x245 = x210 * x244;
-        let x246 = x20 * x98 * x92 * x224 + x227 * x84
-            + (x228 + x231 + x234 * x92 - x237) * x21 + (x94 * x126 + x20 * x238) * mH
-            + mF * (x20 * x239 + x130 * x119) + (x243 + x245) * IFxx;
-        let x247 = mB * (x63 * x69 - x66 * xB) + IRyy + IByy;
-        let x248 = x27 * x214;
-        let x249 = x210 * x28;
-        let x250 = x248 + x249;
-        let x251 = x250 * IFxx;
-        let x252 = x223 * x16 * x98
-            + (x16 * x101 * x158 + x20 * x157 * x94 + x156 * x104) * mH
-            + (x117 * x152 + x146 * x20 * x119 + x116 * x155) * mF + x247 * x1
-            + (x219 + x220 + x251) * x20;
-        let x253 = x1 * IRyy;
-        let x254 = x203 + x89 * x94 * mH + IFxx * (x214 * x28 - x27 * x210)
-            + mF * x119 * x107 + x208;
-        let x255 = x98 * IFyy;
-        let x256 = x165 - x21;
-        let x257 = rR * x5 * x1 * x256;
-        let x258 = rR * x1 * x256 * x2;
-        let x259 = x211 + x215 + x166;
-        let x260 = x53 * x98;
-        let x261 = x210 * x50 + x214 * x57 + x260;
-        let x262 = x39 - x40;
-        let x263 = x9 * x262;
-        let x264 = -x35 - x36;
-        let x265 = x8 * x264;
-        let x266 = x263 + x265;
-        let x267 = x266 * x16 - x45;
-        let x268 = x5 * x1;
-        let x269 = x8 * x262;
-        let x270 = x9 * x264;
-        let x271 = x269 - x270;
-        let x272 = x112 * x271;
-        let x273 = x85 * x264;
-        let x274 = x267 * x107 + rR * (x268 - x39 + x40) + x272 + x273;
-        let x275 = f64::sqrt(x167) * x274;
-        let x276 = x275 - (x53 * x98 * x259 + x167 * x261) * rF;
-        let x277 = x1 * x2;
-        let x278 = x23 * x107 + rR * (x277 - x3 - x6) + x14 * x112 + x85 * x12;
-        let x279 = x210 * x29;
-        let x280 = x33 * x214;
-        let x281 = x25 * x98;
-        let x282 = x279 + x280 + x281;
-        let x283 = x167 * x282;
-        let x284 = x25 * x98 * x259;
-        let x285 = f64::sqrt(x167) * x278 - (-x283 - x284) * rF;
-        let x286 = x186 + x188;
-        let x287 = x89 * x89 * x92 * x92;
-        let x288 = x125 * x125;
-        let x289 = x131 * x131;
-        let x290 = x134 * x134;
-        let x291 = x16 * x227;
-        let x292 = x223 * x20 * x20 * x92 + x291;
-        let x293 = x146 * x130 + x131 * x152 + x134 * x155;
-        let x294 = x216 - IHyy - IFyy + x217;
-        let x295 = x157 * x126 + x16 * x125 * x158 + x89 * x156 * x92;
-        let x296 = x27 * x242;
-        let x297 = x244 * x28;
-        let x298 = x296 + x297;
-        let x299 = IFxx * x298;
-        let x300 = (mF * x293 + x226 + x16 * x294 * x92 + x295 * mH + x299) * x20;
-        let x301 = x89 * mH * x126 + IFxx * (x242 * x28 - x27 * x244) + x232 + x233
-            + x130 * mF * x107;
-        let x302 = -(x20 * IFyy * x92);
-        let x303 = rR * x256 * x21 * x2;
-        let x304 = x21 - x165;
-        let x305 = x304 * rR * x5 * x21;
-        let x306 = 1.0 - x0;
-        let x307 = rR * x306;
-        let x308 = x307 + x128 - x123;
-        let x309 = x84 * x107 + x308 * x21;
-        let x310 = f64::sqrt(x167) * x309 * x2;
-        let x311 = x50 * x244 + x57 * x242 - x20 * x53 * x92;
-        let x312 = x243 + x245 - x20 * x98 * x92;
-        let x313 = x310 - rF * (x167 * x311 + x53 * x98 * x312);
-        let x314 = x244 * x29 - x20 * x25 * x92 + x33 * x242;
-        let x315 = x167 * x314;
-        let x316 = x25 * x98 * x312;
-        let x317 = -x90 - x91;
-        let x318 = x112 * x317;
-        let x319 = x122 + x123 + x318;
-        let x320 = x319 * x21;
-        let x321 = x16 * x121 * x21 - x79;
-        let x322 = x321 * x107;
-        let x323 = x320 + x322;
-        let x324 = x323 * f64::sqrt(x167) * x5 - (-x315 - x316) * rF;
-        let x325 = x20 * x21;
-        let x326 = x16 * x121 * x1;
-        let x327 = x325 + x326;
-        let x328 = x327 * x107;
-        let x329 = x319 * x1;
-        let x330 = x16 * x21 - x20 * x121 * x1;
-        let x331 = x328 + x329 + x330 * rF * x98 / f64::sqrt(x167);
-        let x332 = x27 * x27;
-        let x333 = x28 * x28;
-        let x334 = x332 + x333;
-        let x335 = x334 * IFxx;
-        let x336 = x89 * x157 * mH + x146 * mF * x107 - x200 + x201;
-        let x337 = x20 * x336;
-        let x338 = x16 * IFyy;
-        let x339 = -(rR * x5 * x21);
-        let x340 = -(rR * x21 * x2);
-        let x341 = -x3 - x6;
-        let x342 = x9 * x341;
-        let x343 = x17 - x342;
-        let x344 = x341 * x8;
-        let x345 = x344 + x13;
-        let x346 = x85 * x341 - rR * x12 + x343 * x112 + x345 * x16 * x107;
-        let x347 = f64::sqrt(x167) * x346;
-        let x348 = x167 * x5 * x21;
-        let x349 = x16 * x98;
-        let x350 = x250 * x20;
-        let x351 = x349 + x350;
-        let x352 = x347 - rF * (x348 + x351 * x53 * x98);
-        let x353 = x167 * x21 * x2;
-        let x354 = x351 * x25 * x98;
-        let x355 = x38 - x263;
-        let x356 = x269 + x48;
-        let x357 = x355 * x112 + x356 * x16 * x107 - rR * x37 + x85 * x262;
-        let x358 = f64::sqrt(x167) * x357 - rF * (x353 - x354);
-        let x359 = x82 * x112;
-        let x360 = rF * x20 * x98 / f64::sqrt(x167);
-        let x361 = x147 - x360;
-        let x362 = x21 * (x359 + x65 + x361 * x317 - x86);
-        let x363 = f64::sqrt(x167) * x25 * x107;
-        let x364 = x0 * x8 * x21 + x9 * x4 * x21;
-        let x365 = x363 - rF * (x334 * x167 * x49 + x53 * x98 * x364);
-        let x366 = x14 * x334 * x167;
-        let x367 = x25 * x98 * x364;
-        let x368 = f64::sqrt(x167) * x53 * x107 - (-x366 - x367) * rF;
-        let x369 = -x79 - x83;
-        let x370 = x98 * (x105 + rF * x369 / f64::sqrt(x167) - x106);
-        let x371 = -(rF * x53);
-        let x372 = rF * x25;
-        let x373 = psi_dot * x1;
-        let x374 = theta_dot + x373;
-        let x375 = x20 * x374;
-        let x376 = x4 * psi_dot * x21;
-        let x377 = x0 * phi_dot;
-        let x378 = x377 - x376;
-        let x379 = x378 * x8;
-        let x380 = x0 * psi_dot * x21;
-        let x381 = x4 * phi_dot;
-        let x382 = x380 + x381;
-        let x383 = x379 + x9 * x382;
-        let x384 = x16 * x383;
-        let x385 = -x375 - x384;
-        let x386 = x373 - theta_dot;
-        let x387 = x4 * x386 * phi_dot - theta_dot * x0 * psi_dot * x21;
-        let x388 = x8 * x387;
-        let x389 = theta_dot - x373;
-        let x390 = x4 * theta_dot * psi_dot * x21;
-        let x391 = x0 * phi_dot * x389 - x390;
-        let x392 = x388 + x9 * x391;
-        let x393 = x16 * psi_dot * phi_dot * x21 + delta_dot * x385 - x20 * x392;
-        let x394 = x393 * x112;
-        let x395 = x4 * rR * psi_dot * x1;
-        let x396 = x395 - x85 * x374;
-        let x397 = x0 * psi_dot * x1 - theta_dot - x373;
-        let x398 = x9 * x396 + rR * x397 * x8;
-        let x399 = x20 * x398;
-        let x400 = rR * (x377 - x376 - phi_dot) + x85 * x382;
-        let x401 = x400 * x16;
-        let x402 = (x401 - x399) * delta_dot;
-        let x403 = rR * x387 + x85 * x391;
-        let x404 = x403 * x20;
-        let x405 = x4 * theta_dot * x1;
-        let x406 = x72 * phi_dot * x21 - x405;
-        let x407 = rR * theta_dot * x0 * x1;
-        let x408 = x407 + x73 * phi_dot * x21;
-        let x409 = x406 * rR * x8 + x9 * x408;
-        let x410 = x16 * psi_dot * x409;
-        let x411 = x394 + x402 + x404 + x410;
-        let x412 = x411 * x28;
-        let x413 = x9 * x406 * rR;
-        let x414 = x408 * x8;
-        let x415 = psi_dot * (x414 - x413);
-        let x416 = x415 - x393 * x107;
-        let x417 = x27 * x416;
-        let x418 = x9 * rR * x397;
-        let x419 = x8 * x396;
-        let x420 = x374 * x16;
-        let x421 = x20 * x383;
-        let x422 = x420 - x421;
-        let x423 = x419 - x418 - x107 * x422;
-        let x424 = x28 * x423;
-        let x425 = x20 * x400;
-        let x426 = x112 * x422;
-        let x427 = x16 * x398;
-        let x428 = x425 + x426 + x427;
-        let x429 = x428 * x27;
-        let x430 = x424 + x429;
-        let x431 = x375 + x384;
-        let x432 = x431 * x27;
-        let x433 = x9 * x378;
-        let x434 = x8 * x382 + delta_dot - x433;
-        let x435 = x434 * x28;
-        let x436 = x432 + x435;
-        let x437 = x431 * x112;
-        let x438 = x434 * x107;
-        let x439 = x401 - x437 - x399 + x438;
-        let x440 = x412 - x417 + x430 * x422 - x436 * x439;
-        let x441 = x403 * x16;
-        let x442 = x431 * x28;
-        let x443 = x27 * x434;
-        let x444 = x442 - x443;
-        let x445 = x444 * x430;
-        let x446 = delta_dot * (-x425 - x427);
-        let x447 = x8 * x391;
-        let x448 = x9 * x387;
-        let x449 = x447 - x448;
-        let x450 = x449 * x107;
-        let x451 = x392 * x16;
-        let x452 = delta_dot * x422;
-        let x453 = x20 * psi_dot * phi_dot * x21;
-        let x454 = x451 + x452 + x453;
-        let x455 = x112 * x454;
-        let x456 = x428 * x28 - x27 * x423;
-        let x457 = x456 * x436;
-        let x458 = x20 * psi_dot * x409;
-        let x459 = x441 - x445 + x446 + x450 - x455 + x457 - x458;
-        let x460 = x416 * x28 - x456 * x422 + x27 * x411 + x444 * x439;
-        let x461 = x78 * x422;
-        let x462 = x425 + x427 + x461;
-        let x463 = x434 * x462;
-        let x464 = x89 * x449;
-        let x465 = x78 * x454;
-        let x466 = x89 * x422;
-        let x467 = x419 - x418 - x466;
-        let x468 = x431 * x467;
-        let x469 = x441 + x446 + x463 + x464 - x465 - x468 - x458;
-        let x470 = x467 * x422;
-        let x471 = x78 * x393;
-        let x472 = x431 * x78;
-        let x473 = x89 * x434;
-        let x474 = x473 - x472 - x399 + x401;
-        let x475 = x434 * x474;
-        let x476 = x470 + x471 + x402 - x475 + x404 + x410;
-        let x477 = x415 - x422 * x462 + x431 * x474 - x89 * x393;
-        let x478 = x374 * xB;
-        let x479 = x395 - x478;
-        let x480 = x374 * x69;
-        let x481 = rR * x0 * psi_dot * x1;
-        let x482 = x480 + x481;
-        let x483 = x382 * x482 - x387 * x69 - x378 * x479 + xB * x391;
-        let x484 = x378 * x69;
-        let x485 = xB * x382;
-        let x486 = rR * phi_dot;
-        let x487 = x485 - x484 - x486;
-        let x488 = psi_dot * (x63 * phi_dot * x21 - x4 * rR * theta_dot * x1)
-            - x487 * x382 + x374 * x479;
-        let x489 = x374 * x482;
-        let x490 = x378 * x487;
-        let x491 = psi_dot * (x407 + x66 * phi_dot * x21);
-        let x492 = x490 - x489 + x491;
-        let x493 = phi_dot * phi_dot;
-        let x494 = psi_dot * psi_dot;
-        let x495 = -x493 - x494;
-        let x496 = -mF * (x440 * x29 + x25 * x459 + x33 * x460)
-            - (x25 * x469 + x476 * x23 + x14 * x477) * mH
-            - mB * (x12 * x488 - x483 * x21 * x2 + x7 * x492)
-            - (2.0 * (x5 * psi_dot * phi_dot * x21) + x1 * x2 * x495) * rR * mR;
-        let x497 = psi_dot * phi_dot * x21 * x2;
-        let x498 = x493 + x494;
-        let x499 = x483 * x5 * x21;
-        let x500 = x431 * x218;
-        let x501 = x434 * x202;
-        let x502 = x500 + x501;
-        let x503 = x434 * x502;
-        let x504 = x393 * IHyy;
-        let x505 = x434 * x207;
-        let x506 = x431 * x202;
-        let x507 = x505 + x506;
-        let x508 = x431 * x507;
-        let x509 = x393 * IFyy;
-        let x510 = x508 - x503 - x504 - x509;
-        let x511 = IBxz * x382;
-        let x512 = x378 * IBxx;
-        let x513 = x512 - x511;
-        let x514 = x513 * x382;
-        let x515 = x378 * IBxz;
-        let x516 = IBzz * x382;
-        let x517 = x516 - x515;
-        let x518 = x378 * x517;
-        let x519 = x514 + psi_dot * phi_dot * IByy * x21 - x518;
-        let x520 = IBxz * x391;
-        let x521 = x516 - x515 - IByy * x382;
-        let x522 = x521 * x374;
-        let x523 = IBxx * x387;
-        let x524 = x522 - x520 + x523;
-        let x525 = x4 * x524;
-        let x526 = psi_dot * x1 * IRyy * phi_dot;
-        let x527 = IBxz * x387;
-        let x528 = x378 * IByy;
-        let x529 = x511 + x528 - x512;
-        let x530 = x374 * x529;
-        let x531 = IBzz * x391;
-        let x532 = x530 - x527 + x531;
-        let x533 = x0 * x532;
-        let x534 = x431 * IHyy;
-        let x535 = x534 - x500 - x501;
-        let x536 = x202 * x454;
-        let x537 = x207 * x449;
-        let x538 = x535 * x422 + x536 + x537;
-        let x539 = x538 * x92;
-        let x540 = x378 * x187;
-        let x541 = x185 * x382;
-        let x542 = x540 + x541;
-        let x543 = thR_dot + theta_dot + x373;
-        let x544 = IRxx - IRyy;
-        let x545 = x542 * x543 * x544;
-        let x546 = -x540 - x541;
-        let x547 = x185 * x387;
-        let x548 = (thR_dot * x546 - x187 * x391 + x547) * IRxx;
-        let x549 = x545 + x548;
-        let x550 = x185 * x378;
-        let x551 = x187 * x382;
-        let x552 = x550 - x551;
-        let x553 = IRyy - IRxx;
-        let x554 = x552 * x543 * x553;
-        let x555 = x185 * x391;
-        let x556 = x187 * x387;
-        let x557 = (x555 + thR_dot * x552 + x556) * IRxx;
-        let x558 = x554 + x557;
-        let x559 = x63 * x488 + x66 * x492;
-        let x560 = f64::sin(x181);
-        let x561 = x434 * IHyy;
-        let x562 = x505 - x561 + x506;
-        let x563 = x422 * x562;
-        let x564 = x454 * x218;
-        let x565 = x202 * x449;
-        let x566 = x563 + x564 + x565;
-        let x567 = thF_dot * x434;
-        let x568 = x451 - x567 + x452 + x453;
-        let x569 = x431 * thF_dot;
-        let x570 = IFxx * (x27 * x568 + (x569 + x447 - x448) * x28);
-        let x571 = x420 + thF_dot - x421;
-        let x572 = IFyy - IFxx;
-        let x573 = x571 * x444 * x572;
-        let x574 = x570 + x573;
-        let x575 = IFxx - IFyy;
-        let x576 = x571 * x436 * x575;
-        let x577 = x448 - x569 - x447;
-        let x578 = IFxx * (x28 * x568 + x27 * x577);
-        let x579 = x576 + x578;
-        let x580 = x78 * x317;
-        let x581 = x580 + x122 + x123;
-        let x582 = x1 * x141;
-        let x583 = x328 + x329;
-        let x584 = x476 * x125 + x477 * x89 * x92;
-        let x585 = (x503 + x504 - x508 + x509) * x20 - x16 * x566;
-        let x586 = x134 * x460 + x440 * x131;
-        let x587 = x27 * x574;
-        let x588 = x579 * x28;
-        let x589 = -IRyy - IByy;
-        let x590 = x16 * x107 * x317 + x359 + x65 - x86;
-        let x591 = -x68 - x70;
-        let x592 = g * x98;
-        let x593 = x500 + x501 - x534;
-        let x594 = x21 / f64::sqrt(x164);
-        let x595 = 2.0 - x594;
-        let x596 = -thR_dot - theta_dot;
-        let x597 = x596 * x5 * x1;
-        let x598 = x596 * x21 * x2;
-        let x599 = x1 * x1 / f64::sqrt(x164);
-        let x600 = (x165 - x599 - x21) * x21;
-        let x601 = x1 * x1;
-        let x602 = x600 + x601;
-        let x603 = rR
-            * (phi_dot
-                * (f64::sqrt(x164) * x1 * phi_dot * x2
-                    - (x1 * phi_dot * x595 * x2 + x5 * psi_dot * x256) * x21 + x597)
-                + psi_dot * (x598 - x304 * psi_dot * x1 * x2 - x5 * x602 * phi_dot));
-        let x604 = x5 * f64::sqrt(x164) * x1 * phi_dot;
-        let x605 = x594 - 2.0;
-        let x606 = thR_dot + theta_dot;
-        let x607 = delta_dot * x82;
-        let x608 = phi_dot - x607;
-        let x609 = x16 * x608 * x21;
-        let x610 = theta_dot * x317 * x21;
-        let x611 = delta_dot * x1;
-        let x612 = x121 * x1 * phi_dot;
-        let x613 = -x610 - x611 - x612;
-        let x614 = x613 * x20;
-        let x615 = x609 + x614;
-        let x616 = x274 * x98 * x615 / f64::sqrt(x167);
-        let x617 = psi_dot * x21 * x2;
-        let x618 = x5 * x1 * phi_dot;
-        let x619 = x617 + x618 - delta_dot * x266;
-        let x620 = x20 * x619;
-        let x621 = theta_dot * x1;
-        let x622 = -psi_dot - x621;
-        let x623 = x5 * phi_dot * x21;
-        let x624 = x5 * x0 * x622 + x4 * (x374 * x2 - x623);
-        let x625 = x8 * x624;
-        let x626 = delta_dot * x5 * x21;
-        let x627 = x0 * phi_dot * x21;
-        let x628 = x5 * (x627 + x4 * x622);
-        let x629 = -theta_dot - x373;
-        let x630 = x629 * x0 * x2;
-        let x631 = x628 + x630;
-        let x632 = x9 * x631;
-        let x633 = (x625 - x626 + x632) * x16;
-        let x634 = x85 * x624;
-        let x635 = psi_dot * x1 * x2;
-        let x636 = x631 * x8;
-        let x637 = x9 * x624;
-        let x638 = x636 - x637;
-        let x639 = x112 * x638;
-        let x640 = (x620 + x633) * x107 + x634 + rR * (x623 - x628 - x630 - x635) + x639;
-        let x641 = f64::sqrt(x167) * x640;
-        let x642 = thF_dot * x92 * x21;
-        let x643 = x610 + x611 + x612;
-        let x644 = x643 * x16;
-        let x645 = x20 * x608 * x21;
-        let x646 = x644 - x642 + x645;
-        let x647 = x27 * x646;
-        let x648 = theta_dot * x82 * x21;
-        let x649 = x1 * phi_dot * x317;
-        let x650 = thF_dot * x84;
-        let x651 = (x648 + x649 + x650) * x28;
-        let x652 = x647 + x651;
-        let x653 = x652 * x214;
-        let x654 = x98 * x615;
-        let x655 = -x648 - x649 - x650;
-        let x656 = x27 * x655;
-        let x657 = x646 * x28;
-        let x658 = x656 + x657;
-        let x659 = x210 * x658;
-        let x660 = 2.0 * x653 + 2.0 * x654 + 2.0 * x659;
-        let x661 = x53 * x660;
-        let x662 = x261 * x615;
-        let x663 = psi_dot + x621;
-        let x664 = x5 * x0 * x663 + x4 * (x623 + x629 * x2);
-        let x665 = x8 * x664;
-        let x666 = x374 * x0 * x2 + x5 * (x4 * x663 - x627);
-        let x667 = x9 * x666;
-        let x668 = -x626 - x665 - x667;
-        let x669 = x20 * x668;
-        let x670 = delta_dot * x43;
-        let x671 = -x617 - x670 - x618;
-        let x672 = x671 * x16;
-        let x673 = x669 + x672;
-        let x674 = x259 * x673;
-        let x675 = x661 - 2.0 * x662 + x674;
-        let x676 = x675 * x98;
-        let x677 = thF_dot * x46;
-        let x678 = x9 * x664;
-        let x679 = x666 * x8;
-        let x680 = (x677 - x678 + x679) * x28;
-        let x681 = thF_dot * x49;
-        let x682 = x20 * x671;
-        let x683 = x16 * (x626 + x665 + x667);
-        let x684 = x682 - x681 + x683;
-        let x685 = x27 * x684;
-        let x686 = x680 + x685;
-        let x687 = x678 - x677 - x679;
-        let x688 = x28 * x684 + x27 * x687;
-        let x689 = x53 * x615;
-        let x690 = x98 * x673;
-        let x691 = x686 * x214 + x210 * x688 + x652 * x57 + x689 + x658 * x50 + x690;
-        let x692 = x167 * x691;
-        let x693 = x53 * x259 * x615;
-        let x694 = x351 * x673;
-        let x695 = x27 * (x647 + x651 - x210 * thF_dot);
-        let x696 = delta_dot * x98;
-        let x697 = (x656 + thF_dot * x214 + x657) * x28;
-        let x698 = x16 * (delta_dot * x250 + x609 + x614) + (x695 - x696 + x697) * x20;
-        let x699 = x53 * x698;
-        let x700 = x5 * x21 * x615;
-        let x701 = (x694 + x699 - 2.0 * x700) * x98;
-        let x702 = x351 * x53 * x615;
-        let x703 = x21 * x2;
-        let x704 = psi_dot - phi_dot;
-        let x705 = (x703 - x268) * x704;
-        let x706 = psi_dot + phi_dot;
-        let x707 = (x703 + x268) * x706;
-        let x708 = x27 * x20;
-        let x709 = x16 * x28;
-        let x710 = delta_dot * (x708 + x709);
-        let x711 = delta_dot * (x709 - x708);
-        let x712 = x20 * x28;
-        let x713 = x27 * x16;
-        let x714 = (x712 + x713) * delta_dot;
-        let x715 = delta_dot * (x712 - x713);
-        let x716 = x27 * (-0.5 * x710 - 0.5 * x711) + (0.5 * x714 - 0.5 * x715) * x28;
-        let x717 = x716 * x49 - 0.5 * x705 - 0.5 * x707;
-        let x718 = x717 * x167;
-        let x719 = x346 * x98 * x615 / f64::sqrt(x167);
-        let x720 = phi_dot * x21 * x2;
-        let x721 = x5 * x629 - x720;
-        let x722 = x0 * x721;
-        let x723 = x4 * x663 * x2;
-        let x724 = x722 + x723;
-        let x725 = delta_dot * x345 * x20;
-        let x726 = x0 * x622 * x2 + x4 * x721;
-        let x727 = x9 * x726;
-        let x728 = x8 * x724;
-        let x729 = x727 + x728;
-        let x730 = x16 * x729;
-        let x731 = x9 * x724;
-        let x732 = x8 * x726;
-        let x733 = x732 - x731;
-        let x734 = x85 * x724 + (x730 - x725) * x107 + x733 * x112 - rR * x726;
-        let x735 = f64::sqrt(x167) * x734;
-        let x736 = x53 * x364 * x615;
-        let x737 = theta_dot + phi_dot;
-        let x738 = x9 * x1;
-        let x739 = x8 * x21;
-        let x740 = x738 + x739;
-        let x741 = x9 * x21;
-        let x742 = x8 * x1;
-        let x743 = x742 - x741;
-        let x744 = -x741 - x742;
-        let x745 = x739 - x738;
-        let x746 = theta_dot - phi_dot;
-        let x747 = -0.5 * (x737 * (x4 * x740 + x743 * x0))
-            - 0.5 * ((x0 * x744 + x4 * x745) * x746);
-        let x748 = x53 * x747;
-        let x749 = x334 * x49 * x615;
-        let x750 = x364 * x673;
-        let x751 = x98 * (x748 - 2.0 * x749 + x750);
-        let x752 = x679 - x678;
-        let x753 = x334 * x167 * x752;
-        let x754 = delta_dot * x18;
-        let x755 = x5 * psi_dot * x21;
-        let x756 = x1 * phi_dot * x2;
-        let x757 = x756 - x754 - x755;
-        let x758 = x757 * x16;
-        let x759 = delta_dot * x21 * x2;
-        let x760 = x4 * x622 * x2;
-        let x761 = x374 * x5 + x720;
-        let x762 = x761 * x0;
-        let x763 = x760 + x762;
-        let x764 = x9 * x763;
-        let x765 = x759 - x732 - x764;
-        let x766 = x20 * x765;
-        let x767 = x758 + x766;
-        let x768 = (f64::sqrt(x167) * x767 - x25 * x98 * x615 / f64::sqrt(x167)) * x107;
-        let x769 = delta_dot * x20 * x28;
-        let x770 = thF_dot * x16;
-        let x771 = -theta_dot - x770;
-        let x772 = theta_dot * x16;
-        let x773 = -thF_dot - x772;
-        let x774 = (x27 * x771 - x769) * x92 + x773 * x121 * x28;
-        let x775 = delta_dot * x20 * x92;
-        let x776 = x27 * (x773 * x121 - x775);
-        let x777 = theta_dot + x770;
-        let x778 = x777 * x92 * x28;
-        let x779 = x776 + x778;
-        let x780 = x688 * x244 - delta_dot * x53 * x16 * x92 + x50 * x774
-            + x20 * (theta_dot * x53 * x121 - x92 * x673) + x779 * x57 + x686 * x242;
-        let x781 = x167 * x780;
-        let x782 = x312 * x673;
-        let x783 = x311 * x615;
-        let x784 = x779 * x214;
-        let x785 = x210 * x774;
-        let x786 = x784 + x20 * (theta_dot * x98 * x121 - x92 * x615) + x658 * x244
-            + x652 * x242 - delta_dot * x16 * x98 * x92 + x785;
-        let x787 = x53 * x786;
-        let x788 = x782 - 2.0 * x783 + x787;
-        let x789 = x788 * x98;
-        let x790 = x53 * x312 * x615;
-        let x791 = x756 - x755;
-        let x792 = x4 * x791 - theta_dot * x0 * x21 * x2;
-        let x793 = x85 * x792;
-        let x794 = x4 * theta_dot * x2;
-        let x795 = x5 * psi_dot * x1;
-        let x796 = x608 * x21 * x2 + x795;
-        let x797 = x20 * x796;
-        let x798 = (x5 * x82 * psi_dot + theta_dot * x317 * x2) * x21;
-        let x799 = delta_dot * x1 * x2;
-        let x800 = x121 * x1 * phi_dot * x2;
-        let x801 = x793
-            + rR * ((x5 * psi_dot * x306 + x794) * x21 + x72 * x1 * phi_dot * x2)
-            + x112
-                * (x1 * phi_dot * x317 * x2
-                    + (theta_dot * x82 * x2 + x5 * psi_dot * x92) * x21)
-            + (x797 + (x798 + x799 + x800) * x16) * x107;
-        let x802 = f64::sqrt(x167) * x801;
-        let x803 = x98 * x309 * x615 * x2 / f64::sqrt(x167);
-        let x804 = (x732 - x759 + x764) * x16;
-        let x805 = x757 * x20;
-        let x806 = x14 * thF_dot;
-        let x807 = x804 + x805 - x806;
-        let x808 = x27 * x807;
-        let x809 = x763 * x8;
-        let x810 = thF_dot * x23;
-        let x811 = (x809 - x727 + x810) * x28;
-        let x812 = x808 + x811;
-        let x813 = x727 - x809 - x810;
-        let x814 = x27 * x813 + x807 * x28;
-        let x815 = (theta_dot * x25 * x121 - x767 * x92) * x20
-            - delta_dot * x25 * x16 * x92 + x812 * x242 + x244 * x814 + x774 * x29
-            + x33 * x779;
-        let x816 = x167 * x815;
-        let x817 = x25 * x312 * x615;
-        let x818 = x314 * x615;
-        let x819 = x25 * x786;
-        let x820 = x312 * x767;
-        let x821 = 2.0 * x818 - x819 - x820;
-        let x822 = rF * (x98 * x821 - x816 - x817);
-        let x823 = x4 * theta_dot * x21;
-        let x824 = x1 * phi_dot * x306 - x823;
-        let x825 = x82 * psi_dot * x21 * x2;
-        let x826 = theta_dot * x92 * x21;
-        let x827 = x82 * x1 * phi_dot;
-        let x828 = x826 + x827;
-        let x829 = x5 * x828;
-        let x830 = delta_dot * x5 * x1;
-        let x831 = delta_dot * x121;
-        let x832 = -x831 - phi_dot;
-        let x833 = x20 * (x5 * x832 * x21 + x635);
-        let x834 = theta_dot * x121 * x21 + x1 * phi_dot * x92;
-        let x835 = theta_dot * x5 * x0 * x21;
-        let x836 = -x617 - x618;
-        let x837 = x835 + x836 * x4;
-        let x838 = rR * (x5 * x824 + psi_dot * x306 * x21 * x2)
-            + (x16 * (x825 + x829 - x830) + x833) * x107
-            + x112 * (x5 * x834 + psi_dot * x92 * x21 * x2) + x85 * x837;
-        let x839 = f64::sqrt(x167) * x838;
-        let x840 = x809 - x727;
-        let x841 = x840 * x334 * x167;
-        let x842 = x25 * x364 * x615;
-        let x843 = x25 * x747;
-        let x844 = x364 * x767;
-        let x845 = x14 * x334 * x615;
-        let x846 = 2.0 * x845 - x843 - x844;
-        let x847 = x98 * x846;
-        let x848 = rF * thF_dot * x767;
-        let x849 = x351 * x25 * x615;
-        let x850 = x5 * x21;
-        let x851 = (x850 - x277) * x706;
-        let x852 = (x277 + x850) * x704;
-        let x853 = x716 * x14 - 0.5 * x851 - 0.5 * x852;
-        let x854 = x167 * x853;
-        let x855 = x21 * x615 * x2;
-        let x856 = x351 * x767;
-        let x857 = x25 * x698;
-        let x858 = -2.0 * x855 - x856 - x857;
-        let x859 = x858 * x98;
-        let x860 = delta_dot * x20 * x356;
-        let x861 = x636 + x678;
-        let x862 = x16 * x861;
-        let x863 = x665 - x632;
-        let x864 = x107 * (x862 - x860) - rR * x664 + x631 * x85 + x112 * x863;
-        let x865 = f64::sqrt(x167) * x864;
-        let x866 = x278 * x98 * x615 / f64::sqrt(x167);
-        let x867 = (x804 + x805) * x107 + x85 * x726 + x840 * x112
-            + rR * (x795 - x760 - x762 + x720);
-        let x868 = f64::sqrt(x167) * x867;
-        let x869 = x25 * x259 * x615;
-        let x870 = x282 * x615;
-        let x871 = x25 * x660;
-        let x872 = x767 * x259;
+        let x222 = x221 * x221;
+        let x223 = IRxx * (x218 * x218 + x222);
+        let x224 = IRyy + IByy;
+        let x225 = x193 * x29 + x22 * x95;
+        let x226 = x95 * x29 - x22 * x193;
+        let x227 = x225 * x225 + x226 * x226;
+        let x228 = IHyy + IFyy;
+        let x229 = x60 * rR;
+        let x230 = 2.0 * phi;
+        let x231 = f64::cos(x230);
+        let x232 = x0 * x98;
+        let x233 = x232 * x29 - x22 * x136;
+        let x234 = x29 * x136;
+        let x235 = x22 * x232 + x234;
+        let x236 = x226 * x233 + x235 * x225;
+        let x237 = x113 * x111 + x134 * x107;
+        let x238 = x19 * x98;
+        let x239 = x75 * x238;
+        let x240 = x4 * IBzz;
+        let x241 = x240 - x208;
+        let x242 = x241 * x9;
+        let x243 = x128 * x117;
+        let x244 = x194 * x232 + x205 * x136;
+        let x245 = x244 * x98;
+        let x246 = x9 * IBxx;
+        let x247 = x246 - x211;
+        let x248 = x4 * x247;
+        let x249 = x232 * x200;
+        let x250 = x194 * x136;
+        let x251 = x249 + x250;
+        let x252 = x144 * x91 + x103 * x142;
+        let x253 = x236 * IFxx + (x138 * x112 + x19 * x237) * mH - x239 * x228
+            + (x242 + x243 + x245 - x248) * x1 + x251 * x95
+            + mF * (x19 * x252 + x147 * x102);
+        let x254 = x22 * x225;
+        let x255 = x226 * x29;
+        let x256 = x254 + x255;
+        let x257 = IFxx * x256;
+        let x258 = x202 + x257;
+        let x259 = x224 + (-x119 * xB - x121 * x115) * mB;
+        let x260 = x75 * x0;
+        let x261 = x260 * x228;
+        let x262 = mH * (x113 * x166 + x107 * x165 + x163 * x112)
+            + mF * (x152 * x102 + x103 * x159 + x161 * x91) + x19 * x258 + x259 * x5
+            + x261;
+        let x263 = x5 * IRyy;
+        let x264 = x168 * x112 + x102 * x169 + x206 + IFxx * (x225 * x29 - x22 * x226);
+        let x265 = x75 * IFyy;
+        let x266 = x173 - x1;
+        let x267 = rR * x266;
+        let x268 = x35 * x267;
+        let x269 = x6 * x267;
+        let x270 = x75 * x55;
+        let x271 = x270 + x50 * x225 + x52 * x226;
+        let x272 = x227 + x174;
+        let x273 = x40 - x39;
+        let x274 = x273 * x12 + x48;
+        let x275 = x274 * x88 - x37 * x78;
+        let x276 = x13 * x273;
+        let x277 = x276 - x38;
+        let x278 = x277 * x0 - x46;
+        let x279 = rR * (x41 + x35) + x275 + x68 * x278;
+        let x280 = f64::sqrt(x175) * x279;
+        let x281 = x280 - (x175 * x271 + x270 * x272) * rF;
+        let x282 = -(x20 * x75);
+        let x283 = x226 * x30;
+        let x284 = x31 * x225;
+        let x285 = x282 + x283 + x284;
+        let x286 = rF * (x282 * x272 + x175 * x285);
+        let x287 = x25 * x88 + rR * (x6 - x14 - x15) + x68 * x28 + x11 * x78;
+        let x288 = x286 + f64::sqrt(x175) * x287;
+        let x289 = x19 * x238;
+        let x290 = x251 * x0;
+        let x291 = (x289 * x228 + x290) * x98;
+        let x292 = x19 * x19;
+        let x293 = x111 * x111;
+        let x294 = x134 * x134;
+        let x295 = x142 * x142;
+        let x296 = x144 * x144;
+        let x297 = x200 - IHyy;
+        let x298 = x297 - IFyy;
+        let x299 = x233 * x29;
+        let x300 = x235 * x22;
+        let x301 = x299 + x300;
+        let x302 = x250 + x301 * IFxx;
+        let x303 = x162 * x138 + x134 * x165 + x111 * x166;
+        let x304 = x142 * x159 + x144 * x161 + x147 * x151;
+        let x305 = x19 * (x298 * x232 + x302 + x303 * mH + mF * x304);
+        let x306 = x147 * x169 + IFxx * (x235 * x29 - x22 * x233) + x244 + x138 * x168;
+        let x307 = -(x238 * IFyy);
+        let x308 = x3 * x267;
+        let x309 = rR * x45;
+        let x310 = x1 - x173;
+        let x311 = x309 * x310;
+        let x312 = x52 * x233 - x238 * x55 + x235 * x50;
+        let x313 = x236 - x239;
+        let x314 = x68 * x95;
+        let x315 = 1.0 - x9;
+        let x316 = rR * x315;
+        let x317 = x139 - x130;
+        let x318 = x316 + x317;
+        let x319 = x314 + x318 * x1;
+        let x320 = x319 * x2;
+        let x321 = f64::sqrt(x175) * x320;
+        let x322 = x321 - rF * (x175 * x312 + x270 * x313);
+        let x323 = x140 * x1;
+        let x324 = x92 * x136 - x94;
+        let x325 = x68 * x324;
+        let x326 = x323 + x325;
+        let x327 = x8 * x326;
+        let x328 = x20 * x238 + x233 * x30 + x235 * x31;
+        let x329 = (x282 * x313 + x175 * x328) * rF;
+        let x330 = x327 * f64::sqrt(x175) + x329;
+        let x331 = x92 - x94 * x136;
+        let x332 = x75 * x331;
+        let x333 = x72 + x74 * x136;
+        let x334 = x140 * x5 + x68 * x333;
+        let x335 = rF * x332 / f64::sqrt(x175) + x334;
+        let x336 = x22 * x22;
+        let x337 = x29 * x29;
+        let x338 = x336 + x337;
+        let x339 = x338 * IFxx;
+        let x340 = x0 * x0;
+        let x341 = x162 * x168 + x151 * x169 + x194;
+        let x342 = x341 * x19;
+        let x343 = x0 * IFyy;
+        let x344 = -x309;
+        let x345 = rR * x3;
+        let x346 = -x345;
+        let x347 = x23 - x24;
+        let x348 = x347 * x154 - x16 * x78 - rR * x11 + x18 * x88;
+        let x349 = f64::sqrt(x175) * x348;
+        let x350 = x175 * x45;
+        let x351 = x19 * x256;
+        let x352 = x351 + x260;
+        let x353 = x349 - rF * (x350 + x270 * x352);
+        let x354 = rR * x37;
+        let x355 = x38 - x276;
+        let x356 = x273 * x78 - x354 + x154 * x274 + x355 * x88;
+        let x357 = x282 * x352;
+        let x358 = x175 * x3;
+        let x359 = f64::sqrt(x175) * x356 - rF * (x358 - x357);
+        let x360 = x19 * x75;
+        let x361 = x360 * rF / f64::sqrt(x175);
+        let x362 = x154 - x361;
+        let x363 = x362 * x98;
+        let x364 = x64 - x79;
+        let x365 = x364 + x71 * x88;
+        let x366 = (x365 - x363) * x1;
+        let x367 = x20 * f64::sqrt(x175) * x68;
+        let x368 = x12 * x1;
+        let x369 = x97 * x1 + x368 * x9;
+        let x370 = x175 * x338;
+        let x371 = -x367 - rF * (x270 * x369 + x49 * x370);
+        let x372 = (x25 * x370 + x282 * x369) * rF;
+        let x373 = x372 + f64::sqrt(x175) * x68 * x55;
+        let x374 = x75 * (x68 - rF * x95 / f64::sqrt(x175));
+        let x375 = -(rF * x55);
+        let x376 = -(x20 * rF);
+        let x377 = phi_dot * phi_dot + psi_dot * psi_dot;
+        let x378 = psi_dot * x45;
+        let x379 = psi_dot * x1;
+        let x380 = x9 * phi_dot;
+        let x381 = x380 - x4 * x379;
+        let x382 = rR * psi_dot;
+        let x383 = x5 * x382;
+        let x384 = x4 * x383;
+        let x385 = psi_dot * x5;
+        let x386 = theta_dot + x385;
+        let x387 = x386 * xB;
+        let x388 = x384 - x387;
+        let x389 = x385 - theta_dot;
+        let x390 = x389 * x4;
+        let x391 = theta_dot * x9;
+        let x392 = x390 * phi_dot - x391 * x379;
+        let x393 = x9 * x5;
+        let x394 = x393 * x382;
+        let x395 = x386 * x115;
+        let x396 = x394 - x395;
+        let x397 = x4 * phi_dot;
+        let x398 = x9 * x379;
+        let x399 = x397 + x398;
+        let x400 = theta_dot - x385;
+        let x401 = x9 * x400;
+        let x402 = x4 * theta_dot;
+        let x403 = x379 * x402;
+        let x404 = x401 * phi_dot - x403;
+        let x405 = x392 * x115 - x381 * x388 + x396 * x399 + x404 * xB;
+        let x406 = phi_dot * x1;
+        let x407 = rR * x5;
+        let x408 = xB * x399;
+        let x409 = x381 * x115;
+        let x410 = x408 + x409;
+        let x411 = rR * phi_dot;
+        let x412 = x410 - x411;
+        let x413 = x412 * x399;
+        let x414 = psi_dot * (x121 * x406 - x407 * x402) + x386 * x388 - x413;
+        let x415 = x412 * x381;
+        let x416 = x391 * x407;
+        let x417 = (x416 + x406 * x119) * psi_dot - x396 * x386;
+        let x418 = x415 + x417;
+        let x419 = x416 + x406 * x65;
+        let x420 = x5 * x402;
+        let x421 = x61 * x406 - x420;
+        let x422 = x419 * x12 - x421 * x62;
+        let x423 = psi_dot * x422;
+        let x424 = x406 * psi_dot;
+        let x425 = x19 * x386;
+        let x426 = x381 * x12;
+        let x427 = x13 * x399;
+        let x428 = x426 + x427;
+        let x429 = x0 * x428;
+        let x430 = x425 + x429;
+        let x431 = x392 * x12;
+        let x432 = x13 * x404 + x431;
+        let x433 = x424 * x0 - delta_dot * x430 - x19 * x432;
+        let x434 = x19 * x428;
+        let x435 = x386 * x0;
+        let x436 = x435 - x434;
+        let x437 = x384 - x386 * x78;
+        let x438 = x393 * psi_dot - theta_dot - x385;
+        let x439 = x13 * x437 + x438 * x82;
+        let x440 = x439 * x0;
+        let x441 = rR * (x381 - phi_dot) + x399 * x78;
+        let x442 = x19 * x441;
+        let x443 = x440 + x442;
+        let x444 = x436 * x106 + x443;
+        let x445 = x430 * x106;
+        let x446 = x12 * x399;
+        let x447 = x13 * x381;
+        let x448 = delta_dot + x446 - x447;
+        let x449 = x448 * x109 - x445;
+        let x450 = x439 * x19;
+        let x451 = x0 * x441;
+        let x452 = x451 - x450;
+        let x453 = x449 + x452;
+        let x454 = x423 - x433 * x109 - x444 * x436 + x453 * x430;
+        let x455 = x404 * x12;
+        let x456 = x13 * x392;
+        let x457 = x455 - x456;
+        let x458 = x457 * x109;
+        let x459 = x109 * x436;
+        let x460 = x12 * x437;
+        let x461 = x62 * x438;
+        let x462 = x460 - x461;
+        let x463 = x462 - x459;
+        let x464 = x430 * x463;
+        let x465 = x448 * x444;
+        let x466 = x404 * x78 + rR * x392;
+        let x467 = x466 * x0;
+        let x468 = delta_dot * x443;
+        let x469 = x13 * x419 + x421 * x82;
+        let x470 = x19 * x469;
+        let x471 = psi_dot * x470;
+        let x472 = (x467 - x468) - x471;
+        let x473 = x424 * x19;
+        let x474 = delta_dot * x436;
+        let x475 = x0 * x432;
+        let x476 = x473 + (x474 + x475);
+        let x477 = x476 * x106;
+        let x478 = x458 - x464 + x465 + x472 - x477;
+        let x479 = delta_dot * x452;
+        let x480 = x479 - x453 * x448;
+        let x481 = x433 * x106;
+        let x482 = x463 * x436;
+        let x483 = x0 * x469;
+        let x484 = psi_dot * x483;
+        let x485 = x19 * x466;
+        let x486 = x484 + x485;
+        let x487 = (x481 + x482) + x486;
+        let x488 = x480 + x487;
+        let x489 = x436 * x88;
+        let x490 = x489 + x443;
+        let x491 = x462 - x68 * x436;
+        let x492 = x22 * x490 + x29 * x491;
+        let x493 = x430 * x88;
+        let x494 = x68 * x448 - x493 + x452;
+        let x495 = x448 * x29;
+        let x496 = x22 * x430;
+        let x497 = x495 + x496;
+        let x498 = x423 - x433 * x68;
+        let x499 = x433 * x88;
+        let x500 = x486 + x499;
+        let x501 = x479 + x500;
+        let x502 = x436 * x492 - x494 * x497 + (x501 * x29 - x22 * x498);
+        let x503 = x430 * x29;
+        let x504 = x503 - x22 * x448;
+        let x505 = x490 * x29 - x22 * x491;
+        let x506 = x498 * x29 + x22 * x501 + x504 * x494 - x505 * x436;
+        let x507 = x457 * x68;
+        let x508 = x505 * x497;
+        let x509 = x476 * x88;
+        let x510 = x504 * x492;
+        let x511 = x507 + x508 + x472 - x509 - x510;
+        let x512 = -(x60 * (2.0 * (x378 * phi_dot) - x377 * x6)
+            + mB * (x11 * x414 - x405 * x3 + x16 * x418)
+            + mH * (x454 * x25 - x20 * x478 + x28 * x488)
+            + mF * (x30 * x502 + x31 * x506 - x20 * x511));
+        let x513 = x377 * x35;
+        let x514 = psi_dot * x3;
+        let x515 = phi_dot * x514;
+        let x516 = x405 * x45;
+        let x517 = x37 * x414;
+        let x518 = x430 * thF_dot;
+        let x519 = x448 * thF_dot;
+        let x520 = x476 - x519;
+        let x521 = thF_dot + x436;
+        let x522 = x521 * (IFyy - IFxx);
+        let x523 = ((x457 + x518) * x29 + x22 * x520) * IFxx + x504 * x522;
+        let x524 = x60 * x382;
+        let x525 = f64::sin(x230);
+        let x526 = x524 * x525;
+        let x527 = x381 * IBxz;
+        let x528 = IBzz * x399 - x527;
+        let x529 = x399 * IByy;
+        let x530 = x528 - x529;
+        let x531 = (x530 * x386 - x404 * IBxz) + x392 * IBxx;
+        let x532 = x4 * x531;
+        let x533 = x404 * x216;
+        let x534 = x392 * x214;
+        let x535 = x214 * x399;
+        let x536 = x216 * x381;
+        let x537 = x536 - x535;
+        let x538 = thR_dot + theta_dot;
+        let x539 = x385 + x538;
+        let x540 = IRyy - IRxx;
+        let x541 = x539 * x540;
+        let x542 = (x533 + x534 + thR_dot * x537) * IRxx + x541 * x537;
+        let x543 = x392 * x216;
+        let x544 = x216 * x399;
+        let x545 = x214 * x381;
+        let x546 = x544 + x545;
+        let x547 = (x543 - thR_dot * x546 - x404 * x214) * IRxx;
+        let x548 = IRxx - IRyy;
+        let x549 = x539 * x548;
+        let x550 = x546 * x549;
+        let x551 = x547 + x550;
+        let x552 = x551 * x221;
+        let x553 = x5 * phi_dot;
+        let x554 = x553 * psi_dot * IRyy;
+        let x555 = x476 * x194;
+        let x556 = x457 * x205;
+        let x557 = x430 * IHyy;
+        let x558 = x448 * x194;
+        let x559 = x430 * x200;
+        let x560 = x557 + (-x558 - x559);
+        let x561 = x555 + x556 + x436 * x560;
+        let x562 = x561 * x98;
+        let x563 = x381 * IByy;
+        let x564 = x381 * IBxx;
+        let x565 = x399 * IBxz;
+        let x566 = x565 - x564;
+        let x567 = x563 + x566;
+        let x568 = x386 * x567;
+        let x569 = x404 * IBzz;
+        let x570 = x568 + x569;
+        let x571 = x392 * IBxz;
+        let x572 = x570 - x571;
+        let x573 = x572 * x9;
+        let x574 = x558 + x559;
+        let x575 = x574 * x448;
+        let x576 = x433 * IHyy;
+        let x577 = x430 * x194;
+        let x578 = x448 * x205;
+        let x579 = x577 + x578;
+        let x580 = x430 * x579;
+        let x581 = x433 * IFyy;
+        let x582 = x580 - x575 - x576 - x581;
+        let x583 = x121 * x414 + x119 * x418;
+        let x584 = x521 * (IFxx - IFyy);
+        let x585 = x497 * x584;
+        let x586 = x456 - x455 - x518;
+        let x587 = (x22 * x586 + x29 * x520) * IFxx;
+        let x588 = x585 + x587;
+        let x589 = x528 * x381;
+        let x590 = x564 - x565;
+        let x591 = x399 * x590;
+        let x592 = x591 - x589 + x424 * IByy;
+        let x593 = x448 * IHyy;
+        let x594 = x579 - x593;
+        let x595 = (x476 * x200 + x594 * x436) + x457 * x194;
+        let x596 = x506 * x144 + x502 * x142;
+        let x597 = x134 * x488 + x454 * x111;
+        let x598 = (x575 + x576) + (x581 - x580);
+        let x599 = (x19 * x598 - x595 * x0) * x98;
+        let x600 = x129 * x5;
+        let x601 = x595 + (x588 * x29 + x22 * x523);
+        let x602 = -(mB * x117);
+        let x603 = x365 - x154 * x98;
+        let x604 = -(x0 * x98);
+        let x605 = -(phi_dot * x224);
+        let x606 = (-x467 - x75 * g) + (x471 + x468);
+        let x607 = x574 - x557;
+        let x608 = x406 * x5;
+        let x609 = x192 / f64::sqrt(x172);
+        let x610 = (x266 - x609) * x1;
+        let x611 = x610 + x192;
+        let x612 = x8 * phi_dot;
+        let x613 = psi_dot * x6;
+        let x614 = x538 * x3;
+        let x615 = x6 * phi_dot;
+        let x616 = x8 * psi_dot;
+        let x617 = x1 / f64::sqrt(x172);
+        let x618 = 2.0 - x617;
+        let x619 = x538 * x35;
+        let x620 = rR
+            * (psi_dot * (-x611 * x612 - x310 * x613 - x614)
+                + phi_dot
+                    * (f64::sqrt(x172) * x615 - (x616 * x266 + x618 * x615) * x1
+                        - x619));
+        let x621 = x35 * psi_dot;
+        let x622 = x538 * x45;
+        let x623 = phi_dot * x2;
+        let x624 = x538 * x6;
+        let x625 = x35 * phi_dot;
+        let x626 = f64::sqrt(x172) * x625;
+        let x627 = x617 - 2.0;
+        let x628 = psi_dot * x2;
+        let x629 = delta_dot * x5;
+        let x630 = -(x98 * x1);
+        let x631 = theta_dot * x630;
+        let x632 = x631 + x553 * x136;
+        let x633 = x629 + x632;
+        let x634 = x19 * x633;
+        let x635 = delta_dot * x71;
+        let x636 = phi_dot - x635;
+        let x637 = x92 * x636;
+        let x638 = x637 - x634;
+        let x639 = x75 * x638;
+        let x640 = x348 * x639;
+        let x641 = theta_dot * x5;
+        let x642 = x641 + psi_dot;
+        let x643 = x642 * x39;
+        let x644 = x8 * x386;
+        let x645 = phi_dot * x3;
+        let x646 = -x644 - x645;
+        let x647 = x643 + x646 * x9;
+        let x648 = x13 * x647;
+        let x649 = x642 * x36;
+        let x650 = x4 * x646 - x649;
+        let x651 = x12 * x650;
+        let x652 = x651 - x648;
+        let x653 = x12 * x647;
+        let x654 = x13 * x650;
+        let x655 = x653 + x654;
+        let x656 = x347 * x19;
+        let x657 = x655 * x0 - delta_dot * x656;
+        let x658 = x88 * x652 - rR * x650 + x68 * x657 + x647 * x78;
+        let x659 = f64::sqrt(x175) * x658;
+        let x660 = x659 - x640 / f64::sqrt(x175);
+        let x661 = psi_dot - phi_dot;
+        let x662 = (x3 - x35) * x661;
+        let x663 = psi_dot + phi_dot;
+        let x664 = (x35 + x3) * x663;
+        let x665 = x22 * x19;
+        let x666 = delta_dot * (x665 + x156);
+        let x667 = delta_dot * (x156 - x665);
+        let x668 = x19 * x29;
+        let x669 = delta_dot * (x160 + x668);
+        let x670 = delta_dot * (x668 - x160);
+        let x671 = (0.5 * x669 - 0.5 * x670) * x29 - x22 * (0.5 * x666 + 0.5 * x667);
+        let x672 = x49 * x671 - 0.5 * x662 - 0.5 * x664;
+        let x673 = x625 + x514;
+        let x674 = delta_dot * x43 + x673;
+        let x675 = x386 * x36;
+        let x676 = x406 * x9;
+        let x677 = x642 * x4;
+        let x678 = x675 + (x677 - x676) * x8;
+        let x679 = x13 * x678;
+        let x680 = x642 * x10;
+        let x681 = phi_dot * x45;
+        let x682 = x386 * x2;
+        let x683 = x680 + x4 * (x681 - x682);
+        let x684 = x683 * x12;
+        let x685 = delta_dot * x45;
+        let x686 = x679 + (x684 + x685);
+        let x687 = -x674 * x0 - x19 * x686;
+        let x688 = x352 * x687;
+        let x689 = x638 * x45;
+        let x690 = theta_dot * x1;
+        let x691 = x553 * x98;
+        let x692 = x71 * x690 - x691;
+        let x693 = x95 * thF_dot;
+        let x694 = x692 + x693;
+        let x695 = x694 * x29;
+        let x696 = x72 * x636;
+        let x697 = x193 * thF_dot;
+        let x698 = x696 - x697;
+        let x699 = x0 * x633;
+        let x700 = x698 + x699;
+        let x701 = x22 * x700;
+        let x702 = x695 + x701;
+        let x703 = x700 * x29 - x22 * x694;
+        let x704 = x22 * (x702 - thF_dot * x226) + (thF_dot * x225 + x703) * x29;
+        let x705 = delta_dot * x75;
+        let x706 = x19 * (x704 - x705) + x0 * (delta_dot * x256 + x638);
+        let x707 = x706 * x55;
+        let x708 = x707 - 2.0 * x689;
+        let x709 = x638 * x55;
+        let x710 = x175 * x672 + (x75 * (x688 + x708) + x352 * x709);
+        let x711 = x320 * x639;
+        let x712 = x615 - x378;
+        let x713 = x4 * x712 - x391 * x3;
+        let x714 = x713 * x78;
+        let x715 = x3 * x636 + x621;
+        let x716 = x19 * x715;
+        let x717 = theta_dot * x2;
+        let x718 = x717 * x98;
+        let x719 = (x71 * x616 - x718) * x1 + x615 * x136;
+        let x720 = delta_dot * x6;
+        let x721 = x719 + x720;
+        let x722 = x98 * x615;
+        let x723 = x616 * x98;
+        let x724 = x402 * x2;
+        let x725 = x714 + x68 * (x716 + x0 * x721)
+            + ((x717 * x71 + x723) * x1 - x722) * x88
+            + rR * (x61 * x615 + (x616 * x315 + x724) * x1);
+        let x726 = f64::sqrt(x175) * x725;
+        let x727 = x726 - x711 / f64::sqrt(x175);
+        let x728 = thF_dot + theta_dot * x0;
+        let x729 = x728 * x136;
+        let x730 = delta_dot * x238;
+        let x731 = thF_dot * x0;
+        let x732 = theta_dot + x731;
+        let x733 = x732 * x143;
+        let x734 = x22 * (-x729 - x730) + x733;
+        let x735 = theta_dot * x136;
+        let x736 = thF_dot * x47;
+        let x737 = x678 * x12;
+        let x738 = x13 * x683;
+        let x739 = x737 - x738;
+        let x740 = thF_dot * x49;
+        let x741 = x19 * x674;
+        let x742 = x0 * x686;
+        let x743 = x742 - x740 - x741;
+        let x744 = (x736 + x739) * x29 + x22 * x743;
+        let x745 = delta_dot * x0;
+        let x746 = x745 * x98;
+        let x747 = x738 - x736 - x737;
+        let x748 = x22 * x747 + x743 * x29;
+        let x749 = x22 * x732;
+        let x750 = delta_dot * x19;
+        let x751 = x750 * x29;
+        let x752 = (-x749 - x751) * x98 - x234 * x728;
+        let x753 = x734 * x50 + x19 * (x735 * x55 - x687 * x98) + x235 * x744
+            - x746 * x55 + x748 * x233 + x52 * x752;
+        let x754 = x687 * x313;
+        let x755 = x312 * x638;
+        let x756 = x226 * x752 + x734 * x225;
+        let x757 = x756 - x746 * x75 + x19 * (x735 * x75 - x638 * x98) + x235 * x702
+            + x703 * x233;
+        let x758 = x757 * x55;
+        let x759 = x754 - 2.0 * x755 + x758;
+        let x760 = x313 * x709 + (x753 * x175 + x759 * x75);
+        let x761 = x279 * x639;
+        let x762 = x761 / f64::sqrt(x175);
+        let x763 = x8 * (x676 - x677);
+        let x764 = x4 * (x682 - x681) - x680;
+        let x765 = x13 * x764;
+        let x766 = x763 - x675;
+        let x767 = x766 * x12;
+        let x768 = x767 - x765;
+        let x769 = x764 * x78 + x768 * x88;
+        let x770 = x13 * x766;
+        let x771 = x12 * x764;
+        let x772 = x770 + x771;
+        let x773 = x673 - x277 * delta_dot;
+        let x774 = x0 * (x772 - x685) + x19 * x773;
+        let x775 = rR * (x681 - x763 + x675 - x613) + x769 + x68 * x774;
+        let x776 = f64::sqrt(x175) * x775;
+        let x777 = x776 - x762;
+        let x778 = x703 * x226;
+        let x779 = x702 * x225;
+        let x780 = 2.0 * x778 + 2.0 * x779 + 2.0 * x639;
+        let x781 = x780 * x55;
+        let x782 = x271 * x638;
+        let x783 = x687 * x272;
+        let x784 = x781 - 2.0 * x782 + x783;
+        let x785 = x75 * x687;
+        let x786 = x785 + x709;
+        let x787 = x786 + x748 * x226 + x702 * x50 + x225 * x744 + x703 * x52;
+        let x788 = x709 * x272 + (x784 * x75 + x175 * x787);
+        let x789 = rF * thF_dot;
+        let x790 = delta_dot * x18;
+        let x791 = x712 - x790;
+        let x792 = x644 + x645;
+        let x793 = x792 * x9;
+        let x794 = x793 - x643;
+        let x795 = x794 * x13;
+        let x796 = delta_dot * x3;
+        let x797 = x796 - x795 - x651;
+        let x798 = x0 * x791 + x19 * x797;
+        let x799 = x68 * (x20 * x639 / f64::sqrt(x175) + x798 * f64::sqrt(x175));
+        let x800 = x49 * x338;
+        let x801 = x800 * x638;
+        let x802 = x687 * x369;
+        let x803 = x13 * x5;
+        let x804 = x368 - x803;
+        let x805 = x13 * x1;
+        let x806 = x12 * x5;
+        let x807 = x805 + x806;
+        let x808 = theta_dot - phi_dot;
+        let x809 = x368 + x803;
+        let x810 = x806 - x805;
+        let x811 = theta_dot + phi_dot;
+        let x812 = 0.5 * ((x4 * x804 - x807 * x9) * x808)
+            + 0.5 * ((x4 * x809 + x810 * x9) * x811);
+        let x813 = x812 * x55;
+        let x814 = (x75 * (x802 - 2.0 * x801 - x813) + x369 * x709) + x739 * x370;
+        let x815 = x798 * x789;
+        let x816 = x20 * x757;
+        let x817 = x328 * x638;
+        let x818 = x798 * x313;
+        let x819 = x816 + 2.0 * x817 - x818;
+        let x820 = thF_dot * x25;
+        let x821 = x19 * x791;
+        let x822 = x0 * (x795 - x796 + x651);
+        let x823 = x821 + x822;
+        let x824 = x823 - x820;
+        let x825 = thF_dot * x28;
+        let x826 = x794 * x12;
+        let x827 = x826 - x654;
+        let x828 = x22 * x824 + (x825 + x827) * x29;
+        let x829 = x654 - x825 - x826;
+        let x830 = x22 * x829 + x824 * x29;
+        let x831 = x20 * x746 + x19 * (-x20 * x735 - x798 * x98) + x734 * x31
+            + x30 * x752 + x235 * x828 + x830 * x233;
+        let x832 = x175 * x831;
+        let x833 = -(x20 * x638);
+        let x834 = x833 * x313;
+        let x835 = (x819 * x75 - x832 - x834) * rF;
+        let x836 = x691 + x735 * x1;
+        let x837 = x4 * x673;
+        let x838 = x391 * x45;
+        let x839 = x838 - x837;
+        let x840 = x402 * x1;
+        let x841 = x553 * x315 - x840;
+        let x842 = delta_dot * x136 + phi_dot;
+        let x843 = x19 * (x613 - x842 * x45);
+        let x844 = delta_dot * x35;
+        let x845 = x553 * x71;
+        let x846 = x193 * theta_dot;
+        let x847 = x845 + x846;
+        let x848 = x71 * x514 + x847 * x8;
+        let x849 = (x514 * x98 + x8 * x836) * x88 + x839 * x78
+            + rR * (x8 * x841 + x315 * x514) + x68 * (x843 + x0 * (x848 - x844));
+        let x850 = f64::sqrt(x175) * x849;
+        let x851 = (x798 * x352 + 2.0 * (x638 * x3)) - x706 * x20;
+        let x852 = x75 * x851;
+        let x853 = (x45 - x6) * x663;
+        let x854 = (x6 + x45) * x661;
+        let x855 = x25 * x671 - 0.5 * x853 - 0.5 * x854;
+        let x856 = x855 * x175;
+        let x857 = x352 * x833;
+        let x858 = (-x856 - x857) - x852;
+        let x859 = x356 * x639;
+        let x860 = x684 - x770;
+        let x861 = x738 + x767;
+        let x862 = x19 * x274;
+        let x863 = x861 * x0 - delta_dot * x862;
+        let x864 = x860 * x88 - rR * x683 + x766 * x78 + x68 * x863;
+        let x865 = f64::sqrt(x175) * x864;
+        let x866 = x639 * x55;
+        let x867 = x827 * x370;
+        let x868 = x833 * x369;
+        let x869 = x25 * x338;
+        let x870 = x869 * x638;
+        let x871 = x798 * x369;
+        let x872 = x20 * x812;
         let x873 = 2.0 * x870 - x871 - x872;
-        let x874 = x98 * x873;
-        let x875 = x25 * x615;
-        let x876 = x98 * x767;
-        let x877 = x33 * x652 + x875 + x876 + x210 * x814 + x812 * x214 + x658 * x29;
-        let x878 = x877 * x167;
-        let x879 = x610 + x612;
-        let x880 = x112 * x879;
-        let x881 = x98 * x98 / f64::powf(x167, 1.5);
-        let x882 = 1.0 / f64::sqrt(x167);
-        let x883 = -x881 - x882;
-        let x884 = x62 + x123;
-        let x885 = phi_dot * x317 * x21;
-        let x886 = theta_dot * x121 * x1;
-        let x887 = (x885 + x886) * x112;
-        let x888 = x122 + x123;
-        let x889 = x20 * x832 * x1;
-        let x890 = x121 * phi_dot * x21;
-        let x891 = delta_dot * x21;
-        let x892 = theta_dot * x1 * x92;
-        let x893 = x16 * (x890 + x891 + x892);
-        let x894 = (x889 + x893) * x107;
-        let x895 = x881 + x882;
-        let x896 = -x890 - x891 - x892;
-        let x897 = x20 * x896;
-        let x898 = x832 * x16 * x1;
-        let x899 = x897 + x898;
-        let x900 = x98 * x899 / f64::sqrt(x167);
-        let x901 = x330 * x895 * x615 + x900;
-        let x902 = x107 * x615;
-        let x903 = x613 * x16;
-        let x904 = x607 - phi_dot;
-        let x905 = x20 * x904 * x21;
-        let x906 = x903 + x905;
-        let x907 = x98 * x906 / f64::sqrt(x167);
-        let x908 = x369 * x895 * x615 + x907;
-        let x909 = -x266 * x20 - x52;
-        let x910 = x25 * x909;
-        let x911 = x267 * x28 - x27 * x271;
-        let x912 = x27 * x267 + x28 * x271;
-        let x913 = x53 * x909;
-        let x914 = (x913 + x49 * x271 + x267 * x46 + x15 + x24 + x26) * mH
-            + mF * (x912 * x57 + x30 + x913 + x50 * x911 + x34 + x26);
-        let x915 = mF * (x117 * x911 + x116 * x912 + x119 * x909)
-            + mB * (x1 * (x66 * x262 + x63 * x264) - x172)
-            + mH * (x104 * x271 + x94 * x909 + x101 * x267) - x173;
-        let x916 = (x130 * x909 + x20 * (x131 * x911 + x134 * x912)) * mF
-            + (x909 * x126 + x20 * (x89 * x92 * x271 + x125 * x267)) * mH
-            + x5 * x141 * x21;
-        let x917 = mH * (x156 * x271 + x20 * x157 * x909 + x16 * x267 * x158)
-            + mF * (x146 * x20 * x909 + x912 * x155 + x152 * x911)
-            + (x264 * x69 - xB * x262) * mB;
-        let x918 = x162 * x909;
-        let x919 = x304 * rR * x1 * x2;
-        let x920 = x10 - x11;
-        let x921 = x920 * x85;
-        let x922 = x112 * (x344 - x9 * x920);
-        let x923 = x920 * x8 + x342;
-        let x924 = x921 + x922 + (x22 + x16 * x923) * x107 + (x3 - x277 + x6) * rR;
-        let x925 = f64::sqrt(x167) * x924 - rF * (x283 + x284);
-        let x926 = x98 * x909 + x210 * x911 + x912 * x214;
-        let x927 = x275 - rF * (-x98 * x909 * x259 - x167 * x926);
-        let x928 = rR * x5 * x256 * x21;
-        let x929 = f64::sqrt(x167) * x5 * x309;
-        let x930 = x929 - (x315 + x316) * rF;
-        let x931 = x912 * x242 - x20 * x909 * x92 + x244 * x911;
-        let x932 = x310 - (-x931 * x167 - x98 * x312 * x909) * rF;
-        let x933 = rR * x21 * x2;
-        let x934 = x47 + x270;
-        let x935 = x41 * x85 + (x265 - x42) * x112 - rR * x264 + x934 * x16 * x107;
-        let x936 = x935 * f64::sqrt(x167);
-        let x937 = x936 - rF * (x354 - x353);
-        let x938 = x347 - (x348 - x351 * x98 * x909) * rF;
-        let x939 = f64::sqrt(x167) * x909 * x107;
-        let x940 = x939 - rF * (x366 + x367);
-        let x941 = x363 - rF * (-x98 * x364 * x909 - x334 * x167 * x271);
-        let x942 = -(rF * x25);
-        let x943 = rF * x909;
-        let x944 = x1 * x606 * x2;
-        let x945 = x596 * x5 * x21;
-        let x946 = x761 * x4 + x0 * x663 * x2;
-        let x947 = x112 * (x728 - x9 * x946);
-        let x948 = x85 * x946;
-        let x949 = x8 * x946;
-        let x950 = x871 - 2.0 * x870 + x872;
-        let x951 = f64::sqrt(x167)
-            * (((x637 + x679) * x16 - delta_dot * x20 * x934) * x107 - rR * x624
-                + x112 * (x625 - x667) + x666 * x85);
-        let x952 = x16 * x619 + x20 * (x626 - x625 - x632);
-        let x953 = x843 + x844 - 2.0 * x845;
-        let x954 = x819 - 2.0 * x818 + x820;
-        let x955 = psi_dot * x317 * x21 * x2 + (x648 + x649) * x5;
-        let x956 = x4 * (x617 + x618) - x835;
-        let x957 = x85 * x956;
-        let x958 = (x5 * x608 * x21 - x635) * x20;
-        let x959 = thF_dot * x267;
-        let x960 = x620 - thF_dot * x271 + x633;
-        let x961 = x27 * (x637 - x959 - x636) + x960 * x28;
-        let x962 = (x959 + x636 - x637) * x28 + x960 * x27;
-        let x963 = -x20 * x121 * x21 - x96;
-        let x964 = x25 * x963;
-        let x965 = x321 * x28 - x27 * x317 * x21;
-        let x966 = x317 * x28 * x21;
-        let x967 = x27 * x321;
-        let x968 = x966 + x967;
-        let x969 = mF * (x261 * x2 + x5 * (x964 + x965 * x29 + x33 * x968))
-            + (x5 * (x14 * x317 * x21 + x964 + x321 * x23)
-                + (x260 + x84 * x46 + x49 * x92 * x21) * x2) * mH;
-        let x970 = x65 - x86;
-        let x971 = x16 * x970;
-        let x972 = x20 * x74 * x21;
-        let x973 = x1 * (x971 + x107 * x317) - x327 * x112 - x972;
-        let x974 = x16 * x74 * x21;
-        let x975 = x20 * x970 * x1;
-        let x976 = x974 + x330 * x112 + x975;
-        let x977 = x102 * x21;
-        let x978 = x977 - x330 * x107;
-        let x979 = x976 * x28 - x27 * x978;
-        let x980 = x978 * x28 + x27 * x976;
-        let x981 = x1 * (x971 + x89 * x317) - x972 - x327 * x78;
-        let x982 = x974 + x78 * x330 + x975;
-        let x983 = x977 - x330 * x89;
-        let x984 = x4 * x63;
-        let x985 = x0 * x66;
-        let x986 = (x25 * x973 + x979 * x29
-            + (x117 * x210 + x119 * x98 + x116 * x214) * x2 + x33 * x980) * mF
-            + (x25 * x981 + x982 * x23 + (x104 * x92 * x21 + x101 * x84 + x98 * x94) * x2
-                + x14 * x983) * mH
-            + (rR * mR * x5
-                + ((2.0 * x68 - x984 + 2.0 * x70 + x985) * x1 * x2 + x64 + x67) * mB)
-                * x21;
-        let x987 = (mF * (x20 * (x134 * x214 + x210 * x131) + x130 * x98)
-            + (x98 * x126 + x20 * (x125 * x84 + x89 * x92 * x92 * x21)) * mH + x176 * x1)
-            * x2;
-        let x988 = (x591 * mB * x21 + mF * (x146 * x20 * x98 + x214 * x155 + x210 * x152)
-            + mH * (x16 * x84 * x158 + x156 * x92 * x21 + x20 * x98 * x157)) * x2;
-        let x989 = x98 * x162 * x2;
-        let x990 = -(x1 * x21 / f64::sqrt(x164));
-        let x991 = -(x330 * x98 / f64::sqrt(x167));
-        let x992 = x53 * x963;
-        let x993 = (x983 * x49 + x53 * x981 + x982 * x46
-            + x5 * (x104 * x317 * x21 + x321 * x101 + x94 * x963)) * mH
-            + ((x170 + x171 + x5 * x1 * (x984 - 2.0 * x68 - 2.0 * x70 - x985)) * mB
-                + rR * mR * x2) * x21
+        let x874 = (-x867 - x868) + x75 * x873;
+        let x875 = x798 * x75;
+        let x876 = x875 + x833;
+        let x877 = x226 * x830 + x702 * x31 + x876 + x703 * x30 + x828 * x225;
+        let x878 = x175 * x877;
+        let x879 = x833 * x272;
+        let x880 = x798 * x272;
+        let x881 = x638 * x285;
+        let x882 = x20 * x780;
+        let x883 = 2.0 * x881 - x880 + x882;
+        let x884 = (x75 * x883 - x879) - x878;
+        let x885 = x621 + x645;
+        let x886 = x827 * x88 + x650 * x78 + x823 * x68 + rR * (x643 + x885 - x793);
+        let x887 = f64::sqrt(x175) * x886;
+        let x888 = x287 * x639;
+        let x889 = x888 / f64::sqrt(x175);
+        let x890 = x120 + x130;
+        let x891 = x890 * theta_dot;
+        let x892 = x174 / f64::powf(x175, 1.5) + 1.0 / f64::sqrt(x175);
+        let x893 = -(x638 * x892);
+        let x894 = x632 * x88;
+        let x895 = x68 * x638;
+        let x896 = -(x95 * x638);
+        let x897 = x896 * x892;
+        let x898 = x635 - phi_dot;
+        let x899 = x898 * x72;
+        let x900 = x899 - x699;
+        let x901 = x75 * x900;
+        let x902 = x901 / f64::sqrt(x175);
+        let x903 = x897 + x902;
+        let x904 = x630 * phi_dot + x735 * x5;
+        let x905 = x904 * x88;
+        let x906 = x5 * x98;
+        let x907 = theta_dot * x906 + x406 * x136;
+        let x908 = delta_dot * x1;
+        let x909 = x907 + x908;
+        let x910 = x909 * x0;
+        let x911 = x94 * x842;
+        let x912 = x910 - x911;
+        let x913 = x68 * x912;
+        let x914 = x638 * x331;
+        let x915 = x914 * x892;
+        let x916 = x74 * x842;
+        let x917 = -x916 - x909 * x19;
+        let x918 = x75 * x917;
+        let x919 = x918 / f64::sqrt(x175);
+        let x920 = x915 + x919;
+        let x921 = x54 + x277 * x19;
+        let x922 = x20 * x921;
+        let x923 = x22 * x278 + x274 * x29;
+        let x924 = x278 * x29 - x22 * x274;
+        let x925 = x921 * x55;
+        let x926 = (x32 + x50 * x923 - x925 + x52 * x924) * mF
+            + (x278 * x47 + x49 * x274 - x925 + x33) * mH;
+        let x927 = ((x273 * x119 - x179) * x5 - x181) * mB
+            + (x113 * x274 - x921 * x112 + x107 * x278) * mH - x178
+            + mF * (x924 * x103 - x921 * x102 + x923 * x91);
+        let x928 = (x19 * (x924 * x142 + x144 * x923) - x921 * x147) * mF
+            + (x19 * (x111 * x274 + x134 * x278) - x138 * x921) * mH + x129 * x45;
+        let x929 = mF * (x161 * x923 - x152 * x921 + x924 * x159)
+            + (x278 * x165 - x163 * x921 + x274 * x166) * mH + mB * (x187 - x273 * xB);
+        let x930 = -(x921 * x170);
+        let x931 = rR * x6;
+        let x932 = x931 * x310;
+        let x933 = x7 - x10;
+        let x934 = x933 * x78 + (-x13 * x933 - x24) * x88;
+        let x935 = x933 * x12 - x17;
+        let x936 = rR * (x16 - x6) + x934 + x68 * (x0 * x935 + x27);
+        let x937 = f64::sqrt(x175) * x936 - x286;
+        let x938 = -(x75 * x921);
+        let x939 = x924 * x226 + x938 + x225 * x923;
+        let x940 = x280 + rF * (x938 * x272 + x175 * x939);
+        let x941 = x267 * x45;
+        let x942 = x8 * x319;
+        let x943 = x942 * f64::sqrt(x175);
+        let x944 = x943 - x329;
+        let x945 = x924 * x233 + x921 * x238 + x235 * x923;
+        let x946 = x321 + (x938 * x313 + x175 * x945) * rF;
+        let x947 = x41 * x78 + x354 + (-x38 - x42) * x88 + x154 * x49;
+        let x948 = f64::sqrt(x175) * x947;
+        let x949 = x948 - rF * (x357 - x358);
+        let x950 = x349 - (x350 - x352 * x938) * rF;
+        let x951 = f64::sqrt(x175) * x68 * x921;
+        let x952 = -x951 - x372;
+        let x953 = rF * (x938 * x369 + x274 * x370) - x367;
+        let x954 = -x376;
+        let x955 = -(rF * x921);
+        let x956 = x773 * x0 + (x685 - x770 - x771) * x19;
+        let x957 = x871 - 2.0 * x870 + x872;
+        let x958 = ((x771 - x679) * x88 - rR * x764 + x678 * x78
+            + ((x737 + x765) * x0 - x750 * x49) * x68) * f64::sqrt(x175);
+        let x959 = x792 * x4 + x649;
+        let x960 = (x653 - x13 * x959) * x88 + x959 * x78;
+        let x961 = x378 - x615;
+        let x962 = x648 + x959 * x12;
+        let x963 = x880 - 2.0 * x881 - x882;
+        let x964 = x818 - x816 - 2.0 * x817;
+        let x965 = (x45 * x636 - x613) * x19;
+        let x966 = x8 * x692 + x630 * x628;
+        let x967 = x837 - x838;
+        let x968 = x78 * x967;
+        let x969 = -(x921 * x638);
+        let x970 = x774 - thF_dot * x274;
+        let x971 = thF_dot * x278;
+        let x972 = x970 * x29 + x22 * (x765 - x767 - x971);
+        let x973 = x29 * (x768 + x971) + x22 * x970;
+        let x974 = x74 + x72 * x136;
+        let x975 = x20 * x974;
+        let x976 = x324 * x29 - x22 * x630;
+        let x977 = x630 * x29 + x22 * x324;
+        let x978 = (x8 * (x25 * x630 + x975 + x324 * x28)
+            + (x270 + x193 * x49 + x95 * x47) * x2) * mH
+            + mF * (x271 * x2 + x8 * (x975 + x30 * x976 + x31 * x977));
+        let x979 = x4 * x121;
+        let x980 = x9 * x119;
+        let x981 = x66 * x1;
+        let x982 = x981 - x68 * x331;
+        let x983 = x92 * x83 + x364 * x94;
+        let x984 = x331 * x88 + x983;
+        let x985 = x984 * x29 - x22 * x982;
+        let x986 = x982 * x29 + x22 * x984;
+        let x987 = x0 * x364;
+        let x988 = x83 * x72;
+        let x989 = (x987 - x99) * x5 - x333 * x88 - x988;
+        let x990 = x331 * x106 + x983;
+        let x991 = x5 * (x987 - x110) - x988 - x333 * x106;
+        let x992 = x981 - x109 * x331;
+        let x993 = (x60 * x8
+            + mB * (x6 * (2.0 * x114 - x979 + x980 - 2.0 * x116) + x122)) * x1
             + mF
-                * (x53 * x973 + x980 * x57
-                    + x5 * (x119 * x963 + x117 * x965 + x116 * x968) + x979 * x50);
-        let x994 = x5
-            * (mF * (x130 * x963 + x20 * (x134 * x968 + x131 * x965))
-                + ((x321 * x125 + x89 * x317 * x92 * x21) * x20 + x963 * x126) * mH
-                + x582);
-        let x995 = x5
-            * (x71 * mB * x21
-                + (x20 * x157 * x963 + x156 * x317 * x21 + x321 * x16 * x158) * mH
-                + mF * (x152 * x965 + x146 * x20 * x963 + x155 * x968));
-        let x996 = x5 * x162 * x963;
-        let x997 = x1 * x207 * x317;
-        let x998 = x327 * x202;
-        let x999 = x997 + x998;
-        let x1000 = 2.0 * IHyy + 2.0 * IFyy;
-        let x1001 = x202 * x1 * x317;
-        let x1002 = x327 * x218;
-        let x1003 = x1001 + x1002;
-        let x1004 = x327 * x28 - x27 * x1 * x317;
-        let x1005 = x210 * x1004;
-        let x1006 = x27 * x327 + x1 * x317 * x28;
-        let x1007 = x1006 * x214;
-        let x1008 = x191 - x190;
-        let x1009 = x1006 * x242;
-        let x1010 = x244 * x1004;
-        let x1011 = IFxx * (x1009 + x1010)
-            + mF * (x20 * (x979 * x131 + x134 * x980) + x130 * x973) + x327 * x227
-            + x330 * x20 * x92 * x224
-            + x1 * (x591 * x138 * mB - x231 + x234 * x317 + x237)
-            + (x20 * (x983 * x89 * x92 + x982 * x125) + x126 * x981) * mH;
-        let x1012 = x1004 * x28 + x27 * x1006;
-        let x1013 = x247 * x21 + x223 * x330 * x16
-            + mF * (x979 * x152 + x146 * x20 * x973 + x980 * x155)
-            + (x20 * x157 * x981 + x983 * x156 + x982 * x16 * x158) * mH
-            + x20 * (x1001 + x1012 * IFxx + x1002);
-        let x1014 = IRyy * x21;
-        let x1015 = x89 * mH * x981 + x997 + x998 + IFxx * (x1006 * x28 - x27 * x1004)
-            + mF * x973 * x107;
-        let x1016 = x330 * IFyy;
-        let x1017 = rR * x5 * x602;
-        let x1018 = rR * x602 * x2;
-        let x1019 = 2.0 * x1005 + 2.0 * x1007 + 2.0 * (x330 * x98);
-        let x1020 = x1006 * x57 + (x210 * x965 + x98 * x963 + x214 * x968) * x5
-            + x50 * x1004 + x330 * x53;
-        let x1021 = x929
-            - rF
-                * (x330 * x53 * x259
-                    + (x53 * x1019 + x5 * x963 * x259 - 2.0 * (x330 * x261)) * x98
-                    + x1020 * x167) - x330 * x274 * x98 / f64::sqrt(x167);
-        let x1022 = x33 * x1006;
-        let x1023 = x330 * x25;
-        let x1024 = x29 * x1004;
-        let x1025 = x259 * x2;
-        let x1026 = x310
-            - rF
-                * ((2.0 * (x330 * x282) - x25 * x1019 - x98 * x259 * x2) * x98
-                    - x330 * x25 * x259 - x167 * (x1022 + x1023 + x1024 + x1025))
-            - x330 * x278 * x98 / f64::sqrt(x167);
-        let x1027 = x21 * x595;
-        let x1028 = rR * (x1027 - x165) * x1 * x2;
-        let x1029 = x605 * x21;
-        let x1030 = (x165 + x1029) * rR * x5 * x1;
-        let x1031 = x968 * x242 - x20 * x963 * x92 + x244 * x965;
-        let x1032 = x1009 - x330 * x20 * x92 + x1010;
-        let x1033 = (f64::sqrt(x167) * x583 - x330 * x98 * x309 / f64::sqrt(x167)) * x2
-            - (x330 * x53 * x312 + x167 * x1031 * x5
-                + (x5 * x312 * x963 - 2.0 * (x330 * x311) + x1032 * x53) * x98) * rF;
-        let x1034 = x308 * x1 + x107 * (x16 * x82 * x1 - x325);
-        let x1035 = (f64::sqrt(x167) * x1034 - x323 * x330 * x98 / f64::sqrt(x167)) * x5
-            - rF
-                * (x312 * (-x1023 - x167 * x2)
-                    + (2.0 * (x330 * x314) - x98 * x312 * x2 - x1032 * x25) * x98);
-        let x1036 = (x98 * x963 / f64::sqrt(x167) + x330 * x330 * x895) * rF;
-        let x1037 = x320 + x322 + x1036;
-        let x1038 = rR * x5 * x1;
-        let x1039 = rR * x1 * x2;
-        let x1040 = x20 * x1012 + x330 * x16;
-        let x1041 = f64::sqrt(x167) * x590 * x21 * x2
-            - x330 * x346 * x98 / f64::sqrt(x167)
-            - rF
-                * (x351 * x330 * x53
-                    + x98 * (x351 * x5 * x963 - 2.0 * (x330 * x5 * x21) + x1040 * x53)
-                    - x167 * x5 * x1);
-        let x1042 = x112 * x121;
-        let x1043 = x16 * x107 * x92 - x65 + x1042 + x86;
-        let x1044 = x1043 * f64::sqrt(x167) * x5 * x21
-            - x330 * x98 * x357 / f64::sqrt(x167)
-            - ((-x351 * x98 * x2 - x1040 * x25 - 2.0 * (x330 * x21 * x2)) * x98
-                - x351 * x330 * x25 - x167 * x1 * x2) * rF;
-        let x1045 = x330 * rF * x20 * x883 * x317 * x21;
-        let x1046 = x1 * (x1042 - x65 + x361 * x92 + x86);
-        let x1047 = x1045 + x1046;
-        let x1048 = -x9 * x4 * x1 - x0 * x8 * x1;
-        let x1049 = (f64::sqrt(x167) * x2 - x330 * x25 / f64::sqrt(x167)) * x98 * x107
-            - rF
-                * (x334 * x167 * x5 * x317 * x21 + x330 * x53 * x364
-                    + x98
-                        * (x5 * x364 * x963 + x53 * x1048 - 2.0 * (x334 * x330 * x49)));
-        let x1050 = (f64::sqrt(x167) * x5 * x963 - x330 * x53 * x98 / f64::sqrt(x167))
-            * x107
-            - rF
-                * (x98 * (2.0 * (x14 * x334 * x330) - x25 * x1048 - x98 * x364 * x2)
-                    - x330 * x25 * x364 - x334 * x167 * x92 * x21 * x2);
-        let x1051 = -x325 - x326;
-        let x1052 = rF * x98 * x1051 / f64::sqrt(x167)
-            + x330 * (x105 + rF * x369 * x895 - x106);
-        let x1053 = -(rF * x5 * x963);
-        let x1054 = rF * x98 * x2;
-        let x1055 = x9 * rR * x824;
-        let x1056 = x405 - x627;
-        let x1057 = x9 * x1056;
-        let x1058 = theta_dot * x0 * x1;
-        let x1059 = x4 * phi_dot * x21;
-        let x1060 = x1058 + x1059;
-        let x1061 = x8 * x1060;
-        let x1062 = (-x891 - x1057 - x1061) * x20 + x898;
-        let x1063 = (c_ + w_ - x65) * x1 * phi_dot + rR * theta_dot * x0 * x21;
-        let x1064 = x1063 * x8;
-        let x1065 = x1064 - x1055 - x1062 * x107;
-        let x1066 = delta_dot * (x16 * x970 * x1 - x972);
-        let x1067 = x85 * x1056 + rR * x1060;
-        let x1068 = x1067 * x20;
-        let x1069 = rR * x824 * x8 + x9 * x1063;
-        let x1070 = x16 * x1069;
-        let x1071 = x1066 + x112 * x1062 + x1068 + x1070;
-        let x1072 = x1004 * x439 - x330 * x456 + x444 * x973 + x1065 * x28 + x27 * x1071
-            - x979 * x422;
-        let x1073 = x980 * x422 - x27 * x1065 + x1071 * x28 + x330 * x430 - x973 * x436
-            - x1006 * x439;
-        let x1074 = x20 * x1069;
-        let x1075 = delta_dot * (-x974 - x975);
-        let x1076 = x1067 * x16;
-        let x1077 = (x891 + x1057 + x1061) * x16;
-        let x1078 = x1077 + x889;
-        let x1079 = x9 * x1060;
-        let x1080 = x8 * x1056;
-        let x1081 = x1080 - x1079;
-        let x1082 = x456 * x1006 - x1074 - x444 * x980 + x979 * x436 - x1004 * x430
-            + x1075 + x1076 - x1078 * x112 + x1081 * x107;
-        let x1083 = x1081 * x89 - x431 * x983 - x327 * x467 - x1074 - x1078 * x78
-            + x1 * x317 * x462 + x982 * x434 + x1075 + x1076;
-        let x1084 = x327 * x474 - x1055 - x330 * x462 + x431 * x981 - x982 * x422 + x1064
-            - x89 * x1062;
-        let x1085 = x1066 + x1068 + x78 * x1062 + x983 * x422 + x1070 - x434 * x981
-            + x467 * x330 - x1 * x474 * x317;
-        let x1086 = x0 * x492;
-        let x1087 = x4 * x488;
-        let x1088 = x63 * x382 - x378 * x66;
-        let x1089 = x0 * x482;
-        let x1090 = x4 * x479;
-        let x1091 = xB * x1056 + x1088 * x21 + x1 * (-x1089 - x1090) - x1060 * x69;
-        let x1092 = x1091 * psi_dot;
-        let x1093 = x483 * x1;
-        let x1094 = rR * theta_dot * x0 - x480 - x63 * x374 - x481;
-        let x1095 = x485 - x484 - 2.0 * x486;
-        let x1096 = xB * phi_dot;
-        let x1097 = x1094 * x21 + (x378 * x591 + x4 * x1095 + x1096) * x1;
-        let x1098 = x374 * x66 - x478 + x395 - x4 * rR * theta_dot;
-        let x1099 = phi_dot * x69;
-        let x1100 = x21 * x1098 + (x0 * x1095 - x1099 - x591 * x382) * x1;
-        let x1101 = x571 * x1006;
-        let x1102 = x330 * x436;
-        let x1103 = thF_dot * x1 * x317;
-        let x1104 = x1077 + x889 - x1103;
-        let x1105 = x327 * thF_dot;
-        let x1106 = IFyy * (-x1101 - x1102)
-            + (x1104 * x28 + x27 * (x1079 - x1105 - x1080) + x1101 + x1102) * IFxx;
-        let x1107 = x422 * (x997 - x1 * IHyy * x317 + x998);
-        let x1108 = x1078 * x218;
-        let x1109 = x1081 * x202;
-        let x1110 = x330 * x562;
-        let x1111 = x1107 + x1108 + x1109 + x1110;
-        let x1112 = x4 * x517;
-        let x1113 = x513 * x0;
-        let x1114 = (x197 + x198) * x382;
-        let x1115 = IRyy * phi_dot;
-        let x1116 = x378 * (-x194 - x195);
-        let x1117 = phi_dot * IByy;
-        let x1118 = x1081 * x207;
-        let x1119 = x1078 * x202;
-        let x1120 = x327 * IHyy;
-        let x1121 = x330 * x535 + x1118 + x1119 + x422 * (x1120 - x1001 - x1002);
-        let x1122 = x0 * IByy;
-        let x1123 = x521 * x21 + x1060 * IBxx + x374 * (x1122 - x194 - x195) * x1
-            - IBxz * x1056;
-        let x1124 = x1 * x543 * x1008;
-        let x1125 = x542 * x21;
-        let x1126 = IRyy * (-x1124 - x1125)
-            + (x1124 + x1125 - x187 * x1056 + x185 * x1060 + thR_dot * x192 * x1) * IRxx;
-        let x1127 = x4 * IByy;
-        let x1128 = IBzz * x1056 + x529 * x21 + x374 * (x1127 - x197 - x198) * x1
-            - IBxz * x1060;
-        let x1129 = x286 * x1 * x543;
-        let x1130 = x552 * x21;
-        let x1131 = (x187 * x1060 - x1129 + thR_dot * x286 * x1 - x1130 + x185 * x1056)
-            * IRxx + IRyy * (x1129 + x1130);
-        let x1132 = IHyy * x1062;
-        let x1133 = x327 * x507;
-        let x1134 = x434 * x1003;
-        let x1135 = x1062 * IFyy;
-        let x1136 = x431 * x999;
-        let x1137 = x1 * x502 * x317;
-        let x1138 = x1133 - x1132 - x1134 - x1135 + x1136 - x1137;
-        let x1139 = x330 * x444;
-        let x1140 = x571 * x1004;
-        let x1141 = IFxx * ((x1105 - x1079 + x1080) * x28 - x1139 - x1140 + x27 * x1104)
-            + (x1139 + x1140) * IFyy;
-        let x1142 = x78 * x121;
-        let x1143 = (-(x89 * x16 * x92 - x65 + x1142 + x86) * mH - x1043 * mF - x71 * mB)
-            * g * x1;
-        let x1144 = -x160 - x161;
-        let x1145 = x330 * g * x1144;
-        let x1146 = 1.0 / f64::sqrt(x164);
-        let x1147 = (x21 * x21 / f64::powf(x164, 1.5) - x1146) * x1 * x1
-            + x21 * x21 / f64::sqrt(x164);
-        let x1148 = x1 * x1 / f64::powf(x164, 1.5);
-        let x1149 = ((-3.0 * x1146 - x1148) * x21 + 4.0) * x21 + x599 - x165;
-        let x1150 = x832 * x16 * x21;
-        let x1151 = x5 * (delta_dot * x20 * x1 + x1150);
-        let x1152 = x8 * x837;
-        let x1153 = x0 * x1 * phi_dot;
-        let x1154 = x0 * psi_dot * x21 * x2;
-        let x1155 = (x1153 + x823) * x5 + x1154;
-        let x1156 = x9 * x1155;
-        let x1157 = x16 * psi_dot * x1 * x2;
-        let x1158 = x1151 - x20 * (x1152 + x1156) + x1157;
-        let x1159 = x274 * x98 * x615 / f64::powf(x167, 1.5);
-        let x1160 = x640 / f64::sqrt(x167);
-        let x1161 = -x1153 - x823;
-        let x1162 = x5 * x1161;
-        let x1163 = x1162 - x1154;
-        let x1164 = x1163 * x9;
-        let x1165 = x1163 * x8;
-        let x1166 = x9 * x837;
-        let x1167 = x1155 * x8 - x1166;
-        let x1168 = x16 * (x1152 + x1156 - x830) + x833;
-        let x1169 = x28 * x1167 + thF_dot * x5 * x965 + x27 * x1168;
-        let x1170 = x330 * x673;
-        let x1171 = x889 - x1103 + x893;
-        let x1172 = x27 * x1171;
-        let x1173 = x28 * (x885 + x886 + x1105);
-        let x1174 = x1172 + x1173;
-        let x1175 = x1168 * x28 - x27 * x1167 + (-x966 - x967) * thF_dot * x5;
-        let x1176 = x53 * x899;
-        let x1177 = x1171 * x28;
-        let x1178 = x27 * (-x885 - x886 - x1105);
-        let x1179 = x1177 + x1178;
-        let x1180 = x1019 * x615;
-        let x1181 = x899 * x259;
-        let x1182 = 2.0 * (x330 * x615) + 2.0 * (x658 * x1004) + 2.0 * (x1174 * x214)
-            + 2.0 * (x98 * x899) + 2.0 * (x210 * x1179) + 2.0 * (x652 * x1006);
-        let x1183 = x346 * x98 * x615 / f64::powf(x167, 1.5);
-        let x1184 = x734 / f64::sqrt(x167);
-        let x1185 = x4 * theta_dot * x21 * x2;
-        let x1186 = x1185 + x0 * x791;
-        let x1187 = x792 * x8;
-        let x1188 = x9 * x792;
-        let x1189 = delta_dot * x20 * x317 * x21 * x2;
-        let x1190 = x20
-            * (x27 * (x1172 - thF_dot * x1004 + x1173) - delta_dot * x330
-                + (thF_dot * x1006 + x1177 + x1178) * x28)
-            + x16 * (delta_dot * x1012 + x897 + x898);
-        let x1191 = x1170 + x5 * x963 * x615 + x1176;
-        let x1192 = x5 * psi_dot * x317 + theta_dot * x121 * x2;
-        let x1193 = theta_dot * x20 * x121 - delta_dot * x16 * x92;
-        let x1194 = x779 * x1006 + x244 * x1179 + x774 * x1004 + x1193 * x330
-            - x20 * x899 * x92 + x1174 * x242;
-        let x1195 = x1032 * x615;
-        let x1196 = x312 * x899;
-        let x1197 = x899 / f64::sqrt(x167);
-        let x1198 = x1048 * x615;
-        let x1199 = (x740 * x0 - x4 * x743) * x737;
-        let x1200 = (x0 * x745 - x4 * x744) * x746;
-        let x1201 = 0.5 * x1200 - 0.5 * x1199;
-        let x1202 = x16 * x796;
-        let x1203 = x755 - x756;
-        let x1204 = x1203 * x0;
-        let x1205 = x1204 - x1185;
-        let x1206 = x9 * x1205;
-        let x1207 = (-x1206 - x1187 - x799) * x20;
-        let x1208 = x1202 + x1207;
-        let x1209 = x309 * x615 * x2 / f64::sqrt(x167);
-        let x1210 = x278 * x98 * x615 / f64::powf(x167, 1.5);
-        let x1211 = x867 / f64::sqrt(x167);
-        let x1212 = -x212 - x213;
-        let x1213 = x797 + x16 * (x1206 + x1187 + x799);
-        let x1214 = x1205 * x8 - x1188;
-        let x1215 = thF_dot * x1212 * x2 + x1213 * x28 - x27 * x1214;
-        let x1216 = x210 * thF_dot * x2 + x27 * x1213 + x1214 * x28;
-        let x1217 = x98 * x698;
-        let x1218 = x864 / f64::sqrt(x167);
-        let x1219 = x98 * x357 * x615 / f64::powf(x167, 1.5);
-        let x1220 = -x1218 - x1219;
-        let x1221 = delta_dot * x20 * x5 * x92 * x21;
-        let x1222 = x330 * x883 * x615 - x900;
-        let x1223 = theta_dot * x82 * x1 + phi_dot * x92 * x21;
-        let x1224 = x615 * x2;
-        let x1225 = x834 * x112;
-        let x1226 = x98 * x98 / f64::powf(x167, 2.5);
-        let x1227 = 1.0 / f64::powf(x167, 1.5);
-        let x1228 = x98 * x899 / f64::powf(x167, 1.5);
-        let x1229 = x307 - x123;
-        let x1230 = -x62 - x123;
-        let x1231 = x87 * phi_dot * x21;
-        let x1232 = (x890 + x892) * x112;
-        let x1233 = x906 / f64::powf(x167, 1.5);
-        let x1234 = x98 * x369 * x615 / f64::powf(x167, 2.5);
-        let x1235 = x107 * x899
-            + rF
-                * (x1051 * x615 / f64::sqrt(x167)
-                    + ((x16 * x896 + (x831 + phi_dot) * x20 * x1) / f64::sqrt(x167)
-                        + ((x1233 + 3.0 * x1234) * x330
-                            + x369 * x899 / f64::powf(x167, 1.5)
-                            + x1051 * x615 / f64::powf(x167, 1.5)) * x98
-                        + 3.0 * (x330 * x369 * x615 / f64::powf(x167, 1.5))) * x98
-                    + x330 * x906 / f64::sqrt(x167) + x369 * x899 / f64::sqrt(x167));
-        let x1236 = x20 * x25;
-        let x1237 = x16 * x23;
-        let x1238 = x345 * x16 * x28 - x27 * x343;
-        let x1239 = x343 * x28 + x27 * x345 * x16;
-        let x1240 = x355 * x28 + x27 * x356 * x16;
-        let x1241 = x356 * x16 * x28 - x355 * x27;
-        let x1242 = x16 * x46;
-        let x1243 = x20 * x53;
-        let x1244 = mF
-            * (x57 * x1239 + x1240 * x33 + x20 * (-x345 * x53 - x25 * x356) + x1241 * x29
-                + x50 * x1238)
-            + (x345 * (x1242 - x1243) + x355 * x14 + x343 * x49 + x356 * (x1237 - x1236))
-                * mH;
-        let x1245 = -x580 - x62 - x123;
-        let x1246 = rR * x20 * x82 * x1;
-        let x1247 = (x89 * x82 + x16 * x1245) * x21 - x1246;
-        let x1248 = x16 * x101 - x20 * x94;
-        let x1249 = rR * x16 * x82 * x1;
-        let x1250 = x20 * x1245 * x21 + x1249;
-        let x1251 = rR * x1 * x92;
-        let x1252 = x20 * x89 * x317 * x21 + x1251;
-        let x1253 = -x62 - x123 - x318;
-        let x1254 = x20 * x1253 * x21 + x1249;
-        let x1255 = x1251 + x20 * x107 * x317 * x21;
-        let x1256 = x1254 * x28 - x27 * x1255;
-        let x1257 = (x82 * x107 + x16 * x1253) * x21 - x1246;
-        let x1258 = x1255 * x28 + x27 * x1254;
-        let x1259 = x136 - x137;
-        let x1260 = mH
-            * (x25 * x1247 + x345 * x1248 + x1250 * x23 + x104 * x343 + x14 * x1252)
-            + mF
-                * (x1256 * x29 + x25 * x1257 + x117 * x1238 + x116 * x1239
-                    - x345 * x20 * x119 + x33 * x1258)
-            + ((x63 * x341 + rR * (x0 * x7 - x4 * x12) + x66 * x12) * x1
-                - x1259 * x21 * x21 * x2) * mB;
-        let x1261 = x1042 - x65 + x86;
-        let x1262 = x27 * x121 * x107 + x1261 * x28;
-        let x1263 = x27 * x1261 - x121 * x107 * x28;
-        let x1264 = x1261 * x16 + x118;
-        let x1265 = x1142 - x65 + x86;
-        let x1266 = x93 + x1265 * x16;
-        let x1267 = mF
-            * (x20
-                * (x131 * x1238 - x345 * x130 + x1262 * x29 + x1263 * x33 + x134 * x1239)
-                + x25 * x1264)
-            + (x20 * (x1265 * x23 - x345 * x89 * x121 + (x343 * x92 - x14 * x121) * x89)
-                + x25 * x1266) * mH - x71 * mB * x21 * x2;
-        let x1268 = xB * x12;
-        let x1269 = x16 * x16 * x158 - x20 * x20 * x157;
-        let x1270 = (x155 * x1239 - x146 * x345 * x20 * x20 + x152 * x1238) * mF
-            + (x341 * x69 - x1268) * mB + (x156 * x343 + x345 * x1269) * mH;
-        let x1271 = x345 * x20 * x1144;
-        let x1272 = x20 * x98 * x317 * x21 / f64::sqrt(x167);
-        let x1273 = (x53 * x1247 + x1250 * x46 + x49 * x1252 + x1248 * x356
-            + x355 * x104) * mH
-            + (x1259 * x5 * x21 * x21
-                + (x37 * x66 + x63 * x262 + (x41 * x0 - x4 * x37) * rR) * x1) * mB
-            + mF
-                * (x53 * x1257 + x1258 * x57 + x1240 * x116 + x117 * x1241
-                    - x20 * x356 * x119 + x1256 * x50);
-        let x1274 = (x53 * x1266
-            + x20 * (x1265 * x46 - x89 * x356 * x121 + x89 * (x355 * x92 - x121 * x49)))
-            * mH
-            + mF
-                * ((x1263 * x57 - x130 * x356 + x1240 * x134 + x50 * x1262
-                    + x1241 * x131) * x20 + x1264 * x53) + x5 * x71 * mB * x21;
-        let x1275 = x37 * xB;
-        let x1276 = mF * (x1240 * x155 - x146 * x20 * x20 * x356 + x1241 * x152)
-            + (x262 * x69 - x1275) * mB + mH * (x356 * x1269 + x355 * x156);
-        let x1277 = x20 * x356 * x1144;
-        let x1278 = x82 * x207;
-        let x1279 = x16 * x202 * x317;
-        let x1280 = 2.0 * x197 + x198 - x229;
-        let x1281 = -2.0 * IHyy - 2.0 * IFyy;
-        let x1282 = x82 * x202;
-        let x1283 = x16 * x317 * x28 - x27 * x82;
-        let x1284 = x210 * x1283;
-        let x1285 = x27 * x16 * x317;
-        let x1286 = x82 * x28;
-        let x1287 = x1285 + x1286;
-        let x1288 = x214 * x1287;
-        let x1289 = 2.0 * x194 - x235 + x195;
-        let x1290 = x1287 * x242;
-        let x1291 = x244 * x1283;
-        let x1292 = x16 * x202 * x121;
-        let x1293 = x207 * x92;
-        let x1294 = -x27 * x92 - x16 * x121 * x28;
-        let x1295 = x210 * x1294;
-        let x1296 = x92 * x28 - x27 * x16 * x121;
-        let x1297 = x214 * x1296;
-        let x1298 = x202 * x92;
-        let x1299 = x1298 - x16 * x121 * x218;
-        let x1300 = mF
-            * (x130 * x1257
-                + x20 * (x134 * x1258 + x1263 * x116 + x1256 * x131 + x117 * x1262)
-                + x1264 * x119)
-            + (x0 * x1289 + (x1259 * x138 + x71 * x71) * mB + x4 * x1280 + x292 * x317
-                + (x1290 + x1291) * IFxx + x82 * x234 + (x1293 - x1292) * x92) * x21
-            + x223 * x20 * x98 * x121
-            + (x20 * (x1265 * x101 + x1250 * x125 + x89 * (x1252 * x92 - x104 * x121))
-                + x94 * x1266 + x1247 * x126) * mH + (x1295 + x1297) * IFxx
-            + x1299 * x84;
-        let x1301 = x1283 * x28;
-        let x1302 = x27 * x1287;
-        let x1303 = x1301 + x1302;
-        let x1304 = (x156 * x1252 + x20 * x1247 * x157 + x16 * x1250 * x158) * mH
-            + rR * x591 * x1 * mB
-            + (x1303 * IFxx + x1282 + x16 * x294 * x317) * x20 * x21
-            + mF * (x1258 * x155 + x146 * x20 * x1257 + x1256 * x152);
-        let x1305 = x1287 * x28 - x27 * x1283;
-        let x1306 = mF * x1257 * x107 + (x1305 * IFxx + x1278 + x1279) * x21
-            + x89 * x1247 * mH;
-        let x1307 = -(x20 * IFyy * x317 * x21);
-        let x1308 = x1240 * x214 - x20 * x356 * x98 + x210 * x1241
-            + (x50 * x1283 - x20 * x53 * x317 + x1287 * x57) * x21;
-        let x1309 = 2.0 * x1284 - 2.0 * (x20 * x98 * x317) + 2.0 * x1288;
-        let x1310 = x936 + x274 * x20 * x98 * x317 * x21 / f64::sqrt(x167)
-            - rF
-                * (((2.0 * (x98 * x261) - x53 * x259) * x317 * x21 - x356 * x98 * x259)
-                    * x20 + x167 * x1308 + x1309 * x53 * x98 * x21);
-        let x1311 = x210 * x1238 + x214 * x1239 - x345 * x20 * x98
-            + (x33 * x1287 + x1283 * x29 - x20 * x25 * x317) * x21;
-        let x1312 = x20 * x278 * x98 * x317 * x21 / f64::sqrt(x167) + x347
-            - rF
-                * (x20
-                    * (x345 * x98 * x259
-                        + (x25 * x259 - 2.0 * (x98 * x282)) * x317 * x21)
-                    - x1309 * x25 * x98 * x21 - x167 * x1311);
-        let x1313 = x20
-            * (x16 * x121 * (IHyy - x216 + IFyy - x217)
-                + (x1294 * x28 + x27 * x1296) * IFxx
-                + (x1263 * x155 + x152 * x1262 + x146 * x1264) * mF + x1298
-                + mH * (x1265 * x16 * x158 - x89 * x156 * x121 + x157 * x1266));
-        let x1314 = x1264 * mF * x107 - x1292 + (x1296 * x28 - x27 * x1294) * IFxx
-            + x89 * x1266 * mH + x1293;
-        let x1315 = x20 * x121 * IFyy;
-        let x1316 = x1295 + x1297 + x20 * x98 * x121
-            + (x1290 + x20 * x20 * x317 * x92 + x1291) * x21;
-        let x1317 = x57 * x1296 + x1240 * x242 + x20 * (x53 * x121 + x20 * x356 * x92)
-            + x1294 * x50 + x1241 * x244;
-        let x1318 = (x20 * x98 * x309 * x317 / f64::sqrt(x167) + f64::sqrt(x167) * x590)
-            * x21 * x2
-            - rF
-                * (x1316 * x53 * x98
-                    + ((2.0 * (x98 * x311) - x53 * x312) * x317 * x21
-                        - x356 * x98 * x312) * x20 + x167 * x1317);
-        let x1319 = x33 * x1296 + x20 * (x345 * x20 * x92 + x25 * x121) + x1294 * x29
-            + x242 * x1239 + x244 * x1238;
-        let x1320 = x5
-            * (x1043 * f64::sqrt(x167) + x323 * x20 * x98 * x317 / f64::sqrt(x167)) * x21
-            - (x20 * (x345 * x98 * x312 + (x25 * x312 - 2.0 * (x314 * x98)) * x317 * x21)
-                - x1316 * x25 * x98 - x167 * x1319) * rF;
-        let x1321 = x921 + x922 + x16 * x923 * x107 - rR * x341;
-        let x1322 = x1301 + x1302 - x16 * x317;
-        let x1323 = f64::sqrt(x167) * x1321
-            + x346 * x20 * x98 * x317 * x21 / f64::sqrt(x167)
-            - rF * x20
-                * (((2.0 * (x5 * x317 * x21) + x53 * x1322) * x21 - x351 * x356) * x98
-                    - x351 * x53 * x317 * x21);
-        let x1324 = x272 + x273 + x266 * x16 * x107 - rR * x262;
-        let x1325 = x1324 * f64::sqrt(x167)
-            - (x98 * ((2.0 * (x317 * x21 * x2) - x25 * x1322) * x21 + x351 * x345)
-                + x351 * x25 * x317 * x21) * rF * x20
-            + x20 * x98 * x317 * x357 * x21 / f64::sqrt(x167);
-        let x1326 = x16 * x121 * x107;
-        let x1327 = rF * x20
-            * (x20 * x317 * x317 * x21 * x895 - x98 * x121 / f64::sqrt(x167));
-        let x1328 = (x1326 + x62 + x123 + x1327 + x318) * x21;
-        let x1329 = x9 * x0 * x21 - x4 * x8 * x21;
-        let x1330 = (x25 * x98 * x317 * x21 / f64::sqrt(x167) - x345 * f64::sqrt(x167))
-            * x20 * x107
-            - (x53 * x1329 * x98
-                + x20
-                    * ((2.0 * (x334 * x98 * x49) - x53 * x364) * x317 * x21
-                        - x356 * x98 * x364) + x355 * x334 * x167) * rF;
-        let x1331 = x20
-            * (x53 * x98 * x317 * x21 / f64::sqrt(x167) - f64::sqrt(x167) * x356) * x107
-            - rF
-                * (x20
-                    * ((x25 * x364 - 2.0 * (x14 * x334 * x98)) * x317 * x21
-                        + x345 * x98 * x364) - x25 * x1329 * x98 - x334 * x167 * x343);
-        let x1332 = x20 * x883 * x369 - x16 * x98 / f64::sqrt(x167);
-        let x1333 = x1332 * rF;
-        let x1334 = x20 * x107;
-        let x1335 = x1333 - x1334;
-        let x1336 = x1335 * x317 * x21;
-        let x1337 = rF * x20 * x356;
-        let x1338 = -(x345 * rF * x20);
-        let x1339 = -x380 - x381;
-        let x1340 = x386 * x0 * phi_dot + x390;
-        let x1341 = xB * x387 + x378 * x482 - x479 * x1339 - x1340 * x69
-            + rR * psi_dot * (-x4 * x382 - x378 * x0) * x1;
-        let x1342 = (x0 * psi_dot * x1 * x1 - x1059) * rR * psi_dot;
-        let x1343 = x378 * xB;
-        let x1344 = x1343 - x1339 * x69;
-        let x1345 = x382 * x1344;
-        let x1346 = x1342 - x489 + x491 - x1345;
-        let x1347 = x378 * x1344 + rR * (x627 + x4 * psi_dot * x1 * x1) * psi_dot
-            + x1339 * x487;
-        let x1348 = x8 * x1339;
-        let x1349 = x1348 + x433;
-        let x1350 = x9 * x1339;
-        let x1351 = x379 - x1350;
-        let x1352 = x1349 * x16 * x28 - x27 * x1351;
-        let x1353 = x1349 * x27 * x16 + x1351 * x28;
-        let x1354 = x378 * x85;
-        let x1355 = rR * x1339;
-        let x1356 = x1354 - x1349 * x112 + x1355;
-        let x1357 = rR * x16 * x82 * psi_dot * x1;
-        let x1358 = x20 * x1356 + x1357;
-        let x1359 = rR * psi_dot * x1 * x92;
-        let x1360 = x1359 + x1349 * x20 * x107;
-        let x1361 = x1358 * x28 - x27 * x1360;
-        let x1362 = x627 - x405;
-        let x1363 = -x1058 - x1059;
-        let x1364 = x9 * x1362 + x1363 * x8;
-        let x1365 = x1358 * x27 + x1360 * x28;
-        let x1366 = x8 * x1340 + x448;
-        let x1367 = x16 * x1366;
-        let x1368 = x1349 * delta_dot * x20;
-        let x1369 = x1367 - x1368;
-        let x1370 = x85 * x387;
-        let x1371 = rR * x1340;
-        let x1372 = x1370 + x1371;
-        let x1373 = x1354 + x1355;
-        let x1374 = x9 * x1340;
-        let x1375 = x388 - x1374;
-        let x1376 = x456 * x1353 - x1352 * x430 + x1361 * x436
-            + rR * (-delta_dot * x16 * x82 * x1 - x20 * x1364) * psi_dot - x444 * x1365
-            - x1369 * x112 + x1372 * x16 - delta_dot * x20 * x1373 + x1375 * x107;
-        let x1377 = -x1349 * delta_dot * x16 - x20 * x1366;
-        let x1378 = delta_dot * x16 * x1373 + x1377 * x112 + x20 * x1372
-            + rR * psi_dot * (x1364 * x16 - delta_dot * x20 * x82 * x1);
-        let x1379 = x1351 * x107;
-        let x1380 = rR * x20 * x82 * psi_dot * x1;
-        let x1381 = x1379 + x1356 * x16 - x1380;
-        let x1382 = rR * psi_dot * (x1362 * x8 - x9 * x1363);
-        let x1383 = x1382 - x1377 * x107;
-        let x1384 = x27 * x1378 + x444 * x1381 + x1383 * x28 + x1352 * x439
-            - x1361 * x422 + x1349 * x20 * x456;
-        let x1385 = x1378 * x28 - x27 * x1383 - x1381 * x436 - x1353 * x439
-            - x1349 * x20 * x430 + x422 * x1365;
-        let x1386 = x1354 - x1349 * x78 + x1355;
-        let x1387 = x1386 * x20 + x1357;
-        let x1388 = x89 * x1351;
-        let x1389 = x1388 + x1386 * x16 - x1380;
-        let x1390 = x431 * x1389 - x422 * x1387 - x1377 * x89 + x1382
-            + x1349 * (x16 * x474 + x20 * x462);
-        let x1391 = x476 * x16 - x20 * x469;
-        let x1392 = x1359 + x1349 * x20 * x89;
-        let x1393 = rR * x1364 * psi_dot;
-        let x1394 = delta_dot * x1373;
-        let x1395 = x1370 + x1371 - delta_dot * rR * x82 * psi_dot * x1 - x1349 * x467;
-        let x1396 = x1392 * x422 + x78 * x1377 - x474 * x1351 + x16 * (x1393 + x1394)
-            - x1389 * x434 + x20 * x1395;
-        let x1397 = x1351 * x462 - x78 * x1369 + x434 * x1387 + x1375 * x89
-            - x431 * x1392 + x16 * x1395 + x20 * (-x1393 - x1394);
-        let x1398 = x1369 * x218;
-        let x1399 = x207 * x1351;
-        let x1400 = x1349 * x16 * x202;
-        let x1401 = (x1399 - IHyy * x1351 + x1400) * x422;
-        let x1402 = x1375 * x202;
-        let x1403 = x561 - x505 - x506;
-        let x1404 = x1349 * x20 * x1403;
-        let x1405 = x1398 + x1401 + x1402 + x1404;
-        let x1406 = x1342 - x490 - x1345;
-        let x1407 = x1349 * x20 * x436;
-        let x1408 = x571 * x1353;
-        let x1409 = x1349 * thF_dot * x16;
-        let x1410 = x1367 - thF_dot * x1351 - x1368;
-        let x1411 = IFxx * (x1408 - x1407 + x27 * (x1374 - x388 - x1409) + x1410 * x28)
-            + (x1407 - x1408) * IFyy;
-        let x1412 = x517 * x1339;
-        let x1413 = x1339 * IBxx;
-        let x1414 = (x1413 - x515) * x382;
-        let x1415 = x378 * IBzz;
-        let x1416 = IBxz * x1339;
-        let x1417 = x374 * (x1415 - x1416 - x528);
-        let x1418 = x1340 * IBxx;
-        let x1419 = x549 * x1008;
-        let x1420 = x185 * x1339 - x540;
-        let x1421 = x1420 * x543 * x553;
-        let x1422 = (x1420 * thR_dot + x187 * x1340 + x547) * IRxx;
-        let x1423 = IBxz * x1340 - IBzz * x387 - x520 + x522
-            - x374 * (x515 - x1413 + IByy * x1339) + x523;
-        let x1424 = x187 * x1339;
-        let x1425 = x550 + x1424;
-        let x1426 = -(thR_dot * (-x550 - x1424) + x185 * x1340 - x556) * IRxx - x554
-            - x1425 * x543 * x544 - x557;
-        let x1427 = x1349 * x16 * x218;
-        let x1428 = x202 * x1351;
-        let x1429 = x1427 + x1428;
-        let x1430 = x1369 * x202;
-        let x1431 = x16 * IHyy * x422;
-        let x1432 = x20 * x593 + x1431;
-        let x1433 = x1375 * x207;
-        let x1434 = x1430 - x1429 * x422 + x1349 * x1432 + x1433;
-        let x1435 = x1349 * x20 * x444;
-        let x1436 = x1352 * x571;
-        let x1437 = (x1435 + (x388 + x1409 - x1374) * x28 + x27 * x1410 - x1436) * IFxx
-            + (x1436 - x1435) * IFyy;
-        let x1438 = x434 * x1429;
-        let x1439 = x1377 * IHyy;
-        let x1440 = x1377 * IFyy;
-        let x1441 = x1349 * x16 * x507;
-        let x1442 = x431 * (x1399 + x1400);
-        let x1443 = x502 * x1351;
-        let x1444 = x1441 - x1438 - x1439 - x1440 + x1442 - x1443;
-        let x1445 = g * x162 * x317 * x21;
-        let x1446 = delta_dot * x16 * x317 * x21;
-        let x1447 = x20 * x834;
-        let x1448 = -x1446 - x1447;
-        let x1449 = x20 * x883 * x317 * x21 * x615 + x98 * x1448 / f64::sqrt(x167);
-        let x1450 = x351 * x615;
-        let x1451 = delta_dot * x356 * x16;
-        let x1452 = x20 * x861;
-        let x1453 = -x1451 - x1452;
-        let x1454 = x16 * x834;
-        let x1455 = delta_dot * x20 * x317 * x21;
-        let x1456 = x1454 - x1455;
-        let x1457 = x879 * x28 + x27 * x1456 + thF_dot * x1283 * x21;
-        let x1458 = thF_dot * (-x1285 - x1286) * x21 + x1456 * x28 - x27 * x879;
-        let x1459 = x16 * (delta_dot * x1303 * x21 - x1446 - x1447)
-            + (x27 * x1457 + (thF_dot * x1305 + delta_dot * x20 * x317) * x21
-                + x1458 * x28) * x20;
-        let x1460 = 2.0 * (x210 * x1458) + 2.0 * (x98 * x1448) + 2.0 * (x214 * x1457)
-            + (2.0 * (x652 * x1287) + 2.0 * (x658 * x1283) - 2.0 * (x20 * x317 * x615))
-                * x21;
-        let x1461 = thF_dot * x356 * x16;
-        let x1462 = x862 - x355 * thF_dot - x860;
-        let x1463 = (x1461 - x632 + x665) * x28 + x27 * x1462;
-        let x1464 = x27 * (x632 - x1461 - x665) + x28 * x1462;
-        let x1465 = x1309 * x21 * x615;
-        let x1466 = x1448 * x259;
-        let x1467 = x773 * x92 * x28 + (x777 * x27 + x769) * x121;
-        let x1468 = x27 * (x773 * x92 + delta_dot * x20 * x121) + x121 * x771 * x28;
-        let x1469 = x1457 * x242 + delta_dot * x16 * x98 * x121 + x210 * x1467
-            + x244 * x1458 + x652 * x1296 + x21 * (x774 * x1283 + x779 * x1287)
-            + x1468 * x214
-            + x20
-                * ((x609 + x614 - theta_dot * x20 * x317 * x21) * x121
-                    + x92 * (theta_dot * x98 + 2.0 * x1446 + x1447)) + x658 * x1294;
-        let x1470 = x1316 * x615;
-        let x1471 = x1448 * x312;
-        let x1472 = -0.5 * x1199 - 0.5 * x1200;
-        let x1473 = x1448 * x364;
-        let x1474 = x1329 * x615;
-        let x1475 = x20 * x729;
-        let x1476 = delta_dot * x345 * x16;
-        let x1477 = -x1475 - x1476;
-        let x1478 = x346 * x615 / f64::sqrt(x167);
-        let x1479 = x345 * thF_dot * x16;
-        let x1480 = x730 - thF_dot * x343 - x725;
-        let x1481 = (x732 - x731 + x1479) * x28 + x27 * x1480;
-        let x1482 = x1480 * x28 + x27 * (x731 - x732 - x1479);
-        let x1483 = x825 + x829;
-        let x1484 = x1448 * x107;
-        let x1485 = -3.0 * x1226 - 3.0 * x1227;
-        let x1486 = x1485 * x369 * x615;
-        let x1487 = x98 * x906 / f64::powf(x167, 1.5);
-        let x1488 = x906 / f64::sqrt(x167);
-        let x1489 = x543 * x553 * x546;
-        let x1490 = -x554 - x552 * x543 * x544
-            - IRxx * (thR_dot * (x551 - x550) - x555 - x556) - x557;
-        let x1491 = x29 * x28;
-        let x1492 = x27 * x33;
-        let x1493 = x27 * x57;
-        let x1494 = x50 * x28;
-        let x1495 = x1493 - x44 + x1494 - x45;
-        let x1496 = x1491 - x19 + x1492 + x22;
-        let x1497 = (x1495 * x25 + x1496 * x53) * mF;
-        let x1498 = x22 - x19;
-        let x1499 = x87 * x16 * x21;
-        let x1500 = x1499 - x75 + x78 * x369;
-        let x1501 = x117 * x28 - x95 - x100 - x113 + x27 * x116;
-        let x1502 = x112 * x369 - x75 + x1499;
-        let x1503 = x28 * x1502 + x27 * x107 * x369;
-        let x1504 = x27 * x1502 - x107 * x369 * x28;
-        let x1505 = (x94 * x1498 + x23 * x1500 - x14 * x89 * x369) * mH
-            + (x119 * x1498 + x25 * x1501 + x29 * x1503 + x1504 * x33) * mF;
-        let x1506 = x131 * x28 + x27 * x134 + x128 - x122 - x123;
-        let x1507 = mH * (x127 * x16 + x1498 * x126)
-            + mF * (x130 * x1498 + x135 * x16 + x20 * x25 * x1506);
-        let x1508 = x146 * x28 - x27 * x107;
-        let x1509 = x107 * x28 + x146 * x27;
-        let x1510 = x152 * x28 + x27 * x155 + x146 * x16;
-        let x1511 = x14 * x20 * x89 * mH
-            + mF * (x20 * (x146 * x1498 + x1508 * x29 + x1509 * x33) + x25 * x1510);
-        let x1512 = x162 * x1498;
-        let x1513 = -(x98 * x369 / f64::sqrt(x167));
-        let x1514 = -x44 - x45;
-        let x1515 = (x1514 * x94 - x89 * x49 * x369 + x46 * x1500) * mH
-            + (x50 * x1503 + x53 * x1501 + x1504 * x57 + x119 * x1514) * mF;
-        let x1516 = (x1514 * x126 + x175 * x16) * mH
-            + mF * (x130 * x1514 + x177 * x16 + x20 * x53 * x1506);
-        let x1517 = x20 * x89 * x49 * mH
-            + mF * ((x1508 * x50 + x146 * x1514 + x1509 * x57) * x20 + x53 * x1510);
-        let x1518 = x1514 * x162;
-        let x1519 = -x95 - x99 - x100;
-        let x1520 = -x95 - x100 - x113;
-        let x1521 = -x248 - x249;
-        let x1522 = x128 - x122 - x123;
-        let x1523 = x124 - x122 - x123;
-        let x1524 = (x20 * (x369 * x224 - x219 - x220 + x1521 * IFxx) + x16 * x98 * x224)
-            * x92 + x98 * (x225 + x226 + x299)
-            + mF
-                * (x16 * x239 + (x1522 * x119 + x1504 * x134 + x131 * x1503) * x20
-                    + x1520 * x130)
+                * (x985 * x30 + x31 * x986 + (x225 * x91 + x226 * x103 + x75 * x102) * x2
+                    - x20 * x989)
             + mH
-                * (x1519 * x126 + x16 * x238
-                    + x20 * (x125 * x1500 - x89 * x89 * x369 * x92 + x1523 * x94));
-        let x1525 = (x216 + x335 - IHyy - IFyy + x217) * x20 * x98
-            + (x219 + x220 + x223 * x369 + x251) * x16
-            + (x16 * (x157 * x94 + x158 * x1500) - x89 * x156 * x369 + x20 * x89 * x104)
-                * mH
+                * (x28 * x990 - x991 * x20 + x25 * x992
+                    + (x113 * x193 + x75 * x112 + x95 * x107) * x2);
+        let x994 = ((x75 * x138 + (x134 * x95 + x193 * x111) * x19) * mH
+            + mF * (x19 * (x144 * x225 + x226 * x142) + x75 * x147) + x183 * x5) * x2;
+        let x995 = ((x75 * x152 + x226 * x159 + x225 * x161) * mF + x602 * x1
+            + mH * (x95 * x165 + x163 * x75 + x193 * x166)) * x2;
+        let x996 = x75 * x2;
+        let x997 = x996 * x170;
+        let x998 = x5 * x1;
+        let x999 = -(x998 / f64::sqrt(x172));
+        let x1000 = -(x332 / f64::sqrt(x175));
+        let x1001 = x974 * x55;
+        let x1002 = (x60 * x2
+            + mB * (x180 + x35 * (x979 - 2.0 * x114 - x980 + 2.0 * x116))) * x1
             + mF
-                * (x152 * x1503 + x20 * (x146 * x1520 + x117 * x1508 + x1509 * x116)
-                    + x146 * x16 * x119 + x1504 * x155);
-        let x1526 = x98 * x202 + x1520 * mF * x107 + x89 * mH * x1519;
-        let x1527 = x369 * IFyy;
-        let x1528 = 2.0 * x248 - 2.0 * x79 - 2.0 * x83 + 2.0 * x249;
-        let x1529 = x248 - x79 - x83 + x249;
-        let x1530 = x53 * x1529 + x1495 * x98;
-        let x1531 = x939
+                * (x8 * (x103 * x976 - x974 * x102 + x977 * x91) + x989 * x55
+                    + x985 * x52 + x986 * x50)
+            + (x991 * x55 + x49 * x992 + x47 * x990
+                + x8 * (x113 * x630 + x324 * x107 - x974 * x112)) * mH;
+        let x1003 = (((x144 * x977 + x976 * x142) * x19 - x974 * x147) * mF
+            + (x19 * (x134 * x324 + x111 * x630) - x974 * x138) * mH + x600) * x8;
+        let x1004 = x8
+            * (mH * (x630 * x166 - x163 * x974 + x324 * x165) + x118 * mB
+                + (x976 * x159 - x974 * x152 + x977 * x161) * mF);
+        let x1005 = -(x8 * x974);
+        let x1006 = x1005 * x170;
+        let x1007 = -(x5 * x98);
+        let x1008 = x1007 * x205 + x333 * x194;
+        let x1009 = x215 - x217;
+        let x1010 = x117 * x117;
+        let x1011 = x333 * x29 - x22 * x1007;
+        let x1012 = x22 * x333 + x1007 * x29;
+        let x1013 = 2.0 * (x1011 * x226) + 2.0 * (x1012 * x225);
+        let x1014 = 2.0 * IHyy + 2.0 * IFyy;
+        let x1015 = x333 * x200;
+        let x1016 = x1007 * x194;
+        let x1017 = x1015 + x1016;
+        let x1018 = x331 * x238;
+        let x1019 = x1011 * x233 + x1012 * x235;
+        let x1020 = x5 * (x248 - x242 - x243 - x245)
+            + mH * (x991 * x138 + (x134 * x990 + x111 * x992) * x19)
+            + mF * ((x986 * x144 + x985 * x142) * x19 + x989 * x147) - x1018 * x228
+            + x1019 * IFxx + x251 * x333;
+        let x1021 = x1011 * x29 + x1012 * x22;
+        let x1022 = x0 * x331;
+        let x1023 = mH * (x992 * x166 + x165 * x990 + x163 * x991)
+            + x19 * (IFxx * x1021 + x1017) + x1022 * x228
+            + mF * (x986 * x161 + x985 * x159 + x989 * x152) + x259 * x1;
+        let x1024 = IRyy * x1;
+        let x1025 = x1008 + x989 * x169 + x991 * x168
+            + (x1012 * x29 - x1011 * x22) * IFxx;
+        let x1026 = x331 * IFyy;
+        let x1027 = rR * x611;
+        let x1028 = x8 * x1027;
+        let x1029 = x1027 * x2;
+        let x1030 = -(x974 * x75);
+        let x1031 = x331 * x55;
+        let x1032 = x1011 * x52 + x8 * (x226 * x976 + x977 * x225 + x1030) + x1031
+            + x1012 * x50;
+        let x1033 = 2.0 * x332 + x1013;
+        let x1034 = x943
             - rF
-                * ((x1514 * x259 + x53 * x98 * x1528 - 2.0 * (x261 * x369)) * x98
-                    + x167 * x1530 + x53 * x369 * x259)
-            - x274 * x98 * x369 / f64::sqrt(x167);
-        let x1532 = x25 * x1529 + x1496 * x98;
-        let x1533 = x363
+                * (x175 * x1032
+                    + x75 * (x1033 * x55 - 2.0 * (x271 * x331) + x1005 * x272)
+                    + x1031 * x272) - x332 * x279 / f64::sqrt(x175);
+        let x1035 = -(x20 * x331);
+        let x1036 = x272 * x2;
+        let x1037 = x1012 * x31;
+        let x1038 = x1011 * x30;
+        let x1039 = x321
             - rF
-                * ((2.0 * (x282 * x369) - x1498 * x259 - x25 * x98 * x1528) * x98
-                    - x167 * x1532 - x25 * x369 * x259)
-            - x278 * x98 * x369 / f64::sqrt(x167);
-        let x1534 = -x332 - x333;
-        let x1535 = (x20 * x20 * (x1509 * x134 + x146 * x1522 + x1508 * x131)
-            + x16 * x293) * mF + x16 * (x226 + x299)
-            + (x16 * x16 * x294 + x20 * x20 * (IHyy - x216 + IFyy - x217 + x1534 * IFxx))
-                * x92 + (x20 * x20 * x89 * x89 * x92 + x295 * x16) * mH;
-        let x1536 = (x1523 * x89 * mH + x1522 * mF * x107 - x1298) * x20;
-        let x1537 = -(x16 * IFyy * x92);
-        let x1538 = x53 * x298 + (x20 * (x44 - x1493 - x1494 + x45) - x53 * x16) * x92;
-        let x1539 = x79 - x248 + x83 - x249;
-        let x1540 = (x1539 * x20 - x349) * x92 + x98 * x298;
-        let x1541 = x98 * (f64::sqrt(x167) * x107 - x309 * x369 / f64::sqrt(x167)) * x2
+                * ((x20 * x1033 - x996 * x272 + 2.0 * (x331 * x285)) * x75 - x1035 * x272
+                    - x175 * (x1036 + x1035 + x1037 + x1038))
+            - x332 * x287 / f64::sqrt(x175);
+        let x1040 = x618 * x1;
+        let x1041 = (x1040 - x173) * x931;
+        let x1042 = rR * x35;
+        let x1043 = x627 * x1;
+        let x1044 = x1042 * (x173 + x1043);
+        let x1045 = x1019 - x1018;
+        let x1046 = x974 * x238 + x235 * x977 + x233 * x976;
+        let x1047 = (f64::sqrt(x175) * x334 - x332 * x319 / f64::sqrt(x175)) * x2
             - rF
-                * (x167 * x1538 + x53 * x312 * x369
-                    + x98 * (x1514 * x312 - 2.0 * (x311 * x369) + x53 * x1540));
-        let x1542 = ((x19 - x1491 - x1492 - x22) * x20 - x25 * x16) * x92 + x25 * x298;
-        let x1543 = x5
-            * (f64::sqrt(x167) * x963 * x107 - x323 * x98 * x369 / f64::sqrt(x167))
-            - ((2.0 * (x314 * x369) - x25 * x1540 - x312 * x1498) * x98 - x167 * x1542
-                - x25 * x312 * x369) * rF;
-        let x1544 = x16 * x336;
-        let x1545 = -(x20 * IFyy);
-        let x1546 = x332 + x333 - 1.0;
-        let x1547 = x20 * x1546 * x98 + x16 * x1529;
-        let x1548 = -x345 * f64::sqrt(x167) * x20 * x107
+                * (x1031 * x313
+                    + (x1005 * x313 - 2.0 * (x312 * x331) + x1045 * x55) * x75
+                    + x175 * x8 * x1046);
+        let x1048 = x71 * x5;
+        let x1049 = x0 * x1048;
+        let x1050 = x68 * (x1049 - x72) + x318 * x5;
+        let x1051 = x8 * (f64::sqrt(x175) * x1050 - x332 * x326 / f64::sqrt(x175))
+            - ((2.0 * (x328 * x331) - x996 * x313 + x20 * x1045) * x75
+                - (x175 * x2 + x1035) * x313) * rF;
+        let x1052 = x331 * x892;
+        let x1053 = rF * (x1030 / f64::sqrt(x175) + x1052 * x331);
+        let x1054 = x1053 + x326;
+        let x1055 = x1022 + x19 * x1021;
+        let x1056 = x603 * x3;
+        let x1057 = x1056 * f64::sqrt(x175)
             - rF
-                * (x351 * x53 * x369
-                    + (x351 * x1514 + x53 * x1547 - 2.0 * (x5 * x369 * x21)) * x98)
-            - x346 * x98 * x369 / f64::sqrt(x167);
-        let x1549 = -f64::sqrt(x167) * x20 * x356 * x107
+                * ((x1005 * x352 + x1055 * x55 - 2.0 * (x331 * x45)) * x75 + x1031 * x352
+                    - x175 * x35) - x332 * x348 / f64::sqrt(x175);
+        let x1058 = x136 * x88 + x80;
+        let x1059 = x68 * x232 + x1058;
+        let x1060 = f64::sqrt(x175) * x1059 * x45 - x356 * x332 / f64::sqrt(x175)
+            - (-(2.0 * (x331 * x3) - x20 * x1055 + x996 * x352) * x75 - x175 * x6
+                - x352 * x1035) * rF;
+        let x1061 = (x363 + x1058) * x5;
+        let x1062 = x19 * x630;
+        let x1063 = -(x331 * x892);
+        let x1064 = rF * x1062 * x1063;
+        let x1065 = x1061 + x1064;
+        let x1066 = x8 * x630;
+        let x1067 = x97 * x5 + x393 * x12;
+        let x1068 = (f64::sqrt(x175) * x2 - x1035 / f64::sqrt(x175)) * x76
             - rF
-                * ((-x25 * x1547 - x351 * x1498 - 2.0 * (x369 * x21 * x2)) * x98
-                    - x351 * x25 * x369) - x98 * x369 * x357 / f64::sqrt(x167);
-        let x1550 = x53 * x369 + x1514 * x98;
-        let x1551 = (f64::sqrt(x167) * x1498 - x25 * x98 * x369 / f64::sqrt(x167)) * x107
-            - rF * (x1550 * x364 - 2.0 * (x334 * x98 * x49 * x369));
-        let x1552 = -x98 * x1498 - x25 * x369;
-        let x1553 = x107 * (f64::sqrt(x167) * x1514 - x53 * x98 * x369 / f64::sqrt(x167))
-            - rF * (2.0 * (x14 * x334 * x98 * x369) + x1552 * x364);
-        let x1554 = x97 - x96;
-        let x1555 = x107 * x369
-            + rF * (x98 * x1554 / f64::sqrt(x167) + x369 * x369 * x895);
-        let x1556 = -(rF * x1514);
-        let x1557 = rF * x1498;
-        let x1558 = -x425 - x426 - x427;
-        let x1559 = delta_dot * (x421 - x420) - x451 - x453;
-        let x1560 = x441 + x446 + x1559 * x112 - x458;
-        let x1561 = x27 * x385 * x107;
-        let x1562 = x439 * x28;
-        let x1563 = x385 * x112;
-        let x1564 = x1563 - x399 + x401;
-        let x1565 = x1564 * x28;
-        let x1566 = x444 * x1558 - x456 * x385 + x27 * x1560
-            + (x1562 - x1561 - x1565) * x422 - x1559 * x107 * x28;
-        let x1567 = x27 * x1564 - x385 * x107 * x28;
-        let x1568 = x1560 * x28 - x1558 * x436 + x27 * (x1559 * x107 - x422 * x439)
-            + x1567 * x422 + x385 * x430;
-        let x1569 = x444 * x1567;
-        let x1570 = x27 * x456;
-        let x1571 = x430 * x28;
-        let x1572 = (x1570 - x1571) * x422;
-        let x1573 = delta_dot * (x399 - x401);
-        let x1574 = (x1561 + x1565) * x436;
-        let x1575 = x440 * x28 - x394 + x27 * x460 - x404 - x1569 + x1572 + x1573 + x1574
-            - x410;
-        let x1576 = -x425 - x427 - x461;
-        let x1577 = x78 * x385;
-        let x1578 = x431 * x1576 - x385 * x462 + (x473 - x1577 - x472) * x422
-            - x1559 * x89;
-        let x1579 = x441 + x446 - x434 * x1576 + x78 * x1559 - x458
-            + x385 * (x419 - x418 - 2.0 * x466);
-        let x1580 = (x1577 - x399 + x401) * x434;
-        let x1581 = x431 * x89 * x385;
-        let x1582 = x402 - x475 + x1580 + x1581 + x1573;
-        let x1583 = x1580 - x470 - x471 - x404 + x1581 + x1573 - x410;
-        let x1584 = x385 * x436;
-        let x1585 = x27 * x571 * x422;
-        let x1586 = (-x1584 - x1585) * IFyy
-            + (x393 * x28 + x1584 + x1585 - x27 * thF_dot * x422) * IFxx;
-        let x1587 = x1559 * IFyy;
-        let x1588 = x1559 * IHyy;
-        let x1589 = x434 * x218;
-        let x1590 = (x1589 - x505 - 2.0 * x506) * x422;
-        let x1591 = -x563 - x564 - x1587 - x565 - x587 - x1588 - x588 - x1590;
-        let x1592 = IHyy - x216 - x217;
-        let x1593 = x393 * x202;
-        let x1594 = x1592 * x422 * x422 + x1593 + x385 * x535;
-        let x1595 = x571 * x422 * x28;
-        let x1596 = x444 * x385;
-        let x1597 = IFxx * (thF_dot * x422 * x28 - x1595 - x1596 + x27 * x393)
-            + (x1595 + x1596) * IFyy;
-        let x1598 = x385 * x562;
-        let x1599 = x202 * x422 * x422;
-        let x1600 = x393 * x218;
-        let x1601 = x1572 - x394 - x404 - x1569 + x1573 + x1574 - x410;
-        let x1602 = g * x369;
-        let x1603 = x216 - IHyy + x217;
-        let x1604 = -x98 * x369 * x615 / f64::powf(x167, 1.5) - x1488;
-        let x1605 = (x617 + x670 + x618) * x20;
-        let x1606 = x16 * x668;
-        let x1607 = x1605 + x1606;
-        let x1608 = thF_dot * x98 * x28 + x27 * x615;
-        let x1609 = x28 * x615 - x27 * thF_dot * x98;
-        let x1610 = (x695 + x903 + delta_dot * x1546 * x98 + x697 + x905) * x16
-            + x20 * (delta_dot * x1539 - x609 - x614 + x27 * x1608 + x1609 * x28);
-        let x1611 = x53 * x906;
-        let x1612 = x369 * x673;
-        let x1613 = x1514 * x615;
-        let x1614 = (0.5 * x711 - 0.5 * x710) * x28 + x27 * (0.5 * x714 + 0.5 * x715);
-        let x1615 = x369 * x698;
-        let x1616 = x1547 * x615;
-        let x1617 = x765 * x16;
-        let x1618 = x20 * (x754 + x755 - x756);
-        let x1619 = x1617 + x1618;
-        let x1620 = x906 * x312;
-        let x1621 = x369 * x786;
-        let x1622 = x1540 * x615;
-        let x1623 = x27 * x673 + thF_dot * x53 * x28;
-        let x1624 = x27 * x686;
-        let x1625 = x688 * x28;
-        let x1626 = x27 * x779 + x774 * x28 + theta_dot * x16 * x121;
-        let x1627 = x28 * x673 - x27 * thF_dot * x53;
-        let x1628 = x1193 * x27 - x20 * thF_dot * x92 * x28;
-        let x1629 = x20 * (theta_dot * x121 * x28 + x27 * thF_dot * x92)
-            - delta_dot * x16 * x92 * x28;
-        let x1630 = x658 * x28;
-        let x1631 = x27 * x652;
-        let x1632 = x98 * x1626 + theta_dot * x20 * x121 * x369 + x214 * x1628
-            + x244 * x1609 + x242 * x1608
-            + ((-x609 - x614 - delta_dot * x369) * x16
-                + x20 * (x696 - x1630 - x903 - x1631 - x905)) * x92 + x210 * x1629;
-        let x1633 = x1630 + x903 + x1631 + x905;
-        let x1634 = x214 * x1608;
-        let x1635 = x1528 * x615;
-        let x1636 = x369 * x615;
-        let x1637 = x210 * x1609;
-        let x1638 = x98 * (2.0 * x1630 + 2.0 * x903 + 2.0 * x1631 + 2.0 * x905);
-        let x1639 = x25 * x107 * x615 / f64::sqrt(x167);
-        let x1640 = f64::sqrt(x167) * x767 * x107;
-        let x1641 = x814 * x28;
-        let x1642 = x27 * x812;
-        let x1643 = x767 * x28 - x27 * thF_dot * x25;
-        let x1644 = x767 * x369;
-        let x1645 = x27 * x767 + thF_dot * x25 * x28;
-        let x1646 = x1498 * x615;
-        let x1647 = x25 * x906;
-        let x1648 = x883 * x369 * x615 - x907;
-        let x1649 = -x424 - x429;
-        let x1650 = -x432 - x435;
-        let x1651 = x1649 * x436 - x1650 * x430;
-        let x1652 = x1650 * x439 - x1649 * x422 + x412 - x417;
-        let x1653 = x1650 * x571 * x572;
-        let x1654 = x578 + x1653;
-        let x1655 = (x577 * x28 + x27 * (x567 - x451 - x452 - x453)) * IFxx;
-        let x1656 = x571 * x444 * x575;
-        let x1657 = -x570 - x1655 - x1656 - x573;
-        let x1658 = x576 - x1653;
-        let x1659 = x655 * x28;
-        let x1660 = x27 * (x642 - x644 - x645);
-        let x1661 = x647 + x651 + x1659 + x1660;
-        let x1662 = x776 + x771 * x92 * x28 + x778
-            + x27 * (x775 + (thF_dot + x772) * x121);
-        let x1663 = x27 * (x681 - x682 - x683) + x680 + x687 * x28 + x685;
-        let x1664 = x210 * x1662 + x244 * x1661;
-        let x1665 = 2.0 * x647 + 2.0 * x651 + 2.0 * x1659 + 2.0 * x1660;
-        let x1666 = x808 + x813 * x28 + x811 + (x806 - x804 - x805) * x27;
-        let x1667 = x1 * phi_dot * x21 / f64::sqrt(x164);
-        let x1668 = x98 * x615 / f64::sqrt(x167);
-        let x1669 = x16 * x409;
-        let x1670 = x9 * x1161;
-        let x1671 = x4 * x1 * phi_dot - theta_dot * x0 * x21;
-        let x1672 = x1671 * x8;
-        let x1673 = x609 + x20 * (-x611 - x1670 - x1672);
-        let x1674 = x85 * x1161 + rR * x1671;
-        let x1675 = x20 * x1674;
-        let x1676 = delta_dot * (x1499 - x75);
-        let x1677 = x104 * x422 + x1669 + x467 * x98 + x78 * x1673 + x1675 + x1676
-            - x474 * x92 * x21 - x434 * x94;
-        let x1678 = x16 * x1674;
-        let x1679 = x20 * x409;
-        let x1680 = x9 * x1671;
-        let x1681 = x8 * x1161;
-        let x1682 = x1681 - x1680;
-        let x1683 = delta_dot * (-x95 - x100);
-        let x1684 = x434 * x101;
-        let x1685 = (x611 + x1670 + x1672) * x16;
-        let x1686 = x1685 + x645;
-        let x1687 = x1678 - x1679 + x89 * x1682 - x467 * x84 + x1683 + x92 * x21 * x462
-            + x1684 - x431 * x104 - x78 * x1686;
-        let x1688 = x474 * x84 - x413 - x89 * x1673 + x414 + x431 * x94 - x98 * x462
-            - x101 * x422;
-        let x1689 = x112 * x1673 + x1669 + x1675 + x1676;
-        let x1690 = x414 - x413 - x1673 * x107;
-        let x1691 = x27 * x1689 + x444 * x119 - x456 * x98 - x117 * x422 + x1690 * x28
-            + x210 * x439;
-        let x1692 = x1689 * x28 - x214 * x439 + x98 * x430 - x119 * x436 - x27 * x1690
-            + x116 * x422;
-        let x1693 = x117 * x436 - x112 * x1686 - x210 * x430 - x116 * x444 + x456 * x214
-            + x1678 - x1679 + x1683 + x1682 * x107;
-        let x1694 = x484 - x485 + 2.0 * x486;
-        let x1695 = x1094 * x1 + x21 * (x378 * x71 - x1096 + x4 * x1694);
-        let x1696 = (x1089 + x1090) * x21 - x1671 * x69 + xB * x1161 + x1 * x1088;
-        let x1697 = x1 * x1098 + (x1694 * x0 + x1099 - x71 * x382) * x21;
-        let x1698 = x207 * x1682;
-        let x1699 = x202 * x1686;
-        let x1700 = IHyy * x84;
-        let x1701 = x1698 + x1699 + x98 * x535 + (x1700 - x219 - x220) * x422;
-        let x1702 = x552 * x1;
-        let x1703 = x189 * x543 * x21;
-        let x1704 = IRyy * (x1702 + x1703)
-            + (x185 * x1161 + thR_dot * x189 * x21 - x1702 - x1703 + x1671 * x187)
-                * IRxx;
-        let x1705 = (x194 - x1122 + x195) * x374 * x21 - IBxz * x1161 + x521 * x1
-            + x1671 * IBxx;
-        let x1706 = x1 * x529 + IBzz * x1161 + (x197 + x198 - x1127) * x374 * x21
-            - x1671 * IBxz;
-        let x1707 = x378 * x196;
-        let x1708 = x199 * x382;
-        let x1709 = x542 * x1;
-        let x1710 = x192 * x543 * x21;
-        let x1711 = (-x1709 - x1710) * IRyy
-            + (thR_dot * x21 * x1008 - x187 * x1161 + x185 * x1671 + x1709 + x1710)
-                * IRxx;
-        let x1712 = x444 * x98;
-        let x1713 = x1685 - x642 + x645;
-        let x1714 = x210 * x571;
-        let x1715 = (x27 * x1713 - x1712 - x1714 + (x1681 - x1680 + x650) * x28) * IFxx
-            + (x1712 + x1714) * IFyy;
-        let x1716 = x1673 * IFyy;
-        let x1717 = x221 * x434;
-        let x1718 = x502 * x92 * x21;
-        let x1719 = x1673 * IHyy;
-        let x1720 = x431 * x209;
-        let x1721 = x507 * x84;
-        let x1722 = x1720 - x1716 - x1717 - x1718 - x1719 + x1721;
-        let x1723 = x98 * x436;
-        let x1724 = x571 * x214;
-        let x1725 = IFxx * (x1723 + x1713 * x28 + x27 * (x1680 - x1681 - x650) + x1724)
-            + (-x1723 - x1724) * IFyy;
-        let x1726 = x202 * x1682;
-        let x1727 = x98 * x562;
-        let x1728 = x218 * x1686;
-        let x1729 = (x203 - IHyy * x92 * x21 + x208) * x422;
-        let x1730 = x1726 + x1727 + x1728 + x1729;
-        let x1731 = rR * rR * mR * psi_dot * x560;
-        let x1732 = x599 - 2.0 * x165 + 2.0 * x21;
-        let x1733 = x4 * (x480 - x386 * x69 + x481) + (x478 + xB * x389 - x395) * x0;
-        let x1734 = x63 * psi_dot * x21 - x138 * x382 - x4 * x487;
-        let x1735 = x0 * x487 + x378 * x138 + psi_dot * x66 * x21;
-        let x1736 = psi_dot * x21 - delta_dot * x92;
-        let x1737 = x20 * x1736;
-        let x1738 = x4 * x386 * x8 + x9 * x0 * x389;
-        let x1739 = x1738 * x16;
-        let x1740 = x1737 + x1739;
-        let x1741 = x0 * x8 * x389;
-        let x1742 = x9 * x4 * x386;
-        let x1743 = x1741 - x1742;
-        let x1744 = x888 * delta_dot;
-        let x1745 = psi_dot * x74 * x21;
-        let x1746 = x4 * rR * x386;
-        let x1747 = x85 * x0 * x389;
-        let x1748 = x1746 + x1747;
-        let x1749 = x1743 * x107 - x1740 * x112 - x244 * x430
-            + x20 * (x131 * x436 - x1744 - x134 * x444 - x1745) + x456 * x242
-            + x16 * x1748;
-        let x1750 = x16 * (x1744 + x1745);
-        let x1751 = x16 * x1736 - x1738 * x20;
-        let x1752 = x1750 + x20 * x1748 + x112 * x1751;
-        let x1753 = x102 * psi_dot * x21;
-        let x1754 = x1753 - x1751 * x107;
-        let x1755 = x20 * (x134 * x422 - x430 * x92) - x130 * x436 - x242 * x439
-            + x1752 * x28 - x27 * x1754;
-        let x1756 = x244 * x439 + x130 * x444 + x1754 * x28 + x27 * x1752
-            + x20 * (x456 * x92 - x131 * x422);
-        let x1757 = x1750 + x78 * x1751 - x121 * x474 - x434 * x126
-            + x20 * ((x418 - x419 + 2.0 * x466) * x92 + x1746 + x1747);
-        let x1758 = x1753 + x16 * x474 * x92 + x431 * x126 - x89 * x1751
-            + x20 * (x92 * x462 - x125 * x422);
-        let x1759 = x434 * x125;
-        let x1760 = x20 * (x1759 - x1744 - x431 * x89 * x92 - x1745) + x89 * x1743
-            - x1740 * x78 + x16 * (x1746 - x467 * x92 + x1747) + x121 * x462;
-        let x1761 = x431 * x234;
-        let x1762 = x1751 * IFyy;
-        let x1763 = x16 * x507 * x92;
-        let x1764 = IHyy * x1751;
-        let x1765 = x121 * x502;
-        let x1766 = x434 * x227;
-        let x1767 = x1761 - x1762 + x1763 - x1764 - x1765 - x1766;
-        let x1768 = x20 * x436 * x92;
-        let x1769 = thF_dot * x16 * x92;
-        let x1770 = x1737 + x1739 - thF_dot * x121;
-        let x1771 = x571 * x242;
-        let x1772 = IFxx * (x27 * (x1742 - x1769 - x1741) - x1768 + x1770 * x28 + x1771)
-            + (x1768 - x1771) * IFyy;
-        let x1773 = x571 * x244;
-        let x1774 = x20 * x444 * x92;
-        let x1775 = ((x1769 + x1741 - x1742) * x28 - x1773 + x27 * x1770 + x1774) * IFxx
-            + (x1773 - x1774) * IFyy;
-        let x1776 = x20 * x1403 * x92;
-        let x1777 = (x232 - x121 * IHyy + x233) * x422;
-        let x1778 = x1743 * x202;
-        let x1779 = x1740 * x218;
-        let x1780 = x1776 + x1777 + x1778 + x1779;
-        let x1781 = x4 * (x386 * IBxx - x374 * IByy) - x0 * IBxz * x389 + x230 * x374;
-        let x1782 = x373 - thR_dot - theta_dot;
-        let x1783 = (x1782 * x187 * x0 + x1782 * x4 * x185) * IRxx + x286 * x543 * x544;
-        let x1784 = x192 * x543 * x553
-            + ((thR_dot + theta_dot - x373) * x185 * x0 + x1782 * x4 * x187) * IRxx;
-        let x1785 = x1740 * x202;
-        let x1786 = x227 * x422;
-        let x1787 = x1743 * x207;
-        let x1788 = x1785 - x1786 + x92 * x1432 + x1787;
-        let x1789 = IBzz * x0 * x389 + x374 * (x1122 + x194 - x235) - x4 * x386 * IBxz;
-        let x1790 = x236 * x382;
-        let x1791 = x517 * x0;
-        let x1792 = x4 * x513;
-        let x1793 = x378 * x230;
-        let x1794 = x304 * x21 - x600 - x601;
-        let x1795 = x970 * x1 - x1045 - x1046;
-        let x1796 = -delta_dot - x1348 - x433;
-        let x1797 = (-x422 * x158 - x425 - x427 - x461) * x16 + x1359
-            + x20 * (x431 * x157 - x472 + x473 - x399 - x89 * x1796 + x401);
-        let x1798 = rR * x82 * psi_dot * x1;
-        let x1799 = delta_dot + x1348 + x433;
-        let x1800 = delta_dot * (x144 - x145);
-        let x1801 = x1388 + x20 * (x418 - x1798 - x419 + x466) - x431 * x156
-            + x16 * (x1354 - x1799 * x78 - x1800 + x434 * x158 + x1355);
-        let x1802 = x20 * (x1354 - x434 * x157 + x78 * x1796 - x1800 + x1355)
-            + x156 * x422 + (x1798 - x418 + x419 - x466) * x16;
-        let x1803 = 2.0 * x380 + 2.0 * x381;
-        let x1804 = 2.0 * x1343 + x1803 * x69;
-        let x1805 = (x1354 - x1799 * x112 - x1800 + x1355) * x16 + x1379 + x152 * x436
-            - x444 * x155 + x20 * (x1570 - x1798 - x1571);
-        let x1806 = x20 * (x112 * x1796 + x1354 - x1800 + x1355) + x1357;
-        let x1807 = x20 * x107 * x1796;
-        let x1808 = x20 * (x1562 + x146 * x444) - x456 * x16 - x152 * x422 + x1806 * x27
-            + (x1359 - x1807) * x28;
-        let x1809 = x155 * x422 + x1806 * x28 + x16 * x430 - x146 * x20 * x436
-            + x27 * (x1807 - x20 * x439 - x1359);
-        let x1810 = x444 * x16;
-        let x1811 = x571 * x20 * x28;
-        let x1812 = x20 * thF_dot;
-        let x1813 = (x1810 + x1811) * IFyy
-            + (x27 * x1799 * x16 + (x379 - x1350 + x1812) * x28 - x1810 - x1811) * IFxx;
-        let x1814 = x378 * (IBzz + IByy - IBxx) + x1803 * IBxz;
-        let x1815 = x542 * x544;
-        let x1816 = x1815 + x1420 * IRxx;
-        let x1817 = x1425 * IRxx + x552 * x553;
-        let x1818 = x1413 - 2.0 * x515 + (IBzz - IByy) * x382;
-        let x1819 = x1799 * x202;
-        let x1820 = x1399 + x20 * x1592 * x422 + x16 * (x1819 - x500 - x501 + x534);
-        let x1821 = (x505 - x561 + x1799 * x218 + x506) * x16;
-        let x1822 = x202 * (x379 - x1350 + x20 * x422);
-        let x1823 = x1821 + x1822;
-        let x1824 = IHyy * x1796;
-        let x1825 = IFyy * x1796;
-        let x1826 = x505 - x1824 - x1589 - x1825 + 2.0 * x506;
-        let x1827 = x27 * x571 * x20;
-        let x1828 = x16 * x436;
-        let x1829 = (x1827 + x1799 * x16 * x28 + x1828 + x27 * (x1350 - x379 - x1812))
-            * IFxx + (-x1827 - x1828) * IFyy;
-        let x1830 = x836 * rR;
-        let x1831 = rR * x1203;
-        let x1832 = x1815 + x546 * IRxx;
-        let x1833 = x456 * x28 - x425 + x27 * x430 - x426 - x427;
-        let x1834 = x437 + x1563 - x438;
-        let x1835 = x27 * x1834 + x107 * (x442 - x385 * x28 - x443);
-        let x1836 = x107 * (x27 * x385 - x432 - x435) + x1834 * x28;
-        let x1837 = 2.0 * x375 + 2.0 * x384;
-        let x1838 = x571 * x575 + IFxx * (x420 - thF_dot - x421);
-        let x1839 = x216 + x204 + x206 - IHyy + x217;
-        let x1840 = x431 * (x216 - x204 - x206 + x217);
-        let x1841 = x385 * IHyy;
-        let x1842 = x385 * IFyy;
-        let x1843 = -x1840 - x1841 - 2.0 * x501 - x1842;
+                * (x370 * x1066
+                    + x75 * (x1005 * x369 - 2.0 * (x800 * x331) - x1067 * x55)
+                    + x1031 * x369);
+        let x1069 = x3 * x98;
+        let x1070 = x68 * (f64::sqrt(x175) * x1005 - x270 * x331 / f64::sqrt(x175))
+            - rF
+                * ((2.0 * (x869 * x331) - x996 * x369 - x1067 * x20) * x75 - x1035 * x369
+                    - x1069 * x370);
+        let x1071 = -(x95 * x892);
+        let x1072 = (x68 + rF * x1071) * x331 - rF * x75 * x333 / f64::sqrt(x175);
+        let x1073 = -(rF * x1005);
+        let x1074 = rF * x996;
+        let x1075 = x391 * x1;
+        let x1076 = x1075 * rR + x553 * (x78 - x64);
+        let x1077 = x82 * x841 + x13 * x1076;
+        let x1078 = x420 - x676;
+        let x1079 = x4 * x406;
+        let x1080 = x391 * x5 + x1079;
+        let x1081 = x1078 * x78 + rR * x1080;
+        let x1082 = (-delta_dot * x983 - x19 * x1077) + x1081 * x0;
+        let x1083 = x1080 * x12;
+        let x1084 = x1083 + (x13 * x1078 + x908);
+        let x1085 = x1084 * x0 - x911;
+        let x1086 = x12 * x1078;
+        let x1087 = x13 * x1080;
+        let x1088 = x1086 - x1087;
+        let x1089 = x1012 * x505 - x1011 * x492 + x985 * x497 + x1082 - x504 * x986
+            - x1085 * x88 + x68 * x1088;
+        let x1090 = x1077 * x0 + (delta_dot * (x74 * x364 - x988) + x19 * x1081);
+        let x1091 = -x916 - x1084 * x19;
+        let x1092 = x1090 + x1091 * x88;
+        let x1093 = x1076 * x12 - x62 * x841;
+        let x1094 = x1093 - x68 * x1091;
+        let x1095 = x436 * x986 + x1092 * x29 - x22 * x1094 - x989 * x497 - x1012 * x494
+            + x331 * x492;
+        let x1096 = x22 * x1092 - x985 * x436 + x504 * x989 - x505 * x331 + x1011 * x494
+            + x1094 * x29;
+        let x1097 = x1093 + x991 * x430 + x453 * x333 - x444 * x331 - x436 * x990
+            - x109 * x1091;
+        let x1098 = x1090 - x991 * x448 + x436 * x992 - x453 * x1007 + x106 * x1091
+            + x463 * x331;
+        let x1099 = x448 * x990 - x430 * x992 + x444 * x1007 + x1082 - x463 * x333
+            - x1085 * x106 + x109 * x1088;
+        let x1100 = x5 * x405;
+        let x1101 = x396 * x9 + x4 * x388;
+        let x1102 = x121 * x399 - x381 * x119;
+        let x1103 = xB * x1078 - x1101 * x5 + x1102 * x1 + x1080 * x115;
+        let x1104 = x1103 * psi_dot;
+        let x1105 = x4 * x414;
+        let x1106 = x9 * x418;
+        let x1107 = x1106 - x1105;
+        let x1108 = x388 - rR * x402 + x386 * x119;
+        let x1109 = phi_dot * x115;
+        let x1110 = x410 - 2.0 * x411;
+        let x1111 = x399 * x117;
+        let x1112 = x1108 * x1 + (x1109 + x9 * x1110 + x1111) * x5;
+        let x1113 = xB * phi_dot;
+        let x1114 = x381 * x117;
+        let x1115 = x395 - x394 + x391 * rR - x121 * x386;
+        let x1116 = (x4 * x1110 + x1113 - x1114) * x5 + x1 * x1115;
+        let x1117 = (x1085 * x200 + (x1008 - x1007 * IHyy) * x436)
+            + (x594 * x331 + x1088 * x194);
+        let x1118 = thF_dot * x333;
+        let x1119 = x1011 * x521;
+        let x1120 = thF_dot * x1007;
+        let x1121 = x1085 - x1120;
+        let x1122 = x504 * x331;
+        let x1123 = IFxx * ((x1118 + x1088) * x29 - x1119 + x22 * x1121 - x1122)
+            + IFyy * (x1119 + x1122);
+        let x1124 = x579 * x333;
+        let x1125 = x1091 * IFyy;
+        let x1126 = IHyy * x1091;
+        let x1127 = x574 * x1007;
+        let x1128 = x430 * x1008;
+        let x1129 = x448 * x1017;
+        let x1130 = x1124 - x1125 - x1126 - x1127 + x1128 - x1129;
+        let x1131 = x229 * phi_dot;
+        let x1132 = x210 * x399;
+        let x1133 = x213 * x381;
+        let x1134 = x9 * x590;
+        let x1135 = x528 * x4;
+        let x1136 = (-x1132 - x1133) + (x1134 + x1135);
+        let x1137 = IRyy * phi_dot;
+        let x1138 = phi_dot * IByy;
+        let x1139 = x406 * IRyy;
+        let x1140 = x4 * IByy;
+        let x1141 = x386 * x5;
+        let x1142 = (x1140 - x208 - x209) * x1141 + IBzz * x1078 + x567 * x1
+            - x1080 * IBxz;
+        let x1143 = x1088 * x205;
+        let x1144 = x333 * IHyy;
+        let x1145 = x1085 * x194;
+        let x1146 = x1143 + x436 * (x1144 - x1015 - x1016) + x1145 + x331 * x560;
+        let x1147 = x9 * IByy;
+        let x1148 = x1080 * IBxx - x1078 * IBxz + x530 * x1
+            + (x1147 - x211 - x212) * x1141;
+        let x1149 = x537 * x1;
+        let x1150 = x221 * x5;
+        let x1151 = x539 * x1150;
+        let x1152 = (x1149 + x1151) * IRyy
+            + (thR_dot * x1150 - x1149 + x216 * x1078 + x1080 * x214 - x1151) * IRxx;
+        let x1153 = x539 * x1009 * x5 + x546 * x1;
+        let x1154 = (x1153 + x218 * thR_dot * x5 - x214 * x1078 + x216 * x1080) * IRxx
+            - x1153 * IRyy;
+        let x1155 = x1012 * x521 + x497 * x331;
+        let x1156 = (x1121 * x29 + x1155 + x22 * (x1087 - x1118 - x1086)) * IFxx
+            - x1155 * IFyy;
+        let x1157 = x80 + x106 * x136;
+        let x1158 = mB * x117;
+        let x1159 = (mH * (x1157 + x111 * x0) + mF * x1059 + x1158) * g * x5;
+        let x1160 = g * x331 * x170;
+        let x1161 = 1.0 / f64::sqrt(x172);
+        let x1162 = x192 / f64::powf(x172, 1.5);
+        let x1163 = (4.0 - (3.0 * x1161 + x1162) * x1) * x1 - x173 + x609;
+        let x1164 = (x1161 + x1162) * x1;
+        let x1165 = f64::sqrt(x172) * phi_dot;
+        let x1166 = x761 / f64::powf(x175, 1.5) + x775 / f64::sqrt(x175);
+        let x1167 = x1005 * x638;
+        let x1168 = x904 + x1118;
+        let x1169 = x912 - x1120;
+        let x1170 = x1168 * x29 + x22 * x1169;
+        let x1171 = x9 * x514;
+        let x1172 = x553 * x9 + x840;
+        let x1173 = x1172 * x8;
+        let x1174 = x1171 + x1173;
+        let x1175 = x13 * x839;
+        let x1176 = x1174 * x12 - x1175;
+        let x1177 = thF_dot * x8;
+        let x1178 = x12 * x839;
+        let x1179 = x13 * x1174 + x1178;
+        let x1180 = x843 + x0 * (x1179 - x844);
+        let x1181 = x1176 * x29 + x976 * x1177 + x22 * x1180;
+        let x1182 = x917 * x55;
+        let x1183 = x1182 + x687 * x331;
+        let x1184 = x1169 * x29 - x22 * x1168;
+        let x1185 = x1180 * x29 - x977 * x1177 - x22 * x1176;
+        let x1186 = x92 * x842;
+        let x1187 = (x750 * x5 - x1186) * x8 + x0 * x613;
+        let x1188 = x1187 - x19 * x1179;
+        let x1189 = -(x974 * x638);
+        let x1190 = 2.0 * x918 + 2.0 * (x1170 * x225) + 2.0 * x914 + 2.0 * (x1012 * x702)
+            + 2.0 * (x1011 * x703) + 2.0 * (x1184 * x226);
+        let x1191 = x917 * x272 + x1033 * x638;
+        let x1192 = -x1171 - x1173;
+        let x1193 = x12 * x1192;
+        let x1194 = x13 * x1192;
+        let x1195 = x808 * (x9 * x804 + x4 * x807);
+        let x1196 = x811 * (x9 * x809 - x4 * x810);
+        let x1197 = 0.5 * x1195 - 0.5 * x1196;
+        let x1198 = x1183 + x1167;
+        let x1199 = x1067 * x638;
+        let x1200 = -(x20 * x917);
+        let x1201 = x798 * x331;
+        let x1202 = x715 * x0;
+        let x1203 = x3 * x402;
+        let x1204 = x961 * x9;
+        let x1205 = x1204 - x1203;
+        let x1206 = x12 * x713;
+        let x1207 = x13 * x1205 + (x1206 + x720);
+        let x1208 = x19 * x1207;
+        let x1209 = x1202 - x1208;
+        let x1210 = x1203 + x9 * x712;
+        let x1211 = delta_dot * x1062;
+        let x1212 = x1211 * x2;
+        let x1213 = x13 * x713;
+        let x1214 = x640 / f64::powf(x175, 1.5) + x658 / f64::sqrt(x175);
+        let x1215 = (delta_dot * x1021 + x917) * x0
+            + x19
+                * (x22 * (x1170 - x1011 * thF_dot) - delta_dot * x331
+                    + (x1184 + x1012 * thF_dot) * x29);
+        let x1216 = x735 * x2 - x723;
+        let x1217 = x19 * x735;
+        let x1218 = x1217 - x746;
+        let x1219 = x1218 * x331 + x235 * x1170 + x1011 * x752 + x1184 * x233
+            + x1012 * x734 - x917 * x238;
+        let x1220 = x638 * x1045 + x917 * x313;
+        let x1221 = x917 / f64::sqrt(x175);
+        let x1222 = x331 * x639;
+        let x1223 = x864 / f64::sqrt(x175) + x859 / f64::powf(x175, 1.5);
+        let x1224 = x706 * x75;
+        let x1225 = x730 * x45;
+        let x1226 = x638 * x2;
+        let x1227 = x1205 * x12 - x1213;
+        let x1228 = x0 * x1207 + x716;
+        let x1229 = thF_dot * x2;
+        let x1230 = x1227 * x29 + x22 * x1228 + x226 * x1229;
+        let x1231 = x1228 * x29 - x225 * x1229 - x22 * x1227;
+        let x1232 = theta_dot * x1048 + x406 * x98;
+        let x1233 = -x915 - x919;
+        let x1234 = x320 * x638 / f64::sqrt(x175);
+        let x1235 = x888 / f64::powf(x175, 1.5) + x886 / f64::sqrt(x175);
+        let x1236 = -(x333 * x638);
+        let x1237 = -(x95 * x917);
+        let x1238 = -(x95 * x639);
+        let x1239 = x1238 / f64::powf(x175, 2.5);
+        let x1240 = x900 / f64::powf(x175, 1.5);
+        let x1241 = rF
+            * (x75
+                * ((x1236 / f64::powf(x175, 1.5) + x1237 / f64::powf(x175, 1.5)
+                    + (3.0 * x1239 + x1240) * x331) * x75
+                    + (x911 - x910) / f64::sqrt(x175)
+                    + 3.0 * (x896 * x331 / f64::powf(x175, 1.5)))
+                + x900 * x331 / f64::sqrt(x175) + x1236 / f64::sqrt(x175)
+                + x1237 / f64::sqrt(x175)) + x68 * x917;
+        let x1242 = x836 * x88;
+        let x1243 = x316 - x130;
+        let x1244 = 3.0 * (x174 / f64::powf(x175, 2.5))
+            + 3.0 * (1.0 / f64::powf(x175, 1.5));
+        let x1245 = x1244 * x914;
+        let x1246 = x918 / f64::powf(x175, 1.5);
+        let x1247 = x907 * x88 + x80 * x406;
+        let x1248 = x906 * x638;
+        let x1249 = x836 * x331;
+        let x1250 = -(x20 * x19);
+        let x1251 = x0 * x28;
+        let x1252 = x18 * x29 + x347 * x160;
+        let x1253 = x347 * x156 - x22 * x18;
+        let x1254 = x160 * x274 + x355 * x29;
+        let x1255 = x156 * x274 - x22 * x355;
+        let x1256 = x19 * x55;
+        let x1257 = x0 * x47;
+        let x1258 = mF
+            * (x1252 * x50 + x31 * x1254 - x19 * (x347 * x55 - x20 * x274) + x52 * x1253
+                + x30 * x1255)
+            + mH
+                * (x347 * (x1257 - x1256) + (x1251 - x1250) * x274 + x25 * x355
+                    + x18 * x49);
+        let x1259 = -x124 - x125;
+        let x1260 = x1259 * x1;
+        let x1261 = rR * x1049;
+        let x1262 = x890 - x139;
+        let x1263 = x1261 - x1262 * x72;
+        let x1264 = rR * x906;
+        let x1265 = x68 * x1062 + x1264;
+        let x1266 = x1263 * x29 - x22 * x1265;
+        let x1267 = x22 * x1263 + x1265 * x29;
+        let x1268 = rR * x19 * x1048;
+        let x1269 = (x68 * x71 - x0 * x1262) * x1 - x1268;
+        let x1270 = x890 - x133;
+        let x1271 = x1261 - x1270 * x72;
+        let x1272 = x109 * x1062 + x1264;
+        let x1273 = (x109 * x71 - x0 * x1270) * x1 - x1268;
+        let x1274 = x107 * x0 - x19 * x112;
+        let x1275 = ((rR * (x9 * x16 - x4 * x11) - x121 * x16 + x11 * x119) * x5
+            - x1260 * x3) * mB
+            + (x103 * x1253 - x656 * x102 + x30 * x1266 + x31 * x1267 - x20 * x1269
+                + x1252 * x91) * mF
+            + (x1271 * x28 + x25 * x1272 + x113 * x18 - x20 * x1273 + x347 * x1274) * mH;
+        let x1276 = x111 + x0 * x1157;
+        let x1277 = x68 * x29;
+        let x1278 = x22 * x1058 - x1277 * x136;
+        let x1279 = x1058 * x29 + x141 * x136;
+        let x1280 = x0 * x1058 + x99;
+        let x1281 = (x19 * (x109 * (x18 * x98 - x25 * x136) - x347 * x137 + x1157 * x28)
+            - x20 * x1276) * mH
+            + mF
+                * ((x31 * x1278 - x347 * x147 + x30 * x1279 + x1252 * x144
+                    + x142 * x1253) * x19 - x20 * x1280) - x3 * x1158;
+        let x1282 = x11 * xB;
+        let x1283 = x16 * x115;
+        let x1284 = x0 * x165 - x163 * x19;
+        let x1285 = mB * (x1283 - x1282)
+            + mF * (x159 * x1253 + x1252 * x161 - x152 * x656)
+            + (x18 * x166 + x347 * x1284) * mH;
+        let x1286 = -(x656 * x170);
+        let x1287 = x75 * x1062;
+        let x1288 = x1287 / f64::sqrt(x175);
+        let x1289 = mH
+            * (x274 * x1274 + x1271 * x47 + x49 * x1272 + x1273 * x55 + x113 * x355)
+            + mB
+                * (x1260 * x45
+                    + x5 * (x121 * x273 + rR * (x41 * x9 - x4 * x37) + x119 * x37))
+            + mF
+                * (x1269 * x55 - x102 * x862 + x1267 * x50 + x1254 * x91 + x103 * x1255
+                    + x52 * x1266);
+        let x1290 = mH
+            * (x1276 * x55
+                + x19 * (x1157 * x47 - x137 * x274 + x109 * (x355 * x98 - x49 * x136)))
+            + x1158 * x45
+            + mF
+                * (x19
+                    * (x50 * x1278 + x144 * x1254 + x1255 * x142 + x52 * x1279
+                        - x147 * x274) + x1280 * x55);
+        let x1291 = xB * x37;
+        let x1292 = (-x1291 - x273 * x115) * mB + (x1284 * x274 + x355 * x166) * mH
+            + mF * (x1255 * x159 - x152 * x862 + x161 * x1254);
+        let x1293 = -(x170 * x862);
+        let x1294 = x71 * x29 - x160 * x98;
+        let x1295 = -x22 * x71 - x156 * x98;
+        let x1296 = 2.0 * (x225 * x1294) + 2.0 * (x226 * x1295);
+        let x1297 = x71 * x205 + x194 * x604;
+        let x1298 = 2.0 * x208 + x209 - x240;
+        let x1299 = x71 * x194;
+        let x1300 = 2.0 * x211 - x246 + x212;
+        let x1301 = x0 * x136;
+        let x1302 = x205 * x98 - x1301 * x194;
+        let x1303 = x233 * x1295 + x235 * x1294;
+        let x1304 = x194 * x98;
+        let x1305 = x1304 - x1301 * x200;
+        let x1306 = x143 - x160 * x136;
+        let x1307 = x22 * x98 + x156 * x136;
+        let x1308 = x1306 * x225 - x226 * x1307;
+        let x1309 = x360 * x136;
+        let x1310 = (x1276 * x112
+            + x19 * (x107 * x1157 + x134 * x1271 + x109 * (x1272 * x98 - x113 * x136))
+            + x1273 * x138) * mH
+            + (x9 * x1300 - x291 + x244 * x71 + x4 * x1298 + x1302 * x98
+                + mB * (x127 * x1259 + x1010) + IFxx * x1303) * x1 + x95 * x1305
+            + mF
+                * (x1269 * x147
+                    + (x1267 * x144 + x1266 * x142 + x103 * x1279 + x91 * x1278) * x19
+                    + x1280 * x102) + x1308 * IFxx + x1309 * x228;
+        let x1311 = x22 * x1294 + x1295 * x29;
+        let x1312 = (x298 * x604 + x1311 * IFxx + x1299) * x72 + x602 * x407
+            + (x166 * x1272 + x165 * x1271 + x163 * x1273) * mH
+            + mF * (x1269 * x152 + x1267 * x161 + x1266 * x159);
+        let x1313 = x1294 * x29 - x22 * x1295;
+        let x1314 = x1273 * x168 + x1269 * x169 + (IFxx * x1313 + x1297) * x1;
+        let x1315 = -(x1062 * IFyy);
+        let x1316 = x75 * x274;
+        let x1317 = -(x19 * x98);
+        let x1318 = (x52 * x1295 + x50 * x1294 - x1317 * x55) * x1 - x75 * x862
+            + x226 * x1255 + x225 * x1254;
+        let x1319 = x75 * x1317;
+        let x1320 = x1 * (x1296 - 2.0 * x1319);
+        let x1321 = x1287 * x279 / f64::sqrt(x175)
+            - rF
+                * (x19 * (x630 * (2.0 * (x75 * x271) - x272 * x55) - x1316 * x272)
+                    + x175 * x1318 + x270 * x1320) + x948;
+        let x1322 = x226 * x1253 + x1 * (x30 * x1295 + x20 * x1317 + x31 * x1294)
+            + x1252 * x225 - x75 * x656;
+        let x1323 = x347 * x75;
+        let x1324 = x349 + x1287 * x287 / f64::sqrt(x175)
+            - (x19 * (x1323 * x272 + (-2.0 * (x75 * x285) - x20 * x272) * x630)
+                - x175 * x1322 - x282 * x1320) * rF;
+        let x1325 = -x197 - x199;
+        let x1326 = x1325 + x228;
+        let x1327 = (x1304 + (x22 * x1306 - x1307 * x29) * IFxx
+            + mH * (x162 * x1276 + x1157 * x165 - x137 * x166)
+            + (x161 * x1278 + x159 * x1279 + x1280 * x151) * mF + x1301 * x1326) * x19;
+        let x1328 = (x1306 * x29 + x22 * x1307) * IFxx + x1276 * x168 + x1280 * x169
+            + x1302;
+        let x1329 = x19 * IFyy;
+        let x1330 = x1329 * x136;
+        let x1331 = x1308 + (x1303 + x1317 * x238) * x1 + x1309;
+        let x1332 = x233 * x1255 + (x274 * x238 + x136 * x55) * x19 - x52 * x1307
+            + x235 * x1254 + x1306 * x50;
+        let x1333 = (x603 * f64::sqrt(x175) + x1319 * x319 / f64::sqrt(x175)) * x3
+            - (x270 * x1331 + x175 * x1332
+                + x19 * ((2.0 * (x75 * x312) - x313 * x55) * x630 - x1316 * x313)) * rF;
+        let x1334 = x233 * x1253 + x1306 * x31 + x235 * x1252
+            + x19 * (x347 * x238 - x20 * x136) - x30 * x1307;
+        let x1335 = (x1319 * x326 / f64::sqrt(x175) + f64::sqrt(x175) * x1059) * x45
+            - rF
+                * ((x630 * (-2.0 * (x75 * x328) - x20 * x313) + x1323 * x313) * x19
+                    - x175 * x1334 - x282 * x1331);
+        let x1336 = x934 + rR * x16 + x154 * x935;
+        let x1337 = x352 * x55;
+        let x1338 = x1311 - x604;
+        let x1339 = rF * x19;
+        let x1340 = f64::sqrt(x175) * x1336 + x1287 * x348 / f64::sqrt(x175)
+            - (((x1338 * x55 + 2.0 * x1066) * x1 - x352 * x274) * x75 - x630 * x1337)
+                * x1339;
+        let x1341 = -(x20 * x352);
+        let x1342 = x277 * x154 - rR * x273 + x275;
+        let x1343 = x356 * x1287 / f64::sqrt(x175)
+            - x1339
+                * (x1341 * x630
+                    + (x347 * x352 + x1 * (2.0 * (x630 * x2) + x20 * x1338)) * x75)
+            + f64::sqrt(x175) * x1342;
+        let x1344 = x154 * x136 - x139;
+        let x1345 = (-x75 * x136 / f64::sqrt(x175) - x1062 * x98 * x892) * x1339 + x1344;
+        let x1346 = (x890 + x1345) * x1;
+        let x1347 = x69 * x1 - x4 * x368;
+        let x1348 = x68 * x19;
+        let x1349 = x1348 * (x282 * x630 / f64::sqrt(x175) - x347 * f64::sqrt(x175))
+            - rF
+                * (x19 * (x630 * (2.0 * (x75 * x800) - x369 * x55) - x1316 * x369)
+                    + x355 * x370 + x270 * x1347);
+        let x1350 = x1348 * (x270 * x630 / f64::sqrt(x175) - f64::sqrt(x175) * x274)
+            - (x19 * (x1323 * x369 + (-2.0 * (x869 * x75) - x20 * x369) * x630)
+                - x282 * x1347 - x18 * x370) * rF;
+        let x1351 = x95 * x19 * x892 - x260 / f64::sqrt(x175);
+        let x1352 = rF * x1351;
+        let x1353 = x1352 - x1348;
+        let x1354 = x630 * x1353;
+        let x1355 = rF * x862;
+        let x1356 = -(rF * x656);
+        let x1357 = x0 * x488 - x19 * x478;
+        let x1358 = x381 * x78 - rR * x399;
+        let x1359 = x447 - x446;
+        let x1360 = x1358 - x1359 * x106;
+        let x1361 = x382 * x1048;
+        let x1362 = x1361 * x0;
+        let x1363 = x19 * x1360 + x1362;
+        let x1364 = x389 * x380 + x403;
+        let x1365 = x1364 * x12 + x456;
+        let x1366 = x19 * x1365 + x1359 * x745;
+        let x1367 = x428;
+        let x1368 = x1367 * x109;
+        let x1369 = x1361 * x19;
+        let x1370 = x1368 + x0 * x1360 - x1369;
+        let x1371 = x676 - x420;
+        let x1372 = (x12 * x1371 + x1087) * x382;
+        let x1373 = x109 * x1366 - x1363 * x436 + x430 * x1370 + x1372
+            + x1359 * (x453 * x0 + x19 * x444);
+        let x1374 = rR * x1364 + x392 * x78;
+        let x1375 = x1374 - x1359 * x463 - x1361 * delta_dot;
+        let x1376 = x906 * x382;
+        let x1377 = x1359 * x19;
+        let x1378 = x1376 + x1377 * x109;
+        let x1379 = x13 * x1371 - x1083;
+        let x1380 = delta_dot * x1358 + x1379 * x382;
+        let x1381 = x19 * x1375 + x1378 * x436 - x106 * x1366 + x0 * x1380 - x1370 * x448
+            - x1367 * x453;
+        let x1382 = x0 * x1365 - x750 * x1359;
+        let x1383 = x13 * x1364;
+        let x1384 = x431 - x1383;
+        let x1385 = x0 * x1375 - x1382 * x106 - x1378 * x430 + x1367 * x444
+            + x109 * x1384 - x19 * x1380 + x1363 * x448;
+        let x1386 = x381 * xB;
+        let x1387 = x1386 - x399 * x115;
+        let x1388 = psi_dot * x192;
+        let x1389 = (x9 * x1388 - x1079) * x382 - x1387 * x399;
+        let x1390 = x1389 + x417;
+        let x1391 = (x676 + x4 * x1388) * x382 - x413 + x1387 * x381;
+        let x1392 = x1364 * x115 - x383 * (x9 * x381 + x4 * x399) + x392 * xB
+            + x399 * x388 + x396 * x381;
+        let x1393 = x1376 + x1377 * x68;
+        let x1394 = x1358 - x1359 * x88;
+        let x1395 = x19 * x1394 + x1362;
+        let x1396 = x1393 * x29 + x22 * x1395;
+        let x1397 = x1359 * x156 - x1367 * x22;
+        let x1398 = x1395 * x29 - x1393 * x22;
+        let x1399 = x1359 * x160 + x1367 * x29;
+        let x1400 = x1398 * x497 - x1396 * x504 - (x1048 * x745 + x19 * x1379) * x382
+            - x1397 * x492 - x750 * x1358 + x1374 * x0 + x505 * x1399 - x1382 * x88
+            + x68 * x1384;
+        let x1401 = x1367 * x68;
+        let x1402 = x1401 + x0 * x1394 - x1369;
+        let x1403 = x1358 * x745 - x1366 * x88 + (x0 * x1379 - x750 * x1048) * x382
+            + x1374 * x19;
+        let x1404 = x68 * x1366 + x1372;
+        let x1405 = x504 * x1402 - x1398 * x436 + x22 * x1403 + x1404 * x29
+            + x505 * x1377 + x494 * x1397;
+        let x1406 = x1403 * x29 - x22 * x1404 - x494 * x1399 - x1377 * x492
+            + x1396 * x436 - x497 * x1402;
+        let x1407 = x1389 - x415;
+        let x1408 = IHyy * x1366;
+        let x1409 = x1367 * x574;
+        let x1410 = -(IFyy * x1366);
+        let x1411 = x1359 * x0;
+        let x1412 = x1411 * x579;
+        let x1413 = x1411 * x200 + x1367 * x194;
+        let x1414 = x448 * x1413;
+        let x1415 = x1367 * x205;
+        let x1416 = x1411 * x194 + x1415;
+        let x1417 = x430 * x1416;
+        let x1418 = x1408 - x1409 - x1410 + x1412 - x1414 + x1417;
+        let x1419 = x593 - x577 - x578;
+        let x1420 = (x1382 * x200 + x436 * (x1416 - x1367 * IHyy))
+            + (x1384 * x194 + x1377 * x1419);
+        let x1421 = x528 * x399;
+        let x1422 = x399 * IBxx;
+        let x1423 = (-x1422 - x527) * x399;
+        let x1424 = IBzz * x381;
+        let x1425 = x1382 - x1367 * thF_dot;
+        let x1426 = thF_dot * x1411;
+        let x1427 = x504 * x1377;
+        let x1428 = x521 * x1397;
+        let x1429 = (x22 * x1425 + (x1426 + x1384) * x29 + x1427 - x1428) * IFxx
+            + (x1428 - x1427) * IFyy;
+        let x1430 = x531 - x386 * (x1422 - x529 + x527) + x1364 * IBxz - x392 * IBzz;
+        let x1431 = x1384 * x205;
+        let x1432 = x436 * x0 * IHyy;
+        let x1433 = x1432 + x607 * x19;
+        let x1434 = x1382 * x194;
+        let x1435 = x1431 + x1359 * x1433 - x1413 * x436 + x1434;
+        let x1436 = x537;
+        let x1437 = (x216 * x1364 - x1436 * thR_dot - x534) * IRxx + x1436 * x549 + x542;
+        let x1438 = x551 * x1009;
+        let x1439 = -x544 - x545;
+        let x1440 = (x543 + thR_dot * x1439 + x214 * x1364) * IRxx;
+        let x1441 = x1439 * x541;
+        let x1442 = x1364 * IBxx;
+        let x1443 = x1424 + x565;
+        let x1444 = x386 * (x1443 - x563);
+        let x1445 = x1399 * x521;
+        let x1446 = x1377 * x497;
+        let x1447 = IFxx * (x1445 + x1425 * x29 + x22 * (x1383 - x1426 - x431) - x1446)
+            + (x1446 - x1445) * IFyy;
+        let x1448 = g * x630 * x170;
+        let x1449 = x19 * x836;
+        let x1450 = x630 * x745;
+        let x1451 = x1449 + x1450;
+        let x1452 = -(x1451 * x75);
+        let x1453 = x0 * x836;
+        let x1454 = x1453 - x1211;
+        let x1455 = thF_dot * x1;
+        let x1456 = x1454 * x29 - x1455 * x1294 - x22 * x632;
+        let x1457 = x22 * x1454 + x632 * x29 + x1455 * x1295;
+        let x1458 = 2.0 * x1452
+            + (2.0 * (x703 * x1295) - 2.0 * (x1317 * x638) + 2.0 * (x702 * x1294)) * x1
+            + 2.0 * (x226 * x1456) + 2.0 * (x225 * x1457);
+        let x1459 = x861 * x19;
+        let x1460 = x274 * x745;
+        let x1461 = x1459 + x1460;
+        let x1462 = x863 - thF_dot * x355;
+        let x1463 = x731 * x274;
+        let x1464 = x22 * x1462 + (x860 + x1463) * x29;
+        let x1465 = x22 * (x770 - x684 - x1463) + x1462 * x29;
+        let x1466 = x638 * x274;
+        let x1467 = x638 * x1320 - x1451 * x272;
+        let x1468 = x1062 * x638;
+        let x1469 = x745 * x136;
+        let x1470 = x22 * (x750 * x136 - x728 * x98) - x732 * x234;
+        let x1471 = (x749 + x751) * x136 - x728 * x143;
+        let x1472 = x1469 * x75;
+        let x1473 = x235 * x1457 + x226 * x1471 + x1472
+            + (x734 * x1294 + x1295 * x752) * x1
+            + x19
+                * ((x638 - theta_dot * x1062) * x136
+                    + (theta_dot * x75 + x1449 + 2.0 * x1450) * x98) + x702 * x1306
+            + x225 * x1470 - x703 * x1307 + x233 * x1456;
+        let x1474 = x1331 * x638 - x1451 * x313;
+        let x1475 = x1452 / f64::sqrt(x175) - x1468 * x892;
+        let x1476 = x347 * x745;
+        let x1477 = x655 * x19;
+        let x1478 = x1476 + x1477;
+        let x1479 = x638 * x1347 - x1451 * x369;
+        let x1480 = 0.5 * x1195 + 0.5 * x1196;
+        let x1481 = x1224 + x352 * x638;
+        let x1482 = x19
+            * (x22 * x1457 + (delta_dot * x1317 + thF_dot * x1313) * x1 + x1456 * x29)
+            + x0 * (x1311 * x908 - x1449 - x1450);
+        let x1483 = x175 * x671;
+        let x1484 = x638 * x348 / f64::sqrt(x175);
+        let x1485 = x657 - x18 * thF_dot;
+        let x1486 = x347 * x731;
+        let x1487 = x1485 * x29 + x22 * (x648 - x1486 - x651);
+        let x1488 = (x1486 + x652) * x29 + x22 * x1485;
+        let x1489 = x347 * x638;
+        let x1490 = x1451 * x68;
+        let x1491 = -x901 / f64::powf(x175, 1.5) - x1244 * x896;
+        let x1492 = x900 / f64::sqrt(x175);
+        let x1493 = x546 * x541;
+        let x1494 = (thR_dot * (x535 - x536) - x533 - x534) * IRxx + x542 + x549 * x537;
+        let x1495 = x30 * x29;
+        let x1496 = x22 * x31;
+        let x1497 = x22 * x50;
+        let x1498 = x52 * x29;
+        let x1499 = x1497 - x44 + x1498 - x46;
+        let x1500 = x27 - x26;
+        let x1501 = x1495 + x1496 + x1500;
+        let x1502 = (x1501 * x55 - x20 * x1499) * mF;
+        let x1503 = -(x95 * x109);
+        let x1504 = x92 * x80 - x101;
+        let x1505 = x1504 - x108;
+        let x1506 = x1504 - x96;
+        let x1507 = x29 * x1506 - x95 * x141;
+        let x1508 = x103 * x29 - x89 + x22 * x91 - x81 - x84;
+        let x1509 = x22 * x1506 + x95 * x1277;
+        let x1510 = (x112 * x1500 - x1503 * x25 + x1505 * x28) * mH
+            + (x1507 * x30 - x20 * x1508 + x102 * x1500 + x31 * x1509) * mF;
+        let x1511 = x317 - x131;
+        let x1512 = x1511 + x22 * x144 + x142 * x29;
+        let x1513 = (x147 * x1500 + x0 * x145 + x1250 * x1512) * mF
+            + (x0 * x135 + x138 * x1500) * mH;
+        let x1514 = x151 * x29 - x141;
+        let x1515 = x1277 + x22 * x151;
+        let x1516 = x0 * x151;
+        let x1517 = x159 * x29 + x22 * x161 + x1516;
+        let x1518 = x19 * x168;
+        let x1519 = mF * (x19 * (x30 * x1514 + x1515 * x31 + x151 * x1500) - x20 * x1517)
+            + x25 * x1518;
+        let x1520 = x170 * x1500;
+        let x1521 = -(x95 * x75);
+        let x1522 = -(x1521 / f64::sqrt(x175));
+        let x1523 = (x1508 * x55 + x52 * x1507 + x1509 * x50 - x102 * x47) * mF
+            + (x1505 * x47 - x47 * x112 - x1503 * x49) * mH;
+        let x1524 = (x0 * x184 - x138 * x47) * mH
+            + mF * (x1512 * x1256 - x147 * x47 + x0 * x185);
+        let x1525 = x49 * x1518
+            + mF * (x19 * (x1515 * x50 - x151 * x47 + x52 * x1514) + x1517 * x55);
+        let x1526 = -(x170 * x47);
+        let x1527 = 2.0 * x254 + 2.0 * x255;
+        let x1528 = x95 * x228;
+        let x1529 = -x195 - x201;
+        let x1530 = x133 - x130 - x131;
+        let x1531 = (x19 * (x1528 - x257 + x1529) - x261) * x98
+            + mH
+                * (x19 * (x1530 * x112 - x1503 * x111 + x134 * x1505) + x0 * x237
+                    - x107 * x138)
+            + mF
+                * (x0 * x252 - x90 * x147
+                    + x19 * (x1511 * x102 + x1507 * x142 + x1509 * x144))
+            + (x302 + x249) * x75;
+        let x1532 = (x113 * x19 * x109 - x1503 * x166
+            + (x162 * x112 + x164 * x1505) * x0) * mH + x360 * (x298 + x339)
+            + mF
+                * (x1507 * x159 + x1509 * x161
+                    + x19 * (x1515 * x91 - x90 * x151 + x103 * x1514) + x1516 * x102)
+            + x0 * (x258 - x1528);
+        let x1533 = x75 * x194 - x90 * x169 - x107 * x168;
+        let x1534 = -(x95 * IFyy);
+        let x1535 = x1527 - 2.0 * x93 - 2.0 * x94;
+        let x1536 = -(x95 * x55);
+        let x1537 = x256 - x93 - x94;
+        let x1538 = x1537 * x55 + x75 * x1499;
+        let x1539 = -rF
+            * (x75 * (2.0 * (x95 * x271) - x272 * x47 + x270 * x1535) + x1536 * x272
+                + x175 * x1538) - x1521 * x279 / f64::sqrt(x175) - x951;
+        let x1540 = x1501 * x75 - x20 * x1537;
+        let x1541 = x20 * x95;
+        let x1542 = -x1521 * x287 / f64::sqrt(x175) - x367
+            - rF
+                * (x75 * (-x282 * x1535 - x272 * x1500 - 2.0 * (x95 * x285))
+                    - x1540 * x175 - x1541 * x272);
+        let x1543 = mF
+            * (x0 * x304 + (x1511 * x151 + x1515 * x144 + x1514 * x142) * x292)
+            + (x109 * x109 * x289 + x0 * x303) * mH + x302 * x0
+            + ((x1326 - x339) * x292 + x340 * x298) * x98;
+        let x1544 = x19 * (x1511 * x169 - x1304 + x168 * x1530);
+        let x1545 = -(x232 * IFyy);
+        let x1546 = x95 - x254 - x255;
+        let x1547 = x301 * x75 + (x19 * x1546 - x260) * x98;
+        let x1548 = x301 * x55 + (x19 * (x47 - x1497 - x1498) - x0 * x55) * x98;
+        let x1549 = -(x95 * x319);
+        let x1550 = x996 * (f64::sqrt(x175) * x68 - x1549 / f64::sqrt(x175))
+            - rF
+                * (x75 * (2.0 * (x95 * x312) - x313 * x47 + x1547 * x55) + x313 * x1536
+                    + x175 * x1548);
+        let x1551 = ((x28 - x1495 - x1496) * x19 + x20 * x0) * x98 - x20 * x301;
+        let x1552 = -(x68 * x974);
+        let x1553 = x8 * (f64::sqrt(x175) * x1552 - x1521 * x326 / f64::sqrt(x175))
+            - (x75 * (x20 * x1547 - 2.0 * (x95 * x328) - x313 * x1500) - x1541 * x313
+                - x175 * x1551) * rF;
+        let x1554 = x341 * x0;
+        let x1555 = -x1329;
+        let x1556 = x338 - 1.0;
+        let x1557 = x1556 * x360 + x1537 * x0;
+        let x1558 = rF
+            * (x352 * x1536 + (x1557 * x55 + 2.0 * (x95 * x45) - x352 * x47) * x75)
+            + f64::sqrt(x175) * x68 * x656 + x1521 * x348 / f64::sqrt(x175);
+        let x1559 = -x1558;
+        let x1560 = f64::sqrt(x175) * x68 * x862 + x356 * x1521 / f64::sqrt(x175)
+            + rF
+                * (-x352 * x1541
+                    - (x352 * x1500 - x20 * x1557 - 2.0 * (x95 * x3)) * x75);
+        let x1561 = -x1560;
+        let x1562 = x1536 - x75 * x47;
+        let x1563 = x68 * (x282 * x95 / f64::sqrt(x175) + f64::sqrt(x175) * x1500)
+            - rF * (x369 * x1562 - 2.0 * (x1521 * x800));
+        let x1564 = x75 * x1500 + x1541;
+        let x1565 = (x95 * x270 / f64::sqrt(x175) - f64::sqrt(x175) * x47) * x68
+            - (2.0 * (x1521 * x869) - x1564 * x369) * rF;
+        let x1566 = x73 - x74;
+        let x1567 = (x75 * x1566 / f64::sqrt(x175) - x95 * x1071) * rF - x314;
+        let x1568 = rF * x47;
+        let x1569 = rF * x1500;
+        let x1570 = x448 * (x452 - x445);
+        let x1571 = x430 * x430 * x109;
+        let x1572 = x1570 - x1571;
+        let x1573 = delta_dot * (x450 - x451);
+        let x1574 = x1572 + x480 + x1573;
+        let x1575 = -x473 - x475;
+        let x1576 = x1575 + delta_dot * (x434 - x435);
+        let x1577 = x106 * x1576 + x465 + x472 - x430 * (x462 - 2.0 * x459);
+        let x1578 = x436 * (x445 + x449) - x109 * x1576;
+        let x1579 = x472 + x1576 * x88;
+        let x1580 = x452 - x493;
+        let x1581 = x430 * x1277 + x22 * x1580;
+        let x1582 = x1579 * x29 - x430 * x492 + x436 * x1581
+            + x22 * (x68 * x1576 - x494 * x436) + x490 * x497;
+        let x1583 = x1580 * x29;
+        let x1584 = x430 * x141;
+        let x1585 = x494 * x29;
+        let x1586 = x436 * (x1584 - x1583 + x1585) - x504 * x490 + x22 * x1579
+            - x1277 * x1576 + x505 * x430;
+        let x1587 = x504 * x1581;
+        let x1588 = (x1573 - x485) - x484;
+        let x1589 = (x1583 - x1584) * x497;
+        let x1590 = x505 * x22 - x492 * x29;
+        let x1591 = x1590 * x436;
+        let x1592 = ((-x499 - x1587) + x1588) + (x1589 + x1591);
+        let x1593 = x502 * x29 + x22 * x506 + x1592;
+        let x1594 = thF_dot * x29;
+        let x1595 = x504 * x430;
+        let x1596 = x436 * x521;
+        let x1597 = x1596 * x29;
+        let x1598 = (x1594 * x436 + x1595 - x1597 + x22 * x433) * IFxx
+            + (x1597 - x1595) * IFyy;
+        let x1599 = x433 * x194;
+        let x1600 = x436 * x436;
+        let x1601 = IHyy + x1325;
+        let x1602 = x1599 - x430 * x560 + x1600 * x1601;
+        let x1603 = x1576 * IFyy;
+        let x1604 = x448 * x200;
+        let x1605 = (x1604 - x578) - 2.0 * x577;
+        let x1606 = (x1603 + IHyy * x1576) + (x436 * x1605 + x601);
+        let x1607 = x1600 * x194;
+        let x1608 = x433 * x200;
+        let x1609 = x594 * x430;
+        let x1610 = x1572 - x481 - x482 + x1588;
+        let x1611 = x22 * thF_dot;
+        let x1612 = x22 * x1596 - x430 * x497;
+        let x1613 = (x433 * x29 - x1611 * x436 + x1612) * IFxx - x1612 * IFyy;
+        let x1614 = (x1609 - x1607) + (x598 - x1608);
+        let x1615 = x95 * g - x1573;
+        let x1616 = x22 * x702;
+        let x1617 = x703 * x29;
+        let x1618 = -(delta_dot * x95);
+        let x1619 = x29 * x752 + x22 * x734 + x735 * x0;
+        let x1620 = x22 * x1218 - x1594 * x238;
+        let x1621 = x638 * x29 - x1611 * x75;
+        let x1622 = (x735 * x29 + x1611 * x98) * x19 - x143 * x745;
+        let x1623 = x22 * x638 + x1594 * x75;
+        let x1624 = (x19 * (x699 + x705 - x1616 - x899 - x1617) - (x638 + x1618) * x0)
+            * x98 - x95 * x1217 + x75 * x1619 + x1620 * x225 + x233 * x1621
+            + x226 * x1622 + x235 * x1623;
+        let x1625 = x741 - x742;
+        let x1626 = -(x638 * x47);
+        let x1627 = -(x95 * x687);
+        let x1628 = x1626 + x1627;
+        let x1629 = x687 * x29 - x1611 * x55;
+        let x1630 = x22 * x744;
+        let x1631 = x748 * x29;
+        let x1632 = x22 * x687 + x1594 * x55;
+        let x1633 = x638 * x1547 + (x900 * x313 - x95 * x757);
+        let x1634 = ((2.0 * x1616 - 2.0 * x699 + 2.0 * x899 + 2.0 * x1617) * x75
+            + (x1535 * x638 + 2.0 * (x225 * x1623)))
+            + (2.0 * (x226 * x1621) + 2.0 * x896);
+        let x1635 = x900 + x1616 + x1617;
+        let x1636 = x900 * x55;
+        let x1637 = x1238 / f64::powf(x175, 1.5) + x1492;
+        let x1638 = x638 * x1557 - x706 * x95;
+        let x1639 = x0 * (x704 + x1556 * x705 + x900)
+            + x19 * (x22 * x1623 + delta_dot * x1546 + x634 + x1621 * x29 - x637);
+        let x1640 = x1636 + x1628;
+        let x1641 = x175
+            * (x22 * (0.5 * x669 + 0.5 * x670) + (0.5 * x667 - 0.5 * x666) * x29);
+        let x1642 = x19 * (x961 + x790);
+        let x1643 = x0 * x797;
+        let x1644 = x1642 + x1643;
+        let x1645 = -(x798 * x95);
+        let x1646 = x638 * x1500;
+        let x1647 = x1645 + x1646;
+        let x1648 = x20 * x900;
+        let x1649 = x1647 - x1648;
+        let x1650 = -x897 - x902;
+        let x1651 = x830 * x29;
+        let x1652 = x22 * x828;
+        let x1653 = x798 * x22 - x1594 * x20;
+        let x1654 = x20 * x1611 + x798 * x29;
+        let x1655 = x68 * x833 / f64::sqrt(x175);
+        let x1656 = x798 * f64::sqrt(x175) * x68;
+        let x1657 = x638 * x1566;
+        let x1658 = (x504 * x584 + IFxx * (x22 * (x519 - x474 + x1575) + x586 * x29))
+            + x523;
+        let x1659 = x497 * x522;
+        let x1660 = x587 - x1659;
+        let x1661 = x1659 + x585;
+        let x1662 = x22 * (x697 - x696 - x699);
+        let x1663 = x702 - x695 + x1662;
+        let x1664 = theta_dot * x1663 * x668;
+        let x1665 = x734 - x733 + x22 * (x729 + x730);
+        let x1666 = x233 * x1663 + x1665 * x226;
+        let x1667 = x747 * x29 + x22 * (x740 + x741 - x742) + x744;
+        let x1668 = (2.0 * x1662 + 2.0 * x701) * x226;
+        let x1669 = x829 * x29 + x22 * (x820 - x821 - x822) + x828;
+        let x1670 = x608 / f64::sqrt(x172);
+        let x1671 = x639 / f64::sqrt(x175);
+        let x1672 = x448 * x107;
+        let x1673 = x553 * x4 - x1075;
+        let x1674 = x1673 * x12 + (x629 - x13 * x1172);
+        let x1675 = x0 * x1674;
+        let x1676 = x696 + x1675;
+        let x1677 = x1172 * x12;
+        let x1678 = x13 * x1673;
+        let x1679 = -x1677 - x1678;
+        let x1680 = rR * x1673 - x1172 * x78;
+        let x1681 = (x1680 * x0 - x470) - delta_dot * x85;
+        let x1682 = x1672 - x113 * x430 - x1676 * x106 + x109 * x1679 + x1681
+            + x193 * x444 - x95 * x463;
+        let x1683 = x637 - x19 * x1674;
+        let x1684 = delta_dot * x1504 + (x1680 * x19 + x483);
+        let x1685 = x113 * x436 - x193 * x453 - x448 * x112 + x1683 * x106 + x1684
+            + x463 * x75;
+        let x1686 = x430 * x112 - x444 * x75 - x107 * x436 + x453 * x95 + x422
+            - x109 * x1683;
+        let x1687 = x1673 * x115 + x5 * x1102 + x1101 * x1 - x1172 * xB;
+        let x1688 = 2.0 * x411 - x408 - x409;
+        let x1689 = x5 * x1115 + (x1114 - x1113 + x4 * x1688) * x1;
+        let x1690 = x5 * x1108 + (x1688 * x9 - x1109 - x1111) * x1;
+        let x1691 = x422 - x68 * x1683;
+        let x1692 = x1683 * x88 + x1684;
+        let x1693 = x494 * x226 - x505 * x75 + x29 * x1691 + x22 * x1692 + x504 * x102
+            - x103 * x436;
+        let x1694 = x1692 * x29 - x494 * x225 - x497 * x102 - x22 * x1691 + x75 * x492
+            + x436 * x91;
+        let x1695 = x103 * x497 - x1676 * x88 - x504 * x91 + x505 * x225 + x68 * x1679
+            - x226 * x492 + x1681;
+        let x1696 = x75 * x497 + x521 * x225;
+        let x1697 = x698 + x1675;
+        let x1698 = IFxx * (x29 * x1697 + x22 * (x1677 + x1678 - x693) + x1696)
+            - x1696 * IFyy;
+        let x1699 = x226 * x521;
+        let x1700 = x504 * x75;
+        let x1701 = (x22 * x1697 - x1699 + (x1679 + x693) * x29 - x1700) * IFxx
+            + (x1699 + x1700) * IFyy;
+        let x1702 = (x1132 + x1133) + (-x1134 - x1135);
+        let x1703 = x386 * x1;
+        let x1704 = x530 * x5 + x1172 * IBxz + x1673 * IBxx + x1703 * (x213 - x1147);
+        let x1705 = -(x221 * x1);
+        let x1706 = x539 * x1705;
+        let x1707 = x5 * x537;
+        let x1708 = IRyy * (x1706 + x1707)
+            + (thR_dot * x1705 - x1706 - x216 * x1172 - x1707 + x1673 * x214) * IRxx;
+        let x1709 = x546 * x5 + x218 * x539 * x1;
+        let x1710 = (x1172 * x214 + thR_dot * x1009 * x1 + x1709 + x216 * x1673) * IRxx
+            - IRyy * x1709;
+        let x1711 = x1703 * (x210 - x1140) - x1172 * IBzz - x1673 * IBxz + x5 * x567;
+        let x1712 = x95 * IHyy;
+        let x1713 = x1679 * x205;
+        let x1714 = x1676 * x194;
+        let x1715 = x436 * (x1712 + x1529) + x1713 + x1714 + x75 * x560;
+        let x1716 = x1683 * IHyy;
+        let x1717 = x430 * x206;
+        let x1718 = x448 * x202;
+        let x1719 = x1683 * IFyy;
+        let x1720 = x193 * x574;
+        let x1721 = x95 * x579;
+        let x1722 = x1717 - x1716 - x1718 - x1719 - x1720 + x1721;
+        let x1723 = (x1676 * x200 + x436 * (x206 - x193 * IHyy))
+            + (x194 * x1679 + x594 * x75);
+        let x1724 = x609 - 2.0 * x173 + 2.0 * x1;
+        let x1725 = x390 * x12 + x13 * x401;
+        let x1726 = x379 - delta_dot * x98;
+        let x1727 = x0 * x1726 - x19 * x1725;
+        let x1728 = x461 - x460;
+        let x1729 = x401 * x78 + rR * x390;
+        let x1730 = x379 * x83;
+        let x1731 = delta_dot * x132;
+        let x1732 = x0 * (x1730 + x1731);
+        let x1733 = x106 * x1727 - x453 * x136
+            + ((x1728 + 2.0 * x459) * x98 + x1729) * x19 - x448 * x138 + x1732;
+        let x1734 = x134 * x448;
+        let x1735 = -x1730 - x1731;
+        let x1736 = x0 * x1725 + x19 * x1726;
+        let x1737 = x401 * x12;
+        let x1738 = x13 * x390;
+        let x1739 = x1737 - x1738;
+        let x1740 = (x1729 - x463 * x98) * x0 + x19 * (x1734 + x1735 - x430 * x111)
+            + x444 * x136 - x1736 * x106 + x109 * x1739;
+        let x1741 = x66 * x379;
+        let x1742 = x430 * x138 + x453 * x232 + x19 * (x444 * x98 - x134 * x436) + x1741
+            - x109 * x1727;
+        let x1743 = (xB * x400 - x384 + x387) * x9 + x4 * (x396 + x389 * x115);
+        let x1744 = x121 * x379 - x399 * x127 - x4 * x412;
+        let x1745 = x119 * x379 + x381 * x127 + x412 * x9;
+        let x1746 = x235 * x505 - x233 * x492 - x1736 * x88 + x1729 * x0
+            + (x497 * x142 - x504 * x144 + x1735) * x19 + x68 * x1739;
+        let x1747 = x1727 * x88 + x1729 * x19 + x1732;
+        let x1748 = x1741 - x68 * x1727;
+        let x1749 = x1747 * x29 - x497 * x147 - x22 * x1748 - x235 * x494
+            + x19 * (x436 * x144 - x492 * x98);
+        let x1750 = x19 * (x505 * x98 - x436 * x142) + x22 * x1747 + x494 * x233
+            + x1748 * x29 + x504 * x147;
+        let x1751 = (x1419 * x238 + (x244 - IHyy * x136) * x436)
+            + (x1739 * x194 + x1736 * x200);
+        let x1752 = x497 * x238;
+        let x1753 = x235 * x521;
+        let x1754 = x1736 - thF_dot * x136;
+        let x1755 = thF_dot * x232;
+        let x1756 = IFyy * (x1752 - x1753)
+            + (x1753 - x1752 + x1754 * x29 + x22 * (x1738 - x1737 - x1755)) * IFxx;
+        let x1757 = x579 * x232;
+        let x1758 = IFyy * x1727;
+        let x1759 = x251 * x448;
+        let x1760 = x574 * x136;
+        let x1761 = IHyy * x1727;
+        let x1762 = x430 * x244;
+        let x1763 = x1757 - x1758 - x1759 - x1760 - x1761 + x1762;
+        let x1764 = x504 * x238;
+        let x1765 = x233 * x521;
+        let x1766 = IFxx * (x1754 * x22 + x1764 + (x1739 + x1755) * x29 - x1765)
+            + (x1765 - x1764) * IFyy;
+        let x1767 = x528 * x9;
+        let x1768 = x399 * x247;
+        let x1769 = x4 * x590;
+        let x1770 = x241 * x381;
+        let x1771 = x389 - thR_dot;
+        let x1772 = (x1771 * x220 + x1771 * x219) * IRxx + x221 * x549;
+        let x1773 = x241 * x386 + x4 * (x389 * IBxx - x386 * IByy) - x401 * IBxz;
+        let x1774 = x1736 * x194;
+        let x1775 = x1739 * x205;
+        let x1776 = x251 * x436;
+        let x1777 = x1433 * x98 + x1774 + x1775 - x1776;
+        let x1778 = x386 * (x1147 + x211 - x246) - x390 * IBxz + x401 * IBzz;
+        let x1779 = x218 * x541 + (x217 * (x538 - x385) + x215 * x1771) * IRxx;
+        let x1780 = x310 * x1 - x610 - x192;
+        let x1781 = x5 * x364 - x1061 - x1064;
+        let x1782 = x1358 - delta_dot * x157;
+        let x1783 = x1359 + delta_dot;
+        let x1784 = x106 * x1783;
+        let x1785 = x1368 - x430 * x166 + x0 * (x164 * x448 + x1782 - x1784)
+            + x19 * (x1728 - x1361 + x459);
+        let x1786 = x436 * x166 + x0 * (x1361 + x463)
+            + x19 * (x1782 - x448 * x162 - x1784);
+        let x1787 = x1376 - x0 * (x444 + x164 * x436)
+            + x19 * (x453 + x430 * x162 + x109 * x1783);
+        let x1788 = 2.0 * x397 + 2.0 * x398;
+        let x1789 = 2.0 * x1386 - x1788 * x115;
+        let x1790 = x1782 - x1783 * x88;
+        let x1791 = x1401 + x1790 * x0 - x504 * x161 + x497 * x159
+            + x19 * (x1590 - x1361);
+        let x1792 = x1362 + x1790 * x19;
+        let x1793 = x1348 * x1783;
+        let x1794 = x22 * x1792 - x505 * x0 + x19 * (x504 * x151 + x1585) - x436 * x159
+            + (x1376 + x1793) * x29;
+        let x1795 = x1792 * x29 + x22 * (-x1376 - x1793 - x494 * x19) + x0 * x492
+            + x436 * x161 - x152 * x497;
+        let x1796 = x19 * x436;
+        let x1797 = (x1367 + x1796) * x194;
+        let x1798 = x0 * (x594 + x200 * x1783);
+        let x1799 = x1797 + x1798;
+        let x1800 = x540 * x537 + x1436 * IRxx;
+        let x1801 = x1788 * IBxz + x381 * (IBzz + IByy - IBxx);
+        let x1802 = x546 * x548;
+        let x1803 = x1439 * IRxx + x1802;
+        let x1804 = (IBzz - IByy) * x399 - x1422 - 2.0 * x527;
+        let x1805 = x194 * x1783;
+        let x1806 = x1415 + (x560 + x1805) * x0 + x1796 * x1601;
+        let x1807 = x0 * x497 + x665 * x521;
+        let x1808 = x19 * thF_dot;
+        let x1809 = (x1807 + (-x426 - x427 - x1808) * x22 + x156 * x1783) * IFxx
+            - x1807 * IFyy;
+        let x1810 = IHyy * x1783;
+        let x1811 = IFyy * x1783;
+        let x1812 = x1810 - x1604 + x1811 + 2.0 * x577 + x578;
+        let x1813 = x504 * x0;
+        let x1814 = x521 * x668;
+        let x1815 = (x1813 + x1814) * IFyy
+            + IFxx * ((x1367 + x1808) * x29 - x1813 + x160 * x1783 - x1814);
+        let x1816 = -(rR * x673);
+        let x1817 = x961 * rR;
+        let x1818 = x1802 - x546 * IRxx;
+        let x1819 = IRyy * x537;
+        let x1820 = 2.0 * x425 + 2.0 * x429;
+        let x1821 = (x504 + x503) * x68 - x22 * x68 * x448;
+        let x1822 = x22 * x492 - x489 - x440 - x442 + x505 * x29;
+        let x1823 = x68 * (-x495 - 2.0 * x496) - x68 * x448 * x29;
+        let x1824 = IFxx * (x436 - thF_dot) + x584;
+        let x1825 = x436 * (x297 + x205);
+        let x1826 = -(x430 * IFyy);
+        let x1827 = (x430 * (x200 - x203 - x204) - x557) + (2.0 * x558 + x1826);
         Derivatives {
             qdot: [
                 x_dot,
@@ -4342,185 +4207,161 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    mR + mB + (x15 + x24 + x26) * mH + (x30 + x34 + x26) * mF,
-                    x61,
-                    x120,
-                    x142,
-                    x159,
+                    mF * x32 + mH * x33 + x34,
+                    x59,
+                    x123,
+                    x148,
+                    x167,
                     0.0,
-                    x163,
+                    x171,
                     0.0,
-                    x165,
+                    x173,
                     0.0,
-                    x168,
+                    x176,
                     0.0,
                     0.0,
                 ],
                 [
-                    x61,
-                    mF * (x169 + x50 * x50 + x57 * x57) + mR + mB
-                        + mH * (x169 + x46 * x46 + x49 * x49),
-                    x174,
-                    x178,
-                    x179,
+                    x59,
+                    (x177 + x50 * x50 + x52 * x52) * mF
+                        + (x49 * x49 + x177 + x47 * x47) * mH + x34,
+                    x182,
+                    x186,
+                    x188,
                     0.0,
-                    x180,
+                    x189,
                     0.0,
                     0.0,
-                    x165,
+                    x173,
                     0.0,
-                    x168,
+                    x176,
                     0.0,
                 ],
                 [
-                    x120,
-                    x174,
-                    rR * rR * mR * (0.5 - 0.5 * x182)
-                        + ((x183 + x184) * x1 * x1 + x71 * x71 * x21 * x21) * mB
-                        + (((x189 * x189 + x193) * IRxx + x196 * x0 - x4 * x199) * x21
-                            + x209 * x92) * x21 + (x211 + x215) * IFxx
-                        + (x116 * x116 + x117 * x117 + x119 * x119) * mF + x221 * x84
-                        + (x94 * x94 + x101 * x101 + x104 * x104) * mH + x222 * x1 * x1
-                        + x223 * x98 * x98,
-                    x246,
-                    x252,
+                    x123,
+                    x182,
+                    mF * (x91 * x91 + x103 * x103 + x102 * x102)
+                        + mH * (x113 * x113 + x107 * x107 + x112 * x112)
+                        + ((x190 + x191) * x192 + x118 * x118) * mB + x95 * x202
+                        + (x207 + (x4 * x210 + x213 * x9 + x223) * x1) * x1 + x192 * x224
+                        + IFxx * x227 + x174 * x228 + x229 * (0.5 - 0.5 * x231),
                     x253,
-                    x254,
-                    x255,
-                    x257,
-                    x258,
-                    x276,
-                    x285,
+                    x262,
+                    x263,
+                    x264,
+                    x265,
+                    x268,
+                    x269,
+                    x281,
+                    x288,
                     0.0,
                 ],
                 [
-                    x142,
-                    x178,
-                    x246,
-                    rR * rR * mR + x0 * x236 + (x286 * x286 + x193) * IRxx
-                        + (x20 * x20 * (x287 + x288) + x126 * x126) * mH + x4 * x230
-                        + x234 * x121 + mF * (x20 * x20 * (x289 + x290) + x130 * x130)
-                        + x138 * x138 * mB + x292 * x92
-                        + (x242 * x242 + x244 * x244) * IFxx,
-                    x300,
-                    0.0,
-                    x301,
-                    x302,
-                    x303,
+                    x148,
+                    x186,
+                    x253,
+                    x291 + x9 * x247 + x4 * x241 + x229
+                        + (x138 * x138 + x292 * (x293 + x294)) * mH + x127 * x128 + x223
+                        + mF * (x147 * x147 + (x295 + x296) * x292)
+                        + (x233 * x233 + x235 * x235) * IFxx + x244 * x136,
                     x305,
-                    x313,
-                    x324,
-                    x331,
+                    0.0,
+                    x306,
+                    x307,
+                    x308,
+                    x311,
+                    x322,
+                    x330,
+                    x335,
                 ],
                 [
-                    x159,
-                    x179,
-                    x252,
-                    x300,
-                    (x69 * x69 + xB * xB) * mB
-                        + mF * (x152 * x152 + x155 * x155 + x146 * x146 * x20 * x20)
-                        + x223 * x16 * x16
-                        + (x20 * x20 * x157 * x157 + x156 * x156
-                            + x16 * x16 * x158 * x158) * mH + IRyy
-                        + (x216 + x335 + x217) * x20 * x20 + IByy,
+                    x167,
+                    x188,
+                    x262,
+                    x305,
+                    mH * (x163 * x163 + x166 * x166 + x165 * x165)
+                        + mF * (x161 * x161 + x152 * x152 + x159 * x159)
+                        + (x115 * x115 + xB * xB) * mB + (x339 + x200) * x292 + x224
+                        + x340 * x228,
                     IRyy,
-                    x337,
-                    x338,
-                    x339,
-                    x340,
-                    x352,
-                    x358,
-                    x362,
+                    x342,
+                    x343,
+                    x344,
+                    x346,
+                    x353,
+                    x359,
+                    x366,
                 ],
-                [0.0, 0.0, x253, 0.0, IRyy, IRyy, 0.0, 0.0, x339, x340, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x263, 0.0, IRyy, IRyy, 0.0, 0.0, x344, x346, 0.0, 0.0, 0.0],
                 [
-                    x163,
-                    x180,
-                    x254,
-                    x301,
-                    x337,
+                    x171,
+                    x189,
+                    x264,
+                    x306,
+                    x342,
                     0.0,
-                    x204 + x335 + x206 + x89 * x89 * mH + mF * x107 * x107,
+                    x339 + x109 * x168 + x205 + x68 * x169,
                     0.0,
                     0.0,
                     0.0,
-                    x365,
-                    x368,
-                    x370,
+                    x371,
+                    x373,
+                    x374,
                 ],
-                [0.0, 0.0, x255, x302, x338, 0.0, 0.0, IFyy, 0.0, 0.0, x371, x372, 0.0],
-                [x165, 0.0, x257, x303, x339, x339, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x165, x258, x305, x340, x340, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x168, 0.0, x276, x313, x352, 0.0, x365, x371, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x168, x285, x324, x358, 0.0, x368, x372, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, x331, x362, 0.0, x370, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, x265, x307, x343, 0.0, 0.0, IFyy, 0.0, 0.0, x375, x376, 0.0],
+                [x173, 0.0, x268, x308, x344, x344, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x173, x269, x311, x346, x346, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x176, 0.0, x281, x322, x353, 0.0, x371, x375, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x176, x288, x330, x359, 0.0, x373, x376, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, x335, x366, 0.0, x374, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             force: [
-                x496,
-                -(x53 * x469 + x476 * x46 + x477 * x49) * mH
-                    - rR * mR * (2.0 * x497 + x498 * x5 * x1)
-                    - mF * (x57 * x460 + x440 * x50 + x53 * x459)
-                    - (x37 * x488 + x41 * x492 + x499) * mB,
-                x98 * x510 - mF * (x119 * x459 + x440 * x117 + x116 * x460) - x519 * x1
-                    + (x525 - x526 - x533 - x539 - x189 * x549 - x192 * x558) * x21
-                    - mB * (x483 * x71 * x21 + x559 * x1)
-                    - rR * rR * mR * psi_dot * phi_dot * x560
-                    - (x94 * x469 + x476 * x101 + x477 * x104) * mH - x84 * x566
-                    - x574 * x214 - x210 * x579,
-                (x582 - (x581 * x1 + x327 * x89) * mH - mF * x583) * g - x192 * x549
-                    - x0 * x524 - (x126 * x469 + x584 * x20) * mH - x286 * x558
-                    + x585 * x92 - x244 * x579 - mF * (x130 * x459 + x20 * x586)
-                    - x574 * x242 - x483 * x138 * mB
-                    + 0.5 * (rR * rR * mR * psi_dot * psi_dot * x560) - x121 * x538
-                    - x4 * x532,
-                x16 * x510 - x514 + x20 * (-x563 - x564 - x565 - x587 - x588)
-                    - (x488 * x69 - xB * x492) * mB
-                    + (x589 * psi_dot * phi_dot
-                        + (-mF * x590 - x591 * mB
-                            - (x65 + x78 * x82 + x89 * x16 * x317 - x86) * mH) * g) * x21
-                    + x518 - (x146 * x20 * x459 + x440 * x152 + x155 * x460) * mF
-                    - (x477 * x156 + x20 * x157 * x469 + x476 * x16 * x158) * mH,
-                -(psi_dot * IRyy * phi_dot * x21),
-                x27 * x579
-                    + mF * x107 * (x445 - x592 - x441 - x446 - x450 + x455 - x457 + x458)
-                    - x536 - x537
-                    + (x465 - x592 - x441 - x446 - x463 - x464 + x468 + x458) * x89 * mH
-                    - x574 * x28 + x422 * x593,
-                -(x393 * IFyy),
-                x_dot * x1 * phi_dot * x21 / f64::sqrt(x164) + x603,
-                rR
-                    * ((x596 * x1 * x2 - x604
-                        - (x605 * x5 * x1 * phi_dot + psi_dot * x256 * x2) * x21)
-                        * phi_dot
-                        + psi_dot
-                            * (x5 * x606 * x21 - x602 * phi_dot * x2
-                                - x5 * psi_dot * x1 * x256))
-                    + x1 * y_dot * phi_dot * x21 / f64::sqrt(x164),
-                x98 * x_dot * x615 / f64::sqrt(x167)
-                    - (x641 - x616 - rF * (x676 + x692 + x693)) * psi_dot
-                    + rF * thF_dot * x673
-                    - (x735 - rF * (x701 + x702 + x718) - x719) * theta_dot
-                    - delta_dot * (x768 - rF * (x736 + x751 + x753))
-                    - (x802 - rF * (x781 + x789 + x790) - x803) * phi_dot,
-                x98 * y_dot * x615 / f64::sqrt(x167)
-                    - (x839 - x323 * x5 * x98 * x615 / f64::sqrt(x167) - x822) * phi_dot
+                x512,
+                -(x60 * (x513 + 2.0 * x515) + (x47 * x488 + x49 * x454 + x478 * x55) * mH
+                    + mF * (x511 * x55 + x506 * x50 + x52 * x502)
+                    + (x41 * x418 + x516 + x517) * mB),
+                (x532 - x218 * x542 + x552 - x554 - x562 - x573) * x1 - x225 * x523
+                    - mF * (x506 * x91 + x103 * x502 + x511 * x102) - phi_dot * x526
+                    + x582 * x75 - (x118 * x405 + x5 * x583) * mB - x226 * x588
+                    - (x478 * x112 + x107 * x488 + x113 * x454) * mH - x5 * x592
+                    - x95 * x595,
+                0.5 * (psi_dot * x526) - x531 * x9 - x218 * x551 - x405 * x128
+                    - mF * (x511 * x147 + x19 * x596) - x221 * x542
+                    - (x478 * x138 + x19 * x597) * mH + x599 - x235 * x523
+                    + (x600 - mF * x334 - (x134 * x5 + x109 * x333) * mH) * g - x4 * x572
+                    - x561 * x136 - x233 * x588,
+                x582 * x0 + x589 - x19 * x601 - (-x115 * x414 - xB * x418) * mB
+                    - mF * (x506 * x161 + x502 * x159 + x511 * x152) - x591
+                    + (psi_dot * x605
+                        - g
+                            * (x602 + x603 * mF
+                                + (x71 * x106 + x109 * x604 + x364) * mH)) * x1
+                    - mH * (x454 * x166 + x165 * x488 + x163 * x478),
+                -(x424 * IRyy),
+                (x464 - x458 + x606 - x465 + x477) * x168 - x555 + x22 * x588
+                    + x607 * x436 - x556 + (x606 - x507 - x508 + x509 + x510) * x169
+                    - x29 * x523,
+                -x581,
+                x_dot * x608 / f64::sqrt(x172) + x620,
+                x608 * y_dot / f64::sqrt(x172)
+                    + rR
+                        * (psi_dot * (x622 - x621 * x266 - x623 * x611)
+                            + (-x624 - x626 - (x625 * x627 + x266 * x628) * x1)
+                                * phi_dot),
+                x_dot * x639 / f64::sqrt(x175) - (x660 - rF * x710) * theta_dot
+                    - (x727 - rF * x760) * phi_dot - (x777 - rF * x788) * psi_dot
+                    + x789 * x687 - delta_dot * (x799 - x814 * rF),
+                y_dot * x639 / f64::sqrt(x175) - x815
+                    - phi_dot * (x850 - x835 - x327 * x639 / f64::sqrt(x175))
+                    - theta_dot * (x865 - x858 * rF - x859 / f64::sqrt(x175))
                     - delta_dot
-                        * ((f64::sqrt(x167) * x673 - x53 * x98 * x615 / f64::sqrt(x167))
-                            * x107 - (x847 - x841 - x842) * rF) - x848
-                    - theta_dot
-                        * (x865 - rF * (x859 - x849 - x854)
-                            - x98 * x357 * x615 / f64::sqrt(x167))
-                    - psi_dot * (x868 - x866 - rF * (x874 - x869 - x878)),
-                -theta_dot
-                    * (x87 * x1 * phi_dot + x880
-                        + ((rF
-                            * (x20 * x883 * x615
-                                - delta_dot * x16 * x98 / f64::sqrt(x167))
-                            - delta_dot * x20 * x107) * x317 + theta_dot * x884) * x21
-                        + x834 * x361)
-                    - (x887 + x888 * phi_dot * x21 + x894 + x901 * rF
-                        + theta_dot * x87 * x1) * phi_dot
-                    - (x902 + rF * x908) * delta_dot,
+                        * (x68 * (f64::sqrt(x175) * x687 - x866 / f64::sqrt(x175))
+                            - rF * x874) - psi_dot * (x887 - rF * x884 - x889),
+                -(((x891
+                    - (rF * (x19 * x893 - x75 * x745 / f64::sqrt(x175)) - x750 * x68)
+                        * x98) * x1 + x553 * x80 + x362 * x836 + x894) * theta_dot
+                    + delta_dot * (x895 + x903 * rF)
+                    + phi_dot * (x905 + x913 + x406 * x132 + rF * x920 + x80 * x641)),
             ],
             checks: [],
             d_qdot: [
@@ -4574,154 +4415,154 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        mH * (2.0 * (x14 * x271) + 2.0 * x910 + 2.0 * (x23 * x267))
+                        (2.0 * (x25 * x274) + 2.0 * (x278 * x28) + 2.0 * x922) * mH
                             + mF
-                                * (2.0 * x910 + 2.0 * (x29 * x911) + 2.0 * (x33 * x912)),
-                        x914,
-                        x915,
-                        x916,
-                        x917,
-                        0.0,
-                        x918,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x914,
-                        (2.0 * x51 + 2.0 * x54 + 2.0 * x58) * mF
-                            + (2.0 * x59 + 2.0 * x54 + 2.0 * x60) * mH,
-                        x120,
-                        x142,
-                        x159,
-                        0.0,
-                        x163,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x915,
-                        x120,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x919,
-                        x257,
-                        x925,
+                                * (2.0 * (x31 * x923) + 2.0 * (x924 * x30) + 2.0 * x922),
+                        x926,
                         x927,
-                        0.0,
-                    ],
-                    [
-                        x916,
-                        x142,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
                         x928,
-                        x303,
+                        x929,
+                        0.0,
                         x930,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x926,
+                        mH * (2.0 * x57 + 2.0 * x58 - 2.0 * x56)
+                            + mF * (2.0 * x51 + 2.0 * x53 - 2.0 * x56),
+                        x123,
+                        x148,
+                        x167,
+                        0.0,
+                        x171,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x927,
+                        x123,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
                         x932,
-                        0.0,
-                    ],
-                    [
-                        x917,
-                        x159,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x933,
-                        x339,
+                        x268,
                         x937,
-                        x938,
+                        x940,
                         0.0,
                     ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x933, x339, 0.0, 0.0, 0.0],
                     [
-                        x918,
-                        x163,
+                        x928,
+                        x148,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
+                        x941,
+                        x308,
+                        x944,
+                        x946,
+                        0.0,
+                    ],
+                    [
+                        x929,
+                        x167,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x345,
+                        x344,
+                        x949,
+                        x950,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x345, x344, 0.0, 0.0, 0.0],
+                    [
+                        x930,
+                        x171,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x952,
+                        x953,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x954, x955, 0.0],
+                    [
+                        0.0,
+                        0.0,
+                        x932,
+                        x941,
+                        x345,
+                        x345,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x268,
+                        x308,
+                        x344,
+                        x344,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x937,
+                        x944,
+                        x949,
+                        0.0,
+                        x952,
+                        x954,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
                         0.0,
                         0.0,
                         x940,
-                        x941,
+                        x946,
+                        x950,
                         0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x942, x943, 0.0],
-                    [
-                        0.0,
-                        0.0,
-                        x919,
-                        x928,
-                        x933,
-                        x933,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x257,
-                        x303,
-                        x339,
-                        x339,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x925,
-                        x930,
-                        x937,
-                        0.0,
-                        x940,
-                        x942,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x927,
-                        x932,
-                        x938,
-                        0.0,
-                        x941,
-                        x943,
+                        x953,
+                        x955,
                         0.0,
                         0.0,
                         0.0,
@@ -4732,164 +4573,116 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        ((2.0 * x279 + 2.0 * x280 + 2.0 * x281) * mF
-                            + (2.0 * (x14 * x92 * x21) + 2.0 * (x23 * x84) + 2.0 * x281)
-                                * mH) * x2,
-                        x969,
-                        x986,
-                        x987,
-                        x988,
-                        0.0,
-                        x989,
-                        0.0,
-                        x990,
-                        0.0,
-                        x991,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x969,
-                        (mF * (2.0 * (x50 * x965) + 2.0 * x992 + 2.0 * (x57 * x968))
-                            + mH
-                                * (2.0 * (x49 * x317 * x21) + 2.0 * x992
-                                    + 2.0 * (x321 * x46))) * x5,
+                        ((2.0 * x282 + 2.0 * x283 + 2.0 * x284) * mF
+                            + mH * (2.0 * (x95 * x28) + 2.0 * x282 + 2.0 * (x193 * x25)))
+                            * x2,
+                        x978,
                         x993,
                         x994,
                         x995,
                         0.0,
-                        x996,
+                        x997,
                         0.0,
+                        x999,
                         0.0,
-                        x990,
+                        x1000,
                         0.0,
-                        x991,
                         0.0,
                     ],
                     [
-                        x986,
+                        x978,
+                        x8
+                            * ((2.0 * (x324 * x47) - 2.0 * x1001 + 2.0 * (x49 * x630))
+                                * mH
+                                + (2.0 * (x50 * x977) - 2.0 * x1001 + 2.0 * (x52 * x976))
+                                    * mF),
+                        x1002,
+                        x1003,
+                        x1004,
+                        0.0,
+                        x1006,
+                        0.0,
+                        0.0,
+                        x999,
+                        0.0,
+                        x1000,
+                        0.0,
+                    ],
+                    [
                         x993,
-                        x999 * x92 * x21 + x327 * x221
-                            + (2.0 * (x94 * x981) + 2.0 * (x983 * x104)
-                                + 2.0 * (x982 * x101)) * mH + rR * rR * mR * x560
-                            + x1000 * x330 * x98
+                        x1002,
+                        x229 * x525 + x193 * x1008
+                            + (((2.0 * (x218 * x1009) - 2.0 * x222) * IRxx
+                                - x4 * (2.0 * x208 + 2.0 * x209)
+                                - x9 * (2.0 * x211 + 2.0 * x212) + 2.0 * IRyy + 2.0 * IByy
+                                + (2.0 * x190 + 2.0 * x191 - 2.0 * x1010) * mB) * x1 - x207)
+                                * x5
                             + mF
-                                * (2.0 * (x117 * x979) + 2.0 * (x116 * x980)
-                                    + 2.0 * (x119 * x973)) + x84 * x1003
-                            + IFxx * (2.0 * x1005 + 2.0 * x1007)
-                            + (((-2.0 * x194 - 2.0 * x195) * x0
-                                + (2.0 * (x189 * x286) + 2.0 * (x192 * x1008)) * IRxx
-                                + x4 * (-2.0 * x197 - 2.0 * x198) + 2.0 * IRyy + 2.0 * IByy
-                                + mB * (2.0 * x183 + 2.0 * (x591 * x71) + 2.0 * x184)) * x21
-                                + x209 * x317) * x1,
-                        x1011,
-                        x1013,
-                        x1014,
-                        x1015,
-                        x1016,
-                        x1017,
-                        x1018,
-                        x1021,
+                                * (2.0 * (x986 * x91) + 2.0 * (x985 * x103)
+                                    + 2.0 * (x989 * x102))
+                            + (2.0 * (x113 * x992) + 2.0 * (x107 * x990)
+                                + 2.0 * (x991 * x112)) * mH + IFxx * x1013 + x332 * x1014
+                            + x95 * x1017 + x333 * x202,
+                        x1020,
+                        x1023,
+                        x1024,
+                        x1025,
                         x1026,
+                        x1028,
+                        x1029,
+                        x1034,
+                        x1039,
                         0.0,
                     ],
                     [
-                        x987,
                         x994,
-                        x1011,
+                        x1003,
+                        x1020,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1028,
-                        x1030,
-                        x1033,
-                        x1035,
-                        x1037,
+                        x1041,
+                        x1044,
+                        x1047,
+                        x1051,
+                        x1054,
                     ],
                     [
-                        x988,
                         x995,
-                        x1013,
+                        x1004,
+                        x1023,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1038,
-                        x1039,
-                        x1041,
-                        x1044,
-                        x1047,
+                        x1042,
+                        x931,
+                        x1057,
+                        x1060,
+                        x1065,
                     ],
                     [
                         0.0,
                         0.0,
-                        x1014,
+                        x1024,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
                         0.0,
-                        x1038,
-                        x1039,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x989,
-                        x996,
-                        x1015,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1049,
-                        x1050,
-                        x1052,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1016,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1053,
-                        x1054,
-                        0.0,
-                    ],
-                    [
-                        x990,
-                        0.0,
-                        x1017,
-                        x1028,
-                        x1038,
-                        x1038,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
+                        x1042,
+                        x931,
                         0.0,
                         0.0,
                         0.0,
                     ],
                     [
-                        0.0,
-                        x990,
-                        x1018,
-                        x1030,
-                        x1039,
-                        x1039,
+                        x997,
+                        x1006,
+                        x1025,
                         0.0,
                         0.0,
                         0.0,
@@ -4897,31 +4690,79 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                    ],
-                    [
-                        x991,
-                        0.0,
-                        x1021,
-                        x1033,
-                        x1041,
-                        0.0,
-                        x1049,
-                        x1053,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
+                        x1068,
+                        x1070,
+                        x1072,
                     ],
                     [
                         0.0,
-                        x991,
+                        0.0,
                         x1026,
-                        x1035,
-                        x1044,
                         0.0,
-                        x1050,
-                        x1054,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1073,
+                        x1074,
+                        0.0,
+                    ],
+                    [
+                        x999,
+                        0.0,
+                        x1028,
+                        x1041,
+                        x1042,
+                        x1042,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x999,
+                        x1029,
+                        x1044,
+                        x931,
+                        x931,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x1000,
+                        0.0,
+                        x1034,
+                        x1047,
+                        x1057,
+                        0.0,
+                        x1068,
+                        x1073,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1000,
+                        x1039,
+                        x1051,
+                        x1060,
+                        0.0,
+                        x1070,
+                        x1074,
                         0.0,
                         0.0,
                         0.0,
@@ -4932,10 +4773,10 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x1037,
-                        x1047,
+                        x1054,
+                        x1065,
                         0.0,
-                        x1052,
+                        x1072,
                         0.0,
                         0.0,
                         0.0,
@@ -4946,357 +4787,353 @@ pub mod lagrange {
                 ],
                 [
                     [
-                        mH * (x345 * (2.0 * x1237 - 2.0 * x1236) + 2.0 * (x14 * x343))
+                        (x347 * (2.0 * x1251 - 2.0 * x1250) + 2.0 * (x18 * x25)) * mH
                             + mF
-                                * (2.0 * (x1238 * x29) - 2.0 * (x345 * x20 * x25)
-                                    + 2.0 * (x33 * x1239)),
-                        x1244,
-                        x1260,
-                        x1267,
-                        x1270,
+                                * (2.0 * (x20 * x656) + 2.0 * (x31 * x1252)
+                                    + 2.0 * (x30 * x1253)),
+                        x1258,
+                        x1275,
+                        x1281,
+                        x1285,
                         0.0,
-                        x1271,
+                        x1286,
                         0.0,
                         0.0,
                         0.0,
-                        x1272,
+                        x1288,
                         0.0,
                         0.0,
                     ],
                     [
-                        x1244,
+                        x1258,
                         mF
-                            * (2.0 * (x1240 * x57) - 2.0 * (x20 * x356 * x53)
-                                + 2.0 * (x1241 * x50))
-                            + ((2.0 * x1242 - 2.0 * x1243) * x356 + 2.0 * (x355 * x49))
+                            * (2.0 * (x52 * x1255) - 2.0 * (x862 * x55)
+                                + 2.0 * (x50 * x1254))
+                            + (2.0 * (x49 * x355) + x274 * (2.0 * x1257 - 2.0 * x1256))
                                 * mH,
-                        x1273,
-                        x1274,
-                        x1276,
+                        x1289,
+                        x1290,
+                        x1292,
                         0.0,
-                        x1277,
-                        0.0,
-                        0.0,
+                        x1293,
                         0.0,
                         0.0,
-                        x1272,
+                        0.0,
+                        0.0,
+                        x1288,
                         0.0,
                     ],
                     [
-                        x1260,
-                        x1273,
+                        x1275,
+                        x1289,
                         mF
-                            * (2.0 * (x1256 * x117) + 2.0 * (x119 * x1257)
-                                + 2.0 * (x116 * x1258))
-                            + (rR * x1 * x1 * (2.0 * x985 - 2.0 * x984)
-                                + 2.0 * (x1259 * x71 * x21 * x21)) * mB
-                            + (((x1278 + x1279) * x92 + x4 * (x235 - 2.0 * x194 - x195)
-                                + x0 * x1280) * x21
-                                + (x221 * x16 + x20 * x98 * x1281) * x317 + x209 * x82
-                                + (x16 * x317 * x218 + x1282) * x84
-                                + IFxx * (2.0 * x1284 + 2.0 * x1288)) * x21
+                            * (2.0 * (x1269 * x102) + 2.0 * (x1267 * x91)
+                                + 2.0 * (x103 * x1266))
+                            + (IFxx * x1296 - (x0 * x202 - x360 * x1014) * x98
+                                + x71 * x206
+                                + (x1297 * x98 + x4 * (x246 - 2.0 * x211 - x212)
+                                    + x9 * x1298) * x1 + x95 * (x1299 + x604 * x200)) * x1
+                            + (2.0 * (x107 * x1271) + 2.0 * (x1273 * x112)
+                                + 2.0 * (x113 * x1272)) * mH
+                            + mB
+                                * (2.0 * (x1260 * x118)
+                                    + rR * x192 * (2.0 * x980 - 2.0 * x979)),
+                        x1310,
+                        x1312,
+                        0.0,
+                        x1314,
+                        x1315,
+                        0.0,
+                        0.0,
+                        x1321,
+                        x1324,
+                        0.0,
+                    ],
+                    [
+                        x1281,
+                        x1290,
+                        x1310,
+                        (x244 + x0 * x1305) * x98
+                            + (2.0 * (x138 * x1276)
+                                + (2.0 * (x134 * x1157) - 2.0 * (x111 * x137)) * x292) * mH
+                            + 2.0 * x243
+                            + (2.0 * (x235 * x1306) - 2.0 * (x233 * x1307)) * IFxx
+                            + x9 * (x240 - 2.0 * x208 - x209) + x4 * x1300
+                            + (x1302 - x290 - x1014 * x289) * x136
+                            + mF
+                                * ((2.0 * (x142 * x1279) + 2.0 * (x144 * x1278)) * x292
+                                    + 2.0 * (x1280 * x147)),
+                        x1327,
+                        0.0,
+                        x1328,
+                        x1330,
+                        0.0,
+                        0.0,
+                        x1333,
+                        x1335,
+                        x1065,
+                    ],
+                    [
+                        x1285,
+                        x1292,
+                        x1312,
+                        x1327,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1340,
+                        x1343,
+                        x1346,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1286,
+                        x1293,
+                        x1314,
+                        x1328,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1349,
+                        x1350,
+                        x1354,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1315,
+                        x1330,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1355,
+                        x1356,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1288,
+                        0.0,
+                        x1321,
+                        x1333,
+                        x1340,
+                        0.0,
+                        x1349,
+                        x1355,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1288,
+                        x1324,
+                        x1335,
+                        x1343,
+                        0.0,
+                        x1350,
+                        x1356,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1065,
+                        x1346,
+                        0.0,
+                        x1354,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        -((2.0 * x1495 - 2.0 * x26 + 2.0 * x1496 + 2.0 * x27) * x20
+                            * mF),
+                        x1502,
+                        x1510,
+                        x1513,
+                        x1519,
+                        0.0,
+                        x1520,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1522,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        x1502,
+                        mF * (2.0 * x1497 - 2.0 * x44 + 2.0 * x1498 - 2.0 * x46) * x55,
+                        x1523,
+                        x1524,
+                        x1525,
+                        0.0,
+                        x1526,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1522,
+                        0.0,
+                    ],
+                    [
+                        x1510,
+                        x1523,
+                        mF
+                            * (2.0 * (x1507 * x103) - 2.0 * (x90 * x102)
+                                + 2.0 * (x1509 * x91))
+                            + x75
+                                * (x1527 * IFxx + 2.0 * x195 - x95 * x1014 + 2.0 * x201)
                             + mH
-                                * (2.0 * (x1247 * x94) + 2.0 * (x101 * x1250)
-                                    + 2.0 * (x104 * x1252)),
-                        x1300,
-                        x1304,
-                        0.0,
-                        x1306,
-                        x1307,
-                        0.0,
-                        0.0,
-                        x1310,
-                        x1312,
-                        0.0,
-                    ],
-                    [
-                        x1267,
-                        x1274,
-                        x1300,
-                        2.0 * x228
-                            + (2.0 * (x1266 * x126)
-                                + x20 * x20
-                                    * (2.0 * (x1265 * x125) - 2.0 * (x89 * x89 * x121 * x92)))
-                                * mH + (2.0 * (x1294 * x244) + 2.0 * (x242 * x1296)) * IFxx
-                            + x0 * (x229 - 2.0 * x197 - x198)
-                            + (x232 + x233 + x16 * x1299) * x92 + x4 * x1289
-                            + mF
-                                * (2.0 * (x130 * x1264)
-                                    + x20 * x20 * (2.0 * (x131 * x1262) + 2.0 * (x1263 * x134)))
-                            + x121 * (x20 * x20 * x1281 * x92 - x1292 + x1293 - x291),
-                        x1313,
-                        0.0,
-                        x1314,
-                        x1315,
-                        0.0,
-                        0.0,
-                        x1318,
-                        x1320,
-                        x1047,
-                    ],
-                    [
-                        x1270,
-                        x1276,
-                        x1304,
-                        x1313,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1323,
-                        x1325,
-                        x1328,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1271,
-                        x1277,
-                        x1306,
-                        x1314,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1330,
-                        x1331,
-                        x1336,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1307,
-                        x1315,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1337,
-                        x1338,
-                        0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1272,
-                        0.0,
-                        x1310,
-                        x1318,
-                        x1323,
-                        0.0,
-                        x1330,
-                        x1337,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1272,
-                        x1312,
-                        x1320,
-                        x1325,
-                        0.0,
-                        x1331,
-                        x1338,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1047,
-                        x1328,
-                        0.0,
-                        x1336,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                ],
-                [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        x25 * mF * (2.0 * x1491 - 2.0 * x19 + 2.0 * x1492 + 2.0 * x22),
-                        x1497,
-                        x1505,
-                        x1507,
-                        x1511,
-                        0.0,
-                        x1512,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1513,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x1497,
-                        mF * x53 * (2.0 * x1493 - 2.0 * x44 + 2.0 * x1494 - 2.0 * x45),
-                        x1515,
-                        x1516,
-                        x1517,
-                        0.0,
-                        x1518,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1513,
-                        0.0,
-                    ],
-                    [
-                        x1505,
-                        x1515,
-                        mH
-                            * (2.0 * (x94 * x1519) - 2.0 * (x89 * x104 * x369)
-                                + 2.0 * (x101 * x1500))
-                            + x98
-                                * (IFxx * (2.0 * x248 + 2.0 * x249) + 2.0 * x219
-                                    + x1000 * x369 + 2.0 * x220)
-                            + mF
-                                * (2.0 * (x1520 * x119) + 2.0 * (x1504 * x116)
-                                    + 2.0 * (x117 * x1503)),
-                        x1524,
-                        x1525,
-                        0.0,
-                        x1526,
-                        x1527,
-                        0.0,
-                        0.0,
+                                * (2.0 * (x107 * x1505) - 2.0 * (x107 * x112)
+                                    - 2.0 * (x113 * x1503)),
                         x1531,
+                        x1532,
+                        0.0,
                         x1533,
+                        x1534,
+                        0.0,
+                        0.0,
+                        x1539,
+                        x1542,
                         0.0,
                     ],
                     [
-                        x1507,
-                        x1516,
+                        x1513,
                         x1524,
-                        x20
-                            * (mF
-                                * ((2.0 * x289 + 2.0 * x290) * x16 + 2.0 * (x1522 * x130))
-                                + mH
-                                    * (2.0 * (x1523 * x126) + x16 * (2.0 * x287 + 2.0 * x288))
-                                + x92
-                                    * ((-2.0 * x296 - 2.0 * x297) * IFxx - x225 - 2.0 * x226
-                                        + x16 * (2.0 * IHyy - x216 + 2.0 * IFyy - x217) * x92)),
-                        x1535,
-                        0.0,
-                        x1536,
-                        x1537,
-                        0.0,
-                        0.0,
-                        x1541,
-                        x1543,
-                        x1052,
-                    ],
-                    [
-                        x1511,
-                        x1517,
-                        x1525,
-                        x1535,
-                        x20
-                            * (2.0 * (x89 * x156 * mH)
-                                + (2.0 * x216 - 2.0 * IHyy - 2.0 * IFyy
-                                    + IFxx * (2.0 * x332 + 2.0 * x333) + 2.0 * x217) * x16
+                        x1531,
+                        x19
+                            * ((x232 * (x1014 + x1325) - (2.0 * x299 + 2.0 * x300) * IFxx
+                                - x249 - 2.0 * x250) * x98
                                 + mF
-                                    * (2.0 * (x146 * x146 * x16) + 2.0 * (x1509 * x155)
-                                        + 2.0 * (x1508 * x152))),
-                        0.0,
-                        x1544,
-                        x1545,
-                        0.0,
-                        0.0,
-                        x1548,
-                        x1549,
-                        x1336,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1512,
-                        x1518,
-                        x1526,
-                        x1536,
-                        x1544,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1551,
-                        x1553,
-                        x1555,
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        x1527,
-                        x1537,
-                        x1545,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x1556,
-                        x1557,
-                        0.0,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        x1513,
-                        0.0,
-                        x1531,
-                        x1541,
-                        x1548,
-                        0.0,
-                        x1551,
-                        x1556,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        0.0,
-                        x1513,
-                        x1533,
+                                    * (2.0 * (x1511 * x147) + (2.0 * x295 + 2.0 * x296) * x0)
+                                + ((2.0 * x293 + 2.0 * x294) * x0 + 2.0 * (x138 * x1530))
+                                    * mH),
                         x1543,
-                        x1549,
                         0.0,
+                        x1544,
+                        x1545,
+                        0.0,
+                        0.0,
+                        x1550,
                         x1553,
-                        x1557,
+                        x1072,
+                    ],
+                    [
+                        x1519,
+                        x1525,
+                        x1532,
+                        x1543,
+                        ((2.0 * (x1516 * x151) + 2.0 * (x1514 * x159)
+                            + 2.0 * (x1515 * x161)) * mF
+                            + x0
+                                * (2.0 * x197 - 2.0 * IHyy + 2.0 * x199 - 2.0 * IFyy
+                                    + IFxx * (2.0 * x336 + 2.0 * x337)) + 2.0 * (x166 * x168))
+                            * x19,
+                        0.0,
+                        x1554,
+                        x1555,
+                        0.0,
+                        0.0,
+                        x1559,
+                        x1561,
+                        x1354,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1520,
+                        x1526,
+                        x1533,
+                        x1544,
+                        x1554,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1563,
+                        x1565,
+                        x1567,
+                    ],
+                    [
+                        0.0,
+                        0.0,
+                        x1534,
+                        x1545,
+                        x1555,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x1568,
+                        x1569,
+                        0.0,
+                    ],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x1522,
+                        0.0,
+                        x1539,
+                        x1550,
+                        x1559,
+                        0.0,
+                        x1563,
+                        x1568,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [
+                        0.0,
+                        x1522,
+                        x1542,
+                        x1553,
+                        x1561,
+                        0.0,
+                        x1565,
+                        x1569,
                         0.0,
                         0.0,
                         0.0,
@@ -5307,10 +5144,10 @@ pub mod lagrange {
                         0.0,
                         0.0,
                         0.0,
-                        x1052,
-                        x1336,
+                        x1072,
+                        x1354,
                         0.0,
-                        x1555,
+                        x1567,
                         0.0,
                         0.0,
                         0.0,
@@ -5459,1016 +5296,889 @@ pub mod lagrange {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    -(x477 * x271 + x909 * x469 + x476 * x267) * mH
-                        - (x264 * x488 + x262 * x492 - x499) * mB
-                        - rR * mR * (x5 * x1 * x495 - 2.0 * x497)
-                        - mF * (x440 * x911 + x909 * x459 + x912 * x460),
-                    x496,
+                    -(mH * (x454 * x274 - x478 * x921 + x278 * x488)
+                        + mF * (x506 * x923 - x511 * x921 + x924 * x502)
+                        + x60 * (-x513 - 2.0 * x515) + mB * (x273 * x418 - x516 - x517)),
+                    x512,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    (phi_dot
-                        * (x604 - (x5 * x1 * phi_dot * x595 + x304 * psi_dot * x2) * x21
-                            + x944)
-                        + psi_dot
-                            * (x945 - phi_dot * x2 * ((x599 - x165 + x21) * x21 - x601)
-                                - x304 * x5 * psi_dot * x1)) * rR,
-                    x603,
-                    x848
-                        - psi_dot
-                            * (f64::sqrt(x167)
-                                * ((-x722 - x795 - x723 - x720) * rR + x947 + x948
-                                    + (x16 * (x759 + x731 + x949)
-                                        + x20 * (x755 - delta_dot * x923 - x756)) * x107)
-                                - rF * (x869 + x98 * x950 + x878)
-                                - x924 * x98 * x615 / f64::sqrt(x167))
-                        - theta_dot
-                            * (x951
-                                - rF * (x849 + x854 + x98 * (2.0 * x855 + x856 + x857))
-                                - x935 * x98 * x615 / f64::sqrt(x167))
-                        - delta_dot
-                            * ((f64::sqrt(x167) * x952
-                                - x98 * x909 * x615 / f64::sqrt(x167)) * x107
-                                - rF * (x953 * x98 + x841 + x842))
-                        - (f64::sqrt(x167)
-                            * (rR
-                                * (x72 * psi_dot * x21 * x2
-                                    + x5 * (x823 + x72 * x1 * phi_dot)) + x955 * x112 + x957
-                                + ((psi_dot * x121 * x21 * x2 + x830 + x5 * x879) * x16
-                                    + x958) * x107) - x5 * x98 * x309 * x615 / f64::sqrt(x167)
-                            - rF * (x98 * x954 + x816 + x817)) * phi_dot,
-                    -(x641 - x616
-                        - ((2.0 * (x926 * x615) - x660 * x909 - x952 * x259) * x98
-                            - x167
-                                * (x658 * x911 + x210 * x961 + x909 * x615 + x98 * x952
-                                    + x962 * x214 + x652 * x912) - x909 * x259 * x615) * rF)
-                        * psi_dot
-                        - (x802
-                            - rF
-                                * ((2.0 * (x931 * x615) - x909 * x786 - x312 * x952) * x98
-                                    - (x20 * (theta_dot * x121 * x909 - x952 * x92)
-                                        + x774 * x911 - delta_dot * x16 * x909 * x92 + x244 * x961
-                                        + x779 * x912 + x962 * x242) * x167 - x312 * x909 * x615)
-                            - x803) * phi_dot - rF * thF_dot * x952
-                        - delta_dot
-                            * (x768
-                                - ((2.0 * (x334 * x271 * x615) - x747 * x909 - x364 * x952)
-                                    * x98 - x364 * x909 * x615 - x334 * x167 * x638) * rF)
-                        - (x735 - x719
-                            - (x98 * (-x909 * x698 - x351 * x952 - 2.0 * x700)
-                                - x351 * x909 * x615
-                                - x167 * (0.5 * x705 + 0.5 * x707 + x716 * x271)) * rF)
-                            * theta_dot,
-                    0.0,
-                ],
-                [
-                    -mF
-                        * ((x98 * x459 + x440 * x210 + x214 * x460) * x2
-                            + (x1072 * x33 + x1073 * x29 + x25 * x1082) * psi_dot)
-                        - mH
-                            * (psi_dot * (x25 * x1083 + x1084 * x14 + x1085 * x23)
-                                + (x98 * x469 + x477 * x92 * x21 + x476 * x84) * x2)
-                        - rR * mR
-                            * (x21 * x2 * x495 - 2.0 * (x5 * psi_dot * x1 * phi_dot))
-                        - mB
-                            * ((x21 * (x1086 - x1087 - x1092) + x1093) * x2
-                                + (x7 * x1097 + x12 * x1100) * psi_dot),
-                    -rR * mR * (x498 * x5 * x21 - 2.0 * (psi_dot * x1 * phi_dot * x2))
-                        - mF
-                            * ((x1072 * x57 + x50 * x1073 + x1082 * x53) * psi_dot
-                                + (x440 * x965 + x963 * x459 + x968 * x460) * x5)
-                        - mH
-                            * ((x476 * x321 + x477 * x317 * x21 + x963 * x469) * x5
-                                + (x1085 * x46 + x1084 * x49 + x53 * x1083) * psi_dot)
-                        - mB
-                            * (x5 * (x21 * (x1087 - x1086 + x1092) - x1093)
-                                + psi_dot * (x41 * x1097 + x37 * x1100)),
-                    psi_dot
-                        * (x1 * x1 * (x1112 + x1113 - x1114 + x1115 + x1116 + x1117)
-                            - x1106 * x210 - 2.0 * (rR * rR * mR * x182 * phi_dot)
-                            - x1111 * x84
-                            + (x4 * x1123 - x1121 * x92 - x189 * x1126
-                                - IRyy * phi_dot * x21 - x1128 * x0 - x192 * x1131) * x21
-                            + x98 * x1138 - x1141 * x214)
-                        - (x559 * x21
-                            + (x1091 * x71 * x21 + x1 * (x63 * x1100 + x66 * x1097))
-                                * psi_dot + x591 * x483 * x1) * mB - x327 * x566
-                        - (x476 * x982 + x477 * x983 + x469 * x981
-                            + psi_dot * (x1085 * x101 + x94 * x1083 + x1084 * x104)) * mH
-                        - x574 * x1006
-                        + (x533 - x558 * x1008 - x538 * x317 - x286 * x549 - x525) * x1
-                        - x1004 * x579 - x519 * x21 + x330 * x510
-                        - mF
-                            * (x973 * x459
-                                + psi_dot * (x1082 * x119 + x117 * x1073 + x1072 * x116)
-                                + x980 * x460 + x440 * x979),
-                    g * (x141 * x21 - x323 * mF - (x89 * x321 + x581 * x21) * mH)
-                        + psi_dot
-                            * ((x20 * (x1132 - x1133 + x1134 + x1135 - x1136 + x1137)
-                                - x16 * x1111) * x92 - x1091 * x138 * mB - x1106 * x244
-                                - x0 * x1123 - x4 * x1128 - x286 * x1131
-                                - mH
-                                    * (x1083 * x126 + (x1084 * x89 * x92 + x1085 * x125) * x20)
-                                + rR * rR * mR * psi_dot * x182 - x1121 * x121
-                                - x1141 * x242 - x192 * x1126
-                                - mF
-                                    * (x130 * x1082 + (x1072 * x134 + x131 * x1073) * x20)),
-                    x1143
-                        + psi_dot
-                            * (x20
-                                * (-x1107 - x1106 * x28 - x1108 - x27 * x1141 - x1109
-                                    - x1110)
-                                - mF * (x152 * x1073 + x146 * x20 * x1082 + x1072 * x155)
-                                - mB * (x1100 * x69 - xB * x1097)
-                                + x1 * (x1112 + x1113 - x1114 + x222 * phi_dot + x1116)
-                                + x16 * x1138
-                                - mH
-                                    * (x1085 * x16 * x158 + x1084 * x156 + x20 * x157 * x1083)),
-                    x526,
-                    x1145
-                        + psi_dot
-                            * (x1106 * x27 - x89 * mH * x1083 - x1118
-                                + (x1001 - x1120 + x1002) * x422 - mF * x1082 * x107 - x1119
-                                - x1141 * x28 + x330 * x593),
-                    -(psi_dot * x1062 * IFyy),
-                    x1147 * x_dot * phi_dot
-                        + rR
-                            * (psi_dot
-                                * (x944 - x304 * psi_dot * x21 * x2
-                                    - x1
-                                        * (x5 * x1149 * phi_dot + (x594 - 1.0) * psi_dot * x1 * x2))
-                                + phi_dot
-                                    * (x945
-                                        - x1 * (-x5 * f64::sqrt(x164) * psi_dot - 2.0 * x756)
-                                        - (phi_dot
-                                            * (3.0 * x599 - x165 + ((-x1146 - x1148) * x21 + 2.0) * x21)
-                                            * x2 + x5 * psi_dot * x1 * x595) * x21)),
                     rR
-                        * ((x597
-                            - (x1149 * phi_dot * x2 + (1.0 - x594) * x5 * psi_dot * x1)
-                                * x1 - x5 * psi_dot * x256 * x21) * psi_dot
-                            + (x598
-                                - (psi_dot * x1 * x595 * x2
-                                    + x5 * phi_dot
-                                        * (((x1146 + x1148) * x21 - 2.0) * x21 - 3.0 * x599 + x165))
-                                    * x21 - (2.0 * x618 - f64::sqrt(x164) * psi_dot * x2) * x1)
-                                * phi_dot) + x1147 * y_dot * phi_dot,
-                    rF * x1158 * thF_dot
-                        - ((x330 * (-x1159 - x1160) - x274 * x899 / f64::sqrt(x167)
-                            - x5 * x309 * x615 / f64::sqrt(x167)) * x98
-                            - x330 * x274 * x615 / f64::sqrt(x167)
-                            + f64::sqrt(x167)
-                                * (rR * (x1154 - x1162 - x617 - x618)
-                                    + x107 * (x958 + x16 * (x956 * x8 + x1164 + x830))
-                                    + x112 * (x1165 - x9 * x956) + x957)
-                            - (x5 * x963 * x259 * x615
-                                + x167
-                                    * (x686 * x1006 + x1169 * x214 + x1170 + x1174 * x57
-                                        + x210 * x1175 + x688 * x1004 + x1158 * x98 + x1176
-                                        + x5 * (x658 * x965 + x963 * x615 + x652 * x968)
-                                        + x50 * x1179) + x53 * (x1180 + x1181) + x330 * x675
-                                + x98
-                                    * (x1158 * x259 + x5 * x660 * x963 + x53 * x1182
-                                        - 2.0 * (x261 * x899) + x1019 * x673 - 2.0 * (x1020 * x615)
-                                        - 2.0 * (x330 * x691))) * rF) * psi_dot
-                        - theta_dot
-                            * (x98
-                                * (x330 * (-x1183 - x1184) - x346 * x899 / f64::sqrt(x167)
-                                    - x590 * x21 * x615 * x2 / f64::sqrt(x167))
-                                + f64::sqrt(x167)
-                                    * (x85 * x1186 + x112 * (x1187 - x9 * x1186)
-                                        + (x16 * (x1186 * x8 + x1188) - x1189) * x107 - rR * x792)
-                                - rF
-                                    * ((x1040 * x673 - 2.0 * (x5 * x899 * x21)
-                                        + (2.0 * (x1 * x615) + x963 * x698) * x5
-                                        - 2.0 * (x717 * x330) + x351 * x1158 + x1190 * x53) * x98
-                                        + x1040 * x53 * x615 + (x699 - 2.0 * x700) * x330
-                                        + x351 * x1191
-                                        + (0.5 * x852 - 0.5 * x851 + x716 * x5 * x317 * x21) * x167)
-                                - x330 * x346 * x615 / f64::sqrt(x167))
-                        - phi_dot
-                            * (f64::sqrt(x167)
-                                * ((x1192 * x1 + phi_dot * x317 * x21 * x2) * x112
-                                    + rR
-                                        * (x72 * phi_dot * x21 * x2
-                                            + (x72 * x5 * psi_dot - x794) * x1)
-                                    + x85 * (theta_dot * x0 * x1 * x2 + x4 * (x795 + x720))
-                                    + ((x832 * x1 * x2 + x755) * x20
-                                        + x16
-                                            * ((theta_dot * x92 * x2 + x5 * psi_dot * x121) * x1 + x759
-                                                + x121 * phi_dot * x21 * x2)) * x107)
-                                - x330 * x309 * x615 * x2 / f64::sqrt(x167)
-                                - rF
-                                    * (x98
-                                        * (x1194 * x53 - 2.0 * (x330 * x780) + x1158 * x312
-                                            - 2.0 * (x311 * x899) + x1032 * x673
-                                            + (x963 * x786 - 2.0 * (x1031 * x615)) * x5)
-                                        + x167
-                                            * ((x779 * x968 + x774 * x965 + x1193 * x963) * x5
-                                                - x1158 * x20 * x92 + x1169 * x242 + x244 * x1175)
-                                        + x5 * x312 * x963 * x615 + (x1195 + x1196) * x53
-                                        + x330 * x788)
-                                + ((x309
-                                    * (-x330 * x98 * x615 / f64::powf(x167, 1.5) - x1197)
-                                    - x583 * x615 / f64::sqrt(x167)) * x2
-                                    - x330 * x801 / f64::sqrt(x167)) * x98)
-                        - delta_dot
-                            * ((x98
-                                * ((-x2 / f64::sqrt(x167)
-                                    - x330 * x25 / f64::powf(x167, 1.5)) * x98 * x615
-                                    - x25 * x899 / f64::sqrt(x167)
-                                    - x330 * x767 / f64::sqrt(x167)) + f64::sqrt(x167) * x1208
-                                - x330 * x25 * x615 / f64::sqrt(x167)) * x107
-                                - rF
-                                    * (x53 * (x1198 + x330 * x747) + x1191 * x364
-                                        + x334 * (x167 * x1167 - 2.0 * (x330 * x49 * x615))
-                                        + (x5 * x747 * x963
-                                            + x334
-                                                * (-2.0 * (x49 * x899) - 2.0 * (x330 * x752)
-                                                    - 2.0 * (x5 * x317 * x21 * x615)) + x1048 * x673
-                                            + x1201 * x53 + x1158 * x364) * x98)) + x901 * x_dot,
-                    x901 * y_dot
-                        - ((x330 * (-x1210 - x1211) - x1209
-                            - x278 * x899 / f64::sqrt(x167)) * x98
-                            - rF
-                                * (x98
-                                    * ((2.0 * x1022 + 2.0 * x1023 + 2.0 * x1024 + x1025) * x615
-                                        - x1208 * x259 - x767 * x1019 + 2.0 * (x877 * x330)
-                                        - x98 * x660 * x2 + 2.0 * (x282 * x899) - x25 * x1182)
-                                    - x167
-                                        * ((x653 + x654 + x659) * x2 + x330 * x767 + x1179 * x29
-                                            + x210 * x1215 + x814 * x1004 + x812 * x1006 + x25 * x899
-                                            + x1216 * x214 + x33 * x1174 + x98 * x1208)
-                                    + (-x1180 - x1181) * x25 + x330 * x873)
-                            - x330 * x278 * x615 / f64::sqrt(x167)
-                            + (x793 + x1213 * x107 + x112 * x1214
-                                + rR * (x755 + x1185 - x756 - x1204)) * f64::sqrt(x167))
+                        * ((-x621 * x310 - x623 * ((x609 + x310) * x1 - x192) - x622)
                             * psi_dot
-                        - theta_dot
-                            * ((x330 * x1220 - x1043 * x5 * x21 * x615 / f64::sqrt(x167)
-                                - x899 * x357 / f64::sqrt(x167)) * x98
-                                - x330 * x357 * x615 / f64::sqrt(x167)
-                                - (x25 * (-x1040 * x615 - x351 * x899)
-                                    - x167 * (0.5 * x707 - 0.5 * x705 + x716 * x92 * x21 * x2)
-                                    + (((2.0 * x1 - x349 - x350) * x615 - x1217) * x2
-                                        - x1190 * x25 - 2.0 * (x899 * x21 * x2) - x1040 * x767
-                                        - x351 * x1208 + 2.0 * (x330 * x853)) * x98 + x858 * x330)
-                                    * rF
-                                + f64::sqrt(x167)
-                                    * (x1163 * x85 - rR * x837
-                                        + (x16 * (x1166 + x1165) - x1221) * x107
-                                        + (x1152 - x1164) * x112))
-                        - ((x323 * x1222 - x98 * x615 * x1034 / f64::sqrt(x167)) * x5
-                            + ((x5 * x1223 + psi_dot * x1 * x317 * x2) * x112
-                                + x85 * (x4 * (x635 - x623) - theta_dot * x5 * x0 * x1)
-                                + ((x5 * x1 * x608 + x617) * x20
-                                    + ((theta_dot * x1 * x317 + x82 * phi_dot * x21) * x5
-                                        + psi_dot * x121 * x1 * x2 - x626) * x16) * x107
-                                + rR
-                                    * ((phi_dot * x306 * x21 + x405) * x5
-                                        + x72 * psi_dot * x1 * x2)) * f64::sqrt(x167)
-                            - rF
-                                * (x330 * x821 + (-x1195 - x1196) * x25
-                                    - x167
-                                        * (x1216 * x242 + (x784 + x785 + x1193 * x98) * x2
-                                            - x20 * x1208 * x92 + x1215 * x244)
-                                    + x98
-                                        * (2.0 * (x314 * x899) - x1032 * x767 - x1194 * x25
-                                            + (x1224 - x1202 - x1207) * x312 + 2.0 * (x330 * x815)
-                                            - x98 * x786 * x2)) - x330 * x98 * x838 / f64::sqrt(x167))
-                            * phi_dot - rF * thF_dot * x1208
+                            + (x624 + x626 - (x310 * x628 + x618 * x625) * x1)
+                                * phi_dot),
+                    x620,
+                    x815
                         - delta_dot
-                            * (((x330
-                                * (-x53 * x98 * x615 / f64::powf(x167, 1.5)
-                                    - x673 / f64::sqrt(x167)) - x53 * x899 / f64::sqrt(x167)
-                                - x5 * x963 * x615 / f64::sqrt(x167)) * x98
-                                - x330 * x53 * x615 / f64::sqrt(x167)
-                                + f64::sqrt(x167) * x1158) * x107
-                                - rF
-                                    * (x25 * (-x1198 - x364 * x899) - x334 * x167 * x1214
-                                        + (x364 * (-x1202 - x1224 - x1207) - x767 * x1048
-                                            - x1201 * x25
-                                            + x334
-                                                * (2.0 * (x14 * x899) + 2.0 * (x92 * x21 * x615 * x2)
-                                                    + 2.0 * (x840 * x330)) - x747 * x98 * x2) * x98
-                                        + x330 * x846)),
-                    -(x1225
-                        + rF
-                            * (x963 * x615 / f64::sqrt(x167)
-                                + 2.0 * (x330 * x899 / f64::sqrt(x167))
-                                + x98
-                                    * ((x20 * (x611 - x826 - x827) + x1150) / f64::sqrt(x167)
-                                        + x330
-                                            * (x330 * (3.0 * x1226 + 3.0 * x1227) * x615 + 2.0 * x1228)
-                                        + x98 * x963 * x615 / f64::powf(x167, 1.5)))
-                        + x107 * (x16 * (x826 - x611 + x827) + x20 * x832 * x21)
-                        + theta_dot * x87 * x21 + x1229 * x1 * phi_dot) * phi_dot
-                        - theta_dot
-                            * (rF
-                                * (delta_dot * x16
-                                    * (x330 * x883 * x317 * x21
-                                        - x98 * x1 * x92 / f64::sqrt(x167))
-                                    + x20
-                                        * ((((-3.0 * (x330 * x98 * x615 / f64::powf(x167, 2.5))
-                                            - x899 / f64::powf(x167, 1.5)) * x317 * x21
-                                            - x330 * x834 / f64::powf(x167, 1.5)
-                                            - x1 * x92 * x615 / f64::powf(x167, 1.5)) * x98
-                                            - 3.0 * (x330 * x317 * x21 * x615 / f64::powf(x167, 1.5))
-                                            - x1223 / f64::sqrt(x167)) * x98
-                                            - x1 * x92 * x615 / f64::sqrt(x167)
-                                            - x330 * x834 / f64::sqrt(x167)
-                                            - x899 * x317 * x21 / f64::sqrt(x167)))
-                                + (theta_dot * x1230 - delta_dot * x20 * x107 * x92) * x1
-                                + x1231 + x16 * x107 * x1223 + x1232) - delta_dot * x1235,
-                ],
-                [
-                    -mB * (x12 * x1346 - x1341 * x21 * x2 + x341 * x488 + x7 * x1347)
-                        - mF
-                            * (x440 * x1238 - x345 * x20 * x459 + x25 * x1376
-                                + x460 * x1239 + x1384 * x33 + x1385 * x29)
-                        - (x14 * x1390 + x345 * x1391 + x477 * x343 + x1396 * x23
-                            + x25 * x1397) * mH,
-                    -mH
-                        * (x49 * x1390 + x355 * x477 + x53 * x1397 + x1396 * x46
-                            + x356 * x1391)
-                        - (x1341 * x5 * x21 + x37 * x1346 + x488 * x262 + x41 * x1347)
-                            * mB
-                        - mF
-                            * (x440 * x1241 - x20 * x356 * x459 + x1240 * x460
-                                + x1385 * x50 + x53 * x1376 + x1384 * x57),
-                    (x585 * x317 + x4 * (x530 - 2.0 * x527 + x1417 + x1418 + x531)
-                        - x574 * x1287 - x1283 * x579 - x1419 - x192 * (x1421 + x1422)
-                        + x0 * x1423 + x189 * x1426 - x92 * x1434 - x82 * x538) * x21
-                        - x1405 * x84
-                        - mF
-                            * (x1257 * x459 + x440 * x1256 + x1258 * x460 + x117 * x1385
-                                + x119 * x1376 + x1384 * x116)
-                        - mB
-                            * ((x1259 * x483 + x1341 * x71) * x21
-                                + x1 * (x1406 * x63 + rR * (x1086 - x1087) + x66 * x1347))
-                        - x1411 * x210
-                        - x1 * (x1414 - x1412 + x378 * (x1416 - x1415 - x511 + x512))
-                        - x1437 * x214 + x98 * x1444
-                        - (x104 * x1390 + x94 * x1397 + x1247 * x469 + x477 * x1252
-                            + x1396 * x101 + x476 * x1250) * mH,
-                    (x121 * x566 - x1405 * x92) * x16
-                        + ((x1438 + x1439 + x1440 - x1441 - x1442 + x1443) * x92
-                            + x121 * x510) * x20 - x1294 * x579 - x1437 * x242
-                        - x121 * x1434 - x1411 * x244 + x4 * x1423
-                        - (x1266 * x469 + x1397 * x126
-                            + (x89 * (x1390 * x92 - x477 * x121) + x476 * x1265
-                                + x1396 * x125) * x20) * mH - x539
-                        + x0 * (2.0 * x527 - x530 - x1417 - x1418 - x531) - x574 * x1296
-                        + x1143 + mB * (-x483 * x71 - x1341 * x138)
-                        + x286 * (x545 - x1421 - x1422 + x548) + x192 * x1426
-                        - mF
-                            * (x20
-                                * (x440 * x1262 + x1384 * x134 + x1263 * x460
-                                    + x1385 * x131) + x1264 * x459 + x130 * x1376),
-                    x16 * x1444 - mF * (x146 * x20 * x1376 + x1385 * x152 + x1384 * x155)
-                        + x1412 - x1414 - (x1406 * x69 - xB * x1347) * mB
-                        + (-x1398 - x1401 - x1402 - x1404 - x1411 * x28 - x27 * x1437)
-                            * x20
-                        + g
-                            * (-(x1326 + x62 + x123 + x318) * mF
-                                - (x89 * x16 * x121 + x580 + x62 + x123) * mH
-                                - (x137 - x136) * mB) * x21
-                        - mH * (x1396 * x16 * x158 + x20 * x157 * x1397 + x156 * x1390)
-                        + x378 * (x1415 - x1416 + x511 - x512),
-                    0.0,
-                    (x1427 - x1349 * x16 * IHyy + x1428) * x422 + x27 * x1411 - x1430
-                        - mF * x107 * x1376 - x89 * mH * x1397
-                        + x20 * (x1349 * x535 + x1445) - x1433 - x1437 * x28,
-                    -(x1377 * IFyy),
-                    0.0,
-                    0.0,
-                    x1449 * x_dot
-                        - theta_dot
-                            * (x346 * x20 * x317 * x21 * x615 / f64::sqrt(x167)
-                                + x98
-                                    * (x20 * (x1183 + x1184) * x317 * x21
-                                        - x1321 * x615 / f64::sqrt(x167)
-                                        - x346 * x1448 / f64::sqrt(x167))
-                                - rF
-                                    * (x351 * x53 * x1448
-                                        + x20
-                                            * (x356 * (-x1217 - x1450)
-                                                + ((2.0 * (x717 * x98) - x694 - x699 + 2.0 * x700) * x317
-                                                    + x1322 * (x689 + x690)) * x21)
-                                        + (x351 * x1453 - 2.0 * (x5 * x1448 * x21) + x53 * x1459)
-                                            * x98 + x355 * x716 * x167)
-                                + f64::sqrt(x167)
-                                    * (x947 + x948
-                                        + (x16 * (x731 + x949) - delta_dot * x20 * x923) * x107
-                                        - rR * x724))
-                        - (x274 * x20 * x317 * x21 * x615 / f64::sqrt(x167)
-                            + (x20 * x317 * x21 * (x1159 + x1160)
-                                - x935 * x615 / f64::sqrt(x167)
-                                - x274 * x1448 / f64::sqrt(x167)) * x98 + x951
-                            - rF
-                                * ((x1309 * x21 * x673 - 2.0 * (x1448 * x261) + x53 * x1460
-                                    + x1453 * x259 - 2.0 * (x1308 * x615)
-                                    + x20 * (2.0 * (x691 * x317 * x21) - x356 * x660)) * x98
-                                    + x167
-                                        * ((x688 * x1283 - x20 * x317 * x673 + x686 * x1287) * x21
-                                            - x20 * x356 * x615 + x1457 * x57 + x53 * x1448
-                                            + x658 * x1241 + x1463 * x214 + x50 * x1458 + x1240 * x652
-                                            + x98 * x1453 + x210 * x1464) + (x1465 + x1466) * x53
-                                    + x20
-                                        * ((2.0 * x662 - x661 - x674) * x317 * x21
-                                            - x356 * x259 * x615))) * psi_dot + rF * thF_dot * x1453
-                        - (f64::sqrt(x167)
-                            * (((x1 * phi_dot * x92 * x2 + x1192 * x21) * x16 - x1189)
-                                * x107 + (x798 + x800) * x112
-                                + (theta_dot * x884 * x2 + x5 * psi_dot * x970) * x21
-                                + x87 * x1 * phi_dot * x2)
-                            - ((x1316 * x673
-                                + x20 * (2.0 * (x780 * x317 * x21) - x356 * x786)
-                                - 2.0 * (x311 * x1448) + x1469 * x53 + x1453 * x312
-                                - 2.0 * (x1317 * x615)) * x98
-                                + (delta_dot * x53 * x16 * x121 + x686 * x1296
-                                    + x1463 * x242 + x1241 * x774 + x1240 * x779
-                                    + x20
-                                        * ((x669 + x672 - theta_dot * x20 * x356) * x121
-                                            + (2.0 * x1451 + x1452 + theta_dot * x53) * x92)
-                                    + x1468 * x57 + x50 * x1467 + x688 * x1294 + x244 * x1464)
-                                    * x167 + (x1470 + x1471) * x53
-                                + x20
-                                    * ((2.0 * x783 - x782 - x787) * x317 * x21
-                                        - x356 * x312 * x615)) * rF
-                            + x20 * x309 * x317 * x21 * x615 * x2 / f64::sqrt(x167)
-                            + x98
-                                * ((x20 * x317
-                                    * (x98 * x309 * x615 * x2 / f64::powf(x167, 1.5)
-                                        + x801 / f64::sqrt(x167))
-                                    - x590 * x615 * x2 / f64::sqrt(x167)) * x21
-                                    - x309 * x1448 * x2 / f64::sqrt(x167))) * phi_dot
-                        - delta_dot
-                            * (x107
-                                * (x1477 * f64::sqrt(x167)
-                                    + x20
-                                        * ((x25 * x895 * x615 + x98 * x767 / f64::sqrt(x167)) * x317
-                                            * x21 + x345 * x98 * x615 / f64::sqrt(x167))
-                                    - x25 * x98 * x1448 / f64::sqrt(x167))
-                                - ((x1453 * x364 - x20 * x356 * x747 + x1472 * x53
-                                    + x334
-                                        * (2.0 * (x20 * x752 * x317 * x21) - 2.0 * (x1448 * x49)
-                                            - 2.0 * (x355 * x615)) + x1329 * x673) * x98
-                                    + x334 * x167 * x863 + x53 * (x1473 + x1474)
-                                    + x20
-                                        * (x317 * x21 * (2.0 * x749 - x748 - x750)
-                                            - x356 * x364 * x615)) * rF),
-                    x1449 * y_dot - x1477 * rF * thF_dot
+                            * ((f64::sqrt(x175) * x956 + x921 * x639 / f64::sqrt(x175))
+                                * x68 - rF * (x867 + x868 + x75 * x957))
+                        - (x958 - rF * (x852 + x856 + x857)
+                            - x639 * x947 / f64::sqrt(x175)) * theta_dot
                         - psi_dot
-                            * (x20 * x278 * x317 * x21 * x615 / f64::sqrt(x167) + x735
-                                + x98
-                                    * (x20 * (x1210 + x1211) * x317 * x21
-                                        - x278 * x1448 / f64::sqrt(x167) - x1478)
+                            * (f64::sqrt(x175)
+                                * (x960 - rR * (x647 + x885)
+                                    + x68
+                                        * (x19 * (x961 - delta_dot * x935) + x0 * (x962 + x796)))
+                                - x936 * x639 / f64::sqrt(x175)
+                                - rF * (x75 * x963 + x878 + x879))
+                        - (f64::sqrt(x175)
+                            * (x68 * (x965 + x0 * (x844 + x632 * x8 + x514 * x136))
+                                + rR * (x61 * x514 + x8 * (x61 * x553 + x840)) + x966 * x88
+                                + x968) - x942 * x639 / f64::sqrt(x175)
+                            - rF * (x832 + x834 + x964 * x75)) * phi_dot,
+                    -(x789 * x956
+                        + psi_dot
+                            * (x777
                                 - rF
-                                    * (x25 * (-x1465 - x1466)
-                                        + x98
-                                            * (x20 * (x345 * x660 - 2.0 * (x877 * x317 * x21))
-                                                - x25 * x1460 + 2.0 * (x1311 * x615) - x1309 * x767 * x21
-                                                + 2.0 * (x1448 * x282) - x1477 * x259)
-                                        + x20 * (x345 * x259 * x615 + x317 * x21 * x950)
-                                        - x167
-                                            * (x652 * x1239
-                                                + (x814 * x1283 + x812 * x1287 - x20 * x767 * x317) * x21
-                                                + x25 * x1448 - x345 * x20 * x615 + x33 * x1457
-                                                + x658 * x1238 + x1458 * x29 + x1481 * x214 + x1477 * x98
-                                                + x210 * x1482)))
-                        - theta_dot
-                            * (x20 * x317 * x357 * x21 * x615 / f64::sqrt(x167)
+                                    * ((2.0 * (x638 * x939) + x921 * x780 - x956 * x272) * x75
+                                        - x175
+                                            * (x969 + x75 * x956 + x226 * x972 + x225 * x973
+                                                + x703 * x924 + x702 * x923) - x969 * x272))
+                        + theta_dot
+                            * (x660
                                 - rF
-                                    * ((-x351 * x1477 - x25 * x1459 - 2.0 * (x1448 * x21 * x2))
-                                        * x98
-                                        + x20
-                                            * (((2.0 * x855 - 2.0 * (x98 * x853) + x856 + x857) * x317
-                                                + (-x875 - x876) * x1322) * x21 + x345 * (x1217 + x1450))
-                                        - x351 * x25 * x1448 - x716 * x167 * x343)
-                                + (((x625 + x632) * x16 - delta_dot * x266 * x20) * x107
-                                    - x631 * rR + x634 + x639) * f64::sqrt(x167)
-                                + (x20 * (x1218 + x1219) * x317 * x21
-                                    - x1324 * x615 / f64::sqrt(x167)
-                                    - x1448 * x357 / f64::sqrt(x167)) * x98)
-                        - (x20 * x98 * x838 * x317 * x21 / f64::sqrt(x167)
+                                    * (-x969 * x352
+                                        - (x352 * x956 - x706 * x921 + 2.0 * x689) * x75
+                                        - x175 * (x274 * x671 + 0.5 * x662 + 0.5 * x664)))
+                        + (x727
                             - rF
-                                * (x20 * (x345 * x312 * x615 + x317 * x954 * x21)
-                                    + x25 * (-x1470 - x1471)
-                                    + (2.0 * (x314 * x1448) - x1469 * x25 + 2.0 * (x1319 * x615)
-                                        - x1316 * x767
-                                        + x20 * (x345 * x786 - 2.0 * (x815 * x317 * x21))
-                                        - x1477 * x312) * x98
-                                    - x167
-                                        * (x1294 * x814 + x1238 * x774 + x244 * x1482
-                                            + delta_dot * x25 * x16 * x121 + x1468 * x33
-                                            + ((x1475 + theta_dot * x25 + 2.0 * x1476) * x92
-                                                + x121 * (x758 + x766 - x345 * theta_dot * x20)) * x20
-                                            + x779 * x1239 + x1467 * x29 + x1481 * x242 + x812 * x1296))
-                            + f64::sqrt(x167)
-                                * ((x955 * x16 - x1221) * x107 + x1483 * x112
-                                    + psi_dot * x970 * x21 * x2
-                                    + (x970 * x1 * phi_dot + theta_dot * x1230 * x21) * x5)
-                            + ((x323 * x20 * x317 * x895 - x1043 * x98 / f64::sqrt(x167))
-                                * x21 * x615 - x323 * x98 * x1448 / f64::sqrt(x167)) * x5)
-                            * phi_dot
-                        - delta_dot
-                            * (x107
-                                * (f64::sqrt(x167) * x1453
-                                    - x53 * x98 * x1448 / f64::sqrt(x167)
-                                    + x20
-                                        * (x317 * x21
-                                            * (x98 * x673 / f64::sqrt(x167) + x53 * x895 * x615)
-                                            + x356 * x98 * x615 / f64::sqrt(x167)))
-                                - ((-x1473 - x1474) * x25
-                                    + (x345 * x20 * x747 - x1477 * x364
-                                        + x334
-                                            * (2.0 * (x14 * x1448) - 2.0 * (x840 * x20 * x317 * x21)
-                                                + 2.0 * (x343 * x615)) - x1472 * x25 - x1329 * x767) * x98
-                                    + x20 * (x953 * x317 * x21 + x345 * x364 * x615)
-                                    - x334 * x167 * x733) * rF),
-                    -theta_dot
-                        * (x1225
-                            + (theta_dot * x87
-                                + rF
-                                    * ((x121 * x883 * x615
-                                        + x317
-                                            * (delta_dot * x16 * x317 * x21 / f64::sqrt(x167)
-                                                - x1448 / f64::sqrt(x167)
-                                                + (3.0 * (x20 * x317 * x21 * x615 / f64::powf(x167, 1.5))
-                                                    + (x20 * x834 / f64::powf(x167, 1.5)
-                                                        - x1448 / f64::powf(x167, 1.5)
-                                                        + x317
-                                                            * (delta_dot * x16 / f64::powf(x167, 1.5)
-                                                                + 3.0 * (x20 * x98 * x615 / f64::powf(x167, 2.5))) * x21)
-                                                        * x98) * x98 + x20 * x834 / f64::sqrt(x167))) * x20
-                                        - delta_dot * x16 * x98 * x121 / f64::sqrt(x167))
-                                - delta_dot * x20 * x121 * x107) * x21
-                            + x1230 * x1 * phi_dot + x361 * x828)
-                        - delta_dot
-                            * (x1484
-                                + rF
-                                    * ((x16 * x883 * x615
-                                        + x20 * ((x1486 - x1487) * x98 - x1488)) * x317 * x21
-                                        + x98 * (x1455 - x1454) / f64::sqrt(x167)
-                                        + x1448 * x369 * x895))
-                        - phi_dot
-                            * (x107 * (x16 * x1223 - delta_dot * x20 * x1 * x92)
-                                + theta_dot * x1230 * x1 + x1231
-                                + rF
-                                    * (x20
-                                        * (x1 * x883 * x92 * x615
-                                            + (x98 * (x330 * x1485 * x615 - x1228) - x1197) * x317
-                                                * x21) + x330 * x1448 * x895
-                                        + (-x20 * x1223 - delta_dot * x16 * x1 * x92) * x98
-                                            / f64::sqrt(x167)) + x1232),
-                ],
-                [
-                    0.0,
-                    0.0,
-                    x21 * (x189 * x1490 - x192 * (x1489 + x548) - x1419),
-                    x192 * x1490 + (x545 - x1489) * x286,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
+                                * ((2.0 * (x945 * x638) - x956 * x313 + x757 * x921) * x75
+                                    - x969 * x313
+                                    - (x734 * x923 + (-x956 * x98 - x735 * x921) * x19
+                                        + x746 * x921 + x235 * x973 + x233 * x972 + x924 * x752)
+                                        * x175)) * phi_dot
+                        + delta_dot
+                            * (x799
+                                - ((2.0 * (x338 * x638 * x274) - x812 * x921 - x956 * x369)
+                                    * x75 - x969 * x369 - x768 * x370) * rF)),
                     0.0,
                 ],
                 [
-                    -(x33 * x1566 + x1568 * x29 + x1498 * x459 + x25 * x1575) * mF
-                        - (x14 * x1578 + x1579 * x23 + x25 * x1582 + x1498 * x469) * mH,
-                    -mF * (x57 * x1566 + x1514 * x459 + x53 * x1575 + x1568 * x50)
-                        - (x49 * x1578 + x1514 * x469 + x1579 * x46 + x53 * x1582) * mH,
-                    x510 * x369
-                        - (x1583 * x94 + x1519 * x469 + x104 * x1578 + x1579 * x101
-                            + x476 * x1500 - x477 * x89 * x369) * mH - x210 * x1586
-                        + x98 * x1591 - x92 * x1594 * x21 - x1597 * x214
-                        - (x1598 + x1599 + x1600) * x84
+                    -(mF
+                        * ((x226 * x502 + x506 * x225 + x511 * x75) * x2
+                            + (x30 * x1095 - x1089 * x20 + x31 * x1096) * psi_dot)
+                        + ((x478 * x75 + x95 * x488 + x193 * x454) * x2
+                            + (x25 * x1097 + x28 * x1098 - x20 * x1099) * psi_dot) * mH
+                        + mB
+                            * ((x1100 + (x1107 - x1104) * x1) * x2
+                                + (x11 * x1112 + x16 * x1116) * psi_dot)
+                        + x60 * (-x377 * x3 - 2.0 * (phi_dot * x621))),
+                    -(mF
+                        * ((x976 * x502 - x974 * x511 + x506 * x977) * x8
+                            + psi_dot * (x1096 * x50 + x1089 * x55 + x52 * x1095))
+                        + x60 * (x377 * x45 - 2.0 * (phi_dot * x613))
+                        + (x8 * ((x1105 + x1104 - x1106) * x1 - x1100)
+                            + psi_dot * (x41 * x1116 + x37 * x1112)) * mB
+                        + (x8 * (x454 * x630 + x324 * x488 - x478 * x974)
+                            + (x1099 * x55 + x1098 * x47 + x49 * x1097) * psi_dot) * mH),
+                    (x75 * x1130 - x95 * x1117 - x1123 * x225 - 2.0 * (x1131 * x231)
+                        + (x1136 + x1137 + x1138) * x192
+                        + (x4 * x1148 - x1139 - x1142 * x9 - x1146 * x98 - x218 * x1152
+                            + x221 * x1154) * x1 - x1156 * x226) * psi_dot
+                        - (x583 * x1 - x1100 * x117
+                            + (x118 * x1103 + (x119 * x1116 + x121 * x1112) * x5)
+                                * psi_dot) * mB
                         - mF
-                            * (x440 * x1503 + x117 * x1568 + x1520 * x459 + x1504 * x460
-                                + x1601 * x119 + x116 * x1566),
-                    (x16 * (x503 + x504 - x1598 - x1599 - x508 - x1600 + x509)
-                        + x20
-                            * (x563 + x564 + x1587 + x565 + x587 + x1588 + x588 + x1590))
-                        * x92
-                        - (x584 * x16 + x1583 * x126
-                            + x20 * (x1579 * x125 + x1523 * x469 + x89 * x1578 * x92))
-                            * mH + x1145 - x1586 * x244 - x121 * x1594
-                        - mF
-                            * (x1601 * x130 + x16 * x586
-                                + x20 * (x1568 * x131 + x1522 * x459 + x134 * x1566))
-                        - x1597 * x242,
-                    x20
-                        * (x503 - x1586 * x28 + x504 - x1598 - x1599 - x508 - x1597 * x27
-                            - x1600 + x1445 + x509)
-                        - mF
-                            * (x155 * x1566 + x1568 * x152 + x146 * x16 * x459
-                                + (x440 * x1508 + x1509 * x460 + x146 * x1601) * x20)
-                        + x16 * x1591
-                        - (x16 * (x157 * x469 + x1579 * x158) + x156 * x1578
-                            + x20 * (x157 * x1582 + x477 * x89)) * mH,
-                    0.0,
-                    x385 * x593 - x1593
-                        + x89
-                            * (x470 + x471 - x1602 + x404 - x1580 - x1581 - x1573 + x410)
-                            * mH + x1603 * x422 * x422 - x1597 * x28 + x27 * x1586
-                        + (x394 - x1602 + x404 + x1569 - x1572 - x1573 - x1574 + x410)
-                            * mF * x107,
-                    -(x1559 * IFyy),
-                    0.0,
-                    0.0,
-                    rF * thF_dot * x1607
-                        - theta_dot
-                            * (x98
-                                * (x346 * x1604 - x734 * x369 / f64::sqrt(x167)
-                                    + x345 * x20 * x107 * x615 / f64::sqrt(x167))
-                                - x346 * x369 * x615 / f64::sqrt(x167)
-                                + x1477 * f64::sqrt(x167) * x107
-                                - rF
-                                    * ((x351 * x1607 + x1547 * x673 + x1514 * x698
-                                        - 2.0 * (x5 * x906 * x21) - 2.0 * (x717 * x369)
-                                        + x53 * x1610) * x98 + x351 * (x1611 + x1612 + x1613)
-                                        - 2.0 * (x5 * x369 * x21 * x615) + x167 * x49 * x1614
-                                        + x53 * (x1615 + x1616))) + x_dot * x908
-                        - delta_dot
-                            * ((f64::sqrt(x167) * x1619
-                                - x25 * x369 * x615 / f64::sqrt(x167)
-                                + (x25 * x1604 - x767 * x369 / f64::sqrt(x167)
-                                    - x1498 * x615 / f64::sqrt(x167)) * x98) * x107
-                                - rF
-                                    * (x334
-                                        * ((-2.0 * (x906 * x49) - 2.0 * (x752 * x369)) * x98
-                                            - 2.0 * (x49 * x369 * x615)) + x1550 * x747
-                                        + x364 * (x1611 + x1612 + x98 * x1607 + x1613)))
-                        - (f64::sqrt(x167) * (x1202 + x20 * (-x798 - x799 - x800)) * x107
-                            - ((x1612 + x1613) * x312 - 2.0 * (x311 * x369 * x615)
-                                + x53 * (x1620 + x1621 + x1622)
-                                + x167
-                                    * (x1623 * x242
-                                        + ((delta_dot * x53 - x1605 - x1624 - x1625 - x1606) * x20
-                                            + x16 * (-x669 - x672 - delta_dot * x1514)) * x92
-                                        + x53 * x1626 + theta_dot * x20 * x1514 * x121
-                                        + x1627 * x244 + x57 * x1628 + x50 * x1629)
-                                + x98
-                                    * (x1632 * x53 - 2.0 * (x780 * x369) + x1540 * x673
-                                        + x312 * x1607 + x1514 * x786 - 2.0 * (x1538 * x615)
-                                        - 2.0 * (x311 * x906))) * rF
-                            - x309 * x369 * x615 * x2 / f64::sqrt(x167)
-                            + x98
-                                * ((x98
-                                    * (-x107 / f64::sqrt(x167)
-                                        - x309 * x369 / f64::powf(x167, 1.5)) * x615
-                                    - x309 * x906 / f64::sqrt(x167)) * x2
-                                    - x801 * x369 / f64::sqrt(x167))) * phi_dot
-                        - (f64::sqrt(x167) * x952 * x107
-                            - rF
-                                * ((x1611 + x1613) * x259
-                                    + x167
-                                        * (x1633 * x53 + x1612
-                                            + (x1605 + x1624 + x1625 + x1606) * x98 + x1627 * x210
-                                            + x50 * x1609 + x1613 + x214 * x1623 + x57 * x1608)
-                                    + x675 * x369
-                                    + x98
-                                        * (x1514 * x660 + x1607 * x259 - 2.0 * (x615 * x1530)
-                                            + (2.0 * x1634 + x1635 + 2.0 * x1636 + 2.0 * x1637 + x1638)
-                                                * x53 - 2.0 * (x691 * x369) - 2.0 * (x906 * x261)
-                                            + x98 * x1528 * x673))
-                            - x274 * x369 * x615 / f64::sqrt(x167)
-                            + (x274 * x1604 - x909 * x107 * x615 / f64::sqrt(x167)
-                                - x640 * x369 / f64::sqrt(x167)) * x98) * psi_dot,
-                    y_dot * x908
-                        - (x98 * (x278 * x1604 - x867 * x369 / f64::sqrt(x167) - x1639)
-                            - x278 * x369 * x615 / f64::sqrt(x167) + x1640
-                            - ((-x1647 - x1646) * x259
-                                - x167
-                                    * (x1633 * x25 + (x1641 + x1642 + x1617 + x1618) * x98
-                                        + x29 * x1609 + x1643 * x210 + x1644 + x33 * x1608
-                                        + x1645 * x214 + x1646)
-                                + x98
-                                    * (2.0 * (x877 * x369) - x98 * x767 * x1528 - x660 * x1498
-                                        + x25
-                                            * (-2.0 * x1634 - x1635 - 2.0 * x1636 - 2.0 * x1637 - x1638)
-                                        + 2.0 * (x1532 * x615) - x1619 * x259 + 2.0 * (x906 * x282))
-                                + x369 * x873) * rF) * psi_dot
-                        - delta_dot
-                            * ((f64::sqrt(x167) * x1607
-                                - x53 * x369 * x615 / f64::sqrt(x167)
-                                + x98
-                                    * (x53 * x1604 - x369 * x673 / f64::sqrt(x167)
-                                        - x1514 * x615 / f64::sqrt(x167))) * x107
-                                - rF
-                                    * (x1552 * x747
-                                        + (-x98 * x1619 - x1644 - x1647 - x1646) * x364
-                                        + (x14 * (2.0 * x1636 + 2.0 * (x98 * x906))
-                                            + 2.0 * (x840 * x98 * x369)) * x334))
-                        - theta_dot
-                            * (x98
-                                * (x1220 * x369 - x906 * x357 / f64::sqrt(x167)
-                                    + x20 * x356 * x107 * x615 / f64::sqrt(x167))
-                                - (x351 * (-x1644 - x1647 - x1646)
-                                    + x98
-                                        * (2.0 * (x369 * x853) - x25 * x1610
-                                            - 2.0 * (x906 * x21 * x2) - x1498 * x698 - x351 * x1619
-                                            - x767 * x1547) - x14 * x167 * x1614
-                                    + x25 * (-x1615 - x1616) - 2.0 * (x369 * x21 * x615 * x2))
-                                    * rF + f64::sqrt(x167) * x1453 * x107
-                                - x369 * x357 * x615 / f64::sqrt(x167))
-                        - rF * thF_dot * x1619
-                        - phi_dot
-                            * (x5
-                                * (x323 * x1648
-                                    - x98 * x963 * x107 * x615 / f64::sqrt(x167))
-                                - rF
-                                    * (2.0 * (x314 * x369 * x615) + (-x1644 - x1646) * x312
-                                        + (2.0 * (x815 * x369) - x1498 * x786 - x1619 * x312
-                                            - x1632 * x25 - x1540 * x767 + 2.0 * (x314 * x906)
-                                            + 2.0 * (x1542 * x615)) * x98
-                                        + x25 * (-x1620 - x1621 - x1622)
-                                        - x167
-                                            * (x1643 * x244 + x33 * x1628 + x25 * x1626 + x1645 * x242
-                                                + theta_dot * x20 * x121 * x1498
-                                                + ((-delta_dot * x1498 - x758 - x766) * x16
-                                                    + (delta_dot * x25 - x1641 - x1642 - x1617 - x1618) * x20)
-                                                    * x92 + x1629 * x29))
-                                + f64::sqrt(x167) * x107 * (x1151 + x1157 - x20 * x1483)
-                                - x98 * x838 * x369 / f64::sqrt(x167)),
-                    -theta_dot
-                        * (x1484
-                            + rF
-                                * ((x16
-                                    * (-delta_dot * x369 / f64::sqrt(x167)
-                                        - x615 / f64::sqrt(x167)) - x20 * x906 / f64::sqrt(x167)
-                                    + x98
-                                        * (x16 * x98
-                                            * (-delta_dot * x369 / f64::powf(x167, 1.5)
-                                                - x615 / f64::powf(x167, 1.5))
-                                            + x20 * (x1486 + delta_dot / f64::sqrt(x167) - x1487)))
-                                    * x317 * x21 + x1332 * x834)) - x1235 * phi_dot
-                        - delta_dot
-                            * ((x615 * x1554 / f64::sqrt(x167)
-                                + ((x20 * x643 + x16 * x904 * x21) / f64::sqrt(x167)
-                                    + x98
-                                        * (x615 * x1554 / f64::powf(x167, 1.5)
-                                            + x369 * (2.0 * x1233 + 3.0 * x1234))
-                                    + 3.0 * (x369 * x369 * x615 / f64::powf(x167, 1.5))) * x98
-                                + 2.0 * (x906 * x369 / f64::sqrt(x167))) * rF + x906 * x107),
-                ],
-                [
-                    -(mF * (x1651 * x25 + x1652 * x33 + x440 * (-x31 - x32))),
-                    -(mF * (x440 * (-x55 - x56) + x1652 * x57 + x1651 * x53)),
-                    x210 * x1657 - x214 * x1654
-                        - mF * (x1652 * x116 + x440 * (-x109 - x115) + x1651 * x119)
-                        - x1212 * x579,
-                    x244 * x1657 - (-x240 - x241) * x579
-                        - mF
-                            * ((x1652 * x134 + x440 * (-x132 - x133)) * x20
-                                + x1651 * x130) - x1654 * x242,
-                    x20 * (x1657 * x28 + x27 * x1658)
-                        - mF
-                            * (x1652 * x155 + x440 * (-x153 - x154)
-                                + x146 * x1651 * x20),
-                    0.0,
-                    x1658 * x28 - x1651 * mF * x107
-                        + x27 * (x570 + x1655 + x1656 + x573),
-                    0.0,
-                    0.0,
-                    0.0,
-                    rF
-                        * (theta_dot * x20 * x53 * x98 * x28 * x1661
-                            + (x167 * (x50 * x1662 + x1663 * x244) + x1664 * x53 * x98)
-                                * phi_dot
-                            + psi_dot
-                                * (x167 * (x50 * x1661 + x210 * x1663)
-                                    + x210 * x53 * x1665 * x98)),
-                    rF
-                        * ((-x210 * x25 * x1665 * x98
-                            - x167 * (x1666 * x210 + x29 * x1661)) * psi_dot
-                            - theta_dot * x20 * x25 * x98 * x28 * x1661
+                            * (x506 * x986
+                                + psi_dot * (x1089 * x102 + x103 * x1095 + x1096 * x91)
+                                + x989 * x511 + x985 * x502) - x592 * x1 - x1011 * x588
+                        - x595 * x333 - x1012 * x523
+                        + x5 * (x562 - x1009 * x542 - x532 - x552 + x573) + x582 * x331
+                        - mH
+                            * (x488 * x990 + x991 * x478 + x454 * x992
+                                + psi_dot * (x113 * x1097 + x1099 * x112 + x107 * x1098)),
+                    ((x19 * (x1125 - x1124 + x1126 + x1127 - x1128 + x1129) - x0 * x1117)
+                        * x98 - x1103 * x128 - x1156 * x233 - x4 * x1142 - x1152 * x221
+                        - x235 * x1123
+                        - (x1099 * x138 + x19 * (x111 * x1097 + x134 * x1098)) * mH
+                        - x1146 * x136 - x1148 * x9 - x218 * x1154 + x231 * x524
+                        - mF * (x1089 * x147 + x19 * (x1096 * x144 + x1095 * x142)))
+                        * psi_dot
+                        + g * (x129 * x1 - (x109 * x324 + x134 * x1) * mH - mF * x326),
+                    ((x1136 + phi_dot * x224) * x5
+                        - x19 * (x22 * x1123 + x1156 * x29 + x1117)
+                        - (-x1112 * x115 - xB * x1116) * mB + x0 * x1130
+                        - mF * (x1089 * x152 + x1095 * x159 + x1096 * x161)
+                        - mH * (x163 * x1099 + x166 * x1097 + x165 * x1098)) * psi_dot
+                        - x1159,
+                    x554,
+                    (x22 * x1156 + x607 * x331 - x1143 + (x1017 - x1144) * x436
+                        - x1123 * x29 - x1089 * x169 - x1099 * x168 - x1145) * psi_dot
+                        - x1160,
+                    -(x1125 * psi_dot),
+                    rR
+                        * (psi_dot
+                            * (x624 - x5 * (x612 * x1163 + (x617 - 1.0) * x613)
+                                - x514 * x310)
                             + phi_dot
-                                * (-x1664 * x25 * x98
-                                    - x167 * (x1662 * x29 + x1666 * x244))),
-                    0.0,
-                ],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1667, 0.0, x1668, 0.0],
-                [
-                    -(2.0 * x623 - 2.0 * x635) * rR * mR
-                        - (x23 * x1677 + x1687 * x25 + x14 * x1688) * mH
-                        - mF * (x1691 * x33 + x1692 * x29 + x25 * x1693)
-                        - (x7 * x1695 - x1696 * x21 * x2 + x1697 * x12) * mB,
-                    -rR * mR * (2.0 * x795 + 2.0 * x720)
-                        - mF * (x1691 * x57 + x53 * x1693 + x50 * x1692)
-                        - mH * (x1687 * x53 + x46 * x1677 + x1688 * x49)
-                        - mB * (x1697 * x37 + x41 * x1695 + x1696 * x5 * x21),
-                    (x4 * x1705 - x1701 * x92 - x192 * x1704 - x1706 * x0
-                        + (x1707 - x1112 - x1113 - x1115 - x1117 - x1708) * x1
-                        - x1711 * x189) * x21
-                        - mB * (x1696 * x71 * x21 + (x1697 * x63 + x66 * x1695) * x1)
-                        - rR * rR * mR * phi_dot * x560 - x1715 * x214 + x1722 * x98
-                        - x210 * x1725 - (x101 * x1677 + x1687 * x94 + x1688 * x104) * mH
-                        - mF * (x117 * x1692 + x119 * x1693 + x1691 * x116)
-                        - x1730 * x84,
-                    x1731 - x1725 * x244 - x1706 * x4
-                        - ((x1688 * x89 * x92 + x125 * x1677) * x20 + x1687 * x126) * mH
-                        - x0 * x1705
-                        - mF * (x130 * x1693 + x20 * (x1691 * x134 + x131 * x1692))
-                        + (x20 * (x1716 + x1717 + x1718 + x1719 - x1720 - x1721)
-                            - x1730 * x16) * x92 - x1696 * x138 * mB - x1701 * x121
-                        - x1704 * x286 - x1711 * x192 - x1715 * x242,
-                    x20 * (-x1726 - x1727 - x27 * x1715 - x1728 - x1729 - x1725 * x28)
-                        + x1722 * x16
-                        - mF * (x1691 * x155 + x146 * x20 * x1693 + x152 * x1692)
-                        - (x1697 * x69 - xB * x1695) * mB
-                        + x21 * (x589 * phi_dot - x1112 - x1113 + x1707 - x1708)
-                        - (x16 * x158 * x1677 + x1688 * x156 + x20 * x1687 * x157) * mH,
-                    -(IRyy * phi_dot * x21),
-                    x27 * x1725 - x1698 - x1699 - x1687 * x89 * mH - mF * x1693 * x107
-                        - x1715 * x28 + x98 * x593 + (x219 + x220 - x1700) * x422,
-                    -(x1673 * IFyy),
-                    ((psi_dot * (2.0 * x165 - x21) * x2 - x618) * x1
-                        + (x5 * x1732 * phi_dot + (-thR_dot - theta_dot - x373) * x2)
-                            * x21) * rR,
+                                * (x5 * (f64::sqrt(x172) * x616 + 2.0 * x615)
+                                    - (x623 * (3.0 * x609 - x173 + (2.0 - x1164) * x1)
+                                        + x618 * x621) * x1 - x622)) + x_dot * x1165,
                     rR
-                        * ((x1732 * phi_dot * x2 + x5 * x543) * x21
-                            + x1 * (x5 * psi_dot * (x21 - 2.0 * x165) - x756)),
-                    x616 - x641 + (x676 + x692 + thF_dot * x25 + x693) * rF
-                        - delta_dot * x940 - x930 * phi_dot - psi_dot * x925
-                        - theta_dot * x937,
-                    rF * (x874 - x869 - thF_dot * x909 - x878) - x932 * phi_dot + x866
-                        - x868 - delta_dot * x941 - x938 * theta_dot - psi_dot * x927,
+                        * ((-(2.0 * x625 - f64::sqrt(x172) * x628) * x5
+                            - (x618 * x613
+                                + x612 * ((x1164 - 2.0) * x1 + x173 - 3.0 * x609)) * x1
+                            - x614) * phi_dot
+                            + (-x5 * ((1.0 - x617) * x621 + x623 * x1163) - x619
+                                - x378 * x266) * psi_dot) + y_dot * x1165,
+                    x920 * x_dot
+                        - ((-x917 * x279 / f64::sqrt(x175)
+                            - x942 * x638 / f64::sqrt(x175) - x1166 * x331) * x75
+                            - x914 * x279 / f64::sqrt(x175)
+                            - rF
+                                * (x272 * x1167
+                                    + x175
+                                        * (x1170 * x50 + x1181 * x225 + x1012 * x744 + x1011 * x748
+                                            + x1183 + x52 * x1184 + x226 * x1185 + x75 * x1188
+                                            + x8 * (x702 * x977 + x1189 + x703 * x976))
+                                    + x75
+                                        * (x1190 * x55 - 2.0 * (x638 * x1032) + x1188 * x272
+                                            + x1005 * x780 - 2.0 * (x787 * x331) - 2.0 * (x271 * x917)
+                                            + x1033 * x687) + x784 * x331 + x1191 * x55)
+                            + f64::sqrt(x175)
+                                * ((x1193 - x13 * x967) * x88
+                                    + x68 * (x965 + (x844 + x12 * x967 + x1194) * x0)
+                                    + rR * (x1171 - x625 + x1173 - x514) + x968)) * psi_dot
+                        + x789 * x1188
+                        - delta_dot
+                            * (x68
+                                * (x20 * x914 / f64::sqrt(x175)
+                                    + (-x1200 / f64::sqrt(x175)
+                                        - (x2 / f64::sqrt(x175) + x1035 / f64::powf(x175, 1.5))
+                                            * x639 - x1201 / f64::sqrt(x175)) * x75
+                                    + x1209 * f64::sqrt(x175))
+                                - rF
+                                    * ((x1188 * x369 - x1067 * x687
+                                        - (2.0 * (x331 * x739) + 2.0 * (x49 * x917)
+                                            + 2.0 * (x638 * x1066)) * x338 + x1197 * x55 - x1005 * x812)
+                                        * x75 + x1198 * x369
+                                        + x338 * (x175 * x1176 - 2.0 * (x49 * x914))
+                                        + (-x1199 - x812 * x331) * x55))
+                        - (f64::sqrt(x175)
+                            * ((x1206 - x13 * x1210) * x88
+                                + ((x1210 * x12 + x1213) * x0 - x1212) * x68 + x1210 * x78
+                                - rR * x713)
+                            + x75
+                                * (-x917 * x348 / f64::sqrt(x175)
+                                    - x1056 * x638 / f64::sqrt(x175) - x1214 * x331)
+                            - rF
+                                * (x1055 * x709
+                                    + x75
+                                        * (x8 * (2.0 * (x5 * x638) - x706 * x974) + x352 * x1188
+                                            + x1215 * x55 - 2.0 * (x917 * x45) - 2.0 * (x672 * x331)
+                                            + x687 * x1055)
+                                    + x175 * (x671 * x1066 - 0.5 * x853 + 0.5 * x854)
+                                    + x1198 * x352 + x331 * x708)
+                            - x914 * x348 / f64::sqrt(x175)) * theta_dot
+                        - ((rR * (x5 * (x61 * x616 - x724) + x61 * x645)
+                            + x68
+                                * (x19 * (x378 - x6 * x842)
+                                    + (x136 * x645 + x5 * (x616 * x136 + x718) + x796) * x0)
+                            + (x623 * x630 + x1216 * x5) * x88
+                            + (x4 * x885 + x391 * x6) * x78) * f64::sqrt(x175)
+                            - x320 * x914 / f64::sqrt(x175)
+                            - rF
+                                * (x313 * x1167
+                                    + x75
+                                        * (x1219 * x55 - 2.0 * (x917 * x312)
+                                            + x8 * (-2.0 * (x638 * x1046) - x757 * x974)
+                                            - 2.0 * (x753 * x331) + x313 * x1188 + x687 * x1045)
+                                    + x1220 * x55
+                                    + (x235 * x1181 + x233 * x1185
+                                        + x8 * (x734 * x977 - x1218 * x974 + x976 * x752)
+                                        - x1188 * x238) * x175 + x759 * x331)
+                            + x75
+                                * ((-x334 * x638 / f64::sqrt(x175)
+                                    - x319 * (x1221 + x1222 / f64::powf(x175, 1.5))) * x2
+                                    - x725 * x331 / f64::sqrt(x175))) * phi_dot,
+                    x920 * y_dot
+                        - theta_dot
+                            * (x75
+                                * (-x1223 * x331 - x356 * x917 / f64::sqrt(x175)
+                                    - x689 * x1059 / f64::sqrt(x175))
+                                - rF
+                                    * ((x20 * x1215 - x798 * x1055 - x1209 * x352
+                                        + 2.0 * (x855 * x331) - 2.0 * (x917 * x3)
+                                        + ((2.0 * x5 - x351 - x260) * x638 - x1224) * x2) * x75
+                                        - x851 * x331 + x20 * (x1055 * x638 + x352 * x917)
+                                        - x175 * (x1069 * x671 - 0.5 * x662 + 0.5 * x664))
+                                - x356 * x914 / f64::sqrt(x175)
+                                + f64::sqrt(x175)
+                                    * ((x1178 - x1194) * x88 + x1192 * x78 - rR * x839
+                                        + x68 * ((x1193 + x1175) * x0 - x1225)))
+                        - phi_dot
+                            * (f64::sqrt(x175)
+                                * (x68
+                                    * ((x136 * x613 - x685
+                                        + x8 * (theta_dot * x1007 + x406 * x71)) * x0
+                                        + x19 * (x35 * x636 + x514))
+                                    + rR * (x8 * (x420 + x406 * x315) + x61 * x613)
+                                    + (x4 * (x613 - x681) - x391 * x35) * x78
+                                    + (x1232 * x8 - x98 * x613) * x88)
+                                - rF
+                                    * (x75
+                                        * (x20 * x1219 - x798 * x1045 - x996 * x757
+                                            + 2.0 * (x831 * x331) + (x1226 - x1202 + x1208) * x313
+                                            + 2.0 * (x328 * x917)) + x20 * x1220 + x819 * x331
+                                        - x175
+                                            * (x235 * x1230 + x1231 * x233 + (x1218 * x75 + x756) * x2
+                                                - x1209 * x238))
+                                + (x1233 * x326 - x1050 * x639 / f64::sqrt(x175)) * x8
+                                - x332 * x849 / f64::sqrt(x175))
+                        - delta_dot
+                            * (x68
+                                * (f64::sqrt(x175) * x1188 - x914 * x55 / f64::sqrt(x175)
+                                    + (-x1167 / f64::sqrt(x175)
+                                        - (x687 / f64::sqrt(x175) + x866 / f64::powf(x175, 1.5))
+                                            * x331 - x1182 / f64::sqrt(x175)) * x75)
+                                - rF
+                                    * (x75
+                                        * (x338
+                                            * (2.0 * (x827 * x331) + 2.0 * (x25 * x917)
+                                                + 2.0 * (x1069 * x638)) - (x1209 + x1226) * x369
+                                            + x996 * x812 + x798 * x1067 + x1197 * x20) - x1227 * x370
+                                        + x20 * (x917 * x369 - x1199) + x331 * x873)) - x1209 * x789
+                        - (f64::sqrt(x175)
+                            * (x1227 * x88 + rR * (x961 + x1203 - x1204) + x68 * x1228
+                                + x714)
+                            - rF
+                                * (x883 * x331
+                                    + x75
+                                        * (x638 * (x1036 + 2.0 * x1035 + 2.0 * x1037 + 2.0 * x1038)
+                                            - x798 * x1033 + 2.0 * (x917 * x285) - x996 * x780
+                                            - x1209 * x272 + 2.0 * (x877 * x331) + x20 * x1190)
+                                    - x175
+                                        * (x1200 + x1170 * x31 + x1012 * x828 + x1231 * x226
+                                            + x1209 * x75 + x1184 * x30 + x1201
+                                            + (x778 + x779 + x639) * x2 + x225 * x1230 + x1011 * x830)
+                                    + x20 * x1191) - x914 * x287 / f64::sqrt(x175)
+                            + x75
+                                * (-x917 * x287 / f64::sqrt(x175) - x1234 - x1235 * x331))
+                            * psi_dot,
+                    -(delta_dot * x1241
+                        + phi_dot
+                            * (x68 * (x0 * (x847 - x629) - x72 * x842) + x1242
+                                + x1243 * x553 + x80 * x690
+                                + rF
+                                    * (2.0 * (x917 * x331 / f64::sqrt(x175))
+                                        + x1189 / f64::sqrt(x175)
+                                        + x75
+                                            * ((x19 * (x629 - x845 - x846) - x1186) / f64::sqrt(x175)
+                                                - x974 * x639 / f64::powf(x175, 1.5)
+                                                + (x1245 + 2.0 * x1246) * x331)))
+                        + theta_dot
+                            * (x1247 + x1232 * x154
+                                + rF
+                                    * ((x630 * x1063 - x906 * x75 / f64::sqrt(x175)) * x745
+                                        + x19
+                                            * (((-x630
+                                                * (3.0 * (x1222 / f64::powf(x175, 2.5))
+                                                    + x917 / f64::powf(x175, 1.5))
+                                                - x1248 / f64::powf(x175, 1.5)
+                                                - x1249 / f64::powf(x175, 1.5)) * x75
+                                                - 3.0 * (x630 * x914 / f64::powf(x175, 1.5))
+                                                - x1232 / f64::sqrt(x175)) * x75
+                                                - x630 * x917 / f64::sqrt(x175) - x1249 / f64::sqrt(x175)
+                                                - x1248 / f64::sqrt(x175))) + (-x891 - x68 * x730) * x5)),
+                ],
+                [
+                    -((x18 * x454 + x1357 * x347 + x25 * x1373 + x1381 * x28
+                        - x20 * x1385) * mH
+                        + (x1390 * x11 + x16 * x1391 - x16 * x414 - x1392 * x3) * mB
+                        + mF
+                            * (x1252 * x506 - x20 * x1400 - x511 * x656 + x502 * x1253
+                                + x1405 * x31 + x1406 * x30)),
+                    -(mF
+                        * (x1400 * x55 + x1405 * x50 + x52 * x1406 + x506 * x1254
+                            - x511 * x862 + x1255 * x502)
+                        + (x1390 * x37 + x41 * x1391 + x273 * x414 + x1392 * x45) * mB
+                        + (x454 * x355 + x1357 * x274 + x49 * x1373 + x1381 * x47
+                            + x1385 * x55) * mH),
+                    x75 * x1418
+                        - ((x121 * x1407 + x119 * x1391 + rR * x1107) * x5
+                            + (x405 * x1259 + x1392 * x117) * x1) * mB
+                        - (x1271 * x488 + x107 * x1381 + x454 * x1272 + x1385 * x112
+                            + x113 * x1373 + x1273 * x478) * mH
+                        - mF
+                            * (x1405 * x91 + x511 * x1269 + x1267 * x506 + x1266 * x502
+                                + x1406 * x103 + x1400 * x102) - x95 * x1420
+                        - (x1421 + x1423 + (x590 - x1424 - x565) * x381) * x5
+                        - x225 * x1429
+                        + (x9 * x1430 - x1295 * x588 - x1294 * x523 - x1435 * x98
+                            + x221 * x1437 - x599 - x1438 - x71 * x561
+                            - x218 * (x1440 + x1441)
+                            + x4 * (x570 + x1442 - 2.0 * x571 + x1444)) * x1
+                        - x1447 * x226,
+                    x9 * (2.0 * x571 - x1442 - x568 - x1444 - x569)
+                        - (x1392 * x127 + x405 * x117) * mB - x1435 * x136
+                        - (x478 * x1276
+                            + (x1157 * x488 + x134 * x1381
+                                + (x1373 * x98 - x454 * x136) * x109) * x19 + x138 * x1385)
+                            * mH + (x551 - x1440 - x1441) * x221
+                        - mF
+                            * (x1400 * x147 + x511 * x1280
+                                + (x1406 * x142 + x1405 * x144 + x502 * x1279
+                                    + x506 * x1278) * x19) + x1307 * x588 - x1159 - x1447 * x233
+                        - x1306 * x523 - x562 - x235 * x1429
+                        + x0 * (x595 * x136 - x1420 * x98) + x4 * x1430 - x218 * x1437
+                        + x19
+                            * ((x1409 - x1408 + x1410 - x1412 + x1414 - x1417) * x98
+                                + x582 * x136),
+                    x0 * x1418 - mH * (x1373 * x166 + x1381 * x165 + x163 * x1385)
+                        - g
+                            * ((x137 * x0 + x1270) * mH + mF * (x890 + x1344)
+                                + x126 * mB) * x1
+                        - x19 * (x1420 + x1447 * x29 + x22 * x1429)
+                        - (-x1407 * x115 - xB * x1391) * mB - x1421 - x1423
+                        - mF * (x1406 * x159 + x1405 * x161 + x152 * x1400)
+                        + x381 * (x1443 + x566),
+                    0.0,
+                    x22 * x1447 - x1429 * x29 + (x1413 - x1411 * IHyy) * x436 - x1431
+                        - x1400 * x169 + x19 * (x1448 + x1359 * x560) - x1385 * x168
+                        - x1434,
+                    -x1410,
+                    0.0,
+                    0.0,
+                    x_dot * x1475
+                        - psi_dot
+                            * (x958
+                                - ((2.0 * (x1451 * x271) - 2.0 * (x638 * x1318)
+                                    + x687 * x1320 + x1458 * x55 - x1461 * x272
+                                    + x19 * (2.0 * (x630 * x787) - x274 * x780)) * x75
+                                    + x175
+                                        * (x52 * x1456 + x50 * x1457 + x703 * x1255 + x702 * x1254
+                                            - x638 * x862 - x1451 * x55 + x1464 * x225
+                                            + (x748 * x1295 + x1294 * x744 - x1317 * x687) * x1
+                                            + x1465 * x226 - x1461 * x75)
+                                    + (x630 * (2.0 * x782 - x781 - x783) - x1466 * x272) * x19
+                                    + x1467 * x55) * rF
+                                + x75
+                                    * (x1166 * x1062 - x638 * x947 / f64::sqrt(x175)
+                                        + x1451 * x279 / f64::sqrt(x175))
+                                + x1468 * x279 / f64::sqrt(x175)) - x789 * x1461
+                        - (f64::sqrt(x175)
+                            * (x68 * (x0 * (x1216 * x1 + x722) - x1212) + x80 * x615
+                                + (x890 * x717 + x616 * x364) * x1 + x719 * x88)
+                            + x320 * x1468 / f64::sqrt(x175)
+                            + x75
+                                * (((x711 / f64::powf(x175, 1.5) + x725 / f64::sqrt(x175))
+                                    * x1317 - x603 * x1226 / f64::sqrt(x175)) * x1
+                                    + x1451 * x320 / f64::sqrt(x175))
+                            - rF
+                                * (x175
+                                    * (x1306 * x744 + x235 * x1464 + x1469 * x55 + x1255 * x752
+                                        - x748 * x1307 + x50 * x1470 + x52 * x1471 + x734 * x1254
+                                        + x1465 * x233
+                                        + x19
+                                            * ((x687 - theta_dot * x862) * x136
+                                                + (x1459 + 2.0 * x1460 + theta_dot * x55) * x98))
+                                    + x75
+                                        * (x687 * x1331 + x19 * (2.0 * (x753 * x630) - x757 * x274)
+                                            + x1473 * x55 - x1461 * x313 - 2.0 * (x1332 * x638)
+                                            + 2.0 * (x1451 * x312))
+                                    + ((2.0 * x755 - x754 - x758) * x630 - x1466 * x313) * x19
+                                    + x1474 * x55)) * phi_dot
+                        - delta_dot
+                            * (x68
+                                * (x19
+                                    * (x630 * (x833 * x892 + x875 / f64::sqrt(x175))
+                                        + x347 * x639 / f64::sqrt(x175))
+                                    + x282 * x1451 / f64::sqrt(x175) - f64::sqrt(x175) * x1478)
+                                - (x860 * x370
+                                    + x19 * (x630 * (2.0 * x801 - x802 + x813) - x1466 * x369)
+                                    + x1479 * x55
+                                    + x75
+                                        * (x687 * x1347 - x1461 * x369
+                                            + (2.0 * (x1062 * x739) - 2.0 * (x638 * x355)
+                                                + 2.0 * (x1451 * x49)) * x338 - x1480 * x55 + x812 * x862))
+                                    * rF)
+                        - theta_dot
+                            * (x1468 * x348 / f64::sqrt(x175)
+                                - rF
+                                    * (((x786 * x1338
+                                        - (2.0 * (x75 * x672) - x688 + 2.0 * x689 - x707) * x98)
+                                        * x1 - x1481 * x274) * x19
+                                        + x75 * (2.0 * (x1451 * x45) + x1482 * x55 - x1461 * x352)
+                                        - x1451 * x1337 + x1483 * x355)
+                                + f64::sqrt(x175)
+                                    * (x960 - rR * x647 + x68 * (x0 * x962 - x750 * x935))
+                                + x75
+                                    * (x1214 * x1062 - x638 * x1336 / f64::sqrt(x175)
+                                        + x1451 * x348 / f64::sqrt(x175))),
+                    x789 * x1478
+                        - psi_dot
+                            * ((x1451 * x287 / f64::sqrt(x175) - x1484 + x1062 * x1235)
+                                * x75 + x1468 * x287 / f64::sqrt(x175)
+                                - (x19 * (x630 * x963 + x1489 * x272)
+                                    - x175
+                                        * (x30 * x1456 - x656 * x638 + x702 * x1252
+                                            + (x830 * x1295 - x798 * x1317 + x828 * x1294) * x1
+                                            + x1487 * x226 + x1451 * x20 - x75 * x1478 + x31 * x1457
+                                            + x1488 * x225 + x703 * x1253)
+                                    + x75
+                                        * (x1458 * x20 - x798 * x1320
+                                            + x19 * (x347 * x780 - 2.0 * (x877 * x630))
+                                            - 2.0 * (x1451 * x285) + x1478 * x272
+                                            + 2.0 * (x638 * x1322)) + x1467 * x20) * rF + x659)
+                        - phi_dot
+                            * (x849 * x1287 / f64::sqrt(x175)
+                                + x8
+                                    * (x638 * x1
+                                        * (x1317 * x326 * x892 - x75 * x1059 / f64::sqrt(x175))
+                                        - x1452 * x326 / f64::sqrt(x175))
+                                - rF
+                                    * (x75
+                                        * (2.0 * (x638 * x1334) - 2.0 * (x1451 * x328)
+                                            + x313 * x1478 - x798 * x1331 + x20 * x1473
+                                            + (x347 * x757 - 2.0 * (x630 * x831)) * x19)
+                                        + (x964 * x630 + x1489 * x313) * x19 + x20 * x1474
+                                        - x175
+                                            * (x235 * x1488 - x20 * x1469 + x1487 * x233 + x752 * x1253
+                                                - x830 * x1307 + x734 * x1252 + x31 * x1470 + x1471 * x30
+                                                + x19
+                                                    * ((2.0 * x1476 + x1477 - x20 * theta_dot) * x98
+                                                        + (x798 - theta_dot * x656) * x136) + x1306 * x828))
+                                + f64::sqrt(x175)
+                                    * ((x966 * x0 - x1225) * x68 + x848 * x88
+                                        + (x553 * x364 - x890 * x690) * x8 + x514 * x364))
+                        - delta_dot
+                            * (x68
+                                * (x1451 * x270 / f64::sqrt(x175) - f64::sqrt(x175) * x1461
+                                    + x19
+                                        * (x630 * (x785 / f64::sqrt(x175) + x709 * x892)
+                                            + x274 * x639 / f64::sqrt(x175)))
+                                - (x75
+                                    * (x338
+                                        * (2.0 * (x18 * x638) - 2.0 * (x827 * x1062)
+                                            - 2.0 * (x1451 * x25)) - x812 * x656 - x798 * x1347
+                                        - x1480 * x20 + x1478 * x369) - x370 * x652 + x20 * x1479
+                                    + x19 * (x630 * x957 + x1489 * x369)) * rF)
+                        - theta_dot
+                            * (f64::sqrt(x175)
+                                * (x769 - rR * x766 + x68 * (x772 * x0 - x750 * x277))
+                                - rF
+                                    * (x19
+                                        * (x347 * x1481
+                                            + (-x1338 * x876 - (x851 - 2.0 * (x855 * x75)) * x98) * x1)
+                                        - x75 * (-x352 * x1478 - 2.0 * (x1451 * x3) - x20 * x1482)
+                                        - x1483 * x18 + x1451 * x1341)
+                                + x356 * x1468 / f64::sqrt(x175)
+                                + x75
+                                    * (x1223 * x1062 - x1342 * x638 / f64::sqrt(x175)
+                                        + x1451 * x356 / f64::sqrt(x175))) + y_dot * x1475,
+                    -(((theta_dot * x80 - x750 * x146
+                        + (x19
+                            * (x893 * x136
+                                - (x1449 / f64::sqrt(x175) + x1451 / f64::sqrt(x175)
+                                    + x75
+                                        * ((x1451 / f64::powf(x175, 1.5)
+                                            + x1449 / f64::powf(x175, 1.5)
+                                            + x630
+                                                * (x745 / f64::powf(x175, 1.5)
+                                                    + 3.0 * (x19 * x639 / f64::powf(x175, 2.5)))) * x75
+                                            + 3.0 * (x1468 / f64::powf(x175, 1.5)))
+                                    + x1450 / f64::sqrt(x175)) * x98) - x1472 / f64::sqrt(x175))
+                            * rF) * x1 + x1242 - x890 * x553 + x847 * x362) * theta_dot
+                        + delta_dot
+                            * (rF
+                                * ((x1211 - x1453) * x75 / f64::sqrt(x175) - x1451 * x1071
+                                    + (x0 * x893 + (x75 * x1491 - x1492) * x19) * x630) - x1490)
+                        + (x1247 - x890 * x641
+                            + rF
+                                * ((x630 * (x75 * (-x1245 - x1246) - x1221) + x906 * x893)
+                                    * x19 - x1451 * x1052
+                                    - x75 * (x906 * x745 + x1232 * x19) / f64::sqrt(x175))
+                            + x68 * (x1232 * x0 - x5 * x730)) * phi_dot),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    (x221 * x1494 - x218 * (x547 - x1493) - x1438) * x1,
+                    (x550 + x1493) * x221 - x218 * x1494,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
                     0.0,
                 ],
                 [
-                    -rR * mR * (2.0 * x755 - 2.0 * x756)
-                        - (x1734 * x12 - x1733 * x21 * x2 + x7 * x1735) * mB
-                        - mF * (x25 * x1749 + x1755 * x29 + x1756 * x33)
-                        - (x1757 * x23 + x14 * x1758 + x25 * x1760) * mH,
-                    -(x37 * x1734 + x41 * x1735 + x5 * x1733 * x21) * mB
-                        - rR * mR * (2.0 * x617 + 2.0 * x618)
-                        - (x53 * x1760 + x1757 * x46 + x1758 * x49) * mH
-                        - mF * (x1755 * x50 + x1756 * x57 + x53 * x1749),
-                    x1767 * x98 - x1731 - x210 * x1772 - x1775 * x214 - x1780 * x84
-                        - mF * (x117 * x1755 + x116 * x1756 + x1749 * x119)
-                        - (x71 * x1733 * x21 + x1 * (x66 * x1735 + x63 * x1734)) * mB
-                        + (x1781 * x4 - psi_dot * x1 * IRyy - x189 * x1783 - x1784 * x192
-                            - x1788 * x92 - x1789 * x0) * x21
-                        - (x1790 - x1791 + psi_dot * IByy * x21 + x1792 - x1793) * x1
-                        - (x1760 * x94 + x1757 * x101 + x1758 * x104) * mH,
-                    (x20 * (x1762 - x1761 - x1763 + x1764 + x1765 + x1766) - x16 * x1780)
-                        * x92 - x121 * x1788 - x192 * x1783 - x1784 * x286
-                        - mF * (x130 * x1749 + (x1755 * x131 + x134 * x1756) * x20)
-                        - (x20 * (x89 * x1758 * x92 + x1757 * x125) + x1760 * x126) * mH
-                        - x1775 * x242 - x1781 * x0 - x1772 * x244 - x4 * x1789
-                        - x138 * mB * x1733,
-                    x1791 - x1790
-                        - mH * (x20 * x1760 * x157 + x1758 * x156 + x1757 * x16 * x158)
-                        - (x1734 * x69 - xB * x1735) * mB + x1767 * x16 - x1792
-                        + x589 * psi_dot * x21
-                        + (-x1776 - x1777 - x1772 * x28 - x1778 - x1779 - x27 * x1775)
-                            * x20 + x1793
-                        - (x1756 * x155 + x146 * x20 * x1749 + x1755 * x152) * mF,
-                    -(psi_dot * IRyy * x21),
-                    x92 * (x20 * x535 - x1431) - x1785 - x89 * x1760 * mH
-                        - mF * x1749 * x107 - x1775 * x28 + x1786 + x27 * x1772 - x1787,
-                    -(x1751 * IFyy),
-                    x_dot * x1 * x21 / f64::sqrt(x164)
-                        + rR
-                            * ((x596 * x5 + phi_dot * (2.0 * x165 - x1027 + x1029) * x2)
-                                * x1 + x1794 * x5 * psi_dot),
+                    -((x478 * x1500 - x20 * x1574 + x1577 * x28 + x1578 * x25) * mH
+                        + mF * (x1582 * x30 + x31 * x1586 + x511 * x1500 - x20 * x1593)),
+                    -((x50 * x1586 + x1593 * x55 - x511 * x47 + x52 * x1582) * mF
+                        + (x1574 * x55 + x1578 * x49 - x478 * x47 + x1577 * x47) * mH),
+                    -x1598 * x225 - x193 * x1602 - x75 * x1606
+                        - x95 * (x1607 + x1608 - x1609) - x95 * x582
+                        - mF
+                            * (x506 * x1509 + x1592 * x102 + x103 * x1582 + x1507 * x502
+                                + x1586 * x91 - x511 * x90)
+                        - (x1505 * x488 + x113 * x1578 - x478 * x107 + x107 * x1577
+                            + x112 * x1610 - x1503 * x454) * mH - x226 * x1613,
+                    (x1614 * x0 + x19 * x1606) * x98
+                        - mF
+                            * (x0 * x596 + x147 * x1592
+                                + x19 * (x1511 * x511 + x144 * x1586 + x1582 * x142))
+                        - (x597 * x0 + x138 * x1610
+                            + x19 * (x134 * x1577 + x1578 * x111 + x478 * x1530)) * mH
+                        - x233 * x1613 - x1160 - x1602 * x136 - x235 * x1598,
+                    x19 * (x1614 + x1448 - x29 * x1613 - x22 * x1598)
+                        - mH
+                            * (x19 * (x109 * x454 + x162 * x1574) + x1578 * x166
+                                + (x478 * x162 + x164 * x1577) * x0)
+                        - mF
+                            * (x1582 * x159 + x1586 * x161
+                                + x19 * (x1514 * x502 + x1592 * x151 + x1515 * x506)
+                                + x511 * x1516) - x0 * x1606,
+                    0.0,
+                    x22 * x1613 + x1600 * x297 - x1598 * x29 - x607 * x430 - x1599
+                        + (x487 - x1570 + x1615 + x1571) * x168
+                        + (x1615 - x1589 - x1591 + x1587 + x500) * x169,
+                    -x1603,
+                    0.0,
+                    0.0,
+                    x903 * x_dot
+                        - phi_dot
+                            * (f64::sqrt(x175) * x68 * (x1202 - x19 * x721)
+                                - x320 * x896 / f64::sqrt(x175)
+                                - rF
+                                    * (x75
+                                        * (x1624 * x55 + x1625 * x313 - 2.0 * (x312 * x900)
+                                            - x757 * x47 - 2.0 * (x1548 * x638) + 2.0 * (x753 * x95)
+                                            + x687 * x1547) + x313 * x1628
+                                        + x175
+                                            * (x52 * x1622 - x1217 * x47 + x1629 * x233 + x1620 * x50
+                                                + ((delta_dot * x55 - x1630 - x741 - x1631 + x742) * x19
+                                                    - x0 * (x687 - delta_dot * x47)) * x98 + x235 * x1632
+                                                + x1619 * x55) - 2.0 * (x896 * x312) + x1633 * x55)
+                                + x75
+                                    * ((-(x1549 / f64::powf(x175, 1.5) + x68 / f64::sqrt(x175))
+                                        * x639 - x319 * x900 / f64::sqrt(x175)) * x2
+                                        + x95 * x725 / f64::sqrt(x175)))
+                        - ((x95 * x775 / f64::sqrt(x175) - x969 * x68 / f64::sqrt(x175)
+                            - x1637 * x279) * x75
+                            - rF
+                                * (x75
+                                    * (x1625 * x272 - 2.0 * (x1538 * x638) + x1634 * x55
+                                        - x780 * x47 - 2.0 * (x271 * x900) + x1535 * x785
+                                        + 2.0 * (x95 * x787)) - x95 * x784
+                                    + (x1632 * x225 + x52 * x1621
+                                        + (x1625 + x1630 + x1631) * x75 + x50 * x1623 + x1635 * x55
+                                        + x1628 + x1629 * x226) * x175 + (x1636 + x1626) * x272)
+                            + f64::sqrt(x175) * x68 * x956
+                            - x896 * x279 / f64::sqrt(x175)) * psi_dot
+                        - theta_dot
+                            * (x75
+                                * (x95 * x658 / f64::sqrt(x175) - x348 * x1637
+                                    + x895 * x656 / f64::sqrt(x175))
+                                - f64::sqrt(x175) * x68 * x1478
+                                - rF
+                                    * (x1638 * x55 - 2.0 * (x896 * x45)
+                                        + (x1639 * x55 + x687 * x1557 + 2.0 * (x95 * x672)
+                                            - 2.0 * (x900 * x45) + x1625 * x352 - x706 * x47) * x75
+                                        + x1640 * x352 + x49 * x1641)
+                                - x896 * x348 / f64::sqrt(x175))
+                        - delta_dot
+                            * (x68
+                                * (x20 * x896 / f64::sqrt(x175) + f64::sqrt(x175) * x1644
+                                    + x75
+                                        * (x20 * x1637 - x1645 / f64::sqrt(x175)
+                                            - x1646 / f64::sqrt(x175)))
+                                - rF
+                                    * (x369 * (x1640 + x1625 * x75) - x812 * x1562
+                                        + x338
+                                            * (-x75 * (2.0 * (x49 * x900) - 2.0 * (x95 * x739))
+                                                - 2.0 * (x896 * x49)))) + x1625 * x789,
+                    x903 * y_dot
+                        - delta_dot
+                            * (x68
+                                * ((-x1637 * x55 - x1627 / f64::sqrt(x175)
+                                    - x1626 / f64::sqrt(x175)) * x75
+                                    - x896 * x55 / f64::sqrt(x175) + f64::sqrt(x175) * x1625)
+                                - rF
+                                    * (x812 * x1564 - (x1649 + x1644 * x75) * x369
+                                        + (x25 * (2.0 * x901 + 2.0 * x896) + 2.0 * (x827 * x1521))
+                                            * x338))
+                        - (f64::sqrt(x175) * x68 * (x1187 - x19 * x848)
+                            + x8 * (x1650 * x326 - x1552 * x639 / f64::sqrt(x175))
+                            - rF
+                                * (2.0 * (x896 * x328)
+                                    - x175
+                                        * (x1217 * x1500
+                                            + (x19 * (-x1642 - delta_dot * x20 - x1651 - x1652 - x1643)
+                                                - x0 * (x798 + delta_dot * x1500)) * x98 + x235 * x1653
+                                            - x20 * x1619 + x1654 * x233 + x31 * x1620 + x30 * x1622)
+                                    + (2.0 * (x1551 * x638) + x20 * x1624 - x757 * x1500
+                                        - x798 * x1547 - x1644 * x313 + 2.0 * (x328 * x900)
+                                        - 2.0 * (x95 * x831)) * x75 - x1647 * x313 + x20 * x1633)
+                            - x1521 * x849 / f64::sqrt(x175)) * phi_dot
+                        - (x75 * (x95 * x886 / f64::sqrt(x175) - x1637 * x287 - x1655)
+                            - x896 * x287 / f64::sqrt(x175) + x1656
+                            - (x75
+                                * (2.0 * (x1540 * x638) - x1644 * x272 + x20 * x1634
+                                    - x875 * x1535 + 2.0 * (x900 * x285) - x780 * x1500
+                                    - 2.0 * (x95 * x877)) - (x1646 - x1648) * x272 - x95 * x883
+                                - x175
+                                    * (x1654 * x226 - x20 * x1635 + x1647 + x30 * x1621
+                                        + x1653 * x225 + x31 * x1623
+                                        + (x1644 + x1651 + x1652) * x75)) * rF) * psi_dot
+                        - theta_dot
+                            * (x75
+                                * (x95 * x1223 + x895 * x862 / f64::sqrt(x175)
+                                    - x356 * x900 / f64::sqrt(x175))
+                                - (x20 * x1638 - x352 * x1649 - 2.0 * (x896 * x3)
+                                    + (x20 * x1639 - 2.0 * (x900 * x3) - 2.0 * (x855 * x95)
+                                        - x706 * x1500 - x798 * x1557 - x352 * x1644) * x75
+                                    - x25 * x1641) * rF - f64::sqrt(x175) * x68 * x1461
+                                - x356 * x896 / f64::sqrt(x175)) - x789 * x1644,
+                    -(delta_dot
+                        * (x68 * x900
+                            + rF
+                                * (x1657 / f64::sqrt(x175)
+                                    - 2.0 * (x95 * x900 / f64::sqrt(x175))
+                                    + x75
+                                        * ((x898 * x92 + x634) / f64::sqrt(x175)
+                                            - 3.0 * (x95 * x896 / f64::powf(x175, 1.5))
+                                            + x75
+                                                * (x1657 / f64::powf(x175, 1.5)
+                                                    - x95 * (3.0 * x1239 + 2.0 * x1240)))))
+                        + (rF
+                            * (x630
+                                * (x75
+                                    * (x19 * (delta_dot / f64::sqrt(x175) + x1491)
+                                        - (x638 / f64::powf(x175, 1.5)
+                                            + x1618 / f64::powf(x175, 1.5)) * x260)
+                                    - x19 * x900 / f64::sqrt(x175)
+                                    - (x1618 / f64::sqrt(x175) + x638 / f64::sqrt(x175)) * x0)
+                                + x836 * x1351) - x1490) * theta_dot + phi_dot * x1241),
+                ],
+                [
+                    0.0,
+                    0.0,
+                    x225 * x588 - x226 * x1658 - x1660 * x225,
+                    x235 * x588 - x235 * x1660 - x233 * x1658,
+                    x19 * (x22 * x1661 - x1658 * x29),
+                    0.0,
+                    x22 * x1658 + x1661 * x29,
+                    0.0,
+                    0.0,
+                    0.0,
+                    rF
+                        * (x270 * x1664
+                            + (x270 * x1666 + x175 * (x52 * x1665 + x1667 * x233))
+                                * phi_dot
+                            + (x270 * x1668 + (x52 * x1663 + x1667 * x226) * x175)
+                                * psi_dot),
+                    rF
+                        * (-psi_dot
+                            * (x282 * x1668 + x175 * (x1663 * x30 + x1669 * x226))
+                            - x282 * x1664
+                            - (x282 * x1666 + x175 * (x1669 * x233 + x1665 * x30))
+                                * phi_dot),
+                    0.0,
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1670, 0.0, x1671, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x1670, 0.0, x1671, 0.0],
+                [
+                    -((x28 * x1685 - x20 * x1682 + x1686 * x25) * mH
+                        + mB * (x1689 * x16 - x1687 * x3 + x11 * x1690)
+                        + mF * (x31 * x1693 + x1694 * x30 - x1695 * x20)
+                        + x60 * (2.0 * x681 - 2.0 * x613)),
+                    -(x60 * (2.0 * x621 + 2.0 * x645)
+                        + (x50 * x1693 + x1695 * x55 + x52 * x1694) * mF
+                        + mH * (x1685 * x47 + x1686 * x49 + x1682 * x55)
+                        + (x1690 * x37 + x1687 * x45 + x41 * x1689) * mB),
+                    ((x1702 - x1137 - x1138) * x5 + x4 * x1704 - x218 * x1708
+                        + x1710 * x221 - x1711 * x9 - x98 * x1715) * x1
+                        - mF * (x1695 * x102 + x1693 * x91 + x1694 * x103) - x226 * x1698
+                        - (x1682 * x112 + x107 * x1685 + x113 * x1686) * mH
+                        - x1131 * x525
+                        - (x118 * x1687 + (x119 * x1689 + x121 * x1690) * x5) * mB
+                        - x1701 * x225 + x75 * x1722 - x1723 * x95,
+                    (x19 * (x1716 - x1717 + x1718 + x1719 + x1720 - x1721) - x1723 * x0)
+                        * x98 - x233 * x1698 - x1711 * x4 - x136 * x1715 - x1701 * x235
+                        - x221 * x1708
+                        - mH * (x1682 * x138 + x19 * (x134 * x1685 + x1686 * x111))
+                        - x9 * x1704 + x526 - x1687 * x128 - x218 * x1710
+                        - mF * (x19 * (x1694 * x142 + x144 * x1693) + x1695 * x147),
+                    x0 * x1722 - x19 * (x1723 + x1698 * x29 + x1701 * x22)
+                        + (x605 + x1702) * x1
+                        - (x165 * x1685 + x163 * x1682 + x1686 * x166) * mH
+                        - mF * (x161 * x1693 + x1694 * x159 + x1695 * x152)
+                        - (-x1689 * xB - x1690 * x115) * mB,
+                    -x1139,
+                    x22 * x1698 - x1701 * x29 + (x202 - x1712) * x436 - x1695 * x169
+                        - x1713 - x1682 * x168 - x1714 + x607 * x75,
+                    -x1719,
                     rR
-                        * ((x5 * phi_dot * (x1027 - 2.0 * x165 - x1029) + x596 * x2) * x1
-                            + x1794 * psi_dot * x2) + x1 * y_dot * x21 / f64::sqrt(x164),
-                    rF * (thF_dot * x5 * x963 + x781 + x789 + x790) - x802
-                        - delta_dot * x1049 - psi_dot * x1021 - theta_dot * x1041
-                        - x1033 * phi_dot
-                        + (x1209 + x330 * x_dot / f64::sqrt(x167)) * x98,
-                    x98
-                        * (x323 * x5 * x615 / f64::sqrt(x167) - rF * thF_dot * x2
-                            + x330 * y_dot / f64::sqrt(x167)) - x1035 * phi_dot + x822
-                        - theta_dot * x1044 - x839 - psi_dot * x1026 - delta_dot * x1050,
-                    theta_dot * x1795 - x887 - x894 + rF * x1222 - delta_dot * x1052
-                        + phi_dot * (x1229 * x21 - x320 - x322 - x1036),
+                        * ((x1724 * x612 - x539 * x2) * x1
+                            + (x628 * (2.0 * x173 - x1) - x625) * x5),
+                    ((x623 * x1724 + x539 * x8) * x1
+                        + x5 * (x616 * (x1 - 2.0 * x173) - x615)) * rR,
+                    x762 - psi_dot * x937 - x944 * phi_dot - delta_dot * x952
+                        - theta_dot * x949 - x776 + rF * (x788 - x20 * thF_dot),
+                    x889 - x887 - x950 * theta_dot + rF * (x884 + thF_dot * x921)
+                        - delta_dot * x953 - x946 * phi_dot - psi_dot * x940,
+                    0.0,
                 ],
                 [
-                    -mH * (x14 * x1797 + x25 * x1801 + x1802 * x23)
-                        - ((-2.0 * x1268 - 2.0 * (x7 * x69)) * x374 - x1804 * x21 * x2)
-                            * mB - mF * (x25 * x1805 + x33 * x1808 + x29 * x1809),
-                    -mF * (x50 * x1809 + x57 * x1808 + x53 * x1805)
-                        - mH * (x53 * x1801 + x1797 * x49 + x1802 * x46)
-                        - ((-2.0 * x1275 - 2.0 * (x41 * x69)) * x374 + x5 * x1804 * x21)
-                            * mB,
-                    (x4 * x1818 - x1814 * x0 - x189 * x1816 - x192 * x1817 - x1820 * x92)
-                        * x21
-                        - (x71 * x1804 * x21
-                            + x374 * x1 * (-2.0 * (x66 * x69) - 2.0 * (x63 * xB))) * mB
-                        - x1813 * x214
-                        - (x119 * x1805 + x117 * x1809 + x116 * x1808) * mF
-                        - (x1801 * x94 + x1802 * x101 + x1797 * x104) * mH - x1823 * x84
-                        + x20 * x98 * x1826 - x1829 * x210,
-                    (x20 * x20 * (x1824 - x505 + x1589 + x1825 - 2.0 * x506)
-                        - x16 * x1823) * x92 - x138 * mB * x1804 - x1814 * x4
-                        - (x130 * x1805 + x20 * (x131 * x1809 + x134 * x1808)) * mF
-                        - x286 * x1817 - x1820 * x121 - x1813 * x242
-                        - (x1801 * x126 + (x89 * x1797 * x92 + x1802 * x125) * x20) * mH
-                        - x1818 * x0 - x1829 * x244 - x192 * x1816,
-                    x20 * (x16 * x1826 - x1829 * x28 - x1821 - x27 * x1813 - x1822)
-                        - (x146 * x20 * x1805 + x155 * x1808 + x152 * x1809) * mF
-                        - (x1797 * x156 + x1802 * x16 * x158 + x20 * x1801 * x157) * mH,
+                    -((x1733 * x28 - x20 * x1740 + x25 * x1742) * mH
+                        + x60 * (2.0 * x378 - 2.0 * x615)
+                        + (x1744 * x11 - x1743 * x3 + x1745 * x16) * mB
+                        + mF * (x30 * x1749 - x20 * x1746 + x31 * x1750)),
+                    -(mF * (x50 * x1750 + x52 * x1749 + x1746 * x55)
+                        + (x1744 * x37 + x1745 * x41 + x1743 * x45) * mB
+                        + x60 * (2.0 * x625 + 2.0 * x514)
+                        + mH * (x1740 * x55 + x49 * x1742 + x1733 * x47)),
+                    x75 * x1763 - x1751 * x95
+                        - mB * ((x1744 * x121 + x1745 * x119) * x5 + x118 * x1743)
+                        - x226 * x1756 - x225 * x1766
+                        - (x1740 * x112 + x113 * x1742 + x1733 * x107) * mH - x526
+                        - x5 * (x1768 - x1767 + x379 * IByy + x1769 - x1770)
+                        - (x103 * x1749 + x1750 * x91 + x1746 * x102) * mF
+                        + (x1772 * x221 - x263 * psi_dot + x4 * x1773 - x1777 * x98
+                            - x9 * x1778 - x1779 * x218) * x1,
+                    ((x1758 - x1757 + x1759 + x1760 + x1761 - x1762) * x19 - x1751 * x0)
+                        * x98 - mF * (x19 * (x144 * x1750 + x1749 * x142) + x1746 * x147)
+                        - x235 * x1766 - x1743 * x128 - x9 * x1773
+                        - mH * (x138 * x1740 + x19 * (x111 * x1742 + x1733 * x134))
+                        - x1779 * x221 - x218 * x1772 - x4 * x1778 - x1777 * x136
+                        - x233 * x1756,
+                    x0 * x1763 - x19 * (x29 * x1756 + x1751 + x22 * x1766) + x1767
+                        - (-x1745 * xB - x1744 * x115) * mB - x1768
+                        - mF * (x152 * x1746 + x1750 * x161 + x1749 * x159) - x1769
+                        + x1770 - (x1733 * x165 + x163 * x1740 + x1742 * x166) * mH
+                        - x379 * x224,
+                    -(IRyy * x379),
+                    x1776 - x1774 - x1775 + (x19 * x560 - x1432) * x98 - x1746 * x169
+                        + x22 * x1756 - x168 * x1740 - x1766 * x29,
+                    -x1758,
+                    rR
+                        * (x616 * x1780
+                            + ((2.0 * x173 - x1040 + x1043) * x623 - x538 * x8) * x5)
+                        + x_dot * x998 / f64::sqrt(x172),
+                    rR
+                        * (x5 * ((x1040 - 2.0 * x173 - x1043) * x612 - x538 * x2)
+                            + x628 * x1780) + y_dot * x998 / f64::sqrt(x172),
+                    x75 * (x1234 + x_dot * x331 / f64::sqrt(x175)) - delta_dot * x1068
+                        - x726 - psi_dot * x1034 + rF * (x760 + x1005 * thF_dot)
+                        - theta_dot * x1057 - phi_dot * x1047,
+                    x75
+                        * (y_dot * x331 / f64::sqrt(x175) - x789 * x2
+                            + x327 * x638 / f64::sqrt(x175)) - psi_dot * x1039
+                        - delta_dot * x1070 - theta_dot * x1060 + x835 - x850
+                        - x1051 * phi_dot,
+                    theta_dot * x1781 + rF * x1233 - delta_dot * x1072 - x905
+                        + phi_dot * (x1243 * x1 - x323 - x1053 - x325) - x913,
+                ],
+                [
+                    -(mH * (x1786 * x28 - x20 * x1785 + x25 * x1787)
+                        + mB * (-(2.0 * x1282 - 2.0 * x1283) * x386 - x1789 * x3)
+                        + mF * (x31 * x1794 - x20 * x1791 + x30 * x1795)),
+                    -(mF * (x1791 * x55 + x52 * x1795 + x50 * x1794)
+                        + mB * (x1789 * x45 - x386 * (2.0 * x1291 - 2.0 * (x41 * x115)))
+                        + mH * (x49 * x1787 + x1786 * x47 + x1785 * x55)),
+                    (x1803 * x221 - x218 * x1800 - x9 * x1801 + x4 * x1804 - x1806 * x98)
+                        * x1 - x1799 * x95
+                        - (x118 * x1789
+                            - x1141 * (2.0 * (x121 * xB) - 2.0 * (x119 * x115))) * mB
+                        - x1809 * x226 - mF * (x103 * x1795 + x1791 * x102 + x1794 * x91)
+                        + x1812 * x360 - x225 * x1815
+                        - (x1786 * x107 + x1785 * x112 + x113 * x1787) * mH,
+                    ((x1605 - x1810 - x1811) * x292 - x1799 * x0) * x98 - x4 * x1801
+                        - x1789 * x128
+                        - mF * (x19 * (x142 * x1795 + x144 * x1794) + x1791 * x147)
+                        - x235 * x1815 - x218 * x1803
+                        - (x1785 * x138 + x19 * (x111 * x1787 + x1786 * x134)) * mH
+                        - x1806 * x136 - x9 * x1804 - x221 * x1800 - x1809 * x233,
+                    (x1812 * x0 - x1797 - x22 * x1815 - x1798 - x1809 * x29) * x19
+                        - mF * (x159 * x1795 + x1791 * x152 + x161 * x1794)
+                        - (x1787 * x166 + x1786 * x165 + x163 * x1785) * mH,
                     0.0,
-                    x16 * (x500 - x1819 + x501 - x534) - x1399 + x1603 * x20 * x422
-                        - mF * x1805 * x107 - x89 * x1801 * mH + x27 * x1829
-                        - x1813 * x28,
-                    -(x20 * IFyy * x1796),
-                    x1830,
-                    x1831,
-                    x98 * (x1478 - x20 * x_dot * x317 * x21 / f64::sqrt(x167))
-                        - x1318 * phi_dot - delta_dot * x1330 - x735 - x1323 * theta_dot
-                        + rF * (x701 - x20 * thF_dot * x356 + x702 + x718)
-                        - psi_dot * x1310,
-                    x98
-                        * (x357 * x615 / f64::sqrt(x167)
-                            - x20 * y_dot * x317 * x21 / f64::sqrt(x167))
-                        - psi_dot * x1312 - x865 - theta_dot * x1325 - x1331 * delta_dot
-                        + (x345 * x20 * thF_dot - x849 - x854 + x859) * rF
-                        - x1320 * phi_dot,
-                    phi_dot * x1795 + x834 * (x360 - x147) - x880
-                        + x21
-                            * ((rF * x20 * x895 * x615
+                    x22 * x1809 - x1791 * x169 - x1785 * x168 - x1415
+                        + x0 * (x607 - x1805) + x1796 * x297 - x1815 * x29,
+                    x1329 * x1783,
+                    x1816,
+                    x1817,
+                    rF * (x710 - thF_dot * x862) - phi_dot * x1333 - psi_dot * x1321
+                        + x75 * (x1484 - x_dot * x1062 / f64::sqrt(x175))
+                        - delta_dot * x1349 - theta_dot * x1340 - x659,
+                    x75
+                        * (x356 * x638 / f64::sqrt(x175)
+                            - x1062 * y_dot / f64::sqrt(x175)) - x1324 * psi_dot
+                        - phi_dot * x1335 + (thF_dot * x656 + x858) * rF
+                        - theta_dot * x1343 - delta_dot * x1350 - x865,
+                    (x361 - x154) * x836 + x1781 * phi_dot
+                        + (-theta_dot * (2.0 * x120 + 2.0 * x130 + x1345)
+                            - (x638 * x1339 * x892
                                 + delta_dot
-                                    * (rF * x16 * x98 / f64::sqrt(x167) - x1333 + 2.0 * x1334))
-                                * x317
-                                + theta_dot
-                                    * (-x1326 - 2.0 * x62 - 2.0 * x123 - x1327 - x318)),
+                                    * (2.0 * x1348 + rF * x260 / f64::sqrt(x175) - x1352))
+                                * x98) * x1 - x894,
                 ],
                 [
                     0.0,
                     0.0,
-                    (-x189 * x1832 - x192 * x552 * IRyy) * x21,
-                    -x552 * x286 * IRyy - x192 * x1832,
+                    -(x1 * (x218 * x1819 - x1818 * x221)),
+                    -(x218 * x1818 + x221 * x1819),
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    x1830,
-                    x1831,
+                    x1816,
+                    x1817,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    -(x25 * x1833 + x33 * x1835 + x1836 * x29) * mF
-                        - x89 * (x14 * x1837 - 2.0 * (x434 * x23)) * mH,
-                    -x89 * mH * (x1837 * x49 - 2.0 * (x434 * x46))
-                        - mF * (x50 * x1836 + x53 * x1833 + x1835 * x57),
-                    x1521 * x1838 - mF * (x117 * x1836 + x119 * x1833 + x116 * x1835)
-                        - (x1837 * x104 - 2.0 * x1684) * x89 * mH - x1839 * x84 * x422
-                        + x1843 * x98,
-                    x20
-                        * ((x1840 + x1841 + 2.0 * x501 + x1842) * x92
-                            - x89 * (x89 * x1837 * x92 - 2.0 * x1759) * mH)
-                        - mF * (x20 * (x131 * x1836 + x134 * x1835) + x130 * x1833)
-                        - x16 * x1839 * x422 * x92 + (-x296 - x297) * x1838,
-                    x16 * x1843 - (x152 * x1836 + x1835 * x155 + x146 * x20 * x1833) * mF
-                        + x20 * (x1534 * x1838 - x1839 * x422)
-                        - x89 * (x1837 * x156 - 2.0 * (x16 * x434 * x158)) * mH,
+                    -((x25 * x1820 - 2.0 * (x448 * x28)) * x168
+                        + mF * (x31 * x1821 - x20 * x1822 + x1823 * x30)),
+                    -((x49 * x1820 - 2.0 * (x448 * x47)) * x168
+                        + (x50 * x1821 + x1822 * x55 + x1823 * x52) * mF),
+                    -(x113 * x1820 - 2.0 * x1672) * x168
+                        - mF * (x1823 * x103 + x102 * x1822 + x1821 * x91) - x1824 * x256
+                        - x95 * x1825 - x1827 * x75,
+                    x19 * (x1827 * x98 - (x111 * x1820 - 2.0 * x1734) * x168)
+                        - mF * (x19 * (x1823 * x142 + x144 * x1821) + x147 * x1822)
+                        - x1825 * x232 - x301 * x1824,
+                    (-x338 * x1824 - x1825) * x19 - x1827 * x0
+                        - (x166 * x1820 - 2.0 * (x448 * x165)) * x168
+                        - (x1823 * x159 + x161 * x1821 + x152 * x1822) * mF,
                     0.0,
-                    -(mF * x107 * x1833),
-                    -(x385 * IFyy),
+                    -(x169 * x1822),
+                    -x1826,
                     0.0,
                     0.0,
-                    rF * (x736 + thF_dot * x1514 + x751 + x753) - theta_dot * x1548
-                        - x1541 * phi_dot
-                        + (x_dot * x369 / f64::sqrt(x167) + x1639) * x98
-                        - x1531 * psi_dot - delta_dot * x1551 - x1640,
-                    (x847 - thF_dot * x1498 - x841 - x842) * rF
-                        + x98
-                            * (x53 * x107 * x615 / f64::sqrt(x167)
-                                + y_dot * x369 / f64::sqrt(x167)) - delta_dot * x1553
-                        - f64::sqrt(x167) * x107 * x673 - phi_dot * x1543
-                        - x1533 * psi_dot - theta_dot * x1549,
-                    rF * x1648 - x902 - x1052 * phi_dot - theta_dot * x1335 * x317 * x21
-                        - delta_dot * x1555,
+                    theta_dot * x1558 - x1539 * psi_dot - phi_dot * x1550
+                        - delta_dot * x1563 - x1656
+                        + (x1655 - x95 * x_dot / f64::sqrt(x175)) * x75
+                        + rF * (x814 - x736),
+                    x75 * (x68 * x709 / f64::sqrt(x175) - x95 * y_dot / f64::sqrt(x175))
+                        - f64::sqrt(x175) * x68 * x687 - delta_dot * x1565
+                        - phi_dot * x1553 - psi_dot * x1542
+                        + rF * (x874 - thF_dot * x1500) + x1560 * theta_dot,
+                    rF * x1650 - x895 - phi_dot * x1072 - delta_dot * x1567
+                        - x631 * x1353,
                 ],
                 [
                     0.0,
                     0.0,
-                    (x210 * x436 - x444 * x214) * IFyy,
-                    (x244 * x436 - x444 * x242) * IFyy,
-                    x20 * (x436 * x28 - x27 * x444) * IFyy,
+                    (x226 * x497 - x504 * x225) * IFyy,
+                    (x233 * x497 - x235 * x504) * IFyy,
+                    x1329 * (x497 * x29 - x22 * x504),
                     0.0,
-                    IFyy * (-x444 * x28 - x27 * x436),
+                    -((x504 * x29 + x22 * x497) * IFyy),
                     0.0,
                     0.0,
                     0.0,
-                    rF * x673,
-                    rF * (-x758 - x766),
+                    rF * x687,
+                    -(x798 * rF),
                     0.0,
                 ],
             ],

@@ -197,22 +197,20 @@ pub fn energy(
     let m2 = params.m2;
     let l = params.l;
     let g = params.g;
-    let x0 = f64::cos(theta2);
-    let x1 = f64::cos(theta1);
-    let x2 = theta1 - theta2;
-    let x3 = l * f64::sin(x2) * theta1_dot - x_dot * f64::sin(theta2);
-    let x4 = l * (theta1_dot * f64::cos(x2) + 0.5 * theta2_dot) + x0 * x_dot;
-    l
-        * (m2
-            * (0.041666666666666664 * (l * theta2_dot * theta2_dot)
-                + g * (-0.5 * x0 - x1))
-            + (0.041666666666666664 * (l * theta1_dot * theta1_dot) - 0.5 * (g * x1))
-                * m1)
-        + 0.5
-            * (m1
-                * (l * (x_dot * x1 + 0.25 * (l * theta1_dot)) * theta1_dot
-                    + x_dot * x_dot)) + 0.5 * (m2 * (x3 * x3 + x4 * x4))
-        + 0.5 * (x_dot * x_dot * M)
+    let x0 = x_dot * x_dot;
+    let x1 = l * theta1_dot;
+    let x2 = f64::cos(theta1);
+    let x3 = f64::cos(theta2);
+    let x4 = theta1 - theta2;
+    let x5 = f64::sin(x4) * x1 - x_dot * f64::sin(theta2);
+    let x6 = l * (theta1_dot * f64::cos(x4) + 0.5 * theta2_dot) + x3 * x_dot;
+    0.5 * ((x0 + x1 * (x_dot * x2 + 0.25 * x1)) * m1)
+        + l
+            * (m2
+                * (0.041666666666666664 * (l * theta2_dot * theta2_dot)
+                    - (0.5 * x3 + x2) * g)
+                + m1 * (0.041666666666666664 * (theta1_dot * x1) - 0.5 * (g * x2)))
+        + 0.5 * (m2 * (x5 * x5 + x6 * x6)) + 0.5 * (x0 * M)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -334,34 +332,33 @@ pub mod lagrange {
         let x2 = f64::cos(theta2);
         let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
-        let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = l * (m2 + 0.5 * m1) * x3;
-        let x7 = l * x4;
-        let x8 = 0.5 * x2 * m2 * l;
-        let x9 = x2 * x0 - x3 * x1;
-        let x10 = theta1_dot - theta2_dot;
+        let x5 = l * x4;
+        let x6 = m2 * l;
+        let x7 = 0.5 * x5 * x6;
+        let x8 = m2 + 0.5 * m1;
+        let x9 = l * x8 * x3;
+        let x10 = 0.5 * x2 * x6;
+        let x11 = theta2_dot * theta2_dot;
+        let x12 = x2 * x0 - x3 * x1;
+        let x13 = l * x12;
+        let x14 = theta1_dot * theta1_dot;
+        let x15 = x0 * x14;
+        let x16 = theta1_dot - theta2_dot;
         Assembly {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
-                [l * l * (m2 + 0.3333333333333333 * m1), x5, x6, x7],
-                [x5, 0.3333333333333333 * m2 * l * l, x8, l],
-                [x6, x8, m2 + M + m1, 0.0],
-                [x7, l, 0.0, 0.0],
+                [l * l * (m2 + 0.3333333333333333 * m1), x7, x9, x5],
+                [x7, 0.3333333333333333 * l * x6, x10, l],
+                [x9, x10, m2 + M + m1, 0.0],
+                [x5, l, 0.0, 0.0],
             ],
             force: [
-                tau
-                    + l
-                        * ((-m2 - 0.5 * m1) * x0 * g
-                            - 0.5 * (m2 * l * x9 * theta2_dot * theta2_dot)),
-                m2 * (0.5 * (l * x9 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l
-                    - tau,
-                (0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                    - m2
-                        * (-x0 * theta1_dot * theta1_dot
-                            - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
-                x10 * l * x9 * theta1_dot,
+                tau + l * (-0.5 * (x6 * x11 * x12) - x0 * g * x8),
+                x6 * (0.5 * (x13 * x14) - 0.5 * (g * x1)) - tau,
+                l * (0.5 * (x15 * m1) + m2 * (x15 + 0.5 * (x11 * x1))),
+                x16 * x13 * theta1_dot,
             ],
-            power: x10 * tau,
+            power: x16 * tau,
             checks: [],
             residuals: [l * (theta2_dot + x4 * theta1_dot)],
             positions: [0.0],
@@ -563,40 +560,45 @@ pub mod lagrange {
         let x2 = f64::cos(theta2);
         let x3 = f64::cos(theta1);
         let x4 = x0 * x1 + x2 * x3;
-        let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = m2 + 0.5 * m1;
-        let x7 = l * x6 * x3;
-        let x8 = l * x4;
-        let x9 = 0.5 * x2 * m2 * l;
-        let x10 = -m2 - 0.5 * m1;
-        let x11 = x2 * x0 - x3 * x1;
-        let x12 = theta1_dot - theta2_dot;
-        let x13 = -(0.5 * m2 * l * l * x11);
-        let x14 = x10 * x0 * l;
-        let x15 = -(l * x11);
-        let x16 = 0.5 * m2 * l * l * x11;
-        let x17 = l * x11;
-        let x18 = -(0.5 * m2 * l * x1);
+        let x5 = l * x4;
+        let x6 = m2 * l;
+        let x7 = x5 * x6;
+        let x8 = 0.5 * x7;
+        let x9 = m2 + 0.5 * m1;
+        let x10 = l * x3 * x9;
+        let x11 = 0.5 * x2 * x6;
+        let x12 = -(g * x9);
+        let x13 = x6 * theta2_dot;
+        let x14 = theta2_dot * x13;
+        let x15 = x2 * x0 - x3 * x1;
+        let x16 = l * x15;
+        let x17 = theta1_dot * theta1_dot;
+        let x18 = x0 * x17;
+        let x19 = theta1_dot - theta2_dot;
+        let x20 = x19 * theta1_dot;
+        let x21 = x16 * x6;
+        let x22 = -(0.5 * x21);
+        let x23 = x0 * l;
+        let x24 = -(x23 * x9);
+        let x25 = -x16;
+        let x26 = x5 * x20;
+        let x27 = 0.5 * x21;
+        let x28 = -(0.5 * x6 * x1);
         Derivatives {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
-                [l * l * (m2 + 0.3333333333333333 * m1), x5, x7, x8],
-                [x5, 0.3333333333333333 * m2 * l * l, x9, l],
-                [x7, x9, m2 + M + m1, 0.0],
-                [x8, l, 0.0, 0.0],
+                [l * l * (m2 + 0.3333333333333333 * m1), x8, x10, x5],
+                [x8, 0.3333333333333333 * l * x6, x11, l],
+                [x10, x11, m2 + M + m1, 0.0],
+                [x5, l, 0.0, 0.0],
             ],
             force: [
-                tau
-                    + l
-                        * (x10 * x0 * g
-                            - 0.5 * (m2 * l * x11 * theta2_dot * theta2_dot)),
-                m2 * (0.5 * (l * x11 * theta1_dot * theta1_dot) - 0.5 * (g * x1)) * l
-                    - tau,
-                (0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                    - m2
-                        * (-x0 * theta1_dot * theta1_dot
-                            - 0.5 * (theta2_dot * theta2_dot * x1))) * l,
-                x12 * l * x11 * theta1_dot,
+                tau + l * (x0 * x12 - 0.5 * (x14 * x15)),
+                x6 * (0.5 * (x16 * x17) - 0.5 * (g * x1)) - tau,
+                l
+                    * (0.5 * (x18 * m1)
+                        + m2 * (x18 + 0.5 * (theta2_dot * theta2_dot * x1))),
+                x20 * x16,
             ],
             checks: [],
             d_qdot: [
@@ -609,16 +611,16 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, x13, x14, x15],
-                    [x13, 0.0, 0.0, 0.0],
-                    [x14, 0.0, 0.0, 0.0],
-                    [x15, 0.0, 0.0, 0.0],
+                    [0.0, x22, x24, x25],
+                    [x22, 0.0, 0.0, 0.0],
+                    [x24, 0.0, 0.0, 0.0],
+                    [x25, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x16, 0.0, x17],
-                    [x16, 0.0, x18, 0.0],
-                    [0.0, x18, 0.0, 0.0],
-                    [x17, 0.0, 0.0, 0.0],
+                    [0.0, x27, 0.0, x16],
+                    [x27, 0.0, x28, 0.0],
+                    [0.0, x28, 0.0, 0.0],
+                    [x16, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
@@ -646,35 +648,24 @@ pub mod lagrange {
                 ],
             ],
             d_force: [
+                [l * (x3 * x12 - 0.5 * (x14 * x4)), 0.5 * x7 * x17, x10 * x17, x26],
                 [
-                    l * (x10 * g * x3 - 0.5 * (m2 * l * x4 * theta2_dot * theta2_dot)),
-                    0.5 * m2 * l * l * x4 * theta1_dot * theta1_dot,
-                    l * x6 * theta1_dot * theta1_dot * x3,
-                    x12 * l * x4 * theta1_dot,
-                ],
-                [
-                    0.5 * m2 * l * l * x4 * theta2_dot * theta2_dot,
-                    m2 * l
-                        * (-0.5 * (x2 * g) - 0.5 * (l * x4 * theta1_dot * theta1_dot)),
-                    0.5 * x2 * m2 * l * theta2_dot * theta2_dot,
-                    -(x12 * l * x4 * theta1_dot),
+                    0.5 * x5 * x14,
+                    -(x6 * (0.5 * (x2 * g) + 0.5 * (x5 * x17))),
+                    0.5 * x2 * x14,
+                    -x26,
                 ],
                 [0.0, 0.0, 0.0, 0.0],
                 [
                     0.0,
-                    m2 * l * l * x11 * theta1_dot,
-                    x0 * l * theta1_dot * (2.0 * m2 + m1),
-                    l * x11 * (2.0 * theta1_dot - theta2_dot),
+                    x21 * theta1_dot,
+                    x23 * theta1_dot * (2.0 * m2 + m1),
+                    x16 * (2.0 * theta1_dot - theta2_dot),
                 ],
-                [
-                    -(m2 * l * l * x11 * theta2_dot),
-                    0.0,
-                    m2 * l * theta2_dot * x1,
-                    -(l * x11 * theta1_dot),
-                ],
+                [-(x16 * x13), 0.0, x1 * x13, -(x16 * theta1_dot)],
                 [0.0, 0.0, 0.0, 0.0],
             ],
-            power: x12 * tau,
+            power: x19 * tau,
             d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
         }
     }
@@ -796,49 +787,51 @@ pub mod lagrange {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = f64::cos(theta2);
-        let x3 = f64::cos(theta1);
-        let x4 = x0 * x1 + x2 * x3;
-        let x5 = 0.5 * m2 * l * l * x4;
-        let x6 = m2 + 0.5 * m1;
-        let x7 = l * x6 * x3;
-        let x8 = l * x4;
-        let x9 = 0.5 * x2 * m2 * l;
-        let x10 = -m2 - 0.5 * m1;
-        let x11 = x10 * x0 * g;
-        let x12 = x2 * x0 - x3 * x1;
-        let x13 = m2 * l * x12 * theta2_dot * theta2_dot;
-        let x14 = g * x1;
-        let x15 = l * x12 * theta1_dot * theta1_dot;
-        let x16 = 0.5 * x15 - 0.5 * x14;
-        let x17 = x0 * theta1_dot * theta1_dot;
-        let x18 = theta2_dot * theta2_dot * x1;
-        let x19 = 0.5 * (x0 * theta1_dot * theta1_dot * m1) - m2 * (-x17 - 0.5 * x18);
-        let x20 = theta1_dot - theta2_dot;
-        let x21 = 0.3333333333333333 * l * l;
-        let x22 = 0.5 * l * x3;
-        let x23 = 0.5 * l * l * x4;
-        let x24 = l * x3;
-        let x25 = 0.5 * x2 * l;
-        let x26 = m2 * l * x4;
-        let x27 = x6 * x3;
-        let x28 = 0.5 * x2 * m2;
+        let x0 = l * l;
+        let x1 = f64::sin(theta1);
+        let x2 = f64::sin(theta2);
+        let x3 = f64::cos(theta2);
+        let x4 = f64::cos(theta1);
+        let x5 = x1 * x2 + x3 * x4;
+        let x6 = l * x5;
+        let x7 = m2 * l;
+        let x8 = 0.5 * x6 * x7;
+        let x9 = l * x4;
+        let x10 = m2 + 0.5 * m1;
+        let x11 = x9 * x10;
+        let x12 = 0.5 * x3 * x7;
+        let x13 = theta2_dot * theta2_dot;
+        let x14 = x3 * x1 - x4 * x2;
+        let x15 = x7 * x13 * x14;
+        let x16 = x1 * g;
+        let x17 = x10 * x16;
+        let x18 = l * x14;
+        let x19 = theta1_dot * theta1_dot;
+        let x20 = x18 * x19;
+        let x21 = g * x2;
+        let x22 = 0.5 * x20 - 0.5 * x21;
+        let x23 = x1 * x19;
+        let x24 = x23 + 0.5 * (x13 * x2);
+        let x25 = 0.5 * (x23 * m1) + x24 * m2;
+        let x26 = theta1_dot - theta2_dot;
+        let x27 = x26 * theta1_dot;
+        let x28 = 0.3333333333333333 * x0;
+        let x29 = 0.5 * x9;
+        let x30 = x1 * l;
+        let x31 = 0.5 * x5 * x0;
+        let x32 = 0.5 * x3 * l;
+        let x33 = x7 * x5;
+        let x34 = x10 * x4;
+        let x35 = 0.5 * x3 * m2;
         ParameterDerivatives {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
-                [l * l * (m2 + 0.3333333333333333 * m1), x5, x7, x8],
-                [x5, 0.3333333333333333 * m2 * l * l, x9, l],
-                [x7, x9, m2 + M + m1, 0.0],
-                [x8, l, 0.0, 0.0],
+                [x0 * (m2 + 0.3333333333333333 * m1), x8, x11, x6],
+                [x8, 0.3333333333333333 * l * x7, x12, l],
+                [x11, x12, m2 + M + m1, 0.0],
+                [x6, l, 0.0, 0.0],
             ],
-            force: [
-                tau + l * (x11 - 0.5 * x13),
-                m2 * x16 * l - tau,
-                x19 * l,
-                x20 * l * x12 * theta1_dot,
-            ],
+            force: [tau + l * (-0.5 * x15 - x17), x7 * x22 - tau, l * x25, x27 * x18],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -856,22 +849,22 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x21, 0.0, x22, 0.0],
+                    [x28, 0.0, x29, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
-                    [x22, 0.0, 1.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [l * l, x23, x24, 0.0],
-                    [x23, x21, x25, 0.0],
-                    [x24, x25, 1.0, 0.0],
+                    [x29, 0.0, 1.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [l * (2.0 * m2 + 0.6666666666666666 * m1), x26, x27, x4],
-                    [x26, 0.6666666666666666 * m2 * l, x28, 1.0],
-                    [x27, x28, 0.0, 0.0],
-                    [x4, 1.0, 0.0, 0.0],
+                    [x0, x31, x9, 0.0],
+                    [x31, x28, x32, 0.0],
+                    [x9, x32, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [l * (2.0 * m2 + 0.6666666666666666 * m1), x33, x34, x5],
+                    [x33, 0.6666666666666666 * x7, x35, 1.0],
+                    [x34, x35, 0.0, 0.0],
+                    [x5, 1.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
@@ -888,19 +881,14 @@ pub mod lagrange {
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0],
-                [-(0.5 * x0 * l * g), 0.0, 0.5 * x0 * l * theta1_dot * theta1_dot, 0.0],
-                [
-                    (-0.5 * (l * x12 * theta2_dot * theta2_dot) - x0 * g) * l,
-                    x16 * l,
-                    (x17 + 0.5 * x18) * l,
-                    0.0,
-                ],
-                [x11 - x13, m2 * (x15 - 0.5 * x14), x19, x20 * x12 * theta1_dot],
-                [x10 * x0 * l, -(0.5 * m2 * l * x1), 0.0, 0.0],
+                [-(0.5 * x30 * g), 0.0, 0.5 * x30 * x19, 0.0],
+                [-(l * (x16 + 0.5 * (x18 * x13))), l * x22, x24 * l, 0.0],
+                [-x15 - x17, m2 * (x20 - 0.5 * x21), x25, x27 * x14],
+                [-(x30 * x10), -(0.5 * x7 * x2), 0.0, 0.0],
                 [1.0, -1.0, 0.0, 0.0],
             ],
-            power: x20 * tau,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x20],
+            power: x26 * tau,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x26],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
@@ -1155,60 +1143,58 @@ pub mod maggi {
         let tau = params.tau;
         let x0 = f64::sin(theta1);
         let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = x4 + 1.0;
+        let x6 = 1.0 / x5;
+        let x7 = l * x6;
+        let x8 = x2 * m2;
         let x9 = m2 + 0.5 * m1;
-        let x10 = l * x7 * (x9 * x4 - 0.5 * (x3 * m2 * x8));
-        let x11 = theta1_dot - theta2_dot;
-        let x12 = x7 * x8;
-        let x13 = 1.0 - x12;
-        let x14 = x3 * x0 - x4 * x1;
+        let x10 = x9 * x3;
+        let x11 = x7 * (x10 - 0.5 * (x8 * x4));
+        let x12 = x2 * x0 - x3 * x1;
+        let x13 = l * x12;
+        let x14 = x4 * x6;
+        let x15 = theta1_dot - theta2_dot;
+        let x16 = x15 * x6;
+        let x17 = x15 * x16;
+        let x18 = theta1_dot * theta1_dot;
+        let x19 = 1.0 - x14;
+        let x20 = theta2_dot * theta2_dot;
+        let x21 = x0 * x18;
+        let x22 = x12 * x17;
         Assembly {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
                 [
-                    l * l * x7 * x7
+                    x7 * x7
                         * (m2
                             * (0.6666666666666666
                                 - 0.3333333333333333
                                     * f64::cos(2.0 * theta1 - 2.0 * theta2))
                             + 0.3333333333333333 * m1),
-                    x10,
+                    x11,
                 ],
-                [x10, m2 + M + m1],
+                [x11, m2 + M + m1],
             ],
             force: [
-                x7
-                    * (tau
-                        + l
-                            * (l
-                                * (x11 * x11
-                                    * (-x7 * (m2 + 0.3333333333333333 * m1)
-                                        - 0.5 * (m2 * x13 * x8)) * x7
-                                    - 0.5 * (m2 * theta2_dot * theta2_dot)) * x14
-                                + (-m2 - 0.5 * m1) * x0 * g)
-                        - (m2 * l
-                            * (l
-                                * (0.5 * (theta1_dot * theta1_dot)
-                                    + x11 * x11 * x7
-                                        * (-0.16666666666666666 * x12 - 0.3333333333333333)) * x14
-                                - 0.5 * (g * x1)) - tau) * x8),
+                (tau
+                    - x4
+                        * (m2 * l
+                            * (x13
+                                * ((-0.16666666666666666 * x14 - 0.3333333333333333) * x17
+                                    + 0.5 * x18) - 0.5 * (g * x1)) - tau)
+                    + ((-(0.5 * (m2 * x19 * x4) + (m2 + 0.3333333333333333 * m1) * x6)
+                        * x17 - 0.5 * (m2 * x20)) * x13 - x0 * g * x9) * l) * x6,
                 l
-                    * (x11 * x11 * x7 * x14 * (-0.5 * (x3 * m2 * x13) - x7 * x9 * x4)
-                        + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                        - m2
-                            * (-x0 * theta1_dot * theta1_dot
-                                - 0.5 * (theta2_dot * theta2_dot * x1))),
+                    * (0.5 * (x21 * m1) + m2 * (x21 + 0.5 * (x20 * x1))
+                        - x22 * (0.5 * (x8 * x19) + x10 * x6)),
             ],
-            w: [[x7, 0.0], [-(x7 * x8), 0.0], [0.0, 1.0]],
-            c: [x11 * x11 * x7 * x7 * x14, x11 * x11 * x13 * x7 * x14, 0.0],
-            power: x11 * tau,
-            checks: [x6, l * x6],
+            w: [[x6, 0.0], [-x14, 0.0], [0.0, 1.0]],
+            c: [x12 * x16 * x16, x19 * x22, 0.0],
+            power: x15 * tau,
+            checks: [x5, l * x5],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -1416,78 +1402,90 @@ pub mod maggi {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = 2.0 * theta1 - 2.0 * theta2;
-        let x9 = f64::cos(x8);
-        let x10 = x2 + x5;
-        let x11 = m2 + 0.5 * m1;
-        let x12 = l * x7 * (x11 * x4 - 0.5 * (x3 * m2 * x10));
-        let x13 = theta1_dot - theta2_dot;
-        let x14 = m2 + 0.3333333333333333 * m1;
-        let x15 = x7 * x14;
-        let x16 = x7 * x10;
-        let x17 = 1.0 - x16;
-        let x18 = x3 * x0 - x4 * x1;
-        let x19 = -m2 - 0.5 * m1;
-        let x20 = l
-            * (l
-                * (x13 * x13 * (-x15 - 0.5 * (m2 * x17 * x10)) * x7
-                    - 0.5 * (m2 * theta2_dot * theta2_dot)) * x18 + x19 * x0 * g);
-        let x21 = m2 * l
-            * (l
-                * (0.5 * (theta1_dot * theta1_dot)
-                    + x13 * x13 * x7 * (-0.16666666666666666 * x16 - 0.3333333333333333))
-                * x18 - 0.5 * (g * x1)) - tau;
-        let x22 = x7 * x11 * x4;
-        let x23 = m2 * f64::sin(x8);
-        let x24 = (x19 * x0 + x18 * (x3 * m2 * (0.5 - 0.5 * x16) + x22)) * l * x7;
-        let x25 = x10 * theta1_dot * theta1_dot;
-        let x26 = x10 * x10;
-        let x27 = x7 * x18 * x18;
-        let x28 = -x2 - 2.0 * x27 - x5;
-        let x29 = (x7 * x28 + 1.0) * x10;
-        let x30 = m2 * x10 * theta2_dot * theta2_dot;
-        let x31 = 2.0 * x27 + x29;
-        let x32 = x7 * x7 * x14;
-        let x33 = m2 * x17;
-        let x34 = x7 * (tau + x20);
-        let x35 = x2 + 2.0 * x27 + x5;
-        let x36 = l * x7
-            * (m2 * (x3 * (0.5 * x16 - 0.5) * x18 + 0.5 * (x10 * x1))
-                - x7 * x11 * x18 * x4);
-        let x37 = x16 - 1.0;
-        let x38 = x10 * (x35 * x7 - 1.0);
-        let x39 = x38 - 2.0 * x27;
-        let x40 = 2.0 - 2.0 * x16;
-        let x41 = 2.0 * x16 - 2.0;
+        let x0 = 2.0 * theta1 - 2.0 * theta2;
+        let x1 = f64::cos(x0);
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = f64::cos(theta2);
+        let x5 = f64::cos(theta1);
+        let x6 = x2 * x3 + x4 * x5;
+        let x7 = x6 + 1.0;
+        let x8 = 1.0 / x7;
+        let x9 = l * x8;
+        let x10 = x9 * x9;
+        let x11 = m2 * x6;
+        let x12 = m2 + 0.5 * m1;
+        let x13 = x12 * x5;
+        let x14 = (x13 - 0.5 * (x4 * x11)) * x9;
+        let x15 = theta2_dot * theta2_dot;
+        let x16 = (m2 + 0.3333333333333333 * m1) * x8;
+        let x17 = x6 * x8;
+        let x18 = 1.0 - x17;
+        let x19 = theta1_dot - theta2_dot;
+        let x20 = x19 * x8;
+        let x21 = x19 * x20;
+        let x22 = x4 * x2 - x5 * x3;
+        let x23 = l * x22;
+        let x24 = -(x2 * x12);
+        let x25 = tau
+            + l
+                * ((-0.5 * (m2 * x15) - (x16 + 0.5 * (x18 * x11)) * x21) * x23
+                    + x24 * g);
+        let x26 = theta1_dot * theta1_dot;
+        let x27 = m2 * l
+            * (x23
+                * ((-0.16666666666666666 * x17 - 0.3333333333333333) * x21 + 0.5 * x26)
+                - 0.5 * (g * x3)) - tau;
+        let x28 = x2 * x26;
+        let x29 = x4 * m2;
+        let x30 = x13 * x8;
+        let x31 = x22 * x20;
+        let x32 = x18 * x22;
+        let x33 = m2 * f64::sin(x0);
+        let x34 = x22 * x8;
+        let x35 = (x24 + ((0.5 - 0.5 * x17) * x29 + x30) * x22) * x9;
+        let x36 = x15 * x11;
+        let x37 = x22 * x22;
+        let x38 = m2 * x18;
+        let x39 = x16 * x8;
+        let x40 = x22 * x34;
+        let x41 = 2.0 * x40 + x6;
+        let x42 = x41 * x8;
+        let x43 = (1.0 - x42) * x6;
+        let x44 = 2.0 * x40 + x43;
+        let x45 = x26 * x6;
+        let x46 = x6 * x6;
+        let x47 = x25 * x8;
+        let x48 = x34 * x8;
+        let x49 = x20 * x20;
+        let x50 = (m2 * (x4 * x22 * (0.5 * x17 - 0.5) + 0.5 * (x3 * x6)) - x34 * x13)
+            * x9;
+        let x51 = x17 - 1.0;
+        let x52 = x42;
+        let x53 = (x52 - 1.0) * x6;
+        let x54 = x53 - 2.0 * x40;
+        let x55 = x34 * (l * l);
+        let x56 = 2.0 - 2.0 * x17;
+        let x57 = x34 * x20;
+        let x58 = 2.0 * x17 - 2.0;
+        let x59 = m2 * theta2_dot;
         Derivatives {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
                 [
-                    l * l * x7 * x7
-                        * (m2 * (0.6666666666666666 - 0.3333333333333333 * x9)
-                            + 0.3333333333333333 * m1),
-                    x12,
+                    (m2 * (0.6666666666666666 - 0.3333333333333333 * x1)
+                        + 0.3333333333333333 * m1) * x10,
+                    x14,
                 ],
-                [x12, m2 + M + m1],
+                [x14, m2 + M + m1],
             ],
             force: [
-                x7 * (tau + x20 - x21 * x10),
+                (x25 - x6 * x27) * x8,
                 l
-                    * (x13 * x13 * x7 * x18 * (-0.5 * (x3 * m2 * x17) - x22)
-                        + 0.5 * (x0 * theta1_dot * theta1_dot * m1)
-                        - m2
-                            * (-x0 * theta1_dot * theta1_dot
-                                - 0.5 * (theta2_dot * theta2_dot * x1))),
+                    * (0.5 * (x28 * m1) + m2 * (x28 + 0.5 * (x15 * x3))
+                        - x22 * (0.5 * (x29 * x18) + x30) * x21),
             ],
-            checks: [x6, l * x6],
+            checks: [x7, l * x7],
             d_qdot: [
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
@@ -1499,23 +1497,21 @@ pub mod maggi {
             d_matrix: [
                 [
                     [
-                        l * l * x7 * x7
-                            * (0.6666666666666666 * x23
-                                + (m2 * (1.3333333333333333 - 0.6666666666666666 * x9)
-                                    + 0.6666666666666666 * m1) * x7 * x18),
-                        x24,
+                        (0.6666666666666666 * x33
+                            + (m2 * (1.3333333333333333 - 0.6666666666666666 * x1)
+                                + 0.6666666666666666 * m1) * x34) * x10,
+                        x35,
                     ],
-                    [x24, 0.0],
+                    [x35, 0.0],
                 ],
                 [
                     [
-                        l * l * x7 * x7
-                            * ((m2 * (0.6666666666666666 * x9 - 1.3333333333333333)
-                                - 0.6666666666666666 * m1) * x7 * x18
-                                - 0.6666666666666666 * x23),
-                        x36,
+                        ((m2 * (0.6666666666666666 * x1 - 1.3333333333333333)
+                            - 0.6666666666666666 * m1) * x34 - 0.6666666666666666 * x33)
+                            * x10,
+                        x50,
                     ],
-                    [x36, 0.0],
+                    [x50, 0.0],
                 ],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -1524,85 +1520,75 @@ pub mod maggi {
             ],
             d_force: [
                 [
-                    ((l
-                        * (((-0.5 * (m2 * x31) - x15) * x10
-                            + (0.5 * x33 - 2.0 * x32) * x18 * x18) * x13 * x13 * x7
-                            - 0.5 * x30)
-                        - m2 * l * x10
-                            * (0.5 * x25
-                                + (x7 * ((0.5 - x16) * x18 * x18 - 0.5 * x26)
-                                    - 0.6666666666666666 * x27 - 0.3333333333333333 * x29) * x13
-                                    * x13 * x7) + x19 * g * x4) * l + x18 * (x34 + x21 * x17))
-                        * x7,
+                    (l
+                        * (l
+                            * (x21
+                                * (x37 * (0.5 * x38 - 2.0 * x39)
+                                    - x6 * (x16 + 0.5 * (m2 * x44))) - 0.5 * x36)
+                            - l
+                                * (0.5 * x45
+                                    + (((0.5 - x17) * x37 - 0.5 * x46) * x8
+                                        - 0.6666666666666666 * x40 - 0.3333333333333333 * x43)
+                                        * x21) * x11 - g * x12 * x5) + x22 * (x18 * x27 + x47))
+                        * x8,
                     l
-                        * (x11 * theta1_dot * theta1_dot * x4
-                            + x13 * x13 * x7
-                                * (x7 * (x11 * x28 * x4 - x19 * x0 * x18)
-                                    - 0.5 * (x3 * m2 * x31))),
+                        * (x26 * x13
+                            + ((-x24 * x22 - x41 * x13) * x8 - 0.5 * (x29 * x44)) * x21),
                 ],
                 [
-                    x7
-                        * (x18 * (x21 * x37 - x34)
-                            + l
-                                * ((0.5 * x30
-                                    + x13 * x13 * x7
-                                        * (x10 * (x15 - 0.5 * (m2 * x39))
-                                            + x18 * x18 * (2.0 * x32 - 0.5 * x33))) * l
-                                    - m2 * x10
-                                        * (l
-                                            * (x13 * x13 * x7
-                                                * (0.6666666666666666 * x27 - 0.3333333333333333 * x38
-                                                    + x7 * (0.5 * x26 + x18 * x18 * (x16 - 0.5))) - 0.5 * x25)
-                                            - 0.5 * (x3 * g)))),
+                    ((x51 * x27 - x47) * x22
+                        + l
+                            * (l
+                                * (0.5 * x36
+                                    + (x37 * (2.0 * x39 - 0.5 * x38)
+                                        + x6 * (x16 - 0.5 * (x54 * m2))) * x21)
+                                - (((0.6666666666666666 * x40
+                                    + (0.5 * x46 + x37 * (x17 - 0.5)) * x8
+                                    - 0.3333333333333333 * x53) * x21 - 0.5 * x45) * l
+                                    - 0.5 * (x4 * g)) * x11)) * x8,
                     l
-                        * (0.5 * (x3 * m2 * theta2_dot * theta2_dot)
-                            + x13 * x13 * x7
-                                * (x35 * x7 * x11 * x4
-                                    + m2 * (0.5 * (x17 * x18 * x1) - 0.5 * (x3 * x39)))),
+                        * (0.5 * (x29 * x15)
+                            + (x52 * x13 + m2 * (0.5 * (x32 * x3) - 0.5 * (x54 * x4)))
+                                * x21),
                 ],
                 [0.0, 0.0],
                 [
-                    l * l * x7 * x18
-                        * (x13 * x7 * (-0.5 * (m2 * x10 * x40) - 2.0 * x15)
-                            - m2 * x10
-                                * (x13 * x7
-                                    * (-0.3333333333333333 * x16 - 0.6666666666666666)
-                                    + theta1_dot)),
+                    x55
+                        * (-(0.5 * (x11 * x56) + 2.0 * x16) * x20
+                            - ((-0.3333333333333333 * x17 - 0.6666666666666666) * x20
+                                + theta1_dot) * x11),
                     l
-                        * (x0 * theta1_dot * (2.0 * m2 + m1)
-                            + x13 * (-0.5 * (x3 * m2 * x40) - 2.0 * x22) * x7 * x18),
+                        * (x2 * theta1_dot * (2.0 * m2 + m1)
+                            - (2.0 * x30 + 0.5 * (x29 * x56)) * x31),
                 ],
                 [
-                    l * l
-                        * (x13 * x7 * (2.0 * x15 - 0.5 * (m2 * x10 * x41))
-                            - x13 * m2 * x7 * x10
-                                * (0.3333333333333333 * x16 + 0.6666666666666666)
-                            - m2 * theta2_dot) * x7 * x18,
-                    l
-                        * (x13 * x7 * x18 * (2.0 * x22 - 0.5 * (x3 * m2 * x41))
-                            + m2 * theta2_dot * x1),
+                    x55
+                        * ((2.0 * x16 - 0.5 * (x58 * x11)) * x20
+                            - (0.3333333333333333 * x17 + 0.6666666666666666) * x11 * x20
+                            - x59),
+                    l * (x3 * x59 + (2.0 * x30 - 0.5 * (x58 * x29)) * x31),
                 ],
                 [0.0, 0.0],
             ],
-            w: [[x7, 0.0], [-(x7 * x10), 0.0], [0.0, 1.0]],
-            c: [x13 * x13 * x7 * x7 * x18, x13 * x13 * x17 * x7 * x18, 0.0],
+            w: [[x8, 0.0], [-x17, 0.0], [0.0, 1.0]],
+            c: [x31 * x20, x32 * x21, 0.0],
             d_w: [
-                [[x7 * x7 * x18, 0.0], [x17 * x7 * x18, 0.0], [0.0, 0.0]],
-                [[-(x7 * x7 * x18), 0.0], [x37 * x7 * x18, 0.0], [0.0, 0.0]],
+                [[x48, 0.0], [x18 * x34, 0.0], [0.0, 0.0]],
+                [[-x48, 0.0], [x34 * x51, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
             ],
             d_c: [
-                [x35 * x13 * x13 * x7 * x7, x13 * x13 * x31 * x7, 0.0],
-                [x13 * x13 * x7 * x7 * x28, x13 * x13 * x39 * x7, 0.0],
+                [x49 * x41, x44 * x21, 0.0],
+                [-(x49 * x41), x54 * x21, 0.0],
                 [0.0, 0.0, 0.0],
-                [2.0 * x13 * x7 * x7 * x18, x13 * x7 * x18 * x40, 0.0],
-                [-(2.0 * x13 * x7 * x7 * x18), x13 * x7 * x18 * x41, 0.0],
+                [2.0 * x57, x31 * x56, 0.0],
+                [-(2.0 * x57), x58 * x31, 0.0],
                 [0.0, 0.0, 0.0],
             ],
-            power: x13 * tau,
+            power: x19 * tau,
             d_power: [0.0, 0.0, 0.0, tau, -tau, 0.0],
         }
     }
@@ -1740,59 +1726,65 @@ pub mod maggi {
         let l = params.l;
         let g = params.g;
         let tau = params.tau;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = f64::cos(2.0 * theta1 - 2.0 * theta2);
-        let x9 = 0.6666666666666666 - 0.3333333333333333 * x8;
-        let x10 = x2 + x5;
+        let x0 = f64::cos(2.0 * theta1 - 2.0 * theta2);
+        let x1 = 0.6666666666666666 - 0.3333333333333333 * x0;
+        let x2 = f64::sin(theta1);
+        let x3 = f64::sin(theta2);
+        let x4 = f64::cos(theta2);
+        let x5 = f64::cos(theta1);
+        let x6 = x2 * x3 + x4 * x5;
+        let x7 = x6 + 1.0;
+        let x8 = 1.0 / x7;
+        let x9 = l * x8;
+        let x10 = x9 * x9;
         let x11 = m2 + 0.5 * m1;
-        let x12 = x11 * x4 - 0.5 * (x3 * m2 * x10);
-        let x13 = l * x7 * x12;
-        let x14 = theta1_dot - theta2_dot;
-        let x15 = x7 * x10;
-        let x16 = 1.0 - x15;
-        let x17 = m2 * x16 * x10;
-        let x18 = m2 * theta2_dot * theta2_dot;
-        let x19 = x3 * x0 - x4 * x1;
-        let x20 = -m2 - 0.5 * m1;
-        let x21 = x20 * x0 * g;
-        let x22 = g * x1;
-        let x23 = theta1_dot * theta1_dot;
-        let x24 = l
-            * (0.5 * x23
-                + x14 * x14 * x7 * (-0.16666666666666666 * x15 - 0.3333333333333333))
-            * x19 - 0.5 * x22;
-        let x25 = x0 * theta1_dot * theta1_dot;
-        let x26 = theta2_dot * theta2_dot * x1;
-        let x27 = x14 * x14 * x7 * x19 * (-0.5 * (x3 * m2 * x16) - x7 * x11 * x4)
-            + 0.5 * (x0 * theta1_dot * theta1_dot * m1) - m2 * (-x25 - 0.5 * x26);
-        let x28 = 0.5 * l * x7 * x4;
-        let x29 = x0 * g;
-        let x30 = (x4 - 0.5 * (x3 * x10)) * l * x7;
-        let x31 = x7 * x12;
+        let x12 = m2 * x6;
+        let x13 = x11 * x5 - 0.5 * (x4 * x12);
+        let x14 = x9 * x13;
+        let x15 = x4 * x2 - x5 * x3;
+        let x16 = l * x15;
+        let x17 = x6 * x8;
+        let x18 = theta1_dot - theta2_dot;
+        let x19 = x18 * x8;
+        let x20 = x18 * x19;
+        let x21 = theta1_dot * theta1_dot;
+        let x22 = g * x3;
+        let x23 = x16
+            * ((-0.16666666666666666 * x17 - 0.3333333333333333) * x20 + 0.5 * x21)
+            - 0.5 * x22;
+        let x24 = -(x2 * x11);
+        let x25 = x24 * g;
+        let x26 = 1.0 - x17;
+        let x27 = x26 * x12;
+        let x28 = theta2_dot * theta2_dot;
+        let x29 = m2 * x28;
+        let x30 = x2 * x21;
+        let x31 = x30 + 0.5 * (x28 * x3);
+        let x32 = x5 * x8;
+        let x33 = x4 * x26;
+        let x34 = x15 * x20;
+        let x35 = 0.5 * (x30 * m1) + x31 * m2 - (x32 * x11 + 0.5 * (m2 * x33)) * x34;
+        let x36 = x15 * x19 * x19;
+        let x37 = 0.5 * x9 * x5;
+        let x38 = x2 * g;
+        let x39 = (x5 - 0.5 * (x4 * x6)) * x9;
+        let x40 = x13 * x8;
         ParameterDerivatives {
             qdot: [theta1_dot, theta2_dot, x_dot],
             matrix: [
-                [l * l * x7 * x7 * (m2 * x9 + 0.3333333333333333 * m1), x13],
-                [x13, m2 + M + m1],
+                [(m2 * x1 + 0.3333333333333333 * m1) * x10, x14],
+                [x14, m2 + M + m1],
             ],
             force: [
-                x7
-                    * (tau
-                        + l
-                            * (l
-                                * (x14 * x14
-                                    * (-x7 * (m2 + 0.3333333333333333 * m1) - 0.5 * x17) * x7
-                                    - 0.5 * x18) * x19 + x21) - (m2 * l * x24 - tau) * x10),
-                l * x27,
+                (tau - x6 * (m2 * l * x23 - tau)
+                    + l
+                        * (x25
+                            + x16
+                                * (-x20 * (0.5 * x27 + (m2 + 0.3333333333333333 * m1) * x8)
+                                    - 0.5 * x29))) * x8,
+                l * x35,
             ],
-            checks: [x6, l * x6],
+            checks: [x7, l * x7],
             d_qdot: [
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
@@ -1803,16 +1795,15 @@ pub mod maggi {
             ],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 1.0]],
-                [[0.3333333333333333 * l * l * x7 * x7, x28], [x28, 1.0]],
-                [[l * l * x7 * x7 * x9, x30], [x30, 1.0]],
+                [[0.3333333333333333 * x10, x37], [x37, 1.0]],
+                [[x1 * x10, x39], [x39, 1.0]],
                 [
                     [
-                        l
-                            * (m2 * (1.3333333333333333 - 0.6666666666666666 * x8)
-                                + 0.6666666666666666 * m1) * x7 * x7,
-                        x31,
+                        (m2 * (1.3333333333333333 - 0.6666666666666666 * x0)
+                            + 0.6666666666666666 * m1) * x9 * x8,
+                        x40,
                     ],
-                    [x31, 0.0],
+                    [x40, 0.0],
                 ],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -1820,36 +1811,29 @@ pub mod maggi {
             d_force: [
                 [0.0, 0.0],
                 [
-                    l * x7
-                        * (-0.5 * x29
-                            - 0.3333333333333333 * (x14 * x14 * l * x7 * x7 * x19)),
-                    (0.5 * x25 - 0.5 * (x14 * x14 * x7 * x7 * x19 * x4)) * l,
+                    -((0.5 * x38 + 0.3333333333333333 * (x34 * x9)) * x9),
+                    l * (0.5 * x30 - 0.5 * (x36 * x5)),
                 ],
                 [
-                    (l
-                        * (x14 * x14 * x7 * (-x7 - 0.5 * (x16 * x10))
-                            - 0.5 * (theta2_dot * theta2_dot)) * x19 - x29 - x10 * x24)
-                        * l * x7,
-                    l
-                        * (x14 * x14 * x7 * x19 * (-x7 * x4 - 0.5 * (x3 * x16)) + x25
-                            + 0.5 * x26),
+                    x9
+                        * (x16 * (-(0.5 * (x26 * x6) + x8) * x20 - 0.5 * x28) - x23 * x6
+                            - x38),
+                    l * (x31 - x34 * (0.5 * x33 + x32)),
                 ],
                 [
-                    (l * x19
-                        * (x14 * x14 * x7
-                            * (-x7 * (2.0 * m2 + 0.6666666666666666 * m1) - x17) - x18)
-                        - (l * x19
-                            * (x23
-                                + x14 * x14 * x7
-                                    * (-0.3333333333333333 * x15 - 0.6666666666666666))
-                            - 0.5 * x22) * m2 * x10 + x21) * x7,
-                    x27,
+                    (x25
+                        + x16
+                            * (-x29
+                                - (x27 + x8 * (2.0 * m2 + 0.6666666666666666 * m1)) * x20)
+                        - (((-0.3333333333333333 * x17 - 0.6666666666666666) * x20 + x21)
+                            * x16 - 0.5 * x22) * x12) * x8,
+                    x35,
                 ],
-                [l * x7 * (0.5 * (m2 * x10 * x1) + x20 * x0), 0.0],
+                [x9 * (0.5 * (x12 * x3) + x24), 0.0],
                 [1.0, 0.0],
             ],
-            w: [[x7, 0.0], [-(x7 * x10), 0.0], [0.0, 1.0]],
-            c: [x14 * x14 * x7 * x7 * x19, x14 * x14 * x16 * x7 * x19, 0.0],
+            w: [[x8, 0.0], [-x17, 0.0], [0.0, 1.0]],
+            c: [x36, x26 * x34, 0.0],
             d_w: [
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
@@ -1866,8 +1850,8 @@ pub mod maggi {
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
             ],
-            power: x14 * tau,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x14],
+            power: x18 * tau,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x18],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.
@@ -2112,54 +2096,54 @@ pub mod kane {
         let tau = params.tau;
         let x0 = f64::sin(theta1);
         let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = x4 + 1.0;
+        let x6 = 1.0 / x5;
+        let x7 = u1 * x6;
+        let x8 = l * x6;
         let x9 = 2.0 * theta1 - 2.0 * theta2;
-        let x10 = m2 + 0.5 * m1;
-        let x11 = l * x7 * (x10 * x4 - 0.5 * (x3 * m2 * x8));
-        let x12 = x4 * x1;
-        let x13 = x3 * x0;
-        let x14 = f64::sin(x9);
-        let x15 = f64::sin(3.0 * theta1 - 3.0 * theta2);
-        let x16 = x13 - x12;
+        let x10 = x2 * m2;
+        let x11 = m2 + 0.5 * m1;
+        let x12 = x11 * x3;
+        let x13 = x8 * (x12 - 0.5 * (x10 * x4));
+        let x14 = l * g;
+        let x15 = l * x7;
+        let x16 = x3 * x1;
+        let x17 = x2 * x0;
+        let x18 = f64::sin(x9);
+        let x19 = f64::sin(3.0 * theta1 - 3.0 * theta2);
+        let x20 = x17 - x16;
         Assembly {
-            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            qdot: [x7, -(x7 * x4), u2],
             matrix: [
                 [
-                    l * l * x7 * x7
+                    x8 * x8
                         * (m2 * (0.6666666666666666 - 0.3333333333333333 * f64::cos(x9))
                             + 0.3333333333333333 * m1),
-                    x11,
+                    x13,
                 ],
-                [x11, m2 + M + m1],
+                [x13, m2 + M + m1],
             ],
             force: [
-                x7
-                    * (tau
-                        + l * l * x7 * x7 * u1 * u1
-                            * ((0.3333333333333333 * x12 - 0.3333333333333333 * x13
-                                - 0.16666666666666666 * x14) * x7 * m1
-                                + m2
-                                    * (0.16666666666666666 * x12 - 0.16666666666666666 * x15
-                                        - 0.16666666666666666 * x13 - 0.3333333333333333 * x14
-                                        + (0.8333333333333334 * x12 + 0.16666666666666666 * x15
-                                            + 0.08333333333333333
-                                                * f64::sin(4.0 * theta1 - 4.0 * theta2)
-                                            - 0.8333333333333334 * x13 - 0.3333333333333333 * x14)
-                                            * x7)) + (-m2 - 0.5 * m1) * x0 * l * g
-                        - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
-                l * x7 * u1 * u1
-                    * ((0.5 * (x0 * m1) - x10 * x16 * x4
-                        - m2 * (-x0 - 0.5 * (x8 * x8 * x1))) * x7
-                        - 0.5 * (x3 * m2 * (1.0 - x7 * x8) * x16)),
+                (tau - x0 * x14 * x11
+                    + x15 * x15
+                        * ((0.3333333333333333 * x16 - 0.3333333333333333 * x17
+                            - 0.16666666666666666 * x18) * m1 * x6
+                            + m2
+                                * (0.16666666666666666 * x16 - 0.16666666666666666 * x19
+                                    + (0.8333333333333334 * x16 + 0.16666666666666666 * x19
+                                        + 0.08333333333333333
+                                            * f64::sin(4.0 * theta1 - 4.0 * theta2)
+                                        - 0.8333333333333334 * x17 - 0.3333333333333333 * x18) * x6
+                                    - 0.16666666666666666 * x17 - 0.3333333333333333 * x18))
+                    + (tau + 0.5 * (m2 * x14 * x1)) * x4) * x6,
+                ((m2 * (x0 + 0.5 * (x1 * x4 * x4)) - x20 * x12 + 0.5 * (x0 * m1)) * x6
+                    - 0.5 * (x10 * x20 * (1.0 - x4 * x6))) * x15 * u1,
             ],
             power: tau * u1,
-            checks: [x6, l * x6],
+            checks: [x5, l * x5],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -2286,11 +2270,11 @@ pub mod kane {
         let u1 = state[3];
         let u2 = state[4];
         let l = params.l;
-        let x0 = f64::sin(theta1) * f64::sin(theta2);
-        let x1 = f64::cos(theta2) * f64::cos(theta1);
-        let x2 = x0 + x1 + 1.0;
-        let x3 = 1.0 / x2;
-        let value = x2;
+        let x0 = f64::sin(theta1) * f64::sin(theta2)
+            + f64::cos(theta2) * f64::cos(theta1);
+        let x1 = x0 + 1.0;
+        let x2 = u1 * (1.0 / x1);
+        let value = x1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -2298,7 +2282,7 @@ pub mod kane {
                 value,
             });
         }
-        let value = l * x2;
+        let value = l * x1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -2307,7 +2291,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
-        let qdot: [f64; NUM_COORDINATES] = [x3 * u1, -(x3 * (x0 + x1) * u1), u2];
+        let qdot: [f64; NUM_COORDINATES] = [x2, -(x2 * x0), u2];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(Failure::NonFinite { t, index });
@@ -2366,98 +2350,113 @@ pub mod kane {
         let x3 = f64::cos(theta2);
         let x4 = f64::cos(theta1);
         let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
-        let x9 = 2.0 * theta1 - 2.0 * theta2;
-        let x10 = f64::cos(x9);
-        let x11 = m2 + 0.5 * m1;
-        let x12 = l * x7 * (x11 * x4 - 0.5 * (x3 * m2 * x8));
-        let x13 = x4 * x1;
-        let x14 = x3 * x0;
-        let x15 = f64::sin(x9);
-        let x16 = 3.0 * theta1 - 3.0 * theta2;
-        let x17 = f64::sin(x16);
-        let x18 = 4.0 * theta1 - 4.0 * theta2;
-        let x19 = f64::sin(x18);
-        let x20 = -m2 - 0.5 * m1;
-        let x21 = x20 * x0 * l * g;
-        let x22 = -tau - 0.5 * (m2 * l * g * x1);
-        let x23 = x8 * x22;
-        let x24 = x14 - x13;
-        let x25 = x11 * x24 * x4;
-        let x26 = x8 * x8 * x1;
-        let x27 = x0 * m1;
-        let x28 = x7 * x8;
-        let x29 = 1.0 - x28;
-        let x30 = m2 * x15;
-        let x31 = (x20 * x0 + x24 * (x3 * m2 * (0.5 - 0.5 * x28) + x7 * x11 * x4)) * l
-            * x7;
-        let x32 = f64::cos(x16);
-        let x33 = f64::cos(x18);
-        let x34 = x24 * x22;
-        let x35 = x7 * x24 * x24;
-        let x36 = x7 * x11 * x24 * x4;
-        let x37 = x0 * x7;
-        let x38 = x28 - 1.0;
-        let x39 = l * x7 * (m2 * (x3 * (0.5 * x28 - 0.5) * x24 + 0.5 * (x8 * x1)) - x36);
-        let x40 = x7 * (-x2 - x5 - 1.0);
-        let x41 = 1.0 - x40;
+        let x6 = x2 + x5;
+        let x7 = x6 + 1.0;
+        let x8 = 1.0 / x7;
+        let x9 = u1 * x8;
+        let x10 = 2.0 * theta1 - 2.0 * theta2;
+        let x11 = f64::cos(x10);
+        let x12 = l * x8;
+        let x13 = x12 * x12;
+        let x14 = x3 * m2;
+        let x15 = x14 * x6;
+        let x16 = m2 + 0.5 * m1;
+        let x17 = x16 * x4;
+        let x18 = x12 * (x17 - 0.5 * x15);
+        let x19 = l * g;
+        let x20 = tau + 0.5 * (m2 * x19 * x1);
+        let x21 = x20 * x6;
+        let x22 = -(x0 * x16);
+        let x23 = x22 * x19;
+        let x24 = x21 + (tau + x23);
+        let x25 = m1 * x8;
+        let x26 = f64::sin(x10);
+        let x27 = x4 * x1;
+        let x28 = x3 * x0;
+        let x29 = 0.3333333333333333 * x27 - 0.3333333333333333 * x28;
+        let x30 = 3.0 * theta1 - 3.0 * theta2;
+        let x31 = f64::sin(x30);
+        let x32 = 4.0 * theta1 - 4.0 * theta2;
+        let x33 = f64::sin(x32);
+        let x34 = l * x9;
+        let x35 = x34 * u1;
+        let x36 = x6 * x8;
+        let x37 = 1.0 - x36;
+        let x38 = x28 - x27;
+        let x39 = x37 * x38;
+        let x40 = x0 * m1;
+        let x41 = x38 * x17;
+        let x42 = x1 * x6;
+        let x43 = x42 * x6;
+        let x44 = x38 * x8;
+        let x45 = x9 * x44;
+        let x46 = m2 * x26;
+        let x47 = (x22 + ((0.5 - 0.5 * x36) * x14 + x17 * x8) * x38) * x12;
+        let x48 = l * x35;
+        let x49 = f64::cos(x30);
+        let x50 = m2
+            * ((0.16666666666666666 * x2 + 0.16666666666666666 * x5)
+                + (0.6666666666666666 * x11 + 0.5 * x49));
+        let x51 = f64::cos(x32);
+        let x52 = x20 * x38;
+        let x53 = x0 * x8;
+        let x54 = x44 * x17;
+        let x55 = x38 * x44;
+        let x56 = x36 - 1.0;
+        let x57 = x9 * x38;
+        let x58 = x12 * (m2 * (x3 * x38 * (0.5 * x36 - 0.5) + 0.5 * x42) - x54);
+        let x59 = x6 * x6;
+        let x60 = x7 * x8;
+        let x61 = x60 + 1.0;
         Derivatives {
-            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            qdot: [x9, -(x9 * x6), u2],
             matrix: [
                 [
-                    l * l * x7 * x7
-                        * (m2 * (0.6666666666666666 - 0.3333333333333333 * x10)
-                            + 0.3333333333333333 * m1),
-                    x12,
+                    (m2 * (0.6666666666666666 - 0.3333333333333333 * x11)
+                        + 0.3333333333333333 * m1) * x13,
+                    x18,
                 ],
-                [x12, m2 + M + m1],
+                [x18, m2 + M + m1],
             ],
             force: [
-                x7
-                    * (tau
-                        + l * l * x7 * x7 * u1 * u1
-                            * ((0.3333333333333333 * x13 - 0.3333333333333333 * x14
-                                - 0.16666666666666666 * x15) * x7 * m1
-                                + m2
-                                    * (0.16666666666666666 * x13 - 0.16666666666666666 * x17
-                                        - 0.16666666666666666 * x14 - 0.3333333333333333 * x15
-                                        + (0.8333333333333334 * x13 + 0.16666666666666666 * x17
-                                            + 0.08333333333333333 * x19 - 0.8333333333333334 * x14
-                                            - 0.3333333333333333 * x15) * x7)) + x21 - x23),
-                l * x7 * u1 * u1
-                    * ((0.5 * x27 - x25 - m2 * (-x0 - 0.5 * x26)) * x7
-                        - 0.5 * (x3 * m2 * x29 * x24)),
+                (x24
+                    + (x25 * (x29 - 0.16666666666666666 * x26)
+                        + m2
+                            * (0.16666666666666666 * x27 - 0.16666666666666666 * x31
+                                + (0.8333333333333334 * x27 + 0.16666666666666666 * x31
+                                    + 0.08333333333333333 * x33 - 0.8333333333333334 * x28
+                                    - 0.3333333333333333 * x26) * x8 - 0.16666666666666666 * x28
+                                - 0.3333333333333333 * x26)) * x34 * x34) * x8,
+                x35
+                    * ((0.5 * x40 - x41 + m2 * (x0 + 0.5 * x43)) * x8
+                        - 0.5 * (x14 * x39)),
             ],
-            checks: [x6, l * x6],
+            checks: [x7, l * x7],
             d_qdot: [
-                [x7 * x7 * x24 * u1, x29 * x7 * x24 * u1, 0.0],
-                [-(x7 * x7 * x24 * u1), x38 * x7 * x24 * u1, 0.0],
+                [x45, x9 * x39, 0.0],
+                [-x45, x56 * x57, 0.0],
                 [0.0, 0.0, 0.0],
-                [x7, -(x7 * x8), 0.0],
+                [x8, -x36, 0.0],
                 [0.0, 0.0, 1.0],
             ],
             d_matrix: [
                 [
                     [
-                        l * l * x7 * x7
-                            * (0.6666666666666666 * x30
-                                + (m2 * (1.3333333333333333 - 0.6666666666666666 * x10)
-                                    + 0.6666666666666666 * m1) * x7 * x24),
-                        x31,
+                        (0.6666666666666666 * x46
+                            + (m2 * (1.3333333333333333 - 0.6666666666666666 * x11)
+                                + 0.6666666666666666 * m1) * x44) * x13,
+                        x47,
                     ],
-                    [x31, 0.0],
+                    [x47, 0.0],
                 ],
                 [
                     [
-                        l * l * x7 * x7
-                            * ((m2 * (0.6666666666666666 * x10 - 1.3333333333333333)
-                                - 0.6666666666666666 * m1) * x7 * x24
-                                - 0.6666666666666666 * x30),
-                        x39,
+                        ((m2 * (0.6666666666666666 * x11 - 1.3333333333333333)
+                            - 0.6666666666666666 * m1) * x44 - 0.6666666666666666 * x46)
+                            * x13,
+                        x58,
                     ],
-                    [x39, 0.0],
+                    [x58, 0.0],
                 ],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -2465,94 +2464,70 @@ pub mod kane {
             ],
             d_force: [
                 [
-                    x7
-                        * (x20 * l * g * x4
-                            + (x24 * (tau + x21 - x23)
-                                + l * l
-                                    * (x7
-                                        * (m2
-                                            * (x24
-                                                * (0.5 * x13 - 0.5 * x17 - 0.5 * x14
-                                                    + x7
-                                                        * (3.3333333333333335 * x13 + 0.6666666666666666 * x17
-                                                            + 0.3333333333333333 * x19 - 3.3333333333333335 * x14
-                                                            - 1.3333333333333333 * x15) - x15)
-                                                - 0.6666666666666666 * x10 - 0.8333333333333334 * x2
-                                                - 0.8333333333333334 * x5 + 0.5 * x32
-                                                + 0.3333333333333333 * x33)
-                                            + m1
-                                                * (x7 * x24
-                                                    * (1.3333333333333333 * x13 - 1.3333333333333333 * x14
-                                                        - 0.6666666666666666 * x15) - 0.3333333333333333 * x10
-                                                    - 0.3333333333333333 * x2 - 0.3333333333333333 * x5))
-                                        + m2
-                                            * (-0.6666666666666666 * x10 - 0.16666666666666666 * x2
-                                                - 0.16666666666666666 * x5 - 0.5 * x32)) * x7 * u1 * u1)
-                                * x7 + x34),
-                    l * x7
-                        * (x7
-                            * (x24 * (x0 * (x7 * m1 + m2 + 0.5 * m1) - 2.0 * x36)
-                                + x4 * (0.5 * m1 - x11 * x8)
-                                - m2 * ((x29 * x8 * x1 - 2.0 * x37) * x24 - x4))
-                            - 0.5
-                                * (x3 * m2
-                                    * (2.0 * x35 + (x7 * (-x2 - 2.0 * x35 - x5) + 1.0) * x8)))
-                        * u1 * u1,
+                    ((x48
+                        * ((m2
+                            * (0.5 * x49 - 0.6666666666666666 * x11
+                                - 0.8333333333333334 * x2 - 0.8333333333333334 * x5
+                                + 0.3333333333333333 * x51
+                                + x38
+                                    * (0.5 * x27 - 0.5 * x31 - 0.5 * x28 - x26
+                                        + (3.3333333333333335 * x27 + 0.6666666666666666 * x31
+                                            + 0.3333333333333333 * x33 - 3.3333333333333335 * x28
+                                            - 1.3333333333333333 * x26) * x8))
+                            + (x44
+                                * (1.3333333333333333 * x27 - 1.3333333333333333 * x28
+                                    - 0.6666666666666666 * x26) - 0.3333333333333333 * x11
+                                - 0.3333333333333333 * x2 - 0.3333333333333333 * x5) * m1)
+                            * x8 - x50) + x38 * x24) * x8 - x19 * x16 * x4 - x52) * x8,
+                    ((x38 * ((x25 + x16) * x0 - 2.0 * x54)
+                        - m2 * (x38 * (x37 * x42 - 2.0 * x53) - x4)
+                        + (0.5 * m1 - x16 * x6) * x4) * x8
+                        - 0.5 * (x14 * (2.0 * x55 + x6 * (1.0 - (2.0 * x55 + x6) * x8))))
+                        * x35,
                 ],
                 [
-                    x7
-                        * (0.5 * (x3 * m2 * l * g * x8)
-                            + (l * l * x7 * u1 * u1
-                                * (m2
-                                    * (0.6666666666666666 * x10 + 0.16666666666666666 * x2
-                                        + 0.16666666666666666 * x5 + 0.5 * x32)
-                                    + (m2
-                                        * (0.6666666666666666 * x10 + 0.8333333333333334 * x2
-                                            + x24
-                                                * (0.5 * x17 - 0.5 * x13 + 0.5 * x14
-                                                    + (3.3333333333333335 * x14 - 3.3333333333333335 * x13
-                                                        - 0.6666666666666666 * x17 - 0.3333333333333333 * x19
-                                                        + 1.3333333333333333 * x15) * x7 + x15)
-                                            + 0.8333333333333334 * x5 - 0.5 * x32
-                                            - 0.3333333333333333 * x33)
-                                        + (0.3333333333333333 * x10 + 0.3333333333333333 * x2
-                                            + (1.3333333333333333 * x14 - 1.3333333333333333 * x13
-                                                + 0.6666666666666666 * x15) * x7 * x24
-                                            + 0.3333333333333333 * x5) * m1) * x7)
-                                + x24 * (x23 - tau - x21)) * x7 - x34),
-                    l * x7
-                        * (x7
-                            * (x11 * x4 * (x2 + x7 * x24 * x24 * x41 + x5)
-                                - m2
-                                    * ((x38 * x8 * x1 + 2.0 * x37) * x24 - 0.5 * (x3 * x8 * x8))
-                                - x0 * x7 * x24 * m1)
+                    (0.5 * (x15 * x19)
+                        + ((x50
+                            + ((0.6666666666666666 * x11
+                                + (0.5 * x31 - 0.5 * x27
+                                    + (3.3333333333333335 * x28 - 3.3333333333333335 * x27
+                                        - 0.6666666666666666 * x31 - 0.3333333333333333 * x33
+                                        + 1.3333333333333333 * x26) * x8 + 0.5 * x28 + x26) * x38
+                                + 0.8333333333333334 * x2 + 0.8333333333333334 * x5
+                                - 0.5 * x49 - 0.3333333333333333 * x51) * m2
+                                + (0.3333333333333333 * x11 + 0.3333333333333333 * x2
+                                    + (1.3333333333333333 * x28 - 1.3333333333333333 * x27
+                                        + 0.6666666666666666 * x26) * x44 + 0.3333333333333333 * x5)
+                                    * m1) * x8) * x48 + (-tau - x21 - x23) * x38) * x8 + x52)
+                        * x8,
+                    x35
+                        * (((x6 + x55 * x61) * x17 - x40 * x44
+                            - m2 * ((x42 * x56 + 2.0 * x53) * x38 - 0.5 * (x3 * x59)))
+                            * x8
                             + m2
-                                * (0.5 * (x29 * x24 * x1)
+                                * (0.5 * (x39 * x1)
                                     - 0.5
                                         * (x3
-                                            * ((x24 * x24 * (x40 + x7 * x41 * x8 - 1.0) + x8 * x8) * x7
-                                                - x2 - x5)))) * u1 * u1,
+                                            * ((x59 + (x36 * x61 - x60 - 1.0) * x38 * x38) * x8 - x2
+                                                - x5)))),
                 ],
                 [0.0, 0.0],
                 [
-                    l * l * x7 * x7 * x7
-                        * (m2
-                            * (x7
-                                * (1.6666666666666667 * x13 + 0.3333333333333333 * x17
-                                    + 0.16666666666666666 * x19 - 1.6666666666666667 * x14
-                                    - 0.6666666666666666 * x15) + 0.3333333333333333 * x13
-                                - 0.3333333333333333 * x17 - 0.3333333333333333 * x14
-                                - 0.6666666666666666 * x15)
-                            + (0.6666666666666666 * x13 - 0.6666666666666666 * x14
-                                - 0.3333333333333333 * x15) * x7 * m1) * u1,
-                    l * x7 * u1
-                        * (x7 * (x27 - 2.0 * x25 - m2 * (-2.0 * x0 - x26))
-                            - 0.5 * (x3 * m2 * x24 * (2.0 - 2.0 * x28))),
+                    (((1.6666666666666667 * x27 + 0.3333333333333333 * x31
+                        + 0.16666666666666666 * x33 - 1.6666666666666667 * x28
+                        - 0.6666666666666666 * x26) * x8 - 0.3333333333333333 * x31
+                        - 0.6666666666666666 * x26 + x29) * m2
+                        + x25
+                            * (0.6666666666666666 * x27 - 0.6666666666666666 * x28
+                                - 0.3333333333333333 * x26)) * x34 * x12 * x8,
+                    x34
+                        * ((x40 - 2.0 * x41 + m2 * (2.0 * x0 + x43)) * x8
+                            - 0.5 * (x14 * x38 * (2.0 - 2.0 * x36))),
                 ],
                 [0.0, 0.0],
             ],
             power: tau * u1,
-            d_power: [0.0, tau * x7 * x24 * (x40 + 1.0) * u1, 0.0, tau, 0.0],
+            d_power: [0.0, (1.0 - x60) * tau * x57, 0.0, tau, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -2674,55 +2649,61 @@ pub mod kane {
         let tau = params.tau;
         let x0 = f64::sin(theta1);
         let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = x2 + x5 + 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5;
-        let x9 = 2.0 * theta1 - 2.0 * theta2;
-        let x10 = f64::cos(x9);
-        let x11 = 0.6666666666666666 - 0.3333333333333333 * x10;
-        let x12 = m2 + 0.5 * m1;
-        let x13 = x12 * x4 - 0.5 * (x3 * m2 * x8);
-        let x14 = l * x7 * x13;
-        let x15 = x4 * x1;
-        let x16 = x3 * x0;
-        let x17 = f64::sin(x9);
-        let x18 = 0.3333333333333333 * x15 - 0.3333333333333333 * x16
-            - 0.16666666666666666 * x17;
-        let x19 = f64::sin(3.0 * theta1 - 3.0 * theta2);
-        let x20 = f64::sin(4.0 * theta1 - 4.0 * theta2);
-        let x21 = 0.16666666666666666 * x15 - 0.16666666666666666 * x19
-            - 0.16666666666666666 * x16 - 0.3333333333333333 * x17
-            + (0.8333333333333334 * x15 + 0.16666666666666666 * x19
-                + 0.08333333333333333 * x20 - 0.8333333333333334 * x16
-                - 0.3333333333333333 * x17) * x7;
-        let x22 = -m2 - 0.5 * m1;
-        let x23 = x16 - x15;
-        let x24 = x8 * x8 * x1;
-        let x25 = 1.0 - x7 * x8;
-        let x26 = (0.5 * (x0 * m1) - x12 * x23 * x4 - m2 * (-x0 - 0.5 * x24)) * x7
-            - 0.5 * (x3 * m2 * x25 * x23);
-        let x27 = 0.5 * l * x7 * x4;
-        let x28 = x23 * x4;
-        let x29 = (x4 - 0.5 * (x3 * x8)) * l * x7;
-        let x30 = x7 * x13;
-        let x31 = 0.5 * (m2 * x8 * x1) + x22 * x0;
+        let x2 = f64::cos(theta2);
+        let x3 = f64::cos(theta1);
+        let x4 = x0 * x1 + x2 * x3;
+        let x5 = x4 + 1.0;
+        let x6 = 1.0 / x5;
+        let x7 = u1 * x6;
+        let x8 = 2.0 * theta1 - 2.0 * theta2;
+        let x9 = f64::cos(x8);
+        let x10 = 0.6666666666666666 - 0.3333333333333333 * x9;
+        let x11 = l * x6;
+        let x12 = x11 * x11;
+        let x13 = x2 * x4;
+        let x14 = m2 + 0.5 * m1;
+        let x15 = x14 * x3;
+        let x16 = x15 - 0.5 * (m2 * x13);
+        let x17 = x11 * x16;
+        let x18 = f64::sin(x8);
+        let x19 = x3 * x1;
+        let x20 = x2 * x0;
+        let x21 = 0.3333333333333333 * x19 - 0.3333333333333333 * x20;
+        let x22 = (x21 - 0.16666666666666666 * x18) * x6;
+        let x23 = f64::sin(3.0 * theta1 - 3.0 * theta2);
+        let x24 = f64::sin(4.0 * theta1 - 4.0 * theta2);
+        let x25 = 0.16666666666666666 * x19 - 0.16666666666666666 * x23
+            + (0.8333333333333334 * x19 + 0.16666666666666666 * x23
+                + 0.08333333333333333 * x24 - 0.8333333333333334 * x20
+                - 0.3333333333333333 * x18) * x6 - 0.16666666666666666 * x20
+            - 0.3333333333333333 * x18;
+        let x26 = u1 * u1;
+        let x27 = x26 * x11;
+        let x28 = l * g;
+        let x29 = -(x0 * x14);
+        let x30 = x20 - x19;
+        let x31 = x1 * x4;
+        let x32 = x0 + 0.5 * (x31 * x4);
+        let x33 = x2 * x30 * (1.0 - x4 * x6);
+        let x34 = (m2 * x32 - x30 * x15 + 0.5 * (x0 * m1)) * x6 - 0.5 * (m2 * x33);
+        let x35 = 0.5 * x11 * x3;
+        let x36 = x27 * x6;
+        let x37 = x30 * x3;
+        let x38 = (x3 - 0.5 * x13) * x11;
+        let x39 = x16 * x6;
+        let x40 = x29 + 0.5 * (m2 * x31);
         ParameterDerivatives {
-            qdot: [x7 * u1, -(x7 * x8 * u1), u2],
+            qdot: [x7, -(x7 * x4), u2],
             matrix: [
-                [l * l * x7 * x7 * (m2 * x11 + 0.3333333333333333 * m1), x14],
-                [x14, m2 + M + m1],
+                [(m2 * x10 + 0.3333333333333333 * m1) * x12, x17],
+                [x17, m2 + M + m1],
             ],
             force: [
-                x7
-                    * (tau + l * l * x7 * x7 * u1 * u1 * (x18 * x7 * m1 + m2 * x21)
-                        + x22 * x0 * l * g - x8 * (-tau - 0.5 * (m2 * l * g * x1))),
-                l * x7 * u1 * u1 * x26,
+                (tau + (x22 * m1 + m2 * x25) * x27 * x11
+                    + (tau + 0.5 * (m2 * x28 * x1)) * x4 + x29 * x28) * x6,
+                x27 * x34,
             ],
-            checks: [x6, l * x6],
+            checks: [x5, l * x5],
             d_qdot: [
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
@@ -2733,47 +2714,36 @@ pub mod kane {
             ],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 1.0]],
-                [[0.3333333333333333 * l * l * x7 * x7, x27], [x27, 1.0]],
-                [[l * l * x7 * x7 * x11, x29], [x29, 1.0]],
+                [[0.3333333333333333 * x12, x35], [x35, 1.0]],
+                [[x10 * x12, x38], [x38, 1.0]],
                 [
                     [
-                        l
-                            * (m2 * (1.3333333333333333 - 0.6666666666666666 * x10)
-                                + 0.6666666666666666 * m1) * x7 * x7,
-                        x30,
+                        (m2 * (1.3333333333333333 - 0.6666666666666666 * x9)
+                            + 0.6666666666666666 * m1) * x11 * x6,
+                        x39,
                     ],
-                    [x30, 0.0],
+                    [x39, 0.0],
                 ],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [0.0, 0.0],
+                [(x22 * x36 - 0.5 * (x0 * g)) * x11, (0.5 * x0 - 0.5 * x37) * x36],
                 [
-                    l * x7 * (x18 * l * x7 * x7 * x7 * u1 * u1 - 0.5 * (x0 * g)),
-                    l * x7 * x7 * u1 * u1 * (0.5 * x0 - 0.5 * x28),
+                    (g * (0.5 * x31 - x0) + x25 * x36) * x11,
+                    x27 * ((x32 - x37) * x6 - 0.5 * x33),
                 ],
                 [
-                    l * x7 * ((0.5 * (x8 * x1) - x0) * g + l * x7 * x7 * u1 * u1 * x21),
-                    l * (x7 * (x0 + 0.5 * x24 - x28) - 0.5 * (x3 * x25 * x23)) * x7 * u1
-                        * u1,
+                    ((((1.6666666666666667 * x19 + 0.3333333333333333 * x23
+                        + 0.16666666666666666 * x24 - 1.6666666666666667 * x20
+                        - 0.6666666666666666 * x18) * x6 - 0.3333333333333333 * x23
+                        - 0.6666666666666666 * x18 + x21) * m2
+                        + (0.6666666666666666 * x19 - 0.6666666666666666 * x20
+                            - 0.3333333333333333 * x18) * m1 * x6) * x36 + g * x40) * x6,
+                    x26 * x34 * x6,
                 ],
-                [
-                    x7
-                        * (g * x31
-                            + l * x7 * x7
-                                * (m2
-                                    * (x7
-                                        * (1.6666666666666667 * x15 + 0.3333333333333333 * x19
-                                            + 0.16666666666666666 * x20 - 1.6666666666666667 * x16
-                                            - 0.6666666666666666 * x17) + 0.3333333333333333 * x15
-                                        - 0.3333333333333333 * x19 - 0.3333333333333333 * x16
-                                        - 0.6666666666666666 * x17)
-                                    + (0.6666666666666666 * x15 - 0.6666666666666666 * x16
-                                        - 0.3333333333333333 * x17) * x7 * m1) * u1 * u1),
-                    x7 * u1 * u1 * x26,
-                ],
-                [l * x7 * x31, 0.0],
+                [x11 * x40, 0.0],
                 [1.0, 0.0],
             ],
             power: tau * u1,
@@ -3009,69 +2979,65 @@ pub mod reduced_volterra {
         let g = params.g;
         let tau = params.tau;
         let G_x = g_i[0];
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
         let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
         let x5 = x3 * x4;
-        let x6 = -x2 - x5 - 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5 + 1.0;
+        let x6 = x2 + x5;
+        let x7 = x6 + 1.0;
+        let x8 = -x7;
         let x9 = 1.0 / x8;
-        let x10 = x2 + x5;
-        let x11 = theta1 - 2.0 * theta2;
-        let x12 = 0.5 * (x4 * m1) + m2 * (0.75 * x4 - 0.25 * f64::cos(x11));
-        let x13 = m2 + M + m1;
-        let x14 = 1.0 / (m2 + M + m1 + x13 * x10);
-        let x15 = m2 + 0.5 * m1;
-        let x16 = m2 + 0.3333333333333333 * m1;
-        let x17 = x3 * x0 - x4 * x1;
-        let x18 = x9 * x10;
-        let x19 = x7 - x18;
-        let x20 = x18 - 1.0;
-        let x21 = (-0.75 * m2 - 0.5 * m1) * x0 * x7
-            - x12 * (-m2 - M - m1) * x17 * x14 * x19
-            + 0.25 * (m2 * f64::sin(x11) * (x7 - 2.0 * x18));
+        let x10 = 1.0 / x7;
+        let x11 = x6 * x10;
+        let x12 = (m2 + M) + m1;
+        let x13 = 1.0 / (x12 + x12 * x6);
+        let x14 = l * u1;
+        let x15 = theta1 - 2.0 * theta2;
+        let x16 = 0.5 * (x1 * m1) + m2 * (0.75 * x1 - 0.25 * f64::cos(x15));
+        let x17 = m2 * x11;
+        let x18 = x16 * x13;
+        let x19 = m2 + 0.5 * m1;
+        let x20 = x19 * x1;
+        let x21 = m2 + 0.3333333333333333 * m1;
+        let x22 = l * g;
+        let x23 = x0 * x3 - x1 * x4;
+        let x24 = x9 - x11;
+        let x25 = x9 * x9;
+        let x26 = x11 - 1.0;
+        let x27 = x26 * x10;
+        let x28 = x23 * x24;
+        let x29 = x13
+            * (0.25 * (m2 * f64::sin(x15) * (x9 - 2.0 * x11)) + x18 * x28 * x12
+                - x3 * x9 * (0.75 * m2 + 0.5 * m1));
+        let x30 = x3 * x25;
         Assembly {
-            qdot: [x7 * u1, x9 * x10 * u1, (l * x12 * u1 + G_x * x8) * x14],
+            qdot: [u1 * x9, u1 * x11, x13 * (x14 * x16 + G_x * x7)],
             matrix: [
                 [
                     l * l
-                        * (x12
-                            * (0.5 * (x3 * m2 * x9 * x10) + x15 * x7 * x4
-                                + x12 * x13 * x14) * x14
-                            + m2 * x9 * x10
-                                * (x10 * (0.3333333333333333 * x9 + 0.5 * x7)
-                                    + 0.5 * (x3 * x12 * x14))
-                            + x7
-                                * (x7 * x16 + x12 * x15 * x4 * x14
-                                    + 0.5 * (m2 * x9 * x10 * x10))),
+                        * ((0.5 * (x17 * x6) + x18 * x20 + x9 * x21) * x9
+                            + (0.5 * (x0 * x18)
+                                + (0.3333333333333333 * x10 + 0.5 * x9) * x6) * x17
+                            + x18 * (0.5 * (x0 * x17) + x18 * x12 + x9 * x20)),
                 ],
             ],
             force: [
-                x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
-                    + (tau + (-m2 - 0.5 * m1) * x0 * l * g) * x7
-                    + l * l
-                        * (m2 * x9 * x10
-                            * (x17
-                                * (x7 * x7 * (0.5 * (x10 * x19) + 0.5)
-                                    - 0.3333333333333333 * (x20 * x9 * x19))
-                                - 0.5 * (x3 * x21 * x14))
-                            + x12
-                                * (0.5 * (x0 * x7 * x7 * m1)
-                                    - m2 * (-0.5 * (x9 * x9 * x10 * x10 * x1) - x0 * x7 * x7)
-                                    - x13 * x21 * x14
-                                    + (x15 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x20 * x9)) * x17
-                                        * x19) * x14
-                            + x7
-                                * (x17
-                                    * (x7 * x7 * x19 * x16
-                                        + (-0.5 * (x20 * x19) - 0.5 * x18) * m2 * x9 * x10)
-                                    - x15 * x21 * x4 * x14)) * u1 * u1,
+                (tau - x3 * x22 * x19) * x9 - (tau + 0.5 * (m2 * x22 * x4)) * x11
+                    + x14 * x14
+                        * ((x23
+                            * ((0.5 * (x24 * x6) + 0.5) * x25
+                                - 0.3333333333333333 * (x27 * x24)) - 0.5 * (x0 * x29))
+                            * x17
+                            + x18
+                                * (x28 * (x20 * x25 - 0.5 * (x0 * m2 * x27)) - x29 * x12
+                                    + 0.5 * (m1 * x30) + m2 * (0.5 * (x4 * x11 * x11) + x30))
+                            + ((x24 * x25 * x21 - (0.5 * (x26 * x24) + 0.5 * x11) * x17)
+                                * x23 - x29 * x20) * x9),
             ],
-            power: tau * u1 * x19,
-            checks: [x6, l * x8, x0 * x13 * x1 + m2 + x3 * x13 * x4 + M + m1],
+            power: tau * u1 * x24,
+            checks: [x8, l * x7, x12 * x5 + x12 * x2 + x12],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -3193,17 +3159,13 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let l = params.l;
         let G_x = g_i[0];
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = -x2 - x5 - 1.0;
-        let x7 = x2 + x5;
-        let x8 = x2 + x5 + 1.0;
-        let x9 = m2 + M + m1;
-        let value = x6;
+        let x0 = f64::cos(theta1);
+        let x1 = f64::cos(theta2) * x0;
+        let x2 = f64::sin(theta1) * f64::sin(theta2);
+        let x3 = x1 + x2;
+        let x4 = x3 + 1.0;
+        let x5 = (m2 + M) + m1;
+        let value = -x4;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -3211,7 +3173,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = l * x8;
+        let value = l * x4;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -3219,7 +3181,7 @@ pub mod reduced_volterra {
                 value,
             });
         }
-        let value = x0 * x9 * x1 + m2 + x3 * x9 * x4 + M + m1;
+        let value = x5 * x2 + x5 * x1 + x5;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -3229,12 +3191,12 @@ pub mod reduced_volterra {
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2]];
         let qdot: [f64; NUM_COORDINATES] = [
-            u1 / x6,
-            x7 * u1 / x8,
+            -(u1 / x4),
+            u1 * x3 / x4,
             (l
-                * (0.5 * (x4 * m1)
-                    + m2 * (0.75 * x4 - 0.25 * f64::cos(theta1 - 2.0 * theta2))) * u1
-                + G_x * x8) / (m2 + M + m1 + x9 * x7),
+                * (0.5 * (x0 * m1)
+                    + m2 * (0.75 * x0 - 0.25 * f64::cos(theta1 - 2.0 * theta2))) * u1
+                + G_x * x4) / (x5 + x5 * x3),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -3257,17 +3219,14 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let l = params.l;
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
-        let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
-        let x5 = x3 * x4;
-        let x6 = m2 + M + m1;
+        let x0 = f64::cos(theta2) * f64::cos(theta1);
+        let x1 = f64::sin(theta1) * f64::sin(theta2);
+        let x2 = (x0 + x1) + 1.0;
+        let x3 = (m2 + M) + m1;
         f64::INFINITY
-            .min(f64::abs(-x2 - x5 - 1.0))
-            .min(f64::abs(l * (x2 + x5 + 1.0)))
-            .min(f64::abs(x0 * x6 * x1 + m2 + x3 * x6 * x4 + M + m1))
+            .min(f64::abs(-x2))
+            .min(f64::abs(l * x2))
+            .min(f64::abs(x3 * x1 + x3 * x0 + x3))
     }
     ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
     struct Derivatives {
@@ -3299,167 +3258,181 @@ pub mod reduced_volterra {
         let g = params.g;
         let tau = params.tau;
         let G_x = g_i[0];
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
         let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
         let x5 = x3 * x4;
-        let x6 = -x2 - x5 - 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5 + 1.0;
+        let x6 = x2 + x5;
+        let x7 = x6 + 1.0;
+        let x8 = -x7;
         let x9 = 1.0 / x8;
-        let x10 = x2 + x5;
-        let x11 = theta1 - 2.0 * theta2;
-        let x12 = f64::cos(x11);
-        let x13 = 0.5 * (x4 * m1) + m2 * (0.75 * x4 - 0.25 * x12);
-        let x14 = l * x13 * u1;
-        let x15 = G_x * x8;
-        let x16 = m2 + M + m1;
-        let x17 = 1.0 / (m2 + M + m1 + x16 * x10);
-        let x18 = m2 + 0.5 * m1;
-        let x19 = 0.5 * (x3 * m2 * x9 * x10) + x18 * x7 * x4 + x13 * x16 * x17;
-        let x20 = x10 * (0.3333333333333333 * x9 + 0.5 * x7) + 0.5 * (x3 * x13 * x17);
-        let x21 = m2 + 0.3333333333333333 * m1;
-        let x22 = x7 * x21 + x13 * x18 * x4 * x17 + 0.5 * (m2 * x9 * x10 * x10);
-        let x23 = -tau - 0.5 * (m2 * l * g * x1);
-        let x24 = -m2 - 0.5 * m1;
-        let x25 = tau + x24 * x0 * l * g;
-        let x26 = x3 * x0 - x4 * x1;
-        let x27 = x9 * x10;
-        let x28 = x7 - x27;
-        let x29 = x10 * x28;
-        let x30 = 0.5 * x29 + 0.5;
-        let x31 = x27 - 1.0;
-        let x32 = -m2 - M - m1;
-        let x33 = x13 * x32 * x26 * x17 * x28;
-        let x34 = (-0.75 * m2 - 0.5 * m1) * x0 * x7;
-        let x35 = f64::sin(x11);
-        let x36 = x7 - 2.0 * x27;
-        let x37 = m2 * x35 * x36;
-        let x38 = x34 - x33 + 0.25 * x37;
-        let x39 = x26 * (x7 * x7 * x30 - 0.3333333333333333 * (x31 * x9 * x28))
-            - 0.5 * (x3 * x38 * x17);
-        let x40 = x0 * x7 * x7 * m1;
-        let x41 = x9 * x9 * x10 * x10 * x1;
-        let x42 = x0 * x7 * x7;
-        let x43 = x18 * x7 * x7 * x4;
-        let x44 = 0.5 * x40 - m2 * (-0.5 * x41 - x42) - x16 * x38 * x17
-            + (x43 - 0.5 * (x3 * m2 * x31 * x9)) * x26 * x28;
-        let x45 = x7 * x7 * x28 * x21;
-        let x46 = x26 * (x45 + (-0.5 * (x31 * x28) - 0.5 * x27) * m2 * x9 * x10)
-            - x18 * x38 * x4 * x17;
-        let x47 = m2 * (0.25 * x35 - 0.75 * x0);
-        let x48 = x0 * m1;
-        let x49 = x47 - 0.5 * x48;
-        let x50 = -x14 - x15;
-        let x51 = x7 * x7;
-        let x52 = x9 * x9;
-        let x53 = x7 * x7 * x21;
-        let x54 = 2.0 - 2.0 * x27;
-        let x55 = x12 * x36;
-        let x56 = 1.0 - x27;
-        let x57 = x56 * x9;
-        let x58 = x57 - x51;
-        let x59 = x7 * (0.5 * (x0 * x7 * x26) - 0.5 * x4) * m1
-            + m2
-                * ((0.25 * (x35 * (x9 * x54 - x51)) + 0.75 * x42) * x26
-                    - 0.75 * (x7 * x4) + 0.25 * x55)
-            + (x32 * x26
-                * ((2.0 * (x13 * x32 * x26 * x17) - x47 + 0.5 * x48) * x28 - x34
-                    - 0.25 * x37) - x13 * (x32 * x10 * x28 + x58 * x32 * x26 * x26))
-                * x17;
-        let x60 = 2.0 * x27 - 2.0;
-        let x61 = x60 * x28;
-        let x62 = x58 * x10;
-        let x63 = (x51 + x9 * (x61 + x62) - x57) * x26 * x26;
-        let x64 = x31 * x10 * x28;
-        let x65 = x63 + x64;
-        let x66 = x7 * x10;
-        let x67 = x31 * x26 * x26 * x28;
-        let x68 = x10 * x10;
-        let x69 = x7 * x28;
-        let x70 = x57 - 2.0 * x69 - x51;
-        let x71 = x25 * x7 * x7;
-        let x72 = x56 * x10 * x28;
-        let x73 = x31 * x9;
-        let x74 = x51 + x73;
-        let x75 = x10 * x74;
-        let x76 = x26 * x26 * (x9 * (x75 + x28 * x54) - x51 - x73);
-        let x77 = x72 + x76;
-        let x78 = (2.0 * x69 + x51 + x73) * x26 * x26 - x29;
-        let x79 = m2 * (x26 * (0.25 * (x35 * (x51 + x9 * x60)) - 0.75 * x42) - 0.5 * x55)
-            + ((x32 * x28 * (0.5 * (m2 * x35) + 2.0 * (x13 * x26 * x16 * x17))
-                - x16 * (x34 + 0.25 * x37)) * x26
-                - x13 * (x32 * x26 * x26 * x74 + x16 * x10 * x28)) * x17
-            - 0.5 * (x0 * x7 * x7 * x26 * m1);
-        let x80 = 2.0 * x34 - 2.0 * x33 + 0.5 * x37;
+        let x10 = 1.0 / x7;
+        let x11 = x6 * x10;
+        let x12 = l * u1;
+        let x13 = theta1 - 2.0 * theta2;
+        let x14 = f64::cos(x13);
+        let x15 = 0.5 * (x1 * m1) + m2 * (0.75 * x1 - 0.25 * x14);
+        let x16 = x12 * x15 + G_x * x7;
+        let x17 = (m2 + M) + m1;
+        let x18 = 1.0 / (x17 + x17 * x6);
+        let x19 = x15 * x18;
+        let x20 = x19 * x17;
+        let x21 = m2 * x10;
+        let x22 = x6 * x21;
+        let x23 = x0 * x22;
+        let x24 = m2 + 0.5 * m1;
+        let x25 = x24 * x1;
+        let x26 = x20 + 0.5 * x23 + x9 * x25;
+        let x27 = 0.3333333333333333 * x10 + 0.5 * x9;
+        let x28 = x0 * x19;
+        let x29 = x6 * x27 + 0.5 * x28;
+        let x30 = x19 * x25;
+        let x31 = m2 + 0.3333333333333333 * m1;
+        let x32 = 0.5 * (x6 * x22) + x30 + x9 * x31;
+        let x33 = x32 * x9;
+        let x34 = l * l;
+        let x35 = l * g;
+        let x36 = tau + 0.5 * (m2 * x35 * x4);
+        let x37 = -(x3 * x24);
+        let x38 = tau + x37 * x35;
+        let x39 = x0 * x3 - x1 * x4;
+        let x40 = x9 - x11;
+        let x41 = x40 * x6;
+        let x42 = 0.5 * x41 + 0.5;
+        let x43 = x9 * x9;
+        let x44 = x11 - 1.0;
+        let x45 = x44 * x10;
+        let x46 = x3 * x9;
+        let x47 = x46 * (0.75 * m2 + 0.5 * m1);
+        let x48 = f64::sin(x13);
+        let x49 = m2 * x48;
+        let x50 = x9 - 2.0 * x11;
+        let x51 = x49 * x50;
+        let x52 = 0.25 * x51 - x47;
+        let x53 = -(x19 * x17);
+        let x54 = x39 * x40;
+        let x55 = x53 * x54;
+        let x56 = x52 - x55;
+        let x57 = x0 * x18;
+        let x58 = x39 * (x42 * x43 - 0.3333333333333333 * (x45 * x40))
+            - 0.5 * (x56 * x57);
+        let x59 = x18 * x25;
+        let x60 = x43 * x31;
+        let x61 = x40 * x60;
+        let x62 = x44 * x40;
+        let x63 = x39 * (x61 - (0.5 * x62 + 0.5 * x11) * x22) - x56 * x59;
+        let x64 = x63 * x9;
+        let x65 = x4 * x11;
+        let x66 = x65 * x11;
+        let x67 = x3 * x43;
+        let x68 = x17 * x18;
+        let x69 = x3 * m1;
+        let x70 = x69 * x43;
+        let x71 = x25 * x43;
+        let x72 = x0 * x21;
+        let x73 = m2 * (0.5 * x66 + x67) - x68 * x56 + 0.5 * x70
+            + x54 * (x71 - 0.5 * (x44 * x72));
+        let x74 = tau * x40;
+        let x75 = x39 * u1;
+        let x76 = x75 * x43;
+        let x77 = m2 * (0.25 * x48 - 0.75 * x3);
+        let x78 = x77 - 0.5 * x69;
+        let x79 = x18 * x26;
+        let x80 = x44 * x21;
+        let x81 = x10 * x10;
+        let x82 = x38 * x43;
+        let x83 = x12 * u1;
+        let x84 = x40 * x9;
+        let x85 = 1.0 - x11;
+        let x86 = x85 * x10;
+        let x87 = x86 - x43;
+        let x88 = x87 - 2.0 * x84;
+        let x89 = x39 * x39;
+        let x90 = x62 * x89;
+        let x91 = x6 * x6;
+        let x92 = 2.0 * x11 - 2.0;
+        let x93 = x40 * x92;
+        let x94 = x6 * x87;
+        let x95 = ((x93 + x94) * x10 - x86 + x43) * x89;
+        let x96 = x44 * x41;
+        let x97 = x14 * x50;
+        let x98 = x1 * x9;
+        let x99 = 2.0 - 2.0 * x11;
+        let x100 = m1 * x9;
+        let x101 = x39 * x46;
+        let x102 = -(x17 * x89);
+        let x103 = x17 * x41;
+        let x104 = m2
+            * (0.25 * x97 - 0.75 * x98
+                + (0.25 * (x48 * (x99 * x10 - x43)) + 0.75 * x67) * x39)
+            + x100 * (0.5 * x101 - 0.5 * x1)
+            + x18
+                * (-((0.5 * x69 - x77 + 2.0 * (x53 * x39)) * x40 + x47 - 0.25 * x51)
+                    * x17 * x39 - x15 * (x102 * x87 - x103));
+        let x105 = x6 * x9;
+        let x106 = (x95 + x96) * x10;
+        let x107 = x73 * x18;
+        let x108 = tau * x75;
+        let x109 = x39 * x85;
+        let x110 = x68 * x39;
+        let x111 = x10 * x92;
+        let x112 = x45 + x43;
+        let x113 = m2 * ((0.25 * (x48 * (x111 + x43)) - 0.75 * x67) * x39 - 0.5 * x97)
+            - 0.5 * (x39 * x70)
+            + (x39 * (-(2.0 * (x39 * x20) + 0.5 * x49) * x17 * x40 - x52 * x17)
+                - x15 * (x112 * x102 + x103)) * x18;
+        let x114 = x112 * x6;
+        let x115 = ((x114 + x99 * x40) * x10 - x45 - x43) * x89;
+        let x116 = x85 * x41;
+        let x117 = (x112 + 2.0 * x84) * x89 - x41;
+        let x118 = x44 * x4;
+        let x119 = x115 + x116;
+        let x120 = 0.5 * x51 - 2.0 * x47 - 2.0 * x55;
         Derivatives {
-            qdot: [x7 * u1, x9 * x10 * u1, (x14 + x15) * x17],
-            matrix: [[l * l * (x13 * x19 * x17 + m2 * x9 * x10 * x20 + x7 * x22)]],
-            force: [
-                x9 * x10 * x23 + x25 * x7
-                    + l * l * (m2 * x9 * x10 * x39 + x13 * x44 * x17 + x7 * x46) * u1
-                        * u1,
-            ],
-            checks: [x6, l * x8, x0 * x16 * x1 + m2 + x3 * x16 * x4 + M + m1],
+            qdot: [u1 * x9, u1 * x11, x16 * x18],
+            matrix: [[(x19 * x26 + x29 * x22 + x33) * x34]],
+            force: [x38 * x9 - x36 * x11 + x12 * x12 * (x58 * x22 + x64 + x19 * x73)],
+            checks: [x8, l * x7, x17 * x5 + x17 * x2 + x17],
             d_qdot: [
-                [
-                    -(x7 * x7 * x26 * u1),
-                    x31 * x9 * x26 * u1,
-                    (l * u1 * x49 + x26 * (x50 * x32 * x17 - G_x)) * x17,
-                ],
-                [
-                    x7 * x7 * x26 * u1,
-                    x56 * x9 * x26 * u1,
-                    x17 * (x26 * (G_x + x50 * x16 * x17) - 0.5 * (m2 * x35 * l * u1)),
-                ],
+                [-x76, x75 * x45, x18 * (x12 * x78 + x39 * (x16 * x17 * x18 - G_x))],
+                [x76, x75 * x86, ((G_x - x16 * x68) * x39 - 0.5 * (x12 * x49)) * x18],
                 [0.0, 0.0, 0.0],
-                [x7, x27, l * x13 * x17],
+                [x9, x11, x19 * l],
             ],
             d_matrix: [
                 [
                     [
-                        l * l
-                            * (x26
-                                * (m2 * x31 * x9 * x20 - x7 * x7 * x22
-                                    - x13 * x19 * x32 * x17 * x17)
-                                + x17
-                                    * (x19 * x49
-                                        + (x24 * x0 * x7 + x16 * x49 * x17
-                                            + x26
-                                                * (x3 * m2 * (0.5 * x27 - 0.5) * x9
-                                                    - x13 * x32 * x16 * x17 * x17 - x43)) * x13)
-                                + m2 * x9
-                                    * (((0.3333333333333333 * x52 - 0.5 * x51) * x10
-                                        - 0.3333333333333333 * x9 - 0.5 * x7
-                                        - 0.5 * (x3 * x13 * x32 * x17 * x17)) * x26
-                                        + 0.5 * (x3 * x49 * x17)) * x10
-                                + ((x24 * x0 * x13 + x18 * x4 * x49) * x17
-                                    + (m2 * x9 * x10 * (0.5 * x27 - 1.0) - x53
-                                        - x13 * x18 * x32 * x4 * x17 * x17) * x26) * x7),
+                        ((x39 * (x22 * (0.5 * x11 - 1.0) - x53 * x59 - x60)
+                            + x18 * (x78 * x25 + x37 * x15)) * x9
+                            + x39 * (x29 * x80 - x53 * x79 - x32 * x43)
+                            + x22
+                                * (0.5 * (x57 * x78)
+                                    + x39
+                                        * ((0.3333333333333333 * x81 - 0.5 * x43) * x6
+                                            - 0.5 * (x53 * x57) - 0.3333333333333333 * x10 - 0.5 * x9))
+                            + x18
+                                * (x78 * x26
+                                    + x15
+                                        * (x39 * ((0.5 * x11 - 0.5) * x72 - x71 - x68 * x53)
+                                            - x24 * x46 + x68 * x78))) * x34,
                     ],
                 ],
                 [
                     [
-                        l * l
-                            * (x13
-                                * (m2
-                                    * (x9 * (x3 * (0.5 - 0.5 * x27) * x26 - 0.5 * (x10 * x1))
-                                        - 0.5 * (x35 * x16 * x17)) - x19 * x26 * x16 * x17
-                                    + (x43 - x13 * x16 * x16 * x17 * x17) * x26) * x17
-                                + m2
-                                    * (x9
-                                        * (x10
-                                            * ((-0.5 * (x13 * x1) - 0.25 * (x3 * m2 * x35)) * x17
-                                                + x26
-                                                    * ((0.5 * x51 - 0.3333333333333333 * x52) * x10
-                                                        + 0.3333333333333333 * x9 + 0.5 * x7
-                                                        - 0.5 * (x3 * x13 * x16 * x17 * x17))) + x56 * x26 * x20)
-                                        - 0.5 * (x35 * x19 * x17))
-                                + ((x53 - x13 * x18 * x16 * x4 * x17 * x17
-                                    + m2 * (1.0 - 0.5 * x27) * x9 * x10) * x26 + x7 * x26 * x22
-                                    - 0.5 * (m2 * x35 * x18 * x4 * x17)) * x7),
+                        ((x39 * x33 - 0.5 * (x49 * x59)
+                            + x39 * (x22 * (1.0 - 0.5 * x11) - x68 * x30 + x60)) * x9
+                            + m2
+                                * (((((0.5 * x43 - 0.3333333333333333 * x81) * x6
+                                    - 0.5 * (x68 * x28) + x27) * x39
+                                    - (0.5 * (x15 * x4) + 0.25 * (x0 * x49)) * x18) * x6
+                                    + x109 * x29) * x10 - 0.5 * (x48 * x79))
+                            + x19
+                                * ((x71 - x68 * x20) * x39 - x26 * x110
+                                    + m2
+                                        * (x10 * (x0 * x39 * (0.5 - 0.5 * x11) - 0.5 * (x6 * x4))
+                                            - 0.5 * (x68 * x48)))) * x34,
                     ],
                 ],
                 [[0.0]],
@@ -3467,78 +3440,60 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    l
-                        * (x24 * x7 * g * x4
-                            + l * u1 * u1
-                                * (m2 * x9
-                                    * (x7 * x7
-                                        * (x30 * x10
-                                            + x26 * x26 * ((-x66 - 0.5) * x28 - x7 + 0.5 * x62))
-                                        - 0.5 * (x3 * x59 * x17) - 0.3333333333333333 * (x9 * x65))
-                                    * x10
-                                    + x7
-                                        * (m2 * x9
-                                            * (0.5 * x67
-                                                + (x9 * (x56 * x26 * x26 - 0.5 * x68) - 0.5 * x63
-                                                    - 0.5 * x64) * x10)
-                                            + x7 * x7 * (x70 * x26 * x26 + x29) * x21
-                                            + (-x59 * x18 * x4 - x24 * x0 * x38) * x17)
-                                    + (x13
-                                        * (m2
-                                            * (x7 * x7 * x4
-                                                - x26
-                                                    * (x56 * x9 * x9 * x10 * x1 + 2.0 * (x0 * x7 * x7 * x7))
-                                                - 0.5 * (x3 * x9 * x65)) - x59 * x16 * x17
-                                            + x7 * x7
-                                                * ((x18 * x10 * x28 + 0.5 * m1) * x4
-                                                    + (x70 * x18 * x26 * x4 + x0 * (x24 * x28 - x7 * m1))
-                                                        * x26)) + x44 * x49) * x17
-                                    + (m2 * x31 * x9 * x39 - x13 * x44 * x32 * x17 * x17
-                                        - x7 * x7 * x46) * x26)) + (x31 * x9 * x23 - x71) * x26,
+                    (-x82 - x36 * x45) * x39
+                        + (x83
+                            * (((x88 * x89 + x41) * x60
+                                + (0.5 * x90
+                                    + ((x89 * x85 - 0.5 * x91) * x10 - 0.5 * x95 - 0.5 * x96)
+                                        * x6) * x21 - (x104 * x25 + x37 * x56) * x18) * x9
+                                + ((x89 * ((-x105 - 0.5) * x40 + 0.5 * x94 - x9) + x42 * x6)
+                                    * x43 - 0.5 * (x104 * x57) - 0.3333333333333333 * x106)
+                                    * x22 + x39 * (x58 * x80 - x53 * x107 - x63 * x43)
+                                + x18
+                                    * (x73 * x78
+                                        + x15
+                                            * (((x88 * x39 * x25 + x3 * (-x24 * x40 - x100)) * x39
+                                                + (x24 * x41 + 0.5 * m1) * x1) * x43
+                                                + m2
+                                                    * (x1 * x43 - 0.5 * (x0 * x106)
+                                                        - (2.0 * (x46 * x43) + x65 * x86) * x39) - x68 * x104)))
+                            - g * x98 * x24) * l,
                 ],
                 [
-                    (x71 + x56 * x9 * x23) * x26
-                        + l
-                            * (l * u1 * u1
-                                * (x13
-                                    * (m2
-                                        * (2.0 * (x0 * x7 * x7 * x7 * x26)
-                                            - x9 * x9 * (x31 * x26 * x1 - 0.5 * (x3 * x10)) * x10
-                                            + x9 * (0.5 * (x31 * x26 * x1 * x28) - 0.5 * (x3 * x77)))
-                                        + (x18 * x78 * x4 + x0 * x7 * x26 * m1) * x7 * x7
-                                        - x44 * x26 * x16 * x17 - x16 * x79 * x17) * x17
-                                    + x7
-                                        * (x78 * x7 * x7 * x21 - x18 * x79 * x4 * x17
-                                            + m2
-                                                * ((x9 * (0.5 * x68 + x31 * x26 * x26) - 0.5 * x72
-                                                    - 0.5 * x76) * x10 - 0.5 * x67) * x9 + x7 * x26 * x46)
-                                    + m2
-                                        * ((((x26 * x26 * (0.5 * x75 + x7 + (x66 + 0.5) * x28)
-                                            + x10 * (-0.5 * x29 - 0.5)) * x7 * x7
-                                            - 0.3333333333333333 * (x9 * x77)
-                                            + (0.5 * (x38 * x1) - 0.5 * (x3 * x79)) * x17) * x10
-                                            + x56 * x26 * x39) * x9 - 0.5 * (x35 * x44 * x17)))
-                                - 0.5 * (x3 * m2 * x9 * g * x10)),
+                    l
+                        * (x83
+                            * (((((0.5 * x91 + x44 * x89) * x10 - 0.5 * x115
+                                - 0.5 * x116) * x6 - 0.5 * x90) * x21 - x113 * x59
+                                + x39 * x64 + x117 * x60) * x9
+                                + x19
+                                    * ((2.0 * (x101 * x43)
+                                        - x10 * x11 * (x39 * x118 - 0.5 * (x0 * x6))
+                                        + (0.5 * (x54 * x118) - 0.5 * (x0 * x119)) * x10) * m2
+                                        - x73 * x110 + (x101 * m1 + x117 * x25) * x43 - x68 * x113)
+                                + m2
+                                    * ((x109 * x58
+                                        + (x43
+                                            * ((-0.5 * x41 - 0.5) * x6
+                                                + (0.5 * x114 + x40 * (x105 + 0.5) + x9) * x89)
+                                            - 0.3333333333333333 * (x119 * x10)
+                                            + x18 * (0.5 * (x56 * x4) - 0.5 * (x0 * x113))) * x6) * x10
+                                        - 0.5 * (x48 * x107))) - 0.5 * (g * x23))
+                        + x39 * (x82 - x36 * x86),
                 ],
                 [0.0],
                 [
-                    l * l * u1
-                        * (x7
-                            * ((2.0 * x45 + (-x27 - 0.5 * x61) * m2 * x9 * x10) * x26
-                                - x18 * x80 * x4 * x17)
-                            + x13
-                                * (x40 - x16 * x80 * x17 - m2 * (-x41 - 2.0 * x42)
-                                    + x26 * x28 * (2.0 * x43 - 0.5 * (x3 * m2 * x9 * x60)))
-                                * x17
-                            + m2 * x9 * x10
-                                * (x26
-                                    * ((x29 + 1.0) * x7 * x7
-                                        - 0.3333333333333333 * (x9 * x60 * x28))
-                                    - 0.5 * (x3 * x80 * x17))),
+                    x12
+                        * ((((x41 + 1.0) * x43 - 0.3333333333333333 * (x40 * x111)) * x39
+                            - 0.5 * (x57 * x120)) * x22
+                            + (x39 * (2.0 * x61 - (0.5 * x93 + x11) * x22) - x120 * x59)
+                                * x9
+                            + x19
+                                * (m2 * (x66 + 2.0 * x67) - x68 * x120
+                                    + x54 * (2.0 * x71 - 0.5 * (x72 * x92)) + x70)) * l,
                 ],
             ],
-            power: tau * u1 * x28,
-            d_power: [tau * x58 * x26 * u1, tau * x26 * u1 * x74, 0.0, tau * x28],
+            power: u1 * x74,
+            d_power: [x108 * x87, x112 * x108, 0.0, x74],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -3658,148 +3613,161 @@ pub mod reduced_volterra {
         let g = params.g;
         let tau = params.tau;
         let G_x = g_i[0];
-        let x0 = f64::sin(theta1);
-        let x1 = f64::sin(theta2);
+        let x0 = f64::cos(theta2);
+        let x1 = f64::cos(theta1);
         let x2 = x0 * x1;
-        let x3 = f64::cos(theta2);
-        let x4 = f64::cos(theta1);
+        let x3 = f64::sin(theta1);
+        let x4 = f64::sin(theta2);
         let x5 = x3 * x4;
-        let x6 = -x2 - x5 - 1.0;
-        let x7 = 1.0 / x6;
-        let x8 = x2 + x5 + 1.0;
+        let x6 = x2 + x5;
+        let x7 = x6 + 1.0;
+        let x8 = -x7;
         let x9 = 1.0 / x8;
-        let x10 = x2 + x5;
-        let x11 = x4 * m1;
-        let x12 = theta1 - 2.0 * theta2;
-        let x13 = f64::cos(x12);
-        let x14 = 0.75 * x4 - 0.25 * x13;
-        let x15 = m2 * x14;
-        let x16 = 0.5 * x11 + x15;
-        let x17 = l * x16 * u1;
-        let x18 = G_x * x8;
-        let x19 = m2 + M + m1;
-        let x20 = 1.0 / (m2 + M + m1 + x19 * x10);
-        let x21 = x3 * m2 * x9 * x10;
-        let x22 = m2 + 0.5 * m1;
-        let x23 = x22 * x7 * x4;
-        let x24 = x16 * x19 * x20;
-        let x25 = 0.5 * x21 + x23 + x24;
-        let x26 = x16 * x25 * x20;
-        let x27 = x10 * (0.3333333333333333 * x9 + 0.5 * x7);
-        let x28 = x3 * x16 * x20;
+        let x10 = 1.0 / x7;
+        let x11 = x6 * x10;
+        let x12 = l * u1;
+        let x13 = theta1 - 2.0 * theta2;
+        let x14 = f64::cos(x13);
+        let x15 = 0.75 * x1 - 0.25 * x14;
+        let x16 = m2 * x15;
+        let x17 = x1 * m1;
+        let x18 = x16 + 0.5 * x17;
+        let x19 = G_x * x7;
+        let x20 = x12 * x18 + x19;
+        let x21 = (m2 + M) + m1;
+        let x22 = 1.0 / (x21 + x21 * x6);
+        let x23 = m2 * x11;
+        let x24 = x23 * x6;
+        let x25 = x18 * x22;
+        let x26 = m2 + 0.5 * m1;
+        let x27 = x26 * x1;
+        let x28 = x25 * x27;
         let x29 = m2 + 0.3333333333333333 * m1;
-        let x30 = x16 * x22 * x4 * x20;
-        let x31 = m2 * x9 * x10 * x10;
-        let x32 = -m2 - 0.5 * m1;
-        let x33 = x3 * x0 - x4 * x1;
-        let x34 = x9 * x10;
-        let x35 = x7 - x34;
-        let x36 = x10 * x35;
-        let x37 = x34 - 1.0;
-        let x38 = x37 * x9 * x35;
-        let x39 = x33 * (x7 * x7 * (0.5 * x36 + 0.5) - 0.3333333333333333 * x38);
-        let x40 = -m2 - M - m1;
-        let x41 = x16 * x40 * x33 * x20 * x35;
-        let x42 = (-0.75 * m2 - 0.5 * m1) * x0 * x7;
-        let x43 = f64::sin(x12);
-        let x44 = x7 - 2.0 * x34;
-        let x45 = m2 * x43 * x44;
-        let x46 = x42 - x41 + 0.25 * x45;
-        let x47 = x3 * x46 * x20;
-        let x48 = x9 * x9 * x10 * x10 * x1;
-        let x49 = x0 * x7 * x7;
-        let x50 = 0.5 * (x0 * x7 * x7 * m1) - m2 * (-0.5 * x48 - x49) - x19 * x46 * x20
-            + (x22 * x7 * x7 * x4 - 0.5 * (x3 * m2 * x37 * x9)) * x33 * x35;
-        let x51 = x16 * x50 * x20;
-        let x52 = x22 * x46 * x4 * x20;
-        let x53 = x37 * x35;
-        let x54 = -0.5 * x53 - 0.5 * x34;
-        let x55 = (1.0 - x19 * x8 * x20) * x16;
-        let x56 = x8 * (x42 + 0.25 * x45);
-        let x57 = 2.0 * (x40 * x8 * x20) + 1.0;
-        let x58 = x16 * x33 * x57 * x35 - x56;
-        let x59 = x16 * x8 * x20;
-        let x60 = 0.5 * x4 - x59;
-        let x61 = G_x * x8 * x8 * x20;
-        let x62 = x7 * x4;
-        let x63 = x22 * x8 * x20;
-        let x64 = x50 * x8 * x20;
-        let x65 = x16 * x57;
-        let x66 = x0 * x7;
-        let x67 = (x33 * (x65 - 0.5 * (x40 * x4)) * x35 - x56) * x20 - 0.5 * x66;
-        let x68 = 0.75 * x4 - x59 - 0.25 * x13;
-        let x69 = 0.25 * (x43 * x44) + x20 * ((x65 - x14 * x40) * x33 * x35 - x56)
-            - 0.75 * x66;
-        let x70 = 2.0 * m2 + 0.6666666666666666 * m1;
-        let x71 = x32 * x0 * x7 - 0.5 * (m2 * x9 * x10 * x1);
+        let x30 = x0 * x25;
+        let x31 = (0.3333333333333333 * x10 + 0.5 * x9) * x6;
+        let x32 = x0 * x23;
+        let x33 = x9 * x27;
+        let x34 = 0.5 * x32 + x33;
+        let x35 = x21 * x25;
+        let x36 = x34 + x35;
+        let x37 = x25 * x36;
+        let x38 = l * l;
+        let x39 = l * g;
+        let x40 = x12 * x12;
+        let x41 = x4 * x11;
+        let x42 = x9 * x9;
+        let x43 = x3 * x42;
+        let x44 = 0.5 * (x41 * x11) + x43;
+        let x45 = x3 * x9;
+        let x46 = x45 * (0.75 * m2 + 0.5 * m1);
+        let x47 = f64::sin(x13) * (x9 - 2.0 * x11);
+        let x48 = m2 * x47;
+        let x49 = 0.25 * x48 - x46;
+        let x50 = x0 * x3 - x1 * x4;
+        let x51 = x9 - x11;
+        let x52 = x50 * x51;
+        let x53 = -(x52 * x21);
+        let x54 = x53 * x25;
+        let x55 = x49 - x54;
+        let x56 = x0 * m2;
+        let x57 = x11 - 1.0;
+        let x58 = x57 * x10;
+        let x59 = m2 * x44 + 0.5 * (m1 * x43) - x55 * x21 * x22
+            + x52 * (x27 * x42 - 0.5 * (x56 * x58));
+        let x60 = x25 * x59;
+        let x61 = x51 * x42;
+        let x62 = x57 * x51;
+        let x63 = 0.5 * x62 + 0.5 * x11;
+        let x64 = x22 * x1;
+        let x65 = x55 * x64 * x26;
+        let x66 = x51 * x6;
+        let x67 = x58 * x51;
+        let x68 = x50 * ((0.5 * x66 + 0.5) * x42 - 0.3333333333333333 * x67);
+        let x69 = x0 * x22;
+        let x70 = x55 * x69;
+        let x71 = u1 * x51;
+        let x72 = x7 * x22;
+        let x73 = x72 * x21;
+        let x74 = x18 * (1.0 - x73);
+        let x75 = x25 * x22;
+        let x76 = x7 * x49;
+        let x77 = (1.0 - 2.0 * x73) * x18;
+        let x78 = x52 * x77 - x76;
+        let x79 = x46 - 0.25 * x48;
+        let x80 = x72 * x19;
+        let x81 = x7 * x25;
+        let x82 = 0.5 * x1 - x81;
+        let x83 = x72 * x26;
+        let x84 = x21 * x1;
+        let x85 = x1 * x9;
+        let x86 = x12 * u1;
+        let x87 = x22 * (x52 * (0.5 * x84 + x77) - x76) - 0.5 * x45;
+        let x88 = (0.5 * x46 + 0.5 * x54) - 0.125 * x48;
+        let x89 = x79 + x54;
+        let x90 = x72 * x59;
+        let x91 = x15 - x81;
+        let x92 = x21 * x15;
+        let x93 = (x52 * (x92 + x77) - x76) * x22 + 0.25 * x47 - 0.75 * x45;
+        let x94 = 2.0 * m2 + 0.6666666666666666 * m1;
+        let x95 = -x26 * x45 - 0.5 * (x23 * x4);
         ParameterDerivatives {
-            qdot: [x7 * u1, x9 * x10 * u1, (x17 + x18) * x20],
+            qdot: [u1 * x9, u1 * x11, x20 * x22],
             matrix: [
                 [
-                    l * l
-                        * (x26 + m2 * x9 * x10 * (x27 + 0.5 * x28)
-                            + x7 * (x7 * x29 + x30 + 0.5 * x31)),
+                    ((0.5 * x24 + x28 + x9 * x29) * x9 + (0.5 * x30 + x31) * x23 + x37)
+                        * x38,
                 ],
             ],
             force: [
-                x9 * x10 * (-tau - 0.5 * (m2 * l * g * x1))
-                    + (tau + x32 * x0 * l * g) * x7
-                    + l * l
-                        * (m2 * x9 * x10 * (x39 - 0.5 * x47) + x51
-                            + x7
-                                * (x33 * (x7 * x7 * x35 * x29 + x54 * m2 * x9 * x10) - x52))
-                        * u1 * u1,
+                (tau - x3 * x39 * x26) * x9 - (tau + 0.5 * (m2 * x39 * x4)) * x11
+                    + x40
+                        * (x60 + (x50 * (x61 * x29 - x63 * x23) - x65) * x9
+                            + x23 * (x68 - 0.5 * x70)),
             ],
-            checks: [x6, l * x8, x0 * x19 * x1 + m2 + x3 * x19 * x4 + M + m1],
+            checks: [x8, l * x7, x21 * x5 + x21 * x2 + x21],
             d_qdot: [
-                [0.0, 0.0, (-x17 - x18) * x8 * x20 * x20],
-                [0.0, 0.0, (x60 * l * u1 - x61) * x20],
-                [0.0, 0.0, (l * u1 * x68 - x61) * x20],
-                [0.0, 0.0, x16 * u1 * x20],
+                [0.0, 0.0, -(x20 * x72 * x22)],
+                [0.0, 0.0, (x12 * x82 - x80) * x22],
+                [0.0, 0.0, (x12 * x91 - x80) * x22],
+                [0.0, 0.0, x25 * u1],
                 [0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0],
             ],
             d_matrix: [
                 [
                     [
-                        l * l * x16 * x20 * x20
-                            * (x8 * (-0.5 * x21 - 2.0 * x23 - x24)
-                                - 0.5 * (x3 * m2 * x10) + x55),
+                        (x74 - (0.5 * x32 + x35 + 2.0 * x33) * x7 - 0.5 * (x56 * x6))
+                            * x75 * x38,
                     ],
                 ],
                 [
                     [
-                        l * l
-                            * ((x3 * (0.25 * x4 - 0.5 * x59) * m2 * x9 * x10 + x60 * x25
-                                + (0.5 * x62 + (0.5 * (x19 * x4) + x55) * x20) * x16) * x20
-                                + x7
-                                    * (0.3333333333333333 * x7
-                                        + (x16 * (0.5 - x63) + 0.5 * (x22 * x4)) * x4 * x20)),
+                        x38
+                            * ((0.3333333333333333 * x9
+                                + x64 * ((0.5 - x83) * x18 + 0.5 * x27)) * x9
+                                + x22
+                                    * (x82 * x36 + (0.25 * x1 - 0.5 * x81) * x32
+                                        + x18 * ((0.5 * x84 + x74) * x22 + 0.5 * x85))),
                     ],
                 ],
                 [
                     [
-                        l * l
-                            * (x9 * x10
-                                * (x27
-                                    + x3
-                                        * (0.25 * x11 + m2 * (0.375 * x4 - 0.5 * x59 - 0.125 * x13)
-                                            + 0.5 * x15) * x20)
-                                + (x25 * x68
-                                    + x16
-                                        * (0.5 * (x3 * x9 * x10) + (x14 * x19 + x55) * x20 + x62))
-                                    * x20
-                                + x7
-                                    * (x4 * x20 * (x14 * x22 + x16 * (1.0 - x63)) + x7
-                                        + 0.5 * (x9 * x10 * x10))),
+                        x38
+                            * (x22
+                                * (x36 * x91
+                                    + ((x92 + x74) * x22 + x85 + 0.5 * (x0 * x11)) * x18)
+                                + ((x18 * (1.0 - x83) + x15 * x26) * x64 + 0.5 * (x6 * x11)
+                                    + x9) * x9
+                                + ((0.5 * x16 + 0.25 * x17
+                                    + m2 * (0.375 * x1 - 0.125 * x14 - 0.5 * x81)) * x69 + x31)
+                                    * x11),
                     ],
                 ],
                 [
                     [
                         l
-                            * ((x7 * x70 + 2.0 * x30 + x31) * x7 + 2.0 * x26
-                                + ((0.6666666666666666 * x9 + x7) * x10 + x28) * m2 * x9
-                                    * x10),
+                            * (2.0 * x37 + (x24 + x9 * x94 + 2.0 * x28) * x9
+                                + x23 * (x30 + (0.6666666666666666 * x10 + x9) * x6)),
                     ],
                 ],
                 [[0.0]],
@@ -3807,56 +3775,44 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    (x58 * (-0.5 * x21 - x23)
-                        + x16
-                            * (x20 * (x16 * x40 * x33 * x35 - x58 * x19) - x50 * x8 - x42
-                                - 0.25 * x45)) * l * l * u1 * u1 * x20 * x20,
-                ],
-                [
-                    (l * u1 * u1
-                        * ((x16
-                            * ((x41 - x19 * x67 - x42 - 0.25 * x45) * x20 - x64
-                                + x7 * x7 * (0.5 * x0 + 0.5 * (x33 * x4 * x35)))
-                            + 0.5 * (x50 * x4) - 0.5 * (x3 * m2 * x9 * x10 * x67)) * x20
-                            + (0.3333333333333333 * (x7 * x7 * x33 * x35)
-                                + (0.5 * x41 - x22 * x67 - 0.5 * x42 - 0.125 * x45) * x4
-                                    * x20) * x7) - 0.5 * (x0 * x7 * g)) * l,
+                    x40 * x22 * x22
+                        * (x18 * (x79 + x22 * (x53 * x18 - x21 * x78) - x7 * x59)
+                            - x78 * x34),
                 ],
                 [
                     l
-                        * (l * u1 * u1
-                            * (x7
-                                * ((x54 * x9 * x10 + x7 * x7 * x35) * x33
-                                    + (x41 - x22 * x69 - x42 - 0.25 * x45) * x4 * x20)
-                                + (x16
-                                    * ((-x19 * x69 - x42 - 0.25 * x45) * x20 - x64 + 0.5 * x48
-                                        + x49
-                                        + x33
-                                            * (x16 * x40 * x20 * x20 - 0.5 * (x3 * x37 * x9)
-                                                + x7 * x7 * x4) * x35) + x14 * x50) * x20
-                                + x9 * x10
-                                    * (x39
-                                        + x3
-                                            * (0.5 * x41 - 0.5 * (m2 * x69) - 0.5 * x42 - 0.125 * x45)
-                                            * x20)) + (-0.5 * (x9 * x10 * x1) - x66) * g),
+                        * (x86
+                            * (((x88 - x87 * x26) * x64
+                                + 0.3333333333333333 * (x52 * x42)) * x9
+                                + x22
+                                    * ((x22 * (x89 - x21 * x87) - x90
+                                        + (0.5 * x3 + 0.5 * (x52 * x1)) * x42) * x18
+                                        - 0.5 * (x32 * x87) + 0.5 * (x59 * x1))) - 0.5 * (g * x45)),
                 ],
                 [
-                    g * x71
-                        + l
-                            * (2.0 * x51
-                                + x7
-                                    * (x33
-                                        * (x7 * x7 * x35 * x70 + (-x53 - x34) * m2 * x9 * x10)
-                                        - 2.0 * x52)
-                                + m2 * x9 * x10
-                                    * (((x36 + 1.0) * x7 * x7 - 0.6666666666666666 * x38) * x33
-                                        - x47)) * u1 * u1,
+                    l
+                        * (x86
+                            * ((x68 + x69 * (x88 - 0.5 * (m2 * x93))) * x11
+                                + (x50 * (x61 - x63 * x11) + (x89 - x93 * x26) * x64) * x9
+                                + (x15 * x59
+                                    + x18
+                                        * (x52 * (x1 * x42 - 0.5 * (x0 * x58) - x21 * x75) - x90
+                                            + x44 - x22 * (x49 + x21 * x93))) * x22)
+                            - g * (0.5 * x41 + x45)),
                 ],
-                [l * x71],
-                [x35],
+                [
+                    g * x95
+                        + x86
+                            * (2.0 * x60
+                                + (x50 * (x61 * x94 - x23 * (x62 + x11)) - 2.0 * x65) * x9
+                                + (x50 * ((x66 + 1.0) * x42 - 0.6666666666666666 * x67)
+                                    - x70) * x23),
+                ],
+                [l * x95],
+                [x51],
             ],
-            power: tau * u1 * x35,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, u1 * x35],
+            power: tau * x71,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, x71],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d params.values()[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix.

@@ -285,7 +285,7 @@ pub mod lagrange {
         Assembly {
             qdot: [x_dot, y_dot],
             matrix: [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]],
-            force: [w_, -(mb * g), -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot)],
+            force: [w_, -(mb * g), -(2.0 * (x_dot * x_dot) + 2.0 * (y_dot * y_dot))],
             power: w_ * x_dot,
             checks: [],
             residuals: [2.0 * (x * x_dot) + 2.0 * (y * y_dot)],
@@ -467,7 +467,7 @@ pub mod lagrange {
         Derivatives {
             qdot: [x_dot, y_dot],
             matrix: [[mb, 0.0, x0], [0.0, mb, x1], [x0, x1, 0.0]],
-            force: [w_, -(mb * g), -2.0 * (x_dot * x_dot) - 2.0 * (y_dot * y_dot)],
+            force: [w_, -(mb * g), -(2.0 * (x_dot * x_dot) + 2.0 * (y_dot * y_dot))],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
@@ -713,18 +713,18 @@ pub mod maggi {
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let x4 = x * y_dot - x_dot * y;
-        let x5 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
-        let x6 = x3 * x4 * (2.0 * x_dot - 2.0 * (x5 * x * x3));
-        let x7 = 2.0 * (x5 * x3 * y) - 2.0 * y_dot;
+        let x4 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
+        let x5 = x3 * y;
+        let x6 = x3 * (x * y_dot - x_dot * y);
+        let x7 = (2.0 * (x4 * x5) - 2.0 * y_dot) * x6;
+        let x8 = x * x3;
+        let x9 = x6 * (2.0 * x_dot - 2.0 * (x4 * x8));
         Assembly {
             qdot: [x_dot, y_dot],
             matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [
-                (2.0 * (x * mb * (-x6 - g)) - 2.0 * ((w_ - x7 * mb * x3 * x4) * y)) * x3,
-            ],
-            w: [[-(2.0 * x3 * y)], [2.0 * x * x3]],
-            c: [x7 * x3 * x4, x6],
+            force: [(-2.0 * (y * (w_ - mb * x7)) - 2.0 * ((g + x9) * x * mb)) * x3],
+            w: [[-(2.0 * x5)], [2.0 * x8]],
+            c: [x7, x9],
             power: w_ * x_dot,
             checks: [x2],
         }
@@ -899,88 +899,87 @@ pub mod maggi {
         let mb = params.mb;
         let g = params.g;
         let w_ = params.w_;
-        let x0 = x * x;
-        let x1 = y * y;
+        let x0 = y * y;
+        let x1 = x * x;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let x4 = x_dot * y;
-        let x5 = x * y_dot;
-        let x6 = x5 - x4;
-        let x7 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
-        let x8 = x3 * x6 * (2.0 * x_dot - 2.0 * (x7 * x * x3));
-        let x9 = -x8 - g;
-        let x10 = 2.0 * (x7 * x3 * y) - 2.0 * y_dot;
-        let x11 = x10 * mb * x3 * x6;
-        let x12 = w_ - x11;
-        let x13 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
-        let x14 = x * x3 * x6;
-        let x15 = (y * (8.0 * (x_dot * x6) + x7 * (2.0 * y_dot - 16.0 * x14))
-            + 8.0 * (x * x6 * y_dot)) * x3 - 2.0 * (y_dot * y_dot);
-        let x16 = x3
-            * (x7 * (2.0 * x4 - 2.0 * x5 + (16.0 * x14 - 2.0 * y_dot) * x)
-                - 16.0 * (x * x_dot * x6));
-        let x17 = x_dot * y_dot;
-        let x18 = x3 * y * x6;
-        let x19 = x3
-            * (x7 * (2.0 * x5 - 2.0 * x4 + y * (-16.0 * x18 - 2.0 * x_dot))
-                + 16.0 * (y * x6 * y_dot)) + 2.0 * x17;
-        let x20 = (x * ((16.0 * x18 + 2.0 * x_dot) * x7 - 8.0 * (x6 * y_dot))
-            - 8.0 * (x_dot * y * x6)) * x3;
-        let x21 = x_dot * x_dot;
-        let x22 = x7 * y;
-        let x23 = x * x6;
-        let x24 = 2.0 * x5 - 4.0 * x4 + x * x3 * (2.0 * x22 - 8.0 * x23);
-        let x25 = (8.0 * x23 - 2.0 * x22) * x3 + 2.0 * y_dot;
-        let x26 = x7 * x;
-        let x27 = y * x6;
-        let x28 = 2.0 * x4 - 4.0 * x5 + (2.0 * x26 + 8.0 * x27) * x3 * y;
-        let x29 = (-2.0 * x26 - 8.0 * x27) * x3 + 2.0 * x_dot;
+        let x4 = mb * x3;
+        let x5 = x4 * x3;
+        let x6 = x_dot * y;
+        let x7 = x * y_dot;
+        let x8 = x7 - x6;
+        let x9 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
+        let x10 = x3 * y;
+        let x11 = 2.0 * (x9 * x10) - 2.0 * y_dot;
+        let x12 = x4 * x8 * x11;
+        let x13 = w_ - x12;
+        let x14 = y * x13;
+        let x15 = x3 * x8;
+        let x16 = x * x3;
+        let x17 = x15 * (2.0 * x_dot - 2.0 * (x9 * x16));
+        let x18 = x17 + g;
+        let x19 = -(x * x18);
+        let x20 = x4 * (8.0 - x3 * (32.0 * x0 + 32.0 * x1));
+        let x21 = x16 * x8;
+        let x22 = x * x8;
+        let x23 = ((8.0 * (x_dot * x8) + x9 * (2.0 * y_dot - 16.0 * x21)) * y
+            + 8.0 * (x22 * y_dot)) * x3 - 2.0 * (y_dot * y_dot);
+        let x24 = x3
+            * (x9 * (2.0 * x6 - 2.0 * x7 + x * (16.0 * x21 - 2.0 * y_dot))
+                - 16.0 * (x22 * x_dot));
+        let x25 = x_dot * y_dot;
+        let x26 = x16 * x10;
+        let x27 = 16.0 * (x10 * x8) + 2.0 * x_dot;
+        let x28 = y * x8;
+        let x29 = x3 * (x * (x9 * x27 - 8.0 * (x8 * y_dot)) - 8.0 * (x28 * x_dot));
+        let x30 = x_dot * x_dot;
+        let x31 = (16.0 * (x28 * y_dot) + x9 * (2.0 * x7 - 2.0 * x6 - x27 * y)) * x3
+            + 2.0 * x25;
+        let x32 = x9 * y;
+        let x33 = x3 * (8.0 * x22 - 2.0 * x32) + 2.0 * y_dot;
+        let x34 = 2.0 * x7 - 4.0 * x6 + x16 * (2.0 * x32 - 8.0 * x22);
+        let x35 = 2.0 * (x9 * x) + 8.0 * x28;
+        let x36 = 2.0 * x_dot - x3 * x35;
+        let x37 = 2.0 * x6 - 4.0 * x7 + x10 * x35;
         Derivatives {
             qdot: [x_dot, y_dot],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(2.0 * (x * mb * x9) - 2.0 * (x12 * y)) * x3],
+            matrix: [[x5 * (4.0 * x0 + 4.0 * x1)]],
+            force: [(2.0 * (x19 * mb) - 2.0 * x14) * x3],
             checks: [x2],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            d_matrix: [
-                [[x * mb * x3 * x3 * x13]],
-                [[mb * x3 * x3 * y * x13]],
-                [[0.0]],
-                [[0.0]],
-            ],
+            d_matrix: [[[x20 * x16]], [[x20 * x10]], [[0.0]], [[0.0]]],
             d_force: [
                 [
-                    (8.0 * (x * x12 * x3 * y)
+                    (8.0 * (x14 * x16)
                         + mb
                             * (x3
-                                * (2.0 * (x15 * y)
-                                    + x * (-2.0 * x16 - 4.0 * x17 - 8.0 * (x * x9))) - 2.0 * x8
+                                * (2.0 * (x23 * y)
+                                    - x * (8.0 * x19 + 2.0 * x24 + 4.0 * x25)) - 2.0 * x17
                                 - 2.0 * g)) * x3,
                 ],
                 [
                     x3
-                        * (x3
-                            * (8.0 * (x12 * y * y)
-                                + mb
-                                    * (2.0 * (x19 * y)
-                                        + x * (4.0 * x21 - 2.0 * x20 - 8.0 * (y * x9)))) - 2.0 * w_
-                            + 2.0 * x11),
+                        * ((mb
+                            * (x * (8.0 * (y * x18) - 2.0 * x29 + 4.0 * x30)
+                                + 2.0 * (y * x31)) + 8.0 * (x0 * x13)) * x3 - 2.0 * w_
+                            + 2.0 * x12),
                 ],
-                [(2.0 * (x25 * y * y) - 2.0 * (x24 * x)) * mb * x3 * x3],
-                [mb * (2.0 * (x28 * y) - 2.0 * (x * x * x29)) * x3 * x3],
+                [(2.0 * (x0 * x33) - 2.0 * (x * x34)) * x5],
+                [x5 * (2.0 * (y * x37) - 2.0 * (x36 * x1))],
             ],
-            w: [[-(2.0 * x3 * y)], [2.0 * x * x3]],
-            c: [x10 * x3 * x6, x8],
+            w: [[-(2.0 * x10)], [2.0 * x16]],
+            c: [x15 * x11, x17],
             d_w: [
-                [[8.0 * x * x3 * x3 * y], [(2.0 - 8.0 * (x * x * x3)) * x3]],
-                [[(8.0 * (x3 * y * y) - 2.0) * x3], [-(8.0 * x * x3 * x3 * y)]],
+                [[8.0 * x26], [(2.0 - 8.0 * (x * x16)) * x3]],
+                [[(8.0 * (x10 * y) - 2.0) * x3], [-(8.0 * x26)]],
                 [[0.0], [0.0]],
                 [[0.0], [0.0]],
             ],
             d_c: [
-                [x15 * x3, (x16 + 2.0 * x17) * x3],
-                [x19 * x3, x3 * (x20 - 2.0 * x21)],
-                [x25 * x3 * y, x24 * x3],
-                [x28 * x3, x * x29 * x3],
+                [x23 * x3, (x24 + 2.0 * x25) * x3],
+                [x3 * x31, (x29 - 2.0 * x30) * x3],
+                [x10 * x33, x34 * x3],
+                [x3 * x37, x16 * x36],
             ],
             power: w_ * x_dot,
             d_power: [0.0, 0.0, w_, 0.0],
@@ -1211,11 +1210,13 @@ pub mod kane {
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
+        let x4 = x3 * u1;
+        let x5 = w_ * y;
         Assembly {
-            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            qdot: [-(2.0 * y * x4), 2.0 * x * x4],
             matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(-2.0 * (w_ * y) - 2.0 * (x * mb * g)) * x3],
-            power: -(2.0 * w_ * x3 * y * u1),
+            force: [-((2.0 * (x * mb * g) + 2.0 * x5) * x3)],
+            power: -(2.0 * x4 * x5),
             checks: [x2],
         }
     }
@@ -1327,7 +1328,7 @@ pub mod kane {
         let y = state[1];
         let u1 = state[2];
         let x0 = 2.0 * (x * x) + 2.0 * (y * y);
-        let x1 = 1.0 / x0;
+        let x1 = 1.0 / x0 * u1;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -1337,7 +1338,7 @@ pub mod kane {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * x1 * y * u1), 2.0 * x * x1 * u1];
+        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * x1), 2.0 * x * x1];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(Failure::NonFinite { t, index });
@@ -1387,33 +1388,32 @@ pub mod kane {
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let x4 = w_ * y;
-        let x5 = x * mb * g;
-        let x6 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
-        let x7 = 8.0 * x4 + 8.0 * x5;
-        let x8 = 8.0 * (x3 * y * y) - 2.0;
+        let x4 = x3 * y;
+        let x5 = x4 * u1;
+        let x6 = x * x3;
+        let x7 = mb * x3;
+        let x8 = mb * g;
+        let x9 = x * x8;
+        let x10 = w_ * y;
+        let x11 = x6 * x5;
+        let x12 = x3 * u1;
+        let x13 = (8.0 - (32.0 * x0 + 32.0 * x1) * x3) * x7;
+        let x14 = 8.0 * x9 + 8.0 * x10;
+        let x15 = (8.0 * (x4 * y) - 2.0) * x12;
         Derivatives {
-            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(-2.0 * x4 - 2.0 * x5) * x3],
+            qdot: [-(2.0 * x5), 2.0 * x6 * u1],
+            matrix: [[x7 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [-(x3 * (2.0 * x9 + 2.0 * x10))],
             checks: [x2],
             d_qdot: [
-                [8.0 * x * x3 * x3 * y * u1, (2.0 - 8.0 * (x * x * x3)) * x3 * u1],
-                [x8 * x3 * u1, -(8.0 * x * x3 * x3 * y * u1)],
-                [-(2.0 * x3 * y), 2.0 * x * x3],
+                [8.0 * x11, (2.0 - 8.0 * (x * x6)) * x12],
+                [x15, -(8.0 * x11)],
+                [-(2.0 * x4), 2.0 * x6],
             ],
-            d_matrix: [[[x * mb * x3 * x3 * x6]], [[mb * x3 * x3 * y * x6]], [[0.0]]],
-            d_force: [
-                [x3 * (x * x3 * x7 - 2.0 * (mb * g))],
-                [(x3 * y * x7 - 2.0 * w_) * x3],
-                [0.0],
-            ],
-            power: -(2.0 * w_ * x3 * y * u1),
-            d_power: [
-                8.0 * x * w_ * x3 * x3 * y * u1,
-                x8 * w_ * x3 * u1,
-                -(2.0 * w_ * x3 * y),
-            ],
+            d_matrix: [[[x6 * x13]], [[x4 * x13]], [[0.0]]],
+            d_force: [[(x6 * x14 - 2.0 * x8) * x3], [(x4 * x14 - 2.0 * w_) * x3], [0.0]],
+            power: -(2.0 * w_ * x5),
+            d_power: [8.0 * w_ * x11, w_ * x15, -(2.0 * w_ * x4)],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1629,11 +1629,13 @@ pub mod reduced_volterra {
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
+        let x4 = x3 * u1;
+        let x5 = w_ * y;
         Assembly {
-            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
+            qdot: [-(2.0 * y * x4), 2.0 * x * x4],
             matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(-2.0 * (w_ * y) - 2.0 * (x * mb * g)) * x3],
-            power: -(2.0 * w_ * x3 * y * u1),
+            force: [-((2.0 * (x * mb * g) + 2.0 * x5) * x3)],
+            power: -(2.0 * x4 * x5),
             checks: [x2],
         }
     }
@@ -1745,7 +1747,7 @@ pub mod reduced_volterra {
         let y = state[1];
         let u1 = state[2];
         let x0 = 2.0 * (x * x) + 2.0 * (y * y);
-        let x1 = 1.0 / x0;
+        let x1 = 1.0 / x0 * u1;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -1755,7 +1757,7 @@ pub mod reduced_volterra {
             });
         }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * x1 * y * u1), 2.0 * x * x1 * u1];
+        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * x1), 2.0 * x * x1];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(Failure::NonFinite { t, index });
@@ -1805,33 +1807,32 @@ pub mod reduced_volterra {
         let x1 = y * y;
         let x2 = 2.0 * x0 + 2.0 * x1;
         let x3 = 1.0 / x2;
-        let x4 = w_ * y;
-        let x5 = x * mb * g;
-        let x6 = x3 * (-32.0 * x0 - 32.0 * x1) + 8.0;
-        let x7 = 8.0 * x4 + 8.0 * x5;
-        let x8 = 8.0 * (x3 * y * y) - 2.0;
+        let x4 = x3 * y;
+        let x5 = x4 * u1;
+        let x6 = x * x3;
+        let x7 = mb * x3;
+        let x8 = mb * g;
+        let x9 = x * x8;
+        let x10 = w_ * y;
+        let x11 = x6 * x5;
+        let x12 = x3 * u1;
+        let x13 = (8.0 - (32.0 * x0 + 32.0 * x1) * x3) * x7;
+        let x14 = 8.0 * x9 + 8.0 * x10;
+        let x15 = (8.0 * (x4 * y) - 2.0) * x12;
         Derivatives {
-            qdot: [-(2.0 * x3 * y * u1), 2.0 * x * x3 * u1],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(-2.0 * x4 - 2.0 * x5) * x3],
+            qdot: [-(2.0 * x5), 2.0 * x6 * u1],
+            matrix: [[x7 * x3 * (4.0 * x0 + 4.0 * x1)]],
+            force: [-(x3 * (2.0 * x9 + 2.0 * x10))],
             checks: [x2],
             d_qdot: [
-                [8.0 * x * x3 * x3 * y * u1, (2.0 - 8.0 * (x * x * x3)) * x3 * u1],
-                [x8 * x3 * u1, -(8.0 * x * x3 * x3 * y * u1)],
-                [-(2.0 * x3 * y), 2.0 * x * x3],
+                [8.0 * x11, (2.0 - 8.0 * (x * x6)) * x12],
+                [x15, -(8.0 * x11)],
+                [-(2.0 * x4), 2.0 * x6],
             ],
-            d_matrix: [[[x * mb * x3 * x3 * x6]], [[mb * x3 * x3 * y * x6]], [[0.0]]],
-            d_force: [
-                [x3 * (x * x3 * x7 - 2.0 * (mb * g))],
-                [(x3 * y * x7 - 2.0 * w_) * x3],
-                [0.0],
-            ],
-            power: -(2.0 * w_ * x3 * y * u1),
-            d_power: [
-                8.0 * x * w_ * x3 * x3 * y * u1,
-                x8 * w_ * x3 * u1,
-                -(2.0 * w_ * x3 * y),
-            ],
+            d_matrix: [[[x6 * x13]], [[x4 * x13]], [[0.0]]],
+            d_force: [[(x6 * x14 - 2.0 * x8) * x3], [(x4 * x14 - 2.0 * w_) * x3], [0.0]],
+            power: -(2.0 * w_ * x5),
+            d_power: [8.0 * w_ * x11, w_ * x15, -(2.0 * w_ * x4)],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.

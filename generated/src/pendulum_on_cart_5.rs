@@ -267,44 +267,43 @@ pub fn energy(
     let l3 = params.l3;
     let l4 = params.l4;
     let g = params.g;
-    let x0 = f64::cos(q3);
-    let x1 = x0 * l2;
-    let x2 = f64::cos(q1);
-    let x3 = x2 * l0;
-    let x4 = f64::cos(q2);
-    let x5 = l1 * x4;
-    let x6 = f64::cos(q5);
-    let x7 = f64::cos(q4);
-    let x8 = x7 * l3;
+    let x0 = f64::cos(q4);
+    let x1 = f64::sin(q2);
+    let x2 = f64::sin(q4);
+    let x3 = f64::cos(q2);
+    let x4 = l1 * q2_dot;
+    let x5 = l0 * q1_dot;
+    let x6 = f64::cos(q1);
+    let x7 = f64::sin(q1);
+    let x8 = f64::cos(q3);
     let x9 = f64::sin(q3);
-    let x10 = f64::sin(q4);
-    let x11 = f64::sin(q1);
-    let x12 = f64::sin(q2);
-    let x13 = x7 * q0_dot - (x7 * x0 + x9 * x10) * q3_dot * l2
-        - l0 * q1_dot * (x7 * x2 + x11 * x10) - l3 * q4_dot
-        - l1 * q2_dot * (x7 * x4 + x12 * x10);
-    let x14 = -(x7 * x9 - x0 * x10) * q3_dot * l2 - q0_dot * x10
-        - l1 * q2_dot * (x7 * x12 - x10 * x4) - l0 * q1_dot * (x7 * x11 - x2 * x10);
-    let x15 = l1 * q2_dot * (x9 * x4 - x0 * x12) - q0_dot * x9
-        - l0 * (x11 * x0 - x2 * x9) * q1_dot;
-    let x16 = q0_dot * x0 - l1 * q2_dot * (x0 * x4 + x9 * x12)
-        - l0 * q1_dot * (x2 * x0 + x11 * x9) - q3_dot * l2;
-    let x17 = q0_dot * x2 - l0 * q1_dot;
-    let x18 = f64::sin(q5);
-    let x19 = q0_dot * x6 - (x7 * x6 + x18 * x10) * l3 * q4_dot
-        - l1 * q2_dot * (x18 * x12 + x4 * x6) - q3_dot * (x18 * x9 + x0 * x6) * l2
-        - l0 * q1_dot * (x2 * x6 + x11 * x18) - q5_dot * l4;
-    let x20 = l1 * q2_dot * (x18 * x4 - x12 * x6) + l3 * q4_dot * (x7 * x18 - x10 * x6)
-        - x18 * q0_dot - (x11 * x6 - x18 * x2) * l0 * q1_dot
-        - (x9 * x6 - x18 * x0) * q3_dot * l2;
-    let x21 = q0_dot * x4 - l0 * q1_dot * (x11 * x12 + x2 * x4) - l1 * q2_dot;
-    let x22 = -l0 * q1_dot * (x11 * x4 - x2 * x12) - q0_dot * x12;
-    ((x1 + x3 + x5) * m3 + m2 * (x3 + x5) + m5 * (x1 + x3 + x5 + l4 * x6 + x8)
-        + x2 * l0 * m1 + m4 * (x1 + x3 + x5 + x8)) * g
-        + 0.5 * ((x13 * x13 + x14 * x14) * m4) + 0.5 * ((x15 * x15 + x16 * x16) * m3)
-        + 0.5 * (m1 * (x11 * x11 * q0_dot * q0_dot + x17 * x17))
-        + 0.5 * ((x19 * x19 + x20 * x20) * m5) + 0.5 * (m2 * (x21 * x21 + x22 * x22))
-        + 0.5 * (m0 * q0_dot * q0_dot)
+    let x10 = q3_dot * l2;
+    let x11 = (x0 * x1 - x2 * x3) * x4 + x5 * (x0 * x7 - x6 * x2) + q0_dot * x2
+        + (x0 * x9 - x8 * x2) * x10;
+    let x12 = l3 * q4_dot;
+    let x13 = x0 * q0_dot - x12 - (x0 * x3 + x1 * x2) * x4 - (x0 * x8 + x9 * x2) * x10
+        - x5 * (x0 * x6 + x7 * x2);
+    let x14 = x6 * l0;
+    let x15 = x14 + l1 * x3;
+    let x16 = x8 * l2 + x15;
+    let x17 = x0 * l3 + x16;
+    let x18 = f64::cos(q5);
+    let x19 = q0_dot * x6 - x5;
+    let x20 = q0_dot * q0_dot;
+    let x21 = q0_dot * x8 - (x8 * x3 + x9 * x1) * x4 - x10 - x5 * (x6 * x8 + x7 * x9);
+    let x22 = (x9 * x3 - x8 * x1) * x4 - x5 * (x7 * x8 - x6 * x9) - q0_dot * x9;
+    let x23 = f64::sin(q5);
+    let x24 = x12 * (x0 * x23 - x2 * x18) - x5 * (x7 * x18 - x23 * x6) - x23 * q0_dot
+        - (x9 * x18 - x23 * x8) * x10 + (x23 * x3 - x1 * x18) * x4;
+    let x25 = q0_dot * x18 - (x0 * x18 + x23 * x2) * x12 - (x23 * x1 + x3 * x18) * x4
+        - x5 * (x6 * x18 + x7 * x23) - x10 * (x23 * x9 + x8 * x18) - q5_dot * l4;
+    let x26 = q0_dot * x1 + x5 * (x7 * x3 - x6 * x1);
+    let x27 = q0_dot * x3 - x4 - x5 * (x7 * x1 + x6 * x3);
+    0.5 * (m4 * (x11 * x11 + x13 * x13))
+        + g * (m2 * x15 + x14 * m1 + m4 * x17 + x16 * m3 + m5 * (l4 * x18 + x17))
+        + 0.5 * (m1 * (x19 * x19 + x7 * x7 * x20)) + 0.5 * ((x21 * x21 + x22 * x22) * m3)
+        + 0.5 * (m0 * x20) + 0.5 * (m5 * (x24 * x24 + x25 * x25))
+        + 0.5 * (m2 * (x26 * x26 + x27 * x27))
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -346,12 +345,14 @@ pub fn momenta(
     let l2 = params.l2;
     let l3 = params.l3;
     let l4 = params.l4;
+    let x0 = m4 + m5;
+    let x1 = x0 + m3;
+    let x2 = m2 + x1;
+    let x3 = x2 + m1;
     [
-        f64::cos(q4) * l3 * (-m4 - m5) * q4_dot + q0_dot * (m2 + m0 + m4 + m5 + m1 + m3)
-            + l1 * q2_dot * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-            + (-m4 - m5 - m3) * f64::cos(q3) * q3_dot * l2
-            - q5_dot * m5 * l4 * f64::cos(q5)
-            + f64::cos(q1) * l0 * q1_dot * (-m2 - m4 - m5 - m1 - m3),
+        (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
+            - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
+            - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -443,88 +444,89 @@ pub mod lagrange {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = x0 * l0 * (-m2 - m4 - m5 - m1 - m3);
-        let x2 = f64::cos(q2);
-        let x3 = l1 * (-m2 - m4 - m5 - m3) * x2;
-        let x4 = f64::cos(q3);
-        let x5 = (-m4 - m5 - m3) * x4 * l2;
-        let x6 = f64::cos(q4);
-        let x7 = x6 * l3 * (-m4 - m5);
-        let x8 = f64::cos(q5);
-        let x9 = -(m5 * l4 * x8);
-        let x10 = m2 + m4 + m5 + m1 + m3;
-        let x11 = m2 + m4 + m5 + m3;
-        let x12 = f64::sin(q1);
-        let x13 = f64::sin(q2);
-        let x14 = x11 * l1 * l0 * (x12 * x13 + x0 * x2);
-        let x15 = m4 + m5 + m3;
-        let x16 = f64::sin(q3);
-        let x17 = x15 * l0 * (x0 * x4 + x12 * x16) * l2;
-        let x18 = f64::sin(q4);
-        let x19 = m4 + m5;
-        let x20 = l0 * l3 * (x6 * x0 + x12 * x18) * x19;
-        let x21 = f64::sin(q5);
-        let x22 = l0 * m5 * l4 * (x0 * x8 + x12 * x21);
-        let x23 = x15 * l1 * (x4 * x2 + x16 * x13) * l2;
-        let x24 = l1 * l3 * (x6 * x2 + x13 * x18) * x19;
-        let x25 = l1 * m5 * (x21 * x13 + x2 * x8) * l4;
-        let x26 = (x6 * x4 + x16 * x18) * l3 * x19 * l2;
-        let x27 = m5 * l4 * (x21 * x16 + x4 * x8) * l2;
-        let x28 = (x6 * x8 + x21 * x18) * l3 * m5 * l4;
-        let x29 = x16 * q3_dot * q3_dot * l2;
-        let x30 = l1 * q2_dot * q2_dot * x13;
-        let x31 = x12 * l0 * q1_dot * q1_dot;
-        let x32 = l3 * q4_dot * q4_dot * x18;
-        let x33 = x12 * x4 - x0 * x16;
-        let x34 = x33 * q3_dot * q3_dot * l2;
-        let x35 = x12 * x2 - x0 * x13;
-        let x36 = l1 * q2_dot * q2_dot * x35;
-        let x37 = x6 * x12 - x0 * x18;
-        let x38 = l3 * q4_dot * q4_dot * x37;
-        let x39 = x12 * x8 - x21 * x0;
-        let x40 = l0 * q1_dot * q1_dot * x35;
-        let x41 = x16 * x2 - x4 * x13;
-        let x42 = x41 * q3_dot * q3_dot * l2;
-        let x43 = x6 * x13 - x18 * x2;
-        let x44 = x43 * l3 * q4_dot * q4_dot;
-        let x45 = x21 * x2 - x13 * x8;
-        let x46 = l1 * q2_dot * q2_dot * x41;
-        let x47 = l0 * x33 * q1_dot * q1_dot;
-        let x48 = x6 * x16 - x4 * x18;
-        let x49 = x48 * l3 * q4_dot * q4_dot;
-        let x50 = x16 * x8 - x21 * x4;
-        let x51 = x48 * q3_dot * q3_dot * l2;
-        let x52 = l0 * q1_dot * q1_dot * x37;
-        let x53 = l1 * q2_dot * q2_dot * x43;
-        let x54 = x6 * x21 - x18 * x8;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4 * l0);
+        let x6 = f64::cos(q2);
+        let x7 = -(l1 * x2 * x6);
+        let x8 = f64::cos(q3);
+        let x9 = -(x8 * x1 * l2);
+        let x10 = f64::cos(q4);
+        let x11 = -(x10 * x0 * l3);
+        let x12 = m5 * l4;
+        let x13 = f64::cos(q5);
+        let x14 = -(x12 * x13);
+        let x15 = l1 * x2;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x15 * l0 * (x16 * x17 + x4 * x6);
+        let x19 = x1 * l2;
+        let x20 = f64::sin(q3);
+        let x21 = l0 * x19 * (x4 * x8 + x16 * x20);
+        let x22 = f64::sin(q4);
+        let x23 = x0 * l3;
+        let x24 = l0 * (x10 * x4 + x16 * x22) * x23;
+        let x25 = f64::sin(q5);
+        let x26 = l0 * x12 * (x4 * x13 + x16 * x25);
+        let x27 = l1 * (x8 * x6 + x20 * x17) * x19;
+        let x28 = l1 * (x10 * x6 + x17 * x22) * x23;
+        let x29 = l1 * (x25 * x17 + x6 * x13) * x12;
+        let x30 = (x10 * x8 + x20 * x22) * x23 * l2;
+        let x31 = x12 * (x25 * x20 + x8 * x13) * l2;
+        let x32 = (x10 * x13 + x25 * x22) * l3 * x12;
+        let x33 = l0 * q1_dot * q1_dot;
+        let x34 = x16 * x33;
+        let x35 = q2_dot * (l1 * q2_dot);
+        let x36 = x34 + x35 * x17;
+        let x37 = q3_dot * (q3_dot * l2);
+        let x38 = x36 + x37 * x20;
+        let x39 = l3 * q4_dot * q4_dot;
+        let x40 = x38 + x39 * x22;
+        let x41 = q5_dot * (q5_dot * l4);
+        let x42 = x16 * x6 - x4 * x17;
+        let x43 = m2 * x42;
+        let x44 = x16 * x8 - x4 * x20;
+        let x45 = x37 * x44 + x35 * x42;
+        let x46 = x10 * x16 - x4 * x22;
+        let x47 = x45 + x39 * x46;
+        let x48 = x16 * x13 - x25 * x4;
+        let x49 = x33 * x42;
+        let x50 = x20 * x6 - x8 * x17;
+        let x51 = x37 * x50;
+        let x52 = x10 * x17 - x22 * x6;
+        let x53 = (-x49 - x51) + x39 * x52;
+        let x54 = x25 * x6 - x17 * x13;
+        let x55 = x33 * x44;
+        let x56 = x50 * x35;
+        let x57 = x20 * x13 - x25 * x8;
+        let x58 = x10 * x20 - x8 * x22;
+        let x59 = (x56 + x39 * x58) - x55;
+        let x60 = (x33 * x46 + x37 * x58) + x52 * x35;
+        let x61 = x10 * x25 - x22 * x13;
         Assembly {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x1, x3, x5, x7, x9],
-                [x1, l0 * l0 * x10, x14, x17, x20, x22],
-                [x3, x14, x11 * l1 * l1, x23, x24, x25],
-                [x5, x17, x23, x15 * l2 * l2, x26, x27],
-                [x7, x20, x24, x26, l3 * l3 * x19, x28],
-                [x9, x22, x25, x27, x28, m5 * l4 * l4],
+                [x3 + m0, x5, x7, x9, x11, x14],
+                [x5, x3 * l0 * l0, x18, x21, x24, x26],
+                [x7, x18, x15 * l1, x27, x28, x29],
+                [x9, x21, x27, x19 * l2, x30, x31],
+                [x11, x24, x28, x30, l3 * x23, x32],
+                [x14, x26, x29, x31, x32, x12 * l4],
             ],
             force: [
-                -m3 * (x29 + x30 + x31) - x12 * l0 * q1_dot * q1_dot * m1
-                    - (x32 + x29 + x30 + x31) * m4 - m2 * (x30 + x31)
-                    - m5 * (x32 + x29 + x30 + x31 + x21 * q5_dot * q5_dot * l4),
-                (x12 * g * x10 - (x34 + x36) * m3 - m2 * l1 * q2_dot * q2_dot * x35
-                    - m4 * (x34 + x36 + x38)
-                    - (x39 * q5_dot * q5_dot * l4 + x34 + x36 + x38) * m5) * l0,
+                -(m4 * x40 + x34 * m1 + x38 * m3 + m2 * x36 + (x25 * x41 + x40) * m5),
+                (x3 * x16 * g - x35 * x43 - m5 * (x47 + x48 * x41) - m4 * x47 - x45 * m3)
+                    * l0,
                 l1
-                    * (m2 * l0 * q1_dot * q1_dot * x35
-                        - m5 * (x44 - x40 - x42 - q5_dot * q5_dot * x45 * l4)
-                        - m4 * (x44 - x40 - x42) + x11 * g * x13 - (-x40 - x42) * m3),
-                ((x47 - x46) * m3 + x15 * x16 * g - m4 * (x49 + x46 - x47)
-                    - (x49 + x46 - x47 + x50 * q5_dot * q5_dot * l4) * m5) * l2,
-                (m4 * (x51 + x52 + x53) + g * x18 * x19
-                    - (-q5_dot * q5_dot * l4 * x54 - x51 - x52 - x53) * m5) * l3,
-                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x54
-                    + x50 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x45) * m5 * l4,
+                    * ((x49 + x51) * m3 + x33 * x43 - m4 * x53 - (x53 - x54 * x41) * m5
+                        + x2 * g * x17),
+                (x20 * g * x1 + (x55 - x56) * m3 - m5 * (x57 * x41 + x59) - x59 * m4)
+                    * l2,
+                (m4 * x60 + m5 * (x41 * x61 + x60) + x0 * g * x22) * l3,
+                (x57 * x37 - x39 * x61 + x25 * g + x48 * x33 - x35 * x54) * x12,
             ],
             checks: [],
             residuals: [],
@@ -636,6 +638,10 @@ pub mod lagrange {
         let l2 = params.l2;
         let l3 = params.l3;
         let l4 = params.l4;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -663,12 +669,9 @@ pub mod lagrange {
             q5_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            f64::cos(q4) * l3 * (-m4 - m5) * q4_dot
-                + q0_dot * (m2 + m0 + m4 + m5 + m1 + m3)
-                + l1 * q2_dot * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-                + (-m4 - m5 - m3) * f64::cos(q3) * q3_dot * l2
-                - q5_dot * m5 * l4 * f64::cos(q5)
-                + f64::cos(q1) * l0 * q1_dot * (-m2 - m4 - m5 - m1 - m3),
+            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
+                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
+                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -765,144 +768,180 @@ pub mod lagrange {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = -m2 - m4 - m5 - m1 - m3;
-        let x2 = x0 * l0 * x1;
-        let x3 = -m2 - m4 - m5 - m3;
-        let x4 = f64::cos(q2);
-        let x5 = l1 * x3 * x4;
-        let x6 = -m4 - m5 - m3;
-        let x7 = f64::cos(q3);
-        let x8 = x6 * x7 * l2;
-        let x9 = f64::cos(q4);
-        let x10 = -m4 - m5;
-        let x11 = x9 * l3 * x10;
-        let x12 = f64::cos(q5);
-        let x13 = -(m5 * l4 * x12);
-        let x14 = m2 + m4 + m5 + m1 + m3;
-        let x15 = m2 + m4 + m5 + m3;
-        let x16 = f64::sin(q1);
-        let x17 = f64::sin(q2);
-        let x18 = x16 * x17 + x0 * x4;
-        let x19 = x15 * l1 * l0 * x18;
-        let x20 = m4 + m5 + m3;
-        let x21 = f64::sin(q3);
-        let x22 = x0 * x7 + x16 * x21;
-        let x23 = x20 * l0 * x22 * l2;
-        let x24 = f64::sin(q4);
-        let x25 = x9 * x0 + x16 * x24;
-        let x26 = m4 + m5;
-        let x27 = l0 * l3 * x25 * x26;
-        let x28 = f64::sin(q5);
-        let x29 = x0 * x12 + x16 * x28;
-        let x30 = l0 * m5 * l4 * x29;
-        let x31 = x7 * x4 + x21 * x17;
-        let x32 = x20 * l1 * x31 * l2;
-        let x33 = x9 * x4 + x17 * x24;
-        let x34 = l1 * l3 * x33 * x26;
-        let x35 = x28 * x17 + x4 * x12;
-        let x36 = l1 * m5 * x35 * l4;
-        let x37 = x9 * x7 + x21 * x24;
-        let x38 = x37 * l3 * x26 * l2;
-        let x39 = x28 * x21 + x7 * x12;
-        let x40 = m5 * l4 * x39 * l2;
-        let x41 = x9 * x12 + x28 * x24;
-        let x42 = x41 * l3 * m5 * l4;
-        let x43 = x21 * q3_dot * q3_dot * l2;
-        let x44 = l1 * q2_dot * q2_dot * x17;
-        let x45 = x16 * l0 * q1_dot * q1_dot;
-        let x46 = l3 * q4_dot * q4_dot * x24;
-        let x47 = x16 * x7 - x0 * x21;
-        let x48 = x47 * q3_dot * q3_dot * l2;
-        let x49 = x16 * x4 - x0 * x17;
-        let x50 = l1 * q2_dot * q2_dot * x49;
-        let x51 = x9 * x16 - x0 * x24;
-        let x52 = l3 * q4_dot * q4_dot * x51;
-        let x53 = x16 * x12 - x28 * x0;
-        let x54 = l0 * q1_dot * q1_dot * x49;
-        let x55 = x21 * x4 - x7 * x17;
-        let x56 = x55 * q3_dot * q3_dot * l2;
-        let x57 = x9 * x17 - x24 * x4;
-        let x58 = x57 * l3 * q4_dot * q4_dot;
-        let x59 = x28 * x4 - x17 * x12;
-        let x60 = l1 * q2_dot * q2_dot * x55;
-        let x61 = l0 * x47 * q1_dot * q1_dot;
-        let x62 = x9 * x21 - x7 * x24;
-        let x63 = x62 * l3 * q4_dot * q4_dot;
-        let x64 = x21 * x12 - x28 * x7;
-        let x65 = x62 * q3_dot * q3_dot * l2;
-        let x66 = l0 * q1_dot * q1_dot * x51;
-        let x67 = l1 * q2_dot * q2_dot * x57;
-        let x68 = x9 * x28 - x24 * x12;
-        let x69 = x16 * l0 * x14;
-        let x70 = l1 * l0 * x3 * x49;
-        let x71 = l0 * x6 * x47 * l2;
-        let x72 = l0 * l3 * x10 * x51;
-        let x73 = -(x53 * l0 * m5 * l4);
-        let x74 = l1 * q2_dot * q2_dot * x18;
-        let x75 = q3_dot * q3_dot * x22 * l2;
-        let x76 = l3 * x25 * q4_dot * q4_dot;
-        let x77 = x15 * l1 * x17;
-        let x78 = x15 * l1 * l0 * x49;
-        let x79 = x20 * l1 * x55 * l2;
-        let x80 = l1 * x57 * l3 * x10;
-        let x81 = l1 * m5 * x59 * l4;
-        let x82 = x31 * q3_dot * q3_dot * l2;
-        let x83 = l3 * x33 * q4_dot * q4_dot;
-        let x84 = l0 * q1_dot * q1_dot * x18;
-        let x85 = x20 * x21 * l2;
-        let x86 = x20 * l0 * x47 * l2;
-        let x87 = l1 * x6 * x55 * l2;
-        let x88 = x62 * l3 * x10 * l2;
-        let x89 = -(x64 * m5 * l4 * l2);
-        let x90 = l1 * q2_dot * q2_dot * x31;
-        let x91 = x37 * l3 * q4_dot * q4_dot;
-        let x92 = l0 * q1_dot * q1_dot * x22;
-        let x93 = l3 * x24 * x26;
-        let x94 = l0 * l3 * x51 * x26;
-        let x95 = l1 * x57 * l3 * x26;
-        let x96 = x62 * l3 * x26 * l2;
-        let x97 = l3 * m5 * l4 * x68;
-        let x98 = x37 * q3_dot * q3_dot * l2;
-        let x99 = l1 * q2_dot * q2_dot * x33;
-        let x100 = l0 * q1_dot * q1_dot * x25;
-        let x101 = x28 * m5 * l4;
-        let x102 = x53 * l0 * m5 * l4;
-        let x103 = -(l1 * m5 * x59 * l4);
-        let x104 = x64 * m5 * l4 * l2;
-        let x105 = -(l3 * m5 * l4 * x68);
-        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
-        let x107 = 2.0 * m4 + 2.0 * m5;
-        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x110 = -2.0 * m4 - 2.0 * m5;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4);
+        let x6 = l0 * x5;
+        let x7 = f64::cos(q2);
+        let x8 = -(l1 * x2);
+        let x9 = x7 * x8;
+        let x10 = f64::cos(q3);
+        let x11 = -(x1 * l2);
+        let x12 = x10 * x11;
+        let x13 = f64::cos(q4);
+        let x14 = -(x0 * l3);
+        let x15 = x13 * x14;
+        let x16 = m5 * l4;
+        let x17 = f64::cos(q5);
+        let x18 = x16 * x17;
+        let x19 = -x18;
+        let x20 = x3 * l0;
+        let x21 = l1 * x2;
+        let x22 = f64::sin(q1);
+        let x23 = f64::sin(q2);
+        let x24 = x22 * x23 + x4 * x7;
+        let x25 = x21 * l0 * x24;
+        let x26 = x1 * l2;
+        let x27 = f64::sin(q3);
+        let x28 = x4 * x10 + x22 * x27;
+        let x29 = l0 * x28;
+        let x30 = x26 * x29;
+        let x31 = x0 * l3;
+        let x32 = f64::sin(q4);
+        let x33 = x13 * x4 + x22 * x32;
+        let x34 = l0 * x33;
+        let x35 = x31 * x34;
+        let x36 = l0 * x16;
+        let x37 = f64::sin(q5);
+        let x38 = x4 * x17 + x22 * x37;
+        let x39 = x36 * x38;
+        let x40 = x10 * x7 + x27 * x23;
+        let x41 = l1 * x40;
+        let x42 = x41 * x26;
+        let x43 = x13 * x7 + x23 * x32;
+        let x44 = l1 * x43;
+        let x45 = x31 * x44;
+        let x46 = l1 * x16;
+        let x47 = x37 * x23 + x7 * x17;
+        let x48 = x46 * x47;
+        let x49 = x13 * x10 + x27 * x32;
+        let x50 = x49 * l2;
+        let x51 = x31 * x50;
+        let x52 = x16 * l2;
+        let x53 = x37 * x27 + x10 * x17;
+        let x54 = x52 * x53;
+        let x55 = x13 * x17 + x37 * x32;
+        let x56 = l3 * x16;
+        let x57 = x55 * x56;
+        let x58 = l0 * q1_dot;
+        let x59 = x58 * q1_dot;
+        let x60 = x22 * x59;
+        let x61 = l1 * q2_dot;
+        let x62 = q2_dot * x61;
+        let x63 = x60 + x62 * x23;
+        let x64 = q3_dot * l2;
+        let x65 = q3_dot * x64;
+        let x66 = x63 + x65 * x27;
+        let x67 = l3 * q4_dot;
+        let x68 = x67 * q4_dot;
+        let x69 = x66 + x68 * x32;
+        let x70 = q5_dot * q5_dot;
+        let x71 = l4 * x70;
+        let x72 = x22 * x7 - x4 * x23;
+        let x73 = m2 * x72;
+        let x74 = x3 * g;
+        let x75 = x22 * x17 - x37 * x4;
+        let x76 = x22 * x10 - x4 * x27;
+        let x77 = x65 * x76 + x62 * x72;
+        let x78 = x13 * x22 - x4 * x32;
+        let x79 = x77 + x68 * x78;
+        let x80 = x59 * x72;
+        let x81 = x27 * x7 - x10 * x23;
+        let x82 = x65 * x81;
+        let x83 = x13 * x23 - x32 * x7;
+        let x84 = (-x80 - x82) + x68 * x83;
+        let x85 = x37 * x7 - x23 * x17;
+        let x86 = x2 * g;
+        let x87 = g * x1;
+        let x88 = x59 * x76;
+        let x89 = x81 * x62;
+        let x90 = x13 * x27 - x10 * x32;
+        let x91 = (x89 + x68 * x90) - x88;
+        let x92 = x27 * x17 - x37 * x10;
+        let x93 = (x59 * x78 + x65 * x90) + x83 * x62;
+        let x94 = x0 * g;
+        let x95 = x13 * x37 - x32 * x17;
+        let x96 = x22 * x20;
+        let x97 = l0 * x72;
+        let x98 = x97 * x8;
+        let x99 = l0 * x76;
+        let x100 = x11 * x99;
+        let x101 = l0 * x78;
+        let x102 = x14 * x101;
+        let x103 = x75 * x36;
+        let x104 = -x103;
+        let x105 = x24 * x62;
+        let x106 = x65 * x28 + x105;
+        let x107 = x68 * x33 + x106;
+        let x108 = x59 * x24;
+        let x109 = x59 * x28;
+        let x110 = x59 * x33;
+        let x111 = x59 * x38;
+        let x112 = x21 * x23;
+        let x113 = x21 * x97;
+        let x114 = l1 * x81;
+        let x115 = x26 * x114;
+        let x116 = l1 * x83;
+        let x117 = x116 * x14;
+        let x118 = x46 * x85;
+        let x119 = x65 * x40 + x108;
+        let x120 = x68 * x43 + x119;
+        let x121 = x40 * x62;
+        let x122 = x62 * x43;
+        let x123 = x47 * x62;
+        let x124 = x27 * x26;
+        let x125 = x26 * x99;
+        let x126 = x11 * x114;
+        let x127 = x90 * l2;
+        let x128 = x127 * x14;
+        let x129 = x92 * x52;
+        let x130 = -x129;
+        let x131 = x65 * x1;
+        let x132 = x109 + x121;
+        let x133 = x132 + x68 * x49;
+        let x134 = x65 * x49;
+        let x135 = x65 * x53;
+        let x136 = x31 * x32;
+        let x137 = x31 * x101;
+        let x138 = x116 * x31;
+        let x139 = x127 * x31;
+        let x140 = x56 * x95;
+        let x141 = x68 * x0;
+        let x142 = x110 + (x122 + x134);
+        let x143 = x68 * x55;
+        let x144 = x37 * x16;
+        let x145 = -x118;
+        let x146 = -x140;
+        let x147 = 2.0 * m4 + 2.0 * m5;
+        let x148 = x147 + 2.0 * m3;
+        let x149 = 2.0 * m2 + x148;
+        let x150 = l3 * x147;
+        let x151 = -(x149 * x61);
+        let x152 = -(x148 * x64);
+        let x153 = -(x67 * x147);
         Derivatives {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
-                [x2, l0 * l0 * x14, x19, x23, x27, x30],
-                [x5, x19, x15 * l1 * l1, x32, x34, x36],
-                [x8, x23, x32, x20 * l2 * l2, x38, x40],
-                [x11, x27, x34, x38, l3 * l3 * x26, x42],
-                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+                [x3 + m0, x6, x9, x12, x15, x19],
+                [x6, l0 * x20, x25, x30, x35, x39],
+                [x9, x25, x21 * l1, x42, x45, x48],
+                [x12, x30, x42, x26 * l2, x51, x54],
+                [x15, x35, x45, x51, l3 * x31, x57],
+                [x19, x39, x48, x54, x57, x16 * l4],
             ],
             force: [
-                -m3 * (x43 + x44 + x45) - x16 * l0 * q1_dot * q1_dot * m1
-                    - (x46 + x43 + x44 + x45) * m4 - m2 * (x44 + x45)
-                    - m5 * (x46 + x43 + x44 + x45 + x28 * q5_dot * q5_dot * l4),
-                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * q2_dot * q2_dot * x49
-                    - m4 * (x48 + x50 + x52)
-                    - (x53 * q5_dot * q5_dot * l4 + x48 + x50 + x52) * m5) * l0,
+                -(m4 * x69 + x60 * m1 + (x37 * x71 + x69) * m5 + x66 * m3 + m2 * x63),
+                (x22 * x74 - x62 * x73 - (x75 * x71 + x79) * m5 - m4 * x79 - x77 * m3)
+                    * l0,
                 l1
-                    * (m2 * l0 * q1_dot * q1_dot * x49
-                        - m5 * (x58 - x54 - x56 - q5_dot * q5_dot * x59 * l4)
-                        - m4 * (x58 - x54 - x56) + x15 * g * x17 - (-x54 - x56) * m3),
-                ((x61 - x60) * m3 + x20 * x21 * g - m4 * (x63 + x60 - x61)
-                    - (x63 + x60 - x61 + x64 * q5_dot * q5_dot * l4) * m5) * l2,
-                (m4 * (x65 + x66 + x67) + g * x24 * x26
-                    - (-q5_dot * q5_dot * l4 * x68 - x65 - x66 - x67) * m5) * l3,
-                (x53 * l0 * q1_dot * q1_dot + x28 * g - l3 * q4_dot * q4_dot * x68
-                    + x64 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x59) * m5 * l4,
+                    * ((x80 + x82) * m3 + x59 * x73 - m4 * x84 - m5 * (x84 - x85 * x71)
+                        + x86 * x23),
+                (x27 * x87 + (x88 - x89) * m3 - (x91 + x92 * x71) * m5 - x91 * m4) * l2,
+                (m4 * x93 + x94 * x32 + m5 * (x71 * x95 + x93)) * l3,
+                (x92 * x65 - x68 * x95 + x37 * g + x75 * x59 - x62 * x85) * x16,
             ],
             checks: [],
             d_qdot: [
@@ -929,44 +968,44 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
-                    [x69, 0.0, x70, x71, x72, x73],
-                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x96, 0.0, 0.0, 0.0, 0.0],
+                    [x96, 0.0, x98, x100, x102, x104],
+                    [0.0, x98, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x100, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x102, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x104, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
-                    [x77, x78, 0.0, x79, x80, x81],
-                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x112, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x113, 0.0, 0.0, 0.0],
+                    [x112, x113, 0.0, x115, x117, x118],
+                    [0.0, 0.0, x115, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x117, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x118, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
-                    [x85, x86, x87, 0.0, x88, x89],
-                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x124, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x125, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x126, 0.0, 0.0],
+                    [x124, x125, x126, 0.0, x128, x130],
+                    [0.0, 0.0, 0.0, x128, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x130, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
-                    [x93, x94, x95, x96, 0.0, x97],
-                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x136, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x137, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x138, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x139, 0.0],
+                    [x136, x137, x138, x139, 0.0, x140],
+                    [0.0, 0.0, 0.0, 0.0, x140, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x144],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x103],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
-                    [x101, x102, x103, x104, x105, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x145],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x129],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x146],
+                    [x144, x103, x145, x129, x146, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1020,97 +1059,87 @@ pub mod lagrange {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x0 * l0 * q1_dot * q1_dot * x1,
+                    x59 * x5,
                     l0
-                        * (x0 * g * x14 - (x74 + x75) * m3
-                            - m2 * l1 * q2_dot * q2_dot * x18 - m4 * (x74 + x75 + x76)
-                            - (x74 + x75 + x76 + q5_dot * q5_dot * l4 * x29) * m5),
-                    x15 * l1 * l0 * q1_dot * q1_dot * x18,
-                    x20 * l0 * q1_dot * q1_dot * x22 * l2,
-                    l0 * l3 * q1_dot * q1_dot * x25 * x26,
-                    l0 * m5 * q1_dot * q1_dot * l4 * x29,
+                        * (x4 * x74 - x106 * m3 - m4 * x107 - m2 * x105
+                            - m5 * (x71 * x38 + x107)),
+                    x21 * x108,
+                    x109 * x26,
+                    x110 * x31,
+                    x111 * x16,
                 ],
                 [
-                    l1 * q2_dot * q2_dot * x3 * x4,
-                    x15 * l1 * q2_dot * q2_dot * l0 * x18,
-                    l1
-                        * (x15 * g * x4 - (x82 + x83 + x84) * m4
-                            - m5 * (x82 + x83 + x84 + q5_dot * q5_dot * x35 * l4)
-                            - (x82 + x84) * m3 - m2 * l0 * q1_dot * q1_dot * x18),
-                    x20 * l1 * q2_dot * q2_dot * x31 * l2,
-                    l1 * q2_dot * q2_dot * l3 * x33 * x26,
-                    l1 * q2_dot * q2_dot * m5 * x35 * l4,
+                    -(x2 * x62 * x7),
+                    l0 * x2 * x105,
+                    (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
+                        - x119 * m3) * l1,
+                    x26 * x121,
+                    x122 * x31,
+                    x16 * x123,
                 ],
                 [
-                    x6 * x7 * q3_dot * q3_dot * l2,
-                    x20 * l0 * q3_dot * q3_dot * x22 * l2,
-                    x20 * l1 * x31 * q3_dot * q3_dot * l2,
-                    ((-x90 - x92) * m3 - m4 * (x90 + x91 + x92)
-                        - m5 * (x90 + q5_dot * q5_dot * l4 * x39 + x91 + x92)
-                        + x20 * x7 * g) * l2,
-                    x37 * l3 * q3_dot * q3_dot * x26 * l2,
-                    m5 * q3_dot * q3_dot * l4 * x39 * l2,
+                    -(x65 * x10 * x1),
+                    x131 * x29,
+                    x41 * x131,
+                    (x10 * x87 - x132 * m3 - m4 * x133 - (x133 + x71 * x53) * m5) * l2,
+                    x31 * x134,
+                    x135 * x16,
                 ],
                 [
-                    x9 * l3 * x10 * q4_dot * q4_dot,
-                    l0 * l3 * x25 * q4_dot * q4_dot * x26,
-                    l1 * l3 * x33 * q4_dot * q4_dot * x26,
-                    x37 * l3 * q4_dot * q4_dot * x26 * l2,
-                    l3
-                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
-                            - (x98 + x99 + x41 * q5_dot * q5_dot * l4 + x100) * m5),
-                    x41 * l3 * m5 * q4_dot * q4_dot * l4,
+                    -(x68 * x13 * x0),
+                    x141 * x34,
+                    x141 * x44,
+                    x141 * x50,
+                    l3 * (x13 * x94 - m4 * x142 - m5 * (x55 * x71 + x142)),
+                    x16 * x143,
                 ],
                 [
-                    -(q5_dot * q5_dot * m5 * l4 * x12),
-                    l0 * q5_dot * q5_dot * m5 * l4 * x29,
-                    l1 * q5_dot * q5_dot * m5 * x35 * l4,
-                    q5_dot * q5_dot * m5 * l4 * x39 * l2,
-                    x41 * l3 * q5_dot * q5_dot * m5 * l4,
-                    (g * x12 - q3_dot * q3_dot * x39 * l2 - l0 * q1_dot * q1_dot * x29
-                        - x41 * l3 * q4_dot * q4_dot - l1 * q2_dot * q2_dot * x35) * m5
-                        * l4,
+                    -(x18 * x70),
+                    x39 * x70,
+                    x48 * x70,
+                    x54 * x70,
+                    x70 * x57,
+                    (g * x17 - x135 - x111 - x143 - x123) * x16,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x16 * l0 * q1_dot
-                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    -(x58 * x22 * (x149 + 2.0 * m1)),
                     0.0,
-                    l1 * l0 * q1_dot * x49 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
-                    l0 * x47 * q1_dot * x106 * l2,
-                    l0 * l3 * q1_dot * x51 * x107,
-                    2.0 * x53 * l0 * m5 * q1_dot * l4,
+                    x58 * l1 * x149 * x72,
+                    x58 * x76 * x148 * l2,
+                    x58 * x150 * x78,
+                    2.0 * x58 * x75 * x16,
                 ],
                 [
-                    l1 * q2_dot * x108 * x17,
-                    l1 * q2_dot * x108 * l0 * x49,
+                    x23 * x151,
+                    x97 * x151,
                     0.0,
-                    l1 * q2_dot * x55 * x109 * l2,
-                    l1 * q2_dot * x57 * l3 * x107,
-                    -(2.0 * l1 * q2_dot * m5 * x59 * l4),
+                    -(x148 * x81 * x61 * l2),
+                    x150 * x83 * x61,
+                    -(2.0 * x85 * x16 * x61),
                 ],
                 [
-                    x21 * q3_dot * x109 * l2,
-                    l0 * x47 * q3_dot * x109 * l2,
-                    l1 * x55 * x106 * q3_dot * l2,
+                    x152 * x27,
+                    x152 * x99,
+                    x148 * x64 * x114,
                     0.0,
-                    x62 * l3 * q3_dot * x107 * l2,
-                    2.0 * x64 * m5 * q3_dot * l4 * l2,
+                    x150 * x90 * x64,
+                    2.0 * x92 * x16 * x64,
                 ],
                 [
-                    l3 * q4_dot * x24 * x110,
-                    l0 * l3 * q4_dot * x51 * x110,
-                    l1 * x57 * l3 * q4_dot * x110,
-                    x62 * l3 * q4_dot * x110 * l2,
+                    x153 * x32,
+                    x153 * x101,
+                    x116 * x153,
+                    x127 * x153,
                     0.0,
-                    -(2.0 * l3 * m5 * q4_dot * l4 * x68),
+                    -(2.0 * x67 * x16 * x95),
                 ],
                 [
-                    -(2.0 * x28 * q5_dot * m5 * l4),
-                    -(2.0 * x53 * l0 * q5_dot * m5 * l4),
-                    2.0 * l1 * q5_dot * m5 * x59 * l4,
-                    -(2.0 * x64 * q5_dot * m5 * l4 * l2),
-                    2.0 * l3 * q5_dot * m5 * l4 * x68,
+                    -(2.0 * q5_dot * x144),
+                    -(2.0 * q5_dot * x103),
+                    2.0 * q5_dot * x118,
+                    -(2.0 * q5_dot * x129),
+                    2.0 * q5_dot * x140,
                     0.0,
                 ],
             ],
@@ -1358,88 +1387,89 @@ pub mod maggi {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = x0 * l0 * (-m2 - m4 - m5 - m1 - m3);
-        let x2 = f64::cos(q2);
-        let x3 = l1 * (-m2 - m4 - m5 - m3) * x2;
-        let x4 = f64::cos(q3);
-        let x5 = (-m4 - m5 - m3) * x4 * l2;
-        let x6 = f64::cos(q4);
-        let x7 = x6 * l3 * (-m4 - m5);
-        let x8 = f64::cos(q5);
-        let x9 = -(m5 * l4 * x8);
-        let x10 = m2 + m4 + m5 + m1 + m3;
-        let x11 = m2 + m4 + m5 + m3;
-        let x12 = f64::sin(q1);
-        let x13 = f64::sin(q2);
-        let x14 = x11 * l1 * l0 * (x12 * x13 + x0 * x2);
-        let x15 = m4 + m5 + m3;
-        let x16 = f64::sin(q3);
-        let x17 = x15 * l0 * (x0 * x4 + x12 * x16) * l2;
-        let x18 = f64::sin(q4);
-        let x19 = m4 + m5;
-        let x20 = l0 * l3 * (x6 * x0 + x12 * x18) * x19;
-        let x21 = f64::sin(q5);
-        let x22 = l0 * m5 * l4 * (x0 * x8 + x12 * x21);
-        let x23 = x15 * l1 * (x4 * x2 + x16 * x13) * l2;
-        let x24 = l1 * l3 * (x6 * x2 + x13 * x18) * x19;
-        let x25 = l1 * m5 * (x21 * x13 + x2 * x8) * l4;
-        let x26 = (x6 * x4 + x16 * x18) * l3 * x19 * l2;
-        let x27 = m5 * l4 * (x21 * x16 + x4 * x8) * l2;
-        let x28 = (x6 * x8 + x21 * x18) * l3 * m5 * l4;
-        let x29 = x16 * q3_dot * q3_dot * l2;
-        let x30 = l1 * q2_dot * q2_dot * x13;
-        let x31 = x12 * l0 * q1_dot * q1_dot;
-        let x32 = l3 * q4_dot * q4_dot * x18;
-        let x33 = x12 * x4 - x0 * x16;
-        let x34 = x33 * q3_dot * q3_dot * l2;
-        let x35 = x12 * x2 - x0 * x13;
-        let x36 = l1 * q2_dot * q2_dot * x35;
-        let x37 = x6 * x12 - x0 * x18;
-        let x38 = l3 * q4_dot * q4_dot * x37;
-        let x39 = x12 * x8 - x21 * x0;
-        let x40 = l0 * q1_dot * q1_dot * x35;
-        let x41 = x16 * x2 - x4 * x13;
-        let x42 = x41 * q3_dot * q3_dot * l2;
-        let x43 = x6 * x13 - x18 * x2;
-        let x44 = x43 * l3 * q4_dot * q4_dot;
-        let x45 = x21 * x2 - x13 * x8;
-        let x46 = l1 * q2_dot * q2_dot * x41;
-        let x47 = l0 * x33 * q1_dot * q1_dot;
-        let x48 = x6 * x16 - x4 * x18;
-        let x49 = x48 * l3 * q4_dot * q4_dot;
-        let x50 = x16 * x8 - x21 * x4;
-        let x51 = x48 * q3_dot * q3_dot * l2;
-        let x52 = l0 * q1_dot * q1_dot * x37;
-        let x53 = l1 * q2_dot * q2_dot * x43;
-        let x54 = x6 * x21 - x18 * x8;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4 * l0);
+        let x6 = f64::cos(q2);
+        let x7 = -(l1 * x2 * x6);
+        let x8 = f64::cos(q3);
+        let x9 = -(x8 * x1 * l2);
+        let x10 = f64::cos(q4);
+        let x11 = -(x10 * x0 * l3);
+        let x12 = m5 * l4;
+        let x13 = f64::cos(q5);
+        let x14 = -(x12 * x13);
+        let x15 = l1 * x2;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x15 * l0 * (x16 * x17 + x4 * x6);
+        let x19 = x1 * l2;
+        let x20 = f64::sin(q3);
+        let x21 = l0 * x19 * (x4 * x8 + x16 * x20);
+        let x22 = f64::sin(q4);
+        let x23 = x0 * l3;
+        let x24 = l0 * (x10 * x4 + x16 * x22) * x23;
+        let x25 = f64::sin(q5);
+        let x26 = l0 * x12 * (x4 * x13 + x16 * x25);
+        let x27 = l1 * (x8 * x6 + x20 * x17) * x19;
+        let x28 = l1 * (x10 * x6 + x17 * x22) * x23;
+        let x29 = l1 * (x25 * x17 + x6 * x13) * x12;
+        let x30 = (x10 * x8 + x20 * x22) * x23 * l2;
+        let x31 = x12 * (x25 * x20 + x8 * x13) * l2;
+        let x32 = (x10 * x13 + x25 * x22) * l3 * x12;
+        let x33 = l0 * q1_dot * q1_dot;
+        let x34 = x16 * x33;
+        let x35 = q2_dot * (l1 * q2_dot);
+        let x36 = x34 + x35 * x17;
+        let x37 = q3_dot * (q3_dot * l2);
+        let x38 = x36 + x37 * x20;
+        let x39 = l3 * q4_dot * q4_dot;
+        let x40 = x38 + x39 * x22;
+        let x41 = q5_dot * (q5_dot * l4);
+        let x42 = x16 * x6 - x4 * x17;
+        let x43 = m2 * x42;
+        let x44 = x16 * x8 - x4 * x20;
+        let x45 = x37 * x44 + x35 * x42;
+        let x46 = x10 * x16 - x4 * x22;
+        let x47 = x45 + x39 * x46;
+        let x48 = x16 * x13 - x25 * x4;
+        let x49 = x33 * x42;
+        let x50 = x20 * x6 - x8 * x17;
+        let x51 = x37 * x50;
+        let x52 = x10 * x17 - x22 * x6;
+        let x53 = (-x49 - x51) + x39 * x52;
+        let x54 = x25 * x6 - x17 * x13;
+        let x55 = x33 * x44;
+        let x56 = x50 * x35;
+        let x57 = x20 * x13 - x25 * x8;
+        let x58 = x10 * x20 - x8 * x22;
+        let x59 = (x56 + x39 * x58) - x55;
+        let x60 = (x33 * x46 + x37 * x58) + x52 * x35;
+        let x61 = x10 * x25 - x22 * x13;
         Assembly {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x1, x3, x5, x7, x9],
-                [x1, l0 * l0 * x10, x14, x17, x20, x22],
-                [x3, x14, x11 * l1 * l1, x23, x24, x25],
-                [x5, x17, x23, x15 * l2 * l2, x26, x27],
-                [x7, x20, x24, x26, l3 * l3 * x19, x28],
-                [x9, x22, x25, x27, x28, m5 * l4 * l4],
+                [x3 + m0, x5, x7, x9, x11, x14],
+                [x5, x3 * l0 * l0, x18, x21, x24, x26],
+                [x7, x18, x15 * l1, x27, x28, x29],
+                [x9, x21, x27, x19 * l2, x30, x31],
+                [x11, x24, x28, x30, l3 * x23, x32],
+                [x14, x26, x29, x31, x32, x12 * l4],
             ],
             force: [
-                -m3 * (x29 + x30 + x31) - x12 * l0 * q1_dot * q1_dot * m1
-                    - (x32 + x29 + x30 + x31) * m4 - m2 * (x30 + x31)
-                    - m5 * (x32 + x29 + x30 + x31 + x21 * q5_dot * q5_dot * l4),
-                (x12 * g * x10 - (x34 + x36) * m3 - m2 * l1 * q2_dot * q2_dot * x35
-                    - m4 * (x34 + x36 + x38)
-                    - (x39 * q5_dot * q5_dot * l4 + x34 + x36 + x38) * m5) * l0,
+                -(m4 * x40 + x34 * m1 + x38 * m3 + m2 * x36 + (x25 * x41 + x40) * m5),
+                (x3 * x16 * g - x35 * x43 - m5 * (x47 + x48 * x41) - m4 * x47 - x45 * m3)
+                    * l0,
                 l1
-                    * (m2 * l0 * q1_dot * q1_dot * x35
-                        - m5 * (x44 - x40 - x42 - q5_dot * q5_dot * x45 * l4)
-                        - m4 * (x44 - x40 - x42) + x11 * g * x13 - (-x40 - x42) * m3),
-                ((x47 - x46) * m3 + x15 * x16 * g - m4 * (x49 + x46 - x47)
-                    - (x49 + x46 - x47 + x50 * q5_dot * q5_dot * l4) * m5) * l2,
-                (m4 * (x51 + x52 + x53) + g * x18 * x19
-                    - (-q5_dot * q5_dot * l4 * x54 - x51 - x52 - x53) * m5) * l3,
-                (x39 * l0 * q1_dot * q1_dot + x21 * g - l3 * q4_dot * q4_dot * x54
-                    + x50 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x45) * m5 * l4,
+                    * ((x49 + x51) * m3 + x33 * x43 - m4 * x53 - (x53 - x54 * x41) * m5
+                        + x2 * g * x17),
+                (x20 * g * x1 + (x55 - x56) * m3 - m5 * (x57 * x41 + x59) - x59 * m4)
+                    * l2,
+                (m4 * x60 + m5 * (x41 * x61 + x60) + x0 * g * x22) * l3,
+                (x57 * x37 - x39 * x61 + x25 * g + x48 * x33 - x35 * x54) * x12,
             ],
             w: [
                 [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1548,6 +1578,10 @@ pub mod maggi {
         let l2 = params.l2;
         let l3 = params.l3;
         let l4 = params.l4;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1575,12 +1609,9 @@ pub mod maggi {
             q5_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            f64::cos(q4) * l3 * (-m4 - m5) * q4_dot
-                + q0_dot * (m2 + m0 + m4 + m5 + m1 + m3)
-                + l1 * q2_dot * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-                + (-m4 - m5 - m3) * f64::cos(q3) * q3_dot * l2
-                - q5_dot * m5 * l4 * f64::cos(q5)
-                + f64::cos(q1) * l0 * q1_dot * (-m2 - m4 - m5 - m1 - m3),
+            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
+                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
+                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1681,144 +1712,180 @@ pub mod maggi {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = -m2 - m4 - m5 - m1 - m3;
-        let x2 = x0 * l0 * x1;
-        let x3 = -m2 - m4 - m5 - m3;
-        let x4 = f64::cos(q2);
-        let x5 = l1 * x3 * x4;
-        let x6 = -m4 - m5 - m3;
-        let x7 = f64::cos(q3);
-        let x8 = x6 * x7 * l2;
-        let x9 = f64::cos(q4);
-        let x10 = -m4 - m5;
-        let x11 = x9 * l3 * x10;
-        let x12 = f64::cos(q5);
-        let x13 = -(m5 * l4 * x12);
-        let x14 = m2 + m4 + m5 + m1 + m3;
-        let x15 = m2 + m4 + m5 + m3;
-        let x16 = f64::sin(q1);
-        let x17 = f64::sin(q2);
-        let x18 = x16 * x17 + x0 * x4;
-        let x19 = x15 * l1 * l0 * x18;
-        let x20 = m4 + m5 + m3;
-        let x21 = f64::sin(q3);
-        let x22 = x0 * x7 + x16 * x21;
-        let x23 = x20 * l0 * x22 * l2;
-        let x24 = f64::sin(q4);
-        let x25 = x9 * x0 + x16 * x24;
-        let x26 = m4 + m5;
-        let x27 = l0 * l3 * x25 * x26;
-        let x28 = f64::sin(q5);
-        let x29 = x0 * x12 + x16 * x28;
-        let x30 = l0 * m5 * l4 * x29;
-        let x31 = x7 * x4 + x21 * x17;
-        let x32 = x20 * l1 * x31 * l2;
-        let x33 = x9 * x4 + x17 * x24;
-        let x34 = l1 * l3 * x33 * x26;
-        let x35 = x28 * x17 + x4 * x12;
-        let x36 = l1 * m5 * x35 * l4;
-        let x37 = x9 * x7 + x21 * x24;
-        let x38 = x37 * l3 * x26 * l2;
-        let x39 = x28 * x21 + x7 * x12;
-        let x40 = m5 * l4 * x39 * l2;
-        let x41 = x9 * x12 + x28 * x24;
-        let x42 = x41 * l3 * m5 * l4;
-        let x43 = x21 * q3_dot * q3_dot * l2;
-        let x44 = l1 * q2_dot * q2_dot * x17;
-        let x45 = x16 * l0 * q1_dot * q1_dot;
-        let x46 = l3 * q4_dot * q4_dot * x24;
-        let x47 = x16 * x7 - x0 * x21;
-        let x48 = x47 * q3_dot * q3_dot * l2;
-        let x49 = x16 * x4 - x0 * x17;
-        let x50 = l1 * q2_dot * q2_dot * x49;
-        let x51 = x9 * x16 - x0 * x24;
-        let x52 = l3 * q4_dot * q4_dot * x51;
-        let x53 = x16 * x12 - x28 * x0;
-        let x54 = l0 * q1_dot * q1_dot * x49;
-        let x55 = x21 * x4 - x7 * x17;
-        let x56 = x55 * q3_dot * q3_dot * l2;
-        let x57 = x9 * x17 - x24 * x4;
-        let x58 = x57 * l3 * q4_dot * q4_dot;
-        let x59 = x28 * x4 - x17 * x12;
-        let x60 = l1 * q2_dot * q2_dot * x55;
-        let x61 = l0 * x47 * q1_dot * q1_dot;
-        let x62 = x9 * x21 - x7 * x24;
-        let x63 = x62 * l3 * q4_dot * q4_dot;
-        let x64 = x21 * x12 - x28 * x7;
-        let x65 = x62 * q3_dot * q3_dot * l2;
-        let x66 = l0 * q1_dot * q1_dot * x51;
-        let x67 = l1 * q2_dot * q2_dot * x57;
-        let x68 = x9 * x28 - x24 * x12;
-        let x69 = x16 * l0 * x14;
-        let x70 = l1 * l0 * x3 * x49;
-        let x71 = l0 * x6 * x47 * l2;
-        let x72 = l0 * l3 * x10 * x51;
-        let x73 = -(x53 * l0 * m5 * l4);
-        let x74 = l1 * q2_dot * q2_dot * x18;
-        let x75 = q3_dot * q3_dot * x22 * l2;
-        let x76 = l3 * x25 * q4_dot * q4_dot;
-        let x77 = x15 * l1 * x17;
-        let x78 = x15 * l1 * l0 * x49;
-        let x79 = x20 * l1 * x55 * l2;
-        let x80 = l1 * x57 * l3 * x10;
-        let x81 = l1 * m5 * x59 * l4;
-        let x82 = x31 * q3_dot * q3_dot * l2;
-        let x83 = l3 * x33 * q4_dot * q4_dot;
-        let x84 = l0 * q1_dot * q1_dot * x18;
-        let x85 = x20 * x21 * l2;
-        let x86 = x20 * l0 * x47 * l2;
-        let x87 = l1 * x6 * x55 * l2;
-        let x88 = x62 * l3 * x10 * l2;
-        let x89 = -(x64 * m5 * l4 * l2);
-        let x90 = l1 * q2_dot * q2_dot * x31;
-        let x91 = x37 * l3 * q4_dot * q4_dot;
-        let x92 = l0 * q1_dot * q1_dot * x22;
-        let x93 = l3 * x24 * x26;
-        let x94 = l0 * l3 * x51 * x26;
-        let x95 = l1 * x57 * l3 * x26;
-        let x96 = x62 * l3 * x26 * l2;
-        let x97 = l3 * m5 * l4 * x68;
-        let x98 = x37 * q3_dot * q3_dot * l2;
-        let x99 = l1 * q2_dot * q2_dot * x33;
-        let x100 = l0 * q1_dot * q1_dot * x25;
-        let x101 = x28 * m5 * l4;
-        let x102 = x53 * l0 * m5 * l4;
-        let x103 = -(l1 * m5 * x59 * l4);
-        let x104 = x64 * m5 * l4 * l2;
-        let x105 = -(l3 * m5 * l4 * x68);
-        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
-        let x107 = 2.0 * m4 + 2.0 * m5;
-        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x110 = -2.0 * m4 - 2.0 * m5;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4);
+        let x6 = l0 * x5;
+        let x7 = f64::cos(q2);
+        let x8 = -(l1 * x2);
+        let x9 = x7 * x8;
+        let x10 = f64::cos(q3);
+        let x11 = -(x1 * l2);
+        let x12 = x10 * x11;
+        let x13 = f64::cos(q4);
+        let x14 = -(x0 * l3);
+        let x15 = x13 * x14;
+        let x16 = m5 * l4;
+        let x17 = f64::cos(q5);
+        let x18 = x16 * x17;
+        let x19 = -x18;
+        let x20 = x3 * l0;
+        let x21 = l1 * x2;
+        let x22 = f64::sin(q1);
+        let x23 = f64::sin(q2);
+        let x24 = x22 * x23 + x4 * x7;
+        let x25 = x21 * l0 * x24;
+        let x26 = x1 * l2;
+        let x27 = f64::sin(q3);
+        let x28 = x4 * x10 + x22 * x27;
+        let x29 = l0 * x28;
+        let x30 = x26 * x29;
+        let x31 = x0 * l3;
+        let x32 = f64::sin(q4);
+        let x33 = x13 * x4 + x22 * x32;
+        let x34 = l0 * x33;
+        let x35 = x31 * x34;
+        let x36 = l0 * x16;
+        let x37 = f64::sin(q5);
+        let x38 = x4 * x17 + x22 * x37;
+        let x39 = x36 * x38;
+        let x40 = x10 * x7 + x27 * x23;
+        let x41 = l1 * x40;
+        let x42 = x41 * x26;
+        let x43 = x13 * x7 + x23 * x32;
+        let x44 = l1 * x43;
+        let x45 = x31 * x44;
+        let x46 = l1 * x16;
+        let x47 = x37 * x23 + x7 * x17;
+        let x48 = x46 * x47;
+        let x49 = x13 * x10 + x27 * x32;
+        let x50 = x49 * l2;
+        let x51 = x31 * x50;
+        let x52 = x16 * l2;
+        let x53 = x37 * x27 + x10 * x17;
+        let x54 = x52 * x53;
+        let x55 = x13 * x17 + x37 * x32;
+        let x56 = l3 * x16;
+        let x57 = x55 * x56;
+        let x58 = l0 * q1_dot;
+        let x59 = x58 * q1_dot;
+        let x60 = x22 * x59;
+        let x61 = l1 * q2_dot;
+        let x62 = q2_dot * x61;
+        let x63 = x60 + x62 * x23;
+        let x64 = q3_dot * l2;
+        let x65 = q3_dot * x64;
+        let x66 = x63 + x65 * x27;
+        let x67 = l3 * q4_dot;
+        let x68 = x67 * q4_dot;
+        let x69 = x66 + x68 * x32;
+        let x70 = q5_dot * q5_dot;
+        let x71 = l4 * x70;
+        let x72 = x22 * x7 - x4 * x23;
+        let x73 = m2 * x72;
+        let x74 = x3 * g;
+        let x75 = x22 * x17 - x37 * x4;
+        let x76 = x22 * x10 - x4 * x27;
+        let x77 = x65 * x76 + x62 * x72;
+        let x78 = x13 * x22 - x4 * x32;
+        let x79 = x77 + x68 * x78;
+        let x80 = x59 * x72;
+        let x81 = x27 * x7 - x10 * x23;
+        let x82 = x65 * x81;
+        let x83 = x13 * x23 - x32 * x7;
+        let x84 = (-x80 - x82) + x68 * x83;
+        let x85 = x37 * x7 - x23 * x17;
+        let x86 = x2 * g;
+        let x87 = g * x1;
+        let x88 = x59 * x76;
+        let x89 = x81 * x62;
+        let x90 = x13 * x27 - x10 * x32;
+        let x91 = (x89 + x68 * x90) - x88;
+        let x92 = x27 * x17 - x37 * x10;
+        let x93 = (x59 * x78 + x65 * x90) + x83 * x62;
+        let x94 = x0 * g;
+        let x95 = x13 * x37 - x32 * x17;
+        let x96 = x22 * x20;
+        let x97 = l0 * x72;
+        let x98 = x97 * x8;
+        let x99 = l0 * x76;
+        let x100 = x11 * x99;
+        let x101 = l0 * x78;
+        let x102 = x14 * x101;
+        let x103 = x75 * x36;
+        let x104 = -x103;
+        let x105 = x24 * x62;
+        let x106 = x65 * x28 + x105;
+        let x107 = x68 * x33 + x106;
+        let x108 = x59 * x24;
+        let x109 = x59 * x28;
+        let x110 = x59 * x33;
+        let x111 = x59 * x38;
+        let x112 = x21 * x23;
+        let x113 = x21 * x97;
+        let x114 = l1 * x81;
+        let x115 = x26 * x114;
+        let x116 = l1 * x83;
+        let x117 = x116 * x14;
+        let x118 = x46 * x85;
+        let x119 = x65 * x40 + x108;
+        let x120 = x68 * x43 + x119;
+        let x121 = x40 * x62;
+        let x122 = x62 * x43;
+        let x123 = x47 * x62;
+        let x124 = x27 * x26;
+        let x125 = x26 * x99;
+        let x126 = x11 * x114;
+        let x127 = x90 * l2;
+        let x128 = x127 * x14;
+        let x129 = x92 * x52;
+        let x130 = -x129;
+        let x131 = x65 * x1;
+        let x132 = x109 + x121;
+        let x133 = x132 + x68 * x49;
+        let x134 = x65 * x49;
+        let x135 = x65 * x53;
+        let x136 = x31 * x32;
+        let x137 = x31 * x101;
+        let x138 = x116 * x31;
+        let x139 = x127 * x31;
+        let x140 = x56 * x95;
+        let x141 = x68 * x0;
+        let x142 = x110 + (x122 + x134);
+        let x143 = x68 * x55;
+        let x144 = x37 * x16;
+        let x145 = -x118;
+        let x146 = -x140;
+        let x147 = 2.0 * m4 + 2.0 * m5;
+        let x148 = x147 + 2.0 * m3;
+        let x149 = 2.0 * m2 + x148;
+        let x150 = l3 * x147;
+        let x151 = -(x149 * x61);
+        let x152 = -(x148 * x64);
+        let x153 = -(x67 * x147);
         Derivatives {
             qdot: [q0_dot, q1_dot, q2_dot, q3_dot, q4_dot, q5_dot],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
-                [x2, l0 * l0 * x14, x19, x23, x27, x30],
-                [x5, x19, x15 * l1 * l1, x32, x34, x36],
-                [x8, x23, x32, x20 * l2 * l2, x38, x40],
-                [x11, x27, x34, x38, l3 * l3 * x26, x42],
-                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+                [x3 + m0, x6, x9, x12, x15, x19],
+                [x6, l0 * x20, x25, x30, x35, x39],
+                [x9, x25, x21 * l1, x42, x45, x48],
+                [x12, x30, x42, x26 * l2, x51, x54],
+                [x15, x35, x45, x51, l3 * x31, x57],
+                [x19, x39, x48, x54, x57, x16 * l4],
             ],
             force: [
-                -m3 * (x43 + x44 + x45) - x16 * l0 * q1_dot * q1_dot * m1
-                    - (x46 + x43 + x44 + x45) * m4 - m2 * (x44 + x45)
-                    - m5 * (x46 + x43 + x44 + x45 + x28 * q5_dot * q5_dot * l4),
-                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * q2_dot * q2_dot * x49
-                    - m4 * (x48 + x50 + x52)
-                    - (x53 * q5_dot * q5_dot * l4 + x48 + x50 + x52) * m5) * l0,
+                -(m4 * x69 + x60 * m1 + (x37 * x71 + x69) * m5 + x66 * m3 + m2 * x63),
+                (x22 * x74 - x62 * x73 - (x75 * x71 + x79) * m5 - m4 * x79 - x77 * m3)
+                    * l0,
                 l1
-                    * (m2 * l0 * q1_dot * q1_dot * x49
-                        - m5 * (x58 - x54 - x56 - q5_dot * q5_dot * x59 * l4)
-                        - m4 * (x58 - x54 - x56) + x15 * g * x17 - (-x54 - x56) * m3),
-                ((x61 - x60) * m3 + x20 * x21 * g - m4 * (x63 + x60 - x61)
-                    - (x63 + x60 - x61 + x64 * q5_dot * q5_dot * l4) * m5) * l2,
-                (m4 * (x65 + x66 + x67) + g * x24 * x26
-                    - (-q5_dot * q5_dot * l4 * x68 - x65 - x66 - x67) * m5) * l3,
-                (x53 * l0 * q1_dot * q1_dot + x28 * g - l3 * q4_dot * q4_dot * x68
-                    + x64 * q3_dot * q3_dot * l2 - l1 * q2_dot * q2_dot * x59) * m5 * l4,
+                    * ((x80 + x82) * m3 + x59 * x73 - m4 * x84 - m5 * (x84 - x85 * x71)
+                        + x86 * x23),
+                (x27 * x87 + (x88 - x89) * m3 - (x91 + x92 * x71) * m5 - x91 * m4) * l2,
+                (m4 * x93 + x94 * x32 + m5 * (x71 * x95 + x93)) * l3,
+                (x92 * x65 - x68 * x95 + x37 * g + x75 * x59 - x62 * x85) * x16,
             ],
             checks: [],
             d_qdot: [
@@ -1845,44 +1912,44 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
-                    [x69, 0.0, x70, x71, x72, x73],
-                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x96, 0.0, 0.0, 0.0, 0.0],
+                    [x96, 0.0, x98, x100, x102, x104],
+                    [0.0, x98, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x100, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x102, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x104, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
-                    [x77, x78, 0.0, x79, x80, x81],
-                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x112, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x113, 0.0, 0.0, 0.0],
+                    [x112, x113, 0.0, x115, x117, x118],
+                    [0.0, 0.0, x115, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x117, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x118, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
-                    [x85, x86, x87, 0.0, x88, x89],
-                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x124, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x125, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x126, 0.0, 0.0],
+                    [x124, x125, x126, 0.0, x128, x130],
+                    [0.0, 0.0, 0.0, x128, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x130, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
-                    [x93, x94, x95, x96, 0.0, x97],
-                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x136, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x137, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x138, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x139, 0.0],
+                    [x136, x137, x138, x139, 0.0, x140],
+                    [0.0, 0.0, 0.0, 0.0, x140, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x144],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x103],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
-                    [x101, x102, x103, x104, x105, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x145],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x129],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x146],
+                    [x144, x103, x145, x129, x146, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1936,97 +2003,87 @@ pub mod maggi {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x0 * l0 * q1_dot * q1_dot * x1,
+                    x59 * x5,
                     l0
-                        * (x0 * g * x14 - (x74 + x75) * m3
-                            - m2 * l1 * q2_dot * q2_dot * x18 - m4 * (x74 + x75 + x76)
-                            - (x74 + x75 + x76 + q5_dot * q5_dot * l4 * x29) * m5),
-                    x15 * l1 * l0 * q1_dot * q1_dot * x18,
-                    x20 * l0 * q1_dot * q1_dot * x22 * l2,
-                    l0 * l3 * q1_dot * q1_dot * x25 * x26,
-                    l0 * m5 * q1_dot * q1_dot * l4 * x29,
+                        * (x4 * x74 - x106 * m3 - m4 * x107 - m2 * x105
+                            - m5 * (x71 * x38 + x107)),
+                    x21 * x108,
+                    x109 * x26,
+                    x110 * x31,
+                    x111 * x16,
                 ],
                 [
-                    l1 * q2_dot * q2_dot * x3 * x4,
-                    x15 * l1 * q2_dot * q2_dot * l0 * x18,
-                    l1
-                        * (x15 * g * x4 - (x82 + x83 + x84) * m4
-                            - m5 * (x82 + x83 + x84 + q5_dot * q5_dot * x35 * l4)
-                            - (x82 + x84) * m3 - m2 * l0 * q1_dot * q1_dot * x18),
-                    x20 * l1 * q2_dot * q2_dot * x31 * l2,
-                    l1 * q2_dot * q2_dot * l3 * x33 * x26,
-                    l1 * q2_dot * q2_dot * m5 * x35 * l4,
+                    -(x2 * x62 * x7),
+                    l0 * x2 * x105,
+                    (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
+                        - x119 * m3) * l1,
+                    x26 * x121,
+                    x122 * x31,
+                    x16 * x123,
                 ],
                 [
-                    x6 * x7 * q3_dot * q3_dot * l2,
-                    x20 * l0 * q3_dot * q3_dot * x22 * l2,
-                    x20 * l1 * x31 * q3_dot * q3_dot * l2,
-                    ((-x90 - x92) * m3 - m4 * (x90 + x91 + x92)
-                        - m5 * (x90 + q5_dot * q5_dot * l4 * x39 + x91 + x92)
-                        + x20 * x7 * g) * l2,
-                    x37 * l3 * q3_dot * q3_dot * x26 * l2,
-                    m5 * q3_dot * q3_dot * l4 * x39 * l2,
+                    -(x65 * x10 * x1),
+                    x131 * x29,
+                    x41 * x131,
+                    (x10 * x87 - x132 * m3 - m4 * x133 - (x133 + x71 * x53) * m5) * l2,
+                    x31 * x134,
+                    x135 * x16,
                 ],
                 [
-                    x9 * l3 * x10 * q4_dot * q4_dot,
-                    l0 * l3 * x25 * q4_dot * q4_dot * x26,
-                    l1 * l3 * x33 * q4_dot * q4_dot * x26,
-                    x37 * l3 * q4_dot * q4_dot * x26 * l2,
-                    l3
-                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
-                            - (x98 + x99 + x41 * q5_dot * q5_dot * l4 + x100) * m5),
-                    x41 * l3 * m5 * q4_dot * q4_dot * l4,
+                    -(x68 * x13 * x0),
+                    x141 * x34,
+                    x141 * x44,
+                    x141 * x50,
+                    l3 * (x13 * x94 - m4 * x142 - m5 * (x55 * x71 + x142)),
+                    x16 * x143,
                 ],
                 [
-                    -(q5_dot * q5_dot * m5 * l4 * x12),
-                    l0 * q5_dot * q5_dot * m5 * l4 * x29,
-                    l1 * q5_dot * q5_dot * m5 * x35 * l4,
-                    q5_dot * q5_dot * m5 * l4 * x39 * l2,
-                    x41 * l3 * q5_dot * q5_dot * m5 * l4,
-                    (g * x12 - q3_dot * q3_dot * x39 * l2 - l0 * q1_dot * q1_dot * x29
-                        - x41 * l3 * q4_dot * q4_dot - l1 * q2_dot * q2_dot * x35) * m5
-                        * l4,
+                    -(x18 * x70),
+                    x39 * x70,
+                    x48 * x70,
+                    x54 * x70,
+                    x70 * x57,
+                    (g * x17 - x135 - x111 - x143 - x123) * x16,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x16 * l0 * q1_dot
-                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    -(x58 * x22 * (x149 + 2.0 * m1)),
                     0.0,
-                    l1 * l0 * q1_dot * x49 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
-                    l0 * x47 * q1_dot * x106 * l2,
-                    l0 * l3 * q1_dot * x51 * x107,
-                    2.0 * x53 * l0 * m5 * q1_dot * l4,
+                    x58 * l1 * x149 * x72,
+                    x58 * x76 * x148 * l2,
+                    x58 * x150 * x78,
+                    2.0 * x58 * x75 * x16,
                 ],
                 [
-                    l1 * q2_dot * x108 * x17,
-                    l1 * q2_dot * x108 * l0 * x49,
+                    x23 * x151,
+                    x97 * x151,
                     0.0,
-                    l1 * q2_dot * x55 * x109 * l2,
-                    l1 * q2_dot * x57 * l3 * x107,
-                    -(2.0 * l1 * q2_dot * m5 * x59 * l4),
+                    -(x148 * x81 * x61 * l2),
+                    x150 * x83 * x61,
+                    -(2.0 * x85 * x16 * x61),
                 ],
                 [
-                    x21 * q3_dot * x109 * l2,
-                    l0 * x47 * q3_dot * x109 * l2,
-                    l1 * x55 * x106 * q3_dot * l2,
+                    x152 * x27,
+                    x152 * x99,
+                    x148 * x64 * x114,
                     0.0,
-                    x62 * l3 * q3_dot * x107 * l2,
-                    2.0 * x64 * m5 * q3_dot * l4 * l2,
+                    x150 * x90 * x64,
+                    2.0 * x92 * x16 * x64,
                 ],
                 [
-                    l3 * q4_dot * x24 * x110,
-                    l0 * l3 * q4_dot * x51 * x110,
-                    l1 * x57 * l3 * q4_dot * x110,
-                    x62 * l3 * q4_dot * x110 * l2,
+                    x153 * x32,
+                    x153 * x101,
+                    x116 * x153,
+                    x127 * x153,
                     0.0,
-                    -(2.0 * l3 * m5 * q4_dot * l4 * x68),
+                    -(2.0 * x67 * x16 * x95),
                 ],
                 [
-                    -(2.0 * x28 * q5_dot * m5 * l4),
-                    -(2.0 * x53 * l0 * q5_dot * m5 * l4),
-                    2.0 * l1 * q5_dot * m5 * x59 * l4,
-                    -(2.0 * x64 * q5_dot * m5 * l4 * l2),
-                    2.0 * l3 * q5_dot * m5 * l4 * x68,
+                    -(2.0 * q5_dot * x144),
+                    -(2.0 * q5_dot * x103),
+                    2.0 * q5_dot * x118,
+                    -(2.0 * q5_dot * x129),
+                    2.0 * q5_dot * x140,
                     0.0,
                 ],
             ],
@@ -2397,90 +2454,90 @@ pub mod kane {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = x0 * l0 * (-m2 - m4 - m5 - m1 - m3);
-        let x2 = f64::cos(q2);
-        let x3 = l1 * (-m2 - m4 - m5 - m3) * x2;
-        let x4 = f64::cos(q3);
-        let x5 = (-m4 - m5 - m3) * x4 * l2;
-        let x6 = f64::cos(q4);
-        let x7 = x6 * l3 * (-m4 - m5);
-        let x8 = f64::cos(q5);
-        let x9 = -(m5 * l4 * x8);
-        let x10 = m2 + m4 + m5 + m1 + m3;
-        let x11 = m2 + m4 + m5 + m3;
-        let x12 = f64::sin(q1);
-        let x13 = f64::sin(q2);
-        let x14 = x11 * l1 * l0 * (x12 * x13 + x0 * x2);
-        let x15 = m4 + m5 + m3;
-        let x16 = f64::sin(q3);
-        let x17 = x15 * l0 * (x0 * x4 + x12 * x16) * l2;
-        let x18 = f64::sin(q4);
-        let x19 = m4 + m5;
-        let x20 = l0 * l3 * (x6 * x0 + x12 * x18) * x19;
-        let x21 = f64::sin(q5);
-        let x22 = l0 * m5 * l4 * (x0 * x8 + x12 * x21);
-        let x23 = x15 * l1 * (x4 * x2 + x16 * x13) * l2;
-        let x24 = l1 * l3 * (x6 * x2 + x13 * x18) * x19;
-        let x25 = l1 * m5 * (x21 * x13 + x2 * x8) * l4;
-        let x26 = (x6 * x4 + x16 * x18) * l3 * x19 * l2;
-        let x27 = m5 * l4 * (x21 * x16 + x4 * x8) * l2;
-        let x28 = (x6 * x8 + x21 * x18) * l3 * m5 * l4;
-        let x29 = u2 * u2 * x12 * l0;
-        let x30 = l1 * u3 * u3 * x13;
-        let x31 = x16 * u4 * u4 * l2;
-        let x32 = u5 * u5 * l3 * x18;
-        let x33 = x12 * x2 - x0 * x13;
-        let x34 = l1 * u3 * u3 * x33;
-        let x35 = x12 * x4 - x0 * x16;
-        let x36 = x35 * u4 * u4 * l2;
-        let x37 = x6 * x12 - x0 * x18;
-        let x38 = u5 * u5 * l3 * x37;
-        let x39 = x12 * x8 - x21 * x0;
-        let x40 = x16 * x2 - x4 * x13;
-        let x41 = u4 * u4 * x40 * l2;
-        let x42 = x6 * x13 - x18 * x2;
-        let x43 = u5 * u5 * x42 * l3;
-        let x44 = u2 * u2 * l0 * x33;
-        let x45 = x21 * x2 - x13 * x8;
-        let x46 = x6 * x16 - x4 * x18;
-        let x47 = u5 * u5 * x46 * l3;
-        let x48 = l1 * u3 * u3 * x40;
-        let x49 = u2 * u2 * l0 * x35;
-        let x50 = x16 * x8 - x21 * x4;
-        let x51 = l1 * x42 * u3 * u3;
-        let x52 = u2 * u2 * l0 * x37;
-        let x53 = x46 * u4 * u4 * l2;
-        let x54 = x6 * x21 - x18 * x8;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4 * l0);
+        let x6 = f64::cos(q2);
+        let x7 = -(l1 * x2 * x6);
+        let x8 = f64::cos(q3);
+        let x9 = -(x8 * x1 * l2);
+        let x10 = f64::cos(q4);
+        let x11 = -(x10 * x0 * l3);
+        let x12 = m5 * l4;
+        let x13 = f64::cos(q5);
+        let x14 = -(x12 * x13);
+        let x15 = l1 * x2;
+        let x16 = f64::sin(q1);
+        let x17 = f64::sin(q2);
+        let x18 = x15 * l0 * (x16 * x17 + x4 * x6);
+        let x19 = x1 * l2;
+        let x20 = f64::sin(q3);
+        let x21 = l0 * x19 * (x4 * x8 + x16 * x20);
+        let x22 = f64::sin(q4);
+        let x23 = x0 * l3;
+        let x24 = l0 * (x10 * x4 + x16 * x22) * x23;
+        let x25 = f64::sin(q5);
+        let x26 = l0 * x12 * (x4 * x13 + x16 * x25);
+        let x27 = l1 * (x8 * x6 + x20 * x17) * x19;
+        let x28 = l1 * (x10 * x6 + x17 * x22) * x23;
+        let x29 = l1 * (x25 * x17 + x6 * x13) * x12;
+        let x30 = (x10 * x8 + x20 * x22) * x23 * l2;
+        let x31 = x12 * (x25 * x20 + x8 * x13) * l2;
+        let x32 = (x10 * x13 + x25 * x22) * l3 * x12;
+        let x33 = u2 * l0 * u2;
+        let x34 = x16 * x33;
+        let x35 = u5 * (u5 * l3);
+        let x36 = u4 * l2 * u4;
+        let x37 = u3 * (l1 * u3);
+        let x38 = x37 * x17 + x34;
+        let x39 = x20 * x36 + x38;
+        let x40 = x35 * x22 + x39;
+        let x41 = u6 * (u6 * l4);
+        let x42 = x16 * x6 - x4 * x17;
+        let x43 = x16 * x8 - x4 * x20;
+        let x44 = x42 * x37 + x43 * x36;
+        let x45 = x10 * x16 - x4 * x22;
+        let x46 = x44 + x35 * x45;
+        let x47 = x16 * x13 - x25 * x4;
+        let x48 = m2 * x42;
+        let x49 = x20 * x6 - x8 * x17;
+        let x50 = x36 * x49;
+        let x51 = x33 * x42;
+        let x52 = x10 * x17 - x22 * x6;
+        let x53 = (x35 * x52 - x50) - x51;
+        let x54 = x25 * x6 - x17 * x13;
+        let x55 = x49 * x37;
+        let x56 = x43 * x33;
+        let x57 = x10 * x20 - x8 * x22;
+        let x58 = (x35 * x57 + x55) - x56;
+        let x59 = x20 * x13 - x25 * x8;
+        let x60 = (x33 * x45 + x52 * x37) + x57 * x36;
+        let x61 = x10 * x25 - x22 * x13;
         Assembly {
             qdot: [u1, u2, u3, u4, u5, u6],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x1, x3, x5, x7, x9],
-                [x1, l0 * l0 * x10, x14, x17, x20, x22],
-                [x3, x14, x11 * l1 * l1, x23, x24, x25],
-                [x5, x17, x23, x15 * l2 * l2, x26, x27],
-                [x7, x20, x24, x26, l3 * l3 * x19, x28],
-                [x9, x22, x25, x27, x28, m5 * l4 * l4],
+                [x3 + m0, x5, x7, x9, x11, x14],
+                [x5, x3 * l0 * l0, x18, x21, x24, x26],
+                [x7, x18, x15 * l1, x27, x28, x29],
+                [x9, x21, x27, x19 * l2, x30, x31],
+                [x11, x24, x28, x30, l3 * x23, x32],
+                [x14, x26, x29, x31, x32, x12 * l4],
             ],
             force: [
-                -m2 * (x29 + x30) - u2 * u2 * x12 * l0 * m1
-                    - (x21 * u6 * u6 * l4 + x29 + x31 + x30 + x32) * m5
-                    - m4 * (x29 + x31 + x30 + x32) - (x29 + x31 + x30) * m3,
-                (x12 * g * x10 - (x34 + x36) * m3 - m2 * l1 * u3 * u3 * x33
-                    - m5 * (x38 + x34 + x36 + x39 * u6 * u6 * l4)
-                    - m4 * (x38 + x34 + x36)) * l0,
-                l1
-                    * (x11 * g * x13 - (x43 - x41 - x44) * m4
-                        - m5 * (x43 - x41 - u6 * u6 * x45 * l4 - x44) - (-x41 - x44) * m3
-                        + m2 * u2 * u2 * l0 * x33),
-                (x15 * x16 * g - (x47 + x48 - x49 + x50 * u6 * u6 * l4) * m5
-                    - m4 * (x47 + x48 - x49) + (x49 - x48) * m3) * l2,
-                l3
-                    * (g * x18 * x19 + (x51 + x52 + x53) * m4
-                        - (-x51 - x52 - u6 * u6 * l4 * x54 - x53) * m5),
-                m5
-                    * (x50 * u4 * u4 * l2 - l1 * u3 * u3 * x45 + x21 * g
-                        - u5 * u5 * l3 * x54 + u2 * u2 * x39 * l0) * l4,
+                -(x34 * m1 + m4 * x40 + x38 * m2 + x39 * m3 + (x41 * x25 + x40) * m5),
+                l0
+                    * (x3 * x16 * g - m4 * x46 - (x41 * x47 + x46) * m5 - x44 * m3
+                        - x37 * x48),
+                ((x50 + x51) * m3 - m4 * x53 + x2 * g * x17 - (x53 - x41 * x54) * m5
+                    + x33 * x48) * l1,
+                l2
+                    * (x20 * g * x1 + (x56 - x55) * m3 - m4 * x58
+                        - (x41 * x59 + x58) * m5),
+                l3 * (m4 * x60 + m5 * (x60 + x41 * x61) + x0 * g * x22),
+                (x59 * x36 + x25 * g + x47 * x33 - x35 * x61 - x54 * x37) * x12,
             ],
             checks: [],
         }
@@ -2573,6 +2630,10 @@ pub mod kane {
         let l2 = params.l2;
         let l3 = params.l3;
         let l4 = params.l4;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2600,12 +2661,9 @@ pub mod kane {
             q5_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            f64::cos(q4) * l3 * (-m4 - m5) * q4_dot
-                + q0_dot * (m2 + m0 + m4 + m5 + m1 + m3)
-                + l1 * q2_dot * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-                + (-m4 - m5 - m3) * f64::cos(q3) * q3_dot * l2
-                - q5_dot * m5 * l4 * f64::cos(q5)
-                + f64::cos(q1) * l0 * q1_dot * (-m2 - m4 - m5 - m1 - m3),
+            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
+                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
+                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2695,146 +2753,180 @@ pub mod kane {
         let l3 = params.l3;
         let l4 = params.l4;
         let g = params.g;
-        let x0 = f64::cos(q1);
-        let x1 = -m2 - m4 - m5 - m1 - m3;
-        let x2 = x0 * l0 * x1;
-        let x3 = -m2 - m4 - m5 - m3;
-        let x4 = f64::cos(q2);
-        let x5 = l1 * x3 * x4;
-        let x6 = -m4 - m5 - m3;
-        let x7 = f64::cos(q3);
-        let x8 = x6 * x7 * l2;
-        let x9 = f64::cos(q4);
-        let x10 = -m4 - m5;
-        let x11 = x9 * l3 * x10;
-        let x12 = f64::cos(q5);
-        let x13 = -(m5 * l4 * x12);
-        let x14 = m2 + m4 + m5 + m1 + m3;
-        let x15 = m2 + m4 + m5 + m3;
-        let x16 = f64::sin(q1);
-        let x17 = f64::sin(q2);
-        let x18 = x16 * x17 + x0 * x4;
-        let x19 = x15 * l1 * l0 * x18;
-        let x20 = m4 + m5 + m3;
-        let x21 = f64::sin(q3);
-        let x22 = x0 * x7 + x16 * x21;
-        let x23 = x20 * l0 * x22 * l2;
-        let x24 = f64::sin(q4);
-        let x25 = x9 * x0 + x16 * x24;
-        let x26 = m4 + m5;
-        let x27 = l0 * l3 * x25 * x26;
-        let x28 = f64::sin(q5);
-        let x29 = x0 * x12 + x16 * x28;
-        let x30 = l0 * m5 * l4 * x29;
-        let x31 = x7 * x4 + x21 * x17;
-        let x32 = x20 * l1 * x31 * l2;
-        let x33 = x9 * x4 + x17 * x24;
-        let x34 = l1 * l3 * x33 * x26;
-        let x35 = x28 * x17 + x4 * x12;
-        let x36 = l1 * m5 * x35 * l4;
-        let x37 = x9 * x7 + x21 * x24;
-        let x38 = x37 * l3 * x26 * l2;
-        let x39 = x28 * x21 + x7 * x12;
-        let x40 = m5 * l4 * x39 * l2;
-        let x41 = x9 * x12 + x28 * x24;
-        let x42 = x41 * l3 * m5 * l4;
-        let x43 = u2 * u2 * x16 * l0;
-        let x44 = l1 * u3 * u3 * x17;
-        let x45 = x21 * u4 * u4 * l2;
-        let x46 = u5 * u5 * l3 * x24;
-        let x47 = x16 * x4 - x0 * x17;
-        let x48 = l1 * u3 * u3 * x47;
-        let x49 = x16 * x7 - x0 * x21;
-        let x50 = x49 * u4 * u4 * l2;
-        let x51 = x9 * x16 - x0 * x24;
-        let x52 = u5 * u5 * l3 * x51;
-        let x53 = x16 * x12 - x28 * x0;
-        let x54 = x21 * x4 - x7 * x17;
-        let x55 = u4 * u4 * x54 * l2;
-        let x56 = x9 * x17 - x24 * x4;
-        let x57 = u5 * u5 * x56 * l3;
-        let x58 = u2 * u2 * l0 * x47;
-        let x59 = x28 * x4 - x17 * x12;
-        let x60 = x9 * x21 - x7 * x24;
-        let x61 = u5 * u5 * x60 * l3;
-        let x62 = l1 * u3 * u3 * x54;
-        let x63 = u2 * u2 * l0 * x49;
-        let x64 = x21 * x12 - x28 * x7;
-        let x65 = l1 * x56 * u3 * u3;
-        let x66 = u2 * u2 * l0 * x51;
-        let x67 = x60 * u4 * u4 * l2;
-        let x68 = x9 * x28 - x24 * x12;
-        let x69 = x16 * l0 * x14;
-        let x70 = l1 * l0 * x3 * x47;
-        let x71 = l0 * x6 * x49 * l2;
-        let x72 = l0 * l3 * x10 * x51;
-        let x73 = -(x53 * l0 * m5 * l4);
-        let x74 = u5 * u5 * l3 * x25;
-        let x75 = u4 * u4 * x22 * l2;
-        let x76 = l1 * u3 * u3 * x18;
-        let x77 = x15 * l1 * x17;
-        let x78 = x15 * l1 * l0 * x47;
-        let x79 = x20 * l1 * x54 * l2;
-        let x80 = l1 * x56 * l3 * x10;
-        let x81 = l1 * m5 * x59 * l4;
-        let x82 = u5 * u5 * l3 * x33;
-        let x83 = u2 * u2 * l0 * x18;
-        let x84 = x31 * u4 * u4 * l2;
-        let x85 = x20 * x21 * l2;
-        let x86 = x20 * l0 * x49 * l2;
-        let x87 = l1 * x6 * x54 * l2;
-        let x88 = x60 * l3 * x10 * l2;
-        let x89 = -(x64 * m5 * l4 * l2);
-        let x90 = u5 * u5 * x37 * l3;
-        let x91 = l1 * x31 * u3 * u3;
-        let x92 = u2 * u2 * l0 * x22;
-        let x93 = l3 * x24 * x26;
-        let x94 = l0 * l3 * x51 * x26;
-        let x95 = l1 * x56 * l3 * x26;
-        let x96 = x60 * l3 * x26 * l2;
-        let x97 = l3 * m5 * l4 * x68;
-        let x98 = u2 * u2 * l0 * x25;
-        let x99 = l1 * u3 * u3 * x33;
-        let x100 = x37 * u4 * u4 * l2;
-        let x101 = x28 * m5 * l4;
-        let x102 = x53 * l0 * m5 * l4;
-        let x103 = -(l1 * m5 * x59 * l4);
-        let x104 = x64 * m5 * l4 * l2;
-        let x105 = -(l3 * m5 * l4 * x68);
-        let x106 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
-        let x107 = 2.0 * m4 + 2.0 * m5;
-        let x108 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x109 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x110 = -2.0 * m4 - 2.0 * m5;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = f64::cos(q1);
+        let x5 = -(x3 * x4);
+        let x6 = l0 * x5;
+        let x7 = f64::cos(q2);
+        let x8 = -(l1 * x2);
+        let x9 = x7 * x8;
+        let x10 = f64::cos(q3);
+        let x11 = -(x1 * l2);
+        let x12 = x10 * x11;
+        let x13 = f64::cos(q4);
+        let x14 = -(x0 * l3);
+        let x15 = x13 * x14;
+        let x16 = m5 * l4;
+        let x17 = f64::cos(q5);
+        let x18 = x16 * x17;
+        let x19 = -x18;
+        let x20 = x3 * l0;
+        let x21 = l1 * x2;
+        let x22 = f64::sin(q1);
+        let x23 = f64::sin(q2);
+        let x24 = x22 * x23 + x4 * x7;
+        let x25 = x21 * l0 * x24;
+        let x26 = x1 * l2;
+        let x27 = f64::sin(q3);
+        let x28 = x4 * x10 + x22 * x27;
+        let x29 = l0 * x28;
+        let x30 = x26 * x29;
+        let x31 = x0 * l3;
+        let x32 = f64::sin(q4);
+        let x33 = x13 * x4 + x22 * x32;
+        let x34 = l0 * x33;
+        let x35 = x31 * x34;
+        let x36 = l0 * x16;
+        let x37 = f64::sin(q5);
+        let x38 = x4 * x17 + x22 * x37;
+        let x39 = x36 * x38;
+        let x40 = x10 * x7 + x27 * x23;
+        let x41 = l1 * x40;
+        let x42 = x41 * x26;
+        let x43 = x13 * x7 + x23 * x32;
+        let x44 = l1 * x43;
+        let x45 = x31 * x44;
+        let x46 = l1 * x16;
+        let x47 = x37 * x23 + x7 * x17;
+        let x48 = x46 * x47;
+        let x49 = x13 * x10 + x27 * x32;
+        let x50 = x49 * l2;
+        let x51 = x31 * x50;
+        let x52 = x16 * l2;
+        let x53 = x37 * x27 + x10 * x17;
+        let x54 = x52 * x53;
+        let x55 = x13 * x17 + x37 * x32;
+        let x56 = l3 * x16;
+        let x57 = x55 * x56;
+        let x58 = u2 * l0;
+        let x59 = x58 * u2;
+        let x60 = x22 * x59;
+        let x61 = u5 * l3;
+        let x62 = u5 * x61;
+        let x63 = u4 * l2;
+        let x64 = x63 * u4;
+        let x65 = l1 * u3;
+        let x66 = u3 * x65;
+        let x67 = x66 * x23 + x60;
+        let x68 = x27 * x64 + x67;
+        let x69 = x62 * x32 + x68;
+        let x70 = u6 * u6;
+        let x71 = x70 * l4;
+        let x72 = x22 * x7 - x4 * x23;
+        let x73 = x22 * x10 - x4 * x27;
+        let x74 = x72 * x66 + x73 * x64;
+        let x75 = x13 * x22 - x4 * x32;
+        let x76 = x74 + x62 * x75;
+        let x77 = x22 * x17 - x37 * x4;
+        let x78 = x3 * g;
+        let x79 = m2 * x72;
+        let x80 = x27 * x7 - x10 * x23;
+        let x81 = x64 * x80;
+        let x82 = x59 * x72;
+        let x83 = x13 * x23 - x32 * x7;
+        let x84 = (x62 * x83 - x81) - x82;
+        let x85 = x2 * g;
+        let x86 = x37 * x7 - x23 * x17;
+        let x87 = x80 * x66;
+        let x88 = x73 * x59;
+        let x89 = g * x1;
+        let x90 = x13 * x27 - x10 * x32;
+        let x91 = (x62 * x90 + x87) - x88;
+        let x92 = x27 * x17 - x37 * x10;
+        let x93 = (x59 * x75 + x83 * x66) + x90 * x64;
+        let x94 = x0 * g;
+        let x95 = x13 * x37 - x32 * x17;
+        let x96 = x22 * x20;
+        let x97 = l0 * x72;
+        let x98 = x97 * x8;
+        let x99 = l0 * x73;
+        let x100 = x11 * x99;
+        let x101 = l0 * x75;
+        let x102 = x14 * x101;
+        let x103 = x77 * x36;
+        let x104 = -x103;
+        let x105 = x24 * x66;
+        let x106 = x105 + x64 * x28;
+        let x107 = x106 + x62 * x33;
+        let x108 = x24 * x59;
+        let x109 = x59 * x28;
+        let x110 = x33 * x59;
+        let x111 = x59 * x38;
+        let x112 = x21 * x23;
+        let x113 = x21 * x97;
+        let x114 = l1 * x80;
+        let x115 = x26 * x114;
+        let x116 = l1 * x83;
+        let x117 = x116 * x14;
+        let x118 = x46 * x86;
+        let x119 = x108 + x40 * x64;
+        let x120 = x119 + x62 * x43;
+        let x121 = x40 * x66;
+        let x122 = x43 * x66;
+        let x123 = x47 * x66;
+        let x124 = x27 * x26;
+        let x125 = x26 * x99;
+        let x126 = x11 * x114;
+        let x127 = x90 * l2;
+        let x128 = x127 * x14;
+        let x129 = x92 * x52;
+        let x130 = -x129;
+        let x131 = x64 * x1;
+        let x132 = x109 + x121;
+        let x133 = x62 * x49 + x132;
+        let x134 = x49 * x64;
+        let x135 = x64 * x53;
+        let x136 = x31 * x32;
+        let x137 = x31 * x101;
+        let x138 = x116 * x31;
+        let x139 = x127 * x31;
+        let x140 = x56 * x95;
+        let x141 = x0 * x62;
+        let x142 = x134 + (x110 + x122);
+        let x143 = x55 * x62;
+        let x144 = x37 * x16;
+        let x145 = -x118;
+        let x146 = -x140;
+        let x147 = 2.0 * m4 + 2.0 * m5;
+        let x148 = x147 + 2.0 * m3;
+        let x149 = 2.0 * m2 + x148;
+        let x150 = l3 * x147;
+        let x151 = -(x149 * x65);
+        let x152 = -(x63 * x148);
+        let x153 = -(x147 * x61);
         Derivatives {
             qdot: [u1, u2, u3, u4, u5, u6],
             matrix: [
-                [m2 + m0 + m4 + m5 + m1 + m3, x2, x5, x8, x11, x13],
-                [x2, l0 * l0 * x14, x19, x23, x27, x30],
-                [x5, x19, x15 * l1 * l1, x32, x34, x36],
-                [x8, x23, x32, x20 * l2 * l2, x38, x40],
-                [x11, x27, x34, x38, l3 * l3 * x26, x42],
-                [x13, x30, x36, x40, x42, m5 * l4 * l4],
+                [x3 + m0, x6, x9, x12, x15, x19],
+                [x6, l0 * x20, x25, x30, x35, x39],
+                [x9, x25, x21 * l1, x42, x45, x48],
+                [x12, x30, x42, x26 * l2, x51, x54],
+                [x15, x35, x45, x51, l3 * x31, x57],
+                [x19, x39, x48, x54, x57, x16 * l4],
             ],
             force: [
-                -m2 * (x43 + x44) - u2 * u2 * x16 * l0 * m1
-                    - (x28 * u6 * u6 * l4 + x43 + x45 + x44 + x46) * m5
-                    - m4 * (x43 + x45 + x44 + x46) - (x43 + x45 + x44) * m3,
-                (x16 * g * x14 - (x48 + x50) * m3 - m2 * l1 * u3 * u3 * x47
-                    - m5 * (x52 + x48 + x50 + x53 * u6 * u6 * l4)
-                    - m4 * (x52 + x48 + x50)) * l0,
+                -(x60 * m1 + m4 * x69 + x67 * m2 + x68 * m3 + (x37 * x71 + x69) * m5),
+                (x22 * x78 - m4 * x76 - m5 * (x77 * x71 + x76) - x74 * m3 - x66 * x79)
+                    * l0,
                 l1
-                    * (x15 * g * x17 - (x57 - x55 - x58) * m4
-                        - m5 * (x57 - x55 - u6 * u6 * x59 * l4 - x58) - (-x55 - x58) * m3
-                        + m2 * u2 * u2 * l0 * x47),
-                (x20 * x21 * g - (x61 + x62 - x63 + x64 * u6 * u6 * l4) * m5
-                    - m4 * (x61 + x62 - x63) + (x63 - x62) * m3) * l2,
-                l3
-                    * (g * x24 * x26 + (x65 + x66 + x67) * m4
-                        - (-x65 - x66 - u6 * u6 * l4 * x68 - x67) * m5),
-                m5
-                    * (x64 * u4 * u4 * l2 - l1 * u3 * u3 * x59 + x28 * g
-                        - u5 * u5 * l3 * x68 + u2 * u2 * x53 * l0) * l4,
+                    * ((x81 + x82) * m3 - m4 * x84 + x85 * x23 - (x84 - x86 * x71) * m5
+                        + x59 * x79),
+                ((x88 - x87) * m3 + x27 * x89 - m4 * x91 - m5 * (x92 * x71 + x91)) * l2,
+                l3 * (m4 * x93 + x94 * x32 + m5 * (x93 + x71 * x95)),
+                (x92 * x64 + x37 * g + x77 * x59 - x62 * x95 - x86 * x66) * x16,
             ],
             checks: [],
             d_qdot: [
@@ -2861,44 +2953,44 @@ pub mod kane {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x69, 0.0, 0.0, 0.0, 0.0],
-                    [x69, 0.0, x70, x71, x72, x73],
-                    [0.0, x70, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x73, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x96, 0.0, 0.0, 0.0, 0.0],
+                    [x96, 0.0, x98, x100, x102, x104],
+                    [0.0, x98, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x100, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x102, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x104, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x77, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x78, 0.0, 0.0, 0.0],
-                    [x77, x78, 0.0, x79, x80, x81],
-                    [0.0, 0.0, x79, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x80, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x81, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x112, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x113, 0.0, 0.0, 0.0],
+                    [x112, x113, 0.0, x115, x117, x118],
+                    [0.0, 0.0, x115, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x117, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x118, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, x85, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x86, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x87, 0.0, 0.0],
-                    [x85, x86, x87, 0.0, x88, x89],
-                    [0.0, 0.0, 0.0, x88, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x89, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x124, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x125, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x126, 0.0, 0.0],
+                    [x124, x125, x126, 0.0, x128, x130],
+                    [0.0, 0.0, 0.0, x128, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x130, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, x93, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x94, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x95, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x96, 0.0],
-                    [x93, x94, x95, x96, 0.0, x97],
-                    [0.0, 0.0, 0.0, 0.0, x97, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x136, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x137, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x138, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x139, 0.0],
+                    [x136, x137, x138, x139, 0.0, x140],
+                    [0.0, 0.0, 0.0, 0.0, x140, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x101],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x102],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x144],
                     [0.0, 0.0, 0.0, 0.0, 0.0, x103],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x104],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x105],
-                    [x101, x102, x103, x104, x105, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x145],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x129],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x146],
+                    [x144, x103, x145, x129, x146, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2952,94 +3044,87 @@ pub mod kane {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    u2 * u2 * x0 * l0 * x1,
-                    (x0 * g * x14 - m5 * (x74 + x75 + u6 * u6 * l4 * x29 + x76)
-                        - m2 * l1 * u3 * u3 * x18 - (x75 + x76) * m3
-                        - m4 * (x74 + x75 + x76)) * l0,
-                    x15 * u2 * u2 * l1 * l0 * x18,
-                    u2 * u2 * x20 * l0 * x22 * l2,
-                    u2 * u2 * l0 * l3 * x25 * x26,
-                    u2 * u2 * l0 * m5 * l4 * x29,
+                    x5 * x59,
+                    (x4 * x78 - x106 * m3 - m2 * x105 - m4 * x107
+                        - m5 * (x71 * x38 + x107)) * l0,
+                    x21 * x108,
+                    x26 * x109,
+                    x110 * x31,
+                    x111 * x16,
                 ],
                 [
-                    l1 * u3 * u3 * x3 * x4,
-                    x15 * l1 * l0 * u3 * u3 * x18,
-                    (x15 * g * x4 - m2 * u2 * u2 * l0 * x18
-                        - (x82 + x83 + x84 + u6 * u6 * x35 * l4) * m5 - (x83 + x84) * m3
-                        - m4 * (x82 + x83 + x84)) * l1,
-                    x20 * l1 * x31 * u3 * u3 * l2,
-                    l1 * l3 * u3 * u3 * x33 * x26,
-                    l1 * u3 * u3 * m5 * x35 * l4,
+                    -(x2 * x66 * x7),
+                    l0 * x2 * x105,
+                    l1
+                        * (x85 * x7 - x119 * m3 - m4 * x120 - m5 * (x120 + x47 * x71)
+                            - m2 * x108),
+                    x26 * x121,
+                    x31 * x122,
+                    x123 * x16,
                 ],
                 [
-                    x6 * x7 * u4 * u4 * l2,
-                    x20 * l0 * u4 * u4 * x22 * l2,
-                    x20 * l1 * x31 * u4 * u4 * l2,
-                    (x20 * x7 * g - m5 * (x90 + u6 * u6 * l4 * x39 + x91 + x92)
-                        - m4 * (x90 + x91 + x92) + (-x91 - x92) * m3) * l2,
-                    x37 * l3 * u4 * u4 * x26 * l2,
-                    m5 * u4 * u4 * l4 * x39 * l2,
+                    -(x10 * x64 * x1),
+                    x131 * x29,
+                    x41 * x131,
+                    (x10 * x89 - x132 * m3 - (x133 + x71 * x53) * m5 - x133 * m4) * l2,
+                    x134 * x31,
+                    x135 * x16,
                 ],
                 [
-                    x9 * u5 * u5 * l3 * x10,
-                    u5 * u5 * l0 * l3 * x25 * x26,
-                    u5 * u5 * l1 * l3 * x33 * x26,
-                    u5 * u5 * x37 * l3 * x26 * l2,
-                    l3
-                        * (m4 * (-x98 - x99 - x100) + x9 * g * x26
-                            - m5 * (x98 + x99 + x41 * u6 * u6 * l4 + x100)),
-                    x41 * u5 * u5 * l3 * m5 * l4,
+                    -(x13 * x0 * x62),
+                    x141 * x34,
+                    x141 * x44,
+                    x141 * x50,
+                    l3 * (x13 * x94 - (x55 * x71 + x142) * m5 - m4 * x142),
+                    x143 * x16,
                 ],
                 [
-                    -(u6 * u6 * m5 * l4 * x12),
-                    l0 * u6 * u6 * m5 * l4 * x29,
-                    l1 * u6 * u6 * m5 * x35 * l4,
-                    u6 * u6 * m5 * l4 * x39 * l2,
-                    x41 * l3 * u6 * u6 * m5 * l4,
-                    m5
-                        * (g * x12 - x41 * u5 * u5 * l3 - l1 * u3 * u3 * x35
-                            - u2 * u2 * l0 * x29 - u4 * u4 * x39 * l2) * l4,
+                    -(x70 * x18),
+                    x70 * x39,
+                    x70 * x48,
+                    x70 * x54,
+                    x70 * x57,
+                    (g * x17 - x111 - x143 - x123 - x135) * x16,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    u2 * x16 * l0
-                        * (-2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3),
+                    -(x58 * x22 * (x149 + 2.0 * m1)),
                     0.0,
-                    u2 * l1 * l0 * x47 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3),
-                    u2 * l0 * x49 * x106 * l2,
-                    u2 * l0 * l3 * x51 * x107,
-                    2.0 * u2 * x53 * l0 * m5 * l4,
+                    x58 * l1 * x149 * x72,
+                    x58 * x73 * x148 * l2,
+                    x58 * x150 * x75,
+                    2.0 * x58 * x77 * x16,
                 ],
                 [
-                    l1 * x108 * u3 * x17,
-                    l1 * x108 * l0 * u3 * x47,
+                    x23 * x151,
+                    x97 * x151,
                     0.0,
-                    l1 * u3 * x54 * x109 * l2,
-                    l1 * x56 * l3 * u3 * x107,
-                    -(2.0 * l1 * u3 * m5 * x59 * l4),
+                    -(x148 * x80 * x65 * l2),
+                    x150 * x83 * x65,
+                    -(2.0 * x86 * x16 * x65),
                 ],
                 [
-                    x21 * u4 * x109 * l2,
-                    l0 * x49 * u4 * x109 * l2,
-                    l1 * u4 * x54 * x106 * l2,
+                    x27 * x152,
+                    x99 * x152,
+                    x63 * x148 * x114,
                     0.0,
-                    x60 * l3 * u4 * x107 * l2,
-                    2.0 * x64 * m5 * u4 * l4 * l2,
+                    x63 * x150 * x90,
+                    2.0 * x92 * x63 * x16,
                 ],
                 [
-                    u5 * l3 * x24 * x110,
-                    u5 * l0 * l3 * x51 * x110,
-                    u5 * l1 * x56 * l3 * x110,
-                    u5 * x60 * l3 * x110 * l2,
+                    x153 * x32,
+                    x153 * x101,
+                    x116 * x153,
+                    x127 * x153,
                     0.0,
-                    -(2.0 * u5 * l3 * m5 * l4 * x68),
+                    -(2.0 * x16 * x61 * x95),
                 ],
                 [
-                    -(2.0 * x28 * u6 * m5 * l4),
-                    -(2.0 * x53 * l0 * u6 * m5 * l4),
-                    2.0 * l1 * u6 * m5 * x59 * l4,
-                    -(2.0 * x64 * u6 * m5 * l4 * l2),
-                    2.0 * l3 * u6 * m5 * l4 * x68,
+                    -(2.0 * u6 * x144),
+                    -(2.0 * u6 * x103),
+                    2.0 * u6 * x118,
+                    -(2.0 * u6 * x129),
+                    2.0 * u6 * x140,
                     0.0,
                 ],
             ],
@@ -3273,68 +3358,80 @@ pub mod reduced_volterra {
         let l4 = params.l4;
         let g = params.g;
         let G_q0 = g_i[0];
-        let x0 = 1.0 / (m2 + m0 + m4 + m5 + m1 + m3);
-        let x1 = f64::cos(q4);
-        let x2 = -m4 - m5;
-        let x3 = f64::cos(q5);
-        let x4 = -m2 - m4 - m5 - m3;
-        let x5 = f64::cos(q2);
-        let x6 = f64::cos(q1);
-        let x7 = -m2 - m4 - m5 - m1 - m3;
-        let x8 = -m4 - m5 - m3;
-        let x9 = f64::cos(q3);
-        let x10 = m2 + m4 + m5 + m3;
-        let x11 = f64::sin(q1);
-        let x12 = f64::sin(q2);
-        let x13 = l1 * (x10 * (x11 * x12 + x6 * x5) - x6 * x4 * x0 * x7 * x5) * l0;
-        let x14 = m4 + m5 + m3;
-        let x15 = f64::sin(q3);
-        let x16 = (x14 * (x6 * x9 + x11 * x15) - x6 * x8 * x9 * x0 * x7) * l0 * l2;
-        let x17 = f64::sin(q4);
-        let x18 = m4 + m5;
-        let x19 = l0 * l3 * ((x1 * x6 + x11 * x17) * x18 - x1 * x6 * x2 * x0 * x7);
-        let x20 = f64::sin(q5);
-        let x21 = l0 * m5 * (x6 * x3 + x11 * x20 + x6 * x0 * x7 * x3) * l4;
-        let x22 = (x14 * (x9 * x5 + x15 * x12) - x8 * x9 * x4 * x0 * x5) * l1 * l2;
-        let x23 = l1 * l3 * ((x1 * x5 + x12 * x17) * x18 - x1 * x2 * x4 * x0 * x5);
-        let x24 = l1 * m5 * (x20 * x12 + x4 * x0 * x5 * x3 + x5 * x3) * l4;
-        let x25 = l3 * ((x1 * x9 + x15 * x17) * x18 - x1 * x8 * x9 * x2 * x0) * l2;
-        let x26 = m5 * l4 * l2 * (x20 * x15 + x9 * x3 + x8 * x9 * x0 * x3);
-        let x27 = (x1 * x3 + x1 * x2 * x0 * x3 + x20 * x17) * l3 * m5 * l4;
-        let x28 = x11 * x9 - x6 * x15;
-        let x29 = x28 * u3 * u3 * l2;
-        let x30 = x11 * x5 - x6 * x12;
-        let x31 = u2 * u2 * l1 * x30;
-        let x32 = x11 * x3 - x20 * x6;
-        let x33 = x1 * x11 - x6 * x17;
-        let x34 = l3 * u4 * u4 * x33;
-        let x35 = u2 * u2 * l1 * x12;
-        let x36 = x11 * l0 * u1 * u1;
-        let x37 = l3 * u4 * u4 * x17;
-        let x38 = x15 * u3 * u3 * l2;
-        let x39 = -x11 * l0 * u1 * u1 * m1 - m2 * (x35 + x36)
-            - m4 * (x35 + x36 + x37 + x38) - (x35 + x36 + x38) * m3
-            - m5 * (x35 + x36 + x37 + u5 * u5 * x20 * l4 + x38);
-        let x40 = x1 * x12 - x17 * x5;
-        let x41 = x40 * l3 * u4 * u4;
-        let x42 = x20 * x5 - x12 * x3;
-        let x43 = l0 * x30 * u1 * u1;
-        let x44 = x15 * x5 - x9 * x12;
-        let x45 = u3 * u3 * x44 * l2;
-        let x46 = x1 * x15 - x9 * x17;
-        let x47 = x46 * l3 * u4 * u4;
-        let x48 = u2 * u2 * l1 * x44;
-        let x49 = l0 * x28 * u1 * u1;
-        let x50 = x15 * x3 - x20 * x9;
-        let x51 = x1 * x20 - x17 * x3;
-        let x52 = u2 * u2 * l1 * x40;
-        let x53 = x46 * u3 * u3 * l2;
-        let x54 = l0 * u1 * u1 * x33;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = 1.0 / (x3 + m0);
+        let x5 = f64::cos(q1);
+        let x6 = -(x3 * x5);
+        let x7 = l0 * u1;
+        let x8 = f64::cos(q3);
+        let x9 = -(x8 * x1);
+        let x10 = u3 * l2;
+        let x11 = f64::cos(q2);
+        let x12 = -(x2 * x11);
+        let x13 = u2 * l1;
+        let x14 = l3 * u4;
+        let x15 = f64::cos(q4);
+        let x16 = -(x15 * x0);
+        let x17 = m5 * l4;
+        let x18 = f64::cos(q5);
+        let x19 = x4 * x6;
+        let x20 = f64::sin(q1);
+        let x21 = f64::sin(q2);
+        let x22 = x12 * x4;
+        let x23 = l1 * l0 * (x2 * (x20 * x21 + x5 * x11) - x6 * x22);
+        let x24 = f64::sin(q3);
+        let x25 = (x1 * (x5 * x8 + x20 * x24) - x19 * x9) * l0 * l2;
+        let x26 = f64::sin(q4);
+        let x27 = x4 * x16;
+        let x28 = l0 * l3 * (x0 * (x15 * x5 + x20 * x26) - x6 * x27);
+        let x29 = f64::sin(q5);
+        let x30 = x4 * x18;
+        let x31 = l0 * (x5 * x18 + x20 * x29 + x30 * x6) * x17;
+        let x32 = l1 * ((x8 * x11 + x24 * x21) * x1 - x9 * x22) * l2;
+        let x33 = l1 * l3 * (x0 * (x15 * x11 + x21 * x26) - x12 * x27);
+        let x34 = l1 * (x30 * x12 + x29 * x21 + x11 * x18) * x17;
+        let x35 = x4 * x9;
+        let x36 = l3 * (x0 * (x15 * x8 + x24 * x26) - x9 * x27) * l2;
+        let x37 = (x29 * x24 + x8 * x18 + x30 * x9) * x17 * l2;
+        let x38 = l3 * (x30 * x16 + x15 * x18 + x29 * x26) * x17;
+        let x39 = u2 * x13;
+        let x40 = x20 * x11 - x5 * x21;
+        let x41 = m2 * x40;
+        let x42 = x15 * x20 - x5 * x26;
+        let x43 = u4 * x14;
+        let x44 = x20 * x8 - x5 * x24;
+        let x45 = u3 * x10;
+        let x46 = x44 * x45 + x39 * x40;
+        let x47 = x42 * x43 + x46;
+        let x48 = x20 * x18 - x29 * x5;
+        let x49 = u5 * u5 * l4;
+        let x50 = u1 * x7;
+        let x51 = x20 * x50;
+        let x52 = x51 + x39 * x21;
+        let x53 = x24 * x45 + x52;
+        let x54 = x53 + x43 * x26;
+        let x55 = x53 * m3 + m5 * (x29 * x49 + x54) + m2 * x52 + m4 * x54 + x51 * m1;
+        let x56 = x24 * x11 - x8 * x21;
+        let x57 = x45 * x56;
+        let x58 = x40 * x50;
+        let x59 = x15 * x21 - x26 * x11;
+        let x60 = (x59 * x43 - x58) - x57;
+        let x61 = x29 * x11 - x21 * x18;
+        let x62 = x15 * x24 - x8 * x26;
+        let x63 = x56 * x39;
+        let x64 = x44 * x50;
+        let x65 = (x62 * x43 + x63) - x64;
+        let x66 = x24 * x18 - x29 * x8;
+        let x67 = (x59 * x39 + x62 * x45) + x42 * x50;
+        let x68 = x15 * x29 - x26 * x18;
         Assembly {
             qdot: [
-                x0
-                    * (u5 * m5 * l4 * x3 - x1 * l3 * x2 * u4 + G_q0 - u2 * l1 * x4 * x5
-                        - x6 * l0 * u1 * x7 - x8 * x9 * u3 * l2),
+                x4
+                    * (G_q0 - x6 * x7 - x9 * x10 - x12 * x13 - x14 * x16
+                        + u5 * x17 * x18),
                 u1,
                 u2,
                 u3,
@@ -3342,41 +3439,24 @@ pub mod reduced_volterra {
                 u5,
             ],
             matrix: [
-                [
-                    l0 * l0 * (m2 + m4 + m5 + m1 - x6 * x6 * x0 * x7 * x7 + m3),
-                    x13,
-                    x16,
-                    x19,
-                    x21,
-                ],
-                [
-                    x13,
-                    l1 * l1 * (m2 - x4 * x4 * x0 * x5 * x5 + m4 + m5 + m3),
-                    x22,
-                    x23,
-                    x24,
-                ],
-                [x16, x22, (m4 + m5 - x8 * x8 * x9 * x9 * x0 + m3) * l2 * l2, x25, x26],
-                [x19, x23, x25, l3 * l3 * (m4 - x1 * x1 * x2 * x2 * x0 + m5), x27],
-                [x21, x24, x26, x27, m5 * (1.0 - m5 * x0 * x3 * x3) * l4 * l4],
+                [l0 * l0 * (x3 - x19 * x6), x23, x25, x28, x31],
+                [x23, l1 * l1 * (x2 - x12 * x22), x32, x33, x34],
+                [x25, x32, (x1 - x35 * x9) * l2 * l2, x36, x37],
+                [x28, x33, x36, l3 * l3 * (x0 - x27 * x16), x38],
+                [x31, x34, x37, x38, (1.0 - x30 * m5 * x18) * x17 * l4],
             ],
             force: [
-                (x11 * g * (m2 + m4 + m5 + m1 + m3)
-                    - m5 * (x29 + x31 + u5 * u5 * x32 * l4 + x34)
-                    - m2 * u2 * u2 * l1 * x30 - (x29 + x31) * m3 - x6 * x39 * x0 * x7
-                    - m4 * (x29 + x31 + x34)) * l0,
+                (x3 * x20 * g - x39 * x41 - m5 * (x47 + x48 * x49) - x46 * m3 - m4 * x47
+                    + x55 * x19) * l0,
                 l1
-                    * (x10 * g * x12 - (x41 - u5 * u5 * x42 * l4 - x43 - x45) * m5
-                        - (x41 - x43 - x45) * m4 + m2 * l0 * x30 * u1 * u1
-                        - (-x43 - x45) * m3 - x39 * x4 * x0 * x5),
-                (x14 * x15 * g - (x47 + x48 - x49) * m4 + (x49 - x48) * m3
-                    - m5 * (u5 * u5 * x50 * l4 + x47 + x48 - x49) - x8 * x9 * x39 * x0)
-                    * l2,
-                l3
-                    * (g * x17 * x18 - (-u5 * u5 * l4 * x51 - x52 - x53 - x54) * m5
-                        + m4 * (x52 + x53 + x54) - x1 * x2 * x39 * x0),
-                (x39 * x0 * x3 + x50 * u3 * u3 * l2 + x32 * l0 * u1 * u1 + x20 * g
-                    - l3 * u4 * u4 * x51 - u2 * u2 * l1 * x42) * m5 * l4,
+                    * (x2 * g * x21 - m4 * x60 + (x57 + x58) * m3 + x55 * x22 + x41 * x50
+                        - m5 * (x60 - x61 * x49)),
+                (x24 * g * x1 - m4 * x65 + x55 * x35 - m5 * (x65 + x66 * x49)
+                    + (x64 - x63) * m3) * l2,
+                (m4 * x67 + m5 * (x67 + x49 * x68) + x55 * x27 + x0 * g * x26) * l3,
+                x17
+                    * (x48 * x50 - x39 * x61 - x43 * x68 + x66 * x45 + x29 * g
+                        - x30 * x55),
             ],
             checks: [],
         }
@@ -3468,6 +3548,10 @@ pub mod reduced_volterra {
         let l2 = params.l2;
         let l3 = params.l3;
         let l4 = params.l4;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3494,12 +3578,9 @@ pub mod reduced_volterra {
             q5_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            f64::cos(q4) * l3 * (-m4 - m5) * q4_dot
-                + q0_dot * (m2 + m0 + m4 + m5 + m1 + m3)
-                + l1 * q2_dot * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-                + (-m4 - m5 - m3) * f64::cos(q3) * q3_dot * l2
-                - q5_dot * m5 * l4 * f64::cos(q5)
-                + f64::cos(q1) * l0 * q1_dot * (-m2 - m4 - m5 - m1 - m3),
+            (x3 + m0) * q0_dot - f64::cos(q3) * q3_dot * x1 * l2
+                - l1 * q2_dot * x2 * f64::cos(q2) - x3 * f64::cos(q1) * l0 * q1_dot
+                - q5_dot * m5 * l4 * f64::cos(q5) - f64::cos(q4) * x0 * l3 * q4_dot,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3538,6 +3619,10 @@ pub mod reduced_volterra {
         let l3 = params.l3;
         let l4 = params.l4;
         let G_q0 = g_i[0];
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
         let q: [f64; NUM_COORDINATES] = [
             state[0],
             state[1],
@@ -3547,11 +3632,9 @@ pub mod reduced_volterra {
             state[5],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            (u5 * m5 * l4 * f64::cos(q5) - f64::cos(q4) * l3 * (-m4 - m5) * u4 + G_q0
-                - u2 * l1 * (-m2 - m4 - m5 - m3) * f64::cos(q2)
-                - f64::cos(q1) * l0 * u1 * (-m2 - m4 - m5 - m1 - m3)
-                - (-m4 - m5 - m3) * f64::cos(q3) * u3 * l2)
-                / (m2 + m0 + m4 + m5 + m1 + m3),
+            (f64::cos(q3) * u3 * x1 * l2 + x3 * f64::cos(q1) * l0 * u1
+                + u5 * m5 * l4 * f64::cos(q5) + G_q0 + u2 * l1 * x2 * f64::cos(q2)
+                + f64::cos(q4) * x0 * l3 * u4) / (x3 + m0),
             u1,
             u2,
             u3,
@@ -3616,147 +3699,181 @@ pub mod reduced_volterra {
         let l4 = params.l4;
         let g = params.g;
         let G_q0 = g_i[0];
-        let x0 = 1.0 / (m2 + m0 + m4 + m5 + m1 + m3);
-        let x1 = f64::cos(q4);
-        let x2 = -m4 - m5;
-        let x3 = f64::cos(q5);
-        let x4 = -m2 - m4 - m5 - m3;
-        let x5 = f64::cos(q2);
-        let x6 = f64::cos(q1);
-        let x7 = -m2 - m4 - m5 - m1 - m3;
-        let x8 = -m4 - m5 - m3;
-        let x9 = f64::cos(q3);
-        let x10 = m2 + m4 + m5 + m3;
-        let x11 = f64::sin(q1);
-        let x12 = f64::sin(q2);
-        let x13 = x11 * x12 + x6 * x5;
-        let x14 = x10 * x13 - x6 * x4 * x0 * x7 * x5;
-        let x15 = l1 * x14 * l0;
-        let x16 = m4 + m5 + m3;
-        let x17 = f64::sin(q3);
-        let x18 = x6 * x9 + x11 * x17;
-        let x19 = x16 * x18 - x6 * x8 * x9 * x0 * x7;
-        let x20 = x19 * l0 * l2;
-        let x21 = f64::sin(q4);
-        let x22 = x1 * x6 + x11 * x21;
-        let x23 = m4 + m5;
-        let x24 = x22 * x23 - x1 * x6 * x2 * x0 * x7;
-        let x25 = l0 * l3 * x24;
-        let x26 = x6 * x3;
-        let x27 = f64::sin(q5);
-        let x28 = x11 * x27;
-        let x29 = x26 + x28 + x6 * x0 * x7 * x3;
-        let x30 = l0 * m5 * x29 * l4;
-        let x31 = x9 * x5 + x17 * x12;
-        let x32 = x16 * x31 - x8 * x9 * x4 * x0 * x5;
-        let x33 = x32 * l1 * l2;
-        let x34 = x1 * x5 + x12 * x21;
-        let x35 = x34 * x23 - x1 * x2 * x4 * x0 * x5;
-        let x36 = l1 * l3 * x35;
-        let x37 = x27 * x12;
-        let x38 = x5 * x3;
-        let x39 = x37 + x4 * x0 * x5 * x3 + x38;
-        let x40 = l1 * m5 * x39 * l4;
-        let x41 = x1 * x9 + x17 * x21;
-        let x42 = x41 * x23 - x1 * x8 * x9 * x2 * x0;
-        let x43 = l3 * x42 * l2;
-        let x44 = x27 * x17;
-        let x45 = x9 * x3;
-        let x46 = x44 + x45 + x8 * x9 * x0 * x3;
-        let x47 = m5 * l4 * l2 * x46;
-        let x48 = x1 * x3;
-        let x49 = x27 * x21;
-        let x50 = x48 + x1 * x2 * x0 * x3 + x49;
-        let x51 = x50 * l3 * m5 * l4;
-        let x52 = x11 * x9 - x6 * x17;
-        let x53 = x52 * u3 * u3 * l2;
-        let x54 = x11 * x5 - x6 * x12;
-        let x55 = u2 * u2 * l1 * x54;
-        let x56 = x27 * x6;
-        let x57 = x11 * x3;
-        let x58 = x57 - x56;
-        let x59 = x1 * x11 - x6 * x21;
-        let x60 = l3 * u4 * u4 * x59;
-        let x61 = u2 * u2 * l1 * x12;
-        let x62 = x11 * l0 * u1 * u1;
-        let x63 = l3 * u4 * u4 * x21;
-        let x64 = x17 * u3 * u3 * l2;
-        let x65 = -x11 * l0 * u1 * u1 * m1 - m2 * (x61 + x62)
-            - m4 * (x61 + x62 + x63 + x64) - (x61 + x62 + x64) * m3
-            - m5 * (x61 + x62 + x63 + u5 * u5 * x27 * l4 + x64);
-        let x66 = m2 + m4 + m5 + m1 + m3;
-        let x67 = x1 * x12 - x21 * x5;
-        let x68 = x67 * l3 * u4 * u4;
-        let x69 = x27 * x5;
-        let x70 = x12 * x3;
-        let x71 = x69 - x70;
-        let x72 = l0 * x54 * u1 * u1;
-        let x73 = x17 * x5 - x9 * x12;
-        let x74 = u3 * u3 * x73 * l2;
-        let x75 = x1 * x17 - x9 * x21;
-        let x76 = x75 * l3 * u4 * u4;
-        let x77 = u2 * u2 * l1 * x73;
-        let x78 = l0 * x52 * u1 * u1;
-        let x79 = x27 * x9;
-        let x80 = x17 * x3;
-        let x81 = x80 - x79;
-        let x82 = x21 * x3;
-        let x83 = x1 * x27;
-        let x84 = x83 - x82;
-        let x85 = u2 * u2 * l1 * x67;
-        let x86 = x75 * u3 * u3 * l2;
-        let x87 = l0 * u1 * u1 * x59;
-        let x88 = l1 * l0 * (x4 * x54 - x11 * x66 * x4 * x0 * x5);
-        let x89 = l0 * (x8 * x52 - x11 * x8 * x9 * x66 * x0) * l2;
-        let x90 = (x2 * x59 - x1 * x11 * x2 * x66 * x0) * l0 * l3;
-        let x91 = (x56 + x11 * x66 * x0 * x3 - x57) * l0 * m5 * l4;
-        let x92 = l3 * u4 * u4 * x22;
-        let x93 = u3 * u3 * x18 * l2;
-        let x94 = u2 * u2 * l1 * x13;
-        let x95 = x26 + x28;
-        let x96 = l1 * l0 * (x10 * x54 - x10 * x6 * x0 * x12 * x7);
-        let x97 = (x16 * x73 - x10 * x8 * x9 * x0 * x12) * l1 * l2;
-        let x98 = l1 * l3 * (x67 * x2 - x1 * x10 * x2 * x0 * x12);
-        let x99 = (x69 + x10 * x0 * x12 * x3 - x70) * l1 * m5 * l4;
-        let x100 = l0 * x13 * u1 * u1;
-        let x101 = x31 * u3 * u3 * l2;
-        let x102 = l3 * u4 * u4 * x34;
-        let x103 = x37 + x38;
-        let x104 = l0 * (x16 * x52 - x16 * x6 * x17 * x0 * x7) * l2;
-        let x105 = (x8 * x73 - x16 * x17 * x4 * x0 * x5) * l1 * l2;
-        let x106 = l3 * (x75 * x2 - x1 * x16 * x17 * x2 * x0) * l2;
-        let x107 = m5 * l4 * (x16 * x17 * x0 * x3 + x79 - x80) * l2;
-        let x108 = u2 * u2 * l1 * x31;
-        let x109 = l0 * u1 * u1 * x18;
-        let x110 = x41 * l3 * u4 * u4;
-        let x111 = x44 + x45;
-        let x112 = l0 * l3 * (x59 * x23 - x6 * x0 * x21 * x23 * x7);
-        let x113 = l1 * l3 * (x67 * x23 - x4 * x0 * x21 * x23 * x5);
-        let x114 = (x75 * x23 - x8 * x9 * x0 * x21 * x23) * l3 * l2;
-        let x115 = l3 * m5 * (x0 * x21 * x23 * x3 - x82 + x83) * l4;
-        let x116 = l0 * x22 * u1 * u1;
-        let x117 = x48 + x49;
-        let x118 = u2 * u2 * l1 * x34;
-        let x119 = x41 * u3 * u3 * l2;
-        let x120 = x27 * x6 * x0 * x7;
-        let x121 = l0 * m5 * (x57 - x56 - x120) * l4;
-        let x122 = x27 * x4 * x0 * x5;
-        let x123 = l1 * m5 * (x70 - x69 - x122) * l4;
-        let x124 = x27 * x8 * x9 * x0;
-        let x125 = m5 * l4 * (x80 - x79 - x124) * l2;
-        let x126 = x1 * x27 * x2 * x0;
-        let x127 = l3 * m5 * l4 * (x82 - x83 - x126);
-        let x128 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m1 - 2.0 * m3;
-        let x129 = 2.0 * m4 + 2.0 * m5 + 2.0 * m3;
-        let x130 = 2.0 * m4 + 2.0 * m5;
-        let x131 = -2.0 * m2 - 2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x132 = -2.0 * m4 - 2.0 * m5 - 2.0 * m3;
-        let x133 = -2.0 * m4 - 2.0 * m5;
+        let x0 = m4 + m5;
+        let x1 = x0 + m3;
+        let x2 = m2 + x1;
+        let x3 = x2 + m1;
+        let x4 = 1.0 / (x3 + m0);
+        let x5 = f64::cos(q1);
+        let x6 = -(x3 * x5);
+        let x7 = l0 * u1;
+        let x8 = f64::cos(q3);
+        let x9 = -(x8 * x1);
+        let x10 = u3 * l2;
+        let x11 = m5 * l4;
+        let x12 = u5 * x11;
+        let x13 = f64::cos(q5);
+        let x14 = f64::cos(q2);
+        let x15 = -(x2 * x14);
+        let x16 = u2 * l1;
+        let x17 = l3 * u4;
+        let x18 = f64::cos(q4);
+        let x19 = -(x18 * x0);
+        let x20 = x4 * x6;
+        let x21 = l0 * l0;
+        let x22 = l1 * l0;
+        let x23 = f64::sin(q1);
+        let x24 = f64::sin(q2);
+        let x25 = x23 * x24 + x5 * x14;
+        let x26 = x15 * x4;
+        let x27 = x2 * x25 - x6 * x26;
+        let x28 = x22 * x27;
+        let x29 = f64::sin(q3);
+        let x30 = x5 * x8 + x23 * x29;
+        let x31 = x1 * x30 - x20 * x9;
+        let x32 = l0 * l2;
+        let x33 = x31 * x32;
+        let x34 = l0 * l3;
+        let x35 = f64::sin(q4);
+        let x36 = x18 * x5 + x23 * x35;
+        let x37 = x4 * x19;
+        let x38 = x0 * x36 - x6 * x37;
+        let x39 = x34 * x38;
+        let x40 = f64::sin(q5);
+        let x41 = x5 * x13 + x23 * x40;
+        let x42 = x4 * x13;
+        let x43 = x41 + x42 * x6;
+        let x44 = l0 * x11;
+        let x45 = x43 * x44;
+        let x46 = l1 * l1;
+        let x47 = x8 * x14 + x29 * x24;
+        let x48 = x47 * x1 - x9 * x26;
+        let x49 = l1 * l2;
+        let x50 = x48 * x49;
+        let x51 = l1 * l3;
+        let x52 = x18 * x14 + x24 * x35;
+        let x53 = x0 * x52 - x15 * x37;
+        let x54 = x51 * x53;
+        let x55 = l1 * x11;
+        let x56 = x40 * x24 + x14 * x13;
+        let x57 = x42 * x15 + x56;
+        let x58 = x55 * x57;
+        let x59 = x4 * x9;
+        let x60 = l2 * l2;
+        let x61 = l3 * l2;
+        let x62 = x18 * x8 + x29 * x35;
+        let x63 = x0 * x62 - x9 * x37;
+        let x64 = x61 * x63;
+        let x65 = x11 * l2;
+        let x66 = x40 * x29 + x8 * x13;
+        let x67 = x66 + x42 * x9;
+        let x68 = x65 * x67;
+        let x69 = l3 * l3;
+        let x70 = x18 * x13 + x40 * x35;
+        let x71 = x42 * x19 + x70;
+        let x72 = l3 * x11;
+        let x73 = x71 * x72;
+        let x74 = u2 * x16;
+        let x75 = x23 * x14 - x5 * x24;
+        let x76 = m2 * x75;
+        let x77 = x23 * x8 - x5 * x29;
+        let x78 = u3 * x10;
+        let x79 = x77 * x78 + x74 * x75;
+        let x80 = x3 * x23;
+        let x81 = x40 * x5;
+        let x82 = x23 * x13;
+        let x83 = x82 - x81;
+        let x84 = u5 * u5;
+        let x85 = x84 * l4;
+        let x86 = x18 * x23 - x5 * x35;
+        let x87 = u4 * x17;
+        let x88 = x86 * x87 + x79;
+        let x89 = u1 * x7;
+        let x90 = x23 * x89;
+        let x91 = x90 + x74 * x24;
+        let x92 = x29 * x78 + x91;
+        let x93 = x92 + x87 * x35;
+        let x94 = x92 * m3 + m5 * (x40 * x85 + x93) + m2 * x91 + m4 * x93 + x90 * m1;
+        let x95 = x40 * x14;
+        let x96 = x24 * x13;
+        let x97 = x95 - x96;
+        let x98 = x29 * x14 - x8 * x24;
+        let x99 = x78 * x98;
+        let x100 = x75 * x89;
+        let x101 = x18 * x24 - x35 * x14;
+        let x102 = (x101 * x87 - x100) - x99;
+        let x103 = x2 * x24;
+        let x104 = x18 * x29 - x8 * x35;
+        let x105 = x98 * x74;
+        let x106 = x77 * x89;
+        let x107 = (x104 * x87 + x105) - x106;
+        let x108 = x29 * x1;
+        let x109 = x40 * x8;
+        let x110 = x29 * x13;
+        let x111 = x110 - x109;
+        let x112 = x0 * x35;
+        let x113 = (x101 * x74 + x104 * x78) + x86 * x89;
+        let x114 = x35 * x13;
+        let x115 = x18 * x40;
+        let x116 = x115 - x114;
+        let x117 = x2 * x75;
+        let x118 = x22 * (-x117 - x26 * x80);
+        let x119 = x77 * x1;
+        let x120 = (-x59 * x80 - x119) * x32;
+        let x121 = x0 * x86;
+        let x122 = (-x37 * x80 - x121) * x34;
+        let x123 = (x81 - x82 + x42 * x80) * x44;
+        let x124 = -(x94 * x4);
+        let x125 = x78 * x30 + x25 * x74;
+        let x126 = x125 + x36 * x87;
+        let x127 = m2 * x25;
+        let x128 = (x117 - x20 * x103) * x22;
+        let x129 = x98 * x1;
+        let x130 = (x129 - x59 * x103) * x49;
+        let x131 = x0 * x101;
+        let x132 = (-x103 * x37 - x131) * x51;
+        let x133 = (x42 * x103 + x97) * x55;
+        let x134 = x47 * x78 + x25 * x89;
+        let x135 = x52 * x87 + x134;
+        let x136 = (x119 - x20 * x108) * x32;
+        let x137 = (-x129 - x26 * x108) * x49;
+        let x138 = x0 * x104;
+        let x139 = x61 * (-x37 * x108 - x138);
+        let x140 = x65 * (x109 + x42 * x108 - x110);
+        let x141 = x47 * x74 + x89 * x30;
+        let x142 = x62 * x87 + x141;
+        let x143 = (x121 - x20 * x112) * x34;
+        let x144 = (x131 - x112 * x26) * x51;
+        let x145 = (x138 - x112 * x59) * x61;
+        let x146 = (x116 + x42 * x112) * x72;
+        let x147 = x62 * x78 + (x36 * x89 + x74 * x52);
+        let x148 = x12 * x40;
+        let x149 = x40 * x20;
+        let x150 = (x83 - x149) * x44;
+        let x151 = x40 * x26;
+        let x152 = x55 * (x96 - x95 - x151);
+        let x153 = x40 * x59;
+        let x154 = (x111 - x153) * x65;
+        let x155 = x40 * x37;
+        let x156 = x72 * (x114 - x115 - x155);
+        let x157 = x42 * x11;
+        let x158 = x11 * x84;
+        let x159 = 2.0 * m4 + 2.0 * m5;
+        let x160 = x159 + 2.0 * m3;
+        let x161 = 2.0 * m2 + x160;
+        let x162 = -(x23 * (x161 + 2.0 * m1));
+        let x163 = x161 * x75;
+        let x164 = x77 * x160;
+        let x165 = x86 * x159;
+        let x166 = -(x161 * x24);
+        let x167 = x160 * x98;
+        let x168 = x101 * x159;
+        let x169 = -(x29 * x160);
+        let x170 = x104 * x159;
+        let x171 = -(x35 * x159);
         Derivatives {
             qdot: [
-                x0
-                    * (u5 * m5 * l4 * x3 - x1 * l3 * x2 * u4 + G_q0 - u2 * l1 * x4 * x5
-                        - x6 * l0 * u1 * x7 - x8 * x9 * u3 * l2),
+                x4 * (G_q0 - x6 * x7 - x9 * x10 + x12 * x13 - x15 * x16 - x17 * x19),
                 u1,
                 u2,
                 u3,
@@ -3764,54 +3881,38 @@ pub mod reduced_volterra {
                 u5,
             ],
             matrix: [
-                [
-                    l0 * l0 * (m2 + m4 + m5 + m1 - x6 * x6 * x0 * x7 * x7 + m3),
-                    x15,
-                    x20,
-                    x25,
-                    x30,
-                ],
-                [
-                    x15,
-                    l1 * l1 * (m2 - x4 * x4 * x0 * x5 * x5 + m4 + m5 + m3),
-                    x33,
-                    x36,
-                    x40,
-                ],
-                [x20, x33, (m4 + m5 - x8 * x8 * x9 * x9 * x0 + m3) * l2 * l2, x43, x47],
-                [x25, x36, x43, l3 * l3 * (m4 - x1 * x1 * x2 * x2 * x0 + m5), x51],
-                [x30, x40, x47, x51, m5 * (1.0 - m5 * x0 * x3 * x3) * l4 * l4],
+                [(x3 - x20 * x6) * x21, x28, x33, x39, x45],
+                [x28, x46 * (x2 - x15 * x26), x50, x54, x58],
+                [x33, x50, (x1 - x59 * x9) * x60, x64, x68],
+                [x39, x54, x64, x69 * (x0 - x37 * x19), x73],
+                [x45, x58, x68, x73, (1.0 - x42 * m5 * x13) * x11 * l4],
             ],
             force: [
-                (x11 * g * x66 - m5 * (x53 + x55 + u5 * u5 * x58 * l4 + x60)
-                    - m2 * u2 * u2 * l1 * x54 - (x53 + x55) * m3 - x6 * x65 * x0 * x7
-                    - m4 * (x53 + x55 + x60)) * l0,
+                l0
+                    * (g * x80 - x74 * x76 - x79 * m3 - m5 * (x83 * x85 + x88) - m4 * x88
+                        + x94 * x20),
                 l1
-                    * (x10 * g * x12 - (x68 - u5 * u5 * x71 * l4 - x72 - x74) * m5
-                        - (x68 - x72 - x74) * m4 + m2 * l0 * x54 * u1 * u1
-                        - (-x72 - x74) * m3 - x65 * x4 * x0 * x5),
-                (x16 * x17 * g - (x76 + x77 - x78) * m4 + (x78 - x77) * m3
-                    - m5 * (u5 * u5 * x81 * l4 + x76 + x77 - x78) - x8 * x9 * x65 * x0)
-                    * l2,
-                l3
-                    * (g * x21 * x23 - (-u5 * u5 * l4 * x84 - x85 - x86 - x87) * m5
-                        + m4 * (x85 + x86 + x87) - x1 * x2 * x65 * x0),
-                (x65 * x0 * x3 + x81 * u3 * u3 * l2 + x58 * l0 * u1 * u1 + x27 * g
-                    - l3 * u4 * u4 * x84 - u2 * u2 * l1 * x71) * m5 * l4,
+                    * (g * x103 - m5 * (x102 - x97 * x85) - m4 * x102 + (x99 + x100) * m3
+                        + x94 * x26 + x76 * x89),
+                (x94 * x59 - m4 * x107 + g * x108 - (x107 + x85 * x111) * m5
+                    + (x106 - x105) * m3) * l2,
+                l3 * (x112 * g + m4 * x113 + x94 * x37 + m5 * (x85 * x116 + x113)),
+                (x83 * x89 - x87 * x116 + x40 * g - x42 * x94 + x78 * x111 - x74 * x97)
+                    * x11,
             ],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [-(x11 * l0 * x66 * x0 * u1), 0.0, 0.0, 0.0, 0.0, 0.0],
-                [-(x10 * u2 * l1 * x0 * x12), 0.0, 0.0, 0.0, 0.0, 0.0],
-                [-(x16 * x17 * u3 * x0 * l2), 0.0, 0.0, 0.0, 0.0, 0.0],
-                [-(l3 * u4 * x0 * x21 * x23), 0.0, 0.0, 0.0, 0.0, 0.0],
-                [-(u5 * x27 * m5 * x0 * l4), 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x6 * l0 * x66 * x0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                [x10 * l1 * x0 * x5, 0.0, 1.0, 0.0, 0.0, 0.0],
-                [x16 * x9 * x0 * l2, 0.0, 0.0, 1.0, 0.0, 0.0],
-                [x1 * l3 * x0 * x23, 0.0, 0.0, 0.0, 1.0, 0.0],
-                [m5 * x0 * l4 * x3, 0.0, 0.0, 0.0, 0.0, 1.0],
+                [-(x4 * x7 * x80), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x4 * x16 * x103), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x4 * x10 * x108), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x4 * x112 * x17), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [-(x4 * x148), 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x3 * x5 * x4 * l0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [l1 * x4 * x2 * x14, 0.0, 1.0, 0.0, 0.0, 0.0],
+                [x4 * x8 * x1 * l2, 0.0, 0.0, 1.0, 0.0, 0.0],
+                [x18 * x0 * x4 * l3, 0.0, 0.0, 0.0, 1.0, 0.0],
+                [x157, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             d_matrix: [
                 [
@@ -3822,51 +3923,39 @@ pub mod reduced_volterra {
                     [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [-(2.0 * x11 * x6 * l0 * l0 * x66 * x0 * x7), x88, x89, x90, x91],
-                    [x88, 0.0, 0.0, 0.0, 0.0],
-                    [x89, 0.0, 0.0, 0.0, 0.0],
-                    [x90, 0.0, 0.0, 0.0, 0.0],
-                    [x91, 0.0, 0.0, 0.0, 0.0],
+                    [-(2.0 * x20 * x80 * x21), x118, x120, x122, x123],
+                    [x118, 0.0, 0.0, 0.0, 0.0],
+                    [x120, 0.0, 0.0, 0.0, 0.0],
+                    [x122, 0.0, 0.0, 0.0, 0.0],
+                    [x123, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x96, 0.0, 0.0, 0.0],
-                    [x96, -(2.0 * x10 * l1 * l1 * x4 * x0 * x12 * x5), x97, x98, x99],
-                    [0.0, x97, 0.0, 0.0, 0.0],
-                    [0.0, x98, 0.0, 0.0, 0.0],
-                    [0.0, x99, 0.0, 0.0, 0.0],
+                    [0.0, x128, 0.0, 0.0, 0.0],
+                    [x128, -(2.0 * x103 * x46 * x26), x130, x132, x133],
+                    [0.0, x130, 0.0, 0.0, 0.0],
+                    [0.0, x132, 0.0, 0.0, 0.0],
+                    [0.0, x133, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x104, 0.0, 0.0],
-                    [0.0, 0.0, x105, 0.0, 0.0],
-                    [
-                        x104,
-                        x105,
-                        -(2.0 * x16 * x8 * x17 * x9 * x0 * l2 * l2),
-                        x106,
-                        x107,
-                    ],
-                    [0.0, 0.0, x106, 0.0, 0.0],
-                    [0.0, 0.0, x107, 0.0, 0.0],
+                    [0.0, 0.0, x136, 0.0, 0.0],
+                    [0.0, 0.0, x137, 0.0, 0.0],
+                    [x136, x137, -(2.0 * x60 * x59 * x108), x139, x140],
+                    [0.0, 0.0, x139, 0.0, 0.0],
+                    [0.0, 0.0, x140, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, x112, 0.0],
-                    [0.0, 0.0, 0.0, x113, 0.0],
-                    [0.0, 0.0, 0.0, x114, 0.0],
-                    [
-                        x112,
-                        x113,
-                        x114,
-                        -(2.0 * x1 * l3 * l3 * x2 * x0 * x21 * x23),
-                        x115,
-                    ],
-                    [0.0, 0.0, 0.0, x115, 0.0],
+                    [0.0, 0.0, 0.0, x143, 0.0],
+                    [0.0, 0.0, 0.0, x144, 0.0],
+                    [0.0, 0.0, 0.0, x145, 0.0],
+                    [x143, x144, x145, -(2.0 * x112 * x69 * x37), x146],
+                    [0.0, 0.0, 0.0, x146, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, x121],
-                    [0.0, 0.0, 0.0, 0.0, x123],
-                    [0.0, 0.0, 0.0, 0.0, x125],
-                    [0.0, 0.0, 0.0, 0.0, x127],
-                    [x121, x123, x125, x127, 2.0 * x27 * m5 * m5 * x0 * l4 * l4 * x3],
+                    [0.0, 0.0, 0.0, 0.0, x150],
+                    [0.0, 0.0, 0.0, 0.0, x152],
+                    [0.0, 0.0, 0.0, 0.0, x154],
+                    [0.0, 0.0, 0.0, 0.0, x156],
+                    [x150, x152, x154, x156, 2.0 * x40 * x157 * x11],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3907,93 +3996,80 @@ pub mod reduced_volterra {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    l0
-                        * (x6 * (g * x66 - x6 * l0 * x0 * u1 * u1 * x7 * x7)
-                            - m2 * u2 * u2 * l1 * x13 - m4 * (x92 + x93 + x94)
-                            - (x93 + x94) * m3 - x11 * x65 * x66 * x0
-                            - m5 * (x92 + x93 + x94 + u5 * u5 * l4 * x95)),
-                    l1 * x14 * l0 * u1 * u1,
-                    x19 * l0 * u1 * u1 * l2,
-                    l0 * l3 * u1 * u1 * x24,
-                    l0 * m5 * x29 * u1 * u1 * l4,
+                    (x5 * (x3 * x20 * x89 + x3 * g) - x124 * x80 - x125 * m3 - m4 * x126
+                        - m5 * (x41 * x85 + x126) - x74 * x127) * l0,
+                    l1 * x27 * x89,
+                    x31 * x89 * l2,
+                    l3 * x38 * x89,
+                    x43 * x11 * x89,
                 ],
                 [
-                    u2 * u2 * l1 * x14 * l0,
-                    ((x10 * g - u2 * u2 * l1 * x4 * x4 * x0 * x5) * x5
-                        - x10 * x65 * x0 * x12 - (x100 + x101) * m3
-                        - m2 * l0 * x13 * u1 * u1 - (x100 + x101 + x102) * m4
-                        - m5 * (x100 + u5 * u5 * x103 * l4 + x101 + x102)) * l1,
-                    x32 * u2 * u2 * l1 * l2,
-                    u2 * u2 * l1 * l3 * x35,
-                    u2 * u2 * l1 * m5 * x39 * l4,
+                    l0 * x74 * x27,
+                    ((x2 * g + x2 * x74 * x26) * x14 - x135 * m4 - x134 * m3
+                        - x124 * x103 - x127 * x89 - m5 * (x85 * x56 + x135)) * l1,
+                    x48 * x74 * l2,
+                    l3 * x74 * x53,
+                    x74 * x57 * x11,
                 ],
                 [
-                    x19 * l0 * u3 * u3 * l2,
-                    x32 * l1 * u3 * u3 * l2,
-                    ((-x108 - x109) * m3 - x16 * x17 * x65 * x0
-                        - m4 * (x110 + x108 + x109)
-                        + x9 * (x16 * g - x8 * x8 * x9 * u3 * u3 * x0 * l2)
-                        - m5 * (x110 + u5 * u5 * l4 * x111 + x108 + x109)) * l2,
-                    l3 * u3 * u3 * x42 * l2,
-                    u3 * u3 * m5 * l4 * l2 * x46,
+                    x31 * l0 * x78,
+                    l1 * x78 * x48,
+                    (x8 * (g * x1 + x59 * x78 * x1) - m4 * x142 - m5 * (x142 + x66 * x85)
+                        - x141 * m3 - x124 * x108) * l2,
+                    l3 * x78 * x63,
+                    x78 * x67 * x11,
                 ],
                 [
-                    l0 * l3 * u4 * u4 * x24,
-                    l1 * l3 * u4 * u4 * x35,
-                    l3 * x42 * u4 * u4 * l2,
-                    l3
-                        * (x1 * (g * x23 - x1 * l3 * x2 * x2 * u4 * u4 * x0)
-                            - x65 * x0 * x21 * x23
-                            - (x116 + x117 * u5 * u5 * l4 + x118 + x119) * m5
-                            + m4 * (-x116 - x118 - x119)),
-                    x50 * l3 * m5 * u4 * u4 * l4,
+                    l0 * x38 * x87,
+                    l1 * x53 * x87,
+                    x63 * x87 * l2,
+                    (x18 * (x0 * x37 * x87 + x0 * g) - m5 * (x147 + x85 * x70)
+                        - x124 * x112 - m4 * x147) * l3,
+                    x71 * x11 * x87,
                 ],
                 [
-                    u5 * u5 * l0 * m5 * x29 * l4,
-                    u5 * u5 * l1 * m5 * x39 * l4,
-                    u5 * u5 * m5 * l4 * l2 * x46,
-                    u5 * u5 * x50 * l3 * m5 * l4,
-                    m5
-                        * (g * x3 + (-x27 * x65 - u5 * u5 * m5 * l4 * x3 * x3) * x0
-                            - u2 * u2 * l1 * x103 - u3 * u3 * x111 * l2
-                            - l0 * u1 * u1 * x95 - x117 * l3 * u4 * u4) * l4,
+                    x43 * l0 * x158,
+                    l1 * x158 * x57,
+                    x67 * x158 * l2,
+                    l3 * x71 * x158,
+                    x11
+                        * (g * x13 - x78 * x66 - x87 * x70 - x41 * x89 - x74 * x56
+                            - x4 * (x158 * x13 * x13 - x40 * x94)),
                 ],
                 [
-                    -(x11 * x6 * l0 * l0 * x128 * x0 * u1 * x7),
-                    l1 * l0 * u1
-                        * (x54 * (2.0 * m2 + 2.0 * m4 + 2.0 * m5 + 2.0 * m3)
-                            - x11 * x128 * x4 * x0 * x5),
-                    (x52 * x129 - x11 * x8 * x9 * x128 * x0) * l0 * u1 * l2,
-                    l0 * l3 * (x59 * x130 - x1 * x11 * x2 * x128 * x0) * u1,
-                    l0 * m5 * (2.0 * x57 - 2.0 * x56 + x11 * x128 * x0 * x3) * u1 * l4,
+                    -(l0 * x162 * x20 * x7),
+                    l1 * (x163 - x162 * x26) * x7,
+                    (x164 - x162 * x59) * x7 * l2,
+                    l3 * (x165 - x162 * x37) * x7,
+                    (2.0 * x82 - 2.0 * x81 + x42 * x162) * x11 * x7,
                 ],
                 [
-                    (x131 * x54 - x6 * x131 * x0 * x12 * x7) * u2 * l1 * l0,
-                    -(u2 * l1 * l1 * x131 * x4 * x0 * x12 * x5),
-                    (x73 * x132 - x131 * x8 * x9 * x0 * x12) * u2 * l1 * l2,
-                    u2 * l1 * (x67 * x130 - x1 * x131 * x2 * x0 * x12) * l3,
-                    (x131 * x0 * x12 * x3 - 2.0 * x69 + 2.0 * x70) * u2 * l1 * m5 * l4,
+                    (-x163 - x20 * x166) * l0 * x16,
+                    -(l1 * x16 * x26 * x166),
+                    (-x167 - x59 * x166) * x16 * l2,
+                    x16 * l3 * (x168 - x37 * x166),
+                    x16 * x11 * (x42 * x166 - 2.0 * x95 + 2.0 * x96),
                 ],
                 [
-                    l0 * u3 * (x52 * x132 - x6 * x17 * x132 * x0 * x7) * l2,
-                    l1 * u3 * (x73 * x129 - x17 * x132 * x4 * x0 * x5) * l2,
-                    -(x8 * x17 * x9 * u3 * x132 * x0 * l2 * l2),
-                    l3 * u3 * (x75 * x130 - x1 * x17 * x2 * x132 * x0) * l2,
-                    (x17 * x132 * x0 * x3 - 2.0 * x79 + 2.0 * x80) * u3 * m5 * l4 * l2,
+                    l0 * (-x164 - x20 * x169) * x10,
+                    l1 * (x167 - x169 * x26) * x10,
+                    -(x59 * x169 * x10 * l2),
+                    l3 * (x170 - x169 * x37) * x10,
+                    (x42 * x169 - 2.0 * x109 + 2.0 * x110) * x11 * x10,
                 ],
                 [
-                    (x59 * x133 - x6 * x0 * x21 * x133 * x7) * l0 * l3 * u4,
-                    l1 * l3 * (x67 * x133 - x4 * x0 * x21 * x133 * x5) * u4,
-                    (x75 * x133 - x8 * x9 * x0 * x21 * x133) * l3 * u4 * l2,
-                    -(x1 * l3 * l3 * x2 * u4 * x0 * x21 * x133),
-                    l3 * m5 * u4 * (2.0 * x82 + x0 * x21 * x133 * x3 - 2.0 * x83) * l4,
+                    l0 * (-x165 - x20 * x171) * x17,
+                    l1 * (-x168 - x171 * x26) * x17,
+                    (-x170 - x59 * x171) * x17 * l2,
+                    -(l3 * x37 * x17 * x171),
+                    (2.0 * x114 - 2.0 * x115 + x42 * x171) * x11 * x17,
                 ],
                 [
-                    u5 * l0 * (2.0 * x56 + 2.0 * x120 - 2.0 * x57) * m5 * l4,
-                    u5 * l1 * m5 * (2.0 * x69 + 2.0 * x122 - 2.0 * x70) * l4,
-                    u5 * m5 * l4 * (2.0 * x79 + 2.0 * x124 - 2.0 * x80) * l2,
-                    u5 * l3 * m5 * (2.0 * x83 - 2.0 * x82 + 2.0 * x126) * l4,
-                    -(2.0 * u5 * x27 * m5 * m5 * x0 * l4 * l4 * x3),
+                    x12 * l0 * (2.0 * x81 - 2.0 * x82 + 2.0 * x149),
+                    x12 * l1 * (2.0 * x95 - 2.0 * x96 + 2.0 * x151),
+                    x12 * (2.0 * x153 + 2.0 * x109 - 2.0 * x110) * l2,
+                    (2.0 * x115 - 2.0 * x114 + 2.0 * x155) * x12 * l3,
+                    -(2.0 * x157 * x148),
                 ],
             ],
         }

@@ -224,7 +224,8 @@ pub fn constraint_residuals(
     let y_dot = qdot[1];
     let phi_dot = qdot[3];
     let R = params.R;
-    [x_dot - R * f64::cos(psi) * phi_dot, y_dot - R * phi_dot * f64::sin(psi)]
+    let x0 = R * phi_dot;
+    [x_dot - f64::cos(psi) * x0, y_dot - x0 * f64::sin(psi)]
 }
 ///Position-level residuals of the holonomic constraints.
 #[allow(non_snake_case, clippy::all)]
@@ -288,31 +289,28 @@ pub mod lagrange {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = -(R * x0);
-        let x2 = f64::sin(psi);
-        let x3 = -(R * x2);
+        let x0 = R * (md * R);
+        let x1 = f64::cos(psi);
+        let x2 = -(R * x1);
+        let x3 = f64::sin(psi);
+        let x4 = -(R * x3);
+        let x5 = R * phi_dot;
+        let x6 = x5 * x3;
+        let x7 = x1 * x5;
         Assembly {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
             matrix: [
                 [md, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, md, 0.0, 0.0, 0.0, 1.0],
-                [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
-                [1.0, 0.0, 0.0, x1, 0.0, 0.0],
-                [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+                [0.0, 0.0, 0.25 * x0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.5 * x0, x2, x4],
+                [1.0, 0.0, 0.0, x2, 0.0, 0.0],
+                [0.0, 1.0, 0.0, x4, 0.0, 0.0],
             ],
-            force: [
-                0.0,
-                0.0,
-                0.0,
-                tq,
-                -(R * psi_dot * phi_dot * x2),
-                R * x0 * psi_dot * phi_dot,
-            ],
+            force: [0.0, 0.0, 0.0, tq, -(x6 * psi_dot), psi_dot * x7],
             power: tq * phi_dot,
             checks: [],
-            residuals: [x_dot - R * x0 * phi_dot, y_dot - R * phi_dot * x2],
+            residuals: [x_dot - x7, y_dot - x6],
             positions: [0.0, 0.0],
         }
     }
@@ -405,20 +403,12 @@ pub mod lagrange {
         let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = f64::abs(phi_dot);
-        let x3 = f64::abs(R);
+        let x1 = R * phi_dot;
+        let x2 = f64::sin(psi);
+        let x3 = f64::abs(phi_dot) * f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "contact_x",
-                x_dot - R * x0 * phi_dot,
-                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
-            ),
-            (
-                "contact_y",
-                y_dot - R * phi_dot * x1,
-                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
-            ),
+            ("contact_x", x_dot - x0 * x1, f64::abs(x_dot) + x3 * f64::abs(x0)),
+            ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -509,23 +499,25 @@ pub mod lagrange {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = -(R * x0);
-        let x2 = f64::sin(psi);
-        let x3 = -(R * x2);
-        let x4 = -(R * psi_dot * phi_dot * x2);
-        let x5 = R * x2;
+        let x0 = R * (md * R);
+        let x1 = R * f64::cos(psi);
+        let x2 = -x1;
+        let x3 = R * f64::sin(psi);
+        let x4 = -x3;
+        let x5 = psi_dot * phi_dot;
+        let x6 = -(x5 * x3);
+        let x7 = x5 * x1;
         Derivatives {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
             matrix: [
                 [md, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, md, 0.0, 0.0, 0.0, 1.0],
-                [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
-                [1.0, 0.0, 0.0, x1, 0.0, 0.0],
-                [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+                [0.0, 0.0, 0.25 * x0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.5 * x0, x2, x4],
+                [1.0, 0.0, 0.0, x2, 0.0, 0.0],
+                [0.0, 1.0, 0.0, x4, 0.0, 0.0],
             ],
-            force: [0.0, 0.0, 0.0, tq, x4, R * x0 * psi_dot * phi_dot],
+            force: [0.0, 0.0, 0.0, tq, x6, x7],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0],
@@ -558,9 +550,9 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x5, x1],
-                    [0.0, 0.0, 0.0, x5, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x1, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x3, x2],
+                    [0.0, 0.0, 0.0, x3, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x2, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -606,12 +598,12 @@ pub mod lagrange {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, -(R * x0 * psi_dot * phi_dot), x4],
+                [0.0, 0.0, 0.0, 0.0, -x7, x6],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, -(R * phi_dot * x2), R * x0 * phi_dot],
-                [0.0, 0.0, 0.0, 0.0, -(R * psi_dot * x2), R * x0 * psi_dot],
+                [0.0, 0.0, 0.0, 0.0, -(phi_dot * x3), x1 * phi_dot],
+                [0.0, 0.0, 0.0, 0.0, -(psi_dot * x3), psi_dot * x1],
             ],
             power: tq * phi_dot,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tq],
@@ -732,48 +724,47 @@ pub mod lagrange {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = -(R * x0);
-        let x2 = f64::sin(psi);
-        let x3 = -(R * x2);
-        let x4 = -x0;
-        let x5 = -x2;
+        let x0 = md * R;
+        let x1 = R * x0;
+        let x2 = f64::cos(psi);
+        let x3 = R * x2;
+        let x4 = -x3;
+        let x5 = f64::sin(psi);
+        let x6 = R * x5;
+        let x7 = -x6;
+        let x8 = psi_dot * phi_dot;
+        let x9 = R * R;
+        let x10 = -x2;
+        let x11 = -x5;
         ParameterDerivatives {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
             matrix: [
                 [md, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, md, 0.0, 0.0, 0.0, 1.0],
-                [0.0, 0.0, 0.25 * md * R * R, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.5 * md * R * R, x1, x3],
-                [1.0, 0.0, 0.0, x1, 0.0, 0.0],
-                [0.0, 1.0, 0.0, x3, 0.0, 0.0],
+                [0.0, 0.0, 0.25 * x1, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.5 * x1, x4, x7],
+                [1.0, 0.0, 0.0, x4, 0.0, 0.0],
+                [0.0, 1.0, 0.0, x7, 0.0, 0.0],
             ],
-            force: [
-                0.0,
-                0.0,
-                0.0,
-                tq,
-                -(R * psi_dot * phi_dot * x2),
-                R * x0 * psi_dot * phi_dot,
-            ],
+            force: [0.0, 0.0, 0.0, tq, -(x8 * x6), x8 * x3],
             checks: [],
             d_qdot: [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
             d_matrix: [
                 [
                     [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.25 * R * R, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.5 * R * R, 0.0, 0.0],
+                    [0.0, 0.0, 0.25 * x9, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.5 * x9, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.5 * md * R, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, md * R, x4, x5],
-                    [0.0, 0.0, 0.0, x4, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, x5, 0.0, 0.0],
+                    [0.0, 0.0, 0.5 * x0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x0, x10, x11],
+                    [0.0, 0.0, 0.0, x10, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, x11, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -786,7 +777,7 @@ pub mod lagrange {
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, -(psi_dot * phi_dot * x2), x0 * psi_dot * phi_dot],
+                [0.0, 0.0, 0.0, 0.0, -(x8 * x5), x8 * x2],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
             ],
             power: tq * phi_dot,
@@ -1039,14 +1030,16 @@ pub mod maggi {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
+        let x0 = R * (md * R);
+        let x1 = R * f64::cos(psi);
+        let x2 = R * f64::sin(psi);
+        let x3 = psi_dot * phi_dot;
         Assembly {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            matrix: [[0.25 * x0, 0.0], [0.0, 1.5 * x0]],
             force: [0.0, tq],
-            w: [[0.0, R * x0], [0.0, R * x1], [1.0, 0.0], [0.0, 1.0]],
-            c: [-(R * psi_dot * phi_dot * x1), R * x0 * psi_dot * phi_dot, 0.0, 0.0],
+            w: [[0.0, x1], [0.0, x2], [1.0, 0.0], [0.0, 1.0]],
+            c: [-(x3 * x2), x3 * x1, 0.0, 0.0],
             power: tq * phi_dot,
             checks: [],
         }
@@ -1124,20 +1117,12 @@ pub mod maggi {
         let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = f64::abs(phi_dot);
-        let x3 = f64::abs(R);
+        let x1 = R * phi_dot;
+        let x2 = f64::sin(psi);
+        let x3 = f64::abs(phi_dot) * f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "contact_x",
-                x_dot - R * x0 * phi_dot,
-                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
-            ),
-            (
-                "contact_y",
-                y_dot - R * phi_dot * x1,
-                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
-            ),
+            ("contact_x", x_dot - x0 * x1, f64::abs(x_dot) + x3 * f64::abs(x0)),
+            ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1232,13 +1217,15 @@ pub mod maggi {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = R * x0;
-        let x2 = f64::sin(psi);
-        let x3 = -(R * psi_dot * phi_dot * x2);
+        let x0 = R * (md * R);
+        let x1 = R * f64::cos(psi);
+        let x2 = R * f64::sin(psi);
+        let x3 = psi_dot * phi_dot;
+        let x4 = -(x3 * x2);
+        let x5 = x3 * x1;
         Derivatives {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            matrix: [[0.25 * x0, 0.0], [0.0, 1.5 * x0]],
             force: [0.0, tq],
             checks: [],
             d_qdot: [
@@ -1271,12 +1258,12 @@ pub mod maggi {
                 [0.0, 0.0],
                 [0.0, 0.0],
             ],
-            w: [[0.0, x1], [0.0, R * x2], [1.0, 0.0], [0.0, 1.0]],
-            c: [x3, R * x0 * psi_dot * phi_dot, 0.0, 0.0],
+            w: [[0.0, x1], [0.0, x2], [1.0, 0.0], [0.0, 1.0]],
+            c: [x4, x5, 0.0, 0.0],
             d_w: [
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
-                [[0.0, -(R * x2)], [0.0, x1], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, -x2], [0.0, x1], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
@@ -1286,12 +1273,12 @@ pub mod maggi {
             d_c: [
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [-(R * x0 * psi_dot * phi_dot), x3, 0.0, 0.0],
+                [-x5, x4, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [-(R * phi_dot * x2), R * x0 * phi_dot, 0.0, 0.0],
-                [-(R * psi_dot * x2), R * x0 * psi_dot, 0.0, 0.0],
+                [-(phi_dot * x2), x1 * phi_dot, 0.0, 0.0],
+                [-(psi_dot * x2), psi_dot * x1, 0.0, 0.0],
             ],
             power: tq * phi_dot,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, tq],
@@ -1428,30 +1415,36 @@ pub mod maggi {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
-        let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
+        let x0 = md * R;
+        let x1 = R * x0;
+        let x2 = f64::cos(psi);
+        let x3 = R * x2;
+        let x4 = f64::sin(psi);
+        let x5 = R * x4;
+        let x6 = psi_dot * phi_dot;
+        let x7 = R * R;
         ParameterDerivatives {
             qdot: [x_dot, y_dot, psi_dot, phi_dot],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            matrix: [[0.25 * x1, 0.0], [0.0, 1.5 * x1]],
             force: [0.0, tq],
             checks: [],
             d_qdot: [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]],
             d_matrix: [
-                [[0.25 * R * R, 0.0], [0.0, 1.5 * R * R]],
-                [[0.5 * md * R, 0.0], [0.0, 3.0 * md * R]],
+                [[0.25 * x7, 0.0], [0.0, 1.5 * x7]],
+                [[0.5 * x0, 0.0], [0.0, 3.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [[0.0, 0.0], [0.0, 0.0], [0.0, 1.0]],
-            w: [[0.0, R * x0], [0.0, R * x1], [1.0, 0.0], [0.0, 1.0]],
-            c: [-(R * psi_dot * phi_dot * x1), R * x0 * psi_dot * phi_dot, 0.0, 0.0],
+            w: [[0.0, x3], [0.0, x5], [1.0, 0.0], [0.0, 1.0]],
+            c: [-(x6 * x5), x6 * x3, 0.0, 0.0],
             d_w: [
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x0], [0.0, x1], [0.0, 0.0], [0.0, 0.0]],
+                [[0.0, x2], [0.0, x4], [0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
             ],
             d_c: [
                 [0.0, 0.0, 0.0, 0.0],
-                [-(psi_dot * phi_dot * x1), x0 * psi_dot * phi_dot, 0.0, 0.0],
+                [-(x6 * x4), x6 * x2, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
             ],
             power: tq * phi_dot,
@@ -1691,9 +1684,11 @@ pub mod kane {
         let md = params.md;
         let R = params.R;
         let tq = params.tq;
+        let x0 = u2 * R;
+        let x1 = md * (R * R);
         Assembly {
-            qdot: [u2 * R * f64::cos(psi), u2 * R * f64::sin(psi), u1, u2],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            qdot: [f64::cos(psi) * x0, x0 * f64::sin(psi), u1, u2],
+            matrix: [[0.25 * x1, 0.0], [0.0, 1.5 * x1]],
             force: [0.0, tq],
             power: u2 * tq,
             checks: [],
@@ -1769,20 +1764,12 @@ pub mod kane {
         let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = f64::abs(phi_dot);
-        let x3 = f64::abs(R);
+        let x1 = R * phi_dot;
+        let x2 = f64::sin(psi);
+        let x3 = f64::abs(phi_dot) * f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "contact_x",
-                x_dot - R * x0 * phi_dot,
-                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
-            ),
-            (
-                "contact_y",
-                y_dot - R * phi_dot * x1,
-                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
-            ),
+            ("contact_x", x_dot - x0 * x1, f64::abs(x_dot) + x3 * f64::abs(x0)),
+            ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1816,10 +1803,11 @@ pub mod kane {
         let u1 = state[4];
         let u2 = state[5];
         let R = params.R;
+        let x0 = u2 * R;
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
         let qdot: [f64; NUM_COORDINATES] = [
-            u2 * R * f64::cos(psi),
-            u2 * R * f64::sin(psi),
+            f64::cos(psi) * x0,
+            x0 * f64::sin(psi),
             u1,
             u2,
         ];
@@ -1867,20 +1855,23 @@ pub mod kane {
         let R = params.R;
         let tq = params.tq;
         let x0 = f64::cos(psi);
-        let x1 = u2 * R * x0;
-        let x2 = f64::sin(psi);
+        let x1 = u2 * R;
+        let x2 = x0 * x1;
+        let x3 = f64::sin(psi);
+        let x4 = x1 * x3;
+        let x5 = md * (R * R);
         Derivatives {
-            qdot: [x1, u2 * R * x2, u1, u2],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            qdot: [x2, x4, u1, u2],
+            matrix: [[0.25 * x5, 0.0], [0.0, 1.5 * x5]],
             force: [0.0, tq],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [-(u2 * R * x2), x1, 0.0, 0.0],
+                [-x4, x2, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0],
-                [R * x0, R * x2, 0.0, 1.0],
+                [R * x0, R * x3, 0.0, 1.0],
             ],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -2016,20 +2007,24 @@ pub mod kane {
         let R = params.R;
         let tq = params.tq;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
+        let x1 = u2 * R;
+        let x2 = f64::sin(psi);
+        let x3 = R * R;
+        let x4 = md * x3;
+        let x5 = md * R;
         ParameterDerivatives {
-            qdot: [u2 * R * x0, u2 * R * x1, u1, u2],
-            matrix: [[0.25 * md * R * R, 0.0], [0.0, 1.5 * md * R * R]],
+            qdot: [x0 * x1, x1 * x2, u1, u2],
+            matrix: [[0.25 * x4, 0.0], [0.0, 1.5 * x4]],
             force: [0.0, tq],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0],
-                [u2 * x0, u2 * x1, 0.0, 0.0],
+                [u2 * x0, u2 * x2, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
             ],
             d_matrix: [
-                [[0.25 * R * R, 0.0], [0.0, 1.5 * R * R]],
-                [[0.5 * md * R, 0.0], [0.0, 3.0 * md * R]],
+                [[0.25 * x3, 0.0], [0.0, 1.5 * x3]],
+                [[0.5 * x5, 0.0], [0.0, 3.0 * x5]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [[0.0, 0.0], [0.0, 0.0], [0.0, 1.0]],
@@ -2258,10 +2253,11 @@ pub mod reduced_volterra {
         let R = params.R;
         let tq = params.tq;
         let G_psi = g_i[0];
+        let x0 = R * u1;
         Assembly {
             qdot: [
-                R * f64::cos(psi) * u1,
-                R * u1 * f64::sin(psi),
+                x0 * f64::cos(psi),
+                x0 * f64::sin(psi),
                 4.0 * G_psi / (md * R * R),
                 u1,
             ],
@@ -2340,20 +2336,12 @@ pub mod reduced_volterra {
         let md = params.md;
         let R = params.R;
         let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = f64::abs(phi_dot);
-        let x3 = f64::abs(R);
+        let x1 = R * phi_dot;
+        let x2 = f64::sin(psi);
+        let x3 = f64::abs(phi_dot) * f64::abs(R);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [
-            (
-                "contact_x",
-                x_dot - R * x0 * phi_dot,
-                f64::abs(x_dot) + x2 * x3 * f64::abs(x0),
-            ),
-            (
-                "contact_y",
-                y_dot - R * phi_dot * x1,
-                f64::abs(y_dot) + x2 * x3 * f64::abs(x1),
-            ),
+            ("contact_x", x_dot - x0 * x1, f64::abs(x_dot) + x3 * f64::abs(x0)),
+            ("contact_y", y_dot - x1 * x2, f64::abs(y_dot) + x3 * f64::abs(x2)),
         ];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2388,10 +2376,11 @@ pub mod reduced_volterra {
         let md = params.md;
         let R = params.R;
         let G_psi = g_i[0];
+        let x0 = R * u1;
         let q: [f64; NUM_COORDINATES] = [state[0], state[1], state[2], state[3]];
         let qdot: [f64; NUM_COORDINATES] = [
-            R * f64::cos(psi) * u1,
-            R * u1 * f64::sin(psi),
+            x0 * f64::cos(psi),
+            x0 * f64::sin(psi),
             4.0 * G_psi / (md * R * R),
             u1,
         ];
@@ -2438,20 +2427,22 @@ pub mod reduced_volterra {
         let R = params.R;
         let tq = params.tq;
         let G_psi = g_i[0];
-        let x0 = f64::cos(psi);
-        let x1 = R * x0 * u1;
-        let x2 = f64::sin(psi);
+        let x0 = R * u1;
+        let x1 = f64::cos(psi);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(psi);
+        let x4 = x0 * x3;
         Derivatives {
-            qdot: [x1, R * u1 * x2, 4.0 * G_psi / (md * R * R), u1],
+            qdot: [x2, x4, 4.0 * G_psi / (md * R * R), u1],
             matrix: [[1.5 * md * R * R]],
             force: [tq],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [-(R * u1 * x2), x1, 0.0, 0.0],
+                [-x4, x2, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [R * x0, R * x2, 0.0, 1.0],
+                [R * x1, R * x3, 0.0, 1.0],
             ],
             d_matrix: [[[0.0]], [[0.0]], [[0.0]], [[0.0]], [[0.0]]],
             d_force: [[0.0], [0.0], [0.0], [0.0], [0.0]],
@@ -2572,21 +2563,24 @@ pub mod reduced_volterra {
         let R = params.R;
         let tq = params.tq;
         let G_psi = g_i[0];
-        let x0 = f64::cos(psi);
-        let x1 = f64::sin(psi);
-        let x2 = 1.0 / R;
-        let x3 = 1.0 / md;
+        let x0 = R * u1;
+        let x1 = f64::cos(psi);
+        let x2 = f64::sin(psi);
+        let x3 = 1.0 / R;
+        let x4 = 1.0 / md;
+        let x5 = x3 * x3 * (x4 * G_psi);
+        let x6 = R * R;
         ParameterDerivatives {
-            qdot: [R * x0 * u1, R * u1 * x1, 4.0 * x2 * x2 * x3 * G_psi, u1],
-            matrix: [[1.5 * md * R * R]],
+            qdot: [x0 * x1, x0 * x2, 4.0 * x5, u1],
+            matrix: [[1.5 * md * x6]],
             force: [tq],
             checks: [],
             d_qdot: [
-                [0.0, 0.0, -(4.0 * x2 * x2 * x3 * x3 * G_psi), 0.0],
-                [x0 * u1, u1 * x1, -(8.0 * x2 * x2 * x2 * x3 * G_psi), 0.0],
+                [0.0, 0.0, -(4.0 * x5 * x4), 0.0],
+                [x1 * u1, u1 * x2, -(8.0 * x5 * x3), 0.0],
                 [0.0, 0.0, 0.0, 0.0],
             ],
-            d_matrix: [[[1.5 * R * R]], [[3.0 * md * R]], [[0.0]]],
+            d_matrix: [[[1.5 * x6]], [[3.0 * md * R]], [[0.0]]],
             d_force: [[0.0], [0.0], [1.0]],
             power: tq * u1,
             d_power: [0.0, 0.0, u1],

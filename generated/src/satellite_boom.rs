@@ -256,23 +256,26 @@ pub fn energy(
     let m = params.m;
     let l = params.l;
     let x0 = f64::sin(theta);
-    let x1 = phi_dot - x0 * psi_dot;
-    let x2 = f64::cos(theta);
-    let x3 = f64::cos(phi);
-    let x4 = f64::sin(phi);
-    let x5 = x2 * psi_dot * x3 - theta_dot * x4;
-    let x6 = theta_dot * x3 + x2 * psi_dot * x4;
-    let x7 = f64::cos(psi);
-    let x8 = rho + 0.5 * l;
-    let x9 = f64::sin(psi);
-    let x10 = X_dot + x7 * (x2 * rho_dot - x0 * theta_dot * x8) - x2 * psi_dot * x8 * x9;
-    let x11 = Y_dot - x0 * theta_dot * x8 * x9 + x2 * (rho_dot * x9 + x7 * psi_dot * x8);
-    let x12 = Z_dot - theta_dot * x2 * x8 - x0 * rho_dot;
-    0.5 * (x1 * (Ixx * x1 - x5 * Ixz - Ixy * x6))
-        + 0.5 * ((x5 * Izz - Iyz * x6 - Ixz * x1) * x5)
-        + 0.5 * ((x10 * x10 + x11 * x11 + x12 * x12) * m)
+    let x1 = rho + 0.5 * l;
+    let x2 = theta_dot * x1;
+    let x3 = x0 * x2;
+    let x4 = f64::sin(psi);
+    let x5 = f64::cos(theta);
+    let x6 = f64::cos(psi);
+    let x7 = Y_dot - x3 * x4 + x5 * (rho_dot * x4 + x6 * psi_dot * x1);
+    let x8 = x5 * psi_dot;
+    let x9 = X_dot - x8 * x1 * x4 + x6 * (x5 * rho_dot - x3);
+    let x10 = Z_dot - x5 * x2 - x0 * rho_dot;
+    let x11 = phi_dot - x0 * psi_dot;
+    let x12 = f64::cos(phi);
+    let x13 = f64::sin(phi);
+    let x14 = x8 * x12 - theta_dot * x13;
+    let x15 = x8 * x13 + theta_dot * x12;
+    0.5 * ((x7 * x7 + x9 * x9 + x10 * x10) * m)
+        + 0.5 * ((Ixx * x11 - x14 * Ixz - Ixy * x15) * x11)
+        + 0.5 * (x14 * (x14 * Izz - Ixz * x11 - Iyz * x15))
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * mg)
-        + 0.5 * ((Iyy * x6 - x5 * Iyz - Ixy * x1) * x6)
+        + 0.5 * ((Iyy * x15 - Ixy * x11 - Iyz * x14) * x15)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -309,14 +312,15 @@ pub fn momenta(
     let x1 = f64::cos(theta);
     let x2 = f64::sin(theta);
     let x3 = rho + 0.5 * l;
-    let x4 = f64::sin(psi);
-    let x5 = m + mg;
+    let x4 = theta_dot * x3;
+    let x5 = x2 * x4;
+    let x6 = f64::sin(psi);
+    let x7 = psi_dot * x3;
+    let x8 = m + mg;
     [
-        m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
-            + x5 * X_dot,
-        x5 * Y_dot
-            + m * (x1 * (rho_dot * x4 + x0 * psi_dot * x3) - x2 * theta_dot * x3 * x4),
-        m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
+        (x0 * (x1 * rho_dot - x5) - x1 * x6 * x7) * m + x8 * X_dot,
+        x8 * Y_dot + m * (x1 * (rho_dot * x6 + x0 * x7) - x5 * x6),
+        Z_dot * x8 - (x1 * x4 + x2 * rho_dot) * m,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -409,111 +413,122 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
+        let x0 = f64::cos(theta);
+        let x1 = f64::cos(phi);
+        let x2 = Iyz * x1;
+        let x3 = f64::sin(phi);
+        let x4 = f64::sin(theta);
         let x5 = Iyz * x3;
         let x6 = rho + 0.5 * l;
-        let x7 = f64::cos(psi);
-        let x8 = f64::sin(psi);
-        let x9 = Iyz * x2;
-        let x10 = x2 * Ixz - Ixy * x3;
-        let x11 = -x2 * Izz - x5;
-        let x12 = Iyy * x3 + x9;
-        let x13 = (x11 * x3 + x12 * x2) * x1 - x0 * x10;
-        let x14 = -(x1 * m * x6 * x8);
-        let x15 = x7 * x1 * m * x6;
-        let x16 = l * l;
-        let x17 = -(x0 * x7 * m * x6);
-        let x18 = -(x0 * m * x6 * x8);
-        let x19 = -(x1 * m * x6);
-        let x20 = x7 * x1 * m;
-        let x21 = x1 * m * x8;
-        let x22 = -(x0 * m);
-        let x23 = m + mg;
-        let x24 = x1 * psi_dot * x3 - theta_dot * x2;
-        let x25 = x0 * psi_dot;
-        let x26 = phi_dot - x25;
-        let x27 = theta_dot * x3 + x1 * psi_dot * x2;
-        let x28 = Ixx * x26 - x24 * Ixz - Ixy * x27;
-        let x29 = -phi_dot - x25;
-        let x30 = theta_dot * x29 * x2 + x1 * psi_dot * phi_dot * x3;
-        let x31 = x24 * Izz - Iyz * x27 - Ixz * x26;
-        let x32 = theta_dot * x29 * x3 - x1 * psi_dot * x2 * phi_dot;
-        let x33 = x24 * x28 + Iyy * x30 - x31 * x26 + Ixy * theta_dot * x1 * psi_dot
-            - x32 * Iyz;
-        let x34 = Iyy * x27 - x24 * Iyz - Ixy * x26;
-        let x35 = theta_dot * x1 * psi_dot * Ixz + x34 * x26 - x27 * x28 - Iyz * x30
-            + x32 * Izz;
-        let x36 = theta_dot * Ixx * x1 * psi_dot;
-        let x37 = x31 * x27;
-        let x38 = x32 * Ixz;
-        let x39 = x24 * x34;
-        let x40 = Ixy * x30;
-        let x41 = 2.0 * theta;
-        let x42 = f64::sin(x41);
-        let x43 = f64::cos(x41);
-        let x44 = f64::cos(0.0485 * t);
-        let x45 = f64::sin(0.089 * t);
-        let x46 = rho_dot * x8;
-        let x47 = x7 * psi_dot * x6;
-        let x48 = psi_dot * x6 * x8;
-        let x49 = x7 * rho_dot;
+        let x7 = x0 * m;
+        let x8 = x7 * x6;
+        let x9 = f64::cos(psi);
+        let x10 = f64::sin(psi);
+        let x11 = -x4 * Ixx - x0 * (Ixy * x3 + Ixz * x1);
+        let x12 = x3 * Ixz - Ixy * x1;
+        let x13 = x3 * Izz + x2;
+        let x14 = Iyy * x1 + x5;
+        let x15 = (x14 * x3 - x13 * x1) * x0 - x4 * x12;
+        let x16 = x6 * x10;
+        let x17 = -(x7 * x16);
+        let x18 = x6 * x9;
+        let x19 = x7 * x18;
+        let x20 = l * l;
+        let x21 = rho + l;
+        let x22 = x4 * m;
+        let x23 = -(x18 * x22);
+        let x24 = -(x22 * x16);
+        let x25 = -x8;
+        let x26 = x7 * x9;
+        let x27 = x7 * x10;
+        let x28 = -x22;
+        let x29 = m + mg;
+        let x30 = x0 * psi_dot;
+        let x31 = x30 * x3;
+        let x32 = x4 * psi_dot;
+        let x33 = phi_dot + x32;
+        let x34 = theta_dot * x1;
+        let x35 = -phi_dot * x31 - x33 * x34;
+        let x36 = x31 + x34;
+        let x37 = phi_dot - x32;
+        let x38 = theta_dot * x3;
+        let x39 = x30 * x1;
+        let x40 = x39 - x38;
+        let x41 = Iyy * x36 - Ixy * x37 - Iyz * x40;
+        let x42 = x30 * theta_dot;
+        let x43 = Ixx * x37 - x40 * Ixz - Ixy * x36;
+        let x44 = x39 * phi_dot - x33 * x38;
+        let x45 = x35 * Izz + x41 * x37 + x42 * Ixz - x36 * x43 - x44 * Iyz;
+        let x46 = x40 * Izz - Iyz * x36 - Ixz * x37;
+        let x47 = x40 * x43 - Iyz * x35 - x46 * x37 + x44 * Iyy + Ixy * x42;
+        let x48 = x44 * Ixy;
+        let x49 = x40 * x41;
+        let x50 = x35 * Ixz;
+        let x51 = x46 * x36;
+        let x52 = x42 * Ixx;
+        let x53 = 2.0 * theta;
+        let x54 = f64::sin(x53);
+        let x55 = theta_dot * x54;
+        let x56 = f64::cos(x53);
+        let x57 = psi_dot * psi_dot;
+        let x58 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x59 = rho_dot * x10;
+        let x60 = x18 * psi_dot;
+        let x61 = theta_dot * x0;
+        let x62 = x9 * rho_dot;
+        let x63 = psi_dot * x16;
         Assembly {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [
-                    x1
-                        * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2
-                            + x1 * m * x6 * x6 * (x7 * x7 + x8 * x8)
-                            + (x1 * (Izz * x3 - x9) + x0 * Ixz) * x3) - x0 * x4,
-                    x13,
-                    x4,
-                    0.0,
-                    x14,
+                    x0
+                        * (((Iyy * x3 - x2) * x0 + x4 * Ixy) * x3
+                            + (x0 * (Izz * x1 - x5) + x4 * Ixz) * x1
+                            + x6 * x8 * (x9 * x9 + x10 * x10)) - x4 * x11,
                     x15,
+                    x11,
+                    0.0,
+                    x17,
+                    x19,
                     0.0,
                 ],
                 [
-                    x13,
-                    m * (0.25 * x16 + rho * (rho + l)) - x2 * x11 + x12 * x3,
-                    x10,
+                    x15,
+                    (0.25 * x20 + rho * x21) * m + x14 * x1 + x13 * x3,
+                    x12,
                     0.0,
-                    x17,
-                    x18,
-                    x19,
+                    x23,
+                    x24,
+                    x25,
                 ],
-                [x4, x10, Ixx, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, m, x20, x21, x22],
-                [x14, x17, 0.0, x20, x23, 0.0, 0.0],
-                [x15, x18, 0.0, x21, 0.0, x23, 0.0],
-                [0.0, x19, 0.0, x22, 0.0, 0.0, x23],
+                [x11, x12, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x26, x27, x28],
+                [x17, x23, 0.0, x26, x29, 0.0, 0.0],
+                [x19, x24, 0.0, x27, 0.0, x29, 0.0],
+                [0.0, x25, 0.0, x28, 0.0, 0.0, x29],
             ],
             force: [
-                x1 * (-x2 * x33 - x35 * x3) + (x37 - x36 - x38 - x39 - x40) * x0
-                    - (l * ((0.5 * x43 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x42))
-                        + rho * ((-rho - l) * theta_dot * x42 + rho_dot * (x43 + 1.0)))
-                        * psi_dot * m,
-                x35 * x2
-                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x16) * psi_dot * psi_dot
-                        * x42 + theta_dot * (2.0 * rho + l) * rho_dot) * m - x33 * x3,
-                x36 - x37 + x38 + x39 + x40,
-                0.012 * x44
-                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x43 - 0.25) + rho * (-0.5 * x43 - 0.5)) * psi_dot
-                            * psi_dot) * m - 0.018 * x45,
+                x4 * (x51 - x48 - x49 - x50 - x52) - x0 * (x45 * x1 + x47 * x3)
+                    - (rho * (rho_dot * (x56 + 1.0) - x21 * x55)
+                        + ((0.5 * x56 + 0.5) * rho_dot - 0.25 * (l * x55)) * l) * psi_dot
+                        * m,
+                x45 * x3 - x47 * x1
+                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x20) * x57 * x54
+                        + theta_dot * (2.0 * rho + l) * rho_dot) * m,
+                x48 + x49 + x50 - x51 + x52,
+                x58
+                    - m
+                        * ((l * (-0.25 * x56 - 0.25) + rho * (-0.5 * x56 - 0.5)) * x57
+                            - x6 * theta_dot * theta_dot),
                 -(m
-                    * ((-2.0 * x46 - x47) * x1 * psi_dot
-                        + (x0 * (2.0 * x48 - 2.0 * x49) - theta_dot * x7 * x1 * x6)
-                            * theta_dot)),
-                -((x1 * psi_dot * (2.0 * x49 - x48)
-                    + (x0 * (-2.0 * x46 - 2.0 * x47) - theta_dot * x1 * x6 * x8)
-                        * theta_dot) * m),
-                -(theta_dot * m * (x0 * theta_dot * x6 - 2.0 * (x1 * rho_dot))),
+                    * (theta_dot * (x4 * (2.0 * x63 - 2.0 * x62) - x61 * x18)
+                        - x30 * (2.0 * x59 + x60))),
+                -(m
+                    * ((2.0 * x62 - x63) * x30
+                        + (-x61 * x16 - x4 * (2.0 * x59 + 2.0 * x60)) * theta_dot)),
+                -(theta_dot * (x4 * x6 * theta_dot - 2.0 * (x0 * rho_dot)) * m),
             ],
-            power: rho_dot * (0.012 * x44 - 0.018 * x45),
+            power: x58 * rho_dot,
             checks: [],
             residuals: [],
             positions: [],
@@ -623,8 +638,11 @@ pub mod lagrange {
         let x1 = f64::cos(theta);
         let x2 = f64::sin(theta);
         let x3 = rho + 0.5 * l;
-        let x4 = f64::sin(psi);
-        let x5 = m + mg;
+        let x4 = theta_dot * x3;
+        let x5 = x2 * x4;
+        let x6 = f64::sin(psi);
+        let x7 = psi_dot * x3;
+        let x8 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -655,13 +673,9 @@ pub mod lagrange {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
-                + x5 * X_dot,
-            x5 * Y_dot
-                + m
-                    * (x1 * (rho_dot * x4 + x0 * psi_dot * x3)
-                        - x2 * theta_dot * x3 * x4),
-            m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
+            (x0 * (x1 * rho_dot - x5) - x1 * x6 * x7) * m + x8 * X_dot,
+            x8 * Y_dot + m * (x1 * (rho_dot * x6 + x0 * x7) - x5 * x6),
+            Z_dot * x8 - (x1 * x4 + x2 * rho_dot) * m,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -760,225 +774,232 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = x0 * Ixx;
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = Ixy * x3;
-        let x5 = f64::cos(phi);
-        let x6 = Ixz * x5;
-        let x7 = -x4 - x6;
-        let x8 = x2 * x7;
-        let x9 = x8 - x1;
-        let x10 = Iyz * x5;
-        let x11 = Iyy * x3;
-        let x12 = x11 - x10;
-        let x13 = x12 * x2 + x0 * Ixy;
-        let x14 = x13 * x3;
-        let x15 = rho + 0.5 * l;
-        let x16 = f64::cos(psi);
-        let x17 = x16 * x16;
-        let x18 = f64::sin(psi);
-        let x19 = x18 * x18;
-        let x20 = Izz * x5;
-        let x21 = Iyz * x3;
-        let x22 = x20 - x21;
-        let x23 = x2 * x22 + x0 * Ixz;
-        let x24 = x23 * x5;
-        let x25 = x3 * Ixz - Ixy * x5;
-        let x26 = x0 * x25;
-        let x27 = x3 * Izz;
-        let x28 = -x27 - x10;
-        let x29 = x28 * x5;
-        let x30 = Iyy * x5;
-        let x31 = x30 + x21;
-        let x32 = x31 * x3;
-        let x33 = (x29 + x32) * x2;
-        let x34 = x33 - x26;
-        let x35 = -(x2 * m * x15 * x18);
-        let x36 = x16 * x2 * m * x15;
+        let x0 = f64::cos(phi);
+        let x1 = Iyz * x0;
+        let x2 = f64::sin(phi);
+        let x3 = Iyy * x2;
+        let x4 = x3 - x1;
+        let x5 = f64::cos(theta);
+        let x6 = f64::sin(theta);
+        let x7 = x4 * x5 + x6 * Ixy;
+        let x8 = x7 * x2;
+        let x9 = f64::cos(psi);
+        let x10 = x9 * x9;
+        let x11 = f64::sin(psi);
+        let x12 = x11 * x11;
+        let x13 = rho + 0.5 * l;
+        let x14 = x5 * m;
+        let x15 = x14 * x13;
+        let x16 = x13 * x15;
+        let x17 = Izz * x0;
+        let x18 = Iyz * x2;
+        let x19 = x17 - x18;
+        let x20 = x5 * x19 + x6 * Ixz;
+        let x21 = x20 * x0;
+        let x22 = x6 * Ixx;
+        let x23 = Ixy * x2 + Ixz * x0;
+        let x24 = x5 * x23;
+        let x25 = -x22 - x24;
+        let x26 = x2 * Izz;
+        let x27 = x26 + x1;
+        let x28 = Iyy * x0;
+        let x29 = x28 + x18;
+        let x30 = x29 * x2 - x27 * x0;
+        let x31 = x2 * Ixz - Ixy * x0;
+        let x32 = x5 * x30 - x6 * x31;
+        let x33 = x13 * x11;
+        let x34 = -(x14 * x33);
+        let x35 = x13 * x9;
+        let x36 = x14 * x35;
         let x37 = l * l;
-        let x38 = 0.25 * x37 + rho * (rho + l);
-        let x39 = -(x0 * x16 * m * x15);
-        let x40 = -(x0 * m * x15 * x18);
-        let x41 = -(x2 * m * x15);
-        let x42 = x16 * x2 * m;
-        let x43 = x2 * m * x18;
-        let x44 = -(x0 * m);
-        let x45 = m + mg;
-        let x46 = x2 * psi_dot * x5 - theta_dot * x3;
-        let x47 = x0 * psi_dot;
-        let x48 = phi_dot - x47;
-        let x49 = theta_dot * x5;
-        let x50 = x2 * psi_dot * x3;
-        let x51 = x49 + x50;
-        let x52 = Ixx * x48 - x46 * Ixz - Ixy * x51;
-        let x53 = -phi_dot - x47;
-        let x54 = x2 * psi_dot * phi_dot * x5;
-        let x55 = theta_dot * x53 * x3 + x54;
-        let x56 = Iyy * x55;
-        let x57 = Iyz * x51;
-        let x58 = Ixz * x48;
-        let x59 = x46 * Izz;
-        let x60 = x59 - x57 - x58;
-        let x61 = x60 * x48;
-        let x62 = Ixy * theta_dot * x2 * psi_dot;
-        let x63 = theta_dot * x53 * x5 - x2 * psi_dot * x3 * phi_dot;
-        let x64 = x63 * Iyz;
-        let x65 = x46 * x52 + x56 - x61 + x62 - x64;
-        let x66 = x3 * x65;
-        let x67 = theta_dot * x2 * psi_dot * Ixz;
-        let x68 = x46 * Iyz;
-        let x69 = Ixy * x48;
-        let x70 = Iyy * x51 - x68 - x69;
-        let x71 = x70 * x48;
-        let x72 = x51 * x52;
-        let x73 = Iyz * x55;
-        let x74 = x63 * Izz;
-        let x75 = x67 + x71 - x72 - x73 + x74;
-        let x76 = x75 * x5;
-        let x77 = theta_dot * Ixx * x2 * psi_dot;
-        let x78 = x60 * x51;
-        let x79 = x63 * Ixz;
-        let x80 = x46 * x70;
-        let x81 = Ixy * x55;
-        let x82 = x78 - x77 - x79 - x80 - x81;
-        let x83 = 2.0 * theta;
-        let x84 = f64::sin(x83);
-        let x85 = f64::cos(x83);
-        let x86 = 0.5 * x85 + 0.5;
-        let x87 = -rho - l;
-        let x88 = x85 + 1.0;
-        let x89 = rho_dot * x88;
-        let x90 = l * (x86 * rho_dot - 0.25 * (l * theta_dot * x84))
-            + rho * (x87 * theta_dot * x84 + x89);
-        let x91 = 2.0 * rho + l;
-        let x92 = -0.5 * x85 - 0.5;
-        let x93 = f64::cos(0.0485 * t);
-        let x94 = f64::sin(0.089 * t);
-        let x95 = rho_dot * x18;
-        let x96 = x16 * psi_dot * x15;
-        let x97 = psi_dot * x15 * x18;
-        let x98 = x16 * rho_dot;
-        let x99 = 2.0 * x97 - 2.0 * x98;
-        let x100 = x0 * x99;
-        let x101 = theta_dot * x16 * x2 * x15;
-        let x102 = -(m
-            * ((-2.0 * x95 - x96) * x2 * psi_dot + (x100 - x101) * theta_dot));
-        let x103 = -2.0 * x95 - 2.0 * x96;
-        let x104 = x0 * x103;
-        let x105 = theta_dot * x2 * x15 * x18;
-        let x106 = x2 * rho_dot;
-        let x107 = x0 * theta_dot * x15;
-        let x108 = 0.012 * x93 - 0.018 * x94;
-        let x109 = -(x16 * x2 * m * x15);
-        let x110 = x0 * m * x15 * x18;
-        let x111 = -(x2 * m * x18);
-        let x112 = Ixx * x2;
-        let x113 = x4 + x6;
-        let x114 = x0 * x113;
-        let x115 = Ixy * x2 + x0 * (x10 - x11);
-        let x116 = x0 * (x21 - x20) + x2 * Ixz;
-        let x117 = x25 * x2;
-        let x118 = x0 * (-x29 - x32) - x117;
-        let x119 = x114 - x112;
-        let x120 = x0 * m * x15;
-        let x121 = -(x0 * x16 * m);
-        let x122 = -(x0 * m * x18);
-        let x123 = -(x2 * m);
-        let x124 = -2.0 * rho - l;
-        let x125 = x0 * x3 * phi_dot - theta_dot * x2 * x5;
-        let x126 = -theta_dot * x2 * x3 - x0 * phi_dot * x5;
-        let x127 = Ixy * theta_dot;
-        let x128 = x5 * x52;
-        let x129 = Iyy * x126 - Iyz * x125 - x116 * x48 + x46 * x119 + x60 * x2
-            + x0 * (-x127 - x128);
-        let x130 = theta_dot * Ixz;
-        let x131 = x3 * x52;
-        let x132 = x48 * x115 + x125 * Izz - x119 * x51 - Iyz * x126 - x70 * x2
-            + x0 * (x131 - x130);
-        let x133 = x125 * Ixz;
-        let x134 = Ixy * x126;
-        let x135 = x46 * x115;
-        let x136 = x116 * x51;
-        let x137 = x60 * x3;
-        let x138 = theta_dot * Ixx;
-        let x139 = x70 * x5;
-        let x140 = x138 - x137 + x139;
-        let x141 = x137 - x138 - x139;
-        let x142 = theta_dot * theta_dot;
-        let x143 = psi_dot * psi_dot;
-        let x144 = x142 + x143;
-        let x145 = x27 + 2.0 * x10 - x11;
-        let x146 = x2 * (x145 * x3 + (x30 - x20 + 2.0 * x21) * x5) - x114;
-        let x147 = -x49 - x50;
-        let x148 = x147 * Izz;
-        let x149 = x148 - x68;
-        let x150 = x149 * x51;
-        let x151 = x70 * x147;
-        let x152 = theta_dot * (phi_dot + x47) * x3 - x54;
-        let x153 = x152 * Ixz;
-        let x154 = x46 * Iyy;
-        let x155 = Iyz * x147;
-        let x156 = x63 * Ixy;
-        let x157 = -x147 * Ixz - x46 * Ixy;
-        let x158 = Iyz * x152 - x147 * x52 - x63 * Iyy + x67 + x71 - x72 - x73
-            + x149 * x48 + x74 - x46 * x157;
-        let x159 = (x154 - x155) * x48;
-        let x160 = x51 * x157;
-        let x161 = x152 * Izz;
-        let x162 = -x142 - x143;
-        let x163 = -x2 * x3 * phi_dot - x0 * theta_dot * x5;
-        let x164 = x2 * phi_dot * x5 - x0 * theta_dot * x3;
-        let x165 = Izz * x163 + x13 * x48 - x164 * Iyz + (x130 - x131) * x2 - x51 * x9
-            - x0 * x70;
-        let x166 = x46 * x9 - Iyz * x163 - x23 * x48 + x164 * Iyy + x60 * x0
-            + x2 * (x127 + x128);
-        let x167 = x23 * x51;
-        let x168 = Ixz * x163;
-        let x169 = x46 * x13;
-        let x170 = Ixy * x164;
-        let x171 = x28 * x51;
-        let x172 = Ixx * x2 * psi_dot;
-        let x173 = x70 * x3;
-        let x174 = x60 * x5;
-        let x175 = x46 * x31;
-        let x176 = Ixy * x2 * psi_dot - x131 - x28 * x48 + x46 * x25 + x12 * x53;
-        let x177 = x2 * psi_dot * Ixz - x25 * x51 - x128 + x53 * x22 + x31 * x48;
-        let x178 = x148 - 2.0 * x68 - 2.0 * x69 + (Iyy - Ixx) * x51;
-        let x179 = 2.0 * x58 + Iyz * (2.0 * x49 + 2.0 * x50) + x46 * (Iyy + Ixx - Izz);
+        let x38 = rho + l;
+        let x39 = rho * x38;
+        let x40 = 0.25 * x37 + x39;
+        let x41 = x6 * m;
+        let x42 = -(x35 * x41);
+        let x43 = x41 * x33;
+        let x44 = -x43;
+        let x45 = -x15;
+        let x46 = x14 * x9;
+        let x47 = x14 * x11;
+        let x48 = -x41;
+        let x49 = m + mg;
+        let x50 = psi_dot * m;
+        let x51 = 2.0 * theta;
+        let x52 = f64::sin(x51);
+        let x53 = theta_dot * x52;
+        let x54 = f64::cos(x51);
+        let x55 = x54 + 1.0;
+        let x56 = rho_dot * x55;
+        let x57 = 0.5 * x54 + 0.5;
+        let x58 = rho * (x56 - x38 * x53) + (x57 * rho_dot - 0.25 * (l * x53)) * l;
+        let x59 = x5 * psi_dot;
+        let x60 = theta_dot * x2;
+        let x61 = x59 * x0 - x60;
+        let x62 = Izz * x61;
+        let x63 = x6 * psi_dot;
+        let x64 = phi_dot - x63;
+        let x65 = Ixz * x64;
+        let x66 = x59 * x2;
+        let x67 = theta_dot * x0;
+        let x68 = x66 + x67;
+        let x69 = Iyz * x68;
+        let x70 = x62 + (-x65 - x69);
+        let x71 = x70 * x68;
+        let x72 = phi_dot + x63;
+        let x73 = x60 * x72;
+        let x74 = phi_dot * x0;
+        let x75 = x59 * x74;
+        let x76 = x75 - x73;
+        let x77 = Ixy * x76;
+        let x78 = x2 * phi_dot;
+        let x79 = -x72 * x67 - x78 * x59;
+        let x80 = x79 * Ixz;
+        let x81 = Iyz * x61;
+        let x82 = Ixy * x64;
+        let x83 = Iyy * x68 - x81 - x82;
+        let x84 = x83 * x61;
+        let x85 = x59 * theta_dot;
+        let x86 = x85 * Ixx;
+        let x87 = x71 - x77 - x80 - x84 - x86;
+        let x88 = Iyz * x79;
+        let x89 = x76 * Iyy;
+        let x90 = x70 * x64;
+        let x91 = Ixy * x85;
+        let x92 = (x89 - x90) + x91;
+        let x93 = Ixx * x64 - Ixy * x68 - Ixz * x61;
+        let x94 = x92 - x88 + x93 * x61;
+        let x95 = x68 * x93;
+        let x96 = ((x83 * x64 + x85 * Ixz) + x79 * Izz) + (-x76 * Iyz - x95);
+        let x97 = x94 * x2 + x96 * x0;
+        let x98 = psi_dot * psi_dot;
+        let x99 = x98 * x52;
+        let x100 = theta_dot * rho_dot;
+        let x101 = 2.0 * rho + l;
+        let x102 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x103 = -0.5 * x54 - 0.5;
+        let x104 = theta_dot * theta_dot;
+        let x105 = rho_dot * x11;
+        let x106 = x35 * psi_dot;
+        let x107 = theta_dot * x5;
+        let x108 = x107 * x35;
+        let x109 = x9 * rho_dot;
+        let x110 = psi_dot * x33;
+        let x111 = 2.0 * x110 - 2.0 * x109;
+        let x112 = x6 * x111;
+        let x113 = -(m * (theta_dot * (x112 - x108) - x59 * (2.0 * x105 + x106)));
+        let x114 = 2.0 * x105 + 2.0 * x106;
+        let x115 = x6 * x114;
+        let x116 = x107 * x33;
+        let x117 = x5 * rho_dot;
+        let x118 = x6 * theta_dot;
+        let x119 = x13 * x118;
+        let x120 = theta_dot * m;
+        let x121 = -x36;
+        let x122 = -x47;
+        let x123 = Ixy * x5 + x6 * (x1 - x3);
+        let x124 = x6 * (x18 - x17) + x5 * Ixz;
+        let x125 = 2.0 * x10 + 2.0 * x12;
+        let x126 = Ixx * x5;
+        let x127 = x6 * x23;
+        let x128 = x31 * x5;
+        let x129 = -x128 - x6 * x30;
+        let x130 = x127 - x126;
+        let x131 = x13 * x41;
+        let x132 = -(x9 * x41);
+        let x133 = -(x41 * x11);
+        let x134 = -x14;
+        let x135 = x83 * x0;
+        let x136 = theta_dot * Ixx;
+        let x137 = x70 * x2;
+        let x138 = x135 + x136 - x137;
+        let x139 = x107 * x2 + x6 * x74;
+        let x140 = Ixy * x139;
+        let x141 = x78 * x6 - x107 * x0;
+        let x142 = Ixz * x141;
+        let x143 = x123 * x61;
+        let x144 = x124 * x68;
+        let x145 = x2 * x93;
+        let x146 = theta_dot * Ixz;
+        let x147 = x64 * x123 + Izz * x141 - x5 * x83 - x68 * x130 + (x145 - x146) * x6
+            + Iyz * x139;
+        let x148 = x93 * x0;
+        let x149 = Ixy * theta_dot + x148;
+        let x150 = x130 * x61 - Iyz * x141 - x124 * x64 + x70 * x5 - x6 * x149
+            - Iyy * x139;
+        let x151 = x137 - x135 - x136;
+        let x152 = x50 * x52;
+        let x153 = psi_dot * x11;
+        let x154 = x98 + x104;
+        let x155 = x9 * psi_dot;
+        let x156 = x26 + 2.0 * x1 - x3;
+        let x157 = x5 * (x156 * x2 + (x28 - x17 + 2.0 * x18) * x0) - x127;
+        let x158 = x73 - x75;
+        let x159 = x68 * Izz;
+        let x160 = -x159 - x81;
+        let x161 = Ixy * x61 - x68 * Ixz;
+        let x162 = Iyz * x158 + x96 + x64 * x160 + x95 + x161 * x61 - Iyy * x79;
+        let x163 = x158 * Izz;
+        let x164 = x161 * x68;
+        let x165 = Iyy * x61;
+        let x166 = x165 + x69;
+        let x167 = x166 * x64;
+        let x168 = x158 * Ixz;
+        let x169 = x68 * x160;
+        let x170 = Ixy * x79;
+        let x171 = x68 * x83;
+        let x172 = m * x101;
+        let x173 = -(x154 * x5);
+        let x174 = x74 * x5 - x2 * x118;
+        let x175 = x78 * x5 + x118 * x0;
+        let x176 = x7 * x64 - x68 * x25 + x5 * (x146 - x145) - Iyz * x174 - x6 * x83
+            - Izz * x175;
+        let x177 = x70 * x6 + x5 * x149 - x20 * x64 + Iyz * x175 + x61 * x25
+            + Iyy * x174;
+        let x178 = x68 * x20;
+        let x179 = Ixy * x174;
+        let x180 = Ixz * x175;
+        let x181 = x7 * x61;
+        let x182 = x27 * x64 - x145 - x4 * x72 + x31 * x61 + x59 * Ixy;
+        let x183 = x29 * x64 - x31 * x68 + x59 * Ixz - x72 * x19 - x148;
+        let x184 = x72 * x23;
+        let x185 = x2 * x83;
+        let x186 = x29 * x61;
+        let x187 = x59 * Ixx;
+        let x188 = x70 * x0;
+        let x189 = x68 * x27;
+        let x190 = x68 * (Iyy - Ixx) - x159 - 2.0 * x81 - 2.0 * x82;
+        let x191 = (Iyy + Ixx - Izz) * x61 + Iyz * (2.0 * x66 + 2.0 * x67) + 2.0 * x65;
         Derivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [
-                    x2 * (x14 + x2 * m * x15 * x15 * (x17 + x19) + x24) - x0 * x9,
-                    x34,
-                    x9,
+                    (x8 + (x10 + x12) * x16 + x21) * x5 - x6 * x25,
+                    x32,
+                    x25,
                     0.0,
-                    x35,
+                    x34,
                     x36,
                     0.0,
                 ],
-                [x34, m * x38 - x3 * x28 + x31 * x5, x25, 0.0, x39, x40, x41],
-                [x9, x25, Ixx, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, m, x42, x43, x44],
-                [x35, x39, 0.0, x42, x45, 0.0, 0.0],
-                [x36, x40, 0.0, x43, 0.0, x45, 0.0],
-                [0.0, x41, 0.0, x44, 0.0, 0.0, x45],
+                [x32, x40 * m + x29 * x0 + x27 * x2, x31, 0.0, x42, x44, x45],
+                [x25, x31, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x46, x47, x48],
+                [x34, x42, 0.0, x46, x49, 0.0, 0.0],
+                [x36, x44, 0.0, x47, 0.0, x49, 0.0],
+                [0.0, x45, 0.0, x48, 0.0, 0.0, x49],
             ],
             force: [
-                x2 * (-x66 - x76) + x82 * x0 - x90 * psi_dot * m,
-                x75 * x3
-                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x37) * psi_dot * psi_dot
-                        * x84 + theta_dot * x91 * rho_dot) * m - x65 * x5,
-                x77 - x78 + x79 + x80 + x81,
-                0.012 * x93
-                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x85 - 0.25) + rho * x92) * psi_dot * psi_dot) * m
-                    - 0.018 * x94,
-                x102,
-                -((x2 * psi_dot * (2.0 * x98 - x97) + (x104 - x105) * theta_dot) * m),
-                -(theta_dot * m * (x107 - 2.0 * x106)),
+                x6 * x87 - x50 * x58 - x5 * x97,
+                x2 * x96 - x94 * x0
+                    - m
+                        * (x99 * (rho * (0.5 * rho + 0.5 * l) + 0.125 * x37)
+                            + x100 * x101),
+                x77 - x71 + x80 + x84 + x86,
+                x102 - m * ((l * (-0.25 * x54 - 0.25) + rho * x103) * x98 - x13 * x104),
+                x113,
+                -(m * ((2.0 * x109 - x110) * x59 + theta_dot * (-x115 - x116))),
+                -((x119 - 2.0 * x117) * x120),
             ],
             checks: [],
             d_qdot: [
@@ -999,75 +1020,57 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, x109, x35, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x110, x39, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x121, x34, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x43, x42, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x111, x42, 0.0],
-                    [x109, x110, 0.0, x111, 0.0, 0.0, 0.0],
-                    [x35, x39, 0.0, x42, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        x0
-                            * (x112 - x14 - x24
-                                + x2 * m * x15 * x15 * (-2.0 * x17 - 2.0 * x19) - x114)
-                            + x2 * (x1 - x8 + x3 * x115 + x116 * x5),
-                        x118,
-                        x119,
-                        0.0,
-                        x110,
-                        x39,
-                        0.0,
-                    ],
-                    [x118, 0.0, 0.0, 0.0, x109, x35, x120],
-                    [x119, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x121, x122, x123],
-                    [x110, x109, 0.0, x121, 0.0, 0.0, 0.0],
-                    [x39, x35, 0.0, x122, 0.0, 0.0, 0.0],
-                    [0.0, x120, 0.0, x123, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        (x13 * x5 - x26 - x23 * x3 + x33) * x2,
-                        x146,
-                        x117,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [
-                        x146,
-                        (x20 - x30 - 2.0 * x21) * x3 + x145 * x5,
-                        x113,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
-                    [x117, x113, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x122, x46, 0.0],
+                    [x121, x43, 0.0, x122, 0.0, 0.0, 0.0],
+                    [x34, x42, 0.0, x46, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        x2 * x2 * m * x15 * (2.0 * x17 + 2.0 * x19),
+                        (x22 + x24 + x2 * x123 + x124 * x0) * x5
+                            + x6 * (x126 - x8 - x125 * x16 - x21 - x127),
+                        x129,
+                        x130,
                         0.0,
-                        0.0,
-                        0.0,
-                        x111,
+                        x43,
                         x42,
                         0.0,
                     ],
-                    [0.0, m * x91, 0.0, 0.0, x121, x122, x123],
+                    [x129, 0.0, 0.0, 0.0, x121, x34, x131],
+                    [x130, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x132, x133, x134],
+                    [x43, x121, 0.0, x132, 0.0, 0.0, 0.0],
+                    [x42, x34, 0.0, x133, 0.0, 0.0, 0.0],
+                    [0.0, x131, 0.0, x134, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x5 * (x7 * x0 - x20 * x2 + x32), x157, x128, 0.0, 0.0, 0.0, 0.0],
+                    [
+                        x157,
+                        (x17 - x28 - 2.0 * x18) * x2 + x156 * x0,
+                        x23,
+                        0.0,
+                        0.0,
+                        0.0,
+                        0.0,
+                    ],
+                    [x128, x23, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x111, x121, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x42, x122, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x123, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x15 * x5 * x125, 0.0, 0.0, 0.0, x122, x46, 0.0],
+                    [0.0, x172, 0.0, 0.0, x132, x133, x134],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x122, x132, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x46, x133, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x134, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1166,80 +1169,71 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     0.0,
-                    -((theta_dot * (x0 * (2.0 * x95 + 2.0 * x96) + x105)
-                        + (x97 - 2.0 * x98) * x2 * psi_dot) * m),
-                    x102,
+                    -((theta_dot * (x115 + x116) + x59 * (x110 - 2.0 * x109)) * m),
+                    x113,
                     0.0,
                 ],
                 [
-                    psi_dot
-                        * (x2 * (-x129 * x3 - x132 * x5)
-                            - (theta_dot * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x37)
-                                * x85 + x124 * rho_dot * x84) * m
-                            + x0 * (x136 - x133 - x134 - x135 + x0 * x140))
-                        + x0 * (x66 + x76) + x82 * x2,
-                    (x132 * x3 - psi_dot * m * x85 * x38 - x129 * x5) * psi_dot,
-                    (x133 + x134 + x135 + x141 * x0 - x136) * psi_dot,
-                    -(psi_dot * psi_dot * m * x15 * x84),
-                    -(m
-                        * (theta_dot * x2 * x99
-                            + x0
-                                * (x144 * x16 * x15 + 2.0 * (psi_dot * rho_dot * x18)))),
-                    -((x0 * (x144 * x15 * x18 - 2.0 * (x16 * psi_dot * rho_dot))
-                        + theta_dot * x103 * x2) * m),
-                    -(theta_dot * (theta_dot * x2 * x15 + 2.0 * (x0 * rho_dot)) * m),
+                    x87 * x5
+                        + psi_dot
+                            * (x6 * (x6 * x138 + x140 - x142 - x143 + x144)
+                                - x5 * (x147 * x0 + x2 * x150)
+                                - ((-0.5 * x37 - rho * (2.0 * rho + 2.0 * l)) * theta_dot
+                                    * x54 - rho_dot * x101 * x52) * m) + x6 * x97,
+                    (x2 * x147 - x40 * x50 * x54 - x150 * x0) * psi_dot,
+                    (x142 - x140 + x143 + x6 * x151 - x144) * psi_dot,
+                    -(x13 * psi_dot * x152),
+                    -(m * ((2.0 * (rho_dot * x153) + x154 * x35) * x6 + x107 * x111)),
+                    -((x6 * (x154 * x33 - 2.0 * (x155 * rho_dot)) - x107 * x114) * m),
+                    -((x107 * x13 + 2.0 * (x6 * rho_dot)) * x120),
                 ],
                 [
-                    x0
-                        * (x150 - x151 - x153 + x46 * (x155 - x154 - x57 - x58 + x59)
-                            - x156)
-                        + x2
-                            * (x158 * x3
-                                + (x61 - x159 - x56 + x160 - x62 + 2.0 * x64 - x161) * x5),
-                    (x159 + x56 - x61 - x160 + x62 - 2.0 * x64 + x161) * x3 + x158 * x5,
-                    x46 * (x154 + x57 - x155 + x58 - x59) - x150 + x151 + x153 + x156,
+                    x5
+                        * (x2 * x162
+                            + (2.0 * x88 - x89 - x163 + x90 - x164 - x167 - x91) * x0)
+                        + x6 * (x169 - x168 - x170 + x171 + (x70 - x165 - x69) * x61),
+                    x2 * (x163 - 2.0 * x88 + x92 + x164 + x167) + x0 * x162,
+                    x168 - x169 + x170 + (x166 - x62 + x65 + x69) * x61 - x171,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    -(psi_dot * m * (x124 * theta_dot * x84 + x89)),
-                    -(m * (2.0 * (theta_dot * rho_dot) + psi_dot * psi_dot * x15 * x84)),
+                    -(x50 * (x56 - x53 * x101)),
+                    -((2.0 * x100 + x13 * x99) * m),
                     0.0,
-                    -(m * (psi_dot * psi_dot * x92 - x142)),
-                    -((x16 * x2 * x162 + 2.0 * (x0 * theta_dot * psi_dot * x18)) * m),
-                    -(m * (x2 * x18 * x162 - 2.0 * (x0 * theta_dot * x16 * psi_dot))),
-                    -(x0 * theta_dot * theta_dot * m),
+                    -((x98 * x103 - x104) * m),
+                    -(m * (x173 * x9 + 2.0 * (x118 * x153))),
+                    -(m * (x173 * x11 - 2.0 * (x155 * x118))),
+                    -(x120 * x118),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (-x165 * x5 - x166 * x3) * x2
-                        + (x167 - x168 - x169 + x141 * x2 - x170) * x0 - x90 * m,
-                    x165 * x3 - x166 * x5 - psi_dot * m * x84 * x38,
-                    x140 * x2 - x167 + x168 + x169 + x170,
-                    -((rho * (-x85 - 1.0) + l * x92) * psi_dot * m),
-                    -(m * (x103 * x2 + 2.0 * (x0 * theta_dot * x15 * x18))),
-                    -(((2.0 * x106 - 2.0 * x107) * x16
-                        - 2.0 * (x2 * psi_dot * x15 * x18)) * m),
+                    x6 * (x178 + x5 * x151 - x179 + x180 - x181)
+                        - (x176 * x0 + x177 * x2) * x5 - x58 * m,
+                    x176 * x2 - x177 * x0 - x40 * x152,
+                    x5 * x138 - x178 + x179 - x180 + x181,
+                    -((rho * (-x54 - 1.0) + l * x103) * x50),
+                    -((2.0 * (x118 * x33) - x5 * x114) * m),
+                    -(m * ((2.0 * x117 - 2.0 * x119) * x9 - 2.0 * (x59 * x33))),
                     0.0,
                 ],
                 [
-                    (x171 + x53 * x7 - x172 + x173 + x174 - x175) * x0
-                        + x2 * (-x176 * x3 - x177 * x5)
-                        - psi_dot * m * (rho * x87 - 0.25 * x37) * x84,
-                    x3 * x177 - m * x91 * rho_dot - x176 * x5,
-                    x172 - x171 + x53 * x113 - x173 - x174 + x175,
-                    -(x124 * theta_dot * m),
-                    -(m * (x100 - 2.0 * x101)),
-                    -((x104 - 2.0 * x105) * m),
-                    -((2.0 * x107 - 2.0 * x106) * m),
+                    x6 * (x184 + x185 - x186 - x187 + x188 - x189)
+                        - x5 * (x2 * x182 + x183 * x0) - (-0.25 * x37 - x39) * x152,
+                    x2 * x183 - rho_dot * x172 - x182 * x0,
+                    x186 - x184 - x185 + x187 - x188 + x189,
+                    x120 * x101,
+                    -((x112 - 2.0 * x108) * m),
+                    -((-x115 - 2.0 * x116) * m),
+                    -((2.0 * x119 - 2.0 * x117) * m),
                 ],
                 [
-                    x2 * (-x178 * x5 - x179 * x3),
-                    x178 * x3 - x179 * x5,
+                    -(x5 * (x190 * x0 + x191 * x2)),
+                    x2 * x190 - x191 * x0,
                     0.0,
                     0.0,
                     0.0,
@@ -1247,19 +1241,19 @@ pub mod lagrange {
                     0.0,
                 ],
                 [
-                    -(psi_dot * m * (rho * x88 + l * x86)),
-                    -(theta_dot * m * x91),
+                    -(x50 * (rho * x55 + l * x57)),
+                    -(x120 * x101),
                     0.0,
                     0.0,
-                    -((-2.0 * (x0 * theta_dot * x16) - 2.0 * (x2 * psi_dot * x18)) * m),
-                    -((2.0 * (x16 * x2 * psi_dot) - 2.0 * (x0 * theta_dot * x18)) * m),
-                    2.0 * theta_dot * x2 * m,
+                    m * (2.0 * (x59 * x11) + 2.0 * (x9 * x118)),
+                    -(m * (2.0 * (x59 * x9) - 2.0 * (x118 * x11))),
+                    2.0 * x14 * theta_dot,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: rho_dot * x108,
+            power: x102 * rho_dot,
             d_power: [
                 0.0,
                 0.0,
@@ -1271,7 +1265,7 @@ pub mod lagrange {
                 0.0,
                 0.0,
                 0.0,
-                x108,
+                x102,
                 0.0,
                 0.0,
                 0.0,
@@ -1405,161 +1399,175 @@ pub mod lagrange {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(theta);
+        let x0 = f64::cos(phi);
+        let x1 = Iyz * x0;
         let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = x1 * (-Ixy * x2 - Ixz * x3) - x0 * Ixx;
-        let x5 = Iyz * x3;
-        let x6 = rho + 0.5 * l;
-        let x7 = f64::cos(psi);
-        let x8 = f64::sin(psi);
-        let x9 = x7 * x7 + x8 * x8;
-        let x10 = Iyz * x2;
-        let x11 = x2 * Ixz - Ixy * x3;
-        let x12 = -x2 * Izz - x5;
-        let x13 = Iyy * x3 + x10;
-        let x14 = (x12 * x3 + x13 * x2) * x1 - x0 * x11;
-        let x15 = -(x1 * m * x6 * x8);
-        let x16 = x7 * x1 * m * x6;
-        let x17 = l * l;
-        let x18 = rho + l;
-        let x19 = 0.25 * x17 + rho * x18;
-        let x20 = -(x0 * x7 * m * x6);
-        let x21 = -(x0 * m * x6 * x8);
-        let x22 = -(x1 * m * x6);
-        let x23 = x7 * x1 * m;
-        let x24 = x1 * m * x8;
-        let x25 = -(x0 * m);
-        let x26 = m + mg;
-        let x27 = x1 * psi_dot * x3;
-        let x28 = theta_dot * x2;
-        let x29 = x27 - x28;
-        let x30 = x0 * psi_dot;
-        let x31 = phi_dot - x30;
-        let x32 = theta_dot * x3;
-        let x33 = x1 * psi_dot * x2;
-        let x34 = x32 + x33;
-        let x35 = Ixx * x31 - x29 * Ixz - Ixy * x34;
-        let x36 = -phi_dot - x30;
-        let x37 = theta_dot * x36 * x2;
-        let x38 = x1 * psi_dot * phi_dot * x3;
-        let x39 = x37 + x38;
-        let x40 = x29 * Izz - Iyz * x34 - Ixz * x31;
-        let x41 = theta_dot * x36 * x3;
-        let x42 = x1 * psi_dot * x2 * phi_dot;
-        let x43 = x41 - x42;
-        let x44 = x29 * x35 + Iyy * x39 - x40 * x31 + Ixy * theta_dot * x1 * psi_dot
-            - x43 * Iyz;
-        let x45 = Iyy * x34 - x29 * Iyz - Ixy * x31;
-        let x46 = theta_dot * x1 * psi_dot * Ixz + x45 * x31 - x34 * x35 - Iyz * x39
-            + x43 * Izz;
-        let x47 = theta_dot * Ixx * x1 * psi_dot;
-        let x48 = x40 * x34;
-        let x49 = x43 * Ixz;
-        let x50 = x29 * x45;
-        let x51 = Ixy * x39;
-        let x52 = 2.0 * theta;
-        let x53 = f64::sin(x52);
-        let x54 = l * theta_dot * x53;
-        let x55 = f64::cos(x52);
-        let x56 = 0.5 * x55 + 0.5;
-        let x57 = x56 * rho_dot;
-        let x58 = -rho - 0.5 * l;
-        let x59 = -0.25 * x55 - 0.25;
-        let x60 = -0.5 * x55 - 0.5;
-        let x61 = f64::cos(0.0485 * t);
-        let x62 = f64::sin(0.089 * t);
-        let x63 = rho_dot * x8;
-        let x64 = x7 * psi_dot * x6;
-        let x65 = psi_dot * x6 * x8;
-        let x66 = x7 * rho_dot;
-        let x67 = theta_dot * x7 * x1 * x6;
-        let x68 = theta_dot * x1 * x6 * x8;
-        let x69 = x1 * rho_dot;
-        let x70 = x0 * theta_dot * x6;
-        let x71 = -x0;
-        let x72 = theta_dot * x1 * psi_dot;
-        let x73 = x1 * x2 * x3;
-        let x74 = x3 * x3;
-        let x75 = -(x1 * x2 * x3);
-        let x76 = x2 * x2;
-        let x77 = x0 * x3;
-        let x78 = -(x1 * x2);
-        let x79 = -x3;
-        let x80 = -x32 - x33;
-        let x81 = x29 * x80 + x72;
-        let x82 = x30 - phi_dot;
-        let x83 = x31 * x82;
-        let x84 = x80 * x34;
-        let x85 = x83 - x84;
-        let x86 = phi_dot + x30;
-        let x87 = theta_dot * x86 * x2;
-        let x88 = x29 * x82;
-        let x89 = -(x0 * x2);
-        let x90 = -(x1 * x3);
-        let x91 = x28 - x27;
-        let x92 = x29 * x91;
-        let x93 = x92 - x83;
-        let x94 = x72 - x91 * x34;
-        let x95 = x82 * x34;
-        let x96 = theta_dot * x86 * x3;
-        let x97 = (x76 - x74) * x1;
-        let x98 = x87 + x91 * x31 - x38;
-        let x99 = x42 - x80 * x31 + x96;
-        let x100 = -(x1 * x6 * x8);
-        let x101 = x7 * x1 * x6;
-        let x102 = -(x0 * x7 * x6);
-        let x103 = -(x0 * x6 * x8);
-        let x104 = -(x1 * x6);
-        let x105 = x7 * x1;
-        let x106 = x1 * x8;
-        let x107 = -(0.5 * x1 * m * x8);
-        let x108 = 0.5 * x7 * x1 * m;
-        let x109 = -(0.5 * x0 * x7 * m);
-        let x110 = -(0.5 * x0 * m * x8);
-        let x111 = -(0.5 * x1 * m);
-        let x112 = theta_dot * theta_dot;
-        let x113 = -0.5 * x112 - 0.5 * (psi_dot * psi_dot);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(theta);
+        let x5 = rho + 0.5 * l;
+        let x6 = x5 * x3;
+        let x7 = m * x6;
+        let x8 = f64::cos(psi);
+        let x9 = f64::sin(psi);
+        let x10 = x8 * x8 + x9 * x9;
+        let x11 = Iyz * x2;
+        let x12 = -x4 * Ixx - x3 * (Ixy * x2 + Ixz * x0);
+        let x13 = x2 * Ixz - Ixy * x0;
+        let x14 = x2 * Izz + x1;
+        let x15 = Iyy * x0 + x11;
+        let x16 = (x15 * x2 - x14 * x0) * x3 - x4 * x13;
+        let x17 = -(x7 * x9);
+        let x18 = x7 * x8;
+        let x19 = l * l;
+        let x20 = rho + l;
+        let x21 = 0.25 * x19 + rho * x20;
+        let x22 = x5 * x8;
+        let x23 = x4 * m;
+        let x24 = -(x22 * x23);
+        let x25 = x5 * x9;
+        let x26 = -(x23 * x25);
+        let x27 = -x7;
+        let x28 = x3 * m;
+        let x29 = x28 * x8;
+        let x30 = x28 * x9;
+        let x31 = -x23;
+        let x32 = m + mg;
+        let x33 = psi_dot * m;
+        let x34 = 2.0 * theta;
+        let x35 = f64::sin(x34);
+        let x36 = theta_dot * x35;
+        let x37 = x20 * x36;
+        let x38 = f64::cos(x34);
+        let x39 = l * x36;
+        let x40 = 0.5 * x38 + 0.5;
+        let x41 = x40 * rho_dot;
+        let x42 = x3 * psi_dot;
+        let x43 = x42 * x2;
+        let x44 = theta_dot * x0;
+        let x45 = x43 + x44;
+        let x46 = x4 * psi_dot;
+        let x47 = phi_dot - x46;
+        let x48 = theta_dot * x2;
+        let x49 = x42 * x0;
+        let x50 = x49 - x48;
+        let x51 = x50 * Izz - x47 * Ixz - Iyz * x45;
+        let x52 = x45 * x51;
+        let x53 = x49 * phi_dot;
+        let x54 = x46 + phi_dot;
+        let x55 = x48 * x54;
+        let x56 = x53 - x55;
+        let x57 = Ixy * x56;
+        let x58 = phi_dot * x43;
+        let x59 = x54 * x44;
+        let x60 = -x58 - x59;
+        let x61 = x60 * Ixz;
+        let x62 = Iyy * x45 - x47 * Ixy - Iyz * x50;
+        let x63 = x50 * x62;
+        let x64 = x42 * theta_dot;
+        let x65 = x64 * Ixx;
+        let x66 = x47 * Ixx - Ixy * x45 - x50 * Ixz;
+        let x67 = x47 * x62 + x64 * Ixz - Iyz * x56 - x45 * x66 + x60 * Izz;
+        let x68 = Iyy * x56 - x47 * x51 - Iyz * x60 + Ixy * x64 + x50 * x66;
+        let x69 = rho * (0.5 * rho + 0.5 * l);
+        let x70 = psi_dot * psi_dot;
+        let x71 = x70 * x35;
+        let x72 = theta_dot * rho_dot;
+        let x73 = x72 * (2.0 * rho + l);
+        let x74 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x75 = -0.25 * x38 - 0.25;
+        let x76 = -0.5 * x38 - 0.5;
+        let x77 = theta_dot * theta_dot;
+        let x78 = x5 * x77;
+        let x79 = x8 * x6;
+        let x80 = theta_dot * x79;
+        let x81 = x8 * rho_dot;
+        let x82 = psi_dot * x25;
+        let x83 = rho_dot * x9;
+        let x84 = x22 * psi_dot;
+        let x85 = x42 * (2.0 * x83 + x84);
+        let x86 = x4 * (2.0 * x83 + 2.0 * x84);
+        let x87 = x6 * x9;
+        let x88 = x87 * theta_dot;
+        let x89 = x3 * rho_dot;
+        let x90 = x4 * x5;
+        let x91 = theta_dot * x90;
+        let x92 = -x4;
+        let x93 = theta_dot * x46;
+        let x94 = x45 * x2;
+        let x95 = x3 * x2;
+        let x96 = x95 * x0;
+        let x97 = x0 * x0;
+        let x98 = x45 * x50;
+        let x99 = x98;
+        let x100 = x47 * x0;
+        let x101 = x3 * x0;
+        let x102 = -x96;
+        let x103 = x2 * x2;
+        let x104 = x4 * x0;
+        let x105 = -x95;
+        let x106 = -x0;
+        let x107 = x55 - x53;
+        let x108 = x46 - phi_dot;
+        let x109 = x50 * x108;
+        let x110 = x64 - x98;
+        let x111 = x45 * x45;
+        let x112 = x47 * x108;
+        let x113 = x111 + x112;
+        let x114 = -(x4 * x2);
+        let x115 = -x101;
+        let x116 = x48 - x49;
+        let x117 = x50 * x116;
+        let x118 = x117 - x112;
+        let x119 = x64 - x45 * x116;
+        let x120 = x58 + x59;
+        let x121 = x45 * x108;
+        let x122 = (x103 - x97) * x3;
+        let x123 = x120 + x47 * x45;
+        let x124 = x47 * x116 + x107;
+        let x125 = x10 * x6;
+        let x126 = -x87;
+        let x127 = -(x90 * x8);
+        let x128 = -(x90 * x9);
+        let x129 = -x6;
+        let x130 = x8 * x3;
+        let x131 = x3 * x9;
+        let x132 = -(0.5 * x30);
+        let x133 = 0.5 * x29;
+        let x134 = -(0.5 * x8 * x23);
+        let x135 = -(0.5 * x23 * x9);
+        let x136 = -(0.5 * x28);
+        let x137 = 0.5 * x70 + 0.5 * x77;
         ParameterDerivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [
-                    x1
-                        * (((Iyy * x2 - x5) * x1 + x0 * Ixy) * x2 + x1 * m * x6 * x6 * x9
-                            + (x1 * (Izz * x3 - x10) + x0 * Ixz) * x3) - x0 * x4,
-                    x14,
-                    x4,
-                    0.0,
-                    x15,
+                    (((Iyy * x2 - x1) * x3 + x4 * Ixy) * x2 + x5 * x7 * x10
+                        + (x3 * (Izz * x0 - x11) + x4 * Ixz) * x0) * x3 - x4 * x12,
                     x16,
+                    x12,
+                    0.0,
+                    x17,
+                    x18,
                     0.0,
                 ],
-                [x14, m * x19 - x2 * x12 + x13 * x3, x11, 0.0, x20, x21, x22],
-                [x4, x11, Ixx, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, m, x23, x24, x25],
-                [x15, x20, 0.0, x23, x26, 0.0, 0.0],
-                [x16, x21, 0.0, x24, 0.0, x26, 0.0],
-                [0.0, x22, 0.0, x25, 0.0, 0.0, x26],
+                [x16, x21 * m + x15 * x0 + x14 * x2, x13, 0.0, x24, x26, x27],
+                [x12, x13, Ixx, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, m, x29, x30, x31],
+                [x17, x24, 0.0, x29, x32, 0.0, 0.0],
+                [x18, x26, 0.0, x30, 0.0, x32, 0.0],
+                [0.0, x27, 0.0, x31, 0.0, 0.0, x32],
             ],
             force: [
-                x1 * (-x2 * x44 - x46 * x3) + (x48 - x47 - x49 - x50 - x51) * x0
-                    - (l * (x57 - 0.25 * x54)
-                        + rho * ((-rho - l) * theta_dot * x53 + rho_dot * (x55 + 1.0)))
-                        * psi_dot * m,
-                x46 * x2
-                    - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x17) * psi_dot * psi_dot
-                        * x53 + theta_dot * (2.0 * rho + l) * rho_dot) * m - x44 * x3,
-                x47 - x48 + x49 + x50 + x51,
-                0.012 * x61
-                    - (x58 * theta_dot * theta_dot
-                        + (l * x59 + rho * x60) * psi_dot * psi_dot) * m - 0.018 * x62,
-                -(m
-                    * ((-2.0 * x63 - x64) * x1 * psi_dot
-                        + (x0 * (2.0 * x65 - 2.0 * x66) - x67) * theta_dot)),
-                -((x1 * psi_dot * (2.0 * x66 - x65)
-                    + (x0 * (-2.0 * x63 - 2.0 * x64) - x68) * theta_dot) * m),
-                -(theta_dot * m * (x70 - 2.0 * x69)),
+                x4 * (x52 - x57 - x61 - x63 - x65)
+                    - x33
+                        * (rho * (rho_dot * (x38 + 1.0) - x37) + (x41 - 0.25 * x39) * l)
+                    - x3 * (x67 * x0 + x2 * x68),
+                x67 * x2 - ((x69 + 0.125 * x19) * x71 + x73) * m - x68 * x0,
+                x57 - x52 + x61 + x63 + x65,
+                x74 - m * ((l * x75 + rho * x76) * x70 - x78),
+                -((theta_dot * (x4 * (2.0 * x82 - 2.0 * x81) - x80) - x85) * m),
+                -((theta_dot * (-x86 - x88) + (2.0 * x81 - x82) * x42) * m),
+                -(theta_dot * m * (x91 - 2.0 * x89)),
             ],
             checks: [],
             d_qdot: [
@@ -1584,26 +1592,17 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
                 ],
                 [
-                    [x0 * x0, 0.0, x71, 0.0, 0.0, 0.0, 0.0],
+                    [x4 * x4, 0.0, x92, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x71, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [x1 * x1 * x2 * x2, x73, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x73, x74, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x92, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1 * x1 * x3 * x3, x75, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x75, x76, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x95 * x95, x96, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x96, x97, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1611,26 +1610,8 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [2.0 * x0 * x1 * x2, x77, x78, 0.0, 0.0, 0.0, 0.0],
-                    [x77, 0.0, x79, 0.0, 0.0, 0.0, 0.0],
-                    [x78, x79, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [2.0 * x0 * x1 * x3, x89, x90, 0.0, 0.0, 0.0, 0.0],
-                    [x89, 0.0, x2, 0.0, 0.0, 0.0, 0.0],
-                    [x90, x2, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [-(2.0 * x1 * x1 * x2 * x3), x97, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x97, 2.0 * x2 * x3, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x101 * x101, x102, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x102, x103, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1638,109 +1619,128 @@ pub mod lagrange {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1 * x1 * x6 * x6 * x9, 0.0, 0.0, 0.0, x100, x101, 0.0],
-                    [0.0, x19, 0.0, 0.0, x102, x103, x104],
+                    [2.0 * x4 * x95, x104, x105, 0.0, 0.0, 0.0, 0.0],
+                    [x104, 0.0, x106, 0.0, 0.0, 0.0, 0.0],
+                    [x105, x106, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 1.0, x105, x106, x71],
-                    [x100, x102, 0.0, x105, 1.0, 0.0, 0.0],
-                    [x101, x103, 0.0, x106, 0.0, 1.0, 0.0],
-                    [0.0, x104, 0.0, x71, 0.0, 0.0, 1.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x1 * x1 * m * x6 * x9, 0.0, 0.0, 0.0, x107, x108, 0.0],
-                    [0.0, m * x6, 0.0, 0.0, x109, x110, x111],
+                    [2.0 * x4 * x101, x114, x115, 0.0, 0.0, 0.0, 0.0],
+                    [x114, 0.0, x2, 0.0, 0.0, 0.0, 0.0],
+                    [x115, x2, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x107, x109, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x108, x110, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x111, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [-(2.0 * x95 * x101), x122, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x122, 2.0 * x2 * x0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x125 * x6, 0.0, 0.0, 0.0, x126, x79, 0.0],
+                    [0.0, x21, 0.0, 0.0, x127, x128, x129],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 1.0, x130, x131, x92],
+                    [x126, x127, 0.0, x130, 1.0, 0.0, 0.0],
+                    [x79, x128, 0.0, x131, 0.0, 1.0, 0.0],
+                    [0.0, x129, 0.0, x92, 0.0, 0.0, 1.0],
+                ],
+                [
+                    [x125 * x28, 0.0, 0.0, 0.0, x132, x133, 0.0],
+                    [0.0, x5 * m, 0.0, 0.0, x134, x135, x136],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x132, x134, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x133, x135, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x136, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    ((x34 * x3 - x29 * x2) * x31 - x0 * theta_dot * psi_dot) * x1,
-                    (-x2 * x34 - x29 * x3) * x31,
-                    x72,
+                    (x47 * (x45 * x0 - x50 * x2) - x93) * x3,
+                    -(x47 * (x94 + x50 * x0)),
+                    x64,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x1 * (-x31 * x34 * x3 - x39 * x2) - x29 * x0 * x34,
-                    x2 * x31 * x34 - x39 * x3,
-                    x29 * x34,
+                    -x4 * x99 - (x2 * x56 + x100 * x45) * x3,
+                    x94 * x47 - x56 * x0,
+                    x99,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x29 * (x1 * x2 * x31 + x0 * x34) - x43 * x1 * x3,
-                    x43 * x2 + x29 * x31 * x3,
-                    -(x29 * x34),
+                    x50 * (x4 * x45 + x47 * x95) - x60 * x101,
+                    x100 * x50 + x2 * x60,
+                    -x99,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x1 * (-x81 * x2 - x85 * x3) + x0 * (x87 - x88 - x38),
-                    x85 * x2 - x81 * x3,
-                    x88 + x37 + x38,
+                    x4 * (x107 - x109) - x3 * (x2 * x110 + x0 * x113),
+                    x2 * x113 - x0 * x110,
+                    x56 + x109,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    (-x93 * x2 - x94 * x3) * x1 + x0 * (x42 + x95 + x96),
-                    x94 * x2 - x93 * x3,
-                    x41 - x42 - x95,
+                    x4 * (x120 + x121) - x3 * (x2 * x118 + x119 * x0),
+                    x2 * x119 - x118 * x0,
+                    x60 - x121,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x1 * (-x98 * x3 - x99 * x2) + x0 * (x84 - x92),
-                    x2 * x98 - x99 * x3,
-                    x92 - x84,
+                    x4 * (-x111 - x117) - (x123 * x2 + x124 * x0) * x3,
+                    x124 * x2 - x123 * x0,
+                    x111 + x117,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    psi_dot
-                        * ((rho_dot * x60 + 0.25 * x54) * l
-                            + rho * ((-x55 - 1.0) * rho_dot + theta_dot * x18 * x53)),
-                    (-2.0 * rho - l) * theta_dot * rho_dot
-                        + psi_dot * psi_dot
-                            * ((-0.5 * rho - 0.5 * l) * rho - 0.125 * x17) * x53,
+                    (l * (0.25 * x39 + rho_dot * x76)
+                        + rho * ((-x38 - 1.0) * rho_dot + x37)) * psi_dot,
+                    (-x69 - 0.125 * x19) * x71 - x73,
                     0.0,
-                    theta_dot * theta_dot * x6
-                        + (rho * x56 + l * (0.25 * x55 + 0.25)) * psi_dot * psi_dot,
-                    theta_dot * (x0 * (2.0 * x66 - 2.0 * x65) + x67)
-                        + (2.0 * x63 + x64) * x1 * psi_dot,
-                    theta_dot * (x0 * (2.0 * x63 + 2.0 * x64) + x68)
-                        + (x65 - 2.0 * x66) * x1 * psi_dot,
-                    theta_dot * (2.0 * x69 - x70),
+                    x78 + (rho * x40 + l * (0.25 * x38 + 0.25)) * x70,
+                    x85 + theta_dot * (x80 + (2.0 * x81 - 2.0 * x82) * x4),
+                    x42 * (x82 - 2.0 * x81) + theta_dot * (x86 + x88),
+                    theta_dot * (2.0 * x89 - x91),
                 ],
                 [
-                    -(psi_dot * m * (x58 * theta_dot * x53 + x57)),
-                    -(m
-                        * (theta_dot * rho_dot
-                            + psi_dot * psi_dot * (0.5 * rho + 0.25 * l) * x53)),
+                    -(x33 * (x41 - x5 * x36)),
+                    -((x71 * (0.5 * rho + 0.25 * l) + x72) * m),
                     0.0,
-                    -((psi_dot * psi_dot * x59 - 0.5 * x112) * m),
-                    -((x113 * x7 * x1 + x0 * theta_dot * psi_dot * x8) * m),
-                    -(m * (x113 * x1 * x8 - x0 * theta_dot * x7 * psi_dot)),
-                    -(0.5 * x0 * theta_dot * theta_dot * m),
+                    -(m * (x70 * x75 - 0.5 * x77)),
+                    -((x93 * x9 - x137 * x130) * m),
+                    -(m * (-x93 * x8 - x137 * x131)),
+                    -(0.5 * x77 * x23),
                 ],
             ],
-            power: rho_dot * (0.012 * x61 - 0.018 * x62),
+            power: x74 * rho_dot,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }
@@ -2011,143 +2011,146 @@ pub mod maggi {
         let x0 = f64::cos(phi);
         let x1 = f64::sin(phi);
         let x2 = x1 * Ixz - Ixy * x0;
-        let x3 = -Ixy * x1 - Ixz * x0;
-        let x4 = x2 * x0 + x1 * x3;
-        let x5 = x3 * x0 - x2 * x1;
-        let x6 = f64::sin(theta);
-        let x7 = Iyz * x0;
-        let x8 = -x1 * Izz - x7;
-        let x9 = Iyz * x1;
-        let x10 = Iyy * x0 + x9;
-        let x11 = x8 * x0 + x10 * x1;
-        let x12 = f64::cos(theta);
-        let x13 = x11 * x12 - x6 * x2;
-        let x14 = rho + 0.5 * l;
-        let x15 = f64::cos(psi);
-        let x16 = f64::sin(psi);
-        let x17 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1
-            + x12 * m * x14 * x14 * (x15 * x15 + x16 * x16)
-            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
-        let x18 = x6 * x4 + x0 * x13 + x1 * x17;
-        let x19 = 1.0 / x12;
-        let x20 = l * l;
-        let x21 = m * (0.25 * x20 + rho * (rho + l)) - x1 * x8 + x10 * x0;
-        let x22 = x11 * x1 + x21 * x0;
-        let x23 = x18 * x19 * x0 - x1 * x22;
-        let x24 = (-x1 * x16 - x6 * x15 * x0) * m * x14;
-        let x25 = (x15 * x1 - x6 * x0 * x16) * m * x14;
-        let x26 = -(x12 * m * x14 * x0);
-        let x27 = (x6 * x15 * x1 - x0 * x16) * m * x14;
-        let x28 = m * x14 * (x15 * x0 + x6 * x1 * x16);
-        let x29 = x12 * m * x14 * x1;
-        let x30 = x15 * x12 * m;
-        let x31 = x12 * m * x16;
-        let x32 = -(x6 * m);
-        let x33 = m + mg;
-        let x34 = theta_dot * x0 + x12 * psi_dot * x1;
-        let x35 = x6 * psi_dot;
-        let x36 = phi_dot - x35;
-        let x37 = x12 * psi_dot * x0 - theta_dot * x1;
-        let x38 = x37 * Izz - Iyz * x34 - Ixz * x36;
-        let x39 = x38 * x34;
-        let x40 = -phi_dot - x35;
-        let x41 = theta_dot * x40 * x0 - x12 * psi_dot * x1 * phi_dot;
-        let x42 = x41 * Ixz;
-        let x43 = Iyy * x34 - x37 * Iyz - Ixy * x36;
-        let x44 = x37 * x43;
-        let x45 = theta_dot * x40 * x1 + x12 * psi_dot * phi_dot * x0;
-        let x46 = Ixy * x45;
-        let x47 = 2.0 * theta;
-        let x48 = f64::sin(x47);
-        let x49 = 0.5 * (x19 * psi_dot * x48) + phi_dot;
-        let x50 = x12 * x3 - x6 * Ixx;
-        let x51 = (0.25 - 0.25 * (x19 * f64::cos(3.0 * theta))) * psi_dot + x6 * phi_dot;
-        let x52 = x42 - x39 + x44 + x46
-            + (-x49 * x19 * x50 - x51 * Ixx * x19) * theta_dot
-            + x2 * x12 * psi_dot * phi_dot;
-        let x53 = x51 * x19 + x12 * psi_dot;
-        let x54 = Ixx * x36 - x37 * Ixz - Ixy * x34;
-        let x55 = x37 * x54 + Iyy * x45 - x38 * x36 + Ixy * theta_dot * x12 * psi_dot
-            - x41 * Iyz;
-        let x56 = theta_dot * x12 * psi_dot * Ixz + x43 * x36 - x34 * x54 - Iyz * x45
-            + x41 * Izz;
-        let x57 = f64::cos(x47);
-        let x58 = theta_dot * (-x53 * x50 - x49 * x19 * (x12 * x17 - x6 * x50))
-            + x12 * (psi_dot * phi_dot * x13 - x1 * x55 - x56 * x0)
-            + (x39 - theta_dot * Ixx * x12 * psi_dot - x42 - x44 - x46) * x6 + x6 * x52
-            - (l * ((0.5 * x57 + 0.5) * rho_dot - 0.25 * (l * theta_dot * x48))
-                + rho * ((-rho - l) * theta_dot * x48 + rho_dot * (x57 + 1.0))) * psi_dot
-                * m;
-        let x59 = theta_dot * (-x49 * x19 * x13 - x2 * x53)
-            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x20) * psi_dot * psi_dot * x48
+        let x3 = Ixy * x1 + Ixz * x0;
+        let x4 = x2 * x0 - x1 * x3;
+        let x5 = -x0 * x3 - x2 * x1;
+        let x6 = Iyz * x0;
+        let x7 = x1 * Izz + x6;
+        let x8 = Iyz * x1;
+        let x9 = Iyy * x0 + x8;
+        let x10 = x9 * x1 - x7 * x0;
+        let x11 = l * l;
+        let x12 = rho + l;
+        let x13 = (0.25 * x11 + rho * x12) * m + x9 * x0 + x7 * x1;
+        let x14 = x10 * x1 + x13 * x0;
+        let x15 = f64::sin(theta);
+        let x16 = f64::cos(theta);
+        let x17 = x10 * x16 - x15 * x2;
+        let x18 = rho + 0.5 * l;
+        let x19 = x18 * m;
+        let x20 = f64::cos(psi);
+        let x21 = f64::sin(psi);
+        let x22 = x18 * x16;
+        let x23 = ((Iyy * x1 - x6) * x16 + x15 * Ixy) * x1
+            + (x16 * (Izz * x0 - x8) + x15 * Ixz) * x0
+            + x19 * (x20 * x20 + x21 * x21) * x22;
+        let x24 = x17 * x0 + x15 * x4 + x1 * x23;
+        let x25 = 1.0 / x16;
+        let x26 = x25 * x1;
+        let x27 = x25 * x0;
+        let x28 = x24 * x27 - x1 * x14;
+        let x29 = x15 * x20;
+        let x30 = -((x1 * x21 + x29 * x0) * x19);
+        let x31 = x15 * x21;
+        let x32 = x19 * (x20 * x1 - x31 * x0);
+        let x33 = x16 * x19;
+        let x34 = -(x33 * x0);
+        let x35 = x19 * (x29 * x1 - x0 * x21);
+        let x36 = x19 * (x31 * x1 + x20 * x0);
+        let x37 = x1 * x33;
+        let x38 = x16 * m;
+        let x39 = x38 * x20;
+        let x40 = x38 * x21;
+        let x41 = -(x15 * m);
+        let x42 = m + mg;
+        let x43 = x16 * psi_dot;
+        let x44 = x43 * phi_dot;
+        let x45 = x15 * psi_dot;
+        let x46 = phi_dot + x45;
+        let x47 = theta_dot * x0;
+        let x48 = -x1 * x44 - x46 * x47;
+        let x49 = x48 * Ixz;
+        let x50 = 2.0 * theta;
+        let x51 = f64::sin(x50);
+        let x52 = 0.5 * (x25 * psi_dot * x51) + phi_dot;
+        let x53 = x52 * x25;
+        let x54 = -x15 * Ixx - x16 * x3;
+        let x55 = ((0.25 - 0.25 * (x25 * f64::cos(3.0 * theta))) * psi_dot
+            + x15 * phi_dot) * x25;
+        let x56 = x43 * x1 + x47;
+        let x57 = theta_dot * x1;
+        let x58 = x43 * x0 - x57;
+        let x59 = phi_dot - x45;
+        let x60 = Iyy * x56 - Iyz * x58 - Ixy * x59;
+        let x61 = x60 * x58;
+        let x62 = x44 * x0 - x46 * x57;
+        let x63 = Ixy * x62;
+        let x64 = Izz * x58 - Iyz * x56 - Ixz * x59;
+        let x65 = x56 * x64;
+        let x66 = x49 - theta_dot * (x53 * x54 + x55 * Ixx) + x2 * x44 + x61 + x63 - x65;
+        let x67 = x43 * theta_dot;
+        let x68 = Ixx * x59 - Ixz * x58 - Ixy * x56;
+        let x69 = x68 * x58 - x64 * x59 + Iyy * x62 + Ixy * x67 - Iyz * x48;
+        let x70 = x60 * x59 - x68 * x56 + x67 * Ixz + x48 * Izz - Iyz * x62;
+        let x71 = x43 + x55;
+        let x72 = theta_dot * x51;
+        let x73 = f64::cos(x50);
+        let x74 = x15 * (x65 - x49 - x61 - x63 - x67 * Ixx)
+            + x16 * (psi_dot * phi_dot * x17 - x69 * x1 - x70 * x0)
+            - theta_dot * (x53 * (x16 * x23 - x15 * x54) + x54 * x71) + x66 * x15
+            - (rho * (rho_dot * (x73 + 1.0) - x12 * x72)
+                + ((0.5 * x73 + 0.5) * rho_dot - 0.25 * (l * x72)) * l) * psi_dot * m;
+        let x75 = psi_dot * psi_dot;
+        let x76 = x1 * x70 - x69 * x0
+            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x11) * x75 * x51
                 + theta_dot * (2.0 * rho + l) * rho_dot) * m
-            + x12 * psi_dot * phi_dot * x21 - x55 * x0 + x56 * x1;
-        let x60 = f64::cos(0.0485 * t);
-        let x61 = f64::sin(0.089 * t);
-        let x62 = rho_dot * x16;
-        let x63 = x15 * psi_dot * x14;
-        let x64 = psi_dot * x14 * x16;
-        let x65 = x15 * rho_dot;
+            - theta_dot * (x2 * x71 + x53 * x17) + x13 * x44;
+        let x77 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x78 = theta_dot * x21;
+        let x79 = rho_dot * x21;
+        let x80 = x18 * psi_dot;
+        let x81 = x80 * x20;
+        let x82 = x80 * x21;
+        let x83 = x20 * rho_dot;
+        let x84 = theta_dot * x20;
         Assembly {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
-                [x4, x18 * x19 * x1 + x22 * x0, x23, 0.0, x24, x25, x26],
+                [x4, x14 * x0 + x24 * x26, x28, 0.0, x30, x32, x34],
                 [
                     x5,
-                    x23,
-                    x19 * (x17 * x0 - x1 * x13 + x5 * x6) * x0
-                        - (x11 * x0 - x1 * x21) * x1,
-                    0.0,
-                    x27,
                     x28,
-                    x29,
+                    (x15 * x5 - x1 * x17 + x23 * x0) * x27 - x1 * (x10 * x0 - x13 * x1),
+                    0.0,
+                    x35,
+                    x36,
+                    x37,
                 ],
-                [0.0, 0.0, 0.0, m, x30, x31, x32],
-                [0.0, x24, x27, x30, x33, 0.0, 0.0],
-                [0.0, x25, x28, x31, 0.0, x33, 0.0],
-                [0.0, x26, x29, x32, 0.0, 0.0, x33],
+                [0.0, 0.0, 0.0, m, x39, x40, x41],
+                [0.0, x30, x35, x39, x42, 0.0, 0.0],
+                [0.0, x32, x36, x40, 0.0, x42, 0.0],
+                [0.0, x34, x37, x41, 0.0, 0.0, x42],
             ],
             force: [
-                x52,
-                x58 * x19 * x1 + x59 * x0,
-                x58 * x19 * x0 - x59 * x1,
-                0.012 * x60
-                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x57 - 0.25) + rho * (-0.5 * x57 - 0.5)) * psi_dot
-                            * psi_dot) * m - 0.018 * x61,
-                ((theta_dot * x49 * x16 - x6 * x15 * x12 * psi_dot * phi_dot) * x14
-                    - (-2.0 * x62 - x63) * x12 * psi_dot
-                    - (x6 * (2.0 * x64 - 2.0 * x65) - theta_dot * x15 * x12 * x14)
-                        * theta_dot) * m,
-                ((-x6 * x12 * psi_dot * phi_dot * x16 - theta_dot * x49 * x15) * x14
-                    - x12 * psi_dot * (2.0 * x65 - x64)
-                    - (x6 * (-2.0 * x62 - 2.0 * x63) - theta_dot * x12 * x14 * x16)
-                        * theta_dot) * m,
+                x66,
+                x26 * x74 + x76 * x0,
+                x74 * x27 - x1 * x76,
+                x77
+                    - m
+                        * ((l * (-0.25 * x73 - 0.25) + rho * (-0.5 * x73 - 0.5)) * x75
+                            - x18 * theta_dot * theta_dot),
+                ((x52 * x78 - x29 * x44) * x18 + x43 * (2.0 * x79 + x81)
+                    - theta_dot * (x15 * (2.0 * x82 - 2.0 * x83) - x84 * x22)) * m,
                 m
-                    * (-x12 * x12 * psi_dot * x14 * phi_dot
-                        - theta_dot * (x6 * theta_dot * x14 - 2.0 * (x12 * rho_dot))),
+                    * (-x43 * (2.0 * x83 - x82)
+                        - theta_dot * (-x78 * x22 - x15 * (2.0 * x79 + 2.0 * x81))
+                        - x18 * (x84 * x52 + x31 * x44)),
+                -((x44 * x22
+                    + theta_dot * (x15 * x18 * theta_dot - 2.0 * (x16 * rho_dot))) * m),
             ],
             w: [
-                [0.0, x19 * x1, x19 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x26, x27, 0.0, 0.0, 0.0, 0.0],
                 [0.0, x0, -x1, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x6 * x19 * x1, x6 * x19 * x0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x15 * x26, x15 * x27, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * x49 * x19,
-                -(x12 * psi_dot * phi_dot),
-                theta_dot * x53,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
-            power: rho_dot * (0.012 * x60 - 0.018 * x61),
-            checks: [x12],
+            c: [x53 * theta_dot, -x44, theta_dot * x71, 0.0, 0.0, 0.0, 0.0],
+            power: x77 * rho_dot,
+            checks: [x16],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -2252,8 +2255,11 @@ pub mod maggi {
         let x1 = f64::cos(theta);
         let x2 = f64::sin(theta);
         let x3 = rho + 0.5 * l;
-        let x4 = f64::sin(psi);
-        let x5 = m + mg;
+        let x4 = theta_dot * x3;
+        let x5 = x2 * x4;
+        let x6 = f64::sin(psi);
+        let x7 = psi_dot * x3;
+        let x8 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -2284,13 +2290,9 @@ pub mod maggi {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x0 * (x1 * rho_dot - x2 * theta_dot * x3) - x1 * psi_dot * x3 * x4)
-                + x5 * X_dot,
-            x5 * Y_dot
-                + m
-                    * (x1 * (rho_dot * x4 + x0 * psi_dot * x3)
-                        - x2 * theta_dot * x3 * x4),
-            m * (-theta_dot * x1 * x3 - x2 * rho_dot) + Z_dot * x5,
+            (x0 * (x1 * rho_dot - x5) - x1 * x6 * x7) * m + x8 * X_dot,
+            x8 * Y_dot + m * (x1 * (rho_dot * x6 + x0 * x7) - x5 * x6),
+            Z_dot * x8 - (x1 * x4 + x2 * rho_dot) * m,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -2403,391 +2405,385 @@ pub mod maggi {
         let Iyz = params.Iyz;
         let m = params.m;
         let l = params.l;
-        let x0 = f64::cos(phi);
-        let x1 = Ixy * x0;
-        let x2 = f64::sin(phi);
-        let x3 = x2 * Ixz;
-        let x4 = x3 - x1;
-        let x5 = x4 * x0;
-        let x6 = Ixy * x2;
-        let x7 = Ixz * x0;
-        let x8 = -x6 - x7;
-        let x9 = x2 * x8;
-        let x10 = x5 + x9;
-        let x11 = x8 * x0;
-        let x12 = x4 * x2;
-        let x13 = x11 - x12;
-        let x14 = f64::sin(theta);
-        let x15 = x14 * x10;
-        let x16 = x14 * x4;
-        let x17 = x2 * Izz;
-        let x18 = Iyz * x0;
-        let x19 = -x17 - x18;
-        let x20 = x19 * x0;
-        let x21 = Iyy * x0;
-        let x22 = Iyz * x2;
-        let x23 = x21 + x22;
-        let x24 = x23 * x2;
-        let x25 = x20 + x24;
-        let x26 = f64::cos(theta);
-        let x27 = x25 * x26;
-        let x28 = x27 - x16;
-        let x29 = x0 * x28;
-        let x30 = Iyy * x2;
-        let x31 = x30 - x18;
-        let x32 = x31 * x26 + x14 * Ixy;
-        let x33 = x32 * x2;
-        let x34 = rho + 0.5 * l;
-        let x35 = f64::cos(psi);
-        let x36 = x35 * x35;
-        let x37 = f64::sin(psi);
-        let x38 = x37 * x37;
-        let x39 = x26 * m * x34 * x34 * (x36 + x38);
-        let x40 = Izz * x0;
-        let x41 = x40 - x22;
-        let x42 = x26 * x41 + x14 * Ixz;
-        let x43 = x42 * x0;
-        let x44 = x33 + x39 + x43;
-        let x45 = x2 * x44;
-        let x46 = x15 + x29 + x45;
-        let x47 = 1.0 / x26;
-        let x48 = l * l;
-        let x49 = 0.25 * x48 + rho * (rho + l);
-        let x50 = m * x49 - x2 * x19 + x23 * x0;
-        let x51 = x50 * x0;
-        let x52 = x25 * x2 + x51;
-        let x53 = x52 * x0;
-        let x54 = x2 * x52;
-        let x55 = x46 * x47 * x0 - x54;
-        let x56 = x2 * x37;
-        let x57 = x14 * x35 * x0;
-        let x58 = -x56 - x57;
-        let x59 = x58 * m * x34;
-        let x60 = x35 * x2;
-        let x61 = x14 * x0 * x37;
-        let x62 = x60 - x61;
-        let x63 = x62 * m * x34;
-        let x64 = -(x26 * m * x34 * x0);
-        let x65 = x2 * x50;
-        let x66 = x25 * x0 - x65;
-        let x67 = x44 * x0;
-        let x68 = x2 * x28;
-        let x69 = x67 - x68 + x13 * x14;
-        let x70 = x14 * x35 * x2 - x0 * x37;
-        let x71 = x70 * m * x34;
-        let x72 = x35 * x0;
-        let x73 = x14 * x2 * x37;
-        let x74 = x72 + x73;
-        let x75 = m * x34 * x74;
-        let x76 = x26 * m * x34 * x2;
-        let x77 = x35 * x26 * m;
-        let x78 = x26 * m * x37;
-        let x79 = -(x14 * m);
-        let x80 = m + mg;
-        let x81 = theta_dot * x0;
-        let x82 = x26 * psi_dot * x2;
-        let x83 = x81 + x82;
-        let x84 = Iyz * x83;
-        let x85 = x14 * psi_dot;
-        let x86 = phi_dot - x85;
-        let x87 = Ixz * x86;
-        let x88 = x26 * psi_dot * x0 - theta_dot * x2;
-        let x89 = x88 * Izz;
-        let x90 = x89 - x84 - x87;
-        let x91 = x90 * x83;
-        let x92 = -phi_dot - x85;
-        let x93 = theta_dot * x92 * x0 - x26 * psi_dot * x2 * phi_dot;
-        let x94 = x93 * Ixz;
-        let x95 = x88 * Iyz;
-        let x96 = Ixy * x86;
-        let x97 = Iyy * x83 - x95 - x96;
-        let x98 = x88 * x97;
-        let x99 = x26 * psi_dot * phi_dot * x0;
-        let x100 = theta_dot * x92 * x2 + x99;
-        let x101 = Ixy * x100;
-        let x102 = 2.0 * theta;
-        let x103 = f64::sin(x102);
-        let x104 = x47 * psi_dot * x103;
-        let x105 = 0.5 * x104 + phi_dot;
-        let x106 = x14 * Ixx;
-        let x107 = x26 * x8;
-        let x108 = x107 - x106;
-        let x109 = x105 * x47 * x108;
-        let x110 = 3.0 * theta;
-        let x111 = x47 * f64::cos(x110);
-        let x112 = 0.25 - 0.25 * x111;
-        let x113 = x14 * phi_dot;
-        let x114 = x112 * psi_dot + x113;
-        let x115 = x114 * Ixx * x47;
-        let x116 = (-x109 - x115) * theta_dot;
-        let x117 = x4 * x26 * psi_dot * phi_dot;
-        let x118 = x94 - x91 + x98 + x101 + x116 + x117;
-        let x119 = x114 * x47 + x26 * psi_dot;
-        let x120 = x119 * x108;
-        let x121 = x26 * x44 - x14 * x108;
-        let x122 = x105 * x47 * x121;
-        let x123 = theta_dot * (-x120 - x122);
-        let x124 = Ixx * x86 - x88 * Ixz - Ixy * x83;
-        let x125 = Iyy * x100;
-        let x126 = x90 * x86;
-        let x127 = Ixy * theta_dot * x26 * psi_dot;
-        let x128 = x93 * Iyz;
-        let x129 = x88 * x124 + x125 - x126 + x127 - x128;
-        let x130 = x2 * x129;
-        let x131 = theta_dot * x26 * psi_dot * Ixz;
-        let x132 = x97 * x86;
-        let x133 = x83 * x124;
-        let x134 = Iyz * x100;
-        let x135 = x93 * Izz;
-        let x136 = x131 + x132 - x133 - x134 + x135;
-        let x137 = x136 * x0;
-        let x138 = x26 * (psi_dot * phi_dot * x28 - x130 - x137);
-        let x139 = x91 - theta_dot * Ixx * x26 * psi_dot - x94 - x98 - x101;
-        let x140 = x139 * x14;
-        let x141 = f64::cos(x102);
-        let x142 = 0.5 * x141 + 0.5;
-        let x143 = -rho - l;
-        let x144 = x141 + 1.0;
-        let x145 = rho_dot * x144;
-        let x146 = l * (x142 * rho_dot - 0.25 * (l * theta_dot * x103))
-            + rho * (x143 * theta_dot * x103 + x145);
-        let x147 = x146 * psi_dot * m;
-        let x148 = x123 + x138 + x140 + x14 * x118 - x147;
-        let x149 = 2.0 * rho + l;
-        let x150 = x105 * x47 * x28;
-        let x151 = x4 * x119;
-        let x152 = theta_dot * (-x150 - x151)
-            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x48) * psi_dot * psi_dot * x103
-                + theta_dot * x149 * rho_dot) * m + x26 * psi_dot * phi_dot * x50
-            - x129 * x0 + x136 * x2;
-        let x153 = x152 * x0;
-        let x154 = x152 * x2;
-        let x155 = -0.5 * x141 - 0.5;
-        let x156 = f64::cos(0.0485 * t);
-        let x157 = f64::sin(0.089 * t);
-        let x158 = rho_dot * x37;
-        let x159 = x35 * psi_dot * x34;
-        let x160 = psi_dot * x34 * x37;
-        let x161 = x35 * rho_dot;
-        let x162 = 2.0 * x160 - 2.0 * x161;
-        let x163 = x14 * x162;
-        let x164 = theta_dot * x35 * x26 * x34;
-        let x165 = x14 * x35 * x26 * psi_dot * phi_dot;
-        let x166 = theta_dot * x105 * x37;
-        let x167 = ((x166 - x165) * x34 - (-2.0 * x158 - x159) * x26 * psi_dot
-            - (x163 - x164) * theta_dot) * m;
-        let x168 = x14 * x26 * psi_dot * phi_dot * x37;
-        let x169 = theta_dot * x105 * x35;
-        let x170 = -2.0 * x158 - 2.0 * x159;
-        let x171 = x14 * x170;
-        let x172 = theta_dot * x26 * x34 * x37;
-        let x173 = x26 * rho_dot;
-        let x174 = x14 * theta_dot * x34;
-        let x175 = x47 * x0;
-        let x176 = -x2;
-        let x177 = x14 * x47 * x0;
-        let x178 = 0.012 * x156 - 0.018 * x157;
-        let x179 = m * x34 * (x61 - x60);
-        let x180 = m * x34 * (-x72 - x73);
-        let x181 = -(x26 * m * x37);
-        let x182 = Ixx * x26;
-        let x183 = x6 + x7;
-        let x184 = x14 * x183;
-        let x185 = Ixx + x47 * (x184 - x182 + x14 * x8);
-        let x186 = x185 * x2;
-        let x187 = x185 * x0;
-        let x188 = x14
-            * (x182 - x33 - x43 + x26 * m * x34 * x34 * (-2.0 * x36 - 2.0 * x38) - x184);
-        let x189 = Ixy * x26 + x14 * (x18 - x30);
-        let x190 = x14 * (x22 - x40) + x26 * Ixz;
-        let x191 = x26 * (x106 - x107 + x2 * x189 + x190 * x0);
-        let x192 = x107 - x106
-            + x47 * (x14 * (x33 + x39 + x43 - x182 + x184) + x188 + x191);
-        let x193 = x4 * x26;
-        let x194 = x14 * (-x20 - x24);
-        let x195 = x194 - x193;
-        let x196 = x47 * (x2 * x192 + x195 * x0 + (x46 * x47 + x186) * x14);
-        let x197 = x47 * (x25 * x14 - x193 + x194) - x1 + x3;
-        let x198 = (x196 + x5 + x9) * x0 - x197 * x2 * x2;
-        let x199 = -(x35 * x26 * m * x34 * x0);
-        let x200 = -(x26 * m * x34 * x0 * x37);
-        let x201 = x14 * m * x34 * x0;
-        let x202 = x35 * x26 * m * x34 * x2;
-        let x203 = x26 * m * x34 * x2 * x37;
-        let x204 = -(x14 * m * x34 * x2);
-        let x205 = -(x14 * x35 * m);
-        let x206 = -(x14 * m * x37);
-        let x207 = -(x26 * m);
-        let x208 = psi_dot * x141;
-        let x209 = x14 * (x104 + phi_dot);
-        let x210 = x208 + x209;
-        let x211 = x184 - x182;
-        let x212 = x47 * x47
-            * (x14 * ((0.25 - 0.5 * x111) * psi_dot + x113)
-                + 0.75 * (psi_dot * f64::sin(x110))) + phi_dot - x85;
-        let x213 = theta_dot * (x47 * (-x210 * x47 * x108 - x105 * x211) - Ixx * x212);
-        let x214 = x14 * x2 * phi_dot - theta_dot * x26 * x0;
-        let x215 = x214 * Ixz;
-        let x216 = -theta_dot * x26 * x2 - x14 * phi_dot * x0;
-        let x217 = Ixy * x216;
-        let x218 = x90 * x2;
-        let x219 = x4 * phi_dot;
-        let x220 = theta_dot * Ixx;
-        let x221 = x97 * x0;
-        let x222 = x88 * x189;
-        let x223 = x190 * x83;
-        let x224 = (x215 + x217 + x14 * (x218 - x219 - x220 - x221) + x222 - x223)
-            * psi_dot;
-        let x225 = -2.0 * rho - l;
-        let x226 = phi_dot * x28;
-        let x227 = Ixy * theta_dot;
-        let x228 = x0 * x124;
-        let x229 = Iyy * x216 - Iyz * x214 - x190 * x86 + x88 * x211 + x90 * x26
-            + x14 * (-x227 - x228);
-        let x230 = theta_dot * Ixz;
-        let x231 = x2 * x124;
-        let x232 = x86 * x189 + x214 * Izz - x211 * x83 - Iyz * x216 - x97 * x26
-            + x14 * (x231 - x230);
-        let x233 = x94 - x91 + x98 + x101
-            + x47
-                * (x14 * (x148 * x47 + x213 + x224)
-                    + theta_dot
-                        * (x47 * (-x105 * (x188 + x191) - x210 * x47 * x121)
-                            - x212 * x108 - x119 * x211)
-                    + (x14
-                        * (x223 - x215 - x217 - x222 + x14 * (x220 - x218 + x221) - x226)
-                        - (theta_dot * (rho * (-2.0 * rho - 2.0 * l) - 0.5 * x48) * x141
-                            + x225 * rho_dot * x103) * m
-                        + (x195 * phi_dot - x229 * x2 - x232 * x0) * x26) * psi_dot
-                    + x14 * (x130 + x137) + x139 * x26) + x116 + x117;
-        let x234 = ((-x210 * x47 * x28 - x195 * x105) * x47 - x4 * x212) * theta_dot
-            + (x232 * x2 - x14 * phi_dot * x50 - psi_dot * m * x141 * x49 - x229 * x0)
-                * psi_dot;
-        let x235 = x14 * x14 - x26 * x26;
-        let x236 = x14 * x105;
-        let x237 = theta_dot * theta_dot;
-        let x238 = psi_dot * psi_dot;
-        let x239 = x237 + x238;
-        let x240 = x14 * x14 * x47 * x47 + 1.0;
-        let x241 = -x6 - x47 * x26 * x8 - x7;
-        let x242 = x241 * x2;
-        let x243 = x17 + 2.0 * x18 - x30;
-        let x244 = (x40 - x21 - 2.0 * x22) * x2 + x243 * x0;
-        let x245 = x26 * (x243 * x2 + (x21 - x40 + 2.0 * x22) * x0);
-        let x246 = x245 - x184;
-        let x247 = x244 * x0 - x65 + x47 * (x14 * (x5 + x2 * x183) + x246 * x2 + x29);
-        let x248 = x32 * x0;
-        let x249 = x42 * x2;
-        let x250 = x248 + x16 - x249;
-        let x251 = x250 * x2 + (x33 + x39 + x43 + x245 - x184) * x0;
-        let x252 = x47 * (x2 * (-x15 - x29 - x45) + x251 * x0) - x53 - x247 * x2;
-        let x253 = m * x34 * (x56 + x57);
-        let x254 = x26 * m * x34 * x0;
-        let x255 = -x81 - x82;
-        let x256 = x255 * Izz;
-        let x257 = x256 - x95;
-        let x258 = x257 * x83;
-        let x259 = x88 * Iyy;
-        let x260 = Iyz * x255;
-        let x261 = x97 * x255;
-        let x262 = theta_dot * (phi_dot + x85) * x2 - x99;
-        let x263 = x262 * Ixz;
-        let x264 = x93 * Ixy;
-        let x265 = x88 * (x259 + x84 - x260 + x87 - x89) - theta_dot * x4 * x105 - x258
-            + x261 + x263 + x26 * psi_dot * phi_dot * x183 + x264;
-        let x266 = x123 + x138 + x140 - x147;
-        let x267 = -x255 * Ixz - x88 * Ixy;
-        let x268 = Iyz * x262 - x255 * x124 - x93 * Iyy + x131 + x132 - x133 - x134
-            + x257 * x86 + x135 - x88 * x267;
-        let x269 = (x259 - x260) * x86;
-        let x270 = x83 * x267;
-        let x271 = x262 * Izz;
-        let x272 = x14
-            * (x258 - x261 - x263 + x88 * (x260 - x259 - x84 - x87 + x89) - x264)
-            - theta_dot * x105 * (x248 - x16 - x249 + x27)
-            + (x268 * x2 + (x126 - x269 - x125 + x270 - x127 + 2.0 * x128 - x271) * x0
-                - theta_dot * x4 * x119 + x246 * psi_dot * phi_dot) * x26;
-        let x273 = (x269 + x125 - x126 - x270 + x127 - 2.0 * x128 + x271) * x2
-            + theta_dot * (-x105 * x47 * x246 - x119 * x183) + x268 * x0
-            + x26 * psi_dot * x244 * phi_dot;
-        let x274 = 2.0 * x36 + 2.0 * x38;
-        let x275 = m * x2 * (x34 * x274 - 2.0 * rho - l) * x0;
-        let x276 = x58 * m;
-        let x277 = x62 * m;
-        let x278 = -(x26 * m * x0);
-        let x279 = x70 * m;
-        let x280 = m * x74;
-        let x281 = x26 * m * x2;
-        let x282 = x26 * psi_dot * x149 * phi_dot - 2.0 * (theta_dot * rho_dot)
-            - psi_dot * psi_dot * x34 * x103;
-        let x283 = -theta_dot * x105 * x26 * x34 * x274
-            - psi_dot * (x225 * theta_dot * x103 + x145);
-        let x284 = -x237 - x238;
-        let x285 = x42 * x83;
-        let x286 = -x26 * x2 * phi_dot - x14 * theta_dot * x0;
-        let x287 = Ixz * x286;
-        let x288 = x88 * x32;
-        let x289 = x26 * phi_dot * x0 - x14 * theta_dot * x2;
-        let x290 = Ixy * x289;
-        let x291 = x26 + x112 * x47;
-        let x292 = x287 - x285 + x288 + x290 + (x219 - x218 + x220 + x221) * x26
-            + theta_dot * (-Ixx * x291 - 0.5 * (x47 * x47 * x103 * x108));
-        let x293 = Izz * x286 + x32 * x86 - x289 * Iyz + (x230 - x231) * x26 - x83 * x108
-            - x14 * x97;
-        let x294 = x88 * x108 - Iyz * x286 - x42 * x86 + x289 * Iyy + x90 * x14
-            + x26 * (x227 + x228);
-        let x295 = (x285 - x287 - x288 + (x218 - x220 - x221) * x26 - x290) * x14
-            - x146 * m + theta_dot * (-x291 * x108 - 0.5 * (x47 * x47 * x121 * x103))
-            + x14 * x292 + (x226 - x293 * x0 - x294 * x2) * x26;
-        let x296 = theta_dot * (-0.5 * (x47 * x47 * x28 * x103) - x4 * x291) - x294 * x0
-            - psi_dot * m * x103 * x49 + x293 * x2 + x26 * phi_dot * x50;
-        let x297 = x19 * x83;
-        let x298 = x97 * x2;
-        let x299 = x90 * x0;
-        let x300 = x88 * x23;
-        let x301 = x92 * x183 - x297 - x109 - x298 - x299 + x300 - x115;
-        let x302 = Ixy * x26 * psi_dot - x231 - x19 * x86 + x88 * x4 + x31 * x92;
-        let x303 = x26 * psi_dot * Ixz - x4 * x83 - x228 + x92 * x41 + x23 * x86;
-        let x304 = x14 * x301 - x120
-            + (x297 + x92 * x8 - Ixx * x26 * psi_dot + x298 + x299 - x300) * x14
-            + x26 * (-x302 * x2 - x303 * x0) - x122
-            - psi_dot * m * (rho * x143 - 0.25 * x48) * x103;
-        let x305 = x2 * x303 - m * x149 * rho_dot - x150 - x302 * x0 - x151;
-        let x306 = x4 * x26 * psi_dot - theta_dot * x47 * x26 * x8;
-        let x307 = 2.0 * x87 + Iyz * (2.0 * x81 + 2.0 * x82) + x88 * (Iyy + Ixx - Izz);
-        let x308 = x256 - 2.0 * x95 - 2.0 * x96 + (Iyy - Ixx) * x83;
-        let x309 = x26 * psi_dot * x50 - x307 * x0 - x25 * theta_dot * x47 * x26
-            + x308 * x2;
-        let x310 = (psi_dot * x28 - x308 * x0 - x307 * x2) * x26
-            - theta_dot * x47 * x26 * x44 + x14 * x306;
-        let x311 = rho * x144 + l * x142;
+        let x0 = f64::sin(phi);
+        let x1 = f64::cos(phi);
+        let x2 = Ixy * x0 + Ixz * x1;
+        let x3 = x0 * x2;
+        let x4 = x0 * Ixz - Ixy * x1;
+        let x5 = x4 * x1;
+        let x6 = x5 - x3;
+        let x7 = x4 * x0;
+        let x8 = x1 * x2;
+        let x9 = -x7 - x8;
+        let x10 = x0 * Izz;
+        let x11 = Iyz * x1;
+        let x12 = x10 + x11;
+        let x13 = Iyy * x1;
+        let x14 = Iyz * x0;
+        let x15 = x13 + x14;
+        let x16 = x15 * x0 - x12 * x1;
+        let x17 = l * l;
+        let x18 = rho + l;
+        let x19 = rho * x18;
+        let x20 = 0.25 * x17 + x19;
+        let x21 = x20 * m + x15 * x1 + x12 * x0;
+        let x22 = x21 * x1;
+        let x23 = x0 * x16 + x22;
+        let x24 = x23 * x1;
+        let x25 = f64::cos(theta);
+        let x26 = 1.0 / x25;
+        let x27 = x26 * x0;
+        let x28 = f64::sin(theta);
+        let x29 = x28 * x4;
+        let x30 = x25 * x16 - x29;
+        let x31 = x30 * x1;
+        let x32 = Iyy * x0;
+        let x33 = x32 - x11;
+        let x34 = x33 * x25 + x28 * Ixy;
+        let x35 = x34 * x0;
+        let x36 = rho + 0.5 * l;
+        let x37 = x36 * m;
+        let x38 = x25 * x37;
+        let x39 = x36 * x38;
+        let x40 = f64::cos(psi);
+        let x41 = x40 * x40;
+        let x42 = f64::sin(psi);
+        let x43 = x42 * x42;
+        let x44 = Izz * x1;
+        let x45 = x44 - x14;
+        let x46 = x25 * x45 + x28 * Ixz;
+        let x47 = x46 * x1;
+        let x48 = (x35 + x39 * (x41 + x43)) + x47;
+        let x49 = (x6 * x28 + x31) + x48 * x0;
+        let x50 = x26 * x1;
+        let x51 = x23 * x0;
+        let x52 = x49 * x50 - x51;
+        let x53 = x28 * x40;
+        let x54 = x0 * x42 + x53 * x1;
+        let x55 = -(x54 * x37);
+        let x56 = x28 * x42;
+        let x57 = x56 * x1;
+        let x58 = x40 * x0;
+        let x59 = x58 - x57;
+        let x60 = x37 * x59;
+        let x61 = x38 * x1;
+        let x62 = -x61;
+        let x63 = x48 * x1;
+        let x64 = x30 * x0;
+        let x65 = x63 - x64 + x28 * x9;
+        let x66 = x21 * x0;
+        let x67 = x16 * x1 - x66;
+        let x68 = x53 * x0 - x1 * x42;
+        let x69 = x37 * x68;
+        let x70 = x56 * x0 + x40 * x1;
+        let x71 = x37 * x70;
+        let x72 = x0 * x38;
+        let x73 = x25 * m;
+        let x74 = x73 * x40;
+        let x75 = x73 * x42;
+        let x76 = -(x28 * m);
+        let x77 = m + mg;
+        let x78 = x25 * psi_dot;
+        let x79 = x78 * phi_dot;
+        let x80 = x28 * psi_dot;
+        let x81 = phi_dot + x80;
+        let x82 = theta_dot * x1;
+        let x83 = -x0 * x79 - x81 * x82;
+        let x84 = x83 * Ixz;
+        let x85 = x78 * x0;
+        let x86 = x85 + x82;
+        let x87 = theta_dot * x0;
+        let x88 = x78 * x1 - x87;
+        let x89 = Izz * x88;
+        let x90 = phi_dot - x80;
+        let x91 = Ixz * x90;
+        let x92 = Iyz * x86;
+        let x93 = x89 + (-x91 - x92);
+        let x94 = x86 * x93;
+        let x95 = Ixy * x90;
+        let x96 = Iyz * x88;
+        let x97 = Iyy * x86 - x95 - x96;
+        let x98 = x97 * x88;
+        let x99 = x87 * x81;
+        let x100 = x79 * x1;
+        let x101 = x100 - x99;
+        let x102 = Ixy * x101;
+        let x103 = 2.0 * theta;
+        let x104 = f64::sin(x103);
+        let x105 = x26 * psi_dot * x104;
+        let x106 = 0.5 * x105 + phi_dot;
+        let x107 = x106 * x26;
+        let x108 = x28 * Ixx;
+        let x109 = -(x25 * x2);
+        let x110 = x109 - x108;
+        let x111 = x107 * x110;
+        let x112 = 3.0 * theta;
+        let x113 = x26 * f64::cos(x112);
+        let x114 = 0.25 - 0.25 * x113;
+        let x115 = x28 * phi_dot;
+        let x116 = (x114 * psi_dot + x115) * x26;
+        let x117 = x116 * Ixx;
+        let x118 = ((x84 - x94) + (x98 + x102)) + (x4 * x79 - theta_dot * (x111 + x117));
+        let x119 = x48 * x25;
+        let x120 = x119 - x28 * x110;
+        let x121 = x120 * x107;
+        let x122 = x116 + x78;
+        let x123 = x122 * x110;
+        let x124 = psi_dot * phi_dot;
+        let x125 = Ixx * x90 - Ixy * x86 - Ixz * x88;
+        let x126 = x125 * x86;
+        let x127 = x78 * theta_dot;
+        let x128 = (-x126 - Iyz * x101) + ((x97 * x90 + x127 * Ixz) + x83 * Izz);
+        let x129 = x128 * x1;
+        let x130 = x83 * Iyz;
+        let x131 = x93 * x90;
+        let x132 = Iyy * x101;
+        let x133 = Ixy * x127;
+        let x134 = (x132 - x131) + x133;
+        let x135 = x125 * x88 - x130 + x134;
+        let x136 = x135 * x0;
+        let x137 = psi_dot * m;
+        let x138 = theta_dot * x104;
+        let x139 = f64::cos(x103);
+        let x140 = x139 + 1.0;
+        let x141 = rho_dot * x140;
+        let x142 = 0.5 * x139 + 0.5;
+        let x143 = rho * (x141 - x18 * x138) + (x142 * rho_dot - 0.25 * (l * x138)) * l;
+        let x144 = x94 - x84 - x98 - x102 - x127 * Ixx;
+        let x145 = ((x124 * x30 - x129 - x136) * x25 - (x121 + x123) * theta_dot)
+            + (x28 * x144 - x137 * x143);
+        let x146 = x145 + x28 * x118;
+        let x147 = x4 * x122;
+        let x148 = x107 * x30;
+        let x149 = psi_dot * psi_dot;
+        let x150 = x149 * x104;
+        let x151 = theta_dot * rho_dot;
+        let x152 = 2.0 * rho + l;
+        let x153 = x0 * x128 - theta_dot * (x147 + x148) - x135 * x1 + x21 * x79
+            - m * (x150 * (rho * (0.5 * rho + 0.5 * l) + 0.125 * x17) + x151 * x152);
+        let x154 = x153 * x1;
+        let x155 = x153 * x0;
+        let x156 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x157 = -0.5 * x139 - 0.5;
+        let x158 = theta_dot * theta_dot;
+        let x159 = rho_dot * x42;
+        let x160 = x36 * x40;
+        let x161 = x160 * psi_dot;
+        let x162 = theta_dot * x106;
+        let x163 = x162 * x42 - x53 * x79;
+        let x164 = theta_dot * x25;
+        let x165 = x164 * x160;
+        let x166 = x40 * rho_dot;
+        let x167 = x36 * x42;
+        let x168 = psi_dot * x167;
+        let x169 = 2.0 * x168 - 2.0 * x166;
+        let x170 = x28 * x169;
+        let x171 = m
+            * (x78 * (2.0 * x159 + x161) + x36 * x163 - theta_dot * (x170 - x165));
+        let x172 = x56 * x79;
+        let x173 = x40 * x162;
+        let x174 = x36 * (x172 + x173);
+        let x175 = 2.0 * x159 + 2.0 * x161;
+        let x176 = x28 * x175;
+        let x177 = x164 * x167;
+        let x178 = x25 * rho_dot;
+        let x179 = x28 * theta_dot;
+        let x180 = x36 * x179;
+        let x181 = x25 * x79;
+        let x182 = -x0;
+        let x183 = x28 * x27;
+        let x184 = x28 * x50;
+        let x185 = theta_dot * x26;
+        let x186 = x37 * (x57 - x58);
+        let x187 = -(x37 * x70);
+        let x188 = -x75;
+        let x189 = Ixx * x25;
+        let x190 = x28 * x2;
+        let x191 = x190 - x189;
+        let x192 = Ixx + (x191 - x190) * x26;
+        let x193 = x192 * x0;
+        let x194 = x192 * x1;
+        let x195 = x28 * x16;
+        let x196 = -x4 * x25 - x195;
+        let x197 = x4 + x26 * (x196 + x195);
+        let x198 = Ixy * x25 + x28 * (x11 - x32);
+        let x199 = x28 * (x14 - x44) + x25 * Ixz;
+        let x200 = 2.0 * x41 + 2.0 * x43;
+        let x201 = x25 * (x108 - x109 + x0 * x198 + x199 * x1)
+            + x28 * (x189 - x35 - x47 - x190 - x39 * x200);
+        let x202 = x26 * ((x48 + x191) * x28 + x201) + x110;
+        let x203 = x6 + x26 * (x196 * x1 + (x26 * x49 + x193) * x28 + x202 * x0);
+        let x204 = x0 * x0;
+        let x205 = x203 * x1 - x197 * x204;
+        let x206 = -(x61 * x40);
+        let x207 = -(x61 * x42);
+        let x208 = x28 * x37;
+        let x209 = x208 * x1;
+        let x210 = x72 * x40;
+        let x211 = x72 * x42;
+        let x212 = -(x208 * x0);
+        let x213 = -(x53 * m);
+        let x214 = -(x56 * m);
+        let x215 = -x73;
+        let x216 = x0 * x115 - x164 * x1;
+        let x217 = x216 * Ixz;
+        let x218 = x4 * phi_dot;
+        let x219 = theta_dot * Ixx;
+        let x220 = x0 * x93;
+        let x221 = x97 * x1;
+        let x222 = (x220 - x219) - x221;
+        let x223 = x164 * x0 + x115 * x1;
+        let x224 = Ixy * x223;
+        let x225 = x198 * x88;
+        let x226 = x199 * x86;
+        let x227 = psi_dot * x139;
+        let x228 = x28 * (x105 + phi_dot);
+        let x229 = x227 + x228;
+        let x230 = x26 * x229;
+        let x231 = x26 * x26;
+        let x232 = x90
+            + (0.75 * (psi_dot * f64::sin(x112))
+                + x28 * ((0.25 - 0.5 * x113) * psi_dot + x115)) * x231;
+        let x233 = psi_dot * (x217 + x28 * (x222 - x218) - x224 + x225 - x226)
+            + theta_dot * (-(x110 * x230 + x106 * x191) * x26 - Ixx * x232);
+        let x234 = x125 * x0;
+        let x235 = theta_dot * Ixz;
+        let x236 = x198 * x90 + Iyz * x223 + x216 * Izz + x28 * (x234 - x235) - x25 * x97
+            - x86 * x191;
+        let x237 = x20 * x137;
+        let x238 = x125 * x1;
+        let x239 = Ixy * theta_dot + x238;
+        let x240 = x191 * x88 - x239 * x28 - x199 * x90 - Iyz * x216 + x25 * x93
+            - Iyy * x223;
+        let x241 = (-x4 * x232 - x26 * (x30 * x230 + x106 * x196)) * theta_dot
+            + psi_dot * (x0 * x236 - x21 * x115 - x237 * x139 - x240 * x1);
+        let x242 = (x219 - x220) + x221;
+        let x243 = x30 * phi_dot;
+        let x244 = x26
+            * (x28 * (x129 + x136)
+                + (x28 * (x28 * x242 - x217 - x243 + x224 - x225 + x226)
+                    - ((-0.5 * x17 - rho * (2.0 * rho + 2.0 * l)) * theta_dot * x139
+                        - rho_dot * x152 * x104) * m
+                    + x25 * (phi_dot * x196 - x0 * x240 - x236 * x1)) * psi_dot
+                + (-x26 * (x120 * x230 + x106 * x201) - x191 * x122 - x110 * x232)
+                    * theta_dot + x28 * (x26 * x146 + x233) + x144 * x25) + x118;
+        let x245 = psi_dot * x42;
+        let x246 = x149 + x158;
+        let x247 = x28 * x28;
+        let x248 = x124 * (x247 - x25 * x25);
+        let x249 = x28 * x106;
+        let x250 = x40 * psi_dot;
+        let x251 = x247 * x231 + 1.0;
+        let x252 = x26 * x109 + x2;
+        let x253 = -(x252 * x0);
+        let x254 = x10 + 2.0 * x11 - x32;
+        let x255 = (x44 - x13 - 2.0 * x14) * x0 + x254 * x1;
+        let x256 = x25 * (x254 * x0 + (x13 - x44 + 2.0 * x14) * x1);
+        let x257 = x256 - x190;
+        let x258 = x255 * x1 + (x257 * x0 + x28 * (x3 + x5) + x31) * x26 - x66;
+        let x259 = x34 * x1 - x46 * x0;
+        let x260 = x29 + x259;
+        let x261 = x260 * x0 + (x48 + x257) * x1;
+        let x262 = (x1 * x261 - x0 * x49) * x26 - x0 * x258 - x24;
+        let x263 = x54 * x37;
+        let x264 = x86 * Izz;
+        let x265 = -x264 - x96;
+        let x266 = x86 * x265;
+        let x267 = Iyy * x88;
+        let x268 = x267 + x92;
+        let x269 = x83 * Ixy;
+        let x270 = x99 - x100;
+        let x271 = x270 * Ixz;
+        let x272 = x86 * x97;
+        let x273 = (x91 - x89 + x268 + x92) * x88 - x4 * x162 - x266 + x269 + x79 * x2
+            + x271 - x272;
+        let x274 = Ixy * x88 - x86 * Ixz;
+        let x275 = Iyz * x270 + x126 + x274 * x88 + x265 * x90 + x128 - x83 * Iyy;
+        let x276 = x274 * x86;
+        let x277 = x268 * x90;
+        let x278 = x270 * Izz;
+        let x279 = x25
+            * (x0 * x275 + (x131 - x132 + 2.0 * x130 - x276 - x277 - x278 - x133) * x1
+                + x124 * x257 - x147 * theta_dot) - (x30 + x259) * x162
+            + x28 * (x266 + x88 * (x93 - x267 - x92) - x269 - x271 + x272);
+        let x280 = (x276 - 2.0 * x130 + x277 + x278 + x134) * x0
+            - (x122 * x2 + x107 * x257) * theta_dot + x275 * x1 + x255 * x79;
+        let x281 = x1 * x1;
+        let x282 = x36 * x200;
+        let x283 = (x282 - 2.0 * rho - l) * m * x0 * x1;
+        let x284 = -(x54 * m);
+        let x285 = m * x59;
+        let x286 = -(x73 * x1);
+        let x287 = m * x68;
+        let x288 = m * x70;
+        let x289 = x73 * x0;
+        let x290 = x79 * x152 - 2.0 * x151 - x36 * x150;
+        let x291 = (x141 - x138 * x152) * psi_dot + x164 * x106 * x282;
+        let x292 = x40 * x25;
+        let x293 = x25 * x42;
+        let x294 = x25 * phi_dot;
+        let x295 = x0 * x294 + x179 * x1;
+        let x296 = x295 * Ixz;
+        let x297 = x86 * x46;
+        let x298 = x1 * x294 - x0 * x179;
+        let x299 = Ixy * x298;
+        let x300 = x25 + x114 * x26;
+        let x301 = x104 * x231;
+        let x302 = x34 * x88;
+        let x303 = x25 * (x218 + x242) - x296 - x297 + x299
+            - theta_dot * (Ixx * x300 + 0.5 * (x110 * x301)) + x302;
+        let x304 = x239 * x25 + Iyz * x295 + Iyy * x298 - x46 * x90 + x28 * x93
+            + x110 * x88;
+        let x305 = (x235 - x234) * x25 - x295 * Izz - x28 * x97 - Iyz * x298 - x86 * x110
+            + x34 * x90;
+        let x306 = x28 * x303 - x143 * m + x25 * (x243 - x304 * x0 - x305 * x1)
+            - theta_dot * (x110 * x300 + 0.5 * (x120 * x301))
+            + x28 * (x25 * x222 + x296 + x297 - x299 - x302);
+        let x307 = x21 * x294 - x237 * x104 - x304 * x1
+            - theta_dot * (x4 * x300 + 0.5 * (x30 * x301)) + x0 * x305;
+        let x308 = x104 * x185;
+        let x309 = x81 * x2;
+        let x310 = x93 * x1;
+        let x311 = x15 * x88;
+        let x312 = x97 * x0;
+        let x313 = x86 * x12;
+        let x314 = x311 - x111 - x309 - x310 - x312 + x313 - x117;
+        let x315 = x4 * x88 - x234 - x33 * x81 + x12 * x90 + x78 * Ixy;
+        let x316 = x15 * x90 - x238 - x4 * x86 + x78 * Ixz - x81 * x45;
+        let x317 = x28 * x314 - x137 * (-0.25 * x17 - x19) * x104
+            - (x0 * x315 + x1 * x316) * x25 - x121 - x123
+            + x28 * (x309 + x310 - x311 - x78 * Ixx + x312 - x313);
+        let x318 = x0 * x316 - x147 - x1 * x315 - m * rho_dot * x152 - x148;
+        let x319 = x164 * x26;
+        let x320 = x319 * x2 + x78 * x4;
+        let x321 = x86 * (Iyy - Ixx) - 2.0 * x95 - x264 - 2.0 * x96;
+        let x322 = 2.0 * x91 + (Iyy + Ixx - Izz) * x88 + Iyz * (2.0 * x85 + 2.0 * x82);
+        let x323 = x28 * x320 - x319 * x48
+            + (x30 * psi_dot - x321 * x1 - x0 * x322) * x25;
+        let x324 = x78 * x21 + x0 * x321 - x319 * x16 - x322 * x1;
+        let x325 = psi_dot * (rho * x140 + l * x142);
         Derivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
-                [Ixx, x10, x13, 0.0, 0.0, 0.0, 0.0],
-                [x10, x46 * x47 * x2 + x53, x55, 0.0, x59, x63, x64],
-                [x13, x55, x47 * x69 * x0 - x66 * x2, 0.0, x71, x75, x76],
-                [0.0, 0.0, 0.0, m, x77, x78, x79],
-                [0.0, x59, x71, x77, x80, 0.0, 0.0],
-                [0.0, x63, x75, x78, 0.0, x80, 0.0],
-                [0.0, x64, x76, x79, 0.0, 0.0, x80],
+                [Ixx, x6, x9, 0.0, 0.0, 0.0, 0.0],
+                [x6, x24 + x27 * x49, x52, 0.0, x55, x60, x62],
+                [x9, x52, x65 * x50 - x0 * x67, 0.0, x69, x71, x72],
+                [0.0, 0.0, 0.0, m, x74, x75, x76],
+                [0.0, x55, x69, x74, x77, 0.0, 0.0],
+                [0.0, x60, x71, x75, 0.0, x77, 0.0],
+                [0.0, x62, x72, x76, 0.0, 0.0, x77],
             ],
             force: [
                 x118,
-                x148 * x47 * x2 + x153,
-                x148 * x47 * x0 - x154,
-                0.012 * x156
-                    - ((-rho - 0.5 * l) * theta_dot * theta_dot
-                        + (l * (-0.25 * x141 - 0.25) + rho * x155) * psi_dot * psi_dot)
-                        * m - 0.018 * x157,
-                x167,
-                ((-x168 - x169) * x34 - x26 * psi_dot * (2.0 * x161 - x160)
-                    - (x171 - x172) * theta_dot) * m,
-                m
-                    * (-x26 * x26 * psi_dot * x34 * phi_dot
-                        - theta_dot * (x174 - 2.0 * x173)),
+                x27 * x146 + x154,
+                x50 * x146 - x155,
+                x156
+                    - m * ((l * (-0.25 * x139 - 0.25) + rho * x157) * x149 - x36 * x158),
+                x171,
+                (-(2.0 * x166 - x168) * x78 - x174 - theta_dot * (-x176 - x177)) * m,
+                -((theta_dot * (x180 - 2.0 * x178) + x36 * x181) * m),
             ],
-            checks: [x26],
+            checks: [x25],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2807,95 +2803,70 @@ pub mod maggi {
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x179, x59, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x180, x71, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x181, x77, 0.0],
-                    [0.0, x179, x180, x181, 0.0, 0.0, 0.0],
-                    [0.0, x59, x71, x77, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x186, x55, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x187, x69, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x188, x74, 0.0],
+                    [0.0, x186, x187, x188, 0.0, 0.0, 0.0],
+                    [0.0, x55, x69, x74, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x186, x187, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x193, x194, 0.0, 0.0, 0.0, 0.0],
+                    [x193, (x197 * x1 + x203) * x0, x205, 0.0, x206, x207, x209],
                     [
-                        x186,
-                        (x196 + x5 + x9 + x197 * x0) * x2,
-                        x198,
+                        x194,
+                        x205,
+                        (x9 - x197 * x0
+                            + x26 * (x28 * (x65 * x26 + x194) - x0 * x196 + x202 * x1))
+                            * x1,
                         0.0,
-                        x199,
-                        x200,
-                        x201,
+                        x210,
+                        x211,
+                        x212,
                     ],
-                    [
-                        x187,
-                        x198,
-                        (x11 - x197 * x2
-                            + x47 * (x14 * (x47 * x69 + x187) + x192 * x0 - x195 * x2)
-                            - x12) * x0,
-                        0.0,
-                        x202,
-                        x203,
-                        x204,
-                    ],
-                    [0.0, 0.0, 0.0, 0.0, x205, x206, x207],
-                    [0.0, x199, x202, x205, 0.0, 0.0, 0.0],
-                    [0.0, x200, x203, x206, 0.0, 0.0, 0.0],
-                    [0.0, x201, x204, x207, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x213, x214, x215],
+                    [0.0, x206, x210, x213, 0.0, 0.0, 0.0],
+                    [0.0, x207, x211, x214, 0.0, 0.0, 0.0],
+                    [0.0, x209, x212, x215, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x242, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x253, 0.0, 0.0, 0.0, 0.0],
                     [
                         0.0,
-                        x247 * x0 - x54 + (x46 * x0 + x251 * x2) * x47,
-                        x252,
+                        x258 * x1 - x51 + x26 * (x0 * x261 + x49 * x1),
+                        x262,
                         0.0,
+                        x69,
                         x71,
-                        x75,
-                        x76,
+                        x72,
                     ],
                     [
-                        x242,
-                        x252,
-                        x47
-                            * (x2 * (x68 - x67 + x14 * (x241 * x0 - x11 + x12))
-                                + ((x184 - x245 - x47 * x26 * x44) * x2 + x250 * x0) * x0)
-                            - x66 * x0
-                            - x2
-                                * ((x246 * x0 - x68 + x14 * (x0 * x183 - x12)) * x47
-                                    - x244 * x2 - x51),
-                        0.0,
                         x253,
-                        x179,
-                        x254,
+                        x262,
+                        x26
+                            * ((x0 * (x190 - x26 * x119 - x256) + x260 * x1) * x1
+                                + (x64 - x63 + x28 * (x7 - x252 * x1 + x8)) * x0) - x1 * x67
+                            - x0
+                                * (x26 * (x257 * x1 - x64 + x28 * (x8 - x7)) - x255 * x0
+                                    - x22),
+                        0.0,
+                        x263,
+                        x186,
+                        x61,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, x253, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x75, x179, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x76, x254, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x69, x263, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x71, x186, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x72, x61, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        0.0,
-                        m * (x34 * x2 * x2 * x274 + x149 * x0 * x0),
-                        x275,
-                        0.0,
-                        x276,
-                        x277,
-                        x278,
-                    ],
-                    [
-                        0.0,
-                        x275,
-                        m * (x149 * x2 * x2 + x34 * x274 * x0 * x0),
-                        0.0,
-                        x279,
-                        x280,
-                        x281,
-                    ],
+                    [0.0, m * (x281 * x152 + x282 * x204), x283, 0.0, x284, x285, x286],
+                    [0.0, x283, m * (x281 * x282 + x204 * x152), 0.0, x287, x288, x289],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x276, x279, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x277, x280, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x278, x281, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x284, x287, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x285, x288, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x286, x289, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2994,40 +2965,32 @@ pub mod maggi {
                     0.0,
                     0.0,
                     0.0,
-                    m
-                        * (x34 * (x168 + x169)
-                            - theta_dot * (x14 * (2.0 * x158 + 2.0 * x159) + x172)
-                            - (x160 - 2.0 * x161) * x26 * psi_dot),
-                    x167,
+                    m * (x174 - theta_dot * (x176 + x177) - x78 * (x168 - 2.0 * x166)),
+                    x171,
                     0.0,
                 ],
                 [
-                    x213 + x224,
-                    x2 * x233 + x234 * x0,
-                    x233 * x0 - x234 * x2,
-                    -(psi_dot * psi_dot * m * x34 * x103),
+                    x233,
+                    x241 * x1 + x0 * x244,
+                    x244 * x1 - x241 * x0,
+                    -(x150 * x37),
                     m
-                        * (x34
-                            * (x35 * psi_dot * phi_dot * x235
-                                + theta_dot * x47 * (x208 + x209 - x236) * x37)
-                            - theta_dot * x26 * x162
-                            - x14
-                                * (x239 * x35 * x34 + 2.0 * (psi_dot * rho_dot * x37))),
-                    ((psi_dot * phi_dot * x235 * x37
-                        + (x236 - x208 - x209) * theta_dot * x47 * x35) * x34
-                        - x14 * (x239 * x34 * x37 - 2.0 * (x35 * psi_dot * rho_dot))
-                        - theta_dot * x170 * x26) * m,
+                        * ((x40 * x248 + (x229 - x249) * x42 * x185) * x36
+                            - (2.0 * (rho_dot * x245) + x246 * x160) * x28
+                            - x164 * x169),
                     m
-                        * (2.0 * (x14 * x26 * psi_dot * x34 * phi_dot)
-                            - theta_dot
-                                * (theta_dot * x26 * x34 + 2.0 * (x14 * rho_dot))),
+                        * (x164 * x175 - x28 * (x246 * x167 - 2.0 * (x250 * rho_dot))
+                            + x36 * ((x249 - x227 - x228) * x40 * x185 + x248 * x42)),
+                    m
+                        * (2.0 * (x28 * x36 * x79)
+                            - theta_dot * (x164 * x36 + 2.0 * (x28 * rho_dot))),
                 ],
                 [
-                    x265,
-                    x47 * (x14 * (x265 * x2 + x118 * x0) + x0 * x266 + x272 * x2)
-                        + x273 * x0 - x154,
-                    ((x265 * x0 - x2 * x118) * x14 - x2 * x266 + x272 * x0) * x47
-                        - x2 * x273 - x153,
+                    x273,
+                    (x279 * x0 + x28 * (x118 * x1 + x0 * x273) + x145 * x1) * x26
+                        + x280 * x1 - x155,
+                    x26 * (x279 * x1 - x145 * x0 + (x273 * x1 - x0 * x118) * x28)
+                        - x0 * x280 - x154,
                     0.0,
                     0.0,
                     0.0,
@@ -3035,86 +2998,68 @@ pub mod maggi {
                 ],
                 [
                     0.0,
-                    m * (x0 * x282 + x47 * x2 * x283),
-                    (x47 * x0 * x283 - x2 * x282) * m,
-                    -(m * (psi_dot * psi_dot * x155 - x237)),
-                    m
-                        * (x166 - x165 - x35 * x26 * x284
-                            - 2.0 * (x14 * theta_dot * psi_dot * x37)),
-                    m
-                        * (2.0 * (x14 * theta_dot * x35 * psi_dot) - x26 * x37 * x284
-                            - x168 - x169),
-                    (-x26 * x26 * psi_dot * phi_dot - x14 * theta_dot * theta_dot) * m,
+                    m * (x290 * x1 - x27 * x291),
+                    m * (-x291 * x50 - x290 * x0),
+                    -((x149 * x157 - x158) * m),
+                    (x246 * x292 - 2.0 * (x179 * x245) + x163) * m,
+                    m * (2.0 * (x250 * x179) - x172 - x173 + x246 * x293),
+                    -(m * (theta_dot * x179 + x181)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x292,
-                    x47 * x2 * x295 + x296 * x0,
-                    x47 * x295 * x0 - x296 * x2,
-                    -((rho * (-x141 - 1.0) + l * x155) * psi_dot * m),
-                    (x34
-                        * (0.5 * (theta_dot * x47 * x37 * x103)
-                            - x14 * x35 * x26 * phi_dot) - x170 * x26
-                        - 2.0 * (x14 * theta_dot * x34 * x37)) * m,
-                    m
-                        * ((-x14 * x26 * phi_dot * x37
-                            - 0.5 * (theta_dot * x47 * x35 * x103)) * x34
-                            - (2.0 * x173 - 2.0 * x174) * x35
-                            + 2.0 * (x26 * psi_dot * x34 * x37)),
-                    -(x26 * x26 * m * x34 * phi_dot),
+                    x303,
+                    x27 * x306 + x307 * x1,
+                    x306 * x50 - x307 * x0,
+                    -((rho * (-x139 - 1.0) + l * x157) * x137),
+                    (x25 * x175 + x36 * (0.5 * (x308 * x42) - x292 * x115)
+                        - 2.0 * (x179 * x167)) * m,
+                    (2.0 * (x78 * x167) - (2.0 * x178 - 2.0 * x180) * x40
+                        - x36 * (0.5 * (x308 * x40) + x293 * x115)) * m,
+                    -(x38 * x294),
                 ],
                 [
-                    x301,
-                    x304 * x47 * x2 + x305 * x0,
-                    x304 * x47 * x0 - x305 * x2,
-                    -(x225 * theta_dot * m),
-                    (x105 * x34 * x37 - x163 + 2.0 * x164) * m,
-                    m * (2.0 * x172 - x105 * x35 * x34 - x171),
-                    -((2.0 * x174 - 2.0 * x173) * m),
+                    x314,
+                    x317 * x27 + x318 * x1,
+                    x317 * x50 - x0 * x318,
+                    theta_dot * m * x152,
+                    m * (2.0 * x165 + x106 * x167 - x170),
+                    m * (x176 - x106 * x160 + 2.0 * x177),
+                    -((2.0 * x180 - 2.0 * x178) * m),
                 ],
                 [
-                    x306,
-                    x309 * x0 + x47 * x2 * x310,
-                    x47 * x310 * x0 - x309 * x2,
+                    x320,
+                    x323 * x27 + x1 * x324,
+                    x323 * x50 - x0 * x324,
                     0.0,
-                    (theta_dot * x37 - x14 * x35 * x26 * psi_dot) * m * x34,
-                    m * x34 * (-theta_dot * x35 - x14 * x26 * psi_dot * x37),
-                    -(x26 * x26 * psi_dot * m * x34),
+                    x37 * (theta_dot * x42 - x53 * x78),
+                    -(x37 * (theta_dot * x40 + x78 * x56)),
+                    -(x78 * x38),
                 ],
                 [
                     0.0,
-                    m * (-theta_dot * x149 * x0 - x47 * psi_dot * x2 * x311),
-                    (theta_dot * x149 * x2 - x47 * psi_dot * x311 * x0) * m,
+                    -((x152 * x82 + x27 * x325) * m),
+                    (x87 * x152 - x325 * x50) * m,
                     0.0,
-                    -((-2.0 * (x14 * theta_dot * x35) - 2.0 * (x26 * psi_dot * x37))
-                        * m),
-                    -((2.0 * (x35 * x26 * psi_dot) - 2.0 * (x14 * theta_dot * x37)) * m),
-                    2.0 * theta_dot * x26 * m,
+                    m * (2.0 * (x78 * x42) + 2.0 * (x40 * x179)),
+                    -(m * (2.0 * (x78 * x40) - 2.0 * (x179 * x42))),
+                    2.0 * x164 * m,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [0.0, x47 * x2, x175, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x0, x176, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x14 * x47 * x2, x177, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x27, x50, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x1, x182, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x183, x184, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * x105 * x47,
-                -(x26 * psi_dot * phi_dot),
-                theta_dot * x119,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
+            c: [x106 * x185, -x79, theta_dot * x122, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3126,26 +3071,18 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [
-                        0.0,
-                        x14 * x47 * x47 * x2,
-                        x14 * x47 * x47 * x0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
+                    [0.0, x26 * x183, x26 * x184, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x240 * x2, x240 * x0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x251 * x0, x251 * x1, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x175, -(x47 * x2), 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x176, -x0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x177, -(x14 * x47 * x2), 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x50, -x27, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x182, -x1, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x184, -x183, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3253,45 +3190,21 @@ pub mod maggi {
             ],
             d_c: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    x210 * theta_dot * x47 * x47,
-                    x14 * psi_dot * phi_dot,
-                    theta_dot * x212,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
+                [x230 * x185, psi_dot * x115, theta_dot * x232, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    0.5 * theta_dot * x47 * x47 * x103,
-                    -(x26 * phi_dot),
-                    theta_dot * x291,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [x105 * x47, 0.0, x119, 0.0, 0.0, 0.0, 0.0],
-                [
-                    theta_dot * x47,
-                    -(x26 * psi_dot),
-                    x14 * theta_dot * x47,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
+                [0.5 * x308 * x26, -x294, theta_dot * x300, 0.0, 0.0, 0.0, 0.0],
+                [x107, 0.0, x122, 0.0, 0.0, 0.0, 0.0],
+                [x185, -x78, x26 * x179, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: rho_dot * x178,
+            power: x156 * rho_dot,
             d_power: [
                 0.0,
                 0.0,
@@ -3303,7 +3216,7 @@ pub mod maggi {
                 0.0,
                 0.0,
                 0.0,
-                x178,
+                x156,
                 0.0,
                 0.0,
                 0.0,
@@ -3456,247 +3369,254 @@ pub mod maggi {
         let x0 = f64::cos(phi);
         let x1 = f64::sin(phi);
         let x2 = x1 * Ixz - Ixy * x0;
-        let x3 = -Ixy * x1 - Ixz * x0;
-        let x4 = x2 * x0 + x1 * x3;
-        let x5 = x3 * x0 - x2 * x1;
-        let x6 = f64::sin(theta);
-        let x7 = Iyz * x0;
-        let x8 = -x1 * Izz - x7;
-        let x9 = Iyz * x1;
-        let x10 = Iyy * x0 + x9;
-        let x11 = x8 * x0 + x10 * x1;
-        let x12 = f64::cos(theta);
-        let x13 = x11 * x12 - x6 * x2;
-        let x14 = rho + 0.5 * l;
-        let x15 = f64::cos(psi);
-        let x16 = x15 * x15;
-        let x17 = f64::sin(psi);
-        let x18 = x17 * x17;
-        let x19 = x16 + x18;
-        let x20 = ((Iyy * x1 - x7) * x12 + x6 * Ixy) * x1 + x12 * m * x14 * x14 * x19
-            + (x12 * (Izz * x0 - x9) + x6 * Ixz) * x0;
-        let x21 = x6 * x4 + x0 * x13 + x1 * x20;
-        let x22 = 1.0 / x12;
-        let x23 = l * l;
-        let x24 = rho + l;
-        let x25 = rho * x24;
-        let x26 = 0.25 * x23 + x25;
-        let x27 = m * x26 - x1 * x8 + x10 * x0;
-        let x28 = x11 * x1 + x27 * x0;
-        let x29 = x21 * x22 * x0 - x1 * x28;
-        let x30 = x1 * x17;
-        let x31 = x6 * x15 * x0;
-        let x32 = -x30 - x31;
-        let x33 = x32 * m * x14;
-        let x34 = x15 * x1;
-        let x35 = x6 * x0 * x17;
-        let x36 = x34 - x35;
-        let x37 = x36 * m * x14;
-        let x38 = -(x12 * m * x14 * x0);
-        let x39 = x0 * x17;
-        let x40 = x6 * x15 * x1;
+        let x3 = Ixy * x1 + Ixz * x0;
+        let x4 = x2 * x0 - x1 * x3;
+        let x5 = -x0 * x3 - x2 * x1;
+        let x6 = Iyz * x0;
+        let x7 = x1 * Izz + x6;
+        let x8 = Iyz * x1;
+        let x9 = Iyy * x0 + x8;
+        let x10 = x9 * x1 - x7 * x0;
+        let x11 = l * l;
+        let x12 = rho + l;
+        let x13 = rho * x12;
+        let x14 = 0.25 * x11 + x13;
+        let x15 = x14 * m + x9 * x0 + x7 * x1;
+        let x16 = x10 * x1 + x15 * x0;
+        let x17 = f64::cos(theta);
+        let x18 = 1.0 / x17;
+        let x19 = x18 * x1;
+        let x20 = f64::sin(theta);
+        let x21 = f64::cos(psi);
+        let x22 = f64::sin(psi);
+        let x23 = x21 * x21 + x22 * x22;
+        let x24 = rho + 0.5 * l;
+        let x25 = x24 * x17;
+        let x26 = x23 * x25;
+        let x27 = x24 * m;
+        let x28 = ((Iyy * x1 - x6) * x17 + x20 * Ixy) * x1
+            + (x17 * (Izz * x0 - x8) + x20 * Ixz) * x0 + x26 * x27;
+        let x29 = x10 * x17 - x20 * x2;
+        let x30 = x28 * x1 + x29 * x0 + x20 * x4;
+        let x31 = x18 * x0;
+        let x32 = x30 * x31 - x1 * x16;
+        let x33 = x1 * x22;
+        let x34 = x20 * x21;
+        let x35 = x34 * x0;
+        let x36 = x33 + x35;
+        let x37 = -(x36 * x27);
+        let x38 = x20 * x22;
+        let x39 = x38 * x0;
+        let x40 = x21 * x1;
         let x41 = x40 - x39;
-        let x42 = x41 * m * x14;
-        let x43 = x15 * x0;
-        let x44 = x6 * x1 * x17;
-        let x45 = x43 + x44;
-        let x46 = m * x14 * x45;
-        let x47 = x12 * m * x14 * x1;
-        let x48 = x15 * x12 * m;
-        let x49 = x12 * m * x17;
-        let x50 = -(x6 * m);
-        let x51 = m + mg;
-        let x52 = theta_dot * x0;
-        let x53 = x12 * psi_dot * x1;
-        let x54 = x52 + x53;
-        let x55 = x6 * psi_dot;
-        let x56 = phi_dot - x55;
-        let x57 = x12 * psi_dot * x0;
-        let x58 = theta_dot * x1;
-        let x59 = x57 - x58;
-        let x60 = x59 * Izz - Iyz * x54 - Ixz * x56;
-        let x61 = x60 * x54;
-        let x62 = -phi_dot - x55;
-        let x63 = theta_dot * x62 * x0;
-        let x64 = x12 * psi_dot * x1 * phi_dot;
-        let x65 = x63 - x64;
-        let x66 = x65 * Ixz;
-        let x67 = Iyy * x54 - x59 * Iyz - Ixy * x56;
-        let x68 = x59 * x67;
-        let x69 = theta_dot * x62 * x1;
-        let x70 = x12 * psi_dot * phi_dot * x0;
-        let x71 = x69 + x70;
-        let x72 = Ixy * x71;
-        let x73 = 2.0 * theta;
-        let x74 = f64::sin(x73);
-        let x75 = x22 * psi_dot * x74;
+        let x42 = x27 * x41;
+        let x43 = m * x0;
+        let x44 = -(x43 * x25);
+        let x45 = x0 * x22;
+        let x46 = x34 * x1;
+        let x47 = x46 - x45;
+        let x48 = x27 * x47;
+        let x49 = x38 * x1;
+        let x50 = x21 * x0;
+        let x51 = x49 + x50;
+        let x52 = x27 * x51;
+        let x53 = m * x1;
+        let x54 = x25 * x53;
+        let x55 = x21 * x17;
+        let x56 = m * x55;
+        let x57 = x17 * x22;
+        let x58 = m * x57;
+        let x59 = -(x20 * m);
+        let x60 = m + mg;
+        let x61 = x20 * psi_dot;
+        let x62 = phi_dot - x61;
+        let x63 = x17 * psi_dot;
+        let x64 = x63 * x0;
+        let x65 = theta_dot * x1;
+        let x66 = x64 - x65;
+        let x67 = theta_dot * x0;
+        let x68 = x63 * x1 + x67;
+        let x69 = Iyy * x68 - x62 * Ixy - Iyz * x66;
+        let x70 = x69 * x66;
+        let x71 = x63 * phi_dot;
+        let x72 = 2.0 * theta;
+        let x73 = f64::sin(x72);
+        let x74 = x18 * x73;
+        let x75 = x74 * psi_dot;
         let x76 = 0.5 * x75 + phi_dot;
-        let x77 = x12 * x3 - x6 * Ixx;
-        let x78 = x22 * f64::cos(3.0 * theta);
-        let x79 = x6 * phi_dot;
-        let x80 = (0.25 - 0.25 * x78) * psi_dot + x79;
-        let x81 = x66 - x61 + x68 + x72
-            + (-x76 * x22 * x77 - x80 * Ixx * x22) * theta_dot
-            + x2 * x12 * psi_dot * phi_dot;
-        let x82 = x80 * x22;
-        let x83 = x12 * psi_dot;
-        let x84 = x82 + x83;
-        let x85 = Ixx * x56 - x59 * Ixz - Ixy * x54;
-        let x86 = x59 * x85 + Iyy * x71 - x60 * x56 + Ixy * theta_dot * x12 * psi_dot
-            - x65 * Iyz;
-        let x87 = theta_dot * x12 * psi_dot * Ixz + x67 * x56 - x54 * x85 - Iyz * x71
-            + x65 * Izz;
-        let x88 = l * theta_dot * x74;
-        let x89 = f64::cos(x73);
-        let x90 = 0.5 * x89 + 0.5;
-        let x91 = x90 * rho_dot;
-        let x92 = theta_dot * (-x84 * x77 - x76 * x22 * (x12 * x20 - x6 * x77))
-            + x12 * (psi_dot * phi_dot * x13 - x1 * x86 - x87 * x0)
-            + (x61 - theta_dot * Ixx * x12 * psi_dot - x66 - x68 - x72) * x6 + x6 * x81
-            - (l * (x91 - 0.25 * x88)
-                + rho * ((-rho - l) * theta_dot * x74 + rho_dot * (x89 + 1.0))) * psi_dot
-                * m;
-        let x93 = theta_dot * (-x76 * x22 * x13 - x2 * x84)
-            - ((rho * (0.5 * rho + 0.5 * l) + 0.125 * x23) * psi_dot * psi_dot * x74
-                + theta_dot * (2.0 * rho + l) * rho_dot) * m
-            + x12 * psi_dot * phi_dot * x27 - x86 * x0 + x87 * x1;
-        let x94 = -rho - 0.5 * l;
-        let x95 = -0.25 * x89 - 0.25;
-        let x96 = -0.5 * x89 - 0.5;
-        let x97 = f64::cos(0.0485 * t);
-        let x98 = f64::sin(0.089 * t);
-        let x99 = rho_dot * x17;
-        let x100 = x15 * psi_dot * x14;
-        let x101 = psi_dot * x14 * x17;
-        let x102 = x15 * rho_dot;
-        let x103 = x6 * x15 * x12 * psi_dot * phi_dot;
-        let x104 = theta_dot * x76 * x17;
-        let x105 = x6 * x12 * psi_dot * phi_dot * x17;
-        let x106 = theta_dot * x76 * x15;
-        let x107 = x12 * x12 * psi_dot * x14 * phi_dot;
-        let x108 = x12 * rho_dot;
-        let x109 = x6 * theta_dot * x14;
-        let x110 = theta_dot * x84;
-        let x111 = 0.5 * (x6 * x22 * psi_dot * x74) + (0.25 * x78 - 0.25) * psi_dot;
-        let x112 = x6 * x76 * x22;
-        let x113 = x111 * x6 * theta_dot * x22 + x6 * (x82 - x112) * theta_dot
-            + x12 * (x54 * x0 - x59 * x1) * x56;
-        let x114 = -x1 * x54 - x59 * x0;
-        let x115 = x0 * x0;
-        let x116 = x1 * x1;
-        let x117 = x115 + x116;
-        let x118 = theta_dot * x76 * x1;
-        let x119 = -x118 - x69;
-        let x120 = x119 * x0 + x1 * x56 * x54;
-        let x121 = x1 * x119 - x56 * x54 * x0;
-        let x122 = -x115 - x116;
-        let x123 = theta_dot * x76 * x0;
-        let x124 = (-x63 - x123) * x0 + x59 * x1 * x56;
-        let x125 = x59 * x56 * x0 + (x63 + x123) * x1;
-        let x126 = x55 - phi_dot;
-        let x127 = x59 * x126;
-        let x128 = 0.5 * x75 - x55;
-        let x129 = x127 + theta_dot * x128 * x1;
-        let x130 = x56 * x126;
-        let x131 = -x52 - x53;
-        let x132 = x131 * x54;
-        let x133 = x59 * x131;
-        let x134 = theta_dot * x12 * psi_dot;
-        let x135 = (x130 - x132) * x1
-            + (theta_dot * (x82 - x112 + x83) - x133 - x134) * x0;
-        let x136 = phi_dot + x55;
-        let x137 = theta_dot * x136 * x1;
-        let x138 = x6 * psi_dot * phi_dot;
-        let x139 = x6 * (x137 - x127 - 2.0 * x118 - x70) + x6 * x129
-            + x12 * ((x138 - x130 + x132) * x0 + x1 * (x110 - x133 - x134));
-        let x140 = x126 * x54;
-        let x141 = theta_dot * x128 * x0 - x140;
-        let x142 = x58 - x57;
-        let x143 = x59 * x142;
-        let x144 = x142 * x54;
-        let x145 = x1 * (theta_dot * (x112 - x82 - x83) - x144 + x134)
-            - (x143 - x130) * x0;
-        let x146 = theta_dot * x136 * x0;
-        let x147 = x12 * ((x144 + x110 - x134) * x0 + (x130 - x138 - x143) * x1)
-            + x6 * (x64 - 2.0 * x123 + x140 + x146) + x6 * x141;
-        let x148 = x122 * x0 * x0 - x1 * x1 * x117;
-        let x149 = x143 - x132;
-        let x150 = x131 * x56;
-        let x151 = x142 * x56;
-        let x152 = x116 - x115;
-        let x153 = x1 * (x137 + x151 + x70) - (x64 - x150 + x146) * x0
-            - x152 * theta_dot * x76;
-        let x154 = x6 * (x132 - x143) + x6 * x149
-            + ((x150 - x64 + 2.0 * x123 - x146) * x1 - (x137 + x151 - x70) * x0
-                + x152 * x12 * psi_dot * phi_dot) * x12;
-        let x155 = (x14 * x14 * x19 - 0.25 * x23 - x25) * x1 * x0;
-        let x156 = x32 * x14;
-        let x157 = x36 * x14;
-        let x158 = -(x12 * x14 * x0);
-        let x159 = x41 * x14;
-        let x160 = x14 * x45;
-        let x161 = x12 * x14 * x1;
-        let x162 = x15 * x12;
-        let x163 = x12 * x17;
-        let x164 = -x6;
-        let x165 = (-2.0 * rho - l) * theta_dot * rho_dot
-            + psi_dot
-                * (x12 * phi_dot * x26
-                    + psi_dot * ((-0.5 * rho - 0.5 * l) * rho - 0.125 * x23) * x74);
-        let x166 = psi_dot
-            * ((rho_dot * x96 + 0.25 * x88) * l
-                + rho * ((-x89 - 1.0) * rho_dot + theta_dot * x24 * x74))
-            - theta_dot * x76 * x12 * x14 * x14 * x19;
-        let x167 = theta_dot * theta_dot;
-        let x168 = x167 + (psi_dot - x79) * psi_dot;
-        let x169 = m * x14 * x1 * (x16 + x18 - 1.0) * x0;
-        let x170 = (-0.5 * x30 - 0.5 * x31) * m;
-        let x171 = (0.5 * x34 - 0.5 * x35) * m;
-        let x172 = -(0.5 * x12 * m * x0);
-        let x173 = (0.5 * x40 - 0.5 * x39) * m;
-        let x174 = m * (0.5 * x43 + 0.5 * x44);
-        let x175 = 0.5 * x12 * m * x1;
-        let x176 = -psi_dot * (x94 * theta_dot * x74 + x91)
-            - theta_dot * x76 * x12 * x14 * x19;
-        let x177 = x12 * psi_dot * x14 * phi_dot - theta_dot * rho_dot
-            - psi_dot * psi_dot * (0.5 * rho + 0.25 * l) * x74;
-        let x178 = -0.5 * x167 - 0.5 * (psi_dot * psi_dot);
+        let x77 = x76 * x18;
+        let x78 = -x20 * Ixx - x17 * x3;
+        let x79 = x18 * f64::cos(3.0 * theta);
+        let x80 = x20 * phi_dot;
+        let x81 = ((0.25 - 0.25 * x79) * psi_dot + x80) * x18;
+        let x82 = Izz * x66 - x62 * Ixz - Iyz * x68;
+        let x83 = x82 * x68;
+        let x84 = x71 * x0;
+        let x85 = x61 + phi_dot;
+        let x86 = x65 * x85;
+        let x87 = x84 - x86;
+        let x88 = Ixy * x87;
+        let x89 = x85 * x67;
+        let x90 = x1 * x71;
+        let x91 = -x89 - x90;
+        let x92 = x91 * Ixz;
+        let x93 = x70 + x2 * x71 - theta_dot * (x77 * x78 + x81 * Ixx) - x83 + x88 + x92;
+        let x94 = x63 + x81;
+        let x95 = theta_dot * x73;
+        let x96 = x12 * x95;
+        let x97 = f64::cos(x72);
+        let x98 = l * x95;
+        let x99 = 0.5 * x97 + 0.5;
+        let x100 = x99 * rho_dot;
+        let x101 = x63 * theta_dot;
+        let x102 = x62 * Ixx - Ixy * x68 - Ixz * x66;
+        let x103 = x91 * Izz + x101 * Ixz + x69 * x62 - x102 * x68 - Iyz * x87;
+        let x104 = x102 * x66 - Iyz * x91 + Iyy * x87 - x62 * x82 + Ixy * x101;
+        let x105 = x20 * x93 - theta_dot * ((x28 * x17 - x20 * x78) * x77 + x94 * x78)
+            - (rho * (rho_dot * (x97 + 1.0) - x96) + (x100 - 0.25 * x98) * l) * psi_dot
+                * m + (psi_dot * phi_dot * x29 - x103 * x0 - x1 * x104) * x17
+            + x20 * (x83 - x70 - x88 - x92 - x101 * Ixx);
+        let x106 = rho * (0.5 * rho + 0.5 * l);
+        let x107 = psi_dot * psi_dot;
+        let x108 = x107 * x73;
+        let x109 = theta_dot * rho_dot;
+        let x110 = x109 * (2.0 * rho + l);
+        let x111 = x103 * x1 - ((x106 + 0.125 * x11) * x108 + x110) * m
+            - theta_dot * (x77 * x29 + x2 * x94) - x104 * x0 + x15 * x71;
+        let x112 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x113 = -0.25 * x97 - 0.25;
+        let x114 = -0.5 * x97 - 0.5;
+        let x115 = theta_dot * theta_dot;
+        let x116 = x24 * x115;
+        let x117 = x76 * theta_dot;
+        let x118 = x117 * x22;
+        let x119 = x34 * x71;
+        let x120 = rho_dot * x22;
+        let x121 = x21 * psi_dot;
+        let x122 = x24 * x121;
+        let x123 = x21 * rho_dot;
+        let x124 = psi_dot * x22;
+        let x125 = x24 * x124;
+        let x126 = theta_dot * x21;
+        let x127 = x38 * x71;
+        let x128 = x117 * x21;
+        let x129 = theta_dot * x22;
+        let x130 = x17 * rho_dot;
+        let x131 = x20 * theta_dot;
+        let x132 = x24 * x131;
+        let x133 = x71 * x25;
+        let x134 = theta_dot * x94;
+        let x135 = x18 * (0.5 * (x74 * x61) + (0.25 * x79 - 0.25) * psi_dot);
+        let x136 = x62 * x0;
+        let x137 = x66 * x0 + x68 * x1;
+        let x138 = x20 * x77;
+        let x139 = x62 * x17 * (x68 * x0 - x1 * x66) + (x81 - x138) * x131 + x135 * x131;
+        let x140 = x62 * x1;
+        let x141 = x0 * x0;
+        let x142 = x1 * x1;
+        let x143 = x141 + x142;
+        let x144 = x68 * x66;
+        let x145 = x144;
+        let x146 = x117 * x1;
+        let x147 = x146 - x86;
+        let x148 = -x136 * x68 - x1 * x147;
+        let x149 = x68 * x140 - x0 * x147;
+        let x150 = x142 * x143;
+        let x151 = x141 * x143;
+        let x152 = x117 * x0;
+        let x153 = x152 - x89;
+        let x154 = x140 * x66 - x153 * x0;
+        let x155 = x136 * x66 + x153 * x1;
+        let x156 = -x143;
+        let x157 = 0.5 * x75 - x61;
+        let x158 = x61 - phi_dot;
+        let x159 = x158 * x66;
+        let x160 = x65 * x157 + x159;
+        let x161 = x86 - x84;
+        let x162 = x144 - x101;
+        let x163 = x61 * phi_dot;
+        let x164 = x68 * x68;
+        let x165 = x62 * x158;
+        let x166 = x20 * (x161 - x159 - 2.0 * x146)
+            + x17 * ((x134 + x162) * x1 + (x163 - x164 - x165) * x0) + x20 * x160;
+        let x167 = (theta_dot * (x94 - x138) + x162) * x0 + (x164 + x165) * x1;
+        let x168 = x68 * x158;
+        let x169 = x157 * x67 - x168;
+        let x170 = x89 + x90;
+        let x171 = x65 - x64;
+        let x172 = x68 * x171;
+        let x173 = x171 * x66;
+        let x174 = x20 * (x170 - 2.0 * x152 + x168)
+            + x17 * (x0 * (x172 - x101 + x134) + (x165 - x173 - x163) * x1) + x20 * x169;
+        let x175 = x1 * (x101 - x172 + theta_dot * (x138 - x63 - x81))
+            - (x173 - x165) * x0;
+        let x176 = -x150 - x151;
+        let x177 = x173 + x164;
+        let x178 = x62 * x171;
+        let x179 = x142 - x141;
+        let x180 = x62 * x68;
+        let x181 = (x84 + x86 + x178) * x1 - x117 * x179 - (x170 + x180) * x0;
+        let x182 = ((2.0 * x152 - x89 - x90 - x180) * x1 - (x161 + x178) * x0
+            + x71 * x179) * x17 + x20 * (-x173 - x164) + x177 * x20;
+        let x183 = x24 * x23;
+        let x184 = x24 * x183;
+        let x185 = x1 * x0;
+        let x186 = (x184 - 0.25 * x11 - x13) * x185;
+        let x187 = -(x36 * x24);
+        let x188 = x24 * x41;
+        let x189 = -(x25 * x0);
+        let x190 = x24 * x47;
+        let x191 = x24 * x51;
+        let x192 = x1 * x25;
+        let x193 = -x20;
+        let x194 = psi_dot
+            * ((-x106 - 0.125 * x11) * psi_dot * x73 + x14 * x17 * phi_dot) - x110;
+        let x195 = (l * (0.25 * x98 + rho_dot * x114)
+            + rho * ((-x97 - 1.0) * rho_dot + x96)) * psi_dot - x117 * x183 * x25;
+        let x196 = (psi_dot - x80) * psi_dot + x115;
+        let x197 = (x23 - 1.0) * x27 * x185;
+        let x198 = -((0.5 * x33 + 0.5 * x35) * m);
+        let x199 = (0.5 * x40 - 0.5 * x39) * m;
+        let x200 = -(0.5 * x43 * x17);
+        let x201 = m * (0.5 * x46 - 0.5 * x45);
+        let x202 = (0.5 * x49 + 0.5 * x50) * m;
+        let x203 = 0.5 * x17 * x53;
+        let x204 = x26 * x117 + (x100 - x24 * x95) * psi_dot;
+        let x205 = x24 * x71 - x108 * (0.5 * rho + 0.25 * l) - x109;
+        let x206 = 0.5 * x107 + 0.5 * x115;
         ParameterDerivatives {
             qdot: [psi_dot, theta_dot, phi_dot, rho_dot, X_dot, Y_dot, Z_dot],
             matrix: [
                 [Ixx, x4, x5, 0.0, 0.0, 0.0, 0.0],
-                [x4, x21 * x22 * x1 + x28 * x0, x29, 0.0, x33, x37, x38],
+                [x4, x16 * x0 + x19 * x30, x32, 0.0, x37, x42, x44],
                 [
                     x5,
-                    x29,
-                    x22 * (x20 * x0 - x1 * x13 + x5 * x6) * x0
-                        - (x11 * x0 - x1 * x27) * x1,
+                    x32,
+                    (x28 * x0 - x1 * x29 + x20 * x5) * x31 - x1 * (x10 * x0 - x15 * x1),
                     0.0,
-                    x42,
-                    x46,
-                    x47,
+                    x48,
+                    x52,
+                    x54,
                 ],
-                [0.0, 0.0, 0.0, m, x48, x49, x50],
-                [0.0, x33, x42, x48, x51, 0.0, 0.0],
-                [0.0, x37, x46, x49, 0.0, x51, 0.0],
-                [0.0, x38, x47, x50, 0.0, 0.0, x51],
+                [0.0, 0.0, 0.0, m, x56, x58, x59],
+                [0.0, x37, x48, x56, x60, 0.0, 0.0],
+                [0.0, x42, x52, x58, 0.0, x60, 0.0],
+                [0.0, x44, x54, x59, 0.0, 0.0, x60],
             ],
             force: [
-                x81,
-                x92 * x22 * x1 + x93 * x0,
-                x92 * x22 * x0 - x93 * x1,
-                0.012 * x97
-                    - (x94 * theta_dot * theta_dot
-                        + (l * x95 + rho * x96) * psi_dot * psi_dot) * m - 0.018 * x98,
-                ((x104 - x103) * x14 - (-2.0 * x99 - x100) * x12 * psi_dot
-                    - (x6 * (2.0 * x101 - 2.0 * x102) - theta_dot * x15 * x12 * x14)
-                        * theta_dot) * m,
-                ((-x105 - x106) * x14 - x12 * psi_dot * (2.0 * x102 - x101)
-                    - (x6 * (-2.0 * x99 - 2.0 * x100) - theta_dot * x12 * x14 * x17)
-                        * theta_dot) * m,
-                m * (-x107 - theta_dot * (x109 - 2.0 * x108)),
+                x93,
+                x105 * x19 + x111 * x0,
+                x105 * x31 - x111 * x1,
+                x112 - m * ((l * x113 + rho * x114) * x107 - x116),
+                (x24 * (x118 - x119) + x63 * (2.0 * x120 + x122)
+                    - theta_dot * (x20 * (2.0 * x125 - 2.0 * x123) - x126 * x25)) * m,
+                m
+                    * (-x24 * (x127 + x128)
+                        - theta_dot * (-x129 * x25 - x20 * (2.0 * x120 + 2.0 * x122))
+                        - x63 * (2.0 * x123 - x125)),
+                -((theta_dot * (x132 - 2.0 * x130) + x133) * m),
             ],
-            checks: [x12],
+            checks: [x17],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3729,7 +3649,7 @@ pub mod maggi {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x117 * x117, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x143 * x143, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3739,15 +3659,15 @@ pub mod maggi {
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x117 * x0 * x0 - x122 * x1 * x1, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x150 + x151, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x122, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x122, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x156, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x156, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3755,18 +3675,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, x122, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, x156, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x122, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, x148, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x148, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x156, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -3774,90 +3685,75 @@ pub mod maggi {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [
-                        0.0,
-                        x14 * x14 * x19 * x1 * x1 + x0 * x0 * x26,
-                        x155,
-                        0.0,
-                        x156,
-                        x157,
-                        x158,
-                    ],
-                    [
-                        0.0,
-                        x155,
-                        x14 * x14 * x19 * x0 * x0 + x1 * x1 * x26,
-                        0.0,
-                        x159,
-                        x160,
-                        x161,
-                    ],
-                    [0.0, 0.0, 0.0, 1.0, x162, x163, x164],
-                    [0.0, x156, x159, x162, 1.0, 0.0, 0.0],
-                    [0.0, x157, x160, x163, 0.0, 1.0, 0.0],
-                    [0.0, x158, x161, x164, 0.0, 0.0, 1.0],
+                    [0.0, 0.0, x176, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x176, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, (x19 * x1 * x1 + x115) * m * x14, x169, 0.0, x170, x171, x172],
-                    [0.0, x169, m * x14 * (x19 * x0 * x0 + x116), 0.0, x173, x174, x175],
+                    [0.0, x141 * x14 + x184 * x142, x186, 0.0, x187, x188, x189],
+                    [0.0, x186, x14 * x142 + x141 * x184, 0.0, x190, x191, x192],
+                    [0.0, 0.0, 0.0, 1.0, x55, x57, x193],
+                    [0.0, x187, x190, x55, 1.0, 0.0, 0.0],
+                    [0.0, x188, x191, x57, 0.0, 1.0, 0.0],
+                    [0.0, x189, x192, x193, 0.0, 0.0, 1.0],
+                ],
+                [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x170, x173, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x171, x174, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x172, x175, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x27 * (x141 + x142 * x23), x197, 0.0, x198, x199, x200],
+                    [0.0, x197, x27 * (x142 + x141 * x23), 0.0, x201, x202, x203],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x198, x201, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x199, x202, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x200, x203, 0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x111 * theta_dot * x22,
-                    x113 * x22 * x1 + x114 * x56 * x0,
-                    x113 * x22 * x0 - x114 * x1 * x56,
+                    x135 * theta_dot,
+                    x139 * x19 - x136 * x137,
+                    x137 * x140 + x139 * x31,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                ],
+                [x145, x148 * x1 + x149 * x0, x148 * x0 - x1 * x149, 0.0, 0.0, 0.0, 0.0],
+                [
+                    -x145,
+                    x154 * x1 + x155 * x0,
+                    x154 * x0 - x155 * x1,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x59 * x54,
-                    x120 * x0 + x1 * x121,
-                    x121 * x0 - x1 * x120,
+                    x160,
+                    x166 * x19 + x167 * x0,
+                    x166 * x31 - x1 * x167,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    -(x59 * x54),
-                    x124 * x1 + x125 * x0,
-                    x124 * x0 - x125 * x1,
+                    x169,
+                    x19 * x174 + x175 * x0,
+                    x174 * x31 - x175 * x1,
                     0.0,
                     0.0,
                     0.0,
                     0.0,
                 ],
                 [
-                    x129,
-                    x0 * x135 + x22 * x1 * x139,
-                    x22 * x139 * x0 - x1 * x135,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [
-                    x141,
-                    x145 * x0 + x22 * x1 * x147,
-                    x22 * x147 * x0 - x145 * x1,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [
-                    x149,
-                    x153 * x0 + x22 * x1 * x154,
-                    x22 * x154 * x0 - x153 * x1,
+                    x177,
+                    x181 * x0 + x182 * x19,
+                    x182 * x31 - x1 * x181,
                     0.0,
                     0.0,
                     0.0,
@@ -3865,52 +3761,35 @@ pub mod maggi {
                 ],
                 [
                     0.0,
-                    x0 * x165 + x22 * x1 * x166,
-                    x22 * x166 * x0 - x1 * x165,
-                    theta_dot * theta_dot * x14
-                        + (rho * x90 + l * (0.25 * x89 + 0.25)) * psi_dot * psi_dot,
-                    (2.0 * (x6 * theta_dot * x15) + 2.0 * (x12 * psi_dot * x17))
-                        * rho_dot
-                        + ((0.5 * x75 + phi_dot - 2.0 * x55) * theta_dot * x17
-                            + x168 * x15 * x12) * x14,
-                    (x168 * x12 * x17
-                        + (2.0 * x55 - 0.5 * x75 - phi_dot) * theta_dot * x15) * x14
-                        + (2.0 * (x6 * theta_dot * x17) - 2.0 * (x15 * x12 * psi_dot))
-                            * rho_dot,
-                    theta_dot * (2.0 * x108 - x109) - x107,
+                    x194 * x0 + x19 * x195,
+                    x195 * x31 - x194 * x1,
+                    x116 + (rho * x99 + l * (0.25 * x97 + 0.25)) * x107,
+                    x24 * (x196 * x55 + x129 * (x76 - 2.0 * x61))
+                        + rho_dot * (2.0 * (x63 * x22) + 2.0 * (x21 * x131)),
+                    (2.0 * (x131 * x22) - 2.0 * (x63 * x21)) * rho_dot
+                        + (x196 * x57 + x126 * (2.0 * x61 - 0.5 * x75 - phi_dot)) * x24,
+                    (2.0 * x130 - x132) * theta_dot - x133,
                 ],
                 [
                     0.0,
-                    (x176 * x22 * x1 + x177 * x0) * m,
-                    (x176 * x22 * x0 - x177 * x1) * m,
-                    -((psi_dot * psi_dot * x95 - 0.5 * x167) * m),
-                    (0.5 * x104 - 0.5 * x103 - x178 * x15 * x12
-                        - x6 * theta_dot * psi_dot * x17) * m,
-                    (x6 * theta_dot * x15 * psi_dot - x178 * x12 * x17 - 0.5 * x105
-                        - 0.5 * x106) * m,
-                    m
-                        * (-0.5 * (x12 * x12 * psi_dot * phi_dot)
-                            - 0.5 * (x6 * theta_dot * theta_dot)),
+                    m * (x205 * x0 - x19 * x204),
+                    m * (-x204 * x31 - x1 * x205),
+                    -(m * (x107 * x113 - 0.5 * x115)),
+                    (0.5 * x118 + x206 * x55 - x131 * x124 - 0.5 * x119) * m,
+                    m * (x121 * x131 - 0.5 * x127 + x206 * x57 - 0.5 * x128),
+                    -(m * (0.5 * (theta_dot * x131) + 0.5 * (x17 * x71))),
                 ],
             ],
             w: [
-                [0.0, x22 * x1, x22 * x0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x19, x31, 0.0, 0.0, 0.0, 0.0],
                 [0.0, x0, -x1, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x6 * x22 * x1, x6 * x22 * x0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x20 * x19, x20 * x31, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * x76 * x22,
-                -(x12 * psi_dot * phi_dot),
-                x110,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
+            c: [x117 * x18, -x71, x134, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4005,7 +3884,7 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: rho_dot * (0.012 * x97 - 0.018 * x98),
+            power: x112 * rho_dot,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }
@@ -4273,61 +4152,66 @@ pub mod kane {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = -Ixy;
-        let x7 = -Ixz;
-        let x8 = -rho - 0.5 * l;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = -Ixy;
+        let x6 = -Ixz;
+        let x7 = rho + 0.5 * l;
+        let x8 = -(x7 * m);
         let x9 = -Iyz;
         let x10 = f64::sin(psi);
-        let x11 = f64::cos(psi);
-        let x12 = x2 * x10 + x5 * x11 * x3;
-        let x13 = x8 * m * x12;
-        let x14 = x5 * x3 * x10 - x11 * x2;
-        let x15 = x8 * m * x14;
-        let x16 = x8 * x0 * m * x3;
-        let x17 = rho + 0.5 * l;
-        let x18 = x5 * x11 * x2 - x3 * x10;
-        let x19 = x18 * m * x17;
-        let x20 = x11 * x3 + x5 * x2 * x10;
-        let x21 = m * x17 * x20;
-        let x22 = x0 * m * x17 * x2;
-        let x23 = x11 * x0 * m;
-        let x24 = x0 * m * x10;
-        let x25 = -(x5 * m);
-        let x26 = m + mg;
-        let x27 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x28 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x29 = u3 * x17 * u1 - 2.0 * (u2 * u4);
-        let x30 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x31 = 2.0 * (u3 * u4) - x8 * u2 * u1;
-        let x32 = x8 * u2 * u2 - u3 * u3 * x17;
-        let x33 = f64::cos(0.0485 * t);
-        let x34 = f64::sin(0.089 * t);
+        let x11 = x4 * x2;
+        let x12 = f64::cos(psi);
+        let x13 = x1 * x10 + x11 * x12;
+        let x14 = x13 * x8;
+        let x15 = x11 * x10 - x12 * x1;
+        let x16 = x15 * x8;
+        let x17 = x0 * x2 * x8;
+        let x18 = x7 * m;
+        let x19 = x4 * x1;
+        let x20 = x12 * x19 - x2 * x10;
+        let x21 = x20 * x18;
+        let x22 = x12 * x2 + x19 * x10;
+        let x23 = x22 * x18;
+        let x24 = x0 * x18 * x1;
+        let x25 = x0 * m;
+        let x26 = x25 * x12;
+        let x27 = x25 * x10;
+        let x28 = -(x4 * m);
+        let x29 = m + mg;
+        let x30 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x31 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x32 = x7 * u3;
+        let x33 = u1 * x32 - 2.0 * (u2 * u4);
+        let x34 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x35 = -(u2 * x7);
+        let x36 = 2.0 * (u3 * u4) - u1 * x35;
+        let x37 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x38 = u2 * x35 - u3 * x32;
+        let x39 = x38 * x0;
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5, u6, u7],
+            qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5, u6, u7],
             matrix: [
-                [Ixx, x6, x7, 0.0, 0.0, 0.0, 0.0],
-                [x6, Iyy + x8 * x8 * m, x9, 0.0, x13, x15, x16],
-                [x7, x9, m * x17 * x17 + Izz, 0.0, x19, x21, x22],
-                [0.0, 0.0, 0.0, m, x23, x24, x25],
-                [0.0, x13, x19, x23, x26, 0.0, 0.0],
-                [0.0, x15, x21, x24, 0.0, x26, 0.0],
-                [0.0, x16, x22, x25, 0.0, 0.0, x26],
+                [Ixx, x5, x6, 0.0, 0.0, 0.0, 0.0],
+                [x5, Iyy - x7 * x8, x9, 0.0, x14, x16, x17],
+                [x6, x9, x7 * x18 + Izz, 0.0, x21, x23, x24],
+                [0.0, 0.0, 0.0, m, x26, x27, x28],
+                [0.0, x14, x21, x26, x29, 0.0, 0.0],
+                [0.0, x16, x23, x27, 0.0, x29, 0.0],
+                [0.0, x17, x24, x28, 0.0, 0.0, x29],
             ],
             force: [
-                x28 * u3 - u2 * x27,
-                x27 * u1 - x8 * m * x29 - x30 * u3,
-                u2 * x30 - m * x17 * x31 - x28 * u1,
-                0.012 * x33 - m * x32 - 0.018 * x34,
-                -((x11 * x0 * x32 + x12 * x29 + x18 * x31) * m),
-                -((x20 * x31 + x0 * x32 * x10 + x14 * x29) * m),
-                -(((x3 * x29 + x2 * x31) * x0 - x5 * x32) * m),
+                x31 * u3 - u2 * x30,
+                x30 * u1 - x33 * x8 - x34 * u3,
+                u2 * x34 - x36 * x18 - x31 * u1,
+                x37 - x38 * m,
+                -((x20 * x36 + x13 * x33 + x12 * x39) * m),
+                -((x15 * x33 + x36 * x22 + x10 * x39) * m),
+                -((x0 * (x33 * x2 + x36 * x1) - x4 * x38) * m),
             ],
-            power: u4 * (0.012 * x33 - 0.018 * x34),
+            power: x37 * u4,
             checks: [x0],
         }
     }
@@ -4416,13 +4300,16 @@ pub mod kane {
         let m = params.m;
         let l = params.l;
         let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
+        let x1 = f64::cos(theta);
+        let x2 = x1 * psi_dot;
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
+        let x4 = f64::cos(phi);
         let x5 = rho + 0.5 * l;
         let x6 = f64::sin(psi);
-        let x7 = m + mg;
+        let x7 = f64::cos(psi);
+        let x8 = theta_dot * x5;
+        let x9 = x0 * x8;
+        let x10 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4444,8 +4331,8 @@ pub mod kane {
             q[5],
             q[6],
             phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            x2 * x3 + theta_dot * x4,
+            x2 * x4 - theta_dot * x3,
             rho_dot,
             X_dot,
             Y_dot,
@@ -4453,13 +4340,9 @@ pub mod kane {
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6)
-                + x7 * X_dot,
-            x7 * Y_dot
-                + m
-                    * (x2 * (rho_dot * x6 + x4 * psi_dot * x5)
-                        - x0 * theta_dot * x5 * x6),
-            m * (-theta_dot * x2 * x5 - x0 * rho_dot) + Z_dot * x7,
+            m * (x7 * (x1 * rho_dot - x9) - x2 * x5 * x6) + x10 * X_dot,
+            x10 * Y_dot + (x1 * (rho_dot * x6 + x7 * psi_dot * x5) - x9 * x6) * m,
+            Z_dot * x10 - (x1 * x8 + x0 * rho_dot) * m,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -4486,10 +4369,9 @@ pub mod kane {
         let u6 = state[12];
         let u7 = state[13];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -4508,9 +4390,9 @@ pub mod kane {
             state[6],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + f64::sin(theta) * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            f64::sin(theta) * x3 + u1,
             u4,
             u5,
             u6,
@@ -4577,143 +4459,144 @@ pub mod kane {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u3 * x2;
-        let x8 = u2 * x4;
-        let x9 = x8 - x7;
-        let x10 = f64::sin(theta);
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = u3 * x2;
+        let x6 = u2 * x3;
+        let x7 = x6 - x5;
+        let x8 = f64::sin(theta);
+        let x9 = x8 * x1;
+        let x10 = x4 * x9;
         let x11 = -Ixy;
         let x12 = -Ixz;
-        let x13 = -rho - 0.5 * l;
-        let x14 = -Iyz;
-        let x15 = f64::sin(psi);
-        let x16 = f64::cos(psi);
-        let x17 = x2 * x15 + x10 * x16 * x4;
-        let x18 = x13 * m * x17;
-        let x19 = x16 * x2;
-        let x20 = x10 * x4 * x15;
-        let x21 = x20 - x19;
-        let x22 = x13 * m * x21;
-        let x23 = x13 * x0 * m * x4;
-        let x24 = rho + 0.5 * l;
-        let x25 = m * x24 * x24;
-        let x26 = x4 * x15;
-        let x27 = x10 * x16 * x2;
-        let x28 = x27 - x26;
-        let x29 = x28 * m * x24;
-        let x30 = x16 * x4;
-        let x31 = x10 * x2 * x15;
-        let x32 = x30 + x31;
-        let x33 = m * x24 * x32;
-        let x34 = x0 * m * x24 * x2;
-        let x35 = x16 * x0 * m;
-        let x36 = x0 * m * x15;
-        let x37 = -(x10 * m);
-        let x38 = m + mg;
-        let x39 = u2 * Iyz;
-        let x40 = u1 * Ixz;
-        let x41 = u3 * Izz - x39 - x40;
-        let x42 = Iyz * u3;
-        let x43 = Ixy * u1;
-        let x44 = u2 * Iyy - x42 - x43;
-        let x45 = u2 * u4;
-        let x46 = u3 * x24 * u1;
-        let x47 = x46 - 2.0 * x45;
-        let x48 = u3 * Ixz;
-        let x49 = u2 * Ixy;
-        let x50 = Ixx * u1 - x48 - x49;
-        let x51 = u3 * u4;
-        let x52 = x13 * u2 * u1;
-        let x53 = 2.0 * x51 - x52;
-        let x54 = x13 * u2 * u2 - u3 * u3 * x24;
-        let x55 = f64::cos(0.0485 * t);
-        let x56 = f64::sin(0.089 * t);
-        let x57 = -((x16 * x0 * x54 + x17 * x47 + x28 * x53) * m);
-        let x58 = x0 * x54 * x15;
-        let x59 = x4 * x47;
-        let x60 = x2 * x53;
-        let x61 = (x59 + x60) * x0 - x10 * x54;
-        let x62 = 0.012 * x55 - 0.018 * x56;
-        let x63 = x19 - x20;
-        let x64 = x13 * x63 * m;
-        let x65 = -x30 - x31;
-        let x66 = m * x24 * x65;
-        let x67 = -(x0 * m * x15);
-        let x68 = x13 * x16 * x0 * m * x4;
-        let x69 = x13 * x0 * m * x4 * x15;
-        let x70 = -(x13 * x10 * m * x4);
-        let x71 = x16 * x0 * m * x24 * x2;
-        let x72 = x0 * m * x24 * x2 * x15;
-        let x73 = -(x10 * m * x24 * x2);
-        let x74 = -(x10 * x16 * m);
-        let x75 = -(x10 * m * x15);
-        let x76 = -(x0 * m);
-        let x77 = x26 - x27;
-        let x78 = x13 * m * x77;
-        let x79 = x13 * m * x65;
-        let x80 = -(x13 * x0 * m * x2);
-        let x81 = m * x24 * x17;
-        let x82 = m * x24 * x21;
-        let x83 = x0 * m * x24 * x4;
-        let x84 = -(m * x17);
-        let x85 = -(m * x21);
-        let x86 = -(x0 * m * x4);
-        let x87 = x28 * m;
-        let x88 = m * x32;
-        let x89 = x0 * m * x2;
-        let x90 = -u2 * u2 - u3 * u3;
-        let x91 = u2 * x28 + u3 * x17;
-        let x92 = u2 * x32 + u3 * x21;
-        let x93 = Ixy * u3;
-        let x94 = u2 * Ixz;
-        let x95 = x13 * m * x24;
-        let x96 = Izz - Ixx - x95;
-        let x97 = Iyy - Izz;
-        let x98 = Iyz * u1;
-        let x99 = -2.0 * rho - l;
+        let x13 = rho + 0.5 * l;
+        let x14 = -(x13 * m);
+        let x15 = -Iyz;
+        let x16 = f64::sin(psi);
+        let x17 = x8 * x3;
+        let x18 = f64::cos(psi);
+        let x19 = x2 * x16 + x17 * x18;
+        let x20 = x19 * x14;
+        let x21 = x18 * x2;
+        let x22 = x17 * x16;
+        let x23 = x22 - x21;
+        let x24 = x23 * x14;
+        let x25 = x3 * x14;
+        let x26 = x25 * x0;
+        let x27 = x13 * m;
+        let x28 = x13 * x27;
+        let x29 = x8 * x2;
+        let x30 = x18 * x29;
+        let x31 = x3 * x16;
+        let x32 = x30 - x31;
+        let x33 = x32 * x27;
+        let x34 = x18 * x3 + x29 * x16;
+        let x35 = x34 * x27;
+        let x36 = x27 * x2;
+        let x37 = x0 * x36;
+        let x38 = x0 * m;
+        let x39 = x38 * x18;
+        let x40 = x38 * x16;
+        let x41 = x8 * m;
+        let x42 = -x41;
+        let x43 = m + mg;
+        let x44 = u2 * Iyz;
+        let x45 = u1 * Ixz;
+        let x46 = u3 * Izz - x44 - x45;
+        let x47 = Iyz * u3;
+        let x48 = Ixy * u1;
+        let x49 = u2 * Iyy - x47 - x48;
+        let x50 = x13 * u1;
+        let x51 = u3 * x50 - 2.0 * (u2 * u4);
+        let x52 = u3 * Ixz;
+        let x53 = u2 * Ixy;
+        let x54 = Ixx * u1 - x52 - x53;
+        let x55 = u3 * u4;
+        let x56 = -(x13 * u1);
+        let x57 = u2 * x56;
+        let x58 = 2.0 * x55 - x57;
+        let x59 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x60 = u2 * u2;
+        let x61 = u3 * u3;
+        let x62 = -x13 * x60 - x61 * x13;
+        let x63 = x18 * x0;
+        let x64 = -(m * (x19 * x51 + x63 * x62 + x32 * x58));
+        let x65 = x0 * x16;
+        let x66 = x65 * x62;
+        let x67 = x34 * x58;
+        let x68 = x2 * x58 + x51 * x3;
+        let x69 = (x68 * x0 - x8 * x62) * m;
+        let x70 = x21 - x22;
+        let x71 = x70 * x14;
+        let x72 = -(x34 * x27);
+        let x73 = -x40;
+        let x74 = x25 * x63;
+        let x75 = x25 * x65;
+        let x76 = -(x8 * x25);
+        let x77 = x63 * x36;
+        let x78 = x65 * x36;
+        let x79 = -(x8 * x36);
+        let x80 = -(x18 * x41);
+        let x81 = -(x41 * x16);
+        let x82 = -x38;
+        let x83 = x31 - x30;
+        let x84 = x83 * x14;
+        let x85 = -(x34 * x14);
+        let x86 = -(x0 * x2 * x14);
+        let x87 = x19 * x27;
+        let x88 = x23 * x27;
+        let x89 = x0 * x27 * x3;
+        let x90 = -(x19 * m);
+        let x91 = -(m * x23);
+        let x92 = -(x38 * x3);
+        let x93 = x32 * m;
+        let x94 = x34 * m;
+        let x95 = x38 * x2;
+        let x96 = x61 + x60;
+        let x97 = x19 * u3 + x32 * u2;
+        let x98 = u3 * x23 + u2 * x34;
+        let x99 = x4 * x0;
+        let x100 = Ixy * u3;
+        let x101 = u2 * Ixz;
+        let x102 = x28 - Ixx + Izz;
+        let x103 = (Ixx - Iyy) - x28;
+        let x104 = Iyy - Izz;
+        let x105 = Iyz * u1;
+        let x106 = 2.0 * rho + l;
+        let x107 = -(u2 * x106);
+        let x108 = -(u3 * x106);
         Derivatives {
-            qdot: [x1 * x6, x9, u1 + x10 * x1 * x6, u4, u5, u6, u7],
+            qdot: [x1 * x4, x7, x10 + u1, u4, u5, u6, u7],
             matrix: [
                 [Ixx, x11, x12, 0.0, 0.0, 0.0, 0.0],
-                [x11, Iyy + x13 * x13 * m, x14, 0.0, x18, x22, x23],
-                [x12, x14, x25 + Izz, 0.0, x29, x33, x34],
-                [0.0, 0.0, 0.0, m, x35, x36, x37],
-                [0.0, x18, x29, x35, x38, 0.0, 0.0],
-                [0.0, x22, x33, x36, 0.0, x38, 0.0],
-                [0.0, x23, x34, x37, 0.0, 0.0, x38],
+                [x11, Iyy - x13 * x14, x15, 0.0, x20, x24, x26],
+                [x12, x15, x28 + Izz, 0.0, x33, x35, x37],
+                [0.0, 0.0, 0.0, m, x39, x40, x42],
+                [0.0, x20, x33, x39, x43, 0.0, 0.0],
+                [0.0, x24, x35, x40, 0.0, x43, 0.0],
+                [0.0, x26, x37, x42, 0.0, 0.0, x43],
             ],
             force: [
-                x44 * u3 - u2 * x41,
-                x41 * u1 - x13 * m * x47 - x50 * u3,
-                u2 * x50 - m * x24 * x53 - x44 * u1,
-                0.012 * x55 - m * x54 - 0.018 * x56,
-                x57,
-                -((x32 * x53 + x58 + x21 * x47) * m),
-                -(x61 * m),
+                x49 * u3 - u2 * x46,
+                x46 * u1 - x51 * x14 - x54 * u3,
+                u2 * x54 - x27 * x58 - x49 * u1,
+                x59 - m * x62,
+                x64,
+                -((x66 + x23 * x51 + x67) * m),
+                -x69,
             ],
             checks: [x0],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    x10 * x1 * x1 * x6,
-                    0.0,
-                    x3 + x10 * x10 * x1 * x1 * x6 + x5,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [x1 * x9, -x3 - x5, x10 * x1 * x9, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x10, 0.0, x10 * x9 + x4, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x7, -x4, x7 * x9, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x2, x4, x10 * x1 * x2, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x4, -x2, x10 * x1 * x4, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x3, x2 * x9, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x3, -x2, x9 * x3, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
@@ -4722,39 +4605,39 @@ pub mod kane {
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x64, x18, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x66, x29, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x67, x35, 0.0],
-                    [0.0, x64, x66, x67, 0.0, 0.0, 0.0],
-                    [0.0, x18, x29, x35, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x71, x20, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x72, x33, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x73, x39, 0.0],
+                    [0.0, x71, x72, x73, 0.0, 0.0, 0.0],
+                    [0.0, x20, x33, x39, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x68, x69, x70],
-                    [0.0, 0.0, 0.0, 0.0, x71, x72, x73],
                     [0.0, 0.0, 0.0, 0.0, x74, x75, x76],
-                    [0.0, x68, x71, x74, 0.0, 0.0, 0.0],
-                    [0.0, x69, x72, x75, 0.0, 0.0, 0.0],
-                    [0.0, x70, x73, x76, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, x77, x78, x79],
+                    [0.0, 0.0, 0.0, 0.0, x80, x81, x82],
+                    [0.0, x74, x77, x80, 0.0, 0.0, 0.0],
+                    [0.0, x75, x78, x81, 0.0, 0.0, 0.0],
+                    [0.0, x76, x79, x82, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, x78, x79, x80],
-                    [0.0, 0.0, 0.0, 0.0, x81, x82, x83],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x78, x81, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x79, x82, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x80, x83, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, -(2.0 * x13 * m), 0.0, 0.0, x84, x85, x86],
-                    [0.0, 0.0, 2.0 * m * x24, 0.0, x87, x88, x89],
+                    [0.0, 0.0, 0.0, 0.0, x84, x85, x86],
+                    [0.0, 0.0, 0.0, 0.0, x87, x88, x89],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x84, x87, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x85, x88, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x86, x89, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, -(2.0 * x14), 0.0, 0.0, x90, x91, x92],
+                    [0.0, 0.0, 2.0 * x27, 0.0, x93, x94, x95],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x90, x93, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x91, x94, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x92, x95, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4848,78 +4731,78 @@ pub mod kane {
                 ],
             ],
             d_force: [
-                [0.0, 0.0, 0.0, 0.0, -(m * (x63 * x47 + x65 * x53 - x58)), x57, 0.0],
+                [0.0, 0.0, 0.0, 0.0, -(m * (x70 * x51 - x66 - x67)), x64, 0.0],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    -(x61 * x16 * m),
-                    -(x61 * m * x15),
-                    -((x10 * (-x59 - x60) - x0 * x54) * m),
+                    -(x69 * x18),
+                    -(x69 * x16),
+                    -(m * (-x8 * x68 - x0 * x62)),
                 ],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    -((x77 * x47 + x17 * x53) * m),
-                    -((x65 * x47 + x21 * x53) * m),
-                    -((x53 * x4 - x2 * x47) * x0 * m),
+                    -((x51 * x83 + x19 * x58) * m),
+                    -((x23 * x58 - x34 * x51) * m),
+                    -(x38 * (x58 * x3 - x2 * x51)),
                 ],
                 [
                     0.0,
-                    m * (x46 - 2.0 * x45 - x13 * u3 * u1),
-                    m * (x52 - 2.0 * x51 - u2 * x24 * u1),
-                    -(m * x90),
-                    -((u1 * x91 + x16 * x0 * x90) * m),
-                    -(m * (x92 * u1 + x0 * x90 * x15)),
-                    -(m * (x0 * u1 * x6 - x10 * x90)),
+                    m * (x51 - u3 * x56),
+                    (x57 - 2.0 * x55 - u2 * x50) * m,
+                    x96 * m,
+                    -(m * (x97 * u1 - x96 * x63)),
+                    -((x98 * u1 - x96 * x65) * m),
+                    -((x8 * x96 + x99 * u1) * m),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x94 - x93,
-                    u3 * x96 - x39 - 2.0 * x40,
-                    u2 * (Ixx - Iyy - x25) + x42 + 2.0 * x43,
+                    x101 - x100,
+                    u3 * x102 - x44 - 2.0 * x45,
+                    x47 + 2.0 * x48 + u2 * x103,
                     0.0,
-                    -(m * x24 * x91),
-                    -(x92 * m * x24),
-                    -(x0 * m * x24 * x6),
+                    -(x97 * x27),
+                    -(x98 * x27),
+                    -(x99 * x27),
                 ],
                 [
-                    2.0 * x39 + x40 + u3 * x97,
-                    2.0 * (x13 * m * u4) + x93 - x98,
-                    u1 * (Ixx - Iyy + x95) - x48 - 2.0 * x49,
-                    -(u2 * x99 * m),
-                    -(m * (u2 * x99 * x16 * x0 - 2.0 * (u4 * x17) - x13 * x28 * u1)),
-                    -(m * (u2 * x99 * x0 * x15 - x13 * u1 * x32 - 2.0 * (u4 * x21))),
-                    -(m * ((-x13 * x2 * u1 - 2.0 * (u4 * x4)) * x0 - u2 * x99 * x10)),
+                    2.0 * x44 + x45 + u3 * x104,
+                    x100 + 2.0 * (u4 * x14) - x105,
+                    x103 * u1 - x52 - 2.0 * x53,
+                    -(m * x107),
+                    -((x63 * x107 - 2.0 * (x19 * u4) - x32 * x56) * m),
+                    -(m * (x65 * x107 - 2.0 * (u4 * x23) - x34 * x56)),
+                    -((-x0 * (x56 * x2 + 2.0 * (u4 * x3)) - x8 * x107) * m),
                 ],
                 [
-                    u2 * x97 - 2.0 * x42 - x43,
-                    2.0 * x48 + u1 * x96 + x49,
-                    x98 - 2.0 * (m * u4 * x24) - x94,
-                    -(x99 * u3 * m),
-                    -((x99 * x16 * u3 * x0 + x24 * u1 * x17 + 2.0 * (x28 * u4)) * m),
-                    -((x99 * u3 * x0 * x15 + 2.0 * (u4 * x32) + x24 * u1 * x21) * m),
-                    -(m * (x0 * (x24 * u1 * x4 + 2.0 * (u4 * x2)) - x99 * x10 * u3)),
+                    u2 * x104 - 2.0 * x47 - x48,
+                    2.0 * x52 + u1 * x102 + x53,
+                    x105 - 2.0 * (u4 * x27) - x101,
+                    -(m * x108),
+                    -((2.0 * (x32 * u4) + x63 * x108 + x19 * x50) * m),
+                    -((x23 * x50 + 2.0 * (x34 * u4) + x65 * x108) * m),
+                    -(m * ((2.0 * (u4 * x2) + x50 * x3) * x0 - x8 * x108)),
                 ],
                 [
                     0.0,
-                    2.0 * x13 * u2 * m,
-                    -(2.0 * u3 * m * x24),
+                    2.0 * u2 * x14,
+                    -(2.0 * u3 * x27),
                     0.0,
-                    -((2.0 * (x28 * u3) - 2.0 * (u2 * x17)) * m),
-                    -(m * (2.0 * (u3 * x32) - 2.0 * (u2 * x21))),
-                    -(x0 * m * (2.0 * x7 - 2.0 * x8)),
+                    -((2.0 * (x32 * u3) - 2.0 * (u2 * x19)) * m),
+                    -((2.0 * (x34 * u3) - 2.0 * (u2 * x23)) * m),
+                    -(x38 * (2.0 * x5 - 2.0 * x6)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
-            power: u4 * x62,
+            power: x59 * u4,
             d_power: [
                 0.0,
                 0.0,
@@ -4931,7 +4814,7 @@ pub mod kane {
                 0.0,
                 0.0,
                 0.0,
-                x62,
+                x59,
                 0.0,
                 0.0,
                 0.0,
@@ -5066,101 +4949,101 @@ pub mod kane {
         let m = params.m;
         let l = params.l;
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = f64::sin(theta);
-        let x8 = -Ixy;
-        let x9 = -Ixz;
-        let x10 = -rho - 0.5 * l;
+        let x1 = f64::sin(phi);
+        let x2 = u2 * x1;
+        let x3 = f64::cos(phi);
+        let x4 = u3 * x3;
+        let x5 = 1.0 / x0 * (x2 + x4);
+        let x6 = f64::sin(theta);
+        let x7 = -Ixy;
+        let x8 = -Ixz;
+        let x9 = rho + 0.5 * l;
+        let x10 = -(x9 * m);
         let x11 = -Iyz;
         let x12 = f64::sin(psi);
-        let x13 = f64::cos(psi);
-        let x14 = x2 * x12 + x7 * x13 * x4;
-        let x15 = x10 * m * x14;
-        let x16 = x7 * x4 * x12 - x13 * x2;
-        let x17 = x10 * m * x16;
-        let x18 = x10 * x0 * m * x4;
-        let x19 = rho + 0.5 * l;
-        let x20 = x7 * x13 * x2 - x4 * x12;
-        let x21 = x20 * m * x19;
-        let x22 = x13 * x4 + x7 * x2 * x12;
-        let x23 = m * x19 * x22;
-        let x24 = x0 * m * x19 * x2;
-        let x25 = x13 * x0 * m;
-        let x26 = x0 * m * x12;
-        let x27 = -(x7 * m);
-        let x28 = m + mg;
-        let x29 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x30 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x31 = u2 * u4;
-        let x32 = u3 * x19 * u1;
-        let x33 = x32 - 2.0 * x31;
-        let x34 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x35 = u3 * u4;
-        let x36 = x10 * u2 * u1;
-        let x37 = 2.0 * x35 - x36;
-        let x38 = x10 * u2 * u2;
-        let x39 = u3 * u3 * x19;
-        let x40 = x38 - x39;
-        let x41 = f64::cos(0.0485 * t);
-        let x42 = f64::sin(0.089 * t);
-        let x43 = x13 * x0 * x40;
-        let x44 = x14 * x33;
-        let x45 = x20 * x37;
-        let x46 = x22 * x37;
-        let x47 = x0 * x40 * x12;
-        let x48 = x16 * x33;
-        let x49 = x4 * x33;
-        let x50 = x2 * x37;
-        let x51 = x7 * x40;
-        let x52 = -(u3 * u1);
-        let x53 = u2 * u1;
-        let x54 = u2 * u3;
-        let x55 = -(u2 * u1);
-        let x56 = -(u2 * u3);
-        let x57 = u3 * u1;
-        let x58 = u2 * u2;
-        let x59 = u1 * u1;
-        let x60 = u3 * u3;
-        let x61 = x10 * x14;
-        let x62 = x10 * x16;
-        let x63 = x10 * x0 * x4;
-        let x64 = x20 * x19;
-        let x65 = x19 * x22;
-        let x66 = x0 * x19 * x2;
-        let x67 = x13 * x0;
-        let x68 = x0 * x12;
-        let x69 = -x7;
-        let x70 = -(0.5 * m * x14);
-        let x71 = -(0.5 * m * x16);
-        let x72 = -(0.5 * x0 * m * x4);
-        let x73 = 0.5 * x20 * m;
-        let x74 = 0.5 * m * x22;
-        let x75 = 0.5 * x0 * m * x2;
-        let x76 = -0.5 * x58 - 0.5 * x60;
+        let x13 = x6 * x3;
+        let x14 = f64::cos(psi);
+        let x15 = x1 * x12 + x13 * x14;
+        let x16 = x15 * x10;
+        let x17 = x13 * x12 - x14 * x1;
+        let x18 = x17 * x10;
+        let x19 = x0 * x3;
+        let x20 = x19 * x10;
+        let x21 = x9 * m;
+        let x22 = x6 * x1;
+        let x23 = x14 * x22 - x3 * x12;
+        let x24 = x23 * x21;
+        let x25 = x14 * x3 + x22 * x12;
+        let x26 = x25 * x21;
+        let x27 = x0 * x1;
+        let x28 = x27 * x21;
+        let x29 = x0 * m;
+        let x30 = x29 * x14;
+        let x31 = x29 * x12;
+        let x32 = -(x6 * m);
+        let x33 = m + mg;
+        let x34 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x35 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x36 = u2 * u4;
+        let x37 = u3 * u1;
+        let x38 = x9 * x37;
+        let x39 = x38 - 2.0 * x36;
+        let x40 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x41 = u2 * u1;
+        let x42 = x9 * x41;
+        let x43 = u3 * u4;
+        let x44 = x42 + 2.0 * x43;
+        let x45 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x46 = u2 * u2;
+        let x47 = x9 * x46;
+        let x48 = u3 * u3;
+        let x49 = x48 * x9;
+        let x50 = -x47 - x49;
+        let x51 = x14 * x0;
+        let x52 = (x15 * x39 + x51 * x50) + x44 * x23;
+        let x53 = x0 * x12;
+        let x54 = x17 * x39 + (x53 * x50 + x44 * x25);
+        let x55 = x6 * x50;
+        let x56 = x0 * (x3 * x39 + x44 * x1);
+        let x57 = -x37;
+        let x58 = u2 * u3;
+        let x59 = -x41;
+        let x60 = -x58;
+        let x61 = u1 * u1;
+        let x62 = x9 * x9;
+        let x63 = -(x9 * x15);
+        let x64 = -(x9 * x17);
+        let x65 = -(x9 * x19);
+        let x66 = x23 * x9;
+        let x67 = x9 * x25;
+        let x68 = x9 * x27;
+        let x69 = -x6;
+        let x70 = -(0.5 * x15 * m);
+        let x71 = -(0.5 * m * x17);
+        let x72 = -(0.5 * x29 * x3);
+        let x73 = 0.5 * x23 * m;
+        let x74 = 0.5 * x25 * m;
+        let x75 = 0.5 * x29 * x1;
+        let x76 = 0.5 * x48 + 0.5 * x46;
         ParameterDerivatives {
-            qdot: [x1 * x6, u2 * x4 - u3 * x2, u1 + x7 * x1 * x6, u4, u5, u6, u7],
+            qdot: [x5, u2 * x3 - u3 * x1, x6 * x5 + u1, u4, u5, u6, u7],
             matrix: [
-                [Ixx, x8, x9, 0.0, 0.0, 0.0, 0.0],
-                [x8, Iyy + x10 * x10 * m, x11, 0.0, x15, x17, x18],
-                [x9, x11, m * x19 * x19 + Izz, 0.0, x21, x23, x24],
-                [0.0, 0.0, 0.0, m, x25, x26, x27],
-                [0.0, x15, x21, x25, x28, 0.0, 0.0],
-                [0.0, x17, x23, x26, 0.0, x28, 0.0],
-                [0.0, x18, x24, x27, 0.0, 0.0, x28],
+                [Ixx, x7, x8, 0.0, 0.0, 0.0, 0.0],
+                [x7, Iyy - x9 * x10, x11, 0.0, x16, x18, x20],
+                [x8, x11, x9 * x21 + Izz, 0.0, x24, x26, x28],
+                [0.0, 0.0, 0.0, m, x30, x31, x32],
+                [0.0, x16, x24, x30, x33, 0.0, 0.0],
+                [0.0, x18, x26, x31, 0.0, x33, 0.0],
+                [0.0, x20, x28, x32, 0.0, 0.0, x33],
             ],
             force: [
-                x30 * u3 - u2 * x29,
-                x29 * u1 - x10 * m * x33 - x34 * u3,
-                u2 * x34 - m * x19 * x37 - x30 * u1,
-                0.012 * x41 - m * x40 - 0.018 * x42,
-                -((x43 + x44 + x45) * m),
-                -((x46 + x47 + x48) * m),
-                -(((x49 + x50) * x0 - x51) * m),
+                x35 * u3 - u2 * x34,
+                x34 * u1 - x39 * x10 - x40 * u3,
+                u2 * x40 - x44 * x21 - x35 * u1,
+                x45 - m * x50,
+                -(m * x52),
+                -(m * x54),
+                -((x56 - x55) * m),
             ],
             checks: [x0],
             d_qdot: [
@@ -5240,17 +5123,17 @@ pub mod kane {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x10 * x10, 0.0, 0.0, x61, x62, x63],
-                    [0.0, 0.0, x19 * x19, 0.0, x64, x65, x66],
-                    [0.0, 0.0, 0.0, 1.0, x67, x68, x69],
-                    [0.0, x61, x64, x67, 1.0, 0.0, 0.0],
-                    [0.0, x62, x65, x68, 0.0, 1.0, 0.0],
-                    [0.0, x63, x66, x69, 0.0, 0.0, 1.0],
+                    [0.0, x62, 0.0, 0.0, x63, x64, x65],
+                    [0.0, 0.0, x62, 0.0, x66, x67, x68],
+                    [0.0, 0.0, 0.0, 1.0, x51, x53, x69],
+                    [0.0, x63, x66, x51, 1.0, 0.0, 0.0],
+                    [0.0, x64, x67, x53, 0.0, 1.0, 0.0],
+                    [0.0, x65, x68, x69, 0.0, 0.0, 1.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, -(x10 * m), 0.0, 0.0, x70, x71, x72],
-                    [0.0, 0.0, m * x19, 0.0, x73, x74, x75],
+                    [0.0, -x10, 0.0, 0.0, x70, x71, x72],
+                    [0.0, 0.0, x21, 0.0, x73, x74, x75],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x70, x73, 0.0, 0.0, 0.0, 0.0],
                     [0.0, x71, x74, 0.0, 0.0, 0.0, 0.0],
@@ -5259,32 +5142,24 @@ pub mod kane {
             ],
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x52, x53, 0.0, 0.0, 0.0, 0.0],
-                [x54, 0.0, x55, 0.0, 0.0, 0.0, 0.0],
-                [x56, x57, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x52, x54, x59 - x58, 0.0, 0.0, 0.0, 0.0],
-                [x53, x60 - x59, x56, 0.0, 0.0, 0.0, 0.0],
-                [x58 - x60, x55, x57, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x57, x41, 0.0, 0.0, 0.0, 0.0],
+                [x58, 0.0, x59, 0.0, 0.0, 0.0, 0.0],
+                [x60, x37, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x57, x58, x61 - x46, 0.0, 0.0, 0.0, 0.0],
+                [x41, x48 - x61, x60, 0.0, 0.0, 0.0, 0.0],
+                [x46 - x48, x59, x37, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x9 * x39, -(x44 * x9), x47 + x49, -x52, -x54, x55 - x56],
                 [
                     0.0,
-                    -(x10 * x33),
-                    -(x19 * x37),
-                    x39 - x38,
-                    -x43 - x44 - x45,
-                    -x46 - x47 - x48,
-                    (-x49 - x50) * x0 + x51,
-                ],
-                [
-                    0.0,
-                    m * (0.5 * x32 - x31 - 0.5 * (x10 * u3 * u1)),
-                    m * (0.5 * x36 - x35 - 0.5 * (u2 * x19 * u1)),
-                    -(x76 * m),
-                    -((u1 * (0.5 * (u2 * x20) + 0.5 * (u3 * x14)) + x76 * x13 * x0) * m),
-                    -((u1 * (0.5 * (u2 * x22) + 0.5 * (u3 * x16)) + x76 * x0 * x12) * m),
-                    -(m * ((0.5 * x3 + 0.5 * x5) * x0 * u1 - x7 * x76)),
+                    (x38 - x36) * m,
+                    (-x42 - x43) * m,
+                    x76 * m,
+                    -((u1 * (0.5 * (x15 * u3) + 0.5 * (x23 * u2)) - x76 * x51) * m),
+                    -(m * (u1 * (0.5 * (u3 * x17) + 0.5 * (u2 * x25)) - x76 * x53)),
+                    -(m * ((0.5 * x2 + 0.5 * x4) * x0 * u1 + x6 * x76)),
                 ],
             ],
-            power: u4 * (0.012 * x41 - 0.018 * x42),
+            power: x45 * u4,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }
@@ -5537,66 +5412,68 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = f64::cos(psi);
+        let x6 = x4 * x1;
         let x7 = f64::sin(psi);
-        let x8 = f64::cos(psi);
-        let x9 = rho + 0.5 * l;
-        let x10 = -rho - 0.5 * l;
-        let x11 = -Ixy;
-        let x12 = -Ixz;
-        let x13 = m * x6;
-        let x14 = m
-            * (rho * ((-rho - l) * m * x6 + rho + l) + l * l * (0.25 - 0.25 * x13));
-        let x15 = -Iyz;
-        let x16 = u3 * Ixz;
-        let x17 = u2 * Ixy;
-        let x18 = Iyz * u1;
-        let x19 = (m * (2.0 * rho + l) * x6 - 2.0 * rho - l) * m * u4;
-        let x20 = rho + 0.5 * l + x10 * m * x6;
-        let x21 = f64::cos(0.0485 * t);
-        let x22 = f64::sin(0.089 * t);
+        let x8 = rho + 0.5 * l;
+        let x9 = x8 * u3;
+        let x10 = x0 * u4;
+        let x11 = x4 * x2;
+        let x12 = -(u2 * x8);
+        let x13 = 1.0 / (m + mg);
+        let x14 = -Ixy;
+        let x15 = -Ixz;
+        let x16 = m * x13;
+        let x17 = l * l;
+        let x18 = rho + l;
+        let x19 = x18 * x16;
+        let x20 = m * ((0.25 - 0.25 * x16) * x17 + rho * (x18 - x19));
+        let x21 = -Iyz;
+        let x22 = x20 + Izz;
+        let x23 = u1 * Ixz;
+        let x24 = Ixy * u1;
+        let x25 = u3 * Ixz;
+        let x26 = u2 * Ixy;
+        let x27 = m * u4 * ((2.0 * rho + l) * x16 - 2.0 * rho - l);
+        let x28 = Iyz * u1;
+        let x29 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x30 = x8 - x8 * x16;
         Assembly {
             qdot: [
-                x1 * x4,
-                u2 * x3 - u3 * x2,
-                u1 + x5 * x1 * x4,
+                x3,
+                u2 * x2 - u3 * x1,
+                x4 * x3 + u1,
                 u4,
-                x6
-                    * (G_X
-                        + m
-                            * (-(x5 * x8 * x2 - x3 * x7) * u3 * x9 - x8 * x0 * u4
-                                - x10 * u2 * (x2 * x7 + x5 * x8 * x3))),
-                ((-u3 * x9 * (x8 * x3 + x5 * x2 * x7)
-                    - x10 * u2 * (x5 * x3 * x7 - x8 * x2) - x0 * u4 * x7) * m + G_Y)
-                    * x6,
-                x6 * ((x5 * u4 + (-x10 * u2 * x3 - u3 * x9 * x2) * x0) * m + G_Z),
+                (G_X
+                    - ((x5 * x6 - x2 * x7) * x9 + x5 * x10 + (x1 * x7 + x11 * x5) * x12)
+                        * m) * x13,
+                x13
+                    * (G_Y
+                        - ((x11 * x7 - x5 * x1) * x12 + (x5 * x2 + x6 * x7) * x9
+                            + x10 * x7) * m),
+                (m * (x4 * u4 - x0 * (x12 * x2 + x1 * x9)) + G_Z) * x13,
             ],
             matrix: [
-                [Ixx, x11, x12, 0.0],
-                [x11, Iyy + x14, x15, 0.0],
-                [x12, x15, x14 + Izz, 0.0],
-                [0.0, 0.0, 0.0, m * (1.0 - x13)],
+                [Ixx, x14, x15, 0.0],
+                [x14, x20 + Iyy, x21, 0.0],
+                [x15, x21, x22, 0.0],
+                [0.0, 0.0, 0.0, m * (1.0 - x16)],
             ],
             force: [
-                (u2 * Iyy - Iyz * u3 - Ixy * u1) * u3
-                    - u2 * (u3 * Izz - u2 * Iyz - u1 * Ixz),
-                u3 * (x16 + x17 + (x14 - Ixx + Izz) * u1) - u1 * u1 * Ixz
-                    + u2 * (x19 - x18),
-                Ixy * u1 * u1
-                    + u2
-                        * (u1
-                            * (Ixx - Iyy
-                                + (l * l * (0.25 * x13 - 0.25)
-                                    + rho * ((rho + l) * m * x6 - rho - l)) * m) - x16 - x17)
-                    + (x18 + x19) * u3,
-                (u3 * u3 * x20 + u2 * u2 * x20) * m + 0.012 * x21 - 0.018 * x22,
+                u3 * (u2 * Iyy - Iyz * u3 - x24) - u2 * (u3 * Izz - x23 - u2 * Iyz),
+                u3 * (x25 + x26 + u1 * (x22 - Ixx)) - x23 * u1 + u2 * (x27 - x28),
+                u2
+                    * (u1
+                        * (Ixx - Iyy
+                            + m * ((x19 - rho - l) * rho + x17 * (0.25 * x16 - 0.25)))
+                        - x25 - x26) + (x27 + x28) * u3 + u1 * x24,
+                x29 + m * (u2 * u2 * x30 + u3 * u3 * x30),
             ],
-            power: u4 * (0.012 * x21 - 0.018 * x22),
+            power: x29 * u4,
             checks: [x0],
         }
     }
@@ -5682,13 +5559,16 @@ pub mod reduced_volterra {
         let m = params.m;
         let l = params.l;
         let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
+        let x1 = f64::cos(theta);
+        let x2 = x1 * psi_dot;
         let x3 = f64::sin(phi);
-        let x4 = f64::cos(psi);
+        let x4 = f64::cos(phi);
         let x5 = rho + 0.5 * l;
         let x6 = f64::sin(psi);
-        let x7 = m + mg;
+        let x7 = f64::cos(psi);
+        let x8 = theta_dot * x5;
+        let x9 = x0 * x8;
+        let x10 = m + mg;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -5710,19 +5590,15 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            x2 * x3 + theta_dot * x4,
+            x2 * x4 - theta_dot * x3,
             rho_dot,
             0.0,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
-            m * (x4 * (x2 * rho_dot - x0 * theta_dot * x5) - x2 * psi_dot * x5 * x6)
-                + x7 * X_dot,
-            x7 * Y_dot
-                + m
-                    * (x2 * (rho_dot * x6 + x4 * psi_dot * x5)
-                        - x0 * theta_dot * x5 * x6),
-            m * (-theta_dot * x2 * x5 - x0 * rho_dot) + Z_dot * x7,
+            m * (x7 * (x1 * rho_dot - x9) - x2 * x5 * x6) + x10 * X_dot,
+            x10 * Y_dot + (x1 * (rho_dot * x6 + x7 * psi_dot * x5) - x9 * x6) * m,
+            Z_dot * x10 - (x1 * x8 + x0 * rho_dot) * m,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -5754,16 +5630,19 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m + mg);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = f64::cos(psi);
+        let x6 = x4 * x1;
         let x7 = f64::sin(psi);
-        let x8 = f64::cos(psi);
-        let x9 = rho + 0.5 * l;
-        let x10 = -rho - 0.5 * l;
+        let x8 = rho + 0.5 * l;
+        let x9 = x8 * u3;
+        let x10 = x0 * u4;
+        let x11 = x4 * x2;
+        let x12 = -(u2 * x8);
+        let x13 = 1.0 / (m + mg);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -5782,18 +5661,18 @@ pub mod reduced_volterra {
             state[6],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + x5 * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            x4 * x3 + u1,
             u4,
-            x6
-                * (G_X
-                    + m
-                        * (-(x5 * x8 * x2 - x3 * x7) * u3 * x9 - x8 * x0 * u4
-                            - x10 * u2 * (x2 * x7 + x5 * x8 * x3))),
-            ((-u3 * x9 * (x8 * x3 + x5 * x2 * x7) - x10 * u2 * (x5 * x3 * x7 - x8 * x2)
-                - x0 * u4 * x7) * m + G_Y) * x6,
-            x6 * ((x5 * u4 + (-x10 * u2 * x3 - u3 * x9 * x2) * x0) * m + G_Z),
+            (G_X
+                - ((x5 * x6 - x2 * x7) * x9 + x5 * x10 + (x1 * x7 + x11 * x5) * x12) * m)
+                * x13,
+            x13
+                * (G_Y
+                    - ((x11 * x7 - x5 * x1) * x12 + (x5 * x2 + x6 * x7) * x9 + x10 * x7)
+                        * m),
+            (m * (x4 * u4 - x0 * (x12 * x2 + x1 * x9)) + G_Z) * x13,
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -5856,85 +5735,97 @@ pub mod reduced_volterra {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
-        let x9 = 1.0 / (m + mg);
-        let x10 = f64::sin(psi);
-        let x11 = x4 * x10;
-        let x12 = f64::cos(psi);
-        let x13 = x8 * x12 * x2;
-        let x14 = x13 - x11;
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = u2 * x3 - u3 * x2;
+        let x6 = f64::sin(theta);
+        let x7 = x6 * x1;
+        let x8 = x4 * x7;
+        let x9 = f64::cos(psi);
+        let x10 = x6 * x2;
+        let x11 = x9 * x10;
+        let x12 = f64::sin(psi);
+        let x13 = x3 * x12;
+        let x14 = x11 - x13;
         let x15 = rho + 0.5 * l;
-        let x16 = -rho - 0.5 * l;
-        let x17 = x2 * x10 + x8 * x12 * x4;
-        let x18 = -x14 * u3 * x15 - x12 * x0 * u4 - x16 * u2 * x17;
-        let x19 = x12 * x4;
-        let x20 = x8 * x2 * x10;
-        let x21 = x19 + x20;
-        let x22 = x12 * x2;
-        let x23 = x8 * x4 * x10;
-        let x24 = x23 - x22;
-        let x25 = x0 * u4 * x10;
-        let x26 = x16 * u2 * x4;
-        let x27 = u3 * x15 * x2;
-        let x28 = x8 * u4 + (-x26 - x27) * x0;
-        let x29 = -Ixy;
-        let x30 = -Ixz;
-        let x31 = m * x9;
-        let x32 = m
-            * (rho * ((-rho - l) * m * x9 + rho + l) + l * l * (0.25 - 0.25 * x31));
-        let x33 = -Iyz;
-        let x34 = 1.0 - x31;
-        let x35 = u2 * Iyz;
-        let x36 = u1 * Ixz;
-        let x37 = Iyz * u3;
-        let x38 = Ixy * u1;
-        let x39 = u3 * Ixz;
-        let x40 = u2 * Ixy;
-        let x41 = x32 - Ixx + Izz;
-        let x42 = x41 * u1;
-        let x43 = Iyz * u1;
-        let x44 = m * (2.0 * rho + l) * x9 - 2.0 * rho - l;
-        let x45 = x44 * m * u4;
-        let x46 = Ixx - Iyy
-            + (l * l * (0.25 * x31 - 0.25) + rho * ((rho + l) * m * x9 - rho - l)) * m;
-        let x47 = u1 * x46;
-        let x48 = rho + 0.5 * l + x16 * m * x9;
-        let x49 = f64::cos(0.0485 * t);
-        let x50 = f64::sin(0.089 * t);
-        let x51 = 0.012 * x49 - 0.018 * x50;
-        let x52 = -x19 - x20;
-        let x53 = 2.0 * rho + l + (-2.0 * rho - l) * m * x9;
-        let x54 = x53 * m;
-        let x55 = 2.0 * x31 - 2.0;
-        let x56 = Ixy * u3;
-        let x57 = u2 * Ixz;
-        let x58 = Iyy - Izz;
+        let x16 = x15 * u3;
+        let x17 = x0 * u4;
+        let x18 = x6 * x3;
+        let x19 = x2 * x12 + x18 * x9;
+        let x20 = -(u2 * x15);
+        let x21 = x14 * x16 + x9 * x17 + x19 * x20;
+        let x22 = 1.0 / (m + mg);
+        let x23 = x9 * x2;
+        let x24 = x18 * x12;
+        let x25 = x24 - x23;
+        let x26 = x9 * x3 + x10 * x12;
+        let x27 = x26 * x16;
+        let x28 = x17 * x12;
+        let x29 = x20 * x3 + x2 * x16;
+        let x30 = x6 * u4 - x0 * x29;
+        let x31 = -Ixy;
+        let x32 = -Ixz;
+        let x33 = m * x22;
+        let x34 = l * l;
+        let x35 = rho + l;
+        let x36 = x35 * x33;
+        let x37 = m * ((0.25 - 0.25 * x33) * x34 + rho * (x35 - x36));
+        let x38 = -Iyz;
+        let x39 = x37 + Izz;
+        let x40 = 1.0 - x33;
+        let x41 = u1 * Ixz;
+        let x42 = u2 * Iyz;
+        let x43 = Iyz * u3;
+        let x44 = Ixy * u1;
+        let x45 = u3 * Ixz;
+        let x46 = u2 * Ixy;
+        let x47 = x39 - Ixx;
+        let x48 = x46 + u1 * x47;
+        let x49 = 2.0 * rho + l;
+        let x50 = x33 * x49;
+        let x51 = x50 - 2.0 * rho - l;
+        let x52 = x51 * m;
+        let x53 = x52 * u4;
+        let x54 = Iyz * u1;
+        let x55 = x53 - x54;
+        let x56 = x53 + x54;
+        let x57 = Ixx - Iyy + m * ((x36 - rho - l) * rho + x34 * (0.25 * x33 - 0.25));
+        let x58 = u1 * x57 - x45;
+        let x59 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x60 = u3 * u3;
+        let x61 = -(x15 * x33);
+        let x62 = x15 + x61;
+        let x63 = u2 * u2;
+        let x64 = x30 * x33;
+        let x65 = x0 * x33;
+        let x66 = x49 - x50;
+        let x67 = x66 * m;
+        let x68 = u4 * (2.0 * x33 - 2.0);
+        let x69 = Ixy * u3;
+        let x70 = u2 * Ixz;
+        let x71 = Iyy - Izz;
+        let x72 = x15 * x33;
         Derivatives {
             qdot: [
-                x1 * x6,
-                x7,
-                u1 + x8 * x1 * x6,
+                x1 * x4,
+                x5,
+                x8 + u1,
                 u4,
-                x9 * (G_X + m * x18),
-                ((-u3 * x15 * x21 - x16 * u2 * x24 - x25) * m + G_Y) * x9,
-                x9 * (x28 * m + G_Z),
+                (G_X - x21 * m) * x22,
+                (G_Y - (x25 * x20 + x27 + x28) * m) * x22,
+                (G_Z + x30 * m) * x22,
             ],
             matrix: [
-                [Ixx, x29, x30, 0.0],
-                [x29, Iyy + x32, x33, 0.0],
-                [x30, x33, x32 + Izz, 0.0],
-                [0.0, 0.0, 0.0, m * x34],
+                [Ixx, x31, x32, 0.0],
+                [x31, x37 + Iyy, x38, 0.0],
+                [x32, x38, x39, 0.0],
+                [0.0, 0.0, 0.0, m * x40],
             ],
             force: [
-                (u2 * Iyy - x37 - x38) * u3 - u2 * (u3 * Izz - x35 - x36),
-                u3 * (x39 + x40 + x42) - u1 * u1 * Ixz + u2 * (x45 - x43),
-                Ixy * u1 * u1 + u2 * (x47 - x39 - x40) + (x43 + x45) * u3,
-                (u3 * u3 * x48 + u2 * u2 * x48) * m + 0.012 * x49 - 0.018 * x50,
+                u3 * (u2 * Iyy - x43 - x44) - u2 * (u3 * Izz - x41 - x42),
+                u3 * (x45 + x48) - x41 * u1 + u2 * x55,
+                x56 * u3 + u2 * (x58 - x46) + u1 * x44,
+                x59 + (x60 * x62 + x63 * x62) * m,
             ],
             checks: [x0],
             d_qdot: [
@@ -5943,68 +5834,52 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    m * x9 * (x25 - x16 * (x22 - x23) * u2 - u3 * x15 * x52),
-                    m * x18 * x9,
+                    (x27 - (x23 - x24) * x20 + x28) * x33,
+                    -(x21 * x33),
                     0.0,
                 ],
                 [
-                    x8 * x1 * x1 * x6,
+                    x1 * x8,
                     0.0,
-                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
+                    x8 * x7 + x4,
                     0.0,
-                    x28 * x12 * m * x9,
-                    x28 * m * x9 * x10,
-                    m * x9 * (x0 * u4 + x8 * (x26 + x27)),
+                    x64 * x9,
+                    x64 * x12,
+                    (x6 * x29 + x17) * x33,
                 ],
                 [
-                    x1 * x7,
-                    -x3 - x5,
-                    x8 * x1 * x7,
+                    x1 * x5,
+                    -x4,
+                    x5 * x7,
                     0.0,
-                    m * (-u3 * x15 * x17 - x16 * u2 * (x11 - x13)) * x9,
-                    (-x16 * u2 * x52 - u3 * x15 * x24) * m * x9,
-                    (x16 * u2 * x2 - u3 * x15 * x4) * x0 * m * x9,
+                    -((x20 * (x13 - x11) + x19 * x16) * x33),
+                    -(x33 * (x25 * x16 - x26 * x20)),
+                    (x2 * x20 - x16 * x3) * x65,
                 ],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    m * x9 * (u2 * x17 - x14 * u3),
-                    m * x9 * (u2 * x24 - u3 * x21),
-                    x0 * m * x7 * x9,
+                    x33 * (u2 * x19 - x14 * u3),
+                    (u2 * x25 - x26 * u3) * x33,
+                    x5 * x65,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x3, x2 * x7, 0.0, -(x19 * x61), -(x25 * x61), x15 * x3 * x65],
                 [
-                    x1 * x2,
-                    x4,
-                    x8 * x1 * x2,
-                    0.0,
-                    -(x16 * m * x9 * x17),
-                    -(x16 * m * x9 * x24),
-                    -(x16 * x0 * m * x9 * x4),
-                ],
-                [
-                    x1 * x4,
+                    x1 * x3,
                     -x2,
-                    x8 * x1 * x4,
+                    x7 * x3,
                     0.0,
-                    -(x14 * m * x15 * x9),
-                    -(m * x15 * x9 * x21),
-                    -(x0 * m * x15 * x2 * x9),
+                    -(x14 * x72),
+                    -(x26 * x72),
+                    -(x15 * x2 * x65),
                 ],
-                [
-                    0.0,
-                    0.0,
-                    0.0,
-                    1.0,
-                    -(x12 * x0 * m * x9),
-                    -(x0 * m * x9 * x10),
-                    x8 * m * x9,
-                ],
+                [0.0, 0.0, 0.0, 1.0, -(x9 * x65), -(x12 * x65), x6 * x33],
             ],
             d_matrix: [
                 [
@@ -6027,8 +5902,8 @@ pub mod reduced_volterra {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x54, 0.0, 0.0],
-                    [0.0, 0.0, x54, 0.0],
+                    [0.0, x67, 0.0, 0.0],
+                    [0.0, 0.0, x67, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
                 [
@@ -6080,30 +5955,20 @@ pub mod reduced_volterra {
                 [0.0, 0.0, 0.0, 0.0],
                 [
                     0.0,
-                    m * (u3 * x53 * u1 + u2 * x55 * u4),
-                    m * (u2 * x44 * u1 + u3 * x55 * u4),
-                    m * (u3 * u3 * x34 + u2 * u2 * x34),
+                    m * (x66 * u3 * u1 + u2 * x68),
+                    (u3 * x68 + x51 * u2 * u1) * m,
+                    m * (x60 * x40 + x63 * x40),
                 ],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [x57 - x56, x41 * u3 - x35 - 2.0 * x36, x37 + 2.0 * x38 + u2 * x46, 0.0],
-                [
-                    2.0 * x35 + x36 + u3 * x58,
-                    x56 - x43 + x45,
-                    x47 - x39 - 2.0 * x40,
-                    u2 * x53 * m,
-                ],
-                [
-                    u2 * x58 - 2.0 * x37 - x38,
-                    2.0 * x39 + x40 + x42,
-                    x43 - x57 + x45,
-                    u3 * x53 * m,
-                ],
-                [0.0, u2 * x44 * m, u3 * x44 * m, 0.0],
+                [x70 - x69, u3 * x47 - 2.0 * x41 - x42, u2 * x57 + x43 + 2.0 * x44, 0.0],
+                [x41 + 2.0 * x42 + u3 * x71, x69 + x55, x58 - 2.0 * x46, x67 * u2],
+                [u2 * x71 - 2.0 * x43 - x44, 2.0 * x45 + x48, x56 - x70, x67 * u3],
+                [0.0, u2 * x52, u3 * x52, 0.0],
             ],
-            power: u4 * x51,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x51],
+            power: x59 * u4,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x59],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -6234,112 +6099,101 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = u3 * x2;
-        let x6 = u2 * x3;
-        let x7 = f64::sin(theta);
-        let x8 = 1.0 / (m + mg);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = u3 * x1;
+        let x5 = u2 * x2;
+        let x6 = f64::sin(theta);
+        let x7 = f64::cos(psi);
+        let x8 = x6 * x1;
         let x9 = f64::sin(psi);
-        let x10 = f64::cos(psi);
-        let x11 = x7 * x10 * x2 - x3 * x9;
-        let x12 = rho + 0.5 * l;
-        let x13 = x11 * u3 * x12;
-        let x14 = x10 * x0 * u4;
-        let x15 = -rho - 0.5 * l;
-        let x16 = x2 * x9 + x7 * x10 * x3;
-        let x17 = x15 * u2 * x16;
-        let x18 = G_X + m * (-x13 - x14 - x17);
-        let x19 = x8 * x18;
-        let x20 = x10 * x3 + x7 * x2 * x9;
-        let x21 = u3 * x12 * x20;
-        let x22 = x7 * x3 * x9 - x10 * x2;
-        let x23 = x15 * u2 * x22;
-        let x24 = x0 * u4 * x9;
-        let x25 = (-x21 - x23 - x24) * m + G_Y;
-        let x26 = x25 * x8;
-        let x27 = x7 * u4;
-        let x28 = (-x15 * u2 * x3 - u3 * x12 * x2) * x0;
-        let x29 = (x27 + x28) * m + G_Z;
-        let x30 = x8 * x29;
-        let x31 = -Ixy;
-        let x32 = -Ixz;
-        let x33 = -rho - l;
-        let x34 = x33 * m * x8;
-        let x35 = m * x8;
-        let x36 = m * (rho * (x34 + rho + l) + l * l * (0.25 - 0.25 * x35));
-        let x37 = -Iyz;
-        let x38 = u3 * Ixz;
-        let x39 = u2 * Ixy;
-        let x40 = Iyz * u1;
-        let x41 = (m * (2.0 * rho + l) * x8 - 2.0 * rho - l) * m * u4;
-        let x42 = rho + l;
-        let x43 = x42 * m * x8;
-        let x44 = rho + 0.5 * l + x15 * m * x8;
-        let x45 = f64::cos(0.0485 * t);
-        let x46 = f64::sin(0.089 * t);
-        let x47 = l * l;
-        let x48 = rho * x42;
-        let x49 = 0.25 * x47 + x48;
-        let x50 = m * m * x8 * x8 * x49;
-        let x51 = u3 * u1 * x49;
-        let x52 = -2.0 * rho - l;
-        let x53 = u2 * x52 * u4;
-        let x54 = x52 * u3 * u4;
-        let x55 = u2 * u1 * (rho * x33 - 0.25 * x47);
-        let x56 = u2 * u2 * x12;
-        let x57 = u3 * u3 * x12;
-        let x58 = -(u3 * u1);
-        let x59 = u2 * u1;
-        let x60 = u2 * u3;
-        let x61 = -(u2 * u1);
-        let x62 = -(u2 * u3);
-        let x63 = u3 * u1;
-        let x64 = u2 * u2;
-        let x65 = u1 * u1;
-        let x66 = u3 * u3;
-        let x67 = l * l * (0.25 * x35 - 0.5) + rho * (x43 - 2.0 * rho - 2.0 * l);
-        let x68 = m * x67 * x8 + 0.25 * x47 + x48;
-        let x69 = 4.0 * rho + 2.0 * l + x52 * m * x8;
-        let x70 = m * x12 * x8;
-        let x71 = x70 - 2.0 * rho - l;
-        let x72 = x44 * m;
-        let x73 = x35 - 1.0;
-        let x74 = 0.5 - 0.5 * x35;
+        let x10 = x7 * x8 - x2 * x9;
+        let x11 = rho + 0.5 * l;
+        let x12 = x11 * u3;
+        let x13 = x0 * u4;
+        let x14 = x6 * x2;
+        let x15 = x1 * x9 + x14 * x7;
+        let x16 = -(u2 * x11);
+        let x17 = (x10 * x12 + x7 * x13) + x15 * x16;
+        let x18 = G_X - m * x17;
+        let x19 = 1.0 / (m + mg);
+        let x20 = x18 * x19;
+        let x21 = x14 * x9 - x7 * x1;
+        let x22 = x7 * x2 + x8 * x9;
+        let x23 = (x21 * x16 + x22 * x12) + x13 * x9;
+        let x24 = G_Y - m * x23;
+        let x25 = x24 * x19;
+        let x26 = x6 * u4 - x0 * (x16 * x2 + x1 * x12);
+        let x27 = x26 * m + G_Z;
+        let x28 = x27 * x19;
+        let x29 = -Ixy;
+        let x30 = -Ixz;
+        let x31 = m * x19;
+        let x32 = l * l;
+        let x33 = rho + l;
+        let x34 = x33 * x31;
+        let x35 = m * ((0.25 - 0.25 * x31) * x32 + rho * (x33 - x34));
+        let x36 = -Iyz;
+        let x37 = x35 + Izz;
+        let x38 = u1 * u1;
+        let x39 = -2.0 * rho - l;
+        let x40 = 2.0 * rho + l;
+        let x41 = x31 * x40;
+        let x42 = (x39 + x41) * m * u4;
+        let x43 = Iyz * u1;
+        let x44 = u3 * Ixz;
+        let x45 = u2 * Ixy;
+        let x46 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x47 = u2 * u2;
+        let x48 = x11 * x31;
+        let x49 = x11 - x48;
+        let x50 = u3 * u3;
+        let x51 = x19 * x19;
+        let x52 = x31 * x31;
+        let x53 = rho * x33;
+        let x54 = 0.25 * x32 + x53;
+        let x55 = x52 * x54;
+        let x56 = u2 * u4;
+        let x57 = u3 * u1;
+        let x58 = x57 * x54 - x56 * x40;
+        let x59 = u3 * u4;
+        let x60 = u2 * u1;
+        let x61 = x60 * (-0.25 * x32 - x53) - x59 * x40;
+        let x62 = x11 * x47 + x50 * x11;
+        let x63 = -x57;
+        let x64 = u2 * u3;
+        let x65 = -x60;
+        let x66 = -x64;
+        let x67 = (0.25 * x31 - 0.5) * x32 + rho * (x34 - 2.0 * rho - 2.0 * l);
+        let x68 = x31 * x67 + x54;
+        let x69 = 4.0 * rho + 2.0 * l - x41;
+        let x70 = x39 + x48;
+        let x71 = m * x49;
+        let x72 = x31 - 1.0;
+        let x73 = 0.5 - 0.5 * x31;
         ParameterDerivatives {
-            qdot: [x1 * x4, x6 - x5, u1 + x7 * x1 * x4, u4, x19, x26, x30],
+            qdot: [x3, x5 - x4, x6 * x3 + u1, u4, x20, x25, x28],
             matrix: [
-                [Ixx, x31, x32, 0.0],
-                [x31, Iyy + x36, x37, 0.0],
-                [x32, x37, x36 + Izz, 0.0],
-                [0.0, 0.0, 0.0, m * (1.0 - x35)],
+                [Ixx, x29, x30, 0.0],
+                [x29, x35 + Iyy, x36, 0.0],
+                [x30, x36, x37, 0.0],
+                [0.0, 0.0, 0.0, m * (1.0 - x31)],
             ],
             force: [
                 (u2 * Iyy - Iyz * u3 - Ixy * u1) * u3
                     - u2 * (u3 * Izz - u2 * Iyz - u1 * Ixz),
-                u3 * (x38 + x39 + (x36 - Ixx + Izz) * u1) - u1 * u1 * Ixz
-                    + u2 * (x41 - x40),
-                Ixy * u1 * u1
-                    + u2
-                        * (u1
-                            * (Ixx - Iyy
-                                + (l * l * (0.25 * x35 - 0.25) + rho * (x43 - rho - l)) * m)
-                            - x38 - x39) + (x40 + x41) * u3,
-                (u3 * u3 * x44 + u2 * u2 * x44) * m + 0.012 * x45 - 0.018 * x46,
+                u2 * (x42 - x43) - x38 * Ixz + u3 * (x44 + x45 + u1 * (x37 - Ixx)),
+                u2
+                    * (u1
+                        * (Ixx - Iyy
+                            + m * ((x34 - rho - l) * rho + x32 * (0.25 * x31 - 0.25)))
+                        - x44 - x45) + (x42 + x43) * u3 + x38 * Ixy,
+                x46 + m * (x47 * x49 + x50 * x49),
             ],
             checks: [x0],
             d_qdot: [
-                [
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    -(x8 * x8 * x18),
-                    -(x25 * x8 * x8),
-                    -(x8 * x8 * x29),
-                ],
+                [0.0, 0.0, 0.0, 0.0, -(x18 * x51), -(x24 * x51), -(x27 * x51)],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -6351,26 +6205,26 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    (-x19 - x13 - x14 - x17) * x8,
-                    (-x26 - x21 - x23 - x24) * x8,
-                    x8 * (x27 + x28 - x30),
+                    -((x20 + x17) * x19),
+                    -((x25 + x23) * x19),
+                    (x26 - x28) * x19,
                 ],
                 [
                     0.0,
                     0.0,
                     0.0,
                     0.0,
-                    (0.5 * (u2 * x16) - 0.5 * (x11 * u3)) * m * x8,
-                    m * x8 * (0.5 * (u2 * x22) - 0.5 * (u3 * x20)),
-                    (0.5 * x6 - 0.5 * x5) * x0 * m * x8,
+                    (0.5 * (u2 * x15) - 0.5 * (x10 * u3)) * x31,
+                    x31 * (0.5 * (u2 * x21) - 0.5 * (x22 * u3)),
+                    (0.5 * x5 - 0.5 * x4) * x0 * x31,
                 ],
             ],
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x50, 0.0, 0.0],
-                    [0.0, 0.0, x50, 0.0],
-                    [0.0, 0.0, 0.0, m * m * x8 * x8],
+                    [0.0, x55, 0.0, 0.0],
+                    [0.0, 0.0, x55, 0.0],
+                    [0.0, 0.0, 0.0, x52],
                 ],
                 [
                     [1.0, 0.0, 0.0, 0.0],
@@ -6412,45 +6266,40 @@ pub mod reduced_volterra {
                     [0.0, 0.0, 0.0, 0.0],
                     [0.0, x68, 0.0, 0.0],
                     [0.0, 0.0, x68, 0.0],
-                    [0.0, 0.0, 0.0, m * x8 * (x35 - 2.0) + 1.0],
+                    [0.0, 0.0, 0.0, (x31 - 2.0) * x31 + 1.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x72, 0.0, 0.0],
-                    [0.0, 0.0, x72, 0.0],
+                    [0.0, x71, 0.0, 0.0],
+                    [0.0, 0.0, x71, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
+                [0.0, x52 * x58, x52 * x61, x62 * x52],
+                [0.0, x63, x60, 0.0],
+                [x64, 0.0, x65, 0.0],
+                [x66, x57, 0.0, 0.0],
+                [x63, x64, x38 - x47, 0.0],
+                [x60, x50 - x38, x66, 0.0],
+                [x47 - x50, x65, x57, 0.0],
                 [
                     0.0,
-                    m * m * x8 * x8 * (x51 + x53),
-                    m * m * (x54 + x55) * x8 * x8,
-                    (x56 + x57) * m * m * x8 * x8,
-                ],
-                [0.0, x58, x59, 0.0],
-                [x60, 0.0, x61, 0.0],
-                [x62, x63, 0.0, 0.0],
-                [x58, x60, x65 - x64, 0.0],
-                [x59, x66 - x65, x62, 0.0],
-                [x64 - x66, x61, x63, 0.0],
-                [
-                    0.0,
-                    x51 + x53 + (u3 * x67 * u1 + u2 * u4 * x69) * m * x8,
-                    x54
-                        + ((rho * (x34 + 2.0 * rho + 2.0 * l)
-                            + l * l * (0.5 - 0.25 * x35)) * u2 * u1 + u3 * u4 * x69) * m
-                            * x8 + x55,
-                    (u2 * u2 * x71 + x71 * u3 * u3) * m * x8 + x56 + x57,
+                    x58 + x31 * (x56 * x69 + x57 * x67),
+                    x31
+                        * (x60
+                            * (x32 * (0.5 - 0.25 * x31)
+                                + rho * (2.0 * rho + 2.0 * l - x34)) + x59 * x69) + x61,
+                    x62 + (x47 * x70 + x50 * x70) * x31,
                 ],
                 [
                     0.0,
-                    m * (u3 * x44 * u1 + x73 * u2 * u4),
-                    (u2 * u1 * (x70 - rho - 0.5 * l) + x73 * u3 * u4) * m,
-                    m * (u3 * u3 * x74 + u2 * u2 * x74),
+                    (x56 * x72 + x57 * x49) * m,
+                    m * (x59 * x72 + (x48 - rho - 0.5 * l) * x60),
+                    m * (x50 * x73 + x47 * x73),
                 ],
             ],
-            power: u4 * (0.012 * x45 - 0.018 * x46),
+            power: x46 * u4,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }

@@ -201,14 +201,14 @@ pub fn energy(
     let k = params.k;
     let L0 = params.L0;
     let g = params.g;
-    let x0 = -x - L0;
+    let x0 = x + L0;
     let x1 = f64::sqrt(x0 * x0) - L0;
-    let x2 = f64::cos(th);
-    let x3 = th_dot * lp + x_dot * x2;
-    let x4 = f64::sin(th);
-    0.5 * (x1 * x1 * k)
-        + mp * (0.5 * (x3 * x3) - g * x2 * lp + 0.5 * (x4 * x4 * x_dot * x_dot))
-        + 0.5 * (mc * x_dot * x_dot)
+    let x2 = x_dot * x_dot;
+    let x3 = f64::sin(th);
+    let x4 = f64::cos(th);
+    let x5 = th_dot * lp + x_dot * x4;
+    0.5 * (x1 * x1 * k) + 0.5 * (x2 * mc)
+        + mp * (0.5 * (x2 * x3 * x3) + 0.5 * (x5 * x5) - g * x4 * lp)
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -222,7 +222,7 @@ pub fn work_rate(
     let x_dot = qdot[0];
     let c_ = params.c_;
     let L0 = params.L0;
-    0.5 * (2.0 * x + 2.0 * L0) * c_ * x_dot * x_dot / (-x - L0)
+    -(0.5 * (2.0 * x + 2.0 * L0) * c_ * x_dot * x_dot / (x + L0))
 }
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
@@ -299,23 +299,22 @@ pub mod lagrange {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = 1.0 / x2;
-        let x4 = x2 * x2;
-        let x5 = f64::sin(th);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = x + L0;
+        let x3 = x2 * x2;
+        let x4 = c_ * (1.0 / (-x2)) * x_dot;
+        let x5 = 2.0 * x + 2.0 * L0;
+        let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x1
-                    * (0.5 * (c_ * x3 * x_dot)
-                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                    + x5 * mp * th_dot * th_dot * lp,
-                -(x5 * g * mp * lp),
+                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
+                    + x6 * th_dot * th_dot,
+                -(x6 * g),
             ],
-            power: 0.5 * x1 * c_ * x3 * x_dot * x_dot,
+            power: 0.5 * x5 * x_dot * x4,
             checks: [],
             residuals: [],
             positions: [],
@@ -481,51 +480,46 @@ pub mod lagrange {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * x_dot;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = -(x9 * mp * lp);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = x0 * f64::sin(th);
+        let x3 = th_dot * th_dot;
+        let x4 = x + L0;
+        let x5 = x4 * x4;
+        let x6 = f64::sqrt(x5) - L0;
+        let x7 = x6 * k / f64::sqrt(x5);
+        let x8 = 1.0 / (-x4);
+        let x9 = c_ * x8;
+        let x10 = x9 * x_dot;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = x_dot * x10;
+        let x13 = -x2;
         Derivatives {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
+            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x10], [x10, 0.0]],
+                [[0.0, x13], [x13, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x2
-                        * (0.5 * (c_ * x4 * x4 * x_dot)
-                            + x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
-                                * k) + x5 - x8,
+                    x11
+                        * (0.5 * (x8 * x10)
+                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
+                                * k) - x7 + x10,
                     0.0,
                 ],
-                [mp * x0 * th_dot * th_dot * lp, -(g * mp * x0 * lp)],
-                [0.5 * x2 * c_ * x4, 0.0],
-                [2.0 * x9 * mp * th_dot * lp, 0.0],
+                [x3 * x1, -(g * x1)],
+                [0.5 * x11 * x9, 0.0],
+                [2.0 * x2 * th_dot, 0.0],
             ],
-            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
-            d_power: [
-                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
-                0.0,
-                x2 * c_ * x4 * x_dot,
-                0.0,
-            ],
+            power: 0.5 * x11 * x12,
+            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -646,25 +640,28 @@ pub mod lagrange {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * x_dot;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = x0 * lp;
-        let x11 = mp * x0;
+        let x0 = mp * lp;
+        let x1 = f64::cos(th);
+        let x2 = x0 * x1;
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = f64::sqrt(x4) - L0;
+        let x6 = x5 * k / f64::sqrt(x4);
+        let x7 = 1.0 / (-x3);
+        let x8 = x_dot * x7;
+        let x9 = c_ * x8;
+        let x10 = 2.0 * x + 2.0 * L0;
+        let x11 = f64::sin(th);
+        let x12 = x11 * th_dot * th_dot;
+        let x13 = x11 * g;
+        let x14 = x10 * x_dot;
+        let x15 = x1 * lp;
+        let x16 = mp * x1;
+        let x17 = x10 * x5;
         ParameterDerivatives {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x2], [x2, x0 * lp]],
+            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -677,8 +674,8 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x10], [x10, lp * lp]],
-                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[1.0, x15], [x15, lp * lp]],
+                [[0.0, x16], [x16, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -686,30 +683,30 @@ pub mod lagrange {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x9 * th_dot * th_dot * lp, -(x9 * g * lp)],
-                [x9 * mp * th_dot * th_dot, -(x9 * g * mp)],
-                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
-                [0.5 * x2 * x4 * x_dot, 0.0],
+                [x12 * lp, -(x13 * lp)],
+                [x12 * mp, -(x13 * mp)],
+                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
+                [0.5 * x10 * x8, 0.0],
                 [
-                    x5
-                        + x2
-                            * (0.5 * (c_ * x4 * x4 * x_dot)
-                                + (0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                    x9 - x6
+                        + x10
+                            * (0.5 * (x9 * x7)
+                                + (0.25 * (x17 / f64::powf(x4, 1.5))
                                     - 0.5
-                                        * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k)
-                        - x8,
+                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
+                                    * k),
                     0.0,
                 ],
-                [0.0, -(x9 * mp * lp)],
+                [0.0, -(x0 * x11)],
             ],
-            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            power: 0.5 * x14 * x9,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x2 * x4 * x_dot * x_dot,
-                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.5 * x14 * x8,
+                x_dot * x9 * (0.5 * (x10 * x7) + 1.0),
                 0.0,
             ],
         }
@@ -953,25 +950,24 @@ pub mod maggi {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = 1.0 / x2;
-        let x4 = x2 * x2;
-        let x5 = f64::sin(th);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = x + L0;
+        let x3 = x2 * x2;
+        let x4 = c_ * (1.0 / (-x2)) * x_dot;
+        let x5 = 2.0 * x + 2.0 * L0;
+        let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x1
-                    * (0.5 * (c_ * x3 * x_dot)
-                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                    + x5 * mp * th_dot * th_dot * lp,
-                -(x5 * g * mp * lp),
+                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
+                    + x6 * th_dot * th_dot,
+                -(x6 * g),
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
             c: [0.0, 0.0],
-            power: 0.5 * x1 * c_ * x3 * x_dot * x_dot,
+            power: 0.5 * x5 * x_dot * x4,
             checks: [],
         }
     }
@@ -1123,43 +1119,43 @@ pub mod maggi {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * x_dot;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = -(x9 * mp * lp);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = x0 * f64::sin(th);
+        let x3 = th_dot * th_dot;
+        let x4 = x + L0;
+        let x5 = x4 * x4;
+        let x6 = f64::sqrt(x5) - L0;
+        let x7 = x6 * k / f64::sqrt(x5);
+        let x8 = 1.0 / (-x4);
+        let x9 = c_ * x8;
+        let x10 = x9 * x_dot;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = x_dot * x10;
+        let x13 = -x2;
         Derivatives {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
+            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x10], [x10, 0.0]],
+                [[0.0, x13], [x13, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x2
-                        * (0.5 * (c_ * x4 * x4 * x_dot)
-                            + x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
-                                * k) + x5 - x8,
+                    x11
+                        * (0.5 * (x8 * x10)
+                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
+                                * k) - x7 + x10,
                     0.0,
                 ],
-                [mp * x0 * th_dot * th_dot * lp, -(g * mp * x0 * lp)],
-                [0.5 * x2 * c_ * x4, 0.0],
-                [2.0 * x9 * mp * th_dot * lp, 0.0],
+                [x3 * x1, -(g * x1)],
+                [0.5 * x11 * x9, 0.0],
+                [2.0 * x2 * th_dot, 0.0],
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
             c: [0.0, 0.0],
@@ -1170,13 +1166,8 @@ pub mod maggi {
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_c: [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]],
-            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
-            d_power: [
-                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
-                0.0,
-                x2 * c_ * x4 * x_dot,
-                0.0,
-            ],
+            power: 0.5 * x11 * x12,
+            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1313,25 +1304,28 @@ pub mod maggi {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * x_dot;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = x0 * lp;
-        let x11 = mp * x0;
+        let x0 = mp * lp;
+        let x1 = f64::cos(th);
+        let x2 = x0 * x1;
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = f64::sqrt(x4) - L0;
+        let x6 = x5 * k / f64::sqrt(x4);
+        let x7 = 1.0 / (-x3);
+        let x8 = x_dot * x7;
+        let x9 = c_ * x8;
+        let x10 = 2.0 * x + 2.0 * L0;
+        let x11 = f64::sin(th);
+        let x12 = x11 * th_dot * th_dot;
+        let x13 = x11 * g;
+        let x14 = x10 * x_dot;
+        let x15 = x1 * lp;
+        let x16 = mp * x1;
+        let x17 = x10 * x5;
         ParameterDerivatives {
             qdot: [x_dot, th_dot],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + x9 * mp * th_dot * th_dot * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x2], [x2, x0 * lp]],
+            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -1344,8 +1338,8 @@ pub mod maggi {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x10], [x10, lp * lp]],
-                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[1.0, x15], [x15, lp * lp]],
+                [[0.0, x16], [x16, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -1353,21 +1347,21 @@ pub mod maggi {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x9 * th_dot * th_dot * lp, -(x9 * g * lp)],
-                [x9 * mp * th_dot * th_dot, -(x9 * g * mp)],
-                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
-                [0.5 * x2 * x4 * x_dot, 0.0],
+                [x12 * lp, -(x13 * lp)],
+                [x12 * mp, -(x13 * mp)],
+                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
+                [0.5 * x10 * x8, 0.0],
                 [
-                    x5
-                        + x2
-                            * (0.5 * (c_ * x4 * x4 * x_dot)
-                                + (0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                    x9 - x6
+                        + x10
+                            * (0.5 * (x9 * x7)
+                                + (0.25 * (x17 / f64::powf(x4, 1.5))
                                     - 0.5
-                                        * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k)
-                        - x8,
+                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
+                                    * k),
                     0.0,
                 ],
-                [0.0, -(x9 * mp * lp)],
+                [0.0, -(x0 * x11)],
             ],
             w: [[1.0, 0.0], [0.0, 1.0]],
             c: [0.0, 0.0],
@@ -1389,14 +1383,14 @@ pub mod maggi {
                 [0.0, 0.0],
                 [0.0, 0.0],
             ],
-            power: 0.5 * x2 * c_ * x4 * x_dot * x_dot,
+            power: 0.5 * x14 * x9,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x2 * x4 * x_dot * x_dot,
-                c_ * x4 * x_dot * x_dot * (0.5 * (x2 * x4) + 1.0),
+                0.5 * x14 * x8,
+                x_dot * x9 * (0.5 * (x10 * x7) + 1.0),
                 0.0,
             ],
         }
@@ -1639,23 +1633,22 @@ pub mod kane {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = 1.0 / x2;
-        let x4 = x2 * x2;
-        let x5 = f64::sin(th);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = c_ * (1.0 / (-x3)) * u1;
+        let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x1
-                    * (0.5 * (c_ * x3 * u1)
-                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                    + u2 * u2 * x5 * mp * lp,
-                -(x5 * g * mp * lp),
+                x2 * (0.5 * x5 - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + x6 * u2 * u2,
+                -(x6 * g),
             ],
-            power: 0.5 * x1 * c_ * x3 * u1 * u1,
+            power: 0.5 * x2 * u1 * x5,
             checks: [],
         }
     }
@@ -1802,51 +1795,46 @@ pub mod kane {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
         let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * u1;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = -(x9 * mp * lp);
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = f64::sqrt(x4) - L0;
+        let x6 = x5 * k / f64::sqrt(x4);
+        let x7 = 1.0 / (-x3);
+        let x8 = c_ * x7;
+        let x9 = x8 * u1;
+        let x10 = x0 * f64::sin(th);
+        let x11 = u2 * u2;
+        let x12 = u1 * x9;
+        let x13 = -x10;
         Derivatives {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
+            force: [x2 * (0.5 * x9 - 0.5 * x6) + x10 * x11, -(x10 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x10], [x10, 0.0]],
+                [[0.0, x13], [x13, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x5
-                        + x2
-                            * (x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
-                                * k + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    x2
+                        * (0.5 * (x7 * x9)
+                            + x2 * (0.25 * (x5 / f64::powf(x4, 1.5)) - 0.25 * (x7 * x7))
+                                * k) - x6 + x9,
                     0.0,
                 ],
-                [u2 * u2 * mp * x0 * lp, -(g * mp * x0 * lp)],
-                [0.5 * x2 * c_ * x4, 0.0],
-                [2.0 * u2 * x9 * mp * lp, 0.0],
+                [x11 * x1, -(g * x1)],
+                [0.5 * x2 * x8, 0.0],
+                [2.0 * x10 * u2, 0.0],
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
-            d_power: [
-                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
-                0.0,
-                x2 * c_ * x4 * u1,
-                0.0,
-            ],
+            power: 0.5 * x2 * x12,
+            d_power: [x12 * (0.5 * (x2 * x7) + 1.0), 0.0, x2 * x9, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1967,25 +1955,28 @@ pub mod kane {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * u1;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = x0 * lp;
-        let x11 = mp * x0;
+        let x0 = mp * lp;
+        let x1 = f64::cos(th);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(th);
+        let x4 = x3 * (u2 * u2);
+        let x5 = 2.0 * x + 2.0 * L0;
+        let x6 = x + L0;
+        let x7 = x6 * x6;
+        let x8 = f64::sqrt(x7) - L0;
+        let x9 = x8 * k / f64::sqrt(x7);
+        let x10 = 1.0 / (-x6);
+        let x11 = u1 * x10;
+        let x12 = c_ * x11;
+        let x13 = x3 * g;
+        let x14 = x5 * u1;
+        let x15 = x1 * lp;
+        let x16 = mp * x1;
+        let x17 = x5 * x8;
         ParameterDerivatives {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x2], [x2, x0 * lp]],
+            force: [x0 * x4 + x5 * (0.5 * x12 - 0.5 * x9), -(x0 * x13)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -1998,8 +1989,8 @@ pub mod kane {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x10], [x10, lp * lp]],
-                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[1.0, x15], [x15, lp * lp]],
+                [[0.0, x16], [x16, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -2007,29 +1998,29 @@ pub mod kane {
             ],
             d_force: [
                 [0.0, 0.0],
-                [u2 * u2 * x9 * lp, -(x9 * g * lp)],
-                [u2 * u2 * x9 * mp, -(x9 * g * mp)],
-                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
-                [0.5 * x2 * x4 * u1, 0.0],
+                [x4 * lp, -(x13 * lp)],
+                [x4 * mp, -(x13 * mp)],
+                [-(0.5 * x17 / f64::sqrt(x7)), 0.0],
+                [0.5 * x5 * x11, 0.0],
                 [
                     x5
-                        + x2
-                            * ((0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                        * (0.5 * (x10 * x12)
+                            + (0.25 * (x17 / f64::powf(x7, 1.5))
                                 - 0.5
-                                    * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k
-                                + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                                    * ((0.5 * (x5 / f64::sqrt(x7)) - 1.0) / f64::sqrt(x7))) * k)
+                        - x9 + x12,
                     0.0,
                 ],
-                [0.0, -(x9 * mp * lp)],
+                [0.0, -(x0 * x3)],
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            power: 0.5 * x14 * x12,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x2 * x4 * u1 * u1,
-                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.5 * x14 * x11,
+                u1 * (0.5 * (x5 * x10) + 1.0) * x12,
                 0.0,
             ],
         }
@@ -2260,23 +2251,22 @@ pub mod reduced_volterra {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = mp * f64::cos(th) * lp;
-        let x1 = 2.0 * x + 2.0 * L0;
-        let x2 = -x - L0;
-        let x3 = 1.0 / x2;
-        let x4 = x2 * x2;
-        let x5 = f64::sin(th);
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
+        let x2 = 2.0 * x + 2.0 * L0;
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = c_ * (1.0 / (-x3)) * u1;
+        let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x0], [x0, mp * lp * lp]],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x1
-                    * (0.5 * (c_ * x3 * u1)
-                        - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
-                    + u2 * u2 * x5 * mp * lp,
-                -(x5 * g * mp * lp),
+                x2 * (0.5 * x5 - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                    + x6 * u2 * u2,
+                -(x6 * g),
             ],
-            power: 0.5 * x1 * c_ * x3 * u1 * u1,
+            power: 0.5 * x2 * u1 * x5,
             checks: [],
         }
     }
@@ -2423,51 +2413,46 @@ pub mod reduced_volterra {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
+        let x0 = mp * lp;
+        let x1 = x0 * f64::cos(th);
         let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * u1;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = -(x9 * mp * lp);
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = f64::sqrt(x4) - L0;
+        let x6 = x5 * k / f64::sqrt(x4);
+        let x7 = 1.0 / (-x3);
+        let x8 = c_ * x7;
+        let x9 = x8 * u1;
+        let x10 = x0 * f64::sin(th);
+        let x11 = u2 * u2;
+        let x12 = u1 * x9;
+        let x13 = -x10;
         Derivatives {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x1], [x1, x0 * lp]],
+            force: [x2 * (0.5 * x9 - 0.5 * x6) + x10 * x11, -(x10 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
                 [[0.0, 0.0], [0.0, 0.0]],
-                [[0.0, x10], [x10, 0.0]],
+                [[0.0, x13], [x13, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
             ],
             d_force: [
                 [
-                    x5
-                        + x2
-                            * (x2 * (0.25 * (x7 / f64::powf(x6, 1.5)) - 0.25 * (x4 * x4))
-                                * k + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                    x2
+                        * (0.5 * (x7 * x9)
+                            + x2 * (0.25 * (x5 / f64::powf(x4, 1.5)) - 0.25 * (x7 * x7))
+                                * k) - x6 + x9,
                     0.0,
                 ],
-                [u2 * u2 * mp * x0 * lp, -(g * mp * x0 * lp)],
-                [0.5 * x2 * c_ * x4, 0.0],
-                [2.0 * u2 * x9 * mp * lp, 0.0],
+                [x11 * x1, -(g * x1)],
+                [0.5 * x2 * x8, 0.0],
+                [2.0 * x10 * u2, 0.0],
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
-            d_power: [
-                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
-                0.0,
-                x2 * c_ * x4 * u1,
-                0.0,
-            ],
+            power: 0.5 * x2 * x12,
+            d_power: [x12 * (0.5 * (x2 * x7) + 1.0), 0.0, x2 * x9, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -2588,25 +2573,28 @@ pub mod reduced_volterra {
         let c_ = params.c_;
         let L0 = params.L0;
         let g = params.g;
-        let x0 = f64::cos(th);
-        let x1 = mp * x0 * lp;
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = -x - L0;
-        let x4 = 1.0 / x3;
-        let x5 = c_ * x4 * u1;
-        let x6 = x3 * x3;
-        let x7 = f64::sqrt(x6) - L0;
-        let x8 = x7 * k / f64::sqrt(x6);
-        let x9 = f64::sin(th);
-        let x10 = x0 * lp;
-        let x11 = mp * x0;
+        let x0 = mp * lp;
+        let x1 = f64::cos(th);
+        let x2 = x0 * x1;
+        let x3 = f64::sin(th);
+        let x4 = x3 * (u2 * u2);
+        let x5 = 2.0 * x + 2.0 * L0;
+        let x6 = x + L0;
+        let x7 = x6 * x6;
+        let x8 = f64::sqrt(x7) - L0;
+        let x9 = x8 * k / f64::sqrt(x7);
+        let x10 = 1.0 / (-x6);
+        let x11 = u1 * x10;
+        let x12 = c_ * x11;
+        let x13 = x3 * g;
+        let x14 = x5 * u1;
+        let x15 = x1 * lp;
+        let x16 = mp * x1;
+        let x17 = x5 * x8;
         ParameterDerivatives {
             qdot: [u1, u2],
-            matrix: [[mc + mp, x1], [x1, mp * lp * lp]],
-            force: [
-                x2 * (0.5 * x5 - 0.5 * x8) + u2 * u2 * x9 * mp * lp,
-                -(x9 * g * mp * lp),
-            ],
+            matrix: [[mc + mp, x2], [x2, x0 * lp]],
+            force: [x0 * x4 + x5 * (0.5 * x12 - 0.5 * x9), -(x0 * x13)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -2619,8 +2607,8 @@ pub mod reduced_volterra {
             ],
             d_matrix: [
                 [[1.0, 0.0], [0.0, 0.0]],
-                [[1.0, x10], [x10, lp * lp]],
-                [[0.0, x11], [x11, 2.0 * mp * lp]],
+                [[1.0, x15], [x15, lp * lp]],
+                [[0.0, x16], [x16, 2.0 * x0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
                 [[0.0, 0.0], [0.0, 0.0]],
@@ -2628,29 +2616,29 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [0.0, 0.0],
-                [u2 * u2 * x9 * lp, -(x9 * g * lp)],
-                [u2 * u2 * x9 * mp, -(x9 * g * mp)],
-                [-(0.5 * x2 * x7 / f64::sqrt(x6)), 0.0],
-                [0.5 * x2 * x4 * u1, 0.0],
+                [x4 * lp, -(x13 * lp)],
+                [x4 * mp, -(x13 * mp)],
+                [-(0.5 * x17 / f64::sqrt(x7)), 0.0],
+                [0.5 * x5 * x11, 0.0],
                 [
                     x5
-                        + x2
-                            * ((0.25 * (x2 * x7 / f64::powf(x6, 1.5))
+                        * (0.5 * (x10 * x12)
+                            + (0.25 * (x17 / f64::powf(x7, 1.5))
                                 - 0.5
-                                    * ((0.5 * (x2 / f64::sqrt(x6)) - 1.0) / f64::sqrt(x6))) * k
-                                + 0.5 * (c_ * x4 * x4 * u1)) - x8,
+                                    * ((0.5 * (x5 / f64::sqrt(x7)) - 1.0) / f64::sqrt(x7))) * k)
+                        - x9 + x12,
                     0.0,
                 ],
-                [0.0, -(x9 * mp * lp)],
+                [0.0, -(x0 * x3)],
             ],
-            power: 0.5 * x2 * c_ * x4 * u1 * u1,
+            power: 0.5 * x14 * x12,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x2 * x4 * u1 * u1,
-                c_ * x4 * u1 * u1 * (0.5 * (x2 * x4) + 1.0),
+                0.5 * x14 * x11,
+                u1 * (0.5 * (x5 * x10) + 1.0) * x12,
                 0.0,
             ],
         }

@@ -287,54 +287,51 @@ pub fn energy(
     let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::cos(gamma1);
-    let x1 = f64::sin(theta);
-    let x2 = f64::cos(theta);
-    let x3 = f64::sin(psi);
-    let x4 = f64::cos(psi);
-    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
-    let x6 = f64::sin(gamma1);
-    let x7 = f64::sin(phi);
-    let x8 = Z_dot * x2 * x7;
-    let x9 = f64::cos(phi);
-    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
-    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
-    let x12 = x2 * psi_dot * x9;
-    let x13 = theta_dot * x7;
-    let x14 = x12 - x13;
-    let x15 = a_ * x14;
-    let x16 = x8 + x10 + x11 + x15;
-    let x17 = x0 * x5 + x6 * x16;
-    let x18 = x12 + gamma1_dot - x13;
-    let x19 = x0 * x16 - x5 * x6 + x18 * d;
-    let x20 = theta_dot * x9;
-    let x21 = x2 * psi_dot * x7;
-    let x22 = x20 + x21;
-    let x23 = a_ * x22;
-    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
-    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
-    let x26 = Z_dot * x2 * x9;
-    let x27 = phi_dot - x1 * psi_dot;
-    let x28 = x0 * x22 - x6 * x27;
-    let x29 = x24 - x23 + x25 + x26 - d * x28;
-    let x30 = gamma2_dot + x20 + x21;
-    let x31 = f64::sin(gamma2);
-    let x32 = f64::cos(gamma2);
-    let x33 = x23 + x24 + x25 + x26;
-    let x34 = x30 * d + x5 * x31 + x32 * x33;
-    let x35 = x31 * x27 + x32 * x14;
-    let x36 = x8 + x10 + x11 - x35 * d - x15;
-    let x37 = x5 * x32 - x33 * x31;
-    let x38 = x6 * x22 + x0 * x27;
-    let x39 = x32 * x27 - x14 * x31;
-    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
-        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
-        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
+    let x0 = f64::cos(theta);
+    let x1 = x0 * psi_dot;
+    let x2 = f64::sin(phi);
+    let x3 = f64::cos(phi);
+    let x4 = x1 * x2 + theta_dot * x3;
+    let x5 = f64::sin(theta);
+    let x6 = phi_dot - x5 * psi_dot;
+    let x7 = x1 * x3 - theta_dot * x2;
+    let x8 = f64::cos(gamma1);
+    let x9 = f64::sin(psi);
+    let x10 = x5 * x9;
+    let x11 = f64::cos(psi);
+    let x12 = x5 * x11;
+    let x13 = Z_dot * x0;
+    let x14 = Y_dot * (x10 * x2 + x11 * x3) + (X_dot * (x12 * x2 - x3 * x9) + x13 * x2);
+    let x15 = a_ * x7;
+    let x16 = x14 + x15;
+    let x17 = gamma1_dot + x7;
+    let x18 = x0 * (Y_dot * x9 + X_dot * x11) - Z_dot * x5;
+    let x19 = f64::sin(gamma1);
+    let x20 = x8 * x16 + d * x17 - x18 * x19;
+    let x21 = x8 * x18 + x19 * x16;
+    let x22 = a_ * x4;
+    let x23 = ((x2 * x9 + x12 * x3) * X_dot + Y_dot * (x10 * x3 - x11 * x2)) + x13 * x3;
+    let x24 = x8 * x4 - x19 * x6;
+    let x25 = x23 - x22 - x24 * d;
+    let x26 = f64::cos(gamma2);
+    let x27 = f64::sin(gamma2);
+    let x28 = x26 * x7 + x27 * x6;
+    let x29 = x14 - x28 * d - x15;
+    let x30 = x22 + x23;
+    let x31 = x18 * x26 - x27 * x30;
+    let x32 = gamma2_dot + x4;
+    let x33 = x26 * x30 + x18 * x27 + x32 * d;
+    let x34 = x19 * x4 + x8 * x6;
+    let x35 = x26 * x6 - x27 * x7;
+    0.5 * ((x7 * Izz - Iyz * x4 - Ixz * x6) * x7)
+        + 0.5 * ((x20 * x20 + x21 * x21 + x25 * x25) * m1)
+        + 0.5 * (m2 * (x29 * x29 + x31 * x31 + x33 * x33))
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
-        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
-        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
-            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
+        + (0.5 * (x34 * x34) + 0.5 * (x35 * x35)) * J1
+        + 0.5 * ((Ixx * x6 - Ixy * x4 - x7 * Ixz) * x6)
+        + 0.5 * ((Iyy * x4 - Ixy * x6 - Iyz * x7) * x4)
+        + (0.5 * (x24 * x24) + 0.5 * (x17 * x17) + 0.5 * (x32 * x32) + 0.5 * (x28 * x28))
+            * J2
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -372,65 +369,71 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let x0 = f64::sin(gamma2);
-    let x1 = f64::cos(gamma2);
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::sin(theta);
     let x2 = f64::cos(psi);
-    let x3 = f64::cos(theta);
-    let x4 = f64::sin(phi);
-    let x5 = f64::sin(psi);
-    let x6 = f64::sin(theta);
-    let x7 = f64::cos(phi);
-    let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
+    let x3 = f64::sin(phi);
+    let x4 = x2 * x3;
+    let x5 = f64::cos(phi);
+    let x6 = f64::sin(psi);
+    let x7 = x5 * x6;
+    let x8 = x1 * x4 - x7;
+    let x9 = f64::sin(gamma1);
+    let x10 = f64::cos(theta);
+    let x11 = x2 * x10;
+    let x12 = x0 * x8 - x9 * x11;
+    let x13 = gamma1_dot * m1;
+    let x14 = f64::sin(gamma2);
+    let x15 = m2 * x14;
+    let x16 = x9 * m1;
+    let x17 = x2 * x5;
+    let x18 = x3 * x6;
+    let x19 = x1 * x17 + x18;
+    let x20 = m2 * gamma2_dot;
+    let x21 = f64::cos(gamma2);
+    let x22 = x14 * x11 + x21 * x19;
+    let x23 = x0 * a_ + d;
+    let x24 = x12 * x23;
+    let x25 = a_ * x9;
+    let x26 = (x0 * x11 + x9 * x8) * x25;
+    let x27 = x10 * x5;
+    let x28 = x10 * x3;
+    let x29 = x1 * x9 + x0 * x28;
+    let x30 = x29 * d + a_ * x28;
+    let x31 = a_ * x14;
+    let x32 = d + x21 * a_;
+    let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
+    let x34 = x21 * x27 - x1 * x14;
+    let x35 = a_ * x27 + x34 * d;
+    let x36 = -((a_ + x0 * d) * x5);
+    let x37 = (a_ + x21 * d) * x3;
+    let x38 = m2 + m0 + m1;
+    let x39 = x1 * x7 - x4;
+    let x40 = x1 * x18 + x17;
+    let x41 = x10 * x6;
+    let x42 = (x40 * x9 + x0 * x41) * x25;
+    let x43 = x0 * x40 - x9 * x41;
+    let x44 = x43 * x23;
+    let x45 = x14 * x41 + x21 * x39;
+    let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
     [
+        d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
+            + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
+                * psi_dot
+            + theta_dot
+                * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
+            + X_dot * x38,
+        Y_dot * x38
+            + theta_dot
+                * ((x39 * x36 + (-x42 - x44) * x3) * m1 + m2 * (x40 * x37 + x46 * x5))
+            + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
+                * psi_dot
+            + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
         theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
-            + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
-        theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
-            + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
-        theta_dot
-            * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+            * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
+                + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
+            + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
+            + Z_dot * x38,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -529,188 +532,202 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma1);
-        let x5 = x0 * x1 * x2 + x3 * x4;
-        let x6 = -x5 * d - a_ * x1 * x2;
-        let x7 = x0 * a_;
-        let x8 = x7 + d;
-        let x9 = a_ * a_ * x4 * x4;
-        let x10 = f64::cos(phi);
-        let x11 = f64::sin(gamma2);
-        let x12 = f64::cos(gamma2);
-        let x13 = x12 * x1 * x10 - x3 * x11;
-        let x14 = -a_ * x1 * x10 - x13 * d;
-        let x15 = d + x12 * a_;
-        let x16 = a_ * a_ * x11 * x11 + x15 * x15;
-        let x17 = x12 * x3;
-        let x18 = -x1 * x11 * x10 - x17;
-        let x19 = x0 * x3;
-        let x20 = x4 * x1 * x2 - x19;
-        let x21 = x3 * Ixx;
-        let x22 = x1 * (-Ixy * x2 - Ixz * x10);
-        let x23 = Iyz * x10;
-        let x24 = Iyz * x2;
-        let x25 = a_ + x12 * d;
-        let x26 = Iyy * x10;
-        let x27 = x2 * Izz;
-        let x28 = -a_ - x0 * d;
-        let x29 = -x7 - d;
-        let x30 = x2
-            * (m2 * (x1 * x16 * x10 + x25 * x14) - x12 * x13 * J2 + x18 * x11 * J1
-                + (x26 + x24) * x1) - x3 * (x2 * Ixz - Ixy * x10)
-            + (x0 * J2 * x5 + x1 * (-x27 - x23) + x20 * x4 * J1
-                + (x28 * x6 + x1 * x2 * (x8 * x29 - x9)) * m1) * x10;
-        let x31 = x22 - x21 + (x0 * x20 + x12 * x18) * J1 + (x13 * x11 - x5 * x4) * J2
-            + (x4 * m1 * x6 - m2 * x11 * x14) * d;
-        let x32 = x1 * (d * x8 * m1 + J2) * x10;
-        let x33 = J2 + m2 * d * x15;
-        let x34 = x1 * x33 * x2;
-        let x35 = f64::cos(psi);
-        let x36 = f64::sin(psi);
-        let x37 = x3 * x35 * x2 - x10 * x36;
-        let x38 = x0 * x37 - x35 * x4 * x1;
-        let x39 = x37 * x4 + x0 * x35 * x1;
-        let x40 = a_ * x4 * x39;
-        let x41 = x2 * x36 + x3 * x35 * x10;
-        let x42 = x12 * x35 * x1 - x11 * x41;
-        let x43 = x35 * x1 * x11 + x12 * x41;
-        let x44 = x43 * x15 - a_ * x11 * x42;
-        let x45 = m1 * (x1 * (x38 * x8 + x40) * x10 + x41 * x6)
-            + m2 * (x1 * x44 * x2 + x37 * x14);
-        let x46 = x35 * x10 + x3 * x2 * x36;
-        let x47 = x0 * x46 - x4 * x1 * x36;
-        let x48 = x0 * x1 * x36 + x4 * x46;
-        let x49 = a_ * x4 * x48;
-        let x50 = x3 * x10 * x36 - x35 * x2;
-        let x51 = x12 * x1 * x36 - x11 * x50;
-        let x52 = x1 * x11 * x36 + x12 * x50;
-        let x53 = x52 * x15 - a_ * x51 * x11;
-        let x54 = m1 * (x1 * (x47 * x8 + x49) * x10 + x50 * x6)
-            + m2 * (x1 * x2 * x53 + x46 * x14);
-        let x55 = x0 * x0;
-        let x56 = x12 * x12;
-        let x57 = J1 - J2;
-        let x58 = ((x0 * x57 + x28 * d * m1) * x4 - Ixy) * x10
-            + x2 * ((x12 * x57 - m2 * d * x25) * x11 + Ixz);
-        let x59 = x2 * (d * x29 * m1 - J2);
-        let x60 = x33 * x10;
-        let x61 = m2 * (x44 * x10 + x37 * x25 * x2)
-            + m1 * (x2 * (x38 * x29 - x40) + x28 * x41 * x10);
-        let x62 = m2 * (x53 * x10 + x25 * x2 * x46)
-            + (x28 * x50 * x10 + (x47 * x29 - x49) * x2) * m1;
-        let x63 = m2 * (x1 * x25 * x2 * x2 + (x13 * x15 - a_ * x18 * x11) * x10)
-            + m1 * ((x5 * x29 - a_ * x20 * x4) * x2 + x28 * x1 * x10 * x10);
-        let x64 = J2 + d * d * m1;
-        let x65 = m2 * d * d + J2;
-        let x66 = d * (x4 * x41 * m1 - m2 * x37 * x11);
-        let x67 = (x4 * x50 * m1 - m2 * x11 * x46) * d;
-        let x68 = (x4 * m1 * x10 - m2 * x11 * x2) * x1 * d;
-        let x69 = x38 * d * m1;
-        let x70 = x47 * d * m1;
-        let x71 = x5 * d * m1;
-        let x72 = m2 * d * x43;
-        let x73 = m2 * d * x52;
-        let x74 = m2 * x13 * d;
-        let x75 = m2 + m0 + m1;
-        let x76 = x1 * psi_dot * x10;
-        let x77 = theta_dot * x2;
-        let x78 = x76 + gamma1_dot - x77;
-        let x79 = theta_dot * x10;
-        let x80 = x1 * psi_dot * x2;
-        let x81 = x79 + x80;
-        let x82 = x3 * psi_dot;
-        let x83 = phi_dot - x82;
-        let x84 = x4 * x81 + x0 * x83;
-        let x85 = x78 * x57 * x84;
-        let x86 = -phi_dot - x82;
-        let x87 = theta_dot * x86 * x2;
-        let x88 = x1 * psi_dot * phi_dot * x10;
-        let x89 = x87 + x88 - gamma1_dot * x83;
-        let x90 = gamma1_dot * x81;
-        let x91 = theta_dot * x1 * psi_dot;
-        let x92 = x0 * x89 + x4 * (x91 - x90);
-        let x93 = J2 * x92;
-        let x94 = x85 + x93;
-        let x95 = theta_dot * x86 * x10;
-        let x96 = x1 * psi_dot * x2 * phi_dot;
-        let x97 = gamma2_dot * x83;
-        let x98 = x76 - x77;
-        let x99 = -x98 * gamma2_dot - x91;
-        let x100 = x11 * (x96 - x95 - x97) + x12 * x99;
-        let x101 = x0 * (x90 - x91) + x89 * x4;
-        let x102 = x0 * a_ * x98 + x78 * d;
-        let x103 = x0 * x81 - x4 * x83;
-        let x104 = -a_ * x81 - d * x103;
-        let x105 = x95 - x96;
-        let x106 = x104 * x103 - x78 * x102 + a_ * (x0 * x98 * gamma1_dot + x105 * x4);
-        let x107 = a_ * x4 * x106;
-        let x108 = x105 * d - x84 * x104 + a_ * (x0 * x105 + x98 * x98 * x4);
-        let x109 = x84 * x102 - d * x92 + a_ * (-x98 * x4 * x103 - x87 - x88);
-        let x110 = Ixx * x83 - x98 * Ixz - Ixy * x81;
-        let x111 = x98 * x110;
-        let x112 = x87 + x88;
-        let x113 = Iyy * x112;
-        let x114 = x98 * Izz - Iyz * x81 - Ixz * x83;
-        let x115 = x114 * x83;
-        let x116 = Ixy * theta_dot * x1 * psi_dot;
-        let x117 = x105 * Iyz;
-        let x118 = J2 * x112;
-        let x119 = x12 * x83 - x98 * x11;
-        let x120 = x11 * x83 + x12 * x98;
-        let x121 = x119 * x57 * x120;
-        let x122 = theta_dot * x1 * psi_dot * Ixz;
+        let x0 = f64::sin(theta);
+        let x1 = f64::sin(gamma1);
+        let x2 = f64::cos(gamma1);
+        let x3 = f64::cos(theta);
+        let x4 = f64::sin(phi);
+        let x5 = x3 * x4;
+        let x6 = x0 * x1 + x2 * x5;
+        let x7 = f64::cos(phi);
+        let x8 = x7 * x7;
+        let x9 = x4 * x4;
+        let x10 = f64::sin(gamma2);
+        let x11 = f64::cos(gamma2);
+        let x12 = x3 * x7;
+        let x13 = x11 * x12 - x0 * x10;
+        let x14 = -x0 * Ixx - x3 * (Ixy * x4 + Ixz * x7);
+        let x15 = x2 * a_;
+        let x16 = x15 + d;
+        let x17 = x16 * x16;
+        let x18 = a_ * x1;
+        let x19 = x18 * x18;
+        let x20 = x17 + x19;
+        let x21 = x6 * d + a_ * x5;
+        let x22 = a_ * x10;
+        let x23 = x11 * a_;
+        let x24 = x23 + d;
+        let x25 = x22 * x22 + x24 * x24;
+        let x26 = a_ * x12 + x13 * d;
+        let x27 = x11 * x0;
+        let x28 = x10 * x12 + x27;
+        let x29 = x2 * x0;
+        let x30 = x5 * x1 - x29;
+        let x31 = Iyz * x7;
+        let x32 = Iyz * x4;
+        let x33 = a_ + x11 * d;
+        let x34 = Iyy * x7 + x32;
+        let x35 = x10 * J1;
+        let x36 = a_ + x2 * d;
+        let x37 = x4 * Izz + x31;
+        let x38 = x1 * J1;
+        let x39 = x4
+            * (m2 * (x25 * x12 - x33 * x26) + x3 * x34 - x11 * J2 * x13 - x35 * x28)
+            - x0 * (x4 * Ixz - Ixy * x7)
+            + (m1 * (x36 * x21 + x5 * (-x17 - x19)) + x2 * J2 * x6 - x3 * x37
+                + x38 * x30) * x7;
+        let x40 = x1 * m1;
+        let x41 = m2 * x10;
+        let x42 = J1 * (x2 * x30 - x11 * x28) + d * (x41 * x26 - x21 * x40)
+            + J2 * (x13 * x10 - x6 * x1) + x14;
+        let x43 = d * m1;
+        let x44 = x43 * x16;
+        let x45 = x12 * (J2 + x44);
+        let x46 = m2 * d;
+        let x47 = J2 + x46 * x24;
+        let x48 = x47 * x5;
+        let x49 = f64::cos(psi);
+        let x50 = x0 * x4;
+        let x51 = f64::sin(psi);
+        let x52 = x49 * x50 - x7 * x51;
+        let x53 = x0 * x7;
+        let x54 = x4 * x51 + x53 * x49;
+        let x55 = x49 * x3;
+        let x56 = x11 * x54 + x10 * x55;
+        let x57 = x11 * x55 - x54 * x10;
+        let x58 = x24 * x56 - x57 * x22;
+        let x59 = x2 * x52 - x1 * x55;
+        let x60 = x59 * x16;
+        let x61 = x2 * x55 + x52 * x1;
+        let x62 = x18 * x61;
+        let x63 = (x5 * x58 - x52 * x26) * m2 + m1 * ((x60 + x62) * x12 - x54 * x21);
+        let x64 = x3 * x51;
+        let x65 = x49 * x7 + x50 * x51;
+        let x66 = x2 * x65 - x1 * x64;
+        let x67 = x66 * x16;
+        let x68 = x65 * x1 + x2 * x64;
+        let x69 = x68 * x18;
+        let x70 = x53 * x51 - x49 * x4;
+        let x71 = x11 * x64 - x10 * x70;
+        let x72 = x10 * x64 + x11 * x70;
+        let x73 = x24 * x72 - x71 * x22;
+        let x74 = ((x67 + x69) * x12 - x21 * x70) * m1 + m2 * (x5 * x73 - x65 * x26);
+        let x75 = -(x36 * x7);
+        let x76 = x10 * x4;
+        let x77 = x11 * x11;
+        let x78 = x2 * x2;
+        let x79 = x33 * x4;
+        let x80 = J1 - J2;
+        let x81 = (x1 * (x2 * x80 - x36 * x43) - Ixy) * x7
+            + x4 * (x10 * (x11 * x80 - x46 * x33) + Ixz);
+        let x82 = (-J2 - x44) * x4;
+        let x83 = x47 * x7;
+        let x84 = (x54 * x75 + x4 * (-x60 - x62)) * m1 + m2 * (x52 * x79 + x58 * x7);
+        let x85 = m1 * (x75 * x70 + (-x67 - x69) * x4) + m2 * (x73 * x7 + x65 * x79);
+        let x86 = m1 * (x75 * x12 + x4 * (-x6 * x16 - x30 * x18))
+            + ((x24 * x13 + x22 * x28) * x7 + x5 * x79) * m2;
+        let x87 = x43 * d + J2;
+        let x88 = J2 + x46 * d;
+        let x89 = d * (x54 * x40 - x52 * x41);
+        let x90 = (x40 * x70 - x41 * x65) * d;
+        let x91 = x3 * d * (x40 * x7 - x41 * x4);
+        let x92 = x59 * x43;
+        let x93 = x66 * x43;
+        let x94 = x6 * x43;
+        let x95 = x46 * x56;
+        let x96 = x46 * x72;
+        let x97 = x46 * x13;
+        let x98 = m2 + m0 + m1;
+        let x99 = theta_dot * x7;
+        let x100 = x5 * psi_dot + x99;
+        let x101 = x0 * psi_dot;
+        let x102 = phi_dot - x101;
+        let x103 = x1 * x100 + x2 * x102;
+        let x104 = x80 * x103;
+        let x105 = theta_dot * x4;
+        let x106 = psi_dot * x12 - x105;
+        let x107 = x106 + gamma1_dot;
+        let x108 = x3 * psi_dot * theta_dot;
+        let x109 = gamma1_dot * x100;
+        let x110 = phi_dot + x101;
+        let x111 = psi_dot * phi_dot;
+        let x112 = x111 * x12 - x110 * x105;
+        let x113 = x112 - gamma1_dot * x102;
+        let x114 = x1 * (x108 - x109) + x2 * x113;
+        let x115 = x104 * x107 + x114 * J2;
+        let x116 = gamma2_dot * x102;
+        let x117 = x111 * x5;
+        let x118 = x110 * x99;
+        let x119 = -x117 - x118;
+        let x120 = x106 * gamma2_dot + x108;
+        let x121 = x11 * (x116 + x119) - x120 * x10;
+        let x122 = J2 * x121;
         let x123 = J2 - J1;
-        let x124 = x123 * x84 * x103;
-        let x125 = Iyy * x81 - x98 * Iyz - Ixy * x83;
-        let x126 = x125 * x83;
-        let x127 = x81 * x110;
-        let x128 = Iyz * x112;
-        let x129 = x105 * J2;
-        let x130 = x105 * Izz;
-        let x131 = theta_dot * Ixx * x1 * psi_dot;
-        let x132 = x114 * x81;
-        let x133 = x105 * Ixz;
-        let x134 = x98 * x125;
-        let x135 = Ixy * x112;
-        let x136 = gamma2_dot + x79 + x80;
-        let x137 = x123 * x119 * x136;
-        let x138 = x99 * x11 + (x95 - x96 + x97) * x12;
-        let x139 = J2 * x138;
-        let x140 = x137 + x139;
-        let x141 = -x120 * d - a_ * x98;
-        let x142 = x136 * d + x12 * a_ * x81;
-        let x143 = a_ * (-x12 * gamma2_dot * x81 - x112 * x11) - x120 * x141
-            + x142 * x136;
-        let x144 = x112 * d + x119 * x141 + a_ * (x12 * x112 + x11 * x81 * x81);
-        let x145 = x144 * x15 - a_ * x11 * x143;
-        let x146 = a_ * (x96 - x95 - x120 * x11 * x81) - x142 * x119 - x138 * d;
-        let x147 = a_ * x3 * theta_dot * theta_dot;
-        let x148 = x12 * x2;
-        let x149 = x11 * x10;
-        let x150 = (-x148 - x149) * x1;
-        let x151 = x1 * (x148 + x149);
-        let x152 = (x149 - x148) * x1;
-        let x153 = (x148 - x149) * x1;
-        let x154 = 0.25 * x150 - 0.25 * x151 - 0.25 * x152 + 0.25 * x153 - x17;
-        let x155 = x11 * x2;
-        let x156 = x12 * x10;
-        let x157 = x3 * (x155 + x156);
-        let x158 = x3 * (x156 - x155);
-        let x159 = x3 * x2;
-        let x160 = x1 * x10;
-        let x161 = x0 * (x159 + x160);
-        let x162 = x1 * x2;
-        let x163 = x3 * x10;
-        let x164 = x4 * (x162 - x163);
-        let x165 = x0 * (x160 - x159);
-        let x166 = x4 * (x163 - x162);
-        let x167 = x4 * (x162 + x163);
-        let x168 = (-x162 - x163) * x4;
-        let x169 = 0.25 * x166 - 0.25 * x164 - 0.25 * x167 + x19 + 0.25 * x168;
+        let x124 = gamma2_dot + x100;
+        let x125 = x11 * x102 - x106 * x10;
+        let x126 = x123 * x124 * x125;
+        let x127 = x122 + x126;
+        let x128 = J2 * x119;
+        let x129 = Ixx * x102 - x106 * Ixz - Ixy * x100;
+        let x130 = x129 * x100;
+        let x131 = x2 * x100 - x1 * x102;
+        let x132 = x123 * x131 * x103;
+        let x133 = Izz * x119;
+        let x134 = x108 * Ixz;
+        let x135 = Iyz * x112;
+        let x136 = Iyy * x100 - x106 * Iyz - Ixy * x102;
+        let x137 = x136 * x102;
+        let x138 = x10 * x102 + x106 * x11;
+        let x139 = x138 * x125;
+        let x140 = x106 * Izz - Iyz * x100 - Ixz * x102;
+        let x141 = J2 * x112;
+        let x142 = ((-Iyy * x112 - x106 * x129) - x80 * x139)
+            + ((x140 * x102 - Ixy * x108) + (Iyz * x119 - x141));
+        let x143 = x117 + x118;
+        let x144 = x10 * x100;
+        let x145 = x124 * d + x23 * x100;
+        let x146 = a_ * (x143 - x138 * x144) - x145 * x125 - d * x121;
+        let x147 = x138 * d + x106 * a_;
+        let x148 = x138 * x147 + x145 * x124
+            - a_ * (x112 * x10 + x11 * gamma2_dot * x100);
+        let x149 = a_ * (x11 * x112 + x144 * x100) + x112 * d - x125 * x147;
+        let x150 = x24 * x149 - x148 * x22;
+        let x151 = x140 * x100;
+        let x152 = Ixy * x112;
+        let x153 = x106 * x136;
+        let x154 = Ixz * x119;
+        let x155 = x108 * Ixx;
+        let x156 = d * x107 + x106 * x15;
+        let x157 = x106 * x1;
+        let x158 = x103 * x156 - x114 * d - a_ * (x112 + x131 * x157);
+        let x159 = a_ * x100 + x131 * d;
+        let x160 = d * x119 + a_ * (x2 * x119 + x106 * x157) + x159 * x103;
+        let x161 = x160 * x16;
+        let x162 = a_ * (x1 * x119 + x106 * x2 * gamma1_dot) - x107 * x156 - x159 * x131;
+        let x163 = x162 * x18;
+        let x164 = x10 * (x143 - x116) - x11 * x120;
+        let x165 = x113 * x1 + x2 * (x109 - x108);
+        let x166 = a_ * x0 * theta_dot * theta_dot;
+        let x167 = x11 * x4;
+        let x168 = x10 * x7;
+        let x169 = x167 + x168;
+        let x170 = (x168 - x167) * x3;
+        let x171 = (x167 - x168) * x3;
+        let x172 = -(0.5 * x169 * x3) + (0.25 * x171 - 0.25 * x170);
+        let x173 = phi_dot * phi_dot;
+        let x174 = x172 - x27;
+        let x175 = x11 * x7;
+        let x176 = x0 * (x175 - x76);
+        let x177 = (x0 * (x76 + x175) + 0.5 * x170) + 0.5 * x171;
+        let x178 = x53 + x5;
+        let x179 = x1 * (x5 - x53);
+        let x180 = x1 * (x53 - x5);
+        let x181 = -(0.5 * x178 * x1) + (0.25 * x180 - 0.25 * x179);
+        let x182 = x178 * x1;
+        let x183 = 0.5 * x182 + x2 * (x12 - x50);
+        let x184 = x2 * (x50 + x12);
+        let x185 = x181 + x29;
+        let x186 = 0.5 * x179 - 0.5 * x182;
         Assembly {
             qdot: [
                 psi_dot,
@@ -724,101 +741,85 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    (x6 * x6 + (x8 * x8 + x9) * x1 * x1 * x10 * x10) * m1
-                        + m2 * (x14 * x14 + x1 * x1 * x2 * x2 * x16)
-                        + (x18 * x18 + x20 * x20) * J1
-                        + J2 * (x1 * x1 * (x10 * x10 + x2 * x2) + x13 * x13 + x5 * x5)
-                        - x3 * (x22 - x21)
-                        + x1
-                            * (((Iyy * x2 - x23) * x1 + x3 * Ixy) * x2
-                                + (x1 * (Izz * x10 - x24) + x3 * Ixz) * x10),
-                    x30,
-                    x31,
-                    x32,
-                    x34,
+                    J2 * (x6 * x6 + x3 * x3 * (x8 + x9) + x13 * x13) - x0 * x14
+                        + m1 * (x20 * x12 * x12 + x21 * x21)
+                        + m2 * (x5 * x5 * x25 + x26 * x26) + (x28 * x28 + x30 * x30) * J1
+                        + x3
+                            * (((Iyy * x4 - x31) * x3 + x0 * Ixy) * x4
+                                + (x3 * (Izz * x7 - x32) + x0 * Ixz) * x7),
+                    x39,
+                    x42,
                     x45,
-                    x54,
-                    0.0,
-                ],
-                [
-                    x30,
-                    J2 * ((x55 + 1.0) * x10 * x10 + (x56 + 1.0) * x2 * x2)
-                        + (x4 * x4 * x10 * J1 + x26 + x24) * x10
-                        + (x16 * x10 * x10 + x25 * x25 * x2 * x2) * m2
-                        + x2 * (x27 + x23 + x11 * x11 * x2 * J1)
-                        + ((x9 + x29 * x29) * x2 * x2 + x28 * x28 * x10 * x10) * m1,
-                    x58,
-                    x59,
-                    x60,
-                    x61,
-                    x62,
+                    x48,
                     x63,
+                    x74,
+                    0.0,
                 ],
                 [
-                    x31,
-                    x58,
-                    Ixx + x64 * x4 * x4 + (x55 + x56) * J1 + x11 * x11 * x65,
-                    0.0,
-                    0.0,
-                    x66,
-                    x67,
-                    x68,
+                    x39,
+                    (x20 * x9 + x75 * x75) * m1 + (x38 * x1 * x7 + x34) * x7
+                        + x4 * (x76 * x35 + x37)
+                        + J2 * ((x77 + 1.0) * x9 + x8 * (x78 + 1.0))
+                        + m2 * (x79 * x79 + x8 * x25),
+                    x81,
+                    x82,
+                    x83,
+                    x84,
+                    x85,
+                    x86,
                 ],
-                [x32, x59, 0.0, x64, 0.0, x69, x70, x71],
-                [x34, x60, 0.0, 0.0, x65, x72, x73, x74],
-                [x45, x61, x66, x69, x72, x75, 0.0, 0.0],
-                [x54, x62, x67, x70, x73, 0.0, x75, 0.0],
-                [0.0, x63, x68, x71, x74, 0.0, 0.0, x75],
+                [
+                    x42,
+                    x81,
+                    x87 * x1 * x1 + Ixx + x88 * x10 * x10 + (x78 + x77) * J1,
+                    0.0,
+                    0.0,
+                    x89,
+                    x90,
+                    x91,
+                ],
+                [x45, x82, 0.0, x87, 0.0, x92, x93, x94],
+                [x48, x83, 0.0, 0.0, x88, x95, x96, x97],
+                [x63, x84, x89, x92, x95, x98, 0.0, 0.0],
+                [x74, x85, x90, x93, x96, 0.0, x98, 0.0],
+                [0.0, x86, x91, x94, x97, 0.0, 0.0, x98],
             ],
             force: [
-                (-x18 * x100 - x20 * x101) * J1 - x94 * x5
-                    - ((x107 + x108 * x8) * x1 * x10 + x109 * x6) * m1
-                    + x1
-                        * (x2 * (x115 - x111 - x113 - x116 + x117 - x118 - x121)
-                            + (x127 - x122 - x124 - x126 + x128 - x129 - x130) * x10)
-                    + (x132 - x131 - x133 - x134 - x135) * x3 - x140 * x13
-                    - m2 * (x145 * x1 * x2 + x146 * x14),
-                x2
-                    * (x122 - x100 * x11 * J1 + x124 + x126 + x12 * x140 - x127 - x128
-                        + x129 + x130)
-                    - (x2 * (x108 * x29 - x107) + x109 * x28 * x10) * m1
-                    - m2 * (x145 * x10 + x146 * x25 * x2)
-                    + (x115 - x111 - x113 - x4 * J1 * x101 - x116 - x0 * x94 + x117
-                        - x118 - x121) * x10,
-                x131 - x132 + x133 + x134 + x135 + x11 * (m2 * x146 * d - x137 - x139)
-                    + x4 * (x85 - x109 * d * m1 + x93) + (-x0 * x101 - x12 * x100) * J1,
-                x57 * x84 * x103 - x108 * d * m1 - x129,
-                x123 * x119 * x120 - x118 - m2 * x144 * d,
-                -m2 * (x144 * x43 + x37 * x146 + x42 * x143)
-                    - (x106 * x39 + x38 * x108 + x109 * x41) * m1,
-                -m2 * (x146 * x46 + x51 * x143 + x144 * x52)
-                    - (x106 * x48 + x108 * x47 + x109 * x50) * m1,
-                -m2
-                    * (((0.25 * x150 - 0.25 * x151 - 0.25 * x152 + 0.25 * x153) * phi_dot
-                        * phi_dot
-                        + (theta_dot * x154
-                            + phi_dot
-                                * (x157 - 0.5 * x150 - 0.5 * x151 + 0.5 * x152 + 0.5 * x153
-                                    - x158)) * theta_dot
-                        + gamma2_dot
-                            * (phi_dot
-                                * (0.5 * x150 - 0.5 * x151 + 0.5 * x152 - 0.5 * x153)
-                                + (-x157 - 0.5 * x150 - 0.5 * x151 - 2.0 * (x1 * x11)
-                                    - 0.5 * x152 - 0.5 * x153 - x158) * theta_dot
-                                + gamma2_dot * x154)) * d - x147)
-                    - (x147
-                        + (theta_dot
-                            * ((0.5 * x164 - x161 + x165 + 2.0 * (x4 * x1) + 0.5 * x166
-                                - 0.5 * x167 - 0.5 * x168) * gamma1_dot + theta_dot * x169
-                                + (0.5 * x164 - 0.5 * x166 - 0.5 * x167 + 0.5 * x168)
-                                    * phi_dot)
-                            + gamma1_dot
-                                * (x169 * gamma1_dot
-                                    + phi_dot
-                                        * (x161 - 0.5 * x164 + x165 - 0.5 * x166 - 0.5 * x167
-                                            - 0.5 * x168))
-                            + (0.25 * x166 - 0.25 * x164 - 0.25 * x167 + 0.25 * x168)
-                                * phi_dot * phi_dot) * d) * m1,
+                ((x130 - x128 - x132 - x133 - x134 + x135 - x137) * x7 + x142 * x4) * x3
+                    - x6 * x115 - x13 * x127 - m2 * (x5 * x150 - x146 * x26)
+                    + (x151 - x152 - x153 - x154 - x155) * x0
+                    - ((x161 + x163) * x12 - x21 * x158) * m1
+                    - (x30 * x165 - x164 * x28) * J1,
+                (x142 - x38 * x165 - x2 * x115) * x7
+                    - ((-x161 - x163) * x4 + x75 * x158) * m1
+                    + (x128 - x164 * x35 + x11 * x127 - x130 + x132 + x133 + x134 - x135
+                        + x137) * x4 - m2 * (x150 * x7 + x146 * x79),
+                (x146 * x46 - x122 - x126) * x10 + x1 * (x115 - x43 * x158) - x151 + x152
+                    - (x2 * x165 + x11 * x164) * J1 + x153 + x154 + x155,
+                x104 * x131 - x160 * x43 - x128,
+                x123 * x139 - x141 - x46 * x149,
+                -((x54 * x158 + x162 * x61 + x160 * x59) * m1
+                    + m2 * (x146 * x52 + x148 * x57 + x56 * x149)),
+                -(m1 * (x162 * x68 + x160 * x66 + x70 * x158)
+                    + m2 * (x146 * x65 + x148 * x71 + x149 * x72)),
+                -(m2
+                    * (d
+                        * (x172 * x173
+                            + gamma2_dot
+                                * ((0.5 * x170 - x169 * x3 - 0.5 * x171) * phi_dot
+                                    + gamma2_dot * x174
+                                    - theta_dot * (x176 + x177 + 2.0 * (x3 * x10)))
+                            + theta_dot * (theta_dot * x174 + phi_dot * (x177 - x176)))
+                        - x166)
+                    + (x166
+                        + d
+                            * (x173 * x181
+                                + ((x183 - 0.5 * x182 - 0.5 * x179 - 0.5 * x180 + x184)
+                                    * phi_dot + gamma1_dot * x185) * gamma1_dot
+                                + theta_dot
+                                    * ((2.0 * (x1 * x3) + x183 + 0.5 * x180 + x186 - x184)
+                                        * gamma1_dot + (x186 - 0.5 * x182 - 0.5 * x180) * phi_dot
+                                        + theta_dot * x185))) * m1),
             ],
             checks: [],
             residuals: [],
@@ -930,39 +931,53 @@ pub mod lagrange {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::sin(theta);
         let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let x3 = f64::sin(phi);
+        let x4 = x2 * x3;
+        let x5 = f64::cos(phi);
+        let x6 = f64::sin(psi);
+        let x7 = x5 * x6;
+        let x8 = x1 * x4 - x7;
+        let x9 = f64::sin(gamma1);
+        let x10 = f64::cos(theta);
+        let x11 = x2 * x10;
+        let x12 = x0 * x8 - x9 * x11;
+        let x13 = gamma1_dot * m1;
+        let x14 = f64::sin(gamma2);
+        let x15 = m2 * x14;
+        let x16 = x9 * m1;
+        let x17 = x2 * x5;
+        let x18 = x3 * x6;
+        let x19 = x1 * x17 + x18;
+        let x20 = m2 * gamma2_dot;
+        let x21 = f64::cos(gamma2);
+        let x22 = x14 * x11 + x21 * x19;
+        let x23 = x0 * a_ + d;
+        let x24 = x12 * x23;
+        let x25 = a_ * x9;
+        let x26 = (x0 * x11 + x9 * x8) * x25;
+        let x27 = x10 * x5;
+        let x28 = x10 * x3;
+        let x29 = x1 * x9 + x0 * x28;
+        let x30 = x29 * d + a_ * x28;
+        let x31 = a_ * x14;
+        let x32 = d + x21 * a_;
+        let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
+        let x34 = x21 * x27 - x1 * x14;
+        let x35 = a_ * x27 + x34 * d;
+        let x36 = -((a_ + x0 * d) * x5);
+        let x37 = (a_ + x21 * d) * x3;
+        let x38 = m2 + m0 + m1;
+        let x39 = x1 * x7 - x4;
+        let x40 = x1 * x18 + x17;
+        let x41 = x10 * x6;
+        let x42 = (x40 * x9 + x0 * x41) * x25;
+        let x43 = x0 * x40 - x9 * x41;
+        let x44 = x43 * x23;
+        let x45 = x14 * x41 + x21 * x39;
+        let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -994,31 +1009,24 @@ pub mod lagrange {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
+            d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
+                + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
+                    * psi_dot
+                + theta_dot
+                    * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
+                + X_dot * x38,
+            Y_dot * x38
+                + theta_dot
+                    * ((x39 * x36 + (-x42 - x44) * x3) * m1
+                        + m2 * (x40 * x37 + x46 * x5))
+                + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
+                    * psi_dot
+                + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
-                + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
-            theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
+                    + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
+                + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
+                + Z_dot * x38,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1124,859 +1132,879 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = f64::cos(gamma1);
-        let x1 = f64::cos(theta);
-        let x2 = f64::sin(phi);
-        let x3 = f64::sin(theta);
-        let x4 = f64::sin(gamma1);
-        let x5 = x3 * x4;
-        let x6 = x0 * x1 * x2 + x5;
-        let x7 = x6 * d;
-        let x8 = a_ * x1 * x2;
-        let x9 = -x7 - x8;
-        let x10 = x0 * a_;
-        let x11 = x10 + d;
-        let x12 = a_ * a_ * x4 * x4;
-        let x13 = f64::cos(phi);
-        let x14 = a_ * x1 * x13;
-        let x15 = f64::sin(gamma2);
-        let x16 = x3 * x15;
-        let x17 = f64::cos(gamma2);
-        let x18 = x17 * x1 * x13;
-        let x19 = x18 - x16;
-        let x20 = x19 * d;
-        let x21 = -x14 - x20;
-        let x22 = a_ * a_ * x15 * x15;
-        let x23 = x17 * a_;
-        let x24 = d + x23;
-        let x25 = x24 * x24;
-        let x26 = x22 + x25;
-        let x27 = x17 * x3;
-        let x28 = -x1 * x15 * x13 - x27;
-        let x29 = x4 * x1 * x2;
-        let x30 = x0 * x3;
-        let x31 = x29 - x30;
-        let x32 = x13 * x13;
-        let x33 = x2 * x2;
-        let x34 = x3 * Ixx;
-        let x35 = Ixy * x2;
-        let x36 = Ixz * x13;
-        let x37 = -x35 - x36;
-        let x38 = x1 * x37;
-        let x39 = x38 - x34;
-        let x40 = Iyz * x13;
-        let x41 = Iyy * x2;
-        let x42 = x41 - x40;
-        let x43 = x42 * x1;
-        let x44 = x3 * Ixy;
-        let x45 = x43 + x44;
-        let x46 = x45 * x2;
-        let x47 = Izz * x13;
-        let x48 = Iyz * x2;
-        let x49 = x47 - x48;
-        let x50 = x1 * x49;
-        let x51 = x3 * Ixz;
-        let x52 = x50 + x51;
-        let x53 = x52 * x13;
-        let x54 = x17 * x19 * J2;
-        let x55 = x17 * d;
-        let x56 = a_ + x55;
-        let x57 = x56 * x21;
-        let x58 = x28 * x15 * J1;
-        let x59 = Iyy * x13;
-        let x60 = x59 + x48;
-        let x61 = x60 * x1;
-        let x62 = x2 * Ixz - Ixy * x13;
-        let x63 = x3 * x62;
-        let x64 = x0 * J2 * x6;
-        let x65 = x2 * Izz;
-        let x66 = -x65 - x40;
-        let x67 = x1 * x66;
-        let x68 = x31 * x4 * J1;
-        let x69 = x0 * d;
-        let x70 = -a_ - x69;
-        let x71 = x70 * x9;
-        let x72 = -x10 - d;
-        let x73 = x11 * x72;
-        let x74 = x2 * (m2 * (x1 * x26 * x13 + x57) - x54 + x58 + x61) - x63
-            + (x64 + x67 + x68 + (x71 + x1 * x2 * (x73 - x12)) * m1) * x13;
-        let x75 = x38 - x34 + (x0 * x31 + x17 * x28) * J1 + (x19 * x15 - x6 * x4) * J2
-            + (x4 * m1 * x9 - m2 * x15 * x21) * d;
-        let x76 = x1 * (d * x11 * m1 + J2) * x13;
-        let x77 = J2 + m2 * d * x24;
-        let x78 = x1 * x77 * x2;
-        let x79 = f64::cos(psi);
-        let x80 = f64::sin(psi);
-        let x81 = x13 * x80;
-        let x82 = x3 * x79 * x2;
-        let x83 = x82 - x81;
-        let x84 = x0 * x83 - x79 * x4 * x1;
-        let x85 = x83 * x4;
-        let x86 = x0 * x79 * x1;
-        let x87 = x85 + x86;
-        let x88 = a_ * x4 * x87;
-        let x89 = x2 * x80 + x3 * x79 * x13;
-        let x90 = x17 * x79 * x1 - x15 * x89;
-        let x91 = a_ * x15 * x90;
-        let x92 = x79 * x1 * x15;
-        let x93 = x17 * x89;
-        let x94 = x92 + x93;
-        let x95 = x94 * x24 - x91;
-        let x96 = m1 * (x1 * (x84 * x11 + x88) * x13 + x89 * x9)
-            + m2 * (x1 * x95 * x2 + x83 * x21);
-        let x97 = x79 * x13;
-        let x98 = x3 * x2 * x80;
-        let x99 = x97 + x98;
-        let x100 = x4 * x1 * x80;
-        let x101 = x0 * x99 - x100;
-        let x102 = x0 * x1 * x80;
-        let x103 = x4 * x99;
-        let x104 = x102 + x103;
-        let x105 = a_ * x4 * x104;
-        let x106 = x79 * x2;
-        let x107 = x3 * x13 * x80;
-        let x108 = x107 - x106;
-        let x109 = x17 * x1 * x80;
-        let x110 = x109 - x15 * x108;
-        let x111 = a_ * x110 * x15;
-        let x112 = x1 * x15 * x80;
-        let x113 = x17 * x108;
-        let x114 = x112 + x113;
-        let x115 = x114 * x24 - x111;
-        let x116 = m1 * (x1 * (x101 * x11 + x105) * x13 + x108 * x9)
-            + m2 * (x1 * x2 * x115 + x99 * x21);
-        let x117 = x0 * x0;
-        let x118 = x17 * x17;
-        let x119 = x26 * x13 * x13;
-        let x120 = x72 * x72;
-        let x121 = x12 + x120;
-        let x122 = x121 * x2 * x2;
-        let x123 = J1 - J2;
-        let x124 = x0 * x123 + x70 * d * m1;
-        let x125 = x17 * x123 - m2 * d * x56;
-        let x126 = x125 * x15 + Ixz;
-        let x127 = (x124 * x4 - Ixy) * x13 + x2 * x126;
-        let x128 = d * x72 * m1 - J2;
-        let x129 = x2 * x128;
-        let x130 = x77 * x13;
-        let x131 = x95 * x13;
-        let x132 = x84 * x72;
-        let x133 = x132 - x88;
-        let x134 = x2 * x133;
-        let x135 = m2 * (x131 + x83 * x56 * x2) + m1 * (x134 + x70 * x89 * x13);
-        let x136 = x115 * x13;
-        let x137 = x101 * x72;
-        let x138 = x137 - x105;
-        let x139 = x138 * x2;
-        let x140 = m2 * (x136 + x56 * x2 * x99) + (x70 * x108 * x13 + x139) * m1;
-        let x141 = a_ * x28 * x15;
-        let x142 = x19 * x24;
-        let x143 = a_ * x31 * x4;
-        let x144 = x6 * x72;
-        let x145 = m2 * (x1 * x56 * x2 * x2 + (x142 - x141) * x13)
-            + m1 * ((x144 - x143) * x2 + x70 * x1 * x13 * x13);
-        let x146 = d * d * m1;
-        let x147 = J2 + x146;
-        let x148 = m2 * d * d;
-        let x149 = x148 + J2;
-        let x150 = d * (x4 * x89 * m1 - m2 * x83 * x15);
-        let x151 = (x4 * x108 * m1 - m2 * x15 * x99) * d;
-        let x152 = x4 * m1 * x13;
-        let x153 = m2 * x15 * x2;
-        let x154 = x152 - x153;
-        let x155 = x154 * x1 * d;
-        let x156 = x84 * d * m1;
-        let x157 = x101 * d * m1;
-        let x158 = x6 * d * m1;
-        let x159 = m2 * d * x94;
-        let x160 = m2 * d * x114;
-        let x161 = m2 * x19 * d;
-        let x162 = m2 + m0 + m1;
-        let x163 = x1 * psi_dot * x13;
-        let x164 = theta_dot * x2;
-        let x165 = x163 + gamma1_dot - x164;
-        let x166 = theta_dot * x13;
-        let x167 = x1 * psi_dot * x2;
-        let x168 = x166 + x167;
-        let x169 = x4 * x168;
-        let x170 = x3 * psi_dot;
-        let x171 = phi_dot - x170;
-        let x172 = x0 * x171;
-        let x173 = x169 + x172;
-        let x174 = x165 * x123 * x173;
-        let x175 = -phi_dot - x170;
-        let x176 = theta_dot * x175 * x2;
-        let x177 = x1 * psi_dot * phi_dot * x13;
-        let x178 = gamma1_dot * x171;
-        let x179 = x176 + x177 - x178;
-        let x180 = gamma1_dot * x168;
-        let x181 = theta_dot * x1 * psi_dot;
-        let x182 = x181 - x180;
-        let x183 = x0 * x179 + x4 * x182;
-        let x184 = J2 * x183;
-        let x185 = x174 + x184;
-        let x186 = theta_dot * x175 * x13;
-        let x187 = x1 * psi_dot * x2 * phi_dot;
-        let x188 = gamma2_dot * x171;
-        let x189 = x187 - x186 - x188;
-        let x190 = x163 - x164;
-        let x191 = x190 * gamma2_dot;
-        let x192 = -x191 - x181;
-        let x193 = x15 * x189 + x17 * x192;
-        let x194 = x0 * (x180 - x181) + x179 * x4;
-        let x195 = x0 * a_ * x190;
-        let x196 = x165 * d;
-        let x197 = x195 + x196;
-        let x198 = x165 * x197;
-        let x199 = a_ * x168;
-        let x200 = x0 * x168 - x4 * x171;
-        let x201 = d * x200;
-        let x202 = -x199 - x201;
-        let x203 = x202 * x200;
-        let x204 = x186 - x187;
-        let x205 = x204 * x4;
-        let x206 = x0 * x190 * gamma1_dot + x205;
-        let x207 = a_ * x206;
-        let x208 = x203 - x198 + x207;
-        let x209 = a_ * x4 * x208;
-        let x210 = x204 * d;
-        let x211 = x173 * x202;
-        let x212 = x0 * x204;
-        let x213 = a_ * (x212 + x190 * x190 * x4);
-        let x214 = x210 - x211 + x213;
-        let x215 = x173 * x197 - d * x183 + a_ * (-x190 * x4 * x200 - x176 - x177);
-        let x216 = Ixx * x171 - x190 * Ixz - Ixy * x168;
-        let x217 = x190 * x216;
-        let x218 = x176 + x177;
-        let x219 = Iyy * x218;
-        let x220 = Iyz * x168;
-        let x221 = Ixz * x171;
-        let x222 = x190 * Izz;
-        let x223 = x222 - x220 - x221;
-        let x224 = x223 * x171;
-        let x225 = Ixy * theta_dot * x1 * psi_dot;
-        let x226 = x204 * Iyz;
-        let x227 = J2 * x218;
-        let x228 = x17 * x171 - x190 * x15;
-        let x229 = x15 * x171;
-        let x230 = x17 * x190;
-        let x231 = x229 + x230;
-        let x232 = x228 * x123 * x231;
-        let x233 = theta_dot * x1 * psi_dot * Ixz;
-        let x234 = J2 - J1;
-        let x235 = x234 * x173 * x200;
-        let x236 = x190 * Iyz;
-        let x237 = Ixy * x171;
-        let x238 = Iyy * x168 - x236 - x237;
-        let x239 = x238 * x171;
-        let x240 = x168 * x216;
-        let x241 = Iyz * x218;
-        let x242 = x204 * J2;
-        let x243 = x204 * Izz;
-        let x244 = theta_dot * Ixx * x1 * psi_dot;
-        let x245 = x223 * x168;
-        let x246 = x204 * Ixz;
-        let x247 = x190 * x238;
-        let x248 = Ixy * x218;
-        let x249 = x245 - x244 - x246 - x247 - x248;
-        let x250 = gamma2_dot + x166 + x167;
-        let x251 = x234 * x228 * x250;
-        let x252 = x192 * x15 + (x186 - x187 + x188) * x17;
-        let x253 = J2 * x252;
-        let x254 = x251 + x253;
-        let x255 = x231 * d;
-        let x256 = a_ * x190;
-        let x257 = -x255 - x256;
-        let x258 = x218 * x15;
-        let x259 = x250 * d;
-        let x260 = x17 * a_ * x168;
-        let x261 = x259 + x260;
-        let x262 = a_ * (-x17 * gamma2_dot * x168 - x258) - x231 * x257 + x261 * x250;
-        let x263 = a_ * x15 * x262;
-        let x264 = x218 * d;
-        let x265 = x228 * x257;
-        let x266 = x17 * x218;
-        let x267 = a_ * (x266 + x15 * x168 * x168);
-        let x268 = x264 + x265 + x267;
-        let x269 = x268 * x24 - x263;
-        let x270 = a_ * (x187 - x186 - x231 * x15 * x168) - x261 * x228 - x252 * d;
-        let x271 = x214 * x72;
-        let x272 = x2 * (x271 - x209);
-        let x273 = x193 * x15 * J1;
-        let x274 = x17 * x254;
-        let x275 = x269 * x13;
-        let x276 = x4 * J1 * x194;
-        let x277 = x0 * x185;
-        let x278 = m2 * x270 * d;
-        let x279 = x215 * d * m1;
-        let x280 = -m2 * (x268 * x94 + x83 * x270 + x90 * x262)
-            - (x208 * x87 + x84 * x214 + x215 * x89) * m1;
-        let x281 = a_ * x3 * theta_dot * theta_dot;
-        let x282 = x17 * x2;
-        let x283 = x15 * x13;
-        let x284 = -x282 - x283;
-        let x285 = x284 * x1;
-        let x286 = x282 + x283;
-        let x287 = x1 * x286;
-        let x288 = x283 - x282;
-        let x289 = x288 * x1;
-        let x290 = x282 - x283;
-        let x291 = x290 * x1;
-        let x292 = 0.25 * x285 - 0.25 * x287 - 0.25 * x289 + 0.25 * x291 - x27;
-        let x293 = x15 * x2;
-        let x294 = x17 * x13;
-        let x295 = x293 + x294;
-        let x296 = x3 * x295;
-        let x297 = x294 - x293;
-        let x298 = x3 * x297;
-        let x299 = x296 - 0.5 * x285 - 0.5 * x287 + 0.5 * x289 + 0.5 * x291 - x298;
-        let x300 = phi_dot * x299;
-        let x301 = 0.5 * x285 - 0.5 * x287 + 0.5 * x289 - 0.5 * x291;
-        let x302 = phi_dot * x301;
-        let x303 = x1 * x15;
-        let x304 = -x296 - 0.5 * x285 - 0.5 * x287 - 2.0 * x303 - 0.5 * x289 - 0.5 * x291
-            - x298;
-        let x305 = x304 * theta_dot;
-        let x306 = x3 * x2;
-        let x307 = x1 * x13;
-        let x308 = x306 + x307;
-        let x309 = x0 * x308;
-        let x310 = x1 * x2;
-        let x311 = x3 * x13;
-        let x312 = x310 - x311;
-        let x313 = x4 * x312;
-        let x314 = x307 - x306;
-        let x315 = x0 * x314;
-        let x316 = x4 * x1;
-        let x317 = x311 - x310;
-        let x318 = x4 * x317;
-        let x319 = x310 + x311;
-        let x320 = x4 * x319;
-        let x321 = -x310 - x311;
-        let x322 = x321 * x4;
-        let x323 = 0.5 * x313 - x309 + x315 + 2.0 * x316 + 0.5 * x318 - 0.5 * x320
-            - 0.5 * x322;
-        let x324 = x323 * gamma1_dot;
-        let x325 = 0.25 * x318 - 0.25 * x313 - 0.25 * x320 + x30 + 0.25 * x322;
-        let x326 = 0.5 * x313 - 0.5 * x318 - 0.5 * x320 + 0.5 * x322;
-        let x327 = x326 * phi_dot;
-        let x328 = x309 - 0.5 * x313 + x315 - 0.5 * x318 - 0.5 * x320 - 0.5 * x322;
-        let x329 = phi_dot * x328;
-        let x330 = -x97 - x98;
-        let x331 = x0 * x330 + x100;
-        let x332 = x4 * x330 - x102;
-        let x333 = a_ * x4 * x332;
-        let x334 = x106 - x107;
-        let x335 = x17 * x334 - x112;
-        let x336 = -x109 - x334 * x15;
-        let x337 = x335 * x24 - a_ * x336 * x15;
-        let x338 = (x1 * (x331 * x11 + x333) * x13 + x334 * x9) * m1
-            + m2 * (x337 * x1 * x2 + x330 * x21);
-        let x339 = ((x331 * x72 - x333) * x2 + x334 * x70 * x13) * m1
-            + m2 * (x337 * x13 + x56 * x2 * x330);
-        let x340 = d * (x334 * x4 * m1 - m2 * x15 * x330);
-        let x341 = d * x331 * m1;
-        let x342 = m2 * d * x335;
-        let x343 = -d - x23;
-        let x344 = x343 * x24;
-        let x345 = -x17 * x3 * x13 - x303;
-        let x346 = a_ * x3 * x13 - d * x345;
-        let x347 = x316 - x0 * x3 * x2;
-        let x348 = x0 * x1;
-        let x349 = -x3 * x4 * x2 - x348;
-        let x350 = x17 * x1;
-        let x351 = x3 * x15 * x13 - x350;
-        let x352 = a_ * x3 * x2 - d * x347;
-        let x353 = 2.0 * x73 - 2.0 * x12;
-        let x354 = Ixy * x1 + x3 * (x40 - x41);
-        let x355 = x3 * (x48 - x47) + x1 * Ixz;
-        let x356 = Ixx * x1;
-        let x357 = x35 + x36;
-        let x358 = x3 * x357;
-        let x359 = (x351 * x15 * J1 + (x3 * (x344 - x22) * x13 + x56 * x346) * m2
-            - x3 * x60 - x17 * J2 * x345) * x2 - x62 * x1
-            + (x0 * J2 * x347 - x3 * x66 + (x70 * x352 + x3 * x121 * x2) * m1
-                + x349 * x4 * J1) * x13;
-        let x360 = d * (x352 * x4 * m1 - m2 * x15 * x346) - x356
-            + (x0 * x349 + x17 * x351) * J1 + J2 * (x15 * x345 - x4 * x347) + x358;
-        let x361 = x3 * x128 * x13;
-        let x362 = m2 * d * x343 - J2;
-        let x363 = x3 * x2 * x362;
-        let x364 = x6 * x11 + x143 - x7 - x8;
-        let x365 = x142 - x141 - x14 - x20;
-        let x366 = x343 * x94;
-        let x367 = (x352 * x89 + x13 * (x364 * x79 * x1 + x3 * x133)) * m1
-            + m2 * ((x79 * x1 * x365 + x3 * (x366 + x91)) * x2 + x83 * x346);
-        let x368 = x343 * x114;
-        let x369 = m2 * (x2 * (x1 * x365 * x80 + x3 * (x111 + x368)) + x99 * x346)
-            + ((x3 * x138 + x364 * x1 * x80) * x13 + x352 * x108) * m1;
-        let x370 = x145 * x79;
-        let x371 = x145 * x80;
-        let x372 = ((x345 * x24 - x351 * a_ * x15) * x13 - x3 * x56 * x2 * x2) * m2
-            + m1 * ((x347 * x72 - a_ * x349 * x4) * x2 - x3 * x70 * x13 * x13);
-        let x373 = x154 * x79 * x1 * d;
-        let x374 = x154 * x1 * d * x80;
-        let x375 = (x153 - x152) * x3 * d;
-        let x376 = x6 * x79 * d * m1;
-        let x377 = x6 * d * m1 * x80;
-        let x378 = d * x347 * m1;
-        let x379 = m2 * x19 * x79 * d;
-        let x380 = m2 * x19 * d * x80;
-        let x381 = m2 * d * x345;
-        let x382 = theta_dot * x1 * x13;
-        let x383 = gamma2_dot * x1;
-        let x384 = x3 * x2 * phi_dot;
-        let x385 = x17 * (x384 - x382 - x383);
-        let x386 = x228 * x3 * x2;
-        let x387 = gamma2_dot * x13;
-        let x388 = x387 + theta_dot;
-        let x389 = x388 * x3 * x15;
-        let x390 = x351 * x250;
-        let x391 = (x385 - x386 + x389 + x390) * J2;
-        let x392 = (x386 - x390) * J1;
-        let x393 = x391 + x392;
-        let x394 = x17 * x388 * x3 + (x382 + x383 - x384) * x15;
-        let x395 = gamma1_dot * x2;
-        let x396 = theta_dot - x395;
-        let x397 = theta_dot * x1 * x2;
-        let x398 = x3 * phi_dot * x13;
-        let x399 = x1 * gamma1_dot - x397 - x398;
-        let x400 = x0 * x3 * x396 + x4 * x399;
-        let x401 = x384 - x382;
-        let x402 = Iyz * x401;
-        let x403 = x355 * x171;
-        let x404 = -x397 - x398;
-        let x405 = Iyy * x404;
-        let x406 = x358 - x356;
-        let x407 = x190 * x406;
-        let x408 = x223 * x1;
-        let x409 = Ixy * theta_dot;
-        let x410 = x13 * x216;
-        let x411 = x3 * (-x409 - x410);
-        let x412 = x351 * x231;
-        let x413 = x228 * x345;
-        let x414 = (-x397 - x412 - x398 - x413) * J2;
-        let x415 = (x412 + x413) * J1;
-        let x416 = x171 * x354;
-        let x417 = x401 * Izz;
-        let x418 = x406 * x168;
-        let x419 = x173 * x347;
-        let x420 = x349 * x200;
-        let x421 = (-x419 - x420) * J1;
-        let x422 = (x419 - x382 + x420 + x384) * J2;
-        let x423 = Iyz * x404;
-        let x424 = x238 * x1;
-        let x425 = theta_dot * Ixz;
-        let x426 = x2 * x216;
-        let x427 = x3 * (x426 - x425);
-        let x428 = x401 * Ixz;
-        let x429 = Ixy * x404;
-        let x430 = x190 * x354;
-        let x431 = x355 * x168;
-        let x432 = x223 * x2;
-        let x433 = theta_dot * Ixx;
-        let x434 = x238 * x13;
-        let x435 = x433 - x432 + x434;
-        let x436 = x3 * x173 * x13;
-        let x437 = x165 * x349;
-        let x438 = (x437 - x436) * J1;
-        let x439 = x0 * x399;
-        let x440 = x395 - theta_dot;
-        let x441 = x3 * x4 * x440;
-        let x442 = J2 * (x439 + x441 + x436 - x437);
-        let x443 = x438 + x442;
-        let x444 = a_ * (x382 + x15 * (x3 * x231 * x2 - x345 * x168) - x384)
-            - x228 * x3 * x2 * x343 - (x385 + x389) * d - x261 * x351;
-        let x445 = x228 * x346 + x404 * d + x351 * x257
-            + a_ * (x17 * x404 + x3 * (-2.0 * x166 - 2.0 * x167) * x15 * x2);
-        let x446 = x17 * a_ * gamma2_dot;
-        let x447 = x3 * x2 * (x446 - x259 + x250 * x343 - x260) - a_ * x404 * x15
-            - x231 * x346 - x257 * x345;
-        let x448 = a_ * (x397 + x398 + (x3 * x200 * x13 - x190 * x347) * x4)
-            + x349 * x197 - d * (x439 + x441) + x3 * x173 * x72 * x13;
-        let x449 = x0 * a_ * gamma1_dot;
-        let x450 = x195 - x165 * x72 + x196 - x449;
-        let x451 = x202 * x347 + a_ * x401 * x4 + x3 * x13 * x450 + x352 * x200;
-        let x452 = 2.0 * x164 - 2.0 * x163;
-        let x453 = x401 * d - x349 * x202 - x352 * x173
-            + a_ * (x0 * x401 + x3 * x452 * x4 * x13);
-        let x454 = x432 - x433 - x434;
-        let x455 = x215 * x1 * x13 + x31 * x208 + x214 * x6;
-        let x456 = x270 * x1 * x2 + x28 * x262 + x19 * x268;
-        let x457 = a_ * theta_dot * theta_dot * x1;
-        let x458 = x0 * x312;
-        let x459 = x0 * x319;
-        let x460 = x0 * x317;
-        let x461 = x0 * x321;
-        let x462 = x314 * x4;
-        let x463 = x308 * x4;
-        let x464 = (-0.5 * x458 - 0.5 * x459 - 0.5 * x460 - x462 - 0.5 * x461 - x463)
-            * phi_dot;
-        let x465 = 0.25 * x458 - 0.25 * x459 + 0.25 * x460 - 0.5 * x462 + x348
-            - 0.25 * x461 + 0.5 * x463;
-        let x466 = 0.5 * x458 - 0.5 * x459 - 0.5 * x460 + 0.5 * x461;
-        let x467 = x466 * phi_dot;
-        let x468 = x3 * x284;
-        let x469 = x3 * x286;
-        let x470 = x288 * x3;
-        let x471 = x1 * x297;
-        let x472 = x3 * x290;
-        let x473 = x1 * x295;
-        let x474 = (0.5 * x468 + 0.5 * x469 - 0.5 * x470 - x471 - 0.5 * x472 + x473)
-            * phi_dot;
-        let x475 = 0.25 * x469 - 0.25 * x468 - x350 + 0.25 * x470 - 0.25 * x472;
-        let x476 = 0.5 * x469 - 0.5 * x468 - 0.5 * x470 + 0.5 * x472;
-        let x477 = phi_dot * x476;
-        let x478 = x56 * x56;
-        let x479 = a_ + x69;
-        let x480 = m2 * (x1 * (x119 + x2 * x2 * (x478 - x22 + x344)) + x56 * x21 * x13)
-            + ((x122 + (x73 - x12 + x70 * x70) * x13 * x13) * x1 + x479 * x2 * x9) * m1
-            + (x28 * x15 * x13 - x31 * x4 * x2) * J1
-            + J2 * (-x17 * x19 * x13 - x0 * x6 * x2) - x358
-            + x1
-                * (((x4 * x4 * J1 + x0 * x0 * J2) * x13 + x59 - x47 + 2.0 * x48) * x13
-                    + (x65 + 2.0 * x40 + (x15 * x15 * J1 + x17 * x17 * J2) * x2 - x41)
-                        * x2);
-        let x481 = x127 * x1;
-        let x482 = x1 * x2 * x128;
-        let x483 = x1 * x77 * x13;
-        let x484 = a_ * x4 * x4;
-        let x485 = x484 - a_ + x0 * x11 - x69;
-        let x486 = x81 - x82;
-        let x487 = x17 * x24;
-        let x488 = a_ * x15 * x15;
-        let x489 = x487 + x488;
-        let x490 = x489 * x486 + x83 * x56;
-        let x491 = ((x89 * x485 * x13 + x134) * x1 + x486 * x9) * m1
-            + m2 * (x89 * x21 + (x131 + x490 * x2) * x1);
-        let x492 = x56 * x99 + x330 * x489;
-        let x493 = (x1 * (x139 + x485 * x108 * x13) + x330 * x9) * m1
-            + m2 * (x1 * (x136 + x492 * x2) + x108 * x21);
-        let x494 = x4 * x4;
-        let x495 = (Ixy + x4 * (x0 * x234 + x479 * d * m1)) * x2 + x126 * x13;
-        let x496 = x128 * x13;
-        let x497 = x2 * x362;
-        let x498 = x0 * x72;
-        let x499 = a_ - x484 + x69 + x498;
-        let x500 = ((x366 + x56 * x89 + x91) * x2 + x490 * x13) * m2
-            + ((x132 - x88 + x70 * x486) * x13 + x499 * x2 * x89) * m1;
-        let x501 = m2 * (x2 * (x111 + x56 * x108 + x368) + x492 * x13)
-            + ((x137 - x105 + x70 * x330) * x13 + x499 * x2 * x108) * m1;
-        let x502 = m2 * x2
-            * (x141 + (2.0 * a_ - x487 + 2.0 * x55 - x488) * x1 * x13 + x19 * x343)
-            + (x144 - x143 + x1 * (2.0 * a_ - x484 + 2.0 * x69 + x498) * x2) * m1 * x13;
-        let x503 = d * (x4 * m1 * x486 - m2 * x15 * x89);
-        let x504 = d * (x4 * x330 * m1 - m2 * x15 * x108);
-        let x505 = x1 * d * (-m2 * x15 * x13 - x4 * x2 * m1);
-        let x506 = x0 * d * x89 * m1;
-        let x507 = x0 * d * x108 * m1;
-        let x508 = x0 * x1 * d * m1 * x13;
-        let x509 = x17 * m2 * d * x486;
-        let x510 = x17 * m2 * d * x330;
-        let x511 = -(x17 * m2 * x1 * d * x2);
-        let x512 = -x166 - x167;
-        let x513 = theta_dot * (phi_dot + x170) * x2;
-        let x514 = x513 - x177;
-        let x515 = x17 * x514;
-        let x516 = gamma2_dot * x512 * x15;
-        let x517 = x261 * x512 * x15
-            + a_ * (x15 * (-x17 * x512 * x168 - x190 * x231) - x513 + x177)
-            - x228 * x190 * x24 - d * (x515 - x516);
-        let x518 = x15 * x257;
-        let x519 = -a_ - x55;
-        let x520 = 2.0 * x166 + 2.0 * x167;
-        let x521 = x210 + x512 * (x228 * x519 - x518)
-            + a_ * (x190 * x520 * x15 + x17 * x204);
-        let x522 = x17 * x257;
-        let x523 = x259 - x446 + x250 * x24 + x260;
-        let x524 = x512 * (-x231 * x519 - x522) + x190 * x523 - x204 * a_ * x15;
-        let x525 = x521 * x24 - a_ * x15 * x524 + x270 * x56;
-        let x526 = x512 * Izz;
-        let x527 = x526 - x236;
-        let x528 = x527 * x168;
-        let x529 = x238 * x512;
-        let x530 = x514 * Ixz;
-        let x531 = x190 * Iyy;
-        let x532 = Iyz * x512;
-        let x533 = x204 * Ixy;
-        let x534 = x190 * x4 * gamma1_dot;
-        let x535 = x512 * x173;
-        let x536 = x190 * x165 * x4;
-        let x537 = J2 * (x212 - x534 - x535 - x536);
-        let x538 = J1 * (x535 + x536);
-        let x539 = x537 + x538;
-        let x540 = 2.0 * x163 - 2.0 * x164;
-        let x541 = x4 * x202;
-        let x542 = x70 * x173;
-        let x543 = d * x514 + a_ * (x512 * x4 * x540 + x0 * x514)
-            + x190 * (-x541 - x542);
-        let x544 = x0 * x202;
-        let x545 = x70 * x200;
-        let x546 = x449 - x165 * x11 - x195 - x196;
-        let x547 = x190 * (x544 + x545) + x512 * x546 + a_ * x4 * x514;
-        let x548 = a_ * x4 * x547;
-        let x549 = x512 * x173 * x11;
-        let x550 = d * (x212 - x534);
-        let x551 = x0 * x190 * x190;
-        let x552 = a_ * ((-x512 * x200 - x551) * x4 - x186 + x187);
-        let x553 = x190 * x4 * x197;
-        let x554 = x549 - x550 + x552 + x553;
-        let x555 = -x514 * x15 - x17 * gamma2_dot * x512;
-        let x556 = x512 * (x17 * x228 * x123 + x234 * x231 * x15);
-        let x557 = Iyz * x514;
-        let x558 = x512 * x216;
-        let x559 = x204 * Iyy;
-        let x560 = x527 * x171;
-        let x561 = -x512 * Ixz - x190 * Ixy;
-        let x562 = x190 * x561;
-        let x563 = (x531 - x532) * x171;
-        let x564 = x168 * x561;
-        let x565 = J2 * x514;
-        let x566 = x514 * Izz;
-        let x567 = x190 * (x234 * x4 * x200 + x0 * x234 * x173);
-        let x568 = x228 * x190;
-        let x569 = x250 * x512 * x15;
-        let x570 = (x568 + x515 - x516 - x569) * J2;
-        let x571 = (x569 - x568) * J1;
-        let x572 = x570 + x571;
-        let x573 = x549 - x550 + x0 * x214 + x552 + x553 + x4 * x208;
-        let x574 = x17 * x268 - x15 * x262;
-        let x575 = 0.25 * x468 + 0.25 * x469 - 0.25 * x470 - 0.5 * x471 - 0.25 * x472
-            + 0.5 * x473;
-        let x576 = -0.25 * x458 - 0.25 * x459 - 0.25 * x460 - 0.5 * x462 - 0.25 * x461
-            - 0.5 * x463;
-        let x577 = x30 - x29;
-        let x578 = J2 * x577;
-        let x579 = x31 * J1;
-        let x580 = (x0 * (x578 + x579)
-            + ((d * x9 + 2.0 * (a_ * x1 * d * x2)) * x4 - x70 * d * x577) * m1
-            + x6 * x123 * x4) * x13;
-        let x581 = x0 * (d * m1 * x9 + x6 * x123) + ((-J2 - x146) * x577 - x579) * x4;
-        let x582 = -(a_ * x4 * x1 * d * m1 * x13);
-        let x583 = x0 * a_ * x87;
-        let x584 = -x85 - x86;
-        let x585 = ((x583 + x11 * x584) * x1 * x13 - d * x89 * x577) * m1;
-        let x586 = x0 * a_ * x104;
-        let x587 = -x102 - x103;
-        let x588 = (x1 * (x586 + x11 * x587) * x13 - d * x108 * x577) * m1;
-        let x589 = 2.0 * J1 - 2.0 * J2;
-        let x590 = x13 * ((J2 + x146 - J1) * x4 * x4 + x0 * x124);
-        let x591 = a_ * x4 * d * x2 * m1;
-        let x592 = (x2 * (x72 * x584 - x583) + x4 * d * x89 * x13) * m1;
-        let x593 = ((x587 * x72 - x586) * x2 + x4 * d * x108 * x13) * m1;
-        let x594 = (x4 * x1 * d * x13 * x13 + (x72 * x577 - x0 * a_ * x31) * x2) * m1;
-        let x595 = d * m1 * x584;
-        let x596 = d * x587 * m1;
-        let x597 = d * m1 * x577;
-        let x598 = -x169 - x172;
-        let x599 = x598 * x234 * x173 + x234 * x200 * x200;
-        let x600 = J1 * x194;
-        let x601 = x0 * x182 + (x178 - x176 - x177) * x4;
-        let x602 = J2 * x601;
-        let x603 = x165 * x123 * x200;
-        let x604 = -x600 - x602 - x603;
-        let x605 = x598 * (-x199 - 2.0 * x201);
-        let x606 = x0 * x208;
-        let x607 = a_ * (x551 - x205);
-        let x608 = x598 * x173 * d;
-        let x609 = x607 - x203 + x608;
-        let x610 = x197 * x200 - x0 * a_ * x190 * x200 - d * x601;
-        let x611 = x183 * J1;
-        let x612 = x607 - x198 + x608 + x207;
-        let x613 = x605 + x213;
-        let x614 = 0.25 * x460 - 0.25 * x458 - 0.25 * x459 - x5 + 0.25 * x461;
-        let x615 = x16 - x18;
-        let x616 = x615 * J1;
-        let x617 = x19 * J2;
-        let x618 = x2
-            * (x17 * x28 * x123
-                + m2 * (x15 * (-d * x21 - 2.0 * (a_ * x1 * d * x13)) - x28 * d * x56)
-                + x15 * (x616 + x617));
-        let x619 = x148 + J2 - J1;
-        let x620 = (x616 + x617 - m2 * d * x21) * x17 + x28 * x15 * x619;
-        let x621 = -(m2 * a_ * x1 * d * x15 * x2);
-        let x622 = x90 * x24 - x17 * a_ * x90;
-        let x623 = m2 * (x1 * x622 * x2 - x83 * x28 * d);
-        let x624 = x110 * x24 - x17 * a_ * x110;
-        let x625 = m2 * (x624 * x1 * x2 - x28 * d * x99);
-        let x626 = x2 * (x125 * x17 + x15 * x15 * x619);
-        let x627 = -(m2 * a_ * d * x15 * x13);
-        let x628 = (x622 * x13 - x83 * d * x15 * x2) * m2;
-        let x629 = m2 * (x624 * x13 - d * x15 * x2 * x99);
-        let x630 = m2 * ((x28 * x24 - x17 * a_ * x28) * x13 - x1 * d * x15 * x2 * x2);
-        let x631 = -(x17 * m2 * x83 * d);
-        let x632 = -(x17 * m2 * d * x99);
-        let x633 = m2 * d * x90;
-        let x634 = m2 * x110 * d;
-        let x635 = m2 * x28 * d;
-        let x636 = -x229 - x230;
-        let x637 = x228 * x228 * x123 + x123 * x231 * x636;
-        let x638 = x234 * x250 * x636;
-        let x639 = J2 * x193;
-        let x640 = (x17 * x189 + (x191 + x181) * x15) * J1;
-        let x641 = -x251 - x253 - x640;
-        let x642 = x228 * (2.0 * x255 + x256);
-        let x643 = a_ * (x512 * x15 * x168 - x266);
-        let x644 = a_ * (x17 * x168 * x168 - x258) - x228 * x228 * d + x257 * x636;
-        let x645 = a_ * (x15 * (-x642 - x264 - x265 - x643 - x267) - x17 * x262)
-            + x24 * x644;
-        let x646 = -x261 * x636 - x17 * a_ * x231 * x168 - x193 * d;
-        let x647 = x193 * J1;
-        let x648 = x642 + x264 + x265 + x643 + x267;
-        let x649 = 0.25 * x468 + 0.25 * x469 + x16 + 0.25 * x470 - 0.5 * x471
-            + 0.25 * x472 - 0.5 * x473;
-        let x650 = x396 * x4 * x1;
-        let x651 = x165 * x31;
-        let x652 = x1 * phi_dot * x13;
-        let x653 = x3 * theta_dot * x2;
-        let x654 = x652 - x653 + x3 * gamma1_dot;
-        let x655 = x0 * x654;
-        let x656 = x173 * x1 * x13;
-        let x657 = J2 * (x650 - x651 + x655 - x656);
-        let x658 = (x651 + x656) * J1;
-        let x659 = x657 + x658;
-        let x660 = x52 * x168;
-        let x661 = x1 * x2 * phi_dot;
-        let x662 = x3 * theta_dot * x13;
-        let x663 = -x661 - x662;
-        let x664 = Ixz * x663;
-        let x665 = x190 * x45;
-        let x666 = x652 - x653;
-        let x667 = Ixy * x666;
-        let x668 = gamma2_dot * x3;
-        let x669 = -x387 - theta_dot;
-        let x670 = (x661 + x668 + x662) * x15 + x17 * x669 * x1;
-        let x671 = x654 * x4 + x0 * x1 * x440;
-        let x672 = x228 * x21;
-        let x673 = a_ * (x17 * x666 + x1 * x520 * x15 * x2) + x672 + x666 * d
-            + x28 * x257;
-        let x674 = x1 * x523 * x2 - a_ * x666 * x15 - x19 * x257 - x231 * x21;
-        let x675 = x673 * x24 - a_ * x15 * x674;
-        let x676 = x669 * x1 * x15;
-        let x677 = x17 * (-x661 - x668 - x662);
-        let x678 = a_ * (x661 + (-x19 * x168 - x231 * x1 * x2) * x15 + x662) - x261 * x28
-            - x228 * x1 * x2 * x24 - (x676 + x677) * d;
-        let x679 = x200 * x9 + x6 * x202 + a_ * x4 * x663 + x1 * x546 * x13;
-        let x680 = a_ * x679 * x4;
-        let x681 = d * x663 - x31 * x202 - x173 * x9
-            + a_ * (x4 * x1 * x540 * x13 + x0 * x663);
-        let x682 = x31 * x197 - (x650 + x655) * d
-            + a_ * (x653 - x652 + (-x190 * x6 - x1 * x200 * x13) * x4)
-            + x173 * x1 * x11 * x13;
-        let x683 = x228 * x19;
-        let x684 = x28 * x231;
-        let x685 = (x683 + x684) * J1;
-        let x686 = Iyz * x663;
-        let x687 = J2 * (x652 - x683 - x653 - x684);
-        let x688 = x52 * x171;
-        let x689 = x190 * x39;
-        let x690 = x666 * Iyy;
-        let x691 = x223 * x3;
-        let x692 = x1 * (x409 + x410);
-        let x693 = Izz * x663;
-        let x694 = x45 * x171;
-        let x695 = x666 * Iyz;
-        let x696 = (x425 - x426) * x1;
-        let x697 = x168 * x39;
-        let x698 = x6 * x173;
-        let x699 = x31 * x200;
-        let x700 = (-x698 - x699) * J1;
-        let x701 = x3 * x238;
-        let x702 = J2 * (x698 + x699 - x661 - x662);
-        let x703 = x228 * x1 * x2;
-        let x704 = x250 * x28;
-        let x705 = (x676 + x677 + x703 + x704) * J2;
-        let x706 = (-x703 - x704) * J1;
-        let x707 = x705 + x706;
-        let x708 = x165 * x4 * x13;
-        let x709 = x173 * x2;
-        let x710 = (x708 - x709) * J1;
-        let x711 = gamma1_dot * x13;
-        let x712 = x1 * psi_dot;
-        let x713 = x4 * (x712 - x711);
-        let x714 = x0 * x175 * x2;
-        let x715 = J2 * (x709 - x708 + x713 + x714);
-        let x716 = x710 + x715;
-        let x717 = x66 * x168;
-        let x718 = Ixx * x1 * psi_dot;
-        let x719 = x238 * x2;
-        let x720 = x223 * x13;
-        let x721 = x190 * x60;
-        let x722 = x175 * d;
-        let x723 = x2 * (x518 + x228 * x56 + x722)
-            + a_ * (x520 * x15 * x13 + x17 * x175 * x2);
-        let x724 = (x522 - a_ * x175 * x15 - x231 * x56) * x2 + x523 * x13;
-        let x725 = x723 * x24 - a_ * x724 * x15;
-        let x726 = gamma2_dot * x2 - x712;
-        let x727 = x15 * x726;
-        let x728 = x17 * x175 * x13;
-        let x729 = a_ * ((x17 * x2 * x168 - x231 * x13) * x15 - x175 * x13)
-            - x261 * x15 * x2 - x228 * x24 * x13 - (x727 + x728) * d;
-        let x730 = x4 * x200;
-        let x731 = x0 * x173;
-        let x732 = (-x730 - x731) * J1;
-        let x733 = (x730 + x731 - phi_dot - x170) * J2;
-        let x734 = x1 * psi_dot * Ixz;
-        let x735 = x62 * x168;
-        let x736 = x175 * x49;
-        let x737 = x60 * x171;
-        let x738 = Ixy * x1 * psi_dot;
-        let x739 = x66 * x171;
-        let x740 = x190 * x62;
-        let x741 = x17 * x228;
-        let x742 = x231 * x15;
-        let x743 = J2 * (x741 - x742 - phi_dot - x170);
-        let x744 = (x742 - x741) * J1;
-        let x745 = x42 * x175;
-        let x746 = x2 * x450 + (x544 + x545 + a_ * x175 * x4) * x13;
-        let x747 = a_ * x4 * x746;
-        let x748 = a_ * (x0 * x175 * x13 + x452 * x4 * x2) + (x722 - x541 - x542) * x13;
-        let x749 = x173 * x2 * x72 - d * (x713 + x714)
-            + a_ * (x4 * (x2 * x200 - x0 * x190 * x13) - x175 * x2) + x4 * x197 * x13;
-        let x750 = x228 * x13;
-        let x751 = x250 * x15 * x2;
-        let x752 = J2 * (x727 + x750 + x728 + x751);
-        let x753 = (-x750 - x751) * J1;
-        let x754 = x752 + x753;
-        let x755 = x17 * x726 - x175 * x15 * x13;
-        let x756 = x0 * (x711 - x712) + x175 * x4 * x2;
-        let x757 = 0.5 * x318 - 0.5 * x313 - 0.5 * x320 + 2.0 * x30 + 0.5 * x322;
-        let x758 = a_ * x3 * theta_dot;
-        let x759 = 0.5 * x285 - 0.5 * x287 - 0.5 * x289 + 0.5 * x291 - 2.0 * x27;
-        let x760 = gamma2_dot - x166 - x167;
-        let x761 = J2 * x760;
-        let x762 = x234 * x250;
-        let x763 = x761 + x762;
-        let x764 = x166 - gamma2_dot + x167;
-        let x765 = x163 - gamma1_dot - x164;
-        let x766 = a_ * x512;
-        let x767 = x199 + 2.0 * x201 + x766;
-        let x768 = a_ * x767 * x4 * x4;
-        let x769 = x173 * x4;
-        let x770 = d * (-x166 - x769 - x167) + x0 * (x199 + x201 + x766);
-        let x771 = x0 * (x195 - x765 * d + x196) + a_ * x190 * (x494 - 1.0);
-        let x772 = x0 * x200;
-        let x773 = (x769 - x772) * J1;
-        let x774 = J2 * (x772 - x166 - x769 - x167);
-        let x775 = (Iyy - Ixx) * x168;
-        let x776 = x17 * x231;
-        let x777 = x228 * x15;
-        let x778 = J2 * (x163 - x776 - x777 - x164);
-        let x779 = Iyz * x520;
-        let x780 = x190 * (Iyy + Ixx - Izz);
-        let x781 = (x776 + x777) * J1;
-        let x782 = d * (x163 - x777 - x164) - x17 * x231 * d;
-        let x783 = x782 * x24 - 2.0 * (a_ * x231 * d * x15 * x15);
-        let x784 = x17 * (-x259 - d * x760 - x260)
-            + a_ * (x166 - x15 * x15 * x168 + x167);
-        let x785 = J2 * x765;
-        let x786 = x165 * x123;
-        let x787 = x785 + x786;
-        let x788 = 2.0 * x169 + 2.0 * x172;
-        let x789 = x173 * J1;
-        let x790 = (-2.0 * x169 - 2.0 * x172) * J2;
-        let x791 = x789 + x790;
-        let x792 = 2.0 * J2 - J1;
+        let x0 = f64::sin(theta);
+        let x1 = f64::sin(gamma1);
+        let x2 = x0 * x1;
+        let x3 = f64::cos(gamma1);
+        let x4 = f64::cos(theta);
+        let x5 = f64::sin(phi);
+        let x6 = x4 * x5;
+        let x7 = x2 + x3 * x6;
+        let x8 = f64::cos(phi);
+        let x9 = x8 * x8;
+        let x10 = x5 * x5;
+        let x11 = f64::sin(gamma2);
+        let x12 = x0 * x11;
+        let x13 = f64::cos(gamma2);
+        let x14 = x4 * x8;
+        let x15 = x13 * x14;
+        let x16 = x15 - x12;
+        let x17 = a_ * x14;
+        let x18 = x16 * d;
+        let x19 = x17 + x18;
+        let x20 = x13 * a_;
+        let x21 = x20 + d;
+        let x22 = x21 * x21;
+        let x23 = a_ * x11;
+        let x24 = x23 * x23;
+        let x25 = x22 + x24;
+        let x26 = x3 * a_;
+        let x27 = x26 + d;
+        let x28 = x27 * x27;
+        let x29 = a_ * x1;
+        let x30 = x29 * x29;
+        let x31 = x28 + x30;
+        let x32 = x7 * d;
+        let x33 = a_ * x6;
+        let x34 = x32 + x33;
+        let x35 = x0 * Ixx;
+        let x36 = Ixy * x5 + Ixz * x8;
+        let x37 = x4 * x36;
+        let x38 = -x35 - x37;
+        let x39 = Iyz * x8;
+        let x40 = Iyy * x5;
+        let x41 = x40 - x39;
+        let x42 = x41 * x4 + x0 * Ixy;
+        let x43 = x42 * x5;
+        let x44 = Izz * x8;
+        let x45 = Iyz * x5;
+        let x46 = x44 - x45;
+        let x47 = x4 * x46;
+        let x48 = x0 * Ixz;
+        let x49 = x47 + x48;
+        let x50 = x49 * x8;
+        let x51 = x13 * x0;
+        let x52 = x11 * x14 + x51;
+        let x53 = x6 * x1;
+        let x54 = x3 * x0;
+        let x55 = x53 - x54;
+        let x56 = x3 * x7;
+        let x57 = J2 * x56;
+        let x58 = x1 * J1;
+        let x59 = x58 * x55;
+        let x60 = x3 * d;
+        let x61 = a_ + x60;
+        let x62 = x61 * x34;
+        let x63 = -x28 - x30;
+        let x64 = x5 * Izz;
+        let x65 = x64 + x39;
+        let x66 = x4 * x65;
+        let x67 = x5 * Ixz - Ixy * x8;
+        let x68 = x0 * x67;
+        let x69 = x11 * J1;
+        let x70 = x52 * x69;
+        let x71 = x13 * x16;
+        let x72 = J2 * x71;
+        let x73 = Iyy * x8;
+        let x74 = x73 + x45;
+        let x75 = x4 * x74;
+        let x76 = x13 * d;
+        let x77 = x76 + a_;
+        let x78 = -(x77 * x19);
+        let x79 = (x57 + x59 + m1 * (x62 + x63 * x6) - x66) * x8 - x68
+            + (x75 - x70 - x72 + m2 * (x78 + x25 * x14)) * x5;
+        let x80 = -(x52 * x13);
+        let x81 = x7 * x1;
+        let x82 = m2 * x11;
+        let x83 = x1 * m1;
+        let x84 = x38 + (x3 * x55 + x80) * J1 + (x16 * x11 - x81) * J2
+            + d * (x82 * x19 - x34 * x83);
+        let x85 = d * m1;
+        let x86 = x85 * x27;
+        let x87 = x14 * (J2 + x86);
+        let x88 = m2 * d;
+        let x89 = x21 * x88;
+        let x90 = x89 + J2;
+        let x91 = x6 * x90;
+        let x92 = f64::cos(psi);
+        let x93 = x0 * x5;
+        let x94 = x92 * x93;
+        let x95 = f64::sin(psi);
+        let x96 = x8 * x95;
+        let x97 = x94 - x96;
+        let x98 = x92 * x4;
+        let x99 = x0 * x8;
+        let x100 = x5 * x95 + x99 * x92;
+        let x101 = x13 * x98 - x100 * x11;
+        let x102 = x101 * x23;
+        let x103 = x13 * x100 + x11 * x98;
+        let x104 = x21 * x103;
+        let x105 = x104 - x102;
+        let x106 = x3 * x98 + x97 * x1;
+        let x107 = x106 * x29;
+        let x108 = x3 * x97 - x1 * x98;
+        let x109 = x108 * x27;
+        let x110 = m2 * (x6 * x105 - x97 * x19)
+            + (x14 * (x107 + x109) - x100 * x34) * m1;
+        let x111 = x92 * x8 + x93 * x95;
+        let x112 = x3 * x111;
+        let x113 = x4 * x95;
+        let x114 = x1 * x113;
+        let x115 = x112 - x114;
+        let x116 = x27 * x115;
+        let x117 = x111 * x1;
+        let x118 = x3 * x113;
+        let x119 = x117 + x118;
+        let x120 = x119 * x29;
+        let x121 = x92 * x5;
+        let x122 = x99 * x95;
+        let x123 = x122 - x121;
+        let x124 = x13 * x113;
+        let x125 = x124 - x11 * x123;
+        let x126 = x125 * x23;
+        let x127 = x11 * x113;
+        let x128 = x127 + x13 * x123;
+        let x129 = x21 * x128;
+        let x130 = x129 - x126;
+        let x131 = x111 * x19;
+        let x132 = m1 * (x14 * (x116 + x120) - x34 * x123) + m2 * (x6 * x130 - x131);
+        let x133 = x77 * x5;
+        let x134 = x9 * x25;
+        let x135 = x11 * x5;
+        let x136 = x31 * x10;
+        let x137 = -(x61 * x8);
+        let x138 = x3 * x3;
+        let x139 = x13 * x13;
+        let x140 = x1 * x8;
+        let x141 = J1 - J2;
+        let x142 = x13 * x141 - x88 * x77;
+        let x143 = x11 * x142 + Ixz;
+        let x144 = x61 * x85;
+        let x145 = x3 * x141 - x144;
+        let x146 = x143 * x5 + (x1 * x145 - Ixy) * x8;
+        let x147 = -J2 - x86;
+        let x148 = x147 * x5;
+        let x149 = x90 * x8;
+        let x150 = x105 * x8;
+        let x151 = -x107 - x109;
+        let x152 = x151 * x5;
+        let x153 = m2 * (x97 * x133 + x150) + (x100 * x137 + x152) * m1;
+        let x154 = x130 * x8;
+        let x155 = x133 * x111;
+        let x156 = -x116 - x120;
+        let x157 = x5 * x156;
+        let x158 = m2 * (x154 + x155) + (x157 + x137 * x123) * m1;
+        let x159 = x21 * x16;
+        let x160 = x52 * x23;
+        let x161 = x159 + x160;
+        let x162 = x7 * x27;
+        let x163 = x55 * x29;
+        let x164 = -x162 - x163;
+        let x165 = m2 * (x6 * x133 + x161 * x8) + m1 * (x137 * x14 + x5 * x164);
+        let x166 = x85 * d;
+        let x167 = x166 + J2;
+        let x168 = x1 * x1;
+        let x169 = x11 * x11;
+        let x170 = x88 * d;
+        let x171 = J2 + x170;
+        let x172 = d * (x100 * x83 - x97 * x82);
+        let x173 = x82 * x111;
+        let x174 = d * (x83 * x123 - x173);
+        let x175 = x82 * x5;
+        let x176 = x83 * x8;
+        let x177 = d * (x176 - x175);
+        let x178 = x177 * x4;
+        let x179 = x108 * x85;
+        let x180 = x85 * x115;
+        let x181 = x7 * x85;
+        let x182 = x88 * x103;
+        let x183 = x88 * x128;
+        let x184 = x88 * x16;
+        let x185 = m2 + m0 + m1;
+        let x186 = psi_dot * x14;
+        let x187 = theta_dot * x5;
+        let x188 = x186 - x187;
+        let x189 = x4 * psi_dot;
+        let x190 = x189 * theta_dot;
+        let x191 = x188 * gamma2_dot + x190;
+        let x192 = x11 * x191;
+        let x193 = x0 * psi_dot;
+        let x194 = phi_dot + x193;
+        let x195 = -(x194 * x8);
+        let x196 = theta_dot * x195;
+        let x197 = psi_dot * phi_dot;
+        let x198 = x197 * x6;
+        let x199 = x196 - x198;
+        let x200 = phi_dot - x193;
+        let x201 = gamma2_dot * x200;
+        let x202 = x13 * (x199 + x201) - x192;
+        let x203 = J2 * x202;
+        let x204 = J2 - J1;
+        let x205 = x6 * psi_dot;
+        let x206 = theta_dot * x8;
+        let x207 = x205 + x206;
+        let x208 = gamma2_dot + x207;
+        let x209 = x204 * x208;
+        let x210 = x188 * x11;
+        let x211 = x13 * x200 - x210;
+        let x212 = x209 * x211;
+        let x213 = x203 + x212;
+        let x214 = x199 * Ixz;
+        let x215 = -(x5 * x194);
+        let x216 = theta_dot * x215;
+        let x217 = x197 * x14;
+        let x218 = x216 + x217;
+        let x219 = Ixy * x218;
+        let x220 = x188 * Iyz;
+        let x221 = Ixy * x200;
+        let x222 = Iyy * x207 - x220 - x221;
+        let x223 = x188 * x222;
+        let x224 = x188 * Izz;
+        let x225 = Iyz * x207;
+        let x226 = Ixz * x200;
+        let x227 = x224 + (-x225 - x226);
+        let x228 = x227 * x207;
+        let x229 = x190 * Ixx;
+        let x230 = x228 - x214 - x219 - x223 - x229;
+        let x231 = x3 * x207 - x1 * x200;
+        let x232 = x188 * x1;
+        let x233 = gamma1_dot * x207;
+        let x234 = x190 - x233;
+        let x235 = gamma1_dot * x200;
+        let x236 = x218 - x235;
+        let x237 = x234 * x1 + x3 * x236;
+        let x238 = x1 * x207;
+        let x239 = x3 * x200;
+        let x240 = x238 + x239;
+        let x241 = x188 + gamma1_dot;
+        let x242 = d * x241;
+        let x243 = x188 * x26;
+        let x244 = x242 + x243;
+        let x245 = x240 * x244 - a_ * (x218 + x231 * x232) - d * x237;
+        let x246 = x199 * x1;
+        let x247 = x188 * x3;
+        let x248 = x246 + gamma1_dot * x247;
+        let x249 = a_ * x248 - x244 * x241;
+        let x250 = x231 * d;
+        let x251 = a_ * x207;
+        let x252 = x250 + x251;
+        let x253 = x231 * x252;
+        let x254 = x249 - x253;
+        let x255 = x254 * x29;
+        let x256 = x199 * d;
+        let x257 = x240 * x252;
+        let x258 = x256 + x257;
+        let x259 = x3 * x199;
+        let x260 = a_ * (x188 * x232 + x259);
+        let x261 = x258 + x260;
+        let x262 = x11 * x200 + x188 * x13;
+        let x263 = d * x262;
+        let x264 = x188 * a_;
+        let x265 = x263 + x264;
+        let x266 = x13 * x218;
+        let x267 = (x218 * d - x265 * x211) + a_ * (x266 + x11 * x207 * x207);
+        let x268 = x218 * x11;
+        let x269 = x13 * x207;
+        let x270 = d * x208;
+        let x271 = x20 * x207;
+        let x272 = x270 + x271;
+        let x273 = x265 * x262;
+        let x274 = x272 * x208 - a_ * (x268 + gamma2_dot * x269) + x273;
+        let x275 = x274 * x23;
+        let x276 = x21 * x267 - x275;
+        let x277 = x11 * x262;
+        let x278 = x198 - x196;
+        let x279 = a_ * (x278 - x277 * x207) - x272 * x211 - d * x202;
+        let x280 = Ixx * x200 - x188 * Ixz - Ixy * x207;
+        let x281 = x188 * x280;
+        let x282 = x199 * Iyz;
+        let x283 = x218 * J2;
+        let x284 = Ixy * x190;
+        let x285 = x227 * x200;
+        let x286 = Iyy * x218;
+        let x287 = x141 * x262;
+        let x288 = x287 * x211;
+        let x289 = (-x283 - x284) + ((x285 - x286) - x288);
+        let x290 = (x282 - x281) + x289;
+        let x291 = x199 * J2;
+        let x292 = x199 * Izz;
+        let x293 = x280 * x207;
+        let x294 = Iyz * x218;
+        let x295 = x190 * Ixz;
+        let x296 = x204 * x240;
+        let x297 = x231 * x296;
+        let x298 = x222 * x200;
+        let x299 = x1 * x236 + x3 * (x233 - x190);
+        let x300 = x278 - x201;
+        let x301 = x11 * x300 - x13 * x191;
+        let x302 = x240 * x141;
+        let x303 = x241 * x302 + J2 * x237;
+        let x304 = x276 * x8;
+        let x305 = x3 * x303;
+        let x306 = -x305 - x58 * x299;
+        let x307 = ((x295 + x297) + (x298 - x293)) + (x292 - x294);
+        let x308 = x13 * x213 + x307;
+        let x309 = x308 - x301 * x69;
+        let x310 = -(x27 * x261);
+        let x311 = x310 - x255;
+        let x312 = x311 * x5;
+        let x313 = x303 - x85 * x245;
+        let x314 = (x88 * x279 - x212) - x203;
+        let x315 = x204 * x262;
+        let x316 = -(m2 * (x101 * x274 + x103 * x267 + x97 * x279)
+            + (x100 * x245 + x108 * x261 + x106 * x254) * m1);
+        let x317 = x111 * x279;
+        let x318 = a_ * theta_dot;
+        let x319 = x318 * x0;
+        let x320 = theta_dot * x319;
+        let x321 = x11 * x8;
+        let x322 = x13 * x5;
+        let x323 = x321 + x322;
+        let x324 = x321 - x322;
+        let x325 = x324 * x4;
+        let x326 = x322 - x321;
+        let x327 = x4 * x326;
+        let x328 = -(0.5 * x323 * x4) + (0.25 * x327 - 0.25 * x325);
+        let x329 = x328 - x51;
+        let x330 = x323 * x4;
+        let x331 = 0.5 * x325 - x330 - 0.5 * x327;
+        let x332 = x13 * x8;
+        let x333 = x135 + x332;
+        let x334 = x0 * x333 + 0.5 * x325;
+        let x335 = x332 - x135;
+        let x336 = x0 * x335;
+        let x337 = x4 * x11;
+        let x338 = x334 + x336 + 2.0 * x337 + 0.5 * x327;
+        let x339 = phi_dot * x331 - theta_dot * x338;
+        let x340 = 0.5 * x327 - 0.5 * x330;
+        let x341 = x334 - x336 + 0.5 * x330 + x340;
+        let x342 = x341 * phi_dot;
+        let x343 = phi_dot * phi_dot;
+        let x344 = x99 + x6;
+        let x345 = x6 - x99;
+        let x346 = x1 * x345;
+        let x347 = x99 - x6;
+        let x348 = x1 * x347;
+        let x349 = -(0.5 * x344 * x1) + (0.25 * x348 - 0.25 * x346);
+        let x350 = x344 * x1;
+        let x351 = -0.5 * x350 - 0.5 * x348;
+        let x352 = x14 - x93;
+        let x353 = 0.5 * x350 + x3 * x352;
+        let x354 = x93 + x14;
+        let x355 = x3 * x354;
+        let x356 = x351 - 0.5 * x346 + x353 + x355;
+        let x357 = x356 * phi_dot;
+        let x358 = x54 + x349;
+        let x359 = x351 - 0.5 * x350 + 0.5 * x346;
+        let x360 = 0.5 * x348 - 0.5 * x350;
+        let x361 = x1 * x4;
+        let x362 = x360 + 0.5 * x346 + x353 - x355 + 2.0 * x361;
+        let x363 = phi_dot * x359 + x362 * gamma1_dot;
+        let x364 = x121 - x122;
+        let x365 = x13 * x364 - x127;
+        let x366 = x364 * x11 + x124;
+        let x367 = x365 * x21 + x366 * x23;
+        let x368 = -x117 - x118;
+        let x369 = x368 * x29;
+        let x370 = x114 - x112;
+        let x371 = x27 * x370;
+        let x372 = m2 * (x131 + x6 * x367) + ((x369 + x371) * x14 - x364 * x34) * m1;
+        let x373 = m2 * (x367 * x8 - x155) + ((-x369 - x371) * x5 + x364 * x137) * m1;
+        let x374 = (x364 * x83 + x173) * d;
+        let x375 = x85 * x370;
+        let x376 = x365 * x88;
+        let x377 = Ixy * x4 + x0 * (x39 - x40);
+        let x378 = x0 * (x45 - x44) + x4 * Ixz;
+        let x379 = -2.0 * x28 - 2.0 * x30;
+        let x380 = x361 - x3 * x93;
+        let x381 = a_ * x93 - d * x380;
+        let x382 = Ixx * x4;
+        let x383 = x0 * x36;
+        let x384 = x337 + x13 * x99;
+        let x385 = x3 * x4;
+        let x386 = x1 * x93 + x385;
+        let x387 = x13 * x4;
+        let x388 = x99 * x11 - x387;
+        let x389 = d * x384 + a_ * x99;
+        let x390 = -2.0 * x22 - 2.0 * x24;
+        let x391 = -x22 - x24;
+        let x392 = x8
+            * ((x31 * x93 - x61 * x381) * m1 - x58 * x386 + x0 * x65 + x3 * J2 * x380)
+            - x67 * x4
+            + x5
+                * (x388 * x69 - x0 * x74 + m2 * (x77 * x389 + x99 * x391)
+                    + x13 * J2 * x384);
+        let x393 = x383 - x382;
+        let x394 = x393 + (-x1 * x380 - x11 * x384) * J2 + (x381 * x83 - x82 * x389) * d
+            + (x13 * x388 - x3 * x386) * J1;
+        let x395 = x147 * x99;
+        let x396 = -x89 - J2;
+        let x397 = x396 * x93;
+        let x398 = x102 - x104;
+        let x399 = x161 - x17 - x18;
+        let x400 = x162 - x32 + x163 - x33;
+        let x401 = m2 * ((x0 * x398 + x399 * x98) * x5 + x97 * x389)
+            + ((x400 * x98 + x0 * x151) * x8 + x381 * x100) * m1;
+        let x402 = x126 - x129;
+        let x403 = ((x0 * x402 + x399 * x113) * x5 + x111 * x389) * m2
+            + (x381 * x123 + (x0 * x156 + x400 * x113) * x8) * m1;
+        let x404 = x92 * x165;
+        let x405 = x165 * x95;
+        let x406 = m2 * ((-x388 * x23 - x21 * x384) * x8 - x133 * x93)
+            + ((x386 * x29 - x380 * x27) * x5 - x99 * x137) * m1;
+        let x407 = x177 * x98;
+        let x408 = x177 * x113;
+        let x409 = x0 * (x175 - x176) * d;
+        let x410 = x92 * x181;
+        let x411 = x181 * x95;
+        let x412 = x85 * x380;
+        let x413 = x92 * x184;
+        let x414 = x184 * x95;
+        let x415 = -(x88 * x384);
+        let x416 = x93 * phi_dot;
+        let x417 = theta_dot * x14;
+        let x418 = x416 - x417;
+        let x419 = Ixz * x418;
+        let x420 = x378 * x207;
+        let x421 = x99 * phi_dot;
+        let x422 = theta_dot * x6;
+        let x423 = x421 + x422;
+        let x424 = Ixy * x423;
+        let x425 = x222 * x8;
+        let x426 = theta_dot * Ixx;
+        let x427 = x5 * x227;
+        let x428 = x425 + x426 - x427;
+        let x429 = x188 * x377;
+        let x430 = x93 * x211;
+        let x431 = x388 * x208;
+        let x432 = gamma2_dot * x4;
+        let x433 = gamma2_dot * x8 + theta_dot;
+        let x434 = x13 * (x418 - x432) + x12 * x433;
+        let x435 = J2 * (x431 - x430 + x434);
+        let x436 = (x430 - x431) * J1;
+        let x437 = x435 + x436;
+        let x438 = x262 * x388 - x384 * x211;
+        let x439 = J2 * (x438 + x423);
+        let x440 = x438 * J1;
+        let x441 = x280 * x8;
+        let x442 = x441 + Ixy * theta_dot;
+        let x443 = ((x439 - x440) + (x0 * x442 - x4 * x227))
+            + ((Iyy * x423 - x188 * x393) + (x378 * x200 + Iyz * x418));
+        let x444 = x4 * x222;
+        let x445 = x200 * x377;
+        let x446 = x418 * Izz;
+        let x447 = Iyz * x423;
+        let x448 = x240 * x380;
+        let x449 = x231 * x386;
+        let x450 = x448 - x449;
+        let x451 = x450 * J1;
+        let x452 = J2 * (x450 + x418);
+        let x453 = x5 * x280;
+        let x454 = theta_dot * Ixz;
+        let x455 = x0 * (x453 - x454);
+        let x456 = x393 * x207;
+        let x457 = x240 * x99;
+        let x458 = x241 * x386;
+        let x459 = x4 * gamma1_dot - x421 - x422;
+        let x460 = gamma1_dot * x5;
+        let x461 = x460 - theta_dot;
+        let x462 = x3 * x459 + x2 * x461;
+        let x463 = J2 * (x457 + x458 + x462) + (-x457 - x458) * J1;
+        let x464 = x417 - x416;
+        let x465 = x11 * (x464 + x432) + x51 * x433;
+        let x466 = theta_dot - x460;
+        let x467 = x466 * x54 + x459 * x1;
+        let x468 = (x288 + (x286 - x285)) + (x283 + x284);
+        let x469 = a_ * (x11 * (x384 * x207 + x262 * x93) + x464) - x272 * x388
+            - d * x434 + x21 * x430;
+        let x470 = gamma2_dot * x20;
+        let x471 = x21 * x208;
+        let x472 = x93 * (x470 - x270 - x271 - x471) - x262 * x389 + x423 * x23
+            - x265 * x384;
+        let x473 = 2.0 * x205 + 2.0 * x206;
+        let x474 = a_ * (-x13 * x423 - x11 * x93 * x473) - x265 * x388 + x389 * x211
+            - d * x423;
+        let x475 = x21 * x474;
+        let x476 = -(x21 * x267);
+        let x477 = x26 * gamma1_dot;
+        let x478 = x241 * x27;
+        let x479 = x244 - x477 + x478;
+        let x480 = x29 * x418 - x252 * x380 + x381 * x231 + x99 * x479;
+        let x481 = 2.0 * x187 - 2.0 * x186;
+        let x482 = d * x418 + (x3 * x418 + x99 * x1 * x481) * a_ - x252 * x386
+            - x381 * x240;
+        let x483 = a_ * (x423 + x1 * (x231 * x99 - x188 * x380)) - x244 * x386
+            - x457 * x27 - d * x462;
+        let x484 = x427 - x425 - x426;
+        let x485 = x7 * x261 + x254 * x55 + x245 * x14;
+        let x486 = x16 * x267 + x6 * x279 - x52 * x274;
+        let x487 = x318 * theta_dot * x4;
+        let x488 = x3 * x345;
+        let x489 = x354 * x1;
+        let x490 = 0.25 * x488 + 0.5 * x489;
+        let x491 = x3 * x344;
+        let x492 = x3 * x347;
+        let x493 = 0.25 * x492 - 0.25 * x491;
+        let x494 = x352 * x1;
+        let x495 = (x490 + x493) + (0.25 * x491 - 0.5 * x494);
+        let x496 = 0.5 * x488 + x489;
+        let x497 = phi_dot * (x496 + x494 + 0.5 * x492);
+        let x498 = x385 + x495;
+        let x499 = 0.5 * x492 - 0.5 * x491;
+        let x500 = x499 + (-0.5 * x488 - 0.5 * x491);
+        let x501 = 0.5 * x488 - x491 - 0.5 * x492;
+        let x502 = x501 * phi_dot;
+        let x503 = x0 * x323;
+        let x504 = x0 * x326;
+        let x505 = x324 * x0;
+        let x506 = 0.25 * x503 + 0.25 * x505;
+        let x507 = (0.25 * x503 - 0.25 * x504) + x506;
+        let x508 = x507 - x387;
+        let x509 = 0.5 * x503 - 0.5 * x505;
+        let x510 = x4 * x333;
+        let x511 = x335 * x4;
+        let x512 = -x511 - 0.5 * x503;
+        let x513 = (x509 - 0.5 * x504 + x510 + x512) * phi_dot;
+        let x514 = x509 + 0.5 * x503 + 0.5 * x504;
+        let x515 = x514 * phi_dot;
+        let x516 = 0.5 * x503 + 0.5 * x505;
+        let x517 = (x516 + x512) + (0.5 * x504 - x510);
+        let x518 = x11 * x69;
+        let x519 = (x64 - x40) + 2.0 * x39;
+        let x520 = x1 * x5;
+        let x521 = x61 * x61;
+        let x522 = x77 * x77;
+        let x523 = (((x138 * J2 + x58 * x1) * x8 + x73 - x44 + 2.0 * x45) * x8
+            + x5 * ((J2 * x139 + x518) * x5 + x519)) * x4
+            + (-x55 * x520 - x52 * x321) * J1 - J2 * (x56 * x5 + x71 * x8)
+            + m1 * (x4 * (x136 + (x63 + x521) * x9) - x61 * x34 * x5)
+            + m2 * ((x10 * (x391 + x522) + x134) * x4 + x78 * x8) - x383;
+        let x524 = x4 * x146;
+        let x525 = x147 * x6;
+        let x526 = x90 * x14;
+        let x527 = x13 * x21;
+        let x528 = x11 * x23;
+        let x529 = x527 + x528;
+        let x530 = x96 - x94;
+        let x531 = x97 * x77 + x529 * x530;
+        let x532 = x3 * x27;
+        let x533 = x1 * x29;
+        let x534 = x8 * (x532 - a_ + x533 - x60);
+        let x535 = m2 * (x4 * (x5 * x531 + x150) - x100 * x19)
+            + m1 * (x4 * (x152 + x100 * x534) - x34 * x530);
+        let x536 = x77 * x111 - x529 * x111;
+        let x537 = (x4 * (x5 * x536 + x154) - x123 * x19) * m2
+            + m1 * (x4 * (x123 * x534 + x157) + x111 * x34);
+        let x538 = x143 * x8 + (Ixy + x1 * (x144 + x3 * x204)) * x5;
+        let x539 = x147 * x8;
+        let x540 = x396 * x5;
+        let x541 = -x532 - x533;
+        let x542 = (x61 + x541) * x5;
+        let x543 = (x100 * x542 + (x151 - x61 * x530) * x8) * m1
+            + m2 * (x531 * x8 + (x398 + x77 * x100) * x5);
+        let x544 = (x123 * x542 + (x156 + x61 * x111) * x8) * m1
+            + m2 * ((x402 + x77 * x123) * x5 + x8 * x536);
+        let x545 = m1 * (x6 * (2.0 * a_ + x541 + 2.0 * x60) + x164) * x8
+            + m2 * ((2.0 * x76 + 2.0 * a_ - x527 - x528) * x14 - x159 - x160) * x5;
+        let x546 = d * (x83 * x530 - x82 * x100);
+        let x547 = d * (-x82 * x123 - x111 * x83);
+        let x548 = -(x4 * d * (x83 * x5 + x82 * x8));
+        let x549 = x3 * x85;
+        let x550 = x549 * x100;
+        let x551 = x549 * x123;
+        let x552 = x549 * x14;
+        let x553 = x13 * x88;
+        let x554 = x553 * x530;
+        let x555 = -(x553 * x111);
+        let x556 = -(x553 * x6);
+        let x557 = x188 * Ixy - Ixz * x207;
+        let x558 = x557 * x207;
+        let x559 = x231 * x1;
+        let x560 = x188 * (x3 * x296 + x559 * x204);
+        let x561 = x188 * Iyy;
+        let x562 = x561 + x225;
+        let x563 = x562 * x200;
+        let x564 = x187 * x194;
+        let x565 = x564 - x217;
+        let x566 = x565 * J2;
+        let x567 = x565 * Izz;
+        let x568 = x13 * x211;
+        let x569 = Izz * x207;
+        let x570 = -x569 - x220;
+        let x571 = (((x204 * x277 + x141 * x568) * x207 + x565 * Iyz)
+            + (x293 - x199 * Iyy)) + (x570 * x200 + x188 * x557);
+        let x572 = x565 * x11 - x13 * gamma2_dot * x207;
+        let x573 = x77 * x211;
+        let x574 = x265 * x11;
+        let x575 = x256 - (x574 - x573) * x207 + a_ * (x210 * x473 + x13 * x199);
+        let x576 = x13 * x265;
+        let x577 = x77 * x262;
+        let x578 = x272 - x470 + x471;
+        let x579 = (-x576 - x577) * x207 - x199 * x23 + x188 * x578;
+        let x580 = x21 * x575 + x77 * x279 - x579 * x23;
+        let x581 = x21 * x211;
+        let x582 = -(x11 * x207);
+        let x583 = x13 * x565 - gamma2_dot * x582;
+        let x584 = x269 * x207;
+        let x585 = x272 * x582 - x188 * x581 - d * x583
+            + a_ * (x217 - x564 - x11 * (x188 * x262 - x584));
+        let x586 = x188 * x247;
+        let x587 = x240 * x27;
+        let x588 = x259 - gamma1_dot * x232;
+        let x589 = (a_ * (x278 - (x586 - x231 * x207) * x1) + x244 * x232)
+            + (-x587 * x207 - d * x588);
+        let x590 = x477 - x242 - x478 - x243;
+        let x591 = -x61 * x231 - x3 * x252;
+        let x592 = x565 * x29 - x590 * x207 + x188 * x591;
+        let x593 = x29 * x592;
+        let x594 = x1 * (2.0 * x186 - 2.0 * x187);
+        let x595 = x61 * x240;
+        let x596 = x1 * x252;
+        let x597 = a_ * (x3 * x565 - x594 * x207) + x565 * d - x188 * (-x595 - x596);
+        let x598 = x27 * x597;
+        let x599 = x61 * x245;
+        let x600 = x582 * x208;
+        let x601 = x188 * x211;
+        let x602 = (x583 - x600 + x601) * J2;
+        let x603 = (x600 - x601) * J1;
+        let x604 = x602 + x603;
+        let x605 = x240 * x207;
+        let x606 = x241 * x232;
+        let x607 = (x606 - x605) * J1 + J2 * (x588 + x605 - x606);
+        let x608 = x565 * Ixz;
+        let x609 = x570 * x207;
+        let x610 = x199 * Ixy;
+        let x611 = x222 * x207;
+        let x612 = x13 * x267 - x274 * x11;
+        let x613 = x589 + x3 * x261 + x254 * x1;
+        let x614 = (x496 + x499) + (0.5 * x491 - x494);
+        let x615 = 0.5 * x494 + 0.25 * x492 + x490;
+        let x616 = -0.5 * x511 - 0.25 * x503;
+        let x617 = x616 + 0.25 * x503 - 0.25 * x504 + 0.5 * x510 - 0.25 * x505;
+        let x618 = (0.5 * x503 - 0.5 * x504) + x516;
+        let x619 = x29 * x14;
+        let x620 = x54 - x53;
+        let x621 = d * x620;
+        let x622 = J2 * x620;
+        let x623 = x55 * J1;
+        let x624 = a_ * d;
+        let x625 = ((x61 * x621 + (2.0 * (x6 * x624) - x34 * d) * x1) * m1
+            + x3 * (x622 + x623) + x141 * x81) * x8;
+        let x626 = x3 * (x7 * x141 - x85 * x34) + x1 * (-x167 * x620 - x623);
+        let x627 = -(x85 * x619);
+        let x628 = x106 * x27;
+        let x629 = x106 * x26;
+        let x630 = ((x629 - x628) * x14 - x100 * x621) * m1;
+        let x631 = x26 * x119;
+        let x632 = x119 * x27;
+        let x633 = ((x631 - x632) * x14 - x123 * x621) * m1;
+        let x634 = 2.0 * J1 - 2.0 * J2;
+        let x635 = (x3 * x145 + x168 * (x167 - J1)) * x8;
+        let x636 = x5 * x29;
+        let x637 = x85 * x636;
+        let x638 = d * x140;
+        let x639 = m1 * (x100 * x638 + (x628 - x629) * x5);
+        let x640 = m1 * (x123 * x638 + (x632 - x631) * x5);
+        let x641 = (x638 * x14 + (-x26 * x55 - x27 * x620) * x5) * m1;
+        let x642 = 2.0 * J2 - 2.0 * J1;
+        let x643 = -(x106 * x85);
+        let x644 = -(x119 * x85);
+        let x645 = x85 * x620;
+        let x646 = (x235 - x216 - x217) * x1 + x3 * x234;
+        let x647 = x231 * x244 - d * x646 - x231 * x243;
+        let x648 = a_ * (x586 - x246) - x240 * x240 * d;
+        let x649 = x648 + x253;
+        let x650 = x27 * x649;
+        let x651 = 2.0 * x250 + x251;
+        let x652 = x240 * x651;
+        let x653 = x3 * x254;
+        let x654 = x141 * x241;
+        let x655 = (J2 * x646 + x299 * J1) + x654 * x231;
+        let x656 = x231 * x231;
+        let x657 = x656 * x204 - x240 * x296;
+        let x658 = x237 * J1;
+        let x659 = x648 + x249;
+        let x660 = x652 + x260;
+        let x661 = (-0.25 * x488 - 0.25 * x491) + x493;
+        let x662 = x661 - x2;
+        let x663 = J2 * x16;
+        let x664 = x12 - x15;
+        let x665 = x664 * J1;
+        let x666 = x6 * x23;
+        let x667 = -(x52 * d);
+        let x668 = x663 + x665;
+        let x669 = x5
+            * (x11 * x668 + x141 * x80
+                + m2 * (-x11 * (2.0 * (x624 * x14) - d * x19) - x77 * x667));
+        let x670 = x171 - J1;
+        let x671 = -(x52 * x11);
+        let x672 = x13 * (x88 * x19 + x668) + x670 * x671;
+        let x673 = -(x666 * x88);
+        let x674 = x101 * x21 - x101 * x20;
+        let x675 = (x674 * x6 - x97 * x667) * m2;
+        let x676 = x21 * x125 - x20 * x125;
+        let x677 = m2 * (x6 * x676 - x111 * x667);
+        let x678 = (x13 * x142 + x169 * x670) * x5;
+        let x679 = x8 * x23;
+        let x680 = -(x679 * x88);
+        let x681 = d * x135;
+        let x682 = m2 * (x674 * x8 - x97 * x681);
+        let x683 = (x676 * x8 - x111 * x681) * m2;
+        let x684 = m2 * ((x52 * x20 - x52 * x21) * x8 - x6 * x681);
+        let x685 = -(x97 * x553);
+        let x686 = x101 * x88;
+        let x687 = x88 * x125;
+        let x688 = -(x52 * x88);
+        let x689 = x301 * J2;
+        let x690 = x209 * x262;
+        let x691 = x689 - x690;
+        let x692 = x211 * x211;
+        let x693 = x692 * x141 - x287 * x262;
+        let x694 = (x13 * x300 + x192) * J1;
+        let x695 = x213 + x694;
+        let x696 = (x584 - x268) * a_ - x692 * d + x273;
+        let x697 = ((2.0 * x263 + x264) * x211 + a_ * (x582 * x207 - x266)) + x267;
+        let x698 = x21 * x696 + a_ * (-x697 * x11 - x13 * x274);
+        let x699 = x301 * d - x272 * x262 + x271 * x262;
+        let x700 = x301 * J1;
+        let x701 = (0.25 * x504 - 0.5 * x510) + (x616 + x506);
+        let x702 = x12 + x701;
+        let x703 = x240 * x14;
+        let x704 = x55 * x241;
+        let x705 = theta_dot * x93;
+        let x706 = phi_dot * x14;
+        let x707 = x706 - x705;
+        let x708 = x707 + x0 * gamma1_dot;
+        let x709 = x466 * x361 + x3 * x708;
+        let x710 = (x703 + x704) * J1 + J2 * (x709 - x703 - x704);
+        let x711 = x99 * theta_dot;
+        let x712 = x6 * phi_dot;
+        let x713 = x711 + x712;
+        let x714 = gamma2_dot * x0 + x713;
+        let x715 = -x714 * x13 - x337 * x433;
+        let x716 = x6 * x211 - x52 * x208;
+        let x717 = J2 * (x715 + x716);
+        let x718 = x716 * J1;
+        let x719 = x717 - x718;
+        let x720 = x240 * x7;
+        let x721 = x231 * x55;
+        let x722 = x720 + x721;
+        let x723 = (x722 - x711 - x712) * J2;
+        let x724 = x0 * x222;
+        let x725 = Iyz * x707;
+        let x726 = (x454 - x453) * x4;
+        let x727 = x42 * x200;
+        let x728 = x713 * Izz;
+        let x729 = x722 * J1;
+        let x730 = x38 * x207;
+        let x731 = x16 * x211;
+        let x732 = x52 * x262;
+        let x733 = x731 - x732;
+        let x734 = x733 * J1;
+        let x735 = ((-x0 * x227 - x442 * x4) + (-Iyy * x707 - x38 * x188))
+            + ((-x734 - Iyz * x713) + (x49 * x200 - (x732 - x731 + x707) * J2));
+        let x736 = x385 * x461 + x708 * x1;
+        let x737 = x714 * x11 - x387 * x433;
+        let x738 = x6 * x578 + x265 * x16 + x262 * x19 - x707 * x23;
+        let x739 = x211 * x19;
+        let x740 = d * x707 + a_ * (x6 * x11 * x473 + x13 * x707) - x739 + x52 * x265;
+        let x741 = x21 * x740 - x738 * x23;
+        let x742 = x52 * x272 - x715 * d - x6 * x581
+            + a_ * (x713 - (x6 * x262 + x16 * x207) * x11);
+        let x743 = x188 * x42;
+        let x744 = x713 * Ixz;
+        let x745 = Ixy * x707;
+        let x746 = x49 * x207;
+        let x747 = x705 - x706;
+        let x748 = x587 * x14 - d * x709 + a_ * (x747 - (x188 * x7 + x231 * x14) * x1)
+            + x55 * x244;
+        let x749 = x240 * x34 + x252 * x55 + a_ * (x594 * x14 - x3 * x713) - d * x713;
+        let x750 = x27 * x749;
+        let x751 = x590 * x14 - x7 * x252 - x231 * x34 - x713 * x29;
+        let x752 = x751 * x29;
+        let x753 = (x194 * x23 - x576 - x577) * x5 + x578 * x8;
+        let x754 = d * x194;
+        let x755 = (x573 - x574 - x754) * x5 + a_ * (x13 * x215 + x321 * x473);
+        let x756 = x21 * x755 - x753 * x23;
+        let x757 = gamma2_dot * x5 - x189;
+        let x758 = x13 * x195 + x11 * x757;
+        let x759 = a_ * (x11 * (x269 * x5 - x262 * x8) - x195) - x758 * d - x272 * x135
+            - x581 * x8;
+        let x760 = x211 * x8 + x208 * x135;
+        let x761 = x760 * J1;
+        let x762 = J2 * (x758 + x760);
+        let x763 = x762 - x761;
+        let x764 = (x591 - x29 * x194) * x8 + x479 * x5;
+        let x765 = x764 * x29;
+        let x766 = a_ * (x3 * x195 + x520 * x481) + (x595 - x754 + x596) * x8;
+        let x767 = x766 * x27;
+        let x768 = gamma1_dot * x8;
+        let x769 = x3 * x215 + x1 * (x189 - x768);
+        let x770 = x240 * x5;
+        let x771 = a_ * (x1 * (x231 * x5 - x8 * x247) - x215) - x769 * d - x770 * x27
+            + x244 * x140;
+        let x772 = x74 * x200;
+        let x773 = x67 * x207;
+        let x774 = x3 * x240;
+        let x775 = x559 + x774;
+        let x776 = -phi_dot - x193;
+        let x777 = x775 * J1;
+        let x778 = J2 * (x775 + x776) - x777;
+        let x779 = x189 * Ixz;
+        let x780 = x194 * x46;
+        let x781 = ((x453 - x189 * Ixy) + x41 * x194) + (-x200 * x65 - x188 * x67);
+        let x782 = x568 - x277;
+        let x783 = J2 * (x782 + x776);
+        let x784 = x277 - x568;
+        let x785 = x784 * J1;
+        let x786 = x3 * (x768 - x189) + x1 * x215;
+        let x787 = x13 * x757 - x195 * x11;
+        let x788 = x194 * x36;
+        let x789 = x188 * x74;
+        let x790 = x227 * x8;
+        let x791 = x189 * Ixx;
+        let x792 = x65 * x207;
+        let x793 = x5 * x222;
+        let x794 = x241 * x140;
+        let x795 = J2 * (x769 - x794 + x770) + (x794 - x770) * J1;
+        let x796 = (-0.5 * x330 - 0.5 * x325) + x340;
+        let x797 = x796 - 2.0 * x51;
+        let x798 = x360 + (-0.5 * x350 - 0.5 * x346);
+        let x799 = x798 + 2.0 * x54;
+        let x800 = x188 - gamma1_dot;
+        let x801 = x654 + J2 * x800;
+        let x802 = -x205 - x206;
+        let x803 = x802 + gamma2_dot;
+        let x804 = J2 * x803 + x209;
+        let x805 = x11 * x211;
+        let x806 = x188 - x805;
+        let x807 = d * x806 - x76 * x262;
+        let x808 = x277 * d;
+        let x809 = x807 * x21 - 2.0 * (x23 * x808);
+        let x810 = a_ * (x207 - x169 * x207) - x13 * (x272 + x803 * d);
+        let x811 = x1 * x800;
+        let x812 = x207 - gamma2_dot;
+        let x813 = x3 * x231;
+        let x814 = x240 * x1;
+        let x815 = x814 - x813;
+        let x816 = x815 * J1;
+        let x817 = x813 - x814;
+        let x818 = J2 * (x802 + x817);
+        let x819 = (Iyy - Ixx) * x207;
+        let x820 = x13 * x262;
+        let x821 = x820 + x805;
+        let x822 = x821 * J1;
+        let x823 = (Iyz * x473 + x188 * (Iyy + Ixx - Izz))
+            + (x822 + (J2 * (x806 - x820) + 2.0 * x226));
+        let x824 = x3 * (x244 - x800 * d) + (x168 - 1.0) * x264;
+        let x825 = x1 * (x651 - x251);
+        let x826 = x29 * x825;
+        let x827 = x3 * (x252 - x251) - (x814 + x207) * d;
+        let x828 = x827 * x27;
+        let x829 = 2.0 * x238 + 2.0 * x239;
+        let x830 = x240 * J1 - J2 * x829;
+        let x831 = -(x262 * J1);
+        let x832 = 2.0 * J2 - J1;
         Derivatives {
             qdot: [
                 psi_dot,
@@ -1990,76 +2018,68 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    (x9 * x9 + (x11 * x11 + x12) * x1 * x1 * x13 * x13) * m1
-                        + m2 * (x21 * x21 + x1 * x1 * x2 * x2 * x26)
-                        + (x28 * x28 + x31 * x31) * J1
-                        + J2 * (x1 * x1 * (x32 + x33) + x19 * x19 + x6 * x6) - x3 * x39
-                        + x1 * (x46 + x53),
-                    x74,
-                    x75,
-                    x76,
-                    x78,
-                    x96,
-                    x116,
+                    J2 * (x7 * x7 + x4 * x4 * (x9 + x10) + x16 * x16)
+                        + m2 * (x19 * x19 + x6 * x6 * x25)
+                        + (x31 * x14 * x14 + x34 * x34) * m1 - x38 * x0
+                        + x4 * (x43 + x50) + (x52 * x52 + x55 * x55) * J1,
+                    x79,
+                    x84,
+                    x87,
+                    x91,
+                    x110,
+                    x132,
                     0.0,
                 ],
                 [
-                    x74,
-                    J2 * ((x117 + 1.0) * x13 * x13 + (x118 + 1.0) * x2 * x2)
-                        + (x4 * x4 * x13 * J1 + x59 + x48) * x13
-                        + (x119 + x56 * x56 * x2 * x2) * m2
-                        + x2 * (x65 + x40 + x15 * x15 * x2 * J1)
-                        + (x122 + x70 * x70 * x13 * x13) * m1,
-                    x127,
-                    x129,
-                    x130,
-                    x135,
-                    x140,
-                    x145,
+                    x79,
+                    m2 * (x133 * x133 + x134) + x5 * (x135 * x69 + x65)
+                        + (x136 + x137 * x137) * m1
+                        + J2 * (x9 * (x138 + 1.0) + (x139 + 1.0) * x10)
+                        + (x74 + x58 * x140) * x8,
+                    x146,
+                    x148,
+                    x149,
+                    x153,
+                    x158,
+                    x165,
                 ],
                 [
-                    x75,
-                    x127,
-                    Ixx + x147 * x4 * x4 + (x117 + x118) * J1 + x15 * x15 * x149,
+                    x84,
+                    x146,
+                    Ixx + (x138 + x139) * J1 + x167 * x168 + x169 * x171,
                     0.0,
                     0.0,
-                    x150,
-                    x151,
-                    x155,
+                    x172,
+                    x174,
+                    x178,
                 ],
-                [x76, x129, 0.0, x147, 0.0, x156, x157, x158],
-                [x78, x130, 0.0, 0.0, x149, x159, x160, x161],
-                [x96, x135, x150, x156, x159, x162, 0.0, 0.0],
-                [x116, x140, x151, x157, x160, 0.0, x162, 0.0],
-                [0.0, x145, x155, x158, x161, 0.0, 0.0, x162],
+                [x87, x148, 0.0, x167, 0.0, x179, x180, x181],
+                [x91, x149, 0.0, 0.0, x171, x182, x183, x184],
+                [x110, x153, x172, x179, x182, x185, 0.0, 0.0],
+                [x132, x158, x174, x180, x183, 0.0, x185, 0.0],
+                [0.0, x165, x178, x181, x184, 0.0, 0.0, x185],
             ],
             force: [
-                (-x28 * x193 - x31 * x194) * J1 - x185 * x6
-                    - ((x209 + x214 * x11) * x1 * x13 + x215 * x9) * m1
-                    + x1
-                        * (x2 * (x224 - x217 - x219 - x225 + x226 - x227 - x232)
-                            + (x240 - x233 - x235 - x239 + x241 - x242 - x243) * x13)
-                    + x249 * x3 - x254 * x19 - m2 * (x269 * x1 * x2 + x270 * x21),
-                x2 * (x233 - x273 + x235 + x239 + x274 - x240 - x241 + x242 + x243)
-                    - (x272 + x215 * x70 * x13) * m1 - m2 * (x275 + x270 * x56 * x2)
-                    + (x224 - x217 - x219 - x276 - x225 - x277 + x226 - x227 - x232)
-                        * x13,
-                x244 - x245 + x246 + x247 + x248 + x15 * (x278 - x251 - x253)
-                    + x4 * (x174 - x279 + x184) + (-x0 * x194 - x17 * x193) * J1,
-                x123 * x173 * x200 - x214 * d * m1 - x242,
-                x234 * x228 * x231 - x227 - m2 * x268 * d,
-                x280,
-                -m2 * (x270 * x99 + x110 * x262 + x268 * x114)
-                    - (x208 * x104 + x214 * x101 + x215 * x108) * m1,
-                -m2
-                    * (((0.25 * x285 - 0.25 * x287 - 0.25 * x289 + 0.25 * x291) * phi_dot
-                        * phi_dot + (theta_dot * x292 + x300) * theta_dot
-                        + gamma2_dot * (x302 + x305 + gamma2_dot * x292)) * d - x281)
-                    - (x281
-                        + (theta_dot * (x324 + theta_dot * x325 + x327)
-                            + gamma1_dot * (x325 * gamma1_dot + x329)
-                            + (0.25 * x318 - 0.25 * x313 - 0.25 * x320 + 0.25 * x322)
-                                * phi_dot * phi_dot) * d) * m1,
+                x0 * x230 - x16 * x213 - (x14 * (x255 + x27 * x261) - x34 * x245) * m1
+                    - m2 * (x6 * x276 - x279 * x19)
+                    + (x290 * x5 + (x293 - x291 - x292 + x294 - x295 - x297 - x298) * x8)
+                        * x4 - (x55 * x299 - x52 * x301) * J1 - x303 * x7,
+                (x306 + x290) * x8 - m2 * (x133 * x279 + x304) + x5 * (x309 + x291)
+                    - (x312 + x137 * x245) * m1,
+                x214 - (x13 * x301 + x3 * x299) * J1 + x313 * x1 + x219 + x223 - x228
+                    + x11 * x314 + x229,
+                x231 * x302 - x291 - x85 * x261,
+                x315 * x211 - x88 * x267 - x283,
+                x316,
+                -((x123 * x245 + x254 * x119 + x261 * x115) * m1
+                    + m2 * (x128 * x267 + x317 + x274 * x125)),
+                -(((gamma2_dot * (gamma2_dot * x329 + x339)
+                    + theta_dot * (x342 + theta_dot * x329) + x343 * x328) * d - x320)
+                    * m2
+                    + (x320
+                        + d
+                            * (x343 * x349 + (x357 + gamma1_dot * x358) * gamma1_dot
+                                + theta_dot * (x363 + theta_dot * x358))) * m1),
             ],
             checks: [],
             d_qdot: [
@@ -2082,165 +2102,153 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x338, x96, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x339, x135, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x340, x150, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x341, x156, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x342, x159, 0.0],
-                    [x338, x339, x340, x341, x342, 0.0, 0.0, 0.0],
-                    [x96, x135, x150, x156, x159, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x372, x110, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x373, x153, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x374, x172, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x375, x179, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x376, x182, 0.0],
+                    [x372, x373, x374, x375, x376, 0.0, 0.0, 0.0],
+                    [x110, x153, x172, x179, x182, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        m2
-                            * (x3 * x1 * (2.0 * x344 - 2.0 * x22) * x2 * x2
-                                + 2.0 * (x21 * x346))
-                            + (2.0 * (x19 * x345) + 2.0 * (x6 * x347)) * J2
-                            + (2.0 * (x31 * x349) + 2.0 * (x351 * x28)) * J1
-                            + m1 * (2.0 * (x352 * x9) + x3 * x353 * x1 * x13 * x13)
-                            + x1 * (x34 - x38 + x2 * x354 + x355 * x13)
-                            + x3
-                                * (x356 - x46 - x53 + (-2.0 * x32 - 2.0 * x33) * J2 * x1
-                                    - x358),
-                        x359,
-                        x360,
-                        x361,
-                        x363,
-                        x367,
-                        x369,
+                        (x35 + x37 + x5 * x377 + x378 * x8) * x4
+                            + m1 * (x379 * x99 * x14 - 2.0 * (x381 * x34))
+                            + x0
+                                * (x382 - x43 - (2.0 * x9 + 2.0 * x10) * J2 * x4 - x50
+                                    - x383) + J2 * (2.0 * (x7 * x380) - 2.0 * (x16 * x384))
+                            + (-2.0 * (x55 * x386) - 2.0 * (x52 * x388)) * J1
+                            + m2 * (x6 * x390 * x93 - 2.0 * (x389 * x19)),
+                        x392,
+                        x394,
+                        x395,
+                        x397,
+                        x401,
+                        x403,
                         0.0,
                     ],
-                    [x359, 0.0, 0.0, 0.0, 0.0, x370, x371, x372],
-                    [x360, 0.0, 0.0, 0.0, 0.0, x373, x374, x375],
-                    [x361, 0.0, 0.0, 0.0, 0.0, x376, x377, x378],
-                    [x363, 0.0, 0.0, 0.0, 0.0, x379, x380, x381],
-                    [x367, x370, x373, x376, x379, 0.0, 0.0, 0.0],
-                    [x369, x371, x374, x377, x380, 0.0, 0.0, 0.0],
-                    [0.0, x372, x375, x378, x381, 0.0, 0.0, 0.0],
+                    [x392, 0.0, 0.0, 0.0, 0.0, x404, x405, x406],
+                    [x394, 0.0, 0.0, 0.0, 0.0, x407, x408, x409],
+                    [x395, 0.0, 0.0, 0.0, 0.0, x410, x411, x412],
+                    [x397, 0.0, 0.0, 0.0, 0.0, x413, x414, x415],
+                    [x401, x404, x407, x410, x413, 0.0, 0.0, 0.0],
+                    [x403, x405, x408, x411, x414, 0.0, 0.0, 0.0],
+                    [0.0, x406, x409, x412, x415, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        x1
-                            * ((2.0 * x64 + x67 + x43 + m1 * (2.0 * x71 + x353 * x1 * x2)
-                                + x44 + 2.0 * x68) * x13 - x63
-                                + (2.0 * x58 - 2.0 * x54 - x50 - x51
-                                    + m2 * (x1 * (2.0 * x22 + 2.0 * x25) * x13 + 2.0 * x57)
-                                    + x61) * x2),
-                        x480,
-                        x481,
-                        x482,
-                        x483,
-                        x491,
-                        x493,
+                        ((x42 + 2.0 * x57 + 2.0 * x59 + (2.0 * x62 + x379 * x6) * m1
+                            - x66) * x8
+                            + (x75 - 2.0 * x70 - 2.0 * x72 - x47
+                                + m2 * ((2.0 * x22 + 2.0 * x24) * x14 + 2.0 * x78) - x48)
+                                * x5 - x68) * x4,
+                        x523,
+                        x524,
+                        x525,
+                        x526,
+                        x535,
+                        x537,
                         0.0,
                     ],
                     [
-                        x480,
-                        (x65 + 2.0 * x40 - x41) * x13
-                            + (x13
-                                * ((2.0 * x478 - 2.0 * x22 + 2.0 * x344) * m2
-                                    + m1 * (2.0 * x12 + 2.0 * (x479 * x70) + 2.0 * x120)
-                                    + J2 * (2.0 * x118 - 2.0 * x117)
-                                    + (2.0 * (x15 * x15) - 2.0 * x494) * J1) - x59 + x47
-                                - 2.0 * x48) * x2,
-                        x495,
-                        x496,
-                        x497,
-                        x500,
-                        x501,
-                        x502,
+                        x523,
+                        x5
+                            * (((2.0 * x28 - 2.0 * x521 + 2.0 * x30) * m1
+                                + (2.0 * x169 - 2.0 * x168) * J1
+                                + J2 * (2.0 * x139 - 2.0 * x138) + m2 * (x390 + 2.0 * x522))
+                                * x8 - x73 + x44 - 2.0 * x45) + x8 * x519,
+                        x538,
+                        x539,
+                        x540,
+                        x543,
+                        x544,
+                        x545,
                     ],
-                    [x481, x495, 0.0, 0.0, 0.0, x503, x504, x505],
-                    [x482, x496, 0.0, 0.0, 0.0, x506, x507, x508],
-                    [x483, x497, 0.0, 0.0, 0.0, x509, x510, x511],
-                    [x491, x500, x503, x506, x509, 0.0, 0.0, 0.0],
-                    [x493, x501, x504, x507, x510, 0.0, 0.0, 0.0],
-                    [0.0, x502, x505, x508, x511, 0.0, 0.0, 0.0],
+                    [x524, x538, 0.0, 0.0, 0.0, x546, x547, x548],
+                    [x525, x539, 0.0, 0.0, 0.0, x550, x551, x552],
+                    [x526, x540, 0.0, 0.0, 0.0, x554, x555, x556],
+                    [x535, x543, x546, x550, x554, 0.0, 0.0, 0.0],
+                    [x537, x544, x547, x551, x555, 0.0, 0.0, 0.0],
+                    [0.0, x545, x548, x552, x556, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        (-2.0 * (a_ * x4 * x1 * x1 * d * x13 * x13)
-                            - 2.0 * (d * x577 * x9)) * m1
-                            + (2.0 * x578 + 2.0 * x579) * x6,
-                        x580,
-                        x581,
-                        x582,
-                        0.0,
-                        x585,
-                        x588,
-                        0.0,
-                    ],
-                    [
-                        x580,
-                        (x0 * x589 * x13 * x13
-                            + (2.0 * (x70 * d * x13 * x13) - 2.0 * (a_ * d * x2 * x2))
-                                * m1) * x4,
-                        x590,
-                        x591,
-                        0.0,
-                        x592,
-                        x593,
-                        x594,
-                    ],
-                    [
-                        x581,
-                        x590,
-                        x0 * (2.0 * J2 + 2.0 * x146 - 2.0 * J1) * x4,
-                        0.0,
-                        0.0,
-                        x506,
-                        x507,
-                        x508,
-                    ],
-                    [x582, x591, 0.0, 0.0, 0.0, x595, x596, x597],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x585, x592, x506, x595, 0.0, 0.0, 0.0, 0.0],
-                    [x588, x593, x507, x596, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x594, x508, x597, 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        x28 * (2.0 * x616 + 2.0 * x617)
-                            + (-2.0 * (x28 * d * x21)
-                                - 2.0 * (a_ * x1 * x1 * d * x15 * x2 * x2)) * m2,
-                        x618,
-                        x620,
-                        0.0,
-                        x621,
-                        x623,
+                        (2.0 * x622 + 2.0 * x623) * x7
+                            - (2.0 * (d * x14 * x619) - 2.0 * (x34 * x621)) * m1,
                         x625,
-                        0.0,
-                    ],
-                    [
-                        x618,
-                        x15
-                            * (x17 * x589 * x2 * x2
-                                + m2
-                                    * (-2.0 * (d * x56 * x2 * x2)
-                                        - 2.0 * (a_ * d * x13 * x13))),
                         x626,
-                        0.0,
                         x627,
-                        x628,
-                        x629,
+                        0.0,
                         x630,
+                        x633,
+                        0.0,
                     ],
                     [
-                        x620,
+                        x625,
+                        (x9 * x3 * x634
+                            + (2.0 * (d * x137 * x8) - 2.0 * (x624 * x10)) * m1) * x1,
+                        x635,
+                        x637,
+                        0.0,
+                        x639,
+                        x640,
+                        x641,
+                    ],
+                    [
                         x626,
-                        x17 * x15 * (2.0 * x148 + 2.0 * J2 - 2.0 * J1),
+                        x635,
+                        x3 * (2.0 * x166 + x642) * x1,
                         0.0,
                         0.0,
-                        x631,
-                        x632,
-                        x511,
+                        x550,
+                        x551,
+                        x552,
+                    ],
+                    [x627, x637, 0.0, 0.0, 0.0, x643, x644, x645],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x630, x639, x550, x643, 0.0, 0.0, 0.0, 0.0],
+                    [x633, x640, x551, x644, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x641, x552, x645, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        -x52 * (2.0 * x663 + 2.0 * x665)
+                            - (2.0 * (x666 * x6 * d) - 2.0 * (x667 * x19)) * m2,
+                        x669,
+                        x672,
+                        0.0,
+                        x673,
+                        x675,
+                        x677,
+                        0.0,
+                    ],
+                    [
+                        x669,
+                        (x13 * x634 * x10
+                            - m2 * (2.0 * (x9 * x624) + 2.0 * (x133 * d * x5))) * x11,
+                        x678,
+                        0.0,
+                        x680,
+                        x682,
+                        x683,
+                        x684,
+                    ],
+                    [
+                        x672,
+                        x678,
+                        x13 * (2.0 * x170 + x642) * x11,
+                        0.0,
+                        0.0,
+                        x685,
+                        x555,
+                        x556,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x621, x627, 0.0, 0.0, 0.0, x633, x634, x635],
-                    [x623, x628, x631, 0.0, x633, 0.0, 0.0, 0.0],
-                    [x625, x629, x632, 0.0, x634, 0.0, 0.0, 0.0],
-                    [0.0, x630, x511, 0.0, x635, 0.0, 0.0, 0.0],
+                    [x673, x680, 0.0, 0.0, 0.0, x686, x687, x688],
+                    [x675, x682, x685, 0.0, x686, 0.0, 0.0, 0.0],
+                    [x677, x683, x555, 0.0, x687, 0.0, 0.0, 0.0],
+                    [0.0, x684, x556, 0.0, x688, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2360,300 +2368,230 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     0.0,
-                    -(x208 * x332 + x214 * x331 + x215 * x334) * m1
-                        - m2 * (x270 * x330 + x336 * x262 + x268 * x335),
-                    x280,
+                    -(m2 * (x365 * x267 - x317 - x366 * x274)
+                        + m1 * (x364 * x245 + x261 * x370 + x254 * x368)),
+                    x316,
                     0.0,
                 ],
                 [
-                    (-x351 * x193 - x349 * x194) * J1
-                        + psi_dot
-                            * ((-x28 * x394 - x31 * x400) * J1 - x19 * x393
-                                + ((x402 + x403 - x405 - x407 - x408 - x411 - x414 - x415)
-                                    * x2
-                                    + (x418 - x416 - x417 - x421 - x422 + x423 + x424 - x427)
-                                        * x13) * x1 + x3 * (x431 - x428 - x429 - x430 + x3 * x435)
-                                - x6 * x443)
-                        + ((x217 + x219 - x224 + x225 - x226 + x227 + x232) * x2
-                            + x13 * (x233 + x235 + x239 - x240 - x241 + x242 + x243))
-                            * x3 - x185 * x347
+                    x4 * x230 - x303 * x380 - (x301 * x388 - x386 * x299) * J1
+                        + ((x420 - x419 + x424 + x0 * x428 - x429) * x0 - x16 * x437
+                            + (x5 * x443
+                                + (x444 - x445 - x446 - x447 + x451 - x452 - x455 + x456)
+                                    * x8) * x4 - x463 * x7 - (x55 * x467 - x52 * x465) * J1)
+                            * psi_dot
+                        + x0 * (x5 * (x281 - x282 + x468) + (x307 + x291) * x8)
+                        + x384 * x213
                         - m2
-                            * (psi_dot * x21 * x444
-                                + (x3 * x268 * x343 + x1 * psi_dot * x445 * x24
-                                    + a_ * x15 * (x3 * x262 - x1 * psi_dot * x447)) * x2
-                                + x270 * x346)
-                        - (x448 * psi_dot * x9
-                            + (x3 * x214 * x72
-                                + a_ * (x1 * psi_dot * x451 - x3 * x208) * x4
-                                + x1 * psi_dot * x11 * x453) * x13 + x215 * x352) * m1
-                        + x249 * x1 - x254 * x345,
-                    (x2
-                        * (x416 - x394 * x15 * J1 + x417 - x418 + x17 * x393 + x421
-                            + x422 - x423 - x424 + x427)
-                        - m2 * ((x445 * x24 - a_ * x15 * x447) * x13 + x56 * x2 * x444)
-                        - m1 * (x448 * x70 * x13 + x2 * (x72 * x453 - a_ * x4 * x451))
-                        + (x402 + x403 - x405 - x407 - x408 - x4 * x400 * J1 - x0 * x443
-                            - x411 - x414 - x415) * x13) * psi_dot,
-                    (x428 + x429 + (m2 * d * x444 - x391 - x392) * x15 + x430 + x454 * x3
-                        + (-x17 * x394 - x0 * x400) * J1
-                        + x4 * (x438 - x448 * d * m1 + x442) - x431) * psi_dot,
+                            * (x5
+                                * ((x0 * x274 - x472 * x189) * x23 + x189 * x475
+                                    + x0 * x476) - psi_dot * x469 * x19 + x389 * x279)
+                        - (((x189 * x480 - x0 * x254) * x29 + x0 * x310
+                            + x189 * x27 * x482) * x8 + x381 * x245
+                            - x34 * x483 * psi_dot) * m1,
                     psi_dot
-                        * (J2 * (x382 - x419 - x420 - x384) - d * m1 * x453
-                            + (x419 + x420) * J1),
-                    psi_dot
-                        * (J1 * (-x412 - x413) - m2 * d * x445
-                            + J2 * (x397 + x412 + x398 + x413)),
-                    -(x455 * x79 + psi_dot * (x84 * x453 + x451 * x87 + x448 * x89)) * m1
-                        - m2
-                            * (x79 * x456
-                                + psi_dot * (x83 * x444 + x90 * x447 + x94 * x445)),
-                    -m2
-                        * (x456 * x80
-                            + psi_dot * (x114 * x445 + x99 * x444 + x110 * x447))
-                        - m1
-                            * ((x101 * x453 + x448 * x108 + x451 * x104) * psi_dot
-                                + x455 * x80),
-                    -(x457
+                        * ((x443 - x58 * x467 - x3 * x463) * x8
+                            - m2 * ((x475 - x472 * x23) * x8 + x133 * x469)
+                            - ((-x480 * x29 - x27 * x482) * x5 + x483 * x137) * m1
+                            + (x445 - x444 + x446 + x447 - x465 * x69 - x451 + x13 * x437
+                                + x452 + x455 - x456) * x5),
+                    (x419 - (x13 * x465 + x3 * x467) * J1 - x420
+                        + (x88 * x469 - x435 - x436) * x11 - x424 + x429 + x0 * x484
+                        + x1 * (x463 - x85 * x483)) * psi_dot,
+                    psi_dot * (x451 - x85 * x482 + J2 * (x464 - x448 + x449)),
+                    (x439 - x88 * x474 - x440) * psi_dot,
+                    -((x92 * x485 + (x108 * x482 + x106 * x480 + x100 * x483) * psi_dot)
+                        * m1
+                        + m2
+                            * (x92 * x486
+                                + (x472 * x101 + x474 * x103 + x97 * x469) * psi_dot)),
+                    -((psi_dot * (x115 * x482 + x483 * x123 + x119 * x480) + x485 * x95)
+                        * m1
+                        + m2
+                            * (x486 * x95
+                                + psi_dot * (x111 * x469 + x474 * x128 + x472 * x125))),
+                    -((x487
                         + d
-                            * (theta_dot
-                                * ((0.5 * x460 - 0.5 * x458 - 0.5 * x459 - 2.0 * x5
-                                    + 0.5 * x461) * gamma1_dot + x464 + theta_dot * x465)
-                                + (0.25 * x458 - 0.25 * x459 + 0.25 * x460 - 0.5 * x462
-                                    - 0.25 * x461 + 0.5 * x463) * phi_dot * phi_dot
-                                + gamma1_dot * (x467 + gamma1_dot * x465))) * m1
-                        - m2
-                            * ((theta_dot * (x474 + x475 * theta_dot)
-                                + (0.25 * x469 - 0.25 * x468 + 0.25 * x470 - 0.25 * x472)
-                                    * phi_dot * phi_dot
-                                + gamma2_dot
-                                    * (theta_dot
-                                        * (0.5 * x468 + 0.5 * x469 + 2.0 * x16 + 0.5 * x470 - x471
-                                            + 0.5 * x472 - x473) + x475 * gamma2_dot + x477)) * d
-                                - x457),
+                            * (x495 * x343
+                                + (x498 * theta_dot - x497 + gamma1_dot * (x500 - 2.0 * x2))
+                                    * theta_dot + gamma1_dot * (x502 + x498 * gamma1_dot))) * m1
+                        + m2
+                            * (d
+                                * (theta_dot * (theta_dot * x508 + x513)
+                                    + gamma2_dot
+                                        * (gamma2_dot * x508 + x515
+                                            + (2.0 * x12 + x517) * theta_dot) + x507 * x343) - x487)),
                 ],
                 [
-                    x3
-                        * (x528 - x529 - x530 + x190 * (x532 - x531 - x220 - x221 + x222)
-                            - x533) - m2 * (x517 * x21 + x1 * (x275 + x525 * x2))
-                        - x539 * x6
-                        - (((x543 * x11 + x548 + x215 * x70) * x13 + x272) * x1
-                            + x554 * x9) * m1 + (-x206 * x31 - x28 * x555) * J1
-                        + ((x557 - x556 - x558 - x273 - x559 + x233 + x235 + x239 + x274
-                            - x240 - x241 + x560 + x243 - x562) * x2
-                            + x13
-                                * (x224 - x563 - x219 + x564 - x276 - x225 - x277
-                                    + 2.0 * x226 - x565 - x227 - x232 - x566 - x567)) * x1
-                        - x19 * x572,
-                    (x557 - x0 * x539 - x556 - x558 - x559 + x233 + x235 + x239 + x274
-                        - x240 - x241 + x560 + (-x206 * x4 - x193 * x15) * J1 + x243
-                        - x562) * x13
-                        - m2 * (x525 * x13 + (x517 * x56 + x263 + x268 * x343) * x2)
-                        - ((x271 - x209 + x70 * x554) * x13
-                            + x2 * (x543 * x72 - x548 + x215 * x479)) * m1
-                        + x2
-                            * (x563 + x219 - x224 - x564 + x225 + x277 + x17 * x572
-                                - 2.0 * x226 + x565 + x227 + (x4 * x194 - x555 * x15) * J1
-                                + x232 + x566 + x567),
-                    (m2 * d * x517 - x570 - x571) * x15 + J1 * (-x0 * x206 - x17 * x555)
-                        + (x537 - d * x554 * m1 + x538) * x4 - x528
-                        + x190 * (x531 + x220 - x532 + x221 - x222) + x529 + x530 + x533,
-                    x190 * (x123 * x4 * x200 + x0 * x123 * x173) - x543 * d * m1 - x565,
-                    x512 * (x123 * x231 * x15 + x17 * x234 * x228) - m2 * d * x521
-                        - x242,
-                    -(x547 * x87 + x543 * x84 + x89 * x573 + x215 * x486) * m1
-                        - m2
-                            * (x270 * x89 + x94 * x521 + x574 * x486 + x90 * x524
-                                + x83 * x517),
-                    -m2
-                        * (x114 * x521 + x110 * x524 + x270 * x108 + x517 * x99
-                            + x574 * x330)
-                        - (x108 * x573 + x543 * x101 + x547 * x104 + x215 * x330) * m1,
-                    d
-                        * (-m2
-                            * (gamma2_dot
-                                * (gamma2_dot * x575
-                                    + (0.5 * x468 + 0.5 * x469 + 0.5 * x470 - x471 + 0.5 * x472
-                                        - x473) * phi_dot + theta_dot * x476)
-                                + theta_dot
-                                    * (phi_dot
-                                        * (0.5 * x469 - 0.5 * x468 + 0.5 * x470 - 0.5 * x472)
-                                        + theta_dot * x575) + x575 * phi_dot * phi_dot)
-                            - m1
-                                * ((x466 * gamma1_dot + theta_dot * x576
-                                    + phi_dot
-                                        * (0.5 * x458 - 0.5 * x459 + 0.5 * x460 - x462 - 0.5 * x461
-                                            + x463)) * theta_dot
-                                    + gamma1_dot
-                                        * (x576 * gamma1_dot
-                                            + (0.5 * x460 - 0.5 * x458 - 0.5 * x459 + 0.5 * x461)
-                                                * phi_dot) + x576 * phi_dot * phi_dot)),
-                ],
-                [
-                    x604 * x6 - x599 * x1 * x13 - x31 * x183 * J1 - x185 * x577
-                        - ((a_ * (x4 * (x211 - x210 + x605) + x606) + x11 * x609) * x1
-                            * x13 - x215 * d * x577 + x610 * x9) * m1,
-                    x599 * x2
-                        - (x2 * (a_ * (x4 * (x210 - x211 - x605) - x606) + x72 * x609)
-                            + (x215 * x4 * d + x610 * x70) * x13) * m1
-                        + (x0 * x604 + (x174 + x184 - x611) * x4) * x13,
-                    x4 * (x600 - x610 * d * m1 + x602 + x603)
-                        + x0 * (x174 - x279 + x184 - x611),
-                    x598 * x123 * x173 - d * m1 * x609 + x123 * x200 * x200,
-                    0.0,
-                    -((x610 * x89 + x214 * x584 + x84 * x612 + x613 * x87) * m1),
-                    -((x613 * x104 + x101 * x612 + x214 * x587 + x610 * x108) * m1),
-                    -(d
-                        * (phi_dot * phi_dot
-                            * (0.25 * x460 - 0.25 * x458 - 0.25 * x459 + 0.25 * x461)
-                            + gamma1_dot * (x614 * gamma1_dot + x464)
-                            + theta_dot
-                                * (x467 + theta_dot * x614
-                                    + (0.5 * x458 - 0.5 * x459 + 0.5 * x460 - x462 + 2.0 * x348
-                                        - 0.5 * x461 + x463) * gamma1_dot)) * m1),
-                ],
-                [
-                    x641 * x28 - x1 * x637 * x2 - (x638 + x639) * x19 - x193 * x615 * J1
-                        - m2 * (x1 * x2 * x645 - x270 * x28 * d + x646 * x21),
-                    x2 * (x641 * x15 + x17 * (x638 + x639 - x647)) - x637 * x13
-                        - m2 * (x2 * (x646 * x56 - x270 * d * x15) + x13 * x645),
-                    x17 * (x278 - x251 - x253 - x640)
-                        + x15 * (x647 - x638 - x639 + m2 * x646 * d),
-                    0.0,
-                    x234 * x228 * x228 + x234 * x231 * x636 - m2 * d * x644,
-                    -(m2 * (x94 * x644 + x83 * x646 + x90 * x648 + (-x92 - x93) * x262)),
+                    x4
+                        * ((x289 - x558 + x306 - x560 - x563 - x566 - x567 + 2.0 * x282)
+                            * x8 + (x309 + x571) * x5) - (x248 * x55 + x52 * x572) * J1
+                        - m2 * (x4 * (x580 * x5 + x304) - x585 * x19)
+                        - (((x593 + x598 - x599) * x8 + x312) * x4 - x589 * x34) * m1
+                        - x604 * x16 - x7 * x607
+                        + x0 * (x188 * (x227 - x561 - x225) - x608 + x609 - x610 + x611),
+                    (x571 + x308 - (x301 * x11 + x248 * x1) * J1 - x3 * x607) * x8
+                        + x5
+                            * (x305 + (x572 * x11 + x1 * x299) * J1 + x558 + x13 * x604
+                                + x560 + x563 + x566 + x567 - 2.0 * x282 + x468)
+                        - ((x599 - x593 - x598) * x5 + (x311 - x61 * x589) * x8) * m1
+                        - m2 * (x580 * x8 + (x77 * x585 + x476 + x275) * x5),
+                    x11 * (x88 * x585 - x602 - x603) - (x3 * x248 - x13 * x572) * J1
+                        + x608 - x609 + (x607 - x589 * x85) * x1 + x610 - x611
+                        + x188 * (x225 + x562 - x224 + x226),
+                    x188 * (x559 * x141 + x3 * x302) - x566 - x85 * x597,
+                    -(x204 * x568 + x277 * x141) * x207 - x291 - x88 * x575,
                     -(m2
-                        * (x114 * x644 + x646 * x99 + x262 * (-x112 - x113)
-                            + x110 * x648)),
-                    -(m2 * d
-                        * (gamma2_dot
-                            * (x474
-                                + theta_dot
-                                    * (0.5 * x469 - 0.5 * x468 - 2.0 * x350 + 0.5 * x470
-                                        - 0.5 * x472) + gamma2_dot * x649)
-                            + theta_dot * (x477 + theta_dot * x649)
-                            + (0.25 * x468 + 0.25 * x469 + 0.25 * x470 - 0.5 * x471
-                                + 0.25 * x472 - 0.5 * x473) * phi_dot * phi_dot)),
+                        * (x100 * x279 + x97 * x585 + x101 * x579 + x612 * x530
+                            + x103 * x575)
+                        + (x108 * x597 + x245 * x530 + x613 * x100 + x106 * x592) * m1),
+                    -(m2
+                        * (x579 * x125 + x111 * x585 - x111 * x612 + x128 * x575
+                            + x123 * x279)
+                        + (x119 * x592 - x111 * x245 + x613 * x123 + x597 * x115) * m1),
+                    -((m1
+                        * ((x614 * phi_dot + x501 * gamma1_dot - x615 * theta_dot)
+                            * theta_dot
+                            + gamma1_dot * (x500 * phi_dot - x615 * gamma1_dot)
+                            - x615 * x343)
+                        + m2
+                            * (theta_dot * (theta_dot * x617 + phi_dot * x618)
+                                + x617 * x343
+                                + gamma2_dot
+                                    * (x517 * phi_dot + theta_dot * x514 + gamma2_dot * x617)))
+                        * d),
+                ],
+                [
+                    -x303 * x620
+                        - ((x650 + a_ * ((x652 - x256 - x257) * x1 + x653)) * x14
+                            - x647 * x34 - x245 * x621) * m1 - x655 * x7 - x657 * x14
+                        - x237 * x623,
+                    x5 * x657 + (x1 * (x303 - x658) - x3 * x655) * x8
+                        - (x5 * (a_ * ((x258 - x652) * x1 - x653) - x650)
+                            + (x1 * d * x245 - x647 * x61) * x8) * m1,
+                    x3 * (x313 - x658) + (x655 - x647 * x85) * x1,
+                    x656 * x141 - x240 * x302 - x85 * x649,
+                    0.0,
+                    -(m1 * (x647 * x100 + x108 * x659 + x660 * x106 - x106 * x261)),
+                    -(m1 * (x659 * x115 + x660 * x119 + x647 * x123 - x119 * x261)),
+                    -(x85
+                        * (theta_dot
+                            * (x502 + (2.0 * x385 + x614) * gamma1_dot
+                                + x662 * theta_dot) + x343 * x661
+                            + gamma1_dot * (x662 * gamma1_dot - x497))),
+                ],
+                [
+                    x52 * x695 - x691 * x16 - x6 * x693
+                        - m2 * (x6 * x698 + x699 * x19 - x667 * x279) - x664 * x700,
+                    x5 * (x13 * (x691 - x700) - x11 * x695) - x693 * x8
+                        - m2 * (x698 * x8 + (-x77 * x699 - d * x11 * x279) * x5),
+                    x13 * (x314 - x694) + x11 * (x700 - x88 * x699 - x689 + x690),
+                    0.0,
+                    x692 * x204 - x88 * x696 - x315 * x262,
+                    -(m2 * (x103 * x696 - x97 * x699 - x103 * x274 + x697 * x101)),
+                    -(m2 * (x697 * x125 - x111 * x699 - x128 * x274 + x128 * x696)),
+                    -(x88
+                        * ((x515 + theta_dot * x702) * theta_dot + x701 * x343
+                            + gamma2_dot
+                                * (gamma2_dot * x702 + x513
+                                    + theta_dot * (x618 - 2.0 * x387)))),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x660 - x664 - x665 + x454 * x1 - x667) * x3 - x6 * x659
-                        + (-x670 * x28 - x31 * x671) * J1
-                        - m2 * (x675 * x1 * x2 + x678 * x21)
-                        - (x1 * x13 * (x680 + x681 * x11) + x682 * x9) * m1
-                        + x1
-                            * (x2
-                                * (x686 - x685 - x687 + x688 - x689 - x690 - x691 - x692)
-                                + (x695 - x693 - x694 - x696 + x697 - x700 + x701 - x702)
-                                    * x13) - x19 * x707,
-                    (x693 + x694 - x670 * x15 * J1 + x17 * x707 - x695 + x696 - x697
-                        + x700 - x701 + x702) * x2 - m2 * (x675 * x13 + x678 * x56 * x2)
-                        - (x682 * x70 * x13 + (x681 * x72 - x680) * x2) * m1
-                        + (x686 - x685 - x687 + x688 - x689 - x0 * x659 - x4 * x671 * J1
-                            - x690 - x691 - x692) * x13,
-                    x435 * x1 - x660 + (m2 * x678 * d - x705 - x706) * x15 + x664 + x665
-                        + x667 + x4 * (x657 - x682 * d * m1 + x658)
-                        + (-x0 * x671 - x17 * x670) * J1,
-                    (x698 + x699) * J1 - d * x681 * m1
-                        + (x661 - x698 - x699 + x662) * J2,
-                    (-x683 - x684) * J1 - m2 * x673 * d
-                        + (x683 - x652 + x653 + x684) * J2,
-                    -(x682 * x89 + x84 * x681 + x679 * x87) * m1
-                        - (x90 * x674 + x673 * x94 + x83 * x678) * m2,
-                    -(x679 * x104 + x682 * x108 + x101 * x681) * m1
-                        - (x673 * x114 + x678 * x99 + x110 * x674) * m2,
+                    (x8 * (x724 - x723 + x725 - x726 - x727 + x728 + x729 + x730)
+                        + x735 * x5) * x4 - x7 * x710 - x16 * x719
+                        - (x55 * x736 - x52 * x737) * J1 - m2 * (x6 * x741 - x742 * x19)
+                        + x0 * (x744 - x743 - x745 + x746 + x4 * x484)
+                        - m1 * ((x750 + x752) * x14 - x748 * x34),
+                    (x723 - x724 - x725 + x726 + x727 - x728 - x729 - x730 + x13 * x719
+                        - x737 * x69) * x5 - m1 * (x748 * x137 + (-x750 - x752) * x5)
+                        - m2 * (x133 * x742 + x8 * x741)
+                        + (x735 - x3 * x710 - x58 * x736) * x8,
+                    x743 - J1 * (x13 * x737 + x3 * x736) + x428 * x4 - x744
+                        + x11 * (x88 * x742 - x717 + x718) + x745 - x746
+                        + x1 * (x710 - x748 * x85),
+                    J2 * (x713 - x720 - x721) - x85 * x749 + x729,
+                    (x747 + x733) * J2 - x88 * x740 - x734,
+                    -(m2 * (x97 * x742 + x101 * x738 + x103 * x740)
+                        + (x108 * x749 + x748 * x100 + x106 * x751) * m1),
+                    -(m2 * (x738 * x125 + x111 * x742 + x128 * x740)
+                        + m1 * (x748 * x123 + x115 * x749 + x751 * x119)),
                     0.0,
                 ],
                 [
-                    (x717 + x175 * x37 - x718 + x719 + x720 - x721) * x3 - x6 * x716
-                        - m2 * (x1 * x2 * x725 + x729 * x21)
-                        + x1
-                            * ((x735 - (x732 + x733) * x13 - x734 + x410 - x736 - x737)
-                                * x13
-                                + (x426 - x738 + x739 - x740 - (x743 + x744) * x2 - x745)
-                                    * x2) - (x1 * (x747 + x748 * x11) * x13 + x749 * x9) * m1
-                        - x19 * x754 + (-x28 * x755 - x31 * x756) * J1,
-                    (x734 - x735 - x410 + (x732 - x743 - x744 + x733) * x13
-                        - x15 * x755 * J1 + x736 + x17 * x754 + x737) * x2
-                        - (x70 * x749 * x13 + x2 * (x748 * x72 - x747)) * m1
-                        - m2 * (x13 * x725 + x56 * x2 * x729)
-                        + (x426 - x0 * x716 - x738 + x739 - x740 - x745 - x4 * x756 * J1)
-                            * x13,
-                    x4 * (x710 - x749 * d * m1 + x715) - x717
-                        + (-x0 * x756 - x17 * x755) * J1 + x718
-                        + x15 * (m2 * d * x729 - x752 - x753) + x175 * x357 - x719 - x720
-                        + x721,
-                    (J2 * (phi_dot - x730 - x731 + x170) + (x730 + x731) * J1) * x13
-                        - x748 * d * m1,
-                    x2 * (J2 * (x742 - x741 + phi_dot + x170) + (x741 - x742) * J1)
-                        - m2 * d * x723,
-                    -m2 * (x723 * x94 + x724 * x90 + x83 * x729)
-                        - (x749 * x89 + x87 * x746 + x84 * x748) * m1,
-                    -m2 * (x729 * x99 + x110 * x724 + x723 * x114)
-                        - m1 * (x104 * x746 + x749 * x108 + x748 * x101),
-                    -(d * (x324 + x757 * theta_dot + x327) + 2.0 * x758) * m1
-                        - m2
-                            * ((theta_dot * x759 + x300 + x304 * gamma2_dot) * d
-                                - 2.0 * x758),
+                    ((x441 - x772 + x773 - x778 * x8 - x779 + x780) * x8
+                        + x5 * (x781 - (x783 + x785) * x5)) * x4
+                        - m2 * (x6 * x756 - x759 * x19) - x16 * x763
+                        - ((x765 + x767) * x14 - x34 * x771) * m1
+                        - (x55 * x786 - x52 * x787) * J1
+                        + x0 * (x788 - x789 + x790 - x791 - x792 + x793) - x7 * x795,
+                    (x772 - x441 + x13 * x763 - x773 + (x778 - x783 - x785) * x8
+                        - x787 * x69 + x779 - x780) * x5
+                        - (x137 * x771 + (-x765 - x767) * x5) * m1
+                        - (x133 * x759 + x756 * x8) * m2
+                        + (x781 - x58 * x786 - x3 * x795) * x8,
+                    x11 * (x761 - x762 + x88 * x759) - (x13 * x787 + x3 * x786) * J1
+                        - x788 + x1 * (x795 - x85 * x771) + x789 - x790 + x791 + x792
+                        - x793,
+                    (x777 + J2 * (x194 - x559 - x774)) * x8 - x766 * x85,
+                    (x782 * J1 + J2 * (x194 + x784)) * x5 - x755 * x88,
+                    -(m1 * (x108 * x766 + x764 * x106 + x100 * x771)
+                        + m2 * (x755 * x103 + x101 * x753 + x97 * x759)),
+                    -(m2 * (x111 * x759 + x753 * x125 + x755 * x128)
+                        + m1 * (x766 * x115 + x764 * x119 + x123 * x771)),
+                    -(m2
+                        * (d * (x342 + x797 * theta_dot - gamma2_dot * x338)
+                            - 2.0 * x319)
+                        + m1 * (2.0 * x319 + (theta_dot * x799 + x363) * d)),
                 ],
                 [
-                    (-x28 * x15 * x764 - x765 * x31 * x4) * J1 - x17 * x19 * x763
-                        - (x1 * (x768 + x11 * x770) * x13 + x771 * x9) * m1
-                        + ((2.0 * x236 - x773 + 2.0 * x237 - x526 - x774 - x775) * x13
-                            + x2 * (-x778 - 2.0 * x221 - x779 - x780 - x781)) * x1
-                        - m2 * (x1 * x2 * x783 + x21 * x784) - x0 * x787 * x6,
-                    (-x778 - x0 * x0 * x787 - x765 * x4 * x4 * J1 - 2.0 * x221 - x779
-                        - x780 - x781) * x13 - m2 * (x56 * x2 * x784 + x783 * x13)
-                        - m1 * (x70 * x771 * x13 + x2 * (x72 * x770 - x768))
-                        + x2
-                            * (x773 - 2.0 * x236 - 2.0 * x237 - x15 * x15 * x764 * J1
-                                + x526 + x774 + x17 * x17 * x763 + x775),
-                    x15 * (m2 * d * x784 + x17 * (-x764 * J1 - x761 - x762))
-                        + (x0 * (x785 - x765 * J1 + x786) - d * x771 * m1) * x4,
-                    (x772 - x769) * J1 + (x166 - x772 + x769 + x167) * J2
-                        - d * m1 * x770,
-                    (-x776 - x777) * J1 - x782 * m2 * d
-                        + J2 * (x776 - x163 + x777 + x164),
-                    -m2 * (2.0 * (x231 * d * x15 * x90) + x83 * x784 + x782 * x94)
-                        - m1 * (x767 * x4 * x87 + x771 * x89 + x84 * x770),
-                    -m1 * (x767 * x4 * x104 + x101 * x770 + x771 * x108)
-                        - m2
-                            * (x782 * x114 + 2.0 * (x110 * x231 * d * x15) + x99 * x784),
-                    (-m2
-                        * (gamma2_dot * x301 + theta_dot * x299
-                            + phi_dot
-                                * (0.5 * x285 - 0.5 * x287 - 0.5 * x289 + 0.5 * x291))
-                        - (gamma1_dot * x328
-                            + phi_dot
-                                * (0.5 * x318 - 0.5 * x313 - 0.5 * x320 + 0.5 * x322)
-                            + theta_dot * x326) * m1) * d,
+                    ((x569 - x816 - x818 + 2.0 * x220 + 2.0 * x221 - x819) * x8
+                        - x5 * x823) * x4 - x801 * x56 - x804 * x71
+                        - m2 * (x809 * x6 - x810 * x19) - (x55 * x811 + x671 * x812) * J1
+                        - m1 * ((x826 + x828) * x14 - x34 * x824),
+                    x5
+                        * (x816 - x569 + x818 - 2.0 * x220 - 2.0 * x221 + x139 * x804
+                            - x812 * x518 + x819) - m2 * (x809 * x8 + x133 * x810)
+                        - (x138 * x801 + x823 + x58 * x811) * x8
+                        - (x824 * x137 + (-x826 - x828) * x5) * m1,
+                    x11 * (x88 * x810 - x13 * (x812 * J1 + x804))
+                        + (x3 * (x801 - x800 * J1) - x85 * x824) * x1,
+                    x817 * J1 - x85 * x827 + J2 * (x815 + x207),
+                    (x187 - x186 + x821) * J2 - x807 * x88 - x822,
+                    -(m2 * (x97 * x810 + 2.0 * (x101 * x808) + x807 * x103)
+                        + m1 * (x100 * x824 + x106 * x825 + x108 * x827)),
+                    -(m1 * (x119 * x825 + x827 * x115 + x824 * x123)
+                        + m2 * (x111 * x810 + x807 * x128 + 2.0 * (x125 * x808))),
+                    -(d
+                        * ((phi_dot * x796 + gamma2_dot * x331 + theta_dot * x341) * m2
+                            + (x356 * gamma1_dot + x798 * phi_dot + theta_dot * x359)
+                                * m1)),
                 ],
                 [
-                    -x31 * x200 * J1
-                        - (x788 * x9 - 2.0 * (a_ * x165 * x4 * x1 * x13)) * d * m1
-                        - x791 * x6,
-                    (-x4 * x200 * J1 - x0 * x791) * x13
-                        - d * (2.0 * (a_ * x165 * x4 * x2) + x788 * x70 * x13) * m1,
-                    x4 * (x789 - x788 * d * d * m1 + x790) - x0 * x200 * J1,
+                    -(x85 * (-2.0 * (x241 * x619) - x829 * x34) + x231 * x623
+                        + x7 * x830),
+                    -(2.0 * (x241 * x636) + x829 * x137) * x85
+                        - x8 * (x3 * x830 + x58 * x231),
+                    (x830 - x166 * x829) * x1 - x813 * J1,
                     0.0,
                     0.0,
-                    -(d * m1 * (x788 * x89 - 2.0 * (x165 * x87))),
-                    -(d * (x788 * x108 - 2.0 * (x165 * x104)) * m1),
-                    -(d * m1 * (x757 * gamma1_dot + x323 * theta_dot + x329)),
+                    -((x829 * x100 - 2.0 * (x106 * x241)) * x85),
+                    -(x85 * (x829 * x123 - 2.0 * (x119 * x241))),
+                    -(x85 * (gamma1_dot * x799 + x357 + theta_dot * x362)),
                 ],
                 [
-                    -x228 * x19 * x792 - x28 * x636 * J1
-                        - m2 * d * (-2.0 * x672 - 2.0 * (a_ * x250 * x1 * x15 * x2)),
-                    x2 * (x17 * x228 * x792 - x15 * x636 * J1)
-                        - m2 * d
-                            * (-2.0 * (x228 * x56 * x2) - 2.0 * (a_ * x250 * x15 * x13)),
-                    x228 * x15 * (J1 - 2.0 * x148 - 2.0 * J2) - x17 * x636 * J1,
+                    -(x731 * x832 - x52 * x831
+                        - (2.0 * (x666 * x208) - 2.0 * x739) * x88),
+                    x88 * (2.0 * (x133 * x211) + 2.0 * (x679 * x208))
+                        + x5 * (x568 * x832 + x262 * x69),
+                    (J1 - 2.0 * J2 - 2.0 * x170) * x805 - x13 * x831,
                     0.0,
                     0.0,
-                    -(m2 * d * (2.0 * (x250 * x90) - 2.0 * (x228 * x83))),
-                    -(m2 * (2.0 * (x110 * x250) - 2.0 * (x228 * x99)) * d),
-                    -(m2 * d * (gamma2_dot * x759 + x302 + x305)),
+                    -(x88 * (2.0 * (x101 * x208) - 2.0 * (x97 * x211))),
+                    -((2.0 * (x125 * x208) - 2.0 * (x111 * x211)) * x88),
+                    -((x339 + x797 * gamma2_dot) * x88),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2910,255 +2848,260 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = J2 + d * d * m1;
-        let x1 = f64::sin(gamma1);
-        let x2 = f64::cos(gamma1);
-        let x3 = x2 * x2;
-        let x4 = f64::cos(gamma2);
-        let x5 = x4 * x4;
-        let x6 = f64::sin(gamma2);
-        let x7 = m2 * d * d + J2;
-        let x8 = Ixx + x0 * x1 * x1 + (x3 + x5) * J1 + x6 * x6 * x7;
-        let x9 = J1 - J2;
-        let x10 = -a_ - x2 * d;
-        let x11 = f64::cos(phi);
-        let x12 = f64::sin(phi);
-        let x13 = a_ + x4 * d;
-        let x14 = ((x2 * x9 + x10 * d * m1) * x1 - Ixy) * x11
-            + x12 * ((x4 * x9 - m2 * d * x13) * x6 + Ixz);
-        let x15 = f64::cos(theta);
-        let x16 = 1.0 / x15;
-        let x17 = f64::sin(theta);
-        let x18 = x17 * Ixx;
-        let x19 = x15 * (-Ixy * x12 - Ixz * x11);
-        let x20 = x2 * x17;
-        let x21 = x1 * x15 * x12 - x20;
-        let x22 = x4 * x17;
-        let x23 = -x15 * x6 * x11 - x22;
-        let x24 = (x2 * x21 + x4 * x23) * J1;
-        let x25 = x4 * x15 * x11 - x17 * x6;
-        let x26 = x2 * x15 * x12 + x17 * x1;
-        let x27 = (x25 * x6 - x26 * x1) * J2;
-        let x28 = -x26 * d - a_ * x15 * x12;
-        let x29 = -a_ * x15 * x11 - x25 * d;
-        let x30 = (x1 * m1 * x28 - m2 * x6 * x29) * d;
-        let x31 = x19 - x18 + x24 + x27 + x30 + x17 * x8;
-        let x32 = x14 * x11 + x16 * x31 * x12;
-        let x33 = x16 * x31 * x11 - x14 * x12;
-        let x34 = f64::sin(psi);
-        let x35 = f64::cos(psi);
-        let x36 = x12 * x34 + x17 * x35 * x11;
-        let x37 = x17 * x35 * x12 - x11 * x34;
-        let x38 = x1 * x36 * m1 - m2 * x37 * x6;
-        let x39 = d * x38;
-        let x40 = x35 * x11 + x17 * x12 * x34;
-        let x41 = x17 * x11 * x34 - x35 * x12;
-        let x42 = x1 * x41 * m1 - m2 * x6 * x40;
-        let x43 = x42 * d;
-        let x44 = x1 * m1 * x11 - m2 * x6 * x12;
-        let x45 = x44 * x15 * d;
-        let x46 = x2 * a_;
-        let x47 = x46 + d;
-        let x48 = a_ * a_ * x1 * x1;
-        let x49 = (x28 * x28 + (x47 * x47 + x48) * x15 * x15 * x11 * x11) * m1;
-        let x50 = d + x4 * a_;
-        let x51 = a_ * a_ * x6 * x6 + x50 * x50;
-        let x52 = m2 * (x29 * x29 + x15 * x15 * x12 * x12 * x51);
-        let x53 = (x23 * x23 + x21 * x21) * J1;
-        let x54 = x19 - x18 + x24 + x27 + x30;
-        let x55 = x11 * x11 + x12 * x12;
-        let x56 = J2 * (x15 * x15 * x55 + x25 * x25 + x26 * x26);
-        let x57 = x17 * (x19 - x18);
-        let x58 = Iyz * x11;
-        let x59 = Iyz * x12;
-        let x60 = x15
-            * (((Iyy * x12 - x58) * x15 + x17 * Ixy) * x12
-                + (x15 * (Izz * x11 - x59) + x17 * Ixz) * x11);
-        let x61 = x49 + x52 + x53 + x17 * x54 + x56 - x57 + x60;
-        let x62 = Iyy * x11;
-        let x63 = x12
-            * (m2 * (x15 * x51 * x11 + x13 * x29) - x4 * x25 * J2 + x23 * x6 * J1
-                + (x62 + x59) * x15);
-        let x64 = x17 * (x12 * Ixz - Ixy * x11);
-        let x65 = x12 * Izz;
-        let x66 = -x46 - d;
-        let x67 = (x2 * J2 * x26 + x15 * (-x65 - x58) + x21 * x1 * J1
-            + (x10 * x28 + x15 * x12 * (x47 * x66 - x48)) * m1) * x11;
-        let x68 = x63 - x64 + x67;
-        let x69 = x61 * x16 * x12 + x17 * x32 + x68 * x11;
-        let x70 = J2 * ((x3 + 1.0) * x11 * x11 + (x5 + 1.0) * x12 * x12)
-            + (x1 * x1 * x11 * J1 + x62 + x59) * x11
-            + (x51 * x11 * x11 + x13 * x13 * x12 * x12) * m2
-            + x12 * (x65 + x58 + x6 * x6 * x12 * J1)
-            + ((x48 + x66 * x66) * x12 * x12 + x10 * x10 * x11 * x11) * m1;
-        let x71 = x63 - x64 + x67 + x17 * x14;
-        let x72 = x70 * x11 + x16 * x71 * x12;
-        let x73 = x16 * x69 * x11 - x72 * x12;
-        let x74 = d * x47 * m1;
-        let x75 = d * x66 * m1;
-        let x76 = (x74 + x75) * x12 * x11;
-        let x77 = J2 + m2 * d * x50;
-        let x78 = x77 * x55;
-        let x79 = x4 * x35 * x15 - x6 * x36;
-        let x80 = x35 * x15 * x6 + x4 * x36;
-        let x81 = x80 * x50 - a_ * x6 * x79;
-        let x82 = x2 * x37 - x35 * x1 * x15;
-        let x83 = x37 * x1 + x2 * x35 * x15;
-        let x84 = a_ * x1 * x83;
-        let x85 = m2 * (x81 * x11 + x37 * x13 * x12)
-            + m1 * (x12 * (x82 * x66 - x84) + x10 * x36 * x11);
-        let x86 = m1 * (x15 * (x82 * x47 + x84) * x11 + x36 * x28);
-        let x87 = m2 * (x15 * x81 * x12 + x37 * x29);
-        let x88 = x17 * d * x38 + x86 + x87;
-        let x89 = x85 * x11 + x88 * x16 * x12;
-        let x90 = x4 * x15 * x34 - x6 * x41;
-        let x91 = x15 * x6 * x34 + x4 * x41;
-        let x92 = x91 * x50 - a_ * x90 * x6;
-        let x93 = x2 * x15 * x34 + x1 * x40;
-        let x94 = a_ * x1 * x93;
-        let x95 = x2 * x40 - x1 * x15 * x34;
-        let x96 = m2 * (x92 * x11 + x13 * x12 * x40)
-            + (x10 * x41 * x11 + (x95 * x66 - x94) * x12) * m1;
-        let x97 = m1 * (x15 * (x95 * x47 + x94) * x11 + x41 * x28);
-        let x98 = m2 * (x15 * x12 * x92 + x40 * x29);
-        let x99 = x17 * x42 * d + x97 + x98;
-        let x100 = x96 * x11 + x99 * x16 * x12;
-        let x101 = m2 * (x15 * x13 * x12 * x12 + (x25 * x50 - a_ * x23 * x6) * x11)
-            + m1 * ((x26 * x66 - a_ * x21 * x1) * x12 + x10 * x15 * x11 * x11);
-        let x102 = x17 * x44 * d * x12 + x101 * x11;
-        let x103 = x74 + J2;
-        let x104 = x75 - J2;
-        let x105 = x103 * x11 * x11 - x12 * x12 * x104;
-        let x106 = x88 * x16 * x11 - x12 * x85;
-        let x107 = x99 * x16 * x11 - x12 * x96;
-        let x108 = x17 * x44 * d * x11 - x101 * x12;
-        let x109 = x82 * d * m1;
-        let x110 = x95 * d * m1;
-        let x111 = x26 * d * m1;
-        let x112 = m2 * d * x80;
-        let x113 = m2 * d * x91;
-        let x114 = m2 * x25 * d;
-        let x115 = m2 + m0 + m1;
-        let x116 = theta_dot * x11;
-        let x117 = x15 * psi_dot * x12;
-        let x118 = x116 + x117;
-        let x119 = x17 * psi_dot;
-        let x120 = phi_dot - x119;
-        let x121 = x15 * psi_dot * x11;
-        let x122 = theta_dot * x12;
-        let x123 = x121 - x122;
-        let x124 = x123 * Izz - Iyz * x118 - Ixz * x120;
-        let x125 = x124 * x118;
-        let x126 = -phi_dot - x119;
-        let x127 = theta_dot * x126 * x11;
-        let x128 = x15 * psi_dot * x12 * phi_dot;
-        let x129 = x127 - x128;
-        let x130 = x129 * Ixz;
-        let x131 = Iyy * x118 - x123 * Iyz - Ixy * x120;
-        let x132 = x123 * x131;
-        let x133 = theta_dot * x126 * x12;
-        let x134 = x15 * psi_dot * phi_dot * x11;
-        let x135 = x133 + x134;
-        let x136 = Ixy * x135;
-        let x137 = J2 - J1;
-        let x138 = x4 * x120 - x123 * x6;
-        let x139 = gamma2_dot + x116 + x117;
-        let x140 = x137 * x138 * x139;
-        let x141 = x139 * d + x4 * a_ * x118;
-        let x142 = theta_dot * x15 * psi_dot;
-        let x143 = -x123 * gamma2_dot - x142;
-        let x144 = gamma2_dot * x120;
-        let x145 = x143 * x6 + (x127 - x128 + x144) * x4;
-        let x146 = x6 * x120 + x4 * x123;
-        let x147 = a_ * (x128 - x127 - x146 * x6 * x118) - x141 * x138 - x145 * d;
-        let x148 = J2 * x145;
-        let x149 = x1 * x118 + x2 * x120;
-        let x150 = x121 + gamma1_dot - x122;
-        let x151 = x2 * a_ * x123 + x150 * d;
-        let x152 = x133 + x134 - gamma1_dot * x120;
-        let x153 = gamma1_dot * x118;
-        let x154 = x2 * x152 + x1 * (x142 - x153);
-        let x155 = x2 * x118 - x1 * x120;
-        let x156 = x149 * x151 - d * x154 + a_ * (-x123 * x1 * x155 - x133 - x134);
-        let x157 = x150 * x9 * x149;
-        let x158 = J2 * x154;
-        let x159 = x2 * (x153 - x142) + x152 * x1;
-        let x160 = x6 * (x128 - x127 - x144) + x4 * x143;
-        let x161 = 0.5 * (x16 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        let x162 = ((0.25 - 0.25 * (x16 * f64::cos(3.0 * theta))) * psi_dot
-            + x17 * phi_dot) * x16 + x15 * psi_dot;
-        let x163 = x130 - x125 + x132 + x136 + x6 * (m2 * x147 * d - x140 - x148)
-            + x14 * x15 * psi_dot * phi_dot + x1 * (x157 - x156 * d * m1 + x158)
-            + (-x2 * x159 - x4 * x160) * J1
-            + (Ixx * x15 * psi_dot - x161 * x16 * x54 - x162 * x8) * theta_dot;
-        let x164 = -a_ * x118 - d * x155;
-        let x165 = x164 * x155 - x150 * x151 + a_ * (x2 * x123 * gamma1_dot + x129 * x1);
-        let x166 = a_ * x1 * x165;
-        let x167 = x129 * d - x149 * x164 + a_ * (x2 * x129 + x123 * x123 * x1);
-        let x168 = theta_dot * x15 * psi_dot * Ixz;
-        let x169 = x137 * x149 * x155;
-        let x170 = x131 * x120;
-        let x171 = x140 + x148;
-        let x172 = Ixx * x120 - x123 * Ixz - Ixy * x118;
-        let x173 = x118 * x172;
-        let x174 = Iyz * x135;
-        let x175 = x129 * J2;
-        let x176 = x129 * Izz;
-        let x177 = -x146 * d - a_ * x123;
-        let x178 = a_ * (-x4 * gamma2_dot * x118 - x135 * x6) - x146 * x177
-            + x141 * x139;
-        let x179 = x135 * d + x138 * x177 + a_ * (x4 * x135 + x6 * x118 * x118);
-        let x180 = x179 * x50 - a_ * x6 * x178;
-        let x181 = x123 * x172;
-        let x182 = Iyy * x135;
-        let x183 = x124 * x120;
-        let x184 = Ixy * theta_dot * x15 * psi_dot;
-        let x185 = x157 + x158;
-        let x186 = x129 * Iyz;
-        let x187 = J2 * x135;
-        let x188 = x138 * x9 * x146;
-        let x189 = x12
-            * (x168 - x160 * x6 * J1 + x169 + x170 + x4 * x171 - x173 - x174 + x175
-                + x176) - (x12 * (x167 * x66 - x166) + x156 * x10 * x11) * m1
-            + (-x161 * x16 * x68 - x14 * x162) * theta_dot
-            - m2 * (x180 * x11 + x147 * x13 * x12) + x15 * psi_dot * x70 * phi_dot
-            + (x183 - x181 - x182 - x1 * J1 * x159 - x184 - x2 * x185 + x186 - x187
-                - x188) * x11;
-        let x190 = (-x23 * x160 - x21 * x159) * J1 - x185 * x26
-            - ((x166 + x167 * x47) * x15 * x11 + x156 * x28) * m1
-            + (x125 - theta_dot * Ixx * x15 * psi_dot - x130 - x132 - x136) * x17
-            - x171 * x25
-            + theta_dot
-                * (-x161 * x16 * (x49 + x52 + x53 + x56 - x57 + x60) - x162 * x54)
-            + x17 * x163
-            + x15
-                * (psi_dot * phi_dot * x68
-                    + x12 * (x183 - x181 - x182 - x184 + x186 - x187 - x188)
-                    + (x173 - x168 - x169 - x170 + x174 - x175 - x176) * x11)
-            - m2 * (x180 * x15 * x12 + x147 * x29);
-        let x191 = a_ * x17 * theta_dot * theta_dot;
-        let x192 = x4 * x12;
-        let x193 = x6 * x11;
-        let x194 = (-x192 - x193) * x15;
-        let x195 = x15 * (x192 + x193);
-        let x196 = (x193 - x192) * x15;
-        let x197 = (x192 - x193) * x15;
-        let x198 = 0.25 * x194 - 0.25 * x195 - 0.25 * x196 + 0.25 * x197 - x22;
-        let x199 = x6 * x12;
-        let x200 = x4 * x11;
-        let x201 = x17 * (x199 + x200);
-        let x202 = x17 * (x200 - x199);
-        let x203 = x17 * x12;
-        let x204 = x15 * x11;
-        let x205 = x2 * (x203 + x204);
-        let x206 = x15 * x12;
-        let x207 = x17 * x11;
-        let x208 = x1 * (x206 - x207);
-        let x209 = x2 * (x204 - x203);
-        let x210 = x1 * (x207 - x206);
-        let x211 = x1 * (x206 + x207);
-        let x212 = (-x206 - x207) * x1;
-        let x213 = 0.25 * x210 - 0.25 * x208 - 0.25 * x211 + x20 + 0.25 * x212;
+        let x0 = d * m1;
+        let x1 = x0 * d + J2;
+        let x2 = f64::sin(gamma1);
+        let x3 = m2 * d;
+        let x4 = J2 + x3 * d;
+        let x5 = f64::sin(gamma2);
+        let x6 = f64::cos(gamma1);
+        let x7 = x6 * x6;
+        let x8 = f64::cos(gamma2);
+        let x9 = x8 * x8;
+        let x10 = x1 * x2 * x2 + Ixx + x4 * x5 * x5 + (x7 + x9) * J1;
+        let x11 = f64::sin(theta);
+        let x12 = f64::cos(theta);
+        let x13 = f64::sin(phi);
+        let x14 = x12 * x13;
+        let x15 = x6 * x11;
+        let x16 = x14 * x2 - x15;
+        let x17 = f64::cos(phi);
+        let x18 = x12 * x17;
+        let x19 = x8 * x11;
+        let x20 = x5 * x18 + x19;
+        let x21 = x8 * x18 - x11 * x5;
+        let x22 = x11 * x2 + x6 * x14;
+        let x23 = x22 * d + a_ * x14;
+        let x24 = x2 * m1;
+        let x25 = m2 * x5;
+        let x26 = a_ * x18 + x21 * d;
+        let x27 = -x11 * Ixx - x12 * (Ixy * x13 + Ixz * x17);
+        let x28 = (J1 * (x6 * x16 - x8 * x20) + J2 * (x21 * x5 - x22 * x2))
+            + (d * (x25 * x26 - x23 * x24) + x27);
+        let x29 = x10 * x11 + x28;
+        let x30 = 1.0 / x12;
+        let x31 = x30 * x13;
+        let x32 = J1 - J2;
+        let x33 = a_ + x6 * d;
+        let x34 = a_ + x8 * d;
+        let x35 = (x2 * (x6 * x32 - x33 * x0) - Ixy) * x17
+            + x13 * (x5 * (x8 * x32 - x3 * x34) + Ixz);
+        let x36 = x29 * x31 + x35 * x17;
+        let x37 = x30 * x17;
+        let x38 = x29 * x37 - x35 * x13;
+        let x39 = f64::cos(psi);
+        let x40 = x11 * x13;
+        let x41 = f64::sin(psi);
+        let x42 = x39 * x40 - x17 * x41;
+        let x43 = x11 * x17;
+        let x44 = x13 * x41 + x43 * x39;
+        let x45 = x44 * x24 - x42 * x25;
+        let x46 = d * x45;
+        let x47 = x43 * x41 - x39 * x13;
+        let x48 = x39 * x17 + x40 * x41;
+        let x49 = x24 * x47 - x25 * x48;
+        let x50 = x49 * d;
+        let x51 = x24 * x17 - x25 * x13;
+        let x52 = x12 * d * x51;
+        let x53 = Iyz * x17;
+        let x54 = Iyz * x13;
+        let x55 = x6 * a_;
+        let x56 = x55 + d;
+        let x57 = x56 * x56;
+        let x58 = a_ * x2;
+        let x59 = x58 * x58;
+        let x60 = x57 + x59;
+        let x61 = a_ * x5;
+        let x62 = x8 * a_;
+        let x63 = x62 + d;
+        let x64 = x61 * x61 + x63 * x63;
+        let x65 = x17 * x17;
+        let x66 = x13 * x13;
+        let x67 = x65 + x66;
+        let x68 = (x12
+            * (((Iyy * x13 - x53) * x12 + x11 * Ixy) * x13
+                + (x12 * (Izz * x17 - x54) + x11 * Ixz) * x17) - x11 * x27)
+            + ((m1 * (x60 * x18 * x18 + x23 * x23) + m2 * (x14 * x14 * x64 + x26 * x26))
+                + (J2 * (x22 * x22 + x12 * x12 * x67 + x21 * x21)
+                    + (x20 * x20 + x16 * x16) * J1));
+        let x69 = x68 + x11 * x28;
+        let x70 = Iyy * x17 + x54;
+        let x71 = x5 * J1;
+        let x72 = x13 * Izz + x53;
+        let x73 = x2 * J1;
+        let x74 = (x13
+            * (m2 * (x64 * x18 - x34 * x26) + x12 * x70 - x8 * J2 * x21 - x71 * x20)
+            - x11 * (x13 * Ixz - Ixy * x17))
+            + (m1 * (x33 * x23 + x14 * (-x57 - x59)) + x6 * J2 * x22 - x12 * x72
+                + x73 * x16) * x17;
+        let x75 = x31 * x69 + x17 * x74 + x11 * x36;
+        let x76 = x11 * x35 + x74;
+        let x77 = -(x33 * x17);
+        let x78 = x5 * x13;
+        let x79 = x34 * x13;
+        let x80 = (x60 * x66 + x77 * x77) * m1 + (x73 * x2 * x17 + x70) * x17
+            + x13 * (x78 * x71 + x72) + J2 * ((x9 + 1.0) * x66 + x65 * (x7 + 1.0))
+            + m2 * (x79 * x79 + x65 * x64);
+        let x81 = x76 * x31 + x80 * x17;
+        let x82 = x75 * x37 - x81 * x13;
+        let x83 = J2 + x3 * x63;
+        let x84 = x83 * x67;
+        let x85 = x39 * x12;
+        let x86 = x8 * x44 + x5 * x85;
+        let x87 = x8 * x85 - x44 * x5;
+        let x88 = x63 * x86 - x87 * x61;
+        let x89 = x6 * x42 - x2 * x85;
+        let x90 = x89 * x56;
+        let x91 = x6 * x85 + x42 * x2;
+        let x92 = x58 * x91;
+        let x93 = (x14 * x88 - x42 * x26) * m2 + m1 * ((x90 + x92) * x18 - x44 * x23);
+        let x94 = x11 * d;
+        let x95 = x93 + x94 * x45;
+        let x96 = (x44 * x77 + x13 * (-x90 - x92)) * m1 + m2 * (x42 * x79 + x88 * x17);
+        let x97 = x31 * x95 + x96 * x17;
+        let x98 = x12 * x41;
+        let x99 = x6 * x48 - x2 * x98;
+        let x100 = x99 * x56;
+        let x101 = x48 * x2 + x6 * x98;
+        let x102 = x101 * x58;
+        let x103 = x8 * x98 - x5 * x47;
+        let x104 = x5 * x98 + x8 * x47;
+        let x105 = x63 * x104 - x103 * x61;
+        let x106 = m1 * (x77 * x47 + (-x100 - x102) * x13)
+            + m2 * (x105 * x17 + x48 * x79);
+        let x107 = ((x100 + x102) * x18 - x23 * x47) * m1
+            + m2 * (x14 * x105 - x48 * x26);
+        let x108 = x49 * x94 + x107;
+        let x109 = x106 * x17 + x31 * x108;
+        let x110 = m1 * (x77 * x18 + x13 * (-x22 * x56 - x16 * x58))
+            + ((x63 * x21 + x61 * x20) * x17 + x14 * x79) * m2;
+        let x111 = x94 * x51;
+        let x112 = x110 * x17 + x13 * x111;
+        let x113 = x0 * x56;
+        let x114 = J2 + x113;
+        let x115 = -J2 - x113;
+        let x116 = x65 * x114 - x115 * x66;
+        let x117 = x95 * x37 - x96 * x13;
+        let x118 = x108 * x37 - x13 * x106;
+        let x119 = x111 * x17 - x13 * x110;
+        let x120 = x89 * x0;
+        let x121 = x99 * x0;
+        let x122 = x22 * x0;
+        let x123 = x3 * x86;
+        let x124 = x3 * x104;
+        let x125 = x3 * x21;
+        let x126 = m2 + m0 + m1;
+        let x127 = x11 * psi_dot;
+        let x128 = phi_dot + x127;
+        let x129 = theta_dot * x13;
+        let x130 = x12 * psi_dot;
+        let x131 = x130 * phi_dot;
+        let x132 = x131 * x17;
+        let x133 = x132 - x128 * x129;
+        let x134 = phi_dot - x127;
+        let x135 = x133 - gamma1_dot * x134;
+        let x136 = x130 * theta_dot;
+        let x137 = theta_dot * x17;
+        let x138 = x130 * x13 + x137;
+        let x139 = x138 * gamma1_dot;
+        let x140 = x2 * x135 + (x139 - x136) * x6;
+        let x141 = x130 * x17 - x129;
+        let x142 = x136 + gamma2_dot * x141;
+        let x143 = x13 * x131;
+        let x144 = x128 * x137;
+        let x145 = x143 + x144;
+        let x146 = gamma2_dot * x134;
+        let x147 = x5 * (x145 - x146) - x8 * x142;
+        let x148 = x130
+            + ((0.25 - 0.25 * (x30 * f64::cos(3.0 * theta))) * psi_dot + x11 * phi_dot)
+                * x30;
+        let x149 = 0.5 * (x30 * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        let x150 = x149 * x30;
+        let x151 = x138 * x2 + x6 * x134;
+        let x152 = x141 + gamma1_dot;
+        let x153 = d * x152 + x55 * x141;
+        let x154 = x6 * x135 + x2 * (x136 - x139);
+        let x155 = x141 * x2;
+        let x156 = x6 * x138 - x2 * x134;
+        let x157 = x151 * x153 - x154 * d - a_ * (x155 * x156 + x133);
+        let x158 = x151 * x32;
+        let x159 = x152 * x158 + x154 * J2;
+        let x160 = -x143 - x144;
+        let x161 = x160 * Ixz;
+        let x162 = x141 * Izz - Ixz * x134 - Iyz * x138;
+        let x163 = x138 * x162;
+        let x164 = Ixy * x133;
+        let x165 = Iyy * x138 - Ixy * x134 - Iyz * x141;
+        let x166 = x141 * x165;
+        let x167 = x8 * (x160 + x146) - x142 * x5;
+        let x168 = x167 * J2;
+        let x169 = J2 - J1;
+        let x170 = x8 * x134 - x141 * x5;
+        let x171 = x169 * x170;
+        let x172 = gamma2_dot + x138;
+        let x173 = x171 * x172;
+        let x174 = x5 * x134 + x8 * x141;
+        let x175 = x138 * x5;
+        let x176 = d * x172 + x138 * x62;
+        let x177 = a_ * (x145 - x174 * x175) - x167 * d - x176 * x170;
+        let x178 = theta_dot * (x130 * Ixx - x10 * x148 - x150 * x28)
+            - (x6 * x140 + x8 * x147) * J1 + (x159 - x0 * x157) * x2 + x161 - x163 + x164
+            + x35 * x131 + x166 + (x3 * x177 - x168 - x173) * x5;
+        let x179 = x160 * J2;
+        let x180 = x160 * Izz;
+        let x181 = x168 + x173;
+        let x182 = x136 * Ixz;
+        let x183 = Iyz * x133;
+        let x184 = x165 * x134;
+        let x185 = x169 * x151 * x156;
+        let x186 = Ixx * x134 - x141 * Ixz - Ixy * x138;
+        let x187 = x138 * x186;
+        let x188 = d * x174 + a_ * x141;
+        let x189 = d * x133 - x188 * x170 + a_ * (x8 * x133 + x138 * x175);
+        let x190 = x174 * x188 + x176 * x172 - a_ * (x8 * gamma2_dot * x138 + x5 * x133);
+        let x191 = x189 * x63 - x190 * x61;
+        let x192 = d * x156 + a_ * x138;
+        let x193 = x151 * x192 + a_ * (x141 * x155 + x6 * x160) + x160 * d;
+        let x194 = x193 * x56;
+        let x195 = a_ * (x160 * x2 + x6 * x141 * gamma1_dot) - x192 * x156 - x153 * x152;
+        let x196 = x58 * x195;
+        let x197 = J2 * x133;
+        let x198 = ((x162 * x134 - Ixy * x136) + (x160 * Iyz - x197))
+            + ((-Iyy * x133 - x141 * x186) - x32 * x174 * x170);
+        let x199 = (x179 - x147 * x71 + x180 + x8 * x181 + x182 - x183 + x184 + x185
+            - x187) * x13 - theta_dot * (x148 * x35 + x150 * x74)
+            - m2 * (x177 * x79 + x191 * x17) - m1 * ((-x194 - x196) * x13 + x157 * x77)
+            + (x198 - x6 * x159 - x73 * x140) * x17 + x80 * x131;
+        let x200 = psi_dot * phi_dot;
+        let x201 = x12
+            * (x198 * x13 + x200 * x74
+                + (x183 - x179 - x180 - x182 - x184 - x185 + x187) * x17)
+            - (x16 * x140 - x147 * x20) * J1 - m2 * (x14 * x191 - x177 * x26)
+            - ((x194 + x196) * x18 - x23 * x157) * m1 - x181 * x21 + x178 * x11
+            + x11 * (x163 - x161 - x164 - x166 - x136 * Ixx) - x22 * x159
+            - (x148 * x28 + x150 * x68) * theta_dot;
+        let x202 = x148 * d;
+        let x203 = a_ * x11 * theta_dot * theta_dot;
+        let x204 = x8 * x13;
+        let x205 = x5 * x17;
+        let x206 = x204 + x205;
+        let x207 = (x205 - x204) * x12;
+        let x208 = (x204 - x205) * x12;
+        let x209 = -(0.5 * x206 * x12) + (0.25 * x208 - 0.25 * x207);
+        let x210 = phi_dot * phi_dot;
+        let x211 = x209 - x19;
+        let x212 = x8 * x17;
+        let x213 = x11 * (x212 - x78);
+        let x214 = (x11 * (x78 + x212) + 0.5 * x207) + 0.5 * x208;
+        let x215 = x43 + x14;
+        let x216 = x2 * (x14 - x43);
+        let x217 = x2 * (x43 - x14);
+        let x218 = -(0.5 * x215 * x2) + (0.25 * x217 - 0.25 * x216);
+        let x219 = x215 * x2;
+        let x220 = 0.5 * x219 + x6 * (x18 - x40);
+        let x221 = x6 * (x40 + x18);
+        let x222 = x218 + x15;
+        let x223 = 0.5 * x216 - 0.5 * x219;
         Assembly {
             qdot: [
                 psi_dot,
@@ -3171,90 +3114,69 @@ pub mod maggi {
                 Z_dot,
             ],
             matrix: [
-                [x8, x32, x33, 0.0, 0.0, x39, x43, x45],
-                [x32, x16 * x12 * x69 + x72 * x11, x73, x76, x78, x89, x100, x102],
+                [x10, x36, x38, 0.0, 0.0, x46, x50, x52],
+                [x36, x31 * x75 + x81 * x17, x82, 0.0, x84, x97, x109, x112],
                 [
-                    x33,
-                    x73,
-                    (x61 * x16 * x11 - x12 * x68 + x17 * x33) * x16 * x11
-                        - (x16 * x71 * x11 - x70 * x12) * x12,
-                    x105,
+                    x38,
+                    x82,
+                    (x69 * x37 - x13 * x74 + x11 * x38) * x37
+                        - x13 * (x76 * x37 - x80 * x13),
+                    x116,
                     0.0,
-                    x106,
-                    x107,
-                    x108,
+                    x117,
+                    x118,
+                    x119,
                 ],
-                [0.0, x76, x105, x0, 0.0, x109, x110, x111],
-                [0.0, x78, 0.0, 0.0, x7, x112, x113, x114],
-                [x39, x89, x106, x109, x112, x115, 0.0, 0.0],
-                [x43, x100, x107, x110, x113, 0.0, x115, 0.0],
-                [x45, x102, x108, x111, x114, 0.0, 0.0, x115],
+                [0.0, 0.0, x116, x1, 0.0, x120, x121, x122],
+                [0.0, x84, 0.0, 0.0, x4, x123, x124, x125],
+                [x46, x97, x117, x120, x123, x126, 0.0, 0.0],
+                [x50, x109, x118, x121, x124, 0.0, x126, 0.0],
+                [x52, x112, x119, x122, x125, 0.0, 0.0, x126],
             ],
             force: [
-                x163,
-                x189 * x11 + x16 * x190 * x12,
-                x16 * x190 * x11 - x189 * x12,
-                x15 * psi_dot * x12 * x104 * phi_dot - x167 * d * m1
-                    - theta_dot * x161 * x103 * x11 - x175 + x9 * x149 * x155,
-                x137 * x138 * x146 + (x134 - theta_dot * x161 * x12) * x77 - x187
-                    - m2 * x179 * d,
-                theta_dot * (-x162 * d * x38 - (x86 + x87) * x161 * x16)
-                    - m2 * (x179 * x80 + x37 * x147 + x79 * x178)
-                    - (x165 * x83 + x82 * x167 + x156 * x36) * m1
-                    + x15 * psi_dot * phi_dot * x85,
-                (-x42 * x162 * d - x161 * x16 * (x97 + x98)) * theta_dot
-                    + x15 * psi_dot * phi_dot * x96
-                    - m2 * (x147 * x40 + x90 * x178 + x179 * x91)
-                    - (x165 * x93 + x167 * x95 + x156 * x41) * m1,
-                x15 * (x101 * psi_dot * phi_dot - theta_dot * x44 * x162 * d)
+                x178,
+                x199 * x17 + x31 * x201,
+                x201 * x37 - x13 * x199,
+                x158 * x156 - x179 - x149 * x137 * x114 - x193 * x0 + x115 * x143,
+                x171 * x174 - x3 * x189 + x83 * (x132 - x149 * x129) - x197,
+                x96 * x131 - m2 * (x42 * x177 + x87 * x190 + x189 * x86)
+                    - (x150 * x93 + x202 * x45) * theta_dot
+                    - (x44 * x157 + x91 * x195 + x193 * x89) * m1,
+                x131 * x106 - m2 * (x48 * x177 + x189 * x104 + x103 * x190)
+                    - theta_dot * (x49 * x202 + x150 * x107)
+                    - m1 * (x193 * x99 + x157 * x47 + x101 * x195),
+                (x200 * x110 - theta_dot * x202 * x51) * x12
                     - m2
-                        * (((0.25 * x194 - 0.25 * x195 - 0.25 * x196 + 0.25 * x197)
-                            * phi_dot * phi_dot
-                            + (theta_dot * x198
-                                + phi_dot
-                                    * (x201 - 0.5 * x194 - 0.5 * x195 + 0.5 * x196 + 0.5 * x197
-                                        - x202)) * theta_dot
-                            + gamma2_dot
-                                * (phi_dot
-                                    * (0.5 * x194 - 0.5 * x195 + 0.5 * x196 - 0.5 * x197)
-                                    + (-x201 - 0.5 * x194 - 0.5 * x195 - 2.0 * (x15 * x6)
-                                        - 0.5 * x196 - 0.5 * x197 - x202) * theta_dot
-                                    + gamma2_dot * x198)) * d - x191)
-                    - (x191
-                        + (theta_dot
-                            * ((0.5 * x208 - x205 + x209 + 2.0 * (x1 * x15) + 0.5 * x210
-                                - 0.5 * x211 - 0.5 * x212) * gamma1_dot + theta_dot * x213
-                                + (0.5 * x208 - 0.5 * x210 - 0.5 * x211 + 0.5 * x212)
-                                    * phi_dot)
-                            + gamma1_dot
-                                * (x213 * gamma1_dot
-                                    + phi_dot
-                                        * (x205 - 0.5 * x208 + x209 - 0.5 * x210 - 0.5 * x211
-                                            - 0.5 * x212))
-                            + (0.25 * x210 - 0.25 * x208 - 0.25 * x211 + 0.25 * x212)
-                                * phi_dot * phi_dot) * d) * m1,
+                        * (d
+                            * (x209 * x210
+                                + gamma2_dot
+                                    * ((0.5 * x207 - x206 * x12 - 0.5 * x208) * phi_dot
+                                        + gamma2_dot * x211
+                                        - theta_dot * (x213 + x214 + 2.0 * (x12 * x5)))
+                                + theta_dot * (theta_dot * x211 + phi_dot * (x214 - x213)))
+                            - x203)
+                    - (x203
+                        + d
+                            * (x210 * x218
+                                + ((x220 - 0.5 * x219 - 0.5 * x216 - 0.5 * x217 + x221)
+                                    * phi_dot + gamma1_dot * x222) * gamma1_dot
+                                + theta_dot
+                                    * ((2.0 * (x2 * x12) + x220 + 0.5 * x217 + x223 - x221)
+                                        * gamma1_dot + (x223 - 0.5 * x219 - 0.5 * x217) * phi_dot
+                                        + theta_dot * x222))) * m1,
             ],
             w: [
-                [0.0, x16 * x12, x16 * x11, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x11, -x12, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x17 * x16 * x12, x17 * x16 * x11, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x31, x37, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x17, -x13, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x11 * x31, x11 * x37, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * x161 * x16,
-                -(x15 * psi_dot * phi_dot),
-                theta_dot * x162,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
-            checks: [x15],
+            c: [x150 * theta_dot, -x131, x148 * theta_dot, 0.0, 0.0, 0.0, 0.0, 0.0],
+            checks: [x12],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -3362,39 +3284,53 @@ pub mod maggi {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
+        let x0 = f64::cos(gamma1);
+        let x1 = f64::sin(theta);
         let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let x3 = f64::sin(phi);
+        let x4 = x2 * x3;
+        let x5 = f64::cos(phi);
+        let x6 = f64::sin(psi);
+        let x7 = x5 * x6;
+        let x8 = x1 * x4 - x7;
+        let x9 = f64::sin(gamma1);
+        let x10 = f64::cos(theta);
+        let x11 = x2 * x10;
+        let x12 = x0 * x8 - x9 * x11;
+        let x13 = gamma1_dot * m1;
+        let x14 = f64::sin(gamma2);
+        let x15 = m2 * x14;
+        let x16 = x9 * m1;
+        let x17 = x2 * x5;
+        let x18 = x3 * x6;
+        let x19 = x1 * x17 + x18;
+        let x20 = m2 * gamma2_dot;
+        let x21 = f64::cos(gamma2);
+        let x22 = x14 * x11 + x21 * x19;
+        let x23 = x0 * a_ + d;
+        let x24 = x12 * x23;
+        let x25 = a_ * x9;
+        let x26 = (x0 * x11 + x9 * x8) * x25;
+        let x27 = x10 * x5;
+        let x28 = x10 * x3;
+        let x29 = x1 * x9 + x0 * x28;
+        let x30 = x29 * d + a_ * x28;
+        let x31 = a_ * x14;
+        let x32 = d + x21 * a_;
+        let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
+        let x34 = x21 * x27 - x1 * x14;
+        let x35 = a_ * x27 + x34 * d;
+        let x36 = -((a_ + x0 * d) * x5);
+        let x37 = (a_ + x21 * d) * x3;
+        let x38 = m2 + m0 + m1;
+        let x39 = x1 * x7 - x4;
+        let x40 = x1 * x18 + x17;
+        let x41 = x10 * x6;
+        let x42 = (x40 * x9 + x0 * x41) * x25;
+        let x43 = x0 * x40 - x9 * x41;
+        let x44 = x43 * x23;
+        let x45 = x14 * x41 + x21 * x39;
+        let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -3426,31 +3362,24 @@ pub mod maggi {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
+            d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
+                + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
+                    * psi_dot
+                + theta_dot
+                    * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
+                + X_dot * x38,
+            Y_dot * x38
+                + theta_dot
+                    * ((x39 * x36 + (-x42 - x44) * x3) * m1
+                        + m2 * (x40 * x37 + x46 * x5))
+                + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
+                    * psi_dot
+                + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
-                + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
-            theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
+                    + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
+                + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
+                + Z_dot * x38,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -3570,1292 +3499,1253 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let x0 = d * d * m1;
-        let x1 = J2 + x0;
-        let x2 = f64::sin(gamma1);
-        let x3 = x1 * x2 * x2;
-        let x4 = f64::cos(gamma1);
-        let x5 = x4 * x4;
-        let x6 = f64::cos(gamma2);
-        let x7 = x6 * x6;
-        let x8 = (x5 + x7) * J1;
+        let x0 = d * m1;
+        let x1 = x0 * d;
+        let x2 = x1 + J2;
+        let x3 = f64::sin(gamma1);
+        let x4 = x3 * x3;
+        let x5 = f64::cos(gamma1);
+        let x6 = x5 * x5;
+        let x7 = f64::cos(gamma2);
+        let x8 = x7 * x7;
         let x9 = f64::sin(gamma2);
-        let x10 = m2 * d * d;
-        let x11 = x10 + J2;
-        let x12 = x9 * x9 * x11;
-        let x13 = Ixx + x3 + x8 + x12;
-        let x14 = J1 - J2;
-        let x15 = x4 * d;
-        let x16 = -a_ - x15;
-        let x17 = x4 * x14 + x16 * d * m1;
-        let x18 = f64::cos(phi);
-        let x19 = (x17 * x2 - Ixy) * x18;
-        let x20 = f64::sin(phi);
-        let x21 = x6 * d;
-        let x22 = a_ + x21;
-        let x23 = x6 * x14 - m2 * d * x22;
-        let x24 = x23 * x9 + Ixz;
-        let x25 = x20 * x24;
-        let x26 = x19 + x25;
-        let x27 = x26 * x18;
-        let x28 = f64::cos(theta);
-        let x29 = 1.0 / x28;
-        let x30 = f64::sin(theta);
-        let x31 = x30 * Ixx;
-        let x32 = Ixy * x20;
-        let x33 = Ixz * x18;
-        let x34 = -x32 - x33;
-        let x35 = x28 * x34;
-        let x36 = x2 * x28 * x20;
-        let x37 = x4 * x30;
-        let x38 = x36 - x37;
-        let x39 = x6 * x30;
-        let x40 = -x28 * x9 * x18 - x39;
-        let x41 = (x4 * x38 + x6 * x40) * J1;
-        let x42 = x30 * x9;
-        let x43 = x6 * x28 * x18;
-        let x44 = x43 - x42;
-        let x45 = x30 * x2;
-        let x46 = x4 * x28 * x20 + x45;
-        let x47 = (x44 * x9 - x46 * x2) * J2;
-        let x48 = x46 * d;
-        let x49 = a_ * x28 * x20;
-        let x50 = -x48 - x49;
-        let x51 = a_ * x28 * x18;
-        let x52 = x44 * d;
-        let x53 = -x51 - x52;
-        let x54 = (x2 * m1 * x50 - m2 * x9 * x53) * d;
-        let x55 = x30 * x13;
-        let x56 = x35 - x31 + x41 + x47 + x54 + x55;
-        let x57 = x29 * x56 * x20;
-        let x58 = x27 + x57;
-        let x59 = x26 * x20;
-        let x60 = x29 * x56 * x18;
-        let x61 = x60 - x59;
-        let x62 = f64::sin(psi);
-        let x63 = f64::cos(psi);
-        let x64 = x20 * x62 + x30 * x63 * x18;
-        let x65 = x18 * x62;
-        let x66 = x30 * x63 * x20;
-        let x67 = x66 - x65;
-        let x68 = x2 * x64 * m1 - m2 * x67 * x9;
-        let x69 = d * x68;
-        let x70 = x63 * x18;
-        let x71 = x30 * x20 * x62;
-        let x72 = x70 + x71;
-        let x73 = x63 * x20;
-        let x74 = x30 * x18 * x62;
-        let x75 = x74 - x73;
-        let x76 = x2 * x75 * m1 - m2 * x9 * x72;
-        let x77 = x76 * d;
-        let x78 = x2 * m1 * x18;
-        let x79 = m2 * x9 * x20;
-        let x80 = x78 - x79;
-        let x81 = x80 * x28 * d;
-        let x82 = x4 * a_;
-        let x83 = x82 + d;
-        let x84 = a_ * a_ * x2 * x2;
-        let x85 = (x50 * x50 + (x83 * x83 + x84) * x28 * x28 * x18 * x18) * m1;
-        let x86 = a_ * a_ * x9 * x9;
-        let x87 = x6 * a_;
-        let x88 = d + x87;
-        let x89 = x88 * x88;
-        let x90 = x86 + x89;
-        let x91 = m2 * (x53 * x53 + x28 * x28 * x20 * x20 * x90);
-        let x92 = (x40 * x40 + x38 * x38) * J1;
-        let x93 = x35 - x31 + x41 + x47 + x54;
-        let x94 = x30 * x93;
-        let x95 = x18 * x18;
-        let x96 = x20 * x20;
-        let x97 = x95 + x96;
-        let x98 = J2 * (x28 * x28 * x97 + x44 * x44 + x46 * x46);
-        let x99 = x35 - x31;
-        let x100 = x30 * x99;
-        let x101 = Iyz * x18;
-        let x102 = Iyy * x20;
-        let x103 = x102 - x101;
-        let x104 = x103 * x28;
-        let x105 = x30 * Ixy;
-        let x106 = x104 + x105;
-        let x107 = x106 * x20;
-        let x108 = Izz * x18;
-        let x109 = Iyz * x20;
-        let x110 = x108 - x109;
-        let x111 = x28 * x110;
-        let x112 = x30 * Ixz;
-        let x113 = x111 + x112;
-        let x114 = x113 * x18;
-        let x115 = x28 * (x107 + x114);
-        let x116 = x85 + x91 + x92 + x94 + x98 - x100 + x115;
-        let x117 = x116 * x29 * x20;
-        let x118 = x6 * x44 * J2;
-        let x119 = x22 * x53;
-        let x120 = x40 * x9 * J1;
-        let x121 = Iyy * x18;
-        let x122 = x121 + x109;
-        let x123 = x122 * x28;
-        let x124 = x20 * (m2 * (x28 * x90 * x18 + x119) - x118 + x120 + x123);
-        let x125 = x20 * Ixz - Ixy * x18;
-        let x126 = x30 * x125;
-        let x127 = x4 * J2 * x46;
-        let x128 = x20 * Izz;
-        let x129 = -x128 - x101;
-        let x130 = x28 * x129;
-        let x131 = x38 * x2 * J1;
-        let x132 = x16 * x50;
-        let x133 = -x82 - d;
-        let x134 = x83 * x133;
-        let x135 = (x127 + x130 + x131 + (x132 + x28 * x20 * (x134 - x84)) * m1) * x18;
-        let x136 = x124 - x126 + x135;
-        let x137 = x136 * x18;
-        let x138 = x117 + x30 * x58 + x137;
-        let x139 = x90 * x18 * x18;
-        let x140 = x133 * x133;
-        let x141 = x84 + x140;
-        let x142 = x141 * x20 * x20;
-        let x143 = J2 * ((x5 + 1.0) * x18 * x18 + (x7 + 1.0) * x20 * x20)
-            + (x2 * x2 * x18 * J1 + x121 + x109) * x18
-            + (x139 + x22 * x22 * x20 * x20) * m2
-            + x20 * (x128 + x101 + x9 * x9 * x20 * J1)
-            + (x142 + x16 * x16 * x18 * x18) * m1;
-        let x144 = x143 * x18;
-        let x145 = x30 * x26;
-        let x146 = x124 - x126 + x135 + x145;
-        let x147 = x144 + x29 * x146 * x20;
-        let x148 = x147 * x18;
-        let x149 = x147 * x20;
-        let x150 = x29 * x138 * x18 - x149;
-        let x151 = d * x83 * m1;
-        let x152 = d * x133 * m1;
-        let x153 = x151 + x152;
-        let x154 = x153 * x20 * x18;
-        let x155 = m2 * d * x88;
-        let x156 = J2 + x155;
-        let x157 = x156 * x97;
-        let x158 = x6 * x63 * x28 - x9 * x64;
-        let x159 = a_ * x9 * x158;
-        let x160 = x63 * x28 * x9;
-        let x161 = x6 * x64;
-        let x162 = x160 + x161;
-        let x163 = x162 * x88 - x159;
-        let x164 = x163 * x18;
-        let x165 = x4 * x67 - x63 * x2 * x28;
-        let x166 = x165 * x133;
-        let x167 = x67 * x2;
-        let x168 = x4 * x63 * x28;
-        let x169 = x167 + x168;
-        let x170 = a_ * x2 * x169;
-        let x171 = x166 - x170;
-        let x172 = x20 * x171;
-        let x173 = m2 * (x164 + x67 * x22 * x20) + m1 * (x172 + x16 * x64 * x18);
-        let x174 = x173 * x18;
-        let x175 = x30 * d * x68;
-        let x176 = m1 * (x28 * (x165 * x83 + x170) * x18 + x64 * x50);
-        let x177 = m2 * (x28 * x163 * x20 + x67 * x53);
-        let x178 = x175 + x176 + x177;
-        let x179 = x174 + x178 * x29 * x20;
-        let x180 = x6 * x28 * x62;
-        let x181 = x180 - x9 * x75;
-        let x182 = a_ * x181 * x9;
-        let x183 = x28 * x9 * x62;
-        let x184 = x6 * x75;
-        let x185 = x183 + x184;
-        let x186 = x185 * x88 - x182;
-        let x187 = x186 * x18;
-        let x188 = x4 * x28 * x62;
-        let x189 = x2 * x72;
-        let x190 = x188 + x189;
-        let x191 = a_ * x2 * x190;
-        let x192 = x2 * x28 * x62;
-        let x193 = x4 * x72 - x192;
-        let x194 = x193 * x133;
-        let x195 = x194 - x191;
-        let x196 = x195 * x20;
-        let x197 = m2 * (x187 + x22 * x20 * x72) + (x16 * x75 * x18 + x196) * m1;
-        let x198 = x197 * x18;
-        let x199 = x30 * x76 * d;
-        let x200 = m1 * (x28 * (x193 * x83 + x191) * x18 + x75 * x50);
-        let x201 = m2 * (x28 * x20 * x186 + x72 * x53);
-        let x202 = x199 + x200 + x201;
-        let x203 = x198 + x202 * x29 * x20;
-        let x204 = a_ * x40 * x9;
-        let x205 = x44 * x88;
-        let x206 = a_ * x38 * x2;
-        let x207 = x46 * x133;
-        let x208 = m2 * (x28 * x22 * x20 * x20 + (x205 - x204) * x18)
-            + m1 * ((x207 - x206) * x20 + x16 * x28 * x18 * x18);
-        let x209 = x208 * x18;
-        let x210 = x30 * x80 * d * x20 + x209;
-        let x211 = x143 * x20;
-        let x212 = x29 * x146 * x18 - x211;
-        let x213 = x116 * x29 * x18;
-        let x214 = x20 * x136;
-        let x215 = x213 - x214 + x30 * x61;
-        let x216 = x151 + J2;
-        let x217 = x152 - J2;
-        let x218 = x216 * x18 * x18 - x20 * x20 * x217;
-        let x219 = x20 * x173;
-        let x220 = x178 * x29 * x18 - x219;
-        let x221 = x20 * x197;
-        let x222 = x202 * x29 * x18 - x221;
-        let x223 = x208 * x20;
-        let x224 = x30 * x80 * d * x18 - x223;
-        let x225 = x165 * d * m1;
-        let x226 = x193 * d * m1;
-        let x227 = x46 * d * m1;
-        let x228 = m2 * d * x162;
-        let x229 = m2 * d * x185;
-        let x230 = m2 * x44 * d;
-        let x231 = m2 + m0 + m1;
-        let x232 = theta_dot * x18;
-        let x233 = x28 * psi_dot * x20;
-        let x234 = x232 + x233;
-        let x235 = Iyz * x234;
-        let x236 = x30 * psi_dot;
-        let x237 = phi_dot - x236;
-        let x238 = Ixz * x237;
-        let x239 = x28 * psi_dot * x18;
-        let x240 = theta_dot * x20;
-        let x241 = x239 - x240;
-        let x242 = x241 * Izz;
-        let x243 = x242 - x235 - x238;
-        let x244 = x243 * x234;
-        let x245 = -phi_dot - x236;
-        let x246 = theta_dot * x245 * x18;
-        let x247 = x28 * psi_dot * x20 * phi_dot;
-        let x248 = x246 - x247;
-        let x249 = x248 * Ixz;
-        let x250 = x241 * Iyz;
-        let x251 = Ixy * x237;
-        let x252 = Iyy * x234 - x250 - x251;
-        let x253 = x241 * x252;
-        let x254 = theta_dot * x245 * x20;
-        let x255 = x28 * psi_dot * phi_dot * x18;
+        let x10 = x9 * x9;
+        let x11 = m2 * d;
+        let x12 = x11 * d;
+        let x13 = J2 + x12;
+        let x14 = (Ixx + x2 * x4) + ((x6 + x8) * J1 + x10 * x13);
+        let x15 = f64::cos(phi);
+        let x16 = f64::sin(phi);
+        let x17 = J1 - J2;
+        let x18 = x7 * x17;
+        let x19 = x7 * d;
+        let x20 = x19 + a_;
+        let x21 = x18 - x11 * x20;
+        let x22 = x21 * x9 + Ixz;
+        let x23 = x5 * d;
+        let x24 = a_ + x23;
+        let x25 = x24 * x0;
+        let x26 = x5 * x17 - x25;
+        let x27 = x16 * x22 + (x3 * x26 - Ixy) * x15;
+        let x28 = x15 * x27;
+        let x29 = f64::cos(theta);
+        let x30 = 1.0 / x29;
+        let x31 = x30 * x16;
+        let x32 = x29 * x16;
+        let x33 = x32 * x3;
+        let x34 = f64::sin(theta);
+        let x35 = x5 * x34;
+        let x36 = x33 - x35;
+        let x37 = x29 * x15;
+        let x38 = x7 * x34;
+        let x39 = x9 * x37 + x38;
+        let x40 = (x5 * x36 - x39 * x7) * J1;
+        let x41 = x34 * x3;
+        let x42 = x41 + x5 * x32;
+        let x43 = x42 * x3;
+        let x44 = x34 * x9;
+        let x45 = x7 * x37;
+        let x46 = x45 - x44;
+        let x47 = (x46 * x9 - x43) * J2;
+        let x48 = x34 * Ixx;
+        let x49 = Ixy * x16 + Ixz * x15;
+        let x50 = x29 * x49;
+        let x51 = -x48 - x50;
+        let x52 = m2 * x9;
+        let x53 = a_ * x37;
+        let x54 = x46 * d;
+        let x55 = x53 + x54;
+        let x56 = x42 * d;
+        let x57 = a_ * x32;
+        let x58 = x56 + x57;
+        let x59 = x3 * m1;
+        let x60 = d * (x52 * x55 - x58 * x59);
+        let x61 = (x40 + x47) + (x51 + x60);
+        let x62 = x34 * x14;
+        let x63 = x61 + x62;
+        let x64 = x28 + x31 * x63;
+        let x65 = x30 * x15;
+        let x66 = x63 * x65;
+        let x67 = x16 * x27;
+        let x68 = x66 - x67;
+        let x69 = f64::cos(psi);
+        let x70 = x34 * x16;
+        let x71 = x69 * x70;
+        let x72 = f64::sin(psi);
+        let x73 = x15 * x72;
+        let x74 = x71 - x73;
+        let x75 = x34 * x15;
+        let x76 = x16 * x72 + x75 * x69;
+        let x77 = x76 * x59 - x74 * x52;
+        let x78 = d * x77;
+        let x79 = x69 * x15 + x70 * x72;
+        let x80 = x52 * x79;
+        let x81 = x69 * x16;
+        let x82 = x75 * x72;
+        let x83 = x82 - x81;
+        let x84 = x59 * x83 - x80;
+        let x85 = d * x84;
+        let x86 = x52 * x16;
+        let x87 = x59 * x15;
+        let x88 = x87 - x86;
+        let x89 = d * x88;
+        let x90 = x89 * x29;
+        let x91 = x34 * x27;
+        let x92 = x16 * Ixz - Ixy * x15;
+        let x93 = x34 * x92;
+        let x94 = x9 * J1;
+        let x95 = x39 * x94;
+        let x96 = x7 * x46;
+        let x97 = J2 * x96;
+        let x98 = Iyy * x15;
+        let x99 = Iyz * x16;
+        let x100 = x98 + x99;
+        let x101 = x29 * x100;
+        let x102 = -(x20 * x55);
+        let x103 = x7 * a_;
+        let x104 = x103 + d;
+        let x105 = x104 * x104;
+        let x106 = a_ * x9;
+        let x107 = x106 * x106;
+        let x108 = x105 + x107;
+        let x109 = (x101 - x95 - x97 + m2 * (x102 + x108 * x37)) * x16;
+        let x110 = x5 * x42;
+        let x111 = J2 * x110;
+        let x112 = x3 * J1;
+        let x113 = x112 * x36;
+        let x114 = x16 * Izz;
+        let x115 = Iyz * x15;
+        let x116 = x114 + x115;
+        let x117 = x29 * x116;
+        let x118 = x24 * x58;
+        let x119 = x5 * a_;
+        let x120 = x119 + d;
+        let x121 = x120 * x120;
+        let x122 = a_ * x3;
+        let x123 = x122 * x122;
+        let x124 = -x121 - x123;
+        let x125 = (x111 + x113 - x117 + (x118 + x124 * x32) * m1) * x15;
+        let x126 = (x109 - x93) + x125;
+        let x127 = x91 + x126;
+        let x128 = x20 * x20;
+        let x129 = x16 * x16;
+        let x130 = x15 * x15;
+        let x131 = x130 * x108;
+        let x132 = x121 + x123;
+        let x133 = x132 * x129;
+        let x134 = x24 * x24;
+        let x135 = x134;
+        let x136 = x9 * x16;
+        let x137 = x3 * x15;
+        let x138 = m2 * (x128 * x129 + x131) + (x133 + x130 * x135) * m1
+            + x16 * (x136 * x94 + x116) + J2 * (x130 * (x6 + 1.0) + (x8 + 1.0) * x129)
+            + (x100 + x112 * x137) * x15;
+        let x139 = x138 * x15;
+        let x140 = x31 * x127 + x139;
+        let x141 = x140 * x15;
+        let x142 = x61 * x34;
+        let x143 = x51 * x34;
+        let x144 = Iyy * x16;
+        let x145 = x144 - x115;
+        let x146 = x145 * x29 + x34 * Ixy;
+        let x147 = x146 * x16;
+        let x148 = Izz * x15;
+        let x149 = x148 - x99;
+        let x150 = x29 * x149;
+        let x151 = x34 * Ixz;
+        let x152 = x150 + x151;
+        let x153 = x152 * x15;
+        let x154 = x29 * (x147 + x153);
+        let x155 = x130 + x129;
+        let x156 = (x42 * x42 + x29 * x29 * x155 + x46 * x46) * J2;
+        let x157 = (x39 * x39 + x36 * x36) * J1;
+        let x158 = x32 * x32;
+        let x159 = m2 * (x55 * x55 + x108 * x158);
+        let x160 = x37 * x37;
+        let x161 = m1 * (x58 * x58 + x132 * x160);
+        let x162 = (x154 - x143) + ((x156 + x157) + (x159 + x161));
+        let x163 = x142 + x162;
+        let x164 = x126 * x15;
+        let x165 = x31 * x163 + x164;
+        let x166 = x165 + x34 * x64;
+        let x167 = x140 * x16;
+        let x168 = x166 * x65 - x167;
+        let x169 = x16 * x15;
+        let x170 = 0.0;
+        let x171 = x169 * x170;
+        let x172 = x104 * x11;
+        let x173 = x172 + J2;
+        let x174 = x155 * x173;
+        let x175 = x34 * d;
+        let x176 = x69 * x29;
+        let x177 = x7 * x176 - x76 * x9;
+        let x178 = x177 * x106;
+        let x179 = x7 * x76 + x9 * x176;
+        let x180 = x104 * x179;
+        let x181 = x180 - x178;
+        let x182 = x5 * x176 + x74 * x3;
+        let x183 = x182 * x122;
+        let x184 = x5 * x74 - x3 * x176;
+        let x185 = x184 * x120;
+        let x186 = m2 * (x32 * x181 - x74 * x55)
+            + (x37 * (x183 + x185) - x76 * x58) * m1;
+        let x187 = x175 * x77 + x186;
+        let x188 = x20 * x16;
+        let x189 = x181 * x15;
+        let x190 = -x183 - x185;
+        let x191 = x190 * x16;
+        let x192 = -(x24 * x15);
+        let x193 = m2 * (x74 * x188 + x189) + (x191 + x76 * x192) * m1;
+        let x194 = x193 * x15;
+        let x195 = x187 * x31 + x194;
+        let x196 = x29 * x72;
+        let x197 = x7 * x196;
+        let x198 = x197 - x9 * x83;
+        let x199 = x198 * x106;
+        let x200 = x9 * x196;
+        let x201 = x200 + x7 * x83;
+        let x202 = x104 * x201;
+        let x203 = x202 - x199;
+        let x204 = x203 * x15;
+        let x205 = x188 * x79;
+        let x206 = x5 * x79;
+        let x207 = x3 * x196;
+        let x208 = x206 - x207;
+        let x209 = x120 * x208;
+        let x210 = x79 * x3;
+        let x211 = x5 * x196;
+        let x212 = x210 + x211;
+        let x213 = x212 * x122;
+        let x214 = -x209 - x213;
+        let x215 = x16 * x214;
+        let x216 = m2 * (x204 + x205) + (x215 + x83 * x192) * m1;
+        let x217 = x216 * x15;
+        let x218 = x79 * x55;
+        let x219 = m1 * (x37 * (x209 + x213) - x58 * x83) + m2 * (x32 * x203 - x218);
+        let x220 = x219 + x175 * x84;
+        let x221 = x217 + x31 * x220;
+        let x222 = x104 * x46;
+        let x223 = x39 * x106;
+        let x224 = x222 + x223;
+        let x225 = x42 * x120;
+        let x226 = x36 * x122;
+        let x227 = -x225 - x226;
+        let x228 = m2 * (x32 * x188 + x224 * x15) + (x192 * x37 + x16 * x227) * m1;
+        let x229 = x228 * x15;
+        let x230 = x89 * x70 + x229;
+        let x231 = x16 * x138;
+        let x232 = x127 * x65 - x231;
+        let x233 = x126 * x16;
+        let x234 = x163 * x65;
+        let x235 = x234 - x233 + x34 * x68;
+        let x236 = x0 * x120;
+        let x237 = J2 + x236;
+        let x238 = -J2 - x236;
+        let x239 = x130 * x237 - x238 * x129;
+        let x240 = x16 * x193;
+        let x241 = x187 * x65 - x240;
+        let x242 = x216 * x16;
+        let x243 = x220 * x65 - x242;
+        let x244 = x228 * x16;
+        let x245 = x75 * x89 - x244;
+        let x246 = x184 * x0;
+        let x247 = x0 * x208;
+        let x248 = x42 * x0;
+        let x249 = x11 * x179;
+        let x250 = x11 * x201;
+        let x251 = x11 * x46;
+        let x252 = m2 + m0 + m1;
+        let x253 = x29 * psi_dot;
+        let x254 = x253 * x16;
+        let x255 = theta_dot * x15;
         let x256 = x254 + x255;
-        let x257 = Ixy * x256;
-        let x258 = J2 - J1;
-        let x259 = x6 * x237 - x241 * x9;
-        let x260 = gamma2_dot + x232 + x233;
-        let x261 = x258 * x259 * x260;
-        let x262 = x260 * d;
-        let x263 = x6 * a_ * x234;
-        let x264 = x262 + x263;
-        let x265 = x241 * gamma2_dot;
-        let x266 = theta_dot * x28 * psi_dot;
-        let x267 = -x265 - x266;
-        let x268 = gamma2_dot * x237;
-        let x269 = x267 * x9 + (x246 - x247 + x268) * x6;
-        let x270 = x9 * x237;
-        let x271 = x6 * x241;
-        let x272 = x270 + x271;
-        let x273 = a_ * (x247 - x246 - x272 * x9 * x234) - x264 * x259 - x269 * d;
-        let x274 = m2 * x273 * d;
-        let x275 = J2 * x269;
-        let x276 = x9 * (x274 - x261 - x275);
-        let x277 = x26 * x28 * psi_dot * phi_dot;
-        let x278 = x2 * x234;
-        let x279 = x4 * x237;
-        let x280 = x278 + x279;
-        let x281 = x4 * a_ * x241;
-        let x282 = x239 + gamma1_dot - x240;
-        let x283 = x282 * d;
-        let x284 = x281 + x283;
-        let x285 = gamma1_dot * x237;
-        let x286 = x254 + x255 - x285;
-        let x287 = gamma1_dot * x234;
-        let x288 = x266 - x287;
-        let x289 = x4 * x286 + x2 * x288;
-        let x290 = x4 * x234 - x2 * x237;
-        let x291 = x280 * x284 - d * x289 + a_ * (-x241 * x2 * x290 - x254 - x255);
-        let x292 = x291 * d * m1;
-        let x293 = x282 * x14 * x280;
-        let x294 = J2 * x289;
-        let x295 = x2 * (x293 - x292 + x294);
-        let x296 = x4 * (x287 - x266) + x286 * x2;
-        let x297 = x247 - x246 - x268;
-        let x298 = x9 * x297 + x6 * x267;
-        let x299 = (-x4 * x296 - x6 * x298) * J1;
-        let x300 = Ixx * x28 * psi_dot;
-        let x301 = 2.0 * theta;
-        let x302 = f64::sin(x301);
-        let x303 = x29 * psi_dot * x302;
-        let x304 = 0.5 * x303 + phi_dot;
-        let x305 = x304 * x29 * x93;
-        let x306 = 3.0 * theta;
-        let x307 = x29 * f64::cos(x306);
-        let x308 = 0.25 - 0.25 * x307;
-        let x309 = x30 * phi_dot;
-        let x310 = x28 * psi_dot;
-        let x311 = (x308 * psi_dot + x309) * x29 + x310;
-        let x312 = x311 * x13;
-        let x313 = (x300 - x305 - x312) * theta_dot;
-        let x314 = x249 - x244 + x253 + x257 + x276 + x277 + x295 + x299 + x313;
-        let x315 = x282 * x284;
-        let x316 = a_ * x234;
-        let x317 = d * x290;
-        let x318 = -x316 - x317;
-        let x319 = x318 * x290;
-        let x320 = x248 * x2;
-        let x321 = x4 * x241 * gamma1_dot + x320;
-        let x322 = a_ * x321;
-        let x323 = x319 - x315 + x322;
-        let x324 = a_ * x2 * x323;
-        let x325 = x248 * d;
-        let x326 = x280 * x318;
-        let x327 = x4 * x248;
-        let x328 = a_ * (x327 + x241 * x241 * x2);
-        let x329 = x325 - x326 + x328;
-        let x330 = x329 * x133;
-        let x331 = x20 * (x330 - x324);
-        let x332 = x298 * x9 * J1;
-        let x333 = theta_dot * x28 * psi_dot * Ixz;
-        let x334 = x258 * x280 * x290;
-        let x335 = x252 * x237;
-        let x336 = x261 + x275;
-        let x337 = x6 * x336;
-        let x338 = Ixx * x237 - x241 * Ixz - Ixy * x234;
-        let x339 = x234 * x338;
-        let x340 = Iyz * x256;
-        let x341 = x248 * J2;
-        let x342 = x248 * Izz;
-        let x343 = x304 * x29 * x136;
-        let x344 = x26 * x311;
-        let x345 = x272 * d;
-        let x346 = a_ * x241;
-        let x347 = -x345 - x346;
-        let x348 = x256 * x9;
-        let x349 = a_ * (-x6 * gamma2_dot * x234 - x348) - x272 * x347 + x264 * x260;
-        let x350 = a_ * x9 * x349;
-        let x351 = x256 * d;
-        let x352 = x259 * x347;
-        let x353 = x6 * x256;
-        let x354 = a_ * (x353 + x9 * x234 * x234);
-        let x355 = x351 + x352 + x354;
-        let x356 = x355 * x88 - x350;
-        let x357 = x356 * x18;
-        let x358 = x241 * x338;
-        let x359 = Iyy * x256;
-        let x360 = x243 * x237;
-        let x361 = x2 * J1 * x296;
-        let x362 = Ixy * theta_dot * x28 * psi_dot;
-        let x363 = x293 + x294;
-        let x364 = x4 * x363;
-        let x365 = x248 * Iyz;
-        let x366 = J2 * x256;
-        let x367 = x259 * x14 * x272;
-        let x368 = x20 * (x333 - x332 + x334 + x335 + x337 - x339 - x340 + x341 + x342)
-            - (x331 + x291 * x16 * x18) * m1 + (-x343 - x344) * theta_dot
-            - m2 * (x357 + x273 * x22 * x20) + x28 * psi_dot * x143 * phi_dot
-            + (x360 - x358 - x359 - x361 - x362 - x364 + x365 - x366 - x367) * x18;
-        let x369 = x368 * x18;
-        let x370 = x363 * x46;
-        let x371 = (-x40 * x298 - x38 * x296) * J1;
-        let x372 = ((x324 + x329 * x83) * x28 * x18 + x291 * x50) * m1;
-        let x373 = x244 - theta_dot * Ixx * x28 * psi_dot - x249 - x253 - x257;
-        let x374 = x373 * x30;
-        let x375 = x336 * x44;
-        let x376 = x85 + x91 + x92 + x98 - x100 + x115;
-        let x377 = x304 * x29 * x376;
-        let x378 = x311 * x93;
-        let x379 = theta_dot * (-x377 - x378);
-        let x380 = x28
-            * (psi_dot * phi_dot * x136
-                + x20 * (x360 - x358 - x359 - x362 + x365 - x366 - x367)
-                + (x339 - x333 - x334 - x335 + x340 - x341 - x342) * x18);
-        let x381 = m2 * (x356 * x28 * x20 + x273 * x53);
-        let x382 = x371 - x370 - x372 + x374 - x375 + x379 + x30 * x314 + x380 - x381;
-        let x383 = x368 * x20;
-        let x384 = theta_dot * x304 * x20;
-        let x385 = x255 - x384;
-        let x386 = x311 * d * x68;
-        let x387 = x176 + x177;
-        let x388 = x387 * x304 * x29;
-        let x389 = theta_dot * (-x386 - x388)
-            - m2 * (x355 * x162 + x67 * x273 + x158 * x349)
-            - (x323 * x169 + x165 * x329 + x291 * x64) * m1
-            + x28 * psi_dot * phi_dot * x173;
-        let x390 = x76 * x311 * d;
-        let x391 = x200 + x201;
-        let x392 = x304 * x29 * x391;
-        let x393 = a_ * x30 * theta_dot * theta_dot;
-        let x394 = x6 * x20;
-        let x395 = x9 * x18;
-        let x396 = -x394 - x395;
-        let x397 = x396 * x28;
-        let x398 = x394 + x395;
-        let x399 = x28 * x398;
-        let x400 = x395 - x394;
-        let x401 = x400 * x28;
-        let x402 = x394 - x395;
-        let x403 = x402 * x28;
-        let x404 = 0.25 * x397 - 0.25 * x399 - 0.25 * x401 + 0.25 * x403 - x39;
-        let x405 = x9 * x20;
-        let x406 = x6 * x18;
-        let x407 = x405 + x406;
-        let x408 = x30 * x407;
-        let x409 = x406 - x405;
-        let x410 = x30 * x409;
-        let x411 = x408 - 0.5 * x397 - 0.5 * x399 + 0.5 * x401 + 0.5 * x403 - x410;
-        let x412 = phi_dot * x411;
-        let x413 = 0.5 * x397 - 0.5 * x399 + 0.5 * x401 - 0.5 * x403;
-        let x414 = phi_dot * x413;
-        let x415 = x28 * x9;
-        let x416 = -x408 - 0.5 * x397 - 0.5 * x399 - 2.0 * x415 - 0.5 * x401 - 0.5 * x403
-            - x410;
-        let x417 = x416 * theta_dot;
-        let x418 = x30 * x20;
-        let x419 = x28 * x18;
-        let x420 = x418 + x419;
-        let x421 = x4 * x420;
-        let x422 = x28 * x20;
-        let x423 = x30 * x18;
-        let x424 = x422 - x423;
-        let x425 = x2 * x424;
-        let x426 = x419 - x418;
-        let x427 = x4 * x426;
-        let x428 = x2 * x28;
-        let x429 = x423 - x422;
-        let x430 = x2 * x429;
-        let x431 = x422 + x423;
-        let x432 = x2 * x431;
-        let x433 = -x422 - x423;
-        let x434 = x433 * x2;
-        let x435 = 0.5 * x425 - x421 + x427 + 2.0 * x428 + 0.5 * x430 - 0.5 * x432
-            - 0.5 * x434;
-        let x436 = x435 * gamma1_dot;
-        let x437 = 0.25 * x430 - 0.25 * x425 - 0.25 * x432 + x37 + 0.25 * x434;
-        let x438 = 0.5 * x425 - 0.5 * x430 - 0.5 * x432 + 0.5 * x434;
-        let x439 = x438 * phi_dot;
-        let x440 = x421 - 0.5 * x425 + x427 - 0.5 * x430 - 0.5 * x432 - 0.5 * x434;
-        let x441 = phi_dot * x440;
-        let x442 = x29 * x18;
-        let x443 = -x20;
-        let x444 = x30 * x29 * x18;
-        let x445 = -x70 - x71;
-        let x446 = x73 - x74;
-        let x447 = x446 * x2 * m1 - m2 * x9 * x445;
-        let x448 = d * x447;
-        let x449 = x4 * x445 + x192;
-        let x450 = x2 * x445 - x188;
-        let x451 = a_ * x2 * x450;
-        let x452 = (x28 * (x449 * x83 + x451) * x18 + x446 * x50) * m1;
-        let x453 = x6 * x446 - x183;
-        let x454 = -x180 - x446 * x9;
-        let x455 = x453 * x88 - a_ * x454 * x9;
-        let x456 = m2 * (x455 * x28 * x20 + x445 * x53);
-        let x457 = x452 + x30 * d * x447 + x456;
-        let x458 = ((x449 * x133 - x451) * x20 + x446 * x16 * x18) * m1
-            + m2 * (x455 * x18 + x22 * x20 * x445);
-        let x459 = x457 * x29 * x20 + x458 * x18;
-        let x460 = x457 * x29 * x18 - x20 * x458;
-        let x461 = d * x449 * m1;
-        let x462 = m2 * d * x453;
-        let x463 = -x6 * x30 * x18 - x415;
-        let x464 = a_ * x30 * x18 - d * x463;
-        let x465 = x428 - x4 * x30 * x20;
-        let x466 = a_ * x30 * x20 - d * x465;
-        let x467 = d * (x466 * x2 * m1 - m2 * x9 * x464);
-        let x468 = Ixx * x28;
-        let x469 = x4 * x28;
-        let x470 = -x30 * x2 * x20 - x469;
-        let x471 = x6 * x28;
-        let x472 = x30 * x9 * x18 - x471;
-        let x473 = (x4 * x470 + x6 * x472) * J1;
-        let x474 = J2 * (x9 * x463 - x2 * x465);
-        let x475 = x32 + x33;
-        let x476 = x30 * x475;
-        let x477 = Ixx + x3 + x8 + x12
-            + (x30 * x29 * x56 + x467 - x468 + x473 + x474 + x476) * x29;
-        let x478 = x477 * x20;
-        let x479 = x477 * x18;
-        let x480 = x80 * x63 * x28 * d;
-        let x481 = x80 * x28 * d * x62;
-        let x482 = x79 - x78;
-        let x483 = x482 * x30 * d;
-        let x484 = -d - x87;
-        let x485 = x484 * x88;
-        let x486 = (x472 * x9 * J1 + (x30 * (x485 - x86) * x18 + x22 * x464) * m2
-            - x30 * x122 - x6 * J2 * x463) * x20;
-        let x487 = x125 * x28;
-        let x488 = (x4 * J2 * x465 - x30 * x129 + (x16 * x466 + x30 * x141 * x20) * m1
-            + x470 * x2 * J1) * x18;
-        let x489 = x486 - x487 + x488;
-        let x490 = m2
-            * (x30 * x28 * (2.0 * x485 - 2.0 * x86) * x20 * x20 + 2.0 * (x53 * x464));
-        let x491 = (2.0 * (x44 * x463) + 2.0 * (x46 * x465)) * J2;
-        let x492 = x116 * x29;
-        let x493 = (2.0 * (x38 * x470) + 2.0 * (x472 * x40)) * J1;
-        let x494 = 2.0 * x134 - 2.0 * x84;
-        let x495 = m1 * (2.0 * (x466 * x50) + x30 * x494 * x28 * x18 * x18);
-        let x496 = Ixy * x28 + x30 * (x101 - x102);
-        let x497 = x30 * (x109 - x108) + x28 * Ixz;
-        let x498 = x28 * (x31 - x35 + x20 * x496 + x497 * x18);
-        let x499 = x30
-            * (x468 - x107 - x114 + (-2.0 * x95 - 2.0 * x96) * J2 * x28 - x476);
-        let x500 = x35 - x31 + x41 + x47
+        let x257 = x34 * psi_dot;
+        let x258 = phi_dot - x257;
+        let x259 = Ixz * x258;
+        let x260 = Iyz * x256;
+        let x261 = x253 * x15;
+        let x262 = theta_dot * x16;
+        let x263 = x261 - x262;
+        let x264 = x263 * Izz;
+        let x265 = (-x259 - x260) + x264;
+        let x266 = x256 * x265;
+        let x267 = x253 * phi_dot;
+        let x268 = x16 * x267;
+        let x269 = phi_dot + x257;
+        let x270 = x269 * x255;
+        let x271 = -x268 - x270;
+        let x272 = x271 * Ixz;
+        let x273 = 3.0 * theta;
+        let x274 = x30 * f64::cos(x273);
+        let x275 = 0.25 - 0.25 * x274;
+        let x276 = x34 * phi_dot;
+        let x277 = x253 + (x275 * psi_dot + x276) * x30;
+        let x278 = 2.0 * theta;
+        let x279 = f64::sin(x278);
+        let x280 = x30 * psi_dot * x279;
+        let x281 = 0.5 * x280 + phi_dot;
+        let x282 = x281 * x30;
+        let x283 = x253 * Ixx;
+        let x284 = (x283 - x282 * x61) - x14 * x277;
+        let x285 = x253 * theta_dot;
+        let x286 = x285 + gamma2_dot * x263;
+        let x287 = x268 + x270;
+        let x288 = gamma2_dot * x258;
+        let x289 = x287 - x288;
+        let x290 = x289 * x9 - x7 * x286;
+        let x291 = x262 * x269;
+        let x292 = x267 * x15;
+        let x293 = x292 - x291;
+        let x294 = gamma1_dot * x258;
+        let x295 = x293 - x294;
+        let x296 = x256 * gamma1_dot;
+        let x297 = x295 * x3 + x5 * (x296 - x285);
+        let x298 = x256 * x3;
+        let x299 = x5 * x258;
+        let x300 = x298 + x299;
+        let x301 = x17 * x300;
+        let x302 = x263 + gamma1_dot;
+        let x303 = x285 - x296;
+        let x304 = x5 * x295 + x303 * x3;
+        let x305 = x301 * x302 + J2 * x304;
+        let x306 = x263 * x3;
+        let x307 = x5 * x256 - x3 * x258;
+        let x308 = x119 * x263;
+        let x309 = d * x302;
+        let x310 = x308 + x309;
+        let x311 = x310 * x300 - a_ * (x306 * x307 + x293) - d * x304;
+        let x312 = x305 - x0 * x311;
+        let x313 = Ixy * x258;
+        let x314 = Iyz * x263;
+        let x315 = Iyy * x256 - x313 - x314;
+        let x316 = x263 * x315;
+        let x317 = Ixy * x293;
+        let x318 = x263 * x9;
+        let x319 = x7 * x258 - x318;
+        let x320 = gamma2_dot + x256;
+        let x321 = d * x320;
+        let x322 = x256 * x103;
+        let x323 = x321 + x322;
+        let x324 = x9 * x286;
+        let x325 = x7 * (x288 + x271) - x324;
+        let x326 = x7 * x263 + x9 * x258;
+        let x327 = x9 * x326;
+        let x328 = a_ * (x287 - x256 * x327) - x319 * x323 - x325 * d;
+        let x329 = J2 - J1;
+        let x330 = x329 * x319;
+        let x331 = x320 * x330;
+        let x332 = J2 * x325;
+        let x333 = (x11 * x328 - x331) - x332;
+        let x334 = (((x272 - x266) + theta_dot * x284)
+            + (x312 * x3 - (x7 * x290 + x5 * x297) * J1))
+            + ((x316 + x317) + (x9 * x333 + x267 * x27));
+        let x335 = x282 * x162;
+        let x336 = x61 * x277;
+        let x337 = x331 + x332;
+        let x338 = a_ * x263;
+        let x339 = d * x326;
+        let x340 = x338 + x339;
+        let x341 = x340 * x326;
+        let x342 = x9 * x293;
+        let x343 = x7 * x256;
+        let x344 = x323 * x320 + x341 - a_ * (x342 + gamma2_dot * x343);
+        let x345 = x344 * x106;
+        let x346 = x7 * x293;
+        let x347 = a_ * (x256 * x256 * x9 + x346) + (d * x293 - x340 * x319);
+        let x348 = x347 * x104 - x345;
+        let x349 = psi_dot * phi_dot;
+        let x350 = x17 * x319;
+        let x351 = x326 * x350;
+        let x352 = x265 * x258;
+        let x353 = Iyy * x293;
+        let x354 = J2 * x293;
+        let x355 = Ixy * x285;
+        let x356 = ((x352 - x353) - x351) + (-x354 - x355);
+        let x357 = Ixx * x258 - x263 * Ixz - Ixy * x256;
+        let x358 = x357 * x263;
+        let x359 = Iyz * x271;
+        let x360 = x356 + (x359 - x358);
+        let x361 = x271 * Izz;
+        let x362 = J2 * x271;
+        let x363 = x285 * Ixz;
+        let x364 = x315 * x258;
+        let x365 = x329 * x300;
+        let x366 = x365 * x307;
+        let x367 = Iyz * x293;
+        let x368 = x357 * x256;
+        let x369 = x3 * x271;
+        let x370 = x5 * x263;
+        let x371 = x369 + gamma1_dot * x370;
+        let x372 = a_ * x371 - x310 * x302;
+        let x373 = d * x307;
+        let x374 = a_ * x256;
+        let x375 = x373 + x374;
+        let x376 = x375 * x307;
+        let x377 = x372 - x376;
+        let x378 = x377 * x122;
+        let x379 = x5 * x271;
+        let x380 = a_ * (x263 * x306 + x379);
+        let x381 = x375 * x300;
+        let x382 = d * x271;
+        let x383 = x381 + x382;
+        let x384 = x380 + x383;
+        let x385 = x266 - x316 - x272 - x317 - x285 * Ixx;
+        let x386 = ((-(x335 + x336) * theta_dot - x46 * x337)
+            + ((x349 * x126 + x360 * x16
+                + (x367 - x361 - x362 - x363 - x364 - x366 + x368) * x15) * x29
+                - m2 * (x348 * x32 - x328 * x55)))
+            + ((-x42 * x305 - (x36 * x297 - x39 * x290) * J1)
+                + (x34 * x385 - m1 * ((x378 + x120 * x384) * x37 - x58 * x311)));
+        let x387 = x34 * x334 + x386;
+        let x388 = x5 * x305;
+        let x389 = -x112 * x297 - x388;
+        let x390 = -(x120 * x384);
+        let x391 = x390 - x378;
+        let x392 = x391 * x16;
+        let x393 = x282 * x126;
+        let x394 = x277 * x27;
+        let x395 = x348 * x15;
+        let x396 = (x361 - x367) + ((x364 - x368) + (x363 + x366));
+        let x397 = x7 * x337 + x396;
+        let x398 = x397 - x290 * x94;
+        let x399 = (x360 + x389) * x15 + x267 * x138 - (x192 * x311 + x392) * m1
+            - theta_dot * (x393 + x394) - m2 * (x188 * x328 + x395)
+            + (x362 + x398) * x16;
+        let x400 = x399 * x15;
+        let x401 = x16 * x399;
+        let x402 = x281 * x255;
+        let x403 = x281 * x262;
+        let x404 = x292 - x403;
+        let x405 = d * x277;
+        let x406 = x282 * x186 + x405 * x77;
+        let x407 = x267 * x193 - (x177 * x344 + x74 * x328 + x347 * x179) * m2
+            - theta_dot * x406 - m1 * (x76 * x311 + x184 * x384 + x377 * x182);
+        let x408 = x282 * x219 + x405 * x84;
+        let x409 = x79 * x328;
+        let x410 = a_ * theta_dot;
+        let x411 = x34 * theta_dot;
+        let x412 = x410 * x411;
+        let x413 = phi_dot * phi_dot;
+        let x414 = x75 + x32;
+        let x415 = x32 - x75;
+        let x416 = x3 * x415;
+        let x417 = x75 - x32;
+        let x418 = x3 * x417;
+        let x419 = -(0.5 * x414 * x3) + (0.25 * x418 - 0.25 * x416);
+        let x420 = x414 * x3;
+        let x421 = -0.5 * x420 - 0.5 * x418;
+        let x422 = x37 - x70;
+        let x423 = 0.5 * x420 + x5 * x422;
+        let x424 = x70 + x37;
+        let x425 = x5 * x424;
+        let x426 = x421 - 0.5 * x416 + x423 + x425;
+        let x427 = x426 * phi_dot;
+        let x428 = x35 + x419;
+        let x429 = x421 - 0.5 * x420 + 0.5 * x416;
+        let x430 = 0.5 * x418 - 0.5 * x420;
+        let x431 = x3 * x29;
+        let x432 = x430 + 0.5 * x416 + x423 - x425 + 2.0 * x431;
+        let x433 = phi_dot * x429 + x432 * gamma1_dot;
+        let x434 = x9 * x15;
+        let x435 = x7 * x16;
+        let x436 = x435 - x434;
+        let x437 = x29 * x436;
+        let x438 = x434 - x435;
+        let x439 = x29 * x438;
+        let x440 = x434 + x435;
+        let x441 = (0.25 * x437 - 0.25 * x439) + -(0.5 * x440 * x29);
+        let x442 = x441 - x38;
+        let x443 = x7 * x15;
+        let x444 = x443 - x136;
+        let x445 = x34 * x444;
+        let x446 = x440 * x29;
+        let x447 = 0.5 * x437 - 0.5 * x446;
+        let x448 = x443 + x136;
+        let x449 = 0.5 * x439 + x34 * x448;
+        let x450 = 0.5 * x446 - x445 + x447 + x449;
+        let x451 = x450 * phi_dot;
+        let x452 = 0.5 * x439 - 0.5 * x437 - x446;
+        let x453 = x29 * x9;
+        let x454 = 0.5 * x437 + x445 + 2.0 * x453 + x449;
+        let x455 = phi_dot * x452 - theta_dot * x454;
+        let x456 = x405 * theta_dot;
+        let x457 = -x16;
+        let x458 = x34 * x31;
+        let x459 = x34 * x65;
+        let x460 = x282 * theta_dot;
+        let x461 = theta_dot * x277;
+        let x462 = x81 - x82;
+        let x463 = x462 * x59 + x80;
+        let x464 = x463 * d;
+        let x465 = x7 * x462 - x200;
+        let x466 = x462 * x9 + x197;
+        let x467 = x465 * x104 + x466 * x106;
+        let x468 = -x210 - x211;
+        let x469 = x468 * x122;
+        let x470 = x207 - x206;
+        let x471 = x120 * x470;
+        let x472 = m2 * (x467 * x15 - x205) + ((-x469 - x471) * x16 + x462 * x192) * m1;
+        let x473 = m2 * (x218 + x32 * x467) + ((x469 + x471) * x37 - x462 * x58) * m1;
+        let x474 = x463 * x175 + x473;
+        let x475 = x472 * x15 + x31 * x474;
+        let x476 = x474 * x65 - x472 * x16;
+        let x477 = x0 * x470;
+        let x478 = x465 * x11;
+        let x479 = x34 * x30;
+        let x480 = x431 - x5 * x70;
+        let x481 = a_ * x70 - d * x480;
+        let x482 = x453 + x7 * x75;
+        let x483 = d * x482 + a_ * x75;
+        let x484 = x7 * x29;
+        let x485 = x75 * x9 - x484;
+        let x486 = x5 * x29;
+        let x487 = x3 * x70 + x486;
+        let x488 = Ixx * x29;
+        let x489 = x34 * x49;
+        let x490 = x489 - x488;
+        let x491 = ((x481 * x59 - x52 * x483) * d + (x7 * x485 - x5 * x487) * J1)
+            + (x490 + (-x3 * x480 - x9 * x482) * J2);
+        let x492 = x14 + (x63 * x479 + x491) * x30;
+        let x493 = x492 * x16;
+        let x494 = x492 * x15;
+        let x495 = x89 * x176;
+        let x496 = x89 * x196;
+        let x497 = x86 - x87;
+        let x498 = x497 * x175;
+        let x499 = -x105 - x107;
+        let x500 = (x16
+            * (x485 * x94 - x34 * x100 + m2 * (x20 * x483 + x75 * x499) + x7 * J2 * x482)
+            - x92 * x29)
+            + (x34 * x116 - x112 * x487 + x5 * J2 * x480
+                + m1 * (x132 * x70 - x481 * x24)) * x15;
+        let x501 = x30 * x163;
+        let x502 = x48 + x50;
+        let x503 = Ixy * x29 + x34 * (x115 - x144);
+        let x504 = x34 * (x99 - x148) + x29 * Ixz;
+        let x505 = -2.0 * x121 - 2.0 * x123;
+        let x506 = -2.0 * x105 - 2.0 * x107;
+        let x507 = (x34
+            * (x488 - x147 - (2.0 * x130 + 2.0 * x129) * J2 * x29 - x153 - x489)
+            + (x502 + x16 * x503 + x504 * x15) * x29)
+            + ((m1 * (x505 * x75 * x37 - 2.0 * (x481 * x58))
+                + (-2.0 * (x36 * x487) - 2.0 * (x39 * x485)) * J1)
+                + (J2 * (2.0 * (x42 * x480) - 2.0 * (x46 * x482))
+                    + m2 * (x32 * x506 * x70 - 2.0 * (x483 * x55))));
+        let x508 = x61 + (x34 * (x501 + x491) + x507) * x30;
+        let x509 = x64 + x30 * (x500 * x15 + x16 * x508 + x34 * (x166 * x30 + x493));
+        let x510 = x30 * (x500 + x479 * x127) + x27;
+        let x511 = x509 * x15 - x129 * x510;
+        let x512 = x170 * x65;
+        let x513 = x512 * x70;
+        let x514 = x70 * x170;
+        let x515 = x31 * x514;
+        let x516 = x178 - x180;
+        let x517 = x224 - x53 - x54;
+        let x518 = x225 - x56 + x226 - x57;
+        let x519 = m2 * ((x34 * x516 + x517 * x176) * x16 + x74 * x483)
+            + ((x518 * x176 + x34 * x190) * x15 + x481 * x76) * m1;
+        let x520 = x30 * x30;
+        let x521 = x30 * x519 + (x89 * x69 + x187 * x520) * x34 + x78;
+        let x522 = x521 * x16 + x69 * x229;
+        let x523 = x199 - x202;
+        let x524 = ((x34 * x523 + x517 * x196) * x16 + x79 * x483) * m2
+            + (x481 * x83 + (x34 * x214 + x518 * x196) * x15) * m1;
+        let x525 = x85 + x30 * x524 + x34 * (x89 * x72 + x220 * x520);
+        let x526 = x229 * x72 + x525 * x16;
+        let x527 = m2 * ((-x485 * x106 - x104 * x482) * x15 - x188 * x70)
+            + ((x487 * x122 - x480 * x120) * x16 - x75 * x192) * m1;
+        let x528 = x32 * x89 + x527 * x15;
+        let x529 = x512 * x75;
+        let x530 = x514 * x65;
+        let x531 = x521 * x15 - x69 * x244;
+        let x532 = x525 * x15 - x244 * x72;
+        let x533 = x89 * x37 - x16 * x527;
+        let x534 = x69 * x248;
+        let x535 = x248 * x72;
+        let x536 = x0 * x480;
+        let x537 = x69 * x251;
+        let x538 = x251 * x72;
+        let x539 = -(x11 * x482);
+        let x540 = x319 * x70;
+        let x541 = x320 * x485;
+        let x542 = (x540 - x541) * J1;
+        let x543 = x70 * phi_dot;
+        let x544 = theta_dot * x37;
+        let x545 = x543 - x544;
+        let x546 = gamma2_dot * x29;
+        let x547 = gamma2_dot * x15 + theta_dot;
+        let x548 = x7 * (x545 - x546) + x44 * x547;
+        let x549 = J2 * (x541 - x540 + x548);
+        let x550 = x544 - x543;
+        let x551 = a_ * (x550 + x9 * (x256 * x482 + x70 * x326)) - x323 * x485 - d * x548
+            + x104 * x540;
+        let x552 = x75 * x300;
+        let x553 = x302 * x487;
+        let x554 = gamma1_dot * x16;
+        let x555 = x554 - theta_dot;
+        let x556 = theta_dot * x32;
+        let x557 = x75 * phi_dot;
+        let x558 = x29 * gamma1_dot - x556 - x557;
+        let x559 = x41 * x555 + x5 * x558;
+        let x560 = (-x552 - x553) * J1 + J2 * (x559 + x552 + x553);
+        let x561 = x556 + x557;
+        let x562 = a_ * (x561 + (x75 * x307 - x263 * x480) * x3) - x310 * x487 - x559 * d
+            - x120 * x552;
+        let x563 = Ixz * x545;
+        let x564 = x504 * x256;
+        let x565 = x263 * x503;
+        let x566 = theta_dot - x554;
+        let x567 = x566 * x35 + x3 * x558;
+        let x568 = x9 * (x550 + x546) + x38 * x547;
+        let x569 = Ixy * x561;
+        let x570 = x315 * x15;
+        let x571 = x265 * x16;
+        let x572 = theta_dot * Ixx;
+        let x573 = (x571 - x572) - x570;
+        let x574 = phi_dot * x27;
+        let x575 = psi_dot * f64::cos(x278) + x34 * (x280 + phi_dot);
+        let x576 = x575 * x30;
+        let x577 = x258
+            + (0.75 * (psi_dot * f64::sin(x273))
+                + x34 * ((0.25 - 0.5 * x274) * psi_dot + x276)) * x520;
+        let x578 = psi_dot
+            * ((x11 * x551 - x542 - x549) * x9 + x3 * (x560 - x0 * x562) + x563 - x564
+                + x565 - (x5 * x567 + x7 * x568) * J1 - x569 + x34 * (x573 - x574))
+            + (-(x491 * x281 + x61 * x576) * x30 - x14 * x577) * theta_dot;
+        let x579 = 2.0 * x262 - 2.0 * x261;
+        let x580 = d * x545 - x375 * x487 + a_ * (x5 * x545 + x75 * x3 * x579)
+            - x481 * x300;
+        let x581 = x119 * gamma1_dot;
+        let x582 = x302 * x120;
+        let x583 = x310 - x581 + x582;
+        let x584 = x122 * x545 + x481 * x307 + x75 * x583 - x480 * x375;
+        let x585 = x357 * x15;
+        let x586 = Ixy * theta_dot + x585;
+        let x587 = x485 * x326 - x319 * x482;
+        let x588 = J2 * (x587 + x561);
+        let x589 = x587 * J1;
+        let x590 = ((Iyy * x561 - x263 * x490) + (x504 * x258 + Iyz * x545))
+            + ((x34 * x586 - x265 * x29) + (x588 - x589));
+        let x591 = x503 * x258;
+        let x592 = theta_dot * Ixz;
+        let x593 = x357 * x16;
+        let x594 = x34 * (x593 - x592);
+        let x595 = Iyz * x561;
+        let x596 = x545 * Izz;
+        let x597 = x29 * x315;
+        let x598 = x487 * x307;
+        let x599 = x480 * x300;
+        let x600 = x599 - x598;
+        let x601 = x600 * J1;
+        let x602 = x542 + x549;
+        let x603 = J2 * (x600 + x545);
+        let x604 = x256 * x490;
+        let x605 = gamma2_dot * x103;
+        let x606 = x104 * x320;
+        let x607 = x70 * (x605 - x321 - x322 - x606) + x561 * x106 - x483 * x326
+            - x340 * x482;
+        let x608 = 2.0 * x254 + 2.0 * x255;
+        let x609 = a_ * (-x608 * x9 * x70 - x7 * x561) - x340 * x485 + x319 * x483
+            - d * x561;
+        let x610 = x104 * x609;
+        let x611 = (-x30 * (x126 * x576 + x500 * x281) - x577 * x27) * theta_dot
+            + psi_dot
+                * ((x590 - x112 * x567 - x5 * x560) * x15
+                    - m1 * ((-x580 * x120 - x122 * x584) * x16 + x192 * x562)
+                    - x276 * x138
+                    + x16
+                        * (x591 + x594 + x595 + x596 - x597 - x568 * x94 - x601
+                            + x7 * x602 + x603 - x604)
+                    - m2 * (x551 * x188 + (x610 - x607 * x106) * x15));
+        let x612 = (x354 + x355) + (x351 + (x353 - x352));
+        let x613 = x126 * phi_dot;
+        let x614 = x570 + (x572 - x571);
+        let x615 = -(x347 * x104);
+        let x616 = x334
+            + (x482 * x337 + x34 * ((x362 + x396) * x15 + x16 * (x612 + x358 - x359))
+                - (x290 * x485 - x297 * x487) * J1
+                + (x34 * (x614 * x34 - x563 - x613 + x564 - x565 + x569) - x46 * x602
+                    - (x567 * x36 - x39 * x568) * J1
+                    + (x590 * x16
+                        + (x597 - x591 - x594 - x595 - x596 + x601 - x603 + x604) * x15
+                        + x500 * phi_dot) * x29 - x560 * x42) * psi_dot - x480 * x305
+                - m1
+                    * (x481 * x311 - x58 * psi_dot * x562
+                        + (x253 * x580 * x120 + x34 * x390
+                            + (x253 * x584 - x34 * x377) * x122) * x15)
+                + x34 * (x578 + x30 * x387)
+                + theta_dot
+                    * (-x491 * x277 - x30 * (x281 * x507 + x162 * x576) - x61 * x577)
+                - m2
+                    * (x16
+                        * (x34 * x615 + x253 * x610 + (x34 * x344 - x253 * x607) * x106)
+                        + x328 * x483 - x551 * psi_dot * x55) + x385 * x29) * x30;
+        let x617 = x238 * phi_dot;
+        let x618 = x34 * x281;
+        let x619 = -x172 - J2;
+        let x620 = x37 * x311 + x42 * x384 + x377 * x36;
+        let x621 = x32 * x328 + x347 * x46 - x39 * x344;
+        let x622 = x88 * x277;
+        let x623 = x29 * x88;
+        let x624 = x410 * theta_dot * x29;
+        let x625 = x5 * x415;
+        let x626 = x424 * x3;
+        let x627 = 0.25 * x625 + 0.5 * x626;
+        let x628 = x5 * x414;
+        let x629 = x5 * x417;
+        let x630 = 0.25 * x629 - 0.25 * x628;
+        let x631 = x422 * x3;
+        let x632 = (x627 + x630) + (0.25 * x628 - 0.5 * x631);
+        let x633 = 0.5 * x625 + x626;
+        let x634 = phi_dot * (x633 + x631 + 0.5 * x629);
+        let x635 = x486 + x632;
+        let x636 = 0.5 * x629 - 0.5 * x628;
+        let x637 = x636 + (-0.5 * x625 - 0.5 * x628);
+        let x638 = 0.5 * x625 - x628 - 0.5 * x629;
+        let x639 = x638 * phi_dot;
+        let x640 = x440 * x34;
+        let x641 = x34 * x436;
+        let x642 = x34 * x438;
+        let x643 = 0.25 * x640 + 0.25 * x642;
+        let x644 = (0.25 * x640 - 0.25 * x641) + x643;
+        let x645 = x644 - x484;
+        let x646 = 0.5 * x640 - 0.5 * x642;
+        let x647 = x29 * x448;
+        let x648 = x444 * x29;
+        let x649 = -x648 - 0.5 * x640;
+        let x650 = (x646 + x647 + x649 - 0.5 * x641) * phi_dot;
+        let x651 = 0.5 * x640 + 0.5 * x642;
+        let x652 = (0.5 * x641 - x647) + (x651 + x649);
+        let x653 = x646 + 0.5 * x640 + 0.5 * x641;
+        let x654 = phi_dot * x653;
+        let x655 = x34 * x34 * x520 + 1.0;
+        let x656 = x22 * x15;
+        let x657 = (Ixy + x3 * (x5 * x329 + x25)) * x16;
+        let x658 = x656 + x657;
+        let x659 = x658 + x30 * x63;
+        let x660 = x659 * x15;
+        let x661 = x502 - x40 - x47 - x62 - x60;
+        let x662 = x30 * x661 - x656 - x657;
+        let x663 = x16 * x662;
+        let x664 = x73 - x71;
+        let x665 = x59 * x664 - x52 * x76;
+        let x666 = d * x665;
+        let x667 = -x52 * x83 - x79 * x59;
+        let x668 = d * x667;
+        let x669 = x59 * x16 + x52 * x15;
+        let x670 = -(x29 * x669);
+        let x671 = d * x670;
+        let x672 = (x114 - x144) + 2.0 * x115;
+        let x673 = x15 * x672
+            + x16
+                * (((2.0 * x10 - 2.0 * x4) * J1 + m2 * (2.0 * x128 + x506)
+                    + J2 * (2.0 * x8 - 2.0 * x6)
+                    + (2.0 * x121 + 2.0 * x123 - 2.0 * x134) * m1) * x15 - x98 + x148
+                    - 2.0 * x99);
+        let x674 = x3 * x16;
+        let x675 = (-x36 * x674 - x39 * x434) * J1;
+        let x676 = (x29 * (x133 + x130 * (x135 + x124)) - x24 * x58 * x16) * m1;
+        let x677 = (x102 * x15 + x29 * ((x128 + x499) * x129 + x131)) * m2;
+        let x678 = x9 * x94;
+        let x679 = (((x6 * J2 + x112 * x3) * x15 + x98 - x148 + 2.0 * x99) * x15
+            + x16 * ((J2 * x8 + x678) * x16 + x672)) * x29;
+        let x680 = J2 * (x110 * x16 + x46 * x443);
+        let x681 = ((x675 + x676) + (x677 - x489)) + (x679 - x680);
+        let x682 = x673 * x15 - x231
+            + x30 * (x16 * x681 + x164 + x34 * (x658 * x16 + x28));
+        let x683 = (x146 + 2.0 * x111 + 2.0 * x113 + (2.0 * x118 + x505 * x32) * m1
+            - x117) * x15
+            + (x101 - 2.0 * x95 - 2.0 * x97 - x150
+                + m2 * ((2.0 * x105 + 2.0 * x107) * x37 + 2.0 * x102) - x151) * x16;
+        let x684 = -x125 - x109;
+        let x685 = x91 + x683 + x684;
+        let x686 = x685 * x16 + (x501 + x681) * x15;
+        let x687 = x30 * (x15 * x686 + x34 * (x130 * x659 - x64 * x16) - x165 * x16)
+            - x141 - x16 * x682;
+        let x688 = x130 * x170;
+        let x689 = x7 * x104;
+        let x690 = x9 * x106;
+        let x691 = x689 + x690;
+        let x692 = x74 * x20 + x691 * x664;
+        let x693 = x5 * x120;
+        let x694 = x3 * x122;
+        let x695 = (x693 - a_ - x23 + x694) * x15;
+        let x696 = m2 * (x29 * (x16 * x692 + x189) - x76 * x55)
+            + ((x191 + x76 * x695) * x29 - x58 * x664) * m1;
+        let x697 = -x693 - x694;
+        let x698 = x16 * (x24 + x697);
+        let x699 = m1 * (x76 * x698 + (x190 - x24 * x664) * x15)
+            + m2 * (x692 * x15 + (x516 + x20 * x76) * x16);
+        let x700 = x30 * (x696 * x16 + x186 * x15 + (x77 * x15 + x16 * x665) * x175)
+            - x240 + x15 * x699;
+        let x701 = x20 * x79 - x691 * x79;
+        let x702 = m2 * ((x523 + x20 * x83) * x16 + x15 * x701)
+            + m1 * ((x79 * x24 + x214) * x15 + x698 * x83);
+        let x703 = (x29 * (x16 * x701 + x204) - x83 * x55) * m2
+            + m1 * (x79 * x58 + x29 * (x83 * x695 + x215));
+        let x704 = x702 * x15
+            + (x219 * x15 + x703 * x16 + x175 * (x16 * x667 + x84 * x15)) * x30 - x242;
+        let x705 = m2 * x16;
+        let x706 = m1 * x15;
+        let x707 = ((2.0 * x19 + 2.0 * a_ - x689 - x690) * x37 - x222 - x223) * x705
+            + (x32 * (2.0 * a_ + 2.0 * x23 + x697) + x227) * x706;
+        let x708 = x175 * (x88 * x15 - x16 * x669) - x244 + x707 * x15;
+        let x709 = x143 - x142 - x156 - x159 - x161 - x154 - x157;
+        let x710 = -(x169 * x170);
+        let x711 = -(x129 * x170);
+        let x712 = x30 * (x175 * (x15 * x665 - x16 * x77) - x16 * x186 + x696 * x15)
+            - x16 * x699 - x194;
+        let x713 = ((x667 * x15 - x16 * x84) * x175 - x219 * x16 + x703 * x15) * x30
+            - x217 - x702 * x16;
+        let x714 = x175 * (-x16 * x88 - x669 * x15) - x229 - x16 * x707;
+        let x715 = x5 * x76;
+        let x716 = x0 * x715;
+        let x717 = x5 * x83;
+        let x718 = x0 * x717;
+        let x719 = x5 * x0 * x37;
+        let x720 = x7 * x11;
+        let x721 = x720 * x664;
+        let x722 = -(x720 * x79);
+        let x723 = -(x720 * x32);
+        let x724 = theta_dot * x281;
+        let x725 = x263 * x319;
+        let x726 = x291 - x292;
+        let x727 = -(x256 * x9);
+        let x728 = x7 * x726 - gamma2_dot * x727;
+        let x729 = x727 * x320;
+        let x730 = (x725 + x728 - x729) * J2;
+        let x731 = (x729 - x725) * J1;
+        let x732 = x256 * x343;
+        let x733 = x104 * x319;
+        let x734 = a_ * (x292 - x291 - x9 * (x263 * x326 - x732)) + x323 * x727
+            - x728 * d - x263 * x733;
+        let x735 = Ixz * x726;
+        let x736 = x263 * x370;
+        let x737 = x379 - x306 * gamma1_dot;
+        let x738 = x120 * x300;
+        let x739 = (x310 * x306 + a_ * (x287 - x3 * (x736 - x256 * x307)))
+            + (-x737 * d - x256 * x738);
+        let x740 = x306 * x302;
+        let x741 = x256 * x300;
+        let x742 = (x737 - x740 + x741) * J2 + (x740 - x741) * J1;
+        let x743 = Iyy * x263;
+        let x744 = x743 + x260;
+        let x745 = x9 * x726 - x7 * gamma2_dot * x256;
+        let x746 = x256 * Izz;
+        let x747 = -x746 - x314;
+        let x748 = x256 * x747;
+        let x749 = Ixy * x271;
+        let x750 = x256 * x315;
+        let x751 = x9 * (x11 * x734 - x730 - x731) - x724 * x27 + x735
+            + (x742 - x739 * x0) * x3 + x263 * (x744 + x259 + x260 - x264)
+            - (x5 * x371 - x7 * x745) * J1 - x748 + x749 - x750 + x658 * x267;
+        let x752 = x340 * x9;
+        let x753 = x20 * x319;
+        let x754 = a_ * (x608 * x318 + x7 * x271) - x256 * (x752 - x753) + x382;
+        let x755 = x7 * x340;
+        let x756 = x20 * x326;
+        let x757 = x323 - x605 + x606;
+        let x758 = x256 * (-x755 - x756) - x271 * x106 + x263 * x757;
+        let x759 = x20 * x328 + x754 * x104 - x758 * x106;
+        let x760 = x7 * x319;
+        let x761 = Ixy * x263 - x256 * Ixz;
+        let x762 = ((x368 - Iyy * x271)
+            + (Iyz * x726 + x256 * (x329 * x327 + x17 * x760)))
+            + (x747 * x258 + x263 * x761);
+        let x763 = x581 - x308 - x309 - x582;
+        let x764 = -x24 * x307 - x5 * x375;
+        let x765 = x764 * x263 - x256 * x763 + x122 * x726;
+        let x766 = x122 * x765;
+        let x767 = x24 * x311;
+        let x768 = (2.0 * x261 - 2.0 * x262) * x3;
+        let x769 = x3 * x375;
+        let x770 = x24 * x300;
+        let x771 = a_ * (x5 * x726 - x768 * x256) - (-x769 - x770) * x263 + d * x726;
+        let x772 = x771 * x120;
+        let x773 = x3 * x307;
+        let x774 = (x5 * x365 + x329 * x773) * x263;
+        let x775 = x256 * x761;
+        let x776 = J2 * x726;
+        let x777 = Izz * x726;
+        let x778 = x744 * x258;
+        let x779 = x730 + x731;
+        let x780 = (x762 - (x3 * x371 + x290 * x9) * J1 + x397 - x5 * x742) * x15
+            - m2 * (x759 * x15 + (x345 + x20 * x734 + x615) * x16)
+            - theta_dot * (x658 * x277 + x282 * x681)
+            - (x16 * (x767 - x766 - x772) + (x391 - x24 * x739) * x15) * m1
+            + (x774 + x775 + x612 + x776 + (x9 * x745 + x3 * x297) * J1 + x777 + x388
+                + x778 + x7 * x779 - 2.0 * x359) * x16 + x673 * x267;
+        let x781 = ((x356 - x774 - x775 - x776 - x777 - x778 + x389 + 2.0 * x359) * x15
+            + x16 * (x762 + x398) - x461 * x27 + x349 * x681) * x29 - x779 * x46
+            - (x39 * x745 + x36 * x371) * J1
+            + x34 * ((x265 - x743 - x260) * x263 - x735 + x748 - x749 + x750)
+            - ((x15 * (x766 - x767 + x772) + x392) * x29 - x739 * x58) * m1 - x42 * x742
+            - (x683 - x93) * x724 - m2 * (x29 * (x16 * x759 + x395) - x734 * x55);
+        let x782 = x7 * x347 - x344 * x9;
+        let x783 = x739 + x5 * x384 + x377 * x3;
+        let x784 = -0.5 * x648 - 0.25 * x640;
+        let x785 = 0.5 * x647 + 0.25 * x640 + x784 - 0.25 * x642 - 0.25 * x641;
+        let x786 = x651 + (0.5 * x640 - 0.5 * x641);
+        let x787 = (x633 + x636) + (0.5 * x628 - x631);
+        let x788 = 0.5 * x631 + 0.25 * x629 + x627;
+        let x789 = 2.0 * J2 - 2.0 * J1;
+        let x790 = 2.0 * x1 + x789;
+        let x791 = x790 * x3;
+        let x792 = x35 - x33;
+        let x793 = x36 * J1;
+        let x794 = x5 * (x42 * x17 - x0 * x58) + x3 * (-x2 * x792 - x793);
+        let x795 = x5 * x790 * x41 + x794;
+        let x796 = x5 * x26 + x4 * (x2 - J1);
+        let x797 = x31 * x795 + x130 * x796;
+        let x798 = x30 * x795 - x796 * x16;
+        let x799 = x798 * x15;
+        let x800 = 2.0 * J1 - 2.0 * J2;
+        let x801 = a_ * d;
+        let x802 = x130 * x5 * x800
+            + (-2.0 * (x130 * x24 * d) - 2.0 * (x801 * x129)) * m1;
+        let x803 = x3 * x802;
+        let x804 = d * x792;
+        let x805 = J2 * x792;
+        let x806 = (m1 * (x24 * x804 + (2.0 * (x32 * x801) - x58 * d) * x3)
+            + x5 * (x805 + x793)) + x17 * x43;
+        let x807 = x806 + x796 * x34;
+        let x808 = x803 + x31 * x807;
+        let x809 = (2.0 * x805 + 2.0 * x793) * x42
+            - (2.0 * (d * x160 * x122) - 2.0 * (x58 * x804)) * m1;
+        let x810 = x34 * x794 + x809;
+        let x811 = x34 * x797 + x130 * x806 + x31 * x810;
+        let x812 = (x30 * x811 - x808 * x16) * x15;
+        let x813 = d * x137;
+        let x814 = x182 * x120;
+        let x815 = x182 * x119;
+        let x816 = x76 * x813 + (x814 - x815) * x16;
+        let x817 = (x815 - x814) * x37 - x76 * x804;
+        let x818 = x175 * x715 + x817;
+        let x819 = (x816 * x15 + x818 * x31) * m1;
+        let x820 = x119 * x212;
+        let x821 = x212 * x120;
+        let x822 = x83 * x813 + (x821 - x820) * x16;
+        let x823 = (x820 - x821) * x37 - x83 * x804;
+        let x824 = x175 * x717 + x823;
+        let x825 = (x822 * x15 + x824 * x31) * m1;
+        let x826 = x813 * x37 + (-x119 * x36 - x120 * x792) * x16;
+        let x827 = x706 * (x23 * x70 + x826);
+        let x828 = x15 * x65;
+        let x829 = -(x0 * x155 * x122);
+        let x830 = m1 * (x818 * x65 - x16 * x816);
+        let x831 = (x824 * x65 - x16 * x822) * m1;
+        let x832 = m1 * (x23 * x75 * x15 - x16 * x826);
+        let x833 = -(x182 * x0);
+        let x834 = -(x212 * x0);
+        let x835 = x0 * x792;
+        let x836 = x303 * x5 + x3 * (x291 + x294 - x292);
+        let x837 = x310 * x307 - d * x836 - x308 * x307;
+        let x838 = x17 * x302;
+        let x839 = x838 * x307 + (J2 * x836 + x297 * J1);
+        let x840 = x304 * J1;
+        let x841 = x3 * (x839 - x837 * x0) - x460 * x794
+            + x5 * (x312 - x840 - x461 * x791) + x796 * x292;
+        let x842 = a_ * (x736 - x369);
+        let x843 = d * x300 * x300;
+        let x844 = x842 - x843;
+        let x845 = (x844 + x376) * x120;
+        let x846 = x5 * x377;
+        let x847 = 2.0 * x373 + x374;
+        let x848 = x847 * x300;
+        let x849 = x365 * x300;
+        let x850 = x307 * x307;
+        let x851 = x329 * x850;
+        let x852 = (x3 * (x305 - x840) - (x796 * x277 + x282 * x806) * theta_dot
+            - x5 * x839) * x15
+            - ((x3 * d * x311 - x837 * x24) * x15
+                + x16 * (a_ * ((x383 - x848) * x3 - x846) - x845)) * m1
+            + x16 * (x851 - x849) + x267 * x803;
+        let x853 = x34 * x841 - x304 * x793 - x305 * x792 - x42 * x839
+            - theta_dot * (x282 * x809 + x277 * x794) + (x849 - x851 + x349 * x806) * x37
+            - ((x845 + (x846 + x3 * (x848 - x381 - x382)) * a_) * x37 - x837 * x58
+                - x804 * x311) * m1;
+        let x854 = x380 + x848;
+        let x855 = x844 + x372;
+        let x856 = (-0.25 * x625 - 0.25 * x628) + x630;
+        let x857 = x856 - x41;
+        let x858 = (2.0 * x12 + x789) * x9;
+        let x859 = J2 * x46;
+        let x860 = x44 - x45;
+        let x861 = x860 * J1;
+        let x862 = x859 + x861;
+        let x863 = x13 - J1;
+        let x864 = -(x39 * x9);
+        let x865 = x7 * (x11 * x55 + x862) + x863 * x864;
+        let x866 = x38 * x858 + x865;
+        let x867 = x7 * x21 + x10 * x863;
+        let x868 = x30 * x866 + x867 * x15;
+        let x869 = x868 * x16;
+        let x870 = x866 * x65 - x867 * x129;
+        let x871 = -(x74 * x720);
+        let x872 = -(x39 * d);
+        let x873 = (m2 * (-x9 * (2.0 * (x801 * x37) - d * x55) - x20 * x872) - x39 * x18)
+            + x9 * x862;
+        let x874 = x873 + x34 * x867;
+        let x875 = x31 * x16;
+        let x876 = x874 * x875;
+        let x877 = x7 * x800 * x129
+            - m2 * (2.0 * (x130 * x801) + 2.0 * (x20 * d * x129));
+        let x878 = x434 * x877;
+        let x879 = -x39 * (2.0 * x859 + 2.0 * x861)
+            - m2 * (2.0 * (d * x158 * x106) - 2.0 * (x872 * x55));
+        let x880 = x34 * x865 + x879;
+        let x881 = x873 * x15 + x868 * x34 + x30 * x880;
+        let x882 = x16 * (x881 * x65 - x876 - x878);
+        let x883 = -(x11 * x155 * x106);
+        let x884 = x177 * x104 - x177 * x103;
+        let x885 = x884 * x32 - x74 * x872;
+        let x886 = x7 * x74;
+        let x887 = x885 - x175 * x886;
+        let x888 = d * x9;
+        let x889 = x16 * x888;
+        let x890 = x884 * x15 - x74 * x889;
+        let x891 = m2 * (x887 * x31 + x890 * x15);
+        let x892 = x104 * x198 - x103 * x198;
+        let x893 = x892 * x15 - x79 * x889;
+        let x894 = x7 * x79;
+        let x895 = x32 * x892 - x79 * x872;
+        let x896 = x895 - x175 * x894;
+        let x897 = m2 * (x893 * x15 + x31 * x896);
+        let x898 = (x39 * x103 - x39 * x104) * x15;
+        let x899 = x32 * x889;
+        let x900 = x898 - x899;
+        let x901 = m2 * (x900 * x15 - d * x70 * x435);
+        let x902 = x877 * x9;
+        let x903 = m2 * (x887 * x65 - x890 * x16);
+        let x904 = m2 * (x896 * x65 - x893 * x16);
+        let x905 = (x899 - x898 - x19 * x75) * x705;
+        let x906 = x177 * x11;
+        let x907 = x11 * x198;
+        let x908 = -(x39 * x11);
+        let x909 = (x324 + x7 * x289) * J1;
+        let x910 = x329 * x320;
+        let x911 = x910 * x326;
+        let x912 = x290 * J2;
+        let x913 = x290 * J1;
+        let x914 = x290 * d + x326 * x322 - x323 * x326;
+        let x915 = x268 * x867 - x865 * x460 + x7 * (x333 - x909 - x461 * x858)
+            + x9 * (x911 - x912 + x913 - x11 * x914);
+        let x916 = x912 - x911;
+        let x917 = -(x326 * x326);
+        let x918 = x17 * x917;
+        let x919 = x319 * x350;
+        let x920 = d * x319 * x319;
+        let x921 = a_ * (x732 - x342);
+        let x922 = x921 - x920 + x341;
+        let x923 = x347 + (a_ * (x256 * x727 - x346) + (x338 + 2.0 * x339) * x319);
+        let x924 = x104 * x922 + a_ * (-x9 * x923 - x7 * x344);
+        let x925 = x909 + x337;
+        let x926 = (x349 * x873 - x918 - x919) * x32 - x916 * x46 - x860 * x913
+            - m2 * (x32 * x924 - x328 * x872 + x914 * x55)
+            - (x282 * x879 + x865 * x277) * theta_dot + x34 * x915 + x39 * x925;
+        let x927 = x16
+            * (x7 * (x916 - x913) - (x282 * x873 + x867 * x277) * theta_dot - x9 * x925)
+            - (x918 + x919) * x15 - m2 * ((-x20 * x914 - x328 * x888) * x16 + x15 * x924)
+            + x902 * x267;
+        let x928 = (x643 + x784) + (0.25 * x641 - 0.5 * x647);
+        let x929 = x44 + x928;
+        let x930 = x256 * x152;
+        let x931 = x75 * theta_dot;
+        let x932 = x32 * phi_dot;
+        let x933 = x931 + x932;
+        let x934 = gamma2_dot * x34 + x933;
+        let x935 = -x934 * x7 - x453 * x547;
+        let x936 = a_ * (x933 - (x32 * x326 + x256 * x46) * x9) - x935 * d + x39 * x323
+            - x32 * x733;
+        let x937 = x32 * x319 - x39 * x320;
+        let x938 = x937 * J1;
+        let x939 = (x935 + x937) * J2;
+        let x940 = x146 * x263;
+        let x941 = x934 * x9 - x484 * x547;
+        let x942 = theta_dot * x70;
+        let x943 = phi_dot * x37;
+        let x944 = x943 - x942;
+        let x945 = x944 + x34 * gamma1_dot;
+        let x946 = x486 * x555 + x945 * x3;
+        let x947 = x933 * Ixz;
+        let x948 = Ixy * x944;
+        let x949 = x300 * x37;
+        let x950 = x36 * x302;
+        let x951 = x566 * x431 + x5 * x945;
+        let x952 = J2 * (x951 - x949 - x950) + (x949 + x950) * J1;
+        let x953 = x942 - x943;
+        let x954 = a_ * (x953 - (x42 * x263 + x307 * x37) * x3) - d * x951 + x37 * x738
+            + x310 * x36;
+        let x955 = x279 * x520;
+        let x956 = x29 + x275 * x30;
+        let x957 = x9 * (x11 * x936 + x938 - x939) - x930 + x940
+            - J1 * (x7 * x941 + x5 * x946) + (x614 + x574) * x29 - x947 + x948
+            + x3 * (x952 - x954 * x0) - (0.5 * (x61 * x955) + x14 * x956) * theta_dot;
+        let x958 = x42 * x300;
+        let x959 = x36 * x307;
+        let x960 = x958 + x959;
+        let x961 = (x960 - x931 - x932) * J2;
+        let x962 = x939 - x938;
+        let x963 = Iyz * x944;
+        let x964 = x146 * x258;
+        let x965 = x960 * J1;
+        let x966 = x51 * x256;
+        let x967 = x933 * Izz;
+        let x968 = (x592 - x593) * x29;
+        let x969 = x34 * x315;
+        let x970 = x763 * x37 - x42 * x375 - x933 * x122 - x58 * x307;
+        let x971 = x122 * x970;
+        let x972 = a_ * (x768 * x37 - x5 * x933) + x36 * x375 + x58 * x300 - d * x933;
+        let x973 = x972 * x120;
+        let x974 = x340 * x46 + x326 * x55 - x944 * x106 + x32 * x757;
+        let x975 = x319 * x55;
+        let x976 = d * x944 + x39 * x340 - x975 + a_ * (x32 * x608 * x9 + x7 * x944);
+        let x977 = x104 * x976 - x974 * x106;
+        let x978 = x29 * phi_dot;
+        let x979 = x39 * x326;
+        let x980 = x46 * x319;
+        let x981 = x980 - x979;
+        let x982 = x981 * J1;
+        let x983 = ((-Iyy * x944 - x51 * x263) + (-x29 * x586 - x34 * x265))
+            + ((-x982 - Iyz * x933) + (x152 * x258 - J2 * (x979 - x980 + x944)));
+        let x984 = (x961 + x7 * x962 - x963 + x964 - x965 - x966 - x967 + x968 - x969
+            - x941 * x94) * x16 - ((-x971 - x973) * x16 + x954 * x192) * m1
+            - m2 * (x977 * x15 + x188 * x936)
+            - theta_dot * (0.5 * (x126 * x955) + x956 * x27) + x138 * x978
+            + (x983 - x5 * x952 - x112 * x946) * x15;
+        let x985 = x34 * x957 - m2 * (x32 * x977 - x936 * x55)
+            - (x36 * x946 - x39 * x941) * J1 - x952 * x42
+            + x34 * (x930 - x940 + x947 - x948 + x29 * x573)
             + x29
-                * (x490 + x491 + x30 * (x467 + x492 - x468 + x473 + x474 + x476) + x493
-                    + x495 + x498 + x499) + x54;
-        let x501 = x29 * (x30 * (x29 * x138 + x478) + x18 * x489 + x500 * x20);
-        let x502 = x29 * (x486 - x487 + x30 * x29 * x146 + x488) + x19 + x25;
-        let x503 = (x27 + x501 + x57) * x18 - x20 * x20 * x502;
-        let x504 = x30 * x153 * x29 * x20 * x18;
-        let x505 = m2 * d * x484;
-        let x506 = x155 + x505;
-        let x507 = x30 * x29 * x20 * x20 * x506;
-        let x508 = x46 * x83 + x206 - x48 - x49;
-        let x509 = x205 - x204 - x51 - x52;
-        let x510 = x484 * x162;
-        let x511 = (x466 * x64 + x18 * (x508 * x63 * x28 + x30 * x171)) * m1
-            + m2 * ((x63 * x28 * x509 + x30 * (x510 + x159)) * x20 + x67 * x464);
-        let x512 = x30 * (x178 * x29 * x29 + x80 * x63 * d) + x511 * x29 + x69;
-        let x513 = x512 * x20 + x208 * x63 * x18;
-        let x514 = x484 * x185;
-        let x515 = m2 * (x20 * (x28 * x509 * x62 + x30 * (x182 + x514)) + x72 * x464)
-            + ((x30 * x195 + x508 * x28 * x62) * x18 + x466 * x75) * m1;
-        let x516 = x29 * x515 + x30 * (x80 * d * x62 + x202 * x29 * x29) + x77;
-        let x517 = x516 * x20 + x208 * x18 * x62;
-        let x518 = ((x463 * x88 - x472 * a_ * x9) * x18 - x30 * x22 * x20 * x20) * m2
-            + m1 * ((x465 * x133 - a_ * x470 * x2) * x20 - x30 * x16 * x18 * x18);
-        let x519 = x80 * x28 * d * x20 + x518 * x18;
-        let x520 = x30 * x153 * x29 * x18 * x18;
-        let x521 = x30 * x29 * x20 * x506 * x18;
-        let x522 = x512 * x18 - x208 * x63 * x20;
-        let x523 = x516 * x18 - x208 * x20 * x62;
-        let x524 = x80 * x28 * d * x18 - x20 * x518;
-        let x525 = x46 * x63 * d * m1;
-        let x526 = x46 * d * m1 * x62;
-        let x527 = d * x465 * m1;
-        let x528 = m2 * x44 * x63 * d;
-        let x529 = m2 * x44 * d * x62;
-        let x530 = m2 * d * x463;
-        let x531 = x29 * x29
-            * (x30 * ((0.25 - 0.5 * x307) * psi_dot + x309)
-                + 0.75 * (psi_dot * f64::sin(x306))) + phi_dot - x236;
-        let x532 = psi_dot * f64::cos(x301) + x30 * (x303 + phi_dot);
-        let x533 = x467 - x468 + x473 + x474 + x476;
-        let x534 = (x29 * (-x532 * x29 * x93 - x304 * x533) - x531 * x13) * theta_dot;
-        let x535 = theta_dot * x28 * x18;
-        let x536 = x30 * x20 * phi_dot;
-        let x537 = x536 - x535;
-        let x538 = x537 * Ixz;
-        let x539 = theta_dot * x28 * x20;
-        let x540 = x30 * phi_dot * x18;
-        let x541 = -x539 - x540;
-        let x542 = Ixy * x541;
-        let x543 = gamma2_dot * x28;
-        let x544 = x6 * (x536 - x535 - x543);
-        let x545 = x259 * x30 * x20;
-        let x546 = gamma2_dot * x18;
-        let x547 = x546 + theta_dot;
-        let x548 = x547 * x30 * x9;
-        let x549 = x472 * x260;
-        let x550 = (x544 - x545 + x548 + x549) * J2;
-        let x551 = (x545 - x549) * J1;
-        let x552 = a_ * (x535 + x9 * (x30 * x272 * x20 - x463 * x234) - x536)
-            - x259 * x30 * x20 * x484 - (x544 + x548) * d - x264 * x472;
-        let x553 = x26 * phi_dot;
-        let x554 = x243 * x20;
-        let x555 = theta_dot * Ixx;
-        let x556 = x252 * x18;
-        let x557 = x241 * x496;
-        let x558 = x6 * x547 * x30 + (x535 + x543 - x536) * x9;
-        let x559 = gamma1_dot * x20;
-        let x560 = theta_dot - x559;
-        let x561 = x28 * gamma1_dot - x539 - x540;
-        let x562 = x4 * x30 * x560 + x2 * x561;
-        let x563 = x30 * x280 * x18;
-        let x564 = x282 * x470;
-        let x565 = (x564 - x563) * J1;
-        let x566 = x4 * x561;
-        let x567 = x559 - theta_dot;
-        let x568 = x30 * x2 * x567;
-        let x569 = a_ * (x539 + x540 + (x30 * x290 * x18 - x241 * x465) * x2)
-            + x470 * x284 - d * (x566 + x568) + x30 * x280 * x133 * x18;
-        let x570 = J2 * (x566 + x568 + x563 - x564);
-        let x571 = x497 * x234;
-        let x572 = (x538 + x542 + (m2 * d * x552 - x550 - x551) * x9
-            + x30 * (x554 - x553 - x555 - x556) + x557 + (-x6 * x558 - x4 * x562) * J1
-            + x2 * (x565 - x569 * d * m1 + x570) - x571) * psi_dot;
-        let x573 = x6 * a_ * gamma2_dot;
-        let x574 = x30 * x20 * (x573 - x262 + x260 * x484 - x263) - a_ * x541 * x9
-            - x272 * x464 - x347 * x463;
-        let x575 = x259 * x464 + x541 * d + x472 * x347
-            + a_ * (x6 * x541 + x30 * (-2.0 * x232 - 2.0 * x233) * x9 * x20);
-        let x576 = x237 * x496;
-        let x577 = x537 * Izz;
-        let x578 = x476 - x468;
-        let x579 = x578 * x234;
-        let x580 = x550 + x551;
-        let x581 = x280 * x465;
-        let x582 = x470 * x290;
-        let x583 = (-x581 - x582) * J1;
-        let x584 = (x581 - x535 + x582 + x536) * J2;
-        let x585 = Iyz * x541;
-        let x586 = x252 * x28;
-        let x587 = theta_dot * Ixz;
-        let x588 = x20 * x338;
-        let x589 = x30 * (x588 - x587);
-        let x590 = 2.0 * x240 - 2.0 * x239;
-        let x591 = x537 * d - x470 * x318 - x466 * x280
-            + a_ * (x4 * x537 + x30 * x590 * x2 * x18);
-        let x592 = x4 * a_ * gamma1_dot;
-        let x593 = x281 - x282 * x133 + x283 - x592;
-        let x594 = x318 * x465 + a_ * x537 * x2 + x30 * x18 * x593 + x466 * x290;
-        let x595 = Iyz * x537;
-        let x596 = x497 * x237;
-        let x597 = Iyy * x541;
-        let x598 = x241 * x578;
-        let x599 = x243 * x28;
-        let x600 = x565 + x570;
-        let x601 = Ixy * theta_dot;
-        let x602 = x18 * x338;
-        let x603 = x30 * (-x601 - x602);
-        let x604 = x472 * x272;
-        let x605 = x259 * x463;
-        let x606 = (-x539 - x604 - x540 - x605) * J2;
-        let x607 = (x604 + x605) * J1;
-        let x608 = psi_dot
-            * (x20
-                * (x576 - x558 * x9 * J1 + x577 - x579 + x6 * x580 + x583 + x584 - x585
-                    - x586 + x589)
-                - m2 * ((x575 * x88 - a_ * x9 * x574) * x18 + x22 * x20 * x552)
-                - m1 * (x569 * x16 * x18 + x20 * (x133 * x591 - a_ * x2 * x594))
-                - x30 * x143 * phi_dot
-                + (x595 + x596 - x597 - x598 - x599 - x2 * x562 * J1 - x4 * x600 - x603
-                    - x606 - x607) * x18)
-            + theta_dot * (x29 * (-x532 * x29 * x136 - x304 * x489) - x531 * x26);
-        let x609 = phi_dot * x136;
-        let x610 = x249 - x244 + x253 + x257 + x276 + x277 + x295 + x299
-            + x29
-                * ((x534 + x572 + x29 * x382) * x30 + (-x472 * x298 - x470 * x296) * J1
-                    + psi_dot
-                        * (x30
-                            * (x571 - x538 - x542 - x609 - x557
-                                + x30 * (x555 - x554 + x556)) - x44 * x580
-                            + ((x595 + x596 - x597 - x598 - x599 - x603 - x606 - x607)
-                                * x20
-                                + (x579 - x576 - x577 - x583 - x584 + x585 + x586 - x589)
-                                    * x18 + phi_dot * x489) * x28
-                            + (-x40 * x558 - x38 * x562) * J1 - x46 * x600)
-                    + ((x358 + x359 - x360 + x362 - x365 + x366 + x367) * x20
-                        + x18 * (x333 + x334 + x335 - x339 - x340 + x341 + x342)) * x30
-                    - x363 * x465
-                    - m2
-                        * (psi_dot * x53 * x552
-                            + (x30 * x355 * x484 + x28 * psi_dot * x575 * x88
-                                + a_ * x9 * (x30 * x349 - x28 * psi_dot * x574)) * x20
-                            + x273 * x464)
-                    - (x569 * psi_dot * x50
-                        + (x30 * x329 * x133
-                            + a_ * (x28 * psi_dot * x594 - x30 * x323) * x2
-                            + x28 * psi_dot * x83 * x591) * x18 + x291 * x466) * m1
-                    + x373 * x28
-                    + theta_dot
-                        * (x29
-                            * (-x304 * (x490 + x491 + x493 + x495 + x498 + x499)
-                                - x532 * x29 * x376) - x311 * x533 - x531 * x93)
-                    - x336 * x463) + x313;
-        let x611 = x505 - J2;
-        let x612 = x291 * x28 * x18 + x38 * x323 + x329 * x46;
-        let x613 = x273 * x28 * x20 + x40 * x349 + x44 * x355;
-        let x614 = a_ * theta_dot * theta_dot * x28;
-        let x615 = x4 * x424;
-        let x616 = x4 * x431;
-        let x617 = x4 * x429;
-        let x618 = x4 * x433;
-        let x619 = x426 * x2;
-        let x620 = x420 * x2;
-        let x621 = (-0.5 * x615 - 0.5 * x616 - 0.5 * x617 - x619 - 0.5 * x618 - x620)
-            * phi_dot;
-        let x622 = 0.25 * x615 - 0.25 * x616 + 0.25 * x617 - 0.5 * x619 + x469
-            - 0.25 * x618 + 0.5 * x620;
-        let x623 = 0.5 * x615 - 0.5 * x616 - 0.5 * x617 + 0.5 * x618;
-        let x624 = x623 * phi_dot;
-        let x625 = x30 * x396;
-        let x626 = x30 * x398;
-        let x627 = x400 * x30;
-        let x628 = x28 * x409;
-        let x629 = x30 * x402;
-        let x630 = x28 * x407;
-        let x631 = (0.5 * x625 + 0.5 * x626 - 0.5 * x627 - x628 - 0.5 * x629 + x630)
-            * phi_dot;
-        let x632 = 0.25 * x626 - 0.25 * x625 - x471 + 0.25 * x627 - 0.25 * x629;
-        let x633 = 0.5 * x626 - 0.5 * x625 - 0.5 * x627 + 0.5 * x629;
-        let x634 = phi_dot * x633;
-        let x635 = x30 * x30 * x29 * x29 + 1.0;
-        let x636 = a_ + x15;
-        let x637 = (Ixy + x2 * (x4 * x258 + x636 * d * m1)) * x20;
-        let x638 = x24 * x18;
-        let x639 = x29 * x56 + x637 + x638;
-        let x640 = x639 * x18;
-        let x641 = x31 - x35 - x41 - x47 - x54 - x55;
-        let x642 = x641 * x29 - x637 - x638;
-        let x643 = x642 * x20;
-        let x644 = x65 - x66;
-        let x645 = x2 * m1 * x644 - m2 * x9 * x64;
-        let x646 = d * x645;
-        let x647 = x2 * x445 * m1 - m2 * x9 * x75;
-        let x648 = d * x647;
-        let x649 = -m2 * x9 * x18 - x2 * x20 * m1;
-        let x650 = x28 * d * x649;
-        let x651 = (2.0 * x127 + x130 + x104 + m1 * (2.0 * x132 + x494 * x28 * x20)
-            + x105 + 2.0 * x131) * x18;
-        let x652 = (2.0 * x120 - 2.0 * x118 - x111 - x112
-            + m2 * (x28 * (2.0 * x86 + 2.0 * x89) * x18 + 2.0 * x119) + x123) * x20;
-        let x653 = x651 - x124 - x135 + x145 + x652;
-        let x654 = x22 * x22;
-        let x655 = m2
-            * (x28 * (x139 + x20 * x20 * (x654 - x86 + x485)) + x22 * x53 * x18);
-        let x656 = ((x142 + (x134 - x84 + x16 * x16) * x18 * x18) * x28
-            + x636 * x20 * x50) * m1;
-        let x657 = (x40 * x9 * x18 - x38 * x2 * x20) * J1;
-        let x658 = J2 * (-x6 * x44 * x18 - x4 * x46 * x20);
-        let x659 = x28
-            * (((x2 * x2 * J1 + x4 * x4 * J2) * x18 + x121 - x108 + 2.0 * x109) * x18
-                + (x128 + 2.0 * x101 + (x9 * x9 * J1 + x6 * x6 * J2) * x20 - x102)
-                    * x20);
-        let x660 = x20 * x653 + (x655 + x656 + x492 + x657 + x658 - x476 + x659) * x18;
-        let x661 = x655 + x656 + x657 + x658 - x476 + x659;
-        let x662 = x637 + x638;
-        let x663 = x2 * x2;
-        let x664 = (x128 + 2.0 * x101 - x102) * x18
-            + (x18
-                * ((2.0 * x654 - 2.0 * x86 + 2.0 * x485) * m2
-                    + m1 * (2.0 * x84 + 2.0 * (x636 * x16) + 2.0 * x140)
-                    + J2 * (2.0 * x7 - 2.0 * x5) + (2.0 * (x9 * x9) - 2.0 * x663) * J1)
-                - x121 + x108 - 2.0 * x109) * x20;
-        let x665 = (x20 * x661 + x30 * (x662 * x20 + x27) + x137) * x29 - x211
-            + x664 * x18;
-        let x666 = x29
-            * (x30 * (x639 * x18 * x18 - x58 * x20) + x660 * x18 - x20 * (x117 + x137))
-            - x20 * x665 - x148;
-        let x667 = x153 * x18 * x18;
-        let x668 = x20 * x506 * x18;
-        let x669 = x6 * x88;
-        let x670 = a_ * x9 * x9;
-        let x671 = x669 + x670;
-        let x672 = x671 * x644 + x67 * x22;
-        let x673 = a_ * x2 * x2;
-        let x674 = x4 * x133;
-        let x675 = a_ - x673 + x15 + x674;
-        let x676 = ((x510 + x22 * x64 + x159) * x20 + x672 * x18) * m2
-            + ((x166 - x170 + x16 * x644) * x18 + x675 * x20 * x64) * m1;
-        let x677 = x673 - a_ + x4 * x83 - x15;
-        let x678 = ((x64 * x677 * x18 + x172) * x28 + x644 * x50) * m1
-            + m2 * (x64 * x53 + (x164 + x672 * x20) * x28);
-        let x679 = x676 * x18 - x219
-            + x29 * (x678 * x20 + x30 * (x20 * x645 + x68 * x18) * d + x387 * x18);
-        let x680 = x22 * x72 + x445 * x671;
-        let x681 = m2 * (x20 * (x182 + x22 * x75 + x514) + x680 * x18)
-            + ((x194 - x191 + x16 * x445) * x18 + x675 * x20 * x75) * m1;
-        let x682 = (x28 * (x196 + x677 * x75 * x18) + x445 * x50) * m1
-            + m2 * (x28 * (x187 + x680 * x20) + x75 * x53);
-        let x683 = x681 * x18 - x221
-            + (x391 * x18 + x682 * x20 + x30 * d * (x20 * x647 + x76 * x18)) * x29;
-        let x684 = m2 * x20
-            * (x204 + (2.0 * a_ - x669 + 2.0 * x21 - x670) * x28 * x18 + x44 * x484)
-            + (x207 - x206 + x28 * (2.0 * a_ - x673 + 2.0 * x15 + x674) * x20) * m1
-                * x18;
-        let x685 = x30 * (x20 * x649 + x80 * x18) * d + x684 * x18 - x223;
-        let x686 = x100 - x85 - x91 - x92 - x94 - x98 - x115;
-        let x687 = (-x151 - x152) * x20 * x18;
-        let x688 = (-x155 - x505) * x20 * x20;
-        let x689 = x29 * (x30 * (x18 * x645 - x20 * x68) * d - x387 * x20 + x678 * x18)
-            - x174 - x676 * x20;
-        let x690 = x29 * (x30 * d * (x18 * x647 - x76 * x20) - x20 * x391 + x682 * x18)
-            - x681 * x20 - x198;
-        let x691 = (x649 * x18 - x80 * x20) * x30 * d - x684 * x20 - x209;
-        let x692 = x4 * d * x64 * m1;
-        let x693 = x4 * d * x75 * m1;
-        let x694 = x4 * x28 * d * m1 * x18;
-        let x695 = x6 * m2 * d * x644;
-        let x696 = x6 * m2 * d * x445;
-        let x697 = -(x6 * m2 * x28 * d * x20);
-        let x698 = x259 * x241;
-        let x699 = theta_dot * (phi_dot + x236) * x20;
-        let x700 = x699 - x255;
-        let x701 = x6 * x700;
-        let x702 = -x232 - x233;
-        let x703 = gamma2_dot * x702 * x9;
-        let x704 = x260 * x702 * x9;
-        let x705 = (x698 + x701 - x703 - x704) * J2;
-        let x706 = (x704 - x698) * J1;
-        let x707 = x264 * x702 * x9
-            + a_ * (x9 * (-x6 * x702 * x234 - x241 * x272) - x699 + x255)
-            - x259 * x241 * x88 - d * (x701 - x703);
-        let x708 = -x700 * x9 - x6 * gamma2_dot * x702;
-        let x709 = x702 * x280 * x83;
-        let x710 = x241 * x2 * gamma1_dot;
-        let x711 = d * (x327 - x710);
-        let x712 = x4 * x241 * x241;
-        let x713 = a_ * ((-x702 * x290 - x712) * x2 - x246 + x247);
-        let x714 = x241 * x2 * x284;
-        let x715 = x709 - x711 + x713 + x714;
-        let x716 = x702 * x280;
-        let x717 = x241 * x282 * x2;
-        let x718 = J2 * (x327 - x710 - x716 - x717);
-        let x719 = J1 * (x716 + x717);
-        let x720 = x702 * Izz;
-        let x721 = x720 - x250;
-        let x722 = x721 * x234;
-        let x723 = x241 * Iyy;
-        let x724 = Iyz * x702;
-        let x725 = x252 * x702;
-        let x726 = x700 * Ixz;
-        let x727 = x248 * Ixy;
-        let x728 = (m2 * d * x707 - x705 - x706) * x9 - theta_dot * x304 * x26
-            + J1 * (-x4 * x321 - x6 * x708) + (x718 - d * x715 * m1 + x719) * x2
-            + x28 * psi_dot * x662 * phi_dot - x722
-            + x241 * (x723 + x235 - x724 + x238 - x242) + x725 + x726 + x727;
-        let x729 = x9 * x347;
-        let x730 = -a_ - x21;
-        let x731 = 2.0 * x232 + 2.0 * x233;
-        let x732 = x325 + x702 * (x259 * x730 - x729)
-            + a_ * (x241 * x731 * x9 + x6 * x248);
-        let x733 = x6 * x347;
-        let x734 = x262 - x573 + x260 * x88 + x263;
-        let x735 = x702 * (-x272 * x730 - x733) + x241 * x734 - x248 * a_ * x9;
-        let x736 = x732 * x88 - a_ * x9 * x735 + x273 * x22;
-        let x737 = x718 + x719;
-        let x738 = 2.0 * x239 - 2.0 * x240;
-        let x739 = x2 * x318;
-        let x740 = x16 * x280;
-        let x741 = d * x700 + a_ * (x702 * x2 * x738 + x4 * x700)
-            + x241 * (-x739 - x740);
-        let x742 = x4 * x318;
-        let x743 = x16 * x290;
-        let x744 = x592 - x282 * x83 - x281 - x283;
-        let x745 = x241 * (x742 + x743) + x702 * x744 + a_ * x2 * x700;
-        let x746 = a_ * x2 * x745;
-        let x747 = x702 * (x6 * x259 * x14 + x258 * x272 * x9);
-        let x748 = Iyz * x700;
-        let x749 = x702 * x338;
-        let x750 = x248 * Iyy;
-        let x751 = x721 * x237;
-        let x752 = -x702 * Ixz - x241 * Ixy;
-        let x753 = x241 * x752;
-        let x754 = (x723 - x724) * x237;
-        let x755 = x234 * x752;
-        let x756 = J2 * x700;
-        let x757 = x700 * Izz;
-        let x758 = x241 * (x258 * x2 * x290 + x4 * x258 * x280);
-        let x759 = x705 + x706;
-        let x760 = x30
-            * (x722 - x725 - x726 + x241 * (x724 - x723 - x235 - x238 + x242) - x727)
-            - m2 * (x707 * x53 + x28 * (x357 + x736 * x20)) - x737 * x46
-            - theta_dot * x304 * (x651 - x126 + x652)
-            - (((x741 * x83 + x746 + x291 * x16) * x18 + x331) * x28 + x715 * x50) * m1
-            + ((x748 - x747 - x749 - x332 - x750 + x333 + x334 + x335 + x337 - x339
-                - x340 + x751 + x342 - x753) * x20 + psi_dot * phi_dot * x661
-                - theta_dot * x26 * x311
-                + x18
-                    * (x360 - x754 - x359 + x755 - x361 - x362 - x364 + 2.0 * x365 - x756
-                        - x366 - x367 - x757 - x758)) * x28
-            + (-x321 * x38 - x40 * x708) * J1 - x44 * x759;
-        let x761 = x371 - x370 - x372 + x374 - x375 + x379 + x380 - x381;
-        let x762 = (x748 - x4 * x737 - x747 - x749 - x750 + x333 + x334 + x335 + x337
-            - x339 - x340 + x751 + (-x321 * x2 - x298 * x9) * J1 + x342 - x753) * x18
-            - m2 * (x736 * x18 + (x707 * x22 + x350 + x355 * x484) * x20)
-            + theta_dot * (-x311 * x662 - x304 * x29 * x661)
-            + x28 * psi_dot * phi_dot * x664
-            - ((x330 - x324 + x16 * x715) * x18
-                + x20 * (x741 * x133 - x746 + x291 * x636)) * m1
-            + x20
-                * (x754 + x359 - x360 - x755 + x362 + x364 + x6 * x759 - 2.0 * x365
-                    + x756 + x366 + (x2 * x296 - x708 * x9) * J1 + x367 + x757 + x758);
-        let x763 = x709 - x711 + x4 * x329 + x713 + x714 + x2 * x323;
-        let x764 = x6 * x355 - x9 * x349;
-        let x765 = 0.25 * x625 + 0.25 * x626 - 0.25 * x627 - 0.5 * x628 - 0.25 * x629
-            + 0.5 * x630;
-        let x766 = -0.25 * x615 - 0.25 * x616 - 0.25 * x617 - 0.5 * x619 - 0.25 * x618
-            - 0.5 * x620;
-        let x767 = 2.0 * J2 + 2.0 * x0 - 2.0 * J1;
-        let x768 = (J2 + x0 - J1) * x2 * x2 + x4 * x17;
-        let x769 = x4 * (d * m1 * x50 + x46 * x14);
-        let x770 = x37 - x36;
-        let x771 = x38 * J1;
-        let x772 = ((-J2 - x0) * x770 - x771) * x2;
-        let x773 = x769 + x772 + x4 * x30 * x767 * x2;
-        let x774 = x18 * x18 * x768 + x29 * x20 * x773;
-        let x775 = x29 * x773 - x20 * x768;
-        let x776 = x18 * x775;
-        let x777 = 2.0 * J1 - 2.0 * J2;
-        let x778 = x4 * x777 * x18 * x18
-            + (2.0 * (x16 * d * x18 * x18) - 2.0 * (a_ * d * x20 * x20)) * m1;
-        let x779 = J2 * x770;
-        let x780 = x4 * (x779 + x771);
-        let x781 = ((d * x50 + 2.0 * (a_ * x28 * d * x20)) * x2 - x16 * d * x770) * m1;
-        let x782 = x46 * x14 * x2;
-        let x783 = x780 + x781 + x782 + x30 * x768;
-        let x784 = x778 * x2 + x783 * x29 * x20;
-        let x785 = (-2.0 * (a_ * x2 * x28 * x28 * d * x18 * x18)
-            - 2.0 * (d * x770 * x50)) * m1;
-        let x786 = x769 + x772;
-        let x787 = (2.0 * x779 + 2.0 * x771) * x46;
-        let x788 = x785 + x30 * x786 + x787;
-        let x789 = x780 + x781 + x782;
-        let x790 = x29 * x20 * x788 + x789 * x18 * x18 + x30 * x774;
-        let x791 = (x29 * x790 - x20 * x784) * x18;
-        let x792 = x4 * a_ * x169;
-        let x793 = -x167 - x168;
-        let x794 = (x792 + x83 * x793) * x28 * x18;
-        let x795 = d * x64 * x770;
-        let x796 = x794 - x795 + x4 * x30 * d * x64;
-        let x797 = x20 * (x133 * x793 - x792) + x2 * d * x64 * x18;
-        let x798 = m1 * (x796 * x29 * x20 + x797 * x18);
-        let x799 = d * x75 * x770;
-        let x800 = x4 * a_ * x190;
-        let x801 = -x188 - x189;
-        let x802 = x28 * (x800 + x83 * x801) * x18;
-        let x803 = x802 - x799 + x4 * x30 * d * x75;
-        let x804 = (x801 * x133 - x800) * x20 + x2 * d * x75 * x18;
-        let x805 = m1 * (x803 * x29 * x20 + x804 * x18);
-        let x806 = x2 * x28 * d * x18 * x18;
-        let x807 = (x133 * x770 - x4 * a_ * x38) * x20;
-        let x808 = (x4 * x30 * d * x20 + x806 + x807) * m1 * x18;
-        let x809 = -x95 - x96;
-        let x810 = a_ * x809 * x2 * d * m1;
-        let x811 = (x796 * x29 * x18 - x797 * x20) * m1;
-        let x812 = (x803 * x29 * x18 - x20 * x804) * m1;
-        let x813 = x806 + x807;
-        let x814 = (x4 * x30 * d * x18 * x18 - x813 * x20) * m1;
-        let x815 = d * m1 * x793;
-        let x816 = d * x801 * m1;
-        let x817 = d * m1 * x770;
-        let x818 = x4 * x288 + (x285 - x254 - x255) * x2;
-        let x819 = x284 * x290 - x4 * a_ * x241 * x290 - d * x818;
-        let x820 = J1 * x296;
-        let x821 = J2 * x818;
-        let x822 = x282 * x14 * x290;
-        let x823 = x289 * J1;
-        let x824 = x2 * (x820 - x819 * d * m1 + x821 + x822)
-            + x4 * (x293 - x292 + x294 - x823 - theta_dot * x767 * x311 * x2)
-            - theta_dot * x304 * x29 * x786 + x28 * psi_dot * phi_dot * x18 * x768;
-        let x825 = -x278 - x279;
-        let x826 = x825 * x258 * x280;
-        let x827 = x258 * x290 * x290;
-        let x828 = x825 * (-x316 - 2.0 * x317);
-        let x829 = x4 * x323;
-        let x830 = a_ * (x712 - x320);
-        let x831 = x825 * x280 * d;
-        let x832 = x830 - x319 + x831;
-        let x833 = -x820 - x821 - x822;
-        let x834 = (x826 + x827) * x20 + x778 * x2 * x28 * psi_dot * phi_dot
-            - (x20 * (a_ * (x2 * (x325 - x326 - x828) - x829) + x133 * x832)
-                + (x291 * x2 * d + x819 * x16) * x18) * m1
-            + (x4 * x833 + theta_dot * (-x304 * x29 * x789 - x311 * x768)
-                + (x293 + x294 - x823) * x2) * x18;
-        let x835 = theta_dot * (-x311 * x786 - (x785 + x787) * x304 * x29)
-            - x38 * x289 * J1 + x833 * x46 - x363 * x770 + x30 * x824
-            - ((a_ * (x2 * (x326 - x325 + x828) + x829) + x83 * x832) * x28 * x18
-                - x291 * d * x770 + x819 * x50) * m1
-            + x28 * (psi_dot * x789 * phi_dot - x826 - x827) * x18;
-        let x836 = x830 - x315 + x831 + x322;
-        let x837 = x828 + x328;
-        let x838 = 0.25 * x617 - 0.25 * x615 - 0.25 * x616 - x45 + 0.25 * x618;
-        let x839 = 2.0 * x10 + 2.0 * J2 - 2.0 * J1;
-        let x840 = x42 - x43;
-        let x841 = x840 * J1;
-        let x842 = x44 * J2;
-        let x843 = (x841 + x842 - m2 * d * x53) * x6;
-        let x844 = x10 + J2 - J1;
-        let x845 = x40 * x9 * x844;
-        let x846 = x843 + x845 + x6 * x30 * x9 * x839;
-        let x847 = x23 * x6 + x9 * x9 * x844;
-        let x848 = x846 * x29 + x847 * x18;
-        let x849 = x20 * x848;
-        let x850 = x846 * x29 * x18 - x20 * x20 * x847;
-        let x851 = -(x6 * m2 * x67 * d);
-        let x852 = -(x6 * m2 * d * x72);
-        let x853 = x6 * x40 * x14;
-        let x854 = m2 * (x9 * (-d * x53 - 2.0 * (a_ * x28 * d * x18)) - x40 * d * x22);
-        let x855 = x9 * (x841 + x842);
-        let x856 = x853 + x854 + x30 * x847 + x855;
-        let x857 = x29 * x856 * x20 * x20;
-        let x858 = x6 * x777 * x20 * x20
-            + m2 * (-2.0 * (d * x22 * x20 * x20) - 2.0 * (a_ * d * x18 * x18));
-        let x859 = x9 * x858 * x18;
-        let x860 = x853 + x854 + x855;
-        let x861 = x40 * (2.0 * x841 + 2.0 * x842);
-        let x862 = (-2.0 * (x40 * d * x53) - 2.0 * (a_ * x28 * x28 * d * x9 * x20 * x20))
-            * m2;
-        let x863 = x843 + x845;
-        let x864 = x861 + x862 + x30 * x863;
-        let x865 = x30 * x848 + x860 * x18 + x29 * x864;
-        let x866 = x20 * (x29 * x18 * x865 - x857 - x859);
-        let x867 = m2 * a_ * x809 * d * x9;
-        let x868 = x67 * x40 * d;
-        let x869 = x158 * x88 - x6 * a_ * x158;
-        let x870 = x28 * x869 * x20;
-        let x871 = x870 - x868 - x6 * x30 * x67 * d;
-        let x872 = x869 * x18 - x67 * d * x9 * x20;
-        let x873 = (x29 * x20 * x871 + x872 * x18) * m2;
-        let x874 = x181 * x88 - x6 * a_ * x181;
-        let x875 = x874 * x18 - d * x9 * x20 * x72;
-        let x876 = x40 * d * x72;
-        let x877 = x874 * x28 * x20;
-        let x878 = x877 - x876 - x6 * x30 * d * x72;
-        let x879 = m2 * (x875 * x18 + x29 * x20 * x878);
-        let x880 = x28 * d * x9 * x20 * x20;
-        let x881 = (x40 * x88 - x6 * a_ * x40) * x18;
-        let x882 = x881 - x880;
-        let x883 = m2 * (x882 * x18 - x6 * x30 * d * x20 * x20);
-        let x884 = m2 * (x29 * x871 * x18 - x872 * x20);
-        let x885 = m2 * (x29 * x878 * x18 - x20 * x875);
-        let x886 = (x880 - x881 - x6 * x30 * d * x18) * m2 * x20;
-        let x887 = m2 * d * x158;
-        let x888 = m2 * x181 * d;
-        let x889 = m2 * x40 * d;
-        let x890 = -x270 - x271;
-        let x891 = x258 * x260 * x890;
-        let x892 = J2 * x298;
-        let x893 = x298 * J1;
-        let x894 = -x264 * x890 - x6 * a_ * x272 * x234 - x298 * d;
-        let x895 = (x6 * x297 + (x265 + x266) * x9) * J1;
-        let x896 = x9 * (x893 - x891 - x892 + m2 * x894 * d)
-            - theta_dot * x304 * x29 * x863
-            + x6 * (x274 - x261 - x275 - x895 - theta_dot * x311 * x9 * x839)
-            + x28 * psi_dot * x20 * phi_dot * x847;
-        let x897 = x259 * x259 * x14;
-        let x898 = x14 * x272 * x890;
-        let x899 = -x261 - x275 - x895;
-        let x900 = x259 * (2.0 * x345 + x346);
-        let x901 = a_ * (x702 * x9 * x234 - x353);
-        let x902 = a_ * (x6 * x234 * x234 - x348);
-        let x903 = x259 * x259 * d;
-        let x904 = x347 * x890;
-        let x905 = x902 - x903 + x904;
-        let x906 = a_ * (x9 * (-x900 - x351 - x352 - x901 - x354) - x6 * x349)
-            + x88 * x905;
-        let x907 = x28 * (psi_dot * phi_dot * x860 - x897 - x898) * x20 + x30 * x896
-            + (-(x861 + x862) * x304 * x29 - x311 * x863) * theta_dot
-            - (x891 + x892) * x44 - x298 * x840 * J1 + x899 * x40
-            - m2 * (x28 * x20 * x906 - x273 * x40 * d + x894 * x53);
-        let x908 = (x899 * x9 + theta_dot * (-x311 * x847 - x304 * x29 * x860)
-            + x6 * (x891 + x892 - x893)) * x20 - (x897 + x898) * x18
-            - m2 * (x20 * (x894 * x22 - x273 * d * x9) + x18 * x906)
-            + x28 * x9 * psi_dot * phi_dot * x858;
-        let x909 = x900 + x351 + x352 + x901 + x354;
-        let x910 = 0.25 * x625 + 0.25 * x626 + x42 + 0.25 * x627 - 0.5 * x628
-            + 0.25 * x629 - 0.5 * x630;
-        let x911 = x113 * x234;
-        let x912 = -x546 - theta_dot;
-        let x913 = x912 * x28 * x9;
-        let x914 = x28 * x20 * phi_dot;
-        let x915 = gamma2_dot * x30;
-        let x916 = x30 * theta_dot * x18;
-        let x917 = x6 * (-x914 - x915 - x916);
-        let x918 = x259 * x28 * x20;
-        let x919 = x260 * x40;
-        let x920 = (x913 + x917 + x918 + x919) * J2;
-        let x921 = a_ * (x914 + (-x44 * x234 - x272 * x28 * x20) * x9 + x916)
-            - x264 * x40 - x259 * x28 * x20 * x88 - (x913 + x917) * d;
-        let x922 = (-x918 - x919) * J1;
-        let x923 = -x914 - x916;
-        let x924 = Ixz * x923;
-        let x925 = x241 * x106;
-        let x926 = x28 * phi_dot * x18;
-        let x927 = x30 * theta_dot * x20;
-        let x928 = x926 - x927;
-        let x929 = Ixy * x928;
-        let x930 = x560 * x2 * x28;
-        let x931 = x926 - x927 + x30 * gamma1_dot;
-        let x932 = x4 * x931;
-        let x933 = x38 * x284 - (x930 + x932) * d
-            + a_ * (x927 - x926 + (-x241 * x46 - x28 * x290 * x18) * x2)
-            + x280 * x28 * x83 * x18;
-        let x934 = x282 * x38;
-        let x935 = x280 * x28 * x18;
-        let x936 = J2 * (x930 - x934 + x932 - x935);
-        let x937 = (x934 + x935) * J1;
-        let x938 = x28 + x308 * x29;
-        let x939 = x931 * x2 + x4 * x28 * x567;
-        let x940 = (x914 + x915 + x916) * x9 + x6 * x912 * x28;
-        let x941 = x28 * (x553 - x554 + x555 + x556) - x911
-            + (m2 * x921 * d - x920 - x922) * x9 + x924 + x925 + x929
-            + x2 * (x936 - x933 * d * m1 + x937)
-            + theta_dot * (-0.5 * (x29 * x29 * x93 * x302) - x13 * x938)
-            + (-x4 * x939 - x6 * x940) * J1;
-        let x942 = x259 * x53;
-        let x943 = a_ * (x6 * x928 + x28 * x731 * x9 * x20) + x942 + x928 * d
-            + x40 * x347;
-        let x944 = x28 * x734 * x20 - a_ * x928 * x9 - x44 * x347 - x272 * x53;
-        let x945 = x943 * x88 - a_ * x9 * x944;
-        let x946 = x290 * x50 + x46 * x318 + a_ * x2 * x923 + x28 * x744 * x18;
-        let x947 = a_ * x946 * x2;
-        let x948 = d * x923 - x38 * x318 - x280 * x50
-            + a_ * (x2 * x28 * x738 * x18 + x4 * x923);
-        let x949 = Izz * x923;
-        let x950 = x106 * x237;
-        let x951 = x920 + x922;
-        let x952 = x928 * Iyz;
-        let x953 = (x587 - x588) * x28;
-        let x954 = x234 * x99;
-        let x955 = x46 * x280;
-        let x956 = x38 * x290;
-        let x957 = (-x955 - x956) * J1;
-        let x958 = x30 * x252;
-        let x959 = J2 * (x955 + x956 - x914 - x916);
-        let x960 = x259 * x44;
-        let x961 = x40 * x272;
-        let x962 = (x960 + x961) * J1;
-        let x963 = Iyz * x923;
-        let x964 = J2 * (x926 - x960 - x927 - x961);
-        let x965 = x113 * x237;
-        let x966 = x241 * x99;
-        let x967 = x936 + x937;
-        let x968 = x928 * Iyy;
-        let x969 = x243 * x30;
-        let x970 = x28 * (x601 + x602);
-        let x971 = x28 * x143 * phi_dot - m2 * (x945 * x18 + x921 * x22 * x20)
-            - (x933 * x16 * x18 + (x948 * x133 - x947) * x20) * m1
-            + theta_dot * (-x26 * x938 - 0.5 * (x29 * x29 * x136 * x302))
-            + (x949 + x950 - x940 * x9 * J1 + x6 * x951 - x952 + x953 - x954 + x957
-                - x958 + x959) * x20
-            + (x963 - x962 - x964 + x965 - x966 - x4 * x967 - x2 * x939 * J1 - x968
-                - x969 - x970) * x18;
-        let x972 = (x911 - x924 - x925 + (x554 - x555 - x556) * x28 - x929) * x30
-            - x46 * x967 + (-x940 * x40 - x38 * x939) * J1
-            - m2 * (x945 * x28 * x20 + x921 * x53) + x30 * x941
-            - (x28 * x18 * (x947 + x948 * x83) + x933 * x50) * m1
-            + theta_dot * (-0.5 * (x29 * x29 * x376 * x302) - x93 * x938)
-            + (x609 + x20 * (x963 - x962 - x964 + x965 - x966 - x968 - x969 - x970)
-                + (x952 - x949 - x950 - x953 + x954 - x957 + x958 - x959) * x18) * x28
-            - x44 * x951;
-        let x973 = gamma1_dot * x18;
-        let x974 = x2 * (x310 - x973);
-        let x975 = x4 * x245 * x20;
-        let x976 = x280 * x20 * x133 - d * (x974 + x975)
-            + a_ * (x2 * (x20 * x290 - x4 * x241 * x18) - x245 * x20) + x2 * x284 * x18;
-        let x977 = x282 * x2 * x18;
-        let x978 = x280 * x20;
-        let x979 = (x977 - x978) * J1;
-        let x980 = J2 * (x978 - x977 + x974 + x975);
-        let x981 = x129 * x234;
-        let x982 = x4 * (x973 - x310) + x245 * x2 * x20;
-        let x983 = gamma2_dot * x20 - x310;
-        let x984 = x6 * x983 - x245 * x9 * x18;
-        let x985 = x9 * x983;
-        let x986 = x6 * x245 * x18;
-        let x987 = a_ * ((x6 * x20 * x234 - x272 * x18) * x9 - x245 * x18)
-            - x264 * x9 * x20 - x259 * x88 * x18 - (x985 + x986) * d;
-        let x988 = x259 * x18;
-        let x989 = x260 * x9 * x20;
-        let x990 = J2 * (x985 + x988 + x986 + x989);
-        let x991 = (-x988 - x989) * J1;
-        let x992 = x252 * x20;
-        let x993 = x243 * x18;
-        let x994 = x241 * x122;
-        let x995 = x2 * (x979 - x976 * d * m1 + x980) - x981
-            + (-x4 * x982 - x6 * x984) * J1 + x300 + x9 * (m2 * d * x987 - x990 - x991)
-            - x305 + x245 * x475 - x992 - x993 + x994 - x312;
-        let x996 = x979 + x980;
-        let x997 = x245 * d;
-        let x998 = x20 * (x729 + x259 * x22 + x997)
-            + a_ * (x731 * x9 * x18 + x6 * x245 * x20);
-        let x999 = (x733 - a_ * x245 * x9 - x272 * x22) * x20 + x734 * x18;
-        let x1000 = x998 * x88 - a_ * x999 * x9;
-        let x1001 = x2 * x290;
-        let x1002 = x4 * x280;
-        let x1003 = (-x1001 - x1002) * J1;
-        let x1004 = (x1001 + x1002 - phi_dot - x236) * J2;
-        let x1005 = x28 * psi_dot * Ixz;
-        let x1006 = x125 * x234;
-        let x1007 = x245 * x110;
-        let x1008 = x122 * x237;
-        let x1009 = Ixy * x28 * psi_dot;
-        let x1010 = x129 * x237;
-        let x1011 = x241 * x125;
-        let x1012 = x6 * x259;
-        let x1013 = x272 * x9;
-        let x1014 = J2 * (x1012 - x1013 - phi_dot - x236);
-        let x1015 = (x1013 - x1012) * J1;
-        let x1016 = x103 * x245;
-        let x1017 = x20 * x593 + (x742 + x743 + a_ * x245 * x2) * x18;
-        let x1018 = a_ * x2 * x1017;
-        let x1019 = a_ * (x4 * x245 * x18 + x590 * x2 * x20)
-            + (x997 - x739 - x740) * x18;
-        let x1020 = x990 + x991;
-        let x1021 = (x981 + x245 * x34 - x300 + x992 + x993 - x994) * x30 - x46 * x996
-            - m2 * (x28 * x20 * x1000 + x987 * x53) - x377 - x378
-            + x28
-                * ((x1006 - (x1003 + x1004) * x18 - x1005 + x602 - x1007 - x1008) * x18
-                    + (x588 - x1009 + x1010 - x1011 - (x1014 + x1015) * x20 - x1016)
-                        * x20) + x995 * x30
-            - (x28 * (x1018 + x1019 * x83) * x18 + x976 * x50) * m1 - x44 * x1020
-            + (-x40 * x984 - x38 * x982) * J1;
-        let x1022 = (x1005 - x1006 - x602 + (x1003 - x1014 - x1015 + x1004) * x18
-            - x9 * x984 * J1 + x1007 + x6 * x1020 + x1008) * x20 - x343
-            - (x16 * x976 * x18 + x20 * (x1019 * x133 - x1018)) * m1 - x344
-            - m2 * (x18 * x1000 + x22 * x20 * x987)
-            + (x588 - x4 * x996 - x1009 + x1010 - x1011 - x1016 - x2 * x982 * J1) * x18;
-        let x1023 = 0.5 * x430 - 0.5 * x425 - 0.5 * x432 + 2.0 * x37 + 0.5 * x434;
-        let x1024 = a_ * x30 * theta_dot;
-        let x1025 = 0.5 * x397 - 0.5 * x399 - 0.5 * x401 + 0.5 * x403 - 2.0 * x39;
-        let x1026 = gamma2_dot - x232 - x233;
-        let x1027 = x6 * (-x262 - d * x1026 - x263)
-            + a_ * (x232 - x9 * x9 * x234 + x233);
-        let x1028 = x232 - gamma2_dot + x233;
-        let x1029 = J2 * x1026;
-        let x1030 = x258 * x260;
-        let x1031 = x239 - gamma1_dot - x240;
-        let x1032 = x4 * (x281 - x1031 * d + x283) + a_ * x241 * (x663 - 1.0);
-        let x1033 = J2 * x1031;
-        let x1034 = x282 * x14;
-        let x1035 = x9 * (m2 * d * x1027 + x6 * (-x1028 * J1 - x1029 - x1030))
-            + x26 * x28 * psi_dot
-            + (x4 * (x1033 - x1031 * J1 + x1034) - d * x1032 * m1) * x2
-            + x641 * theta_dot * x29;
-        let x1036 = x1029 + x1030;
-        let x1037 = a_ * x702;
-        let x1038 = x316 + 2.0 * x317 + x1037;
-        let x1039 = a_ * x1038 * x2 * x2;
-        let x1040 = x280 * x2;
-        let x1041 = d * (-x232 - x1040 - x233) + x4 * (x316 + x317 + x1037);
-        let x1042 = x4 * x290;
-        let x1043 = (x1040 - x1042) * J1;
-        let x1044 = J2 * (x1042 - x232 - x1040 - x233);
-        let x1045 = (Iyy - Ixx) * x234;
-        let x1046 = x6 * x272;
-        let x1047 = x259 * x9;
-        let x1048 = J2 * (x239 - x1046 - x1047 - x240);
-        let x1049 = Iyz * x731;
-        let x1050 = x241 * (Iyy + Ixx - Izz);
-        let x1051 = (x1046 + x1047) * J1;
-        let x1052 = d * (x239 - x1047 - x240) - x6 * x272 * d;
-        let x1053 = x1052 * x88 - 2.0 * (a_ * x272 * d * x9 * x9);
-        let x1054 = x1033 + x1034;
-        let x1055 = theta_dot * x29 * x686 - x6 * x44 * x1036
-            + (-x40 * x9 * x1028 - x1031 * x38 * x2) * J1
-            - (x28 * (x1039 + x83 * x1041) * x18 + x1032 * x50) * m1 + x30 * x1035
-            + (psi_dot * x136
-                + (2.0 * x250 - x1043 + 2.0 * x251 - x720 - x1044 - x1045) * x18
-                + x20 * (-x1048 - 2.0 * x238 - x1049 - x1050 - x1051)) * x28
-            - m2 * (x28 * x20 * x1053 + x53 * x1027) - x4 * x1054 * x46;
-        let x1056 = theta_dot * x29 * (x126 - x124 - x135 - x145)
-            + (-x1048 - x4 * x4 * x1054 - x1031 * x2 * x2 * J1 - 2.0 * x238 - x1049
-                - x1050 - x1051) * x18 - m2 * (x22 * x20 * x1027 + x1053 * x18)
-            + x28 * psi_dot * x143
-            - m1 * (x16 * x1032 * x18 + x20 * (x133 * x1041 - x1039))
-            + x20
-                * (x1043 - 2.0 * x250 - 2.0 * x251 - x9 * x9 * x1028 * J1 + x720 + x1044
-                    + x6 * x6 * x1036 + x1045);
-        let x1057 = x280 * J1;
-        let x1058 = 2.0 * x278 + 2.0 * x279;
-        let x1059 = (-2.0 * x278 - 2.0 * x279) * J2;
-        let x1060 = x2 * (x1057 - x1058 * d * d * m1 + x1059) - x4 * x290 * J1;
-        let x1061 = x1057 + x1059;
-        let x1062 = x30 * x1060 - x38 * x290 * J1
-            - (x1058 * x50 - 2.0 * (a_ * x282 * x2 * x28 * x18)) * d * m1 - x1061 * x46;
-        let x1063 = (-x2 * x290 * J1 - x4 * x1061) * x18
-            - d * (2.0 * (a_ * x282 * x2 * x20) + x1058 * x16 * x18) * m1;
-        let x1064 = x259 * x9 * (J1 - 2.0 * x10 - 2.0 * J2) - x6 * x890 * J1;
-        let x1065 = 2.0 * J2 - J1;
-        let x1066 = x20 * (x6 * x259 * x1065 - x9 * x890 * J1)
-            - m2 * d * (-2.0 * (x259 * x22 * x20) - 2.0 * (a_ * x260 * x9 * x18));
-        let x1067 = x30 * x1064 - x259 * x44 * x1065 - x40 * x890 * J1
-            - m2 * d * (-2.0 * x942 - 2.0 * (a_ * x260 * x28 * x9 * x20));
+                * (x613 + x983 * x16
+                    + (x963 - x961 - x964 + x965 + x966 + x967 - x968 + x969) * x15)
+            - ((x971 + x973) * x37 - x954 * x58) * m1 - x46 * x962
+            - (0.5 * (x162 * x955) + x61 * x956) * theta_dot;
+        let x986 = theta_dot * x279;
+        let x987 = theta_dot * x956;
+        let x988 = x269 * x49;
+        let x989 = gamma2_dot * x16 - x253;
+        let x990 = x434 * x269 + x7 * x989;
+        let x991 = gamma1_dot * x15;
+        let x992 = x5 * (x991 - x253) - x674 * x269;
+        let x993 = -(x5 * x269);
+        let x994 = x3 * (x253 - x991) + x16 * x993;
+        let x995 = x16 * x300;
+        let x996 = a_ * (x16 * x269 + x3 * (x16 * x307 - x370 * x15)) - x994 * d
+            - x120 * x995 + x310 * x137;
+        let x997 = x302 * x137;
+        let x998 = J2 * (x994 - x997 + x995) + (x997 - x995) * J1;
+        let x999 = x265 * x15;
+        let x1000 = x9 * x989 - x443 * x269;
+        let x1001 = a_ * (x9 * (x256 * x435 - x326 * x15) + x269 * x15) - x323 * x136
+            - x733 * x15 - x1000 * d;
+        let x1002 = x320 * x136 + x319 * x15;
+        let x1003 = (x1000 + x1002) * J2;
+        let x1004 = x1002 * J1;
+        let x1005 = x263 * x100;
+        let x1006 = x256 * x116;
+        let x1007 = x315 * x16;
+        let x1008 = x3 * (x998 - x0 * x996) - x988 - (x7 * x990 + x5 * x992) * J1 - x999
+            + x9 * (x1001 * x11 - x1003 + x1004) + x1005 + x284 + x1006 - x1007;
+        let x1009 = x327 - x760;
+        let x1010 = x1009 * J1;
+        let x1011 = x760 - x327;
+        let x1012 = -phi_dot - x257;
+        let x1013 = (x1011 + x1012) * J2;
+        let x1014 = ((x593 - x253 * Ixy) + x145 * x269) + (-x92 * x263 - x258 * x116);
+        let x1015 = x100 * x258;
+        let x1016 = x256 * x92;
+        let x1017 = x5 * x300;
+        let x1018 = x773 + x1017;
+        let x1019 = x1018 * J1;
+        let x1020 = J2 * (x1018 + x1012) - x1019;
+        let x1021 = x253 * Ixz;
+        let x1022 = x269 * x149;
+        let x1023 = d * x269;
+        let x1024 = (x769 - x1023 + x770) * x15 + a_ * (x15 * x993 + x674 * x579);
+        let x1025 = x120 * x1024;
+        let x1026 = x16 * x583 + (x764 - x122 * x269) * x15;
+        let x1027 = x1026 * x122;
+        let x1028 = x16 * (x753 - x1023 - x752) + a_ * (x434 * x608 - x435 * x269);
+        let x1029 = x757 * x15 + x16 * (x269 * x106 - x755 - x756);
+        let x1030 = x104 * x1028 - x1029 * x106;
+        let x1031 = x1003 - x1004;
+        let x1032 = x29
+            * (x16 * (x1014 - x16 * (x1010 + x1013))
+                + x15 * (x1016 - x1015 - x1020 * x15 - x1021 + x1022 + x585))
+            - (x36 * x992 - x39 * x990) * J1 - ((x1025 + x1027) * x37 - x58 * x996) * m1
+            - m2 * (x32 * x1030 - x1001 * x55)
+            + x34 * (x988 - x283 + x999 - x1005 - x1006 + x1007) - x46 * x1031
+            + x1008 * x34 - x335 - x42 * x998 - x336;
+        let x1033 = (x1014 - x112 * x992 - x5 * x998) * x15 - x393
+            - (x16 * (-x1025 - x1027) + x192 * x996) * m1
+            + x16
+                * (x1015 - x990 * x94 - x1016 + (x1020 - x1010 - x1013) * x15
+                    + x7 * x1031 + x1021 - x1022 - x585)
+            - m2 * (x1030 * x15 + x1001 * x188) - x394;
+        let x1034 = x447 + (-0.5 * x439 - 0.5 * x446);
+        let x1035 = x1034 - 2.0 * x38;
+        let x1036 = a_ * x411;
+        let x1037 = x430 + (-0.5 * x420 - 0.5 * x416);
+        let x1038 = x1037 + 2.0 * x35;
+        let x1039 = x256 - gamma2_dot;
+        let x1040 = -x254 - x255;
+        let x1041 = gamma2_dot + x1040;
+        let x1042 = x910 + J2 * x1041;
+        let x1043 = a_ * (x256 - x10 * x256) - x7 * (x1041 * d + x323);
+        let x1044 = theta_dot * x30;
+        let x1045 = x263 - gamma1_dot;
+        let x1046 = x838 + J2 * x1045;
+        let x1047 = x5 * (x310 - d * x1045) + x338 * (x4 - 1.0);
+        let x1048 = (x1043 * x11 - x7 * (x1039 * J1 + x1042)) * x9 + x661 * x1044
+            + x253 * x27 + (x5 * (x1046 - x1045 * J1) - x1047 * x0) * x3;
+        let x1049 = x9 * x319;
+        let x1050 = x263 - x1049;
+        let x1051 = d * x1050 - x19 * x326;
+        let x1052 = x326 * x888;
+        let x1053 = x104 * x1051 - 2.0 * (x1052 * x106);
+        let x1054 = x7 * x326;
+        let x1055 = x1049 + x1054;
+        let x1056 = x1055 * J1;
+        let x1057 = (x1056 + (2.0 * x259 + (x1050 - x1054) * J2))
+            + (x263 * (Iyy + Ixx - Izz) + Iyz * x608);
+        let x1058 = x3 * x1045;
+        let x1059 = x3 * x300;
+        let x1060 = x5 * (x375 - x374) - d * (x256 + x1059);
+        let x1061 = x120 * x1060;
+        let x1062 = x3 * (x847 - x374);
+        let x1063 = x1062 * x122;
+        let x1064 = x5 * x307;
+        let x1065 = x1064 - x1059;
+        let x1066 = J2 * (x1065 + x1040);
+        let x1067 = x256 * (Iyy - Ixx);
+        let x1068 = x1059 - x1064;
+        let x1069 = x1068 * J1;
+        let x1070 = x253 * x138 - m2 * (x1053 * x15 + x1043 * x188)
+            - (x1046 * x6 + x1057 + x1058 * x112) * x15 + (x684 - x91 + x93) * x1044
+            - (x1047 * x192 + (-x1061 - x1063) * x16) * m1
+            + (x1066 - x746 - 2.0 * x313 + x1067 + x1069 - x1039 * x678 + x8 * x1042
+                - 2.0 * x314) * x16;
+        let x1071 = ((x746 + 2.0 * x313 - x1066 - x1067 - x1069 + 2.0 * x314) * x15
+            - x16 * x1057 + x126 * psi_dot) * x29 - m2 * (x32 * x1053 - x1043 * x55)
+            + x34 * x1048 + x709 * x1044 - (x1058 * x36 + x1039 * x864) * J1
+            - x96 * x1042 - x1046 * x110 - ((x1061 + x1063) * x37 - x1047 * x58) * m1;
+        let x1072 = 2.0 * x298 + 2.0 * x299;
+        let x1073 = x300 * J1 - x1072 * J2;
+        let x1074 = (x1073 - x1 * x1072) * x3 - x1064 * J1;
+        let x1075 = x302 * x122;
+        let x1076 = -x0 * (2.0 * (x1075 * x16) + x1072 * x192)
+            - (x5 * x1073 + x112 * x307) * x15;
+        let x1077 = x34 * x1074 - x307 * x793 - x0 * (-x1072 * x58 - 2.0 * (x1075 * x37))
+            - x42 * x1073;
+        let x1078 = -(x326 * J1);
+        let x1079 = x1049 * (J1 - 2.0 * J2 - 2.0 * x12) - x7 * x1078;
+        let x1080 = 2.0 * J2 - J1;
+        let x1081 = x320 * x106;
+        let x1082 = (x760 * x1080 + x326 * x94) * x16
+            + (2.0 * (x1081 * x15) + 2.0 * (x188 * x319)) * x11;
+        let x1083 = x34 * x1079 - x980 * x1080 + x39 * x1078
+            + x11 * (2.0 * (x32 * x1081) - 2.0 * x975);
         Derivatives {
             qdot: [
                 psi_dot,
@@ -4868,38 +4758,35 @@ pub mod maggi {
                 Z_dot,
             ],
             matrix: [
-                [x13, x58, x61, 0.0, 0.0, x69, x77, x81],
-                [x58, x29 * x20 * x138 + x148, x150, x154, x157, x179, x203, x210],
-                [x61, x150, x215 * x29 * x18 - x212 * x20, x218, 0.0, x220, x222, x224],
-                [0.0, x154, x218, x1, 0.0, x225, x226, x227],
-                [0.0, x157, 0.0, 0.0, x11, x228, x229, x230],
-                [x69, x179, x220, x225, x228, x231, 0.0, 0.0],
-                [x77, x203, x222, x226, x229, 0.0, x231, 0.0],
-                [x81, x210, x224, x227, x230, 0.0, 0.0, x231],
+                [x14, x64, x68, 0.0, 0.0, x78, x85, x90],
+                [x64, x141 + x166 * x31, x168, x171, x174, x195, x221, x230],
+                [x68, x168, x235 * x65 - x232 * x16, x239, 0.0, x241, x243, x245],
+                [0.0, x171, x239, x2, 0.0, x246, x247, x248],
+                [0.0, x174, 0.0, 0.0, x13, x249, x250, x251],
+                [x78, x195, x241, x246, x249, x252, 0.0, 0.0],
+                [x85, x221, x243, x247, x250, 0.0, x252, 0.0],
+                [x90, x230, x245, x248, x251, 0.0, 0.0, x252],
             ],
             force: [
-                x314,
-                x369 + x29 * x382 * x20,
-                x29 * x382 * x18 - x383,
-                x28 * psi_dot * x20 * x217 * phi_dot - x329 * d * m1
-                    - theta_dot * x304 * x216 * x18 - x341 + x14 * x280 * x290,
-                x258 * x259 * x272 + x385 * x156 - x366 - m2 * x355 * d,
-                x389,
-                (-x390 - x392) * theta_dot + x28 * psi_dot * phi_dot * x197
-                    - m2 * (x273 * x72 + x181 * x349 + x355 * x185)
-                    - (x323 * x190 + x329 * x193 + x291 * x75) * m1,
-                x28 * (x208 * psi_dot * phi_dot - theta_dot * x80 * x311 * d)
+                x334,
+                x31 * x387 + x400,
+                x387 * x65 - x401,
+                x301 * x307 - x0 * x384 - x362 + x238 * x268 - x402 * x237,
+                x326 * x330 - x347 * x11 - x354 + x404 * x173,
+                x407,
+                x216 * x267 - (x377 * x212 + x384 * x208 + x83 * x311) * m1
+                    - theta_dot * x408 - m2 * (x344 * x198 + x409 + x347 * x201),
+                (x349 * x228 - x88 * x456) * x29
+                    - (x412
+                        + d
+                            * (x413 * x419 + (x427 + gamma1_dot * x428) * gamma1_dot
+                                + theta_dot * (x433 + theta_dot * x428))) * m1
                     - m2
-                        * (((0.25 * x397 - 0.25 * x399 - 0.25 * x401 + 0.25 * x403)
-                            * phi_dot * phi_dot + (theta_dot * x404 + x412) * theta_dot
-                            + gamma2_dot * (x414 + x417 + gamma2_dot * x404)) * d - x393)
-                    - (x393
-                        + (theta_dot * (x436 + theta_dot * x437 + x439)
-                            + gamma1_dot * (x437 * gamma1_dot + x441)
-                            + (0.25 * x430 - 0.25 * x425 - 0.25 * x432 + 0.25 * x434)
-                                * phi_dot * phi_dot) * d) * m1,
+                        * (((theta_dot * x442 + x451) * theta_dot
+                            + gamma2_dot * (x455 + gamma2_dot * x442) + x441 * x413) * d
+                            - x412),
             ],
-            checks: [x28],
+            checks: [x29],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4920,140 +4807,130 @@ pub mod maggi {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x448, x69, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x459, x179, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x460, x220, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x461, x225, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x462, x228, 0.0],
-                    [x448, x459, x460, x461, x462, 0.0, 0.0, 0.0],
-                    [x69, x179, x220, x225, x228, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x464, x78, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x475, x195, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x476, x241, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x477, x246, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x478, x249, 0.0],
+                    [x464, x475, x476, x477, x478, 0.0, 0.0, 0.0],
+                    [x78, x195, x241, x246, x249, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x478, x479, 0.0, 0.0, x480, x481, x483],
+                    [0.0, x493, x494, 0.0, 0.0, x495, x496, x498],
                     [
-                        x478,
-                        (x27 + x501 + x502 * x18 + x57) * x20,
-                        x503,
-                        x504,
-                        x507,
+                        x493,
+                        (x509 + x15 * x510) * x16,
+                        x511,
                         x513,
-                        x517,
-                        x519,
+                        x515,
+                        x522,
+                        x526,
+                        x528,
                     ],
                     [
-                        x479,
-                        x503,
-                        (x60 - x20 * x502 - x59
-                            + x29
-                                * (x30 * (x479 + x215 * x29) + x500 * x18 - x20 * x489))
-                            * x18,
-                        x520,
-                        x521,
-                        x522,
-                        x523,
-                        x524,
+                        x494,
+                        x511,
+                        (x68 - x16 * x510
+                            + x30
+                                * (x508 * x15 - x500 * x16 + x34 * (x30 * x235 + x494)))
+                            * x15,
+                        x529,
+                        x530,
+                        x531,
+                        x532,
+                        x533,
                     ],
-                    [0.0, x504, x520, 0.0, 0.0, x525, x526, x527],
-                    [0.0, x507, x521, 0.0, 0.0, x528, x529, x530],
-                    [x480, x513, x522, x525, x528, 0.0, 0.0, 0.0],
-                    [x481, x517, x523, x526, x529, 0.0, 0.0, 0.0],
-                    [x483, x519, x524, x527, x530, 0.0, 0.0, 0.0],
+                    [0.0, x513, x529, 0.0, 0.0, x534, x535, x536],
+                    [0.0, x515, x530, 0.0, 0.0, x537, x538, x539],
+                    [x495, x522, x531, x534, x537, 0.0, 0.0, 0.0],
+                    [x496, x526, x532, x535, x538, 0.0, 0.0, 0.0],
+                    [x498, x528, x533, x536, x539, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x640, x643, 0.0, 0.0, x646, x648, x650],
+                    [0.0, x660, x663, 0.0, 0.0, x666, x668, x671],
                     [
-                        x640,
-                        x29
-                            * ((x117 + x30 * (x639 * x20 + x27 + x57) + x137) * x18
-                                + x20 * x660) + x665 * x18 - x149,
-                        x666,
-                        x667,
-                        x668,
-                        x679,
-                        x683,
-                        x685,
-                    ],
-                    [
-                        x643,
-                        x666,
-                        x29
-                            * ((x653 * x18
-                                + (x29 * x686 - x655 - x656 - x657 - x658 + x476 - x659)
-                                    * x20) * x18
-                                + (x214 - x213 + x30 * (x59 - x60 + x642 * x18)) * x20)
-                            - x212 * x18
-                            - (x29 * (x661 * x18 - x214 + x30 * (x662 * x18 - x59))
-                                - x144 - x20 * x664) * x20,
+                        x660,
+                        x682 * x15 - x167
+                            + x30
+                                * (x16 * x686 + (x165 + x34 * (x64 + x16 * x659)) * x15),
                         x687,
                         x688,
-                        x689,
-                        x690,
-                        x691,
+                        x171,
+                        x700,
+                        x704,
+                        x708,
                     ],
-                    [0.0, x667, x687, 0.0, 0.0, x692, x693, x694],
-                    [0.0, x668, x688, 0.0, 0.0, x695, x696, x697],
-                    [x646, x679, x689, x692, x695, 0.0, 0.0, 0.0],
-                    [x648, x683, x690, x693, x696, 0.0, 0.0, 0.0],
-                    [x650, x685, x691, x694, x697, 0.0, 0.0, 0.0],
+                    [
+                        x663,
+                        x687,
+                        x30
+                            * ((x685 * x15
+                                + (x680 - x679 - x675 - x676 + x30 * x709 + x489 - x677)
+                                    * x16) * x15
+                                + (x34 * (x67 - x66 + x662 * x15) + x233 - x234) * x16)
+                            - (x30 * (x34 * (x658 * x15 - x67) - x233 + x15 * x681)
+                                - x673 * x16 - x139) * x16 - x232 * x15,
+                        x710,
+                        x711,
+                        x712,
+                        x713,
+                        x714,
+                    ],
+                    [0.0, x688, x710, 0.0, 0.0, x716, x718, x719],
+                    [0.0, x171, x711, 0.0, 0.0, x721, x722, x723],
+                    [x666, x700, x712, x716, x721, 0.0, 0.0, 0.0],
+                    [x668, x704, x713, x718, x722, 0.0, 0.0, 0.0],
+                    [x671, x708, x714, x719, x723, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x4 * x767 * x2, x774, x776, 0.0, 0.0, x692, x693, x694],
+                    [x5 * x791, x797, x799, 0.0, 0.0, x716, x718, x719],
+                    [x797, x130 * x808 + x31 * x811, x812, 0.0, 0.0, x819, x825, x827],
                     [
-                        x774,
-                        x784 * x18 * x18 + x29 * x20 * x790,
-                        x791,
-                        0.0,
-                        0.0,
-                        x798,
-                        x805,
-                        x808,
-                    ],
-                    [
-                        x776,
-                        x791,
-                        x29 * (x30 * x775 - x20 * x789 + x29 * x788) * x18 * x18
-                            - (x783 * x29 * x18 * x18 - x778 * x2 * x20) * x20,
-                        x810,
-                        0.0,
-                        x811,
+                        x799,
                         x812,
-                        x814,
+                        x828 * (x34 * x798 - x806 * x16 + x30 * x810)
+                            - (x828 * x807 - x674 * x802) * x16,
+                        x829,
+                        0.0,
+                        x830,
+                        x831,
+                        x832,
                     ],
-                    [0.0, 0.0, x810, 0.0, 0.0, x815, x816, x817],
+                    [0.0, 0.0, x829, 0.0, 0.0, x833, x834, x835],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x692, x798, x811, x815, 0.0, 0.0, 0.0, 0.0],
-                    [x693, x805, x812, x816, 0.0, 0.0, 0.0, 0.0],
-                    [x694, x808, x814, x817, 0.0, 0.0, 0.0, 0.0],
+                    [x716, x819, x830, x833, 0.0, 0.0, 0.0, 0.0],
+                    [x718, x825, x831, x834, 0.0, 0.0, 0.0, 0.0],
+                    [x719, x827, x832, x835, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [x6 * x9 * x839, x849, x850, 0.0, 0.0, x851, x852, x697],
+                    [x7 * x858, x869, x870, 0.0, 0.0, x871, x722, x723],
                     [
-                        x849,
-                        (x857 + x859) * x18 + x29 * x20 * x20 * x865,
-                        x866,
+                        x869,
+                        (x876 + x878) * x15 + x881 * x875,
+                        x882,
                         0.0,
-                        x867,
-                        x873,
-                        x879,
                         x883,
+                        x891,
+                        x897,
+                        x901,
                     ],
                     [
-                        x850,
-                        x866,
-                        x29 * (x30 * x850 - x20 * x20 * x860 + x29 * x864 * x18) * x18
-                            - (x29 * x856 * x18 - x9 * x858) * x20 * x20,
+                        x870,
+                        x882,
+                        (x34 * x870 - x873 * x129 + x880 * x65) * x65
+                            - x129 * (x874 * x65 - x902),
                         0.0,
                         0.0,
-                        x884,
-                        x885,
-                        x886,
+                        x903,
+                        x904,
+                        x905,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x867, 0.0, 0.0, 0.0, x887, x888, x889],
-                    [x851, x873, x884, 0.0, x887, 0.0, 0.0, 0.0],
-                    [x852, x879, x885, 0.0, x888, 0.0, 0.0, 0.0],
-                    [x697, x883, x886, 0.0, x889, 0.0, 0.0, 0.0],
+                    [0.0, x883, 0.0, 0.0, 0.0, x906, x907, x908],
+                    [x871, x891, x903, 0.0, x906, 0.0, 0.0, 0.0],
+                    [x722, x897, x904, 0.0, x907, 0.0, 0.0, 0.0],
+                    [x723, x901, x905, 0.0, x908, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5173,272 +5050,220 @@ pub mod maggi {
                     0.0,
                     0.0,
                     0.0,
-                    theta_dot * (-x311 * d * x447 - x304 * x29 * (x452 + x456))
-                        - (x323 * x450 + x329 * x449 + x291 * x446) * m1
-                        + x28 * psi_dot * phi_dot * x458
-                        - m2 * (x273 * x445 + x454 * x349 + x355 * x453),
-                    x389,
+                    x472 * x267 - theta_dot * (x282 * x473 + x463 * x405)
+                        - (x377 * x468 + x462 * x311 + x384 * x470) * m1
+                        - m2 * (x347 * x465 - x466 * x344 - x409),
+                    x407,
                     0.0,
                 ],
                 [
-                    x534 + x572,
-                    x608 * x18 + x610 * x20,
-                    x610 * x18 - x608 * x20,
-                    (J2 * (x535 - x581 - x582 - x536) - d * m1 * x591
-                        - x30 * x20 * x217 * phi_dot + (x581 + x582) * J1) * psi_dot
-                        + (-x30 * x304 * x217 - x532 * x216) * theta_dot * x29 * x18,
-                    (J1 * (-x604 - x605) - x30 * x156 * phi_dot * x18 - m2 * d * x575
-                        + J2 * (x539 + x604 + x540 + x605)) * psi_dot
-                        + theta_dot * (-x30 * x304 * x611 - x532 * x156) * x29 * x20,
-                    psi_dot * (x208 * x63 * x28 - x30 * x173) * phi_dot
-                        - (x612 * x63
-                            + psi_dot * (x165 * x591 + x594 * x169 + x569 * x64)) * m1
+                    x578,
+                    x611 * x15 + x616 * x16,
+                    x616 * x15 - x611 * x16,
+                    (J2 * (x550 + x598 - x599) + x601 - x580 * x0 - x617 * x70) * psi_dot
+                        - theta_dot * (x575 * x237 + x238 * x618) * x65,
+                    psi_dot * (x588 - x11 * x609 - x589 - x173 * x557)
+                        - theta_dot * (x618 * x619 + x575 * x173) * x31,
+                    (x228 * x176 - x34 * x193) * x349
+                        - (x69 * x620
+                            + psi_dot * (x182 * x584 + x580 * x184 + x76 * x562)) * m1
+                        - m2
+                            * (x621 * x69
+                                + psi_dot * (x74 * x551 + x179 * x609 + x177 * x607))
                         + theta_dot
-                            * (d * (-x531 * x68 - x80 * x63 * x311 * x28)
-                                + x29 * (-x511 * x304 - x532 * x387 * x29))
+                            * (-x30 * (x281 * x519 + x576 * x186)
+                                - d * (x176 * x622 + x577 * x77)),
+                    (x228 * x196 - x34 * x216) * x349
                         - m2
-                            * (x63 * x613
-                                + psi_dot * (x67 * x552 + x158 * x574 + x162 * x575)),
-                    (x208 * x28 * x62 - x30 * x197) * psi_dot * phi_dot
-                        - m2
-                            * (x613 * x62
-                                + psi_dot * (x185 * x575 + x72 * x552 + x181 * x574))
-                        + (x29 * (-x304 * x515 - x532 * x29 * x391)
-                            + (-x80 * x311 * x28 * x62 - x76 * x531) * d) * theta_dot
-                        - m1
-                            * ((x193 * x591 + x569 * x75 + x594 * x190) * psi_dot
-                                + x612 * x62),
-                    psi_dot * phi_dot * (x28 * x518 - x30 * x208)
-                        + theta_dot * (-x482 * x30 * x311 - x531 * x80 * x28) * d
-                        - (x614
+                            * (x621 * x72
+                                + (x201 * x609 + x551 * x79 + x607 * x198) * psi_dot)
+                        + theta_dot
+                            * (-(x577 * x84 + x196 * x622) * d
+                                - x30 * (x281 * x524 + x219 * x576))
+                        - (psi_dot * (x212 * x584 + x83 * x562 + x580 * x208)
+                            + x72 * x620) * m1,
+                    x349 * (x29 * x527 - x34 * x228)
+                        - theta_dot * d * (x34 * x497 * x277 + x623 * x577)
+                        - (x624
                             + d
-                                * (theta_dot
-                                    * ((0.5 * x617 - 0.5 * x615 - 0.5 * x616 - 2.0 * x45
-                                        + 0.5 * x618) * gamma1_dot + x621 + theta_dot * x622)
-                                    + (0.25 * x615 - 0.25 * x616 + 0.25 * x617 - 0.5 * x619
-                                        - 0.25 * x618 + 0.5 * x620) * phi_dot * phi_dot
-                                    + gamma1_dot * (x624 + gamma1_dot * x622))) * m1
-                        - m2
-                            * ((theta_dot * (x631 + x632 * theta_dot)
-                                + (0.25 * x626 - 0.25 * x625 + 0.25 * x627 - 0.25 * x629)
-                                    * phi_dot * phi_dot
+                                * (x632 * x413
+                                    + (x635 * theta_dot - x634
+                                        + gamma1_dot * (x637 - 2.0 * x41)) * theta_dot
+                                    + gamma1_dot * (x639 + x635 * gamma1_dot))) * m1
+                        - (d
+                            * (theta_dot * (theta_dot * x645 + x650)
                                 + gamma2_dot
-                                    * (theta_dot
-                                        * (0.5 * x625 + 0.5 * x626 + 2.0 * x42 + 0.5 * x627 - x628
-                                            + 0.5 * x629 - x630) + x632 * gamma2_dot + x634)) * d
-                                - x614),
+                                    * (theta_dot * (x652 + 2.0 * x44) + x654
+                                        + gamma2_dot * x645) + x413 * x644) - x624) * m2,
                 ],
                 [
-                    x728,
-                    x29 * (x20 * x760 + x30 * (x314 * x18 + x728 * x20) + x761 * x18)
-                        + x762 * x18 - x383,
-                    x29 * (x760 * x18 - x761 * x20 + x30 * (x728 * x18 - x314 * x20))
-                        - x762 * x20 - x369,
-                    x385 * x217 - x741 * d * m1 - x756
-                        + x241 * (x14 * x2 * x290 + x4 * x14 * x280),
-                    x702 * (x14 * x272 * x9 + x6 * x258 * x259)
-                        - theta_dot * x304 * x156 * x18 - m2 * d * x732
-                        + x28 * psi_dot * x20 * x611 * phi_dot - x341,
-                    x28 * x676 * psi_dot * phi_dot
-                        - (x745 * x169 + x741 * x165 + x64 * x763 + x291 * x644) * m1
-                        + (-x678 * x304 * x29 - x311 * d * x645) * theta_dot
+                    x751,
+                    x780 * x15 - x401
+                        + (x781 * x16 + x15 * x386 + x34 * (x751 * x16 + x334 * x15))
+                            * x30,
+                    x30 * (x781 * x15 - x16 * x386 + x34 * (x751 * x15 - x334 * x16))
+                        - x780 * x16 - x400,
+                    x238 * x404 - x776 - x0 * x771 + (x17 * x773 + x5 * x301) * x263,
+                    x268 * x619 - x402 * x173 - x256 * (x17 * x327 + x329 * x760)
+                        - x754 * x11 - x362,
+                    x267 * x699
                         - m2
-                            * (x273 * x64 + x162 * x732 + x764 * x644 + x158 * x735
-                                + x67 * x707),
-                    (-x311 * d * x647 - x304 * x29 * x682) * theta_dot
+                            * (x177 * x758 + x754 * x179 + x74 * x734 + x782 * x664
+                                + x76 * x328)
+                        - (x182 * x765 + x76 * x783 + x664 * x311 + x184 * x771) * m1
+                        - theta_dot * (x405 * x665 + x696 * x282),
+                    x702 * x267
                         - m2
-                            * (x185 * x732 + x181 * x735 + x273 * x75 + x707 * x72
-                                + x764 * x445)
-                        - (x75 * x763 + x741 * x193 + x745 * x190 + x291 * x445) * m1
-                        + x681 * x28 * psi_dot * phi_dot,
-                    (-theta_dot * x311 * x28 * x649
-                        - m2
-                            * (gamma2_dot
-                                * (gamma2_dot * x765
-                                    + (0.5 * x625 + 0.5 * x626 + 0.5 * x627 - x628 + 0.5 * x629
-                                        - x630) * phi_dot + theta_dot * x633)
-                                + theta_dot
-                                    * (phi_dot
-                                        * (0.5 * x626 - 0.5 * x625 + 0.5 * x627 - 0.5 * x629)
-                                        + theta_dot * x765) + x765 * phi_dot * phi_dot)
-                        - m1
-                            * ((x623 * gamma1_dot + theta_dot * x766
-                                + phi_dot
-                                    * (0.5 * x615 - 0.5 * x616 + 0.5 * x617 - x619 - 0.5 * x618
-                                        + x620)) * theta_dot
-                                + gamma1_dot
-                                    * (x766 * gamma1_dot
-                                        + (0.5 * x617 - 0.5 * x615 - 0.5 * x616 + 0.5 * x618)
-                                            * phi_dot) + x766 * phi_dot * phi_dot)) * d
-                        + x684 * x28 * psi_dot * phi_dot,
-                ],
-                [
-                    x824,
-                    x834 * x18 + x835 * x29 * x20,
-                    x835 * x29 * x18 - x834 * x20,
-                    x825 * x14 * x280
-                        + d
-                            * (x319 - x830 - x831
-                                + a_ * (x247 + theta_dot * x304 * x18) * x2) * m1
-                        + x14 * x290 * x290,
-                    0.0,
-                    (theta_dot * (-x4 * x311 * d * x64 - x304 * x29 * (x794 - x795))
-                        - x819 * x64 - x329 * x793 - x165 * x836 - x837 * x169
-                        + x28 * psi_dot * x797 * phi_dot) * m1,
-                    (theta_dot * (-x4 * x311 * d * x75 - (x802 - x799) * x304 * x29)
-                        - x837 * x190 - x193 * x836 - x329 * x801
-                        + x28 * psi_dot * x804 * phi_dot - x819 * x75) * m1,
-                    (x28 * (x813 * psi_dot * phi_dot - x4 * theta_dot * x311 * d * x18)
+                            * (x754 * x201 + x328 * x83 - x782 * x79 + x79 * x734
+                                + x758 * x198) - theta_dot * (x405 * x667 + x282 * x703)
+                        - (x212 * x765 - x79 * x311 + x83 * x783 + x771 * x208) * m1,
+                    x267 * x707
                         - d
-                            * (phi_dot * phi_dot
-                                * (0.25 * x617 - 0.25 * x615 - 0.25 * x616 + 0.25 * x618)
-                                + gamma1_dot * (x838 * gamma1_dot + x621)
-                                + theta_dot
-                                    * (x624 + theta_dot * x838
-                                        + (0.5 * x615 - 0.5 * x616 + 0.5 * x617 - x619 + 2.0 * x469
-                                            - 0.5 * x618 + x620) * gamma1_dot))) * m1,
-                ],
-                [
-                    x896,
-                    x29 * x20 * x907 + x908 * x18,
-                    x29 * x907 * x18 - x908 * x20,
-                    0.0,
-                    x258 * x259 * x259 + x258 * x272 * x890
-                        + m2 * (a_ * (x384 - x255) * x9 - x902 + x903 - x904) * d,
-                    (x872 * x28 * psi_dot * phi_dot - x162 * x905 - x67 * x894
-                        - x158 * x909
-                        + theta_dot * (x6 * x67 * x311 * d - x304 * x29 * (x870 - x868))
-                        - (-x160 - x161) * x349) * m2,
-                    m2
-                        * ((x6 * x311 * d * x72 - x304 * x29 * (x877 - x876)) * theta_dot
-                            - x185 * x905 - x894 * x72 - x349 * (-x183 - x184)
-                            - x181 * x909 + x28 * psi_dot * phi_dot * x875),
-                    m2
-                        * ((x882 * psi_dot * phi_dot + x6 * theta_dot * x311 * d * x20)
-                            * x28
-                            - d
+                            * (m2
                                 * (gamma2_dot
-                                    * (x631
-                                        + theta_dot
-                                            * (0.5 * x626 - 0.5 * x625 - 2.0 * x471 + 0.5 * x627
-                                                - 0.5 * x629) + gamma2_dot * x910)
-                                    + theta_dot * (x634 + theta_dot * x910)
-                                    + (0.25 * x625 + 0.25 * x626 + 0.25 * x627 - 0.5 * x628
-                                        + 0.25 * x629 - 0.5 * x630) * phi_dot * phi_dot)),
+                                    * (gamma2_dot * x785 + theta_dot * x653 + x652 * phi_dot)
+                                    + x785 * x413
+                                    + theta_dot * (theta_dot * x785 + x786 * phi_dot))
+                                + m1
+                                    * ((x787 * phi_dot + x638 * gamma1_dot - x788 * theta_dot)
+                                        * theta_dot
+                                        + gamma1_dot * (x637 * phi_dot - x788 * gamma1_dot)
+                                        - x788 * x413) + x461 * x670),
+                ],
+                [
+                    x841,
+                    x852 * x15 + x31 * x853,
+                    x853 * x65 - x852 * x16,
+                    x0 * ((x402 + x268) * x122 - x842 - x376 + x843) - x301 * x300
+                        + x850 * x17,
+                    0.0,
+                    m1
+                        * (x182 * x384 - x182 * x854 + x267 * x816 - x837 * x76
+                            - x184 * x855 - (x405 * x715 + x282 * x817) * theta_dot),
+                    m1
+                        * (x212 * x384 - x212 * x854 - x855 * x208
+                            - theta_dot * (x282 * x823 + x405 * x717) + x267 * x822
+                            - x837 * x83),
+                    ((x349 * x826 - x5 * x405 * x255) * x29
+                        - d
+                            * (theta_dot
+                                * (x639 + (2.0 * x486 + x787) * gamma1_dot
+                                    + x857 * theta_dot) + x413 * x856
+                                + gamma1_dot * (x857 * gamma1_dot - x634))) * m1,
+                ],
+                [
+                    x915,
+                    x926 * x31 + x927 * x15,
+                    x926 * x65 - x927 * x16,
+                    0.0,
+                    x11 * (x920 + (x403 - x292) * x106 - x921 - x341) + x319 * x330
+                        + x329 * x917,
+                    m2
+                        * (x344 * x179 - x177 * x923 + x74 * x914 - x179 * x922
+                            + x890 * x267 + theta_dot * (x405 * x886 - x282 * x885)),
+                    m2
+                        * (x79 * x914 + theta_dot * (x405 * x894 - x282 * x895)
+                            - x201 * x922 + x344 * x201 + x893 * x267 - x923 * x198),
+                    m2
+                        * (x29 * (x900 * x349 + x435 * x456)
+                            - d
+                                * ((x654 + theta_dot * x929) * theta_dot
+                                    + (gamma2_dot * x929 + theta_dot * (x786 - 2.0 * x484)
+                                        + x650) * gamma2_dot + x928 * x413)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x941,
-                    x971 * x18 + x29 * x972 * x20,
-                    x29 * x972 * x18 - x971 * x20,
-                    (x955 + x956) * J1 - 0.5 * (theta_dot * x29 * x216 * x18 * x302)
-                        - d * x948 * m1 + x28 * x20 * x217 * phi_dot
-                        + (x914 - x955 - x956 + x916) * J2,
-                    (-x960 - x961) * J1
-                        + (x926 - 0.5 * (theta_dot * x29 * x20 * x302)) * x156
-                        - m2 * x943 * d + (x960 - x926 + x927 + x961) * J2,
-                    x28 * phi_dot * x173 - (x933 * x64 + x165 * x948 + x946 * x169) * m1
-                        + theta_dot * (-d * x938 * x68 - 0.5 * (x387 * x29 * x29 * x302))
-                        - (x158 * x944 + x943 * x162 + x67 * x921) * m2,
-                    x28 * phi_dot * x197 - (x946 * x190 + x933 * x75 + x193 * x948) * m1
-                        + (-x76 * d * x938 - 0.5 * (x29 * x29 * x391 * x302)) * theta_dot
-                        - (x943 * x185 + x921 * x72 + x181 * x944) * m2,
-                    x28 * (x208 * phi_dot - theta_dot * x80 * d * x938),
+                    x957,
+                    x984 * x15 + x985 * x31,
+                    x985 * x65 - x16 * x984,
+                    x617 * x32 - 0.5 * (x986 * x237 * x65) + x965 - x972 * x0
+                        + J2 * (x933 - x958 - x959),
+                    (x943 - 0.5 * (x31 * x986)) * x173 - x982 + (x953 + x981) * J2
+                        - x11 * x976,
+                    x193 * x978 - m2 * (x179 * x976 + x177 * x974 + x74 * x936)
+                        - m1 * (x954 * x76 + x182 * x970 + x972 * x184)
+                        - theta_dot * (0.5 * (x955 * x186) + x78 * x956),
+                    x216 * x978 - (x85 * x956 + 0.5 * (x219 * x955)) * theta_dot
+                        - m2 * (x201 * x976 + x79 * x936 + x974 * x198)
+                        - m1 * (x212 * x970 + x972 * x208 + x954 * x83),
+                    (x228 * phi_dot - x987 * x89) * x29,
                 ],
                 [
-                    x995,
-                    x1021 * x29 * x20 + x1022 * x18,
-                    x1021 * x29 * x18 - x1022 * x20,
-                    (J2 * (phi_dot - x1001 - x1002 + x236) + (x1001 + x1002) * J1
-                        - x304 * x216) * x18 - x1019 * d * m1,
-                    (J2 * (x1013 - x1012 + phi_dot + x236) - x304 * x156
-                        + (x1012 - x1013) * J1) * x20 - m2 * d * x998,
-                    -x386 - m2 * (x998 * x162 + x999 * x158 + x67 * x987)
-                        - (x976 * x64 + x169 * x1017 + x165 * x1019) * m1 - x388,
-                    -m2 * (x987 * x72 + x181 * x999 + x998 * x185) - x390
-                        - m1 * (x190 * x1017 + x976 * x75 + x1019 * x193) - x392,
-                    -(d * (x436 + x1023 * theta_dot + x439) + 2.0 * x1024) * m1
-                        - x80 * x311 * x28 * d
-                        - m2
-                            * ((theta_dot * x1025 + x412 + x416 * gamma2_dot) * d
-                                - 2.0 * x1024),
+                    x1008,
+                    x31 * x1032 + x1033 * x15,
+                    x1032 * x65 - x1033 * x16,
+                    (J2 * (x269 - x773 - x1017) - x281 * x237 + x1019) * x15
+                        - x0 * x1024,
+                    x16 * (J2 * (x1009 + x269) - x281 * x173 + x1011 * J1) - x11 * x1028,
+                    -(m2 * (x179 * x1028 + x74 * x1001 + x177 * x1029) + x406
+                        + m1 * (x182 * x1026 + x76 * x996 + x184 * x1024)),
+                    -((x212 * x1026 + x208 * x1024 + x83 * x996) * m1 + x408
+                        + m2 * (x1001 * x79 + x1029 * x198 + x201 * x1028)),
+                    -(m2
+                        * (d * (x1035 * theta_dot - gamma2_dot * x454 + x451)
+                            - 2.0 * x1036)
+                        + ((theta_dot * x1038 + x433) * d + 2.0 * x1036) * m1
+                        + x623 * x405),
                 ],
                 [
-                    x1035,
-                    x29 * x20 * x1055 + x1056 * x18,
-                    x29 * x1055 * x18 - x20 * x1056,
-                    (x1042 - x1040) * J1 - theta_dot * x216 * x18
-                        + (x232 - x1042 + x1040 + x233) * J2 + x28 * psi_dot * x20 * x217
-                        - d * m1 * x1041,
-                    (-x1046 - x1047) * J1 - x1052 * m2 * d + x241 * x156
-                        + J2 * (x1046 - x239 + x1047 + x240),
-                    x28 * psi_dot * x173
-                        - m2
-                            * (2.0 * (x272 * d * x9 * x158) + x67 * x1027 + x1052 * x162)
-                        + (-x175 - x176 - x177) * theta_dot * x29
-                        - m1 * (x1038 * x2 * x169 + x1032 * x64 + x165 * x1041),
-                    theta_dot * x29 * (-x199 - x200 - x201)
-                        - m1 * (x1038 * x2 * x190 + x193 * x1041 + x1032 * x75)
-                        - m2
-                            * (x1052 * x185 + 2.0 * (x181 * x272 * d * x9) + x72 * x1027)
-                        + x28 * psi_dot * x197,
-                    d
-                        * (-x30 * theta_dot * x80
-                            - m2
-                                * (gamma2_dot * x413 + theta_dot * x411
-                                    + phi_dot
-                                        * (0.5 * x397 - 0.5 * x399 - 0.5 * x401 + 0.5 * x403))
-                            - (gamma1_dot * x440
-                                + phi_dot
-                                    * (0.5 * x430 - 0.5 * x425 - 0.5 * x432 + 0.5 * x434)
-                                + theta_dot * x438) * m1) + x208 * x28 * psi_dot,
+                    x1048,
+                    x1070 * x15 + x1071 * x31,
+                    x1071 * x65 - x1070 * x16,
+                    J2 * (x256 + x1068) + x238 * x254 + x1065 * J1 - x0 * x1060
+                        - x255 * x237,
+                    x263 * x173 - x1056 - x11 * x1051 + (x262 - x261 + x1055) * J2,
+                    x253 * x193
+                        - m2 * (x179 * x1051 + x74 * x1043 + 2.0 * (x177 * x1052))
+                        - m1 * (x184 * x1060 + x1047 * x76 + x182 * x1062)
+                        - x187 * x1044,
+                    x253 * x216
+                        - m2 * (2.0 * (x1052 * x198) + x201 * x1051 + x1043 * x79)
+                        - (x212 * x1062 + x1047 * x83 + x208 * x1060) * m1
+                        - x220 * x1044,
+                    x253 * x228
+                        - d
+                            * (m2
+                                * (gamma2_dot * x452 + theta_dot * x450 + phi_dot * x1034)
+                                + (x426 * gamma1_dot + x1037 * phi_dot + theta_dot * x429)
+                                    * m1 + x88 * x411),
                 ],
                 [
-                    x1060,
-                    x1062 * x29 * x20 + x1063 * x18,
-                    x1062 * x29 * x18 - x1063 * x20,
+                    x1074,
+                    x1076 * x15 + x31 * x1077,
+                    x1077 * x65 - x1076 * x16,
                     0.0,
                     0.0,
-                    -(d * m1 * (x1058 * x64 - 2.0 * (x282 * x169))),
-                    -(d * (x1058 * x75 - 2.0 * (x282 * x190)) * m1),
-                    -(d * m1 * (x1023 * gamma1_dot + x435 * theta_dot + x441)),
+                    -((x1072 * x76 - 2.0 * (x182 * x302)) * x0),
+                    -(x0 * (x1072 * x83 - 2.0 * (x212 * x302))),
+                    -(x0 * (gamma1_dot * x1038 + x427 + theta_dot * x432)),
                 ],
                 [
-                    x1064,
-                    x1066 * x18 + x1067 * x29 * x20,
-                    x1067 * x29 * x18 - x20 * x1066,
+                    x1079,
+                    x1082 * x15 + x1083 * x31,
+                    x1083 * x65 - x16 * x1082,
                     0.0,
                     0.0,
-                    -(m2 * d * (2.0 * (x260 * x158) - 2.0 * (x259 * x67))),
-                    -(m2 * (2.0 * (x181 * x260) - 2.0 * (x259 * x72)) * d),
-                    -(m2 * d * (gamma2_dot * x1025 + x414 + x417)),
+                    -((2.0 * (x177 * x320) - 2.0 * (x74 * x319)) * x11),
+                    -((2.0 * (x320 * x198) - 2.0 * (x79 * x319)) * x11),
+                    -(x11 * (x455 + x1035 * gamma2_dot)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [0.0, x29 * x20, x442, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, x18, x443, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [1.0, x30 * x29 * x20, x444, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x31, x65, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, x15, x457, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, x458, x459, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * x304 * x29,
-                -(x28 * psi_dot * phi_dot),
-                theta_dot * x311,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
+            c: [x460, -x267, x461, 0.0, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5451,18 +5276,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [
-                        0.0,
-                        x30 * x29 * x29 * x20,
-                        x30 * x29 * x29 * x18,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
+                    [0.0, x31 * x479, x479 * x65, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x635 * x20, x635 * x18, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x655 * x16, x655 * x15, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5470,9 +5286,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, x442, -(x29 * x20), 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x443, -x18, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x444, -(x30 * x29 * x20), 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x65, -x31, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x457, -x15, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, x459, -x458, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5613,9 +5429,9 @@ pub mod maggi {
             d_c: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x532 * theta_dot * x29 * x29,
-                    x30 * psi_dot * phi_dot,
-                    theta_dot * x531,
+                    x575 * theta_dot * x520,
+                    x34 * x349,
+                    theta_dot * x577,
                     0.0,
                     0.0,
                     0.0,
@@ -5628,27 +5444,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    0.5 * theta_dot * x29 * x29 * x302,
-                    -(x28 * phi_dot),
-                    theta_dot * x938,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [x304 * x29, 0.0, x311, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    theta_dot * x29,
-                    -(x28 * psi_dot),
-                    x30 * theta_dot * x29,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
+                [0.5 * theta_dot * x955, -x978, x987, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x282, 0.0, x277, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1044, -x253, x34 * x1044, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5909,172 +5707,194 @@ pub mod kane {
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = J2 + d * d * m1;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = d * m1;
+        let x6 = x5 * d + J2;
         let x7 = f64::sin(gamma1);
-        let x8 = f64::cos(gamma1);
-        let x9 = x8 * x8;
-        let x10 = f64::cos(gamma2);
-        let x11 = x10 * x10;
-        let x12 = f64::sin(gamma2);
-        let x13 = m2 * d * d + J2;
-        let x14 = J1 - J2;
-        let x15 = x8 * d;
-        let x16 = -a_ - x15;
-        let x17 = (x8 * x14 + x16 * d * m1) * x7 - Ixy;
-        let x18 = J2 - J1;
-        let x19 = x10 * d;
-        let x20 = -a_ - x19;
-        let x21 = x12 * (x10 * x18 - m2 * d * x20) - Ixz;
-        let x22 = f64::sin(psi);
-        let x23 = f64::cos(psi);
-        let x24 = x2 * x22 + x5 * x23 * x3;
-        let x25 = x5 * x23 * x2 - x3 * x22;
-        let x26 = d * (x7 * x24 * m1 - m2 * x25 * x12);
-        let x27 = x23 * x3 + x5 * x2 * x22;
-        let x28 = x23 * x2;
-        let x29 = x5 * x3 * x22;
-        let x30 = x29 - x28;
-        let x31 = (x7 * x30 * m1 - m2 * x12 * x27) * d;
-        let x32 = (x7 * m1 * x3 - m2 * x12 * x2) * x0 * d;
-        let x33 = d * d;
-        let x34 = -Iyz;
-        let x35 = d + x10 * a_;
-        let x36 = J2 + m2 * d * x35;
-        let x37 = (x10 * x0 - x5 * x12 * x3) * x23 - x12 * x2 * x22;
-        let x38 = x23 * x0 * x12 + x10 * x24;
-        let x39 = m2 * (x38 * x35 - a_ * x37 * x12) + x16 * x24 * m1;
-        let x40 = x10 * x0 * x22 + (x28 - x29) * x12;
-        let x41 = x0 * x12 * x22 + x10 * x30;
-        let x42 = x16 * x30 * m1 + m2 * (x41 * x35 - a_ * x12 * x40);
-        let x43 = -x0 * x12 * x3 - x10 * x5;
-        let x44 = x10 * x0 * x3 - x5 * x12;
-        let x45 = m2 * (x44 * x35 - a_ * x43 * x12) + x16 * x0 * m1 * x3;
-        let x46 = x8 * a_ + d;
-        let x47 = d * x46 * m1 + J2;
-        let x48 = x8 * x25 - x23 * x7 * x0;
-        let x49 = x23 * (x5 * x7 * x2 + x8 * x0) - x7 * x3 * x22;
-        let x50 = m2 * x25 * x20 + (x48 * x46 + a_ * x49 * x7) * m1;
-        let x51 = x8 * x27 - x7 * x0 * x22;
-        let x52 = x8 * x0 * x22 + x7 * x27;
-        let x53 = (x51 * x46 + a_ * x7 * x52) * m1 + m2 * x20 * x27;
-        let x54 = x8 * x0 * x2 + x5 * x7;
-        let x55 = x7 * x0 * x2 - x8 * x5;
-        let x56 = (x54 * x46 + a_ * x55 * x7) * m1 + m2 * x0 * x2 * x20;
-        let x57 = x48 * d * m1;
-        let x58 = x51 * d * m1;
-        let x59 = x54 * d * m1;
-        let x60 = m2 * d * x38;
-        let x61 = m2 * d * x41;
-        let x62 = m2 * x44 * d;
-        let x63 = m2 + m0 + m1;
-        let x64 = x8 * u2 - x7 * u1;
-        let x65 = x12 * u1;
-        let x66 = x10 * u3;
-        let x67 = -x65 - x66;
-        let x68 = u3 + 2.0 * u4;
-        let x69 = d * (x8 * x68 * u1 + x68 * u2 * x7) + a_ * u3 * u1;
-        let x70 = u2 * x7;
-        let x71 = x8 * u1;
-        let x72 = J2 * (-x70 - x71) * u4;
-        let x73 = u3 + u4;
-        let x74 = x70 + x71;
-        let x75 = x73 * x74 * x14;
-        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x77 = u5 + u2;
-        let x78 = 2.0 * u5 + u2;
-        let x79 = x78 * J2 - J1 * x77;
-        let x80 = x10 * u1 - u3 * x12;
-        let x81 = d * (x10 * (-2.0 * u5 - u2) * u1 + x78 * u3 * x12) - a_ * u2 * u1;
-        let x82 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x83 = x65 + x66;
-        let x84 = x18 * x80 * x83;
-        let x85 = u1 * u1;
-        let x86 = 2.0 * gamma2;
-        let x87 = f64::sin(x86);
-        let x88 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x89 = 2.0 * gamma1;
-        let x90 = f64::sin(x89);
-        let x91 = x74 * x14 * x64;
-        let x92 = u2 * x16 + x7 * d * u1;
-        let x93 = a_ * u3 * u3 * x7 - x92 * x74;
-        let x94 = u3 * x20 - d * x12 * u1;
-        let x95 = a_ * u2 * u2 * x12 + x80 * x94;
-        let x96 = x92 * x64 + x8 * a_ * u3 * u4 - (u3 * x46 + d * u4) * x73;
-        let x97 = (u5 * d + u2 * x35) * x77 - x10 * u5 * a_ * u2 - x94 * x83;
+        let x8 = x7 * x7;
+        let x9 = m2 * d;
+        let x10 = J2 + x9 * d;
+        let x11 = f64::sin(gamma2);
+        let x12 = f64::cos(gamma1);
+        let x13 = x12 * x12;
+        let x14 = f64::cos(gamma2);
+        let x15 = x14 * x14;
+        let x16 = J1 - J2;
+        let x17 = x12 * d;
+        let x18 = a_ + x17;
+        let x19 = x7 * (x12 * x16 - x18 * x5) - Ixy;
+        let x20 = J2 - J1;
+        let x21 = x14 * d;
+        let x22 = a_ + x21;
+        let x23 = x11 * (x14 * x20 + x9 * x22) - Ixz;
+        let x24 = x7 * m1;
+        let x25 = f64::sin(psi);
+        let x26 = x1 * x25;
+        let x27 = x4 * x2;
+        let x28 = f64::cos(psi);
+        let x29 = x26 + x27 * x28;
+        let x30 = m2 * x11;
+        let x31 = x4 * x1;
+        let x32 = x2 * x25;
+        let x33 = x28 * x31 - x32;
+        let x34 = (x24 * x29 - x30 * x33) * d;
+        let x35 = x28 * x1;
+        let x36 = x27 * x25;
+        let x37 = x36 - x35;
+        let x38 = x28 * x2 + x31 * x25;
+        let x39 = (x24 * x37 - x30 * x38) * d;
+        let x40 = x0 * d * (x24 * x2 - x30 * x1);
+        let x41 = -(x18 * m1);
+        let x42 = d * d;
+        let x43 = -Iyz;
+        let x44 = d + x14 * a_;
+        let x45 = x9 * x44 + J2;
+        let x46 = x28 * x0;
+        let x47 = x11 * x46 + x14 * x29;
+        let x48 = (x14 * x0 - x27 * x11) * x28 - x11 * x26;
+        let x49 = a_ * x11;
+        let x50 = m2 * (x47 * x44 - x48 * x49) + x41 * x29;
+        let x51 = x0 * x25;
+        let x52 = x11 * x51 + x14 * x37;
+        let x53 = (x35 - x36) * x11 + x14 * x51;
+        let x54 = (x44 * x52 - x53 * x49) * m2 + x41 * x37;
+        let x55 = x0 * x2;
+        let x56 = x11 * x55 + x14 * x4;
+        let x57 = x14 * x55 - x4 * x11;
+        let x58 = (x49 * x56 + x57 * x44) * m2 + x41 * x55;
+        let x59 = x11 * J1;
+        let x60 = -(m2 * x22);
+        let x61 = x12 * a_ + d;
+        let x62 = x5 * x61 + J2;
+        let x63 = x12 * x33 - x7 * x46;
+        let x64 = x28 * (x7 * x31 + x12 * x0) - x7 * x32;
+        let x65 = a_ * x7;
+        let x66 = (x61 * x63 + x64 * x65) * m1 + x33 * x60;
+        let x67 = x12 * x38 - x7 * x51;
+        let x68 = x38 * x7 + x12 * x51;
+        let x69 = x38 * x60 + (x67 * x61 + x68 * x65) * m1;
+        let x70 = x0 * x1;
+        let x71 = x4 * x7 + x12 * x70;
+        let x72 = x70 * x7 - x12 * x4;
+        let x73 = (x71 * x61 + x72 * x65) * m1 + x70 * x60;
+        let x74 = x5 * x63;
+        let x75 = x67 * x5;
+        let x76 = x71 * x5;
+        let x77 = x9 * x47;
+        let x78 = x9 * x52;
+        let x79 = x9 * x57;
+        let x80 = m2 + m0 + m1;
+        let x81 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x82 = u2 * x7;
+        let x83 = u3 + 2.0 * u4;
+        let x84 = x12 * u1;
+        let x85 = a_ * u3;
+        let x86 = d * (x82 * x83 + x83 * x84) + x85 * u1;
+        let x87 = x82 + x84;
+        let x88 = u3 + u4;
+        let x89 = x16 * x87;
+        let x90 = x88 * x89 - J2 * u4 * x87;
+        let x91 = 2.0 * u5 + u2;
+        let x92 = u5 + u2;
+        let x93 = x14 * u1;
+        let x94 = u3 * x11;
+        let x95 = x93 - x94;
+        let x96 = (J2 * x91 - J1 * x92) * x95;
+        let x97 = a_ * u2;
+        let x98 = d * (x91 * x94 - x93 * x91) - x97 * u1;
+        let x99 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x100 = x11 * u1 + x14 * u3;
+        let x101 = x14 * u5;
+        let x102 = x12 * u4;
+        let x103 = x12 * u2 - x7 * u1;
+        let x104 = a_ * u1;
+        let x105 = 2.0 * gamma2;
+        let x106 = f64::sin(x105);
+        let x107 = u1 * u1;
+        let x108 = x20 * x95 * x100;
+        let x109 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x110 = x89 * x103;
+        let x111 = 2.0 * gamma1;
+        let x112 = f64::sin(x111);
+        let x113 = d * u1;
+        let x114 = x7 * x113 - x18 * u2;
+        let x115 = x85 * u3 * x7 - x87 * x114;
+        let x116 = -x11 * x113 - u3 * x22;
+        let x117 = x116 * x95 + u2 * x11 * x97;
+        let x118 = (u5 * d + u2 * x44) * x92 - x116 * x100 - x97 * x101;
+        let x119 = x114 * x103 + x85 * x102 - (u3 * x61 + d * u4) * x88;
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5, u6, u7, u8],
+            qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + x6 * x7 * x7 + (x9 + x11) * J1 + x12 * x12 * x13,
-                    x17,
-                    x21,
+                    Ixx + x6 * x8 + x10 * x11 * x11 + (x13 + x15) * J1,
+                    x19,
+                    x23,
                     0.0,
                     0.0,
-                    x26,
-                    x31,
-                    x32,
-                ],
-                [
-                    x17,
-                    x7 * x7 * J1 + x16 * x16 * m1 + Iyy + J2 * (x9 + 1.0)
-                        + m2 * (x33 + a_ * (a_ + 2.0 * x19)),
                     x34,
-                    0.0,
-                    x36,
                     x39,
-                    x42,
-                    x45,
+                    x40,
                 ],
                 [
-                    x21,
-                    x34,
-                    x12 * x12 * J1 + (a_ * (a_ + 2.0 * x15) + x33) * m1 + m2 * x20 * x20
-                        + Izz + J2 * (x11 + 1.0),
-                    x47,
+                    x19,
+                    Iyy + J2 * (x13 + 1.0) - x18 * x41
+                        + m2 * (x42 + a_ * (a_ + 2.0 * x21)) + x8 * J1,
+                    x43,
                     0.0,
+                    x45,
                     x50,
-                    x53,
-                    x56,
+                    x54,
+                    x58,
                 ],
-                [0.0, 0.0, x47, x6, 0.0, x57, x58, x59],
-                [0.0, x36, 0.0, 0.0, x13, x60, x61, x62],
-                [x26, x39, x50, x57, x60, x63, 0.0, 0.0],
-                [x31, x42, x53, x58, x61, 0.0, x63, 0.0],
-                [x32, x45, x56, x59, x62, 0.0, 0.0, x63],
+                [
+                    x23,
+                    x43,
+                    x11 * x59 + (a_ * (a_ + 2.0 * x17) + x42) * m1 + Izz
+                        + J2 * (x15 + 1.0) - x22 * x60,
+                    x62,
+                    0.0,
+                    x66,
+                    x69,
+                    x73,
+                ],
+                [0.0, 0.0, x62, x6, 0.0, x74, x75, x76],
+                [0.0, x45, 0.0, 0.0, x10, x77, x78, x79],
+                [x34, x50, x66, x74, x77, x80, 0.0, 0.0],
+                [x39, x54, x69, x75, x78, 0.0, x80, 0.0],
+                [x40, x58, x73, x76, x79, 0.0, 0.0, x80],
             ],
             force: [
-                (-x8 * u4 * x64 - x10 * u5 * x67) * J1 + (x72 - d * m1 * x69 + x75) * x7
-                    - u2 * x76 + x12 * (m2 * d * x81 - x79 * x80) + x82 * u3,
-                x84 - x8 * (x72 + x75) - x16 * m1 * x69 + x76 * u1 - x7 * u4 * x64 * J1
+                x7 * (x90 - x5 * x86) - u2 * x81 + x11 * (x98 * x9 - x96) + x99 * u3
+                    - (x102 * x103 - x100 * x101) * J1,
+                x81 * u1
                     - m2
-                        * ((a_
-                            * (x12 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x85)
-                                - 2.0 * (x10 * u3 * u1))
-                            + ((0.5 * (u3 * x87) - f64::cos(x86) * u1) * u3
-                                - 0.5 * (u1 * u1 * x87)) * d) * d - a_ * a_ * u3 * u1)
-                    - x88 * u3,
-                u2 * x88 - m2 * x20 * x81
+                        * (d
+                            * (d
+                                * ((0.5 * (u3 * x106) - f64::cos(x105) * u1) * u3
+                                    - 0.5 * (x107 * x106))
+                                + ((u3 * u3 - x107 - (u5 + 2.0 * u2) * u5) * x11
+                                    - 2.0 * (x93 * u3)) * a_) - x85 * x104) - x12 * x90
+                    - x7 * u4 * x103 * J1 + x108 - x41 * x86 - x109 * u3,
+                x110 - x98 * x60 - u5 * x100 * x59 + u2 * x109
                     - (d
                         * (a_
-                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x85) * x7
-                                + 2.0 * (x8 * u2 * u1))
-                            + d
-                                * (u2 * (0.5 * (u2 * x90) + u1 * f64::cos(x89))
-                                    - 0.5 * (u1 * u1 * x90))) + a_ * a_ * u2 * u1) * m1
-                    - x10 * x79 * x80 + u5 * x12 * x67 * J1 - x82 * u1 + x91,
-                x91 - x93 * d * m1,
-                x84 - m2 * x95 * d,
-                -m1 * (x49 * x96 + x48 * x93 + x24 * x69)
-                    - m2 * (x37 * x97 + x95 * x38 + x25 * x81),
-                -(x95 * x41 + x97 * x40 + x27 * x81) * m2
-                    - m1 * (x30 * x69 + x93 * x51 + x96 * x52),
-                -m2 * (x0 * x2 * x81 + x95 * x44 + x43 * x97)
-                    - (x0 * x69 * x3 + x55 * x96 + x93 * x54) * m1,
+                            * ((u2 * u2 - x107 - u4 * (2.0 * u3 + u4)) * x7
+                                + 2.0 * (u2 * x84))
+                            + (u2 * (0.5 * (u2 * x112) + u1 * f64::cos(x111))
+                                - 0.5 * (x107 * x112)) * d) + x104 * x97) * m1 - x99 * u1
+                    - x14 * x96,
+                x110 - x115 * x5,
+                x108 - x9 * x117,
+                -(m2 * (x98 * x33 + x117 * x47 + x118 * x48)
+                    + m1 * (x86 * x29 + x64 * x119 + x115 * x63)),
+                -((x68 * x119 + x86 * x37 + x115 * x67) * m1
+                    + m2 * (x53 * x118 + x98 * x38 + x117 * x52)),
+                -((x115 * x71 + x86 * x55 + x72 * x119) * m1
+                    + m2 * (x57 * x117 + x98 * x70 - x118 * x56)),
             ],
             checks: [x0],
         }
@@ -6168,38 +5988,50 @@ pub mod kane {
         let d = params.d;
         let a_ = params.a_;
         let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = x1 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = x1 * x4;
+        let x6 = f64::sin(psi);
+        let x7 = x0 * x4;
+        let x8 = f64::cos(psi);
+        let x9 = x2 * x6 + x7 * x8;
+        let x10 = f64::cos(gamma1);
+        let x11 = -((a_ + x10 * d) * x4);
+        let x12 = x0 * x2;
+        let x13 = x8 * x12 - x4 * x6;
         let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x15 = x8 * x1;
+        let x16 = x10 * x13 - x14 * x15;
+        let x17 = x10 * a_ + d;
+        let x18 = x16 * x17;
+        let x19 = a_ * x14;
+        let x20 = x19 * (x10 * x15 + x13 * x14);
+        let x21 = f64::cos(gamma2);
+        let x22 = f64::sin(gamma2);
+        let x23 = a_ * x22;
+        let x24 = x21 * x9 + x22 * x15;
+        let x25 = d + x21 * a_;
+        let x26 = x24 * x25 - (x21 * x15 - x9 * x22) * x23;
+        let x27 = (a_ + x21 * d) * x2;
+        let x28 = m2 * gamma2_dot;
+        let x29 = m2 * x22;
+        let x30 = x14 * m1;
+        let x31 = gamma1_dot * m1;
+        let x32 = x21 * x5 - x0 * x22;
+        let x33 = a_ * x5 + x32 * d;
+        let x34 = x0 * x14 + x10 * x3;
+        let x35 = x34 * d + a_ * x3;
+        let x36 = m2 + m0 + m1;
+        let x37 = x8 * x4 + x12 * x6;
+        let x38 = x7 * x6 - x8 * x2;
+        let x39 = x1 * x6;
+        let x40 = x22 * x39 + x21 * x38;
+        let x41 = x25 * x40 - (x21 * x39 - x22 * x38) * x23;
+        let x42 = x10 * x37 - x14 * x39;
+        let x43 = x42 * x17;
+        let x44 = (x37 * x14 + x10 * x39) * x19;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -6222,8 +6054,8 @@ pub mod kane {
             q[6],
             q[7],
             phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            x3 * psi_dot + theta_dot * x4,
+            psi_dot * x5 - theta_dot * x2,
             gamma1_dot,
             gamma2_dot,
             X_dot,
@@ -6232,30 +6064,23 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * ((x9 * x11 + x2 * (-x18 - x20)) * m1 + m2 * (x26 * x4 + x13 * x27))
+                + (x28 * x24 + phi_dot * (x9 * x30 - x13 * x29) + x31 * x16) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m2 * (x26 * x3 - x13 * x33) + ((x18 + x20) * x5 - x9 * x35) * m1)
+                + X_dot * x36,
+            Y_dot * x36
+                + theta_dot
+                    * (m2 * (x37 * x27 + x41 * x4)
+                        + (x11 * x38 + (-x43 - x44) * x2) * m1)
+                + psi_dot
+                    * (m2 * (x3 * x41 - x37 * x33) + m1 * ((x43 + x44) * x5 - x35 * x38))
+                + d * ((x30 * x38 - x29 * x37) * phi_dot + x28 * x40 + x31 * x42),
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((x2 * (-x34 * x17 - (x3 * x14 - x10 * x0) * x19) + x11 * x5) * m1
+                    + m2 * ((x23 * (x22 * x5 + x21 * x0) + x32 * x25) * x4 + x3 * x27))
+                + d * (x1 * phi_dot * (x30 * x4 - x29 * x2) + x28 * x32 + x31 * x34)
+                + Z_dot * x36,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -6283,10 +6108,9 @@ pub mod kane {
         let u7 = state[14];
         let u8 = state[15];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -6306,9 +6130,9 @@ pub mod kane {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + f64::sin(theta) * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            f64::sin(theta) * x3 + u1,
             u4,
             u5,
             u6,
@@ -6380,399 +6204,433 @@ pub mod kane {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
-        let x9 = d * d * m1;
-        let x10 = J2 + x9;
-        let x11 = f64::sin(gamma1);
-        let x12 = f64::cos(gamma1);
-        let x13 = x12 * x12;
-        let x14 = f64::cos(gamma2);
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = x1 * x4;
+        let x6 = u2 * x3 - u3 * x2;
+        let x7 = f64::sin(theta);
+        let x8 = x7 * x5;
+        let x9 = f64::sin(gamma2);
+        let x10 = x9 * x9;
+        let x11 = m2 * d;
+        let x12 = x11 * d;
+        let x13 = x12 + J2;
+        let x14 = f64::cos(gamma1);
         let x15 = x14 * x14;
-        let x16 = f64::sin(gamma2);
-        let x17 = m2 * d * d;
-        let x18 = x17 + J2;
-        let x19 = J1 - J2;
-        let x20 = x12 * d;
-        let x21 = -a_ - x20;
-        let x22 = x21 * d * m1;
-        let x23 = x12 * x19 + x22;
-        let x24 = x23 * x11 - Ixy;
-        let x25 = J2 - J1;
-        let x26 = x14 * d;
-        let x27 = -a_ - x26;
-        let x28 = m2 * d * x27;
-        let x29 = x14 * x25 - x28;
-        let x30 = x16 * x29 - Ixz;
-        let x31 = f64::sin(psi);
-        let x32 = x2 * x31;
-        let x33 = f64::cos(psi);
-        let x34 = x8 * x33 * x4;
-        let x35 = x32 + x34;
-        let x36 = x4 * x31;
-        let x37 = x8 * x33 * x2;
-        let x38 = x37 - x36;
-        let x39 = d * (x11 * x35 * m1 - m2 * x38 * x16);
-        let x40 = x33 * x4;
-        let x41 = x8 * x2 * x31;
-        let x42 = x40 + x41;
-        let x43 = x33 * x2;
-        let x44 = x8 * x4 * x31;
-        let x45 = x44 - x43;
-        let x46 = (x11 * x45 * m1 - m2 * x16 * x42) * d;
-        let x47 = x11 * m1 * x4;
-        let x48 = m2 * x16 * x2;
-        let x49 = x47 - x48;
-        let x50 = x49 * x0 * d;
-        let x51 = d * d;
-        let x52 = -Iyz;
-        let x53 = d + x14 * a_;
-        let x54 = J2 + m2 * d * x53;
-        let x55 = x14 * x0;
-        let x56 = x8 * x16 * x4;
-        let x57 = (x55 - x56) * x33 - x16 * x2 * x31;
-        let x58 = x33 * x0 * x16;
-        let x59 = x14 * x35;
-        let x60 = x58 + x59;
-        let x61 = m2 * (x60 * x53 - a_ * x57 * x16) + x21 * x35 * m1;
-        let x62 = x14 * x0 * x31;
-        let x63 = x43 - x44;
-        let x64 = x62 + x63 * x16;
-        let x65 = x0 * x16 * x31;
-        let x66 = x14 * x45;
+        let x16 = f64::cos(gamma2);
+        let x17 = x16 * x16;
+        let x18 = d * m1;
+        let x19 = x18 * d;
+        let x20 = x19 + J2;
+        let x21 = f64::sin(gamma1);
+        let x22 = x21 * x21;
+        let x23 = x14 * d;
+        let x24 = a_ + x23;
+        let x25 = -(x18 * x24);
+        let x26 = J1 - J2;
+        let x27 = x25 + x14 * x26;
+        let x28 = x27 * x21 - Ixy;
+        let x29 = J2 - J1;
+        let x30 = x16 * x29;
+        let x31 = x16 * d;
+        let x32 = x31 + a_;
+        let x33 = -(x11 * x32);
+        let x34 = x30 - x33;
+        let x35 = x34 * x9 - Ixz;
+        let x36 = f64::sin(psi);
+        let x37 = x2 * x36;
+        let x38 = x7 * x3;
+        let x39 = f64::cos(psi);
+        let x40 = x37 + x38 * x39;
+        let x41 = x21 * m1;
+        let x42 = m2 * x9;
+        let x43 = x7 * x2;
+        let x44 = x39 * x43;
+        let x45 = x3 * x36;
+        let x46 = x44 - x45;
+        let x47 = d * (x40 * x41 - x42 * x46);
+        let x48 = x39 * x3 + x43 * x36;
+        let x49 = x42 * x48;
+        let x50 = x39 * x2;
+        let x51 = x38 * x36;
+        let x52 = x51 - x50;
+        let x53 = d * (x41 * x52 - x49);
+        let x54 = x42 * x2;
+        let x55 = x41 * x3;
+        let x56 = d * (x55 - x54);
+        let x57 = x56 * x0;
+        let x58 = -(m1 * x24);
+        let x59 = d * d;
+        let x60 = -Iyz;
+        let x61 = x16 * a_;
+        let x62 = x61 + d;
+        let x63 = J2 + x11 * x62;
+        let x64 = x39 * x0;
+        let x65 = x9 * x64;
+        let x66 = x16 * x40;
         let x67 = x65 + x66;
-        let x68 = x21 * x45 * m1 + m2 * (x67 * x53 - a_ * x16 * x64);
-        let x69 = -x0 * x16 * x4 - x14 * x8;
-        let x70 = x8 * x16;
-        let x71 = x14 * x0 * x4;
-        let x72 = x71 - x70;
-        let x73 = m2 * (x72 * x53 - a_ * x69 * x16) + x21 * x0 * m1 * x4;
-        let x74 = x12 * a_ + d;
-        let x75 = d * x74 * m1 + J2;
-        let x76 = x12 * x38 - x33 * x11 * x0;
-        let x77 = x8 * x11 * x2;
-        let x78 = x12 * x0;
-        let x79 = x11 * x4 * x31;
-        let x80 = x33 * (x77 + x78) - x79;
-        let x81 = m2 * x38 * x27 + (x76 * x74 + a_ * x80 * x11) * m1;
-        let x82 = x11 * x0 * x31;
-        let x83 = x12 * x42 - x82;
-        let x84 = x12 * x0 * x31;
-        let x85 = x84 + x11 * x42;
-        let x86 = (x83 * x74 + a_ * x11 * x85) * m1 + m2 * x27 * x42;
-        let x87 = x12 * x0 * x2 + x8 * x11;
-        let x88 = x11 * x0 * x2;
-        let x89 = x12 * x8;
-        let x90 = x88 - x89;
-        let x91 = (x87 * x74 + a_ * x90 * x11) * m1 + m2 * x0 * x2 * x27;
-        let x92 = x76 * d * m1;
-        let x93 = x83 * d * m1;
-        let x94 = x87 * d * m1;
-        let x95 = m2 * d * x60;
-        let x96 = m2 * d * x67;
-        let x97 = m2 * x72 * d;
-        let x98 = m2 + m0 + m1;
-        let x99 = x11 * u1;
-        let x100 = x12 * u2;
-        let x101 = x100 - x99;
-        let x102 = x16 * u1;
-        let x103 = x14 * u3;
-        let x104 = -x102 - x103;
-        let x105 = u3 + 2.0 * u4;
-        let x106 = d * (x12 * x105 * u1 + x105 * u2 * x11) + a_ * u3 * u1;
-        let x107 = d * m1 * x106;
-        let x108 = u2 * x11;
-        let x109 = x12 * u1;
-        let x110 = -x108 - x109;
-        let x111 = J2 * x110 * u4;
-        let x112 = u3 + u4;
-        let x113 = x108 + x109;
-        let x114 = x112 * x113 * x19;
-        let x115 = u2 * Iyz;
-        let x116 = u1 * Ixz;
-        let x117 = u3 * Izz - x115 - x116;
-        let x118 = u5 + u2;
-        let x119 = J1 * x118;
-        let x120 = 2.0 * u5 + u2;
-        let x121 = x120 * J2;
-        let x122 = x121 - x119;
-        let x123 = u3 * x16;
-        let x124 = x14 * u1;
-        let x125 = x124 - x123;
-        let x126 = x122 * x125;
-        let x127 = -2.0 * u5 - u2;
-        let x128 = d * (x14 * x127 * u1 + x120 * u3 * x16) - a_ * u2 * u1;
-        let x129 = m2 * d * x128;
-        let x130 = Iyz * u3;
-        let x131 = Ixy * u1;
-        let x132 = u2 * Iyy - x130 - x131;
-        let x133 = x102 + x103;
-        let x134 = x25 * x125 * x133;
-        let x135 = u3 * u3;
-        let x136 = u1 * u1;
-        let x137 = u5 * (-u5 - 2.0 * u2) + x135 - x136;
-        let x138 = 2.0 * gamma2;
-        let x139 = f64::sin(x138);
-        let x140 = u3 * x139;
-        let x141 = f64::cos(x138);
-        let x142 = x141 * u1;
-        let x143 = u3 * Ixz;
-        let x144 = u2 * Ixy;
-        let x145 = Ixx * u1 - x143 - x144;
-        let x146 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x136;
-        let x147 = 2.0 * gamma1;
-        let x148 = f64::sin(x147);
-        let x149 = u2 * x148;
-        let x150 = f64::cos(x147);
-        let x151 = u1 * x150;
-        let x152 = x113 * x19 * x101;
-        let x153 = a_ * u3 * u3 * x11;
-        let x154 = u2 * x21;
-        let x155 = x11 * d * u1;
-        let x156 = x154 + x155;
-        let x157 = x153 - x156 * x113;
-        let x158 = d * x16 * u1;
-        let x159 = u3 * x27;
+        let x68 = x16 * x0;
+        let x69 = x38 * x9;
+        let x70 = (x68 - x69) * x39 - x9 * x37;
+        let x71 = a_ * x9;
+        let x72 = (x67 * x62 - x70 * x71) * m2 + x58 * x40;
+        let x73 = x0 * x36;
+        let x74 = x9 * x73;
+        let x75 = x16 * x52;
+        let x76 = x74 + x75;
+        let x77 = x50 - x51;
+        let x78 = x16 * x73;
+        let x79 = x77 * x9 + x78;
+        let x80 = x58 * x52 + m2 * (x62 * x76 - x79 * x71);
+        let x81 = x0 * x3;
+        let x82 = x7 * x9;
+        let x83 = x16 * x81;
+        let x84 = x83 - x82;
+        let x85 = x9 * x81 + x16 * x7;
+        let x86 = x58 * x81 + m2 * (x62 * x84 + x71 * x85);
+        let x87 = -(m2 * x32);
+        let x88 = x14 * a_;
+        let x89 = x88 + d;
+        let x90 = J2 + x89 * x18;
+        let x91 = a_ * x21;
+        let x92 = x21 * x43 + x14 * x0;
+        let x93 = x92 * x39;
+        let x94 = x21 * x45;
+        let x95 = x93 - x94;
+        let x96 = x14 * x46 - x21 * x64;
+        let x97 = x46 * x87 + (x91 * x95 + x89 * x96) * m1;
+        let x98 = x48 * x87;
+        let x99 = x14 * x48;
+        let x100 = x21 * x73;
+        let x101 = x99 - x100;
+        let x102 = x48 * x21;
+        let x103 = x14 * x73;
+        let x104 = x102 + x103;
+        let x105 = x98 + (x89 * x101 + x104 * x91) * m1;
+        let x106 = x0 * x2;
+        let x107 = x106 * x21;
+        let x108 = x14 * x7;
+        let x109 = x107 - x108;
+        let x110 = x7 * x21 + x14 * x106;
+        let x111 = x106 * x87 + (x109 * x91 + x89 * x110) * m1;
+        let x112 = x18 * x96;
+        let x113 = x18 * x101;
+        let x114 = x110 * x18;
+        let x115 = x67 * x11;
+        let x116 = x11 * x76;
+        let x117 = x11 * x84;
+        let x118 = m2 + m0 + m1;
+        let x119 = u3 * u1;
+        let x120 = u2 * x21;
+        let x121 = u3 + 2.0 * u4;
+        let x122 = x14 * u1;
+        let x123 = a_ * x119 + (x120 * x121 + x121 * x122) * d;
+        let x124 = x120 + x122;
+        let x125 = x124 * x26;
+        let x126 = u3 + u4;
+        let x127 = J2 * u4;
+        let x128 = x125 * x126 - x127 * x124;
+        let x129 = x128 - x123 * x18;
+        let x130 = x16 * u1;
+        let x131 = 2.0 * u5 + u2;
+        let x132 = u3 * x9;
+        let x133 = a_ * u2;
+        let x134 = d * (x131 * x132 - x130 * x131) - x133 * u1;
+        let x135 = x134 * x11;
+        let x136 = J2 * x131;
+        let x137 = u5 + u2;
+        let x138 = J1 * x137;
+        let x139 = x136 - x138;
+        let x140 = x130 - x132;
+        let x141 = x139 * x140;
+        let x142 = x135 - x141;
+        let x143 = x21 * u1;
+        let x144 = x14 * u2;
+        let x145 = x144 - x143;
+        let x146 = x14 * x145;
+        let x147 = x9 * u1;
+        let x148 = x16 * u3;
+        let x149 = x147 + x148;
+        let x150 = -(x16 * x149);
+        let x151 = u2 * Iyz;
+        let x152 = u1 * Ixz;
+        let x153 = u3 * Izz - x151 - x152;
+        let x154 = Iyz * u3;
+        let x155 = Ixy * u1;
+        let x156 = u2 * Iyy - x154 - x155;
+        let x157 = a_ * a_;
+        let x158 = u1 * u1;
+        let x159 = u3 * u3;
         let x160 = x159 - x158;
-        let x161 = a_ * u2 * u2 * x16 + x125 * x160;
-        let x162 = x156 * x101;
-        let x163 = x12 * a_ * u3 * u4;
-        let x164 = (u3 * x74 + d * u4) * x112;
-        let x165 = x162 + x163 - x164;
-        let x166 = (u5 * d + u2 * x53) * x118 - x14 * u5 * a_ * u2 - x160 * x133;
-        let x167 = -m1 * (x80 * x165 + x76 * x157 + x35 * x106)
-            - m2 * (x57 * x166 + x161 * x60 + x38 * x128);
-        let x168 = -m2 * (x0 * x2 * x128 + x161 * x72 + x69 * x166)
-            - (x0 * x106 * x4 + x90 * x165 + x157 * x87) * m1;
-        let x169 = -x40 - x41;
-        let x170 = d * (x63 * x11 * m1 - m2 * x16 * x169);
-        let x171 = x16 * x45 - x62;
-        let x172 = x14 * x63;
-        let x173 = x172 - x65;
-        let x174 = m2 * (x173 * x53 - a_ * x171 * x16) + x63 * x21 * m1;
-        let x175 = x12 * x169 + x82;
-        let x176 = x11 * x169 - x84;
-        let x177 = (x175 * x74 + a_ * x11 * x176) * m1 + m2 * x169 * x27;
-        let x178 = d * x175 * m1;
-        let x179 = m2 * d * x173;
-        let x180 = x49 * x33 * x0 * d;
-        let x181 = x49 * x0 * d * x31;
-        let x182 = (x48 - x47) * x8 * d;
-        let x183 = x73 * x33;
-        let x184 = x73 * x31;
-        let x185 = -x14 * x8 * x4 - x0 * x16;
-        let x186 = x56 - x55;
-        let x187 = m2 * (x185 * x53 - x186 * a_ * x16) - x8 * x21 * m1 * x4;
-        let x188 = x33 * x91;
-        let x189 = x91 * x31;
-        let x190 = -x77 - x78;
-        let x191 = x11 * x0 - x12 * x8 * x2;
-        let x192 = (a_ * x190 * x11 + x191 * x74) * m1 - m2 * x8 * x2 * x27;
-        let x193 = x87 * x33 * d * m1;
-        let x194 = x87 * d * m1 * x31;
-        let x195 = d * x191 * m1;
-        let x196 = m2 * x72 * x33 * d;
-        let x197 = m2 * x72 * d * x31;
-        let x198 = m2 * d * x185;
-        let x199 = x36 - x37;
-        let x200 = d * (x11 * m1 * x199 - m2 * x16 * x35);
-        let x201 = d * (x11 * x169 * m1 - m2 * x16 * x45);
-        let x202 = x0 * d * (-m2 * x16 * x4 - x11 * x2 * m1);
-        let x203 = m2 * (x14 * x53 * x199 - a_ * x38 * x16 * x16) + x21 * m1 * x199;
-        let x204 = m2 * (x14 * x169 * x53 - a_ * x16 * x16 * x42) + x21 * x169 * m1;
-        let x205 = x0 * x2 * (m2 * (-x14 * x53 - a_ * x16 * x16) - x21 * m1);
-        let x206 = m2 * x27 + (a_ * x11 * x11 + x12 * x74) * m1;
-        let x207 = x206 * x35;
-        let x208 = x206 * x45;
-        let x209 = x206 * x0 * x4;
-        let x210 = x12 * d * x35 * m1;
-        let x211 = x12 * d * x45 * m1;
-        let x212 = x12 * x0 * d * m1 * x4;
-        let x213 = x14 * m2 * d * x199;
-        let x214 = x14 * m2 * d * x169;
-        let x215 = -(x14 * m2 * x0 * d * x2);
-        let x216 = x11 * x165 + x12 * x157;
-        let x217 = (J2 + x9 - J1) * x11 * x11 + x12 * x23;
-        let x218 = 2.0 * J1 - 2.0 * J2;
-        let x219 = x11 * d * x35 * m1;
-        let x220 = x11 * d * x45 * m1;
-        let x221 = x11 * x0 * d * m1 * x4;
-        let x222 = -(a_ * x11 * d * m1);
-        let x223 = x33 * x190 + x79;
-        let x224 = m1 * (x12 * a_ * x80 + x74 * x223);
-        let x225 = (x12 * a_ * x85 + x74 * x176) * m1;
-        let x226 = x89 - x88;
-        let x227 = (x12 * a_ * x90 + x74 * x226) * m1;
-        let x228 = d * x223 * m1;
-        let x229 = d * m1 * x176;
-        let x230 = d * m1 * x226;
-        let x231 = x112 * x19 * x101;
-        let x232 = x12 * x105 * u2 + x11 * u1 * (-u3 - 2.0 * u4);
-        let x233 = u4 * x101 * J1;
-        let x234 = (x99 - x100) * J2 * u4;
-        let x235 = x111 - x107 + x114 - x110 * u4 * J1;
-        let x236 = u1 * x148;
-        let x237 = u2 * x150;
-        let x238 = x113 * x19 * x110;
-        let x239 = x19 * x101 * x101;
-        let x240 = x113 * x113 * d;
-        let x241 = x12 * a_ * u3 * u3;
-        let x242 = x241 - x240 + x163 - x164;
-        let x243 = x153 + x113 * d * x101 + x156 * x110;
-        let x244 = x14 * x29 + (J1 - x17 - J2) * x16 * x16;
-        let x245 = -(x14 * m2 * x38 * d);
-        let x246 = -(x14 * m2 * d * x42);
-        let x247 = -(m2 * a_ * d * x16);
-        let x248 = x14 * (-x32 - x34);
-        let x249 = m2 * (x57 * x53 + a_ * (x16 * (-x59 - x248) - x14 * x57));
-        let x250 = m2 * (x64 * x53 + a_ * ((-x66 - x172) * x16 - x14 * x64));
-        let x251 = m2 * (x69 * x53 - x14 * a_ * x69);
-        let x252 = m2 * x38 * d * x16;
-        let x253 = m2 * d * x16 * x42;
-        let x254 = m2 * x0 * d * x16 * x2;
-        let x255 = m2 * x57 * d;
-        let x256 = m2 * d * x64;
-        let x257 = m2 * x69 * d;
-        let x258 = u5 * J1;
-        let x259 = x119 - x121 + x258;
-        let x260 = x14 * x120 * u3 + x120 * x16 * u1;
-        let x261 = x123 - x124;
-        let x262 = u5 * x261 * J1;
-        let x263 = x25 * x125 * x125;
-        let x264 = x25 * x133 * x104;
-        let x265 = x14 * a_ * u2 * u2 + x125 * d * x261 + x160 * x104;
-        let x266 = a_ * u3 + x12 * x105 * d;
-        let x267 = x112 * x19;
-        let x268 = J2 * u4;
-        let x269 = u4 * J1;
-        let x270 = Ixy * u3;
-        let x271 = x14 * d * x127 - a_ * u2;
-        let x272 = u2 * Ixz;
-        let x273 = x14 * x133;
-        let x274 = x125 * x16;
-        let x275 = Izz - Ixx;
-        let x276 = x12 * x101;
-        let x277 = x113 * x11;
-        let x278 = Ixx - Iyy;
-        let x279 = x12 * x156;
-        let x280 = -x279 - x113 * x11 * d;
-        let x281 = x14 * x160;
-        let x282 = x281 - x125 * d * x16;
-        let x283 = d * x101 - x154 - x155;
-        let x284 = x158 - x159 + d * x133;
-        let x285 = Iyy - Izz;
-        let x286 = a_ * u1;
-        let x287 = d * x261 - x286;
-        let x288 = Iyz * u1;
-        let x289 = x12 * x113 * x19;
-        let x290 = a_ * a_ * u1;
-        let x291 = 2.0 * x108 + 2.0 * x109;
-        let x292 = x14 * x25 * x125;
-        let x293 = x19 * x11 * x101;
-        let x294 = -x156 * x11 - x21 * x113;
-        let x295 = d * x118 + x14 * a_ * (u2 - u5) + x53 * x118;
-        let x296 = x21 * x101 + x279;
-        let x297 = J2 * x127;
-        let x298 = x113 * d + x286;
-        let x299 = x113 * x19;
-        let x300 = 2.0 * x123 - 2.0 * x124;
-        let x301 = x19 * x16 * x133;
-        let x302 = x125 * x27 - x16 * x160;
-        let x303 = (-u3 - u4) * d - x112 * x74 + x12 * a_ * (u4 - u3);
-        let x304 = -x281 - x133 * x27;
-        let x305 = J2 * x110;
-        let x306 = -2.0 * u3 - 2.0 * u4;
-        let x307 = 2.0 * J2 - J1;
-        let x308 = 2.0 * u5 + 2.0 * u2;
+        let x161 = x160 - (u5 + 2.0 * u2) * u5;
+        let x162 = 2.0 * gamma2;
+        let x163 = f64::sin(x162);
+        let x164 = u3 * x163;
+        let x165 = f64::cos(x162);
+        let x166 = x165 * u1;
+        let x167 = u4 * J1;
+        let x168 = x145 * x21;
+        let x169 = x29 * x140;
+        let x170 = x169 * x149;
+        let x171 = u3 * Ixz;
+        let x172 = u2 * Ixy;
+        let x173 = Ixx * u1 - x171 - x172;
+        let x174 = x145 * x26;
+        let x175 = x174 * x124;
+        let x176 = x16 * x140;
+        let x177 = u5 * J1;
+        let x178 = -(x9 * x149);
+        let x179 = a_ * u1;
+        let x180 = u2 * u2 - x158 - u4 * (2.0 * u3 + u4);
+        let x181 = 2.0 * gamma1;
+        let x182 = f64::sin(x181);
+        let x183 = u2 * x182;
+        let x184 = f64::cos(x181);
+        let x185 = u1 * x184;
+        let x186 = x21 * d;
+        let x187 = x186 * u1;
+        let x188 = u2 * x24;
+        let x189 = x187 - x188;
+        let x190 = x189 * x124;
+        let x191 = u3 * x91;
+        let x192 = x191 * u3;
+        let x193 = x192 - x190;
+        let x194 = u3 * x32;
+        let x195 = d * x9;
+        let x196 = u1 * x195;
+        let x197 = -x194 - x196;
+        let x198 = u2 * x71;
+        let x199 = x197 * x140 + u2 * x198;
+        let x200 = x88 * u3 * u4 - (x89 * u3 + d * u4) * x126;
+        let x201 = x189 * x145;
+        let x202 = x200 + x201;
+        let x203 = x16 * x133;
+        let x204 = x197 * x149;
+        let x205 = (u2 * x62 + u5 * d) * x137 - u5 * x203 - x204;
+        let x206 = -((x202 * x95 + x96 * x193 + x123 * x40) * m1
+            + (x205 * x70 + x134 * x46 + x67 * x199) * m2);
+        let x207 = x134 * x48;
+        let x208 = m2 * (x84 * x199 + x134 * x106 - x205 * x85)
+            + (x110 * x193 + x123 * x81 + x109 * x202) * m1;
+        let x209 = (x77 * x41 + x49) * d;
+        let x210 = x16 * x77;
+        let x211 = x210 - x74;
+        let x212 = x9 * x52 - x78;
+        let x213 = m2 * (x211 * x62 - x212 * x71) + x77 * x58;
+        let x214 = -x102 - x103;
+        let x215 = x100 - x99;
+        let x216 = (x214 * x91 + x89 * x215) * m1 - x98;
+        let x217 = x18 * x215;
+        let x218 = x211 * x11;
+        let x219 = x7 * x1;
+        let x220 = x56 * x64;
+        let x221 = x56 * x73;
+        let x222 = x7 * (x54 - x55) * d;
+        let x223 = x39 * x86;
+        let x224 = x86 * x36;
+        let x225 = x69 - x68;
+        let x226 = x0 * x9 + x16 * x38;
+        let x227 = m2 * (-x225 * x71 - x226 * x62) - x38 * x58;
+        let x228 = x111 * x39;
+        let x229 = x111 * x36;
+        let x230 = x21 * x0 - x14 * x43;
+        let x231 = (x89 * x230 - x92 * x91) * m1 - x43 * x87;
+        let x232 = x39 * x114;
+        let x233 = x114 * x36;
+        let x234 = x18 * x230;
+        let x235 = x117 * x39;
+        let x236 = x117 * x36;
+        let x237 = -(x226 * x11);
+        let x238 = x45 - x44;
+        let x239 = d * (x238 * x41 - x42 * x40);
+        let x240 = d * (-x42 * x52 - x48 * x41);
+        let x241 = -(x0 * d * (x41 * x2 + x42 * x3));
+        let x242 = x16 * x62;
+        let x243 = x46 * x9;
+        let x244 = m2 * (x238 * x242 - x243 * x71) + x58 * x238;
+        let x245 = x48 * x9;
+        let x246 = m2 * (-x245 * x71 - x48 * x242) - x58 * x48;
+        let x247 = x106 * (-x58 - m2 * (x9 * x71 + x242));
+        let x248 = (x21 * x91 + x14 * x89) * m1 + x87;
+        let x249 = x40 * x248;
+        let x250 = x52 * x248;
+        let x251 = x248 * x81;
+        let x252 = x14 * x18;
+        let x253 = x252 * x40;
+        let x254 = x252 * x52;
+        let x255 = x252 * x81;
+        let x256 = x16 * x11;
+        let x257 = x256 * x238;
+        let x258 = -(x256 * x48);
+        let x259 = -(x256 * x106);
+        let x260 = x16 * x199;
+        let x261 = x21 * x202 + x14 * x193;
+        let x262 = 2.0 * J2 - 2.0 * J1;
+        let x263 = x22 * (x20 - J1) + x14 * x27;
+        let x264 = 2.0 * J1 - 2.0 * J2;
+        let x265 = x18 * x21;
+        let x266 = x40 * x265;
+        let x267 = x52 * x265;
+        let x268 = x265 * x81;
+        let x269 = x18 * x91;
+        let x270 = -x269;
+        let x271 = x94 - x93;
+        let x272 = m1 * (x88 * x95 + x89 * x271);
+        let x273 = (x89 * x214 + x104 * x88) * m1;
+        let x274 = x108 - x107;
+        let x275 = m1 * (x88 * x109 + x89 * x274);
+        let x276 = x18 * x271;
+        let x277 = x214 * x18;
+        let x278 = x18 * x274;
+        let x279 = x124 * x167 + x129;
+        let x280 = (x126 * x174 + x145 * x167) + x127 * (x143 - x144);
+        let x281 = x144 * x121 - x143 * x121;
+        let x282 = x281 * d;
+        let x283 = u1 * x182;
+        let x284 = u2 * x184;
+        let x285 = x174 * x145 - x125 * x124;
+        let x286 = d * x124;
+        let x287 = x159 * x88 - x286 * x124;
+        let x288 = x192 - x190 + x145 * x286;
+        let x289 = x287 + x200;
+        let x290 = x10 * (x26 - x12) + x16 * x34;
+        let x291 = -(x256 * x46);
+        let x292 = x11 * x71;
+        let x293 = -x292;
+        let x294 = m2 * (x62 * x70 - x16 * a_ * x70);
+        let x295 = m2 * (a_ * (-x79 * x16 - (x75 + x210) * x9) + x79 * x62);
+        let x296 = m2 * (x61 * x85 - x62 * x85);
+        let x297 = x11 * x243;
+        let x298 = x11 * x245;
+        let x299 = x106 * x11 * x9;
+        let x300 = x11 * x70;
+        let x301 = x79 * x11;
+        let x302 = -(x11 * x85);
+        let x303 = x132 - x130;
+        let x304 = x177 * x303;
+        let x305 = x148 * x131 + x147 * x131;
+        let x306 = d * x305;
+        let x307 = (x177 + x138) - x136;
+        let x308 = x140 * x169 - x29 * x149 * x149;
+        let x309 = x303 * d;
+        let x310 = u2 * x203 + x140 * x309 - x204;
+        let x311 = x309 * x149;
+        let x312 = a_ * u3 + x23 * x121;
+        let x313 = x126 * x26;
+        let x314 = x313 - x127;
+        let x315 = Ixy * u3;
+        let x316 = u2 * Ixz;
+        let x317 = x16 * x307;
+        let x318 = -x133 - x31 * x131;
+        let x319 = x9 * x140;
+        let x320 = x16 * x149;
+        let x321 = Izz - Ixx;
+        let x322 = Ixx - Iyy;
+        let x323 = x21 * x124;
+        let x324 = x14 * x189;
+        let x325 = x186 * x124 + x324;
+        let x326 = x16 * x197;
+        let x327 = x326 - x140 * x195;
+        let x328 = x21 * (x188 - x187 + x145 * d);
+        let x329 = x9 * (x194 + x196 + d * x149);
+        let x330 = x309 - x179;
+        let x331 = Iyy - Izz;
+        let x332 = Iyz * u1;
+        let x333 = u1 * x157;
+        let x334 = 2.0 * x120 + 2.0 * x122;
+        let x335 = x16 * x169;
+        let x336 = x14 * x125;
+        let x337 = x174 * x21 + x336;
+        let x338 = x189 * x21 - x124 * x24;
+        let x339 = d * x137 + x62 * x137 + x61 * (u2 - u5);
+        let x340 = x324 - x145 * x24;
+        let x341 = x186 * x121;
+        let x342 = x179 + x286;
+        let x343 = 2.0 * x132 - 2.0 * x130;
+        let x344 = x335 + x9 * x149 * x26;
+        let x345 = -x197 * x9 - x140 * x32;
+        let x346 = x326 - x149 * x32;
+        let x347 = x131 * x195;
+        let x348 = x88 * (u4 - u3) - x89 * x126 - x126 * d;
+        let x349 = x125 - J2 * x124;
+        let x350 = 2.0 * u3 + 2.0 * u4;
+        let x351 = 2.0 * J2 - J1;
+        let x352 = 2.0 * u5 + 2.0 * u2;
         Derivatives {
-            qdot: [x1 * x6, x7, u1 + x8 * x1 * x6, u4, u5, u6, u7, u8],
+            qdot: [x5, x6, x8 + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + x10 * x11 * x11 + (x13 + x15) * J1 + x16 * x16 * x18,
-                    x24,
-                    x30,
+                    x10 * x13 + Ixx + (x15 + x17) * J1 + x20 * x22,
+                    x28,
+                    x35,
                     0.0,
                     0.0,
-                    x39,
-                    x46,
-                    x50,
+                    x47,
+                    x53,
+                    x57,
                 ],
                 [
-                    x24,
-                    x11 * x11 * J1 + x21 * x21 * m1 + Iyy + J2 * (x13 + 1.0)
-                        + m2 * (x51 + a_ * (a_ + 2.0 * x26)),
-                    x52,
+                    x28,
+                    Iyy - x58 * x24 + m2 * (x59 + a_ * (2.0 * x31 + a_))
+                        + J2 * (x15 + 1.0) + x22 * J1,
+                    x60,
                     0.0,
-                    x54,
-                    x61,
-                    x68,
-                    x73,
-                ],
-                [
-                    x30,
-                    x52,
-                    x16 * x16 * J1 + (a_ * (a_ + 2.0 * x20) + x51) * m1 + m2 * x27 * x27
-                        + Izz + J2 * (x15 + 1.0),
-                    x75,
-                    0.0,
-                    x81,
+                    x63,
+                    x72,
+                    x80,
                     x86,
-                    x91,
                 ],
-                [0.0, 0.0, x75, x10, 0.0, x92, x93, x94],
-                [0.0, x54, 0.0, 0.0, x18, x95, x96, x97],
-                [x39, x61, x81, x92, x95, x98, 0.0, 0.0],
-                [x46, x68, x86, x93, x96, 0.0, x98, 0.0],
-                [x50, x73, x91, x94, x97, 0.0, 0.0, x98],
+                [
+                    x35,
+                    x60,
+                    J2 * (x17 + 1.0) + x10 * J1 - x32 * x87 + Izz
+                        + (x59 + a_ * (a_ + 2.0 * x23)) * m1,
+                    x90,
+                    0.0,
+                    x97,
+                    x105,
+                    x111,
+                ],
+                [0.0, 0.0, x90, x20, 0.0, x112, x113, x114],
+                [0.0, x63, 0.0, 0.0, x13, x115, x116, x117],
+                [x47, x72, x97, x112, x115, x118, 0.0, 0.0],
+                [x53, x80, x105, x113, x116, 0.0, x118, 0.0],
+                [x57, x86, x111, x114, x117, 0.0, 0.0, x118],
             ],
             force: [
-                (-x12 * u4 * x101 - x14 * u5 * x104) * J1 + (x111 - x107 + x114) * x11
-                    - u2 * x117 + x16 * (x129 - x126) + x132 * u3,
-                x134 - x12 * (x111 + x114) - x21 * m1 * x106 + x117 * u1
-                    - x11 * u4 * x101 * J1
+                x21 * x129 + x9 * x142 - (x146 * u4 + u5 * x150) * J1 - u2 * x153
+                    + x156 * u3,
+                x153 * u1 - x14 * x128
                     - m2
-                        * ((a_ * (x16 * x137 - 2.0 * (x14 * u3 * u1))
-                            + ((0.5 * x140 - x142) * u3 - 0.5 * (u1 * u1 * x139)) * d)
-                            * d - a_ * a_ * u3 * u1) - x145 * u3,
-                u2 * x145 - m2 * x27 * x128
-                    - (d
-                        * (a_ * (x146 * x11 + 2.0 * (x12 * u2 * u1))
-                            + d * (u2 * (0.5 * x149 + x151) - 0.5 * (u1 * u1 * x148)))
-                        + a_ * a_ * u2 * u1) * m1 - x14 * x122 * x125
-                    + u5 * x16 * x104 * J1 - x132 * u1 + x152,
-                x152 - x157 * d * m1,
-                x134 - m2 * x161 * d,
-                x167,
-                -(x161 * x67 + x166 * x64 + x42 * x128) * m2
-                    - m1 * (x45 * x106 + x157 * x83 + x165 * x85),
-                x168,
+                        * ((a_ * (x9 * x161 - 2.0 * (x16 * x119))
+                            + d * ((0.5 * x164 - x166) * u3 - 0.5 * (x158 * x163))) * d
+                            - x119 * x157) - x167 * x168 - x123 * x58 + x170 - x173 * u3,
+                x175 - x134 * x87 - x139 * x176 + u2 * x173 + x177 * x178 - x156 * u1
+                    - (x179 * x133
+                        + d
+                            * (a_ * (x180 * x21 + 2.0 * (x144 * u1))
+                                + (u2 * (0.5 * x183 + x185) - 0.5 * (x158 * x182)) * d))
+                        * m1,
+                x175 - x18 * x193,
+                x170 - x11 * x199,
+                x206,
+                -(m2 * (x199 * x76 + x207 + x79 * x205)
+                    + m1 * (x123 * x52 + x101 * x193 + x104 * x202)),
+                -x208,
             ],
             checks: [x0],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    x8 * x1 * x1 * x6,
-                    0.0,
-                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [x1 * x7, -x3 - x5, x8 * x1 * x7, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x5 * x219, 0.0, x4 + x8 * x219, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x6, -x4, x6 * x219, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x2, x4, x8 * x1 * x2, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x4, -x2, x8 * x1 * x4, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x2, x3, x1 * x43, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [x1 * x3, -x2, x38 * x1, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -6781,90 +6639,90 @@ pub mod kane {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x170, x39, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x174, x61, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x177, x81, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x178, x92, 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x179, x95, 0.0],
-                    [x170, x174, x177, x178, x179, 0.0, 0.0, 0.0],
-                    [x39, x61, x81, x92, x95, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x209, x47, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x213, x72, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x216, x97, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x217, x112, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x218, x115, 0.0],
+                    [x209, x213, x216, x217, x218, 0.0, 0.0, 0.0],
+                    [x47, x72, x97, x112, x115, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x180, x181, x182],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x183, x184, x187],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x188, x189, x192],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x193, x194, x195],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x196, x197, x198],
-                    [x180, x183, x188, x193, x196, 0.0, 0.0, 0.0],
-                    [x181, x184, x189, x194, x197, 0.0, 0.0, 0.0],
-                    [x182, x187, x192, x195, x198, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x220, x221, x222],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x223, x224, x227],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x228, x229, x231],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x232, x233, x234],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x235, x236, x237],
+                    [x220, x223, x228, x232, x235, 0.0, 0.0, 0.0],
+                    [x221, x224, x229, x233, x236, 0.0, 0.0, 0.0],
+                    [x222, x227, x231, x234, x237, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x200, x201, x202],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x203, x204, x205],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x207, x208, x209],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x210, x211, x212],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, x213, x214, x215],
-                    [x200, x203, x207, x210, x213, 0.0, 0.0, 0.0],
-                    [x201, x204, x208, x211, x214, 0.0, 0.0, 0.0],
-                    [x202, x205, x209, x212, x215, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        x12 * (2.0 * J2 + 2.0 * x9 - 2.0 * J1) * x11,
-                        x217,
-                        0.0,
-                        0.0,
-                        0.0,
-                        x210,
-                        x211,
-                        x212,
-                    ],
-                    [
-                        x217,
-                        x11 * (2.0 * x22 + x12 * x218),
-                        0.0,
-                        0.0,
-                        0.0,
-                        x219,
-                        x220,
-                        x221,
-                    ],
-                    [0.0, 0.0, -(2.0 * a_ * x11 * d * m1), x222, 0.0, x224, x225, x227],
-                    [0.0, 0.0, x222, 0.0, 0.0, x228, x229, x230],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [x210, x219, x224, x228, 0.0, 0.0, 0.0, 0.0],
-                    [x211, x220, x225, x229, 0.0, 0.0, 0.0, 0.0],
-                    [x212, x221, x227, x230, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x239, x240, x241],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x244, x246, x247],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x249, x250, x251],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x253, x254, x255],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, x257, x258, x259],
+                    [x239, x244, x249, x253, x257, 0.0, 0.0, 0.0],
+                    [x240, x246, x250, x254, x258, 0.0, 0.0, 0.0],
+                    [x241, x247, x251, x255, x259, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        x14 * x16 * (2.0 * x17 + 2.0 * J2 - 2.0 * J1),
-                        0.0,
-                        x244,
-                        0.0,
-                        0.0,
-                        x245,
-                        x246,
-                        x215,
-                    ],
-                    [0.0, -(2.0 * m2 * a_ * d * x16), 0.0, 0.0, x247, x249, x250, x251],
-                    [
-                        x244,
-                        0.0,
-                        x16 * (2.0 * x28 + x14 * x218),
+                        x14 * (2.0 * x19 + x262) * x21,
+                        x263,
                         0.0,
                         0.0,
-                        x252,
+                        0.0,
                         x253,
                         x254,
+                        x255,
+                    ],
+                    [
+                        x263,
+                        (2.0 * x25 + x14 * x264) * x21,
+                        0.0,
+                        0.0,
+                        0.0,
+                        x266,
+                        x267,
+                        x268,
+                    ],
+                    [0.0, 0.0, -(2.0 * x269), x270, 0.0, x272, x273, x275],
+                    [0.0, 0.0, x270, 0.0, 0.0, x276, x277, x278],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [x253, x266, x272, x276, 0.0, 0.0, 0.0, 0.0],
+                    [x254, x267, x273, x277, 0.0, 0.0, 0.0, 0.0],
+                    [x255, x268, x275, x278, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        x16 * (2.0 * x12 + x262) * x9,
+                        0.0,
+                        x290,
+                        0.0,
+                        0.0,
+                        x291,
+                        x258,
+                        x259,
+                    ],
+                    [0.0, -(2.0 * x292), 0.0, 0.0, x293, x294, x295, x296],
+                    [
+                        x290,
+                        0.0,
+                        (x16 * x264 + 2.0 * x33) * x9,
+                        0.0,
+                        0.0,
+                        x297,
+                        x298,
+                        x299,
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, x247, 0.0, 0.0, 0.0, x255, x256, x257],
-                    [x245, x249, x252, 0.0, x255, 0.0, 0.0, 0.0],
-                    [x246, x250, x253, 0.0, x256, 0.0, 0.0, 0.0],
-                    [x215, x251, x254, 0.0, x257, 0.0, 0.0, 0.0],
+                    [0.0, x293, 0.0, 0.0, 0.0, x300, x301, x302],
+                    [x291, x294, x297, 0.0, x300, 0.0, 0.0, 0.0],
+                    [x258, x295, x298, 0.0, x301, 0.0, 0.0, 0.0],
+                    [x259, x296, x299, 0.0, x302, 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -6984,9 +6842,9 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(x157 * x175 + x165 * x176 + x63 * x106) * m1
-                        - m2 * (x169 * x128 + x171 * x166 + x161 * x173),
-                    x167,
+                    -(m1 * (x214 * x202 + x77 * x123 + x215 * x193)
+                        + m2 * (x205 * x212 - x207 + x211 * x199)),
+                    x206,
                     0.0,
                 ],
                 [
@@ -6995,10 +6853,10 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    x168 * x33,
-                    x168 * x31,
-                    -m1 * (x190 * x165 - x8 * x106 * x4 + x157 * x191)
-                        - m2 * (x186 * x166 - x8 * x2 * x128 + x161 * x185),
+                    -(x208 * x39),
+                    -(x208 * x36),
+                    -(m2 * (x205 * x225 - x134 * x43 - x226 * x199)
+                        + m1 * (x230 * x193 - x123 * x38 - x92 * x202)),
                 ],
                 [
                     0.0,
@@ -7006,129 +6864,115 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(x38 * x166 * x16 + x35 * x128 + x14 * x161 * x199) * m2
-                        - m1 * (x35 * x216 + x106 * x199),
-                    -(x45 * x216 + x169 * x106) * m1
-                        - m2 * (x166 * x16 * x42 + x45 * x128 + x14 * x161 * x169),
-                    x0
-                        * (-(x4 * x216 - x2 * x106) * m1
-                            - m2 * (x128 * x4 + x2 * (x166 * x16 - x14 * x161))),
+                    -(m2 * (x260 * x238 + x134 * x40 + x205 * x243)
+                        + m1 * (x40 * x261 + x123 * x238)),
+                    -((x52 * x261 - x123 * x48) * m1
+                        + m2 * (x134 * x52 - x260 * x48 + x205 * x245)),
+                    -(x0
+                        * (m2 * (x134 * x3 + (x205 * x9 - x260) * x2)
+                            + (x261 * x3 - x123 * x2) * m1)),
                 ],
                 [
-                    (x231 - d * d * x232 * m1 + x233 + x234) * x11 + x12 * x235,
-                    x11 * x235 - x21 * d * x232 * m1 + x12 * (-x231 - x233 - x234),
-                    x238
-                        - d * m1
-                            * (d * ((x237 - 2.0 * x236) * u2 - u1 * u1 * x150)
-                                + a_ * (x12 * x146 - 2.0 * (u2 * x11 * u1))) + x239,
-                    x238 - d * (x241 - x162 - x240) * m1 + x239,
+                    x14 * x279 + (x280 - x18 * x282) * x21,
+                    x21 * x279 - x25 * x281 - x280 * x14,
+                    x285
+                        - (a_ * (x14 * x180 - 2.0 * (x120 * u1))
+                            + d * ((x284 - 2.0 * x283) * u2 - x158 * x184)) * x18,
+                    x285 - x18 * (x287 - x201),
                     0.0,
-                    -((x242 * x76 + x157 * x223 + x243 * x80 + d * x232 * x35) * m1),
-                    -((x242 * x83 + x243 * x85 + x157 * x176 + d * x232 * x45) * m1),
-                    -((x242 * x87 + x0 * d * x232 * x4 + x157 * x226 + x243 * x90) * m1),
+                    -(m1 * (x95 * x288 + x289 * x96 + x282 * x40 + x271 * x193)),
+                    -(m1 * (x282 * x52 + x104 * x288 + x214 * x193 + x101 * x289)),
+                    -((x274 * x193 + x110 * x289 + x109 * x288 + x282 * x81) * m1),
                 ],
                 [
-                    x16 * (x259 * x104 + m2 * x260 * d * d) + x14 * (x129 - x262 - x126),
-                    x263 + x264
-                        - m2 * d
-                            * (a_ * (2.0 * (u3 * x16 * u1) + x14 * x137)
-                                + (x141 * (x135 - x136) + 2.0 * (u3 * u1 * x139)) * d),
-                    (x262 + x126 - x129) * x16 - m2 * x260 * d * x27 + x14 * x259 * x104,
+                    x16 * (x142 - x304) + x9 * (x306 * x11 - x149 * x307),
+                    x308
+                        - x11
+                            * (d * (2.0 * (x119 * x163) + x165 * x160)
+                                + a_ * (x16 * x161 + 2.0 * (x119 * x9))),
+                    x150 * x307 - x33 * x305 + x9 * (x304 - x135 + x141),
                     0.0,
-                    x263 - m2 * d * x265 + x264,
-                    -(m2
-                        * (x265 * x60 - x57 * d * x261 * x133 + x166 * (x248 - x58)
-                            + x260 * x38 * d)),
-                    -(m2
-                        * (x166 * x173 - d * x261 * x64 * x133 + x265 * x67
-                            + x260 * d * x42)),
-                    -(m2
-                        * (x166 * (x70 - x71) - x69 * d * x261 * x133
-                            + x260 * x0 * d * x2 + x72 * x265)),
+                    x308 - x11 * x310,
+                    -(m2 * (x306 * x46 - x311 * x70 + x205 * (-x65 - x66) + x67 * x310)),
+                    -(m2 * (x306 * x48 + x310 * x76 + x205 * x211 - x79 * x311)),
+                    -(m2 * (x311 * x85 + x205 * (x82 - x83) + x306 * x106 + x84 * x310)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x12 * (x267 - x268 + x269) - d * x266 * m1) * x11 - x270
-                        + (m2 * d * x271 + x14 * x259) * x16 + x272,
-                    J2 * (x273 + x274) + x275 * u3 + (x11 * x11 * u4 - x273 - x274) * J1
+                    (x14 * (x167 + x314) - x18 * x312) * x21 - x315 + x316
+                        + x9 * (x317 + x11 * x318),
+                    J2 * (x319 + x320)
                         - m2
-                            * ((a_ * (-2.0 * x102 - 2.0 * x103)
-                                + d * (-u1 * x139 - x141 * u3)) * d - a_ * a_ * u3)
-                        - x12 * x12 * (x267 - x268) - x115 - 2.0 * x116
-                        - x21 * x266 * m1,
-                    (x276 - u5 * x16 * x16 - x277) * J1 - m2 * x271 * x27
-                        - x14 * x14 * x122 + u2 * x278 + (x277 - x276) * J2
-                        - m1
-                            * (((2.0 * x100 - 2.0 * x99) * a_ + d * (x237 - x236)) * d
-                                + a_ * a_ * u2) + x130 + 2.0 * x131,
-                    x25 * x113 * x11 + x12 * x19 * x101 - d * m1 * x280,
-                    x14 * x25 * x133 + x25 * x125 * x16 - m2 * d * x282,
-                    -m1 * (x80 * x11 * x283 + x76 * x280 + x266 * x35)
-                        - m2 * (x282 * x60 + x38 * x271 + x57 * x16 * x284),
-                    -(x266 * x45 + x83 * x280 + x11 * x283 * x85) * m1
-                        - m2 * (x271 * x42 + x67 * x282 + x16 * x64 * x284),
-                    -m2 * (x69 * x16 * x284 + x72 * x282 + x0 * x2 * x271)
-                        - (x0 * x266 * x4 + x87 * x280 + x90 * x11 * x283) * m1,
+                            * (d
+                                * (-(2.0 * x147 + 2.0 * x148) * a_
+                                    - (u1 * x163 + x165 * u3) * d) - u3 * x157) + x321 * u3
+                        - x15 * x314 - x58 * x312 - x151 - 2.0 * x152
+                        + (x22 * u4 - x319 - x320) * J1,
+                    u2 * x322 - x17 * x139 - x318 * x87 + x154 + 2.0 * x155
+                        + (x146 - u5 * x10 - x323) * J1 + J2 * (x323 - x146)
+                        - (d * (a_ * (2.0 * x144 - 2.0 * x143) + d * (x284 - x283))
+                            + a_ * x133) * m1,
+                    x18 * x325 + x29 * x323 + x14 * x174,
+                    x30 * x149 - x11 * x327 + x9 * x169,
+                    -((x328 * x95 - x96 * x325 + x40 * x312) * m1
+                        + (x46 * x318 + x329 * x70 + x67 * x327) * m2),
+                    -((x52 * x312 - x101 * x325 + x104 * x328) * m1
+                        + (x327 * x76 + x48 * x318 + x79 * x329) * m2),
+                    -(m2 * (x84 * x327 - x329 * x85 + x106 * x318)
+                        + (x109 * x328 + x81 * x312 - x110 * x325) * m1),
                 ],
                 [
-                    x11 * x11 * (x267 - x105 * d * d * m1 - x268) - x12 * x12 * u4 * J1
-                        + 2.0 * x115 + x116 + u3 * x285
-                        + x16 * (m2 * d * x287 - x25 * x125),
-                    2.0 * (u5 * m2 * a_ * d * x16) + x270
-                        + x11 * (x12 * (x268 - x267 - x269) - x105 * x21 * d * m1)
-                        - x288,
-                    x289 - x143 + x278 * u1 - 2.0 * x144
-                        - m1 * (x290 + d * (d * (x149 + x151) + a_ * x291)) - x292 + x293
-                        - m2 * x27 * x287,
-                    x289 - d * x294 * m1 + x293,
-                    -(2.0 * m2 * a_ * u2 * d * x16),
-                    -m2 * (x38 * x287 + 2.0 * (a_ * u2 * x16 * x60) + x57 * x295)
-                        - m1 * (x76 * x294 + x80 * x296 + x105 * x11 * d * x35),
-                    -(x105 * x11 * d * x45 + x296 * x85 + x83 * x294) * m1
-                        - m2 * (x42 * x287 + x295 * x64 + 2.0 * (a_ * u2 * x16 * x67)),
-                    -m2 * (2.0 * (a_ * u2 * x72 * x16) + x69 * x295 + x0 * x2 * x287)
-                        - (x90 * x296 + x105 * x11 * x0 * d * x4 + x87 * x294) * m1,
+                    x9 * (x11 * x330 - x169) + x22 * (x314 - x19 * x121) + 2.0 * x151
+                        + x152 + u3 * x331 - x15 * x167,
+                    x21 * (x14 * (x127 - x313 - x167) - x25 * x121) + 2.0 * (u5 * x292)
+                        + x315 - x332,
+                    x322 * u1 - x171 - (x333 + d * (d * (x183 + x185) + a_ * x334)) * m1
+                        - 2.0 * x172 - x335 - x330 * x87 + x337,
+                    x18 * x338 + x337,
+                    -(2.0 * x11 * x198),
+                    -(m2 * (2.0 * (x67 * x198) + x339 * x70 + x46 * x330)
+                        + (x95 * x340 - x338 * x96 + x40 * x341) * m1),
+                    -((2.0 * (x198 * x76) + x48 * x330 + x79 * x339) * m2
+                        + m1 * (x104 * x340 + x52 * x341 - x338 * x101)),
+                    -(m2 * (2.0 * (x84 * x198) - x339 * x85 + x106 * x330)
+                        + (x341 * x81 + x109 * x340 - x110 * x338) * m1),
                 ],
                 [
-                    u2 * x285 + (m2 * x120 * d * d - x119 - x297) * x16 * x16
-                        + x14 * x14 * u5 * J1 - 2.0 * x130 - x131
-                        + (x299 - x298 * d * m1) * x11,
-                    2.0 * x143 - x289 + x275 * u1
-                        - m2 * ((d * (x140 - x142) + a_ * x300) * d - x290) + x144 + x292
-                        - x298 * x21 * m1 + x301,
-                    x16 * (x14 * (-x119 - x297 - x258) - m2 * x120 * d * x27) - x272
-                        + 2.0 * (a_ * x11 * d * u4 * m1) + x288,
-                    -(2.0 * a_ * u3 * x11 * d * m1),
-                    x292 - m2 * d * x302 + x301,
-                    -m1 * (x298 * x35 + 2.0 * (a_ * x76 * u3 * x11) + x80 * x303)
-                        - m2 * (x60 * x302 + x38 * x120 * d * x16 + x57 * x304),
-                    -m2 * (x120 * d * x16 * x42 + x304 * x64 + x67 * x302)
-                        - (x298 * x45 + 2.0 * (a_ * x83 * u3 * x11) + x303 * x85) * m1,
-                    -m2 * (x72 * x302 + x69 * x304 + x120 * x0 * d * x16 * x2)
-                        - (x298 * x0 * x4 + x90 * x303 + 2.0 * (a_ * x87 * u3 * x11))
-                            * m1,
+                    u2 * x331 + x10 * (x136 + x12 * x131 - x138) - 2.0 * x154 - x155
+                        + x177 * x17 + x21 * (x125 - x342 * x18),
+                    2.0 * x171 - m2 * (d * (d * (x164 - x166) + a_ * x343) - x333)
+                        + x321 * u1 + x344 + x172 - x336 - x342 * x58,
+                    2.0 * (x269 * u4) - x316 + (-x317 - x131 * x33) * x9 + x332,
+                    -(2.0 * x191 * x18),
+                    x344 - x345 * x11,
+                    -(m2 * (x46 * x347 - x346 * x70 + x67 * x345)
+                        + (2.0 * (x191 * x96) + x342 * x40 + x348 * x95) * m1),
+                    -((x104 * x348 + 2.0 * (x191 * x101) + x342 * x52) * m1
+                        + m2 * (x345 * x76 - x79 * x346 + x48 * x347)),
+                    -(m2 * (x345 * x84 + x346 * x85 + x106 * x347)
+                        + m1 * (x109 * x348 + 2.0 * (x191 * x110) + x342 * x81)),
                 ],
                 [
-                    (x305 + x299 - d * d * x291 * m1) * x11 - x12 * x101 * J1,
-                    -x21 * d * x291 * m1 - x11 * x101 * J1 - x12 * (x305 + x299),
-                    -(a_ * x11 * d * x306 * m1),
+                    x21 * (x349 - x19 * x334) - x146 * J1,
+                    -(x168 * J1 + x25 * x334 + x14 * x349),
+                    x350 * x269,
                     0.0,
                     0.0,
-                    -((x35 * x291 + x80 * x306) * d * m1),
-                    -(d * m1 * (x306 * x85 + x291 * x45)),
-                    -((x0 * x291 * x4 + x90 * x306) * d * m1),
+                    -(x18 * (x40 * x334 - x350 * x95)),
+                    -(x18 * (x52 * x334 - x104 * x350)),
+                    -((x334 * x81 - x350 * x109) * x18),
                 ],
                 [
-                    (m2 * d * d * x300 - x125 * x307) * x16 - x14 * x104 * J1,
-                    -(m2 * a_ * d * x16 * (-2.0 * u5 - 2.0 * u2)),
-                    x16 * x104 * J1 - x14 * x125 * x307 - m2 * d * x300 * x27,
+                    x9 * (x12 * x343 - x140 * x351) - x150 * J1,
+                    x352 * x292,
+                    J1 * x178 - x351 * x176 - x343 * x33,
                     0.0,
                     0.0,
-                    -(m2 * (x38 * x300 + x57 * x308) * d),
-                    -(m2 * d * (x300 * x42 + x64 * x308)),
-                    -(m2 * (x69 * x308 + x0 * x2 * x300) * d),
+                    -(x11 * (x46 * x343 + x352 * x70)),
+                    -((x79 * x352 + x48 * x343) * x11),
+                    -(x11 * (x106 * x343 - x352 * x85)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -7370,189 +7214,213 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma2);
-        let x8 = f64::sin(gamma2);
-        let x9 = f64::cos(psi);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = f64::sin(gamma1);
+        let x6 = f64::cos(psi);
+        let x7 = x6 * x0;
+        let x8 = f64::cos(gamma1);
+        let x9 = x4 * x1;
         let x10 = f64::sin(psi);
-        let x11 = (x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10;
-        let x12 = x2 * x10 + x5 * x9 * x3;
-        let x13 = x9 * x0 * x8 + x7 * x12;
-        let x14 = x7 * a_;
-        let x15 = d + x14;
-        let x16 = f64::cos(gamma1);
-        let x17 = x16 * d;
-        let x18 = -a_ - x17;
-        let x19 = m2 * (x13 * x15 - a_ * x11 * x8) + x18 * x12 * m1;
-        let x20 = x5 * x9 * x2 - x3 * x10;
-        let x21 = x7 * d;
-        let x22 = -a_ - x21;
-        let x23 = f64::sin(gamma1);
-        let x24 = x16 * x20 - x9 * x23 * x0;
-        let x25 = x16 * a_;
-        let x26 = x25 + d;
-        let x27 = x9 * (x5 * x23 * x2 + x16 * x0) - x23 * x3 * x10;
-        let x28 = m2 * x20 * x22 + (x24 * x26 + a_ * x27 * x23) * m1;
-        let x29 = x23 * x12 * m1 - m2 * x20 * x8;
-        let x30 = x9 * x3 + x5 * x2 * x10;
-        let x31 = x16 * x30 - x23 * x0 * x10;
-        let x32 = x16 * x0 * x10 + x23 * x30;
-        let x33 = (x31 * x26 + a_ * x23 * x32) * m1 + m2 * x22 * x30;
-        let x34 = x9 * x2;
-        let x35 = x5 * x3 * x10;
-        let x36 = x35 - x34;
-        let x37 = x7 * x0 * x10 + (x34 - x35) * x8;
-        let x38 = x0 * x8 * x10 + x7 * x36;
-        let x39 = x18 * x36 * m1 + m2 * (x38 * x15 - a_ * x8 * x37);
-        let x40 = x23 * x36 * m1 - m2 * x8 * x30;
-        let x41 = x16 * x0 * x2 + x5 * x23;
-        let x42 = x23 * x0 * x2 - x16 * x5;
-        let x43 = (x41 * x26 + a_ * x42 * x23) * m1 + m2 * x0 * x2 * x22;
-        let x44 = -x0 * x8 * x3 - x7 * x5;
-        let x45 = x7 * x0 * x3 - x5 * x8;
-        let x46 = m2 * (x45 * x15 - a_ * x44 * x8) + x18 * x0 * m1 * x3;
-        let x47 = x23 * m1 * x3 - m2 * x8 * x2;
-        let x48 = x16 * x16;
-        let x49 = x7 * x7;
-        let x50 = J1 - J2;
-        let x51 = x16 * x50 * x23 - Ixy
-            + d * ((-x19 * x29 - x40 * x39 - x46 * x47 * x0) * x6 + x18 * x23 * m1);
-        let x52 = J2 - J1;
-        let x53 = (x6 * (-x33 * x40 - x28 * x29 - x47 * x0 * x43) - m2 * x8 * x22) * d
-            + x7 * x52 * x8 - Ixz;
-        let x54 = x6 * d * d * (-x47 * x41 * x0 - x24 * x29 - x40 * x31) * m1;
-        let x55 = x6 * m2 * d * d * (-x13 * x29 - x40 * x38 - x45 * x47 * x0);
-        let x56 = d * d;
-        let x57 = (-x19 * x28 - x33 * x39 - x46 * x43) * x6 - Iyz;
-        let x58 = x6 * d * m1 * (-x19 * x24 - x46 * x41 - x31 * x39);
-        let x59 = m2 * (x6 * (-x45 * x46 - x19 * x13 - x39 * x38) + d + x14) * d + J2;
-        let x60 = J2 + d * m1 * (x25 + d + (-x24 * x28 - x41 * x43 - x33 * x31) * x6);
-        let x61 = x6 * m2 * d * (-x13 * x28 - x45 * x43 - x33 * x38);
-        let x62 = x6 * m2 * d * d * m1 * (-x24 * x13 - x45 * x41 - x31 * x38);
-        let x63 = u5 + u2;
-        let x64 = 2.0 * u5 + u2;
-        let x65 = x64 * J2 - J1 * x63;
-        let x66 = x7 * u1 - u3 * x8;
-        let x67 = u2 * x23;
-        let x68 = x16 * u1;
-        let x69 = u3 + u4;
-        let x70 = x67 + x68;
-        let x71 = J2 * (-x67 - x68) * u4 + x69 * x70 * x50;
-        let x72 = x16 * u2 - x23 * u1;
-        let x73 = x8 * u1;
-        let x74 = x7 * u3;
-        let x75 = -x73 - x74;
-        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x77 = d * (x7 * (-2.0 * u5 - u2) * u1 + x64 * u3 * x8) - a_ * u2 * u1;
-        let x78 = u3 + 2.0 * u4;
-        let x79 = d * (x16 * x78 * u1 + x78 * u2 * x23) + a_ * u3 * u1;
-        let x80 = a_ * u2 * u2 * x8;
-        let x81 = u3 * x22 - d * x8 * u1;
-        let x82 = x66 * x81;
-        let x83 = x80 + x82;
-        let x84 = x73 + x74;
-        let x85 = (u5 * d + u2 * x15) * x63 - x7 * u5 * a_ * u2 - x81 * x84;
-        let x86 = a_ * u3 * u3 * x23;
-        let x87 = u2 * x18 + x23 * d * u1;
-        let x88 = x87 * x70;
-        let x89 = x86 - x88;
-        let x90 = x87 * x72 + x16 * a_ * u3 * u4 - (u3 * x26 + d * u4) * x69;
-        let x91 = -(x83 * x38 + x85 * x37 + x30 * x77) * m2
-            - m1 * (x36 * x79 + x89 * x31 + x90 * x32);
-        let x92 = -m1 * (x27 * x90 + x24 * x89 + x12 * x79)
-            - m2 * (x11 * x85 + x83 * x13 + x20 * x77);
-        let x93 = -m2 * (x0 * x2 * x77 + x83 * x45 + x44 * x85)
-            - (x0 * x79 * x3 + x42 * x90 + x89 * x41) * m1;
-        let x94 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x95 = x52 * x66 * x84;
-        let x96 = u1 * u1;
-        let x97 = 2.0 * gamma2;
-        let x98 = f64::sin(x97);
-        let x99 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x100 = 2.0 * gamma1;
-        let x101 = f64::sin(x100);
-        let x102 = x70 * x50 * x72;
+        let x11 = x2 * x10;
+        let x12 = x6 * x9 - x11;
+        let x13 = x8 * x12 - x5 * x7;
+        let x14 = x8 * a_ + d;
+        let x15 = x6 * (x5 * x9 + x8 * x0) - x5 * x11;
+        let x16 = a_ * x5;
+        let x17 = f64::cos(gamma2);
+        let x18 = x17 * d;
+        let x19 = a_ + x18;
+        let x20 = -(m2 * x19);
+        let x21 = (x13 * x14 + x15 * x16) * m1 + x12 * x20;
+        let x22 = f64::sin(gamma2);
+        let x23 = x1 * x10;
+        let x24 = x4 * x2;
+        let x25 = x23 + x24 * x6;
+        let x26 = x22 * x7 + x17 * x25;
+        let x27 = d + x17 * a_;
+        let x28 = (x17 * x0 - x24 * x22) * x6 - x22 * x23;
+        let x29 = a_ * x22;
+        let x30 = x8 * d;
+        let x31 = a_ + x30;
+        let x32 = -(x31 * m1);
+        let x33 = m2 * (x26 * x27 - x28 * x29) + x32 * x25;
+        let x34 = u5 * m2;
+        let x35 = x5 * m1;
+        let x36 = m2 * x22;
+        let x37 = x35 * x25 - x36 * x12;
+        let x38 = u4 * m1;
+        let x39 = 1.0 / (m2 + m0 + m1);
+        let x40 = x6 * x2 + x9 * x10;
+        let x41 = x0 * x10;
+        let x42 = x8 * x40 - x5 * x41;
+        let x43 = x40 * x5 + x8 * x41;
+        let x44 = x40 * x20 + m1 * (x42 * x14 + x43 * x16);
+        let x45 = x6 * x1;
+        let x46 = x24 * x10;
+        let x47 = x46 - x45;
+        let x48 = x22 * x41 + x17 * x47;
+        let x49 = x35 * x47 - x36 * x40;
+        let x50 = (x45 - x46) * x22 + x17 * x41;
+        let x51 = m2 * (x27 * x48 - x50 * x29) + x32 * x47;
+        let x52 = x0 * x2;
+        let x53 = x17 * x52 - x4 * x22;
+        let x54 = x22 * x52 + x17 * x4;
+        let x55 = m2 * (x53 * x27 + x29 * x54) + x32 * x52;
+        let x56 = x0 * x1;
+        let x57 = x4 * x5 + x8 * x56;
+        let x58 = x0 * (x35 * x2 - x36 * x1);
+        let x59 = x56 * x5 - x8 * x4;
+        let x60 = (x57 * x14 + x59 * x16) * m1 + x56 * x20;
+        let x61 = x22 * x22;
+        let x62 = x5 * x5;
+        let x63 = x8 * x8;
+        let x64 = x17 * x17;
+        let x65 = d * d;
+        let x66 = J1 - J2;
+        let x67 = (x5 * x32 - x39 * (x37 * x33 + x51 * x49 + x58 * x55)) * d - Ixy
+            + x8 * x66 * x5;
+        let x68 = J2 - J1;
+        let x69 = x17 * x68 * x22
+            + (x36 * x19 - x39 * (x49 * x44 + x58 * x60 + x37 * x21)) * d - Ixz;
+        let x70 = m1 * x65;
+        let x71 = -(x39 * (x49 * x42 + x58 * x57 + x37 * x13) * x70);
+        let x72 = x39 * m2;
+        let x73 = -((x58 * x53 + x37 * x26 + x49 * x48) * x65 * x72);
+        let x74 = -Iyz - x39 * (x55 * x60 + x51 * x44 + x33 * x21);
+        let x75 = d * m1;
+        let x76 = -(x39 * x75 * (x57 * x55 + x51 * x42 + x33 * x13));
+        let x77 = m2 * d;
+        let x78 = J2 + (x27 - x39 * (x33 * x26 + x53 * x55 + x51 * x48)) * x77;
+        let x79 = J2 + (x14 - x39 * (x21 * x13 + x57 * x60 + x42 * x44)) * x75;
+        let x80 = -((x21 * x26 + x48 * x44 + x53 * x60) * d * x72);
+        let x81 = -((x57 * x53 + x42 * x48 + x26 * x13) * x70 * x72);
+        let x82 = u2 * x5;
+        let x83 = x8 * u1;
+        let x84 = x82 + x83;
+        let x85 = u3 + u4;
+        let x86 = x66 * x84;
+        let x87 = x85 * x86 - J2 * u4 * x84;
+        let x88 = u3 + 2.0 * u4;
+        let x89 = a_ * u3;
+        let x90 = d * (x82 * x88 + x88 * x83) + x89 * u1;
+        let x91 = x17 * u1;
+        let x92 = 2.0 * u5 + u2;
+        let x93 = u3 * x22;
+        let x94 = a_ * u2;
+        let x95 = d * (x92 * x93 - x91 * x92) - x94 * u1;
+        let x96 = x5 * u1;
+        let x97 = x96 * d - x31 * u2;
+        let x98 = x97 * x84;
+        let x99 = x89 * u3 * x5;
+        let x100 = x99 - x98;
+        let x101 = x8 * u4;
+        let x102 = x8 * u2 - x96;
+        let x103 = x89 * x101 - x85 * (u3 * x14 + d * u4) + x97 * x102;
+        let x104 = x22 * u1;
+        let x105 = -x104 * d - u3 * x19;
+        let x106 = x91 - x93;
+        let x107 = x105 * x106;
+        let x108 = u2 * x22 * x94;
+        let x109 = x107 + x108;
+        let x110 = x104 + x17 * u3;
+        let x111 = x17 * u5;
+        let x112 = u5 + u2;
+        let x113 = (u5 * d + u2 * x27) * x112 - x110 * x105 - x94 * x111;
+        let x114 = (x90 * x47 + x100 * x42 + x43 * x103) * m1
+            + m2 * (x109 * x48 + x50 * x113 + x95 * x40);
+        let x115 = m1 * (x103 * x15 + x90 * x25 + x100 * x13)
+            + m2 * (x109 * x26 + x95 * x12 + x113 * x28);
+        let x116 = (x59 * x103 + x100 * x57 + x90 * x52) * m1
+            + m2 * (x109 * x53 + x95 * x56 - x113 * x54);
+        let x117 = (J2 * x92 - J1 * x112) * x106;
+        let x118 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x119 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x120 = x110 * x68 * x106;
+        let x121 = a_ * u1;
+        let x122 = 2.0 * gamma2;
+        let x123 = f64::sin(x122);
+        let x124 = u1 * u1;
+        let x125 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x126 = x86 * x102;
+        let x127 = 2.0 * gamma1;
+        let x128 = f64::sin(x127);
         Assembly {
             qdot: [
-                x1 * x4,
-                u2 * x3 - u3 * x2,
-                u1 + x5 * x1 * x4,
+                x3,
+                u2 * x2 - u3 * x1,
+                x4 * x3 + u1,
                 u4,
                 u5,
-                x6
-                    * (G_X - x19 * u2 - u3 * x28
-                        + d * (-u5 * m2 * x13 - u1 * x29 - x24 * u4 * m1)),
-                x6
-                    * (G_Y - x33 * u3 - u2 * x39
-                        + d * (-x31 * u4 * m1 - u5 * m2 * x38 - x40 * u1)),
-                x6
-                    * (G_Z - u3 * x43 - u2 * x46
-                        + d * (-x41 * u4 * m1 - u5 * m2 * x45 - x47 * x0 * u1)),
+                (G_X - x21 * u3 - u2 * x33 - d * (x34 * x26 + x37 * u1 + x38 * x13))
+                    * x39,
+                (G_Y - u3 * x44 - (x42 * x38 + x34 * x48 + x49 * u1) * d - x51 * u2)
+                    * x39,
+                x39
+                    * (G_Z - u2 * x55 - d * (x57 * x38 + x53 * x34 + x58 * u1)
+                        - u3 * x60),
             ],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * x8 * x8
-                                + x6 * (-x40 * x40 - x47 * x47 * x0 * x0 - x29 * x29)
-                                + x23 * x23 * m1) + (x48 + x49) * J1
-                        + (x8 * x8 + x23 * x23) * J2,
-                    x51,
-                    x53,
-                    x54,
-                    x55,
+                    (x61 + x62) * J2 + Ixx + (x63 + x64) * J1
+                        + (x36 * x22 - x39 * (x37 * x37 + x49 * x49 + x58 * x58)
+                            + x5 * x35) * x65,
+                    x67,
+                    x69,
+                    x71,
+                    x73,
                 ],
                 [
-                    x51,
-                    x23 * x23 * J1 + x18 * x18 * m1 + Iyy + J2 * (x48 + 1.0)
-                        + x6 * (-x19 * x19 - x39 * x39 - x46 * x46)
-                        + m2 * (x56 + a_ * (a_ + 2.0 * x21)),
-                    x57,
-                    x58,
-                    x59,
+                    x67,
+                    Iyy - x39 * (x33 * x33 + x51 * x51 + x55 * x55) + J2 * (x63 + 1.0)
+                        - x31 * x32 + m2 * (x65 + a_ * (a_ + 2.0 * x18)) + x62 * J1,
+                    x74,
+                    x76,
+                    x78,
                 ],
                 [
-                    x53,
-                    x57,
-                    x6 * (-x33 * x33 - x28 * x28 - x43 * x43) + x8 * x8 * J1
-                        + (a_ * (a_ + 2.0 * x17) + x56) * m1 + m2 * x22 * x22 + Izz
-                        + J2 * (x49 + 1.0),
-                    x60,
-                    x61,
+                    x69,
+                    x74,
+                    x61 * J1 - x39 * (x44 * x44 + x60 * x60 + x21 * x21) + Izz
+                        + J2 * (x64 + 1.0) - x19 * x20
+                        + (a_ * (a_ + 2.0 * x30) + x65) * m1,
+                    x79,
+                    x80,
                 ],
-                [x54, x58, x60, (1.0 - x6 * m1) * d * d * m1 + J2, x62],
-                [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x6 * m2)],
+                [x71, x76, x79, (1.0 - x39 * m1) * x70 + J2, x81],
+                [x73, x78, x80, x81, J2 + (1.0 - x72) * m2 * x65],
             ],
             force: [
-                x71 * x23 - x65 * x66 * x8 + (-x16 * u4 * x72 - x7 * u5 * x75) * J1
-                    - u2 * x76
-                    + (m2 * x8 * x77 - x23 * m1 * x79
-                        + x6 * (-x40 * x91 - x92 * x29 - x47 * x93 * x0)) * d + x94 * u3,
-                x95 - x16 * x71 - x18 * m1 * x79 + x76 * u1
-                    + x6 * (-x46 * x93 - x92 * x19 - x91 * x39) - x23 * u4 * x72 * J1
+                x5 * x87
+                    + d
+                        * (x95 * x36 - x90 * x35
+                            - x39 * (-x49 * x114 - x37 * x115 - x58 * x116)) - x117 * x22
+                    - (x101 * x102 - x110 * x111) * J1 - u2 * x118 + x119 * u3,
+                x120 - x8 * x87 + x118 * u1
                     - m2
-                        * ((a_
-                            * (x8 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x96)
-                                - 2.0 * (x7 * u3 * u1))
-                            + ((0.5 * (u3 * x98) - f64::cos(x97) * u1) * u3
-                                - 0.5 * (u1 * u1 * x98)) * d) * d - a_ * a_ * u3 * u1)
-                    - x99 * u3,
-                x6 * (-x93 * x43 - x92 * x28 - x33 * x91) - m2 * x22 * x77
+                        * (d
+                            * (d
+                                * ((0.5 * (u3 * x123) - f64::cos(x122) * u1) * u3
+                                    - 0.5 * (x124 * x123))
+                                + ((u3 * u3 - x124 - (u5 + 2.0 * u2) * u5) * x22
+                                    - 2.0 * (x91 * u3)) * a_) - x89 * x121)
+                    - x5 * u4 * x102 * J1 - x32 * x90
+                    - x39 * (-x33 * x115 - x51 * x114 - x55 * x116) - x125 * u3,
+                x126 - u5 * x110 * x22 * J1 - x95 * x20 + u2 * x125
+                    - x39 * (-x114 * x44 - x116 * x60 - x21 * x115)
                     - (d
                         * (a_
-                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x96) * x23
-                                + 2.0 * (x16 * u2 * u1))
-                            + d
-                                * (u2 * (0.5 * (u2 * x101) + u1 * f64::cos(x100))
-                                    - 0.5 * (u1 * u1 * x101))) + a_ * a_ * u2 * u1) * m1
-                    - x7 * x65 * x66 + u2 * x99 + u5 * x8 * x75 * J1 - x94 * u1 + x102,
-                d * m1 * (x6 * (-x93 * x41 - x92 * x24 - x31 * x91) - x86 + x88) + x102,
-                x95 + m2 * (x6 * (-x91 * x38 - x92 * x13 - x45 * x93) - x80 - x82) * d,
+                            * ((u2 * u2 - x124 - u4 * (2.0 * u3 + u4)) * x5
+                                + 2.0 * (u2 * x83))
+                            + (u2 * (0.5 * (u2 * x128) + u1 * f64::cos(x127))
+                                - 0.5 * (x124 * x128)) * d) + x121 * x94) * m1 - x119 * u1
+                    - x17 * x117,
+                x126 + x75 * (x98 - x99 - x39 * (-x115 * x13 - x57 * x116 - x42 * x114)),
+                x120
+                    + x77
+                        * (-x39 * (-x115 * x26 - x114 * x48 - x53 * x116) - x107 - x108),
             ],
             checks: [x0],
         }
@@ -7643,38 +7511,50 @@ pub mod reduced_volterra {
         let d = params.d;
         let a_ = params.a_;
         let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = x1 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = x1 * x4;
+        let x6 = f64::sin(psi);
+        let x7 = x0 * x4;
+        let x8 = f64::cos(psi);
+        let x9 = x2 * x6 + x7 * x8;
+        let x10 = f64::cos(gamma1);
+        let x11 = -((a_ + x10 * d) * x4);
+        let x12 = x0 * x2;
+        let x13 = x8 * x12 - x4 * x6;
         let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x15 = x8 * x1;
+        let x16 = x10 * x13 - x14 * x15;
+        let x17 = x10 * a_ + d;
+        let x18 = x16 * x17;
+        let x19 = a_ * x14;
+        let x20 = x19 * (x10 * x15 + x13 * x14);
+        let x21 = f64::cos(gamma2);
+        let x22 = f64::sin(gamma2);
+        let x23 = a_ * x22;
+        let x24 = x21 * x9 + x22 * x15;
+        let x25 = d + x21 * a_;
+        let x26 = x24 * x25 - (x21 * x15 - x9 * x22) * x23;
+        let x27 = (a_ + x21 * d) * x2;
+        let x28 = m2 * gamma2_dot;
+        let x29 = m2 * x22;
+        let x30 = x14 * m1;
+        let x31 = gamma1_dot * m1;
+        let x32 = x21 * x5 - x0 * x22;
+        let x33 = a_ * x5 + x32 * d;
+        let x34 = x0 * x14 + x10 * x3;
+        let x35 = x34 * d + a_ * x3;
+        let x36 = m2 + m0 + m1;
+        let x37 = x8 * x4 + x12 * x6;
+        let x38 = x7 * x6 - x8 * x2;
+        let x39 = x1 * x6;
+        let x40 = x22 * x39 + x21 * x38;
+        let x41 = x25 * x40 - (x21 * x39 - x22 * x38) * x23;
+        let x42 = x10 * x37 - x14 * x39;
+        let x43 = x42 * x17;
+        let x44 = (x37 * x14 + x10 * x39) * x19;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -7697,37 +7577,30 @@ pub mod reduced_volterra {
             q[6],
             q[7],
             phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            x3 * psi_dot + theta_dot * x4,
+            psi_dot * x5 - theta_dot * x2,
             gamma1_dot,
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * ((x9 * x11 + x2 * (-x18 - x20)) * m1 + m2 * (x26 * x4 + x13 * x27))
+                + (x28 * x24 + phi_dot * (x9 * x30 - x13 * x29) + x31 * x16) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m2 * (x26 * x3 - x13 * x33) + ((x18 + x20) * x5 - x9 * x35) * m1)
+                + X_dot * x36,
+            Y_dot * x36
+                + theta_dot
+                    * (m2 * (x37 * x27 + x41 * x4)
+                        + (x11 * x38 + (-x43 - x44) * x2) * m1)
+                + psi_dot
+                    * (m2 * (x3 * x41 - x37 * x33) + m1 * ((x43 + x44) * x5 - x35 * x38))
+                + d * ((x30 * x38 - x29 * x37) * phi_dot + x28 * x40 + x31 * x42),
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((x2 * (-x34 * x17 - (x3 * x14 - x10 * x0) * x19) + x11 * x5) * m1
+                    + m2 * ((x23 * (x22 * x5 + x21 * x0) + x32 * x25) * x4 + x3 * x27))
+                + d * (x1 * phi_dot * (x30 * x4 - x29 * x2) + x28 * x32 + x31 * x34)
+                + Z_dot * x36,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -7763,34 +7636,47 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma2);
-        let x8 = f64::sin(gamma2);
-        let x9 = f64::cos(psi);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = 1.0 / (m2 + m0 + m1);
+        let x6 = f64::sin(gamma2);
+        let x7 = f64::cos(psi);
+        let x8 = x7 * x0;
+        let x9 = f64::cos(gamma2);
         let x10 = f64::sin(psi);
-        let x11 = x2 * x10 + x5 * x9 * x3;
-        let x12 = x9 * x0 * x8 + x7 * x11;
-        let x13 = d + x7 * a_;
-        let x14 = f64::cos(gamma1);
-        let x15 = -a_ - x14 * d;
-        let x16 = x5 * x9 * x2 - x3 * x10;
-        let x17 = -a_ - x7 * d;
-        let x18 = f64::sin(gamma1);
-        let x19 = x14 * x16 - x9 * x18 * x0;
-        let x20 = x14 * a_ + d;
-        let x21 = x9 * x3 + x5 * x2 * x10;
-        let x22 = x14 * x21 - x18 * x0 * x10;
-        let x23 = x9 * x2;
-        let x24 = x5 * x3 * x10;
-        let x25 = x24 - x23;
-        let x26 = x0 * x8 * x10 + x7 * x25;
-        let x27 = x14 * x0 * x2 + x5 * x18;
-        let x28 = x7 * x0 * x3 - x5 * x8;
+        let x11 = x1 * x10;
+        let x12 = x4 * x2;
+        let x13 = x11 + x12 * x7;
+        let x14 = x6 * x8 + x9 * x13;
+        let x15 = d + x9 * a_;
+        let x16 = a_ * x6;
+        let x17 = f64::cos(gamma1);
+        let x18 = -((a_ + x17 * d) * m1);
+        let x19 = x17 * a_ + d;
+        let x20 = f64::sin(gamma1);
+        let x21 = x4 * x1;
+        let x22 = x2 * x10;
+        let x23 = x7 * x21 - x22;
+        let x24 = x17 * x23 - x20 * x8;
+        let x25 = a_ * x20;
+        let x26 = -(m2 * (a_ + x9 * d));
+        let x27 = u5 * m2;
+        let x28 = x20 * m1;
+        let x29 = m2 * x6;
+        let x30 = u4 * m1;
+        let x31 = x0 * x10;
+        let x32 = x7 * x2 + x21 * x10;
+        let x33 = x17 * x32 - x20 * x31;
+        let x34 = x7 * x1;
+        let x35 = x12 * x10;
+        let x36 = x35 - x34;
+        let x37 = x6 * x31 + x9 * x36;
+        let x38 = x0 * x1;
+        let x39 = x4 * x20 + x17 * x38;
+        let x40 = x0 * x2;
+        let x41 = x9 * x40 - x4 * x6;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -7810,48 +7696,33 @@ pub mod reduced_volterra {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + x5 * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            x4 * x3 + u1,
             u4,
             u5,
-            x6
+            x5
                 * (G_X
-                    - (m2
-                        * (x12 * x13
-                            - a_ * ((x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10) * x8)
-                        + x15 * x11 * m1) * u2
-                    - u3
-                        * (m2 * x16 * x17
-                            + (x19 * x20
-                                + a_ * (x9 * (x5 * x18 * x2 + x14 * x0) - x18 * x3 * x10)
-                                    * x18) * m1)
-                    + d
-                        * (-u5 * m2 * x12 - u1 * (x18 * x11 * m1 - m2 * x16 * x8)
-                            - x19 * u4 * m1)),
-            x6
-                * (G_Y
-                    - ((x22 * x20 + a_ * x18 * (x14 * x0 * x10 + x18 * x21)) * m1
-                        + m2 * x17 * x21) * u3
                     - u2
-                        * (x15 * x25 * m1
-                            + m2
-                                * (x26 * x13
-                                    - a_ * x8 * (x7 * x0 * x10 + (x23 - x24) * x8)))
-                    + d
-                        * (-x22 * u4 * m1 - u5 * m2 * x26
-                            - (x18 * x25 * m1 - m2 * x8 * x21) * u1)),
-            x6
+                        * (m2
+                            * (x14 * x15 - ((x9 * x0 - x12 * x6) * x7 - x6 * x11) * x16)
+                            + x18 * x13)
+                    - u3
+                        * ((x19 * x24 + (x7 * (x20 * x21 + x17 * x0) - x20 * x22) * x25)
+                            * m1 + x23 * x26)
+                    - d * (x27 * x14 + (x28 * x13 - x29 * x23) * u1 + x30 * x24)),
+            x5
+                * (G_Y - (x33 * x30 + x27 * x37 + (x28 * x36 - x29 * x32) * u1) * d
+                    - u2
+                        * ((x15 * x37 - ((x34 - x35) * x6 + x9 * x31) * x16) * m2
+                            + x18 * x36)
+                    - (x32 * x26 + (x33 * x19 + (x32 * x20 + x17 * x31) * x25) * m1)
+                        * u3),
+            x5
                 * (G_Z
-                    - u3
-                        * ((x27 * x20 + a_ * (x18 * x0 * x2 - x14 * x5) * x18) * m1
-                            + m2 * x0 * x2 * x17)
-                    - u2
-                        * (m2 * (x28 * x13 - a_ * (-x0 * x8 * x3 - x7 * x5) * x8)
-                            + x15 * x0 * m1 * x3)
-                    + d
-                        * (-x27 * u4 * m1 - u5 * m2 * x28
-                            - (x18 * m1 * x3 - m2 * x8 * x2) * x0 * u1)),
+                    - u3 * ((x39 * x19 + (x38 * x20 - x17 * x4) * x25) * m1 + x38 * x26)
+                    - u2 * ((x16 * (x6 * x40 + x9 * x4) + x41 * x15) * m2 + x18 * x40)
+                    - d * (x39 * x30 + x41 * x27 + x0 * u1 * (x28 * x2 - x29 * x1))),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -7918,553 +7789,574 @@ pub mod reduced_volterra {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = x1 * x4;
+        let x6 = u2 * x3 - u3 * x2;
+        let x7 = f64::sin(theta);
+        let x8 = x7 * x5;
         let x9 = 1.0 / (m2 + m0 + m1);
-        let x10 = f64::cos(gamma2);
-        let x11 = x10 * x0;
-        let x12 = f64::sin(gamma2);
-        let x13 = x8 * x12 * x4;
-        let x14 = f64::cos(psi);
-        let x15 = f64::sin(psi);
-        let x16 = (x11 - x13) * x14 - x12 * x2 * x15;
-        let x17 = x14 * x0 * x12;
-        let x18 = x2 * x15;
-        let x19 = x8 * x14 * x4;
-        let x20 = x18 + x19;
-        let x21 = x10 * x20;
-        let x22 = x17 + x21;
-        let x23 = x10 * a_;
-        let x24 = d + x23;
-        let x25 = m2 * (x22 * x24 - a_ * x16 * x12);
-        let x26 = f64::cos(gamma1);
-        let x27 = x26 * d;
-        let x28 = -a_ - x27;
-        let x29 = x28 * x20 * m1;
-        let x30 = x25 + x29;
-        let x31 = x30 * u2;
-        let x32 = x4 * x15;
-        let x33 = x8 * x14 * x2;
-        let x34 = x33 - x32;
-        let x35 = x10 * d;
-        let x36 = -a_ - x35;
-        let x37 = m2 * x34 * x36;
-        let x38 = f64::sin(gamma1);
-        let x39 = x26 * x34 - x14 * x38 * x0;
-        let x40 = x26 * a_;
-        let x41 = x40 + d;
-        let x42 = x8 * x38 * x2;
-        let x43 = x26 * x0;
-        let x44 = x38 * x4 * x15;
-        let x45 = x14 * (x42 + x43) - x44;
-        let x46 = (x39 * x41 + a_ * x45 * x38) * m1;
-        let x47 = x37 + x46;
-        let x48 = u3 * x47;
-        let x49 = x38 * x20 * m1;
-        let x50 = m2 * x34 * x12;
-        let x51 = x49 - x50;
-        let x52 = d * (-u5 * m2 * x22 - u1 * x51 - x39 * u4 * m1);
-        let x53 = x14 * x4;
-        let x54 = x8 * x2 * x15;
-        let x55 = x53 + x54;
-        let x56 = x26 * x55;
-        let x57 = x38 * x0 * x15;
-        let x58 = x56 - x57;
-        let x59 = x26 * x0 * x15;
-        let x60 = x59 + x38 * x55;
-        let x61 = (x58 * x41 + a_ * x38 * x60) * m1;
-        let x62 = m2 * x36 * x55;
-        let x63 = x61 + x62;
-        let x64 = x14 * x2;
-        let x65 = x8 * x4 * x15;
-        let x66 = x65 - x64;
-        let x67 = x28 * x66 * m1;
-        let x68 = x10 * x0 * x15;
-        let x69 = x64 - x65;
-        let x70 = x68 + x69 * x12;
-        let x71 = x0 * x12 * x15;
-        let x72 = x10 * x66;
-        let x73 = x71 + x72;
-        let x74 = m2 * (x73 * x24 - a_ * x12 * x70);
-        let x75 = x67 + x74;
-        let x76 = m2 * x12 * x55;
-        let x77 = x38 * x66 * m1;
-        let x78 = x77 - x76;
-        let x79 = x26 * x0 * x2 + x8 * x38;
-        let x80 = x38 * x0 * x2;
-        let x81 = x26 * x8;
-        let x82 = x80 - x81;
-        let x83 = (x79 * x41 + a_ * x82 * x38) * m1;
-        let x84 = m2 * x0 * x2 * x36;
-        let x85 = x83 + x84;
-        let x86 = u3 * x85;
-        let x87 = -x0 * x12 * x4 - x10 * x8;
-        let x88 = x8 * x12;
-        let x89 = x10 * x0 * x4;
-        let x90 = x89 - x88;
-        let x91 = m2 * (x90 * x24 - a_ * x87 * x12);
-        let x92 = x28 * x0 * m1 * x4;
-        let x93 = x91 + x92;
-        let x94 = u2 * x93;
-        let x95 = x38 * m1 * x4;
-        let x96 = m2 * x12 * x2;
-        let x97 = x95 - x96;
-        let x98 = d * (-x79 * u4 * m1 - u5 * m2 * x90 - x97 * x0 * u1);
-        let x99 = x26 * x26;
-        let x100 = x10 * x10;
-        let x101 = J1 - J2;
-        let x102 = x26 * x101 * x38 - Ixy
-            + d * ((-x30 * x51 - x78 * x75 - x93 * x97 * x0) * x9 + x28 * x38 * m1);
-        let x103 = J2 - J1;
-        let x104 = (x9 * (-x63 * x78 - x47 * x51 - x97 * x0 * x85) - m2 * x12 * x36) * d
-            + x10 * x103 * x12 - Ixz;
-        let x105 = x9 * d * d * (-x97 * x79 * x0 - x39 * x51 - x78 * x58) * m1;
-        let x106 = x9 * m2 * d * d * (-x22 * x51 - x78 * x73 - x90 * x97 * x0);
-        let x107 = d * d;
-        let x108 = (-x30 * x47 - x63 * x75 - x93 * x85) * x9 - Iyz;
-        let x109 = x9 * d * m1 * (-x30 * x39 - x93 * x79 - x58 * x75);
-        let x110 = m2 * (x9 * (-x90 * x93 - x30 * x22 - x75 * x73) + d + x23) * d + J2;
-        let x111 = J2 + d * m1 * (x40 + d + (-x39 * x47 - x79 * x85 - x63 * x58) * x9);
-        let x112 = x9 * m2 * d * (-x22 * x47 - x90 * x85 - x63 * x73);
-        let x113 = x9 * m2 * d * d * m1 * (-x39 * x22 - x90 * x79 - x58 * x73);
-        let x114 = u5 + u2;
-        let x115 = J1 * x114;
-        let x116 = 2.0 * u5 + u2;
-        let x117 = x116 * J2;
-        let x118 = x117 - x115;
-        let x119 = u3 * x12;
-        let x120 = x10 * u1;
-        let x121 = x120 - x119;
-        let x122 = u2 * x38;
-        let x123 = x26 * u1;
-        let x124 = -x122 - x123;
-        let x125 = u3 + u4;
-        let x126 = x122 + x123;
-        let x127 = J2 * x124 * u4 + x125 * x126 * x101;
-        let x128 = x127 * x38;
-        let x129 = x38 * u1;
-        let x130 = x26 * u2;
-        let x131 = x130 - x129;
-        let x132 = x12 * u1;
-        let x133 = x10 * u3;
-        let x134 = -x132 - x133;
-        let x135 = u2 * Iyz;
-        let x136 = u1 * Ixz;
-        let x137 = u3 * Izz - x135 - x136;
-        let x138 = -2.0 * u5 - u2;
-        let x139 = d * (x10 * x138 * u1 + x116 * u3 * x12) - a_ * u2 * u1;
-        let x140 = u3 + 2.0 * u4;
-        let x141 = d * (x26 * x140 * u1 + x140 * u2 * x38) + a_ * u3 * u1;
-        let x142 = a_ * u2 * u2 * x12;
-        let x143 = d * x12 * u1;
-        let x144 = u3 * x36;
-        let x145 = x144 - x143;
-        let x146 = x121 * x145;
-        let x147 = x142 + x146;
-        let x148 = x132 + x133;
-        let x149 = (u5 * d + u2 * x24) * x114 - x10 * u5 * a_ * u2 - x145 * x148;
-        let x150 = (x147 * x73 + x149 * x70 + x55 * x139) * m2;
-        let x151 = a_ * u3 * u3 * x38;
-        let x152 = u2 * x28;
-        let x153 = x38 * d * u1;
-        let x154 = x152 + x153;
-        let x155 = x154 * x126;
-        let x156 = x151 - x155;
-        let x157 = x154 * x131;
-        let x158 = x26 * a_ * u3 * u4;
-        let x159 = (u3 * x41 + d * u4) * x125;
-        let x160 = x157 + x158 - x159;
-        let x161 = m1 * (x66 * x141 + x156 * x58 + x160 * x60);
-        let x162 = -x150 - x161;
-        let x163 = -m1 * (x45 * x160 + x39 * x156 + x20 * x141)
-            - m2 * (x16 * x149 + x147 * x22 + x34 * x139);
-        let x164 = -m2 * (x0 * x2 * x139 + x147 * x90 + x87 * x149)
-            - (x0 * x141 * x4 + x82 * x160 + x156 * x79) * m1;
-        let x165 = Iyz * u3;
-        let x166 = Ixy * u1;
-        let x167 = u2 * Iyy - x165 - x166;
-        let x168 = x103 * x121 * x148;
-        let x169 = x26 * x127;
-        let x170 = u3 * u3;
-        let x171 = u1 * u1;
-        let x172 = u5 * (-u5 - 2.0 * u2) + x170 - x171;
-        let x173 = 2.0 * gamma2;
-        let x174 = f64::sin(x173);
-        let x175 = u3 * x174;
-        let x176 = f64::cos(x173);
-        let x177 = x176 * u1;
-        let x178 = u3 * Ixz;
-        let x179 = u2 * Ixy;
-        let x180 = Ixx * u1 - x178 - x179;
-        let x181 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x171;
-        let x182 = 2.0 * gamma1;
-        let x183 = f64::sin(x182);
-        let x184 = u2 * x183;
-        let x185 = f64::cos(x182);
-        let x186 = u1 * x185;
-        let x187 = x126 * x101 * x131;
-        let x188 = x10 * x69;
-        let x189 = x188 - x71;
-        let x190 = -x53 - x54;
-        let x191 = x26 * x190;
-        let x192 = x191 + x57;
-        let x193 = m2 * x12 * x190;
-        let x194 = x69 * x38 * m1;
-        let x195 = x12 * x66 - x68;
-        let x196 = m2 * (x189 * x24 - a_ * x195 * x12);
-        let x197 = x69 * x28 * m1;
-        let x198 = x38 * x190 - x59;
-        let x199 = (x192 * x41 + a_ * x38 * x198) * m1;
-        let x200 = m2 * x190 * x36;
-        let x201 = x193 + x76 - x194 - x77;
-        let x202 = -x67 - x74 - x196 - x197;
-        let x203 = x9 * (x30 * x201 + x202 * x51) * d;
-        let x204 = -x61 - x199 - x200 - x62;
-        let x205 = x9 * (x204 * x51 + x201 * x47) * d;
-        let x206 = -x191 - x56;
-        let x207 = x9 * (x206 * x51 + x39 * x201) * d * d * m1;
-        let x208 = -x72 - x188;
-        let x209 = x9 * m2 * d * d * (x201 * x22 + x208 * x51);
-        let x210 = x9 * (x30 * x204 + x202 * x47);
-        let x211 = (x202 * x39 + x30 * x206) * x9 * d * m1;
-        let x212 = x9 * m2 * d * (x202 * x22 + x30 * x208);
-        let x213 = x9 * (x206 * x47 + x39 * x204) * d * m1;
-        let x214 = x9 * m2 * (x208 * x47 + x22 * x204) * d;
-        let x215 = x9 * m2 * d * d * m1 * (x39 * x208 + x206 * x22);
-        let x216 = x150 + x161 + (x156 * x192 + x160 * x198 + x69 * x141) * m1
-            + m2 * (x190 * x139 + x195 * x149 + x147 * x189);
-        let x217 = x98 - x86 - x94;
-        let x218 = x8 * x28 * m1 * x4;
-        let x219 = x10 * x8 * x4;
-        let x220 = x0 * x12;
-        let x221 = -x219 - x220;
-        let x222 = x13 - x11;
-        let x223 = m2 * (x221 * x24 - x222 * a_ * x12);
-        let x224 = m2 * x8 * x2 * x36;
-        let x225 = -x42 - x43;
-        let x226 = x26 * x8 * x2;
-        let x227 = x38 * x0;
-        let x228 = x227 - x226;
-        let x229 = (a_ * x225 * x38 + x228 * x41) * m1;
-        let x230 = x96 - x95;
-        let x231 = x14 * x51;
-        let x232 = x78 * x15;
-        let x233 = x230 * x8;
-        let x234 = -x231 - x232 - x233;
-        let x235 = x75 * x15;
-        let x236 = x30 * x14;
-        let x237 = x218 - x235 - x236 - x223;
-        let x238 = x9 * (x93 * x234 + x97 * x0 * x237) * d;
-        let x239 = x14 * x47;
-        let x240 = x63 * x15;
-        let x241 = x224 - x239 - x229 - x240;
-        let x242 = x9 * (x97 * x0 * x241 + x234 * x85) * d;
-        let x243 = x226 - x58 * x15 - x39 * x14 - x227;
-        let x244 = x9 * (x79 * x234 + x243 * x97 * x0) * d * d * m1;
-        let x245 = x219 - x14 * x22 - x73 * x15 + x220;
-        let x246 = x9 * m2 * (x97 * x245 * x0 + x90 * x234) * d * d;
-        let x247 = x9 * (x237 * x85 + x93 * x241);
-        let x248 = x9 * d * m1 * (x243 * x93 + x79 * x237);
-        let x249 = (x93 * x245 + x90 * x237) * x9 * m2 * d;
-        let x250 = x9 * d * m1 * (x79 * x241 + x243 * x85);
-        let x251 = x9 * m2 * (x245 * x85 + x90 * x241) * d;
-        let x252 = x9 * m2 * d * d * m1 * (x79 * x245 + x243 * x90);
-        let x253 = m1 * (x225 * x160 - x8 * x141 * x4 + x156 * x228) - x162 * x15
-            + m2 * (x222 * x149 - x8 * x2 * x139 + x147 * x221) - x163 * x14;
-        let x254 = m2 * x36 + (a_ * x38 * x38 + x26 * x41) * m1;
-        let x255 = x32 - x33;
-        let x256 = x38 * m1 * x255 - m2 * x12 * x20;
-        let x257 = m2 * (x10 * x24 * x255 - a_ * x34 * x12 * x12) + x28 * m1 * x255;
-        let x258 = m2 * (x10 * x190 * x24 - a_ * x12 * x12 * x55) + x28 * x190 * m1;
-        let x259 = x38 * x190 * m1 - m2 * x12 * x66;
-        let x260 = -m2 * x12 * x4 - x38 * x2 * m1;
-        let x261 = m2 * (-x10 * x24 - a_ * x12 * x12) - x28 * m1;
-        let x262 = x9
-            * (x0 * (-x93 * x260 - x97 * x0 * x2 * x261) - x75 * x259 - x257 * x51
-                - x30 * x256 - x78 * x258) * d;
-        let x263 = x78 * x66;
-        let x264 = x20 * x51;
-        let x265 = x97 * x0 * x0 * x4;
-        let x266 = -x263 - x264 - x265;
-        let x267 = x9 * (x254 * x266 - x47 * x256 - x63 * x259 - x0 * x85 * x260) * d;
-        let x268 = x9 * (x26 * x266 - x79 * x0 * x260 - x58 * x259 - x39 * x256) * d * d
-            * m1;
-        let x269 = x97 * x0 * x0 * x2;
-        let x270 = x9 * m2 * d * d
-            * (x10 * (x269 - x78 * x190 - x51 * x255) - x22 * x256 - x90 * x0 * x260
-                - x73 * x259);
-        let x271 = x75 * x66;
-        let x272 = x30 * x20;
-        let x273 = x93 * x0 * x4;
-        let x274 = -x271 - x272 - x273;
-        let x275 = x9 * (x254 * x274 - x257 * x47 - x63 * x258 - x0 * x2 * x261 * x85);
-        let x276 = x26 * x274;
-        let x277 = x9 * (x276 - x58 * x258 - x79 * x0 * x2 * x261 - x257 * x39) * d * m1;
-        let x278 = x93 * x0 * x2;
-        let x279 = (x10 * (x278 - x75 * x190 - x30 * x255) - x90 * x0 * x2 * x261
-            - x73 * x258 - x257 * x22) * x9 * m2 * d;
-        let x280 = x63 * x66;
-        let x281 = x0 * x85 * x4;
-        let x282 = x20 * x47;
-        let x283 = -x280 - x281 - x282;
-        let x284 = x26 * x283;
-        let x285 = -x79 * x0 * x4 - x39 * x20 - x58 * x66;
-        let x286 = (x284 + x254 * x285) * x9 * d * m1;
-        let x287 = x0 * x2 * x85;
-        let x288 = -x73 * x66 - x20 * x22 - x90 * x0 * x4;
-        let x289 = (x10 * (x287 - x47 * x255 - x63 * x190) + x254 * x288) * x9 * m2 * d;
-        let x290 = x79 * x0 * x2;
-        let x291 = (x10 * (x290 - x39 * x255 - x58 * x190) + x26 * x288) * x9 * m2 * d
-            * d * m1;
-        let x292 = x38 * x160 + x26 * x156;
-        let x293 = -(x66 * x292 + x190 * x141) * m1
-            - m2 * (x149 * x12 * x55 + x66 * x139 + x10 * x147 * x190);
-        let x294 = -(x34 * x149 * x12 + x20 * x139 + x10 * x147 * x255) * m2
-            - m1 * (x20 * x292 + x141 * x255);
-        let x295 = -(x4 * x292 - x2 * x141) * m1
-            - m2 * (x139 * x4 + x2 * (x149 * x12 - x10 * x147));
-        let x296 = -x163 * x20 - x164 * x0 * x4 - x162 * x66;
-        let x297 = x26 * x296;
-        let x298 = x164 * x0 * x2;
-        let x299 = x14 * x225 + x44;
-        let x300 = x26 * a_ * x45 + x41 * x299;
-        let x301 = x26 * a_ * x60 + x41 * x198;
-        let x302 = x81 - x80;
-        let x303 = x26 * a_ * x82 + x41 * x302;
-        let x304 = 2.0 * J2 - 2.0 * J1;
-        let x305 = x26 * x26 * x101
-            + (x26 * x28 + x9 * (x38 * d * x266 + x276) + x38 * x38 * d) * d * m1
-            + x103 * x38 * x38;
-        let x306 = x9 * d * m1 * (x284 - x51 * x300 - x97 * x0 * x303 - x78 * x301);
-        let x307 = x9 * (x26 * m1 * x285 - x299 * x51 - x97 * x0 * x302 - x78 * x198) * d
-            * d * m1;
-        let x308 = x26 * x9 * m2 * d * d * x288 * m1;
-        let x309 = 2.0 * J1 - 2.0 * J2;
-        let x310 = x9 * (x283 * x38 * d - x93 * x303 - x30 * x300 - x301 * x75) * m1;
-        let x311 = x9 * d * m1
-            * (x38 * d * m1 * x285 - x75 * x198 - x30 * x299 - x93 * x302);
-        let x312 = x9 * m2 * x38 * d * d * x288 * m1;
-        let x313 = d * m1
+        let x10 = u5 * m2;
+        let x11 = f64::cos(gamma2);
+        let x12 = f64::sin(psi);
+        let x13 = x2 * x12;
+        let x14 = x7 * x3;
+        let x15 = f64::cos(psi);
+        let x16 = x13 + x14 * x15;
+        let x17 = x11 * x16;
+        let x18 = f64::sin(gamma2);
+        let x19 = x0 * x18;
+        let x20 = x15 * x19;
+        let x21 = x17 + x20;
+        let x22 = f64::sin(gamma1);
+        let x23 = x22 * m1;
+        let x24 = x16 * x23;
+        let x25 = m2 * x18;
+        let x26 = x7 * x2;
+        let x27 = x15 * x26;
+        let x28 = x3 * x12;
+        let x29 = x27 - x28;
+        let x30 = x25 * x29;
+        let x31 = x24 - x30;
+        let x32 = f64::cos(gamma1);
+        let x33 = x22 * x0;
+        let x34 = x32 * x29 - x15 * x33;
+        let x35 = u4 * m1;
+        let x36 = x32 * d;
+        let x37 = a_ + x36;
+        let x38 = -(m1 * x37);
+        let x39 = x11 * a_;
+        let x40 = x39 + d;
+        let x41 = x11 * x0;
+        let x42 = x14 * x18;
+        let x43 = (x41 - x42) * x15 - x18 * x13;
+        let x44 = a_ * x18;
+        let x45 = x38 * x16 + m2 * (x40 * x21 - x43 * x44);
+        let x46 = a_ * x22;
+        let x47 = x22 * x26 + x32 * x0;
+        let x48 = x47 * x15;
+        let x49 = x22 * x28;
+        let x50 = x48 - x49;
+        let x51 = x32 * a_;
+        let x52 = x51 + d;
+        let x53 = x11 * d;
+        let x54 = x53 + a_;
+        let x55 = -(m2 * x54);
+        let x56 = m1 * (x46 * x50 + x34 * x52) + x29 * x55;
+        let x57 = (-u2 * x45 - x56 * u3) - (x10 * x21 + u1 * x31 + x34 * x35) * d;
+        let x58 = x15 * x3 + x26 * x12;
+        let x59 = x58 * x55;
+        let x60 = x32 * x58;
+        let x61 = x0 * x12;
+        let x62 = x22 * x61;
+        let x63 = x60 - x62;
+        let x64 = x58 * x22;
+        let x65 = x32 * x61;
+        let x66 = x64 + x65;
+        let x67 = (x52 * x63 + x66 * x46) * m1;
+        let x68 = x59 + x67;
+        let x69 = x15 * x2;
+        let x70 = x14 * x12;
+        let x71 = x70 - x69;
+        let x72 = x38 * x71;
+        let x73 = x69 - x70;
+        let x74 = x11 * x61;
+        let x75 = x73 * x18 + x74;
+        let x76 = x18 * x61;
+        let x77 = x11 * x71;
+        let x78 = x76 + x77;
+        let x79 = m2 * (x40 * x78 - x75 * x44);
+        let x80 = x72 + x79;
+        let x81 = x25 * x58;
+        let x82 = x23 * x71;
+        let x83 = x82 - x81;
+        let x84 = x0 * x2;
+        let x85 = x7 * x22 + x32 * x84;
+        let x86 = x84 * x22;
+        let x87 = x32 * x7;
+        let x88 = x86 - x87;
+        let x89 = x84 * x55 + m1 * (x85 * x52 + x88 * x46);
+        let x90 = x7 * x18;
+        let x91 = x0 * x3;
+        let x92 = x11 * x91;
+        let x93 = x92 - x90;
+        let x94 = x18 * x91 + x11 * x7;
+        let x95 = m2 * (x40 * x93 + x44 * x94) + x38 * x91;
+        let x96 = x25 * x2;
+        let x97 = x23 * x3;
+        let x98 = x0 * (x97 - x96);
+        let x99 = (-x89 * u3 - u2 * x95) - d * (x85 * x35 + x93 * x10 + x98 * u1);
+        let x100 = x18 * x18;
+        let x101 = x22 * x22;
+        let x102 = d * d;
+        let x103 = x32 * x32;
+        let x104 = x11 * x11;
+        let x105 = x32 * x22;
+        let x106 = J1 - J2;
+        let x107 = (x38 * x22 - (x98 * x95 + x83 * x80 + x45 * x31) * x9) * d - Ixy
+            + x105 * x106;
+        let x108 = J2 - J1;
+        let x109 = x11 * x18;
+        let x110 = x108 * x109 - Ixz
+            + (x25 * x54 - x9 * (x89 * x98 + x68 * x83 + x56 * x31)) * d;
+        let x111 = x9 * d;
+        let x112 = x111 * m1;
+        let x113 = d * x112;
+        let x114 = -(x113 * (x83 * x63 + x34 * x31 + x98 * x85));
+        let x115 = m2 * d;
+        let x116 = x115 * x111;
+        let x117 = -(x116 * (x83 * x78 + x98 * x93 + x21 * x31));
+        let x118 = -x9 * (x89 * x95 + x68 * x80 + x56 * x45) - Iyz;
+        let x119 = -((x63 * x80 + x85 * x95 + x34 * x45) * x112);
+        let x120 = J2 + (x40 - (x80 * x78 + x21 * x45 + x93 * x95) * x9) * x115;
+        let x121 = d * m1;
+        let x122 = J2 + x121 * (x52 - x9 * (x89 * x85 + x68 * x63 + x56 * x34));
+        let x123 = m2 * x111;
+        let x124 = -((x68 * x78 + x89 * x93 + x56 * x21) * x123);
+        let x125 = x9 * m1;
+        let x126 = x121 * d;
+        let x127 = x115 * x112;
+        let x128 = -((x34 * x21 + x85 * x93 + x63 * x78) * x127);
+        let x129 = x9 * m2;
+        let x130 = x115 * d;
+        let x131 = 2.0 * u5 + u2;
+        let x132 = J2 * x131;
+        let x133 = u5 + u2;
+        let x134 = J1 * x133;
+        let x135 = x132 - x134;
+        let x136 = x11 * u1;
+        let x137 = u3 * x18;
+        let x138 = x136 - x137;
+        let x139 = x18 * x138;
+        let x140 = x22 * u1;
+        let x141 = x32 * u2;
+        let x142 = x141 - x140;
+        let x143 = x32 * x142;
+        let x144 = x18 * u1;
+        let x145 = x11 * u3;
+        let x146 = x144 + x145;
+        let x147 = -(x11 * x146);
+        let x148 = u3 + u4;
+        let x149 = u2 * x22;
+        let x150 = x32 * u1;
+        let x151 = x149 + x150;
+        let x152 = x106 * x151;
+        let x153 = J2 * u4;
+        let x154 = x148 * x152 - x153 * x151;
+        let x155 = x154 * x22;
+        let x156 = u2 * Iyz;
+        let x157 = u1 * Ixz;
+        let x158 = u3 * Izz - x156 - x157;
+        let x159 = a_ * u2;
+        let x160 = x11 * x159;
+        let x161 = u3 * x54;
+        let x162 = d * x18;
+        let x163 = u1 * x162;
+        let x164 = -x161 - x163;
+        let x165 = x164 * x146;
+        let x166 = (u5 * d + u2 * x40) * x133 - u5 * x160 - x165;
+        let x167 = x164 * x138;
+        let x168 = u2 * x44;
+        let x169 = u2 * x168;
+        let x170 = x167 + x169;
+        let x171 = d * (x131 * x137 - x136 * x131) - x159 * u1;
+        let x172 = x171 * x58;
+        let x173 = u3 * u1;
+        let x174 = u3 + 2.0 * u4;
+        let x175 = a_ * x173 + (x149 * x174 + x174 * x150) * d;
+        let x176 = x51 * u3 * u4 - x148 * (u3 * x52 + d * u4);
+        let x177 = x22 * d;
+        let x178 = x177 * u1;
+        let x179 = u2 * x37;
+        let x180 = x178 - x179;
+        let x181 = x180 * x142;
+        let x182 = x176 + x181;
+        let x183 = x180 * x151;
+        let x184 = u3 * x46;
+        let x185 = x184 * u3;
+        let x186 = x185 - x183;
+        let x187 = (x75 * x166 + x170 * x78 + x172) * m2
+            + (x175 * x71 + x66 * x182 + x63 * x186) * m1;
+        let x188 = (x93 * x170 + x171 * x84 - x166 * x94) * m2
+            + (x85 * x186 + x175 * x91 + x88 * x182) * m1;
+        let x189 = m2 * (x166 * x43 + x171 * x29 + x21 * x170)
+            + (x34 * x186 + x182 * x50 + x175 * x16) * m1;
+        let x190 = Iyz * u3;
+        let x191 = Ixy * u1;
+        let x192 = u2 * Iyy - x190 - x191;
+        let x193 = a_ * a_;
+        let x194 = u1 * u1;
+        let x195 = u3 * u3;
+        let x196 = x195 - x194;
+        let x197 = x196 - (u5 + 2.0 * u2) * u5;
+        let x198 = 2.0 * gamma2;
+        let x199 = f64::sin(x198);
+        let x200 = u3 * x199;
+        let x201 = f64::cos(x198);
+        let x202 = x201 * u1;
+        let x203 = x32 * x154;
+        let x204 = u4 * J1;
+        let x205 = x142 * x22;
+        let x206 = x108 * x146;
+        let x207 = x206 * x138;
+        let x208 = u3 * Ixz;
+        let x209 = u2 * Ixy;
+        let x210 = Ixx * u1 - x208 - x209;
+        let x211 = x152 * x142;
+        let x212 = x11 * x138;
+        let x213 = u5 * J1;
+        let x214 = -(x18 * x146);
+        let x215 = a_ * u1;
+        let x216 = u2 * u2 - x194 - u4 * (2.0 * u3 + u4);
+        let x217 = 2.0 * gamma1;
+        let x218 = f64::sin(x217);
+        let x219 = u2 * x218;
+        let x220 = f64::cos(x217);
+        let x221 = u1 * x220;
+        let x222 = x11 * x73;
+        let x223 = x222 - x76;
+        let x224 = x18 * x71 - x74;
+        let x225 = m2 * (x223 * x40 - x224 * x44);
+        let x226 = x73 * x38;
+        let x227 = x225 + x226;
+        let x228 = x62 - x60;
+        let x229 = x73 * x23;
+        let x230 = -x64 - x65;
+        let x231 = (x230 * x46 + x52 * x228) * m1;
+        let x232 = x231 - x59;
+        let x233 = d * x111;
+        let x234 = x227 + x80;
+        let x235 = x81 - x82;
+        let x236 = x235 - x229 - x81;
+        let x237 = x111 * (x236 * x45 - x234 * x31);
+        let x238 = x232 + x68;
+        let x239 = x111 * (x56 * x236 - x238 * x31);
+        let x240 = x113 * x236 * x34;
+        let x241 = x77 + x222;
+        let x242 = (x236 * x21 - x241 * x31) * x116;
+        let x243 = (-x56 * x234 - x238 * x45) * x9;
+        let x244 = -(x234 * x34 * x112);
+        let x245 = x123 * (-x234 * x21 - x241 * x45);
+        let x246 = -(x238 * x34 * x112);
+        let x247 = x123 * (-x238 * x21 - x56 * x241);
+        let x248 = -(x34 * x241 * x127);
+        let x249 = x187 + (x230 * x182 + x73 * x175 + x228 * x186) * m1
+            + (x166 * x224 - x172 + x223 * x170) * m2;
+        let x250 = x7 * x1;
+        let x251 = x9 * x99;
+        let x252 = x32 * x26;
+        let x253 = x33 - x252;
+        let x254 = x96 - x97;
+        let x255 = x7 * x254;
+        let x256 = x19 + x11 * x14;
+        let x257 = x26 * x55;
+        let x258 = (x253 * x52 - x47 * x46) * m1;
+        let x259 = x14 * x38;
+        let x260 = x42 - x41;
+        let x261 = m2 * (-x40 * x256 - x260 * x44);
+        let x262 = x15 * x31;
+        let x263 = x83 * x12;
+        let x264 = x80 * x12;
+        let x265 = x15 * x45;
+        let x266 = x259 - x264 - x265 - x261;
+        let x267 = x262 + x263 + x255;
+        let x268 = (x98 * x266 - x95 * x267) * x111;
+        let x269 = x56 * x15;
+        let x270 = x68 * x12;
+        let x271 = x257 - x269 - x258 - x270;
+        let x272 = x111 * (x98 * x271 - x89 * x267);
+        let x273 = x252 - x63 * x12 - x15 * x34 - x33;
+        let x274 = x113 * (x273 * x98 - x85 * x267);
+        let x275 = x256 - x78 * x12 - x15 * x21;
+        let x276 = x116 * (x98 * x275 - x93 * x267);
+        let x277 = x9 * (x95 * x271 + x89 * x266);
+        let x278 = (x273 * x95 + x85 * x266) * x112;
+        let x279 = x123 * (x95 * x275 + x93 * x266);
+        let x280 = (x85 * x271 + x273 * x89) * x112;
+        let x281 = (x89 * x275 + x93 * x271) * x123;
+        let x282 = x127 * (x85 * x275 + x273 * x93);
+        let x283 = x187 * x12 + x189 * x15
+            + (x166 * x260 - x256 * x170 - x171 * x26) * m2
+            + (x253 * x186 - x175 * x14 - x47 * x182) * m1;
+        let x284 = x28 - x27;
+        let x285 = x11 * x40;
+        let x286 = x18 * x44;
+        let x287 = m2 * (x284 * x285 - x29 * x286) + x38 * x284;
+        let x288 = x32 * x35;
+        let x289 = x284 * x23 - x25 * x16;
+        let x290 = x11 * x10;
+        let x291 = x55 + (x32 * x52 + x22 * x46) * m1;
+        let x292 = u3 * x291;
+        let x293 = -x25 * x71 - x58 * x23;
+        let x294 = m2 * (-x58 * x286 - x58 * x285) - x38 * x58;
+        let x295 = x23 * x2 + x25 * x3;
+        let x296 = -x38 - m2 * (x286 + x285);
+        let x297 = x296 * x2;
+        let x298 = -(x0 * x295);
+        let x299 = x111
+            * (-x294 * x83 - (x98 * x297 - x95 * x295) * x0 - x287 * x31 - x293 * x80
+                - x45 * x289);
+        let x300 = x16 * x31;
+        let x301 = x98 * x91;
+        let x302 = x71 * x83;
+        let x303 = x300 + x301 + x302;
+        let x304 = x111 * (-x303 * x291 - x89 * x298 - x68 * x293 - x56 * x289);
+        let x305 = x113 * (-x34 * x289 - x85 * x298 - x32 * x303 - x293 * x63);
+        let x306 = x98 * x84;
+        let x307 = x58 * x83;
+        let x308 = x116
+            * (x11 * (x306 + x307 - x284 * x31) - x293 * x78 - x21 * x289 - x93 * x298);
+        let x309 = x84 * x296;
+        let x310 = x95 * x91;
+        let x311 = x16 * x45;
+        let x312 = x71 * x80;
+        let x313 = x310 + x311 + x312;
+        let x314 = x9 * (-x313 * x291 - x56 * x287 - x68 * x294 - x309 * x89);
+        let x315 = x32 * x313;
+        let x316 = x112 * (-x315 - x294 * x63 - x309 * x85 - x34 * x287);
+        let x317 = x84 * x95;
+        let x318 = x58 * x80;
+        let x319 = (x11 * (x317 - x284 * x45 + x318) - x309 * x93 - x294 * x78
+            - x21 * x287) * x123;
+        let x320 = x89 * x91;
+        let x321 = x68 * x71;
+        let x322 = x56 * x16;
+        let x323 = x320 + x321 + x322;
+        let x324 = x32 * x323;
+        let x325 = x85 * x91 + x71 * x63 + x16 * x34;
+        let x326 = (-x324 - x325 * x291) * x112;
+        let x327 = x58 * x68;
+        let x328 = x89 * x84;
+        let x329 = x93 * x91 + x71 * x78 + x16 * x21;
+        let x330 = x123 * (x11 * (x327 - x56 * x284 + x328) - x329 * x291);
+        let x331 = -(x32 * x329);
+        let x332 = x58 * x63;
+        let x333 = x84 * x85;
+        let x334 = (x331 + x11 * (x332 + x333 - x284 * x34)) * x127;
+        let x335 = x11 * x170;
+        let x336 = x166 * x18;
+        let x337 = x22 * x182 + x32 * x186;
+        let x338 = m2 * (x171 * x71 - x335 * x58 + x336 * x58)
+            + (x71 * x337 - x175 * x58) * m1;
+        let x339 = m1 * (x16 * x337 + x175 * x284)
+            + m2 * (x335 * x284 + x336 * x29 + x171 * x16);
+        let x340 = (x337 * x3 - x175 * x2) * m1 + m2 * (x171 * x3 + (x336 - x335) * x2);
+        let x341 = -x189 * x16 - x188 * x91 - x187 * x71;
+        let x342 = -(x340 * x0);
+        let x343 = x32 * x341;
+        let x344 = x187 * x58;
+        let x345 = x84 * x188;
+        let x346 = x49 - x48;
+        let x347 = x52 * x346 + x51 * x50;
+        let x348 = x66 * x51 + x230 * x52;
+        let x349 = x87 - x86;
+        let x350 = x51 * x88 + x52 * x349;
+        let x351 = 2.0 * J2 - 2.0 * J1;
+        let x352 = x103 * x106
+            + x121 * (x177 * x22 - x32 * x37 + x9 * (-x315 - x177 * x303)) + x108 * x101;
+        let x353 = (-x98 * x350 - x348 * x83 - x324 - x347 * x31) * x112;
+        let x354 = x113 * (-x346 * x31 - x98 * x349 - x230 * x83 - x32 * x325 * m1);
+        let x355 = x331 * x127;
+        let x356 = 2.0 * J1 - 2.0 * J2;
+        let x357 = x125 * (-x95 * x350 - x348 * x80 - x347 * x45 - x177 * x323);
+        let x358 = x112 * (-x121 * x22 * x325 - x95 * x349 - x346 * x45 - x230 * x80);
+        let x359 = -(x22 * x329 * x127);
+        let x360 = x121
             * (x9
-                * ((-x79 * x303 - x39 * x300 - x58 * x301) * m1 - x63 * x198 - x85 * x302
-                    - x299 * x47) - a_ * x38);
-        let x314 = x9 * m2 * (-x22 * x300 - x90 * x303 - x301 * x73) * d * m1;
-        let x315 = x9 * m2 * d * d * m1 * (-x73 * x198 - x299 * x22 - x90 * x302);
-        let x316 = x125 * x101 * x131 + (x129 - x130) * J2 * u4;
-        let x317 = x126 * x126 * d;
-        let x318 = x26 * a_ * u3 * u3;
-        let x319 = x318 - x317 + x158 - x159;
-        let x320 = x26 * x140 * u2 + x38 * u1 * (-u3 - 2.0 * u4);
-        let x321 = x151 + x126 * d * x131 + x154 * x124;
-        let x322 = x319 * x79 + x0 * d * x320 * x4 + x156 * x302 + x321 * x82;
-        let x323 = x319 * x39 + x156 * x299 + x321 * x45 + d * x320 * x20;
-        let x324 = x319 * x58 + x321 * x60 + x156 * x198 + d * x320 * x66;
-        let x325 = x26 * x131;
-        let x326 = x126 * x101 * x124;
-        let x327 = u1 * x183;
-        let x328 = u2 * x185;
-        let x329 = x101 * x131 * x131;
-        let x330 = x10 * (-x18 - x19);
-        let x331 = x16 * x24 + a_ * (x12 * (-x21 - x330) - x10 * x16);
-        let x332 = x70 * x24 + a_ * (x208 * x12 - x10 * x70);
-        let x333 = x87 * x24 - x10 * a_ * x87;
-        let x334 = x78 * x55;
-        let x335 = x34 * x51;
-        let x336 = x75 * x55;
-        let x337 = x30 * x34;
-        let x338 = x9 * m2
-            * (x10 * (x336 + x337 + x278) - x97 * x333 * x0 - x51 * x331 - x78 * x332)
-            * d;
-        let x339 = x34 * x47;
-        let x340 = x63 * x55;
-        let x341 = m2
-            * (x9 * ((-x334 - x269 - x335) * d * x12 + x10 * (x287 + x339 + x340))
-                - d * x12 * x12 - x10 * x36) * d + x10 * x10 * x103 + x101 * x12 * x12;
-        let x342 = x34 * x39;
-        let x343 = x58 * x55;
-        let x344 = x10 * x9 * m2 * d * d * m1 * (x342 + x343 + x290);
-        let x345 = x90 * x0 * x2;
-        let x346 = x73 * x55;
-        let x347 = x34 * x22;
-        let x348 = x9 * m2
-            * ((x345 + x346 + x347) * x10 * m2 - x97 * x87 * x0 - x78 * x70 - x16 * x51)
-            * d * d;
-        let x349 = x9 * m2
-            * ((-x336 - x337 - x278) * d * x12 - x47 * x331 - x333 * x85 - x63 * x332);
-        let x350 = (-x39 * x331 - x79 * x333 - x58 * x332) * x9 * m2 * d * m1;
-        let x351 = m2 * d
-            * (x9
-                * (m2 * (-x73 * x332 - x22 * x331 - x90 * x333) - x93 * x87 - x75 * x70
-                    - x30 * x16) - a_ * x12);
-        let x352 = x9 * m2 * d * d * x12 * (-x342 - x343 - x290) * m1;
-        let x353 = x9 * m2 * d
-            * (m2 * d * x12 * (-x345 - x346 - x347) - x87 * x85 - x16 * x47 - x63 * x70);
-        let x354 = x9 * m2 * (-x58 * x70 - x16 * x39 - x87 * x79) * d * d * m1;
-        let x355 = x119 - x120;
-        let x356 = x12 * x134;
-        let x357 = x10 * x116 * u3 + x116 * x12 * u1;
-        let x358 = x163 * x34;
-        let x359 = x162 * x55;
-        let x360 = x10 * a_ * u2 * u2;
-        let x361 = x121 * d * x355;
-        let x362 = x145 * x134;
-        let x363 = x360 + x361 + x362;
-        let x364 = x363 * x22 - x16 * d * x355 * x148 + x149 * (x330 - x17)
-            + x357 * x34 * d;
-        let x365 = x149 * (x88 - x89) - x87 * d * x355 * x148 + x357 * x0 * d * x2
-            + x90 * x363;
-        let x366 = x149 * x189 - d * x355 * x70 * x148 + x363 * x73 + x357 * d * x55;
-        let x367 = x103 * x121 * x121;
-        let x368 = x103 * x148 * x134;
-        let x369 = u5 * J1;
-        let x370 = x115 - x117 + x369;
-        let x371 = x125 * x101;
-        let x372 = J2 * u4;
-        let x373 = u4 * J1;
-        let x374 = Ixy * u3;
-        let x375 = u2 * Ixz;
-        let x376 = a_ * u3 + x26 * x140 * d;
-        let x377 = x10 * d * x138 - a_ * u2;
-        let x378 = d * x131 - x152 - x153;
-        let x379 = x26 * x154;
-        let x380 = x126 * x38 * d;
-        let x381 = -x379 - x380;
-        let x382 = x10 * x145;
-        let x383 = x121 * d * x12;
-        let x384 = x382 - x383;
-        let x385 = x143 - x144 + d * x148;
-        let x386 = -m1 * (x45 * x38 * x378 + x39 * x381 + x376 * x20)
-            - m2 * (x384 * x22 + x34 * x377 + x16 * x12 * x385);
-        let x387 = -(x376 * x66 + x58 * x381 + x38 * x378 * x60) * m1
-            - m2 * (x377 * x55 + x73 * x384 + x12 * x70 * x385);
-        let x388 = -m2 * (x87 * x12 * x385 + x90 * x384 + x0 * x2 * x377)
-            - (x0 * x376 * x4 + x79 * x381 + x82 * x38 * x378) * m1;
-        let x389 = x10 * x148;
-        let x390 = x121 * x12;
-        let x391 = Izz - Ixx;
-        let x392 = x371 - x372;
-        let x393 = x126 * x38;
-        let x394 = Ixx - Iyy;
-        let x395 = x103 * x121 * x12;
-        let x396 = x28 * x131 + x379;
-        let x397 = x154 * x38;
-        let x398 = x28 * x126;
-        let x399 = -x397 - x398;
-        let x400 = a_ * u1;
-        let x401 = d * x355 - x400;
-        let x402 = d * x114 + x10 * a_ * (u2 - u5) + x24 * x114;
-        let x403 = -(x140 * x38 * d * x66 + x396 * x60 + x58 * x399) * m1
-            - m2 * (x55 * x401 + x402 * x70 + 2.0 * (a_ * u2 * x12 * x73));
-        let x404 = -m2 * (2.0 * (a_ * u2 * x90 * x12) + x87 * x402 + x0 * x2 * x401)
-            - (x82 * x396 + x140 * x38 * x0 * d * x4 + x79 * x399) * m1;
-        let x405 = -m2 * (x34 * x401 + 2.0 * (a_ * u2 * x12 * x22) + x16 * x402)
-            - m1 * (x39 * x399 + x45 * x396 + x140 * x38 * d * x20);
-        let x406 = Iyy - Izz;
-        let x407 = Iyz * u1;
-        let x408 = x26 * x126 * x101;
-        let x409 = a_ * a_ * u1;
-        let x410 = 2.0 * x122 + 2.0 * x123;
-        let x411 = x10 * x103 * x121;
-        let x412 = x101 * x38 * x131;
-        let x413 = J2 * x138;
-        let x414 = x12 * x145;
-        let x415 = x121 * x36;
-        let x416 = x415 - x414;
-        let x417 = -x382 - x148 * x36;
-        let x418 = x126 * d + x400;
-        let x419 = (-u3 - u4) * d - x125 * x41 + x26 * a_ * (u4 - u3);
-        let x420 = -m2 * (x90 * x416 + x87 * x417 + x116 * x0 * d * x12 * x2)
-            - (x418 * x0 * x4 + x82 * x419 + 2.0 * (a_ * x79 * u3 * x38)) * m1;
-        let x421 = -m1 * (x418 * x20 + 2.0 * (a_ * x39 * u3 * x38) + x45 * x419)
-            - m2 * (x22 * x416 + x34 * x116 * d * x12 + x16 * x417);
-        let x422 = -m2 * (x116 * d * x12 * x55 + x417 * x70 + x73 * x416)
-            - (x418 * x66 + 2.0 * (a_ * x58 * u3 * x38) + x419 * x60) * m1;
-        let x423 = 2.0 * x119 - 2.0 * x120;
-        let x424 = x101 * x12 * x148;
-        let x425 = J2 * x124 + x126 * x101;
-        let x426 = -2.0 * u3 - 2.0 * u4;
-        let x427 = x0 * x410 * x4 + x82 * x426;
-        let x428 = x20 * x410 + x45 * x426;
-        let x429 = x426 * x60 + x410 * x66;
-        let x430 = 2.0 * u5 + 2.0 * u2;
-        let x431 = x423 * x55 + x70 * x430;
-        let x432 = x34 * x423 + x16 * x430;
-        let x433 = x87 * x430 + x0 * x2 * x423;
-        let x434 = 2.0 * J2 - J1;
+                * (-(x347 * x34 + x348 * x63 + x85 * x350) * m1 - x230 * x68 - x56 * x346
+                    - x89 * x349) - x46);
+        let x361 = m2 * x112;
+        let x362 = -(x361 * (x93 * x350 + x347 * x21 + x348 * x78));
+        let x363 = -(x127 * (x230 * x78 + x21 * x346 + x93 * x349));
+        let x364 = x141 * x174 - x140 * x174;
+        let x365 = x364 * d;
+        let x366 = x195 * x51;
+        let x367 = d * x151;
+        let x368 = x367 * x151;
+        let x369 = x366 + x176 - x368;
+        let x370 = x185 - x183 + x142 * x367;
+        let x371 = x365 * x71 + x369 * x63 + x66 * x370 + x230 * x186;
+        let x372 = x349 * x186 + x369 * x85 + x88 * x370 + x365 * x91;
+        let x373 = x50 * x370 + x369 * x34 + x365 * x16 + x346 * x186;
+        let x374 = x148 * x106;
+        let x375 = x142 * x374 + x153 * (x140 - x141);
+        let x376 = x22 * x151;
+        let x377 = u1 * x218;
+        let x378 = u2 * x220;
+        let x379 = x106 * x142 * x142 - x152 * x151;
+        let x380 = x40 * x43 - x11 * a_ * x43;
+        let x381 = a_ * (-x75 * x11 - x241 * x18) + x75 * x40;
+        let x382 = x39 * x94 - x40 * x94;
+        let x383 = x29 * x31;
+        let x384 = (x317 + x318) + x29 * x45;
+        let x385 = x123 * (x11 * x384 - x380 * x31 - x381 * x83 - x98 * x382);
+        let x386 = x56 * x29;
+        let x387 = x100 * x106 + x108 * x104
+            + (x11 * x54 - x18 * x162
+                + x9 * (x11 * (x327 + x386 + x328) - (x306 + x307 + x383) * x162))
+                * x115;
+        let x388 = (x29 * x34 + x333) + x332;
+        let x389 = x11 * x127 * x388;
+        let x390 = x29 * x21 + (x58 * x78 + x84 * x93);
+        let x391 = (x98 * x94 - x75 * x83 + x11 * x390 * m2 - x43 * x31) * x116;
+        let x392 = (-x56 * x380 - x68 * x381 - x89 * x382 - x384 * x162) * x129;
+        let x393 = -((x34 * x380 + x382 * x85 + x381 * x63) * x361);
+        let x394 = (x9
+            * (x95 * x94 - m2 * (x382 * x93 + x21 * x380 + x381 * x78) - x75 * x80
+                - x45 * x43) - x44) * x115;
+        let x395 = -(x18 * x127 * x388);
+        let x396 = (x89 * x94 - x75 * x68 - x390 * x115 * x18 - x56 * x43) * x123;
+        let x397 = -((x34 * x43 - x85 * x94 + x75 * x63) * x127);
+        let x398 = x137 - x136;
+        let x399 = x145 * x131 + x144 * x131;
+        let x400 = x398 * d;
+        let x401 = x400 * x146;
+        let x402 = d * x399;
+        let x403 = u2 * x160;
+        let x404 = x138 * x400;
+        let x405 = x403 + x404 - x165;
+        let x406 = x401 * x94 + x166 * (x90 - x92) + x402 * x84 + x93 * x405;
+        let x407 = x402 * x58 + x405 * x78 + x166 * x223 - x75 * x401;
+        let x408 = x402 * x29 - x401 * x43 + x21 * x405 + x166 * (-x17 - x20);
+        let x409 = (-x345 - x189 * x29) - x344;
+        let x410 = x108 * x138 * x138 - x206 * x146;
+        let x411 = (x213 + x134) - x132;
+        let x412 = x138 * x162;
+        let x413 = x11 * x164;
+        let x414 = x413 - x412;
+        let x415 = -x159 - x53 * x131;
+        let x416 = x18 * (x161 + x163 + d * x146);
+        let x417 = x32 * x180;
+        let x418 = x177 * x151 + x417;
+        let x419 = a_ * u3 + x36 * x174;
+        let x420 = x22 * (x179 - x178 + x142 * d);
+        let x421 = (x414 * x78 + x58 * x415 + x75 * x416) * m2
+            + (x71 * x419 - x418 * x63 + x66 * x420) * m1;
+        let x422 = (x420 * x50 - x34 * x418 + x16 * x419) * m1
+            + m2 * (x29 * x415 + x416 * x43 + x21 * x414);
+        let x423 = m1 * (x88 * x420 + x91 * x419 - x85 * x418)
+            + m2 * (x93 * x414 - x416 * x94 + x84 * x415);
+        let x424 = Ixy * u3;
+        let x425 = x374 - x153;
+        let x426 = u2 * Ixz;
+        let x427 = Izz - Ixx;
+        let x428 = x11 * x146;
+        let x429 = Ixx - Iyy;
+        let x430 = x376;
+        let x431 = x108 * x139;
+        let x432 = x121 * x174;
+        let x433 = x400 - x215;
+        let x434 = d * x133 + x40 * x133 + x39 * (u2 - u5);
+        let x435 = x417 - x142 * x37;
+        let x436 = x180 * x22 - x151 * x37;
+        let x437 = x177 * x174;
+        let x438 = m2 * (x75 * x434 + 2.0 * (x168 * x78) + x58 * x433)
+            + m1 * (x66 * x435 - x436 * x63 + x71 * x437);
+        let x439 = (2.0 * (x93 * x168) - x434 * x94 + x84 * x433) * m2
+            + (x437 * x91 + x88 * x435 - x85 * x436) * m1;
+        let x440 = m2 * (x29 * x433 + x434 * x43 + 2.0 * (x21 * x168))
+            + (x50 * x435 - x436 * x34 + x16 * x437) * m1;
+        let x441 = Iyy - Izz;
+        let x442 = Iyz * u1;
+        let x443 = u1 * x193;
+        let x444 = 2.0 * x149 + 2.0 * x150;
+        let x445 = x108 * x212;
+        let x446 = x32 * x152;
+        let x447 = x106 * x205 + x446;
+        let x448 = x115 * x131;
+        let x449 = x215 + x367;
+        let x450 = x51 * (u4 - u3) - x148 * d - x148 * x52;
+        let x451 = x413 - x146 * x54;
+        let x452 = x164 * x18;
+        let x453 = x138 * x54;
+        let x454 = -x452 - x453;
+        let x455 = x131 * x162;
+        let x456 = m1 * (x450 * x50 + x449 * x16 + 2.0 * (x184 * x34))
+            + m2 * (x454 * x21 - x451 * x43 + x29 * x455);
+        let x457 = (2.0 * (x184 * x85) + x450 * x88 + x449 * x91) * m1
+            + m2 * (x454 * x93 + x451 * x94 + x84 * x455);
+        let x458 = m2 * (x454 * x78 - x75 * x451 + x58 * x455)
+            + (2.0 * (x184 * x63) + x449 * x71 + x66 * x450) * m1;
+        let x459 = 2.0 * x137 - 2.0 * x136;
+        let x460 = x106 * x18 * x146 + x445;
+        let x461 = x152 - J2 * x151;
+        let x462 = 2.0 * u3 + 2.0 * u4;
+        let x463 = x16 * x444 - x462 * x50;
+        let x464 = x444 * x91 - x462 * x88;
+        let x465 = x71 * x444 - x66 * x462;
+        let x466 = 2.0 * J2 - J1;
+        let x467 = 2.0 * u5 + 2.0 * u2;
+        let x468 = x75 * x467 + x58 * x459;
+        let x469 = x84 * x459 - x467 * x94;
+        let x470 = x29 * x459 + x467 * x43;
         Derivatives {
             qdot: [
-                x1 * x6,
-                x7,
-                u1 + x8 * x1 * x6,
+                x5,
+                x6,
+                x8 + u1,
                 u4,
                 u5,
-                x9 * (G_X - x31 - x48 + x52),
+                x9 * (G_X + x57),
                 x9
-                    * (G_Y - x63 * u3 - u2 * x75
-                        + d * (-x58 * u4 * m1 - u5 * m2 * x73 - x78 * u1)),
-                x9 * (G_Z - x86 - x94 + x98),
+                    * (G_Y - u3 * x68 - u2 * x80
+                        - d * (u1 * x83 + x10 * x78 + x35 * x63)),
+                x9 * (x99 + G_Z),
             ],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * x12 * x12
-                                + x9 * (-x78 * x78 - x97 * x97 * x0 * x0 - x51 * x51)
-                                + x38 * x38 * m1) + (x99 + x100) * J1
-                        + (x12 * x12 + x38 * x38) * J2,
-                    x102,
-                    x104,
-                    x105,
-                    x106,
-                ],
-                [
-                    x102,
-                    x38 * x38 * J1 + x28 * x28 * m1 + Iyy + J2 * (x99 + 1.0)
-                        + x9 * (-x30 * x30 - x75 * x75 - x93 * x93)
-                        + m2 * (x107 + a_ * (a_ + 2.0 * x35)),
-                    x108,
-                    x109,
+                    (x100 + x101) * J2 + Ixx
+                        + (x25 * x18 - (x31 * x31 + x83 * x83 + x98 * x98) * x9
+                            + x22 * x23) * x102 + (x103 + x104) * J1,
+                    x107,
                     x110,
+                    x114,
+                    x117,
                 ],
                 [
-                    x104,
-                    x108,
-                    x9 * (-x63 * x63 - x47 * x47 - x85 * x85) + x12 * x12 * J1
-                        + (a_ * (a_ + 2.0 * x27) + x107) * m1 + m2 * x36 * x36 + Izz
-                        + J2 * (x100 + 1.0),
-                    x111,
-                    x112,
+                    x107,
+                    Iyy - x38 * x37 + J2 * (x103 + 1.0)
+                        + m2 * (a_ * (2.0 * x53 + a_) + x102)
+                        - x9 * (x80 * x80 + x45 * x45 + x95 * x95) + x101 * J1,
+                    x118,
+                    x119,
+                    x120,
                 ],
-                [x105, x109, x111, (1.0 - x9 * m1) * d * d * m1 + J2, x113],
-                [x106, x110, x112, x113, J2 + m2 * d * d * (1.0 - x9 * m2)],
+                [
+                    x110,
+                    x118,
+                    J2 * (x104 + 1.0) - x9 * (x89 * x89 + x56 * x56 + x68 * x68)
+                        + x100 * J1 - x54 * x55 + (a_ * (a_ + 2.0 * x36) + x102) * m1
+                        + Izz,
+                    x122,
+                    x124,
+                ],
+                [x114, x119, x122, J2 + (1.0 - x125) * x126, x128],
+                [x117, x120, x124, x128, (1.0 - x129) * x130 + J2],
             ],
             force: [
-                x128 - x118 * x121 * x12 + (-x26 * u4 * x131 - x10 * u5 * x134) * J1
-                    - u2 * x137
-                    + (m2 * x12 * x139 - x38 * m1 * x141
-                        + x9 * (-x78 * x162 - x163 * x51 - x97 * x164 * x0)) * d
-                    + x167 * u3,
-                x168 - x169 - x28 * m1 * x141 + x137 * u1
-                    + x9 * (-x93 * x164 - x163 * x30 - x162 * x75) - x38 * u4 * x131 * J1
+                x155 - x135 * x139 - (x143 * u4 + u5 * x147) * J1 - u2 * x158
+                    + d
+                        * (x171 * x25 - x9 * (-x187 * x83 - x98 * x188 - x189 * x31)
+                            - x175 * x23) + x192 * u3,
+                x158 * u1
                     - m2
-                        * ((a_ * (x12 * x172 - 2.0 * (x10 * u3 * u1))
-                            + ((0.5 * x175 - x177) * u3 - 0.5 * (u1 * u1 * x174)) * d)
-                            * d - a_ * a_ * u3 * u1) - x180 * u3,
-                x9 * (-x164 * x85 - x163 * x47 - x63 * x162) - m2 * x36 * x139
-                    - (d
-                        * (a_ * (x181 * x38 + 2.0 * (x26 * u2 * u1))
-                            + d * (u2 * (0.5 * x184 + x186) - 0.5 * (u1 * u1 * x183)))
-                        + a_ * a_ * u2 * u1) * m1 - x10 * x118 * x121 + u2 * x180
-                    + u5 * x12 * x134 * J1 - x167 * u1 + x187,
-                d * m1 * (x9 * (-x164 * x79 - x163 * x39 - x58 * x162) - x151 + x155)
-                    + x187,
-                x168
-                    + m2 * (x9 * (-x162 * x73 - x163 * x22 - x90 * x164) - x142 - x146)
-                        * d,
+                        * ((a_ * (x18 * x197 - 2.0 * (x11 * x173))
+                            + d * ((0.5 * x200 - x202) * u3 - 0.5 * (x194 * x199))) * d
+                            - x173 * x193) - x9 * (-x95 * x188 - x189 * x45 - x187 * x80)
+                    - x203 - x204 * x205 + x207 - x175 * x38 - x210 * u3,
+                x211 - x171 * x55 - x135 * x212
+                    - x9 * (-x189 * x56 - x187 * x68 - x89 * x188) + u2 * x210
+                    + x213 * x214 - x192 * u1
+                    - (x215 * x159
+                        + d
+                            * (a_ * (x216 * x22 + 2.0 * (x141 * u1))
+                                + (u2 * (0.5 * x219 + x221) - 0.5 * (x194 * x218)) * d))
+                        * m1,
+                x211
+                    + x121
+                        * (x183 - x185 - (-x189 * x34 - x85 * x188 - x187 * x63) * x9),
+                x115 * (-x9 * (-x189 * x21 - x93 * x188 - x187 * x78) - x167 - x169)
+                    + x207,
             ],
             checks: [x0],
             d_qdot: [
@@ -8475,38 +8367,36 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     x9
-                        * (d * (-u5 * m2 * x189 - x192 * u4 * m1 - u1 * (x194 - x193))
-                            - (x196 + x197) * u2 - (x199 + x200) * u3),
-                    x9 * (x52 - x31 - x48),
+                        * (-u2 * x227 - (x35 * x228 + x223 * x10 + (x229 + x81) * u1) * d
+                            - x232 * u3),
+                    x9 * x57,
                     0.0,
                 ],
                 [
-                    x8 * x1 * x1 * x6,
+                    x5 * x250,
                     0.0,
-                    x3 + x8 * x8 * x1 * x1 * x6 + x5,
+                    x4 + x8 * x250,
                     0.0,
                     0.0,
-                    x9 * x14 * x217,
-                    x9 * x217 * x15,
-                    x9
-                        * ((-x230 * x8 * u1 - u4 * x228 * m1 - u5 * m2 * x221) * d
-                            - u2 * (x223 - x218) - u3 * (x229 - x224)),
+                    x251 * x15,
+                    x251 * x12,
+                    (-d * (x253 * x35 + u1 * x255 - x10 * x256) - u3 * (x258 - x257)
+                        - u2 * (x261 - x259)) * x9,
                 ],
                 [
-                    x1 * x7,
-                    -x3 - x5,
-                    x8 * x1 * x7,
+                    x1 * x6,
+                    -x4,
+                    x6 * x250,
                     0.0,
                     0.0,
                     x9
-                        * (d * (-x26 * u4 * x20 * m1 - x10 * u5 * m2 * x255 - u1 * x256)
-                            - x254 * u3 * x20 - x257 * u2),
-                    x9
-                        * (d * (-x10 * u5 * m2 * x190 - u1 * x259 - x26 * u4 * x66 * m1)
-                            - u2 * x258 - x254 * u3 * x66),
+                        * (-u2 * x287 - d * (x16 * x288 + u1 * x289 + x290 * x284)
+                            - x16 * x292),
+                    (-(u1 * x293 - x290 * x58 + x71 * x288) * d - x71 * x292 - u2 * x294)
+                        * x9,
                     x9 * x0
-                        * (d * (x10 * u5 * m2 * x2 - x26 * u4 * m1 * x4 - u1 * x260)
-                            - x254 * u3 * x4 - u2 * x2 * x261),
+                        * ((x295 * u1 - x3 * x288 + x290 * x2) * d - x292 * x3
+                            - u2 * x297),
                 ],
                 [
                     0.0,
@@ -8514,9 +8404,9 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    ((x124 * x20 - u4 * x299) * d - u3 * x300) * x9 * m1,
-                    x9 * m1 * (d * (x124 * x66 - u4 * x198) - x301 * u3),
-                    x9 * (d * (x124 * x0 * x4 - u4 * x302) - u3 * x303) * m1,
+                    ((-u4 * x346 - x16 * x151) * d - x347 * u3) * x125,
+                    ((-x71 * x151 - x230 * u4) * d - x348 * u3) * x125,
+                    ((-u4 * x349 - x151 * x91) * d - u3 * x350) * x125,
                 ],
                 [
                     0.0,
@@ -8524,9 +8414,9 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    x9 * m2 * ((x34 * x121 - u5 * x16) * d - u2 * x331),
-                    x9 * m2 * (d * (x121 * x55 - u5 * x70) - u2 * x332),
-                    x9 * m2 * (d * (x121 * x0 * x2 - u5 * x87) - u2 * x333),
+                    ((x29 * x138 - u5 * x43) * d - u2 * x380) * x129,
+                    (d * (x58 * x138 - x75 * u5) - u2 * x381) * x129,
+                    (d * (u5 * x94 + x84 * x138) - u2 * x382) * x129,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8537,201 +8427,160 @@ pub mod reduced_volterra {
                     1.0,
                     0.0,
                     0.0,
-                    x9 * (x50 - x49) * d,
-                    x9 * d * (x76 - x77),
-                    x230 * x9 * x0 * d,
+                    x111 * (x30 - x24),
+                    x235 * x111,
+                    x254 * x0 * x111,
                 ],
+                [x1 * x2, x3, x1 * x26, 0.0, 0.0, -(x9 * x45), -(x9 * x80), -(x9 * x95)],
                 [
-                    x1 * x2,
-                    x4,
-                    x8 * x1 * x2,
-                    0.0,
-                    0.0,
-                    x9 * (-x25 - x29),
-                    x9 * (-x67 - x74),
-                    x9 * (-x91 - x92),
-                ],
-                [
-                    x1 * x4,
+                    x1 * x3,
                     -x2,
-                    x8 * x1 * x4,
+                    x14 * x1,
                     0.0,
                     0.0,
-                    (-x37 - x46) * x9,
-                    (-x61 - x62) * x9,
-                    x9 * (-x83 - x84),
+                    -(x56 * x9),
+                    -(x9 * x68),
+                    -(x89 * x9),
                 ],
-                [
-                    0.0,
-                    0.0,
-                    0.0,
-                    1.0,
-                    0.0,
-                    -(x9 * x39 * d * m1),
-                    -(x9 * x58 * d * m1),
-                    -(x9 * x79 * d * m1),
-                ],
-                [
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    1.0,
-                    -(x9 * m2 * d * x22),
-                    -(x9 * m2 * d * x73),
-                    -(x9 * m2 * x90 * d),
-                ],
+                [0.0, 0.0, 0.0, 1.0, 0.0, -(x34 * x112), -(x63 * x112), -(x85 * x112)],
+                [0.0, 0.0, 0.0, 0.0, 1.0, -(x123 * x21), -(x123 * x78), -(x123 * x93)],
             ],
             d_matrix: [
                 [
+                    [x233 * x31 * (-2.0 * x229 - 2.0 * x82), x237, x239, x240, x242],
                     [
-                        (2.0 * x193 + 2.0 * x76 - 2.0 * x194 - 2.0 * x77) * x9 * d * d
-                            * x51,
-                        x203,
-                        x205,
-                        x207,
-                        x209,
-                    ],
-                    [
-                        x203,
-                        (-2.0 * x67 - 2.0 * x74 - 2.0 * x196 - 2.0 * x197) * x9 * x30,
-                        x210,
-                        x211,
-                        x212,
-                    ],
-                    [
-                        x205,
-                        x210,
-                        x9 * (-2.0 * x61 - 2.0 * x199 - 2.0 * x200 - 2.0 * x62) * x47,
-                        x213,
-                        x214,
-                    ],
-                    [x207, x211, x213, 0.0, x215],
-                    [x209, x212, x214, x215, 0.0],
-                ],
-                [
-                    [
-                        x9 * (-2.0 * x231 - 2.0 * x232 - 2.0 * x233) * x97 * x0 * d * d,
-                        x238,
-                        x242,
+                        x237,
+                        -(x9 * (2.0 * x225 + 2.0 * x72 + 2.0 * x79 + 2.0 * x226) * x45),
+                        x243,
                         x244,
-                        x246,
+                        x245,
                     ],
-                    [
-                        x238,
-                        x9 * (2.0 * x218 - 2.0 * x235 - 2.0 * x236 - 2.0 * x223) * x93,
-                        x247,
-                        x248,
-                        x249,
-                    ],
-                    [
-                        x242,
-                        x247,
-                        (2.0 * x224 - 2.0 * x239 - 2.0 * x229 - 2.0 * x240) * x9 * x85,
-                        x250,
-                        x251,
-                    ],
-                    [x244, x248, x250, 0.0, x252],
-                    [x246, x249, x251, x252, 0.0],
+                    [x239, x243, -(x56 * x9 * (2.0 * x231 + 2.0 * x67)), x246, x247],
+                    [x240, x244, x246, 0.0, x248],
+                    [x242, x245, x247, x248, 0.0],
                 ],
                 [
                     [
-                        x9 * d * d
-                            * (-2.0 * (x78 * x259) - 2.0 * (x51 * x256)
-                                - 2.0 * (x97 * x0 * x0 * x260)),
-                        x262,
-                        x267,
+                        -(x98 * x233 * (2.0 * x262 + 2.0 * x263 + 2.0 * x255)),
                         x268,
-                        x270,
+                        x272,
+                        x274,
+                        x276,
                     ],
                     [
-                        x262,
-                        x9
-                            * (-2.0 * (x75 * x258) - 2.0 * (x93 * x0 * x2 * x261)
-                                - 2.0 * (x257 * x30)),
-                        x275,
+                        x268,
+                        x9 * x95 * (2.0 * x259 - 2.0 * x264 - 2.0 * x265 - 2.0 * x261),
                         x277,
+                        x278,
                         x279,
                     ],
                     [
-                        x267,
-                        x275,
-                        x254 * x9 * (-2.0 * x280 - 2.0 * x281 - 2.0 * x282),
-                        x286,
-                        x289,
+                        x272,
+                        x277,
+                        x89 * x9 * (2.0 * x257 - 2.0 * x269 - 2.0 * x258 - 2.0 * x270),
+                        x280,
+                        x281,
                     ],
-                    [x268, x277, x286, 0.0, x291],
-                    [x270, x279, x289, x291, 0.0],
+                    [x274, x278, x280, 0.0, x282],
+                    [x276, x279, x281, x282, 0.0],
                 ],
                 [
                     [
-                        x26
-                            * (x304 * x38
-                                + d * d
-                                    * (x9 * (-2.0 * x263 - 2.0 * x264 - 2.0 * x265) + 2.0 * x38)
-                                    * m1),
+                        -((2.0 * (x293 * x83) + 2.0 * (x98 * x298) + 2.0 * (x31 * x289))
+                            * x233),
+                        x299,
+                        x304,
                         x305,
-                        x306,
-                        x307,
                         x308,
                     ],
                     [
-                        x305,
-                        x38
-                            * (x26 * x309
-                                + d
-                                    * (x9 * (-2.0 * x271 - 2.0 * x272 - 2.0 * x273) - 2.0 * a_
-                                        - 2.0 * x27) * m1),
-                        x310,
-                        x311,
-                        x312,
+                        x299,
+                        -(x9
+                            * (2.0 * (x294 * x80) + 2.0 * (x287 * x45)
+                                + 2.0 * (x309 * x95))),
+                        x314,
+                        x316,
+                        x319,
                     ],
                     [
-                        x306,
-                        x310,
-                        (x9
-                            * (-2.0 * (x85 * x303) - 2.0 * (x47 * x300)
-                                - 2.0 * (x63 * x301)) - 2.0 * (a_ * x38 * d)) * m1,
-                        x313,
+                        x304,
                         x314,
+                        -(x9 * (2.0 * x320 + 2.0 * x321 + 2.0 * x322) * x291),
+                        x326,
+                        x330,
                     ],
-                    [x307, x311, x313, 0.0, x315],
-                    [x308, x312, x314, x315, 0.0],
+                    [x305, x316, x326, 0.0, x334],
+                    [x308, x319, x330, x334, 0.0],
                 ],
                 [
                     [
-                        x10
-                            * (m2 * d * d
-                                * (2.0 * x12 + x9 * (2.0 * x334 + 2.0 * x269 + 2.0 * x335))
-                                + x304 * x12),
-                        x338,
-                        x341,
-                        x344,
-                        x348,
-                    ],
-                    [
-                        x338,
-                        m2
-                            * (x9
-                                * (-2.0 * (x30 * x331) - 2.0 * (x75 * x332)
-                                    - 2.0 * (x93 * x333)) - 2.0 * (a_ * d * x12)),
-                        x349,
-                        x350,
-                        x351,
-                    ],
-                    [
-                        x341,
-                        x349,
-                        x12
-                            * (x10 * x309
-                                + m2 * d
-                                    * (x9 * (-2.0 * x287 - 2.0 * x339 - 2.0 * x340) - 2.0 * a_
-                                        - 2.0 * x35)),
+                        x32
+                            * (x351 * x22
+                                + x126
+                                    * (2.0 * x22
+                                        - x9 * (2.0 * x300 + 2.0 * x301 + 2.0 * x302))),
                         x352,
                         x353,
+                        x354,
+                        x355,
                     ],
-                    [x344, x350, x352, 0.0, x354],
-                    [x348, x351, x353, x354, 0.0],
+                    [
+                        x352,
+                        (x32 * x356
+                            + (-2.0 * a_ - 2.0 * x36
+                                - (2.0 * x310 + 2.0 * x311 + 2.0 * x312) * x9) * x121)
+                            * x22,
+                        x357,
+                        x358,
+                        x359,
+                    ],
+                    [
+                        x353,
+                        x357,
+                        m1
+                            * (-2.0 * (d * x46)
+                                - x9
+                                    * (2.0 * (x347 * x56) + 2.0 * (x348 * x68)
+                                        + 2.0 * (x89 * x350))),
+                        x360,
+                        x362,
+                    ],
+                    [x354, x358, x360, 0.0, x363],
+                    [x355, x359, x362, x363, 0.0],
+                ],
+                [
+                    [
+                        x11
+                            * (x130
+                                * (2.0 * x18 + x9 * (2.0 * x306 + 2.0 * x307 + 2.0 * x383))
+                                + x351 * x18),
+                        x385,
+                        x387,
+                        x389,
+                        x391,
+                    ],
+                    [
+                        x385,
+                        m2
+                            * (-x9
+                                * (2.0 * (x380 * x45) + 2.0 * (x382 * x95)
+                                    + 2.0 * (x381 * x80)) - 2.0 * (d * x44)),
+                        x392,
+                        x393,
+                        x394,
+                    ],
+                    [
+                        x387,
+                        x392,
+                        (x11 * x356
+                            + x115
+                                * (-2.0 * x53 - 2.0 * a_
+                                    - x9 * (2.0 * x327 + 2.0 * x386 + 2.0 * x328))) * x18,
+                        x395,
+                        x396,
+                    ],
+                    [x389, x393, x395, 0.0, x397],
+                    [x391, x394, x396, x397, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8792,171 +8641,154 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    x9 * d * (x216 * x51 + x163 * x201),
-                    x9 * (x163 * x202 + x30 * x216),
-                    x9 * (x216 * x47 + x163 * x204),
-                    x9 * d * m1 * (x39 * x216 + x163 * x206),
-                    x9 * m2 * (x163 * x208 + x216 * x22) * d,
+                    x111 * (x249 * x31 - x189 * x236),
+                    x9 * (x249 * x45 + x189 * x234),
+                    x9 * (x56 * x249 + x189 * x238),
+                    x249 * x34 * x112,
+                    (x189 * x241 + x249 * x21) * x123,
                 ],
                 [
-                    x9 * (x253 * x97 * x0 + x164 * x234) * d,
-                    x9 * (x253 * x93 + x164 * x237),
-                    x9 * (x164 * x241 + x253 * x85),
-                    x9 * (x253 * x79 + x243 * x164) * d * m1,
-                    (x164 * x245 + x253 * x90) * x9 * m2 * d,
+                    (x188 * x267 + x98 * x283) * x111,
+                    x9 * (x283 * x95 - x188 * x266),
+                    x9 * (x89 * x283 - x188 * x271),
+                    (x85 * x283 - x273 * x188) * x112,
+                    x123 * (x93 * x283 - x188 * x275),
                 ],
                 [
-                    x9 * d
-                        * ((-x97 * x0 * x295 - x164 * x260) * x0 - x293 * x78
-                            - x163 * x256 - x294 * x51 - x162 * x259),
-                    (x0 * (-x164 * x2 * x261 - x93 * x295) - x293 * x75 - x30 * x294
-                        - x162 * x258 - x163 * x257) * x9,
-                    x9 * (x254 * x296 - x294 * x47 - x0 * x85 * x295 - x293 * x63),
-                    x9 * d * m1 * (x297 - x39 * x294 - x293 * x58 - x79 * x0 * x295),
-                    x9 * m2
-                        * (x10 * (x298 - x162 * x190 - x163 * x255) - x293 * x73
-                            - x294 * x22 - x90 * x0 * x295) * d,
+                    (x187 * x293 + x189 * x289 + x338 * x83 + x31 * x339
+                        - x0 * (x188 * x295 - x98 * x340)) * x111,
+                    x9
+                        * (x45 * x339 + x338 * x80 + x189 * x287 + x187 * x294
+                            - x0 * (-x188 * x297 - x340 * x95)),
+                    x9 * (x56 * x339 - x341 * x291 + x68 * x338 - x89 * x342),
+                    (x34 * x339 - x343 - x342 * x85 + x338 * x63) * x112,
+                    x123
+                        * (x21 * x339 - x342 * x93 + x11 * (x189 * x284 - x344 - x345)
+                            + x338 * x78),
                 ],
                 [
-                    x169 + (x38 * x131 - x26 * x124) * u4 * J1 + x316 * x38
-                        + d * m1
-                            * (x9 * (x97 * x322 * x0 + x297 + x323 * x51 + x78 * x324)
-                                - x26 * x141 - x38 * d * x320),
-                    m1
-                        * (x9 * (x30 * x323 + x93 * x322 + x324 * x75 + x296 * x38 * d)
-                            + (-x28 * x320 - x38 * x141) * d) + x128
-                        + u4 * (-x325 - x38 * x124) * J1 - x26 * x316,
-                    x326
-                        + (x9
-                            * (x323 * x47 + x63 * x324 - x162 * x301 + x322 * x85
-                                - x163 * x300 - x164 * x303)
-                            - d
-                                * (d * ((x328 - 2.0 * x327) * u2 - u1 * u1 * x185)
-                                    + a_ * (x26 * x181 - 2.0 * (u2 * x38 * u1)))) * m1 + x329,
-                    x326
-                        + d
-                            * (x157
-                                + x9
-                                    * (m1 * (x58 * x324 + x322 * x79 + x39 * x323) - x163 * x299
-                                        - x164 * x302 - x162 * x198) + x317 - x318) * m1 + x329,
-                    (x324 * x73 + x90 * x322 + x323 * x22) * x9 * m2 * d * m1,
+                    x203
+                        + x121
+                            * (x9 * (x371 * x83 - x343 + x98 * x372 + x373 * x31)
+                                - x32 * x175 - x177 * x364) + (x32 * x151 + x205) * x204
+                        + x375 * x22,
+                    ((x373 * x45 + x372 * x95 - x177 * x341 + x371 * x80) * x9
+                        - (x175 * x22 - x364 * x37) * d) * m1 - x32 * x375
+                        - x204 * (x143 - x376) + x155,
+                    (x9
+                        * (x56 * x373 + x189 * x347 + x68 * x371 + x89 * x372
+                            + x187 * x348 + x188 * x350)
+                        - (a_ * (x32 * x216 - 2.0 * (x149 * u1))
+                            + d * ((x378 - 2.0 * x377) * u2 - x194 * x220)) * d) * m1
+                        + x379,
+                    x121
+                        * (x368 - x366 + x181
+                            + x9
+                                * (x189 * x346 + (x85 * x372 + x371 * x63 + x373 * x34) * m1
+                                    + x187 * x230 + x188 * x349)) + x379,
+                    x361 * (x373 * x21 + x93 * x372 + x371 * x78),
                 ],
                 [
-                    u5 * (x356 - x10 * x355) * J1
-                        + m2
-                            * (x357 * d * x12 + x10 * x139
-                                + x9
-                                    * (x10 * (x298 + x358 + x359) + x51 * x364 + x97 * x365 * x0
-                                        + x78 * x366)) * d + x118 * (-x10 * x121 - x356),
-                    x367 + x368
+                    x213 * (x214 - x11 * x398) - x135 * (x214 + x212)
+                        + x115
+                            * (x399 * x162
+                                + x9 * (x98 * x406 + x83 * x407 + x408 * x31 + x11 * x409)
+                                + x11 * x171),
+                    x410
                         + m2
                             * (x9
-                                * (x30 * x364 - x162 * x332 - x164 * x333 + x93 * x365
-                                    - x163 * x331 + x75 * x366)
+                                * (x189 * x380 + x187 * x381 + x382 * x188 + x407 * x80
+                                    + x95 * x406 + x45 * x408)
                                 - d
-                                    * (a_ * (2.0 * (u3 * x12 * u1) + x10 * x172)
-                                        + (x176 * (x170 - x171) + 2.0 * (u3 * u1 * x174)) * d)),
-                    x12 * (u5 * x355 * J1 + x118 * x121)
-                        + m2
+                                    * (d * (2.0 * (x173 * x199) + x201 * x196)
+                                        + a_ * (x11 * x197 + 2.0 * (x173 * x18)))),
+                    (x9 * (x56 * x408 + x68 * x407 + x89 * x406 - x409 * x162)
+                        - (x171 * x18 - x54 * x399) * d) * m2
+                        + x18 * (x213 * x398 + x135 * x138) + x147 * x411,
+                    x361 * (x63 * x407 + x85 * x406 + x34 * x408),
+                    x410
+                        + x115
                             * (x9
-                                * (x365 * x85 + x47 * x364 + d * x12 * (-x298 - x358 - x359)
-                                    + x63 * x366) + d * (-x357 * x36 - x12 * x139))
-                        + x10 * x370 * x134,
-                    (x39 * x364 + x79 * x365 + x58 * x366) * x9 * m2 * d * m1,
-                    m2 * d
-                        * (x9
-                            * (m2 * (x73 * x366 + x90 * x365 + x22 * x364) - x163 * x16
-                                - x164 * x87 - x162 * x70) - x360 - x361 - x362) + x367
-                        + x368,
+                                * ((x407 * x78 + x21 * x408 + x93 * x406) * m2 - x188 * x94
+                                    + x189 * x43 + x75 * x187) - x403 - x404 + x165),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x26 * x38 * (x371 - x372 + x373) - x374 + x10 * x12 * x370 + x375
-                        + d
-                            * (m2 * x12 * x377 - x38 * x376 * m1
-                                + x9 * (-x386 * x51 - x78 * x387 - x97 * x0 * x388)),
-                    J2 * (x389 + x390) + x391 * u3 + (x38 * x38 * u4 - x389 - x390) * J1
+                    (x25 * x415 - x9 * (-x83 * x421 - x31 * x422 - x98 * x423)
+                        - x23 * x419) * d - x424 + x105 * (x425 + x204) + x426
+                        + x109 * x411,
+                    x427 * u3
                         - m2
-                            * ((a_ * (-2.0 * x132 - 2.0 * x133)
-                                + d * (-u1 * x174 - x176 * u3)) * d - a_ * a_ * u3)
-                        - x26 * x26 * x392 - x135
-                        + x9 * (-x387 * x75 - x93 * x388 - x30 * x386) - 2.0 * x136
-                        - x28 * x376 * m1,
-                    (x325 - u5 * x12 * x12 - x393) * J1 - m2 * x377 * x36
-                        + x9 * (-x85 * x388 - x63 * x387 - x386 * x47) - x10 * x10 * x118
-                        + u2 * x394 + (x393 - x325) * J2
-                        - m1
-                            * (((2.0 * x130 - 2.0 * x129) * a_ + d * (x328 - x327)) * d
-                                + a_ * a_ * u2) + x165 + 2.0 * x166,
-                    d * m1 * (x379 + x380 + x9 * (-x58 * x387 - x79 * x388 - x39 * x386))
-                        + x103 * x126 * x38 + x26 * x101 * x131,
-                    x10 * x103 * x148
-                        + m2 * d
-                            * (x383 - x382
-                                + x9 * (-x387 * x73 - x90 * x388 - x386 * x22)) + x395,
+                            * (d
+                                * (-(2.0 * x144 + 2.0 * x145) * a_
+                                    - (u1 * x199 + x201 * u3) * d) - u3 * x193) - x38 * x419
+                        - x156 - x103 * x425 + J2 * (x139 + x428) - 2.0 * x157
+                        + (x101 * u4 - x139 - x428) * J1
+                        - x9 * (-x423 * x95 - x80 * x421 - x45 * x422),
+                    u2 * x429 - x104 * x135 - x415 * x55
+                        - x9 * (-x56 * x422 - x68 * x421 - x89 * x423) + x190
+                        + 2.0 * x191 + (x143 - u5 * x100 - x430) * J1
+                        + J2 * (x430 - x143)
+                        - (d * (a_ * (2.0 * x141 - 2.0 * x140) + d * (x378 - x377))
+                            + a_ * x159) * m1,
+                    x108 * x430 + x143 * x106
+                        + (x418 - x9 * (-x63 * x421 - x85 * x423 - x34 * x422)) * x121,
+                    x11 * x206 + x431
+                        + x115
+                            * (x412 - x413
+                                - x9 * (-x21 * x422 - x93 * x423 - x421 * x78)),
                 ],
                 [
-                    (x9 * (-x78 * x403 - x97 * x0 * x404 - x405 * x51)
-                        - x140 * x38 * x38 * d * m1 + m2 * x12 * x401) * d
-                        - x26 * x26 * u4 * J1 + x38 * x38 * x392 + 2.0 * x135 - x395
-                        + x136 + u3 * x406,
-                    2.0 * (u5 * m2 * a_ * d * x12) + x374
-                        + (-x93 * x404 - x403 * x75 - x30 * x405) * x9
-                        + x38 * (x26 * (x372 - x371 - x373) - x140 * x28 * d * m1)
-                        - x407,
-                    x408 - x178 + x394 * u1 - 2.0 * x179
-                        + x9 * (-x85 * x404 - x63 * x403 - x405 * x47)
-                        - m1 * (x409 + d * (d * (x184 + x186) + a_ * x410)) - x411 + x412
-                        - m2 * x36 * x401,
-                    x408
-                        + (x397 + x9 * (-x79 * x404 - x39 * x405 - x58 * x403) + x398)
-                            * d * m1 + x412,
-                    m2 * d
-                        * (x9 * (-x403 * x73 - x90 * x404 - x405 * x22)
-                            - 2.0 * (a_ * u2 * x12)),
+                    d
+                        * (x25 * x433 - x101 * x432
+                            - x9 * (-x83 * x438 - x439 * x98 - x440 * x31)) + x425 * x101
+                        + 2.0 * x156 - x431 + x157 + u3 * x441 - x103 * x204,
+                    x22 * (x32 * (x153 - x204 - x374) + x432 * x37) + x424
+                        + 2.0 * (u5 * x115 * x44)
+                        - x9 * (-x440 * x45 - x438 * x80 - x439 * x95) - x442,
+                    x429 * u1 - x208 - (x443 + d * (d * (x219 + x221) + a_ * x444)) * m1
+                        - 2.0 * x209 - x445 - x433 * x55
+                        - x9 * (-x56 * x440 - x89 * x439 - x68 * x438) + x447,
+                    x447 + x121 * (x436 - x9 * (-x34 * x440 - x439 * x85 - x63 * x438)),
+                    (-x9 * (-x438 * x78 - x439 * x93 - x440 * x21) - 2.0 * x168) * x115,
                 ],
                 [
-                    x126 * x101 * x38 + u2 * x406 - x12 * x12 * (x115 + x413)
-                        + x10 * x10 * u5 * J1 - 2.0 * x165 - x166
-                        + (x9 * (-x97 * x0 * x420 - x421 * x51 - x78 * x422)
-                            + m2 * x116 * d * x12 * x12 - x418 * x38 * m1) * d,
-                    2.0 * x178 - x408 + x391 * u1
-                        - m2 * ((d * (x175 - x177) + a_ * x423) * d - x409) + x179
-                        + x9 * (-x422 * x75 - x93 * x420 - x30 * x421) + x411
-                        - x418 * x28 * m1 + x424,
-                    x12 * (x10 * (-x115 - x413 - x369) - m2 * x116 * d * x36)
-                        + x9 * (-x421 * x47 - x420 * x85 - x63 * x422) - x375
-                        + 2.0 * (a_ * x38 * d * u4 * m1) + x407,
-                    (x9 * (-x79 * x420 - x58 * x422 - x39 * x421)
-                        - 2.0 * (a_ * u3 * x38)) * d * m1,
-                    m2 * d * (x414 + x9 * (-x90 * x420 - x22 * x421 - x422 * x73) - x415)
-                        + x411 + x424,
+                    u2 * x441 - 2.0 * x190 - x191 - (x134 - x132) * x100 + x152 * x22
+                        + x213 * x104
+                        + d
+                            * (x100 * x448 - x449 * x23
+                                - x9 * (-x456 * x31 - x98 * x457 - x458 * x83)),
+                    2.0 * x208 - m2 * (d * (d * (x200 - x202) + a_ * x459) - x443)
+                        + x427 * u1 + x209 - x9 * (-x95 * x457 - x458 * x80 - x456 * x45)
+                        - x446 + x460 - x449 * x38,
+                    x18 * (x448 * x54 - x11 * x411)
+                        - x9 * (-x89 * x457 - x56 * x456 - x68 * x458) - x426
+                        + 2.0 * (x121 * u4 * x46) + x442,
+                    x121 * (-x9 * (-x85 * x457 - x456 * x34 - x458 * x63) - 2.0 * x184),
+                    x115 * (x452 + x453 - x9 * (-x93 * x457 - x458 * x78 - x456 * x21))
+                        + x460,
                 ],
                 [
-                    x425 * x38 - x26 * x131 * J1
-                        + d * d
-                            * (x9 * (x427 * x97 * x0 + x428 * x51 + x78 * x429)
-                                - x38 * x410) * m1,
-                    (x9 * (x30 * x428 + x427 * x93 + x75 * x429) - x28 * x410) * d * m1
-                        - x38 * x131 * J1 - x26 * x425,
-                    (x9 * (x428 * x47 + x427 * x85 + x63 * x429) - a_ * x38 * x426) * d
-                        * m1,
-                    (x427 * x79 + x428 * x39 + x58 * x429) * x9 * d * d * m1 * m1,
-                    x9 * m2 * d * d * (x427 * x90 + x73 * x429 + x428 * x22) * m1,
+                    x22 * x461
+                        + x126
+                            * (x9 * (x463 * x31 + x98 * x464 + x83 * x465) - x22 * x444)
+                        - x143 * J1,
+                    x121 * ((x465 * x80 + x463 * x45 + x464 * x95) * x9 + x444 * x37)
+                        - x205 * J1 - x32 * x461,
+                    x121 * (x9 * (x68 * x465 + x56 * x463 + x89 * x464) + x462 * x46),
+                    (x63 * x465 + x34 * x463 + x464 * x85) * x121 * x112,
+                    (x465 * x78 + x463 * x21 + x464 * x93) * x127,
                 ],
                 [
-                    m2 * d * d
-                        * (x9 * (x78 * x431 + x432 * x51 + x433 * x97 * x0) + x12 * x423)
-                        - x10 * x134 * J1 - x121 * x12 * x434,
-                    m2 * d
-                        * (x9 * (x433 * x93 + x75 * x431 + x30 * x432)
-                            - a_ * x12 * (-2.0 * u5 - 2.0 * u2)),
-                    m2 * (x9 * (x433 * x85 + x432 * x47 + x63 * x431) - x423 * x36) * d
-                        - x10 * x121 * x434 + x12 * x134 * J1,
-                    x9 * m2 * d * d * m1 * (x433 * x79 + x432 * x39 + x58 * x431),
-                    x9 * m2 * m2 * (x433 * x90 + x432 * x22 + x73 * x431) * d * d,
+                    (x18 * x459 + x9 * (x468 * x83 + x98 * x469 + x470 * x31)) * x130
+                        - x147 * J1 - x139 * x466,
+                    x115 * (x467 * x44 + x9 * (x95 * x469 + x468 * x80 + x470 * x45)),
+                    x115 * (x459 * x54 + x9 * (x468 * x68 + x56 * x470 + x89 * x469))
+                        - x466 * x212 + J1 * x214,
+                    (x34 * x470 + x468 * x63 + x85 * x469) * x127,
+                    x115 * x123 * (x468 * x78 + x21 * x470 + x93 * x469),
                 ],
             ],
         }

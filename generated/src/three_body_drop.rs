@@ -287,54 +287,51 @@ pub fn energy(
     let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::cos(gamma1);
-    let x1 = f64::sin(theta);
-    let x2 = f64::cos(theta);
-    let x3 = f64::sin(psi);
-    let x4 = f64::cos(psi);
-    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
-    let x6 = f64::sin(gamma1);
-    let x7 = f64::sin(phi);
-    let x8 = Z_dot * x2 * x7;
-    let x9 = f64::cos(phi);
-    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
-    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
-    let x12 = x2 * psi_dot * x9;
-    let x13 = theta_dot * x7;
-    let x14 = x12 - x13;
-    let x15 = a_ * x14;
-    let x16 = x8 + x10 + x11 + x15;
-    let x17 = x0 * x5 + x6 * x16;
-    let x18 = x12 + gamma1_dot - x13;
-    let x19 = x0 * x16 - x5 * x6 + x18 * d;
-    let x20 = theta_dot * x9;
-    let x21 = x2 * psi_dot * x7;
-    let x22 = x20 + x21;
-    let x23 = a_ * x22;
-    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
-    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
-    let x26 = Z_dot * x2 * x9;
-    let x27 = phi_dot - x1 * psi_dot;
-    let x28 = x0 * x22 - x6 * x27;
-    let x29 = x24 - x23 + x25 + x26 - d * x28;
-    let x30 = gamma2_dot + x20 + x21;
-    let x31 = f64::sin(gamma2);
-    let x32 = f64::cos(gamma2);
-    let x33 = x23 + x24 + x25 + x26;
-    let x34 = x30 * d + x5 * x31 + x32 * x33;
-    let x35 = x31 * x27 + x32 * x14;
-    let x36 = x8 + x10 + x11 - x35 * d - x15;
-    let x37 = x5 * x32 - x33 * x31;
-    let x38 = x6 * x22 + x0 * x27;
-    let x39 = x32 * x27 - x14 * x31;
-    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
-        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
-        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
+    let x0 = f64::cos(theta);
+    let x1 = x0 * psi_dot;
+    let x2 = f64::sin(phi);
+    let x3 = f64::cos(phi);
+    let x4 = x1 * x2 + theta_dot * x3;
+    let x5 = f64::sin(theta);
+    let x6 = phi_dot - x5 * psi_dot;
+    let x7 = x1 * x3 - theta_dot * x2;
+    let x8 = f64::cos(gamma1);
+    let x9 = f64::sin(psi);
+    let x10 = x5 * x9;
+    let x11 = f64::cos(psi);
+    let x12 = x5 * x11;
+    let x13 = Z_dot * x0;
+    let x14 = Y_dot * (x10 * x2 + x11 * x3) + (X_dot * (x12 * x2 - x3 * x9) + x13 * x2);
+    let x15 = a_ * x7;
+    let x16 = x14 + x15;
+    let x17 = gamma1_dot + x7;
+    let x18 = x0 * (Y_dot * x9 + X_dot * x11) - Z_dot * x5;
+    let x19 = f64::sin(gamma1);
+    let x20 = x8 * x16 + d * x17 - x18 * x19;
+    let x21 = x8 * x18 + x19 * x16;
+    let x22 = a_ * x4;
+    let x23 = ((x2 * x9 + x12 * x3) * X_dot + Y_dot * (x10 * x3 - x11 * x2)) + x13 * x3;
+    let x24 = x8 * x4 - x19 * x6;
+    let x25 = x23 - x22 - x24 * d;
+    let x26 = f64::cos(gamma2);
+    let x27 = f64::sin(gamma2);
+    let x28 = x26 * x7 + x27 * x6;
+    let x29 = x14 - x28 * d - x15;
+    let x30 = x22 + x23;
+    let x31 = x18 * x26 - x27 * x30;
+    let x32 = gamma2_dot + x4;
+    let x33 = x26 * x30 + x18 * x27 + x32 * d;
+    let x34 = x19 * x4 + x8 * x6;
+    let x35 = x26 * x6 - x27 * x7;
+    0.5 * ((x7 * Izz - Iyz * x4 - Ixz * x6) * x7)
+        + 0.5 * ((x20 * x20 + x21 * x21 + x25 * x25) * m1)
+        + 0.5 * (m2 * (x29 * x29 + x31 * x31 + x33 * x33))
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
-        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
-        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
-            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
+        + (0.5 * (x34 * x34) + 0.5 * (x35 * x35)) * J1
+        + 0.5 * ((Ixx * x6 - Ixy * x4 - x7 * Ixz) * x6)
+        + 0.5 * ((Iyy * x4 - Ixy * x6 - Iyz * x7) * x4)
+        + (0.5 * (x24 * x24) + 0.5 * (x17 * x17) + 0.5 * (x32 * x32) + 0.5 * (x28 * x28))
+            * J2
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -372,65 +369,71 @@ pub fn momenta(
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let x0 = f64::sin(gamma2);
-    let x1 = f64::cos(gamma2);
+    let x0 = f64::cos(gamma1);
+    let x1 = f64::sin(theta);
     let x2 = f64::cos(psi);
-    let x3 = f64::cos(theta);
-    let x4 = f64::sin(phi);
-    let x5 = f64::sin(psi);
-    let x6 = f64::sin(theta);
-    let x7 = f64::cos(phi);
-    let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
+    let x3 = f64::sin(phi);
+    let x4 = x2 * x3;
+    let x5 = f64::cos(phi);
+    let x6 = f64::sin(psi);
+    let x7 = x5 * x6;
+    let x8 = x1 * x4 - x7;
+    let x9 = f64::sin(gamma1);
+    let x10 = f64::cos(theta);
+    let x11 = x2 * x10;
+    let x12 = x0 * x8 - x9 * x11;
+    let x13 = gamma1_dot * m1;
+    let x14 = f64::sin(gamma2);
+    let x15 = m2 * x14;
+    let x16 = x9 * m1;
+    let x17 = x2 * x5;
+    let x18 = x3 * x6;
+    let x19 = x1 * x17 + x18;
+    let x20 = m2 * gamma2_dot;
+    let x21 = f64::cos(gamma2);
+    let x22 = x14 * x11 + x21 * x19;
+    let x23 = x0 * a_ + d;
+    let x24 = x12 * x23;
+    let x25 = a_ * x9;
+    let x26 = (x0 * x11 + x9 * x8) * x25;
+    let x27 = x10 * x5;
+    let x28 = x10 * x3;
+    let x29 = x1 * x9 + x0 * x28;
+    let x30 = x29 * d + a_ * x28;
+    let x31 = a_ * x14;
+    let x32 = d + x21 * a_;
+    let x33 = x22 * x32 - (x21 * x11 - x14 * x19) * x31;
+    let x34 = x21 * x27 - x1 * x14;
+    let x35 = a_ * x27 + x34 * d;
+    let x36 = -((a_ + x0 * d) * x5);
+    let x37 = (a_ + x21 * d) * x3;
+    let x38 = m2 + m0 + m1;
+    let x39 = x1 * x7 - x4;
+    let x40 = x1 * x18 + x17;
+    let x41 = x10 * x6;
+    let x42 = (x40 * x9 + x0 * x41) * x25;
+    let x43 = x0 * x40 - x9 * x41;
+    let x44 = x43 * x23;
+    let x45 = x14 * x41 + x21 * x39;
+    let x46 = x45 * x32 - (x21 * x41 - x39 * x14) * x31;
     [
+        d * (x12 * x13 + phi_dot * (x16 * x19 - x15 * x8) + x20 * x22)
+            + (((x24 + x26) * x27 - x30 * x19) * m1 + (x28 * x33 - x8 * x35) * m2)
+                * psi_dot
+            + theta_dot
+                * ((x3 * (-x24 - x26) + x36 * x19) * m1 + (x33 * x5 + x8 * x37) * m2)
+            + X_dot * x38,
+        Y_dot * x38
+            + theta_dot
+                * ((x39 * x36 + (-x42 - x44) * x3) * m1 + m2 * (x40 * x37 + x46 * x5))
+            + ((x27 * (x42 + x44) - x39 * x30) * m1 + m2 * (x28 * x46 - x40 * x35))
+                * psi_dot
+            + (x45 * x20 + (x39 * x16 - x15 * x40) * phi_dot + x13 * x43) * d,
         theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
-            + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
-        theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
-            + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
-        theta_dot
-            * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+            * ((x3 * (-x29 * x23 - (x28 * x9 - x0 * x1) * x25) + x36 * x27) * m1
+                + m2 * ((x31 * (x14 * x27 + x21 * x1) + x34 * x32) * x5 + x28 * x37))
+            + d * (x10 * phi_dot * (x16 * x5 - x15 * x3) + x20 * x34 + x13 * x29)
+            + Z_dot * x38,
     ]
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
@@ -519,174 +522,199 @@ pub mod reduced_volterra {
         let J1 = params.J1;
         let J2 = params.J2;
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = f64::sin(gamma2);
-        let x7 = 1.0 / (m2 + m0 + m1);
-        let x8 = f64::cos(psi);
-        let x9 = f64::sin(psi);
-        let x10 = x8 * x3 + x5 * x2 * x9;
-        let x11 = f64::sin(gamma1);
-        let x12 = x8 * x2;
-        let x13 = x5 * x3 * x9;
-        let x14 = x13 - x12;
-        let x15 = x11 * x14 * m1 - m2 * x6 * x10;
-        let x16 = x11 * m1 * x3 - m2 * x6 * x2;
-        let x17 = x2 * x9 + x5 * x8 * x3;
-        let x18 = x5 * x8 * x2 - x3 * x9;
-        let x19 = x11 * x17 * m1 - m2 * x18 * x6;
-        let x20 = f64::cos(gamma1);
-        let x21 = x20 * x20;
-        let x22 = f64::cos(gamma2);
-        let x23 = x22 * x22;
-        let x24 = J1 - J2;
-        let x25 = (x22 * x0 - x5 * x6 * x3) * x8 - x6 * x2 * x9;
-        let x26 = x8 * x0 * x6 + x22 * x17;
-        let x27 = x22 * a_;
-        let x28 = d + x27;
-        let x29 = x20 * d;
-        let x30 = -a_ - x29;
-        let x31 = m2 * (x26 * x28 - a_ * x25 * x6) + x30 * x17 * m1;
-        let x32 = x22 * x0 * x9 + (x12 - x13) * x6;
-        let x33 = x0 * x6 * x9 + x22 * x14;
-        let x34 = x30 * x14 * m1 + m2 * (x33 * x28 - a_ * x6 * x32);
-        let x35 = -x0 * x6 * x3 - x22 * x5;
-        let x36 = x22 * x0 * x3 - x5 * x6;
-        let x37 = m2 * (x36 * x28 - a_ * x35 * x6) + x30 * x0 * m1 * x3;
-        let x38 = x20 * x24 * x11 - Ixy
-            + d * ((-x31 * x19 - x15 * x34 - x37 * x16 * x0) * x7 + x30 * x11 * m1);
-        let x39 = x22 * d;
-        let x40 = -a_ - x39;
-        let x41 = x20 * x10 - x11 * x0 * x9;
-        let x42 = x20 * a_;
-        let x43 = x42 + d;
-        let x44 = x20 * x0 * x9 + x11 * x10;
-        let x45 = (x41 * x43 + a_ * x11 * x44) * m1 + m2 * x40 * x10;
-        let x46 = x20 * x18 - x8 * x11 * x0;
-        let x47 = x8 * (x5 * x11 * x2 + x20 * x0) - x11 * x3 * x9;
-        let x48 = m2 * x18 * x40 + (x46 * x43 + a_ * x47 * x11) * m1;
-        let x49 = x20 * x0 * x2 + x5 * x11;
-        let x50 = x11 * x0 * x2 - x20 * x5;
-        let x51 = (x49 * x43 + a_ * x50 * x11) * m1 + m2 * x0 * x2 * x40;
-        let x52 = J2 - J1;
-        let x53 = (x7 * (-x45 * x15 - x48 * x19 - x16 * x0 * x51) - m2 * x6 * x40) * d
-            + x22 * x52 * x6 - Ixz;
-        let x54 = x7 * d * d * (-x16 * x49 * x0 - x46 * x19 - x15 * x41) * m1;
-        let x55 = x7 * m2 * d * d * (-x26 * x19 - x15 * x33 - x36 * x16 * x0);
-        let x56 = d * d;
-        let x57 = (-x31 * x48 - x45 * x34 - x37 * x51) * x7 - Iyz;
-        let x58 = x7 * d * m1 * (-x31 * x46 - x37 * x49 - x41 * x34);
-        let x59 = m2 * (x7 * (-x36 * x37 - x31 * x26 - x34 * x33) + d + x27) * d + J2;
-        let x60 = J2 + d * m1 * (x42 + d + (-x46 * x48 - x49 * x51 - x45 * x41) * x7);
-        let x61 = x7 * m2 * d * (-x26 * x48 - x36 * x51 - x45 * x33);
-        let x62 = x7 * m2 * d * d * m1 * (-x46 * x26 - x36 * x49 - x41 * x33);
-        let x63 = u5 + u2;
-        let x64 = 2.0 * u5 + u2;
-        let x65 = x64 * J2 - J1 * x63;
-        let x66 = x22 * u1 - u3 * x6;
-        let x67 = u2 * x11;
-        let x68 = x20 * u1;
-        let x69 = u3 + u4;
-        let x70 = x67 + x68;
-        let x71 = J2 * (-x67 - x68) * u4 + x69 * x70 * x24;
-        let x72 = x20 * u2 - x11 * u1;
-        let x73 = x6 * u1;
-        let x74 = x22 * u3;
-        let x75 = -x73 - x74;
-        let x76 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x77 = d * (x22 * (-2.0 * u5 - u2) * u1 + x64 * u3 * x6) - a_ * u2 * u1;
-        let x78 = u3 + 2.0 * u4;
-        let x79 = d * (x20 * x78 * u1 + x78 * u2 * x11) + a_ * u3 * u1;
-        let x80 = a_ * u2 * u2 * x6;
-        let x81 = u3 * x40 - d * x6 * u1;
-        let x82 = x66 * x81;
-        let x83 = x80 + x82;
-        let x84 = x73 + x74;
-        let x85 = (u5 * d + u2 * x28) * x63 - x22 * u5 * a_ * u2 - x81 * x84;
-        let x86 = a_ * u3 * u3 * x11;
-        let x87 = u2 * x30 + x11 * d * u1;
-        let x88 = x87 * x70;
-        let x89 = x86 - x88;
-        let x90 = x87 * x72 + x20 * a_ * u3 * u4 - (u3 * x43 + d * u4) * x69;
-        let x91 = -(x83 * x33 + x85 * x32 + x10 * x77) * m2
-            - m1 * (x14 * x79 + x89 * x41 + x90 * x44);
-        let x92 = -m1 * (x47 * x90 + x46 * x89 + x17 * x79)
-            - m2 * (x25 * x85 + x83 * x26 + x18 * x77);
-        let x93 = -m2 * (x0 * x2 * x77 + x83 * x36 + x35 * x85)
-            - (x0 * x79 * x3 + x50 * x90 + x89 * x49) * m1;
-        let x94 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x95 = x52 * x66 * x84;
-        let x96 = u1 * u1;
-        let x97 = 2.0 * gamma2;
-        let x98 = f64::sin(x97);
-        let x99 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x100 = 2.0 * gamma1;
-        let x101 = f64::sin(x100);
-        let x102 = x70 * x24 * x72;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = f64::sin(gamma2);
+        let x6 = x5 * x5;
+        let x7 = f64::sin(gamma1);
+        let x8 = x7 * x7;
+        let x9 = f64::cos(gamma1);
+        let x10 = x9 * x9;
+        let x11 = f64::cos(gamma2);
+        let x12 = x11 * x11;
+        let x13 = m2 * x5;
+        let x14 = 1.0 / (m2 + m0 + m1);
+        let x15 = x7 * m1;
+        let x16 = f64::sin(psi);
+        let x17 = x1 * x16;
+        let x18 = x4 * x2;
+        let x19 = f64::cos(psi);
+        let x20 = x17 + x18 * x19;
+        let x21 = x4 * x1;
+        let x22 = x2 * x16;
+        let x23 = x19 * x21 - x22;
+        let x24 = x15 * x20 - x13 * x23;
+        let x25 = x19 * x1;
+        let x26 = x18 * x16;
+        let x27 = x26 - x25;
+        let x28 = x19 * x2 + x21 * x16;
+        let x29 = x15 * x27 - x13 * x28;
+        let x30 = x0 * (x15 * x2 - x13 * x1);
+        let x31 = d * d;
+        let x32 = J1 - J2;
+        let x33 = x9 * d;
+        let x34 = a_ + x33;
+        let x35 = x19 * x0;
+        let x36 = x5 * x35 + x11 * x20;
+        let x37 = d + x11 * a_;
+        let x38 = (x11 * x0 - x18 * x5) * x19 - x5 * x17;
+        let x39 = a_ * x5;
+        let x40 = -(x34 * m1);
+        let x41 = m2 * (x36 * x37 - x38 * x39) + x40 * x20;
+        let x42 = x0 * x16;
+        let x43 = x5 * x42 + x11 * x27;
+        let x44 = (x25 - x26) * x5 + x11 * x42;
+        let x45 = m2 * (x37 * x43 - x44 * x39) + x40 * x27;
+        let x46 = x0 * x2;
+        let x47 = x11 * x46 - x4 * x5;
+        let x48 = x5 * x46 + x11 * x4;
+        let x49 = m2 * (x47 * x37 + x39 * x48) + x40 * x46;
+        let x50 = x9 * x32 * x7 - Ixy
+            + d * (-x34 * x15 - x14 * (x24 * x41 + x45 * x29 + x30 * x49));
+        let x51 = J2 - J1;
+        let x52 = x11 * d;
+        let x53 = a_ + x52;
+        let x54 = -(m2 * x53);
+        let x55 = x9 * x28 - x7 * x42;
+        let x56 = x9 * a_ + d;
+        let x57 = x28 * x7 + x9 * x42;
+        let x58 = a_ * x7;
+        let x59 = x28 * x54 + m1 * (x55 * x56 + x57 * x58);
+        let x60 = x0 * x1;
+        let x61 = x4 * x7 + x9 * x60;
+        let x62 = x60 * x7 - x9 * x4;
+        let x63 = (x61 * x56 + x62 * x58) * m1 + x60 * x54;
+        let x64 = x9 * x23 - x7 * x35;
+        let x65 = x19 * (x7 * x21 + x9 * x0) - x7 * x22;
+        let x66 = (x64 * x56 + x65 * x58) * m1 + x23 * x54;
+        let x67 = x11 * x51 * x5
+            + (x13 * x53 - x14 * (x29 * x59 + x30 * x63 + x24 * x66)) * d - Ixz;
+        let x68 = x14 * m1;
+        let x69 = -(x68 * (x29 * x55 + x30 * x61 + x24 * x64) * x31);
+        let x70 = x14 * m2;
+        let x71 = -((x30 * x47 + x24 * x36 + x29 * x43) * x31 * x70);
+        let x72 = -Iyz - x14 * (x49 * x63 + x45 * x59 + x41 * x66);
+        let x73 = -(x68 * (x61 * x49 + x45 * x55 + x41 * x64) * d);
+        let x74 = m2 * d;
+        let x75 = J2 + (x37 - x14 * (x41 * x36 + x47 * x49 + x45 * x43)) * x74;
+        let x76 = d * m1;
+        let x77 = J2 + (x56 - x14 * (x66 * x64 + x61 * x63 + x55 * x59)) * x76;
+        let x78 = -((x66 * x36 + x43 * x59 + x47 * x63) * d * x70);
+        let x79 = m1 * x31;
+        let x80 = -((x61 * x47 + x55 * x43 + x36 * x64) * x79 * x70);
+        let x81 = u2 * x7;
+        let x82 = x9 * u1;
+        let x83 = x81 + x82;
+        let x84 = u3 + u4;
+        let x85 = x32 * x83;
+        let x86 = x84 * x85 - J2 * u4 * x83;
+        let x87 = u3 + 2.0 * u4;
+        let x88 = a_ * u3;
+        let x89 = d * (x81 * x87 + x87 * x82) + x88 * u1;
+        let x90 = x11 * u1;
+        let x91 = 2.0 * u5 + u2;
+        let x92 = u3 * x5;
+        let x93 = a_ * u2;
+        let x94 = d * (x91 * x92 - x90 * x91) - x93 * u1;
+        let x95 = x7 * u1;
+        let x96 = x95 * d - x34 * u2;
+        let x97 = x96 * x83;
+        let x98 = x88 * u3 * x7;
+        let x99 = x98 - x97;
+        let x100 = x9 * u4;
+        let x101 = x9 * u2 - x95;
+        let x102 = x88 * x100 - x84 * (u3 * x56 + d * u4) + x96 * x101;
+        let x103 = x5 * u1;
+        let x104 = -x103 * d - u3 * x53;
+        let x105 = x90 - x92;
+        let x106 = x104 * x105;
+        let x107 = u2 * x5 * x93;
+        let x108 = x106 + x107;
+        let x109 = x103 + x11 * u3;
+        let x110 = x11 * u5;
+        let x111 = u5 + u2;
+        let x112 = (u5 * d + u2 * x37) * x111 - x109 * x104 - x93 * x110;
+        let x113 = (x89 * x27 + x99 * x55 + x57 * x102) * m1
+            + m2 * (x108 * x43 + x44 * x112 + x94 * x28);
+        let x114 = m1 * (x102 * x65 + x89 * x20 + x99 * x64)
+            + m2 * (x108 * x36 + x94 * x23 + x112 * x38);
+        let x115 = (x62 * x102 + x99 * x61 + x89 * x46) * m1
+            + m2 * (x108 * x47 + x94 * x60 - x112 * x48);
+        let x116 = (J2 * x91 - J1 * x111) * x105;
+        let x117 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x118 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x119 = x109 * x51 * x105;
+        let x120 = a_ * u1;
+        let x121 = 2.0 * gamma2;
+        let x122 = f64::sin(x121);
+        let x123 = u1 * u1;
+        let x124 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x125 = x85 * x101;
+        let x126 = 2.0 * gamma1;
+        let x127 = f64::sin(x126);
         Assembly {
-            qdot: [x1 * x4, u2 * x3 - u3 * x2, u1 + x5 * x1 * x4, u4, u5],
+            qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * x6 * x6
-                                + x7 * (-x15 * x15 - x16 * x16 * x0 * x0 - x19 * x19)
-                                + x11 * x11 * m1) + (x21 + x23) * J1
-                        + (x6 * x6 + x11 * x11) * J2,
-                    x38,
-                    x53,
-                    x54,
-                    x55,
+                    (x6 + x8) * J2 + Ixx + (x10 + x12) * J1
+                        + (x13 * x5 - x14 * (x24 * x24 + x29 * x29 + x30 * x30)
+                            + x7 * x15) * x31,
+                    x50,
+                    x67,
+                    x69,
+                    x71,
                 ],
                 [
-                    x38,
-                    x11 * x11 * J1 + x30 * x30 * m1 + Iyy + J2 * (x21 + 1.0)
-                        + x7 * (-x31 * x31 - x34 * x34 - x37 * x37)
-                        + m2 * (x56 + a_ * (a_ + 2.0 * x39)),
-                    x57,
-                    x58,
-                    x59,
+                    x50,
+                    Iyy - x14 * (x41 * x41 + x45 * x45 + x49 * x49) + J2 * (x10 + 1.0)
+                        - x34 * x40 + m2 * (x31 + a_ * (a_ + 2.0 * x52)) + x8 * J1,
+                    x72,
+                    x73,
+                    x75,
                 ],
                 [
-                    x53,
-                    x57,
-                    x7 * (-x45 * x45 - x48 * x48 - x51 * x51) + x6 * x6 * J1
-                        + (a_ * (a_ + 2.0 * x29) + x56) * m1 + m2 * x40 * x40 + Izz
-                        + J2 * (x23 + 1.0),
-                    x60,
-                    x61,
+                    x67,
+                    x72,
+                    x6 * J1 - x14 * (x59 * x59 + x63 * x63 + x66 * x66) + Izz
+                        + J2 * (x12 + 1.0) - x53 * x54
+                        + (a_ * (a_ + 2.0 * x33) + x31) * m1,
+                    x77,
+                    x78,
                 ],
-                [x54, x58, x60, (1.0 - x7 * m1) * d * d * m1 + J2, x62],
-                [x55, x59, x61, x62, J2 + m2 * d * d * (1.0 - x7 * m2)],
+                [x69, x73, x77, J2 + (1.0 - x68) * x79, x80],
+                [x71, x75, x78, x80, J2 + (1.0 - x70) * m2 * x31],
             ],
             force: [
-                x71 * x11 - x65 * x66 * x6 + (-x20 * u4 * x72 - x22 * u5 * x75) * J1
-                    - u2 * x76
-                    + (m2 * x6 * x77 - x11 * m1 * x79
-                        + x7 * (-x15 * x91 - x92 * x19 - x16 * x93 * x0)) * d + x94 * u3,
-                x95 - x20 * x71 - x30 * m1 * x79 + x76 * u1
-                    + x7 * (-x37 * x93 - x92 * x31 - x91 * x34) - x11 * u4 * x72 * J1
+                x7 * x86
+                    + d
+                        * (x94 * x13 - x89 * x15
+                            - x14 * (-x29 * x113 - x24 * x114 - x30 * x115)) - x116 * x5
+                    - (x100 * x101 - x109 * x110) * J1 - u2 * x117 + x118 * u3,
+                x119 - x9 * x86 + x117 * u1
                     - m2
-                        * ((a_
-                            * (x6 * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - x96)
-                                - 2.0 * (x22 * u3 * u1))
-                            + ((0.5 * (u3 * x98) - f64::cos(x97) * u1) * u3
-                                - 0.5 * (u1 * u1 * x98)) * d) * d - a_ * a_ * u3 * u1)
-                    - x99 * u3,
-                x7 * (-x93 * x51 - x92 * x48 - x45 * x91) - m2 * x40 * x77
+                        * (d
+                            * (d
+                                * ((0.5 * (u3 * x122) - f64::cos(x121) * u1) * u3
+                                    - 0.5 * (x123 * x122))
+                                + ((u3 * u3 - x123 - (u5 + 2.0 * u2) * u5) * x5
+                                    - 2.0 * (x90 * u3)) * a_) - x88 * x120)
+                    - x7 * u4 * x101 * J1 - x40 * x89
+                    - x14 * (-x41 * x114 - x45 * x113 - x49 * x115) - x124 * u3,
+                x125 - u5 * x109 * x5 * J1 - x94 * x54 + u2 * x124
+                    - x14 * (-x113 * x59 - x115 * x63 - x66 * x114)
                     - (d
                         * (a_
-                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - x96) * x11
-                                + 2.0 * (x20 * u2 * u1))
-                            + d
-                                * (u2 * (0.5 * (u2 * x101) + u1 * f64::cos(x100))
-                                    - 0.5 * (u1 * u1 * x101))) + a_ * a_ * u2 * u1) * m1
-                    - x22 * x65 * x66 + u2 * x99 + u5 * x6 * x75 * J1 - x94 * u1 + x102,
-                d * m1 * (x7 * (-x93 * x49 - x92 * x46 - x41 * x91) - x86 + x88) + x102,
-                x95 + m2 * (x7 * (-x91 * x33 - x92 * x26 - x36 * x93) - x80 - x82) * d,
+                            * ((u2 * u2 - x123 - u4 * (2.0 * u3 + u4)) * x7
+                                + 2.0 * (u2 * x82))
+                            + (u2 * (0.5 * (u2 * x127) + u1 * f64::cos(x126))
+                                - 0.5 * (x123 * x127)) * d) + x120 * x93) * m1 - x118 * u1
+                    - x11 * x116,
+                x125 + x76 * (x97 - x98 - x14 * (-x114 * x64 - x61 * x115 - x55 * x113)),
+                x119
+                    + x74
+                        * (-x14 * (-x114 * x36 - x113 * x43 - x47 * x115) - x106 - x107),
             ],
             checks: [x0],
         }
@@ -774,38 +802,50 @@ pub mod reduced_volterra {
         let d = params.d;
         let a_ = params.a_;
         let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
+        let x1 = f64::cos(theta);
+        let x2 = f64::sin(phi);
+        let x3 = x1 * x2;
+        let x4 = f64::cos(phi);
+        let x5 = x1 * x4;
+        let x6 = f64::sin(psi);
+        let x7 = x0 * x4;
+        let x8 = f64::cos(psi);
+        let x9 = x2 * x6 + x7 * x8;
+        let x10 = f64::cos(gamma1);
+        let x11 = -((a_ + x10 * d) * x4);
+        let x12 = x0 * x2;
+        let x13 = x8 * x12 - x4 * x6;
         let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let x15 = x8 * x1;
+        let x16 = x10 * x13 - x14 * x15;
+        let x17 = x10 * a_ + d;
+        let x18 = x16 * x17;
+        let x19 = a_ * x14;
+        let x20 = x19 * (x10 * x15 + x13 * x14);
+        let x21 = f64::cos(gamma2);
+        let x22 = f64::sin(gamma2);
+        let x23 = a_ * x22;
+        let x24 = x21 * x9 + x22 * x15;
+        let x25 = d + x21 * a_;
+        let x26 = x24 * x25 - (x21 * x15 - x9 * x22) * x23;
+        let x27 = (a_ + x21 * d) * x2;
+        let x28 = m2 * gamma2_dot;
+        let x29 = m2 * x22;
+        let x30 = x14 * m1;
+        let x31 = gamma1_dot * m1;
+        let x32 = x21 * x5 - x0 * x22;
+        let x33 = a_ * x5 + x32 * d;
+        let x34 = x0 * x14 + x10 * x3;
+        let x35 = x34 * d + a_ * x3;
+        let x36 = m2 + m0 + m1;
+        let x37 = x8 * x4 + x12 * x6;
+        let x38 = x7 * x6 - x8 * x2;
+        let x39 = x1 * x6;
+        let x40 = x22 * x39 + x21 * x38;
+        let x41 = x25 * x40 - (x21 * x39 - x22 * x38) * x23;
+        let x42 = x10 * x37 - x14 * x39;
+        let x43 = x42 * x17;
+        let x44 = (x37 * x14 + x10 * x39) * x19;
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -825,37 +865,30 @@ pub mod reduced_volterra {
             q[3],
             q[4],
             phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            x3 * psi_dot + theta_dot * x4,
+            psi_dot * x5 - theta_dot * x2,
             gamma1_dot,
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * ((x9 * x11 + x2 * (-x18 - x20)) * m1 + m2 * (x26 * x4 + x13 * x27))
+                + (x28 * x24 + phi_dot * (x9 * x30 - x13 * x29) + x31 * x16) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m2 * (x26 * x3 - x13 * x33) + ((x18 + x20) * x5 - x9 * x35) * m1)
+                + X_dot * x36,
+            Y_dot * x36
+                + theta_dot
+                    * (m2 * (x37 * x27 + x41 * x4)
+                        + (x11 * x38 + (-x43 - x44) * x2) * m1)
+                + psi_dot
+                    * (m2 * (x3 * x41 - x37 * x33) + m1 * ((x43 + x44) * x5 - x35 * x38))
+                + d * ((x30 * x38 - x29 * x37) * phi_dot + x28 * x40 + x31 * x42),
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((x2 * (-x34 * x17 - (x3 * x14 - x10 * x0) * x19) + x11 * x5) * m1
+                    + m2 * ((x23 * (x22 * x5 + x21 * x0) + x32 * x25) * x4 + x3 * x27))
+                + d * (x1 * phi_dot * (x30 * x4 - x29 * x2) + x28 * x32 + x31 * x34)
+                + Z_dot * x36,
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -891,34 +924,47 @@ pub mod reduced_volterra {
         let G_Y = g_i[1];
         let G_Z = g_i[2];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma2);
-        let x8 = f64::sin(gamma2);
-        let x9 = f64::cos(psi);
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
+        let x4 = f64::sin(theta);
+        let x5 = 1.0 / (m2 + m0 + m1);
+        let x6 = f64::sin(gamma2);
+        let x7 = f64::cos(psi);
+        let x8 = x7 * x0;
+        let x9 = f64::cos(gamma2);
         let x10 = f64::sin(psi);
-        let x11 = x2 * x10 + x5 * x9 * x3;
-        let x12 = x9 * x0 * x8 + x7 * x11;
-        let x13 = d + x7 * a_;
-        let x14 = f64::cos(gamma1);
-        let x15 = -a_ - x14 * d;
-        let x16 = x5 * x9 * x2 - x3 * x10;
-        let x17 = -a_ - x7 * d;
-        let x18 = f64::sin(gamma1);
-        let x19 = x14 * x16 - x9 * x18 * x0;
-        let x20 = x14 * a_ + d;
-        let x21 = x9 * x3 + x5 * x2 * x10;
-        let x22 = x14 * x21 - x18 * x0 * x10;
-        let x23 = x9 * x2;
-        let x24 = x5 * x3 * x10;
-        let x25 = x24 - x23;
-        let x26 = x0 * x8 * x10 + x7 * x25;
-        let x27 = x14 * x0 * x2 + x5 * x18;
-        let x28 = x7 * x0 * x3 - x5 * x8;
+        let x11 = x1 * x10;
+        let x12 = x4 * x2;
+        let x13 = x11 + x12 * x7;
+        let x14 = x6 * x8 + x9 * x13;
+        let x15 = d + x9 * a_;
+        let x16 = a_ * x6;
+        let x17 = f64::cos(gamma1);
+        let x18 = -((a_ + x17 * d) * m1);
+        let x19 = x17 * a_ + d;
+        let x20 = f64::sin(gamma1);
+        let x21 = x4 * x1;
+        let x22 = x2 * x10;
+        let x23 = x7 * x21 - x22;
+        let x24 = x17 * x23 - x20 * x8;
+        let x25 = a_ * x20;
+        let x26 = -(m2 * (a_ + x9 * d));
+        let x27 = u5 * m2;
+        let x28 = x20 * m1;
+        let x29 = m2 * x6;
+        let x30 = u4 * m1;
+        let x31 = x0 * x10;
+        let x32 = x7 * x2 + x21 * x10;
+        let x33 = x17 * x32 - x20 * x31;
+        let x34 = x7 * x1;
+        let x35 = x12 * x10;
+        let x36 = x35 - x34;
+        let x37 = x6 * x31 + x9 * x36;
+        let x38 = x0 * x1;
+        let x39 = x4 * x20 + x17 * x38;
+        let x40 = x0 * x2;
+        let x41 = x9 * x40 - x4 * x6;
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -938,48 +984,33 @@ pub mod reduced_volterra {
             0.0,
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + x5 * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            x4 * x3 + u1,
             u4,
             u5,
-            x6
+            x5
                 * (G_X
-                    - (m2
-                        * (x12 * x13
-                            - a_ * ((x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10) * x8)
-                        + x15 * x11 * m1) * u2
-                    - u3
-                        * (m2 * x16 * x17
-                            + (x19 * x20
-                                + a_ * (x9 * (x5 * x18 * x2 + x14 * x0) - x18 * x3 * x10)
-                                    * x18) * m1)
-                    + d
-                        * (-u5 * m2 * x12 - u1 * (x18 * x11 * m1 - m2 * x16 * x8)
-                            - x19 * u4 * m1)),
-            x6
-                * (G_Y
-                    - ((x22 * x20 + a_ * x18 * (x14 * x0 * x10 + x18 * x21)) * m1
-                        + m2 * x17 * x21) * u3
                     - u2
-                        * (x15 * x25 * m1
-                            + m2
-                                * (x26 * x13
-                                    - a_ * x8 * (x7 * x0 * x10 + (x23 - x24) * x8)))
-                    + d
-                        * (-x22 * u4 * m1 - u5 * m2 * x26
-                            - (x18 * x25 * m1 - m2 * x8 * x21) * u1)),
-            x6
+                        * (m2
+                            * (x14 * x15 - ((x9 * x0 - x12 * x6) * x7 - x6 * x11) * x16)
+                            + x18 * x13)
+                    - u3
+                        * ((x19 * x24 + (x7 * (x20 * x21 + x17 * x0) - x20 * x22) * x25)
+                            * m1 + x23 * x26)
+                    - d * (x27 * x14 + (x28 * x13 - x29 * x23) * u1 + x30 * x24)),
+            x5
+                * (G_Y - (x33 * x30 + x27 * x37 + (x28 * x36 - x29 * x32) * u1) * d
+                    - u2
+                        * ((x15 * x37 - ((x34 - x35) * x6 + x9 * x31) * x16) * m2
+                            + x18 * x36)
+                    - (x32 * x26 + (x33 * x19 + (x32 * x20 + x17 * x31) * x25) * m1)
+                        * u3),
+            x5
                 * (G_Z
-                    - u3
-                        * ((x27 * x20 + a_ * (x18 * x0 * x2 - x14 * x5) * x18) * m1
-                            + m2 * x0 * x2 * x17)
-                    - u2
-                        * (m2 * (x28 * x13 - a_ * (-x0 * x8 * x3 - x7 * x5) * x8)
-                            + x15 * x0 * m1 * x3)
-                    + d
-                        * (-x27 * u4 * m1 - u5 * m2 * x28
-                            - (x18 * m1 * x3 - m2 * x8 * x2) * x0 * u1)),
+                    - u3 * ((x39 * x19 + (x38 * x20 - x17 * x4) * x25) * m1 + x38 * x26)
+                    - u2 * ((x16 * (x6 * x40 + x9 * x4) + x41 * x15) * m2 + x18 * x40)
+                    - d * (x39 * x30 + x41 * x27 + x0 * u1 * (x28 * x2 - x29 * x1))),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -1043,690 +1074,698 @@ pub mod reduced_volterra {
         let x0 = f64::cos(theta);
         let x1 = 1.0 / x0;
         let x2 = f64::sin(phi);
-        let x3 = u2 * x2;
-        let x4 = f64::cos(phi);
-        let x5 = u3 * x4;
-        let x6 = x3 + x5;
-        let x7 = u2 * x4 - u3 * x2;
-        let x8 = f64::sin(theta);
+        let x3 = f64::cos(phi);
+        let x4 = u2 * x2 + u3 * x3;
+        let x5 = x1 * x4;
+        let x6 = u2 * x3 - u3 * x2;
+        let x7 = f64::sin(theta);
+        let x8 = x7 * x5;
         let x9 = f64::sin(gamma2);
-        let x10 = 1.0 / (m2 + m0 + m1);
-        let x11 = f64::cos(psi);
-        let x12 = x11 * x4;
-        let x13 = f64::sin(psi);
-        let x14 = x8 * x2 * x13;
-        let x15 = x12 + x14;
-        let x16 = m2 * x9 * x15;
-        let x17 = f64::sin(gamma1);
-        let x18 = x11 * x2;
-        let x19 = x8 * x4 * x13;
-        let x20 = x19 - x18;
-        let x21 = x17 * x20 * m1;
-        let x22 = x21 - x16;
-        let x23 = x17 * m1 * x4;
-        let x24 = m2 * x9 * x2;
-        let x25 = x23 - x24;
-        let x26 = x2 * x13;
-        let x27 = x8 * x11 * x4;
-        let x28 = x26 + x27;
-        let x29 = x4 * x13;
-        let x30 = x8 * x11 * x2;
-        let x31 = x30 - x29;
-        let x32 = x17 * x28 * m1 - m2 * x31 * x9;
-        let x33 = f64::cos(gamma1);
-        let x34 = x33 * x33;
-        let x35 = f64::cos(gamma2);
-        let x36 = x35 * x35;
-        let x37 = J1 - J2;
-        let x38 = x35 * x0;
-        let x39 = x8 * x9 * x4;
-        let x40 = (x38 - x39) * x11 - x9 * x2 * x13;
-        let x41 = x11 * x0 * x9;
-        let x42 = x35 * x28;
-        let x43 = x41 + x42;
-        let x44 = x35 * a_;
-        let x45 = d + x44;
-        let x46 = x33 * d;
-        let x47 = -a_ - x46;
-        let x48 = m2 * (x43 * x45 - a_ * x40 * x9) + x47 * x28 * m1;
-        let x49 = x47 * x20 * m1;
-        let x50 = x35 * x0 * x13;
-        let x51 = x18 - x19;
-        let x52 = x50 + x51 * x9;
-        let x53 = x0 * x9 * x13;
-        let x54 = x35 * x20;
-        let x55 = x53 + x54;
-        let x56 = m2 * (x55 * x45 - a_ * x9 * x52);
-        let x57 = x49 + x56;
-        let x58 = -x0 * x9 * x4 - x35 * x8;
-        let x59 = x8 * x9;
-        let x60 = x35 * x0 * x4;
-        let x61 = x60 - x59;
-        let x62 = m2 * (x61 * x45 - a_ * x58 * x9) + x47 * x0 * m1 * x4;
-        let x63 = x33 * x37 * x17 - Ixy
-            + d * ((-x48 * x32 - x22 * x57 - x62 * x25 * x0) * x10 + x47 * x17 * m1);
-        let x64 = x35 * d;
-        let x65 = -a_ - x64;
-        let x66 = x33 * x15;
-        let x67 = x17 * x0 * x13;
-        let x68 = x66 - x67;
-        let x69 = x33 * a_;
-        let x70 = x69 + d;
-        let x71 = x33 * x0 * x13;
-        let x72 = x71 + x17 * x15;
-        let x73 = (x68 * x70 + a_ * x17 * x72) * m1;
-        let x74 = m2 * x65 * x15;
-        let x75 = x73 + x74;
-        let x76 = x33 * x31 - x11 * x17 * x0;
-        let x77 = x8 * x17 * x2;
-        let x78 = x33 * x0;
-        let x79 = x17 * x4 * x13;
-        let x80 = x11 * (x77 + x78) - x79;
-        let x81 = m2 * x31 * x65 + (x76 * x70 + a_ * x80 * x17) * m1;
-        let x82 = x33 * x0 * x2 + x8 * x17;
-        let x83 = x17 * x0 * x2;
-        let x84 = x33 * x8;
-        let x85 = x83 - x84;
-        let x86 = (x82 * x70 + a_ * x85 * x17) * m1 + m2 * x0 * x2 * x65;
-        let x87 = J2 - J1;
-        let x88 = (x10 * (-x75 * x22 - x81 * x32 - x25 * x0 * x86) - m2 * x9 * x65) * d
-            + x35 * x87 * x9 - Ixz;
-        let x89 = x10 * d * d * (-x25 * x82 * x0 - x76 * x32 - x22 * x68) * m1;
-        let x90 = x10 * m2 * d * d * (-x43 * x32 - x22 * x55 - x61 * x25 * x0);
-        let x91 = d * d;
-        let x92 = (-x48 * x81 - x75 * x57 - x62 * x86) * x10 - Iyz;
-        let x93 = x10 * d * m1 * (-x48 * x76 - x62 * x82 - x68 * x57);
-        let x94 = m2 * (x10 * (-x61 * x62 - x48 * x43 - x57 * x55) + d + x44) * d + J2;
-        let x95 = J2 + d * m1 * (x69 + d + (-x76 * x81 - x82 * x86 - x75 * x68) * x10);
-        let x96 = x10 * m2 * d * (-x43 * x81 - x61 * x86 - x75 * x55);
-        let x97 = x10 * m2 * d * d * m1 * (-x76 * x43 - x61 * x82 - x68 * x55);
-        let x98 = u5 + u2;
-        let x99 = J1 * x98;
-        let x100 = 2.0 * u5 + u2;
-        let x101 = x100 * J2;
-        let x102 = x101 - x99;
-        let x103 = u3 * x9;
-        let x104 = x35 * u1;
-        let x105 = x104 - x103;
-        let x106 = u2 * x17;
-        let x107 = x33 * u1;
-        let x108 = -x106 - x107;
-        let x109 = u3 + u4;
-        let x110 = x106 + x107;
-        let x111 = J2 * x108 * u4 + x109 * x110 * x37;
-        let x112 = x111 * x17;
-        let x113 = x17 * u1;
-        let x114 = x33 * u2;
-        let x115 = x114 - x113;
-        let x116 = x9 * u1;
-        let x117 = x35 * u3;
-        let x118 = -x116 - x117;
-        let x119 = u2 * Iyz;
-        let x120 = u1 * Ixz;
-        let x121 = u3 * Izz - x119 - x120;
-        let x122 = -2.0 * u5 - u2;
-        let x123 = d * (x35 * x122 * u1 + x100 * u3 * x9) - a_ * u2 * u1;
-        let x124 = u3 + 2.0 * u4;
-        let x125 = d * (x33 * x124 * u1 + x124 * u2 * x17) + a_ * u3 * u1;
-        let x126 = a_ * u2 * u2 * x9;
-        let x127 = d * x9 * u1;
-        let x128 = u3 * x65;
-        let x129 = x128 - x127;
-        let x130 = x105 * x129;
-        let x131 = x126 + x130;
-        let x132 = x116 + x117;
-        let x133 = (u5 * d + u2 * x45) * x98 - x35 * u5 * a_ * u2 - x129 * x132;
-        let x134 = (x131 * x55 + x133 * x52 + x15 * x123) * m2;
-        let x135 = a_ * u3 * u3 * x17;
-        let x136 = u2 * x47;
-        let x137 = x17 * d * u1;
-        let x138 = x136 + x137;
-        let x139 = x138 * x110;
-        let x140 = x135 - x139;
-        let x141 = x138 * x115;
-        let x142 = x33 * a_ * u3 * u4;
-        let x143 = (u3 * x70 + d * u4) * x109;
-        let x144 = x141 + x142 - x143;
-        let x145 = m1 * (x20 * x125 + x140 * x68 + x144 * x72);
-        let x146 = -x134 - x145;
-        let x147 = -m1 * (x80 * x144 + x76 * x140 + x28 * x125)
-            - m2 * (x40 * x133 + x131 * x43 + x31 * x123);
-        let x148 = -m2 * (x0 * x2 * x123 + x131 * x61 + x58 * x133)
-            - (x0 * x125 * x4 + x85 * x144 + x140 * x82) * m1;
-        let x149 = Iyz * u3;
-        let x150 = Ixy * u1;
-        let x151 = u2 * Iyy - x149 - x150;
-        let x152 = x87 * x105 * x132;
-        let x153 = x33 * x111;
-        let x154 = u3 * u3;
-        let x155 = u1 * u1;
-        let x156 = u5 * (-u5 - 2.0 * u2) + x154 - x155;
-        let x157 = 2.0 * gamma2;
-        let x158 = f64::sin(x157);
-        let x159 = u3 * x158;
-        let x160 = f64::cos(x157);
-        let x161 = x160 * u1;
-        let x162 = u3 * Ixz;
-        let x163 = u2 * Ixy;
-        let x164 = Ixx * u1 - x162 - x163;
-        let x165 = u2 * u2 + u4 * (-2.0 * u3 - u4) - x155;
-        let x166 = 2.0 * gamma1;
-        let x167 = f64::sin(x166);
-        let x168 = u2 * x167;
-        let x169 = f64::cos(x166);
-        let x170 = u1 * x169;
-        let x171 = x110 * x37 * x115;
-        let x172 = -x12 - x14;
-        let x173 = m2 * x9 * x172;
-        let x174 = x51 * x17 * m1;
-        let x175 = x173 + x16 - x174 - x21;
-        let x176 = x9 * x20 - x50;
-        let x177 = x35 * x51;
-        let x178 = x177 - x53;
-        let x179 = m2 * (x178 * x45 - a_ * x176 * x9);
-        let x180 = x51 * x47 * m1;
-        let x181 = -x49 - x56 - x179 - x180;
-        let x182 = x10 * (x48 * x175 + x181 * x32) * d;
-        let x183 = x33 * x172;
-        let x184 = x183 + x67;
-        let x185 = x17 * x172 - x71;
-        let x186 = (x184 * x70 + a_ * x17 * x185) * m1;
-        let x187 = m2 * x172 * x65;
-        let x188 = -x73 - x186 - x187 - x74;
-        let x189 = x10 * (x188 * x32 + x175 * x81) * d;
-        let x190 = -x183 - x66;
-        let x191 = x10 * (x190 * x32 + x76 * x175) * d * d * m1;
-        let x192 = -x54 - x177;
-        let x193 = x10 * m2 * d * d * (x175 * x43 + x192 * x32);
-        let x194 = x10 * (x48 * x188 + x181 * x81);
-        let x195 = (x181 * x76 + x48 * x190) * x10 * d * m1;
-        let x196 = x10 * m2 * d * (x181 * x43 + x48 * x192);
-        let x197 = x10 * (x190 * x81 + x76 * x188) * d * m1;
-        let x198 = x10 * m2 * (x192 * x81 + x43 * x188) * d;
-        let x199 = x10 * m2 * d * d * m1 * (x76 * x192 + x190 * x43);
-        let x200 = x134 + x145 + (x140 * x184 + x144 * x185 + x51 * x125) * m1
-            + m2 * (x172 * x123 + x176 * x133 + x131 * x178);
-        let x201 = x11 * x32;
-        let x202 = x22 * x13;
-        let x203 = (x24 - x23) * x8;
-        let x204 = -x201 - x202 - x203;
-        let x205 = x8 * x47 * m1 * x4;
-        let x206 = x57 * x13;
-        let x207 = x48 * x11;
-        let x208 = x35 * x8 * x4;
-        let x209 = x0 * x9;
-        let x210 = -x208 - x209;
-        let x211 = x39 - x38;
-        let x212 = m2 * (x210 * x45 - x211 * a_ * x9);
-        let x213 = x205 - x206 - x207 - x212;
-        let x214 = x10 * (x62 * x204 + x25 * x0 * x213) * d;
-        let x215 = m2 * x8 * x2 * x65;
-        let x216 = x11 * x81;
-        let x217 = -x77 - x78;
-        let x218 = x33 * x8 * x2;
-        let x219 = x17 * x0;
-        let x220 = x219 - x218;
-        let x221 = (a_ * x217 * x17 + x220 * x70) * m1;
-        let x222 = x75 * x13;
-        let x223 = x215 - x216 - x221 - x222;
-        let x224 = x10 * (x25 * x0 * x223 + x204 * x86) * d;
-        let x225 = x218 - x68 * x13 - x76 * x11 - x219;
-        let x226 = x10 * (x82 * x204 + x225 * x25 * x0) * d * d * m1;
-        let x227 = x208 - x11 * x43 - x55 * x13 + x209;
-        let x228 = x10 * m2 * (x25 * x227 * x0 + x61 * x204) * d * d;
-        let x229 = x10 * (x213 * x86 + x62 * x223);
-        let x230 = x10 * d * m1 * (x225 * x62 + x82 * x213);
-        let x231 = (x62 * x227 + x61 * x213) * x10 * m2 * d;
-        let x232 = x10 * d * m1 * (x82 * x223 + x225 * x86);
-        let x233 = x10 * m2 * (x227 * x86 + x61 * x223) * d;
-        let x234 = x10 * m2 * d * d * m1 * (x82 * x227 + x225 * x61);
-        let x235 = m1 * (x217 * x144 - x8 * x125 * x4 + x140 * x220) - x146 * x13
-            + m2 * (x211 * x133 - x8 * x2 * x123 + x131 * x210) - x147 * x11;
-        let x236 = x17 * x172 * m1 - m2 * x9 * x20;
-        let x237 = x29 - x30;
-        let x238 = x17 * m1 * x237 - m2 * x9 * x28;
-        let x239 = -m2 * x9 * x4 - x17 * x2 * m1;
-        let x240 = m2 * (x35 * x45 * x237 - a_ * x31 * x9 * x9) + x47 * m1 * x237;
-        let x241 = m2 * (x35 * x172 * x45 - a_ * x9 * x9 * x15) + x47 * x172 * m1;
-        let x242 = m2 * (-x35 * x45 - a_ * x9 * x9) - x47 * m1;
-        let x243 = x10
-            * (x0 * (-x62 * x239 - x25 * x0 * x2 * x242) - x57 * x236 - x240 * x32
-                - x48 * x238 - x22 * x241) * d;
-        let x244 = m2 * x65 + (a_ * x17 * x17 + x33 * x70) * m1;
-        let x245 = x22 * x20;
-        let x246 = x28 * x32;
-        let x247 = x25 * x0 * x0 * x4;
-        let x248 = -x245 - x246 - x247;
-        let x249 = x10 * (x244 * x248 - x81 * x238 - x75 * x236 - x0 * x86 * x239) * d;
-        let x250 = x10 * (x33 * x248 - x82 * x0 * x239 - x68 * x236 - x76 * x238) * d * d
-            * m1;
-        let x251 = x25 * x0 * x0 * x2;
-        let x252 = x10 * m2 * d * d
-            * (x35 * (x251 - x22 * x172 - x32 * x237) - x43 * x238 - x61 * x0 * x239
-                - x55 * x236);
-        let x253 = x57 * x20;
-        let x254 = x48 * x28;
-        let x255 = x62 * x0 * x4;
-        let x256 = -x253 - x254 - x255;
-        let x257 = x10 * (x244 * x256 - x240 * x81 - x75 * x241 - x0 * x2 * x242 * x86);
-        let x258 = x33 * x256;
-        let x259 = x10 * (x258 - x68 * x241 - x82 * x0 * x2 * x242 - x240 * x76) * d
-            * m1;
-        let x260 = x62 * x0 * x2;
-        let x261 = (x35 * (x260 - x57 * x172 - x48 * x237) - x61 * x0 * x2 * x242
-            - x55 * x241 - x240 * x43) * x10 * m2 * d;
-        let x262 = x75 * x20;
-        let x263 = x0 * x86 * x4;
-        let x264 = x28 * x81;
-        let x265 = -x262 - x263 - x264;
-        let x266 = x33 * x265;
-        let x267 = -x82 * x0 * x4 - x76 * x28 - x68 * x20;
-        let x268 = (x266 + x244 * x267) * x10 * d * m1;
-        let x269 = x0 * x2 * x86;
-        let x270 = -x55 * x20 - x28 * x43 - x61 * x0 * x4;
-        let x271 = (x35 * (x269 - x81 * x237 - x75 * x172) + x244 * x270) * x10 * m2 * d;
-        let x272 = x82 * x0 * x2;
-        let x273 = (x35 * (x272 - x76 * x237 - x68 * x172) + x33 * x270) * x10 * m2 * d
-            * d * m1;
-        let x274 = x17 * x144 + x33 * x140;
-        let x275 = -(x20 * x274 + x172 * x125) * m1
-            - m2 * (x133 * x9 * x15 + x20 * x123 + x35 * x131 * x172);
-        let x276 = -(x31 * x133 * x9 + x28 * x123 + x35 * x131 * x237) * m2
-            - m1 * (x28 * x274 + x125 * x237);
-        let x277 = -(x4 * x274 - x2 * x125) * m1
-            - m2 * (x123 * x4 + x2 * (x133 * x9 - x35 * x131));
-        let x278 = -x147 * x28 - x148 * x0 * x4 - x146 * x20;
-        let x279 = x33 * x278;
-        let x280 = x148 * x0 * x2;
-        let x281 = 2.0 * J2 - 2.0 * J1;
-        let x282 = x33 * x33 * x37
-            + (x33 * x47 + x10 * (x17 * d * x248 + x258) + x17 * x17 * d) * d * m1
-            + x87 * x17 * x17;
-        let x283 = x11 * x217 + x79;
-        let x284 = x33 * a_ * x80 + x70 * x283;
-        let x285 = x84 - x83;
-        let x286 = x33 * a_ * x85 + x70 * x285;
-        let x287 = x33 * a_ * x72 + x70 * x185;
-        let x288 = x10 * d * m1 * (x266 - x32 * x284 - x25 * x0 * x286 - x22 * x287);
-        let x289 = x10 * (x33 * m1 * x267 - x283 * x32 - x25 * x0 * x285 - x22 * x185)
-            * d * d * m1;
-        let x290 = x33 * x10 * m2 * d * d * x270 * m1;
-        let x291 = 2.0 * J1 - 2.0 * J2;
-        let x292 = x10 * (x265 * x17 * d - x62 * x286 - x48 * x284 - x287 * x57) * m1;
-        let x293 = x10 * d * m1
-            * (x17 * d * m1 * x267 - x57 * x185 - x48 * x283 - x62 * x285);
-        let x294 = x10 * m2 * x17 * d * d * x270 * m1;
-        let x295 = d * m1
-            * (x10
-                * ((-x82 * x286 - x76 * x284 - x68 * x287) * m1 - x75 * x185 - x86 * x285
-                    - x283 * x81) - a_ * x17);
-        let x296 = x10 * m2 * (-x43 * x284 - x61 * x286 - x287 * x55) * d * m1;
-        let x297 = x10 * m2 * d * d * m1 * (-x55 * x185 - x283 * x43 - x61 * x285);
-        let x298 = x109 * x37 * x115 + (x113 - x114) * J2 * u4;
-        let x299 = x110 * x110 * d;
-        let x300 = x33 * a_ * u3 * u3;
-        let x301 = x300 - x299 + x142 - x143;
-        let x302 = x33 * x124 * u2 + x17 * u1 * (-u3 - 2.0 * u4);
-        let x303 = x135 + x110 * d * x115 + x138 * x108;
-        let x304 = x301 * x82 + x0 * d * x302 * x4 + x140 * x285 + x303 * x85;
-        let x305 = x301 * x76 + x140 * x283 + x303 * x80 + d * x302 * x28;
-        let x306 = x301 * x68 + x303 * x72 + x140 * x185 + d * x302 * x20;
-        let x307 = x33 * x115;
-        let x308 = x110 * x37 * x108;
-        let x309 = u1 * x167;
-        let x310 = u2 * x169;
-        let x311 = x37 * x115 * x115;
-        let x312 = x22 * x15;
-        let x313 = x31 * x32;
-        let x314 = x58 * x45 - x35 * a_ * x58;
-        let x315 = x35 * (-x26 - x27);
-        let x316 = x40 * x45 + a_ * (x9 * (-x42 - x315) - x35 * x40);
-        let x317 = x52 * x45 + a_ * (x192 * x9 - x35 * x52);
-        let x318 = x57 * x15;
-        let x319 = x48 * x31;
-        let x320 = x10 * m2
-            * (x35 * (x318 + x319 + x260) - x25 * x314 * x0 - x32 * x316 - x22 * x317)
-            * d;
-        let x321 = x31 * x81;
-        let x322 = x75 * x15;
-        let x323 = m2
-            * (x10 * ((-x312 - x251 - x313) * d * x9 + x35 * (x269 + x321 + x322))
-                - d * x9 * x9 - x35 * x65) * d + x35 * x35 * x87 + x37 * x9 * x9;
-        let x324 = x31 * x76;
-        let x325 = x68 * x15;
-        let x326 = x35 * x10 * m2 * d * d * m1 * (x324 + x325 + x272);
-        let x327 = x61 * x0 * x2;
-        let x328 = x55 * x15;
-        let x329 = x31 * x43;
-        let x330 = x10 * m2
-            * ((x327 + x328 + x329) * x35 * m2 - x25 * x58 * x0 - x22 * x52 - x40 * x32)
-            * d * d;
-        let x331 = x10 * m2
-            * ((-x318 - x319 - x260) * d * x9 - x81 * x316 - x314 * x86 - x75 * x317);
-        let x332 = (-x76 * x316 - x82 * x314 - x68 * x317) * x10 * m2 * d * m1;
-        let x333 = m2 * d
-            * (x10
-                * (m2 * (-x55 * x317 - x43 * x316 - x61 * x314) - x62 * x58 - x57 * x52
-                    - x48 * x40) - a_ * x9);
-        let x334 = x10 * m2 * d * d * x9 * (-x324 - x325 - x272) * m1;
-        let x335 = x10 * m2 * d
-            * (m2 * d * x9 * (-x327 - x328 - x329) - x58 * x86 - x40 * x81 - x75 * x52);
-        let x336 = x10 * m2 * (-x68 * x52 - x40 * x76 - x58 * x82) * d * d * m1;
-        let x337 = x103 - x104;
-        let x338 = x9 * x118;
-        let x339 = x35 * x100 * u3 + x100 * x9 * u1;
-        let x340 = x147 * x31;
-        let x341 = x146 * x15;
-        let x342 = x35 * a_ * u2 * u2;
-        let x343 = x105 * d * x337;
-        let x344 = x129 * x118;
-        let x345 = x342 + x343 + x344;
-        let x346 = x345 * x43 - x40 * d * x337 * x132 + x133 * (x315 - x41)
-            + x339 * x31 * d;
-        let x347 = x133 * (x59 - x60) - x58 * d * x337 * x132 + x339 * x0 * d * x2
-            + x61 * x345;
-        let x348 = x133 * x178 - d * x337 * x52 * x132 + x345 * x55 + x339 * d * x15;
-        let x349 = x87 * x105 * x105;
-        let x350 = x87 * x132 * x118;
-        let x351 = u5 * J1;
-        let x352 = x99 - x101 + x351;
-        let x353 = x109 * x37;
-        let x354 = J2 * u4;
-        let x355 = u4 * J1;
-        let x356 = Ixy * u3;
-        let x357 = u2 * Ixz;
-        let x358 = a_ * u3 + x33 * x124 * d;
-        let x359 = x35 * d * x122 - a_ * u2;
-        let x360 = d * x115 - x136 - x137;
-        let x361 = x33 * x138;
-        let x362 = x110 * x17 * d;
-        let x363 = -x361 - x362;
-        let x364 = x35 * x129;
-        let x365 = x105 * d * x9;
-        let x366 = x364 - x365;
-        let x367 = x127 - x128 + d * x132;
-        let x368 = -m1 * (x80 * x17 * x360 + x76 * x363 + x358 * x28)
-            - m2 * (x366 * x43 + x31 * x359 + x40 * x9 * x367);
-        let x369 = -(x358 * x20 + x68 * x363 + x17 * x360 * x72) * m1
-            - m2 * (x359 * x15 + x55 * x366 + x9 * x52 * x367);
-        let x370 = -m2 * (x58 * x9 * x367 + x61 * x366 + x0 * x2 * x359)
-            - (x0 * x358 * x4 + x82 * x363 + x85 * x17 * x360) * m1;
-        let x371 = x35 * x132;
-        let x372 = x105 * x9;
-        let x373 = Izz - Ixx;
-        let x374 = x353 - x354;
-        let x375 = x110 * x17;
-        let x376 = Ixx - Iyy;
-        let x377 = x87 * x105 * x9;
-        let x378 = x47 * x115 + x361;
-        let x379 = x138 * x17;
-        let x380 = x47 * x110;
-        let x381 = -x379 - x380;
-        let x382 = a_ * u1;
-        let x383 = d * x337 - x382;
-        let x384 = d * x98 + x35 * a_ * (u2 - u5) + x45 * x98;
-        let x385 = -(x124 * x17 * d * x20 + x378 * x72 + x68 * x381) * m1
-            - m2 * (x15 * x383 + x384 * x52 + 2.0 * (a_ * u2 * x9 * x55));
-        let x386 = -m2 * (2.0 * (a_ * u2 * x61 * x9) + x58 * x384 + x0 * x2 * x383)
-            - (x85 * x378 + x124 * x17 * x0 * d * x4 + x82 * x381) * m1;
-        let x387 = -m2 * (x31 * x383 + 2.0 * (a_ * u2 * x9 * x43) + x40 * x384)
-            - m1 * (x76 * x381 + x80 * x378 + x124 * x17 * d * x28);
-        let x388 = Iyy - Izz;
-        let x389 = Iyz * u1;
-        let x390 = x33 * x110 * x37;
-        let x391 = a_ * a_ * u1;
-        let x392 = 2.0 * x106 + 2.0 * x107;
-        let x393 = x35 * x87 * x105;
-        let x394 = x37 * x17 * x115;
-        let x395 = J2 * x122;
-        let x396 = x9 * x129;
-        let x397 = x105 * x65;
-        let x398 = x397 - x396;
-        let x399 = -x364 - x132 * x65;
-        let x400 = x110 * d + x382;
-        let x401 = (-u3 - u4) * d - x109 * x70 + x33 * a_ * (u4 - u3);
-        let x402 = -m2 * (x61 * x398 + x58 * x399 + x100 * x0 * d * x9 * x2)
-            - (x400 * x0 * x4 + x85 * x401 + 2.0 * (a_ * x82 * u3 * x17)) * m1;
-        let x403 = -m1 * (x400 * x28 + 2.0 * (a_ * x76 * u3 * x17) + x80 * x401)
-            - m2 * (x43 * x398 + x31 * x100 * d * x9 + x40 * x399);
-        let x404 = -m2 * (x100 * d * x9 * x15 + x399 * x52 + x55 * x398)
-            - (x400 * x20 + 2.0 * (a_ * x68 * u3 * x17) + x401 * x72) * m1;
-        let x405 = 2.0 * x103 - 2.0 * x104;
-        let x406 = x37 * x9 * x132;
-        let x407 = J2 * x108 + x110 * x37;
-        let x408 = -2.0 * u3 - 2.0 * u4;
-        let x409 = x0 * x392 * x4 + x85 * x408;
-        let x410 = x28 * x392 + x80 * x408;
-        let x411 = x408 * x72 + x392 * x20;
-        let x412 = 2.0 * u5 + 2.0 * u2;
-        let x413 = x405 * x15 + x52 * x412;
-        let x414 = x31 * x405 + x40 * x412;
-        let x415 = x58 * x412 + x0 * x2 * x405;
-        let x416 = 2.0 * J2 - J1;
+        let x10 = x9 * x9;
+        let x11 = f64::sin(gamma1);
+        let x12 = x11 * x11;
+        let x13 = m2 * x9;
+        let x14 = f64::sin(psi);
+        let x15 = x2 * x14;
+        let x16 = x7 * x3;
+        let x17 = f64::cos(psi);
+        let x18 = x15 + x16 * x17;
+        let x19 = x11 * m1;
+        let x20 = x7 * x2;
+        let x21 = x17 * x20;
+        let x22 = x3 * x14;
+        let x23 = x21 - x22;
+        let x24 = x18 * x19 - x13 * x23;
+        let x25 = x17 * x3 + x20 * x14;
+        let x26 = x17 * x2;
+        let x27 = x16 * x14;
+        let x28 = x27 - x26;
+        let x29 = x19 * x28;
+        let x30 = x29 - x13 * x25;
+        let x31 = x13 * x2;
+        let x32 = x19 * x3;
+        let x33 = x0 * (x32 - x31);
+        let x34 = 1.0 / (m2 + m0 + m1);
+        let x35 = d * d;
+        let x36 = f64::cos(gamma1);
+        let x37 = x36 * x36;
+        let x38 = f64::cos(gamma2);
+        let x39 = x38 * x38;
+        let x40 = x36 * d;
+        let x41 = a_ + x40;
+        let x42 = -(m1 * x41);
+        let x43 = x42 * x28;
+        let x44 = x26 - x27;
+        let x45 = x0 * x14;
+        let x46 = x38 * x45;
+        let x47 = x44 * x9 + x46;
+        let x48 = a_ * x9;
+        let x49 = x38 * a_;
+        let x50 = x49 + d;
+        let x51 = x9 * x45;
+        let x52 = x38 * x28;
+        let x53 = x51 + x52;
+        let x54 = m2 * (x50 * x53 - x47 * x48);
+        let x55 = x43 + x54;
+        let x56 = x38 * x18;
+        let x57 = x0 * x9;
+        let x58 = x17 * x57;
+        let x59 = x56 + x58;
+        let x60 = x38 * x0;
+        let x61 = x16 * x9;
+        let x62 = (x60 - x61) * x17 - x9 * x15;
+        let x63 = x42 * x18 + m2 * (x50 * x59 - x62 * x48);
+        let x64 = x7 * x9;
+        let x65 = x0 * x3;
+        let x66 = x38 * x65;
+        let x67 = x66 - x64;
+        let x68 = x9 * x65 + x38 * x7;
+        let x69 = m2 * (x50 * x67 + x48 * x68) + x42 * x65;
+        let x70 = x36 * x11;
+        let x71 = J1 - J2;
+        let x72 = (x42 * x11 - x34 * (x30 * x55 + x63 * x24 + x33 * x69)) * d - Ixy
+            + x70 * x71;
+        let x73 = J2 - J1;
+        let x74 = x38 * x9;
+        let x75 = a_ * x11;
+        let x76 = x11 * x20 + x36 * x0;
+        let x77 = x76 * x17;
+        let x78 = x11 * x22;
+        let x79 = x77 - x78;
+        let x80 = x11 * x0;
+        let x81 = x36 * x23 - x17 * x80;
+        let x82 = x36 * a_;
+        let x83 = x82 + d;
+        let x84 = x38 * d;
+        let x85 = x84 + a_;
+        let x86 = -(m2 * x85);
+        let x87 = m1 * (x75 * x79 + x81 * x83) + x23 * x86;
+        let x88 = x0 * x2;
+        let x89 = x7 * x11 + x36 * x88;
+        let x90 = x88 * x11;
+        let x91 = x36 * x7;
+        let x92 = x90 - x91;
+        let x93 = x88 * x86 + m1 * (x89 * x83 + x92 * x75);
+        let x94 = x25 * x86;
+        let x95 = x36 * x25;
+        let x96 = x11 * x45;
+        let x97 = x95 - x96;
+        let x98 = x25 * x11;
+        let x99 = x36 * x45;
+        let x100 = x98 + x99;
+        let x101 = (x83 * x97 + x100 * x75) * m1;
+        let x102 = x94 + x101;
+        let x103 = x73 * x74 - Ixz
+            + d * (x13 * x85 - x34 * (x87 * x24 + x33 * x93 + x102 * x30));
+        let x104 = x34 * d;
+        let x105 = x104 * m1;
+        let x106 = d * x105;
+        let x107 = -(x106 * (x30 * x97 + x81 * x24 + x33 * x89));
+        let x108 = m2 * d;
+        let x109 = x108 * x104;
+        let x110 = -(x109 * (x30 * x53 + x33 * x67 + x59 * x24));
+        let x111 = -Iyz - x34 * (x102 * x55 + x69 * x93 + x87 * x63);
+        let x112 = -((x97 * x55 + x81 * x63 + x89 * x69) * x105);
+        let x113 = J2 + x108 * (x50 - x34 * (x55 * x53 + x67 * x69 + x59 * x63));
+        let x114 = d * m1;
+        let x115 = J2 + x114 * (x83 - x34 * (x89 * x93 + x87 * x81 + x102 * x97));
+        let x116 = m2 * x104;
+        let x117 = -(x116 * (x87 * x59 + x102 * x53 + x67 * x93));
+        let x118 = x34 * m1;
+        let x119 = x114 * d;
+        let x120 = x108 * x105;
+        let x121 = -((x81 * x59 + x89 * x67 + x97 * x53) * x120);
+        let x122 = x34 * m2;
+        let x123 = x108 * d;
+        let x124 = 2.0 * u5 + u2;
+        let x125 = J2 * x124;
+        let x126 = u5 + u2;
+        let x127 = J1 * x126;
+        let x128 = x125 - x127;
+        let x129 = x38 * u1;
+        let x130 = u3 * x9;
+        let x131 = x129 - x130;
+        let x132 = x9 * x131;
+        let x133 = x11 * u1;
+        let x134 = x36 * u2;
+        let x135 = x134 - x133;
+        let x136 = x36 * x135;
+        let x137 = x9 * u1;
+        let x138 = x38 * u3;
+        let x139 = x137 + x138;
+        let x140 = -(x38 * x139);
+        let x141 = u3 + u4;
+        let x142 = u2 * x11;
+        let x143 = x36 * u1;
+        let x144 = x142 + x143;
+        let x145 = x71 * x144;
+        let x146 = J2 * u4;
+        let x147 = x141 * x145 - x146 * x144;
+        let x148 = x147 * x11;
+        let x149 = u2 * Iyz;
+        let x150 = u1 * Ixz;
+        let x151 = u3 * Izz - x149 - x150;
+        let x152 = a_ * u2;
+        let x153 = x38 * x152;
+        let x154 = u3 * x85;
+        let x155 = d * x9;
+        let x156 = u1 * x155;
+        let x157 = -x154 - x156;
+        let x158 = x157 * x139;
+        let x159 = (u5 * d + u2 * x50) * x126 - u5 * x153 - x158;
+        let x160 = x157 * x131;
+        let x161 = u2 * x48;
+        let x162 = u2 * x161;
+        let x163 = x160 + x162;
+        let x164 = d * (x124 * x130 - x129 * x124) - x152 * u1;
+        let x165 = x164 * x25;
+        let x166 = u3 * u1;
+        let x167 = u3 + 2.0 * u4;
+        let x168 = a_ * x166 + (x142 * x167 + x167 * x143) * d;
+        let x169 = x82 * u3 * u4 - x141 * (u3 * x83 + d * u4);
+        let x170 = x11 * d;
+        let x171 = x170 * u1;
+        let x172 = u2 * x41;
+        let x173 = x171 - x172;
+        let x174 = x173 * x135;
+        let x175 = x169 + x174;
+        let x176 = x173 * x144;
+        let x177 = u3 * x75;
+        let x178 = x177 * u3;
+        let x179 = x178 - x176;
+        let x180 = (x47 * x159 + x163 * x53 + x165) * m2
+            + (x168 * x28 + x100 * x175 + x97 * x179) * m1;
+        let x181 = (x67 * x163 + x164 * x88 - x159 * x68) * m2
+            + (x89 * x179 + x168 * x65 + x92 * x175) * m1;
+        let x182 = m2 * (x159 * x62 + x164 * x23 + x59 * x163)
+            + (x81 * x179 + x175 * x79 + x168 * x18) * m1;
+        let x183 = Iyz * u3;
+        let x184 = Ixy * u1;
+        let x185 = u2 * Iyy - x183 - x184;
+        let x186 = a_ * a_;
+        let x187 = u1 * u1;
+        let x188 = u3 * u3;
+        let x189 = x188 - x187;
+        let x190 = x189 - (u5 + 2.0 * u2) * u5;
+        let x191 = 2.0 * gamma2;
+        let x192 = f64::sin(x191);
+        let x193 = u3 * x192;
+        let x194 = f64::cos(x191);
+        let x195 = x194 * u1;
+        let x196 = x36 * x147;
+        let x197 = u4 * J1;
+        let x198 = x135 * x11;
+        let x199 = x73 * x139;
+        let x200 = x199 * x131;
+        let x201 = u3 * Ixz;
+        let x202 = u2 * Ixy;
+        let x203 = Ixx * u1 - x201 - x202;
+        let x204 = x145 * x135;
+        let x205 = x38 * x131;
+        let x206 = u5 * J1;
+        let x207 = -(x9 * x139);
+        let x208 = a_ * u1;
+        let x209 = u2 * u2 - x187 - u4 * (2.0 * u3 + u4);
+        let x210 = 2.0 * gamma1;
+        let x211 = f64::sin(x210);
+        let x212 = u2 * x211;
+        let x213 = f64::cos(x210);
+        let x214 = u1 * x213;
+        let x215 = d * x104;
+        let x216 = x44 * x19;
+        let x217 = -x216 - x29;
+        let x218 = x38 * x44;
+        let x219 = x218 - x51;
+        let x220 = x9 * x28 - x46;
+        let x221 = m2 * (x219 * x50 - x220 * x48);
+        let x222 = x44 * x42;
+        let x223 = x221 + x222 + x55;
+        let x224 = x104 * (x63 * x217 - x223 * x24);
+        let x225 = -x98 - x99;
+        let x226 = x96 - x95;
+        let x227 = (x225 * x75 + x83 * x226) * m1;
+        let x228 = x227 - x94 + x102;
+        let x229 = (x87 * x217 - x228 * x24) * x104;
+        let x230 = x106 * x81 * x217;
+        let x231 = x52 + x218;
+        let x232 = x109 * (x59 * x217 - x231 * x24);
+        let x233 = x34 * (-x63 * x228 - x87 * x223);
+        let x234 = -(x81 * x223 * x105);
+        let x235 = (-x231 * x63 - x59 * x223) * x116;
+        let x236 = -(x81 * x228 * x105);
+        let x237 = (-x87 * x231 - x59 * x228) * x116;
+        let x238 = -(x81 * x231 * x120);
+        let x239 = x180 + (x225 * x175 + x44 * x168 + x226 * x179) * m1
+            + (x159 * x220 - x165 + x219 * x163) * m2;
+        let x240 = x7 * x1;
+        let x241 = x7 * (x31 - x32);
+        let x242 = x17 * x24;
+        let x243 = x30 * x14;
+        let x244 = x241 + x242 + x243;
+        let x245 = x55 * x14;
+        let x246 = x17 * x63;
+        let x247 = x16 * x42;
+        let x248 = x57 + x38 * x16;
+        let x249 = x61 - x60;
+        let x250 = m2 * (-x50 * x248 - x249 * x48);
+        let x251 = x247 - x245 - x246 - x250;
+        let x252 = x104 * (x33 * x251 - x244 * x69);
+        let x253 = x17 * x87;
+        let x254 = x20 * x86;
+        let x255 = x36 * x20;
+        let x256 = x80 - x255;
+        let x257 = (x256 * x83 - x76 * x75) * m1;
+        let x258 = x102 * x14;
+        let x259 = x254 - x253 - x257 - x258;
+        let x260 = x104 * (x33 * x259 - x244 * x93);
+        let x261 = x255 - x97 * x14 - x17 * x81 - x80;
+        let x262 = x106 * (x261 * x33 - x89 * x244);
+        let x263 = x248 - x53 * x14 - x17 * x59;
+        let x264 = (x33 * x263 - x244 * x67) * x109;
+        let x265 = x34 * (x251 * x93 + x259 * x69);
+        let x266 = (x89 * x251 + x261 * x69) * x105;
+        let x267 = x116 * (x263 * x69 + x67 * x251);
+        let x268 = (x259 * x89 + x261 * x93) * x105;
+        let x269 = (x259 * x67 + x263 * x93) * x116;
+        let x270 = x120 * (x89 * x263 + x261 * x67);
+        let x271 = x180 * x14 + x182 * x17
+            + (x159 * x249 - x248 * x163 - x164 * x20) * m2
+            + (x256 * x179 - x168 * x16 - x76 * x175) * m1;
+        let x272 = -x13 * x28 - x25 * x19;
+        let x273 = x19 * x2 + x13 * x3;
+        let x274 = -(x0 * x273);
+        let x275 = x22 - x21;
+        let x276 = x275 * x19 - x13 * x18;
+        let x277 = x9 * x48;
+        let x278 = x38 * x50;
+        let x279 = m2 * (-x25 * x277 - x25 * x278) - x42 * x25;
+        let x280 = m2 * (x275 * x278 - x23 * x277) + x42 * x275;
+        let x281 = -x42 - m2 * (x277 + x278);
+        let x282 = x281 * x2;
+        let x283 = (-x279 * x30 - x280 * x24 - x272 * x55 - x63 * x276
+            - (x33 * x282 - x273 * x69) * x0) * x104;
+        let x284 = x18 * x24;
+        let x285 = x33 * x65;
+        let x286 = x28 * x30;
+        let x287 = x284 + x285 + x286;
+        let x288 = x86 + (x36 * x83 + x11 * x75) * m1;
+        let x289 = (-x287 * x288 - x274 * x93 - x102 * x272 - x87 * x276) * x104;
+        let x290 = x106 * (-x81 * x276 - x89 * x274 - x36 * x287 - x272 * x97);
+        let x291 = x33 * x88;
+        let x292 = x25 * x30;
+        let x293 = x109
+            * (x38 * (x291 + x292 - x275 * x24) - x272 * x53 - x59 * x276 - x67 * x274);
+        let x294 = x88 * x281;
+        let x295 = x69 * x65;
+        let x296 = x18 * x63;
+        let x297 = x28 * x55;
+        let x298 = x295 + x296 + x297;
+        let x299 = x34 * (-x294 * x93 - x87 * x280 - x298 * x288 - x102 * x279);
+        let x300 = x36 * x298;
+        let x301 = (-x279 * x97 - x294 * x89 - x81 * x280 - x300) * x105;
+        let x302 = x88 * x69;
+        let x303 = x25 * x55;
+        let x304 = x116
+            * (x38 * (x302 - x275 * x63 + x303) - x294 * x67 - x279 * x53 - x59 * x280);
+        let x305 = x65 * x93;
+        let x306 = x102 * x28;
+        let x307 = x87 * x18;
+        let x308 = x305 + x306 + x307;
+        let x309 = x36 * x308;
+        let x310 = x89 * x65 + x28 * x97 + x18 * x81;
+        let x311 = (-x309 - x310 * x288) * x105;
+        let x312 = x88 * x93;
+        let x313 = x25 * x102;
+        let x314 = x67 * x65 + x28 * x53 + x18 * x59;
+        let x315 = (x38 * (x312 - x87 * x275 + x313) - x314 * x288) * x116;
+        let x316 = -(x36 * x314);
+        let x317 = x25 * x97;
+        let x318 = x88 * x89;
+        let x319 = (x316 + x38 * (x317 + x318 - x275 * x81)) * x120;
+        let x320 = x38 * x163;
+        let x321 = x159 * x9;
+        let x322 = x11 * x175 + x36 * x179;
+        let x323 = m2 * (x164 * x28 - x320 * x25 + x321 * x25)
+            + (x28 * x322 - x168 * x25) * m1;
+        let x324 = m1 * (x18 * x322 + x168 * x275)
+            + m2 * (x320 * x275 + x321 * x23 + x164 * x18);
+        let x325 = (x322 * x3 - x168 * x2) * m1 + m2 * (x164 * x3 + (x321 - x320) * x2);
+        let x326 = -x182 * x18 - x181 * x65 - x180 * x28;
+        let x327 = -(x325 * x0);
+        let x328 = x36 * x326;
+        let x329 = x180 * x25;
+        let x330 = x88 * x181;
+        let x331 = 2.0 * J2 - 2.0 * J1;
+        let x332 = (x170 * x11 - x36 * x41 + x34 * (-x170 * x287 - x300)) * x114
+            + x37 * x71 + x73 * x12;
+        let x333 = x91 - x90;
+        let x334 = x82 * x92 + x83 * x333;
+        let x335 = x100 * x82 + x225 * x83;
+        let x336 = x78 - x77;
+        let x337 = x83 * x336 + x82 * x79;
+        let x338 = (-x33 * x334 - x309 - x335 * x30 - x337 * x24) * x105;
+        let x339 = x106 * (-x336 * x24 - x33 * x333 - x225 * x30 - x36 * x310 * m1);
+        let x340 = x316 * x120;
+        let x341 = 2.0 * J1 - 2.0 * J2;
+        let x342 = x118 * (-x337 * x63 - x334 * x69 - x335 * x55 - x170 * x308);
+        let x343 = (-x63 * x336 - x114 * x11 * x310 - x333 * x69 - x225 * x55) * x105;
+        let x344 = -(x11 * x314 * x120);
+        let x345 = (x34
+            * (-x87 * x336 - (x337 * x81 + x335 * x97 + x89 * x334) * m1 - x225 * x102
+                - x333 * x93) - x75) * x114;
+        let x346 = m2 * x105;
+        let x347 = -(x346 * (x67 * x334 + x337 * x59 + x335 * x53));
+        let x348 = -(x120 * (x225 * x53 + x59 * x336 + x67 * x333));
+        let x349 = x134 * x167 - x133 * x167;
+        let x350 = x349 * d;
+        let x351 = x188 * x82;
+        let x352 = d * x144;
+        let x353 = x352 * x144;
+        let x354 = x351 + x169 - x353;
+        let x355 = x178 - x176 + x135 * x352;
+        let x356 = x350 * x28 + x354 * x97 + x100 * x355 + x225 * x179;
+        let x357 = x333 * x179 + x354 * x89 + x92 * x355 + x350 * x65;
+        let x358 = x79 * x355 + x354 * x81 + x350 * x18 + x336 * x179;
+        let x359 = x141 * x71;
+        let x360 = x135 * x359 + x146 * (x133 - x134);
+        let x361 = x11 * x144;
+        let x362 = u1 * x211;
+        let x363 = u2 * x213;
+        let x364 = x71 * x135 * x135 - x145 * x144;
+        let x365 = x23 * x24;
+        let x366 = x50 * x62 - x38 * a_ * x62;
+        let x367 = a_ * (-x47 * x38 - x231 * x9) + x47 * x50;
+        let x368 = x49 * x68 - x50 * x68;
+        let x369 = (x302 + x303) + x23 * x63;
+        let x370 = x116 * (x38 * x369 - x366 * x24 - x367 * x30 - x33 * x368);
+        let x371 = x23 * x87;
+        let x372 = x10 * x71 + x73 * x39
+            + x108
+                * (x34 * (x38 * (x312 + x313 + x371) - (x291 + x292 + x365) * x155)
+                    - x9 * x155 + x38 * x85);
+        let x373 = (x23 * x81 + x318) + x317;
+        let x374 = x38 * x120 * x373;
+        let x375 = x23 * x59 + (x25 * x53 + x88 * x67);
+        let x376 = (x33 * x68 - x47 * x30 + x38 * x375 * m2 - x62 * x24) * x109;
+        let x377 = (-x368 * x93 - x102 * x367 - x369 * x155 - x87 * x366) * x122;
+        let x378 = -((x81 * x366 + x368 * x89 + x367 * x97) * x346);
+        let x379 = x108
+            * (x34
+                * (x69 * x68 - m2 * (x368 * x67 + x59 * x366 + x367 * x53) - x47 * x55
+                    - x63 * x62) - x48);
+        let x380 = -(x9 * x120 * x373);
+        let x381 = x116 * (x68 * x93 - x87 * x62 - x47 * x102 - x375 * x108 * x9);
+        let x382 = -((x81 * x62 - x89 * x68 + x47 * x97) * x120);
+        let x383 = x130 - x129;
+        let x384 = x138 * x124 + x137 * x124;
+        let x385 = x383 * d;
+        let x386 = x385 * x139;
+        let x387 = d * x384;
+        let x388 = u2 * x153;
+        let x389 = x131 * x385;
+        let x390 = x388 + x389 - x158;
+        let x391 = x386 * x68 + x159 * (x64 - x66) + x387 * x88 + x67 * x390;
+        let x392 = x387 * x25 + x390 * x53 + x159 * x219 - x47 * x386;
+        let x393 = x387 * x23 - x386 * x62 + x59 * x390 + x159 * (-x56 - x58);
+        let x394 = (-x330 - x182 * x23) - x329;
+        let x395 = x73 * x131 * x131 - x199 * x139;
+        let x396 = (x206 + x127) - x125;
+        let x397 = x131 * x155;
+        let x398 = x38 * x157;
+        let x399 = x398 - x397;
+        let x400 = -x152 - x84 * x124;
+        let x401 = x9 * (x154 + x156 + d * x139);
+        let x402 = x36 * x173;
+        let x403 = x170 * x144 + x402;
+        let x404 = a_ * u3 + x40 * x167;
+        let x405 = x11 * (x172 - x171 + x135 * d);
+        let x406 = (x399 * x53 + x25 * x400 + x47 * x401) * m2
+            + (x28 * x404 - x403 * x97 + x100 * x405) * m1;
+        let x407 = (x405 * x79 - x81 * x403 + x18 * x404) * m1
+            + m2 * (x23 * x400 + x401 * x62 + x59 * x399);
+        let x408 = m1 * (x92 * x405 + x65 * x404 - x89 * x403)
+            + m2 * (x67 * x399 - x401 * x68 + x88 * x400);
+        let x409 = Ixy * u3;
+        let x410 = x359 - x146;
+        let x411 = u2 * Ixz;
+        let x412 = Izz - Ixx;
+        let x413 = x38 * x139;
+        let x414 = Ixx - Iyy;
+        let x415 = x361;
+        let x416 = x73 * x132;
+        let x417 = x114 * x167;
+        let x418 = x385 - x208;
+        let x419 = d * x126 + x50 * x126 + x49 * (u2 - u5);
+        let x420 = x402 - x135 * x41;
+        let x421 = x173 * x11 - x144 * x41;
+        let x422 = x170 * x167;
+        let x423 = m2 * (x47 * x419 + 2.0 * (x161 * x53) + x25 * x418)
+            + m1 * (x100 * x420 - x421 * x97 + x28 * x422);
+        let x424 = (2.0 * (x67 * x161) - x419 * x68 + x88 * x418) * m2
+            + (x422 * x65 + x92 * x420 - x89 * x421) * m1;
+        let x425 = m2 * (x23 * x418 + x419 * x62 + 2.0 * (x59 * x161))
+            + (x79 * x420 - x421 * x81 + x18 * x422) * m1;
+        let x426 = Iyy - Izz;
+        let x427 = Iyz * u1;
+        let x428 = u1 * x186;
+        let x429 = 2.0 * x142 + 2.0 * x143;
+        let x430 = x73 * x205;
+        let x431 = x36 * x145;
+        let x432 = x71 * x198 + x431;
+        let x433 = x108 * x124;
+        let x434 = x208 + x352;
+        let x435 = x82 * (u4 - u3) - x141 * d - x141 * x83;
+        let x436 = x398 - x139 * x85;
+        let x437 = x157 * x9;
+        let x438 = x131 * x85;
+        let x439 = -x437 - x438;
+        let x440 = x124 * x155;
+        let x441 = m1 * (x435 * x79 + x434 * x18 + 2.0 * (x177 * x81))
+            + m2 * (x439 * x59 - x436 * x62 + x23 * x440);
+        let x442 = (2.0 * (x177 * x89) + x435 * x92 + x434 * x65) * m1
+            + m2 * (x439 * x67 + x436 * x68 + x88 * x440);
+        let x443 = m2 * (x439 * x53 - x47 * x436 + x25 * x440)
+            + (2.0 * (x177 * x97) + x434 * x28 + x100 * x435) * m1;
+        let x444 = 2.0 * x130 - 2.0 * x129;
+        let x445 = x71 * x9 * x139 + x430;
+        let x446 = x145 - J2 * x144;
+        let x447 = 2.0 * u3 + 2.0 * u4;
+        let x448 = x18 * x429 - x447 * x79;
+        let x449 = x429 * x65 - x447 * x92;
+        let x450 = x28 * x429 - x100 * x447;
+        let x451 = 2.0 * J2 - J1;
+        let x452 = 2.0 * u5 + 2.0 * u2;
+        let x453 = x47 * x452 + x25 * x444;
+        let x454 = x88 * x444 - x452 * x68;
+        let x455 = x23 * x444 + x452 * x62;
         Derivatives {
-            qdot: [x1 * x6, x7, u1 + x8 * x1 * x6, u4, u5],
+            qdot: [x5, x6, x8 + u1, u4, u5],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * x9 * x9
-                                + x10 * (-x22 * x22 - x25 * x25 * x0 * x0 - x32 * x32)
-                                + x17 * x17 * m1) + (x34 + x36) * J1
-                        + (x9 * x9 + x17 * x17) * J2,
-                    x63,
-                    x88,
-                    x89,
-                    x90,
+                    (x10 + x12) * J2 + Ixx
+                        + (x13 * x9 - (x24 * x24 + x30 * x30 + x33 * x33) * x34
+                            + x11 * x19) * x35 + (x37 + x39) * J1,
+                    x72,
+                    x103,
+                    x107,
+                    x110,
                 ],
                 [
-                    x63,
-                    x17 * x17 * J1 + x47 * x47 * m1 + Iyy + J2 * (x34 + 1.0)
-                        + x10 * (-x48 * x48 - x57 * x57 - x62 * x62)
-                        + m2 * (x91 + a_ * (a_ + 2.0 * x64)),
-                    x92,
-                    x93,
-                    x94,
+                    x72,
+                    Iyy - x42 * x41 + J2 * (x37 + 1.0)
+                        + m2 * (a_ * (2.0 * x84 + a_) + x35)
+                        - (x63 * x63 + x55 * x55 + x69 * x69) * x34 + x12 * J1,
+                    x111,
+                    x112,
+                    x113,
                 ],
                 [
-                    x88,
-                    x92,
-                    x10 * (-x75 * x75 - x81 * x81 - x86 * x86) + x9 * x9 * J1
-                        + (a_ * (a_ + 2.0 * x46) + x91) * m1 + m2 * x65 * x65 + Izz
-                        + J2 * (x36 + 1.0),
-                    x95,
-                    x96,
+                    x103,
+                    x111,
+                    J2 * (x39 + 1.0) + x10 * J1 - x85 * x86
+                        + (a_ * (a_ + 2.0 * x40) + x35) * m1 + Izz
+                        - x34 * (x87 * x87 + x102 * x102 + x93 * x93),
+                    x115,
+                    x117,
                 ],
-                [x89, x93, x95, (1.0 - x10 * m1) * d * d * m1 + J2, x97],
-                [x90, x94, x96, x97, J2 + m2 * d * d * (1.0 - x10 * m2)],
+                [x107, x112, x115, J2 + (1.0 - x118) * x119, x121],
+                [x110, x113, x117, x121, (1.0 - x122) * x123 + J2],
             ],
             force: [
-                x112 - x102 * x105 * x9 + (-x33 * u4 * x115 - x35 * u5 * x118) * J1
-                    - u2 * x121
-                    + (m2 * x9 * x123 - x17 * m1 * x125
-                        + x10 * (-x22 * x146 - x147 * x32 - x25 * x148 * x0)) * d
-                    + x151 * u3,
-                x152 - x153 - x47 * m1 * x125 + x121 * u1
-                    + x10 * (-x62 * x148 - x147 * x48 - x146 * x57)
-                    - x17 * u4 * x115 * J1
+                x148 - x128 * x132 - (x136 * u4 + u5 * x140) * J1 - u2 * x151
+                    + d
+                        * (x164 * x13 - x34 * (-x180 * x30 - x33 * x181 - x182 * x24)
+                            - x168 * x19) + x185 * u3,
+                x151 * u1
                     - m2
-                        * ((a_ * (x9 * x156 - 2.0 * (x35 * u3 * u1))
-                            + ((0.5 * x159 - x161) * u3 - 0.5 * (u1 * u1 * x158)) * d)
-                            * d - a_ * a_ * u3 * u1) - x164 * u3,
-                x10 * (-x148 * x86 - x147 * x81 - x75 * x146) - m2 * x65 * x123
-                    - (d
-                        * (a_ * (x165 * x17 + 2.0 * (x33 * u2 * u1))
-                            + d * (u2 * (0.5 * x168 + x170) - 0.5 * (u1 * u1 * x167)))
-                        + a_ * a_ * u2 * u1) * m1 - x35 * x102 * x105 + u2 * x164
-                    + u5 * x9 * x118 * J1 - x151 * u1 + x171,
-                d * m1 * (x10 * (-x148 * x82 - x147 * x76 - x68 * x146) - x135 + x139)
-                    + x171,
-                x152
-                    + m2 * (x10 * (-x146 * x55 - x147 * x43 - x61 * x148) - x126 - x130)
-                        * d,
+                        * ((a_ * (x9 * x190 - 2.0 * (x38 * x166))
+                            + d * ((0.5 * x193 - x195) * u3 - 0.5 * (x187 * x192))) * d
+                            - x166 * x186) - x196 - x197 * x198 + x200
+                    - x34 * (-x181 * x69 - x182 * x63 - x180 * x55) - x168 * x42
+                    - x203 * u3,
+                x204 - (-x180 * x102 - x181 * x93 - x182 * x87) * x34 - x164 * x86
+                    - x128 * x205 + u2 * x203 + x206 * x207 - x185 * u1
+                    - (x208 * x152
+                        + d
+                            * (a_ * (x209 * x11 + 2.0 * (x134 * u1))
+                                + (u2 * (0.5 * x212 + x214) - 0.5 * (x187 * x211)) * d))
+                        * m1,
+                x204
+                    + x114
+                        * (x176 - x178 - (-x182 * x81 - x89 * x181 - x180 * x97) * x34),
+                x108 * (-x34 * (-x182 * x59 - x67 * x181 - x180 * x53) - x160 - x162)
+                    + x200,
             ],
             checks: [x0],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0],
-                [x8 * x1 * x1 * x6, 0.0, x3 + x8 * x8 * x1 * x1 * x6 + x5, 0.0, 0.0],
-                [x1 * x7, -x3 - x5, x8 * x1 * x7, 0.0, 0.0],
+                [x5 * x240, 0.0, x4 + x8 * x240, 0.0, 0.0],
+                [x1 * x6, -x4, x6 * x240, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0],
-                [x1 * x2, x4, x8 * x1 * x2, 0.0, 0.0],
-                [x1 * x4, -x2, x8 * x1 * x4, 0.0, 0.0],
+                [x1 * x2, x3, x1 * x20, 0.0, 0.0],
+                [x1 * x3, -x2, x16 * x1, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             d_matrix: [
                 [
-                    [
-                        (2.0 * x173 + 2.0 * x16 - 2.0 * x174 - 2.0 * x21) * x10 * d * d
-                            * x32,
-                        x182,
-                        x189,
-                        x191,
-                        x193,
-                    ],
-                    [
-                        x182,
-                        (-2.0 * x49 - 2.0 * x56 - 2.0 * x179 - 2.0 * x180) * x10 * x48,
-                        x194,
-                        x195,
-                        x196,
-                    ],
-                    [
-                        x189,
-                        x194,
-                        x10 * (-2.0 * x73 - 2.0 * x186 - 2.0 * x187 - 2.0 * x74) * x81,
-                        x197,
-                        x198,
-                    ],
-                    [x191, x195, x197, 0.0, x199],
-                    [x193, x196, x198, x199, 0.0],
-                ],
-                [
-                    [
-                        x10 * (-2.0 * x201 - 2.0 * x202 - 2.0 * x203) * x25 * x0 * d * d,
-                        x214,
-                        x224,
-                        x226,
-                        x228,
-                    ],
-                    [
-                        x214,
-                        x10 * (2.0 * x205 - 2.0 * x206 - 2.0 * x207 - 2.0 * x212) * x62,
-                        x229,
-                        x230,
-                        x231,
-                    ],
+                    [x215 * x24 * (-2.0 * x216 - 2.0 * x29), x224, x229, x230, x232],
                     [
                         x224,
-                        x229,
-                        (2.0 * x215 - 2.0 * x216 - 2.0 * x221 - 2.0 * x222) * x10 * x86,
-                        x232,
+                        -(x34 * (2.0 * x221 + 2.0 * x43 + 2.0 * x54 + 2.0 * x222) * x63),
                         x233,
+                        x234,
+                        x235,
                     ],
-                    [x226, x230, x232, 0.0, x234],
-                    [x228, x231, x233, x234, 0.0],
+                    [x229, x233, -(x34 * x87 * (2.0 * x227 + 2.0 * x101)), x236, x237],
+                    [x230, x234, x236, 0.0, x238],
+                    [x232, x235, x237, x238, 0.0],
                 ],
                 [
                     [
-                        x10 * d * d
-                            * (-2.0 * (x22 * x236) - 2.0 * (x32 * x238)
-                                - 2.0 * (x25 * x0 * x0 * x239)),
-                        x243,
-                        x249,
-                        x250,
+                        -(x33 * x215 * (2.0 * x241 + 2.0 * x242 + 2.0 * x243)),
                         x252,
+                        x260,
+                        x262,
+                        x264,
                     ],
                     [
-                        x243,
-                        x10
-                            * (-2.0 * (x57 * x241) - 2.0 * (x62 * x0 * x2 * x242)
-                                - 2.0 * (x240 * x48)),
-                        x257,
-                        x259,
-                        x261,
+                        x252,
+                        x34 * (2.0 * x247 - 2.0 * x245 - 2.0 * x246 - 2.0 * x250) * x69,
+                        x265,
+                        x266,
+                        x267,
                     ],
                     [
-                        x249,
-                        x257,
-                        x244 * x10 * (-2.0 * x262 - 2.0 * x263 - 2.0 * x264),
+                        x260,
+                        x265,
+                        (2.0 * x254 - 2.0 * x253 - 2.0 * x257 - 2.0 * x258) * x34 * x93,
                         x268,
-                        x271,
+                        x269,
                     ],
-                    [x250, x259, x268, 0.0, x273],
-                    [x252, x261, x271, x273, 0.0],
+                    [x262, x266, x268, 0.0, x270],
+                    [x264, x267, x269, x270, 0.0],
                 ],
                 [
                     [
-                        x33
-                            * (x281 * x17
-                                + d * d
-                                    * (x10 * (-2.0 * x245 - 2.0 * x246 - 2.0 * x247)
-                                        + 2.0 * x17) * m1),
-                        x282,
-                        x288,
+                        -((2.0 * (x272 * x30) + 2.0 * (x33 * x274) + 2.0 * (x24 * x276))
+                            * x215),
+                        x283,
                         x289,
                         x290,
-                    ],
-                    [
-                        x282,
-                        x17
-                            * (x33 * x291
-                                + d
-                                    * (x10 * (-2.0 * x253 - 2.0 * x254 - 2.0 * x255) - 2.0 * a_
-                                        - 2.0 * x46) * m1),
-                        x292,
                         x293,
-                        x294,
                     ],
                     [
-                        x288,
-                        x292,
-                        (x10
-                            * (-2.0 * (x86 * x286) - 2.0 * (x81 * x284)
-                                - 2.0 * (x75 * x287)) - 2.0 * (a_ * x17 * d)) * m1,
-                        x295,
-                        x296,
+                        x283,
+                        -(x34
+                            * (2.0 * (x279 * x55) + 2.0 * (x294 * x69)
+                                + 2.0 * (x63 * x280))),
+                        x299,
+                        x301,
+                        x304,
                     ],
-                    [x289, x293, x295, 0.0, x297],
-                    [x290, x294, x296, x297, 0.0],
+                    [
+                        x289,
+                        x299,
+                        -(x34 * (2.0 * x305 + 2.0 * x306 + 2.0 * x307) * x288),
+                        x311,
+                        x315,
+                    ],
+                    [x290, x301, x311, 0.0, x319],
+                    [x293, x304, x315, x319, 0.0],
                 ],
                 [
                     [
-                        x35
-                            * (m2 * d * d
-                                * (2.0 * x9 + x10 * (2.0 * x312 + 2.0 * x251 + 2.0 * x313))
-                                + x281 * x9),
-                        x320,
-                        x323,
-                        x326,
-                        x330,
-                    ],
-                    [
-                        x320,
-                        m2
-                            * (x10
-                                * (-2.0 * (x48 * x316) - 2.0 * (x57 * x317)
-                                    - 2.0 * (x62 * x314)) - 2.0 * (a_ * d * x9)),
-                        x331,
+                        x36
+                            * (x331 * x11
+                                + x119
+                                    * (2.0 * x11
+                                        - x34 * (2.0 * x284 + 2.0 * x285 + 2.0 * x286))),
                         x332,
-                        x333,
+                        x338,
+                        x339,
+                        x340,
                     ],
                     [
-                        x323,
-                        x331,
-                        x9
-                            * (x35 * x291
-                                + m2 * d
-                                    * (x10 * (-2.0 * x269 - 2.0 * x321 - 2.0 * x322) - 2.0 * a_
-                                        - 2.0 * x64)),
-                        x334,
-                        x335,
+                        x332,
+                        x11
+                            * (x114
+                                * (-2.0 * a_ - 2.0 * x40
+                                    - x34 * (2.0 * x295 + 2.0 * x296 + 2.0 * x297))
+                                + x36 * x341),
+                        x342,
+                        x343,
+                        x344,
                     ],
-                    [x326, x332, x334, 0.0, x336],
-                    [x330, x333, x335, x336, 0.0],
+                    [
+                        x338,
+                        x342,
+                        m1
+                            * (-x34
+                                * (2.0 * (x337 * x87) + 2.0 * (x335 * x102)
+                                    + 2.0 * (x334 * x93)) - 2.0 * (d * x75)),
+                        x345,
+                        x347,
+                    ],
+                    [x339, x343, x345, 0.0, x348],
+                    [x340, x344, x347, x348, 0.0],
+                ],
+                [
+                    [
+                        x38
+                            * (x123
+                                * (2.0 * x9 + x34 * (2.0 * x291 + 2.0 * x292 + 2.0 * x365))
+                                + x331 * x9),
+                        x370,
+                        x372,
+                        x374,
+                        x376,
+                    ],
+                    [
+                        x370,
+                        m2
+                            * (-x34
+                                * (2.0 * (x63 * x366) + 2.0 * (x368 * x69)
+                                    + 2.0 * (x367 * x55)) - 2.0 * (d * x48)),
+                        x377,
+                        x378,
+                        x379,
+                    ],
+                    [
+                        x372,
+                        x377,
+                        x9
+                            * (x38 * x341
+                                + x108
+                                    * (-2.0 * x84 - 2.0 * a_
+                                        - x34 * (2.0 * x312 + 2.0 * x313 + 2.0 * x371))),
+                        x380,
+                        x381,
+                    ],
+                    [x374, x378, x380, 0.0, x382],
+                    [x376, x379, x381, x382, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1766,170 +1805,152 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    x10 * d * (x200 * x32 + x147 * x175),
-                    x10 * (x147 * x181 + x48 * x200),
-                    x10 * (x200 * x81 + x147 * x188),
-                    x10 * d * m1 * (x76 * x200 + x147 * x190),
-                    x10 * m2 * (x147 * x192 + x200 * x43) * d,
+                    x104 * (x239 * x24 - x182 * x217),
+                    x34 * (x239 * x63 + x182 * x223),
+                    x34 * (x239 * x87 + x182 * x228),
+                    x239 * x81 * x105,
+                    (x182 * x231 + x239 * x59) * x116,
                 ],
                 [
-                    x10 * (x235 * x25 * x0 + x148 * x204) * d,
-                    x10 * (x235 * x62 + x148 * x213),
-                    x10 * (x148 * x223 + x235 * x86),
-                    x10 * (x235 * x82 + x225 * x148) * d * m1,
-                    (x148 * x227 + x235 * x61) * x10 * m2 * d,
+                    (x33 * x271 + x244 * x181) * x104,
+                    x34 * (x271 * x69 - x181 * x251),
+                    x34 * (x271 * x93 - x259 * x181),
+                    (x89 * x271 - x261 * x181) * x105,
+                    x116 * (x67 * x271 - x181 * x263),
                 ],
                 [
-                    x10 * d
-                        * ((-x25 * x0 * x277 - x148 * x239) * x0 - x275 * x22
-                            - x147 * x238 - x276 * x32 - x146 * x236),
-                    (x0 * (-x148 * x2 * x242 - x62 * x277) - x275 * x57 - x48 * x276
-                        - x146 * x241 - x147 * x240) * x10,
-                    x10 * (x244 * x278 - x276 * x81 - x0 * x86 * x277 - x275 * x75),
-                    x10 * d * m1 * (x279 - x76 * x276 - x275 * x68 - x82 * x0 * x277),
-                    x10 * m2
-                        * (x35 * (x280 - x146 * x172 - x147 * x237) - x275 * x55
-                            - x276 * x43 - x61 * x0 * x277) * d,
+                    (x180 * x272 + x182 * x276 + x323 * x30 + x24 * x324
+                        - x0 * (x181 * x273 - x33 * x325)) * x104,
+                    x34
+                        * (x323 * x55 + x63 * x324 + x182 * x280 + x180 * x279
+                            - (-x181 * x282 - x325 * x69) * x0),
+                    x34 * (x87 * x324 - x326 * x288 + x102 * x323 - x327 * x93),
+                    (x81 * x324 - x328 - x327 * x89 + x323 * x97) * x105,
+                    x116
+                        * (x59 * x324 - x327 * x67 + x38 * (x182 * x275 - x329 - x330)
+                            + x323 * x53),
                 ],
                 [
-                    x153 + (x17 * x115 - x33 * x108) * u4 * J1 + x298 * x17
-                        + d * m1
-                            * (x10 * (x25 * x304 * x0 + x279 + x305 * x32 + x22 * x306)
-                                - x33 * x125 - x17 * d * x302),
+                    x196
+                        + x114
+                            * (x34 * (x356 * x30 - x328 + x33 * x357 + x358 * x24)
+                                - x36 * x168 - x170 * x349) + (x36 * x144 + x198) * x197
+                        + x360 * x11,
                     m1
-                        * (x10 * (x48 * x305 + x62 * x304 + x306 * x57 + x278 * x17 * d)
-                            + (-x47 * x302 - x17 * x125) * d) + x112
-                        + u4 * (-x307 - x17 * x108) * J1 - x33 * x298,
-                    x308
-                        + (x10
-                            * (x305 * x81 + x75 * x306 - x146 * x287 + x304 * x86
-                                - x147 * x284 - x148 * x286)
-                            - d
-                                * (d * ((x310 - 2.0 * x309) * u2 - u1 * u1 * x169)
-                                    + a_ * (x33 * x165 - 2.0 * (u2 * x17 * u1)))) * m1 + x311,
-                    x308
-                        + d
-                            * (x141
-                                + x10
-                                    * (m1 * (x68 * x306 + x304 * x82 + x76 * x305) - x147 * x283
-                                        - x148 * x285 - x146 * x185) + x299 - x300) * m1 + x311,
-                    (x306 * x55 + x61 * x304 + x305 * x43) * x10 * m2 * d * m1,
+                        * (x34 * (x357 * x69 - x170 * x326 + x356 * x55 + x358 * x63)
+                            - (x168 * x11 - x349 * x41) * d) - x36 * x360
+                        - x197 * (x136 - x361) + x148,
+                    (x34
+                        * (x182 * x337 + x357 * x93 + x102 * x356 + x358 * x87
+                            + x180 * x335 + x181 * x334)
+                        - (a_ * (x36 * x209 - 2.0 * (x142 * u1))
+                            + d * ((x363 - 2.0 * x362) * u2 - x187 * x213)) * d) * m1
+                        + x364,
+                    x114
+                        * (x353 - x351 + x174
+                            + x34
+                                * (x182 * x336 + (x89 * x357 + x356 * x97 + x358 * x81) * m1
+                                    + x180 * x225 + x181 * x333)) + x364,
+                    x346 * (x358 * x59 + x67 * x357 + x356 * x53),
                 ],
                 [
-                    u5 * (x338 - x35 * x337) * J1
+                    x206 * (x207 - x38 * x383) - x128 * (x207 + x205)
+                        + x108
+                            * (x384 * x155
+                                + x34 * (x33 * x391 + x30 * x392 + x393 * x24 + x38 * x394)
+                                + x38 * x164),
+                    x395
                         + m2
-                            * (x339 * d * x9 + x35 * x123
-                                + x10
-                                    * (x35 * (x280 + x340 + x341) + x32 * x346 + x25 * x347 * x0
-                                        + x22 * x348)) * d + x102 * (-x35 * x105 - x338),
-                    x349 + x350
-                        + m2
-                            * (x10
-                                * (x48 * x346 - x146 * x317 - x148 * x314 + x62 * x347
-                                    - x147 * x316 + x57 * x348)
+                            * (x34
+                                * (x182 * x366 + x180 * x367 + x368 * x181 + x391 * x69
+                                    + x392 * x55 + x63 * x393)
                                 - d
-                                    * (a_ * (2.0 * (u3 * x9 * u1) + x35 * x156)
-                                        + (x160 * (x154 - x155) + 2.0 * (u3 * u1 * x158)) * d)),
-                    x9 * (u5 * x337 * J1 + x102 * x105)
+                                    * (d * (2.0 * (x166 * x192) + x194 * x189)
+                                        + a_ * (x38 * x190 + 2.0 * (x166 * x9)))),
+                    x9 * (x206 * x383 + x128 * x131) + x140 * x396
                         + m2
-                            * (x10
-                                * (x347 * x86 + x81 * x346 + d * x9 * (-x280 - x340 - x341)
-                                    + x75 * x348) + d * (-x339 * x65 - x9 * x123))
-                        + x35 * x352 * x118,
-                    (x76 * x346 + x82 * x347 + x68 * x348) * x10 * m2 * d * m1,
-                    m2 * d
-                        * (x10
-                            * (m2 * (x55 * x348 + x61 * x347 + x43 * x346) - x147 * x40
-                                - x148 * x58 - x146 * x52) - x342 - x343 - x344) + x349
-                        + x350,
+                            * (x34
+                                * (x102 * x392 + x87 * x393 - x394 * x155 + x391 * x93)
+                                - (x164 * x9 - x85 * x384) * d),
+                    x346 * (x97 * x392 + x89 * x391 + x81 * x393),
+                    x395
+                        + x108
+                            * (x34
+                                * ((x392 * x53 + x59 * x393 + x67 * x391) * m2 - x181 * x68
+                                    + x182 * x62 + x47 * x180) - x388 - x389 + x158),
                 ],
                 [
-                    x33 * x17 * (x353 - x354 + x355) - x356 + x35 * x9 * x352 + x357
-                        + d
-                            * (m2 * x9 * x359 - x17 * x358 * m1
-                                + x10 * (-x368 * x32 - x22 * x369 - x25 * x0 * x370)),
-                    J2 * (x371 + x372) + x373 * u3 + (x17 * x17 * u4 - x371 - x372) * J1
+                    (x13 * x400 - x34 * (-x30 * x406 - x24 * x407 - x33 * x408)
+                        - x19 * x404) * d - x409 + x70 * (x410 + x197) + x411
+                        + x74 * x396,
+                    x412 * u3
                         - m2
-                            * ((a_ * (-2.0 * x116 - 2.0 * x117)
-                                + d * (-u1 * x158 - x160 * u3)) * d - a_ * a_ * u3)
-                        - x33 * x33 * x374 - x119
-                        + x10 * (-x369 * x57 - x62 * x370 - x48 * x368) - 2.0 * x120
-                        - x47 * x358 * m1,
-                    (x307 - u5 * x9 * x9 - x375) * J1 - m2 * x359 * x65
-                        + x10 * (-x86 * x370 - x75 * x369 - x368 * x81)
-                        - x35 * x35 * x102 + u2 * x376 + (x375 - x307) * J2
-                        - m1
-                            * (((2.0 * x114 - 2.0 * x113) * a_ + d * (x310 - x309)) * d
-                                + a_ * a_ * u2) + x149 + 2.0 * x150,
-                    d * m1
-                        * (x361 + x362 + x10 * (-x68 * x369 - x82 * x370 - x76 * x368))
-                        + x87 * x110 * x17 + x33 * x37 * x115,
-                    x35 * x87 * x132
-                        + m2 * d
-                            * (x365 - x364
-                                + x10 * (-x369 * x55 - x61 * x370 - x368 * x43)) + x377,
+                            * (d
+                                * (-(2.0 * x137 + 2.0 * x138) * a_
+                                    - (u1 * x192 + x194 * u3) * d) - u3 * x186)
+                        - x34 * (-x55 * x406 - x63 * x407 - x408 * x69) - x42 * x404
+                        - x149 - x37 * x410 + J2 * (x132 + x413) - 2.0 * x150
+                        + (x12 * u4 - x132 - x413) * J1,
+                    u2 * x414 - x39 * x128 - x400 * x86 + x183 + 2.0 * x184
+                        + (x136 - u5 * x10 - x415) * J1 + J2 * (x415 - x136)
+                        - (-x87 * x407 - x102 * x406 - x408 * x93) * x34
+                        - (d * (a_ * (2.0 * x134 - 2.0 * x133) + d * (x363 - x362))
+                            + a_ * x152) * m1,
+                    x73 * x415 + x136 * x71
+                        + (x403 - x34 * (-x97 * x406 - x89 * x408 - x81 * x407)) * x114,
+                    x38 * x199 + x416
+                        + x108
+                            * (x397 - x398
+                                - x34 * (-x59 * x407 - x67 * x408 - x406 * x53)),
                 ],
                 [
-                    (x10 * (-x22 * x385 - x25 * x0 * x386 - x387 * x32)
-                        - x124 * x17 * x17 * d * m1 + m2 * x9 * x383) * d
-                        - x33 * x33 * u4 * J1 + x17 * x17 * x374 + 2.0 * x119 - x377
-                        + x120 + u3 * x388,
-                    2.0 * (u5 * m2 * a_ * d * x9) + x356
-                        + (-x62 * x386 - x385 * x57 - x48 * x387) * x10
-                        + x17 * (x33 * (x354 - x353 - x355) - x124 * x47 * d * m1)
-                        - x389,
-                    x390 - x162 + x376 * u1 - 2.0 * x163
-                        + x10 * (-x86 * x386 - x75 * x385 - x387 * x81)
-                        - m1 * (x391 + d * (d * (x168 + x170) + a_ * x392)) - x393 + x394
-                        - m2 * x65 * x383,
-                    x390
-                        + (x379 + x10 * (-x82 * x386 - x76 * x387 - x68 * x385) + x380)
-                            * d * m1 + x394,
-                    m2 * d
-                        * (x10 * (-x385 * x55 - x61 * x386 - x387 * x43)
-                            - 2.0 * (a_ * u2 * x9)),
+                    d
+                        * (x13 * x418 - x12 * x417
+                            - x34 * (-x30 * x423 - x424 * x33 - x425 * x24)) + x410 * x12
+                        + 2.0 * x149 - x416 + x150 + u3 * x426 - x37 * x197,
+                    x11 * (x36 * (x146 - x197 - x359) + x417 * x41) + x409
+                        + 2.0 * (u5 * x108 * x48) - x427
+                        - x34 * (-x425 * x63 - x423 * x55 - x424 * x69),
+                    x414 * u1 - x201 - (x428 + d * (d * (x212 + x214) + a_ * x429)) * m1
+                        - (-x424 * x93 - x102 * x423 - x87 * x425) * x34 - 2.0 * x202
+                        - x430 - x418 * x86 + x432,
+                    x432 + x114 * (x421 - x34 * (-x81 * x425 - x424 * x89 - x97 * x423)),
+                    (-x34 * (-x423 * x53 - x424 * x67 - x425 * x59) - 2.0 * x161) * x108,
                 ],
                 [
-                    x110 * x37 * x17 + u2 * x388 - x9 * x9 * (x99 + x395)
-                        + x35 * x35 * u5 * J1 - 2.0 * x149 - x150
-                        + (x10 * (-x25 * x0 * x402 - x403 * x32 - x22 * x404)
-                            + m2 * x100 * d * x9 * x9 - x400 * x17 * m1) * d,
-                    2.0 * x162 - x390 + x373 * u1
-                        - m2 * ((d * (x159 - x161) + a_ * x405) * d - x391) + x163
-                        + x10 * (-x404 * x57 - x62 * x402 - x48 * x403) + x393
-                        - x400 * x47 * m1 + x406,
-                    x9 * (x35 * (-x99 - x395 - x351) - m2 * x100 * d * x65)
-                        + x10 * (-x403 * x81 - x402 * x86 - x75 * x404) - x357
-                        + 2.0 * (a_ * x17 * d * u4 * m1) + x389,
-                    (x10 * (-x82 * x402 - x68 * x404 - x76 * x403)
-                        - 2.0 * (a_ * u3 * x17)) * d * m1,
-                    m2 * d
-                        * (x396 + x10 * (-x61 * x402 - x43 * x403 - x404 * x55) - x397)
-                        + x393 + x406,
+                    u2 * x426 - 2.0 * x183 - x184 - (x127 - x125) * x10 + x145 * x11
+                        + x206 * x39
+                        + d
+                            * (x10 * x433 - x434 * x19
+                                - x34 * (-x441 * x24 - x33 * x442 - x443 * x30)),
+                    2.0 * x201 - x34 * (-x443 * x55 - x441 * x63 - x69 * x442)
+                        - m2 * (d * (d * (x193 - x195) + a_ * x444) - x428) + x412 * u1
+                        + x202 - x431 + x445 - x434 * x42,
+                    x9 * (x433 * x85 - x38 * x396) - x411 + 2.0 * (x114 * u4 * x75)
+                        + x427 - x34 * (-x442 * x93 - x441 * x87 - x102 * x443),
+                    x114 * (-x34 * (-x89 * x442 - x441 * x81 - x443 * x97) - 2.0 * x177),
+                    x108 * (x437 + x438 - x34 * (-x67 * x442 - x443 * x53 - x441 * x59))
+                        + x445,
                 ],
                 [
-                    x407 * x17 - x33 * x115 * J1
-                        + d * d
-                            * (x10 * (x409 * x25 * x0 + x410 * x32 + x22 * x411)
-                                - x17 * x392) * m1,
-                    (x10 * (x48 * x410 + x409 * x62 + x57 * x411) - x47 * x392) * d * m1
-                        - x17 * x115 * J1 - x33 * x407,
-                    (x10 * (x410 * x81 + x409 * x86 + x75 * x411) - a_ * x17 * x408) * d
-                        * m1,
-                    (x409 * x82 + x410 * x76 + x68 * x411) * x10 * d * d * m1 * m1,
-                    x10 * m2 * d * d * (x409 * x61 + x55 * x411 + x410 * x43) * m1,
+                    x11 * x446
+                        + x119
+                            * (x34 * (x448 * x24 + x33 * x449 + x30 * x450) - x11 * x429)
+                        - x136 * J1,
+                    x114 * (x34 * (x450 * x55 + x448 * x63 + x449 * x69) + x429 * x41)
+                        - x198 * J1 - x36 * x446,
+                    x114 * (x34 * (x102 * x450 + x87 * x448 + x449 * x93) + x447 * x75),
+                    (x97 * x450 + x81 * x448 + x449 * x89) * x114 * x105,
+                    (x450 * x53 + x448 * x59 + x449 * x67) * x120,
                 ],
                 [
-                    m2 * d * d
-                        * (x10 * (x22 * x413 + x414 * x32 + x415 * x25 * x0) + x9 * x405)
-                        - x35 * x118 * J1 - x105 * x9 * x416,
-                    m2 * d
-                        * (x10 * (x415 * x62 + x57 * x413 + x48 * x414)
-                            - a_ * x9 * (-2.0 * u5 - 2.0 * u2)),
-                    m2 * (x10 * (x415 * x86 + x414 * x81 + x75 * x413) - x405 * x65) * d
-                        - x35 * x105 * x416 + x9 * x118 * J1,
-                    x10 * m2 * d * d * m1 * (x415 * x82 + x414 * x76 + x68 * x413),
-                    x10 * m2 * m2 * (x415 * x61 + x414 * x43 + x55 * x413) * d * d,
+                    (x9 * x444 + x34 * (x453 * x30 + x33 * x454 + x455 * x24)) * x123
+                        - x140 * J1 - x132 * x451,
+                    x108 * (x34 * (x455 * x63 + x453 * x55 + x454 * x69) + x452 * x48),
+                    x108 * (x34 * (x454 * x93 + x453 * x102 + x87 * x455) + x444 * x85)
+                        - x451 * x205 + J1 * x207,
+                    (x81 * x455 + x453 * x97 + x89 * x454) * x120,
+                    x108 * x116 * (x453 * x53 + x59 * x455 + x67 * x454),
                 ],
             ],
         }

@@ -287,54 +287,51 @@ pub fn energy(
     let a_ = params.a_;
     let J1 = params.J1;
     let J2 = params.J2;
-    let x0 = f64::cos(gamma1);
-    let x1 = f64::sin(theta);
-    let x2 = f64::cos(theta);
-    let x3 = f64::sin(psi);
-    let x4 = f64::cos(psi);
-    let x5 = x2 * (Y_dot * x3 + X_dot * x4) - Z_dot * x1;
-    let x6 = f64::sin(gamma1);
-    let x7 = f64::sin(phi);
-    let x8 = Z_dot * x2 * x7;
-    let x9 = f64::cos(phi);
-    let x10 = (x1 * x4 * x7 - x9 * x3) * X_dot;
-    let x11 = Y_dot * (x4 * x9 + x1 * x7 * x3);
-    let x12 = x2 * psi_dot * x9;
-    let x13 = theta_dot * x7;
-    let x14 = x12 - x13;
-    let x15 = a_ * x14;
-    let x16 = x8 + x10 + x11 + x15;
-    let x17 = x0 * x5 + x6 * x16;
-    let x18 = x12 + gamma1_dot - x13;
-    let x19 = x0 * x16 - x5 * x6 + x18 * d;
-    let x20 = theta_dot * x9;
-    let x21 = x2 * psi_dot * x7;
-    let x22 = x20 + x21;
-    let x23 = a_ * x22;
-    let x24 = Y_dot * (x1 * x9 * x3 - x4 * x7);
-    let x25 = X_dot * (x7 * x3 + x1 * x4 * x9);
-    let x26 = Z_dot * x2 * x9;
-    let x27 = phi_dot - x1 * psi_dot;
-    let x28 = x0 * x22 - x6 * x27;
-    let x29 = x24 - x23 + x25 + x26 - d * x28;
-    let x30 = gamma2_dot + x20 + x21;
-    let x31 = f64::sin(gamma2);
-    let x32 = f64::cos(gamma2);
-    let x33 = x23 + x24 + x25 + x26;
-    let x34 = x30 * d + x5 * x31 + x32 * x33;
-    let x35 = x31 * x27 + x32 * x14;
-    let x36 = x8 + x10 + x11 - x35 * d - x15;
-    let x37 = x5 * x32 - x33 * x31;
-    let x38 = x6 * x22 + x0 * x27;
-    let x39 = x32 * x27 - x14 * x31;
-    0.5 * ((x17 * x17 + x19 * x19 + x29 * x29) * m1)
-        + 0.5 * (x27 * (Ixx * x27 - x14 * Ixz - Ixy * x22))
-        + 0.5 * ((x14 * Izz - Iyz * x22 - Ixz * x27) * x14)
+    let x0 = f64::cos(theta);
+    let x1 = x0 * psi_dot;
+    let x2 = f64::sin(phi);
+    let x3 = f64::cos(phi);
+    let x4 = x1 * x2 + theta_dot * x3;
+    let x5 = f64::sin(theta);
+    let x6 = phi_dot - x5 * psi_dot;
+    let x7 = x1 * x3 - theta_dot * x2;
+    let x8 = f64::cos(gamma1);
+    let x9 = f64::sin(psi);
+    let x10 = x5 * x9;
+    let x11 = f64::cos(psi);
+    let x12 = x5 * x11;
+    let x13 = Z_dot * x0;
+    let x14 = Y_dot * (x10 * x2 + x11 * x3) + (X_dot * (x12 * x2 - x3 * x9) + x13 * x2);
+    let x15 = a_ * x7;
+    let x16 = x14 + x15;
+    let x17 = gamma1_dot + x7;
+    let x18 = x0 * (Y_dot * x9 + X_dot * x11) - Z_dot * x5;
+    let x19 = f64::sin(gamma1);
+    let x20 = x8 * x16 + d * x17 - x18 * x19;
+    let x21 = x8 * x18 + x19 * x16;
+    let x22 = a_ * x4;
+    let x23 = ((x2 * x9 + x12 * x3) * X_dot + Y_dot * (x10 * x3 - x11 * x2)) + x13 * x3;
+    let x24 = x8 * x4 - x19 * x6;
+    let x25 = x23 - x22 - x24 * d;
+    let x26 = f64::cos(gamma2);
+    let x27 = f64::sin(gamma2);
+    let x28 = x26 * x7 + x27 * x6;
+    let x29 = x14 - x28 * d - x15;
+    let x30 = x22 + x23;
+    let x31 = x18 * x26 - x27 * x30;
+    let x32 = gamma2_dot + x4;
+    let x33 = x26 * x30 + x18 * x27 + x32 * d;
+    let x34 = x19 * x4 + x8 * x6;
+    let x35 = x26 * x6 - x27 * x7;
+    0.5 * ((x7 * Izz - Iyz * x4 - Ixz * x6) * x7)
+        + 0.5 * ((x20 * x20 + x21 * x21 + x25 * x25) * m1)
+        + 0.5 * (m2 * (x29 * x29 + x31 * x31 + x33 * x33))
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * m0)
-        + 0.5 * (m2 * (x34 * x34 + x36 * x36 + x37 * x37))
-        + 0.5 * ((Iyy * x22 - x14 * Iyz - Ixy * x27) * x22)
-        + (0.5 * (x30 * x30) + 0.5 * (x28 * x28) + 0.5 * (x18 * x18) + 0.5 * (x35 * x35))
-            * J2 + (0.5 * (x38 * x38) + 0.5 * (x39 * x39)) * J1
+        + (0.5 * (x34 * x34) + 0.5 * (x35 * x35)) * J1
+        + 0.5 * ((Ixx * x6 - Ixy * x4 - x7 * Ixz) * x6)
+        + 0.5 * ((Iyy * x4 - Ixy * x6 - Iyz * x7) * x4)
+        + (0.5 * (x24 * x24) + 0.5 * (x17 * x17) + 0.5 * (x32 * x32) + 0.5 * (x28 * x28))
+            * J2
 }
 ///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
 #[allow(non_snake_case, clippy::all)]
@@ -349,89 +346,127 @@ pub fn work_rate(
 ///Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.
 #[allow(non_snake_case, clippy::all)]
 pub fn momenta(
-    _t: f64,
+    t: f64,
     q: &[f64; NUM_COORDINATES],
     qdot: &[f64; NUM_COORDINATES],
     params: &Params,
 ) -> [f64; NUM_IGNORABLE] {
+    let psi_dot = qdot[0];
+    let theta_dot = qdot[1];
+    let phi_dot = qdot[2];
+    let X_dot = qdot[5];
+    let Y_dot = qdot[6];
+    let Z_dot = qdot[7];
+    let m1 = params.m1;
+    let m2 = params.m2;
+    let d = params.d;
+    let mut v = [0.0f64; 47];
+    momenta_part0(t, q, qdot, params, &mut v);
+    momenta_part1(t, q, qdot, params, &mut v);
+    [
+        d * (v[12] * v[13] + phi_dot * (v[16] * v[19] - v[15] * v[8]) + v[20] * v[22])
+            + (((v[24] + v[26]) * v[27] - v[30] * v[19]) * m1
+                + (v[28] * v[33] - v[8] * v[35]) * m2) * psi_dot
+            + theta_dot
+                * ((v[3] * (-v[24] - v[26]) + v[36] * v[19]) * m1
+                    + (v[33] * v[5] + v[8] * v[37]) * m2) + X_dot * v[38],
+        Y_dot * v[38]
+            + theta_dot
+                * ((v[39] * v[36] + (-v[42] - v[44]) * v[3]) * m1
+                    + m2 * (v[40] * v[37] + v[46] * v[5]))
+            + ((v[27] * (v[42] + v[44]) - v[39] * v[30]) * m1
+                + m2 * (v[28] * v[46] - v[40] * v[35])) * psi_dot
+            + (v[45] * v[20] + (v[39] * v[16] - v[15] * v[40]) * phi_dot + v[13] * v[43])
+                * d,
+        theta_dot
+            * ((v[3] * (-v[29] * v[23] - (v[28] * v[9] - v[0] * v[1]) * v[25])
+                + v[36] * v[27]) * m1
+                + m2
+                    * ((v[31] * (v[14] * v[27] + v[21] * v[1]) + v[34] * v[32]) * v[5]
+                        + v[28] * v[37]))
+            + d
+                * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
+                    + v[13] * v[29]) + Z_dot * v[38],
+    ]
+}
+#[allow(non_snake_case)]
+#[inline(never)]
+fn momenta_part0(
+    _t: f64,
+    q: &[f64; NUM_COORDINATES],
+    qdot: &[f64; NUM_COORDINATES],
+    params: &Params,
+    v: &mut [f64; 47],
+) {
     let psi = q[0];
     let theta = q[1];
     let phi = q[2];
     let gamma1 = q[3];
     let gamma2 = q[4];
-    let psi_dot = qdot[0];
-    let theta_dot = qdot[1];
-    let phi_dot = qdot[2];
     let gamma1_dot = qdot[3];
     let gamma2_dot = qdot[4];
-    let X_dot = qdot[5];
-    let Y_dot = qdot[6];
-    let Z_dot = qdot[7];
     let m0 = params.m0;
     let m1 = params.m1;
     let m2 = params.m2;
     let d = params.d;
     let a_ = params.a_;
-    let x0 = f64::sin(gamma2);
-    let x1 = f64::cos(gamma2);
-    let x2 = f64::cos(psi);
-    let x3 = f64::cos(theta);
-    let x4 = f64::sin(phi);
-    let x5 = f64::sin(psi);
-    let x6 = f64::sin(theta);
-    let x7 = f64::cos(phi);
-    let x8 = x4 * x5 + x6 * x2 * x7;
-    let x9 = x2 * x3 * x0 + x1 * x8;
-    let x10 = d + x1 * a_;
-    let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-    let x12 = x6 * x2 * x4 - x7 * x5;
-    let x13 = a_ + x1 * d;
-    let x14 = f64::sin(gamma1);
-    let x15 = f64::cos(gamma1);
-    let x16 = x15 * x12 - x2 * x14 * x3;
-    let x17 = x15 * a_;
-    let x18 = -x17 - d;
-    let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-    let x20 = -a_ - x15 * d;
-    let x21 = x17 + d;
-    let x22 = x15 * x3 * x4 + x6 * x14;
-    let x23 = -x22 * d - a_ * x3 * x4;
-    let x24 = x1 * x3 * x7 - x6 * x0;
-    let x25 = -a_ * x3 * x7 - x24 * d;
-    let x26 = m2 + m0 + m1;
-    let x27 = x6 * x7 * x5 - x2 * x4;
-    let x28 = x3 * x0 * x5 + x1 * x27;
-    let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-    let x30 = x2 * x7 + x6 * x4 * x5;
-    let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-    let x32 = x15 * x30 - x14 * x3 * x5;
-    [
-        theta_dot
-            * (m2 * (x11 * x7 + x12 * x13 * x4)
-                + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-            + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
-            + d
-                * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                    + m2 * gamma2_dot * x9) + X_dot * x26,
-        theta_dot
-            * (m2 * (x29 * x7 + x13 * x4 * x30)
-                + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-            + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                + x32 * gamma1_dot * m1) * d
-            + psi_dot
-                * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                    + m2 * (x3 * x4 * x29 + x30 * x25)),
-        theta_dot
-            * (m2
-                * (x3 * x13 * x4 * x4
-                    + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                + m1
-                    * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                        + x20 * x3 * x7 * x7))
-            + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                + x22 * gamma1_dot * m1) * d + Z_dot * x26,
-    ]
+    v[0] = f64::cos(gamma1);
+    v[1] = f64::sin(theta);
+    v[2] = f64::cos(psi);
+    v[3] = f64::sin(phi);
+    v[4] = v[2] * v[3];
+    v[5] = f64::cos(phi);
+    v[6] = f64::sin(psi);
+    v[7] = v[5] * v[6];
+    v[8] = v[1] * v[4] - v[7];
+    v[9] = f64::sin(gamma1);
+    v[10] = f64::cos(theta);
+    v[11] = v[2] * v[10];
+    v[12] = v[0] * v[8] - v[9] * v[11];
+    v[13] = gamma1_dot * m1;
+    v[14] = f64::sin(gamma2);
+    v[15] = m2 * v[14];
+    v[16] = v[9] * m1;
+    v[17] = v[2] * v[5];
+    v[18] = v[3] * v[6];
+    v[19] = v[1] * v[17] + v[18];
+    v[20] = m2 * gamma2_dot;
+    v[21] = f64::cos(gamma2);
+    v[22] = v[14] * v[11] + v[21] * v[19];
+    v[23] = v[0] * a_ + d;
+    v[24] = v[12] * v[23];
+    v[25] = a_ * v[9];
+    v[26] = (v[0] * v[11] + v[9] * v[8]) * v[25];
+    v[27] = v[10] * v[5];
+    v[28] = v[10] * v[3];
+    v[29] = v[1] * v[9] + v[0] * v[28];
+    v[30] = v[29] * d + a_ * v[28];
+    v[31] = a_ * v[14];
+    v[32] = d + v[21] * a_;
+    v[33] = v[22] * v[32] - (v[21] * v[11] - v[14] * v[19]) * v[31];
+    v[34] = v[21] * v[27] - v[1] * v[14];
+    v[35] = a_ * v[27] + v[34] * d;
+    v[36] = -((a_ + v[0] * d) * v[5]);
+    v[37] = (a_ + v[21] * d) * v[3];
+    v[38] = m2 + m0 + m1;
+    v[39] = v[1] * v[7] - v[4];
+}
+#[allow(non_snake_case)]
+#[inline(never)]
+fn momenta_part1(
+    _t: f64,
+    _q: &[f64; NUM_COORDINATES],
+    _qdot: &[f64; NUM_COORDINATES],
+    _params: &Params,
+    v: &mut [f64; 47],
+) {
+    v[40] = v[1] * v[18] + v[17];
+    v[41] = v[10] * v[6];
+    v[42] = (v[40] * v[9] + v[0] * v[41]) * v[25];
+    v[43] = v[0] * v[40] - v[9] * v[41];
+    v[44] = v[43] * v[23];
+    v[45] = v[14] * v[41] + v[21] * v[39];
+    v[46] = v[45] * v[32] - (v[21] * v[41] - v[39] * v[14]) * v[31];
 }
 ///Velocity-level constraint residuals `a q' + b` (zero on admissible motions).
 #[allow(non_snake_case, clippy::all)]
@@ -521,7 +556,7 @@ pub mod lagrange {
         let d = params.d;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 170];
+        let mut v = [0.0f64; 187];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -540,111 +575,93 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    (v[6] * v[6] + (v[8] * v[8] + v[9]) * v[1] * v[1] * v[10] * v[10])
-                        * m1 + m2 * (v[14] * v[14] + v[1] * v[1] * v[2] * v[2] * v[16])
-                        + (v[18] * v[18] + v[20] * v[20]) * J1
-                        + J2
-                            * (v[1] * v[1] * (v[10] * v[10] + v[2] * v[2])
-                                + v[13] * v[13] + v[5] * v[5]) - v[3] * (v[22] - v[21])
-                        + v[1]
-                            * (((Iyy * v[2] - v[23]) * v[1] + v[3] * Ixy) * v[2]
-                                + (v[1] * (Izz * v[10] - v[24]) + v[3] * Ixz) * v[10]),
-                    v[30],
-                    v[31],
-                    v[32],
-                    v[34],
+                    J2 * (v[6] * v[6] + v[3] * v[3] * (v[8] + v[9]) + v[13] * v[13])
+                        - v[0] * v[14] + m1 * (v[20] * v[12] * v[12] + v[21] * v[21])
+                        + m2 * (v[5] * v[5] * v[25] + v[26] * v[26])
+                        + (v[28] * v[28] + v[30] * v[30]) * J1
+                        + v[3]
+                            * (((Iyy * v[4] - v[31]) * v[3] + v[0] * Ixy) * v[4]
+                                + (v[3] * (Izz * v[7] - v[32]) + v[0] * Ixz) * v[7]),
+                    v[39],
+                    v[42],
                     v[45],
-                    v[54],
-                    0.0,
-                ],
-                [
-                    v[30],
-                    J2 * ((v[55] + 1.0) * v[10] * v[10] + (v[56] + 1.0) * v[2] * v[2])
-                        + (v[4] * v[4] * v[10] * J1 + v[26] + v[24]) * v[10]
-                        + (v[16] * v[10] * v[10] + v[25] * v[25] * v[2] * v[2]) * m2
-                        + v[2] * (v[27] + v[23] + v[11] * v[11] * v[2] * J1)
-                        + ((v[9] + v[29] * v[29]) * v[2] * v[2]
-                            + v[28] * v[28] * v[10] * v[10]) * m1,
-                    v[58],
-                    v[59],
-                    v[60],
-                    v[61],
-                    v[62],
+                    v[48],
                     v[63],
+                    v[74],
+                    0.0,
                 ],
                 [
-                    v[31],
-                    v[58],
-                    Ixx + v[64] * v[4] * v[4] + (v[55] + v[56]) * J1
-                        + v[11] * v[11] * v[65],
-                    0.0,
-                    0.0,
-                    v[66],
-                    v[67],
-                    v[68],
+                    v[39],
+                    (v[20] * v[9] + v[75] * v[75]) * m1
+                        + (v[38] * v[1] * v[7] + v[34]) * v[7]
+                        + v[4] * (v[76] * v[35] + v[37])
+                        + J2 * ((v[77] + 1.0) * v[9] + v[8] * (v[78] + 1.0))
+                        + m2 * (v[79] * v[79] + v[8] * v[25]),
+                    v[81],
+                    v[82],
+                    v[83],
+                    v[84],
+                    v[85],
+                    v[86],
                 ],
-                [v[32], v[59], 0.0, v[64], 0.0, v[69], v[70], v[71]],
-                [v[34], v[60], 0.0, 0.0, v[65], v[72], v[73], v[74]],
-                [v[45], v[61], v[66], v[69], v[72], v[75], 0.0, 0.0],
-                [v[54], v[62], v[67], v[70], v[73], 0.0, v[75], 0.0],
-                [0.0, v[63], v[68], v[71], v[74], 0.0, 0.0, v[75]],
+                [
+                    v[42],
+                    v[81],
+                    v[87] * v[1] * v[1] + Ixx + v[88] * v[10] * v[10]
+                        + (v[78] + v[77]) * J1,
+                    0.0,
+                    0.0,
+                    v[89],
+                    v[90],
+                    v[91],
+                ],
+                [v[45], v[82], 0.0, v[87], 0.0, v[92], v[93], v[94]],
+                [v[48], v[83], 0.0, 0.0, v[88], v[95], v[96], v[97]],
+                [v[63], v[84], v[89], v[92], v[95], v[98], 0.0, 0.0],
+                [v[74], v[85], v[90], v[93], v[96], 0.0, v[98], 0.0],
+                [0.0, v[86], v[91], v[94], v[97], 0.0, 0.0, v[98]],
             ],
             force: [
-                (-v[18] * v[100] - v[20] * v[101]) * J1 - v[94] * v[5]
-                    - ((v[107] + v[108] * v[8]) * v[1] * v[10] + v[109] * v[6]) * m1
-                    + v[1]
-                        * (v[2]
-                            * (v[115] - v[111] - v[113] - v[116] + v[117] - v[118]
-                                - v[121])
-                            + (v[127] - v[122] - v[124] - v[126] + v[128] - v[129]
-                                - v[130]) * v[10])
-                    + (v[132] - v[131] - v[133] - v[134] - v[135]) * v[3]
-                    - v[140] * v[13] - m2 * (v[145] * v[1] * v[2] + v[146] * v[14]),
-                v[2]
-                    * (v[122] - v[100] * v[11] * J1 + v[124] + v[126] + v[12] * v[140]
-                        - v[127] - v[128] + v[129] + v[130])
-                    - (v[2] * (v[108] * v[29] - v[107]) + v[109] * v[28] * v[10]) * m1
-                    - m2 * (v[145] * v[10] + v[146] * v[25] * v[2])
-                    + (v[115] - v[111] - v[113] - v[4] * J1 * v[101] - v[116]
-                        - v[0] * v[94] + v[117] - v[118] - v[121]) * v[10],
-                v[131] - v[132] + v[133] + v[134] + v[135]
-                    + v[11] * (m2 * v[146] * d - v[137] - v[139])
-                    + v[4] * (v[85] - v[109] * d * m1 + v[93])
-                    + (-v[0] * v[101] - v[12] * v[100]) * J1,
-                v[57] * v[84] * v[103] - v[108] * d * m1 - v[129],
-                v[123] * v[119] * v[120] - v[118] - m2 * v[144] * d,
-                -m2 * (v[144] * v[43] + v[37] * v[146] + v[42] * v[143])
-                    - (v[106] * v[39] + v[38] * v[108] + v[109] * v[41]) * m1,
-                -m2 * (v[146] * v[46] + v[51] * v[143] + v[144] * v[52])
-                    - (v[106] * v[48] + v[108] * v[47] + v[109] * v[50]) * m1,
-                -m2
-                    * (((0.25 * v[150] - 0.25 * v[151] - 0.25 * v[152] + 0.25 * v[153])
-                        * phi_dot * phi_dot
-                        + (theta_dot * v[154]
-                            + phi_dot
-                                * (v[157] - 0.5 * v[150] - 0.5 * v[151] + 0.5 * v[152]
-                                    + 0.5 * v[153] - v[158])) * theta_dot
-                        + gamma2_dot
-                            * (phi_dot
-                                * (0.5 * v[150] - 0.5 * v[151] + 0.5 * v[152]
-                                    - 0.5 * v[153])
-                                + (-v[157] - 0.5 * v[150] - 0.5 * v[151]
-                                    - 2.0 * (v[1] * v[11]) - 0.5 * v[152] - 0.5 * v[153]
-                                    - v[158]) * theta_dot + gamma2_dot * v[154])) * d - v[147])
-                    - (v[147]
-                        + (theta_dot
-                            * ((0.5 * v[164] - v[161] + v[165] + 2.0 * (v[4] * v[1])
-                                + 0.5 * v[166] - 0.5 * v[167] - 0.5 * v[168]) * gamma1_dot
-                                + theta_dot * v[169]
-                                + (0.5 * v[164] - 0.5 * v[166] - 0.5 * v[167]
-                                    + 0.5 * v[168]) * phi_dot)
-                            + gamma1_dot
-                                * (v[169] * gamma1_dot
-                                    + phi_dot
-                                        * (v[161] - 0.5 * v[164] + v[165] - 0.5 * v[166]
-                                            - 0.5 * v[167] - 0.5 * v[168]))
-                            + (0.25 * v[166] - 0.25 * v[164] - 0.25 * v[167]
-                                + 0.25 * v[168]) * phi_dot * phi_dot) * d) * m1,
+                ((v[130] - v[128] - v[132] - v[133] - v[134] + v[135] - v[137]) * v[7]
+                    + v[142] * v[4]) * v[3] - v[6] * v[115] - v[13] * v[127]
+                    - m2 * (v[5] * v[150] - v[146] * v[26])
+                    + (v[151] - v[152] - v[153] - v[154] - v[155]) * v[0]
+                    - ((v[161] + v[163]) * v[12] - v[21] * v[158]) * m1
+                    - (v[30] * v[165] - v[164] * v[28]) * J1,
+                (v[142] - v[38] * v[165] - v[2] * v[115]) * v[7]
+                    - ((-v[161] - v[163]) * v[4] + v[75] * v[158]) * m1
+                    + (v[128] - v[164] * v[35] + v[11] * v[127] - v[130] + v[132]
+                        + v[133] + v[134] - v[135] + v[137]) * v[4]
+                    - m2 * (v[150] * v[7] + v[146] * v[79]),
+                (v[146] * v[46] - v[122] - v[126]) * v[10]
+                    + v[1] * (v[115] - v[43] * v[158]) - v[151] + v[152]
+                    - (v[2] * v[165] + v[11] * v[164]) * J1 + v[153] + v[154] + v[155],
+                v[104] * v[131] - v[160] * v[43] - v[128],
+                v[123] * v[139] - v[141] - v[46] * v[149],
+                -((v[54] * v[158] + v[162] * v[61] + v[160] * v[59]) * m1
+                    + m2 * (v[146] * v[52] + v[148] * v[57] + v[56] * v[149])),
+                -(m1 * (v[162] * v[68] + v[160] * v[66] + v[70] * v[158])
+                    + m2 * (v[146] * v[65] + v[148] * v[71] + v[149] * v[72])),
+                -(m2
+                    * (d
+                        * (v[172] * v[173]
+                            + gamma2_dot
+                                * ((0.5 * v[170] - v[169] * v[3] - 0.5 * v[171]) * phi_dot
+                                    + gamma2_dot * v[174]
+                                    - theta_dot * (v[176] + v[177] + 2.0 * (v[3] * v[10])))
+                            + theta_dot
+                                * (theta_dot * v[174] + phi_dot * (v[177] - v[176])))
+                        - v[166])
+                    + (v[166]
+                        + d
+                            * (v[173] * v[181]
+                                + ((v[183] - 0.5 * v[182] - 0.5 * v[179] - 0.5 * v[180]
+                                    + v[184]) * phi_dot + gamma1_dot * v[185]) * gamma1_dot
+                                + theta_dot
+                                    * ((2.0 * (v[1] * v[3]) + v[183] + 0.5 * v[180] + v[186]
+                                        - v[184]) * gamma1_dot
+                                        + (v[186] - 0.5 * v[182] - 0.5 * v[180]) * phi_dot
+                                        + theta_dot * v[185]))) * m1),
             ],
             checks: [],
             residuals: [],
@@ -658,9 +675,8 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 170],
+        v: &mut [f64; 187],
     ) {
-        let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -677,53 +693,50 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = f64::sin(theta);
-        v[4] = f64::sin(gamma1);
-        v[5] = v[0] * v[1] * v[2] + v[3] * v[4];
-        v[6] = -v[5] * d - a_ * v[1] * v[2];
-        v[7] = v[0] * a_;
-        v[8] = v[7] + d;
-        v[9] = a_ * a_ * v[4] * v[4];
-        v[10] = f64::cos(phi);
-        v[11] = f64::sin(gamma2);
-        v[12] = f64::cos(gamma2);
-        v[13] = v[12] * v[1] * v[10] - v[3] * v[11];
-        v[14] = -a_ * v[1] * v[10] - v[13] * d;
-        v[15] = d + v[12] * a_;
-        v[16] = a_ * a_ * v[11] * v[11] + v[15] * v[15];
-        v[17] = v[12] * v[3];
-        v[18] = -v[1] * v[11] * v[10] - v[17];
-        v[19] = v[0] * v[3];
-        v[20] = v[4] * v[1] * v[2] - v[19];
-        v[21] = v[3] * Ixx;
-        v[22] = v[1] * (-Ixy * v[2] - Ixz * v[10]);
-        v[23] = Iyz * v[10];
-        v[24] = Iyz * v[2];
-        v[25] = a_ + v[12] * d;
-        v[26] = Iyy * v[10];
-        v[27] = v[2] * Izz;
-        v[28] = -a_ - v[0] * d;
-        v[29] = -v[7] - d;
-        v[30] = v[2]
-            * (m2 * (v[1] * v[16] * v[10] + v[25] * v[14]) - v[12] * v[13] * J2
-                + v[18] * v[11] * J1 + (v[26] + v[24]) * v[1])
-            - v[3] * (v[2] * Ixz - Ixy * v[10])
-            + (v[0] * J2 * v[5] + v[1] * (-v[27] - v[23]) + v[20] * v[4] * J1
-                + (v[28] * v[6] + v[1] * v[2] * (v[8] * v[29] - v[9])) * m1) * v[10];
-        v[31] = v[22] - v[21] + (v[0] * v[20] + v[12] * v[18]) * J1
-            + (v[13] * v[11] - v[5] * v[4]) * J2
-            + (v[4] * m1 * v[6] - m2 * v[11] * v[14]) * d;
-        v[32] = v[1] * (d * v[8] * m1 + J2) * v[10];
-        v[33] = J2 + m2 * d * v[15];
-        v[34] = v[1] * v[33] * v[2];
-        v[35] = f64::cos(psi);
-        v[36] = f64::sin(psi);
-        v[37] = v[3] * v[35] * v[2] - v[10] * v[36];
-        v[38] = v[0] * v[37] - v[35] * v[4] * v[1];
-        v[39] = v[37] * v[4] + v[0] * v[35] * v[1];
+        v[0] = f64::sin(theta);
+        v[1] = f64::sin(gamma1);
+        v[2] = f64::cos(gamma1);
+        v[3] = f64::cos(theta);
+        v[4] = f64::sin(phi);
+        v[5] = v[3] * v[4];
+        v[6] = v[0] * v[1] + v[2] * v[5];
+        v[7] = f64::cos(phi);
+        v[8] = v[7] * v[7];
+        v[9] = v[4] * v[4];
+        v[10] = f64::sin(gamma2);
+        v[11] = f64::cos(gamma2);
+        v[12] = v[3] * v[7];
+        v[13] = v[11] * v[12] - v[0] * v[10];
+        v[14] = -v[0] * Ixx - v[3] * (Ixy * v[4] + Ixz * v[7]);
+        v[15] = v[2] * a_;
+        v[16] = v[15] + d;
+        v[17] = v[16] * v[16];
+        v[18] = a_ * v[1];
+        v[19] = v[18] * v[18];
+        v[20] = v[17] + v[19];
+        v[21] = v[6] * d + a_ * v[5];
+        v[22] = a_ * v[10];
+        v[23] = v[11] * a_;
+        v[24] = v[23] + d;
+        v[25] = v[22] * v[22] + v[24] * v[24];
+        v[26] = a_ * v[12] + v[13] * d;
+        v[27] = v[11] * v[0];
+        v[28] = v[10] * v[12] + v[27];
+        v[29] = v[2] * v[0];
+        v[30] = v[5] * v[1] - v[29];
+        v[31] = Iyz * v[7];
+        v[32] = Iyz * v[4];
+        v[33] = a_ + v[11] * d;
+        v[34] = Iyy * v[7] + v[32];
+        v[35] = v[10] * J1;
+        v[36] = a_ + v[2] * d;
+        v[37] = v[4] * Izz + v[31];
+        v[38] = v[1] * J1;
+        v[39] = v[4]
+            * (m2 * (v[25] * v[12] - v[33] * v[26]) + v[3] * v[34] - v[11] * J2 * v[13]
+                - v[35] * v[28]) - v[0] * (v[4] * Ixz - Ixy * v[7])
+            + (m1 * (v[36] * v[21] + v[5] * (-v[17] - v[19])) + v[2] * J2 * v[6]
+                - v[3] * v[37] + v[38] * v[30]) * v[7];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -732,69 +745,57 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 170],
+        v: &mut [f64; 187],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let gamma1_dot = state[11];
-        let m0 = params.m0;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
+        let psi = state[0];
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = a_ * v[4] * v[39];
-        v[41] = v[2] * v[36] + v[3] * v[35] * v[10];
-        v[42] = v[12] * v[35] * v[1] - v[11] * v[41];
-        v[43] = v[35] * v[1] * v[11] + v[12] * v[41];
-        v[44] = v[43] * v[15] - a_ * v[11] * v[42];
-        v[45] = m1 * (v[1] * (v[38] * v[8] + v[40]) * v[10] + v[41] * v[6])
-            + m2 * (v[1] * v[44] * v[2] + v[37] * v[14]);
-        v[46] = v[35] * v[10] + v[3] * v[2] * v[36];
-        v[47] = v[0] * v[46] - v[4] * v[1] * v[36];
-        v[48] = v[0] * v[1] * v[36] + v[4] * v[46];
-        v[49] = a_ * v[4] * v[48];
-        v[50] = v[3] * v[10] * v[36] - v[35] * v[2];
-        v[51] = v[12] * v[1] * v[36] - v[11] * v[50];
-        v[52] = v[1] * v[11] * v[36] + v[12] * v[50];
-        v[53] = v[52] * v[15] - a_ * v[51] * v[11];
-        v[54] = m1 * (v[1] * (v[47] * v[8] + v[49]) * v[10] + v[50] * v[6])
-            + m2 * (v[1] * v[2] * v[53] + v[46] * v[14]);
-        v[55] = v[0] * v[0];
-        v[56] = v[12] * v[12];
-        v[57] = J1 - J2;
-        v[58] = ((v[0] * v[57] + v[28] * d * m1) * v[4] - Ixy) * v[10]
-            + v[2] * ((v[12] * v[57] - m2 * d * v[25]) * v[11] + Ixz);
-        v[59] = v[2] * (d * v[29] * m1 - J2);
-        v[60] = v[33] * v[10];
-        v[61] = m2 * (v[44] * v[10] + v[37] * v[25] * v[2])
-            + m1 * (v[2] * (v[38] * v[29] - v[40]) + v[28] * v[41] * v[10]);
-        v[62] = m2 * (v[53] * v[10] + v[25] * v[2] * v[46])
-            + (v[28] * v[50] * v[10] + (v[47] * v[29] - v[49]) * v[2]) * m1;
-        v[63] = m2
-            * (v[1] * v[25] * v[2] * v[2] + (v[13] * v[15] - a_ * v[18] * v[11]) * v[10])
-            + m1
-                * ((v[5] * v[29] - a_ * v[20] * v[4]) * v[2]
-                    + v[28] * v[1] * v[10] * v[10]);
-        v[64] = J2 + d * d * m1;
-        v[65] = m2 * d * d + J2;
-        v[66] = d * (v[4] * v[41] * m1 - m2 * v[37] * v[11]);
-        v[67] = (v[4] * v[50] * m1 - m2 * v[11] * v[46]) * d;
-        v[68] = (v[4] * m1 * v[10] - m2 * v[11] * v[2]) * v[1] * d;
-        v[69] = v[38] * d * m1;
-        v[70] = v[47] * d * m1;
-        v[71] = v[5] * d * m1;
-        v[72] = m2 * d * v[43];
-        v[73] = m2 * d * v[52];
-        v[74] = m2 * v[13] * d;
-        v[75] = m2 + m0 + m1;
-        v[76] = v[1] * psi_dot * v[10];
-        v[77] = theta_dot * v[2];
-        v[78] = v[76] + gamma1_dot - v[77];
-        v[79] = theta_dot * v[10];
+        v[40] = v[1] * m1;
+        v[41] = m2 * v[10];
+        v[42] = J1 * (v[2] * v[30] - v[11] * v[28]) + d * (v[41] * v[26] - v[21] * v[40])
+            + J2 * (v[13] * v[10] - v[6] * v[1]) + v[14];
+        v[43] = d * m1;
+        v[44] = v[43] * v[16];
+        v[45] = v[12] * (J2 + v[44]);
+        v[46] = m2 * d;
+        v[47] = J2 + v[46] * v[24];
+        v[48] = v[47] * v[5];
+        v[49] = f64::cos(psi);
+        v[50] = v[0] * v[4];
+        v[51] = f64::sin(psi);
+        v[52] = v[49] * v[50] - v[7] * v[51];
+        v[53] = v[0] * v[7];
+        v[54] = v[4] * v[51] + v[53] * v[49];
+        v[55] = v[49] * v[3];
+        v[56] = v[11] * v[54] + v[10] * v[55];
+        v[57] = v[11] * v[55] - v[54] * v[10];
+        v[58] = v[24] * v[56] - v[57] * v[22];
+        v[59] = v[2] * v[52] - v[1] * v[55];
+        v[60] = v[59] * v[16];
+        v[61] = v[2] * v[55] + v[52] * v[1];
+        v[62] = v[18] * v[61];
+        v[63] = (v[5] * v[58] - v[52] * v[26]) * m2
+            + m1 * ((v[60] + v[62]) * v[12] - v[54] * v[21]);
+        v[64] = v[3] * v[51];
+        v[65] = v[49] * v[7] + v[50] * v[51];
+        v[66] = v[2] * v[65] - v[1] * v[64];
+        v[67] = v[66] * v[16];
+        v[68] = v[65] * v[1] + v[2] * v[64];
+        v[69] = v[68] * v[18];
+        v[70] = v[53] * v[51] - v[49] * v[4];
+        v[71] = v[11] * v[64] - v[10] * v[70];
+        v[72] = v[10] * v[64] + v[11] * v[70];
+        v[73] = v[24] * v[72] - v[71] * v[22];
+        v[74] = ((v[67] + v[69]) * v[12] - v[21] * v[70]) * m1
+            + m2 * (v[5] * v[73] - v[65] * v[26]);
+        v[75] = -(v[36] * v[7]);
+        v[76] = v[10] * v[4];
+        v[77] = v[11] * v[11];
+        v[78] = v[2] * v[2];
+        v[79] = v[33] * v[4];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -803,65 +804,65 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 170],
+        v: &mut [f64; 187],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
+        let m0 = params.m0;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
+        let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[1] * psi_dot * v[2];
-        v[81] = v[79] + v[80];
-        v[82] = v[3] * psi_dot;
-        v[83] = phi_dot - v[82];
-        v[84] = v[4] * v[81] + v[0] * v[83];
-        v[85] = v[78] * v[57] * v[84];
-        v[86] = -phi_dot - v[82];
-        v[87] = theta_dot * v[86] * v[2];
-        v[88] = v[1] * psi_dot * phi_dot * v[10];
-        v[89] = v[87] + v[88] - gamma1_dot * v[83];
-        v[90] = gamma1_dot * v[81];
-        v[91] = theta_dot * v[1] * psi_dot;
-        v[92] = v[0] * v[89] + v[4] * (v[91] - v[90]);
-        v[93] = J2 * v[92];
-        v[94] = v[85] + v[93];
-        v[95] = theta_dot * v[86] * v[10];
-        v[96] = v[1] * psi_dot * v[2] * phi_dot;
-        v[97] = gamma2_dot * v[83];
-        v[98] = v[76] - v[77];
-        v[99] = -v[98] * gamma2_dot - v[91];
-        v[100] = v[11] * (v[96] - v[95] - v[97]) + v[12] * v[99];
-        v[101] = v[0] * (v[90] - v[91]) + v[89] * v[4];
-        v[102] = v[0] * a_ * v[98] + v[78] * d;
-        v[103] = v[0] * v[81] - v[4] * v[83];
-        v[104] = -a_ * v[81] - d * v[103];
-        v[105] = v[95] - v[96];
-        v[106] = v[104] * v[103] - v[78] * v[102]
-            + a_ * (v[0] * v[98] * gamma1_dot + v[105] * v[4]);
-        v[107] = a_ * v[4] * v[106];
-        v[108] = v[105] * d - v[84] * v[104]
-            + a_ * (v[0] * v[105] + v[98] * v[98] * v[4]);
-        v[109] = v[84] * v[102] - d * v[92]
-            + a_ * (-v[98] * v[4] * v[103] - v[87] - v[88]);
-        v[110] = Ixx * v[83] - v[98] * Ixz - Ixy * v[81];
-        v[111] = v[98] * v[110];
-        v[112] = v[87] + v[88];
-        v[113] = Iyy * v[112];
-        v[114] = v[98] * Izz - Iyz * v[81] - Ixz * v[83];
-        v[115] = v[114] * v[83];
-        v[116] = Ixy * theta_dot * v[1] * psi_dot;
-        v[117] = v[105] * Iyz;
-        v[118] = J2 * v[112];
-        v[119] = v[12] * v[83] - v[98] * v[11];
+        v[80] = J1 - J2;
+        v[81] = (v[1] * (v[2] * v[80] - v[36] * v[43]) - Ixy) * v[7]
+            + v[4] * (v[10] * (v[11] * v[80] - v[46] * v[33]) + Ixz);
+        v[82] = (-J2 - v[44]) * v[4];
+        v[83] = v[47] * v[7];
+        v[84] = (v[54] * v[75] + v[4] * (-v[60] - v[62])) * m1
+            + m2 * (v[52] * v[79] + v[58] * v[7]);
+        v[85] = m1 * (v[75] * v[70] + (-v[67] - v[69]) * v[4])
+            + m2 * (v[73] * v[7] + v[65] * v[79]);
+        v[86] = m1 * (v[75] * v[12] + v[4] * (-v[6] * v[16] - v[30] * v[18]))
+            + ((v[24] * v[13] + v[22] * v[28]) * v[7] + v[5] * v[79]) * m2;
+        v[87] = v[43] * d + J2;
+        v[88] = J2 + v[46] * d;
+        v[89] = d * (v[54] * v[40] - v[52] * v[41]);
+        v[90] = (v[40] * v[70] - v[41] * v[65]) * d;
+        v[91] = v[3] * d * (v[40] * v[7] - v[41] * v[4]);
+        v[92] = v[59] * v[43];
+        v[93] = v[66] * v[43];
+        v[94] = v[6] * v[43];
+        v[95] = v[46] * v[56];
+        v[96] = v[46] * v[72];
+        v[97] = v[46] * v[13];
+        v[98] = m2 + m0 + m1;
+        v[99] = theta_dot * v[7];
+        v[100] = v[5] * psi_dot + v[99];
+        v[101] = v[0] * psi_dot;
+        v[102] = phi_dot - v[101];
+        v[103] = v[1] * v[100] + v[2] * v[102];
+        v[104] = v[80] * v[103];
+        v[105] = theta_dot * v[4];
+        v[106] = psi_dot * v[12] - v[105];
+        v[107] = v[106] + gamma1_dot;
+        v[108] = v[3] * psi_dot * theta_dot;
+        v[109] = gamma1_dot * v[100];
+        v[110] = phi_dot + v[101];
+        v[111] = psi_dot * phi_dot;
+        v[112] = v[111] * v[12] - v[110] * v[105];
+        v[113] = v[112] - gamma1_dot * v[102];
+        v[114] = v[1] * (v[108] - v[109]) + v[2] * v[113];
+        v[115] = v[104] * v[107] + v[114] * J2;
+        v[116] = gamma2_dot * v[102];
+        v[117] = v[111] * v[5];
+        v[118] = v[110] * v[99];
+        v[119] = -v[117] - v[118];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -870,10 +871,8 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 170],
+        v: &mut [f64; 187],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
         let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
@@ -885,69 +884,91 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[11] * v[83] + v[12] * v[98];
-        v[121] = v[119] * v[57] * v[120];
-        v[122] = theta_dot * v[1] * psi_dot * Ixz;
+        v[120] = v[106] * gamma2_dot + v[108];
+        v[121] = v[11] * (v[116] + v[119]) - v[120] * v[10];
+        v[122] = J2 * v[121];
         v[123] = J2 - J1;
-        v[124] = v[123] * v[84] * v[103];
-        v[125] = Iyy * v[81] - v[98] * Iyz - Ixy * v[83];
-        v[126] = v[125] * v[83];
-        v[127] = v[81] * v[110];
-        v[128] = Iyz * v[112];
-        v[129] = v[105] * J2;
-        v[130] = v[105] * Izz;
-        v[131] = theta_dot * Ixx * v[1] * psi_dot;
-        v[132] = v[114] * v[81];
-        v[133] = v[105] * Ixz;
-        v[134] = v[98] * v[125];
-        v[135] = Ixy * v[112];
-        v[136] = gamma2_dot + v[79] + v[80];
-        v[137] = v[123] * v[119] * v[136];
-        v[138] = v[99] * v[11] + (v[95] - v[96] + v[97]) * v[12];
-        v[139] = J2 * v[138];
-        v[140] = v[137] + v[139];
-        v[141] = -v[120] * d - a_ * v[98];
-        v[142] = v[136] * d + v[12] * a_ * v[81];
-        v[143] = a_ * (-v[12] * gamma2_dot * v[81] - v[112] * v[11]) - v[120] * v[141]
-            + v[142] * v[136];
-        v[144] = v[112] * d + v[119] * v[141]
-            + a_ * (v[12] * v[112] + v[11] * v[81] * v[81]);
-        v[145] = v[144] * v[15] - a_ * v[11] * v[143];
-        v[146] = a_ * (v[96] - v[95] - v[120] * v[11] * v[81]) - v[142] * v[119]
-            - v[138] * d;
-        v[147] = a_ * v[3] * theta_dot * theta_dot;
-        v[148] = v[12] * v[2];
-        v[149] = v[11] * v[10];
-        v[150] = (-v[148] - v[149]) * v[1];
-        v[151] = v[1] * (v[148] + v[149]);
-        v[152] = (v[149] - v[148]) * v[1];
-        v[153] = (v[148] - v[149]) * v[1];
-        v[154] = 0.25 * v[150] - 0.25 * v[151] - 0.25 * v[152] + 0.25 * v[153] - v[17];
-        v[155] = v[11] * v[2];
-        v[156] = v[12] * v[10];
-        v[157] = v[3] * (v[155] + v[156]);
-        v[158] = v[3] * (v[156] - v[155]);
-        v[159] = v[3] * v[2];
+        v[124] = gamma2_dot + v[100];
+        v[125] = v[11] * v[102] - v[106] * v[10];
+        v[126] = v[123] * v[124] * v[125];
+        v[127] = v[122] + v[126];
+        v[128] = J2 * v[119];
+        v[129] = Ixx * v[102] - v[106] * Ixz - Ixy * v[100];
+        v[130] = v[129] * v[100];
+        v[131] = v[2] * v[100] - v[1] * v[102];
+        v[132] = v[123] * v[131] * v[103];
+        v[133] = Izz * v[119];
+        v[134] = v[108] * Ixz;
+        v[135] = Iyz * v[112];
+        v[136] = Iyy * v[100] - v[106] * Iyz - Ixy * v[102];
+        v[137] = v[136] * v[102];
+        v[138] = v[10] * v[102] + v[106] * v[11];
+        v[139] = v[138] * v[125];
+        v[140] = v[106] * Izz - Iyz * v[100] - Ixz * v[102];
+        v[141] = J2 * v[112];
+        v[142] = ((-Iyy * v[112] - v[106] * v[129]) - v[80] * v[139])
+            + ((v[140] * v[102] - Ixy * v[108]) + (Iyz * v[119] - v[141]));
+        v[143] = v[117] + v[118];
+        v[144] = v[10] * v[100];
+        v[145] = v[124] * d + v[23] * v[100];
+        v[146] = a_ * (v[143] - v[138] * v[144]) - v[145] * v[125] - d * v[121];
+        v[147] = v[138] * d + v[106] * a_;
+        v[148] = v[138] * v[147] + v[145] * v[124]
+            - a_ * (v[112] * v[10] + v[11] * gamma2_dot * v[100]);
+        v[149] = a_ * (v[11] * v[112] + v[144] * v[100]) + v[112] * d - v[125] * v[147];
+        v[150] = v[24] * v[149] - v[148] * v[22];
+        v[151] = v[140] * v[100];
+        v[152] = Ixy * v[112];
+        v[153] = v[106] * v[136];
+        v[154] = Ixz * v[119];
+        v[155] = v[108] * Ixx;
+        v[156] = d * v[107] + v[106] * v[15];
+        v[157] = v[106] * v[1];
+        v[158] = v[103] * v[156] - v[114] * d - a_ * (v[112] + v[131] * v[157]);
+        v[159] = a_ * v[100] + v[131] * d;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part4(
         _t: f64,
-        _state: &[f64; STATES],
-        _params: &Params,
+        state: &[f64; STATES],
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 170],
+        v: &mut [f64; 187],
     ) {
-        v[160] = v[1] * v[10];
-        v[161] = v[0] * (v[159] + v[160]);
-        v[162] = v[1] * v[2];
-        v[163] = v[3] * v[10];
-        v[164] = v[4] * (v[162] - v[163]);
-        v[165] = v[0] * (v[160] - v[159]);
-        v[166] = v[4] * (v[163] - v[162]);
-        v[167] = v[4] * (v[162] + v[163]);
-        v[168] = (-v[162] - v[163]) * v[4];
-        v[169] = 0.25 * v[166] - 0.25 * v[164] - 0.25 * v[167] + v[19] + 0.25 * v[168];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let d = params.d;
+        let a_ = params.a_;
+        v[160] = d * v[119] + a_ * (v[2] * v[119] + v[106] * v[157]) + v[159] * v[103];
+        v[161] = v[160] * v[16];
+        v[162] = a_ * (v[1] * v[119] + v[106] * v[2] * gamma1_dot) - v[107] * v[156]
+            - v[159] * v[131];
+        v[163] = v[162] * v[18];
+        v[164] = v[10] * (v[143] - v[116]) - v[11] * v[120];
+        v[165] = v[113] * v[1] + v[2] * (v[109] - v[108]);
+        v[166] = a_ * v[0] * theta_dot * theta_dot;
+        v[167] = v[11] * v[4];
+        v[168] = v[10] * v[7];
+        v[169] = v[167] + v[168];
+        v[170] = (v[168] - v[167]) * v[3];
+        v[171] = (v[167] - v[168]) * v[3];
+        v[172] = -(0.5 * v[169] * v[3]) + (0.25 * v[171] - 0.25 * v[170]);
+        v[173] = phi_dot * phi_dot;
+        v[174] = v[172] - v[27];
+        v[175] = v[11] * v[7];
+        v[176] = v[0] * (v[175] - v[76]);
+        v[177] = (v[0] * (v[76] + v[175]) + 0.5 * v[170]) + 0.5 * v[171];
+        v[178] = v[53] + v[5];
+        v[179] = v[1] * (v[5] - v[53]);
+        v[180] = v[1] * (v[53] - v[5]);
+        v[181] = -(0.5 * v[178] * v[1]) + (0.25 * v[180] - 0.25 * v[179]);
+        v[182] = v[178] * v[1];
+        v[183] = 0.5 * v[182] + v[2] * (v[12] - v[50]);
+        v[184] = v[2] * (v[50] + v[12]);
+        v[185] = v[181] + v[29];
+        v[186] = 0.5 * v[179] - 0.5 * v[182];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -1036,11 +1057,6 @@ pub mod lagrange {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -1049,44 +1065,12 @@ pub mod lagrange {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
-        let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let mut v = [0.0f64; 47];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -1118,31 +1102,31 @@ pub mod lagrange {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
+            d
+                * (v[12] * v[13] + phi_dot * (v[16] * v[19] - v[15] * v[8])
+                    + v[20] * v[22])
+                + (((v[24] + v[26]) * v[27] - v[30] * v[19]) * m1
+                    + (v[28] * v[33] - v[8] * v[35]) * m2) * psi_dot
+                + theta_dot
+                    * ((v[3] * (-v[24] - v[26]) + v[36] * v[19]) * m1
+                        + (v[33] * v[5] + v[8] * v[37]) * m2) + X_dot * v[38],
+            Y_dot * v[38]
+                + theta_dot
+                    * ((v[39] * v[36] + (-v[42] - v[44]) * v[3]) * m1
+                        + m2 * (v[40] * v[37] + v[46] * v[5]))
+                + ((v[27] * (v[42] + v[44]) - v[39] * v[30]) * m1
+                    + m2 * (v[28] * v[46] - v[40] * v[35])) * psi_dot
+                + (v[45] * v[20] + (v[39] * v[16] - v[15] * v[40]) * phi_dot
+                    + v[13] * v[43]) * d,
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * ((v[3] * (-v[29] * v[23] - (v[28] * v[9] - v[0] * v[1]) * v[25])
+                    + v[36] * v[27]) * m1
+                    + m2
+                        * ((v[31] * (v[14] * v[27] + v[21] * v[1]) + v[34] * v[32])
+                            * v[5] + v[28] * v[37]))
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
-                + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
-            theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                    * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
+                        + v[13] * v[29]) + Z_dot * v[38],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -1150,6 +1134,85 @@ pub mod lagrange {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 47],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::sin(theta);
+        v[2] = f64::cos(psi);
+        v[3] = f64::sin(phi);
+        v[4] = v[2] * v[3];
+        v[5] = f64::cos(phi);
+        v[6] = f64::sin(psi);
+        v[7] = v[5] * v[6];
+        v[8] = v[1] * v[4] - v[7];
+        v[9] = f64::sin(gamma1);
+        v[10] = f64::cos(theta);
+        v[11] = v[2] * v[10];
+        v[12] = v[0] * v[8] - v[9] * v[11];
+        v[13] = gamma1_dot * m1;
+        v[14] = f64::sin(gamma2);
+        v[15] = m2 * v[14];
+        v[16] = v[9] * m1;
+        v[17] = v[2] * v[5];
+        v[18] = v[3] * v[6];
+        v[19] = v[1] * v[17] + v[18];
+        v[20] = m2 * gamma2_dot;
+        v[21] = f64::cos(gamma2);
+        v[22] = v[14] * v[11] + v[21] * v[19];
+        v[23] = v[0] * a_ + d;
+        v[24] = v[12] * v[23];
+        v[25] = a_ * v[9];
+        v[26] = (v[0] * v[11] + v[9] * v[8]) * v[25];
+        v[27] = v[10] * v[5];
+        v[28] = v[10] * v[3];
+        v[29] = v[1] * v[9] + v[0] * v[28];
+        v[30] = v[29] * d + a_ * v[28];
+        v[31] = a_ * v[14];
+        v[32] = d + v[21] * a_;
+        v[33] = v[22] * v[32] - (v[21] * v[11] - v[14] * v[19]) * v[31];
+        v[34] = v[21] * v[27] - v[1] * v[14];
+        v[35] = a_ * v[27] + v[34] * d;
+        v[36] = -((a_ + v[0] * d) * v[5]);
+        v[37] = (a_ + v[21] * d) * v[3];
+        v[38] = m2 + m0 + m1;
+        v[39] = v[1] * v[7] - v[4];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+        v: &mut [f64; 47],
+    ) {
+        v[40] = v[1] * v[18] + v[17];
+        v[41] = v[10] * v[6];
+        v[42] = (v[40] * v[9] + v[0] * v[41]) * v[25];
+        v[43] = v[0] * v[40] - v[9] * v[41];
+        v[44] = v[43] * v[23];
+        v[45] = v[14] * v[41] + v[21] * v[39];
+        v[46] = v[45] * v[32] - (v[21] * v[41] - v[39] * v[14]) * v[31];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -1237,7 +1300,7 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 793];
+        let mut v = [0.0f64; 833];
         jacobian_part0(t, state, params, g_i, &mut v);
         jacobian_part1(t, state, params, g_i, &mut v);
         jacobian_part2(t, state, params, g_i, &mut v);
@@ -1258,6 +1321,7 @@ pub mod lagrange {
         jacobian_part17(t, state, params, g_i, &mut v);
         jacobian_part18(t, state, params, g_i, &mut v);
         jacobian_part19(t, state, params, g_i, &mut v);
+        jacobian_part20(t, state, params, g_i, &mut v);
         Derivatives {
             qdot: [
                 psi_dot,
@@ -1271,86 +1335,72 @@ pub mod lagrange {
             ],
             matrix: [
                 [
-                    (v[9] * v[9] + (v[11] * v[11] + v[12]) * v[1] * v[1] * v[13] * v[13])
-                        * m1 + m2 * (v[21] * v[21] + v[1] * v[1] * v[2] * v[2] * v[26])
-                        + (v[28] * v[28] + v[31] * v[31]) * J1
-                        + J2
-                            * (v[1] * v[1] * (v[32] + v[33]) + v[19] * v[19]
-                                + v[6] * v[6]) - v[3] * v[39] + v[1] * (v[46] + v[53]),
-                    v[74],
-                    v[75],
-                    v[76],
-                    v[78],
-                    v[96],
-                    v[116],
+                    J2 * (v[7] * v[7] + v[4] * v[4] * (v[9] + v[10]) + v[16] * v[16])
+                        + m2 * (v[19] * v[19] + v[6] * v[6] * v[25])
+                        + (v[31] * v[14] * v[14] + v[34] * v[34]) * m1 - v[38] * v[0]
+                        + v[4] * (v[43] + v[50]) + (v[52] * v[52] + v[55] * v[55]) * J1,
+                    v[79],
+                    v[84],
+                    v[87],
+                    v[91],
+                    v[110],
+                    v[132],
                     0.0,
                 ],
                 [
-                    v[74],
-                    J2 * ((v[117] + 1.0) * v[13] * v[13] + (v[118] + 1.0) * v[2] * v[2])
-                        + (v[4] * v[4] * v[13] * J1 + v[59] + v[48]) * v[13]
-                        + (v[119] + v[56] * v[56] * v[2] * v[2]) * m2
-                        + v[2] * (v[65] + v[40] + v[15] * v[15] * v[2] * J1)
-                        + (v[122] + v[70] * v[70] * v[13] * v[13]) * m1,
-                    v[127],
-                    v[129],
-                    v[130],
-                    v[135],
-                    v[140],
-                    v[145],
+                    v[79],
+                    m2 * (v[133] * v[133] + v[134]) + v[5] * (v[135] * v[69] + v[65])
+                        + (v[136] + v[137] * v[137]) * m1
+                        + J2 * (v[9] * (v[138] + 1.0) + (v[139] + 1.0) * v[10])
+                        + (v[74] + v[58] * v[140]) * v[8],
+                    v[146],
+                    v[148],
+                    v[149],
+                    v[153],
+                    v[158],
+                    v[165],
                 ],
                 [
-                    v[75],
-                    v[127],
-                    Ixx + v[147] * v[4] * v[4] + (v[117] + v[118]) * J1
-                        + v[15] * v[15] * v[149],
+                    v[84],
+                    v[146],
+                    Ixx + (v[138] + v[139]) * J1 + v[167] * v[168] + v[169] * v[171],
                     0.0,
                     0.0,
-                    v[150],
-                    v[151],
-                    v[155],
+                    v[172],
+                    v[174],
+                    v[178],
                 ],
-                [v[76], v[129], 0.0, v[147], 0.0, v[156], v[157], v[158]],
-                [v[78], v[130], 0.0, 0.0, v[149], v[159], v[160], v[161]],
-                [v[96], v[135], v[150], v[156], v[159], v[162], 0.0, 0.0],
-                [v[116], v[140], v[151], v[157], v[160], 0.0, v[162], 0.0],
-                [0.0, v[145], v[155], v[158], v[161], 0.0, 0.0, v[162]],
+                [v[87], v[148], 0.0, v[167], 0.0, v[179], v[180], v[181]],
+                [v[91], v[149], 0.0, 0.0, v[171], v[182], v[183], v[184]],
+                [v[110], v[153], v[172], v[179], v[182], v[185], 0.0, 0.0],
+                [v[132], v[158], v[174], v[180], v[183], 0.0, v[185], 0.0],
+                [0.0, v[165], v[178], v[181], v[184], 0.0, 0.0, v[185]],
             ],
             force: [
-                (-v[28] * v[193] - v[31] * v[194]) * J1 - v[185] * v[6]
-                    - ((v[209] + v[214] * v[11]) * v[1] * v[13] + v[215] * v[9]) * m1
-                    + v[1]
-                        * (v[2]
-                            * (v[224] - v[217] - v[219] - v[225] + v[226] - v[227]
-                                - v[232])
-                            + (v[240] - v[233] - v[235] - v[239] + v[241] - v[242]
-                                - v[243]) * v[13]) + v[249] * v[3] - v[254] * v[19]
-                    - m2 * (v[269] * v[1] * v[2] + v[270] * v[21]),
-                v[2]
-                    * (v[233] - v[273] + v[235] + v[239] + v[274] - v[240] - v[241]
-                        + v[242] + v[243]) - (v[272] + v[215] * v[70] * v[13]) * m1
-                    - m2 * (v[275] + v[270] * v[56] * v[2])
-                    + (v[224] - v[217] - v[219] - v[276] - v[225] - v[277] + v[226]
-                        - v[227] - v[232]) * v[13],
-                v[244] - v[245] + v[246] + v[247] + v[248]
-                    + v[15] * (v[278] - v[251] - v[253])
-                    + v[4] * (v[174] - v[279] + v[184])
-                    + (-v[0] * v[194] - v[17] * v[193]) * J1,
-                v[123] * v[173] * v[200] - v[214] * d * m1 - v[242],
-                v[234] * v[228] * v[231] - v[227] - m2 * v[268] * d,
-                v[280],
-                -m2 * (v[270] * v[99] + v[110] * v[262] + v[268] * v[114])
-                    - (v[208] * v[104] + v[214] * v[101] + v[215] * v[108]) * m1,
-                -m2
-                    * (((0.25 * v[285] - 0.25 * v[287] - 0.25 * v[289] + 0.25 * v[291])
-                        * phi_dot * phi_dot + (theta_dot * v[292] + v[300]) * theta_dot
-                        + gamma2_dot * (v[302] + v[305] + gamma2_dot * v[292])) * d
-                        - v[281])
-                    - (v[281]
-                        + (theta_dot * (v[324] + theta_dot * v[325] + v[327])
-                            + gamma1_dot * (v[325] * gamma1_dot + v[329])
-                            + (0.25 * v[318] - 0.25 * v[313] - 0.25 * v[320]
-                                + 0.25 * v[322]) * phi_dot * phi_dot) * d) * m1,
+                v[0] * v[230] - v[16] * v[213]
+                    - (v[14] * (v[255] + v[27] * v[261]) - v[34] * v[245]) * m1
+                    - m2 * (v[6] * v[276] - v[279] * v[19])
+                    + (v[290] * v[5]
+                        + (v[293] - v[291] - v[292] + v[294] - v[295] - v[297] - v[298])
+                            * v[8]) * v[4] - (v[55] * v[299] - v[52] * v[301]) * J1
+                    - v[303] * v[7],
+                (v[306] + v[290]) * v[8] - m2 * (v[133] * v[279] + v[304])
+                    + v[5] * (v[309] + v[291]) - (v[312] + v[137] * v[245]) * m1,
+                v[214] - (v[13] * v[301] + v[3] * v[299]) * J1 + v[313] * v[1] + v[219]
+                    + v[223] - v[228] + v[11] * v[314] + v[229],
+                v[231] * v[302] - v[291] - v[85] * v[261],
+                v[315] * v[211] - v[88] * v[267] - v[283],
+                v[316],
+                -((v[123] * v[245] + v[254] * v[119] + v[261] * v[115]) * m1
+                    + m2 * (v[128] * v[267] + v[317] + v[274] * v[125])),
+                -(((gamma2_dot * (gamma2_dot * v[329] + v[339])
+                    + theta_dot * (v[342] + theta_dot * v[329]) + v[343] * v[328]) * d
+                    - v[320]) * m2
+                    + (v[320]
+                        + d
+                            * (v[343] * v[349]
+                                + (v[357] + gamma1_dot * v[358]) * gamma1_dot
+                                + theta_dot * (v[363] + theta_dot * v[358]))) * m1),
             ],
             checks: [],
             d_qdot: [
@@ -1373,169 +1423,157 @@ pub mod lagrange {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[338], v[96], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[339], v[135], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[340], v[150], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[341], v[156], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[342], v[159], 0.0],
-                    [v[338], v[339], v[340], v[341], v[342], 0.0, 0.0, 0.0],
-                    [v[96], v[135], v[150], v[156], v[159], 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[372], v[110], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[373], v[153], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[374], v[172], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[375], v[179], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[376], v[182], 0.0],
+                    [v[372], v[373], v[374], v[375], v[376], 0.0, 0.0, 0.0],
+                    [v[110], v[153], v[172], v[179], v[182], 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        m2
-                            * (v[3] * v[1] * (2.0 * v[344] - 2.0 * v[22]) * v[2] * v[2]
-                                + 2.0 * (v[21] * v[346]))
-                            + (2.0 * (v[19] * v[345]) + 2.0 * (v[6] * v[347])) * J2
-                            + (2.0 * (v[31] * v[349]) + 2.0 * (v[351] * v[28])) * J1
-                            + m1
-                                * (2.0 * (v[352] * v[9])
-                                    + v[3] * v[353] * v[1] * v[13] * v[13])
-                            + v[1] * (v[34] - v[38] + v[2] * v[354] + v[355] * v[13])
-                            + v[3]
-                                * (v[356] - v[46] - v[53]
-                                    + (-2.0 * v[32] - 2.0 * v[33]) * J2 * v[1] - v[358]),
-                        v[359],
-                        v[360],
-                        v[361],
-                        v[363],
-                        v[367],
-                        v[369],
+                        (v[35] + v[37] + v[5] * v[377] + v[378] * v[8]) * v[4]
+                            + m1 * (v[379] * v[99] * v[14] - 2.0 * (v[381] * v[34]))
+                            + v[0]
+                                * (v[382] - v[43] - (2.0 * v[9] + 2.0 * v[10]) * J2 * v[4]
+                                    - v[50] - v[383])
+                            + J2 * (2.0 * (v[7] * v[380]) - 2.0 * (v[16] * v[384]))
+                            + (-2.0 * (v[55] * v[386]) - 2.0 * (v[52] * v[388])) * J1
+                            + m2 * (v[6] * v[390] * v[93] - 2.0 * (v[389] * v[19])),
+                        v[392],
+                        v[394],
+                        v[395],
+                        v[397],
+                        v[401],
+                        v[403],
                         0.0,
                     ],
-                    [v[359], 0.0, 0.0, 0.0, 0.0, v[370], v[371], v[372]],
-                    [v[360], 0.0, 0.0, 0.0, 0.0, v[373], v[374], v[375]],
-                    [v[361], 0.0, 0.0, 0.0, 0.0, v[376], v[377], v[378]],
-                    [v[363], 0.0, 0.0, 0.0, 0.0, v[379], v[380], v[381]],
-                    [v[367], v[370], v[373], v[376], v[379], 0.0, 0.0, 0.0],
-                    [v[369], v[371], v[374], v[377], v[380], 0.0, 0.0, 0.0],
-                    [0.0, v[372], v[375], v[378], v[381], 0.0, 0.0, 0.0],
+                    [v[392], 0.0, 0.0, 0.0, 0.0, v[404], v[405], v[406]],
+                    [v[394], 0.0, 0.0, 0.0, 0.0, v[407], v[408], v[409]],
+                    [v[395], 0.0, 0.0, 0.0, 0.0, v[410], v[411], v[412]],
+                    [v[397], 0.0, 0.0, 0.0, 0.0, v[413], v[414], v[415]],
+                    [v[401], v[404], v[407], v[410], v[413], 0.0, 0.0, 0.0],
+                    [v[403], v[405], v[408], v[411], v[414], 0.0, 0.0, 0.0],
+                    [0.0, v[406], v[409], v[412], v[415], 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        v[1]
-                            * ((2.0 * v[64] + v[67] + v[43]
-                                + m1 * (2.0 * v[71] + v[353] * v[1] * v[2]) + v[44]
-                                + 2.0 * v[68]) * v[13] - v[63]
-                                + (2.0 * v[58] - 2.0 * v[54] - v[50] - v[51]
-                                    + m2
-                                        * (v[1] * (2.0 * v[22] + 2.0 * v[25]) * v[13] + 2.0 * v[57])
-                                    + v[61]) * v[2]),
-                        v[480],
-                        v[481],
-                        v[482],
-                        v[483],
-                        v[491],
-                        v[493],
+                        ((v[42] + 2.0 * v[57] + 2.0 * v[59]
+                            + (2.0 * v[62] + v[379] * v[6]) * m1 - v[66]) * v[8]
+                            + (v[75] - 2.0 * v[70] - 2.0 * v[72] - v[47]
+                                + m2 * ((2.0 * v[22] + 2.0 * v[24]) * v[14] + 2.0 * v[78])
+                                - v[48]) * v[5] - v[68]) * v[4],
+                        v[523],
+                        v[524],
+                        v[525],
+                        v[526],
+                        v[535],
+                        v[537],
                         0.0,
                     ],
                     [
-                        v[480],
-                        (v[65] + 2.0 * v[40] - v[41]) * v[13]
-                            + (v[13]
-                                * ((2.0 * v[478] - 2.0 * v[22] + 2.0 * v[344]) * m2
-                                    + m1 * (2.0 * v[12] + 2.0 * (v[479] * v[70]) + 2.0 * v[120])
-                                    + J2 * (2.0 * v[118] - 2.0 * v[117])
-                                    + (2.0 * (v[15] * v[15]) - 2.0 * v[494]) * J1) - v[59]
-                                + v[47] - 2.0 * v[48]) * v[2],
-                        v[495],
-                        v[496],
-                        v[497],
-                        v[500],
-                        v[501],
-                        v[502],
+                        v[523],
+                        v[5]
+                            * (((2.0 * v[28] - 2.0 * v[521] + 2.0 * v[30]) * m1
+                                + (2.0 * v[169] - 2.0 * v[168]) * J1
+                                + J2 * (2.0 * v[139] - 2.0 * v[138])
+                                + m2 * (v[390] + 2.0 * v[522])) * v[8] - v[73] + v[44]
+                                - 2.0 * v[45]) + v[8] * v[519],
+                        v[538],
+                        v[539],
+                        v[540],
+                        v[543],
+                        v[544],
+                        v[545],
                     ],
-                    [v[481], v[495], 0.0, 0.0, 0.0, v[503], v[504], v[505]],
-                    [v[482], v[496], 0.0, 0.0, 0.0, v[506], v[507], v[508]],
-                    [v[483], v[497], 0.0, 0.0, 0.0, v[509], v[510], v[511]],
-                    [v[491], v[500], v[503], v[506], v[509], 0.0, 0.0, 0.0],
-                    [v[493], v[501], v[504], v[507], v[510], 0.0, 0.0, 0.0],
-                    [0.0, v[502], v[505], v[508], v[511], 0.0, 0.0, 0.0],
+                    [v[524], v[538], 0.0, 0.0, 0.0, v[546], v[547], v[548]],
+                    [v[525], v[539], 0.0, 0.0, 0.0, v[550], v[551], v[552]],
+                    [v[526], v[540], 0.0, 0.0, 0.0, v[554], v[555], v[556]],
+                    [v[535], v[543], v[546], v[550], v[554], 0.0, 0.0, 0.0],
+                    [v[537], v[544], v[547], v[551], v[555], 0.0, 0.0, 0.0],
+                    [0.0, v[545], v[548], v[552], v[556], 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        (-2.0 * (a_ * v[4] * v[1] * v[1] * d * v[13] * v[13])
-                            - 2.0 * (d * v[577] * v[9])) * m1
-                            + (2.0 * v[578] + 2.0 * v[579]) * v[6],
-                        v[580],
-                        v[581],
-                        v[582],
-                        0.0,
-                        v[585],
-                        v[588],
-                        0.0,
-                    ],
-                    [
-                        v[580],
-                        (v[0] * v[589] * v[13] * v[13]
-                            + (2.0 * (v[70] * d * v[13] * v[13])
-                                - 2.0 * (a_ * d * v[2] * v[2])) * m1) * v[4],
-                        v[590],
-                        v[591],
-                        0.0,
-                        v[592],
-                        v[593],
-                        v[594],
-                    ],
-                    [
-                        v[581],
-                        v[590],
-                        v[0] * (2.0 * J2 + 2.0 * v[146] - 2.0 * J1) * v[4],
-                        0.0,
-                        0.0,
-                        v[506],
-                        v[507],
-                        v[508],
-                    ],
-                    [v[582], v[591], 0.0, 0.0, 0.0, v[595], v[596], v[597]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [v[585], v[592], v[506], v[595], 0.0, 0.0, 0.0, 0.0],
-                    [v[588], v[593], v[507], v[596], 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[594], v[508], v[597], 0.0, 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        v[28] * (2.0 * v[616] + 2.0 * v[617])
-                            + (-2.0 * (v[28] * d * v[21])
-                                - 2.0 * (a_ * v[1] * v[1] * d * v[15] * v[2] * v[2])) * m2,
-                        v[618],
-                        v[620],
-                        0.0,
-                        v[621],
-                        v[623],
+                        (2.0 * v[622] + 2.0 * v[623]) * v[7]
+                            - (2.0 * (d * v[14] * v[619]) - 2.0 * (v[34] * v[621])) * m1,
                         v[625],
-                        0.0,
-                    ],
-                    [
-                        v[618],
-                        v[15]
-                            * (v[17] * v[589] * v[2] * v[2]
-                                + m2
-                                    * (-2.0 * (d * v[56] * v[2] * v[2])
-                                        - 2.0 * (a_ * d * v[13] * v[13]))),
                         v[626],
-                        0.0,
                         v[627],
-                        v[628],
-                        v[629],
+                        0.0,
                         v[630],
+                        v[633],
+                        0.0,
                     ],
                     [
-                        v[620],
+                        v[625],
+                        (v[9] * v[3] * v[634]
+                            + (2.0 * (d * v[137] * v[8]) - 2.0 * (v[624] * v[10])) * m1)
+                            * v[1],
+                        v[635],
+                        v[637],
+                        0.0,
+                        v[639],
+                        v[640],
+                        v[641],
+                    ],
+                    [
                         v[626],
-                        v[17] * v[15] * (2.0 * v[148] + 2.0 * J2 - 2.0 * J1),
+                        v[635],
+                        v[3] * (2.0 * v[166] + v[642]) * v[1],
                         0.0,
                         0.0,
-                        v[631],
-                        v[632],
-                        v[511],
+                        v[550],
+                        v[551],
+                        v[552],
+                    ],
+                    [v[627], v[637], 0.0, 0.0, 0.0, v[643], v[644], v[645]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [v[630], v[639], v[550], v[643], 0.0, 0.0, 0.0, 0.0],
+                    [v[633], v[640], v[551], v[644], 0.0, 0.0, 0.0, 0.0],
+                    [0.0, v[641], v[552], v[645], 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        -v[52] * (2.0 * v[663] + 2.0 * v[665])
+                            - (2.0 * (v[666] * v[6] * d) - 2.0 * (v[667] * v[19])) * m2,
+                        v[669],
+                        v[672],
+                        0.0,
+                        v[673],
+                        v[675],
+                        v[677],
+                        0.0,
+                    ],
+                    [
+                        v[669],
+                        (v[13] * v[634] * v[10]
+                            - m2 * (2.0 * (v[9] * v[624]) + 2.0 * (v[133] * d * v[5])))
+                            * v[11],
+                        v[678],
+                        0.0,
+                        v[680],
+                        v[682],
+                        v[683],
+                        v[684],
+                    ],
+                    [
+                        v[672],
+                        v[678],
+                        v[13] * (2.0 * v[170] + v[642]) * v[11],
+                        0.0,
+                        0.0,
+                        v[685],
+                        v[555],
+                        v[556],
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [v[621], v[627], 0.0, 0.0, 0.0, v[633], v[634], v[635]],
-                    [v[623], v[628], v[631], 0.0, v[633], 0.0, 0.0, 0.0],
-                    [v[625], v[629], v[632], 0.0, v[634], 0.0, 0.0, 0.0],
-                    [0.0, v[630], v[511], 0.0, v[635], 0.0, 0.0, 0.0],
+                    [v[673], v[680], 0.0, 0.0, 0.0, v[686], v[687], v[688]],
+                    [v[675], v[682], v[685], 0.0, v[686], 0.0, 0.0, 0.0],
+                    [v[677], v[683], v[555], 0.0, v[687], 0.0, 0.0, 0.0],
+                    [0.0, v[684], v[556], 0.0, v[688], 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1655,370 +1693,277 @@ pub mod lagrange {
                     0.0,
                     0.0,
                     0.0,
-                    -(v[208] * v[332] + v[214] * v[331] + v[215] * v[334]) * m1
-                        - m2 * (v[270] * v[330] + v[336] * v[262] + v[268] * v[335]),
-                    v[280],
+                    -(m2 * (v[365] * v[267] - v[317] - v[366] * v[274])
+                        + m1 * (v[364] * v[245] + v[261] * v[370] + v[254] * v[368])),
+                    v[316],
                     0.0,
                 ],
                 [
-                    (-v[351] * v[193] - v[349] * v[194]) * J1
-                        + psi_dot
-                            * ((-v[28] * v[394] - v[31] * v[400]) * J1 - v[19] * v[393]
-                                + ((v[402] + v[403] - v[405] - v[407] - v[408] - v[411]
-                                    - v[414] - v[415]) * v[2]
-                                    + (v[418] - v[416] - v[417] - v[421] - v[422] + v[423]
-                                        + v[424] - v[427]) * v[13]) * v[1]
-                                + v[3] * (v[431] - v[428] - v[429] - v[430] + v[3] * v[435])
-                                - v[6] * v[443])
-                        + ((v[217] + v[219] - v[224] + v[225] - v[226] + v[227] + v[232])
-                            * v[2]
-                            + v[13]
-                                * (v[233] + v[235] + v[239] - v[240] - v[241] + v[242]
-                                    + v[243])) * v[3] - v[185] * v[347]
+                    v[4] * v[230] - v[303] * v[380]
+                        - (v[301] * v[388] - v[386] * v[299]) * J1
+                        + ((v[420] - v[419] + v[424] + v[0] * v[428] - v[429]) * v[0]
+                            - v[16] * v[437]
+                            + (v[5] * v[443]
+                                + (v[444] - v[445] - v[446] - v[447] + v[451] - v[452]
+                                    - v[455] + v[456]) * v[8]) * v[4] - v[463] * v[7]
+                            - (v[55] * v[467] - v[52] * v[465]) * J1) * psi_dot
+                        + v[0]
+                            * (v[5] * (v[281] - v[282] + v[468])
+                                + (v[307] + v[291]) * v[8]) + v[384] * v[213]
                         - m2
-                            * (psi_dot * v[21] * v[444]
-                                + (v[3] * v[268] * v[343] + v[1] * psi_dot * v[445] * v[24]
-                                    + a_ * v[15] * (v[3] * v[262] - v[1] * psi_dot * v[447]))
-                                    * v[2] + v[270] * v[346])
-                        - (v[448] * psi_dot * v[9]
-                            + (v[3] * v[214] * v[72]
-                                + a_ * (v[1] * psi_dot * v[451] - v[3] * v[208]) * v[4]
-                                + v[1] * psi_dot * v[11] * v[453]) * v[13]
-                            + v[215] * v[352]) * m1 + v[249] * v[1] - v[254] * v[345],
-                    (v[2]
-                        * (v[416] - v[394] * v[15] * J1 + v[417] - v[418]
-                            + v[17] * v[393] + v[421] + v[422] - v[423] - v[424]
-                            + v[427])
-                        - m2
-                            * ((v[445] * v[24] - a_ * v[15] * v[447]) * v[13]
-                                + v[56] * v[2] * v[444])
-                        - m1
-                            * (v[448] * v[70] * v[13]
-                                + v[2] * (v[72] * v[453] - a_ * v[4] * v[451]))
-                        + (v[402] + v[403] - v[405] - v[407] - v[408]
-                            - v[4] * v[400] * J1 - v[0] * v[443] - v[411] - v[414]
-                            - v[415]) * v[13]) * psi_dot,
-                    (v[428] + v[429] + (m2 * d * v[444] - v[391] - v[392]) * v[15]
-                        + v[430] + v[454] * v[3] + (-v[17] * v[394] - v[0] * v[400]) * J1
-                        + v[4] * (v[438] - v[448] * d * m1 + v[442]) - v[431]) * psi_dot,
+                            * (v[5]
+                                * ((v[0] * v[274] - v[472] * v[189]) * v[23]
+                                    + v[189] * v[475] + v[0] * v[476])
+                                - psi_dot * v[469] * v[19] + v[389] * v[279])
+                        - (((v[189] * v[480] - v[0] * v[254]) * v[29] + v[0] * v[310]
+                            + v[189] * v[27] * v[482]) * v[8] + v[381] * v[245]
+                            - v[34] * v[483] * psi_dot) * m1,
                     psi_dot
-                        * (J2 * (v[382] - v[419] - v[420] - v[384]) - d * m1 * v[453]
-                            + (v[419] + v[420]) * J1),
+                        * ((v[443] - v[58] * v[467] - v[3] * v[463]) * v[8]
+                            - m2 * ((v[475] - v[472] * v[23]) * v[8] + v[133] * v[469])
+                            - ((-v[480] * v[29] - v[27] * v[482]) * v[5]
+                                + v[483] * v[137]) * m1
+                            + (v[445] - v[444] + v[446] + v[447] - v[465] * v[69]
+                                - v[451] + v[13] * v[437] + v[452] + v[455] - v[456])
+                                * v[5]),
+                    (v[419] - (v[13] * v[465] + v[3] * v[467]) * J1 - v[420]
+                        + (v[88] * v[469] - v[435] - v[436]) * v[11] - v[424] + v[429]
+                        + v[0] * v[484] + v[1] * (v[463] - v[85] * v[483])) * psi_dot,
                     psi_dot
-                        * (J1 * (-v[412] - v[413]) - m2 * d * v[445]
-                            + J2 * (v[397] + v[412] + v[398] + v[413])),
-                    -(v[455] * v[79]
-                        + psi_dot * (v[84] * v[453] + v[451] * v[87] + v[448] * v[89]))
-                        * m1
-                        - m2
-                            * (v[79] * v[456]
+                        * (v[451] - v[85] * v[482] + J2 * (v[464] - v[448] + v[449])),
+                    (v[439] - v[88] * v[474] - v[440]) * psi_dot,
+                    -((v[92] * v[485]
+                        + (v[108] * v[482] + v[106] * v[480] + v[100] * v[483])
+                            * psi_dot) * m1
+                        + m2
+                            * (v[92] * v[486]
+                                + (v[472] * v[101] + v[474] * v[103] + v[97] * v[469])
+                                    * psi_dot)),
+                    -((psi_dot * (v[115] * v[482] + v[483] * v[123] + v[119] * v[480])
+                        + v[485] * v[95]) * m1
+                        + m2
+                            * (v[486] * v[95]
                                 + psi_dot
-                                    * (v[83] * v[444] + v[90] * v[447] + v[94] * v[445])),
-                    -m2
-                        * (v[456] * v[80]
-                            + psi_dot
-                                * (v[114] * v[445] + v[99] * v[444] + v[110] * v[447]))
-                        - m1
-                            * ((v[101] * v[453] + v[448] * v[108] + v[451] * v[104])
-                                * psi_dot + v[455] * v[80]),
-                    -(v[457]
+                                    * (v[111] * v[469] + v[474] * v[128] + v[472] * v[125]))),
+                    -((v[487]
                         + d
-                            * (theta_dot
-                                * ((0.5 * v[460] - 0.5 * v[458] - 0.5 * v[459] - 2.0 * v[5]
-                                    + 0.5 * v[461]) * gamma1_dot + v[464] + theta_dot * v[465])
-                                + (0.25 * v[458] - 0.25 * v[459] + 0.25 * v[460]
-                                    - 0.5 * v[462] - 0.25 * v[461] + 0.5 * v[463]) * phi_dot
-                                    * phi_dot + gamma1_dot * (v[467] + gamma1_dot * v[465])))
-                        * m1
+                            * (v[495] * v[343]
+                                + (v[498] * theta_dot - v[497]
+                                    + gamma1_dot * (v[500] - 2.0 * v[2])) * theta_dot
+                                + gamma1_dot * (v[502] + v[498] * gamma1_dot))) * m1
+                        + m2
+                            * (d
+                                * (theta_dot * (theta_dot * v[508] + v[513])
+                                    + gamma2_dot
+                                        * (gamma2_dot * v[508] + v[515]
+                                            + (2.0 * v[12] + v[517]) * theta_dot) + v[507] * v[343])
+                                - v[487])),
+                ],
+                [
+                    v[4]
+                        * ((v[289] - v[558] + v[306] - v[560] - v[563] - v[566] - v[567]
+                            + 2.0 * v[282]) * v[8] + (v[309] + v[571]) * v[5])
+                        - (v[248] * v[55] + v[52] * v[572]) * J1
+                        - m2 * (v[4] * (v[580] * v[5] + v[304]) - v[585] * v[19])
+                        - (((v[593] + v[598] - v[599]) * v[8] + v[312]) * v[4]
+                            - v[589] * v[34]) * m1 - v[604] * v[16] - v[7] * v[607]
+                        + v[0]
+                            * (v[188] * (v[227] - v[561] - v[225]) - v[608] + v[609]
+                                - v[610] + v[611]),
+                    (v[571] + v[308] - (v[301] * v[11] + v[248] * v[1]) * J1
+                        - v[3] * v[607]) * v[8]
+                        + v[5]
+                            * (v[305] + (v[572] * v[11] + v[1] * v[299]) * J1 + v[558]
+                                + v[13] * v[604] + v[560] + v[563] + v[566] + v[567]
+                                - 2.0 * v[282] + v[468])
+                        - ((v[599] - v[593] - v[598]) * v[5]
+                            + (v[311] - v[61] * v[589]) * v[8]) * m1
                         - m2
-                            * ((theta_dot * (v[474] + v[475] * theta_dot)
-                                + (0.25 * v[469] - 0.25 * v[468] + 0.25 * v[470]
-                                    - 0.25 * v[472]) * phi_dot * phi_dot
+                            * (v[580] * v[8]
+                                + (v[77] * v[585] + v[476] + v[275]) * v[5]),
+                    v[11] * (v[88] * v[585] - v[602] - v[603])
+                        - (v[3] * v[248] - v[13] * v[572]) * J1 + v[608] - v[609]
+                        + (v[607] - v[589] * v[85]) * v[1] + v[610] - v[611]
+                        + v[188] * (v[225] + v[562] - v[224] + v[226]),
+                    v[188] * (v[559] * v[141] + v[3] * v[302]) - v[566] - v[85] * v[597],
+                    -(v[204] * v[568] + v[277] * v[141]) * v[207] - v[291]
+                        - v[88] * v[575],
+                    -(m2
+                        * (v[100] * v[279] + v[97] * v[585] + v[101] * v[579]
+                            + v[612] * v[530] + v[103] * v[575])
+                        + (v[108] * v[597] + v[245] * v[530] + v[613] * v[100]
+                            + v[106] * v[592]) * m1),
+                    -(m2
+                        * (v[579] * v[125] + v[111] * v[585] - v[111] * v[612]
+                            + v[128] * v[575] + v[123] * v[279])
+                        + (v[119] * v[592] - v[111] * v[245] + v[613] * v[123]
+                            + v[597] * v[115]) * m1),
+                    -((m1
+                        * ((v[614] * phi_dot + v[501] * gamma1_dot - v[615] * theta_dot)
+                            * theta_dot
+                            + gamma1_dot * (v[500] * phi_dot - v[615] * gamma1_dot)
+                            - v[615] * v[343])
+                        + m2
+                            * (theta_dot * (theta_dot * v[617] + phi_dot * v[618])
+                                + v[617] * v[343]
                                 + gamma2_dot
-                                    * (theta_dot
-                                        * (0.5 * v[468] + 0.5 * v[469] + 2.0 * v[16] + 0.5 * v[470]
-                                            - v[471] + 0.5 * v[472] - v[473]) + v[475] * gamma2_dot
-                                        + v[477])) * d - v[457]),
+                                    * (v[517] * phi_dot + theta_dot * v[514]
+                                        + gamma2_dot * v[617]))) * d),
                 ],
                 [
-                    v[3]
-                        * (v[528] - v[529] - v[530]
-                            + v[190] * (v[532] - v[531] - v[220] - v[221] + v[222])
-                            - v[533])
-                        - m2 * (v[517] * v[21] + v[1] * (v[275] + v[525] * v[2]))
-                        - v[539] * v[6]
-                        - (((v[543] * v[11] + v[548] + v[215] * v[70]) * v[13] + v[272])
-                            * v[1] + v[554] * v[9]) * m1
-                        + (-v[206] * v[31] - v[28] * v[555]) * J1
-                        + ((v[557] - v[556] - v[558] - v[273] - v[559] + v[233] + v[235]
-                            + v[239] + v[274] - v[240] - v[241] + v[560] + v[243]
-                            - v[562]) * v[2]
-                            + v[13]
-                                * (v[224] - v[563] - v[219] + v[564] - v[276] - v[225]
-                                    - v[277] + 2.0 * v[226] - v[565] - v[227] - v[232] - v[566]
-                                    - v[567])) * v[1] - v[19] * v[572],
-                    (v[557] - v[0] * v[539] - v[556] - v[558] - v[559] + v[233] + v[235]
-                        + v[239] + v[274] - v[240] - v[241] + v[560]
-                        + (-v[206] * v[4] - v[193] * v[15]) * J1 + v[243] - v[562])
-                        * v[13]
-                        - m2
-                            * (v[525] * v[13]
-                                + (v[517] * v[56] + v[263] + v[268] * v[343]) * v[2])
-                        - ((v[271] - v[209] + v[70] * v[554]) * v[13]
-                            + v[2] * (v[543] * v[72] - v[548] + v[215] * v[479])) * m1
-                        + v[2]
-                            * (v[563] + v[219] - v[224] - v[564] + v[225] + v[277]
-                                + v[17] * v[572] - 2.0 * v[226] + v[565] + v[227]
-                                + (v[4] * v[194] - v[555] * v[15]) * J1 + v[232] + v[566]
-                                + v[567]),
-                    (m2 * d * v[517] - v[570] - v[571]) * v[15]
-                        + J1 * (-v[0] * v[206] - v[17] * v[555])
-                        + (v[537] - d * v[554] * m1 + v[538]) * v[4] - v[528]
-                        + v[190] * (v[531] + v[220] - v[532] + v[221] - v[222]) + v[529]
-                        + v[530] + v[533],
-                    v[190] * (v[123] * v[4] * v[200] + v[0] * v[123] * v[173])
-                        - v[543] * d * m1 - v[565],
-                    v[512] * (v[123] * v[231] * v[15] + v[17] * v[234] * v[228])
-                        - m2 * d * v[521] - v[242],
-                    -(v[547] * v[87] + v[543] * v[84] + v[89] * v[573] + v[215] * v[486])
-                        * m1
-                        - m2
-                            * (v[270] * v[89] + v[94] * v[521] + v[574] * v[486]
-                                + v[90] * v[524] + v[83] * v[517]),
-                    -m2
-                        * (v[114] * v[521] + v[110] * v[524] + v[270] * v[108]
-                            + v[517] * v[99] + v[574] * v[330])
-                        - (v[108] * v[573] + v[543] * v[101] + v[547] * v[104]
-                            + v[215] * v[330]) * m1,
-                    d
-                        * (-m2
-                            * (gamma2_dot
-                                * (gamma2_dot * v[575]
-                                    + (0.5 * v[468] + 0.5 * v[469] + 0.5 * v[470] - v[471]
-                                        + 0.5 * v[472] - v[473]) * phi_dot + theta_dot * v[476])
-                                + theta_dot
-                                    * (phi_dot
-                                        * (0.5 * v[469] - 0.5 * v[468] + 0.5 * v[470]
-                                            - 0.5 * v[472]) + theta_dot * v[575])
-                                + v[575] * phi_dot * phi_dot)
-                            - m1
-                                * ((v[466] * gamma1_dot + theta_dot * v[576]
-                                    + phi_dot
-                                        * (0.5 * v[458] - 0.5 * v[459] + 0.5 * v[460] - v[462]
-                                            - 0.5 * v[461] + v[463])) * theta_dot
-                                    + gamma1_dot
-                                        * (v[576] * gamma1_dot
-                                            + (0.5 * v[460] - 0.5 * v[458] - 0.5 * v[459]
-                                                + 0.5 * v[461]) * phi_dot) + v[576] * phi_dot * phi_dot)),
-                ],
-                [
-                    v[604] * v[6] - v[599] * v[1] * v[13] - v[31] * v[183] * J1
-                        - v[185] * v[577]
-                        - ((a_ * (v[4] * (v[211] - v[210] + v[605]) + v[606])
-                            + v[11] * v[609]) * v[1] * v[13] - v[215] * d * v[577]
-                            + v[610] * v[9]) * m1,
-                    v[599] * v[2]
-                        - (v[2]
-                            * (a_ * (v[4] * (v[210] - v[211] - v[605]) - v[606])
-                                + v[72] * v[609])
-                            + (v[215] * v[4] * d + v[610] * v[70]) * v[13]) * m1
-                        + (v[0] * v[604] + (v[174] + v[184] - v[611]) * v[4]) * v[13],
-                    v[4] * (v[600] - v[610] * d * m1 + v[602] + v[603])
-                        + v[0] * (v[174] - v[279] + v[184] - v[611]),
-                    v[598] * v[123] * v[173] - d * m1 * v[609]
-                        + v[123] * v[200] * v[200],
+                    -v[303] * v[620]
+                        - ((v[650] + a_ * ((v[652] - v[256] - v[257]) * v[1] + v[653]))
+                            * v[14] - v[647] * v[34] - v[245] * v[621]) * m1
+                        - v[655] * v[7] - v[657] * v[14] - v[237] * v[623],
+                    v[5] * v[657] + (v[1] * (v[303] - v[658]) - v[3] * v[655]) * v[8]
+                        - (v[5] * (a_ * ((v[258] - v[652]) * v[1] - v[653]) - v[650])
+                            + (v[1] * d * v[245] - v[647] * v[61]) * v[8]) * m1,
+                    v[3] * (v[313] - v[658]) + (v[655] - v[647] * v[85]) * v[1],
+                    v[656] * v[141] - v[240] * v[302] - v[85] * v[649],
                     0.0,
-                    -((v[610] * v[89] + v[214] * v[584] + v[84] * v[612]
-                        + v[613] * v[87]) * m1),
-                    -((v[613] * v[104] + v[101] * v[612] + v[214] * v[587]
-                        + v[610] * v[108]) * m1),
+                    -(m1
+                        * (v[647] * v[100] + v[108] * v[659] + v[660] * v[106]
+                            - v[106] * v[261])),
+                    -(m1
+                        * (v[659] * v[115] + v[660] * v[119] + v[647] * v[123]
+                            - v[119] * v[261])),
+                    -(v[85]
+                        * (theta_dot
+                            * (v[502] + (2.0 * v[385] + v[614]) * gamma1_dot
+                                + v[662] * theta_dot) + v[343] * v[661]
+                            + gamma1_dot * (v[662] * gamma1_dot - v[497]))),
+                ],
+                [
+                    v[52] * v[695] - v[691] * v[16] - v[6] * v[693]
+                        - m2 * (v[6] * v[698] + v[699] * v[19] - v[667] * v[279])
+                        - v[664] * v[700],
+                    v[5] * (v[13] * (v[691] - v[700]) - v[11] * v[695]) - v[693] * v[8]
+                        - m2
+                            * (v[698] * v[8]
+                                + (-v[77] * v[699] - d * v[11] * v[279]) * v[5]),
+                    v[13] * (v[314] - v[694])
+                        + v[11] * (v[700] - v[88] * v[699] - v[689] + v[690]),
+                    0.0,
+                    v[692] * v[204] - v[88] * v[696] - v[315] * v[262],
+                    -(m2
+                        * (v[103] * v[696] - v[97] * v[699] - v[103] * v[274]
+                            + v[697] * v[101])),
+                    -(m2
+                        * (v[697] * v[125] - v[111] * v[699] - v[128] * v[274]
+                            + v[128] * v[696])),
+                    -(v[88]
+                        * ((v[515] + theta_dot * v[702]) * theta_dot + v[701] * v[343]
+                            + gamma2_dot
+                                * (gamma2_dot * v[702] + v[513]
+                                    + theta_dot * (v[618] - 2.0 * v[387])))),
+                ],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                [
+                    (v[8]
+                        * (v[724] - v[723] + v[725] - v[726] - v[727] + v[728] + v[729]
+                            + v[730]) + v[735] * v[5]) * v[4] - v[7] * v[710]
+                        - v[16] * v[719] - (v[55] * v[736] - v[52] * v[737]) * J1
+                        - m2 * (v[6] * v[741] - v[742] * v[19])
+                        + v[0] * (v[744] - v[743] - v[745] + v[746] + v[4] * v[484])
+                        - m1 * ((v[750] + v[752]) * v[14] - v[748] * v[34]),
+                    (v[723] - v[724] - v[725] + v[726] + v[727] - v[728] - v[729]
+                        - v[730] + v[13] * v[719] - v[737] * v[69]) * v[5]
+                        - m1 * (v[748] * v[137] + (-v[750] - v[752]) * v[5])
+                        - m2 * (v[133] * v[742] + v[8] * v[741])
+                        + (v[735] - v[3] * v[710] - v[58] * v[736]) * v[8],
+                    v[743] - J1 * (v[13] * v[737] + v[3] * v[736]) + v[428] * v[4]
+                        - v[744] + v[11] * (v[88] * v[742] - v[717] + v[718]) + v[745]
+                        - v[746] + v[1] * (v[710] - v[748] * v[85]),
+                    J2 * (v[713] - v[720] - v[721]) - v[85] * v[749] + v[729],
+                    (v[747] + v[733]) * J2 - v[88] * v[740] - v[734],
+                    -(m2 * (v[97] * v[742] + v[101] * v[738] + v[103] * v[740])
+                        + (v[108] * v[749] + v[748] * v[100] + v[106] * v[751]) * m1),
+                    -(m2 * (v[738] * v[125] + v[111] * v[742] + v[128] * v[740])
+                        + m1 * (v[748] * v[123] + v[115] * v[749] + v[751] * v[119])),
+                    0.0,
+                ],
+                [
+                    ((v[441] - v[772] + v[773] - v[778] * v[8] - v[779] + v[780]) * v[8]
+                        + v[5] * (v[781] - (v[783] + v[785]) * v[5])) * v[4]
+                        - m2 * (v[6] * v[756] - v[759] * v[19]) - v[16] * v[763]
+                        - ((v[765] + v[767]) * v[14] - v[34] * v[771]) * m1
+                        - (v[55] * v[786] - v[52] * v[787]) * J1
+                        + v[0] * (v[788] - v[789] + v[790] - v[791] - v[792] + v[793])
+                        - v[7] * v[795],
+                    (v[772] - v[441] + v[13] * v[763] - v[773]
+                        + (v[778] - v[783] - v[785]) * v[8] - v[787] * v[69] + v[779]
+                        - v[780]) * v[5]
+                        - (v[137] * v[771] + (-v[765] - v[767]) * v[5]) * m1
+                        - (v[133] * v[759] + v[756] * v[8]) * m2
+                        + (v[781] - v[58] * v[786] - v[3] * v[795]) * v[8],
+                    v[11] * (v[761] - v[762] + v[88] * v[759])
+                        - (v[13] * v[787] + v[3] * v[786]) * J1 - v[788]
+                        + v[1] * (v[795] - v[85] * v[771]) + v[789] - v[790] + v[791]
+                        + v[792] - v[793],
+                    (v[777] + J2 * (v[194] - v[559] - v[774])) * v[8] - v[766] * v[85],
+                    (v[782] * J1 + J2 * (v[194] + v[784])) * v[5] - v[755] * v[88],
+                    -(m1 * (v[108] * v[766] + v[764] * v[106] + v[100] * v[771])
+                        + m2 * (v[755] * v[103] + v[101] * v[753] + v[97] * v[759])),
+                    -(m2 * (v[111] * v[759] + v[753] * v[125] + v[755] * v[128])
+                        + m1 * (v[766] * v[115] + v[764] * v[119] + v[123] * v[771])),
+                    -(m2
+                        * (d * (v[342] + v[797] * theta_dot - gamma2_dot * v[338])
+                            - 2.0 * v[319])
+                        + m1 * (2.0 * v[319] + (theta_dot * v[799] + v[363]) * d)),
+                ],
+                [
+                    ((v[569] - v[816] - v[818] + 2.0 * v[220] + 2.0 * v[221] - v[819])
+                        * v[8] - v[5] * v[823]) * v[4] - v[801] * v[56] - v[804] * v[71]
+                        - m2 * (v[809] * v[6] - v[810] * v[19])
+                        - (v[55] * v[811] + v[671] * v[812]) * J1
+                        - m1 * ((v[826] + v[828]) * v[14] - v[34] * v[824]),
+                    v[5]
+                        * (v[816] - v[569] + v[818] - 2.0 * v[220] - 2.0 * v[221]
+                            + v[139] * v[804] - v[812] * v[518] + v[819])
+                        - m2 * (v[809] * v[8] + v[133] * v[810])
+                        - (v[138] * v[801] + v[823] + v[58] * v[811]) * v[8]
+                        - (v[824] * v[137] + (-v[826] - v[828]) * v[5]) * m1,
+                    v[11] * (v[88] * v[810] - v[13] * (v[812] * J1 + v[804]))
+                        + (v[3] * (v[801] - v[800] * J1) - v[85] * v[824]) * v[1],
+                    v[817] * J1 - v[85] * v[827] + J2 * (v[815] + v[207]),
+                    (v[187] - v[186] + v[821]) * J2 - v[807] * v[88] - v[822],
+                    -(m2 * (v[97] * v[810] + 2.0 * (v[101] * v[808]) + v[807] * v[103])
+                        + m1 * (v[100] * v[824] + v[106] * v[825] + v[108] * v[827])),
+                    -(m1 * (v[119] * v[825] + v[827] * v[115] + v[824] * v[123])
+                        + m2
+                            * (v[111] * v[810] + v[807] * v[128]
+                                + 2.0 * (v[125] * v[808]))),
                     -(d
-                        * (phi_dot * phi_dot
-                            * (0.25 * v[460] - 0.25 * v[458] - 0.25 * v[459]
-                                + 0.25 * v[461])
-                            + gamma1_dot * (v[614] * gamma1_dot + v[464])
-                            + theta_dot
-                                * (v[467] + theta_dot * v[614]
-                                    + (0.5 * v[458] - 0.5 * v[459] + 0.5 * v[460] - v[462]
-                                        + 2.0 * v[348] - 0.5 * v[461] + v[463]) * gamma1_dot)) * m1),
+                        * ((phi_dot * v[796] + gamma2_dot * v[331] + theta_dot * v[341])
+                            * m2
+                            + (v[356] * gamma1_dot + v[798] * phi_dot
+                                + theta_dot * v[359]) * m1)),
                 ],
                 [
-                    v[641] * v[28] - v[1] * v[637] * v[2] - (v[638] + v[639]) * v[19]
-                        - v[193] * v[615] * J1
-                        - m2
-                            * (v[1] * v[2] * v[645] - v[270] * v[28] * d
-                                + v[646] * v[21]),
-                    v[2] * (v[641] * v[15] + v[17] * (v[638] + v[639] - v[647]))
-                        - v[637] * v[13]
-                        - m2
-                            * (v[2] * (v[646] * v[56] - v[270] * d * v[15])
-                                + v[13] * v[645]),
-                    v[17] * (v[278] - v[251] - v[253] - v[640])
-                        + v[15] * (v[647] - v[638] - v[639] + m2 * v[646] * d),
+                    -(v[85] * (-2.0 * (v[241] * v[619]) - v[829] * v[34])
+                        + v[231] * v[623] + v[7] * v[830]),
+                    -(2.0 * (v[241] * v[636]) + v[829] * v[137]) * v[85]
+                        - v[8] * (v[3] * v[830] + v[58] * v[231]),
+                    (v[830] - v[166] * v[829]) * v[1] - v[813] * J1,
                     0.0,
-                    v[234] * v[228] * v[228] + v[234] * v[231] * v[636]
-                        - m2 * d * v[644],
-                    -(m2
-                        * (v[94] * v[644] + v[83] * v[646] + v[90] * v[648]
-                            + (-v[92] - v[93]) * v[262])),
-                    -(m2
-                        * (v[114] * v[644] + v[646] * v[99] + v[262] * (-v[112] - v[113])
-                            + v[110] * v[648])),
-                    -(m2 * d
-                        * (gamma2_dot
-                            * (v[474]
-                                + theta_dot
-                                    * (0.5 * v[469] - 0.5 * v[468] - 2.0 * v[350] + 0.5 * v[470]
-                                        - 0.5 * v[472]) + gamma2_dot * v[649])
-                            + theta_dot * (v[477] + theta_dot * v[649])
-                            + (0.25 * v[468] + 0.25 * v[469] + 0.25 * v[470]
-                                - 0.5 * v[471] + 0.25 * v[472] - 0.5 * v[473]) * phi_dot
-                                * phi_dot)),
-                ],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    (v[660] - v[664] - v[665] + v[454] * v[1] - v[667]) * v[3]
-                        - v[6] * v[659] + (-v[670] * v[28] - v[31] * v[671]) * J1
-                        - m2 * (v[675] * v[1] * v[2] + v[678] * v[21])
-                        - (v[1] * v[13] * (v[680] + v[681] * v[11]) + v[682] * v[9]) * m1
-                        + v[1]
-                            * (v[2]
-                                * (v[686] - v[685] - v[687] + v[688] - v[689] - v[690]
-                                    - v[691] - v[692])
-                                + (v[695] - v[693] - v[694] - v[696] + v[697] - v[700]
-                                    + v[701] - v[702]) * v[13]) - v[19] * v[707],
-                    (v[693] + v[694] - v[670] * v[15] * J1 + v[17] * v[707] - v[695]
-                        + v[696] - v[697] + v[700] - v[701] + v[702]) * v[2]
-                        - m2 * (v[675] * v[13] + v[678] * v[56] * v[2])
-                        - (v[682] * v[70] * v[13] + (v[681] * v[72] - v[680]) * v[2])
-                            * m1
-                        + (v[686] - v[685] - v[687] + v[688] - v[689] - v[0] * v[659]
-                            - v[4] * v[671] * J1 - v[690] - v[691] - v[692]) * v[13],
-                    v[435] * v[1] - v[660] + (m2 * v[678] * d - v[705] - v[706]) * v[15]
-                        + v[664] + v[665] + v[667]
-                        + v[4] * (v[657] - v[682] * d * m1 + v[658])
-                        + (-v[0] * v[671] - v[17] * v[670]) * J1,
-                    (v[698] + v[699]) * J1 - d * v[681] * m1
-                        + (v[661] - v[698] - v[699] + v[662]) * J2,
-                    (-v[683] - v[684]) * J1 - m2 * v[673] * d
-                        + (v[683] - v[652] + v[653] + v[684]) * J2,
-                    -(v[682] * v[89] + v[84] * v[681] + v[679] * v[87]) * m1
-                        - (v[90] * v[674] + v[673] * v[94] + v[83] * v[678]) * m2,
-                    -(v[679] * v[104] + v[682] * v[108] + v[101] * v[681]) * m1
-                        - (v[673] * v[114] + v[678] * v[99] + v[110] * v[674]) * m2,
                     0.0,
+                    -((v[829] * v[100] - 2.0 * (v[106] * v[241])) * v[85]),
+                    -(v[85] * (v[829] * v[123] - 2.0 * (v[119] * v[241]))),
+                    -(v[85] * (gamma1_dot * v[799] + v[357] + theta_dot * v[362])),
                 ],
                 [
-                    (v[717] + v[175] * v[37] - v[718] + v[719] + v[720] - v[721]) * v[3]
-                        - v[6] * v[716] - m2 * (v[1] * v[2] * v[725] + v[729] * v[21])
-                        + v[1]
-                            * ((v[735] - (v[732] + v[733]) * v[13] - v[734] + v[410]
-                                - v[736] - v[737]) * v[13]
-                                + (v[426] - v[738] + v[739] - v[740]
-                                    - (v[743] + v[744]) * v[2] - v[745]) * v[2])
-                        - (v[1] * (v[747] + v[748] * v[11]) * v[13] + v[749] * v[9]) * m1
-                        - v[19] * v[754] + (-v[28] * v[755] - v[31] * v[756]) * J1,
-                    (v[734] - v[735] - v[410]
-                        + (v[732] - v[743] - v[744] + v[733]) * v[13]
-                        - v[15] * v[755] * J1 + v[736] + v[17] * v[754] + v[737]) * v[2]
-                        - (v[70] * v[749] * v[13] + v[2] * (v[748] * v[72] - v[747]))
-                            * m1 - m2 * (v[13] * v[725] + v[56] * v[2] * v[729])
-                        + (v[426] - v[0] * v[716] - v[738] + v[739] - v[740] - v[745]
-                            - v[4] * v[756] * J1) * v[13],
-                    v[4] * (v[710] - v[749] * d * m1 + v[715]) - v[717]
-                        + (-v[0] * v[756] - v[17] * v[755]) * J1 + v[718]
-                        + v[15] * (m2 * d * v[729] - v[752] - v[753]) + v[175] * v[357]
-                        - v[719] - v[720] + v[721],
-                    (J2 * (phi_dot - v[730] - v[731] + v[170]) + (v[730] + v[731]) * J1)
-                        * v[13] - v[748] * d * m1,
-                    v[2]
-                        * (J2 * (v[742] - v[741] + phi_dot + v[170])
-                            + (v[741] - v[742]) * J1) - m2 * d * v[723],
-                    -m2 * (v[723] * v[94] + v[724] * v[90] + v[83] * v[729])
-                        - (v[749] * v[89] + v[87] * v[746] + v[84] * v[748]) * m1,
-                    -m2 * (v[729] * v[99] + v[110] * v[724] + v[723] * v[114])
-                        - m1 * (v[104] * v[746] + v[749] * v[108] + v[748] * v[101]),
-                    -(d * (v[324] + v[757] * theta_dot + v[327]) + 2.0 * v[758]) * m1
-                        - m2
-                            * ((theta_dot * v[759] + v[300] + v[304] * gamma2_dot) * d
-                                - 2.0 * v[758]),
-                ],
-                [
-                    (-v[28] * v[15] * v[764] - v[765] * v[31] * v[4]) * J1
-                        - v[17] * v[19] * v[763]
-                        - (v[1] * (v[768] + v[11] * v[770]) * v[13] + v[771] * v[9]) * m1
-                        + ((2.0 * v[236] - v[773] + 2.0 * v[237] - v[526] - v[774]
-                            - v[775]) * v[13]
-                            + v[2] * (-v[778] - 2.0 * v[221] - v[779] - v[780] - v[781]))
-                            * v[1] - m2 * (v[1] * v[2] * v[783] + v[21] * v[784])
-                        - v[0] * v[787] * v[6],
-                    (-v[778] - v[0] * v[0] * v[787] - v[765] * v[4] * v[4] * J1
-                        - 2.0 * v[221] - v[779] - v[780] - v[781]) * v[13]
-                        - m2 * (v[56] * v[2] * v[784] + v[783] * v[13])
-                        - m1
-                            * (v[70] * v[771] * v[13] + v[2] * (v[72] * v[770] - v[768]))
-                        + v[2]
-                            * (v[773] - 2.0 * v[236] - 2.0 * v[237]
-                                - v[15] * v[15] * v[764] * J1 + v[526] + v[774]
-                                + v[17] * v[17] * v[763] + v[775]),
-                    v[15] * (m2 * d * v[784] + v[17] * (-v[764] * J1 - v[761] - v[762]))
-                        + (v[0] * (v[785] - v[765] * J1 + v[786]) - d * v[771] * m1)
-                            * v[4],
-                    (v[772] - v[769]) * J1 + (v[166] - v[772] + v[769] + v[167]) * J2
-                        - d * m1 * v[770],
-                    (-v[776] - v[777]) * J1 - v[782] * m2 * d
-                        + J2 * (v[776] - v[163] + v[777] + v[164]),
-                    -m2
-                        * (2.0 * (v[231] * d * v[15] * v[90]) + v[83] * v[784]
-                            + v[782] * v[94])
-                        - m1 * (v[767] * v[4] * v[87] + v[771] * v[89] + v[84] * v[770]),
-                    -m1 * (v[767] * v[4] * v[104] + v[101] * v[770] + v[771] * v[108])
-                        - m2
-                            * (v[782] * v[114] + 2.0 * (v[110] * v[231] * d * v[15])
-                                + v[99] * v[784]),
-                    (-m2
-                        * (gamma2_dot * v[301] + theta_dot * v[299]
-                            + phi_dot
-                                * (0.5 * v[285] - 0.5 * v[287] - 0.5 * v[289]
-                                    + 0.5 * v[291]))
-                        - (gamma1_dot * v[328]
-                            + phi_dot
-                                * (0.5 * v[318] - 0.5 * v[313] - 0.5 * v[320]
-                                    + 0.5 * v[322]) + theta_dot * v[326]) * m1) * d,
-                ],
-                [
-                    -v[31] * v[200] * J1
-                        - (v[788] * v[9] - 2.0 * (a_ * v[165] * v[4] * v[1] * v[13])) * d
-                            * m1 - v[791] * v[6],
-                    (-v[4] * v[200] * J1 - v[0] * v[791]) * v[13]
-                        - d
-                            * (2.0 * (a_ * v[165] * v[4] * v[2])
-                                + v[788] * v[70] * v[13]) * m1,
-                    v[4] * (v[789] - v[788] * d * d * m1 + v[790]) - v[0] * v[200] * J1,
+                    -(v[731] * v[832] - v[52] * v[831]
+                        - (2.0 * (v[666] * v[208]) - 2.0 * v[739]) * v[88]),
+                    v[88] * (2.0 * (v[133] * v[211]) + 2.0 * (v[679] * v[208]))
+                        + v[5] * (v[568] * v[832] + v[262] * v[69]),
+                    (J1 - 2.0 * J2 - 2.0 * v[170]) * v[805] - v[13] * v[831],
                     0.0,
                     0.0,
-                    -(d * m1 * (v[788] * v[89] - 2.0 * (v[165] * v[87]))),
-                    -(d * (v[788] * v[108] - 2.0 * (v[165] * v[104])) * m1),
-                    -(d * m1 * (v[757] * gamma1_dot + v[323] * theta_dot + v[329])),
-                ],
-                [
-                    -v[228] * v[19] * v[792] - v[28] * v[636] * J1
-                        - m2 * d
-                            * (-2.0 * v[672]
-                                - 2.0 * (a_ * v[250] * v[1] * v[15] * v[2])),
-                    v[2] * (v[17] * v[228] * v[792] - v[15] * v[636] * J1)
-                        - m2 * d
-                            * (-2.0 * (v[228] * v[56] * v[2])
-                                - 2.0 * (a_ * v[250] * v[15] * v[13])),
-                    v[228] * v[15] * (J1 - 2.0 * v[148] - 2.0 * J2)
-                        - v[17] * v[636] * J1,
-                    0.0,
-                    0.0,
-                    -(m2 * d * (2.0 * (v[250] * v[90]) - 2.0 * (v[228] * v[83]))),
-                    -(m2 * (2.0 * (v[110] * v[250]) - 2.0 * (v[228] * v[99])) * d),
-                    -(m2 * d * (gamma2_dot * v[759] + v[302] + v[305])),
+                    -(v[88] * (2.0 * (v[101] * v[208]) - 2.0 * (v[97] * v[211]))),
+                    -((2.0 * (v[125] * v[208]) - 2.0 * (v[111] * v[211])) * v[88]),
+                    -((v[339] + v[797] * gamma2_dot) * v[88]),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -2033,7 +1978,7 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let theta = state[1];
         let phi = state[2];
@@ -2042,59 +1987,59 @@ pub mod lagrange {
         let Ixx = params.Ixx;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
-        v[0] = f64::cos(gamma1);
-        v[1] = f64::cos(theta);
-        v[2] = f64::sin(phi);
-        v[3] = f64::sin(theta);
-        v[4] = f64::sin(gamma1);
-        v[5] = v[3] * v[4];
-        v[6] = v[0] * v[1] * v[2] + v[5];
-        v[7] = v[6] * d;
-        v[8] = a_ * v[1] * v[2];
-        v[9] = -v[7] - v[8];
-        v[10] = v[0] * a_;
-        v[11] = v[10] + d;
-        v[12] = a_ * a_ * v[4] * v[4];
-        v[13] = f64::cos(phi);
-        v[14] = a_ * v[1] * v[13];
-        v[15] = f64::sin(gamma2);
-        v[16] = v[3] * v[15];
-        v[17] = f64::cos(gamma2);
-        v[18] = v[17] * v[1] * v[13];
-        v[19] = v[18] - v[16];
-        v[20] = v[19] * d;
-        v[21] = -v[14] - v[20];
-        v[22] = a_ * a_ * v[15] * v[15];
-        v[23] = v[17] * a_;
-        v[24] = d + v[23];
-        v[25] = v[24] * v[24];
-        v[26] = v[22] + v[25];
-        v[27] = v[17] * v[3];
-        v[28] = -v[1] * v[15] * v[13] - v[27];
-        v[29] = v[4] * v[1] * v[2];
-        v[30] = v[0] * v[3];
-        v[31] = v[29] - v[30];
-        v[32] = v[13] * v[13];
-        v[33] = v[2] * v[2];
-        v[34] = v[3] * Ixx;
-        v[35] = Ixy * v[2];
-        v[36] = Ixz * v[13];
-        v[37] = -v[35] - v[36];
-        v[38] = v[1] * v[37];
-        v[39] = v[38] - v[34];
+        v[0] = f64::sin(theta);
+        v[1] = f64::sin(gamma1);
+        v[2] = v[0] * v[1];
+        v[3] = f64::cos(gamma1);
+        v[4] = f64::cos(theta);
+        v[5] = f64::sin(phi);
+        v[6] = v[4] * v[5];
+        v[7] = v[2] + v[3] * v[6];
+        v[8] = f64::cos(phi);
+        v[9] = v[8] * v[8];
+        v[10] = v[5] * v[5];
+        v[11] = f64::sin(gamma2);
+        v[12] = v[0] * v[11];
+        v[13] = f64::cos(gamma2);
+        v[14] = v[4] * v[8];
+        v[15] = v[13] * v[14];
+        v[16] = v[15] - v[12];
+        v[17] = a_ * v[14];
+        v[18] = v[16] * d;
+        v[19] = v[17] + v[18];
+        v[20] = v[13] * a_;
+        v[21] = v[20] + d;
+        v[22] = v[21] * v[21];
+        v[23] = a_ * v[11];
+        v[24] = v[23] * v[23];
+        v[25] = v[22] + v[24];
+        v[26] = v[3] * a_;
+        v[27] = v[26] + d;
+        v[28] = v[27] * v[27];
+        v[29] = a_ * v[1];
+        v[30] = v[29] * v[29];
+        v[31] = v[28] + v[30];
+        v[32] = v[7] * d;
+        v[33] = a_ * v[6];
+        v[34] = v[32] + v[33];
+        v[35] = v[0] * Ixx;
+        v[36] = Ixy * v[5] + Ixz * v[8];
+        v[37] = v[4] * v[36];
+        v[38] = -v[35] - v[37];
+        v[39] = Iyz * v[8];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part1(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let psi = state[0];
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
@@ -2106,51 +2051,47 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = Iyz * v[13];
-        v[41] = Iyy * v[2];
-        v[42] = v[41] - v[40];
-        v[43] = v[42] * v[1];
-        v[44] = v[3] * Ixy;
-        v[45] = v[43] + v[44];
-        v[46] = v[45] * v[2];
-        v[47] = Izz * v[13];
-        v[48] = Iyz * v[2];
-        v[49] = v[47] - v[48];
-        v[50] = v[1] * v[49];
-        v[51] = v[3] * Ixz;
-        v[52] = v[50] + v[51];
-        v[53] = v[52] * v[13];
-        v[54] = v[17] * v[19] * J2;
-        v[55] = v[17] * d;
-        v[56] = a_ + v[55];
-        v[57] = v[56] * v[21];
-        v[58] = v[28] * v[15] * J1;
-        v[59] = Iyy * v[13];
-        v[60] = v[59] + v[48];
-        v[61] = v[60] * v[1];
-        v[62] = v[2] * Ixz - Ixy * v[13];
-        v[63] = v[3] * v[62];
-        v[64] = v[0] * J2 * v[6];
-        v[65] = v[2] * Izz;
-        v[66] = -v[65] - v[40];
-        v[67] = v[1] * v[66];
-        v[68] = v[31] * v[4] * J1;
-        v[69] = v[0] * d;
-        v[70] = -a_ - v[69];
-        v[71] = v[70] * v[9];
-        v[72] = -v[10] - d;
-        v[73] = v[11] * v[72];
-        v[74] = v[2] * (m2 * (v[1] * v[26] * v[13] + v[57]) - v[54] + v[58] + v[61])
-            - v[63]
-            + (v[64] + v[67] + v[68] + (v[71] + v[1] * v[2] * (v[73] - v[12])) * m1)
-                * v[13];
-        v[75] = v[38] - v[34] + (v[0] * v[31] + v[17] * v[28]) * J1
-            + (v[19] * v[15] - v[6] * v[4]) * J2
-            + (v[4] * m1 * v[9] - m2 * v[15] * v[21]) * d;
-        v[76] = v[1] * (d * v[11] * m1 + J2) * v[13];
-        v[77] = J2 + m2 * d * v[24];
-        v[78] = v[1] * v[77] * v[2];
-        v[79] = f64::cos(psi);
+        v[40] = Iyy * v[5];
+        v[41] = v[40] - v[39];
+        v[42] = v[41] * v[4] + v[0] * Ixy;
+        v[43] = v[42] * v[5];
+        v[44] = Izz * v[8];
+        v[45] = Iyz * v[5];
+        v[46] = v[44] - v[45];
+        v[47] = v[4] * v[46];
+        v[48] = v[0] * Ixz;
+        v[49] = v[47] + v[48];
+        v[50] = v[49] * v[8];
+        v[51] = v[13] * v[0];
+        v[52] = v[11] * v[14] + v[51];
+        v[53] = v[6] * v[1];
+        v[54] = v[3] * v[0];
+        v[55] = v[53] - v[54];
+        v[56] = v[3] * v[7];
+        v[57] = J2 * v[56];
+        v[58] = v[1] * J1;
+        v[59] = v[58] * v[55];
+        v[60] = v[3] * d;
+        v[61] = a_ + v[60];
+        v[62] = v[61] * v[34];
+        v[63] = -v[28] - v[30];
+        v[64] = v[5] * Izz;
+        v[65] = v[64] + v[39];
+        v[66] = v[4] * v[65];
+        v[67] = v[5] * Ixz - Ixy * v[8];
+        v[68] = v[0] * v[67];
+        v[69] = v[11] * J1;
+        v[70] = v[52] * v[69];
+        v[71] = v[13] * v[16];
+        v[72] = J2 * v[71];
+        v[73] = Iyy * v[8];
+        v[74] = v[73] + v[45];
+        v[75] = v[4] * v[74];
+        v[76] = v[13] * d;
+        v[77] = v[76] + a_;
+        v[78] = -(v[77] * v[19]);
+        v[79] = (v[57] + v[59] + m1 * (v[62] + v[63] * v[6]) - v[66]) * v[8] - v[68]
+            + (v[75] - v[70] - v[72] + m2 * (v[78] + v[25] * v[14])) * v[5];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2159,54 +2100,56 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let psi = state[0];
         let m1 = params.m1;
         let m2 = params.m2;
-        let a_ = params.a_;
-        v[80] = f64::sin(psi);
-        v[81] = v[13] * v[80];
-        v[82] = v[3] * v[79] * v[2];
-        v[83] = v[82] - v[81];
-        v[84] = v[0] * v[83] - v[79] * v[4] * v[1];
-        v[85] = v[83] * v[4];
-        v[86] = v[0] * v[79] * v[1];
-        v[87] = v[85] + v[86];
-        v[88] = a_ * v[4] * v[87];
-        v[89] = v[2] * v[80] + v[3] * v[79] * v[13];
-        v[90] = v[17] * v[79] * v[1] - v[15] * v[89];
-        v[91] = a_ * v[15] * v[90];
-        v[92] = v[79] * v[1] * v[15];
-        v[93] = v[17] * v[89];
-        v[94] = v[92] + v[93];
-        v[95] = v[94] * v[24] - v[91];
-        v[96] = m1 * (v[1] * (v[84] * v[11] + v[88]) * v[13] + v[89] * v[9])
-            + m2 * (v[1] * v[95] * v[2] + v[83] * v[21]);
-        v[97] = v[79] * v[13];
-        v[98] = v[3] * v[2] * v[80];
-        v[99] = v[97] + v[98];
-        v[100] = v[4] * v[1] * v[80];
-        v[101] = v[0] * v[99] - v[100];
-        v[102] = v[0] * v[1] * v[80];
-        v[103] = v[4] * v[99];
-        v[104] = v[102] + v[103];
-        v[105] = a_ * v[4] * v[104];
-        v[106] = v[79] * v[2];
-        v[107] = v[3] * v[13] * v[80];
-        v[108] = v[107] - v[106];
-        v[109] = v[17] * v[1] * v[80];
-        v[110] = v[109] - v[15] * v[108];
-        v[111] = a_ * v[110] * v[15];
-        v[112] = v[1] * v[15] * v[80];
-        v[113] = v[17] * v[108];
-        v[114] = v[112] + v[113];
-        v[115] = v[114] * v[24] - v[111];
-        v[116] = m1 * (v[1] * (v[101] * v[11] + v[105]) * v[13] + v[108] * v[9])
-            + m2 * (v[1] * v[2] * v[115] + v[99] * v[21]);
-        v[117] = v[0] * v[0];
-        v[118] = v[17] * v[17];
-        v[119] = v[26] * v[13] * v[13];
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = -(v[52] * v[13]);
+        v[81] = v[7] * v[1];
+        v[82] = m2 * v[11];
+        v[83] = v[1] * m1;
+        v[84] = v[38] + (v[3] * v[55] + v[80]) * J1 + (v[16] * v[11] - v[81]) * J2
+            + d * (v[82] * v[19] - v[34] * v[83]);
+        v[85] = d * m1;
+        v[86] = v[85] * v[27];
+        v[87] = v[14] * (J2 + v[86]);
+        v[88] = m2 * d;
+        v[89] = v[21] * v[88];
+        v[90] = v[89] + J2;
+        v[91] = v[6] * v[90];
+        v[92] = f64::cos(psi);
+        v[93] = v[0] * v[5];
+        v[94] = v[92] * v[93];
+        v[95] = f64::sin(psi);
+        v[96] = v[8] * v[95];
+        v[97] = v[94] - v[96];
+        v[98] = v[92] * v[4];
+        v[99] = v[0] * v[8];
+        v[100] = v[5] * v[95] + v[99] * v[92];
+        v[101] = v[13] * v[98] - v[100] * v[11];
+        v[102] = v[101] * v[23];
+        v[103] = v[13] * v[100] + v[11] * v[98];
+        v[104] = v[21] * v[103];
+        v[105] = v[104] - v[102];
+        v[106] = v[3] * v[98] + v[97] * v[1];
+        v[107] = v[106] * v[29];
+        v[108] = v[3] * v[97] - v[1] * v[98];
+        v[109] = v[108] * v[27];
+        v[110] = m2 * (v[6] * v[105] - v[97] * v[19])
+            + (v[14] * (v[107] + v[109]) - v[100] * v[34]) * m1;
+        v[111] = v[92] * v[8] + v[93] * v[95];
+        v[112] = v[3] * v[111];
+        v[113] = v[4] * v[95];
+        v[114] = v[1] * v[113];
+        v[115] = v[112] - v[114];
+        v[116] = v[27] * v[115];
+        v[117] = v[111] * v[1];
+        v[118] = v[3] * v[113];
+        v[119] = v[117] + v[118];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2215,59 +2158,55 @@ pub mod lagrange {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[72] * v[72];
-        v[121] = v[12] + v[120];
-        v[122] = v[121] * v[2] * v[2];
-        v[123] = J1 - J2;
-        v[124] = v[0] * v[123] + v[70] * d * m1;
-        v[125] = v[17] * v[123] - m2 * d * v[56];
-        v[126] = v[125] * v[15] + Ixz;
-        v[127] = (v[124] * v[4] - Ixy) * v[13] + v[2] * v[126];
-        v[128] = d * v[72] * m1 - J2;
-        v[129] = v[2] * v[128];
-        v[130] = v[77] * v[13];
-        v[131] = v[95] * v[13];
-        v[132] = v[84] * v[72];
-        v[133] = v[132] - v[88];
-        v[134] = v[2] * v[133];
-        v[135] = m2 * (v[131] + v[83] * v[56] * v[2])
-            + m1 * (v[134] + v[70] * v[89] * v[13]);
-        v[136] = v[115] * v[13];
-        v[137] = v[101] * v[72];
-        v[138] = v[137] - v[105];
-        v[139] = v[138] * v[2];
-        v[140] = m2 * (v[136] + v[56] * v[2] * v[99])
-            + (v[70] * v[108] * v[13] + v[139]) * m1;
-        v[141] = a_ * v[28] * v[15];
-        v[142] = v[19] * v[24];
-        v[143] = a_ * v[31] * v[4];
-        v[144] = v[6] * v[72];
-        v[145] = m2 * (v[1] * v[56] * v[2] * v[2] + (v[142] - v[141]) * v[13])
-            + m1 * ((v[144] - v[143]) * v[2] + v[70] * v[1] * v[13] * v[13]);
-        v[146] = d * d * m1;
-        v[147] = J2 + v[146];
-        v[148] = m2 * d * d;
-        v[149] = v[148] + J2;
-        v[150] = d * (v[4] * v[89] * m1 - m2 * v[83] * v[15]);
-        v[151] = (v[4] * v[108] * m1 - m2 * v[15] * v[99]) * d;
-        v[152] = v[4] * m1 * v[13];
-        v[153] = m2 * v[15] * v[2];
-        v[154] = v[152] - v[153];
-        v[155] = v[154] * v[1] * d;
-        v[156] = v[84] * d * m1;
-        v[157] = v[101] * d * m1;
-        v[158] = v[6] * d * m1;
-        v[159] = m2 * d * v[94];
+        v[120] = v[119] * v[29];
+        v[121] = v[92] * v[5];
+        v[122] = v[99] * v[95];
+        v[123] = v[122] - v[121];
+        v[124] = v[13] * v[113];
+        v[125] = v[124] - v[11] * v[123];
+        v[126] = v[125] * v[23];
+        v[127] = v[11] * v[113];
+        v[128] = v[127] + v[13] * v[123];
+        v[129] = v[21] * v[128];
+        v[130] = v[129] - v[126];
+        v[131] = v[111] * v[19];
+        v[132] = m1 * (v[14] * (v[116] + v[120]) - v[34] * v[123])
+            + m2 * (v[6] * v[130] - v[131]);
+        v[133] = v[77] * v[5];
+        v[134] = v[9] * v[25];
+        v[135] = v[11] * v[5];
+        v[136] = v[31] * v[10];
+        v[137] = -(v[61] * v[8]);
+        v[138] = v[3] * v[3];
+        v[139] = v[13] * v[13];
+        v[140] = v[1] * v[8];
+        v[141] = J1 - J2;
+        v[142] = v[13] * v[141] - v[88] * v[77];
+        v[143] = v[11] * v[142] + Ixz;
+        v[144] = v[61] * v[85];
+        v[145] = v[3] * v[141] - v[144];
+        v[146] = v[143] * v[5] + (v[1] * v[145] - Ixy) * v[8];
+        v[147] = -J2 - v[86];
+        v[148] = v[147] * v[5];
+        v[149] = v[90] * v[8];
+        v[150] = v[105] * v[8];
+        v[151] = -v[107] - v[109];
+        v[152] = v[151] * v[5];
+        v[153] = m2 * (v[97] * v[133] + v[150]) + (v[100] * v[137] + v[152]) * m1;
+        v[154] = v[130] * v[8];
+        v[155] = v[133] * v[111];
+        v[156] = -v[116] - v[120];
+        v[157] = v[5] * v[156];
+        v[158] = m2 * (v[154] + v[155]) + (v[157] + v[137] * v[123]) * m1;
+        v[159] = v[21] * v[16];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2276,59 +2215,58 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
-        let gamma1_dot = state[11];
         let gamma2_dot = state[12];
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J2 = params.J2;
-        v[160] = m2 * d * v[114];
-        v[161] = m2 * v[19] * d;
-        v[162] = m2 + m0 + m1;
-        v[163] = v[1] * psi_dot * v[13];
-        v[164] = theta_dot * v[2];
-        v[165] = v[163] + gamma1_dot - v[164];
-        v[166] = theta_dot * v[13];
-        v[167] = v[1] * psi_dot * v[2];
-        v[168] = v[166] + v[167];
-        v[169] = v[4] * v[168];
-        v[170] = v[3] * psi_dot;
-        v[171] = phi_dot - v[170];
-        v[172] = v[0] * v[171];
-        v[173] = v[169] + v[172];
-        v[174] = v[165] * v[123] * v[173];
-        v[175] = -phi_dot - v[170];
-        v[176] = theta_dot * v[175] * v[2];
-        v[177] = v[1] * psi_dot * phi_dot * v[13];
-        v[178] = gamma1_dot * v[171];
-        v[179] = v[176] + v[177] - v[178];
-        v[180] = gamma1_dot * v[168];
-        v[181] = theta_dot * v[1] * psi_dot;
-        v[182] = v[181] - v[180];
-        v[183] = v[0] * v[179] + v[4] * v[182];
-        v[184] = J2 * v[183];
-        v[185] = v[174] + v[184];
-        v[186] = theta_dot * v[175] * v[13];
-        v[187] = v[1] * psi_dot * v[2] * phi_dot;
-        v[188] = gamma2_dot * v[171];
-        v[189] = v[187] - v[186] - v[188];
-        v[190] = v[163] - v[164];
-        v[191] = v[190] * gamma2_dot;
-        v[192] = -v[191] - v[181];
-        v[193] = v[15] * v[189] + v[17] * v[192];
-        v[194] = v[0] * (v[180] - v[181]) + v[179] * v[4];
-        v[195] = v[0] * a_ * v[190];
-        v[196] = v[165] * d;
-        v[197] = v[195] + v[196];
-        v[198] = v[165] * v[197];
-        v[199] = a_ * v[168];
+        v[160] = v[52] * v[23];
+        v[161] = v[159] + v[160];
+        v[162] = v[7] * v[27];
+        v[163] = v[55] * v[29];
+        v[164] = -v[162] - v[163];
+        v[165] = m2 * (v[6] * v[133] + v[161] * v[8])
+            + m1 * (v[137] * v[14] + v[5] * v[164]);
+        v[166] = v[85] * d;
+        v[167] = v[166] + J2;
+        v[168] = v[1] * v[1];
+        v[169] = v[11] * v[11];
+        v[170] = v[88] * d;
+        v[171] = J2 + v[170];
+        v[172] = d * (v[100] * v[83] - v[97] * v[82]);
+        v[173] = v[82] * v[111];
+        v[174] = d * (v[83] * v[123] - v[173]);
+        v[175] = v[82] * v[5];
+        v[176] = v[83] * v[8];
+        v[177] = d * (v[176] - v[175]);
+        v[178] = v[177] * v[4];
+        v[179] = v[108] * v[85];
+        v[180] = v[85] * v[115];
+        v[181] = v[7] * v[85];
+        v[182] = v[88] * v[103];
+        v[183] = v[88] * v[128];
+        v[184] = v[88] * v[16];
+        v[185] = m2 + m0 + m1;
+        v[186] = psi_dot * v[14];
+        v[187] = theta_dot * v[5];
+        v[188] = v[186] - v[187];
+        v[189] = v[4] * psi_dot;
+        v[190] = v[189] * theta_dot;
+        v[191] = v[188] * gamma2_dot + v[190];
+        v[192] = v[11] * v[191];
+        v[193] = v[0] * psi_dot;
+        v[194] = phi_dot + v[193];
+        v[195] = -(v[194] * v[8]);
+        v[196] = theta_dot * v[195];
+        v[197] = psi_dot * phi_dot;
+        v[198] = v[197] * v[6];
+        v[199] = v[196] - v[198];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2337,62 +2275,61 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
+        let phi_dot = state[10];
         let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
-        let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[200] = v[0] * v[168] - v[4] * v[171];
-        v[201] = d * v[200];
-        v[202] = -v[199] - v[201];
-        v[203] = v[202] * v[200];
-        v[204] = v[186] - v[187];
-        v[205] = v[204] * v[4];
-        v[206] = v[0] * v[190] * gamma1_dot + v[205];
-        v[207] = a_ * v[206];
-        v[208] = v[203] - v[198] + v[207];
-        v[209] = a_ * v[4] * v[208];
-        v[210] = v[204] * d;
-        v[211] = v[173] * v[202];
-        v[212] = v[0] * v[204];
-        v[213] = a_ * (v[212] + v[190] * v[190] * v[4]);
-        v[214] = v[210] - v[211] + v[213];
-        v[215] = v[173] * v[197] - d * v[183]
-            + a_ * (-v[190] * v[4] * v[200] - v[176] - v[177]);
-        v[216] = Ixx * v[171] - v[190] * Ixz - Ixy * v[168];
-        v[217] = v[190] * v[216];
-        v[218] = v[176] + v[177];
-        v[219] = Iyy * v[218];
-        v[220] = Iyz * v[168];
-        v[221] = Ixz * v[171];
-        v[222] = v[190] * Izz;
-        v[223] = v[222] - v[220] - v[221];
-        v[224] = v[223] * v[171];
-        v[225] = Ixy * theta_dot * v[1] * psi_dot;
-        v[226] = v[204] * Iyz;
-        v[227] = J2 * v[218];
-        v[228] = v[17] * v[171] - v[190] * v[15];
-        v[229] = v[15] * v[171];
-        v[230] = v[17] * v[190];
-        v[231] = v[229] + v[230];
-        v[232] = v[228] * v[123] * v[231];
-        v[233] = theta_dot * v[1] * psi_dot * Ixz;
-        v[234] = J2 - J1;
-        v[235] = v[234] * v[173] * v[200];
-        v[236] = v[190] * Iyz;
-        v[237] = Ixy * v[171];
-        v[238] = Iyy * v[168] - v[236] - v[237];
-        v[239] = v[238] * v[171];
+        v[200] = phi_dot - v[193];
+        v[201] = gamma2_dot * v[200];
+        v[202] = v[13] * (v[199] + v[201]) - v[192];
+        v[203] = J2 * v[202];
+        v[204] = J2 - J1;
+        v[205] = v[6] * psi_dot;
+        v[206] = theta_dot * v[8];
+        v[207] = v[205] + v[206];
+        v[208] = gamma2_dot + v[207];
+        v[209] = v[204] * v[208];
+        v[210] = v[188] * v[11];
+        v[211] = v[13] * v[200] - v[210];
+        v[212] = v[209] * v[211];
+        v[213] = v[203] + v[212];
+        v[214] = v[199] * Ixz;
+        v[215] = -(v[5] * v[194]);
+        v[216] = theta_dot * v[215];
+        v[217] = v[197] * v[14];
+        v[218] = v[216] + v[217];
+        v[219] = Ixy * v[218];
+        v[220] = v[188] * Iyz;
+        v[221] = Ixy * v[200];
+        v[222] = Iyy * v[207] - v[220] - v[221];
+        v[223] = v[188] * v[222];
+        v[224] = v[188] * Izz;
+        v[225] = Iyz * v[207];
+        v[226] = Ixz * v[200];
+        v[227] = v[224] + (-v[225] - v[226]);
+        v[228] = v[227] * v[207];
+        v[229] = v[190] * Ixx;
+        v[230] = v[228] - v[214] - v[219] - v[223] - v[229];
+        v[231] = v[3] * v[207] - v[1] * v[200];
+        v[232] = v[188] * v[1];
+        v[233] = gamma1_dot * v[207];
+        v[234] = v[190] - v[233];
+        v[235] = gamma1_dot * v[200];
+        v[236] = v[218] - v[235];
+        v[237] = v[234] * v[1] + v[3] * v[236];
+        v[238] = v[1] * v[207];
+        v[239] = v[3] * v[200];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2401,64 +2338,53 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
+        let gamma1_dot = state[11];
         let gamma2_dot = state[12];
-        let Ixx = params.Ixx;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[240] = v[168] * v[216];
-        v[241] = Iyz * v[218];
-        v[242] = v[204] * J2;
-        v[243] = v[204] * Izz;
-        v[244] = theta_dot * Ixx * v[1] * psi_dot;
-        v[245] = v[223] * v[168];
-        v[246] = v[204] * Ixz;
-        v[247] = v[190] * v[238];
-        v[248] = Ixy * v[218];
-        v[249] = v[245] - v[244] - v[246] - v[247] - v[248];
-        v[250] = gamma2_dot + v[166] + v[167];
-        v[251] = v[234] * v[228] * v[250];
-        v[252] = v[192] * v[15] + (v[186] - v[187] + v[188]) * v[17];
-        v[253] = J2 * v[252];
-        v[254] = v[251] + v[253];
-        v[255] = v[231] * d;
-        v[256] = a_ * v[190];
-        v[257] = -v[255] - v[256];
-        v[258] = v[218] * v[15];
-        v[259] = v[250] * d;
-        v[260] = v[17] * a_ * v[168];
-        v[261] = v[259] + v[260];
-        v[262] = a_ * (-v[17] * gamma2_dot * v[168] - v[258]) - v[231] * v[257]
-            + v[261] * v[250];
-        v[263] = a_ * v[15] * v[262];
-        v[264] = v[218] * d;
-        v[265] = v[228] * v[257];
-        v[266] = v[17] * v[218];
-        v[267] = a_ * (v[266] + v[15] * v[168] * v[168]);
-        v[268] = v[264] + v[265] + v[267];
-        v[269] = v[268] * v[24] - v[263];
-        v[270] = a_ * (v[187] - v[186] - v[231] * v[15] * v[168]) - v[261] * v[228]
-            - v[252] * d;
-        v[271] = v[214] * v[72];
-        v[272] = v[2] * (v[271] - v[209]);
-        v[273] = v[193] * v[15] * J1;
-        v[274] = v[17] * v[254];
-        v[275] = v[269] * v[13];
-        v[276] = v[4] * J1 * v[194];
-        v[277] = v[0] * v[185];
-        v[278] = m2 * v[270] * d;
-        v[279] = v[215] * d * m1;
+        v[240] = v[238] + v[239];
+        v[241] = v[188] + gamma1_dot;
+        v[242] = d * v[241];
+        v[243] = v[188] * v[26];
+        v[244] = v[242] + v[243];
+        v[245] = v[240] * v[244] - a_ * (v[218] + v[231] * v[232]) - d * v[237];
+        v[246] = v[199] * v[1];
+        v[247] = v[188] * v[3];
+        v[248] = v[246] + gamma1_dot * v[247];
+        v[249] = a_ * v[248] - v[244] * v[241];
+        v[250] = v[231] * d;
+        v[251] = a_ * v[207];
+        v[252] = v[250] + v[251];
+        v[253] = v[231] * v[252];
+        v[254] = v[249] - v[253];
+        v[255] = v[254] * v[29];
+        v[256] = v[199] * d;
+        v[257] = v[240] * v[252];
+        v[258] = v[256] + v[257];
+        v[259] = v[3] * v[199];
+        v[260] = a_ * (v[188] * v[232] + v[259]);
+        v[261] = v[258] + v[260];
+        v[262] = v[11] * v[200] + v[188] * v[13];
+        v[263] = d * v[262];
+        v[264] = v[188] * a_;
+        v[265] = v[263] + v[264];
+        v[266] = v[13] * v[218];
+        v[267] = (v[218] * d - v[265] * v[211])
+            + a_ * (v[266] + v[11] * v[207] * v[207]);
+        v[268] = v[218] * v[11];
+        v[269] = v[13] * v[207];
+        v[270] = d * v[208];
+        v[271] = v[20] * v[207];
+        v[272] = v[270] + v[271];
+        v[273] = v[265] * v[262];
+        v[274] = v[272] * v[208] - a_ * (v[268] + gamma2_dot * v[269]) + v[273];
+        v[275] = v[274] * v[23];
+        v[276] = v[21] * v[267] - v[275];
+        v[277] = v[11] * v[262];
+        v[278] = v[198] - v[196];
+        v[279] = a_ * (v[278] - v[277] * v[207]) - v[272] * v[211] - d * v[202];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2467,126 +2393,112 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let theta_dot = state[9];
-        let phi_dot = state[10];
+        let Ixx = params.Ixx;
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let a_ = params.a_;
-        v[280] = -m2 * (v[268] * v[94] + v[83] * v[270] + v[90] * v[262])
-            - (v[208] * v[87] + v[84] * v[214] + v[215] * v[89]) * m1;
-        v[281] = a_ * v[3] * theta_dot * theta_dot;
-        v[282] = v[17] * v[2];
-        v[283] = v[15] * v[13];
-        v[284] = -v[282] - v[283];
-        v[285] = v[284] * v[1];
-        v[286] = v[282] + v[283];
-        v[287] = v[1] * v[286];
-        v[288] = v[283] - v[282];
-        v[289] = v[288] * v[1];
-        v[290] = v[282] - v[283];
-        v[291] = v[290] * v[1];
-        v[292] = 0.25 * v[285] - 0.25 * v[287] - 0.25 * v[289] + 0.25 * v[291] - v[27];
-        v[293] = v[15] * v[2];
-        v[294] = v[17] * v[13];
-        v[295] = v[293] + v[294];
-        v[296] = v[3] * v[295];
-        v[297] = v[294] - v[293];
-        v[298] = v[3] * v[297];
-        v[299] = v[296] - 0.5 * v[285] - 0.5 * v[287] + 0.5 * v[289] + 0.5 * v[291]
-            - v[298];
-        v[300] = phi_dot * v[299];
-        v[301] = 0.5 * v[285] - 0.5 * v[287] + 0.5 * v[289] - 0.5 * v[291];
-        v[302] = phi_dot * v[301];
-        v[303] = v[1] * v[15];
-        v[304] = -v[296] - 0.5 * v[285] - 0.5 * v[287] - 2.0 * v[303] - 0.5 * v[289]
-            - 0.5 * v[291] - v[298];
-        v[305] = v[304] * theta_dot;
-        v[306] = v[3] * v[2];
-        v[307] = v[1] * v[13];
-        v[308] = v[306] + v[307];
-        v[309] = v[0] * v[308];
-        v[310] = v[1] * v[2];
-        v[311] = v[3] * v[13];
-        v[312] = v[310] - v[311];
-        v[313] = v[4] * v[312];
-        v[314] = v[307] - v[306];
-        v[315] = v[0] * v[314];
-        v[316] = v[4] * v[1];
-        v[317] = v[311] - v[310];
-        v[318] = v[4] * v[317];
-        v[319] = v[310] + v[311];
+        let J2 = params.J2;
+        v[280] = Ixx * v[200] - v[188] * Ixz - Ixy * v[207];
+        v[281] = v[188] * v[280];
+        v[282] = v[199] * Iyz;
+        v[283] = v[218] * J2;
+        v[284] = Ixy * v[190];
+        v[285] = v[227] * v[200];
+        v[286] = Iyy * v[218];
+        v[287] = v[141] * v[262];
+        v[288] = v[287] * v[211];
+        v[289] = (-v[283] - v[284]) + ((v[285] - v[286]) - v[288]);
+        v[290] = (v[282] - v[281]) + v[289];
+        v[291] = v[199] * J2;
+        v[292] = v[199] * Izz;
+        v[293] = v[280] * v[207];
+        v[294] = Iyz * v[218];
+        v[295] = v[190] * Ixz;
+        v[296] = v[204] * v[240];
+        v[297] = v[231] * v[296];
+        v[298] = v[222] * v[200];
+        v[299] = v[1] * v[236] + v[3] * (v[233] - v[190]);
+        v[300] = v[278] - v[201];
+        v[301] = v[11] * v[300] - v[13] * v[191];
+        v[302] = v[240] * v[141];
+        v[303] = v[241] * v[302] + J2 * v[237];
+        v[304] = v[276] * v[8];
+        v[305] = v[3] * v[303];
+        v[306] = -v[305] - v[58] * v[299];
+        v[307] = ((v[295] + v[297]) + (v[298] - v[293])) + (v[292] - v[294]);
+        v[308] = v[13] * v[213] + v[307];
+        v[309] = v[308] - v[301] * v[69];
+        v[310] = -(v[27] * v[261]);
+        v[311] = v[310] - v[255];
+        v[312] = v[311] * v[5];
+        v[313] = v[303] - v[85] * v[245];
+        v[314] = (v[88] * v[279] - v[212]) - v[203];
+        v[315] = v[204] * v[262];
+        v[316] = -(m2 * (v[101] * v[274] + v[103] * v[267] + v[97] * v[279])
+            + (v[100] * v[245] + v[108] * v[261] + v[106] * v[254]) * m1);
+        v[317] = v[111] * v[279];
+        v[318] = a_ * theta_dot;
+        v[319] = v[318] * v[0];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part8(
         _t: f64,
         state: &[f64; STATES],
-        params: &Params,
+        _params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
+        let theta_dot = state[9];
         let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[320] = v[4] * v[319];
-        v[321] = -v[310] - v[311];
-        v[322] = v[321] * v[4];
-        v[323] = 0.5 * v[313] - v[309] + v[315] + 2.0 * v[316] + 0.5 * v[318]
-            - 0.5 * v[320] - 0.5 * v[322];
-        v[324] = v[323] * gamma1_dot;
-        v[325] = 0.25 * v[318] - 0.25 * v[313] - 0.25 * v[320] + v[30] + 0.25 * v[322];
-        v[326] = 0.5 * v[313] - 0.5 * v[318] - 0.5 * v[320] + 0.5 * v[322];
-        v[327] = v[326] * phi_dot;
-        v[328] = v[309] - 0.5 * v[313] + v[315] - 0.5 * v[318] - 0.5 * v[320]
-            - 0.5 * v[322];
-        v[329] = phi_dot * v[328];
-        v[330] = -v[97] - v[98];
-        v[331] = v[0] * v[330] + v[100];
-        v[332] = v[4] * v[330] - v[102];
-        v[333] = a_ * v[4] * v[332];
-        v[334] = v[106] - v[107];
-        v[335] = v[17] * v[334] - v[112];
-        v[336] = -v[109] - v[334] * v[15];
-        v[337] = v[335] * v[24] - a_ * v[336] * v[15];
-        v[338] = (v[1] * (v[331] * v[11] + v[333]) * v[13] + v[334] * v[9]) * m1
-            + m2 * (v[337] * v[1] * v[2] + v[330] * v[21]);
-        v[339] = ((v[331] * v[72] - v[333]) * v[2] + v[334] * v[70] * v[13]) * m1
-            + m2 * (v[337] * v[13] + v[56] * v[2] * v[330]);
-        v[340] = d * (v[334] * v[4] * m1 - m2 * v[15] * v[330]);
-        v[341] = d * v[331] * m1;
-        v[342] = m2 * d * v[335];
-        v[343] = -d - v[23];
-        v[344] = v[343] * v[24];
-        v[345] = -v[17] * v[3] * v[13] - v[303];
-        v[346] = a_ * v[3] * v[13] - d * v[345];
-        v[347] = v[316] - v[0] * v[3] * v[2];
-        v[348] = v[0] * v[1];
-        v[349] = -v[3] * v[4] * v[2] - v[348];
-        v[350] = v[17] * v[1];
-        v[351] = v[3] * v[15] * v[13] - v[350];
-        v[352] = a_ * v[3] * v[2] - d * v[347];
-        v[353] = 2.0 * v[73] - 2.0 * v[12];
-        v[354] = Ixy * v[1] + v[3] * (v[40] - v[41]);
-        v[355] = v[3] * (v[48] - v[47]) + v[1] * Ixz;
-        v[356] = Ixx * v[1];
-        v[357] = v[35] + v[36];
-        v[358] = v[3] * v[357];
-        v[359] = (v[351] * v[15] * J1
-            + (v[3] * (v[344] - v[22]) * v[13] + v[56] * v[346]) * m2 - v[3] * v[60]
-            - v[17] * J2 * v[345]) * v[2] - v[62] * v[1]
-            + (v[0] * J2 * v[347] - v[3] * v[66]
-                + (v[70] * v[352] + v[3] * v[121] * v[2]) * m1 + v[349] * v[4] * J1)
-                * v[13];
+        v[320] = theta_dot * v[319];
+        v[321] = v[11] * v[8];
+        v[322] = v[13] * v[5];
+        v[323] = v[321] + v[322];
+        v[324] = v[321] - v[322];
+        v[325] = v[324] * v[4];
+        v[326] = v[322] - v[321];
+        v[327] = v[4] * v[326];
+        v[328] = -(0.5 * v[323] * v[4]) + (0.25 * v[327] - 0.25 * v[325]);
+        v[329] = v[328] - v[51];
+        v[330] = v[323] * v[4];
+        v[331] = 0.5 * v[325] - v[330] - 0.5 * v[327];
+        v[332] = v[13] * v[8];
+        v[333] = v[135] + v[332];
+        v[334] = v[0] * v[333] + 0.5 * v[325];
+        v[335] = v[332] - v[135];
+        v[336] = v[0] * v[335];
+        v[337] = v[4] * v[11];
+        v[338] = v[334] + v[336] + 2.0 * v[337] + 0.5 * v[327];
+        v[339] = phi_dot * v[331] - theta_dot * v[338];
+        v[340] = 0.5 * v[327] - 0.5 * v[330];
+        v[341] = v[334] - v[336] + 0.5 * v[330] + v[340];
+        v[342] = v[341] * phi_dot;
+        v[343] = phi_dot * phi_dot;
+        v[344] = v[99] + v[6];
+        v[345] = v[6] - v[99];
+        v[346] = v[1] * v[345];
+        v[347] = v[99] - v[6];
+        v[348] = v[1] * v[347];
+        v[349] = -(0.5 * v[344] * v[1]) + (0.25 * v[348] - 0.25 * v[346]);
+        v[350] = v[344] * v[1];
+        v[351] = -0.5 * v[350] - 0.5 * v[348];
+        v[352] = v[14] - v[93];
+        v[353] = 0.5 * v[350] + v[3] * v[352];
+        v[354] = v[93] + v[14];
+        v[355] = v[3] * v[354];
+        v[356] = v[351] - 0.5 * v[346] + v[353] + v[355];
+        v[357] = v[356] * phi_dot;
+        v[358] = v[54] + v[349];
+        v[359] = v[351] - 0.5 * v[350] + 0.5 * v[346];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2595,70 +2507,68 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[360] = d * (v[352] * v[4] * m1 - m2 * v[15] * v[346]) - v[356]
-            + (v[0] * v[349] + v[17] * v[351]) * J1
-            + J2 * (v[15] * v[345] - v[4] * v[347]) + v[358];
-        v[361] = v[3] * v[128] * v[13];
-        v[362] = m2 * d * v[343] - J2;
-        v[363] = v[3] * v[2] * v[362];
-        v[364] = v[6] * v[11] + v[143] - v[7] - v[8];
-        v[365] = v[142] - v[141] - v[14] - v[20];
-        v[366] = v[343] * v[94];
-        v[367] = (v[352] * v[89] + v[13] * (v[364] * v[79] * v[1] + v[3] * v[133])) * m1
-            + m2
-                * ((v[79] * v[1] * v[365] + v[3] * (v[366] + v[91])) * v[2]
-                    + v[83] * v[346]);
-        v[368] = v[343] * v[114];
-        v[369] = m2
-            * (v[2] * (v[1] * v[365] * v[80] + v[3] * (v[111] + v[368]))
-                + v[99] * v[346])
-            + ((v[3] * v[138] + v[364] * v[1] * v[80]) * v[13] + v[352] * v[108]) * m1;
-        v[370] = v[145] * v[79];
-        v[371] = v[145] * v[80];
-        v[372] = ((v[345] * v[24] - v[351] * a_ * v[15]) * v[13]
-            - v[3] * v[56] * v[2] * v[2]) * m2
-            + m1
-                * ((v[347] * v[72] - a_ * v[349] * v[4]) * v[2]
-                    - v[3] * v[70] * v[13] * v[13]);
-        v[373] = v[154] * v[79] * v[1] * d;
-        v[374] = v[154] * v[1] * d * v[80];
-        v[375] = (v[153] - v[152]) * v[3] * d;
-        v[376] = v[6] * v[79] * d * m1;
-        v[377] = v[6] * d * m1 * v[80];
-        v[378] = d * v[347] * m1;
-        v[379] = m2 * v[19] * v[79] * d;
-        v[380] = m2 * v[19] * d * v[80];
-        v[381] = m2 * d * v[345];
-        v[382] = theta_dot * v[1] * v[13];
-        v[383] = gamma2_dot * v[1];
-        v[384] = v[3] * v[2] * phi_dot;
-        v[385] = v[17] * (v[384] - v[382] - v[383]);
-        v[386] = v[228] * v[3] * v[2];
-        v[387] = gamma2_dot * v[13];
-        v[388] = v[387] + theta_dot;
-        v[389] = v[388] * v[3] * v[15];
-        v[390] = v[351] * v[250];
-        v[391] = (v[385] - v[386] + v[389] + v[390]) * J2;
-        v[392] = (v[386] - v[390]) * J1;
-        v[393] = v[391] + v[392];
-        v[394] = v[17] * v[388] * v[3] + (v[382] + v[383] - v[384]) * v[15];
-        v[395] = gamma1_dot * v[2];
-        v[396] = theta_dot - v[395];
-        v[397] = theta_dot * v[1] * v[2];
-        v[398] = v[3] * phi_dot * v[13];
-        v[399] = v[1] * gamma1_dot - v[397] - v[398];
+        v[360] = 0.5 * v[348] - 0.5 * v[350];
+        v[361] = v[1] * v[4];
+        v[362] = v[360] + 0.5 * v[346] + v[353] - v[355] + 2.0 * v[361];
+        v[363] = phi_dot * v[359] + v[362] * gamma1_dot;
+        v[364] = v[121] - v[122];
+        v[365] = v[13] * v[364] - v[127];
+        v[366] = v[364] * v[11] + v[124];
+        v[367] = v[365] * v[21] + v[366] * v[23];
+        v[368] = -v[117] - v[118];
+        v[369] = v[368] * v[29];
+        v[370] = v[114] - v[112];
+        v[371] = v[27] * v[370];
+        v[372] = m2 * (v[131] + v[6] * v[367])
+            + ((v[369] + v[371]) * v[14] - v[364] * v[34]) * m1;
+        v[373] = m2 * (v[367] * v[8] - v[155])
+            + ((-v[369] - v[371]) * v[5] + v[364] * v[137]) * m1;
+        v[374] = (v[364] * v[83] + v[173]) * d;
+        v[375] = v[85] * v[370];
+        v[376] = v[365] * v[88];
+        v[377] = Ixy * v[4] + v[0] * (v[39] - v[40]);
+        v[378] = v[0] * (v[45] - v[44]) + v[4] * Ixz;
+        v[379] = -2.0 * v[28] - 2.0 * v[30];
+        v[380] = v[361] - v[3] * v[93];
+        v[381] = a_ * v[93] - d * v[380];
+        v[382] = Ixx * v[4];
+        v[383] = v[0] * v[36];
+        v[384] = v[337] + v[13] * v[99];
+        v[385] = v[3] * v[4];
+        v[386] = v[1] * v[93] + v[385];
+        v[387] = v[13] * v[4];
+        v[388] = v[99] * v[11] - v[387];
+        v[389] = d * v[384] + a_ * v[99];
+        v[390] = -2.0 * v[22] - 2.0 * v[24];
+        v[391] = -v[22] - v[24];
+        v[392] = v[8]
+            * ((v[31] * v[93] - v[61] * v[381]) * m1 - v[58] * v[386] + v[0] * v[65]
+                + v[3] * J2 * v[380]) - v[67] * v[4]
+            + v[5]
+                * (v[388] * v[69] - v[0] * v[74] + m2 * (v[77] * v[389] + v[99] * v[391])
+                    + v[13] * J2 * v[384]);
+        v[393] = v[383] - v[382];
+        v[394] = v[393] + (-v[1] * v[380] - v[11] * v[384]) * J2
+            + (v[381] * v[83] - v[82] * v[389]) * d
+            + (v[13] * v[388] - v[3] * v[386]) * J1;
+        v[395] = v[147] * v[99];
+        v[396] = -v[89] - J2;
+        v[397] = v[396] * v[93];
+        v[398] = v[102] - v[104];
+        v[399] = v[161] - v[17] - v[18];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2667,57 +2577,62 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma2_dot = state[12];
         let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[400] = v[0] * v[3] * v[396] + v[4] * v[399];
-        v[401] = v[384] - v[382];
-        v[402] = Iyz * v[401];
-        v[403] = v[355] * v[171];
-        v[404] = -v[397] - v[398];
-        v[405] = Iyy * v[404];
-        v[406] = v[358] - v[356];
-        v[407] = v[190] * v[406];
-        v[408] = v[223] * v[1];
-        v[409] = Ixy * theta_dot;
-        v[410] = v[13] * v[216];
-        v[411] = v[3] * (-v[409] - v[410]);
-        v[412] = v[351] * v[231];
-        v[413] = v[228] * v[345];
-        v[414] = (-v[397] - v[412] - v[398] - v[413]) * J2;
-        v[415] = (v[412] + v[413]) * J1;
-        v[416] = v[171] * v[354];
-        v[417] = v[401] * Izz;
-        v[418] = v[406] * v[168];
-        v[419] = v[173] * v[347];
-        v[420] = v[349] * v[200];
-        v[421] = (-v[419] - v[420]) * J1;
-        v[422] = (v[419] - v[382] + v[420] + v[384]) * J2;
-        v[423] = Iyz * v[404];
-        v[424] = v[238] * v[1];
-        v[425] = theta_dot * Ixz;
-        v[426] = v[2] * v[216];
-        v[427] = v[3] * (v[426] - v[425]);
-        v[428] = v[401] * Ixz;
-        v[429] = Ixy * v[404];
-        v[430] = v[190] * v[354];
-        v[431] = v[355] * v[168];
-        v[432] = v[223] * v[2];
-        v[433] = theta_dot * Ixx;
-        v[434] = v[238] * v[13];
-        v[435] = v[433] - v[432] + v[434];
-        v[436] = v[3] * v[173] * v[13];
-        v[437] = v[165] * v[349];
-        v[438] = (v[437] - v[436]) * J1;
-        v[439] = v[0] * v[399];
+        v[400] = v[162] - v[32] + v[163] - v[33];
+        v[401] = m2 * ((v[0] * v[398] + v[399] * v[98]) * v[5] + v[97] * v[389])
+            + ((v[400] * v[98] + v[0] * v[151]) * v[8] + v[381] * v[100]) * m1;
+        v[402] = v[126] - v[129];
+        v[403] = ((v[0] * v[402] + v[399] * v[113]) * v[5] + v[111] * v[389]) * m2
+            + (v[381] * v[123] + (v[0] * v[156] + v[400] * v[113]) * v[8]) * m1;
+        v[404] = v[92] * v[165];
+        v[405] = v[165] * v[95];
+        v[406] = m2 * ((-v[388] * v[23] - v[21] * v[384]) * v[8] - v[133] * v[93])
+            + ((v[386] * v[29] - v[380] * v[27]) * v[5] - v[99] * v[137]) * m1;
+        v[407] = v[177] * v[98];
+        v[408] = v[177] * v[113];
+        v[409] = v[0] * (v[175] - v[176]) * d;
+        v[410] = v[92] * v[181];
+        v[411] = v[181] * v[95];
+        v[412] = v[85] * v[380];
+        v[413] = v[92] * v[184];
+        v[414] = v[184] * v[95];
+        v[415] = -(v[88] * v[384]);
+        v[416] = v[93] * phi_dot;
+        v[417] = theta_dot * v[14];
+        v[418] = v[416] - v[417];
+        v[419] = Ixz * v[418];
+        v[420] = v[378] * v[207];
+        v[421] = v[99] * phi_dot;
+        v[422] = theta_dot * v[6];
+        v[423] = v[421] + v[422];
+        v[424] = Ixy * v[423];
+        v[425] = v[222] * v[8];
+        v[426] = theta_dot * Ixx;
+        v[427] = v[5] * v[227];
+        v[428] = v[425] + v[426] - v[427];
+        v[429] = v[188] * v[377];
+        v[430] = v[93] * v[211];
+        v[431] = v[388] * v[208];
+        v[432] = gamma2_dot * v[4];
+        v[433] = gamma2_dot * v[8] + theta_dot;
+        v[434] = v[13] * (v[418] - v[432]) + v[12] * v[433];
+        v[435] = J2 * (v[431] - v[430] + v[434]);
+        v[436] = (v[430] - v[431]) * J1;
+        v[437] = v[435] + v[436];
+        v[438] = v[262] * v[388] - v[384] * v[211];
+        v[439] = J2 * (v[438] + v[423]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2726,68 +2641,64 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let theta_dot = state[9];
-        let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
+        let J1 = params.J1;
         let J2 = params.J2;
-        v[440] = v[395] - theta_dot;
-        v[441] = v[3] * v[4] * v[440];
-        v[442] = J2 * (v[439] + v[441] + v[436] - v[437]);
-        v[443] = v[438] + v[442];
-        v[444] = a_
-            * (v[382] + v[15] * (v[3] * v[231] * v[2] - v[345] * v[168]) - v[384])
-            - v[228] * v[3] * v[2] * v[343] - (v[385] + v[389]) * d - v[261] * v[351];
-        v[445] = v[228] * v[346] + v[404] * d + v[351] * v[257]
-            + a_
-                * (v[17] * v[404]
-                    + v[3] * (-2.0 * v[166] - 2.0 * v[167]) * v[15] * v[2]);
-        v[446] = v[17] * a_ * gamma2_dot;
-        v[447] = v[3] * v[2] * (v[446] - v[259] + v[250] * v[343] - v[260])
-            - a_ * v[404] * v[15] - v[231] * v[346] - v[257] * v[345];
-        v[448] = a_
-            * (v[397] + v[398] + (v[3] * v[200] * v[13] - v[190] * v[347]) * v[4])
-            + v[349] * v[197] - d * (v[439] + v[441]) + v[3] * v[173] * v[72] * v[13];
-        v[449] = v[0] * a_ * gamma1_dot;
-        v[450] = v[195] - v[165] * v[72] + v[196] - v[449];
-        v[451] = v[202] * v[347] + a_ * v[401] * v[4] + v[3] * v[13] * v[450]
-            + v[352] * v[200];
-        v[452] = 2.0 * v[164] - 2.0 * v[163];
-        v[453] = v[401] * d - v[349] * v[202] - v[352] * v[173]
-            + a_ * (v[0] * v[401] + v[3] * v[452] * v[4] * v[13]);
-        v[454] = v[432] - v[433] - v[434];
-        v[455] = v[215] * v[1] * v[13] + v[31] * v[208] + v[214] * v[6];
-        v[456] = v[270] * v[1] * v[2] + v[28] * v[262] + v[19] * v[268];
-        v[457] = a_ * theta_dot * theta_dot * v[1];
-        v[458] = v[0] * v[312];
-        v[459] = v[0] * v[319];
-        v[460] = v[0] * v[317];
-        v[461] = v[0] * v[321];
-        v[462] = v[314] * v[4];
-        v[463] = v[308] * v[4];
-        v[464] = (-0.5 * v[458] - 0.5 * v[459] - 0.5 * v[460] - v[462] - 0.5 * v[461]
-            - v[463]) * phi_dot;
-        v[465] = 0.25 * v[458] - 0.25 * v[459] + 0.25 * v[460] - 0.5 * v[462] + v[348]
-            - 0.25 * v[461] + 0.5 * v[463];
-        v[466] = 0.5 * v[458] - 0.5 * v[459] - 0.5 * v[460] + 0.5 * v[461];
-        v[467] = v[466] * phi_dot;
-        v[468] = v[3] * v[284];
-        v[469] = v[3] * v[286];
-        v[470] = v[288] * v[3];
-        v[471] = v[1] * v[297];
-        v[472] = v[3] * v[290];
-        v[473] = v[1] * v[295];
-        v[474] = (0.5 * v[468] + 0.5 * v[469] - 0.5 * v[470] - v[471] - 0.5 * v[472]
-            + v[473]) * phi_dot;
-        v[475] = 0.25 * v[469] - 0.25 * v[468] - v[350] + 0.25 * v[470] - 0.25 * v[472];
-        v[476] = 0.5 * v[469] - 0.5 * v[468] - 0.5 * v[470] + 0.5 * v[472];
-        v[477] = phi_dot * v[476];
-        v[478] = v[56] * v[56];
-        v[479] = a_ + v[69];
+        v[440] = v[438] * J1;
+        v[441] = v[280] * v[8];
+        v[442] = v[441] + Ixy * theta_dot;
+        v[443] = ((v[439] - v[440]) + (v[0] * v[442] - v[4] * v[227]))
+            + ((Iyy * v[423] - v[188] * v[393]) + (v[378] * v[200] + Iyz * v[418]));
+        v[444] = v[4] * v[222];
+        v[445] = v[200] * v[377];
+        v[446] = v[418] * Izz;
+        v[447] = Iyz * v[423];
+        v[448] = v[240] * v[380];
+        v[449] = v[231] * v[386];
+        v[450] = v[448] - v[449];
+        v[451] = v[450] * J1;
+        v[452] = J2 * (v[450] + v[418]);
+        v[453] = v[5] * v[280];
+        v[454] = theta_dot * Ixz;
+        v[455] = v[0] * (v[453] - v[454]);
+        v[456] = v[393] * v[207];
+        v[457] = v[240] * v[99];
+        v[458] = v[241] * v[386];
+        v[459] = v[4] * gamma1_dot - v[421] - v[422];
+        v[460] = gamma1_dot * v[5];
+        v[461] = v[460] - theta_dot;
+        v[462] = v[3] * v[459] + v[2] * v[461];
+        v[463] = J2 * (v[457] + v[458] + v[462]) + (-v[457] - v[458]) * J1;
+        v[464] = v[417] - v[416];
+        v[465] = v[11] * (v[464] + v[432]) + v[51] * v[433];
+        v[466] = theta_dot - v[460];
+        v[467] = v[466] * v[54] + v[459] * v[1];
+        v[468] = (v[288] + (v[286] - v[285])) + (v[283] + v[284]);
+        v[469] = a_ * (v[11] * (v[384] * v[207] + v[262] * v[93]) + v[464])
+            - v[272] * v[388] - d * v[434] + v[21] * v[430];
+        v[470] = gamma2_dot * v[20];
+        v[471] = v[21] * v[208];
+        v[472] = v[93] * (v[470] - v[270] - v[271] - v[471]) - v[262] * v[389]
+            + v[423] * v[23] - v[265] * v[384];
+        v[473] = 2.0 * v[205] + 2.0 * v[206];
+        v[474] = a_ * (-v[13] * v[423] - v[11] * v[93] * v[473]) - v[265] * v[388]
+            + v[389] * v[211] - d * v[423];
+        v[475] = v[21] * v[474];
+        v[476] = -(v[21] * v[267]);
+        v[477] = v[26] * gamma1_dot;
+        v[478] = v[241] * v[27];
+        v[479] = v[244] - v[477] + v[478];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -2796,210 +2707,186 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
         let theta_dot = state[9];
         let phi_dot = state[10];
-        let gamma2_dot = state[12];
+        let d = params.d;
+        let a_ = params.a_;
+        v[480] = v[29] * v[418] - v[252] * v[380] + v[381] * v[231] + v[99] * v[479];
+        v[481] = 2.0 * v[187] - 2.0 * v[186];
+        v[482] = d * v[418] + (v[3] * v[418] + v[99] * v[1] * v[481]) * a_
+            - v[252] * v[386] - v[381] * v[240];
+        v[483] = a_ * (v[423] + v[1] * (v[231] * v[99] - v[188] * v[380]))
+            - v[244] * v[386] - v[457] * v[27] - d * v[462];
+        v[484] = v[427] - v[425] - v[426];
+        v[485] = v[7] * v[261] + v[254] * v[55] + v[245] * v[14];
+        v[486] = v[16] * v[267] + v[6] * v[279] - v[52] * v[274];
+        v[487] = v[318] * theta_dot * v[4];
+        v[488] = v[3] * v[345];
+        v[489] = v[354] * v[1];
+        v[490] = 0.25 * v[488] + 0.5 * v[489];
+        v[491] = v[3] * v[344];
+        v[492] = v[3] * v[347];
+        v[493] = 0.25 * v[492] - 0.25 * v[491];
+        v[494] = v[352] * v[1];
+        v[495] = (v[490] + v[493]) + (0.25 * v[491] - 0.5 * v[494]);
+        v[496] = 0.5 * v[488] + v[489];
+        v[497] = phi_dot * (v[496] + v[494] + 0.5 * v[492]);
+        v[498] = v[385] + v[495];
+        v[499] = 0.5 * v[492] - 0.5 * v[491];
+        v[500] = v[499] + (-0.5 * v[488] - 0.5 * v[491]);
+        v[501] = 0.5 * v[488] - v[491] - 0.5 * v[492];
+        v[502] = v[501] * phi_dot;
+        v[503] = v[0] * v[323];
+        v[504] = v[0] * v[326];
+        v[505] = v[324] * v[0];
+        v[506] = 0.25 * v[503] + 0.25 * v[505];
+        v[507] = (0.25 * v[503] - 0.25 * v[504]) + v[506];
+        v[508] = v[507] - v[387];
+        v[509] = 0.5 * v[503] - 0.5 * v[505];
+        v[510] = v[4] * v[333];
+        v[511] = v[335] * v[4];
+        v[512] = -v[511] - 0.5 * v[503];
+        v[513] = (v[509] - 0.5 * v[504] + v[510] + v[512]) * phi_dot;
+        v[514] = v[509] + 0.5 * v[503] + 0.5 * v[504];
+        v[515] = v[514] * phi_dot;
+        v[516] = 0.5 * v[503] + 0.5 * v[505];
+        v[517] = (v[516] + v[512]) + (0.5 * v[504] - v[510]);
+        v[518] = v[11] * v[69];
+        v[519] = (v[64] - v[40]) + 2.0 * v[39];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part13(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 833],
+    ) {
         let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[480] = m2
-            * (v[1] * (v[119] + v[2] * v[2] * (v[478] - v[22] + v[344]))
-                + v[56] * v[21] * v[13])
-            + ((v[122] + (v[73] - v[12] + v[70] * v[70]) * v[13] * v[13]) * v[1]
-                + v[479] * v[2] * v[9]) * m1
-            + (v[28] * v[15] * v[13] - v[31] * v[4] * v[2]) * J1
-            + J2 * (-v[17] * v[19] * v[13] - v[0] * v[6] * v[2]) - v[358]
-            + v[1]
-                * (((v[4] * v[4] * J1 + v[0] * v[0] * J2) * v[13] + v[59] - v[47]
-                    + 2.0 * v[48]) * v[13]
-                    + (v[65] + 2.0 * v[40]
-                        + (v[15] * v[15] * J1 + v[17] * v[17] * J2) * v[2] - v[41])
-                        * v[2]);
-        v[481] = v[127] * v[1];
-        v[482] = v[1] * v[2] * v[128];
-        v[483] = v[1] * v[77] * v[13];
-        v[484] = a_ * v[4] * v[4];
-        v[485] = v[484] - a_ + v[0] * v[11] - v[69];
-        v[486] = v[81] - v[82];
-        v[487] = v[17] * v[24];
-        v[488] = a_ * v[15] * v[15];
-        v[489] = v[487] + v[488];
-        v[490] = v[489] * v[486] + v[83] * v[56];
-        v[491] = ((v[89] * v[485] * v[13] + v[134]) * v[1] + v[486] * v[9]) * m1
-            + m2 * (v[89] * v[21] + (v[131] + v[490] * v[2]) * v[1]);
-        v[492] = v[56] * v[99] + v[330] * v[489];
-        v[493] = (v[1] * (v[139] + v[485] * v[108] * v[13]) + v[330] * v[9]) * m1
-            + m2 * (v[1] * (v[136] + v[492] * v[2]) + v[108] * v[21]);
-        v[494] = v[4] * v[4];
-        v[495] = (Ixy + v[4] * (v[0] * v[234] + v[479] * d * m1)) * v[2]
-            + v[126] * v[13];
-        v[496] = v[128] * v[13];
-        v[497] = v[2] * v[362];
-        v[498] = v[0] * v[72];
-        v[499] = a_ - v[484] + v[69] + v[498];
-        v[500] = ((v[366] + v[56] * v[89] + v[91]) * v[2] + v[490] * v[13]) * m2
-            + ((v[132] - v[88] + v[70] * v[486]) * v[13] + v[499] * v[2] * v[89]) * m1;
-        v[501] = m2 * (v[2] * (v[111] + v[56] * v[108] + v[368]) + v[492] * v[13])
-            + ((v[137] - v[105] + v[70] * v[330]) * v[13] + v[499] * v[2] * v[108]) * m1;
-        v[502] = m2 * v[2]
-            * (v[141] + (2.0 * a_ - v[487] + 2.0 * v[55] - v[488]) * v[1] * v[13]
-                + v[19] * v[343])
-            + (v[144] - v[143]
-                + v[1] * (2.0 * a_ - v[484] + 2.0 * v[69] + v[498]) * v[2]) * m1 * v[13];
-        v[503] = d * (v[4] * m1 * v[486] - m2 * v[15] * v[89]);
-        v[504] = d * (v[4] * v[330] * m1 - m2 * v[15] * v[108]);
-        v[505] = v[1] * d * (-m2 * v[15] * v[13] - v[4] * v[2] * m1);
-        v[506] = v[0] * d * v[89] * m1;
-        v[507] = v[0] * d * v[108] * m1;
-        v[508] = v[0] * v[1] * d * m1 * v[13];
-        v[509] = v[17] * m2 * d * v[486];
-        v[510] = v[17] * m2 * d * v[330];
-        v[511] = -(v[17] * m2 * v[1] * d * v[2]);
-        v[512] = -v[166] - v[167];
-        v[513] = theta_dot * (phi_dot + v[170]) * v[2];
-        v[514] = v[513] - v[177];
-        v[515] = v[17] * v[514];
-        v[516] = gamma2_dot * v[512] * v[15];
-        v[517] = v[261] * v[512] * v[15]
-            + a_
-                * (v[15] * (-v[17] * v[512] * v[168] - v[190] * v[231]) - v[513]
-                    + v[177]) - v[228] * v[190] * v[24] - d * (v[515] - v[516]);
-        v[518] = v[15] * v[257];
-        v[519] = -a_ - v[55];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part13(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
-    ) {
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[520] = 2.0 * v[166] + 2.0 * v[167];
-        v[521] = v[210] + v[512] * (v[228] * v[519] - v[518])
-            + a_ * (v[190] * v[520] * v[15] + v[17] * v[204]);
-        v[522] = v[17] * v[257];
-        v[523] = v[259] - v[446] + v[250] * v[24] + v[260];
-        v[524] = v[512] * (-v[231] * v[519] - v[522]) + v[190] * v[523]
-            - v[204] * a_ * v[15];
-        v[525] = v[521] * v[24] - a_ * v[15] * v[524] + v[270] * v[56];
-        v[526] = v[512] * Izz;
-        v[527] = v[526] - v[236];
-        v[528] = v[527] * v[168];
-        v[529] = v[238] * v[512];
-        v[530] = v[514] * Ixz;
-        v[531] = v[190] * Iyy;
-        v[532] = Iyz * v[512];
-        v[533] = v[204] * Ixy;
-        v[534] = v[190] * v[4] * gamma1_dot;
-        v[535] = v[512] * v[173];
-        v[536] = v[190] * v[165] * v[4];
-        v[537] = J2 * (v[212] - v[534] - v[535] - v[536]);
-        v[538] = J1 * (v[535] + v[536]);
-        v[539] = v[537] + v[538];
-        v[540] = 2.0 * v[163] - 2.0 * v[164];
-        v[541] = v[4] * v[202];
-        v[542] = v[70] * v[173];
-        v[543] = d * v[514] + a_ * (v[512] * v[4] * v[540] + v[0] * v[514])
-            + v[190] * (-v[541] - v[542]);
-        v[544] = v[0] * v[202];
-        v[545] = v[70] * v[200];
-        v[546] = v[449] - v[165] * v[11] - v[195] - v[196];
-        v[547] = v[190] * (v[544] + v[545]) + v[512] * v[546] + a_ * v[4] * v[514];
-        v[548] = a_ * v[4] * v[547];
-        v[549] = v[512] * v[173] * v[11];
-        v[550] = d * (v[212] - v[534]);
-        v[551] = v[0] * v[190] * v[190];
-        v[552] = a_ * ((-v[512] * v[200] - v[551]) * v[4] - v[186] + v[187]);
-        v[553] = v[190] * v[4] * v[197];
-        v[554] = v[549] - v[550] + v[552] + v[553];
-        v[555] = -v[514] * v[15] - v[17] * gamma2_dot * v[512];
-        v[556] = v[512] * (v[17] * v[228] * v[123] + v[234] * v[231] * v[15]);
-        v[557] = Iyz * v[514];
-        v[558] = v[512] * v[216];
-        v[559] = v[204] * Iyy;
+        v[520] = v[1] * v[5];
+        v[521] = v[61] * v[61];
+        v[522] = v[77] * v[77];
+        v[523] = (((v[138] * J2 + v[58] * v[1]) * v[8] + v[73] - v[44] + 2.0 * v[45])
+            * v[8] + v[5] * ((J2 * v[139] + v[518]) * v[5] + v[519])) * v[4]
+            + (-v[55] * v[520] - v[52] * v[321]) * J1
+            - J2 * (v[56] * v[5] + v[71] * v[8])
+            + m1 * (v[4] * (v[136] + (v[63] + v[521]) * v[9]) - v[61] * v[34] * v[5])
+            + m2 * ((v[10] * (v[391] + v[522]) + v[134]) * v[4] + v[78] * v[8]) - v[383];
+        v[524] = v[4] * v[146];
+        v[525] = v[147] * v[6];
+        v[526] = v[90] * v[14];
+        v[527] = v[13] * v[21];
+        v[528] = v[11] * v[23];
+        v[529] = v[527] + v[528];
+        v[530] = v[96] - v[94];
+        v[531] = v[97] * v[77] + v[529] * v[530];
+        v[532] = v[3] * v[27];
+        v[533] = v[1] * v[29];
+        v[534] = v[8] * (v[532] - a_ + v[533] - v[60]);
+        v[535] = m2 * (v[4] * (v[5] * v[531] + v[150]) - v[100] * v[19])
+            + m1 * (v[4] * (v[152] + v[100] * v[534]) - v[34] * v[530]);
+        v[536] = v[77] * v[111] - v[529] * v[111];
+        v[537] = (v[4] * (v[5] * v[536] + v[154]) - v[123] * v[19]) * m2
+            + m1 * (v[4] * (v[123] * v[534] + v[157]) + v[111] * v[34]);
+        v[538] = v[143] * v[8] + (Ixy + v[1] * (v[144] + v[3] * v[204])) * v[5];
+        v[539] = v[147] * v[8];
+        v[540] = v[396] * v[5];
+        v[541] = -v[532] - v[533];
+        v[542] = (v[61] + v[541]) * v[5];
+        v[543] = (v[100] * v[542] + (v[151] - v[61] * v[530]) * v[8]) * m1
+            + m2 * (v[531] * v[8] + (v[398] + v[77] * v[100]) * v[5]);
+        v[544] = (v[123] * v[542] + (v[156] + v[61] * v[111]) * v[8]) * m1
+            + m2 * ((v[402] + v[77] * v[123]) * v[5] + v[8] * v[536]);
+        v[545] = m1 * (v[6] * (2.0 * a_ + v[541] + 2.0 * v[60]) + v[164]) * v[8]
+            + m2 * ((2.0 * v[76] + 2.0 * a_ - v[527] - v[528]) * v[14] - v[159] - v[160])
+                * v[5];
+        v[546] = d * (v[83] * v[530] - v[82] * v[100]);
+        v[547] = d * (-v[82] * v[123] - v[111] * v[83]);
+        v[548] = -(v[4] * d * (v[83] * v[5] + v[82] * v[8]));
+        v[549] = v[3] * v[85];
+        v[550] = v[549] * v[100];
+        v[551] = v[549] * v[123];
+        v[552] = v[549] * v[14];
+        v[553] = v[13] * v[88];
+        v[554] = v[553] * v[530];
+        v[555] = -(v[553] * v[111]);
+        v[556] = -(v[553] * v[6]);
+        v[557] = v[188] * Ixy - Ixz * v[207];
+        v[558] = v[557] * v[207];
+        v[559] = v[231] * v[1];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part14(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let Iyy = params.Iyy;
         let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m1 = params.m1;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[560] = v[527] * v[171];
-        v[561] = -v[512] * Ixz - v[190] * Ixy;
-        v[562] = v[190] * v[561];
-        v[563] = (v[531] - v[532]) * v[171];
-        v[564] = v[168] * v[561];
-        v[565] = J2 * v[514];
-        v[566] = v[514] * Izz;
-        v[567] = v[190] * (v[234] * v[4] * v[200] + v[0] * v[234] * v[173]);
-        v[568] = v[228] * v[190];
-        v[569] = v[250] * v[512] * v[15];
-        v[570] = (v[568] + v[515] - v[516] - v[569]) * J2;
-        v[571] = (v[569] - v[568]) * J1;
-        v[572] = v[570] + v[571];
-        v[573] = v[549] - v[550] + v[0] * v[214] + v[552] + v[553] + v[4] * v[208];
-        v[574] = v[17] * v[268] - v[15] * v[262];
-        v[575] = 0.25 * v[468] + 0.25 * v[469] - 0.25 * v[470] - 0.5 * v[471]
-            - 0.25 * v[472] + 0.5 * v[473];
-        v[576] = -0.25 * v[458] - 0.25 * v[459] - 0.25 * v[460] - 0.5 * v[462]
-            - 0.25 * v[461] - 0.5 * v[463];
-        v[577] = v[30] - v[29];
-        v[578] = J2 * v[577];
-        v[579] = v[31] * J1;
-        v[580] = (v[0] * (v[578] + v[579])
-            + ((d * v[9] + 2.0 * (a_ * v[1] * d * v[2])) * v[4] - v[70] * d * v[577])
-                * m1 + v[6] * v[123] * v[4]) * v[13];
-        v[581] = v[0] * (d * m1 * v[9] + v[6] * v[123])
-            + ((-J2 - v[146]) * v[577] - v[579]) * v[4];
-        v[582] = -(a_ * v[4] * v[1] * d * m1 * v[13]);
-        v[583] = v[0] * a_ * v[87];
-        v[584] = -v[85] - v[86];
-        v[585] = ((v[583] + v[11] * v[584]) * v[1] * v[13] - d * v[89] * v[577]) * m1;
-        v[586] = v[0] * a_ * v[104];
-        v[587] = -v[102] - v[103];
-        v[588] = (v[1] * (v[586] + v[11] * v[587]) * v[13] - d * v[108] * v[577]) * m1;
-        v[589] = 2.0 * J1 - 2.0 * J2;
-        v[590] = v[13] * ((J2 + v[146] - J1) * v[4] * v[4] + v[0] * v[124]);
-        v[591] = a_ * v[4] * d * v[2] * m1;
-        v[592] = (v[2] * (v[72] * v[584] - v[583]) + v[4] * d * v[89] * v[13]) * m1;
-        v[593] = ((v[587] * v[72] - v[586]) * v[2] + v[4] * d * v[108] * v[13]) * m1;
-        v[594] = (v[4] * v[1] * d * v[13] * v[13]
-            + (v[72] * v[577] - v[0] * a_ * v[31]) * v[2]) * m1;
-        v[595] = d * m1 * v[584];
-        v[596] = d * v[587] * m1;
-        v[597] = d * m1 * v[577];
-        v[598] = -v[169] - v[172];
-        v[599] = v[598] * v[234] * v[173] + v[234] * v[200] * v[200];
+        v[560] = v[188] * (v[3] * v[296] + v[559] * v[204]);
+        v[561] = v[188] * Iyy;
+        v[562] = v[561] + v[225];
+        v[563] = v[562] * v[200];
+        v[564] = v[187] * v[194];
+        v[565] = v[564] - v[217];
+        v[566] = v[565] * J2;
+        v[567] = v[565] * Izz;
+        v[568] = v[13] * v[211];
+        v[569] = Izz * v[207];
+        v[570] = -v[569] - v[220];
+        v[571] = (((v[204] * v[277] + v[141] * v[568]) * v[207] + v[565] * Iyz)
+            + (v[293] - v[199] * Iyy)) + (v[570] * v[200] + v[188] * v[557]);
+        v[572] = v[565] * v[11] - v[13] * gamma2_dot * v[207];
+        v[573] = v[77] * v[211];
+        v[574] = v[265] * v[11];
+        v[575] = v[256] - (v[574] - v[573]) * v[207]
+            + a_ * (v[210] * v[473] + v[13] * v[199]);
+        v[576] = v[13] * v[265];
+        v[577] = v[77] * v[262];
+        v[578] = v[272] - v[470] + v[471];
+        v[579] = (-v[576] - v[577]) * v[207] - v[199] * v[23] + v[188] * v[578];
+        v[580] = v[21] * v[575] + v[77] * v[279] - v[579] * v[23];
+        v[581] = v[21] * v[211];
+        v[582] = -(v[11] * v[207]);
+        v[583] = v[13] * v[565] - gamma2_dot * v[582];
+        v[584] = v[269] * v[207];
+        v[585] = v[272] * v[582] - v[188] * v[581] - d * v[583]
+            + a_ * (v[217] - v[564] - v[11] * (v[188] * v[262] - v[584]));
+        v[586] = v[188] * v[247];
+        v[587] = v[240] * v[27];
+        v[588] = v[259] - gamma1_dot * v[232];
+        v[589] = (a_ * (v[278] - (v[586] - v[231] * v[207]) * v[1]) + v[244] * v[232])
+            + (-v[587] * v[207] - d * v[588]);
+        v[590] = v[477] - v[242] - v[478] - v[243];
+        v[591] = -v[61] * v[231] - v[3] * v[252];
+        v[592] = v[565] * v[29] - v[590] * v[207] + v[188] * v[591];
+        v[593] = v[29] * v[592];
+        v[594] = v[1] * (2.0 * v[186] - 2.0 * v[187]);
+        v[595] = v[61] * v[240];
+        v[596] = v[1] * v[252];
+        v[597] = a_ * (v[3] * v[565] - v[594] * v[207]) + v[565] * d
+            - v[188] * (-v[595] - v[596]);
+        v[598] = v[27] * v[597];
+        v[599] = v[61] * v[245];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3008,128 +2895,115 @@ pub mod lagrange {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let m2 = params.m2;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m1 = params.m1;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[600] = J1 * v[194];
-        v[601] = v[0] * v[182] + (v[178] - v[176] - v[177]) * v[4];
-        v[602] = J2 * v[601];
-        v[603] = v[165] * v[123] * v[200];
-        v[604] = -v[600] - v[602] - v[603];
-        v[605] = v[598] * (-v[199] - 2.0 * v[201]);
-        v[606] = v[0] * v[208];
-        v[607] = a_ * (v[551] - v[205]);
-        v[608] = v[598] * v[173] * d;
-        v[609] = v[607] - v[203] + v[608];
-        v[610] = v[197] * v[200] - v[0] * a_ * v[190] * v[200] - d * v[601];
-        v[611] = v[183] * J1;
-        v[612] = v[607] - v[198] + v[608] + v[207];
-        v[613] = v[605] + v[213];
-        v[614] = 0.25 * v[460] - 0.25 * v[458] - 0.25 * v[459] - v[5] + 0.25 * v[461];
-        v[615] = v[16] - v[18];
-        v[616] = v[615] * J1;
-        v[617] = v[19] * J2;
-        v[618] = v[2]
-            * (v[17] * v[28] * v[123]
-                + m2
-                    * (v[15] * (-d * v[21] - 2.0 * (a_ * v[1] * d * v[13]))
-                        - v[28] * d * v[56]) + v[15] * (v[616] + v[617]));
-        v[619] = v[148] + J2 - J1;
-        v[620] = (v[616] + v[617] - m2 * d * v[21]) * v[17] + v[28] * v[15] * v[619];
-        v[621] = -(m2 * a_ * v[1] * d * v[15] * v[2]);
-        v[622] = v[90] * v[24] - v[17] * a_ * v[90];
-        v[623] = m2 * (v[1] * v[622] * v[2] - v[83] * v[28] * d);
-        v[624] = v[110] * v[24] - v[17] * a_ * v[110];
-        v[625] = m2 * (v[624] * v[1] * v[2] - v[28] * d * v[99]);
-        v[626] = v[2] * (v[125] * v[17] + v[15] * v[15] * v[619]);
-        v[627] = -(m2 * a_ * d * v[15] * v[13]);
-        v[628] = (v[622] * v[13] - v[83] * d * v[15] * v[2]) * m2;
-        v[629] = m2 * (v[624] * v[13] - d * v[15] * v[2] * v[99]);
-        v[630] = m2
-            * ((v[28] * v[24] - v[17] * a_ * v[28]) * v[13]
-                - v[1] * d * v[15] * v[2] * v[2]);
-        v[631] = -(v[17] * m2 * v[83] * d);
-        v[632] = -(v[17] * m2 * d * v[99]);
-        v[633] = m2 * d * v[90];
-        v[634] = m2 * v[110] * d;
-        v[635] = m2 * v[28] * d;
-        v[636] = -v[229] - v[230];
-        v[637] = v[228] * v[228] * v[123] + v[123] * v[231] * v[636];
-        v[638] = v[234] * v[250] * v[636];
-        v[639] = J2 * v[193];
+        v[600] = v[582] * v[208];
+        v[601] = v[188] * v[211];
+        v[602] = (v[583] - v[600] + v[601]) * J2;
+        v[603] = (v[600] - v[601]) * J1;
+        v[604] = v[602] + v[603];
+        v[605] = v[240] * v[207];
+        v[606] = v[241] * v[232];
+        v[607] = (v[606] - v[605]) * J1 + J2 * (v[588] + v[605] - v[606]);
+        v[608] = v[565] * Ixz;
+        v[609] = v[570] * v[207];
+        v[610] = v[199] * Ixy;
+        v[611] = v[222] * v[207];
+        v[612] = v[13] * v[267] - v[274] * v[11];
+        v[613] = v[589] + v[3] * v[261] + v[254] * v[1];
+        v[614] = (v[496] + v[499]) + (0.5 * v[491] - v[494]);
+        v[615] = 0.5 * v[494] + 0.25 * v[492] + v[490];
+        v[616] = -0.5 * v[511] - 0.25 * v[503];
+        v[617] = v[616] + 0.25 * v[503] - 0.25 * v[504] + 0.5 * v[510] - 0.25 * v[505];
+        v[618] = (0.5 * v[503] - 0.5 * v[504]) + v[516];
+        v[619] = v[29] * v[14];
+        v[620] = v[54] - v[53];
+        v[621] = d * v[620];
+        v[622] = J2 * v[620];
+        v[623] = v[55] * J1;
+        v[624] = a_ * d;
+        v[625] = ((v[61] * v[621] + (2.0 * (v[6] * v[624]) - v[34] * d) * v[1]) * m1
+            + v[3] * (v[622] + v[623]) + v[141] * v[81]) * v[8];
+        v[626] = v[3] * (v[7] * v[141] - v[85] * v[34])
+            + v[1] * (-v[167] * v[620] - v[623]);
+        v[627] = -(v[85] * v[619]);
+        v[628] = v[106] * v[27];
+        v[629] = v[106] * v[26];
+        v[630] = ((v[629] - v[628]) * v[14] - v[100] * v[621]) * m1;
+        v[631] = v[26] * v[119];
+        v[632] = v[119] * v[27];
+        v[633] = ((v[631] - v[632]) * v[14] - v[123] * v[621]) * m1;
+        v[634] = 2.0 * J1 - 2.0 * J2;
+        v[635] = (v[3] * v[145] + v[168] * (v[167] - J1)) * v[8];
+        v[636] = v[5] * v[29];
+        v[637] = v[85] * v[636];
+        v[638] = d * v[140];
+        v[639] = m1 * (v[100] * v[638] + (v[628] - v[629]) * v[5]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part16(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
+        let m1 = params.m1;
+        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[640] = (v[17] * v[189] + (v[191] + v[181]) * v[15]) * J1;
-        v[641] = -v[251] - v[253] - v[640];
-        v[642] = v[228] * (2.0 * v[255] + v[256]);
-        v[643] = a_ * (v[512] * v[15] * v[168] - v[266]);
-        v[644] = a_ * (v[17] * v[168] * v[168] - v[258]) - v[228] * v[228] * d
-            + v[257] * v[636];
-        v[645] = a_
-            * (v[15] * (-v[642] - v[264] - v[265] - v[643] - v[267]) - v[17] * v[262])
-            + v[24] * v[644];
-        v[646] = -v[261] * v[636] - v[17] * a_ * v[231] * v[168] - v[193] * d;
-        v[647] = v[193] * J1;
-        v[648] = v[642] + v[264] + v[265] + v[643] + v[267];
-        v[649] = 0.25 * v[468] + 0.25 * v[469] + v[16] + 0.25 * v[470] - 0.5 * v[471]
-            + 0.25 * v[472] - 0.5 * v[473];
-        v[650] = v[396] * v[4] * v[1];
-        v[651] = v[165] * v[31];
-        v[652] = v[1] * phi_dot * v[13];
-        v[653] = v[3] * theta_dot * v[2];
-        v[654] = v[652] - v[653] + v[3] * gamma1_dot;
-        v[655] = v[0] * v[654];
-        v[656] = v[173] * v[1] * v[13];
-        v[657] = J2 * (v[650] - v[651] + v[655] - v[656]);
-        v[658] = (v[651] + v[656]) * J1;
-        v[659] = v[657] + v[658];
-        v[660] = v[52] * v[168];
-        v[661] = v[1] * v[2] * phi_dot;
-        v[662] = v[3] * theta_dot * v[13];
-        v[663] = -v[661] - v[662];
-        v[664] = Ixz * v[663];
-        v[665] = v[190] * v[45];
-        v[666] = v[652] - v[653];
-        v[667] = Ixy * v[666];
-        v[668] = gamma2_dot * v[3];
-        v[669] = -v[387] - theta_dot;
-        v[670] = (v[661] + v[668] + v[662]) * v[15] + v[17] * v[669] * v[1];
-        v[671] = v[654] * v[4] + v[0] * v[1] * v[440];
-        v[672] = v[228] * v[21];
-        v[673] = a_ * (v[17] * v[666] + v[1] * v[520] * v[15] * v[2]) + v[672]
-            + v[666] * d + v[28] * v[257];
-        v[674] = v[1] * v[523] * v[2] - a_ * v[666] * v[15] - v[19] * v[257]
-            - v[231] * v[21];
-        v[675] = v[673] * v[24] - a_ * v[15] * v[674];
-        v[676] = v[669] * v[1] * v[15];
-        v[677] = v[17] * (-v[661] - v[668] - v[662]);
-        v[678] = a_
-            * (v[661] + (-v[19] * v[168] - v[231] * v[1] * v[2]) * v[15] + v[662])
-            - v[261] * v[28] - v[228] * v[1] * v[2] * v[24] - (v[676] + v[677]) * d;
-        v[679] = v[200] * v[9] + v[6] * v[202] + a_ * v[4] * v[663]
-            + v[1] * v[546] * v[13];
+        v[640] = m1 * (v[123] * v[638] + (v[632] - v[631]) * v[5]);
+        v[641] = (v[638] * v[14] + (-v[26] * v[55] - v[27] * v[620]) * v[5]) * m1;
+        v[642] = 2.0 * J2 - 2.0 * J1;
+        v[643] = -(v[106] * v[85]);
+        v[644] = -(v[119] * v[85]);
+        v[645] = v[85] * v[620];
+        v[646] = (v[235] - v[216] - v[217]) * v[1] + v[3] * v[234];
+        v[647] = v[231] * v[244] - d * v[646] - v[231] * v[243];
+        v[648] = a_ * (v[586] - v[246]) - v[240] * v[240] * d;
+        v[649] = v[648] + v[253];
+        v[650] = v[27] * v[649];
+        v[651] = 2.0 * v[250] + v[251];
+        v[652] = v[240] * v[651];
+        v[653] = v[3] * v[254];
+        v[654] = v[141] * v[241];
+        v[655] = (J2 * v[646] + v[299] * J1) + v[654] * v[231];
+        v[656] = v[231] * v[231];
+        v[657] = v[656] * v[204] - v[240] * v[296];
+        v[658] = v[237] * J1;
+        v[659] = v[648] + v[249];
+        v[660] = v[652] + v[260];
+        v[661] = (-0.25 * v[488] - 0.25 * v[491]) + v[493];
+        v[662] = v[661] - v[2];
+        v[663] = J2 * v[16];
+        v[664] = v[12] - v[15];
+        v[665] = v[664] * J1;
+        v[666] = v[6] * v[23];
+        v[667] = -(v[52] * d);
+        v[668] = v[663] + v[665];
+        v[669] = v[5]
+            * (v[11] * v[668] + v[141] * v[80]
+                + m2 * (-v[11] * (2.0 * (v[624] * v[14]) - d * v[19]) - v[77] * v[667]));
+        v[670] = v[171] - J1;
+        v[671] = -(v[52] * v[11]);
+        v[672] = v[13] * (v[88] * v[19] + v[668]) + v[670] * v[671];
+        v[673] = -(v[666] * v[88]);
+        v[674] = v[101] * v[21] - v[101] * v[20];
+        v[675] = (v[674] * v[6] - v[97] * v[667]) * m2;
+        v[676] = v[21] * v[125] - v[20] * v[125];
+        v[677] = m2 * (v[6] * v[676] - v[111] * v[667]);
+        v[678] = (v[13] * v[142] + v[169] * v[670]) * v[5];
+        v[679] = v[8] * v[23];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3138,61 +3012,58 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Iyz = params.Iyz;
+        let gamma2_dot = state[12];
+        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[680] = a_ * v[679] * v[4];
-        v[681] = d * v[663] - v[31] * v[202] - v[173] * v[9]
-            + a_ * (v[4] * v[1] * v[540] * v[13] + v[0] * v[663]);
-        v[682] = v[31] * v[197] - (v[650] + v[655]) * d
-            + a_ * (v[653] - v[652] + (-v[190] * v[6] - v[1] * v[200] * v[13]) * v[4])
-            + v[173] * v[1] * v[11] * v[13];
-        v[683] = v[228] * v[19];
-        v[684] = v[28] * v[231];
-        v[685] = (v[683] + v[684]) * J1;
-        v[686] = Iyz * v[663];
-        v[687] = J2 * (v[652] - v[683] - v[653] - v[684]);
-        v[688] = v[52] * v[171];
-        v[689] = v[190] * v[39];
-        v[690] = v[666] * Iyy;
-        v[691] = v[223] * v[3];
-        v[692] = v[1] * (v[409] + v[410]);
-        v[693] = Izz * v[663];
-        v[694] = v[45] * v[171];
-        v[695] = v[666] * Iyz;
-        v[696] = (v[425] - v[426]) * v[1];
-        v[697] = v[168] * v[39];
-        v[698] = v[6] * v[173];
-        v[699] = v[31] * v[200];
-        v[700] = (-v[698] - v[699]) * J1;
-        v[701] = v[3] * v[238];
-        v[702] = J2 * (v[698] + v[699] - v[661] - v[662]);
-        v[703] = v[228] * v[1] * v[2];
-        v[704] = v[250] * v[28];
-        v[705] = (v[676] + v[677] + v[703] + v[704]) * J2;
-        v[706] = (-v[703] - v[704]) * J1;
-        v[707] = v[705] + v[706];
-        v[708] = v[165] * v[4] * v[13];
-        v[709] = v[173] * v[2];
-        v[710] = (v[708] - v[709]) * J1;
-        v[711] = gamma1_dot * v[13];
-        v[712] = v[1] * psi_dot;
-        v[713] = v[4] * (v[712] - v[711]);
-        v[714] = v[0] * v[175] * v[2];
-        v[715] = J2 * (v[709] - v[708] + v[713] + v[714]);
-        v[716] = v[710] + v[715];
-        v[717] = v[66] * v[168];
-        v[718] = Ixx * v[1] * psi_dot;
-        v[719] = v[238] * v[2];
+        v[680] = -(v[679] * v[88]);
+        v[681] = d * v[135];
+        v[682] = m2 * (v[674] * v[8] - v[97] * v[681]);
+        v[683] = (v[676] * v[8] - v[111] * v[681]) * m2;
+        v[684] = m2 * ((v[52] * v[20] - v[52] * v[21]) * v[8] - v[6] * v[681]);
+        v[685] = -(v[97] * v[553]);
+        v[686] = v[101] * v[88];
+        v[687] = v[88] * v[125];
+        v[688] = -(v[52] * v[88]);
+        v[689] = v[301] * J2;
+        v[690] = v[209] * v[262];
+        v[691] = v[689] - v[690];
+        v[692] = v[211] * v[211];
+        v[693] = v[692] * v[141] - v[287] * v[262];
+        v[694] = (v[13] * v[300] + v[192]) * J1;
+        v[695] = v[213] + v[694];
+        v[696] = (v[584] - v[268]) * a_ - v[692] * d + v[273];
+        v[697] = ((2.0 * v[263] + v[264]) * v[211] + a_ * (v[582] * v[207] - v[266]))
+            + v[267];
+        v[698] = v[21] * v[696] + a_ * (-v[697] * v[11] - v[13] * v[274]);
+        v[699] = v[301] * d - v[272] * v[262] + v[271] * v[262];
+        v[700] = v[301] * J1;
+        v[701] = (0.25 * v[504] - 0.5 * v[510]) + (v[616] + v[506]);
+        v[702] = v[12] + v[701];
+        v[703] = v[240] * v[14];
+        v[704] = v[55] * v[241];
+        v[705] = theta_dot * v[93];
+        v[706] = phi_dot * v[14];
+        v[707] = v[706] - v[705];
+        v[708] = v[707] + v[0] * gamma1_dot;
+        v[709] = v[466] * v[361] + v[3] * v[708];
+        v[710] = (v[703] + v[704]) * J1 + J2 * (v[709] - v[703] - v[704]);
+        v[711] = v[99] * theta_dot;
+        v[712] = v[6] * phi_dot;
+        v[713] = v[711] + v[712];
+        v[714] = gamma2_dot * v[0] + v[713];
+        v[715] = -v[714] * v[13] - v[337] * v[433];
+        v[716] = v[6] * v[211] - v[52] * v[208];
+        v[717] = J2 * (v[715] + v[716]);
+        v[718] = v[716] * J1;
+        v[719] = v[717] - v[718];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3201,63 +3072,66 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
         let gamma2_dot = state[12];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[720] = v[223] * v[13];
-        v[721] = v[190] * v[60];
-        v[722] = v[175] * d;
-        v[723] = v[2] * (v[518] + v[228] * v[56] + v[722])
-            + a_ * (v[520] * v[15] * v[13] + v[17] * v[175] * v[2]);
-        v[724] = (v[522] - a_ * v[175] * v[15] - v[231] * v[56]) * v[2] + v[523] * v[13];
-        v[725] = v[723] * v[24] - a_ * v[724] * v[15];
-        v[726] = gamma2_dot * v[2] - v[712];
-        v[727] = v[15] * v[726];
-        v[728] = v[17] * v[175] * v[13];
-        v[729] = a_ * ((v[17] * v[2] * v[168] - v[231] * v[13]) * v[15] - v[175] * v[13])
-            - v[261] * v[15] * v[2] - v[228] * v[24] * v[13] - (v[727] + v[728]) * d;
-        v[730] = v[4] * v[200];
-        v[731] = v[0] * v[173];
-        v[732] = (-v[730] - v[731]) * J1;
-        v[733] = (v[730] + v[731] - phi_dot - v[170]) * J2;
-        v[734] = v[1] * psi_dot * Ixz;
-        v[735] = v[62] * v[168];
-        v[736] = v[175] * v[49];
-        v[737] = v[60] * v[171];
-        v[738] = Ixy * v[1] * psi_dot;
-        v[739] = v[66] * v[171];
-        v[740] = v[190] * v[62];
-        v[741] = v[17] * v[228];
-        v[742] = v[231] * v[15];
-        v[743] = J2 * (v[741] - v[742] - phi_dot - v[170]);
-        v[744] = (v[742] - v[741]) * J1;
-        v[745] = v[42] * v[175];
-        v[746] = v[2] * v[450] + (v[544] + v[545] + a_ * v[175] * v[4]) * v[13];
-        v[747] = a_ * v[4] * v[746];
-        v[748] = a_ * (v[0] * v[175] * v[13] + v[452] * v[4] * v[2])
-            + (v[722] - v[541] - v[542]) * v[13];
-        v[749] = v[173] * v[2] * v[72] - d * (v[713] + v[714])
-            + a_ * (v[4] * (v[2] * v[200] - v[0] * v[190] * v[13]) - v[175] * v[2])
-            + v[4] * v[197] * v[13];
-        v[750] = v[228] * v[13];
-        v[751] = v[250] * v[15] * v[2];
-        v[752] = J2 * (v[727] + v[750] + v[728] + v[751]);
-        v[753] = (-v[750] - v[751]) * J1;
-        v[754] = v[752] + v[753];
-        v[755] = v[17] * v[726] - v[175] * v[15] * v[13];
-        v[756] = v[0] * (v[711] - v[712]) + v[175] * v[4] * v[2];
-        v[757] = 0.5 * v[318] - 0.5 * v[313] - 0.5 * v[320] + 2.0 * v[30] + 0.5 * v[322];
-        v[758] = a_ * v[3] * theta_dot;
-        v[759] = 0.5 * v[285] - 0.5 * v[287] - 0.5 * v[289] + 0.5 * v[291] - 2.0 * v[27];
+        v[720] = v[240] * v[7];
+        v[721] = v[231] * v[55];
+        v[722] = v[720] + v[721];
+        v[723] = (v[722] - v[711] - v[712]) * J2;
+        v[724] = v[0] * v[222];
+        v[725] = Iyz * v[707];
+        v[726] = (v[454] - v[453]) * v[4];
+        v[727] = v[42] * v[200];
+        v[728] = v[713] * Izz;
+        v[729] = v[722] * J1;
+        v[730] = v[38] * v[207];
+        v[731] = v[16] * v[211];
+        v[732] = v[52] * v[262];
+        v[733] = v[731] - v[732];
+        v[734] = v[733] * J1;
+        v[735] = ((-v[0] * v[227] - v[442] * v[4]) + (-Iyy * v[707] - v[38] * v[188]))
+            + ((-v[734] - Iyz * v[713])
+                + (v[49] * v[200] - (v[732] - v[731] + v[707]) * J2));
+        v[736] = v[385] * v[461] + v[708] * v[1];
+        v[737] = v[714] * v[11] - v[387] * v[433];
+        v[738] = v[6] * v[578] + v[265] * v[16] + v[262] * v[19] - v[707] * v[23];
+        v[739] = v[211] * v[19];
+        v[740] = d * v[707] + a_ * (v[6] * v[11] * v[473] + v[13] * v[707]) - v[739]
+            + v[52] * v[265];
+        v[741] = v[21] * v[740] - v[738] * v[23];
+        v[742] = v[52] * v[272] - v[715] * d - v[6] * v[581]
+            + a_ * (v[713] - (v[6] * v[262] + v[16] * v[207]) * v[11]);
+        v[743] = v[188] * v[42];
+        v[744] = v[713] * Ixz;
+        v[745] = Ixy * v[707];
+        v[746] = v[49] * v[207];
+        v[747] = v[705] - v[706];
+        v[748] = v[587] * v[14] - d * v[709]
+            + a_ * (v[747] - (v[188] * v[7] + v[231] * v[14]) * v[1]) + v[55] * v[244];
+        v[749] = v[240] * v[34] + v[252] * v[55] + a_ * (v[594] * v[14] - v[3] * v[713])
+            - d * v[713];
+        v[750] = v[27] * v[749];
+        v[751] = v[590] * v[14] - v[7] * v[252] - v[231] * v[34] - v[713] * v[29];
+        v[752] = v[751] * v[29];
+        v[753] = (v[194] * v[23] - v[576] - v[577]) * v[5] + v[578] * v[8];
+        v[754] = d * v[194];
+        v[755] = (v[573] - v[574] - v[754]) * v[5]
+            + a_ * (v[13] * v[215] + v[321] * v[473]);
+        v[756] = v[21] * v[755] - v[753] * v[23];
+        v[757] = gamma2_dot * v[5] - v[189];
+        v[758] = v[13] * v[195] + v[11] * v[757];
+        v[759] = a_ * (v[11] * (v[269] * v[5] - v[262] * v[8]) - v[195]) - v[758] * d
+            - v[272] * v[135] - v[581] * v[8];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3266,7 +3140,69 @@ pub mod lagrange {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 793],
+        v: &mut [f64; 833],
+    ) {
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[760] = v[211] * v[8] + v[208] * v[135];
+        v[761] = v[760] * J1;
+        v[762] = J2 * (v[758] + v[760]);
+        v[763] = v[762] - v[761];
+        v[764] = (v[591] - v[29] * v[194]) * v[8] + v[479] * v[5];
+        v[765] = v[764] * v[29];
+        v[766] = a_ * (v[3] * v[195] + v[520] * v[481])
+            + (v[595] - v[754] + v[596]) * v[8];
+        v[767] = v[766] * v[27];
+        v[768] = gamma1_dot * v[8];
+        v[769] = v[3] * v[215] + v[1] * (v[189] - v[768]);
+        v[770] = v[240] * v[5];
+        v[771] = a_ * (v[1] * (v[231] * v[5] - v[8] * v[247]) - v[215]) - v[769] * d
+            - v[770] * v[27] + v[244] * v[140];
+        v[772] = v[74] * v[200];
+        v[773] = v[67] * v[207];
+        v[774] = v[3] * v[240];
+        v[775] = v[559] + v[774];
+        v[776] = -phi_dot - v[193];
+        v[777] = v[775] * J1;
+        v[778] = J2 * (v[775] + v[776]) - v[777];
+        v[779] = v[189] * Ixz;
+        v[780] = v[194] * v[46];
+        v[781] = ((v[453] - v[189] * Ixy) + v[41] * v[194])
+            + (-v[200] * v[65] - v[188] * v[67]);
+        v[782] = v[568] - v[277];
+        v[783] = J2 * (v[782] + v[776]);
+        v[784] = v[277] - v[568];
+        v[785] = v[784] * J1;
+        v[786] = v[3] * (v[768] - v[189]) + v[1] * v[215];
+        v[787] = v[13] * v[757] - v[195] * v[11];
+        v[788] = v[194] * v[36];
+        v[789] = v[188] * v[74];
+        v[790] = v[227] * v[8];
+        v[791] = v[189] * Ixx;
+        v[792] = v[65] * v[207];
+        v[793] = v[5] * v[222];
+        v[794] = v[241] * v[140];
+        v[795] = J2 * (v[769] - v[794] + v[770]) + (v[794] - v[770]) * J1;
+        v[796] = (-0.5 * v[330] - 0.5 * v[325]) + v[340];
+        v[797] = v[796] - 2.0 * v[51];
+        v[798] = v[360] + (-0.5 * v[350] - 0.5 * v[346]);
+        v[799] = v[798] + 2.0 * v[54];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part20(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 833],
     ) {
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
@@ -3278,40 +3214,40 @@ pub mod lagrange {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[760] = gamma2_dot - v[166] - v[167];
-        v[761] = J2 * v[760];
-        v[762] = v[234] * v[250];
-        v[763] = v[761] + v[762];
-        v[764] = v[166] - gamma2_dot + v[167];
-        v[765] = v[163] - gamma1_dot - v[164];
-        v[766] = a_ * v[512];
-        v[767] = v[199] + 2.0 * v[201] + v[766];
-        v[768] = a_ * v[767] * v[4] * v[4];
-        v[769] = v[173] * v[4];
-        v[770] = d * (-v[166] - v[769] - v[167]) + v[0] * (v[199] + v[201] + v[766]);
-        v[771] = v[0] * (v[195] - v[765] * d + v[196]) + a_ * v[190] * (v[494] - 1.0);
-        v[772] = v[0] * v[200];
-        v[773] = (v[769] - v[772]) * J1;
-        v[774] = J2 * (v[772] - v[166] - v[769] - v[167]);
-        v[775] = (Iyy - Ixx) * v[168];
-        v[776] = v[17] * v[231];
-        v[777] = v[228] * v[15];
-        v[778] = J2 * (v[163] - v[776] - v[777] - v[164]);
-        v[779] = Iyz * v[520];
-        v[780] = v[190] * (Iyy + Ixx - Izz);
-        v[781] = (v[776] + v[777]) * J1;
-        v[782] = d * (v[163] - v[777] - v[164]) - v[17] * v[231] * d;
-        v[783] = v[782] * v[24] - 2.0 * (a_ * v[231] * d * v[15] * v[15]);
-        v[784] = v[17] * (-v[259] - d * v[760] - v[260])
-            + a_ * (v[166] - v[15] * v[15] * v[168] + v[167]);
-        v[785] = J2 * v[765];
-        v[786] = v[165] * v[123];
-        v[787] = v[785] + v[786];
-        v[788] = 2.0 * v[169] + 2.0 * v[172];
-        v[789] = v[173] * J1;
-        v[790] = (-2.0 * v[169] - 2.0 * v[172]) * J2;
-        v[791] = v[789] + v[790];
-        v[792] = 2.0 * J2 - J1;
+        v[800] = v[188] - gamma1_dot;
+        v[801] = v[654] + J2 * v[800];
+        v[802] = -v[205] - v[206];
+        v[803] = v[802] + gamma2_dot;
+        v[804] = J2 * v[803] + v[209];
+        v[805] = v[11] * v[211];
+        v[806] = v[188] - v[805];
+        v[807] = d * v[806] - v[76] * v[262];
+        v[808] = v[277] * d;
+        v[809] = v[807] * v[21] - 2.0 * (v[23] * v[808]);
+        v[810] = a_ * (v[207] - v[169] * v[207]) - v[13] * (v[272] + v[803] * d);
+        v[811] = v[1] * v[800];
+        v[812] = v[207] - gamma2_dot;
+        v[813] = v[3] * v[231];
+        v[814] = v[240] * v[1];
+        v[815] = v[814] - v[813];
+        v[816] = v[815] * J1;
+        v[817] = v[813] - v[814];
+        v[818] = J2 * (v[802] + v[817]);
+        v[819] = (Iyy - Ixx) * v[207];
+        v[820] = v[13] * v[262];
+        v[821] = v[820] + v[805];
+        v[822] = v[821] * J1;
+        v[823] = (Iyz * v[473] + v[188] * (Iyy + Ixx - Izz))
+            + (v[822] + (J2 * (v[806] - v[820]) + 2.0 * v[226]));
+        v[824] = v[3] * (v[244] - v[800] * d) + (v[168] - 1.0) * v[264];
+        v[825] = v[1] * (v[651] - v[251]);
+        v[826] = v[29] * v[825];
+        v[827] = v[3] * (v[252] - v[251]) - (v[814] + v[207]) * d;
+        v[828] = v[827] * v[27];
+        v[829] = 2.0 * v[238] + 2.0 * v[239];
+        v[830] = v[240] * J1 - J2 * v[829];
+        v[831] = -(v[262] * J1);
+        v[832] = 2.0 * J2 - J1;
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
@@ -3547,7 +3483,7 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let mut v = [0.0f64; 214];
+        let mut v = [0.0f64; 224];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
@@ -3566,94 +3502,75 @@ pub mod maggi {
                 Z_dot,
             ],
             matrix: [
-                [v[8], v[32], v[33], 0.0, 0.0, v[39], v[43], v[45]],
+                [v[10], v[36], v[38], 0.0, 0.0, v[46], v[50], v[52]],
                 [
-                    v[32],
-                    v[16] * v[12] * v[69] + v[72] * v[11],
-                    v[73],
-                    v[76],
-                    v[78],
-                    v[89],
-                    v[100],
-                    v[102],
-                ],
-                [
-                    v[33],
-                    v[73],
-                    (v[61] * v[16] * v[11] - v[12] * v[68] + v[17] * v[33]) * v[16]
-                        * v[11] - (v[16] * v[71] * v[11] - v[70] * v[12]) * v[12],
-                    v[105],
+                    v[36],
+                    v[31] * v[75] + v[81] * v[17],
+                    v[82],
                     0.0,
-                    v[106],
-                    v[107],
-                    v[108],
+                    v[84],
+                    v[97],
+                    v[109],
+                    v[112],
                 ],
-                [0.0, v[76], v[105], v[0], 0.0, v[109], v[110], v[111]],
-                [0.0, v[78], 0.0, 0.0, v[7], v[112], v[113], v[114]],
-                [v[39], v[89], v[106], v[109], v[112], v[115], 0.0, 0.0],
-                [v[43], v[100], v[107], v[110], v[113], 0.0, v[115], 0.0],
-                [v[45], v[102], v[108], v[111], v[114], 0.0, 0.0, v[115]],
+                [
+                    v[38],
+                    v[82],
+                    (v[69] * v[37] - v[13] * v[74] + v[11] * v[38]) * v[37]
+                        - v[13] * (v[76] * v[37] - v[80] * v[13]),
+                    v[116],
+                    0.0,
+                    v[117],
+                    v[118],
+                    v[119],
+                ],
+                [0.0, 0.0, v[116], v[1], 0.0, v[120], v[121], v[122]],
+                [0.0, v[84], 0.0, 0.0, v[4], v[123], v[124], v[125]],
+                [v[46], v[97], v[117], v[120], v[123], v[126], 0.0, 0.0],
+                [v[50], v[109], v[118], v[121], v[124], 0.0, v[126], 0.0],
+                [v[52], v[112], v[119], v[122], v[125], 0.0, 0.0, v[126]],
             ],
             force: [
-                v[163],
-                v[189] * v[11] + v[16] * v[190] * v[12],
-                v[16] * v[190] * v[11] - v[189] * v[12],
-                v[15] * psi_dot * v[12] * v[104] * phi_dot - v[167] * d * m1
-                    - theta_dot * v[161] * v[103] * v[11] - v[175]
-                    + v[9] * v[149] * v[155],
-                v[137] * v[138] * v[146] + (v[134] - theta_dot * v[161] * v[12]) * v[77]
-                    - v[187] - m2 * v[179] * d,
-                theta_dot * (-v[162] * d * v[38] - (v[86] + v[87]) * v[161] * v[16])
-                    - m2 * (v[179] * v[80] + v[37] * v[147] + v[79] * v[178])
-                    - (v[165] * v[83] + v[82] * v[167] + v[156] * v[36]) * m1
-                    + v[15] * psi_dot * phi_dot * v[85],
-                (-v[42] * v[162] * d - v[161] * v[16] * (v[97] + v[98])) * theta_dot
-                    + v[15] * psi_dot * phi_dot * v[96]
-                    - m2 * (v[147] * v[40] + v[90] * v[178] + v[179] * v[91])
-                    - (v[165] * v[93] + v[167] * v[95] + v[156] * v[41]) * m1,
-                v[15] * (v[101] * psi_dot * phi_dot - theta_dot * v[44] * v[162] * d)
+                v[178],
+                v[199] * v[17] + v[31] * v[201],
+                v[201] * v[37] - v[13] * v[199],
+                v[158] * v[156] - v[179] - v[149] * v[137] * v[114] - v[193] * v[0]
+                    + v[115] * v[143],
+                v[171] * v[174] - v[3] * v[189] + v[83] * (v[132] - v[149] * v[129])
+                    - v[197],
+                v[96] * v[131] - m2 * (v[42] * v[177] + v[87] * v[190] + v[189] * v[86])
+                    - (v[150] * v[93] + v[202] * v[45]) * theta_dot
+                    - (v[44] * v[157] + v[91] * v[195] + v[193] * v[89]) * m1,
+                v[131] * v[106]
+                    - m2 * (v[48] * v[177] + v[189] * v[104] + v[103] * v[190])
+                    - theta_dot * (v[49] * v[202] + v[150] * v[107])
+                    - m1 * (v[193] * v[99] + v[157] * v[47] + v[101] * v[195]),
+                (v[200] * v[110] - theta_dot * v[202] * v[51]) * v[12]
                     - m2
-                        * (((0.25 * v[194] - 0.25 * v[195] - 0.25 * v[196]
-                            + 0.25 * v[197]) * phi_dot * phi_dot
-                            + (theta_dot * v[198]
-                                + phi_dot
-                                    * (v[201] - 0.5 * v[194] - 0.5 * v[195] + 0.5 * v[196]
-                                        + 0.5 * v[197] - v[202])) * theta_dot
-                            + gamma2_dot
-                                * (phi_dot
-                                    * (0.5 * v[194] - 0.5 * v[195] + 0.5 * v[196]
-                                        - 0.5 * v[197])
-                                    + (-v[201] - 0.5 * v[194] - 0.5 * v[195]
-                                        - 2.0 * (v[15] * v[6]) - 0.5 * v[196] - 0.5 * v[197]
-                                        - v[202]) * theta_dot + gamma2_dot * v[198])) * d - v[191])
-                    - (v[191]
-                        + (theta_dot
-                            * ((0.5 * v[208] - v[205] + v[209] + 2.0 * (v[1] * v[15])
-                                + 0.5 * v[210] - 0.5 * v[211] - 0.5 * v[212]) * gamma1_dot
-                                + theta_dot * v[213]
-                                + (0.5 * v[208] - 0.5 * v[210] - 0.5 * v[211]
-                                    + 0.5 * v[212]) * phi_dot)
-                            + gamma1_dot
-                                * (v[213] * gamma1_dot
-                                    + phi_dot
-                                        * (v[205] - 0.5 * v[208] + v[209] - 0.5 * v[210]
-                                            - 0.5 * v[211] - 0.5 * v[212]))
-                            + (0.25 * v[210] - 0.25 * v[208] - 0.25 * v[211]
-                                + 0.25 * v[212]) * phi_dot * phi_dot) * d) * m1,
+                        * (d
+                            * (v[209] * v[210]
+                                + gamma2_dot
+                                    * ((0.5 * v[207] - v[206] * v[12] - 0.5 * v[208]) * phi_dot
+                                        + gamma2_dot * v[211]
+                                        - theta_dot * (v[213] + v[214] + 2.0 * (v[12] * v[5])))
+                                + theta_dot
+                                    * (theta_dot * v[211] + phi_dot * (v[214] - v[213])))
+                            - v[203])
+                    - (v[203]
+                        + d
+                            * (v[210] * v[218]
+                                + ((v[220] - 0.5 * v[219] - 0.5 * v[216] - 0.5 * v[217]
+                                    + v[221]) * phi_dot + gamma1_dot * v[222]) * gamma1_dot
+                                + theta_dot
+                                    * ((2.0 * (v[2] * v[12]) + v[220] + 0.5 * v[217] + v[223]
+                                        - v[221]) * gamma1_dot
+                                        + (v[223] - 0.5 * v[219] - 0.5 * v[217]) * phi_dot
+                                        + theta_dot * v[222]))) * m1,
             ],
             w: [
-                [0.0, v[16] * v[12], v[16] * v[11], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, v[11], -v[12], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    1.0,
-                    v[17] * v[16] * v[12],
-                    v[17] * v[16] * v[11],
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
+                [0.0, v[31], v[37], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, v[17], -v[13], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, v[11] * v[31], v[11] * v[37], 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -3661,16 +3578,16 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             c: [
-                theta_dot * v[161] * v[16],
-                -(v[15] * psi_dot * phi_dot),
-                theta_dot * v[162],
+                v[150] * theta_dot,
+                -v[131],
+                v[148] * theta_dot,
                 0.0,
                 0.0,
                 0.0,
                 0.0,
                 0.0,
             ],
-            checks: [v[15]],
+            checks: [v[12]],
         }
     }
     #[allow(non_snake_case)]
@@ -3680,7 +3597,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -3696,57 +3613,59 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = J2 + d * d * m1;
-        v[1] = f64::sin(gamma1);
-        v[2] = f64::cos(gamma1);
-        v[3] = v[2] * v[2];
-        v[4] = f64::cos(gamma2);
-        v[5] = v[4] * v[4];
-        v[6] = f64::sin(gamma2);
-        v[7] = m2 * d * d + J2;
-        v[8] = Ixx + v[0] * v[1] * v[1] + (v[3] + v[5]) * J1 + v[6] * v[6] * v[7];
-        v[9] = J1 - J2;
-        v[10] = -a_ - v[2] * d;
-        v[11] = f64::cos(phi);
-        v[12] = f64::sin(phi);
-        v[13] = a_ + v[4] * d;
-        v[14] = ((v[2] * v[9] + v[10] * d * m1) * v[1] - Ixy) * v[11]
-            + v[12] * ((v[4] * v[9] - m2 * d * v[13]) * v[6] + Ixz);
-        v[15] = f64::cos(theta);
-        v[16] = 1.0 / v[15];
-        v[17] = f64::sin(theta);
-        v[18] = v[17] * Ixx;
-        v[19] = v[15] * (-Ixy * v[12] - Ixz * v[11]);
-        v[20] = v[2] * v[17];
-        v[21] = v[1] * v[15] * v[12] - v[20];
-        v[22] = v[4] * v[17];
-        v[23] = -v[15] * v[6] * v[11] - v[22];
-        v[24] = (v[2] * v[21] + v[4] * v[23]) * J1;
-        v[25] = v[4] * v[15] * v[11] - v[17] * v[6];
-        v[26] = v[2] * v[15] * v[12] + v[17] * v[1];
-        v[27] = (v[25] * v[6] - v[26] * v[1]) * J2;
-        v[28] = -v[26] * d - a_ * v[15] * v[12];
-        v[29] = -a_ * v[15] * v[11] - v[25] * d;
-        v[30] = (v[1] * m1 * v[28] - m2 * v[6] * v[29]) * d;
-        v[31] = v[19] - v[18] + v[24] + v[27] + v[30] + v[17] * v[8];
-        v[32] = v[14] * v[11] + v[16] * v[31] * v[12];
-        v[33] = v[16] * v[31] * v[11] - v[14] * v[12];
-        v[34] = f64::sin(psi);
-        v[35] = f64::cos(psi);
-        v[36] = v[12] * v[34] + v[17] * v[35] * v[11];
-        v[37] = v[17] * v[35] * v[12] - v[11] * v[34];
-        v[38] = v[1] * v[36] * m1 - m2 * v[37] * v[6];
-        v[39] = d * v[38];
+        v[0] = d * m1;
+        v[1] = v[0] * d + J2;
+        v[2] = f64::sin(gamma1);
+        v[3] = m2 * d;
+        v[4] = J2 + v[3] * d;
+        v[5] = f64::sin(gamma2);
+        v[6] = f64::cos(gamma1);
+        v[7] = v[6] * v[6];
+        v[8] = f64::cos(gamma2);
+        v[9] = v[8] * v[8];
+        v[10] = v[1] * v[2] * v[2] + Ixx + v[4] * v[5] * v[5] + (v[7] + v[9]) * J1;
+        v[11] = f64::sin(theta);
+        v[12] = f64::cos(theta);
+        v[13] = f64::sin(phi);
+        v[14] = v[12] * v[13];
+        v[15] = v[6] * v[11];
+        v[16] = v[14] * v[2] - v[15];
+        v[17] = f64::cos(phi);
+        v[18] = v[12] * v[17];
+        v[19] = v[8] * v[11];
+        v[20] = v[5] * v[18] + v[19];
+        v[21] = v[8] * v[18] - v[11] * v[5];
+        v[22] = v[11] * v[2] + v[6] * v[14];
+        v[23] = v[22] * d + a_ * v[14];
+        v[24] = v[2] * m1;
+        v[25] = m2 * v[5];
+        v[26] = a_ * v[18] + v[21] * d;
+        v[27] = -v[11] * Ixx - v[12] * (Ixy * v[13] + Ixz * v[17]);
+        v[28] = (J1 * (v[6] * v[16] - v[8] * v[20]) + J2 * (v[21] * v[5] - v[22] * v[2]))
+            + (d * (v[25] * v[26] - v[23] * v[24]) + v[27]);
+        v[29] = v[10] * v[11] + v[28];
+        v[30] = 1.0 / v[12];
+        v[31] = v[30] * v[13];
+        v[32] = J1 - J2;
+        v[33] = a_ + v[6] * d;
+        v[34] = a_ + v[8] * d;
+        v[35] = (v[2] * (v[6] * v[32] - v[33] * v[0]) - Ixy) * v[17]
+            + v[13] * (v[5] * (v[8] * v[32] - v[3] * v[34]) + Ixz);
+        v[36] = v[29] * v[31] + v[35] * v[17];
+        v[37] = v[30] * v[17];
+        v[38] = v[29] * v[37] - v[35] * v[13];
+        v[39] = f64::cos(psi);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
+        let psi = state[0];
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
@@ -3758,122 +3677,118 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[35] * v[11] + v[17] * v[12] * v[34];
-        v[41] = v[17] * v[11] * v[34] - v[35] * v[12];
-        v[42] = v[1] * v[41] * m1 - m2 * v[6] * v[40];
-        v[43] = v[42] * d;
-        v[44] = v[1] * m1 * v[11] - m2 * v[6] * v[12];
-        v[45] = v[44] * v[15] * d;
-        v[46] = v[2] * a_;
-        v[47] = v[46] + d;
-        v[48] = a_ * a_ * v[1] * v[1];
-        v[49] = (v[28] * v[28] + (v[47] * v[47] + v[48]) * v[15] * v[15] * v[11] * v[11])
-            * m1;
-        v[50] = d + v[4] * a_;
-        v[51] = a_ * a_ * v[6] * v[6] + v[50] * v[50];
-        v[52] = m2 * (v[29] * v[29] + v[15] * v[15] * v[12] * v[12] * v[51]);
-        v[53] = (v[23] * v[23] + v[21] * v[21]) * J1;
-        v[54] = v[19] - v[18] + v[24] + v[27] + v[30];
-        v[55] = v[11] * v[11] + v[12] * v[12];
-        v[56] = J2 * (v[15] * v[15] * v[55] + v[25] * v[25] + v[26] * v[26]);
-        v[57] = v[17] * (v[19] - v[18]);
-        v[58] = Iyz * v[11];
-        v[59] = Iyz * v[12];
-        v[60] = v[15]
-            * (((Iyy * v[12] - v[58]) * v[15] + v[17] * Ixy) * v[12]
-                + (v[15] * (Izz * v[11] - v[59]) + v[17] * Ixz) * v[11]);
-        v[61] = v[49] + v[52] + v[53] + v[17] * v[54] + v[56] - v[57] + v[60];
-        v[62] = Iyy * v[11];
-        v[63] = v[12]
-            * (m2 * (v[15] * v[51] * v[11] + v[13] * v[29]) - v[4] * v[25] * J2
-                + v[23] * v[6] * J1 + (v[62] + v[59]) * v[15]);
-        v[64] = v[17] * (v[12] * Ixz - Ixy * v[11]);
-        v[65] = v[12] * Izz;
-        v[66] = -v[46] - d;
-        v[67] = (v[2] * J2 * v[26] + v[15] * (-v[65] - v[58]) + v[21] * v[1] * J1
-            + (v[10] * v[28] + v[15] * v[12] * (v[47] * v[66] - v[48])) * m1) * v[11];
-        v[68] = v[63] - v[64] + v[67];
-        v[69] = v[61] * v[16] * v[12] + v[17] * v[32] + v[68] * v[11];
-        v[70] = J2 * ((v[3] + 1.0) * v[11] * v[11] + (v[5] + 1.0) * v[12] * v[12])
-            + (v[1] * v[1] * v[11] * J1 + v[62] + v[59]) * v[11]
-            + (v[51] * v[11] * v[11] + v[13] * v[13] * v[12] * v[12]) * m2
-            + v[12] * (v[65] + v[58] + v[6] * v[6] * v[12] * J1)
-            + ((v[48] + v[66] * v[66]) * v[12] * v[12] + v[10] * v[10] * v[11] * v[11])
-                * m1;
-        v[71] = v[63] - v[64] + v[67] + v[17] * v[14];
-        v[72] = v[70] * v[11] + v[16] * v[71] * v[12];
-        v[73] = v[16] * v[69] * v[11] - v[72] * v[12];
-        v[74] = d * v[47] * m1;
-        v[75] = d * v[66] * m1;
-        v[76] = (v[74] + v[75]) * v[12] * v[11];
-        v[77] = J2 + m2 * d * v[50];
-        v[78] = v[77] * v[55];
-        v[79] = v[4] * v[35] * v[15] - v[6] * v[36];
+        v[40] = v[11] * v[13];
+        v[41] = f64::sin(psi);
+        v[42] = v[39] * v[40] - v[17] * v[41];
+        v[43] = v[11] * v[17];
+        v[44] = v[13] * v[41] + v[43] * v[39];
+        v[45] = v[44] * v[24] - v[42] * v[25];
+        v[46] = d * v[45];
+        v[47] = v[43] * v[41] - v[39] * v[13];
+        v[48] = v[39] * v[17] + v[40] * v[41];
+        v[49] = v[24] * v[47] - v[25] * v[48];
+        v[50] = v[49] * d;
+        v[51] = v[24] * v[17] - v[25] * v[13];
+        v[52] = v[12] * d * v[51];
+        v[53] = Iyz * v[17];
+        v[54] = Iyz * v[13];
+        v[55] = v[6] * a_;
+        v[56] = v[55] + d;
+        v[57] = v[56] * v[56];
+        v[58] = a_ * v[2];
+        v[59] = v[58] * v[58];
+        v[60] = v[57] + v[59];
+        v[61] = a_ * v[5];
+        v[62] = v[8] * a_;
+        v[63] = v[62] + d;
+        v[64] = v[61] * v[61] + v[63] * v[63];
+        v[65] = v[17] * v[17];
+        v[66] = v[13] * v[13];
+        v[67] = v[65] + v[66];
+        v[68] = (v[12]
+            * (((Iyy * v[13] - v[53]) * v[12] + v[11] * Ixy) * v[13]
+                + (v[12] * (Izz * v[17] - v[54]) + v[11] * Ixz) * v[17]) - v[11] * v[27])
+            + ((m1 * (v[60] * v[18] * v[18] + v[23] * v[23])
+                + m2 * (v[14] * v[14] * v[64] + v[26] * v[26]))
+                + (J2 * (v[22] * v[22] + v[12] * v[12] * v[67] + v[21] * v[21])
+                    + (v[20] * v[20] + v[16] * v[16]) * J1));
+        v[69] = v[68] + v[11] * v[28];
+        v[70] = Iyy * v[17] + v[54];
+        v[71] = v[5] * J1;
+        v[72] = v[13] * Izz + v[53];
+        v[73] = v[2] * J1;
+        v[74] = (v[13]
+            * (m2 * (v[64] * v[18] - v[34] * v[26]) + v[12] * v[70] - v[8] * J2 * v[21]
+                - v[71] * v[20]) - v[11] * (v[13] * Ixz - Ixy * v[17]))
+            + (m1 * (v[33] * v[23] + v[14] * (-v[57] - v[59])) + v[6] * J2 * v[22]
+                - v[12] * v[72] + v[73] * v[16]) * v[17];
+        v[75] = v[31] * v[69] + v[17] * v[74] + v[11] * v[36];
+        v[76] = v[11] * v[35] + v[74];
+        v[77] = -(v[33] * v[17]);
+        v[78] = v[5] * v[13];
+        v[79] = v[34] * v[13];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part2(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J2 = params.J2;
-        v[80] = v[35] * v[15] * v[6] + v[4] * v[36];
-        v[81] = v[80] * v[50] - a_ * v[6] * v[79];
-        v[82] = v[2] * v[37] - v[35] * v[1] * v[15];
-        v[83] = v[37] * v[1] + v[2] * v[35] * v[15];
-        v[84] = a_ * v[1] * v[83];
-        v[85] = m2 * (v[81] * v[11] + v[37] * v[13] * v[12])
-            + m1 * (v[12] * (v[82] * v[66] - v[84]) + v[10] * v[36] * v[11]);
-        v[86] = m1 * (v[15] * (v[82] * v[47] + v[84]) * v[11] + v[36] * v[28]);
-        v[87] = m2 * (v[15] * v[81] * v[12] + v[37] * v[29]);
-        v[88] = v[17] * d * v[38] + v[86] + v[87];
-        v[89] = v[85] * v[11] + v[88] * v[16] * v[12];
-        v[90] = v[4] * v[15] * v[34] - v[6] * v[41];
-        v[91] = v[15] * v[6] * v[34] + v[4] * v[41];
-        v[92] = v[91] * v[50] - a_ * v[90] * v[6];
-        v[93] = v[2] * v[15] * v[34] + v[1] * v[40];
-        v[94] = a_ * v[1] * v[93];
-        v[95] = v[2] * v[40] - v[1] * v[15] * v[34];
-        v[96] = m2 * (v[92] * v[11] + v[13] * v[12] * v[40])
-            + (v[10] * v[41] * v[11] + (v[95] * v[66] - v[94]) * v[12]) * m1;
-        v[97] = m1 * (v[15] * (v[95] * v[47] + v[94]) * v[11] + v[41] * v[28]);
-        v[98] = m2 * (v[15] * v[12] * v[92] + v[40] * v[29]);
-        v[99] = v[17] * v[42] * d + v[97] + v[98];
-        v[100] = v[96] * v[11] + v[99] * v[16] * v[12];
-        v[101] = m2
-            * (v[15] * v[13] * v[12] * v[12]
-                + (v[25] * v[50] - a_ * v[23] * v[6]) * v[11])
-            + m1
-                * ((v[26] * v[66] - a_ * v[21] * v[1]) * v[12]
-                    + v[10] * v[15] * v[11] * v[11]);
-        v[102] = v[17] * v[44] * d * v[12] + v[101] * v[11];
-        v[103] = v[74] + J2;
-        v[104] = v[75] - J2;
-        v[105] = v[103] * v[11] * v[11] - v[12] * v[12] * v[104];
-        v[106] = v[88] * v[16] * v[11] - v[12] * v[85];
-        v[107] = v[99] * v[16] * v[11] - v[12] * v[96];
-        v[108] = v[17] * v[44] * d * v[11] - v[101] * v[12];
-        v[109] = v[82] * d * m1;
-        v[110] = v[95] * d * m1;
-        v[111] = v[26] * d * m1;
-        v[112] = m2 * d * v[80];
-        v[113] = m2 * d * v[91];
-        v[114] = m2 * v[25] * d;
-        v[115] = m2 + m0 + m1;
-        v[116] = theta_dot * v[11];
-        v[117] = v[15] * psi_dot * v[12];
-        v[118] = v[116] + v[117];
-        v[119] = v[17] * psi_dot;
+        v[80] = (v[60] * v[66] + v[77] * v[77]) * m1
+            + (v[73] * v[2] * v[17] + v[70]) * v[17] + v[13] * (v[78] * v[71] + v[72])
+            + J2 * ((v[9] + 1.0) * v[66] + v[65] * (v[7] + 1.0))
+            + m2 * (v[79] * v[79] + v[65] * v[64]);
+        v[81] = v[76] * v[31] + v[80] * v[17];
+        v[82] = v[75] * v[37] - v[81] * v[13];
+        v[83] = J2 + v[3] * v[63];
+        v[84] = v[83] * v[67];
+        v[85] = v[39] * v[12];
+        v[86] = v[8] * v[44] + v[5] * v[85];
+        v[87] = v[8] * v[85] - v[44] * v[5];
+        v[88] = v[63] * v[86] - v[87] * v[61];
+        v[89] = v[6] * v[42] - v[2] * v[85];
+        v[90] = v[89] * v[56];
+        v[91] = v[6] * v[85] + v[42] * v[2];
+        v[92] = v[58] * v[91];
+        v[93] = (v[14] * v[88] - v[42] * v[26]) * m2
+            + m1 * ((v[90] + v[92]) * v[18] - v[44] * v[23]);
+        v[94] = v[11] * d;
+        v[95] = v[93] + v[94] * v[45];
+        v[96] = (v[44] * v[77] + v[13] * (-v[90] - v[92])) * m1
+            + m2 * (v[42] * v[79] + v[88] * v[17]);
+        v[97] = v[31] * v[95] + v[96] * v[17];
+        v[98] = v[12] * v[41];
+        v[99] = v[6] * v[48] - v[2] * v[98];
+        v[100] = v[99] * v[56];
+        v[101] = v[48] * v[2] + v[6] * v[98];
+        v[102] = v[101] * v[58];
+        v[103] = v[8] * v[98] - v[5] * v[47];
+        v[104] = v[5] * v[98] + v[8] * v[47];
+        v[105] = v[63] * v[104] - v[103] * v[61];
+        v[106] = m1 * (v[77] * v[47] + (-v[100] - v[102]) * v[13])
+            + m2 * (v[105] * v[17] + v[48] * v[79]);
+        v[107] = ((v[100] + v[102]) * v[18] - v[23] * v[47]) * m1
+            + m2 * (v[14] * v[105] - v[48] * v[26]);
+        v[108] = v[49] * v[94] + v[107];
+        v[109] = v[106] * v[17] + v[31] * v[108];
+        v[110] = m1 * (v[77] * v[18] + v[13] * (-v[22] * v[56] - v[16] * v[58]))
+            + ((v[63] * v[21] + v[61] * v[20]) * v[17] + v[14] * v[79]) * m2;
+        v[111] = v[94] * v[51];
+        v[112] = v[110] * v[17] + v[13] * v[111];
+        v[113] = v[0] * v[56];
+        v[114] = J2 + v[113];
+        v[115] = -J2 - v[113];
+        v[116] = v[65] * v[114] - v[115] * v[66];
+        v[117] = v[95] * v[37] - v[96] * v[13];
+        v[118] = v[108] * v[37] - v[13] * v[106];
+        v[119] = v[111] * v[17] - v[13] * v[110];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3882,64 +3797,62 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
+        let theta = state[1];
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = phi_dot - v[119];
-        v[121] = v[15] * psi_dot * v[11];
-        v[122] = theta_dot * v[12];
-        v[123] = v[121] - v[122];
-        v[124] = v[123] * Izz - Iyz * v[118] - Ixz * v[120];
-        v[125] = v[124] * v[118];
-        v[126] = -phi_dot - v[119];
-        v[127] = theta_dot * v[126] * v[11];
-        v[128] = v[15] * psi_dot * v[12] * phi_dot;
-        v[129] = v[127] - v[128];
-        v[130] = v[129] * Ixz;
-        v[131] = Iyy * v[118] - v[123] * Iyz - Ixy * v[120];
-        v[132] = v[123] * v[131];
-        v[133] = theta_dot * v[126] * v[12];
-        v[134] = v[15] * psi_dot * phi_dot * v[11];
-        v[135] = v[133] + v[134];
-        v[136] = Ixy * v[135];
-        v[137] = J2 - J1;
-        v[138] = v[4] * v[120] - v[123] * v[6];
-        v[139] = gamma2_dot + v[116] + v[117];
-        v[140] = v[137] * v[138] * v[139];
-        v[141] = v[139] * d + v[4] * a_ * v[118];
-        v[142] = theta_dot * v[15] * psi_dot;
-        v[143] = -v[123] * gamma2_dot - v[142];
-        v[144] = gamma2_dot * v[120];
-        v[145] = v[143] * v[6] + (v[127] - v[128] + v[144]) * v[4];
-        v[146] = v[6] * v[120] + v[4] * v[123];
-        v[147] = a_ * (v[128] - v[127] - v[146] * v[6] * v[118]) - v[141] * v[138]
-            - v[145] * d;
-        v[148] = J2 * v[145];
-        v[149] = v[1] * v[118] + v[2] * v[120];
-        v[150] = v[121] + gamma1_dot - v[122];
-        v[151] = v[2] * a_ * v[123] + v[150] * d;
-        v[152] = v[133] + v[134] - gamma1_dot * v[120];
-        v[153] = gamma1_dot * v[118];
-        v[154] = v[2] * v[152] + v[1] * (v[142] - v[153]);
-        v[155] = v[2] * v[118] - v[1] * v[120];
-        v[156] = v[149] * v[151] - d * v[154]
-            + a_ * (-v[123] * v[1] * v[155] - v[133] - v[134]);
-        v[157] = v[150] * v[9] * v[149];
-        v[158] = J2 * v[154];
-        v[159] = v[2] * (v[153] - v[142]) + v[152] * v[1];
+        v[120] = v[89] * v[0];
+        v[121] = v[99] * v[0];
+        v[122] = v[22] * v[0];
+        v[123] = v[3] * v[86];
+        v[124] = v[3] * v[104];
+        v[125] = v[3] * v[21];
+        v[126] = m2 + m0 + m1;
+        v[127] = v[11] * psi_dot;
+        v[128] = phi_dot + v[127];
+        v[129] = theta_dot * v[13];
+        v[130] = v[12] * psi_dot;
+        v[131] = v[130] * phi_dot;
+        v[132] = v[131] * v[17];
+        v[133] = v[132] - v[128] * v[129];
+        v[134] = phi_dot - v[127];
+        v[135] = v[133] - gamma1_dot * v[134];
+        v[136] = v[130] * theta_dot;
+        v[137] = theta_dot * v[17];
+        v[138] = v[130] * v[13] + v[137];
+        v[139] = v[138] * gamma1_dot;
+        v[140] = v[2] * v[135] + (v[139] - v[136]) * v[6];
+        v[141] = v[130] * v[17] - v[129];
+        v[142] = v[136] + gamma2_dot * v[141];
+        v[143] = v[13] * v[131];
+        v[144] = v[128] * v[137];
+        v[145] = v[143] + v[144];
+        v[146] = gamma2_dot * v[134];
+        v[147] = v[5] * (v[145] - v[146]) - v[8] * v[142];
+        v[148] = v[130]
+            + ((0.25 - 0.25 * (v[30] * f64::cos(3.0 * theta))) * psi_dot
+                + v[11] * phi_dot) * v[30];
+        v[149] = 0.5 * (v[30] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
+        v[150] = v[149] * v[30];
+        v[151] = v[138] * v[2] + v[6] * v[134];
+        v[152] = v[141] + gamma1_dot;
+        v[153] = d * v[152] + v[55] * v[141];
+        v[154] = v[6] * v[135] + v[2] * (v[136] - v[139]);
+        v[155] = v[141] * v[2];
+        v[156] = v[6] * v[138] - v[2] * v[134];
+        v[157] = v[151] * v[153] - v[154] * d - a_ * (v[155] * v[156] + v[133]);
+        v[158] = v[151] * v[32];
+        v[159] = v[152] * v[158] + v[154] * J2;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -3948,12 +3861,9 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
-        let theta = state[1];
-        let psi_dot = state[8];
         let theta_dot = state[9];
-        let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
         let Ixx = params.Ixx;
@@ -3968,101 +3878,107 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[160] = v[6] * (v[128] - v[127] - v[144]) + v[4] * v[143];
-        v[161] = 0.5 * (v[16] * psi_dot * f64::sin(2.0 * theta)) + phi_dot;
-        v[162] = ((0.25 - 0.25 * (v[16] * f64::cos(3.0 * theta))) * psi_dot
-            + v[17] * phi_dot) * v[16] + v[15] * psi_dot;
-        v[163] = v[130] - v[125] + v[132] + v[136]
-            + v[6] * (m2 * v[147] * d - v[140] - v[148])
-            + v[14] * v[15] * psi_dot * phi_dot
-            + v[1] * (v[157] - v[156] * d * m1 + v[158])
-            + (-v[2] * v[159] - v[4] * v[160]) * J1
-            + (Ixx * v[15] * psi_dot - v[161] * v[16] * v[54] - v[162] * v[8])
-                * theta_dot;
-        v[164] = -a_ * v[118] - d * v[155];
-        v[165] = v[164] * v[155] - v[150] * v[151]
-            + a_ * (v[2] * v[123] * gamma1_dot + v[129] * v[1]);
-        v[166] = a_ * v[1] * v[165];
-        v[167] = v[129] * d - v[149] * v[164]
-            + a_ * (v[2] * v[129] + v[123] * v[123] * v[1]);
-        v[168] = theta_dot * v[15] * psi_dot * Ixz;
-        v[169] = v[137] * v[149] * v[155];
-        v[170] = v[131] * v[120];
-        v[171] = v[140] + v[148];
-        v[172] = Ixx * v[120] - v[123] * Ixz - Ixy * v[118];
-        v[173] = v[118] * v[172];
-        v[174] = Iyz * v[135];
-        v[175] = v[129] * J2;
-        v[176] = v[129] * Izz;
-        v[177] = -v[146] * d - a_ * v[123];
-        v[178] = a_ * (-v[4] * gamma2_dot * v[118] - v[135] * v[6]) - v[146] * v[177]
-            + v[141] * v[139];
-        v[179] = v[135] * d + v[138] * v[177]
-            + a_ * (v[4] * v[135] + v[6] * v[118] * v[118]);
-        v[180] = v[179] * v[50] - a_ * v[6] * v[178];
-        v[181] = v[123] * v[172];
-        v[182] = Iyy * v[135];
-        v[183] = v[124] * v[120];
-        v[184] = Ixy * theta_dot * v[15] * psi_dot;
-        v[185] = v[157] + v[158];
-        v[186] = v[129] * Iyz;
-        v[187] = J2 * v[135];
-        v[188] = v[138] * v[9] * v[146];
-        v[189] = v[12]
-            * (v[168] - v[160] * v[6] * J1 + v[169] + v[170] + v[4] * v[171] - v[173]
-                - v[174] + v[175] + v[176])
-            - (v[12] * (v[167] * v[66] - v[166]) + v[156] * v[10] * v[11]) * m1
-            + (-v[161] * v[16] * v[68] - v[14] * v[162]) * theta_dot
-            - m2 * (v[180] * v[11] + v[147] * v[13] * v[12])
-            + v[15] * psi_dot * v[70] * phi_dot
-            + (v[183] - v[181] - v[182] - v[1] * J1 * v[159] - v[184] - v[2] * v[185]
-                + v[186] - v[187] - v[188]) * v[11];
-        v[190] = (-v[23] * v[160] - v[21] * v[159]) * J1 - v[185] * v[26]
-            - ((v[166] + v[167] * v[47]) * v[15] * v[11] + v[156] * v[28]) * m1
-            + (v[125] - theta_dot * Ixx * v[15] * psi_dot - v[130] - v[132] - v[136])
-                * v[17] - v[171] * v[25]
-            + theta_dot
-                * (-v[161] * v[16] * (v[49] + v[52] + v[53] + v[56] - v[57] + v[60])
-                    - v[162] * v[54]) + v[17] * v[163]
-            + v[15]
-                * (psi_dot * phi_dot * v[68]
-                    + v[12]
-                        * (v[183] - v[181] - v[182] - v[184] + v[186] - v[187] - v[188])
-                    + (v[173] - v[168] - v[169] - v[170] + v[174] - v[175] - v[176])
-                        * v[11]) - m2 * (v[180] * v[15] * v[12] + v[147] * v[29]);
-        v[191] = a_ * v[17] * theta_dot * theta_dot;
-        v[192] = v[4] * v[12];
-        v[193] = v[6] * v[11];
-        v[194] = (-v[192] - v[193]) * v[15];
-        v[195] = v[15] * (v[192] + v[193]);
-        v[196] = (v[193] - v[192]) * v[15];
-        v[197] = (v[192] - v[193]) * v[15];
-        v[198] = 0.25 * v[194] - 0.25 * v[195] - 0.25 * v[196] + 0.25 * v[197] - v[22];
-        v[199] = v[6] * v[12];
+        v[160] = -v[143] - v[144];
+        v[161] = v[160] * Ixz;
+        v[162] = v[141] * Izz - Ixz * v[134] - Iyz * v[138];
+        v[163] = v[138] * v[162];
+        v[164] = Ixy * v[133];
+        v[165] = Iyy * v[138] - Ixy * v[134] - Iyz * v[141];
+        v[166] = v[141] * v[165];
+        v[167] = v[8] * (v[160] + v[146]) - v[142] * v[5];
+        v[168] = v[167] * J2;
+        v[169] = J2 - J1;
+        v[170] = v[8] * v[134] - v[141] * v[5];
+        v[171] = v[169] * v[170];
+        v[172] = gamma2_dot + v[138];
+        v[173] = v[171] * v[172];
+        v[174] = v[5] * v[134] + v[8] * v[141];
+        v[175] = v[138] * v[5];
+        v[176] = d * v[172] + v[138] * v[62];
+        v[177] = a_ * (v[145] - v[174] * v[175]) - v[167] * d - v[176] * v[170];
+        v[178] = theta_dot * (v[130] * Ixx - v[10] * v[148] - v[150] * v[28])
+            - (v[6] * v[140] + v[8] * v[147]) * J1 + (v[159] - v[0] * v[157]) * v[2]
+            + v[161] - v[163] + v[164] + v[35] * v[131] + v[166]
+            + (v[3] * v[177] - v[168] - v[173]) * v[5];
+        v[179] = v[160] * J2;
+        v[180] = v[160] * Izz;
+        v[181] = v[168] + v[173];
+        v[182] = v[136] * Ixz;
+        v[183] = Iyz * v[133];
+        v[184] = v[165] * v[134];
+        v[185] = v[169] * v[151] * v[156];
+        v[186] = Ixx * v[134] - v[141] * Ixz - Ixy * v[138];
+        v[187] = v[138] * v[186];
+        v[188] = d * v[174] + a_ * v[141];
+        v[189] = d * v[133] - v[188] * v[170] + a_ * (v[8] * v[133] + v[138] * v[175]);
+        v[190] = v[174] * v[188] + v[176] * v[172]
+            - a_ * (v[8] * gamma2_dot * v[138] + v[5] * v[133]);
+        v[191] = v[189] * v[63] - v[190] * v[61];
+        v[192] = d * v[156] + a_ * v[138];
+        v[193] = v[151] * v[192] + a_ * (v[141] * v[155] + v[6] * v[160]) + v[160] * d;
+        v[194] = v[193] * v[56];
+        v[195] = a_ * (v[160] * v[2] + v[6] * v[141] * gamma1_dot) - v[192] * v[156]
+            - v[153] * v[152];
+        v[196] = v[58] * v[195];
+        v[197] = J2 * v[133];
+        v[198] = ((v[162] * v[134] - Ixy * v[136]) + (v[160] * Iyz - v[197]))
+            + ((-Iyy * v[133] - v[141] * v[186]) - v[32] * v[174] * v[170]);
+        v[199] = (v[179] - v[147] * v[71] + v[180] + v[8] * v[181] + v[182] - v[183]
+            + v[184] + v[185] - v[187]) * v[13]
+            - theta_dot * (v[148] * v[35] + v[150] * v[74])
+            - m2 * (v[177] * v[79] + v[191] * v[17])
+            - m1 * ((-v[194] - v[196]) * v[13] + v[157] * v[77])
+            + (v[198] - v[6] * v[159] - v[73] * v[140]) * v[17] + v[80] * v[131];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part5(
         _t: f64,
-        _state: &[f64; STATES],
-        _params: &Params,
+        state: &[f64; STATES],
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 214],
+        v: &mut [f64; 224],
     ) {
-        v[200] = v[4] * v[11];
-        v[201] = v[17] * (v[199] + v[200]);
-        v[202] = v[17] * (v[200] - v[199]);
-        v[203] = v[17] * v[12];
-        v[204] = v[15] * v[11];
-        v[205] = v[2] * (v[203] + v[204]);
-        v[206] = v[15] * v[12];
-        v[207] = v[17] * v[11];
-        v[208] = v[1] * (v[206] - v[207]);
-        v[209] = v[2] * (v[204] - v[203]);
-        v[210] = v[1] * (v[207] - v[206]);
-        v[211] = v[1] * (v[206] + v[207]);
-        v[212] = (-v[206] - v[207]) * v[1];
-        v[213] = 0.25 * v[210] - 0.25 * v[208] - 0.25 * v[211] + v[20] + 0.25 * v[212];
+        let psi_dot = state[8];
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let Ixx = params.Ixx;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        v[200] = psi_dot * phi_dot;
+        v[201] = v[12]
+            * (v[198] * v[13] + v[200] * v[74]
+                + (v[183] - v[179] - v[180] - v[182] - v[184] - v[185] + v[187]) * v[17])
+            - (v[16] * v[140] - v[147] * v[20]) * J1
+            - m2 * (v[14] * v[191] - v[177] * v[26])
+            - ((v[194] + v[196]) * v[18] - v[23] * v[157]) * m1 - v[181] * v[21]
+            + v[178] * v[11] + v[11] * (v[163] - v[161] - v[164] - v[166] - v[136] * Ixx)
+            - v[22] * v[159] - (v[148] * v[28] + v[150] * v[68]) * theta_dot;
+        v[202] = v[148] * d;
+        v[203] = a_ * v[11] * theta_dot * theta_dot;
+        v[204] = v[8] * v[13];
+        v[205] = v[5] * v[17];
+        v[206] = v[204] + v[205];
+        v[207] = (v[205] - v[204]) * v[12];
+        v[208] = (v[204] - v[205]) * v[12];
+        v[209] = -(0.5 * v[206] * v[12]) + (0.25 * v[208] - 0.25 * v[207]);
+        v[210] = phi_dot * phi_dot;
+        v[211] = v[209] - v[19];
+        v[212] = v[8] * v[17];
+        v[213] = v[11] * (v[212] - v[78]);
+        v[214] = (v[11] * (v[78] + v[212]) + 0.5 * v[207]) + 0.5 * v[208];
+        v[215] = v[43] + v[14];
+        v[216] = v[2] * (v[14] - v[43]);
+        v[217] = v[2] * (v[43] - v[14]);
+        v[218] = -(0.5 * v[215] * v[2]) + (0.25 * v[217] - 0.25 * v[216]);
+        v[219] = v[215] * v[2];
+        v[220] = 0.5 * v[219] + v[6] * (v[18] - v[40]);
+        v[221] = v[6] * (v[40] + v[18]);
+        v[222] = v[218] + v[15];
+        v[223] = 0.5 * v[216] - 0.5 * v[219];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -4151,11 +4067,6 @@ pub mod maggi {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -4164,44 +4075,12 @@ pub mod maggi {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(gamma2);
-        let x1 = f64::cos(gamma2);
-        let x2 = f64::cos(psi);
-        let x3 = f64::cos(theta);
-        let x4 = f64::sin(phi);
-        let x5 = f64::sin(psi);
-        let x6 = f64::sin(theta);
-        let x7 = f64::cos(phi);
-        let x8 = x4 * x5 + x6 * x2 * x7;
-        let x9 = x2 * x3 * x0 + x1 * x8;
-        let x10 = d + x1 * a_;
-        let x11 = x9 * x10 - a_ * x0 * (x1 * x2 * x3 - x0 * x8);
-        let x12 = x6 * x2 * x4 - x7 * x5;
-        let x13 = a_ + x1 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x2 * x14 * x3;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x2 * x3);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x3 * x4 + x6 * x14;
-        let x23 = -x22 * d - a_ * x3 * x4;
-        let x24 = x1 * x3 * x7 - x6 * x0;
-        let x25 = -a_ * x3 * x7 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x6 * x7 * x5 - x2 * x4;
-        let x28 = x3 * x0 * x5 + x1 * x27;
-        let x29 = x28 * x10 - a_ * (x1 * x3 * x5 - x0 * x27) * x0;
-        let x30 = x2 * x7 + x6 * x4 * x5;
-        let x31 = a_ * x14 * (x15 * x3 * x5 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x3 * x5;
+        let mut v = [0.0f64; 47];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -4233,31 +4112,31 @@ pub mod maggi {
             Z_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
+            d
+                * (v[12] * v[13] + phi_dot * (v[16] * v[19] - v[15] * v[8])
+                    + v[20] * v[22])
+                + (((v[24] + v[26]) * v[27] - v[30] * v[19]) * m1
+                    + (v[28] * v[33] - v[8] * v[35]) * m2) * psi_dot
+                + theta_dot
+                    * ((v[3] * (-v[24] - v[26]) + v[36] * v[19]) * m1
+                        + (v[33] * v[5] + v[8] * v[37]) * m2) + X_dot * v[38],
+            Y_dot * v[38]
+                + theta_dot
+                    * ((v[39] * v[36] + (-v[42] - v[44]) * v[3]) * m1
+                        + m2 * (v[40] * v[37] + v[46] * v[5]))
+                + ((v[27] * (v[42] + v[44]) - v[39] * v[30]) * m1
+                    + m2 * (v[28] * v[46] - v[40] * v[35])) * psi_dot
+                + (v[45] * v[20] + (v[39] * v[16] - v[15] * v[40]) * phi_dot
+                    + v[13] * v[43]) * d,
             theta_dot
-                * (m2 * (x11 * x7 + x12 * x13 * x4)
-                    + m1 * (x4 * (x16 * x18 - x19) + x20 * x8 * x7))
-                + (m1 * (x3 * (x16 * x21 + x19) * x7 + x8 * x23)
-                    + m2 * (x3 * x11 * x4 + x12 * x25)) * psi_dot
+                * ((v[3] * (-v[29] * v[23] - (v[28] * v[9] - v[0] * v[1]) * v[25])
+                    + v[36] * v[27]) * m1
+                    + m2
+                        * ((v[31] * (v[14] * v[27] + v[21] * v[1]) + v[34] * v[32])
+                            * v[5] + v[28] * v[37]))
                 + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x0) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x7 + x13 * x4 * x30)
-                    + (x20 * x27 * x7 + (x32 * x18 - x31) * x4) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x0 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
-                + psi_dot
-                    * (m1 * (x3 * (x32 * x21 + x31) * x7 + x27 * x23)
-                        + m2 * (x3 * x4 * x29 + x30 * x25)),
-            theta_dot
-                * (m2
-                    * (x3 * x13 * x4 * x4
-                        + (x24 * x10 - a_ * (-x3 * x0 * x7 - x1 * x6) * x0) * x7)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x3 * x4 - x15 * x6) * x14) * x4
-                            + x20 * x3 * x7 * x7))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x7 - m2 * x0 * x4) * x3 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                    * (v[10] * phi_dot * (v[16] * v[5] - v[15] * v[3]) + v[20] * v[34]
+                        + v[13] * v[29]) + Z_dot * v[38],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -4265,6 +4144,85 @@ pub mod maggi {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 47],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::cos(gamma1);
+        v[1] = f64::sin(theta);
+        v[2] = f64::cos(psi);
+        v[3] = f64::sin(phi);
+        v[4] = v[2] * v[3];
+        v[5] = f64::cos(phi);
+        v[6] = f64::sin(psi);
+        v[7] = v[5] * v[6];
+        v[8] = v[1] * v[4] - v[7];
+        v[9] = f64::sin(gamma1);
+        v[10] = f64::cos(theta);
+        v[11] = v[2] * v[10];
+        v[12] = v[0] * v[8] - v[9] * v[11];
+        v[13] = gamma1_dot * m1;
+        v[14] = f64::sin(gamma2);
+        v[15] = m2 * v[14];
+        v[16] = v[9] * m1;
+        v[17] = v[2] * v[5];
+        v[18] = v[3] * v[6];
+        v[19] = v[1] * v[17] + v[18];
+        v[20] = m2 * gamma2_dot;
+        v[21] = f64::cos(gamma2);
+        v[22] = v[14] * v[11] + v[21] * v[19];
+        v[23] = v[0] * a_ + d;
+        v[24] = v[12] * v[23];
+        v[25] = a_ * v[9];
+        v[26] = (v[0] * v[11] + v[9] * v[8]) * v[25];
+        v[27] = v[10] * v[5];
+        v[28] = v[10] * v[3];
+        v[29] = v[1] * v[9] + v[0] * v[28];
+        v[30] = v[29] * d + a_ * v[28];
+        v[31] = a_ * v[14];
+        v[32] = d + v[21] * a_;
+        v[33] = v[22] * v[32] - (v[21] * v[11] - v[14] * v[19]) * v[31];
+        v[34] = v[21] * v[27] - v[1] * v[14];
+        v[35] = a_ * v[27] + v[34] * d;
+        v[36] = -((a_ + v[0] * d) * v[5]);
+        v[37] = (a_ + v[21] * d) * v[3];
+        v[38] = m2 + m0 + m1;
+        v[39] = v[1] * v[7] - v[4];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+        v: &mut [f64; 47],
+    ) {
+        v[40] = v[1] * v[18] + v[17];
+        v[41] = v[10] * v[6];
+        v[42] = (v[40] * v[9] + v[0] * v[41]) * v[25];
+        v[43] = v[0] * v[40] - v[9] * v[41];
+        v[44] = v[43] * v[23];
+        v[45] = v[14] * v[41] + v[21] * v[39];
+        v[46] = v[45] * v[32] - (v[21] * v[41] - v[39] * v[14]) * v[31];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -4362,10 +4320,9 @@ pub mod maggi {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 1068];
+        let mut v = [0.0f64; 1084];
         jacobian_part0(t, state, params, g_i, &mut v);
         jacobian_part1(t, state, params, g_i, &mut v);
         jacobian_part2(t, state, params, g_i, &mut v);
@@ -4393,6 +4350,7 @@ pub mod maggi {
         jacobian_part24(t, state, params, g_i, &mut v);
         jacobian_part25(t, state, params, g_i, &mut v);
         jacobian_part26(t, state, params, g_i, &mut v);
+        jacobian_part27(t, state, params, g_i, &mut v);
         Derivatives {
             qdot: [
                 psi_dot,
@@ -4405,59 +4363,57 @@ pub mod maggi {
                 Z_dot,
             ],
             matrix: [
-                [v[13], v[58], v[61], 0.0, 0.0, v[69], v[77], v[81]],
+                [v[14], v[64], v[68], 0.0, 0.0, v[78], v[85], v[90]],
                 [
-                    v[58],
-                    v[29] * v[20] * v[138] + v[148],
-                    v[150],
-                    v[154],
-                    v[157],
-                    v[179],
-                    v[203],
-                    v[210],
+                    v[64],
+                    v[141] + v[166] * v[31],
+                    v[168],
+                    v[171],
+                    v[174],
+                    v[195],
+                    v[221],
+                    v[230],
                 ],
                 [
-                    v[61],
-                    v[150],
-                    v[215] * v[29] * v[18] - v[212] * v[20],
-                    v[218],
+                    v[68],
+                    v[168],
+                    v[235] * v[65] - v[232] * v[16],
+                    v[239],
                     0.0,
-                    v[220],
-                    v[222],
-                    v[224],
+                    v[241],
+                    v[243],
+                    v[245],
                 ],
-                [0.0, v[154], v[218], v[1], 0.0, v[225], v[226], v[227]],
-                [0.0, v[157], 0.0, 0.0, v[11], v[228], v[229], v[230]],
-                [v[69], v[179], v[220], v[225], v[228], v[231], 0.0, 0.0],
-                [v[77], v[203], v[222], v[226], v[229], 0.0, v[231], 0.0],
-                [v[81], v[210], v[224], v[227], v[230], 0.0, 0.0, v[231]],
+                [0.0, v[171], v[239], v[2], 0.0, v[246], v[247], v[248]],
+                [0.0, v[174], 0.0, 0.0, v[13], v[249], v[250], v[251]],
+                [v[78], v[195], v[241], v[246], v[249], v[252], 0.0, 0.0],
+                [v[85], v[221], v[243], v[247], v[250], 0.0, v[252], 0.0],
+                [v[90], v[230], v[245], v[248], v[251], 0.0, 0.0, v[252]],
             ],
             force: [
-                v[314],
-                v[369] + v[29] * v[382] * v[20],
-                v[29] * v[382] * v[18] - v[383],
-                v[28] * psi_dot * v[20] * v[217] * phi_dot - v[329] * d * m1
-                    - theta_dot * v[304] * v[216] * v[18] - v[341]
-                    + v[14] * v[280] * v[290],
-                v[258] * v[259] * v[272] + v[385] * v[156] - v[366] - m2 * v[355] * d,
-                v[389],
-                (-v[390] - v[392]) * theta_dot + v[28] * psi_dot * phi_dot * v[197]
-                    - m2 * (v[273] * v[72] + v[181] * v[349] + v[355] * v[185])
-                    - (v[323] * v[190] + v[329] * v[193] + v[291] * v[75]) * m1,
-                v[28] * (v[208] * psi_dot * phi_dot - theta_dot * v[80] * v[311] * d)
+                v[334],
+                v[31] * v[387] + v[400],
+                v[387] * v[65] - v[401],
+                v[301] * v[307] - v[0] * v[384] - v[362] + v[238] * v[268]
+                    - v[402] * v[237],
+                v[326] * v[330] - v[347] * v[11] - v[354] + v[404] * v[173],
+                v[407],
+                v[216] * v[267]
+                    - (v[377] * v[212] + v[384] * v[208] + v[83] * v[311]) * m1
+                    - theta_dot * v[408]
+                    - m2 * (v[344] * v[198] + v[409] + v[347] * v[201]),
+                (v[349] * v[228] - v[88] * v[456]) * v[29]
+                    - (v[412]
+                        + d
+                            * (v[413] * v[419]
+                                + (v[427] + gamma1_dot * v[428]) * gamma1_dot
+                                + theta_dot * (v[433] + theta_dot * v[428]))) * m1
                     - m2
-                        * (((0.25 * v[397] - 0.25 * v[399] - 0.25 * v[401]
-                            + 0.25 * v[403]) * phi_dot * phi_dot
-                            + (theta_dot * v[404] + v[412]) * theta_dot
-                            + gamma2_dot * (v[414] + v[417] + gamma2_dot * v[404])) * d
-                            - v[393])
-                    - (v[393]
-                        + (theta_dot * (v[436] + theta_dot * v[437] + v[439])
-                            + gamma1_dot * (v[437] * gamma1_dot + v[441])
-                            + (0.25 * v[430] - 0.25 * v[425] - 0.25 * v[432]
-                                + 0.25 * v[434]) * phi_dot * phi_dot) * d) * m1,
+                        * (((theta_dot * v[442] + v[451]) * theta_dot
+                            + gamma2_dot * (v[455] + gamma2_dot * v[442])
+                            + v[441] * v[413]) * d - v[412]),
             ],
-            checks: [v[28]],
+            checks: [v[29]],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4478,166 +4434,143 @@ pub mod maggi {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[448], v[69], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[459], v[179], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[460], v[220], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[461], v[225], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[462], v[228], 0.0],
-                    [v[448], v[459], v[460], v[461], v[462], 0.0, 0.0, 0.0],
-                    [v[69], v[179], v[220], v[225], v[228], 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[464], v[78], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[475], v[195], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[476], v[241], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[477], v[246], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[478], v[249], 0.0],
+                    [v[464], v[475], v[476], v[477], v[478], 0.0, 0.0, 0.0],
+                    [v[78], v[195], v[241], v[246], v[249], 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, v[478], v[479], 0.0, 0.0, v[480], v[481], v[483]],
+                    [0.0, v[493], v[494], 0.0, 0.0, v[495], v[496], v[498]],
                     [
-                        v[478],
-                        (v[27] + v[501] + v[502] * v[18] + v[57]) * v[20],
-                        v[503],
-                        v[504],
-                        v[507],
+                        v[493],
+                        (v[509] + v[15] * v[510]) * v[16],
+                        v[511],
                         v[513],
-                        v[517],
-                        v[519],
+                        v[515],
+                        v[522],
+                        v[526],
+                        v[528],
                     ],
                     [
-                        v[479],
-                        v[503],
-                        (v[60] - v[20] * v[502] - v[59]
-                            + v[29]
-                                * (v[30] * (v[479] + v[215] * v[29]) + v[500] * v[18]
-                                    - v[20] * v[489])) * v[18],
-                        v[520],
-                        v[521],
-                        v[522],
-                        v[523],
-                        v[524],
+                        v[494],
+                        v[511],
+                        (v[68] - v[16] * v[510]
+                            + v[30]
+                                * (v[508] * v[15] - v[500] * v[16]
+                                    + v[34] * (v[30] * v[235] + v[494]))) * v[15],
+                        v[529],
+                        v[530],
+                        v[531],
+                        v[532],
+                        v[533],
                     ],
-                    [0.0, v[504], v[520], 0.0, 0.0, v[525], v[526], v[527]],
-                    [0.0, v[507], v[521], 0.0, 0.0, v[528], v[529], v[530]],
-                    [v[480], v[513], v[522], v[525], v[528], 0.0, 0.0, 0.0],
-                    [v[481], v[517], v[523], v[526], v[529], 0.0, 0.0, 0.0],
-                    [v[483], v[519], v[524], v[527], v[530], 0.0, 0.0, 0.0],
+                    [0.0, v[513], v[529], 0.0, 0.0, v[534], v[535], v[536]],
+                    [0.0, v[515], v[530], 0.0, 0.0, v[537], v[538], v[539]],
+                    [v[495], v[522], v[531], v[534], v[537], 0.0, 0.0, 0.0],
+                    [v[496], v[526], v[532], v[535], v[538], 0.0, 0.0, 0.0],
+                    [v[498], v[528], v[533], v[536], v[539], 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, v[640], v[643], 0.0, 0.0, v[646], v[648], v[650]],
+                    [0.0, v[660], v[663], 0.0, 0.0, v[666], v[668], v[671]],
                     [
-                        v[640],
-                        v[29]
-                            * ((v[117] + v[30] * (v[639] * v[20] + v[27] + v[57])
-                                + v[137]) * v[18] + v[20] * v[660]) + v[665] * v[18]
-                            - v[149],
-                        v[666],
-                        v[667],
-                        v[668],
-                        v[679],
-                        v[683],
-                        v[685],
-                    ],
-                    [
-                        v[643],
-                        v[666],
-                        v[29]
-                            * ((v[653] * v[18]
-                                + (v[29] * v[686] - v[655] - v[656] - v[657] - v[658]
-                                    + v[476] - v[659]) * v[20]) * v[18]
-                                + (v[214] - v[213]
-                                    + v[30] * (v[59] - v[60] + v[642] * v[18])) * v[20])
-                            - v[212] * v[18]
-                            - (v[29]
-                                * (v[661] * v[18] - v[214]
-                                    + v[30] * (v[662] * v[18] - v[59])) - v[144]
-                                - v[20] * v[664]) * v[20],
+                        v[660],
+                        v[682] * v[15] - v[167]
+                            + v[30]
+                                * (v[16] * v[686]
+                                    + (v[165] + v[34] * (v[64] + v[16] * v[659])) * v[15]),
                         v[687],
                         v[688],
-                        v[689],
-                        v[690],
-                        v[691],
+                        v[171],
+                        v[700],
+                        v[704],
+                        v[708],
                     ],
-                    [0.0, v[667], v[687], 0.0, 0.0, v[692], v[693], v[694]],
-                    [0.0, v[668], v[688], 0.0, 0.0, v[695], v[696], v[697]],
-                    [v[646], v[679], v[689], v[692], v[695], 0.0, 0.0, 0.0],
-                    [v[648], v[683], v[690], v[693], v[696], 0.0, 0.0, 0.0],
-                    [v[650], v[685], v[691], v[694], v[697], 0.0, 0.0, 0.0],
+                    [
+                        v[663],
+                        v[687],
+                        v[30]
+                            * ((v[685] * v[15]
+                                + (v[680] - v[679] - v[675] - v[676] + v[30] * v[709]
+                                    + v[489] - v[677]) * v[16]) * v[15]
+                                + (v[34] * (v[67] - v[66] + v[662] * v[15]) + v[233]
+                                    - v[234]) * v[16])
+                            - (v[30]
+                                * (v[34] * (v[658] * v[15] - v[67]) - v[233]
+                                    + v[15] * v[681]) - v[673] * v[16] - v[139]) * v[16]
+                            - v[232] * v[15],
+                        v[710],
+                        v[711],
+                        v[712],
+                        v[713],
+                        v[714],
+                    ],
+                    [0.0, v[688], v[710], 0.0, 0.0, v[716], v[718], v[719]],
+                    [0.0, v[171], v[711], 0.0, 0.0, v[721], v[722], v[723]],
+                    [v[666], v[700], v[712], v[716], v[721], 0.0, 0.0, 0.0],
+                    [v[668], v[704], v[713], v[718], v[722], 0.0, 0.0, 0.0],
+                    [v[671], v[708], v[714], v[719], v[723], 0.0, 0.0, 0.0],
                 ],
                 [
+                    [v[5] * v[791], v[797], v[799], 0.0, 0.0, v[716], v[718], v[719]],
                     [
-                        v[4] * v[767] * v[2],
-                        v[774],
-                        v[776],
-                        0.0,
-                        0.0,
-                        v[692],
-                        v[693],
-                        v[694],
-                    ],
-                    [
-                        v[774],
-                        v[784] * v[18] * v[18] + v[29] * v[20] * v[790],
-                        v[791],
-                        0.0,
-                        0.0,
-                        v[798],
-                        v[805],
-                        v[808],
-                    ],
-                    [
-                        v[776],
-                        v[791],
-                        v[29] * (v[30] * v[775] - v[20] * v[789] + v[29] * v[788])
-                            * v[18] * v[18]
-                            - (v[783] * v[29] * v[18] * v[18] - v[778] * v[2] * v[20])
-                                * v[20],
-                        v[810],
-                        0.0,
-                        v[811],
+                        v[797],
+                        v[130] * v[808] + v[31] * v[811],
                         v[812],
-                        v[814],
+                        0.0,
+                        0.0,
+                        v[819],
+                        v[825],
+                        v[827],
                     ],
-                    [0.0, 0.0, v[810], 0.0, 0.0, v[815], v[816], v[817]],
+                    [
+                        v[799],
+                        v[812],
+                        v[828] * (v[34] * v[798] - v[806] * v[16] + v[30] * v[810])
+                            - (v[828] * v[807] - v[674] * v[802]) * v[16],
+                        v[829],
+                        0.0,
+                        v[830],
+                        v[831],
+                        v[832],
+                    ],
+                    [0.0, 0.0, v[829], 0.0, 0.0, v[833], v[834], v[835]],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [v[692], v[798], v[811], v[815], 0.0, 0.0, 0.0, 0.0],
-                    [v[693], v[805], v[812], v[816], 0.0, 0.0, 0.0, 0.0],
-                    [v[694], v[808], v[814], v[817], 0.0, 0.0, 0.0, 0.0],
+                    [v[716], v[819], v[830], v[833], 0.0, 0.0, 0.0, 0.0],
+                    [v[718], v[825], v[831], v[834], 0.0, 0.0, 0.0, 0.0],
+                    [v[719], v[827], v[832], v[835], 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
+                    [v[7] * v[858], v[869], v[870], 0.0, 0.0, v[871], v[722], v[723]],
                     [
-                        v[6] * v[9] * v[839],
-                        v[849],
-                        v[850],
+                        v[869],
+                        (v[876] + v[878]) * v[15] + v[881] * v[875],
+                        v[882],
                         0.0,
-                        0.0,
-                        v[851],
-                        v[852],
-                        v[697],
-                    ],
-                    [
-                        v[849],
-                        (v[857] + v[859]) * v[18] + v[29] * v[20] * v[20] * v[865],
-                        v[866],
-                        0.0,
-                        v[867],
-                        v[873],
-                        v[879],
                         v[883],
+                        v[891],
+                        v[897],
+                        v[901],
                     ],
                     [
-                        v[850],
-                        v[866],
-                        v[29]
-                            * (v[30] * v[850] - v[20] * v[20] * v[860]
-                                + v[29] * v[864] * v[18]) * v[18]
-                            - (v[29] * v[856] * v[18] - v[9] * v[858]) * v[20] * v[20],
+                        v[870],
+                        v[882],
+                        (v[34] * v[870] - v[873] * v[129] + v[880] * v[65]) * v[65]
+                            - v[129] * (v[874] * v[65] - v[902]),
                         0.0,
                         0.0,
-                        v[884],
-                        v[885],
-                        v[886],
+                        v[903],
+                        v[904],
+                        v[905],
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[867], 0.0, 0.0, 0.0, v[887], v[888], v[889]],
-                    [v[851], v[873], v[884], 0.0, v[887], 0.0, 0.0, 0.0],
-                    [v[852], v[879], v[885], 0.0, v[888], 0.0, 0.0, 0.0],
-                    [v[697], v[883], v[886], 0.0, v[889], 0.0, 0.0, 0.0],
+                    [0.0, v[883], 0.0, 0.0, 0.0, v[906], v[907], v[908]],
+                    [v[871], v[891], v[903], 0.0, v[906], 0.0, 0.0, 0.0],
+                    [v[722], v[897], v[904], 0.0, v[907], 0.0, 0.0, 0.0],
+                    [v[723], v[901], v[905], 0.0, v[908], 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -4757,317 +4690,246 @@ pub mod maggi {
                     0.0,
                     0.0,
                     0.0,
-                    theta_dot
-                        * (-v[311] * d * v[447] - v[304] * v[29] * (v[452] + v[456]))
-                        - (v[323] * v[450] + v[329] * v[449] + v[291] * v[446]) * m1
-                        + v[28] * psi_dot * phi_dot * v[458]
-                        - m2 * (v[273] * v[445] + v[454] * v[349] + v[355] * v[453]),
-                    v[389],
+                    v[472] * v[267] - theta_dot * (v[282] * v[473] + v[463] * v[405])
+                        - (v[377] * v[468] + v[462] * v[311] + v[384] * v[470]) * m1
+                        - m2 * (v[347] * v[465] - v[466] * v[344] - v[409]),
+                    v[407],
                     0.0,
                 ],
                 [
-                    v[534] + v[572],
-                    v[608] * v[18] + v[610] * v[20],
-                    v[610] * v[18] - v[608] * v[20],
-                    (J2 * (v[535] - v[581] - v[582] - v[536]) - d * m1 * v[591]
-                        - v[30] * v[20] * v[217] * phi_dot + (v[581] + v[582]) * J1)
-                        * psi_dot
-                        + (-v[30] * v[304] * v[217] - v[532] * v[216]) * theta_dot
-                            * v[29] * v[18],
-                    (J1 * (-v[604] - v[605]) - v[30] * v[156] * phi_dot * v[18]
-                        - m2 * d * v[575] + J2 * (v[539] + v[604] + v[540] + v[605]))
-                        * psi_dot
-                        + theta_dot * (-v[30] * v[304] * v[611] - v[532] * v[156])
-                            * v[29] * v[20],
-                    psi_dot * (v[208] * v[63] * v[28] - v[30] * v[173]) * phi_dot
-                        - (v[612] * v[63]
+                    v[578],
+                    v[611] * v[15] + v[616] * v[16],
+                    v[616] * v[15] - v[611] * v[16],
+                    (J2 * (v[550] + v[598] - v[599]) + v[601] - v[580] * v[0]
+                        - v[617] * v[70]) * psi_dot
+                        - theta_dot * (v[575] * v[237] + v[238] * v[618]) * v[65],
+                    psi_dot * (v[588] - v[11] * v[609] - v[589] - v[173] * v[557])
+                        - theta_dot * (v[618] * v[619] + v[575] * v[173]) * v[31],
+                    (v[228] * v[176] - v[34] * v[193]) * v[349]
+                        - (v[69] * v[620]
                             + psi_dot
-                                * (v[165] * v[591] + v[594] * v[169] + v[569] * v[64])) * m1
+                                * (v[182] * v[584] + v[580] * v[184] + v[76] * v[562])) * m1
+                        - m2
+                            * (v[621] * v[69]
+                                + psi_dot
+                                    * (v[74] * v[551] + v[179] * v[609] + v[177] * v[607]))
                         + theta_dot
-                            * (d * (-v[531] * v[68] - v[80] * v[63] * v[311] * v[28])
-                                + v[29] * (-v[511] * v[304] - v[532] * v[387] * v[29]))
+                            * (-v[30] * (v[281] * v[519] + v[576] * v[186])
+                                - d * (v[176] * v[622] + v[577] * v[77])),
+                    (v[228] * v[196] - v[34] * v[216]) * v[349]
                         - m2
-                            * (v[63] * v[613]
-                                + psi_dot
-                                    * (v[67] * v[552] + v[158] * v[574] + v[162] * v[575])),
-                    (v[208] * v[28] * v[62] - v[30] * v[197]) * psi_dot * phi_dot
-                        - m2
-                            * (v[613] * v[62]
-                                + psi_dot
-                                    * (v[185] * v[575] + v[72] * v[552] + v[181] * v[574]))
-                        + (v[29] * (-v[304] * v[515] - v[532] * v[29] * v[391])
-                            + (-v[80] * v[311] * v[28] * v[62] - v[76] * v[531]) * d)
-                            * theta_dot
-                        - m1
-                            * ((v[193] * v[591] + v[569] * v[75] + v[594] * v[190])
-                                * psi_dot + v[612] * v[62]),
-                    psi_dot * phi_dot * (v[28] * v[518] - v[30] * v[208])
-                        + theta_dot * (-v[482] * v[30] * v[311] - v[531] * v[80] * v[28])
-                            * d
-                        - (v[614]
+                            * (v[621] * v[72]
+                                + (v[201] * v[609] + v[551] * v[79] + v[607] * v[198])
+                                    * psi_dot)
+                        + theta_dot
+                            * (-(v[577] * v[84] + v[196] * v[622]) * d
+                                - v[30] * (v[281] * v[524] + v[219] * v[576]))
+                        - (psi_dot * (v[212] * v[584] + v[83] * v[562] + v[580] * v[208])
+                            + v[72] * v[620]) * m1,
+                    v[349] * (v[29] * v[527] - v[34] * v[228])
+                        - theta_dot * d * (v[34] * v[497] * v[277] + v[623] * v[577])
+                        - (v[624]
                             + d
-                                * (theta_dot
-                                    * ((0.5 * v[617] - 0.5 * v[615] - 0.5 * v[616] - 2.0 * v[45]
-                                        + 0.5 * v[618]) * gamma1_dot + v[621] + theta_dot * v[622])
-                                    + (0.25 * v[615] - 0.25 * v[616] + 0.25 * v[617]
-                                        - 0.5 * v[619] - 0.25 * v[618] + 0.5 * v[620]) * phi_dot
-                                        * phi_dot + gamma1_dot * (v[624] + gamma1_dot * v[622])))
-                            * m1
-                        - m2
-                            * ((theta_dot * (v[631] + v[632] * theta_dot)
-                                + (0.25 * v[626] - 0.25 * v[625] + 0.25 * v[627]
-                                    - 0.25 * v[629]) * phi_dot * phi_dot
+                                * (v[632] * v[413]
+                                    + (v[635] * theta_dot - v[634]
+                                        + gamma1_dot * (v[637] - 2.0 * v[41])) * theta_dot
+                                    + gamma1_dot * (v[639] + v[635] * gamma1_dot))) * m1
+                        - (d
+                            * (theta_dot * (theta_dot * v[645] + v[650])
                                 + gamma2_dot
-                                    * (theta_dot
-                                        * (0.5 * v[625] + 0.5 * v[626] + 2.0 * v[42] + 0.5 * v[627]
-                                            - v[628] + 0.5 * v[629] - v[630]) + v[632] * gamma2_dot
-                                        + v[634])) * d - v[614]),
+                                    * (theta_dot * (v[652] + 2.0 * v[44]) + v[654]
+                                        + gamma2_dot * v[645]) + v[413] * v[644]) - v[624]) * m2,
                 ],
                 [
-                    v[728],
-                    v[29]
-                        * (v[20] * v[760] + v[30] * (v[314] * v[18] + v[728] * v[20])
-                            + v[761] * v[18]) + v[762] * v[18] - v[383],
-                    v[29]
-                        * (v[760] * v[18] - v[761] * v[20]
-                            + v[30] * (v[728] * v[18] - v[314] * v[20])) - v[762] * v[20]
-                        - v[369],
-                    v[385] * v[217] - v[741] * d * m1 - v[756]
-                        + v[241] * (v[14] * v[2] * v[290] + v[4] * v[14] * v[280]),
-                    v[702] * (v[14] * v[272] * v[9] + v[6] * v[258] * v[259])
-                        - theta_dot * v[304] * v[156] * v[18] - m2 * d * v[732]
-                        + v[28] * psi_dot * v[20] * v[611] * phi_dot - v[341],
-                    v[28] * v[676] * psi_dot * phi_dot
-                        - (v[745] * v[169] + v[741] * v[165] + v[64] * v[763]
-                            + v[291] * v[644]) * m1
-                        + (-v[678] * v[304] * v[29] - v[311] * d * v[645]) * theta_dot
+                    v[751],
+                    v[780] * v[15] - v[401]
+                        + (v[781] * v[16] + v[15] * v[386]
+                            + v[34] * (v[751] * v[16] + v[334] * v[15])) * v[30],
+                    v[30]
+                        * (v[781] * v[15] - v[16] * v[386]
+                            + v[34] * (v[751] * v[15] - v[334] * v[16])) - v[780] * v[16]
+                        - v[400],
+                    v[238] * v[404] - v[776] - v[0] * v[771]
+                        + (v[17] * v[773] + v[5] * v[301]) * v[263],
+                    v[268] * v[619] - v[402] * v[173]
+                        - v[256] * (v[17] * v[327] + v[329] * v[760]) - v[754] * v[11]
+                        - v[362],
+                    v[267] * v[699]
                         - m2
-                            * (v[273] * v[64] + v[162] * v[732] + v[764] * v[644]
-                                + v[158] * v[735] + v[67] * v[707]),
-                    (-v[311] * d * v[647] - v[304] * v[29] * v[682]) * theta_dot
+                            * (v[177] * v[758] + v[754] * v[179] + v[74] * v[734]
+                                + v[782] * v[664] + v[76] * v[328])
+                        - (v[182] * v[765] + v[76] * v[783] + v[664] * v[311]
+                            + v[184] * v[771]) * m1
+                        - theta_dot * (v[405] * v[665] + v[696] * v[282]),
+                    v[702] * v[267]
                         - m2
-                            * (v[185] * v[732] + v[181] * v[735] + v[273] * v[75]
-                                + v[707] * v[72] + v[764] * v[445])
-                        - (v[75] * v[763] + v[741] * v[193] + v[745] * v[190]
-                            + v[291] * v[445]) * m1 + v[681] * v[28] * psi_dot * phi_dot,
-                    (-theta_dot * v[311] * v[28] * v[649]
-                        - m2
-                            * (gamma2_dot
-                                * (gamma2_dot * v[765]
-                                    + (0.5 * v[625] + 0.5 * v[626] + 0.5 * v[627] - v[628]
-                                        + 0.5 * v[629] - v[630]) * phi_dot + theta_dot * v[633])
-                                + theta_dot
-                                    * (phi_dot
-                                        * (0.5 * v[626] - 0.5 * v[625] + 0.5 * v[627]
-                                            - 0.5 * v[629]) + theta_dot * v[765])
-                                + v[765] * phi_dot * phi_dot)
-                        - m1
-                            * ((v[623] * gamma1_dot + theta_dot * v[766]
-                                + phi_dot
-                                    * (0.5 * v[615] - 0.5 * v[616] + 0.5 * v[617] - v[619]
-                                        - 0.5 * v[618] + v[620])) * theta_dot
-                                + gamma1_dot
-                                    * (v[766] * gamma1_dot
-                                        + (0.5 * v[617] - 0.5 * v[615] - 0.5 * v[616]
-                                            + 0.5 * v[618]) * phi_dot) + v[766] * phi_dot * phi_dot))
-                        * d + v[684] * v[28] * psi_dot * phi_dot,
-                ],
-                [
-                    v[824],
-                    v[834] * v[18] + v[835] * v[29] * v[20],
-                    v[835] * v[29] * v[18] - v[834] * v[20],
-                    v[825] * v[14] * v[280]
-                        + d
-                            * (v[319] - v[830] - v[831]
-                                + a_ * (v[247] + theta_dot * v[304] * v[18]) * v[2]) * m1
-                        + v[14] * v[290] * v[290],
-                    0.0,
-                    (theta_dot
-                        * (-v[4] * v[311] * d * v[64]
-                            - v[304] * v[29] * (v[794] - v[795])) - v[819] * v[64]
-                        - v[329] * v[793] - v[165] * v[836] - v[837] * v[169]
-                        + v[28] * psi_dot * v[797] * phi_dot) * m1,
-                    (theta_dot
-                        * (-v[4] * v[311] * d * v[75]
-                            - (v[802] - v[799]) * v[304] * v[29]) - v[837] * v[190]
-                        - v[193] * v[836] - v[329] * v[801]
-                        + v[28] * psi_dot * v[804] * phi_dot - v[819] * v[75]) * m1,
-                    (v[28]
-                        * (v[813] * psi_dot * phi_dot
-                            - v[4] * theta_dot * v[311] * d * v[18])
+                            * (v[754] * v[201] + v[328] * v[83] - v[782] * v[79]
+                                + v[79] * v[734] + v[758] * v[198])
+                        - theta_dot * (v[405] * v[667] + v[282] * v[703])
+                        - (v[212] * v[765] - v[79] * v[311] + v[83] * v[783]
+                            + v[771] * v[208]) * m1,
+                    v[267] * v[707]
                         - d
-                            * (phi_dot * phi_dot
-                                * (0.25 * v[617] - 0.25 * v[615] - 0.25 * v[616]
-                                    + 0.25 * v[618])
-                                + gamma1_dot * (v[838] * gamma1_dot + v[621])
-                                + theta_dot
-                                    * (v[624] + theta_dot * v[838]
-                                        + (0.5 * v[615] - 0.5 * v[616] + 0.5 * v[617] - v[619]
-                                            + 2.0 * v[469] - 0.5 * v[618] + v[620]) * gamma1_dot))) * m1,
-                ],
-                [
-                    v[896],
-                    v[29] * v[20] * v[907] + v[908] * v[18],
-                    v[29] * v[907] * v[18] - v[908] * v[20],
-                    0.0,
-                    v[258] * v[259] * v[259] + v[258] * v[272] * v[890]
-                        + m2 * (a_ * (v[384] - v[255]) * v[9] - v[902] + v[903] - v[904])
-                            * d,
-                    (v[872] * v[28] * psi_dot * phi_dot - v[162] * v[905]
-                        - v[67] * v[894] - v[158] * v[909]
-                        + theta_dot
-                            * (v[6] * v[67] * v[311] * d
-                                - v[304] * v[29] * (v[870] - v[868]))
-                        - (-v[160] - v[161]) * v[349]) * m2,
-                    m2
-                        * ((v[6] * v[311] * d * v[72]
-                            - v[304] * v[29] * (v[877] - v[876])) * theta_dot
-                            - v[185] * v[905] - v[894] * v[72]
-                            - v[349] * (-v[183] - v[184]) - v[181] * v[909]
-                            + v[28] * psi_dot * phi_dot * v[875]),
-                    m2
-                        * ((v[882] * psi_dot * phi_dot
-                            + v[6] * theta_dot * v[311] * d * v[20]) * v[28]
-                            - d
+                            * (m2
                                 * (gamma2_dot
-                                    * (v[631]
-                                        + theta_dot
-                                            * (0.5 * v[626] - 0.5 * v[625] - 2.0 * v[471] + 0.5 * v[627]
-                                                - 0.5 * v[629]) + gamma2_dot * v[910])
-                                    + theta_dot * (v[634] + theta_dot * v[910])
-                                    + (0.25 * v[625] + 0.25 * v[626] + 0.25 * v[627]
-                                        - 0.5 * v[628] + 0.25 * v[629] - 0.5 * v[630]) * phi_dot
-                                        * phi_dot)),
+                                    * (gamma2_dot * v[785] + theta_dot * v[653]
+                                        + v[652] * phi_dot) + v[785] * v[413]
+                                    + theta_dot * (theta_dot * v[785] + v[786] * phi_dot))
+                                + m1
+                                    * ((v[787] * phi_dot + v[638] * gamma1_dot
+                                        - v[788] * theta_dot) * theta_dot
+                                        + gamma1_dot * (v[637] * phi_dot - v[788] * gamma1_dot)
+                                        - v[788] * v[413]) + v[461] * v[670]),
+                ],
+                [
+                    v[841],
+                    v[852] * v[15] + v[31] * v[853],
+                    v[853] * v[65] - v[852] * v[16],
+                    v[0] * ((v[402] + v[268]) * v[122] - v[842] - v[376] + v[843])
+                        - v[301] * v[300] + v[850] * v[17],
+                    0.0,
+                    m1
+                        * (v[182] * v[384] - v[182] * v[854] + v[267] * v[816]
+                            - v[837] * v[76] - v[184] * v[855]
+                            - (v[405] * v[715] + v[282] * v[817]) * theta_dot),
+                    m1
+                        * (v[212] * v[384] - v[212] * v[854] - v[855] * v[208]
+                            - theta_dot * (v[282] * v[823] + v[405] * v[717])
+                            + v[267] * v[822] - v[837] * v[83]),
+                    ((v[349] * v[826] - v[5] * v[405] * v[255]) * v[29]
+                        - d
+                            * (theta_dot
+                                * (v[639] + (2.0 * v[486] + v[787]) * gamma1_dot
+                                    + v[857] * theta_dot) + v[413] * v[856]
+                                + gamma1_dot * (v[857] * gamma1_dot - v[634]))) * m1,
+                ],
+                [
+                    v[915],
+                    v[926] * v[31] + v[927] * v[15],
+                    v[926] * v[65] - v[927] * v[16],
+                    0.0,
+                    v[11] * (v[920] + (v[403] - v[292]) * v[106] - v[921] - v[341])
+                        + v[319] * v[330] + v[329] * v[917],
+                    m2
+                        * (v[344] * v[179] - v[177] * v[923] + v[74] * v[914]
+                            - v[179] * v[922] + v[890] * v[267]
+                            + theta_dot * (v[405] * v[886] - v[282] * v[885])),
+                    m2
+                        * (v[79] * v[914]
+                            + theta_dot * (v[405] * v[894] - v[282] * v[895])
+                            - v[201] * v[922] + v[344] * v[201] + v[893] * v[267]
+                            - v[923] * v[198]),
+                    m2
+                        * (v[29] * (v[900] * v[349] + v[435] * v[456])
+                            - d
+                                * ((v[654] + theta_dot * v[929]) * theta_dot
+                                    + (gamma2_dot * v[929] + theta_dot * (v[786] - 2.0 * v[484])
+                                        + v[650]) * gamma2_dot + v[928] * v[413])),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    v[941],
-                    v[971] * v[18] + v[29] * v[972] * v[20],
-                    v[29] * v[972] * v[18] - v[971] * v[20],
-                    (v[955] + v[956]) * J1
-                        - 0.5 * (theta_dot * v[29] * v[216] * v[18] * v[302])
-                        - d * v[948] * m1 + v[28] * v[20] * v[217] * phi_dot
-                        + (v[914] - v[955] - v[956] + v[916]) * J2,
-                    (-v[960] - v[961]) * J1
-                        + (v[926] - 0.5 * (theta_dot * v[29] * v[20] * v[302])) * v[156]
-                        - m2 * v[943] * d + (v[960] - v[926] + v[927] + v[961]) * J2,
-                    v[28] * phi_dot * v[173]
-                        - (v[933] * v[64] + v[165] * v[948] + v[946] * v[169]) * m1
-                        + theta_dot
-                            * (-d * v[938] * v[68]
-                                - 0.5 * (v[387] * v[29] * v[29] * v[302]))
-                        - (v[158] * v[944] + v[943] * v[162] + v[67] * v[921]) * m2,
-                    v[28] * phi_dot * v[197]
-                        - (v[946] * v[190] + v[933] * v[75] + v[193] * v[948]) * m1
-                        + (-v[76] * d * v[938] - 0.5 * (v[29] * v[29] * v[391] * v[302]))
-                            * theta_dot
-                        - (v[943] * v[185] + v[921] * v[72] + v[181] * v[944]) * m2,
-                    v[28] * (v[208] * phi_dot - theta_dot * v[80] * d * v[938]),
+                    v[957],
+                    v[984] * v[15] + v[985] * v[31],
+                    v[985] * v[65] - v[16] * v[984],
+                    v[617] * v[32] - 0.5 * (v[986] * v[237] * v[65]) + v[965]
+                        - v[972] * v[0] + J2 * (v[933] - v[958] - v[959]),
+                    (v[943] - 0.5 * (v[31] * v[986])) * v[173] - v[982]
+                        + (v[953] + v[981]) * J2 - v[11] * v[976],
+                    v[193] * v[978]
+                        - m2 * (v[179] * v[976] + v[177] * v[974] + v[74] * v[936])
+                        - m1 * (v[954] * v[76] + v[182] * v[970] + v[972] * v[184])
+                        - theta_dot * (0.5 * (v[955] * v[186]) + v[78] * v[956]),
+                    v[216] * v[978]
+                        - (v[85] * v[956] + 0.5 * (v[219] * v[955])) * theta_dot
+                        - m2 * (v[201] * v[976] + v[79] * v[936] + v[974] * v[198])
+                        - m1 * (v[212] * v[970] + v[972] * v[208] + v[954] * v[83]),
+                    (v[228] * phi_dot - v[987] * v[89]) * v[29],
                 ],
                 [
-                    v[995],
-                    v[1021] * v[29] * v[20] + v[1022] * v[18],
-                    v[1021] * v[29] * v[18] - v[1022] * v[20],
-                    (J2 * (phi_dot - v[1001] - v[1002] + v[236])
-                        + (v[1001] + v[1002]) * J1 - v[304] * v[216]) * v[18]
-                        - v[1019] * d * m1,
-                    (J2 * (v[1013] - v[1012] + phi_dot + v[236]) - v[304] * v[156]
-                        + (v[1012] - v[1013]) * J1) * v[20] - m2 * d * v[998],
-                    -v[386] - m2 * (v[998] * v[162] + v[999] * v[158] + v[67] * v[987])
-                        - (v[976] * v[64] + v[169] * v[1017] + v[165] * v[1019]) * m1
-                        - v[388],
-                    -m2 * (v[987] * v[72] + v[181] * v[999] + v[998] * v[185]) - v[390]
-                        - m1 * (v[190] * v[1017] + v[976] * v[75] + v[1019] * v[193])
-                        - v[392],
-                    -(d * (v[436] + v[1023] * theta_dot + v[439]) + 2.0 * v[1024]) * m1
-                        - v[80] * v[311] * v[28] * d
+                    v[1008],
+                    v[31] * v[1032] + v[1033] * v[15],
+                    v[1032] * v[65] - v[1033] * v[16],
+                    (J2 * (v[269] - v[773] - v[1017]) - v[281] * v[237] + v[1019])
+                        * v[15] - v[0] * v[1024],
+                    v[16] * (J2 * (v[1009] + v[269]) - v[281] * v[173] + v[1011] * J1)
+                        - v[11] * v[1028],
+                    -(m2 * (v[179] * v[1028] + v[74] * v[1001] + v[177] * v[1029])
+                        + v[406]
+                        + m1 * (v[182] * v[1026] + v[76] * v[996] + v[184] * v[1024])),
+                    -((v[212] * v[1026] + v[208] * v[1024] + v[83] * v[996]) * m1
+                        + v[408]
+                        + m2 * (v[1001] * v[79] + v[1029] * v[198] + v[201] * v[1028])),
+                    -(m2
+                        * (d * (v[1035] * theta_dot - gamma2_dot * v[454] + v[451])
+                            - 2.0 * v[1036])
+                        + ((theta_dot * v[1038] + v[433]) * d + 2.0 * v[1036]) * m1
+                        + v[623] * v[405]),
+                ],
+                [
+                    v[1048],
+                    v[1070] * v[15] + v[1071] * v[31],
+                    v[1071] * v[65] - v[1070] * v[16],
+                    J2 * (v[256] + v[1068]) + v[238] * v[254] + v[1065] * J1
+                        - v[0] * v[1060] - v[255] * v[237],
+                    v[263] * v[173] - v[1056] - v[11] * v[1051]
+                        + (v[262] - v[261] + v[1055]) * J2,
+                    v[253] * v[193]
                         - m2
-                            * ((theta_dot * v[1025] + v[412] + v[416] * gamma2_dot) * d
-                                - 2.0 * v[1024]),
-                ],
-                [
-                    v[1035],
-                    v[29] * v[20] * v[1055] + v[1056] * v[18],
-                    v[29] * v[1055] * v[18] - v[20] * v[1056],
-                    (v[1042] - v[1040]) * J1 - theta_dot * v[216] * v[18]
-                        + (v[232] - v[1042] + v[1040] + v[233]) * J2
-                        + v[28] * psi_dot * v[20] * v[217] - d * m1 * v[1041],
-                    (-v[1046] - v[1047]) * J1 - v[1052] * m2 * d + v[241] * v[156]
-                        + J2 * (v[1046] - v[239] + v[1047] + v[240]),
-                    v[28] * psi_dot * v[173]
+                            * (v[179] * v[1051] + v[74] * v[1043]
+                                + 2.0 * (v[177] * v[1052]))
+                        - m1 * (v[184] * v[1060] + v[1047] * v[76] + v[182] * v[1062])
+                        - v[187] * v[1044],
+                    v[253] * v[216]
                         - m2
-                            * (2.0 * (v[272] * d * v[9] * v[158]) + v[67] * v[1027]
-                                + v[1052] * v[162])
-                        + (-v[175] - v[176] - v[177]) * theta_dot * v[29]
-                        - m1
-                            * (v[1038] * v[2] * v[169] + v[1032] * v[64]
-                                + v[165] * v[1041]),
-                    theta_dot * v[29] * (-v[199] - v[200] - v[201])
-                        - m1
-                            * (v[1038] * v[2] * v[190] + v[193] * v[1041]
-                                + v[1032] * v[75])
-                        - m2
-                            * (v[1052] * v[185] + 2.0 * (v[181] * v[272] * d * v[9])
-                                + v[72] * v[1027]) + v[28] * psi_dot * v[197],
-                    d
-                        * (-v[30] * theta_dot * v[80]
-                            - m2
-                                * (gamma2_dot * v[413] + theta_dot * v[411]
-                                    + phi_dot
-                                        * (0.5 * v[397] - 0.5 * v[399] - 0.5 * v[401]
-                                            + 0.5 * v[403]))
-                            - (gamma1_dot * v[440]
-                                + phi_dot
-                                    * (0.5 * v[430] - 0.5 * v[425] - 0.5 * v[432]
-                                        + 0.5 * v[434]) + theta_dot * v[438]) * m1)
-                        + v[208] * v[28] * psi_dot,
+                            * (2.0 * (v[1052] * v[198]) + v[201] * v[1051]
+                                + v[1043] * v[79])
+                        - (v[212] * v[1062] + v[1047] * v[83] + v[208] * v[1060]) * m1
+                        - v[220] * v[1044],
+                    v[253] * v[228]
+                        - d
+                            * (m2
+                                * (gamma2_dot * v[452] + theta_dot * v[450]
+                                    + phi_dot * v[1034])
+                                + (v[426] * gamma1_dot + v[1037] * phi_dot
+                                    + theta_dot * v[429]) * m1 + v[88] * v[411]),
                 ],
                 [
-                    v[1060],
-                    v[1062] * v[29] * v[20] + v[1063] * v[18],
-                    v[1062] * v[29] * v[18] - v[1063] * v[20],
+                    v[1074],
+                    v[1076] * v[15] + v[31] * v[1077],
+                    v[1077] * v[65] - v[1076] * v[16],
                     0.0,
                     0.0,
-                    -(d * m1 * (v[1058] * v[64] - 2.0 * (v[282] * v[169]))),
-                    -(d * (v[1058] * v[75] - 2.0 * (v[282] * v[190])) * m1),
-                    -(d * m1 * (v[1023] * gamma1_dot + v[435] * theta_dot + v[441])),
+                    -((v[1072] * v[76] - 2.0 * (v[182] * v[302])) * v[0]),
+                    -(v[0] * (v[1072] * v[83] - 2.0 * (v[212] * v[302]))),
+                    -(v[0] * (gamma1_dot * v[1038] + v[427] + theta_dot * v[432])),
                 ],
                 [
-                    v[1064],
-                    v[1066] * v[18] + v[1067] * v[29] * v[20],
-                    v[1067] * v[29] * v[18] - v[20] * v[1066],
+                    v[1079],
+                    v[1082] * v[15] + v[1083] * v[31],
+                    v[1083] * v[65] - v[16] * v[1082],
                     0.0,
                     0.0,
-                    -(m2 * d * (2.0 * (v[260] * v[158]) - 2.0 * (v[259] * v[67]))),
-                    -(m2 * (2.0 * (v[181] * v[260]) - 2.0 * (v[259] * v[72])) * d),
-                    -(m2 * d * (gamma2_dot * v[1025] + v[414] + v[417])),
+                    -((2.0 * (v[177] * v[320]) - 2.0 * (v[74] * v[319])) * v[11]),
+                    -((2.0 * (v[320] * v[198]) - 2.0 * (v[79] * v[319])) * v[11]),
+                    -(v[11] * (v[455] + v[1035] * gamma2_dot)),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
             ],
             w: [
-                [0.0, v[29] * v[20], v[442], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [0.0, v[18], v[443], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [1.0, v[30] * v[29] * v[20], v[444], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, v[31], v[65], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, v[15], v[457], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [1.0, v[458], v[459], 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
             ],
-            c: [
-                theta_dot * v[304] * v[29],
-                -(v[28] * psi_dot * phi_dot),
-                theta_dot * v[311],
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ],
+            c: [v[460], -v[267], v[461], 0.0, 0.0, 0.0, 0.0, 0.0],
             d_w: [
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5080,18 +4942,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [
-                        0.0,
-                        v[30] * v[29] * v[29] * v[20],
-                        v[30] * v[29] * v[29] * v[18],
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                        0.0,
-                    ],
+                    [0.0, v[31] * v[479], v[479] * v[65], 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[635] * v[20], v[635] * v[18], 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, v[655] * v[16], v[655] * v[15], 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5099,9 +4952,9 @@ pub mod maggi {
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, v[442], -(v[29] * v[20]), 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[443], -v[18], 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[444], -(v[30] * v[29] * v[20]), 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, v[65], -v[31], 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, v[457], -v[15], 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, v[459], -v[458], 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5242,9 +5095,9 @@ pub mod maggi {
             d_c: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    v[532] * theta_dot * v[29] * v[29],
-                    v[30] * psi_dot * phi_dot,
-                    theta_dot * v[531],
+                    v[575] * theta_dot * v[520],
+                    v[34] * v[349],
+                    theta_dot * v[577],
                     0.0,
                     0.0,
                     0.0,
@@ -5257,27 +5110,9 @@ pub mod maggi {
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    0.5 * theta_dot * v[29] * v[29] * v[302],
-                    -(v[28] * phi_dot),
-                    theta_dot * v[938],
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [v[304] * v[29], 0.0, v[311], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    theta_dot * v[29],
-                    -(v[28] * psi_dot),
-                    v[30] * theta_dot * v[29],
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
+                [0.5 * theta_dot * v[955], -v[978], v[987], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[282], 0.0, v[277], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[1044], -v[253], v[34] * v[1044], 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -5293,7 +5128,7 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let theta = state[1];
         let phi = state[2];
@@ -5308,46 +5143,46 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[0] = d * d * m1;
-        v[1] = J2 + v[0];
-        v[2] = f64::sin(gamma1);
-        v[3] = v[1] * v[2] * v[2];
-        v[4] = f64::cos(gamma1);
-        v[5] = v[4] * v[4];
-        v[6] = f64::cos(gamma2);
-        v[7] = v[6] * v[6];
-        v[8] = (v[5] + v[7]) * J1;
+        v[0] = d * m1;
+        v[1] = v[0] * d;
+        v[2] = v[1] + J2;
+        v[3] = f64::sin(gamma1);
+        v[4] = v[3] * v[3];
+        v[5] = f64::cos(gamma1);
+        v[6] = v[5] * v[5];
+        v[7] = f64::cos(gamma2);
+        v[8] = v[7] * v[7];
         v[9] = f64::sin(gamma2);
-        v[10] = m2 * d * d;
-        v[11] = v[10] + J2;
-        v[12] = v[9] * v[9] * v[11];
-        v[13] = Ixx + v[3] + v[8] + v[12];
-        v[14] = J1 - J2;
-        v[15] = v[4] * d;
-        v[16] = -a_ - v[15];
-        v[17] = v[4] * v[14] + v[16] * d * m1;
-        v[18] = f64::cos(phi);
-        v[19] = (v[17] * v[2] - Ixy) * v[18];
-        v[20] = f64::sin(phi);
-        v[21] = v[6] * d;
-        v[22] = a_ + v[21];
-        v[23] = v[6] * v[14] - m2 * d * v[22];
-        v[24] = v[23] * v[9] + Ixz;
-        v[25] = v[20] * v[24];
-        v[26] = v[19] + v[25];
-        v[27] = v[26] * v[18];
-        v[28] = f64::cos(theta);
-        v[29] = 1.0 / v[28];
-        v[30] = f64::sin(theta);
-        v[31] = v[30] * Ixx;
-        v[32] = Ixy * v[20];
-        v[33] = Ixz * v[18];
-        v[34] = -v[32] - v[33];
-        v[35] = v[28] * v[34];
-        v[36] = v[2] * v[28] * v[20];
-        v[37] = v[4] * v[30];
-        v[38] = v[36] - v[37];
-        v[39] = v[6] * v[30];
+        v[10] = v[9] * v[9];
+        v[11] = m2 * d;
+        v[12] = v[11] * d;
+        v[13] = J2 + v[12];
+        v[14] = (Ixx + v[2] * v[4]) + ((v[6] + v[8]) * J1 + v[10] * v[13]);
+        v[15] = f64::cos(phi);
+        v[16] = f64::sin(phi);
+        v[17] = J1 - J2;
+        v[18] = v[7] * v[17];
+        v[19] = v[7] * d;
+        v[20] = v[19] + a_;
+        v[21] = v[18] - v[11] * v[20];
+        v[22] = v[21] * v[9] + Ixz;
+        v[23] = v[5] * d;
+        v[24] = a_ + v[23];
+        v[25] = v[24] * v[0];
+        v[26] = v[5] * v[17] - v[25];
+        v[27] = v[16] * v[22] + (v[3] * v[26] - Ixy) * v[15];
+        v[28] = v[15] * v[27];
+        v[29] = f64::cos(theta);
+        v[30] = 1.0 / v[29];
+        v[31] = v[30] * v[16];
+        v[32] = v[29] * v[16];
+        v[33] = v[32] * v[3];
+        v[34] = f64::sin(theta);
+        v[35] = v[5] * v[34];
+        v[36] = v[33] - v[35];
+        v[37] = v[29] * v[15];
+        v[38] = v[7] * v[34];
+        v[39] = v[9] * v[37] + v[38];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5356,55 +5191,58 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let psi = state[0];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = -v[28] * v[9] * v[18] - v[39];
-        v[41] = (v[4] * v[38] + v[6] * v[40]) * J1;
-        v[42] = v[30] * v[9];
-        v[43] = v[6] * v[28] * v[18];
-        v[44] = v[43] - v[42];
-        v[45] = v[30] * v[2];
-        v[46] = v[4] * v[28] * v[20] + v[45];
-        v[47] = (v[44] * v[9] - v[46] * v[2]) * J2;
-        v[48] = v[46] * d;
-        v[49] = a_ * v[28] * v[20];
-        v[50] = -v[48] - v[49];
-        v[51] = a_ * v[28] * v[18];
-        v[52] = v[44] * d;
-        v[53] = -v[51] - v[52];
-        v[54] = (v[2] * m1 * v[50] - m2 * v[9] * v[53]) * d;
-        v[55] = v[30] * v[13];
-        v[56] = v[35] - v[31] + v[41] + v[47] + v[54] + v[55];
-        v[57] = v[29] * v[56] * v[20];
-        v[58] = v[27] + v[57];
-        v[59] = v[26] * v[20];
-        v[60] = v[29] * v[56] * v[18];
-        v[61] = v[60] - v[59];
-        v[62] = f64::sin(psi);
-        v[63] = f64::cos(psi);
-        v[64] = v[20] * v[62] + v[30] * v[63] * v[18];
-        v[65] = v[18] * v[62];
-        v[66] = v[30] * v[63] * v[20];
-        v[67] = v[66] - v[65];
-        v[68] = v[2] * v[64] * m1 - m2 * v[67] * v[9];
-        v[69] = d * v[68];
-        v[70] = v[63] * v[18];
-        v[71] = v[30] * v[20] * v[62];
-        v[72] = v[70] + v[71];
-        v[73] = v[63] * v[20];
-        v[74] = v[30] * v[18] * v[62];
-        v[75] = v[74] - v[73];
-        v[76] = v[2] * v[75] * m1 - m2 * v[9] * v[72];
-        v[77] = v[76] * d;
-        v[78] = v[2] * m1 * v[18];
-        v[79] = m2 * v[9] * v[20];
+        v[40] = (v[5] * v[36] - v[39] * v[7]) * J1;
+        v[41] = v[34] * v[3];
+        v[42] = v[41] + v[5] * v[32];
+        v[43] = v[42] * v[3];
+        v[44] = v[34] * v[9];
+        v[45] = v[7] * v[37];
+        v[46] = v[45] - v[44];
+        v[47] = (v[46] * v[9] - v[43]) * J2;
+        v[48] = v[34] * Ixx;
+        v[49] = Ixy * v[16] + Ixz * v[15];
+        v[50] = v[29] * v[49];
+        v[51] = -v[48] - v[50];
+        v[52] = m2 * v[9];
+        v[53] = a_ * v[37];
+        v[54] = v[46] * d;
+        v[55] = v[53] + v[54];
+        v[56] = v[42] * d;
+        v[57] = a_ * v[32];
+        v[58] = v[56] + v[57];
+        v[59] = v[3] * m1;
+        v[60] = d * (v[52] * v[55] - v[58] * v[59]);
+        v[61] = (v[40] + v[47]) + (v[51] + v[60]);
+        v[62] = v[34] * v[14];
+        v[63] = v[61] + v[62];
+        v[64] = v[28] + v[31] * v[63];
+        v[65] = v[30] * v[15];
+        v[66] = v[63] * v[65];
+        v[67] = v[16] * v[27];
+        v[68] = v[66] - v[67];
+        v[69] = f64::cos(psi);
+        v[70] = v[34] * v[16];
+        v[71] = v[69] * v[70];
+        v[72] = f64::sin(psi);
+        v[73] = v[15] * v[72];
+        v[74] = v[71] - v[73];
+        v[75] = v[34] * v[15];
+        v[76] = v[16] * v[72] + v[75] * v[69];
+        v[77] = v[76] * v[59] - v[74] * v[52];
+        v[78] = d * v[77];
+        v[79] = v[69] * v[15] + v[70] * v[72];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5413,60 +5251,58 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
-        let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[78] - v[79];
-        v[81] = v[80] * v[28] * d;
-        v[82] = v[4] * a_;
-        v[83] = v[82] + d;
-        v[84] = a_ * a_ * v[2] * v[2];
-        v[85] = (v[50] * v[50] + (v[83] * v[83] + v[84]) * v[28] * v[28] * v[18] * v[18])
-            * m1;
-        v[86] = a_ * a_ * v[9] * v[9];
-        v[87] = v[6] * a_;
-        v[88] = d + v[87];
-        v[89] = v[88] * v[88];
-        v[90] = v[86] + v[89];
-        v[91] = m2 * (v[53] * v[53] + v[28] * v[28] * v[20] * v[20] * v[90]);
-        v[92] = (v[40] * v[40] + v[38] * v[38]) * J1;
-        v[93] = v[35] - v[31] + v[41] + v[47] + v[54];
-        v[94] = v[30] * v[93];
-        v[95] = v[18] * v[18];
-        v[96] = v[20] * v[20];
-        v[97] = v[95] + v[96];
-        v[98] = J2 * (v[28] * v[28] * v[97] + v[44] * v[44] + v[46] * v[46]);
-        v[99] = v[35] - v[31];
-        v[100] = v[30] * v[99];
-        v[101] = Iyz * v[18];
-        v[102] = Iyy * v[20];
-        v[103] = v[102] - v[101];
-        v[104] = v[103] * v[28];
-        v[105] = v[30] * Ixy;
-        v[106] = v[104] + v[105];
-        v[107] = v[106] * v[20];
-        v[108] = Izz * v[18];
-        v[109] = Iyz * v[20];
-        v[110] = v[108] - v[109];
-        v[111] = v[28] * v[110];
-        v[112] = v[30] * Ixz;
-        v[113] = v[111] + v[112];
-        v[114] = v[113] * v[18];
-        v[115] = v[28] * (v[107] + v[114]);
-        v[116] = v[85] + v[91] + v[92] + v[94] + v[98] - v[100] + v[115];
-        v[117] = v[116] * v[29] * v[20];
-        v[118] = v[6] * v[44] * J2;
-        v[119] = v[22] * v[53];
+        v[80] = v[52] * v[79];
+        v[81] = v[69] * v[16];
+        v[82] = v[75] * v[72];
+        v[83] = v[82] - v[81];
+        v[84] = v[59] * v[83] - v[80];
+        v[85] = d * v[84];
+        v[86] = v[52] * v[16];
+        v[87] = v[59] * v[15];
+        v[88] = v[87] - v[86];
+        v[89] = d * v[88];
+        v[90] = v[89] * v[29];
+        v[91] = v[34] * v[27];
+        v[92] = v[16] * Ixz - Ixy * v[15];
+        v[93] = v[34] * v[92];
+        v[94] = v[9] * J1;
+        v[95] = v[39] * v[94];
+        v[96] = v[7] * v[46];
+        v[97] = J2 * v[96];
+        v[98] = Iyy * v[15];
+        v[99] = Iyz * v[16];
+        v[100] = v[98] + v[99];
+        v[101] = v[29] * v[100];
+        v[102] = -(v[20] * v[55]);
+        v[103] = v[7] * a_;
+        v[104] = v[103] + d;
+        v[105] = v[104] * v[104];
+        v[106] = a_ * v[9];
+        v[107] = v[106] * v[106];
+        v[108] = v[105] + v[107];
+        v[109] = (v[101] - v[95] - v[97] + m2 * (v[102] + v[108] * v[37])) * v[16];
+        v[110] = v[5] * v[42];
+        v[111] = J2 * v[110];
+        v[112] = v[3] * J1;
+        v[113] = v[112] * v[36];
+        v[114] = v[16] * Izz;
+        v[115] = Iyz * v[15];
+        v[116] = v[114] + v[115];
+        v[117] = v[29] * v[116];
+        v[118] = v[24] * v[58];
+        v[119] = v[5] * a_;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5475,7 +5311,7 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -5487,52 +5323,49 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[40] * v[9] * J1;
-        v[121] = Iyy * v[18];
-        v[122] = v[121] + v[109];
-        v[123] = v[122] * v[28];
-        v[124] = v[20]
-            * (m2 * (v[28] * v[90] * v[18] + v[119]) - v[118] + v[120] + v[123]);
-        v[125] = v[20] * Ixz - Ixy * v[18];
-        v[126] = v[30] * v[125];
-        v[127] = v[4] * J2 * v[46];
-        v[128] = v[20] * Izz;
-        v[129] = -v[128] - v[101];
-        v[130] = v[28] * v[129];
-        v[131] = v[38] * v[2] * J1;
-        v[132] = v[16] * v[50];
-        v[133] = -v[82] - d;
-        v[134] = v[83] * v[133];
-        v[135] = (v[127] + v[130] + v[131]
-            + (v[132] + v[28] * v[20] * (v[134] - v[84])) * m1) * v[18];
-        v[136] = v[124] - v[126] + v[135];
-        v[137] = v[136] * v[18];
-        v[138] = v[117] + v[30] * v[58] + v[137];
-        v[139] = v[90] * v[18] * v[18];
-        v[140] = v[133] * v[133];
-        v[141] = v[84] + v[140];
-        v[142] = v[141] * v[20] * v[20];
-        v[143] = J2 * ((v[5] + 1.0) * v[18] * v[18] + (v[7] + 1.0) * v[20] * v[20])
-            + (v[2] * v[2] * v[18] * J1 + v[121] + v[109]) * v[18]
-            + (v[139] + v[22] * v[22] * v[20] * v[20]) * m2
-            + v[20] * (v[128] + v[101] + v[9] * v[9] * v[20] * J1)
-            + (v[142] + v[16] * v[16] * v[18] * v[18]) * m1;
-        v[144] = v[143] * v[18];
-        v[145] = v[30] * v[26];
-        v[146] = v[124] - v[126] + v[135] + v[145];
-        v[147] = v[144] + v[29] * v[146] * v[20];
-        v[148] = v[147] * v[18];
-        v[149] = v[147] * v[20];
-        v[150] = v[29] * v[138] * v[18] - v[149];
-        v[151] = d * v[83] * m1;
-        v[152] = d * v[133] * m1;
-        v[153] = v[151] + v[152];
-        v[154] = v[153] * v[20] * v[18];
-        v[155] = m2 * d * v[88];
-        v[156] = J2 + v[155];
-        v[157] = v[156] * v[97];
-        v[158] = v[6] * v[63] * v[28] - v[9] * v[64];
-        v[159] = a_ * v[9] * v[158];
+        v[120] = v[119] + d;
+        v[121] = v[120] * v[120];
+        v[122] = a_ * v[3];
+        v[123] = v[122] * v[122];
+        v[124] = -v[121] - v[123];
+        v[125] = (v[111] + v[113] - v[117] + (v[118] + v[124] * v[32]) * m1) * v[15];
+        v[126] = (v[109] - v[93]) + v[125];
+        v[127] = v[91] + v[126];
+        v[128] = v[20] * v[20];
+        v[129] = v[16] * v[16];
+        v[130] = v[15] * v[15];
+        v[131] = v[130] * v[108];
+        v[132] = v[121] + v[123];
+        v[133] = v[132] * v[129];
+        v[134] = v[24] * v[24];
+        v[135] = v[134];
+        v[136] = v[9] * v[16];
+        v[137] = v[3] * v[15];
+        v[138] = m2 * (v[128] * v[129] + v[131]) + (v[133] + v[130] * v[135]) * m1
+            + v[16] * (v[136] * v[94] + v[116])
+            + J2 * (v[130] * (v[6] + 1.0) + (v[8] + 1.0) * v[129])
+            + (v[100] + v[112] * v[137]) * v[15];
+        v[139] = v[138] * v[15];
+        v[140] = v[31] * v[127] + v[139];
+        v[141] = v[140] * v[15];
+        v[142] = v[61] * v[34];
+        v[143] = v[51] * v[34];
+        v[144] = Iyy * v[16];
+        v[145] = v[144] - v[115];
+        v[146] = v[145] * v[29] + v[34] * Ixy;
+        v[147] = v[146] * v[16];
+        v[148] = Izz * v[15];
+        v[149] = v[148] - v[99];
+        v[150] = v[29] * v[149];
+        v[151] = v[34] * Ixz;
+        v[152] = v[150] + v[151];
+        v[153] = v[152] * v[15];
+        v[154] = v[29] * (v[147] + v[153]);
+        v[155] = v[130] + v[129];
+        v[156] = (v[42] * v[42] + v[29] * v[29] * v[155] + v[46] * v[46]) * J2;
+        v[157] = (v[39] * v[39] + v[36] * v[36]) * J1;
+        v[158] = v[32] * v[32];
+        v[159] = m2 * (v[55] * v[55] + v[108] * v[158]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5541,116 +5374,108 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        v[160] = v[63] * v[28] * v[9];
-        v[161] = v[6] * v[64];
-        v[162] = v[160] + v[161];
-        v[163] = v[162] * v[88] - v[159];
-        v[164] = v[163] * v[18];
-        v[165] = v[4] * v[67] - v[63] * v[2] * v[28];
-        v[166] = v[165] * v[133];
-        v[167] = v[67] * v[2];
-        v[168] = v[4] * v[63] * v[28];
-        v[169] = v[167] + v[168];
-        v[170] = a_ * v[2] * v[169];
-        v[171] = v[166] - v[170];
-        v[172] = v[20] * v[171];
-        v[173] = m2 * (v[164] + v[67] * v[22] * v[20])
-            + m1 * (v[172] + v[16] * v[64] * v[18]);
-        v[174] = v[173] * v[18];
-        v[175] = v[30] * d * v[68];
-        v[176] = m1 * (v[28] * (v[165] * v[83] + v[170]) * v[18] + v[64] * v[50]);
-        v[177] = m2 * (v[28] * v[163] * v[20] + v[67] * v[53]);
-        v[178] = v[175] + v[176] + v[177];
-        v[179] = v[174] + v[178] * v[29] * v[20];
-        v[180] = v[6] * v[28] * v[62];
-        v[181] = v[180] - v[9] * v[75];
-        v[182] = a_ * v[181] * v[9];
-        v[183] = v[28] * v[9] * v[62];
-        v[184] = v[6] * v[75];
-        v[185] = v[183] + v[184];
-        v[186] = v[185] * v[88] - v[182];
-        v[187] = v[186] * v[18];
-        v[188] = v[4] * v[28] * v[62];
-        v[189] = v[2] * v[72];
-        v[190] = v[188] + v[189];
-        v[191] = a_ * v[2] * v[190];
-        v[192] = v[2] * v[28] * v[62];
-        v[193] = v[4] * v[72] - v[192];
-        v[194] = v[193] * v[133];
-        v[195] = v[194] - v[191];
-        v[196] = v[195] * v[20];
-        v[197] = m2 * (v[187] + v[22] * v[20] * v[72])
-            + (v[16] * v[75] * v[18] + v[196]) * m1;
-        v[198] = v[197] * v[18];
-        v[199] = v[30] * v[76] * d;
+        let J2 = params.J2;
+        v[160] = v[37] * v[37];
+        v[161] = m1 * (v[58] * v[58] + v[132] * v[160]);
+        v[162] = (v[154] - v[143]) + ((v[156] + v[157]) + (v[159] + v[161]));
+        v[163] = v[142] + v[162];
+        v[164] = v[126] * v[15];
+        v[165] = v[31] * v[163] + v[164];
+        v[166] = v[165] + v[34] * v[64];
+        v[167] = v[140] * v[16];
+        v[168] = v[166] * v[65] - v[167];
+        v[169] = v[16] * v[15];
+        v[170] = 0.0;
+        v[171] = v[169] * v[170];
+        v[172] = v[104] * v[11];
+        v[173] = v[172] + J2;
+        v[174] = v[155] * v[173];
+        v[175] = v[34] * d;
+        v[176] = v[69] * v[29];
+        v[177] = v[7] * v[176] - v[76] * v[9];
+        v[178] = v[177] * v[106];
+        v[179] = v[7] * v[76] + v[9] * v[176];
+        v[180] = v[104] * v[179];
+        v[181] = v[180] - v[178];
+        v[182] = v[5] * v[176] + v[74] * v[3];
+        v[183] = v[182] * v[122];
+        v[184] = v[5] * v[74] - v[3] * v[176];
+        v[185] = v[184] * v[120];
+        v[186] = m2 * (v[32] * v[181] - v[74] * v[55])
+            + (v[37] * (v[183] + v[185]) - v[76] * v[58]) * m1;
+        v[187] = v[175] * v[77] + v[186];
+        v[188] = v[20] * v[16];
+        v[189] = v[181] * v[15];
+        v[190] = -v[183] - v[185];
+        v[191] = v[190] * v[16];
+        v[192] = -(v[24] * v[15]);
+        v[193] = m2 * (v[74] * v[188] + v[189]) + (v[191] + v[76] * v[192]) * m1;
+        v[194] = v[193] * v[15];
+        v[195] = v[187] * v[31] + v[194];
+        v[196] = v[29] * v[72];
+        v[197] = v[7] * v[196];
+        v[198] = v[197] - v[9] * v[83];
+        v[199] = v[198] * v[106];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part5(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let m0 = params.m0;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
         let J2 = params.J2;
-        v[200] = m1 * (v[28] * (v[193] * v[83] + v[191]) * v[18] + v[75] * v[50]);
-        v[201] = m2 * (v[28] * v[20] * v[186] + v[72] * v[53]);
-        v[202] = v[199] + v[200] + v[201];
-        v[203] = v[198] + v[202] * v[29] * v[20];
-        v[204] = a_ * v[40] * v[9];
-        v[205] = v[44] * v[88];
-        v[206] = a_ * v[38] * v[2];
-        v[207] = v[46] * v[133];
-        v[208] = m2 * (v[28] * v[22] * v[20] * v[20] + (v[205] - v[204]) * v[18])
-            + m1 * ((v[207] - v[206]) * v[20] + v[16] * v[28] * v[18] * v[18]);
-        v[209] = v[208] * v[18];
-        v[210] = v[30] * v[80] * d * v[20] + v[209];
-        v[211] = v[143] * v[20];
-        v[212] = v[29] * v[146] * v[18] - v[211];
-        v[213] = v[116] * v[29] * v[18];
-        v[214] = v[20] * v[136];
-        v[215] = v[213] - v[214] + v[30] * v[61];
-        v[216] = v[151] + J2;
-        v[217] = v[152] - J2;
-        v[218] = v[216] * v[18] * v[18] - v[20] * v[20] * v[217];
-        v[219] = v[20] * v[173];
-        v[220] = v[178] * v[29] * v[18] - v[219];
-        v[221] = v[20] * v[197];
-        v[222] = v[202] * v[29] * v[18] - v[221];
-        v[223] = v[208] * v[20];
-        v[224] = v[30] * v[80] * d * v[18] - v[223];
-        v[225] = v[165] * d * m1;
-        v[226] = v[193] * d * m1;
-        v[227] = v[46] * d * m1;
-        v[228] = m2 * d * v[162];
-        v[229] = m2 * d * v[185];
-        v[230] = m2 * v[44] * d;
-        v[231] = m2 + m0 + m1;
-        v[232] = theta_dot * v[18];
-        v[233] = v[28] * psi_dot * v[20];
-        v[234] = v[232] + v[233];
-        v[235] = Iyz * v[234];
-        v[236] = v[30] * psi_dot;
-        v[237] = phi_dot - v[236];
-        v[238] = Ixz * v[237];
-        v[239] = v[28] * psi_dot * v[18];
+        v[200] = v[9] * v[196];
+        v[201] = v[200] + v[7] * v[83];
+        v[202] = v[104] * v[201];
+        v[203] = v[202] - v[199];
+        v[204] = v[203] * v[15];
+        v[205] = v[188] * v[79];
+        v[206] = v[5] * v[79];
+        v[207] = v[3] * v[196];
+        v[208] = v[206] - v[207];
+        v[209] = v[120] * v[208];
+        v[210] = v[79] * v[3];
+        v[211] = v[5] * v[196];
+        v[212] = v[210] + v[211];
+        v[213] = v[212] * v[122];
+        v[214] = -v[209] - v[213];
+        v[215] = v[16] * v[214];
+        v[216] = m2 * (v[204] + v[205]) + (v[215] + v[83] * v[192]) * m1;
+        v[217] = v[216] * v[15];
+        v[218] = v[79] * v[55];
+        v[219] = m1 * (v[37] * (v[209] + v[213]) - v[58] * v[83])
+            + m2 * (v[32] * v[203] - v[218]);
+        v[220] = v[219] + v[175] * v[84];
+        v[221] = v[217] + v[31] * v[220];
+        v[222] = v[104] * v[46];
+        v[223] = v[39] * v[106];
+        v[224] = v[222] + v[223];
+        v[225] = v[42] * v[120];
+        v[226] = v[36] * v[122];
+        v[227] = -v[225] - v[226];
+        v[228] = m2 * (v[32] * v[188] + v[224] * v[15])
+            + (v[192] * v[37] + v[16] * v[227]) * m1;
+        v[229] = v[228] * v[15];
+        v[230] = v[89] * v[70] + v[229];
+        v[231] = v[16] * v[138];
+        v[232] = v[127] * v[65] - v[231];
+        v[233] = v[126] * v[16];
+        v[234] = v[163] * v[65];
+        v[235] = v[234] - v[233] + v[34] * v[68];
+        v[236] = v[0] * v[120];
+        v[237] = J2 + v[236];
+        v[238] = -J2 - v[236];
+        v[239] = v[130] * v[237] - v[238] * v[129];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5659,63 +5484,58 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
+        let theta = state[1];
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
-        let gamma2_dot = state[12];
-        let Iyy = params.Iyy;
+        let m0 = params.m0;
         let Izz = params.Izz;
-        let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
+        let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[240] = theta_dot * v[20];
-        v[241] = v[239] - v[240];
-        v[242] = v[241] * Izz;
-        v[243] = v[242] - v[235] - v[238];
-        v[244] = v[243] * v[234];
-        v[245] = -phi_dot - v[236];
-        v[246] = theta_dot * v[245] * v[18];
-        v[247] = v[28] * psi_dot * v[20] * phi_dot;
-        v[248] = v[246] - v[247];
-        v[249] = v[248] * Ixz;
-        v[250] = v[241] * Iyz;
-        v[251] = Ixy * v[237];
-        v[252] = Iyy * v[234] - v[250] - v[251];
-        v[253] = v[241] * v[252];
-        v[254] = theta_dot * v[245] * v[20];
-        v[255] = v[28] * psi_dot * phi_dot * v[18];
+        v[240] = v[16] * v[193];
+        v[241] = v[187] * v[65] - v[240];
+        v[242] = v[216] * v[16];
+        v[243] = v[220] * v[65] - v[242];
+        v[244] = v[228] * v[16];
+        v[245] = v[75] * v[89] - v[244];
+        v[246] = v[184] * v[0];
+        v[247] = v[0] * v[208];
+        v[248] = v[42] * v[0];
+        v[249] = v[11] * v[179];
+        v[250] = v[11] * v[201];
+        v[251] = v[11] * v[46];
+        v[252] = m2 + m0 + m1;
+        v[253] = v[29] * psi_dot;
+        v[254] = v[253] * v[16];
+        v[255] = theta_dot * v[15];
         v[256] = v[254] + v[255];
-        v[257] = Ixy * v[256];
-        v[258] = J2 - J1;
-        v[259] = v[6] * v[237] - v[241] * v[9];
-        v[260] = gamma2_dot + v[232] + v[233];
-        v[261] = v[258] * v[259] * v[260];
-        v[262] = v[260] * d;
-        v[263] = v[6] * a_ * v[234];
-        v[264] = v[262] + v[263];
-        v[265] = v[241] * gamma2_dot;
-        v[266] = theta_dot * v[28] * psi_dot;
-        v[267] = -v[265] - v[266];
-        v[268] = gamma2_dot * v[237];
-        v[269] = v[267] * v[9] + (v[246] - v[247] + v[268]) * v[6];
-        v[270] = v[9] * v[237];
-        v[271] = v[6] * v[241];
-        v[272] = v[270] + v[271];
-        v[273] = a_ * (v[247] - v[246] - v[272] * v[9] * v[234]) - v[264] * v[259]
-            - v[269] * d;
-        v[274] = m2 * v[273] * d;
-        v[275] = J2 * v[269];
-        v[276] = v[9] * (v[274] - v[261] - v[275]);
-        v[277] = v[26] * v[28] * psi_dot * phi_dot;
-        v[278] = v[2] * v[234];
-        v[279] = v[4] * v[237];
+        v[257] = v[34] * psi_dot;
+        v[258] = phi_dot - v[257];
+        v[259] = Ixz * v[258];
+        v[260] = Iyz * v[256];
+        v[261] = v[253] * v[15];
+        v[262] = theta_dot * v[16];
+        v[263] = v[261] - v[262];
+        v[264] = v[263] * Izz;
+        v[265] = (-v[259] - v[260]) + v[264];
+        v[266] = v[256] * v[265];
+        v[267] = v[253] * phi_dot;
+        v[268] = v[16] * v[267];
+        v[269] = phi_dot + v[257];
+        v[270] = v[269] * v[255];
+        v[271] = -v[268] - v[270];
+        v[272] = v[271] * Ixz;
+        v[273] = 3.0 * theta;
+        v[274] = v[30] * f64::cos(v[273]);
+        v[275] = 0.25 - 0.25 * v[274];
+        v[276] = v[34] * phi_dot;
+        v[277] = v[253] + (v[275] * psi_dot + v[276]) * v[30];
+        v[278] = 2.0 * theta;
+        v[279] = f64::sin(v[278]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5724,61 +5544,60 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let theta = state[1];
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
         let Ixx = params.Ixx;
-        let m1 = params.m1;
+        let Iyy = params.Iyy;
+        let Ixy = params.Ixy;
+        let Iyz = params.Iyz;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[280] = v[278] + v[279];
-        v[281] = v[4] * a_ * v[241];
-        v[282] = v[239] + gamma1_dot - v[240];
-        v[283] = v[282] * d;
-        v[284] = v[281] + v[283];
-        v[285] = gamma1_dot * v[237];
-        v[286] = v[254] + v[255] - v[285];
-        v[287] = gamma1_dot * v[234];
-        v[288] = v[266] - v[287];
-        v[289] = v[4] * v[286] + v[2] * v[288];
-        v[290] = v[4] * v[234] - v[2] * v[237];
-        v[291] = v[280] * v[284] - d * v[289]
-            + a_ * (-v[241] * v[2] * v[290] - v[254] - v[255]);
-        v[292] = v[291] * d * m1;
-        v[293] = v[282] * v[14] * v[280];
-        v[294] = J2 * v[289];
-        v[295] = v[2] * (v[293] - v[292] + v[294]);
-        v[296] = v[4] * (v[287] - v[266]) + v[286] * v[2];
-        v[297] = v[247] - v[246] - v[268];
-        v[298] = v[9] * v[297] + v[6] * v[267];
-        v[299] = (-v[4] * v[296] - v[6] * v[298]) * J1;
-        v[300] = Ixx * v[28] * psi_dot;
-        v[301] = 2.0 * theta;
-        v[302] = f64::sin(v[301]);
-        v[303] = v[29] * psi_dot * v[302];
-        v[304] = 0.5 * v[303] + phi_dot;
-        v[305] = v[304] * v[29] * v[93];
-        v[306] = 3.0 * theta;
-        v[307] = v[29] * f64::cos(v[306]);
-        v[308] = 0.25 - 0.25 * v[307];
-        v[309] = v[30] * phi_dot;
-        v[310] = v[28] * psi_dot;
-        v[311] = (v[308] * psi_dot + v[309]) * v[29] + v[310];
-        v[312] = v[311] * v[13];
-        v[313] = (v[300] - v[305] - v[312]) * theta_dot;
-        v[314] = v[249] - v[244] + v[253] + v[257] + v[276] + v[277] + v[295] + v[299]
-            + v[313];
-        v[315] = v[282] * v[284];
-        v[316] = a_ * v[234];
-        v[317] = d * v[290];
-        v[318] = -v[316] - v[317];
-        v[319] = v[318] * v[290];
+        v[280] = v[30] * psi_dot * v[279];
+        v[281] = 0.5 * v[280] + phi_dot;
+        v[282] = v[281] * v[30];
+        v[283] = v[253] * Ixx;
+        v[284] = (v[283] - v[282] * v[61]) - v[14] * v[277];
+        v[285] = v[253] * theta_dot;
+        v[286] = v[285] + gamma2_dot * v[263];
+        v[287] = v[268] + v[270];
+        v[288] = gamma2_dot * v[258];
+        v[289] = v[287] - v[288];
+        v[290] = v[289] * v[9] - v[7] * v[286];
+        v[291] = v[262] * v[269];
+        v[292] = v[267] * v[15];
+        v[293] = v[292] - v[291];
+        v[294] = gamma1_dot * v[258];
+        v[295] = v[293] - v[294];
+        v[296] = v[256] * gamma1_dot;
+        v[297] = v[295] * v[3] + v[5] * (v[296] - v[285]);
+        v[298] = v[256] * v[3];
+        v[299] = v[5] * v[258];
+        v[300] = v[298] + v[299];
+        v[301] = v[17] * v[300];
+        v[302] = v[263] + gamma1_dot;
+        v[303] = v[285] - v[296];
+        v[304] = v[5] * v[295] + v[303] * v[3];
+        v[305] = v[301] * v[302] + J2 * v[304];
+        v[306] = v[263] * v[3];
+        v[307] = v[5] * v[256] - v[3] * v[258];
+        v[308] = v[119] * v[263];
+        v[309] = d * v[302];
+        v[310] = v[308] + v[309];
+        v[311] = v[310] * v[300] - a_ * (v[306] * v[307] + v[293]) - d * v[304];
+        v[312] = v[305] - v[0] * v[311];
+        v[313] = Ixy * v[258];
+        v[314] = Iyz * v[263];
+        v[315] = Iyy * v[256] - v[313] - v[314];
+        v[316] = v[263] * v[315];
+        v[317] = Ixy * v[293];
+        v[318] = v[263] * v[9];
+        v[319] = v[7] * v[258] - v[318];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5787,15 +5606,14 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
-        let gamma1_dot = state[11];
+        let phi_dot = state[10];
         let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
-        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
@@ -5803,47 +5621,48 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[320] = v[248] * v[2];
-        v[321] = v[4] * v[241] * gamma1_dot + v[320];
-        v[322] = a_ * v[321];
-        v[323] = v[319] - v[315] + v[322];
-        v[324] = a_ * v[2] * v[323];
-        v[325] = v[248] * d;
-        v[326] = v[280] * v[318];
-        v[327] = v[4] * v[248];
-        v[328] = a_ * (v[327] + v[241] * v[241] * v[2]);
-        v[329] = v[325] - v[326] + v[328];
-        v[330] = v[329] * v[133];
-        v[331] = v[20] * (v[330] - v[324]);
-        v[332] = v[298] * v[9] * J1;
-        v[333] = theta_dot * v[28] * psi_dot * Ixz;
-        v[334] = v[258] * v[280] * v[290];
-        v[335] = v[252] * v[237];
-        v[336] = v[261] + v[275];
-        v[337] = v[6] * v[336];
-        v[338] = Ixx * v[237] - v[241] * Ixz - Ixy * v[234];
-        v[339] = v[234] * v[338];
-        v[340] = Iyz * v[256];
-        v[341] = v[248] * J2;
-        v[342] = v[248] * Izz;
-        v[343] = v[304] * v[29] * v[136];
-        v[344] = v[26] * v[311];
-        v[345] = v[272] * d;
-        v[346] = a_ * v[241];
-        v[347] = -v[345] - v[346];
-        v[348] = v[256] * v[9];
-        v[349] = a_ * (-v[6] * gamma2_dot * v[234] - v[348]) - v[272] * v[347]
-            + v[264] * v[260];
-        v[350] = a_ * v[9] * v[349];
-        v[351] = v[256] * d;
-        v[352] = v[259] * v[347];
-        v[353] = v[6] * v[256];
-        v[354] = a_ * (v[353] + v[9] * v[234] * v[234]);
-        v[355] = v[351] + v[352] + v[354];
-        v[356] = v[355] * v[88] - v[350];
-        v[357] = v[356] * v[18];
-        v[358] = v[241] * v[338];
-        v[359] = Iyy * v[256];
+        v[320] = gamma2_dot + v[256];
+        v[321] = d * v[320];
+        v[322] = v[256] * v[103];
+        v[323] = v[321] + v[322];
+        v[324] = v[9] * v[286];
+        v[325] = v[7] * (v[288] + v[271]) - v[324];
+        v[326] = v[7] * v[263] + v[9] * v[258];
+        v[327] = v[9] * v[326];
+        v[328] = a_ * (v[287] - v[256] * v[327]) - v[319] * v[323] - v[325] * d;
+        v[329] = J2 - J1;
+        v[330] = v[329] * v[319];
+        v[331] = v[320] * v[330];
+        v[332] = J2 * v[325];
+        v[333] = (v[11] * v[328] - v[331]) - v[332];
+        v[334] = (((v[272] - v[266]) + theta_dot * v[284])
+            + (v[312] * v[3] - (v[7] * v[290] + v[5] * v[297]) * J1))
+            + ((v[316] + v[317]) + (v[9] * v[333] + v[267] * v[27]));
+        v[335] = v[282] * v[162];
+        v[336] = v[61] * v[277];
+        v[337] = v[331] + v[332];
+        v[338] = a_ * v[263];
+        v[339] = d * v[326];
+        v[340] = v[338] + v[339];
+        v[341] = v[340] * v[326];
+        v[342] = v[9] * v[293];
+        v[343] = v[7] * v[256];
+        v[344] = v[323] * v[320] + v[341] - a_ * (v[342] + gamma2_dot * v[343]);
+        v[345] = v[344] * v[106];
+        v[346] = v[7] * v[293];
+        v[347] = a_ * (v[256] * v[256] * v[9] + v[346]) + (d * v[293] - v[340] * v[319]);
+        v[348] = v[347] * v[104] - v[345];
+        v[349] = psi_dot * phi_dot;
+        v[350] = v[17] * v[319];
+        v[351] = v[326] * v[350];
+        v[352] = v[265] * v[258];
+        v[353] = Iyy * v[293];
+        v[354] = J2 * v[293];
+        v[355] = Ixy * v[285];
+        v[356] = ((v[352] - v[353]) - v[351]) + (-v[354] - v[355]);
+        v[357] = Ixx * v[258] - v[263] * Ixz - Ixy * v[256];
+        v[358] = v[357] * v[263];
+        v[359] = Iyz * v[271];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5852,13 +5671,13 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let psi_dot = state[8];
         let theta_dot = state[9];
-        let phi_dot = state[10];
+        let gamma1_dot = state[11];
         let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
+        let Izz = params.Izz;
+        let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -5866,116 +5685,114 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[360] = v[243] * v[237];
-        v[361] = v[2] * J1 * v[296];
-        v[362] = Ixy * theta_dot * v[28] * psi_dot;
-        v[363] = v[293] + v[294];
-        v[364] = v[4] * v[363];
-        v[365] = v[248] * Iyz;
-        v[366] = J2 * v[256];
-        v[367] = v[259] * v[14] * v[272];
-        v[368] = v[20]
-            * (v[333] - v[332] + v[334] + v[335] + v[337] - v[339] - v[340] + v[341]
-                + v[342]) - (v[331] + v[291] * v[16] * v[18]) * m1
-            + (-v[343] - v[344]) * theta_dot - m2 * (v[357] + v[273] * v[22] * v[20])
-            + v[28] * psi_dot * v[143] * phi_dot
-            + (v[360] - v[358] - v[359] - v[361] - v[362] - v[364] + v[365] - v[366]
-                - v[367]) * v[18];
-        v[369] = v[368] * v[18];
-        v[370] = v[363] * v[46];
-        v[371] = (-v[40] * v[298] - v[38] * v[296]) * J1;
-        v[372] = ((v[324] + v[329] * v[83]) * v[28] * v[18] + v[291] * v[50]) * m1;
-        v[373] = v[244] - theta_dot * Ixx * v[28] * psi_dot - v[249] - v[253] - v[257];
-        v[374] = v[373] * v[30];
-        v[375] = v[336] * v[44];
-        v[376] = v[85] + v[91] + v[92] + v[98] - v[100] + v[115];
-        v[377] = v[304] * v[29] * v[376];
-        v[378] = v[311] * v[93];
-        v[379] = theta_dot * (-v[377] - v[378]);
-        v[380] = v[28]
-            * (psi_dot * phi_dot * v[136]
-                + v[20] * (v[360] - v[358] - v[359] - v[362] + v[365] - v[366] - v[367])
-                + (v[339] - v[333] - v[334] - v[335] + v[340] - v[341] - v[342])
-                    * v[18]);
-        v[381] = m2 * (v[356] * v[28] * v[20] + v[273] * v[53]);
-        v[382] = v[371] - v[370] - v[372] + v[374] - v[375] + v[379] + v[30] * v[314]
-            + v[380] - v[381];
-        v[383] = v[368] * v[20];
-        v[384] = theta_dot * v[304] * v[20];
-        v[385] = v[255] - v[384];
-        v[386] = v[311] * d * v[68];
-        v[387] = v[176] + v[177];
-        v[388] = v[387] * v[304] * v[29];
-        v[389] = theta_dot * (-v[386] - v[388])
-            - m2 * (v[355] * v[162] + v[67] * v[273] + v[158] * v[349])
-            - (v[323] * v[169] + v[165] * v[329] + v[291] * v[64]) * m1
-            + v[28] * psi_dot * phi_dot * v[173];
-        v[390] = v[76] * v[311] * d;
-        v[391] = v[200] + v[201];
-        v[392] = v[304] * v[29] * v[391];
-        v[393] = a_ * v[30] * theta_dot * theta_dot;
-        v[394] = v[6] * v[20];
-        v[395] = v[9] * v[18];
-        v[396] = -v[394] - v[395];
-        v[397] = v[396] * v[28];
-        v[398] = v[394] + v[395];
-        v[399] = v[28] * v[398];
+        v[360] = v[356] + (v[359] - v[358]);
+        v[361] = v[271] * Izz;
+        v[362] = J2 * v[271];
+        v[363] = v[285] * Ixz;
+        v[364] = v[315] * v[258];
+        v[365] = v[329] * v[300];
+        v[366] = v[365] * v[307];
+        v[367] = Iyz * v[293];
+        v[368] = v[357] * v[256];
+        v[369] = v[3] * v[271];
+        v[370] = v[5] * v[263];
+        v[371] = v[369] + gamma1_dot * v[370];
+        v[372] = a_ * v[371] - v[310] * v[302];
+        v[373] = d * v[307];
+        v[374] = a_ * v[256];
+        v[375] = v[373] + v[374];
+        v[376] = v[375] * v[307];
+        v[377] = v[372] - v[376];
+        v[378] = v[377] * v[122];
+        v[379] = v[5] * v[271];
+        v[380] = a_ * (v[263] * v[306] + v[379]);
+        v[381] = v[375] * v[300];
+        v[382] = d * v[271];
+        v[383] = v[381] + v[382];
+        v[384] = v[380] + v[383];
+        v[385] = v[266] - v[316] - v[272] - v[317] - v[285] * Ixx;
+        v[386] = ((-(v[335] + v[336]) * theta_dot - v[46] * v[337])
+            + ((v[349] * v[126] + v[360] * v[16]
+                + (v[367] - v[361] - v[362] - v[363] - v[364] - v[366] + v[368]) * v[15])
+                * v[29] - m2 * (v[348] * v[32] - v[328] * v[55])))
+            + ((-v[42] * v[305] - (v[36] * v[297] - v[39] * v[290]) * J1)
+                + (v[34] * v[385]
+                    - m1 * ((v[378] + v[120] * v[384]) * v[37] - v[58] * v[311])));
+        v[387] = v[34] * v[334] + v[386];
+        v[388] = v[5] * v[305];
+        v[389] = -v[112] * v[297] - v[388];
+        v[390] = -(v[120] * v[384]);
+        v[391] = v[390] - v[378];
+        v[392] = v[391] * v[16];
+        v[393] = v[282] * v[126];
+        v[394] = v[277] * v[27];
+        v[395] = v[348] * v[15];
+        v[396] = (v[361] - v[367]) + ((v[364] - v[368]) + (v[363] + v[366]));
+        v[397] = v[7] * v[337] + v[396];
+        v[398] = v[397] - v[290] * v[94];
+        v[399] = (v[360] + v[389]) * v[15] + v[267] * v[138]
+            - (v[192] * v[311] + v[392]) * m1 - theta_dot * (v[393] + v[394])
+            - m2 * (v[188] * v[328] + v[395]) + (v[362] + v[398]) * v[16];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part10(
         _t: f64,
         state: &[f64; STATES],
-        _params: &Params,
+        params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
-        v[400] = v[395] - v[394];
-        v[401] = v[400] * v[28];
-        v[402] = v[394] - v[395];
-        v[403] = v[402] * v[28];
-        v[404] = 0.25 * v[397] - 0.25 * v[399] - 0.25 * v[401] + 0.25 * v[403] - v[39];
-        v[405] = v[9] * v[20];
-        v[406] = v[6] * v[18];
-        v[407] = v[405] + v[406];
-        v[408] = v[30] * v[407];
-        v[409] = v[406] - v[405];
-        v[410] = v[30] * v[409];
-        v[411] = v[408] - 0.5 * v[397] - 0.5 * v[399] + 0.5 * v[401] + 0.5 * v[403]
-            - v[410];
-        v[412] = phi_dot * v[411];
-        v[413] = 0.5 * v[397] - 0.5 * v[399] + 0.5 * v[401] - 0.5 * v[403];
-        v[414] = phi_dot * v[413];
-        v[415] = v[28] * v[9];
-        v[416] = -v[408] - 0.5 * v[397] - 0.5 * v[399] - 2.0 * v[415] - 0.5 * v[401]
-            - 0.5 * v[403] - v[410];
-        v[417] = v[416] * theta_dot;
-        v[418] = v[30] * v[20];
-        v[419] = v[28] * v[18];
-        v[420] = v[418] + v[419];
-        v[421] = v[4] * v[420];
-        v[422] = v[28] * v[20];
-        v[423] = v[30] * v[18];
-        v[424] = v[422] - v[423];
-        v[425] = v[2] * v[424];
-        v[426] = v[419] - v[418];
-        v[427] = v[4] * v[426];
-        v[428] = v[2] * v[28];
-        v[429] = v[423] - v[422];
-        v[430] = v[2] * v[429];
-        v[431] = v[422] + v[423];
-        v[432] = v[2] * v[431];
-        v[433] = -v[422] - v[423];
-        v[434] = v[433] * v[2];
-        v[435] = 0.5 * v[425] - v[421] + v[427] + 2.0 * v[428] + 0.5 * v[430]
-            - 0.5 * v[432] - 0.5 * v[434];
-        v[436] = v[435] * gamma1_dot;
-        v[437] = 0.25 * v[430] - 0.25 * v[425] - 0.25 * v[432] + v[37] + 0.25 * v[434];
-        v[438] = 0.5 * v[425] - 0.5 * v[430] - 0.5 * v[432] + 0.5 * v[434];
-        v[439] = v[438] * phi_dot;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[400] = v[399] * v[15];
+        v[401] = v[16] * v[399];
+        v[402] = v[281] * v[255];
+        v[403] = v[281] * v[262];
+        v[404] = v[292] - v[403];
+        v[405] = d * v[277];
+        v[406] = v[282] * v[186] + v[405] * v[77];
+        v[407] = v[267] * v[193]
+            - (v[177] * v[344] + v[74] * v[328] + v[347] * v[179]) * m2
+            - theta_dot * v[406]
+            - m1 * (v[76] * v[311] + v[184] * v[384] + v[377] * v[182]);
+        v[408] = v[282] * v[219] + v[405] * v[84];
+        v[409] = v[79] * v[328];
+        v[410] = a_ * theta_dot;
+        v[411] = v[34] * theta_dot;
+        v[412] = v[410] * v[411];
+        v[413] = phi_dot * phi_dot;
+        v[414] = v[75] + v[32];
+        v[415] = v[32] - v[75];
+        v[416] = v[3] * v[415];
+        v[417] = v[75] - v[32];
+        v[418] = v[3] * v[417];
+        v[419] = -(0.5 * v[414] * v[3]) + (0.25 * v[418] - 0.25 * v[416]);
+        v[420] = v[414] * v[3];
+        v[421] = -0.5 * v[420] - 0.5 * v[418];
+        v[422] = v[37] - v[70];
+        v[423] = 0.5 * v[420] + v[5] * v[422];
+        v[424] = v[70] + v[37];
+        v[425] = v[5] * v[424];
+        v[426] = v[421] - 0.5 * v[416] + v[423] + v[425];
+        v[427] = v[426] * phi_dot;
+        v[428] = v[35] + v[419];
+        v[429] = v[421] - 0.5 * v[420] + 0.5 * v[416];
+        v[430] = 0.5 * v[418] - 0.5 * v[420];
+        v[431] = v[3] * v[29];
+        v[432] = v[430] + 0.5 * v[416] + v[423] - v[425] + 2.0 * v[431];
+        v[433] = phi_dot * v[429] + v[432] * gamma1_dot;
+        v[434] = v[9] * v[15];
+        v[435] = v[7] * v[16];
+        v[436] = v[435] - v[434];
+        v[437] = v[29] * v[436];
+        v[438] = v[434] - v[435];
+        v[439] = v[29] * v[438];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -5984,60 +5801,55 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
+        let theta_dot = state[9];
         let phi_dot = state[10];
-        let Ixx = params.Ixx;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[440] = v[421] - 0.5 * v[425] + v[427] - 0.5 * v[430] - 0.5 * v[432]
-            - 0.5 * v[434];
-        v[441] = phi_dot * v[440];
-        v[442] = v[29] * v[18];
-        v[443] = -v[20];
-        v[444] = v[30] * v[29] * v[18];
-        v[445] = -v[70] - v[71];
-        v[446] = v[73] - v[74];
-        v[447] = v[446] * v[2] * m1 - m2 * v[9] * v[445];
-        v[448] = d * v[447];
-        v[449] = v[4] * v[445] + v[192];
-        v[450] = v[2] * v[445] - v[188];
-        v[451] = a_ * v[2] * v[450];
-        v[452] = (v[28] * (v[449] * v[83] + v[451]) * v[18] + v[446] * v[50]) * m1;
-        v[453] = v[6] * v[446] - v[183];
-        v[454] = -v[180] - v[446] * v[9];
-        v[455] = v[453] * v[88] - a_ * v[454] * v[9];
-        v[456] = m2 * (v[455] * v[28] * v[20] + v[445] * v[53]);
-        v[457] = v[452] + v[30] * d * v[447] + v[456];
-        v[458] = ((v[449] * v[133] - v[451]) * v[20] + v[446] * v[16] * v[18]) * m1
-            + m2 * (v[455] * v[18] + v[22] * v[20] * v[445]);
-        v[459] = v[457] * v[29] * v[20] + v[458] * v[18];
-        v[460] = v[457] * v[29] * v[18] - v[20] * v[458];
-        v[461] = d * v[449] * m1;
-        v[462] = m2 * d * v[453];
-        v[463] = -v[6] * v[30] * v[18] - v[415];
-        v[464] = a_ * v[30] * v[18] - d * v[463];
-        v[465] = v[428] - v[4] * v[30] * v[20];
-        v[466] = a_ * v[30] * v[20] - d * v[465];
-        v[467] = d * (v[466] * v[2] * m1 - m2 * v[9] * v[464]);
-        v[468] = Ixx * v[28];
-        v[469] = v[4] * v[28];
-        v[470] = -v[30] * v[2] * v[20] - v[469];
-        v[471] = v[6] * v[28];
-        v[472] = v[30] * v[9] * v[18] - v[471];
-        v[473] = (v[4] * v[470] + v[6] * v[472]) * J1;
-        v[474] = J2 * (v[9] * v[463] - v[2] * v[465]);
-        v[475] = v[32] + v[33];
-        v[476] = v[30] * v[475];
-        v[477] = Ixx + v[3] + v[8] + v[12]
-            + (v[30] * v[29] * v[56] + v[467] - v[468] + v[473] + v[474] + v[476])
-                * v[29];
-        v[478] = v[477] * v[20];
-        v[479] = v[477] * v[18];
+        v[440] = v[434] + v[435];
+        v[441] = (0.25 * v[437] - 0.25 * v[439]) + -(0.5 * v[440] * v[29]);
+        v[442] = v[441] - v[38];
+        v[443] = v[7] * v[15];
+        v[444] = v[443] - v[136];
+        v[445] = v[34] * v[444];
+        v[446] = v[440] * v[29];
+        v[447] = 0.5 * v[437] - 0.5 * v[446];
+        v[448] = v[443] + v[136];
+        v[449] = 0.5 * v[439] + v[34] * v[448];
+        v[450] = 0.5 * v[446] - v[445] + v[447] + v[449];
+        v[451] = v[450] * phi_dot;
+        v[452] = 0.5 * v[439] - 0.5 * v[437] - v[446];
+        v[453] = v[29] * v[9];
+        v[454] = 0.5 * v[437] + v[445] + 2.0 * v[453] + v[449];
+        v[455] = phi_dot * v[452] - theta_dot * v[454];
+        v[456] = v[405] * theta_dot;
+        v[457] = -v[16];
+        v[458] = v[34] * v[31];
+        v[459] = v[34] * v[65];
+        v[460] = v[282] * theta_dot;
+        v[461] = theta_dot * v[277];
+        v[462] = v[81] - v[82];
+        v[463] = v[462] * v[59] + v[80];
+        v[464] = v[463] * d;
+        v[465] = v[7] * v[462] - v[200];
+        v[466] = v[462] * v[9] + v[197];
+        v[467] = v[465] * v[104] + v[466] * v[106];
+        v[468] = -v[210] - v[211];
+        v[469] = v[468] * v[122];
+        v[470] = v[207] - v[206];
+        v[471] = v[120] * v[470];
+        v[472] = m2 * (v[467] * v[15] - v[205])
+            + ((-v[469] - v[471]) * v[16] + v[462] * v[192]) * m1;
+        v[473] = m2 * (v[218] + v[32] * v[467])
+            + ((v[469] + v[471]) * v[37] - v[462] * v[58]) * m1;
+        v[474] = v[463] * v[175] + v[473];
+        v[475] = v[472] * v[15] + v[31] * v[474];
+        v[476] = v[474] * v[65] - v[472] * v[16];
+        v[477] = v[0] * v[470];
+        v[478] = v[465] * v[11];
+        v[479] = v[34] * v[30];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6046,8 +5858,9 @@ pub mod maggi {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
+        let Ixx = params.Ixx;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let m1 = params.m1;
@@ -6056,73 +5869,61 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[480] = v[80] * v[63] * v[28] * d;
-        v[481] = v[80] * v[28] * d * v[62];
-        v[482] = v[79] - v[78];
-        v[483] = v[482] * v[30] * d;
-        v[484] = -d - v[87];
-        v[485] = v[484] * v[88];
-        v[486] = (v[472] * v[9] * J1
-            + (v[30] * (v[485] - v[86]) * v[18] + v[22] * v[464]) * m2 - v[30] * v[122]
-            - v[6] * J2 * v[463]) * v[20];
-        v[487] = v[125] * v[28];
-        v[488] = (v[4] * J2 * v[465] - v[30] * v[129]
-            + (v[16] * v[466] + v[30] * v[141] * v[20]) * m1 + v[470] * v[2] * J1)
-            * v[18];
-        v[489] = v[486] - v[487] + v[488];
-        v[490] = m2
-            * (v[30] * v[28] * (2.0 * v[485] - 2.0 * v[86]) * v[20] * v[20]
-                + 2.0 * (v[53] * v[464]));
-        v[491] = (2.0 * (v[44] * v[463]) + 2.0 * (v[46] * v[465])) * J2;
-        v[492] = v[116] * v[29];
-        v[493] = (2.0 * (v[38] * v[470]) + 2.0 * (v[472] * v[40])) * J1;
-        v[494] = 2.0 * v[134] - 2.0 * v[84];
-        v[495] = m1 * (2.0 * (v[466] * v[50]) + v[30] * v[494] * v[28] * v[18] * v[18]);
-        v[496] = Ixy * v[28] + v[30] * (v[101] - v[102]);
-        v[497] = v[30] * (v[109] - v[108]) + v[28] * Ixz;
-        v[498] = v[28] * (v[31] - v[35] + v[20] * v[496] + v[497] * v[18]);
-        v[499] = v[30]
-            * (v[468] - v[107] - v[114] + (-2.0 * v[95] - 2.0 * v[96]) * J2 * v[28]
-                - v[476]);
-        v[500] = v[35] - v[31] + v[41] + v[47]
-            + v[29]
-                * (v[490] + v[491]
-                    + v[30] * (v[467] + v[492] - v[468] + v[473] + v[474] + v[476])
-                    + v[493] + v[495] + v[498] + v[499]) + v[54];
-        v[501] = v[29]
-            * (v[30] * (v[29] * v[138] + v[478]) + v[18] * v[489] + v[500] * v[20]);
-        v[502] = v[29] * (v[486] - v[487] + v[30] * v[29] * v[146] + v[488]) + v[19]
-            + v[25];
-        v[503] = (v[27] + v[501] + v[57]) * v[18] - v[20] * v[20] * v[502];
-        v[504] = v[30] * v[153] * v[29] * v[20] * v[18];
-        v[505] = m2 * d * v[484];
-        v[506] = v[155] + v[505];
-        v[507] = v[30] * v[29] * v[20] * v[20] * v[506];
-        v[508] = v[46] * v[83] + v[206] - v[48] - v[49];
-        v[509] = v[205] - v[204] - v[51] - v[52];
-        v[510] = v[484] * v[162];
-        v[511] = (v[466] * v[64] + v[18] * (v[508] * v[63] * v[28] + v[30] * v[171]))
-            * m1
-            + m2
-                * ((v[63] * v[28] * v[509] + v[30] * (v[510] + v[159])) * v[20]
-                    + v[67] * v[464]);
-        v[512] = v[30] * (v[178] * v[29] * v[29] + v[80] * v[63] * d) + v[511] * v[29]
-            + v[69];
-        v[513] = v[512] * v[20] + v[208] * v[63] * v[18];
-        v[514] = v[484] * v[185];
-        v[515] = m2
-            * (v[20] * (v[28] * v[509] * v[62] + v[30] * (v[182] + v[514]))
-                + v[72] * v[464])
-            + ((v[30] * v[195] + v[508] * v[28] * v[62]) * v[18] + v[466] * v[75]) * m1;
-        v[516] = v[29] * v[515] + v[30] * (v[80] * d * v[62] + v[202] * v[29] * v[29])
-            + v[77];
-        v[517] = v[516] * v[20] + v[208] * v[18] * v[62];
-        v[518] = ((v[463] * v[88] - v[472] * a_ * v[9]) * v[18]
-            - v[30] * v[22] * v[20] * v[20]) * m2
-            + m1
-                * ((v[465] * v[133] - a_ * v[470] * v[2]) * v[20]
-                    - v[30] * v[16] * v[18] * v[18]);
-        v[519] = v[80] * v[28] * d * v[20] + v[518] * v[18];
+        v[480] = v[431] - v[5] * v[70];
+        v[481] = a_ * v[70] - d * v[480];
+        v[482] = v[453] + v[7] * v[75];
+        v[483] = d * v[482] + a_ * v[75];
+        v[484] = v[7] * v[29];
+        v[485] = v[75] * v[9] - v[484];
+        v[486] = v[5] * v[29];
+        v[487] = v[3] * v[70] + v[486];
+        v[488] = Ixx * v[29];
+        v[489] = v[34] * v[49];
+        v[490] = v[489] - v[488];
+        v[491] = ((v[481] * v[59] - v[52] * v[483]) * d
+            + (v[7] * v[485] - v[5] * v[487]) * J1)
+            + (v[490] + (-v[3] * v[480] - v[9] * v[482]) * J2);
+        v[492] = v[14] + (v[63] * v[479] + v[491]) * v[30];
+        v[493] = v[492] * v[16];
+        v[494] = v[492] * v[15];
+        v[495] = v[89] * v[176];
+        v[496] = v[89] * v[196];
+        v[497] = v[86] - v[87];
+        v[498] = v[497] * v[175];
+        v[499] = -v[105] - v[107];
+        v[500] = (v[16]
+            * (v[485] * v[94] - v[34] * v[100] + m2 * (v[20] * v[483] + v[75] * v[499])
+                + v[7] * J2 * v[482]) - v[92] * v[29])
+            + (v[34] * v[116] - v[112] * v[487] + v[5] * J2 * v[480]
+                + m1 * (v[132] * v[70] - v[481] * v[24])) * v[15];
+        v[501] = v[30] * v[163];
+        v[502] = v[48] + v[50];
+        v[503] = Ixy * v[29] + v[34] * (v[115] - v[144]);
+        v[504] = v[34] * (v[99] - v[148]) + v[29] * Ixz;
+        v[505] = -2.0 * v[121] - 2.0 * v[123];
+        v[506] = -2.0 * v[105] - 2.0 * v[107];
+        v[507] = (v[34]
+            * (v[488] - v[147] - (2.0 * v[130] + 2.0 * v[129]) * J2 * v[29] - v[153]
+                - v[489]) + (v[502] + v[16] * v[503] + v[504] * v[15]) * v[29])
+            + ((m1 * (v[505] * v[75] * v[37] - 2.0 * (v[481] * v[58]))
+                + (-2.0 * (v[36] * v[487]) - 2.0 * (v[39] * v[485])) * J1)
+                + (J2 * (2.0 * (v[42] * v[480]) - 2.0 * (v[46] * v[482]))
+                    + m2 * (v[32] * v[506] * v[70] - 2.0 * (v[483] * v[55]))));
+        v[508] = v[61] + (v[34] * (v[501] + v[491]) + v[507]) * v[30];
+        v[509] = v[64]
+            + v[30]
+                * (v[500] * v[15] + v[16] * v[508] + v[34] * (v[166] * v[30] + v[493]));
+        v[510] = v[30] * (v[500] + v[479] * v[127]) + v[27];
+        v[511] = v[509] * v[15] - v[129] * v[510];
+        v[512] = v[170] * v[65];
+        v[513] = v[512] * v[70];
+        v[514] = v[70] * v[170];
+        v[515] = v[31] * v[514];
+        v[516] = v[178] - v[180];
+        v[517] = v[224] - v[53] - v[54];
+        v[518] = v[225] - v[56] + v[226] - v[57];
+        v[519] = m2 * ((v[34] * v[516] + v[517] * v[176]) * v[16] + v[74] * v[483])
+            + ((v[518] * v[176] + v[34] * v[190]) * v[15] + v[481] * v[76]) * m1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6131,67 +5932,61 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
-        let Ixx = params.Ixx;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[520] = v[30] * v[153] * v[29] * v[18] * v[18];
-        v[521] = v[30] * v[29] * v[20] * v[506] * v[18];
-        v[522] = v[512] * v[18] - v[208] * v[63] * v[20];
-        v[523] = v[516] * v[18] - v[208] * v[20] * v[62];
-        v[524] = v[80] * v[28] * d * v[18] - v[20] * v[518];
-        v[525] = v[46] * v[63] * d * m1;
-        v[526] = v[46] * d * m1 * v[62];
-        v[527] = d * v[465] * m1;
-        v[528] = m2 * v[44] * v[63] * d;
-        v[529] = m2 * v[44] * d * v[62];
-        v[530] = m2 * d * v[463];
-        v[531] = v[29] * v[29]
-            * (v[30] * ((0.25 - 0.5 * v[307]) * psi_dot + v[309])
-                + 0.75 * (psi_dot * f64::sin(v[306]))) + phi_dot - v[236];
-        v[532] = psi_dot * f64::cos(v[301]) + v[30] * (v[303] + phi_dot);
-        v[533] = v[467] - v[468] + v[473] + v[474] + v[476];
-        v[534] = (v[29] * (-v[532] * v[29] * v[93] - v[304] * v[533]) - v[531] * v[13])
-            * theta_dot;
-        v[535] = theta_dot * v[28] * v[18];
-        v[536] = v[30] * v[20] * phi_dot;
-        v[537] = v[536] - v[535];
-        v[538] = v[537] * Ixz;
-        v[539] = theta_dot * v[28] * v[20];
-        v[540] = v[30] * phi_dot * v[18];
-        v[541] = -v[539] - v[540];
-        v[542] = Ixy * v[541];
-        v[543] = gamma2_dot * v[28];
-        v[544] = v[6] * (v[536] - v[535] - v[543]);
-        v[545] = v[259] * v[30] * v[20];
-        v[546] = gamma2_dot * v[18];
-        v[547] = v[546] + theta_dot;
-        v[548] = v[547] * v[30] * v[9];
-        v[549] = v[472] * v[260];
-        v[550] = (v[544] - v[545] + v[548] + v[549]) * J2;
-        v[551] = (v[545] - v[549]) * J1;
-        v[552] = a_
-            * (v[535] + v[9] * (v[30] * v[272] * v[20] - v[463] * v[234]) - v[536])
-            - v[259] * v[30] * v[20] * v[484] - (v[544] + v[548]) * d - v[264] * v[472];
-        v[553] = v[26] * phi_dot;
-        v[554] = v[243] * v[20];
-        v[555] = theta_dot * Ixx;
-        v[556] = v[252] * v[18];
-        v[557] = v[241] * v[496];
-        v[558] = v[6] * v[547] * v[30] + (v[535] + v[543] - v[536]) * v[9];
-        v[559] = gamma1_dot * v[20];
+        v[520] = v[30] * v[30];
+        v[521] = v[30] * v[519] + (v[89] * v[69] + v[187] * v[520]) * v[34] + v[78];
+        v[522] = v[521] * v[16] + v[69] * v[229];
+        v[523] = v[199] - v[202];
+        v[524] = ((v[34] * v[523] + v[517] * v[196]) * v[16] + v[79] * v[483]) * m2
+            + (v[481] * v[83] + (v[34] * v[214] + v[518] * v[196]) * v[15]) * m1;
+        v[525] = v[85] + v[30] * v[524] + v[34] * (v[89] * v[72] + v[220] * v[520]);
+        v[526] = v[229] * v[72] + v[525] * v[16];
+        v[527] = m2 * ((-v[485] * v[106] - v[104] * v[482]) * v[15] - v[188] * v[70])
+            + ((v[487] * v[122] - v[480] * v[120]) * v[16] - v[75] * v[192]) * m1;
+        v[528] = v[32] * v[89] + v[527] * v[15];
+        v[529] = v[512] * v[75];
+        v[530] = v[514] * v[65];
+        v[531] = v[521] * v[15] - v[69] * v[244];
+        v[532] = v[525] * v[15] - v[244] * v[72];
+        v[533] = v[89] * v[37] - v[16] * v[527];
+        v[534] = v[69] * v[248];
+        v[535] = v[248] * v[72];
+        v[536] = v[0] * v[480];
+        v[537] = v[69] * v[251];
+        v[538] = v[251] * v[72];
+        v[539] = -(v[11] * v[482]);
+        v[540] = v[319] * v[70];
+        v[541] = v[320] * v[485];
+        v[542] = (v[540] - v[541]) * J1;
+        v[543] = v[70] * phi_dot;
+        v[544] = theta_dot * v[37];
+        v[545] = v[543] - v[544];
+        v[546] = gamma2_dot * v[29];
+        v[547] = gamma2_dot * v[15] + theta_dot;
+        v[548] = v[7] * (v[545] - v[546]) + v[44] * v[547];
+        v[549] = J2 * (v[541] - v[540] + v[548]);
+        v[550] = v[544] - v[543];
+        v[551] = a_ * (v[550] + v[9] * (v[256] * v[482] + v[70] * v[326]))
+            - v[323] * v[485] - d * v[548] + v[104] * v[540];
+        v[552] = v[75] * v[300];
+        v[553] = v[302] * v[487];
+        v[554] = gamma1_dot * v[16];
+        v[555] = v[554] - theta_dot;
+        v[556] = theta_dot * v[32];
+        v[557] = v[75] * phi_dot;
+        v[558] = v[29] * gamma1_dot - v[556] - v[557];
+        v[559] = v[41] * v[555] + v[5] * v[558];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6200,73 +5995,72 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
+        let phi_dot = state[10];
         let gamma1_dot = state[11];
-        let gamma2_dot = state[12];
+        let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
+        let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[560] = theta_dot - v[559];
-        v[561] = v[28] * gamma1_dot - v[539] - v[540];
-        v[562] = v[4] * v[30] * v[560] + v[2] * v[561];
-        v[563] = v[30] * v[280] * v[18];
-        v[564] = v[282] * v[470];
-        v[565] = (v[564] - v[563]) * J1;
-        v[566] = v[4] * v[561];
-        v[567] = v[559] - theta_dot;
-        v[568] = v[30] * v[2] * v[567];
-        v[569] = a_
-            * (v[539] + v[540] + (v[30] * v[290] * v[18] - v[241] * v[465]) * v[2])
-            + v[470] * v[284] - d * (v[566] + v[568]) + v[30] * v[280] * v[133] * v[18];
-        v[570] = J2 * (v[566] + v[568] + v[563] - v[564]);
-        v[571] = v[497] * v[234];
-        v[572] = (v[538] + v[542] + (m2 * d * v[552] - v[550] - v[551]) * v[9]
-            + v[30] * (v[554] - v[553] - v[555] - v[556]) + v[557]
-            + (-v[6] * v[558] - v[4] * v[562]) * J1
-            + v[2] * (v[565] - v[569] * d * m1 + v[570]) - v[571]) * psi_dot;
-        v[573] = v[6] * a_ * gamma2_dot;
-        v[574] = v[30] * v[20] * (v[573] - v[262] + v[260] * v[484] - v[263])
-            - a_ * v[541] * v[9] - v[272] * v[464] - v[347] * v[463];
-        v[575] = v[259] * v[464] + v[541] * d + v[472] * v[347]
-            + a_
-                * (v[6] * v[541]
-                    + v[30] * (-2.0 * v[232] - 2.0 * v[233]) * v[9] * v[20]);
-        v[576] = v[237] * v[496];
-        v[577] = v[537] * Izz;
-        v[578] = v[476] - v[468];
-        v[579] = v[578] * v[234];
-        v[580] = v[550] + v[551];
-        v[581] = v[280] * v[465];
-        v[582] = v[470] * v[290];
-        v[583] = (-v[581] - v[582]) * J1;
-        v[584] = (v[581] - v[535] + v[582] + v[536]) * J2;
-        v[585] = Iyz * v[541];
-        v[586] = v[252] * v[28];
-        v[587] = theta_dot * Ixz;
-        v[588] = v[20] * v[338];
-        v[589] = v[30] * (v[588] - v[587]);
-        v[590] = 2.0 * v[240] - 2.0 * v[239];
-        v[591] = v[537] * d - v[470] * v[318] - v[466] * v[280]
-            + a_ * (v[4] * v[537] + v[30] * v[590] * v[2] * v[18]);
-        v[592] = v[4] * a_ * gamma1_dot;
-        v[593] = v[281] - v[282] * v[133] + v[283] - v[592];
-        v[594] = v[318] * v[465] + a_ * v[537] * v[2] + v[30] * v[18] * v[593]
-            + v[466] * v[290];
-        v[595] = Iyz * v[537];
-        v[596] = v[497] * v[237];
-        v[597] = Iyy * v[541];
-        v[598] = v[241] * v[578];
-        v[599] = v[243] * v[28];
+        v[560] = (-v[552] - v[553]) * J1 + J2 * (v[559] + v[552] + v[553]);
+        v[561] = v[556] + v[557];
+        v[562] = a_ * (v[561] + (v[75] * v[307] - v[263] * v[480]) * v[3])
+            - v[310] * v[487] - v[559] * d - v[120] * v[552];
+        v[563] = Ixz * v[545];
+        v[564] = v[504] * v[256];
+        v[565] = v[263] * v[503];
+        v[566] = theta_dot - v[554];
+        v[567] = v[566] * v[35] + v[3] * v[558];
+        v[568] = v[9] * (v[550] + v[546]) + v[38] * v[547];
+        v[569] = Ixy * v[561];
+        v[570] = v[315] * v[15];
+        v[571] = v[265] * v[16];
+        v[572] = theta_dot * Ixx;
+        v[573] = (v[571] - v[572]) - v[570];
+        v[574] = phi_dot * v[27];
+        v[575] = psi_dot * f64::cos(v[278]) + v[34] * (v[280] + phi_dot);
+        v[576] = v[575] * v[30];
+        v[577] = v[258]
+            + (0.75 * (psi_dot * f64::sin(v[273]))
+                + v[34] * ((0.25 - 0.5 * v[274]) * psi_dot + v[276])) * v[520];
+        v[578] = psi_dot
+            * ((v[11] * v[551] - v[542] - v[549]) * v[9]
+                + v[3] * (v[560] - v[0] * v[562]) + v[563] - v[564] + v[565]
+                - (v[5] * v[567] + v[7] * v[568]) * J1 - v[569]
+                + v[34] * (v[573] - v[574]))
+            + (-(v[491] * v[281] + v[61] * v[576]) * v[30] - v[14] * v[577]) * theta_dot;
+        v[579] = 2.0 * v[262] - 2.0 * v[261];
+        v[580] = d * v[545] - v[375] * v[487]
+            + a_ * (v[5] * v[545] + v[75] * v[3] * v[579]) - v[481] * v[300];
+        v[581] = v[119] * gamma1_dot;
+        v[582] = v[302] * v[120];
+        v[583] = v[310] - v[581] + v[582];
+        v[584] = v[122] * v[545] + v[481] * v[307] + v[75] * v[583] - v[480] * v[375];
+        v[585] = v[357] * v[15];
+        v[586] = Ixy * theta_dot + v[585];
+        v[587] = v[485] * v[326] - v[319] * v[482];
+        v[588] = J2 * (v[587] + v[561]);
+        v[589] = v[587] * J1;
+        v[590] = ((Iyy * v[561] - v[263] * v[490]) + (v[504] * v[258] + Iyz * v[545]))
+            + ((v[34] * v[586] - v[265] * v[29]) + (v[588] - v[589]));
+        v[591] = v[503] * v[258];
+        v[592] = theta_dot * Ixz;
+        v[593] = v[357] * v[16];
+        v[594] = v[34] * (v[593] - v[592]);
+        v[595] = Iyz * v[561];
+        v[596] = v[545] * Izz;
+        v[597] = v[29] * v[315];
+        v[598] = v[487] * v[307];
+        v[599] = v[480] * v[300];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6275,204 +6069,11 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
         let phi_dot = state[10];
-        let Ixy = params.Ixy;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[600] = v[565] + v[570];
-        v[601] = Ixy * theta_dot;
-        v[602] = v[18] * v[338];
-        v[603] = v[30] * (-v[601] - v[602]);
-        v[604] = v[472] * v[272];
-        v[605] = v[259] * v[463];
-        v[606] = (-v[539] - v[604] - v[540] - v[605]) * J2;
-        v[607] = (v[604] + v[605]) * J1;
-        v[608] = psi_dot
-            * (v[20]
-                * (v[576] - v[558] * v[9] * J1 + v[577] - v[579] + v[6] * v[580] + v[583]
-                    + v[584] - v[585] - v[586] + v[589])
-                - m2
-                    * ((v[575] * v[88] - a_ * v[9] * v[574]) * v[18]
-                        + v[22] * v[20] * v[552])
-                - m1
-                    * (v[569] * v[16] * v[18]
-                        + v[20] * (v[133] * v[591] - a_ * v[2] * v[594]))
-                - v[30] * v[143] * phi_dot
-                + (v[595] + v[596] - v[597] - v[598] - v[599] - v[2] * v[562] * J1
-                    - v[4] * v[600] - v[603] - v[606] - v[607]) * v[18])
-            + theta_dot
-                * (v[29] * (-v[532] * v[29] * v[136] - v[304] * v[489])
-                    - v[531] * v[26]);
-        v[609] = phi_dot * v[136];
-        v[610] = v[249] - v[244] + v[253] + v[257] + v[276] + v[277] + v[295] + v[299]
-            + v[29]
-                * ((v[534] + v[572] + v[29] * v[382]) * v[30]
-                    + (-v[472] * v[298] - v[470] * v[296]) * J1
-                    + psi_dot
-                        * (v[30]
-                            * (v[571] - v[538] - v[542] - v[609] - v[557]
-                                + v[30] * (v[555] - v[554] + v[556])) - v[44] * v[580]
-                            + ((v[595] + v[596] - v[597] - v[598] - v[599] - v[603]
-                                - v[606] - v[607]) * v[20]
-                                + (v[579] - v[576] - v[577] - v[583] - v[584] + v[585]
-                                    + v[586] - v[589]) * v[18] + phi_dot * v[489]) * v[28]
-                            + (-v[40] * v[558] - v[38] * v[562]) * J1 - v[46] * v[600])
-                    + ((v[358] + v[359] - v[360] + v[362] - v[365] + v[366] + v[367])
-                        * v[20]
-                        + v[18]
-                            * (v[333] + v[334] + v[335] - v[339] - v[340] + v[341]
-                                + v[342])) * v[30] - v[363] * v[465]
-                    - m2
-                        * (psi_dot * v[53] * v[552]
-                            + (v[30] * v[355] * v[484] + v[28] * psi_dot * v[575] * v[88]
-                                + a_ * v[9] * (v[30] * v[349] - v[28] * psi_dot * v[574]))
-                                * v[20] + v[273] * v[464])
-                    - (v[569] * psi_dot * v[50]
-                        + (v[30] * v[329] * v[133]
-                            + a_ * (v[28] * psi_dot * v[594] - v[30] * v[323]) * v[2]
-                            + v[28] * psi_dot * v[83] * v[591]) * v[18]
-                        + v[291] * v[466]) * m1 + v[373] * v[28]
-                    + theta_dot
-                        * (v[29]
-                            * (-v[304]
-                                * (v[490] + v[491] + v[493] + v[495] + v[498] + v[499])
-                                - v[532] * v[29] * v[376]) - v[311] * v[533]
-                            - v[531] * v[93]) - v[336] * v[463]) + v[313];
-        v[611] = v[505] - J2;
-        v[612] = v[291] * v[28] * v[18] + v[38] * v[323] + v[329] * v[46];
-        v[613] = v[273] * v[28] * v[20] + v[40] * v[349] + v[44] * v[355];
-        v[614] = a_ * theta_dot * theta_dot * v[28];
-        v[615] = v[4] * v[424];
-        v[616] = v[4] * v[431];
-        v[617] = v[4] * v[429];
-        v[618] = v[4] * v[433];
-        v[619] = v[426] * v[2];
-        v[620] = v[420] * v[2];
-        v[621] = (-0.5 * v[615] - 0.5 * v[616] - 0.5 * v[617] - v[619] - 0.5 * v[618]
-            - v[620]) * phi_dot;
-        v[622] = 0.25 * v[615] - 0.25 * v[616] + 0.25 * v[617] - 0.5 * v[619] + v[469]
-            - 0.25 * v[618] + 0.5 * v[620];
-        v[623] = 0.5 * v[615] - 0.5 * v[616] - 0.5 * v[617] + 0.5 * v[618];
-        v[624] = v[623] * phi_dot;
-        v[625] = v[30] * v[396];
-        v[626] = v[30] * v[398];
-        v[627] = v[400] * v[30];
-        v[628] = v[28] * v[409];
-        v[629] = v[30] * v[402];
-        v[630] = v[28] * v[407];
-        v[631] = (0.5 * v[625] + 0.5 * v[626] - 0.5 * v[627] - v[628] - 0.5 * v[629]
-            + v[630]) * phi_dot;
-        v[632] = 0.25 * v[626] - 0.25 * v[625] - v[471] + 0.25 * v[627] - 0.25 * v[629];
-        v[633] = 0.5 * v[626] - 0.5 * v[625] - 0.5 * v[627] + 0.5 * v[629];
-        v[634] = phi_dot * v[633];
-        v[635] = v[30] * v[30] * v[29] * v[29] + 1.0;
-        v[636] = a_ + v[15];
-        v[637] = (Ixy + v[2] * (v[4] * v[258] + v[636] * d * m1)) * v[20];
-        v[638] = v[24] * v[18];
-        v[639] = v[29] * v[56] + v[637] + v[638];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part16(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[640] = v[639] * v[18];
-        v[641] = v[31] - v[35] - v[41] - v[47] - v[54] - v[55];
-        v[642] = v[641] * v[29] - v[637] - v[638];
-        v[643] = v[642] * v[20];
-        v[644] = v[65] - v[66];
-        v[645] = v[2] * m1 * v[644] - m2 * v[9] * v[64];
-        v[646] = d * v[645];
-        v[647] = v[2] * v[445] * m1 - m2 * v[9] * v[75];
-        v[648] = d * v[647];
-        v[649] = -m2 * v[9] * v[18] - v[2] * v[20] * m1;
-        v[650] = v[28] * d * v[649];
-        v[651] = (2.0 * v[127] + v[130] + v[104]
-            + m1 * (2.0 * v[132] + v[494] * v[28] * v[20]) + v[105] + 2.0 * v[131])
-            * v[18];
-        v[652] = (2.0 * v[120] - 2.0 * v[118] - v[111] - v[112]
-            + m2 * (v[28] * (2.0 * v[86] + 2.0 * v[89]) * v[18] + 2.0 * v[119]) + v[123])
-            * v[20];
-        v[653] = v[651] - v[124] - v[135] + v[145] + v[652];
-        v[654] = v[22] * v[22];
-        v[655] = m2
-            * (v[28] * (v[139] + v[20] * v[20] * (v[654] - v[86] + v[485]))
-                + v[22] * v[53] * v[18]);
-        v[656] = ((v[142] + (v[134] - v[84] + v[16] * v[16]) * v[18] * v[18]) * v[28]
-            + v[636] * v[20] * v[50]) * m1;
-        v[657] = (v[40] * v[9] * v[18] - v[38] * v[2] * v[20]) * J1;
-        v[658] = J2 * (-v[6] * v[44] * v[18] - v[4] * v[46] * v[20]);
-        v[659] = v[28]
-            * (((v[2] * v[2] * J1 + v[4] * v[4] * J2) * v[18] + v[121] - v[108]
-                + 2.0 * v[109]) * v[18]
-                + (v[128] + 2.0 * v[101] + (v[9] * v[9] * J1 + v[6] * v[6] * J2) * v[20]
-                    - v[102]) * v[20]);
-        v[660] = v[20] * v[653]
-            + (v[655] + v[656] + v[492] + v[657] + v[658] - v[476] + v[659]) * v[18];
-        v[661] = v[655] + v[656] + v[657] + v[658] - v[476] + v[659];
-        v[662] = v[637] + v[638];
-        v[663] = v[2] * v[2];
-        v[664] = (v[128] + 2.0 * v[101] - v[102]) * v[18]
-            + (v[18]
-                * ((2.0 * v[654] - 2.0 * v[86] + 2.0 * v[485]) * m2
-                    + m1 * (2.0 * v[84] + 2.0 * (v[636] * v[16]) + 2.0 * v[140])
-                    + J2 * (2.0 * v[7] - 2.0 * v[5])
-                    + (2.0 * (v[9] * v[9]) - 2.0 * v[663]) * J1) - v[121] + v[108]
-                - 2.0 * v[109]) * v[20];
-        v[665] = (v[20] * v[661] + v[30] * (v[662] * v[20] + v[27]) + v[137]) * v[29]
-            - v[211] + v[664] * v[18];
-        v[666] = v[29]
-            * (v[30] * (v[639] * v[18] * v[18] - v[58] * v[20]) + v[660] * v[18]
-                - v[20] * (v[117] + v[137])) - v[20] * v[665] - v[148];
-        v[667] = v[153] * v[18] * v[18];
-        v[668] = v[20] * v[506] * v[18];
-        v[669] = v[6] * v[88];
-        v[670] = a_ * v[9] * v[9];
-        v[671] = v[669] + v[670];
-        v[672] = v[671] * v[644] + v[67] * v[22];
-        v[673] = a_ * v[2] * v[2];
-        v[674] = v[4] * v[133];
-        v[675] = a_ - v[673] + v[15] + v[674];
-        v[676] = ((v[510] + v[22] * v[64] + v[159]) * v[20] + v[672] * v[18]) * m2
-            + ((v[166] - v[170] + v[16] * v[644]) * v[18] + v[675] * v[20] * v[64]) * m1;
-        v[677] = v[673] - a_ + v[4] * v[83] - v[15];
-        v[678] = ((v[64] * v[677] * v[18] + v[172]) * v[28] + v[644] * v[50]) * m1
-            + m2 * (v[64] * v[53] + (v[164] + v[672] * v[20]) * v[28]);
-        v[679] = v[676] * v[18] - v[219]
-            + v[29]
-                * (v[678] * v[20] + v[30] * (v[20] * v[645] + v[68] * v[18]) * d
-                    + v[387] * v[18]);
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part17(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
         let gamma2_dot = state[12];
         let m1 = params.m1;
         let m2 = params.m2;
@@ -6480,61 +6081,219 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[680] = v[22] * v[72] + v[445] * v[671];
-        v[681] = m2 * (v[20] * (v[182] + v[22] * v[75] + v[514]) + v[680] * v[18])
-            + ((v[194] - v[191] + v[16] * v[445]) * v[18] + v[675] * v[20] * v[75]) * m1;
-        v[682] = (v[28] * (v[196] + v[677] * v[75] * v[18]) + v[445] * v[50]) * m1
-            + m2 * (v[28] * (v[187] + v[680] * v[20]) + v[75] * v[53]);
-        v[683] = v[681] * v[18] - v[221]
-            + (v[391] * v[18] + v[682] * v[20]
-                + v[30] * d * (v[20] * v[647] + v[76] * v[18])) * v[29];
-        v[684] = m2 * v[20]
-            * (v[204] + (2.0 * a_ - v[669] + 2.0 * v[21] - v[670]) * v[28] * v[18]
-                + v[44] * v[484])
-            + (v[207] - v[206]
-                + v[28] * (2.0 * a_ - v[673] + 2.0 * v[15] + v[674]) * v[20]) * m1
-                * v[18];
-        v[685] = v[30] * (v[20] * v[649] + v[80] * v[18]) * d + v[684] * v[18] - v[223];
-        v[686] = v[100] - v[85] - v[91] - v[92] - v[94] - v[98] - v[115];
-        v[687] = (-v[151] - v[152]) * v[20] * v[18];
-        v[688] = (-v[155] - v[505]) * v[20] * v[20];
-        v[689] = v[29]
-            * (v[30] * (v[18] * v[645] - v[20] * v[68]) * d - v[387] * v[20]
-                + v[678] * v[18]) - v[174] - v[676] * v[20];
-        v[690] = v[29]
-            * (v[30] * d * (v[18] * v[647] - v[76] * v[20]) - v[20] * v[391]
-                + v[682] * v[18]) - v[681] * v[20] - v[198];
-        v[691] = (v[649] * v[18] - v[80] * v[20]) * v[30] * d - v[684] * v[20] - v[209];
-        v[692] = v[4] * d * v[64] * m1;
-        v[693] = v[4] * d * v[75] * m1;
-        v[694] = v[4] * v[28] * d * m1 * v[18];
-        v[695] = v[6] * m2 * d * v[644];
-        v[696] = v[6] * m2 * d * v[445];
-        v[697] = -(v[6] * m2 * v[28] * d * v[20]);
-        v[698] = v[259] * v[241];
-        v[699] = theta_dot * (phi_dot + v[236]) * v[20];
-        v[700] = v[699] - v[255];
-        v[701] = v[6] * v[700];
-        v[702] = -v[232] - v[233];
-        v[703] = gamma2_dot * v[702] * v[9];
-        v[704] = v[260] * v[702] * v[9];
-        v[705] = (v[698] + v[701] - v[703] - v[704]) * J2;
-        v[706] = (v[704] - v[698]) * J1;
-        v[707] = v[264] * v[702] * v[9]
-            + a_ * (v[9] * (-v[6] * v[702] * v[234] - v[241] * v[272]) - v[699] + v[255])
-            - v[259] * v[241] * v[88] - d * (v[701] - v[703]);
-        v[708] = -v[700] * v[9] - v[6] * gamma2_dot * v[702];
-        v[709] = v[702] * v[280] * v[83];
-        v[710] = v[241] * v[2] * gamma1_dot;
-        v[711] = d * (v[327] - v[710]);
-        v[712] = v[4] * v[241] * v[241];
-        v[713] = a_ * ((-v[702] * v[290] - v[712]) * v[2] - v[246] + v[247]);
-        v[714] = v[241] * v[2] * v[284];
-        v[715] = v[709] - v[711] + v[713] + v[714];
-        v[716] = v[702] * v[280];
-        v[717] = v[241] * v[282] * v[2];
-        v[718] = J2 * (v[327] - v[710] - v[716] - v[717]);
-        v[719] = J1 * (v[716] + v[717]);
+        v[600] = v[599] - v[598];
+        v[601] = v[600] * J1;
+        v[602] = v[542] + v[549];
+        v[603] = J2 * (v[600] + v[545]);
+        v[604] = v[256] * v[490];
+        v[605] = gamma2_dot * v[103];
+        v[606] = v[104] * v[320];
+        v[607] = v[70] * (v[605] - v[321] - v[322] - v[606]) + v[561] * v[106]
+            - v[483] * v[326] - v[340] * v[482];
+        v[608] = 2.0 * v[254] + 2.0 * v[255];
+        v[609] = a_ * (-v[608] * v[9] * v[70] - v[7] * v[561]) - v[340] * v[485]
+            + v[319] * v[483] - d * v[561];
+        v[610] = v[104] * v[609];
+        v[611] = (-v[30] * (v[126] * v[576] + v[500] * v[281]) - v[577] * v[27])
+            * theta_dot
+            + psi_dot
+                * ((v[590] - v[112] * v[567] - v[5] * v[560]) * v[15]
+                    - m1
+                        * ((-v[580] * v[120] - v[122] * v[584]) * v[16]
+                            + v[192] * v[562]) - v[276] * v[138]
+                    + v[16]
+                        * (v[591] + v[594] + v[595] + v[596] - v[597] - v[568] * v[94]
+                            - v[601] + v[7] * v[602] + v[603] - v[604])
+                    - m2 * (v[551] * v[188] + (v[610] - v[607] * v[106]) * v[15]));
+        v[612] = (v[354] + v[355]) + (v[351] + (v[353] - v[352]));
+        v[613] = v[126] * phi_dot;
+        v[614] = v[570] + (v[572] - v[571]);
+        v[615] = -(v[347] * v[104]);
+        v[616] = v[334]
+            + (v[482] * v[337]
+                + v[34]
+                    * ((v[362] + v[396]) * v[15] + v[16] * (v[612] + v[358] - v[359]))
+                - (v[290] * v[485] - v[297] * v[487]) * J1
+                + (v[34] * (v[614] * v[34] - v[563] - v[613] + v[564] - v[565] + v[569])
+                    - v[46] * v[602] - (v[567] * v[36] - v[39] * v[568]) * J1
+                    + (v[590] * v[16]
+                        + (v[597] - v[591] - v[594] - v[595] - v[596] + v[601] - v[603]
+                            + v[604]) * v[15] + v[500] * phi_dot) * v[29]
+                    - v[560] * v[42]) * psi_dot - v[480] * v[305]
+                - m1
+                    * (v[481] * v[311] - v[58] * psi_dot * v[562]
+                        + (v[253] * v[580] * v[120] + v[34] * v[390]
+                            + (v[253] * v[584] - v[34] * v[377]) * v[122]) * v[15])
+                + v[34] * (v[578] + v[30] * v[387])
+                + theta_dot
+                    * (-v[491] * v[277] - v[30] * (v[281] * v[507] + v[162] * v[576])
+                        - v[61] * v[577])
+                - m2
+                    * (v[16]
+                        * (v[34] * v[615] + v[253] * v[610]
+                            + (v[34] * v[344] - v[253] * v[607]) * v[106])
+                        + v[328] * v[483] - v[551] * psi_dot * v[55]) + v[385] * v[29])
+                * v[30];
+        v[617] = v[238] * phi_dot;
+        v[618] = v[34] * v[281];
+        v[619] = -v[172] - J2;
+        v[620] = v[37] * v[311] + v[42] * v[384] + v[377] * v[36];
+        v[621] = v[32] * v[328] + v[347] * v[46] - v[39] * v[344];
+        v[622] = v[88] * v[277];
+        v[623] = v[29] * v[88];
+        v[624] = v[410] * theta_dot * v[29];
+        v[625] = v[5] * v[415];
+        v[626] = v[424] * v[3];
+        v[627] = 0.25 * v[625] + 0.5 * v[626];
+        v[628] = v[5] * v[414];
+        v[629] = v[5] * v[417];
+        v[630] = 0.25 * v[629] - 0.25 * v[628];
+        v[631] = v[422] * v[3];
+        v[632] = (v[627] + v[630]) + (0.25 * v[628] - 0.5 * v[631]);
+        v[633] = 0.5 * v[625] + v[626];
+        v[634] = phi_dot * (v[633] + v[631] + 0.5 * v[629]);
+        v[635] = v[486] + v[632];
+        v[636] = 0.5 * v[629] - 0.5 * v[628];
+        v[637] = v[636] + (-0.5 * v[625] - 0.5 * v[628]);
+        v[638] = 0.5 * v[625] - v[628] - 0.5 * v[629];
+        v[639] = v[638] * phi_dot;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part16(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let phi_dot = state[10];
+        let Ixy = params.Ixy;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[640] = v[440] * v[34];
+        v[641] = v[34] * v[436];
+        v[642] = v[34] * v[438];
+        v[643] = 0.25 * v[640] + 0.25 * v[642];
+        v[644] = (0.25 * v[640] - 0.25 * v[641]) + v[643];
+        v[645] = v[644] - v[484];
+        v[646] = 0.5 * v[640] - 0.5 * v[642];
+        v[647] = v[29] * v[448];
+        v[648] = v[444] * v[29];
+        v[649] = -v[648] - 0.5 * v[640];
+        v[650] = (v[646] + v[647] + v[649] - 0.5 * v[641]) * phi_dot;
+        v[651] = 0.5 * v[640] + 0.5 * v[642];
+        v[652] = (0.5 * v[641] - v[647]) + (v[651] + v[649]);
+        v[653] = v[646] + 0.5 * v[640] + 0.5 * v[641];
+        v[654] = phi_dot * v[653];
+        v[655] = v[34] * v[34] * v[520] + 1.0;
+        v[656] = v[22] * v[15];
+        v[657] = (Ixy + v[3] * (v[5] * v[329] + v[25])) * v[16];
+        v[658] = v[656] + v[657];
+        v[659] = v[658] + v[30] * v[63];
+        v[660] = v[659] * v[15];
+        v[661] = v[502] - v[40] - v[47] - v[62] - v[60];
+        v[662] = v[30] * v[661] - v[656] - v[657];
+        v[663] = v[16] * v[662];
+        v[664] = v[73] - v[71];
+        v[665] = v[59] * v[664] - v[52] * v[76];
+        v[666] = d * v[665];
+        v[667] = -v[52] * v[83] - v[79] * v[59];
+        v[668] = d * v[667];
+        v[669] = v[59] * v[16] + v[52] * v[15];
+        v[670] = -(v[29] * v[669]);
+        v[671] = d * v[670];
+        v[672] = (v[114] - v[144]) + 2.0 * v[115];
+        v[673] = v[15] * v[672]
+            + v[16]
+                * (((2.0 * v[10] - 2.0 * v[4]) * J1 + m2 * (2.0 * v[128] + v[506])
+                    + J2 * (2.0 * v[8] - 2.0 * v[6])
+                    + (2.0 * v[121] + 2.0 * v[123] - 2.0 * v[134]) * m1) * v[15] - v[98]
+                    + v[148] - 2.0 * v[99]);
+        v[674] = v[3] * v[16];
+        v[675] = (-v[36] * v[674] - v[39] * v[434]) * J1;
+        v[676] = (v[29] * (v[133] + v[130] * (v[135] + v[124])) - v[24] * v[58] * v[16])
+            * m1;
+        v[677] = (v[102] * v[15] + v[29] * ((v[128] + v[499]) * v[129] + v[131])) * m2;
+        v[678] = v[9] * v[94];
+        v[679] = (((v[6] * J2 + v[112] * v[3]) * v[15] + v[98] - v[148] + 2.0 * v[99])
+            * v[15] + v[16] * ((J2 * v[8] + v[678]) * v[16] + v[672])) * v[29];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part17(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let a_ = params.a_;
+        let J2 = params.J2;
+        v[680] = J2 * (v[110] * v[16] + v[46] * v[443]);
+        v[681] = ((v[675] + v[676]) + (v[677] - v[489])) + (v[679] - v[680]);
+        v[682] = v[673] * v[15] - v[231]
+            + v[30] * (v[16] * v[681] + v[164] + v[34] * (v[658] * v[16] + v[28]));
+        v[683] = (v[146] + 2.0 * v[111] + 2.0 * v[113]
+            + (2.0 * v[118] + v[505] * v[32]) * m1 - v[117]) * v[15]
+            + (v[101] - 2.0 * v[95] - 2.0 * v[97] - v[150]
+                + m2 * ((2.0 * v[105] + 2.0 * v[107]) * v[37] + 2.0 * v[102]) - v[151])
+                * v[16];
+        v[684] = -v[125] - v[109];
+        v[685] = v[91] + v[683] + v[684];
+        v[686] = v[685] * v[16] + (v[501] + v[681]) * v[15];
+        v[687] = v[30]
+            * (v[15] * v[686] + v[34] * (v[130] * v[659] - v[64] * v[16])
+                - v[165] * v[16]) - v[141] - v[16] * v[682];
+        v[688] = v[130] * v[170];
+        v[689] = v[7] * v[104];
+        v[690] = v[9] * v[106];
+        v[691] = v[689] + v[690];
+        v[692] = v[74] * v[20] + v[691] * v[664];
+        v[693] = v[5] * v[120];
+        v[694] = v[3] * v[122];
+        v[695] = (v[693] - a_ - v[23] + v[694]) * v[15];
+        v[696] = m2 * (v[29] * (v[16] * v[692] + v[189]) - v[76] * v[55])
+            + ((v[191] + v[76] * v[695]) * v[29] - v[58] * v[664]) * m1;
+        v[697] = -v[693] - v[694];
+        v[698] = v[16] * (v[24] + v[697]);
+        v[699] = m1 * (v[76] * v[698] + (v[190] - v[24] * v[664]) * v[15])
+            + m2 * (v[692] * v[15] + (v[516] + v[20] * v[76]) * v[16]);
+        v[700] = v[30]
+            * (v[696] * v[16] + v[186] * v[15]
+                + (v[77] * v[15] + v[16] * v[665]) * v[175]) - v[240] + v[15] * v[699];
+        v[701] = v[20] * v[79] - v[691] * v[79];
+        v[702] = m2 * ((v[523] + v[20] * v[83]) * v[16] + v[15] * v[701])
+            + m1 * ((v[79] * v[24] + v[214]) * v[15] + v[698] * v[83]);
+        v[703] = (v[29] * (v[16] * v[701] + v[204]) - v[83] * v[55]) * m2
+            + m1 * (v[79] * v[58] + v[29] * (v[83] * v[695] + v[215]));
+        v[704] = v[702] * v[15]
+            + (v[219] * v[15] + v[703] * v[16]
+                + v[175] * (v[16] * v[667] + v[84] * v[15])) * v[30] - v[242];
+        v[705] = m2 * v[16];
+        v[706] = m1 * v[15];
+        v[707] = ((2.0 * v[19] + 2.0 * a_ - v[689] - v[690]) * v[37] - v[222] - v[223])
+            * v[705] + (v[32] * (2.0 * a_ + 2.0 * v[23] + v[697]) + v[227]) * v[706];
+        v[708] = v[175] * (v[88] * v[15] - v[16] * v[669]) - v[244] + v[707] * v[15];
+        v[709] = v[143] - v[142] - v[156] - v[159] - v[161] - v[154] - v[157];
+        v[710] = -(v[169] * v[170]);
+        v[711] = -(v[129] * v[170]);
+        v[712] = v[30]
+            * (v[175] * (v[15] * v[665] - v[16] * v[77]) - v[16] * v[186]
+                + v[696] * v[15]) - v[16] * v[699] - v[194];
+        v[713] = ((v[667] * v[15] - v[16] * v[84]) * v[175] - v[219] * v[16]
+            + v[703] * v[15]) * v[30] - v[217] - v[702] * v[16];
+        v[714] = v[175] * (-v[16] * v[88] - v[669] * v[15]) - v[229] - v[16] * v[707];
+        v[715] = v[5] * v[76];
+        v[716] = v[0] * v[715];
+        v[717] = v[5] * v[83];
+        v[718] = v[0] * v[717];
+        v[719] = v[5] * v[0] * v[37];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6543,70 +6302,66 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let psi_dot = state[8];
         let theta_dot = state[9];
-        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
         let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[720] = v[702] * Izz;
-        v[721] = v[720] - v[250];
-        v[722] = v[721] * v[234];
-        v[723] = v[241] * Iyy;
-        v[724] = Iyz * v[702];
-        v[725] = v[252] * v[702];
-        v[726] = v[700] * Ixz;
-        v[727] = v[248] * Ixy;
-        v[728] = (m2 * d * v[707] - v[705] - v[706]) * v[9] - theta_dot * v[304] * v[26]
-            + J1 * (-v[4] * v[321] - v[6] * v[708])
-            + (v[718] - d * v[715] * m1 + v[719]) * v[2]
-            + v[28] * psi_dot * v[662] * phi_dot - v[722]
-            + v[241] * (v[723] + v[235] - v[724] + v[238] - v[242]) + v[725] + v[726]
-            + v[727];
-        v[729] = v[9] * v[347];
-        v[730] = -a_ - v[21];
-        v[731] = 2.0 * v[232] + 2.0 * v[233];
-        v[732] = v[325] + v[702] * (v[259] * v[730] - v[729])
-            + a_ * (v[241] * v[731] * v[9] + v[6] * v[248]);
-        v[733] = v[6] * v[347];
-        v[734] = v[262] - v[573] + v[260] * v[88] + v[263];
-        v[735] = v[702] * (-v[272] * v[730] - v[733]) + v[241] * v[734]
-            - v[248] * a_ * v[9];
-        v[736] = v[732] * v[88] - a_ * v[9] * v[735] + v[273] * v[22];
-        v[737] = v[718] + v[719];
-        v[738] = 2.0 * v[239] - 2.0 * v[240];
-        v[739] = v[2] * v[318];
-        v[740] = v[16] * v[280];
-        v[741] = d * v[700] + a_ * (v[702] * v[2] * v[738] + v[4] * v[700])
-            + v[241] * (-v[739] - v[740]);
-        v[742] = v[4] * v[318];
-        v[743] = v[16] * v[290];
-        v[744] = v[592] - v[282] * v[83] - v[281] - v[283];
-        v[745] = v[241] * (v[742] + v[743]) + v[702] * v[744] + a_ * v[2] * v[700];
-        v[746] = a_ * v[2] * v[745];
-        v[747] = v[702] * (v[6] * v[259] * v[14] + v[258] * v[272] * v[9]);
-        v[748] = Iyz * v[700];
-        v[749] = v[702] * v[338];
-        v[750] = v[248] * Iyy;
-        v[751] = v[721] * v[237];
-        v[752] = -v[702] * Ixz - v[241] * Ixy;
-        v[753] = v[241] * v[752];
-        v[754] = (v[723] - v[724]) * v[237];
-        v[755] = v[234] * v[752];
-        v[756] = J2 * v[700];
-        v[757] = v[700] * Izz;
-        v[758] = v[241] * (v[258] * v[2] * v[290] + v[4] * v[258] * v[280]);
-        v[759] = v[705] + v[706];
+        v[720] = v[7] * v[11];
+        v[721] = v[720] * v[664];
+        v[722] = -(v[720] * v[79]);
+        v[723] = -(v[720] * v[32]);
+        v[724] = theta_dot * v[281];
+        v[725] = v[263] * v[319];
+        v[726] = v[291] - v[292];
+        v[727] = -(v[256] * v[9]);
+        v[728] = v[7] * v[726] - gamma2_dot * v[727];
+        v[729] = v[727] * v[320];
+        v[730] = (v[725] + v[728] - v[729]) * J2;
+        v[731] = (v[729] - v[725]) * J1;
+        v[732] = v[256] * v[343];
+        v[733] = v[104] * v[319];
+        v[734] = a_ * (v[292] - v[291] - v[9] * (v[263] * v[326] - v[732]))
+            + v[323] * v[727] - v[728] * d - v[263] * v[733];
+        v[735] = Ixz * v[726];
+        v[736] = v[263] * v[370];
+        v[737] = v[379] - v[306] * gamma1_dot;
+        v[738] = v[120] * v[300];
+        v[739] = (v[310] * v[306] + a_ * (v[287] - v[3] * (v[736] - v[256] * v[307])))
+            + (-v[737] * d - v[256] * v[738]);
+        v[740] = v[306] * v[302];
+        v[741] = v[256] * v[300];
+        v[742] = (v[737] - v[740] + v[741]) * J2 + (v[740] - v[741]) * J1;
+        v[743] = Iyy * v[263];
+        v[744] = v[743] + v[260];
+        v[745] = v[9] * v[726] - v[7] * gamma2_dot * v[256];
+        v[746] = v[256] * Izz;
+        v[747] = -v[746] - v[314];
+        v[748] = v[256] * v[747];
+        v[749] = Ixy * v[271];
+        v[750] = v[256] * v[315];
+        v[751] = v[9] * (v[11] * v[734] - v[730] - v[731]) - v[724] * v[27] + v[735]
+            + (v[742] - v[739] * v[0]) * v[3]
+            + v[263] * (v[744] + v[259] + v[260] - v[264])
+            - (v[5] * v[371] - v[7] * v[745]) * J1 - v[748] + v[749] - v[750]
+            + v[658] * v[267];
+        v[752] = v[340] * v[9];
+        v[753] = v[20] * v[319];
+        v[754] = a_ * (v[608] * v[318] + v[7] * v[271]) - v[256] * (v[752] - v[753])
+            + v[382];
+        v[755] = v[7] * v[340];
+        v[756] = v[20] * v[326];
+        v[757] = v[323] - v[605] + v[606];
+        v[758] = v[256] * (-v[755] - v[756]) - v[271] * v[106] + v[263] * v[757];
+        v[759] = v[20] * v[328] + v[754] * v[104] - v[758] * v[106];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6615,304 +6370,10 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[760] = v[30]
-            * (v[722] - v[725] - v[726]
-                + v[241] * (v[724] - v[723] - v[235] - v[238] + v[242]) - v[727])
-            - m2 * (v[707] * v[53] + v[28] * (v[357] + v[736] * v[20])) - v[737] * v[46]
-            - theta_dot * v[304] * (v[651] - v[126] + v[652])
-            - (((v[741] * v[83] + v[746] + v[291] * v[16]) * v[18] + v[331]) * v[28]
-                + v[715] * v[50]) * m1
-            + ((v[748] - v[747] - v[749] - v[332] - v[750] + v[333] + v[334] + v[335]
-                + v[337] - v[339] - v[340] + v[751] + v[342] - v[753]) * v[20]
-                + psi_dot * phi_dot * v[661] - theta_dot * v[26] * v[311]
-                + v[18]
-                    * (v[360] - v[754] - v[359] + v[755] - v[361] - v[362] - v[364]
-                        + 2.0 * v[365] - v[756] - v[366] - v[367] - v[757] - v[758]))
-                * v[28] + (-v[321] * v[38] - v[40] * v[708]) * J1 - v[44] * v[759];
-        v[761] = v[371] - v[370] - v[372] + v[374] - v[375] + v[379] + v[380] - v[381];
-        v[762] = (v[748] - v[4] * v[737] - v[747] - v[749] - v[750] + v[333] + v[334]
-            + v[335] + v[337] - v[339] - v[340] + v[751]
-            + (-v[321] * v[2] - v[298] * v[9]) * J1 + v[342] - v[753]) * v[18]
-            - m2 * (v[736] * v[18] + (v[707] * v[22] + v[350] + v[355] * v[484]) * v[20])
-            + theta_dot * (-v[311] * v[662] - v[304] * v[29] * v[661])
-            + v[28] * psi_dot * phi_dot * v[664]
-            - ((v[330] - v[324] + v[16] * v[715]) * v[18]
-                + v[20] * (v[741] * v[133] - v[746] + v[291] * v[636])) * m1
-            + v[20]
-                * (v[754] + v[359] - v[360] - v[755] + v[362] + v[364] + v[6] * v[759]
-                    - 2.0 * v[365] + v[756] + v[366]
-                    + (v[2] * v[296] - v[708] * v[9]) * J1 + v[367] + v[757] + v[758]);
-        v[763] = v[709] - v[711] + v[4] * v[329] + v[713] + v[714] + v[2] * v[323];
-        v[764] = v[6] * v[355] - v[9] * v[349];
-        v[765] = 0.25 * v[625] + 0.25 * v[626] - 0.25 * v[627] - 0.5 * v[628]
-            - 0.25 * v[629] + 0.5 * v[630];
-        v[766] = -0.25 * v[615] - 0.25 * v[616] - 0.25 * v[617] - 0.5 * v[619]
-            - 0.25 * v[618] - 0.5 * v[620];
-        v[767] = 2.0 * J2 + 2.0 * v[0] - 2.0 * J1;
-        v[768] = (J2 + v[0] - J1) * v[2] * v[2] + v[4] * v[17];
-        v[769] = v[4] * (d * m1 * v[50] + v[46] * v[14]);
-        v[770] = v[37] - v[36];
-        v[771] = v[38] * J1;
-        v[772] = ((-J2 - v[0]) * v[770] - v[771]) * v[2];
-        v[773] = v[769] + v[772] + v[4] * v[30] * v[767] * v[2];
-        v[774] = v[18] * v[18] * v[768] + v[29] * v[20] * v[773];
-        v[775] = v[29] * v[773] - v[20] * v[768];
-        v[776] = v[18] * v[775];
-        v[777] = 2.0 * J1 - 2.0 * J2;
-        v[778] = v[4] * v[777] * v[18] * v[18]
-            + (2.0 * (v[16] * d * v[18] * v[18]) - 2.0 * (a_ * d * v[20] * v[20])) * m1;
-        v[779] = J2 * v[770];
-        v[780] = v[4] * (v[779] + v[771]);
-        v[781] = ((d * v[50] + 2.0 * (a_ * v[28] * d * v[20])) * v[2]
-            - v[16] * d * v[770]) * m1;
-        v[782] = v[46] * v[14] * v[2];
-        v[783] = v[780] + v[781] + v[782] + v[30] * v[768];
-        v[784] = v[778] * v[2] + v[783] * v[29] * v[20];
-        v[785] = (-2.0 * (a_ * v[2] * v[28] * v[28] * d * v[18] * v[18])
-            - 2.0 * (d * v[770] * v[50])) * m1;
-        v[786] = v[769] + v[772];
-        v[787] = (2.0 * v[779] + 2.0 * v[771]) * v[46];
-        v[788] = v[785] + v[30] * v[786] + v[787];
-        v[789] = v[780] + v[781] + v[782];
-        v[790] = v[29] * v[20] * v[788] + v[789] * v[18] * v[18] + v[30] * v[774];
-        v[791] = (v[29] * v[790] - v[20] * v[784]) * v[18];
-        v[792] = v[4] * a_ * v[169];
-        v[793] = -v[167] - v[168];
-        v[794] = (v[792] + v[83] * v[793]) * v[28] * v[18];
-        v[795] = d * v[64] * v[770];
-        v[796] = v[794] - v[795] + v[4] * v[30] * d * v[64];
-        v[797] = v[20] * (v[133] * v[793] - v[792]) + v[2] * d * v[64] * v[18];
-        v[798] = m1 * (v[796] * v[29] * v[20] + v[797] * v[18]);
-        v[799] = d * v[75] * v[770];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part20(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let m1 = params.m1;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[800] = v[4] * a_ * v[190];
-        v[801] = -v[188] - v[189];
-        v[802] = v[28] * (v[800] + v[83] * v[801]) * v[18];
-        v[803] = v[802] - v[799] + v[4] * v[30] * d * v[75];
-        v[804] = (v[801] * v[133] - v[800]) * v[20] + v[2] * d * v[75] * v[18];
-        v[805] = m1 * (v[803] * v[29] * v[20] + v[804] * v[18]);
-        v[806] = v[2] * v[28] * d * v[18] * v[18];
-        v[807] = (v[133] * v[770] - v[4] * a_ * v[38]) * v[20];
-        v[808] = (v[4] * v[30] * d * v[20] + v[806] + v[807]) * m1 * v[18];
-        v[809] = -v[95] - v[96];
-        v[810] = a_ * v[809] * v[2] * d * m1;
-        v[811] = (v[796] * v[29] * v[18] - v[797] * v[20]) * m1;
-        v[812] = (v[803] * v[29] * v[18] - v[20] * v[804]) * m1;
-        v[813] = v[806] + v[807];
-        v[814] = (v[4] * v[30] * d * v[18] * v[18] - v[813] * v[20]) * m1;
-        v[815] = d * m1 * v[793];
-        v[816] = d * v[801] * m1;
-        v[817] = d * m1 * v[770];
-        v[818] = v[4] * v[288] + (v[285] - v[254] - v[255]) * v[2];
-        v[819] = v[284] * v[290] - v[4] * a_ * v[241] * v[290] - d * v[818];
-        v[820] = J1 * v[296];
-        v[821] = J2 * v[818];
-        v[822] = v[282] * v[14] * v[290];
-        v[823] = v[289] * J1;
-        v[824] = v[2] * (v[820] - v[819] * d * m1 + v[821] + v[822])
-            + v[4]
-                * (v[293] - v[292] + v[294] - v[823]
-                    - theta_dot * v[767] * v[311] * v[2])
-            - theta_dot * v[304] * v[29] * v[786]
-            + v[28] * psi_dot * phi_dot * v[18] * v[768];
-        v[825] = -v[278] - v[279];
-        v[826] = v[825] * v[258] * v[280];
-        v[827] = v[258] * v[290] * v[290];
-        v[828] = v[825] * (-v[316] - 2.0 * v[317]);
-        v[829] = v[4] * v[323];
-        v[830] = a_ * (v[712] - v[320]);
-        v[831] = v[825] * v[280] * d;
-        v[832] = v[830] - v[319] + v[831];
-        v[833] = -v[820] - v[821] - v[822];
-        v[834] = (v[826] + v[827]) * v[20] + v[778] * v[2] * v[28] * psi_dot * phi_dot
-            - (v[20]
-                * (a_ * (v[2] * (v[325] - v[326] - v[828]) - v[829]) + v[133] * v[832])
-                + (v[291] * v[2] * d + v[819] * v[16]) * v[18]) * m1
-            + (v[4] * v[833] + theta_dot * (-v[304] * v[29] * v[789] - v[311] * v[768])
-                + (v[293] + v[294] - v[823]) * v[2]) * v[18];
-        v[835] = theta_dot * (-v[311] * v[786] - (v[785] + v[787]) * v[304] * v[29])
-            - v[38] * v[289] * J1 + v[833] * v[46] - v[363] * v[770] + v[30] * v[824]
-            - ((a_ * (v[2] * (v[326] - v[325] + v[828]) + v[829]) + v[83] * v[832])
-                * v[28] * v[18] - v[291] * d * v[770] + v[819] * v[50]) * m1
-            + v[28] * (psi_dot * v[789] * phi_dot - v[826] - v[827]) * v[18];
-        v[836] = v[830] - v[315] + v[831] + v[322];
-        v[837] = v[828] + v[328];
-        v[838] = 0.25 * v[617] - 0.25 * v[615] - 0.25 * v[616] - v[45] + 0.25 * v[618];
-        v[839] = 2.0 * v[10] + 2.0 * J2 - 2.0 * J1;
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part21(
-        _t: f64,
-        _state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[840] = v[42] - v[43];
-        v[841] = v[840] * J1;
-        v[842] = v[44] * J2;
-        v[843] = (v[841] + v[842] - m2 * d * v[53]) * v[6];
-        v[844] = v[10] + J2 - J1;
-        v[845] = v[40] * v[9] * v[844];
-        v[846] = v[843] + v[845] + v[6] * v[30] * v[9] * v[839];
-        v[847] = v[23] * v[6] + v[9] * v[9] * v[844];
-        v[848] = v[846] * v[29] + v[847] * v[18];
-        v[849] = v[20] * v[848];
-        v[850] = v[846] * v[29] * v[18] - v[20] * v[20] * v[847];
-        v[851] = -(v[6] * m2 * v[67] * d);
-        v[852] = -(v[6] * m2 * d * v[72]);
-        v[853] = v[6] * v[40] * v[14];
-        v[854] = m2
-            * (v[9] * (-d * v[53] - 2.0 * (a_ * v[28] * d * v[18])) - v[40] * d * v[22]);
-        v[855] = v[9] * (v[841] + v[842]);
-        v[856] = v[853] + v[854] + v[30] * v[847] + v[855];
-        v[857] = v[29] * v[856] * v[20] * v[20];
-        v[858] = v[6] * v[777] * v[20] * v[20]
-            + m2 * (-2.0 * (d * v[22] * v[20] * v[20]) - 2.0 * (a_ * d * v[18] * v[18]));
-        v[859] = v[9] * v[858] * v[18];
-        v[860] = v[853] + v[854] + v[855];
-        v[861] = v[40] * (2.0 * v[841] + 2.0 * v[842]);
-        v[862] = (-2.0 * (v[40] * d * v[53])
-            - 2.0 * (a_ * v[28] * v[28] * d * v[9] * v[20] * v[20])) * m2;
-        v[863] = v[843] + v[845];
-        v[864] = v[861] + v[862] + v[30] * v[863];
-        v[865] = v[30] * v[848] + v[860] * v[18] + v[29] * v[864];
-        v[866] = v[20] * (v[29] * v[18] * v[865] - v[857] - v[859]);
-        v[867] = m2 * a_ * v[809] * d * v[9];
-        v[868] = v[67] * v[40] * d;
-        v[869] = v[158] * v[88] - v[6] * a_ * v[158];
-        v[870] = v[28] * v[869] * v[20];
-        v[871] = v[870] - v[868] - v[6] * v[30] * v[67] * d;
-        v[872] = v[869] * v[18] - v[67] * d * v[9] * v[20];
-        v[873] = (v[29] * v[20] * v[871] + v[872] * v[18]) * m2;
-        v[874] = v[181] * v[88] - v[6] * a_ * v[181];
-        v[875] = v[874] * v[18] - d * v[9] * v[20] * v[72];
-        v[876] = v[40] * d * v[72];
-        v[877] = v[874] * v[28] * v[20];
-        v[878] = v[877] - v[876] - v[6] * v[30] * d * v[72];
-        v[879] = m2 * (v[875] * v[18] + v[29] * v[20] * v[878]);
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part22(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
-    ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma2_dot = state[12];
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[880] = v[28] * d * v[9] * v[20] * v[20];
-        v[881] = (v[40] * v[88] - v[6] * a_ * v[40]) * v[18];
-        v[882] = v[881] - v[880];
-        v[883] = m2 * (v[882] * v[18] - v[6] * v[30] * d * v[20] * v[20]);
-        v[884] = m2 * (v[29] * v[871] * v[18] - v[872] * v[20]);
-        v[885] = m2 * (v[29] * v[878] * v[18] - v[20] * v[875]);
-        v[886] = (v[880] - v[881] - v[6] * v[30] * d * v[18]) * m2 * v[20];
-        v[887] = m2 * d * v[158];
-        v[888] = m2 * v[181] * d;
-        v[889] = m2 * v[40] * d;
-        v[890] = -v[270] - v[271];
-        v[891] = v[258] * v[260] * v[890];
-        v[892] = J2 * v[298];
-        v[893] = v[298] * J1;
-        v[894] = -v[264] * v[890] - v[6] * a_ * v[272] * v[234] - v[298] * d;
-        v[895] = (v[6] * v[297] + (v[265] + v[266]) * v[9]) * J1;
-        v[896] = v[9] * (v[893] - v[891] - v[892] + m2 * v[894] * d)
-            - theta_dot * v[304] * v[29] * v[863]
-            + v[6]
-                * (v[274] - v[261] - v[275] - v[895]
-                    - theta_dot * v[311] * v[9] * v[839])
-            + v[28] * psi_dot * v[20] * phi_dot * v[847];
-        v[897] = v[259] * v[259] * v[14];
-        v[898] = v[14] * v[272] * v[890];
-        v[899] = -v[261] - v[275] - v[895];
-        v[900] = v[259] * (2.0 * v[345] + v[346]);
-        v[901] = a_ * (v[702] * v[9] * v[234] - v[353]);
-        v[902] = a_ * (v[6] * v[234] * v[234] - v[348]);
-        v[903] = v[259] * v[259] * d;
-        v[904] = v[347] * v[890];
-        v[905] = v[902] - v[903] + v[904];
-        v[906] = a_
-            * (v[9] * (-v[900] - v[351] - v[352] - v[901] - v[354]) - v[6] * v[349])
-            + v[88] * v[905];
-        v[907] = v[28] * (psi_dot * phi_dot * v[860] - v[897] - v[898]) * v[20]
-            + v[30] * v[896]
-            + (-(v[861] + v[862]) * v[304] * v[29] - v[311] * v[863]) * theta_dot
-            - (v[891] + v[892]) * v[44] - v[298] * v[840] * J1 + v[899] * v[40]
-            - m2 * (v[28] * v[20] * v[906] - v[273] * v[40] * d + v[894] * v[53]);
-        v[908] = (v[899] * v[9]
-            + theta_dot * (-v[311] * v[847] - v[304] * v[29] * v[860])
-            + v[6] * (v[891] + v[892] - v[893])) * v[20] - (v[897] + v[898]) * v[18]
-            - m2 * (v[20] * (v[894] * v[22] - v[273] * d * v[9]) + v[18] * v[906])
-            + v[28] * v[9] * psi_dot * phi_dot * v[858];
-        v[909] = v[900] + v[351] + v[352] + v[901] + v[354];
-        v[910] = 0.25 * v[625] + 0.25 * v[626] + v[42] + 0.25 * v[627] - 0.5 * v[628]
-            + 0.25 * v[629] - 0.5 * v[630];
-        v[911] = v[113] * v[234];
-        v[912] = -v[546] - theta_dot;
-        v[913] = v[912] * v[28] * v[9];
-        v[914] = v[28] * v[20] * phi_dot;
-        v[915] = gamma2_dot * v[30];
-        v[916] = v[30] * theta_dot * v[18];
-        v[917] = v[6] * (-v[914] - v[915] - v[916]);
-        v[918] = v[259] * v[28] * v[20];
-        v[919] = v[260] * v[40];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part23(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let theta_dot = state[9];
-        let phi_dot = state[10];
-        let gamma1_dot = state[11];
+        let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
@@ -6923,58 +6384,323 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[920] = (v[913] + v[917] + v[918] + v[919]) * J2;
-        v[921] = a_
-            * (v[914] + (-v[44] * v[234] - v[272] * v[28] * v[20]) * v[9] + v[916])
-            - v[264] * v[40] - v[259] * v[28] * v[20] * v[88] - (v[913] + v[917]) * d;
-        v[922] = (-v[918] - v[919]) * J1;
-        v[923] = -v[914] - v[916];
-        v[924] = Ixz * v[923];
-        v[925] = v[241] * v[106];
-        v[926] = v[28] * phi_dot * v[18];
-        v[927] = v[30] * theta_dot * v[20];
-        v[928] = v[926] - v[927];
-        v[929] = Ixy * v[928];
-        v[930] = v[560] * v[2] * v[28];
-        v[931] = v[926] - v[927] + v[30] * gamma1_dot;
-        v[932] = v[4] * v[931];
-        v[933] = v[38] * v[284] - (v[930] + v[932]) * d
-            + a_ * (v[927] - v[926] + (-v[241] * v[46] - v[28] * v[290] * v[18]) * v[2])
-            + v[280] * v[28] * v[83] * v[18];
-        v[934] = v[282] * v[38];
-        v[935] = v[280] * v[28] * v[18];
-        v[936] = J2 * (v[930] - v[934] + v[932] - v[935]);
-        v[937] = (v[934] + v[935]) * J1;
-        v[938] = v[28] + v[308] * v[29];
-        v[939] = v[931] * v[2] + v[4] * v[28] * v[567];
-        v[940] = (v[914] + v[915] + v[916]) * v[9] + v[6] * v[912] * v[28];
-        v[941] = v[28] * (v[553] - v[554] + v[555] + v[556]) - v[911]
-            + (m2 * v[921] * d - v[920] - v[922]) * v[9] + v[924] + v[925] + v[929]
-            + v[2] * (v[936] - v[933] * d * m1 + v[937])
-            + theta_dot * (-0.5 * (v[29] * v[29] * v[93] * v[302]) - v[13] * v[938])
-            + (-v[4] * v[939] - v[6] * v[940]) * J1;
-        v[942] = v[259] * v[53];
-        v[943] = a_ * (v[6] * v[928] + v[28] * v[731] * v[9] * v[20]) + v[942]
-            + v[928] * d + v[40] * v[347];
-        v[944] = v[28] * v[734] * v[20] - a_ * v[928] * v[9] - v[44] * v[347]
-            - v[272] * v[53];
-        v[945] = v[943] * v[88] - a_ * v[9] * v[944];
-        v[946] = v[290] * v[50] + v[46] * v[318] + a_ * v[2] * v[923]
-            + v[28] * v[744] * v[18];
-        v[947] = a_ * v[946] * v[2];
-        v[948] = d * v[923] - v[38] * v[318] - v[280] * v[50]
-            + a_ * (v[2] * v[28] * v[738] * v[18] + v[4] * v[923]);
-        v[949] = Izz * v[923];
-        v[950] = v[106] * v[237];
-        v[951] = v[920] + v[922];
-        v[952] = v[928] * Iyz;
-        v[953] = (v[587] - v[588]) * v[28];
-        v[954] = v[234] * v[99];
-        v[955] = v[46] * v[280];
-        v[956] = v[38] * v[290];
-        v[957] = (-v[955] - v[956]) * J1;
-        v[958] = v[30] * v[252];
-        v[959] = J2 * (v[955] + v[956] - v[914] - v[916]);
+        v[760] = v[7] * v[319];
+        v[761] = Ixy * v[263] - v[256] * Ixz;
+        v[762] = ((v[368] - Iyy * v[271])
+            + (Iyz * v[726] + v[256] * (v[329] * v[327] + v[17] * v[760])))
+            + (v[747] * v[258] + v[263] * v[761]);
+        v[763] = v[581] - v[308] - v[309] - v[582];
+        v[764] = -v[24] * v[307] - v[5] * v[375];
+        v[765] = v[764] * v[263] - v[256] * v[763] + v[122] * v[726];
+        v[766] = v[122] * v[765];
+        v[767] = v[24] * v[311];
+        v[768] = (2.0 * v[261] - 2.0 * v[262]) * v[3];
+        v[769] = v[3] * v[375];
+        v[770] = v[24] * v[300];
+        v[771] = a_ * (v[5] * v[726] - v[768] * v[256]) - (-v[769] - v[770]) * v[263]
+            + d * v[726];
+        v[772] = v[771] * v[120];
+        v[773] = v[3] * v[307];
+        v[774] = (v[5] * v[365] + v[329] * v[773]) * v[263];
+        v[775] = v[256] * v[761];
+        v[776] = J2 * v[726];
+        v[777] = Izz * v[726];
+        v[778] = v[744] * v[258];
+        v[779] = v[730] + v[731];
+        v[780] = (v[762] - (v[3] * v[371] + v[290] * v[9]) * J1 + v[397] - v[5] * v[742])
+            * v[15] - m2 * (v[759] * v[15] + (v[345] + v[20] * v[734] + v[615]) * v[16])
+            - theta_dot * (v[658] * v[277] + v[282] * v[681])
+            - (v[16] * (v[767] - v[766] - v[772]) + (v[391] - v[24] * v[739]) * v[15])
+                * m1
+            + (v[774] + v[775] + v[612] + v[776] + (v[9] * v[745] + v[3] * v[297]) * J1
+                + v[777] + v[388] + v[778] + v[7] * v[779] - 2.0 * v[359]) * v[16]
+            + v[673] * v[267];
+        v[781] = ((v[356] - v[774] - v[775] - v[776] - v[777] - v[778] + v[389]
+            + 2.0 * v[359]) * v[15] + v[16] * (v[762] + v[398]) - v[461] * v[27]
+            + v[349] * v[681]) * v[29] - v[779] * v[46]
+            - (v[39] * v[745] + v[36] * v[371]) * J1
+            + v[34]
+                * ((v[265] - v[743] - v[260]) * v[263] - v[735] + v[748] - v[749]
+                    + v[750])
+            - ((v[15] * (v[766] - v[767] + v[772]) + v[392]) * v[29] - v[739] * v[58])
+                * m1 - v[42] * v[742] - (v[683] - v[93]) * v[724]
+            - m2 * (v[29] * (v[16] * v[759] + v[395]) - v[734] * v[55]);
+        v[782] = v[7] * v[347] - v[344] * v[9];
+        v[783] = v[739] + v[5] * v[384] + v[377] * v[3];
+        v[784] = -0.5 * v[648] - 0.25 * v[640];
+        v[785] = 0.5 * v[647] + 0.25 * v[640] + v[784] - 0.25 * v[642] - 0.25 * v[641];
+        v[786] = v[651] + (0.5 * v[640] - 0.5 * v[641]);
+        v[787] = (v[633] + v[636]) + (0.5 * v[628] - v[631]);
+        v[788] = 0.5 * v[631] + 0.25 * v[629] + v[627];
+        v[789] = 2.0 * J2 - 2.0 * J1;
+        v[790] = 2.0 * v[1] + v[789];
+        v[791] = v[790] * v[3];
+        v[792] = v[35] - v[33];
+        v[793] = v[36] * J1;
+        v[794] = v[5] * (v[42] * v[17] - v[0] * v[58])
+            + v[3] * (-v[2] * v[792] - v[793]);
+        v[795] = v[5] * v[790] * v[41] + v[794];
+        v[796] = v[5] * v[26] + v[4] * (v[2] - J1);
+        v[797] = v[31] * v[795] + v[130] * v[796];
+        v[798] = v[30] * v[795] - v[796] * v[16];
+        v[799] = v[798] * v[15];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part20(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let m1 = params.m1;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[800] = 2.0 * J1 - 2.0 * J2;
+        v[801] = a_ * d;
+        v[802] = v[130] * v[5] * v[800]
+            + (-2.0 * (v[130] * v[24] * d) - 2.0 * (v[801] * v[129])) * m1;
+        v[803] = v[3] * v[802];
+        v[804] = d * v[792];
+        v[805] = J2 * v[792];
+        v[806] = (m1 * (v[24] * v[804] + (2.0 * (v[32] * v[801]) - v[58] * d) * v[3])
+            + v[5] * (v[805] + v[793])) + v[17] * v[43];
+        v[807] = v[806] + v[796] * v[34];
+        v[808] = v[803] + v[31] * v[807];
+        v[809] = (2.0 * v[805] + 2.0 * v[793]) * v[42]
+            - (2.0 * (d * v[160] * v[122]) - 2.0 * (v[58] * v[804])) * m1;
+        v[810] = v[34] * v[794] + v[809];
+        v[811] = v[34] * v[797] + v[130] * v[806] + v[31] * v[810];
+        v[812] = (v[30] * v[811] - v[808] * v[16]) * v[15];
+        v[813] = d * v[137];
+        v[814] = v[182] * v[120];
+        v[815] = v[182] * v[119];
+        v[816] = v[76] * v[813] + (v[814] - v[815]) * v[16];
+        v[817] = (v[815] - v[814]) * v[37] - v[76] * v[804];
+        v[818] = v[175] * v[715] + v[817];
+        v[819] = (v[816] * v[15] + v[818] * v[31]) * m1;
+        v[820] = v[119] * v[212];
+        v[821] = v[212] * v[120];
+        v[822] = v[83] * v[813] + (v[821] - v[820]) * v[16];
+        v[823] = (v[820] - v[821]) * v[37] - v[83] * v[804];
+        v[824] = v[175] * v[717] + v[823];
+        v[825] = (v[822] * v[15] + v[824] * v[31]) * m1;
+        v[826] = v[813] * v[37] + (-v[119] * v[36] - v[120] * v[792]) * v[16];
+        v[827] = v[706] * (v[23] * v[70] + v[826]);
+        v[828] = v[15] * v[65];
+        v[829] = -(v[0] * v[155] * v[122]);
+        v[830] = m1 * (v[818] * v[65] - v[16] * v[816]);
+        v[831] = (v[824] * v[65] - v[16] * v[822]) * m1;
+        v[832] = m1 * (v[23] * v[75] * v[15] - v[16] * v[826]);
+        v[833] = -(v[182] * v[0]);
+        v[834] = -(v[212] * v[0]);
+        v[835] = v[0] * v[792];
+        v[836] = v[303] * v[5] + v[3] * (v[291] + v[294] - v[292]);
+        v[837] = v[310] * v[307] - d * v[836] - v[308] * v[307];
+        v[838] = v[17] * v[302];
+        v[839] = v[838] * v[307] + (J2 * v[836] + v[297] * J1);
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part21(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let theta_dot = state[9];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[840] = v[304] * J1;
+        v[841] = v[3] * (v[839] - v[837] * v[0]) - v[460] * v[794]
+            + v[5] * (v[312] - v[840] - v[461] * v[791]) + v[796] * v[292];
+        v[842] = a_ * (v[736] - v[369]);
+        v[843] = d * v[300] * v[300];
+        v[844] = v[842] - v[843];
+        v[845] = (v[844] + v[376]) * v[120];
+        v[846] = v[5] * v[377];
+        v[847] = 2.0 * v[373] + v[374];
+        v[848] = v[847] * v[300];
+        v[849] = v[365] * v[300];
+        v[850] = v[307] * v[307];
+        v[851] = v[329] * v[850];
+        v[852] = (v[3] * (v[305] - v[840])
+            - (v[796] * v[277] + v[282] * v[806]) * theta_dot - v[5] * v[839]) * v[15]
+            - ((v[3] * d * v[311] - v[837] * v[24]) * v[15]
+                + v[16] * (a_ * ((v[383] - v[848]) * v[3] - v[846]) - v[845])) * m1
+            + v[16] * (v[851] - v[849]) + v[267] * v[803];
+        v[853] = v[34] * v[841] - v[304] * v[793] - v[305] * v[792] - v[42] * v[839]
+            - theta_dot * (v[282] * v[809] + v[277] * v[794])
+            + (v[849] - v[851] + v[349] * v[806]) * v[37]
+            - ((v[845] + (v[846] + v[3] * (v[848] - v[381] - v[382])) * a_) * v[37]
+                - v[837] * v[58] - v[804] * v[311]) * m1;
+        v[854] = v[380] + v[848];
+        v[855] = v[844] + v[372];
+        v[856] = (-0.25 * v[625] - 0.25 * v[628]) + v[630];
+        v[857] = v[856] - v[41];
+        v[858] = (2.0 * v[12] + v[789]) * v[9];
+        v[859] = J2 * v[46];
+        v[860] = v[44] - v[45];
+        v[861] = v[860] * J1;
+        v[862] = v[859] + v[861];
+        v[863] = v[13] - J1;
+        v[864] = -(v[39] * v[9]);
+        v[865] = v[7] * (v[11] * v[55] + v[862]) + v[863] * v[864];
+        v[866] = v[38] * v[858] + v[865];
+        v[867] = v[7] * v[21] + v[10] * v[863];
+        v[868] = v[30] * v[866] + v[867] * v[15];
+        v[869] = v[868] * v[16];
+        v[870] = v[866] * v[65] - v[867] * v[129];
+        v[871] = -(v[74] * v[720]);
+        v[872] = -(v[39] * d);
+        v[873] = (m2 * (-v[9] * (2.0 * (v[801] * v[37]) - d * v[55]) - v[20] * v[872])
+            - v[39] * v[18]) + v[9] * v[862];
+        v[874] = v[873] + v[34] * v[867];
+        v[875] = v[31] * v[16];
+        v[876] = v[874] * v[875];
+        v[877] = v[7] * v[800] * v[129]
+            - m2 * (2.0 * (v[130] * v[801]) + 2.0 * (v[20] * d * v[129]));
+        v[878] = v[434] * v[877];
+        v[879] = -v[39] * (2.0 * v[859] + 2.0 * v[861])
+            - m2 * (2.0 * (d * v[158] * v[106]) - 2.0 * (v[872] * v[55]));
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part22(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[880] = v[34] * v[865] + v[879];
+        v[881] = v[873] * v[15] + v[868] * v[34] + v[30] * v[880];
+        v[882] = v[16] * (v[881] * v[65] - v[876] - v[878]);
+        v[883] = -(v[11] * v[155] * v[106]);
+        v[884] = v[177] * v[104] - v[177] * v[103];
+        v[885] = v[884] * v[32] - v[74] * v[872];
+        v[886] = v[7] * v[74];
+        v[887] = v[885] - v[175] * v[886];
+        v[888] = d * v[9];
+        v[889] = v[16] * v[888];
+        v[890] = v[884] * v[15] - v[74] * v[889];
+        v[891] = m2 * (v[887] * v[31] + v[890] * v[15]);
+        v[892] = v[104] * v[198] - v[103] * v[198];
+        v[893] = v[892] * v[15] - v[79] * v[889];
+        v[894] = v[7] * v[79];
+        v[895] = v[32] * v[892] - v[79] * v[872];
+        v[896] = v[895] - v[175] * v[894];
+        v[897] = m2 * (v[893] * v[15] + v[31] * v[896]);
+        v[898] = (v[39] * v[103] - v[39] * v[104]) * v[15];
+        v[899] = v[32] * v[889];
+        v[900] = v[898] - v[899];
+        v[901] = m2 * (v[900] * v[15] - d * v[70] * v[435]);
+        v[902] = v[877] * v[9];
+        v[903] = m2 * (v[887] * v[65] - v[890] * v[16]);
+        v[904] = m2 * (v[896] * v[65] - v[893] * v[16]);
+        v[905] = (v[899] - v[898] - v[19] * v[75]) * v[705];
+        v[906] = v[177] * v[11];
+        v[907] = v[11] * v[198];
+        v[908] = -(v[39] * v[11]);
+        v[909] = (v[324] + v[7] * v[289]) * J1;
+        v[910] = v[329] * v[320];
+        v[911] = v[910] * v[326];
+        v[912] = v[290] * J2;
+        v[913] = v[290] * J1;
+        v[914] = v[290] * d + v[326] * v[322] - v[323] * v[326];
+        v[915] = v[268] * v[867] - v[865] * v[460]
+            + v[7] * (v[333] - v[909] - v[461] * v[858])
+            + v[9] * (v[911] - v[912] + v[913] - v[11] * v[914]);
+        v[916] = v[912] - v[911];
+        v[917] = -(v[326] * v[326]);
+        v[918] = v[17] * v[917];
+        v[919] = v[319] * v[350];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part23(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let theta_dot = state[9];
+        let phi_dot = state[10];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[920] = d * v[319] * v[319];
+        v[921] = a_ * (v[732] - v[342]);
+        v[922] = v[921] - v[920] + v[341];
+        v[923] = v[347]
+            + (a_ * (v[256] * v[727] - v[346]) + (v[338] + 2.0 * v[339]) * v[319]);
+        v[924] = v[104] * v[922] + a_ * (-v[9] * v[923] - v[7] * v[344]);
+        v[925] = v[909] + v[337];
+        v[926] = (v[349] * v[873] - v[918] - v[919]) * v[32] - v[916] * v[46]
+            - v[860] * v[913] - m2 * (v[32] * v[924] - v[328] * v[872] + v[914] * v[55])
+            - (v[282] * v[879] + v[865] * v[277]) * theta_dot + v[34] * v[915]
+            + v[39] * v[925];
+        v[927] = v[16]
+            * (v[7] * (v[916] - v[913]) - (v[282] * v[873] + v[867] * v[277]) * theta_dot
+                - v[9] * v[925]) - (v[918] + v[919]) * v[15]
+            - m2 * ((-v[20] * v[914] - v[328] * v[888]) * v[16] + v[15] * v[924])
+            + v[902] * v[267];
+        v[928] = (v[643] + v[784]) + (0.25 * v[641] - 0.5 * v[647]);
+        v[929] = v[44] + v[928];
+        v[930] = v[256] * v[152];
+        v[931] = v[75] * theta_dot;
+        v[932] = v[32] * phi_dot;
+        v[933] = v[931] + v[932];
+        v[934] = gamma2_dot * v[34] + v[933];
+        v[935] = -v[934] * v[7] - v[453] * v[547];
+        v[936] = a_ * (v[933] - (v[32] * v[326] + v[256] * v[46]) * v[9]) - v[935] * d
+            + v[39] * v[323] - v[32] * v[733];
+        v[937] = v[32] * v[319] - v[39] * v[320];
+        v[938] = v[937] * J1;
+        v[939] = (v[935] + v[937]) * J2;
+        v[940] = v[146] * v[263];
+        v[941] = v[934] * v[9] - v[484] * v[547];
+        v[942] = theta_dot * v[70];
+        v[943] = phi_dot * v[37];
+        v[944] = v[943] - v[942];
+        v[945] = v[944] + v[34] * gamma1_dot;
+        v[946] = v[486] * v[555] + v[945] * v[3];
+        v[947] = v[933] * Ixz;
+        v[948] = Ixy * v[944];
+        v[949] = v[300] * v[37];
+        v[950] = v[36] * v[302];
+        v[951] = v[566] * v[431] + v[5] * v[945];
+        v[952] = J2 * (v[951] - v[949] - v[950]) + (v[949] + v[950]) * J1;
+        v[953] = v[942] - v[943];
+        v[954] = a_ * (v[953] - (v[42] * v[263] + v[307] * v[37]) * v[3]) - d * v[951]
+            + v[37] * v[738] + v[310] * v[36];
+        v[955] = v[279] * v[520];
+        v[956] = v[29] + v[275] * v[30];
+        v[957] = v[9] * (v[11] * v[936] + v[938] - v[939]) - v[930] + v[940]
+            - J1 * (v[7] * v[941] + v[5] * v[946]) + (v[614] + v[574]) * v[29] - v[947]
+            + v[948] + v[3] * (v[952] - v[954] * v[0])
+            - (0.5 * (v[61] * v[955]) + v[14] * v[956]) * theta_dot;
+        v[958] = v[42] * v[300];
+        v[959] = v[36] * v[307];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -6983,13 +6709,14 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let theta_dot = state[9];
         let phi_dot = state[10];
         let gamma1_dot = state[11];
         let gamma2_dot = state[12];
         let Iyy = params.Iyy;
+        let Izz = params.Izz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -6997,70 +6724,64 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[960] = v[259] * v[44];
-        v[961] = v[40] * v[272];
-        v[962] = (v[960] + v[961]) * J1;
-        v[963] = Iyz * v[923];
-        v[964] = J2 * (v[926] - v[960] - v[927] - v[961]);
-        v[965] = v[113] * v[237];
-        v[966] = v[241] * v[99];
-        v[967] = v[936] + v[937];
-        v[968] = v[928] * Iyy;
-        v[969] = v[243] * v[30];
-        v[970] = v[28] * (v[601] + v[602]);
-        v[971] = v[28] * v[143] * phi_dot
-            - m2 * (v[945] * v[18] + v[921] * v[22] * v[20])
-            - (v[933] * v[16] * v[18] + (v[948] * v[133] - v[947]) * v[20]) * m1
-            + theta_dot * (-v[26] * v[938] - 0.5 * (v[29] * v[29] * v[136] * v[302]))
-            + (v[949] + v[950] - v[940] * v[9] * J1 + v[6] * v[951] - v[952] + v[953]
-                - v[954] + v[957] - v[958] + v[959]) * v[20]
-            + (v[963] - v[962] - v[964] + v[965] - v[966] - v[4] * v[967]
-                - v[2] * v[939] * J1 - v[968] - v[969] - v[970]) * v[18];
-        v[972] = (v[911] - v[924] - v[925] + (v[554] - v[555] - v[556]) * v[28] - v[929])
-            * v[30] - v[46] * v[967] + (-v[940] * v[40] - v[38] * v[939]) * J1
-            - m2 * (v[945] * v[28] * v[20] + v[921] * v[53]) + v[30] * v[941]
-            - (v[28] * v[18] * (v[947] + v[948] * v[83]) + v[933] * v[50]) * m1
-            + theta_dot * (-0.5 * (v[29] * v[29] * v[376] * v[302]) - v[93] * v[938])
-            + (v[609]
-                + v[20]
-                    * (v[963] - v[962] - v[964] + v[965] - v[966] - v[968] - v[969]
-                        - v[970])
-                + (v[952] - v[949] - v[950] - v[953] + v[954] - v[957] + v[958] - v[959])
-                    * v[18]) * v[28] - v[44] * v[951];
-        v[973] = gamma1_dot * v[18];
-        v[974] = v[2] * (v[310] - v[973]);
-        v[975] = v[4] * v[245] * v[20];
-        v[976] = v[280] * v[20] * v[133] - d * (v[974] + v[975])
-            + a_ * (v[2] * (v[20] * v[290] - v[4] * v[241] * v[18]) - v[245] * v[20])
-            + v[2] * v[284] * v[18];
-        v[977] = v[282] * v[2] * v[18];
-        v[978] = v[280] * v[20];
-        v[979] = (v[977] - v[978]) * J1;
-        v[980] = J2 * (v[978] - v[977] + v[974] + v[975]);
-        v[981] = v[129] * v[234];
-        v[982] = v[4] * (v[973] - v[310]) + v[245] * v[2] * v[20];
-        v[983] = gamma2_dot * v[20] - v[310];
-        v[984] = v[6] * v[983] - v[245] * v[9] * v[18];
-        v[985] = v[9] * v[983];
-        v[986] = v[6] * v[245] * v[18];
-        v[987] = a_ * ((v[6] * v[20] * v[234] - v[272] * v[18]) * v[9] - v[245] * v[18])
-            - v[264] * v[9] * v[20] - v[259] * v[88] * v[18] - (v[985] + v[986]) * d;
-        v[988] = v[259] * v[18];
-        v[989] = v[260] * v[9] * v[20];
-        v[990] = J2 * (v[985] + v[988] + v[986] + v[989]);
-        v[991] = (-v[988] - v[989]) * J1;
-        v[992] = v[252] * v[20];
-        v[993] = v[243] * v[18];
-        v[994] = v[241] * v[122];
-        v[995] = v[2] * (v[979] - v[976] * d * m1 + v[980]) - v[981]
-            + (-v[4] * v[982] - v[6] * v[984]) * J1 + v[300]
-            + v[9] * (m2 * d * v[987] - v[990] - v[991]) - v[305] + v[245] * v[475]
-            - v[992] - v[993] + v[994] - v[312];
-        v[996] = v[979] + v[980];
-        v[997] = v[245] * d;
-        v[998] = v[20] * (v[729] + v[259] * v[22] + v[997])
-            + a_ * (v[731] * v[9] * v[18] + v[6] * v[245] * v[20]);
-        v[999] = (v[733] - a_ * v[245] * v[9] - v[272] * v[22]) * v[20] + v[734] * v[18];
+        v[960] = v[958] + v[959];
+        v[961] = (v[960] - v[931] - v[932]) * J2;
+        v[962] = v[939] - v[938];
+        v[963] = Iyz * v[944];
+        v[964] = v[146] * v[258];
+        v[965] = v[960] * J1;
+        v[966] = v[51] * v[256];
+        v[967] = v[933] * Izz;
+        v[968] = (v[592] - v[593]) * v[29];
+        v[969] = v[34] * v[315];
+        v[970] = v[763] * v[37] - v[42] * v[375] - v[933] * v[122] - v[58] * v[307];
+        v[971] = v[122] * v[970];
+        v[972] = a_ * (v[768] * v[37] - v[5] * v[933]) + v[36] * v[375] + v[58] * v[300]
+            - d * v[933];
+        v[973] = v[972] * v[120];
+        v[974] = v[340] * v[46] + v[326] * v[55] - v[944] * v[106] + v[32] * v[757];
+        v[975] = v[319] * v[55];
+        v[976] = d * v[944] + v[39] * v[340] - v[975]
+            + a_ * (v[32] * v[608] * v[9] + v[7] * v[944]);
+        v[977] = v[104] * v[976] - v[974] * v[106];
+        v[978] = v[29] * phi_dot;
+        v[979] = v[39] * v[326];
+        v[980] = v[46] * v[319];
+        v[981] = v[980] - v[979];
+        v[982] = v[981] * J1;
+        v[983] = ((-Iyy * v[944] - v[51] * v[263]) + (-v[29] * v[586] - v[34] * v[265]))
+            + ((-v[982] - Iyz * v[933])
+                + (v[152] * v[258] - J2 * (v[979] - v[980] + v[944])));
+        v[984] = (v[961] + v[7] * v[962] - v[963] + v[964] - v[965] - v[966] - v[967]
+            + v[968] - v[969] - v[941] * v[94]) * v[16]
+            - ((-v[971] - v[973]) * v[16] + v[954] * v[192]) * m1
+            - m2 * (v[977] * v[15] + v[188] * v[936])
+            - theta_dot * (0.5 * (v[126] * v[955]) + v[956] * v[27]) + v[138] * v[978]
+            + (v[983] - v[5] * v[952] - v[112] * v[946]) * v[15];
+        v[985] = v[34] * v[957] - m2 * (v[32] * v[977] - v[936] * v[55])
+            - (v[36] * v[946] - v[39] * v[941]) * J1 - v[952] * v[42]
+            + v[34] * (v[930] - v[940] + v[947] - v[948] + v[29] * v[573])
+            + v[29]
+                * (v[613] + v[983] * v[16]
+                    + (v[963] - v[961] - v[964] + v[965] + v[966] + v[967] - v[968]
+                        + v[969]) * v[15])
+            - ((v[971] + v[973]) * v[37] - v[954] * v[58]) * m1 - v[46] * v[962]
+            - (0.5 * (v[162] * v[955]) + v[61] * v[956]) * theta_dot;
+        v[986] = theta_dot * v[279];
+        v[987] = theta_dot * v[956];
+        v[988] = v[269] * v[49];
+        v[989] = gamma2_dot * v[16] - v[253];
+        v[990] = v[434] * v[269] + v[7] * v[989];
+        v[991] = gamma1_dot * v[15];
+        v[992] = v[5] * (v[991] - v[253]) - v[674] * v[269];
+        v[993] = -(v[5] * v[269]);
+        v[994] = v[3] * (v[253] - v[991]) + v[16] * v[993];
+        v[995] = v[16] * v[300];
+        v[996] = a_ * (v[16] * v[269] + v[3] * (v[16] * v[307] - v[370] * v[15]))
+            - v[994] * d - v[120] * v[995] + v[310] * v[137];
+        v[997] = v[302] * v[137];
+        v[998] = J2 * (v[994] - v[997] + v[995]) + (v[997] - v[995]) * J1;
+        v[999] = v[265] * v[15];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -7069,12 +6790,9 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
-        let psi_dot = state[8];
-        let theta_dot = state[9];
         let phi_dot = state[10];
-        let gamma1_dot = state[11];
         let gamma2_dot = state[12];
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
@@ -7084,68 +6802,67 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[1000] = v[998] * v[88] - a_ * v[999] * v[9];
-        v[1001] = v[2] * v[290];
-        v[1002] = v[4] * v[280];
-        v[1003] = (-v[1001] - v[1002]) * J1;
-        v[1004] = (v[1001] + v[1002] - phi_dot - v[236]) * J2;
-        v[1005] = v[28] * psi_dot * Ixz;
-        v[1006] = v[125] * v[234];
-        v[1007] = v[245] * v[110];
-        v[1008] = v[122] * v[237];
-        v[1009] = Ixy * v[28] * psi_dot;
-        v[1010] = v[129] * v[237];
-        v[1011] = v[241] * v[125];
-        v[1012] = v[6] * v[259];
-        v[1013] = v[272] * v[9];
-        v[1014] = J2 * (v[1012] - v[1013] - phi_dot - v[236]);
-        v[1015] = (v[1013] - v[1012]) * J1;
-        v[1016] = v[103] * v[245];
-        v[1017] = v[20] * v[593] + (v[742] + v[743] + a_ * v[245] * v[2]) * v[18];
-        v[1018] = a_ * v[2] * v[1017];
-        v[1019] = a_ * (v[4] * v[245] * v[18] + v[590] * v[2] * v[20])
-            + (v[997] - v[739] - v[740]) * v[18];
-        v[1020] = v[990] + v[991];
-        v[1021] = (v[981] + v[245] * v[34] - v[300] + v[992] + v[993] - v[994]) * v[30]
-            - v[46] * v[996] - m2 * (v[28] * v[20] * v[1000] + v[987] * v[53]) - v[377]
-            - v[378]
-            + v[28]
-                * ((v[1006] - (v[1003] + v[1004]) * v[18] - v[1005] + v[602] - v[1007]
-                    - v[1008]) * v[18]
-                    + (v[588] - v[1009] + v[1010] - v[1011] - (v[1014] + v[1015]) * v[20]
-                        - v[1016]) * v[20]) + v[995] * v[30]
-            - (v[28] * (v[1018] + v[1019] * v[83]) * v[18] + v[976] * v[50]) * m1
-            - v[44] * v[1020] + (-v[40] * v[984] - v[38] * v[982]) * J1;
-        v[1022] = (v[1005] - v[1006] - v[602]
-            + (v[1003] - v[1014] - v[1015] + v[1004]) * v[18] - v[9] * v[984] * J1
-            + v[1007] + v[6] * v[1020] + v[1008]) * v[20] - v[343]
-            - (v[16] * v[976] * v[18] + v[20] * (v[1019] * v[133] - v[1018])) * m1
-            - v[344] - m2 * (v[18] * v[1000] + v[22] * v[20] * v[987])
-            + (v[588] - v[4] * v[996] - v[1009] + v[1010] - v[1011] - v[1016]
-                - v[2] * v[982] * J1) * v[18];
-        v[1023] = 0.5 * v[430] - 0.5 * v[425] - 0.5 * v[432] + 2.0 * v[37]
-            + 0.5 * v[434];
-        v[1024] = a_ * v[30] * theta_dot;
-        v[1025] = 0.5 * v[397] - 0.5 * v[399] - 0.5 * v[401] + 0.5 * v[403]
-            - 2.0 * v[39];
-        v[1026] = gamma2_dot - v[232] - v[233];
-        v[1027] = v[6] * (-v[262] - d * v[1026] - v[263])
-            + a_ * (v[232] - v[9] * v[9] * v[234] + v[233]);
-        v[1028] = v[232] - gamma2_dot + v[233];
-        v[1029] = J2 * v[1026];
-        v[1030] = v[258] * v[260];
-        v[1031] = v[239] - gamma1_dot - v[240];
-        v[1032] = v[4] * (v[281] - v[1031] * d + v[283]) + a_ * v[241] * (v[663] - 1.0);
-        v[1033] = J2 * v[1031];
-        v[1034] = v[282] * v[14];
-        v[1035] = v[9] * (m2 * d * v[1027] + v[6] * (-v[1028] * J1 - v[1029] - v[1030]))
-            + v[26] * v[28] * psi_dot
-            + (v[4] * (v[1033] - v[1031] * J1 + v[1034]) - d * v[1032] * m1) * v[2]
-            + v[641] * theta_dot * v[29];
-        v[1036] = v[1029] + v[1030];
-        v[1037] = a_ * v[702];
-        v[1038] = v[316] + 2.0 * v[317] + v[1037];
-        v[1039] = a_ * v[1038] * v[2] * v[2];
+        v[1000] = v[9] * v[989] - v[443] * v[269];
+        v[1001] = a_ * (v[9] * (v[256] * v[435] - v[326] * v[15]) + v[269] * v[15])
+            - v[323] * v[136] - v[733] * v[15] - v[1000] * d;
+        v[1002] = v[320] * v[136] + v[319] * v[15];
+        v[1003] = (v[1000] + v[1002]) * J2;
+        v[1004] = v[1002] * J1;
+        v[1005] = v[263] * v[100];
+        v[1006] = v[256] * v[116];
+        v[1007] = v[315] * v[16];
+        v[1008] = v[3] * (v[998] - v[0] * v[996]) - v[988]
+            - (v[7] * v[990] + v[5] * v[992]) * J1 - v[999]
+            + v[9] * (v[1001] * v[11] - v[1003] + v[1004]) + v[1005] + v[284] + v[1006]
+            - v[1007];
+        v[1009] = v[327] - v[760];
+        v[1010] = v[1009] * J1;
+        v[1011] = v[760] - v[327];
+        v[1012] = -phi_dot - v[257];
+        v[1013] = (v[1011] + v[1012]) * J2;
+        v[1014] = ((v[593] - v[253] * Ixy) + v[145] * v[269])
+            + (-v[92] * v[263] - v[258] * v[116]);
+        v[1015] = v[100] * v[258];
+        v[1016] = v[256] * v[92];
+        v[1017] = v[5] * v[300];
+        v[1018] = v[773] + v[1017];
+        v[1019] = v[1018] * J1;
+        v[1020] = J2 * (v[1018] + v[1012]) - v[1019];
+        v[1021] = v[253] * Ixz;
+        v[1022] = v[269] * v[149];
+        v[1023] = d * v[269];
+        v[1024] = (v[769] - v[1023] + v[770]) * v[15]
+            + a_ * (v[15] * v[993] + v[674] * v[579]);
+        v[1025] = v[120] * v[1024];
+        v[1026] = v[16] * v[583] + (v[764] - v[122] * v[269]) * v[15];
+        v[1027] = v[1026] * v[122];
+        v[1028] = v[16] * (v[753] - v[1023] - v[752])
+            + a_ * (v[434] * v[608] - v[435] * v[269]);
+        v[1029] = v[757] * v[15] + v[16] * (v[269] * v[106] - v[755] - v[756]);
+        v[1030] = v[104] * v[1028] - v[1029] * v[106];
+        v[1031] = v[1003] - v[1004];
+        v[1032] = v[29]
+            * (v[16] * (v[1014] - v[16] * (v[1010] + v[1013]))
+                + v[15]
+                    * (v[1016] - v[1015] - v[1020] * v[15] - v[1021] + v[1022] + v[585]))
+            - (v[36] * v[992] - v[39] * v[990]) * J1
+            - ((v[1025] + v[1027]) * v[37] - v[58] * v[996]) * m1
+            - m2 * (v[32] * v[1030] - v[1001] * v[55])
+            + v[34] * (v[988] - v[283] + v[999] - v[1005] - v[1006] + v[1007])
+            - v[46] * v[1031] + v[1008] * v[34] - v[335] - v[42] * v[998] - v[336];
+        v[1033] = (v[1014] - v[112] * v[992] - v[5] * v[998]) * v[15] - v[393]
+            - (v[16] * (-v[1025] - v[1027]) + v[192] * v[996]) * m1
+            + v[16]
+                * (v[1015] - v[990] * v[94] - v[1016]
+                    + (v[1020] - v[1010] - v[1013]) * v[15] + v[7] * v[1031] + v[1021]
+                    - v[1022] - v[585]) - m2 * (v[1030] * v[15] + v[1001] * v[188])
+            - v[394];
+        v[1034] = v[447] + (-0.5 * v[439] - 0.5 * v[446]);
+        v[1035] = v[1034] - 2.0 * v[38];
+        v[1036] = a_ * v[411];
+        v[1037] = v[430] + (-0.5 * v[420] - 0.5 * v[416]);
+        v[1038] = v[1037] + 2.0 * v[35];
+        v[1039] = v[256] - gamma2_dot;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -7154,10 +6871,12 @@ pub mod maggi {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 1068],
+        v: &mut [f64; 1084],
     ) {
         let psi_dot = state[8];
         let theta_dot = state[9];
+        let gamma1_dot = state[11];
+        let gamma2_dot = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
@@ -7168,56 +6887,79 @@ pub mod maggi {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[1040] = v[280] * v[2];
-        v[1041] = d * (-v[232] - v[1040] - v[233]) + v[4] * (v[316] + v[317] + v[1037]);
-        v[1042] = v[4] * v[290];
-        v[1043] = (v[1040] - v[1042]) * J1;
-        v[1044] = J2 * (v[1042] - v[232] - v[1040] - v[233]);
-        v[1045] = (Iyy - Ixx) * v[234];
-        v[1046] = v[6] * v[272];
-        v[1047] = v[259] * v[9];
-        v[1048] = J2 * (v[239] - v[1046] - v[1047] - v[240]);
-        v[1049] = Iyz * v[731];
-        v[1050] = v[241] * (Iyy + Ixx - Izz);
-        v[1051] = (v[1046] + v[1047]) * J1;
-        v[1052] = d * (v[239] - v[1047] - v[240]) - v[6] * v[272] * d;
-        v[1053] = v[1052] * v[88] - 2.0 * (a_ * v[272] * d * v[9] * v[9]);
-        v[1054] = v[1033] + v[1034];
-        v[1055] = theta_dot * v[29] * v[686] - v[6] * v[44] * v[1036]
-            + (-v[40] * v[9] * v[1028] - v[1031] * v[38] * v[2]) * J1
-            - (v[28] * (v[1039] + v[83] * v[1041]) * v[18] + v[1032] * v[50]) * m1
-            + v[30] * v[1035]
-            + (psi_dot * v[136]
-                + (2.0 * v[250] - v[1043] + 2.0 * v[251] - v[720] - v[1044] - v[1045])
-                    * v[18]
-                + v[20] * (-v[1048] - 2.0 * v[238] - v[1049] - v[1050] - v[1051]))
-                * v[28] - m2 * (v[28] * v[20] * v[1053] + v[53] * v[1027])
-            - v[4] * v[1054] * v[46];
-        v[1056] = theta_dot * v[29] * (v[126] - v[124] - v[135] - v[145])
-            + (-v[1048] - v[4] * v[4] * v[1054] - v[1031] * v[2] * v[2] * J1
-                - 2.0 * v[238] - v[1049] - v[1050] - v[1051]) * v[18]
-            - m2 * (v[22] * v[20] * v[1027] + v[1053] * v[18]) + v[28] * psi_dot * v[143]
-            - m1 * (v[16] * v[1032] * v[18] + v[20] * (v[133] * v[1041] - v[1039]))
-            + v[20]
-                * (v[1043] - 2.0 * v[250] - 2.0 * v[251] - v[9] * v[9] * v[1028] * J1
-                    + v[720] + v[1044] + v[6] * v[6] * v[1036] + v[1045]);
-        v[1057] = v[280] * J1;
-        v[1058] = 2.0 * v[278] + 2.0 * v[279];
-        v[1059] = (-2.0 * v[278] - 2.0 * v[279]) * J2;
-        v[1060] = v[2] * (v[1057] - v[1058] * d * d * m1 + v[1059]) - v[4] * v[290] * J1;
-        v[1061] = v[1057] + v[1059];
-        v[1062] = v[30] * v[1060] - v[38] * v[290] * J1
-            - (v[1058] * v[50] - 2.0 * (a_ * v[282] * v[2] * v[28] * v[18])) * d * m1
-            - v[1061] * v[46];
-        v[1063] = (-v[2] * v[290] * J1 - v[4] * v[1061]) * v[18]
-            - d * (2.0 * (a_ * v[282] * v[2] * v[20]) + v[1058] * v[16] * v[18]) * m1;
-        v[1064] = v[259] * v[9] * (J1 - 2.0 * v[10] - 2.0 * J2) - v[6] * v[890] * J1;
-        v[1065] = 2.0 * J2 - J1;
-        v[1066] = v[20] * (v[6] * v[259] * v[1065] - v[9] * v[890] * J1)
-            - m2 * d
-                * (-2.0 * (v[259] * v[22] * v[20]) - 2.0 * (a_ * v[260] * v[9] * v[18]));
-        v[1067] = v[30] * v[1064] - v[259] * v[44] * v[1065] - v[40] * v[890] * J1
-            - m2 * d * (-2.0 * v[942] - 2.0 * (a_ * v[260] * v[28] * v[9] * v[20]));
+        v[1040] = -v[254] - v[255];
+        v[1041] = gamma2_dot + v[1040];
+        v[1042] = v[910] + J2 * v[1041];
+        v[1043] = a_ * (v[256] - v[10] * v[256]) - v[7] * (v[1041] * d + v[323]);
+        v[1044] = theta_dot * v[30];
+        v[1045] = v[263] - gamma1_dot;
+        v[1046] = v[838] + J2 * v[1045];
+        v[1047] = v[5] * (v[310] - d * v[1045]) + v[338] * (v[4] - 1.0);
+        v[1048] = (v[1043] * v[11] - v[7] * (v[1039] * J1 + v[1042])) * v[9]
+            + v[661] * v[1044] + v[253] * v[27]
+            + (v[5] * (v[1046] - v[1045] * J1) - v[1047] * v[0]) * v[3];
+        v[1049] = v[9] * v[319];
+        v[1050] = v[263] - v[1049];
+        v[1051] = d * v[1050] - v[19] * v[326];
+        v[1052] = v[326] * v[888];
+        v[1053] = v[104] * v[1051] - 2.0 * (v[1052] * v[106]);
+        v[1054] = v[7] * v[326];
+        v[1055] = v[1049] + v[1054];
+        v[1056] = v[1055] * J1;
+        v[1057] = (v[1056] + (2.0 * v[259] + (v[1050] - v[1054]) * J2))
+            + (v[263] * (Iyy + Ixx - Izz) + Iyz * v[608]);
+        v[1058] = v[3] * v[1045];
+        v[1059] = v[3] * v[300];
+        v[1060] = v[5] * (v[375] - v[374]) - d * (v[256] + v[1059]);
+        v[1061] = v[120] * v[1060];
+        v[1062] = v[3] * (v[847] - v[374]);
+        v[1063] = v[1062] * v[122];
+        v[1064] = v[5] * v[307];
+        v[1065] = v[1064] - v[1059];
+        v[1066] = J2 * (v[1065] + v[1040]);
+        v[1067] = v[256] * (Iyy - Ixx);
+        v[1068] = v[1059] - v[1064];
+        v[1069] = v[1068] * J1;
+        v[1070] = v[253] * v[138] - m2 * (v[1053] * v[15] + v[1043] * v[188])
+            - (v[1046] * v[6] + v[1057] + v[1058] * v[112]) * v[15]
+            + (v[684] - v[91] + v[93]) * v[1044]
+            - (v[1047] * v[192] + (-v[1061] - v[1063]) * v[16]) * m1
+            + (v[1066] - v[746] - 2.0 * v[313] + v[1067] + v[1069] - v[1039] * v[678]
+                + v[8] * v[1042] - 2.0 * v[314]) * v[16];
+        v[1071] = ((v[746] + 2.0 * v[313] - v[1066] - v[1067] - v[1069] + 2.0 * v[314])
+            * v[15] - v[16] * v[1057] + v[126] * psi_dot) * v[29]
+            - m2 * (v[32] * v[1053] - v[1043] * v[55]) + v[34] * v[1048]
+            + v[709] * v[1044] - (v[1058] * v[36] + v[1039] * v[864]) * J1
+            - v[96] * v[1042] - v[1046] * v[110]
+            - ((v[1061] + v[1063]) * v[37] - v[1047] * v[58]) * m1;
+        v[1072] = 2.0 * v[298] + 2.0 * v[299];
+        v[1073] = v[300] * J1 - v[1072] * J2;
+        v[1074] = (v[1073] - v[1] * v[1072]) * v[3] - v[1064] * J1;
+        v[1075] = v[302] * v[122];
+        v[1076] = -v[0] * (2.0 * (v[1075] * v[16]) + v[1072] * v[192])
+            - (v[5] * v[1073] + v[112] * v[307]) * v[15];
+        v[1077] = v[34] * v[1074] - v[307] * v[793]
+            - v[0] * (-v[1072] * v[58] - 2.0 * (v[1075] * v[37])) - v[42] * v[1073];
+        v[1078] = -(v[326] * J1);
+        v[1079] = v[1049] * (J1 - 2.0 * J2 - 2.0 * v[12]) - v[7] * v[1078];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part27(
+        _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 1084],
+    ) {
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[1080] = 2.0 * J2 - J1;
+        v[1081] = v[320] * v[106];
+        v[1082] = (v[760] * v[1080] + v[326] * v[94]) * v[16]
+            + (2.0 * (v[1081] * v[15]) + 2.0 * (v[188] * v[319])) * v[11];
+        v[1083] = v[34] * v[1079] - v[980] * v[1080] + v[39] * v[1078]
+            + v[11] * (2.0 * (v[32] * v[1081]) - 2.0 * v[975]);
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
@@ -7461,92 +7203,81 @@ pub mod kane {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 98];
+        let mut v = [0.0f64; 120];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
         Assembly {
-            qdot: [
-                v[1] * v[4],
-                u2 * v[3] - u3 * v[2],
-                u1 + v[5] * v[1] * v[4],
-                u4,
-                u5,
-                u6,
-                u7,
-                u8,
-            ],
+            qdot: [v[3], u2 * v[2] - u3 * v[1], v[4] * v[3] + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + v[6] * v[7] * v[7] + (v[9] + v[11]) * J1
-                        + v[12] * v[12] * v[13],
-                    v[17],
-                    v[21],
+                    Ixx + v[6] * v[8] + v[10] * v[11] * v[11] + (v[13] + v[15]) * J1,
+                    v[19],
+                    v[23],
                     0.0,
                     0.0,
-                    v[26],
-                    v[31],
-                    v[32],
-                ],
-                [
-                    v[17],
-                    v[7] * v[7] * J1 + v[16] * v[16] * m1 + Iyy + J2 * (v[9] + 1.0)
-                        + m2 * (v[33] + a_ * (a_ + 2.0 * v[19])),
                     v[34],
-                    0.0,
-                    v[36],
                     v[39],
-                    v[42],
-                    v[45],
+                    v[40],
                 ],
                 [
-                    v[21],
-                    v[34],
-                    v[12] * v[12] * J1 + (a_ * (a_ + 2.0 * v[15]) + v[33]) * m1
-                        + m2 * v[20] * v[20] + Izz + J2 * (v[11] + 1.0),
-                    v[47],
+                    v[19],
+                    Iyy + J2 * (v[13] + 1.0) - v[18] * v[41]
+                        + m2 * (v[42] + a_ * (a_ + 2.0 * v[21])) + v[8] * J1,
+                    v[43],
                     0.0,
+                    v[45],
                     v[50],
-                    v[53],
-                    v[56],
+                    v[54],
+                    v[58],
                 ],
-                [0.0, 0.0, v[47], v[6], 0.0, v[57], v[58], v[59]],
-                [0.0, v[36], 0.0, 0.0, v[13], v[60], v[61], v[62]],
-                [v[26], v[39], v[50], v[57], v[60], v[63], 0.0, 0.0],
-                [v[31], v[42], v[53], v[58], v[61], 0.0, v[63], 0.0],
-                [v[32], v[45], v[56], v[59], v[62], 0.0, 0.0, v[63]],
+                [
+                    v[23],
+                    v[43],
+                    v[11] * v[59] + (a_ * (a_ + 2.0 * v[17]) + v[42]) * m1 + Izz
+                        + J2 * (v[15] + 1.0) - v[22] * v[60],
+                    v[62],
+                    0.0,
+                    v[66],
+                    v[69],
+                    v[73],
+                ],
+                [0.0, 0.0, v[62], v[6], 0.0, v[74], v[75], v[76]],
+                [0.0, v[45], 0.0, 0.0, v[10], v[77], v[78], v[79]],
+                [v[34], v[50], v[66], v[74], v[77], v[80], 0.0, 0.0],
+                [v[39], v[54], v[69], v[75], v[78], 0.0, v[80], 0.0],
+                [v[40], v[58], v[73], v[76], v[79], 0.0, 0.0, v[80]],
             ],
             force: [
-                (-v[8] * u4 * v[64] - v[10] * u5 * v[67]) * J1
-                    + (v[72] - d * m1 * v[69] + v[75]) * v[7] - u2 * v[76]
-                    + v[12] * (m2 * d * v[81] - v[79] * v[80]) + v[82] * u3,
-                v[84] - v[8] * (v[72] + v[75]) - v[16] * m1 * v[69] + v[76] * u1
-                    - v[7] * u4 * v[64] * J1
+                v[7] * (v[90] - v[5] * v[86]) - u2 * v[81]
+                    + v[11] * (v[98] * v[9] - v[96]) + v[99] * u3
+                    - (v[102] * v[103] - v[100] * v[101]) * J1,
+                v[81] * u1
                     - m2
-                        * ((a_
-                            * (v[12] * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - v[85])
-                                - 2.0 * (v[10] * u3 * u1))
-                            + ((0.5 * (u3 * v[87]) - f64::cos(v[86]) * u1) * u3
-                                - 0.5 * (u1 * u1 * v[87])) * d) * d - a_ * a_ * u3 * u1)
-                    - v[88] * u3,
-                u2 * v[88] - m2 * v[20] * v[81]
+                        * (d
+                            * (d
+                                * ((0.5 * (u3 * v[106]) - f64::cos(v[105]) * u1) * u3
+                                    - 0.5 * (v[107] * v[106]))
+                                + ((u3 * u3 - v[107] - (u5 + 2.0 * u2) * u5) * v[11]
+                                    - 2.0 * (v[93] * u3)) * a_) - v[85] * v[104])
+                    - v[12] * v[90] - v[7] * u4 * v[103] * J1 + v[108] - v[41] * v[86]
+                    - v[109] * u3,
+                v[110] - v[98] * v[60] - u5 * v[100] * v[59] + u2 * v[109]
                     - (d
                         * (a_
-                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - v[85]) * v[7]
-                                + 2.0 * (v[8] * u2 * u1))
-                            + d
-                                * (u2 * (0.5 * (u2 * v[90]) + u1 * f64::cos(v[89]))
-                                    - 0.5 * (u1 * u1 * v[90]))) + a_ * a_ * u2 * u1) * m1
-                    - v[10] * v[79] * v[80] + u5 * v[12] * v[67] * J1 - v[82] * u1
-                    + v[91],
-                v[91] - v[93] * d * m1,
-                v[84] - m2 * v[95] * d,
-                -m1 * (v[49] * v[96] + v[48] * v[93] + v[24] * v[69])
-                    - m2 * (v[37] * v[97] + v[95] * v[38] + v[25] * v[81]),
-                -(v[95] * v[41] + v[97] * v[40] + v[27] * v[81]) * m2
-                    - m1 * (v[30] * v[69] + v[93] * v[51] + v[96] * v[52]),
-                -m2 * (v[0] * v[2] * v[81] + v[95] * v[44] + v[43] * v[97])
-                    - (v[0] * v[69] * v[3] + v[55] * v[96] + v[93] * v[54]) * m1,
+                            * ((u2 * u2 - v[107] - u4 * (2.0 * u3 + u4)) * v[7]
+                                + 2.0 * (u2 * v[84]))
+                            + (u2 * (0.5 * (u2 * v[112]) + u1 * f64::cos(v[111]))
+                                - 0.5 * (v[107] * v[112])) * d) + v[104] * v[97]) * m1
+                    - v[99] * u1 - v[14] * v[96],
+                v[110] - v[115] * v[5],
+                v[108] - v[9] * v[117],
+                -(m2 * (v[98] * v[33] + v[117] * v[47] + v[118] * v[48])
+                    + m1 * (v[86] * v[29] + v[64] * v[119] + v[115] * v[63])),
+                -((v[68] * v[119] + v[86] * v[37] + v[115] * v[67]) * m1
+                    + m2 * (v[53] * v[118] + v[98] * v[38] + v[117] * v[52])),
+                -((v[115] * v[71] + v[86] * v[55] + v[72] * v[119]) * m1
+                    + m2 * (v[57] * v[117] + v[98] * v[70] - v[118] * v[56])),
             ],
             checks: [v[0]],
         }
@@ -7558,7 +7289,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 98],
+        v: &mut [f64; 120],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -7569,7 +7300,6 @@ pub mod kane {
         let u3 = state[10];
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
@@ -7577,63 +7307,55 @@ pub mod kane {
         let J1 = params.J1;
         let J2 = params.J2;
         v[0] = f64::cos(theta);
-        v[1] = 1.0 / v[0];
-        v[2] = f64::sin(phi);
-        v[3] = f64::cos(phi);
-        v[4] = u2 * v[2] + u3 * v[3];
-        v[5] = f64::sin(theta);
-        v[6] = J2 + d * d * m1;
+        v[1] = f64::sin(phi);
+        v[2] = f64::cos(phi);
+        v[3] = 1.0 / v[0] * (u2 * v[1] + u3 * v[2]);
+        v[4] = f64::sin(theta);
+        v[5] = d * m1;
+        v[6] = v[5] * d + J2;
         v[7] = f64::sin(gamma1);
-        v[8] = f64::cos(gamma1);
-        v[9] = v[8] * v[8];
-        v[10] = f64::cos(gamma2);
-        v[11] = v[10] * v[10];
-        v[12] = f64::sin(gamma2);
-        v[13] = m2 * d * d + J2;
-        v[14] = J1 - J2;
-        v[15] = v[8] * d;
-        v[16] = -a_ - v[15];
-        v[17] = (v[8] * v[14] + v[16] * d * m1) * v[7] - Ixy;
-        v[18] = J2 - J1;
-        v[19] = v[10] * d;
-        v[20] = -a_ - v[19];
-        v[21] = v[12] * (v[10] * v[18] - m2 * d * v[20]) - Ixz;
-        v[22] = f64::sin(psi);
-        v[23] = f64::cos(psi);
-        v[24] = v[2] * v[22] + v[5] * v[23] * v[3];
-        v[25] = v[5] * v[23] * v[2] - v[3] * v[22];
-        v[26] = d * (v[7] * v[24] * m1 - m2 * v[25] * v[12]);
-        v[27] = v[23] * v[3] + v[5] * v[2] * v[22];
-        v[28] = v[23] * v[2];
-        v[29] = v[5] * v[3] * v[22];
-        v[30] = v[29] - v[28];
-        v[31] = (v[7] * v[30] * m1 - m2 * v[12] * v[27]) * d;
-        v[32] = (v[7] * m1 * v[3] - m2 * v[12] * v[2]) * v[0] * d;
-        v[33] = d * d;
-        v[34] = -Iyz;
-        v[35] = d + v[10] * a_;
-        v[36] = J2 + m2 * d * v[35];
-        v[37] = (v[10] * v[0] - v[5] * v[12] * v[3]) * v[23] - v[12] * v[2] * v[22];
-        v[38] = v[23] * v[0] * v[12] + v[10] * v[24];
-        v[39] = m2 * (v[38] * v[35] - a_ * v[37] * v[12]) + v[16] * v[24] * m1;
+        v[8] = v[7] * v[7];
+        v[9] = m2 * d;
+        v[10] = J2 + v[9] * d;
+        v[11] = f64::sin(gamma2);
+        v[12] = f64::cos(gamma1);
+        v[13] = v[12] * v[12];
+        v[14] = f64::cos(gamma2);
+        v[15] = v[14] * v[14];
+        v[16] = J1 - J2;
+        v[17] = v[12] * d;
+        v[18] = a_ + v[17];
+        v[19] = v[7] * (v[12] * v[16] - v[18] * v[5]) - Ixy;
+        v[20] = J2 - J1;
+        v[21] = v[14] * d;
+        v[22] = a_ + v[21];
+        v[23] = v[11] * (v[14] * v[20] + v[9] * v[22]) - Ixz;
+        v[24] = v[7] * m1;
+        v[25] = f64::sin(psi);
+        v[26] = v[1] * v[25];
+        v[27] = v[4] * v[2];
+        v[28] = f64::cos(psi);
+        v[29] = v[26] + v[27] * v[28];
+        v[30] = m2 * v[11];
+        v[31] = v[4] * v[1];
+        v[32] = v[2] * v[25];
+        v[33] = v[28] * v[31] - v[32];
+        v[34] = (v[24] * v[29] - v[30] * v[33]) * d;
+        v[35] = v[28] * v[1];
+        v[36] = v[27] * v[25];
+        v[37] = v[36] - v[35];
+        v[38] = v[28] * v[2] + v[31] * v[25];
+        v[39] = (v[24] * v[37] - v[30] * v[38]) * d;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 98],
+        v: &mut [f64; 120],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m0 = params.m0;
-        let Izz = params.Izz;
-        let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -7641,46 +7363,46 @@ pub mod kane {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[10] * v[0] * v[22] + (v[28] - v[29]) * v[12];
-        v[41] = v[0] * v[12] * v[22] + v[10] * v[30];
-        v[42] = v[16] * v[30] * m1 + m2 * (v[41] * v[35] - a_ * v[12] * v[40]);
-        v[43] = -v[0] * v[12] * v[3] - v[10] * v[5];
-        v[44] = v[10] * v[0] * v[3] - v[5] * v[12];
-        v[45] = m2 * (v[44] * v[35] - a_ * v[43] * v[12]) + v[16] * v[0] * m1 * v[3];
-        v[46] = v[8] * a_ + d;
-        v[47] = d * v[46] * m1 + J2;
-        v[48] = v[8] * v[25] - v[23] * v[7] * v[0];
-        v[49] = v[23] * (v[5] * v[7] * v[2] + v[8] * v[0]) - v[7] * v[3] * v[22];
-        v[50] = m2 * v[25] * v[20] + (v[48] * v[46] + a_ * v[49] * v[7]) * m1;
-        v[51] = v[8] * v[27] - v[7] * v[0] * v[22];
-        v[52] = v[8] * v[0] * v[22] + v[7] * v[27];
-        v[53] = (v[51] * v[46] + a_ * v[7] * v[52]) * m1 + m2 * v[20] * v[27];
-        v[54] = v[8] * v[0] * v[2] + v[5] * v[7];
-        v[55] = v[7] * v[0] * v[2] - v[8] * v[5];
-        v[56] = (v[54] * v[46] + a_ * v[55] * v[7]) * m1 + m2 * v[0] * v[2] * v[20];
-        v[57] = v[48] * d * m1;
-        v[58] = v[51] * d * m1;
-        v[59] = v[54] * d * m1;
-        v[60] = m2 * d * v[38];
-        v[61] = m2 * d * v[41];
-        v[62] = m2 * v[44] * d;
-        v[63] = m2 + m0 + m1;
-        v[64] = v[8] * u2 - v[7] * u1;
-        v[65] = v[12] * u1;
-        v[66] = v[10] * u3;
-        v[67] = -v[65] - v[66];
-        v[68] = u3 + 2.0 * u4;
-        v[69] = d * (v[8] * v[68] * u1 + v[68] * u2 * v[7]) + a_ * u3 * u1;
-        v[70] = u2 * v[7];
-        v[71] = v[8] * u1;
-        v[72] = J2 * (-v[70] - v[71]) * u4;
-        v[73] = u3 + u4;
-        v[74] = v[70] + v[71];
-        v[75] = v[73] * v[74] * v[14];
-        v[76] = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        v[77] = u5 + u2;
-        v[78] = 2.0 * u5 + u2;
-        v[79] = v[78] * J2 - J1 * v[77];
+        v[40] = v[0] * d * (v[24] * v[2] - v[30] * v[1]);
+        v[41] = -(v[18] * m1);
+        v[42] = d * d;
+        v[43] = -Iyz;
+        v[44] = d + v[14] * a_;
+        v[45] = v[9] * v[44] + J2;
+        v[46] = v[28] * v[0];
+        v[47] = v[11] * v[46] + v[14] * v[29];
+        v[48] = (v[14] * v[0] - v[27] * v[11]) * v[28] - v[11] * v[26];
+        v[49] = a_ * v[11];
+        v[50] = m2 * (v[47] * v[44] - v[48] * v[49]) + v[41] * v[29];
+        v[51] = v[0] * v[25];
+        v[52] = v[11] * v[51] + v[14] * v[37];
+        v[53] = (v[35] - v[36]) * v[11] + v[14] * v[51];
+        v[54] = (v[44] * v[52] - v[53] * v[49]) * m2 + v[41] * v[37];
+        v[55] = v[0] * v[2];
+        v[56] = v[11] * v[55] + v[14] * v[4];
+        v[57] = v[14] * v[55] - v[4] * v[11];
+        v[58] = (v[49] * v[56] + v[57] * v[44]) * m2 + v[41] * v[55];
+        v[59] = v[11] * J1;
+        v[60] = -(m2 * v[22]);
+        v[61] = v[12] * a_ + d;
+        v[62] = v[5] * v[61] + J2;
+        v[63] = v[12] * v[33] - v[7] * v[46];
+        v[64] = v[28] * (v[7] * v[31] + v[12] * v[0]) - v[7] * v[32];
+        v[65] = a_ * v[7];
+        v[66] = (v[61] * v[63] + v[64] * v[65]) * m1 + v[33] * v[60];
+        v[67] = v[12] * v[38] - v[7] * v[51];
+        v[68] = v[38] * v[7] + v[12] * v[51];
+        v[69] = v[38] * v[60] + (v[67] * v[61] + v[68] * v[65]) * m1;
+        v[70] = v[0] * v[1];
+        v[71] = v[4] * v[7] + v[12] * v[70];
+        v[72] = v[70] * v[7] - v[12] * v[4];
+        v[73] = (v[71] * v[61] + v[72] * v[65]) * m1 + v[70] * v[60];
+        v[74] = v[5] * v[63];
+        v[75] = v[67] * v[5];
+        v[76] = v[71] * v[5];
+        v[77] = v[9] * v[47];
+        v[78] = v[9] * v[52];
+        v[79] = v[9] * v[57];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -7689,7 +7411,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 98],
+        v: &mut [f64; 120],
     ) {
         let gamma1 = state[3];
         let gamma2 = state[4];
@@ -7698,31 +7420,59 @@ pub mod kane {
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
+        let m0 = params.m0;
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
+        let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        v[80] = v[10] * u1 - u3 * v[12];
-        v[81] = d * (v[10] * (-2.0 * u5 - u2) * u1 + v[78] * u3 * v[12]) - a_ * u2 * u1;
-        v[82] = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        v[83] = v[65] + v[66];
-        v[84] = v[18] * v[80] * v[83];
-        v[85] = u1 * u1;
-        v[86] = 2.0 * gamma2;
-        v[87] = f64::sin(v[86]);
-        v[88] = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        v[89] = 2.0 * gamma1;
-        v[90] = f64::sin(v[89]);
-        v[91] = v[74] * v[14] * v[64];
-        v[92] = u2 * v[16] + v[7] * d * u1;
-        v[93] = a_ * u3 * u3 * v[7] - v[92] * v[74];
-        v[94] = u3 * v[20] - d * v[12] * u1;
-        v[95] = a_ * u2 * u2 * v[12] + v[80] * v[94];
-        v[96] = v[92] * v[64] + v[8] * a_ * u3 * u4 - (u3 * v[46] + d * u4) * v[73];
-        v[97] = (u5 * d + u2 * v[35]) * v[77] - v[10] * u5 * a_ * u2 - v[94] * v[83];
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[80] = m2 + m0 + m1;
+        v[81] = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        v[82] = u2 * v[7];
+        v[83] = u3 + 2.0 * u4;
+        v[84] = v[12] * u1;
+        v[85] = a_ * u3;
+        v[86] = d * (v[82] * v[83] + v[83] * v[84]) + v[85] * u1;
+        v[87] = v[82] + v[84];
+        v[88] = u3 + u4;
+        v[89] = v[16] * v[87];
+        v[90] = v[88] * v[89] - J2 * u4 * v[87];
+        v[91] = 2.0 * u5 + u2;
+        v[92] = u5 + u2;
+        v[93] = v[14] * u1;
+        v[94] = u3 * v[11];
+        v[95] = v[93] - v[94];
+        v[96] = (J2 * v[91] - J1 * v[92]) * v[95];
+        v[97] = a_ * u2;
+        v[98] = d * (v[91] * v[94] - v[93] * v[91]) - v[97] * u1;
+        v[99] = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        v[100] = v[11] * u1 + v[14] * u3;
+        v[101] = v[14] * u5;
+        v[102] = v[12] * u4;
+        v[103] = v[12] * u2 - v[7] * u1;
+        v[104] = a_ * u1;
+        v[105] = 2.0 * gamma2;
+        v[106] = f64::sin(v[105]);
+        v[107] = u1 * u1;
+        v[108] = v[20] * v[95] * v[100];
+        v[109] = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        v[110] = v[89] * v[103];
+        v[111] = 2.0 * gamma1;
+        v[112] = f64::sin(v[111]);
+        v[113] = d * u1;
+        v[114] = v[7] * v[113] - v[18] * u2;
+        v[115] = v[85] * u3 * v[7] - v[87] * v[114];
+        v[116] = -v[11] * v[113] - u3 * v[22];
+        v[117] = v[116] * v[95] + u2 * v[11] * v[97];
+        v[118] = (u5 * d + u2 * v[44]) * v[92] - v[116] * v[100] - v[97] * v[101];
+        v[119] = v[114] * v[103] + v[85] * v[102] - (u3 * v[61] + d * u4) * v[88];
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -7794,11 +7544,6 @@ pub mod kane {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -7807,44 +7552,12 @@ pub mod kane {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let mut v = [0.0f64; 45];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -7866,9 +7579,9 @@ pub mod kane {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            phi_dot - v[0] * psi_dot,
+            v[3] * psi_dot + theta_dot * v[4],
+            psi_dot * v[5] - theta_dot * v[2],
             gamma1_dot,
             gamma2_dot,
             X_dot,
@@ -7877,30 +7590,32 @@ pub mod kane {
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * ((v[9] * v[11] + v[2] * (-v[18] - v[20])) * m1
+                    + m2 * (v[26] * v[4] + v[13] * v[27]))
+                + (v[28] * v[24] + phi_dot * (v[9] * v[30] - v[13] * v[29])
+                    + v[31] * v[16]) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m2 * (v[26] * v[3] - v[13] * v[33])
+                        + ((v[18] + v[20]) * v[5] - v[9] * v[35]) * m1) + X_dot * v[36],
+            Y_dot * v[36]
+                + theta_dot
+                    * (m2 * (v[37] * v[27] + v[41] * v[4])
+                        + (v[11] * v[38] + (-v[43] - v[44]) * v[2]) * m1)
+                + psi_dot
+                    * (m2 * (v[3] * v[41] - v[37] * v[33])
+                        + m1 * ((v[43] + v[44]) * v[5] - v[35] * v[38]))
+                + d
+                    * ((v[30] * v[38] - v[29] * v[37]) * phi_dot + v[28] * v[40]
+                        + v[31] * v[42]),
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((v[2] * (-v[34] * v[17] - (v[3] * v[14] - v[10] * v[0]) * v[19])
+                    + v[11] * v[5]) * m1
+                    + m2
+                        * ((v[23] * (v[22] * v[5] + v[21] * v[0]) + v[32] * v[25]) * v[4]
+                            + v[3] * v[27]))
+                + d
+                    * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
+                        + v[31] * v[34]) + Z_dot * v[36],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -7908,6 +7623,83 @@ pub mod kane {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 45],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(theta);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = v[1] * v[2];
+        v[4] = f64::cos(phi);
+        v[5] = v[1] * v[4];
+        v[6] = f64::sin(psi);
+        v[7] = v[0] * v[4];
+        v[8] = f64::cos(psi);
+        v[9] = v[2] * v[6] + v[7] * v[8];
+        v[10] = f64::cos(gamma1);
+        v[11] = -((a_ + v[10] * d) * v[4]);
+        v[12] = v[0] * v[2];
+        v[13] = v[8] * v[12] - v[4] * v[6];
+        v[14] = f64::sin(gamma1);
+        v[15] = v[8] * v[1];
+        v[16] = v[10] * v[13] - v[14] * v[15];
+        v[17] = v[10] * a_ + d;
+        v[18] = v[16] * v[17];
+        v[19] = a_ * v[14];
+        v[20] = v[19] * (v[10] * v[15] + v[13] * v[14]);
+        v[21] = f64::cos(gamma2);
+        v[22] = f64::sin(gamma2);
+        v[23] = a_ * v[22];
+        v[24] = v[21] * v[9] + v[22] * v[15];
+        v[25] = d + v[21] * a_;
+        v[26] = v[24] * v[25] - (v[21] * v[15] - v[9] * v[22]) * v[23];
+        v[27] = (a_ + v[21] * d) * v[2];
+        v[28] = m2 * gamma2_dot;
+        v[29] = m2 * v[22];
+        v[30] = v[14] * m1;
+        v[31] = gamma1_dot * m1;
+        v[32] = v[21] * v[5] - v[0] * v[22];
+        v[33] = a_ * v[5] + v[32] * d;
+        v[34] = v[0] * v[14] + v[10] * v[3];
+        v[35] = v[34] * d + a_ * v[3];
+        v[36] = m2 + m0 + m1;
+        v[37] = v[8] * v[4] + v[12] * v[6];
+        v[38] = v[7] * v[6] - v[8] * v[2];
+        v[39] = v[1] * v[6];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+        v: &mut [f64; 45],
+    ) {
+        v[40] = v[22] * v[39] + v[21] * v[38];
+        v[41] = v[25] * v[40] - (v[21] * v[39] - v[22] * v[38]) * v[23];
+        v[42] = v[10] * v[37] - v[14] * v[39];
+        v[43] = v[42] * v[17];
+        v[44] = (v[37] * v[14] + v[10] * v[39]) * v[19];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -7928,10 +7720,9 @@ pub mod kane {
         let u7 = state[14];
         let u8 = state[15];
         let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
+        let x1 = f64::sin(phi);
+        let x2 = f64::cos(phi);
+        let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
         let value = x0;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
@@ -7951,9 +7742,9 @@ pub mod kane {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + f64::sin(theta) * x1 * x4,
+            x3,
+            u2 * x2 - u3 * x1,
+            f64::sin(theta) * x3 + u1,
             u4,
             u5,
             u6,
@@ -8013,7 +7804,7 @@ pub mod kane {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        let mut v = [0.0f64; 309];
+        let mut v = [0.0f64; 353];
         jacobian_part0(t, state, params, g_i, &mut v);
         jacobian_part1(t, state, params, g_i, &mut v);
         jacobian_part2(t, state, params, g_i, &mut v);
@@ -8022,94 +7813,85 @@ pub mod kane {
         jacobian_part5(t, state, params, g_i, &mut v);
         jacobian_part6(t, state, params, g_i, &mut v);
         jacobian_part7(t, state, params, g_i, &mut v);
+        jacobian_part8(t, state, params, g_i, &mut v);
         Derivatives {
-            qdot: [v[1] * v[6], v[7], u1 + v[8] * v[1] * v[6], u4, u5, u6, u7, u8],
+            qdot: [v[5], v[6], v[8] + u1, u4, u5, u6, u7, u8],
             matrix: [
                 [
-                    Ixx + v[10] * v[11] * v[11] + (v[13] + v[15]) * J1
-                        + v[16] * v[16] * v[18],
-                    v[24],
-                    v[30],
+                    v[10] * v[13] + Ixx + (v[15] + v[17]) * J1 + v[20] * v[22],
+                    v[28],
+                    v[35],
                     0.0,
                     0.0,
-                    v[39],
-                    v[46],
-                    v[50],
+                    v[47],
+                    v[53],
+                    v[57],
                 ],
                 [
-                    v[24],
-                    v[11] * v[11] * J1 + v[21] * v[21] * m1 + Iyy + J2 * (v[13] + 1.0)
-                        + m2 * (v[51] + a_ * (a_ + 2.0 * v[26])),
-                    v[52],
+                    v[28],
+                    Iyy - v[58] * v[24] + m2 * (v[59] + a_ * (2.0 * v[31] + a_))
+                        + J2 * (v[15] + 1.0) + v[22] * J1,
+                    v[60],
                     0.0,
-                    v[54],
-                    v[61],
-                    v[68],
-                    v[73],
-                ],
-                [
-                    v[30],
-                    v[52],
-                    v[16] * v[16] * J1 + (a_ * (a_ + 2.0 * v[20]) + v[51]) * m1
-                        + m2 * v[27] * v[27] + Izz + J2 * (v[15] + 1.0),
-                    v[75],
-                    0.0,
-                    v[81],
+                    v[63],
+                    v[72],
+                    v[80],
                     v[86],
-                    v[91],
                 ],
-                [0.0, 0.0, v[75], v[10], 0.0, v[92], v[93], v[94]],
-                [0.0, v[54], 0.0, 0.0, v[18], v[95], v[96], v[97]],
-                [v[39], v[61], v[81], v[92], v[95], v[98], 0.0, 0.0],
-                [v[46], v[68], v[86], v[93], v[96], 0.0, v[98], 0.0],
-                [v[50], v[73], v[91], v[94], v[97], 0.0, 0.0, v[98]],
+                [
+                    v[35],
+                    v[60],
+                    J2 * (v[17] + 1.0) + v[10] * J1 - v[32] * v[87] + Izz
+                        + (v[59] + a_ * (a_ + 2.0 * v[23])) * m1,
+                    v[90],
+                    0.0,
+                    v[97],
+                    v[105],
+                    v[111],
+                ],
+                [0.0, 0.0, v[90], v[20], 0.0, v[112], v[113], v[114]],
+                [0.0, v[63], 0.0, 0.0, v[13], v[115], v[116], v[117]],
+                [v[47], v[72], v[97], v[112], v[115], v[118], 0.0, 0.0],
+                [v[53], v[80], v[105], v[113], v[116], 0.0, v[118], 0.0],
+                [v[57], v[86], v[111], v[114], v[117], 0.0, 0.0, v[118]],
             ],
             force: [
-                (-v[12] * u4 * v[101] - v[14] * u5 * v[104]) * J1
-                    + (v[111] - v[107] + v[114]) * v[11] - u2 * v[117]
-                    + v[16] * (v[129] - v[126]) + v[132] * u3,
-                v[134] - v[12] * (v[111] + v[114]) - v[21] * m1 * v[106] + v[117] * u1
-                    - v[11] * u4 * v[101] * J1
+                v[21] * v[129] + v[9] * v[142] - (v[146] * u4 + u5 * v[150]) * J1
+                    - u2 * v[153] + v[156] * u3,
+                v[153] * u1 - v[14] * v[128]
                     - m2
-                        * ((a_ * (v[16] * v[137] - 2.0 * (v[14] * u3 * u1))
-                            + ((0.5 * v[140] - v[142]) * u3 - 0.5 * (u1 * u1 * v[139]))
-                                * d) * d - a_ * a_ * u3 * u1) - v[145] * u3,
-                u2 * v[145] - m2 * v[27] * v[128]
-                    - (d
-                        * (a_ * (v[146] * v[11] + 2.0 * (v[12] * u2 * u1))
+                        * ((a_ * (v[9] * v[161] - 2.0 * (v[16] * v[119]))
                             + d
-                                * (u2 * (0.5 * v[149] + v[151]) - 0.5 * (u1 * u1 * v[148])))
-                        + a_ * a_ * u2 * u1) * m1 - v[14] * v[122] * v[125]
-                    + u5 * v[16] * v[104] * J1 - v[132] * u1 + v[152],
-                v[152] - v[157] * d * m1,
-                v[134] - m2 * v[161] * d,
-                v[167],
-                -(v[161] * v[67] + v[166] * v[64] + v[42] * v[128]) * m2
-                    - m1 * (v[45] * v[106] + v[157] * v[83] + v[165] * v[85]),
-                v[168],
+                                * ((0.5 * v[164] - v[166]) * u3 - 0.5 * (v[158] * v[163])))
+                            * d - v[119] * v[157]) - v[167] * v[168] - v[123] * v[58]
+                    + v[170] - v[173] * u3,
+                v[175] - v[134] * v[87] - v[139] * v[176] + u2 * v[173] + v[177] * v[178]
+                    - v[156] * u1
+                    - (v[179] * v[133]
+                        + d
+                            * (a_ * (v[180] * v[21] + 2.0 * (v[144] * u1))
+                                + (u2 * (0.5 * v[183] + v[185]) - 0.5 * (v[158] * v[182]))
+                                    * d)) * m1,
+                v[175] - v[18] * v[193],
+                v[170] - v[11] * v[199],
+                v[206],
+                -(m2 * (v[199] * v[76] + v[207] + v[79] * v[205])
+                    + m1 * (v[123] * v[52] + v[101] * v[193] + v[104] * v[202])),
+                -v[208],
             ],
             checks: [v[0]],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [
-                    v[8] * v[1] * v[1] * v[6],
-                    0.0,
-                    v[3] + v[8] * v[8] * v[1] * v[1] * v[6] + v[5],
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                ],
-                [v[1] * v[7], -v[3] - v[5], v[8] * v[1] * v[7], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[5] * v[219], 0.0, v[4] + v[8] * v[219], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[1] * v[6], -v[4], v[6] * v[219], 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                [v[1] * v[2], v[4], v[8] * v[1] * v[2], 0.0, 0.0, 0.0, 0.0, 0.0],
-                [v[1] * v[4], -v[2], v[8] * v[1] * v[4], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[1] * v[2], v[3], v[1] * v[43], 0.0, 0.0, 0.0, 0.0, 0.0],
+                [v[1] * v[3], -v[2], v[38] * v[1], 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
@@ -8118,108 +7900,90 @@ pub mod kane {
             ],
             d_matrix: [
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[170], v[39], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[174], v[61], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[177], v[81], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[178], v[92], 0.0],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[179], v[95], 0.0],
-                    [v[170], v[174], v[177], v[178], v[179], 0.0, 0.0, 0.0],
-                    [v[39], v[61], v[81], v[92], v[95], 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[209], v[47], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[213], v[72], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[216], v[97], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[217], v[112], 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[218], v[115], 0.0],
+                    [v[209], v[213], v[216], v[217], v[218], 0.0, 0.0, 0.0],
+                    [v[47], v[72], v[97], v[112], v[115], 0.0, 0.0, 0.0],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[180], v[181], v[182]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[183], v[184], v[187]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[188], v[189], v[192]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[193], v[194], v[195]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[196], v[197], v[198]],
-                    [v[180], v[183], v[188], v[193], v[196], 0.0, 0.0, 0.0],
-                    [v[181], v[184], v[189], v[194], v[197], 0.0, 0.0, 0.0],
-                    [v[182], v[187], v[192], v[195], v[198], 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[220], v[221], v[222]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[223], v[224], v[227]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[228], v[229], v[231]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[232], v[233], v[234]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[235], v[236], v[237]],
+                    [v[220], v[223], v[228], v[232], v[235], 0.0, 0.0, 0.0],
+                    [v[221], v[224], v[229], v[233], v[236], 0.0, 0.0, 0.0],
+                    [v[222], v[227], v[231], v[234], v[237], 0.0, 0.0, 0.0],
                 ],
                 [
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[200], v[201], v[202]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[203], v[204], v[205]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[207], v[208], v[209]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[210], v[211], v[212]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, v[213], v[214], v[215]],
-                    [v[200], v[203], v[207], v[210], v[213], 0.0, 0.0, 0.0],
-                    [v[201], v[204], v[208], v[211], v[214], 0.0, 0.0, 0.0],
-                    [v[202], v[205], v[209], v[212], v[215], 0.0, 0.0, 0.0],
-                ],
-                [
-                    [
-                        v[12] * (2.0 * J2 + 2.0 * v[9] - 2.0 * J1) * v[11],
-                        v[217],
-                        0.0,
-                        0.0,
-                        0.0,
-                        v[210],
-                        v[211],
-                        v[212],
-                    ],
-                    [
-                        v[217],
-                        v[11] * (2.0 * v[22] + v[12] * v[218]),
-                        0.0,
-                        0.0,
-                        0.0,
-                        v[219],
-                        v[220],
-                        v[221],
-                    ],
-                    [
-                        0.0,
-                        0.0,
-                        -(2.0 * a_ * v[11] * d * m1),
-                        v[222],
-                        0.0,
-                        v[224],
-                        v[225],
-                        v[227],
-                    ],
-                    [0.0, 0.0, v[222], 0.0, 0.0, v[228], v[229], v[230]],
-                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [v[210], v[219], v[224], v[228], 0.0, 0.0, 0.0, 0.0],
-                    [v[211], v[220], v[225], v[229], 0.0, 0.0, 0.0, 0.0],
-                    [v[212], v[221], v[227], v[230], 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[239], v[240], v[241]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[244], v[246], v[247]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[249], v[250], v[251]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[253], v[254], v[255]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, v[257], v[258], v[259]],
+                    [v[239], v[244], v[249], v[253], v[257], 0.0, 0.0, 0.0],
+                    [v[240], v[246], v[250], v[254], v[258], 0.0, 0.0, 0.0],
+                    [v[241], v[247], v[251], v[255], v[259], 0.0, 0.0, 0.0],
                 ],
                 [
                     [
-                        v[14] * v[16] * (2.0 * v[17] + 2.0 * J2 - 2.0 * J1),
-                        0.0,
-                        v[244],
-                        0.0,
-                        0.0,
-                        v[245],
-                        v[246],
-                        v[215],
-                    ],
-                    [
-                        0.0,
-                        -(2.0 * m2 * a_ * d * v[16]),
+                        v[14] * (2.0 * v[19] + v[262]) * v[21],
+                        v[263],
                         0.0,
                         0.0,
-                        v[247],
-                        v[249],
-                        v[250],
-                        v[251],
-                    ],
-                    [
-                        v[244],
                         0.0,
-                        v[16] * (2.0 * v[28] + v[14] * v[218]),
-                        0.0,
-                        0.0,
-                        v[252],
                         v[253],
                         v[254],
+                        v[255],
+                    ],
+                    [
+                        v[263],
+                        (2.0 * v[25] + v[14] * v[264]) * v[21],
+                        0.0,
+                        0.0,
+                        0.0,
+                        v[266],
+                        v[267],
+                        v[268],
+                    ],
+                    [0.0, 0.0, -(2.0 * v[269]), v[270], 0.0, v[272], v[273], v[275]],
+                    [0.0, 0.0, v[270], 0.0, 0.0, v[276], v[277], v[278]],
+                    [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                    [v[253], v[266], v[272], v[276], 0.0, 0.0, 0.0, 0.0],
+                    [v[254], v[267], v[273], v[277], 0.0, 0.0, 0.0, 0.0],
+                    [v[255], v[268], v[275], v[278], 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [
+                        v[16] * (2.0 * v[12] + v[262]) * v[9],
+                        0.0,
+                        v[290],
+                        0.0,
+                        0.0,
+                        v[291],
+                        v[258],
+                        v[259],
+                    ],
+                    [0.0, -(2.0 * v[292]), 0.0, 0.0, v[293], v[294], v[295], v[296]],
+                    [
+                        v[290],
+                        0.0,
+                        (v[16] * v[264] + 2.0 * v[33]) * v[9],
+                        0.0,
+                        0.0,
+                        v[297],
+                        v[298],
+                        v[299],
                     ],
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    [0.0, v[247], 0.0, 0.0, 0.0, v[255], v[256], v[257]],
-                    [v[245], v[249], v[252], 0.0, v[255], 0.0, 0.0, 0.0],
-                    [v[246], v[250], v[253], 0.0, v[256], 0.0, 0.0, 0.0],
-                    [v[215], v[251], v[254], 0.0, v[257], 0.0, 0.0, 0.0],
+                    [0.0, v[293], 0.0, 0.0, 0.0, v[300], v[301], v[302]],
+                    [v[291], v[294], v[297], 0.0, v[300], 0.0, 0.0, 0.0],
+                    [v[258], v[295], v[298], 0.0, v[301], 0.0, 0.0, 0.0],
+                    [v[259], v[296], v[299], 0.0, v[302], 0.0, 0.0, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8339,9 +8103,9 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(v[157] * v[175] + v[165] * v[176] + v[63] * v[106]) * m1
-                        - m2 * (v[169] * v[128] + v[171] * v[166] + v[161] * v[173]),
-                    v[167],
+                    -(m1 * (v[214] * v[202] + v[77] * v[123] + v[215] * v[193])
+                        + m2 * (v[205] * v[212] - v[207] + v[211] * v[199])),
+                    v[206],
                     0.0,
                 ],
                 [
@@ -8350,10 +8114,10 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    v[168] * v[33],
-                    v[168] * v[31],
-                    -m1 * (v[190] * v[165] - v[8] * v[106] * v[4] + v[157] * v[191])
-                        - m2 * (v[186] * v[166] - v[8] * v[2] * v[128] + v[161] * v[185]),
+                    -(v[208] * v[39]),
+                    -(v[208] * v[36]),
+                    -(m2 * (v[205] * v[225] - v[134] * v[43] - v[226] * v[199])
+                        + m1 * (v[230] * v[193] - v[123] * v[38] - v[92] * v[202])),
                 ],
                 [
                     0.0,
@@ -8361,170 +8125,136 @@ pub mod kane {
                     0.0,
                     0.0,
                     0.0,
-                    -(v[38] * v[166] * v[16] + v[35] * v[128] + v[14] * v[161] * v[199])
-                        * m2 - m1 * (v[35] * v[216] + v[106] * v[199]),
-                    -(v[45] * v[216] + v[169] * v[106]) * m1
-                        - m2
-                            * (v[166] * v[16] * v[42] + v[45] * v[128]
-                                + v[14] * v[161] * v[169]),
-                    v[0]
-                        * (-(v[4] * v[216] - v[2] * v[106]) * m1
-                            - m2
-                                * (v[128] * v[4]
-                                    + v[2] * (v[166] * v[16] - v[14] * v[161]))),
+                    -(m2 * (v[260] * v[238] + v[134] * v[40] + v[205] * v[243])
+                        + m1 * (v[40] * v[261] + v[123] * v[238])),
+                    -((v[52] * v[261] - v[123] * v[48]) * m1
+                        + m2 * (v[134] * v[52] - v[260] * v[48] + v[205] * v[245])),
+                    -(v[0]
+                        * (m2 * (v[134] * v[3] + (v[205] * v[9] - v[260]) * v[2])
+                            + (v[261] * v[3] - v[123] * v[2]) * m1)),
                 ],
                 [
-                    (v[231] - d * d * v[232] * m1 + v[233] + v[234]) * v[11]
-                        + v[12] * v[235],
-                    v[11] * v[235] - v[21] * d * v[232] * m1
-                        + v[12] * (-v[231] - v[233] - v[234]),
-                    v[238]
-                        - d * m1
-                            * (d * ((v[237] - 2.0 * v[236]) * u2 - u1 * u1 * v[150])
-                                + a_ * (v[12] * v[146] - 2.0 * (u2 * v[11] * u1))) + v[239],
-                    v[238] - d * (v[241] - v[162] - v[240]) * m1 + v[239],
+                    v[14] * v[279] + (v[280] - v[18] * v[282]) * v[21],
+                    v[21] * v[279] - v[25] * v[281] - v[280] * v[14],
+                    v[285]
+                        - (a_ * (v[14] * v[180] - 2.0 * (v[120] * u1))
+                            + d * ((v[284] - 2.0 * v[283]) * u2 - v[158] * v[184]))
+                            * v[18],
+                    v[285] - v[18] * (v[287] - v[201]),
                     0.0,
-                    -((v[242] * v[76] + v[157] * v[223] + v[243] * v[80]
-                        + d * v[232] * v[35]) * m1),
-                    -((v[242] * v[83] + v[243] * v[85] + v[157] * v[176]
-                        + d * v[232] * v[45]) * m1),
-                    -((v[242] * v[87] + v[0] * d * v[232] * v[4] + v[157] * v[226]
-                        + v[243] * v[90]) * m1),
+                    -(m1
+                        * (v[95] * v[288] + v[289] * v[96] + v[282] * v[40]
+                            + v[271] * v[193])),
+                    -(m1
+                        * (v[282] * v[52] + v[104] * v[288] + v[214] * v[193]
+                            + v[101] * v[289])),
+                    -((v[274] * v[193] + v[110] * v[289] + v[109] * v[288]
+                        + v[282] * v[81]) * m1),
                 ],
                 [
-                    v[16] * (v[259] * v[104] + m2 * v[260] * d * d)
-                        + v[14] * (v[129] - v[262] - v[126]),
-                    v[263] + v[264]
-                        - m2 * d
-                            * (a_ * (2.0 * (u3 * v[16] * u1) + v[14] * v[137])
-                                + (v[141] * (v[135] - v[136]) + 2.0 * (u3 * u1 * v[139]))
-                                    * d),
-                    (v[262] + v[126] - v[129]) * v[16] - m2 * v[260] * d * v[27]
-                        + v[14] * v[259] * v[104],
+                    v[16] * (v[142] - v[304])
+                        + v[9] * (v[306] * v[11] - v[149] * v[307]),
+                    v[308]
+                        - v[11]
+                            * (d * (2.0 * (v[119] * v[163]) + v[165] * v[160])
+                                + a_ * (v[16] * v[161] + 2.0 * (v[119] * v[9]))),
+                    v[150] * v[307] - v[33] * v[305] + v[9] * (v[304] - v[135] + v[141]),
                     0.0,
-                    v[263] - m2 * d * v[265] + v[264],
+                    v[308] - v[11] * v[310],
                     -(m2
-                        * (v[265] * v[60] - v[57] * d * v[261] * v[133]
-                            + v[166] * (v[248] - v[58]) + v[260] * v[38] * d)),
+                        * (v[306] * v[46] - v[311] * v[70] + v[205] * (-v[65] - v[66])
+                            + v[67] * v[310])),
                     -(m2
-                        * (v[166] * v[173] - d * v[261] * v[64] * v[133] + v[265] * v[67]
-                            + v[260] * d * v[42])),
+                        * (v[306] * v[48] + v[310] * v[76] + v[205] * v[211]
+                            - v[79] * v[311])),
                     -(m2
-                        * (v[166] * (v[70] - v[71]) - v[69] * d * v[261] * v[133]
-                            + v[260] * v[0] * d * v[2] + v[72] * v[265])),
+                        * (v[311] * v[85] + v[205] * (v[82] - v[83]) + v[306] * v[106]
+                            + v[84] * v[310])),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (v[12] * (v[267] - v[268] + v[269]) - d * v[266] * m1) * v[11]
-                        - v[270] + (m2 * d * v[271] + v[14] * v[259]) * v[16] + v[272],
-                    J2 * (v[273] + v[274]) + v[275] * u3
-                        + (v[11] * v[11] * u4 - v[273] - v[274]) * J1
+                    (v[14] * (v[167] + v[314]) - v[18] * v[312]) * v[21] - v[315]
+                        + v[316] + v[9] * (v[317] + v[11] * v[318]),
+                    J2 * (v[319] + v[320])
                         - m2
-                            * ((a_ * (-2.0 * v[102] - 2.0 * v[103])
-                                + d * (-u1 * v[139] - v[141] * u3)) * d - a_ * a_ * u3)
-                        - v[12] * v[12] * (v[267] - v[268]) - v[115] - 2.0 * v[116]
-                        - v[21] * v[266] * m1,
-                    (v[276] - u5 * v[16] * v[16] - v[277]) * J1 - m2 * v[271] * v[27]
-                        - v[14] * v[14] * v[122] + u2 * v[278] + (v[277] - v[276]) * J2
-                        - m1
-                            * (((2.0 * v[100] - 2.0 * v[99]) * a_
-                                + d * (v[237] - v[236])) * d + a_ * a_ * u2) + v[130]
-                        + 2.0 * v[131],
-                    v[25] * v[113] * v[11] + v[12] * v[19] * v[101] - d * m1 * v[280],
-                    v[14] * v[25] * v[133] + v[25] * v[125] * v[16] - m2 * d * v[282],
-                    -m1 * (v[80] * v[11] * v[283] + v[76] * v[280] + v[266] * v[35])
-                        - m2
-                            * (v[282] * v[60] + v[38] * v[271] + v[57] * v[16] * v[284]),
-                    -(v[266] * v[45] + v[83] * v[280] + v[11] * v[283] * v[85]) * m1
-                        - m2
-                            * (v[271] * v[42] + v[67] * v[282] + v[16] * v[64] * v[284]),
-                    -m2
-                        * (v[69] * v[16] * v[284] + v[72] * v[282]
-                            + v[0] * v[2] * v[271])
-                        - (v[0] * v[266] * v[4] + v[87] * v[280]
-                            + v[90] * v[11] * v[283]) * m1,
+                            * (d
+                                * (-(2.0 * v[147] + 2.0 * v[148]) * a_
+                                    - (u1 * v[163] + v[165] * u3) * d) - u3 * v[157])
+                        + v[321] * u3 - v[15] * v[314] - v[58] * v[312] - v[151]
+                        - 2.0 * v[152] + (v[22] * u4 - v[319] - v[320]) * J1,
+                    u2 * v[322] - v[17] * v[139] - v[318] * v[87] + v[154] + 2.0 * v[155]
+                        + (v[146] - u5 * v[10] - v[323]) * J1 + J2 * (v[323] - v[146])
+                        - (d
+                            * (a_ * (2.0 * v[144] - 2.0 * v[143])
+                                + d * (v[284] - v[283])) + a_ * v[133]) * m1,
+                    v[18] * v[325] + v[29] * v[323] + v[14] * v[174],
+                    v[30] * v[149] - v[11] * v[327] + v[9] * v[169],
+                    -((v[328] * v[95] - v[96] * v[325] + v[40] * v[312]) * m1
+                        + (v[46] * v[318] + v[329] * v[70] + v[67] * v[327]) * m2),
+                    -((v[52] * v[312] - v[101] * v[325] + v[104] * v[328]) * m1
+                        + (v[327] * v[76] + v[48] * v[318] + v[79] * v[329]) * m2),
+                    -(m2 * (v[84] * v[327] - v[329] * v[85] + v[106] * v[318])
+                        + (v[109] * v[328] + v[81] * v[312] - v[110] * v[325]) * m1),
                 ],
                 [
-                    v[11] * v[11] * (v[267] - v[105] * d * d * m1 - v[268])
-                        - v[12] * v[12] * u4 * J1 + 2.0 * v[115] + v[116] + u3 * v[285]
-                        + v[16] * (m2 * d * v[287] - v[25] * v[125]),
-                    2.0 * (u5 * m2 * a_ * d * v[16]) + v[270]
-                        + v[11]
-                            * (v[12] * (v[268] - v[267] - v[269])
-                                - v[105] * v[21] * d * m1) - v[288],
-                    v[289] - v[143] + v[278] * u1 - 2.0 * v[144]
-                        - m1 * (v[290] + d * (d * (v[149] + v[151]) + a_ * v[291]))
-                        - v[292] + v[293] - m2 * v[27] * v[287],
-                    v[289] - d * v[294] * m1 + v[293],
-                    -(2.0 * m2 * a_ * u2 * d * v[16]),
-                    -m2
-                        * (v[38] * v[287] + 2.0 * (a_ * u2 * v[16] * v[60])
-                            + v[57] * v[295])
-                        - m1
-                            * (v[76] * v[294] + v[80] * v[296]
-                                + v[105] * v[11] * d * v[35]),
-                    -(v[105] * v[11] * d * v[45] + v[296] * v[85] + v[83] * v[294]) * m1
-                        - m2
-                            * (v[42] * v[287] + v[295] * v[64]
-                                + 2.0 * (a_ * u2 * v[16] * v[67])),
-                    -m2
-                        * (2.0 * (a_ * u2 * v[72] * v[16]) + v[69] * v[295]
-                            + v[0] * v[2] * v[287])
-                        - (v[90] * v[296] + v[105] * v[11] * v[0] * d * v[4]
-                            + v[87] * v[294]) * m1,
+                    v[9] * (v[11] * v[330] - v[169]) + v[22] * (v[314] - v[19] * v[121])
+                        + 2.0 * v[151] + v[152] + u3 * v[331] - v[15] * v[167],
+                    v[21] * (v[14] * (v[127] - v[313] - v[167]) - v[25] * v[121])
+                        + 2.0 * (u5 * v[292]) + v[315] - v[332],
+                    v[322] * u1 - v[171]
+                        - (v[333] + d * (d * (v[183] + v[185]) + a_ * v[334])) * m1
+                        - 2.0 * v[172] - v[335] - v[330] * v[87] + v[337],
+                    v[18] * v[338] + v[337],
+                    -(2.0 * v[11] * v[198]),
+                    -(m2 * (2.0 * (v[67] * v[198]) + v[339] * v[70] + v[46] * v[330])
+                        + (v[95] * v[340] - v[338] * v[96] + v[40] * v[341]) * m1),
+                    -((2.0 * (v[198] * v[76]) + v[48] * v[330] + v[79] * v[339]) * m2
+                        + m1 * (v[104] * v[340] + v[52] * v[341] - v[338] * v[101])),
+                    -(m2 * (2.0 * (v[84] * v[198]) - v[339] * v[85] + v[106] * v[330])
+                        + (v[341] * v[81] + v[109] * v[340] - v[110] * v[338]) * m1),
                 ],
                 [
-                    u2 * v[285] + (m2 * v[120] * d * d - v[119] - v[297]) * v[16] * v[16]
-                        + v[14] * v[14] * u5 * J1 - 2.0 * v[130] - v[131]
-                        + (v[299] - v[298] * d * m1) * v[11],
-                    2.0 * v[143] - v[289] + v[275] * u1
-                        - m2 * ((d * (v[140] - v[142]) + a_ * v[300]) * d - v[290])
-                        + v[144] + v[292] - v[298] * v[21] * m1 + v[301],
-                    v[16]
-                        * (v[14] * (-v[119] - v[297] - v[258]) - m2 * v[120] * d * v[27])
-                        - v[272] + 2.0 * (a_ * v[11] * d * u4 * m1) + v[288],
-                    -(2.0 * a_ * u3 * v[11] * d * m1),
-                    v[292] - m2 * d * v[302] + v[301],
-                    -m1
-                        * (v[298] * v[35] + 2.0 * (a_ * v[76] * u3 * v[11])
-                            + v[80] * v[303])
-                        - m2
-                            * (v[60] * v[302] + v[38] * v[120] * d * v[16]
-                                + v[57] * v[304]),
-                    -m2 * (v[120] * d * v[16] * v[42] + v[304] * v[64] + v[67] * v[302])
-                        - (v[298] * v[45] + 2.0 * (a_ * v[83] * u3 * v[11])
-                            + v[303] * v[85]) * m1,
-                    -m2
-                        * (v[72] * v[302] + v[69] * v[304]
-                            + v[120] * v[0] * d * v[16] * v[2])
-                        - (v[298] * v[0] * v[4] + v[90] * v[303]
-                            + 2.0 * (a_ * v[87] * u3 * v[11])) * m1,
+                    u2 * v[331] + v[10] * (v[136] + v[12] * v[131] - v[138])
+                        - 2.0 * v[154] - v[155] + v[177] * v[17]
+                        + v[21] * (v[125] - v[342] * v[18]),
+                    2.0 * v[171]
+                        - m2 * (d * (d * (v[164] - v[166]) + a_ * v[343]) - v[333])
+                        + v[321] * u1 + v[344] + v[172] - v[336] - v[342] * v[58],
+                    2.0 * (v[269] * u4) - v[316] + (-v[317] - v[131] * v[33]) * v[9]
+                        + v[332],
+                    -(2.0 * v[191] * v[18]),
+                    v[344] - v[345] * v[11],
+                    -(m2 * (v[46] * v[347] - v[346] * v[70] + v[67] * v[345])
+                        + (2.0 * (v[191] * v[96]) + v[342] * v[40] + v[348] * v[95])
+                            * m1),
+                    -((v[104] * v[348] + 2.0 * (v[191] * v[101]) + v[342] * v[52]) * m1
+                        + m2 * (v[345] * v[76] - v[79] * v[346] + v[48] * v[347])),
+                    -(m2 * (v[345] * v[84] + v[346] * v[85] + v[106] * v[347])
+                        + m1
+                            * (v[109] * v[348] + 2.0 * (v[191] * v[110])
+                                + v[342] * v[81])),
                 ],
                 [
-                    (v[305] + v[299] - d * d * v[291] * m1) * v[11]
-                        - v[12] * v[101] * J1,
-                    -v[21] * d * v[291] * m1 - v[11] * v[101] * J1
-                        - v[12] * (v[305] + v[299]),
-                    -(a_ * v[11] * d * v[306] * m1),
+                    v[21] * (v[349] - v[19] * v[334]) - v[146] * J1,
+                    -(v[168] * J1 + v[25] * v[334] + v[14] * v[349]),
+                    v[350] * v[269],
                     0.0,
                     0.0,
-                    -((v[35] * v[291] + v[80] * v[306]) * d * m1),
-                    -(d * m1 * (v[306] * v[85] + v[291] * v[45])),
-                    -((v[0] * v[291] * v[4] + v[90] * v[306]) * d * m1),
+                    -(v[18] * (v[40] * v[334] - v[350] * v[95])),
+                    -(v[18] * (v[52] * v[334] - v[104] * v[350])),
+                    -((v[334] * v[81] - v[350] * v[109]) * v[18]),
                 ],
                 [
-                    (m2 * d * d * v[300] - v[125] * v[307]) * v[16]
-                        - v[14] * v[104] * J1,
-                    -(m2 * a_ * d * v[16] * (-2.0 * u5 - 2.0 * u2)),
-                    v[16] * v[104] * J1 - v[14] * v[125] * v[307]
-                        - m2 * d * v[300] * v[27],
+                    v[9] * (v[12] * v[343] - v[140] * v[351]) - v[150] * J1,
+                    v[352] * v[292],
+                    J1 * v[178] - v[351] * v[176] - v[343] * v[33],
                     0.0,
                     0.0,
-                    -(m2 * (v[38] * v[300] + v[57] * v[308]) * d),
-                    -(m2 * d * (v[300] * v[42] + v[64] * v[308])),
-                    -(m2 * (v[69] * v[308] + v[0] * v[2] * v[300]) * d),
+                    -(v[11] * (v[46] * v[343] + v[352] * v[70])),
+                    -((v[79] * v[352] + v[48] * v[343]) * v[11]),
+                    -(v[11] * (v[106] * v[343] - v[352] * v[85])),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8539,7 +8269,7 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -8559,43 +8289,43 @@ pub mod kane {
         v[0] = f64::cos(theta);
         v[1] = 1.0 / v[0];
         v[2] = f64::sin(phi);
-        v[3] = u2 * v[2];
-        v[4] = f64::cos(phi);
-        v[5] = u3 * v[4];
-        v[6] = v[3] + v[5];
-        v[7] = u2 * v[4] - u3 * v[2];
-        v[8] = f64::sin(theta);
-        v[9] = d * d * m1;
-        v[10] = J2 + v[9];
-        v[11] = f64::sin(gamma1);
-        v[12] = f64::cos(gamma1);
-        v[13] = v[12] * v[12];
-        v[14] = f64::cos(gamma2);
+        v[3] = f64::cos(phi);
+        v[4] = u2 * v[2] + u3 * v[3];
+        v[5] = v[1] * v[4];
+        v[6] = u2 * v[3] - u3 * v[2];
+        v[7] = f64::sin(theta);
+        v[8] = v[7] * v[5];
+        v[9] = f64::sin(gamma2);
+        v[10] = v[9] * v[9];
+        v[11] = m2 * d;
+        v[12] = v[11] * d;
+        v[13] = v[12] + J2;
+        v[14] = f64::cos(gamma1);
         v[15] = v[14] * v[14];
-        v[16] = f64::sin(gamma2);
-        v[17] = m2 * d * d;
-        v[18] = v[17] + J2;
-        v[19] = J1 - J2;
-        v[20] = v[12] * d;
-        v[21] = -a_ - v[20];
-        v[22] = v[21] * d * m1;
-        v[23] = v[12] * v[19] + v[22];
-        v[24] = v[23] * v[11] - Ixy;
-        v[25] = J2 - J1;
-        v[26] = v[14] * d;
-        v[27] = -a_ - v[26];
-        v[28] = m2 * d * v[27];
-        v[29] = v[14] * v[25] - v[28];
-        v[30] = v[16] * v[29] - Ixz;
-        v[31] = f64::sin(psi);
-        v[32] = v[2] * v[31];
-        v[33] = f64::cos(psi);
-        v[34] = v[8] * v[33] * v[4];
-        v[35] = v[32] + v[34];
-        v[36] = v[4] * v[31];
-        v[37] = v[8] * v[33] * v[2];
-        v[38] = v[37] - v[36];
-        v[39] = d * (v[11] * v[35] * m1 - m2 * v[38] * v[16]);
+        v[16] = f64::cos(gamma2);
+        v[17] = v[16] * v[16];
+        v[18] = d * m1;
+        v[19] = v[18] * d;
+        v[20] = v[19] + J2;
+        v[21] = f64::sin(gamma1);
+        v[22] = v[21] * v[21];
+        v[23] = v[14] * d;
+        v[24] = a_ + v[23];
+        v[25] = -(v[18] * v[24]);
+        v[26] = J1 - J2;
+        v[27] = v[25] + v[14] * v[26];
+        v[28] = v[27] * v[21] - Ixy;
+        v[29] = J2 - J1;
+        v[30] = v[16] * v[29];
+        v[31] = v[16] * d;
+        v[32] = v[31] + a_;
+        v[33] = -(v[11] * v[32]);
+        v[34] = v[30] - v[33];
+        v[35] = v[34] * v[9] - Ixz;
+        v[36] = f64::sin(psi);
+        v[37] = v[2] * v[36];
+        v[38] = v[7] * v[3];
+        v[39] = f64::cos(psi);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -8604,7 +8334,7 @@ pub mod kane {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
     ) {
         let Iyz = params.Iyz;
         let m1 = params.m1;
@@ -8612,46 +8342,46 @@ pub mod kane {
         let d = params.d;
         let a_ = params.a_;
         let J2 = params.J2;
-        v[40] = v[33] * v[4];
-        v[41] = v[8] * v[2] * v[31];
-        v[42] = v[40] + v[41];
-        v[43] = v[33] * v[2];
-        v[44] = v[8] * v[4] * v[31];
-        v[45] = v[44] - v[43];
-        v[46] = (v[11] * v[45] * m1 - m2 * v[16] * v[42]) * d;
-        v[47] = v[11] * m1 * v[4];
-        v[48] = m2 * v[16] * v[2];
-        v[49] = v[47] - v[48];
-        v[50] = v[49] * v[0] * d;
-        v[51] = d * d;
-        v[52] = -Iyz;
-        v[53] = d + v[14] * a_;
-        v[54] = J2 + m2 * d * v[53];
-        v[55] = v[14] * v[0];
-        v[56] = v[8] * v[16] * v[4];
-        v[57] = (v[55] - v[56]) * v[33] - v[16] * v[2] * v[31];
-        v[58] = v[33] * v[0] * v[16];
-        v[59] = v[14] * v[35];
-        v[60] = v[58] + v[59];
-        v[61] = m2 * (v[60] * v[53] - a_ * v[57] * v[16]) + v[21] * v[35] * m1;
-        v[62] = v[14] * v[0] * v[31];
-        v[63] = v[43] - v[44];
-        v[64] = v[62] + v[63] * v[16];
-        v[65] = v[0] * v[16] * v[31];
-        v[66] = v[14] * v[45];
+        v[40] = v[37] + v[38] * v[39];
+        v[41] = v[21] * m1;
+        v[42] = m2 * v[9];
+        v[43] = v[7] * v[2];
+        v[44] = v[39] * v[43];
+        v[45] = v[3] * v[36];
+        v[46] = v[44] - v[45];
+        v[47] = d * (v[40] * v[41] - v[42] * v[46]);
+        v[48] = v[39] * v[3] + v[43] * v[36];
+        v[49] = v[42] * v[48];
+        v[50] = v[39] * v[2];
+        v[51] = v[38] * v[36];
+        v[52] = v[51] - v[50];
+        v[53] = d * (v[41] * v[52] - v[49]);
+        v[54] = v[42] * v[2];
+        v[55] = v[41] * v[3];
+        v[56] = d * (v[55] - v[54]);
+        v[57] = v[56] * v[0];
+        v[58] = -(m1 * v[24]);
+        v[59] = d * d;
+        v[60] = -Iyz;
+        v[61] = v[16] * a_;
+        v[62] = v[61] + d;
+        v[63] = J2 + v[11] * v[62];
+        v[64] = v[39] * v[0];
+        v[65] = v[9] * v[64];
+        v[66] = v[16] * v[40];
         v[67] = v[65] + v[66];
-        v[68] = v[21] * v[45] * m1 + m2 * (v[67] * v[53] - a_ * v[16] * v[64]);
-        v[69] = -v[0] * v[16] * v[4] - v[14] * v[8];
-        v[70] = v[8] * v[16];
-        v[71] = v[14] * v[0] * v[4];
-        v[72] = v[71] - v[70];
-        v[73] = m2 * (v[72] * v[53] - a_ * v[69] * v[16]) + v[21] * v[0] * m1 * v[4];
-        v[74] = v[12] * a_ + d;
-        v[75] = d * v[74] * m1 + J2;
-        v[76] = v[12] * v[38] - v[33] * v[11] * v[0];
-        v[77] = v[8] * v[11] * v[2];
-        v[78] = v[12] * v[0];
-        v[79] = v[11] * v[4] * v[31];
+        v[68] = v[16] * v[0];
+        v[69] = v[38] * v[9];
+        v[70] = (v[68] - v[69]) * v[39] - v[9] * v[37];
+        v[71] = a_ * v[9];
+        v[72] = (v[67] * v[62] - v[70] * v[71]) * m2 + v[58] * v[40];
+        v[73] = v[0] * v[36];
+        v[74] = v[9] * v[73];
+        v[75] = v[16] * v[52];
+        v[76] = v[74] + v[75];
+        v[77] = v[50] - v[51];
+        v[78] = v[16] * v[73];
+        v[79] = v[77] * v[9] + v[78];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -8660,63 +8390,56 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
     ) {
         let u1 = state[8];
-        let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
         let m0 = params.m0;
-        let Izz = params.Izz;
-        let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[33] * (v[77] + v[78]) - v[79];
-        v[81] = m2 * v[38] * v[27] + (v[76] * v[74] + a_ * v[80] * v[11]) * m1;
-        v[82] = v[11] * v[0] * v[31];
-        v[83] = v[12] * v[42] - v[82];
-        v[84] = v[12] * v[0] * v[31];
-        v[85] = v[84] + v[11] * v[42];
-        v[86] = (v[83] * v[74] + a_ * v[11] * v[85]) * m1 + m2 * v[27] * v[42];
-        v[87] = v[12] * v[0] * v[2] + v[8] * v[11];
-        v[88] = v[11] * v[0] * v[2];
-        v[89] = v[12] * v[8];
-        v[90] = v[88] - v[89];
-        v[91] = (v[87] * v[74] + a_ * v[90] * v[11]) * m1 + m2 * v[0] * v[2] * v[27];
-        v[92] = v[76] * d * m1;
-        v[93] = v[83] * d * m1;
-        v[94] = v[87] * d * m1;
-        v[95] = m2 * d * v[60];
-        v[96] = m2 * d * v[67];
-        v[97] = m2 * v[72] * d;
-        v[98] = m2 + m0 + m1;
-        v[99] = v[11] * u1;
-        v[100] = v[12] * u2;
-        v[101] = v[100] - v[99];
-        v[102] = v[16] * u1;
-        v[103] = v[14] * u3;
-        v[104] = -v[102] - v[103];
-        v[105] = u3 + 2.0 * u4;
-        v[106] = d * (v[12] * v[105] * u1 + v[105] * u2 * v[11]) + a_ * u3 * u1;
-        v[107] = d * m1 * v[106];
-        v[108] = u2 * v[11];
-        v[109] = v[12] * u1;
-        v[110] = -v[108] - v[109];
-        v[111] = J2 * v[110] * u4;
-        v[112] = u3 + u4;
-        v[113] = v[108] + v[109];
-        v[114] = v[112] * v[113] * v[19];
-        v[115] = u2 * Iyz;
-        v[116] = u1 * Ixz;
-        v[117] = u3 * Izz - v[115] - v[116];
-        v[118] = u5 + u2;
-        v[119] = J1 * v[118];
+        v[80] = v[58] * v[52] + m2 * (v[62] * v[76] - v[79] * v[71]);
+        v[81] = v[0] * v[3];
+        v[82] = v[7] * v[9];
+        v[83] = v[16] * v[81];
+        v[84] = v[83] - v[82];
+        v[85] = v[9] * v[81] + v[16] * v[7];
+        v[86] = v[58] * v[81] + m2 * (v[62] * v[84] + v[71] * v[85]);
+        v[87] = -(m2 * v[32]);
+        v[88] = v[14] * a_;
+        v[89] = v[88] + d;
+        v[90] = J2 + v[89] * v[18];
+        v[91] = a_ * v[21];
+        v[92] = v[21] * v[43] + v[14] * v[0];
+        v[93] = v[92] * v[39];
+        v[94] = v[21] * v[45];
+        v[95] = v[93] - v[94];
+        v[96] = v[14] * v[46] - v[21] * v[64];
+        v[97] = v[46] * v[87] + (v[91] * v[95] + v[89] * v[96]) * m1;
+        v[98] = v[48] * v[87];
+        v[99] = v[14] * v[48];
+        v[100] = v[21] * v[73];
+        v[101] = v[99] - v[100];
+        v[102] = v[48] * v[21];
+        v[103] = v[14] * v[73];
+        v[104] = v[102] + v[103];
+        v[105] = v[98] + (v[89] * v[101] + v[104] * v[91]) * m1;
+        v[106] = v[0] * v[2];
+        v[107] = v[106] * v[21];
+        v[108] = v[14] * v[7];
+        v[109] = v[107] - v[108];
+        v[110] = v[7] * v[21] + v[14] * v[106];
+        v[111] = v[106] * v[87] + (v[109] * v[91] + v[89] * v[110]) * m1;
+        v[112] = v[18] * v[96];
+        v[113] = v[18] * v[101];
+        v[114] = v[110] * v[18];
+        v[115] = v[67] * v[11];
+        v[116] = v[11] * v[76];
+        v[117] = v[11] * v[84];
+        v[118] = m2 + m0 + m1;
+        v[119] = u3 * u1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -8725,7 +8448,71 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let Iyy = params.Iyy;
+        let Izz = params.Izz;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let d = params.d;
+        let a_ = params.a_;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[120] = u2 * v[21];
+        v[121] = u3 + 2.0 * u4;
+        v[122] = v[14] * u1;
+        v[123] = a_ * v[119] + (v[120] * v[121] + v[121] * v[122]) * d;
+        v[124] = v[120] + v[122];
+        v[125] = v[124] * v[26];
+        v[126] = u3 + u4;
+        v[127] = J2 * u4;
+        v[128] = v[125] * v[126] - v[127] * v[124];
+        v[129] = v[128] - v[123] * v[18];
+        v[130] = v[16] * u1;
+        v[131] = 2.0 * u5 + u2;
+        v[132] = u3 * v[9];
+        v[133] = a_ * u2;
+        v[134] = d * (v[131] * v[132] - v[130] * v[131]) - v[133] * u1;
+        v[135] = v[134] * v[11];
+        v[136] = J2 * v[131];
+        v[137] = u5 + u2;
+        v[138] = J1 * v[137];
+        v[139] = v[136] - v[138];
+        v[140] = v[130] - v[132];
+        v[141] = v[139] * v[140];
+        v[142] = v[135] - v[141];
+        v[143] = v[21] * u1;
+        v[144] = v[14] * u2;
+        v[145] = v[144] - v[143];
+        v[146] = v[14] * v[145];
+        v[147] = v[9] * u1;
+        v[148] = v[16] * u3;
+        v[149] = v[147] + v[148];
+        v[150] = -(v[16] * v[149]);
+        v[151] = u2 * Iyz;
+        v[152] = u1 * Ixz;
+        v[153] = u3 * Izz - v[151] - v[152];
+        v[154] = Iyz * u3;
+        v[155] = Ixy * u1;
+        v[156] = u2 * Iyy - v[154] - v[155];
+        v[157] = a_ * a_;
+        v[158] = u1 * u1;
+        v[159] = u3 * u3;
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part4(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 353],
     ) {
         let gamma1 = state[3];
         let gamma2 = state[4];
@@ -8735,114 +8522,51 @@ pub mod kane {
         let u4 = state[11];
         let u5 = state[12];
         let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let J2 = params.J2;
-        v[120] = 2.0 * u5 + u2;
-        v[121] = v[120] * J2;
-        v[122] = v[121] - v[119];
-        v[123] = u3 * v[16];
-        v[124] = v[14] * u1;
-        v[125] = v[124] - v[123];
-        v[126] = v[122] * v[125];
-        v[127] = -2.0 * u5 - u2;
-        v[128] = d * (v[14] * v[127] * u1 + v[120] * u3 * v[16]) - a_ * u2 * u1;
-        v[129] = m2 * d * v[128];
-        v[130] = Iyz * u3;
-        v[131] = Ixy * u1;
-        v[132] = u2 * Iyy - v[130] - v[131];
-        v[133] = v[102] + v[103];
-        v[134] = v[25] * v[125] * v[133];
-        v[135] = u3 * u3;
-        v[136] = u1 * u1;
-        v[137] = u5 * (-u5 - 2.0 * u2) + v[135] - v[136];
-        v[138] = 2.0 * gamma2;
-        v[139] = f64::sin(v[138]);
-        v[140] = u3 * v[139];
-        v[141] = f64::cos(v[138]);
-        v[142] = v[141] * u1;
-        v[143] = u3 * Ixz;
-        v[144] = u2 * Ixy;
-        v[145] = Ixx * u1 - v[143] - v[144];
-        v[146] = u2 * u2 + u4 * (-2.0 * u3 - u4) - v[136];
-        v[147] = 2.0 * gamma1;
-        v[148] = f64::sin(v[147]);
-        v[149] = u2 * v[148];
-        v[150] = f64::cos(v[147]);
-        v[151] = u1 * v[150];
-        v[152] = v[113] * v[19] * v[101];
-        v[153] = a_ * u3 * u3 * v[11];
-        v[154] = u2 * v[21];
-        v[155] = v[11] * d * u1;
-        v[156] = v[154] + v[155];
-        v[157] = v[153] - v[156] * v[113];
-        v[158] = d * v[16] * u1;
-        v[159] = u3 * v[27];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part4(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
-    ) {
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
+        let J1 = params.J1;
         v[160] = v[159] - v[158];
-        v[161] = a_ * u2 * u2 * v[16] + v[125] * v[160];
-        v[162] = v[156] * v[101];
-        v[163] = v[12] * a_ * u3 * u4;
-        v[164] = (u3 * v[74] + d * u4) * v[112];
-        v[165] = v[162] + v[163] - v[164];
-        v[166] = (u5 * d + u2 * v[53]) * v[118] - v[14] * u5 * a_ * u2 - v[160] * v[133];
-        v[167] = -m1 * (v[80] * v[165] + v[76] * v[157] + v[35] * v[106])
-            - m2 * (v[57] * v[166] + v[161] * v[60] + v[38] * v[128]);
-        v[168] = -m2 * (v[0] * v[2] * v[128] + v[161] * v[72] + v[69] * v[166])
-            - (v[0] * v[106] * v[4] + v[90] * v[165] + v[157] * v[87]) * m1;
-        v[169] = -v[40] - v[41];
-        v[170] = d * (v[63] * v[11] * m1 - m2 * v[16] * v[169]);
-        v[171] = v[16] * v[45] - v[62];
-        v[172] = v[14] * v[63];
-        v[173] = v[172] - v[65];
-        v[174] = m2 * (v[173] * v[53] - a_ * v[171] * v[16]) + v[63] * v[21] * m1;
-        v[175] = v[12] * v[169] + v[82];
-        v[176] = v[11] * v[169] - v[84];
-        v[177] = (v[175] * v[74] + a_ * v[11] * v[176]) * m1 + m2 * v[169] * v[27];
-        v[178] = d * v[175] * m1;
-        v[179] = m2 * d * v[173];
-        v[180] = v[49] * v[33] * v[0] * d;
-        v[181] = v[49] * v[0] * d * v[31];
-        v[182] = (v[48] - v[47]) * v[8] * d;
-        v[183] = v[73] * v[33];
-        v[184] = v[73] * v[31];
-        v[185] = -v[14] * v[8] * v[4] - v[0] * v[16];
-        v[186] = v[56] - v[55];
-        v[187] = m2 * (v[185] * v[53] - v[186] * a_ * v[16]) - v[8] * v[21] * m1 * v[4];
-        v[188] = v[33] * v[91];
-        v[189] = v[91] * v[31];
-        v[190] = -v[77] - v[78];
-        v[191] = v[11] * v[0] - v[12] * v[8] * v[2];
-        v[192] = (a_ * v[190] * v[11] + v[191] * v[74]) * m1 - m2 * v[8] * v[2] * v[27];
-        v[193] = v[87] * v[33] * d * m1;
-        v[194] = v[87] * d * m1 * v[31];
-        v[195] = d * v[191] * m1;
-        v[196] = m2 * v[72] * v[33] * d;
-        v[197] = m2 * v[72] * d * v[31];
-        v[198] = m2 * d * v[185];
-        v[199] = v[36] - v[37];
+        v[161] = v[160] - (u5 + 2.0 * u2) * u5;
+        v[162] = 2.0 * gamma2;
+        v[163] = f64::sin(v[162]);
+        v[164] = u3 * v[163];
+        v[165] = f64::cos(v[162]);
+        v[166] = v[165] * u1;
+        v[167] = u4 * J1;
+        v[168] = v[145] * v[21];
+        v[169] = v[29] * v[140];
+        v[170] = v[169] * v[149];
+        v[171] = u3 * Ixz;
+        v[172] = u2 * Ixy;
+        v[173] = Ixx * u1 - v[171] - v[172];
+        v[174] = v[145] * v[26];
+        v[175] = v[174] * v[124];
+        v[176] = v[16] * v[140];
+        v[177] = u5 * J1;
+        v[178] = -(v[9] * v[149]);
+        v[179] = a_ * u1;
+        v[180] = u2 * u2 - v[158] - u4 * (2.0 * u3 + u4);
+        v[181] = 2.0 * gamma1;
+        v[182] = f64::sin(v[181]);
+        v[183] = u2 * v[182];
+        v[184] = f64::cos(v[181]);
+        v[185] = u1 * v[184];
+        v[186] = v[21] * d;
+        v[187] = v[186] * u1;
+        v[188] = u2 * v[24];
+        v[189] = v[187] - v[188];
+        v[190] = v[189] * v[124];
+        v[191] = u3 * v[91];
+        v[192] = v[191] * u3;
+        v[193] = v[192] - v[190];
+        v[194] = u3 * v[32];
+        v[195] = d * v[9];
+        v[196] = u1 * v[195];
+        v[197] = -v[194] - v[196];
+        v[198] = u2 * v[71];
+        v[199] = v[197] * v[140] + u2 * v[198];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -8851,69 +8575,179 @@ pub mod kane {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
     ) {
-        let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
+        let u5 = state[12];
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[200] = d * (v[11] * m1 * v[199] - m2 * v[16] * v[35]);
-        v[201] = d * (v[11] * v[169] * m1 - m2 * v[16] * v[45]);
-        v[202] = v[0] * d * (-m2 * v[16] * v[4] - v[11] * v[2] * m1);
-        v[203] = m2 * (v[14] * v[53] * v[199] - a_ * v[38] * v[16] * v[16])
-            + v[21] * m1 * v[199];
-        v[204] = m2 * (v[14] * v[169] * v[53] - a_ * v[16] * v[16] * v[42])
-            + v[21] * v[169] * m1;
-        v[205] = v[0] * v[2] * (m2 * (-v[14] * v[53] - a_ * v[16] * v[16]) - v[21] * m1);
-        v[206] = m2 * v[27] + (a_ * v[11] * v[11] + v[12] * v[74]) * m1;
-        v[207] = v[206] * v[35];
-        v[208] = v[206] * v[45];
-        v[209] = v[206] * v[0] * v[4];
-        v[210] = v[12] * d * v[35] * m1;
-        v[211] = v[12] * d * v[45] * m1;
-        v[212] = v[12] * v[0] * d * m1 * v[4];
-        v[213] = v[14] * m2 * d * v[199];
-        v[214] = v[14] * m2 * d * v[169];
-        v[215] = -(v[14] * m2 * v[0] * d * v[2]);
-        v[216] = v[11] * v[165] + v[12] * v[157];
-        v[217] = (J2 + v[9] - J1) * v[11] * v[11] + v[12] * v[23];
-        v[218] = 2.0 * J1 - 2.0 * J2;
-        v[219] = v[11] * d * v[35] * m1;
-        v[220] = v[11] * d * v[45] * m1;
-        v[221] = v[11] * v[0] * d * m1 * v[4];
-        v[222] = -(a_ * v[11] * d * m1);
-        v[223] = v[33] * v[190] + v[79];
-        v[224] = m1 * (v[12] * a_ * v[80] + v[74] * v[223]);
-        v[225] = (v[12] * a_ * v[85] + v[74] * v[176]) * m1;
-        v[226] = v[89] - v[88];
-        v[227] = (v[12] * a_ * v[90] + v[74] * v[226]) * m1;
-        v[228] = d * v[223] * m1;
-        v[229] = d * m1 * v[176];
-        v[230] = d * m1 * v[226];
-        v[231] = v[112] * v[19] * v[101];
-        v[232] = v[12] * v[105] * u2 + v[11] * u1 * (-u3 - 2.0 * u4);
-        v[233] = u4 * v[101] * J1;
-        v[234] = (v[99] - v[100]) * J2 * u4;
-        v[235] = v[111] - v[107] + v[114] - v[110] * u4 * J1;
-        v[236] = u1 * v[148];
-        v[237] = u2 * v[150];
-        v[238] = v[113] * v[19] * v[110];
-        v[239] = v[19] * v[101] * v[101];
+        v[200] = v[88] * u3 * u4 - (v[89] * u3 + d * u4) * v[126];
+        v[201] = v[189] * v[145];
+        v[202] = v[200] + v[201];
+        v[203] = v[16] * v[133];
+        v[204] = v[197] * v[149];
+        v[205] = (u2 * v[62] + u5 * d) * v[137] - u5 * v[203] - v[204];
+        v[206] = -((v[202] * v[95] + v[96] * v[193] + v[123] * v[40]) * m1
+            + (v[205] * v[70] + v[134] * v[46] + v[67] * v[199]) * m2);
+        v[207] = v[134] * v[48];
+        v[208] = m2 * (v[84] * v[199] + v[134] * v[106] - v[205] * v[85])
+            + (v[110] * v[193] + v[123] * v[81] + v[109] * v[202]) * m1;
+        v[209] = (v[77] * v[41] + v[49]) * d;
+        v[210] = v[16] * v[77];
+        v[211] = v[210] - v[74];
+        v[212] = v[9] * v[52] - v[78];
+        v[213] = m2 * (v[211] * v[62] - v[212] * v[71]) + v[77] * v[58];
+        v[214] = -v[102] - v[103];
+        v[215] = v[100] - v[99];
+        v[216] = (v[214] * v[91] + v[89] * v[215]) * m1 - v[98];
+        v[217] = v[18] * v[215];
+        v[218] = v[211] * v[11];
+        v[219] = v[7] * v[1];
+        v[220] = v[56] * v[64];
+        v[221] = v[56] * v[73];
+        v[222] = v[7] * (v[54] - v[55]) * d;
+        v[223] = v[39] * v[86];
+        v[224] = v[86] * v[36];
+        v[225] = v[69] - v[68];
+        v[226] = v[0] * v[9] + v[16] * v[38];
+        v[227] = m2 * (-v[225] * v[71] - v[226] * v[62]) - v[38] * v[58];
+        v[228] = v[111] * v[39];
+        v[229] = v[111] * v[36];
+        v[230] = v[21] * v[0] - v[14] * v[43];
+        v[231] = (v[89] * v[230] - v[92] * v[91]) * m1 - v[43] * v[87];
+        v[232] = v[39] * v[114];
+        v[233] = v[114] * v[36];
+        v[234] = v[18] * v[230];
+        v[235] = v[117] * v[39];
+        v[236] = v[117] * v[36];
+        v[237] = -(v[226] * v[11]);
+        v[238] = v[45] - v[44];
+        v[239] = d * (v[238] * v[41] - v[42] * v[40]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part6(
         _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 353],
+    ) {
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[240] = d * (-v[42] * v[52] - v[48] * v[41]);
+        v[241] = -(v[0] * d * (v[41] * v[2] + v[42] * v[3]));
+        v[242] = v[16] * v[62];
+        v[243] = v[46] * v[9];
+        v[244] = m2 * (v[238] * v[242] - v[243] * v[71]) + v[58] * v[238];
+        v[245] = v[48] * v[9];
+        v[246] = m2 * (-v[245] * v[71] - v[48] * v[242]) - v[58] * v[48];
+        v[247] = v[106] * (-v[58] - m2 * (v[9] * v[71] + v[242]));
+        v[248] = (v[21] * v[91] + v[14] * v[89]) * m1 + v[87];
+        v[249] = v[40] * v[248];
+        v[250] = v[52] * v[248];
+        v[251] = v[248] * v[81];
+        v[252] = v[14] * v[18];
+        v[253] = v[252] * v[40];
+        v[254] = v[252] * v[52];
+        v[255] = v[252] * v[81];
+        v[256] = v[16] * v[11];
+        v[257] = v[256] * v[238];
+        v[258] = -(v[256] * v[48]);
+        v[259] = -(v[256] * v[106]);
+        v[260] = v[16] * v[199];
+        v[261] = v[21] * v[202] + v[14] * v[193];
+        v[262] = 2.0 * J2 - 2.0 * J1;
+        v[263] = v[22] * (v[20] - J1) + v[14] * v[27];
+        v[264] = 2.0 * J1 - 2.0 * J2;
+        v[265] = v[18] * v[21];
+        v[266] = v[40] * v[265];
+        v[267] = v[52] * v[265];
+        v[268] = v[265] * v[81];
+        v[269] = v[18] * v[91];
+        v[270] = -v[269];
+        v[271] = v[94] - v[93];
+        v[272] = m1 * (v[88] * v[95] + v[89] * v[271]);
+        v[273] = (v[89] * v[214] + v[104] * v[88]) * m1;
+        v[274] = v[108] - v[107];
+        v[275] = m1 * (v[88] * v[109] + v[89] * v[274]);
+        v[276] = v[18] * v[271];
+        v[277] = v[214] * v[18];
+        v[278] = v[18] * v[274];
+        v[279] = v[124] * v[167] + v[129];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part7(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
+        v: &mut [f64; 353],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[280] = (v[126] * v[174] + v[145] * v[167]) + v[127] * (v[143] - v[144]);
+        v[281] = v[144] * v[121] - v[143] * v[121];
+        v[282] = v[281] * d;
+        v[283] = u1 * v[182];
+        v[284] = u2 * v[184];
+        v[285] = v[174] * v[145] - v[125] * v[124];
+        v[286] = d * v[124];
+        v[287] = v[159] * v[88] - v[286] * v[124];
+        v[288] = v[192] - v[190] + v[145] * v[286];
+        v[289] = v[287] + v[200];
+        v[290] = v[10] * (v[26] - v[12]) + v[16] * v[34];
+        v[291] = -(v[256] * v[46]);
+        v[292] = v[11] * v[71];
+        v[293] = -v[292];
+        v[294] = m2 * (v[62] * v[70] - v[16] * a_ * v[70]);
+        v[295] = m2 * (a_ * (-v[79] * v[16] - (v[75] + v[210]) * v[9]) + v[79] * v[62]);
+        v[296] = m2 * (v[61] * v[85] - v[62] * v[85]);
+        v[297] = v[11] * v[243];
+        v[298] = v[11] * v[245];
+        v[299] = v[106] * v[11] * v[9];
+        v[300] = v[11] * v[70];
+        v[301] = v[79] * v[11];
+        v[302] = -(v[11] * v[85]);
+        v[303] = v[132] - v[130];
+        v[304] = v[177] * v[303];
+        v[305] = v[148] * v[131] + v[147] * v[131];
+        v[306] = d * v[305];
+        v[307] = (v[177] + v[138]) - v[136];
+        v[308] = v[140] * v[169] - v[29] * v[149] * v[149];
+        v[309] = v[303] * d;
+        v[310] = u2 * v[203] + v[140] * v[309] - v[204];
+        v[311] = v[309] * v[149];
+        v[312] = a_ * u3 + v[23] * v[121];
+        v[313] = v[126] * v[26];
+        v[314] = v[313] - v[127];
+        v[315] = Ixy * u3;
+        v[316] = u2 * Ixz;
+        v[317] = v[16] * v[307];
+        v[318] = -v[133] - v[31] * v[131];
+        v[319] = v[9] * v[140];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part8(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 353],
     ) {
         let u1 = state[8];
         let u2 = state[9];
@@ -8923,104 +8757,43 @@ pub mod kane {
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Izz = params.Izz;
-        let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
-        let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[240] = v[113] * v[113] * d;
-        v[241] = v[12] * a_ * u3 * u3;
-        v[242] = v[241] - v[240] + v[163] - v[164];
-        v[243] = v[153] + v[113] * d * v[101] + v[156] * v[110];
-        v[244] = v[14] * v[29] + (J1 - v[17] - J2) * v[16] * v[16];
-        v[245] = -(v[14] * m2 * v[38] * d);
-        v[246] = -(v[14] * m2 * d * v[42]);
-        v[247] = -(m2 * a_ * d * v[16]);
-        v[248] = v[14] * (-v[32] - v[34]);
-        v[249] = m2 * (v[57] * v[53] + a_ * (v[16] * (-v[59] - v[248]) - v[14] * v[57]));
-        v[250] = m2 * (v[64] * v[53] + a_ * ((-v[66] - v[172]) * v[16] - v[14] * v[64]));
-        v[251] = m2 * (v[69] * v[53] - v[14] * a_ * v[69]);
-        v[252] = m2 * v[38] * d * v[16];
-        v[253] = m2 * d * v[16] * v[42];
-        v[254] = m2 * v[0] * d * v[16] * v[2];
-        v[255] = m2 * v[57] * d;
-        v[256] = m2 * d * v[64];
-        v[257] = m2 * v[69] * d;
-        v[258] = u5 * J1;
-        v[259] = v[119] - v[121] + v[258];
-        v[260] = v[14] * v[120] * u3 + v[120] * v[16] * u1;
-        v[261] = v[123] - v[124];
-        v[262] = u5 * v[261] * J1;
-        v[263] = v[25] * v[125] * v[125];
-        v[264] = v[25] * v[133] * v[104];
-        v[265] = v[14] * a_ * u2 * u2 + v[125] * d * v[261] + v[160] * v[104];
-        v[266] = a_ * u3 + v[12] * v[105] * d;
-        v[267] = v[112] * v[19];
-        v[268] = J2 * u4;
-        v[269] = u4 * J1;
-        v[270] = Ixy * u3;
-        v[271] = v[14] * d * v[127] - a_ * u2;
-        v[272] = u2 * Ixz;
-        v[273] = v[14] * v[133];
-        v[274] = v[125] * v[16];
-        v[275] = Izz - Ixx;
-        v[276] = v[12] * v[101];
-        v[277] = v[113] * v[11];
-        v[278] = Ixx - Iyy;
-        v[279] = v[12] * v[156];
-    }
-    #[allow(non_snake_case)]
-    #[inline(never)]
-    fn jacobian_part7(
-        _t: f64,
-        state: &[f64; STATES],
-        params: &Params,
-        _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 309],
-    ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
-        let Iyy = params.Iyy;
-        let Izz = params.Izz;
         let Iyz = params.Iyz;
         let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[280] = -v[279] - v[113] * v[11] * d;
-        v[281] = v[14] * v[160];
-        v[282] = v[281] - v[125] * d * v[16];
-        v[283] = d * v[101] - v[154] - v[155];
-        v[284] = v[158] - v[159] + d * v[133];
-        v[285] = Iyy - Izz;
-        v[286] = a_ * u1;
-        v[287] = d * v[261] - v[286];
-        v[288] = Iyz * u1;
-        v[289] = v[12] * v[113] * v[19];
-        v[290] = a_ * a_ * u1;
-        v[291] = 2.0 * v[108] + 2.0 * v[109];
-        v[292] = v[14] * v[25] * v[125];
-        v[293] = v[19] * v[11] * v[101];
-        v[294] = -v[156] * v[11] - v[21] * v[113];
-        v[295] = d * v[118] + v[14] * a_ * (u2 - u5) + v[53] * v[118];
-        v[296] = v[21] * v[101] + v[279];
-        v[297] = J2 * v[127];
-        v[298] = v[113] * d + v[286];
-        v[299] = v[113] * v[19];
-        v[300] = 2.0 * v[123] - 2.0 * v[124];
-        v[301] = v[19] * v[16] * v[133];
-        v[302] = v[125] * v[27] - v[16] * v[160];
-        v[303] = (-u3 - u4) * d - v[112] * v[74] + v[12] * a_ * (u4 - u3);
-        v[304] = -v[281] - v[133] * v[27];
-        v[305] = J2 * v[110];
-        v[306] = -2.0 * u3 - 2.0 * u4;
-        v[307] = 2.0 * J2 - J1;
-        v[308] = 2.0 * u5 + 2.0 * u2;
+        v[320] = v[16] * v[149];
+        v[321] = Izz - Ixx;
+        v[322] = Ixx - Iyy;
+        v[323] = v[21] * v[124];
+        v[324] = v[14] * v[189];
+        v[325] = v[186] * v[124] + v[324];
+        v[326] = v[16] * v[197];
+        v[327] = v[326] - v[140] * v[195];
+        v[328] = v[21] * (v[188] - v[187] + v[145] * d);
+        v[329] = v[9] * (v[194] + v[196] + d * v[149]);
+        v[330] = v[309] - v[179];
+        v[331] = Iyy - Izz;
+        v[332] = Iyz * u1;
+        v[333] = u1 * v[157];
+        v[334] = 2.0 * v[120] + 2.0 * v[122];
+        v[335] = v[16] * v[169];
+        v[336] = v[14] * v[125];
+        v[337] = v[174] * v[21] + v[336];
+        v[338] = v[189] * v[21] - v[124] * v[24];
+        v[339] = d * v[137] + v[62] * v[137] + v[61] * (u2 - u5);
+        v[340] = v[324] - v[145] * v[24];
+        v[341] = v[186] * v[121];
+        v[342] = v[179] + v[286];
+        v[343] = 2.0 * v[132] - 2.0 * v[130];
+        v[344] = v[335] + v[9] * v[149] * v[26];
+        v[345] = -v[197] * v[9] - v[140] * v[32];
+        v[346] = v[326] - v[149] * v[32];
+        v[347] = v[131] * v[195];
+        v[348] = v[88] * (u4 - u3) - v[89] * v[126] - v[126] * d;
+        v[349] = v[125] - J2 * v[124];
+        v[350] = 2.0 * u3 + 2.0 * u4;
+        v[351] = 2.0 * J2 - J1;
+        v[352] = 2.0 * u5 + 2.0 * u2;
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]
@@ -9246,96 +9019,95 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let mut v = [0.0f64; 103];
+        let mut v = [0.0f64; 129];
         rhs_part0(t, state, params, g_i, &mut v);
         rhs_part1(t, state, params, g_i, &mut v);
         rhs_part2(t, state, params, g_i, &mut v);
+        rhs_part3(t, state, params, g_i, &mut v);
         Assembly {
             qdot: [
-                v[1] * v[4],
-                u2 * v[3] - u3 * v[2],
-                u1 + v[5] * v[1] * v[4],
+                v[3],
+                u2 * v[2] - u3 * v[1],
+                v[4] * v[3] + u1,
                 u4,
                 u5,
-                v[6]
-                    * (G_X - v[19] * u2 - u3 * v[28]
-                        + d * (-u5 * m2 * v[13] - u1 * v[29] - v[24] * u4 * m1)),
-                v[6]
-                    * (G_Y - v[33] * u3 - u2 * v[39]
-                        + d * (-v[31] * u4 * m1 - u5 * m2 * v[38] - v[40] * u1)),
-                v[6]
-                    * (G_Z - u3 * v[43] - u2 * v[46]
-                        + d * (-v[41] * u4 * m1 - u5 * m2 * v[45] - v[47] * v[0] * u1)),
+                (G_X - v[21] * u3 - u2 * v[33]
+                    - d * (v[34] * v[26] + v[37] * u1 + v[38] * v[13])) * v[39],
+                (G_Y - u3 * v[44] - (v[42] * v[38] + v[34] * v[48] + v[49] * u1) * d
+                    - v[51] * u2) * v[39],
+                v[39]
+                    * (G_Z - u2 * v[55]
+                        - d * (v[57] * v[38] + v[53] * v[34] + v[58] * u1) - u3 * v[60]),
             ],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * v[8] * v[8]
-                                + v[6]
-                                    * (-v[40] * v[40] - v[47] * v[47] * v[0] * v[0]
-                                        - v[29] * v[29]) + v[23] * v[23] * m1)
-                        + (v[48] + v[49]) * J1 + (v[8] * v[8] + v[23] * v[23]) * J2,
-                    v[51],
-                    v[53],
-                    v[54],
-                    v[55],
+                    (v[61] + v[62]) * J2 + Ixx + (v[63] + v[64]) * J1
+                        + (v[36] * v[22]
+                            - v[39] * (v[37] * v[37] + v[49] * v[49] + v[58] * v[58])
+                            + v[5] * v[35]) * v[65],
+                    v[67],
+                    v[69],
+                    v[71],
+                    v[73],
                 ],
                 [
-                    v[51],
-                    v[23] * v[23] * J1 + v[18] * v[18] * m1 + Iyy + J2 * (v[48] + 1.0)
-                        + v[6] * (-v[19] * v[19] - v[39] * v[39] - v[46] * v[46])
-                        + m2 * (v[56] + a_ * (a_ + 2.0 * v[21])),
-                    v[57],
-                    v[58],
-                    v[59],
+                    v[67],
+                    Iyy - v[39] * (v[33] * v[33] + v[51] * v[51] + v[55] * v[55])
+                        + J2 * (v[63] + 1.0) - v[31] * v[32]
+                        + m2 * (v[65] + a_ * (a_ + 2.0 * v[18])) + v[62] * J1,
+                    v[74],
+                    v[76],
+                    v[78],
                 ],
                 [
-                    v[53],
-                    v[57],
-                    v[6] * (-v[33] * v[33] - v[28] * v[28] - v[43] * v[43])
-                        + v[8] * v[8] * J1 + (a_ * (a_ + 2.0 * v[17]) + v[56]) * m1
-                        + m2 * v[22] * v[22] + Izz + J2 * (v[49] + 1.0),
-                    v[60],
-                    v[61],
+                    v[69],
+                    v[74],
+                    v[61] * J1 - v[39] * (v[44] * v[44] + v[60] * v[60] + v[21] * v[21])
+                        + Izz + J2 * (v[64] + 1.0) - v[19] * v[20]
+                        + (a_ * (a_ + 2.0 * v[30]) + v[65]) * m1,
+                    v[79],
+                    v[80],
                 ],
-                [v[54], v[58], v[60], (1.0 - v[6] * m1) * d * d * m1 + J2, v[62]],
-                [v[55], v[59], v[61], v[62], J2 + m2 * d * d * (1.0 - v[6] * m2)],
+                [v[71], v[76], v[79], (1.0 - v[39] * m1) * v[70] + J2, v[81]],
+                [v[73], v[78], v[80], v[81], J2 + (1.0 - v[72]) * m2 * v[65]],
             ],
             force: [
-                v[71] * v[23] - v[65] * v[66] * v[8]
-                    + (-v[16] * u4 * v[72] - v[7] * u5 * v[75]) * J1 - u2 * v[76]
-                    + (m2 * v[8] * v[77] - v[23] * m1 * v[79]
-                        + v[6] * (-v[40] * v[91] - v[92] * v[29] - v[47] * v[93] * v[0]))
-                        * d + v[94] * u3,
-                v[95] - v[16] * v[71] - v[18] * m1 * v[79] + v[76] * u1
-                    + v[6] * (-v[46] * v[93] - v[92] * v[19] - v[91] * v[39])
-                    - v[23] * u4 * v[72] * J1
+                v[5] * v[87]
+                    + d
+                        * (v[95] * v[36] - v[90] * v[35]
+                            - v[39]
+                                * (-v[49] * v[114] - v[37] * v[115] - v[58] * v[116]))
+                    - v[117] * v[22] - (v[101] * v[102] - v[110] * v[111]) * J1
+                    - u2 * v[118] + v[119] * u3,
+                v[120] - v[8] * v[87] + v[118] * u1
                     - m2
-                        * ((a_
-                            * (v[8] * (u5 * (-u5 - 2.0 * u2) + u3 * u3 - v[96])
-                                - 2.0 * (v[7] * u3 * u1))
-                            + ((0.5 * (u3 * v[98]) - f64::cos(v[97]) * u1) * u3
-                                - 0.5 * (u1 * u1 * v[98])) * d) * d - a_ * a_ * u3 * u1)
-                    - v[99] * u3,
-                v[6] * (-v[93] * v[43] - v[92] * v[28] - v[33] * v[91])
-                    - m2 * v[22] * v[77]
+                        * (d
+                            * (d
+                                * ((0.5 * (u3 * v[123]) - f64::cos(v[122]) * u1) * u3
+                                    - 0.5 * (v[124] * v[123]))
+                                + ((u3 * u3 - v[124] - (u5 + 2.0 * u2) * u5) * v[22]
+                                    - 2.0 * (v[91] * u3)) * a_) - v[89] * v[121])
+                    - v[5] * u4 * v[102] * J1 - v[32] * v[90]
+                    - v[39] * (-v[33] * v[115] - v[51] * v[114] - v[55] * v[116])
+                    - v[125] * u3,
+                v[126] - u5 * v[110] * v[22] * J1 - v[95] * v[20] + u2 * v[125]
+                    - v[39] * (-v[114] * v[44] - v[116] * v[60] - v[21] * v[115])
                     - (d
                         * (a_
-                            * ((u2 * u2 + u4 * (-2.0 * u3 - u4) - v[96]) * v[23]
-                                + 2.0 * (v[16] * u2 * u1))
-                            + d
-                                * (u2 * (0.5 * (u2 * v[101]) + u1 * f64::cos(v[100]))
-                                    - 0.5 * (u1 * u1 * v[101]))) + a_ * a_ * u2 * u1) * m1
-                    - v[7] * v[65] * v[66] + u2 * v[99] + u5 * v[8] * v[75] * J1
-                    - v[94] * u1 + v[102],
-                d * m1
-                    * (v[6] * (-v[93] * v[41] - v[92] * v[24] - v[31] * v[91]) - v[86]
-                        + v[88]) + v[102],
-                v[95]
-                    + m2
-                        * (v[6] * (-v[91] * v[38] - v[92] * v[13] - v[45] * v[93])
-                            - v[80] - v[82]) * d,
+                            * ((u2 * u2 - v[124] - u4 * (2.0 * u3 + u4)) * v[5]
+                                + 2.0 * (u2 * v[83]))
+                            + (u2 * (0.5 * (u2 * v[128]) + u1 * f64::cos(v[127]))
+                                - 0.5 * (v[124] * v[128])) * d) + v[121] * v[94]) * m1
+                    - v[119] * u1 - v[17] * v[117],
+                v[126]
+                    + v[75]
+                        * (v[98] - v[99]
+                            - v[39]
+                                * (-v[115] * v[13] - v[57] * v[116] - v[42] * v[114])),
+                v[120]
+                    + v[77]
+                        * (-v[39] * (-v[115] * v[26] - v[114] * v[48] - v[53] * v[116])
+                            - v[107] - v[108]),
             ],
             checks: [v[0]],
         }
@@ -9347,7 +9119,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 103],
+        v: &mut [f64; 129],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -9356,66 +9128,132 @@ pub mod reduced_volterra {
         let gamma2 = state[4];
         let u2 = state[9];
         let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
         v[0] = f64::cos(theta);
-        v[1] = 1.0 / v[0];
-        v[2] = f64::sin(phi);
-        v[3] = f64::cos(phi);
-        v[4] = u2 * v[2] + u3 * v[3];
-        v[5] = f64::sin(theta);
-        v[6] = 1.0 / (m2 + m0 + m1);
-        v[7] = f64::cos(gamma2);
-        v[8] = f64::sin(gamma2);
-        v[9] = f64::cos(psi);
+        v[1] = f64::sin(phi);
+        v[2] = f64::cos(phi);
+        v[3] = 1.0 / v[0] * (u2 * v[1] + u3 * v[2]);
+        v[4] = f64::sin(theta);
+        v[5] = f64::sin(gamma1);
+        v[6] = f64::cos(psi);
+        v[7] = v[6] * v[0];
+        v[8] = f64::cos(gamma1);
+        v[9] = v[4] * v[1];
         v[10] = f64::sin(psi);
-        v[11] = (v[7] * v[0] - v[5] * v[8] * v[3]) * v[9] - v[8] * v[2] * v[10];
-        v[12] = v[2] * v[10] + v[5] * v[9] * v[3];
-        v[13] = v[9] * v[0] * v[8] + v[7] * v[12];
-        v[14] = v[7] * a_;
-        v[15] = d + v[14];
-        v[16] = f64::cos(gamma1);
-        v[17] = v[16] * d;
-        v[18] = -a_ - v[17];
-        v[19] = m2 * (v[13] * v[15] - a_ * v[11] * v[8]) + v[18] * v[12] * m1;
-        v[20] = v[5] * v[9] * v[2] - v[3] * v[10];
-        v[21] = v[7] * d;
-        v[22] = -a_ - v[21];
-        v[23] = f64::sin(gamma1);
-        v[24] = v[16] * v[20] - v[9] * v[23] * v[0];
-        v[25] = v[16] * a_;
-        v[26] = v[25] + d;
-        v[27] = v[9] * (v[5] * v[23] * v[2] + v[16] * v[0]) - v[23] * v[3] * v[10];
-        v[28] = m2 * v[20] * v[22] + (v[24] * v[26] + a_ * v[27] * v[23]) * m1;
-        v[29] = v[23] * v[12] * m1 - m2 * v[20] * v[8];
-        v[30] = v[9] * v[3] + v[5] * v[2] * v[10];
-        v[31] = v[16] * v[30] - v[23] * v[0] * v[10];
-        v[32] = v[16] * v[0] * v[10] + v[23] * v[30];
-        v[33] = (v[31] * v[26] + a_ * v[23] * v[32]) * m1 + m2 * v[22] * v[30];
-        v[34] = v[9] * v[2];
-        v[35] = v[5] * v[3] * v[10];
-        v[36] = v[35] - v[34];
-        v[37] = v[7] * v[0] * v[10] + (v[34] - v[35]) * v[8];
-        v[38] = v[0] * v[8] * v[10] + v[7] * v[36];
-        v[39] = v[18] * v[36] * m1 + m2 * (v[38] * v[15] - a_ * v[8] * v[37]);
+        v[11] = v[2] * v[10];
+        v[12] = v[6] * v[9] - v[11];
+        v[13] = v[8] * v[12] - v[5] * v[7];
+        v[14] = v[8] * a_ + d;
+        v[15] = v[6] * (v[5] * v[9] + v[8] * v[0]) - v[5] * v[11];
+        v[16] = a_ * v[5];
+        v[17] = f64::cos(gamma2);
+        v[18] = v[17] * d;
+        v[19] = a_ + v[18];
+        v[20] = -(m2 * v[19]);
+        v[21] = (v[13] * v[14] + v[15] * v[16]) * m1 + v[12] * v[20];
+        v[22] = f64::sin(gamma2);
+        v[23] = v[1] * v[10];
+        v[24] = v[4] * v[2];
+        v[25] = v[23] + v[24] * v[6];
+        v[26] = v[22] * v[7] + v[17] * v[25];
+        v[27] = d + v[17] * a_;
+        v[28] = (v[17] * v[0] - v[24] * v[22]) * v[6] - v[22] * v[23];
+        v[29] = a_ * v[22];
+        v[30] = v[8] * d;
+        v[31] = a_ + v[30];
+        v[32] = -(v[31] * m1);
+        v[33] = m2 * (v[26] * v[27] - v[28] * v[29]) + v[32] * v[25];
+        v[34] = u5 * m2;
+        v[35] = v[5] * m1;
+        v[36] = m2 * v[22];
+        v[37] = v[35] * v[25] - v[36] * v[12];
+        v[38] = u4 * m1;
+        v[39] = 1.0 / (m2 + m0 + m1);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn rhs_part1(
         _t: f64,
+        _state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 129],
+    ) {
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
+        let Iyz = params.Iyz;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[40] = v[6] * v[2] + v[9] * v[10];
+        v[41] = v[0] * v[10];
+        v[42] = v[8] * v[40] - v[5] * v[41];
+        v[43] = v[40] * v[5] + v[8] * v[41];
+        v[44] = v[40] * v[20] + m1 * (v[42] * v[14] + v[43] * v[16]);
+        v[45] = v[6] * v[1];
+        v[46] = v[24] * v[10];
+        v[47] = v[46] - v[45];
+        v[48] = v[22] * v[41] + v[17] * v[47];
+        v[49] = v[35] * v[47] - v[36] * v[40];
+        v[50] = (v[45] - v[46]) * v[22] + v[17] * v[41];
+        v[51] = m2 * (v[27] * v[48] - v[50] * v[29]) + v[32] * v[47];
+        v[52] = v[0] * v[2];
+        v[53] = v[17] * v[52] - v[4] * v[22];
+        v[54] = v[22] * v[52] + v[17] * v[4];
+        v[55] = m2 * (v[53] * v[27] + v[29] * v[54]) + v[32] * v[52];
+        v[56] = v[0] * v[1];
+        v[57] = v[4] * v[5] + v[8] * v[56];
+        v[58] = v[0] * (v[35] * v[2] - v[36] * v[1]);
+        v[59] = v[56] * v[5] - v[8] * v[4];
+        v[60] = (v[57] * v[14] + v[59] * v[16]) * m1 + v[56] * v[20];
+        v[61] = v[22] * v[22];
+        v[62] = v[5] * v[5];
+        v[63] = v[8] * v[8];
+        v[64] = v[17] * v[17];
+        v[65] = d * d;
+        v[66] = J1 - J2;
+        v[67] = (v[5] * v[32] - v[39] * (v[37] * v[33] + v[51] * v[49] + v[58] * v[55]))
+            * d - Ixy + v[8] * v[66] * v[5];
+        v[68] = J2 - J1;
+        v[69] = v[17] * v[68] * v[22]
+            + (v[36] * v[19] - v[39] * (v[49] * v[44] + v[58] * v[60] + v[37] * v[21]))
+                * d - Ixz;
+        v[70] = m1 * v[65];
+        v[71] = -(v[39] * (v[49] * v[42] + v[58] * v[57] + v[37] * v[13]) * v[70]);
+        v[72] = v[39] * m2;
+        v[73] = -((v[58] * v[53] + v[37] * v[26] + v[49] * v[48]) * v[65] * v[72]);
+        v[74] = -Iyz - v[39] * (v[55] * v[60] + v[51] * v[44] + v[33] * v[21]);
+        v[75] = d * m1;
+        v[76] = -(v[39] * v[75] * (v[57] * v[55] + v[51] * v[42] + v[33] * v[13]));
+        v[77] = m2 * d;
+        v[78] = J2
+            + (v[27] - v[39] * (v[33] * v[26] + v[53] * v[55] + v[51] * v[48])) * v[77];
+        v[79] = J2
+            + (v[14] - v[39] * (v[21] * v[13] + v[57] * v[60] + v[42] * v[44])) * v[75];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn rhs_part2(
+        _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 103],
+        v: &mut [f64; 129],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
+        let Iyy = params.Iyy;
         let Izz = params.Izz;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
@@ -9426,109 +9264,77 @@ pub mod reduced_volterra {
         let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[40] = v[23] * v[36] * m1 - m2 * v[8] * v[30];
-        v[41] = v[16] * v[0] * v[2] + v[5] * v[23];
-        v[42] = v[23] * v[0] * v[2] - v[16] * v[5];
-        v[43] = (v[41] * v[26] + a_ * v[42] * v[23]) * m1 + m2 * v[0] * v[2] * v[22];
-        v[44] = -v[0] * v[8] * v[3] - v[7] * v[5];
-        v[45] = v[7] * v[0] * v[3] - v[5] * v[8];
-        v[46] = m2 * (v[45] * v[15] - a_ * v[44] * v[8]) + v[18] * v[0] * m1 * v[3];
-        v[47] = v[23] * m1 * v[3] - m2 * v[8] * v[2];
-        v[48] = v[16] * v[16];
-        v[49] = v[7] * v[7];
-        v[50] = J1 - J2;
-        v[51] = v[16] * v[50] * v[23] - Ixy
-            + d
-                * ((-v[19] * v[29] - v[40] * v[39] - v[46] * v[47] * v[0]) * v[6]
-                    + v[18] * v[23] * m1);
-        v[52] = J2 - J1;
-        v[53] = (v[6] * (-v[33] * v[40] - v[28] * v[29] - v[47] * v[0] * v[43])
-            - m2 * v[8] * v[22]) * d + v[7] * v[52] * v[8] - Ixz;
-        v[54] = v[6] * d * d * (-v[47] * v[41] * v[0] - v[24] * v[29] - v[40] * v[31])
-            * m1;
-        v[55] = v[6] * m2 * d * d
-            * (-v[13] * v[29] - v[40] * v[38] - v[45] * v[47] * v[0]);
-        v[56] = d * d;
-        v[57] = (-v[19] * v[28] - v[33] * v[39] - v[46] * v[43]) * v[6] - Iyz;
-        v[58] = v[6] * d * m1 * (-v[19] * v[24] - v[46] * v[41] - v[31] * v[39]);
-        v[59] = m2
-            * (v[6] * (-v[45] * v[46] - v[19] * v[13] - v[39] * v[38]) + d + v[14]) * d
-            + J2;
-        v[60] = J2
-            + d * m1
-                * (v[25] + d + (-v[24] * v[28] - v[41] * v[43] - v[33] * v[31]) * v[6]);
-        v[61] = v[6] * m2 * d * (-v[13] * v[28] - v[45] * v[43] - v[33] * v[38]);
-        v[62] = v[6] * m2 * d * d * m1
-            * (-v[24] * v[13] - v[45] * v[41] - v[31] * v[38]);
-        v[63] = u5 + u2;
-        v[64] = 2.0 * u5 + u2;
-        v[65] = v[64] * J2 - J1 * v[63];
-        v[66] = v[7] * u1 - u3 * v[8];
-        v[67] = u2 * v[23];
-        v[68] = v[16] * u1;
-        v[69] = u3 + u4;
-        v[70] = v[67] + v[68];
-        v[71] = J2 * (-v[67] - v[68]) * u4 + v[69] * v[70] * v[50];
-        v[72] = v[16] * u2 - v[23] * u1;
-        v[73] = v[8] * u1;
-        v[74] = v[7] * u3;
-        v[75] = -v[73] - v[74];
-        v[76] = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        v[77] = d * (v[7] * (-2.0 * u5 - u2) * u1 + v[64] * u3 * v[8]) - a_ * u2 * u1;
-        v[78] = u3 + 2.0 * u4;
-        v[79] = d * (v[16] * v[78] * u1 + v[78] * u2 * v[23]) + a_ * u3 * u1;
+        v[80] = -((v[21] * v[26] + v[48] * v[44] + v[53] * v[60]) * d * v[72]);
+        v[81] = -((v[57] * v[53] + v[42] * v[48] + v[26] * v[13]) * v[70] * v[72]);
+        v[82] = u2 * v[5];
+        v[83] = v[8] * u1;
+        v[84] = v[82] + v[83];
+        v[85] = u3 + u4;
+        v[86] = v[66] * v[84];
+        v[87] = v[85] * v[86] - J2 * u4 * v[84];
+        v[88] = u3 + 2.0 * u4;
+        v[89] = a_ * u3;
+        v[90] = d * (v[82] * v[88] + v[88] * v[83]) + v[89] * u1;
+        v[91] = v[17] * u1;
+        v[92] = 2.0 * u5 + u2;
+        v[93] = u3 * v[22];
+        v[94] = a_ * u2;
+        v[95] = d * (v[92] * v[93] - v[91] * v[92]) - v[94] * u1;
+        v[96] = v[5] * u1;
+        v[97] = v[96] * d - v[31] * u2;
+        v[98] = v[97] * v[84];
+        v[99] = v[89] * u3 * v[5];
+        v[100] = v[99] - v[98];
+        v[101] = v[8] * u4;
+        v[102] = v[8] * u2 - v[96];
+        v[103] = v[89] * v[101] - v[85] * (u3 * v[14] + d * u4) + v[97] * v[102];
+        v[104] = v[22] * u1;
+        v[105] = -v[104] * d - u3 * v[19];
+        v[106] = v[91] - v[93];
+        v[107] = v[105] * v[106];
+        v[108] = u2 * v[22] * v[94];
+        v[109] = v[107] + v[108];
+        v[110] = v[104] + v[17] * u3;
+        v[111] = v[17] * u5;
+        v[112] = u5 + u2;
+        v[113] = (u5 * d + u2 * v[27]) * v[112] - v[110] * v[105] - v[94] * v[111];
+        v[114] = (v[90] * v[47] + v[100] * v[42] + v[43] * v[103]) * m1
+            + m2 * (v[109] * v[48] + v[50] * v[113] + v[95] * v[40]);
+        v[115] = m1 * (v[103] * v[15] + v[90] * v[25] + v[100] * v[13])
+            + m2 * (v[109] * v[26] + v[95] * v[12] + v[113] * v[28]);
+        v[116] = (v[59] * v[103] + v[100] * v[57] + v[90] * v[52]) * m1
+            + m2 * (v[109] * v[53] + v[95] * v[56] - v[113] * v[54]);
+        v[117] = (J2 * v[92] - J1 * v[112]) * v[106];
+        v[118] = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        v[119] = u2 * Iyy - Iyz * u3 - Ixy * u1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
-    fn rhs_part2(
+    fn rhs_part3(
         _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 103],
+        v: &mut [f64; 129],
     ) {
         let gamma1 = state[3];
         let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
         let Ixx = params.Ixx;
-        let Iyy = params.Iyy;
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
-        let Iyz = params.Iyz;
-        let m1 = params.m1;
-        let m2 = params.m2;
-        let d = params.d;
         let a_ = params.a_;
-        v[80] = a_ * u2 * u2 * v[8];
-        v[81] = u3 * v[22] - d * v[8] * u1;
-        v[82] = v[66] * v[81];
-        v[83] = v[80] + v[82];
-        v[84] = v[73] + v[74];
-        v[85] = (u5 * d + u2 * v[15]) * v[63] - v[7] * u5 * a_ * u2 - v[81] * v[84];
-        v[86] = a_ * u3 * u3 * v[23];
-        v[87] = u2 * v[18] + v[23] * d * u1;
-        v[88] = v[87] * v[70];
-        v[89] = v[86] - v[88];
-        v[90] = v[87] * v[72] + v[16] * a_ * u3 * u4 - (u3 * v[26] + d * u4) * v[69];
-        v[91] = -(v[83] * v[38] + v[85] * v[37] + v[30] * v[77]) * m2
-            - m1 * (v[36] * v[79] + v[89] * v[31] + v[90] * v[32]);
-        v[92] = -m1 * (v[27] * v[90] + v[24] * v[89] + v[12] * v[79])
-            - m2 * (v[11] * v[85] + v[83] * v[13] + v[20] * v[77]);
-        v[93] = -m2 * (v[0] * v[2] * v[77] + v[83] * v[45] + v[44] * v[85])
-            - (v[0] * v[79] * v[3] + v[42] * v[90] + v[89] * v[41]) * m1;
-        v[94] = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        v[95] = v[52] * v[66] * v[84];
-        v[96] = u1 * u1;
-        v[97] = 2.0 * gamma2;
-        v[98] = f64::sin(v[97]);
-        v[99] = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        v[100] = 2.0 * gamma1;
-        v[101] = f64::sin(v[100]);
-        v[102] = v[70] * v[50] * v[72];
+        v[120] = v[110] * v[68] * v[106];
+        v[121] = a_ * u1;
+        v[122] = 2.0 * gamma2;
+        v[123] = f64::sin(v[122]);
+        v[124] = u1 * u1;
+        v[125] = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        v[126] = v[86] * v[102];
+        v[127] = 2.0 * gamma1;
+        v[128] = f64::sin(v[127]);
     }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
@@ -9597,11 +9403,6 @@ pub mod reduced_volterra {
         qdot: &[f64; NUM_COORDINATES],
         params: &Params,
     ) -> Result<([f64; STATES], [f64; NUM_IGNORABLE]), Failure> {
-        let psi = q[0];
-        let theta = q[1];
-        let phi = q[2];
-        let gamma1 = q[3];
-        let gamma2 = q[4];
         let psi_dot = qdot[0];
         let theta_dot = qdot[1];
         let phi_dot = qdot[2];
@@ -9610,44 +9411,12 @@ pub mod reduced_volterra {
         let X_dot = qdot[5];
         let Y_dot = qdot[6];
         let Z_dot = qdot[7];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
-        let x0 = f64::sin(theta);
-        let x1 = f64::cos(phi);
-        let x2 = f64::cos(theta);
-        let x3 = f64::sin(phi);
-        let x4 = f64::sin(gamma2);
-        let x5 = f64::cos(gamma2);
-        let x6 = f64::cos(psi);
-        let x7 = f64::sin(psi);
-        let x8 = x3 * x7 + x0 * x6 * x1;
-        let x9 = x6 * x2 * x4 + x5 * x8;
-        let x10 = d + x5 * a_;
-        let x11 = x9 * x10 - a_ * x4 * (x5 * x6 * x2 - x4 * x8);
-        let x12 = x0 * x6 * x3 - x1 * x7;
-        let x13 = a_ + x5 * d;
-        let x14 = f64::sin(gamma1);
-        let x15 = f64::cos(gamma1);
-        let x16 = x15 * x12 - x6 * x14 * x2;
-        let x17 = x15 * a_;
-        let x18 = -x17 - d;
-        let x19 = a_ * x14 * (x12 * x14 + x15 * x6 * x2);
-        let x20 = -a_ - x15 * d;
-        let x21 = x17 + d;
-        let x22 = x15 * x2 * x3 + x0 * x14;
-        let x23 = -x22 * d - a_ * x2 * x3;
-        let x24 = x5 * x2 * x1 - x0 * x4;
-        let x25 = -a_ * x2 * x1 - x24 * d;
-        let x26 = m2 + m0 + m1;
-        let x27 = x0 * x1 * x7 - x6 * x3;
-        let x28 = x2 * x4 * x7 + x5 * x27;
-        let x29 = x28 * x10 - a_ * (x5 * x2 * x7 - x4 * x27) * x4;
-        let x30 = x6 * x1 + x0 * x3 * x7;
-        let x31 = a_ * x14 * (x15 * x2 * x7 + x14 * x30);
-        let x32 = x15 * x30 - x14 * x2 * x7;
+        let mut v = [0.0f64; 45];
+        initial_state_part0(t, q, qdot, params, &mut v);
+        initial_state_part1(t, q, qdot, params, &mut v);
         let residuals: [(&'static str, f64, f64); NUM_CONSTRAINTS] = [];
         let positions: [(&'static str, f64, f64); NUM_HOLONOMIC] = [];
         for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
@@ -9669,38 +9438,40 @@ pub mod reduced_volterra {
             q[5],
             q[6],
             q[7],
-            phi_dot - x0 * psi_dot,
-            theta_dot * x1 + x2 * psi_dot * x3,
-            x2 * psi_dot * x1 - theta_dot * x3,
+            phi_dot - v[0] * psi_dot,
+            v[3] * psi_dot + theta_dot * v[4],
+            psi_dot * v[5] - theta_dot * v[2],
             gamma1_dot,
             gamma2_dot,
         ];
         let g_i: [f64; NUM_IGNORABLE] = [
             theta_dot
-                * (m2 * (x11 * x1 + x12 * x13 * x3)
-                    + m1 * (x3 * (x16 * x18 - x19) + x20 * x8 * x1))
-                + (m1 * (x2 * (x16 * x21 + x19) * x1 + x8 * x23)
-                    + m2 * (x2 * x11 * x3 + x12 * x25)) * psi_dot
-                + d
-                    * (phi_dot * (x14 * x8 * m1 - m2 * x12 * x4) + x16 * gamma1_dot * m1
-                        + m2 * gamma2_dot * x9) + X_dot * x26,
-            theta_dot
-                * (m2 * (x29 * x1 + x13 * x3 * x30)
-                    + (x20 * x27 * x1 + (x32 * x18 - x31) * x3) * m1) + Y_dot * x26
-                + ((x14 * x27 * m1 - m2 * x4 * x30) * phi_dot + m2 * gamma2_dot * x28
-                    + x32 * gamma1_dot * m1) * d
+                * ((v[9] * v[11] + v[2] * (-v[18] - v[20])) * m1
+                    + m2 * (v[26] * v[4] + v[13] * v[27]))
+                + (v[28] * v[24] + phi_dot * (v[9] * v[30] - v[13] * v[29])
+                    + v[31] * v[16]) * d
                 + psi_dot
-                    * (m1 * (x2 * (x32 * x21 + x31) * x1 + x27 * x23)
-                        + m2 * (x2 * x3 * x29 + x30 * x25)),
+                    * (m2 * (v[26] * v[3] - v[13] * v[33])
+                        + ((v[18] + v[20]) * v[5] - v[9] * v[35]) * m1) + X_dot * v[36],
+            Y_dot * v[36]
+                + theta_dot
+                    * (m2 * (v[37] * v[27] + v[41] * v[4])
+                        + (v[11] * v[38] + (-v[43] - v[44]) * v[2]) * m1)
+                + psi_dot
+                    * (m2 * (v[3] * v[41] - v[37] * v[33])
+                        + m1 * ((v[43] + v[44]) * v[5] - v[35] * v[38]))
+                + d
+                    * ((v[30] * v[38] - v[29] * v[37]) * phi_dot + v[28] * v[40]
+                        + v[31] * v[42]),
             theta_dot
-                * (m2
-                    * (x2 * x13 * x3 * x3
-                        + (x24 * x10 - a_ * (-x2 * x4 * x1 - x5 * x0) * x4) * x1)
-                    + m1
-                        * ((x22 * x18 - a_ * (x14 * x2 * x3 - x15 * x0) * x14) * x3
-                            + x20 * x2 * x1 * x1))
-                + (m2 * gamma2_dot * x24 + (x14 * m1 * x1 - m2 * x4 * x3) * x2 * phi_dot
-                    + x22 * gamma1_dot * m1) * d + Z_dot * x26,
+                * ((v[2] * (-v[34] * v[17] - (v[3] * v[14] - v[10] * v[0]) * v[19])
+                    + v[11] * v[5]) * m1
+                    + m2
+                        * ((v[23] * (v[22] * v[5] + v[21] * v[0]) + v[32] * v[25]) * v[4]
+                            + v[3] * v[27]))
+                + d
+                    * (v[1] * phi_dot * (v[30] * v[4] - v[29] * v[2]) + v[28] * v[32]
+                        + v[31] * v[34]) + Z_dot * v[36],
         ];
         for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
             if !value.is_finite() {
@@ -9708,6 +9479,83 @@ pub mod reduced_volterra {
             }
         }
         Ok((state, g_i))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part0(
+        _t: f64,
+        q: &[f64; NUM_COORDINATES],
+        qdot: &[f64; NUM_COORDINATES],
+        params: &Params,
+        v: &mut [f64; 45],
+    ) {
+        let psi = q[0];
+        let theta = q[1];
+        let phi = q[2];
+        let gamma1 = q[3];
+        let gamma2 = q[4];
+        let gamma1_dot = qdot[3];
+        let gamma2_dot = qdot[4];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::sin(theta);
+        v[1] = f64::cos(theta);
+        v[2] = f64::sin(phi);
+        v[3] = v[1] * v[2];
+        v[4] = f64::cos(phi);
+        v[5] = v[1] * v[4];
+        v[6] = f64::sin(psi);
+        v[7] = v[0] * v[4];
+        v[8] = f64::cos(psi);
+        v[9] = v[2] * v[6] + v[7] * v[8];
+        v[10] = f64::cos(gamma1);
+        v[11] = -((a_ + v[10] * d) * v[4]);
+        v[12] = v[0] * v[2];
+        v[13] = v[8] * v[12] - v[4] * v[6];
+        v[14] = f64::sin(gamma1);
+        v[15] = v[8] * v[1];
+        v[16] = v[10] * v[13] - v[14] * v[15];
+        v[17] = v[10] * a_ + d;
+        v[18] = v[16] * v[17];
+        v[19] = a_ * v[14];
+        v[20] = v[19] * (v[10] * v[15] + v[13] * v[14]);
+        v[21] = f64::cos(gamma2);
+        v[22] = f64::sin(gamma2);
+        v[23] = a_ * v[22];
+        v[24] = v[21] * v[9] + v[22] * v[15];
+        v[25] = d + v[21] * a_;
+        v[26] = v[24] * v[25] - (v[21] * v[15] - v[9] * v[22]) * v[23];
+        v[27] = (a_ + v[21] * d) * v[2];
+        v[28] = m2 * gamma2_dot;
+        v[29] = m2 * v[22];
+        v[30] = v[14] * m1;
+        v[31] = gamma1_dot * m1;
+        v[32] = v[21] * v[5] - v[0] * v[22];
+        v[33] = a_ * v[5] + v[32] * d;
+        v[34] = v[0] * v[14] + v[10] * v[3];
+        v[35] = v[34] * d + a_ * v[3];
+        v[36] = m2 + m0 + m1;
+        v[37] = v[8] * v[4] + v[12] * v[6];
+        v[38] = v[7] * v[6] - v[8] * v[2];
+        v[39] = v[1] * v[6];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn initial_state_part1(
+        _t: f64,
+        _q: &[f64; NUM_COORDINATES],
+        _qdot: &[f64; NUM_COORDINATES],
+        _params: &Params,
+        v: &mut [f64; 45],
+    ) {
+        v[40] = v[22] * v[39] + v[21] * v[38];
+        v[41] = v[25] * v[40] - (v[21] * v[39] - v[22] * v[38]) * v[23];
+        v[42] = v[10] * v[37] - v[14] * v[39];
+        v[43] = v[42] * v[17];
+        v[44] = (v[37] * v[14] + v[10] * v[39]) * v[19];
     }
     ///Coordinates and velocities `(q, q')` at a state (`q' = W u + X`, Eq. 43, for the Volterra forms). Coordinates left out of the state read as 0.
     #[allow(non_snake_case, clippy::all)]
@@ -9717,54 +9565,21 @@ pub mod reduced_volterra {
         params: &Params,
         g_i: &[f64; NUM_IGNORABLE],
     ) -> Result<([f64; NUM_COORDINATES], [f64; NUM_COORDINATES]), Failure> {
-        let psi = state[0];
-        let theta = state[1];
-        let phi = state[2];
-        let gamma1 = state[3];
-        let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = f64::sin(theta);
-        let x6 = 1.0 / (m2 + m0 + m1);
-        let x7 = f64::cos(gamma2);
-        let x8 = f64::sin(gamma2);
-        let x9 = f64::cos(psi);
-        let x10 = f64::sin(psi);
-        let x11 = x2 * x10 + x5 * x9 * x3;
-        let x12 = x9 * x0 * x8 + x7 * x11;
-        let x13 = d + x7 * a_;
-        let x14 = f64::cos(gamma1);
-        let x15 = -a_ - x14 * d;
-        let x16 = x5 * x9 * x2 - x3 * x10;
-        let x17 = -a_ - x7 * d;
-        let x18 = f64::sin(gamma1);
-        let x19 = x14 * x16 - x9 * x18 * x0;
-        let x20 = x14 * a_ + d;
-        let x21 = x9 * x3 + x5 * x2 * x10;
-        let x22 = x14 * x21 - x18 * x0 * x10;
-        let x23 = x9 * x2;
-        let x24 = x5 * x3 * x10;
-        let x25 = x24 - x23;
-        let x26 = x0 * x8 * x10 + x7 * x25;
-        let x27 = x14 * x0 * x2 + x5 * x18;
-        let x28 = x7 * x0 * x3 - x5 * x8;
-        let value = x0;
+        let mut v = [0.0f64; 42];
+        velocities_part0(t, state, params, g_i, &mut v);
+        velocities_part1(t, state, params, g_i, &mut v);
+        let value = v[0];
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -9783,48 +9598,47 @@ pub mod reduced_volterra {
             state[7],
         ];
         let qdot: [f64; NUM_COORDINATES] = [
-            x1 * x4,
-            u2 * x3 - u3 * x2,
-            u1 + x5 * x1 * x4,
+            v[3],
+            u2 * v[2] - u3 * v[1],
+            v[4] * v[3] + u1,
             u4,
             u5,
-            x6
+            v[5]
                 * (G_X
-                    - (m2
-                        * (x12 * x13
-                            - a_ * ((x7 * x0 - x5 * x8 * x3) * x9 - x8 * x2 * x10) * x8)
-                        + x15 * x11 * m1) * u2
-                    - u3
-                        * (m2 * x16 * x17
-                            + (x19 * x20
-                                + a_ * (x9 * (x5 * x18 * x2 + x14 * x0) - x18 * x3 * x10)
-                                    * x18) * m1)
-                    + d
-                        * (-u5 * m2 * x12 - u1 * (x18 * x11 * m1 - m2 * x16 * x8)
-                            - x19 * u4 * m1)),
-            x6
-                * (G_Y
-                    - ((x22 * x20 + a_ * x18 * (x14 * x0 * x10 + x18 * x21)) * m1
-                        + m2 * x17 * x21) * u3
                     - u2
-                        * (x15 * x25 * m1
-                            + m2
-                                * (x26 * x13
-                                    - a_ * x8 * (x7 * x0 * x10 + (x23 - x24) * x8)))
-                    + d
-                        * (-x22 * u4 * m1 - u5 * m2 * x26
-                            - (x18 * x25 * m1 - m2 * x8 * x21) * u1)),
-            x6
+                        * (m2
+                            * (v[14] * v[15]
+                                - ((v[9] * v[0] - v[12] * v[6]) * v[7] - v[6] * v[11])
+                                    * v[16]) + v[18] * v[13])
+                    - u3
+                        * ((v[19] * v[24]
+                            + (v[7] * (v[20] * v[21] + v[17] * v[0]) - v[20] * v[22])
+                                * v[25]) * m1 + v[23] * v[26])
+                    - d
+                        * (v[27] * v[14] + (v[28] * v[13] - v[29] * v[23]) * u1
+                            + v[30] * v[24])),
+            v[5]
+                * (G_Y
+                    - (v[33] * v[30] + v[27] * v[37]
+                        + (v[28] * v[36] - v[29] * v[32]) * u1) * d
+                    - u2
+                        * ((v[15] * v[37]
+                            - ((v[34] - v[35]) * v[6] + v[9] * v[31]) * v[16]) * m2
+                            + v[18] * v[36])
+                    - (v[32] * v[26]
+                        + (v[33] * v[19] + (v[32] * v[20] + v[17] * v[31]) * v[25]) * m1)
+                        * u3),
+            v[5]
                 * (G_Z
                     - u3
-                        * ((x27 * x20 + a_ * (x18 * x0 * x2 - x14 * x5) * x18) * m1
-                            + m2 * x0 * x2 * x17)
+                        * ((v[39] * v[19] + (v[38] * v[20] - v[17] * v[4]) * v[25]) * m1
+                            + v[38] * v[26])
                     - u2
-                        * (m2 * (x28 * x13 - a_ * (-x0 * x8 * x3 - x7 * x5) * x8)
-                            + x15 * x0 * m1 * x3)
-                    + d
-                        * (-x27 * u4 * m1 - u5 * m2 * x28
-                            - (x18 * m1 * x3 - m2 * x8 * x2) * x0 * u1)),
+                        * ((v[16] * (v[6] * v[40] + v[9] * v[4]) + v[41] * v[15]) * m2
+                            + v[18] * v[40])
+                    - d
+                        * (v[39] * v[30] + v[41] * v[27]
+                            + v[0] * u1 * (v[28] * v[2] - v[29] * v[1]))),
         ];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
@@ -9832,6 +9646,82 @@ pub mod reduced_volterra {
             }
         }
         Ok((q, qdot))
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn velocities_part0(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 42],
+    ) {
+        let psi = state[0];
+        let theta = state[1];
+        let phi = state[2];
+        let gamma1 = state[3];
+        let gamma2 = state[4];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let m0 = params.m0;
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[0] = f64::cos(theta);
+        v[1] = f64::sin(phi);
+        v[2] = f64::cos(phi);
+        v[3] = 1.0 / v[0] * (u2 * v[1] + u3 * v[2]);
+        v[4] = f64::sin(theta);
+        v[5] = 1.0 / (m2 + m0 + m1);
+        v[6] = f64::sin(gamma2);
+        v[7] = f64::cos(psi);
+        v[8] = v[7] * v[0];
+        v[9] = f64::cos(gamma2);
+        v[10] = f64::sin(psi);
+        v[11] = v[1] * v[10];
+        v[12] = v[4] * v[2];
+        v[13] = v[11] + v[12] * v[7];
+        v[14] = v[6] * v[8] + v[9] * v[13];
+        v[15] = d + v[9] * a_;
+        v[16] = a_ * v[6];
+        v[17] = f64::cos(gamma1);
+        v[18] = -((a_ + v[17] * d) * m1);
+        v[19] = v[17] * a_ + d;
+        v[20] = f64::sin(gamma1);
+        v[21] = v[4] * v[1];
+        v[22] = v[2] * v[10];
+        v[23] = v[7] * v[21] - v[22];
+        v[24] = v[17] * v[23] - v[20] * v[8];
+        v[25] = a_ * v[20];
+        v[26] = -(m2 * (a_ + v[9] * d));
+        v[27] = u5 * m2;
+        v[28] = v[20] * m1;
+        v[29] = m2 * v[6];
+        v[30] = u4 * m1;
+        v[31] = v[0] * v[10];
+        v[32] = v[7] * v[2] + v[21] * v[10];
+        v[33] = v[17] * v[32] - v[20] * v[31];
+        v[34] = v[7] * v[1];
+        v[35] = v[12] * v[10];
+        v[36] = v[35] - v[34];
+        v[37] = v[6] * v[31] + v[9] * v[36];
+        v[38] = v[0] * v[1];
+        v[39] = v[4] * v[20] + v[17] * v[38];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn velocities_part1(
+        _t: f64,
+        _state: &[f64; STATES],
+        _params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 42],
+    ) {
+        v[40] = v[0] * v[2];
+        v[41] = v[9] * v[40] - v[4] * v[6];
     }
     ///The smallest magnitude of the factors whose vanishing makes the symbolically solved `[Y; M'; a]` singular (infinite when there are none): the distance to the singular set that `rhs` checks against `SINGULAR_TOLERANCE`.
     #[allow(non_snake_case, clippy::all)]
@@ -9879,7 +9769,7 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let mut v = [0.0f64; 435];
+        let mut v = [0.0f64; 471];
         jacobian_part0(t, state, params, g_i, &mut v);
         jacobian_part1(t, state, params, g_i, &mut v);
         jacobian_part2(t, state, params, g_i, &mut v);
@@ -9891,83 +9781,84 @@ pub mod reduced_volterra {
         jacobian_part8(t, state, params, g_i, &mut v);
         jacobian_part9(t, state, params, g_i, &mut v);
         jacobian_part10(t, state, params, g_i, &mut v);
+        jacobian_part11(t, state, params, g_i, &mut v);
         Derivatives {
             qdot: [
-                v[1] * v[6],
-                v[7],
-                u1 + v[8] * v[1] * v[6],
+                v[5],
+                v[6],
+                v[8] + u1,
                 u4,
                 u5,
-                v[9] * (G_X - v[31] - v[48] + v[52]),
+                v[9] * (G_X + v[57]),
                 v[9]
-                    * (G_Y - v[63] * u3 - u2 * v[75]
-                        + d * (-v[58] * u4 * m1 - u5 * m2 * v[73] - v[78] * u1)),
-                v[9] * (G_Z - v[86] - v[94] + v[98]),
+                    * (G_Y - u3 * v[68] - u2 * v[80]
+                        - d * (u1 * v[83] + v[10] * v[78] + v[35] * v[63])),
+                v[9] * (v[99] + G_Z),
             ],
             matrix: [
                 [
-                    Ixx
-                        + d * d
-                            * (m2 * v[12] * v[12]
-                                + v[9]
-                                    * (-v[78] * v[78] - v[97] * v[97] * v[0] * v[0]
-                                        - v[51] * v[51]) + v[38] * v[38] * m1)
-                        + (v[99] + v[100]) * J1 + (v[12] * v[12] + v[38] * v[38]) * J2,
-                    v[102],
-                    v[104],
-                    v[105],
-                    v[106],
-                ],
-                [
-                    v[102],
-                    v[38] * v[38] * J1 + v[28] * v[28] * m1 + Iyy + J2 * (v[99] + 1.0)
-                        + v[9] * (-v[30] * v[30] - v[75] * v[75] - v[93] * v[93])
-                        + m2 * (v[107] + a_ * (a_ + 2.0 * v[35])),
-                    v[108],
-                    v[109],
+                    (v[100] + v[101]) * J2 + Ixx
+                        + (v[25] * v[18]
+                            - (v[31] * v[31] + v[83] * v[83] + v[98] * v[98]) * v[9]
+                            + v[22] * v[23]) * v[102] + (v[103] + v[104]) * J1,
+                    v[107],
                     v[110],
+                    v[114],
+                    v[117],
                 ],
                 [
-                    v[104],
-                    v[108],
-                    v[9] * (-v[63] * v[63] - v[47] * v[47] - v[85] * v[85])
-                        + v[12] * v[12] * J1 + (a_ * (a_ + 2.0 * v[27]) + v[107]) * m1
-                        + m2 * v[36] * v[36] + Izz + J2 * (v[100] + 1.0),
-                    v[111],
-                    v[112],
+                    v[107],
+                    Iyy - v[38] * v[37] + J2 * (v[103] + 1.0)
+                        + m2 * (a_ * (2.0 * v[53] + a_) + v[102])
+                        - v[9] * (v[80] * v[80] + v[45] * v[45] + v[95] * v[95])
+                        + v[101] * J1,
+                    v[118],
+                    v[119],
+                    v[120],
                 ],
-                [v[105], v[109], v[111], (1.0 - v[9] * m1) * d * d * m1 + J2, v[113]],
-                [v[106], v[110], v[112], v[113], J2 + m2 * d * d * (1.0 - v[9] * m2)],
+                [
+                    v[110],
+                    v[118],
+                    J2 * (v[104] + 1.0)
+                        - v[9] * (v[89] * v[89] + v[56] * v[56] + v[68] * v[68])
+                        + v[100] * J1 - v[54] * v[55]
+                        + (a_ * (a_ + 2.0 * v[36]) + v[102]) * m1 + Izz,
+                    v[122],
+                    v[124],
+                ],
+                [v[114], v[119], v[122], J2 + (1.0 - v[125]) * v[126], v[128]],
+                [v[117], v[120], v[124], v[128], (1.0 - v[129]) * v[130] + J2],
             ],
             force: [
-                v[128] - v[118] * v[121] * v[12]
-                    + (-v[26] * u4 * v[131] - v[10] * u5 * v[134]) * J1 - u2 * v[137]
-                    + (m2 * v[12] * v[139] - v[38] * m1 * v[141]
-                        + v[9]
-                            * (-v[78] * v[162] - v[163] * v[51] - v[97] * v[164] * v[0]))
-                        * d + v[167] * u3,
-                v[168] - v[169] - v[28] * m1 * v[141] + v[137] * u1
-                    + v[9] * (-v[93] * v[164] - v[163] * v[30] - v[162] * v[75])
-                    - v[38] * u4 * v[131] * J1
+                v[155] - v[135] * v[139] - (v[143] * u4 + u5 * v[147]) * J1 - u2 * v[158]
+                    + d
+                        * (v[171] * v[25]
+                            - v[9] * (-v[187] * v[83] - v[98] * v[188] - v[189] * v[31])
+                            - v[175] * v[23]) + v[192] * u3,
+                v[158] * u1
                     - m2
-                        * ((a_ * (v[12] * v[172] - 2.0 * (v[10] * u3 * u1))
-                            + ((0.5 * v[175] - v[177]) * u3 - 0.5 * (u1 * u1 * v[174]))
-                                * d) * d - a_ * a_ * u3 * u1) - v[180] * u3,
-                v[9] * (-v[164] * v[85] - v[163] * v[47] - v[63] * v[162])
-                    - m2 * v[36] * v[139]
-                    - (d
-                        * (a_ * (v[181] * v[38] + 2.0 * (v[26] * u2 * u1))
+                        * ((a_ * (v[18] * v[197] - 2.0 * (v[11] * v[173]))
                             + d
-                                * (u2 * (0.5 * v[184] + v[186]) - 0.5 * (u1 * u1 * v[183])))
-                        + a_ * a_ * u2 * u1) * m1 - v[10] * v[118] * v[121] + u2 * v[180]
-                    + u5 * v[12] * v[134] * J1 - v[167] * u1 + v[187],
-                d * m1
-                    * (v[9] * (-v[164] * v[79] - v[163] * v[39] - v[58] * v[162])
-                        - v[151] + v[155]) + v[187],
-                v[168]
-                    + m2
-                        * (v[9] * (-v[162] * v[73] - v[163] * v[22] - v[90] * v[164])
-                            - v[142] - v[146]) * d,
+                                * ((0.5 * v[200] - v[202]) * u3 - 0.5 * (v[194] * v[199])))
+                            * d - v[173] * v[193])
+                    - v[9] * (-v[95] * v[188] - v[189] * v[45] - v[187] * v[80]) - v[203]
+                    - v[204] * v[205] + v[207] - v[175] * v[38] - v[210] * u3,
+                v[211] - v[171] * v[55] - v[135] * v[212]
+                    - v[9] * (-v[189] * v[56] - v[187] * v[68] - v[89] * v[188])
+                    + u2 * v[210] + v[213] * v[214] - v[192] * u1
+                    - (v[215] * v[159]
+                        + d
+                            * (a_ * (v[216] * v[22] + 2.0 * (v[141] * u1))
+                                + (u2 * (0.5 * v[219] + v[221]) - 0.5 * (v[194] * v[218]))
+                                    * d)) * m1,
+                v[211]
+                    + v[121]
+                        * (v[183] - v[185]
+                            - (-v[189] * v[34] - v[85] * v[188] - v[187] * v[63])
+                                * v[9]),
+                v[115]
+                    * (-v[9] * (-v[189] * v[21] - v[93] * v[188] - v[187] * v[78])
+                        - v[167] - v[169]) + v[207],
             ],
             checks: [v[0]],
             d_qdot: [
@@ -9978,44 +9869,38 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     v[9]
-                        * (d
-                            * (-u5 * m2 * v[189] - v[192] * u4 * m1
-                                - u1 * (v[194] - v[193])) - (v[196] + v[197]) * u2
-                            - (v[199] + v[200]) * u3),
-                    v[9] * (v[52] - v[31] - v[48]),
+                        * (-u2 * v[227]
+                            - (v[35] * v[228] + v[223] * v[10] + (v[229] + v[81]) * u1)
+                                * d - v[232] * u3),
+                    v[9] * v[57],
                     0.0,
                 ],
                 [
-                    v[8] * v[1] * v[1] * v[6],
+                    v[5] * v[250],
                     0.0,
-                    v[3] + v[8] * v[8] * v[1] * v[1] * v[6] + v[5],
+                    v[4] + v[8] * v[250],
                     0.0,
                     0.0,
-                    v[9] * v[14] * v[217],
-                    v[9] * v[217] * v[15],
-                    v[9]
-                        * ((-v[230] * v[8] * u1 - u4 * v[228] * m1 - u5 * m2 * v[221])
-                            * d - u2 * (v[223] - v[218]) - u3 * (v[229] - v[224])),
+                    v[251] * v[15],
+                    v[251] * v[12],
+                    (-d * (v[253] * v[35] + u1 * v[255] - v[10] * v[256])
+                        - u3 * (v[258] - v[257]) - u2 * (v[261] - v[259])) * v[9],
                 ],
                 [
-                    v[1] * v[7],
-                    -v[3] - v[5],
-                    v[8] * v[1] * v[7],
+                    v[1] * v[6],
+                    -v[4],
+                    v[6] * v[250],
                     0.0,
                     0.0,
                     v[9]
-                        * (d
-                            * (-v[26] * u4 * v[20] * m1 - v[10] * u5 * m2 * v[255]
-                                - u1 * v[256]) - v[254] * u3 * v[20] - v[257] * u2),
-                    v[9]
-                        * (d
-                            * (-v[10] * u5 * m2 * v[190] - u1 * v[259]
-                                - v[26] * u4 * v[66] * m1) - u2 * v[258]
-                            - v[254] * u3 * v[66]),
+                        * (-u2 * v[287]
+                            - d * (v[16] * v[288] + u1 * v[289] + v[290] * v[284])
+                            - v[16] * v[292]),
+                    (-(u1 * v[293] - v[290] * v[58] + v[71] * v[288]) * d
+                        - v[71] * v[292] - u2 * v[294]) * v[9],
                     v[9] * v[0]
-                        * (d
-                            * (v[10] * u5 * m2 * v[2] - v[26] * u4 * m1 * v[4]
-                                - u1 * v[260]) - v[254] * u3 * v[4] - u2 * v[2] * v[261]),
+                        * ((v[295] * u1 - v[3] * v[288] + v[290] * v[2]) * d
+                            - v[292] * v[3] - u2 * v[297]),
                 ],
                 [
                     0.0,
@@ -10023,9 +9908,9 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    ((v[124] * v[20] - u4 * v[299]) * d - u3 * v[300]) * v[9] * m1,
-                    v[9] * m1 * (d * (v[124] * v[66] - u4 * v[198]) - v[301] * u3),
-                    v[9] * (d * (v[124] * v[0] * v[4] - u4 * v[302]) - u3 * v[303]) * m1,
+                    ((-u4 * v[346] - v[16] * v[151]) * d - v[347] * u3) * v[125],
+                    ((-v[71] * v[151] - v[230] * u4) * d - v[348] * u3) * v[125],
+                    ((-u4 * v[349] - v[151] * v[91]) * d - u3 * v[350]) * v[125],
                 ],
                 [
                     0.0,
@@ -10033,9 +9918,9 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    v[9] * m2 * ((v[34] * v[121] - u5 * v[16]) * d - u2 * v[331]),
-                    v[9] * m2 * (d * (v[121] * v[55] - u5 * v[70]) - u2 * v[332]),
-                    v[9] * m2 * (d * (v[121] * v[0] * v[2] - u5 * v[87]) - u2 * v[333]),
+                    ((v[29] * v[138] - u5 * v[43]) * d - u2 * v[380]) * v[129],
+                    (d * (v[58] * v[138] - v[75] * u5) - u2 * v[381]) * v[129],
+                    (d * (u5 * v[94] + v[84] * v[138]) - u2 * v[382]) * v[129],
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -10046,29 +9931,29 @@ pub mod reduced_volterra {
                     1.0,
                     0.0,
                     0.0,
-                    v[9] * (v[50] - v[49]) * d,
-                    v[9] * d * (v[76] - v[77]),
-                    v[230] * v[9] * v[0] * d,
+                    v[111] * (v[30] - v[24]),
+                    v[235] * v[111],
+                    v[254] * v[0] * v[111],
                 ],
                 [
                     v[1] * v[2],
-                    v[4],
-                    v[8] * v[1] * v[2],
+                    v[3],
+                    v[1] * v[26],
                     0.0,
                     0.0,
-                    v[9] * (-v[25] - v[29]),
-                    v[9] * (-v[67] - v[74]),
-                    v[9] * (-v[91] - v[92]),
+                    -(v[9] * v[45]),
+                    -(v[9] * v[80]),
+                    -(v[9] * v[95]),
                 ],
                 [
-                    v[1] * v[4],
+                    v[1] * v[3],
                     -v[2],
-                    v[8] * v[1] * v[4],
+                    v[14] * v[1],
                     0.0,
                     0.0,
-                    (-v[37] - v[46]) * v[9],
-                    (-v[61] - v[62]) * v[9],
-                    v[9] * (-v[83] - v[84]),
+                    -(v[56] * v[9]),
+                    -(v[9] * v[68]),
+                    -(v[89] * v[9]),
                 ],
                 [
                     0.0,
@@ -10076,9 +9961,9 @@ pub mod reduced_volterra {
                     0.0,
                     1.0,
                     0.0,
-                    -(v[9] * v[39] * d * m1),
-                    -(v[9] * v[58] * d * m1),
-                    -(v[9] * v[79] * d * m1),
+                    -(v[34] * v[112]),
+                    -(v[63] * v[112]),
+                    -(v[85] * v[112]),
                 ],
                 [
                     0.0,
@@ -10086,169 +9971,167 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     1.0,
-                    -(v[9] * m2 * d * v[22]),
-                    -(v[9] * m2 * d * v[73]),
-                    -(v[9] * m2 * v[90] * d),
+                    -(v[123] * v[21]),
+                    -(v[123] * v[78]),
+                    -(v[123] * v[93]),
                 ],
             ],
             d_matrix: [
                 [
                     [
-                        (2.0 * v[193] + 2.0 * v[76] - 2.0 * v[194] - 2.0 * v[77]) * v[9]
-                            * d * d * v[51],
-                        v[203],
-                        v[205],
-                        v[207],
-                        v[209],
-                    ],
-                    [
-                        v[203],
-                        (-2.0 * v[67] - 2.0 * v[74] - 2.0 * v[196] - 2.0 * v[197]) * v[9]
-                            * v[30],
-                        v[210],
-                        v[211],
-                        v[212],
-                    ],
-                    [
-                        v[205],
-                        v[210],
-                        v[9] * (-2.0 * v[61] - 2.0 * v[199] - 2.0 * v[200] - 2.0 * v[62])
-                            * v[47],
-                        v[213],
-                        v[214],
-                    ],
-                    [v[207], v[211], v[213], 0.0, v[215]],
-                    [v[209], v[212], v[214], v[215], 0.0],
-                ],
-                [
-                    [
-                        v[9] * (-2.0 * v[231] - 2.0 * v[232] - 2.0 * v[233]) * v[97]
-                            * v[0] * d * d,
-                        v[238],
+                        v[233] * v[31] * (-2.0 * v[229] - 2.0 * v[82]),
+                        v[237],
+                        v[239],
+                        v[240],
                         v[242],
+                    ],
+                    [
+                        v[237],
+                        -(v[9]
+                            * (2.0 * v[225] + 2.0 * v[72] + 2.0 * v[79] + 2.0 * v[226])
+                            * v[45]),
+                        v[243],
                         v[244],
+                        v[245],
+                    ],
+                    [
+                        v[239],
+                        v[243],
+                        -(v[56] * v[9] * (2.0 * v[231] + 2.0 * v[67])),
                         v[246],
-                    ],
-                    [
-                        v[238],
-                        v[9]
-                            * (2.0 * v[218] - 2.0 * v[235] - 2.0 * v[236] - 2.0 * v[223])
-                            * v[93],
                         v[247],
-                        v[248],
-                        v[249],
                     ],
-                    [
-                        v[242],
-                        v[247],
-                        (2.0 * v[224] - 2.0 * v[239] - 2.0 * v[229] - 2.0 * v[240])
-                            * v[9] * v[85],
-                        v[250],
-                        v[251],
-                    ],
-                    [v[244], v[248], v[250], 0.0, v[252]],
-                    [v[246], v[249], v[251], v[252], 0.0],
+                    [v[240], v[244], v[246], 0.0, v[248]],
+                    [v[242], v[245], v[247], v[248], 0.0],
                 ],
                 [
                     [
-                        v[9] * d * d
-                            * (-2.0 * (v[78] * v[259]) - 2.0 * (v[51] * v[256])
-                                - 2.0 * (v[97] * v[0] * v[0] * v[260])),
-                        v[262],
-                        v[267],
+                        -(v[98] * v[233] * (2.0 * v[262] + 2.0 * v[263] + 2.0 * v[255])),
                         v[268],
-                        v[270],
+                        v[272],
+                        v[274],
+                        v[276],
                     ],
                     [
-                        v[262],
-                        v[9]
-                            * (-2.0 * (v[75] * v[258])
-                                - 2.0 * (v[93] * v[0] * v[2] * v[261])
-                                - 2.0 * (v[257] * v[30])),
-                        v[275],
+                        v[268],
+                        v[9] * v[95]
+                            * (2.0 * v[259] - 2.0 * v[264] - 2.0 * v[265]
+                                - 2.0 * v[261]),
                         v[277],
+                        v[278],
                         v[279],
                     ],
                     [
-                        v[267],
-                        v[275],
-                        v[254] * v[9] * (-2.0 * v[280] - 2.0 * v[281] - 2.0 * v[282]),
-                        v[286],
-                        v[289],
+                        v[272],
+                        v[277],
+                        v[89] * v[9]
+                            * (2.0 * v[257] - 2.0 * v[269] - 2.0 * v[258]
+                                - 2.0 * v[270]),
+                        v[280],
+                        v[281],
                     ],
-                    [v[268], v[277], v[286], 0.0, v[291]],
-                    [v[270], v[279], v[289], v[291], 0.0],
+                    [v[274], v[278], v[280], 0.0, v[282]],
+                    [v[276], v[279], v[281], v[282], 0.0],
                 ],
                 [
                     [
-                        v[26]
-                            * (v[304] * v[38]
-                                + d * d
-                                    * (v[9] * (-2.0 * v[263] - 2.0 * v[264] - 2.0 * v[265])
-                                        + 2.0 * v[38]) * m1),
+                        -((2.0 * (v[293] * v[83]) + 2.0 * (v[98] * v[298])
+                            + 2.0 * (v[31] * v[289])) * v[233]),
+                        v[299],
+                        v[304],
                         v[305],
-                        v[306],
-                        v[307],
                         v[308],
                     ],
                     [
-                        v[305],
-                        v[38]
-                            * (v[26] * v[309]
-                                + d
-                                    * (v[9] * (-2.0 * v[271] - 2.0 * v[272] - 2.0 * v[273])
-                                        - 2.0 * a_ - 2.0 * v[27]) * m1),
-                        v[310],
-                        v[311],
-                        v[312],
+                        v[299],
+                        -(v[9]
+                            * (2.0 * (v[294] * v[80]) + 2.0 * (v[287] * v[45])
+                                + 2.0 * (v[309] * v[95]))),
+                        v[314],
+                        v[316],
+                        v[319],
                     ],
                     [
-                        v[306],
-                        v[310],
-                        (v[9]
-                            * (-2.0 * (v[85] * v[303]) - 2.0 * (v[47] * v[300])
-                                - 2.0 * (v[63] * v[301])) - 2.0 * (a_ * v[38] * d)) * m1,
-                        v[313],
+                        v[304],
                         v[314],
+                        -(v[9] * (2.0 * v[320] + 2.0 * v[321] + 2.0 * v[322]) * v[291]),
+                        v[326],
+                        v[330],
                     ],
-                    [v[307], v[311], v[313], 0.0, v[315]],
-                    [v[308], v[312], v[314], v[315], 0.0],
+                    [v[305], v[316], v[326], 0.0, v[334]],
+                    [v[308], v[319], v[330], v[334], 0.0],
                 ],
                 [
                     [
-                        v[10]
-                            * (m2 * d * d
-                                * (2.0 * v[12]
-                                    + v[9] * (2.0 * v[334] + 2.0 * v[269] + 2.0 * v[335]))
-                                + v[304] * v[12]),
-                        v[338],
-                        v[341],
-                        v[344],
-                        v[348],
-                    ],
-                    [
-                        v[338],
-                        m2
-                            * (v[9]
-                                * (-2.0 * (v[30] * v[331]) - 2.0 * (v[75] * v[332])
-                                    - 2.0 * (v[93] * v[333])) - 2.0 * (a_ * d * v[12])),
-                        v[349],
-                        v[350],
-                        v[351],
-                    ],
-                    [
-                        v[341],
-                        v[349],
-                        v[12]
-                            * (v[10] * v[309]
-                                + m2 * d
-                                    * (v[9] * (-2.0 * v[287] - 2.0 * v[339] - 2.0 * v[340])
-                                        - 2.0 * a_ - 2.0 * v[35])),
+                        v[32]
+                            * (v[351] * v[22]
+                                + v[126]
+                                    * (2.0 * v[22]
+                                        - v[9] * (2.0 * v[300] + 2.0 * v[301] + 2.0 * v[302]))),
                         v[352],
                         v[353],
+                        v[354],
+                        v[355],
                     ],
-                    [v[344], v[350], v[352], 0.0, v[354]],
-                    [v[348], v[351], v[353], v[354], 0.0],
+                    [
+                        v[352],
+                        (v[32] * v[356]
+                            + (-2.0 * a_ - 2.0 * v[36]
+                                - (2.0 * v[310] + 2.0 * v[311] + 2.0 * v[312]) * v[9])
+                                * v[121]) * v[22],
+                        v[357],
+                        v[358],
+                        v[359],
+                    ],
+                    [
+                        v[353],
+                        v[357],
+                        m1
+                            * (-2.0 * (d * v[46])
+                                - v[9]
+                                    * (2.0 * (v[347] * v[56]) + 2.0 * (v[348] * v[68])
+                                        + 2.0 * (v[89] * v[350]))),
+                        v[360],
+                        v[362],
+                    ],
+                    [v[354], v[358], v[360], 0.0, v[363]],
+                    [v[355], v[359], v[362], v[363], 0.0],
+                ],
+                [
+                    [
+                        v[11]
+                            * (v[130]
+                                * (2.0 * v[18]
+                                    + v[9] * (2.0 * v[306] + 2.0 * v[307] + 2.0 * v[383]))
+                                + v[351] * v[18]),
+                        v[385],
+                        v[387],
+                        v[389],
+                        v[391],
+                    ],
+                    [
+                        v[385],
+                        m2
+                            * (-v[9]
+                                * (2.0 * (v[380] * v[45]) + 2.0 * (v[382] * v[95])
+                                    + 2.0 * (v[381] * v[80])) - 2.0 * (d * v[44])),
+                        v[392],
+                        v[393],
+                        v[394],
+                    ],
+                    [
+                        v[387],
+                        v[392],
+                        (v[11] * v[356]
+                            + v[115]
+                                * (-2.0 * v[53] - 2.0 * a_
+                                    - v[9] * (2.0 * v[327] + 2.0 * v[386] + 2.0 * v[328])))
+                            * v[18],
+                        v[395],
+                        v[396],
+                    ],
+                    [v[389], v[393], v[395], 0.0, v[397]],
+                    [v[391], v[394], v[396], v[397], 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -10309,214 +10192,194 @@ pub mod reduced_volterra {
             ],
             d_force: [
                 [
-                    v[9] * d * (v[216] * v[51] + v[163] * v[201]),
-                    v[9] * (v[163] * v[202] + v[30] * v[216]),
-                    v[9] * (v[216] * v[47] + v[163] * v[204]),
-                    v[9] * d * m1 * (v[39] * v[216] + v[163] * v[206]),
-                    v[9] * m2 * (v[163] * v[208] + v[216] * v[22]) * d,
+                    v[111] * (v[249] * v[31] - v[189] * v[236]),
+                    v[9] * (v[249] * v[45] + v[189] * v[234]),
+                    v[9] * (v[56] * v[249] + v[189] * v[238]),
+                    v[249] * v[34] * v[112],
+                    (v[189] * v[241] + v[249] * v[21]) * v[123],
                 ],
                 [
-                    v[9] * (v[253] * v[97] * v[0] + v[164] * v[234]) * d,
-                    v[9] * (v[253] * v[93] + v[164] * v[237]),
-                    v[9] * (v[164] * v[241] + v[253] * v[85]),
-                    v[9] * (v[253] * v[79] + v[243] * v[164]) * d * m1,
-                    (v[164] * v[245] + v[253] * v[90]) * v[9] * m2 * d,
+                    (v[188] * v[267] + v[98] * v[283]) * v[111],
+                    v[9] * (v[283] * v[95] - v[188] * v[266]),
+                    v[9] * (v[89] * v[283] - v[188] * v[271]),
+                    (v[85] * v[283] - v[273] * v[188]) * v[112],
+                    v[123] * (v[93] * v[283] - v[188] * v[275]),
                 ],
                 [
-                    v[9] * d
-                        * ((-v[97] * v[0] * v[295] - v[164] * v[260]) * v[0]
-                            - v[293] * v[78] - v[163] * v[256] - v[294] * v[51]
-                            - v[162] * v[259]),
-                    (v[0] * (-v[164] * v[2] * v[261] - v[93] * v[295]) - v[293] * v[75]
-                        - v[30] * v[294] - v[162] * v[258] - v[163] * v[257]) * v[9],
+                    (v[187] * v[293] + v[189] * v[289] + v[338] * v[83] + v[31] * v[339]
+                        - v[0] * (v[188] * v[295] - v[98] * v[340])) * v[111],
                     v[9]
-                        * (v[254] * v[296] - v[294] * v[47] - v[0] * v[85] * v[295]
-                            - v[293] * v[63]),
-                    v[9] * d * m1
-                        * (v[297] - v[39] * v[294] - v[293] * v[58]
-                            - v[79] * v[0] * v[295]),
-                    v[9] * m2
-                        * (v[10] * (v[298] - v[162] * v[190] - v[163] * v[255])
-                            - v[293] * v[73] - v[294] * v[22] - v[90] * v[0] * v[295])
-                        * d,
+                        * (v[45] * v[339] + v[338] * v[80] + v[189] * v[287]
+                            + v[187] * v[294]
+                            - v[0] * (-v[188] * v[297] - v[340] * v[95])),
+                    v[9]
+                        * (v[56] * v[339] - v[341] * v[291] + v[68] * v[338]
+                            - v[89] * v[342]),
+                    (v[34] * v[339] - v[343] - v[342] * v[85] + v[338] * v[63]) * v[112],
+                    v[123]
+                        * (v[21] * v[339] - v[342] * v[93]
+                            + v[11] * (v[189] * v[284] - v[344] - v[345])
+                            + v[338] * v[78]),
                 ],
                 [
-                    v[169] + (v[38] * v[131] - v[26] * v[124]) * u4 * J1 + v[316] * v[38]
-                        + d * m1
+                    v[203]
+                        + v[121]
                             * (v[9]
-                                * (v[97] * v[322] * v[0] + v[297] + v[323] * v[51]
-                                    + v[78] * v[324]) - v[26] * v[141] - v[38] * d * v[320]),
-                    m1
-                        * (v[9]
-                            * (v[30] * v[323] + v[93] * v[322] + v[324] * v[75]
-                                + v[296] * v[38] * d)
-                            + (-v[28] * v[320] - v[38] * v[141]) * d) + v[128]
-                        + u4 * (-v[325] - v[38] * v[124]) * J1 - v[26] * v[316],
-                    v[326]
-                        + (v[9]
-                            * (v[323] * v[47] + v[63] * v[324] - v[162] * v[301]
-                                + v[322] * v[85] - v[163] * v[300] - v[164] * v[303])
-                            - d
-                                * (d * ((v[328] - 2.0 * v[327]) * u2 - u1 * u1 * v[185])
-                                    + a_ * (v[26] * v[181] - 2.0 * (u2 * v[38] * u1)))) * m1
-                        + v[329],
-                    v[326]
-                        + d
-                            * (v[157]
-                                + v[9]
-                                    * (m1 * (v[58] * v[324] + v[322] * v[79] + v[39] * v[323])
-                                        - v[163] * v[299] - v[164] * v[302] - v[162] * v[198])
-                                + v[317] - v[318]) * m1 + v[329],
-                    (v[324] * v[73] + v[90] * v[322] + v[323] * v[22]) * v[9] * m2 * d
-                        * m1,
+                                * (v[371] * v[83] - v[343] + v[98] * v[372]
+                                    + v[373] * v[31]) - v[32] * v[175] - v[177] * v[364])
+                        + (v[32] * v[151] + v[205]) * v[204] + v[375] * v[22],
+                    ((v[373] * v[45] + v[372] * v[95] - v[177] * v[341] + v[371] * v[80])
+                        * v[9] - (v[175] * v[22] - v[364] * v[37]) * d) * m1
+                        - v[32] * v[375] - v[204] * (v[143] - v[376]) + v[155],
+                    (v[9]
+                        * (v[56] * v[373] + v[189] * v[347] + v[68] * v[371]
+                            + v[89] * v[372] + v[187] * v[348] + v[188] * v[350])
+                        - (a_ * (v[32] * v[216] - 2.0 * (v[149] * u1))
+                            + d * ((v[378] - 2.0 * v[377]) * u2 - v[194] * v[220])) * d)
+                        * m1 + v[379],
+                    v[121]
+                        * (v[368] - v[366] + v[181]
+                            + v[9]
+                                * (v[189] * v[346]
+                                    + (v[85] * v[372] + v[371] * v[63] + v[373] * v[34]) * m1
+                                    + v[187] * v[230] + v[188] * v[349])) + v[379],
+                    v[361] * (v[373] * v[21] + v[93] * v[372] + v[371] * v[78]),
                 ],
                 [
-                    u5 * (v[356] - v[10] * v[355]) * J1
-                        + m2
-                            * (v[357] * d * v[12] + v[10] * v[139]
+                    v[213] * (v[214] - v[11] * v[398]) - v[135] * (v[214] + v[212])
+                        + v[115]
+                            * (v[399] * v[162]
                                 + v[9]
-                                    * (v[10] * (v[298] + v[358] + v[359]) + v[51] * v[364]
-                                        + v[97] * v[365] * v[0] + v[78] * v[366])) * d
-                        + v[118] * (-v[10] * v[121] - v[356]),
-                    v[367] + v[368]
+                                    * (v[98] * v[406] + v[83] * v[407] + v[408] * v[31]
+                                        + v[11] * v[409]) + v[11] * v[171]),
+                    v[410]
                         + m2
                             * (v[9]
-                                * (v[30] * v[364] - v[162] * v[332] - v[164] * v[333]
-                                    + v[93] * v[365] - v[163] * v[331] + v[75] * v[366])
+                                * (v[189] * v[380] + v[187] * v[381] + v[382] * v[188]
+                                    + v[407] * v[80] + v[95] * v[406] + v[45] * v[408])
                                 - d
-                                    * (a_ * (2.0 * (u3 * v[12] * u1) + v[10] * v[172])
-                                        + (v[176] * (v[170] - v[171]) + 2.0 * (u3 * u1 * v[174]))
-                                            * d)),
-                    v[12] * (u5 * v[355] * J1 + v[118] * v[121])
-                        + m2
+                                    * (d * (2.0 * (v[173] * v[199]) + v[201] * v[196])
+                                        + a_ * (v[11] * v[197] + 2.0 * (v[173] * v[18])))),
+                    (v[9]
+                        * (v[56] * v[408] + v[68] * v[407] + v[89] * v[406]
+                            - v[409] * v[162]) - (v[171] * v[18] - v[54] * v[399]) * d)
+                        * m2 + v[18] * (v[213] * v[398] + v[135] * v[138])
+                        + v[147] * v[411],
+                    v[361] * (v[63] * v[407] + v[85] * v[406] + v[34] * v[408]),
+                    v[410]
+                        + v[115]
                             * (v[9]
-                                * (v[365] * v[85] + v[47] * v[364]
-                                    + d * v[12] * (-v[298] - v[358] - v[359]) + v[63] * v[366])
-                                + d * (-v[357] * v[36] - v[12] * v[139]))
-                        + v[10] * v[370] * v[134],
-                    (v[39] * v[364] + v[79] * v[365] + v[58] * v[366]) * v[9] * m2 * d
-                        * m1,
-                    m2 * d
-                        * (v[9]
-                            * (m2 * (v[73] * v[366] + v[90] * v[365] + v[22] * v[364])
-                                - v[163] * v[16] - v[164] * v[87] - v[162] * v[70]) - v[360]
-                            - v[361] - v[362]) + v[367] + v[368],
+                                * ((v[407] * v[78] + v[21] * v[408] + v[93] * v[406]) * m2
+                                    - v[188] * v[94] + v[189] * v[43] + v[75] * v[187]) - v[403]
+                                - v[404] + v[165]),
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    v[26] * v[38] * (v[371] - v[372] + v[373]) - v[374]
-                        + v[10] * v[12] * v[370] + v[375]
-                        + d
-                            * (m2 * v[12] * v[377] - v[38] * v[376] * m1
-                                + v[9]
-                                    * (-v[386] * v[51] - v[78] * v[387]
-                                        - v[97] * v[0] * v[388])),
-                    J2 * (v[389] + v[390]) + v[391] * u3
-                        + (v[38] * v[38] * u4 - v[389] - v[390]) * J1
+                    (v[25] * v[415]
+                        - v[9] * (-v[83] * v[421] - v[31] * v[422] - v[98] * v[423])
+                        - v[23] * v[419]) * d - v[424] + v[105] * (v[425] + v[204])
+                        + v[426] + v[109] * v[411],
+                    v[427] * u3
                         - m2
-                            * ((a_ * (-2.0 * v[132] - 2.0 * v[133])
-                                + d * (-u1 * v[174] - v[176] * u3)) * d - a_ * a_ * u3)
-                        - v[26] * v[26] * v[392] - v[135]
-                        + v[9] * (-v[387] * v[75] - v[93] * v[388] - v[30] * v[386])
-                        - 2.0 * v[136] - v[28] * v[376] * m1,
-                    (v[325] - u5 * v[12] * v[12] - v[393]) * J1 - m2 * v[377] * v[36]
-                        + v[9] * (-v[85] * v[388] - v[63] * v[387] - v[386] * v[47])
-                        - v[10] * v[10] * v[118] + u2 * v[394] + (v[393] - v[325]) * J2
-                        - m1
-                            * (((2.0 * v[130] - 2.0 * v[129]) * a_
-                                + d * (v[328] - v[327])) * d + a_ * a_ * u2) + v[165]
-                        + 2.0 * v[166],
-                    d * m1
-                        * (v[379] + v[380]
-                            + v[9] * (-v[58] * v[387] - v[79] * v[388] - v[39] * v[386]))
-                        + v[103] * v[126] * v[38] + v[26] * v[101] * v[131],
-                    v[10] * v[103] * v[148]
-                        + m2 * d
-                            * (v[383] - v[382]
-                                + v[9]
-                                    * (-v[387] * v[73] - v[90] * v[388] - v[386] * v[22]))
-                        + v[395],
+                            * (d
+                                * (-(2.0 * v[144] + 2.0 * v[145]) * a_
+                                    - (u1 * v[199] + v[201] * u3) * d) - u3 * v[193])
+                        - v[38] * v[419] - v[156] - v[103] * v[425]
+                        + J2 * (v[139] + v[428]) - 2.0 * v[157]
+                        + (v[101] * u4 - v[139] - v[428]) * J1
+                        - v[9] * (-v[423] * v[95] - v[80] * v[421] - v[45] * v[422]),
+                    u2 * v[429] - v[104] * v[135] - v[415] * v[55]
+                        - v[9] * (-v[56] * v[422] - v[68] * v[421] - v[89] * v[423])
+                        + v[190] + 2.0 * v[191] + (v[143] - u5 * v[100] - v[430]) * J1
+                        + J2 * (v[430] - v[143])
+                        - (d
+                            * (a_ * (2.0 * v[141] - 2.0 * v[140])
+                                + d * (v[378] - v[377])) + a_ * v[159]) * m1,
+                    v[108] * v[430] + v[143] * v[106]
+                        + (v[418]
+                            - v[9] * (-v[63] * v[421] - v[85] * v[423] - v[34] * v[422]))
+                            * v[121],
+                    v[11] * v[206] + v[431]
+                        + v[115]
+                            * (v[412] - v[413]
+                                - v[9]
+                                    * (-v[21] * v[422] - v[93] * v[423] - v[421] * v[78])),
                 ],
                 [
-                    (v[9] * (-v[78] * v[403] - v[97] * v[0] * v[404] - v[405] * v[51])
-                        - v[140] * v[38] * v[38] * d * m1 + m2 * v[12] * v[401]) * d
-                        - v[26] * v[26] * u4 * J1 + v[38] * v[38] * v[392] + 2.0 * v[135]
-                        - v[395] + v[136] + u3 * v[406],
-                    2.0 * (u5 * m2 * a_ * d * v[12]) + v[374]
-                        + (-v[93] * v[404] - v[403] * v[75] - v[30] * v[405]) * v[9]
-                        + v[38]
-                            * (v[26] * (v[372] - v[371] - v[373])
-                                - v[140] * v[28] * d * m1) - v[407],
-                    v[408] - v[178] + v[394] * u1 - 2.0 * v[179]
-                        + v[9] * (-v[85] * v[404] - v[63] * v[403] - v[405] * v[47])
-                        - m1 * (v[409] + d * (d * (v[184] + v[186]) + a_ * v[410]))
-                        - v[411] + v[412] - m2 * v[36] * v[401],
-                    v[408]
-                        + (v[397]
-                            + v[9] * (-v[79] * v[404] - v[39] * v[405] - v[58] * v[403])
-                            + v[398]) * d * m1 + v[412],
-                    m2 * d
-                        * (v[9] * (-v[403] * v[73] - v[90] * v[404] - v[405] * v[22])
-                            - 2.0 * (a_ * u2 * v[12])),
+                    d
+                        * (v[25] * v[433] - v[101] * v[432]
+                            - v[9] * (-v[83] * v[438] - v[439] * v[98] - v[440] * v[31]))
+                        + v[425] * v[101] + 2.0 * v[156] - v[431] + v[157] + u3 * v[441]
+                        - v[103] * v[204],
+                    v[22] * (v[32] * (v[153] - v[204] - v[374]) + v[432] * v[37])
+                        + v[424] + 2.0 * (u5 * v[115] * v[44])
+                        - v[9] * (-v[440] * v[45] - v[438] * v[80] - v[439] * v[95])
+                        - v[442],
+                    v[429] * u1 - v[208]
+                        - (v[443] + d * (d * (v[219] + v[221]) + a_ * v[444])) * m1
+                        - 2.0 * v[209] - v[445] - v[433] * v[55]
+                        - v[9] * (-v[56] * v[440] - v[89] * v[439] - v[68] * v[438])
+                        + v[447],
+                    v[447]
+                        + v[121]
+                            * (v[436]
+                                - v[9]
+                                    * (-v[34] * v[440] - v[439] * v[85] - v[63] * v[438])),
+                    (-v[9] * (-v[438] * v[78] - v[439] * v[93] - v[440] * v[21])
+                        - 2.0 * v[168]) * v[115],
                 ],
                 [
-                    v[126] * v[101] * v[38] + u2 * v[406]
-                        - v[12] * v[12] * (v[115] + v[413]) + v[10] * v[10] * u5 * J1
-                        - 2.0 * v[165] - v[166]
-                        + (v[9]
-                            * (-v[97] * v[0] * v[420] - v[421] * v[51] - v[78] * v[422])
-                            + m2 * v[116] * d * v[12] * v[12] - v[418] * v[38] * m1) * d,
-                    2.0 * v[178] - v[408] + v[391] * u1
-                        - m2 * ((d * (v[175] - v[177]) + a_ * v[423]) * d - v[409])
-                        + v[179]
-                        + v[9] * (-v[422] * v[75] - v[93] * v[420] - v[30] * v[421])
-                        + v[411] - v[418] * v[28] * m1 + v[424],
-                    v[12]
-                        * (v[10] * (-v[115] - v[413] - v[369]) - m2 * v[116] * d * v[36])
-                        + v[9] * (-v[421] * v[47] - v[420] * v[85] - v[63] * v[422])
-                        - v[375] + 2.0 * (a_ * v[38] * d * u4 * m1) + v[407],
-                    (v[9] * (-v[79] * v[420] - v[58] * v[422] - v[39] * v[421])
-                        - 2.0 * (a_ * u3 * v[38])) * d * m1,
-                    m2 * d
-                        * (v[414]
-                            + v[9] * (-v[90] * v[420] - v[22] * v[421] - v[422] * v[73])
-                            - v[415]) + v[411] + v[424],
+                    u2 * v[441] - 2.0 * v[190] - v[191] - (v[134] - v[132]) * v[100]
+                        + v[152] * v[22] + v[213] * v[104]
+                        + d
+                            * (v[100] * v[448] - v[449] * v[23]
+                                - v[9]
+                                    * (-v[456] * v[31] - v[98] * v[457] - v[458] * v[83])),
+                    2.0 * v[208]
+                        - m2 * (d * (d * (v[200] - v[202]) + a_ * v[459]) - v[443])
+                        + v[427] * u1 + v[209]
+                        - v[9] * (-v[95] * v[457] - v[458] * v[80] - v[456] * v[45])
+                        - v[446] + v[460] - v[449] * v[38],
+                    v[18] * (v[448] * v[54] - v[11] * v[411])
+                        - v[9] * (-v[89] * v[457] - v[56] * v[456] - v[68] * v[458])
+                        - v[426] + 2.0 * (v[121] * u4 * v[46]) + v[442],
+                    v[121]
+                        * (-v[9] * (-v[85] * v[457] - v[456] * v[34] - v[458] * v[63])
+                            - 2.0 * v[184]),
+                    v[115]
+                        * (v[452] + v[453]
+                            - v[9] * (-v[93] * v[457] - v[458] * v[78] - v[456] * v[21]))
+                        + v[460],
                 ],
                 [
-                    v[425] * v[38] - v[26] * v[131] * J1
-                        + d * d
-                            * (v[9]
-                                * (v[427] * v[97] * v[0] + v[428] * v[51] + v[78] * v[429])
-                                - v[38] * v[410]) * m1,
-                    (v[9] * (v[30] * v[428] + v[427] * v[93] + v[75] * v[429])
-                        - v[28] * v[410]) * d * m1 - v[38] * v[131] * J1
-                        - v[26] * v[425],
-                    (v[9] * (v[428] * v[47] + v[427] * v[85] + v[63] * v[429])
-                        - a_ * v[38] * v[426]) * d * m1,
-                    (v[427] * v[79] + v[428] * v[39] + v[58] * v[429]) * v[9] * d * d
-                        * m1 * m1,
-                    v[9] * m2 * d * d
-                        * (v[427] * v[90] + v[73] * v[429] + v[428] * v[22]) * m1,
+                    v[22] * v[461]
+                        + v[126]
+                            * (v[9] * (v[463] * v[31] + v[98] * v[464] + v[83] * v[465])
+                                - v[22] * v[444]) - v[143] * J1,
+                    v[121]
+                        * ((v[465] * v[80] + v[463] * v[45] + v[464] * v[95]) * v[9]
+                            + v[444] * v[37]) - v[205] * J1 - v[32] * v[461],
+                    v[121]
+                        * (v[9] * (v[68] * v[465] + v[56] * v[463] + v[89] * v[464])
+                            + v[462] * v[46]),
+                    (v[63] * v[465] + v[34] * v[463] + v[464] * v[85]) * v[121] * v[112],
+                    (v[465] * v[78] + v[463] * v[21] + v[464] * v[93]) * v[127],
                 ],
                 [
-                    m2 * d * d
-                        * (v[9]
-                            * (v[78] * v[431] + v[432] * v[51] + v[433] * v[97] * v[0])
-                            + v[12] * v[423]) - v[10] * v[134] * J1
-                        - v[121] * v[12] * v[434],
-                    m2 * d
-                        * (v[9] * (v[433] * v[93] + v[75] * v[431] + v[30] * v[432])
-                            - a_ * v[12] * (-2.0 * u5 - 2.0 * u2)),
-                    m2
-                        * (v[9] * (v[433] * v[85] + v[432] * v[47] + v[63] * v[431])
-                            - v[423] * v[36]) * d - v[10] * v[121] * v[434]
-                        + v[12] * v[134] * J1,
-                    v[9] * m2 * d * d * m1
-                        * (v[433] * v[79] + v[432] * v[39] + v[58] * v[431]),
-                    v[9] * m2 * m2 * (v[433] * v[90] + v[432] * v[22] + v[73] * v[431])
-                        * d * d,
+                    (v[18] * v[459]
+                        + v[9] * (v[468] * v[83] + v[98] * v[469] + v[470] * v[31]))
+                        * v[130] - v[147] * J1 - v[139] * v[466],
+                    v[115]
+                        * (v[467] * v[44]
+                            + v[9] * (v[95] * v[469] + v[468] * v[80] + v[470] * v[45])),
+                    v[115]
+                        * (v[459] * v[54]
+                            + v[9] * (v[468] * v[68] + v[56] * v[470] + v[89] * v[469]))
+                        - v[466] * v[212] + J1 * v[214],
+                    (v[34] * v[470] + v[468] * v[63] + v[85] * v[469]) * v[127],
+                    v[115] * v[123] * (v[468] * v[78] + v[21] * v[470] + v[93] * v[469]),
                 ],
             ],
         }
@@ -10528,7 +10391,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let psi = state[0];
         let theta = state[1];
@@ -10537,6 +10400,8 @@ pub mod reduced_volterra {
         let gamma2 = state[4];
         let u2 = state[9];
         let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
         let m0 = params.m0;
         let m1 = params.m1;
         let m2 = params.m2;
@@ -10545,43 +10410,43 @@ pub mod reduced_volterra {
         v[0] = f64::cos(theta);
         v[1] = 1.0 / v[0];
         v[2] = f64::sin(phi);
-        v[3] = u2 * v[2];
-        v[4] = f64::cos(phi);
-        v[5] = u3 * v[4];
-        v[6] = v[3] + v[5];
-        v[7] = u2 * v[4] - u3 * v[2];
-        v[8] = f64::sin(theta);
+        v[3] = f64::cos(phi);
+        v[4] = u2 * v[2] + u3 * v[3];
+        v[5] = v[1] * v[4];
+        v[6] = u2 * v[3] - u3 * v[2];
+        v[7] = f64::sin(theta);
+        v[8] = v[7] * v[5];
         v[9] = 1.0 / (m2 + m0 + m1);
-        v[10] = f64::cos(gamma2);
-        v[11] = v[10] * v[0];
-        v[12] = f64::sin(gamma2);
-        v[13] = v[8] * v[12] * v[4];
-        v[14] = f64::cos(psi);
-        v[15] = f64::sin(psi);
-        v[16] = (v[11] - v[13]) * v[14] - v[12] * v[2] * v[15];
-        v[17] = v[14] * v[0] * v[12];
-        v[18] = v[2] * v[15];
-        v[19] = v[8] * v[14] * v[4];
-        v[20] = v[18] + v[19];
-        v[21] = v[10] * v[20];
-        v[22] = v[17] + v[21];
-        v[23] = v[10] * a_;
-        v[24] = d + v[23];
-        v[25] = m2 * (v[22] * v[24] - a_ * v[16] * v[12]);
-        v[26] = f64::cos(gamma1);
-        v[27] = v[26] * d;
-        v[28] = -a_ - v[27];
-        v[29] = v[28] * v[20] * m1;
-        v[30] = v[25] + v[29];
-        v[31] = v[30] * u2;
-        v[32] = v[4] * v[15];
-        v[33] = v[8] * v[14] * v[2];
-        v[34] = v[33] - v[32];
-        v[35] = v[10] * d;
-        v[36] = -a_ - v[35];
-        v[37] = m2 * v[34] * v[36];
-        v[38] = f64::sin(gamma1);
-        v[39] = v[26] * v[34] - v[14] * v[38] * v[0];
+        v[10] = u5 * m2;
+        v[11] = f64::cos(gamma2);
+        v[12] = f64::sin(psi);
+        v[13] = v[2] * v[12];
+        v[14] = v[7] * v[3];
+        v[15] = f64::cos(psi);
+        v[16] = v[13] + v[14] * v[15];
+        v[17] = v[11] * v[16];
+        v[18] = f64::sin(gamma2);
+        v[19] = v[0] * v[18];
+        v[20] = v[15] * v[19];
+        v[21] = v[17] + v[20];
+        v[22] = f64::sin(gamma1);
+        v[23] = v[22] * m1;
+        v[24] = v[16] * v[23];
+        v[25] = m2 * v[18];
+        v[26] = v[7] * v[2];
+        v[27] = v[15] * v[26];
+        v[28] = v[3] * v[12];
+        v[29] = v[27] - v[28];
+        v[30] = v[25] * v[29];
+        v[31] = v[24] - v[30];
+        v[32] = f64::cos(gamma1);
+        v[33] = v[22] * v[0];
+        v[34] = v[32] * v[29] - v[15] * v[33];
+        v[35] = u4 * m1;
+        v[36] = v[32] * d;
+        v[37] = a_ + v[36];
+        v[38] = -(m1 * v[37]);
+        v[39] = v[11] * a_;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10590,56 +10455,56 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let u1 = state[8];
+        let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        v[40] = v[26] * a_;
-        v[41] = v[40] + d;
-        v[42] = v[8] * v[38] * v[2];
-        v[43] = v[26] * v[0];
-        v[44] = v[38] * v[4] * v[15];
-        v[45] = v[14] * (v[42] + v[43]) - v[44];
-        v[46] = (v[39] * v[41] + a_ * v[45] * v[38]) * m1;
-        v[47] = v[37] + v[46];
-        v[48] = u3 * v[47];
-        v[49] = v[38] * v[20] * m1;
-        v[50] = m2 * v[34] * v[12];
-        v[51] = v[49] - v[50];
-        v[52] = d * (-u5 * m2 * v[22] - u1 * v[51] - v[39] * u4 * m1);
-        v[53] = v[14] * v[4];
-        v[54] = v[8] * v[2] * v[15];
-        v[55] = v[53] + v[54];
-        v[56] = v[26] * v[55];
-        v[57] = v[38] * v[0] * v[15];
-        v[58] = v[56] - v[57];
-        v[59] = v[26] * v[0] * v[15];
-        v[60] = v[59] + v[38] * v[55];
-        v[61] = (v[58] * v[41] + a_ * v[38] * v[60]) * m1;
-        v[62] = m2 * v[36] * v[55];
-        v[63] = v[61] + v[62];
-        v[64] = v[14] * v[2];
-        v[65] = v[8] * v[4] * v[15];
-        v[66] = v[65] - v[64];
-        v[67] = v[28] * v[66] * m1;
-        v[68] = v[10] * v[0] * v[15];
-        v[69] = v[64] - v[65];
-        v[70] = v[68] + v[69] * v[12];
-        v[71] = v[0] * v[12] * v[15];
-        v[72] = v[10] * v[66];
-        v[73] = v[71] + v[72];
-        v[74] = m2 * (v[73] * v[24] - a_ * v[12] * v[70]);
-        v[75] = v[67] + v[74];
-        v[76] = m2 * v[12] * v[55];
-        v[77] = v[38] * v[66] * m1;
-        v[78] = v[77] - v[76];
-        v[79] = v[26] * v[0] * v[2] + v[8] * v[38];
+        v[40] = v[39] + d;
+        v[41] = v[11] * v[0];
+        v[42] = v[14] * v[18];
+        v[43] = (v[41] - v[42]) * v[15] - v[18] * v[13];
+        v[44] = a_ * v[18];
+        v[45] = v[38] * v[16] + m2 * (v[40] * v[21] - v[43] * v[44]);
+        v[46] = a_ * v[22];
+        v[47] = v[22] * v[26] + v[32] * v[0];
+        v[48] = v[47] * v[15];
+        v[49] = v[22] * v[28];
+        v[50] = v[48] - v[49];
+        v[51] = v[32] * a_;
+        v[52] = v[51] + d;
+        v[53] = v[11] * d;
+        v[54] = v[53] + a_;
+        v[55] = -(m2 * v[54]);
+        v[56] = m1 * (v[46] * v[50] + v[34] * v[52]) + v[29] * v[55];
+        v[57] = (-u2 * v[45] - v[56] * u3)
+            - (v[10] * v[21] + u1 * v[31] + v[34] * v[35]) * d;
+        v[58] = v[15] * v[3] + v[26] * v[12];
+        v[59] = v[58] * v[55];
+        v[60] = v[32] * v[58];
+        v[61] = v[0] * v[12];
+        v[62] = v[22] * v[61];
+        v[63] = v[60] - v[62];
+        v[64] = v[58] * v[22];
+        v[65] = v[32] * v[61];
+        v[66] = v[64] + v[65];
+        v[67] = (v[52] * v[63] + v[66] * v[46]) * m1;
+        v[68] = v[59] + v[67];
+        v[69] = v[15] * v[2];
+        v[70] = v[14] * v[12];
+        v[71] = v[70] - v[69];
+        v[72] = v[38] * v[71];
+        v[73] = v[69] - v[70];
+        v[74] = v[11] * v[61];
+        v[75] = v[73] * v[18] + v[74];
+        v[76] = v[18] * v[61];
+        v[77] = v[11] * v[71];
+        v[78] = v[76] + v[77];
+        v[79] = m2 * (v[40] * v[78] - v[75] * v[44]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10648,73 +10513,63 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
-        let u5 = state[12];
         let Ixy = params.Ixy;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[80] = v[38] * v[0] * v[2];
-        v[81] = v[26] * v[8];
-        v[82] = v[80] - v[81];
-        v[83] = (v[79] * v[41] + a_ * v[82] * v[38]) * m1;
-        v[84] = m2 * v[0] * v[2] * v[36];
-        v[85] = v[83] + v[84];
-        v[86] = u3 * v[85];
-        v[87] = -v[0] * v[12] * v[4] - v[10] * v[8];
-        v[88] = v[8] * v[12];
-        v[89] = v[10] * v[0] * v[4];
-        v[90] = v[89] - v[88];
-        v[91] = m2 * (v[90] * v[24] - a_ * v[87] * v[12]);
-        v[92] = v[28] * v[0] * m1 * v[4];
-        v[93] = v[91] + v[92];
-        v[94] = u2 * v[93];
-        v[95] = v[38] * m1 * v[4];
-        v[96] = m2 * v[12] * v[2];
-        v[97] = v[95] - v[96];
-        v[98] = d * (-v[79] * u4 * m1 - u5 * m2 * v[90] - v[97] * v[0] * u1);
-        v[99] = v[26] * v[26];
-        v[100] = v[10] * v[10];
-        v[101] = J1 - J2;
-        v[102] = v[26] * v[101] * v[38] - Ixy
-            + d
-                * ((-v[30] * v[51] - v[78] * v[75] - v[93] * v[97] * v[0]) * v[9]
-                    + v[28] * v[38] * m1);
-        v[103] = J2 - J1;
-        v[104] = (v[9] * (-v[63] * v[78] - v[47] * v[51] - v[97] * v[0] * v[85])
-            - m2 * v[12] * v[36]) * d + v[10] * v[103] * v[12] - Ixz;
-        v[105] = v[9] * d * d * (-v[97] * v[79] * v[0] - v[39] * v[51] - v[78] * v[58])
-            * m1;
-        v[106] = v[9] * m2 * d * d
-            * (-v[22] * v[51] - v[78] * v[73] - v[90] * v[97] * v[0]);
-        v[107] = d * d;
-        v[108] = (-v[30] * v[47] - v[63] * v[75] - v[93] * v[85]) * v[9] - Iyz;
-        v[109] = v[9] * d * m1 * (-v[30] * v[39] - v[93] * v[79] - v[58] * v[75]);
-        v[110] = m2
-            * (v[9] * (-v[90] * v[93] - v[30] * v[22] - v[75] * v[73]) + d + v[23]) * d
-            + J2;
-        v[111] = J2
-            + d * m1
-                * (v[40] + d + (-v[39] * v[47] - v[79] * v[85] - v[63] * v[58]) * v[9]);
-        v[112] = v[9] * m2 * d * (-v[22] * v[47] - v[90] * v[85] - v[63] * v[73]);
-        v[113] = v[9] * m2 * d * d * m1
-            * (-v[39] * v[22] - v[90] * v[79] - v[58] * v[73]);
-        v[114] = u5 + u2;
-        v[115] = J1 * v[114];
-        v[116] = 2.0 * u5 + u2;
-        v[117] = v[116] * J2;
-        v[118] = v[117] - v[115];
-        v[119] = u3 * v[12];
+        v[80] = v[72] + v[79];
+        v[81] = v[25] * v[58];
+        v[82] = v[23] * v[71];
+        v[83] = v[82] - v[81];
+        v[84] = v[0] * v[2];
+        v[85] = v[7] * v[22] + v[32] * v[84];
+        v[86] = v[84] * v[22];
+        v[87] = v[32] * v[7];
+        v[88] = v[86] - v[87];
+        v[89] = v[84] * v[55] + m1 * (v[85] * v[52] + v[88] * v[46]);
+        v[90] = v[7] * v[18];
+        v[91] = v[0] * v[3];
+        v[92] = v[11] * v[91];
+        v[93] = v[92] - v[90];
+        v[94] = v[18] * v[91] + v[11] * v[7];
+        v[95] = m2 * (v[40] * v[93] + v[44] * v[94]) + v[38] * v[91];
+        v[96] = v[25] * v[2];
+        v[97] = v[23] * v[3];
+        v[98] = v[0] * (v[97] - v[96]);
+        v[99] = (-v[89] * u3 - u2 * v[95])
+            - d * (v[85] * v[35] + v[93] * v[10] + v[98] * u1);
+        v[100] = v[18] * v[18];
+        v[101] = v[22] * v[22];
+        v[102] = d * d;
+        v[103] = v[32] * v[32];
+        v[104] = v[11] * v[11];
+        v[105] = v[32] * v[22];
+        v[106] = J1 - J2;
+        v[107] = (v[38] * v[22] - (v[98] * v[95] + v[83] * v[80] + v[45] * v[31]) * v[9])
+            * d - Ixy + v[105] * v[106];
+        v[108] = J2 - J1;
+        v[109] = v[11] * v[18];
+        v[110] = v[108] * v[109] - Ixz
+            + (v[25] * v[54] - v[9] * (v[89] * v[98] + v[68] * v[83] + v[56] * v[31]))
+                * d;
+        v[111] = v[9] * d;
+        v[112] = v[111] * m1;
+        v[113] = d * v[112];
+        v[114] = -(v[113] * (v[83] * v[63] + v[34] * v[31] + v[98] * v[85]));
+        v[115] = m2 * d;
+        v[116] = v[115] * v[111];
+        v[117] = -(v[116] * (v[83] * v[78] + v[98] * v[93] + v[21] * v[31]));
+        v[118] = -v[9] * (v[89] * v[95] + v[68] * v[80] + v[56] * v[45]) - Iyz;
+        v[119] = -((v[63] * v[80] + v[85] * v[95] + v[34] * v[45]) * v[112]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10723,7 +10578,7 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let u1 = state[8];
         let u2 = state[9];
@@ -10733,50 +10588,54 @@ pub mod reduced_volterra {
         let Izz = params.Izz;
         let Ixz = params.Ixz;
         let Iyz = params.Iyz;
+        let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
+        let J1 = params.J1;
         let J2 = params.J2;
-        v[120] = v[10] * u1;
-        v[121] = v[120] - v[119];
-        v[122] = u2 * v[38];
-        v[123] = v[26] * u1;
-        v[124] = -v[122] - v[123];
-        v[125] = u3 + u4;
-        v[126] = v[122] + v[123];
-        v[127] = J2 * v[124] * u4 + v[125] * v[126] * v[101];
-        v[128] = v[127] * v[38];
-        v[129] = v[38] * u1;
-        v[130] = v[26] * u2;
-        v[131] = v[130] - v[129];
-        v[132] = v[12] * u1;
-        v[133] = v[10] * u3;
-        v[134] = -v[132] - v[133];
-        v[135] = u2 * Iyz;
-        v[136] = u1 * Ixz;
-        v[137] = u3 * Izz - v[135] - v[136];
-        v[138] = -2.0 * u5 - u2;
-        v[139] = d * (v[10] * v[138] * u1 + v[116] * u3 * v[12]) - a_ * u2 * u1;
-        v[140] = u3 + 2.0 * u4;
-        v[141] = d * (v[26] * v[140] * u1 + v[140] * u2 * v[38]) + a_ * u3 * u1;
-        v[142] = a_ * u2 * u2 * v[12];
-        v[143] = d * v[12] * u1;
-        v[144] = u3 * v[36];
-        v[145] = v[144] - v[143];
-        v[146] = v[121] * v[145];
-        v[147] = v[142] + v[146];
-        v[148] = v[132] + v[133];
-        v[149] = (u5 * d + u2 * v[24]) * v[114] - v[10] * u5 * a_ * u2 - v[145] * v[148];
-        v[150] = (v[147] * v[73] + v[149] * v[70] + v[55] * v[139]) * m2;
-        v[151] = a_ * u3 * u3 * v[38];
-        v[152] = u2 * v[28];
-        v[153] = v[38] * d * u1;
-        v[154] = v[152] + v[153];
-        v[155] = v[154] * v[126];
-        v[156] = v[151] - v[155];
-        v[157] = v[154] * v[131];
-        v[158] = v[26] * a_ * u3 * u4;
-        v[159] = (u3 * v[41] + d * u4) * v[125];
+        v[120] = J2
+            + (v[40] - (v[80] * v[78] + v[21] * v[45] + v[93] * v[95]) * v[9]) * v[115];
+        v[121] = d * m1;
+        v[122] = J2
+            + v[121] * (v[52] - v[9] * (v[89] * v[85] + v[68] * v[63] + v[56] * v[34]));
+        v[123] = m2 * v[111];
+        v[124] = -((v[68] * v[78] + v[89] * v[93] + v[56] * v[21]) * v[123]);
+        v[125] = v[9] * m1;
+        v[126] = v[121] * d;
+        v[127] = v[115] * v[112];
+        v[128] = -((v[34] * v[21] + v[85] * v[93] + v[63] * v[78]) * v[127]);
+        v[129] = v[9] * m2;
+        v[130] = v[115] * d;
+        v[131] = 2.0 * u5 + u2;
+        v[132] = J2 * v[131];
+        v[133] = u5 + u2;
+        v[134] = J1 * v[133];
+        v[135] = v[132] - v[134];
+        v[136] = v[11] * u1;
+        v[137] = u3 * v[18];
+        v[138] = v[136] - v[137];
+        v[139] = v[18] * v[138];
+        v[140] = v[22] * u1;
+        v[141] = v[32] * u2;
+        v[142] = v[141] - v[140];
+        v[143] = v[32] * v[142];
+        v[144] = v[18] * u1;
+        v[145] = v[11] * u3;
+        v[146] = v[144] + v[145];
+        v[147] = -(v[11] * v[146]);
+        v[148] = u3 + u4;
+        v[149] = u2 * v[22];
+        v[150] = v[32] * u1;
+        v[151] = v[149] + v[150];
+        v[152] = v[106] * v[151];
+        v[153] = J2 * u4;
+        v[154] = v[148] * v[152] - v[153] * v[151];
+        v[155] = v[154] * v[22];
+        v[156] = u2 * Iyz;
+        v[157] = u1 * Ixz;
+        v[158] = u3 * Izz - v[156] - v[157];
+        v[159] = a_ * u2;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10785,121 +10644,128 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
-        let gamma1 = state[3];
         let gamma2 = state[4];
         let u1 = state[8];
         let u2 = state[9];
         let u3 = state[10];
         let u4 = state[11];
         let u5 = state[12];
-        let Ixx = params.Ixx;
         let Iyy = params.Iyy;
         let Ixy = params.Ixy;
-        let Ixz = params.Ixz;
         let Iyz = params.Iyz;
         let m1 = params.m1;
         let m2 = params.m2;
+        let d = params.d;
         let a_ = params.a_;
-        v[160] = v[157] + v[158] - v[159];
-        v[161] = m1 * (v[66] * v[141] + v[156] * v[58] + v[160] * v[60]);
-        v[162] = -v[150] - v[161];
-        v[163] = -m1 * (v[45] * v[160] + v[39] * v[156] + v[20] * v[141])
-            - m2 * (v[16] * v[149] + v[147] * v[22] + v[34] * v[139]);
-        v[164] = -m2 * (v[0] * v[2] * v[139] + v[147] * v[90] + v[87] * v[149])
-            - (v[0] * v[141] * v[4] + v[82] * v[160] + v[156] * v[79]) * m1;
-        v[165] = Iyz * u3;
-        v[166] = Ixy * u1;
-        v[167] = u2 * Iyy - v[165] - v[166];
-        v[168] = v[103] * v[121] * v[148];
-        v[169] = v[26] * v[127];
-        v[170] = u3 * u3;
-        v[171] = u1 * u1;
-        v[172] = u5 * (-u5 - 2.0 * u2) + v[170] - v[171];
-        v[173] = 2.0 * gamma2;
-        v[174] = f64::sin(v[173]);
-        v[175] = u3 * v[174];
-        v[176] = f64::cos(v[173]);
-        v[177] = v[176] * u1;
-        v[178] = u3 * Ixz;
-        v[179] = u2 * Ixy;
-        v[180] = Ixx * u1 - v[178] - v[179];
-        v[181] = u2 * u2 + u4 * (-2.0 * u3 - u4) - v[171];
-        v[182] = 2.0 * gamma1;
-        v[183] = f64::sin(v[182]);
-        v[184] = u2 * v[183];
-        v[185] = f64::cos(v[182]);
-        v[186] = u1 * v[185];
-        v[187] = v[126] * v[101] * v[131];
-        v[188] = v[10] * v[69];
-        v[189] = v[188] - v[71];
-        v[190] = -v[53] - v[54];
-        v[191] = v[26] * v[190];
-        v[192] = v[191] + v[57];
-        v[193] = m2 * v[12] * v[190];
-        v[194] = v[69] * v[38] * m1;
-        v[195] = v[12] * v[66] - v[68];
-        v[196] = m2 * (v[189] * v[24] - a_ * v[195] * v[12]);
-        v[197] = v[69] * v[28] * m1;
-        v[198] = v[38] * v[190] - v[59];
-        v[199] = (v[192] * v[41] + a_ * v[38] * v[198]) * m1;
+        v[160] = v[11] * v[159];
+        v[161] = u3 * v[54];
+        v[162] = d * v[18];
+        v[163] = u1 * v[162];
+        v[164] = -v[161] - v[163];
+        v[165] = v[164] * v[146];
+        v[166] = (u5 * d + u2 * v[40]) * v[133] - u5 * v[160] - v[165];
+        v[167] = v[164] * v[138];
+        v[168] = u2 * v[44];
+        v[169] = u2 * v[168];
+        v[170] = v[167] + v[169];
+        v[171] = d * (v[131] * v[137] - v[136] * v[131]) - v[159] * u1;
+        v[172] = v[171] * v[58];
+        v[173] = u3 * u1;
+        v[174] = u3 + 2.0 * u4;
+        v[175] = a_ * v[173] + (v[149] * v[174] + v[174] * v[150]) * d;
+        v[176] = v[51] * u3 * u4 - v[148] * (u3 * v[52] + d * u4);
+        v[177] = v[22] * d;
+        v[178] = v[177] * u1;
+        v[179] = u2 * v[37];
+        v[180] = v[178] - v[179];
+        v[181] = v[180] * v[142];
+        v[182] = v[176] + v[181];
+        v[183] = v[180] * v[151];
+        v[184] = u3 * v[46];
+        v[185] = v[184] * u3;
+        v[186] = v[185] - v[183];
+        v[187] = (v[75] * v[166] + v[170] * v[78] + v[172]) * m2
+            + (v[175] * v[71] + v[66] * v[182] + v[63] * v[186]) * m1;
+        v[188] = (v[93] * v[170] + v[171] * v[84] - v[166] * v[94]) * m2
+            + (v[85] * v[186] + v[175] * v[91] + v[88] * v[182]) * m1;
+        v[189] = m2 * (v[166] * v[43] + v[171] * v[29] + v[21] * v[170])
+            + (v[34] * v[186] + v[182] * v[50] + v[175] * v[16]) * m1;
+        v[190] = Iyz * u3;
+        v[191] = Ixy * u1;
+        v[192] = u2 * Iyy - v[190] - v[191];
+        v[193] = a_ * a_;
+        v[194] = u1 * u1;
+        v[195] = u3 * u3;
+        v[196] = v[195] - v[194];
+        v[197] = v[196] - (u5 + 2.0 * u2) * u5;
+        v[198] = 2.0 * gamma2;
+        v[199] = f64::sin(v[198]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part5(
         _t: f64,
-        _state: &[f64; STATES],
+        state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
+        let gamma1 = state[3];
+        let u1 = state[8];
+        let u2 = state[9];
+        let u3 = state[10];
+        let u4 = state[11];
+        let u5 = state[12];
+        let Ixx = params.Ixx;
+        let Ixy = params.Ixy;
+        let Ixz = params.Ixz;
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        v[200] = m2 * v[190] * v[36];
-        v[201] = v[193] + v[76] - v[194] - v[77];
-        v[202] = -v[67] - v[74] - v[196] - v[197];
-        v[203] = v[9] * (v[30] * v[201] + v[202] * v[51]) * d;
-        v[204] = -v[61] - v[199] - v[200] - v[62];
-        v[205] = v[9] * (v[204] * v[51] + v[201] * v[47]) * d;
-        v[206] = -v[191] - v[56];
-        v[207] = v[9] * (v[206] * v[51] + v[39] * v[201]) * d * d * m1;
-        v[208] = -v[72] - v[188];
-        v[209] = v[9] * m2 * d * d * (v[201] * v[22] + v[208] * v[51]);
-        v[210] = v[9] * (v[30] * v[204] + v[202] * v[47]);
-        v[211] = (v[202] * v[39] + v[30] * v[206]) * v[9] * d * m1;
-        v[212] = v[9] * m2 * d * (v[202] * v[22] + v[30] * v[208]);
-        v[213] = v[9] * (v[206] * v[47] + v[39] * v[204]) * d * m1;
-        v[214] = v[9] * m2 * (v[208] * v[47] + v[22] * v[204]) * d;
-        v[215] = v[9] * m2 * d * d * m1 * (v[39] * v[208] + v[206] * v[22]);
-        v[216] = v[150] + v[161]
-            + (v[156] * v[192] + v[160] * v[198] + v[69] * v[141]) * m1
-            + m2 * (v[190] * v[139] + v[195] * v[149] + v[147] * v[189]);
-        v[217] = v[98] - v[86] - v[94];
-        v[218] = v[8] * v[28] * m1 * v[4];
-        v[219] = v[10] * v[8] * v[4];
-        v[220] = v[0] * v[12];
-        v[221] = -v[219] - v[220];
-        v[222] = v[13] - v[11];
-        v[223] = m2 * (v[221] * v[24] - v[222] * a_ * v[12]);
-        v[224] = m2 * v[8] * v[2] * v[36];
-        v[225] = -v[42] - v[43];
-        v[226] = v[26] * v[8] * v[2];
-        v[227] = v[38] * v[0];
-        v[228] = v[227] - v[226];
-        v[229] = (a_ * v[225] * v[38] + v[228] * v[41]) * m1;
-        v[230] = v[96] - v[95];
-        v[231] = v[14] * v[51];
-        v[232] = v[78] * v[15];
-        v[233] = v[230] * v[8];
-        v[234] = -v[231] - v[232] - v[233];
-        v[235] = v[75] * v[15];
-        v[236] = v[30] * v[14];
-        v[237] = v[218] - v[235] - v[236] - v[223];
-        v[238] = v[9] * (v[93] * v[234] + v[97] * v[0] * v[237]) * d;
-        v[239] = v[14] * v[47];
+        let J1 = params.J1;
+        v[200] = u3 * v[199];
+        v[201] = f64::cos(v[198]);
+        v[202] = v[201] * u1;
+        v[203] = v[32] * v[154];
+        v[204] = u4 * J1;
+        v[205] = v[142] * v[22];
+        v[206] = v[108] * v[146];
+        v[207] = v[206] * v[138];
+        v[208] = u3 * Ixz;
+        v[209] = u2 * Ixy;
+        v[210] = Ixx * u1 - v[208] - v[209];
+        v[211] = v[152] * v[142];
+        v[212] = v[11] * v[138];
+        v[213] = u5 * J1;
+        v[214] = -(v[18] * v[146]);
+        v[215] = a_ * u1;
+        v[216] = u2 * u2 - v[194] - u4 * (2.0 * u3 + u4);
+        v[217] = 2.0 * gamma1;
+        v[218] = f64::sin(v[217]);
+        v[219] = u2 * v[218];
+        v[220] = f64::cos(v[217]);
+        v[221] = u1 * v[220];
+        v[222] = v[11] * v[73];
+        v[223] = v[222] - v[76];
+        v[224] = v[18] * v[71] - v[74];
+        v[225] = m2 * (v[223] * v[40] - v[224] * v[44]);
+        v[226] = v[73] * v[38];
+        v[227] = v[225] + v[226];
+        v[228] = v[62] - v[60];
+        v[229] = v[73] * v[23];
+        v[230] = -v[64] - v[65];
+        v[231] = (v[230] * v[46] + v[52] * v[228]) * m1;
+        v[232] = v[231] - v[59];
+        v[233] = d * v[111];
+        v[234] = v[227] + v[80];
+        v[235] = v[81] - v[82];
+        v[236] = v[235] - v[229] - v[81];
+        v[237] = v[111] * (v[236] * v[45] - v[234] * v[31]);
+        v[238] = v[232] + v[68];
+        v[239] = v[111] * (v[56] * v[236] - v[238] * v[31]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10908,71 +10774,51 @@ pub mod reduced_volterra {
         _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[240] = v[63] * v[15];
-        v[241] = v[224] - v[239] - v[229] - v[240];
-        v[242] = v[9] * (v[97] * v[0] * v[241] + v[234] * v[85]) * d;
-        v[243] = v[226] - v[58] * v[15] - v[39] * v[14] - v[227];
-        v[244] = v[9] * (v[79] * v[234] + v[243] * v[97] * v[0]) * d * d * m1;
-        v[245] = v[219] - v[14] * v[22] - v[73] * v[15] + v[220];
-        v[246] = v[9] * m2 * (v[97] * v[245] * v[0] + v[90] * v[234]) * d * d;
-        v[247] = v[9] * (v[237] * v[85] + v[93] * v[241]);
-        v[248] = v[9] * d * m1 * (v[243] * v[93] + v[79] * v[237]);
-        v[249] = (v[93] * v[245] + v[90] * v[237]) * v[9] * m2 * d;
-        v[250] = v[9] * d * m1 * (v[79] * v[241] + v[243] * v[85]);
-        v[251] = v[9] * m2 * (v[245] * v[85] + v[90] * v[241]) * d;
-        v[252] = v[9] * m2 * d * d * m1 * (v[79] * v[245] + v[243] * v[90]);
-        v[253] = m1 * (v[225] * v[160] - v[8] * v[141] * v[4] + v[156] * v[228])
-            - v[162] * v[15]
-            + m2 * (v[222] * v[149] - v[8] * v[2] * v[139] + v[147] * v[221])
-            - v[163] * v[14];
-        v[254] = m2 * v[36] + (a_ * v[38] * v[38] + v[26] * v[41]) * m1;
-        v[255] = v[32] - v[33];
-        v[256] = v[38] * m1 * v[255] - m2 * v[12] * v[20];
-        v[257] = m2 * (v[10] * v[24] * v[255] - a_ * v[34] * v[12] * v[12])
-            + v[28] * m1 * v[255];
-        v[258] = m2 * (v[10] * v[190] * v[24] - a_ * v[12] * v[12] * v[55])
-            + v[28] * v[190] * m1;
-        v[259] = v[38] * v[190] * m1 - m2 * v[12] * v[66];
-        v[260] = -m2 * v[12] * v[4] - v[38] * v[2] * m1;
-        v[261] = m2 * (-v[10] * v[24] - a_ * v[12] * v[12]) - v[28] * m1;
-        v[262] = v[9]
-            * (v[0] * (-v[93] * v[260] - v[97] * v[0] * v[2] * v[261]) - v[75] * v[259]
-                - v[257] * v[51] - v[30] * v[256] - v[78] * v[258]) * d;
-        v[263] = v[78] * v[66];
-        v[264] = v[20] * v[51];
-        v[265] = v[97] * v[0] * v[0] * v[4];
-        v[266] = -v[263] - v[264] - v[265];
-        v[267] = v[9]
-            * (v[254] * v[266] - v[47] * v[256] - v[63] * v[259] - v[0] * v[85] * v[260])
-            * d;
-        v[268] = v[9]
-            * (v[26] * v[266] - v[79] * v[0] * v[260] - v[58] * v[259] - v[39] * v[256])
-            * d * d * m1;
-        v[269] = v[97] * v[0] * v[0] * v[2];
-        v[270] = v[9] * m2 * d * d
-            * (v[10] * (v[269] - v[78] * v[190] - v[51] * v[255]) - v[22] * v[256]
-                - v[90] * v[0] * v[260] - v[73] * v[259]);
-        v[271] = v[75] * v[66];
-        v[272] = v[30] * v[20];
-        v[273] = v[93] * v[0] * v[4];
-        v[274] = -v[271] - v[272] - v[273];
-        v[275] = v[9]
-            * (v[254] * v[274] - v[257] * v[47] - v[63] * v[258]
-                - v[0] * v[2] * v[261] * v[85]);
-        v[276] = v[26] * v[274];
-        v[277] = v[9]
-            * (v[276] - v[58] * v[258] - v[79] * v[0] * v[2] * v[261] - v[257] * v[39])
-            * d * m1;
-        v[278] = v[93] * v[0] * v[2];
-        v[279] = (v[10] * (v[278] - v[75] * v[190] - v[30] * v[255])
-            - v[90] * v[0] * v[2] * v[261] - v[73] * v[258] - v[257] * v[22]) * v[9] * m2
-            * d;
+        v[240] = v[113] * v[236] * v[34];
+        v[241] = v[77] + v[222];
+        v[242] = (v[236] * v[21] - v[241] * v[31]) * v[116];
+        v[243] = (-v[56] * v[234] - v[238] * v[45]) * v[9];
+        v[244] = -(v[234] * v[34] * v[112]);
+        v[245] = v[123] * (-v[234] * v[21] - v[241] * v[45]);
+        v[246] = -(v[238] * v[34] * v[112]);
+        v[247] = v[123] * (-v[238] * v[21] - v[56] * v[241]);
+        v[248] = -(v[34] * v[241] * v[127]);
+        v[249] = v[187] + (v[230] * v[182] + v[73] * v[175] + v[228] * v[186]) * m1
+            + (v[166] * v[224] - v[172] + v[223] * v[170]) * m2;
+        v[250] = v[7] * v[1];
+        v[251] = v[9] * v[99];
+        v[252] = v[32] * v[26];
+        v[253] = v[33] - v[252];
+        v[254] = v[96] - v[97];
+        v[255] = v[7] * v[254];
+        v[256] = v[19] + v[11] * v[14];
+        v[257] = v[26] * v[55];
+        v[258] = (v[253] * v[52] - v[47] * v[46]) * m1;
+        v[259] = v[14] * v[38];
+        v[260] = v[42] - v[41];
+        v[261] = m2 * (-v[40] * v[256] - v[260] * v[44]);
+        v[262] = v[15] * v[31];
+        v[263] = v[83] * v[12];
+        v[264] = v[80] * v[12];
+        v[265] = v[15] * v[45];
+        v[266] = v[259] - v[264] - v[265] - v[261];
+        v[267] = v[262] + v[263] + v[255];
+        v[268] = (v[98] * v[266] - v[95] * v[267]) * v[111];
+        v[269] = v[56] * v[15];
+        v[270] = v[68] * v[12];
+        v[271] = v[257] - v[269] - v[258] - v[270];
+        v[272] = v[111] * (v[98] * v[271] - v[89] * v[267]);
+        v[273] = v[252] - v[63] * v[12] - v[15] * v[34] - v[33];
+        v[274] = v[113] * (v[273] * v[98] - v[85] * v[267]);
+        v[275] = v[256] - v[78] * v[12] - v[15] * v[21];
+        v[276] = v[116] * (v[98] * v[275] - v[93] * v[267]);
+        v[277] = v[9] * (v[95] * v[271] + v[89] * v[266]);
+        v[278] = (v[273] * v[95] + v[85] * v[266]) * v[112];
+        v[279] = v[123] * (v[95] * v[275] + v[93] * v[266]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -10981,151 +10827,125 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let u3 = state[10];
-        let u4 = state[11];
         let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[280] = v[63] * v[66];
-        v[281] = v[0] * v[85] * v[4];
-        v[282] = v[20] * v[47];
-        v[283] = -v[280] - v[281] - v[282];
-        v[284] = v[26] * v[283];
-        v[285] = -v[79] * v[0] * v[4] - v[39] * v[20] - v[58] * v[66];
-        v[286] = (v[284] + v[254] * v[285]) * v[9] * d * m1;
-        v[287] = v[0] * v[2] * v[85];
-        v[288] = -v[73] * v[66] - v[20] * v[22] - v[90] * v[0] * v[4];
-        v[289] = (v[10] * (v[287] - v[47] * v[255] - v[63] * v[190]) + v[254] * v[288])
-            * v[9] * m2 * d;
-        v[290] = v[79] * v[0] * v[2];
-        v[291] = (v[10] * (v[290] - v[39] * v[255] - v[58] * v[190]) + v[26] * v[288])
-            * v[9] * m2 * d * d * m1;
-        v[292] = v[38] * v[160] + v[26] * v[156];
-        v[293] = -(v[66] * v[292] + v[190] * v[141]) * m1
-            - m2 * (v[149] * v[12] * v[55] + v[66] * v[139] + v[10] * v[147] * v[190]);
-        v[294] = -(v[34] * v[149] * v[12] + v[20] * v[139] + v[10] * v[147] * v[255])
-            * m2 - m1 * (v[20] * v[292] + v[141] * v[255]);
-        v[295] = -(v[4] * v[292] - v[2] * v[141]) * m1
-            - m2 * (v[139] * v[4] + v[2] * (v[149] * v[12] - v[10] * v[147]));
-        v[296] = -v[163] * v[20] - v[164] * v[0] * v[4] - v[162] * v[66];
-        v[297] = v[26] * v[296];
-        v[298] = v[164] * v[0] * v[2];
-        v[299] = v[14] * v[225] + v[44];
-        v[300] = v[26] * a_ * v[45] + v[41] * v[299];
-        v[301] = v[26] * a_ * v[60] + v[41] * v[198];
-        v[302] = v[81] - v[80];
-        v[303] = v[26] * a_ * v[82] + v[41] * v[302];
-        v[304] = 2.0 * J2 - 2.0 * J1;
-        v[305] = v[26] * v[26] * v[101]
-            + (v[26] * v[28] + v[9] * (v[38] * d * v[266] + v[276]) + v[38] * v[38] * d)
-                * d * m1 + v[103] * v[38] * v[38];
-        v[306] = v[9] * d * m1
-            * (v[284] - v[51] * v[300] - v[97] * v[0] * v[303] - v[78] * v[301]);
-        v[307] = v[9]
-            * (v[26] * m1 * v[285] - v[299] * v[51] - v[97] * v[0] * v[302]
-                - v[78] * v[198]) * d * d * m1;
-        v[308] = v[26] * v[9] * m2 * d * d * v[288] * m1;
-        v[309] = 2.0 * J1 - 2.0 * J2;
-        v[310] = v[9]
-            * (v[283] * v[38] * d - v[93] * v[303] - v[30] * v[300] - v[301] * v[75])
-            * m1;
-        v[311] = v[9] * d * m1
-            * (v[38] * d * m1 * v[285] - v[75] * v[198] - v[30] * v[299]
-                - v[93] * v[302]);
-        v[312] = v[9] * m2 * v[38] * d * d * v[288] * m1;
-        v[313] = d * m1
-            * (v[9]
-                * ((-v[79] * v[303] - v[39] * v[300] - v[58] * v[301]) * m1
-                    - v[63] * v[198] - v[85] * v[302] - v[299] * v[47]) - a_ * v[38]);
-        v[314] = v[9] * m2 * (-v[22] * v[300] - v[90] * v[303] - v[301] * v[73]) * d
-            * m1;
-        v[315] = v[9] * m2 * d * d * m1
-            * (-v[73] * v[198] - v[299] * v[22] - v[90] * v[302]);
-        v[316] = v[125] * v[101] * v[131] + (v[129] - v[130]) * J2 * u4;
-        v[317] = v[126] * v[126] * d;
-        v[318] = v[26] * a_ * u3 * u3;
-        v[319] = v[318] - v[317] + v[158] - v[159];
+        v[280] = (v[85] * v[271] + v[273] * v[89]) * v[112];
+        v[281] = (v[89] * v[275] + v[93] * v[271]) * v[123];
+        v[282] = v[127] * (v[85] * v[275] + v[273] * v[93]);
+        v[283] = v[187] * v[12] + v[189] * v[15]
+            + (v[166] * v[260] - v[256] * v[170] - v[171] * v[26]) * m2
+            + (v[253] * v[186] - v[175] * v[14] - v[47] * v[182]) * m1;
+        v[284] = v[28] - v[27];
+        v[285] = v[11] * v[40];
+        v[286] = v[18] * v[44];
+        v[287] = m2 * (v[284] * v[285] - v[29] * v[286]) + v[38] * v[284];
+        v[288] = v[32] * v[35];
+        v[289] = v[284] * v[23] - v[25] * v[16];
+        v[290] = v[11] * v[10];
+        v[291] = v[55] + (v[32] * v[52] + v[22] * v[46]) * m1;
+        v[292] = u3 * v[291];
+        v[293] = -v[25] * v[71] - v[58] * v[23];
+        v[294] = m2 * (-v[58] * v[286] - v[58] * v[285]) - v[38] * v[58];
+        v[295] = v[23] * v[2] + v[25] * v[3];
+        v[296] = -v[38] - m2 * (v[286] + v[285]);
+        v[297] = v[296] * v[2];
+        v[298] = -(v[0] * v[295]);
+        v[299] = v[111]
+            * (-v[294] * v[83] - (v[98] * v[297] - v[95] * v[295]) * v[0]
+                - v[287] * v[31] - v[293] * v[80] - v[45] * v[289]);
+        v[300] = v[16] * v[31];
+        v[301] = v[98] * v[91];
+        v[302] = v[71] * v[83];
+        v[303] = v[300] + v[301] + v[302];
+        v[304] = v[111]
+            * (-v[303] * v[291] - v[89] * v[298] - v[68] * v[293] - v[56] * v[289]);
+        v[305] = v[113]
+            * (-v[34] * v[289] - v[85] * v[298] - v[32] * v[303] - v[293] * v[63]);
+        v[306] = v[98] * v[84];
+        v[307] = v[58] * v[83];
+        v[308] = v[116]
+            * (v[11] * (v[306] + v[307] - v[284] * v[31]) - v[293] * v[78]
+                - v[21] * v[289] - v[93] * v[298]);
+        v[309] = v[84] * v[296];
+        v[310] = v[95] * v[91];
+        v[311] = v[16] * v[45];
+        v[312] = v[71] * v[80];
+        v[313] = v[310] + v[311] + v[312];
+        v[314] = v[9]
+            * (-v[313] * v[291] - v[56] * v[287] - v[68] * v[294] - v[309] * v[89]);
+        v[315] = v[32] * v[313];
+        v[316] = v[112] * (-v[315] - v[294] * v[63] - v[309] * v[85] - v[34] * v[287]);
+        v[317] = v[84] * v[95];
+        v[318] = v[58] * v[80];
+        v[319] = (v[11] * (v[317] - v[284] * v[45] + v[318]) - v[309] * v[93]
+            - v[294] * v[78] - v[21] * v[287]) * v[123];
     }
     #[allow(non_snake_case)]
     #[inline(never)]
     fn jacobian_part8(
         _t: f64,
-        state: &[f64; STATES],
+        _state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
-        let u1 = state[8];
-        let u2 = state[9];
-        let u3 = state[10];
-        let u4 = state[11];
         let m1 = params.m1;
         let m2 = params.m2;
-        let d = params.d;
-        let a_ = params.a_;
-        v[320] = v[26] * v[140] * u2 + v[38] * u1 * (-u3 - 2.0 * u4);
-        v[321] = v[151] + v[126] * d * v[131] + v[154] * v[124];
-        v[322] = v[319] * v[79] + v[0] * d * v[320] * v[4] + v[156] * v[302]
-            + v[321] * v[82];
-        v[323] = v[319] * v[39] + v[156] * v[299] + v[321] * v[45] + d * v[320] * v[20];
-        v[324] = v[319] * v[58] + v[321] * v[60] + v[156] * v[198] + d * v[320] * v[66];
-        v[325] = v[26] * v[131];
-        v[326] = v[126] * v[101] * v[124];
-        v[327] = u1 * v[183];
-        v[328] = u2 * v[185];
-        v[329] = v[101] * v[131] * v[131];
-        v[330] = v[10] * (-v[18] - v[19]);
-        v[331] = v[16] * v[24] + a_ * (v[12] * (-v[21] - v[330]) - v[10] * v[16]);
-        v[332] = v[70] * v[24] + a_ * (v[208] * v[12] - v[10] * v[70]);
-        v[333] = v[87] * v[24] - v[10] * a_ * v[87];
-        v[334] = v[78] * v[55];
-        v[335] = v[34] * v[51];
-        v[336] = v[75] * v[55];
-        v[337] = v[30] * v[34];
-        v[338] = v[9] * m2
-            * (v[10] * (v[336] + v[337] + v[278]) - v[97] * v[333] * v[0]
-                - v[51] * v[331] - v[78] * v[332]) * d;
-        v[339] = v[34] * v[47];
-        v[340] = v[63] * v[55];
-        v[341] = m2
-            * (v[9]
-                * ((-v[334] - v[269] - v[335]) * d * v[12]
-                    + v[10] * (v[287] + v[339] + v[340])) - d * v[12] * v[12]
-                - v[10] * v[36]) * d + v[10] * v[10] * v[103] + v[101] * v[12] * v[12];
-        v[342] = v[34] * v[39];
-        v[343] = v[58] * v[55];
-        v[344] = v[10] * v[9] * m2 * d * d * m1 * (v[342] + v[343] + v[290]);
-        v[345] = v[90] * v[0] * v[2];
-        v[346] = v[73] * v[55];
-        v[347] = v[34] * v[22];
-        v[348] = v[9] * m2
-            * ((v[345] + v[346] + v[347]) * v[10] * m2 - v[97] * v[87] * v[0]
-                - v[78] * v[70] - v[16] * v[51]) * d * d;
-        v[349] = v[9] * m2
-            * ((-v[336] - v[337] - v[278]) * d * v[12] - v[47] * v[331] - v[333] * v[85]
-                - v[63] * v[332]);
-        v[350] = (-v[39] * v[331] - v[79] * v[333] - v[58] * v[332]) * v[9] * m2 * d
-            * m1;
-        v[351] = m2 * d
-            * (v[9]
-                * (m2 * (-v[73] * v[332] - v[22] * v[331] - v[90] * v[333])
-                    - v[93] * v[87] - v[75] * v[70] - v[30] * v[16]) - a_ * v[12]);
-        v[352] = v[9] * m2 * d * d * v[12] * (-v[342] - v[343] - v[290]) * m1;
-        v[353] = v[9] * m2 * d
-            * (m2 * d * v[12] * (-v[345] - v[346] - v[347]) - v[87] * v[85]
-                - v[16] * v[47] - v[63] * v[70]);
-        v[354] = v[9] * m2 * (-v[58] * v[70] - v[16] * v[39] - v[87] * v[79]) * d * d
-            * m1;
-        v[355] = v[119] - v[120];
-        v[356] = v[12] * v[134];
-        v[357] = v[10] * v[116] * u3 + v[116] * v[12] * u1;
-        v[358] = v[163] * v[34];
-        v[359] = v[162] * v[55];
+        let J1 = params.J1;
+        let J2 = params.J2;
+        v[320] = v[89] * v[91];
+        v[321] = v[68] * v[71];
+        v[322] = v[56] * v[16];
+        v[323] = v[320] + v[321] + v[322];
+        v[324] = v[32] * v[323];
+        v[325] = v[85] * v[91] + v[71] * v[63] + v[16] * v[34];
+        v[326] = (-v[324] - v[325] * v[291]) * v[112];
+        v[327] = v[58] * v[68];
+        v[328] = v[89] * v[84];
+        v[329] = v[93] * v[91] + v[71] * v[78] + v[16] * v[21];
+        v[330] = v[123] * (v[11] * (v[327] - v[56] * v[284] + v[328]) - v[329] * v[291]);
+        v[331] = -(v[32] * v[329]);
+        v[332] = v[58] * v[63];
+        v[333] = v[84] * v[85];
+        v[334] = (v[331] + v[11] * (v[332] + v[333] - v[284] * v[34])) * v[127];
+        v[335] = v[11] * v[170];
+        v[336] = v[166] * v[18];
+        v[337] = v[22] * v[182] + v[32] * v[186];
+        v[338] = m2 * (v[171] * v[71] - v[335] * v[58] + v[336] * v[58])
+            + (v[71] * v[337] - v[175] * v[58]) * m1;
+        v[339] = m1 * (v[16] * v[337] + v[175] * v[284])
+            + m2 * (v[335] * v[284] + v[336] * v[29] + v[171] * v[16]);
+        v[340] = (v[337] * v[3] - v[175] * v[2]) * m1
+            + m2 * (v[171] * v[3] + (v[336] - v[335]) * v[2]);
+        v[341] = -v[189] * v[16] - v[188] * v[91] - v[187] * v[71];
+        v[342] = -(v[340] * v[0]);
+        v[343] = v[32] * v[341];
+        v[344] = v[187] * v[58];
+        v[345] = v[84] * v[188];
+        v[346] = v[49] - v[48];
+        v[347] = v[52] * v[346] + v[51] * v[50];
+        v[348] = v[66] * v[51] + v[230] * v[52];
+        v[349] = v[87] - v[86];
+        v[350] = v[51] * v[88] + v[52] * v[349];
+        v[351] = 2.0 * J2 - 2.0 * J1;
+        v[352] = v[103] * v[106]
+            + v[121]
+                * (v[177] * v[22] - v[32] * v[37] + v[9] * (-v[315] - v[177] * v[303]))
+            + v[108] * v[101];
+        v[353] = (-v[98] * v[350] - v[348] * v[83] - v[324] - v[347] * v[31]) * v[112];
+        v[354] = v[113]
+            * (-v[346] * v[31] - v[98] * v[349] - v[230] * v[83] - v[32] * v[325] * m1);
+        v[355] = v[331] * v[127];
+        v[356] = 2.0 * J1 - 2.0 * J2;
+        v[357] = v[125]
+            * (-v[95] * v[350] - v[348] * v[80] - v[347] * v[45] - v[177] * v[323]);
+        v[358] = v[112]
+            * (-v[121] * v[22] * v[325] - v[95] * v[349] - v[346] * v[45]
+                - v[230] * v[80]);
+        v[359] = -(v[22] * v[329] * v[127]);
     }
     #[allow(non_snake_case)]
     #[inline(never)]
@@ -11134,11 +10954,79 @@ pub mod reduced_volterra {
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
+    ) {
+        let u1 = state[8];
+        let u2 = state[9];
+        let m1 = params.m1;
+        let m2 = params.m2;
+        let d = params.d;
+        let a_ = params.a_;
+        v[360] = v[121]
+            * (v[9]
+                * (-(v[347] * v[34] + v[348] * v[63] + v[85] * v[350]) * m1
+                    - v[230] * v[68] - v[56] * v[346] - v[89] * v[349]) - v[46]);
+        v[361] = m2 * v[112];
+        v[362] = -(v[361] * (v[93] * v[350] + v[347] * v[21] + v[348] * v[78]));
+        v[363] = -(v[127] * (v[230] * v[78] + v[21] * v[346] + v[93] * v[349]));
+        v[364] = v[141] * v[174] - v[140] * v[174];
+        v[365] = v[364] * d;
+        v[366] = v[195] * v[51];
+        v[367] = d * v[151];
+        v[368] = v[367] * v[151];
+        v[369] = v[366] + v[176] - v[368];
+        v[370] = v[185] - v[183] + v[142] * v[367];
+        v[371] = v[365] * v[71] + v[369] * v[63] + v[66] * v[370] + v[230] * v[186];
+        v[372] = v[349] * v[186] + v[369] * v[85] + v[88] * v[370] + v[365] * v[91];
+        v[373] = v[50] * v[370] + v[369] * v[34] + v[365] * v[16] + v[346] * v[186];
+        v[374] = v[148] * v[106];
+        v[375] = v[142] * v[374] + v[153] * (v[140] - v[141]);
+        v[376] = v[22] * v[151];
+        v[377] = u1 * v[218];
+        v[378] = u2 * v[220];
+        v[379] = v[106] * v[142] * v[142] - v[152] * v[151];
+        v[380] = v[40] * v[43] - v[11] * a_ * v[43];
+        v[381] = a_ * (-v[75] * v[11] - v[241] * v[18]) + v[75] * v[40];
+        v[382] = v[39] * v[94] - v[40] * v[94];
+        v[383] = v[29] * v[31];
+        v[384] = (v[317] + v[318]) + v[29] * v[45];
+        v[385] = v[123]
+            * (v[11] * v[384] - v[380] * v[31] - v[381] * v[83] - v[98] * v[382]);
+        v[386] = v[56] * v[29];
+        v[387] = v[100] * v[106] + v[108] * v[104]
+            + (v[11] * v[54] - v[18] * v[162]
+                + v[9]
+                    * (v[11] * (v[327] + v[386] + v[328])
+                        - (v[306] + v[307] + v[383]) * v[162])) * v[115];
+        v[388] = (v[29] * v[34] + v[333]) + v[332];
+        v[389] = v[11] * v[127] * v[388];
+        v[390] = v[29] * v[21] + (v[58] * v[78] + v[84] * v[93]);
+        v[391] = (v[98] * v[94] - v[75] * v[83] + v[11] * v[390] * m2 - v[43] * v[31])
+            * v[116];
+        v[392] = (-v[56] * v[380] - v[68] * v[381] - v[89] * v[382] - v[384] * v[162])
+            * v[129];
+        v[393] = -((v[34] * v[380] + v[382] * v[85] + v[381] * v[63]) * v[361]);
+        v[394] = (v[9]
+            * (v[95] * v[94] - m2 * (v[382] * v[93] + v[21] * v[380] + v[381] * v[78])
+                - v[75] * v[80] - v[45] * v[43]) - v[44]) * v[115];
+        v[395] = -(v[18] * v[127] * v[388]);
+        v[396] = (v[89] * v[94] - v[75] * v[68] - v[390] * v[115] * v[18]
+            - v[56] * v[43]) * v[123];
+        v[397] = -((v[34] * v[43] - v[85] * v[94] + v[75] * v[63]) * v[127]);
+        v[398] = v[137] - v[136];
+        v[399] = v[145] * v[131] + v[144] * v[131];
+    }
+    #[allow(non_snake_case)]
+    #[inline(never)]
+    fn jacobian_part10(
+        _t: f64,
+        state: &[f64; STATES],
+        params: &Params,
+        _g_i: &[f64; NUM_IGNORABLE],
+        v: &mut [f64; 471],
     ) {
         let u2 = state[9];
         let u3 = state[10];
-        let u4 = state[11];
         let u5 = state[12];
         let Ixx = params.Ixx;
         let Iyy = params.Iyy;
@@ -11149,63 +11037,62 @@ pub mod reduced_volterra {
         let m2 = params.m2;
         let d = params.d;
         let a_ = params.a_;
-        let J1 = params.J1;
-        let J2 = params.J2;
-        v[360] = v[10] * a_ * u2 * u2;
-        v[361] = v[121] * d * v[355];
-        v[362] = v[145] * v[134];
-        v[363] = v[360] + v[361] + v[362];
-        v[364] = v[363] * v[22] - v[16] * d * v[355] * v[148] + v[149] * (v[330] - v[17])
-            + v[357] * v[34] * d;
-        v[365] = v[149] * (v[88] - v[89]) - v[87] * d * v[355] * v[148]
-            + v[357] * v[0] * d * v[2] + v[90] * v[363];
-        v[366] = v[149] * v[189] - d * v[355] * v[70] * v[148] + v[363] * v[73]
-            + v[357] * d * v[55];
-        v[367] = v[103] * v[121] * v[121];
-        v[368] = v[103] * v[148] * v[134];
-        v[369] = u5 * J1;
-        v[370] = v[115] - v[117] + v[369];
-        v[371] = v[125] * v[101];
-        v[372] = J2 * u4;
-        v[373] = u4 * J1;
-        v[374] = Ixy * u3;
-        v[375] = u2 * Ixz;
-        v[376] = a_ * u3 + v[26] * v[140] * d;
-        v[377] = v[10] * d * v[138] - a_ * u2;
-        v[378] = d * v[131] - v[152] - v[153];
-        v[379] = v[26] * v[154];
-        v[380] = v[126] * v[38] * d;
-        v[381] = -v[379] - v[380];
-        v[382] = v[10] * v[145];
-        v[383] = v[121] * d * v[12];
-        v[384] = v[382] - v[383];
-        v[385] = v[143] - v[144] + d * v[148];
-        v[386] = -m1 * (v[45] * v[38] * v[378] + v[39] * v[381] + v[376] * v[20])
-            - m2 * (v[384] * v[22] + v[34] * v[377] + v[16] * v[12] * v[385]);
-        v[387] = -(v[376] * v[66] + v[58] * v[381] + v[38] * v[378] * v[60]) * m1
-            - m2 * (v[377] * v[55] + v[73] * v[384] + v[12] * v[70] * v[385]);
-        v[388] = -m2 * (v[87] * v[12] * v[385] + v[90] * v[384] + v[0] * v[2] * v[377])
-            - (v[0] * v[376] * v[4] + v[79] * v[381] + v[82] * v[38] * v[378]) * m1;
-        v[389] = v[10] * v[148];
-        v[390] = v[121] * v[12];
-        v[391] = Izz - Ixx;
-        v[392] = v[371] - v[372];
-        v[393] = v[126] * v[38];
-        v[394] = Ixx - Iyy;
-        v[395] = v[103] * v[121] * v[12];
-        v[396] = v[28] * v[131] + v[379];
-        v[397] = v[154] * v[38];
-        v[398] = v[28] * v[126];
-        v[399] = -v[397] - v[398];
+        v[400] = v[398] * d;
+        v[401] = v[400] * v[146];
+        v[402] = d * v[399];
+        v[403] = u2 * v[160];
+        v[404] = v[138] * v[400];
+        v[405] = v[403] + v[404] - v[165];
+        v[406] = v[401] * v[94] + v[166] * (v[90] - v[92]) + v[402] * v[84]
+            + v[93] * v[405];
+        v[407] = v[402] * v[58] + v[405] * v[78] + v[166] * v[223] - v[75] * v[401];
+        v[408] = v[402] * v[29] - v[401] * v[43] + v[21] * v[405]
+            + v[166] * (-v[17] - v[20]);
+        v[409] = (-v[345] - v[189] * v[29]) - v[344];
+        v[410] = v[108] * v[138] * v[138] - v[206] * v[146];
+        v[411] = (v[213] + v[134]) - v[132];
+        v[412] = v[138] * v[162];
+        v[413] = v[11] * v[164];
+        v[414] = v[413] - v[412];
+        v[415] = -v[159] - v[53] * v[131];
+        v[416] = v[18] * (v[161] + v[163] + d * v[146]);
+        v[417] = v[32] * v[180];
+        v[418] = v[177] * v[151] + v[417];
+        v[419] = a_ * u3 + v[36] * v[174];
+        v[420] = v[22] * (v[179] - v[178] + v[142] * d);
+        v[421] = (v[414] * v[78] + v[58] * v[415] + v[75] * v[416]) * m2
+            + (v[71] * v[419] - v[418] * v[63] + v[66] * v[420]) * m1;
+        v[422] = (v[420] * v[50] - v[34] * v[418] + v[16] * v[419]) * m1
+            + m2 * (v[29] * v[415] + v[416] * v[43] + v[21] * v[414]);
+        v[423] = m1 * (v[88] * v[420] + v[91] * v[419] - v[85] * v[418])
+            + m2 * (v[93] * v[414] - v[416] * v[94] + v[84] * v[415]);
+        v[424] = Ixy * u3;
+        v[425] = v[374] - v[153];
+        v[426] = u2 * Ixz;
+        v[427] = Izz - Ixx;
+        v[428] = v[11] * v[146];
+        v[429] = Ixx - Iyy;
+        v[430] = v[376];
+        v[431] = v[108] * v[139];
+        v[432] = v[121] * v[174];
+        v[433] = v[400] - v[215];
+        v[434] = d * v[133] + v[40] * v[133] + v[39] * (u2 - u5);
+        v[435] = v[417] - v[142] * v[37];
+        v[436] = v[180] * v[22] - v[151] * v[37];
+        v[437] = v[177] * v[174];
+        v[438] = m2 * (v[75] * v[434] + 2.0 * (v[168] * v[78]) + v[58] * v[433])
+            + m1 * (v[66] * v[435] - v[436] * v[63] + v[71] * v[437]);
+        v[439] = (2.0 * (v[93] * v[168]) - v[434] * v[94] + v[84] * v[433]) * m2
+            + (v[437] * v[91] + v[88] * v[435] - v[85] * v[436]) * m1;
     }
     #[allow(non_snake_case)]
     #[inline(never)]
-    fn jacobian_part10(
+    fn jacobian_part11(
         _t: f64,
         state: &[f64; STATES],
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
-        v: &mut [f64; 435],
+        v: &mut [f64; 471],
     ) {
         let u1 = state[8];
         let u2 = state[9];
@@ -11218,55 +11105,43 @@ pub mod reduced_volterra {
         let m1 = params.m1;
         let m2 = params.m2;
         let d = params.d;
-        let a_ = params.a_;
         let J1 = params.J1;
         let J2 = params.J2;
-        v[400] = a_ * u1;
-        v[401] = d * v[355] - v[400];
-        v[402] = d * v[114] + v[10] * a_ * (u2 - u5) + v[24] * v[114];
-        v[403] = -(v[140] * v[38] * d * v[66] + v[396] * v[60] + v[58] * v[399]) * m1
-            - m2 * (v[55] * v[401] + v[402] * v[70] + 2.0 * (a_ * u2 * v[12] * v[73]));
-        v[404] = -m2
-            * (2.0 * (a_ * u2 * v[90] * v[12]) + v[87] * v[402] + v[0] * v[2] * v[401])
-            - (v[82] * v[396] + v[140] * v[38] * v[0] * d * v[4] + v[79] * v[399]) * m1;
-        v[405] = -m2
-            * (v[34] * v[401] + 2.0 * (a_ * u2 * v[12] * v[22]) + v[16] * v[402])
-            - m1 * (v[39] * v[399] + v[45] * v[396] + v[140] * v[38] * d * v[20]);
-        v[406] = Iyy - Izz;
-        v[407] = Iyz * u1;
-        v[408] = v[26] * v[126] * v[101];
-        v[409] = a_ * a_ * u1;
-        v[410] = 2.0 * v[122] + 2.0 * v[123];
-        v[411] = v[10] * v[103] * v[121];
-        v[412] = v[101] * v[38] * v[131];
-        v[413] = J2 * v[138];
-        v[414] = v[12] * v[145];
-        v[415] = v[121] * v[36];
-        v[416] = v[415] - v[414];
-        v[417] = -v[382] - v[148] * v[36];
-        v[418] = v[126] * d + v[400];
-        v[419] = (-u3 - u4) * d - v[125] * v[41] + v[26] * a_ * (u4 - u3);
-        v[420] = -m2
-            * (v[90] * v[416] + v[87] * v[417] + v[116] * v[0] * d * v[12] * v[2])
-            - (v[418] * v[0] * v[4] + v[82] * v[419] + 2.0 * (a_ * v[79] * u3 * v[38]))
-                * m1;
-        v[421] = -m1
-            * (v[418] * v[20] + 2.0 * (a_ * v[39] * u3 * v[38]) + v[45] * v[419])
-            - m2 * (v[22] * v[416] + v[34] * v[116] * d * v[12] + v[16] * v[417]);
-        v[422] = -m2 * (v[116] * d * v[12] * v[55] + v[417] * v[70] + v[73] * v[416])
-            - (v[418] * v[66] + 2.0 * (a_ * v[58] * u3 * v[38]) + v[419] * v[60]) * m1;
-        v[423] = 2.0 * v[119] - 2.0 * v[120];
-        v[424] = v[101] * v[12] * v[148];
-        v[425] = J2 * v[124] + v[126] * v[101];
-        v[426] = -2.0 * u3 - 2.0 * u4;
-        v[427] = v[0] * v[410] * v[4] + v[82] * v[426];
-        v[428] = v[20] * v[410] + v[45] * v[426];
-        v[429] = v[426] * v[60] + v[410] * v[66];
-        v[430] = 2.0 * u5 + 2.0 * u2;
-        v[431] = v[423] * v[55] + v[70] * v[430];
-        v[432] = v[34] * v[423] + v[16] * v[430];
-        v[433] = v[87] * v[430] + v[0] * v[2] * v[423];
-        v[434] = 2.0 * J2 - J1;
+        v[440] = m2 * (v[29] * v[433] + v[434] * v[43] + 2.0 * (v[21] * v[168]))
+            + (v[50] * v[435] - v[436] * v[34] + v[16] * v[437]) * m1;
+        v[441] = Iyy - Izz;
+        v[442] = Iyz * u1;
+        v[443] = u1 * v[193];
+        v[444] = 2.0 * v[149] + 2.0 * v[150];
+        v[445] = v[108] * v[212];
+        v[446] = v[32] * v[152];
+        v[447] = v[106] * v[205] + v[446];
+        v[448] = v[115] * v[131];
+        v[449] = v[215] + v[367];
+        v[450] = v[51] * (u4 - u3) - v[148] * d - v[148] * v[52];
+        v[451] = v[413] - v[146] * v[54];
+        v[452] = v[164] * v[18];
+        v[453] = v[138] * v[54];
+        v[454] = -v[452] - v[453];
+        v[455] = v[131] * v[162];
+        v[456] = m1 * (v[450] * v[50] + v[449] * v[16] + 2.0 * (v[184] * v[34]))
+            + m2 * (v[454] * v[21] - v[451] * v[43] + v[29] * v[455]);
+        v[457] = (2.0 * (v[184] * v[85]) + v[450] * v[88] + v[449] * v[91]) * m1
+            + m2 * (v[454] * v[93] + v[451] * v[94] + v[84] * v[455]);
+        v[458] = m2 * (v[454] * v[78] - v[75] * v[451] + v[58] * v[455])
+            + (2.0 * (v[184] * v[63]) + v[449] * v[71] + v[66] * v[450]) * m1;
+        v[459] = 2.0 * v[137] - 2.0 * v[136];
+        v[460] = v[106] * v[18] * v[146] + v[445];
+        v[461] = v[152] - J2 * v[151];
+        v[462] = 2.0 * u3 + 2.0 * u4;
+        v[463] = v[16] * v[444] - v[462] * v[50];
+        v[464] = v[444] * v[91] - v[462] * v[88];
+        v[465] = v[71] * v[444] - v[66] * v[462];
+        v[466] = 2.0 * J2 - J1;
+        v[467] = 2.0 * u5 + 2.0 * u2;
+        v[468] = v[75] * v[467] + v[58] * v[459];
+        v[469] = v[84] * v[459] - v[467] * v[94];
+        v[470] = v[29] * v[459] + v[467] * v[43];
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
     #[allow(clippy::all)]

@@ -19,6 +19,7 @@ use super::cse::plan;
 use super::lower::{LowerError, lower};
 use super::ops::OpCount;
 use super::optimize::{expand_angle_sums, factor_sums_with, share_reciprocals};
+use super::share::share_pairs;
 use super::syntax;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
@@ -98,7 +99,7 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
 
 /// [`body`] with the Horner memo of [`factor_sums_with`] kept by the caller (one per module).
 pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize, horner: &mut HashMap<Expr, Expr>) -> Result<Body, LowerError> {
-    let outputs = &share_reciprocals(&factor_sums_with(&expand_angle_sums(outputs), horner));
+    let outputs = &share_pairs(&share_reciprocals(&factor_sums_with(&expand_angle_sums(outputs), horner)));
     let bound = plan(outputs);
     let by_symbol: HashMap<Symbol, &Input> = inputs.iter().map(|i| (i.symbol, i)).collect();
     let taken: HashSet<String> = inputs.iter().map(|i| i.ident.clone()).chain(args.iter().map(|a| a.name.clone())).collect();

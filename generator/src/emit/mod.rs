@@ -24,6 +24,7 @@ pub mod ops;
 pub mod optimize;
 pub mod prepare;
 pub mod seam;
+pub mod share;
 pub mod splice;
 pub mod syntax;
 

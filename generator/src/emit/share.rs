@@ -1,0 +1,363 @@
+//! Common sub-products and sub-sums: `m2*l1` inside `m2*l1*cos(q2)` and `m2*l1*l0*s`, or
+//! `m1 + m2` inside `m0 + m1 + m2`, computed once.
+//!
+//! Hash-consing already shares whole nodes; this pass shares parts of them. Every product is a
+//! bag of factors (a factor `x^2` counts twice) and every sum a bag of terms (a term with its
+//! coefficient); [`merge_pairs`] then repeatedly takes the pair of atoms found together in the
+//! most bags and gives it a name of its own (greedy pair merging, as Re-Pair does for text), while
+//! some pair is shared by two bags or more. Each merge saves one operation per bag beyond the
+//! first. A merged pair becomes a node `()(a*b)` (or `()(a + b)`), the grouping function that
+//! lowers to its argument: without it the canonical form would flatten the product back.
+//!
+//! Ties are broken by the atoms' order of first appearance in a post-order walk of the outputs,
+//! so the result depends only on the expressions; the work is bounded by [`PAIR_BUDGET`]
+//! updates (a count, never a time).
+//!
+//! ```
+//! use generator::emit::share::share_pairs;
+//! use generator::symbolic::Expr;
+//! let (a, b, c, d) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("c"), Expr::sym("d"));
+//! let out = share_pairs(&[a * b * c, a * b * d]);
+//! // Both products now hold the same grouped node for `a*b`.
+//! let shared: Vec<_> = out[0].children().into_iter().filter(|x| out[1].children().contains(x)).collect();
+//! assert_eq!(shared.len(), 1);
+//! ```
+
+use super::cse::post_order;
+use crate::symbolic::number::Rat;
+use crate::symbolic::{Expr, Node, Symbol};
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::cmp::Reverse;
+use std::collections::BTreeSet;
+
+/// The named function that groups a shared pair; emission lowers `()(x)` as `x`.
+pub fn group_symbol() -> Symbol {
+    Symbol::new("()")
+}
+
+/// Most pair-count updates one call of [`merge_pairs`] performs.
+pub const PAIR_BUDGET: usize = 4_000_000;
+
+/// Most distinct atoms of one bag whose pairs are counted (the rest stay as they are).
+const MAX_BAG_ATOMS: usize = 32;
+
+/// An unordered pair of atoms, smaller first.
+type Pair = (usize, usize);
+
+/// The distinct pairs a bag holds (an atom twice makes the pair `(a, a)`), sorted.
+fn pairs_of(bag: &[usize]) -> Vec<Pair> {
+    let mut sorted: Vec<usize> = bag.to_vec();
+    sorted.sort_unstable();
+    let mut distinct: Vec<(usize, usize)> = Vec::new();
+    for a in sorted {
+        match distinct.last_mut() {
+            Some((x, n)) if *x == a => *n += 1,
+            _ => distinct.push((a, 1)),
+        }
+    }
+    distinct.truncate(MAX_BAG_ATOMS);
+    let mut out = Vec::new();
+    for (i, &(a, n)) in distinct.iter().enumerate() {
+        if n >= 2 {
+            out.push((a, a));
+        }
+        for &(b, _) in &distinct[i + 1..] {
+            out.push((a, b));
+        }
+    }
+    out
+}
+
+/// Replaces every occurrence of `pair` in `bag` by `group`.
+fn replace_pair(bag: &mut Vec<usize>, pair: Pair, group: usize) {
+    loop {
+        let Some(i) = bag.iter().position(|&x| x == pair.0) else { return };
+        let j = bag.iter().enumerate().position(|(k, &x)| k != i && x == pair.1);
+        let Some(j) = j else { return };
+        let (lo, hi) = (i.min(j), i.max(j));
+        bag.remove(hi);
+        bag.remove(lo);
+        bag.push(group);
+    }
+}
+
+/// Greedy pair merging over `bags` of atom numbers. Atoms `0..first_group` exist; merged pairs
+/// get the numbers `first_group, first_group + 1, ...` in the order returned, and replace their
+/// pair in the bags. Stops when no pair is held by two bags, or after [`PAIR_BUDGET`] updates.
+///
+/// ```
+/// use generator::emit::share::merge_pairs;
+/// let mut bags = vec![vec![0, 1, 2], vec![0, 1, 3], vec![0, 1]];
+/// let groups = merge_pairs(&mut bags, 4);
+/// assert_eq!(groups, vec![(0, 1)]);
+/// assert_eq!(bags, vec![vec![2, 4], vec![3, 4], vec![4]]);
+/// ```
+pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
+    let mut count: FxHashMap<Pair, usize> = FxHashMap::default();
+    let mut holders: FxHashMap<Pair, Vec<usize>> = FxHashMap::default();
+    let mut queue: BTreeSet<(Reverse<usize>, Pair)> = BTreeSet::new();
+    let mut work = 0usize;
+    for (k, bag) in bags.iter().enumerate() {
+        for p in pairs_of(bag) {
+            *count.entry(p).or_default() += 1;
+            holders.entry(p).or_default().push(k);
+            work += 1;
+        }
+    }
+    for (&p, &n) in &count {
+        if n >= 2 {
+            queue.insert((Reverse(n), p));
+        }
+    }
+    let mut groups = Vec::new();
+    let change = |count: &mut FxHashMap<Pair, usize>, queue: &mut BTreeSet<(Reverse<usize>, Pair)>, p: Pair, up: bool| {
+        let n = count.entry(p).or_default();
+        if *n >= 2 {
+            queue.remove(&(Reverse(*n), p));
+        }
+        if up {
+            *n += 1;
+        } else {
+            *n -= 1;
+        }
+        if *n >= 2 {
+            queue.insert((Reverse(*n), p));
+        }
+    };
+    while let Some(&(Reverse(n), pair)) = queue.first() {
+        if n < 2 || work > PAIR_BUDGET {
+            break;
+        }
+        let group = first_group + groups.len();
+        groups.push(pair);
+        let mut seen = FxHashSet::default();
+        let bag_ids: Vec<usize> = holders.remove(&pair).unwrap_or_default().into_iter().filter(|k| seen.insert(*k)).collect();
+        for k in bag_ids {
+            let old = pairs_of(&bags[k]);
+            if old.binary_search(&pair).is_err() {
+                continue;
+            }
+            replace_pair(&mut bags[k], pair, group);
+            let new = pairs_of(&bags[k]);
+            work += old.len() + new.len();
+            // Both lists are sorted: walk them together and touch only what changed.
+            let (mut i, mut j) = (0, 0);
+            while i < old.len() || j < new.len() {
+                match (old.get(i), new.get(j)) {
+                    (Some(a), Some(b)) if a == b => {
+                        i += 1;
+                        j += 1;
+                    }
+                    (Some(a), b) if b.is_none_or(|b| a < b) => {
+                        change(&mut count, &mut queue, *a, false);
+                        i += 1;
+                    }
+                    (_, Some(b)) => {
+                        change(&mut count, &mut queue, *b, true);
+                        holders.entry(*b).or_default().push(k);
+                        j += 1;
+                    }
+                    _ => unreachable!("the loop runs while one list has an item"),
+                }
+            }
+        }
+        // Whatever still counts this pair (a bag holding it twice) is done with it.
+        if let Some(n) = count.remove(&pair)
+            && n >= 2
+        {
+            queue.remove(&(Reverse(n), pair));
+        }
+    }
+    groups
+}
+
+/// What an atom of a bag stands for: a factor's base, or a sum's term with its coefficient.
+#[derive(Clone, PartialEq, Eq, Hash)]
+enum Atom {
+    Factor(Expr),
+    Term(Expr, Rat),
+}
+
+/// Where a node's bag sits and what stays outside it.
+enum Shape {
+    /// A product: its coefficient, and the factors that are not small positive powers.
+    Product(Rat, Vec<(Expr, Rat)>),
+    /// A sum: its constant, and the sign it was taken with (a sum of negative terms is shared
+    /// as its negation, so `-m1 - m2` finds `m1 + m2`; it costs a negation either way).
+    Sum(Rat, Rat),
+}
+
+/// Shares the pairs of factors and of terms that two or more products or sums hold, across all
+/// `outputs` (values unchanged up to rounding).
+pub fn share_pairs(outputs: &[Expr]) -> Vec<Expr> {
+    let order = post_order(outputs);
+    let mut atoms: Vec<Atom> = Vec::new();
+    let mut number: FxHashMap<Atom, usize> = FxHashMap::default();
+    let mut intern = |a: Atom, atoms: &mut Vec<Atom>| -> usize {
+        *number.entry(a.clone()).or_insert_with(|| {
+            atoms.push(a);
+            atoms.len() - 1
+        })
+    };
+    // Products and sums get bags in separate passes so that their atoms never pair.
+    let mut product_bags: Vec<Vec<usize>> = Vec::new();
+    let mut sum_bags: Vec<Vec<usize>> = Vec::new();
+    let mut shapes: FxHashMap<Expr, (Shape, usize)> = FxHashMap::default();
+    for &e in &order {
+        match &*e.node() {
+            Node::Mul { coefficient, factors } => {
+                let mut bag = Vec::new();
+                let mut rest = Vec::new();
+                for (b, ex) in factors {
+                    match ex.to_i64() {
+                        Some(n @ 1..=3) => bag.extend(std::iter::repeat_n(intern(Atom::Factor(*b), &mut atoms), n as usize)),
+                        _ => rest.push((*b, ex.clone())),
+                    }
+                }
+                if bag.len() >= 2 {
+                    shapes.insert(e, (Shape::Product(coefficient.clone(), rest), product_bags.len()));
+                    product_bags.push(bag);
+                }
+            }
+            Node::Add { constant, terms } if terms.len() >= 2 => {
+                let sign = if terms.iter().all(|(_, c)| c.is_negative()) { -Rat::one() } else { Rat::one() };
+                let bag = terms.iter().map(|(t, c)| intern(Atom::Term(*t, c * &sign), &mut atoms)).collect();
+                shapes.insert(e, (Shape::Sum(constant * &sign, sign), sum_bags.len()));
+                sum_bags.push(bag);
+            }
+            _ => {}
+        }
+    }
+    let product_groups = merge_pairs(&mut product_bags, atoms.len());
+    let sum_groups = merge_pairs(&mut sum_bags, atoms.len() + product_groups.len());
+    let groups: Vec<Pair> = product_groups.iter().chain(&sum_groups).copied().collect();
+    let mut rebuild = Rebuild { atoms: &atoms, groups: &groups, first_group: atoms.len(), built: FxHashMap::default(), memo: FxHashMap::default() };
+    for &e in &order {
+        let r = match shapes.get(&e) {
+            Some((Shape::Product(coefficient, rest), k)) => {
+                let mut factors: Vec<(Expr, Rat)> = product_bags[*k].iter().map(|&a| (rebuild.factor(a), Rat::one())).collect();
+                factors.extend(rest.iter().map(|(b, ex)| (rebuild.memo[b], ex.clone())));
+                Expr::make_mul(coefficient.clone(), factors)
+            }
+            Some((Shape::Sum(constant, sign), k)) => {
+                let terms: Vec<(Expr, Rat)> = sum_bags[*k].iter().map(|&a| rebuild.term(a)).collect();
+                Expr::make_mul(sign.clone(), vec![(Expr::make_add(constant.clone(), terms), Rat::one())])
+            }
+            None => e.map_children(|c| rebuild.memo[&c]),
+        };
+        rebuild.memo.insert(e, r);
+    }
+    outputs.iter().map(|e| rebuild.memo[e]).collect()
+}
+
+/// Rebuilds atoms and merged pairs as expressions over the rewritten children.
+struct Rebuild<'a> {
+    atoms: &'a [Atom],
+    groups: &'a [Pair],
+    first_group: usize,
+    built: FxHashMap<usize, Expr>,
+    memo: FxHashMap<Expr, Expr>,
+}
+
+impl Rebuild<'_> {
+    /// Atom `a` of a product as a factor.
+    fn factor(&mut self, a: usize) -> Expr {
+        if a < self.first_group {
+            let Atom::Factor(b) = &self.atoms[a] else { unreachable!("a product's atom is a factor") };
+            return self.memo[b];
+        }
+        if let Some(&e) = self.built.get(&a) {
+            return e;
+        }
+        let (x, y) = self.groups[a - self.first_group];
+        let inner = Expr::make_mul(Rat::one(), vec![(self.factor(x), Rat::one()), (self.factor(y), Rat::one())]);
+        let e = Expr::apply_named(group_symbol(), inner);
+        self.built.insert(a, e);
+        e
+    }
+
+    /// Atom `a` of a sum as a term with its coefficient.
+    fn term(&mut self, a: usize) -> (Expr, Rat) {
+        if a < self.first_group {
+            let Atom::Term(t, c) = &self.atoms[a] else { unreachable!("a sum's atom is a term") };
+            return (self.memo[t], c.clone());
+        }
+        if let Some(&e) = self.built.get(&a) {
+            return (e, Rat::one());
+        }
+        let (x, y) = self.groups[a - self.first_group];
+        let inner = Expr::make_add(Rat::zero(), vec![self.term(x), self.term(y)]);
+        let e = Expr::apply_named(group_symbol(), inner);
+        self.built.insert(a, e);
+        (e, Rat::one())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::symbolic::eval::Env;
+    use proptest::prelude::*;
+
+    fn env() -> Env {
+        let mut env = Env::default();
+        for (s, v) in [("a", 0.3), ("b", -1.7), ("c", 2.5), ("d", 0.9), ("e", 1.3)] {
+            env.set(Symbol::new(s), v);
+        }
+        env.define(group_symbol(), Symbol::internal("arg"), Symbol::internal("arg").expr());
+        env
+    }
+
+    #[test]
+    fn most_shared_pair_first_and_repeated_atoms_pair_with_themselves() {
+        // (0, 1) is in three bags, (0, 0) in two; once (0, 1) is merged, (0, 0) is left in one.
+        let mut bags = vec![vec![0, 0, 1], vec![0, 0, 2], vec![0, 1, 3], vec![0, 1]];
+        assert_eq!(merge_pairs(&mut bags, 4), vec![(0, 1)]);
+        assert_eq!(bags, vec![vec![0, 4], vec![0, 0, 2], vec![3, 4], vec![4]]);
+        let mut squares = vec![vec![0, 0, 1], vec![0, 0, 2], vec![0, 0]];
+        assert_eq!(merge_pairs(&mut squares, 3), vec![(0, 0)]);
+        assert_eq!(squares, vec![vec![1, 3], vec![2, 3], vec![3]]);
+    }
+
+    #[test]
+    fn a_pair_in_one_bag_only_is_left_alone() {
+        let mut bags = vec![vec![0, 1, 2], vec![3, 4]];
+        assert!(merge_pairs(&mut bags, 5).is_empty());
+        assert_eq!(bags, vec![vec![0, 1, 2], vec![3, 4]]);
+    }
+
+    #[test]
+    fn sums_share_their_common_terms() {
+        let (a, b, c) = (Expr::sym("a"), Expr::sym("b"), Expr::sym("c"));
+        let out = share_pairs(&[a + b * 2 + c, (a + b * 2) * c]);
+        let env = env();
+        let want = [(a + b * 2 + c).eval(&env).unwrap(), ((a + b * 2) * c).eval(&env).unwrap()];
+        for (o, w) in out.iter().zip(want) {
+            assert!((o.eval(&env).unwrap() - w).abs() < 1e-14);
+        }
+        assert!(out[0].children().iter().any(|x| x.to_string().starts_with("()(")), "{}", out[0]);
+    }
+
+    fn arb_product() -> impl Strategy<Value = Vec<(usize, i64)>> {
+        prop::collection::vec((0usize..5, 1i64..4), 1..6)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, rng_seed: proptest::test_runner::RngSeed::Fixed(7), ..ProptestConfig::default() })]
+        /// Sharing keeps every value and never adds an operation to what the products cost.
+        #[test]
+        fn sharing_keeps_the_values(products in prop::collection::vec(arb_product(), 1..8), k in -3i64..4) {
+            let names = ["a", "b", "c", "d", "e"];
+            let outputs: Vec<Expr> = products
+                .iter()
+                .map(|p| p.iter().fold(Expr::num(Rat::from(k)), |acc, (s, n)| acc * Expr::sym(names[*s]).powi(*n)) + Expr::sym("e"))
+                .collect();
+            let shared = share_pairs(&outputs);
+            let env = env();
+            for (o, s) in outputs.iter().zip(&shared) {
+                let (want, got) = (o.eval(&env).unwrap(), s.eval(&env).unwrap());
+                prop_assert!((want - got).abs() <= 1e-12 * want.abs().max(1.0), "{o} = {want}, {s} = {got}");
+            }
+        }
+    }
+}
