@@ -16,7 +16,7 @@
 //! ```
 
 use crate::symbolic::{Expr, Node};
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet};
 
 fn is_leaf(e: Expr) -> bool {
     matches!(&*e.node(), Node::Num(_) | Node::Sym(_))
@@ -25,8 +25,8 @@ fn is_leaf(e: Expr) -> bool {
 /// The subexpressions to bind, in an order where each comes after everything it uses.
 pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
     let order = post_order(outputs);
-    let mut uses: HashMap<Expr, usize> = HashMap::new();
-    let mut force = std::collections::HashSet::new();
+    let mut uses: HashMap<Expr, usize> = HashMap::default();
+    let mut force = FxHashSet::default();
     for e in outputs {
         *uses.entry(*e).or_default() += 1;
     }

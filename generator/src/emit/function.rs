@@ -24,8 +24,9 @@ use super::syntax;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::cell::RefCell;
-use std::collections::{BTreeSet, HashMap, HashSet};
+use std::collections::BTreeSet;
 
 /// A function argument.
 #[derive(Clone, Debug)]
@@ -94,7 +95,7 @@ pub fn arg_list(args: &[Arg], used: &BTreeSet<usize>) -> Vec<TokenStream> {
 /// Builds the body computing `outputs`. Above `max_lets` bound subexpressions the work goes to
 /// helper functions `<name>_part<k>` that fill a scratch array.
 pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize) -> Result<Body, LowerError> {
-    body_with(name, outputs, inputs, args, max_lets, &mut HashMap::new())
+    body_with(name, outputs, inputs, args, max_lets, &mut HashMap::default())
 }
 
 /// [`body`] with the Horner memo of [`factor_sums_with`] kept by the caller (one per module).

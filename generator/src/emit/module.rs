@@ -47,7 +47,7 @@ pub(super) struct Emitter<'a> {
     /// The states end with the work integral `W`.
     pub work: bool,
     /// Horner forms, shared by every function of the module.
-    pub horner: HashMap<Expr, Expr>,
+    pub horner: rustc_hash::FxHashMap<Expr, Expr>,
     /// The seam crate's path in emitted code.
     pub seam: syn::Path,
     /// The bodies' syntax trees, placed into the parsed module at the end.
@@ -103,7 +103,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         functions: Vec::new(),
         forms: Vec::new(),
         work: false,
-        horner: HashMap::new(),
+        horner: Default::default(),
         seam,
         splices: Splices::default(),
     };

@@ -21,7 +21,7 @@
 use super::cse::post_order;
 use crate::symbolic::number::Rat;
 use crate::symbolic::{Expr, Func, Node, Symbol};
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet};
 
 /// The named function that emission lowers as `1.0 / x`.
 pub fn reciprocal_symbol() -> Symbol {
@@ -48,7 +48,7 @@ const HORNER_CANDIDATES: usize = 8;
 /// Horner form of a sum of terms (constant kept apart).
 fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
     // Count, for each (base, sign of exponent), the terms holding it with an integer exponent.
-    let mut count: HashMap<(Expr, bool), usize> = HashMap::new();
+    let mut count: HashMap<(Expr, bool), usize> = HashMap::default();
     for (_, factors) in &terms {
         for (b, e) in factors {
             if e.is_integer() && !e.is_zero() {
@@ -119,7 +119,7 @@ fn horner(constant: Rat, terms: Vec<Term>) -> Expr {
 
 /// Horner-factors every sum in `outputs` (bottom-up, shared across outputs).
 pub fn factor_sums(outputs: &[Expr]) -> Vec<Expr> {
-    factor_sums_with(outputs, &mut HashMap::new())
+    factor_sums_with(outputs, &mut HashMap::default())
 }
 
 /// [`factor_sums`] with a memo kept by the caller: the Horner form of a node does not depend on
@@ -142,7 +142,7 @@ pub fn factor_sums_with(outputs: &[Expr], memo: &mut HashMap<Expr, Expr>) -> Vec
 /// Replaces denominators used by two or more products with a shared reciprocal.
 pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
     let order = post_order(outputs);
-    let mut uses: HashMap<Expr, usize> = HashMap::new();
+    let mut uses: HashMap<Expr, usize> = HashMap::default();
     for e in &order {
         if let Node::Mul { factors, .. } = &*e.node() {
             for (b, ex) in factors {
@@ -153,7 +153,7 @@ pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
         }
     }
     let recip = reciprocal_symbol();
-    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    let mut memo: HashMap<Expr, Expr> = HashMap::default();
     for e in order {
         let r = match &*e.node() {
             Node::Mul { coefficient, factors } => {
@@ -177,8 +177,8 @@ pub fn share_reciprocals(outputs: &[Expr]) -> Vec<Expr> {
 /// of the single angles, for angles whose sine and cosine both occur in `outputs`.
 pub fn expand_angle_sums(outputs: &[Expr]) -> Vec<Expr> {
     let order = post_order(outputs);
-    let mut sines = std::collections::HashSet::new();
-    let mut cosines = std::collections::HashSet::new();
+    let mut sines = FxHashSet::default();
+    let mut cosines = FxHashSet::default();
     for e in &order {
         match &*e.node() {
             Node::Fun(Func::Sin, a) => {
@@ -202,7 +202,7 @@ pub fn expand_angle_sums(outputs: &[Expr]) -> Vec<Expr> {
             _ => None,
         }
     };
-    let mut memo: HashMap<Expr, Expr> = HashMap::new();
+    let mut memo: HashMap<Expr, Expr> = HashMap::default();
     for e in order {
         let r = match &*e.node() {
             Node::Fun(f @ (Func::Sin | Func::Cos), a) => match expandable(*a) {

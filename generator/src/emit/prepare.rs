@@ -10,7 +10,7 @@ use std::collections::HashMap;
 pub struct Preparer {
     numbers: HashMap<Symbol, Expr>,
     functions: HashMap<String, (Symbol, Expr)>,
-    memo: HashMap<Expr, Expr>,
+    memo: rustc_hash::FxHashMap<Expr, Expr>,
 }
 
 impl Preparer {
@@ -25,7 +25,7 @@ impl Preparer {
             }
         }
         let functions = model.time_functions.iter().map(|(f, body)| (f.name(), (model.t, *body))).collect();
-        Preparer { numbers, functions, memo: HashMap::new() }
+        Preparer { numbers, functions, memo: Default::default() }
     }
 
     /// The expression with functions inlined and numbers substituted.

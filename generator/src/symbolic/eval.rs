@@ -49,18 +49,18 @@ impl Env {
 impl Expr {
     /// Evaluates to a float; every symbol must have a value.
     pub fn eval(self, env: &Env) -> Result<f64, EvalError> {
-        let mut memo = HashMap::new();
+        let mut memo = rustc_hash::FxHashMap::default();
         eval_rec(self, env, &mut memo)
     }
 
     /// Evaluates many expressions sharing one memo.
     pub fn eval_all(items: &[Expr], env: &Env) -> Result<Vec<f64>, EvalError> {
-        let mut memo = HashMap::new();
+        let mut memo = rustc_hash::FxHashMap::default();
         items.iter().map(|e| eval_rec(*e, env, &mut memo)).collect()
     }
 }
 
-fn eval_rec(e: Expr, env: &Env, memo: &mut HashMap<Expr, f64>) -> Result<f64, EvalError> {
+fn eval_rec(e: Expr, env: &Env, memo: &mut rustc_hash::FxHashMap<Expr, f64>) -> Result<f64, EvalError> {
     if let Some(&v) = memo.get(&e) {
         return Ok(v);
     }

@@ -10,7 +10,6 @@
 use super::expr::{Expr, Node};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::Rat;
-use std::collections::HashMap;
 
 /// A sum as `(term, coefficient)` pairs; the constant is the term `1`.
 type Terms = Vec<(Expr, Rat)>;
@@ -52,12 +51,12 @@ impl Expr {
     /// Expands products of sums (recursively, including inside function arguments).
     pub fn expand(self, limits: Limits) -> Result<Expr, StopReason> {
         let budget = Budget::start(limits, "expand");
-        let mut memo = HashMap::new();
+        let mut memo = rustc_hash::FxHashMap::default();
         expand_rec(self, &budget, &mut memo)
     }
 }
 
-pub(crate) fn expand_rec(e: Expr, budget: &Budget, memo: &mut HashMap<Expr, Expr>) -> Result<Expr, StopReason> {
+pub(crate) fn expand_rec(e: Expr, budget: &Budget, memo: &mut rustc_hash::FxHashMap<Expr, Expr>) -> Result<Expr, StopReason> {
     if let Some(&r) = memo.get(&e) {
         return Ok(r);
     }

@@ -749,10 +749,24 @@ impl Expr {
 /// order that follows the outputs' order and the canonical child order (so it never depends on
 /// how the expressions were built). Iterative: deep expressions do not exhaust the stack.
 pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
+    post_order_pruned(outputs, |_| false)
+}
+
+/// [`post_order`] without the nodes `known` accepts, nor anything below them: for memo tables
+/// that hold a node only once they hold everything it is built from, this lists exactly what
+/// they lack, in the order [`post_order`] would visit it, without walking what they have.
+///
+/// ```
+/// use generator::symbolic::{Expr, expr::post_order_pruned};
+/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+/// let s = x.sin();
+/// assert_eq!(post_order_pruned(&[s * y], |e| e == s), vec![y, s * y]);
+/// ```
+pub fn post_order_pruned(outputs: &[Expr], mut known: impl FnMut(Expr) -> bool) -> Vec<Expr> {
     let mut seen = rustc_hash::FxHashSet::default();
     let mut order = Vec::new();
     for &root in outputs {
-        if !seen.insert(root) {
+        if known(root) || !seen.insert(root) {
             continue;
         }
         // (node, its children, next child index)
@@ -761,7 +775,7 @@ pub fn post_order(outputs: &[Expr]) -> Vec<Expr> {
             if *next < children.len() {
                 let c = children[*next];
                 *next += 1;
-                if seen.insert(c) {
+                if !known(c) && seen.insert(c) {
                     let cc = c.children();
                     stack.push((c, cc, 0));
                 }

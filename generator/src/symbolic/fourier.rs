@@ -59,8 +59,12 @@ impl C {
         C { re: &self.re * r, im: &self.im * r }
     }
     fn add_assign(&mut self, o: &C) {
-        self.re += &o.re;
-        self.im += &o.im;
+        if !o.re.is_zero() {
+            self.re += &o.re;
+        }
+        if !o.im.is_zero() {
+            self.im += &o.im;
+        }
     }
 }
 
@@ -119,15 +123,15 @@ impl Form {
         if c.is_zero() {
             return;
         }
-        match self.terms.get_mut(&key) {
-            Some(acc) => {
-                acc.add_assign(&c);
-                if acc.is_zero() {
-                    self.terms.remove(&key);
+        match self.terms.entry(key) {
+            std::collections::hash_map::Entry::Occupied(mut acc) => {
+                acc.get_mut().add_assign(&c);
+                if acc.get().is_zero() {
+                    acc.remove();
                 }
             }
-            None => {
-                self.terms.insert(key, c);
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                slot.insert(c);
             }
         }
     }
@@ -341,7 +345,7 @@ impl Simplifier {
             self.report.work_limit_reached = true;
             return None;
         }
-        let mut out = Form::default();
+        let mut out = Form { terms: FxHashMap::with_capacity_and_hasher((a.len() * b.len()).min(4 * self.limits.max_terms), Default::default()) };
         for (&(ma, ka), ca) in &a.terms {
             for (&(mb, kb), cb) in &b.terms {
                 let m = self.mono_mul(ma, mb);
@@ -460,10 +464,8 @@ impl Simplifier {
         if let Some(entry) = self.memo.get(&e) {
             return entry.chosen;
         }
-        for node in e.post_order_nodes() {
-            if self.memo.contains_key(&node) {
-                continue;
-            }
+        let memo = &self.memo;
+        for node in super::expr::post_order_pruned(&[e], |n| memo.contains_key(&n)) {
             let entry = self.node_entry(node);
             self.memo.insert(node, entry);
         }
@@ -489,10 +491,8 @@ impl Simplifier {
         if let Some(&c) = self.costs.get(&e) {
             return c;
         }
-        for node in e.post_order_nodes() {
-            if self.costs.contains_key(&node) {
-                continue;
-            }
+        let costs = &self.costs;
+        for node in super::expr::post_order_pruned(&[e], |n| costs.contains_key(&n)) {
             let c = match &*node.node() {
                 Node::Num(_) | Node::Sym(_) => 0u32,
                 Node::Add { constant, terms } => {

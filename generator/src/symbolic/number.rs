@@ -325,6 +325,10 @@ fn add(a: &Rat, b: &Rat) -> Rat {
     match (&a.0, &b.0) {
         (Repr::Small(0, _), _) => b.clone(),
         (_, Repr::Small(0, _)) => a.clone(),
+        (Repr::Small(n1, 1), Repr::Small(n2, 1)) => match n1.checked_add(*n2) {
+            Some(n) if n != i64::MIN => Rat(Repr::Small(n, 1)),
+            _ => Rat::from_i128(*n1 as i128 + *n2 as i128, 1),
+        },
         (Repr::Small(n1, d1), Repr::Small(n2, d2)) => {
             if d1 == d2 {
                 return Rat::from_i128(*n1 as i128 + *n2 as i128, *d1 as i128);
@@ -340,12 +344,21 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
         (Repr::Small(0, _), _) | (_, Repr::Small(0, _)) => Rat::ZERO,
         (Repr::Small(1, 1), _) => b.clone(),
         (_, Repr::Small(1, 1)) => a.clone(),
+        (Repr::Small(n1, 1), Repr::Small(n2, 1)) => match n1.checked_mul(*n2) {
+            Some(n) if n != i64::MIN => Rat(Repr::Small(n, 1)),
+            _ => Rat::from_i128(*n1 as i128 * *n2 as i128, 1),
+        },
         (Repr::Small(n1, d1), Repr::Small(n2, d2)) => {
-            let g1 = gcd_i64(*n1, *d2).max(1);
-            let g2 = gcd_i64(*n2, *d1).max(1);
+            let g1 = if *d2 == 1 { 1 } else { gcd_i64(*n1, *d2).max(1) };
+            let g2 = if *d1 == 1 { 1 } else { gcd_i64(*n2, *d1).max(1) };
             let n = (*n1 / g1) as i128 * (*n2 / g2) as i128;
             let d = (*d1 / g2) as i128 * (*d2 / g1) as i128;
-            Rat::from_i128(n, d)
+            // Cross-cancelled factors of coprime pairs: already in lowest terms.
+            if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
+                Rat(Repr::Small(n as i64, d as i64))
+            } else {
+                Rat(Repr::Big(Box::new(BigRational::new_raw(BigInt::from(n), BigInt::from(d)))))
+            }
         }
         _ => Rat::from_big(a.to_big() * b.to_big()),
     }

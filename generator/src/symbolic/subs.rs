@@ -15,19 +15,19 @@ impl Expr {
     /// Replaces every symbol in `map` by its expression (simultaneously), re-canonicalizing.
     pub fn subs(self, map: &HashMap<Symbol, Expr>) -> Expr {
         let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.0 % 128)));
-        let mut memo = HashMap::new();
+        let mut memo = rustc_hash::FxHashMap::default();
         subs_rec(self, map, mask, &mut memo)
     }
 
     /// Substitutes many expressions with one shared memo (shared subexpressions once).
     pub fn subs_all(items: &[Expr], map: &HashMap<Symbol, Expr>) -> Vec<Expr> {
         let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.0 % 128)));
-        let mut memo = HashMap::new();
+        let mut memo = rustc_hash::FxHashMap::default();
         items.iter().map(|e| subs_rec(*e, map, mask, &mut memo)).collect()
     }
 }
 
-fn subs_rec(e: Expr, map: &HashMap<Symbol, Expr>, mask: u128, memo: &mut HashMap<Expr, Expr>) -> Expr {
+fn subs_rec(e: Expr, map: &HashMap<Symbol, Expr>, mask: u128, memo: &mut rustc_hash::FxHashMap<Expr, Expr>) -> Expr {
     if e.mask() & mask == 0 {
         return e;
     }

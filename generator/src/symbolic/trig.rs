@@ -21,21 +21,20 @@ use super::expand::expand_rec;
 use super::expr::{Expr, Func, Node};
 use super::limits::{Budget, Limits, StopReason};
 use super::number::{Rat, rat_from_i64};
-use std::collections::HashMap;
 
 impl Expr {
     /// The trigonometric normal form (see the module docs), under `limits`.
     pub fn trig_normal(self, limits: Limits) -> Result<Expr, StopReason> {
         let budget = Budget::start(limits, "trigonometric normal form");
-        let mut cx = Normalizer { budget, memo: HashMap::new(), expand_memo: HashMap::new() };
+        let mut cx = Normalizer { budget, memo: Default::default(), expand_memo: Default::default() };
         cx.normal(self)
     }
 }
 
 struct Normalizer {
     budget: Budget,
-    memo: HashMap<Expr, Expr>,
-    expand_memo: HashMap<Expr, Expr>,
+    memo: rustc_hash::FxHashMap<Expr, Expr>,
+    expand_memo: rustc_hash::FxHashMap<Expr, Expr>,
 }
 
 impl Normalizer {
