@@ -28,7 +28,7 @@ use crate::symbolic::number::Rat;
 use crate::symbolic::{Expr, Node, Symbol};
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::cmp::Reverse;
-use std::collections::BTreeSet;
+use std::collections::BinaryHeap;
 
 /// The named function that groups a shared pair; emission lowers `()(x)` as `x`.
 pub fn group_symbol() -> Symbol {
@@ -44,9 +44,10 @@ const MAX_BAG_ATOMS: usize = 32;
 /// An unordered pair of atoms, smaller first.
 type Pair = (usize, usize);
 
-/// The distinct pairs a bag holds (an atom twice makes the pair `(a, a)`), sorted.
-fn pairs_of(bag: &[usize]) -> Vec<Pair> {
-    let mut sorted: Vec<usize> = bag.to_vec();
+/// The distinct pairs a bag holds (an atom twice makes the pair `(a, a)`), sorted, among the
+/// atoms `shared` accepts (an atom found in one bag only can be in no shared pair).
+fn pairs_of(bag: &[usize], shared: &impl Fn(usize) -> bool) -> Vec<Pair> {
+    let mut sorted: Vec<usize> = bag.iter().copied().filter(|&a| shared(a)).collect();
     sorted.sort_unstable();
     let mut distinct: Vec<(usize, usize)> = Vec::new();
     for a in sorted {
@@ -95,10 +96,25 @@ fn replace_pair(bag: &mut Vec<usize>, pair: Pair, group: usize) {
 pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
     let mut count: FxHashMap<Pair, usize> = FxHashMap::default();
     let mut holders: FxHashMap<Pair, Vec<usize>> = FxHashMap::default();
-    let mut queue: BTreeSet<(Reverse<usize>, Pair)> = BTreeSet::new();
+    // Candidates by count, most shared first and then the smallest pair. Lazy: a count that
+    // falls leaves its entry in place, to be found stale when it comes up (an entry is never
+    // below its pair's count, since every rise pushes one), so the pick is the same as an
+    // exactly kept order's without an update per change.
+    let mut queue: BinaryHeap<(usize, Reverse<Pair>)> = BinaryHeap::new();
     let mut work = 0usize;
+    // Atoms held by two bags or more (merged pairs always are).
+    let mut holding = vec![0u8; first_group];
+    for bag in bags.iter() {
+        let mut distinct: Vec<usize> = bag.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        for a in distinct {
+            holding[a] = holding[a].saturating_add(1);
+        }
+    }
+    let shared = |a: usize| a >= first_group || holding[a] >= 2;
     for (k, bag) in bags.iter().enumerate() {
-        for p in pairs_of(bag) {
+        for p in pairs_of(bag, &shared) {
             *count.entry(p).or_default() += 1;
             holders.entry(p).or_default().push(k);
             work += 1;
@@ -106,26 +122,31 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
     }
     for (&p, &n) in &count {
         if n >= 2 {
-            queue.insert((Reverse(n), p));
+            queue.push((n, Reverse(p)));
         }
     }
     let mut groups = Vec::new();
-    let change = |count: &mut FxHashMap<Pair, usize>, queue: &mut BTreeSet<(Reverse<usize>, Pair)>, p: Pair, up: bool| {
+    let change = |count: &mut FxHashMap<Pair, usize>, queue: &mut BinaryHeap<(usize, Reverse<Pair>)>, p: Pair, up: bool| {
         let n = count.entry(p).or_default();
-        if *n >= 2 {
-            queue.remove(&(Reverse(*n), p));
-        }
         if up {
             *n += 1;
+            if *n >= 2 {
+                queue.push((*n, Reverse(p)));
+            }
         } else {
             *n -= 1;
         }
-        if *n >= 2 {
-            queue.insert((Reverse(*n), p));
-        }
     };
-    while let Some(&(Reverse(n), pair)) = queue.first() {
-        if n < 2 || work > PAIR_BUDGET {
+    while let Some((n, Reverse(pair))) = queue.pop() {
+        let now = count.get(&pair).copied().unwrap_or(0);
+        if now != n {
+            // Stale: its count fell since (a rise would have pushed the current one).
+            if now < n && now >= 2 {
+                queue.push((now, Reverse(pair)));
+            }
+            continue;
+        }
+        if work > PAIR_BUDGET {
             break;
         }
         let group = first_group + groups.len();
@@ -133,12 +154,12 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
         let mut seen = FxHashSet::default();
         let bag_ids: Vec<usize> = holders.remove(&pair).unwrap_or_default().into_iter().filter(|k| seen.insert(*k)).collect();
         for k in bag_ids {
-            let old = pairs_of(&bags[k]);
+            let old = pairs_of(&bags[k], &shared);
             if old.binary_search(&pair).is_err() {
                 continue;
             }
             replace_pair(&mut bags[k], pair, group);
-            let new = pairs_of(&bags[k]);
+            let new = pairs_of(&bags[k], &shared);
             work += old.len() + new.len();
             // Both lists are sorted: walk them together and touch only what changed.
             let (mut i, mut j) = (0, 0);
@@ -162,11 +183,7 @@ pub fn merge_pairs(bags: &mut [Vec<usize>], first_group: usize) -> Vec<Pair> {
             }
         }
         // Whatever still counts this pair (a bag holding it twice) is done with it.
-        if let Some(n) = count.remove(&pair)
-            && n >= 2
-        {
-            queue.remove(&(Reverse(n), pair));
-        }
+        count.remove(&pair);
     }
     groups
 }
@@ -233,7 +250,12 @@ pub fn share_pairs(outputs: &[Expr]) -> Vec<Expr> {
     let groups: Vec<Pair> = product_groups.iter().chain(&sum_groups).copied().collect();
     let mut rebuild = Rebuild { atoms: &atoms, groups: &groups, first_group: atoms.len(), built: FxHashMap::default(), memo: FxHashMap::default() };
     for &e in &order {
+        let merged = |k: usize, bags: &[Vec<usize>]| bags[k].iter().any(|&a| a >= atoms.len());
         let r = match shapes.get(&e) {
+            Some((Shape::Product(_, _), k)) if !merged(*k, &product_bags) => rebuild.over_children(e),
+            // A sum of negative terms is rebuilt as the negation of a positive one even where
+            // nothing merged: the sign then goes into a product's coefficient for free.
+            Some((Shape::Sum(_, sign), k)) if sign.is_one() && !merged(*k, &sum_bags) => rebuild.over_children(e),
             Some((Shape::Product(coefficient, rest), k)) => {
                 let mut factors: Vec<(Expr, Rat)> = product_bags[*k].iter().map(|&a| (rebuild.factor(a), Rat::one())).collect();
                 factors.extend(rest.iter().map(|(b, ex)| (rebuild.memo[b], ex.clone())));
@@ -243,7 +265,7 @@ pub fn share_pairs(outputs: &[Expr]) -> Vec<Expr> {
                 let terms: Vec<(Expr, Rat)> = sum_bags[*k].iter().map(|&a| rebuild.term(a)).collect();
                 Expr::make_mul(sign.clone(), vec![(Expr::make_add(constant.clone(), terms), Rat::one())])
             }
-            None => e.map_children(|c| rebuild.memo[&c]),
+            None => rebuild.over_children(e),
         };
         rebuild.memo.insert(e, r);
     }
@@ -260,6 +282,11 @@ struct Rebuild<'a> {
 }
 
 impl Rebuild<'_> {
+    /// `e` over its rewritten children (itself when none changed: no re-interning).
+    fn over_children(&self, e: Expr) -> Expr {
+        if e.children().iter().all(|c| self.memo[c] == *c) { e } else { e.map_children(|c| self.memo[&c]) }
+    }
+
     /// Atom `a` of a product as a factor.
     fn factor(&mut self, a: usize) -> Expr {
         if a < self.first_group {
