@@ -249,8 +249,9 @@ pub fn share_pairs(outputs: &[Expr]) -> Vec<Expr> {
     let sum_groups = merge_pairs(&mut sum_bags, atoms.len() + product_groups.len());
     let groups: Vec<Pair> = product_groups.iter().chain(&sum_groups).copied().collect();
     let mut rebuild = Rebuild { atoms: &atoms, groups: &groups, first_group: atoms.len(), built: FxHashMap::default(), memo: FxHashMap::default() };
+    // A bag that holds a merged pair (atom numbers from `atoms.len()` on are merged pairs).
+    let merged = |k: usize, bags: &[Vec<usize>]| bags[k].iter().any(|&a| a >= atoms.len());
     for &e in &order {
-        let merged = |k: usize, bags: &[Vec<usize>]| bags[k].iter().any(|&a| a >= atoms.len());
         let r = match shapes.get(&e) {
             Some((Shape::Product(_, _), k)) if !merged(*k, &product_bags) => rebuild.over_children(e),
             // A sum of negative terms is rebuilt as the negation of a positive one even where
@@ -282,9 +283,9 @@ struct Rebuild<'a> {
 }
 
 impl Rebuild<'_> {
-    /// `e` over its rewritten children (itself when none changed: no re-interning).
+    /// `e` over its rewritten children (itself when none changed).
     fn over_children(&self, e: Expr) -> Expr {
-        if e.children().iter().all(|c| self.memo[c] == *c) { e } else { e.map_children(|c| self.memo[&c]) }
+        e.map_children_or_self(|c| self.memo[&c])
     }
 
     /// Atom `a` of a product as a factor.

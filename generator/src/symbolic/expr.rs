@@ -699,6 +699,26 @@ impl Expr {
         }
     }
 
+    /// [`Expr::map_children`], but the node itself when `f` changes no child: no rebuild, so
+    /// no sorting and interning (and no re-canonicalization of a node built another way).
+    ///
+    /// ```
+    /// use generator::symbolic::Expr;
+    /// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+    /// let e = x.sin() + y;
+    /// assert_eq!(e.map_children_or_self(|c| c), e);
+    /// assert_eq!(e.map_children_or_self(|c| if c == y { x } else { c }), x.sin() + x);
+    /// ```
+    pub fn map_children_or_self(self, mut f: impl FnMut(Expr) -> Expr) -> Expr {
+        let children = self.children();
+        let mapped: Vec<Expr> = children.iter().map(|c| f(*c)).collect();
+        if mapped == children {
+            return self;
+        }
+        let mut each = mapped.into_iter();
+        self.map_children(|_| each.next().expect("one mapped child per child"))
+    }
+
     /// Every node below (and including) this expression, children before parents, each once.
     pub fn post_order_nodes(self) -> Vec<Expr> {
         post_order(&[self])

@@ -533,8 +533,7 @@ impl Simplifier {
     }
 
     fn node_entry(&mut self, e: Expr) -> Entry {
-        // Over unchanged children the node is its own rebuild: skip sorting and interning.
-        let direct = if e.children().iter().all(|c| self.memo[c].chosen == *c) { e } else { e.map_children(|c| self.memo[&c].chosen) };
+        let direct = e.map_children_or_self(|c| self.memo[&c].chosen);
         let opaque = |s: &mut Simplifier, direct: Expr| {
             let form = Rc::new(match direct.as_num() {
                 Some(r) => s.constant(&r),
