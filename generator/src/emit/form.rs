@@ -8,11 +8,11 @@
 use super::FunctionCost;
 use super::function::{Arg, Input, arg_list};
 use super::jacobian::Wrt;
-use super::module::{Emitter, doc, momenta, usize_lit};
+use super::module::{Emitter, doc, usize_lit};
 use super::ops::OpCount;
-use crate::formulation::{Derivation, Equations};
+use super::shared::FromMechanics;
+use crate::formulation::Equations;
 use crate::model::ModelError;
-use crate::symbolic::eval::magnitude;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
@@ -84,7 +84,7 @@ impl Emitter<'_> {
     }
 
     /// A formulation's submodule (see the module docs).
-    pub(super) fn form(&mut self, f: &Equations, d: &Derivation) -> Result<TokenStream, ModelError> {
+    pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let m = model.m();
         let name = f.name;
@@ -96,12 +96,12 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let checks = self.runtime_factors(f);
-        let assemble = self.assemble(f, d, &checks)?;
-        let init = self.initial_state(f, d)?;
+        let assemble = self.assemble(f, shared, &checks)?;
+        let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
-        let jacobian = if self.options.jacobian { self.jacobian_fn(f, d, &checks, Wrt::State)? } else { TokenStream::new() };
-        let parameter_jacobian = if self.emits_parameter_jacobian() { self.jacobian_fn(f, d, &checks, Wrt::Parameters)? } else { TokenStream::new() };
+        let jacobian = if self.options.jacobian { self.jacobian_fn(f, shared, &checks, Wrt::State)? } else { TokenStream::new() };
+        let parameter_jacobian = if self.emits_parameter_jacobian() { self.jacobian_fn(f, shared, &checks, Wrt::Parameters)? } else { TokenStream::new() };
         let module = ident(name);
         let states_l = usize_lit(n_states);
         let eqs = usize_lit(f.equations);
@@ -137,7 +137,7 @@ impl Emitter<'_> {
     /// What the state's rates are computed from, in order: the kept coordinates' rates, the
     /// matrix (both triangles read the upper entry, so CSE binds it once), the forcing, Maggi's
     /// `W` and `c`, and the power `Q . q'` when forces do work.
-    pub(super) fn rate_outputs(&self, f: &Equations, d: &Derivation) -> Vec<Expr> {
+    pub(super) fn rate_outputs(&self, f: &Equations, shared: &FromMechanics) -> Vec<Expr> {
         let model = self.model;
         let n = f.mass.rows;
         let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
@@ -153,13 +153,13 @@ impl Emitter<'_> {
         }
         if self.work {
             let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
-            outputs.push(Expr::sum(d.mechanics.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
+            outputs.push(Expr::sum(shared.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
         }
         outputs
     }
 
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`.
-    fn assemble(&mut self, f: &Equations, d: &Derivation, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let name = f.name;
         let work = self.work;
@@ -172,7 +172,7 @@ impl Emitter<'_> {
         // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
         // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
         // the constraint residuals for Baumgarte.
-        let mut outputs = self.rate_outputs(f, d);
+        let mut outputs = self.rate_outputs(f, shared);
         outputs.extend(checks.iter().copied());
         if let Some(stab) = &f.stabilization {
             outputs.extend(stab.iter().map(|(r, _)| *r));
@@ -340,36 +340,29 @@ impl Emitter<'_> {
         })
     }
 
-    fn initial_state(&mut self, f: &Equations, d: &Derivation) -> Result<TokenStream, ModelError> {
+    fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         let work = self.work;
-        let model = self.model;
-        let mech = &d.mechanics;
         let name = f.name;
         let (args, inputs) = self.q_qdot_inputs(true);
         let u = &f.speeds_from_qdot;
-        let g = momenta(mech, &d.ignorable, &model.velocities);
-        let residuals = mech.velocity_residuals(&model.velocities);
-        let bounds: Vec<Expr> =
-            (0..mech.r).map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * model.velocities[j].expr()))) + magnitude(mech.b[i])).collect();
-        let positions: Vec<Expr> = mech.holonomic.iter().map(|(_, e)| *e).collect();
-        let pos_bounds: Vec<Expr> = positions.iter().map(|e| magnitude(*e)).collect();
+        let g = &shared.momenta;
         let mut outputs = u.clone();
         outputs.extend(g.iter().copied());
-        outputs.extend(residuals.iter().copied());
-        outputs.extend(bounds.iter().copied());
-        outputs.extend(positions.iter().copied());
-        outputs.extend(pos_bounds.iter().copied());
+        outputs.extend(shared.velocity_residuals.iter().copied());
+        outputs.extend(shared.residual_bounds.iter().copied());
+        outputs.extend(shared.positions.iter().copied());
+        outputs.extend(shared.position_bounds.iter().copied());
         let b = self.body(&format!("{name}::initial_state"), &outputs, &inputs, &args)?;
         let o = &b.outputs;
-        let (nu, ng, nr, nh) = (u.len(), g.len(), mech.r, positions.len());
+        let (nu, ng, nr, nh) = (u.len(), g.len(), shared.velocity_residuals.len(), shared.positions.len());
         let u_out = &o[..nu];
         let g_out = &o[nu..nu + ng];
         let r_out = &o[nu + ng..nu + ng + nr];
         let rb_out = &o[nu + ng + nr..nu + ng + 2 * nr];
         let h_out = &o[nu + ng + 2 * nr..nu + ng + 2 * nr + nh];
         let hb_out = &o[nu + ng + 2 * nr + nh..];
-        let names: Vec<&String> = mech.constraint_names.iter().collect();
-        let h_names: Vec<&String> = mech.holonomic.iter().map(|(i, _)| &mech.constraint_names[*i]).collect();
+        let names = &shared.constraint_names;
+        let h_names = &shared.holonomic_names;
         let q_idx: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let w0 = if work { quote!(, 0.0) } else { TokenStream::new() };
         let stmts = &b.stmts;

@@ -10,7 +10,8 @@
 use super::form::{solve_cost, state_args};
 use super::module::{Emitter, usize_lit};
 use super::ops::OpCount;
-use crate::formulation::{Derivation, Equations};
+use super::shared::FromMechanics;
+use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::Expr;
 use proc_macro2::TokenStream;
@@ -39,7 +40,7 @@ pub(super) enum Wrt {
 impl Emitter<'_> {
     /// `jacobian` (`jac[i][k] = d dstate_i / d state_k`) or `parameter_jacobian`
     /// (`jac[i][k] = d dstate_i / d params_k`), each with the right-hand side `dstate`.
-    pub(super) fn jacobian_fn(&mut self, f: &Equations, d: &Derivation, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
+    pub(super) fn jacobian_fn(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
         let name = f.name;
         let work = self.work;
         let n_states = f.states(work);
@@ -47,7 +48,7 @@ impl Emitter<'_> {
         let n_speeds = f.speeds.len();
         let n = f.mass.rows;
         let (rw, cw) = f.post.as_ref().map(|(w, _)| (w.rows, w.cols)).unwrap_or((0, 0));
-        let rates = self.rate_outputs(f, d);
+        let rates = self.rate_outputs(f, shared);
         let variables: Vec<_> = match wrt {
             Wrt::State => f.kept.iter().map(|&j| self.model.coordinates[j]).chain(f.speeds.iter().copied()).collect(),
             Wrt::Parameters => self.model.parameters.iter().map(|(s, _)| *s).collect(),

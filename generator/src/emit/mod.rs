@@ -25,6 +25,7 @@ pub mod optimize;
 pub mod prepare;
 pub mod seam;
 pub mod share;
+pub mod shared;
 pub mod splice;
 pub mod syntax;
 

@@ -6,13 +6,14 @@ use super::function::{Arg, Body, Input, arg_list, body_with, ident};
 use super::lower::literal;
 use super::names::Names;
 use super::prepare::Preparer;
+use super::shared::FromMechanics;
 use super::splice::Splices;
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
-use crate::formulation::mechanics::Mechanics;
-use crate::formulation::{self, Derivation, Request};
+use crate::formulation::{self, Equations, Progress, Request};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::number::rat_from_f64;
-use crate::symbolic::{Expr, Symbol};
+use crate::symbolic::transfer::Parcel;
+use crate::symbolic::{Context, Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
@@ -63,13 +64,163 @@ pub(super) struct Placed {
     pub used_args: std::collections::BTreeSet<usize>,
 }
 
+/// Stack of the thread that emits the formulations: the recursive passes over expressions as
+/// deep as [`crate::symbolic::expr::MAX_DEPTH`] need more than a spawned thread's default.
+const EMITTER_STACK: usize = 64 << 20;
+
+/// What the derivation hands the second thread's emitter, each packed for its context.
+enum Job {
+    /// The model and what the emitted functions read of the mechanics (first, once).
+    Start(Parcel<(Model, FromMechanics)>),
+    /// One formulation's equations.
+    Form(Parcel<Equations>),
+}
+
+/// Part of the module, printed, with what its functions cost.
+struct Part {
+    text: String,
+    functions: Vec<FunctionCost>,
+    forms: Vec<(String, usize, usize)>,
+}
+
+impl Part {
+    fn empty() -> Part {
+        Part { text: String::new(), functions: Vec::new(), forms: Vec::new() }
+    }
+}
+
+/// Derives and emits, on two threads. This one derives; as soon as the mechanics are known, a
+/// second thread, in an expression context of its own, emits the module's head (sizes,
+/// `Params`, the shared functions), then each formulation but the last as soon as its
+/// equations are derived, while the next one is. The last formulation and `model()` are
+/// emitted here once the derivation ends. The second thread's input is fixed (the same
+/// parcels in the same order, whatever the timing), so the bytes are too. Errors are reported
+/// in the order the stages run alone: the derivation's, then the emitted functions' in module
+/// order.
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
     let start = Instant::now();
     let request = Request { formulations: options.formulations.clone(), integrate_ignorable: options.integrate_ignorable };
-    let d = formulation::derive(model, &request)?;
-    let derive_time = start.elapsed();
-    let start = Instant::now();
-    let seam: syn::Path = syn::parse_str(&options.seam_path).map_err(|e| {
+    let seam = seam_path(model, options)?;
+    // The formulations derive_with reports, one per distinct request; the last stays here.
+    let wanted = request.formulations.iter().collect::<std::collections::BTreeSet<_>>().len();
+    let mut reported = 0;
+    std::thread::scope(|scope| {
+        let (jobs, inbox) = std::sync::mpsc::channel::<Job>();
+        let worker = std::thread::Builder::new()
+            .name("emit".into())
+            .stack_size(EMITTER_STACK)
+            .spawn_scoped(scope, move || Context::new().enter(|| emit_head_and_formulations(inbox, options)))
+            .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
+        let mut shared = None;
+        // A send fails only when the emitter stopped at an error, which its result reports.
+        let derived = formulation::derive_with(model, &request, &mut |progress| match progress {
+            Progress::Shared { mechanics, ignorable } => {
+                let s = FromMechanics::new(mechanics, ignorable, &model.velocities);
+                let _ = jobs.send(Job::Start(Parcel::pack(&(model.clone(), s.clone()))));
+                shared = Some(s);
+            }
+            Progress::Equations(eqs) => {
+                reported += 1;
+                if reported < wanted {
+                    let _ = jobs.send(Job::Form(Parcel::pack(eqs)));
+                }
+            }
+        });
+        drop(jobs);
+        let derive_time = start.elapsed();
+        let emit_start = Instant::now();
+        let tail = derived.map(|d| {
+            let shared = shared.as_ref().expect("the derivation reports the mechanics before it succeeds");
+            let mut em = Emitter::new(model, options, seam, shared);
+            let names = d.equations.iter().map(|e| e.name.to_string()).collect();
+            (em.formulations_and_model_fn(d.equations.last(), names, shared), d)
+        });
+        let head = worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let (tail, d) = tail?;
+        let (head, tail) = (head?, tail?);
+        let mut functions = head.functions;
+        functions.extend(tail.functions);
+        let mut formulations = head.forms;
+        formulations.extend(tail.forms);
+        let code =
+            format!("// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{}{}", model_file_name(model), model.name, head.text, tail.text);
+        let summary = Summary {
+            model: model.name.clone(),
+            m: d.mechanics.m,
+            r: d.mechanics.r,
+            p: d.mechanics.p,
+            s: d.ignorable.len(),
+            formulations,
+            eliminations: d.equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
+            functions,
+            simplifier: d.mechanics.tidy.report(),
+            stages: d.stages.clone(),
+            derive_time,
+            emit_time: emit_start.elapsed(),
+        };
+        Ok(Generated { code, summary })
+    })
+}
+
+/// The second thread: the module's head, then each formulation as its [`Job`] arrives.
+fn emit_head_and_formulations(inbox: std::sync::mpsc::Receiver<Job>, options: &Options) -> Result<Part, ModelError> {
+    // No start: the derivation failed first, and reports it.
+    let Ok(Job::Start(start)) = inbox.recv() else { return Ok(Part::empty()) };
+    let (model, shared) = start.unpack();
+    let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
+    let mut head = vec![em.header(&shared)];
+    head.push(em.params());
+    head.push(super::seam::failure_import(&em.seam));
+    if !options.formulations.is_empty() {
+        head.push(solve_dense());
+        if options.jacobian || em.emits_parameter_jacobian() {
+            head.push(super::jacobian::lu_items());
+        }
+    }
+    for f in &options.functions {
+        head.extend(em.shared_function(*f, &shared)?);
+    }
+    let mut text = em.print(head)?;
+    // Each submodule printed as it is emitted: the items of one file, printed in order, are
+    // the items printed one by one.
+    for job in inbox {
+        if let Job::Form(parcel) = job {
+            let item = em.form(&parcel.unpack(), &shared)?;
+            text += &em.print(vec![item])?;
+        }
+    }
+    Ok(Part { text, functions: std::mem::take(&mut em.functions), forms: std::mem::take(&mut em.forms) })
+}
+
+impl Emitter<'_> {
+    /// `forms`' submodules and `model()` (listing the formulations `names`), printed.
+    fn formulations_and_model_fn<'e>(
+        &mut self,
+        forms: impl IntoIterator<Item = &'e Equations>,
+        names: Vec<String>,
+        shared: &FromMechanics,
+    ) -> Result<Part, ModelError> {
+        let mut items = Vec::new();
+        for eqs in forms {
+            items.push(self.form(eqs, shared)?);
+        }
+        let module_name = self.options.module_name.clone().unwrap_or_else(|| self.model.name.clone());
+        items.push(super::seam::model_fn(&super::seam::SeamParts {
+            seam: &self.seam,
+            module: &module_name,
+            formulations: names,
+            functions: &self.options.functions,
+            has_initial: self.model.initial.is_some(),
+            has_run: self.model.simulation.is_some(),
+        }));
+        let text = self.print(items)?;
+        Ok(Part { text, functions: std::mem::take(&mut self.functions), forms: std::mem::take(&mut self.forms) })
+    }
+}
+
+/// The seam crate's path in emitted code, from the options.
+fn seam_path(model: &Model, options: &Options) -> Result<syn::Path, ModelError> {
+    syn::parse_str(&options.seam_path).map_err(|e| {
         model.error(
             ErrorKind::Emission,
             "emit",
@@ -77,7 +228,11 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
             format!("`{}` is not a Rust path: {e}", options.seam_path),
             "give the seam crate's path, such as `::seam` or `runtime::seam`".into(),
         )
-    })?;
+    })
+}
+
+/// The symbols' identifiers in emitted code (a model's names, made unique and valid).
+fn symbol_names(model: &Model, shared: &FromMechanics) -> SymbolNames {
     let mut names = Names::new();
     let parameters = model.parameters.iter().map(|(s, _)| names.fresh(&s.name())).collect();
     let coordinates: Vec<String> = model.coordinates.iter().map(|s| names.fresh(&s.name())).collect();
@@ -87,75 +242,46 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         of.insert(*q, coordinates[j].clone());
         of.insert(model.velocities[j], velocities[j].clone());
     }
-    for &j in &d.ignorable {
+    for &j in &shared.ignorable {
         let g = formulation::volterra::momentum_symbol(model, j);
         of.insert(g, names.fresh(&g.name()));
     }
-    for k in 0..d.mechanics.p {
+    for k in 0..shared.p {
         let u = formulation::volterra::quasi_symbol(k);
         of.insert(u, names.fresh(&u.name()));
     }
-    let mut em = Emitter {
-        model,
-        options,
-        prep: Preparer::new(model, options.parameters == Parameters::Baked),
-        names: SymbolNames { coordinates, velocities, parameters, of },
-        functions: Vec::new(),
-        forms: Vec::new(),
-        work: false,
-        horner: Default::default(),
-        seam,
-        splices: Splices::default(),
-    };
-    // Applied non-potential forces can do work (Q not identically zero once prepared): every
-    // formulation then carries the work integral W as its last state.
-    em.work = d.mechanics.q_forces.iter().any(|q| !em.prep.prepare(*q).is_zero());
-    let mut items = vec![em.header(&d)];
-    items.push(em.params());
-    items.push(super::seam::failure_import(&em.seam));
-    if !options.formulations.is_empty() {
-        items.push(solve_dense());
-        if options.jacobian || em.emits_parameter_jacobian() {
-            items.push(super::jacobian::lu_items());
-        }
+    SymbolNames { coordinates, velocities, parameters, of }
+}
+
+impl<'a> Emitter<'a> {
+    fn new(model: &'a Model, options: &'a Options, seam: syn::Path, shared: &FromMechanics) -> Emitter<'a> {
+        let mut em = Emitter {
+            model,
+            options,
+            prep: Preparer::new(model, options.parameters == Parameters::Baked),
+            names: symbol_names(model, shared),
+            functions: Vec::new(),
+            forms: Vec::new(),
+            work: false,
+            horner: Default::default(),
+            seam,
+            splices: Splices::default(),
+        };
+        // Applied non-potential forces can do work (Q not identically zero once prepared): every
+        // formulation then carries the work integral W as its last state.
+        em.work = shared.q_forces.iter().any(|q| !em.prep.prepare(*q).is_zero());
+        em
     }
-    for f in &options.functions {
-        items.extend(em.shared_function(*f, &d)?);
+
+    /// `items` as a formatted file, the bodies' trees in their places.
+    fn print(&mut self, items: Vec<TokenStream>) -> Result<String, ModelError> {
+        let model = self.model;
+        let tokens = quote!(#(#items)*);
+        let mut file: syn::File = syn::parse2(tokens)
+            .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("internal: emitted tokens do not parse: {e}"), String::new()))?;
+        std::mem::take(&mut self.splices).apply(&mut file).map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", e.to_string(), String::new()))?;
+        Ok(prettyplease::unparse(&file))
     }
-    for eqs in &d.equations {
-        items.push(em.form(eqs, &d)?);
-    }
-    let module_name = options.module_name.clone().unwrap_or_else(|| model.name.clone());
-    items.push(super::seam::model_fn(&super::seam::SeamParts {
-        seam: &em.seam,
-        module: &module_name,
-        formulations: d.equations.iter().map(|e| e.name.to_string()).collect(),
-        functions: &options.functions,
-        has_initial: model.initial.is_some(),
-        has_run: model.simulation.is_some(),
-    }));
-    let tokens = quote!(#(#items)*);
-    let mut file: syn::File = syn::parse2(tokens)
-        .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("internal: emitted tokens do not parse: {e}"), String::new()))?;
-    std::mem::take(&mut em.splices).apply(&mut file).map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", e.to_string(), String::new()))?;
-    let code =
-        format!("// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{}", model_file_name(model), model.name, prettyplease::unparse(&file));
-    let formulations = std::mem::take(&mut em.forms);
-    let summary = Summary {
-        model: model.name.clone(),
-        m: d.mechanics.m,
-        r: d.mechanics.r,
-        p: d.mechanics.p,
-        s: d.ignorable.len(),
-        formulations,
-        eliminations: d.equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
-        functions: em.functions,
-        simplifier: d.mechanics.tidy.report(),
-        stages: d.stages.clone(),
-        derive_time,
-        emit_time: start.elapsed(),
-    };
-    Ok(Generated { code, summary })
 }
 
 /// The first number in `source` whose magnitude is beyond `1e150` or below `1e-150` (but not
@@ -253,15 +379,15 @@ impl Emitter<'_> {
         )
     }
 
-    fn header(&self, d: &Derivation) -> TokenStream {
+    fn header(&self, m: &FromMechanics) -> TokenStream {
         let model = self.model;
-        let m = &d.mechanics;
         let name = &model.name;
         let description = doc(&format!("Model `{}`: {}", model.name, model.description));
-        let (nm, nr, np, ns, nh) = (usize_lit(m.m), usize_lit(m.r), usize_lit(m.p), usize_lit(d.ignorable.len()), usize_lit(m.holonomic.len()));
+        let (nm, nr, np, ns, nh) =
+            (usize_lit(model.m()), usize_lit(m.constraint_names.len()), usize_lit(m.p), usize_lit(m.ignorable.len()), usize_lit(m.positions.len()));
         let coords: Vec<String> = model.coordinates.iter().map(|s| s.name()).collect();
         let cons = &m.constraint_names;
-        let ign: Vec<Literal> = d.ignorable.iter().map(|&i| usize_lit(i)).collect();
+        let ign: Vec<Literal> = m.ignorable.iter().map(|&i| usize_lit(i)).collect();
         let (pivot, singular, constraint) = (f64_lit(PIVOT_TOLERANCE), f64_lit(SINGULAR_TOLERANCE), f64_lit(CONSTRAINT_TOLERANCE));
         let mut out = quote! {
             #description
@@ -429,13 +555,12 @@ impl Emitter<'_> {
         }
     }
 
-    fn shared_function(&mut self, f: Function, d: &Derivation) -> Result<Vec<TokenStream>, ModelError> {
-        let m = &d.mechanics;
+    fn shared_function(&mut self, f: Function, m: &FromMechanics) -> Result<Vec<TokenStream>, ModelError> {
         let mut out = Vec::new();
         match f {
             Function::Energy => {
                 let (args, inputs) = self.q_qdot_inputs(true);
-                let b = self.body("energy", &[m.kinetic + m.potential], &inputs, &args)?;
+                let b = self.body("energy", &[m.energy], &inputs, &args)?;
                 out.push(simple_fn("energy", "Total energy T + V.", &args, &b, quote!(f64), |o| quote!(#(#o)*)));
             }
             Function::WorkRate => {
@@ -453,8 +578,7 @@ impl Emitter<'_> {
             }
             Function::Momenta => {
                 let (args, inputs) = self.q_qdot_inputs(true);
-                let g = momenta(m, &d.ignorable, &self.model.velocities);
-                let b = self.body("momenta", &g, &inputs, &args)?;
+                let b = self.body("momenta", &m.momenta, &inputs, &args)?;
                 out.push(simple_fn(
                     "momenta",
                     "Generalized momenta `M' q' + N2` of the ignorable coordinates (Eq. 26): conserved, equal to `G_I`.",
@@ -466,8 +590,7 @@ impl Emitter<'_> {
             }
             Function::Constraints => {
                 let (args, inputs) = self.q_qdot_inputs(true);
-                let res = m.velocity_residuals(&self.model.velocities);
-                let b = self.body("constraint_residuals", &res, &inputs, &args)?;
+                let b = self.body("constraint_residuals", &m.velocity_residuals, &inputs, &args)?;
                 out.push(simple_fn(
                     "constraint_residuals",
                     "Velocity-level constraint residuals `a q' + b` (zero on admissible motions).",
@@ -477,8 +600,7 @@ impl Emitter<'_> {
                     |o| quote!([#(#o),*]),
                 ));
                 let (args, inputs) = self.q_qdot_inputs(false);
-                let pos: Vec<Expr> = m.holonomic.iter().map(|(_, e)| *e).collect();
-                let b = self.body("position_residuals", &pos, &inputs, &args)?;
+                let b = self.body("position_residuals", &m.positions, &inputs, &args)?;
                 out.push(simple_fn(
                     "position_residuals",
                     "Position-level residuals of the holonomic constraints.",
@@ -491,11 +613,6 @@ impl Emitter<'_> {
         }
         Ok(out)
     }
-}
-
-/// `M' q' + N2` for the ignorable coordinates.
-pub(super) fn momenta(m: &Mechanics, ignorable: &[usize], velocities: &[Symbol]) -> Vec<Expr> {
-    ignorable.iter().map(|&i| m.momentum(i, velocities)).collect()
 }
 
 fn simple_fn(name: &str, text: &str, args: &[Arg], b: &Placed, ret: TokenStream, result: impl FnOnce(&[TokenStream]) -> TokenStream) -> TokenStream {

@@ -12,6 +12,7 @@
 //! ```
 
 use crate::model::ModelError;
+use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Matrix, Symbol};
 
 /// The equations of motion of one formulation, ready to emit.
@@ -48,6 +49,20 @@ pub struct Equations {
     pub stabilization: Option<Vec<(Expr, Expr)>>,
     /// How the velocity transformation was eliminated, for the summary and `inspect`.
     pub elimination: &'static str,
+}
+
+impl Transfer for Equations {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.speeds.visit(v);
+        self.momenta.visit(v);
+        self.qdot.visit(v);
+        self.speeds_from_qdot.visit(v);
+        self.mass.visit(v);
+        self.forcing.visit(v);
+        self.post.visit(v);
+        self.singular.visit(v);
+        self.stabilization.visit(v);
+    }
 }
 
 impl Equations {

@@ -89,8 +89,34 @@ impl Derivation {
 
 /// Derives what `request` asks for.
 pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError> {
+    derive_with(model, request, &mut |_| {})
+}
+
+/// What [`derive_with`] has ready, as soon as it is.
+pub enum Progress<'a> {
+    /// The mechanics and the ignorable coordinates the reduced method uses (first, once).
+    Shared { mechanics: &'a Mechanics, ignorable: &'a [usize] },
+    /// One formulation's equations, in the order Lagrange, Maggi, Kane, reduced.
+    Equations(&'a Equations),
+}
+
+/// [`derive`], telling `on` of each result as soon as it is ready, so that a caller can emit
+/// one formulation while the next is derived. Lagrange's equations need only the mechanics,
+/// Maggi's and Kane's Kane's form, the reduced method's the reduced form: each formulation is
+/// derived right after what it needs.
+///
+/// ```
+/// use generator::formulation::{derive_with, Progress, Request};
+/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+/// let mut seen = Vec::new();
+/// derive_with(&model, &Request::all(), &mut |p| if let Progress::Equations(e) = p { seen.push(e.name) }).unwrap();
+/// assert_eq!(seen, ["lagrange", "maggi", "kane", "reduced_volterra"]);
+/// ```
+pub fn derive_with(model: &Model, request: &Request, on: &mut dyn FnMut(Progress)) -> Result<Derivation, ModelError> {
     let mut stages = Vec::new();
     let mut clock = Instant::now();
+    // Time in the formulations' own work, summed over the places it runs.
+    let mut formulations = Duration::ZERO;
     let mut stage = |name: &'static str, stages: &mut Vec<(&'static str, Duration)>| {
         stages.push((name, clock.elapsed()));
         clock = Instant::now();
@@ -100,33 +126,38 @@ pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError
     let reports = ignorable::analyze(model, &mech);
     let chosen = ignorable::choose(model, &reports)?;
     stage("ignorable", &mut stages);
+    on(Progress::Shared { mechanics: &mech, ignorable: &chosen });
     let wants = |f: FormulationDef| request.formulations.contains(&f);
+    let mut equations = Vec::new();
+    let mut formulate = |def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
+        if wants(def) {
+            let start = Instant::now();
+            let shared = Shared { model, mech: &mech, ignorable: &chosen, kane, reduced, integrate_ignorable: request.integrate_ignorable };
+            let eqs = method.equations(&shared)?;
+            formulations += start.elapsed();
+            on(Progress::Equations(&eqs));
+            equations.push(eqs);
+        }
+        Ok(())
+    };
+    formulate(FormulationDef::Lagrange, &lagrange::Lagrange, None, None)?;
+    let clock_start = Instant::now();
     // Kane's form serves Kane, Maggi, and the reduced method's Schur route.
     let kane = if wants(FormulationDef::Kane) || wants(FormulationDef::Maggi) || wants(FormulationDef::ReducedVolterra) {
         Some(volterra::derive(model, &mech, &[], &model.quasi_full)?)
     } else {
         None
     };
-    stage("kane", &mut stages);
+    stages.push(("kane", clock_start.elapsed()));
+    formulate(FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None)?;
+    formulate(FormulationDef::Kane, &kane::Kane, kane.as_ref(), None)?;
+    let clock_start = Instant::now();
     let reduced = match &kane {
         Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &chosen, &model.quasi_reduced, k)?),
         _ => None,
     };
-    stage("reduced", &mut stages);
-    let shared =
-        Shared { model, mech: &mech, ignorable: &chosen, kane: kane.as_ref(), reduced: reduced.as_ref(), integrate_ignorable: request.integrate_ignorable };
-    let methods: [(FormulationDef, &dyn Method); 4] = [
-        (FormulationDef::Lagrange, &lagrange::Lagrange),
-        (FormulationDef::Maggi, &maggi::Maggi),
-        (FormulationDef::Kane, &kane::Kane),
-        (FormulationDef::ReducedVolterra, &reduced::ReducedVolterra),
-    ];
-    let mut equations = Vec::new();
-    for (def, method) in methods {
-        if wants(def) {
-            equations.push(method.equations(&shared)?);
-        }
-    }
-    stage("formulations", &mut stages);
+    stages.push(("reduced", clock_start.elapsed()));
+    formulate(FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref())?;
+    stages.push(("formulations", formulations));
     Ok(Derivation { mechanics: mech, reports, ignorable: chosen, kane, reduced, equations, stages })
 }

@@ -118,6 +118,15 @@ pub struct FrameKinematics {
     pub velocity: [Expr; 3],
 }
 
+impl crate::symbolic::transfer::Transfer for FrameKinematics {
+    fn visit(&mut self, v: &mut dyn crate::symbolic::transfer::Visitor) {
+        self.origin.visit(v);
+        self.rotation.visit(v);
+        self.omega.visit(v);
+        self.velocity.visit(v);
+    }
+}
+
 impl FrameKinematics {
     /// The world frame.
     pub fn world() -> FrameKinematics {

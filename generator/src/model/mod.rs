@@ -20,6 +20,7 @@ use crate::kinematics::{Axis, FrameKinematics, TimeChain};
 use crate::symbolic::eval::Env;
 use crate::symbolic::number::rat_from_f64;
 use crate::symbolic::parse::{self, Ast, AstKind, LowerError, Resolver};
+use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::collections::{HashMap, HashSet};
 
@@ -94,6 +95,66 @@ pub struct Model {
     pub simulation: Option<SimulationDef>,
     /// The raw definition.
     pub def: ModelFile,
+}
+
+impl Transfer for Body {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.mass.visit(v);
+        self.com.visit(v);
+        self.inertia.visit(v);
+    }
+}
+
+impl Transfer for Constraint {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        match self {
+            Constraint::Velocity { expr, .. } | Constraint::Position { expr, .. } => expr.visit(v),
+        }
+    }
+}
+
+impl Transfer for Force {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        match self {
+            Force::Gravity { vector } => vector.visit(v),
+            Force::PointForce { point, force_world, .. } => {
+                point.visit(v);
+                force_world.visit(v);
+            }
+            Force::Torque { torque, .. } => torque.visit(v),
+            Force::Spring { a, b, stiffness, rest_length, .. } => {
+                a.1.visit(v);
+                b.1.visit(v);
+                stiffness.visit(v);
+                rest_length.visit(v);
+            }
+            Force::Damper { a, b, damping, .. } => {
+                a.1.visit(v);
+                b.1.visit(v);
+                damping.visit(v);
+            }
+            Force::Generalized { components, .. } => components.visit(v),
+            Force::Potential { expr, .. } => expr.visit(v),
+        }
+    }
+}
+
+/// Every expression and symbol of the model, so that it can be emitted in another context.
+impl Transfer for Model {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.parameters.iter_mut().for_each(|(s, _)| s.visit(v));
+        self.coordinates.visit(v);
+        self.velocities.visit(v);
+        self.accelerations.visit(v);
+        self.t.visit(v);
+        self.time_functions.visit(v);
+        self.frames.visit(v);
+        self.bodies.visit(v);
+        self.constraints.visit(v);
+        self.forces.visit(v);
+        self.quasi_full.visit(v);
+        self.quasi_reduced.visit(v);
+    }
 }
 
 impl Model {

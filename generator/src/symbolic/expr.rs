@@ -314,6 +314,15 @@ impl Symbol {
             n.strip_prefix(INTERNAL).unwrap_or(n).to_string()
         })
     }
+    /// The name as interned (an internal symbol's with its mark): what
+    /// [`Symbol::from_interned_name`] takes back, in any context.
+    pub(crate) fn interned_name(self) -> String {
+        with_pool(|p| p.names[self.0 as usize].clone())
+    }
+    /// The symbol whose [`Symbol::interned_name`] is `name`, in the current context.
+    pub(crate) fn from_interned_name(name: &str) -> Symbol {
+        with_pool(|p| p.symbol(name))
+    }
     /// True for a symbol made by [`Symbol::internal`].
     pub fn is_internal(self) -> bool {
         with_pool(|p| p.names[self.0 as usize].starts_with(INTERNAL))
@@ -353,8 +362,9 @@ fn merge_pairs(mut pairs: Vec<(Expr, Rat)>) -> Vec<(Expr, Rat)> {
 }
 
 impl Expr {
-    /// Interns a node as it is (no canonicalization): for the constructors below.
-    fn intern(node: Node) -> Expr {
+    /// Interns a node as it is (no canonicalization): for the constructors below, and for
+    /// nodes already canonical in another context ([`super::transfer`]).
+    pub(crate) fn intern(node: Node) -> Expr {
         with_pool(|p| p.intern(node))
     }
 

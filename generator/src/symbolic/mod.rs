@@ -14,6 +14,7 @@ pub mod number;
 pub mod parse;
 pub mod print;
 pub mod subs;
+pub mod transfer;
 pub mod trig;
 pub mod zero;
 

@@ -1,0 +1,75 @@
+//! What the emitted functions read from the shared derivation (the mechanics and the
+//! ignorable coordinates): the same expressions for the module's own functions and for every
+//! formulation's `rhs` and `initial_state`, computed once, and movable to the context a
+//! formulation is emitted in ([`crate::symbolic::transfer`]).
+
+use crate::formulation::mechanics::Mechanics;
+use crate::symbolic::eval::magnitude;
+use crate::symbolic::transfer::{Transfer, Visitor};
+use crate::symbolic::{Expr, Symbol};
+
+/// See the module docs.
+///
+/// ```
+/// use generator::formulation::{derive, Request};
+/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+/// let d = derive(&model, &Request::all()).unwrap();
+/// let shared = generator::emit::shared::FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities);
+/// assert_eq!((shared.momenta.len(), shared.velocity_residuals.len()), (1, 1));
+/// ```
+#[derive(Clone, Debug)]
+pub struct FromMechanics {
+    /// `T + V`.
+    pub energy: Expr,
+    /// The generalized applied non-potential forces `Q`, one per coordinate.
+    pub q_forces: Vec<Expr>,
+    /// `M' q' + N2` of the ignorable coordinates (Eq. 26).
+    pub momenta: Vec<Expr>,
+    /// `a q' + b`, one per constraint.
+    pub velocity_residuals: Vec<Expr>,
+    /// Triangle-inequality bounds of the velocity residuals' terms.
+    pub residual_bounds: Vec<Expr>,
+    /// The holonomic constraints' position residuals, and their bounds.
+    pub positions: Vec<Expr>,
+    pub position_bounds: Vec<Expr>,
+    /// Every constraint's name, and the holonomic ones'.
+    pub constraint_names: Vec<String>,
+    pub holonomic_names: Vec<String>,
+    /// The ignorable coordinates the reduced method uses, and the number of quasi-velocities p.
+    pub ignorable: Vec<usize>,
+    pub p: usize,
+}
+
+impl FromMechanics {
+    /// From the mechanics and the ignorable coordinates the reduced method uses.
+    pub fn new(mech: &Mechanics, ignorable: &[usize], velocities: &[Symbol]) -> FromMechanics {
+        let residual_bounds =
+            (0..mech.r).map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * velocities[j].expr()))) + magnitude(mech.b[i])).collect();
+        let positions: Vec<Expr> = mech.holonomic.iter().map(|(_, e)| *e).collect();
+        FromMechanics {
+            energy: mech.kinetic + mech.potential,
+            q_forces: mech.q_forces.clone(),
+            momenta: ignorable.iter().map(|&i| mech.momentum(i, velocities)).collect(),
+            velocity_residuals: mech.velocity_residuals(velocities),
+            residual_bounds,
+            position_bounds: positions.iter().map(|e| magnitude(*e)).collect(),
+            positions,
+            constraint_names: mech.constraint_names.clone(),
+            holonomic_names: mech.holonomic.iter().map(|(i, _)| mech.constraint_names[*i].clone()).collect(),
+            ignorable: ignorable.to_vec(),
+            p: mech.p,
+        }
+    }
+}
+
+impl Transfer for FromMechanics {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.energy.visit(v);
+        self.q_forces.visit(v);
+        self.momenta.visit(v);
+        self.velocity_residuals.visit(v);
+        self.residual_bounds.visit(v);
+        self.positions.visit(v);
+        self.position_bounds.visit(v);
+    }
+}
