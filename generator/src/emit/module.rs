@@ -71,9 +71,9 @@ const EMITTER_STACK: usize = 64 << 20;
 /// What the derivation hands the second thread's emitter, each packed for its context.
 enum Job {
     /// The model and what the emitted functions read of the mechanics (first, once).
-    Start(Parcel<(Model, FromMechanics)>),
+    Start(Box<Parcel<(Model, FromMechanics)>>),
     /// One formulation's equations.
-    Form(Parcel<Equations>),
+    Form(Box<Parcel<Equations>>),
 }
 
 /// Part of the module, printed, with what its functions cost.
@@ -116,13 +116,13 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let derived = formulation::derive_with(model, &request, &mut |progress| match progress {
             Progress::Shared { mechanics, ignorable } => {
                 let s = FromMechanics::new(mechanics, ignorable, &model.velocities);
-                let _ = jobs.send(Job::Start(Parcel::pack(&(model.clone(), s.clone()))));
+                let _ = jobs.send(Job::Start(Box::new(Parcel::pack(&(model.clone(), s.clone())))));
                 shared = Some(s);
             }
             Progress::Equations(eqs) => {
                 reported += 1;
                 if reported < wanted {
-                    let _ = jobs.send(Job::Form(Parcel::pack(eqs)));
+                    let _ = jobs.send(Job::Form(Box::new(Parcel::pack(eqs))));
                 }
             }
         });

@@ -10,6 +10,9 @@ use std::collections::HashMap;
 pub struct Preparer {
     numbers: HashMap<Symbol, Expr>,
     functions: HashMap<String, (Symbol, Expr)>,
+    /// The symbol mask ([`Expr::mask`]) an expression must meet to hold anything replaced:
+    /// every bit when there are time functions to inline.
+    replaced: u128,
     memo: rustc_hash::FxHashMap<Expr, Expr>,
 }
 
@@ -24,12 +27,16 @@ impl Preparer {
                 numbers.insert(*s, Expr::num(rat_from_f64(*v).expect("finite parameter")));
             }
         }
-        let functions = model.time_functions.iter().map(|(f, body)| (f.name(), (model.t, *body))).collect();
-        Preparer { numbers, functions, memo: Default::default() }
+        let functions: HashMap<String, (Symbol, Expr)> = model.time_functions.iter().map(|(f, body)| (f.name(), (model.t, *body))).collect();
+        let replaced = if functions.is_empty() { numbers.keys().fold(0u128, |m, s| m | s.expr().mask()) } else { u128::MAX };
+        Preparer { numbers, functions, replaced, memo: Default::default() }
     }
 
     /// The expression with functions inlined and numbers substituted.
     pub fn prepare(&mut self, e: Expr) -> Expr {
+        if e.mask() & self.replaced == 0 {
+            return e;
+        }
         if let Some(&r) = self.memo.get(&e) {
             return r;
         }

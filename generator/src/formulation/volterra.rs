@@ -407,7 +407,12 @@ fn inertia_by_bodies(model: &Model, mech: &Mechanics, u: &[Symbol], qdot: &[Expr
         let both = Expr::subs_all(&[bv.v_both.0, bv.v_both.1].concat(), &to_u);
         let om = Expr::subs_all(&bv.omega, &to_u).into_iter().map(|e| tidy.rational(e)).collect::<Vec<_>>();
         let om = [om[0], om[1], om[2]];
-        let translation = Translation::cheaper(tidy, &[both[0], both[1], both[2]], &[both[3], both[4], both[5]], &om, u, chain);
+        let (v_body, v_world) = ([both[0], both[1], both[2]], [both[3], both[4], both[5]]);
+        let translation = if bv.in_body {
+            Translation::in_body(tidy, &v_body, &v_world, &om, u, chain)
+        } else {
+            Translation::cheaper(tidy, &v_body, &v_world, &om, u, chain)
+        };
         let (p, accel) = (translation.partials, translation.accel);
         let partial = |x: &[Expr; 3], k: usize| x.map(|e| tidy.rational(e.diff(u[k])));
         let o: Vec<[Expr; 3]> = (0..n_u).map(|k| partial(&om, k)).collect();
