@@ -124,7 +124,9 @@ pub struct Summary {
     pub simplifier: crate::symbolic::fourier::SimplifyReport,
     /// Time per derivation stage.
     pub stages: Vec<(&'static str, Duration)>,
-    /// Time spent deriving (mechanics and formulations) and emitting.
+    /// Time spent deriving (mechanics and formulations), and emitting after the derivation
+    /// ended (every formulation but the last is emitted meanwhile, on a second thread: the
+    /// two add up to the whole).
     pub derive_time: Duration,
     pub emit_time: Duration,
 }

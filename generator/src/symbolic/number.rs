@@ -44,6 +44,10 @@ fn gcd_u64(mut a: u64, mut b: u64) -> u64 {
     }
     let shift = (a | b).trailing_zeros();
     a >>= a.trailing_zeros();
+    // A power of two against anything (the halves of product-to-sum coefficients): no loop.
+    if a == 1 || (b >> b.trailing_zeros()) == 1 {
+        return 1 << shift;
+    }
     loop {
         b >>= b.trailing_zeros();
         if a > b {
@@ -351,8 +355,11 @@ fn mul(a: &Rat, b: &Rat) -> Rat {
         (Repr::Small(n1, d1), Repr::Small(n2, d2)) => {
             let g1 = if *d2 == 1 { 1 } else { gcd_i64(*n1, *d2).max(1) };
             let g2 = if *d1 == 1 { 1 } else { gcd_i64(*n2, *d1).max(1) };
-            let n = (*n1 / g1) as i128 * (*n2 / g2) as i128;
-            let d = (*d1 / g2) as i128 * (*d2 / g1) as i128;
+            // Integer division is slow: skipped where the gcd is one (coprime, the common case).
+            let (n1, d2) = if g1 == 1 { (*n1, *d2) } else { (*n1 / g1, *d2 / g1) };
+            let (n2, d1) = if g2 == 1 { (*n2, *d1) } else { (*n2 / g2, *d1 / g2) };
+            let n = n1 as i128 * n2 as i128;
+            let d = d1 as i128 * d2 as i128;
             // Cross-cancelled factors of coprime pairs: already in lowest terms.
             if n > i64::MIN as i128 && n <= i64::MAX as i128 && d <= i64::MAX as i128 {
                 Rat(Repr::Small(n as i64, d as i64))
