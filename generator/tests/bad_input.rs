@@ -119,6 +119,32 @@ fn nonlinear_velocity_constraints() {
     check(&e, ErrorKind::NonlinearConstraint, &["not linear in the velocities", "coefficient of theta1'"]);
 }
 
+/// Generation derives on two threads (the ignorable coordinates on the second); with several
+/// stages failing, it reports the one that runs first alone, as inspect does.
+#[test]
+fn with_two_stages_failing_generation_reports_the_first_as_inspect_does() {
+    let not_ignorable = ("ignorable: Declared([\"x\"])", "ignorable: Declared([\"theta1\", \"x\"])");
+    let kane_singular = ("full: [\"theta1' - theta2'\", \"x'\"]", "full: [\"theta1' - theta2'\", \"2*theta1' - 2*theta2'\"]");
+    let cases = [
+        (vec![not_ignorable, kane_singular], ErrorKind::NotIgnorable),
+        (vec![kane_singular], ErrorKind::SingularQuasiVelocities),
+        (vec![not_ignorable], ErrorKind::NotIgnorable),
+    ];
+    for (edits, kind) in cases {
+        let mut text = scene1();
+        for (from, to) in &edits {
+            assert!(text.contains(from), "test edit `{from}` not found");
+            text = text.replacen(from, to, 1);
+        }
+        let generated = from_source("models/broken.ron", &text)
+            .and_then(|m| generator::emit::generate(&m, &generator::emit::Options::from_model(&m)).map(|_| ()))
+            .expect_err("refused");
+        let inspected = from_source("models/broken.ron", &text).and_then(|m| generator::inspect::inspect(&m, false).map(|_| ())).expect_err("refused");
+        assert_eq!(generated.kind, kind, "{edits:?}: {generated}");
+        assert_eq!(generated.to_string(), inspected.to_string(), "{edits:?}");
+    }
+}
+
 #[test]
 fn inspect_and_generation_refuse_the_same_models_with_the_same_error() {
     let edits = [

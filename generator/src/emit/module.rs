@@ -9,7 +9,15 @@ use super::prepare::Preparer;
 use super::shared::FromMechanics;
 use super::splice::Splices;
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
-use crate::formulation::{self, Equations, Progress, Request};
+use crate::formulation::equations::Method;
+use crate::formulation::kane::Kane;
+use crate::formulation::lagrange::Lagrange;
+use crate::formulation::maggi::Maggi;
+use crate::formulation::mechanics::{self, Mechanics, Quantities};
+use crate::formulation::reduced::ReducedVolterra;
+use crate::formulation::volterra::{self, Volterra};
+use crate::formulation::{self, Equations, Shared, ignorable};
+use crate::model::schema::FormulationDef;
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::number::rat_from_f64;
 use crate::symbolic::transfer::Parcel;
@@ -17,6 +25,8 @@ use crate::symbolic::{Context, Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
+use std::sync::mpsc::{Receiver, Sender, channel};
+use std::time::Duration;
 use std::time::Instant;
 
 /// Relative size below which a pivot of the mass matrix counts as zero.
@@ -68,10 +78,10 @@ pub(super) struct Placed {
 /// deep as [`crate::symbolic::expr::MAX_DEPTH`] need more than a spawned thread's default.
 const EMITTER_STACK: usize = 64 << 20;
 
-/// What the derivation hands the second thread's emitter, each packed for its context.
+/// What the deriving thread hands the second one, each packed for its context.
 enum Job {
-    /// The model and what the emitted functions read of the mechanics (first, once).
-    Start(Box<Parcel<(Model, FromMechanics)>>),
+    /// The model and the mechanics' quantities (first, once).
+    Mechanics(Box<Parcel<(Model, Quantities)>>),
     /// One formulation's equations.
     Form(Box<Parcel<Equations>>),
 }
@@ -89,72 +99,110 @@ impl Part {
     }
 }
 
-/// Derives and emits, on two threads. This one derives; as soon as the mechanics are known, a
-/// second thread, in an expression context of its own, emits the module's head (sizes,
-/// `Params`, the shared functions), then each formulation but the last as soon as its
-/// equations are derived, while the next one is. The last formulation and `model()` are
-/// emitted here once the derivation ends. The second thread's input is fixed (the same
+/// Derives and emits, on two threads, each in an expression context of its own. This one
+/// derives: the mechanics, then each formulation as soon as what it needs is there (Lagrange's
+/// equations from the mechanics; Kane's form, then Maggi's and Kane's equations; the reduced
+/// form and its equations last), and emits the last formulation and `model()` at the end. The
+/// second thread gets the mechanics as soon as they are derived: it decides the ignorable
+/// coordinates (handed back for the reduced form, which alone uses them), emits the module's
+/// head (sizes, `Params`, the shared functions), then every formulation but the last as its
+/// equations arrive, while the next is derived. Each thread's input is fixed (the same
 /// parcels in the same order, whatever the timing), so the bytes are too. Errors are reported
-/// in the order the stages run alone: the derivation's, then the emitted functions' in module
-/// order.
+/// in the order the stages run alone ([`crate::formulation::derive`]): the derivation's
+/// (ignorable coordinates, Kane's form, the reduced form), then the emitted functions' in
+/// module order.
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
     let start = Instant::now();
-    let request = Request { formulations: options.formulations.clone(), integrate_ignorable: options.integrate_ignorable };
     let seam = seam_path(model, options)?;
-    // The formulations derive_with reports, one per distinct request; the last stays here.
-    let wanted = request.formulations.iter().collect::<std::collections::BTreeSet<_>>().len();
-    let mut reported = 0;
+    let order = [FormulationDef::Lagrange, FormulationDef::Maggi, FormulationDef::Kane, FormulationDef::ReducedVolterra];
+    let wanted: Vec<FormulationDef> = order.into_iter().filter(|f| options.formulations.contains(f)).collect();
+    let wants = |f: FormulationDef| wanted.contains(&f);
+    let last = wanted.last().copied();
     std::thread::scope(|scope| {
-        let (jobs, inbox) = std::sync::mpsc::channel::<Job>();
-        let worker = std::thread::Builder::new()
+        let (jobs, inbox) = channel::<Job>();
+        let (ignorable_back, ignorable_here) = channel::<Result<Vec<usize>, ModelError>>();
+        let second = std::thread::Builder::new()
             .name("emit".into())
             .stack_size(EMITTER_STACK)
-            .spawn_scoped(scope, move || Context::new().enter(|| emit_head_and_formulations(inbox, options)))
+            .spawn_scoped(scope, move || Context::new().enter(|| analyze_and_emit(inbox, ignorable_back, options)))
             .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
-        let mut shared = None;
-        // A send fails only when the emitter stopped at an error, which its result reports.
-        let derived = formulation::derive_with(model, &request, &mut |progress| match progress {
-            Progress::Shared { mechanics, ignorable } => {
-                let s = FromMechanics::new(mechanics, ignorable, &model.velocities);
-                let _ = jobs.send(Job::Start(Box::new(Parcel::pack(&(model.clone(), s.clone())))));
-                shared = Some(s);
-            }
-            Progress::Equations(eqs) => {
-                reported += 1;
-                if reported < wanted {
-                    let _ = jobs.send(Job::Form(Box::new(Parcel::pack(eqs))));
+        let mut stages = Vec::new();
+        let mut clock = Instant::now();
+        let mech = mechanics::derive(model);
+        stages.push(("mechanics", clock.elapsed()));
+        // A send fails only when the second thread stopped at an error, which its result reports.
+        let _ = jobs.send(Job::Mechanics(Box::new(Parcel::pack(&(model.clone(), mech.quantities.clone())))));
+        let mut equations: Vec<Equations> = Vec::new();
+        let mut formulations_time = Duration::ZERO;
+        // Lagrange's, Maggi's and Kane's equations do not read the ignorable coordinates (the
+        // reduced form holds its own): derived before they come back.
+        let mut formulate =
+            |def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>, ignorable: &[usize]| -> Result<(), ModelError> {
+                if wants(def) {
+                    let clock = Instant::now();
+                    let shared = Shared { model, mech: &mech, ignorable, kane, reduced, integrate_ignorable: options.integrate_ignorable };
+                    let eqs = method.equations(&shared)?;
+                    formulations_time += clock.elapsed();
+                    if Some(def) != last {
+                        let _ = jobs.send(Job::Form(Box::new(Parcel::pack(&eqs))));
+                    }
+                    equations.push(eqs);
                 }
-            }
-        });
+                Ok(())
+            };
+        let derived = (|| -> Result<Vec<usize>, ModelError> {
+            formulate(FormulationDef::Lagrange, &Lagrange, None, None, &[])?;
+            clock = Instant::now();
+            let kane =
+                if wanted.iter().any(|f| *f != FormulationDef::Lagrange) { volterra::derive(model, &mech, &[], &model.quasi_full).map(Some) } else { Ok(None) };
+            stages.push(("kane", clock.elapsed()));
+            // The ignorable coordinates' error first: that stage runs before Kane's form alone.
+            // No answer means the second thread panicked, which joining it reports.
+            let Ok(chosen) = ignorable_here.recv() else { return Ok(Vec::new()) };
+            let (chosen, kane) = (chosen?, kane?);
+            formulate(FormulationDef::Maggi, &Maggi, kane.as_ref(), None, &[])?;
+            formulate(FormulationDef::Kane, &Kane, kane.as_ref(), None, &[])?;
+            clock = Instant::now();
+            let reduced = match &kane {
+                Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &chosen, &model.quasi_reduced, k)?),
+                _ => None,
+            };
+            stages.push(("reduced", clock.elapsed()));
+            formulate(FormulationDef::ReducedVolterra, &ReducedVolterra, kane.as_ref(), reduced.as_ref(), &chosen)?;
+            Ok(chosen)
+        })();
         drop(jobs);
         let derive_time = start.elapsed();
         let emit_start = Instant::now();
-        let tail = derived.map(|d| {
-            let shared = shared.as_ref().expect("the derivation reports the mechanics before it succeeds");
-            let mut em = Emitter::new(model, options, seam, shared);
-            let names = d.equations.iter().map(|e| e.name.to_string()).collect();
-            (em.formulations_and_model_fn(d.equations.last(), names, shared), d)
+        let tail = derived.map(|chosen| {
+            let shared = FromMechanics::new(&mech, &chosen, &model.velocities);
+            let mut em = Emitter::new(model, options, seam, &shared);
+            let names = equations.iter().map(|e| e.name.to_string()).collect();
+            (em.formulations_and_model_fn(equations.last(), names, &shared), chosen)
         });
-        let head = worker.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        let (tail, d) = tail?;
+        let second = second.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let (tail, chosen) = tail?;
+        let (head, ignorable_time) = second;
         let (head, tail) = (head?, tail?);
         let mut functions = head.functions;
         functions.extend(tail.functions);
         let mut formulations = head.forms;
         formulations.extend(tail.forms);
+        stages.insert(1, ("ignorable", ignorable_time));
+        stages.push(("formulations", formulations_time));
         let code =
             format!("// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{}{}", model_file_name(model), model.name, head.text, tail.text);
         let summary = Summary {
             model: model.name.clone(),
-            m: d.mechanics.m,
-            r: d.mechanics.r,
-            p: d.mechanics.p,
-            s: d.ignorable.len(),
+            m: mech.m,
+            r: mech.r,
+            p: mech.p,
+            s: chosen.len(),
             formulations,
-            eliminations: d.equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
+            eliminations: equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
             functions,
-            simplifier: d.mechanics.tidy.report(),
-            stages: d.stages.clone(),
+            simplifier: mech.tidy.report(),
+            stages,
             derive_time,
             emit_time: emit_start.elapsed(),
         };
@@ -162,34 +210,48 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     })
 }
 
-/// The second thread: the module's head, then each formulation as its [`Job`] arrives.
-fn emit_head_and_formulations(inbox: std::sync::mpsc::Receiver<Job>, options: &Options) -> Result<Part, ModelError> {
-    // No start: the derivation failed first, and reports it.
-    let Ok(Job::Start(start)) = inbox.recv() else { return Ok(Part::empty()) };
-    let (model, shared) = start.unpack();
-    let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
-    let mut head = vec![em.header(&shared)];
-    head.push(em.params());
-    head.push(super::seam::failure_import(&em.seam));
-    if !options.formulations.is_empty() {
-        head.push(solve_dense());
-        if options.jacobian || em.emits_parameter_jacobian() {
-            head.push(super::jacobian::lu_items());
+/// The second thread (see [`generate`]): the ignorable coordinates, handed back; the module's
+/// head; each formulation as its [`Job`] arrives. Returns what it emitted and the time the
+/// ignorable coordinates took.
+fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<Vec<usize>, ModelError>>, options: &Options) -> (Result<Part, ModelError>, Duration) {
+    // No mechanics: the deriving thread stopped first, and reports why.
+    let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return (Ok(Part::empty()), Duration::ZERO) };
+    let (model, quantities) = parcel.unpack();
+    // The ignorable coordinates' zero tests need no simplifier: the derivation's limits, unused.
+    let mech = Mechanics::with_simplifier(quantities, mechanics::derivation_limits(model.m()));
+    let clock = Instant::now();
+    let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech));
+    let ignorable_time = clock.elapsed();
+    let _ = ignorable_back.send(chosen.clone());
+    // An error here is the derivation's, which the deriving thread reports.
+    let Ok(chosen) = chosen else { return (Ok(Part::empty()), ignorable_time) };
+    let shared = FromMechanics::new(&mech, &chosen, &model.velocities);
+    let emitted = (|| -> Result<Part, ModelError> {
+        let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
+        let mut head = vec![em.header(&shared)];
+        head.push(em.params());
+        head.push(super::seam::failure_import(&em.seam));
+        if !options.formulations.is_empty() {
+            head.push(solve_dense());
+            if options.jacobian || em.emits_parameter_jacobian() {
+                head.push(super::jacobian::lu_items());
+            }
         }
-    }
-    for f in &options.functions {
-        head.extend(em.shared_function(*f, &shared)?);
-    }
-    let mut text = em.print(head)?;
-    // Each submodule printed as it is emitted: the items of one file, printed in order, are
-    // the items printed one by one.
-    for job in inbox {
-        if let Job::Form(parcel) = job {
-            let item = em.form(&parcel.unpack(), &shared)?;
-            text += &em.print(vec![item])?;
+        for f in &options.functions {
+            head.extend(em.shared_function(*f, &shared)?);
         }
-    }
-    Ok(Part { text, functions: std::mem::take(&mut em.functions), forms: std::mem::take(&mut em.forms) })
+        // Each submodule printed as it is emitted: the items of one file, printed in order,
+        // are the items printed one by one.
+        let mut text = em.print(head)?;
+        for job in inbox {
+            if let Job::Form(parcel) = job {
+                let item = em.form(&parcel.unpack(), &shared)?;
+                text += &em.print(vec![item])?;
+            }
+        }
+        Ok(Part { text, functions: std::mem::take(&mut em.functions), forms: std::mem::take(&mut em.forms) })
+    })();
+    (emitted, ignorable_time)
 }
 
 impl Emitter<'_> {

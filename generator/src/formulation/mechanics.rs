@@ -22,6 +22,7 @@
 use crate::kinematics::{TimeChain, add3, cross, dot, mat_vec};
 use crate::model::{Constraint, Force, Model};
 use crate::symbolic::fourier::{FourierLimits, Simplifier, SimplifyReport};
+use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Matrix, Symbol};
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -190,9 +191,10 @@ fn has_trig_denominator(e: Expr) -> bool {
     })
 }
 
-/// Everything derived before a formulation is chosen.
+/// What the mechanics derives before a formulation is chosen (a [`Mechanics`] without its
+/// simplifier: this part can move to another context, [`crate::symbolic::transfer`]).
 #[derive(Clone, Debug)]
-pub struct Mechanics {
+pub struct Quantities {
     /// Coordinates m, constraints r, degrees of freedom p = m - r.
     pub m: usize,
     pub r: usize,
@@ -222,8 +224,60 @@ pub struct Mechanics {
     pub holonomic: Vec<(usize, Expr)>,
     /// Constraint names, in order.
     pub constraint_names: Vec<String>,
-    /// The simplifier every later stage shares.
+}
+
+/// Everything derived before a formulation is chosen: the [`Quantities`] (read through
+/// `Deref`: `mech.mass`) and the simplifier every later stage shares.
+#[derive(Clone, Debug)]
+pub struct Mechanics {
+    pub quantities: Quantities,
     pub tidy: Tidy,
+}
+
+impl std::ops::Deref for Mechanics {
+    type Target = Quantities;
+    fn deref(&self) -> &Quantities {
+        &self.quantities
+    }
+}
+
+impl Mechanics {
+    /// The quantities with a fresh simplifier under `limits` (in another context, the one
+    /// they were moved to).
+    pub fn with_simplifier(quantities: Quantities, limits: FourierLimits) -> Mechanics {
+        Mechanics { quantities, tidy: Tidy::new(limits) }
+    }
+}
+
+impl Transfer for BodyVelocity {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.v.visit(v);
+        self.omega.visit(v);
+        self.b.visit(v);
+        self.c.visit(v);
+        self.e.visit(v);
+        self.d.visit(v);
+        self.accel.visit(v);
+        self.alpha.visit(v);
+        self.v_both.visit(v);
+    }
+}
+
+impl Transfer for Quantities {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.bodies.visit(v);
+        self.kinetic.visit(v);
+        self.potential.visit(v);
+        self.mass.visit(v);
+        self.n.visit(v);
+        self.t0.visit(v);
+        self.q_forces.visit(v);
+        self.potential_gradient.visit(v);
+        self.inertial.visit(v);
+        self.a.visit(v);
+        self.b.visit(v);
+        self.holonomic.iter_mut().for_each(|(_, e)| e.visit(v));
+    }
 }
 
 /// Largest model (coordinates) whose simplifier combines four angles in one harmonic instead of
@@ -412,7 +466,27 @@ pub fn derive(model: &Model) -> Mechanics {
         }
         b.push(tidy.of(bias));
     }
-    Mechanics { m, r, p: m - r, bodies, kinetic, potential, mass, n, t0, q_forces, potential_gradient, inertial, a, b, holonomic, constraint_names, tidy }
+    Mechanics {
+        quantities: Quantities {
+            m,
+            r,
+            p: m - r,
+            bodies,
+            kinetic,
+            potential,
+            mass,
+            n,
+            t0,
+            q_forces,
+            potential_gradient,
+            inertial,
+            a,
+            b,
+            holonomic,
+            constraint_names,
+        },
+        tidy,
+    }
 }
 
 fn spring_length(model: &Model, tidy: &Tidy, a: &(usize, [Expr; 3]), b: &(usize, [Expr; 3])) -> Expr {

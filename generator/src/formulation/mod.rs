@@ -1,8 +1,8 @@
 //! From mechanics to equations of motion: the shared derivation ([`mechanics`]), the
 //! ignorable-coordinate analysis ([`ignorable`]), the Volterra forms ([`volterra`]) and the
 //! four formulations, each a [`Method`] giving [`Equations`]: [`lagrange`], [`maggi`],
-//! [`kane`], [`reduced`]. [`derive`] runs them once; `inspect` and emission both read the
-//! [`Derivation`].
+//! [`kane`], [`reduced`]. [`derive`] runs them once for `inspect`; emission runs the same
+//! stages in the same order, spread over two threads ([`crate::emit::generate`]).
 //!
 //! ```
 //! use generator::formulation::{derive, Request};
@@ -87,32 +87,10 @@ impl Derivation {
     }
 }
 
-/// Derives what `request` asks for.
+/// Derives what `request` asks for, each formulation right after what it needs (Lagrange's
+/// equations need only the mechanics, Maggi's and Kane's Kane's form, the reduced method's the
+/// reduced form): the order generation's two threads follow too ([`crate::emit::generate`]).
 pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError> {
-    derive_with(model, request, &mut |_| {})
-}
-
-/// What [`derive_with`] has ready, as soon as it is.
-pub enum Progress<'a> {
-    /// The mechanics and the ignorable coordinates the reduced method uses (first, once).
-    Shared { mechanics: &'a Mechanics, ignorable: &'a [usize] },
-    /// One formulation's equations, in the order Lagrange, Maggi, Kane, reduced.
-    Equations(&'a Equations),
-}
-
-/// [`derive`], telling `on` of each result as soon as it is ready, so that a caller can emit
-/// one formulation while the next is derived. Lagrange's equations need only the mechanics,
-/// Maggi's and Kane's Kane's form, the reduced method's the reduced form: each formulation is
-/// derived right after what it needs.
-///
-/// ```
-/// use generator::formulation::{derive_with, Progress, Request};
-/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
-/// let mut seen = Vec::new();
-/// derive_with(&model, &Request::all(), &mut |p| if let Progress::Equations(e) = p { seen.push(e.name) }).unwrap();
-/// assert_eq!(seen, ["lagrange", "maggi", "kane", "reduced_volterra"]);
-/// ```
-pub fn derive_with(model: &Model, request: &Request, on: &mut dyn FnMut(Progress)) -> Result<Derivation, ModelError> {
     let mut stages = Vec::new();
     let mut clock = Instant::now();
     // Time in the formulations' own work, summed over the places it runs.
@@ -126,7 +104,6 @@ pub fn derive_with(model: &Model, request: &Request, on: &mut dyn FnMut(Progress
     let reports = ignorable::analyze(model, &mech);
     let chosen = ignorable::choose(model, &reports)?;
     stage("ignorable", &mut stages);
-    on(Progress::Shared { mechanics: &mech, ignorable: &chosen });
     let wants = |f: FormulationDef| request.formulations.contains(&f);
     let mut equations = Vec::new();
     let mut formulate = |def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
@@ -135,7 +112,6 @@ pub fn derive_with(model: &Model, request: &Request, on: &mut dyn FnMut(Progress
             let shared = Shared { model, mech: &mech, ignorable: &chosen, kane, reduced, integrate_ignorable: request.integrate_ignorable };
             let eqs = method.equations(&shared)?;
             formulations += start.elapsed();
-            on(Progress::Equations(&eqs));
             equations.push(eqs);
         }
         Ok(())

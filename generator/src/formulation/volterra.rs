@@ -66,6 +66,25 @@ pub struct Volterra {
     pub route: &'static str,
 }
 
+impl crate::symbolic::transfer::Transfer for Volterra {
+    fn visit(&mut self, v: &mut dyn crate::symbolic::transfer::Visitor) {
+        self.g.visit(v);
+        self.u.visit(v);
+        self.y.visit(v);
+        self.z.visit(v);
+        self.w.visit(v);
+        self.x.visit(v);
+        self.singular_factors.visit(v);
+        self.determinant.visit(v);
+        self.qdot.visit(v);
+        self.drift.visit(v);
+        self.mass_ni.visit(v);
+        self.u_ni.visit(v);
+        self.inertia_ni.visit(v);
+        self.l_ni.visit(v);
+    }
+}
+
 /// `e` with each symbol in `symbols` it does not depend on set to zero (exact: `L_NI` is
 /// polynomial in `G_I`, and the derivative is decided by the exact zero test). It removes terms
 /// that cancel only across bodies, such as the total momentum in the relative motion of
