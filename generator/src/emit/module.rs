@@ -9,15 +9,8 @@ use super::prepare::Preparer;
 use super::shared::FromMechanics;
 use super::splice::Splices;
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
-use crate::formulation::equations::Method;
-use crate::formulation::kane::Kane;
-use crate::formulation::lagrange::Lagrange;
-use crate::formulation::maggi::Maggi;
-use crate::formulation::mechanics::{self, Mechanics, Quantities};
-use crate::formulation::reduced::ReducedVolterra;
-use crate::formulation::volterra::{self, Volterra};
-use crate::formulation::{self, Equations, Shared, ignorable};
-use crate::model::schema::FormulationDef;
+use crate::formulation::mechanics::{Mechanics, Quantities};
+use crate::formulation::{self, Equations, Request, ignorable};
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::number::rat_from_f64;
 use crate::symbolic::transfer::Parcel;
@@ -100,109 +93,59 @@ impl Part {
 }
 
 /// Derives and emits, on two threads, each in an expression context of its own. This one
-/// derives: the mechanics, then each formulation as soon as what it needs is there (Lagrange's
-/// equations from the mechanics; Kane's form, then Maggi's and Kane's equations; the reduced
-/// form and its equations last), and emits the last formulation and `model()` at the end. The
-/// second thread gets the mechanics as soon as they are derived: it decides the ignorable
-/// coordinates (handed back for the reduced form, which alone uses them), emits the module's
-/// head (sizes, `Params`, the shared functions), then every formulation but the last as its
-/// equations arrive, while the next is derived. Each thread's input is fixed (the same
-/// parcels in the same order, whatever the timing), so the bytes are too. Errors are reported
-/// in the order the stages run alone ([`crate::formulation::derive`]): the derivation's
-/// (ignorable coordinates, Kane's form, the reduced form), then the emitted functions' in
-/// module order.
+/// derives ([`formulation::derive_with`]: the mechanics, then each formulation as soon as what
+/// it needs is there) and emits the last formulation and `model()` at the end. The second
+/// thread gets the mechanics as soon as they are derived: it decides the ignorable coordinates
+/// (handed back for the reduced form), emits the module's head (sizes, `Params`, the shared
+/// functions), then every formulation but the last as its equations arrive, while the next is
+/// derived. Each thread's input is fixed (the same parcels in the same order, whatever the
+/// timing), so the bytes are too. Errors are reported in the order the stages run alone: the
+/// derivation's, then the emitted functions' in module order.
 pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
     let start = Instant::now();
+    let request = Request { formulations: options.formulations.clone(), integrate_ignorable: options.integrate_ignorable };
     let seam = seam_path(model, options)?;
-    let order = [FormulationDef::Lagrange, FormulationDef::Maggi, FormulationDef::Kane, FormulationDef::ReducedVolterra];
-    let wanted: Vec<FormulationDef> = order.into_iter().filter(|f| options.formulations.contains(f)).collect();
-    let wants = |f: FormulationDef| wanted.contains(&f);
-    let last = wanted.last().copied();
     std::thread::scope(|scope| {
         let (jobs, inbox) = channel::<Job>();
-        let (ignorable_back, ignorable_here) = channel::<Result<Vec<usize>, ModelError>>();
+        let (ignorable_back, ignorable_here) = channel::<Result<(Vec<usize>, Duration), ModelError>>();
         let second = std::thread::Builder::new()
             .name("emit".into())
             .stack_size(EMITTER_STACK)
             .spawn_scoped(scope, move || Context::new().enter(|| analyze_and_emit(inbox, ignorable_back, options)))
             .map_err(|e| model.error(ErrorKind::Emission, "emit", "emit", format!("cannot start the emitting thread: {e}"), String::new()))?;
-        let mut stages = Vec::new();
-        let mut clock = Instant::now();
-        let mech = mechanics::derive(model);
-        stages.push(("mechanics", clock.elapsed()));
-        // A send fails only when the second thread stopped at an error, which its result reports.
-        let _ = jobs.send(Job::Mechanics(Box::new(Parcel::pack(&(model.clone(), mech.quantities.clone())))));
-        let mut equations: Vec<Equations> = Vec::new();
-        let mut formulations_time = Duration::ZERO;
-        // Lagrange's, Maggi's and Kane's equations do not read the ignorable coordinates (the
-        // reduced form holds its own): derived before they come back.
-        let mut formulate =
-            |def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>, ignorable: &[usize]| -> Result<(), ModelError> {
-                if wants(def) {
-                    let clock = Instant::now();
-                    let shared = Shared { model, mech: &mech, ignorable, kane, reduced, integrate_ignorable: options.integrate_ignorable };
-                    let eqs = method.equations(&shared)?;
-                    formulations_time += clock.elapsed();
-                    if Some(def) != last {
-                        let _ = jobs.send(Job::Form(Box::new(Parcel::pack(&eqs))));
-                    }
-                    equations.push(eqs);
-                }
-                Ok(())
-            };
-        let derived = (|| -> Result<Vec<usize>, ModelError> {
-            formulate(FormulationDef::Lagrange, &Lagrange, None, None, &[])?;
-            clock = Instant::now();
-            let kane =
-                if wanted.iter().any(|f| *f != FormulationDef::Lagrange) { volterra::derive(model, &mech, &[], &model.quasi_full).map(Some) } else { Ok(None) };
-            stages.push(("kane", clock.elapsed()));
-            // The ignorable coordinates' error first: that stage runs before Kane's form alone.
-            // No answer means the second thread panicked, which joining it reports.
-            let Ok(chosen) = ignorable_here.recv() else { return Ok(Vec::new()) };
-            let (chosen, kane) = (chosen?, kane?);
-            formulate(FormulationDef::Maggi, &Maggi, kane.as_ref(), None, &[])?;
-            formulate(FormulationDef::Kane, &Kane, kane.as_ref(), None, &[])?;
-            clock = Instant::now();
-            let reduced = match &kane {
-                Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &chosen, &model.quasi_reduced, k)?),
-                _ => None,
-            };
-            stages.push(("reduced", clock.elapsed()));
-            formulate(FormulationDef::ReducedVolterra, &ReducedVolterra, kane.as_ref(), reduced.as_ref(), &chosen)?;
-            Ok(chosen)
-        })();
-        drop(jobs);
+        // Every formulation derived but the last goes to the second thread.
+        let distinct = request.formulations.iter().collect::<std::collections::BTreeSet<_>>().len();
+        let mut to_second = ToSecond { model, jobs, ignorable: ignorable_here, to_send: distinct.saturating_sub(1) };
+        let derived = formulation::derive_with(model, &request, &mut to_second);
+        drop(to_second);
         let derive_time = start.elapsed();
         let emit_start = Instant::now();
-        let tail = derived.map(|chosen| {
-            let shared = FromMechanics::new(&mech, &chosen, &model.velocities);
+        let tail = derived.map(|d| {
+            let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities);
             let mut em = Emitter::new(model, options, seam, &shared);
-            let names = equations.iter().map(|e| e.name.to_string()).collect();
-            (em.formulations_and_model_fn(equations.last(), names, &shared), chosen)
+            let names = d.equations.iter().map(|e| e.name.to_string()).collect();
+            (em.formulations_and_model_fn(d.equations.last(), names, &shared), d)
         });
-        let second = second.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        let (tail, chosen) = tail?;
-        let (head, ignorable_time) = second;
+        let head = second.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let (tail, d) = tail?;
         let (head, tail) = (head?, tail?);
         let mut functions = head.functions;
         functions.extend(tail.functions);
         let mut formulations = head.forms;
         formulations.extend(tail.forms);
-        stages.insert(1, ("ignorable", ignorable_time));
-        stages.push(("formulations", formulations_time));
         let code =
             format!("// Generated by `generator` from {} ({}). Do not edit: regenerate.\n\n{}{}", model_file_name(model), model.name, head.text, tail.text);
         let summary = Summary {
             model: model.name.clone(),
-            m: mech.m,
-            r: mech.r,
-            p: mech.p,
-            s: chosen.len(),
+            m: d.mechanics.m,
+            r: d.mechanics.r,
+            p: d.mechanics.p,
+            s: d.ignorable.len(),
             formulations,
-            eliminations: equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
+            eliminations: d.equations.iter().map(|e| (e.name.to_string(), e.elimination.to_string())).collect(),
             functions,
-            simplifier: mech.tidy.report(),
-            stages,
+            simplifier: d.mechanics.tidy.report(),
+            stages: d.stages.clone(),
             derive_time,
             emit_time: emit_start.elapsed(),
         };
@@ -210,48 +153,73 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     })
 }
 
-/// The second thread (see [`generate`]): the ignorable coordinates, handed back; the module's
-/// head; each formulation as its [`Job`] arrives. Returns what it emitted and the time the
-/// ignorable coordinates took.
-fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<Vec<usize>, ModelError>>, options: &Options) -> (Result<Part, ModelError>, Duration) {
+/// The deriving thread's side of [`generate`]: the mechanics and every formulation but the
+/// last go to the second thread, the ignorable coordinates come back from it. A send fails
+/// only when the second thread stopped at an error, which its result reports.
+struct ToSecond<'a> {
+    model: &'a Model,
+    jobs: Sender<Job>,
+    ignorable: Receiver<Result<(Vec<usize>, Duration), ModelError>>,
+    /// Formulations still to send (the last stays here).
+    to_send: usize,
+}
+
+impl formulation::Stages for ToSecond<'_> {
+    fn mechanics(&mut self, mech: &Mechanics) {
+        let _ = self.jobs.send(Job::Mechanics(Box::new(Parcel::pack(&(self.model.clone(), mech.quantities.clone())))));
+    }
+
+    fn ignorable(&mut self, model: &Model, _: &Mechanics) -> Result<formulation::Ignorable, ModelError> {
+        match self.ignorable.recv() {
+            Ok(decided) => decided.map(|(chosen, time)| formulation::Ignorable { reports: Vec::new(), chosen, time }),
+            // The second thread panicked: joining it reports that.
+            Err(_) => Err(model.error(ErrorKind::Emission, "emit", "emit", "internal: the emitting thread stopped".into(), String::new())),
+        }
+    }
+
+    fn equations(&mut self, eqs: &Equations) {
+        if self.to_send > 0 {
+            self.to_send -= 1;
+            let _ = self.jobs.send(Job::Form(Box::new(Parcel::pack(eqs))));
+        }
+    }
+}
+
+/// The second thread (see [`generate`]): the ignorable coordinates, handed back with the time
+/// they took; the module's head; each formulation as its [`Job`] arrives.
+fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usize>, Duration), ModelError>>, options: &Options) -> Result<Part, ModelError> {
     // No mechanics: the deriving thread stopped first, and reports why.
-    let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return (Ok(Part::empty()), Duration::ZERO) };
-    let (model, quantities) = parcel.unpack();
-    // The ignorable coordinates' zero tests need no simplifier: the derivation's limits, unused.
-    let mech = Mechanics::with_simplifier(quantities, mechanics::derivation_limits(model.m()));
+    let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return Ok(Part::empty()) };
+    let (model, mech) = parcel.unpack();
     let clock = Instant::now();
     let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech));
-    let ignorable_time = clock.elapsed();
-    let _ = ignorable_back.send(chosen.clone());
+    let _ = ignorable_back.send(chosen.clone().map(|c| (c, clock.elapsed())));
     // An error here is the derivation's, which the deriving thread reports.
-    let Ok(chosen) = chosen else { return (Ok(Part::empty()), ignorable_time) };
+    let Ok(chosen) = chosen else { return Ok(Part::empty()) };
     let shared = FromMechanics::new(&mech, &chosen, &model.velocities);
-    let emitted = (|| -> Result<Part, ModelError> {
-        let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
-        let mut head = vec![em.header(&shared)];
-        head.push(em.params());
-        head.push(super::seam::failure_import(&em.seam));
-        if !options.formulations.is_empty() {
-            head.push(solve_dense());
-            if options.jacobian || em.emits_parameter_jacobian() {
-                head.push(super::jacobian::lu_items());
-            }
+    let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
+    let mut head = vec![em.header(&shared)];
+    head.push(em.params());
+    head.push(super::seam::failure_import(&em.seam));
+    if !options.formulations.is_empty() {
+        head.push(solve_dense());
+        if options.jacobian || em.emits_parameter_jacobian() {
+            head.push(super::jacobian::lu_items());
         }
-        for f in &options.functions {
-            head.extend(em.shared_function(*f, &shared)?);
+    }
+    for f in &options.functions {
+        head.extend(em.shared_function(*f, &shared)?);
+    }
+    // Each submodule printed as it is emitted: the items of one file, printed in order,
+    // are the items printed one by one.
+    let mut text = em.print(head)?;
+    for job in inbox {
+        if let Job::Form(parcel) = job {
+            let item = em.form(&parcel.unpack(), &shared)?;
+            text += &em.print(vec![item])?;
         }
-        // Each submodule printed as it is emitted: the items of one file, printed in order,
-        // are the items printed one by one.
-        let mut text = em.print(head)?;
-        for job in inbox {
-            if let Job::Form(parcel) = job {
-                let item = em.form(&parcel.unpack(), &shared)?;
-                text += &em.print(vec![item])?;
-            }
-        }
-        Ok(Part { text, functions: std::mem::take(&mut em.functions), forms: std::mem::take(&mut em.forms) })
-    })();
-    (emitted, ignorable_time)
+    }
+    Ok(Part { text, functions: std::mem::take(&mut em.functions), forms: std::mem::take(&mut em.forms) })
 }
 
 impl Emitter<'_> {

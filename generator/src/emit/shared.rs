@@ -3,7 +3,7 @@
 //! formulation's `rhs` and `initial_state`, computed once, and movable to the context a
 //! formulation is emitted in ([`crate::symbolic::transfer`]).
 
-use crate::formulation::mechanics::Mechanics;
+use crate::formulation::mechanics::Quantities;
 use crate::symbolic::eval::magnitude;
 use crate::symbolic::transfer::{Transfer, Visitor};
 use crate::symbolic::{Expr, Symbol};
@@ -42,7 +42,7 @@ pub struct FromMechanics {
 
 impl FromMechanics {
     /// From the mechanics and the ignorable coordinates the reduced method uses.
-    pub fn new(mech: &Mechanics, ignorable: &[usize], velocities: &[Symbol]) -> FromMechanics {
+    pub fn new(mech: &Quantities, ignorable: &[usize], velocities: &[Symbol]) -> FromMechanics {
         let residual_bounds =
             (0..mech.r).map(|i| Expr::sum((0..mech.m).map(|j| magnitude(mech.a.get(i, j) * velocities[j].expr()))) + magnitude(mech.b[i])).collect();
         let positions: Vec<Expr> = mech.holonomic.iter().map(|(_, e)| *e).collect();

@@ -11,7 +11,7 @@
 //! assert!(report[2].is_ignorable() && !report[0].is_ignorable());
 //! ```
 
-use super::mechanics::Mechanics;
+use super::mechanics::Quantities;
 use crate::model::{ErrorKind, Model, ModelError};
 use crate::symbolic::zero::zero_test;
 use crate::symbolic::{Expr, Symbol};
@@ -66,7 +66,7 @@ pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
 }
 
 /// Checks Definition 1 for every coordinate.
-pub fn analyze(model: &Model, mech: &Mechanics) -> Vec<CoordinateReport> {
+pub fn analyze(model: &Model, mech: &Quantities) -> Vec<CoordinateReport> {
     let m = mech.m;
     model
         .coordinates

@@ -241,14 +241,6 @@ impl std::ops::Deref for Mechanics {
     }
 }
 
-impl Mechanics {
-    /// The quantities with a fresh simplifier under `limits` (in another context, the one
-    /// they were moved to).
-    pub fn with_simplifier(quantities: Quantities, limits: FourierLimits) -> Mechanics {
-        Mechanics { quantities, tidy: Tidy::new(limits) }
-    }
-}
-
 impl Transfer for BodyVelocity {
     fn visit(&mut self, v: &mut dyn Visitor) {
         self.v.visit(v);
@@ -496,7 +488,7 @@ fn spring_length(model: &Model, tidy: &Tidy, a: &(usize, [Expr; 3]), b: &(usize,
     tidy.of(dot(&d, &d)).sqrt()
 }
 
-impl Mechanics {
+impl Quantities {
     /// Kinetic energy rebuilt from M, N, T0 and the velocities (Eq. 13).
     pub fn kinetic_from_matrices(&self, velocities: &[Symbol]) -> Expr {
         let qd: Vec<Expr> = velocities.iter().map(|v| v.expr()).collect();
@@ -520,7 +512,9 @@ impl Mechanics {
     pub fn velocity_residuals(&self, velocities: &[Symbol]) -> Vec<Expr> {
         (0..self.r).map(|i| Expr::sum((0..self.m).map(|j| self.a.get(i, j) * velocities[j].expr())) + self.b[i]).collect()
     }
+}
 
+impl Mechanics {
     /// `f = Q - dV/dq - h`: everything in Lagrange's equations but `M q''` and the constraint
     /// forces, in `q`, `q'`, `t`.
     pub fn lagrange_force(&self) -> Vec<Expr> {

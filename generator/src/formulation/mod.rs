@@ -54,8 +54,6 @@ impl Request {
 pub struct Shared<'a> {
     pub model: &'a Model,
     pub mech: &'a Mechanics,
-    /// The ignorable coordinates the reduced method uses.
-    pub ignorable: &'a [usize],
     /// Kane's form (the full quasi-velocities), when a formulation needs it.
     pub kane: Option<&'a Volterra>,
     /// The reduced form, when requested.
@@ -87,53 +85,105 @@ impl Derivation {
     }
 }
 
-/// Derives what `request` asks for, each formulation right after what it needs (Lagrange's
-/// equations need only the mechanics, Maggi's and Kane's Kane's form, the reduced method's the
-/// reduced form): the order generation's two threads follow too ([`crate::emit::generate`]).
+/// Where [`derive_with`] hands its results as soon as they are ready, and where it has the
+/// ignorable coordinates decided: here by default ([`derive`]); generation hands the mechanics
+/// to a second thread that decides them meanwhile, and emits each formulation as it arrives
+/// ([`crate::emit::generate`]).
+pub trait Stages {
+    /// The mechanics are derived (first, once).
+    fn mechanics(&mut self, _mech: &Mechanics) {}
+    /// Definition 1 for every coordinate, and the set the reduced method uses. Asked for after
+    /// Kane's form (which does not need it) and before the reduced form; its error comes first.
+    fn ignorable(&mut self, model: &Model, mech: &Mechanics) -> Result<Ignorable, ModelError> {
+        let clock = Instant::now();
+        let reports = ignorable::analyze(model, mech);
+        let chosen = ignorable::choose(model, &reports)?;
+        Ok(Ignorable { reports, chosen, time: clock.elapsed() })
+    }
+    /// One formulation's equations, as soon as derived.
+    fn equations(&mut self, _eqs: &Equations) {}
+}
+
+/// What [`Stages::ignorable`] decides.
+pub struct Ignorable {
+    /// Definition 1, coordinate by coordinate (empty where they were decided elsewhere).
+    pub reports: Vec<ignorable::CoordinateReport>,
+    /// The ignorable coordinates the reduced method uses.
+    pub chosen: Vec<usize>,
+    /// Time it took, where it ran.
+    pub time: Duration,
+}
+
+/// Everything done where it is asked for.
+struct Here;
+impl Stages for Here {}
+
+/// Derives what `request` asks for ([`derive_with`], everything on this thread).
 pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError> {
-    let mut stages = Vec::new();
+    derive_with(model, request, &mut Here)
+}
+
+/// Derives what `request` asks for, each formulation right after what it needs: Lagrange's
+/// equations after the mechanics, Maggi's and Kane's after Kane's form, the reduced method's
+/// after the reduced form. `stages` hears of each result as soon as it is ready and decides the
+/// ignorable coordinates. Errors come in the order mechanics, ignorable coordinates, Kane's
+/// form, reduced form, formulations.
+///
+/// ```
+/// use generator::formulation::{derive_with, Equations, Request, Stages};
+/// struct Names(Vec<&'static str>);
+/// impl Stages for Names {
+///     fn equations(&mut self, e: &Equations) { self.0.push(e.name) }
+/// }
+/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+/// let mut names = Names(Vec::new());
+/// derive_with(&model, &Request::all(), &mut names).unwrap();
+/// assert_eq!(names.0, ["lagrange", "maggi", "kane", "reduced_volterra"]);
+/// ```
+pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) -> Result<Derivation, ModelError> {
+    let mut times = Vec::new();
     let mut clock = Instant::now();
     // Time in the formulations' own work, summed over the places it runs.
     let mut formulations = Duration::ZERO;
-    let mut stage = |name: &'static str, stages: &mut Vec<(&'static str, Duration)>| {
-        stages.push((name, clock.elapsed()));
-        clock = Instant::now();
-    };
     let mech = mechanics::derive(model);
-    stage("mechanics", &mut stages);
-    let reports = ignorable::analyze(model, &mech);
-    let chosen = ignorable::choose(model, &reports)?;
-    stage("ignorable", &mut stages);
+    times.push(("mechanics", clock.elapsed()));
+    stages.mechanics(&mech);
     let wants = |f: FormulationDef| request.formulations.contains(&f);
     let mut equations = Vec::new();
-    let mut formulate = |def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
-        if wants(def) {
-            let start = Instant::now();
-            let shared = Shared { model, mech: &mech, ignorable: &chosen, kane, reduced, integrate_ignorable: request.integrate_ignorable };
-            let eqs = method.equations(&shared)?;
-            formulations += start.elapsed();
-            equations.push(eqs);
-        }
-        Ok(())
-    };
-    formulate(FormulationDef::Lagrange, &lagrange::Lagrange, None, None)?;
-    let clock_start = Instant::now();
+    let mut formulate =
+        |stages: &mut dyn Stages, def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
+            if wants(def) {
+                let start = Instant::now();
+                let shared = Shared { model, mech: &mech, kane, reduced, integrate_ignorable: request.integrate_ignorable };
+                let eqs = method.equations(&shared)?;
+                formulations += start.elapsed();
+                stages.equations(&eqs);
+                equations.push(eqs);
+            }
+            Ok(())
+        };
+    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None)?;
+    clock = Instant::now();
     // Kane's form serves Kane, Maggi, and the reduced method's Schur route.
     let kane = if wants(FormulationDef::Kane) || wants(FormulationDef::Maggi) || wants(FormulationDef::ReducedVolterra) {
-        Some(volterra::derive(model, &mech, &[], &model.quasi_full)?)
+        volterra::derive(model, &mech, &[], &model.quasi_full).map(Some)
     } else {
-        None
+        Ok(None)
     };
-    stages.push(("kane", clock_start.elapsed()));
-    formulate(FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None)?;
-    formulate(FormulationDef::Kane, &kane::Kane, kane.as_ref(), None)?;
-    let clock_start = Instant::now();
+    let kane_time = clock.elapsed();
+    let decided = stages.ignorable(model, &mech)?;
+    let kane = kane?;
+    times.push(("ignorable", decided.time));
+    times.push(("kane", kane_time));
+    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None)?;
+    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None)?;
+    clock = Instant::now();
     let reduced = match &kane {
-        Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &chosen, &model.quasi_reduced, k)?),
+        Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &decided.chosen, &model.quasi_reduced, k)?),
         _ => None,
     };
-    stages.push(("reduced", clock_start.elapsed()));
-    formulate(FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref())?;
-    stages.push(("formulations", formulations));
-    Ok(Derivation { mechanics: mech, reports, ignorable: chosen, kane, reduced, equations, stages })
+    times.push(("reduced", clock.elapsed()));
+    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref())?;
+    times.push(("formulations", formulations));
+    Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times })
 }
