@@ -10,6 +10,5 @@ pub mod model;
 pub mod formulation;
 pub mod inspect;
 pub mod emit;
-pub mod output;
 
 pub use emit::Builder;

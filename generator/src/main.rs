@@ -191,15 +191,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
     let out = emit::generate(&model, &options)?;
     match &args.output {
         // An unchanged file is left alone, so builds that depend on it stay fresh.
-        Some(path) if std::fs::read(path).ok().as_deref() == Some(out.code.as_bytes()) => {
-            if !args.quiet {
-                eprintln!("unchanged {}", path.display());
-            }
-        }
         Some(path) => {
-            generator::output::write_atomic(path, out.code.as_bytes()).map_err(|e| Failure::Message(format!("error: {e}")))?;
+            let written = files::write_if_changed(path, out.code.as_bytes()).map_err(|e| Failure::Message(format!("error: {e}")))?;
             if !args.quiet {
-                eprintln!("wrote {}", path.display());
+                let verb = match written {
+                    files::Written::Unchanged => "unchanged",
+                    files::Written::Replaced => "wrote",
+                    files::Written::Through => "wrote through",
+                };
+                eprintln!("{verb} {}", path.display());
             }
         }
         None => print_stdout(&out.code)?,

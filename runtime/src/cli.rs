@@ -15,11 +15,11 @@
 use crate::compare::{CompareError, Options, compare, table};
 use crate::integrate::Method;
 use crate::linearize::{LinearizeError, Operating, Swept, crossings, growth, linearize};
-use crate::output::{OutputError, write_atomic};
 use crate::plot::PlotError;
 use crate::sweep::{SweepOptions, csv, sweep};
 use crate::system::Drift;
 use clap::{Parser, ValueEnum};
+use files::{FileError, write_creating_folder as write_atomic};
 use seam::Model;
 use std::io::Write;
 use std::path::PathBuf;
@@ -284,7 +284,7 @@ pub enum CliError {
     #[error(transparent)]
     Compare(#[from] CompareError),
     #[error(transparent)]
-    Output(#[from] OutputError),
+    Output(#[from] FileError),
     #[error(transparent)]
     Plot(#[from] PlotError),
     #[error(transparent)]

@@ -52,8 +52,8 @@ pub enum DriverError {
     Refused { path: PathBuf, code: i32 },
     #[error("cannot run `{program}`: {source}")]
     Spawn { program: String, source: std::io::Error },
-    #[error("cannot write `{path}`: {source}")]
-    Write { path: PathBuf, source: std::io::Error },
+    #[error(transparent)]
+    Write(files::FileError),
     #[error("building the program for `{path}` failed (a bug: the emitted module should always compile; the build log is above)")]
     Build { path: PathBuf },
 }
@@ -130,10 +130,7 @@ fn cargo() -> OsString {
 }
 
 fn write_if_changed(path: &Path, text: &str) -> Result<(), DriverError> {
-    if std::fs::read_to_string(path).ok().as_deref() == Some(text) {
-        return Ok(());
-    }
-    crate::output::write_atomic(path, text.as_bytes()).map_err(|e| DriverError::Write { path: e.path, source: e.source })
+    files::write_if_changed(path, text.as_bytes()).map(|_| ()).map_err(DriverError::Write)
 }
 
 fn status(mut cmd: Command, program: &str) -> Result<std::process::ExitStatus, DriverError> {
@@ -147,7 +144,7 @@ pub fn program_for(file: &Path) -> Result<PathBuf, DriverError> {
     let name = project_name(file);
     let project = target.join(&name);
     let src = project.join("src");
-    std::fs::create_dir_all(&src).map_err(|source| DriverError::Write { path: src.clone(), source })?;
+    std::fs::create_dir_all(&src).map_err(|source| DriverError::Write(files::FileError::Io { path: src.clone(), action: "create the folder", source }))?;
     let binary = target.join("release").join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
 
     // 1. The module, from the generator (built optimized, in the driver's own target directory).

@@ -18,7 +18,6 @@ pub mod compare;
 pub mod sweep;
 pub mod linearize;
 pub mod plot;
-pub mod output;
 pub mod cli;
 pub mod driver;
 

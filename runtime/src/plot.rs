@@ -2,7 +2,7 @@
 //! constraint and momentum errors over time, one curve per method. SVG needs no font files.
 
 use crate::compare::Run;
-use crate::output::write_atomic;
+use files::write_creating_folder as write_atomic;
 use plotters::prelude::*;
 use seam::Model;
 use std::path::{Path, PathBuf};
@@ -70,7 +70,7 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
     }
     root.present().map_err(|e| err(&path, e))?;
     drop(root);
-    write_atomic(&path, svg.as_bytes()).map_err(|e| err(&path, e.source))?;
+    write_atomic(&path, svg.as_bytes()).map_err(|e| err(&path, e))?;
     // Errors: energy, constraint, momentum.
     let epath = dir.join(format!("{scene}_errors.svg"));
     let mut svg = String::new();
@@ -93,7 +93,7 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
     root.present().map_err(|e| err(&epath, e))?;
     drop(areas);
     drop(root);
-    write_atomic(&epath, svg.as_bytes()).map_err(|e| err(&epath, e.source))?;
+    write_atomic(&epath, svg.as_bytes()).map_err(|e| err(&epath, e))?;
     Ok(vec![path, epath])
 }
 
@@ -165,7 +165,7 @@ pub fn write_work_precision(points: &[crate::sweep::Point], path: &Path) -> Resu
     root.present().map_err(|e| err(path, e))?;
     drop(chart);
     drop(root);
-    write_atomic(path, svg.as_bytes()).map_err(|e| err(path, e.source))
+    write_atomic(path, svg.as_bytes()).map(|_| ()).map_err(|e| err(path, e))
 }
 
 /// The eigenvalues of a linearization sweep against the swept value: real parts (top) and
@@ -197,5 +197,5 @@ pub fn write_eigenvalues(title: &str, swept: &str, rows: &[crate::linearize::Swe
     root.present().map_err(|e| err(path, e))?;
     drop(areas);
     drop(root);
-    write_atomic(path, svg.as_bytes()).map_err(|e| err(path, e.source))
+    write_atomic(path, svg.as_bytes()).map(|_| ()).map_err(|e| err(path, e))
 }

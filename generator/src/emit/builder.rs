@@ -68,7 +68,7 @@ pub enum BuildError {
     Model(#[from] ModelError),
     /// A module could not be written (the old file is unchanged).
     #[error("{0}")]
-    Io(#[from] crate::output::OutputError),
+    Io(#[from] files::FileError),
     #[error("no output directory: call `out_dir(..)`, or run from a build script (cargo sets `OUT_DIR`)")]
     NoOutDir,
     #[error("`{first}` and `{second}` both define a model named `{name}`: their modules would be the same file; rename one model")]
@@ -209,7 +209,7 @@ impl Builder {
             }
             models.push((file, model));
         }
-        std::fs::create_dir_all(&out_dir).map_err(|source| crate::output::OutputError { path: out_dir.clone(), source })?;
+        std::fs::create_dir_all(&out_dir).map_err(|source| files::FileError::Io { path: out_dir.clone(), action: "create the folder", source })?;
         let mut built: Vec<Built> = Vec::new();
         for (file, model) in models {
             let Generated { code, summary } = generate(&model, &self.options(&model))?;
@@ -228,12 +228,8 @@ fn unoptimized() -> bool {
 
 /// Writes `code` to `path` atomically unless the file already holds it; returns whether it
 /// wrote.
-pub(super) fn write_if_changed(path: &Path, code: &str) -> Result<bool, crate::output::OutputError> {
-    if std::fs::read(path).ok().as_deref() == Some(code.as_bytes()) {
-        return Ok(false);
-    }
-    crate::output::write_atomic(path, code.as_bytes())?;
-    Ok(true)
+pub(super) fn write_if_changed(path: &Path, code: &str) -> Result<bool, files::FileError> {
+    Ok(files::write_if_changed(path, code.as_bytes())? != files::Written::Unchanged)
 }
 
 #[cfg(test)]

@@ -203,12 +203,29 @@ impl Model {
     }
 }
 
+/// The most bytes a model file may hold (16 MiB): far above any model written by hand or by
+/// the builder (a 200-link chain is about 100 KB), and a bound on what `inspect /dev/zero`
+/// reads.
+pub const MAX_MODEL_BYTES: u64 = 16 << 20;
+
 /// Reads and validates a model file.
 pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let bytes = std::fs::read(path)
-        .map_err(|e| ModelError::unlocated(ErrorKind::Io, &file, format!("cannot read the file: {e}"), "check the path; models live in `models/`".into()))?;
+    let bytes = files::read_bounded(path, MAX_MODEL_BYTES).map_err(|e| match e {
+        files::FileError::TooLarge { limit, .. } => ModelError::unlocated(
+            ErrorKind::Io,
+            &file,
+            format!("the file holds more than {limit} bytes, the most a model file may hold"),
+            "is it the right file? A model of hundreds of bodies takes well under a megabyte; build larger ones in Rust with `ModelBuilder`".into(),
+        ),
+        e => ModelError::unlocated(
+            ErrorKind::Io,
+            &file,
+            format!("cannot read the file: {}", e.source_message()),
+            "check the path; models live in `models/`".into(),
+        ),
+    })?;
     let source = text_of(&file, &bytes)?;
     from_source(&file, source)
 }
