@@ -529,3 +529,22 @@ fn control_characters_in_paths_stay_inside_one_comment() {
     let plain = syn::parse_file(&String::from_utf8(plain.stdout).unwrap()).unwrap();
     assert_eq!(file.items.len(), plain.items.len());
 }
+
+/// Run settings that would allocate without bound, integrate nothing, or overflow are refused
+/// at load, located on the field, naming the limit.
+#[test]
+fn run_settings_must_describe_a_run_that_fits_in_memory() {
+    let src = scene1();
+    for (t_end, dt_out, words) in [
+        ("1e300", "0.01", &["more than the 1000001", "dt_out"][..]),
+        ("50.0", "1e-300", &["more than the 1000001"][..]),
+        ("1e7", "0.01", &["1.000e9 output times"][..]),
+        ("1.0", "100.0", &["longer than the run"][..]),
+        ("0.0", "0.01", &["is not a run"][..]),
+    ] {
+        let e = broken(&src, "Simulation(t_end: 50.0, dt_out: 0.01)", &format!("Simulation(t_end: {t_end}, dt_out: {dt_out})"));
+        check(&e, ErrorKind::BadValue, words);
+        let line = src.lines().position(|l| l.contains("Simulation(")).unwrap() + 1;
+        assert_eq!(e.location.unwrap().0, line, "{e}");
+    }
+}

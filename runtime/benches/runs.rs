@@ -17,7 +17,7 @@ fn whole_runs(c: &mut Criterion) {
         group.sample_size(20);
         let r = Reference::of(&model).unwrap();
         let settings = Settings::paper(r.t_end - r.t_start);
-        let times = r.times();
+        let times = r.times().unwrap();
         for form in model.formulations {
             let (sys, y0) = System::start(model, form.name, model.default_params.to_vec(), r.q0, r.qd0).unwrap();
             group.bench_function(form.name, |b| {
@@ -31,7 +31,7 @@ fn whole_runs(c: &mut Criterion) {
     let model = generated::find("cart_pendulum").unwrap();
     let settings = Settings::paper(50.0);
     let r = Reference::of(&model).unwrap();
-    let times = r.times();
+    let times = r.times().unwrap();
     let mut group = c.benchmark_group("run/cart_pendulum_drift");
     group.sample_size(20);
     for (label, drift) in [("none", Drift::None), ("baumgarte", Drift::Baumgarte { alpha: 10.0, beta: 10.0 }), ("projection", Drift::Projection)] {

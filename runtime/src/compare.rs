@@ -91,6 +91,8 @@ pub enum CompareError {
     Run { method: String, source: RunError },
     #[error("{method}: monitor failed: {source}")]
     Monitor { method: String, source: Failure },
+    #[error("run settings: {0}")]
+    Grid(#[from] seam::GridError),
     #[error("model `{model}` has no reference run: its file has no `{section}` section (add `{section}: {example}` to run it)")]
     NoReference { model: String, section: &'static str, example: &'static str },
 }
@@ -119,13 +121,15 @@ impl Reference {
         let missing = |section, example| CompareError::NoReference { model: model.module.to_string(), section, example };
         let (q0, qd0) = model.initial.ok_or_else(|| missing("initial", "Initial(q: [...], qdot: [...])"))?;
         let (t_start, t_end, dt_out) = model.run.ok_or_else(|| missing("simulation", "Simulation(t_end: 10.0, dt_out: 0.01)"))?;
-        Ok(Reference { q0, qd0, t_start, t_end, dt_out })
+        let reference = Reference { q0, qd0, t_start, t_end, dt_out };
+        reference.times()?;
+        Ok(reference)
     }
 
-    /// The output times `t_start, t_start + dt_out, ..., t_end`.
-    pub fn times(&self) -> Vec<f64> {
-        let n = ((self.t_end - self.t_start) / self.dt_out).round() as usize;
-        (0..=n).map(|i| self.t_start + i as f64 * self.dt_out).collect()
+    /// The output times `t_start, t_start + dt_out, ..., t_end` ([`seam::output_times`]), or
+    /// why the settings are not a run.
+    pub fn times(&self) -> Result<Vec<f64>, seam::GridError> {
+        seam::output_times(self.t_start, self.t_end, self.dt_out)
     }
 }
 
@@ -145,7 +149,7 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         Drift::Baumgarte { .. } => format!("{method}+baumgarte"),
         Drift::Projection => format!("{method}+projection"),
     };
-    let times = reference.times();
+    let times = reference.times()?;
     let mut cpu = Vec::new();
     let mut solution = None;
     for _ in 0..repeats.max(1) {

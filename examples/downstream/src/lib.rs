@@ -40,7 +40,7 @@ mod tests {
         let r = Reference::of(&model).unwrap();
         let settings = Settings { rtol: 1e-10, atol: 1e-10, ..Settings::paper(r.t_end - r.t_start) };
         let (sys, y0) = System::start(model, "reduced_volterra", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
-        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times(), &settings).unwrap();
+        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times().unwrap(), &settings).unwrap();
         let inv = monitor(&sys, &sol).unwrap();
         assert!(norm(&inv.energy_error) < 1e-6 * inv.energy0.abs().max(1.0), "energy drift {}", norm(&inv.energy_error));
         // The trolley's momentum is what the reduced method holds fixed; Lagrange integrates it.

@@ -34,7 +34,7 @@ mod tests {
         let (sys, y0) = System::start(model, "kane", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
         assert!(sys.form.has_work_state, "the damper does work");
         let settings = Settings { method: Method::Dop853, rtol: 1e-11, atol: 1e-11, ..Settings::paper(r.t_end - r.t_start) };
-        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times(), &settings).unwrap();
+        let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times().unwrap(), &settings).unwrap();
         let inv = monitor(&sys, &sol).unwrap();
         let worst = inv.energy_error.iter().fold(0.0f64, |a, e| a.max(e.abs()));
         assert!(worst < 1e-8, "E = T + V - W drifts by {worst}");

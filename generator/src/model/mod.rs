@@ -768,15 +768,13 @@ impl<'a> Builder<'a> {
             self.check_initial_constraints(&constraints, &coordinates, &velocities, q0, qd0, &parameters, &time_functions)?;
         }
         if let Some(sim) = &def.simulation
-            && !(sim.t_start.is_finite() && sim.t_end.is_finite() && sim.t_end > sim.t_start && sim.dt_out > 0.0 && sim.dt_out.is_finite())
+            && let Err(e) = seam::output_steps(sim.t_start, sim.t_end, sim.dt_out)
         {
-            return Err(self.err(
-                ErrorKind::BadValue,
-                "simulation",
-                "simulation",
-                format!("simulation from {} to {} every {} is not a run", sim.t_start, sim.t_end, sim.dt_out),
-                "use t_end > t_start and dt_out > 0",
-            ));
+            let place = match e {
+                seam::GridError::NotARun { .. } => "simulation",
+                seam::GridError::StepLongerThanRun { .. } | seam::GridError::TooManyOutputs { .. } => "simulation.dt_out",
+            };
+            return Err(self.err(ErrorKind::BadValue, place, "", format!("{e}"), "the reference run is sampled every dt_out from t_start to t_end"));
         }
         Ok(Model {
             file: self.file.to_string(),

@@ -32,7 +32,7 @@ fn main() {
     let params = model::Params::default();
     let (y0, g_i) = model::reduced_volterra::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &params).unwrap();
     let registry = generated::find("three_body").unwrap();
-    let times = Reference::of(&registry).unwrap().times();
+    let times = Reference::of(&registry).unwrap().times().unwrap();
     println!("| rtol = atol | ours: ms (rhs calls, ns per call incl. stepping) | ode_solvers: ms (rhs calls, ns per call) | time ode_solvers / ours | max |y_ours - y_theirs| at t_end |");
     println!("|---|---|---|---|---|");
     for tol in [1e-3, 1e-6, 1e-9] {
