@@ -9,6 +9,7 @@
 use runtime::integrate::{Method, Settings, integrate};
 use runtime::linearize::{Operating, Swept, crossings, linearize, sweep};
 use runtime::system::System;
+use seam::FormulationKind;
 
 fn bicycle() -> generated::Model {
     generated::find("bicycle").unwrap()
@@ -42,7 +43,7 @@ fn published(v: f64) -> Vec<(f64, f64)> {
 fn eigenvalues_match_the_benchmark_to_nine_digits() {
     let model = bicycle();
     for v in [0.0, 5.0, 10.0] {
-        for form in ["kane", "lagrange"] {
+        for form in [FormulationKind::Kane, FormulationKind::Lagrange] {
             let lin = linearize(&model, form, &upright(&model, v, 0.0)).unwrap();
             assert!(lin.rates.iter().enumerate().all(|(i, r)| lin.cyclic.contains(&i) || r.abs() < 1e-9), "{form} at {v}: a steady motion");
             // Zero eigenvalues beside the four: the speed of the steady motion, the front
@@ -65,7 +66,7 @@ fn eigenvalues_match_the_benchmark_to_nine_digits() {
 fn with_the_exact_jacobian_the_eigenvalues_match_to_twelve_digits() {
     let model = generated::find("bicycle_lagrange").unwrap();
     for v in [0.0, 5.0, 10.0] {
-        let lin = linearize(&model, "lagrange", &upright(&model, v, 0.0)).unwrap();
+        let lin = linearize(&model, FormulationKind::Lagrange, &upright(&model, v, 0.0)).unwrap();
         assert!(lin.exact);
         let nonzero: Vec<_> = lin.eigenvalues.iter().filter(|l| l.norm() > 1e-6).collect();
         assert_eq!(nonzero.len(), 4, "at {v} m/s: {:?}", lin.eigenvalues);
@@ -78,8 +79,8 @@ fn with_the_exact_jacobian_the_eigenvalues_match_to_twelve_digits() {
     let at = upright(&model, 0.0, 0.0);
     let swept = Swept::find(&model, "x'").unwrap();
     let values: Vec<f64> = (0..=20).map(|i| 0.5 * i as f64).collect();
-    let rows = sweep(&model, "lagrange", &at, swept, &values).unwrap();
-    let cross = crossings(&model, "lagrange", &at, swept, &rows).unwrap();
+    let rows = sweep(&model, FormulationKind::Lagrange, &at, swept, &values).unwrap();
+    let cross = crossings(&model, FormulationKind::Lagrange, &at, swept, &rows).unwrap();
     eprintln!("weave {} capsize {}", cross[0], cross[1]);
     assert!((cross[0] / 4.29238253634111 - 1.0).abs() < 1e-12, "weave speed {}", cross[0]);
     assert!((cross[1] / 6.02426201538837 - 1.0).abs() < 1e-12, "capsize speed {}", cross[1]);
@@ -91,8 +92,8 @@ fn the_weave_and_capsize_speeds_match_the_benchmark() {
     let at = upright(&model, 0.0, 0.0);
     let swept = Swept::find(&model, "x'").unwrap();
     let values: Vec<f64> = (0..=20).map(|i| 0.5 * i as f64).collect();
-    let rows = sweep(&model, "kane", &at, swept, &values).unwrap();
-    let cross = crossings(&model, "kane", &at, swept, &rows).unwrap();
+    let rows = sweep(&model, FormulationKind::Kane, &at, swept, &values).unwrap();
+    let cross = crossings(&model, FormulationKind::Kane, &at, swept, &rows).unwrap();
     // Below the weave speed the weave oscillation grows; beyond the capsize speed the capsize
     // mode does; in between the bicycle is self-stable. (At 0.68 m/s two real roots merge into
     // the weave pair: no sign change there.)
@@ -108,7 +109,7 @@ fn lean_history(v: f64, seconds: f64) -> Vec<f64> {
     let model = bicycle();
     let at = upright(&model, v, 0.05);
     let qdot = at.consistent_rates(&model).unwrap();
-    let (sys, y0) = System::start(model, "kane", at.params.clone(), &at.q, &qdot).unwrap();
+    let (sys, y0) = System::start(&model, FormulationKind::Kane, at.params.clone(), &at.q, &qdot).unwrap();
     let times: Vec<f64> = (0..=(seconds * 100.0).round() as usize).map(|i| i as f64 * 0.01).collect();
     let s = Settings { method: Method::Dopri5, rtol: 1e-9, atol: 1e-11, ..Settings::default() };
     let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &times, &s).unwrap();

@@ -165,7 +165,7 @@ fn scene1_energy_matches_the_reference_initial_value() {
         env.set(m.velocities[i], qd0[i]);
     }
     let e = mech.kinetic.eval(&env).unwrap() + mech.potential.eval(&env).unwrap();
-    // shared/reference/README.md: E(0) = -14.86241191799228, G_x(0) = 2.0634351215568323.
+    // tests/reference/README.md: E(0) = -14.86241191799228, G_x(0) = 2.0634351215568323.
     assert!((e - -14.86241191799228).abs() < 1e-12, "E(0) = {e}");
     let g = mech.kinetic.diff(m.velocities[2]).eval(&env).unwrap();
     assert!((g - 2.0634351215568323).abs() < 1e-12, "G_x(0) = {g}");

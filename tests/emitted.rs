@@ -73,24 +73,23 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
             .collect();
         let e = emitted(name);
         let params = e.default_params.to_vec();
-        let (red, kf) = (e.formulation("reduced_volterra").unwrap(), e.formulation("kane").unwrap());
+        let (red, kf) = (e.formulation(seam::FormulationKind::ReducedVolterra).unwrap(), e.formulation(seam::FormulationKind::Kane).unwrap());
         let (m, s) = (mech.m, chosen.len());
-        let w = usize::from(red.has_work_state);
+        let w = usize::from(red.has_work_state());
         // The paper's Table 1: states 2m, 2m, m + p, m + p - s (+1 for the work integral);
         // equations m, m, p, p - s.
-        let counts: Vec<(usize, usize)> =
-            ["lagrange", "maggi", "kane", "reduced_volterra"].iter().map(|f| e.formulation(f).map(|f| (f.states, f.equations)).unwrap()).collect();
+        let counts: Vec<(usize, usize)> = seam::FormulationKind::ALL.iter().map(|f| e.formulation(*f).map(|f| (f.states(), f.equations)).unwrap()).collect();
         assert_eq!(counts, vec![(2 * m + w, m), (2 * m + w, m), (m + mech.p + w, mech.p), (m + mech.p - s + w, mech.p - s)], "{name}");
         let mut rng = SplitMix(7);
         for trial in 0..5 {
             let holonomic: Vec<Expr> = mech.holonomic.iter().map(|(_, h)| *h).collect();
             let (t, q, qd) = random_state(&def, &holonomic, &kane, &mut rng);
             // Reduced: initial state, right-hand side, q''.
-            let mut state = vec![0.0; red.states];
+            let mut state = vec![0.0; red.states()];
             let mut g = vec![0.0; s];
-            (red.initial_state)(t, &q, &qd, &params, &mut state, &mut g).unwrap();
-            let mut ds = vec![0.0; red.states];
-            (red.rhs)(t, &state, &params, &g, &mut ds).unwrap();
+            red.initial_state(t, &q, &qd, &params, &mut state, &mut g).unwrap();
+            let mut ds = vec![0.0; red.states()];
+            red.rhs(t, &state, &params, &g, &mut ds).unwrap();
             for j in 0..m {
                 assert!(close(ds[j], qd[j], 1e-11), "{name} #{trial}: q'[{j}] {} vs {}", ds[j], qd[j]);
             }
@@ -119,11 +118,11 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
                 assert!(proj.abs() < 1e-9 * scale, "{name} #{trial}: projected Lagrange residual {proj:e} (scale {scale:e})");
             }
             // Kane: same q''.
-            let mut kstate = vec![0.0; kf.states];
+            let mut kstate = vec![0.0; kf.states()];
             let mut kg = vec![0.0; s];
-            (kf.initial_state)(t, &q, &qd, &params, &mut kstate, &mut kg).unwrap();
-            let mut kds = vec![0.0; kf.states];
-            (kf.rhs)(t, &kstate, &params, &kg, &mut kds).unwrap();
+            kf.initial_state(t, &q, &qd, &params, &mut kstate, &mut kg).unwrap();
+            let mut kds = vec![0.0; kf.states()];
+            kf.rhs(t, &kstate, &params, &kg, &mut kds).unwrap();
             for (sym, x) in kane.u.iter().zip(&kstate[m..]) {
                 env.set(*sym, *x);
             }
@@ -140,25 +139,25 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
                 }
             }
             // The work integral's rate is Q . q' in every formulation.
-            if red.has_work_state {
+            if red.has_work_state() {
                 let mut power = [0.0];
-                (e.work_rate)(t, &q, &qd, &params, &mut power).unwrap();
-                let last = red.states - 1;
+                e.work_rate(t, &q, &qd, &params, &mut power).unwrap();
+                let last = red.states() - 1;
                 assert!(close(ds[last], power[0], 1e-12), "{name}: W' {} vs Q.q' {}", ds[last], power[0]);
             }
             // The momenta of the reduced state are G_I; the constraints hold; energy matches.
             let (mut qq, mut qqd) = (vec![0.0; m], vec![0.0; m]);
-            (red.velocities)(t, &state, &params, &g, &mut qq, &mut qqd).unwrap();
+            red.velocities(t, &state, &params, &g, &mut qq, &mut qqd).unwrap();
             let mut mom = vec![0.0; s];
-            (e.momenta)(t, &qq, &qqd, &params, &mut mom).unwrap();
+            e.momenta(t, &qq, &qqd, &params, &mut mom).unwrap();
             for k in 0..s {
                 assert!(close(mom[k], g[k], 1e-12), "{name} #{trial}: momentum {k} {} vs G {}", mom[k], g[k]);
             }
             let mut cres = vec![0.0; e.constraints.len()];
-            (e.constraint_residuals)(t, &qq, &qqd, &params, &mut cres).unwrap();
+            e.constraint_residuals(t, &qq, &qqd, &params, &mut cres).unwrap();
             assert!(cres.iter().all(|r| r.abs() < 1e-12), "{name} #{trial}: constraint residuals {cres:?}");
             let mut energy = [0.0];
-            (e.energy)(t, &q, &qd, &params, &mut energy).unwrap();
+            e.energy(t, &q, &qd, &params, &mut energy).unwrap();
             let want = (mech.kinetic + mech.potential).eval(&env).unwrap();
             assert!(close(energy[0], want, 1e-12), "{name}: energy {} vs {want}", energy[0]);
         }
@@ -167,20 +166,21 @@ fn emitted_reduced_volterra_satisfies_lagrange_agrees_with_kane_and_keeps_moment
 
 /// Evaluates a formulation's right-hand side from `q, q'`.
 fn rhs_at(e: &Model, form: &str, t: f64, q: &[f64], qd: &[f64]) -> Result<Vec<f64>, Failure> {
-    let f = e.formulation(form).unwrap();
+    let f = e.formulation(seam::FormulationKind::from_name(form).unwrap()).unwrap();
     let params = e.default_params.to_vec();
-    let mut state = vec![0.0; f.states];
+    let mut state = vec![0.0; f.states()];
     let mut g = vec![0.0; e.ignorable.len()];
-    (f.initial_state)(t, q, qd, &params, &mut state, &mut g)?;
-    let mut ds = vec![0.0; f.states];
-    (f.rhs)(t, &state, &params, &g, &mut ds)?;
+    f.initial_state(t, q, qd, &params, &mut state, &mut g)?;
+    let mut ds = vec![0.0; f.states()];
+    f.rhs(t, &state, &params, &g, &mut ds)?;
     Ok(ds)
 }
 
 #[test]
 fn variants_compute_the_same_right_hand_sides() {
     let full = emitted("three_body");
-    let (q, qd) = full.initial.unwrap();
+    let (q, qd) = full.initial.clone().unwrap();
+    let (q, qd) = (&q[..], &qd[..]);
     for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&full, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&emitted("three_body_split"), form, 0.0, q, qd).unwrap();
@@ -190,7 +190,7 @@ fn variants_compute_the_same_right_hand_sides() {
     }
     // Without the ignorable coordinates X, Y, Z (indices 5..8): the other entries agree.
     let drop = emitted("three_body_drop");
-    assert!(!drop.formulation("reduced_volterra").unwrap().integrates_ignorable);
+    assert_eq!(drop.formulation(seam::FormulationKind::ReducedVolterra).unwrap().layout.coordinates, [0, 1, 2, 3, 4]);
     let a = rhs_at(&full, "reduced_volterra", 0.0, q, qd).unwrap();
     let b = rhs_at(&drop, "reduced_volterra", 0.0, q, qd).unwrap();
     let kept: Vec<f64> = a[..5].iter().chain(&a[8..]).copied().collect();
@@ -201,7 +201,8 @@ fn variants_compute_the_same_right_hand_sides() {
     // Baked parameters: the same numbers, and no runtime parameters.
     let (runtime, baked) = (emitted("cart_pendulum"), emitted("cart_pendulum_baked"));
     assert!(baked.parameter_names.is_empty() && !runtime.parameter_names.is_empty());
-    let (q, qd) = runtime.initial.unwrap();
+    let (q, qd) = runtime.initial.clone().unwrap();
+    let (q, qd) = (&q[..], &qd[..]);
     for form in ["lagrange", "maggi", "kane", "reduced_volterra"] {
         let a = rhs_at(&runtime, form, 0.0, q, qd).unwrap();
         let b = rhs_at(&baked, form, 0.0, q, qd).unwrap();
@@ -215,17 +216,18 @@ fn variants_compute_the_same_right_hand_sides() {
 #[test]
 fn runtime_parameters_change_the_motion() {
     let e = emitted("cart_pendulum");
-    let f = e.formulation("reduced_volterra").unwrap();
-    let (q, qd) = e.initial.unwrap();
+    let f = e.formulation(seam::FormulationKind::ReducedVolterra).unwrap();
+    let (q, qd) = e.initial.clone().unwrap();
+    let (q, qd) = (&q[..], &qd[..]);
     let mut params = e.default_params.to_vec();
-    let g_index = e.parameter_names.iter().position(|n| *n == "g").unwrap();
-    let mut state = vec![0.0; f.states];
+    let g_index = e.parameter_index("g").unwrap();
+    let mut state = vec![0.0; f.states()];
     let mut g = vec![0.0; 1];
-    let mut out = [vec![0.0; f.states], vec![0.0; f.states]];
+    let mut out = [vec![0.0; f.states()], vec![0.0; f.states()]];
     for (i, gravity) in [9.81, 1.62].into_iter().enumerate() {
         params[g_index] = gravity;
-        (f.initial_state)(0.0, q, qd, &params, &mut state, &mut g).unwrap();
-        (f.rhs)(0.0, &state, &params, &g, &mut out[i]).unwrap();
+        f.initial_state(0.0, q, qd, &params, &mut state, &mut g).unwrap();
+        f.rhs(0.0, &state, &params, &g, &mut out[i]).unwrap();
     }
     assert!((out[0][3] - out[1][3]).abs() > 1e-3, "u' must depend on g: {:?}", out);
 }
@@ -233,7 +235,8 @@ fn runtime_parameters_change_the_motion() {
 #[test]
 fn bad_states_are_reported_not_computed() {
     let e = emitted("cart_pendulum");
-    let (q, qd) = e.initial.unwrap();
+    let (q, qd) = e.initial.clone().unwrap();
+    let (q, qd) = (&q[..], &qd[..]);
     // Velocities that violate the wheel constraint: rejected with the residual.
     let mut bad = qd.to_vec();
     bad[1] += 0.1;
@@ -248,16 +251,17 @@ fn bad_states_are_reported_not_computed() {
     }
     // Positions that violate a holonomic constraint.
     let p = emitted("cartesian_pendulum");
-    let (q, qd) = p.initial.unwrap();
+    let (q, qd) = p.initial.clone().unwrap();
+    let (q, qd) = (&q[..], &qd[..]);
     let mut moved = q.to_vec();
     moved[0] += 0.01;
     assert!(matches!(rhs_at(&p, "reduced_volterra", 0.0, &moved, qd), Err(Failure::ConstraintViolated { .. })));
     // Scene 1 at cos(theta1 - theta2) = -1: singular, reported with the condition.
-    let f = e.formulation("reduced_volterra").unwrap();
+    let f = e.formulation(seam::FormulationKind::ReducedVolterra).unwrap();
     let params = e.default_params.to_vec();
     let state = [0.3, 0.3 + std::f64::consts::PI, 0.0, 0.5, 0.0];
     let mut ds = [0.0; 5];
-    match (f.rhs)(1.5, &state, &params, &[0.2], &mut ds) {
+    match f.rhs(1.5, &state, &params, &[0.2], &mut ds) {
         Err(Failure::Singular { t, condition, .. }) => {
             assert_eq!(t, 1.5);
             assert!(condition.contains("theta1") && condition.contains("theta2"), "{condition}");
@@ -266,9 +270,9 @@ fn bad_states_are_reported_not_computed() {
     }
     // A NaN in the state never comes back as a number.
     let state = [0.3, f64::NAN, 0.0, 0.5, 0.0];
-    assert!((f.rhs)(0.0, &state, &params, &[0.2], &mut ds).is_err());
+    assert!(f.rhs(0.0, &state, &params, &[0.2], &mut ds).is_err());
     // Slices of the wrong length.
-    assert!(matches!((f.rhs)(0.0, &[0.0; 4], &params, &[0.2], &mut ds), Err(Failure::Dimension { argument: "state", .. })));
+    assert!(matches!(f.rhs(0.0, &[0.0; 4], &params, &[0.2], &mut ds), Err(Failure::Dimension { argument: "state", .. })));
 }
 
 #[test]

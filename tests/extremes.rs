@@ -13,13 +13,13 @@ fn model(name: &str) -> Model {
 }
 
 fn param(m: &Model, name: &str) -> usize {
-    m.parameter_names.iter().position(|n| *n == name).unwrap()
+    m.parameter_index(name).unwrap()
 }
 
 /// Runs `form` from `(q0, qd0)` with `params` over `[0, t_end]` every `dt`.
 #[allow(clippy::too_many_arguments)]
 fn simulate(m: &Model, form: &str, params: Vec<f64>, q0: &[f64], qd0: &[f64], t_end: f64, dt: f64, s: &Settings) -> (System, Result<Solution, RunError>) {
-    let (sys, y0) = System::start(*m, form, params, q0, qd0).unwrap();
+    let (sys, y0) = System::start(m, seam::FormulationKind::from_name(form).unwrap(), params, q0, qd0).unwrap();
     let times: Vec<f64> = (0..=((t_end / dt).round() as usize)).map(|i| i as f64 * dt).collect();
     let out = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &times, s);
     (sys, out)
@@ -77,7 +77,8 @@ fn scene1_near_its_singular_set_succeeds_with_the_margin_reported_or_stops_there
 fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
     // Scene 2's quasi-velocities are body rates; the ZYX rates divide by cos(theta).
     let m = model("three_body");
-    let (q0, qd0) = m.initial.unwrap();
+    let (q0, qd0) = m.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     for (theta, must_stop) in [(std::f64::consts::FRAC_PI_2, true), (std::f64::consts::FRAC_PI_2 - 1e-3, false)] {
         let mut q = q0.to_vec();
         q[1] = theta;
@@ -86,7 +87,10 @@ fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
             finite_or_reported(&format!("{form} theta {theta}"), &out, 2.0);
             if must_stop {
                 let e = out.unwrap_err();
-                assert!(matches!(e.reason, Reason::Rhs(runtime::seam::Failure::Singular { condition, .. }) if condition.contains("cos(theta)")), "{form}: {e}");
+                assert!(
+                    matches!(&e.reason, Reason::Rhs(runtime::seam::Failure::Singular { condition, .. }) if condition.contains("cos(theta)")),
+                    "{form}: {e}"
+                );
             }
         }
     }
@@ -95,7 +99,8 @@ fn a_zyx_body_at_cos_theta_zero_is_refused_and_near_it_reported() {
 #[test]
 fn mass_and_inertia_ratios_from_1e_minus_6_to_1e6_keep_the_invariants() {
     let m = model("three_body");
-    let (q0, qd0) = m.initial.unwrap();
+    let (q0, qd0) = m.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let (m1, m2, j1, j2) = (param(&m, "m1"), param(&m, "m2"), param(&m, "J1"), param(&m, "J2"));
     let s = Settings { method: Method::Dop853, rtol: 1e-10, atol: 1e-10, h_max: 1.0, ..Settings::default() };
     for ratio in [1e-6, 1e-3, 1e3, 1e6] {
@@ -120,7 +125,8 @@ fn mass_and_inertia_ratios_from_1e_minus_6_to_1e6_keep_the_invariants() {
 fn very_small_and_very_large_lengths_scale_the_motion() {
     // Scene 1 with l from 1e-3 to 1e3: time scales as sqrt(l), the invariants still hold.
     let m = model("cart_pendulum");
-    let (q0, qd0) = m.initial.unwrap();
+    let (q0, qd0) = m.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let l = param(&m, "l");
     for length in [1e-3, 1e3] {
         let mut p = m.default_params.to_vec();
@@ -140,7 +146,8 @@ fn very_small_and_very_large_lengths_scale_the_motion() {
 #[test]
 fn a_massless_system_stops_with_a_singular_mass_matrix() {
     let m = model("cart_pendulum");
-    let (q0, qd0) = m.initial.unwrap();
+    let (q0, qd0) = m.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let mut p = m.default_params.to_vec();
     for name in ["M", "m1", "m2"] {
         p[param(&m, name)] = 0.0;
@@ -159,18 +166,19 @@ fn extreme_integrator_settings_end_or_report() {
     let (t0, t1, _) = m.run.unwrap();
     // rtol 1e-14: completes (no endless loop) or reports the step-size underflow.
     let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000 };
-    match run(&m, "reduced_volterra", &tight, 1) {
+    match run(&m, seam::FormulationKind::ReducedVolterra, &tight, 1) {
         Ok(r) => assert!(r.record.energy_error_rel < 1e-10, "rtol 1e-14: energy {:e}", r.record.energy_error_rel),
         Err(e) => assert!(e.to_string().contains("underflow"), "{e}"),
     }
     // rtol 1e-1: completes, with the error it allows.
     let loose = Settings { rtol: 1e-1, atol: 1e-1, ..Settings::paper(t1 - t0) };
-    let r = run(&m, "reduced_volterra", &loose, 1).unwrap();
+    let r = run(&m, seam::FormulationKind::ReducedVolterra, &loose, 1).unwrap();
     assert!(r.record.energy_error_rel.is_finite());
     // A fixed step far too large for scene 1: the run stops, the divergence (or the singular
     // configuration it runs into) reported with the time.
     let cart = model("cart_pendulum");
-    let (q0, qd0) = cart.initial.unwrap();
+    let (q0, qd0) = cart.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     for form in ["lagrange", "kane", "reduced_volterra"] {
         let (_, out) =
             simulate(&cart, form, cart.default_params.to_vec(), q0, qd0, 1000.0, 2.0, &Settings { method: Method::Rk4 { h: 2.0 }, ..Settings::default() });
@@ -186,7 +194,8 @@ fn scene2_over_1e5_seconds_keeps_its_energy_drift_bounded_as_documented() {
     // docs/work-precision.md: at the paper's settings the relative energy error of the reduced
     // method grows to about 0.1 by 1e4 s and stays there to 1e5 s; its momenta stay at round-off.
     let m = model("three_body");
-    let (q0, qd0) = m.initial.unwrap();
+    let (q0, qd0) = m.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let (sys, out) = simulate(&m, "reduced_volterra", m.default_params.to_vec(), q0, qd0, 1e5, 100.0, &Settings::paper(50.0));
     let sol = out.unwrap();
     let inv = monitor(&sys, &sol).unwrap();
@@ -205,14 +214,16 @@ fn high_spin_rates_and_large_velocities_keep_the_invariants() {
     // Scene 3 spun up a hundredfold; scene 1 thrown fifty times harder.
     let s = Settings { method: Method::Dop853, rtol: 1e-10, atol: 1e-10, h_max: 0.5, ..Settings::default() };
     let boom = model("satellite_boom");
-    let (q0, qd0) = boom.initial.unwrap();
+    let (q0, qd0) = boom.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let fast: Vec<f64> = qd0.iter().enumerate().map(|(j, v)| if j < 3 { 100.0 * v } else { *v }).collect();
     let (sys, out) = simulate(&boom, "reduced_volterra", boom.default_params.to_vec(), q0, &fast, 10.0, 0.05, &s);
     let inv = monitor(&sys, &out.unwrap()).unwrap();
     let g = inv.momentum0.iter().map(|x| x.abs()).fold(0.0, f64::max);
     assert!(inv.momentum_error.iter().flatten().all(|x| x.abs() <= 1e-12 * g));
     let cart = model("cart_pendulum");
-    let (q0, qd0) = cart.initial.unwrap();
+    let (q0, qd0) = cart.initial.clone().unwrap();
+    let (q0, qd0) = (&q0[..], &qd0[..]);
     let thrown: Vec<f64> = qd0.iter().map(|v| 50.0 * v).collect();
     let (sys, out) = simulate(&cart, "reduced_volterra", cart.default_params.to_vec(), q0, &thrown, 2.0, 0.001, &s);
     let sol = out.unwrap_or_else(|e| panic!("thrown: {e}"));

@@ -5,24 +5,24 @@ use generator::symbolic::zero::SplitMix;
 
 /// `(rhs, jac)` at `state`, through the slice interface.
 fn exact(f: &generated::Formulation, params: &[f64], g: &[f64], state: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let n = f.states;
+    let n = f.states();
     let (mut ds, mut jac) = (vec![0.0; n], vec![0.0; n * n]);
-    (f.jacobian.expect("emitted with its jacobian"))(0.3, state, params, g, &mut ds, &mut jac).unwrap();
+    f.jacobian(0.3, state, params, g, &mut ds, &mut jac).expect("emitted with its jacobian");
     (ds, jac)
 }
 
 fn rhs(f: &generated::Formulation, params: &[f64], g: &[f64], state: &[f64]) -> Vec<f64> {
-    let mut ds = vec![0.0; f.states];
-    (f.rhs)(0.3, state, params, g, &mut ds).unwrap();
+    let mut ds = vec![0.0; f.states()];
+    f.rhs(0.3, state, params, g, &mut ds).unwrap();
     ds
 }
 
 /// The state from the model's initial `(q, q')`, each entry moved by up to `spread`.
 fn random_state(m: &generated::Model, f: &generated::Formulation, rng: &mut SplitMix, spread: f64) -> (Vec<f64>, Vec<f64>) {
-    let (q, qd) = m.initial.expect("committed models have an initial state");
-    let mut state = vec![0.0; f.states];
+    let (q, qd) = m.initial.clone().expect("committed models have an initial state");
+    let mut state = vec![0.0; f.states()];
     let mut g = vec![0.0; m.ignorable.len()];
-    (f.initial_state)(0.0, q, qd, m.default_params, &mut state, &mut g).unwrap();
+    f.initial_state(0.0, &q, &qd, &m.default_params, &mut state, &mut g).unwrap();
     for x in state.iter_mut() {
         *x += rng.uniform(-spread, spread);
     }
@@ -33,23 +33,23 @@ fn random_state(m: &generated::Model, f: &generated::Formulation, rng: &mut Spli
 fn jacobians_match_finite_differences_on_every_model() {
     let mut rng = SplitMix(12);
     let mut checked = 0;
-    for m in generated::models().iter().copied() {
-        for f in m.formulations {
+    for m in generated::models().iter() {
+        for f in &m.formulations {
             // Every committed module carries its Jacobians but the bicycle's (250000 operations
             // each; its linearization differences the right-hand side).
-            if f.jacobian.is_none() {
-                assert_eq!(m.module, "bicycle", "{} {} has no jacobian", m.module, f.name);
+            if !f.has_jacobian {
+                assert_eq!(m.module, "bicycle", "{} {} has no jacobian", m.module, f.name());
                 continue;
             }
             for _ in 0..4 {
-                let (state, g) = random_state(&m, f, &mut rng, 0.05);
-                let params = m.default_params;
+                let (state, g) = random_state(m, f, &mut rng, 0.05);
+                let params = &m.default_params;
                 let (ds, jac) = exact(f, params, &g, &state);
                 let plain = rhs(f, params, &g, &state);
                 for (a, b) in ds.iter().zip(&plain) {
-                    assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{} {}: jacobian's rates {ds:?} differ from rhs {plain:?}", m.module, f.name);
+                    assert!((a - b).abs() <= 1e-12 * (1.0 + b.abs()), "{} {}: jacobian's rates {ds:?} differ from rhs {plain:?}", m.module, f.name());
                 }
-                let n = f.states;
+                let n = f.states();
                 let scale = jac.iter().fold(1.0f64, |a, x| a.max(x.abs()));
                 for k in 0..n {
                     let h = 1e-6 * (1.0 + state[k].abs());
@@ -60,7 +60,7 @@ fn jacobians_match_finite_differences_on_every_model() {
                     for i in 0..n {
                         let fd = (a[i] - b[i]) / (2.0 * h);
                         let err = (fd - jac[i * n + k]).abs();
-                        assert!(err <= 1e-6 * scale, "{} {}: d dstate[{i}] / d state[{k}] = {} exact, {fd} by differences", m.module, f.name, jac[i * n + k]);
+                        assert!(err <= 1e-6 * scale, "{} {}: d dstate[{i}] / d state[{k}] = {} exact, {fd} by differences", m.module, f.name(), jac[i * n + k]);
                     }
                 }
                 checked += 1;
@@ -75,16 +75,18 @@ fn jacobians_match_finite_differences_on_every_model() {
 fn parameter_jacobians_match_finite_differences() {
     let mut rng = SplitMix(5);
     let mut modules = Vec::new();
-    for m in generated::models().iter().copied() {
-        for f in m.formulations {
-            let Some(pj) = f.parameter_jacobian else { continue };
-            modules.push(m.module);
-            let (n, np) = (f.states, m.default_params.len());
+    for m in generated::models().iter() {
+        for f in &m.formulations {
+            if !f.has_parameter_jacobian {
+                continue;
+            }
+            modules.push(m.module.clone());
+            let (n, np) = (f.states(), m.default_params.len());
             for _ in 0..3 {
-                let (state, g) = random_state(&m, f, &mut rng, 0.05);
-                let params = m.default_params.to_vec();
+                let (state, g) = random_state(m, f, &mut rng, 0.05);
+                let params = m.default_params.clone();
                 let (mut ds, mut jac) = (vec![0.0; n], vec![0.0; n * np]);
-                pj(0.3, &state, &params, &g, &mut ds, &mut jac).unwrap();
+                f.parameter_jacobian(0.3, &state, &params, &g, &mut ds, &mut jac).unwrap();
                 let scale = jac.iter().fold(1.0f64, |a, x| a.max(x.abs()));
                 for k in 0..np {
                     let h = 1e-6 * (1.0 + params[k].abs());
@@ -98,7 +100,7 @@ fn parameter_jacobians_match_finite_differences() {
                             (fd - jac[i * np + k]).abs() <= 1e-6 * scale,
                             "{} {}: d dstate[{i}] / d {} = {} exact, {fd} by differences",
                             m.module,
-                            f.name,
+                            f.name(),
                             m.parameter_names[k],
                             jac[i * np + k]
                         );

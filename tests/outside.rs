@@ -2,8 +2,9 @@
 //! depends on the generator and the runtime by path): it builds, its tests pass, it prints its
 //! model's comparison table, and it compiles none of the project's committed modules.
 //!
-//! Nested cargo commands use `target/models`, the directory the `compare` driver builds in:
-//! `cargo test` holds the lock of the workspace's own target directory while tests run.
+//! The nested cargo commands share the workspace's target directory (cargo releases its lock
+//! before the tests run), so the generator, the runtime and their dependencies, already built
+//! for the workspace's tests, are not built again.
 
 use std::path::Path;
 use std::process::Command;
@@ -14,7 +15,7 @@ fn cargo(args: &[&str]) -> std::process::Output {
         .args(args)
         .arg("--manifest-path")
         .arg(root.join("examples/outside/Cargo.toml"))
-        .env("CARGO_TARGET_DIR", root.join("target/models"))
+        .env("CARGO_TARGET_DIR", root.join("target"))
         .output()
         .expect("cargo runs")
 }

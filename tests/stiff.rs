@@ -4,21 +4,23 @@
 //! and both give the same slow motion; the energy balance (E = T + V - W with the damper's
 //! work W) holds for both as the tolerance tightens.
 
-use runtime::compare::{Run, run_with};
+use runtime::compare::{Reference, Run, run_with};
 use runtime::integrate::{Method, Settings};
 use runtime::system::Drift;
+use seam::FormulationKind;
 
 /// The committed module with its spring stiffness set to `k`.
 fn with_stiffness(k: f64) -> generated::Model {
-    let model = generated::find("stiff_pendulum").unwrap();
-    let mut params = model.default_params.to_vec();
-    params[model.parameter_names.iter().position(|p| *p == "k").unwrap()] = k;
-    generated::Model { default_params: Box::leak(params.into_boxed_slice()), ..model }
+    let mut model = generated::find("stiff_pendulum").unwrap();
+    let at = model.parameter_index("k").unwrap();
+    model.default_params[at] = k;
+    model
 }
 
 fn run(model: &generated::Model, form: &str, method: Method, tol: f64) -> Run {
     let s = Settings { method, rtol: tol, atol: tol, h_max: 0.5, ..Settings::default() };
-    run_with(model, form, &s, 1, Drift::None).unwrap_or_else(|e| panic!("{form} {method}: {e}"))
+    let kind = FormulationKind::from_name(form).unwrap();
+    run_with(model, &Reference::of(model).unwrap(), kind, &s, 1, Drift::None).unwrap_or_else(|e| panic!("{form} {method}: {e}"))
 }
 
 #[test]

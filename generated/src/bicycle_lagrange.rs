@@ -58,6 +58,8 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 5.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.01;
+///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
+pub const PAPER_SETTINGS: bool = false;
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -704,6 +706,12 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 13;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -1559,7 +1567,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1568,7 +1576,7 @@ pub mod lagrange {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]",
+                condition: "constraint matrix [M a^T; a 0]".into(),
                 value: column as f64,
             });
         }
@@ -1947,7 +1955,7 @@ pub mod lagrange {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -6205,7 +6213,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -6215,7 +6223,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -6263,12 +6271,13 @@ pub mod lagrange {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "lagrange",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Lagrange,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -6357,10 +6366,10 @@ pub mod lagrange {
     };
 }
 ///Every emitted formulation through slices.
-pub const FORMULATIONS: [::seam::Formulation; 1] = [lagrange::FORMULATION];
+pub const FORMULATIONS: [::seam::StaticFormulation; 1] = [lagrange::FORMULATION];
 ///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
 pub fn model() -> ::seam::Model {
-    ::seam::Model {
+    ::seam::Model::from(::seam::StaticModel {
         module: "bicycle_lagrange",
         name: MODEL,
         coordinates: &COORDINATES,
@@ -6371,6 +6380,7 @@ pub fn model() -> ::seam::Model {
         default_params: &DEFAULT_PARAMS,
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
+        paper_settings: PAPER_SETTINGS,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(
@@ -6421,5 +6431,5 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
-    }
+    })
 }

@@ -34,6 +34,8 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 50.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.01;
+///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
+pub const PAPER_SETTINGS: bool = true;
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -294,6 +296,12 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 3] = [0, 1, 2];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 3;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 4;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -371,7 +379,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -381,7 +389,7 @@ pub mod lagrange {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]",
+                condition: "constraint matrix [M a^T; a 0]".into(),
                 value: column as f64,
             });
         }
@@ -466,7 +474,7 @@ pub mod lagrange {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -695,7 +703,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -705,7 +713,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -917,7 +925,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -927,7 +935,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -979,12 +987,13 @@ pub mod lagrange {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "lagrange",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Lagrange,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -1105,6 +1114,12 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 3] = [0, 1, 2];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 3;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -1204,7 +1219,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1215,7 +1230,7 @@ pub mod maggi {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "Maggi matrix W^T M W",
+                condition: "Maggi matrix W^T M W".into(),
                 value: column as f64,
             });
         }
@@ -1283,7 +1298,7 @@ pub mod maggi {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -1331,7 +1346,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -1339,7 +1354,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[1],
+                condition: CONDITIONS[1].into(),
                 value,
             });
         }
@@ -1622,7 +1637,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1632,7 +1647,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -1884,7 +1899,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1894,7 +1909,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -1954,12 +1969,13 @@ pub mod maggi {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "maggi",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Maggi,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -2061,6 +2077,12 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 3] = [0, 1, 2];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 2;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -2153,7 +2175,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2163,7 +2185,7 @@ pub mod kane {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -2230,7 +2252,7 @@ pub mod kane {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -2278,7 +2300,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -2286,7 +2308,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[1],
+                condition: CONDITIONS[1].into(),
                 value,
             });
         }
@@ -2556,7 +2578,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2566,7 +2588,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2776,7 +2798,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2786,7 +2808,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2838,12 +2860,13 @@ pub mod kane {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "kane",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Kane,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -2945,6 +2968,12 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 3] = [0, 1, 2];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 1;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -3047,7 +3076,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3057,7 +3086,7 @@ pub mod reduced_volterra {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -3123,7 +3152,7 @@ pub mod reduced_volterra {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -3169,7 +3198,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -3177,7 +3206,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[1],
+                condition: CONDITIONS[1].into(),
                 value,
             });
         }
@@ -3185,7 +3214,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[2],
+                condition: CONDITIONS[2].into(),
                 value,
             });
         }
@@ -3522,7 +3551,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3532,7 +3561,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -3841,7 +3870,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3851,7 +3880,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -3903,12 +3932,13 @@ pub mod reduced_volterra {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "reduced_volterra",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::ReducedVolterra,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -3998,7 +4028,7 @@ pub mod reduced_volterra {
     };
 }
 ///Every emitted formulation through slices.
-pub const FORMULATIONS: [::seam::Formulation; 4] = [
+pub const FORMULATIONS: [::seam::StaticFormulation; 4] = [
     lagrange::FORMULATION,
     maggi::FORMULATION,
     kane::FORMULATION,
@@ -4006,7 +4036,7 @@ pub const FORMULATIONS: [::seam::Formulation; 4] = [
 ];
 ///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
 pub fn model() -> ::seam::Model {
-    ::seam::Model {
+    ::seam::Model::from(::seam::StaticModel {
         module: "cart_pendulum",
         name: MODEL,
         coordinates: &COORDINATES,
@@ -4017,6 +4047,7 @@ pub fn model() -> ::seam::Model {
         default_params: &DEFAULT_PARAMS,
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
+        paper_settings: PAPER_SETTINGS,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(
@@ -4067,5 +4098,5 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
-    }
+    })
 }

@@ -60,4 +60,4 @@ pub mod three_body_split;
 
 mod registry;
 pub use registry::{find, models};
-pub use seam::{Failure, Formulation, Model};
+pub use seam::{Failure, Formulation, FormulationKind, Model};

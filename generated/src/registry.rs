@@ -5,8 +5,8 @@ use seam::Model;
 /// Every committed module, in the order of `models/` and then the variants.
 ///
 /// ```
-/// let names: Vec<&str> = generated::models().iter().map(|m| m.module).collect();
-/// assert!(names.contains(&"cart_pendulum") && names.contains(&"cart_pendulum_baked"));
+/// let names: Vec<String> = generated::models().iter().map(|m| m.module.clone()).collect();
+/// assert!(names.iter().any(|n| n == "cart_pendulum") && names.iter().any(|n| n == "cart_pendulum_baked"));
 /// ```
 pub fn models() -> Vec<Model> {
     vec![

@@ -34,6 +34,8 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 10.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.01;
+///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
+pub const PAPER_SETTINGS: bool = false;
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -266,6 +268,12 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 2] = [0, 1];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 2;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -327,7 +335,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -337,7 +345,7 @@ pub mod lagrange {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]",
+                condition: "constraint matrix [M a^T; a 0]".into(),
                 value: column as f64,
             });
         }
@@ -405,7 +413,7 @@ pub mod lagrange {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -548,7 +556,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -558,7 +566,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -737,7 +745,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -747,7 +755,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -799,12 +807,13 @@ pub mod lagrange {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "lagrange",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Lagrange,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -917,6 +926,12 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 2] = [0, 1];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 2;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -978,7 +993,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -989,7 +1004,7 @@ pub mod maggi {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "Maggi matrix W^T M W",
+                condition: "Maggi matrix W^T M W".into(),
                 value: column as f64,
             });
         }
@@ -1040,7 +1055,7 @@ pub mod maggi {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -1200,7 +1215,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1210,7 +1225,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -1425,7 +1440,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1435,7 +1450,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -1495,12 +1510,13 @@ pub mod maggi {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "maggi",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Maggi,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -1602,6 +1618,12 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 2] = [0, 1];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 2;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -1659,7 +1681,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1669,7 +1691,7 @@ pub mod kane {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -1720,7 +1742,7 @@ pub mod kane {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -1863,7 +1885,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -1873,7 +1895,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2051,7 +2073,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2061,7 +2083,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2113,12 +2135,13 @@ pub mod kane {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "kane",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Kane,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -2220,6 +2243,12 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = true;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 2] = [0, 1];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 2;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 2;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -2277,7 +2306,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2287,7 +2316,7 @@ pub mod reduced_volterra {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -2338,7 +2367,7 @@ pub mod reduced_volterra {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -2481,7 +2510,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2491,7 +2520,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2669,7 +2698,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2679,7 +2708,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -2731,12 +2760,13 @@ pub mod reduced_volterra {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "reduced_volterra",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::ReducedVolterra,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -2826,7 +2856,7 @@ pub mod reduced_volterra {
     };
 }
 ///Every emitted formulation through slices.
-pub const FORMULATIONS: [::seam::Formulation; 4] = [
+pub const FORMULATIONS: [::seam::StaticFormulation; 4] = [
     lagrange::FORMULATION,
     maggi::FORMULATION,
     kane::FORMULATION,
@@ -2834,7 +2864,7 @@ pub const FORMULATIONS: [::seam::Formulation; 4] = [
 ];
 ///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
 pub fn model() -> ::seam::Model {
-    ::seam::Model {
+    ::seam::Model::from(::seam::StaticModel {
         module: "spring_cart",
         name: MODEL,
         coordinates: &COORDINATES,
@@ -2845,6 +2875,7 @@ pub fn model() -> ::seam::Model {
         default_params: &DEFAULT_PARAMS,
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
+        paper_settings: PAPER_SETTINGS,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(
@@ -2895,5 +2926,5 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
-    }
+    })
 }

@@ -52,6 +52,8 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 50.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.1;
+///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
+pub const PAPER_SETTINGS: bool = true;
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -485,6 +487,12 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -833,7 +841,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -842,7 +850,7 @@ pub mod lagrange {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]",
+                condition: "constraint matrix [M a^T; a 0]".into(),
                 value: column as f64,
             });
         }
@@ -984,7 +992,7 @@ pub mod lagrange {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -2620,7 +2628,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -2630,7 +2638,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -2678,12 +2686,13 @@ pub mod lagrange {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "lagrange",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Lagrange,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -2801,6 +2810,12 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -3186,7 +3201,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3196,7 +3211,7 @@ pub mod maggi {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "Maggi matrix W^T M W",
+                condition: "Maggi matrix W^T M W".into(),
                 value: column as f64,
             });
         }
@@ -3337,7 +3352,7 @@ pub mod maggi {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -3409,7 +3424,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -5483,7 +5498,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -5493,7 +5508,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -5549,12 +5564,13 @@ pub mod maggi {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "maggi",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Maggi,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -5661,6 +5677,12 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -5906,7 +5928,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -5915,7 +5937,7 @@ pub mod kane {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -6038,7 +6060,7 @@ pub mod kane {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -6115,7 +6137,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -7001,7 +7023,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -7011,7 +7033,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -7059,12 +7081,13 @@ pub mod kane {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "kane",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Kane,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -7168,6 +7191,12 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 5;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -7432,7 +7461,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -7441,7 +7470,7 @@ pub mod reduced_volterra {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -7561,7 +7590,7 @@ pub mod reduced_volterra {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -7681,7 +7710,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -8814,7 +8843,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -8824,7 +8853,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -8872,12 +8901,13 @@ pub mod reduced_volterra {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "reduced_volterra",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::ReducedVolterra,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -8955,7 +8985,7 @@ pub mod reduced_volterra {
     };
 }
 ///Every emitted formulation through slices.
-pub const FORMULATIONS: [::seam::Formulation; 4] = [
+pub const FORMULATIONS: [::seam::StaticFormulation; 4] = [
     lagrange::FORMULATION,
     maggi::FORMULATION,
     kane::FORMULATION,
@@ -8963,7 +8993,7 @@ pub const FORMULATIONS: [::seam::Formulation; 4] = [
 ];
 ///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
 pub fn model() -> ::seam::Model {
-    ::seam::Model {
+    ::seam::Model::from(::seam::StaticModel {
         module: "three_body",
         name: MODEL,
         coordinates: &COORDINATES,
@@ -8974,6 +9004,7 @@ pub fn model() -> ::seam::Model {
         default_params: &DEFAULT_PARAMS,
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
+        paper_settings: PAPER_SETTINGS,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(
@@ -9024,5 +9055,5 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
-    }
+    })
 }

@@ -52,6 +52,8 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 50.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.1;
+///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
+pub const PAPER_SETTINGS: bool = true;
 ///True when the parameters were folded into the code as constants.
 pub const PARAMETERS_BAKED: bool = false;
 ///The model's parameters; `Default` holds the values from the model file.
@@ -517,6 +519,12 @@ pub mod lagrange {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -977,7 +985,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -986,7 +994,7 @@ pub mod lagrange {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]",
+                condition: "constraint matrix [M a^T; a 0]".into(),
                 value: column as f64,
             });
         }
@@ -1077,7 +1085,7 @@ pub mod lagrange {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -3270,7 +3278,7 @@ pub mod lagrange {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3280,7 +3288,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]",
+                    condition: "constraint matrix [M a^T; a 0]".into(),
                     value: column as f64,
                 });
             }
@@ -3328,12 +3336,13 @@ pub mod lagrange {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "lagrange",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Lagrange,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -3451,6 +3460,12 @@ pub mod maggi {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -3987,7 +4002,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -3997,7 +4012,7 @@ pub mod maggi {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "Maggi matrix W^T M W",
+                condition: "Maggi matrix W^T M W".into(),
                 value: column as f64,
             });
         }
@@ -4087,7 +4102,7 @@ pub mod maggi {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -4245,7 +4260,7 @@ pub mod maggi {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -6989,7 +7004,7 @@ pub mod maggi {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -6999,7 +7014,7 @@ pub mod maggi {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "Maggi matrix W^T M W",
+                    condition: "Maggi matrix W^T M W".into(),
                     value: column as f64,
                 });
             }
@@ -7055,12 +7070,13 @@ pub mod maggi {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "maggi",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Maggi,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -7167,6 +7183,12 @@ pub mod kane {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 8;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 8;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -7481,7 +7503,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -7490,7 +7512,7 @@ pub mod kane {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -7564,7 +7586,7 @@ pub mod kane {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -7727,7 +7749,7 @@ pub mod kane {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -8816,7 +8838,7 @@ pub mod kane {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -8826,7 +8848,7 @@ pub mod kane {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -8874,12 +8896,13 @@ pub mod kane {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "kane",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::Kane,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -8983,6 +9006,12 @@ pub mod reduced_volterra {
     pub const INTEGRATES_IGNORABLE: bool = true;
     ///True when the last state entry is the work integral `W` of Eq. 80.
     pub const HAS_WORK_STATE: bool = false;
+    ///The coordinates the state holds, as indices into `COORDINATES`.
+    pub const STATE_COORDINATES: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    ///How many speeds follow them in the state.
+    pub const SPEEDS: usize = 5;
+    ///True when the right-hand side reads `t`.
+    pub const DEPENDS_ON_TIME: bool = false;
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 5;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
@@ -9343,7 +9372,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -9352,7 +9381,7 @@ pub mod reduced_volterra {
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "mass matrix M_NI",
+                condition: "mass matrix M_NI".into(),
                 value: column as f64,
             });
         }
@@ -9423,7 +9452,7 @@ pub mod reduced_volterra {
             let tolerance = CONSTRAINT_TOLERANCE * bound;
             if !(residual.abs() <= tolerance) {
                 return Err(Failure::ConstraintViolated {
-                    constraint,
+                    constraint: constraint.into(),
                     residual,
                     tolerance,
                 });
@@ -9583,7 +9612,7 @@ pub mod reduced_volterra {
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
-                condition: CONDITIONS[0],
+                condition: CONDITIONS[0].into(),
                 value,
             });
         }
@@ -11164,7 +11193,7 @@ pub mod reduced_volterra {
             if !(value.abs() > SINGULAR_TOLERANCE) {
                 return Err(Failure::Singular {
                     t,
-                    condition,
+                    condition: condition.into(),
                     value,
                 });
             }
@@ -11174,7 +11203,7 @@ pub mod reduced_volterra {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "mass matrix M_NI",
+                    condition: "mass matrix M_NI".into(),
                     value: column as f64,
                 });
             }
@@ -11222,12 +11251,13 @@ pub mod reduced_volterra {
         Ok(())
     }
     ///This formulation through slices, for code that picks a model at run time.
-    pub const FORMULATION: ::seam::Formulation = ::seam::Formulation {
-        name: "reduced_volterra",
-        states: STATES,
+    pub const FORMULATION: ::seam::StaticFormulation = ::seam::StaticFormulation {
+        kind: ::seam::FormulationKind::ReducedVolterra,
+        coordinates: &STATE_COORDINATES,
+        speeds: SPEEDS,
+        work: HAS_WORK_STATE,
         equations: EQUATIONS,
-        integrates_ignorable: INTEGRATES_IGNORABLE,
-        has_work_state: HAS_WORK_STATE,
+        depends_on_time: DEPENDS_ON_TIME,
         state_names: &STATE_NAMES,
         rhs: |t, state, params, g_i, dstate| {
             let p = Params::from_values(::seam::array("params", params)?);
@@ -11305,7 +11335,7 @@ pub mod reduced_volterra {
     };
 }
 ///Every emitted formulation through slices.
-pub const FORMULATIONS: [::seam::Formulation; 4] = [
+pub const FORMULATIONS: [::seam::StaticFormulation; 4] = [
     lagrange::FORMULATION,
     maggi::FORMULATION,
     kane::FORMULATION,
@@ -11313,7 +11343,7 @@ pub const FORMULATIONS: [::seam::Formulation; 4] = [
 ];
 ///This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`).
 pub fn model() -> ::seam::Model {
-    ::seam::Model {
+    ::seam::Model::from(::seam::StaticModel {
         module: "three_body_split",
         name: MODEL,
         coordinates: &COORDINATES,
@@ -11324,6 +11354,7 @@ pub fn model() -> ::seam::Model {
         default_params: &DEFAULT_PARAMS,
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
+        paper_settings: PAPER_SETTINGS,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(
@@ -11374,5 +11405,5 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
-    }
+    })
 }

@@ -44,7 +44,7 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     let work = mech.q_forces.iter().any(|q| !q.is_zero());
     let _ = writeln!(w, "\nstates and equations per formulation (paper Table 1){}:", if work { ", the work integral W included" } else { "" });
     for e in &d.equations {
-        let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name, e.states(work), e.equations);
+        let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name(), e.states(work), e.equations);
     }
     let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];
     section(w, "energies:", &mut items, latex);

@@ -9,6 +9,8 @@ pub mod kinematics;
 pub mod model;
 pub mod formulation;
 pub mod inspect;
+pub mod command;
 pub mod emit;
+pub mod eval;
 
 pub use emit::Builder;

@@ -542,7 +542,7 @@ fn run_settings_must_describe_a_run_that_fits_in_memory() {
         ("1.0", "100.0", &["longer than the run"][..]),
         ("0.0", "0.01", &["is not a run"][..]),
     ] {
-        let e = broken(&src, "Simulation(t_end: 50.0, dt_out: 0.01)", &format!("Simulation(t_end: {t_end}, dt_out: {dt_out})"));
+        let e = broken(&src, "Simulation(t_end: 50.0, dt_out: 0.01, paper: true)", &format!("Simulation(t_end: {t_end}, dt_out: {dt_out}, paper: true)"));
         check(&e, ErrorKind::BadValue, words);
         let line = src.lines().position(|l| l.contains("Simulation(")).unwrap() + 1;
         assert_eq!(e.location.unwrap().0, line, "{e}");

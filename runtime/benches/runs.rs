@@ -18,9 +18,9 @@ fn whole_runs(c: &mut Criterion) {
         let r = Reference::of(&model).unwrap();
         let settings = Settings::paper(r.t_end - r.t_start);
         let times = r.times().unwrap();
-        for form in model.formulations {
-            let (sys, y0) = System::start(model, form.name, model.default_params.to_vec(), r.q0, r.qd0).unwrap();
-            group.bench_function(form.name, |b| {
+        for form in &model.formulations {
+            let (sys, y0) = System::start(&model, form.kind, r.params.clone(), &r.q0, &r.qd0).unwrap();
+            group.bench_function(form.name(), |b| {
                 b.iter(|| integrate(&mut |t, y, dy| sys.rhs(t, y, dy), black_box(&y0), &times, &settings).unwrap().stats.rhs_calls)
             });
         }
@@ -35,7 +35,7 @@ fn whole_runs(c: &mut Criterion) {
     let mut group = c.benchmark_group("run/cart_pendulum_drift");
     group.sample_size(20);
     for (label, drift) in [("none", Drift::None), ("baumgarte", Drift::Baumgarte { alpha: 10.0, beta: 10.0 }), ("projection", Drift::Projection)] {
-        let (sys, y0) = System::start(model, "lagrange", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
+        let (sys, y0) = System::start(&model, seam::FormulationKind::Lagrange, r.params.clone(), &r.q0, &r.qd0).unwrap();
         let sys = sys.with_drift(drift).unwrap();
         group.bench_function(label, |b| {
             b.iter(|| {

@@ -9,14 +9,14 @@ use std::time::Instant;
 fn main() {
     let model = generated::find("bicycle").expect("committed");
     let m = model.coordinates.len();
-    let idx = |n: &str| model.coordinates.iter().position(|c| *c == n).expect("a coordinate");
+    let idx = |n: &str| model.coordinate_index(n).expect("a coordinate");
     let mut qdot = vec![0.0; m];
     qdot[idx("x")] = 5.0;
     qdot[idx("phi")] = 0.05;
-    let at = Operating { q: vec![0.0; m], qdot, params: model.default_params.to_vec(), held: vec![idx("x"), idx("phi"), idx("delta")] };
+    let at = Operating { q: vec![0.0; m], qdot, params: model.default_params.clone(), held: vec![idx("x"), idx("phi"), idx("delta")] };
     let qd = at.consistent_rates(&model).expect("consistent");
-    for form in model.formulations {
-        let (sys, y0) = System::start(model, form.name, at.params.clone(), &at.q, &qd).expect("starts");
+    for form in &model.formulations {
+        let (sys, y0) = System::start(&model, form.kind, at.params.clone(), &at.q, &qd).expect("starts");
         let mut dy = vec![0.0; y0.len()];
         let mut best = f64::INFINITY;
         for _ in 0..7 {
@@ -26,6 +26,6 @@ fn main() {
             }
             best = best.min(start.elapsed().as_secs_f64() * 1e9 / 20000.0);
         }
-        println!("{}: {best:.0} ns per call", form.name);
+        println!("{}: {best:.0} ns per call", form.name());
     }
 }

@@ -26,8 +26,8 @@ fn solve(sys: &System, y0: &[f64], times: &[f64], method: Method, tol: f64) -> (
 
 fn main() {
     let model = generated::find("stiff_pendulum").expect("committed");
-    let (q0, qd0) = model.initial.expect("an initial state");
-    let k_index = model.parameter_names.iter().position(|p| *p == "k").expect("k");
+    let (q0, qd0) = model.initial.clone().expect("an initial state");
+    let k_index = model.parameter_index("k").expect("k");
     let times: Vec<f64> = (0..=200).map(|i| i as f64 * 0.01).collect();
     println!(
         "| k | DOPRI5 steps | DOPRI5 rhs calls | DOPRI5 ms | DOPRI5 error | ROS23 steps | ROS23 rhs calls + Jacobians | ROS23 ms | ROS23 error | CPU DOPRI5 / ROS23 |"
@@ -35,9 +35,9 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|");
     for e in 3..=9 {
         let k = 10f64.powi(e);
-        let mut params = model.default_params.to_vec();
+        let mut params = model.default_params.clone();
         params[k_index] = k;
-        let (sys, y0) = System::start(model, "kane", params, q0, qd0).expect("starts");
+        let (sys, y0) = System::start(&model, seam::FormulationKind::Kane, params, &q0, &qd0).expect("starts");
         let (reference, _) = solve(&sys, &y0, &times, Method::Rosenbrock23, 1e-9);
         let error =
             |s: &Solution| s.states.iter().zip(&reference.states).flat_map(|(a, b)| a[..3].iter().zip(&b[..3]).map(|(x, y)| (x - y).abs())).fold(0.0, f64::max);

@@ -7,13 +7,14 @@
 //! let model = generated::find("cart_pendulum").unwrap();
 //! let runs = compare(&model, &Options { repeats: 1, ..Options::paper(&model) }).unwrap();
 //! let reduced = runs.iter().find(|r| r.record.method == "reduced_volterra").unwrap();
+//! assert_eq!(reduced.kind, seam::FormulationKind::ReducedVolterra);
 //! assert!(reduced.record.constraint_error_norm < 1e-12);
 //! ```
 
 use crate::integrate::{JacobianFn, Projector, RunError, Settings, Solution, integrate_with_jacobian};
 use crate::monitor::{Invariants, monitor, norm};
 use crate::system::{Drift, SetupError, System};
-use seam::{Failure, Model};
+use seam::{Failure, FormulationKind, Model};
 use std::time::Instant;
 
 /// What to run.
@@ -23,9 +24,11 @@ pub struct Options {
     /// CPU time is the median of this many runs.
     pub repeats: usize,
     /// Formulations to run (empty: all the model has).
-    pub formulations: Vec<String>,
+    pub formulations: Vec<FormulationKind>,
     /// Drift control applied to the classical formulations that support it.
     pub drift: Drift,
+    /// The run: initial state, parameters and times (`None`: the model file's reference run).
+    pub reference: Option<Reference>,
 }
 
 impl Options {
@@ -33,7 +36,7 @@ impl Options {
     pub fn paper(model: &Model) -> Options {
         // Without a reference run there is nothing to run; `run` says so.
         let span = model.run.map_or(1.0, |(t0, t1, _)| t1 - t0);
-        Options { settings: Settings::paper(span), repeats: 5, formulations: vec![], drift: Drift::None }
+        Options { settings: Settings::paper(span), repeats: 5, formulations: vec![], drift: Drift::None, reference: None }
     }
 }
 
@@ -77,6 +80,7 @@ pub struct MomentumError {
 /// A formulation's run: its record, samples and monitors.
 #[derive(Clone, Debug)]
 pub struct Run {
+    pub kind: FormulationKind,
     pub record: Record,
     pub solution: Solution,
     pub invariants: Invariants,
@@ -97,11 +101,14 @@ pub enum CompareError {
     NoReference { model: String, section: &'static str, example: &'static str },
 }
 
-/// A model's reference run, from its file's `initial` and `simulation` sections.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A run: the initial state, the parameters and the output times. [`Reference::of`] reads the
+/// model file's `initial` and `simulation` sections and its parameter values; the command line
+/// changes them (`--q`, `--qdot`, `--param`, `--t-end`, `--dt-out`).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Reference {
-    pub q0: &'static [f64],
-    pub qd0: &'static [f64],
+    pub q0: Vec<f64>,
+    pub qd0: Vec<f64>,
+    pub params: Vec<f64>,
     pub t_start: f64,
     pub t_end: f64,
     pub dt_out: f64,
@@ -119,9 +126,9 @@ impl Reference {
     /// ```
     pub fn of(model: &Model) -> Result<Reference, CompareError> {
         let missing = |section, example| CompareError::NoReference { model: model.module.to_string(), section, example };
-        let (q0, qd0) = model.initial.ok_or_else(|| missing("initial", "Initial(q: [...], qdot: [...])"))?;
+        let (q0, qd0) = model.initial.clone().ok_or_else(|| missing("initial", "Initial(q: [...], qdot: [...])"))?;
         let (t_start, t_end, dt_out) = model.run.ok_or_else(|| missing("simulation", "Simulation(t_end: 10.0, dt_out: 0.01)"))?;
-        let reference = Reference { q0, qd0, t_start, t_end, dt_out };
+        let reference = Reference { q0, qd0, params: model.default_params.clone(), t_start, t_end, dt_out };
         reference.times()?;
         Ok(reference)
     }
@@ -133,16 +140,16 @@ impl Reference {
     }
 }
 
-/// Runs one formulation.
-pub fn run(model: &Model, method: &str, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
-    run_with(model, method, settings, repeats, Drift::None)
+/// Runs one formulation of the model's reference run.
+pub fn run(model: &Model, kind: FormulationKind, settings: &Settings, repeats: usize) -> Result<Run, CompareError> {
+    run_with(model, &Reference::of(model)?, kind, settings, repeats, Drift::None)
 }
 
-/// Runs one formulation with drift control.
-pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize, drift: Drift) -> Result<Run, CompareError> {
-    let reference = Reference::of(model)?;
+/// Runs one formulation of `reference` with drift control.
+pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, settings: &Settings, repeats: usize, drift: Drift) -> Result<Run, CompareError> {
+    let method = kind.name();
     let setup = |source| CompareError::Setup { method: method.into(), source };
-    let (sys, y0) = System::start(*model, method, model.default_params.to_vec(), reference.q0, reference.qd0).map_err(setup)?;
+    let (sys, y0) = System::start(model, kind, reference.params.clone(), &reference.q0, &reference.qd0).map_err(setup)?;
     let sys = sys.with_drift(drift).map_err(setup)?;
     let label = match drift {
         Drift::None => method.to_string(),
@@ -173,7 +180,7 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         scene: model.module.to_string(),
         method: label,
         integrator: settings.method.to_string(),
-        states: sys.form.states,
+        states: sys.form.states(),
         equations: sys.form.equations,
         cpu_seconds: cpu[cpu.len() / 2],
         energy_error_norm: energy,
@@ -197,22 +204,27 @@ pub fn run_with(model: &Model, method: &str, settings: &Settings, repeats: usize
         max_condition: invariants.condition.iter().fold(0.0, |a, b| a.max(*b)),
         min_singular_margin: invariants.singular_margin.iter().fold(f64::INFINITY, |a, b| a.min(*b)),
     };
-    Ok(Run { record, solution, invariants })
+    Ok(Run { kind, record, solution, invariants })
 }
 
 /// Runs every requested formulation of `model`.
 pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareError> {
+    let reference = match &options.reference {
+        Some(r) => r.clone(),
+        None => Reference::of(model)?,
+    };
+    reference.times()?;
     model
         .formulations
         .iter()
-        .filter(|f| options.formulations.is_empty() || options.formulations.iter().any(|n| n == f.name))
+        .filter(|f| options.formulations.is_empty() || options.formulations.contains(&f.kind))
         .map(|f| {
             let drift = match options.drift {
-                Drift::Baumgarte { .. } if f.rhs_baumgarte.is_some() => options.drift,
-                Drift::Projection if matches!(f.name, "lagrange" | "maggi") => options.drift,
+                Drift::Baumgarte { .. } if f.has_baumgarte => options.drift,
+                Drift::Projection if f.layout.holds_every_rate(model.coordinates.len()) => options.drift,
                 _ => Drift::None,
             };
-            run_with(model, f.name, &options.settings, options.repeats, drift)
+            run_with(model, &reference, f.kind, &options.settings, options.repeats, drift)
         })
         .collect()
 }

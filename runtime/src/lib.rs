@@ -1,13 +1,14 @@
-//! The runtime: integrators, the emitted models as systems to integrate, invariant monitors,
-//! and the comparison of formulations (the paper's section 3).
+//! The runtime, a library: integrators, a model's formulations as systems to integrate,
+//! invariant monitors, and the comparison of formulations (the paper's section 3), the
+//! work-precision sweep and linearization, as functions. No command line, plotting or build
+//! machinery: the `multibody` tool (the repository's root crate) holds those.
 //!
-//! Every model reaches it as a `seam::Model` (the emitted module's `model()`), never as a
-//! particular module: the runtime depends on the seam crate only.
+//! Every model reaches it as a `seam::Model`, compiled (an emitted module's `model()`) or
+//! evaluated in-process (`generator::eval`): the runtime depends on the seam crate only.
 //!
-//! Layout: [`integrate`] (RK4, DOPRI5, DOP853) → [`system`] (a formulation of an emitted model
-//! as `y' = f(t, y)`) → [`monitor`] (energy with the work integral, momenta, constraints) →
-//! [`compare`] and [`sweep`] (tables, JSON, [`plot`]s) → [`cli`] (the commands) and [`driver`]
-//! (a model file to a compiled program that runs them).
+//! Layout: [`integrate`] (RK4, DOPRI5, DOP853, Rosenbrock 2(3)) → [`system`] (a formulation as
+//! `y' = f(t, y)`) → [`monitor`] (energy with the work integral, momenta, constraints) →
+//! [`compare`], [`sweep`], [`linearize`].
 
 #![forbid(unsafe_code)]
 
@@ -17,9 +18,6 @@ pub mod monitor;
 pub mod compare;
 pub mod sweep;
 pub mod linearize;
-pub mod plot;
-pub mod cli;
-pub mod driver;
 
 /// The seam crate, for generated modules emitted with `seam_path = "runtime::seam"`.
 pub use seam;

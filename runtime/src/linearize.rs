@@ -7,16 +7,16 @@
 //! use runtime::linearize::{Operating, linearize};
 //! // The spring cart at rest: every eigenvalue has a negative real part (its damper) or none.
 //! let model = generated::find("spring_cart").unwrap();
-//! let (q0, _) = model.initial.unwrap();
-//! let at = Operating { q: vec![0.0; q0.len()], qdot: vec![0.0; q0.len()], params: model.default_params.to_vec(), held: vec![] };
-//! let lin = linearize(&model, "kane", &at).unwrap();
+//! let m = model.coordinates.len();
+//! let at = Operating { q: vec![0.0; m], qdot: vec![0.0; m], params: model.default_params.to_vec(), held: vec![] };
+//! let lin = linearize(&model, seam::FormulationKind::Kane, &at).unwrap();
 //! assert_eq!(lin.eigenvalues.len(), 4);
 //! assert!(lin.eigenvalues.iter().all(|l| l.re < 1e-9));
 //! ```
 
 use crate::system::{SetupError, System};
 use nalgebra::{Complex, DMatrix};
-use seam::{Failure, Model};
+use seam::{Failure, FormulationKind, Model};
 
 /// Where to linearize: coordinates, their rates and the parameters. When `held` names some
 /// rates (indices into `qdot`) and the model has velocity constraints, the other rates are
@@ -86,11 +86,12 @@ pub enum LinearizeError {
 }
 
 /// The linear model of formulation `formulation` of `model` at `at`.
-pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Linear, LinearizeError> {
+pub fn linearize(model: &Model, formulation: FormulationKind, at: &Operating) -> Result<Linear, LinearizeError> {
     let qdot = at.consistent_rates(model)?;
-    let (sys, y0) = System::start(*model, formulation, at.params.clone(), &at.q, &qdot)?;
-    let n = sys.form.states;
-    let k = if sys.form.has_work_state { n - 1 } else { n };
+    let (sys, y0) = System::start(model, formulation, at.params.clone(), &at.q, &qdot)?;
+    let n = sys.form.states();
+    // The work integral (last in the layout) is left out: nothing depends on it.
+    let k = sys.form.layout.work_index().unwrap_or(n);
     let mut dy = vec![0.0; n];
     let mut flat = vec![0.0; n * n];
     let exact = sys.has_exact_jacobian();
@@ -122,24 +123,24 @@ pub fn linearize(model: &Model, formulation: &str, at: &Operating) -> Result<Lin
 /// use runtime::linearize::{Operating, input_matrix};
 /// // Scene 1's motor torque tau drives the two bars' rates, nothing else.
 /// let model = generated::find("cart_pendulum").unwrap();
-/// let (q0, qd0) = model.initial.unwrap();
-/// let at = Operating { q: q0.to_vec(), qdot: qd0.to_vec(), params: model.default_params.to_vec(), held: vec![] };
-/// let tau = model.parameter_names.iter().position(|p| *p == "tau").unwrap();
-/// let (b, exact) = input_matrix(&model, "kane", &at, &[tau]).unwrap();
+/// let (q0, qd0) = model.initial.clone().unwrap();
+/// let at = Operating { q: q0, qdot: qd0, params: model.default_params.clone(), held: vec![] };
+/// let tau = model.parameter_index("tau").unwrap();
+/// let (b, exact) = input_matrix(&model, seam::FormulationKind::Kane, &at, &[tau]).unwrap();
 /// assert!(exact && b.column(0).iter().any(|x| x.abs() > 1e-3));
 /// ```
-pub fn input_matrix(model: &Model, formulation: &str, at: &Operating, inputs: &[usize]) -> Result<(DMatrix<f64>, bool), LinearizeError> {
+pub fn input_matrix(model: &Model, formulation: FormulationKind, at: &Operating, inputs: &[usize]) -> Result<(DMatrix<f64>, bool), LinearizeError> {
     let qdot = at.consistent_rates(model)?;
-    let (sys, y0) = System::start(*model, formulation, at.params.clone(), &at.q, &qdot)?;
-    let n = sys.form.states;
-    let k = if sys.form.has_work_state { n - 1 } else { n };
+    let (sys, y0) = System::start(model, formulation, at.params.clone(), &at.q, &qdot)?;
+    let n = sys.form.states();
+    let k = sys.form.layout.work_index().unwrap_or(n);
     let np = at.params.len();
     let mut b = DMatrix::zeros(k, inputs.len());
     let mut dy = vec![0.0; n];
-    match sys.form.parameter_jacobian {
-        Some(pj) => {
+    match sys.form.has_parameter_jacobian {
+        true => {
             let mut flat = vec![0.0; n * np];
-            pj(0.0, &y0, &at.params, &sys.g_i, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
+            sys.form.parameter_jacobian(0.0, &y0, &at.params, &sys.g_i, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
             for (c, &p) in inputs.iter().enumerate() {
                 for r in 0..k {
                     b[(r, c)] = flat[r * np + p];
@@ -147,14 +148,14 @@ pub fn input_matrix(model: &Model, formulation: &str, at: &Operating, inputs: &[
             }
             Ok((b, true))
         }
-        None => {
+        false => {
             let chosen: Vec<f64> = inputs.iter().map(|&p| at.params[p]).collect();
             let columns = central_differences(&chosen, inputs.len(), n, |values, out| {
                 let mut params = at.params.clone();
                 for (&p, v) in inputs.iter().zip(values) {
                     params[p] = *v;
                 }
-                (sys.form.rhs)(0.0, &y0, &params, &sys.g_i, out)
+                sys.form.rhs(0.0, &y0, &params, &sys.g_i, out)
             })?;
             for (c, col) in columns.iter().enumerate() {
                 for r in 0..k {
@@ -250,7 +251,7 @@ pub struct SweepRow {
 }
 
 /// Linearizes at `at` with the swept value at each of `values`.
-pub fn sweep(model: &Model, formulation: &str, at: &Operating, swept: Swept, values: &[f64]) -> Result<Vec<SweepRow>, LinearizeError> {
+pub fn sweep(model: &Model, formulation: FormulationKind, at: &Operating, swept: Swept, values: &[f64]) -> Result<Vec<SweepRow>, LinearizeError> {
     values
         .iter()
         .map(|&v| {
@@ -283,7 +284,7 @@ fn growth_without(eigenvalues: &[(f64, f64)], zeros: usize) -> f64 {
 /// The values between neighbouring rows where [`growth`] changes sign, each refined by
 /// bisection (re-linearizing) to a relative width of `1e-13`. Near a crossing the crossing
 /// eigenvalue itself is small, so the zeros set aside are counted at the bracket's ends.
-pub fn crossings(model: &Model, formulation: &str, at: &Operating, swept: Swept, rows: &[SweepRow]) -> Result<Vec<f64>, LinearizeError> {
+pub fn crossings(model: &Model, formulation: FormulationKind, at: &Operating, swept: Swept, rows: &[SweepRow]) -> Result<Vec<f64>, LinearizeError> {
     let mut out = Vec::new();
     for w in rows.windows(2) {
         let (s0, s1) = (growth(&w[0].eigenvalues) > 0.0, growth(&w[1].eigenvalues) > 0.0);

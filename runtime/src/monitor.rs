@@ -27,6 +27,10 @@ pub struct Invariants {
     pub position_constraint: Vec<f64>,
     /// `q(t)` at the samples.
     pub coordinates: Vec<Vec<f64>>,
+    /// `q'(t)` at the samples.
+    pub rates: Vec<Vec<f64>>,
+    /// `E(t) = T + V - W` at the samples.
+    pub energy: Vec<f64>,
     /// 2-norm condition number of the matrix `rhs` solves (Lagrange: `[M a^T; a 0]`, Maggi:
     /// `W^T M W`, Kane and reduced Volterra: `M_NI`).
     pub condition: Vec<f64>,
@@ -63,25 +67,27 @@ pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
     let mut g0: Vec<f64> = Vec::new();
     for (t, y) in sol.times.iter().zip(&sol.states) {
         let (q, qd) = sys.velocities(*t, y)?;
-        (model.energy)(*t, &q, &qd, &sys.params, &mut e_buf)?;
+        model.energy(*t, &q, &qd, &sys.params, &mut e_buf)?;
         let e = e_buf[0] - sys.work(y);
         let e_start = *e0.get_or_insert(e);
+        inv.energy.push(e);
         inv.energy_error.push(e - e_start);
-        (model.momenta)(*t, &q, &qd, &sys.params, &mut g_buf)?;
+        model.momenta(*t, &q, &qd, &sys.params, &mut g_buf)?;
         if g0.is_empty() {
             g0 = g_buf.clone();
         }
         for k in 0..s {
             inv.momentum_error[k].push(g_buf[k] - g0[k]);
         }
-        (model.constraint_residuals)(*t, &q, &qd, &sys.params, &mut c_buf)?;
+        model.constraint_residuals(*t, &q, &qd, &sys.params, &mut c_buf)?;
         inv.velocity_constraint.push(norm(&c_buf));
-        (model.position_residuals)(*t, &q, &qd, &sys.params, &mut h_buf)?;
+        model.position_residuals(*t, &q, &qd, &sys.params, &mut h_buf)?;
         inv.position_constraint.push(norm(&h_buf));
         inv.coordinates.push(q);
-        (sys.form.matrix)(*t, y, &sys.params, &sys.g_i, &mut a_buf)?;
+        inv.rates.push(qd);
+        sys.form.matrix(*t, y, &sys.params, &sys.g_i, &mut a_buf)?;
         inv.condition.push(condition_number(n, &a_buf));
-        inv.singular_margin.push((sys.form.singular_margin)(*t, y, &sys.params, &sys.g_i)?);
+        inv.singular_margin.push(sys.form.singular_margin(*t, y, &sys.params, &sys.g_i)?);
     }
     inv.energy0 = e0.unwrap_or(0.0);
     inv.momentum0 = g0;

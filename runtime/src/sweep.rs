@@ -12,7 +12,7 @@
 use crate::compare::{CompareError, Reference, run_with};
 use crate::integrate::{Method, Settings};
 use crate::system::Drift;
-use seam::Model;
+use seam::{FormulationKind, Model};
 
 /// What to sweep.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,7 +27,9 @@ pub struct SweepOptions {
     /// Tolerance of the reference run (DOP853, reduced Volterra).
     pub reference_tolerance: f64,
     /// Formulations (empty: all).
-    pub formulations: Vec<String>,
+    pub formulations: Vec<FormulationKind>,
+    /// The run (`None`: the model file's reference run).
+    pub reference: Option<Reference>,
 }
 
 impl Default for SweepOptions {
@@ -40,6 +42,7 @@ impl Default for SweepOptions {
             repeats: 3,
             reference_tolerance: 1e-13,
             formulations: vec![],
+            reference: None,
         }
     }
 }
@@ -70,7 +73,10 @@ fn max_error(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 
 /// The settings a sweep runs, with labels.
 pub fn plan(model: &Model, options: &SweepOptions) -> Result<Vec<Settings>, CompareError> {
-    let r = Reference::of(model)?;
+    let r = match &options.reference {
+        Some(r) => r.clone(),
+        None => Reference::of(model)?,
+    };
     let (h_max, dt) = (0.1 * (r.t_end - r.t_start), r.dt_out);
     let mut out = Vec::new();
     for &method in &options.adaptive {
@@ -86,7 +92,11 @@ pub fn plan(model: &Model, options: &SweepOptions) -> Result<Vec<Settings>, Comp
 
 /// Runs the sweep; `progress(done, total, label)` is called before each run.
 pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usize, usize, &str)) -> Result<Vec<Point>, CompareError> {
-    let r = Reference::of(model)?;
+    let r = match &options.reference {
+        Some(r) => r.clone(),
+        None => Reference::of(model)?,
+    };
+    r.times()?;
     let reference_settings = Settings {
         method: Method::Dop853,
         rtol: options.reference_tolerance,
@@ -95,10 +105,10 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
         ..Settings::default()
     };
     // The reference solution: the reduced method when the module has it, else the first.
-    let reference_form = model.formulation("reduced_volterra").or(model.formulations.first()).map_or("reduced_volterra", |f| f.name);
-    let reference = run_with(model, reference_form, &reference_settings, 1, Drift::None)?.invariants.coordinates;
-    let forms: Vec<&str> =
-        model.formulations.iter().map(|f| f.name).filter(|n| options.formulations.is_empty() || options.formulations.iter().any(|o| o == n)).collect();
+    let reference_form =
+        model.formulation(FormulationKind::ReducedVolterra).or(model.formulations.first()).map_or(FormulationKind::ReducedVolterra, |f| f.kind);
+    let reference = run_with(model, &r, reference_form, &reference_settings, 1, Drift::None)?.invariants.coordinates;
+    let forms: Vec<FormulationKind> = model.kinds().into_iter().filter(|k| options.formulations.is_empty() || options.formulations.contains(k)).collect();
     let settings = plan(model, options)?;
     let total = forms.len() * settings.len();
     let mut points = Vec::new();
@@ -113,7 +123,7 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
                 m => m.to_string(),
             };
             progress(points.len(), total, &format!("{form} {integrator} {setting:.2e}"));
-            let point = match run_with(model, form, s, options.repeats, Drift::None) {
+            let point = match run_with(model, &r, *form, s, options.repeats, Drift::None) {
                 Ok(r) => Point {
                     scene: model.module.to_string(),
                     method: form.to_string(),

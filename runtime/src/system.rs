@@ -2,15 +2,16 @@
 //! `G_I` it was started with.
 //!
 //! ```
+//! use seam::FormulationKind;
 //! let model = generated::find("cart_pendulum").unwrap();
-//! let (q0, qd0) = model.initial.unwrap();
-//! let (sys, y0) = runtime::system::System::start(model, "reduced_volterra", model.default_params.to_vec(), q0, qd0).unwrap();
+//! let (q0, qd0) = model.initial.clone().unwrap();
+//! let (sys, y0) = runtime::system::System::start(&model, FormulationKind::ReducedVolterra, model.default_params.clone(), &q0, &qd0).unwrap();
 //! let mut dy = vec![0.0; y0.len()];
 //! sys.rhs(0.0, &y0, &mut dy).unwrap();
-//! assert_eq!(y0.len(), sys.form.states);
+//! assert_eq!(y0.len(), sys.form.states());
 //! ```
 
-use seam::{Failure, Formulation, Model};
+use seam::{Failure, Formulation, FormulationKind, Model};
 
 /// Drift control for the classical methods (Lagrange, Maggi), off by default so the paper's
 /// comparison stays honest.
@@ -29,7 +30,7 @@ pub enum Drift {
 #[derive(Clone, Debug)]
 pub struct System {
     pub model: Model,
-    pub form: &'static Formulation,
+    pub form: Formulation,
     pub params: Vec<f64>,
     /// `G_I` from the initial state (Eq. 26).
     pub g_i: Vec<f64>,
@@ -40,38 +41,38 @@ pub struct System {
 /// Why a system could not be set up.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SetupError {
-    #[error("model `{model}` has no formulation `{name}` (it has: {available})")]
-    UnknownFormulation { model: String, name: String, available: String },
+    #[error("model `{model}` has no formulation `{kind}` (it has: {available})")]
+    UnknownFormulation { model: String, kind: FormulationKind, available: String },
     #[error("initial state rejected: {0}")]
     Initial(Failure),
-    #[error("{drift:?} applies to {applies}, not to `{name}`")]
-    DriftNotApplicable { drift: Drift, name: String, applies: &'static str },
+    #[error("{drift:?} applies to {applies}, not to `{kind}`")]
+    DriftNotApplicable { drift: Drift, kind: FormulationKind, applies: &'static str },
 }
 
 impl System {
-    /// The system of formulation `name` and its initial state from `q(0), q'(0)`.
-    pub fn start(model: Model, name: &str, params: Vec<f64>, q0: &[f64], qd0: &[f64]) -> Result<(System, Vec<f64>), SetupError> {
-        let form = model.formulation(name).ok_or_else(|| SetupError::UnknownFormulation {
-            model: model.module.to_string(),
-            name: name.to_string(),
-            available: model.formulations.iter().map(|f| f.name).collect::<Vec<_>>().join(", "),
+    /// The system of formulation `kind` and its initial state from `q(0), q'(0)`.
+    pub fn start(model: &Model, kind: FormulationKind, params: Vec<f64>, q0: &[f64], qd0: &[f64]) -> Result<(System, Vec<f64>), SetupError> {
+        let form = model.formulation(kind).ok_or_else(|| SetupError::UnknownFormulation {
+            model: model.module.clone(),
+            kind,
+            available: model.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", "),
         })?;
-        let mut y0 = vec![0.0; form.states];
+        let mut y0 = vec![0.0; form.states()];
         let mut g_i = vec![0.0; model.ignorable.len()];
-        (form.initial_state)(0.0, q0, qd0, &params, &mut y0, &mut g_i).map_err(SetupError::Initial)?;
-        Ok((System { model, form, params, g_i, drift: Drift::None }, y0))
+        form.initial_state(0.0, q0, qd0, &params, &mut y0, &mut g_i).map_err(SetupError::Initial)?;
+        Ok((System { model: model.clone(), form: form.clone(), params, g_i, drift: Drift::None }, y0))
     }
 
     /// The same system with drift control.
     pub fn with_drift(mut self, drift: Drift) -> Result<System, SetupError> {
         let ok = match drift {
             Drift::None => true,
-            Drift::Baumgarte { .. } => self.form.rhs_baumgarte.is_some(),
-            Drift::Projection => matches!(self.form.name, "lagrange" | "maggi"),
+            Drift::Baumgarte { .. } => self.form.has_baumgarte,
+            Drift::Projection => self.form.layout.holds_every_rate(self.model.coordinates.len()),
         };
         if !ok {
-            let applies = if matches!(drift, Drift::Projection) { "lagrange and maggi" } else { "lagrange" };
-            return Err(SetupError::DriftNotApplicable { drift, name: self.form.name.to_string(), applies });
+            let applies = if matches!(drift, Drift::Projection) { "states [q; q'] (lagrange and maggi)" } else { "lagrange" };
+            return Err(SetupError::DriftNotApplicable { drift, kind: self.form.kind, applies });
         }
         self.drift = drift;
         Ok(self)
@@ -79,28 +80,26 @@ impl System {
 
     /// `dy = f(t, y)`.
     pub fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-        match (self.drift, self.form.rhs_baumgarte) {
-            (Drift::Baumgarte { alpha, beta }, Some(stabilized)) => stabilized(t, y, &self.params, &self.g_i, dy, alpha, beta),
-            _ => (self.form.rhs)(t, y, &self.params, &self.g_i, dy),
+        match self.drift {
+            Drift::Baumgarte { alpha, beta } => self.form.rhs_baumgarte(t, y, &self.params, &self.g_i, dy, alpha, beta),
+            _ => self.form.rhs(t, y, &self.params, &self.g_i, dy),
         }
     }
 
     /// True when `jacobian` is the model's exact one (emitted with `--jacobian`, and no
     /// Baumgarte terms, which it does not include).
     pub fn has_exact_jacobian(&self) -> bool {
-        self.form.jacobian.is_some() && !matches!(self.drift, Drift::Baumgarte { .. })
+        self.form.has_jacobian && !matches!(self.drift, Drift::Baumgarte { .. })
     }
 
     /// `dy = f(t, y)` and `jac = df/dy` (row-major) from the emitted `jacobian`;
     /// `Failure::Missing` when the module has none (see [`System::has_exact_jacobian`]).
     pub fn jacobian(&self, t: f64, y: &[f64], dy: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
-        match self.form.jacobian {
-            Some(j) if self.has_exact_jacobian() => j(t, y, &self.params, &self.g_i, dy, jac),
-            _ => Err(Failure::Missing { function: "jacobian" }),
-        }
+        if self.has_exact_jacobian() { self.form.jacobian(t, y, &self.params, &self.g_i, dy, jac) } else { Err(Failure::Missing { function: "jacobian" }) }
     }
 
-    /// Projection onto the constraints for [`Drift::Projection`] (state `[q; q'; W]`); returns
+    /// Projection onto the constraints for [`Drift::Projection`] (a state `[q; q'; W?]`, which
+    /// [`System::with_drift`] checked from the layout); returns
     /// whether the state changed.
     pub fn project(&self, t: f64, y: &mut [f64]) -> Result<bool, Failure> {
         if self.drift != Drift::Projection {
@@ -151,7 +150,7 @@ impl System {
 
     fn position_residuals(&self, t: f64, q: &[f64]) -> Result<Vec<f64>, Failure> {
         let mut out = vec![0.0; self.model.holonomic];
-        (self.model.position_residuals)(t, q, &vec![0.0; q.len()], &self.params, &mut out)?;
+        self.model.position_residuals(t, q, &vec![0.0; q.len()], &self.params, &mut out)?;
         Ok(out)
     }
 
@@ -163,20 +162,20 @@ impl System {
     pub fn velocities(&self, t: f64, y: &[f64]) -> Result<(Vec<f64>, Vec<f64>), Failure> {
         let m = self.model.coordinates.len();
         let (mut q, mut qd) = (vec![0.0; m], vec![0.0; m]);
-        (self.form.velocities)(t, y, &self.params, &self.g_i, &mut q, &mut qd)?;
+        self.form.velocities(t, y, &self.params, &self.g_i, &mut q, &mut qd)?;
         Ok((q, qd))
     }
 
     /// The work integral `W` carried in the state (0 when no force can do work).
     pub fn work(&self, y: &[f64]) -> f64 {
-        if self.form.has_work_state { y[self.form.states - 1] } else { 0.0 }
+        self.form.layout.work_index().map_or(0.0, |k| y[k])
     }
 }
 
 /// `a q' + b` of the model's velocity constraints.
 fn velocity_residuals(model: &Model, t: f64, q: &[f64], qd: &[f64], params: &[f64]) -> Result<Vec<f64>, Failure> {
     let mut out = vec![0.0; model.constraints.len()];
-    (model.constraint_residuals)(t, q, qd, params, &mut out)?;
+    model.constraint_residuals(t, q, qd, params, &mut out)?;
     Ok(out)
 }
 

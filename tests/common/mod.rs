@@ -69,7 +69,7 @@ pub fn all_accelerations(d: &Derivation, model: &Model, env: &Env) -> Vec<(&'sta
         let flat = Expr::eval_all(&e.mass.data, &fenv).unwrap();
         let mass: Vec<Vec<f64>> = flat.chunks(n).map(|r| r.to_vec()).collect();
         let x = lin_solve(mass, Expr::eval_all(&e.forcing, &fenv).unwrap());
-        let qdd = match (e.name, &e.post) {
+        let qdd = match (e.name(), &e.post) {
             ("lagrange", _) => x[..m].to_vec(),
             (_, Some((w, c))) => {
                 let (w, c) = (Expr::eval_all(&w.data, &fenv).unwrap(), Expr::eval_all(c, &fenv).unwrap());
@@ -78,7 +78,7 @@ pub fn all_accelerations(d: &Derivation, model: &Model, env: &Env) -> Vec<(&'sta
             ("kane", None) => accelerations_from(d.kane.as_ref().unwrap(), &fenv, model, &x),
             (_, None) => accelerations_from(d.reduced.as_ref().unwrap(), &fenv, model, &x),
         };
-        out.push((e.name, qdd));
+        out.push((e.name(), qdd));
     }
     out
 }

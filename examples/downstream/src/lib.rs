@@ -39,7 +39,7 @@ mod tests {
         let model = crane::model();
         let r = Reference::of(&model).unwrap();
         let settings = Settings { rtol: 1e-10, atol: 1e-10, ..Settings::paper(r.t_end - r.t_start) };
-        let (sys, y0) = System::start(model, "reduced_volterra", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
+        let (sys, y0) = System::start(&model, runtime::seam::FormulationKind::ReducedVolterra, r.params.clone(), &r.q0, &r.qd0).unwrap();
         let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times().unwrap(), &settings).unwrap();
         let inv = monitor(&sys, &sol).unwrap();
         assert!(norm(&inv.energy_error) < 1e-6 * inv.energy0.abs().max(1.0), "energy drift {}", norm(&inv.energy_error));
@@ -69,11 +69,11 @@ mod tests {
     #[test]
     fn a_wrong_slice_length_and_an_inadmissible_state_are_typed_errors() {
         let model = crane::model();
-        let lagrange = model.formulation("lagrange").unwrap();
+        let lagrange = model.formulation(runtime::seam::FormulationKind::Lagrange).unwrap();
         let mut dy = [0.0; 6];
-        let e = (lagrange.rhs)(0.0, &[0.0; 5], model.default_params, &[0.0], &mut dy).unwrap_err();
+        let e = lagrange.rhs(0.0, &[0.0; 5], &model.default_params, &[0.0], &mut dy).unwrap_err();
         assert_eq!(e, runtime::seam::Failure::Dimension { argument: "state", expected: 6, got: 5 });
-        let e = System::start(model, "kane", vec![1.0; 2], &[0.0; 3], &[0.0; 3]).unwrap_err();
+        let e = System::start(&model, runtime::seam::FormulationKind::Kane, vec![1.0; 2], &[0.0; 3], &[0.0; 3]).unwrap_err();
         assert!(e.to_string().contains("`params` has 2 entries, 6 expected"), "{e}");
     }
 }

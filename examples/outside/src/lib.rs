@@ -31,8 +31,8 @@ mod tests {
     fn the_damper_s_work_balances_the_energy() {
         let model = acrobot::model();
         let r = Reference::of(&model).unwrap();
-        let (sys, y0) = System::start(model, "kane", model.default_params.to_vec(), r.q0, r.qd0).unwrap();
-        assert!(sys.form.has_work_state, "the damper does work");
+        let (sys, y0) = System::start(&model, runtime::seam::FormulationKind::Kane, r.params.clone(), &r.q0, &r.qd0).unwrap();
+        assert!(sys.form.has_work_state(), "the damper does work");
         let settings = Settings { method: Method::Dop853, rtol: 1e-11, atol: 1e-11, ..Settings::paper(r.t_end - r.t_start) };
         let sol = integrate(&mut |t, y, dy| sys.rhs(t, y, dy), &y0, &r.times().unwrap(), &settings).unwrap();
         let inv = monitor(&sys, &sol).unwrap();
@@ -48,9 +48,10 @@ mod tests {
         let (state, g) = acrobot::reduced_volterra::initial_state(0.0, &acrobot::INITIAL_Q, &acrobot::INITIAL_QDOT, &params).unwrap();
         let mut typed = [0.0; acrobot::reduced_volterra::STATES];
         acrobot::reduced_volterra::rhs(0.0, &state, &params, &g, &mut typed).unwrap();
-        let form = acrobot::model().formulation("reduced_volterra").unwrap();
-        let mut through_the_seam = vec![0.0; form.states];
-        (form.rhs)(0.0, &state, &params.values(), &g, &mut through_the_seam).unwrap();
+        let model = acrobot::model();
+        let form = model.formulation(runtime::seam::FormulationKind::ReducedVolterra).unwrap();
+        let mut through_the_seam = vec![0.0; form.states()];
+        form.rhs(0.0, &state, &params.values(), &g, &mut through_the_seam).unwrap();
         assert_eq!(typed.to_vec(), through_the_seam);
     }
 }

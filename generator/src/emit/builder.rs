@@ -212,7 +212,7 @@ impl Builder {
         std::fs::create_dir_all(&out_dir).map_err(|source| files::FileError::Io { path: out_dir.clone(), action: "create the folder", source })?;
         let mut built: Vec<Built> = Vec::new();
         for (file, model) in models {
-            let Generated { code, summary } = generate(&model, &self.options(&model))?;
+            let Generated { code, summary, .. } = generate(&model, &self.options(&model))?;
             let path = out_dir.join(format!("{}.rs", model.name));
             let written = write_if_changed(&path, &code)?;
             built.push(Built { model: file.clone(), path, written, summary });

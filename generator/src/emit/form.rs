@@ -87,7 +87,7 @@ impl Emitter<'_> {
     pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let m = model.m();
-        let name = f.name;
+        let name = f.name();
         let work = self.work;
         let n_states = f.states(work);
         let mut state_names: Vec<String> = f.kept.iter().map(|&j| model.coordinates[j].name()).collect();
@@ -108,7 +108,27 @@ impl Emitter<'_> {
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
-        let seam_const = super::seam::formulation_const(&self.seam, name, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
+        let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
+        let t = model.t;
+        let depends_on_time = self.rate_outputs(f, shared).iter().chain(&checks).any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
+        let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
+        let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
+        if self.tapes.is_some() {
+            self.shapes.push(crate::eval::FormShape {
+                kind: f.kind,
+                kept: f.kept.clone(),
+                speeds: f.speeds.len(),
+                work,
+                equations: f.equations,
+                state_names: state_names.clone(),
+                matrix_size: f.mass.rows,
+                post: f.post.as_ref().map(|(w, _)| (w.rows, w.cols)),
+                conditions: conditions(&checks),
+                matrix_name: f.matrix_name.to_string(),
+                stabilization: f.stabilization.as_ref().map(|s| s.len()),
+                depends_on_time,
+            });
+        }
         Ok(quote! {
             #mod_doc
             pub mod #module {
@@ -123,6 +143,12 @@ impl Emitter<'_> {
                 pub const INTEGRATES_IGNORABLE: bool = #integrates;
                 #[doc = "True when the last state entry is the work integral `W` of Eq. 80."]
                 pub const HAS_WORK_STATE: bool = #work;
+                #[doc = "The coordinates the state holds, as indices into `COORDINATES`."]
+                pub const STATE_COORDINATES: [usize; #n_kept] = [#(#kept),*];
+                #[doc = "How many speeds follow them in the state."]
+                pub const SPEEDS: usize = #n_speeds;
+                #[doc = "True when the right-hand side reads `t`."]
+                pub const DEPENDS_ON_TIME: bool = #depends_on_time;
                 #assemble
                 #init
                 #vel
@@ -161,7 +187,7 @@ impl Emitter<'_> {
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`.
     fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<TokenStream, ModelError> {
         let model = self.model;
-        let name = f.name;
+        let name = f.name();
         let work = self.work;
         let n_states = f.states(work);
         let nq = f.kept.len();
@@ -237,13 +263,7 @@ impl Emitter<'_> {
         let check_out = take(checks.len());
         fields.push(quote!(checks: [f64; #nc_l]));
         values.push(quote!(checks: [#(#check_out),*]));
-        let conditions: Vec<String> = checks
-            .iter()
-            .enumerate()
-            .map(|(k, c)| {
-                if c.tree_size() <= MAX_CONDITION_TREE { format!("{c} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) }
-            })
-            .collect();
+        let conditions = conditions(checks);
         let stabilized = match &f.stabilization {
             None => TokenStream::new(),
             Some(stab) => {
@@ -309,14 +329,14 @@ impl Emitter<'_> {
             fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
                 for (condition, value) in CONDITIONS.into_iter().zip(a.checks) {
                     if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition, value });
+                        return Err(Failure::Singular { t, condition: condition.into(), value });
                     }
                 }
                 let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
                 #unpack_post
                 #unpack_power
                 if let Err(column) = solve_dense(&mut matrix, &mut force) {
-                    return Err(Failure::Singular { t, condition: #matrix_name, value: column as f64 });
+                    return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
                 }
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*
                 #(dstate[#s_idx] = #speed_values;)*
@@ -342,7 +362,7 @@ impl Emitter<'_> {
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
         let work = self.work;
-        let name = f.name;
+        let name = f.name();
         let (args, inputs) = self.q_qdot_inputs(true);
         let u = &f.speeds_from_qdot;
         let g = &shared.momenta;
@@ -380,7 +400,7 @@ impl Emitter<'_> {
                 for (constraint, residual, bound) in residuals.into_iter().chain(positions) {
                     let tolerance = CONSTRAINT_TOLERANCE * bound;
                     if !(residual.abs() <= tolerance) {
-                        return Err(Failure::ConstraintViolated { constraint, residual, tolerance });
+                        return Err(Failure::ConstraintViolated { constraint: constraint.into(), residual, tolerance });
                     }
                 }
                 let state: [f64; STATES] = [#(q[#q_idx],)* #(#u_out),* #w0];
@@ -399,7 +419,7 @@ impl Emitter<'_> {
     fn velocities_fn(&mut self, f: &Equations, checks: &[Expr]) -> Result<TokenStream, ModelError> {
         let model = self.model;
         let m = model.m();
-        let name = f.name;
+        let name = f.name();
         let args = state_args();
         let inputs = self.state_inputs(f);
         let mut outputs = f.qdot.clone();
@@ -414,7 +434,7 @@ impl Emitter<'_> {
                 quote! {
                     let value = #v;
                     if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition: CONDITIONS[#l], value });
+                        return Err(Failure::Singular { t, condition: CONDITIONS[#l].into(), value });
                     }
                 }
             })
@@ -454,7 +474,7 @@ impl Emitter<'_> {
     fn singular_margin(&mut self, f: &Equations, checks: &[Expr]) -> Result<TokenStream, ModelError> {
         let args = state_args();
         let inputs = self.state_inputs(f);
-        let b = self.body(&format!("{}::singular_margin", f.name), checks, &inputs, &args)?;
+        let b = self.body(&format!("{}::singular_margin", f.name()), checks, &inputs, &args)?;
         let stmts = &b.stmts;
         let values = &b.outputs;
         let helpers = &b.helpers;
@@ -470,6 +490,19 @@ impl Emitter<'_> {
             #helpers
         })
     }
+}
+
+/// What each checked singular factor's vanishing means, in the order of the checks.
+fn conditions(checks: &[Expr]) -> Vec<String> {
+    checks
+        .iter()
+        .enumerate()
+        .map(
+            |(k, c)| {
+                if c.tree_size() <= MAX_CONDITION_TREE { format!("{c} = 0") } else { format!("pivot factor {} of the velocity transformation vanishes", k + 1) }
+            },
+        )
+        .collect()
 }
 
 impl FunctionCost {

@@ -1,6 +1,6 @@
 //! One emitted function body: input bindings, one `let` per common subexpression, and the
 //! outputs; split into helper functions that fill a scratch array when it would be too long
-//! to compile quickly (see `shared/crates.md`: rustc time grows about quadratically above a
+//! to compile quickly (measured when the crates were chosen: rustc time grows about quadratically above a
 //! few thousand statements in one function).
 //!
 //! ```

@@ -41,7 +41,7 @@ impl Emitter<'_> {
     /// `jacobian` (`jac[i][k] = d dstate_i / d state_k`) or `parameter_jacobian`
     /// (`jac[i][k] = d dstate_i / d params_k`), each with the right-hand side `dstate`.
     pub(super) fn jacobian_fn(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr], wrt: Wrt) -> Result<TokenStream, ModelError> {
-        let name = f.name;
+        let name = f.name();
         let work = self.work;
         let n_states = f.states(work);
         let nq = f.kept.len();
@@ -214,12 +214,12 @@ impl Emitter<'_> {
                 let mut x = force;
                 for (condition, value) in CONDITIONS.into_iter().zip(checks) {
                     if !(value.abs() > SINGULAR_TOLERANCE) {
-                        return Err(Failure::Singular { t, condition, value });
+                        return Err(Failure::Singular { t, condition: condition.into(), value });
                     }
                 }
                 let pivots = match lu_factor(&mut matrix) {
                     Ok(p) => p,
-                    Err(column) => return Err(Failure::Singular { t, condition: #matrix_name, value: column as f64 }),
+                    Err(column) => return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 }),
                 };
                 lu_solve(&matrix, &pivots, &mut x);
                 *jac = [[0.0; #columns]; STATES];

@@ -54,6 +54,9 @@ pub struct Options {
     /// The path of the seam crate in emitted code: `::seam` when the crate depends on `seam`
     /// itself, or a re-export such as `runtime::seam`.
     pub seam_path: String,
+    /// Also compile every emitted function into a tape for in-process evaluation
+    /// ([`crate::eval`]), returned as [`Generated::program`].
+    pub tapes: bool,
 }
 
 /// The seam crate's path when nothing else is asked for.
@@ -79,6 +82,7 @@ impl Options {
             parameter_jacobian: e.parameter_jacobian,
             module_name: None,
             seam_path: DEFAULT_SEAM_PATH.to_string(),
+            tapes: false,
         }
     }
 }
@@ -89,6 +93,8 @@ pub struct Generated {
     /// The Rust source, formatted; identical bytes for identical input.
     pub code: String,
     pub summary: Summary,
+    /// The functions as tapes, when [`Options::tapes`] asked for them.
+    pub program: Option<crate::eval::Program>,
 }
 
 /// What one emitted function costs: the operations of its straight-line body and, for a

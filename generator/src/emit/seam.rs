@@ -22,7 +22,8 @@ pub(super) fn failure_import(seam: &syn::Path) -> TokenStream {
 
 /// `FORMULATION` of the formulation submodule `name`; `stabilized` when it has
 /// `rhs_baumgarte`.
-pub(super) fn formulation_const(seam: &syn::Path, name: &str, stabilized: bool, jacobian: bool, parameter_jacobian: bool) -> TokenStream {
+pub(super) fn formulation_const(seam: &syn::Path, kind: seam::FormulationKind, stabilized: bool, jacobian: bool, parameter_jacobian: bool) -> TokenStream {
+    let variant = ident(&format!("{kind:?}"));
     let parameter_jacobian = if parameter_jacobian {
         quote! {
             Some(|t, state, params, g_i, dstate, jac| {
@@ -59,12 +60,13 @@ pub(super) fn formulation_const(seam: &syn::Path, name: &str, stabilized: bool, 
     };
     quote! {
         #[doc = "This formulation through slices, for code that picks a model at run time."]
-        pub const FORMULATION: #seam::Formulation = #seam::Formulation {
-            name: #name,
-            states: STATES,
+        pub const FORMULATION: #seam::StaticFormulation = #seam::StaticFormulation {
+            kind: #seam::FormulationKind::#variant,
+            coordinates: &STATE_COORDINATES,
+            speeds: SPEEDS,
+            work: HAS_WORK_STATE,
             equations: EQUATIONS,
-            integrates_ignorable: INTEGRATES_IGNORABLE,
-            has_work_state: HAS_WORK_STATE,
+            depends_on_time: DEPENDS_ON_TIME,
             state_names: &STATE_NAMES,
             rhs: |t, state, params, g_i, dstate| {
                 let p = Params::from_values(#seam::array("params", params)?);
@@ -163,13 +165,13 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
         });
     }
     let all = [Function::Energy, Function::WorkRate, Function::Momenta, Function::Constraints].into_iter().all(has);
-    let rest = if all { TokenStream::new() } else { quote!(..#seam::Model::EMPTY) };
+    let rest = if all { TokenStream::new() } else { quote!(..#seam::StaticModel::EMPTY) };
     quote! {
         #[doc = "Every emitted formulation through slices."]
-        pub const FORMULATIONS: [#seam::Formulation; #nf] = [#(#forms::FORMULATION),*];
+        pub const FORMULATIONS: [#seam::StaticFormulation; #nf] = [#(#forms::FORMULATION),*];
         #[doc = "This module as a `seam::Model`: sizes, names, parameter values and every function through slices (a function left out of the module fails with `Failure::Missing`)."]
         pub fn model() -> #seam::Model {
-            #seam::Model {
+            #seam::Model::from(#seam::StaticModel {
                 module: #module,
                 name: MODEL,
                 coordinates: &COORDINATES,
@@ -180,10 +182,11 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
                 default_params: &DEFAULT_PARAMS,
                 initial: #initial,
                 run: #run,
+                paper_settings: PAPER_SETTINGS,
                 #(#fields)*
                 formulations: &FORMULATIONS,
                 #rest
-            }
+            })
         }
     }
 }

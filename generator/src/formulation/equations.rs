@@ -18,8 +18,8 @@ use crate::symbolic::{Expr, Matrix, Symbol};
 /// The equations of motion of one formulation, ready to emit.
 #[derive(Clone, Debug)]
 pub struct Equations {
-    /// The module name in emitted code: `lagrange`, `maggi`, `kane`, `reduced_volterra`.
-    pub name: &'static str,
+    /// Which formulation these are (its module name in emitted code is the kind's name).
+    pub kind: seam::FormulationKind,
     /// A readable name, for documentation.
     pub label: &'static str,
     /// Indices of the coordinates in the state, in order (all of them unless the ignorable
@@ -66,6 +66,11 @@ impl Transfer for Equations {
 }
 
 impl Equations {
+    /// The module name in emitted code: `lagrange`, `maggi`, `kane`, `reduced_volterra`.
+    pub fn name(&self) -> &'static str {
+        self.kind.name()
+    }
+
     /// Length of the state: kept coordinates, speeds, and `W` when forces do work.
     pub fn states(&self, work: bool) -> usize {
         self.kept.len() + self.speeds.len() + usize::from(work)
@@ -75,8 +80,12 @@ impl Equations {
 /// A formulation of the equations of motion: derives its [`Equations`] from what every
 /// formulation shares.
 pub trait Method {
+    /// Which formulation it is.
+    fn kind(&self) -> seam::FormulationKind;
     /// The module name in emitted code.
-    fn name(&self) -> &'static str;
+    fn name(&self) -> &'static str {
+        self.kind().name()
+    }
     /// The equations, from the shared derivation.
     fn equations(&self, shared: &super::Shared) -> Result<Equations, ModelError>;
 }

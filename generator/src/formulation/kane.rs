@@ -23,14 +23,14 @@ pub fn speeds_from_qdot(model: &Model, v: &Volterra) -> Vec<Expr> {
 }
 
 impl Method for Kane {
-    fn name(&self) -> &'static str {
-        "kane"
+    fn kind(&self) -> seam::FormulationKind {
+        seam::FormulationKind::Kane
     }
 
     fn equations(&self, shared: &Shared) -> Result<Equations, ModelError> {
         let v = shared.kane.expect("Kane's form is derived");
         Ok(Equations {
-            name: self.name(),
+            kind: self.kind(),
             label: "Kane / Gibbs-Appell (standard Volterra)",
             kept: (0..shared.mech.m).collect(),
             speeds: v.u.clone(),

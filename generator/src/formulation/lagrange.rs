@@ -18,8 +18,8 @@ use crate::symbolic::{Expr, Matrix};
 pub struct Lagrange;
 
 impl Method for Lagrange {
-    fn name(&self) -> &'static str {
-        "lagrange"
+    fn kind(&self) -> seam::FormulationKind {
+        seam::FormulationKind::Lagrange
     }
 
     fn equations(&self, shared: &Shared) -> Result<Equations, ModelError> {
@@ -46,7 +46,7 @@ impl Method for Lagrange {
             .map(|(i, residual)| (residual, mech.holonomic.iter().find(|(k, _)| *k == i).map_or(Expr::zero(), |(_, h)| *h)))
             .collect();
         Ok(Equations {
-            name: self.name(),
+            kind: self.kind(),
             label: "Lagrange's equations with multipliers",
             kept: (0..m).collect(),
             speeds: model.velocities.clone(),

@@ -19,8 +19,8 @@ use crate::symbolic::{Expr, Matrix};
 pub struct Maggi;
 
 impl Method for Maggi {
-    fn name(&self) -> &'static str {
-        "maggi"
+    fn kind(&self) -> seam::FormulationKind {
+        seam::FormulationKind::Maggi
     }
 
     fn equations(&self, shared: &Shared) -> Result<Equations, ModelError> {
@@ -37,7 +37,7 @@ impl Method for Maggi {
         let forcing = wt.mul(&rest).col(0).into_iter().map(|e| mech.tidy.of(e)).collect();
         let qd: Vec<Expr> = model.velocities.iter().map(|s| s.expr()).collect();
         Ok(Equations {
-            name: self.name(),
+            kind: self.kind(),
             label: "Maggi's equations",
             kept: (0..m).collect(),
             speeds: model.velocities.clone(),

@@ -8,7 +8,7 @@
 //! use generator::formulation::{derive, Request};
 //! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
 //! let d = derive(&model, &Request::all()).unwrap();
-//! let names: Vec<&str> = d.equations.iter().map(|e| e.name).collect();
+//! let names: Vec<&str> = d.equations.iter().map(|e| e.name()).collect();
 //! assert_eq!(names, ["lagrange", "maggi", "kane", "reduced_volterra"]);
 //! assert_eq!(d.ignorable, vec![2]);
 //! ```
@@ -81,7 +81,7 @@ pub struct Derivation {
 impl Derivation {
     /// The equations of the formulation called `name`.
     pub fn equations(&self, name: &str) -> Option<&Equations> {
-        self.equations.iter().find(|e| e.name == name)
+        self.equations.iter().find(|e| e.name() == name)
     }
 }
 
@@ -133,7 +133,7 @@ pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError
 /// use generator::formulation::{derive_with, Equations, Request, Stages};
 /// struct Names(Vec<&'static str>);
 /// impl Stages for Names {
-///     fn equations(&mut self, e: &Equations) { self.0.push(e.name) }
+///     fn equations(&mut self, e: &Equations) { self.0.push(e.name()) }
 /// }
 /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
 /// let mut names = Names(Vec::new());

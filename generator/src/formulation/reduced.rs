@@ -40,8 +40,8 @@ pub fn needed(model: &Model, v: &Volterra) -> Vec<(usize, Option<String>)> {
 }
 
 impl Method for ReducedVolterra {
-    fn name(&self) -> &'static str {
-        "reduced_volterra"
+    fn kind(&self) -> seam::FormulationKind {
+        seam::FormulationKind::ReducedVolterra
     }
 
     fn equations(&self, shared: &Shared) -> Result<Equations, ModelError> {
@@ -71,7 +71,7 @@ impl Method for ReducedVolterra {
             singular = Expr::subs_all(&singular, &zero);
         }
         Ok(Equations {
-            name: self.name(),
+            kind: self.kind(),
             label: "the reduced Volterra equations (paper Eqs. 64-67)",
             kept,
             speeds: v.u.clone(),

@@ -247,7 +247,7 @@ impl ModelBuilder {
 
     /// The reference run: from 0 to `t_end`, output every `dt_out`.
     pub fn simulation(mut self, t_end: f64, dt_out: f64) -> ModelBuilder {
-        self.def.simulation = Some(SimulationDef { t_start: 0.0, t_end, dt_out });
+        self.def.simulation = Some(SimulationDef { t_start: 0.0, t_end, dt_out, paper: false });
         self
     }
 

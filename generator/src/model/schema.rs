@@ -315,4 +315,8 @@ pub struct SimulationDef {
     pub t_start: f64,
     pub t_end: f64,
     pub dt_out: f64,
+    /// Run with the paper's integrator settings by default (DOPRI5, rtol 1e-3, atol 1e-6):
+    /// the paper's scenes say so; other models get tight settings.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub paper: bool,
 }

@@ -1,0 +1,202 @@
+//! The generator's commands, shared by the `generator` binary and the `multibody` tool:
+//! `generate` (a model's Rust module) and `inspect` (what is derived).
+//!
+//! ```
+//! use clap::Parser;
+//! #[derive(Parser)]
+//! struct Cli {
+//!     #[command(flatten)]
+//!     generate: generator::command::GenerateArgs,
+//! }
+//! let cli = Cli::try_parse_from(["generator", "m.ron", "--formulations", "kane,reduced"]).unwrap();
+//! assert_eq!(cli.generate.formulations.unwrap().len(), 2);
+//! ```
+
+use crate::emit::{self, Formulation, Options, Parameters};
+use clap::{Args, ValueEnum};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// A formulation, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FormulationArg {
+    Lagrange,
+    Maggi,
+    Kane,
+    #[value(alias = "reduced", alias = "reduced_volterra")]
+    ReducedVolterra,
+}
+
+impl From<FormulationArg> for Formulation {
+    fn from(f: FormulationArg) -> Formulation {
+        match f {
+            FormulationArg::Lagrange => Formulation::Lagrange,
+            FormulationArg::Maggi => Formulation::Maggi,
+            FormulationArg::Kane => Formulation::Kane,
+            FormulationArg::ReducedVolterra => Formulation::ReducedVolterra,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct GenerateArgs {
+    /// The model file (RON).
+    pub model: Option<PathBuf>,
+    /// Write the module to this file (atomically: a temporary file renamed over it) instead of
+    /// stdout.
+    #[arg(short, long, value_name = "PATH")]
+    pub output: Option<PathBuf>,
+    /// Allow an output path that ends in `.ron` or is the model itself.
+    #[arg(long)]
+    pub force: bool,
+    /// The formulations to emit (overrides the model's `emit` section).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    pub formulations: Option<Vec<FormulationArg>>,
+    /// Fold the parameters into the code as constants.
+    #[arg(long, conflicts_with = "runtime_params")]
+    pub baked: bool,
+    /// Keep the parameters as fields of `Params`.
+    #[arg(long)]
+    pub runtime_params: bool,
+    /// Leave the ignorable coordinates out of the reduced method's state.
+    #[arg(long)]
+    pub drop_ignorable: bool,
+    /// Emit each formulation's exact `jacobian` (the right-hand side and its derivative by the
+    /// state) for the stiff integrator and linearization.
+    #[arg(long)]
+    pub jacobian: bool,
+    /// Emit each formulation's `parameter_jacobian`, the right-hand side's derivative by the
+    /// runtime parameters.
+    #[arg(long)]
+    pub parameter_jacobian: bool,
+    /// Split functions with more than N common subexpressions into helpers.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_lets: Option<u64>,
+    /// The seam crate's path in the emitted code: `::seam`, or a re-export such as
+    /// `runtime::seam` for a crate that depends on the runtime only.
+    #[arg(long, value_name = "PATH", default_value = emit::DEFAULT_SEAM_PATH)]
+    pub seam_path: String,
+    /// The name the module reports as `model().module` (default: the model's name).
+    #[arg(long, value_name = "NAME")]
+    pub module_name: Option<String>,
+    /// Print no summary to stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Why the command failed: a model error (rendered with its excerpt) or another message.
+pub enum Failure {
+    Model(crate::model::ModelError),
+    Message(String),
+}
+
+impl From<String> for Failure {
+    fn from(m: String) -> Failure {
+        Failure::Message(m)
+    }
+}
+
+impl From<crate::model::ModelError> for Failure {
+    fn from(e: crate::model::ModelError) -> Failure {
+        Failure::Model(e)
+    }
+}
+
+/// Writes to stdout; a closed pipe (`generator m.ron | head -1`) ends the program quietly.
+pub fn print_stdout(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        other => other.map_err(|e| Failure::Message(format!("error: cannot write to stdout: {e}"))),
+    }
+}
+
+/// `inspect MODEL [--latex]`: what is derived, printed.
+pub fn inspect(model: &Path, latex: bool) -> Result<(), Failure> {
+    let model = crate::model::load(model)?;
+    let text = crate::inspect::inspect(&model, latex)?;
+    print_stdout(&text)
+}
+
+/// Generates the module `args` ask for: to the output file (atomically, left alone when it
+/// already holds the bytes) or to stdout, with the summary on stderr.
+pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
+    let Some(file) = args.model else {
+        return Err(Failure::Message("error: a model file is needed: `generator MODEL.ron [-o PATH]` (see --help)".into()));
+    };
+    if let Some(out) = &args.output {
+        refuse_overwriting_a_model(&file, out, args.force)?;
+    }
+    let model = crate::model::load(&file)?;
+    let mut options = Options::from_model(&model);
+    if let Some(list) = &args.formulations {
+        let mut f: Vec<Formulation> = list.iter().map(|x| (*x).into()).collect();
+        f.sort();
+        f.dedup();
+        options.formulations = f;
+    }
+    if args.baked {
+        options.parameters = Parameters::Baked;
+    }
+    if args.runtime_params {
+        options.parameters = Parameters::Runtime;
+    }
+    if args.drop_ignorable {
+        options.integrate_ignorable = false;
+    }
+    if args.jacobian {
+        options.jacobian = true;
+    }
+    if args.parameter_jacobian {
+        options.parameter_jacobian = true;
+    }
+    if let Some(n) = args.max_lets {
+        options.max_lets_per_function = n as usize;
+    }
+    options.seam_path = args.seam_path.clone();
+    options.module_name = args.module_name.clone();
+    let out = emit::generate(&model, &options)?;
+    match &args.output {
+        // An unchanged file is left alone, so builds that depend on it stay fresh.
+        Some(path) => {
+            let written = files::write_if_changed(path, out.code.as_bytes()).map_err(|e| Failure::Message(format!("error: {e}")))?;
+            if !args.quiet {
+                let verb = match written {
+                    files::Written::Unchanged => "unchanged",
+                    files::Written::Replaced => "wrote",
+                    files::Written::Through => "wrote through",
+                };
+                eprintln!("{verb} {}", path.display());
+            }
+        }
+        None => print_stdout(&out.code)?,
+    }
+    if !args.quiet {
+        eprintln!("{}", out.summary);
+    }
+    Ok(())
+}
+
+/// Refuses to write Rust over the model itself, or over any `.ron` file, unless `force`.
+fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Result<(), String> {
+    if force {
+        return Ok(());
+    }
+    let same = match (std::fs::canonicalize(input), std::fs::canonicalize(output)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => input == output,
+    };
+    if same {
+        return Err(format!(
+            "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o (or --force if you mean it)",
+            output.display()
+        ));
+    }
+    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+        return Err(format!(
+            "error: the output `{}` is a `.ron` file: the generator writes Rust, and this would replace a model\n  help: write to a `.rs` path (or pass --force if you mean it)",
+            output.display()
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! In-process evaluation: the same optimized functions the emitter writes as Rust, run at once
+//! as register tapes, behind the seam's [`seam::Model`] — a model file reaches a result with no
+//! cargo or rustc.
+//!
+//! Generation with [`crate::emit::Options::tapes`] compiles each emitted function body into a
+//! [`tape::Tape`] from its syntax trees (the very trees prettyplease prints), and records what
+//! the module's hand-written parts do around them ([`Program`]: sizes, names, each
+//! formulation's layout and checks). [`model::Evaluated`] is the module's `model()` over them:
+//! the same checks, the same dense solve, the same errors.
+//!
+//! ```
+//! let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+//! let evaluated = generator::eval::evaluate(&model).unwrap();
+//! let kane = evaluated.formulation(seam::FormulationKind::Kane).unwrap();
+//! let (q0, qd0) = evaluated.initial.clone().unwrap();
+//! let mut state = vec![0.0; kane.states()];
+//! let mut g_i = vec![0.0; evaluated.ignorable.len()];
+//! kane.initial_state(0.0, &q0, &qd0, &evaluated.default_params, &mut state, &mut g_i).unwrap();
+//! let mut dstate = vec![0.0; state.len()];
+//! kane.rhs(0.0, &state, &evaluated.default_params, &g_i, &mut dstate).unwrap();
+//! assert!((dstate[0] - qd0[0]).abs() < 1e-12);
+//! ```
+
+pub mod model;
+pub mod tape;
+
+use crate::emit::{Options, generate};
+use crate::model::{Model, ModelError};
+use seam::FormulationKind;
+use std::collections::HashMap;
+use tape::Tape;
+
+/// What the module describes of itself: `model()`'s sizes, names and values.
+#[derive(Clone, Debug, Default)]
+pub struct Description {
+    pub module: String,
+    pub name: String,
+    pub coordinates: Vec<String>,
+    pub constraints: Vec<String>,
+    pub ignorable: Vec<usize>,
+    /// The holonomic constraints' names (the first `holonomic` of `constraints`).
+    pub holonomic_names: Vec<String>,
+    pub parameter_names: Vec<String>,
+    pub default_params: Vec<f64>,
+    pub initial: Option<(Vec<f64>, Vec<f64>)>,
+    pub run: Option<(f64, f64, f64)>,
+    pub paper_settings: bool,
+}
+
+/// What a formulation's hand-written functions do around its tapes: the layout of `assemble`'s
+/// outputs and of the state, and the names its errors carry.
+#[derive(Clone, Debug)]
+pub struct FormShape {
+    pub kind: FormulationKind,
+    /// Coordinates in the state (indices into the model's coordinates).
+    pub kept: Vec<usize>,
+    pub speeds: usize,
+    pub work: bool,
+    pub equations: usize,
+    pub state_names: Vec<String>,
+    /// Size `n` of the matrix solved.
+    pub matrix_size: usize,
+    /// Maggi: the speeds' rates are `W x + c` with `W` of `(rows, cols)`.
+    pub post: Option<(usize, usize)>,
+    /// What each checked singular factor's vanishing means.
+    pub conditions: Vec<String>,
+    pub matrix_name: String,
+    /// Lagrange: the number of constraints stabilized by `rhs_baumgarte`.
+    pub stabilization: Option<usize>,
+    pub depends_on_time: bool,
+}
+
+/// Every function of a module as tapes, with the shapes around them.
+#[derive(Clone, Debug, Default)]
+pub struct Program {
+    pub description: Description,
+    /// Tapes by function: `energy`, `kane::rhs`, `kane::initial_state`, ...
+    pub tapes: HashMap<String, Tape>,
+    pub forms: Vec<FormShape>,
+}
+
+/// `model` as a [`seam::Model`] evaluated in-process, with the options its file asks for (its
+/// `emit` section), every formulation it requests.
+pub fn evaluate(model: &Model) -> Result<seam::Model, ModelError> {
+    evaluate_with(model, &Options::from_model(model))
+}
+
+/// [`evaluate`] with other options (formulations, baked parameters, dropped ignorable
+/// coordinates). The Jacobians are not evaluated in-process: the runtime differences the
+/// right-hand side where it needs them.
+pub fn evaluate_with(model: &Model, options: &Options) -> Result<seam::Model, ModelError> {
+    let options = Options { tapes: true, jacobian: false, parameter_jacobian: false, max_lets_per_function: usize::MAX, ..options.clone() };
+    let generated = generate(model, &options)?;
+    let program =
+        generated.program.ok_or_else(|| model.error(crate::model::ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;
+    Ok(model::Evaluated::model(program))
+}

@@ -1,0 +1,385 @@
+//! A [`Program`] behind the seam: the emitted module's hand-written parts (the checks, the dense
+//! solve, the state's assembly, the errors) over its tapes, step for step as the module does
+//! them, so that the numbers are the compiled module's.
+
+use super::{FormShape, Program};
+use crate::eval::tape::Tape;
+use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
+use std::borrow::Cow;
+use std::sync::Arc;
+
+/// The tolerances of emitted modules (`generator::emit::module`), read from one place.
+use crate::emit::module::{CONSTRAINT_TOLERANCE, PIVOT_TOLERANCE, SINGULAR_TOLERANCE};
+
+/// The shared functions of a program (energy, work rate, momenta, residuals).
+pub struct Evaluated {
+    energy: Option<Tape>,
+    work_rate: Option<Tape>,
+    momenta: Option<Tape>,
+    constraint_residuals: Option<Tape>,
+    position_residuals: Option<Tape>,
+    m: usize,
+    params: usize,
+}
+
+/// One formulation of a program.
+pub struct EvaluatedForm {
+    shape: FormShape,
+    m: usize,
+    params: usize,
+    ignorable: usize,
+    constraint_names: Arc<[String]>,
+    holonomic_names: Arc<[String]>,
+    rhs: Tape,
+    initial_state: Tape,
+    velocities: Tape,
+    singular_margin: Tape,
+}
+
+fn check(argument: &'static str, slice: &[f64], expected: usize) -> Result<(), Failure> {
+    if slice.len() == expected { Ok(()) } else { Err(Failure::Dimension { argument, expected, got: slice.len() }) }
+}
+
+/// `[t | params | a | b]`: the input registers of a tape, as `eval::tape::Slots` laid them out.
+fn pack(buf: &mut Vec<f64>, t: f64, params: &[f64], a: &[f64], b: &[f64]) {
+    buf.clear();
+    buf.push(t);
+    buf.extend_from_slice(params);
+    buf.extend_from_slice(a);
+    buf.extend_from_slice(b);
+}
+
+thread_local! {
+    static INPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    static OUTPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
+fn run<R>(tape: &Tape, t: f64, params: &[f64], a: &[f64], b: &[f64], then: impl FnOnce(&[f64]) -> R) -> R {
+    INPUTS.with(|inputs| {
+        OUTPUTS.with(|outputs| {
+            let (mut inputs, mut outputs) = (inputs.borrow_mut(), outputs.borrow_mut());
+            pack(&mut inputs, t, params, a, b);
+            outputs.clear();
+            outputs.resize(tape.outputs(), 0.0);
+            tape.eval(&inputs, &mut outputs);
+            then(&outputs)
+        })
+    })
+}
+
+impl Evaluated {
+    /// The program as a [`seam::Model`].
+    pub fn model(mut program: Program) -> Model {
+        let d = program.description;
+        let m = d.coordinates.len();
+        let params = d.parameter_names.len();
+        let take = |name: &str, tapes: &mut std::collections::HashMap<String, Tape>| tapes.remove(name);
+        let tapes = &mut program.tapes;
+        let holonomic = d.holonomic_names.len();
+        let constraint_names: Arc<[String]> = d.constraints.clone().into();
+        let holonomic_names: Arc<[String]> = d.holonomic_names.clone().into();
+        let baked_params = if d.default_params.is_empty() { 0 } else { params };
+        let formulations = program
+            .forms
+            .into_iter()
+            .filter_map(|shape| {
+                let name = shape.kind.name();
+                let f = EvaluatedForm {
+                    m,
+                    params: baked_params,
+                    ignorable: d.ignorable.len(),
+                    constraint_names: constraint_names.clone(),
+                    holonomic_names: holonomic_names.clone(),
+                    rhs: take(&format!("{name}::rhs"), tapes)?,
+                    initial_state: take(&format!("{name}::initial_state"), tapes)?,
+                    velocities: take(&format!("{name}::velocities"), tapes)?,
+                    singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
+                    shape: shape.clone(),
+                };
+                Some(Formulation {
+                    kind: shape.kind,
+                    layout: StateLayout { coordinates: shape.kept.clone(), speeds: shape.speeds, speeds_are: shape.kind.speeds(), work: shape.work },
+                    equations: shape.equations,
+                    state_names: shape.state_names.clone(),
+                    matrix_size: shape.matrix_size,
+                    has_baumgarte: shape.stabilization.is_some(),
+                    has_jacobian: false,
+                    has_parameter_jacobian: false,
+                    depends_on_time: shape.depends_on_time,
+                    functions: Arc::new(f),
+                })
+            })
+            .collect();
+        let functions = Evaluated {
+            energy: take("energy", tapes),
+            work_rate: take("work_rate", tapes),
+            momenta: take("momenta", tapes),
+            constraint_residuals: take("constraint_residuals", tapes),
+            position_residuals: take("position_residuals", tapes),
+            m,
+            params: baked_params,
+        };
+        Model {
+            module: d.module,
+            name: d.name,
+            coordinates: d.coordinates,
+            constraints: d.constraints,
+            ignorable: d.ignorable,
+            holonomic,
+            parameter_names: if baked_params == 0 { vec![] } else { d.parameter_names },
+            default_params: d.default_params,
+            initial: d.initial,
+            run: d.run,
+            paper_settings: d.paper_settings,
+            formulations,
+            functions: Arc::new(functions),
+        }
+    }
+
+    fn point(
+        &self,
+        tape: &Option<Tape>,
+        function: &'static str,
+        t: f64,
+        q: &[f64],
+        qdot: &[f64],
+        params: &[f64],
+        out: &mut [f64],
+        rates: bool,
+    ) -> Result<(), Failure> {
+        let tape = tape.as_ref().ok_or(Failure::Missing { function })?;
+        check("q", q, self.m)?;
+        if rates {
+            check("qdot", qdot, self.m)?;
+        }
+        check("params", params, self.params)?;
+        check("out", out, tape.outputs())?;
+        let qdot = if rates { qdot } else { &[] };
+        run(tape, t, params, q, qdot, |o| out.copy_from_slice(o));
+        Ok(())
+    }
+}
+
+impl ModelFunctions for Evaluated {
+    fn energy(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.energy, "energy", t, q, qdot, params, out, true)
+    }
+    fn work_rate(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.work_rate, "work_rate", t, q, qdot, params, out, true)
+    }
+    fn momenta(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.momenta, "momenta", t, q, qdot, params, out, true)
+    }
+    fn constraint_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.constraint_residuals, "constraint_residuals", t, q, qdot, params, out, true)
+    }
+    fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.position_residuals, "position_residuals", t, q, qdot, params, out, false)
+    }
+}
+
+/// `solve_dense` of emitted modules: Gaussian elimination with partial pivoting, in place, on a
+/// row-major `n x n` matrix; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the
+/// largest entry.
+fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64]) -> Result<(), usize> {
+    let mut scale = 0.0f64;
+    for x in a.iter() {
+        scale = scale.max(x.abs());
+    }
+    for c in 0..n {
+        let mut p = c;
+        for r in c + 1..n {
+            if a[r * n + c].abs() > a[p * n + c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        if p != c {
+            for k in 0..n {
+                a.swap(c * n + k, p * n + k);
+            }
+        }
+        b.swap(c, p);
+        for r in c + 1..n {
+            let f = a[r * n + c] / a[c * n + c];
+            for k in c + 1..n {
+                a[r * n + k] -= f * a[c * n + k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    for r in (0..n).rev() {
+        let mut s = b[r];
+        for k in r + 1..n {
+            s -= a[r * n + k] * b[k];
+        }
+        b[r] = s / a[r * n + r];
+    }
+    Ok(())
+}
+
+impl EvaluatedForm {
+    fn states(&self) -> usize {
+        self.shape.kept.len() + self.shape.speeds + usize::from(self.shape.work)
+    }
+
+    fn check_state(&self, state: &[f64], params: &[f64], g_i: &[f64]) -> Result<(), Failure> {
+        check("state", state, self.states())?;
+        check("params", params, self.params)?;
+        check("g_i", g_i, self.ignorable)
+    }
+
+    /// `rhs` (and `rhs_baumgarte` with `stabilize`): `finish(assemble(..))` of the module.
+    fn rates(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], stabilize: Option<(f64, f64)>) -> Result<(), Failure> {
+        self.check_state(state, params, g_i)?;
+        check("dstate", dstate, self.states())?;
+        let s = &self.shape;
+        let (nq, n) = (s.kept.len(), s.matrix_size);
+        run(&self.rhs, t, params, g_i, state, |o| {
+            let mut at = 0;
+            let mut take = |k: usize| {
+                let out = &o[at..at + k];
+                at += k;
+                out
+            };
+            let qdot = take(nq);
+            let mut matrix = take(n * n).to_vec();
+            let mut force = take(n).to_vec();
+            let post = s.post.map(|(rw, cw)| (take(rw * cw), take(rw)));
+            let power = if s.work { Some(take(1)[0]) } else { None };
+            let checks = take(s.conditions.len());
+            if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
+                let (residuals, positions) = (take(r), take(r));
+                for i in 0..r {
+                    force[self.m + i] -= 2.0 * alpha * residuals[i] + beta * beta * positions[i];
+                }
+            }
+            for (condition, &value) in s.conditions.iter().zip(checks) {
+                if !(value.abs() > SINGULAR_TOLERANCE) {
+                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
+                }
+            }
+            if let Err(column) = solve_dense(n, &mut matrix, &mut force) {
+                return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
+            }
+            dstate[..nq].copy_from_slice(qdot);
+            match post {
+                None => dstate[nq..nq + s.speeds].copy_from_slice(&force[..s.speeds]),
+                Some((w, c)) => {
+                    let (rw, cw) = s.post.expect("post");
+                    for j in 0..rw {
+                        // `w[j][0] * force[0] + ... + c[j]`, left to right as the module writes it.
+                        dstate[nq + j] = match cw {
+                            0 => c[j],
+                            _ => (1..cw).fold(w[j * cw] * force[0], |acc, k| acc + w[j * cw + k] * force[k]) + c[j],
+                        };
+                    }
+                }
+            }
+            if let Some(p) = power {
+                let last = dstate.len() - 1;
+                dstate[last] = p;
+            }
+            for (index, value) in dstate.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite { t, index });
+                }
+            }
+            Ok(())
+        })
+    }
+}
+
+impl FormulationFunctions for EvaluatedForm {
+    fn rhs(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64]) -> Result<(), Failure> {
+        self.rates(t, state, params, g_i, dstate, None)
+    }
+
+    fn rhs_baumgarte(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], alpha: f64, beta: f64) -> Result<(), Failure> {
+        if self.shape.stabilization.is_none() {
+            return Err(Failure::Missing { function: "rhs_baumgarte" });
+        }
+        self.rates(t, state, params, g_i, dstate, Some((alpha, beta)))
+    }
+
+    fn initial_state(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], state: &mut [f64], g_i: &mut [f64]) -> Result<(), Failure> {
+        check("q", q, self.m)?;
+        check("qdot", qdot, self.m)?;
+        check("params", params, self.params)?;
+        check("state", state, self.states())?;
+        check("g_i", g_i, self.ignorable)?;
+        let s = &self.shape;
+        let (nr, nh) = (self.constraint_names.len(), self.holonomic_names.len());
+        run(&self.initial_state, t, params, q, qdot, |o| {
+            let (u, rest) = o.split_at(s.speeds);
+            let (g, rest) = rest.split_at(self.ignorable);
+            let (r, rest) = rest.split_at(nr);
+            let (rb, rest) = rest.split_at(nr);
+            let (h, hb) = rest.split_at(nh);
+            let residuals = self.constraint_names.iter().zip(r.iter().zip(rb));
+            let positions = self.holonomic_names.iter().zip(h.iter().zip(hb));
+            for (constraint, (&residual, &bound)) in residuals.chain(positions) {
+                let tolerance = CONSTRAINT_TOLERANCE * bound;
+                if !(residual.abs() <= tolerance) {
+                    return Err(Failure::ConstraintViolated { constraint: Cow::Owned(constraint.clone()), residual, tolerance });
+                }
+            }
+            for (k, &j) in s.kept.iter().enumerate() {
+                state[k] = q[j];
+            }
+            state[s.kept.len()..s.kept.len() + s.speeds].copy_from_slice(u);
+            if s.work {
+                state[s.kept.len() + s.speeds] = 0.0;
+            }
+            g_i.copy_from_slice(g);
+            for (index, value) in state.iter().chain(g_i.iter()).enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite { t, index });
+                }
+            }
+            Ok(())
+        })
+    }
+
+    fn velocities(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], q: &mut [f64], qdot: &mut [f64]) -> Result<(), Failure> {
+        self.check_state(state, params, g_i)?;
+        check("q", q, self.m)?;
+        check("qdot", qdot, self.m)?;
+        let s = &self.shape;
+        run(&self.velocities, t, params, g_i, state, |o| {
+            let (qd, checks) = o.split_at(self.m);
+            for (condition, &value) in s.conditions.iter().zip(checks) {
+                if !(value.abs() > SINGULAR_TOLERANCE) {
+                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
+                }
+            }
+            q.fill(0.0);
+            for (k, &j) in s.kept.iter().enumerate() {
+                q[j] = state[k];
+            }
+            qdot.copy_from_slice(qd);
+            for (index, value) in qdot.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite { t, index });
+                }
+            }
+            Ok(())
+        })
+    }
+
+    fn matrix(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.check_state(state, params, g_i)?;
+        let (nq, n) = (self.shape.kept.len(), self.shape.matrix_size);
+        check("out", out, n * n)?;
+        run(&self.rhs, t, params, g_i, state, |o| out.copy_from_slice(&o[nq..nq + n * n]));
+        Ok(())
+    }
+
+    fn singular_margin(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64]) -> Result<f64, Failure> {
+        self.check_state(state, params, g_i)?;
+        Ok(run(&self.singular_margin, t, params, g_i, state, |o| o.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))))
+    }
+}

@@ -1,0 +1,129 @@
+//! What a formulation is, and how its state is laid out: types, so that no code matches names.
+
+use std::fmt;
+use std::ops::Range;
+
+/// One of the four formulations (the paper's Table 1). Its names are spelled here only.
+///
+/// ```
+/// use seam::FormulationKind;
+/// assert_eq!(FormulationKind::ReducedVolterra.name(), "reduced_volterra");
+/// assert_eq!(FormulationKind::from_name("reduced"), Some(FormulationKind::ReducedVolterra));
+/// assert_eq!(FormulationKind::from_name("kane"), Some(FormulationKind::Kane));
+/// assert_eq!(FormulationKind::from_name("hamilton"), None);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FormulationKind {
+    /// Lagrange's equations with multipliers: state `[q; q']`.
+    Lagrange,
+    /// Maggi's equations (multiplier-free through the null space of `a`): state `[q; q']`.
+    Maggi,
+    /// Kane's / Gibbs-Appell's equations in the `p` quasi-velocities: state `[q; u]`.
+    Kane,
+    /// The paper's reduced Volterra method, `p - s` equations: state `[q; u_NI]`.
+    ReducedVolterra,
+}
+
+impl FormulationKind {
+    /// All four, in the paper's order.
+    pub const ALL: [FormulationKind; 4] = [FormulationKind::Lagrange, FormulationKind::Maggi, FormulationKind::Kane, FormulationKind::ReducedVolterra];
+
+    /// The name used in files, tables and on the command line.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FormulationKind::Lagrange => "lagrange",
+            FormulationKind::Maggi => "maggi",
+            FormulationKind::Kane => "kane",
+            FormulationKind::ReducedVolterra => "reduced_volterra",
+        }
+    }
+
+    /// Other spellings accepted for the name (`reduced`, `reduced-volterra`, `volterra`).
+    pub const fn aliases(self) -> &'static [&'static str] {
+        match self {
+            FormulationKind::ReducedVolterra => &["reduced", "reduced-volterra", "volterra"],
+            _ => &[],
+        }
+    }
+
+    /// The kind called `name` or one of its aliases.
+    pub fn from_name(name: &str) -> Option<FormulationKind> {
+        FormulationKind::ALL.into_iter().find(|k| k.name() == name || k.aliases().contains(&name))
+    }
+
+    /// The kind of speeds its state carries.
+    pub const fn speeds(self) -> Speeds {
+        match self {
+            FormulationKind::Lagrange | FormulationKind::Maggi => Speeds::Rates,
+            FormulationKind::Kane | FormulationKind::ReducedVolterra => Speeds::QuasiVelocities,
+        }
+    }
+}
+
+impl fmt::Display for FormulationKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// What the speeds of a state are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Speeds {
+    /// The rates `q'` of every coordinate, in the coordinates' order.
+    Rates,
+    /// Quasi-velocities `u = Y q' + Z`.
+    QuasiVelocities,
+}
+
+/// How a formulation's state is laid out: `[q_kept; speeds; W?]`.
+///
+/// ```
+/// use seam::{Speeds, StateLayout};
+/// let layout = StateLayout { coordinates: vec![0, 1, 2], speeds: 3, speeds_are: Speeds::Rates, work: true };
+/// assert_eq!((layout.q(), layout.speed_range(), layout.work_index(), layout.len()), (0..3, 3..6, Some(6), 7));
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StateLayout {
+    /// The coordinates the state holds, as indices into the model's coordinates (all of them,
+    /// unless the ignorable ones were left out).
+    pub coordinates: Vec<usize>,
+    /// How many speeds follow them.
+    pub speeds: usize,
+    /// What the speeds are.
+    pub speeds_are: Speeds,
+    /// True when the last entry is the work integral `W` (Eq. 80).
+    pub work: bool,
+}
+
+impl StateLayout {
+    /// The range of the coordinates.
+    pub fn q(&self) -> Range<usize> {
+        0..self.coordinates.len()
+    }
+
+    /// The range of the speeds.
+    pub fn speed_range(&self) -> Range<usize> {
+        self.coordinates.len()..self.coordinates.len() + self.speeds
+    }
+
+    /// The index of the work integral, when the state carries it.
+    pub fn work_index(&self) -> Option<usize> {
+        self.work.then(|| self.coordinates.len() + self.speeds)
+    }
+
+    /// The length of the state.
+    pub fn len(&self) -> usize {
+        self.coordinates.len() + self.speeds + usize::from(self.work)
+    }
+
+    /// True for a state of no entries.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// True when the state is `[q; q'; W?]` with every coordinate: what projection onto the
+    /// constraints needs.
+    pub fn holds_every_rate(&self, coordinates: usize) -> bool {
+        self.speeds_are == Speeds::Rates && self.coordinates.len() == coordinates && self.speeds == coordinates
+    }
+}

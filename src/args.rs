@@ -1,0 +1,187 @@
+//! What the commands share on the command line: the formulation and integrator names, and the
+//! run (`--param`, `--q`, `--qdot`, `--t-end`, `--dt-out`, `--method`, `--rtol`, `--atol`,
+//! `--paper`), turned into the runtime's [`Reference`] and [`Settings`].
+
+use crate::CliError;
+use clap::{Args, ValueEnum};
+use runtime::compare::Reference;
+use runtime::integrate::{Method, Settings};
+use seam::{FormulationKind, Model};
+
+/// A formulation on the command line: the seam's [`FormulationKind`], its names and aliases
+/// from there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FormulationArg(pub FormulationKind);
+
+impl ValueEnum for FormulationArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[
+            FormulationArg(FormulationKind::Lagrange),
+            FormulationArg(FormulationKind::Maggi),
+            FormulationArg(FormulationKind::Kane),
+            FormulationArg(FormulationKind::ReducedVolterra),
+        ]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).aliases(self.0.aliases()))
+    }
+}
+
+/// An integrator, as named on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// Dormand-Prince 5(4) (MATLAB's ode45, the paper's).
+    Dopri5,
+    /// Dormand-Prince 8(5,3).
+    Dop853,
+    /// Classical Runge-Kutta with a fixed step (`--h`).
+    Rk4,
+    /// Rosenbrock 2(3) (`ode23s`) for stiff models.
+    Ros23,
+}
+
+impl MethodArg {
+    /// The adaptive integrator it names (`None` for RK4, which needs its step).
+    pub fn adaptive(self) -> Option<Method> {
+        match self {
+            MethodArg::Dopri5 => Some(Method::Dopri5),
+            MethodArg::Dop853 => Some(Method::Dop853),
+            MethodArg::Ros23 => Some(Method::Rosenbrock23),
+            MethodArg::Rk4 => None,
+        }
+    }
+}
+
+/// The run: its initial state, parameters, times and integrator.
+#[derive(Args, Debug, Clone, PartialEq, Default)]
+pub struct RunArgs {
+    /// A parameter's value, `NAME=VALUE` (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub param: Vec<(String, f64)>,
+    /// A coordinate's initial value, `NAME=VALUE` (repeatable).
+    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub q: Vec<(String, f64)>,
+    /// A coordinate's initial rate, `NAME=VALUE` (repeatable).
+    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub qdot: Vec<(String, f64)>,
+    /// The end of the run (default: the model file's `simulation.t_end`).
+    #[arg(long, value_parser = finite, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
+    /// The output interval (default: the model file's `simulation.dt_out`).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub dt_out: Option<f64>,
+    /// The integrator (default: DOP853 at rtol = atol = 1e-10; the paper's DOPRI5 at rtol
+    /// 1e-3, atol 1e-6 with `--paper` or for a model whose file asks for it).
+    #[arg(long, value_enum)]
+    pub method: Option<MethodArg>,
+    /// Relative tolerance (adaptive methods).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance (adaptive methods).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub atol: Option<f64>,
+    /// The step of `--method rk4`.
+    #[arg(long, value_parser = positive, allow_hyphen_values = true, required_if_eq("method", "rk4"))]
+    pub h: Option<f64>,
+    /// The largest step (default: a tenth of the run).
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
+    pub h_max: Option<f64>,
+    /// The paper's settings: DOPRI5, rtol 1e-3, atol 1e-6, h_max a tenth of the run.
+    #[arg(long)]
+    pub paper: bool,
+}
+
+fn assignment(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s.split_once('=').ok_or_else(|| format!("needs `NAME=VALUE`, not `{s}`"))?;
+    let v: f64 = value.trim().parse().map_err(|_| format!("`{value}` is not a number (in `{s}`)"))?;
+    if !v.is_finite() {
+        return Err(format!("`{value}` is not finite (in `{s}`)"));
+    }
+    Ok((name.trim().to_string(), v))
+}
+
+pub fn positive(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("needs a positive number, not `{s}`"))
+}
+
+fn finite(s: &str) -> Result<f64, String> {
+    s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("needs a finite number, not `{s}`"))
+}
+
+/// The position of `name` among `names` (a model's coordinates or parameters).
+pub fn index_of(names: &[String], name: &str, what: &'static str) -> Result<usize, CliError> {
+    names.iter().position(|n| n == name).ok_or_else(|| CliError::UnknownName { what, name: name.to_string(), known: names.join(", ") })
+}
+
+impl RunArgs {
+    /// The model's reference run with the overrides applied; a model without an `initial`
+    /// section starts at rest at zero, one without `simulation` needs `--t-end` and `--dt-out`.
+    pub fn reference(&self, model: &Model) -> Result<Reference, CliError> {
+        let m = model.coordinates.len();
+        let (mut q0, mut qd0) = model.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
+        let mut params = model.default_params.clone();
+        for (name, v) in &self.q {
+            q0[index_of(&model.coordinates, name, "coordinate")?] = *v;
+        }
+        for (name, v) in &self.qdot {
+            qd0[index_of(&model.coordinates, name, "coordinate")?] = *v;
+        }
+        for (name, v) in &self.param {
+            let k = index_of(&model.parameter_names, name, "parameter")?;
+            params[k] = *v;
+        }
+        let (t_start, t_end, dt_out) = match (model.run, self.t_end, self.dt_out) {
+            (Some((a, b, c)), t_end, dt_out) => (a, t_end.unwrap_or(b), dt_out.unwrap_or(c)),
+            (None, Some(b), Some(c)) => (0.0, b, c),
+            (None, _, _) => return Err(CliError::NoRun { model: model.module.clone() }),
+        };
+        let reference = Reference { q0, qd0, params, t_start, t_end, dt_out };
+        reference.times().map_err(CliError::Grid)?;
+        Ok(reference)
+    }
+
+    /// True when the run uses the paper's settings (`--paper`, or the model file asks).
+    pub fn paper(&self, model: &Model) -> bool {
+        self.paper || model.paper_settings
+    }
+
+    /// The integrator settings for a run of `span` seconds.
+    pub fn settings(&self, model: &Model, span: f64) -> Settings {
+        let mut s = if self.paper(model) { Settings::paper(span) } else { Settings::tight(span) };
+        if let Some(m) = self.method {
+            s.method = m.adaptive().unwrap_or(Method::Rk4 { h: self.h.unwrap_or(0.01 * span) });
+        }
+        if let Some(x) = self.rtol {
+            s.rtol = x;
+        }
+        if let Some(x) = self.atol {
+            s.atol = x;
+        }
+        if let Some(x) = self.h_max {
+            s.h_max = x;
+        }
+        s
+    }
+}
+
+/// The settings in one line, for every table and file header.
+pub fn describe(s: &Settings) -> String {
+    match s.method {
+        Method::Rk4 { h } => format!("RK4, h {h}"),
+        m => format!("{m}, rtol {:e}, atol {:e}, h_max {}", s.rtol, s.atol, s.h_max),
+    }
+}
+
+/// The requested formulations, checked against what the model has.
+pub fn formulations(model: &Model, list: &[FormulationArg]) -> Result<Vec<FormulationKind>, CliError> {
+    list.iter()
+        .map(|f| {
+            model.formulation(f.0).map(|_| f.0).ok_or_else(|| CliError::UnknownFormulation {
+                model: model.module.clone(),
+                kind: f.0,
+                available: model.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", "),
+            })
+        })
+        .collect()
+}

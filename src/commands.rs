@@ -1,0 +1,267 @@
+//! `compare`, `sweep` and `linearize`: the runtime's functions on a model evaluated in-process,
+//! with their tables, files and plots.
+
+use crate::args::{FormulationArg, MethodArg, RunArgs, describe, formulations, index_of};
+use crate::{CliError, load, plot, print};
+use clap::Args;
+use files::write_creating_folder as write_file;
+use runtime::compare::{Options, compare as compare_runs, table};
+use runtime::linearize::{Operating, Swept, crossings, growth, linearize as linearize_at};
+use runtime::sweep::{SweepOptions, csv as sweep_csv, sweep as sweep_runs};
+use runtime::system::Drift;
+use seam::FormulationKind;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct CompareArgs {
+    /// A model file (`path/to/my_model.ron`) or the name of a built-in model (cart_pendulum,
+    /// three_body, satellite_boom, ...).
+    pub model: String,
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// CPU time is the median of N runs.
+    #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeats: u32,
+    /// A comma-separated subset of the formulations (default: all the model has).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub formulations: Vec<FormulationArg>,
+    /// Baumgarte stabilization of Lagrange.
+    #[arg(long, value_name = "ALPHA,BETA", value_parser = pair, allow_hyphen_values = true, conflicts_with = "projection")]
+    pub baumgarte: Option<(f64, f64)>,
+    /// Project Lagrange and Maggi onto the constraints after every step.
+    #[arg(long)]
+    pub projection: bool,
+    /// Also write the records as JSON, atomically; `-` writes them to stdout, alone (the table
+    /// then goes to stderr).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Also write SVG plots of the coordinates and errors into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
+}
+
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct SweepArgs {
+    /// A model file or the name of a built-in model.
+    pub model: String,
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// The directory the results are written to.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+    /// CPU time is the median of N runs.
+    #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeats: u32,
+    /// Three tolerances and three RK4 steps instead of ten and seven.
+    #[arg(long)]
+    pub quick: bool,
+    /// A comma-separated subset of the formulations (default: all the model has).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub formulations: Vec<FormulationArg>,
+    /// The integrators to sweep (add ros23 for a stiff model).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST", default_value = "dopri5,dop853,rk4")]
+    pub methods: Vec<MethodArg>,
+}
+
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct LinearizeArgs {
+    /// A model file or the name of a built-in model.
+    pub model: String,
+    /// The formulation whose state is linearized.
+    #[arg(long, value_enum, default_value = "kane")]
+    pub formulation: FormulationArg,
+    /// A coordinate's value at the operating point, `NAME=VALUE` (repeatable).
+    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub q: Vec<(String, f64)>,
+    /// A coordinate's rate at the operating point, `NAME=VALUE` (repeatable). With velocity
+    /// constraints, the rates not given (nor swept) are solved from them.
+    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub qdot: Vec<(String, f64)>,
+    /// A parameter's value, `NAME=VALUE` (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub param: Vec<(String, f64)>,
+    /// A parameter to treat as an input `u` (repeatable): prints `B` of `x' = A x + B u`.
+    #[arg(long = "input", value_name = "NAME")]
+    pub input: Vec<String>,
+    /// Sweep a parameter (`k`) or a coordinate's rate (`x'`) from `--from` to `--to`.
+    #[arg(long, value_name = "NAME", requires_all = ["from", "to"])]
+    pub sweep: Option<String>,
+    #[arg(long, allow_hyphen_values = true, requires = "sweep")]
+    pub from: Option<f64>,
+    #[arg(long, allow_hyphen_values = true, requires = "sweep")]
+    pub to: Option<f64>,
+    /// Number of values in the sweep.
+    #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    pub steps: u32,
+    /// The directory a sweep's results are written to.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+}
+
+fn assignment(s: &str) -> Result<(String, f64), String> {
+    let (name, value) = s.split_once('=').ok_or_else(|| format!("needs `NAME=VALUE`, not `{s}`"))?;
+    let v: f64 = value.trim().parse().map_err(|_| format!("`{value}` is not a number (in `{s}`)"))?;
+    if !v.is_finite() {
+        return Err(format!("`{value}` is not finite (in `{s}`)"));
+    }
+    Ok((name.trim().to_string(), v))
+}
+
+fn pair(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| format!("needs `alpha,beta`, not `{s}`"))?;
+    match parts[..] {
+        [a, b] if a.is_finite() && b.is_finite() && a >= 0.0 && b >= 0.0 => Ok((a, b)),
+        _ => Err(format!("needs two non-negative numbers `alpha,beta`, not `{s}`")),
+    }
+}
+
+/// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
+pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
+    let model = load::evaluated(&args.model)?;
+    let reference = args.run.reference(&model)?;
+    let settings = args.run.settings(&model, reference.t_end - reference.t_start);
+    let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
+    options.formulations = formulations(&model, &args.formulations)?;
+    if let Some((alpha, beta)) = args.baumgarte {
+        options.drift = Drift::Baumgarte { alpha, beta };
+    }
+    if args.projection {
+        options.drift = Drift::Projection;
+    }
+    let runs = compare_runs(&model, &options)?;
+    let header = format!(
+        "{}: {}, {} outputs, CPU time median of {} (evaluated in-process)\n\n",
+        model.module,
+        describe(&options.settings),
+        runs.first().map_or(0, |r| r.solution.times.len()),
+        options.repeats
+    );
+    let json_to_stdout = args.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
+    if json_to_stdout {
+        // stdout carries the JSON alone, so that it can be piped; the table goes to stderr.
+        eprint!("{header}{}", table(&runs));
+    } else {
+        print(&(header + &table(&runs)))?;
+    }
+    if let Some(path) = &args.json {
+        let records: Vec<_> = runs.iter().map(|r| &r.record).collect();
+        let text = serde_json::to_string_pretty(&records).expect("records serialize");
+        if json_to_stdout {
+            print(&(text + "\n"))?;
+        } else {
+            write_file(path, text.as_bytes())?;
+        }
+    }
+    if let Some(dir) = &args.plots {
+        for p in plot::write_plots(&model, &runs, dir)? {
+            eprintln!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+/// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
+pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
+    let model = load::evaluated(&args.model)?;
+    let reference = args.run.reference(&model)?;
+    let mut options = SweepOptions {
+        repeats: args.repeats as usize,
+        formulations: formulations(&model, &args.formulations)?,
+        reference: Some(reference),
+        ..SweepOptions::default()
+    };
+    options.adaptive =
+        [MethodArg::Dopri5, MethodArg::Dop853, MethodArg::Ros23].into_iter().filter(|a| args.methods.contains(a)).filter_map(MethodArg::adaptive).collect();
+    if !args.methods.contains(&MethodArg::Rk4) {
+        options.rk4_steps.clear();
+    }
+    if args.quick {
+        options.tolerances = vec![1e-3, 1e-6, 1e-9];
+        if !options.rk4_steps.is_empty() {
+            options.rk4_steps = vec![1.0, 0.1, 0.01];
+        }
+    }
+    let bar = crate::simulate::progress_bar(0);
+    let points = sweep_runs(&model, &options, &mut |done, total, label| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        bar.set_message(label.to_string());
+    })?;
+    bar.finish_and_clear();
+    let base = args.out.join(format!("{}_work_precision", model.module));
+    write_file(&base.with_extension("csv"), sweep_csv(&points).as_bytes())?;
+    write_file(&base.with_extension("json"), serde_json::to_string_pretty(&points).expect("points serialize").as_bytes())?;
+    plot::write_work_precision(&points, &base.with_extension("svg"))?;
+    let failed = points.iter().filter(|p| p.failure.is_some()).count();
+    print(&format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), base.display()))
+}
+
+/// The operating point `args` describe: the model's initial state and parameters with the
+/// overrides applied.
+fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operating, CliError> {
+    let m = model.coordinates.len();
+    let (mut q, mut qdot) = model.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
+    let mut params = model.default_params.clone();
+    for (name, v) in &args.q {
+        q[index_of(&model.coordinates, name, "coordinate")?] = *v;
+    }
+    let mut held = Vec::new();
+    for (name, v) in &args.qdot {
+        let j = index_of(&model.coordinates, name, "coordinate")?;
+        qdot[j] = *v;
+        held.push(j);
+    }
+    for (name, v) in &args.param {
+        params[index_of(&model.parameter_names, name, "parameter")?] = *v;
+    }
+    Ok(Operating { q, qdot, params, held })
+}
+
+/// `linearize`: the eigenvalues at the operating point, or the sweep's files.
+pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
+    let model = load::evaluated(&args.model)?;
+    let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
+    let at = operating_point(&model, args)?;
+    let Some(name) = &args.sweep else {
+        let lin = linearize_at(&model, kind, &at)?;
+        let mut text = format!(
+            "{} {kind}: A is {n} x {n} ({}), largest nonzero real part {:e}\n",
+            model.module,
+            if lin.exact { "exact Jacobian" } else { "finite differences" },
+            growth(&lin.eigenvalues.iter().map(|l| (l.re, l.im)).collect::<Vec<_>>()),
+            n = lin.a.nrows()
+        );
+        for l in &lin.eigenvalues {
+            text += &format!("  {:+.12e} {:+.12e}i\n", l.re, l.im);
+        }
+        if !args.input.is_empty() {
+            let inputs: Vec<usize> = args.input.iter().map(|n| index_of(&model.parameter_names, n, "parameter")).collect::<Result<_, _>>()?;
+            let (b, exact) = runtime::linearize::input_matrix(&model, kind, &at, &inputs)?;
+            text += &format!("B ({}), columns {}:\n", if exact { "exact" } else { "finite differences" }, args.input.join(", "));
+            let names = model.formulation(kind).map(|f| f.state_names.clone()).unwrap_or_default();
+            for (r, name) in (0..b.nrows()).zip(names) {
+                let row: Vec<String> = b.row(r).iter().map(|x| format!("{x:+.9e}")).collect();
+                text += &format!("  {name:>12}: {}\n", row.join(" "));
+            }
+        }
+        return print(&text);
+    };
+    let swept = Swept::find(&model, name)?;
+    let (a, b) = (args.from.expect("clap requires --from"), args.to.expect("clap requires --to"));
+    let k = args.steps as usize;
+    let values: Vec<f64> = (0..k).map(|i| a + (b - a) * i as f64 / (k - 1) as f64).collect();
+    let rows = runtime::linearize::sweep(&model, kind, &at, swept, &values)?;
+    let cross = crossings(&model, kind, &at, swept, &rows)?;
+    let base = args.out.join(format!("{}_eigenvalues", model.module));
+    write_file(&base.with_extension("csv"), runtime::linearize::csv(name, &rows).as_bytes())?;
+    let json = serde_json::json!({ "model": model.module, "formulation": kind.name(), "swept": name, "crossings": cross, "rows": rows });
+    write_file(&base.with_extension("json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
+    plot::write_eigenvalues(&format!("{} ({kind})", model.module), name, &rows, &base.with_extension("svg"))?;
+    let mut text = format!("{} {kind}: {} values of {name} from {a} to {b}; written {}.{{csv,json,svg}}\n", model.module, k, base.display());
+    for c in &cross {
+        text += &format!("  the largest nonzero real part crosses zero at {name} = {c:.12}\n");
+    }
+    let _ = std::io::stderr().flush();
+    print(&text)
+}

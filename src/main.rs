@@ -1,0 +1,142 @@
+//! `multibody`: equations of motion of multibody systems, derived symbolically, run at once.
+//!
+//! One tool, installed with `cargo install --path .`: `generate` (a model's Rust module),
+//! `inspect` (what is derived), and, on any model file, in any folder, with no cargo or rustc
+//! at run time (the model is evaluated in-process): `simulate` (a trajectory), `compare` (the
+//! four formulations side by side), `sweep` (work against precision), `linearize` (A, B,
+//! eigenvalues). The libraries do the work: `generator` derives and evaluates, `runtime`
+//! integrates and measures; this crate is their command line.
+
+mod args;
+mod commands;
+mod load;
+mod plot;
+mod simulate;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// The symbolic core allocates many small nodes and maps (see the generator's binary).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// Derives the equations of motion of a multibody model (a RON file) symbolically and runs
+/// them: in-process, in any folder, with no Rust toolchain needed at run time.
+#[derive(Parser, Debug)]
+#[command(name = "multibody", version)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Writes a model's equations of motion as a Rust module (to stdout, or to -o PATH).
+    Generate(generator::command::GenerateArgs),
+    /// Shows what is derived: T, M, N, Q, the constraints, Definition 1 per coordinate, and
+    /// the reduced method's W_NI, X_NI, M_NI, L_NI.
+    Inspect {
+        /// The model file (RON).
+        model: PathBuf,
+        /// Print LaTeX instead of text.
+        #[arg(long)]
+        latex: bool,
+    },
+    /// Integrates one formulation and writes the trajectory (CSV and JSON) and its plots.
+    Simulate(simulate::SimulateArgs),
+    /// Every formulation under the same integrator settings, as a table shaped like the
+    /// paper's Tables 2, 3 and 6.
+    Compare(commands::CompareArgs),
+    /// The work-precision sweep: every formulation under DOPRI5 and DOP853 over a range of
+    /// tolerances and RK4 over a range of steps (CSV, JSON, SVG).
+    Sweep(commands::SweepArgs),
+    /// The linear model x' = A x (+ B u) of a formulation about an operating point, its
+    /// eigenvalues, or their sweep over a parameter or a rate.
+    Linearize(commands::LinearizeArgs),
+}
+
+/// Why a command failed: the user's model (rendered with its excerpt), the run, or a file.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    #[error(transparent)]
+    Model(#[from] generator::model::ModelError),
+    #[error("no model `{name}`: it is not a file, and no built-in model has that name (built in: {known})")]
+    UnknownModel { name: String, known: String },
+    #[error("model `{model}` has no `simulation` section: give the run with --t-end and --dt-out")]
+    NoRun { model: String },
+    #[error("run settings: {0}")]
+    Grid(seam::GridError),
+    #[error(transparent)]
+    Compare(#[from] runtime::compare::CompareError),
+    #[error(transparent)]
+    Setup(#[from] runtime::system::SetupError),
+    #[error(transparent)]
+    Run(#[from] runtime::integrate::RunError),
+    #[error("monitoring the run failed: {0}")]
+    Monitor(seam::Failure),
+    #[error(transparent)]
+    Linearize(#[from] runtime::linearize::LinearizeError),
+    #[error(transparent)]
+    File(#[from] files::FileError),
+    #[error(transparent)]
+    Plot(#[from] plot::PlotError),
+    #[error("no {what} `{name}` (known: {known})")]
+    UnknownName { what: &'static str, name: String, known: String },
+    #[error("model `{model}` has no formulation `{kind}` (it has: {available})")]
+    UnknownFormulation { model: String, kind: seam::FormulationKind, available: String },
+    #[error("cannot write to stdout: {0}")]
+    Stdout(std::io::Error),
+    #[error("cannot write the CSV: {0}")]
+    Csv(#[from] csv::Error),
+}
+
+fn main() -> ExitCode {
+    use std::io::IsTerminal;
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Generate(args) => return generator_result(generator::command::generate(args)),
+        Command::Inspect { model, latex } => return generator_result(generator::command::inspect(&model, latex)),
+        Command::Simulate(args) => simulate::simulate(&args),
+        Command::Compare(args) => commands::compare(&args),
+        Command::Sweep(args) => commands::sweep(&args),
+        Command::Linearize(args) => commands::linearize(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(CliError::Model(e)) => {
+            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The generator's own commands report as its binary does.
+fn generator_result(result: Result<(), generator::command::Failure>) -> ExitCode {
+    use std::io::IsTerminal;
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(generator::command::Failure::Model(e)) => {
+            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
+            ExitCode::FAILURE
+        }
+        Err(generator::command::Failure::Message(m)) => {
+            eprintln!("{m}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Writes to stdout; a closed pipe (`multibody compare m | head`) ends the program quietly.
+pub fn print(text: &str) -> Result<(), CliError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        other => other.map_err(CliError::Stdout),
+    }
+}

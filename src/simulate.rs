@@ -1,0 +1,156 @@
+//! `simulate`: one formulation of a model, integrated, and its trajectory written: `t`, `q`,
+//! `q'`, the formulation's state, the energy and its error, the momenta of the ignorable
+//! coordinates and the constraint residuals, as CSV (the `csv` crate) and JSON (with the
+//! settings used), and plots of `q(t)` and of the invariants' errors.
+
+use crate::args::{FormulationArg, RunArgs, describe, formulations};
+use crate::{CliError, load, plot, print};
+use clap::Args;
+use files::write_creating_folder as write_file;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use runtime::integrate::{JacobianFn, integrate_with_jacobian};
+use runtime::monitor::monitor;
+use runtime::system::System;
+use seam::FormulationKind;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct SimulateArgs {
+    /// A model file (`path/to/my_model.ron`) or the name of a built-in model.
+    pub model: String,
+    /// The formulation (default: the reduced Volterra method where the model has it).
+    #[arg(long, value_enum)]
+    pub formulation: Option<FormulationArg>,
+    #[command(flatten)]
+    pub run: RunArgs,
+    /// The directory the trajectory and plots are written to:
+    /// `<model>_<formulation>.{csv,json}`, `<model>_<formulation>_{coordinates,invariants}.svg`.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+}
+
+/// A progress bar on stderr that shows itself only on a terminal and only once a run has
+/// taken a second.
+pub fn progress_bar(length: u64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(length), ProgressDrawTarget::hidden());
+    bar.set_style(ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} {msg}").expect("a valid template").progress_chars("=> "));
+    let shown = bar.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(1));
+        if !shown.is_finished() {
+            shown.set_draw_target(ProgressDrawTarget::stderr());
+        }
+    });
+    bar
+}
+
+/// The formulation a simulation runs by default: the paper's reduced method where the model
+/// has it, else Kane's, else the first.
+fn default_kind(model: &seam::Model) -> FormulationKind {
+    [FormulationKind::ReducedVolterra, FormulationKind::Kane]
+        .into_iter()
+        .find(|k| model.formulation(*k).is_some())
+        .unwrap_or_else(|| model.formulations[0].kind)
+}
+
+pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
+    let model = load::evaluated(&args.model)?;
+    let kind = match args.formulation {
+        Some(f) => formulations(&model, &[f])?[0],
+        None => default_kind(&model),
+    };
+    let reference = args.run.reference(&model)?;
+    let settings = args.run.settings(&model, reference.t_end - reference.t_start);
+    let (sys, y0) = System::start(&model, kind, reference.params.clone(), &reference.q0, &reference.qd0)?;
+    let times = reference.times().map_err(CliError::Grid)?;
+    let span = reference.t_end - reference.t_start;
+    let bar = progress_bar(1000);
+    bar.set_message(format!("{} {kind}", model.module));
+    let start = Instant::now();
+    let mut calls = 0u64;
+    let mut rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
+        calls += 1;
+        if calls.is_multiple_of(1024) {
+            bar.set_position((1000.0 * (t - reference.t_start) / span) as u64);
+        }
+        sys.rhs(t, y, dy)
+    };
+    let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| sys.jacobian(t, y, dy, j);
+    let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
+    let solution = integrate_with_jacobian(&mut rhs, jacobian, None, &y0, &times, &settings);
+    bar.finish_and_clear();
+    let solution = solution?;
+    let elapsed = start.elapsed();
+    let inv = monitor(&sys, &solution).map_err(CliError::Monitor)?;
+
+    // The trajectory, one row per output time.
+    let base = args.out.join(format!("{}_{}", model.module, kind.name()));
+    let mut header: Vec<String> = vec!["t".into()];
+    header.extend(model.coordinates.iter().cloned());
+    header.extend(model.coordinates.iter().map(|c| format!("{c}'")));
+    header.extend(sys.form.state_names.iter().map(|n| format!("state:{n}")));
+    header.extend(["energy".to_string(), "energy_error".to_string()]);
+    header.extend(model.ignorable.iter().map(|&j| format!("momentum:{}", model.coordinates[j])));
+    header.extend(["constraint_residual".to_string(), "position_residual".to_string()]);
+    let rows: Vec<Vec<f64>> = (0..solution.times.len())
+        .map(|i| {
+            let mut row = vec![solution.times[i]];
+            row.extend(&inv.coordinates[i]);
+            row.extend(&inv.rates[i]);
+            row.extend(&solution.states[i]);
+            row.extend([inv.energy[i], inv.energy_error[i]]);
+            row.extend((0..model.ignorable.len()).map(|k| inv.momentum0[k] + inv.momentum_error[k][i]));
+            row.extend([inv.velocity_constraint[i], inv.position_constraint[i]]);
+            row
+        })
+        .collect();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&header)?;
+    for row in &rows {
+        w.write_record(row.iter().map(|x| format!("{x:e}")))?;
+    }
+    let text = w.into_inner().map_err(|e| CliError::Csv(e.into_error().into()))?;
+    write_file(&base.with_extension("csv"), &text)?;
+    let json = serde_json::json!({
+        "model": model.module,
+        "formulation": kind.name(),
+        "settings": describe(&settings),
+        "evaluation": "in-process",
+        "t_start": reference.t_start,
+        "t_end": reference.t_end,
+        "dt_out": reference.dt_out,
+        "params": model.parameter_names.iter().zip(&reference.params).map(|(n, v)| (n.clone(), serde_json::Value::from(*v))).collect::<serde_json::Map<String, serde_json::Value>>(),
+        "steps": solution.stats.steps,
+        "rejected": solution.stats.rejected,
+        "rhs_calls": solution.stats.rhs_calls,
+        "columns": header,
+        "rows": rows,
+    });
+    write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
+    let plots = plot::write_trajectory(&model, &sys.form, &solution.times, &inv, &base)?;
+    let mut text = format!(
+        "{} {kind}: {} outputs from t = {} to {} ({}), {} steps, {} right-hand sides, {:.3} s\n",
+        model.module,
+        solution.times.len(),
+        reference.t_start,
+        reference.t_end,
+        describe(&settings),
+        solution.stats.steps,
+        solution.stats.rhs_calls,
+        elapsed.as_secs_f64()
+    );
+    let worst = |s: &[f64]| s.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    text += &format!("  max |energy error| {:.3e} (E(0) = {:.6e})\n", worst(&inv.energy_error), inv.energy0);
+    for (k, &j) in model.ignorable.iter().enumerate() {
+        text += &format!("  max |momentum error ({})| {:.3e}\n", model.coordinates[j], worst(&inv.momentum_error[k]));
+    }
+    if !model.constraints.is_empty() {
+        text += &format!("  max constraint residual {:.3e}\n", worst(&inv.velocity_constraint));
+    }
+    text += &format!("  wrote {}.csv, {}.json", base.display(), base.display());
+    for p in plots {
+        text += &format!(", {}", p.display());
+    }
+    print(&(text + "\n"))
+}

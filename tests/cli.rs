@@ -1,0 +1,198 @@
+//! The `multibody` tool, run as a user runs it: from a temporary folder outside the repository,
+//! with no cargo or rustc on `PATH`, on built-in models and on a model the project has never
+//! seen; every model evaluated in-process.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// `multibody ARGS` in `dir`, with `PATH` holding only the system's folders (no cargo, no
+/// rustc).
+fn multibody(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_multibody")).args(args).current_dir(dir).env_clear().env("PATH", "/usr/bin:/bin").output().unwrap()
+}
+
+fn ok(out: &Output) -> String {
+    assert!(out.status.success(), "exit {:?}\n{}\n{}", out.status.code(), String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// A folder outside the repository holding `my_model.ron`: the downstream example's gantry
+/// crane under another name, a model the project's tool has never seen.
+fn user_model() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let crane = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/downstream/models/gantry_crane.ron")).unwrap();
+    let path = dir.path().join("my_model.ron");
+    std::fs::write(&path, crane.replace("name: \"gantry_crane\"", "name: \"my_model\"")).unwrap();
+    (dir, path)
+}
+
+#[test]
+fn compare_prints_the_four_formulations_of_a_model_never_seen() {
+    let (dir, _) = user_model();
+    let table = ok(&multibody(dir.path(), &["compare", "my_model.ron", "--repeats", "1", "--json", "out.json"]));
+    for row in ["| lagrange | 6 | 3 |", "| maggi | 6 | 3 |", "| kane | 6 | 3 |", "| reduced_volterra | 5 | 2 |"] {
+        assert!(table.contains(row), "{row} in\n{table}");
+    }
+    // A user's model gets tight settings, and the table says which.
+    assert!(table.starts_with("my_model: DOP853, rtol 1e-10, atol 1e-10"), "{table}");
+    let records: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("out.json")).unwrap()).unwrap();
+    let records = records.as_array().unwrap();
+    assert_eq!(records.len(), 4);
+    assert!(records.iter().all(|r| r["scene"] == "my_model" && r["momenta"][0]["coordinate"] == "x"));
+    assert!(records[3]["momentum_error_norm"].as_f64().unwrap() < 1e-12);
+    // Parameters and initial values from the command line: a heavier trolley is another run.
+    let heavy = ok(&multibody(dir.path(), &["compare", "my_model.ron", "--repeats", "1", "--formulations", "kane", "--param", "mt=50", "--json", "-"]));
+    let heavy: serde_json::Value = serde_json::from_str(&heavy).unwrap();
+    assert_ne!(heavy[0]["energy_error_norm"], records[2]["energy_error_norm"]);
+    let bad = multibody(dir.path(), &["compare", "my_model.ron", "--param", "mass=1"]);
+    assert!(
+        !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("no parameter `mass` (known: mt, mc, L"),
+        "{}",
+        String::from_utf8_lossy(&bad.stderr)
+    );
+}
+
+#[test]
+fn the_paper_s_scenes_use_the_paper_s_settings_and_the_same_numbers_as_compiled_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ok(&multibody(dir.path(), &["compare", "satellite_boom", "--repeats", "1", "--json", "-"]));
+    let records: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // The paper's state counts for scene 3, the work integral included: 15, 15, 15, 12.
+    let states: Vec<u64> = records.as_array().unwrap().iter().map(|r| r["states"].as_u64().unwrap()).collect();
+    assert_eq!(states, vec![15, 15, 15, 12]);
+    // The compiled module through the runtime, at the same settings: the same steps, calls and
+    // errors (in-process evaluation gives the compiled module's numbers).
+    let compiled = generated::find("satellite_boom").unwrap();
+    let runs = runtime::compare::compare(&compiled, &runtime::compare::Options { repeats: 1, ..runtime::compare::Options::paper(&compiled) }).unwrap();
+    for (r, c) in records.as_array().unwrap().iter().zip(&runs) {
+        assert_eq!(r["method"], c.record.method.as_str());
+        assert_eq!(r["steps"].as_u64().unwrap() as usize, c.record.steps);
+        assert_eq!(r["rhs_calls"].as_u64().unwrap() as usize, c.record.rhs_calls);
+        let (a, b) = (r["energy_error_norm"].as_f64().unwrap(), c.record.energy_error_norm);
+        assert!((a - b).abs() <= 1e-9 * b.abs(), "{}: {a} against {b}", c.record.method);
+    }
+    // `--paper` anywhere: the crane at the paper's settings.
+    let (dir, _) = user_model();
+    let table = ok(&multibody(dir.path(), &["compare", "my_model.ron", "--repeats", "1", "--paper", "--formulations", "kane"]));
+    assert!(table.starts_with("my_model: DOPRI5, rtol 1e-3, atol 1e-6"), "{table}");
+}
+
+#[test]
+fn simulate_writes_the_trajectory_and_its_plots() {
+    let (dir, _) = user_model();
+    let out = ok(&multibody(dir.path(), &["simulate", "my_model.ron", "--out", "run", "--t-end", "4", "--dt-out", "0.5", "--qdot", "x=0.3"]));
+    assert!(out.contains("my_model reduced_volterra: 9 outputs from t = 0 to 4"), "{out}");
+    let csv = std::fs::read_to_string(dir.path().join("run/my_model_reduced_volterra.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&header[..7], ["t", "x", "phi", "psi", "x'", "phi'", "psi'"], "{csv}");
+    assert!(header.contains(&"energy_error") && header.contains(&"momentum:x") && header.contains(&"constraint_residual"), "{header:?}");
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 9);
+    assert_eq!((rows[0][0], rows[8][0]), (0.0, 4.0));
+    assert_eq!(rows[0][4], 0.3, "the given initial rate");
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    // The conserved momentum of the trolley and the energy hold along the written trajectory.
+    let g0 = rows[0][col("momentum:x")];
+    assert!(g0.abs() > 0.1 && rows.iter().all(|r| (r[col("momentum:x")] - g0).abs() <= 1e-12 * g0.abs()), "{csv}");
+    assert!(rows.iter().all(|r| r[col("energy_error")].abs() < 1e-8), "{csv}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.path().join("run/my_model_reduced_volterra.json")).unwrap()).unwrap();
+    assert_eq!(json["settings"], "DOP853, rtol 1e-10, atol 1e-10, h_max 0.4");
+    assert_eq!(json["rows"].as_array().unwrap().len(), 9);
+    for plot in ["my_model_reduced_volterra_coordinates.svg", "my_model_reduced_volterra_invariants.svg"] {
+        let svg = std::fs::read_to_string(dir.path().join("run").join(plot)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{plot}");
+    }
+    // Another formulation, by any of its names.
+    ok(&multibody(dir.path(), &["simulate", "my_model.ron", "--formulation", "lagrange", "--out", "run", "--t-end", "1"]));
+    assert!(dir.path().join("run/my_model_lagrange.csv").is_file());
+}
+
+#[test]
+fn sweep_and_linearize_run_on_a_model_file() {
+    let (dir, _) = user_model();
+    ok(&multibody(dir.path(), &["sweep", "my_model.ron", "--quick", "--repeats", "1", "--formulations", "kane,reduced", "--out", "results"]));
+    let csv = std::fs::read_to_string(dir.path().join("results/my_model_work_precision.csv")).unwrap();
+    // 2 formulations x 9 settings.
+    assert_eq!(csv.lines().count(), 1 + 18, "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.starts_with("my_model,kane,") || l.starts_with("my_model,reduced_volterra,")), "{csv}");
+    // Hanging at rest nothing grows or decays (the pendulum mode is an imaginary pair).
+    let rest = ["--q", "phi=0", "--q", "psi=0", "--qdot", "x=0", "--qdot", "phi=0", "--qdot", "psi=0"];
+    let text = ok(&multibody(dir.path(), &[&["linearize", "my_model.ron"][..], &rest, &["--input", "g"]].concat()));
+    let eigen: Vec<(f64, f64)> = text
+        .lines()
+        .filter_map(|l| l.trim().strip_suffix('i'))
+        .map(|l| {
+            let mut it = l.split_whitespace().map(|x| x.parse::<f64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect();
+    assert!(!eigen.is_empty() && eigen.iter().all(|(re, _)| re.abs() < 1e-4), "{text}");
+    assert!(eigen.iter().any(|(_, im)| *im > 0.1), "{text}");
+    assert!(text.contains("B (finite differences), columns g:"), "{text}");
+    ok(&multibody(
+        dir.path(),
+        &[&["linearize", "my_model.ron"][..], &rest, &["--sweep", "L", "--from", "1", "--to", "3", "--steps", "5", "--out", "lin"]].concat(),
+    ));
+    let csv = std::fs::read_to_string(dir.path().join("lin/my_model_eigenvalues.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 5, "{csv}");
+}
+
+#[test]
+fn the_stiff_integrator_is_selected_in_compare_and_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = ok(&multibody(
+        dir.path(),
+        &["compare", "stiff_pendulum", "--method", "ros23", "--rtol", "1e-4", "--atol", "1e-4", "--repeats", "1", "--formulations", "kane", "--json", "-"],
+    ));
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r[0]["integrator"], "ROS23");
+    let steps = r[0]["steps"].as_u64().unwrap();
+    assert!(steps > 0 && steps < 20_000, "{steps}");
+    ok(&multibody(dir.path(), &["sweep", "stiff_pendulum", "--quick", "--repeats", "1", "--formulations", "kane", "--methods", "dopri5,ros23", "--out", "."]));
+    let csv = std::fs::read_to_string(dir.path().join("stiff_pendulum_work_precision.csv")).unwrap();
+    let integrators: Vec<&str> = csv.lines().skip(1).map(|l| l.split(',').nth(2).unwrap()).collect();
+    assert_eq!(integrators, ["DOPRI5", "DOPRI5", "DOPRI5", "ROS23", "ROS23", "ROS23"], "{csv}");
+}
+
+#[test]
+fn bad_input_gets_the_located_error_and_a_non_zero_exit() {
+    let (dir, path) = user_model();
+    let text = std::fs::read_to_string(&path).unwrap().replace("forces: [Gravity", "forcse: [Gravity");
+    std::fs::write(&path, text).unwrap();
+    for command in ["compare", "simulate", "sweep", "linearize"] {
+        let out = multibody(dir.path(), &[command, "my_model.ron"]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("my_model.ron:") && err.contains("forcse") && err.contains("help:"), "{command}: {err}");
+    }
+    let out = multibody(dir.path(), &["compare", "no_such_model"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("no model `no_such_model`") && err.contains("three_body"), "{err}");
+    let out = multibody(dir.path(), &["compare", "cart_pendulum", "--rtol", "-1"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("positive number"));
+    let out = multibody(dir.path(), &["compare", "cart_pendulum", "--formulations", "hamilton"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("reduced_volterra"));
+    // A run that would not fit in memory, or integrate nothing, is refused before it starts.
+    let out = multibody(dir.path(), &["simulate", "cart_pendulum", "--t-end", "1e7"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("output times"), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = multibody(dir.path(), &["simulate", "cart_pendulum", "--t-end", "1", "--dt-out", "100"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("longer than the run"));
+}
+
+#[test]
+fn help_version_and_the_generator_s_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let help = ok(&multibody(dir.path(), &["--help"]));
+    for command in ["generate", "inspect", "simulate", "compare", "sweep", "linearize"] {
+        assert!(help.contains(command), "{help}");
+    }
+    assert!(ok(&multibody(dir.path(), &["--version"])).contains(env!("CARGO_PKG_VERSION")));
+    let help = ok(&multibody(dir.path(), &["simulate", "--help"]));
+    assert!(help.contains("--param <NAME=VALUE>") && help.contains("--t-end") && help.contains("--paper"), "{help}");
+    std::fs::copy(concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron"), dir.path().join("cart_pendulum.ron")).unwrap();
+    let code = ok(&multibody(dir.path(), &["generate", "cart_pendulum.ron", "--quiet"]));
+    assert!(code.contains("pub fn model()"));
+    let inspect = ok(&multibody(dir.path(), &["inspect", concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron")]));
+    assert!(inspect.contains("m = 3, r = 1, p = 2, s = 1"), "{inspect}");
+}
