@@ -63,6 +63,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let (sys, y0) = System::start(&model, kind, reference.params.clone(), &reference.q0, &reference.qd0)?;
+    let settings = runtime::integrate::Settings { time_independent: !sys.form.depends_on_time, ..settings };
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
     let bar = progress_bar(1000);

@@ -165,7 +165,7 @@ fn extreme_integrator_settings_end_or_report() {
     let m = model("satellite_boom");
     let (t0, t1, _) = m.run.unwrap();
     // rtol 1e-14: completes (no endless loop) or reports the step-size underflow.
-    let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000 };
+    let tight = Settings { method: Method::Dopri5, rtol: 1e-14, atol: 1e-14, h_max: 0.1 * (t1 - t0), max_steps: 2_000_000, time_independent: false };
     match run(&m, seam::FormulationKind::ReducedVolterra, &tight, 1) {
         Ok(r) => assert!(r.record.energy_error_rel < 1e-10, "rtol 1e-14: energy {:e}", r.record.energy_error_rel),
         Err(e) => assert!(e.to_string().contains("underflow"), "{e}"),

@@ -63,3 +63,29 @@ fn explicit_cost_grows_with_stiffness_and_implicit_cost_does_not() {
     assert!(explicit > 7.0, "DOPRI5: {e6} steps at 1e6, {e8} at 1e8");
     assert!(implicit < explicit / 2.0, "ROS23: {i6} steps at 1e6, {i8} at 1e8; DOPRI5 grew {explicit}x");
 }
+
+/// The stiff pendulum does not read `t` (the seam says so): the Rosenbrock method skips its
+/// `df/dt` difference, one right-hand side per Jacobian, with the same steps and states (the
+/// difference of a function that does not read `t` is exactly zero).
+#[test]
+fn the_rosenbrock_method_skips_df_dt_for_a_model_that_does_not_read_t() {
+    use runtime::integrate::integrate_with_jacobian;
+    use runtime::system::System;
+    let model = with_stiffness(1e6);
+    let form = model.formulation(FormulationKind::Kane).unwrap();
+    assert!(!form.depends_on_time);
+    assert!(generated::find("satellite_boom").unwrap().formulations.iter().all(|f| f.depends_on_time), "scene 3's F(t) reads t");
+    let r = Reference::of(&model).unwrap();
+    let (sys, y0) = System::start(&model, FormulationKind::Kane, r.params.clone(), &r.q0, &r.qd0).unwrap();
+    let times = r.times().unwrap();
+    let run = |time_independent: bool| {
+        let s = Settings { method: Method::Rosenbrock23, rtol: 1e-6, atol: 1e-6, h_max: 0.5, time_independent, ..Settings::default() };
+        let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| sys.jacobian(t, y, dy, j);
+        integrate_with_jacobian(&mut |t, y, dy| sys.rhs(t, y, dy), Some(&mut exact), None, &y0, &times, &s).unwrap()
+    };
+    let (with, without) = (run(false), run(true));
+    assert_eq!(with.states, without.states);
+    assert_eq!((with.stats.steps, with.stats.jacobians), (without.stats.steps, without.stats.jacobians));
+    assert!(with.stats.jacobians > 10);
+    assert_eq!(with.stats.rhs_calls - without.stats.rhs_calls, with.stats.jacobians);
+}

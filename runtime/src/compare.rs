@@ -151,6 +151,7 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
     let setup = |source| CompareError::Setup { method: method.into(), source };
     let (sys, y0) = System::start(model, kind, reference.params.clone(), &reference.q0, &reference.qd0).map_err(setup)?;
     let sys = sys.with_drift(drift).map_err(setup)?;
+    let settings = &Settings { time_independent: !sys.form.depends_on_time, ..*settings };
     let label = match drift {
         Drift::None => method.to_string(),
         Drift::Baumgarte { .. } => format!("{method}+baumgarte"),

@@ -52,6 +52,8 @@ fn pack(buf: &mut Vec<f64>, t: f64, params: &[f64], a: &[f64], b: &[f64]) {
 thread_local! {
     static INPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
     static OUTPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// The matrix and forcing a right-hand side solves, reused from call to call.
+    static SOLVE: std::cell::RefCell<(Vec<f64>, Vec<f64>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
@@ -246,49 +248,55 @@ impl EvaluatedForm {
                 out
             };
             let qdot = take(nq);
-            let mut matrix = take(n * n).to_vec();
-            let mut force = take(n).to_vec();
+            let (matrix_out, force_out) = (take(n * n), take(n));
             let post = s.post.map(|(rw, cw)| (take(rw * cw), take(rw)));
             let power = if s.work { Some(take(1)[0]) } else { None };
             let checks = take(s.conditions.len());
-            if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
-                let (residuals, positions) = (take(r), take(r));
-                for i in 0..r {
-                    force[self.m + i] -= 2.0 * alpha * residuals[i] + beta * beta * positions[i];
-                }
-            }
-            for (condition, &value) in s.conditions.iter().zip(checks) {
-                if !(value.abs() > SINGULAR_TOLERANCE) {
-                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
-                }
-            }
-            if let Err(column) = solve_dense(n, &mut matrix, &mut force) {
-                return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
-            }
-            dstate[..nq].copy_from_slice(qdot);
-            match post {
-                None => dstate[nq..nq + s.speeds].copy_from_slice(&force[..s.speeds]),
-                Some((w, c)) => {
-                    let (rw, cw) = s.post.expect("post");
-                    for j in 0..rw {
-                        // `w[j][0] * force[0] + ... + c[j]`, left to right as the module writes it.
-                        dstate[nq + j] = match cw {
-                            0 => c[j],
-                            _ => (1..cw).fold(w[j * cw] * force[0], |acc, k| acc + w[j * cw + k] * force[k]) + c[j],
-                        };
+            SOLVE.with(|cell| {
+                let (matrix, force) = &mut *cell.borrow_mut();
+                matrix.clear();
+                matrix.extend_from_slice(matrix_out);
+                force.clear();
+                force.extend_from_slice(force_out);
+                if let (Some(r), Some((alpha, beta))) = (s.stabilization, stabilize) {
+                    let (residuals, positions) = (take(r), take(r));
+                    for i in 0..r {
+                        force[self.m + i] -= 2.0 * alpha * residuals[i] + beta * beta * positions[i];
                     }
                 }
-            }
-            if let Some(p) = power {
-                let last = dstate.len() - 1;
-                dstate[last] = p;
-            }
-            for (index, value) in dstate.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite { t, index });
+                for (condition, &value) in s.conditions.iter().zip(checks) {
+                    if !(value.abs() > SINGULAR_TOLERANCE) {
+                        return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
+                    }
                 }
-            }
-            Ok(())
+                if let Err(column) = solve_dense(n, matrix, force) {
+                    return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
+                }
+                dstate[..nq].copy_from_slice(qdot);
+                match post {
+                    None => dstate[nq..nq + s.speeds].copy_from_slice(&force[..s.speeds]),
+                    Some((w, c)) => {
+                        let (rw, cw) = s.post.expect("post");
+                        for j in 0..rw {
+                            // `w[j][0] * force[0] + ... + c[j]`, left to right as the module writes it.
+                            dstate[nq + j] = match cw {
+                                0 => c[j],
+                                _ => (1..cw).fold(w[j * cw] * force[0], |acc, k| acc + w[j * cw + k] * force[k]) + c[j],
+                            };
+                        }
+                    }
+                }
+                if let Some(p) = power {
+                    let last = dstate.len() - 1;
+                    dstate[last] = p;
+                }
+                for (index, value) in dstate.iter().enumerate() {
+                    if !value.is_finite() {
+                        return Err(Failure::NonFinite { t, index });
+                    }
+                }
+                Ok(())
+            })
         })
     }
 }

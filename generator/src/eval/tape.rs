@@ -170,12 +170,15 @@ impl Tape {
 
     fn eval_with(&self, inputs: &[f64], regs: &mut Vec<f64>, out: &mut [f64]) {
         let base = self.inputs + self.constants.len();
-        regs.clear();
+        // Every instruction writes its register before any later one reads it: the buffer only
+        // grows, and is never cleared.
+        if regs.len() < base + self.instrs.len() {
+            regs.resize(base + self.instrs.len(), 0.0);
+        }
         let given = self.inputs.min(inputs.len());
-        regs.extend_from_slice(&inputs[..given]);
-        regs.resize(self.inputs, 0.0);
-        regs.extend_from_slice(&self.constants);
-        regs.resize(base + self.instrs.len(), 0.0);
+        regs[..given].copy_from_slice(&inputs[..given]);
+        regs[given..self.inputs].fill(0.0);
+        regs[self.inputs..base].copy_from_slice(&self.constants);
         let r = regs.as_mut_slice();
         for (k, ins) in self.instrs.iter().enumerate() {
             // Operands always precede their instruction (checked by the slice's bounds).

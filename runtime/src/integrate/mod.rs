@@ -63,11 +63,14 @@ pub struct Settings {
     pub h_max: f64,
     /// Give up after this many steps.
     pub max_steps: usize,
+    /// The right-hand side does not read `t` (the seam's `Formulation::depends_on_time` is
+    /// false): the Rosenbrock method then skips its `df/dt` difference, one call a step.
+    pub time_independent: bool,
 }
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { method: Method::Dopri5, rtol: 1e-3, atol: 1e-6, h_max: f64::INFINITY, max_steps: 10_000_000 }
+        Settings { method: Method::Dopri5, rtol: 1e-3, atol: 1e-6, h_max: f64::INFINITY, max_steps: 10_000_000, time_independent: false }
     }
 }
 

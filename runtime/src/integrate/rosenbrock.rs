@@ -51,11 +51,13 @@ pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[
                     tmp[k] = y[k];
                 }
             }
-            // df/dt by a forward difference (zero for autonomous models).
-            let dt = f64::EPSILON.sqrt() * t.abs().max(1.0);
-            f(t + dt, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
-            for i in 0..n {
-                dfdt[i] = (tmp[i] - f0[i]) / dt;
+            // df/dt by a forward difference, unless the model does not read t (then it is 0).
+            if !s.time_independent {
+                let dt = f64::EPSILON.sqrt() * t.abs().max(1.0);
+                f(t + dt, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
+                for i in 0..n {
+                    dfdt[i] = (tmp[i] - f0[i]) / dt;
+                }
             }
             stats.jacobians += 1;
             fresh_jacobian = true;
