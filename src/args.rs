@@ -115,21 +115,20 @@ pub fn index_of(names: &[String], name: &str, what: &'static str) -> Result<usiz
 }
 
 impl RunArgs {
-    /// The model's reference run with the overrides applied; a model without an `initial`
+    /// The model's reference run with `--q`, `--qdot`, `--t-end` and `--dt-out` applied (the
+    /// model was loaded with `--param`); a model without an `initial`
     /// section starts at rest at zero, one without `simulation` needs `--t-end` and `--dt-out`.
     pub fn reference(&self, model: &Model) -> Result<Reference, CliError> {
         let m = model.coordinates.len();
         let (mut q0, mut qd0) = model.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
-        let mut params = model.default_params.clone();
+        // `--param` is applied to the model itself (`load::evaluated`), validated as its file's
+        // values are: here the model's values are the run's.
+        let params = model.default_params.clone();
         for (name, v) in &self.q {
             q0[index_of(&model.coordinates, name, "coordinate")?] = *v;
         }
         for (name, v) in &self.qdot {
             qd0[index_of(&model.coordinates, name, "coordinate")?] = *v;
-        }
-        for (name, v) in &self.param {
-            let k = index_of(&model.parameter_names, name, "parameter")?;
-            params[k] = *v;
         }
         let (t_start, t_end, dt_out) = match (model.run, self.t_end, self.dt_out) {
             (Some((a, b, c)), t_end, dt_out) => (a, t_end.unwrap_or(b), dt_out.unwrap_or(c)),

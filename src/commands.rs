@@ -118,7 +118,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model)?;
+    let model = load::evaluated(&args.model, &args.run.param)?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -163,7 +163,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model)?;
+    let model = load::evaluated(&args.model, &args.run.param)?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -220,7 +220,7 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model)?;
+    let model = load::evaluated(&args.model, &args.param)?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

@@ -37,9 +37,10 @@ pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
     }
 }
 
-/// The model MODEL names, evaluated in-process.
-pub fn evaluated(argument: &str) -> Result<seam::Model, CliError> {
-    let model = model(argument)?;
+/// The model MODEL names with the parameters `params` set (`--param`), validated as the file's
+/// own values are (a negative mass is refused), evaluated in-process.
+pub fn evaluated(argument: &str, params: &[(String, f64)]) -> Result<seam::Model, CliError> {
+    let model = model(argument)?.with_parameters(params)?;
     Ok(generator::eval::evaluate(&model)?)
 }
 

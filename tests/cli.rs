@@ -196,3 +196,19 @@ fn help_version_and_the_generator_s_commands() {
     let inspect = ok(&multibody(dir.path(), &["inspect", concat!(env!("CARGO_MANIFEST_DIR"), "/models/cart_pendulum.ron")]));
     assert!(inspect.contains("m = 3, r = 1, p = 2, s = 1"), "{inspect}");
 }
+
+/// Parameters given on the command line are checked as the file's are: a negative mass is
+/// refused on every command, located in the file and naming the value given.
+#[test]
+fn parameters_from_the_command_line_are_validated_like_the_file_s() {
+    let (dir, _) = user_model();
+    for args in [
+        &["linearize", "my_model.ron", "--param", "mt=-1"][..],
+        &["compare", "my_model.ron", "--param", "mt=-1"],
+        &["simulate", "my_model.ron", "--param", "mt=-1"],
+    ] {
+        let out = multibody(dir.path(), args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("mt = -1 (given on the command line)") && err.contains("my_model.ron:"), "{args:?}: {err}");
+    }
+}

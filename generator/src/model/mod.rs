@@ -270,6 +270,47 @@ fn offset_of(source: &str, line: usize, col: usize) -> usize {
     start + rest.chars().take(col.saturating_sub(1)).map(char::len_utf8).sum::<usize>()
 }
 
+impl Model {
+    /// The same model with some parameters set to other values (the command line's `--param`),
+    /// validated as the file's own values are: a negative mass or an inertia that is not
+    /// positive semi-definite is refused, located in the file, the message naming the values
+    /// given.
+    ///
+    /// ```
+    /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+    /// let heavy = model.with_parameters(&[("M".into(), 20.0)]).unwrap();
+    /// assert_eq!(heavy.def.parameters["M"], 20.0);
+    /// let e = model.with_parameters(&[("M".into(), -1.0)]).unwrap_err().to_string();
+    /// assert!(e.contains("M = -1") && e.contains("mass"), "{e}");
+    /// assert!(model.with_parameters(&[("mass".into(), 1.0)]).unwrap_err().to_string().contains("no parameter `mass`"));
+    /// ```
+    pub fn with_parameters(&self, values: &[(String, f64)]) -> Result<Model, ModelError> {
+        if values.is_empty() {
+            return Ok(self.clone());
+        }
+        let mut def = self.def.clone();
+        for (name, v) in values {
+            match def.parameters.get_mut(name) {
+                Some(x) => *x = *v,
+                None => {
+                    let known: Vec<&str> = def.parameters.keys().map(String::as_str).collect();
+                    return Err(ModelError::unlocated(
+                        ErrorKind::UnknownName,
+                        &self.file,
+                        format!("no parameter `{name}` (known: {})", known.join(", ")),
+                        "give a parameter the model file declares under `parameters`".into(),
+                    ));
+                }
+            }
+        }
+        let given: Vec<String> = values.iter().map(|(n, v)| format!("{n} = {v}")).collect();
+        Builder::new(&self.file, &self.source, def).build().map_err(|mut e| {
+            e.message = format!("with {} (given on the command line): {}", given.join(", "), e.message);
+            e
+        })
+    }
+}
+
 /// Parses and validates model text; `file` names it in errors.
 pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
     let options = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
