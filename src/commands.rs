@@ -144,6 +144,9 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     } else {
         print(&(header + &table(&runs)))?;
     }
+    for r in runs.iter().filter_map(|r| r.record.stiff_at.map(|t| (r, t))) {
+        eprintln!("{}", stiff_warning(&r.0.record.method, r.1));
+    }
     if let Some(path) = &args.json {
         let records: Vec<_> = runs.iter().map(|r| &r.record).collect();
         let text = serde_json::to_string_pretty(&records).expect("records serialize");
@@ -159,6 +162,13 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// What a run that DOPRI5 finds stiff tells the user.
+pub fn stiff_warning(method: &str, t: f64) -> String {
+    format!(
+        "warning: {method} looks stiff from t = {t:.6} (Hairer's test: the step size is held by stability, not accuracy): the stiff method may be much faster, `--method ros23`"
+    )
 }
 
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.

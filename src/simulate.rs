@@ -83,6 +83,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     bar.finish_and_clear();
     let solution = solution?;
     let elapsed = start.elapsed();
+    if let Some(t) = solution.stats.stiff_at {
+        eprintln!("{}", crate::commands::stiff_warning(kind.name(), t));
+    }
     let inv = monitor(&sys, &solution).map_err(CliError::Monitor)?;
 
     // The trajectory, one row per output time.

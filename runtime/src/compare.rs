@@ -65,6 +65,8 @@ pub struct Record {
     pub max_condition: f64,
     /// Smallest distance to the singular set of `[Y; M'; a]` over the samples (`null`: none).
     pub min_singular_margin: f64,
+    /// DOPRI5: the time from which the run looks stiff by Hairer's test (`null`: it does not).
+    pub stiff_at: Option<f64>,
 }
 
 /// The drift of one ignorable coordinate's momentum over a run.
@@ -204,6 +206,7 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         rhs_calls: solution.stats.rhs_calls,
         max_condition: invariants.condition.iter().fold(0.0, |a, b| a.max(*b)),
         min_singular_margin: invariants.singular_margin.iter().fold(f64::INFINITY, |a, b| a.min(*b)),
+        stiff_at: solution.stats.stiff_at,
     };
     Ok(Run { kind, record, solution, invariants })
 }

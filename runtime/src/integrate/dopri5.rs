@@ -47,6 +47,8 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let mut rejected_last = false;
     let (mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut rcont = vec![vec![0.0; n]; 5];
+    // Hairer's stiffness test: the dominant eigenvalue times h from the last two stages.
+    let (mut stiff_steps, mut non_stiff_steps) = (0usize, 0usize);
     while next < outputs.len() {
         h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
         for st in 1..6 {
@@ -71,6 +73,23 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
             let h_new = h / fac;
             facold = e.max(1e-4);
             stats.steps += 1;
+            // Stages 6 and 7 are evaluated at t + h, at `tmp` (stage 6's argument, still in
+            // `tmp`) and at `y_new`: their difference estimates h lambda.
+            if stats.stiff_at.is_none() {
+                let (num, den) = (0..n).fold((0.0, 0.0), |(a, b), i| (a + (k[6][i] - k[5][i]).powi(2), b + (y_new[i] - tmp[i]).powi(2)));
+                if den > 0.0 && h * (num / den).sqrt() > 3.25 {
+                    non_stiff_steps = 0;
+                    stiff_steps += 1;
+                    if stiff_steps == 15 {
+                        stats.stiff_at = Some(t);
+                    }
+                } else {
+                    non_stiff_steps += 1;
+                    if non_stiff_steps == 6 {
+                        stiff_steps = 0;
+                    }
+                }
+            }
             // Dense output over [t, t + h].
             for i in 0..n {
                 let ydiff = y_new[i] - y[i];

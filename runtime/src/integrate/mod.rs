@@ -89,7 +89,7 @@ impl Settings {
 }
 
 /// Work done by the integrator.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
     pub steps: usize,
     pub rejected: usize,
@@ -98,6 +98,10 @@ pub struct Stats {
     pub jacobians: usize,
     /// LU factorizations of the iteration matrix (stiff method).
     pub factorizations: usize,
+    /// DOPRI5 only: the time from which the problem looks stiff by Hairer's test (the step
+    /// size held by stability: `h |lambda| > 3.25` at 15 accepted steps out of 15 tests in a
+    /// row, without six non-stiff ones between), where a stiff method (`ros23`) does better.
+    pub stiff_at: Option<f64>,
 }
 
 /// The states at the requested output times.
@@ -407,6 +411,73 @@ mod tests {
         dy[0] = y[1];
         dy[1] = -y[0];
         Ok(())
+    }
+
+    /// Hairer's reference problem for the explicit pairs (Hairer, Norsett & Wanner, "Solving
+    /// ODEs I", section II.0): the Arenstorf orbit of the restricted three-body problem, periodic
+    /// with period `T = 17.0652165601579625588917206249`.
+    fn arenstorf(_t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        const MU: f64 = 0.012277471;
+        let mu1 = 1.0 - MU;
+        let d1 = ((y[0] + MU).powi(2) + y[1] * y[1]).powf(1.5);
+        let d2 = ((y[0] - mu1).powi(2) + y[1] * y[1]).powf(1.5);
+        dy[0] = y[2];
+        dy[1] = y[3];
+        dy[2] = y[0] + 2.0 * y[3] - mu1 * (y[0] + MU) / d1 - MU * (y[0] - mu1) / d2;
+        dy[3] = y[1] - 2.0 * y[2] - mu1 * y[1] / d1 - MU * y[1] / d2;
+        Ok(())
+    }
+
+    /// After one period the orbit closes: each explicit pair returns to the start, its error
+    /// shrinking with the tolerance, DOP853 with fewer steps than DOPRI5 at tight tolerances.
+    #[test]
+    fn the_arenstorf_orbit_closes_after_one_period() {
+        const PERIOD: f64 = 17.065_216_560_157_963;
+        let y0 = [0.994, 0.0, 0.0, -2.001_585_106_379_082_5];
+        let closing = |method: Method, tol: f64| {
+            let s = Settings { method, rtol: tol, atol: tol, ..Settings::default() };
+            let sol = integrate(&mut arenstorf, &y0, &[0.0, PERIOD / 2.0, PERIOD], &s).unwrap();
+            let end = &sol.states[2];
+            (end.iter().zip(&y0).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max), sol.stats.steps)
+        };
+        for method in [Method::Dopri5, Method::Dop853] {
+            let (loose, _) = closing(method, 1e-6);
+            let (tight, steps) = closing(method, 1e-10);
+            assert!(tight < 1e-5, "{method}: closes to {tight:e} at 1e-10");
+            assert!(tight < 1e-2 * loose, "{method}: {tight:e} at 1e-10 against {loose:e} at 1e-6");
+            assert!(steps > 50, "{method}: {steps} steps");
+        }
+        assert!(closing(Method::Dop853, 1e-10).1 < closing(Method::Dopri5, 1e-10).1);
+    }
+
+    /// Van der Pol's oscillator with mu = 1e3, the stiff reference problem: the Rosenbrock
+    /// method crosses the slow manifold in a few hundred steps, where DOPRI5 needs tens of
+    /// thousands and finds the problem stiff; both reach the same state.
+    #[test]
+    fn van_der_pol_at_mu_1e3_is_stiff_for_dopri5_and_not_for_rosenbrock() {
+        let mut vdp = |_t: f64, y: &[f64], dy: &mut [f64]| -> Result<(), Failure> {
+            dy[0] = y[1];
+            dy[1] = 1e3 * (1.0 - y[0] * y[0]) * y[1] - y[0];
+            Ok(())
+        };
+        let outputs = [0.0, 300.0];
+        let run = |method: Method, vdp: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>| {
+            integrate(vdp, &[2.0, 0.0], &outputs, &Settings { method, rtol: 1e-6, atol: 1e-6, ..Settings::default() }).unwrap()
+        };
+        let (ros, dopri) = (run(Method::Rosenbrock23, &mut vdp), run(Method::Dopri5, &mut vdp));
+        assert!(ros.stats.steps < 2_000 && dopri.stats.steps > 20 * ros.stats.steps, "ROS23 {} steps, DOPRI5 {}", ros.stats.steps, dopri.stats.steps);
+        assert!(dopri.stats.stiff_at.is_some_and(|t| t < 10.0), "{:?}", dopri.stats.stiff_at);
+        assert!((ros.states[1][0] - dopri.states[1][0]).abs() < 1e-3, "{} against {}", ros.states[1][0], dopri.states[1][0]);
+    }
+
+    /// RK4's order: halving the step divides the error by 2^4.
+    #[test]
+    fn rk4_converges_at_order_four() {
+        let outputs: Vec<f64> = (0..=10).map(|i| i as f64).collect();
+        let (coarse, _) = max_error(&Settings { method: Method::Rk4 { h: 0.1 }, ..Settings::default() }, &outputs);
+        let (fine, _) = max_error(&Settings { method: Method::Rk4 { h: 0.05 }, ..Settings::default() }, &outputs);
+        let order = (coarse / fine).log2();
+        assert!((order - 4.0).abs() < 0.1, "observed order {order}");
     }
 
     fn max_error(settings: &Settings, outputs: &[f64]) -> (f64, Stats) {
