@@ -209,6 +209,22 @@ fn parameters_from_the_command_line_are_validated_like_the_file_s() {
     ] {
         let out = multibody(dir.path(), args);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success() && err.contains("mt = -1 (given on the command line)") && err.contains("my_model.ron:"), "{args:?}: {err}");
+        assert!(!out.status.success() && err.contains("mt = -1.0 (given on the command line)") && err.contains("my_model.ron:"), "{args:?}: {err}");
     }
+}
+
+/// Numbers at the edge of f64 are named as such: a parameter of 1e300 stops the run with the
+/// overflowing entry, not with "tolerance too tight"; a length of 1e200 with the inertia entry
+/// that overflows, not with "not positive semi-definite".
+#[test]
+fn overflow_is_named_as_overflow() {
+    let dir = tempfile::tempdir().unwrap();
+    for p in ["g=1e300", "k=1e300"] {
+        let out = multibody(dir.path(), &["simulate", "spring_cart", "--param", p, "--out", "o"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains("at the edge of f64") && !err.contains("tolerance too tight"), "{p}: {err}");
+    }
+    let out = multibody(dir.path(), &["simulate", "cart_pendulum", "--param", "l=1e200", "--out", "o"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("overflows f64") && !err.contains("semi-definite"), "{err}");
 }

@@ -281,7 +281,7 @@ impl Model {
     /// let heavy = model.with_parameters(&[("M".into(), 20.0)]).unwrap();
     /// assert_eq!(heavy.def.parameters["M"], 20.0);
     /// let e = model.with_parameters(&[("M".into(), -1.0)]).unwrap_err().to_string();
-    /// assert!(e.contains("M = -1") && e.contains("mass"), "{e}");
+    /// assert!(e.contains("M = -1.0") && e.contains("mass"), "{e}");
     /// assert!(model.with_parameters(&[("mass".into(), 1.0)]).unwrap_err().to_string().contains("no parameter `mass`"));
     /// ```
     pub fn with_parameters(&self, values: &[(String, f64)]) -> Result<Model, ModelError> {
@@ -303,7 +303,7 @@ impl Model {
                 }
             }
         }
-        let given: Vec<String> = values.iter().map(|(n, v)| format!("{n} = {v}")).collect();
+        let given: Vec<String> = values.iter().map(|(n, v)| format!("{n} = {v:?}")).collect();
         Builder::new(&self.file, &self.source, def).build().map_err(|mut e| {
             e.message = format!("with {} (given on the command line): {}", given.join(", "), e.message);
             e
@@ -1016,6 +1016,15 @@ impl<'a> Builder<'a> {
             }
         };
         let vals: Vec<f64> = m.data.iter().map(|e| e.eval(env).unwrap_or(f64::NAN)).collect();
+        if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+            return Err(self.err(
+                ErrorKind::BadValue,
+                &p,
+                "inertia",
+                format!("entry [{}][{}] of the inertia of {place} is {} with the model's parameter values: it overflows f64", k / 3, k % 3, vals[k]),
+                "scale the model (other units) so that its numbers and their products stay within about 1e-150 to 1e150",
+            ));
+        }
         let sym = (0..3).all(|i| (0..3).all(|j| (vals[i * 3 + j] - vals[j * 3 + i]).abs() <= 1e-12 * (1.0 + vals[i * 3 + j].abs())));
         let min_eig = min_eigenvalue_sym3(&vals);
         let scale = vals.iter().map(|v| v.abs()).fold(0.0, f64::max);

@@ -286,7 +286,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     let (mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n]);
     let mut rcont = vec![vec![0.0; n]; 8];
     while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
+        h = next_step_size(&stats, s, t, h, t_end, &y, &k[0]).map_err(|r| stop(t, &y, r))?;
         for st in 1..12 {
             combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);

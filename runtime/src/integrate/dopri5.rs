@@ -50,7 +50,7 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
     // Hairer's stiffness test: the dominant eigenvalue times h from the last two stages.
     let (mut stiff_steps, mut non_stiff_steps) = (0usize, 0usize);
     while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
+        h = next_step_size(&stats, s, t, h, t_end, &y, &k[0]).map_err(|r| stop(t, &y, r))?;
         for st in 1..6 {
             combine(&mut tmp, &y, h, &A[st][..st], &k);
             let (_, tail) = k.split_at_mut(st);

@@ -186,6 +186,12 @@ pub enum Reason {
     /// The step size fell below what the time's resolution allows.
     #[error("step size {h:e} underflows at this time (tolerance too tight?)")]
     StepSizeTooSmall { h: f64 },
+    /// The step size fell to nothing because the numbers overflow: entry `index` of the state
+    /// or of its rate is at the edge of f64 (or beyond it).
+    #[error(
+        "the {what} entry {index} is {value:e}, at the edge of f64: the steps that follow overflow (scale the model: other units, smaller parameters or initial values)"
+    )]
+    Overflow { what: &'static str, index: usize, value: f64 },
     /// More steps than `max_steps`.
     #[error("more than {0} steps")]
     TooManySteps(usize),
@@ -353,11 +359,22 @@ fn axpy_stages(out: &mut [f64], h: f64, a: &[f64], k: &[Vec<f64>]) {
 
 /// Before an adaptive step: the step budget, step-size underflow, and the last step shortened
 /// to end on `t_end`. Returns the step to try.
-fn next_step_size(stats: &Stats, s: &Settings, t: f64, h: f64, t_end: f64) -> Result<f64, Reason> {
+/// The next step, or why there is none. `y` and its rate `f0` tell an underflowing step whose
+/// cause is numbers at the edge of f64 (a parameter or a rate of 1e200) from a tolerance too
+/// tight for the problem.
+fn next_step_size(stats: &Stats, s: &Settings, t: f64, h: f64, t_end: f64, y: &[f64], f0: &[f64]) -> Result<f64, Reason> {
     if stats.steps + stats.rejected >= s.max_steps {
         return Err(Reason::TooManySteps(s.max_steps));
     }
     if 0.1 * h.abs() <= t.abs().max(1.0) * f64::EPSILON {
+        // Beyond 1e150 the products in a step overflow: that, not the tolerance, stops it.
+        let huge = |v: &f64| !(v.abs() <= 1e150);
+        if let Some(index) = f0.iter().position(huge) {
+            return Err(Reason::Overflow { what: "rate", index, value: f0[index] });
+        }
+        if let Some(index) = y.iter().position(huge) {
+            return Err(Reason::Overflow { what: "state", index, value: y[index] });
+        }
         return Err(Reason::StepSizeTooSmall { h });
     }
     Ok(if t + 1.01 * h >= t_end { t_end - t } else { h })

@@ -36,7 +36,7 @@ pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[
     let (mut k1, mut k2, mut k3) = (DVector::<f64>::zeros(n), DVector::<f64>::zeros(n), DVector::<f64>::zeros(n));
     let mut fresh_jacobian = false;
     while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end).map_err(|r| stop(t, &y, r))?;
+        h = next_step_size(&stats, s, t, h, t_end, &y, &f0).map_err(|r| stop(t, &y, r))?;
         if !fresh_jacobian {
             if !jac(t, &y, &mut j).map_err(|r| stop(t, &y, r))? {
                 // Forward differences, one right-hand side per column.
