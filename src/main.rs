@@ -28,6 +28,11 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// The most expression nodes a derivation may build (default 1000000, about 1 KB of memory
+    /// each): a larger model stops with an error naming the budget, never by running out of
+    /// memory.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_nodes: Option<u64>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -93,7 +98,11 @@ pub enum CliError {
 
 fn main() -> ExitCode {
     use std::io::IsTerminal;
+    generator::symbolic::expr::quiet_budget_panics();
     let cli = Cli::parse();
+    if let Some(n) = cli.max_nodes {
+        generator::symbolic::expr::set_max_nodes(n as usize);
+    }
     let result = match cli.command {
         Command::Generate(args) => return generator_result(generator::command::generate(args)),
         Command::Inspect { model, latex } => return generator_result(generator::command::inspect(&model, latex)),

@@ -1,8 +1,13 @@
 //! The stated minimum Rust version is true: the workspace's `rust-version` is at least the
 //! largest `rust-version` among the locked dependencies, and the README states the same.
 
-fn version(text: &str) -> Vec<u32> {
-    text.split('.').map(|p| p.parse().unwrap_or(0)).collect()
+/// `1.89` as `[1, 89, 0]`: three components, so that `1.89` and `1.89.0` compare equal.
+fn version(text: &str) -> [u32; 3] {
+    let mut out = [0; 3];
+    for (slot, part) in out.iter_mut().zip(text.split('.')) {
+        *slot = part.parse().unwrap_or(0);
+    }
+    out
 }
 
 #[test]

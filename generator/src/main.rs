@@ -20,6 +20,11 @@ struct Cli {
     command: Option<Command>,
     #[command(flatten)]
     generate: GenerateArgs,
+    /// The most expression nodes a derivation may build (default 1000000, about 1 KB of memory
+    /// each): a larger model stops with an error naming the budget, never by running out of
+    /// memory.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_nodes: Option<u64>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -37,7 +42,11 @@ enum Command {
 
 fn main() -> ExitCode {
     use std::io::IsTerminal;
+    generator::symbolic::expr::quiet_budget_panics();
     let cli = Cli::parse();
+    if let Some(n) = cli.max_nodes {
+        generator::symbolic::expr::set_max_nodes(n as usize);
+    }
     let result = match cli.command {
         Some(Command::Inspect { model, latex }) => command::inspect(&model, latex),
         None => command::generate(cli.generate),

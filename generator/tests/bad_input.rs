@@ -548,3 +548,24 @@ fn run_settings_must_describe_a_run_that_fits_in_memory() {
         assert_eq!(e.location.unwrap().0, line, "{e}");
     }
 }
+
+/// A model far too large to derive (a pendulum on a cart with 200 links) ends with the node
+/// budget's error, naming the budget and the option that raises it, long before memory runs
+/// out; a smaller budget stops a small model the same way, and the default admits the
+/// documented 50-link chain (the scaling benchmark).
+#[test]
+fn a_model_too_large_to_derive_ends_with_the_budget_error() {
+    use generator::model::examples::n_link_pendulum_on_cart;
+    let huge = n_link_pendulum_on_cart(200).build().unwrap();
+    let e = generator::emit::generate(&huge, &generator::emit::Options::from_model(&huge)).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::Budget, "{e}");
+    let text = e.to_string();
+    assert!(text.contains("more than 1000000 expression nodes") && text.contains("--max-nodes"), "{text}");
+    // The command line says the same, with no panic message.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("three_body.ron");
+    std::fs::write(&path, scene2()).unwrap();
+    let out = run_generator(&["--max-nodes".as_ref(), "3000".as_ref(), path.as_os_str()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("needs more than 3000 expression nodes") && !err.contains("panicked"), "{err}");
+}

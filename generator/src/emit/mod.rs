@@ -189,5 +189,5 @@ impl fmt::Display for Summary {
 
 /// Derives and emits the module of `model`.
 pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
-    module::generate(model, options)
+    crate::symbolic::expr::catch_budget(|| module::generate(model, options)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
 }

@@ -120,7 +120,7 @@ impl Stages for Here {}
 
 /// Derives what `request` asks for ([`derive_with`], everything on this thread).
 pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError> {
-    derive_with(model, request, &mut Here)
+    crate::symbolic::expr::catch_budget(|| derive_with(model, request, &mut Here)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
 }
 
 /// Derives what `request` asks for, each formulation right after what it needs: Lagrange's

@@ -49,6 +49,8 @@ pub enum ErrorKind {
     /// The derived equations could not be emitted as Rust (a number that is not a finite
     /// float, or a function left without a definition).
     Emission,
+    /// The derivation needs more work than its budget allows (the model is too large).
+    Budget,
 }
 
 /// A located error in a model file.

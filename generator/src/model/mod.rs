@@ -271,6 +271,22 @@ fn offset_of(source: &str, line: usize, col: usize) -> usize {
 }
 
 impl Model {
+    /// The error for a derivation of this model that spent its node budget.
+    pub fn budget_error(&self, spent: crate::symbolic::expr::NodeBudgetSpent) -> ModelError {
+        ModelError::unlocated(
+            ErrorKind::Budget,
+            &self.file,
+            format!(
+                "deriving `{}` needs more than {} expression nodes, the node budget: the model is too large to derive within it ({} coordinates, {} bodies)",
+                self.name,
+                spent.limit,
+                self.coordinates.len(),
+                self.def.bodies.len()
+            ),
+            "raise the budget with `--max-nodes N` (about 1 KB of memory per node), or model fewer bodies".into(),
+        )
+    }
+
     /// The same model with some parameters set to other values (the command line's `--param`),
     /// validated as the file's own values are: a negative mass or an inertia that is not
     /// positive semi-definite is refused, located in the file, the message naming the values
@@ -304,7 +320,7 @@ impl Model {
             }
         }
         let given: Vec<String> = values.iter().map(|(n, v)| format!("{n} = {v:?}")).collect();
-        Builder::new(&self.file, &self.source, def).build().map_err(|mut e| {
+        build_within_budget(&self.file, &self.source, def).map_err(|mut e| {
             e.message = format!("with {} (given on the command line): {}", given.join(", "), e.message);
             e
         })
@@ -327,7 +343,19 @@ pub fn from_source(file: &str, source: &str) -> Result<Model, ModelError> {
         let at = offset_of(source, line, col);
         ModelError::at(ErrorKind::Syntax, file, source, Some(at..(at + 1).min(source.len()).max(at)), "", format!("malformed model: {code}"), help)
     })?;
-    Builder::new(file, source, def).build()
+    build_within_budget(file, source, def)
+}
+
+/// Validates `def`, reporting a spent node budget as an error (validation builds expressions).
+fn build_within_budget(file: &str, source: &str, def: ModelFile) -> Result<Model, ModelError> {
+    crate::symbolic::expr::catch_budget(|| Builder::new(file, source, def).build()).unwrap_or_else(|spent| {
+        Err(ModelError::unlocated(
+            ErrorKind::Budget,
+            file,
+            format!("reading the model needs more than {} expression nodes, the node budget", spent.limit),
+            "raise the budget with `--max-nodes N` (about 1 KB of memory per node), or model fewer bodies".into(),
+        ))
+    })
 }
 
 /// What an expression may refer to.

@@ -24,7 +24,55 @@ use super::number::{Rat, rat_from_i64};
 use rustc_hash::FxHashMap;
 use std::cell::RefCell;
 use std::rc::Rc;
-use std::sync::atomic::{AtomicU32, Ordering as AtomicOrdering};
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering as AtomicOrdering};
+
+/// The most distinct expression nodes one context may hold unless raised ([`set_max_nodes`]):
+/// a bound on the memory a derivation takes, well above what the largest documented models need
+/// (a 50-link chain holds about 0.4 million in its deriving context, 0.5 GB in all), and
+/// reached within seconds by a model far larger (a 200-link chain), long before the machine's
+/// memory is gone.
+pub const DEFAULT_MAX_NODES: usize = 1_000_000;
+
+static MAX_NODES: AtomicUsize = AtomicUsize::new(DEFAULT_MAX_NODES);
+
+/// Sets the node budget of every context (the command lines' `--max-nodes`).
+pub fn set_max_nodes(limit: usize) {
+    MAX_NODES.store(limit.max(1), AtomicOrdering::Relaxed);
+}
+
+/// The node budget in force.
+pub fn max_nodes() -> usize {
+    MAX_NODES.load(AtomicOrdering::Relaxed)
+}
+
+/// What a derivation unwinds with when a context's node budget is spent: the library's entry
+/// points catch it ([`catch_budget`]) and return a located error naming the budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeBudgetSpent {
+    pub limit: usize,
+}
+
+/// Runs `f`; a spent node budget inside it comes back as `Err`, any other panic goes on.
+pub fn catch_budget<R>(f: impl FnOnce() -> R) -> Result<R, NodeBudgetSpent> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(r) => Ok(r),
+        Err(payload) => match payload.downcast_ref::<NodeBudgetSpent>() {
+            Some(spent) => Err(*spent),
+            None => std::panic::resume_unwind(payload),
+        },
+    }
+}
+
+/// Leaves a spent node budget out of the panic messages (it is reported as an error by
+/// [`catch_budget`]'s caller); every other panic prints as before. For a program's `main`.
+pub fn quiet_budget_panics() {
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if info.payload().downcast_ref::<NodeBudgetSpent>().is_none() {
+            previous(info);
+        }
+    }));
+}
 
 /// An interned symbol name (coordinate, velocity, parameter, time, ...).
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, PartialOrd, Ord)]
@@ -231,6 +279,9 @@ impl Pool {
     fn intern(&mut self, node: Node) -> Expr {
         if let Some(&id) = self.map.get(&node) {
             return Expr { id, cx: self.id };
+        }
+        if self.nodes.len() >= max_nodes() {
+            std::panic::panic_any(NodeBudgetSpent { limit: max_nodes() });
         }
         let (key, mask, size, depth) = self.summarize(&node);
         let id = self.nodes.len() as u32;
