@@ -228,3 +228,27 @@ fn overflow_is_named_as_overflow() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("overflows f64") && !err.contains("semi-definite"), "{err}");
 }
+
+/// Two runs at once, of two models whose paths differ only slightly, each get their own
+/// results: nothing is cached or shared between runs (every model is evaluated in-process).
+#[test]
+fn concurrent_runs_of_different_models_keep_their_own_results() {
+    let (dir, path) = user_model();
+    let heavy = std::fs::read_to_string(&path).unwrap().replace("name: \"my_model\"", "name: \"my_modem\"").replace("\"mt\": 5.0", "\"mt\": 50.0");
+    std::fs::write(dir.path().join("my_modem.ron"), heavy).unwrap();
+    let spawn = |file: &str| {
+        Command::new(env!("CARGO_BIN_EXE_multibody"))
+            .args(["compare", file, "--repeats", "3", "--json", "-"])
+            .current_dir(dir.path())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (spawn("my_model.ron"), spawn("my_modem.ron"));
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    let (a, b): (serde_json::Value, serde_json::Value) = (serde_json::from_str(&ok(&a)).unwrap(), serde_json::from_str(&ok(&b)).unwrap());
+    assert!(a.as_array().unwrap().iter().all(|r| r["scene"] == "my_model"));
+    assert!(b.as_array().unwrap().iter().all(|r| r["scene"] == "my_modem"));
+    assert_ne!(a[0]["energy_error_norm"], b[0]["energy_error_norm"]);
+}
