@@ -569,3 +569,20 @@ fn a_model_too_large_to_derive_ends_with_the_budget_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("needs more than 3000 expression nodes") && !err.contains("panicked"), "{err}");
 }
+
+/// A coordinate that moves nothing makes every mass matrix singular at every state: refused at
+/// generation, naming the coordinate, located on it (not a "singular configuration" at t = 0).
+#[test]
+fn a_coordinate_that_moves_no_body_is_refused_by_name() {
+    let src = scene1()
+        .replace("coordinates: [\"theta1\", \"theta2\", \"x\"],", "coordinates: [\"theta1\", \"theta2\", \"x\", \"z\"],")
+        .replace("full: [\"theta1' - theta2'\", \"x'\"],", "full: [\"theta1' - theta2'\", \"x'\", \"z'\"],")
+        .replace("reduced: [\"theta2' - theta1'\"],", "reduced: [\"theta2' - theta1'\", \"z'\"],")
+        .replace("q: {\"theta1\": \"0.5\", \"theta2\": \"1.0\", \"x\": \"0\"},", "q: {\"theta1\": \"0.5\", \"theta2\": \"1.0\", \"x\": \"0\", \"z\": \"0\"},")
+        .replace("\"x\": \"0.3\"},", "\"x\": \"0.3\", \"z\": \"0\"},");
+    let model = from_source("models/broken.ron", &src).expect("the file itself is well-formed");
+    let e = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap_err();
+    check(&e, ErrorKind::SingularQuasiVelocities, &["coordinate `z` moves no body", "singular at every state", "coordinates[3]"]);
+    assert_eq!(e.location.unwrap().0, 14, "{e}");
+    assert!(generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).is_err());
+}

@@ -123,6 +123,27 @@ pub fn derive(model: &Model, request: &Request) -> Result<Derivation, ModelError
     crate::symbolic::expr::catch_budget(|| derive_with(model, request, &mut Here)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
 }
 
+/// Refuses a coordinate that moves no mass (its diagonal entry of `M` is identically zero)
+/// and that no constraint involves: the mass matrix, and every formulation's matrix, would be
+/// singular at every state.
+fn every_coordinate_has_inertia(model: &Model, mech: &mechanics::Mechanics) -> Result<(), ModelError> {
+    use crate::symbolic::zero::is_identically_zero;
+    for (j, q) in model.coordinates.iter().enumerate() {
+        let massless = is_identically_zero(mech.mass.get(j, j));
+        if massless && (0..mech.r).all(|i| is_identically_zero(mech.a.get(i, j))) {
+            let name = q.name();
+            return Err(model.error(
+                crate::model::ErrorKind::SingularQuasiVelocities,
+                &format!("coordinates[{j}]"),
+                &format!("\"{name}\""),
+                format!("coordinate `{name}` moves no body and no constraint involves it: the mass matrix is singular at every state"),
+                "give the coordinate a body to move (a frame that depends on it, carrying a body with mass or inertia), or remove it".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Derives what `request` asks for, each formulation right after what it needs: Lagrange's
 /// equations after the mechanics, Maggi's and Kane's after Kane's form, the reduced method's
 /// after the reduced form. `stages` hears of each result as soon as it is ready and decides the
@@ -146,6 +167,7 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     // Time in the formulations' own work, summed over the places it runs.
     let mut formulations = Duration::ZERO;
     let mech = mechanics::derive(model);
+    every_coordinate_has_inertia(model, &mech)?;
     times.push(("mechanics", clock.elapsed()));
     stages.mechanics(&mech);
     let wants = |f: FormulationDef| request.formulations.contains(&f);
