@@ -20,7 +20,7 @@ pub struct CompareArgs {
     pub model: String,
     #[command(flatten)]
     pub run: RunArgs,
-    /// CPU time is the median of N runs.
+    /// The time of a run is the median of N runs (wall clock, one thread).
     #[arg(long, value_name = "N", default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub repeats: u32,
     /// A comma-separated subset of the formulations (default: all the model has).
@@ -50,7 +50,7 @@ pub struct SweepArgs {
     /// The directory the results are written to.
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub out: PathBuf,
-    /// CPU time is the median of N runs.
+    /// The time of a run is the median of N runs (wall clock, one thread).
     #[arg(long, value_name = "N", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub repeats: u32,
     /// Three tolerances and three RK4 steps instead of ten and seven.
@@ -131,7 +131,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     }
     let runs = compare_runs(&model, &options)?;
     let header = format!(
-        "{}: {}, {} outputs, CPU time median of {} (evaluated in-process)\n\n",
+        "{}: {}, {} outputs, time the median of {} runs (wall clock, evaluated in-process)\n\n",
         model.module,
         describe(&options.settings),
         runs.first().map_or(0, |r| r.solution.times.len()),

@@ -215,15 +215,15 @@ pub fn write_trajectory(model: &Model, form: &seam::Formulation, times: &[f64], 
     Ok(vec![path, ipath])
 }
 
-/// The work-precision diagram: error against CPU time, log-log, one curve per formulation and
+/// The work-precision diagram: error against wall-clock time, log-log, one curve per formulation and
 /// integrator (colour: formulation; marker: integrator).
 pub fn write_work_precision(points: &[runtime::sweep::Point], path: &Path) -> Result<(), PlotError> {
-    let ok: Vec<&runtime::sweep::Point> = points.iter().filter(|p| p.failure.is_none() && p.cpu_seconds > 0.0).collect();
+    let ok: Vec<&runtime::sweep::Point> = points.iter().filter(|p| p.failure.is_none() && p.seconds > 0.0).collect();
     let floor = 1e-16;
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
     for p in &ok {
-        x0 = x0.min(p.cpu_seconds);
-        x1 = x1.max(p.cpu_seconds);
+        x0 = x0.min(p.seconds);
+        x1 = x1.max(p.seconds);
         y0 = y0.min(p.error.max(floor));
         y1 = y1.max(p.error.max(floor));
     }
@@ -235,7 +235,7 @@ pub fn write_work_precision(points: &[runtime::sweep::Point], path: &Path) -> Re
     let root = SVGBackend::with_string(&mut svg, (1000, 700)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(path, e))?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{scene}: work-precision (max |q - q_ref| against CPU time per run)"), ("sans-serif", 16))
+        .caption(format!("{scene}: work-precision (max |q - q_ref| against time per run)"), ("sans-serif", 16))
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(80)
@@ -243,7 +243,7 @@ pub fn write_work_precision(points: &[runtime::sweep::Point], path: &Path) -> Re
         .map_err(|e| err(path, e))?;
     chart
         .configure_mesh()
-        .x_desc("CPU seconds per run")
+        .x_desc("wall-clock seconds per run")
         .y_desc("max error in q")
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
@@ -260,7 +260,7 @@ pub fn write_work_precision(points: &[runtime::sweep::Point], path: &Path) -> Re
         let color = COLORS[mi % COLORS.len()];
         for (ii, integrator) in integrators.iter().enumerate() {
             let mut curve: Vec<(f64, f64)> =
-                ok.iter().filter(|p| p.method == *method && p.integrator == *integrator).map(|p| (p.cpu_seconds, p.error.max(floor))).collect();
+                ok.iter().filter(|p| p.method == *method && p.integrator == *integrator).map(|p| (p.seconds, p.error.max(floor))).collect();
             curve.sort_by(|a, b| a.0.total_cmp(&b.0));
             if curve.is_empty() {
                 continue;

@@ -1,5 +1,5 @@
 //! Every formulation of a model under the same integrator settings, measured like the paper's
-//! Tables 2, 3 and 6: states, equations, CPU time (median of repeated runs), and the norms of
+//! Tables 2, 3 and 6: states, equations, wall-clock time of a run (median of repeated runs), and the norms of
 //! the energy, constraint and momentum errors.
 //!
 //! ```
@@ -21,7 +21,7 @@ use std::time::Instant;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
     pub settings: Settings,
-    /// CPU time is the median of this many runs.
+    /// The time of a run is the median of this many runs.
     pub repeats: usize,
     /// Formulations to run (empty: all the model has).
     pub formulations: Vec<FormulationKind>,
@@ -48,7 +48,7 @@ pub struct Record {
     pub integrator: String,
     pub states: usize,
     pub equations: usize,
-    pub cpu_seconds: f64,
+    pub seconds: f64,
     pub energy_error_norm: f64,
     pub energy_error_rel: f64,
     pub constraint_error_norm: f64,
@@ -160,7 +160,7 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         Drift::Projection => format!("{method}+projection"),
     };
     let times = reference.times()?;
-    let mut cpu = Vec::new();
+    let mut elapsed = Vec::new();
     let mut solution = None;
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
@@ -170,10 +170,10 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
         let sol = integrate_with_jacobian(&mut |t, y, dy| sys.rhs(t, y, dy), jacobian, projector, &y0, &times, settings)
             .map_err(|source| CompareError::Run { method: method.into(), source })?;
-        cpu.push(start.elapsed().as_secs_f64());
+        elapsed.push(start.elapsed().as_secs_f64());
         solution = Some(sol);
     }
-    cpu.sort_by(f64::total_cmp);
+    elapsed.sort_by(f64::total_cmp);
     let solution = solution.expect("at least one run");
     let invariants = monitor(&sys, &solution).map_err(|source| CompareError::Monitor { method: method.into(), source })?;
     let energy = norm(&invariants.energy_error);
@@ -185,7 +185,7 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         integrator: settings.method.to_string(),
         states: sys.form.states(),
         equations: sys.form.equations,
-        cpu_seconds: cpu[cpu.len() / 2],
+        seconds: elapsed[elapsed.len() / 2],
         energy_error_norm: energy,
         energy_error_rel: energy / invariants.energy0.abs(),
         constraint_error_norm: norm(&invariants.velocity_constraint),
@@ -240,7 +240,7 @@ pub fn table(runs: &[Run]) -> String {
     let momentum_header: String = names.iter().map(|n| format!(" momentum err ({n}) | (rel) |")).collect();
     let momentum_rule = "---|---|".repeat(names.len());
     let mut out = format!(
-        "| method | states | equations | CPU s | energy err | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
+        "| method | states | equations | time s | energy err | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
     );
     for r in runs.iter().map(|r| &r.record) {
         let constraint = if r.position_constraint_error_norm > 0.0 {
@@ -252,17 +252,7 @@ pub fn table(runs: &[Run]) -> String {
         let momentum: String = r.momenta.iter().map(|m| format!(" {} | {} |", fmt(m.norm), fmt(m.rel))).collect();
         out += &format!(
             "| {} | {} | {} | {:.2e} | {:.2e} | {:.2e} | {} |{} {} | {} | {:.1e} |\n",
-            r.method,
-            r.states,
-            r.equations,
-            r.cpu_seconds,
-            r.energy_error_norm,
-            r.energy_error_rel,
-            constraint,
-            momentum,
-            r.steps,
-            r.rhs_calls,
-            r.max_condition
+            r.method, r.states, r.equations, r.seconds, r.energy_error_norm, r.energy_error_rel, constraint, momentum, r.steps, r.rhs_calls, r.max_condition
         );
     }
     out

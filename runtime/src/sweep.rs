@@ -1,5 +1,5 @@
 //! Work-precision sweeps: every formulation x every integrator x a range of settings, each run
-//! measured for CPU time (median of repeats), right-hand-side calls, error against a reference
+//! measured for wall-clock time (median of repeats), right-hand-side calls, error against a reference
 //! solution, and the invariants, like the work-precision diagrams of ODE benchmark suites.
 //!
 //! ```no_run
@@ -55,7 +55,7 @@ pub struct Point {
     pub integrator: String,
     /// rtol (= atol) for the adaptive methods, the step for RK4.
     pub setting: f64,
-    pub cpu_seconds: f64,
+    pub seconds: f64,
     pub rhs_calls: usize,
     pub steps: usize,
     /// Largest |q - q_ref| over the samples and coordinates.
@@ -129,7 +129,7 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
                     method: form.to_string(),
                     integrator,
                     setting,
-                    cpu_seconds: r.record.cpu_seconds,
+                    seconds: r.record.seconds,
                     rhs_calls: r.record.rhs_calls,
                     steps: r.record.steps,
                     error: max_error(&r.invariants.coordinates, &reference),
@@ -144,7 +144,7 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
                     method: form.to_string(),
                     integrator,
                     setting,
-                    cpu_seconds: f64::NAN,
+                    seconds: f64::NAN,
                     rhs_calls: 0,
                     steps: 0,
                     error: f64::NAN,
@@ -164,7 +164,7 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
 /// The points as CSV.
 pub fn csv(points: &[Point]) -> String {
     let mut out =
-        String::from("scene,method,integrator,setting,cpu_seconds,rhs_calls,steps,error,energy_error_norm,momentum_error_norm,constraint_error_norm,failure\n");
+        String::from("scene,method,integrator,setting,seconds,rhs_calls,steps,error,energy_error_norm,momentum_error_norm,constraint_error_norm,failure\n");
     for p in points {
         out += &format!(
             "{},{},{},{:e},{:e},{},{},{:e},{:e},{:e},{:e},{}\n",
@@ -172,7 +172,7 @@ pub fn csv(points: &[Point]) -> String {
             p.method,
             p.integrator,
             p.setting,
-            p.cpu_seconds,
+            p.seconds,
             p.rhs_calls,
             p.steps,
             p.error,
