@@ -8,25 +8,7 @@ use runtime::compare::Reference;
 use runtime::integrate::{Method, Settings};
 use seam::{FormulationKind, Model};
 
-/// A formulation on the command line: the seam's [`FormulationKind`], its names and aliases
-/// from there.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct FormulationArg(pub FormulationKind);
-
-impl ValueEnum for FormulationArg {
-    fn value_variants<'a>() -> &'a [Self] {
-        &[
-            FormulationArg(FormulationKind::Lagrange),
-            FormulationArg(FormulationKind::Maggi),
-            FormulationArg(FormulationKind::Kane),
-            FormulationArg(FormulationKind::ReducedVolterra),
-        ]
-    }
-
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.0.name()).aliases(self.0.aliases()))
-    }
-}
+pub use generator::command::FormulationArg;
 
 /// An integrator, as named on the command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

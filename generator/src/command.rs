@@ -17,24 +17,25 @@ use clap::{Args, ValueEnum};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// A formulation, as named on the command line.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum FormulationArg {
-    Lagrange,
-    Maggi,
-    Kane,
-    #[value(alias = "reduced", alias = "reduced_volterra")]
-    ReducedVolterra,
+/// A formulation on the command line: the seam's [`seam::FormulationKind`], whose names and
+/// aliases are the only spelling of them (every command of both tools takes this one type).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FormulationArg(pub seam::FormulationKind);
+
+impl ValueEnum for FormulationArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        use seam::FormulationKind as K;
+        &[FormulationArg(K::Lagrange), FormulationArg(K::Maggi), FormulationArg(K::Kane), FormulationArg(K::ReducedVolterra)]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).aliases(self.0.aliases()))
+    }
 }
 
 impl From<FormulationArg> for Formulation {
     fn from(f: FormulationArg) -> Formulation {
-        match f {
-            FormulationArg::Lagrange => Formulation::Lagrange,
-            FormulationArg::Maggi => Formulation::Maggi,
-            FormulationArg::Kane => Formulation::Kane,
-            FormulationArg::ReducedVolterra => Formulation::ReducedVolterra,
-        }
+        Formulation::of(f.0)
     }
 }
 

@@ -224,7 +224,7 @@ fn generation_writes_the_module_and_a_summary_or_a_clear_error() {
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unexpected argument '--fast'"));
     let out = run_generator(&[model.as_os_str(), "--formulations".as_ref(), "hamilton".as_ref()]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("invalid value 'hamilton'") && err.contains("reduced-volterra"), "{err}");
+    assert!(!out.status.success() && err.contains("invalid value 'hamilton'") && err.contains("reduced_volterra"), "{err}");
     // A repeated -o is an error, not the last one winning.
     let out = run_generator(&[model.as_os_str(), "-o".as_ref(), out_path.as_os_str(), "-o".as_ref(), out_path.as_os_str()]);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("cannot be used multiple times"));

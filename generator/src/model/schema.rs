@@ -149,6 +149,28 @@ pub enum FormulationDef {
     ReducedVolterra,
 }
 
+impl FormulationDef {
+    /// The seam's kind of this formulation.
+    pub fn kind(self) -> seam::FormulationKind {
+        match self {
+            FormulationDef::Lagrange => seam::FormulationKind::Lagrange,
+            FormulationDef::Maggi => seam::FormulationKind::Maggi,
+            FormulationDef::Kane => seam::FormulationKind::Kane,
+            FormulationDef::ReducedVolterra => seam::FormulationKind::ReducedVolterra,
+        }
+    }
+
+    /// The formulation of the seam's `kind`.
+    pub fn of(kind: seam::FormulationKind) -> FormulationDef {
+        match kind {
+            seam::FormulationKind::Lagrange => FormulationDef::Lagrange,
+            seam::FormulationKind::Maggi => FormulationDef::Maggi,
+            seam::FormulationKind::Kane => FormulationDef::Kane,
+            seam::FormulationKind::ReducedVolterra => FormulationDef::ReducedVolterra,
+        }
+    }
+}
+
 /// An extra emitted function.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, Serialize)]
 pub enum FunctionDef {
