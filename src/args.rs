@@ -35,18 +35,25 @@ impl MethodArg {
     }
 }
 
+/// Values that change the model's own: its parameters, its coordinates and rates.
+#[derive(Args, Debug, Clone, PartialEq, Default)]
+pub struct ValueArgs {
+    /// A parameter's value, `NAME=VALUE` (repeatable); checked as the model file's values are.
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub param: Vec<(String, f64)>,
+    /// A coordinate's value, `NAME=VALUE` (repeatable).
+    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub q: Vec<(String, f64)>,
+    /// A coordinate's rate, `NAME=VALUE` (repeatable).
+    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
+    pub qdot: Vec<(String, f64)>,
+}
+
 /// The run: its initial state, parameters, times and integrator.
 #[derive(Args, Debug, Clone, PartialEq, Default)]
 pub struct RunArgs {
-    /// A parameter's value, `NAME=VALUE` (repeatable).
-    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub param: Vec<(String, f64)>,
-    /// A coordinate's initial value, `NAME=VALUE` (repeatable).
-    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub q: Vec<(String, f64)>,
-    /// A coordinate's initial rate, `NAME=VALUE` (repeatable).
-    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub qdot: Vec<(String, f64)>,
+    #[command(flatten)]
+    pub values: ValueArgs,
     /// The end of the run (default: the model file's `simulation.t_end`).
     #[arg(long, value_parser = finite, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
@@ -106,10 +113,10 @@ impl RunArgs {
         // `--param` is applied to the model itself (`load::evaluated`), validated as its file's
         // values are: here the model's values are the run's.
         let params = model.default_params.clone();
-        for (name, v) in &self.q {
+        for (name, v) in &self.values.q {
             q0[index_of(&model.coordinates, name, "coordinate")?] = *v;
         }
-        for (name, v) in &self.qdot {
+        for (name, v) in &self.values.qdot {
             qd0[index_of(&model.coordinates, name, "coordinate")?] = *v;
         }
         let (t_start, t_end, dt_out) = match (model.run, self.t_end, self.dt_out) {

@@ -1,7 +1,7 @@
 //! `compare`, `sweep` and `linearize`: the runtime's functions on a model evaluated in-process,
 //! with their tables, files and plots.
 
-use crate::args::{FormulationArg, MethodArg, RunArgs, describe, formulations, index_of};
+use crate::args::{FormulationArg, MethodArg, RunArgs, ValueArgs, describe, formulations, index_of};
 use crate::{CliError, load, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
@@ -71,16 +71,10 @@ pub struct LinearizeArgs {
     /// The formulation whose state is linearized.
     #[arg(long, value_enum, default_value = "kane")]
     pub formulation: FormulationArg,
-    /// A coordinate's value at the operating point, `NAME=VALUE` (repeatable).
-    #[arg(long = "q", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub q: Vec<(String, f64)>,
-    /// A coordinate's rate at the operating point, `NAME=VALUE` (repeatable). With velocity
+    /// The operating point: the model's initial state with these values. With velocity
     /// constraints, the rates not given (nor swept) are solved from them.
-    #[arg(long = "qdot", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub qdot: Vec<(String, f64)>,
-    /// A parameter's value, `NAME=VALUE` (repeatable).
-    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = assignment, allow_hyphen_values = true)]
-    pub param: Vec<(String, f64)>,
+    #[command(flatten)]
+    pub values: ValueArgs,
     /// A parameter to treat as an input `u` (repeatable): prints `B` of `x' = A x + B u`.
     #[arg(long = "input", value_name = "NAME")]
     pub input: Vec<String>,
@@ -99,15 +93,6 @@ pub struct LinearizeArgs {
     pub out: PathBuf,
 }
 
-fn assignment(s: &str) -> Result<(String, f64), String> {
-    let (name, value) = s.split_once('=').ok_or_else(|| format!("needs `NAME=VALUE`, not `{s}`"))?;
-    let v: f64 = value.trim().parse().map_err(|_| format!("`{value}` is not a number (in `{s}`)"))?;
-    if !v.is_finite() {
-        return Err(format!("`{value}` is not finite (in `{s}`)"));
-    }
-    Ok((name.trim().to_string(), v))
-}
-
 fn pair(s: &str) -> Result<(f64, f64), String> {
     let parts: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| format!("needs `alpha,beta`, not `{s}`"))?;
     match parts[..] {
@@ -118,7 +103,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.param)?;
+    let model = load::evaluated(&args.model, &args.run.values.param)?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -173,7 +158,7 @@ pub fn stiff_warning(method: &str, t: f64) -> String {
 
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.param)?;
+    let model = load::evaluated(&args.model, &args.run.values.param)?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -213,16 +198,16 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
     let m = model.coordinates.len();
     let (mut q, mut qdot) = model.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]));
     let mut params = model.default_params.clone();
-    for (name, v) in &args.q {
+    for (name, v) in &args.values.q {
         q[index_of(&model.coordinates, name, "coordinate")?] = *v;
     }
     let mut held = Vec::new();
-    for (name, v) in &args.qdot {
+    for (name, v) in &args.values.qdot {
         let j = index_of(&model.coordinates, name, "coordinate")?;
         qdot[j] = *v;
         held.push(j);
     }
-    for (name, v) in &args.param {
+    for (name, v) in &args.values.param {
         params[index_of(&model.parameter_names, name, "parameter")?] = *v;
     }
     Ok(Operating { q, qdot, params, held })
@@ -230,7 +215,7 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.param)?;
+    let model = load::evaluated(&args.model, &args.values.param)?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

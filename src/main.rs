@@ -104,8 +104,8 @@ fn main() -> ExitCode {
         generator::symbolic::expr::set_max_nodes(n as usize);
     }
     let result = match cli.command {
-        Command::Generate(args) => return generator_result(generator::command::generate(args)),
-        Command::Inspect { model, latex } => return generator_result(generator::command::inspect(&model, latex)),
+        Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
+        Command::Inspect { model, latex } => return generator::command::exit(generator::command::inspect(&model, latex)),
         Command::Simulate(args) => simulate::simulate(&args),
         Command::Compare(args) => commands::compare(&args),
         Command::Sweep(args) => commands::sweep(&args),
@@ -119,22 +119,6 @@ fn main() -> ExitCode {
         }
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
-}
-
-/// The generator's own commands report as its binary does.
-fn generator_result(result: Result<(), generator::command::Failure>) -> ExitCode {
-    use std::io::IsTerminal;
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(generator::command::Failure::Model(e)) => {
-            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
-            ExitCode::FAILURE
-        }
-        Err(generator::command::Failure::Message(m)) => {
-            eprintln!("{m}");
             ExitCode::FAILURE
         }
     }

@@ -55,7 +55,7 @@ fn default_kind(model: &seam::Model) -> FormulationKind {
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.param)?;
+    let model = load::evaluated(&args.model, &args.run.values.param)?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => default_kind(&model),

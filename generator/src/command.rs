@@ -85,6 +85,23 @@ pub struct GenerateArgs {
     pub quiet: bool,
 }
 
+/// The exit of a command: its error on stderr (a model error with its labelled excerpt, in
+/// colour only on a terminal) and a non-zero code, or success.
+pub fn exit(result: Result<(), Failure>) -> std::process::ExitCode {
+    use std::io::IsTerminal;
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(Failure::Model(e)) => {
+            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
+            std::process::ExitCode::FAILURE
+        }
+        Err(Failure::Message(m)) => {
+            eprintln!("{m}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 /// Why the command failed: a model error (rendered with its excerpt) or another message.
 pub enum Failure {
     Model(crate::model::ModelError),

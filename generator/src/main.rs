@@ -1,7 +1,7 @@
 //! The generator's command line: generate a model's Rust module, or `inspect` what is derived.
 
 use clap::{Parser, Subcommand};
-use generator::command::{self, Failure, GenerateArgs};
+use generator::command::{self, GenerateArgs};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -41,7 +41,6 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    use std::io::IsTerminal;
     generator::symbolic::expr::quiet_budget_panics();
     let cli = Cli::parse();
     if let Some(n) = cli.max_nodes {
@@ -51,16 +50,5 @@ fn main() -> ExitCode {
         Some(Command::Inspect { model, latex }) => command::inspect(&model, latex),
         None => command::generate(cli.generate),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::Model(e)) => {
-            // Colour only on a terminal; a labelled excerpt of the file either way.
-            eprintln!("{}", e.render(std::io::stderr().is_terminal()));
-            ExitCode::FAILURE
-        }
-        Err(Failure::Message(msg)) => {
-            eprintln!("{msg}");
-            ExitCode::FAILURE
-        }
-    }
+    command::exit(result)
 }
