@@ -130,7 +130,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         print(&(header + &table(&runs)))?;
     }
     for r in runs.iter().filter_map(|r| r.record.stiff_at.map(|t| (r, t))) {
-        eprintln!("{}", stiff_warning(&r.0.record.method, r.1));
+        eprintln!("{}", crate::report::stiff_warning(&r.0.record.method, r.1));
     }
     if let Some(path) = &args.json {
         let records: Vec<_> = runs.iter().map(|r| &r.record).collect();
@@ -147,13 +147,6 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
-}
-
-/// What a run that DOPRI5 finds stiff tells the user.
-pub fn stiff_warning(method: &str, t: f64) -> String {
-    format!(
-        "warning: {method} looks stiff from t = {t:.6} (Hairer's test: the step size is held by stability, not accuracy): the stiff method may be much faster, `--method ros23`"
-    )
 }
 
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
@@ -177,7 +170,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
             options.rk4_steps = vec![1.0, 0.1, 0.01];
         }
     }
-    let bar = crate::simulate::progress_bar(0);
+    let bar = crate::report::progress_bar(0);
     let points = sweep_runs(&model, &options, &mut |done, total, label| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);

@@ -11,6 +11,7 @@ mod args;
 mod commands;
 mod load;
 mod plot;
+mod report;
 mod simulate;
 
 use clap::{Parser, Subcommand};

@@ -7,13 +7,12 @@ use crate::args::{FormulationArg, RunArgs, describe, formulations};
 use crate::{CliError, load, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use runtime::integrate::{JacobianFn, integrate_with_jacobian};
 use runtime::monitor::monitor;
 use runtime::system::System;
 use seam::FormulationKind;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct SimulateArgs {
@@ -28,21 +27,6 @@ pub struct SimulateArgs {
     /// `<model>_<formulation>.{csv,json}`, `<model>_<formulation>_{coordinates,invariants}.svg`.
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub out: PathBuf,
-}
-
-/// A progress bar on stderr that shows itself only on a terminal and only once a run has
-/// taken a second.
-pub fn progress_bar(length: u64) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(length), ProgressDrawTarget::hidden());
-    bar.set_style(ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} {msg}").expect("a valid template").progress_chars("=> "));
-    let shown = bar.clone();
-    std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_secs(1));
-        if !shown.is_finished() {
-            shown.set_draw_target(ProgressDrawTarget::stderr());
-        }
-    });
-    bar
 }
 
 /// The formulation a simulation runs by default: the paper's reduced method where the model
@@ -66,7 +50,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     let settings = runtime::integrate::Settings { time_independent: !sys.form.depends_on_time, ..settings };
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
-    let bar = progress_bar(1000);
+    let bar = crate::report::progress_bar(1000);
     bar.set_message(format!("{} {kind}", model.module));
     let start = Instant::now();
     let mut calls = 0u64;
@@ -84,7 +68,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     let solution = solution?;
     let elapsed = start.elapsed();
     if let Some(t) = solution.stats.stiff_at {
-        eprintln!("{}", crate::commands::stiff_warning(kind.name(), t));
+        eprintln!("{}", crate::report::stiff_warning(kind.name(), t));
     }
     let inv = monitor(&sys, &solution).map_err(CliError::Monitor)?;
 

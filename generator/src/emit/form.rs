@@ -114,7 +114,7 @@ impl Emitter<'_> {
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
         if self.tapes.is_some() {
-            self.shapes.push(crate::eval::FormShape {
+            self.shapes.push(super::program::FormShape {
                 kind: f.kind,
                 kept: f.kept.clone(),
                 speeds: f.speeds.len(),

@@ -21,6 +21,7 @@ pub mod lower;
 pub mod module;
 pub mod names;
 pub mod ops;
+pub mod program;
 pub mod optimize;
 pub mod prepare;
 pub mod seam;
@@ -28,6 +29,7 @@ pub mod share;
 pub mod shared;
 pub mod splice;
 pub mod syntax;
+pub mod tape;
 
 pub use crate::model::schema::{FormulationDef as Formulation, FunctionDef as Function, ParameterDef as Parameters};
 use crate::model::{Model, ModelError};
@@ -94,7 +96,7 @@ pub struct Generated {
     pub code: String,
     pub summary: Summary,
     /// The functions as tapes, when [`Options::tapes`] asked for them.
-    pub program: Option<crate::eval::Program>,
+    pub program: Option<program::Program>,
 }
 
 /// What one emitted function costs: the operations of its straight-line body and, for a

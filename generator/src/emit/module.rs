@@ -57,9 +57,9 @@ pub(super) struct Emitter<'a> {
     /// The bodies' syntax trees, placed into the parsed module at the end.
     pub splices: Splices,
     /// Each function's tape, by name, when [`Options::tapes`] asks for them.
-    pub tapes: Option<HashMap<String, crate::eval::tape::Tape>>,
+    pub tapes: Option<HashMap<String, super::tape::Tape>>,
     /// Each formulation's shape around its tapes (in-process evaluation).
-    pub shapes: Vec<crate::eval::FormShape>,
+    pub shapes: Vec<super::program::FormShape>,
     /// Number of ignorable coordinates (the length of `g_i`).
     pub num_ignorable: usize,
 }
@@ -92,7 +92,7 @@ struct Part {
     forms: Vec<(String, usize, usize)>,
     /// In-process evaluation: the part's tapes and formulation shapes, and (the head) the
     /// module's description.
-    program: crate::eval::Program,
+    program: super::program::Program,
 }
 
 impl Part {
@@ -105,7 +105,7 @@ impl Emitter<'_> {
     /// The part of the module this emitter wrote, printed as `text`.
     fn part(&mut self, text: String) -> Part {
         let program =
-            crate::eval::Program { description: Default::default(), tapes: self.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut self.shapes) };
+            super::program::Program { description: Default::default(), tapes: self.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut self.shapes) };
         Part { text, functions: std::mem::take(&mut self.functions), forms: std::mem::take(&mut self.forms), program }
     }
 }
@@ -519,10 +519,10 @@ impl Emitter<'_> {
 
     /// What `model()` says of the module, for in-process evaluation (its `module` name is set
     /// by [`generate`]).
-    fn description(&self, m: &FromMechanics) -> crate::eval::Description {
+    fn description(&self, m: &FromMechanics) -> super::program::Description {
         let model = self.model;
         let baked = self.options.parameters == Parameters::Baked;
-        crate::eval::Description {
+        super::program::Description {
             module: String::new(),
             name: model.name.clone(),
             coordinates: model.coordinates.iter().map(|s| s.name()).collect(),
@@ -645,8 +645,8 @@ impl Emitter<'_> {
     /// `b` as a tape over `[t | params | g_i | state]` (functions of a state) or
     /// `[t | params | q | qdot]` (functions of the coordinates and rates), as
     /// [`crate::eval::model`] packs them. A split body's helpers are read in call order.
-    fn tape(&self, b: &Body, args: &[Arg]) -> Result<crate::eval::tape::Tape, crate::eval::tape::TapeError> {
-        use crate::eval::tape::{Slots, Tape};
+    fn tape(&self, b: &Body, args: &[Arg]) -> Result<super::tape::Tape, super::tape::TapeError> {
+        use super::tape::{Slots, Tape};
         let m = self.model.m();
         let np = if self.options.parameters == Parameters::Baked { 0 } else { self.model.parameters.len() };
         let layout: Vec<(&str, usize)> = if args.iter().any(|a| a.name == "state") {

@@ -5,7 +5,7 @@
 //! Generation with [`crate::emit::Options::tapes`] compiles each emitted function body into a
 //! [`tape::Tape`] from its syntax trees (the very trees prettyplease prints), and records what
 //! the module's hand-written parts do around them ([`Program`]: sizes, names, each
-//! formulation's layout and checks). [`model::Evaluated`] is the module's `model()` over them:
+//! formulation's layout and checks): both are emission's output, in `emit`. [`model::Evaluated`] is the module's `model()` over them:
 //! the same checks, the same dense solve, the same errors.
 //!
 //! ```
@@ -22,62 +22,12 @@
 //! ```
 
 pub mod model;
-pub mod tape;
+
+pub use crate::emit::program::{Description, FormShape, Program};
+pub use crate::emit::tape;
 
 use crate::emit::{Options, generate};
 use crate::model::{Model, ModelError};
-use seam::FormulationKind;
-use std::collections::HashMap;
-use tape::Tape;
-
-/// What the module describes of itself: `model()`'s sizes, names and values.
-#[derive(Clone, Debug, Default)]
-pub struct Description {
-    pub module: String,
-    pub name: String,
-    pub coordinates: Vec<String>,
-    pub constraints: Vec<String>,
-    pub ignorable: Vec<usize>,
-    /// The holonomic constraints' names (the first `holonomic` of `constraints`).
-    pub holonomic_names: Vec<String>,
-    pub parameter_names: Vec<String>,
-    pub default_params: Vec<f64>,
-    pub initial: Option<(Vec<f64>, Vec<f64>)>,
-    pub run: Option<(f64, f64, f64)>,
-    pub paper_settings: bool,
-}
-
-/// What a formulation's hand-written functions do around its tapes: the layout of `assemble`'s
-/// outputs and of the state, and the names its errors carry.
-#[derive(Clone, Debug)]
-pub struct FormShape {
-    pub kind: FormulationKind,
-    /// Coordinates in the state (indices into the model's coordinates).
-    pub kept: Vec<usize>,
-    pub speeds: usize,
-    pub work: bool,
-    pub equations: usize,
-    pub state_names: Vec<String>,
-    /// Size `n` of the matrix solved.
-    pub matrix_size: usize,
-    /// Maggi: the speeds' rates are `W x + c` with `W` of `(rows, cols)`.
-    pub post: Option<(usize, usize)>,
-    /// What each checked singular factor's vanishing means.
-    pub conditions: Vec<String>,
-    pub matrix_name: String,
-    /// Lagrange: the number of constraints stabilized by `rhs_baumgarte`.
-    pub stabilization: Option<usize>,
-    pub depends_on_time: bool,
-}
-
-/// Every function of a module as tapes, with the shapes around them.
-#[derive(Clone, Debug, Default)]
-pub struct Program {
-    pub description: Description,
-    /// Tapes by function: `energy`, `kane::rhs`, `kane::initial_state`, ...
-    pub tapes: HashMap<String, Tape>,
-    pub forms: Vec<FormShape>,
-}
 
 /// `model` as a [`seam::Model`] evaluated in-process, with the options its file asks for (its
 /// `emit` section), every formulation it requests.

@@ -3,7 +3,7 @@
 //! them, so that the numbers are the compiled module's.
 
 use super::{FormShape, Program};
-use crate::eval::tape::Tape;
+use crate::emit::tape::Tape;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
 use std::borrow::Cow;
 use std::sync::Arc;

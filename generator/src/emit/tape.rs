@@ -7,7 +7,7 @@
 //! per instruction; the outputs name registers.
 //!
 //! ```
-//! use generator::eval::tape::{Slots, Tape};
+//! use generator::emit::tape::{Slots, Tape};
 //! let stmts: Vec<syn::Stmt> = vec![syn::parse_quote!(let x = state[0];), syn::parse_quote!(let x0 = f64::sin(x);)];
 //! let outputs: Vec<syn::Expr> = vec![syn::parse_quote!(2.0 * x0 - x)];
 //! let slots = Slots::new(&[("t", 1), ("state", 1)]);
