@@ -3,31 +3,12 @@
 //! formulation's `rhs`, `rhs_baumgarte`, `matrix`, `velocities`, `singular_margin` and
 //! `initial_state` at random states around the reference run's.
 
-use generator::emit::{Formulation, Options, Parameters};
+use generator::emit::Options;
 use seam::{Failure, Model};
 
-/// (committed module, model file, how its options differ from the file's own), as
-/// `generated/tests/regenerate.rs` makes them.
-fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
-    vec![
-        ("cart_pendulum", "cart_pendulum", |_| {}),
-        ("three_body", "three_body", |_| {}),
-        ("satellite_boom", "satellite_boom", |_| {}),
-        ("cartesian_pendulum", "cartesian_pendulum", |_| {}),
-        ("rolling_disk", "rolling_disk", |_| {}),
-        ("spring_cart", "spring_cart", |_| {}),
-        ("pendulum_on_cart_5", "pendulum_on_cart_5", |_| {}),
-        ("stiff_pendulum", "stiff_pendulum", |_| {}),
-        ("bicycle", "bicycle", |_| {}),
-        ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),
-        ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
-        ("three_body_split", "three_body", |o| o.max_lets_per_function = 40),
-        ("three_body_drop", "three_body", |o| {
-            o.integrate_ignorable = false;
-            o.formulations = vec![Formulation::ReducedVolterra];
-        }),
-    ]
-}
+#[path = "../generated/tests/common/variants.rs"]
+mod variants;
+use variants::variants;
 
 /// A small deterministic generator (xorshift), so failures reproduce.
 struct Rng(u64);

@@ -1,36 +1,12 @@
 //! Every committed module is exactly what the generator makes of its model today.
 //! `REGENERATE=1 cargo test -p generated --test regenerate` rewrites them instead.
 
-use generator::emit::{Formulation, Options, Parameters, generate};
+use generator::emit::{Options, generate};
 
-/// (module, model, how its options differ from the model's own).
-fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
-    vec![
-        // `--parameter-jacobian` where the module is small.
-        ("cart_pendulum", "cart_pendulum", |o| o.parameter_jacobian = true),
-        ("three_body", "three_body", |_| {}),
-        ("satellite_boom", "satellite_boom", |o| o.parameter_jacobian = true),
-        ("cartesian_pendulum", "cartesian_pendulum", |_| {}),
-        ("rolling_disk", "rolling_disk", |o| o.parameter_jacobian = true),
-        ("spring_cart", "spring_cart", |o| o.parameter_jacobian = true),
-        ("pendulum_on_cart_5", "pendulum_on_cart_5", |_| {}),
-        ("stiff_pendulum", "stiff_pendulum", |o| o.parameter_jacobian = true),
-        // The bicycle's exact Jacobians would be 250000 operations each: left out.
-        ("bicycle", "bicycle", |o| o.jacobian = false),
-        // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
-        // Jacobian (12136 operations), for linearization to round-off.
-        ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),
-        // `--baked`
-        ("cart_pendulum_baked", "cart_pendulum", |o| o.parameters = Parameters::Baked),
-        // `--max-lets 40`
-        ("three_body_split", "three_body", |o| o.max_lets_per_function = 40),
-        // `--drop-ignorable --formulations reduced_volterra`
-        ("three_body_drop", "three_body", |o| {
-            o.integrate_ignorable = false;
-            o.formulations = vec![Formulation::ReducedVolterra];
-        }),
-    ]
+mod common {
+    pub mod variants;
 }
+use common::variants::variants;
 
 #[test]
 fn committed_modules_match_the_generator() {
