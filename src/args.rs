@@ -125,7 +125,7 @@ impl RunArgs {
             (None, _, _) => return Err(CliError::NoRun { model: model.module.clone() }),
         };
         let reference = Reference { q0, qd0, params, t_start, t_end, dt_out };
-        reference.times().map_err(CliError::Grid)?;
+        reference.check().map_err(CliError::Grid)?;
         Ok(reference)
     }
 

@@ -99,11 +99,8 @@ pub enum CliError {
 
 fn main() -> ExitCode {
     use std::io::IsTerminal;
-    generator::symbolic::expr::quiet_budget_panics();
     let cli = Cli::parse();
-    if let Some(n) = cli.max_nodes {
-        generator::symbolic::expr::set_max_nodes(n as usize);
-    }
+    generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
         Command::Inspect { model, latex } => return generator::command::exit(generator::command::inspect(&model, latex)),

@@ -41,11 +41,8 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    generator::symbolic::expr::quiet_budget_panics();
     let cli = Cli::parse();
-    if let Some(n) = cli.max_nodes {
-        generator::symbolic::expr::set_max_nodes(n as usize);
-    }
+    generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Some(Command::Inspect { model, latex }) => command::inspect(&model, latex),
         None => command::generate(cli.generate),

@@ -131,8 +131,13 @@ impl Reference {
         let (q0, qd0) = model.initial.clone().ok_or_else(|| missing("initial", "Initial(q: [...], qdot: [...])"))?;
         let (t_start, t_end, dt_out) = model.run.ok_or_else(|| missing("simulation", "Simulation(t_end: 10.0, dt_out: 0.01)"))?;
         let reference = Reference { q0, qd0, params: model.default_params.clone(), t_start, t_end, dt_out };
-        reference.times()?;
+        reference.check()?;
         Ok(reference)
+    }
+
+    /// Why the settings are not a run, if they are not (without building the output times).
+    pub fn check(&self) -> Result<(), seam::GridError> {
+        seam::output_steps(self.t_start, self.t_end, self.dt_out).map(|_| ())
     }
 
     /// The output times `t_start, t_start + dt_out, ..., t_end` ([`seam::output_times`]), or
@@ -217,7 +222,7 @@ pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareErro
         Some(r) => r.clone(),
         None => Reference::of(model)?,
     };
-    reference.times()?;
+    reference.check()?;
     model
         .formulations
         .iter()

@@ -96,7 +96,7 @@ pub fn sweep(model: &Model, options: &SweepOptions, progress: &mut dyn FnMut(usi
         Some(r) => r.clone(),
         None => Reference::of(model)?,
     };
-    r.times()?;
+    r.check()?;
     let reference_settings = Settings {
         method: Method::Dop853,
         rtol: options.reference_tolerance,

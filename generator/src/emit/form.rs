@@ -96,7 +96,7 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let checks = self.runtime_factors(f);
-        let assemble = self.assemble(f, shared, &checks)?;
+        let (assemble, depends_on_time) = self.assemble(f, shared, &checks)?;
         let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
@@ -109,8 +109,6 @@ impl Emitter<'_> {
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
         self.forms.push((name.to_string(), n_states, f.equations));
         let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
-        let t = model.t;
-        let depends_on_time = self.rate_outputs(f, shared).iter().chain(&checks).any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
         if self.tapes.is_some() {
@@ -184,8 +182,9 @@ impl Emitter<'_> {
         outputs
     }
 
-    /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`.
-    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<TokenStream, ModelError> {
+    /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`, and
+    /// whether the right-hand side reads `t` (decided on the same outputs).
+    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool), ModelError> {
         let model = self.model;
         let name = f.name();
         let work = self.work;
@@ -200,6 +199,8 @@ impl Emitter<'_> {
         // the constraint residuals for Baumgarte.
         let mut outputs = self.rate_outputs(f, shared);
         outputs.extend(checks.iter().copied());
+        let t = model.t;
+        let depends_on_time = outputs.iter().any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
         if let Some(stab) = &f.stabilization {
             outputs.extend(stab.iter().map(|(r, _)| *r));
             outputs.extend(stab.iter().map(|(_, p)| *p));
@@ -308,7 +309,7 @@ impl Emitter<'_> {
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
-        Ok(quote! {
+        let items = quote! {
             #[doc = "Size of the matrix `rhs` solves numerically."]
             pub const MATRIX_SIZE: usize = #n_l;
             #[doc = "What each checked singular factor's vanishing means, in the order of `Assembly::checks`."]
@@ -357,7 +358,8 @@ impl Emitter<'_> {
             pub fn matrix(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE]) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
                 assemble(t, state, params, g_i).matrix
             }
-        })
+        };
+        Ok((items, depends_on_time))
     }
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {

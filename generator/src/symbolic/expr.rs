@@ -63,6 +63,14 @@ pub fn catch_budget<R>(f: impl FnOnce() -> R) -> Result<R, NodeBudgetSpent> {
     }
 }
 
+/// A command line's budget: [`quiet_budget_panics`], and `--max-nodes` when given.
+pub fn budget_for_command_line(max_nodes: Option<u64>) {
+    quiet_budget_panics();
+    if let Some(n) = max_nodes {
+        set_max_nodes(usize::try_from(n).unwrap_or(usize::MAX));
+    }
+}
+
 /// Leaves a spent node budget out of the panic messages (it is reported as an error by
 /// [`catch_budget`]'s caller); every other panic prints as before. For a program's `main`.
 pub fn quiet_budget_panics() {
