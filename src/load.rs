@@ -41,35 +41,15 @@ pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
 /// own values are (a negative mass is refused), evaluated in-process.
 pub fn evaluated(argument: &str, params: &[(String, f64)]) -> Result<seam::Model, CliError> {
     let model = model(argument)?.with_parameters(params)?;
-    let (evaluated, cut) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model))?;
-    if let Some(warning) = budget_warning(&cut) {
-        eprintln!("{warning}");
+    let (evaluated, summary) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model))?;
+    for line in summary.warnings() {
+        eprintln!("warning: {line}");
     }
     Ok(evaluated)
 }
 
-/// What the simplifier's limits cut, said on stderr: the equations are right, only larger.
-fn budget_warning(cut: &generator::symbolic::fourier::SimplifyReport) -> Option<String> {
-    (cut.over_term_limit > 0 || cut.work_limit_reached).then(|| {
-        format!(
-            "warning: the simplifier kept {} expression nodes as built (over its term limit{}): the equations are exact but larger and slower than they could be",
-            cut.over_term_limit,
-            if cut.work_limit_reached { "; its work limit was reached" } else { "" }
-        )
-    })
-}
-
 #[cfg(test)]
 mod tests {
-    /// A cut is reported; nothing is said when nothing was cut.
-    #[test]
-    fn simplifier_cuts_are_reported() {
-        use generator::symbolic::fourier::SimplifyReport;
-        assert_eq!(super::budget_warning(&SimplifyReport::default()), None);
-        let w = super::budget_warning(&SimplifyReport { over_term_limit: 3, ..SimplifyReport::default() }).unwrap();
-        assert!(w.starts_with("warning:") && w.contains("kept 3 expression nodes"), "{w}");
-    }
-
     /// The built-in list is the `models/` folder.
     #[test]
     fn every_model_file_is_built_in() {

@@ -252,3 +252,26 @@ fn concurrent_runs_of_different_models_keep_their_own_results() {
     assert!(b.as_array().unwrap().iter().all(|r| r["scene"] == "my_modem"));
     assert_ne!(a[0]["energy_error_norm"], b[0]["energy_error_norm"]);
 }
+
+/// What the derivation could not decide reaches stderr as a warning, and the run goes on.
+#[test]
+fn undecided_questions_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = r#"Model(
+    name: "kink",
+    parameters: { "m": 1.0, "k": 2.0 },
+    coordinates: ["x", "y"],
+    frames: [Frame(name: "p", parent: "world", translation: ["x", "y", "0"])],
+    bodies: [Body(name: "p", frame: "p", mass: "m", inertia: PointMass)],
+    forces: [Potential(name: "kink", expr: "k*(sqrt(x^2) - x)")],
+    quasi_velocities: QuasiVelocities(full: ["x'", "y'"], reduced: ["x'"]),
+    ignorable: Auto,
+    initial: Initial(q: {"x": "1", "y": "0"}, qdot: {"x": "0.1", "y": "0.2"}),
+    simulation: Simulation(t_end: 1.0, dt_out: 0.1),
+)"#;
+    std::fs::write(dir.path().join("kink.ron"), model).unwrap();
+    let out = multibody(dir.path(), &["compare", "kink.ron"]);
+    ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("warning: whether the equations depend on `x` could not be decided exactly"), "{stderr}");
+}

@@ -191,6 +191,10 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     }
     if !args.quiet {
         eprintln!("{}", out.summary);
+    } else {
+        for line in out.summary.warnings() {
+            eprintln!("warning: {line}");
+        }
     }
     Ok(())
 }

@@ -127,6 +127,22 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
             }
         }
     }
+    let mut cuts = Vec::new();
+    let simplified = mech.tidy.report();
+    if simplified.over_term_limit > 0 || simplified.work_limit_reached {
+        cuts.push(format!(
+            "simplifier: {} nodes over the term limit{} (kept as built: exact, only larger)",
+            simplified.over_term_limit,
+            if simplified.work_limit_reached { ", work limit reached" } else { "" }
+        ));
+    }
+    cuts.extend(d.cuts.lines());
+    if !cuts.is_empty() {
+        let _ = writeln!(w, "\nBudgets and undecided questions:");
+        for line in cuts {
+            let _ = writeln!(w, "  {line}");
+        }
+    }
     out
 }
 

@@ -130,6 +130,8 @@ pub struct Summary {
     pub functions: Vec<FunctionCost>,
     /// What the simplifier's limits cut (nodes kept as built: correct, only less compact).
     pub simplifier: crate::symbolic::fourier::SimplifyReport,
+    /// What the other budgets cut and which questions stayed undecided (both threads').
+    pub cuts: crate::symbolic::report::Cuts,
     /// Time per derivation stage.
     pub stages: Vec<(&'static str, Duration)>,
     /// Time spent deriving (mechanics and formulations), and emitting after the derivation
@@ -164,13 +166,24 @@ impl Summary {
                 out += &format!("  {:<32} {:>5} lets, assembly {} + solve {} ops\n", f.name, f.lets, f.ops, f.solve.total());
             }
         }
+        for line in self.warnings() {
+            out += &format!("  {line}\n");
+        }
+        out
+    }
+
+    /// What the budgets cut and what could not be decided, one line each (empty when nothing
+    /// was): the equations stay exact, only larger, or they took the safe side named.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
         if self.simplifier.over_term_limit > 0 || self.simplifier.work_limit_reached {
-            out += &format!(
-                "  simplifier: {} nodes over the term limit{} (kept as built)\n",
+            out.push(format!(
+                "simplifier: {} nodes over the term limit{} (kept as built)",
                 self.simplifier.over_term_limit,
                 if self.simplifier.work_limit_reached { ", work limit reached" } else { "" }
-            );
+            ));
         }
+        out.extend(self.cuts.lines());
         out
     }
 }

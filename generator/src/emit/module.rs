@@ -88,6 +88,8 @@ enum Job {
 /// Part of the module, printed, with what its functions cost.
 struct Part {
     text: String,
+    /// What the budgets cut on the thread that wrote it.
+    cuts: crate::symbolic::report::Cuts,
     functions: Vec<FunctionCost>,
     forms: Vec<(String, usize, usize)>,
     /// In-process evaluation: the part's tapes and formulation shapes, and (the head) the
@@ -97,7 +99,7 @@ struct Part {
 
 impl Part {
     fn empty() -> Part {
-        Part { text: String::new(), functions: Vec::new(), forms: Vec::new(), program: Default::default() }
+        Part { text: String::new(), cuts: Default::default(), functions: Vec::new(), forms: Vec::new(), program: Default::default() }
     }
 }
 
@@ -106,7 +108,7 @@ impl Emitter<'_> {
     fn part(&mut self, text: String) -> Part {
         let program =
             super::program::Program { description: Default::default(), tapes: self.tapes.take().unwrap_or_default(), forms: std::mem::take(&mut self.shapes) };
-        Part { text, functions: std::mem::take(&mut self.functions), forms: std::mem::take(&mut self.forms), program }
+        Part { text, cuts: crate::symbolic::report::take(), functions: std::mem::take(&mut self.functions), forms: std::mem::take(&mut self.forms), program }
     }
 }
 
@@ -147,6 +149,9 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let head = second.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
         let (tail, d) = tail?;
         let (head, tail) = (head?, tail?);
+        let mut cuts = d.cuts.clone();
+        cuts.merge(head.cuts);
+        cuts.merge(tail.cuts);
         let mut functions = head.functions;
         functions.extend(tail.functions);
         let mut formulations = head.forms;
@@ -175,6 +180,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
             eliminations: d.equations.iter().map(|e| (e.name().to_string(), e.elimination.to_string())).collect(),
             functions,
             simplifier: d.mechanics.tidy.report(),
+            cuts,
             stages: d.stages.clone(),
             derive_time,
             emit_time: emit_start.elapsed(),
@@ -219,6 +225,7 @@ impl formulation::Stages for ToSecond<'_> {
 /// they took; the module's head; each formulation as its [`Job`] arrives.
 fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usize>, Duration), ModelError>>, options: &Options) -> Result<Part, ModelError> {
     // No mechanics: the deriving thread stopped first, and reports why.
+    crate::symbolic::report::take();
     let Ok(Job::Mechanics(parcel)) = inbox.recv() else { return Ok(Part::empty()) };
     let (model, mech) = parcel.unpack();
     let clock = Instant::now();

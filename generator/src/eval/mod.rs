@@ -42,12 +42,12 @@ pub fn evaluate_with(model: &Model, options: &Options) -> Result<seam::Model, Mo
     Ok(evaluate_reporting(model, options)?.0)
 }
 
-/// [`evaluate_with`], and what the derivation's budgets cut (nodes the simplifier kept as built:
-/// correct, only larger), for the caller to report.
-pub fn evaluate_reporting(model: &Model, options: &Options) -> Result<(seam::Model, crate::symbolic::fourier::SimplifyReport), ModelError> {
+/// [`evaluate_with`], and the generation's summary: what the derivation's budgets cut and what it
+/// could not decide ([`crate::emit::Summary::warnings`]), for the caller to report.
+pub fn evaluate_reporting(model: &Model, options: &Options) -> Result<(seam::Model, crate::emit::Summary), ModelError> {
     let options = Options { tapes: true, jacobian: false, parameter_jacobian: false, max_lets_per_function: usize::MAX, ..options.clone() };
     let generated = generate(model, &options)?;
     let program =
         generated.program.ok_or_else(|| model.error(crate::model::ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;
-    Ok((model::Evaluated::model(program), generated.summary.simplifier))
+    Ok((model::Evaluated::model(program), generated.summary))
 }

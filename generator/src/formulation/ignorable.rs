@@ -13,7 +13,7 @@
 
 use super::mechanics::Quantities;
 use crate::model::{ErrorKind, Model, ModelError};
-use crate::symbolic::zero::zero_test;
+use crate::symbolic::zero::{ZeroVerdict, zero_test};
 use crate::symbolic::{Expr, Symbol};
 
 /// Which condition of Definition 1 fails, and on what.
@@ -56,13 +56,25 @@ impl CoordinateReport {
     }
 }
 
-/// `Some(de/dq)` when `e` depends on `q` (decided by the exact zero test).
+/// `Some(de/dq)` when `e` depends on `q` (decided by the exact zero test). A dependence the test
+/// cannot decide counts as one (the safe side: the coordinate is not taken as ignorable), and
+/// is reported.
 pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
     if !e.contains(q) {
         return None;
     }
     let d = e.diff(q);
-    (!zero_test(d).is_zero()).then_some(d)
+    match zero_test(d) {
+        ZeroVerdict::Zero { .. } => None,
+        ZeroVerdict::NonZero { .. } => Some(d),
+        ZeroVerdict::Undecided { reason } => {
+            let name = q.name();
+            crate::symbolic::report::record(|c| {
+                c.note(format!("whether the equations depend on `{name}` could not be decided exactly ({reason}): taken as depending on it"))
+            });
+            Some(d)
+        }
+    }
 }
 
 /// Checks Definition 1 for every coordinate.

@@ -76,6 +76,8 @@ pub struct Derivation {
     pub equations: Vec<Equations>,
     /// Time per stage (for the summary and the scaling benchmark; never in output).
     pub stages: Vec<(&'static str, Duration)>,
+    /// What this thread's budgets cut and which questions stayed undecided on the way.
+    pub cuts: crate::symbolic::report::Cuts,
 }
 
 impl Derivation {
@@ -162,6 +164,7 @@ fn every_coordinate_has_inertia(model: &Model, mech: &mechanics::Mechanics) -> R
 /// assert_eq!(names.0, ["lagrange", "maggi", "kane", "reduced_volterra"]);
 /// ```
 pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) -> Result<Derivation, ModelError> {
+    crate::symbolic::report::take();
     let mut times = Vec::new();
     let mut clock = Instant::now();
     // Time in the formulations' own work, summed over the places it runs.
@@ -207,5 +210,6 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     times.push(("reduced", clock.elapsed()));
     formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref())?;
     times.push(("formulations", formulations));
-    Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times })
+    let cuts = crate::symbolic::report::take();
+    Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times, cuts })
 }

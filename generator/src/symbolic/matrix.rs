@@ -19,7 +19,7 @@
 use super::expr::{Expr, Node, Symbol};
 use super::limits::{Limits, StopReason};
 use super::number::Rat;
-use super::zero::zero_test;
+use super::zero::{ZeroVerdict, zero_test};
 use std::collections::{BTreeMap, HashSet};
 
 /// A dense matrix of expressions, row-major.
@@ -267,14 +267,32 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
             }
         }
         cands.sort_by_key(|c| c.0);
+        // A pivot must be known to be nonzero; one the zero test could not decide is taken
+        // only when no other is left (and said so), never one known to be zero.
         let mut chosen = None;
+        let mut undecided = None;
         for (_, i, j) in cands {
             let e = rows[i][j];
-            if e.as_num().is_some() || !zero_test(e).is_zero() {
+            if e.as_num().is_some() {
                 chosen = Some((i, j));
                 break;
             }
-            rows[i][j] = Expr::zero();
+            match zero_test(e) {
+                ZeroVerdict::NonZero { .. } => {
+                    chosen = Some((i, j));
+                    break;
+                }
+                ZeroVerdict::Undecided { .. } => {
+                    undecided.get_or_insert((i, j));
+                }
+                ZeroVerdict::Zero { .. } => rows[i][j] = Expr::zero(),
+            }
+        }
+        if chosen.is_none() && undecided.is_some() {
+            super::report::record(|c| {
+                c.note("a symbolic solve took a pivot the zero test could not decide: the equations divide by it, and a run stops where it vanishes".into())
+            });
+            chosen = undecided;
         }
         let Some((pi, pj)) = chosen else {
             let rows_left: Vec<usize> = (0..n).filter(|i| !row_used[*i]).collect();
@@ -326,6 +344,9 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
         }
     }
     let determinant = opts.determinant.then(|| a.determinant(opts.limits));
+    if !stops.is_empty() {
+        super::report::record(|c| c.solver_stops += stops.len());
+    }
     Ok(Solution { x, pivots, determinant, stops })
 }
 

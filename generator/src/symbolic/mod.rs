@@ -13,6 +13,7 @@ pub mod matrix;
 pub mod number;
 pub mod parse;
 pub mod print;
+pub mod report;
 pub mod subs;
 pub mod transfer;
 pub mod trig;

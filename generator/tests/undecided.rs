@@ -1,0 +1,61 @@
+//! What the derivation cannot decide exactly reaches the user: a coordinate whose place in the
+//! equations only a floating-point guess could settle is kept on the safe side (not taken as
+//! ignorable), and the generation summary, `inspect` and the in-process route say so.
+
+use generator::model::from_source;
+
+/// A particle in the plane with the potential `k (sqrt(x^2) - x)`: zero for x > 0, so L does not
+/// depend on x there, but it does for x < 0. The exact test cannot prove "zero" (it is not,
+/// on the other sign of the root), and floats at positive x cannot refute it.
+const KINK: &str = r#"Model(
+    name: "kink",
+    parameters: { "m": 1.0, "k": 2.0 },
+    coordinates: ["x", "y"],
+    frames: [Frame(name: "p", parent: "world", translation: ["x", "y", "0"])],
+    bodies: [Body(name: "p", frame: "p", mass: "m", inertia: PointMass)],
+    forces: [Potential(name: "kink", expr: "k*(sqrt(x^2) - x)")],
+    quasi_velocities: QuasiVelocities(full: ["x'", "y'"], reduced: ["x'"]),
+    ignorable: Auto,
+)"#;
+
+const NOTE: &str = "whether the equations depend on `x` could not be decided exactly";
+
+#[test]
+fn an_undecided_dependence_keeps_the_coordinate_and_is_reported() {
+    let model = from_source("kink.ron", KINK).unwrap();
+    let derivation = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    // y is ignorable; x, which a float test would have called absent, is not.
+    assert_eq!(derivation.ignorable, [1]);
+    assert!(derivation.cuts.notes.iter().any(|n| n.starts_with(NOTE)), "{:?}", derivation.cuts);
+    assert!(derivation.cuts.undecided.values().sum::<usize>() >= 1, "{:?}", derivation.cuts);
+
+    let inspected = generator::inspect::inspect(&model, false).unwrap();
+    let section = inspected.split("Budgets and undecided questions:").nth(1).expect("inspect lists the undecided questions");
+    assert!(section.contains(NOTE), "{section}");
+
+    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    assert!(generated.summary.warnings().iter().any(|w| w.starts_with(NOTE)), "{:?}", generated.summary.warnings());
+    assert!(generated.summary.to_string().contains(NOTE));
+    let (_, summary) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    assert_eq!(summary.warnings(), generated.summary.warnings());
+}
+
+/// A model everything of which is decided says nothing.
+#[test]
+fn a_decided_model_reports_no_cuts() {
+    let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    assert_eq!(generated.summary.warnings(), Vec::<String>::new());
+    assert!(!generator::inspect::inspect(&model, false).unwrap().contains("Budgets and undecided questions"));
+}
+
+/// The bicycle's Kane form: the simplifier's cut is in the summary (it was before), and the
+/// solver's stopped normal forms now too.
+#[test]
+fn the_bicycle_reports_what_its_budgets_cut() {
+    let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/bicycle.ron")).unwrap();
+    let generated = generator::emit::generate(&model, &generator::emit::Options::from_model(&model)).unwrap();
+    let warnings = generated.summary.warnings();
+    assert!(warnings.iter().any(|w| w.starts_with("simplifier: 2097 nodes over the term limit")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("symbolic solve hit the solver's term or work limit")), "{warnings:?}");
+}
