@@ -40,21 +40,35 @@ impl Options {
     }
 }
 
-/// One row of the comparison table (also the JSON record).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+/// JSON writes a non-finite number as `null`: read back as NaN (the table prints it as `-`, or as
+/// `NaN`/`inf` where the number was infinite, which a record read back cannot tell apart).
+fn null_as_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(<Option<f64> as serde::Deserialize>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// One row of the comparison table (also the JSON record, written by `compare --json` and read
+/// back to check the tables quoted from it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Record {
     pub scene: String,
     pub method: String,
     pub integrator: String,
     pub states: usize,
     pub equations: usize,
+    #[serde(deserialize_with = "null_as_nan")]
     pub seconds: f64,
+    #[serde(deserialize_with = "null_as_nan")]
     pub energy_error_norm: f64,
+    #[serde(deserialize_with = "null_as_nan")]
     pub energy_error_rel: f64,
+    #[serde(deserialize_with = "null_as_nan")]
     pub constraint_error_norm: f64,
+    #[serde(deserialize_with = "null_as_nan")]
     pub position_constraint_error_norm: f64,
     /// All ignorable momenta together.
+    #[serde(deserialize_with = "null_as_nan")]
     pub momentum_error_norm: f64,
+    #[serde(deserialize_with = "null_as_nan")]
     pub momentum_error_rel: f64,
     /// Each ignorable momentum on its own.
     pub momenta: Vec<MomentumError>,
@@ -62,20 +76,24 @@ pub struct Record {
     pub rejected: usize,
     pub rhs_calls: usize,
     /// Largest condition number of the matrix solved at run time, over the samples.
+    #[serde(deserialize_with = "null_as_nan")]
     pub max_condition: f64,
     /// Smallest distance to the singular set of `[Y; M'; a]` over the samples (`null`: none).
+    #[serde(deserialize_with = "null_as_nan")]
     pub min_singular_margin: f64,
     /// DOPRI5: the time from which the run looks stiff by Hairer's test (`null`: it does not).
     pub stiff_at: Option<f64>,
 }
 
 /// The drift of one ignorable coordinate's momentum over a run.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MomentumError {
     pub coordinate: String,
     /// Norm of `G(t) - G(0)` over the samples.
+    #[serde(deserialize_with = "null_as_nan")]
     pub norm: f64,
     /// The same divided by `|G(0)|` (NaN, `null` in JSON, when `G(0) = 0`).
+    #[serde(deserialize_with = "null_as_nan")]
     pub rel: f64,
 }
 
@@ -238,16 +256,21 @@ pub fn compare(model: &Model, options: &Options) -> Result<Vec<Run>, CompareErro
         .collect()
 }
 
-/// The runs as a Markdown table shaped like the paper's.
-/// One column pair (absolute, relative) per ignorable momentum, as the paper's "momentum err (X)".
+/// The runs as a Markdown table shaped like the paper's ([`table_of`] their records).
 pub fn table(runs: &[Run]) -> String {
-    let names: Vec<&str> = runs.first().map(|r| r.record.momenta.iter().map(|m| m.coordinate.as_str()).collect()).unwrap_or_default();
+    table_of(&runs.iter().map(|r| r.record.clone()).collect::<Vec<_>>())
+}
+
+/// Records as a Markdown table shaped like the paper's: one column pair (absolute, relative)
+/// per ignorable momentum, as the paper's "momentum err (X)".
+pub fn table_of(records: &[Record]) -> String {
+    let names: Vec<&str> = records.first().map(|r| r.momenta.iter().map(|m| m.coordinate.as_str()).collect()).unwrap_or_default();
     let momentum_header: String = names.iter().map(|n| format!(" momentum err ({n}) | (rel) |")).collect();
     let momentum_rule = "---|---|".repeat(names.len());
     let mut out = format!(
         "| method | states | equations | time s | energy err | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
     );
-    for r in runs.iter().map(|r| &r.record) {
+    for r in records {
         let constraint = if r.position_constraint_error_norm > 0.0 {
             format!("{:.2e} (pos {:.2e})", r.constraint_error_norm, r.position_constraint_error_norm)
         } else {

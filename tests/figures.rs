@@ -1,0 +1,130 @@
+//! The README's figures cannot drift: every table and number it quotes from a measurement is
+//! checked here against the file the measurement writes, and the files' reproducible numbers
+//! against what a run gives now.
+//!
+//! - the scene tables: `docs/comparisons/<scene>.json`, written by
+//!   `cargo run --release -p generated --example compare -- <scene> --repeats 11`;
+//! - the in-process figures: `docs/benchmarks/eval.json` (`cargo bench -p generated --bench eval`);
+//! - the scaling figures: `docs/scaling/ours.json`, `docs/scaling/sympy.json` and the tables of
+//!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`).
+
+use runtime::compare::{Options, Record, compare, table_of};
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const SCENES: [&str; 3] = ["cart_pendulum", "three_body", "satellite_boom"];
+
+fn read(path: &str) -> String {
+    std::fs::read_to_string(format!("{ROOT}/{path}")).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+fn json(path: &str) -> serde_json::Value {
+    serde_json::from_str(&read(path)).unwrap()
+}
+
+fn records(scene: &str) -> Vec<Record> {
+    serde_json::from_str(&read(&format!("docs/comparisons/{scene}.json"))).unwrap()
+}
+
+fn assert_quoted(readme: &str, figure: &str, source: &str) {
+    assert!(readme.contains(figure), "the README does not quote `{figure}` from {source}");
+}
+
+#[test]
+fn the_scene_tables_are_the_comparison_files() {
+    let readme = read("README.md");
+    for scene in SCENES {
+        let table = table_of(&records(scene));
+        assert!(readme.contains(&table), "the README's table of {scene} is not docs/comparisons/{scene}.json:\n{table}");
+    }
+}
+
+/// Everything in a comparison file but the times is what the committed module gives now: the
+/// same states, equations, steps and calls, and the same errors (to the round-off of the
+/// machine's libm where an error is round-off itself).
+#[test]
+fn the_comparison_files_hold_what_a_run_gives_now() {
+    for scene in SCENES {
+        let model = generated::find(scene).unwrap();
+        let now = compare(&model, &Options { repeats: 1, ..Options::paper(&model) }).unwrap();
+        let filed = records(scene);
+        assert_eq!(now.len(), filed.len(), "{scene}");
+        for (run, old) in now.iter().zip(&filed) {
+            let new = &run.record;
+            let what = format!("{scene} {}", new.method);
+            assert_eq!(
+                (&new.method, new.states, new.equations, new.steps, new.rejected, new.rhs_calls),
+                (&old.method, old.states, old.equations, old.steps, old.rejected, old.rhs_calls),
+                "{what}"
+            );
+            let pairs = [
+                ("energy", new.energy_error_norm, old.energy_error_norm, new.energy_error_rel),
+                ("constraint", new.constraint_error_norm, old.constraint_error_norm, new.constraint_error_norm),
+            ];
+            let momenta = new.momenta.iter().zip(&old.momenta).map(|(n, o)| ("momentum", n.norm, o.norm, n.rel));
+            for (name, a, b, relative) in pairs.into_iter().chain(momenta) {
+                // Round-off (relative to the invariant's size, or absolute for a constraint):
+                // both must be round-off; anything larger is a truncation error, reproducible.
+                if relative.abs() < 1e-12 {
+                    assert!(b.abs() <= 1e-12 * (a.abs() / relative.abs().max(1e-300)).max(1.0), "{what} {name}: {a:e} now, {b:e} filed");
+                } else {
+                    assert!((a - b).abs() <= 1e-9 * a.abs(), "{what} {name}: {a:e} now, {b:e} filed");
+                }
+            }
+            assert!((new.max_condition - old.max_condition).abs() <= 1e-9 * new.max_condition, "{what} condition");
+        }
+    }
+}
+
+#[test]
+fn the_in_process_figures_are_the_benchmark_file() {
+    let readme = read("README.md");
+    let eval = json("docs/benchmarks/eval.json");
+    let ms = eval["scene2_file_to_table_seconds"].as_f64().unwrap() * 1e3;
+    assert_quoted(&readme, &format!("comparison table takes {ms:.0} ms"), "docs/benchmarks/eval.json");
+    let ratios: Vec<f64> = eval["rhs"].as_array().unwrap().iter().map(|r| r["ratio"].as_f64().unwrap()).collect();
+    let (lo, hi) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
+    assert_quoted(&readme, &format!("costs {lo:.1} to {hi:.1} times the compiled one"), "docs/benchmarks/eval.json");
+}
+
+#[test]
+fn the_scaling_figures_are_the_benchmark_files() {
+    let readme = read("README.md");
+    let ours = json("docs/scaling/ours.json");
+    let sympy = json("docs/scaling/sympy.json");
+    let row =
+        |model: &str, n: u64| ours.as_array().unwrap().iter().find(|r| r["model"] == model && r["n"] == n).unwrap_or_else(|| panic!("{model} {n}")).clone();
+    let seconds = |r: &serde_json::Value| (r["derive_ms"].as_f64().unwrap() + r["emit_ms"].as_f64().unwrap()) / 1e3;
+    let kane_assembly = |r: &serde_json::Value| r["ops"].as_array().unwrap().iter().find(|o| o[0] == "kane").unwrap()[1].as_f64().unwrap();
+    let sympy_ops = |model: &str, n: u64| sympy[model].as_array().unwrap().iter().find(|r| r["n"] == n).unwrap()["assembly_ops"].as_f64().unwrap();
+    let (p20, p50, f8) = (row("pendulum", 20), row("pendulum", 50), row("floating", 8));
+    let source = "docs/scaling/ours.json";
+    assert_quoted(&readme, &format!("four formulations in {:.2} s", seconds(&p20)), source);
+    assert_quoted(&readme, &format!("50 links take {:.1} s and {:.0} MB", seconds(&p50), p50["peak_mb"].as_f64().unwrap()), source);
+    assert_quoted(&readme, &format!("with {:.2} of SymPy's assembly", kane_assembly(&p20) / sympy_ops("pendulum", 20)), "docs/scaling/sympy.json");
+    assert_quoted(&readme, &format!("8 links\ntakes {:.2} s", seconds(&f8)), source);
+    assert_quoted(&readme, &format!("at {:.2} of its operations", kane_assembly(&f8) / sympy_ops("floating", 8)), "docs/scaling/sympy.json");
+    let worst = ours
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|r| {
+            let (model, n) = (r["model"].as_str()?, r["n"].as_u64()?);
+            let theirs = sympy[model].as_array()?.iter().find(|s| s["n"] == n)?["assembly_ops"].as_f64()?;
+            Some(kane_assembly(r) / theirs)
+        })
+        .fold(0.0f64, f64::max);
+    assert_quoted(&readme, &format!("at most {worst:.2} of SymPy's cse'd count at every size measured"), "docs/scaling/*.json");
+    // SymPy's own times are in the tables the benchmark writes into docs/scaling.md.
+    let scaling = read("docs/scaling.md");
+    let sympy_seconds = |table: &str, n: u64| -> f64 {
+        let section = scaling.split(table).nth(1).unwrap_or_else(|| panic!("docs/scaling.md has no `{table}`"));
+        let line = section.lines().find(|l| l.starts_with(&format!("| {n} |"))).unwrap();
+        line.split('|').nth(2).unwrap().trim().parse().unwrap()
+    };
+    let pendulum = sympy_seconds("SymPy's `KanesMethod` on the same model", 20);
+    assert_quoted(&readme, &format!("SymPy's Kane with cse: {pendulum:.1} s"), "docs/scaling.md");
+    let floating = scaling.rsplit("SymPy's `KanesMethod` on the same model").next().unwrap();
+    let line = floating.lines().find(|l| l.starts_with("| 8 |")).unwrap();
+    let seconds: f64 = line.split('|').nth(2).unwrap().trim().parse().unwrap();
+    assert_quoted(&readme, &format!("against SymPy's {seconds:.0} s"), "docs/scaling.md");
+}
