@@ -143,7 +143,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     }
     if let Some(dir) = &args.plots {
         for p in plot::write_plots(&model, &runs, dir)? {
-            eprintln!("wrote {}", p.display());
+            eprintln!("wrote {}", files::printable_path(&p));
         }
     }
     Ok(())
@@ -182,7 +182,7 @@ pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     write_file(&base.with_extension("json"), serde_json::to_string_pretty(&points).expect("points serialize").as_bytes())?;
     plot::write_work_precision(&points, &base.with_extension("svg"))?;
     let failed = points.iter().filter(|p| p.failure.is_some()).count();
-    print(&format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), base.display()))
+    print(&format!("{} runs ({failed} stopped early), written to {}.{{csv,json,svg}}\n", points.len(), files::printable_path(&base)))
 }
 
 /// The operating point `args` describe: the model's initial state and parameters with the
@@ -246,7 +246,7 @@ pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     let json = serde_json::json!({ "model": model.module, "formulation": kind.name(), "swept": name, "crossings": cross, "rows": rows });
     write_file(&base.with_extension("json"), serde_json::to_string_pretty(&json).expect("plain data").as_bytes())?;
     plot::write_eigenvalues(&format!("{} ({kind})", model.module), name, &rows, &base.with_extension("svg"))?;
-    let mut text = format!("{} {kind}: {} values of {name} from {a} to {b}; written {}.{{csv,json,svg}}\n", model.module, k, base.display());
+    let mut text = format!("{} {kind}: {} values of {name} from {a} to {b}; written {}.{{csv,json,svg}}\n", model.module, k, files::printable_path(&base));
     for c in &cross {
         text += &format!("  the largest nonzero real part crosses zero at {name} = {c:.12}\n");
     }

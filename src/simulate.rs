@@ -78,7 +78,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     header.extend(model.coordinates.iter().cloned());
     header.extend(model.coordinates.iter().map(|c| format!("{c}'")));
     header.extend(sys.form.state_names.iter().map(|n| format!("state:{n}")));
-    header.extend(["energy".to_string(), "energy_error".to_string()]);
+    let quantity = model.energy_balance.quantity();
+    header.extend([quantity.to_string(), format!("{quantity}_error")]);
     header.extend(model.ignorable.iter().map(|&j| format!("momentum:{}", model.coordinates[j])));
     header.extend(["constraint_residual".to_string(), "position_residual".to_string()]);
     let rows: Vec<Vec<f64>> = (0..solution.times.len())
@@ -129,16 +130,22 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         elapsed.as_secs_f64()
     );
     let worst = |s: &[f64]| s.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    text += &format!("  max |energy error| {:.3e} (E(0) = {:.6e})\n", worst(&inv.energy_error), inv.energy0);
+    text += &format!(
+        "  max |{} error| {:.3e} ({}(0) = {:.6e})\n",
+        model.energy_balance.quantity(),
+        worst(&inv.energy_error),
+        model.energy_balance.quantity(),
+        inv.energy0
+    );
     for (k, &j) in model.ignorable.iter().enumerate() {
         text += &format!("  max |momentum error ({})| {:.3e}\n", model.coordinates[j], worst(&inv.momentum_error[k]));
     }
     if !model.constraints.is_empty() {
         text += &format!("  max constraint residual {:.3e}\n", worst(&inv.velocity_constraint));
     }
-    text += &format!("  wrote {}.csv, {}.json", base.display(), base.display());
+    text += &format!("  wrote {0}.csv, {0}.json", files::printable_path(&base));
     for p in plots {
-        text += &format!(", {}", p.display());
+        text += &format!(", {}", files::printable_path(&p));
     }
     print(&(text + "\n"))
 }

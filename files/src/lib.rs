@@ -26,11 +26,28 @@ use std::fs::{File, OpenOptions};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
+/// `text` with its control characters escaped (`\n`, `\t`, `\u{1b}`): a name or path a user
+/// gave, fit to print on a terminal or into one line of a file. Everything else is kept as it
+/// is, so an ordinary name prints unchanged.
+///
+/// ```
+/// assert_eq!(files::printable("models/x.ron"), "models/x.ron");
+/// assert_eq!(files::printable("a\nb\u{1b}[31m"), "a\\nb\\u{1b}[31m");
+/// ```
+pub fn printable(text: &str) -> String {
+    text.chars().map(|c| if c.is_control() { c.escape_debug().to_string() } else { c.to_string() }).collect()
+}
+
+/// [`printable`] of a path (lossy where it is not UTF-8).
+pub fn printable_path(path: &Path) -> String {
+    printable(&path.to_string_lossy())
+}
+
 /// Why a file could not be read or written. A failed write leaves the target as it was.
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
     /// The system refused (no such folder, no permission, a full disk...).
-    #[error("cannot {action} `{path}`: {source}")]
+    #[error("cannot {action} `{}`: {source}", printable_path(path))]
     Io {
         path: PathBuf,
         action: &'static str,
@@ -38,10 +55,10 @@ pub enum FileError {
         source: std::io::Error,
     },
     /// The path is something a file must not replace.
-    #[error("cannot write `{path}`: it is {kind}, not a regular file; nothing was written (give the path of a file)")]
+    #[error("cannot write `{}`: it is {kind}, not a regular file; nothing was written (give the path of a file)", printable_path(path))]
     NotRegular { path: PathBuf, kind: &'static str },
     /// A read found more than `limit` bytes.
-    #[error("`{path}` holds more than {limit} bytes, the most this reads (is it the right file?)")]
+    #[error("`{}` holds more than {limit} bytes, the most this reads (is it the right file?)", printable_path(path))]
     TooLarge { path: PathBuf, limit: u64 },
 }
 

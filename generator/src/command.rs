@@ -184,7 +184,7 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
                     files::Written::Replaced => "wrote",
                     files::Written::Through => "wrote through",
                 };
-                eprintln!("{verb} {}", path.display());
+                eprintln!("{verb} {}", files::printable_path(path));
             }
         }
         None => print_stdout(&out.code)?,
@@ -211,13 +211,13 @@ fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Resul
     if same {
         return Err(format!(
             "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o (or --force if you mean it)",
-            output.display()
+            files::printable_path(output)
         ));
     }
     if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
         return Err(format!(
             "error: the output `{}` is a `.ron` file: the generator writes Rust, and this would replace a model\n  help: write to a `.rs` path (or pass --force if you mean it)",
-            output.display()
+            files::printable_path(output)
         ));
     }
     Ok(())

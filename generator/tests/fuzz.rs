@@ -1,10 +1,14 @@
 //! A seeded mutation fuzzer over the model loader, the expression parser and the whole
 //! generator, run in-process on stable Rust: every file of `models/` is mutated (bytes deleted,
 //! duplicated or replaced, tokens of the format inserted, numbers and names swapped, lines
-//! shuffled, the file cut short), and every mutant must give either a located error (file, line
-//! and column, a fix) or a module that parses as Rust with only finite numbers in it (the first
-//! few distinct ones are compiled by rustc, warnings denied). A panic fails the test with the
-//! mutant that caused it, written to a file to replay.
+//! shuffled, the file cut short, expressions nested thousands deep, extreme run settings), under
+//! file names with control characters and a node budget small enough to be reached, and every
+//! mutant must give either a located error (file, line and column, a fix; the node budget's
+//! error names the budget instead) with no control character in it, or a module that parses as
+//! Rust with only finite numbers and no control character in it (the first few distinct ones
+//! are compiled by rustc, warnings denied), whose in-process evaluation computes every
+//! formulation's first right-hand side as finite numbers or a typed failure. A panic fails the
+//! test with the mutant that caused it, written to a file to replay.
 //!
 //! `cargo test --release -p generator --test fuzz` runs the short pass CI runs;
 //! `FUZZ_MUTANTS=20000 FUZZ_SEED=7 cargo test --release -p generator --test fuzz -- --nocapture`
@@ -95,7 +99,7 @@ fn mutate(src: &str, rng: &mut Rng) -> String {
     for _ in 0..1 + rng.below(3) {
         let n = s.len().max(1);
         let at = rng.below(n);
-        match rng.below(8) {
+        match rng.below(10) {
             // Delete a short range.
             0 => {
                 let end = (at + 1 + rng.below(12)).min(s.len());
@@ -139,6 +143,26 @@ fn mutate(src: &str, rng: &mut Rng) -> String {
                 }
                 s = lines.join("\n").chars().collect();
             }
+            // Nest an expression deep (beyond the parser's depth limit at times).
+            7 => {
+                let depth = [20, 200, 1500, 2500][rng.below(4)];
+                let f = ["sin(", "sqrt(", "(1+", "abs("][rng.below(4)];
+                let nested: Vec<char> = format!("{}x{}", f.repeat(depth), ")".repeat(depth)).chars().collect();
+                if let Some(p) = (at..s.len()).find(|&i| s[i] == '"') {
+                    s.splice(p + 1..p + 1, nested);
+                }
+            }
+            // Extreme run settings.
+            8 => {
+                let text: String = s.iter().collect();
+                if let Some(p) = text.find("simulation:") {
+                    let values = ["1e300", "1e-300", "0", "-1", "1e7", "0.01", "1e-9", "5e-324", "1e308"];
+                    let (a, b) = (values[rng.below(values.len())], values[rng.below(values.len())]);
+                    let end = text[p..].find(")").map_or(text.len(), |e| p + e + 1);
+                    let replaced = format!("{}simulation: Simulation(t_end: {a}, dt_out: {b}){}", &text[..p], &text[end..]);
+                    s = replaced.chars().collect();
+                }
+            }
             // Cut the file short.
             _ => s.truncate(at),
         }
@@ -163,12 +187,39 @@ fn compiles(code: &str, tag: usize) -> Result<(), String> {
     if out.status.success() { Ok(()) } else { Err(format!("emitted code does not compile:\n{}", String::from_utf8_lossy(&out.stderr))) }
 }
 
-/// Loads and generates `text`, checking the contract; `Err` describes a violation.
-fn run_one(text: &str) -> Result<Outcome, String> {
-    let file = "models/mutant.ron";
+/// File names a mutant is loaded under: control characters must reach no error and no module.
+const FILES: &[&str] = &["models/mutant.ron", "models/mu\ntant.ron", "models/\u{1b}[31mred\u{1b}[0m.ron", "models/tab\there\r.ron", "models/ünïcode.ron"];
+
+/// True when `text` holds a control character other than a line break.
+fn has_control(text: &str) -> bool {
+    text.chars().any(|c| c.is_control() && c != '\n')
+}
+
+/// The in-process evaluation of a generated mutant: every formulation's first right-hand side
+/// is finite or a typed failure (any panic is caught by the caller).
+fn evaluate_first_step(model: &generator::model::Model) -> Result<(), String> {
+    let Ok(evaluated) = generator::eval::evaluate(model) else { return Err("generated, but the in-process evaluation failed".into()) };
+    let Some((q0, qd0)) = evaluated.initial.clone() else { return Ok(()) };
+    for form in &evaluated.formulations {
+        let mut state = vec![0.0; form.states()];
+        let mut g_i = vec![0.0; evaluated.ignorable.len()];
+        if form.initial_state(0.0, &q0, &qd0, &evaluated.default_params, &mut state, &mut g_i).is_err() {
+            continue;
+        }
+        let mut rate = vec![0.0; state.len()];
+        if form.rhs(0.0, &state, &evaluated.default_params, &g_i, &mut rate).is_ok() && rate.iter().any(|x| !x.is_finite()) {
+            return Err(format!("{}: the in-process right-hand side returned a non-finite number without a failure", form.kind.name()));
+        }
+    }
+    Ok(())
+}
+
+/// Loads and generates `text` under the name `file`, checking the contract; `Err` describes a
+/// violation.
+fn run_one(text: &str, file: &str, evaluate: bool) -> Result<Outcome, String> {
     let result = catch_unwind(AssertUnwindSafe(|| match from_source(file, text) {
         Err(e) => Err(e),
-        Ok(model) => generate(&model, &Options::from_model(&model)).map(|g| g.code),
+        Ok(model) => generate(&model, &Options::from_model(&model)).map(|g| (g.code, evaluate.then(|| evaluate_first_step(&model)))),
     }));
     match result {
         Err(panic) => {
@@ -177,8 +228,14 @@ fn run_one(text: &str) -> Result<Outcome, String> {
         }
         Ok(Err(e)) => {
             let shown = e.to_string();
-            if !shown.starts_with(&format!("error: {file}")) || !shown.contains("help: ") {
+            if !shown.starts_with(&format!("error: {}", files::printable(file))) || !shown.contains("help: ") {
                 return Err(format!("an error without the file or a fix: {shown}"));
+            }
+            if has_control(&shown) || has_control(&e.render(false)) {
+                return Err(format!("an error with a control character in it: {shown:?}"));
+            }
+            if e.kind == generator::model::ErrorKind::Budget {
+                return if shown.contains("--max-nodes") { Ok(Outcome::Refused) } else { Err(format!("a budget error that names no budget: {shown}")) };
             }
             if std::env::var_os("FUZZ_SHOW_UNLOCATED").is_some() && e.location.is_none() {
                 eprintln!("unlocated: {shown}");
@@ -191,11 +248,15 @@ fn run_one(text: &str) -> Result<Outcome, String> {
             }
             Ok(Outcome::Refused)
         }
-        Ok(Ok(code)) => {
+        Ok(Ok((code, evaluated))) => {
             syn::parse_file(&code).map_err(|e| format!("emitted code does not parse: {e}"))?;
             if code.contains("NAN") || code.contains("INFINITY") && !code.contains("f64::INFINITY") {
                 return Err("emitted code holds a non-finite number".into());
             }
+            if has_control(&code) {
+                return Err("emitted code holds a control character".into());
+            }
+            evaluated.unwrap_or(Ok(()))?;
             Ok(Outcome::Generated(code))
         }
     }
@@ -226,10 +287,15 @@ fn mutated_models_give_a_located_error_or_a_module() {
             let mut compiled: Vec<String> = Vec::new();
             // A panic inside is caught and reported; keep the default hook quiet meanwhile.
             std::panic::set_hook(Box::new(|_| {}));
+            // A budget the nested expressions reach (this test binary runs nothing else).
+            generator::symbolic::expr::set_max_nodes(200_000);
             for i in 0..mutants {
                 let (name, src) = &sources[i % sources.len()];
                 let text = mutate(src, &mut rng);
-                match run_one(&text) {
+                let file = FILES[rng.below(FILES.len())];
+                // One in four generated mutants is evaluated in-process too.
+                let evaluate = rng.below(4) == 0;
+                match run_one(&text, file, evaluate) {
                     Ok(Outcome::Refused) => refused += 1,
                     Ok(Outcome::Generated(code)) => {
                         generated += 1;

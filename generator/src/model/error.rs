@@ -57,7 +57,7 @@ pub enum ErrorKind {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ModelError {
     pub kind: ErrorKind,
-    /// The file as given by the user.
+    /// The file as given by the user, its control characters escaped ([`files::printable`]).
     pub file: String,
     /// 1-based line and column, when the place could be found in the file.
     pub location: Option<(usize, usize)>,
@@ -78,11 +78,11 @@ impl ModelError {
     pub fn at(kind: ErrorKind, file: &str, source: &str, span: Option<Range<usize>>, place: &str, message: String, help: String) -> ModelError {
         ModelError {
             kind,
-            file: file.to_string(),
+            file: files::printable(file),
             location: span.as_ref().map(|r| line_col(source, r.start)),
-            place: place.to_string(),
-            message,
-            help,
+            place: shorten(&files::printable(place), 2 * MAX_QUOTED_CHARS),
+            message: printable_text(&message),
+            help: printable_text(&help),
             span,
             source_text: Some(Arc::from(source)),
         }
@@ -90,8 +90,52 @@ impl ModelError {
 
     /// An error with no place in a file (the file cannot be read, for instance).
     pub fn unlocated(kind: ErrorKind, file: &str, message: String, help: String) -> ModelError {
-        ModelError { kind, file: file.to_string(), location: None, place: String::new(), message, help, span: None, source_text: None }
+        ModelError {
+            kind,
+            file: files::printable(file),
+            location: None,
+            place: String::new(),
+            message: printable_text(&message),
+            help: printable_text(&help),
+            span: None,
+            source_text: None,
+        }
     }
+}
+
+/// A message with the control characters a user's text may have brought in escaped (a name, an
+/// expression, a path), its own line breaks kept: nothing in an error moves a terminal's cursor
+/// or colours it.
+/// A word of an error (a name, an expression, a path the user gave) longer than this is shortened.
+const MAX_QUOTED_CHARS: usize = 80;
+
+fn printable_text(text: &str) -> String {
+    shorten_words(&text.split('\n').map(files::printable).collect::<Vec<_>>().join("\n"))
+}
+
+/// `text` cut to its start and end around an ellipsis when it has more than `max` characters.
+fn shorten(text: &str, max: usize) -> String {
+    let chars = text.chars().count();
+    if chars <= max {
+        return text.to_string();
+    }
+    let (head, tail) = (max * 3 / 4, max / 4);
+    text.chars().take(head).chain(std::iter::once('…')).chain(text.chars().skip(chars - tail)).collect()
+}
+
+/// `text` with each word (a run without spaces) over [`MAX_QUOTED_CHARS`] cut to its start
+/// and end around an ellipsis: a name or expression of thousands of characters is quoted, not
+/// copied, whatever quotes it.
+///
+/// ```
+/// # use generator::model::error::shorten_words;
+/// let long = format!("`{}` is not a name", "x".repeat(500));
+/// let short = shorten_words(&long);
+/// assert!(short.len() < 120 && short.ends_with("` is not a name") && short.contains('…'), "{short}");
+/// assert_eq!(shorten_words("`ok` is fine"), "`ok` is fine");
+/// ```
+pub fn shorten_words(text: &str) -> String {
+    text.split(' ').map(|word| shorten(word, MAX_QUOTED_CHARS)).collect::<Vec<_>>().join(" ")
 }
 
 impl ModelError {
