@@ -50,6 +50,9 @@ pub const T_START: f64 = 0.0;
 pub const T_END: f64 = 50.0;
 ///Output interval of the reference run.
 pub const DT_OUT: f64 = 0.1;
+///What `energy` computes, and what its balance with the work state means:
+///E - W with E = T + V and W the work of the applied non-potential forces and of the explicit time dependence: constant
+pub const ENERGY_BALANCE: ::seam::EnergyBalance = ::seam::EnergyBalance::Energy;
 ///True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default.
 pub const PAPER_SETTINGS: bool = true;
 ///True when the parameters were folded into the code as constants.
@@ -279,7 +282,7 @@ pub fn energy(
         + 0.5 * ((Z_dot * Z_dot + X_dot * X_dot + Y_dot * Y_dot) * mg)
         + 0.5 * ((Iyy * x15 - Ixy * x11 - Iyz * x14) * x15)
 }
-///Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).
+///The rate of the work integral (Eq. 80) the energy function balances: `Q . q' - dL/dt`, the applied non-potential forces' power and the explicit time dependence.
 #[allow(non_snake_case, clippy::all)]
 pub fn work_rate(
     t: f64,
@@ -6536,6 +6539,7 @@ pub fn model() -> ::seam::Model {
         initial: Some((&INITIAL_Q, &INITIAL_QDOT)),
         run: Some((T_START, T_END, DT_OUT)),
         paper_settings: PAPER_SETTINGS,
+        energy_balance: ENERGY_BALANCE,
         energy: |t, q, qdot, params, out| {
             let p = Params::from_values(::seam::array("params", params)?);
             ::seam::array_mut::<1>("out", out)?[0] = energy(

@@ -15,8 +15,10 @@ use std::fmt::Write;
 /// Renders the derivation report for a model: one derivation of all four formulations, the
 /// same one the generator emits from.
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
-    let d = crate::formulation::derive(model, &Request::all())?;
-    Ok(report(model, &d, latex))
+    crate::model::in_own_context(model, |model| {
+        let d = crate::formulation::derive(model, &Request::all())?;
+        Ok(report(model, &d, latex))
+    })
 }
 
 /// The report of a derivation, as text or LaTeX.

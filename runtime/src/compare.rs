@@ -57,6 +57,10 @@ pub struct Record {
     pub equations: usize,
     #[serde(deserialize_with = "null_as_nan")]
     pub seconds: f64,
+    /// The column the energy error is reported in (`energy err`, `jacobi err`, `h - W drift`:
+    /// [`seam::EnergyBalance::column`]) and what it measures.
+    pub energy_column: String,
+    pub energy_balance: String,
     #[serde(deserialize_with = "null_as_nan")]
     pub energy_error_norm: f64,
     #[serde(deserialize_with = "null_as_nan")]
@@ -209,6 +213,8 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
         states: sys.form.states(),
         equations: sys.form.equations,
         seconds: elapsed[elapsed.len() / 2],
+        energy_column: model.energy_balance.column().to_string(),
+        energy_balance: model.energy_balance.describe().to_string(),
         energy_error_norm: energy,
         energy_error_rel: energy / invariants.energy0.abs(),
         constraint_error_norm: norm(&invariants.velocity_constraint),
@@ -267,8 +273,9 @@ pub fn table_of(records: &[Record]) -> String {
     let names: Vec<&str> = records.first().map(|r| r.momenta.iter().map(|m| m.coordinate.as_str()).collect()).unwrap_or_default();
     let momentum_header: String = names.iter().map(|n| format!(" momentum err ({n}) | (rel) |")).collect();
     let momentum_rule = "---|---|".repeat(names.len());
+    let energy = records.first().map_or("energy err", |r| r.energy_column.as_str());
     let mut out = format!(
-        "| method | states | equations | time s | energy err | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
+        "| method | states | equations | time s | {energy} | (rel) | constraint err |{momentum_header} steps | rhs calls | max cond |\n|---|---|---|---|---|---|---|{momentum_rule}---|---|---|\n",
     );
     for r in records {
         let constraint = if r.position_constraint_error_norm > 0.0 {

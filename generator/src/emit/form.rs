@@ -177,7 +177,7 @@ impl Emitter<'_> {
         }
         if self.work {
             let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
-            outputs.push(Expr::sum(shared.q_forces.iter().zip(&f.qdot).map(|(q, v)| q.subs(&to_qdot) * *v)));
+            outputs.push(shared.power.subs(&to_qdot));
         }
         outputs
     }

@@ -202,7 +202,11 @@ impl fmt::Display for Summary {
     }
 }
 
-/// Derives and emits the module of `model`.
+/// Derives and emits the module of `model`, in an expression context of its own: everything the
+/// derivation builds is freed when it returns, so a process that generates many models holds
+/// only the models themselves.
 pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
-    crate::symbolic::expr::catch_budget(|| module::generate(model, options)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
+    crate::model::in_own_context(model, |model| {
+        crate::symbolic::expr::catch_budget(|| module::generate(model, options)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
+    })
 }

@@ -141,7 +141,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let derive_time = start.elapsed();
         let emit_start = Instant::now();
         let tail = derived.map(|d| {
-            let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities);
+            let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
             let mut em = Emitter::new(model, options, seam, &shared);
             let names = d.equations.iter().map(|e| e.name().to_string()).collect();
             (em.formulations_and_model_fn(d.equations.last(), names, &shared), d)
@@ -233,7 +233,7 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     let _ = ignorable_back.send(chosen.clone().map(|c| (c, clock.elapsed())));
     // An error here is the derivation's, which the deriving thread reports.
     let Ok(chosen) = chosen else { return Ok(Part::empty()) };
-    let shared = FromMechanics::new(&mech, &chosen, &model.velocities);
+    let shared = FromMechanics::new(&mech, &chosen, &model.velocities, model.t);
     let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
     let mut head = vec![em.header(&shared)];
     head.push(em.params());
@@ -343,7 +343,7 @@ impl<'a> Emitter<'a> {
         };
         // Applied non-potential forces can do work (Q not identically zero once prepared): every
         // formulation then carries the work integral W as its last state.
-        em.work = shared.q_forces.iter().any(|q| !em.prep.prepare(*q).is_zero());
+        em.work = !em.prep.prepare(shared.power).is_zero();
         em
     }
 
@@ -409,7 +409,7 @@ fn model_file_name(model: &Model) -> String {
 /// `text` fit for a `//` comment: each control character (a line break in a file name would
 /// end the comment and let the rest through as code) written as its escape, `\n`, `\u{1b}`.
 pub(super) fn one_line(text: &str) -> String {
-    text.chars().map(|c| if c.is_control() { c.escape_debug().to_string() } else { c.to_string() }).collect()
+    files::printable(text)
 }
 
 pub(super) fn usize_lit(n: usize) -> Literal {
@@ -517,7 +517,17 @@ impl Emitter<'_> {
             });
         }
         let paper = model.simulation.as_ref().is_some_and(|s| s.paper);
+        let balance = match m.energy_balance {
+            seam::EnergyBalance::Energy => quote!(Energy),
+            seam::EnergyBalance::Jacobi => quote!(Jacobi),
+            seam::EnergyBalance::MovingConstraints => quote!(MovingConstraints),
+        };
+        let seam = &self.seam;
+        let balance_doc = m.energy_balance.describe();
         out.extend(quote! {
+            #[doc = "What `energy` computes, and what its balance with the work state means:"]
+            #[doc = #balance_doc]
+            pub const ENERGY_BALANCE: #seam::EnergyBalance = #seam::EnergyBalance::#balance;
             #[doc = "True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default."]
             pub const PAPER_SETTINGS: bool = #paper;
         });
@@ -541,6 +551,7 @@ impl Emitter<'_> {
             initial: model.initial.clone(),
             run: model.simulation.as_ref().map(|s| (s.t_start, s.t_end, s.dt_out)),
             paper_settings: model.simulation.as_ref().is_some_and(|s| s.paper),
+            energy_balance: m.energy_balance,
         }
     }
 
@@ -707,11 +718,10 @@ impl Emitter<'_> {
             }
             Function::WorkRate => {
                 let (args, inputs) = self.q_qdot_inputs(true);
-                let rate = Expr::sum(m.q_forces.iter().zip(&self.model.velocities).map(|(q, v)| *q * v.expr()));
-                let b = self.body("work_rate", &[rate], &inputs, &args)?;
+                let b = self.body("work_rate", &[m.power], &inputs, &args)?;
                 out.push(simple_fn(
                     "work_rate",
-                    "Power of the applied non-potential forces, `Q . q'`: the rate of the work integral (Eq. 80).",
+                    "The rate of the work integral (Eq. 80) the energy function balances: `Q . q' - dL/dt`, the applied non-potential forces' power and the explicit time dependence.",
                     &args,
                     &b,
                     quote!(f64),

@@ -21,6 +21,7 @@ pub struct Description {
     pub initial: Option<(Vec<f64>, Vec<f64>)>,
     pub run: Option<(f64, f64, f64)>,
     pub paper_settings: bool,
+    pub energy_balance: seam::EnergyBalance,
 }
 
 /// What a formulation's hand-written functions do around its tapes: the layout of `assemble`'s

@@ -183,6 +183,7 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
                 initial: #initial,
                 run: #run,
                 paper_settings: PAPER_SETTINGS,
+                energy_balance: ENERGY_BALANCE,
                 #(#fields)*
                 formulations: &FORMULATIONS,
                 #rest

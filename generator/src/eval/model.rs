@@ -134,6 +134,7 @@ impl Evaluated {
             initial: d.initial,
             run: d.run,
             paper_settings: d.paper_settings,
+            energy_balance: d.energy_balance,
             formulations,
             functions: Arc::new(functions),
         }

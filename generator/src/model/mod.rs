@@ -203,6 +203,24 @@ impl Model {
     }
 }
 
+/// Runs `f` on a copy of `model` in a new expression context, dropped when `f` returns: the
+/// library's entry points ([`crate::emit::generate`], [`crate::inspect::inspect`]) derive there,
+/// so what a derivation builds never stays in the caller's context. `f`'s result must not hold
+/// expressions (it cannot: they would belong to a context that is gone).
+///
+/// ```
+/// use generator::symbolic::Context;
+/// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+/// let before = Context::current_nodes();
+/// let name = generator::model::in_own_context(&model, |m| m.coordinates[0].name());
+/// assert_eq!(name, model.coordinates[0].name());
+/// assert_eq!(Context::current_nodes(), before);
+/// ```
+pub fn in_own_context<R>(model: &Model, f: impl FnOnce(&Model) -> R) -> R {
+    let parcel = crate::symbolic::transfer::Parcel::pack(model);
+    crate::symbolic::Context::new().enter(|| f(&parcel.unpack()))
+}
+
 /// The most bytes a model file may hold (16 MiB): far above any model written by hand or by
 /// the builder (a 200-link chain is about 100 KB), and a bound on what `inspect /dev/zero`
 /// reads.

@@ -128,7 +128,7 @@ impl TimeDerivative {
     /// The derivative along `pairs` (symbols absent from them are constants), time `t`.
     pub fn new(t: Symbol, pairs: &[(Symbol, Expr)]) -> TimeDerivative {
         let rates: rustc_hash::FxHashMap<Symbol, Expr> = pairs.iter().copied().collect();
-        let mask = pairs.iter().fold(1u128 << (t.0 % 128), |m, (s, _)| m | (1u128 << (s.0 % 128)));
+        let mask = pairs.iter().fold(1u128 << (t.id % 128), |m, (s, _)| m | (1u128 << (s.id % 128)));
         TimeDerivative { t, rates, mask, memo: rustc_hash::FxHashMap::default() }
     }
 

@@ -82,9 +82,14 @@ pub fn quiet_budget_panics() {
     }));
 }
 
-/// An interned symbol name (coordinate, velocity, parameter, time, ...).
+/// An interned symbol name (coordinate, velocity, parameter, time, ...), meaningful in the
+/// [`Context`] that made it, as an [`Expr`] is: reading one in another context panics with a
+/// clear message instead of reading another symbol's name.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, PartialOrd, Ord)]
-pub struct Symbol(pub(crate) u32);
+pub struct Symbol {
+    pub(crate) id: u32,
+    pub(crate) cx: u32,
+}
 
 /// An expression: an id into the current [`Context`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -255,6 +260,12 @@ impl Context {
     pub fn nodes(&self) -> usize {
         self.pool.borrow().nodes.len()
     }
+
+    /// Number of distinct nodes in the current context (the thread's default one, or the one
+    /// entered).
+    pub fn current_nodes() -> usize {
+        with_pool(|p| p.nodes.len())
+    }
 }
 
 /// Most nodes a chain of nested operations may have: beyond it, recursive passes would run
@@ -284,6 +295,11 @@ impl Pool {
         e.id as usize
     }
 
+    fn check_symbol(&self, s: Symbol) -> usize {
+        assert!(s.cx == self.id, "a symbol was used outside the context that made it");
+        s.id as usize
+    }
+
     fn intern(&mut self, node: Node) -> Expr {
         if let Some(&id) = self.map.get(&node) {
             return Expr { id, cx: self.id };
@@ -311,7 +327,7 @@ impl Pool {
         let d = |e: &Expr| self.depths[self.check(*e)];
         match node {
             Node::Num(r) => (mix(1, hash_rat(r)), 0, 1, 1),
-            Node::Sym(sym) => (mix(2, hash_str(&self.names[sym.0 as usize])), 1u128 << (sym.0 % 128), 1, 1),
+            Node::Sym(sym) => (mix(2, hash_str(&self.names[self.check_symbol(*sym)])), 1u128 << (sym.id % 128), 1, 1),
             Node::Add { constant, terms } | Node::Mul { coefficient: constant, factors: terms } => {
                 let tag = if matches!(node, Node::Add { .. }) { 3 } else { 4 };
                 let mut h = mix(tag, hash_rat(constant));
@@ -328,7 +344,7 @@ impl Pool {
             }
             Node::Fun(f, a) => (mix(mix(5, *f as u64), k(a)), m(a), s(a).saturating_add(1), d(a) + 1),
             Node::Apply(name, a) => {
-                (mix(mix(6, hash_str(&self.names[name.0 as usize])), k(a)), m(a) | (1u128 << (name.0 % 128)), s(a).saturating_add(1), d(a) + 1)
+                (mix(mix(6, hash_str(&self.names[self.check_symbol(*name)])), k(a)), m(a) | (1u128 << (name.id % 128)), s(a).saturating_add(1), d(a) + 1)
             }
         }
     }
@@ -337,7 +353,7 @@ impl Pool {
         if let Some(&s) = self.name_map.get(name) {
             return s;
         }
-        let s = Symbol(self.names.len() as u32);
+        let s = Symbol { id: self.names.len() as u32, cx: self.id };
         self.names.push(name.to_string());
         self.name_map.insert(name.to_string(), s);
         s
@@ -369,14 +385,14 @@ impl Symbol {
     /// The symbol's name (without the mark of an internal symbol).
     pub fn name(self) -> String {
         with_pool(|p| {
-            let n = &p.names[self.0 as usize];
+            let n = &p.names[p.check_symbol(self)];
             n.strip_prefix(INTERNAL).unwrap_or(n).to_string()
         })
     }
     /// The name as interned (an internal symbol's with its mark): what
     /// [`Symbol::from_interned_name`] takes back, in any context.
     pub(crate) fn interned_name(self) -> String {
-        with_pool(|p| p.names[self.0 as usize].clone())
+        with_pool(|p| p.names[p.check_symbol(self)].clone())
     }
     /// The symbol whose [`Symbol::interned_name`] is `name`, in the current context.
     pub(crate) fn from_interned_name(name: &str) -> Symbol {
@@ -384,7 +400,7 @@ impl Symbol {
     }
     /// True for a symbol made by [`Symbol::internal`].
     pub fn is_internal(self) -> bool {
-        with_pool(|p| p.names[self.0 as usize].starts_with(INTERNAL))
+        with_pool(|p| p.names[p.check_symbol(self)].starts_with(INTERNAL))
     }
     /// The symbol as an expression.
     pub fn expr(self) -> Expr {
@@ -459,7 +475,7 @@ impl Expr {
 
     /// True when `sym` might occur in the expression (never false when it does).
     pub fn may_contain(self, sym: Symbol) -> bool {
-        self.mask() & (1u128 << (sym.0 % 128)) != 0
+        self.mask() & (1u128 << (sym.id % 128)) != 0
     }
 
     /// A symbol by name.

@@ -14,14 +14,14 @@ use std::collections::HashMap;
 impl Expr {
     /// Replaces every symbol in `map` by its expression (simultaneously), re-canonicalizing.
     pub fn subs(self, map: &HashMap<Symbol, Expr>) -> Expr {
-        let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.0 % 128)));
+        let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.id % 128)));
         let mut memo = rustc_hash::FxHashMap::default();
         subs_rec(self, map, mask, &mut memo)
     }
 
     /// Substitutes many expressions with one shared memo (shared subexpressions once).
     pub fn subs_all(items: &[Expr], map: &HashMap<Symbol, Expr>) -> Vec<Expr> {
-        let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.0 % 128)));
+        let mask = map.keys().fold(0u128, |m, s| m | (1u128 << (s.id % 128)));
         let mut memo = rustc_hash::FxHashMap::default();
         items.iter().map(|e| subs_rec(*e, map, mask, &mut memo)).collect()
     }

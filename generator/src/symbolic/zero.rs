@@ -526,7 +526,7 @@ fn eval_at(order: &[Expr], shape: &Shape, point: &mut Point, branches: &mut Bran
                 sign(Branch::Abs, key, key)?
             }
             // A named function: a random function (the same argument gives the same value).
-            Node::Apply(name, a) => stand_in(point.seed, name.0 as u64, value[a]),
+            Node::Apply(name, a) => stand_in(point.seed, name.id as u64, value[a]),
         };
         value.insert(e, v);
     }

@@ -84,6 +84,8 @@ pub struct StaticModel {
     pub run: Option<(f64, f64, f64)>,
     /// The model file asks for the paper's integrator settings.
     pub paper_settings: bool,
+    /// What `energy` computes.
+    pub energy_balance: crate::EnergyBalance,
     pub energy: PointFn,
     pub work_rate: PointFn,
     pub momenta: PointFn,
@@ -107,6 +109,7 @@ impl StaticModel {
         initial: None,
         run: None,
         paper_settings: false,
+        energy_balance: crate::EnergyBalance::Energy,
         energy: |_, _, _, _, _| Err(Failure::Missing { function: "energy" }),
         work_rate: |_, _, _, _, _| Err(Failure::Missing { function: "work_rate" }),
         momenta: |_, _, _, _, _| Err(Failure::Missing { function: "momenta" }),
@@ -227,6 +230,7 @@ impl From<StaticModel> for Model {
             initial: m.initial.map(|(q, qd)| (q.to_vec(), qd.to_vec())),
             run: m.run,
             paper_settings: m.paper_settings,
+            energy_balance: m.energy_balance,
             formulations: m.formulations.iter().map(|f| Formulation::from(*f)).collect(),
             functions: Arc::new(m),
         }

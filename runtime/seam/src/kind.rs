@@ -127,3 +127,71 @@ impl StateLayout {
         self.speeds_are == Speeds::Rates && self.coordinates.len() == coordinates && self.speeds == coordinates
     }
 }
+
+/// What a model's `energy` function computes, and so what its balance with the work state `W`
+/// (the power of the applied non-potential forces and of the explicit time dependence) means.
+///
+/// ```
+/// use seam::EnergyBalance;
+/// assert_eq!(EnergyBalance::Energy.column(), "energy err");
+/// assert!(EnergyBalance::Jacobi.holds() && !EnergyBalance::MovingConstraints.holds());
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum EnergyBalance {
+    /// `E = T + V`: the kinematics do not move with time; `E - W` is constant.
+    #[default]
+    Energy,
+    /// Jacobi's integral `h = T2 - T0 + V` (`T` split by degree in `q'`): the kinematics move
+    /// with time (a frame turned or moved by a prescribed motion); `h - W` is constant.
+    Jacobi,
+    /// `h` as above, but a constraint moves (`b` not zero): its force does work that `W` does not
+    /// count, so `h - W` drifts by that work and is no invariant.
+    MovingConstraints,
+}
+
+impl EnergyBalance {
+    /// The column that reports `E(t) - E(0)` (with `E` the balance's quantity less `W`).
+    pub fn column(self) -> &'static str {
+        match self {
+            EnergyBalance::Energy => "energy err",
+            EnergyBalance::Jacobi => "jacobi err",
+            EnergyBalance::MovingConstraints => "h - W drift",
+        }
+    }
+
+    /// What the column measures, in words (for the JSON record and the docs).
+    pub fn describe(self) -> &'static str {
+        match self {
+            EnergyBalance::Energy => "E - W with E = T + V and W the work of the applied non-potential forces and of the explicit time dependence: constant",
+            EnergyBalance::Jacobi => {
+                "h - W with h = T2 - T0 + V (Jacobi's integral: the kinematics move with time) and W the work of the applied non-potential forces and of the explicit time dependence: constant"
+            }
+            EnergyBalance::MovingConstraints => {
+                "h - W with h = T2 - T0 + V and W the work of the applied non-potential forces and of the explicit time dependence; moving constraints (b not zero) do work W does not count, so this drifts by that work: not an invariant"
+            }
+        }
+    }
+
+    /// The quantity's name in a file's columns (`energy`, `jacobi`, `h_minus_w`).
+    pub fn quantity(self) -> &'static str {
+        match self {
+            EnergyBalance::Energy => "energy",
+            EnergyBalance::Jacobi => "jacobi",
+            EnergyBalance::MovingConstraints => "h_minus_w",
+        }
+    }
+
+    /// A plot's title for the quantity's error over time.
+    pub fn title(self) -> &'static str {
+        match self {
+            EnergyBalance::Energy => "energy error |E(t) - E(0)| (E = T + V - W)",
+            EnergyBalance::Jacobi => "Jacobi integral error |H(t) - H(0)| (H = T2 - T0 + V - W)",
+            EnergyBalance::MovingConstraints => "|H(t) - H(0)| (H = T2 - T0 + V - W; the moving constraints' work is not in W)",
+        }
+    }
+
+    /// True when the column is an invariant (zero but for the integration error).
+    pub fn holds(self) -> bool {
+        self != EnergyBalance::MovingConstraints
+    }
+}

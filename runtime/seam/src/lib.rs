@@ -24,7 +24,7 @@ mod model;
 pub use compiled::{InitialFn, JacobianFn, MarginFn, MatrixFn, PointFn, RhsFn, StabilizedFn, StaticFormulation, StaticModel, VelocitiesFn};
 pub use failure::Failure;
 pub use grid::{GridError, MAX_OUTPUTS, output_steps, output_times};
-pub use kind::{FormulationKind, Speeds, StateLayout};
+pub use kind::{EnergyBalance, FormulationKind, Speeds, StateLayout};
 pub use model::{Formulation, FormulationFunctions, Model, ModelFunctions};
 
 /// `slice` as an array of `N`, or [`Failure::Dimension`] naming `argument`.

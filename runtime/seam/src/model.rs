@@ -162,6 +162,8 @@ pub struct Model {
     /// The model file asks for the paper's integrator settings (`simulation.paper`: the
     /// paper's scenes); other models get tight ones.
     pub paper_settings: bool,
+    /// What `energy` computes and what its balance with the work state means.
+    pub energy_balance: crate::EnergyBalance,
     pub formulations: Vec<Formulation>,
     pub functions: Arc<dyn ModelFunctions>,
 }
