@@ -517,6 +517,32 @@ mod tests {
         assert_eq!((s2.steps, s2.rhs_calls), (200, 800));
     }
 
+    /// Each adaptive method's order, and its dense output's: with a tolerance so loose that
+    /// every step is accepted at `h_max`, halving `h_max` divides the error at the steps' ends by
+    /// `2^p` (DOPRI5 5, DOP853 8, Rosenbrock 2(3) 2), and the error over a fine grid of dense
+    /// outputs between them by the same (an interpolant of order q adds a local error of order
+    /// `q + 1`, at most the method's own here).
+    #[test]
+    fn each_method_and_its_dense_output_converge_at_their_order() {
+        for (method, order, h) in [(Method::Dopri5, 5.0, 0.2), (Method::Dop853, 8.0, 0.5), (Method::Rosenbrock23, 2.0, 0.05)] {
+            let observed = |outputs: &[f64]| {
+                let errors: Vec<f64> = [h, h / 2.0]
+                    .iter()
+                    .map(|&h_max| {
+                        let s = Settings { method, rtol: 1e3, atol: 1e3, h_max, ..Settings::default() };
+                        max_error(&s, outputs).0
+                    })
+                    .collect();
+                (errors[0] / errors[1]).log2()
+            };
+            // The end of the run only (a step lands on it), then outputs between the steps.
+            let at_end = observed(&[0.0, 10.0]);
+            let dense = observed(&grid(10.0, 0.01));
+            assert!((at_end - order).abs() < 0.35, "{method}: order {at_end} at the end, expected {order}");
+            assert!((dense - order).abs() < 0.35, "{method}: order {dense} over the dense outputs, expected {order}");
+        }
+    }
+
     #[test]
     fn adaptive_methods_meet_their_tolerance_and_tighten_with_it() {
         // Many outputs per step: the dense outputs are checked too.
