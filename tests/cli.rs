@@ -257,18 +257,7 @@ fn concurrent_runs_of_different_models_keep_their_own_results() {
 #[test]
 fn undecided_questions_are_warned_about() {
     let dir = tempfile::tempdir().unwrap();
-    let model = r#"Model(
-    name: "kink",
-    parameters: { "m": 1.0, "k": 2.0 },
-    coordinates: ["x", "y"],
-    frames: [Frame(name: "p", parent: "world", translation: ["x", "y", "0"])],
-    bodies: [Body(name: "p", frame: "p", mass: "m", inertia: PointMass)],
-    forces: [Potential(name: "kink", expr: "k*(sqrt(x^2) - x)")],
-    quasi_velocities: QuasiVelocities(full: ["x'", "y'"], reduced: ["x'"]),
-    ignorable: Auto,
-    initial: Initial(q: {"x": "1", "y": "0"}, qdot: {"x": "0.1", "y": "0.2"}),
-    simulation: Simulation(t_end: 1.0, dt_out: 0.1),
-)"#;
+    let model = include_str!("fixtures/kink.ron");
     std::fs::write(dir.path().join("kink.ron"), model).unwrap();
     let out = multibody(dir.path(), &["compare", "kink.ron"]);
     ok(&out);

@@ -4,19 +4,9 @@
 
 use generator::model::from_source;
 
-/// A particle in the plane with the potential `k (sqrt(x^2) - x)`: zero for x > 0, so L does not
-/// depend on x there, but it does for x < 0. The exact test cannot prove "zero" (it is not,
-/// on the other sign of the root), and floats at positive x cannot refute it.
-const KINK: &str = r#"Model(
-    name: "kink",
-    parameters: { "m": 1.0, "k": 2.0 },
-    coordinates: ["x", "y"],
-    frames: [Frame(name: "p", parent: "world", translation: ["x", "y", "0"])],
-    bodies: [Body(name: "p", frame: "p", mass: "m", inertia: PointMass)],
-    forces: [Potential(name: "kink", expr: "k*(sqrt(x^2) - x)")],
-    quasi_velocities: QuasiVelocities(full: ["x'", "y'"], reduced: ["x'"]),
-    ignorable: Auto,
-)"#;
+/// `tests/fixtures/kink.ron`: a potential `k (sqrt(x^2) - x)` whose dependence on x only a
+/// floating-point guess could settle.
+const KINK: &str = include_str!("../../tests/fixtures/kink.ron");
 
 const NOTE: &str = "whether the equations depend on `x` could not be decided exactly";
 

@@ -6,7 +6,8 @@
 //! published DOP853 tableau, digit for digit (hence more digits than an `f64` holds).
 #![allow(clippy::excessive_precision)]
 
-use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, finish_step, grown_step, initial_step, next_step_size};
+use super::driver::{Control, Stepper};
+use super::{Reason, Rhs, Settings, Stats, axpy_stages, combine};
 
 const C: [f64; 12] = [
     0.0,
@@ -267,31 +268,45 @@ const D: [[f64; 16]; 4] = [
     ],
 ];
 
-pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
-    let n = y0.len();
-    let mut stats = Stats::default();
-    let t_end = *outputs.last().expect("checked");
-    let mut t = outputs[0];
-    let mut y = y0.to_vec();
-    let mut states = States::new(n, outputs.len());
-    states.push(&y);
-    let mut next = 1;
-    let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
-    // Stages 1..=16; k[12] is f(t + h, y_new), the next step's first stage.
-    let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 16];
-    f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-    let mut h = initial_step(f, t, &y, &k[0].clone(), 8, s, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let (safe, facc1, facc2, expo1) = (0.9, 1.0 / 0.333, 1.0 / 6.0, 1.0 / 8.0);
-    let mut rejected_last = false;
-    let (mut tmp, mut y_new) = (vec![0.0; n], vec![0.0; n]);
-    let mut rcont = vec![vec![0.0; n]; 8];
-    while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end, &y, &k[0]).map_err(|r| stop(t, &y, r))?;
+/// DOP853's sixteen stages (twelve for the step, one for the next step's first rate, three more
+/// for the dense output) and its interpolant's coefficients.
+pub(super) struct Dop853 {
+    k: Vec<Vec<f64>>,
+    tmp: Vec<f64>,
+    rcont: Vec<Vec<f64>>,
+}
+
+impl Dop853 {
+    pub(super) fn new(n: usize) -> Dop853 {
+        Dop853 { k: vec![vec![0.0; n]; 16], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 8] }
+    }
+}
+
+impl Stepper for Dop853 {
+    const ORDER: i32 = 8;
+    // Hairer's DOP853 defaults: no PI part, growth at most 6, shrink at most 1 / 0.333.
+    const CONTROL: Control =
+        Control { expo: 1.0 / 8.0, beta: 0.0, safe: 0.9, fac_min: 1.0 / 6.0, fac_max: 1.0 / 0.333, non_finite: 0.2, unformed: 0.2, hold_after_reject: true };
+
+    fn attempt(
+        &mut self,
+        f: &mut Rhs,
+        t: f64,
+        y: &[f64],
+        f0: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+        s: &Settings,
+        stats: &mut Stats,
+    ) -> Result<Option<f64>, Reason> {
+        let k = &mut self.k;
+        k[0].copy_from_slice(f0);
         for st in 1..12 {
-            combine(&mut tmp, &y, h, &A[st][..st], &k);
+            combine(&mut self.tmp, y, h, &A[st][..st], k);
             let (_, tail) = k.split_at_mut(st);
-            f(t + C[st] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+            f(t + C[st] * h, &self.tmp, &mut tail[0], stats)?;
         }
+        let n = y.len();
         let (mut err5, mut err3) = (0.0, 0.0);
         for i in 0..n {
             let mut acc = 0.0;
@@ -312,65 +327,45 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         if deno <= 0.0 {
             deno = 1.0;
         }
-        let e = h.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt();
-        if !e.is_finite() {
-            stats.rejected += 1;
-            rejected_last = true;
-            h *= 0.2;
-            continue;
+        Ok(Some(h.abs() * err5 * (1.0 / (n as f64 * deno)).sqrt()))
+    }
+
+    fn accepted(&mut self, f: &mut Rhs, _t: f64, t_new: f64, _h: f64, y_new: &[f64], f1: &mut [f64], stats: &mut Stats) -> Result<(), Reason> {
+        f(t_new, y_new, &mut self.k[12], stats)?;
+        f1.copy_from_slice(&self.k[12]);
+        Ok(())
+    }
+
+    fn prepare_dense(&mut self, f: &mut Rhs, t: f64, y: &[f64], _f0: &[f64], y_new: &[f64], _f1: &[f64], h: f64, stats: &mut Stats) -> Result<(), Reason> {
+        // Three more stages, then the seventh-order interpolant.
+        let k = &mut self.k;
+        for (x, row) in A_DENSE.iter().enumerate() {
+            let st = 13 + x;
+            combine(&mut self.tmp, y, h, &row[..st], k);
+            let (_, tail) = k.split_at_mut(st);
+            f(t + C_DENSE[x] * h, &self.tmp, &mut tail[0], stats)?;
         }
-        let fac11 = e.powf(expo1);
-        if e <= 1.0 {
-            stats.steps += 1;
-            let fac = (fac11 / safe).clamp(facc2, facc1);
-            let h_new = h / fac;
-            let t_new = if h == t_end - t { t_end } else { t + h };
-            {
-                let (_, tail) = k.split_at_mut(12);
-                f(t_new, &y_new, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-            }
-            if outputs[next] <= t_new {
-                // Dense output: three more stages, then the seventh-order interpolant.
-                for (x, row) in A_DENSE.iter().enumerate() {
-                    let st = 13 + x;
-                    combine(&mut tmp, &y, h, &row[..st], &k);
-                    let (_, tail) = k.split_at_mut(st);
-                    f(t + C_DENSE[x] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-                }
-                for i in 0..n {
-                    let ydiff = y_new[i] - y[i];
-                    let bspl = h * k[0][i] - ydiff;
-                    rcont[0][i] = y[i];
-                    rcont[1][i] = ydiff;
-                    rcont[2][i] = bspl;
-                    rcont[3][i] = ydiff - h * k[12][i] - bspl;
-                }
-                for (row, d) in rcont[4..].iter_mut().zip(&D) {
-                    row.fill(0.0);
-                    axpy_stages(row, h, d, &k);
-                }
-                while next < outputs.len() && outputs[next] <= t_new {
-                    let th = (outputs[next] - t) / h;
-                    let th1 = 1.0 - th;
-                    for i in 0..n {
-                        let r = |c: usize| rcont[c][i];
-                        tmp[i] = r(0) + th * (r(1) + th1 * (r(2) + th * (r(3) + th1 * (r(4) + th * (r(5) + th1 * (r(6) + th * r(7)))))));
-                    }
-                    states.push(&tmp);
-                    next += 1;
-                }
-            }
-            t = t_new;
-            std::mem::swap(&mut y, &mut y_new);
-            let (first, rest) = k.split_at_mut(1);
-            finish_step(f, project, t, &mut y, &rest[11], &mut first[0], &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
-            h = grown_step(h_new, h, s, rejected_last);
-            rejected_last = false;
-        } else {
-            stats.rejected += 1;
-            rejected_last = true;
-            h /= (fac11 / safe).min(facc1);
+        let rcont = &mut self.rcont;
+        for i in 0..y.len() {
+            let ydiff = y_new[i] - y[i];
+            let bspl = h * k[0][i] - ydiff;
+            rcont[0][i] = y[i];
+            rcont[1][i] = ydiff;
+            rcont[2][i] = bspl;
+            rcont[3][i] = ydiff - h * k[12][i] - bspl;
+        }
+        for (row, d) in rcont[4..].iter_mut().zip(&D) {
+            row.fill(0.0);
+            axpy_stages(row, h, d, k);
+        }
+        Ok(())
+    }
+
+    fn dense(&self, theta: f64, out: &mut [f64]) {
+        let th1 = 1.0 - theta;
+        for (i, o) in out.iter_mut().enumerate() {
+            let r = |c: usize| self.rcont[c][i];
+            *o = r(0) + theta * (r(1) + th1 * (r(2) + theta * (r(3) + th1 * (r(4) + theta * (r(5) + th1 * (r(6) + theta * r(7)))))));
         }
     }
-    Ok(Solution { times: outputs.to_vec(), states, stats })
 }

@@ -1,9 +1,8 @@
 //! Dormand-Prince 5(4) (Hairer's DOPRI5): PI step-size control, and Shampine's dense output
 //! for the output times between steps, as MATLAB's `ode45` does with a vector of times.
 
-use super::{
-    Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, axpy_stages, combine, error_norm, finish_step, grown_step, initial_step, next_step_size,
-};
+use super::driver::{Control, Stepper};
+use super::{Reason, Rhs, Settings, Stats, axpy_stages, combine, error_norm};
 
 const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -28,100 +27,96 @@ const D: [f64; 7] = [
     69997945.0 / 29380423.0,
 ];
 
-pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
-    let n = y0.len();
-    let mut stats = Stats::default();
-    let t_end = *outputs.last().expect("checked");
-    let mut t = outputs[0];
-    let mut y = y0.to_vec();
-    let mut states = States::new(n, outputs.len());
-    states.push(&y);
-    let mut next = 1;
-    let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
-    let mut k: Vec<Vec<f64>> = vec![vec![0.0; n]; 7];
-    f(t, &y, &mut k[0], &mut stats).map_err(|r| stop(t, &y, r))?;
-    let mut h = initial_step(f, t, &y, &k[0].clone(), 5, s, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let (beta, safe, facc1, facc2) = (0.04, 0.9, 5.0, 0.1);
-    let expo1 = 0.2 - beta * 0.75;
-    let mut facold: f64 = 1e-4;
-    let mut rejected_last = false;
-    let (mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut rcont = vec![vec![0.0; n]; 5];
-    // Hairer's stiffness test: the dominant eigenvalue times h from the last two stages.
-    let (mut stiff_steps, mut non_stiff_steps) = (0usize, 0usize);
-    while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end, &y, &k[0]).map_err(|r| stop(t, &y, r))?;
+/// DOPRI5's stages, its dense-output coefficients and Hairer's stiffness counters.
+pub(super) struct Dopri5 {
+    k: Vec<Vec<f64>>,
+    tmp: Vec<f64>,
+    rcont: Vec<Vec<f64>>,
+    stiff_steps: usize,
+    non_stiff_steps: usize,
+}
+
+impl Dopri5 {
+    pub(super) fn new(n: usize) -> Dopri5 {
+        Dopri5 { k: vec![vec![0.0; n]; 7], tmp: vec![0.0; n], rcont: vec![vec![0.0; n]; 5], stiff_steps: 0, non_stiff_steps: 0 }
+    }
+}
+
+impl Stepper for Dopri5 {
+    const ORDER: i32 = 5;
+    // Hairer's DOPRI5 defaults: PI control with beta 0.04.
+    const CONTROL: Control =
+        Control { expo: 0.2 - 0.04 * 0.75, beta: 0.04, safe: 0.9, fac_min: 0.1, fac_max: 5.0, non_finite: 0.2, unformed: 0.2, hold_after_reject: true };
+
+    fn attempt(
+        &mut self,
+        f: &mut Rhs,
+        t: f64,
+        y: &[f64],
+        f0: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+        s: &Settings,
+        stats: &mut Stats,
+    ) -> Result<Option<f64>, Reason> {
+        let k = &mut self.k;
+        k[0].copy_from_slice(f0);
         for st in 1..6 {
-            combine(&mut tmp, &y, h, &A[st][..st], &k);
+            combine(&mut self.tmp, y, h, &A[st][..st], k);
             let (_, tail) = k.split_at_mut(st);
-            f(t + C[st] * h, &tmp, &mut tail[0], &mut stats).map_err(|r| stop(t, &y, r))?;
+            f(t + C[st] * h, &self.tmp, &mut tail[0], stats)?;
         }
-        combine(&mut y_new, &y, h, &A[6], &k);
-        f(t + h, &y_new, &mut k[6], &mut stats).map_err(|r| stop(t, &y, r))?;
+        combine(y_new, y, h, &A[6], k);
+        f(t + h, y_new, &mut k[6], stats)?;
+        // The error estimate, in the dense coefficients' first row (free until acceptance).
+        let err = &mut self.rcont[0];
         err.fill(0.0);
-        axpy_stages(&mut err, h, &E, &k);
-        let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
-        if !e.is_finite() {
-            stats.rejected += 1;
-            rejected_last = true;
-            h *= 0.2;
-            continue;
+        axpy_stages(err, h, &E, k);
+        Ok(Some(error_norm(err, y, y_new, s.rtol, s.atol)))
+    }
+
+    fn accepted(&mut self, _f: &mut Rhs, t: f64, _t_new: f64, h: f64, y_new: &[f64], f1: &mut [f64], stats: &mut Stats) -> Result<(), Reason> {
+        let k = &self.k;
+        // Hairer's stiffness test: stages 6 and 7 are evaluated at t + h, at `tmp` (stage 6's
+        // argument) and at `y_new`: their difference estimates h lambda.
+        if stats.stiff_at.is_none() {
+            let (num, den) = (0..y_new.len()).fold((0.0, 0.0), |(a, b), i| (a + (k[6][i] - k[5][i]).powi(2), b + (y_new[i] - self.tmp[i]).powi(2)));
+            if den > 0.0 && h * (num / den).sqrt() > 3.25 {
+                self.non_stiff_steps = 0;
+                self.stiff_steps += 1;
+                if self.stiff_steps == 15 {
+                    stats.stiff_at = Some(t);
+                }
+            } else {
+                self.non_stiff_steps += 1;
+                if self.non_stiff_steps == 6 {
+                    self.stiff_steps = 0;
+                }
+            }
         }
-        let fac11 = e.powf(expo1);
-        if e <= 1.0 {
-            let fac = (fac11 / facold.powf(beta) / safe).clamp(facc2, facc1);
-            let h_new = h / fac;
-            facold = e.max(1e-4);
-            stats.steps += 1;
-            // Stages 6 and 7 are evaluated at t + h, at `tmp` (stage 6's argument, still in
-            // `tmp`) and at `y_new`: their difference estimates h lambda.
-            if stats.stiff_at.is_none() {
-                let (num, den) = (0..n).fold((0.0, 0.0), |(a, b), i| (a + (k[6][i] - k[5][i]).powi(2), b + (y_new[i] - tmp[i]).powi(2)));
-                if den > 0.0 && h * (num / den).sqrt() > 3.25 {
-                    non_stiff_steps = 0;
-                    stiff_steps += 1;
-                    if stiff_steps == 15 {
-                        stats.stiff_at = Some(t);
-                    }
-                } else {
-                    non_stiff_steps += 1;
-                    if non_stiff_steps == 6 {
-                        stiff_steps = 0;
-                    }
-                }
-            }
-            // Dense output over [t, t + h].
-            for i in 0..n {
-                let ydiff = y_new[i] - y[i];
-                let bspl = h * k[0][i] - ydiff;
-                rcont[0][i] = y[i];
-                rcont[1][i] = ydiff;
-                rcont[2][i] = bspl;
-                rcont[3][i] = ydiff - h * k[6][i] - bspl;
-            }
-            rcont[4].fill(0.0);
-            axpy_stages(&mut rcont[4], h, &D, &k);
-            let t_new = if h == t_end - t { t_end } else { t + h };
-            while next < outputs.len() && outputs[next] <= t_new {
-                let theta = (outputs[next] - t) / h;
-                let theta1 = 1.0 - theta;
-                for i in 0..n {
-                    tmp[i] = rcont[0][i] + theta * (rcont[1][i] + theta1 * (rcont[2][i] + theta * (rcont[3][i] + theta1 * rcont[4][i])));
-                }
-                states.push(&tmp);
-                next += 1;
-            }
-            t = t_new;
-            std::mem::swap(&mut y, &mut y_new);
-            let (first, rest) = k.split_at_mut(1);
-            finish_step(f, project, t, &mut y, &rest[5], &mut first[0], &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
-            h = grown_step(h_new, h, s, rejected_last);
-            rejected_last = false;
-        } else {
-            stats.rejected += 1;
-            rejected_last = true;
-            h /= (fac11 / safe).min(facc1);
+        f1.copy_from_slice(&k[6]);
+        Ok(())
+    }
+
+    fn prepare_dense(&mut self, _f: &mut Rhs, _t: f64, y: &[f64], _f0: &[f64], y_new: &[f64], _f1: &[f64], h: f64, _stats: &mut Stats) -> Result<(), Reason> {
+        let (k, rcont) = (&self.k, &mut self.rcont);
+        for i in 0..y.len() {
+            let ydiff = y_new[i] - y[i];
+            let bspl = h * k[0][i] - ydiff;
+            rcont[0][i] = y[i];
+            rcont[1][i] = ydiff;
+            rcont[2][i] = bspl;
+            rcont[3][i] = ydiff - h * k[6][i] - bspl;
+        }
+        rcont[4].fill(0.0);
+        axpy_stages(&mut rcont[4], h, &D, k);
+        Ok(())
+    }
+
+    fn dense(&self, theta: f64, out: &mut [f64]) {
+        let (r, theta1) = (&self.rcont, 1.0 - theta);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = r[0][i] + theta * (r[1][i] + theta1 * (r[2][i] + theta * (r[3][i] + theta1 * r[4][i])));
         }
     }
-    Ok(Solution { times: outputs.to_vec(), states, stats })
 }

@@ -1,6 +1,12 @@
 //! Integrators: fixed-step RK4, adaptive Dormand-Prince 5(4) with PI step control and dense
-//! output (what MATLAB's `ode45` does with a vector of output times), and DOP853 with its
-//! seventh-order dense output.
+//! output (what MATLAB's `ode45` does with a vector of output times), DOP853 with its
+//! seventh-order dense output, and the stiff Rosenbrock 2(3) of `ode23s`.
+//!
+//! The three adaptive methods run in one driver (`driver.rs`, as Hairer's codes share one
+//! loop): one step-size controller configured per method, one dense-output loop, one step end
+//! (divergence check, projection); each method only attempts steps and interpolates in the last
+//! accepted one. Each is checked on Hairer's reference problems (the Arenstorf orbit, Van der Pol
+//! at mu = 1e3) and by an order test of the method and of its dense output.
 //!
 //! All three are ours: the systems are small (4 to 16 states), a right-hand side costs 0.1 to
 //! 1 µs, and the candidate crates either allocate per step, pull a second nalgebra, or gave a
@@ -22,6 +28,7 @@
 
 mod dop853;
 mod dopri5;
+mod driver;
 mod rk4;
 mod rosenbrock;
 
@@ -278,8 +285,8 @@ pub fn integrate_with_jacobian(
     };
     match settings.method {
         Method::Rk4 { h } => rk4::run(&mut counted, &mut projector, y0, outputs, h, settings.max_steps),
-        Method::Dopri5 => dopri5::run(&mut counted, &mut projector, y0, outputs, settings),
-        Method::Dop853 => dop853::run(&mut counted, &mut projector, y0, outputs, settings),
+        Method::Dopri5 => driver::drive(&mut dopri5::Dopri5::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings),
+        Method::Dop853 => driver::drive(&mut dop853::Dop853::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings),
         Method::Rosenbrock23 => {
             let n = y0.len();
             let (mut dy, mut flat) = (vec![0.0; n], vec![0.0; n * n]);
@@ -293,7 +300,7 @@ pub fn integrate_with_jacobian(
                 }
                 Ok(true)
             };
-            rosenbrock::run(&mut counted, &mut jac, &mut projector, y0, outputs, settings)
+            driver::drive(&mut rosenbrock::Rosenbrock::new(n, &mut jac), &mut counted, &mut projector, y0, outputs, settings)
         }
     }
 }

@@ -8,7 +8,8 @@
 //! forces steps of order `1/|lambda_max|`. The Jacobian is the model's exact one when given,
 //! otherwise forward differences of the right-hand side (`n` extra calls per step).
 
-use super::{Jacobian, Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, error_norm, finish_step, initial_step, next_step_size};
+use super::driver::{Control, Stepper};
+use super::{Jacobian, Reason, Rhs, Settings, Stats, error_norm};
 use nalgebra::{DMatrix, DVector};
 
 /// `d = 1 / (2 + sqrt 2)`.
@@ -16,115 +17,145 @@ const D: f64 = 0.292_893_218_813_452_5;
 /// `e32 = 6 + sqrt 2`.
 const E32: f64 = 7.414_213_562_373_095;
 
-pub(super) fn run(f: &mut Rhs, jac: &mut Jacobian, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
-    let n = y0.len();
-    let mut stats = Stats::default();
-    let t_end = *outputs.last().expect("checked");
-    let mut t = outputs[0];
-    let mut y = y0.to_vec();
-    let mut states = States::new(n, outputs.len());
-    states.push(&y);
-    let mut next = 1;
-    let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
-    let mut f0 = vec![0.0; n];
-    f(t, &y, &mut f0, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let mut h = initial_step(f, t, &y, &f0, 3, s, &mut stats).map_err(|r| stop(t, &y, r))?;
-    let (mut f1, mut f2, mut tmp, mut y_new, mut err) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut j = DMatrix::<f64>::zeros(n, n);
-    let mut dfdt = vec![0.0; n];
-    // The stages, reused from step to step.
-    let (mut k1, mut k2, mut k3) = (DVector::<f64>::zeros(n), DVector::<f64>::zeros(n), DVector::<f64>::zeros(n));
-    let mut fresh_jacobian = false;
-    // The iteration matrix and its pivots, factored in place every step (no allocation).
-    let (mut w, mut pivots) = (DMatrix::<f64>::zeros(n, n), vec![0usize; n]);
-    while next < outputs.len() {
-        h = next_step_size(&stats, s, t, h, t_end, &y, &f0).map_err(|r| stop(t, &y, r))?;
-        if !fresh_jacobian {
-            if !jac(t, &y, &mut j).map_err(|r| stop(t, &y, r))? {
+/// The stiff method's Jacobian, iteration matrix, stages and dense-output data, reused from
+/// step to step (no allocation per step).
+pub(super) struct Rosenbrock<'a, 'j> {
+    jac: &'a mut Jacobian<'j>,
+    j: DMatrix<f64>,
+    dfdt: Vec<f64>,
+    /// True while the Jacobian is the one at the current step's start (a rejected step keeps it).
+    fresh: bool,
+    w: DMatrix<f64>,
+    pivots: Vec<usize>,
+    k1: DVector<f64>,
+    k2: DVector<f64>,
+    k3: DVector<f64>,
+    f1: Vec<f64>,
+    f2: Vec<f64>,
+    tmp: Vec<f64>,
+    err: Vec<f64>,
+    /// The accepted step's start and size, for the interpolant.
+    y0: Vec<f64>,
+    h: f64,
+}
+
+impl<'a, 'j> Rosenbrock<'a, 'j> {
+    pub(super) fn new(n: usize, jac: &'a mut Jacobian<'j>) -> Rosenbrock<'a, 'j> {
+        Rosenbrock {
+            jac,
+            j: DMatrix::zeros(n, n),
+            dfdt: vec![0.0; n],
+            fresh: false,
+            w: DMatrix::zeros(n, n),
+            pivots: vec![0; n],
+            k1: DVector::zeros(n),
+            k2: DVector::zeros(n),
+            k3: DVector::zeros(n),
+            f1: vec![0.0; n],
+            f2: vec![0.0; n],
+            tmp: vec![0.0; n],
+            err: vec![0.0; n],
+            y0: vec![0.0; n],
+            h: 0.0,
+        }
+    }
+}
+
+impl Stepper for Rosenbrock<'_, '_> {
+    const ORDER: i32 = 3;
+    // ode23s's controller: 0.8 e^(-1/3), growth at most 5, shrink at most 10.
+    const CONTROL: Control =
+        Control { expo: 1.0 / 3.0, beta: 0.0, safe: 0.8, fac_min: 0.2, fac_max: 10.0, non_finite: 0.1, unformed: 0.5, hold_after_reject: false };
+
+    fn attempt(
+        &mut self,
+        f: &mut Rhs,
+        t: f64,
+        y: &[f64],
+        f0: &[f64],
+        h: f64,
+        y_new: &mut [f64],
+        s: &Settings,
+        stats: &mut Stats,
+    ) -> Result<Option<f64>, Reason> {
+        let n = y.len();
+        if !self.fresh {
+            if !(self.jac)(t, y, &mut self.j)? {
                 // Forward differences, one right-hand side per column.
-                tmp.copy_from_slice(&y);
+                self.tmp.copy_from_slice(y);
                 for k in 0..n {
                     let d = f64::EPSILON.sqrt() * y[k].abs().max(1.0);
-                    tmp[k] = y[k] + d;
-                    f(t, &tmp, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
+                    self.tmp[k] = y[k] + d;
+                    f(t, &self.tmp, &mut self.f1, stats)?;
                     for i in 0..n {
-                        j[(i, k)] = (f1[i] - f0[i]) / d;
+                        self.j[(i, k)] = (self.f1[i] - f0[i]) / d;
                     }
-                    tmp[k] = y[k];
+                    self.tmp[k] = y[k];
                 }
             }
             // df/dt by a forward difference, unless the model does not read t (then it is 0).
             if !s.time_independent {
                 let dt = f64::EPSILON.sqrt() * t.abs().max(1.0);
-                f(t + dt, &y, &mut tmp, &mut stats).map_err(|r| stop(t, &y, r))?;
+                f(t + dt, y, &mut self.tmp, stats)?;
                 for i in 0..n {
-                    dfdt[i] = (tmp[i] - f0[i]) / dt;
+                    self.dfdt[i] = (self.tmp[i] - f0[i]) / dt;
                 }
             }
             stats.jacobians += 1;
-            fresh_jacobian = true;
+            self.fresh = true;
         }
         stats.factorizations += 1;
-        if !factor(&mut w, &j, h * D, &mut pivots) {
-            stats.rejected += 1;
-            h *= 0.5;
-            continue;
+        if !factor(&mut self.w, &self.j, h * D, &mut self.pivots) {
+            return Ok(None);
         }
+        let (k1, k2, k3) = (&mut self.k1, &mut self.k2, &mut self.k3);
         for i in 0..n {
-            k1[i] = f0[i] + h * D * dfdt[i];
+            k1[i] = f0[i] + h * D * self.dfdt[i];
         }
-        solve(&w, &pivots, &mut k1);
+        solve(&self.w, &self.pivots, k1);
         for i in 0..n {
-            tmp[i] = y[i] + 0.5 * h * k1[i];
+            self.tmp[i] = y[i] + 0.5 * h * k1[i];
         }
-        f(t + 0.5 * h, &tmp, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
+        f(t + 0.5 * h, &self.tmp, &mut self.f1, stats)?;
         for i in 0..n {
-            k2[i] = f1[i] - k1[i];
+            k2[i] = self.f1[i] - k1[i];
         }
-        solve(&w, &pivots, &mut k2);
-        k2 += &k1;
+        solve(&self.w, &self.pivots, k2);
+        *k2 += &*k1;
         for i in 0..n {
             y_new[i] = y[i] + h * k2[i];
         }
-        f(t + h, &y_new, &mut f2, &mut stats).map_err(|r| stop(t, &y, r))?;
+        f(t + h, y_new, &mut self.f2, stats)?;
         for i in 0..n {
-            k3[i] = f2[i] - E32 * (k2[i] - f1[i]) - 2.0 * (k1[i] - f0[i]) + h * D * dfdt[i];
+            k3[i] = self.f2[i] - E32 * (k2[i] - self.f1[i]) - 2.0 * (k1[i] - f0[i]) + h * D * self.dfdt[i];
         }
-        solve(&w, &pivots, &mut k3);
+        solve(&self.w, &self.pivots, k3);
         for i in 0..n {
-            err[i] = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]);
+            self.err[i] = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]);
         }
-        let e = error_norm(&err, &y, &y_new, s.rtol, s.atol);
-        if !e.is_finite() || !y_new.iter().all(|v| v.is_finite()) {
-            stats.rejected += 1;
-            h *= 0.1;
-            continue;
-        }
-        if e <= 1.0 {
-            stats.steps += 1;
-            let t_new = if h == t_end - t { t_end } else { t + h };
-            // ode23s's interpolant: y + h (s (1 - s) k1 + s (s - 2d) k2) / (1 - 2d).
-            while next < outputs.len() && outputs[next] <= t_new {
-                let th = (outputs[next] - t) / h;
-                let (a, b) = (th * (1.0 - th) / (1.0 - 2.0 * D), th * (th - 2.0 * D) / (1.0 - 2.0 * D));
-                for i in 0..n {
-                    tmp[i] = y[i] + h * (a * k1[i] + b * k2[i]);
-                }
-                states.push(&tmp);
-                next += 1;
-            }
-            t = t_new;
-            std::mem::swap(&mut y, &mut y_new);
-            finish_step(f, project, t, &mut y, &f2, &mut f0, &mut states, outputs[next - 1], &mut stats).map_err(|r| stop(t, &y, r))?;
-            fresh_jacobian = false;
-            let grow = if e == 0.0 { 5.0 } else { (0.8 * e.powf(-1.0 / 3.0)).min(5.0) };
-            h = (h * grow).min(s.h_max);
-        } else {
-            stats.rejected += 1;
-            h *= (0.8 * e.powf(-1.0 / 3.0)).max(0.1);
+        Ok(Some(error_norm(&self.err, y, y_new, s.rtol, s.atol)))
+    }
+
+    fn accepted(&mut self, _f: &mut Rhs, _t: f64, _t_new: f64, _h: f64, _y_new: &[f64], f1: &mut [f64], _stats: &mut Stats) -> Result<(), Reason> {
+        // The last stage is the next step's first; the next step needs a new Jacobian.
+        f1.copy_from_slice(&self.f2);
+        self.fresh = false;
+        Ok(())
+    }
+
+    fn prepare_dense(&mut self, _f: &mut Rhs, _t: f64, y: &[f64], _f0: &[f64], _y_new: &[f64], _f1: &[f64], h: f64, _stats: &mut Stats) -> Result<(), Reason> {
+        self.y0.copy_from_slice(y);
+        self.h = h;
+        Ok(())
+    }
+
+    /// ode23s's interpolant: `y + h (s (1 - s) k1 + s (s - 2d) k2) / (1 - 2d)`.
+    fn dense(&self, theta: f64, out: &mut [f64]) {
+        let (a, b) = (theta * (1.0 - theta) / (1.0 - 2.0 * D), theta * (theta - 2.0 * D) / (1.0 - 2.0 * D));
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.y0[i] + self.h * (a * self.k1[i] + b * self.k2[i]);
         }
     }
-    Ok(Solution { times: outputs.to_vec(), states, stats })
 }
 
 /// Factors `W = I - hd J` into `w` in place (`P W = L U` by partial pivoting, `L` unit lower
