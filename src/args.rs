@@ -129,6 +129,11 @@ impl RunArgs {
         Ok(reference)
     }
 
+    /// The Jacobians a run with these settings wants: exact ones for the stiff method.
+    pub fn jacobians(&self) -> crate::load::Jacobians {
+        if self.method == Some(MethodArg::Ros23) { crate::load::Jacobians::Exact { only: None } } else { crate::load::Jacobians::Differenced }
+    }
+
     /// True when the run uses the paper's settings (`--paper`, or the model file asks).
     pub fn paper(&self, model: &Model) -> bool {
         self.paper || model.paper_settings

@@ -103,7 +103,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.values.param)?;
+    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians())?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -151,7 +151,9 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 
 /// `sweep`: runs the sweep with progress on stderr and writes its CSV, JSON and diagram.
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.values.param)?;
+    let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
+    let jacobians = if stiff { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced };
+    let model = load::evaluated(&args.model, &args.run.values.param, jacobians)?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -208,7 +210,8 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.values.param)?;
+    // The exact Jacobians of the formulation linearized: A and B to round-off.
+    let model = load::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) })?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

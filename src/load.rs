@@ -23,6 +23,16 @@ pub fn built_in() -> impl Iterator<Item = &'static str> {
     BUILT_IN.iter().map(|(n, _)| *n)
 }
 
+/// Whether an evaluated model carries its exact Jacobians (derived and differentiated once more:
+/// worth it for the stiff method and `linearize` only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Jacobians {
+    /// None: the runtime differences the right-hand side where it needs one.
+    Differenced,
+    /// Exact, of one formulation (`Some`) or of every formulation the run uses.
+    Exact { only: Option<seam::FormulationKind> },
+}
+
 /// The model MODEL names, loaded and validated: a path (anything with a `/`, an extension, or
 /// an existing file) is read from disk; a bare name is a built-in model.
 pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
@@ -38,10 +48,30 @@ pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
 }
 
 /// The model MODEL names with the parameters `params` set (`--param`), validated as the file's
-/// own values are (a negative mass is refused), evaluated in-process.
-pub fn evaluated(argument: &str, params: &[(String, f64)]) -> Result<seam::Model, CliError> {
+/// own values are (a negative mass is refused), evaluated in-process; `exact` asks for the exact
+/// Jacobians too (by the state and by the parameters) of the formulations `only` (all of the
+/// file's when empty), for the stiff method and `linearize`. Exact Jacobians that exceed the node
+/// budget (the bicycle's Kane form) fall back to differences, with a warning that says so.
+pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians) -> Result<seam::Model, CliError> {
     let model = model(argument)?.with_parameters(params)?;
-    let (evaluated, summary) = generator::eval::evaluate_reporting(&model, &generator::emit::Options::from_model(&model))?;
+    let plain = generator::emit::Options::from_model(&model);
+    let mut options = plain.clone();
+    if let Jacobians::Exact { only } = exact {
+        options.jacobian = true;
+        options.parameter_jacobian = true;
+        if let Some(kind) = only {
+            options.formulations = vec![generator::emit::Formulation::of(kind)];
+        }
+    }
+    let (evaluated, summary) = match generator::eval::evaluate_reporting(&model, &options) {
+        Err(e) if e.kind == generator::model::ErrorKind::Budget && exact != Jacobians::Differenced => {
+            eprintln!(
+                "warning: the exact Jacobians need more expression nodes than the budget allows (`--max-nodes` raises it): the runtime differences the right-hand side instead"
+            );
+            generator::eval::evaluate_reporting(&model, &plain)?
+        }
+        other => other?,
+    };
     for line in summary.warnings() {
         eprintln!("warning: {line}");
     }

@@ -1,7 +1,8 @@
 //! Every committed module, evaluated in-process (`generator::eval`), gives the compiled module's
 //! numbers to 1e-13 relative: every shared function at random coordinates and rates, and every
-//! formulation's `rhs`, `rhs_baumgarte`, `matrix`, `velocities`, `singular_margin` and
-//! `initial_state` at random states around the reference run's.
+//! formulation's `rhs`, `rhs_baumgarte`, `matrix`, `velocities`, `singular_margin`,
+//! `initial_state` and exact `jacobian` and `parameter_jacobian` at random states around the
+//! reference run's.
 
 use generator::emit::Options;
 use seam::{Failure, Model};
@@ -23,7 +24,8 @@ impl Rng {
 
 fn evaluated(module: &str, file: &str, edit: fn(&mut Options)) -> Model {
     let m = generator::model::load(format!("{}/models/{file}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let mut options = Options { module_name: Some(module.to_string()), ..Options::from_model(&m) };
+    // The committed modules carry their Jacobians, as the regeneration test makes them.
+    let mut options = Options { module_name: Some(module.to_string()), jacobian: true, ..Options::from_model(&m) };
     edit(&mut options);
     generator::eval::evaluate_with(&m, &options).unwrap()
 }
@@ -50,6 +52,7 @@ fn same(what: &str, a: Result<Vec<f64>, Failure>, b: Result<Vec<f64>, Failure>) 
 #[test]
 fn every_committed_module_evaluated_in_process_equals_the_compiled_one() {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut jacobians = 0;
     for (module, file, edit) in variants() {
         let compiled = generated::find(module).unwrap();
         let eval = evaluated(module, file, edit);
@@ -86,6 +89,7 @@ fn every_committed_module_evaluated_in_process_equals_the_compiled_one() {
             for (fc, fe) in compiled.formulations.iter().zip(&eval.formulations) {
                 assert_eq!((fc.kind, &fc.layout, fc.equations, &fc.state_names), (fe.kind, &fe.layout, fe.equations, &fe.state_names));
                 assert_eq!((fc.matrix_size, fc.has_baumgarte, fc.depends_on_time), (fe.matrix_size, fe.has_baumgarte, fe.depends_on_time));
+                assert_eq!((fc.has_jacobian, fc.has_parameter_jacobian), (fe.has_jacobian, fe.has_parameter_jacobian), "{module} {}", fc.kind);
                 let what = format!("{module} {}", fc.kind);
                 let (n, s) = (fc.states(), compiled.ignorable.len());
                 // The state of the reference run's initial values, perturbed.
@@ -106,6 +110,21 @@ fn every_committed_module_evaluated_in_process_equals_the_compiled_one() {
                     f.rhs(t, &y, &params, &g, &mut d).map(|()| d)
                 };
                 compared += same(&format!("{what} rhs"), rhs(fc), rhs(fe));
+                if fc.has_jacobian {
+                    let jac = |f: &seam::Formulation| {
+                        let (mut d, mut j) = (vec![0.0; n], vec![0.0; n * n]);
+                        f.jacobian(t, &y, &params, &g, &mut d, &mut j).map(|()| [d, j].concat())
+                    };
+                    compared += same(&format!("{what} jacobian"), jac(fc), jac(fe));
+                    jacobians += 1;
+                }
+                if fc.has_parameter_jacobian {
+                    let jac = |f: &seam::Formulation| {
+                        let (mut d, mut j) = (vec![0.0; n], vec![0.0; n * params.len()]);
+                        f.parameter_jacobian(t, &y, &params, &g, &mut d, &mut j).map(|()| [d, j].concat())
+                    };
+                    compared += same(&format!("{what} parameter_jacobian"), jac(fc), jac(fe));
+                }
                 if fc.has_baumgarte {
                     let stab = |f: &seam::Formulation| {
                         let mut d = vec![0.0; n];
@@ -135,6 +154,7 @@ fn every_committed_module_evaluated_in_process_equals_the_compiled_one() {
         }
         assert!(compared > 100, "{module}: only {compared} values compared");
     }
+    assert!(jacobians > 100, "only {jacobians} Jacobians compared");
 }
 
 /// Wrong lengths are refused as the compiled module refuses them.

@@ -36,8 +36,8 @@ pub fn evaluate(model: &Model) -> Result<seam::Model, ModelError> {
 }
 
 /// [`evaluate`] with other options (formulations, baked parameters, dropped ignorable
-/// coordinates). The Jacobians are not evaluated in-process: the runtime differences the
-/// right-hand side where it needs them.
+/// coordinates, the exact Jacobians: `jacobian` and `parameter_jacobian` evaluate in-process as
+/// the emitted ones do).
 pub fn evaluate_with(model: &Model, options: &Options) -> Result<seam::Model, ModelError> {
     Ok(evaluate_reporting(model, options)?.0)
 }
@@ -45,7 +45,7 @@ pub fn evaluate_with(model: &Model, options: &Options) -> Result<seam::Model, Mo
 /// [`evaluate_with`], and the generation's summary: what the derivation's budgets cut and what it
 /// could not decide ([`crate::emit::Summary::warnings`]), for the caller to report.
 pub fn evaluate_reporting(model: &Model, options: &Options) -> Result<(seam::Model, crate::emit::Summary), ModelError> {
-    let options = Options { tapes: true, jacobian: false, parameter_jacobian: false, max_lets_per_function: usize::MAX, ..options.clone() };
+    let options = Options { tapes: true, max_lets_per_function: usize::MAX, ..options.clone() };
     let generated = generate(model, &options)?;
     let program =
         generated.program.ok_or_else(|| model.error(crate::model::ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;

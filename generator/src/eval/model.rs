@@ -34,6 +34,9 @@ pub struct EvaluatedForm {
     initial_state: Tape,
     velocities: Tape,
     singular_margin: Tape,
+    /// The exact Jacobians' tapes, when the module has them.
+    jacobian: Option<Tape>,
+    parameter_jacobian: Option<Tape>,
 }
 
 fn check(argument: &'static str, slice: &[f64], expected: usize) -> Result<(), Failure> {
@@ -97,8 +100,11 @@ impl Evaluated {
                     initial_state: take(&format!("{name}::initial_state"), tapes)?,
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
+                    jacobian: take(&format!("{name}::jacobian"), tapes),
+                    parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
                     shape: shape.clone(),
                 };
+                let (has_jacobian, has_parameter_jacobian) = (f.jacobian.is_some(), f.parameter_jacobian.is_some());
                 Some(Formulation {
                     kind: shape.kind,
                     layout: StateLayout { coordinates: shape.kept.clone(), speeds: shape.speeds, speeds_are: shape.kind.speeds(), work: shape.work },
@@ -106,8 +112,8 @@ impl Evaluated {
                     state_names: shape.state_names.clone(),
                     matrix_size: shape.matrix_size,
                     has_baumgarte: shape.stabilization.is_some(),
-                    has_jacobian: false,
-                    has_parameter_jacobian: false,
+                    has_jacobian,
+                    has_parameter_jacobian,
                     depends_on_time: shape.depends_on_time,
                     functions: Arc::new(f),
                 })
@@ -224,6 +230,60 @@ fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64]) -> Result<(), usize> {
     Ok(())
 }
 
+/// `lu_factor` of emitted modules: `P a = L U` in place on a row-major `n x n` matrix (partial
+/// pivoting, `L` unit lower below the diagonal), the row taken at each step into `pivots`;
+/// `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
+fn lu_factor(n: usize, a: &mut [f64], pivots: &mut [usize]) -> Result<(), usize> {
+    let mut scale = 0.0f64;
+    for x in a.iter() {
+        scale = scale.max(x.abs());
+    }
+    for c in 0..n {
+        let mut p = c;
+        for r in c + 1..n {
+            if a[r * n + c].abs() > a[p * n + c].abs() {
+                p = r;
+            }
+        }
+        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
+            return Err(c);
+        }
+        pivots[c] = p;
+        if p != c {
+            for k in 0..n {
+                a.swap(c * n + k, p * n + k);
+            }
+        }
+        for r in c + 1..n {
+            let f = a[r * n + c] / a[c * n + c];
+            a[r * n + c] = f;
+            for k in c + 1..n {
+                a[r * n + k] -= f * a[c * n + k];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `lu_solve` of emitted modules: `a x = b` in place with the factors of [`lu_factor`].
+fn lu_solve(n: usize, a: &[f64], pivots: &[usize], b: &mut [f64]) {
+    for c in 0..n {
+        b.swap(c, pivots[c]);
+    }
+    for c in 0..n {
+        for r in c + 1..n {
+            b[r] -= a[r * n + c] * b[c];
+        }
+    }
+    for r in (0..n).rev() {
+        let mut s = b[r];
+        for k in r + 1..n {
+            s -= a[r * n + k] * b[k];
+        }
+        b[r] = s / a[r * n + r];
+    }
+}
+
 impl EvaluatedForm {
     fn states(&self) -> usize {
         self.shape.kept.len() + self.shape.speeds + usize::from(self.shape.work)
@@ -302,7 +362,128 @@ impl EvaluatedForm {
     }
 }
 
+impl EvaluatedForm {
+    /// `jacobian` or `parameter_jacobian` of the module (`jacobian.rs` emits them): the
+    /// assembly and its derivatives by `columns` variables from the tape, then the solve and
+    /// `dx/ds_k = A^-1 (dF/ds_k - dA/ds_k x)` with the LU factors computed once.
+    #[allow(clippy::too_many_arguments)]
+    fn derivatives(
+        &self,
+        tape: &Tape,
+        variables: usize,
+        columns: usize,
+        t: f64,
+        state: &[f64],
+        params: &[f64],
+        g_i: &[f64],
+        dstate: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), Failure> {
+        self.check_state(state, params, g_i)?;
+        check("dstate", dstate, self.states())?;
+        check("jac", jac, self.states() * columns)?;
+        let s = &self.shape;
+        let (nq, n) = (s.kept.len(), s.matrix_size);
+        let (rw, cw) = s.post.unwrap_or((0, 0));
+        // One block: kept rates, matrix, forcing, W, c, power.
+        let block = nq + n * n + n + rw * cw + rw + usize::from(s.work);
+        run(tape, t, params, g_i, state, |o| {
+            let at = |b: usize| &o[b..b + block];
+            let value = at(0);
+            let checks = &o[block..block + s.conditions.len()];
+            let derivative = |k: usize| at(block + s.conditions.len() + k * block);
+            // The parts of one block.
+            let qd = |b: &[f64]| b[..nq].to_vec();
+            let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
+            for (condition, &v) in s.conditions.iter().zip(checks) {
+                if !(v.abs() > SINGULAR_TOLERANCE) {
+                    return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value: v });
+                }
+            }
+            let mut matrix = value[m_at..f_at].to_vec();
+            let mut x = value[f_at..f_at + n].to_vec();
+            let mut pivots = vec![0usize; n];
+            if let Err(column) = lu_factor(n, &mut matrix, &mut pivots) {
+                return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
+            }
+            lu_solve(n, &matrix, &pivots, &mut x);
+            jac.fill(0.0);
+            dstate[..nq].copy_from_slice(&qd(value));
+            let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
+            if s.post.is_some() {
+                for j in 0..rw {
+                    let mut sum = c[j];
+                    for i in 0..cw {
+                        sum += w[j * cw + i] * x[i];
+                    }
+                    dstate[nq + j] = sum;
+                }
+            } else {
+                dstate[nq..nq + s.speeds].copy_from_slice(&x[..s.speeds]);
+            }
+            let last = dstate.len() - 1;
+            if s.work {
+                dstate[last] = value[p_at];
+                for k in 0..variables {
+                    jac[last * columns + k] = derivative(k)[p_at];
+                }
+            }
+            let mut dx = vec![0.0; n];
+            for k in 0..variables {
+                let d = derivative(k);
+                for j in 0..nq {
+                    jac[j * columns + k] = d[j];
+                }
+                for i in 0..n {
+                    let mut sum = d[f_at + i];
+                    for j in 0..n {
+                        sum -= d[m_at + i * n + j] * x[j];
+                    }
+                    dx[i] = sum;
+                }
+                lu_solve(n, &matrix, &pivots, &mut dx);
+                if s.post.is_some() {
+                    let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
+                    for j in 0..rw {
+                        let mut sum = dc[j];
+                        for i in 0..cw {
+                            sum += dw[j * cw + i] * x[i] + w[j * cw + i] * dx[i];
+                        }
+                        jac[(nq + j) * columns + k] = sum;
+                    }
+                } else {
+                    for j in 0..s.speeds {
+                        jac[(nq + j) * columns + k] = dx[j];
+                    }
+                }
+            }
+            for (index, value) in dstate.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite { t, index });
+                }
+            }
+            for (index, value) in jac.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(Failure::NonFinite { t, index: dstate.len() + index });
+                }
+            }
+            Ok(())
+        })
+    }
+}
+
 impl FormulationFunctions for EvaluatedForm {
+    fn jacobian(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
+        let tape = self.jacobian.as_ref().ok_or(Failure::Missing { function: "jacobian" })?;
+        let variables = self.shape.kept.len() + self.shape.speeds;
+        self.derivatives(tape, variables, self.states(), t, state, params, g_i, dstate, jac)
+    }
+
+    fn parameter_jacobian(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
+        let tape = self.parameter_jacobian.as_ref().ok_or(Failure::Missing { function: "parameter_jacobian" })?;
+        self.derivatives(tape, self.params, self.params, t, state, params, g_i, dstate, jac)
+    }
+
     fn rhs(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64]) -> Result<(), Failure> {
         self.rates(t, state, params, g_i, dstate, None)
     }
