@@ -48,7 +48,8 @@ pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
 }
 
 /// The model MODEL names with the parameters `params` set (`--param`), validated as the file's
-/// own values are (a negative mass is refused), evaluated in-process; `exact` asks for the exact
+/// own values are (a negative mass is refused), evaluated in-process (its tapes compiled to
+/// machine code by the `jit` crate); `exact` asks for the exact
 /// Jacobians too (by the state and by the parameters) of the formulations `only` (all of the
 /// file's when empty), for the stiff method and `linearize`. Exact Jacobians that exceed the node
 /// budget (the bicycle's Kane form) fall back to differences, with a warning that says so.
@@ -63,12 +64,12 @@ pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians) -> 
             options.formulations = vec![generator::emit::Formulation::of(kind)];
         }
     }
-    let (evaluated, summary) = match generator::eval::evaluate_reporting(&model, &options) {
+    let (evaluated, summary) = match generator::eval::evaluate_with_backend(&model, &options, &jit::Jit) {
         Err(e) if e.kind == generator::model::ErrorKind::Budget && exact != Jacobians::Differenced => {
             eprintln!(
                 "warning: the exact Jacobians need more expression nodes than the budget allows (`--max-nodes` raises it): the runtime differences the right-hand side instead"
             );
-            generator::eval::evaluate_reporting(&model, &plain)?
+            generator::eval::evaluate_with_backend(&model, &plain, &jit::Jit)?
         }
         other => other?,
     };

@@ -23,11 +23,16 @@ impl Rng {
 }
 
 fn evaluated(module: &str, file: &str, edit: fn(&mut Options)) -> Model {
+    evaluated_by(module, file, edit, &generator::eval::kernel::Interpreter)
+}
+
+/// The module evaluated in-process, its tapes run by `backend`.
+fn evaluated_by(module: &str, file: &str, edit: fn(&mut Options), backend: &dyn generator::eval::kernel::Backend) -> Model {
     let m = generator::model::load(format!("{}/models/{file}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
     // The committed modules carry their Jacobians, as the regeneration test makes them.
     let mut options = Options { module_name: Some(module.to_string()), jacobian: true, ..Options::from_model(&m) };
     edit(&mut options);
-    generator::eval::evaluate_with(&m, &options).unwrap()
+    generator::eval::evaluate_with_backend(&m, &options, backend).unwrap().0
 }
 
 /// Both succeeded with outputs equal to 1e-13 relative, or both failed the same way.
@@ -51,11 +56,22 @@ fn same(what: &str, a: Result<Vec<f64>, Failure>, b: Result<Vec<f64>, Failure>) 
 
 #[test]
 fn every_committed_module_evaluated_in_process_equals_the_compiled_one() {
+    compare_every_module(&generator::eval::kernel::Interpreter);
+}
+
+/// The same with the tapes compiled to machine code by cranelift (`jit`): the same operations in
+/// the same order, so the same numbers.
+#[test]
+fn every_committed_module_compiled_by_the_jit_equals_the_compiled_one() {
+    compare_every_module(&jit::Jit);
+}
+
+fn compare_every_module(backend: &dyn generator::eval::kernel::Backend) {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     let mut jacobians = 0;
     for (module, file, edit) in variants() {
         let compiled = generated::find(module).unwrap();
-        let eval = evaluated(module, file, edit);
+        let eval = evaluated_by(module, file, edit, backend);
         assert_eq!(
             (&eval.module, &eval.coordinates, &eval.constraints, &eval.ignorable),
             (&compiled.module, &compiled.coordinates, &compiled.constraints, &compiled.ignorable)

@@ -81,9 +81,31 @@ fn the_in_process_figures_are_the_benchmark_file() {
     let eval = json("docs/benchmarks/eval.json");
     let ms = eval["scene2_file_to_table_seconds"].as_f64().unwrap() * 1e3;
     assert_quoted(&readme, &format!("comparison table takes {ms:.0} ms"), "docs/benchmarks/eval.json");
-    let ratios: Vec<f64> = eval["rhs"].as_array().unwrap().iter().map(|r| r["ratio"].as_f64().unwrap()).collect();
-    let (lo, hi) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)));
-    assert_quoted(&readme, &format!("costs {lo:.1} to {hi:.1} times the compiled one"), "docs/benchmarks/eval.json");
+    let range = |field: &str| {
+        let ratios: Vec<f64> = eval["rhs"].as_array().unwrap().iter().map(|r| r[field].as_f64().unwrap()).collect();
+        ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)))
+    };
+    let ((jl, jh), (il, ih)) = (range("jit_ratio"), range("ratio"));
+    assert_quoted(&readme, &format!("call costs {jl:.1} to {jh:.1} times the compiled module's"), "docs/benchmarks/eval.json");
+    assert_quoted(&readme, &format!("a call costs {jl:.1} to {jh:.1} times the compiled module's with the JIT"), "docs/benchmarks/eval.json");
+    assert_quoted(&readme, &format!("without the JIT: {il:.1} to {ih:.1} times"), "docs/benchmarks/eval.json");
+    // docs/benchmarks.md's table is the file's, row for row.
+    let docs = read("docs/benchmarks.md");
+    for r in eval["rhs"].as_array().unwrap() {
+        let f = |k: &str| r[k].as_f64().unwrap();
+        let row = format!(
+            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} |",
+            r["model"].as_str().unwrap(),
+            r["formulation"].as_str().unwrap(),
+            f("compiled_ns"),
+            f("evaluated_ns"),
+            f("ratio"),
+            f("jit_ns"),
+            f("jit_ratio")
+        );
+        assert!(docs.contains(&row), "docs/benchmarks.md lacks the row `{row}` of docs/benchmarks/eval.json");
+    }
+    assert!(docs.contains(&format!("the four runs at the paper's settings): {ms:.0} ms")), "docs/benchmarks.md quotes another time to the first table");
 }
 
 #[test]

@@ -28,7 +28,7 @@ pub struct TapeError(pub String);
 
 /// One instruction: the operation and its operands (registers), writing the next register.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Instr {
+pub enum Instr {
     Add(u32, u32),
     Sub(u32, u32),
     Mul(u32, u32),
@@ -41,7 +41,7 @@ enum Instr {
 
 /// The `f64` methods emitted code calls with one argument.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Unary {
+pub enum Unary {
     Sin,
     Cos,
     Tan,
@@ -65,8 +65,9 @@ impl Unary {
         })
     }
 
+    /// The method applied to `x`, as emitted code calls it.
     #[inline(always)]
-    fn apply(self, x: f64) -> f64 {
+    pub fn apply(self, x: f64) -> f64 {
         match self {
             Unary::Sin => x.sin(),
             Unary::Cos => x.cos(),
@@ -157,6 +158,13 @@ impl Tape {
     /// Number of arithmetic instructions.
     pub fn instructions(&self) -> usize {
         self.instrs.len()
+    }
+
+    /// The program, for a backend that compiles it (a JIT): the number of input registers,
+    /// the constants (the registers after them), the instructions (one register each, after
+    /// the constants) and the registers the outputs read.
+    pub fn parts(&self) -> (usize, &[f64], &[Instr], &[u32]) {
+        (self.inputs, &self.constants, &self.instrs, &self.outputs)
     }
 
     /// Evaluates the tape at `inputs` (as laid out by the [`Slots`] it was compiled with),

@@ -21,6 +21,7 @@
 //! assert!((dstate[0] - qd0[0]).abs() < 1e-12);
 //! ```
 
+pub mod kernel;
 pub mod model;
 
 pub use crate::emit::program::{Description, FormShape, Program};
@@ -45,9 +46,14 @@ pub fn evaluate_with(model: &Model, options: &Options) -> Result<seam::Model, Mo
 /// [`evaluate_with`], and the generation's summary: what the derivation's budgets cut and what it
 /// could not decide ([`crate::emit::Summary::warnings`]), for the caller to report.
 pub fn evaluate_reporting(model: &Model, options: &Options) -> Result<(seam::Model, crate::emit::Summary), ModelError> {
+    evaluate_with_backend(model, options, &kernel::Interpreter)
+}
+
+/// [`evaluate_reporting`] with the tapes made kernels by `backend` (the `jit` crate's compiler).
+pub fn evaluate_with_backend(model: &Model, options: &Options, backend: &dyn kernel::Backend) -> Result<(seam::Model, crate::emit::Summary), ModelError> {
     let options = Options { tapes: true, max_lets_per_function: usize::MAX, ..options.clone() };
     let generated = generate(model, &options)?;
     let program =
         generated.program.ok_or_else(|| model.error(crate::model::ErrorKind::Emission, "emit", "emit", "internal error: no tapes".into(), String::new()))?;
-    Ok((model::Evaluated::model(program), generated.summary))
+    Ok((model::Evaluated::model_with(program, backend), generated.summary))
 }

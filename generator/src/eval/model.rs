@@ -2,6 +2,7 @@
 //! solve, the state's assembly, the errors) over its tapes, step for step as the module does
 //! them, so that the numbers are the compiled module's.
 
+use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
 use crate::emit::tape::Tape;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
@@ -13,11 +14,11 @@ use crate::emit::module::{CONSTRAINT_TOLERANCE, PIVOT_TOLERANCE, SINGULAR_TOLERA
 
 /// The shared functions of a program (energy, work rate, momenta, residuals).
 pub struct Evaluated {
-    energy: Option<Tape>,
-    work_rate: Option<Tape>,
-    momenta: Option<Tape>,
-    constraint_residuals: Option<Tape>,
-    position_residuals: Option<Tape>,
+    energy: Option<Box<dyn Kernel>>,
+    work_rate: Option<Box<dyn Kernel>>,
+    momenta: Option<Box<dyn Kernel>>,
+    constraint_residuals: Option<Box<dyn Kernel>>,
+    position_residuals: Option<Box<dyn Kernel>>,
     m: usize,
     params: usize,
 }
@@ -30,13 +31,13 @@ pub struct EvaluatedForm {
     ignorable: usize,
     constraint_names: Arc<[String]>,
     holonomic_names: Arc<[String]>,
-    rhs: Tape,
-    initial_state: Tape,
-    velocities: Tape,
-    singular_margin: Tape,
+    rhs: Box<dyn Kernel>,
+    initial_state: Box<dyn Kernel>,
+    velocities: Box<dyn Kernel>,
+    singular_margin: Box<dyn Kernel>,
     /// The exact Jacobians' tapes, when the module has them.
-    jacobian: Option<Tape>,
-    parameter_jacobian: Option<Tape>,
+    jacobian: Option<Box<dyn Kernel>>,
+    parameter_jacobian: Option<Box<dyn Kernel>>,
 }
 
 fn check(argument: &'static str, slice: &[f64], expected: usize) -> Result<(), Failure> {
@@ -60,26 +61,35 @@ thread_local! {
 }
 
 /// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
-fn run<R>(tape: &Tape, t: f64, params: &[f64], a: &[f64], b: &[f64], then: impl FnOnce(&[f64]) -> R) -> R {
+fn run<R>(tape: &dyn Kernel, t: f64, params: &[f64], a: &[f64], b: &[f64], then: impl FnOnce(&[f64]) -> R) -> R {
     INPUTS.with(|inputs| {
         OUTPUTS.with(|outputs| {
             let (mut inputs, mut outputs) = (inputs.borrow_mut(), outputs.borrow_mut());
             pack(&mut inputs, t, params, a, b);
+            // A kernel reads exactly its input registers: those the arguments do not fill are 0.
+            if inputs.len() < tape.inputs() {
+                inputs.resize(tape.inputs(), 0.0);
+            }
             outputs.clear();
             outputs.resize(tape.outputs(), 0.0);
-            tape.eval(&inputs, &mut outputs);
+            tape.run(&inputs, &mut outputs);
             then(&outputs)
         })
     })
 }
 
 impl Evaluated {
-    /// The program as a [`seam::Model`].
-    pub fn model(mut program: Program) -> Model {
+    /// The program as a [`seam::Model`], its tapes interpreted.
+    pub fn model(program: Program) -> Model {
+        Evaluated::model_with(program, &Interpreter)
+    }
+
+    /// The program as a [`seam::Model`], its tapes made kernels by `backend` (a JIT).
+    pub fn model_with(mut program: Program, backend: &dyn Backend) -> Model {
         let d = program.description;
         let m = d.coordinates.len();
         let params = d.parameter_names.len();
-        let take = |name: &str, tapes: &mut std::collections::HashMap<String, Tape>| tapes.remove(name);
+        let take = |name: &str, tapes: &mut std::collections::HashMap<String, Tape>| tapes.remove(name).map(|t| backend.kernel(t));
         let tapes = &mut program.tapes;
         let holonomic = d.holonomic_names.len();
         let constraint_names: Arc<[String]> = d.constraints.clone().into();
@@ -148,7 +158,7 @@ impl Evaluated {
 
     fn point(
         &self,
-        tape: &Option<Tape>,
+        tape: &Option<Box<dyn Kernel>>,
         function: &'static str,
         t: f64,
         q: &[f64],
@@ -165,7 +175,7 @@ impl Evaluated {
         check("params", params, self.params)?;
         check("out", out, tape.outputs())?;
         let qdot = if rates { qdot } else { &[] };
-        run(tape, t, params, q, qdot, |o| out.copy_from_slice(o));
+        run(&**tape, t, params, q, qdot, |o| out.copy_from_slice(o));
         Ok(())
     }
 }
@@ -301,7 +311,7 @@ impl EvaluatedForm {
         check("dstate", dstate, self.states())?;
         let s = &self.shape;
         let (nq, n) = (s.kept.len(), s.matrix_size);
-        run(&self.rhs, t, params, g_i, state, |o| {
+        run(&*self.rhs, t, params, g_i, state, |o| {
             let mut at = 0;
             let mut take = |k: usize| {
                 let out = &o[at..at + k];
@@ -369,7 +379,7 @@ impl EvaluatedForm {
     #[allow(clippy::too_many_arguments)]
     fn derivatives(
         &self,
-        tape: &Tape,
+        tape: &dyn Kernel,
         variables: usize,
         columns: usize,
         t: f64,
@@ -476,12 +486,12 @@ impl FormulationFunctions for EvaluatedForm {
     fn jacobian(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
         let tape = self.jacobian.as_ref().ok_or(Failure::Missing { function: "jacobian" })?;
         let variables = self.shape.kept.len() + self.shape.speeds;
-        self.derivatives(tape, variables, self.states(), t, state, params, g_i, dstate, jac)
+        self.derivatives(&**tape, variables, self.states(), t, state, params, g_i, dstate, jac)
     }
 
     fn parameter_jacobian(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64], jac: &mut [f64]) -> Result<(), Failure> {
         let tape = self.parameter_jacobian.as_ref().ok_or(Failure::Missing { function: "parameter_jacobian" })?;
-        self.derivatives(tape, self.params, self.params, t, state, params, g_i, dstate, jac)
+        self.derivatives(&**tape, self.params, self.params, t, state, params, g_i, dstate, jac)
     }
 
     fn rhs(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64], dstate: &mut [f64]) -> Result<(), Failure> {
@@ -503,7 +513,7 @@ impl FormulationFunctions for EvaluatedForm {
         check("g_i", g_i, self.ignorable)?;
         let s = &self.shape;
         let (nr, nh) = (self.constraint_names.len(), self.holonomic_names.len());
-        run(&self.initial_state, t, params, q, qdot, |o| {
+        run(&*self.initial_state, t, params, q, qdot, |o| {
             let (u, rest) = o.split_at(s.speeds);
             let (g, rest) = rest.split_at(self.ignorable);
             let (r, rest) = rest.split_at(nr);
@@ -539,7 +549,7 @@ impl FormulationFunctions for EvaluatedForm {
         check("q", q, self.m)?;
         check("qdot", qdot, self.m)?;
         let s = &self.shape;
-        run(&self.velocities, t, params, g_i, state, |o| {
+        run(&*self.velocities, t, params, g_i, state, |o| {
             let (qd, checks) = o.split_at(self.m);
             for (condition, &value) in s.conditions.iter().zip(checks) {
                 if !(value.abs() > SINGULAR_TOLERANCE) {
@@ -564,12 +574,12 @@ impl FormulationFunctions for EvaluatedForm {
         self.check_state(state, params, g_i)?;
         let (nq, n) = (self.shape.kept.len(), self.shape.matrix_size);
         check("out", out, n * n)?;
-        run(&self.rhs, t, params, g_i, state, |o| out.copy_from_slice(&o[nq..nq + n * n]));
+        run(&*self.rhs, t, params, g_i, state, |o| out.copy_from_slice(&o[nq..nq + n * n]));
         Ok(())
     }
 
     fn singular_margin(&self, t: f64, state: &[f64], params: &[f64], g_i: &[f64]) -> Result<f64, Failure> {
         self.check_state(state, params, g_i)?;
-        Ok(run(&self.singular_margin, t, params, g_i, state, |o| o.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))))
+        Ok(run(&*self.singular_margin, t, params, g_i, state, |o| o.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()))))
     }
 }
