@@ -149,7 +149,7 @@ pub fn write_plots(model: &Model, runs: &[Run], dir: &Path) -> Result<Vec<PathBu
     let epath = dir.join(format!("{scene}_errors.svg"));
     let named = |f: &dyn Fn(&Run) -> Vec<f64>| -> Vec<(&str, Vec<f64>)> { runs.iter().map(|r| (r.record.method.as_str(), f(r))).collect() };
     let mut panels: Vec<(&str, &str, Vec<(&str, Vec<f64>)>)> =
-        vec![(model.energy_balance.title(), "|E - E(0)|", named(&|r| r.invariants.energy_error.clone()))];
+        vec![(model.energy_balance.title(), model.energy_balance.axis(), named(&|r| r.invariants.energy_error.clone()))];
     if !model.constraints.is_empty() {
         panels.push(("constraint error |a q' + b|", "|a q' + b|", named(&|r| r.invariants.velocity_constraint.clone())));
     }
@@ -192,7 +192,7 @@ pub fn write_trajectory(model: &Model, form: &seam::Formulation, times: &[f64], 
     write_atomic(&path, svg.as_bytes()).map_err(|e| err(&path, e))?;
     let ipath = base.with_file_name(format!("{stem}_invariants.svg"));
     let mut panels: Vec<(String, &str, Vec<(String, Vec<f64>)>)> =
-        vec![(model.energy_balance.title().into(), "|E - E(0)|", vec![(model.energy_balance.quantity().into(), inv.energy_error.clone())])];
+        vec![(model.energy_balance.title().into(), model.energy_balance.axis(), vec![(model.energy_balance.quantity().into(), inv.energy_error.clone())])];
     if !model.ignorable.is_empty() {
         let series = model.ignorable.iter().zip(&inv.momentum_error).map(|(&j, s)| (model.coordinates[j].clone(), s.clone())).collect();
         panels.push(("momentum drift |G_I(t) - G_I(0)|, per ignorable coordinate".into(), "|G - G(0)|", series));

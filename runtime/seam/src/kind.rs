@@ -190,6 +190,14 @@ impl EnergyBalance {
         }
     }
 
+    /// A plot's axis label for the quantity's error.
+    pub fn axis(self) -> &'static str {
+        match self {
+            EnergyBalance::Energy => "|E - E(0)|",
+            EnergyBalance::Jacobi | EnergyBalance::MovingConstraints => "|H - H(0)|",
+        }
+    }
+
     /// True when the column is an invariant (zero but for the integration error).
     pub fn holds(self) -> bool {
         self != EnergyBalance::MovingConstraints
