@@ -64,17 +64,24 @@ pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians) -> 
             options.formulations = vec![generator::emit::Formulation::of(kind)];
         }
     }
-    let (evaluated, summary) = match generator::eval::evaluate_with_backend(&model, &options, &jit::Jit) {
+    let jit = jit::Jit::default();
+    let (evaluated, summary) = match generator::eval::evaluate_with_backend(&model, &options, &jit) {
         Err(e) if e.kind == generator::model::ErrorKind::Budget && exact != Jacobians::Differenced => {
             eprintln!(
                 "warning: the exact Jacobians need more expression nodes than the budget allows (`--max-nodes` raises it): the runtime differences the right-hand side instead"
             );
-            generator::eval::evaluate_with_backend(&model, &plain, &jit::Jit)?
+            generator::eval::evaluate_with_backend(&model, &plain, &jit)?
         }
         other => other?,
     };
     for line in summary.warnings() {
         eprintln!("warning: {line}");
+    }
+    if jit.interpreted() > 0 {
+        eprintln!(
+            "warning: {} of the model's functions could not be compiled to this machine's code and are interpreted (the same numbers, 2 to 5 times slower)",
+            jit.interpreted()
+        );
     }
     Ok(evaluated)
 }

@@ -29,7 +29,7 @@ fn main() {
         let compiled = generated::find(name).unwrap();
         let m = generator::model::load(format!("{root}/models/{name}.ron")).unwrap();
         let evaluated = generator::eval::evaluate(&m).unwrap();
-        let jitted = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit).unwrap().0;
+        let jitted = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
         let (q0, qd0) = compiled.initial.clone().unwrap();
         let params = compiled.default_params.clone();
         for ((fc, fe), fj) in compiled.formulations.iter().zip(&evaluated.formulations).zip(&jitted.formulations) {
@@ -52,7 +52,7 @@ fn main() {
     for _ in 0..5 {
         let start = Instant::now();
         let m = generator::model::load(format!("{root}/models/three_body.ron")).unwrap();
-        let model = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit).unwrap().0;
+        let model = generator::eval::evaluate_with_backend(&m, &generator::emit::Options::from_model(&m), &jit::Jit::default()).unwrap().0;
         let runs = runtime::compare::compare(&model, &runtime::compare::Options { repeats: 1, ..runtime::compare::Options::paper(&model) }).unwrap();
         black_box(runtime::compare::table(&runs));
         best = best.min(start.elapsed().as_secs_f64());

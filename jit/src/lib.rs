@@ -9,10 +9,12 @@
 //! use generator::eval::kernel::{Backend, Kernel};
 //! let stmts: Vec<syn::Stmt> = vec![syn::parse_quote!(let x = state[0];), syn::parse_quote!(let x0 = f64::sin(x);)];
 //! let tape = Tape::compile(&stmts, &[syn::parse_quote!(2.0 * x0 - f64::powi(x, 3))], &Slots::new(&[("state", 1)])).unwrap();
-//! let kernel = jit::Jit.kernel(tape);
+//! let jit = jit::Jit::default();
+//! let kernel = jit.kernel(tape);
 //! let mut out = [0.0];
 //! kernel.run(&[0.5], &mut out);
 //! assert_eq!(out[0], 2.0 * f64::sin(0.5) - 0.5f64.powi(3));
+//! assert_eq!(jit.interpreted(), 0);
 //! ```
 
 use cranelift_codegen::ir::{AbiParam, InstBuilder, MemFlagsData, Signature, types};
@@ -24,14 +26,28 @@ use generator::emit::tape::{Instr, Tape, Unary};
 use generator::eval::kernel::{Backend, Kernel};
 
 /// The cranelift backend: each tape compiled to machine code, or left to the interpreter when
-/// this machine's code cannot be generated (the kernel then is the tape itself).
-pub struct Jit;
+/// this machine's code cannot be generated (the kernel then is the tape itself, and
+/// [`Jit::interpreted`] counts it, for the caller to say so).
+#[derive(Debug, Default)]
+pub struct Jit {
+    interpreted: std::sync::atomic::AtomicUsize,
+}
+
+impl Jit {
+    /// How many tapes were left to the interpreter (slower, same numbers).
+    pub fn interpreted(&self) -> usize {
+        self.interpreted.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
 
 impl Backend for Jit {
     fn kernel(&self, tape: Tape) -> Box<dyn Kernel> {
         match compile(&tape) {
             Ok(k) => Box::new(k),
-            Err(_) => Box::new(tape),
+            Err(_) => {
+                self.interpreted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                Box::new(tape)
+            }
         }
     }
 }
