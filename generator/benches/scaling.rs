@@ -47,6 +47,10 @@ struct Record {
     rustc_s: Option<f64>,
     /// Per formulation: ns per right-hand-side call.
     ns_per_call: Vec<(String, f64)>,
+    /// Per formulation: ns per call evaluated in-process, compiled by the JIT (as `multibody`
+    /// runs it), timed the same way in the same child.
+    #[serde(default)]
+    jit_ns_per_call: Vec<(String, f64)>,
 }
 
 #[derive(Clone, Debug, Default, serde::Deserialize)]
@@ -100,8 +104,37 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
                 record.ns_per_call.push((f.to_string(), ns.parse().unwrap_or(f64::NAN)));
             }
         }
+        record.jit_ns_per_call = jit_ns_per_call(&model);
     }
     record
+}
+
+/// Each formulation's `rhs` evaluated in-process by the JIT, timed as [`timing_program`] times
+/// the compiled module: best of 7 rounds of 200 calls at the model's initial state.
+fn jit_ns_per_call(model: &generator::model::Model) -> Vec<(String, f64)> {
+    let jit = jit::Jit::default();
+    let evaluated = generator::eval::evaluate_with_backend(model, &Options::from_model(model), &jit).expect("the benchmark models evaluate").0;
+    let (q0, qd0) = evaluated.initial.clone().expect("the benchmark models have an initial state");
+    let params = evaluated.default_params.clone();
+    evaluated
+        .formulations
+        .iter()
+        .map(|f| {
+            let (mut state, mut g) = (vec![0.0; f.states()], vec![0.0; evaluated.ignorable.len()]);
+            f.initial_state(0.0, &q0, &qd0, &params, &mut state, &mut g).expect("a consistent initial state");
+            let mut d = vec![0.0; state.len()];
+            let mut best = f64::INFINITY;
+            for _ in 0..7 {
+                let t = Instant::now();
+                for _ in 0..200 {
+                    f.rhs(0.0, std::hint::black_box(&state), &params, &g, &mut d).expect("the right-hand side");
+                    std::hint::black_box(&d);
+                }
+                best = best.min(t.elapsed().as_secs_f64() * 1e9 / 200.0);
+            }
+            (f.name().to_string(), best)
+        })
+        .collect()
 }
 
 /// A program that times each formulation's `rhs` at the model's initial state.
