@@ -57,7 +57,9 @@ thread_local! {
     static INPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
     static OUTPUTS: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
     /// The matrix and forcing a right-hand side solves, reused from call to call.
-    static SOLVE: std::cell::RefCell<(Vec<f64>, Vec<f64>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+    static SOLVE: std::cell::RefCell<(Vec<f64>, Vec<f64>, Vec<usize>)> = const { std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
+    /// A Jacobian's column of solved rates, reused from call to call.
+    static COLUMN: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Runs `tape` on `[t | params | a | b]` and hands its outputs to `then`.
@@ -198,45 +200,15 @@ impl ModelFunctions for Evaluated {
     }
 }
 
-/// `solve_dense` of emitted modules: Gaussian elimination with partial pivoting, in place, on a
-/// row-major `n x n` matrix; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the
-/// largest entry.
-fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64]) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for x in a.iter() {
-        scale = scale.max(x.abs());
-    }
-    for c in 0..n {
-        let mut p = c;
-        for r in c + 1..n {
-            if a[r * n + c].abs() > a[p * n + c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p * n + c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        if p != c {
-            for k in 0..n {
-                a.swap(c * n + k, p * n + k);
-            }
-        }
-        b.swap(c, p);
-        for r in c + 1..n {
-            let f = a[r * n + c] / a[c * n + c];
-            for k in c + 1..n {
-                a[r * n + k] -= f * a[c * n + k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    for r in (0..n).rev() {
-        let mut s = b[r];
-        for k in r + 1..n {
-            s -= a[r * n + k] * b[k];
-        }
-        b[r] = s / a[r * n + r];
-    }
+/// `solve_dense` of emitted modules: Gaussian elimination with partial pivoting on a row-major
+/// `n x n` matrix, `b` overwritten by the solution; `Err(column)` when a pivot is below
+/// `PIVOT_TOLERANCE` times the largest entry. It is [`lu_factor`] then [`lu_solve`]: the same
+/// operations in the same order (the row swaps applied to `b` first, then the same
+/// eliminations by column), so the same numbers as the module's one-pass elimination.
+fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) -> Result<(), usize> {
+    pivots.resize(n, 0);
+    lu_factor(n, a, pivots)?;
+    lu_solve(n, a, pivots, b);
     Ok(())
 }
 
@@ -324,7 +296,7 @@ impl EvaluatedForm {
             let power = if s.work { Some(take(1)[0]) } else { None };
             let checks = take(s.conditions.len());
             SOLVE.with(|cell| {
-                let (matrix, force) = &mut *cell.borrow_mut();
+                let (matrix, force, pivots) = &mut *cell.borrow_mut();
                 matrix.clear();
                 matrix.extend_from_slice(matrix_out);
                 force.clear();
@@ -340,7 +312,7 @@ impl EvaluatedForm {
                         return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
                     }
                 }
-                if let Err(column) = solve_dense(n, matrix, force) {
+                if let Err(column) = solve_dense(n, matrix, force, pivots) {
                     return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
                 }
                 dstate[..nq].copy_from_slice(qdot);
@@ -403,81 +375,88 @@ impl EvaluatedForm {
             let checks = &o[block..block + s.conditions.len()];
             let derivative = |k: usize| at(block + s.conditions.len() + k * block);
             // The parts of one block.
-            let qd = |b: &[f64]| b[..nq].to_vec();
             let (m_at, f_at, w_at, c_at, p_at) = (nq, nq + n * n, nq + n * n + n, nq + n * n + n + rw * cw, nq + n * n + n + rw * cw + rw);
             for (condition, &v) in s.conditions.iter().zip(checks) {
                 if !(v.abs() > SINGULAR_TOLERANCE) {
                     return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value: v });
                 }
             }
-            let mut matrix = value[m_at..f_at].to_vec();
-            let mut x = value[f_at..f_at + n].to_vec();
-            let mut pivots = vec![0usize; n];
-            if let Err(column) = lu_factor(n, &mut matrix, &mut pivots) {
-                return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
-            }
-            lu_solve(n, &matrix, &pivots, &mut x);
-            jac.fill(0.0);
-            dstate[..nq].copy_from_slice(&qd(value));
-            let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
-            if s.post.is_some() {
-                for j in 0..rw {
-                    let mut sum = c[j];
-                    for i in 0..cw {
-                        sum += w[j * cw + i] * x[i];
+            SOLVE.with(|solve| {
+                COLUMN.with(|column| {
+                    let (matrix, x, pivots) = &mut *solve.borrow_mut();
+                    let dx = &mut *column.borrow_mut();
+                    matrix.clear();
+                    matrix.extend_from_slice(&value[m_at..f_at]);
+                    x.clear();
+                    x.extend_from_slice(&value[f_at..f_at + n]);
+                    pivots.resize(n, 0);
+                    dx.resize(n, 0.0);
+                    if let Err(column) = lu_factor(n, matrix, pivots) {
+                        return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
                     }
-                    dstate[nq + j] = sum;
-                }
-            } else {
-                dstate[nq..nq + s.speeds].copy_from_slice(&x[..s.speeds]);
-            }
-            let last = dstate.len() - 1;
-            if s.work {
-                dstate[last] = value[p_at];
-                for k in 0..variables {
-                    jac[last * columns + k] = derivative(k)[p_at];
-                }
-            }
-            let mut dx = vec![0.0; n];
-            for k in 0..variables {
-                let d = derivative(k);
-                for j in 0..nq {
-                    jac[j * columns + k] = d[j];
-                }
-                for i in 0..n {
-                    let mut sum = d[f_at + i];
-                    for j in 0..n {
-                        sum -= d[m_at + i * n + j] * x[j];
-                    }
-                    dx[i] = sum;
-                }
-                lu_solve(n, &matrix, &pivots, &mut dx);
-                if s.post.is_some() {
-                    let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
-                    for j in 0..rw {
-                        let mut sum = dc[j];
-                        for i in 0..cw {
-                            sum += dw[j * cw + i] * x[i] + w[j * cw + i] * dx[i];
+                    lu_solve(n, matrix, pivots, x);
+                    jac.fill(0.0);
+                    dstate[..nq].copy_from_slice(&value[..nq]);
+                    let (w, c) = (&value[w_at..c_at], &value[c_at..p_at]);
+                    if s.post.is_some() {
+                        for j in 0..rw {
+                            let mut sum = c[j];
+                            for i in 0..cw {
+                                sum += w[j * cw + i] * x[i];
+                            }
+                            dstate[nq + j] = sum;
                         }
-                        jac[(nq + j) * columns + k] = sum;
+                    } else {
+                        dstate[nq..nq + s.speeds].copy_from_slice(&x[..s.speeds]);
                     }
-                } else {
-                    for j in 0..s.speeds {
-                        jac[(nq + j) * columns + k] = dx[j];
+                    let last = dstate.len() - 1;
+                    if s.work {
+                        dstate[last] = value[p_at];
+                        for k in 0..variables {
+                            jac[last * columns + k] = derivative(k)[p_at];
+                        }
                     }
-                }
-            }
-            for (index, value) in dstate.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite { t, index });
-                }
-            }
-            for (index, value) in jac.iter().enumerate() {
-                if !value.is_finite() {
-                    return Err(Failure::NonFinite { t, index: dstate.len() + index });
-                }
-            }
-            Ok(())
+                    for k in 0..variables {
+                        let d = derivative(k);
+                        for j in 0..nq {
+                            jac[j * columns + k] = d[j];
+                        }
+                        for i in 0..n {
+                            let mut sum = d[f_at + i];
+                            for j in 0..n {
+                                sum -= d[m_at + i * n + j] * x[j];
+                            }
+                            dx[i] = sum;
+                        }
+                        lu_solve(n, matrix, pivots, dx);
+                        if s.post.is_some() {
+                            let (dw, dc) = (&d[w_at..c_at], &d[c_at..p_at]);
+                            for j in 0..rw {
+                                let mut sum = dc[j];
+                                for i in 0..cw {
+                                    sum += dw[j * cw + i] * x[i] + w[j * cw + i] * dx[i];
+                                }
+                                jac[(nq + j) * columns + k] = sum;
+                            }
+                        } else {
+                            for j in 0..s.speeds {
+                                jac[(nq + j) * columns + k] = dx[j];
+                            }
+                        }
+                    }
+                    for (index, value) in dstate.iter().enumerate() {
+                        if !value.is_finite() {
+                            return Err(Failure::NonFinite { t, index });
+                        }
+                    }
+                    for (index, value) in jac.iter().enumerate() {
+                        if !value.is_finite() {
+                            return Err(Failure::NonFinite { t, index: dstate.len() + index });
+                        }
+                    }
+                    Ok(())
+                })
+            })
         })
     }
 }
