@@ -103,7 +103,8 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians())?;
+    let route = load::Route::of(args.run.values.compiled);
+    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), route)?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -116,11 +117,12 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     }
     let runs = compare_runs(&model, &options)?;
     let header = format!(
-        "{}: {}, {} outputs, time the median of {} runs (wall clock, evaluated in-process)\n\n",
+        "{}: {}, {} outputs, time the median of {} runs (wall clock, {})\n\n",
         model.module,
         describe(&options.settings),
         runs.first().map_or(0, |r| r.solution.times.len()),
-        options.repeats
+        options.repeats,
+        route.describe()
     );
     let json_to_stdout = args.json.as_deref().is_some_and(|p| p.as_os_str() == "-");
     if json_to_stdout {
@@ -153,7 +155,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
     let jacobians = if stiff { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced };
-    let model = load::evaluated(&args.model, &args.run.values.param, jacobians)?;
+    let model = load::evaluated(&args.model, &args.run.values.param, jacobians, load::Route::of(args.run.values.compiled))?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -211,7 +213,8 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 /// `linearize`: the eigenvalues at the operating point, or the sweep's files.
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     // The exact Jacobians of the formulation linearized: A and B to round-off.
-    let model = load::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) })?;
+    let model =
+        load::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) }, load::Route::of(args.values.compiled))?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

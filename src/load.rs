@@ -1,6 +1,8 @@
 //! From a MODEL argument to a model that runs: a model file anywhere, or the name of one of the
 //! project's own models (built into the tool, so that `multibody compare three_body` works in
-//! any folder), evaluated in-process ([`generator::eval`]): no cargo, no rustc, no checkout.
+//! any folder), evaluated in-process ([`generator::eval`]: no cargo, no rustc, no checkout), or
+//! with `--compiled` as its emitted module built by rustc into a library cached by content in
+//! the user's cache folder (the `native` crate).
 
 use crate::CliError;
 use std::path::Path;
@@ -49,11 +51,12 @@ pub fn model(argument: &str) -> Result<generator::model::Model, CliError> {
 
 /// The model MODEL names with the parameters `params` set (`--param`), validated as the file's
 /// own values are (a negative mass is refused), evaluated in-process (its tapes compiled to
-/// machine code by the `jit` crate); `exact` asks for the exact
+/// machine code by the `jit` crate) or, on the compiled `route`, as its module built by rustc;
+/// `exact` asks for the exact
 /// Jacobians too (by the state and by the parameters) of the formulations `only` (all of the
 /// file's when empty), for the stiff method and `linearize`. Exact Jacobians that exceed the node
 /// budget (the bicycle's Kane form) fall back to differences, with a warning that says so.
-pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians) -> Result<seam::Model, CliError> {
+pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians, route: Route) -> Result<seam::Model, CliError> {
     let model = model(argument)?.with_parameters(params)?;
     let plain = generator::emit::Options::from_model(&model);
     let mut options = plain.clone();
@@ -64,26 +67,72 @@ pub fn evaluated(argument: &str, params: &[(String, f64)], exact: Jacobians) -> 
             options.formulations = vec![generator::emit::Formulation::of(kind)];
         }
     }
-    let jit = jit::Jit::default();
-    let (evaluated, summary) = match generator::eval::evaluate_with_backend(&model, &options, &jit) {
-        Err(e) if e.kind == generator::model::ErrorKind::Budget && exact != Jacobians::Differenced => {
+    // Exact Jacobians over the node budget fall back to differences.
+    let fallback = |e: &generator::model::ModelError| {
+        let over = e.kind == generator::model::ErrorKind::Budget && exact != Jacobians::Differenced;
+        if over {
             eprintln!(
                 "warning: the exact Jacobians need more expression nodes than the budget allows (`--max-nodes` raises it): the runtime differences the right-hand side instead"
             );
-            generator::eval::evaluate_with_backend(&model, &plain, &jit)?
         }
-        other => other?,
+        over
+    };
+    let (evaluated, summary, interpreted) = match route {
+        Route::Jit => {
+            let jit = jit::Jit::default();
+            let (evaluated, summary) = match generator::eval::evaluate_with_backend(&model, &options, &jit) {
+                Err(e) if fallback(&e) => generator::eval::evaluate_with_backend(&model, &plain, &jit)?,
+                other => other?,
+            };
+            (evaluated, summary, jit.interpreted())
+        }
+        Route::Compiled => {
+            // The module as `generate` writes it, and its tapes for the description.
+            let generated = match generator::emit::generate(&model, &generator::emit::Options { tapes: true, ..options }) {
+                Err(e) if fallback(&e) => generator::emit::generate(&model, &generator::emit::Options { tapes: true, ..plain })?,
+                other => other?,
+            };
+            let folder = native::cache::default_folder()?;
+            let library = native::build(&generated.code, &folder, &mut |path| {
+                eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));
+            })?;
+            let description = generator::eval::model::Evaluated::model(generated.program.expect("tapes were asked for"));
+            (library.model(description)?, generated.summary, 0)
+        }
     };
     for line in summary.warnings() {
         eprintln!("warning: {line}");
     }
-    if jit.interpreted() > 0 {
+    if interpreted > 0 {
         eprintln!(
-            "warning: {} of the model's functions could not be compiled to this machine's code and are interpreted (the same numbers, 2 to 5 times slower)",
-            jit.interpreted()
+            "warning: {interpreted} of the model's functions could not be compiled to this machine's code and are interpreted (the same numbers, 2 to 5 times slower)"
         );
     }
     Ok(evaluated)
+}
+
+/// How the model's arithmetic runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Route {
+    /// Compiled in-process by the `jit` crate (cranelift): no toolchain needed.
+    Jit,
+    /// Built by rustc into a shared library cached by content (`--compiled`, the `native` crate).
+    Compiled,
+}
+
+impl Route {
+    /// The route `--compiled` asks for.
+    pub fn of(compiled: bool) -> Route {
+        if compiled { Route::Compiled } else { Route::Jit }
+    }
+
+    /// How the model ran, for a table's header.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Route::Jit => "evaluated in-process",
+            Route::Compiled => "built by rustc, --compiled",
+        }
+    }
 }
 
 #[cfg(test)]

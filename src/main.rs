@@ -95,6 +95,8 @@ pub enum CliError {
     Stdout(std::io::Error),
     #[error("cannot write the CSV: {0}")]
     Csv(#[from] csv::Error),
+    #[error(transparent)]
+    Compiled(#[from] native::Error),
 }
 
 fn main() -> ExitCode {

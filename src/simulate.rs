@@ -39,7 +39,7 @@ fn default_kind(model: &seam::Model) -> FormulationKind {
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians())?;
+    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => default_kind(&model),

@@ -265,3 +265,83 @@ fn undecided_questions_are_warned_about() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("warning: whether the equations depend on `x` could not be decided exactly"), "{stderr}");
 }
+
+/// The rustc beside the cargo that runs these tests (the compiled route's only need).
+fn rustc() -> PathBuf {
+    let rustc = Path::new(env!("CARGO")).with_file_name(format!("rustc{}", std::env::consts::EXE_SUFFIX));
+    assert!(rustc.is_file(), "no rustc beside {}", env!("CARGO"));
+    rustc
+}
+
+/// `multibody ARGS` in `dir` with the compiled route's cache in `cache` and `rustc` as its
+/// compiler, `PATH` again the system's folders only.
+fn multibody_compiled(dir: &Path, cache: &Path, rustc: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_multibody"))
+        .args(args)
+        .current_dir(dir)
+        .env_clear()
+        .env("PATH", "/usr/bin:/bin")
+        .env("MULTIBODY_CACHE_DIR", cache)
+        .env("RUSTC", rustc)
+        .output()
+        .unwrap()
+}
+
+/// The table without its time column (the only one that differs from run to run).
+fn without_times(table: &str) -> String {
+    table.lines().skip(1).map(|l| l.split('|').enumerate().filter(|(k, _)| *k != 4).map(|(_, c)| c).collect::<Vec<_>>().join("|") + "\n").collect()
+}
+
+/// `--compiled`: the model's module built by rustc once, into the cache folder, then loaded from
+/// it with no rustc at all; the numbers are the in-process route's.
+#[test]
+fn the_compiled_route_builds_once_and_gives_the_same_table() {
+    let (dir, _) = user_model();
+    let cache = dir.path().join("cache");
+    let args = ["compare", "my_model.ron", "--repeats", "1", "--compiled"];
+    let first = multibody_compiled(dir.path(), &cache, &rustc(), &args);
+    let table = ok(&first);
+    assert!(String::from_utf8_lossy(&first.stderr).contains("compiling the model with rustc into"), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(table.lines().next().unwrap().ends_with("(wall clock, built by rustc, --compiled)"), "{table}");
+    // The second run needs no rustc: it loads the library the first one built.
+    let second = multibody_compiled(dir.path(), &cache, Path::new("/nonexistent/rustc"), &args);
+    assert_eq!(without_times(&ok(&second)), without_times(&table));
+    assert!(!String::from_utf8_lossy(&second.stderr).contains("compiling"), "{}", String::from_utf8_lossy(&second.stderr));
+    let in_process = ok(&multibody(dir.path(), &["compare", "my_model.ron", "--repeats", "1"]));
+    assert_eq!(without_times(&in_process), without_times(&table));
+    // Another model (a parameter changed) is another library; without rustc it cannot be built,
+    // and the error says what to do.
+    let other = multibody_compiled(dir.path(), &cache, Path::new("/nonexistent/rustc"), &["compare", "my_model.ron", "--compiled", "--param", "mt=50"]);
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert!(!other.status.success() && err.contains("needs rustc") && err.contains("leave out --compiled"), "{err}");
+    let libraries =
+        std::fs::read_dir(&cache).unwrap().filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().ends_with(std::env::consts::DLL_SUFFIX)).count();
+    assert_eq!(libraries, 1);
+}
+
+/// Two compiled runs at once, of two models whose paths differ by one letter, each get their own
+/// results: the cache is keyed by the module's content, never by a path.
+#[test]
+fn concurrent_compiled_runs_keep_their_own_results() {
+    let (dir, path) = user_model();
+    let heavy = std::fs::read_to_string(&path).unwrap().replace("name: \"my_model\"", "name: \"my_modem\"").replace("\"mt\": 5.0", "\"mt\": 50.0");
+    std::fs::write(dir.path().join("my_modem.ron"), heavy).unwrap();
+    let cache = dir.path().join("cache");
+    let spawn = |file: &str| {
+        Command::new(env!("CARGO_BIN_EXE_multibody"))
+            .args(["compare", file, "--repeats", "1", "--json", "-", "--compiled"])
+            .current_dir(dir.path())
+            .env("MULTIBODY_CACHE_DIR", &cache)
+            .env("RUSTC", rustc())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (a, b) = (spawn("my_model.ron"), spawn("my_modem.ron"));
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    let (a, b): (serde_json::Value, serde_json::Value) = (serde_json::from_str(&ok(&a)).unwrap(), serde_json::from_str(&ok(&b)).unwrap());
+    assert!(a.as_array().unwrap().iter().all(|r| r["scene"] == "my_model"));
+    assert!(b.as_array().unwrap().iter().all(|r| r["scene"] == "my_modem"));
+    assert_ne!(a[0]["energy_error_norm"], b[0]["energy_error_norm"]);
+}

@@ -85,27 +85,33 @@ fn the_in_process_figures_are_the_benchmark_file() {
         let ratios: Vec<f64> = eval["rhs"].as_array().unwrap().iter().map(|r| r[field].as_f64().unwrap()).collect();
         ratios.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(*r), hi.max(*r)))
     };
-    let ((jl, jh), (il, ih)) = (range("jit_ratio"), range("ratio"));
+    let ((jl, jh), (il, ih), (nl, nh)) = (range("jit_ratio"), range("ratio"), range("native_ratio"));
     assert_quoted(&readme, &format!("call costs {jl:.1} to {jh:.1} times the compiled module's"), "docs/benchmarks/eval.json");
     assert_quoted(&readme, &format!("a call costs {jl:.1} to {jh:.1} times the compiled module's with the JIT"), "docs/benchmarks/eval.json");
     assert_quoted(&readme, &format!("without the JIT: {il:.1} to {ih:.1} times"), "docs/benchmarks/eval.json");
+    assert_quoted(&readme, &format!("with `--compiled`, a call costs {nl:.2} to {nh:.2} times the compiled module's"), "docs/benchmarks/eval.json");
+    assert_quoted(&readme, &format!("{nl:.2} to {nh:.2} with `--compiled`"), "docs/benchmarks/eval.json");
     // docs/benchmarks.md's table is the file's, row for row.
     let docs = read("docs/benchmarks.md");
     for r in eval["rhs"].as_array().unwrap() {
         let f = |k: &str| r[k].as_f64().unwrap();
         let row = format!(
-            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} |",
+            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} | {:.0} | {:.2} |",
             r["model"].as_str().unwrap(),
             r["formulation"].as_str().unwrap(),
             f("compiled_ns"),
             f("evaluated_ns"),
             f("ratio"),
             f("jit_ns"),
-            f("jit_ratio")
+            f("jit_ratio"),
+            f("native_ns"),
+            f("native_ratio")
         );
         assert!(docs.contains(&row), "docs/benchmarks.md lacks the row `{row}` of docs/benchmarks/eval.json");
     }
     assert!(docs.contains(&format!("the four runs at the paper's settings): {ms:.0} ms")), "docs/benchmarks.md quotes another time to the first table");
+    assert!(docs.contains(&format!("dispatch costs {il:.1} to {ih:.1} times")), "docs/benchmarks.md quotes another interpreter range");
+    assert!(docs.contains(&format!("`--compiled` is rustc's code, {nl:.2} to {nh:.2} times")), "docs/benchmarks.md quotes another --compiled range");
 }
 
 #[test]
