@@ -6,7 +6,9 @@
 //!   `cargo run --release -p generated --example compare -- <scene> --repeats 11`;
 //! - the in-process figures: `docs/benchmarks/eval.json` (`cargo bench -p generated --bench eval`);
 //! - the scaling figures: `docs/scaling/ours.json`, `docs/scaling/sympy.json` and the tables of
-//!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`).
+//!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`);
+//! - every other table of `docs/benchmarks.md`: `docs/benchmarks/<table>.json`, each holding the
+//!   command that writes it, its columns and its rows.
 
 use runtime::compare::{Options, Record, compare, table_of};
 
@@ -142,6 +144,13 @@ fn the_scaling_figures_are_the_benchmark_files() {
         })
         .fold(0.0f64, f64::max);
     assert_quoted(&readme, &format!("at most {worst:.2} of SymPy's cse'd count at every size measured"), "docs/scaling/*.json");
+    // The in-process call of the 20-link pendulum against its compiled module, in the same child.
+    let per_call = |field: &str, form: &serde_json::Value| p20[field].as_array().unwrap().iter().find(|x| x[0] == *form).map(|x| x[1].as_f64().unwrap());
+    let ratios: Vec<f64> =
+        p20["ns_per_call"].as_array().unwrap().iter().filter_map(|x| Some(per_call("jit_ns_per_call", &x[0])? / per_call("ns_per_call", &x[0])?)).collect();
+    assert_eq!(ratios.len(), 4, "ours.json lacks the 20-link pendulum's per-call times");
+    let (lo, hi) = ratios.iter().fold((f64::INFINITY, 0.0f64), |(a, b), r| (a.min(*r), b.max(*r)));
+    assert_quoted(&readme, &format!("call of the 20-link pendulum costs {lo:.2} to {hi:.2} times its compiled module's"), source);
     // SymPy's own times are in the tables the benchmark writes into docs/scaling.md.
     let scaling = read("docs/scaling.md");
     let sympy_seconds = |table: &str, n: u64| -> f64 {
@@ -155,4 +164,54 @@ fn the_scaling_figures_are_the_benchmark_files() {
     let line = floating.lines().find(|l| l.starts_with("| 8 |")).unwrap();
     let seconds: f64 = line.split('|').nth(2).unwrap().trim().parse().unwrap();
     assert_quoted(&readme, &format!("against SymPy's {seconds:.0} s"), "docs/scaling.md");
+}
+
+/// The tables the benchmarks write as `{command, columns, rows}`.
+const TABLES: [&str; 6] = ["rhs", "runs", "drift", "derive", "rustc", "integrators"];
+
+/// A table file as the markdown lines it stands for.
+fn markdown(file: &serde_json::Value) -> Vec<String> {
+    let cells = |v: &serde_json::Value| v.as_array().unwrap().iter().map(|c| c.as_str().unwrap().to_string()).collect::<Vec<_>>();
+    let columns = cells(&file["columns"]);
+    let mut lines = vec![format!("| {} |", columns.join(" | ")), format!("|{}", "---|".repeat(columns.len()))];
+    lines.extend(file["rows"].as_array().unwrap().iter().map(|r| format!("| {} |", cells(r).join(" | "))));
+    lines
+}
+
+/// Every table of docs/benchmarks.md is a file a benchmark wrote, whole and in order, with the
+/// command that writes it quoted; no table line is typed by hand.
+#[test]
+fn the_benchmark_tables_are_the_files_the_benchmarks_write() {
+    let docs = read("docs/benchmarks.md");
+    let mut from_files: Vec<String> = Vec::new();
+    for name in TABLES {
+        let file = json(&format!("docs/benchmarks/{name}.json"));
+        let lines = markdown(&file);
+        let table = lines.join("\n") + "\n";
+        assert!(docs.contains(&table), "docs/benchmarks.md lacks the table of docs/benchmarks/{name}.json:\n{table}");
+        let command = file["command"].as_str().unwrap();
+        assert!(docs.contains(&format!("`{command}`")), "docs/benchmarks.md does not say how {name}.json is written (`{command}`)");
+        from_files.extend(lines);
+    }
+    // The in-process table is eval.json's (checked row by row above, in its own test).
+    let eval = json("docs/benchmarks/eval.json");
+    for r in eval["rhs"].as_array().unwrap() {
+        let f = |k: &str| r[k].as_f64().unwrap();
+        from_files.push(format!(
+            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} | {:.0} | {:.2} |",
+            r["model"].as_str().unwrap(),
+            r["formulation"].as_str().unwrap(),
+            f("compiled_ns"),
+            f("evaluated_ns"),
+            f("ratio"),
+            f("jit_ns"),
+            f("jit_ratio"),
+            f("native_ns"),
+            f("native_ratio")
+        ));
+    }
+    from_files.push("| model | formulation | compiled ns | interpreted ns | ratio | JIT ns | ratio | --compiled ns | ratio |".into());
+    from_files.push(format!("|{}", "---|".repeat(9)));
+    let typed: Vec<&str> = docs.lines().filter(|l| l.starts_with('|') && !from_files.iter().any(|f| f == l)).collect();
+    assert!(typed.is_empty(), "docs/benchmarks.md has table lines no benchmark wrote: {typed:#?}");
 }

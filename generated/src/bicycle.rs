@@ -12983,5 +12983,6 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
+        ..::seam::StaticModel::EMPTY
     })
 }

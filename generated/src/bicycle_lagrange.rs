@@ -6435,5 +6435,6 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
+        ..::seam::StaticModel::EMPTY
     })
 }

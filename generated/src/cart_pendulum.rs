@@ -4102,5 +4102,6 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
+        ..::seam::StaticModel::EMPTY
     })
 }

@@ -2110,5 +2110,6 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
+        ..::seam::StaticModel::EMPTY
     })
 }

@@ -9059,5 +9059,6 @@ pub fn model() -> ::seam::Model {
             Ok(())
         },
         formulations: &FORMULATIONS,
+        ..::seam::StaticModel::EMPTY
     })
 }

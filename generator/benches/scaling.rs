@@ -370,8 +370,32 @@ fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&s
             verdict(ok, "not compiled")
         );
     }
+    if let Some(r) = find("pendulum", 20) {
+        let ratios = jit_ratios(r);
+        if let Some(worst) = ratios.iter().copied().reduce(f64::max) {
+            let shown: Vec<String> = ratios.iter().map(|x| format!("{x:.2}")).collect();
+            md += &format!(
+                "| a right-hand-side call of the n = 20 pendulum in-process (JIT) against its compiled module | within 2x | {} (lagrange / maggi / kane / reduced) | {} |\n",
+                shown.join(" / "),
+                verdict(worst <= 2.0, "the JIT's code against rustc's")
+            );
+        }
+    }
     md += "| output bytes | depend only on the model and the options | budgets count terms and term products, never time; `generated/tests/regenerate.rs` checks the committed modules byte for byte and across threads | met |\n\n";
     md
+}
+
+/// Per formulation (in `FORMS` order), the JIT's ns per call over the compiled module's, where
+/// both were measured.
+fn jit_ratios(r: &Record) -> Vec<f64> {
+    FORMS
+        .iter()
+        .filter_map(|f| {
+            let compiled = r.ns_per_call.iter().find(|(n, _)| n == f)?.1;
+            let jit = r.jit_ns_per_call.iter().find(|(n, _)| n == f)?.1;
+            Some(jit / compiled)
+        })
+        .collect()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -402,15 +426,16 @@ fn report(
     let title = |k: &str| if k == "pendulum" { "The n-link pendulum on a cart (s = 1)" } else { "The spatial chain on a floating base (s = 3)" };
     for kind in ["pendulum", "floating"] {
         md += &format!("## {}\n\n", title(kind));
-        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced |\n";
-        md += "|---|---|---|---|---|---|---|---|---|\n";
+        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call |\n";
+        md += "|---|---|---|---|---|---|---|---|---|---|\n";
         for r in records.iter().filter(|r| r.model == kind) {
             let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();
             let asm: Vec<String> = FORMS.iter().map(|f| ops_of(r, f).map_or("-".into(), |(a, _)| a.to_string())).collect();
             let solve: Vec<String> = ["kane", "reduced_volterra"].iter().map(|f| ops_of(r, f).map_or("-".into(), |(_, s)| s.to_string())).collect();
             let ns: Vec<String> = FORMS.iter().map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}"))).collect();
+            let jit: Vec<String> = jit_ratios(r).iter().map(|x| format!("{x:.2}")).collect();
             md += &format!(
-                "| {} | {:.0} ({}) | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} |\n",
+                "| {} | {:.0} ({}) | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} | {} |\n",
                 r.n,
                 r.derive_ms,
                 stages.join(" / "),
@@ -421,6 +446,7 @@ fn report(
                 r.code_bytes as f64 / 1024.0,
                 r.rustc_s.map_or("-".into(), |s| format!("{s:.1}")),
                 ns.join(" / "),
+                if jit.is_empty() { "-".to_string() } else { jit.join(" / ") },
             );
         }
         if let Some((_, peer)) = peers.iter().find(|(k, _)| k == kind) {

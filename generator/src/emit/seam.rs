@@ -164,8 +164,9 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
             },
         });
     }
-    let all = [Function::Energy, Function::WorkRate, Function::Momenta, Function::Constraints].into_iter().all(has);
-    let rest = if all { TokenStream::new() } else { quote!(..#seam::StaticModel::EMPTY) };
+    // The fields not written (functions left out of the module, events it does not have) are
+    // the empty model's, which fail with `Failure::Missing`.
+    let rest = quote!(..#seam::StaticModel::EMPTY);
     quote! {
         #[doc = "Every emitted formulation through slices."]
         pub const FORMULATIONS: [#seam::StaticFormulation; #nf] = [#(#forms::FORMULATION),*];

@@ -153,6 +153,7 @@ impl Evaluated {
             run: d.run,
             paper_settings: d.paper_settings,
             energy_balance: d.energy_balance,
+            events: Vec::new(),
             formulations,
             functions: Arc::new(functions),
         }

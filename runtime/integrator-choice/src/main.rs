@@ -1,5 +1,9 @@
 //! Our DOPRI5 against `ode_solvers`' on scene 2 (reduced Volterra, 13 states), same
 //! tolerances, same output times: time per 50 s run (median of 21) and the agreement.
+//!
+//! `cargo run --release --manifest-path runtime/integrator-choice/Cargo.toml` writes
+//! `docs/benchmarks/integrators.json` (the table of `docs/benchmarks.md`, checked by
+//! `tests/figures.rs`) and prints it.
 
 use ode_solvers::{Dopri5, SVector, System};
 use runtime::compare::Reference;
@@ -33,8 +37,7 @@ fn main() {
     let (y0, g_i) = model::reduced_volterra::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &params).unwrap();
     let registry = generated::find("three_body").unwrap();
     let times = Reference::of(&registry).unwrap().times().unwrap();
-    println!("| rtol = atol | ours: ms (rhs calls, ns per call incl. stepping) | ode_solvers: ms (rhs calls, ns per call) | time ode_solvers / ours | max |y_ours - y_theirs| at t_end |");
-    println!("|---|---|---|---|---|");
+    let mut rows = Vec::new();
     for tol in [1e-3, 1e-6, 1e-9] {
         let settings = Settings { method: Method::Dopri5, rtol: tol, atol: tol, h_max: 50.0, ..Settings::default() };
         let mut ours = Vec::new();
@@ -65,11 +68,24 @@ fn main() {
         }
         let diff = last.iter().zip(their_last.iter()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         let (a, b) = (median(ours) * 1e3, median(theirs) * 1e3);
-        println!(
-            "| {tol:e} | {a:.3} ({our_calls} calls, {:.0} ns/call) | {b:.3} ({their_calls} calls, {:.0} ns/call) | {:.2} | {diff:.1e} |",
-            a * 1e6 / our_calls as f64,
-            b * 1e6 / their_calls as f64,
-            b / a
-        );
+        rows.push(vec![
+            format!("{tol:e}"),
+            format!("{a:.3} ({our_calls} calls, {:.0} ns/call)", a * 1e6 / our_calls as f64),
+            format!("{b:.3} ({their_calls} calls, {:.0} ns/call)", b * 1e6 / their_calls as f64),
+            format!("{:.2}", b / a),
+            format!("{diff:.1e}"),
+        ]);
     }
+    let columns = [
+        "rtol = atol",
+        "ours: ms (rhs calls, ns per call incl. stepping)",
+        "ode_solvers 0.6: ms (rhs calls, ns per call)",
+        "time ode_solvers / ours",
+        "max difference at t_end",
+    ];
+    let command = "cargo run --release --manifest-path runtime/integrator-choice/Cargo.toml";
+    let json = serde_json::json!({ "command": command, "columns": columns, "rows": rows });
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/benchmarks/integrators.json");
+    std::fs::write(path, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();
+    println!("{}", std::iter::once(columns.join(" | ")).chain(rows.iter().map(|r| r.join(" | "))).collect::<Vec<_>>().join("\n"));
 }

@@ -86,6 +86,10 @@ pub struct StaticModel {
     pub paper_settings: bool,
     /// What `energy` computes.
     pub energy_balance: crate::EnergyBalance,
+    /// The events: `(name, direction, action)`, in the order of `event_values`' outputs.
+    pub events: &'static [(&'static str, crate::Direction, crate::EventAction)],
+    pub event_values: PointFn,
+    pub event_resets: PointFn,
     pub energy: PointFn,
     pub work_rate: PointFn,
     pub momenta: PointFn,
@@ -110,6 +114,9 @@ impl StaticModel {
         run: None,
         paper_settings: false,
         energy_balance: crate::EnergyBalance::Energy,
+        events: &[],
+        event_values: |_, _, _, _, _| Err(Failure::Missing { function: "event_values" }),
+        event_resets: |_, _, _, _, _| Err(Failure::Missing { function: "event_resets" }),
         energy: |_, _, _, _, _| Err(Failure::Missing { function: "energy" }),
         work_rate: |_, _, _, _, _| Err(Failure::Missing { function: "work_rate" }),
         momenta: |_, _, _, _, _| Err(Failure::Missing { function: "momenta" }),
@@ -156,6 +163,12 @@ impl ModelFunctions for StaticModel {
     }
     fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         (self.position_residuals)(t, q, qdot, params, out)
+    }
+    fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        (self.event_values)(t, q, qdot, params, out)
+    }
+    fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        (self.event_resets)(t, q, qdot, params, out)
     }
 }
 
@@ -231,6 +244,7 @@ impl From<StaticModel> for Model {
             run: m.run,
             paper_settings: m.paper_settings,
             energy_balance: m.energy_balance,
+            events: m.events.iter().map(|(name, direction, action)| crate::Event { name: name.to_string(), direction: *direction, action: *action }).collect(),
             formulations: m.formulations.iter().map(|f| Formulation::from(*f)).collect(),
             functions: Arc::new(m),
         }

@@ -7,6 +7,7 @@
 //!   behind [`ModelFunctions`] and [`FormulationFunctions`]. An emitted module implements them
 //!   with function pointers ([`StaticModel`], its `model()`); a model evaluated in-process
 //!   implements them on its own.
+//! - [`Event`]: a named zero crossing a run locates, and what happens there.
 //! - [`Failure`]: the one error every function returns.
 //! - [`output_times`]: the output grid of a run, and why some settings are not one.
 //!
@@ -16,12 +17,14 @@
 #![forbid(unsafe_code)]
 
 mod compiled;
+mod event;
 mod failure;
 mod grid;
 mod kind;
 mod model;
 
 pub use compiled::{InitialFn, JacobianFn, MarginFn, MatrixFn, PointFn, RhsFn, StabilizedFn, StaticFormulation, StaticModel, VelocitiesFn};
+pub use event::{Direction, Event, EventAction};
 pub use failure::Failure;
 pub use grid::{GridError, MAX_OUTPUTS, output_steps, output_times};
 pub use kind::{EnergyBalance, FormulationKind, Speeds, StateLayout};

@@ -19,6 +19,17 @@ pub trait ModelFunctions: Send + Sync {
     fn constraint_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure>;
     /// The holonomic constraints' residuals (`qdot` is ignored): one output each.
     fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure>;
+    /// The event functions `g(t, q, q')`: one output per event ([`Model::events`]).
+    fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        let _ = (t, q, qdot, params, out);
+        Err(Failure::Missing { function: "event_values" })
+    }
+    /// Every event's reset map at `(t, q, q')`: for event `k`, `out[2 m k..2 m (k + 1)]` holds
+    /// the new `q` and `q'` (an event without one leaves them as they are).
+    fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        let _ = (t, q, qdot, params, out);
+        Err(Failure::Missing { function: "event_resets" })
+    }
 }
 
 /// The functions of one formulation's state: `(t, state, params, g_i, ...)`.
@@ -164,6 +175,8 @@ pub struct Model {
     pub paper_settings: bool,
     /// What `energy` computes and what its balance with the work state means.
     pub energy_balance: crate::EnergyBalance,
+    /// The model's events, in the order of [`ModelFunctions::event_values`]' outputs.
+    pub events: Vec<crate::Event>,
     pub formulations: Vec<Formulation>,
     pub functions: Arc<dyn ModelFunctions>,
 }
@@ -222,5 +235,15 @@ impl Model {
     /// See [`ModelFunctions::position_residuals`].
     pub fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         self.functions.position_residuals(t, q, qdot, params, out)
+    }
+
+    /// See [`ModelFunctions::event_values`].
+    pub fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.functions.event_values(t, q, qdot, params, out)
+    }
+
+    /// See [`ModelFunctions::event_resets`].
+    pub fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.functions.event_resets(t, q, qdot, params, out)
     }
 }

@@ -4,6 +4,7 @@
 //! divergence check, projection, the next step's first rate). A method only attempts steps and
 //! interpolates inside the last accepted one ([`Stepper`]).
 
+use super::events::Watch;
 use super::{Project, Reason, Rhs, RunError, Settings, Solution, States, Stats, finish_step, grown_step, initial_step, next_step_size};
 
 /// A method's step-size controller, Hairer's: after a step with error norm `e`, the next step
@@ -67,7 +68,17 @@ pub(super) trait Stepper {
 }
 
 /// Integrates with `stepper` from `y0` at `outputs[0]`, writing the state at every output time.
-pub(super) fn drive<S: Stepper>(stepper: &mut S, f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64], s: &Settings) -> Result<Solution, RunError> {
+/// With `watch`, each accepted step is searched for events; at a stop or a reset the run ends
+/// there, with the outputs before it (the caller goes on from the reset).
+pub(super) fn drive<S: Stepper>(
+    stepper: &mut S,
+    f: &mut Rhs,
+    project: &mut Project,
+    y0: &[f64],
+    outputs: &[f64],
+    s: &Settings,
+    mut watch: Option<&mut Watch>,
+) -> Result<Solution, RunError> {
     let n = y0.len();
     let c = S::CONTROL;
     let mut stats = Stats::default();
@@ -80,6 +91,9 @@ pub(super) fn drive<S: Stepper>(stepper: &mut S, f: &mut Rhs, project: &mut Proj
     let stop = |t: f64, y: &[f64], reason: Reason| RunError { t, state: y.to_vec(), reason };
     let (mut f0, mut f1, mut y_new, mut out) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     f(t, &y, &mut f0, &mut stats).map_err(|r| stop(t, &y, r))?;
+    if let Some(w) = watch.as_deref_mut() {
+        w.start(t, &y).map_err(|r| stop(t, &y, r))?;
+    }
     let mut h = initial_step(f, t, &y, &f0, S::ORDER, s, &mut stats).map_err(|r| stop(t, &y, r))?;
     let mut facold: f64 = 1e-4;
     let mut rejected_last = false;
@@ -110,8 +124,28 @@ pub(super) fn drive<S: Stepper>(stepper: &mut S, f: &mut Rhs, project: &mut Proj
         stats.steps += 1;
         let t_new = if h == t_end - t { t_end } else { t + h };
         stepper.accepted(f, t, t_new, h, &y_new, &mut f1, &mut stats).map_err(|r| stop(t, &y, r))?;
+        let mut prepared = false;
+        if let Some(w) = watch.as_deref_mut() {
+            if w.crossed(t_new, &y_new, &mut stats).map_err(|r| stop(t, &y, r))? {
+                stepper.prepare_dense(f, t, &y, &f0, &y_new, &f1, h, &mut stats).map_err(|r| stop(t, &y, r))?;
+                prepared = true;
+                let hit = w.locate(t, h, n, &mut |theta, out| stepper.dense(theta, out), &mut stats).map_err(|r| stop(t, &y, r))?;
+                if let Some(at) = hit {
+                    // The run ends at the event: the outputs before it are the interpolant's.
+                    while next < outputs.len() && outputs[next] < at {
+                        stepper.dense((outputs[next] - t) / h, &mut out);
+                        states.push(&out);
+                        next += 1;
+                    }
+                    return Ok(Solution { times: outputs[..next].to_vec(), states, stats, events: Vec::new(), stopped: false });
+                }
+            }
+            w.advance();
+        }
         if outputs[next] <= t_new {
-            stepper.prepare_dense(f, t, &y, &f0, &y_new, &f1, h, &mut stats).map_err(|r| stop(t, &y, r))?;
+            if !prepared {
+                stepper.prepare_dense(f, t, &y, &f0, &y_new, &f1, h, &mut stats).map_err(|r| stop(t, &y, r))?;
+            }
             while next < outputs.len() && outputs[next] <= t_new {
                 stepper.dense((outputs[next] - t) / h, &mut out);
                 states.push(&out);
@@ -124,5 +158,5 @@ pub(super) fn drive<S: Stepper>(stepper: &mut S, f: &mut Rhs, project: &mut Proj
         h = if c.hold_after_reject { grown_step(h_new, h, s, rejected_last) } else { h_new.min(s.h_max) };
         rejected_last = false;
     }
-    Ok(Solution { times: outputs.to_vec(), states, stats })
+    Ok(Solution { times: outputs.to_vec(), states, stats, events: Vec::new(), stopped: false })
 }

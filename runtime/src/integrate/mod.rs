@@ -29,9 +29,11 @@
 mod dop853;
 mod dopri5;
 mod driver;
+mod events;
 mod rk4;
 mod rosenbrock;
 
+pub use events::{Direction, EventAction, Events, Occurrence, time_tolerance};
 use seam::Failure;
 use std::fmt;
 
@@ -109,14 +111,34 @@ pub struct Stats {
     /// size held by stability: `h |lambda| > 3.25` at 15 accepted steps out of 15 tests in a
     /// row, without six non-stiff ones between), where a stiff method (`ros23`) does better.
     pub stiff_at: Option<f64>,
+    /// Evaluations of the event functions (after each accepted step, and while locating).
+    pub event_evaluations: usize,
 }
 
-/// The states at the requested output times.
+impl Stats {
+    /// Adds the work of another stretch of the same run.
+    fn add(&mut self, other: &Stats) {
+        self.steps += other.steps;
+        self.rejected += other.rejected;
+        self.rhs_calls += other.rhs_calls;
+        self.jacobians += other.jacobians;
+        self.factorizations += other.factorizations;
+        self.event_evaluations += other.event_evaluations;
+        self.stiff_at = self.stiff_at.or(other.stiff_at);
+    }
+}
+
+/// The states at the requested output times, and the events of the run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solution {
+    /// The output times reached: all of them, or those before a stop event.
     pub times: Vec<f64>,
     pub states: States,
     pub stats: Stats,
+    /// The events that happened, in time order ([`integrate_with_events`]).
+    pub events: Vec<Occurrence>,
+    /// A stop event ended the run (the last of `events`).
+    pub stopped: bool,
 }
 
 /// Equal-length states stored in one flat buffer (no allocation per sample).
@@ -208,6 +230,17 @@ pub enum Reason {
     /// Output times that are not increasing.
     #[error("output times must start at the initial time and increase")]
     BadOutputTimes,
+    /// More events than the run's budget ([`Events::max_events`]).
+    #[error("more than {0} events: they accumulate here (a Zeno point, as a bouncing ball's impacts do); end the run before it, or raise the budget")]
+    TooManyEvents(usize),
+    /// The steps after a reset shrank to nothing: the events accumulate (a Zeno point).
+    #[error(
+        "the events accumulate here, {count} of them so far, ever closer (a Zeno point, as a bouncing ball's impacts do): the steps between them shrink to nothing; end the run before it"
+    )]
+    EventsAccumulate { count: usize },
+    /// Events are located on a method's dense output, which RK4 does not have.
+    #[error("events need an adaptive method (DOPRI5, DOP853 or ROS23), which interpolates inside its steps; RK4 does not")]
+    EventsNeedDenseOutput,
 }
 
 /// Integrates `y' = f(t, y)` from `y0` at `outputs[0]` and returns the state at each output
@@ -264,43 +297,127 @@ pub fn integrate_projected(
 /// ```
 pub fn integrate_with_jacobian(
     f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
-    mut jacobian: Option<JacobianFn>,
-    mut project: Option<Projector>,
+    jacobian: Option<JacobianFn>,
+    project: Option<Projector>,
     y0: &[f64],
     outputs: &[f64],
     settings: &Settings,
 ) -> Result<Solution, RunError> {
-    if outputs.is_empty() || outputs.windows(2).any(|w| !(w[1] > w[0])) {
-        return Err(RunError { t: outputs.first().copied().unwrap_or(0.0), state: y0.to_vec(), reason: Reason::BadOutputTimes });
+    let mut run = Runner { f, jacobian, project };
+    run.stretch(y0, outputs, settings, None)
+}
+
+/// [`integrate_with_jacobian`] watching `events`: each is located in the step where its function
+/// crosses zero in its direction, to [`time_tolerance`], and recorded in
+/// [`Solution::events`]; a stop ends the run there, a reset goes on from the state its map
+/// gives (the run restarts from it: a new first step).
+pub fn integrate_with_events(
+    f: &mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
+    jacobian: Option<JacobianFn>,
+    project: Option<Projector>,
+    events: &mut Events,
+    y0: &[f64],
+    outputs: &[f64],
+    settings: &Settings,
+) -> Result<Solution, RunError> {
+    let mut run = Runner { f, jacobian, project };
+    if events.kinds.is_empty() {
+        return run.stretch(y0, outputs, settings, None);
     }
-    let mut counted = |t: f64, y: &[f64], dy: &mut [f64], stats: &mut Stats| -> Result<(), Reason> {
-        stats.rhs_calls += 1;
-        f(t, y, dy).map_err(Reason::Rhs)
-    };
-    let mut projector = |t: f64, y: &mut [f64]| -> Result<bool, Reason> {
-        match project.as_mut() {
-            Some(p) => p(t, y).map_err(Reason::Rhs),
-            None => Ok(false),
+    if matches!(settings.method, Method::Rk4 { .. }) {
+        return Err(RunError { t: outputs.first().copied().unwrap_or(0.0), state: y0.to_vec(), reason: Reason::EventsNeedDenseOutput });
+    }
+    let mut all = Solution { times: Vec::new(), states: States::new(y0.len(), outputs.len()), stats: Stats::default(), events: Vec::new(), stopped: false };
+    let (mut start, mut stretch_outputs, mut skip_first, mut rearmed) = (y0.to_vec(), outputs.to_vec(), false, None);
+    loop {
+        let mut watch = events::Watch::new(events, rearmed);
+        let part = run.stretch(&start, &stretch_outputs, settings, Some(&mut watch)).map_err(|mut e| {
+            // Steps that vanish right after a reset: the resets come ever closer.
+            if rearmed.is_some() && matches!(e.reason, Reason::StepSizeTooSmall { .. }) {
+                e.reason = Reason::EventsAccumulate { count: all.events.len() };
+            }
+            e
+        })?;
+        all.stats.add(&part.stats);
+        for (k, (t, y)) in part.times.iter().zip(&part.states).enumerate() {
+            if !(k == 0 && skip_first) {
+                all.times.push(*t);
+                all.states.push(y);
+            }
         }
-    };
-    match settings.method {
-        Method::Rk4 { h } => rk4::run(&mut counted, &mut projector, y0, outputs, h, settings.max_steps),
-        Method::Dopri5 => driver::drive(&mut dopri5::Dopri5::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings),
-        Method::Dop853 => driver::drive(&mut dop853::Dop853::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings),
-        Method::Rosenbrock23 => {
-            let n = y0.len();
-            let (mut dy, mut flat) = (vec![0.0; n], vec![0.0; n * n]);
-            let mut jac = |t: f64, y: &[f64], j: &mut nalgebra::DMatrix<f64>| -> Result<bool, Reason> {
-                let Some(exact) = jacobian.as_mut() else { return Ok(false) };
-                exact(t, y, &mut dy, &mut flat).map_err(Reason::Rhs)?;
-                for i in 0..n {
-                    for k in 0..n {
-                        j[(i, k)] = flat[i * n + k];
+        let (recorded, hit, side, budget) = (std::mem::take(&mut watch.recorded), watch.hit.take(), watch.hit_side, watch.max_events());
+        all.events.extend(recorded);
+        let Some(mut hit) = hit else { break };
+        if all.events.len() >= budget {
+            return Err(RunError { t: hit.t, state: hit.state, reason: Reason::TooManyEvents(budget) });
+        }
+        if events.kinds[hit.event].1 == EventAction::Stop {
+            all.events.push(hit);
+            all.stopped = true;
+            break;
+        }
+        let mut after = vec![0.0; y0.len()];
+        (events.reset)(hit.event, hit.t, &hit.state, &mut after).map_err(|e| RunError { t: hit.t, state: hit.state.clone(), reason: Reason::Rhs(e) })?;
+        // Go on from the reset state; an output at the event's very time is the state after it.
+        let rest: Vec<f64> = outputs.iter().copied().filter(|o| *o >= hit.t).collect();
+        skip_first = rest.first() != Some(&hit.t);
+        stretch_outputs = std::iter::once(hit.t).chain(rest.into_iter().filter(|o| *o > hit.t)).collect();
+        start = after.clone();
+        rearmed = Some((hit.event, side));
+        hit.after = Some(after);
+        all.events.push(hit);
+        if stretch_outputs.len() == 1 && skip_first {
+            break;
+        }
+    }
+    Ok(all)
+}
+
+/// The run's functions, for each stretch between events.
+struct Runner<'f, 'j, 'p> {
+    f: &'f mut dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), Failure>,
+    jacobian: Option<JacobianFn<'j>>,
+    project: Option<Projector<'p>>,
+}
+
+impl Runner<'_, '_, '_> {
+    /// Integrates from `y0` at `outputs[0]` over `outputs`, watching events when `watch` is given.
+    fn stretch(&mut self, y0: &[f64], outputs: &[f64], settings: &Settings, watch: Option<&mut events::Watch>) -> Result<Solution, RunError> {
+        if outputs.is_empty() || outputs.windows(2).any(|w| !(w[1] > w[0])) {
+            return Err(RunError { t: outputs.first().copied().unwrap_or(0.0), state: y0.to_vec(), reason: Reason::BadOutputTimes });
+        }
+        let f = &mut self.f;
+        let mut counted = |t: f64, y: &[f64], dy: &mut [f64], stats: &mut Stats| -> Result<(), Reason> {
+            stats.rhs_calls += 1;
+            f(t, y, dy).map_err(Reason::Rhs)
+        };
+        let project = &mut self.project;
+        let mut projector = |t: f64, y: &mut [f64]| -> Result<bool, Reason> {
+            match project.as_mut() {
+                Some(p) => p(t, y).map_err(Reason::Rhs),
+                None => Ok(false),
+            }
+        };
+        match settings.method {
+            Method::Rk4 { h } => rk4::run(&mut counted, &mut projector, y0, outputs, h, settings.max_steps),
+            Method::Dopri5 => driver::drive(&mut dopri5::Dopri5::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings, watch),
+            Method::Dop853 => driver::drive(&mut dop853::Dop853::new(y0.len()), &mut counted, &mut projector, y0, outputs, settings, watch),
+            Method::Rosenbrock23 => {
+                let n = y0.len();
+                let (mut dy, mut flat) = (vec![0.0; n], vec![0.0; n * n]);
+                let jacobian = &mut self.jacobian;
+                let mut jac = |t: f64, y: &[f64], j: &mut nalgebra::DMatrix<f64>| -> Result<bool, Reason> {
+                    let Some(exact) = jacobian.as_mut() else { return Ok(false) };
+                    exact(t, y, &mut dy, &mut flat).map_err(Reason::Rhs)?;
+                    for i in 0..n {
+                        for k in 0..n {
+                            j[(i, k)] = flat[i * n + k];
+                        }
                     }
-                }
-                Ok(true)
-            };
-            driver::drive(&mut rosenbrock::Rosenbrock::new(n, &mut jac), &mut counted, &mut projector, y0, outputs, settings)
+                    Ok(true)
+                };
+                driver::drive(&mut rosenbrock::Rosenbrock::new(n, &mut jac), &mut counted, &mut projector, y0, outputs, settings, watch)
+            }
         }
     }
 }

@@ -46,5 +46,5 @@ pub(super) fn run(f: &mut Rhs, project: &mut Project, y0: &[f64], outputs: &[f64
         }
         states.push(&y);
     }
-    Ok(Solution { times: outputs.to_vec(), states, stats })
+    Ok(Solution { times: outputs.to_vec(), states, stats, events: Vec::new(), stopped: false })
 }
