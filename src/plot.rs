@@ -85,7 +85,10 @@ fn log_panel(
     let (t0, t1) = (times[0], *times.last().unwrap_or(&1.0));
     let magnitudes: Vec<(&str, Vec<f64>)> = series.iter().map(|(n, s)| (*n, s.iter().map(|v| v.abs().max(FLOOR)).collect())).collect();
     let hi = magnitudes.iter().flat_map(|(_, s)| s.iter().copied()).filter(|v| v.is_finite()).fold(FLOOR * 10.0, f64::max);
-    let lo = magnitudes.iter().flat_map(|(_, s)| s.iter().copied()).filter(|v| v.is_finite()).fold(hi, f64::min);
+    // At least two decades, so that the axis has ticks even when every value is the same.
+    let lo = magnitudes.iter().flat_map(|(_, s)| s.iter().copied()).filter(|v| v.is_finite()).fold(hi, f64::min).min(hi / 100.0);
+    let exact = series.iter().all(|(_, s)| s.iter().all(|v| *v == 0.0));
+    let title = if exact { format!("{title}: exactly 0 at every output (drawn at 1e-17)") } else { title.to_string() };
     let (plot, legend) = area.split_vertically(area.dim_in_pixel().1.saturating_sub(22));
     let mut chart = ChartBuilder::on(&plot)
         .caption(title, ("sans-serif", 14))

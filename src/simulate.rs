@@ -7,8 +7,7 @@ use crate::args::{FormulationArg, RunArgs, describe, formulations};
 use crate::{CliError, load, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
-use runtime::integrate::{JacobianFn, integrate_with_jacobian};
-use runtime::monitor::monitor;
+use runtime::monitor::monitor_with_jumps;
 use runtime::system::System;
 use seam::FormulationKind;
 use std::path::PathBuf;
@@ -54,23 +53,32 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     bar.set_message(format!("{} {kind}", model.module));
     let start = Instant::now();
     let mut calls = 0u64;
-    let mut rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
+    let mut progress = |t: f64| {
         calls += 1;
         if calls.is_multiple_of(1024) {
             bar.set_position((1000.0 * (t - reference.t_start) / span) as u64);
         }
-        sys.rhs(t, y, dy)
     };
-    let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| sys.jacobian(t, y, dy, j);
-    let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
-    let solution = integrate_with_jacobian(&mut rhs, jacobian, None, &y0, &times, &settings);
+    let run = runtime::events::run(&sys, &y0, &times, &settings, &mut progress);
     bar.finish_and_clear();
-    let solution = solution?;
+    let run = run?;
+    let (solution, jumps) = (run.solution, run.jumps);
     let elapsed = start.elapsed();
     if let Some(t) = solution.stats.stiff_at {
         eprintln!("{}", crate::report::stiff_warning(kind.name(), t));
     }
-    let inv = monitor(&sys, &solution).map_err(CliError::Monitor)?;
+    let inv = monitor_with_jumps(&sys, &solution, &jumps).map_err(CliError::Monitor)?;
+    // The events, each with its time and the coordinates and rates there (before a reset).
+    let mut events = Vec::new();
+    for o in &solution.events {
+        // The state just before the event, read with the momenta of the resets before it.
+        let mut before = sys.clone();
+        if let Some(j) = jumps.iter().rev().find(|j| j.t < o.t) {
+            before.g_i.clone_from(&j.g_i);
+        }
+        let (q, qd) = before.velocities(o.t, &o.state).map_err(CliError::Monitor)?;
+        events.push((model.events[o.event].name.clone(), model.events[o.event].action, o.t, q, qd));
+    }
 
     // The trajectory, one row per output time.
     let base = args.out.join(format!("{}_{}", model.module, kind.name()));
@@ -113,17 +121,23 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         "steps": solution.stats.steps,
         "rejected": solution.stats.rejected,
         "rhs_calls": solution.stats.rhs_calls,
+        "stopped_by_event": solution.stopped,
+        "events": events.iter().map(|(name, action, t, q, qd)| serde_json::json!({ "event": name, "action": action.name(), "t": t, "q": q, "qdot": qd })).collect::<Vec<_>>(),
         "columns": header,
         "rows": rows,
     });
     write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
     let plots = plot::write_trajectory(&model, &sys.form, &solution.times, &inv, &base)?;
+    let end = match (solution.stopped, solution.events.last()) {
+        (true, Some(o)) => format!("{} (stopped there by event `{}`)", o.t, model.events[o.event].name),
+        _ => reference.t_end.to_string(),
+    };
     let mut text = format!(
         "{} {kind}: {} outputs from t = {} to {} ({}), {} steps, {} right-hand sides, {:.3} s\n",
         model.module,
         solution.times.len(),
         reference.t_start,
-        reference.t_end,
+        end,
         describe(&settings),
         solution.stats.steps,
         solution.stats.rhs_calls,
@@ -142,6 +156,16 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     }
     if !model.constraints.is_empty() {
         text += &format!("  max constraint residual {:.3e}\n", worst(&inv.velocity_constraint));
+    }
+    if !model.events.is_empty() {
+        text += &format!("  {} events{}\n", events.len(), if solution.stopped { " (the last stopped the run)" } else { "" });
+        for (name, action, t, q, _) in events.iter().take(20) {
+            let coords: Vec<String> = model.coordinates.iter().zip(q).map(|(c, v)| format!("{c} = {v:.6e}")).collect();
+            text += &format!("    t = {t:.12e}  {name} ({})  {}\n", action.name(), coords.join(", "));
+        }
+        if events.len() > 20 {
+            text += &format!("    ... {} more in the JSON file\n", events.len() - 20);
+        }
     }
     text += &format!("  wrote {0}.csv, {0}.json", files::printable_path(&base));
     for p in plots {

@@ -1,5 +1,6 @@
 //! Every committed module, evaluated in-process (`generator::eval`), gives the compiled module's
-//! numbers to 1e-13 relative: every shared function at random coordinates and rates, and every
+//! numbers to 1e-13 relative: every shared function (the event functions and reset maps among
+//! them) at random coordinates and rates, and every
 //! formulation's `rhs`, `rhs_baumgarte`, `matrix`, `velocities`, `singular_margin`,
 //! `initial_state` and exact `jacobian` and `parameter_jacobian` at random states around the
 //! reference run's.
@@ -90,7 +91,10 @@ fn compare_every_module(backend: &dyn generator::eval::kernel::Backend) {
             let qd: Vec<f64> = qd0.iter().map(|x| x + 0.3 * rng.next()).collect();
             let t = 0.7 * trial as f64;
             type Point = fn(&Model, f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), Failure>;
-            let shared: [(&str, usize, Point); 5] = [
+            let (events, m) = (compiled.events.len(), compiled.coordinates.len());
+            let shared: [(&str, usize, Point); 7] = [
+                ("event_values", events, Model::event_values),
+                ("event_resets", 2 * m * events, Model::event_resets),
                 ("energy", 1, Model::energy),
                 ("work_rate", 1, Model::work_rate),
                 ("momenta", compiled.ignorable.len(), Model::momenta),
@@ -104,6 +108,7 @@ fn compare_every_module(backend: &dyn generator::eval::kernel::Backend) {
                 };
                 compared += same(&format!("{module} {name}"), call(&compiled), call(&eval));
             }
+            assert_eq!(compiled.events, eval.events, "{module}");
             for (fc, fe) in compiled.formulations.iter().zip(&eval.formulations) {
                 assert_eq!((fc.kind, &fc.layout, fc.equations, &fc.state_names), (fe.kind, &fe.layout, fe.equations, &fe.state_names));
                 assert_eq!((fc.matrix_size, fc.has_baumgarte, fc.depends_on_time), (fe.matrix_size, fe.has_baumgarte, fe.depends_on_time));

@@ -26,6 +26,9 @@ pub mod bicycle;
 pub mod bicycle_lagrange;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod bouncing_ball;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod cart_pendulum;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs

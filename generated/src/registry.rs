@@ -19,6 +19,7 @@ pub fn models() -> Vec<Model> {
         crate::pendulum_on_cart_5::model(),
         crate::stiff_pendulum::model(),
         crate::bicycle::model(),
+        crate::bouncing_ball::model(),
         crate::cart_pendulum_baked::model(),
         crate::three_body_split::model(),
         crate::three_body_drop::model(),

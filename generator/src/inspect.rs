@@ -129,6 +129,21 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
             }
         }
     }
+    if !model.events.is_empty() {
+        let name = |n: &str| if latex { format!("\\text{{{}}}", n.replace('_', "\\_")) } else { n.to_string() };
+        let mut items = Vec::new();
+        for e in &model.events {
+            items.push((format!("g[{}] ({} crossing, {})", name(&e.name), e.direction.name(), e.action.name()), e.when));
+            let resets = e.reset_q.iter().zip(&model.coordinates).map(|(r, q)| (r, q.name()));
+            let rate_resets = e.reset_qdot.iter().zip(&model.coordinates).map(|(r, q)| (r, format!("{}'", q.name())));
+            for (r, target) in resets.chain(rate_resets) {
+                if let Some(r) = r {
+                    items.push((format!("{} after {}", name(&target), name(&e.name)), *r));
+                }
+            }
+        }
+        section(w, "Events (g(t, q, q') crossing zero) and their resets:", &mut items, latex);
+    }
     let mut cuts = Vec::new();
     let simplified = mech.tidy.report();
     if simplified.over_term_limit > 0 || simplified.work_limit_reached {

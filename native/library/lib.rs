@@ -60,7 +60,9 @@ pub unsafe extern "C" fn multibody_call(
             function::WORK_RATE => f.work_rate(t, a, b, c, o),
             function::MOMENTA => f.momenta(t, a, b, c, o),
             function::CONSTRAINT_RESIDUALS => f.constraint_residuals(t, a, b, c, o),
-            _ => f.position_residuals(t, a, b, c, o),
+            function::POSITION_RESIDUALS => f.position_residuals(t, a, b, c, o),
+            function::EVENT_VALUES => f.event_values(t, a, b, c, o),
+            _ => f.event_resets(t, a, b, c, o),
         }
     } else {
         match m.formulations.get(formulation) {

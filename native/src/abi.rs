@@ -61,6 +61,8 @@ pub mod function {
     pub const MOMENTA: u32 = 10;
     pub const CONSTRAINT_RESIDUALS: u32 = 11;
     pub const POSITION_RESIDUALS: u32 = 12;
+    pub const EVENT_VALUES: u32 = 13;
+    pub const EVENT_RESETS: u32 = 14;
 }
 
 /// `multibody_call(function, formulation, t, inputs[3], outputs[2], alpha, beta, margin, fault)`:

@@ -47,9 +47,10 @@ pub enum Error {
 }
 
 /// The `seam` crate's sources, built into every library (`lib.rs` first).
-pub const SEAM_SOURCES: [(&str, &str); 6] = [
+pub const SEAM_SOURCES: [(&str, &str); 7] = [
     ("lib.rs", include_str!("../../runtime/seam/src/lib.rs")),
     ("compiled.rs", include_str!("../../runtime/seam/src/compiled.rs")),
+    ("event.rs", include_str!("../../runtime/seam/src/event.rs")),
     ("failure.rs", include_str!("../../runtime/seam/src/failure.rs")),
     ("grid.rs", include_str!("../../runtime/seam/src/grid.rs")),
     ("kind.rs", include_str!("../../runtime/seam/src/kind.rs")),
@@ -334,6 +335,12 @@ impl ModelFunctions for NativeModel {
     }
     fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         self.point(f::POSITION_RESIDUALS, t, q, qdot, params, out)
+    }
+    fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(f::EVENT_VALUES, t, q, qdot, params, out)
+    }
+    fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(f::EVENT_RESETS, t, q, qdot, params, out)
     }
 }
 

@@ -11,8 +11,8 @@
 //! assert!(reduced.record.constraint_error_norm < 1e-12);
 //! ```
 
-use crate::integrate::{JacobianFn, Projector, RunError, Settings, Solution, integrate_with_jacobian};
-use crate::monitor::{Invariants, monitor, norm};
+use crate::integrate::{RunError, Settings, Solution};
+use crate::monitor::{Invariants, monitor_with_jumps, norm};
 use crate::system::{Drift, SetupError, System};
 use seam::{Failure, FormulationKind, Model};
 use std::time::Instant;
@@ -191,18 +191,14 @@ pub fn run_with(model: &Model, reference: &Reference, kind: FormulationKind, set
     let mut solution = None;
     for _ in 0..repeats.max(1) {
         let start = Instant::now();
-        let mut project = |t: f64, y: &mut [f64]| sys.project(t, y);
-        let projector: Option<Projector> = if drift == Drift::Projection { Some(&mut project) } else { None };
-        let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| sys.jacobian(t, y, dy, j);
-        let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
-        let sol = integrate_with_jacobian(&mut |t, y, dy| sys.rhs(t, y, dy), jacobian, projector, &y0, &times, settings)
-            .map_err(|source| CompareError::Run { method: method.into(), source })?;
+        // The model's events, when it has any: resets applied, the run stopped where one says.
+        let run = crate::events::run(&sys, &y0, &times, settings, &mut |_| {}).map_err(|source| CompareError::Run { method: method.into(), source })?;
         elapsed.push(start.elapsed().as_secs_f64());
-        solution = Some(sol);
+        solution = Some(run);
     }
     elapsed.sort_by(f64::total_cmp);
-    let solution = solution.expect("at least one run");
-    let invariants = monitor(&sys, &solution).map_err(|source| CompareError::Monitor { method: method.into(), source })?;
+    let crate::events::EventRun { solution, jumps } = solution.expect("at least one run");
+    let invariants = monitor_with_jumps(&sys, &solution, &jumps).map_err(|source| CompareError::Monitor { method: method.into(), source })?;
     let energy = norm(&invariants.energy_error);
     let momentum = invariants.momentum_error.iter().map(|s| norm(s).powi(2)).fold(0.0, |a, b| a + b).sqrt();
     let g0 = norm(&invariants.momentum0);

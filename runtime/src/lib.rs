@@ -7,13 +7,14 @@
 //! evaluated in-process (`generator::eval`): the runtime depends on the seam crate only.
 //!
 //! Layout: [`integrate`] (RK4, DOPRI5, DOP853, Rosenbrock 2(3)) → [`system`] (a formulation as
-//! `y' = f(t, y)`) → [`monitor`] (energy with the work integral, momenta, constraints) →
+//! `y' = f(t, y)`; [`events`]: a run with the model's events) → [`monitor`] (energy with the work integral, momenta, constraints) →
 //! [`compare`], [`sweep`], [`linearize`].
 
 #![forbid(unsafe_code)]
 
 pub mod integrate;
 pub mod system;
+pub mod events;
 pub mod monitor;
 pub mod compare;
 pub mod sweep;

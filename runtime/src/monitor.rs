@@ -54,7 +54,18 @@ pub fn norm(series: &[f64]) -> f64 {
 
 /// Evaluates the monitors at every sample of `sol`.
 pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
-    let model = &sys.model;
+    monitor_with_jumps(sys, sol, &[])
+}
+
+/// [`monitor`] of a run with resets ([`crate::events::run`]): after each, the states are read
+/// with the momenta `G_I` it left, and its jumps of energy and momenta are taken out of the
+/// balances (they are the impact's, not the integration's).
+pub fn monitor_with_jumps(sys: &System, sol: &Solution, jumps: &[crate::events::Jump]) -> Result<Invariants, Failure> {
+    let mut current = sys.clone();
+    let mut passed = 0;
+    let (mut energy_jumps, mut momentum_jumps) = (0.0, vec![0.0; sys.model.ignorable.len()]);
+    let sys = &mut current;
+    let model = &sys.model.clone();
     let s = model.ignorable.len();
     let mut inv = Invariants { momentum_error: vec![Vec::new(); s], ..Invariants::default() };
     let mut e_buf = [0.0];
@@ -66,9 +77,17 @@ pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
     let mut e0 = None;
     let mut g0: Vec<f64> = Vec::new();
     for (t, y) in sol.times.iter().zip(&sol.states) {
+        // The resets up to this time (an output at a reset's time is the state after it).
+        while passed < jumps.len() && jumps[passed].t <= *t {
+            let jump = &jumps[passed];
+            sys.g_i.clone_from(&jump.g_i);
+            energy_jumps += jump.energy;
+            momentum_jumps.iter_mut().zip(&jump.momenta).for_each(|(a, b)| *a += b);
+            passed += 1;
+        }
         let (q, qd) = sys.velocities(*t, y)?;
         model.energy(*t, &q, &qd, &sys.params, &mut e_buf)?;
-        let e = e_buf[0] - sys.work(y);
+        let e = e_buf[0] - sys.work(y) - energy_jumps;
         let e_start = *e0.get_or_insert(e);
         inv.energy.push(e);
         inv.energy_error.push(e - e_start);
@@ -77,7 +96,7 @@ pub fn monitor(sys: &System, sol: &Solution) -> Result<Invariants, Failure> {
             g0 = g_buf.clone();
         }
         for k in 0..s {
-            inv.momentum_error[k].push(g_buf[k] - g0[k]);
+            inv.momentum_error[k].push(g_buf[k] - momentum_jumps[k] - g0[k]);
         }
         model.constraint_residuals(*t, &q, &qd, &sys.params, &mut c_buf)?;
         inv.velocity_constraint.push(norm(&c_buf));

@@ -18,6 +18,8 @@ pub fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("stiff_pendulum", "stiff_pendulum", |o| o.parameter_jacobian = true),
         // The bicycle's exact Jacobians would be 250000 operations each: left out.
         ("bicycle", "bicycle", |o| o.jacobian = false),
+        // Events: an impact's reset map, a recorded crossing, a stop.
+        ("bouncing_ball", "bouncing_ball", |o| o.parameter_jacobian = true),
         // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
         // Jacobian (12136 operations), for linearization to round-off.
         ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),

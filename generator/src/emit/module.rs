@@ -247,6 +247,9 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     for f in &options.functions {
         head.extend(em.shared_function(*f, &shared)?);
     }
+    if !model.events.is_empty() {
+        head.extend(em.event_functions()?);
+    }
     // Each submodule printed as it is emitted: the items of one file, printed in order,
     // are the items printed one by one.
     let mut text = em.print(head)?;
@@ -283,6 +286,7 @@ impl Emitter<'_> {
             functions: &self.options.functions,
             has_initial: self.model.initial.is_some(),
             has_run: self.model.simulation.is_some(),
+            has_events: !self.model.events.is_empty(),
         }));
         let text = self.print(items)?;
         Ok(self.part(text))
@@ -531,7 +535,52 @@ impl Emitter<'_> {
             #[doc = "True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default."]
             pub const PAPER_SETTINGS: bool = #paper;
         });
+        if !model.events.is_empty() {
+            let ne = usize_lit(model.events.len());
+            let names = model.events.iter().map(|e| e.name.as_str());
+            let directions = model.events.iter().map(|e| ident(&variant_name(e.direction.name())));
+            let actions = model.events.iter().map(|e| ident(&variant_name(e.action.name())));
+            out.extend(quote! {
+                #[doc = "Number of events."]
+                pub const NUM_EVENTS: usize = #ne;
+                #[doc = "The events: name, the direction of the crossing that counts, and the action (see `event_values` and `event_resets`)."]
+                pub const EVENTS: [(&str, #seam::Direction, #seam::EventAction); NUM_EVENTS] = [#((#names, #seam::Direction::#directions, #seam::EventAction::#actions)),*];
+            });
+        }
         out
+    }
+
+    /// `event_values` (each event's `g(t, q, q')`) and `event_resets` (each event's new `q` and
+    /// `q'`, the values before it where its reset leaves them).
+    fn event_functions(&mut self) -> Result<Vec<TokenStream>, ModelError> {
+        let model = self.model;
+        let (args, inputs) = self.q_qdot_inputs(true);
+        let values: Vec<Expr> = model.events.iter().map(|e| e.when).collect();
+        let b = self.body("event_values", &values, &inputs, &args)?;
+        let mut out = vec![simple_fn(
+            "event_values",
+            "The event functions `g(t, q, q')`, in the order of `EVENTS`: an event happens where its function crosses zero in its direction.",
+            &args,
+            &b,
+            quote!([f64; NUM_EVENTS]),
+            |o| quote!([#(#o),*]),
+        )];
+        let mut resets = Vec::new();
+        for e in &model.events {
+            resets.extend(e.reset_q.iter().zip(&model.coordinates).map(|(r, q)| r.unwrap_or_else(|| q.expr())));
+            resets.extend(e.reset_qdot.iter().zip(&model.velocities).map(|(r, v)| r.unwrap_or_else(|| v.expr())));
+        }
+        let b = self.body("event_resets", &resets, &inputs, &args)?;
+        let n = usize_lit(resets.len());
+        out.push(simple_fn(
+            "event_resets",
+            "Each event's reset map, in the order of `EVENTS`: the new `q` then the new `q'` (the values before it where the event does not set them), `2 NUM_COORDINATES` entries per event.",
+            &args,
+            &b,
+            quote!([f64; #n]),
+            |o| quote!([#(#o),*]),
+        ));
+        Ok(out)
     }
 
     /// What `model()` says of the module, for in-process evaluation (its `module` name is set
@@ -552,6 +601,7 @@ impl Emitter<'_> {
             run: model.simulation.as_ref().map(|s| (s.t_start, s.t_end, s.dt_out)),
             paper_settings: model.simulation.as_ref().is_some_and(|s| s.paper),
             energy_balance: m.energy_balance,
+            events: model.events.iter().map(|e| seam::Event { name: e.name.clone(), direction: e.direction, action: e.action }).collect(),
         }
     }
 
@@ -765,6 +815,12 @@ impl Emitter<'_> {
         }
         Ok(out)
     }
+}
+
+/// `rising` as `Rising`: a seam enum's variant from its name.
+fn variant_name(name: &str) -> String {
+    let mut c = name.chars();
+    c.next().map(|f| f.to_ascii_uppercase().to_string() + c.as_str()).unwrap_or_default()
 }
 
 fn simple_fn(name: &str, text: &str, args: &[Arg], b: &Placed, ret: TokenStream, result: impl FnOnce(&[TokenStream]) -> TokenStream) -> TokenStream {

@@ -22,6 +22,7 @@ pub struct Description {
     pub run: Option<(f64, f64, f64)>,
     pub paper_settings: bool,
     pub energy_balance: seam::EnergyBalance,
+    pub events: Vec<seam::Event>,
 }
 
 /// What a formulation's hand-written functions do around its tapes: the layout of `assemble`'s

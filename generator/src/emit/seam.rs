@@ -111,6 +111,7 @@ pub(super) struct SeamParts<'a> {
     pub functions: &'a [Function],
     pub has_initial: bool,
     pub has_run: bool,
+    pub has_events: bool,
 }
 
 /// `FORMULATIONS` and `pub fn model() -> seam::Model`.
@@ -160,6 +161,21 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
             position_residuals: |t, q, _qdot, params, out| {
                 let p = Params::from_values(#seam::array("params", params)?);
                 *#seam::array_mut::<NUM_HOLONOMIC>("out", out)? = position_residuals(t, #seam::array("q", q)?, &p);
+                Ok(())
+            },
+        });
+    }
+    if parts.has_events {
+        fields.push(quote! {
+            events: &EVENTS,
+            event_values: |t, q, qdot, params, out| {
+                let p = Params::from_values(#seam::array("params", params)?);
+                *#seam::array_mut::<NUM_EVENTS>("out", out)? = event_values(t, #seam::array("q", q)?, #seam::array("qdot", qdot)?, &p);
+                Ok(())
+            },
+            event_resets: |t, q, qdot, params, out| {
+                let p = Params::from_values(#seam::array("params", params)?);
+                *#seam::array_mut("out", out)? = event_resets(t, #seam::array("q", q)?, #seam::array("qdot", qdot)?, &p);
                 Ok(())
             },
         });

@@ -14,6 +14,8 @@ use crate::emit::module::{CONSTRAINT_TOLERANCE, PIVOT_TOLERANCE, SINGULAR_TOLERA
 
 /// The shared functions of a program (energy, work rate, momenta, residuals).
 pub struct Evaluated {
+    event_values: Option<Box<dyn Kernel>>,
+    event_resets: Option<Box<dyn Kernel>>,
     energy: Option<Box<dyn Kernel>>,
     work_rate: Option<Box<dyn Kernel>>,
     momenta: Option<Box<dyn Kernel>>,
@@ -132,6 +134,8 @@ impl Evaluated {
             })
             .collect();
         let functions = Evaluated {
+            event_values: take("event_values", tapes),
+            event_resets: take("event_resets", tapes),
             energy: take("energy", tapes),
             work_rate: take("work_rate", tapes),
             momenta: take("momenta", tapes),
@@ -153,7 +157,7 @@ impl Evaluated {
             run: d.run,
             paper_settings: d.paper_settings,
             energy_balance: d.energy_balance,
-            events: Vec::new(),
+            events: d.events,
             formulations,
             functions: Arc::new(functions),
         }
@@ -198,6 +202,12 @@ impl ModelFunctions for Evaluated {
     }
     fn position_residuals(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         self.point(&self.position_residuals, "position_residuals", t, q, qdot, params, out, false)
+    }
+    fn event_values(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.event_values, "event_values", t, q, qdot, params, out, true)
+    }
+    fn event_resets(&self, t: f64, q: &[f64], qdot: &[f64], params: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        self.point(&self.event_resets, "event_resets", t, q, qdot, params, out, true)
     }
 }
 

@@ -148,6 +148,7 @@ impl ModelBuilder {
                 ignorable: IgnorableDef::Auto,
                 initial: None,
                 simulation: None,
+                events: Vec::new(),
                 emit: EmitDef::default(),
             },
         }

@@ -93,8 +93,33 @@ pub struct Model {
     /// Initial coordinates and velocities (values), when the model gives them.
     pub initial: Option<(Vec<f64>, Vec<f64>)>,
     pub simulation: Option<SimulationDef>,
+    /// The events a run watches, in file order.
+    pub events: Vec<Event>,
     /// The raw definition.
     pub def: ModelFile,
+}
+
+/// A model's event ([`schema::EventDef`]): `g(t, q, q')` crossing zero in `direction`, and
+/// what happens there.
+#[derive(Clone, Debug)]
+pub struct Event {
+    pub name: String,
+    pub direction: seam::Direction,
+    pub action: seam::EventAction,
+    /// `g(t, q, q')`.
+    pub when: Expr,
+    /// A reset's new coordinates, one per coordinate (`None`: unchanged), in the values before it.
+    pub reset_q: Vec<Option<Expr>>,
+    /// A reset's new rates, likewise.
+    pub reset_qdot: Vec<Option<Expr>>,
+}
+
+impl Transfer for Event {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        self.when.visit(v);
+        self.reset_q.visit(v);
+        self.reset_qdot.visit(v);
+    }
 }
 
 impl Transfer for Body {
@@ -154,6 +179,7 @@ impl Transfer for Model {
         self.forces.visit(v);
         self.quasi_full.visit(v);
         self.quasi_reduced.visit(v);
+        self.events.visit(v);
     }
 }
 
@@ -863,6 +889,7 @@ impl<'a> Builder<'a> {
             };
             return Err(self.err(ErrorKind::BadValue, place, "", format!("{e}"), "the reference run is sampled every dt_out from t_start to t_end"));
         }
+        let events = self.events(&def.events, &def.coordinates)?;
         Ok(Model {
             file: self.file.to_string(),
             source: self.source.to_string(),
@@ -883,8 +910,70 @@ impl<'a> Builder<'a> {
             declared_ignorable,
             initial,
             simulation: def.simulation.clone(),
+            events,
             def,
         })
+    }
+
+    /// The events: unique names, `when` and the resets' values in `t`, `q`, `q'` and the
+    /// parameters, resets naming coordinates only.
+    fn events(&self, defs: &[schema::EventDef], coordinates: &[String]) -> Result<Vec<Event>, ModelError> {
+        let mut seen = HashSet::new();
+        let mut events = Vec::new();
+        for (k, e) in defs.iter().enumerate() {
+            let place = format!("events[{k}]");
+            let valid =
+                e.name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_') && e.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !valid || !seen.insert(e.name.clone()) {
+                return Err(self.err(
+                    if valid { ErrorKind::Duplicate } else { ErrorKind::BadValue },
+                    &format!("{place}.name"),
+                    &format!("\"{}\"", e.name),
+                    if valid { format!("two events are called `{}`", e.name) } else { format!("`{}` is not a valid event name", e.name) },
+                    "give every event its own name of letters, digits and `_`, starting with a letter",
+                ));
+            }
+            let when = self.expr(&e.when, &format!("{place}.when"), Scope::Velocity)?;
+            let direction = match e.direction {
+                schema::DirectionDef::Rising => seam::Direction::Rising,
+                schema::DirectionDef::Falling => seam::Direction::Falling,
+                schema::DirectionDef::Either => seam::Direction::Either,
+            };
+            let (mut reset_q, mut reset_qdot) = (vec![None; coordinates.len()], vec![None; coordinates.len()]);
+            let action = match &e.action {
+                schema::ActionDef::Stop => seam::EventAction::Stop,
+                schema::ActionDef::Record => seam::EventAction::Record,
+                schema::ActionDef::Reset { q, qdot } => {
+                    for (map, target, what) in [(q, &mut reset_q, "q"), (qdot, &mut reset_qdot, "qdot")] {
+                        for (name, src) in map {
+                            let at = format!("{place}.action.{what}.{name}");
+                            let i = coordinates.iter().position(|c| c == name).ok_or_else(|| {
+                                self.err(
+                                    ErrorKind::UnknownName,
+                                    &at,
+                                    &format!("\"{name}\""),
+                                    format!("the reset sets `{name}`, which is not a coordinate"),
+                                    &format!("name coordinates only (coordinates: {})", coordinates.join(", ")),
+                                )
+                            })?;
+                            target[i] = Some(self.expr(src, &at, Scope::Velocity)?);
+                        }
+                    }
+                    if q.is_empty() && qdot.is_empty() {
+                        return Err(self.err(
+                            ErrorKind::BadValue,
+                            &format!("{place}.action"),
+                            "Reset",
+                            format!("event `{}` resets nothing", e.name),
+                            "give the new values, as in Reset(qdot: {\"y\": \"-e*y'\"}), or use Record",
+                        ));
+                    }
+                    seam::EventAction::Reset
+                }
+            };
+            events.push(Event { name: e.name.clone(), direction, action, when, reset_q, reset_qdot });
+        }
+        Ok(events)
     }
 
     /// A time function that calls itself, directly or through others, has no value.

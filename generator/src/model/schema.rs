@@ -70,6 +70,10 @@ pub struct ModelFile {
     /// The reference run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulation: Option<SimulationDef>,
+    /// Events: functions of `t`, `q` and `q'` whose zero crossings a run locates, and what
+    /// happens there.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<EventDef>,
     /// What the generated module contains (default: everything, runtime parameters).
     #[serde(default)]
     pub emit: EmitDef,
@@ -327,6 +331,45 @@ pub struct InitialDef {
     pub q: IndexMap<String, String>,
     #[serde(deserialize_with = "unique_keys")]
     pub qdot: IndexMap<String, String>,
+}
+
+/// An event: `Event(name: "floor", when: "y", direction: Falling, action: Reset(qdot: {"y":
+/// "-e*y'"}))`. `when` is an expression in `t`, the coordinates, their rates and the parameters;
+/// the event happens where it crosses zero in `direction`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename = "Event")]
+pub struct EventDef {
+    pub name: String,
+    pub when: String,
+    #[serde(default)]
+    pub direction: DirectionDef,
+    pub action: ActionDef,
+}
+
+/// Which way `when` must cross zero.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub enum DirectionDef {
+    Rising,
+    Falling,
+    #[default]
+    Either,
+}
+
+/// What happens at an event: the run stops, the crossing is recorded, or the coordinates and
+/// rates named in `Reset` take new values (expressions in the values just before), the others
+/// keeping theirs.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub enum ActionDef {
+    Stop,
+    Record,
+    Reset {
+        #[serde(default, deserialize_with = "unique_keys", skip_serializing_if = "IndexMap::is_empty")]
+        q: IndexMap<String, String>,
+        #[serde(default, deserialize_with = "unique_keys", skip_serializing_if = "IndexMap::is_empty")]
+        qdot: IndexMap<String, String>,
+    },
 }
 
 /// The reference run.

@@ -1,0 +1,80 @@
+//! A system run with its model's events (`seam::Model::events`): the event functions
+//! `g(t, q, q')` watched on the integrator's dense output ([`crate::integrate::integrate_with_events`]),
+//! and a reset applied through the model's reset map: the new `q` and `q'` give the new state by
+//! the formulation's own `initial_state` (so the constraints are checked, and the reduced method's
+//! conserved momenta `G_I` are those after the impact), the work integral carried across. What a
+//! reset changes is kept as a [`Jump`]: the monitors take the impact's energy and momentum out of
+//! the balances, which then hold across it.
+
+use crate::integrate::{Events, JacobianFn, Projector, RunError, Settings, Solution, integrate_with_events};
+use crate::system::{Drift, System};
+use seam::Failure;
+use std::cell::RefCell;
+
+/// What one reset changed: when, which event, the conserved momenta `G_I` after it, and the
+/// jumps of the energy function and of the ignorable momenta across it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Jump {
+    pub t: f64,
+    pub event: usize,
+    pub g_i: Vec<f64>,
+    pub energy: f64,
+    pub momenta: Vec<f64>,
+}
+
+/// A run with events: the solution (its events in [`Solution::events`]) and the resets' jumps.
+#[derive(Clone, Debug)]
+pub struct EventRun {
+    pub solution: Solution,
+    pub jumps: Vec<Jump>,
+}
+
+/// Integrates `sys` from `y0` over `times` watching its model's events (a model without any is
+/// a plain run); `on_rhs(t)` is told of every right-hand side (for progress). The exact
+/// Jacobian is used when the system has one, and the projection after every step when its drift
+/// control is [`Drift::Projection`].
+pub fn run(sys: &System, y0: &[f64], times: &[f64], settings: &Settings, on_rhs: &mut dyn FnMut(f64)) -> Result<EventRun, RunError> {
+    let current = RefCell::new(sys.clone());
+    let jumps = RefCell::new(Vec::new());
+    let model = &sys.model;
+    let m = model.coordinates.len();
+    let mut rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
+        on_rhs(t);
+        current.borrow().rhs(t, y, dy)
+    };
+    let mut exact = |t: f64, y: &[f64], dy: &mut [f64], j: &mut [f64]| current.borrow().jacobian(t, y, dy, j);
+    let jacobian: Option<JacobianFn> = if sys.has_exact_jacobian() { Some(&mut exact) } else { None };
+    let mut project = |t: f64, y: &mut [f64]| current.borrow().project(t, y);
+    let projector: Option<Projector> = if sys.drift == Drift::Projection { Some(&mut project) } else { None };
+    let mut values = |t: f64, y: &[f64], g: &mut [f64]| -> Result<(), Failure> {
+        let s = current.borrow();
+        let (q, qd) = s.velocities(t, y)?;
+        model.event_values(t, &q, &qd, &s.params, g)
+    };
+    let mut reset = |event: usize, t: f64, y: &[f64], after: &mut [f64]| -> Result<(), Failure> {
+        let mut s = current.borrow_mut();
+        let (q, qd) = s.velocities(t, y)?;
+        let mut maps = vec![0.0; 2 * m * model.events.len()];
+        model.event_resets(t, &q, &qd, &s.params, &mut maps)?;
+        let (q1, qd1) = maps[2 * m * event..2 * m * (event + 1)].split_at(m);
+        let mut g_i = vec![0.0; model.ignorable.len()];
+        s.form.initial_state(t, q1, qd1, &s.params, after, &mut g_i)?;
+        if let Some(w) = s.form.layout.work_index() {
+            after[w] = y[w];
+        }
+        let (mut e0, mut e1) = ([0.0], [0.0]);
+        model.energy(t, &q, &qd, &s.params, &mut e0)?;
+        model.energy(t, q1, qd1, &s.params, &mut e1)?;
+        let (mut p0, mut p1) = (vec![0.0; g_i.len()], vec![0.0; g_i.len()]);
+        model.momenta(t, &q, &qd, &s.params, &mut p0)?;
+        model.momenta(t, q1, qd1, &s.params, &mut p1)?;
+        let momenta = p1.iter().zip(&p0).map(|(a, b)| a - b).collect();
+        jumps.borrow_mut().push(Jump { t, event, g_i: g_i.clone(), energy: e1[0] - e0[0], momenta });
+        s.g_i = g_i;
+        Ok(())
+    };
+    let kinds = model.events.iter().map(|e| (e.direction, e.action)).collect();
+    let mut events = Events::new(kinds, &mut values, &mut reset);
+    let solution = integrate_with_events(&mut rhs, jacobian, projector, &mut events, y0, times, settings)?;
+    Ok(EventRun { solution, jumps: jumps.into_inner() })
+}
