@@ -8,11 +8,12 @@ use crate::CliError;
 use std::path::Path;
 
 /// The project's models, built into the tool: `(name, RON text)`.
-const BUILT_IN: [(&str, &str); 10] = [
+const BUILT_IN: [(&str, &str); 11] = [
     ("bicycle", include_str!("../models/bicycle.ron")),
     ("bouncing_ball", include_str!("../models/bouncing_ball.ron")),
     ("cart_pendulum", include_str!("../models/cart_pendulum.ron")),
     ("cartesian_pendulum", include_str!("../models/cartesian_pendulum.ron")),
+    ("inverted_pendulum", include_str!("../models/inverted_pendulum.ron")),
     ("pendulum_on_cart_5", include_str!("../models/pendulum_on_cart_5.ron")),
     ("rolling_disk", include_str!("../models/rolling_disk.ron")),
     ("satellite_boom", include_str!("../models/satellite_boom.ron")),

@@ -97,6 +97,8 @@ pub enum CliError {
     Csv(#[from] csv::Error),
     #[error(transparent)]
     Compiled(#[from] native::Error),
+    #[error("{file}:{line}: {message} (an input's time series is two columns `t,value` with increasing times)")]
+    Series { file: String, line: usize, message: String },
 }
 
 fn main() -> ExitCode {

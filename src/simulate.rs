@@ -22,10 +22,38 @@ pub struct SimulateArgs {
     pub formulation: Option<FormulationArg>,
     #[command(flatten)]
     pub run: RunArgs,
+    /// An input's time series, `NAME=FILE.csv` (repeatable): two columns `t,value`, interpolated
+    /// linearly and held at the ends; an input without one keeps its nominal value.
+    #[arg(long = "input", value_name = "NAME=FILE.csv", value_parser = input_file)]
+    pub input: Vec<(String, PathBuf)>,
     /// The directory the trajectory and plots are written to:
     /// `<model>_<formulation>.{csv,json}`, `<model>_<formulation>_{coordinates,invariants}.svg`.
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub out: PathBuf,
+}
+
+fn input_file(s: &str) -> Result<(String, PathBuf), String> {
+    let (name, file) = s.split_once('=').ok_or_else(|| format!("needs `NAME=FILE.csv`, not `{s}`"))?;
+    Ok((name.trim().to_string(), PathBuf::from(file)))
+}
+
+/// The control law of `--input`: each named input follows its file's time series, the others
+/// keep their nominal values; `None` without `--input`.
+fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result<Option<runtime::inputs::Controller>, CliError> {
+    use runtime::inputs::TimeSeries;
+    if given.is_empty() {
+        return Ok(None);
+    }
+    let names: Vec<String> = model.inputs.iter().map(|&i| model.parameter_names[i].clone()).collect();
+    let mut series: Vec<TimeSeries> =
+        model.inputs.iter().map(|&i| TimeSeries::new(vec![0.0], vec![model.default_params[i]]).expect("a finite nominal value")).collect();
+    for (name, file) in given {
+        let k = crate::args::index_of(&names, name, "input")?;
+        let bytes = files::read_bounded(file, 64 << 20)?;
+        let text = String::from_utf8_lossy(&bytes);
+        series[k] = TimeSeries::parse(&text).map_err(|e| CliError::Series { file: files::printable_path(file), line: e.line, message: e.message })?;
+    }
+    Ok(Some(runtime::inputs::Controller::series(series)))
 }
 
 /// The formulation a simulation runs by default: the paper's reduced method where the model
@@ -45,7 +73,10 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     };
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
-    let (sys, y0) = System::start(&model, kind, reference.params.clone(), &reference.q0, &reference.qd0)?;
+    let (mut sys, y0) = System::start(&model, kind, reference.params.clone(), &reference.q0, &reference.qd0)?;
+    if let Some(controller) = series_controller(&model, &args.input)? {
+        sys = sys.with_controller(controller);
+    }
     let settings = runtime::integrate::Settings { time_independent: !sys.form.depends_on_time, ..settings };
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
@@ -90,6 +121,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     header.extend([quantity.to_string(), format!("{quantity}_error")]);
     header.extend(model.ignorable.iter().map(|&j| format!("momentum:{}", model.coordinates[j])));
     header.extend(["constraint_residual".to_string(), "position_residual".to_string()]);
+    header.extend(model.inputs.iter().map(|&i| format!("input:{}", model.parameter_names[i])));
     let rows: Vec<Vec<f64>> = (0..solution.times.len())
         .map(|i| {
             let mut row = vec![solution.times[i]];
@@ -99,9 +131,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
             row.extend([inv.energy[i], inv.energy_error[i]]);
             row.extend((0..model.ignorable.len()).map(|k| inv.momentum0[k] + inv.momentum_error[k][i]));
             row.extend([inv.velocity_constraint[i], inv.position_constraint[i]]);
-            row
+            let params = sys.params_at(solution.times[i], &solution.states[i]).map_err(CliError::Monitor)?;
+            row.extend(model.inputs.iter().map(|&k| params[k]));
+            Ok(row)
         })
-        .collect();
+        .collect::<Result<_, CliError>>()?;
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(&header)?;
     for row in &rows {

@@ -372,3 +372,37 @@ fn simulate_reports_the_model_s_events() {
         assert!((a["t"].as_f64().unwrap() - b["t"].as_f64().unwrap()).abs() < 1e-12, "{a} against {b}");
     }
 }
+
+/// `simulate --input NAME=FILE.csv` drives a model's input with a time series, interpolated
+/// linearly and held at its ends; the trajectory's CSV holds the input's values; a bad file is
+/// refused with its line.
+#[test]
+fn simulate_drives_an_input_from_a_time_series() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("push.csv"), "t,F\n0,0\n1,2\n").unwrap();
+    ok(&multibody(dir.path(), &["simulate", "inverted_pendulum", "--formulation", "kane", "--input", "F=push.csv", "--t-end", "2", "--out", "o"]));
+    let text = std::fs::read_to_string(dir.path().join("o/inverted_pendulum_kane.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let (t_col, f_col) = (0, header.iter().position(|h| *h == "input:F").expect("an input column"));
+    let mut checked = 0;
+    for line in lines {
+        let cells: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let t = cells[t_col];
+        let expected = if t < 1.0 { 2.0 * t } else { 2.0 };
+        assert!((cells[f_col] - expected).abs() < 1e-12, "t = {t}: F = {}", cells[f_col]);
+        checked += 1;
+    }
+    assert_eq!(checked, 201);
+    // Without --input, F keeps its nominal 0.
+    ok(&multibody(dir.path(), &["simulate", "inverted_pendulum", "--formulation", "kane", "--t-end", "1", "--out", "n"]));
+    let nominal = std::fs::read_to_string(dir.path().join("n/inverted_pendulum_kane.csv")).unwrap();
+    assert!(nominal.lines().skip(1).all(|l| l.rsplit(',').next() == Some("0e0")), "{}", &nominal[..200]);
+    std::fs::write(dir.path().join("bad.csv"), "0,0\n1,2\n0.5,1\n").unwrap();
+    let bad = multibody(dir.path(), &["simulate", "inverted_pendulum", "--input", "F=bad.csv", "--out", "b"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("bad.csv:3:") && err.contains("must increase"), "{err}");
+    let unknown = multibody(dir.path(), &["simulate", "inverted_pendulum", "--input", "G=push.csv", "--out", "b"]);
+    let err = String::from_utf8_lossy(&unknown.stderr);
+    assert!(!unknown.status.success() && err.contains("no input `G` (known: F)"), "{err}");
+}

@@ -108,7 +108,7 @@ fn compare_every_module(backend: &dyn generator::eval::kernel::Backend) {
                 };
                 compared += same(&format!("{module} {name}"), call(&compiled), call(&eval));
             }
-            assert_eq!(compiled.events, eval.events, "{module}");
+            assert_eq!((&compiled.events, &compiled.inputs), (&eval.events, &eval.inputs), "{module}");
             for (fc, fe) in compiled.formulations.iter().zip(&eval.formulations) {
                 assert_eq!((fc.kind, &fc.layout, fc.equations, &fc.state_names), (fe.kind, &fe.layout, fe.equations, &fe.state_names));
                 assert_eq!((fc.matrix_size, fc.has_baumgarte, fc.depends_on_time), (fe.matrix_size, fe.has_baumgarte, fe.depends_on_time));

@@ -38,6 +38,9 @@ pub mod cart_pendulum_baked;
 pub mod cartesian_pendulum;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod inverted_pendulum;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod pendulum_on_cart_5;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs

@@ -13,6 +13,7 @@
 #![forbid(unsafe_code)]
 
 pub mod integrate;
+pub mod inputs;
 pub mod system;
 pub mod events;
 pub mod monitor;

@@ -36,6 +36,8 @@ pub struct System {
     pub g_i: Vec<f64>,
     /// Drift control (classical formulations only).
     pub drift: Drift,
+    /// The control law that sets the model's inputs at every call (none: their nominal values).
+    pub controller: Option<crate::inputs::Controller>,
 }
 
 /// Why a system could not be set up.
@@ -60,7 +62,26 @@ impl System {
         let mut y0 = vec![0.0; form.states()];
         let mut g_i = vec![0.0; model.ignorable.len()];
         form.initial_state(0.0, q0, qd0, &params, &mut y0, &mut g_i).map_err(SetupError::Initial)?;
-        Ok((System { model: model.clone(), form: form.clone(), params, g_i, drift: Drift::None }, y0))
+        Ok((System { model: model.clone(), form: form.clone(), params, g_i, drift: Drift::None, controller: None }, y0))
+    }
+
+    /// The same system with its inputs set by `controller` at every call.
+    pub fn with_controller(mut self, controller: crate::inputs::Controller) -> System {
+        self.controller = Some(controller);
+        self
+    }
+
+    /// The parameters at a state: the model's, with the inputs the controller gives there.
+    pub fn params_at(&self, t: f64, y: &[f64]) -> Result<std::borrow::Cow<'_, [f64]>, Failure> {
+        let Some(controller) = &self.controller else { return Ok(std::borrow::Cow::Borrowed(&self.params)) };
+        let (q, qd) = self.velocities(t, y)?;
+        let mut u = vec![0.0; self.model.inputs.len()];
+        controller.apply(t, &q, &qd, &mut u);
+        let mut params = self.params.clone();
+        for (&i, v) in self.model.inputs.iter().zip(&u) {
+            params[i] = *v;
+        }
+        Ok(std::borrow::Cow::Owned(params))
     }
 
     /// The same system with drift control.
@@ -80,16 +101,18 @@ impl System {
 
     /// `dy = f(t, y)`.
     pub fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        let params = self.params_at(t, y)?;
         match self.drift {
-            Drift::Baumgarte { alpha, beta } => self.form.rhs_baumgarte(t, y, &self.params, &self.g_i, dy, alpha, beta),
-            _ => self.form.rhs(t, y, &self.params, &self.g_i, dy),
+            Drift::Baumgarte { alpha, beta } => self.form.rhs_baumgarte(t, y, &params, &self.g_i, dy, alpha, beta),
+            _ => self.form.rhs(t, y, &params, &self.g_i, dy),
         }
     }
 
     /// True when `jacobian` is the model's exact one (emitted with `--jacobian`, and no
     /// Baumgarte terms, which it does not include).
     pub fn has_exact_jacobian(&self) -> bool {
-        self.form.has_jacobian && !matches!(self.drift, Drift::Baumgarte { .. })
+        // A controller's feedback is not in the emitted Jacobian either.
+        self.form.has_jacobian && !matches!(self.drift, Drift::Baumgarte { .. }) && self.controller.is_none()
     }
 
     /// `dy = f(t, y)` and `jac = df/dy` (row-major) from the emitted `jacobian`;

@@ -20,6 +20,8 @@ pub fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("bicycle", "bicycle", |o| o.jacobian = false),
         // Events: an impact's reset map, a recorded crossing, a stop.
         ("bouncing_ball", "bouncing_ball", |o| o.parameter_jacobian = true),
+        // An input (`F`), read from the parameters at every call.
+        ("inverted_pendulum", "inverted_pendulum", |o| o.parameter_jacobian = true),
         // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
         // Jacobian (12136 operations), for linearization to round-off.
         ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),

@@ -206,6 +206,15 @@ impl fmt::Display for Summary {
 /// derivation builds is freed when it returns, so a process that generates many models holds
 /// only the models themselves.
 pub fn generate(model: &Model, options: &Options) -> Result<Generated, ModelError> {
+    if options.parameters == Parameters::Baked && !model.inputs.is_empty() {
+        return Err(model.error(
+            crate::model::ErrorKind::BadValue,
+            "emit.parameters",
+            "parameters",
+            "a model with inputs cannot bake its parameters in: the inputs are read from them at every call".into(),
+            "emit with runtime parameters (the default), or remove `inputs`".into(),
+        ));
+    }
     crate::model::in_own_context(model, |model| {
         crate::symbolic::expr::catch_budget(|| module::generate(model, options)).unwrap_or_else(|spent| Err(model.budget_error(spent)))
     })

@@ -287,6 +287,7 @@ impl Emitter<'_> {
             has_initial: self.model.initial.is_some(),
             has_run: self.model.simulation.is_some(),
             has_events: !self.model.events.is_empty(),
+            has_inputs: !self.model.inputs.is_empty(),
         }));
         let text = self.print(items)?;
         Ok(self.part(text))
@@ -535,6 +536,16 @@ impl Emitter<'_> {
             #[doc = "True when the model file asks for the paper's integrator settings (DOPRI5, rtol 1e-3, atol 1e-6) by default."]
             pub const PAPER_SETTINGS: bool = #paper;
         });
+        if !model.inputs.is_empty() {
+            let ni = usize_lit(model.inputs.len());
+            let idx = model.inputs.iter().map(|&i| usize_lit(i));
+            out.extend(quote! {
+                #[doc = "Number of inputs."]
+                pub const NUM_INPUTS: usize = #ni;
+                #[doc = "The inputs: indices into `Params::NAMES` of the parameters a run sets at every call (a controller's output, a time series)."]
+                pub const INPUTS: [usize; NUM_INPUTS] = [#(#idx),*];
+            });
+        }
         if !model.events.is_empty() {
             let ne = usize_lit(model.events.len());
             let names = model.events.iter().map(|e| e.name.as_str());
@@ -596,6 +607,7 @@ impl Emitter<'_> {
             ignorable: m.ignorable.clone(),
             holonomic_names: m.holonomic_names.clone(),
             parameter_names: if baked { vec![] } else { model.parameters.iter().map(|(s, _)| s.name()).collect() },
+            inputs: model.inputs.clone(),
             default_params: if baked { vec![] } else { model.parameters.iter().map(|(_, v)| *v).collect() },
             initial: model.initial.clone(),
             run: model.simulation.as_ref().map(|s| (s.t_start, s.t_end, s.dt_out)),

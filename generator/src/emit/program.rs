@@ -17,6 +17,7 @@ pub struct Description {
     /// The holonomic constraints' names (the first `holonomic` of `constraints`).
     pub holonomic_names: Vec<String>,
     pub parameter_names: Vec<String>,
+    pub inputs: Vec<usize>,
     pub default_params: Vec<f64>,
     pub initial: Option<(Vec<f64>, Vec<f64>)>,
     pub run: Option<(f64, f64, f64)>,

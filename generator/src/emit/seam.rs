@@ -112,6 +112,7 @@ pub(super) struct SeamParts<'a> {
     pub has_initial: bool,
     pub has_run: bool,
     pub has_events: bool,
+    pub has_inputs: bool,
 }
 
 /// `FORMULATIONS` and `pub fn model() -> seam::Model`.
@@ -164,6 +165,9 @@ pub(super) fn model_fn(parts: &SeamParts) -> TokenStream {
                 Ok(())
             },
         });
+    }
+    if parts.has_inputs {
+        fields.push(quote!(inputs: &INPUTS,));
     }
     if parts.has_events {
         fields.push(quote! {

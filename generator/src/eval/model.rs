@@ -152,6 +152,7 @@ impl Evaluated {
             ignorable: d.ignorable,
             holonomic,
             parameter_names: if baked_params == 0 { vec![] } else { d.parameter_names },
+            inputs: d.inputs,
             default_params: d.default_params,
             initial: d.initial,
             run: d.run,

@@ -158,6 +158,34 @@ impl FrameKinematics {
         FrameKinematics { name: name.to_string(), origin, rotation: self.rotation.mul(&r_pc), omega, velocity: mat_vec(&r_cp, &moving) }
     }
 
+    /// A child frame: this frame moved by `translation` and turned by the unit quaternion
+    /// (Euler parameters) `e = (e0, e1, e2, e3)`: `R = (e0^2 - |e_v|^2) I + 2 e_v e_v^T + 2 e0 [e_v]x`
+    /// (written in squares, orthogonal where `|e| = 1`), its own angular velocity `2 G(e) e'` with
+    /// `G = [-e_v, e0 I - [e_v]x]`, the relation that holds on the unit sphere.
+    pub fn child_quaternion(&self, name: &str, translation: &[Expr; 3], e: &[Expr; 4], chain: &TimeChain) -> FrameKinematics {
+        let [e0, e1, e2, e3] = *e;
+        let two = Expr::int(2);
+        let r_pc = Matrix::from_rows(vec![
+            vec![e0 * e0 + e1 * e1 - e2 * e2 - e3 * e3, two * (e1 * e2 - e0 * e3), two * (e1 * e3 + e0 * e2)],
+            vec![two * (e1 * e2 + e0 * e3), e0 * e0 - e1 * e1 + e2 * e2 - e3 * e3, two * (e2 * e3 - e0 * e1)],
+            vec![two * (e1 * e3 - e0 * e2), two * (e2 * e3 + e0 * e1), e0 * e0 - e1 * e1 - e2 * e2 + e3 * e3],
+        ]);
+        let d = e.map(|x| chain.dt(x));
+        let g = [[-e1, e0, e3, -e2], [-e2, -e3, e0, e1], [-e3, e2, -e1, e0]];
+        let own: [Expr; 3] = g.map(|row| two * (row[0] * d[0] + row[1] * d[1] + row[2] * d[2] + row[3] * d[3]));
+        let offset = mat_vec(&self.rotation, translation);
+        let r_cp = r_pc.transpose();
+        let omega = add3(&mat_vec(&r_cp, &self.omega), &own);
+        let moving = add3(&add3(&self.velocity, &cross(&self.omega, translation)), &chain.dt3(translation));
+        FrameKinematics {
+            name: name.to_string(),
+            origin: add3(&self.origin, &offset),
+            rotation: self.rotation.mul(&r_pc),
+            omega,
+            velocity: mat_vec(&r_cp, &moving),
+        }
+    }
+
     /// World position of a point with coordinates `p` in this frame.
     pub fn point(&self, p: &[Expr; 3]) -> [Expr; 3] {
         add3(&self.origin, &mat_vec(&self.rotation, p))
@@ -189,6 +217,29 @@ pub fn velocity(position: &[Expr; 3], chain: &TimeChain) -> [Expr; 3] {
 mod tests {
     use super::*;
     use crate::symbolic::zero::zero_test;
+
+    /// The quaternion of ZYX Euler angles `(2a, 2b, 2c)` (half angles `a, b, c`) turns the frame
+    /// as the three elementary rotations do, and `2 G(e) e'` is their angular velocity.
+    #[test]
+    fn a_quaternion_turns_as_its_euler_angles() {
+        let names = ["a", "b", "c"];
+        let q: Vec<Symbol> = names.iter().map(|n| Symbol::new(n)).collect();
+        let chain = TimeChain::new(Symbol::new("t"), q.iter().map(|s| (*s, Expr::sym(&format!("{}'", s.name())))).collect());
+        let [a, b, c] = [q[0].expr(), q[1].expr(), q[2].expr()];
+        let (c1, s1, c2, s2, c3, s3) = (a.cos(), a.sin(), b.cos(), b.sin(), c.cos(), c.sin());
+        let e = [c1 * c2 * c3 + s1 * s2 * s3, c1 * c2 * s3 - s1 * s2 * c3, c1 * s2 * c3 + s1 * c2 * s3, s1 * c2 * c3 - c1 * s2 * s3];
+        let z = [Expr::zero(), Expr::zero(), Expr::zero()];
+        let two = Expr::int(2);
+        let quaternion = FrameKinematics::world().child_quaternion("q", &z, &e, &chain);
+        let euler = FrameKinematics::world().child("e", &z, &[(Axis::Z, two * a), (Axis::Y, two * b), (Axis::X, two * c)], &chain);
+        for i in 0..3 {
+            for j in 0..3 {
+                let d = quaternion.rotation.get(i, j) - euler.rotation.get(i, j);
+                assert!(zero_test(d).is_zero(), "R[{i}][{j}]: {d}");
+            }
+            assert!(zero_test(quaternion.omega[i] - euler.omega[i]).is_zero(), "omega[{i}]: {} against {}", quaternion.omega[i], euler.omega[i]);
+        }
+    }
 
     #[test]
     fn zyx_euler_rates_give_the_papers_omega() {

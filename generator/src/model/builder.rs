@@ -138,6 +138,7 @@ impl ModelBuilder {
                 name: name.into(),
                 description: String::new(),
                 parameters: IndexMap::new(),
+                inputs: IndexMap::new(),
                 coordinates: Vec::new(),
                 time_functions: IndexMap::new(),
                 frames: Vec::new(),

@@ -67,8 +67,10 @@ pub struct Model {
     pub source: String,
     pub name: String,
     pub description: String,
-    /// Parameters and their values, in file order.
+    /// Parameters and their values, in file order, then the inputs with their nominal values.
     pub parameters: Vec<(Symbol, f64)>,
+    /// The inputs: indices into `parameters` (the last ones), set by the runtime at every call.
+    pub inputs: Vec<usize>,
     /// `q`.
     pub coordinates: Vec<Symbol>,
     /// `q'`, one per coordinate.
@@ -350,10 +352,10 @@ impl Model {
         }
         let mut def = self.def.clone();
         for (name, v) in values {
-            match def.parameters.get_mut(name) {
+            match def.parameters.get_mut(name).or_else(|| def.inputs.get_mut(name)) {
                 Some(x) => *x = *v,
                 None => {
-                    let known: Vec<&str> = def.parameters.keys().map(String::as_str).collect();
+                    let known: Vec<&str> = def.parameters.keys().chain(def.inputs.keys()).map(String::as_str).collect();
                     return Err(ModelError::unlocated(
                         ErrorKind::UnknownName,
                         &self.file,
@@ -644,6 +646,24 @@ impl<'a> Builder<'a> {
             self.params.insert(name.clone());
             parameters.push((s, *value));
         }
+        let mut inputs = Vec::new();
+        for (name, value) in &def.inputs {
+            self.check_name(&mut seen, name, &format!("inputs.{name}"), "input")?;
+            if !value.is_finite() || rat_from_f64(*value).is_none() {
+                return Err(self.err(
+                    ErrorKind::BadValue,
+                    &format!("inputs.{name}"),
+                    &format!("\"{name}\""),
+                    format!("input `{name}` has no finite nominal value"),
+                    "give every input a finite nominal value (used where no controller sets it)",
+                ));
+            }
+            let s = Symbol::new(name);
+            self.names.insert(name.clone(), s.expr());
+            self.params.insert(name.clone());
+            inputs.push(parameters.len());
+            parameters.push((s, *value));
+        }
         if def.coordinates.is_empty() {
             return Err(self.err(
                 ErrorKind::Dimension,
@@ -896,6 +916,7 @@ impl<'a> Builder<'a> {
             name: def.name.clone(),
             description: def.description.clone(),
             parameters,
+            inputs,
             coordinates,
             velocities,
             accelerations,
@@ -1087,10 +1108,28 @@ impl<'a> Builder<'a> {
                 let place = format!("frames[{i}] ({})", f.name);
                 let zero = vec!["0".to_string(), "0".to_string(), "0".to_string()];
                 let translation = self.vec3(f.translation.as_ref().unwrap_or(&zero), &format!("{place}.translation"), Scope::Position)?;
+                if let Some(RotationDef::Quaternion(e0, e1, e2, e3)) = f.rotation.iter().find(|r| matches!(r, RotationDef::Quaternion(..))) {
+                    let rp = format!("{place}.rotation");
+                    if f.rotation.len() > 1 {
+                        return Err(self.err(
+                            ErrorKind::BadValue,
+                            &rp,
+                            "Quaternion",
+                            format!("frame `{}` turns by a quaternion and by other rotations", f.name),
+                            "a quaternion is a frame's only rotation: put the others on a parent frame",
+                        ));
+                    }
+                    let e = [e0, e1, e2, e3].map(|x| self.expr(x, &format!("{rp}[0]"), Scope::Position));
+                    let [e0, e1, e2, e3] = e;
+                    let e = [e0?, e1?, e2?, e3?];
+                    done.push(parent.child_quaternion(&f.name, &translation, &e, chain));
+                    continue;
+                }
                 let mut turns = Vec::new();
                 for (k, r) in f.rotation.iter().enumerate() {
                     let rp = format!("{place}.rotation[{k}]");
                     match r {
+                        RotationDef::Quaternion(..) => unreachable!("handled above"),
                         RotationDef::X(a) => turns.push((Axis::X, self.expr(a, &rp, Scope::Position)?)),
                         RotationDef::Y(a) => turns.push((Axis::Y, self.expr(a, &rp, Scope::Position)?)),
                         RotationDef::Z(a) => turns.push((Axis::Z, self.expr(a, &rp, Scope::Position)?)),

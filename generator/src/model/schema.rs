@@ -44,6 +44,10 @@ pub struct ModelFile {
     /// Parameter names and values. Every symbol must be bound here or be a coordinate.
     #[serde(deserialize_with = "unique_keys")]
     pub parameters: IndexMap<String, f64>,
+    /// Inputs and their nominal values: parameters that the runtime may set at every call of
+    /// the model's functions (a controller, a time series). Expressions use them as parameters.
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty", deserialize_with = "unique_keys")]
+    pub inputs: IndexMap<String, f64>,
     /// Generalized coordinates, in order.
     pub coordinates: Vec<String>,
     /// Named functions of time: name -> expression in `t` (e.g. a prescribed force `F(t)`).
@@ -220,6 +224,10 @@ pub enum RotationDef {
     Y(String),
     Z(String),
     EulerZYX(String, String, String),
+    /// Euler parameters `(e0, e1, e2, e3)`, the scalar first: the attitude without a singular
+    /// configuration. The frame's only rotation; the model keeps `e0^2 + e1^2 + e2^2 + e3^2 = 1`
+    /// as a `Position` constraint of its own.
+    Quaternion(String, String, String, String),
 }
 
 /// A body attached to a frame.

@@ -164,6 +164,9 @@ pub struct Model {
     /// Number of holonomic (position-level) constraints, the first of `constraints`.
     pub holonomic: usize,
     pub parameter_names: Vec<String>,
+    /// The inputs: indices into `parameter_names` of the parameters a run may set at every call
+    /// (a controller's output, a time series).
+    pub inputs: Vec<usize>,
     /// The model file's parameter values (empty when they were baked into the code).
     pub default_params: Vec<f64>,
     /// `(q(0), q'(0))` of the reference run, when the model file gives one.
