@@ -8,7 +8,7 @@ use crate::CliError;
 use std::path::Path;
 
 /// The project's models, built into the tool: `(name, RON text)`.
-const BUILT_IN: [(&str, &str); 11] = [
+const BUILT_IN: [(&str, &str); 12] = [
     ("bicycle", include_str!("../models/bicycle.ron")),
     ("bouncing_ball", include_str!("../models/bouncing_ball.ron")),
     ("cart_pendulum", include_str!("../models/cart_pendulum.ron")),
@@ -20,6 +20,7 @@ const BUILT_IN: [(&str, &str); 11] = [
     ("spring_cart", include_str!("../models/spring_cart.ron")),
     ("stiff_pendulum", include_str!("../models/stiff_pendulum.ron")),
     ("three_body", include_str!("../models/three_body.ron")),
+    ("tumbling_body", include_str!("../models/tumbling_body.ron")),
 ];
 
 /// The names of the built-in models.

@@ -96,19 +96,7 @@ fn the_in_process_figures_are_the_benchmark_file() {
     // docs/benchmarks.md's table is the file's, row for row.
     let docs = read("docs/benchmarks.md");
     for r in eval["rhs"].as_array().unwrap() {
-        let f = |k: &str| r[k].as_f64().unwrap();
-        let row = format!(
-            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} | {:.0} | {:.2} |",
-            r["model"].as_str().unwrap(),
-            r["formulation"].as_str().unwrap(),
-            f("compiled_ns"),
-            f("evaluated_ns"),
-            f("ratio"),
-            f("jit_ns"),
-            f("jit_ratio"),
-            f("native_ns"),
-            f("native_ratio")
-        );
+        let row = eval_row(r);
         assert!(docs.contains(&row), "docs/benchmarks.md lacks the row `{row}` of docs/benchmarks/eval.json");
     }
     assert!(docs.contains(&format!("the four runs at the paper's settings): {ms:.0} ms")), "docs/benchmarks.md quotes another time to the first table");
@@ -166,6 +154,23 @@ fn the_scaling_figures_are_the_benchmark_files() {
     assert_quoted(&readme, &format!("against SymPy's {seconds:.0} s"), "docs/scaling.md");
 }
 
+/// One row of eval.json as docs/benchmarks.md's in-process table shows it.
+fn eval_row(r: &serde_json::Value) -> String {
+    let f = |k: &str| r[k].as_f64().unwrap();
+    format!(
+        "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} | {:.0} | {:.2} |",
+        r["model"].as_str().unwrap(),
+        r["formulation"].as_str().unwrap(),
+        f("compiled_ns"),
+        f("evaluated_ns"),
+        f("ratio"),
+        f("jit_ns"),
+        f("jit_ratio"),
+        f("native_ns"),
+        f("native_ratio")
+    )
+}
+
 /// The tables the benchmarks write as `{command, columns, rows}`.
 const TABLES: [&str; 6] = ["rhs", "runs", "drift", "derive", "rustc", "integrators"];
 
@@ -195,21 +200,7 @@ fn the_benchmark_tables_are_the_files_the_benchmarks_write() {
     }
     // The in-process table is eval.json's (checked row by row above, in its own test).
     let eval = json("docs/benchmarks/eval.json");
-    for r in eval["rhs"].as_array().unwrap() {
-        let f = |k: &str| r[k].as_f64().unwrap();
-        from_files.push(format!(
-            "| {} | {} | {:.0} | {:.0} | {:.2} | {:.0} | {:.2} | {:.0} | {:.2} |",
-            r["model"].as_str().unwrap(),
-            r["formulation"].as_str().unwrap(),
-            f("compiled_ns"),
-            f("evaluated_ns"),
-            f("ratio"),
-            f("jit_ns"),
-            f("jit_ratio"),
-            f("native_ns"),
-            f("native_ratio")
-        ));
-    }
+    from_files.extend(eval["rhs"].as_array().unwrap().iter().map(eval_row));
     from_files.push("| model | formulation | compiled ns | interpreted ns | ratio | JIT ns | ratio | --compiled ns | ratio |".into());
     from_files.push(format!("|{}", "---|".repeat(9)));
     let typed: Vec<&str> = docs.lines().filter(|l| l.starts_with('|') && !from_files.iter().any(|f| f == l)).collect();

@@ -63,6 +63,9 @@ pub mod three_body_drop;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body_split;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod tumbling_body;
 
 mod registry;
 pub use registry::{find, models};

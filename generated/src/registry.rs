@@ -21,6 +21,7 @@ pub fn models() -> Vec<Model> {
         crate::bicycle::model(),
         crate::bouncing_ball::model(),
         crate::inverted_pendulum::model(),
+        crate::tumbling_body::model(),
         crate::cart_pendulum_baked::model(),
         crate::three_body_split::model(),
         crate::three_body_drop::model(),

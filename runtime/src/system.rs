@@ -89,10 +89,17 @@ impl System {
         let ok = match drift {
             Drift::None => true,
             Drift::Baumgarte { .. } => self.form.has_baumgarte,
-            Drift::Projection => self.form.layout.holds_every_rate(self.model.coordinates.len()),
+            Drift::Projection => {
+                let m = self.model.coordinates.len();
+                self.form.layout.holds_every_rate(m) || self.form.layout.coordinates.iter().copied().eq(0..m)
+            }
         };
         if !ok {
-            let applies = if matches!(drift, Drift::Projection) { "states [q; q'] (lagrange and maggi)" } else { "lagrange" };
+            let applies = if matches!(drift, Drift::Projection) {
+                "states that hold every coordinate (lagrange, maggi, kane, and reduced_volterra with its ignorable coordinates integrated)"
+            } else {
+                "lagrange"
+            };
             return Err(SetupError::DriftNotApplicable { drift, kind: self.form.kind, applies });
         }
         self.drift = drift;
@@ -157,8 +164,9 @@ impl System {
                 changed = true;
             }
         }
-        // Velocities: a q' + b is linear in q', so a and b come out exactly.
-        if r > 0 {
+        // Velocities: a q' + b is linear in q', so a and b come out exactly. Quasi-velocities
+        // describe admissible motions only: nothing to project.
+        if r > 0 && self.form.layout.holds_every_rate(m) {
             let q = y[..m].to_vec();
             let (a, _) = constraint_matrix(&self.model, t, &q, &self.params)?;
             let res = self.velocity_residuals(t, &q, &y[m..2 * m])?;

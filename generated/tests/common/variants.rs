@@ -22,6 +22,8 @@ pub fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("bouncing_ball", "bouncing_ball", |o| o.parameter_jacobian = true),
         // An input (`F`), read from the parameters at every call.
         ("inverted_pendulum", "inverted_pendulum", |o| o.parameter_jacobian = true),
+        // Unit quaternions: the attitude without a singular configuration.
+        ("tumbling_body", "tumbling_body", |_| {}),
         // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
         // Jacobian (12136 operations), for linearization to round-off.
         ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),

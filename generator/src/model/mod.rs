@@ -630,38 +630,26 @@ impl<'a> Builder<'a> {
         // Names.
         let mut seen = HashSet::new();
         let mut parameters = Vec::new();
-        for (name, value) in &def.parameters {
-            self.check_name(&mut seen, name, &format!("parameters.{name}"), "parameter")?;
-            if !value.is_finite() || rat_from_f64(*value).is_none() {
-                return Err(self.err(
-                    ErrorKind::BadValue,
-                    &format!("parameters.{name}"),
-                    &format!("\"{name}\""),
-                    format!("parameter `{name}` has no finite value"),
-                    "give every parameter a finite number",
-                ));
-            }
-            let s = Symbol::new(name);
-            self.names.insert(name.clone(), s.expr());
-            self.params.insert(name.clone());
-            parameters.push((s, *value));
-        }
+        // The parameters, then the inputs (parameters a run sets at every call).
+        let declared = def.parameters.iter().map(|(n, v)| (n, v, false)).chain(def.inputs.iter().map(|(n, v)| (n, v, true)));
         let mut inputs = Vec::new();
-        for (name, value) in &def.inputs {
-            self.check_name(&mut seen, name, &format!("inputs.{name}"), "input")?;
+        for (name, value, input) in declared {
+            let (section, what, fix) = if input {
+                ("inputs", "input", "give every input a finite nominal value (used where no controller sets it)")
+            } else {
+                ("parameters", "parameter", "give every parameter a finite number")
+            };
+            self.check_name(&mut seen, name, &format!("{section}.{name}"), what)?;
             if !value.is_finite() || rat_from_f64(*value).is_none() {
-                return Err(self.err(
-                    ErrorKind::BadValue,
-                    &format!("inputs.{name}"),
-                    &format!("\"{name}\""),
-                    format!("input `{name}` has no finite nominal value"),
-                    "give every input a finite nominal value (used where no controller sets it)",
-                ));
+                let message = if input { format!("input `{name}` has no finite nominal value") } else { format!("parameter `{name}` has no finite value") };
+                return Err(self.err(ErrorKind::BadValue, &format!("{section}.{name}"), &format!("\"{name}\""), message, fix));
             }
             let s = Symbol::new(name);
             self.names.insert(name.clone(), s.expr());
             self.params.insert(name.clone());
-            inputs.push(parameters.len());
+            if input {
+                inputs.push(parameters.len());
+            }
             parameters.push((s, *value));
         }
         if def.coordinates.is_empty() {
