@@ -4,6 +4,7 @@
 //! the stop, the impacts' energy loss; the energy balance (with the impacts' jumps taken out)
 //! and the ignorable momentum `m x'` held to round-off across every impact.
 
+mod common;
 use runtime::integrate::{EventAction, Method, Settings};
 use seam::Model;
 
@@ -124,5 +125,24 @@ fn bad_events_get_located_errors() {
         assert!(shown.contains(message) && shown.contains(place), "{to}: {shown}");
         let line = text.lines().collect::<Vec<_>>().iter().rposition(|l| l.contains(to)).unwrap() + 1;
         assert!(shown.contains(&format!("models/ball.ron:{line}:")), "{to} (line {line}): {shown}");
+    }
+}
+
+/// A pendulum released from rest at 1 rad is stopped by its event at the bottom after a quarter
+/// period, `sqrt(l / g) K(sin^2(1/2))`, to 1e-12 in time, in every formulation.
+#[test]
+fn a_released_pendulum_stops_at_the_bottom_after_a_quarter_period() {
+    let m = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/released_pendulum.ron")).unwrap();
+    let model = generator::eval::evaluate(&m).unwrap();
+    let quarter = (1.0f64 / 9.81).sqrt() * common::elliptic_k(0.5f64.sin().powi(2));
+    let settings = Settings { method: Method::Dop853, rtol: 1e-14, atol: 1e-14, h_max: 0.5, ..Settings::default() };
+    for form in &model.formulations {
+        let r = runtime::compare::Reference::of(&model).unwrap();
+        let (sys, y0) = runtime::system::System::start(&model, form.kind, r.params.clone(), &r.q0, &r.qd0).unwrap();
+        let run = runtime::events::run(&sys, &y0, &r.times().unwrap(), &settings, &mut |_| {}).unwrap();
+        let stop = run.solution.events.last().unwrap();
+        assert!(run.solution.stopped && run.solution.events.len() == 1, "{}", form.kind);
+        assert!((stop.t - quarter).abs() < 1e-12, "{}: stopped at {} against {quarter}", form.kind, stop.t);
+        assert_eq!(run.solution.times.len(), 6, "{}: the outputs before the stop (0 to 0.5)", form.kind);
     }
 }

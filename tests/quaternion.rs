@@ -4,6 +4,7 @@
 //! its unit norm (to round-off with the projection), agrees with the same body in ZYX Euler
 //! angles away from their singularity, and starts where those angles are singular.
 
+mod common;
 use runtime::integrate::{Method, Settings};
 use runtime::system::{Drift, System};
 use seam::{FormulationKind, Model};
@@ -40,15 +41,6 @@ fn world_momentum(e: &[f64], omega: &[f64]) -> [f64; 3] {
     [0, 1, 2].map(|i| (0..3).map(|k| r[i][k] * body[k]).sum())
 }
 
-/// The complete elliptic integral of the first kind `K(m)`, by the arithmetic-geometric mean.
-fn elliptic_k(m: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - m).sqrt());
-    while (a - b).abs() > 1e-16 * a {
-        (a, b) = (0.5 * (a + b), (a * b).sqrt());
-    }
-    std::f64::consts::PI / (2.0 * a)
-}
-
 /// Half the period of `omega_2(t)` (the time between flips) from Euler's equations' closed
 /// form (Landau and Lifshitz, Mechanics, section 37), for `L^2 > 2 E I2`: `T = 4 K(k) / lambda`,
 /// `lambda = sqrt((I3 - I2)(L^2 - 2 E I1) / (I1 I2 I3))`,
@@ -59,7 +51,7 @@ fn half_period() -> f64 {
     assert!(l2 > two_e * I[1]);
     let lambda = ((I[2] - I[1]) * (l2 - two_e * I[0]) / (I[0] * I[1] * I[2])).sqrt();
     let m = (I[1] - I[0]) * (two_e * I[2] - l2) / ((I[2] - I[1]) * (l2 - two_e * I[0]));
-    2.0 * elliptic_k(m) / lambda
+    2.0 * common::elliptic_k(m) / lambda
 }
 
 /// Every formulation, in-process and compiled, with the unit norm projected after every step:
