@@ -103,10 +103,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     let mut events = Vec::new();
     for o in &solution.events {
         // The state just before the event, read with the momenta of the resets before it.
-        let mut before = sys.clone();
-        if let Some(j) = jumps.iter().rev().find(|j| j.t < o.t) {
-            before.g_i.clone_from(&j.g_i);
-        }
+        let before = runtime::events::system_before(&sys, &jumps, o.t);
         let (q, qd) = before.velocities(o.t, &o.state).map_err(CliError::Monitor)?;
         events.push((model.events[o.event].name.clone(), model.events[o.event].action, o.t, q, qd));
     }

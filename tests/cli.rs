@@ -234,12 +234,20 @@ fn overflow_is_named_as_overflow() {
 /// results: nothing is cached or shared between runs (every model is evaluated in-process).
 #[test]
 fn concurrent_runs_of_different_models_keep_their_own_results() {
+    concurrent_runs_keep_their_own_results(&["--repeats", "3"], &[]);
+}
+
+/// `compare ARGS` on two models whose paths differ by one letter (`my_model`, and `my_modem`
+/// with a heavier trolley), both at once, with the environment `env`: each gets its own records.
+fn concurrent_runs_keep_their_own_results(args: &[&str], env: &[(&str, &std::ffi::OsStr)]) {
     let (dir, path) = user_model();
     let heavy = std::fs::read_to_string(&path).unwrap().replace("name: \"my_model\"", "name: \"my_modem\"").replace("\"mt\": 5.0", "\"mt\": 50.0");
     std::fs::write(dir.path().join("my_modem.ron"), heavy).unwrap();
     let spawn = |file: &str| {
         Command::new(env!("CARGO_BIN_EXE_multibody"))
-            .args(["compare", file, "--repeats", "3", "--json", "-"])
+            .args(["compare", file, "--json", "-"])
+            .args(args)
+            .envs(env.iter().map(|(k, v)| (*k, *v)))
             .current_dir(dir.path())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::piped())
@@ -323,27 +331,12 @@ fn the_compiled_route_builds_once_and_gives_the_same_table() {
 /// results: the cache is keyed by the module's content, never by a path.
 #[test]
 fn concurrent_compiled_runs_keep_their_own_results() {
-    let (dir, path) = user_model();
-    let heavy = std::fs::read_to_string(&path).unwrap().replace("name: \"my_model\"", "name: \"my_modem\"").replace("\"mt\": 5.0", "\"mt\": 50.0");
-    std::fs::write(dir.path().join("my_modem.ron"), heavy).unwrap();
-    let cache = dir.path().join("cache");
-    let spawn = |file: &str| {
-        Command::new(env!("CARGO_BIN_EXE_multibody"))
-            .args(["compare", file, "--repeats", "1", "--json", "-", "--compiled"])
-            .current_dir(dir.path())
-            .env("MULTIBODY_CACHE_DIR", &cache)
-            .env("RUSTC", rustc())
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap()
-    };
-    let (a, b) = (spawn("my_model.ron"), spawn("my_modem.ron"));
-    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
-    let (a, b): (serde_json::Value, serde_json::Value) = (serde_json::from_str(&ok(&a)).unwrap(), serde_json::from_str(&ok(&b)).unwrap());
-    assert!(a.as_array().unwrap().iter().all(|r| r["scene"] == "my_model"));
-    assert!(b.as_array().unwrap().iter().all(|r| r["scene"] == "my_modem"));
-    assert_ne!(a[0]["energy_error_norm"], b[0]["energy_error_norm"]);
+    let cache = tempfile::tempdir().unwrap();
+    let rustc = rustc();
+    concurrent_runs_keep_their_own_results(
+        &["--repeats", "1", "--compiled"],
+        &[("MULTIBODY_CACHE_DIR", cache.path().as_os_str()), ("RUSTC", rustc.as_os_str())],
+    );
 }
 
 /// `simulate` watches a model's events and reports them (stdout and JSON), in-process and

@@ -29,6 +29,16 @@ pub struct EventRun {
     pub jumps: Vec<Jump>,
 }
 
+/// `sys` as it stands just before `t` in a run with these `jumps`: with the momenta `G_I` of
+/// the last reset before `t` (a state the run reports at an event, before its reset, reads so).
+pub fn system_before(sys: &System, jumps: &[Jump], t: f64) -> System {
+    let mut before = sys.clone();
+    if let Some(j) = jumps.iter().rev().find(|j| j.t < t) {
+        before.g_i.clone_from(&j.g_i);
+    }
+    before
+}
+
 /// Integrates `sys` from `y0` over `times` watching its model's events (a model without any is
 /// a plain run); `on_rhs(t)` is told of every right-hand side (for progress). The exact
 /// Jacobian is used when the system has one, and the projection after every step when its drift
