@@ -8,7 +8,7 @@ use crate::CliError;
 use std::path::Path;
 
 /// The project's models, built into the tool: `(name, RON text)`.
-const BUILT_IN: [(&str, &str); 12] = [
+const BUILT_IN: [(&str, &str); 15] = [
     ("bicycle", include_str!("../models/bicycle.ron")),
     ("bouncing_ball", include_str!("../models/bouncing_ball.ron")),
     ("cart_pendulum", include_str!("../models/cart_pendulum.ron")),
@@ -17,10 +17,13 @@ const BUILT_IN: [(&str, &str); 12] = [
     ("pendulum_on_cart_5", include_str!("../models/pendulum_on_cart_5.ron")),
     ("rolling_disk", include_str!("../models/rolling_disk.ron")),
     ("satellite_boom", include_str!("../models/satellite_boom.ron")),
+    ("satellite_boom_quaternion", include_str!("../models/satellite_boom_quaternion.ron")),
     ("spring_cart", include_str!("../models/spring_cart.ron")),
     ("stiff_pendulum", include_str!("../models/stiff_pendulum.ron")),
     ("three_body", include_str!("../models/three_body.ron")),
+    ("three_body_quaternion", include_str!("../models/three_body_quaternion.ron")),
     ("tumbling_body", include_str!("../models/tumbling_body.ron")),
+    ("winch", include_str!("../models/winch.ron")),
 ];
 
 /// The names of the built-in models.

@@ -110,5 +110,5 @@ fn parameter_jacobians_match_finite_differences() {
         }
     }
     modules.dedup();
-    assert_eq!(modules, ["cart_pendulum", "satellite_boom", "rolling_disk", "spring_cart", "stiff_pendulum", "bouncing_ball", "inverted_pendulum"]);
+    assert_eq!(modules, ["cart_pendulum", "satellite_boom", "rolling_disk", "spring_cart", "stiff_pendulum", "bouncing_ball", "inverted_pendulum", "winch"]);
 }

@@ -2,7 +2,9 @@
 //! body spun near its intermediate axis, flips with the period of Euler's equations' closed
 //! form (Jacobi elliptic functions), keeps its energy and world-frame angular momentum, keeps
 //! its unit norm (to round-off with the projection), agrees with the same body in ZYX Euler
-//! angles away from their singularity, and starts where those angles are singular.
+//! angles away from their singularity, and starts where those angles are singular. Scenes 2 and
+//! 3 in quaternions move as the Euler scenes do and run where they cannot; linearized spins give
+//! Euler's closed form; `sweep` runs on them.
 
 mod common;
 use runtime::integrate::{Method, Settings};
@@ -154,4 +156,168 @@ fn quaternions_agree_with_euler_angles_and_pass_their_singularity() {
         System::start(&quaternion, FormulationKind::Kane, quaternion.default_params.clone(), &[h, 0.0, h, 0.0], &[-2.5 * h, 0.0, 2.5 * h, 0.0]).unwrap();
     let run = runtime::events::run(&sq, &yq, &times, &tight(), &mut |_| {}).unwrap();
     assert_eq!(run.solution.times.len(), times.len());
+}
+
+/// ZYX Euler angles and their rates to the unit quaternion `e = q_z(psi) q_y(theta) q_x(phi)` and
+/// `e' = e (0, omega) / 2`, `omega` the body's angular velocity: what the quaternion scenes'
+/// files state as their initial motion.
+fn from_euler(angles: [f64; 3], rates: [f64; 3]) -> ([f64; 4], [f64; 4]) {
+    let ([psi, theta, phi], [dpsi, dtheta, dphi]) = (angles, rates);
+    let (c, s) = (|a: f64| (a / 2.0).cos(), |a: f64| (a / 2.0).sin());
+    let e = [
+        c(psi) * c(theta) * c(phi) + s(psi) * s(theta) * s(phi),
+        c(psi) * c(theta) * s(phi) - s(psi) * s(theta) * c(phi),
+        c(psi) * s(theta) * c(phi) + s(psi) * c(theta) * s(phi),
+        s(psi) * c(theta) * c(phi) - c(psi) * s(theta) * s(phi),
+    ];
+    let w = [dphi - dpsi * theta.sin(), dtheta * phi.cos() + dpsi * theta.cos() * phi.sin(), -dtheta * phi.sin() + dpsi * theta.cos() * phi.cos()];
+    let ed = [
+        0.5 * (-e[1] * w[0] - e[2] * w[1] - e[3] * w[2]),
+        0.5 * (e[0] * w[0] - e[3] * w[1] + e[2] * w[2]),
+        0.5 * (e[3] * w[0] + e[0] * w[1] - e[1] * w[2]),
+        0.5 * (-e[2] * w[0] + e[1] * w[1] + e[0] * w[2]),
+    ];
+    (e, ed)
+}
+
+/// `R = Rz(psi) Ry(theta) Rx(phi)`.
+fn rotation_zyx(psi: f64, theta: f64, phi: f64) -> [[f64; 3]; 3] {
+    let (c1, s1, c2, s2, c3, s3) = (psi.cos(), psi.sin(), theta.cos(), theta.sin(), phi.cos(), phi.sin());
+    [[c1 * c2, c1 * s2 * s3 - s1 * c3, c1 * s2 * c3 + s1 * s3], [s1 * c2, s1 * s2 * s3 + c1 * c3, s1 * s2 * c3 - c1 * s3], [-s2, c2 * s3, c2 * c3]]
+}
+
+/// Scenes 2 and 3 in quaternions (`models/three_body_quaternion.ron`,
+/// `models/satellite_boom_quaternion.ron`) start where the Euler-angle scenes start, and every
+/// formulation of them moves as the Euler scene's Kane form does, to 1e-9 over 10 s at tight
+/// tolerances: the same attitude matrix, the same other coordinates, the same body rates.
+#[test]
+fn the_quaternion_scenes_move_as_the_euler_scenes() {
+    for (euler, quaternion) in [
+        (generated::three_body::model(), generated::three_body_quaternion::model()),
+        (generated::satellite_boom::model(), generated::satellite_boom_quaternion::model()),
+    ] {
+        let name = &quaternion.name;
+        let ((qe, qde), (qq, qdq)) = (euler.initial.clone().unwrap(), quaternion.initial.clone().unwrap());
+        let (e, ed) = from_euler([qe[0], qe[1], qe[2]], [qde[0], qde[1], qde[2]]);
+        for k in 0..4 {
+            assert!(
+                (qq[k] - e[k]).abs() <= 1e-15 && (qdq[k] - ed[k]).abs() <= 1e-15,
+                "{name}: e{k} = {} ({}'), converted {} ({}')",
+                qq[k],
+                qdq[k],
+                e[k],
+                ed[k]
+            );
+        }
+        // The other coordinates and rates are the Euler scene's.
+        assert_eq!((&qq[4..], &qdq[4..]), (&qe[3..], &qde[3..]), "{name}");
+        let times: Vec<f64> = (0..=100).map(|k| k as f64 * 0.1).collect();
+        let settings = Settings { h_max: 0.5, ..tight() };
+        let (se, ye) = System::start(&euler, FormulationKind::Kane, euler.default_params.clone(), &qe, &qde).unwrap();
+        let reference = runtime::events::run(&se, &ye, &times, &settings, &mut |_| {}).unwrap().solution;
+        for kind in quaternion.kinds() {
+            let (sq, yq) = System::start(&quaternion, kind, quaternion.default_params.clone(), &qq, &qdq).unwrap();
+            let run = runtime::events::run(&sq, &yq, &times, &settings, &mut |_| {}).unwrap().solution;
+            for (k, (x, y)) in reference.states.iter().zip(&run.states).enumerate() {
+                let ((q_e, qd_e), (q_q, qd_q)) = (se.velocities(times[k], x).unwrap(), sq.velocities(times[k], y).unwrap());
+                let (re, rq) = (rotation_zyx(q_e[0], q_e[1], q_e[2]), rotation(&q_q[..4]));
+                for i in 0..3 {
+                    for j in 0..3 {
+                        assert!((re[i][j] - rq[i][j]).abs() < 1e-9, "{name} {kind} t = {}: R[{i}][{j}] {} against {}", times[k], rq[i][j], re[i][j]);
+                    }
+                }
+                for j in 3..q_e.len() {
+                    assert!((q_e[j] - q_q[j + 1]).abs() < 1e-9 * (1.0 + q_e[j].abs()), "{name} {kind} t = {}: {}", times[k], euler.coordinates[j]);
+                    assert!((qd_e[j] - qd_q[j + 1]).abs() < 1e-9 * (1.0 + qd_e[j].abs()), "{name} {kind} t = {}: {}'", times[k], euler.coordinates[j]);
+                }
+                // The body rates from either: omega = 2 G(e) e'.
+                let (_, we) = from_euler([q_e[0], q_e[1], q_e[2]], [qd_e[0], qd_e[1], qd_e[2]]);
+                let (eq, edq) = (&q_q[..4], &qd_q[..4]);
+                let omega = |e: &[f64], d: &[f64]| {
+                    [
+                        2.0 * (-e[1] * d[0] + e[0] * d[1] + e[3] * d[2] - e[2] * d[3]),
+                        2.0 * (-e[2] * d[0] - e[3] * d[1] + e[0] * d[2] + e[1] * d[3]),
+                        2.0 * (-e[3] * d[0] + e[2] * d[1] - e[1] * d[2] + e[0] * d[3]),
+                    ]
+                };
+                let (ee, _) = from_euler([q_e[0], q_e[1], q_e[2]], [0.0; 3]);
+                let (wa, wb) = (omega(&ee, &we), omega(eq, edq));
+                for i in 0..3 {
+                    assert!((wa[i] - wb[i]).abs() < 1e-9, "{name} {kind} t = {}: omega[{i}] {} against {}", times[k], wb[i], wa[i]);
+                }
+            }
+        }
+    }
+}
+
+/// At theta = pi/2 scene 2's Euler model cannot start ("singular": its velocity transformation
+/// has no inverse there); the quaternion model of the same attitude and motion runs in every
+/// formulation, keeping its energy, momenta and unit norm, and the body's x axis turns away from
+/// the world's -z axis (`R[2][0] = -sin(theta)` leaves -1).
+#[test]
+fn the_quaternion_scene_runs_where_the_euler_scene_is_singular() {
+    let (euler, quaternion) = (generated::three_body::model(), generated::three_body_quaternion::model());
+    let angles = [0.1, std::f64::consts::FRAC_PI_2, 0.3];
+    let rates = [0.0, 0.5, 0.0];
+    let (qe, qde) = ([&angles[..], &[0.5, -0.4, 0.0, 0.0, 0.0]].concat(), [&rates[..], &[0.5, -0.3, 0.1, -0.2, 0.05]].concat());
+    let times: Vec<f64> = (0..=40).map(|k| k as f64 * 0.05).collect();
+    let err = System::start(&euler, FormulationKind::Kane, euler.default_params.clone(), &qe, &qde)
+        .map(|(se, ye)| runtime::events::run(&se, &ye, &times, &tight(), &mut |_| {}).map(|_| ()))
+        .map_or_else(|e| e.to_string(), |run| run.map_or_else(|e| e.to_string(), |_| String::new()));
+    assert!(err.contains("singular"), "the Euler model at theta = pi/2: {err:?}");
+    let (e, ed) = from_euler(angles, rates);
+    let (qq, qdq) = ([&e[..], &qe[3..]].concat(), [&ed[..], &qde[3..]].concat());
+    for kind in quaternion.kinds() {
+        let (sq, yq) = System::start(&quaternion, kind, quaternion.default_params.clone(), &qq, &qdq).unwrap();
+        let run = runtime::events::run(&sq, &yq, &times, &tight(), &mut |_| {}).unwrap();
+        assert_eq!(run.solution.times.len(), times.len(), "{kind}");
+        let inv = runtime::monitor::monitor(&sq, &run.solution).unwrap();
+        let pitch: Vec<f64> = inv.coordinates.iter().map(|q| rotation(&q[..4])[2][0]).collect();
+        assert!((pitch[0] + 1.0).abs() < 1e-15 && *pitch.last().unwrap() > -0.9, "{kind}: R[2][0] from {} to {}", pitch[0], pitch.last().unwrap());
+        let energy = inv.energy_error.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        assert!(energy < 1e-9 * inv.energy0.abs(), "{kind}: energy drifts by {energy:e} of {:e}", inv.energy0);
+        for (k, drift) in inv.momentum_error.iter().enumerate() {
+            let worst = drift.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            assert!(worst < 1e-9 * inv.momentum0[k].abs(), "{kind}: momentum {k} drifts by {worst:e} of {:e}", inv.momentum0[k]);
+        }
+        let norm = inv.position_constraint.iter().fold(0.0f64, |a, x| a.max(*x));
+        assert!(norm < 1e-9, "{kind}: |e|^2 - 1 reaches {norm:e}");
+    }
+}
+
+/// Linearized about a steady spin (exact Jacobians), the body rates' block of the tumbling body
+/// gives Euler's closed form: about the intermediate axis a real pair
+/// `+-Omega sqrt((I2 - I1)(I3 - I2) / (I1 I3))` (the flip's growth), about the major axis an
+/// imaginary pair `+-i Omega sqrt((I3 - I1)(I3 - I2) / (I1 I2))` (the wobble).
+#[test]
+fn linearized_spins_give_euler_s_closed_form() {
+    let model = generated::tumbling_body::model();
+    let omega = 5.0;
+    for (axis, expected) in
+        [(2, (omega * ((I[1] - I[0]) * (I[2] - I[1]) / (I[0] * I[2])).sqrt(), 0.0)), (3, (0.0, omega * ((I[2] - I[0]) * (I[2] - I[1]) / (I[0] * I[1])).sqrt()))]
+    {
+        let mut qdot = vec![0.0; 4];
+        qdot[axis] = omega / 2.0;
+        let at = runtime::linearize::Operating { q: vec![1.0, 0.0, 0.0, 0.0], qdot, params: model.default_params.clone(), held: (0..4).collect() };
+        let linear = runtime::linearize::linearize(&model, FormulationKind::Kane, &at).unwrap();
+        assert!(linear.exact);
+        let found = linear.eigenvalues.iter().any(|z| (z.re - expected.0).abs() < 1e-12 * omega && (z.im - expected.1).abs() < 1e-12 * omega);
+        assert!(found, "axis {axis}: {:?} has no {expected:?}", linear.eigenvalues);
+    }
+}
+
+/// Scene 2 in quaternions through `sweep`: every formulation's error against the reference run
+/// falls by more than a hundred from rtol 1e-6 to 1e-9.
+#[test]
+fn the_quaternion_scene_sweeps() {
+    let model = generated::three_body_quaternion::model();
+    let options =
+        runtime::sweep::SweepOptions { adaptive: vec![Method::Dop853], tolerances: vec![1e-6, 1e-9], rk4_steps: vec![], repeats: 1, ..Default::default() };
+    let points = runtime::sweep::sweep(&model, &options, &mut |_, _, _| {}).unwrap();
+    assert_eq!(points.len(), 8);
+    for kind in ["lagrange", "maggi", "kane", "reduced_volterra"] {
+        let error = |setting: f64| points.iter().find(|p| p.method == kind && p.setting == setting).unwrap().error;
+        let (loose, tight) = (error(1e-6), error(1e-9));
+        assert!(tight < 1e-2 * loose, "{kind}: error {tight:e} at 1e-9 against {loose:e} at 1e-6");
+    }
 }

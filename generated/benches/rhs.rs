@@ -1,7 +1,8 @@
 //! Nanoseconds per right-hand-side call, per scene and formulation, through the typed
 //! functions of each emitted module (no slices, no conversions), beside each function's exact
 //! operation counts (assembly + worst-case solve, from the generation summary): every call
-//! timed interleaved with the others, best of 30 rounds of 2,000 calls.
+//! timed interleaved with the others, best of 30 rounds of 2,000 calls. Scenes 2 and 3 with
+//! their attitudes in quaternions are timed beside their Euler-angle modules.
 //!
 //! `cargo bench -p generated --bench rhs` writes `docs/benchmarks/rhs.json` (the table of
 //! `docs/benchmarks.md`, checked by `tests/figures.rs`) and prints it.
@@ -68,6 +69,8 @@ fn main() {
     entries!(entries, three_body_drop, "2 three_body, ignorable not integrated", [reduced_volterra]);
     entries!(entries, three_body_split, "2 three_body, split every 40 lets", [kane, reduced_volterra]);
     entries!(entries, satellite_boom, "3 satellite_boom", [lagrange, maggi, kane, reduced_volterra]);
+    entries!(entries, three_body_quaternion, "2 three_body, quaternions", [lagrange, maggi, kane, reduced_volterra]);
+    entries!(entries, satellite_boom_quaternion, "3 satellite_boom, quaternions", [lagrange, maggi, kane, reduced_volterra]);
     // Operation counts: each module's generation summary, with the options it was committed with.
     let mut ops = std::collections::HashMap::new();
     for (module, model, edit) in variants::variants() {
@@ -96,6 +99,9 @@ fn main() {
             Some(j) if label.chars().all(|c| c != ',') => format!("{:.2}", best[k] / best[j]),
             _ => String::new(),
         };
+        // The attitude in quaternions against the same formulation in Euler angles.
+        let euler = module.strip_suffix("_quaternion").and_then(|m| entries.iter().position(|e| e.1 == m && e.2 == *form));
+        let against_euler = euler.map_or(String::new(), |j| format!("{:.2}", best[k] / best[j]));
         rows.push(vec![
             label.to_string(),
             title(form).to_string(),
@@ -104,9 +110,10 @@ fn main() {
             format!("{assembly} + {solve}"),
             format!("{:.0}", best[k]),
             against_kane,
+            against_euler,
         ]);
     }
-    let columns = ["scene", "formulation", "states", "equations", "assembly + solve ops", "ns/call", "/ Kane (ns)"];
+    let columns = ["scene", "formulation", "states", "equations", "assembly + solve ops", "ns/call", "/ Kane (ns)", "/ Euler angles (ns)"];
     let json = serde_json::json!({ "command": COMMAND, "columns": columns, "rows": rows });
     let table = std::iter::once(columns.join(" | ")).chain(rows.iter().map(|r| r.join(" | "))).collect::<Vec<_>>().join("\n");
     println!("{table}");

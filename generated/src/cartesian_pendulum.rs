@@ -701,7 +701,7 @@ pub mod maggi {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 2],
@@ -710,7 +710,7 @@ pub mod maggi {
         w: [[f64; 1]; 2],
         c: [f64; 2],
         power: f64,
-        checks: [f64; 1],
+        checks: [f64; 2],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -729,22 +729,22 @@ pub mod maggi {
         let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
-        let x4 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
-        let x5 = x3 * y;
-        let x6 = x3 * (x * y_dot - x_dot * y);
-        let x7 = (2.0 * (x4 * x5) - 2.0 * y_dot) * x6;
-        let x8 = x * x3;
-        let x9 = x6 * (2.0 * x_dot - 2.0 * (x4 * x8));
+        let x4 = (x * y_dot - x_dot * y) * x3;
+        let x5 = x * x3;
+        let x6 = 2.0 * (x * x_dot) + 2.0 * (y * y_dot);
+        let x7 = x4 * (x_dot - x5 * x6);
+        let x8 = y * x3;
+        let x9 = x4 * (x6 * x8 - y_dot);
         Assembly {
             qdot: [x_dot, y_dot],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(-2.0 * (y * (w_ - mb * x7)) - 2.0 * ((g + x9) * x * mb)) * x3],
-            w: [[-(2.0 * x5)], [2.0 * x8]],
-            c: [x7, x9],
+            matrix: [[mb * x3]],
+            force: [(-(g + x7) * x * mb - y * (w_ - mb * x9)) * x3],
+            w: [[-x8], [x5]],
+            c: [x9, x7],
             power: w_ * x_dot,
-            checks: [x2],
+            checks: [x2, 4.0 * x0 + 4.0 * x1],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -857,11 +857,21 @@ pub mod maggi {
         let y = state[1];
         let x_dot = state[2];
         let y_dot = state[3];
-        let value = 2.0 * (x * x) + 2.0 * (y * y);
+        let x0 = x * x;
+        let x1 = y * y;
+        let value = x0 + x1;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
                 condition: CONDITIONS[0].into(),
+                value,
+            });
+        }
+        let value = 4.0 * x0 + 4.0 * x1;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(Failure::Singular {
+                t,
+                condition: CONDITIONS[1].into(),
                 value,
             });
         }
@@ -884,14 +894,16 @@ pub mod maggi {
     ) -> f64 {
         let x = state[0];
         let y = state[1];
-        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
+        let x0 = x * x;
+        let x1 = y * y;
+        f64::INFINITY.min(f64::abs(x0 + x1)).min(f64::abs(4.0 * x0 + 4.0 * x1))
     }
     ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
     struct Derivatives {
         qdot: [f64; 2],
         matrix: [[f64; 1]; 1],
         force: [f64; 1],
-        checks: [f64; 1],
+        checks: [f64; 2],
         d_qdot: [[f64; 2]; 4],
         d_matrix: [[[f64; 1]; 1]; 4],
         d_force: [[f64; 1]; 4],
@@ -919,85 +931,77 @@ pub mod maggi {
         let w_ = params.w_;
         let x0 = y * y;
         let x1 = x * x;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
         let x4 = mb * x3;
-        let x5 = x4 * x3;
-        let x6 = x_dot * y;
-        let x7 = x * y_dot;
-        let x8 = x7 - x6;
-        let x9 = 4.0 * (x * x_dot) + 4.0 * (y * y_dot);
-        let x10 = x3 * y;
-        let x11 = 2.0 * (x9 * x10) - 2.0 * y_dot;
-        let x12 = x4 * x8 * x11;
-        let x13 = w_ - x12;
-        let x14 = y * x13;
-        let x15 = x3 * x8;
-        let x16 = x * x3;
-        let x17 = x15 * (2.0 * x_dot - 2.0 * (x9 * x16));
-        let x18 = x17 + g;
-        let x19 = -(x * x18);
-        let x20 = x4 * (8.0 - x3 * (32.0 * x0 + 32.0 * x1));
-        let x21 = x16 * x8;
-        let x22 = x * x8;
-        let x23 = ((8.0 * (x_dot * x8) + x9 * (2.0 * y_dot - 16.0 * x21)) * y
-            + 8.0 * (x22 * y_dot)) * x3 - 2.0 * (y_dot * y_dot);
-        let x24 = x3
-            * (x9 * (2.0 * x6 - 2.0 * x7 + x * (16.0 * x21 - 2.0 * y_dot))
-                - 16.0 * (x22 * x_dot));
-        let x25 = x_dot * y_dot;
-        let x26 = x16 * x10;
-        let x27 = 16.0 * (x10 * x8) + 2.0 * x_dot;
-        let x28 = y * x8;
-        let x29 = x3 * (x * (x9 * x27 - 8.0 * (x8 * y_dot)) - 8.0 * (x28 * x_dot));
-        let x30 = x_dot * x_dot;
-        let x31 = (16.0 * (x28 * y_dot) + x9 * (2.0 * x7 - 2.0 * x6 - x27 * y)) * x3
-            + 2.0 * x25;
-        let x32 = x9 * y;
-        let x33 = x3 * (8.0 * x22 - 2.0 * x32) + 2.0 * y_dot;
-        let x34 = 2.0 * x7 - 4.0 * x6 + x16 * (2.0 * x32 - 8.0 * x22);
-        let x35 = 2.0 * (x9 * x) + 8.0 * x28;
-        let x36 = 2.0 * x_dot - x3 * x35;
-        let x37 = 2.0 * x6 - 4.0 * x7 + x10 * x35;
+        let x5 = x_dot * y;
+        let x6 = x * y_dot;
+        let x7 = x6 - x5;
+        let x8 = 2.0 * (x * x_dot) + 2.0 * (y * y_dot);
+        let x9 = y * x3;
+        let x10 = x8 * x9 - y_dot;
+        let x11 = x7 * x10 * x4;
+        let x12 = w_ - x11;
+        let x13 = x12 * y;
+        let x14 = x * x3;
+        let x15 = x7 * x3;
+        let x16 = (x_dot - x8 * x14) * x15;
+        let x17 = g + x16;
+        let x18 = -(x * x17);
+        let x19 = 4.0 * x0 + 4.0 * x1;
+        let x20 = x4 * (2.0 - x3 * x19);
+        let x21 = x7 * x14;
+        let x22 = x7 * x;
+        let x23 = ((x8 * (y_dot - 4.0 * x21) + 2.0 * (x7 * x_dot)) * y
+            + 2.0 * (x22 * y_dot)) * x3 - y_dot * y_dot;
+        let x24 = x_dot * y_dot;
+        let x25 = (x8 * (x5 - x6 + x * (4.0 * x21 - y_dot)) - 4.0 * (x22 * x_dot)) * x3
+            + x24;
+        let x26 = x9 * x14;
+        let x27 = x_dot + 4.0 * (x7 * x9);
+        let x28 = x7 * y;
+        let x29 = x24 + (x8 * (x7 - x27 * y) + 4.0 * (x28 * y_dot)) * x3;
+        let x30 = (x * (x8 * x27 - 2.0 * (x7 * y_dot)) - 2.0 * (x_dot * x28)) * x3;
+        let x31 = x_dot * x_dot;
+        let x32 = x8 * y;
+        let x33 = x6 - 2.0 * x5 + (x32 - 2.0 * x22) * x14;
+        let x34 = (2.0 * x22 - x32) * x3 + y_dot;
+        let x35 = x4 * x3;
+        let x36 = x8 * x + 2.0 * x28;
+        let x37 = x5 - 2.0 * x6 + x9 * x36;
+        let x38 = x_dot - x36 * x3;
         Derivatives {
             qdot: [x_dot, y_dot],
-            matrix: [[x5 * (4.0 * x0 + 4.0 * x1)]],
-            force: [(2.0 * (x19 * mb) - 2.0 * x14) * x3],
-            checks: [x2],
+            matrix: [[x4]],
+            force: [(x18 * mb - x13) * x3],
+            checks: [x2, x19],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            d_matrix: [[[x20 * x16]], [[x20 * x10]], [[0.0]], [[0.0]]],
+            d_matrix: [[[x20 * x14]], [[x9 * x20]], [[0.0]], [[0.0]]],
             d_force: [
                 [
-                    (8.0 * (x14 * x16)
-                        + mb
-                            * (x3
-                                * (2.0 * (x23 * y)
-                                    - x * (8.0 * x19 + 2.0 * x24 + 4.0 * x25)) - 2.0 * x17
-                                - 2.0 * g)) * x3,
+                    (mb * ((x23 * y - x * (2.0 * x18 + x25)) * x3 - g - x16)
+                        + 2.0 * (x13 * x14)) * x3,
                 ],
                 [
-                    x3
-                        * ((mb
-                            * (x * (8.0 * (y * x18) - 2.0 * x29 + 4.0 * x30)
-                                + 2.0 * (y * x31)) + 8.0 * (x0 * x13)) * x3 - 2.0 * w_
-                            + 2.0 * x12),
+                    ((mb * (y * x29 + (x31 - x30 + 2.0 * (y * x17)) * x)
+                        + 2.0 * (x12 * x0)) * x3 - w_ + x11) * x3,
                 ],
-                [(2.0 * (x0 * x33) - 2.0 * (x * x34)) * x5],
-                [x5 * (2.0 * (y * x37) - 2.0 * (x36 * x1))],
+                [(x34 * x0 - x * x33) * x35],
+                [(x37 * y - x38 * x1) * x35],
             ],
-            w: [[-(2.0 * x10)], [2.0 * x16]],
-            c: [x15 * x11, x17],
+            w: [[-x9], [x14]],
+            c: [x10 * x15, x16],
             d_w: [
-                [[8.0 * x26], [(2.0 - 8.0 * (x * x16)) * x3]],
-                [[(8.0 * (x10 * y) - 2.0) * x3], [-(8.0 * x26)]],
+                [[2.0 * x26], [(1.0 - 2.0 * (x * x14)) * x3]],
+                [[(2.0 * (x9 * y) - 1.0) * x3], [-(2.0 * x26)]],
                 [[0.0], [0.0]],
                 [[0.0], [0.0]],
             ],
             d_c: [
-                [x23 * x3, (x24 + 2.0 * x25) * x3],
-                [x3 * x31, (x29 - 2.0 * x30) * x3],
-                [x10 * x33, x34 * x3],
-                [x3 * x37, x16 * x36],
+                [x23 * x3, x25 * x3],
+                [x3 * x29, (x30 - x31) * x3],
+                [x34 * x9, x33 * x3],
+                [x37 * x3, x38 * x14],
             ],
             power: w_ * x_dot,
             d_power: [0.0, 0.0, w_, 0.0],
@@ -1208,14 +1212,14 @@ pub mod kane {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 2],
         matrix: [[f64; 1]; 1],
         force: [f64; 1],
         power: f64,
-        checks: [f64; 1],
+        checks: [f64; 2],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -1233,16 +1237,16 @@ pub mod kane {
         let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
-        let x4 = x3 * u1;
+        let x4 = u1 * x3;
         let x5 = w_ * y;
         Assembly {
-            qdot: [-(2.0 * y * x4), 2.0 * x * x4],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [-((2.0 * (x * mb * g) + 2.0 * x5) * x3)],
-            power: -(2.0 * x4 * x5),
-            checks: [x2],
+            qdot: [-(x4 * y), x * x4],
+            matrix: [[mb * x3]],
+            force: [-((x * mb * g + x5) * x3)],
+            power: -(x4 * x5),
+            checks: [x2, 4.0 * x0 + 4.0 * x1],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -1352,9 +1356,11 @@ pub mod kane {
         let x = state[0];
         let y = state[1];
         let u1 = state[2];
-        let x0 = 2.0 * (x * x) + 2.0 * (y * y);
-        let x1 = 1.0 / x0 * u1;
-        let value = x0;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = x0 + x1;
+        let x3 = u1 * (1.0 / x2);
+        let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -1362,8 +1368,16 @@ pub mod kane {
                 value,
             });
         }
+        let value = 4.0 * x0 + 4.0 * x1;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(Failure::Singular {
+                t,
+                condition: CONDITIONS[1].into(),
+                value,
+            });
+        }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * x1), 2.0 * x * x1];
+        let qdot: [f64; NUM_COORDINATES] = [-(x3 * y), x * x3];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(Failure::NonFinite { t, index });
@@ -1381,14 +1395,16 @@ pub mod kane {
     ) -> f64 {
         let x = state[0];
         let y = state[1];
-        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
+        let x0 = x * x;
+        let x1 = y * y;
+        f64::INFINITY.min(f64::abs(x0 + x1)).min(f64::abs(4.0 * x0 + 4.0 * x1))
     }
     ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
     struct Derivatives {
         qdot: [f64; 2],
         matrix: [[f64; 1]; 1],
         force: [f64; 1],
-        checks: [f64; 1],
+        checks: [f64; 2],
         d_qdot: [[f64; 2]; 3],
         d_matrix: [[[f64; 1]; 1]; 3],
         d_force: [[f64; 1]; 3],
@@ -1411,34 +1427,35 @@ pub mod kane {
         let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
-        let x4 = x3 * y;
+        let x4 = y * x3;
         let x5 = x4 * u1;
         let x6 = x * x3;
         let x7 = mb * x3;
         let x8 = mb * g;
         let x9 = x * x8;
         let x10 = w_ * y;
-        let x11 = x6 * x5;
-        let x12 = x3 * u1;
-        let x13 = (8.0 - (32.0 * x0 + 32.0 * x1) * x3) * x7;
-        let x14 = 8.0 * x9 + 8.0 * x10;
-        let x15 = (8.0 * (x4 * y) - 2.0) * x12;
+        let x11 = 4.0 * x0 + 4.0 * x1;
+        let x12 = x6 * x5;
+        let x13 = u1 * x3;
+        let x14 = (2.0 - x11 * x3) * x7;
+        let x15 = 2.0 * x9 + 2.0 * x10;
+        let x16 = x13 * (2.0 * (x4 * y) - 1.0);
         Derivatives {
-            qdot: [-(2.0 * x5), 2.0 * x6 * u1],
-            matrix: [[x7 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [-(x3 * (2.0 * x9 + 2.0 * x10))],
-            checks: [x2],
+            qdot: [-x5, x6 * u1],
+            matrix: [[x7]],
+            force: [-(x3 * (x9 + x10))],
+            checks: [x2, x11],
             d_qdot: [
-                [8.0 * x11, (2.0 - 8.0 * (x * x6)) * x12],
-                [x15, -(8.0 * x11)],
-                [-(2.0 * x4), 2.0 * x6],
+                [2.0 * x12, x13 * (1.0 - 2.0 * (x6 * x))],
+                [x16, -(2.0 * x12)],
+                [-x4, x6],
             ],
-            d_matrix: [[[x6 * x13]], [[x4 * x13]], [[0.0]]],
-            d_force: [[(x6 * x14 - 2.0 * x8) * x3], [(x4 * x14 - 2.0 * w_) * x3], [0.0]],
-            power: -(2.0 * w_ * x5),
-            d_power: [8.0 * w_ * x11, w_ * x15, -(2.0 * w_ * x4)],
+            d_matrix: [[[x6 * x14]], [[x14 * x4]], [[0.0]]],
+            d_force: [[(x6 * x15 - x8) * x3], [(x4 * x15 - w_) * x3], [0.0]],
+            power: -(x5 * w_),
+            d_power: [2.0 * x12 * w_, w_ * x16, -(x4 * w_)],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -1634,14 +1651,14 @@ pub mod reduced_volterra {
     ///Size of the matrix `rhs` solves numerically.
     pub const MATRIX_SIZE: usize = 1;
     ///What each checked singular factor's vanishing means, in the order of `Assembly::checks`.
-    const CONDITIONS: [&str; 1] = ["2*x^2 + 2*y^2 = 0"];
+    const CONDITIONS: [&str; 2] = ["x^2 + y^2 = 0", "4*x^2 + 4*y^2 = 0"];
     ///Everything the right-hand side evaluates before its solve.
     struct Assembly {
         qdot: [f64; 2],
         matrix: [[f64; 1]; 1],
         force: [f64; 1],
         power: f64,
-        checks: [f64; 1],
+        checks: [f64; 2],
     }
     ///Evaluates the rates of the kept coordinates, the matrix and forcing, and the singular factors.
     #[allow(non_snake_case, clippy::all)]
@@ -1659,16 +1676,16 @@ pub mod reduced_volterra {
         let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
-        let x4 = x3 * u1;
+        let x4 = u1 * x3;
         let x5 = w_ * y;
         Assembly {
-            qdot: [-(2.0 * y * x4), 2.0 * x * x4],
-            matrix: [[mb * x3 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [-((2.0 * (x * mb * g) + 2.0 * x5) * x3)],
-            power: -(2.0 * x4 * x5),
-            checks: [x2],
+            qdot: [-(x4 * y), x * x4],
+            matrix: [[mb * x3]],
+            force: [-((x * mb * g + x5) * x3)],
+            power: -(x4 * x5),
+            checks: [x2, 4.0 * x0 + 4.0 * x1],
         }
     }
     ///Checks the singular factors, solves, and writes the state's rates.
@@ -1778,9 +1795,11 @@ pub mod reduced_volterra {
         let x = state[0];
         let y = state[1];
         let u1 = state[2];
-        let x0 = 2.0 * (x * x) + 2.0 * (y * y);
-        let x1 = 1.0 / x0 * u1;
-        let value = x0;
+        let x0 = x * x;
+        let x1 = y * y;
+        let x2 = x0 + x1;
+        let x3 = u1 * (1.0 / x2);
+        let value = x2;
         if !(value.abs() > SINGULAR_TOLERANCE) {
             return Err(Failure::Singular {
                 t,
@@ -1788,8 +1807,16 @@ pub mod reduced_volterra {
                 value,
             });
         }
+        let value = 4.0 * x0 + 4.0 * x1;
+        if !(value.abs() > SINGULAR_TOLERANCE) {
+            return Err(Failure::Singular {
+                t,
+                condition: CONDITIONS[1].into(),
+                value,
+            });
+        }
         let q: [f64; NUM_COORDINATES] = [state[0], state[1]];
-        let qdot: [f64; NUM_COORDINATES] = [-(2.0 * y * x1), 2.0 * x * x1];
+        let qdot: [f64; NUM_COORDINATES] = [-(x3 * y), x * x3];
         for (index, value) in qdot.iter().enumerate() {
             if !value.is_finite() {
                 return Err(Failure::NonFinite { t, index });
@@ -1807,14 +1834,16 @@ pub mod reduced_volterra {
     ) -> f64 {
         let x = state[0];
         let y = state[1];
-        f64::INFINITY.min(f64::abs(2.0 * (x * x) + 2.0 * (y * y)))
+        let x0 = x * x;
+        let x1 = y * y;
+        f64::INFINITY.min(f64::abs(x0 + x1)).min(f64::abs(4.0 * x0 + 4.0 * x1))
     }
     ///Everything `jacobian` evaluates before its solves: the assembly and its derivatives by each state variable (kept coordinates, then speeds).
     struct Derivatives {
         qdot: [f64; 2],
         matrix: [[f64; 1]; 1],
         force: [f64; 1],
-        checks: [f64; 1],
+        checks: [f64; 2],
         d_qdot: [[f64; 2]; 3],
         d_matrix: [[[f64; 1]; 1]; 3],
         d_force: [[f64; 1]; 3],
@@ -1837,34 +1866,35 @@ pub mod reduced_volterra {
         let w_ = params.w_;
         let x0 = x * x;
         let x1 = y * y;
-        let x2 = 2.0 * x0 + 2.0 * x1;
+        let x2 = x0 + x1;
         let x3 = 1.0 / x2;
-        let x4 = x3 * y;
+        let x4 = y * x3;
         let x5 = x4 * u1;
         let x6 = x * x3;
         let x7 = mb * x3;
         let x8 = mb * g;
         let x9 = x * x8;
         let x10 = w_ * y;
-        let x11 = x6 * x5;
-        let x12 = x3 * u1;
-        let x13 = (8.0 - (32.0 * x0 + 32.0 * x1) * x3) * x7;
-        let x14 = 8.0 * x9 + 8.0 * x10;
-        let x15 = (8.0 * (x4 * y) - 2.0) * x12;
+        let x11 = 4.0 * x0 + 4.0 * x1;
+        let x12 = x6 * x5;
+        let x13 = u1 * x3;
+        let x14 = (2.0 - x11 * x3) * x7;
+        let x15 = 2.0 * x9 + 2.0 * x10;
+        let x16 = x13 * (2.0 * (x4 * y) - 1.0);
         Derivatives {
-            qdot: [-(2.0 * x5), 2.0 * x6 * u1],
-            matrix: [[x7 * x3 * (4.0 * x0 + 4.0 * x1)]],
-            force: [-(x3 * (2.0 * x9 + 2.0 * x10))],
-            checks: [x2],
+            qdot: [-x5, x6 * u1],
+            matrix: [[x7]],
+            force: [-(x3 * (x9 + x10))],
+            checks: [x2, x11],
             d_qdot: [
-                [8.0 * x11, (2.0 - 8.0 * (x * x6)) * x12],
-                [x15, -(8.0 * x11)],
-                [-(2.0 * x4), 2.0 * x6],
+                [2.0 * x12, x13 * (1.0 - 2.0 * (x6 * x))],
+                [x16, -(2.0 * x12)],
+                [-x4, x6],
             ],
-            d_matrix: [[[x6 * x13]], [[x4 * x13]], [[0.0]]],
-            d_force: [[(x6 * x14 - 2.0 * x8) * x3], [(x4 * x14 - 2.0 * w_) * x3], [0.0]],
-            power: -(2.0 * w_ * x5),
-            d_power: [8.0 * w_ * x11, w_ * x15, -(2.0 * w_ * x4)],
+            d_matrix: [[[x6 * x14]], [[x14 * x4]], [[0.0]]],
+            d_force: [[(x6 * x15 - x8) * x3], [(x4 * x15 - w_) * x3], [0.0]],
+            power: -(x5 * w_),
+            d_power: [2.0 * x12 * w_, w_ * x16, -(x4 * w_)],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.

@@ -50,6 +50,9 @@ pub mod rolling_disk;
 pub mod satellite_boom;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod satellite_boom_quaternion;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod spring_cart;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
@@ -59,6 +62,9 @@ pub mod stiff_pendulum;
 pub mod three_body;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod three_body_quaternion;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod three_body_drop;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
@@ -66,6 +72,9 @@ pub mod three_body_split;
 #[allow(clippy::all)] // machine-written: clippy's style lints do not apply
 #[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
 pub mod tumbling_body;
+#[allow(clippy::all)] // machine-written: clippy's style lints do not apply
+#[rustfmt::skip] // machine-written: prettyplease's layout, checked byte for byte by tests/regenerate.rs
+pub mod winch;
 
 mod registry;
 pub use registry::{find, models};

@@ -57,7 +57,7 @@ pub struct Record {
     pub equations: usize,
     #[serde(deserialize_with = "null_as_nan")]
     pub seconds: f64,
-    /// The column the energy error is reported in (`energy err`, `jacobi err`, `h - W drift`:
+    /// The column the energy error is reported in (`energy err`, `jacobi err`, `h - W err`:
     /// [`seam::EnergyBalance::column`]) and what it measures.
     pub energy_column: String,
     pub energy_balance: String,

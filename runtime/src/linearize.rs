@@ -39,6 +39,10 @@ impl Operating {
         }
         let (a_all, b) = crate::system::constraint_matrix(model, 0.0, &self.q, &self.params).map_err(LinearizeError::Rhs)?;
         let free: Vec<usize> = (0..m).filter(|j| !self.held.contains(j)).collect();
+        if free.is_empty() {
+            // Every rate given: nothing to solve (the constraints check them where they are used).
+            return Ok(self.qdot.clone());
+        }
         let a = DMatrix::from_fn(r, free.len(), |i, k| a_all[(i, free[k])]);
         let rhs = nalgebra::DVector::from_iterator(r, (0..r).map(|i| -b[i] - self.held.iter().map(|&j| a_all[(i, j)] * self.qdot[j]).sum::<f64>()));
         let x = a.svd(true, true).solve(&rhs, 1e-12).map_err(|e| LinearizeError::Rates(e.to_string()))?;

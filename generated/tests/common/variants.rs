@@ -24,6 +24,11 @@ pub fn variants() -> Vec<(&'static str, &'static str, fn(&mut Options))> {
         ("inverted_pendulum", "inverted_pendulum", |o| o.parameter_jacobian = true),
         // Unit quaternions: the attitude without a singular configuration.
         ("tumbling_body", "tumbling_body", |_| {}),
+        // Scenes 2 and 3 with their attitudes in unit quaternions.
+        ("three_body_quaternion", "three_body_quaternion", |_| {}),
+        ("satellite_boom_quaternion", "satellite_boom_quaternion", |_| {}),
+        // A moving constraint (a rope reeled by a winch): its power joins the work integral.
+        ("winch", "winch", |o| o.parameter_jacobian = true),
         // `--formulations lagrange --jacobian`: the bicycle's multiplier form with its exact
         // Jacobian (12136 operations), for linearization to round-off.
         ("bicycle_lagrange", "bicycle", |o| o.formulations = vec![Formulation::Lagrange]),

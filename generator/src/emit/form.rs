@@ -124,6 +124,7 @@ impl Emitter<'_> {
                 conditions: conditions(&checks),
                 matrix_name: f.matrix_name.to_string(),
                 stabilization: f.stabilization.as_ref().map(|s| s.len()),
+                power_weights: work && f.constraint_power.is_some(),
                 depends_on_time,
             });
         }
@@ -160,7 +161,8 @@ impl Emitter<'_> {
 
     /// What the state's rates are computed from, in order: the kept coordinates' rates, the
     /// matrix (both triangles read the upper entry, so CSE binds it once), the forcing, Maggi's
-    /// `W` and `c`, and the power `Q . q'` when forces do work.
+    /// `W` and `c`, and the power `Q . q'` when forces do work (with the moving constraints'
+    /// power's offset, then its weights on the solution, [`crate::formulation::power`]).
     pub(super) fn rate_outputs(&self, f: &Equations, shared: &FromMechanics) -> Vec<Expr> {
         let model = self.model;
         let n = f.mass.rows;
@@ -177,7 +179,11 @@ impl Emitter<'_> {
         }
         if self.work {
             let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
-            outputs.push(shared.power.subs(&to_qdot));
+            let offset = f.constraint_power.as_ref().map_or(Expr::zero(), |(_, offset)| *offset);
+            outputs.push(shared.power.subs(&to_qdot) + offset);
+            if let Some((weights, _)) = &f.constraint_power {
+                outputs.extend(weights.iter().copied());
+            }
         }
         outputs
     }
@@ -206,7 +212,13 @@ impl Emitter<'_> {
             outputs.extend(stab.iter().map(|(_, p)| *p));
         }
         let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
-        self.functions.last_mut().expect("just pushed").solve = solve_cost(n);
+        let mut solve = solve_cost(n);
+        if work && f.constraint_power.is_some() {
+            // The moving constraints' power after the solve: `power_weights . x`.
+            solve.add += n;
+            solve.mul += n;
+        }
+        self.functions.last_mut().expect("just pushed").solve = solve;
         let o = &b.outputs;
         let mut at = 0;
         let mut take = |k: usize| {
@@ -257,7 +269,19 @@ impl Emitter<'_> {
             fields.push(quote!(power: f64));
             values.push(quote!(power: #p));
             let l = usize_lit(n_states - 1);
-            quote!(dstate[#l] = power;)
+            if f.constraint_power.is_some() {
+                // The moving constraints' power: its weights on the solution x (in `force`).
+                let weights = take(n);
+                fields.push(quote!(power_weights: [f64; #n_l]));
+                values.push(quote!(power_weights: [#(#weights),*]));
+                let terms = (0..n).map(|k| {
+                    let kl = usize_lit(k);
+                    quote!(power_weights[#kl] * force[#kl])
+                });
+                quote!(dstate[#l] = power #(+ #terms)*;)
+            } else {
+                quote!(dstate[#l] = power;)
+            }
         } else {
             TokenStream::new()
         };
@@ -300,12 +324,20 @@ impl Emitter<'_> {
         let qd_idx: Vec<Literal> = (0..nq).map(usize_lit).collect();
         let s_idx: Vec<Literal> = (0..n_speeds).map(|k| usize_lit(nq + k)).collect();
         let unpack_post = if f.post.is_some() { quote!(let (w, c) = (a.w, a.c);) } else { TokenStream::new() };
-        let unpack_power = if work { quote!(let power = a.power;) } else { TokenStream::new() };
+        let unpack_power = match (work, f.constraint_power.is_some()) {
+            (true, true) => quote!(let (power, power_weights) = (a.power, a.power_weights);),
+            (true, false) => quote!(let power = a.power;),
+            _ => TokenStream::new(),
+        };
         let rhs_doc = doc(&format!(
             "Right-hand side of {}: `dstate = [q'; {}']`{} for `state = [q; {}]`. Stops with `Failure::Singular` where the equations are singular and `Failure::NonFinite` instead of writing NaN.",
             f.label,
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
-            if work { " and the power `W' = Q . q'` last" } else { "" },
+            match (work, f.constraint_power.is_some()) {
+                (true, true) => " and the power `W' = (Q + R) . q' - dL/dt` last (`R` the moving constraints' forces)",
+                (true, false) => " and the power `W' = Q . q'` last",
+                _ => "",
+            },
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));

@@ -67,10 +67,17 @@ impl Emitter<'_> {
         let args = state_args();
         let inputs = self.state_inputs(f);
         let b = self.body(&format!("{name}::{function}"), &outputs, &inputs, &args)?;
-        self.functions.last_mut().expect("just pushed").solve = jacobian_solve_cost(n, nv);
+        let mut solve = jacobian_solve_cost(n, nv);
+        if work && f.constraint_power.is_some() {
+            // `power_weights . x` and, per column, `d_power_weights . x + power_weights . dx`.
+            solve.add += n * (2 * nv + 1);
+            solve.mul += n * (2 * nv + 1);
+        }
+        self.functions.last_mut().expect("just pushed").solve = solve;
         let mut it = b.outputs.iter().cloned();
-        let dims = Dims { nq, n, rw, cw, work };
-        let (qd0, m0, f0, w0, c0, p0) = dims.block(&mut it);
+        let weighted = work && f.constraint_power.is_some();
+        let dims = Dims { nq, n, rw, cw, work, weighted };
+        let (qd0, m0, f0, w0, c0, (p0, pw0)) = dims.block(&mut it);
         let check_out: Vec<TokenStream> = it.by_ref().take(checks.len()).collect();
         let mut d_qd = Vec::new();
         let mut d_m = Vec::new();
@@ -78,14 +85,16 @@ impl Emitter<'_> {
         let mut d_w = Vec::new();
         let mut d_c = Vec::new();
         let mut d_p = Vec::new();
+        let mut d_pw = Vec::new();
         for _ in 0..nv {
-            let (a, b_, c_, w_, cc, p) = dims.block(&mut it);
+            let (a, b_, c_, w_, cc, (p, pw)) = dims.block(&mut it);
             d_qd.push(a);
             d_m.push(b_);
             d_f.push(c_);
             d_w.push(w_);
             d_c.push(cc);
             d_p.push(p);
+            d_pw.push(pw);
         }
         let (n_l, nq_l, nv_l, rw_l, cw_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(nv), usize_lit(rw), usize_lit(cw), usize_lit(checks.len()));
         let ns_l = usize_lit(n_speeds);
@@ -129,15 +138,35 @@ impl Emitter<'_> {
                 }
             }
         };
-        let power = if work {
-            quote! {
-                dstate[#last] = power;
-                for k in 0..#nv_l {
-                    jac[#last][k] = d_power[k];
-                }
-            }
-        } else {
-            TokenStream::new()
+        // The power, and its columns: with moving constraints, `power + power_weights . x`,
+        // whose derivative also reads `dx` (so its columns are written in the loop over them).
+        let (power, power_column) = match (work, weighted) {
+            (true, false) => (
+                quote! {
+                    dstate[#last] = power;
+                    for k in 0..#nv_l {
+                        jac[#last][k] = d_power[k];
+                    }
+                },
+                TokenStream::new(),
+            ),
+            (true, true) => (
+                quote! {
+                    let mut p = power;
+                    for i in 0..#n_l {
+                        p += power_weights[i] * x[i];
+                    }
+                    dstate[#last] = p;
+                },
+                quote! {
+                    let mut p = d_power[k];
+                    for i in 0..#n_l {
+                        p += d_power_weights[k][i] * x[i] + power_weights[i] * dx[i];
+                    }
+                    jac[#last][k] = p;
+                },
+            ),
+            _ => (TokenStream::new(), TokenStream::new()),
         };
         let mut fields: Vec<(&str, TokenStream, TokenStream)> = vec![
             ("qdot", quote!([f64; #nq_l]), qd0),
@@ -157,6 +186,10 @@ impl Emitter<'_> {
         if work {
             fields.push(("power", quote!(f64), p0));
             fields.push(("d_power", quote!([f64; #nv_l]), quote!([#(#d_p),*])));
+        }
+        if weighted {
+            fields.push(("power_weights", quote!([f64; #n_l]), pw0));
+            fields.push(("d_power_weights", quote!([[f64; #n_l]; #nv_l]), quote!([#(#d_pw),*])));
         }
         let field_types: Vec<TokenStream> = fields
             .iter()
@@ -242,6 +275,7 @@ impl Emitter<'_> {
                     }
                     lu_solve(&matrix, &pivots, &mut dx);
                     #speed_columns
+                    #power_column
                 }
                 for (index, value) in dstate.iter().enumerate() {
                     if !value.is_finite() {
@@ -268,13 +302,16 @@ struct Dims {
     rw: usize,
     cw: usize,
     work: bool,
+    /// The power ends with weights on the solution (moving constraints).
+    weighted: bool,
 }
 
-type Block = (TokenStream, TokenStream, TokenStream, TokenStream, TokenStream, TokenStream);
+/// Kept rates, matrix, forcing, `W`, `c`, and the power with its weights.
+type Block = (TokenStream, TokenStream, TokenStream, TokenStream, TokenStream, (TokenStream, TokenStream));
 
 impl Dims {
     /// One block of rates (the values, or one variable's derivatives) as array literals:
-    /// kept rates, matrix, forcing, `W`, `c`, power.
+    /// kept rates, matrix, forcing, `W`, `c`, power (and its weights on the solution).
     fn block(&self, it: &mut impl Iterator<Item = TokenStream>) -> Block {
         let mut take = |k: usize| -> Vec<TokenStream> { it.by_ref().take(k).collect() };
         let qd = take(self.nq);
@@ -283,7 +320,8 @@ impl Dims {
         let w_rows: Vec<TokenStream> = take(self.rw * self.cw).chunks(self.cw.max(1)).map(|r| quote!([#(#r),*])).collect();
         let c = take(self.rw);
         let power = if self.work { take(1).remove(0) } else { quote!(0.0) };
-        (quote!([#(#qd),*]), quote!([#(#rows),*]), quote!([#(#force),*]), quote!([#(#w_rows),*]), quote!([#(#c),*]), power)
+        let weights = if self.weighted { take(self.n) } else { Vec::new() };
+        (quote!([#(#qd),*]), quote!([#(#rows),*]), quote!([#(#force),*]), quote!([#(#w_rows),*]), quote!([#(#c),*]), (power, quote!([#(#weights),*])))
     }
 }
 

@@ -348,7 +348,8 @@ impl<'a> Emitter<'a> {
         };
         // Applied non-potential forces can do work (Q not identically zero once prepared): every
         // formulation then carries the work integral W as its last state.
-        em.work = !em.prep.prepare(shared.power).is_zero();
+        // So can moving constraints (their power joins W after each solve).
+        em.work = !em.prep.prepare(shared.power).is_zero() || shared.energy_balance == seam::EnergyBalance::MovingConstraints;
         em
     }
 
@@ -781,14 +782,12 @@ impl Emitter<'_> {
             Function::WorkRate => {
                 let (args, inputs) = self.q_qdot_inputs(true);
                 let b = self.body("work_rate", &[m.power], &inputs, &args)?;
-                out.push(simple_fn(
-                    "work_rate",
-                    "The rate of the work integral (Eq. 80) the energy function balances: `Q . q' - dL/dt`, the applied non-potential forces' power and the explicit time dependence.",
-                    &args,
-                    &b,
-                    quote!(f64),
-                    |o| quote!(#(#o)*),
-                ));
+                let doc = if m.energy_balance == seam::EnergyBalance::MovingConstraints {
+                    "The part of the work integral's rate (Eq. 80) that `q` and `q'` give: `Q . q' - dL/dt`, the applied non-potential forces' power and the explicit time dependence. The moving constraints' power `R . q'` needs the accelerations: each formulation's `rhs` adds it after its solve."
+                } else {
+                    "The rate of the work integral (Eq. 80) the energy function balances: `Q . q' - dL/dt`, the applied non-potential forces' power and the explicit time dependence."
+                };
+                out.push(simple_fn("work_rate", doc, &args, &b, quote!(f64), |o| quote!(#(#o)*)));
             }
             Function::Momenta => {
                 let (args, inputs) = self.q_qdot_inputs(true);

@@ -46,6 +46,8 @@ pub struct FormShape {
     pub matrix_name: String,
     /// Lagrange: the number of constraints stabilized by `rhs_baumgarte`.
     pub stabilization: Option<usize>,
+    /// The power ends with `matrix_size` weights on the solution (moving constraints).
+    pub power_weights: bool,
     pub depends_on_time: bool,
 }
 

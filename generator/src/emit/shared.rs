@@ -27,7 +27,8 @@ pub struct FromMechanics {
     /// The rate of the work `W` that the energy function balances: `Q . q' - dL/dt` (the applied
     /// non-potential forces' power and the explicit time dependence, from a prescribed motion or
     /// time-varying forces), so `h - W` is constant along a motion whose constraints do not move
-    /// (`b = 0`). Moving constraints do work this does not count ([`Self::energy_balance`]).
+    /// (`b = 0`). Moving constraints do work this does not count: each formulation adds it after
+    /// its solve ([`crate::formulation::power`]).
     pub power: Expr,
     /// What `energy` is and what its balance with `W` means.
     pub energy_balance: seam::EnergyBalance,
@@ -59,7 +60,7 @@ impl FromMechanics {
         FromMechanics {
             energy: mech.kinetic - Expr::sum(mech.n.iter().zip(velocities).map(|(n, v)| *n * v.expr())) - mech.t0 * 2 + mech.potential,
             power: Expr::sum(mech.q_forces.iter().zip(velocities).map(|(q, v)| *q * v.expr())) - (mech.kinetic - mech.potential).diff(t),
-            energy_balance: if mech.b.iter().any(|b| !crate::symbolic::zero::zero_test(*b).is_zero()) {
+            energy_balance: if crate::formulation::power::constraints_move(mech) {
                 seam::EnergyBalance::MovingConstraints
             } else if mech.n.iter().chain([&mech.t0]).any(|e| !crate::symbolic::zero::zero_test(*e).is_zero()) {
                 seam::EnergyBalance::Jacobi

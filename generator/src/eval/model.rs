@@ -306,6 +306,7 @@ impl EvaluatedForm {
             let (matrix_out, force_out) = (take(n * n), take(n));
             let post = s.post.map(|(rw, cw)| (take(rw * cw), take(rw)));
             let power = if s.work { Some(take(1)[0]) } else { None };
+            let power_weights = if s.power_weights { take(n) } else { &[] };
             let checks = take(s.conditions.len());
             SOLVE.with(|cell| {
                 let (matrix, force, pivots) = &mut *cell.borrow_mut();
@@ -342,8 +343,9 @@ impl EvaluatedForm {
                     }
                 }
                 if let Some(p) = power {
+                    // With moving constraints, `power + power_weights . x`, left to right.
                     let last = dstate.len() - 1;
-                    dstate[last] = p;
+                    dstate[last] = power_weights.iter().zip(force.iter()).fold(p, |acc, (w, x)| acc + w * x);
                 }
                 for (index, value) in dstate.iter().enumerate() {
                     if !value.is_finite() {
@@ -379,8 +381,9 @@ impl EvaluatedForm {
         let s = &self.shape;
         let (nq, n) = (s.kept.len(), s.matrix_size);
         let (rw, cw) = s.post.unwrap_or((0, 0));
-        // One block: kept rates, matrix, forcing, W, c, power.
-        let block = nq + n * n + n + rw * cw + rw + usize::from(s.work);
+        // One block: kept rates, matrix, forcing, W, c, power, the power's weights.
+        let weights = if s.power_weights { n } else { 0 };
+        let block = nq + n * n + n + rw * cw + rw + usize::from(s.work) + weights;
         run(tape, t, params, g_i, state, |o| {
             let at = |b: usize| &o[b..b + block];
             let value = at(0);
@@ -422,8 +425,10 @@ impl EvaluatedForm {
                         dstate[nq..nq + s.speeds].copy_from_slice(&x[..s.speeds]);
                     }
                     let last = dstate.len() - 1;
+                    let pw_at = p_at + 1;
                     if s.work {
-                        dstate[last] = value[p_at];
+                        let w = &value[pw_at..pw_at + weights];
+                        dstate[last] = w.iter().zip(x.iter()).fold(value[p_at], |acc, (w, x)| acc + w * x);
                         for k in 0..variables {
                             jac[last * columns + k] = derivative(k)[p_at];
                         }
@@ -454,6 +459,15 @@ impl EvaluatedForm {
                             for j in 0..s.speeds {
                                 jac[(nq + j) * columns + k] = dx[j];
                             }
+                        }
+                        if s.power_weights {
+                            // `d power + d weights . x + weights . dx`, as the module sums it.
+                            let (w, dw) = (&value[pw_at..pw_at + n], &d[pw_at..pw_at + n]);
+                            let mut sum = d[p_at];
+                            for i in 0..n {
+                                sum += dw[i] * x[i] + w[i] * dx[i];
+                            }
+                            jac[last * columns + k] = sum;
                         }
                     }
                     for (index, value) in dstate.iter().enumerate() {

@@ -49,6 +49,10 @@ pub struct Equations {
     pub stabilization: Option<Vec<(Expr, Expr)>>,
     /// How the velocity transformation was eliminated, for the summary and `inspect`.
     pub elimination: &'static str,
+    /// Where a constraint moves: the power of the constraint forces as `(weights, offset)`,
+    /// `R . q' = weights . x + offset` for the solution `x` ([`super::power`]); filled in by
+    /// [`super::derive_with`].
+    pub constraint_power: Option<(Vec<Expr>, Expr)>,
 }
 
 impl Transfer for Equations {
@@ -62,6 +66,7 @@ impl Transfer for Equations {
         self.post.visit(v);
         self.singular.visit(v);
         self.stabilization.visit(v);
+        self.constraint_power.visit(v);
     }
 }
 

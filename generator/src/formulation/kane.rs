@@ -45,6 +45,7 @@ impl Method for Kane {
             matrix_name: "mass matrix M_NI",
             stabilization: None,
             elimination: v.route,
+            constraint_power: None,
         })
     }
 }

@@ -61,6 +61,7 @@ impl Method for Lagrange {
             matrix_name: "constraint matrix [M a^T; a 0]",
             stabilization: Some(stabilization),
             elimination: "none (multipliers solved with the accelerations)",
+            constraint_power: None,
         })
     }
 }

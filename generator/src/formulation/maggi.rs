@@ -52,6 +52,7 @@ impl Method for Maggi {
             matrix_name: "Maggi matrix W^T M W",
             stabilization: None,
             elimination: kane.route,
+            constraint_power: None,
         })
     }
 }

@@ -20,6 +20,7 @@ pub mod kane;
 pub mod lagrange;
 pub mod maggi;
 pub mod mechanics;
+pub mod power;
 pub mod reduced;
 pub mod volterra;
 
@@ -174,13 +175,18 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     times.push(("mechanics", clock.elapsed()));
     stages.mechanics(&mech);
     let wants = |f: FormulationDef| request.formulations.contains(&f);
+    // Where a constraint moves, each formulation also gives the power of its forces.
+    let moving_force = power::constraints_move(&mech).then(|| mech.lagrange_force());
     let mut equations = Vec::new();
     let mut formulate =
         |stages: &mut dyn Stages, def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
             if wants(def) {
                 let start = Instant::now();
                 let shared = Shared { model, mech: &mech, kane, reduced, integrate_ignorable: request.integrate_ignorable };
-                let eqs = method.equations(&shared)?;
+                let mut eqs = method.equations(&shared)?;
+                if let Some(force) = &moving_force {
+                    eqs.constraint_power = Some(power::constraint_power(model, &mech, force, &eqs));
+                }
                 formulations += start.elapsed();
                 stages.equations(&eqs);
                 equations.push(eqs);

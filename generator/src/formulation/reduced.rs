@@ -86,6 +86,7 @@ impl Method for ReducedVolterra {
             matrix_name: "mass matrix M_NI",
             stabilization: None,
             elimination: v.route,
+            constraint_power: None,
         })
     }
 }

@@ -105,6 +105,11 @@ fn drop_absent(e: Expr, symbols: &[Symbol]) -> Expr {
 /// floating chain with 2 links (2620 against 2983), the coordinate route from 3 links on.
 const MAX_BODY_ROUTE_COORDINATES: usize = 8;
 
+/// Largest model for which both routes are derived and the smaller kept (beyond
+/// [`MAX_BODY_ROUTE_COORDINATES`]): scene 2 in quaternions has 9 coordinates, and its body route
+/// gives Kane's right-hand side in 454 operations against 2175 by the coordinates.
+const MAX_COMPARED_ROUTE_COORDINATES: usize = 12;
+
 /// Largest matrix whose determinant is expanded symbolically (for `inspect`).
 const MAX_DETERMINANT_SIZE: usize = 10;
 
@@ -330,7 +335,15 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
         determinant: m <= MAX_DETERMINANT_SIZE,
         normalize: true,
     };
-    let sol = solve(&a_full, &rhs, &opts).map_err(|e| match e {
+    // A body's angular velocity in quaternions gives orthogonal rows: inverted as A^T D^-1.
+    let rates_only = y.data.iter().all(|e| e.as_num().is_some());
+    let orthogonal = if rates_only { None } else { crate::symbolic::matrix::solve_orthogonal(&a_full, &rhs) };
+    let by_rows = orthogonal.is_some();
+    let sol = match orthogonal {
+        Some(sol) => Ok(sol),
+        None => solve(&a_full, &rhs, &opts),
+    }
+    .map_err(|e| match e {
         SolveError::Singular { rows, .. } => {
             let names: Vec<String> = rows
                 .iter()
@@ -380,13 +393,28 @@ pub fn derive(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Exp
     // M_NI and K_NI - A_NI from the coordinates' M and h; where the quasi-velocities are not
     // plain rates (a body's angular velocity), also from the bodies' velocities in u, which
     // cancels the rate transformation body by body; the smaller is kept (both are exact).
-    let rates_only = y.data.iter().all(|e| e.as_num().is_some());
-    let by_bodies = !rates_only && m <= MAX_BODY_ROUTE_COORDINATES;
-    let (mass_ni, inertia_ni) = if by_bodies { inertia_by_bodies(model, mech, &u, &qdot, &chain) } else { inertia_by_coordinates(mech, &w, &drift, &to_u) };
-    let route = if by_bodies {
-        "symbolic elimination of [Y; M'; a]; M_NI and L_NI from the bodies' velocities in u"
+    let (mass_ni, inertia_ni, by_bodies) = if rates_only || m > MAX_COMPARED_ROUTE_COORDINATES {
+        let (mass, inertia) = inertia_by_coordinates(mech, &w, &drift, &to_u);
+        (mass, inertia, false)
+    } else if m <= MAX_BODY_ROUTE_COORDINATES {
+        let (mass, inertia) = inertia_by_bodies(model, mech, &u, &qdot, &chain);
+        (mass, inertia, true)
     } else {
-        "symbolic elimination of [Y; M'; a]; M_NI = W^T M W, L_NI = W^T (Q - dV/dq - h - M c)"
+        let bodies = inertia_by_bodies(model, mech, &u, &qdot, &chain);
+        let coordinates = inertia_by_coordinates(mech, &w, &drift, &to_u);
+        let size =
+            |(mass, inertia): &(Matrix, Vec<Expr>)| crate::symbolic::expr::post_order(&mass.data.iter().chain(inertia).copied().collect::<Vec<_>>()).len();
+        if size(&bodies) <= size(&coordinates) { (bodies.0, bodies.1, true) } else { (coordinates.0, coordinates.1, false) }
+    };
+    let route = match (by_rows, by_bodies) {
+        (false, true) => "symbolic elimination of [Y; M'; a]; M_NI and L_NI from the bodies' velocities in u",
+        (false, false) => "symbolic elimination of [Y; M'; a]; M_NI = W^T M W, L_NI = W^T (Q - dV/dq - h - M c)",
+        (true, true) => {
+            "[Y; M'; a] with orthogonal rows, inverted as its transpose over the rows' squared norms; M_NI and L_NI from the bodies' velocities in u"
+        }
+        (true, false) => {
+            "[Y; M'; a] with orthogonal rows, inverted as its transpose over the rows' squared norms; M_NI = W^T M W, L_NI = W^T (Q - dV/dq - h - M c)"
+        }
     };
     let l_ni: Vec<Expr> = (0..n_u).map(|k| drop_absent(tidy.of(u_ni[k] + inertia_ni[k]), &g)).collect();
     Ok(Volterra {

@@ -350,6 +350,54 @@ pub fn solve(a: &Matrix, b: &Matrix, opts: &SolveOptions) -> Result<Solution, So
     Ok(Solution { x, pivots, determinant, stops })
 }
 
+/// Solves `A X = B` without elimination where the rows of `A` are mutually orthogonal: `A A^T =
+/// D` diagonal (every off-diagonal entry decided zero exactly, none left to a guess) gives
+/// `A^-1 = A^T D^-1`, exact at every state, singular only where some `D_k` vanishes. A body's
+/// angular velocity in unit quaternions, `omega = 2 G(e) e'`, with the unit norm's row `2 e^T`
+/// and plain rates beside them, is such a matrix (`G G^T = |e|^2 I`, `G e = 0`): elimination
+/// would bury `|e|^2` in fractions of high powers. `None` where the rows are not orthogonal.
+///
+/// ```
+/// use generator::symbolic::{Expr, matrix::{Matrix, solve_orthogonal}};
+/// let (c, s) = (Expr::sym("c"), Expr::sym("s"));
+/// let a = Matrix::from_rows(vec![vec![c, s], vec![-s, c]]);
+/// let x = solve_orthogonal(&a, &Matrix::from_rows(vec![vec![Expr::one()], vec![Expr::zero()]])).unwrap().x;
+/// assert_eq!(x.get(0, 0), c / (c * c + s * s));
+/// assert!(solve_orthogonal(&Matrix::from_rows(vec![vec![c, s], vec![s, c]]), &Matrix::zeros(2, 1)).is_none());
+/// ```
+pub fn solve_orthogonal(a: &Matrix, b: &Matrix) -> Option<Solution> {
+    let n = a.rows;
+    if a.cols != n || b.rows != n {
+        return None;
+    }
+    let rows: Vec<Vec<Expr>> = (0..n).map(|i| a.row(i)).collect();
+    for i in 0..n {
+        for j in i + 1..n {
+            let terms: Vec<Expr> = (0..n).filter(|&k| !rows[i][k].is_zero() && !rows[j][k].is_zero()).map(|k| rows[i][k] * rows[j][k]).collect();
+            if !terms.is_empty() && !matches!(zero_test(Expr::sum(terms)), ZeroVerdict::Zero { .. }) {
+                return None;
+            }
+        }
+    }
+    let d: Vec<Expr> = rows.iter().map(|r| Expr::sum(r.iter().filter(|e| !e.is_zero()).map(|e| *e * *e))).collect();
+    if d.iter().any(|e| e.is_zero()) {
+        return None;
+    }
+    let mut x = Matrix::zeros(n, b.cols);
+    for i in 0..n {
+        for c in 0..b.cols {
+            x.set(i, c, Expr::sum((0..n).filter(|&k| !rows[k][i].is_zero() && !b.get(k, c).is_zero()).map(|k| rows[k][i] * b.get(k, c) / d[k])));
+        }
+    }
+    let mut pivots = Vec::new();
+    for e in d.into_iter().filter(|e| e.as_num().is_none()) {
+        if !pivots.contains(&e) {
+            pivots.push(e);
+        }
+    }
+    Some(Solution { x, pivots, determinant: None, stops: Vec::new() })
+}
+
 /// Largest entry (distinct nodes) put in the polynomial normal form: larger ones are kept as
 /// they are (correct, only without cancelled factors).
 const MAX_NORMALIZED_ENTRY: usize = 400;

@@ -129,12 +129,14 @@ impl StateLayout {
 }
 
 /// What a model's `energy` function computes, and so what its balance with the work state `W`
-/// (the power of the applied non-potential forces and of the explicit time dependence) means.
+/// (the power of the applied non-potential forces, of the explicit time dependence and of the
+/// moving constraints' forces) means. Each is constant along a motion but for the integration
+/// error.
 ///
 /// ```
 /// use seam::EnergyBalance;
 /// assert_eq!(EnergyBalance::Energy.column(), "energy err");
-/// assert!(EnergyBalance::Jacobi.holds() && !EnergyBalance::MovingConstraints.holds());
+/// assert_eq!(EnergyBalance::MovingConstraints.quantity(), "h_minus_w");
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum EnergyBalance {
@@ -144,8 +146,9 @@ pub enum EnergyBalance {
     /// Jacobi's integral `h = T2 - T0 + V` (`T` split by degree in `q'`): the kinematics move
     /// with time (a frame turned or moved by a prescribed motion); `h - W` is constant.
     Jacobi,
-    /// `h` as above, but a constraint moves (`b` not zero): its force does work that `W` does not
-    /// count, so `h - W` drifts by that work and is no invariant.
+    /// `h` as above, and a constraint moves (`b` not zero): its forces do work (a motor holding
+    /// a rate), which `W` integrates too (`R . q'`, from each formulation's accelerations), so
+    /// `h - W` is constant.
     MovingConstraints,
 }
 
@@ -155,7 +158,7 @@ impl EnergyBalance {
         match self {
             EnergyBalance::Energy => "energy err",
             EnergyBalance::Jacobi => "jacobi err",
-            EnergyBalance::MovingConstraints => "h - W drift",
+            EnergyBalance::MovingConstraints => "h - W err",
         }
     }
 
@@ -167,7 +170,7 @@ impl EnergyBalance {
                 "h - W with h = T2 - T0 + V (Jacobi's integral: the kinematics move with time) and W the work of the applied non-potential forces and of the explicit time dependence: constant"
             }
             EnergyBalance::MovingConstraints => {
-                "h - W with h = T2 - T0 + V and W the work of the applied non-potential forces and of the explicit time dependence; moving constraints (b not zero) do work W does not count, so this drifts by that work: not an invariant"
+                "h - W with h = T2 - T0 + V and W the work of the applied non-potential forces, of the explicit time dependence and of the moving constraints' forces (b not zero): constant"
             }
         }
     }
@@ -186,7 +189,7 @@ impl EnergyBalance {
         match self {
             EnergyBalance::Energy => "energy error |E(t) - E(0)| (E = T + V - W)",
             EnergyBalance::Jacobi => "Jacobi integral error |H(t) - H(0)| (H = T2 - T0 + V - W)",
-            EnergyBalance::MovingConstraints => "|H(t) - H(0)| (H = T2 - T0 + V - W; the moving constraints' work is not in W)",
+            EnergyBalance::MovingConstraints => "|H(t) - H(0)| (H = T2 - T0 + V - W; W with the moving constraints' work)",
         }
     }
 
@@ -196,10 +199,5 @@ impl EnergyBalance {
             EnergyBalance::Energy => "|E - E(0)|",
             EnergyBalance::Jacobi | EnergyBalance::MovingConstraints => "|H - H(0)|",
         }
-    }
-
-    /// True when the column is an invariant (zero but for the integration error).
-    pub fn holds(self) -> bool {
-        self != EnergyBalance::MovingConstraints
     }
 }
