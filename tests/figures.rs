@@ -3,7 +3,8 @@
 //! against what a run gives now.
 //!
 //! - the scene tables: `docs/comparisons/<scene>.json`, written by
-//!   `cargo run --release -p generated --example compare -- <scene> --repeats 11`;
+//!   `cargo run --release -p generated --example compare -- <scene> --repeats 11` (scenes 2
+//!   and 3 in quaternions: the tables and ratios of `docs/attitude.md`);
 //! - the in-process figures: `docs/benchmarks/eval.json` (`cargo bench -p generated --bench eval`);
 //! - the scaling figures: `docs/scaling/ours.json`, `docs/scaling/sympy.json` and the tables of
 //!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`);
@@ -31,6 +32,32 @@ fn assert_quoted(readme: &str, figure: &str, source: &str) {
     assert!(readme.contains(figure), "the README does not quote `{figure}` from {source}");
 }
 
+/// Scenes 2 and 3 in quaternions: their tables are in docs/attitude.md.
+const QUATERNION_SCENES: [&str; 2] = ["three_body_quaternion", "satellite_boom_quaternion"];
+
+/// docs/attitude.md's tables are the quaternion scenes' comparison files, and the ratios it
+/// quotes are those of the right-hand-side benchmark's file.
+#[test]
+fn the_attitude_figures_are_the_files() {
+    let docs = read("docs/attitude.md");
+    for scene in QUATERNION_SCENES {
+        let table = table_of(&records(scene));
+        assert!(docs.contains(&table), "docs/attitude.md's table of {scene} is not docs/comparisons/{scene}.json:\n{table}");
+    }
+    let rhs = json("docs/benchmarks/rhs.json");
+    let rows: Vec<Vec<String>> =
+        rhs["rows"].as_array().unwrap().iter().map(|r| r.as_array().unwrap().iter().map(|c| c.as_str().unwrap().to_string()).collect()).collect();
+    let range = |forms: [&str; 2]| {
+        let ratios: Vec<f64> = rows.iter().filter(|r| r[0].ends_with("quaternions") && forms.contains(&r[1].as_str())).map(|r| r[7].parse().unwrap()).collect();
+        assert_eq!(ratios.len(), 4, "{forms:?}");
+        format!("{:.2} to {:.2}", ratios.iter().copied().fold(f64::INFINITY, f64::min), ratios.iter().copied().fold(0.0, f64::max))
+    };
+    let fast = format!("Kane's form and the reduced method take {} of the Euler\nmodules' time", range(["Kane", "reduced Volterra"]));
+    assert!(docs.contains(&fast), "docs/attitude.md does not quote `{fast}` from docs/benchmarks/rhs.json");
+    let slow = format!("Lagrange and Maggi\n{}", range(["Lagrange", "Maggi"]));
+    assert!(docs.contains(&slow), "docs/attitude.md does not quote `{slow}` from docs/benchmarks/rhs.json");
+}
+
 #[test]
 fn the_scene_tables_are_the_comparison_files() {
     let readme = read("README.md");
@@ -45,7 +72,7 @@ fn the_scene_tables_are_the_comparison_files() {
 /// machine's libm where an error is round-off itself).
 #[test]
 fn the_comparison_files_hold_what_a_run_gives_now() {
-    for scene in SCENES {
+    for scene in SCENES.into_iter().chain(QUATERNION_SCENES) {
         let model = generated::find(scene).unwrap();
         let now = compare(&model, &Options { repeats: 1, ..Options::paper(&model) }).unwrap();
         let filed = records(scene);
