@@ -15,7 +15,6 @@ mod report;
 mod simulate;
 
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// The symbolic core allocates many small nodes and maps (see the generator's binary).
@@ -43,8 +42,8 @@ enum Command {
     /// Shows what is derived: T, M, N, Q, the constraints, Definition 1 per coordinate, and
     /// the reduced method's W_NI, X_NI, M_NI, L_NI.
     Inspect {
-        /// The model file (RON).
-        model: PathBuf,
+        /// A model file or the name of a built-in model.
+        model: String,
         /// Print LaTeX instead of text.
         #[arg(long)]
         latex: bool,
@@ -107,7 +106,10 @@ fn main() -> ExitCode {
     generator::symbolic::expr::budget_for_command_line(cli.max_nodes);
     let result = match cli.command {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
-        Command::Inspect { model, latex } => return generator::command::exit(generator::command::inspect(&model, latex)),
+        Command::Inspect { model, latex } => match load::model(&model) {
+            Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
+            Err(e) => Err(e),
+        },
         Command::Simulate(args) => simulate::simulate(&args),
         Command::Compare(args) => commands::compare(&args),
         Command::Sweep(args) => commands::sweep(&args),

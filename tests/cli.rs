@@ -399,3 +399,25 @@ fn simulate_drives_an_input_from_a_time_series() {
     let err = String::from_utf8_lossy(&unknown.stderr);
     assert!(!unknown.status.success() && err.contains("no input `G` (known: F)"), "{err}");
 }
+
+/// Scene 2 in quaternions through `simulate` and `inspect` by name: the trajectory's file has the
+/// four quaternion coordinates, its unit norm is among the reported constraints, and `inspect`
+/// shows the body rates in quaternion rates and the orthogonal inversion.
+#[test]
+fn a_quaternion_scene_simulates_and_inspects() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&multibody(dir.path(), &["simulate", "three_body_quaternion", "--t-end", "2", "--out", "run"]));
+    let csv = std::fs::read_to_string(dir.path().join("run/three_body_quaternion_reduced_volterra.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    for column in ["e0", "e1", "e2", "e3", "gamma1", "gamma2", "position_residual"] {
+        assert!(header.split(',').any(|c| c == column), "no column {column} in {header}");
+    }
+    // 2 s at the scene's 0.1 s outputs.
+    assert_eq!(csv.lines().count(), 1 + 21, "{header}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("run/three_body_quaternion_reduced_volterra.json")).unwrap()).unwrap();
+    assert_eq!(json["stopped_by_event"], serde_json::Value::Bool(false), "{json}");
+    let text = ok(&multibody(dir.path(), &["inspect", "tumbling_body"]));
+    assert!(text.contains("u1 = -2*e0'*e1 + 2*e0*e1' + 2*e2'*e3 - 2*e2*e3'"), "{text}");
+    assert!(text.contains("[Y; M'; a] with orthogonal rows, inverted as its transpose"), "{text}");
+}

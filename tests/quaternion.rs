@@ -380,3 +380,34 @@ fn a_symmetric_body_follows_its_closed_form() {
         }
     }
 }
+
+/// Scene 2 in quaternions with its ignorable coordinates dropped from the state
+/// (`--drop-ignorable`): the reduced method integrates the attitude, the joints and the body
+/// rates alone, and they follow the full state's motion to 1e-10.
+#[test]
+fn the_quaternion_scene_drops_its_ignorable_coordinates() {
+    use generator::emit::{Formulation, Options};
+    let path = format!("{}/models/three_body_quaternion.ron", env!("CARGO_MANIFEST_DIR"));
+    let file = generator::model::load(&path).unwrap();
+    let options = Options { integrate_ignorable: false, formulations: vec![Formulation::ReducedVolterra], ..Options::from_model(&file) };
+    let dropped = generator::eval::evaluate_with(&file, &options).unwrap();
+    let full = generated::three_body_quaternion::model();
+    let (q0, qd0) = full.initial.clone().unwrap();
+    let times: Vec<f64> = (0..=50).map(|k| k as f64 * 0.1).collect();
+    let kind = FormulationKind::ReducedVolterra;
+    let (sd, yd) = System::start(&dropped, kind, dropped.default_params.clone(), &q0, &qd0).unwrap();
+    let (sf, yf) = System::start(&full, kind, full.default_params.clone(), &q0, &qd0).unwrap();
+    assert_eq!((yd.len() + 3, dropped.formulation(kind).unwrap().layout.coordinates.len()), (yf.len(), 6));
+    let a = runtime::events::run(&sd, &yd, &times, &tight(), &mut |_| {}).unwrap().solution;
+    let b = runtime::events::run(&sf, &yf, &times, &tight(), &mut |_| {}).unwrap().solution;
+    for (k, (x, y)) in a.states.iter().zip(&b.states).enumerate() {
+        let ((_, qd_a), (_, qd_b)) = (sd.velocities(times[k], x).unwrap(), sf.velocities(times[k], y).unwrap());
+        // The kept coordinates (the quaternion and the joints) and every rate.
+        for j in 0..6 {
+            assert!((x[j] - y[j]).abs() < 1e-10, "t = {}: {} {} against {}", times[k], full.coordinates[j], x[j], y[j]);
+        }
+        for j in 0..qd_a.len() {
+            assert!((qd_a[j] - qd_b[j]).abs() < 1e-10, "t = {}: {}' {} against {}", times[k], full.coordinates[j], qd_a[j], qd_b[j]);
+        }
+    }
+}

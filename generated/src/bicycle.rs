@@ -299,6 +299,51 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
+///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite).
+fn solve_spd<const N: usize>(
+    a: &mut [[f64; N]; N],
+    b: &mut [f64; N],
+) -> Result<(), usize> {
+    let mut scale = 0.0f64;
+    for i in 0..N {
+        scale = scale.max(a[i][i].abs());
+    }
+    let mut inv = [0.0f64; N];
+    let mut v = [0.0f64; N];
+    for j in 0..N {
+        let mut d = a[j][j];
+        for k in 0..j {
+            v[k] = a[j][k] * a[k][k];
+            d -= a[j][k] * v[k];
+        }
+        if !(d > PIVOT_TOLERANCE * scale) {
+            return Err(j);
+        }
+        a[j][j] = d;
+        inv[j] = 1.0 / d;
+        for i in j + 1..N {
+            let mut s = a[i][j];
+            for k in 0..j {
+                s -= a[i][k] * v[k];
+            }
+            a[i][j] = s * inv[j];
+        }
+    }
+    for i in 0..N {
+        for k in 0..i {
+            b[i] -= a[i][k] * b[k];
+        }
+    }
+    for i in 0..N {
+        b[i] *= inv[i];
+    }
+    for i in (0..N).rev() {
+        for k in i + 1..N {
+            b[i] -= a[k][i] * b[k];
+        }
+    }
+    Ok(())
+}
 ///Total energy T + V.
 #[allow(non_snake_case, clippy::all)]
 pub fn energy(
@@ -10798,7 +10843,7 @@ pub mod kane {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+        if let Err(column) = solve_spd(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),

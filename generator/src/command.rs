@@ -131,8 +131,12 @@ pub fn print_stdout(text: &str) -> Result<(), Failure> {
 
 /// `inspect MODEL [--latex]`: what is derived, printed.
 pub fn inspect(model: &Path, latex: bool) -> Result<(), Failure> {
-    let model = crate::model::load(model)?;
-    let text = crate::inspect::inspect(&model, latex)?;
+    print_inspection(&crate::model::load(model)?, latex)
+}
+
+/// What is derived from a loaded model, printed (text, or LaTeX with `latex`).
+pub fn print_inspection(model: &crate::model::Model, latex: bool) -> Result<(), Failure> {
+    let text = crate::inspect::inspect(model, latex)?;
     print_stdout(&text)
 }
 

@@ -21,6 +21,20 @@ use std::collections::{BTreeSet, HashMap};
 /// Largest singular factor (tree nodes) named by its formula in `Failure::Singular`.
 const MAX_CONDITION_TREE: u32 = 200;
 
+/// The cost of `solve_spd` (`LDL^T`, no pivoting) for `n` unknowns: the factorization's
+/// `n^3 / 6` multiply-adds, one reciprocal per pivot, two triangular solves and the scaling.
+pub fn spd_cost(n: usize) -> OpCount {
+    let factor_mul: usize = (0..n).map(|j| 2 * j + (n - 1 - j) * (j + 1)).sum();
+    let factor_add: usize = (0..n).map(|j| j + (n - 1 - j) * j).sum();
+    let triangles = n * n.saturating_sub(1);
+    OpCount { add: factor_add + triangles, mul: factor_mul + triangles + n, div: n, neg: 0, calls: Default::default() }
+}
+
+/// The cost of the solve a formulation's right-hand side performs.
+pub fn rhs_solve_cost(f: &Equations) -> OpCount {
+    if f.kind.solves_positive_definite() { spd_cost(f.mass.rows) } else { solve_cost(f.mass.rows) }
+}
+
 /// The worst-case cost of `solve_dense` for `n` unknowns.
 pub fn solve_cost(n: usize) -> OpCount {
     let elim_div = n * n.saturating_sub(1) / 2;
@@ -212,7 +226,7 @@ impl Emitter<'_> {
             outputs.extend(stab.iter().map(|(_, p)| *p));
         }
         let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
-        let mut solve = solve_cost(n);
+        let mut solve = rhs_solve_cost(f);
         if work && f.constraint_power.is_some() {
             // The moving constraints' power after the solve: `power_weights . x`.
             solve.add += n;
@@ -341,6 +355,7 @@ impl Emitter<'_> {
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
+        let solver = if f.kind.solves_positive_definite() { quote!(solve_spd) } else { quote!(solve_dense) };
         let items = quote! {
             #[doc = "Size of the matrix `rhs` solves numerically."]
             pub const MATRIX_SIZE: usize = #n_l;
@@ -368,7 +383,7 @@ impl Emitter<'_> {
                 let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
                 #unpack_post
                 #unpack_power
-                if let Err(column) = solve_dense(&mut matrix, &mut force) {
+                if let Err(column) = #solver(&mut matrix, &mut force) {
                     return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
                 }
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*

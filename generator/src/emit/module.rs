@@ -239,7 +239,14 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     head.push(em.params());
     head.push(super::seam::failure_import(&em.seam));
     if !options.formulations.is_empty() {
-        head.push(solve_dense());
+        // Each solver where a formulation uses it: LU for Lagrange's, LDL^T for the others'.
+        let kinds: Vec<seam::FormulationKind> = options.formulations.iter().map(|f| f.kind()).collect();
+        if kinds.iter().any(|k| !k.solves_positive_definite()) {
+            head.push(solve_dense());
+        }
+        if kinds.iter().any(|k| k.solves_positive_definite()) {
+            head.push(solve_spd());
+        }
         if options.jacobian || em.emits_parameter_jacobian() {
             head.push(super::jacobian::lu_items());
         }
@@ -888,6 +895,53 @@ fn solve_dense() -> TokenStream {
                     s -= a[r][k] * b[k];
                 }
                 b[r] = s / a[r][r];
+            }
+            Ok(())
+        }
+    }
+}
+
+fn solve_spd() -> TokenStream {
+    quote! {
+        #[doc = "Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite)."]
+        fn solve_spd<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
+            let mut scale = 0.0f64;
+            for i in 0..N {
+                scale = scale.max(a[i][i].abs());
+            }
+            let mut inv = [0.0f64; N];
+            let mut v = [0.0f64; N];
+            for j in 0..N {
+                let mut d = a[j][j];
+                for k in 0..j {
+                    v[k] = a[j][k] * a[k][k];
+                    d -= a[j][k] * v[k];
+                }
+                if !(d > PIVOT_TOLERANCE * scale) {
+                    return Err(j);
+                }
+                a[j][j] = d;
+                inv[j] = 1.0 / d;
+                for i in j + 1..N {
+                    let mut s = a[i][j];
+                    for k in 0..j {
+                        s -= a[i][k] * v[k];
+                    }
+                    a[i][j] = s * inv[j];
+                }
+            }
+            for i in 0..N {
+                for k in 0..i {
+                    b[i] -= a[i][k] * b[k];
+                }
+            }
+            for i in 0..N {
+                b[i] *= inv[i];
+            }
+            for i in (0..N).rev() {
+                for k in i + 1..N {
+                    b[i] -= a[k][i] * b[k];
+                }
             }
             Ok(())
         }

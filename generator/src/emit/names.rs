@@ -40,6 +40,7 @@ const ITEM_NAMES: &[&str] = &[
     "CONSTRAINT_TOLERANCE",
     "Params",
     "solve_dense",
+    "solve_spd",
     "energy",
     "work_rate",
     "momenta",

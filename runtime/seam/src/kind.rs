@@ -38,6 +38,18 @@ impl FormulationKind {
         }
     }
 
+    /// True when the matrix the right-hand side solves is symmetric positive definite (Maggi's
+    /// `W^T M W`, Kane's and the reduced method's `M_NI`), so that `LDL^T` without pivoting
+    /// solves it; Lagrange's `[M a^T; a 0]` is indefinite and needs pivoting.
+    ///
+    /// ```
+    /// use seam::FormulationKind;
+    /// assert!(FormulationKind::Kane.solves_positive_definite() && !FormulationKind::Lagrange.solves_positive_definite());
+    /// ```
+    pub const fn solves_positive_definite(self) -> bool {
+        !matches!(self, FormulationKind::Lagrange)
+    }
+
     /// Other spellings accepted for the name (`reduced`, `reduced-volterra`, `volterra`).
     pub const fn aliases(self) -> &'static [&'static str] {
         match self {
