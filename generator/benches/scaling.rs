@@ -419,7 +419,7 @@ fn report(
          Times are wall-clock on the machine that ran it, one run (the scenes: best of {SCENE_RUNS} fresh processes); operation counts are deterministic. \
          Generation runs on two threads: every formulation but the last is emitted while the next is derived, so \"emit\" is what is left after the derivation. \
          \"Assembly\" is what a right-hand side computes before its dense solve (comparable with SymPy's \
-         `count_ops(cse([M, F]))`), \"solve\" the worst case of the emitted LU with partial pivoting.\n\n",
+         `count_ops(cse([M, F]))`), \"solve\" that of the emitted solve (LDL^T for Maggi, Kane and the reduced method; the worst case of LU with partial pivoting for Lagrange).\n\n",
         pendulum, floating
     );
     md += &goals(records, peers, scenes, inspects);
