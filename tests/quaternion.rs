@@ -37,6 +37,15 @@ fn rotation(e: &[f64]) -> [[f64; 3]; 3] {
     ]
 }
 
+/// The body's angular velocity `omega = 2 G(e) e'`.
+fn body_rates(e: &[f64], ed: &[f64]) -> [f64; 3] {
+    [
+        2.0 * (-e[1] * ed[0] + e[0] * ed[1] + e[3] * ed[2] - e[2] * ed[3]),
+        2.0 * (-e[2] * ed[0] - e[3] * ed[1] + e[0] * ed[2] + e[1] * ed[3]),
+        2.0 * (-e[3] * ed[0] + e[2] * ed[1] - e[1] * ed[2] + e[0] * ed[3]),
+    ]
+}
+
 fn world_momentum(e: &[f64], omega: &[f64]) -> [f64; 3] {
     let r = rotation(e);
     let body: Vec<f64> = (0..3).map(|k| I[k] * omega[k]).collect();
@@ -86,10 +95,7 @@ fn the_tennis_racket_flips_with_the_closed_form_period() {
             let l0 = world_momentum(&r.q0, &OMEGA0);
             let norm0 = l0.iter().map(|x| x * x).sum::<f64>().sqrt();
             for (q, qd) in inv.coordinates.iter().zip(&inv.rates) {
-                // omega = 2 G(e) e'.
-                let g = [[-q[1], q[0], q[3], -q[2]], [-q[2], -q[3], q[0], q[1]], [-q[3], q[2], -q[1], q[0]]];
-                let omega: Vec<f64> = g.iter().map(|row| 2.0 * (0..4).map(|k| row[k] * qd[k]).sum::<f64>()).collect();
-                let l = world_momentum(q, &omega);
+                let l = world_momentum(q, &body_rates(q, qd));
                 let drift = (0..3).map(|k| (l[k] - l0[k]).powi(2)).sum::<f64>().sqrt();
                 assert!(drift < 1e-9 * norm0, "{what}: angular momentum drift {drift}");
             }
@@ -162,7 +168,7 @@ fn quaternions_agree_with_euler_angles_and_pass_their_singularity() {
 /// `e' = e (0, omega) / 2`, `omega` the body's angular velocity: what the quaternion scenes'
 /// files state as their initial motion.
 fn from_euler(angles: [f64; 3], rates: [f64; 3]) -> ([f64; 4], [f64; 4]) {
-    let ([psi, theta, phi], [dpsi, dtheta, dphi]) = (angles, rates);
+    let [psi, theta, phi] = angles;
     let (c, s) = (|a: f64| (a / 2.0).cos(), |a: f64| (a / 2.0).sin());
     let e = [
         c(psi) * c(theta) * c(phi) + s(psi) * s(theta) * s(phi),
@@ -170,7 +176,7 @@ fn from_euler(angles: [f64; 3], rates: [f64; 3]) -> ([f64; 4], [f64; 4]) {
         c(psi) * s(theta) * c(phi) + s(psi) * c(theta) * s(phi),
         s(psi) * c(theta) * c(phi) - c(psi) * s(theta) * s(phi),
     ];
-    let w = [dphi - dpsi * theta.sin(), dtheta * phi.cos() + dpsi * theta.cos() * phi.sin(), -dtheta * phi.sin() + dpsi * theta.cos() * phi.cos()];
+    let w = euler_body_rates(angles, rates);
     let ed = [
         0.5 * (-e[1] * w[0] - e[2] * w[1] - e[3] * w[2]),
         0.5 * (e[0] * w[0] - e[3] * w[1] + e[2] * w[2]),
@@ -178,6 +184,11 @@ fn from_euler(angles: [f64; 3], rates: [f64; 3]) -> ([f64; 4], [f64; 4]) {
         0.5 * (-e[2] * w[0] + e[1] * w[1] + e[0] * w[2]),
     ];
     (e, ed)
+}
+
+/// The body's angular velocity from ZYX Euler angles and their rates.
+fn euler_body_rates([_, theta, phi]: [f64; 3], [dpsi, dtheta, dphi]: [f64; 3]) -> [f64; 3] {
+    [dphi - dpsi * theta.sin(), dtheta * phi.cos() + dpsi * theta.cos() * phi.sin(), -dtheta * phi.sin() + dpsi * theta.cos() * phi.cos()]
 }
 
 /// `R = Rz(psi) Ry(theta) Rx(phi)`.
@@ -230,18 +241,9 @@ fn the_quaternion_scenes_move_as_the_euler_scenes() {
                     assert!((q_e[j] - q_q[j + 1]).abs() < 1e-9 * (1.0 + q_e[j].abs()), "{name} {kind} t = {}: {}", times[k], euler.coordinates[j]);
                     assert!((qd_e[j] - qd_q[j + 1]).abs() < 1e-9 * (1.0 + qd_e[j].abs()), "{name} {kind} t = {}: {}'", times[k], euler.coordinates[j]);
                 }
-                // The body rates from either: omega = 2 G(e) e'.
-                let (_, we) = from_euler([q_e[0], q_e[1], q_e[2]], [qd_e[0], qd_e[1], qd_e[2]]);
-                let (eq, edq) = (&q_q[..4], &qd_q[..4]);
-                let omega = |e: &[f64], d: &[f64]| {
-                    [
-                        2.0 * (-e[1] * d[0] + e[0] * d[1] + e[3] * d[2] - e[2] * d[3]),
-                        2.0 * (-e[2] * d[0] - e[3] * d[1] + e[0] * d[2] + e[1] * d[3]),
-                        2.0 * (-e[3] * d[0] + e[2] * d[1] - e[1] * d[2] + e[0] * d[3]),
-                    ]
-                };
-                let (ee, _) = from_euler([q_e[0], q_e[1], q_e[2]], [0.0; 3]);
-                let (wa, wb) = (omega(&ee, &we), omega(eq, edq));
+                // The body rates from either.
+                let wa = euler_body_rates([q_e[0], q_e[1], q_e[2]], [qd_e[0], qd_e[1], qd_e[2]]);
+                let wb = body_rates(&q_q[..4], &qd_q[..4]);
                 for i in 0..3 {
                     assert!((wa[i] - wb[i]).abs() < 1e-9, "{name} {kind} t = {}: omega[{i}] {} against {}", times[k], wb[i], wa[i]);
                 }
@@ -367,11 +369,7 @@ fn a_symmetric_body_follows_its_closed_form() {
                 }
             }
             // The body rates: (omega_1, omega_2) turned by lambda t, omega_3 constant.
-            let w = [
-                2.0 * (-q[1] * qd[0] + q[0] * qd[1] + q[3] * qd[2] - q[2] * qd[3]),
-                2.0 * (-q[2] * qd[0] - q[3] * qd[1] + q[0] * qd[2] + q[1] * qd[3]),
-                2.0 * (-q[3] * qd[0] + q[2] * qd[1] - q[1] * qd[2] + q[0] * qd[3]),
-            ];
+            let w = body_rates(&q[..4], &qd[..4]);
             let (cl, sl) = ((lambda * t).cos(), (lambda * t).sin());
             let expected_w = [omega0[0] * cl - omega0[1] * sl, omega0[0] * sl + omega0[1] * cl, omega0[2]];
             for i in 0..3 {
@@ -429,9 +427,7 @@ fn the_reduced_method_keeps_the_invariants_to_round_off() {
     let l0 = world_momentum(&r.q0, &OMEGA0);
     let norm0 = l0.iter().map(|x| x * x).sum::<f64>().sqrt();
     for (q, qd) in inv.coordinates.iter().zip(&inv.rates) {
-        let g = [[-q[1], q[0], q[3], -q[2]], [-q[2], -q[3], q[0], q[1]], [-q[3], q[2], -q[1], q[0]]];
-        let omega: Vec<f64> = g.iter().map(|row| 2.0 * (0..4).map(|k| row[k] * qd[k]).sum::<f64>()).collect();
-        let l = world_momentum(q, &omega);
+        let l = world_momentum(q, &body_rates(q, qd));
         let drift = (0..3).map(|k| (l[k] - l0[k]).powi(2)).sum::<f64>().sqrt() / norm0;
         assert!(drift < bound, "angular momentum drifts by {drift:e} relative, beyond {bound:e}");
     }

@@ -138,7 +138,7 @@ impl Emitter<'_> {
                 conditions: conditions(&checks),
                 matrix_name: f.matrix_name.to_string(),
                 stabilization: f.stabilization.as_ref().map(|s| s.len()),
-                power_weights: work && f.constraint_power.is_some(),
+                power_weights: f.constraint_power.is_some(),
                 depends_on_time,
             });
         }
@@ -227,7 +227,7 @@ impl Emitter<'_> {
         }
         let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
         let mut solve = rhs_solve_cost(f);
-        if work && f.constraint_power.is_some() {
+        if f.constraint_power.is_some() {
             // The moving constraints' power after the solve: `power_weights . x`.
             solve.add += n;
             solve.mul += n;

@@ -67,15 +67,16 @@ impl Emitter<'_> {
         let args = state_args();
         let inputs = self.state_inputs(f);
         let b = self.body(&format!("{name}::{function}"), &outputs, &inputs, &args)?;
+        // Moving constraints always carry the work state (`Emitter::new`): their power joins it.
+        let weighted = f.constraint_power.is_some();
         let mut solve = jacobian_solve_cost(n, nv);
-        if work && f.constraint_power.is_some() {
+        if weighted {
             // `power_weights . x` and, per column, `d_power_weights . x + power_weights . dx`.
             solve.add += n * (2 * nv + 1);
             solve.mul += n * (2 * nv + 1);
         }
         self.functions.last_mut().expect("just pushed").solve = solve;
         let mut it = b.outputs.iter().cloned();
-        let weighted = work && f.constraint_power.is_some();
         let dims = Dims { nq, n, rw, cw, work, weighted };
         let (qd0, m0, f0, w0, c0, (p0, pw0)) = dims.block(&mut it);
         let check_out: Vec<TokenStream> = it.by_ref().take(checks.len()).collect();
