@@ -190,3 +190,35 @@ fn evaluated_functions_refuse_slices_of_the_wrong_length() {
     let e = eval.energy(0.0, &[0.0; 3], &[0.0; 3], &[1.0], &mut [0.0]).unwrap_err();
     assert!(matches!(e, Failure::Dimension { argument: "params", .. }), "{e}");
 }
+
+/// Where Kane's mass matrix has structural zeros, its solve follows a sparse `L D L^T` plan in
+/// an order of its own; a matrix that is singular there (every mass and inertia zero) is still
+/// reported as `Singular`, naming the matrix and the column of the first pivot in that order,
+/// by the compiled module and by the evaluator alike, never as NaN.
+#[test]
+fn a_singular_matrix_is_reported_at_the_first_pivot_of_the_sparse_plan() {
+    use generator::emit::ldl::Solve;
+    for (module, kind) in
+        [("satellite_boom", seam::FormulationKind::Kane), ("three_body", seam::FormulationKind::Kane), ("three_body", seam::FormulationKind::Lagrange)]
+    {
+        let model = generator::model::load(format!("{}/models/{module}.ron", env!("CARGO_MANIFEST_DIR"))).unwrap();
+        let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+        let eqs = d.equations.iter().find(|e| e.kind == kind).unwrap();
+        let Solve::Ldl(plan) = Solve::for_equations(eqs) else { panic!("{module} {kind}: not LDL^T") };
+        assert!(!plan.is_dense(), "{module} {kind}: no structural zero to skip");
+        let compiled = generated::find(module).unwrap();
+        let eval = evaluated(module, module, |_| {});
+        for m in [&compiled, &eval] {
+            let f = m.formulation(kind).unwrap();
+            let params = vec![0.0; m.parameter_names.len()];
+            let (state, g) = (vec![0.1; f.states()], vec![0.0; m.ignorable.len()]);
+            let mut ds = vec![0.0; f.states()];
+            match f.rhs(0.5, &state, &params, &g, &mut ds) {
+                Err(Failure::Singular { condition, value, .. }) => {
+                    assert_eq!((condition.as_ref(), value), (eqs.matrix_name, plan.order()[0] as f64), "{module} {kind}");
+                }
+                other => panic!("{module} {kind}: expected a singular matrix, got {other:?}"),
+            }
+        }
+    }
+}

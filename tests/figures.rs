@@ -9,7 +9,9 @@
 //! - the scaling figures: `docs/scaling/ours.json`, `docs/scaling/sympy.json` and the tables of
 //!   `docs/scaling.md` (`cargo bench -p generator --bench scaling -- --sympy`);
 //! - every other table of `docs/benchmarks.md`: `docs/benchmarks/<table>.json`, each holding the
-//!   command that writes it, its columns and its rows.
+//!   command that writes it, its columns and its rows (Pinocchio's beside ours:
+//!   `cargo bench -p generator --bench pinocchio`, outside CI);
+//! - the goals of `docs/goals.md`: `docs/benchmarks/pinocchio.json`, each verdict from its figures.
 
 use runtime::compare::{Options, Record, compare, table_of};
 
@@ -199,7 +201,7 @@ fn eval_row(r: &serde_json::Value) -> String {
 }
 
 /// The tables the benchmarks write as `{command, columns, rows}`.
-const TABLES: [&str; 6] = ["rhs", "runs", "drift", "derive", "rustc", "integrators"];
+const TABLES: [&str; 7] = ["rhs", "pinocchio", "runs", "drift", "derive", "rustc", "integrators"];
 
 /// A table file as the markdown lines it stands for.
 fn markdown(file: &serde_json::Value) -> Vec<String> {
@@ -232,4 +234,45 @@ fn the_benchmark_tables_are_the_files_the_benchmarks_write() {
     from_files.push(format!("|{}", "---|".repeat(9)));
     let typed: Vec<&str> = docs.lines().filter(|l| l.starts_with('|') && !from_files.iter().any(|f| f == l)).collect();
     assert!(typed.is_empty(), "docs/benchmarks.md has table lines no benchmark wrote: {typed:#?}");
+}
+
+/// docs/goals.md quotes each model's ratios to Pinocchio's ABA and the spatial chain's operation
+/// counts as docs/benchmarks/pinocchio.json has them.
+#[test]
+fn the_goals_quote_the_pinocchio_file() {
+    let goals = read("docs/goals.md");
+    let file = json("docs/benchmarks/pinocchio.json");
+    let rows = file["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 5);
+    for row in rows {
+        let cell = |k: usize| row[k].as_str().unwrap().to_string();
+        let ratios = format!("{} (Kane), {} (reduced)", cell(5), cell(6));
+        assert!(goals.contains(&ratios), "docs/goals.md does not quote `{ratios}` ({}) from docs/benchmarks/pinocchio.json", cell(0));
+        if cell(0).starts_with("spatial chain, 8 links") {
+            let ops = format!("{} (Kane), {} (reduced)", cell(7), cell(8));
+            assert!(goals.contains(&ops), "docs/goals.md does not quote `{ops}`");
+        }
+        if cell(0).starts_with("pendulum on a cart, 20") {
+            let solve = format!("({} operations)", cell(8).split(" + ").nth(1).unwrap());
+            assert!(goals.contains(&solve), "docs/goals.md does not quote `{solve}`");
+        }
+    }
+    assert!(read("docs/benchmarks.md").contains("[`goals.md`](goals.md)"), "docs/benchmarks.md links the goals");
+    // Each row's verdict follows from its figures: met when every figure it names is within the
+    // target (the reduced method's alone where the goal names only it).
+    let mut verdicts = 0;
+    for line in goals.lines().filter(|l| l.starts_with("| ") && l.contains("<= ")) {
+        let cells: Vec<&str> = line.split(" | ").collect();
+        let (goal, target, measured, verdict) = (cells[0], cells[1], cells[2], cells[3]);
+        let limit: f64 = target.trim_start_matches("<= ").trim_end_matches(" each").parse().unwrap();
+        let value = |who: &str| -> f64 {
+            let text = measured.split(", ").find(|p| p.ends_with(&format!("({who})"))).unwrap().trim_end_matches(&format!(" ({who})"));
+            text.split(" + ").map(|x| x.parse::<f64>().unwrap()).sum()
+        };
+        let within =
+            if goal.trim_start_matches("| ").ends_with(", reduced") { value("reduced") <= limit } else { value("Kane") <= limit && value("reduced") <= limit };
+        assert_eq!(verdict.starts_with("met"), within, "docs/goals.md: `{line}`");
+        verdicts += 1;
+    }
+    assert_eq!(verdicts, 6);
 }

@@ -108,7 +108,8 @@ fn solve_dense<const N: usize>(
     }
     Ok(())
 }
-///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite).
+///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them.
+#[allow(dead_code)]
 fn solve_spd<const N: usize>(
     a: &mut [[f64; N]; N],
     b: &mut [f64; N],
@@ -118,23 +119,22 @@ fn solve_spd<const N: usize>(
         scale = scale.max(a[i][i].abs());
     }
     let mut inv = [0.0f64; N];
-    let mut v = [0.0f64; N];
+    let mut u = [[0.0f64; N]; N];
     for j in 0..N {
         let mut d = a[j][j];
         for k in 0..j {
-            v[k] = a[j][k] * a[k][k];
-            d -= a[j][k] * v[k];
+            d -= a[j][k] * u[j][k];
         }
         if !(d > PIVOT_TOLERANCE * scale) {
             return Err(j);
         }
-        a[j][j] = d;
         inv[j] = 1.0 / d;
         for i in j + 1..N {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= a[i][k] * v[k];
+                s -= a[i][k] * u[j][k];
             }
+            u[i][j] = s;
             a[i][j] = s * inv[j];
         }
     }
@@ -885,6 +885,34 @@ pub mod maggi {
             checks: [x5, x5],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -897,9 +925,9 @@ pub mod maggi {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let (w, c) = (a.w, a.c);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W".into(),
@@ -1475,6 +1503,34 @@ pub mod kane {
             checks: [x5, x5],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -1487,8 +1543,8 @@ pub mod kane {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),
@@ -2049,6 +2105,24 @@ pub mod reduced_volterra {
             checks: [x8, x7, x12],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let y0 = b[0];
+        let x0 = y0 * inv0;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -2061,8 +2135,8 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),

@@ -99,47 +99,8 @@ impl Params {
 }
 ///Why an emitted function could not produce a value (the seam's error type, shared by every module).
 pub use ::seam::Failure;
-///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn solve_dense<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-    Ok(())
-}
-///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite).
+///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them.
+#[allow(dead_code)]
 fn solve_spd<const N: usize>(
     a: &mut [[f64; N]; N],
     b: &mut [f64; N],
@@ -149,23 +110,22 @@ fn solve_spd<const N: usize>(
         scale = scale.max(a[i][i].abs());
     }
     let mut inv = [0.0f64; N];
-    let mut v = [0.0f64; N];
+    let mut u = [[0.0f64; N]; N];
     for j in 0..N {
         let mut d = a[j][j];
         for k in 0..j {
-            v[k] = a[j][k] * a[k][k];
-            d -= a[j][k] * v[k];
+            d -= a[j][k] * u[j][k];
         }
         if !(d > PIVOT_TOLERANCE * scale) {
             return Err(j);
         }
-        a[j][j] = d;
         inv[j] = 1.0 / d;
         for i in j + 1..N {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= a[i][k] * v[k];
+                s -= a[i][k] * u[j][k];
             }
+            u[i][j] = s;
             a[i][j] = s * inv[j];
         }
     }
@@ -376,6 +336,34 @@ pub mod lagrange {
             positions: [],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -388,12 +376,12 @@ pub mod lagrange {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
+                condition: "mass matrix M".into(),
                 value: column as f64,
             });
         }
@@ -436,7 +424,7 @@ pub mod lagrange {
         }
         finish(t, a, dstate)
     }
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    ///The matrix `rhs` solves numerically (mass matrix M), for monitoring its conditioning.
     pub fn matrix(
         t: f64,
         state: &[f64; STATES],
@@ -614,7 +602,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
+                    condition: "mass matrix M".into(),
                     value: column as f64,
                 });
             }
@@ -803,7 +791,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
+                    condition: "mass matrix M".into(),
                     value: column as f64,
                 });
             }
@@ -1034,6 +1022,34 @@ pub mod maggi {
             checks: [],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -1046,10 +1062,10 @@ pub mod maggi {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let (w, c) = (a.w, a.c);
         let power = a.power;
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W".into(),
@@ -1722,6 +1738,34 @@ pub mod kane {
             checks: [],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -1734,9 +1778,9 @@ pub mod kane {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),
@@ -2347,6 +2391,34 @@ pub mod reduced_volterra {
             checks: [],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64.max(a[0][0].abs()).max(a[1][1].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let x1 = y1 * inv1;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -2359,9 +2431,9 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let power = a.power;
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),

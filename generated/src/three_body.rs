@@ -169,47 +169,8 @@ impl Params {
 }
 ///Why an emitted function could not produce a value (the seam's error type, shared by every module).
 pub use ::seam::Failure;
-///Solves `a x = b` in place by Gaussian elimination with partial pivoting; `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
-fn solve_dense<const N: usize>(
-    a: &mut [[f64; N]; N],
-    b: &mut [f64; N],
-) -> Result<(), usize> {
-    let mut scale = 0.0f64;
-    for row in a.iter() {
-        for x in row.iter() {
-            scale = scale.max(x.abs());
-        }
-    }
-    for c in 0..N {
-        let mut p = c;
-        for r in c + 1..N {
-            if a[r][c].abs() > a[p][c].abs() {
-                p = r;
-            }
-        }
-        if !(a[p][c].abs() > PIVOT_TOLERANCE * scale) {
-            return Err(c);
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..N {
-            let f = a[r][c] / a[c][c];
-            for k in c + 1..N {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    for r in (0..N).rev() {
-        let mut s = b[r];
-        for k in r + 1..N {
-            s -= a[r][k] * b[k];
-        }
-        b[r] = s / a[r][r];
-    }
-    Ok(())
-}
-///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite).
+///Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them.
+#[allow(dead_code)]
 fn solve_spd<const N: usize>(
     a: &mut [[f64; N]; N],
     b: &mut [f64; N],
@@ -219,23 +180,22 @@ fn solve_spd<const N: usize>(
         scale = scale.max(a[i][i].abs());
     }
     let mut inv = [0.0f64; N];
-    let mut v = [0.0f64; N];
+    let mut u = [[0.0f64; N]; N];
     for j in 0..N {
         let mut d = a[j][j];
         for k in 0..j {
-            v[k] = a[j][k] * a[k][k];
-            d -= a[j][k] * v[k];
+            d -= a[j][k] * u[j][k];
         }
         if !(d > PIVOT_TOLERANCE * scale) {
             return Err(j);
         }
-        a[j][j] = d;
         inv[j] = 1.0 / d;
         for i in j + 1..N {
             let mut s = a[i][j];
             for k in 0..j {
-                s -= a[i][k] * v[k];
+                s -= a[i][k] * u[j][k];
             }
+            u[i][j] = s;
             a[i][j] = s * inv[j];
         }
     }
@@ -882,6 +842,140 @@ pub mod lagrange {
             positions: [],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [5, 0, 6, 1, 2, 3, 4, 7] (counted from 0), skipping the structural zeros (3 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64
+            .max(a[0][0].abs())
+            .max(a[1][1].abs())
+            .max(a[2][2].abs())
+            .max(a[3][3].abs())
+            .max(a[4][4].abs())
+            .max(a[5][5].abs())
+            .max(a[6][6].abs())
+            .max(a[7][7].abs());
+        let d0 = a[5][5];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(5);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[0][5];
+        let l1_0 = u1_0 * inv0;
+        let u3_0 = a[1][5];
+        let l3_0 = u3_0 * inv0;
+        let u4_0 = a[2][5];
+        let l4_0 = u4_0 * inv0;
+        let u5_0 = a[3][5];
+        let l5_0 = u5_0 * inv0;
+        let u6_0 = a[4][5];
+        let l6_0 = u6_0 * inv0;
+        let d1 = a[0][0] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv1 = 1.0 / d1;
+        let u2_1 = a[6][0];
+        let l2_1 = u2_1 * inv1;
+        let u3_1 = a[1][0] - l3_0 * u1_0;
+        let l3_1 = u3_1 * inv1;
+        let u4_1 = a[2][0] - l4_0 * u1_0;
+        let l4_1 = u4_1 * inv1;
+        let u5_1 = a[3][0] - l5_0 * u1_0;
+        let l5_1 = u5_1 * inv1;
+        let u6_1 = a[4][0] - l6_0 * u1_0;
+        let l6_1 = u6_1 * inv1;
+        let d2 = a[6][6] - l2_1 * u2_1;
+        if !(d2 > PIVOT_TOLERANCE * scale) {
+            return Err(6);
+        }
+        let inv2 = 1.0 / d2;
+        let u3_2 = a[1][6] - l3_1 * u2_1;
+        let l3_2 = u3_2 * inv2;
+        let u4_2 = a[2][6] - l4_1 * u2_1;
+        let l4_2 = u4_2 * inv2;
+        let u5_2 = a[3][6] - l5_1 * u2_1;
+        let l5_2 = u5_2 * inv2;
+        let u6_2 = a[4][6] - l6_1 * u2_1;
+        let l6_2 = u6_2 * inv2;
+        let d3 = a[1][1] - l3_0 * u3_0 - l3_1 * u3_1 - l3_2 * u3_2;
+        if !(d3 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv3 = 1.0 / d3;
+        let u4_3 = a[2][1] - l4_0 * u3_0 - l4_1 * u3_1 - l4_2 * u3_2;
+        let l4_3 = u4_3 * inv3;
+        let u5_3 = a[3][1] - l5_0 * u3_0 - l5_1 * u3_1 - l5_2 * u3_2;
+        let l5_3 = u5_3 * inv3;
+        let u6_3 = a[4][1] - l6_0 * u3_0 - l6_1 * u3_1 - l6_2 * u3_2;
+        let l6_3 = u6_3 * inv3;
+        let u7_3 = a[7][1];
+        let l7_3 = u7_3 * inv3;
+        let d4 = a[2][2] - l4_0 * u4_0 - l4_1 * u4_1 - l4_2 * u4_2 - l4_3 * u4_3;
+        if !(d4 > PIVOT_TOLERANCE * scale) {
+            return Err(2);
+        }
+        let inv4 = 1.0 / d4;
+        let u5_4 = a[3][2] - l5_0 * u4_0 - l5_1 * u4_1 - l5_2 * u4_2 - l5_3 * u4_3;
+        let l5_4 = u5_4 * inv4;
+        let u6_4 = a[4][2] - l6_0 * u4_0 - l6_1 * u4_1 - l6_2 * u4_2 - l6_3 * u4_3;
+        let l6_4 = u6_4 * inv4;
+        let u7_4 = a[7][2] - l7_3 * u4_3;
+        let l7_4 = u7_4 * inv4;
+        let d5 = a[3][3] - l5_0 * u5_0 - l5_1 * u5_1 - l5_2 * u5_2 - l5_3 * u5_3
+            - l5_4 * u5_4;
+        if !(d5 > PIVOT_TOLERANCE * scale) {
+            return Err(3);
+        }
+        let inv5 = 1.0 / d5;
+        let u6_5 = a[4][3] - l6_0 * u5_0 - l6_1 * u5_1 - l6_2 * u5_2 - l6_3 * u5_3
+            - l6_4 * u5_4;
+        let l6_5 = u6_5 * inv5;
+        let u7_5 = a[7][3] - l7_3 * u5_3 - l7_4 * u5_4;
+        let l7_5 = u7_5 * inv5;
+        let d6 = a[4][4] - l6_0 * u6_0 - l6_1 * u6_1 - l6_2 * u6_2 - l6_3 * u6_3
+            - l6_4 * u6_4 - l6_5 * u6_5;
+        if !(d6 > PIVOT_TOLERANCE * scale) {
+            return Err(4);
+        }
+        let inv6 = 1.0 / d6;
+        let u7_6 = a[7][4] - l7_3 * u6_3 - l7_4 * u6_4 - l7_5 * u6_5;
+        let l7_6 = u7_6 * inv6;
+        let d7 = a[7][7] - l7_3 * u7_3 - l7_4 * u7_4 - l7_5 * u7_5 - l7_6 * u7_6;
+        if !(d7 > PIVOT_TOLERANCE * scale) {
+            return Err(7);
+        }
+        let inv7 = 1.0 / d7;
+        let y0 = b[5];
+        let y1 = b[0] - l1_0 * y0;
+        let y2 = b[6] - l2_1 * y1;
+        let y3 = b[1] - l3_0 * y0 - l3_1 * y1 - l3_2 * y2;
+        let y4 = b[2] - l4_0 * y0 - l4_1 * y1 - l4_2 * y2 - l4_3 * y3;
+        let y5 = b[3] - l5_0 * y0 - l5_1 * y1 - l5_2 * y2 - l5_3 * y3 - l5_4 * y4;
+        let y6 = b[4] - l6_0 * y0 - l6_1 * y1 - l6_2 * y2 - l6_3 * y3 - l6_4 * y4
+            - l6_5 * y5;
+        let y7 = b[7] - l7_3 * y3 - l7_4 * y4 - l7_5 * y5 - l7_6 * y6;
+        let x7 = y7 * inv7;
+        b[7] = x7;
+        let x6 = y6 * inv6 - l7_6 * x7;
+        b[4] = x6;
+        let x5 = y5 * inv5 - l6_5 * x6 - l7_5 * x7;
+        b[3] = x5;
+        let x4 = y4 * inv4 - l5_4 * x5 - l6_4 * x6 - l7_4 * x7;
+        b[2] = x4;
+        let x3 = y3 * inv3 - l4_3 * x4 - l5_3 * x5 - l6_3 * x6 - l7_3 * x7;
+        b[1] = x3;
+        let x2 = y2 * inv2 - l3_2 * x3 - l4_2 * x4 - l5_2 * x5 - l6_2 * x6;
+        b[6] = x2;
+        let x1 = y1 * inv1 - l2_1 * x2 - l3_1 * x3 - l4_1 * x4 - l5_1 * x5 - l6_1 * x6;
+        b[0] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1 - l3_0 * x3 - l4_0 * x4 - l5_0 * x5 - l6_0 * x6;
+        b[5] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -894,11 +988,11 @@ pub mod lagrange {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_dense(&mut matrix, &mut force) {
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
-                condition: "constraint matrix [M a^T; a 0]".into(),
+                condition: "mass matrix M".into(),
                 value: column as f64,
             });
         }
@@ -952,7 +1046,7 @@ pub mod lagrange {
         }
         finish(t, a, dstate)
     }
-    ///The matrix `rhs` solves numerically (constraint matrix [M a^T; a 0]), for monitoring its conditioning.
+    ///The matrix `rhs` solves numerically (mass matrix M), for monitoring its conditioning.
     pub fn matrix(
         t: f64,
         state: &[f64; STATES],
@@ -2686,7 +2780,7 @@ pub mod lagrange {
             Err(column) => {
                 return Err(Failure::Singular {
                     t,
-                    condition: "constraint matrix [M a^T; a 0]".into(),
+                    condition: "mass matrix M".into(),
                     value: column as f64,
                 });
             }
@@ -3242,6 +3336,146 @@ pub mod maggi {
             checks: [x12],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 3, 1, 2, 4, 5, 6, 7] (counted from 0), skipping the structural zeros (3 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64
+            .max(a[0][0].abs())
+            .max(a[1][1].abs())
+            .max(a[2][2].abs())
+            .max(a[3][3].abs())
+            .max(a[4][4].abs())
+            .max(a[5][5].abs())
+            .max(a[6][6].abs())
+            .max(a[7][7].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u2_0 = a[1][0];
+        let l2_0 = u2_0 * inv0;
+        let u3_0 = a[2][0];
+        let l3_0 = u3_0 * inv0;
+        let u5_0 = a[5][0];
+        let l5_0 = u5_0 * inv0;
+        let u6_0 = a[6][0];
+        let l6_0 = u6_0 * inv0;
+        let u7_0 = a[7][0];
+        let l7_0 = u7_0 * inv0;
+        let d1 = a[3][3];
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(3);
+        }
+        let inv1 = 1.0 / d1;
+        let u2_1 = a[1][3];
+        let l2_1 = u2_1 * inv1;
+        let u3_1 = a[2][3];
+        let l3_1 = u3_1 * inv1;
+        let u5_1 = a[5][3];
+        let l5_1 = u5_1 * inv1;
+        let u6_1 = a[6][3];
+        let l6_1 = u6_1 * inv1;
+        let u7_1 = a[7][3];
+        let l7_1 = u7_1 * inv1;
+        let d2 = a[1][1] - l2_0 * u2_0 - l2_1 * u2_1;
+        if !(d2 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv2 = 1.0 / d2;
+        let u3_2 = a[2][1] - l3_0 * u2_0 - l3_1 * u2_1;
+        let l3_2 = u3_2 * inv2;
+        let u4_2 = a[4][1];
+        let l4_2 = u4_2 * inv2;
+        let u5_2 = a[5][1] - l5_0 * u2_0 - l5_1 * u2_1;
+        let l5_2 = u5_2 * inv2;
+        let u6_2 = a[6][1] - l6_0 * u2_0 - l6_1 * u2_1;
+        let l6_2 = u6_2 * inv2;
+        let u7_2 = a[7][1] - l7_0 * u2_0 - l7_1 * u2_1;
+        let l7_2 = u7_2 * inv2;
+        let d3 = a[2][2] - l3_0 * u3_0 - l3_1 * u3_1 - l3_2 * u3_2;
+        if !(d3 > PIVOT_TOLERANCE * scale) {
+            return Err(2);
+        }
+        let inv3 = 1.0 / d3;
+        let u4_3 = a[4][2] - l4_2 * u3_2;
+        let l4_3 = u4_3 * inv3;
+        let u5_3 = a[5][2] - l5_0 * u3_0 - l5_1 * u3_1 - l5_2 * u3_2;
+        let l5_3 = u5_3 * inv3;
+        let u6_3 = a[6][2] - l6_0 * u3_0 - l6_1 * u3_1 - l6_2 * u3_2;
+        let l6_3 = u6_3 * inv3;
+        let u7_3 = a[7][2] - l7_0 * u3_0 - l7_1 * u3_1 - l7_2 * u3_2;
+        let l7_3 = u7_3 * inv3;
+        let d4 = a[4][4] - l4_2 * u4_2 - l4_3 * u4_3;
+        if !(d4 > PIVOT_TOLERANCE * scale) {
+            return Err(4);
+        }
+        let inv4 = 1.0 / d4;
+        let u5_4 = a[5][4] - l5_2 * u4_2 - l5_3 * u4_3;
+        let l5_4 = u5_4 * inv4;
+        let u6_4 = a[6][4] - l6_2 * u4_2 - l6_3 * u4_3;
+        let l6_4 = u6_4 * inv4;
+        let u7_4 = a[7][4] - l7_2 * u4_2 - l7_3 * u4_3;
+        let l7_4 = u7_4 * inv4;
+        let d5 = a[5][5] - l5_0 * u5_0 - l5_1 * u5_1 - l5_2 * u5_2 - l5_3 * u5_3
+            - l5_4 * u5_4;
+        if !(d5 > PIVOT_TOLERANCE * scale) {
+            return Err(5);
+        }
+        let inv5 = 1.0 / d5;
+        let u6_5 = a[6][5] - l6_0 * u5_0 - l6_1 * u5_1 - l6_2 * u5_2 - l6_3 * u5_3
+            - l6_4 * u5_4;
+        let l6_5 = u6_5 * inv5;
+        let u7_5 = a[7][5] - l7_0 * u5_0 - l7_1 * u5_1 - l7_2 * u5_2 - l7_3 * u5_3
+            - l7_4 * u5_4;
+        let l7_5 = u7_5 * inv5;
+        let d6 = a[6][6] - l6_0 * u6_0 - l6_1 * u6_1 - l6_2 * u6_2 - l6_3 * u6_3
+            - l6_4 * u6_4 - l6_5 * u6_5;
+        if !(d6 > PIVOT_TOLERANCE * scale) {
+            return Err(6);
+        }
+        let inv6 = 1.0 / d6;
+        let u7_6 = a[7][6] - l7_0 * u6_0 - l7_1 * u6_1 - l7_2 * u6_2 - l7_3 * u6_3
+            - l7_4 * u6_4 - l7_5 * u6_5;
+        let l7_6 = u7_6 * inv6;
+        let d7 = a[7][7] - l7_0 * u7_0 - l7_1 * u7_1 - l7_2 * u7_2 - l7_3 * u7_3
+            - l7_4 * u7_4 - l7_5 * u7_5 - l7_6 * u7_6;
+        if !(d7 > PIVOT_TOLERANCE * scale) {
+            return Err(7);
+        }
+        let inv7 = 1.0 / d7;
+        let y0 = b[0];
+        let y1 = b[3];
+        let y2 = b[1] - l2_0 * y0 - l2_1 * y1;
+        let y3 = b[2] - l3_0 * y0 - l3_1 * y1 - l3_2 * y2;
+        let y4 = b[4] - l4_2 * y2 - l4_3 * y3;
+        let y5 = b[5] - l5_0 * y0 - l5_1 * y1 - l5_2 * y2 - l5_3 * y3 - l5_4 * y4;
+        let y6 = b[6] - l6_0 * y0 - l6_1 * y1 - l6_2 * y2 - l6_3 * y3 - l6_4 * y4
+            - l6_5 * y5;
+        let y7 = b[7] - l7_0 * y0 - l7_1 * y1 - l7_2 * y2 - l7_3 * y3 - l7_4 * y4
+            - l7_5 * y5 - l7_6 * y6;
+        let x7 = y7 * inv7;
+        b[7] = x7;
+        let x6 = y6 * inv6 - l7_6 * x7;
+        b[6] = x6;
+        let x5 = y5 * inv5 - l6_5 * x6 - l7_5 * x7;
+        b[5] = x5;
+        let x4 = y4 * inv4 - l5_4 * x5 - l6_4 * x6 - l7_4 * x7;
+        b[4] = x4;
+        let x3 = y3 * inv3 - l4_3 * x4 - l5_3 * x5 - l6_3 * x6 - l7_3 * x7;
+        b[2] = x3;
+        let x2 = y2 * inv2 - l3_2 * x3 - l4_2 * x4 - l5_2 * x5 - l6_2 * x6 - l7_2 * x7;
+        b[1] = x2;
+        let x1 = y1 * inv1 - l2_1 * x2 - l3_1 * x3 - l5_1 * x5 - l6_1 * x6 - l7_1 * x7;
+        b[3] = x1;
+        let x0 = y0 * inv0 - l2_0 * x2 - l3_0 * x3 - l5_0 * x5 - l6_0 * x6 - l7_0 * x7;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -3254,9 +3488,9 @@ pub mod maggi {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
         let (w, c) = (a.w, a.c);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "Maggi matrix W^T M W".into(),
@@ -5969,6 +6203,142 @@ pub mod kane {
             checks: [x0],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 3, 2, 1, 4, 5, 6, 7] (counted from 0), skipping the structural zeros (3 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64
+            .max(a[0][0].abs())
+            .max(a[1][1].abs())
+            .max(a[2][2].abs())
+            .max(a[3][3].abs())
+            .max(a[4][4].abs())
+            .max(a[5][5].abs())
+            .max(a[6][6].abs())
+            .max(a[7][7].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u2_0 = a[2][0];
+        let l2_0 = u2_0 * inv0;
+        let u3_0 = a[1][0];
+        let l3_0 = u3_0 * inv0;
+        let u5_0 = a[5][0];
+        let l5_0 = u5_0 * inv0;
+        let u6_0 = a[6][0];
+        let l6_0 = u6_0 * inv0;
+        let u7_0 = a[7][0];
+        let l7_0 = u7_0 * inv0;
+        let d1 = a[3][3];
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(3);
+        }
+        let inv1 = 1.0 / d1;
+        let u2_1 = a[2][3];
+        let l2_1 = u2_1 * inv1;
+        let u5_1 = a[5][3];
+        let l5_1 = u5_1 * inv1;
+        let u6_1 = a[6][3];
+        let l6_1 = u6_1 * inv1;
+        let u7_1 = a[7][3];
+        let l7_1 = u7_1 * inv1;
+        let d2 = a[2][2] - l2_0 * u2_0 - l2_1 * u2_1;
+        if !(d2 > PIVOT_TOLERANCE * scale) {
+            return Err(2);
+        }
+        let inv2 = 1.0 / d2;
+        let u3_2 = a[1][2] - l3_0 * u2_0;
+        let l3_2 = u3_2 * inv2;
+        let u5_2 = a[5][2] - l5_0 * u2_0 - l5_1 * u2_1;
+        let l5_2 = u5_2 * inv2;
+        let u6_2 = a[6][2] - l6_0 * u2_0 - l6_1 * u2_1;
+        let l6_2 = u6_2 * inv2;
+        let u7_2 = a[7][2] - l7_0 * u2_0 - l7_1 * u2_1;
+        let l7_2 = u7_2 * inv2;
+        let d3 = a[1][1] - l3_0 * u3_0 - l3_2 * u3_2;
+        if !(d3 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv3 = 1.0 / d3;
+        let u4_3 = a[4][1];
+        let l4_3 = u4_3 * inv3;
+        let u5_3 = a[5][1] - l5_0 * u3_0 - l5_2 * u3_2;
+        let l5_3 = u5_3 * inv3;
+        let u6_3 = a[6][1] - l6_0 * u3_0 - l6_2 * u3_2;
+        let l6_3 = u6_3 * inv3;
+        let u7_3 = a[7][1] - l7_0 * u3_0 - l7_2 * u3_2;
+        let l7_3 = u7_3 * inv3;
+        let d4 = a[4][4] - l4_3 * u4_3;
+        if !(d4 > PIVOT_TOLERANCE * scale) {
+            return Err(4);
+        }
+        let inv4 = 1.0 / d4;
+        let u5_4 = a[5][4] - l5_3 * u4_3;
+        let l5_4 = u5_4 * inv4;
+        let u6_4 = a[6][4] - l6_3 * u4_3;
+        let l6_4 = u6_4 * inv4;
+        let u7_4 = a[7][4] - l7_3 * u4_3;
+        let l7_4 = u7_4 * inv4;
+        let d5 = a[5][5] - l5_0 * u5_0 - l5_1 * u5_1 - l5_2 * u5_2 - l5_3 * u5_3
+            - l5_4 * u5_4;
+        if !(d5 > PIVOT_TOLERANCE * scale) {
+            return Err(5);
+        }
+        let inv5 = 1.0 / d5;
+        let u6_5 = a[6][5] - l6_0 * u5_0 - l6_1 * u5_1 - l6_2 * u5_2 - l6_3 * u5_3
+            - l6_4 * u5_4;
+        let l6_5 = u6_5 * inv5;
+        let u7_5 = a[7][5] - l7_0 * u5_0 - l7_1 * u5_1 - l7_2 * u5_2 - l7_3 * u5_3
+            - l7_4 * u5_4;
+        let l7_5 = u7_5 * inv5;
+        let d6 = a[6][6] - l6_0 * u6_0 - l6_1 * u6_1 - l6_2 * u6_2 - l6_3 * u6_3
+            - l6_4 * u6_4 - l6_5 * u6_5;
+        if !(d6 > PIVOT_TOLERANCE * scale) {
+            return Err(6);
+        }
+        let inv6 = 1.0 / d6;
+        let u7_6 = a[7][6] - l7_0 * u6_0 - l7_1 * u6_1 - l7_2 * u6_2 - l7_3 * u6_3
+            - l7_4 * u6_4 - l7_5 * u6_5;
+        let l7_6 = u7_6 * inv6;
+        let d7 = a[7][7] - l7_0 * u7_0 - l7_1 * u7_1 - l7_2 * u7_2 - l7_3 * u7_3
+            - l7_4 * u7_4 - l7_5 * u7_5 - l7_6 * u7_6;
+        if !(d7 > PIVOT_TOLERANCE * scale) {
+            return Err(7);
+        }
+        let inv7 = 1.0 / d7;
+        let y0 = b[0];
+        let y1 = b[3];
+        let y2 = b[2] - l2_0 * y0 - l2_1 * y1;
+        let y3 = b[1] - l3_0 * y0 - l3_2 * y2;
+        let y4 = b[4] - l4_3 * y3;
+        let y5 = b[5] - l5_0 * y0 - l5_1 * y1 - l5_2 * y2 - l5_3 * y3 - l5_4 * y4;
+        let y6 = b[6] - l6_0 * y0 - l6_1 * y1 - l6_2 * y2 - l6_3 * y3 - l6_4 * y4
+            - l6_5 * y5;
+        let y7 = b[7] - l7_0 * y0 - l7_1 * y1 - l7_2 * y2 - l7_3 * y3 - l7_4 * y4
+            - l7_5 * y5 - l7_6 * y6;
+        let x7 = y7 * inv7;
+        b[7] = x7;
+        let x6 = y6 * inv6 - l7_6 * x7;
+        b[6] = x6;
+        let x5 = y5 * inv5 - l6_5 * x6 - l7_5 * x7;
+        b[5] = x5;
+        let x4 = y4 * inv4 - l5_4 * x5 - l6_4 * x6 - l7_4 * x7;
+        b[4] = x4;
+        let x3 = y3 * inv3 - l4_3 * x4 - l5_3 * x5 - l6_3 * x6 - l7_3 * x7;
+        b[1] = x3;
+        let x2 = y2 * inv2 - l3_2 * x3 - l5_2 * x5 - l6_2 * x6 - l7_2 * x7;
+        b[2] = x2;
+        let x1 = y1 * inv1 - l2_1 * x2 - l5_1 * x5 - l6_1 * x6 - l7_1 * x7;
+        b[3] = x1;
+        let x0 = y0 * inv0 - l2_0 * x2 - l3_0 * x3 - l5_0 * x5 - l6_0 * x6 - l7_0 * x7;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -5981,8 +6351,8 @@ pub mod kane {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),
@@ -7502,6 +7872,81 @@ pub mod reduced_volterra {
             checks: [x0],
         }
     }
+    ///Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [0, 1, 2, 3, 4] (counted from 0), skipping the structural zeros (0 fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
+    #[allow(clippy::all)]
+    #[inline(never)]
+    fn solve_ldl(
+        a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+        b: &mut [f64; MATRIX_SIZE],
+    ) -> Result<(), usize> {
+        let scale = 0.0f64
+            .max(a[0][0].abs())
+            .max(a[1][1].abs())
+            .max(a[2][2].abs())
+            .max(a[3][3].abs())
+            .max(a[4][4].abs());
+        let d0 = a[0][0];
+        if !(d0 > PIVOT_TOLERANCE * scale) {
+            return Err(0);
+        }
+        let inv0 = 1.0 / d0;
+        let u1_0 = a[1][0];
+        let l1_0 = u1_0 * inv0;
+        let u2_0 = a[2][0];
+        let l2_0 = u2_0 * inv0;
+        let u3_0 = a[3][0];
+        let l3_0 = u3_0 * inv0;
+        let u4_0 = a[4][0];
+        let l4_0 = u4_0 * inv0;
+        let d1 = a[1][1] - l1_0 * u1_0;
+        if !(d1 > PIVOT_TOLERANCE * scale) {
+            return Err(1);
+        }
+        let inv1 = 1.0 / d1;
+        let u2_1 = a[2][1] - l2_0 * u1_0;
+        let l2_1 = u2_1 * inv1;
+        let u3_1 = a[3][1] - l3_0 * u1_0;
+        let l3_1 = u3_1 * inv1;
+        let u4_1 = a[4][1] - l4_0 * u1_0;
+        let l4_1 = u4_1 * inv1;
+        let d2 = a[2][2] - l2_0 * u2_0 - l2_1 * u2_1;
+        if !(d2 > PIVOT_TOLERANCE * scale) {
+            return Err(2);
+        }
+        let inv2 = 1.0 / d2;
+        let u3_2 = a[3][2] - l3_0 * u2_0 - l3_1 * u2_1;
+        let l3_2 = u3_2 * inv2;
+        let u4_2 = a[4][2] - l4_0 * u2_0 - l4_1 * u2_1;
+        let l4_2 = u4_2 * inv2;
+        let d3 = a[3][3] - l3_0 * u3_0 - l3_1 * u3_1 - l3_2 * u3_2;
+        if !(d3 > PIVOT_TOLERANCE * scale) {
+            return Err(3);
+        }
+        let inv3 = 1.0 / d3;
+        let u4_3 = a[4][3] - l4_0 * u3_0 - l4_1 * u3_1 - l4_2 * u3_2;
+        let l4_3 = u4_3 * inv3;
+        let d4 = a[4][4] - l4_0 * u4_0 - l4_1 * u4_1 - l4_2 * u4_2 - l4_3 * u4_3;
+        if !(d4 > PIVOT_TOLERANCE * scale) {
+            return Err(4);
+        }
+        let inv4 = 1.0 / d4;
+        let y0 = b[0];
+        let y1 = b[1] - l1_0 * y0;
+        let y2 = b[2] - l2_0 * y0 - l2_1 * y1;
+        let y3 = b[3] - l3_0 * y0 - l3_1 * y1 - l3_2 * y2;
+        let y4 = b[4] - l4_0 * y0 - l4_1 * y1 - l4_2 * y2 - l4_3 * y3;
+        let x4 = y4 * inv4;
+        b[4] = x4;
+        let x3 = y3 * inv3 - l4_3 * x4;
+        b[3] = x3;
+        let x2 = y2 * inv2 - l3_2 * x3 - l4_2 * x4;
+        b[2] = x2;
+        let x1 = y1 * inv1 - l2_1 * x2 - l3_1 * x3 - l4_1 * x4;
+        b[1] = x1;
+        let x0 = y0 * inv0 - l1_0 * x1 - l2_0 * x2 - l3_0 * x3 - l4_0 * x4;
+        b[0] = x0;
+        Ok(())
+    }
     ///Checks the singular factors, solves, and writes the state's rates.
     #[allow(clippy::all)]
     fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -7514,8 +7959,8 @@ pub mod reduced_volterra {
                 });
             }
         }
-        let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        if let Err(column) = solve_spd(&mut matrix, &mut force) {
+        let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
+        if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
                 condition: "mass matrix M_NI".into(),

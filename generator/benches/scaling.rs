@@ -25,10 +25,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-#[path = "../tests/support/rustc.rs"]
-mod rustc_support;
-
-const FORMS: [&str; 4] = ["lagrange", "maggi", "kane", "reduced_volterra"];
+#[path = "support/timing.rs"]
+mod timing;
+use timing::FORMS;
 
 /// Fresh processes per scene; the best is reported.
 const SCENE_RUNS: usize = 25;
@@ -89,28 +88,16 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         ..Record::default()
     };
     if compile {
-        let dir = work.join(format!("{kind}_{n}"));
-        std::fs::create_dir_all(&dir).expect("a scratch directory");
-        std::fs::write(dir.join("model.rs"), &out.code).expect("the module is written");
-        std::fs::write(dir.join("main.rs"), timing_program()).expect("the timing program is written");
-        rustc_support::seam_rlib(); // built once, outside the timing
-        let start = Instant::now();
-        let status = rustc_support::rustc().args(["-C", "opt-level=3", "-o"]).arg(dir.join("timing")).arg(dir.join("main.rs")).status().expect("rustc runs");
-        record.rustc_s = Some(start.elapsed().as_secs_f64());
-        assert!(status.success(), "the emitted module compiles");
-        let run = Command::new(dir.join("timing")).output().expect("the timing program runs");
-        for line in String::from_utf8_lossy(&run.stdout).lines() {
-            if let Some((f, ns)) = line.split_once(' ') {
-                record.ns_per_call.push((f.to_string(), ns.parse().unwrap_or(f64::NAN)));
-            }
-        }
+        let (exe, rustc_s) = timing::compile(&work.join(format!("{kind}_{n}")), &out.code);
+        record.rustc_s = Some(rustc_s);
+        record.ns_per_call = timing::run(&exe);
         record.jit_ns_per_call = jit_ns_per_call(&model);
     }
     record
 }
 
-/// Each formulation's `rhs` evaluated in-process by the JIT, timed as [`timing_program`] times
-/// the compiled module: best of 7 rounds of 200 calls at the model's initial state.
+/// Each formulation's `rhs` evaluated in-process by the JIT, timed as the timing program times
+/// the compiled module (`support/timing.rs`): best of 7 rounds of 200 calls at the model's initial state.
 fn jit_ns_per_call(model: &generator::model::Model) -> Vec<(String, f64)> {
     let jit = jit::Jit::default();
     let evaluated = generator::eval::evaluate_with_backend(model, &Options::from_model(model), &jit).expect("the benchmark models evaluate").0;
@@ -135,20 +122,6 @@ fn jit_ns_per_call(model: &generator::model::Model) -> Vec<(String, f64)> {
             (f.name().to_string(), best)
         })
         .collect()
-}
-
-/// A program that times each formulation's `rhs` at the model's initial state.
-fn timing_program() -> String {
-    let mut s = String::from(
-        "#[allow(dead_code, non_snake_case, clippy::all)]\n#[path = \"model.rs\"]\nmod model;\nuse std::time::Instant;\n\
-         fn time<F: FnMut()>(mut f: F) -> f64 {\n    let mut best = f64::INFINITY;\n    for _ in 0..7 {\n        let n = 200;\n        let t = Instant::now();\n        for _ in 0..n { f(); }\n        best = best.min(t.elapsed().as_secs_f64() * 1e9 / n as f64);\n    }\n    best\n}\nfn main() {\n    let p = model::Params::default();\n",
-    );
-    for f in FORMS {
-        s += &format!(
-            "    {{\n        let (state, g) = model::{f}::initial_state(0.0, &model::INITIAL_Q, &model::INITIAL_QDOT, &p).unwrap();\n        let mut d = [0.0; model::{f}::STATES];\n        let ns = time(|| {{ model::{f}::rhs(0.0, std::hint::black_box(&state), &p, &g, &mut d).unwrap(); std::hint::black_box(&d); }});\n        println!(\"{f} {{ns}}\");\n    }}\n"
-        );
-    }
-    s + "}\n"
 }
 
 fn list(s: &str) -> Vec<usize> {

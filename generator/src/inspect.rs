@@ -48,6 +48,10 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     for e in &d.equations {
         let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name(), e.states(work), e.equations);
     }
+    let _ = writeln!(w, "\nhow each right-hand side solves its matrix (the plan the emitted code and the evaluator follow):");
+    for e in &d.equations {
+        let _ = writeln!(w, "  {:<17} {}: {}", e.name(), e.matrix_name, crate::emit::ldl::Solve::for_equations(e).describe());
+    }
     let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];
     section(w, "energies:", &mut items, latex);
     let mut items = Vec::new();

@@ -8,6 +8,7 @@
 use super::FunctionCost;
 use super::function::{Arg, Input, arg_list};
 use super::jacobian::Wrt;
+use super::ldl::Solve;
 use super::module::{Emitter, doc, usize_lit};
 use super::ops::OpCount;
 use super::shared::FromMechanics;
@@ -24,15 +25,10 @@ const MAX_CONDITION_TREE: u32 = 200;
 /// The cost of `solve_spd` (`LDL^T`, no pivoting) for `n` unknowns: the factorization's
 /// `n^3 / 6` multiply-adds, one reciprocal per pivot, two triangular solves and the scaling.
 pub fn spd_cost(n: usize) -> OpCount {
-    let factor_mul: usize = (0..n).map(|j| 2 * j + (n - 1 - j) * (j + 1)).sum();
+    let factor_mul: usize = (0..n).map(|j| j + (n - 1 - j) * (j + 1)).sum();
     let factor_add: usize = (0..n).map(|j| j + (n - 1 - j) * j).sum();
     let triangles = n * n.saturating_sub(1);
     OpCount { add: factor_add + triangles, mul: factor_mul + triangles + n, div: n, neg: 0, calls: Default::default() }
-}
-
-/// The cost of the solve a formulation's right-hand side performs.
-pub fn rhs_solve_cost(f: &Equations) -> OpCount {
-    if f.kind.solves_positive_definite() { spd_cost(f.mass.rows) } else { solve_cost(f.mass.rows) }
 }
 
 /// The worst-case cost of `solve_dense` for `n` unknowns.
@@ -110,7 +106,7 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let checks = self.runtime_factors(f);
-        let (assemble, depends_on_time) = self.assemble(f, shared, &checks)?;
+        let (assemble, depends_on_time, solve) = self.assemble(f, shared, &checks)?;
         let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
@@ -140,6 +136,7 @@ impl Emitter<'_> {
                 stabilization: f.stabilization.as_ref().map(|s| s.len()),
                 power_weights: f.constraint_power.is_some(),
                 depends_on_time,
+                solve,
             });
         }
         Ok(quote! {
@@ -202,9 +199,9 @@ impl Emitter<'_> {
         outputs
     }
 
-    /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`, and
-    /// whether the right-hand side reads `t` (decided on the same outputs).
-    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool), ModelError> {
+    /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`,
+    /// whether the right-hand side reads `t` (decided on the same outputs), and how it solves.
+    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool, Solve), ModelError> {
         let model = self.model;
         let name = f.name();
         let work = self.work;
@@ -226,7 +223,8 @@ impl Emitter<'_> {
             outputs.extend(stab.iter().map(|(_, p)| *p));
         }
         let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
-        let mut solve = rhs_solve_cost(f);
+        let plan = Solve::for_equations(f);
+        let mut solve = plan.cost();
         if f.constraint_power.is_some() {
             // The moving constraints' power after the solve: `power_weights . x`.
             solve.add += n;
@@ -355,7 +353,11 @@ impl Emitter<'_> {
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
-        let solver = if f.kind.solves_positive_definite() { quote!(solve_spd) } else { quote!(solve_dense) };
+        let (solve_call, solve_item, matrix_mut) = match (plan.sparse(), &plan) {
+            (Some(sparse), _) => (quote!(solve_ldl(&matrix, &mut force)), sparse.emit(), TokenStream::new()),
+            (None, Solve::Ldl(_)) => (quote!(solve_spd(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
+            (None, Solve::Lu(_)) => (quote!(solve_dense(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
+        };
         let items = quote! {
             #[doc = "Size of the matrix `rhs` solves numerically."]
             pub const MATRIX_SIZE: usize = #n_l;
@@ -372,6 +374,7 @@ impl Emitter<'_> {
                 Assembly { #(#values,)* }
             }
             #helpers
+            #solve_item
             #[doc = "Checks the singular factors, solves, and writes the state's rates."]
             #[allow(clippy::all)]
             fn finish(t: f64, a: Assembly, dstate: &mut [f64; STATES]) -> Result<(), Failure> {
@@ -380,10 +383,10 @@ impl Emitter<'_> {
                         return Err(Failure::Singular { t, condition: condition.into(), value });
                     }
                 }
-                let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+                let (qdot, #matrix_mut matrix, mut force) = (a.qdot, a.matrix, a.force);
                 #unpack_post
                 #unpack_power
-                if let Err(column) = #solver(&mut matrix, &mut force) {
+                if let Err(column) = #solve_call {
                     return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
                 }
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*
@@ -406,7 +409,7 @@ impl Emitter<'_> {
                 assemble(t, state, params, g_i).matrix
             }
         };
-        Ok((items, depends_on_time))
+        Ok((items, depends_on_time, plan))
     }
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {

@@ -16,6 +16,7 @@ pub mod builder;
 pub mod cse;
 pub mod form;
 pub mod jacobian;
+pub mod ldl;
 pub mod function;
 pub mod lower;
 pub mod module;
@@ -126,6 +127,8 @@ pub struct Summary {
     pub formulations: Vec<(String, usize, usize)>,
     /// Per formulation: how its velocity transformation was eliminated.
     pub eliminations: Vec<(String, String)>,
+    /// Per formulation: how its right-hand side solves its matrix ([`ldl::Solve`]).
+    pub solves: Vec<(String, String)>,
     /// Per emitted function: its cost.
     pub functions: Vec<FunctionCost>,
     /// What the simplifier's limits cut (nodes kept as built: correct, only less compact).
@@ -158,6 +161,9 @@ impl Summary {
         }
         for (name, how) in &self.eliminations {
             out += &format!("  {name:<18} {how}\n");
+        }
+        for (name, how) in &self.solves {
+            out += &format!("  {name:<18} solve: {how}\n");
         }
         for f in &self.functions {
             if f.solve.total() == 0 {

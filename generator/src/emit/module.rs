@@ -178,6 +178,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
             s: d.ignorable.len(),
             formulations,
             eliminations: d.equations.iter().map(|e| (e.name().to_string(), e.elimination.to_string())).collect(),
+            solves: d.equations.iter().map(|e| (e.name().to_string(), super::ldl::Solve::for_equations(e).describe())).collect(),
             functions,
             simplifier: d.mechanics.tidy.report(),
             cuts,
@@ -239,12 +240,14 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     head.push(em.params());
     head.push(super::seam::failure_import(&em.seam));
     if !options.formulations.is_empty() {
-        // Each solver where a formulation uses it: LU for Lagrange's, LDL^T for the others'.
+        // Each solver where a formulation may use it: LU for Lagrange's with constraints,
+        // LDL^T for the others' (unless every matrix has its own sparse `solve_ldl`).
         let kinds: Vec<seam::FormulationKind> = options.formulations.iter().map(|f| f.kind()).collect();
-        if kinds.iter().any(|k| !k.solves_positive_definite()) {
+        let lagrange_indefinite = mech.r > 0;
+        if kinds.iter().any(|k| !k.solves_positive_definite()) && lagrange_indefinite {
             head.push(solve_dense());
         }
-        if kinds.iter().any(|k| k.solves_positive_definite()) {
+        if kinds.iter().any(|k| k.solves_positive_definite() || !lagrange_indefinite) {
             head.push(solve_spd());
         }
         if options.jacobian || em.emits_parameter_jacobian() {
@@ -903,30 +906,31 @@ fn solve_dense() -> TokenStream {
 
 fn solve_spd() -> TokenStream {
     quote! {
-        #[doc = "Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite)."]
+        #[doc = "Solves `a x = b` in place for a symmetric positive definite `a` (both triangles given) by `a = L D L^T` without pivoting, one reciprocal per pivot; `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry (singular, or not positive definite). Used where the matrix has no structural zero to skip; elsewhere the formulation's own `solve_ldl` skips them."]
+        #[allow(dead_code)]
         fn solve_spd<const N: usize>(a: &mut [[f64; N]; N], b: &mut [f64; N]) -> Result<(), usize> {
             let mut scale = 0.0f64;
             for i in 0..N {
                 scale = scale.max(a[i][i].abs());
             }
             let mut inv = [0.0f64; N];
-            let mut v = [0.0f64; N];
+            // `L` in `a` below the diagonal; `L D` in `u` (each entry before its division by the pivot).
+            let mut u = [[0.0f64; N]; N];
             for j in 0..N {
                 let mut d = a[j][j];
                 for k in 0..j {
-                    v[k] = a[j][k] * a[k][k];
-                    d -= a[j][k] * v[k];
+                    d -= a[j][k] * u[j][k];
                 }
                 if !(d > PIVOT_TOLERANCE * scale) {
                     return Err(j);
                 }
-                a[j][j] = d;
                 inv[j] = 1.0 / d;
                 for i in j + 1..N {
                     let mut s = a[i][j];
                     for k in 0..j {
-                        s -= a[i][k] * v[k];
+                        s -= a[i][k] * u[j][k];
                     }
+                    u[i][j] = s;
                     a[i][j] = s * inv[j];
                 }
             }

@@ -49,6 +49,8 @@ pub struct FormShape {
     /// The power ends with `matrix_size` weights on the solution (moving constraints).
     pub power_weights: bool,
     pub depends_on_time: bool,
+    /// How `rhs` solves its matrix (the plan the module's code follows).
+    pub solve: super::ldl::Solve,
 }
 
 /// Every function of a module as tapes, with the shapes around them.

@@ -4,6 +4,7 @@
 
 use super::kernel::{Backend, Interpreter, Kernel};
 use super::{FormShape, Program};
+use crate::emit::ldl::Solve;
 use crate::emit::tape::Tape;
 use seam::{Failure, Formulation, FormulationFunctions, Model, ModelFunctions, StateLayout};
 use std::borrow::Cow;
@@ -224,54 +225,6 @@ fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) 
     Ok(())
 }
 
-/// `solve_spd` of emitted modules: `a = L D L^T` without pivoting on a row-major symmetric
-/// positive definite `n x n` matrix, one reciprocal per pivot, `b` overwritten by the solution;
-/// `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.
-/// The same operations in the same order as the module's, so the same numbers; `scratch` holds
-/// the reciprocals and one row of `L D`.
-fn solve_spd(n: usize, a: &mut [f64], b: &mut [f64], scratch: &mut Vec<f64>) -> Result<(), usize> {
-    scratch.clear();
-    scratch.resize(2 * n, 0.0);
-    let (inv, v) = scratch.split_at_mut(n);
-    let mut scale = 0.0f64;
-    for i in 0..n {
-        scale = scale.max(a[i * n + i].abs());
-    }
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            v[k] = a[j * n + k] * a[k * n + k];
-            d -= a[j * n + k] * v[k];
-        }
-        if !(d > PIVOT_TOLERANCE * scale) {
-            return Err(j);
-        }
-        a[j * n + j] = d;
-        inv[j] = 1.0 / d;
-        for i in j + 1..n {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= a[i * n + k] * v[k];
-            }
-            a[i * n + j] = s * inv[j];
-        }
-    }
-    for i in 0..n {
-        for k in 0..i {
-            b[i] -= a[i * n + k] * b[k];
-        }
-    }
-    for i in 0..n {
-        b[i] *= inv[i];
-    }
-    for i in (0..n).rev() {
-        for k in i + 1..n {
-            b[i] -= a[k * n + i] * b[k];
-        }
-    }
-    Ok(())
-}
-
 /// `lu_factor` of emitted modules: `P a = L U` in place on a row-major `n x n` matrix (partial
 /// pivoting, `L` unit lower below the diagonal), the row taken at each step into `pivots`;
 /// `Err(column)` when a pivot is below `PIVOT_TOLERANCE` times the largest entry.
@@ -373,10 +326,10 @@ impl EvaluatedForm {
                         return Err(Failure::Singular { t, condition: Cow::Owned(condition.clone()), value });
                     }
                 }
-                let solved = if s.kind.solves_positive_definite() {
-                    COLUMN.with(|scratch| solve_spd(n, matrix, force, &mut scratch.borrow_mut()))
-                } else {
-                    solve_dense(n, matrix, force, pivots)
+                // The module's own solve: `solve_spd` or its `solve_ldl`, both a plan's twin.
+                let solved = match &s.solve {
+                    Solve::Ldl(plan) => COLUMN.with(|scratch| plan.solve(matrix, force, &mut scratch.borrow_mut())),
+                    Solve::Lu(_) => solve_dense(n, matrix, force, pivots),
                 };
                 if let Err(column) = solved {
                     return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
@@ -645,6 +598,7 @@ impl FormulationFunctions for EvaluatedForm {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::emit::ldl::LdlPlan;
     use crate::symbolic::zero::SplitMix;
 
     /// A random symmetric positive definite matrix `B B^T + n I`, row-major.
@@ -667,8 +621,8 @@ mod tests {
         for n in 1..=12 {
             let a = spd(n, &mut rng);
             let b: Vec<f64> = (0..n).map(|_| rng.uniform(-1.0, 1.0)).collect();
-            let (mut a1, mut x1) = (a.clone(), b.clone());
-            solve_spd(n, &mut a1, &mut x1, &mut scratch).unwrap();
+            let (a1, mut x1) = (a.clone(), b.clone());
+            LdlPlan::dense(n).solve(&a1, &mut x1, &mut scratch).unwrap();
             let (mut a2, mut x2, mut pivots) = (a.clone(), b.clone(), Vec::new());
             solve_dense(n, &mut a2, &mut x2, &mut pivots).unwrap();
             for i in 0..n {
@@ -685,13 +639,12 @@ mod tests {
     fn ldlt_refuses_singular_and_indefinite_matrices() {
         let mut scratch = Vec::new();
         // Rank one: the second pivot is zero.
-        let mut singular = vec![1.0, 2.0, 2.0, 4.0];
-        assert_eq!(solve_spd(2, &mut singular, &mut [1.0, 1.0], &mut scratch), Err(1));
+        let singular = [1.0, 2.0, 2.0, 4.0];
+        assert_eq!(LdlPlan::dense(2).solve(&singular, &mut [1.0, 1.0], &mut scratch), Err(1));
         // Eigenvalues 3 and -1: the second pivot is 1 - 4 = -3.
-        let mut indefinite = vec![1.0, 2.0, 2.0, 1.0];
-        assert_eq!(solve_spd(2, &mut indefinite, &mut [1.0, 1.0], &mut scratch), Err(1));
+        let indefinite = [1.0, 2.0, 2.0, 1.0];
+        assert_eq!(LdlPlan::dense(2).solve(&indefinite, &mut [1.0, 1.0], &mut scratch), Err(1));
         // A negative first pivot.
-        let mut negative = vec![-1.0];
-        assert_eq!(solve_spd(1, &mut negative, &mut [1.0], &mut scratch), Err(0));
+        assert_eq!(LdlPlan::dense(1).solve(&[-1.0], &mut [1.0], &mut scratch), Err(0));
     }
 }

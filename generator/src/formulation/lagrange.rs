@@ -58,7 +58,7 @@ impl Method for Lagrange {
             post: None,
             singular: vec![],
             equations: m,
-            matrix_name: "constraint matrix [M a^T; a 0]",
+            matrix_name: if r == 0 { "mass matrix M" } else { "constraint matrix [M a^T; a 0]" },
             stabilization: Some(stabilization),
             elimination: "none (multipliers solved with the accelerations)",
             constraint_power: None,

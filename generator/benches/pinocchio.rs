@@ -1,0 +1,181 @@
+//! Our emitted right-hand sides against Pinocchio's articulated-body algorithm (ABA), the
+//! fastest general-purpose forward dynamics we know of, on the same models: the paper's scenes
+//! 2 and 3, the 20-link pendulum on a cart and the spatial chain on a floating base at 8 and 20
+//! links (`generator::model::examples`). Writes `docs/benchmarks/pinocchio.json` (the table of
+//! `docs/benchmarks.md`, "Against Pinocchio").
+//!
+//! ```sh
+//! cargo bench -p generator --bench pinocchio                 # every model, 15 rounds
+//! cargo bench -p generator --bench pinocchio -- --rounds 5 --out /tmp/pin.json
+//! ```
+//!
+//! Outside CI: it installs the `pin` wheel (Pinocchio's headers and library) and Eigen's
+//! headers (`cmeel-eigen`) into a virtual environment under `target/peers/`, and builds
+//! `benches/pinocchio/aba.cpp` with `g++ -O3 -march=native` against them, header-only (every
+//! template instantiated for this machine). Our modules are compiled by `rustc -C opt-level=3`
+//! for plain x86-64 (`benches/support/timing.rs`): the comparison gives Pinocchio the newer
+//! instructions (FMA, AVX2) and us none. Both sides time one call the same way (the best, over
+//! 7 rounds, of the mean of 200 calls at one state), in separate processes run alternately,
+//! round after round; each figure is the best over the rounds, so both met the same machine.
+
+#[path = "support/timing.rs"]
+mod timing;
+
+use generator::emit::{Options, generate};
+use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The `pin` wheel's version (Pinocchio 4.1) and the Eigen headers it builds with.
+const PIN: &str = "pin==4.1.0";
+const EIGEN: &str = "cmeel-eigen==3.4.1";
+
+/// The compile definitions Pinocchio's CMake package gives its users (Boost's variant of 25
+/// joint kinds), without `PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION`: every template is
+/// instantiated here, for this machine.
+const DEFINES: [&str; 4] =
+    ["-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30", "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12"];
+
+struct Case {
+    /// The row's name, and the model's name in `aba.cpp` with its size.
+    label: String,
+    aba: (&'static str, usize),
+    model: generator::model::Model,
+}
+
+fn cases() -> Vec<Case> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+    let scene = |file: &str| generator::model::load(root.join(format!("{file}.ron"))).expect("the scene loads");
+    let built = |b: generator::model::builder::ModelBuilder| b.build().expect("the benchmark models are valid");
+    vec![
+        Case { label: "scene 2 three_body".into(), aba: ("three_body", 0), model: scene("three_body") },
+        Case { label: "scene 3 satellite_boom".into(), aba: ("satellite_boom", 0), model: scene("satellite_boom") },
+        Case { label: "pendulum on a cart, 20 links".into(), aba: ("pendulum_on_cart", 20), model: built(n_link_pendulum_on_cart(20)) },
+        Case { label: "spatial chain, 8 links on a floating base".into(), aba: ("floating_chain", 8), model: built(floating_chain(8)) },
+        Case { label: "spatial chain, 20 links on a floating base".into(), aba: ("floating_chain", 20), model: built(floating_chain(20)) },
+    ]
+}
+
+fn run(cmd: &mut Command, what: &str) {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert!(out.status.success(), "{what} failed:\n{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+}
+
+/// The `pin` wheel's prefix (headers and libraries), installed once under `target/peers/`.
+fn pinocchio_prefix(peers: &Path) -> PathBuf {
+    let venv = peers.join("venv");
+    let python = venv.join("bin/python3");
+    if !python.exists() {
+        eprintln!("pinocchio: creating {} ...", venv.display());
+        run(Command::new("python3").args(["-m", "venv"]).arg(&venv), "python3 -m venv");
+    }
+    let prefix = || {
+        let out =
+            Command::new(&python).args(["-c", "import cmeel, os; print(os.path.join(os.path.dirname(cmeel.__path__[0]), 'cmeel.prefix'))"]).output().ok()?;
+        let p = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+        p.join("include/pinocchio/algorithm/aba.hpp").exists().then_some(p).filter(|p| p.join("include/eigen3").exists())
+    };
+    if let Some(p) = prefix() {
+        return p;
+    }
+    eprintln!("pinocchio: pip install {PIN} {EIGEN} ...");
+    run(Command::new(&python).args(["-m", "pip", "install", "--quiet", PIN, EIGEN]), "pip install");
+    prefix().expect("the pin wheel installs its headers and Eigen's")
+}
+
+/// `aba.cpp` built against the wheel, once per change of the source.
+fn build_aba(peers: &Path, prefix: &Path) -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/pinocchio/aba.cpp");
+    let exe = peers.join("aba");
+    let stale = |exe: &Path| -> Option<bool> { Some(std::fs::metadata(exe).ok()?.modified().ok()? < std::fs::metadata(&source).ok()?.modified().ok()?) };
+    if stale(&exe) != Some(false) {
+        eprintln!("pinocchio: g++ -O3 -march=native aba.cpp (about two minutes) ...");
+        let (include, lib) = (prefix.join("include"), prefix.join("lib"));
+        run(
+            Command::new("g++")
+                .args(["-O3", "-march=native", "-DNDEBUG", "-std=c++17"])
+                .args(DEFINES)
+                .arg(format!("-I{}", include.display()))
+                .arg(format!("-I{}", include.join("eigen3").display()))
+                .arg(&source)
+                .arg(format!("-L{}", lib.display()))
+                .arg("-lpinocchio_default")
+                .arg(format!("-Wl,-rpath,{}", lib.display()))
+                .arg("-o")
+                .arg(&exe),
+            "g++ aba.cpp",
+        );
+    }
+    exe
+}
+
+fn aba_ns(exe: &Path, (model, n): (&str, usize)) -> (f64, usize) {
+    let out = Command::new(exe).args([model, &n.to_string()]).output().expect("aba runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let field = |name: &str| {
+        text.lines().find_map(|l| l.strip_prefix(name).map(|v| v.trim().to_string())).unwrap_or_else(|| panic!("aba {model} {n}: no `{name}` in {text}"))
+    };
+    (field("aba ").parse().expect("ns"), field("dof ").parse().expect("dof"))
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut rounds = 15;
+    let mut out = root.join("docs/benchmarks/pinocchio.json");
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--rounds" => rounds = it.next().and_then(|s| s.parse().ok()).expect("--rounds needs a number"),
+            "--out" => out = PathBuf::from(it.next().expect("--out needs a file")),
+            other => panic!("unknown option `{other}`"),
+        }
+    }
+    let peers = root.join("target/peers");
+    std::fs::create_dir_all(&peers).expect("target/peers");
+    let aba = build_aba(&peers, &pinocchio_prefix(&peers));
+    let work = std::env::temp_dir().join(format!("multibody-pinocchio-{}", std::process::id()));
+    let mut rows = Vec::new();
+    for case in cases() {
+        eprintln!("pinocchio: {} ...", case.label);
+        let generated = generate(&case.model, &Options::from_model(&case.model)).expect("the benchmark models generate");
+        let ops = |f: &str| generated.summary.ops(&format!("{f}::rhs")).map(|c| (c.ops.total(), c.solve.total())).expect("the formulation is emitted");
+        let (exe, _) = timing::compile(&work.join(case.aba.0).join(case.aba.1.to_string()), &generated.code);
+        let (mut pin_best, mut dof) = (f64::INFINITY, 0);
+        let mut ours_best = [f64::INFINITY; 4];
+        for _ in 0..rounds {
+            let (ns, n) = aba_ns(&aba, case.aba);
+            (pin_best, dof) = (pin_best.min(ns), n);
+            for (f, ns) in timing::run(&exe) {
+                let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
+                ours_best[k] = ours_best[k].min(ns);
+            }
+        }
+        let (kane, reduced) = (ours_best[2], ours_best[3]);
+        let ((ka, ks), (ra, rs)) = (ops("kane"), ops("reduced_volterra"));
+        eprintln!("pinocchio: {}: ABA {pin_best:.0} ns, Kane {kane:.0} ns, reduced {reduced:.0} ns", case.label);
+        rows.push(vec![
+            case.label.clone(),
+            dof.to_string(),
+            format!("{pin_best:.0}"),
+            format!("{kane:.0}"),
+            format!("{reduced:.0}"),
+            format!("{:.2}", kane / pin_best),
+            format!("{:.2}", reduced / pin_best),
+            format!("{ka} + {ks}"),
+            format!("{ra} + {rs}"),
+        ]);
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    let columns = ["model", "dof", "Pinocchio ABA ns", "Kane ns", "reduced ns", "Kane / ABA", "reduced / ABA", "Kane ops (assembly + solve)", "reduced ops"];
+    let file = serde_json::json!({ "command": "cargo bench -p generator --bench pinocchio", "columns": columns, "rows": rows });
+    let text = serde_json::to_string_pretty(&file).expect("json") + "\n";
+    let tmp = out.with_extension("json.tmp");
+    std::fs::write(&tmp, &text).expect("the table is written");
+    std::fs::rename(&tmp, &out).expect("the table is moved into place");
+    println!("| {} |", columns.join(" | "));
+    for r in &rows {
+        println!("| {} |", r.join(" | "));
+    }
+    eprintln!("pinocchio: wrote {}", out.display());
+}

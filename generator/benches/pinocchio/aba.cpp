@@ -1,0 +1,125 @@
+// Times Pinocchio's articulated-body algorithm (ABA, forward dynamics) on the models of
+// `cargo bench -p generator --bench pinocchio`, built as Pinocchio users build them: a
+// free-flyer joint for a floating base, revolute and prismatic joints for the rest, the same
+// masses, inertias, offsets and gravity as the RON models and `generator::model::examples`.
+//
+//   aba MODEL [N]   MODEL: three_body | satellite_boom | pendulum_on_cart | floating_chain
+//
+// Prints `aba NS`: the best, over 7 rounds, of the mean time of 200 calls at one state (the
+// same rounds and calls as the timing program of our modules). Built by the benchmark with
+// `g++ -O3 -march=native` against the headers and library of the `pin` wheel.
+
+#include <pinocchio/multibody.hpp>
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+using namespace pinocchio;
+using Eigen::Vector3d;
+
+static Inertia body(double mass, const Vector3d & com, double ixx, double iyy, double izz, double ixy = 0, double ixz = 0, double iyz = 0) {
+  Symmetric3 inertia(ixx, ixy, iyy, ixz, iyz, izz);
+  return Inertia(mass, com, inertia);
+}
+
+static SE3 at(double x, double y, double z) {
+  return SE3(Eigen::Matrix3d::Identity(), Vector3d(x, y, z));
+}
+
+// Scene 2 (models/three_body.ron): a middle body free in space, two outer bodies on revolute
+// joints about its z and y axes at (+a, 0, 0) and (-a, 0, 0).
+static Model three_body() {
+  Model m;
+  m.gravity.setZero();
+  JointIndex base = m.addJoint(0, JointModelFreeFlyer(), SE3::Identity(), "middle");
+  m.appendBodyToJoint(base, body(10.0, Vector3d::Zero(), 1.2, 1.5, 1.8, 0.05, 0.03, 0.02));
+  JointIndex j1 = m.addJoint(base, JointModelRZ(), at(0.5, 0, 0), "gamma1");
+  m.appendBodyToJoint(j1, body(2.0, Vector3d(0.4, 0, 0), 0.02, 0.12, 0.12));
+  JointIndex j2 = m.addJoint(base, JointModelRY(), at(-0.5, 0, 0), "gamma2");
+  m.appendBodyToJoint(j2, body(2.0, Vector3d(-0.4, 0, 0), 0.02, 0.12, 0.12));
+  return m;
+}
+
+// Scene 3 (models/satellite_boom.ron): a satellite free in space, a point mass sliding on its
+// x axis from l/2.
+static Model satellite_boom() {
+  Model m;
+  m.gravity.setZero();
+  JointIndex base = m.addJoint(0, JointModelFreeFlyer(), SE3::Identity(), "satellite");
+  m.appendBodyToJoint(base, body(2000.0, Vector3d::Zero(), 1400.0, 900.0, 1100.0, 5.0, 8.0, 3.0));
+  JointIndex rho = m.addJoint(base, JointModelPX(), at(1.25, 0, 0), "rho");
+  m.appendBodyToJoint(rho, body(1.0, Vector3d::Zero(), 0, 0, 0));
+  return m;
+}
+
+// generator::model::examples::n_link_pendulum_on_cart(n): a cart on x, n point masses on
+// massless links of length 1 about z, gravity along -y.
+static Model pendulum_on_cart(int n) {
+  Model m;
+  m.gravity.linear(Vector3d(0, -9.81, 0));
+  JointIndex parent = m.addJoint(0, JointModelPX(), SE3::Identity(), "q0");
+  m.appendBodyToJoint(parent, body(1.0, Vector3d::Zero(), 0, 0, 0));
+  for (int i = 0; i < n; ++i) {
+    parent = m.addJoint(parent, JointModelRZ(), i == 0 ? SE3::Identity() : at(0, 1.0, 0), "q" + std::to_string(i + 1));
+    m.appendBodyToJoint(parent, body(1.0, Vector3d(0, 1.0, 0), 0, 0, 0));
+  }
+  return m;
+}
+
+// generator::model::examples::floating_chain(n): a base free in space and n links on revolute
+// joints alternating between the parent's z and y axes, no gravity.
+static Model floating_chain(int n) {
+  Model m;
+  m.gravity.setZero();
+  JointIndex parent = m.addJoint(0, JointModelFreeFlyer(), SE3::Identity(), "base");
+  m.appendBodyToJoint(parent, body(10.0, Vector3d::Zero(), 1.2, 1.5, 1.8));
+  for (int i = 1; i <= n; ++i) {
+    SE3 place = at(i == 1 ? 0.5 : 0.8, 0, 0);
+    std::string name = "a" + std::to_string(i);
+    parent = i % 2 == 1 ? m.addJoint(parent, JointModelRZ(), place, name) : m.addJoint(parent, JointModelRY(), place, name);
+    m.appendBodyToJoint(parent, body(1.0, Vector3d(0.4, 0, 0), 0.01, 0.06, 0.06));
+  }
+  return m;
+}
+
+int main(int argc, char ** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: aba MODEL [N]\n");
+    return 2;
+  }
+  std::string which = argv[1];
+  int n = argc > 2 ? std::atoi(argv[2]) : 0;
+  Model model;
+  if (which == "three_body") model = three_body();
+  else if (which == "satellite_boom") model = satellite_boom();
+  else if (which == "pendulum_on_cart") model = pendulum_on_cart(n);
+  else if (which == "floating_chain") model = floating_chain(n);
+  else {
+    std::fprintf(stderr, "unknown model %s\n", which.c_str());
+    return 2;
+  }
+  Data data(model);
+  // A generic state: a random configuration and velocity from a fixed seed, no torques.
+  std::srand(1);
+  Eigen::VectorXd q = randomConfiguration(model, -Eigen::VectorXd::Ones(model.nq), Eigen::VectorXd::Ones(model.nq));
+  Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv);
+  Eigen::VectorXd tau = Eigen::VectorXd::Zero(model.nv);
+  double best = 1e300, sink = 0;
+  for (int round = 0; round < 7; ++round) {
+    auto start = std::chrono::steady_clock::now();
+    for (int call = 0; call < 200; ++call) {
+      aba(model, data, q, v, tau);
+      sink += data.ddq[0];
+    }
+    double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count() / 200.0;
+    best = ns < best ? ns : best;
+  }
+  if (!(sink == sink)) return 1;
+  std::printf("aba %.1f\n", best);
+  std::printf("dof %d\n", int(model.nv));
+  return 0;
+}

@@ -1,0 +1,617 @@
+//! The `L D L^T` solve of a symmetric positive definite matrix (Maggi's, Kane's and the reduced
+//! method's), planned per formulation from the matrix's structural zeros: an elimination order
+//! with the least work (no fill-in where the sparsity allows, as Featherstone's `LTDL` orders a
+//! tree's mass matrix), then straight-line code that skips every product with a structural zero.
+//! A dense matrix keeps the module's generic `solve_spd` (every order costs the same).
+//!
+//! One plan drives both the emitted code ([`LdlPlan::emit`]) and in-process evaluation
+//! ([`LdlPlan::solve`]): the same operations in the same order, so the same numbers.
+//!
+//! ```
+//! use generator::emit::ldl::LdlPlan;
+//! // An arrow matrix: the dense row and column first would fill everything in; once at most
+//! // one other row is left, nothing.
+//! let arrow = |i: usize, j: usize| i == j || i == 0 || j == 0;
+//! let plan = LdlPlan::new(4, arrow);
+//! assert_eq!(plan.order(), &[1, 2, 0, 3]);
+//! assert_eq!(plan.fill_in(), 0);
+//! assert!(plan.cost().total() < LdlPlan::dense(4).cost().total());
+//! let mut b = [4.0, 1.0, 1.0, 1.0];
+//! let a = [4.0, 1.0, 1.0, 1.0, 1.0, 2.0, 0.0, 0.0, 1.0, 0.0, 2.0, 0.0, 1.0, 0.0, 0.0, 2.0];
+//! plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
+//! // x = (1, 0, 0, 0) solves it: a's first column is b.
+//! assert!(b.iter().zip([1.0, 0.0, 0.0, 0.0]).all(|(x, e)| (x - e).abs() < 1e-15));
+//! ```
+
+use super::ops::OpCount;
+use crate::formulation::Equations;
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::quote;
+
+/// Largest matrix whose elimination order is the exact optimum, by dynamic programming over
+/// the subsets already eliminated (`2^n` states); larger ones take the minimum-degree order.
+const MAX_EXACT_ORDER: usize = 14;
+
+/// How a symmetric positive definite `n x n` matrix is factored as `L D L^T`: the order the
+/// rows are eliminated in, and where `L` has structural nonzeros in that order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LdlPlan {
+    /// `order[k]`: the matrix row (and column) eliminated `k`-th.
+    order: Vec<usize>,
+    /// `rows[i]`: the positions `k < i` where `L[i][k]` may be nonzero, ascending.
+    rows: Vec<Vec<usize>>,
+    /// `cols[k]`: the positions `i > k` where `L[i][k]` may be nonzero, ascending.
+    cols: Vec<Vec<usize>>,
+    /// Entries of `L` below the diagonal that are nonzero where the matrix has a zero.
+    fill_in: usize,
+    /// Per entry `(i, j)` of `L`, column by column: the positions `k < j` whose products
+    /// `L[i][k] (L D)[j][k]` it subtracts, as a range of `shared`.
+    entries: Vec<(usize, usize, std::ops::Range<usize>)>,
+    shared: Vec<usize>,
+    /// The same, as indices for [`Self::solve`]: the entries of `L` numbered in that order.
+    steps: Steps,
+}
+
+/// [`LdlPlan::solve`]'s operands, resolved once: every entry of `L` by its number `e`, its
+/// matrix element by its row-major index.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+struct Steps {
+    /// Per pivot `j`: the row-major index of its diagonal element, the entries `(j, k)` of its
+    /// row (a range of `row_entries`), and its column's entries (a range of entry numbers).
+    pivots: Vec<(usize, std::ops::Range<usize>, std::ops::Range<usize>)>,
+    row_entries: Vec<usize>,
+    /// Per entry: the row-major index of its matrix element, and its products `(i, k)` times
+    /// `(j, k)` (a range of `products`).
+    elements: Vec<(usize, std::ops::Range<usize>)>,
+    products: Vec<(usize, usize)>,
+    /// Forward substitution, row by row: `(entry (i, k), k)` (a range of `forward`); back
+    /// substitution, column by column: `(entry (k, i), k)` (a range of `back`).
+    forward_rows: Vec<std::ops::Range<usize>>,
+    forward: Vec<(usize, usize)>,
+    back_columns: Vec<std::ops::Range<usize>>,
+    back: Vec<(usize, usize)>,
+}
+
+impl LdlPlan {
+    /// The plan of a dense `n x n` matrix in its own order: the module's generic `solve_spd`.
+    ///
+    /// ```
+    /// let plan = generator::emit::ldl::LdlPlan::dense(3);
+    /// assert!(plan.is_dense());
+    /// assert_eq!(plan.cost().div, 3);
+    /// ```
+    pub fn dense(n: usize) -> LdlPlan {
+        LdlPlan::with_order(n, |_, _| true, (0..n).collect())
+    }
+
+    /// The plan with the least work for a matrix whose entry `(i, j)` may be nonzero where
+    /// `nonzero(i, j)` (read for `i > j`; the diagonal is always nonzero). The matrix's own
+    /// order wins every tie, so a dense matrix keeps it.
+    ///
+    /// ```
+    /// use generator::emit::ldl::LdlPlan;
+    /// let diagonal = LdlPlan::new(3, |i, j| i == j);
+    /// assert_eq!((diagonal.order(), diagonal.cost().total()), (&[0, 1, 2][..], 6));
+    /// ```
+    pub fn new(n: usize, nonzero: impl Fn(usize, usize) -> bool) -> LdlPlan {
+        let adjacency: Vec<u64> = (0..n).map(|i| (0..n).filter(|&j| j != i && nonzero(i.max(j), i.min(j))).fold(0u64, |m, j| m | 1 << j)).collect();
+        let natural = LdlPlan::with_order(n, &nonzero, (0..n).collect());
+        let order = if n > 64 {
+            return natural;
+        } else if n <= MAX_EXACT_ORDER {
+            least_work_order(&adjacency)
+        } else {
+            minimum_degree_order(&adjacency)
+        };
+        let planned = LdlPlan::with_order(n, &nonzero, order);
+        if planned.cost().total() < natural.cost().total() { planned } else { natural }
+    }
+
+    /// The plan of the matrix eliminated in `order` (a permutation of `0..n`).
+    fn with_order(n: usize, nonzero: impl Fn(usize, usize) -> bool, order: Vec<usize>) -> LdlPlan {
+        // Symbolic factorization: column k's nonzeros below the diagonal join, as fill-in, every
+        // later column they meet.
+        let mut pattern = vec![vec![false; n]; n];
+        let mut fill_in = 0;
+        for i in 0..n {
+            for k in 0..i {
+                let (a, b) = (order[i], order[k]);
+                pattern[i][k] = nonzero(a.max(b), a.min(b));
+            }
+        }
+        for k in 0..n {
+            let below: Vec<usize> = (k + 1..n).filter(|&i| pattern[i][k]).collect();
+            for (x, &j) in below.iter().enumerate() {
+                for &i in &below[x + 1..] {
+                    if !pattern[i][j] {
+                        pattern[i][j] = true;
+                        fill_in += 1;
+                    }
+                }
+            }
+        }
+        let rows: Vec<Vec<usize>> = (0..n).map(|i| (0..i).filter(|&k| pattern[i][k]).collect()).collect();
+        let cols: Vec<Vec<usize>> = (0..n).map(|k| (k + 1..n).filter(|&i| pattern[i][k]).collect()).collect();
+        let (mut entries, mut shared) = (Vec::new(), Vec::new());
+        for j in 0..n {
+            for i in j + 1..n {
+                if pattern[i][j] {
+                    let start = shared.len();
+                    shared.extend((0..j).filter(|&k| pattern[i][k] && pattern[j][k]));
+                    entries.push((i, j, start..shared.len()));
+                }
+            }
+        }
+        let number: std::collections::HashMap<(usize, usize), usize> = entries.iter().enumerate().map(|(e, (i, j, _))| ((*i, *j), e)).collect();
+        let mut steps = Steps::default();
+        let mut next = 0;
+        for j in 0..n {
+            let start = steps.row_entries.len();
+            steps.row_entries.extend(rows[j].iter().map(|&k: &usize| number[&(j, k)]));
+            let column = next..next + cols[j].len();
+            next = column.end;
+            steps.pivots.push((order[j] * n + order[j], start..steps.row_entries.len(), column));
+        }
+        for (i, j, ks) in &entries {
+            let start = steps.products.len();
+            steps.products.extend(shared[ks.clone()].iter().map(|&k| (number[&(*i, k)], number[&(*j, k)])));
+            steps.elements.push((order[*i] * n + order[*j], start..steps.products.len()));
+        }
+        for i in 0..n {
+            let start = steps.forward.len();
+            steps.forward.extend(rows[i].iter().map(|&k: &usize| (number[&(i, k)], k)));
+            steps.forward_rows.push(start..steps.forward.len());
+            let start = steps.back.len();
+            steps.back.extend(cols[i].iter().map(|&k: &usize| (number[&(k, i)], k)));
+            steps.back_columns.push(start..steps.back.len());
+        }
+        LdlPlan { order, rows, cols, fill_in, entries, shared, steps }
+    }
+
+    /// Size of the matrix.
+    pub fn size(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The order the rows are eliminated in.
+    pub fn order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// Entries of `L` that are nonzero where the matrix has a structural zero.
+    pub fn fill_in(&self) -> usize {
+        self.fill_in
+    }
+
+    /// True when nothing is skipped and the order is the matrix's own: the generic solve.
+    pub fn is_dense(&self) -> bool {
+        self.order.iter().enumerate().all(|(k, &i)| k == i) && self.rows.iter().enumerate().all(|(i, r)| r.len() == i)
+    }
+
+    /// Operations of the solve: per pivot one reciprocal and one scaling, per entry of `L`
+    /// its share of the pivot, its division by the pivot (a product with the reciprocal) and
+    /// both triangular solves, and per pair of entries in one column one multiply-add. The
+    /// entry before its division is `L D`'s, so `L D` costs nothing more.
+    pub fn cost(&self) -> OpCount {
+        let n = self.size();
+        let mut c = OpCount { div: n, mul: n, ..OpCount::default() };
+        for (_, _, shared) in &self.entries {
+            // The pivot's share, l = s / d, forward and back substitution, and the entry's own
+            // multiply-adds.
+            c.mul += 4 + shared.len();
+            c.add += 3 + shared.len();
+        }
+        c
+    }
+
+    /// One line for the summary and `inspect`: the order, what it skips and what it costs.
+    pub fn describe(&self) -> String {
+        let n = self.size();
+        let dense = LdlPlan::dense(n).cost().total();
+        if self.is_dense() {
+            return format!("LDL^T, dense {n} x {n}, {dense} operations");
+        }
+        let entries: usize = self.rows.iter().map(Vec::len).sum();
+        let zeros = n * n.saturating_sub(1) / 2 - entries;
+        let order: Vec<String> = self.order.iter().map(|i| (i + 1).to_string()).collect();
+        format!(
+            "LDL^T, rows eliminated in the order [{}], {zeros} of {} entries of L structurally zero ({} fill-in), {} operations ({dense} dense)",
+            order.join(", "),
+            n * n.saturating_sub(1) / 2,
+            self.fill_in,
+            self.cost().total()
+        )
+    }
+
+    /// Solves `a x = b` in place for the row-major `n x n` matrix `a` (both triangles given),
+    /// as the emitted code does; `Err(column)` when the pivot of `column` (of the matrix) is not
+    /// above `PIVOT_TOLERANCE` times the largest diagonal entry. `scratch` holds `L`, `L D`
+    /// (each entry before its division by the pivot), the reciprocals of `D` and the permuted
+    /// right-hand side.
+    pub fn solve(&self, a: &[f64], b: &mut [f64], scratch: &mut Vec<f64>) -> Result<(), usize> {
+        let n = self.size();
+        let (o, st, m) = (&self.order, &self.steps, self.entries.len());
+        // Every slot is written before it is read: no clearing from call to call.
+        if scratch.len() < 2 * m + 2 * n {
+            scratch.resize(2 * m + 2 * n, 0.0);
+        }
+        let (l, rest) = scratch.split_at_mut(m);
+        let (u, rest) = rest.split_at_mut(m);
+        let (inv, y) = rest.split_at_mut(n);
+        let mut scale = 0.0f64;
+        for i in 0..n {
+            scale = scale.max(a[i * n + i].abs());
+        }
+        for (j, (diagonal, row, column)) in st.pivots.iter().enumerate() {
+            let mut dj = a[*diagonal];
+            for &e in &st.row_entries[row.clone()] {
+                dj -= l[e] * u[e];
+            }
+            if !(dj > super::module::PIVOT_TOLERANCE * scale) {
+                return Err(o[j]);
+            }
+            inv[j] = 1.0 / dj;
+            for e in column.clone() {
+                let (element, products) = &st.elements[e];
+                let mut s = a[*element];
+                for &(ik, jk) in &st.products[products.clone()] {
+                    s -= l[ik] * u[jk];
+                }
+                u[e] = s;
+                l[e] = s * inv[j];
+            }
+        }
+        // The permuted right-hand side, then forward substitution, scaling, back substitution.
+        for (i, &oi) in o.iter().enumerate() {
+            y[i] = b[oi];
+        }
+        for i in 0..n {
+            for &(e, k) in &st.forward[st.forward_rows[i].clone()] {
+                y[i] -= l[e] * y[k];
+            }
+        }
+        for i in 0..n {
+            y[i] *= inv[i];
+        }
+        for i in (0..n).rev() {
+            for &(e, k) in &st.back[st.back_columns[i].clone()] {
+                y[i] -= l[e] * y[k];
+            }
+        }
+        for (i, &oi) in o.iter().enumerate() {
+            b[oi] = y[i];
+        }
+        Ok(())
+    }
+
+    /// The solve as straight-line code: `fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
+    /// b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize>`, the same operations as [`Self::solve`].
+    pub fn emit(&self) -> TokenStream {
+        let n = self.size();
+        let o: Vec<Literal> = self.order.iter().map(|&i| Literal::usize_unsuffixed(i)).collect();
+        let name = |s: String| Ident::new(&s, Span::call_site());
+        let l = |i: usize, k: usize| name(format!("l{i}_{k}"));
+        let (d, inv) = (|j: usize| name(format!("d{j}")), |j: usize| name(format!("inv{j}")));
+        let u = |i: usize, k: usize| name(format!("u{i}_{k}"));
+        let (y, x) = (|i: usize| name(format!("y{i}")), |i: usize| name(format!("x{i}")));
+        let mut stmts = Vec::new();
+        let diagonal = (0..n).map(|i| {
+            let i = Literal::usize_unsuffixed(i);
+            quote!(.max(a[#i][#i].abs()))
+        });
+        stmts.push(quote!(let scale = 0.0f64 #(#diagonal)*;));
+        for j in 0..n {
+            let oj = &o[j];
+            let (dj, invj) = (d(j), inv(j));
+            let mut terms = Vec::new();
+            for &k in &self.rows[j] {
+                let (ljk, ujk) = (l(j, k), u(j, k));
+                terms.push(quote!(- #ljk * #ujk));
+            }
+            stmts.push(quote! {
+                let #dj = a[#oj][#oj] #(#terms)*;
+                if !(#dj > PIVOT_TOLERANCE * scale) {
+                    return Err(#oj);
+                }
+                let #invj = 1.0 / #dj;
+            });
+            for (i, _, ks) in self.entries.iter().filter(|e| e.1 == j) {
+                let (i, oi) = (*i, &o[*i]);
+                let (lij, uij) = (l(i, j), u(i, j));
+                let terms = self.shared[ks.clone()].iter().map(|&k| {
+                    let (lik, ujk) = (l(i, k), u(j, k));
+                    quote!(- #lik * #ujk)
+                });
+                stmts.push(quote! {
+                    let #uij = a[#oi][#oj] #(#terms)*;
+                    let #lij = #uij * #invj;
+                });
+            }
+        }
+        for i in 0..n {
+            let (yi, oi) = (y(i), &o[i]);
+            let terms = self.rows[i].iter().map(|&k| {
+                let (lik, yk) = (l(i, k), y(k));
+                quote!(- #lik * #yk)
+            });
+            stmts.push(quote!(let #yi = b[#oi] #(#terms)*;));
+        }
+        for i in (0..n).rev() {
+            let (xi, yi, invi, oi) = (x(i), y(i), inv(i), &o[i]);
+            let terms = self.cols[i].iter().map(|&k| {
+                let (lki, xk) = (l(k, i), x(k));
+                quote!(- #lki * #xk)
+            });
+            stmts.push(quote! {
+                let #xi = #yi * #invi #(#terms)*;
+                b[#oi] = #xi;
+            });
+        }
+        let order: Vec<String> = self.order.iter().map(|i| i.to_string()).collect();
+        let doc = format!(
+            "Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [{}] (counted from 0), skipping the structural zeros ({} fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.",
+            order.join(", "),
+            self.fill_in
+        );
+        quote! {
+            #[doc = #doc]
+            #[allow(clippy::all)]
+            #[inline(never)]
+            fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE], b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize> {
+                #(#stmts)*
+                Ok(())
+            }
+        }
+    }
+}
+
+/// How a formulation's right-hand side solves its matrix, decided from its equations alone.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Solve {
+    /// Lagrange's (indefinite with multipliers): the generic LU with partial pivoting of size `n`.
+    Lu(usize),
+    /// The symmetric positive definite matrices of the other formulations.
+    Ldl(Box<LdlPlan>),
+}
+
+impl Solve {
+    /// The solve of `f`'s matrix: `L D L^T` planned on its structural zeros where the matrix is
+    /// symmetric positive definite (every formulation's but Lagrange's with constraints, whose
+    /// multipliers make it indefinite), LU otherwise.
+    ///
+    /// ```
+    /// use generator::emit::ldl::Solve;
+    /// let model = generator::model::load("../models/satellite_boom.ron").unwrap();
+    /// let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    /// let kane = Solve::for_equations(d.equations("kane").unwrap());
+    /// assert!(matches!(&kane, Solve::Ldl(plan) if !plan.is_dense()));
+    /// // No constraints: Lagrange's matrix is the mass matrix itself.
+    /// assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Ldl(_)));
+    /// // One constraint: its multiplier makes the matrix indefinite.
+    /// let model = generator::model::load("../models/cart_pendulum.ron").unwrap();
+    /// let d = generator::formulation::derive(&model, &generator::formulation::Request::all()).unwrap();
+    /// assert!(matches!(Solve::for_equations(d.equations("lagrange").unwrap()), Solve::Lu(4)));
+    /// ```
+    pub fn for_equations(f: &Equations) -> Solve {
+        let n = f.mass.rows;
+        // Lagrange's matrix is `M` alone when there are no multipliers.
+        if !f.kind.solves_positive_definite() && n > f.kept.len() {
+            return Solve::Lu(n);
+        }
+        let nonzero = |i: usize, j: usize| !f.mass.get(i.min(j), i.max(j)).is_zero();
+        let dense = (0..n).all(|i| (0..i).all(|j| nonzero(i, j)));
+        Solve::Ldl(Box::new(if dense { LdlPlan::dense(n) } else { LdlPlan::new(n, nonzero) }))
+    }
+
+    /// Operations of the solve (LU: its worst case).
+    pub fn cost(&self) -> OpCount {
+        match self {
+            Solve::Lu(n) => super::form::solve_cost(*n),
+            Solve::Ldl(plan) => plan.cost(),
+        }
+    }
+
+    /// One line for the summary and `inspect`.
+    pub fn describe(&self) -> String {
+        match self {
+            Solve::Lu(n) => format!("LU with partial pivoting, {n} x {n}, at most {} operations", self.cost().total()),
+            Solve::Ldl(plan) => plan.describe(),
+        }
+    }
+
+    /// The plan, where it is `L D L^T` skipping structural zeros (emitted as `solve_ldl`).
+    pub fn sparse(&self) -> Option<&LdlPlan> {
+        match self {
+            Solve::Ldl(plan) if !plan.is_dense() || plan.size() <= 16 => Some(plan),
+            _ => None,
+        }
+    }
+}
+
+/// Operations of eliminating a row whose remaining neighbours number `degree`: the terms of
+/// [`LdlPlan::cost`] that the row's column of `L` brings.
+fn elimination_cost(degree: u32) -> u64 {
+    let d = u64::from(degree);
+    d * d + 6 * d + 2
+}
+
+/// The rows still to eliminate that row `v` reaches through eliminated ones (`done`): its
+/// column of `L` once the rows in `done` are eliminated.
+fn reach(adjacency: &[u64], v: usize, done: u64) -> u64 {
+    let (mut seen, mut frontier) = (1u64 << v, adjacency[v]);
+    let mut out = 0u64;
+    while frontier & !seen != 0 {
+        let new = frontier & !seen;
+        seen |= new;
+        out |= new & !done;
+        let mut through = new & done;
+        frontier = 0;
+        while through != 0 {
+            let u = through.trailing_zeros() as usize;
+            through &= through - 1;
+            frontier |= adjacency[u];
+        }
+    }
+    out
+}
+
+/// The order with the least work, exactly: the cost still to come from every set of rows
+/// already eliminated, then the lowest-numbered row that keeps to it at each step.
+fn least_work_order(adjacency: &[u64]) -> Vec<usize> {
+    let n = adjacency.len();
+    let full = (1u64 << n) - 1;
+    let mut to_come = vec![0u64; 1 << n];
+    for done in (0..full).rev() {
+        to_come[done as usize] = (0..n)
+            .filter(|&v| done & 1 << v == 0)
+            .map(|v| elimination_cost(reach(adjacency, v, done).count_ones()) + to_come[(done | 1 << v) as usize])
+            .min()
+            .expect("a row is left");
+    }
+    let mut done = 0u64;
+    let mut order = Vec::with_capacity(n);
+    while done != full {
+        let v = (0..n)
+            .find(|&v| {
+                done & 1 << v == 0 && elimination_cost(reach(adjacency, v, done).count_ones()) + to_come[(done | 1 << v) as usize] == to_come[done as usize]
+            })
+            .expect("some row keeps to the least work");
+        order.push(v);
+        done |= 1 << v;
+    }
+    order
+}
+
+/// The minimum-degree order: at each step the row with the fewest remaining neighbours (the
+/// lowest-numbered among equals).
+fn minimum_degree_order(adjacency: &[u64]) -> Vec<usize> {
+    let n = adjacency.len();
+    let mut done = 0u64;
+    let mut order = Vec::with_capacity(n);
+    for _ in 0..n {
+        let v = (0..n).filter(|&v| done & 1 << v == 0).min_by_key(|&v| reach(adjacency, v, done).count_ones()).expect("a row is left");
+        order.push(v);
+        done |= 1 << v;
+    }
+    order
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    /// A random symmetric positive definite matrix with the zeros of `pattern`: a dominant
+    /// diagonal.
+    fn matrix(n: usize, pattern: &dyn Fn(usize, usize) -> bool, rng: &mut Rng) -> Vec<f64> {
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..i {
+                if pattern(i, j) {
+                    let x = rng.next();
+                    a[i * n + j] = x;
+                    a[j * n + i] = x;
+                }
+            }
+        }
+        for i in 0..n {
+            a[i * n + i] = 1.0 + (0..n).map(|j| a[i * n + j].abs()).sum::<f64>();
+        }
+        a
+    }
+
+    #[test]
+    fn the_dense_plan_costs_what_the_generic_solve_does() {
+        for n in 1..10 {
+            assert_eq!(LdlPlan::dense(n).cost(), super::super::form::spd_cost(n), "n = {n}");
+            assert!(LdlPlan::new(n, |_, _| true).is_dense());
+        }
+    }
+
+    #[test]
+    fn every_plan_solves_its_matrix_and_costs_no_more_than_dense() {
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        for n in [1, 2, 3, 5, 7, 9, 16, 20] {
+            for trial in 0..20 {
+                // Structural zeros at random, at densities from sparse to nearly full.
+                let density = 0.1 + 0.04 * trial as f64;
+                let mask: Vec<bool> = (0..n * n).map(|_| rng.next() + 0.5 < density).collect();
+                let pattern = |i: usize, j: usize| mask[i.max(j) * n + i.min(j)];
+                let a = matrix(n, &pattern, &mut rng);
+                let plan = LdlPlan::new(n, pattern);
+                assert!(plan.cost().total() <= LdlPlan::dense(n).cost().total());
+                let x: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+                let mut b: Vec<f64> = (0..n).map(|i| (0..n).map(|j| a[i * n + j] * x[j]).sum()).collect();
+                plan.solve(&a, &mut b, &mut Vec::new()).unwrap();
+                for (got, want) in b.iter().zip(&x) {
+                    assert!((got - want).abs() < 1e-13, "n = {n}, trial {trial}: {got} against {want}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_least_work_order_is_no_worse_than_any_other() {
+        // Every permutation of a 6 x 6 pattern, against the plan's.
+        let mut rng = Rng(7);
+        for _ in 0..10 {
+            let n = 6;
+            let mask: Vec<bool> = (0..n * n).map(|_| rng.next() > 0.1).collect();
+            let pattern = |i: usize, j: usize| mask[i.max(j) * n + i.min(j)];
+            let best = LdlPlan::new(n, pattern).cost().total();
+            let mut order: Vec<usize> = (0..n).collect();
+            let mut c = vec![0; n];
+            let mut i = 0;
+            // Heap's algorithm.
+            while i < n {
+                if c[i] < i {
+                    order.swap(if i % 2 == 0 { 0 } else { c[i] }, i);
+                    assert!(best <= LdlPlan::with_order(n, pattern, order.clone()).cost().total(), "{order:?}");
+                    c[i] += 1;
+                    i = 0;
+                } else {
+                    c[i] = 0;
+                    i += 1;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_tree_is_factored_without_fill_in() {
+        // A branched tree's mass matrix: a joint couples to its ancestors only. Leaves first.
+        let parent = [usize::MAX, 0, 1, 1, 0, 4, 4];
+        let ancestor = |mut i: usize, j: usize| {
+            while i != usize::MAX {
+                if i == j {
+                    return true;
+                }
+                i = parent[i];
+            }
+            false
+        };
+        let plan = LdlPlan::new(7, |i, j| ancestor(i, j) || ancestor(j, i));
+        assert_eq!(plan.fill_in(), 0);
+        assert!(plan.describe().contains("(0 fill-in)"), "{}", plan.describe());
+    }
+
+    #[test]
+    fn a_pivot_that_is_not_positive_names_its_column() {
+        let plan = LdlPlan::new(3, |i, j| i == j || (i, j) == (2, 0));
+        // Columns 0 and 2 coupled: [[1, 0, 1], [0, 1, 0], [1, 0, 1]] is singular in column 2 or 0.
+        let a = [1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 1.0];
+        let failed = plan.solve(&a, &mut [1.0, 1.0, 1.0], &mut Vec::new()).unwrap_err();
+        assert!(failed == 0 || failed == 2, "{failed}");
+        let negative = [1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0];
+        assert_eq!(plan.solve(&negative, &mut [1.0, 1.0, 1.0], &mut Vec::new()), Err(1));
+    }
+}
