@@ -294,7 +294,7 @@ fn reduced_right_hand_side_solves_less_than_kane_and_does_less_work_on_scene_3()
 }
 
 #[test]
-fn inspect_and_the_generator_count_the_same_states_and_equations() {
+fn inspect_and_the_generator_count_the_same_states_and_equations_and_solve_alike() {
     for name in MODELS {
         let def = load(name);
         let text = generator::inspect::inspect(&def, false).unwrap();
@@ -302,6 +302,14 @@ fn inspect_and_the_generator_count_the_same_states_and_equations() {
         for (form, states, eqs) in &out.summary.formulations {
             let line = format!("  {form:<17} {states:>3} states, {eqs:>3} equations");
             assert!(text.contains(&line), "{name}: `{line}` missing from inspect");
+        }
+        // The same solve plan in both, a sparse one where the matrix has structural zeros.
+        assert_eq!(out.summary.solves.len(), out.summary.formulations.len(), "{name}");
+        for (form, how) in &out.summary.solves {
+            assert!(text.lines().any(|l| l.starts_with(&format!("  {form:<17} ")) && l.ends_with(&format!(": {how}"))), "{name}: `{form}: {how}` missing from inspect");
+        }
+        if name == "satellite_boom" {
+            assert!(out.summary.solves.iter().all(|(_, how)| how.contains("rows eliminated in the order")), "{:?}", out.summary.solves);
         }
     }
 }
