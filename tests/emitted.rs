@@ -306,7 +306,10 @@ fn inspect_and_the_generator_count_the_same_states_and_equations_and_solve_alike
         // The same solve plan in both, a sparse one where the matrix has structural zeros.
         assert_eq!(out.summary.solves.len(), out.summary.formulations.len(), "{name}");
         for (form, how) in &out.summary.solves {
-            assert!(text.lines().any(|l| l.starts_with(&format!("  {form:<17} ")) && l.ends_with(&format!(": {how}"))), "{name}: `{form}: {how}` missing from inspect");
+            assert!(
+                text.lines().any(|l| l.starts_with(&format!("  {form:<17} ")) && l.ends_with(&format!(": {how}"))),
+                "{name}: `{form}: {how}` missing from inspect"
+            );
         }
         if name == "satellite_boom" {
             assert!(out.summary.solves.iter().all(|(_, how)| how.contains("rows eliminated in the order")), "{:?}", out.summary.solves);
