@@ -117,7 +117,7 @@ impl Emitter<'_> {
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
-        self.forms.push((name.to_string(), n_states, f.equations));
+        self.forms.push((name.to_string(), n_states, f.equations, solve.describe()));
         let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));

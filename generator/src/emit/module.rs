@@ -46,8 +46,9 @@ pub(super) struct Emitter<'a> {
     pub prep: Preparer,
     pub names: SymbolNames,
     pub functions: Vec<FunctionCost>,
-    /// Per emitted formulation: name, states, equations.
-    pub forms: Vec<(String, usize, usize)>,
+    /// Per emitted formulation: name, states, equations, and how its `rhs` solves (the plan it
+    /// was emitted with, described once).
+    pub forms: Vec<(String, usize, usize, String)>,
     /// The states end with the work integral `W`.
     pub work: bool,
     /// Horner forms, shared by every function of the module.
@@ -91,7 +92,7 @@ struct Part {
     /// What the budgets cut on the thread that wrote it.
     cuts: crate::symbolic::report::Cuts,
     functions: Vec<FunctionCost>,
-    forms: Vec<(String, usize, usize)>,
+    forms: Vec<(String, usize, usize, String)>,
     /// In-process evaluation: the part's tapes and formulation shapes, and (the head) the
     /// module's description.
     program: super::program::Program,
@@ -154,8 +155,9 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         cuts.merge(tail.cuts);
         let mut functions = head.functions;
         functions.extend(tail.functions);
-        let mut formulations = head.forms;
-        formulations.extend(tail.forms);
+        let forms: Vec<(String, usize, usize, String)> = head.forms.into_iter().chain(tail.forms).collect();
+        let formulations = forms.iter().map(|(name, states, eqs, _)| (name.clone(), *states, *eqs)).collect();
+        let solves = forms.into_iter().map(|(name, _, _, how)| (name, how)).collect();
         let program = options.tapes.then(|| {
             let mut p = head.program;
             p.tapes.extend(tail.program.tapes);
@@ -178,7 +180,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
             s: d.ignorable.len(),
             formulations,
             eliminations: d.equations.iter().map(|e| (e.name().to_string(), e.elimination.to_string())).collect(),
-            solves: d.equations.iter().map(|e| (e.name().to_string(), super::ldl::Solve::for_equations(e).describe())).collect(),
+            solves,
             functions,
             simplifier: d.mechanics.tidy.report(),
             cuts,
