@@ -136,8 +136,8 @@ impl RunArgs {
     }
 
     /// The Jacobians a run with these settings wants: exact ones for the stiff method.
-    pub fn jacobians(&self) -> crate::load::Jacobians {
-        if self.method == Some(MethodArg::Ros23) { crate::load::Jacobians::Exact { only: None } } else { crate::load::Jacobians::Differenced }
+    pub fn jacobians(&self) -> load::Jacobians {
+        if self.method == Some(MethodArg::Ros23) { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced }
     }
 
     /// True when the run uses the paper's settings (`--paper`, or the model file asks).

@@ -2,7 +2,7 @@
 //! with their tables, files and plots.
 
 use crate::args::{FormulationArg, MethodArg, RunArgs, ValueArgs, describe, formulations, index_of};
-use crate::{CliError, load, plot, print};
+use crate::{CliError, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
 use runtime::compare::{Options, compare as compare_runs, table};
@@ -104,7 +104,7 @@ fn pair(s: &str) -> Result<(f64, f64), String> {
 /// `compare`: runs the formulations, prints the table, writes the JSON and plots asked for.
 pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
     let route = load::Route::of(args.run.values.compiled);
-    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), route)?;
+    let model = crate::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), route)?;
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);
     let mut options = Options { settings, repeats: args.repeats as usize, reference: Some(reference), ..Options::paper(&model) };
@@ -155,7 +155,7 @@ pub fn compare(args: &CompareArgs) -> Result<(), CliError> {
 pub fn sweep(args: &SweepArgs) -> Result<(), CliError> {
     let stiff = args.methods.contains(&MethodArg::Ros23) || args.run.method == Some(MethodArg::Ros23);
     let jacobians = if stiff { load::Jacobians::Exact { only: None } } else { load::Jacobians::Differenced };
-    let model = load::evaluated(&args.model, &args.run.values.param, jacobians, load::Route::of(args.run.values.compiled))?;
+    let model = crate::evaluated(&args.model, &args.run.values.param, jacobians, load::Route::of(args.run.values.compiled))?;
     let reference = args.run.reference(&model)?;
     let mut options = SweepOptions {
         repeats: args.repeats as usize,
@@ -214,7 +214,7 @@ fn operating_point(model: &seam::Model, args: &LinearizeArgs) -> Result<Operatin
 pub fn linearize(args: &LinearizeArgs) -> Result<(), CliError> {
     // The exact Jacobians of the formulation linearized: A and B to round-off.
     let model =
-        load::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) }, load::Route::of(args.values.compiled))?;
+        crate::evaluated(&args.model, &args.values.param, load::Jacobians::Exact { only: Some(args.formulation.0) }, load::Route::of(args.values.compiled))?;
     let kind: FormulationKind = formulations(&model, &[args.formulation])?[0];
     let at = operating_point(&model, args)?;
     let Some(name) = &args.sweep else {

@@ -9,7 +9,6 @@
 
 mod args;
 mod commands;
-mod load;
 mod plot;
 mod report;
 mod simulate;
@@ -66,8 +65,8 @@ enum Command {
 pub enum CliError {
     #[error(transparent)]
     Model(#[from] generator::model::ModelError),
-    #[error("no model `{name}`: it is not a file, and no built-in model has that name (built in: {known})")]
-    UnknownModel { name: String, known: String },
+    #[error(transparent)]
+    Load(load::LoadError),
     #[error("model `{model}` has no `simulation` section: give the run with --t-end and --dt-out")]
     NoRun { model: String },
     #[error("run settings: {0}")]
@@ -94,8 +93,6 @@ pub enum CliError {
     Stdout(std::io::Error),
     #[error("cannot write the CSV: {0}")]
     Csv(#[from] csv::Error),
-    #[error(transparent)]
-    Compiled(#[from] native::Error),
     #[error("{file}:{line}: {message} (an input's time series is two columns `t,value` with increasing times)")]
     Series { file: String, line: usize, message: String },
 }
@@ -108,7 +105,7 @@ fn main() -> ExitCode {
         Command::Generate(args) => return generator::command::exit(generator::command::generate(args)),
         Command::Inspect { model, latex } => match load::model(&model) {
             Ok(model) => return generator::command::exit(generator::command::print_inspection(&model, latex)),
-            Err(e) => Err(e),
+            Err(e) => Err(e.into()),
         },
         Command::Simulate(args) => simulate::simulate(&args),
         Command::Compare(args) => commands::compare(&args),
@@ -117,7 +114,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(CliError::Model(e)) => {
+        Err(CliError::Model(e) | CliError::Load(load::LoadError::Model(e))) => {
             eprintln!("{}", e.render(std::io::stderr().is_terminal()));
             ExitCode::FAILURE
         }
@@ -126,6 +123,24 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+impl From<load::LoadError> for CliError {
+    fn from(e: load::LoadError) -> CliError {
+        CliError::Load(e)
+    }
+}
+
+/// The model MODEL names with `--param` applied, evaluated by [`load::evaluated`] on `route`;
+/// its warnings and the compiled route's one-time build are told on stderr.
+pub fn evaluated(argument: &str, params: &[(String, f64)], exact: load::Jacobians, route: load::Route) -> Result<seam::Model, CliError> {
+    let loaded = load::evaluated(argument, params, exact, route, &mut |path| {
+        eprintln!("compiling the model with rustc into {} (once per model and version)...", files::printable_path(path));
+    })?;
+    for line in &loaded.warnings {
+        eprintln!("warning: {line}");
+    }
+    Ok(loaded.model)
 }
 
 /// Writes to stdout; a closed pipe (`multibody compare m | head`) ends the program quietly.

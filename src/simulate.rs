@@ -4,7 +4,7 @@
 //! settings used), and plots of `q(t)` and of the invariants' errors.
 
 use crate::args::{FormulationArg, RunArgs, describe, formulations};
-use crate::{CliError, load, plot, print};
+use crate::{CliError, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
 use runtime::monitor::monitor_with_jumps;
@@ -66,7 +66,7 @@ fn default_kind(model: &seam::Model) -> FormulationKind {
 }
 
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
-    let model = load::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
+    let model = crate::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
         None => default_kind(&model),

@@ -8,7 +8,7 @@
 //!
 //! Layout: [`integrate`] (RK4, DOPRI5, DOP853, Rosenbrock 2(3)) → [`system`] (a formulation as
 //! `y' = f(t, y)`; [`events`]: a run with the model's events) → [`monitor`] (energy with the work integral, momenta, constraints) →
-//! [`compare`], [`sweep`], [`linearize`].
+//! [`compare`], [`sweep`], [`linearize`], [`ensemble`] (many runs on every core).
 
 #![forbid(unsafe_code)]
 
@@ -20,6 +20,7 @@ pub mod monitor;
 pub mod compare;
 pub mod sweep;
 pub mod linearize;
+pub mod ensemble;
 
 /// The seam crate, for generated modules emitted with `seam_path = "runtime::seam"`.
 pub use seam;

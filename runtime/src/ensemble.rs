@@ -1,0 +1,225 @@
+//! Ensembles: one formulation of a model run from many parameter sets and initial conditions
+//! on every core (rayon), each member integrated exactly as it would be alone, so that the
+//! result is the same bytes whatever the number of threads.
+//!
+//! ```
+//! use runtime::ensemble::{Member, ensemble};
+//! use runtime::integrate::Settings;
+//! let model = generated::cart_pendulum::model();
+//! let kind = seam::FormulationKind::Kane;
+//! let members: Vec<Member> = (0..4)
+//!     .map(|k| Member { params: model.default_params.clone(), q0: vec![0.1 * k as f64, 0.0, 0.0], qd0: vec![0.0; 3] })
+//!     .collect();
+//! let times = [0.0, 0.5, 1.0];
+//! let runs = ensemble(&model, kind, &members, &times, &Settings::tight(1.0), None, &|| {}).unwrap();
+//! assert_eq!((runs.members, runs.times, runs.states), (4, 3, 6));
+//! // Member 0 starts at rest in its equilibrium and stays there.
+//! assert!(runs.member(0).iter().all(|x| x.abs() < 1e-12));
+//! ```
+
+use crate::events::run;
+use crate::integrate::{RunError, Settings};
+use crate::system::{SetupError, System};
+use rayon::prelude::*;
+use seam::{FormulationKind, Model};
+
+/// One run of an ensemble: its parameters (every one of the model's, in its order) and its
+/// initial coordinates and rates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Member {
+    pub params: Vec<f64>,
+    pub q0: Vec<f64>,
+    pub qd0: Vec<f64>,
+}
+
+/// The states of every member at every output time, member by member.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectories {
+    pub members: usize,
+    pub times: usize,
+    /// The formulation's state size (its `state_names`).
+    pub states: usize,
+    /// `members x times x states`, row-major: member `k`'s state at time `i` starts at
+    /// `(k * times + i) * states`. A member stopped early by a terminal event holds NaN after
+    /// its last reached time (`reached` says where).
+    pub data: Vec<f64>,
+    /// How many output times each member reached (`times` unless a terminal event stopped it).
+    pub reached: Vec<usize>,
+}
+
+impl Trajectories {
+    /// Member `k`'s states, `times x states`, row-major.
+    pub fn member(&self, k: usize) -> &[f64] {
+        &self.data[k * self.times * self.states..(k + 1) * self.times * self.states]
+    }
+}
+
+/// Why an ensemble failed: the first failing member (by index, whatever the order the threads
+/// finished in) and why.
+#[derive(Debug, thiserror::Error)]
+pub enum EnsembleError {
+    #[error("ensemble member {member}: {source}")]
+    Setup { member: usize, source: SetupError },
+    #[error("ensemble member {member}: {source}")]
+    Run { member: usize, source: RunError },
+    #[error("ensemble member {member}: {what} has {got} values, the model has {expected}")]
+    Shape { member: usize, what: &'static str, got: usize, expected: usize },
+    #[error("the output times must start the run and increase (they are the integrator's output grid)")]
+    Times,
+    #[error("cannot start {threads} threads: {message}")]
+    Threads { threads: usize, message: String },
+}
+
+/// One member run alone: its states at `times` (NaN after a terminal event), and how many
+/// times it reached.
+///
+/// The run starts at `times[0]` from the member's `q0`, `qd0`; the model's events are watched.
+pub fn run_member(
+    model: &Model,
+    kind: FormulationKind,
+    member: &Member,
+    index: usize,
+    times: &[f64],
+    settings: &Settings,
+) -> Result<(Vec<f64>, usize), EnsembleError> {
+    let shape = |what, got: usize, expected: usize| if got == expected { Ok(()) } else { Err(EnsembleError::Shape { member: index, what, got, expected }) };
+    shape("params", member.params.len(), model.parameter_names.len())?;
+    shape("q0", member.q0.len(), model.coordinates.len())?;
+    shape("qd0", member.qd0.len(), model.coordinates.len())?;
+    let (sys, y0) =
+        System::start(model, kind, member.params.clone(), &member.q0, &member.qd0).map_err(|source| EnsembleError::Setup { member: index, source })?;
+    let settings = Settings { time_independent: !sys.form.depends_on_time, ..*settings };
+    let solution = run(&sys, &y0, times, &settings, &mut |_| {}).map_err(|source| EnsembleError::Run { member: index, source })?.solution;
+    let mut states: Vec<f64> = solution.states.iter().flatten().copied().collect();
+    let reached = solution.states.len();
+    states.resize(times.len() * y0.len(), f64::NAN);
+    Ok((states, reached))
+}
+
+/// Every member of `members` run with formulation `kind` over the output `times` (the first
+/// is the start) under `settings`, in parallel on `threads` threads (all cores when `None`);
+/// `on_done` is told of every member finished (for progress).
+pub fn ensemble(
+    model: &Model,
+    kind: FormulationKind,
+    members: &[Member],
+    times: &[f64],
+    settings: &Settings,
+    threads: Option<usize>,
+    on_done: &(dyn Fn() + Sync),
+) -> Result<Trajectories, EnsembleError> {
+    if times.is_empty() || !times.windows(2).all(|w| w[1] > w[0]) || !times.iter().all(|t| t.is_finite()) {
+        return Err(EnsembleError::Times);
+    }
+    let states = model.formulation(kind).map(|f| f.states()).ok_or_else(|| EnsembleError::Setup {
+        member: 0,
+        source: SetupError::UnknownFormulation {
+            model: model.module.clone(),
+            kind,
+            available: model.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", "),
+        },
+    })?;
+    let all = || -> Vec<Result<(Vec<f64>, usize), EnsembleError>> {
+        members
+            .par_iter()
+            .enumerate()
+            .map(|(k, member)| {
+                let one = run_member(model, kind, member, k, times, settings);
+                on_done();
+                one
+            })
+            .collect()
+    };
+    let results = match threads {
+        None => all(),
+        Some(n) => {
+            rayon::ThreadPoolBuilder::new().num_threads(n).build().map_err(|e| EnsembleError::Threads { threads: n, message: e.to_string() })?.install(all)
+        }
+    };
+    let mut data = Vec::with_capacity(members.len() * times.len() * states);
+    let mut reached = Vec::with_capacity(members.len());
+    for result in results {
+        let (member_states, member_reached) = result?;
+        data.extend(member_states);
+        reached.push(member_reached);
+    }
+    Ok(Trajectories { members: members.len(), times: times.len(), states, data, reached })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn members(model: &Model, n: usize) -> Vec<Member> {
+        (0..n)
+            .map(|k| {
+                let s = k as f64 / n as f64;
+                let mut params = model.default_params.clone();
+                params[0] *= 1.0 + s;
+                let q0 = (0..model.coordinates.len()).map(|j| 0.3 * s + 0.05 * j as f64).collect();
+                let qd0 = (0..model.coordinates.len()).map(|j| 0.2 * s - 0.1 * j as f64).collect();
+                Member { params, q0, qd0 }
+            })
+            .collect()
+    }
+
+    /// Each member of a parallel ensemble is, to the bit, its run alone; and the result does
+    /// not depend on the number of threads.
+    #[test]
+    fn members_equal_their_sequential_runs() {
+        let model = generated::three_body::model();
+        let times: Vec<f64> = (0..=20).map(|i| 0.05 * i as f64).collect();
+        let settings = Settings::tight(1.0);
+        let members = members(&model, 12);
+        for kind in [FormulationKind::Kane, FormulationKind::ReducedVolterra] {
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let count = || {
+                done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            };
+            let parallel = ensemble(&model, kind, &members, &times, &settings, Some(2), &count).unwrap();
+            assert_eq!(done.into_inner(), members.len());
+            let one_thread = ensemble(&model, kind, &members, &times, &settings, Some(1), &|| {}).unwrap();
+            assert_eq!(parallel, one_thread);
+            for (k, member) in members.iter().enumerate() {
+                let (sys, y0) = System::start(&model, kind, member.params.clone(), &member.q0, &member.qd0).unwrap();
+                let alone = run(&sys, &y0, &times, &Settings { time_independent: true, ..settings }, &mut |_| {}).unwrap().solution;
+                let alone: Vec<f64> = alone.states.iter().flatten().copied().collect();
+                assert_eq!(parallel.member(k), &alone[..], "member {k}, {kind}");
+            }
+            // The members differ: the test would notice a member run with another's values.
+            assert_ne!(parallel.member(0), parallel.member(1));
+            assert_eq!(parallel.reached, vec![times.len(); members.len()]);
+        }
+    }
+
+    /// A member with the wrong number of values is named; so is one whose run fails.
+    #[test]
+    fn the_failing_member_is_named() {
+        let model = generated::three_body::model();
+        let mut members = members(&model, 5);
+        members[3].q0.pop();
+        let e = ensemble(&model, FormulationKind::Kane, &members, &[0.0, 0.1], &Settings::tight(0.1), None, &|| {}).unwrap_err();
+        assert!(matches!(e, EnsembleError::Shape { member: 3, what: "q0", .. }), "{e}");
+        let e = ensemble(&model, FormulationKind::Kane, &members[..2], &[0.0, 0.0], &Settings::tight(0.1), None, &|| {}).unwrap_err();
+        assert!(matches!(e, EnsembleError::Times), "{e}");
+    }
+
+    /// A terminal event stops its member: the rows after it are NaN and `reached` says so,
+    /// while a slower member runs to the end.
+    #[test]
+    fn a_stopped_member_reports_where() {
+        // The ball reaches the wall at x = 5 at t = 5 / x'(0): 2.27 for the first, 5 for the
+        // second, after the run's 4 s (its bounces pile up only at 8.6 s).
+        let model = generated::bouncing_ball::model();
+        let member = |speed: f64| Member { params: model.default_params.clone(), q0: vec![0.0, 1.0], qd0: vec![speed, 0.0] };
+        let times: Vec<f64> = (0..=8).map(|i| 0.5 * f64::from(i)).collect();
+        let runs = ensemble(&model, FormulationKind::Kane, &[member(2.2), member(1.0)], &times, &Settings::tight(4.0), None, &|| {}).unwrap();
+        assert_eq!(runs.reached, [5, 9]);
+        let first = runs.member(0);
+        assert!(first[..5 * runs.states].iter().all(|x| x.is_finite()));
+        assert!(first[5 * runs.states..].iter().all(|x| x.is_nan()));
+        assert!(runs.member(1).iter().all(|x| x.is_finite()));
+        // x = x'(0) t before the wall (x is ignorable: no force along it), at t = 2.
+        assert!((first[4 * runs.states] - 4.4).abs() < 1e-9, "{}", first[4 * runs.states]);
+    }
+}
