@@ -7,8 +7,8 @@ use crate::args::{FormulationArg, RunArgs, describe, formulations};
 use crate::{CliError, plot, print};
 use clap::Args;
 use files::write_creating_folder as write_file;
-use runtime::monitor::monitor_with_jumps;
 use runtime::system::System;
+use runtime::trajectory;
 use seam::FormulationKind;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -77,7 +77,6 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     if let Some(controller) = series_controller(&model, &args.input)? {
         sys = sys.with_controller(controller);
     }
-    let settings = runtime::integrate::Settings { time_independent: !sys.form.depends_on_time, ..settings };
     let times = reference.times().map_err(CliError::Grid)?;
     let span = reference.t_end - reference.t_start;
     let bar = crate::report::progress_bar(1000);
@@ -90,52 +89,21 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
             bar.set_position((1000.0 * (t - reference.t_start) / span) as u64);
         }
     };
-    let run = runtime::events::run(&sys, &y0, &times, &settings, &mut progress);
+    let run = trajectory::simulate(&sys, &y0, &times, &settings, &mut progress);
     bar.finish_and_clear();
-    let run = run?;
-    let (solution, jumps) = (run.solution, run.jumps);
+    let run = run.map_err(|e| match e {
+        trajectory::TrajectoryError::Run(e) => CliError::Run(e),
+        trajectory::TrajectoryError::Monitor(e) => CliError::Monitor(e),
+    })?;
     let elapsed = start.elapsed();
+    let (solution, inv, header, rows) = (&run.solution, &run.invariants, &run.columns, &run.rows);
     if let Some(t) = solution.stats.stiff_at {
         eprintln!("{}", crate::report::stiff_warning(kind.name(), t));
     }
-    let inv = monitor_with_jumps(&sys, &solution, &jumps).map_err(CliError::Monitor)?;
-    // The events, each with its time and the coordinates and rates there (before a reset).
-    let mut events = Vec::new();
-    for o in &solution.events {
-        // The state just before the event, read with the momenta of the resets before it.
-        let before = runtime::events::system_before(&sys, &jumps, o.t);
-        let (q, qd) = before.velocities(o.t, &o.state).map_err(CliError::Monitor)?;
-        events.push((model.events[o.event].name.clone(), model.events[o.event].action, o.t, q, qd));
-    }
-
-    // The trajectory, one row per output time.
     let base = args.out.join(format!("{}_{}", model.module, kind.name()));
-    let mut header: Vec<String> = vec!["t".into()];
-    header.extend(model.coordinates.iter().cloned());
-    header.extend(model.coordinates.iter().map(|c| format!("{c}'")));
-    header.extend(sys.form.state_names.iter().map(|n| format!("state:{n}")));
-    let quantity = model.energy_balance.quantity();
-    header.extend([quantity.to_string(), format!("{quantity}_error")]);
-    header.extend(model.ignorable.iter().map(|&j| format!("momentum:{}", model.coordinates[j])));
-    header.extend(["constraint_residual".to_string(), "position_residual".to_string()]);
-    header.extend(model.inputs.iter().map(|&i| format!("input:{}", model.parameter_names[i])));
-    let rows: Vec<Vec<f64>> = (0..solution.times.len())
-        .map(|i| {
-            let mut row = vec![solution.times[i]];
-            row.extend(&inv.coordinates[i]);
-            row.extend(&inv.rates[i]);
-            row.extend(&solution.states[i]);
-            row.extend([inv.energy[i], inv.energy_error[i]]);
-            row.extend((0..model.ignorable.len()).map(|k| inv.momentum0[k] + inv.momentum_error[k][i]));
-            row.extend([inv.velocity_constraint[i], inv.position_constraint[i]]);
-            let params = sys.params_at(solution.times[i], &solution.states[i]).map_err(CliError::Monitor)?;
-            row.extend(model.inputs.iter().map(|&k| params[k]));
-            Ok(row)
-        })
-        .collect::<Result<_, CliError>>()?;
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(&header)?;
-    for row in &rows {
+    w.write_record(header)?;
+    for row in rows {
         w.write_record(row.iter().map(|x| format!("{x:e}")))?;
     }
     let text = w.into_inner().map_err(|e| CliError::Csv(e.into_error().into()))?;
@@ -153,12 +121,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         "rejected": solution.stats.rejected,
         "rhs_calls": solution.stats.rhs_calls,
         "stopped_by_event": solution.stopped,
-        "events": events.iter().map(|(name, action, t, q, qd)| serde_json::json!({ "event": name, "action": action.name(), "t": t, "q": q, "qdot": qd })).collect::<Vec<_>>(),
+        "events": run.events.iter().map(|e| serde_json::json!({ "event": e.name, "action": e.action.name(), "t": e.t, "q": e.q, "qdot": e.qdot })).collect::<Vec<_>>(),
         "columns": header,
         "rows": rows,
     });
     write_file(&base.with_extension("json"), serde_json::to_string(&json).expect("plain data").as_bytes())?;
-    let plots = plot::write_trajectory(&model, &sys.form, &solution.times, &inv, &base)?;
+    let plots = plot::write_trajectory(&model, &sys.form, &solution.times, inv, &base)?;
     let end = match (solution.stopped, solution.events.last()) {
         (true, Some(o)) => format!("{} (stopped there by event `{}`)", o.t, model.events[o.event].name),
         _ => reference.t_end.to_string(),
@@ -189,13 +157,13 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         text += &format!("  max constraint residual {:.3e}\n", worst(&inv.velocity_constraint));
     }
     if !model.events.is_empty() {
-        text += &format!("  {} events{}\n", events.len(), if solution.stopped { " (the last stopped the run)" } else { "" });
-        for (name, action, t, q, _) in events.iter().take(20) {
-            let coords: Vec<String> = model.coordinates.iter().zip(q).map(|(c, v)| format!("{c} = {v:.6e}")).collect();
-            text += &format!("    t = {t:.12e}  {name} ({})  {}\n", action.name(), coords.join(", "));
+        text += &format!("  {} events{}\n", run.events.len(), if solution.stopped { " (the last stopped the run)" } else { "" });
+        for e in run.events.iter().take(20) {
+            let coords: Vec<String> = model.coordinates.iter().zip(&e.q).map(|(c, v)| format!("{c} = {v:.6e}")).collect();
+            text += &format!("    t = {:.12e}  {} ({})  {}\n", e.t, e.name, e.action.name(), coords.join(", "));
         }
-        if events.len() > 20 {
-            text += &format!("    ... {} more in the JSON file\n", events.len() - 20);
+        if run.events.len() > 20 {
+            text += &format!("    ... {} more in the JSON file\n", run.events.len() - 20);
         }
     }
     text += &format!("  wrote {0}.csv, {0}.json", files::printable_path(&base));

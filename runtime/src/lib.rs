@@ -7,7 +7,8 @@
 //! evaluated in-process (`generator::eval`): the runtime depends on the seam crate only.
 //!
 //! Layout: [`integrate`] (RK4, DOPRI5, DOP853, Rosenbrock 2(3)) → [`system`] (a formulation as
-//! `y' = f(t, y)`; [`events`]: a run with the model's events) → [`monitor`] (energy with the work integral, momenta, constraints) →
+//! `y' = f(t, y)`; [`events`]: a run with the model's events) → [`monitor`] (energy with the
+//! work integral, momenta, constraints; [`trajectory`]: a monitored run as a table) →
 //! [`compare`], [`sweep`], [`linearize`], [`ensemble`] (many runs on every core).
 
 #![forbid(unsafe_code)]
@@ -21,6 +22,7 @@ pub mod compare;
 pub mod sweep;
 pub mod linearize;
 pub mod ensemble;
+pub mod trajectory;
 
 /// The seam crate, for generated modules emitted with `seam_path = "runtime::seam"`.
 pub use seam;
