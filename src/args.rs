@@ -24,14 +24,10 @@ pub enum MethodArg {
 }
 
 impl MethodArg {
-    /// The adaptive integrator it names (`None` for RK4, which needs its step).
+    /// The adaptive integrator it names (`None` for RK4, which needs its step), by the
+    /// runtime's own names ([`Method::from_name`]).
     pub fn adaptive(self) -> Option<Method> {
-        match self {
-            MethodArg::Dopri5 => Some(Method::Dopri5),
-            MethodArg::Dop853 => Some(Method::Dop853),
-            MethodArg::Ros23 => Some(Method::Rosenbrock23),
-            MethodArg::Rk4 => None,
-        }
+        Method::from_name(self.to_possible_value().expect("no variant is skipped").get_name(), None)
     }
 }
 
@@ -183,4 +179,24 @@ pub fn formulations(model: &Model, list: &[FormulationArg]) -> Result<Vec<Formul
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The command line's method names are the runtime's, and each names its method.
+    #[test]
+    fn method_names_are_the_runtimes() {
+        let names: Vec<String> = MethodArg::value_variants().iter().map(|m| m.to_possible_value().unwrap().get_name().to_string()).collect();
+        let mut sorted = names.clone();
+        sorted.sort();
+        let mut runtime_names = Method::NAMES.to_vec();
+        runtime_names.sort();
+        assert_eq!(sorted, runtime_names);
+        assert_eq!(MethodArg::Dopri5.adaptive(), Some(Method::Dopri5));
+        assert_eq!(MethodArg::Dop853.adaptive(), Some(Method::Dop853));
+        assert_eq!(MethodArg::Ros23.adaptive(), Some(Method::Rosenbrock23));
+        assert_eq!(MethodArg::Rk4.adaptive(), None);
+    }
 }

@@ -171,6 +171,36 @@ pub fn input_matrix(model: &Model, formulation: FormulationKind, at: &Operating,
     }
 }
 
+/// `f(t, y)` and its Jacobian `d f / d y` (row-major, every state, the work integral's too),
+/// exact when the system has the model's own (`has_exact_jacobian`), else by central
+/// differences; the flag says which.
+///
+/// ```
+/// use runtime::{linearize::state_jacobian, system::System};
+/// let model = generated::cart_pendulum::model();
+/// let (sys, y0) = System::start(&model, seam::FormulationKind::Kane, model.default_params.clone(), &[0.2, 0.1, 0.0], &[0.0; 3]).unwrap();
+/// let (f, jac, exact) = state_jacobian(&sys, 0.0, &y0).unwrap();
+/// let n = f.len();
+/// assert_eq!((jac.len(), exact), (n * n, sys.has_exact_jacobian()));
+/// ```
+pub fn state_jacobian(sys: &System, t: f64, y: &[f64]) -> Result<(Vec<f64>, Vec<f64>, bool), LinearizeError> {
+    let n = y.len();
+    let (mut dy, mut flat) = (vec![0.0; n], vec![0.0; n * n]);
+    let exact = sys.has_exact_jacobian();
+    if exact {
+        sys.jacobian(t, y, &mut dy, &mut flat).map_err(LinearizeError::Rhs)?;
+    } else {
+        sys.rhs(t, y, &mut dy).map_err(LinearizeError::Rhs)?;
+        let columns = central_differences(y, n, n, |y, out| sys.rhs(t, y, out))?;
+        for (c, col) in columns.iter().enumerate() {
+            for r in 0..n {
+                flat[r * n + c] = col[r];
+            }
+        }
+    }
+    Ok((dy, flat, exact))
+}
+
 /// `d f / d x_c` for the first `columns` entries of `x`, by central differences at the step
 /// that balances truncation (`h^2`) against round-off (`eps / h`); `f` writes `n` values.
 fn central_differences(

@@ -62,6 +62,30 @@ impl fmt::Display for Method {
     }
 }
 
+impl Method {
+    /// The names the front ends take: `dopri5`, `dop853`, `ros23` and `rk4` (which needs its
+    /// fixed step `h`).
+    pub const NAMES: [&'static str; 4] = ["dopri5", "dop853", "rk4", "ros23"];
+
+    /// The method a front end names (see [`Method::NAMES`]); `rk4` takes the step `h`.
+    ///
+    /// ```
+    /// use runtime::integrate::Method;
+    /// assert_eq!(Method::from_name("dop853", None), Some(Method::Dop853));
+    /// assert_eq!(Method::from_name("rk4", Some(0.01)), Some(Method::Rk4 { h: 0.01 }));
+    /// assert_eq!(Method::from_name("rk4", None), None);
+    /// ```
+    pub fn from_name(name: &str, h: Option<f64>) -> Option<Method> {
+        match name {
+            "dopri5" => Some(Method::Dopri5),
+            "dop853" => Some(Method::Dop853),
+            "ros23" => Some(Method::Rosenbrock23),
+            "rk4" => h.filter(|h| h.is_finite() && *h > 0.0).map(|h| Method::Rk4 { h }),
+            _ => None,
+        }
+    }
+}
+
 /// Integrator settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
