@@ -40,18 +40,45 @@ pub enum Jacobians {
     Exact { only: Option<seam::FormulationKind> },
 }
 
-/// The model MODEL names, loaded and validated: a path (anything with a `/`, an extension, or
-/// an existing file) is read from disk; a bare name is a built-in model.
-pub fn model(argument: &str) -> Result<generator::model::Model, LoadError> {
+/// A model's text and the file name its errors print.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Source {
+    /// The file as errors name it (`models/<name>.ron` for a built-in model).
+    pub file: String,
+    pub text: String,
+}
+
+impl Source {
+    /// The model, parsed and validated.
+    pub fn model(&self) -> Result<generator::model::Model, LoadError> {
+        Ok(generator::model::from_source(&self.file, &self.text)?)
+    }
+}
+
+/// The text of the model MODEL names: a path (anything with a `/`, an extension, or an existing
+/// file) is read from disk; a bare name is a built-in model.
+///
+/// ```
+/// let source = load::source("three_body").unwrap();
+/// assert_eq!(source.file, "models/three_body.ron");
+/// assert!(load::source("no_such_model").is_err());
+/// ```
+pub fn source(argument: &str) -> Result<Source, LoadError> {
     let path = Path::new(argument);
     let looks_like_a_path = path.extension().is_some() || argument.contains(['/', '\\']) || path.is_file();
     if looks_like_a_path {
-        return Ok(generator::model::load(path)?);
+        let (file, text) = generator::model::read_source(path)?;
+        return Ok(Source { file, text });
     }
     match BUILT_IN.iter().find(|(n, _)| *n == argument) {
-        Some((name, text)) => Ok(generator::model::from_source(&format!("models/{name}.ron"), text)?),
+        Some((name, text)) => Ok(Source { file: format!("models/{name}.ron"), text: text.to_string() }),
         None => Err(LoadError::UnknownModel { name: argument.to_string(), known: built_in().collect::<Vec<_>>().join(", ") }),
     }
+}
+
+/// The model MODEL names ([`source`]), loaded and validated.
+pub fn model(argument: &str) -> Result<generator::model::Model, LoadError> {
+    source(argument)?.model()
 }
 
 /// A model that runs, and what its user should be told about it.

@@ -54,15 +54,22 @@ pub enum SetupError {
 impl System {
     /// The system of formulation `kind` and its initial state from `q(0), q'(0)`.
     pub fn start(model: &Model, kind: FormulationKind, params: Vec<f64>, q0: &[f64], qd0: &[f64]) -> Result<(System, Vec<f64>), SetupError> {
+        let mut sys = System::new(model, kind, params, vec![0.0; model.ignorable.len()])?;
+        let mut y0 = vec![0.0; sys.form.states()];
+        sys.form.initial_state(0.0, q0, qd0, &sys.params, &mut y0, &mut sys.g_i).map_err(SetupError::Initial)?;
+        Ok((sys, y0))
+    }
+
+    /// The system of formulation `kind` with the conserved momenta `g_i` given (one per
+    /// ignorable coordinate; only the reduced formulation reads them), for evaluating its
+    /// right-hand side at states of the caller's choosing.
+    pub fn new(model: &Model, kind: FormulationKind, params: Vec<f64>, g_i: Vec<f64>) -> Result<System, SetupError> {
         let form = model.formulation(kind).ok_or_else(|| SetupError::UnknownFormulation {
             model: model.module.clone(),
             kind,
             available: model.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", "),
         })?;
-        let mut y0 = vec![0.0; form.states()];
-        let mut g_i = vec![0.0; model.ignorable.len()];
-        form.initial_state(0.0, q0, qd0, &params, &mut y0, &mut g_i).map_err(SetupError::Initial)?;
-        Ok((System { model: model.clone(), form: form.clone(), params, g_i, drift: Drift::None, controller: None }, y0))
+        Ok(System { model: model.clone(), form: form.clone(), params, g_i, drift: Drift::None, controller: None })
     }
 
     /// The same system with its inputs set by `controller` at every call.

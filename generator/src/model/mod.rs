@@ -256,7 +256,13 @@ pub const MAX_MODEL_BYTES: u64 = 16 << 20;
 
 /// Reads and validates a model file.
 pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
-    let path = path.as_ref();
+    let (file, source) = read_source(path.as_ref())?;
+    from_source(&file, &source)
+}
+
+/// The text of the model file at `path`, and the file's name as errors print it: read with the
+/// checks [`load`] makes (a size limit, UTF-8, no byte-order mark), not yet parsed.
+pub fn read_source(path: &std::path::Path) -> Result<(String, String), ModelError> {
     let file = path.display().to_string();
     let bytes = files::read_bounded(path, MAX_MODEL_BYTES).map_err(|e| match e {
         files::FileError::TooLarge { limit, .. } => ModelError::unlocated(
@@ -272,8 +278,8 @@ pub fn load(path: impl AsRef<std::path::Path>) -> Result<Model, ModelError> {
             "check the path; models live in `models/`".into(),
         ),
     })?;
-    let source = text_of(&file, &bytes)?;
-    from_source(&file, source)
+    let source = text_of(&file, &bytes)?.to_string();
+    Ok((file, source))
 }
 
 /// The model text in `bytes`: UTF-8, without a leading byte-order mark (editors that write one

@@ -1,0 +1,269 @@
+"""Equations of motion of multibody systems, derived symbolically and run at once.
+
+A model (a RON file, or its text) is derived and compiled in-process when it is loaded: a
+20-link chain in about a third of a second, with no Rust toolchain on the machine. Then:
+
+>>> import multibody
+>>> m = multibody.load("three_body")            # a built-in model, or a path to a .ron file
+>>> m.formulations
+['lagrange', 'maggi', 'kane', 'reduced_volterra']
+>>> x0, momenta = m.initial_state("kane")
+>>> m.rhs(0.0, x0, "kane").shape == x0.shape
+True
+
+`Model.simulate` integrates one formulation (a pandas DataFrame when pandas is installed),
+`multibody.ensemble` runs many members on every core with the GIL released,
+`multibody.distributed.ensemble` spreads one over a Dask cluster, and `Model.animate` writes a
+self-contained HTML page that plays the motion in 3-D.
+"""
+
+from __future__ import annotations
+
+import warnings as _warnings
+from collections.abc import Mapping
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+from . import _multibody
+from ._multibody import METHODS, ModelError, SimulationError, built_in
+
+__all__ = [
+    "Model",
+    "ModelError",
+    "SimulationError",
+    "Trajectory",
+    "Linear",
+    "load",
+    "loads",
+    "ensemble",
+    "built_in",
+    "METHODS",
+]
+
+
+def load(path) -> "Model":
+    """The model in the RON file at ``path`` (a str or a path), or the built-in model of that
+    name (``multibody.built_in()`` lists them). Raises ``ModelError`` with the file, the line
+    and column, the place in the model and the fix."""
+    return Model(_multibody.load(path))
+
+
+def loads(text: str, name: str = "<string>") -> "Model":
+    """The model in the RON text ``text``; ``name`` is what its errors call the file."""
+    return Model(_multibody.loads(text, name))
+
+
+class Linear(NamedTuple):
+    """The linear model ``x' = A x + B u`` about an operating point, and A's eigenvalues (the
+    zeros of cyclic coordinates left out)."""
+
+    A: np.ndarray
+    B: np.ndarray
+    eigenvalues: np.ndarray
+
+
+class Trajectory(Mapping):
+    """A run's table without pandas: column name -> 1-D array (``t``, each coordinate, each
+    rate ``q'``, ``state:...``, the energy and its error, ``momentum:...``, the constraint
+    residuals), with the events (name, time, coordinates) and where it came from."""
+
+    def __init__(self, columns, table, events, model, formulation):
+        self.columns = list(columns)
+        self._table = table
+        self.events = list(events)
+        self.model = model
+        self.formulation = formulation
+
+    def __getitem__(self, name):
+        try:
+            return self._table[:, self.columns.index(name)]
+        except ValueError:
+            raise KeyError(name) from None
+
+    def __iter__(self):
+        return iter(self.columns)
+
+    def __len__(self):
+        return len(self.columns)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self["t"]
+
+    def to_pandas(self):
+        """The same table as a pandas DataFrame (``attrs`` hold the model, the formulation and
+        the events)."""
+        import pandas as pd
+
+        frame = pd.DataFrame(self._table, columns=self.columns)
+        frame.attrs.update(model=self.model, formulation=self.formulation, events=self.events)
+        return frame
+
+    def __repr__(self):
+        return f"<multibody.Trajectory {self.model} {self.formulation}: {self._table.shape[0]} rows, columns {self.columns}>"
+
+
+def _has_pandas() -> bool:
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class Model:
+    """A model, derived and ready to run (``multibody.load``, ``multibody.loads``).
+
+    Values are given by name (a dict) or in the model's order (a sequence or an array):
+    ``params`` over the model's parameters (``Model.params`` holds the defaults), ``q`` and
+    ``qdot`` over its coordinates (the file's initial values where not given). A formulation is
+    named ``lagrange``, ``maggi``, ``kane`` or ``reduced_volterra`` (``reduced`` too); without
+    one, the reduced method where the model has it, else Kane's.
+    """
+
+    def __init__(self, native):
+        self._native = native
+        for line in native.warnings:
+            _warnings.warn(f"{native.name}: {line}", stacklevel=3)
+
+    # What the model is.
+    name = property(lambda self: self._native.name, doc="The model's name.")
+    file = property(lambda self: self._native.file, doc="The file it came from.")
+    text = property(lambda self: self._native.text, doc="Its RON text.")
+    coordinates = property(lambda self: self._native.coordinates, doc="The generalized coordinates, in order.")
+    formulations = property(lambda self: self._native.formulations, doc="The formulations it has.")
+    params = property(lambda self: self._native.params, doc="The parameters and their defaults (a dict in order).")
+    ignorable = property(lambda self: self._native.ignorable, doc="The ignorable coordinates.")
+    initial = property(lambda self: self._native.initial, doc="The file's initial (q, qdot).")
+    run = property(lambda self: self._native.run, doc="The file's run (t_start, t_end, dt_out), or None.")
+
+    def state_names(self, formulation: Optional[str] = None) -> list:
+        """The state of ``formulation``, by name, in order."""
+        return self._native.state_names(formulation)
+
+    def inspect(self, latex: bool = False) -> str:
+        """What is derived (T, M, N, Q, the constraints, Definition 1, the reduced method's
+        matrices), as text or LaTeX."""
+        return self._native.inspect(latex)
+
+    def _repr_latex_(self) -> str:
+        """The derivation for a notebook: each block of equations as display math, the text
+        between them as text."""
+        return notebook_latex(self._native.inspect(True))
+
+    def __repr__(self):
+        return repr(self._native)
+
+    def initial_state(self, formulation=None, q=None, qdot=None, params=None):
+        """``(x, momenta)``: the state of ``formulation`` at ``q``, ``qdot``, and the conserved
+        momenta of the ignorable coordinates there (``rhs`` of the reduced method needs them)."""
+        return self._native.initial_state(formulation, q, qdot, params)
+
+    def rhs(self, t, x, formulation=None, params=None, momenta=None) -> np.ndarray:
+        """``x' = f(t, x)`` of ``formulation``, as ``scipy.integrate.solve_ivp`` calls it."""
+        return self._native.rhs(t, x, formulation, params, momenta)
+
+    def jacobian(self, t, x, formulation=None, params=None, momenta=None) -> np.ndarray:
+        """``d f / d x`` (n x n), exact from the derivation; ``solve_ivp``'s ``jac``."""
+        return self._native.jacobian(t, x, formulation, params, momenta)
+
+    def simulate(
+        self,
+        formulation=None,
+        t_end=None,
+        dt_out=None,
+        method=None,
+        rtol=None,
+        atol=None,
+        params=None,
+        q=None,
+        qdot=None,
+        h=None,
+        t_start=None,
+        frame=None,
+    ):
+        """One formulation integrated with the model's events and monitored: the times, the
+        coordinates and rates, the state, the energy (or its work balance) and its error, the
+        momenta of the ignorable coordinates and the constraint residuals, one row per output
+        time. A pandas DataFrame when pandas is installed (``frame=False`` for a
+        ``Trajectory`` of numpy arrays). Defaults: the file's run, DOP853 at rtol = atol =
+        1e-10 (the paper's DOPRI5 where the file asks for it); ``method`` is one of
+        ``METHODS``."""
+        kind, columns, table, events = self._native.simulate_columns(
+            formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start
+        )
+        result = Trajectory(columns, table, events, self.name, kind)
+        if frame is None:
+            frame = _has_pandas()
+        return result.to_pandas() if frame else result
+
+    def linearize(self, formulation=None, q=None, qdot=None, params=None) -> Linear:
+        """The linear model about ``q``, ``qdot``: ``Linear(A, B, eigenvalues)``, B by the
+        model's inputs."""
+        return Linear(*self._native.linearize(formulation, q, qdot, params))
+
+    def generate_rust(self, path) -> None:
+        """Writes the model's Rust module (as the ``generator`` command does) to ``path``,
+        atomically."""
+        self._native.generate_rust(path)
+
+    def animate(self, result, path, formulation=None, **options) -> None:
+        """Writes a self-contained HTML page that plays ``result`` (what ``simulate``
+        returned) in 3-D."""
+        from .animate import write_page
+
+        write_page(self, result, path, **options)
+
+
+def notebook_latex(text: str) -> str:
+    """``inspect(latex=True)`` made into what a notebook renders: each
+    ``\\begin{aligned} ... \\end{aligned}`` block inside ``$$ ... $$``, the lines of text
+    between them as ``\\text{...}`` lines of their own display."""
+    out, block = [], None
+    for line in text.splitlines():
+        stripped = line.strip()
+        if block is not None:
+            block.append(line)
+            if stripped.startswith("\\end{aligned}"):
+                out.append("$$" + "\n".join(block) + "$$")
+                block = None
+        elif stripped.startswith("\\begin{aligned}"):
+            block = [line]
+        elif stripped:
+            escaped = "".join("\\" + c if c in "{}_^#$%&" else ("\\backslash " if c == "\\" else c) for c in stripped)
+            out.append("$$\\text{" + escaped + "}$$")
+    return "\n".join(out)
+
+
+def ensemble(
+    model: Model,
+    t_eval,
+    params=None,
+    q0=None,
+    qdot0=None,
+    formulation=None,
+    method=None,
+    rtol=None,
+    atol=None,
+    h=None,
+    threads=None,
+    return_reached=False,
+):
+    """N runs of ``model`` on every core (``threads`` to choose), the GIL released, each the
+    same bytes as it would be alone: ``params`` (N, k) over every parameter in order, ``q0``
+    and ``qdot0`` (N, m); any may be one row for all members or None for the model's own, and
+    one at least is 2-D. Returns the states of ``formulation`` at ``t_eval`` (the first time is
+    the start), an array (N, len(t_eval), states); with ``return_reached``, also how many output
+    times each member reached (a terminal event stops a member early: its later rows are NaN,
+    and a warning says which members stopped)."""
+    states, reached = _multibody.ensemble(
+        model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads
+    )
+    stopped = np.flatnonzero(reached < states.shape[1])
+    if stopped.size and not return_reached:
+        _warnings.warn(
+            f"{stopped.size} members stopped early at a terminal event (rows after it are NaN): members {stopped[:10].tolist()}",
+            stacklevel=2,
+        )
+    return (states, reached) if return_reached else states

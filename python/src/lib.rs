@@ -1,0 +1,522 @@
+//! `multibody._multibody`, the extension module of the Python package `multibody`: a model
+//! loaded from RON text, derived and evaluated in-process (the `load` crate, the JIT), its
+//! right-hand sides and Jacobians on numpy arrays, runs and ensembles by the `runtime` crate with
+//! the GIL released. The Python package (`python/multibody/__init__.py`) adds what is Python's
+//! own: DataFrames, Dask, the notebook's LaTeX.
+//!
+//! Every error of the user's reaches Python as an exception carrying the command line's message:
+//! [`ModelError`] (a `ValueError`) with the file, the line and column and the fix for a model,
+//! `ValueError` for arguments, [`SimulationError`] (a `RuntimeError`) for a run that fails.
+
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use runtime::integrate::{Method, Settings};
+use runtime::system::System;
+use seam::FormulationKind;
+use std::sync::OnceLock;
+
+pyo3::create_exception!(
+    _multibody,
+    ModelError,
+    PyValueError,
+    "A model that cannot be loaded: the message names the file, the line and column, the place in the model and the fix."
+);
+pyo3::create_exception!(
+    _multibody,
+    SimulationError,
+    PyRuntimeError,
+    "A run, a right-hand side or a linearization that failed (a singular matrix, a step size underflow...)."
+);
+
+fn model_error(e: ::load::LoadError) -> PyErr {
+    match e {
+        ::load::LoadError::Model(e) => ModelError::new_err(e.render(false)),
+        other => ModelError::new_err(other.to_string()),
+    }
+}
+
+fn run_error(e: impl std::fmt::Display) -> PyErr {
+    SimulationError::new_err(e.to_string())
+}
+
+/// A model, derived and ready to run: `multibody.load(path)` or `multibody.loads(text)`.
+#[pyclass(frozen, module = "multibody._multibody")]
+struct Model {
+    source: ::load::Source,
+    evaluated: seam::Model,
+    /// The same model with its exact Jacobians, derived at the first `jacobian` or `linearize`.
+    exact: OnceLock<seam::Model>,
+    warnings: Vec<String>,
+}
+
+impl Model {
+    fn open(source: ::load::Source) -> PyResult<Model> {
+        let model = source.model().map_err(model_error)?;
+        let loaded = ::load::evaluate(&model, ::load::Jacobians::Differenced, ::load::Route::Jit, &mut |_| {}).map_err(model_error)?;
+        Ok(Model { source, evaluated: loaded.model, exact: OnceLock::new(), warnings: loaded.warnings })
+    }
+
+    fn kind(&self, formulation: Option<&str>) -> PyResult<FormulationKind> {
+        let available = || self.evaluated.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", ");
+        let Some(name) = formulation else {
+            // The paper's reduced method where the model has it, else Kane's, else the first.
+            return Ok([FormulationKind::ReducedVolterra, FormulationKind::Kane]
+                .into_iter()
+                .find(|k| self.evaluated.formulation(*k).is_some())
+                .unwrap_or(self.evaluated.formulations[0].kind));
+        };
+        match FormulationKind::from_name(name) {
+            Some(k) if self.evaluated.formulation(k).is_some() => Ok(k),
+            _ => Err(PyValueError::new_err(format!("model `{}` has no formulation `{name}` (it has: {})", self.evaluated.module, available()))),
+        }
+    }
+
+    /// The parameters: the model's defaults with `given` applied (a dict by name, or a sequence
+    /// of every parameter in order).
+    fn param_values(&self, given: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+        named_values(given, &self.evaluated.parameter_names, &self.evaluated.default_params, "parameter")
+    }
+
+    /// The exact-Jacobian model (derived once; differences where the node budget refuses).
+    fn exact(&self, py: Python<'_>) -> PyResult<&seam::Model> {
+        if let Some(m) = self.exact.get() {
+            return Ok(m);
+        }
+        let model = self.source.model().map_err(model_error)?;
+        let loaded = py.detach(|| ::load::evaluate(&model, ::load::Jacobians::Exact { only: None }, ::load::Route::Jit, &mut |_| {})).map_err(model_error)?;
+        Ok(self.exact.get_or_init(|| loaded.model))
+    }
+
+    fn system(&self, model: &seam::Model, kind: FormulationKind, params: Vec<f64>, momenta: Option<Vec<f64>>) -> PyResult<System> {
+        let ignorable = model.ignorable.len();
+        let g_i = match momenta {
+            Some(g) if g.len() == ignorable => g,
+            Some(g) => return Err(PyValueError::new_err(format!("momenta has {} values, the model has {ignorable} ignorable coordinates", g.len()))),
+            None if kind == FormulationKind::ReducedVolterra && ignorable > 0 => {
+                return Err(PyValueError::new_err(
+                    "the reduced formulation needs the conserved momenta of the ignorable coordinates: pass momenta=, the second value initial_state returns",
+                ));
+            }
+            None => vec![0.0; ignorable],
+        };
+        System::new(model, kind, params, g_i).map_err(run_error)
+    }
+}
+
+/// Values by name (a dict) or in order (a sequence), over `defaults`.
+fn named_values(given: Option<&Bound<'_, PyAny>>, names: &[String], defaults: &[f64], what: &str) -> PyResult<Vec<f64>> {
+    let mut values = defaults.to_vec();
+    let Some(given) = given.filter(|g| !g.is_none()) else { return Ok(values) };
+    if let Ok(dict) = given.cast::<PyDict>() {
+        for (key, value) in dict.iter() {
+            let name: String = key.extract()?;
+            let k = names.iter().position(|n| *n == name).ok_or_else(|| PyValueError::new_err(format!("no {what} `{name}` (known: {})", names.join(", "))))?;
+            values[k] = finite(value.extract()?, &name)?;
+        }
+        return Ok(values);
+    }
+    let list = vector(given, what)?;
+    if list.len() != names.len() {
+        return Err(PyValueError::new_err(format!("{} {what} values given, the model has {} ({})", list.len(), names.len(), names.join(", "))));
+    }
+    Ok(list)
+}
+
+fn finite(x: f64, name: &str) -> PyResult<f64> {
+    if x.is_finite() { Ok(x) } else { Err(PyValueError::new_err(format!("`{name}` = {x} is not finite"))) }
+}
+
+/// A float vector from a numpy array (without a copy of the Python objects) or any sequence.
+fn vector(x: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    if let Ok(a) = x.extract::<PyReadonlyArray1<'_, f64>>() {
+        return Ok(a.as_array().to_vec());
+    }
+    x.extract::<Vec<f64>>().map_err(|_| PyValueError::new_err(format!("{what}: needs a sequence of numbers or a 1-D float array")))
+}
+
+fn check_len(x: &[f64], n: usize, what: &str) -> PyResult<()> {
+    if x.len() == n { Ok(()) } else { Err(PyValueError::new_err(format!("{what} has {} values, the formulation has {n}", x.len()))) }
+}
+
+/// The integrator settings of a run of `span` seconds (the command line's defaults: DOP853 at
+/// 1e-10, or the paper's DOPRI5 where the model asks for it).
+fn settings(model: &seam::Model, span: f64, method: Option<&str>, rtol: Option<f64>, atol: Option<f64>, h: Option<f64>) -> PyResult<Settings> {
+    let mut s = if model.paper_settings { Settings::paper(span) } else { Settings::tight(span) };
+    if let Some(name) = method {
+        s.method = Method::from_name(name, h.or(Some(0.01 * span)))
+            .ok_or_else(|| PyValueError::new_err(format!("no method `{name}` (known: {}; rk4 takes h=)", Method::NAMES.join(", "))))?;
+    }
+    for (value, name, slot) in [(rtol, "rtol", &mut s.rtol), (atol, "atol", &mut s.atol)] {
+        if let Some(x) = value {
+            if !(x > 0.0 && x.is_finite()) {
+                return Err(PyValueError::new_err(format!("{name} needs a positive number, not {x}")));
+            }
+            *slot = x;
+        }
+    }
+    Ok(s)
+}
+
+#[pymethods]
+impl Model {
+    /// The model's name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.evaluated.name
+    }
+
+    /// The file the model came from (`models/<name>.ron` for a built-in one, `<string>` for
+    /// `loads`).
+    #[getter]
+    fn file(&self) -> &str {
+        &self.source.file
+    }
+
+    /// The model's text (RON).
+    #[getter]
+    fn text(&self) -> &str {
+        &self.source.text
+    }
+
+    /// The generalized coordinates, in the order of every `q` and `qdot`.
+    #[getter]
+    fn coordinates(&self) -> Vec<String> {
+        self.evaluated.coordinates.clone()
+    }
+
+    /// The formulations the model has, by name (`lagrange`, `maggi`, `kane`, `reduced_volterra`).
+    #[getter]
+    fn formulations(&self) -> Vec<&'static str> {
+        self.evaluated.kinds().iter().map(|k| k.name()).collect()
+    }
+
+    /// The parameters and their defaults, in the model's order.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for (name, value) in self.evaluated.parameter_names.iter().zip(&self.evaluated.default_params) {
+            dict.set_item(name, value)?;
+        }
+        Ok(dict)
+    }
+
+    /// The ignorable coordinates whose momenta the reduced formulation holds constant.
+    #[getter]
+    fn ignorable(&self) -> Vec<String> {
+        self.evaluated.ignorable.iter().map(|&j| self.evaluated.coordinates[j].clone()).collect()
+    }
+
+    /// What the derivation warned of.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// The initial coordinates and rates of the model's file (zeros without an `initial`
+    /// section).
+    #[getter]
+    fn initial(&self) -> (Vec<f64>, Vec<f64>) {
+        let m = self.evaluated.coordinates.len();
+        self.evaluated.initial.clone().unwrap_or((vec![0.0; m], vec![0.0; m]))
+    }
+
+    /// The run of the model's file: `(t_start, t_end, dt_out)`, or None.
+    #[getter]
+    fn run(&self) -> Option<(f64, f64, f64)> {
+        self.evaluated.run
+    }
+
+    /// The state of a formulation, by name, in order.
+    #[pyo3(signature = (formulation=None))]
+    fn state_names(&self, formulation: Option<&str>) -> PyResult<Vec<String>> {
+        let kind = self.kind(formulation)?;
+        Ok(self.evaluated.formulation(kind).expect("checked").state_names.clone())
+    }
+
+    /// What is derived: T, M, N, the constraints, Definition 1 per coordinate, the reduced
+    /// method's matrices; as text, or LaTeX with `latex=True`.
+    #[pyo3(signature = (latex=false))]
+    fn inspect(&self, py: Python<'_>, latex: bool) -> PyResult<String> {
+        let model = self.source.model().map_err(model_error)?;
+        py.detach(|| generator::inspect::inspect(&model, latex)).map_err(|e| model_error(e.into()))
+    }
+
+    /// The state `x` of `formulation` at the coordinates `q` and rates `qdot` (the file's initial
+    /// values where not given; a dict by name or a sequence in order), and the conserved momenta
+    /// of the ignorable coordinates there (pass them to `rhs` of the reduced formulation).
+    #[pyo3(signature = (formulation=None, q=None, qdot=None, params=None))]
+    fn initial_state<'py>(
+        &self,
+        py: Python<'py>,
+        formulation: Option<&str>,
+        q: Option<&Bound<'py, PyAny>>,
+        qdot: Option<&Bound<'py, PyAny>>,
+        params: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        let kind = self.kind(formulation)?;
+        let (q0, qd0) = self.initial();
+        let names = &self.evaluated.coordinates;
+        let q = named_values(q, names, &q0, "coordinate")?;
+        let qdot = named_values(qdot, names, &qd0, "coordinate rate")?;
+        let params = self.param_values(params)?;
+        let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
+        Ok((y0.into_pyarray(py), sys.g_i.into_pyarray(py)))
+    }
+
+    /// The right-hand side `x' = f(t, x)` of `formulation` (a 1-D array): what
+    /// `scipy.integrate.solve_ivp` asks for. The reduced formulation needs `momenta`.
+    #[pyo3(signature = (t, x, formulation=None, params=None, momenta=None))]
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: &Bound<'py, PyAny>,
+        formulation: Option<&str>,
+        params: Option<&Bound<'py, PyAny>>,
+        momenta: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let kind = self.kind(formulation)?;
+        let sys = self.system(&self.evaluated, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
+        let x = vector(x, "x")?;
+        check_len(&x, sys.form.states(), "x")?;
+        let mut dx = vec![0.0; x.len()];
+        sys.rhs(t, &x, &mut dx).map_err(run_error)?;
+        Ok(dx.into_pyarray(py))
+    }
+
+    /// The Jacobian `d f / d x` (a 2-D array, row i the derivatives of `x'[i]`): exact from the
+    /// derivation (derived at the first call), central differences where the node budget
+    /// refuses it. `solve_ivp(..., jac=...)` takes it.
+    #[pyo3(signature = (t, x, formulation=None, params=None, momenta=None))]
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: &Bound<'py, PyAny>,
+        formulation: Option<&str>,
+        params: Option<&Bound<'py, PyAny>>,
+        momenta: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let kind = self.kind(formulation)?;
+        let exact = self.exact(py)?;
+        let sys = self.system(exact, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
+        let x = vector(x, "x")?;
+        check_len(&x, sys.form.states(), "x")?;
+        let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &x).map_err(run_error)?;
+        let n = x.len();
+        Ok(Array2::from_shape_vec((n, n), jac).expect("n x n").into_pyarray(py))
+    }
+
+    /// One formulation integrated from `q`, `qdot` (the file's initial values by default) with
+    /// the model's events: a dict of columns (`t`, each coordinate, `q'`, `state:...`, the
+    /// energy and its error, `momentum:...`, the constraint residuals), each a 1-D array, and
+    /// the events, after the formulation's name. The Python package turns it into a DataFrame.
+    #[pyo3(signature = (formulation=None, t_end=None, dt_out=None, method=None, rtol=None, atol=None, h=None, params=None, q=None, qdot=None, t_start=None))]
+    fn simulate_columns<'py>(
+        &self,
+        py: Python<'py>,
+        formulation: Option<&str>,
+        t_end: Option<f64>,
+        dt_out: Option<f64>,
+        method: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        h: Option<f64>,
+        params: Option<&Bound<'py, PyAny>>,
+        q: Option<&Bound<'py, PyAny>>,
+        qdot: Option<&Bound<'py, PyAny>>,
+        t_start: Option<f64>,
+    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>)> {
+        let kind = self.kind(formulation)?;
+        let (q0, qd0) = self.initial();
+        let names = &self.evaluated.coordinates;
+        let q = named_values(q, names, &q0, "coordinate")?;
+        let qdot = named_values(qdot, names, &qd0, "coordinate rate")?;
+        let params = self.param_values(params)?;
+        let file_run = self.evaluated.run;
+        let (t_start, t_end, dt_out) = match (file_run, t_end, dt_out) {
+            (Some((a, b, c)), t_end, dt_out) => (t_start.unwrap_or(a), t_end.unwrap_or(b), dt_out.unwrap_or(c)),
+            (None, Some(b), Some(c)) => (t_start.unwrap_or(0.0), b, c),
+            (None, _, _) => {
+                return Err(PyValueError::new_err(format!("model `{}` has no `simulation` section: give t_end= and dt_out=", self.evaluated.module)));
+            }
+        };
+        let times = seam::output_times(t_start, t_end, dt_out).map_err(|e| PyValueError::new_err(format!("run settings: {e}")))?;
+        let settings = settings(&self.evaluated, t_end - t_start, method, rtol, atol, h)?;
+        let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
+        let run = py.detach(|| runtime::trajectory::simulate(&sys, &y0, &times, &settings, &mut |_| {})).map_err(run_error)?;
+        let (rows, width) = (run.rows.len(), run.columns.len());
+        let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
+        let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
+        Ok((kind.name(), run.columns, table, events))
+    }
+
+    /// The linear model `x' = A x + B u` of `formulation` about `q`, `qdot` (the file's
+    /// initial values by default): `(A, B, eigenvalues)`, B by the model's inputs (no columns
+    /// without any), the eigenvalues without the zeros of cyclic coordinates.
+    #[pyo3(signature = (formulation=None, q=None, qdot=None, params=None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        formulation: Option<&str>,
+        q: Option<&Bound<'py, PyAny>>,
+        qdot: Option<&Bound<'py, PyAny>>,
+        params: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<numpy::Complex64>>)> {
+        let kind = self.kind(formulation)?;
+        let exact = self.exact(py)?;
+        let (q0, qd0) = self.initial();
+        let names = &self.evaluated.coordinates;
+        let at = runtime::linearize::Operating {
+            q: named_values(q, names, &q0, "coordinate")?,
+            qdot: named_values(qdot, names, &qd0, "coordinate rate")?,
+            params: self.param_values(params)?,
+            held: vec![],
+        };
+        let linear = runtime::linearize::linearize(exact, kind, &at).map_err(run_error)?;
+        let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs).map_err(run_error)?;
+        let k = linear.a.nrows();
+        let a = Array2::from_shape_fn((k, k), |(r, c)| linear.a[(r, c)]).into_pyarray(py);
+        let b = Array2::from_shape_fn((k, b.ncols()), |(r, c)| b[(r, c)]).into_pyarray(py);
+        let eigenvalues: Vec<numpy::Complex64> = linear.eigenvalues.iter().map(|z| numpy::Complex64::new(z.re, z.im)).collect();
+        Ok((a, b, eigenvalues.into_pyarray(py)))
+    }
+
+    /// Writes the model's Rust module (what `generator MODEL -o PATH` writes) to `path`,
+    /// atomically; a file already holding the same bytes is left alone.
+    fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        let model = self.source.model().map_err(model_error)?;
+        let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(|e| model_error(e.into()))?;
+        files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
+        Ok(())
+    }
+
+    /// Pickled as its file name and text: a Dask worker derives it again on arrival.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let from_source = py.import("multibody._multibody")?.getattr("_from_source")?;
+        Ok((from_source, PyTuple::new(py, [self.source.file.clone(), self.source.text.clone()])?))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<multibody.Model {} ({}): {} coordinates, formulations {}>",
+            self.evaluated.module,
+            self.source.file,
+            self.evaluated.coordinates.len(),
+            self.formulations().join(", ")
+        )
+    }
+}
+
+/// Rows of a 2-D array (N, n), or one 1-D row for every member, or the default for every member.
+fn rows(given: Option<&Bound<'_, PyAny>>, members: usize, default: &[f64], what: &str) -> PyResult<Vec<Vec<f64>>> {
+    let Some(given) = given.filter(|g| !g.is_none()) else { return Ok(vec![default.to_vec(); members]) };
+    if let Ok(a) = given.extract::<PyReadonlyArray2<'_, f64>>() {
+        let a = a.as_array();
+        if a.nrows() != members || a.ncols() != default.len() {
+            return Err(PyValueError::new_err(format!("{what} has shape ({}, {}), the ensemble needs ({members}, {})", a.nrows(), a.ncols(), default.len())));
+        }
+        return Ok(a.rows().into_iter().map(|r| r.to_vec()).collect());
+    }
+    let row = vector(given, what)?;
+    if row.len() != default.len() {
+        return Err(PyValueError::new_err(format!("{what} has {} values, the model has {}", row.len(), default.len())));
+    }
+    Ok(vec![row; members])
+}
+
+/// The number of members a 2-D argument gives.
+fn members_of(given: Option<&Bound<'_, PyAny>>) -> Option<usize> {
+    let a = given?.extract::<PyReadonlyArray2<'_, f64>>().ok()?;
+    Some(a.as_array().nrows())
+}
+
+/// Runs `N` simulations of `model` on every core with the GIL released, each exactly as it
+/// would run alone: parameters `params` (N, k), initial coordinates `q0` (N, m) and rates
+/// `qdot0` (N, m) (any may be one row for all, or None for the model's own), output times
+/// `t_eval` (the first is the start). Returns the formulation's states, (N, len(t_eval),
+/// states), and the number of output times each member reached (fewer only where a terminal
+/// event stopped it; its later rows are NaN).
+#[pyfunction]
+#[pyo3(signature = (model, t_eval, params=None, q0=None, qdot0=None, formulation=None, method=None, rtol=None, atol=None, h=None, threads=None))]
+fn ensemble<'py>(
+    py: Python<'py>,
+    model: &Model,
+    t_eval: &Bound<'py, PyAny>,
+    params: Option<&Bound<'py, PyAny>>,
+    q0: Option<&Bound<'py, PyAny>>,
+    qdot0: Option<&Bound<'py, PyAny>>,
+    formulation: Option<&str>,
+    method: Option<&str>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    h: Option<f64>,
+    threads: Option<usize>,
+) -> PyResult<(Bound<'py, PyArray3<f64>>, Bound<'py, PyArray1<u64>>)> {
+    let kind = model.kind(formulation)?;
+    let m = &model.evaluated;
+    let counts: Vec<usize> = [params, q0, qdot0].into_iter().filter_map(members_of).collect();
+    let n = counts.first().copied().ok_or_else(|| PyValueError::new_err("give params, q0 or qdot0 as a 2-D array (N, ...): one row per member"))?;
+    if counts.iter().any(|&c| c != n) {
+        return Err(PyValueError::new_err(format!("the 2-D arguments disagree on the number of members: {counts:?}")));
+    }
+    let (iq, iqd) = model.initial();
+    let (params, q0, qdot0) = (rows(params, n, &m.default_params, "params")?, rows(q0, n, &iq, "q0")?, rows(qdot0, n, &iqd, "qdot0")?);
+    let members: Vec<runtime::ensemble::Member> =
+        params.into_iter().zip(q0).zip(qdot0).map(|((params, q0), qd0)| runtime::ensemble::Member { params, q0, qd0 }).collect();
+    let times = vector(t_eval, "t_eval")?;
+    let span = times.last().copied().unwrap_or(0.0) - times.first().copied().unwrap_or(0.0);
+    let settings = settings(m, span.max(f64::MIN_POSITIVE), method, rtol, atol, h)?;
+    let runs = py.detach(|| runtime::ensemble::ensemble(m, kind, &members, &times, &settings, threads, &|| {})).map_err(|e| match e {
+        runtime::ensemble::EnsembleError::Times | runtime::ensemble::EnsembleError::Shape { .. } => PyValueError::new_err(e.to_string()),
+        other => run_error(other),
+    })?;
+    let shape = (runs.members, runs.times, runs.states);
+    let reached: Vec<u64> = runs.reached.iter().map(|&r| r as u64).collect();
+    Ok((Array3::from_shape_vec(shape, runs.data).expect("members x times x states").into_pyarray(py), reached.into_pyarray(py)))
+}
+
+/// The model in the RON file at `path`, or the built-in model of that name.
+#[pyfunction]
+#[pyo3(name = "load")]
+fn load_model(path: &Bound<'_, PyAny>) -> PyResult<Model> {
+    let argument: std::path::PathBuf = path.extract()?;
+    let argument = argument.to_str().ok_or_else(|| PyValueError::new_err("the path is not valid UTF-8"))?.to_string();
+    Model::open(::load::source(&argument).map_err(model_error)?)
+}
+
+/// The model in the RON text `text` (`name` is what its errors call the file).
+#[pyfunction]
+#[pyo3(signature = (text, name="<string>"))]
+fn loads(text: &str, name: &str) -> PyResult<Model> {
+    Model::open(::load::Source { file: name.to_string(), text: text.to_string() })
+}
+
+/// The inverse of `Model.__reduce__`.
+#[pyfunction]
+fn _from_source(file: String, text: String) -> PyResult<Model> {
+    Model::open(::load::Source { file, text })
+}
+
+/// The names of the models built into the wheel (`multibody.load(name)` takes them).
+#[pyfunction]
+fn built_in() -> Vec<&'static str> {
+    ::load::built_in().collect()
+}
+
+#[pymodule]
+fn _multibody(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Model>()?;
+    m.add_function(wrap_pyfunction!(load_model, m)?)?;
+    m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_function(wrap_pyfunction!(_from_source, m)?)?;
+    m.add_function(wrap_pyfunction!(built_in, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add("ModelError", m.py().get_type::<ModelError>())?;
+    m.add("SimulationError", m.py().get_type::<SimulationError>())?;
+    m.add("METHODS", Method::NAMES.to_vec())?;
+    Ok(())
+}
