@@ -19,6 +19,7 @@ self-contained HTML page that plays the motion in 3-D.
 
 from __future__ import annotations
 
+import functools
 import warnings as _warnings
 from collections.abc import Mapping
 from typing import NamedTuple, Optional
@@ -52,6 +53,12 @@ def load(path) -> "Model":
 def loads(text: str, name: str = "<string>") -> "Model":
     """The model in the RON text ``text``; ``name`` is what its errors call the file."""
     return Model(_multibody.loads(text, name))
+
+
+@functools.lru_cache(maxsize=16)
+def _restore(file: str, text: str) -> "Model":
+    """The model a pickle carries, derived once per process for each text."""
+    return loads(text, name=file)
 
 
 class Linear(NamedTuple):
@@ -154,6 +161,10 @@ class Model:
 
     def __repr__(self):
         return repr(self._native)
+
+    def __reduce__(self):
+        # As its text: a worker derives it once per process (`_restore` keeps it).
+        return (_restore, (self._native.file, self._native.text))
 
     def initial_state(self, formulation=None, q=None, qdot=None, params=None):
         """``(x, momenta)``: the state of ``formulation`` at ``q``, ``qdot``, and the conserved
