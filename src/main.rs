@@ -85,6 +85,8 @@ pub enum CliError {
     File(#[from] files::FileError),
     #[error(transparent)]
     Plot(#[from] plot::PlotError),
+    #[error("the animation: {0}")]
+    Animate(#[from] animate::AnimateError),
     #[error("no {what} `{name}` (known: {known})")]
     UnknownName { what: &'static str, name: String, known: String },
     #[error("model `{model}` has no formulation `{kind}` (it has: {available})")]

@@ -30,6 +30,10 @@ pub struct SimulateArgs {
     /// `<model>_<formulation>.{csv,json}`, `<model>_<formulation>_{coordinates,invariants}.svg`.
     #[arg(long, value_name = "DIR", default_value = ".")]
     pub out: PathBuf,
+    /// Also writes a self-contained HTML page that plays the motion in 3-D (each body as its
+    /// equivalent inertia box, frames as axes, a time slider; no network needed to view it).
+    #[arg(long, value_name = "OUT.html")]
+    pub animate: Option<PathBuf>,
 }
 
 fn input_file(s: &str) -> Result<(String, PathBuf), String> {
@@ -167,6 +171,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
         }
     }
     text += &format!("  wrote {0}.csv, {0}.json", files::printable_path(&base));
+    if let Some(page) = &args.animate {
+        let source = load::model(&args.model)?.with_parameters(&args.run.values.param)?;
+        let q: Vec<f64> = inv.coordinates.concat();
+        animate::write(page, &source, &reference.params, &animate::Motion { formulation: kind.name(), times: &solution.times, q: &q })?;
+        text += &format!(", {}", files::printable_path(page));
+    }
     for p in plots {
         text += &format!(", {}", files::printable_path(&p));
     }

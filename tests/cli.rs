@@ -108,6 +108,29 @@ fn simulate_writes_the_trajectory_and_its_plots() {
     assert!(dir.path().join("run/my_model_lagrange.csv").is_file());
 }
 
+/// `simulate --animate` writes the page with the run's times and every frame's pose at each
+/// (the browser test of the page itself is in `python/tests/test_animate.py`); a directory in
+/// its place is never replaced.
+#[test]
+fn simulate_animates_the_run() {
+    let (dir, _) = user_model();
+    let out = ok(&multibody(dir.path(), &["simulate", "my_model.ron", "--out", "run", "--t-end", "2", "--dt-out", "0.5", "--animate", "show/motion.html"]));
+    assert!(out.contains("show/motion.html"), "{out}");
+    let html = std::fs::read_to_string(dir.path().join("show/motion.html")).unwrap();
+    let start = html.find(r#"<script type="application/json" id="data">"#).unwrap();
+    let json = &html[start..];
+    let json = &json[json.find('>').unwrap() + 1..json.find("</script>").unwrap()];
+    let data: serde_json::Value = serde_json::from_str(json).unwrap();
+    assert_eq!(data["times"], serde_json::json!([0.0, 0.5, 1.0, 1.5, 2.0]));
+    assert_eq!(data["poses"].as_array().unwrap().len(), 5);
+    assert_eq!(data["poses"][0].as_array().unwrap().len(), data["frames"].as_array().unwrap().len());
+    assert!(!html.contains("http://") && !html.contains("https://"), "self-contained");
+    std::fs::create_dir(dir.path().join("taken.html")).unwrap();
+    let refused = multibody(dir.path(), &["simulate", "my_model.ron", "--out", "run", "--t-end", "1", "--animate", "taken.html"]);
+    assert!(!refused.status.success());
+    assert!(dir.path().join("taken.html").is_dir());
+}
+
 #[test]
 fn sweep_and_linearize_run_on_a_model_file() {
     let (dir, _) = user_model();

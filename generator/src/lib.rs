@@ -12,5 +12,6 @@ pub mod inspect;
 pub mod command;
 pub mod emit;
 pub mod eval;
+pub mod pose;
 
 pub use emit::Builder;

@@ -75,12 +75,13 @@ class Trajectory(Mapping):
     rate ``q'``, ``state:...``, the energy and its error, ``momentum:...``, the constraint
     residuals), with the events (name, time, coordinates) and where it came from."""
 
-    def __init__(self, columns, table, events, model, formulation):
+    def __init__(self, columns, table, events, model, formulation, params):
         self.columns = list(columns)
         self._table = table
         self.events = list(events)
         self.model = model
         self.formulation = formulation
+        self.params = dict(params)
 
     def __getitem__(self, name):
         try:
@@ -99,12 +100,12 @@ class Trajectory(Mapping):
         return self["t"]
 
     def to_pandas(self):
-        """The same table as a pandas DataFrame (``attrs`` hold the model, the formulation and
-        the events)."""
+        """The same table as a pandas DataFrame (``attrs`` hold the model, the formulation, the
+        events and the parameters)."""
         import pandas as pd
 
         frame = pd.DataFrame(self._table, columns=self.columns)
-        frame.attrs.update(model=self.model, formulation=self.formulation, events=self.events)
+        frame.attrs.update(model=self.model, formulation=self.formulation, events=self.events, params=self.params)
         return frame
 
     def __repr__(self):
@@ -201,10 +202,10 @@ class Model:
         ``Trajectory`` of numpy arrays). Defaults: the file's run, DOP853 at rtol = atol =
         1e-10 (the paper's DOPRI5 where the file asks for it); ``method`` is one of
         ``METHODS``."""
-        kind, columns, table, events = self._native.simulate_columns(
+        kind, columns, table, events, used = self._native.simulate_columns(
             formulation, t_end, dt_out, method, rtol, atol, h, params, q, qdot, t_start
         )
-        result = Trajectory(columns, table, events, self.name, kind)
+        result = Trajectory(columns, table, events, self.name, kind, zip(self.params, used))
         if frame is None:
             frame = _has_pandas()
         return result.to_pandas() if frame else result
@@ -219,12 +220,17 @@ class Model:
         atomically."""
         self._native.generate_rust(path)
 
-    def animate(self, result, path, formulation=None, **options) -> None:
-        """Writes a self-contained HTML page that plays ``result`` (what ``simulate``
-        returned) in 3-D."""
-        from .animate import write_page
-
-        write_page(self, result, path, **options)
+    def animate(self, result, path) -> None:
+        """Writes a self-contained HTML page (no network needed to view it) that plays
+        ``result``, what ``simulate`` returned (a DataFrame or a ``Trajectory``), in 3-D: each
+        body as its equivalent inertia box, each frame as its axes, with a time slider,
+        play/pause and the time shown. ``#t=1.5`` after the page's address opens it paused at
+        t = 1.5."""
+        attrs = getattr(result, "attrs", None)
+        meta = attrs if attrs is not None and "params" in attrs else vars(result)
+        times = np.ascontiguousarray(np.asarray(result["t"], dtype=float))
+        q = np.ascontiguousarray(np.column_stack([np.asarray(result[c], dtype=float) for c in self.coordinates]))
+        self._native.animate(str(path), times, q, meta.get("formulation", ""), meta.get("params"))
 
 
 def notebook_latex(text: str) -> str:

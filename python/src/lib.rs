@@ -313,7 +313,8 @@ impl Model {
     /// One formulation integrated from `q`, `qdot` (the file's initial values by default) with
     /// the model's events: a dict of columns (`t`, each coordinate, `q'`, `state:...`, the
     /// energy and its error, `momentum:...`, the constraint residuals), each a 1-D array, and
-    /// the events, after the formulation's name. The Python package turns it into a DataFrame.
+    /// the events, after the formulation's name and before the parameters used. The Python
+    /// package turns it into a DataFrame.
     #[pyo3(signature = (formulation=None, t_end=None, dt_out=None, method=None, rtol=None, atol=None, h=None, params=None, q=None, qdot=None, t_start=None))]
     fn simulate_columns<'py>(
         &self,
@@ -329,7 +330,7 @@ impl Model {
         q: Option<&Bound<'py, PyAny>>,
         qdot: Option<&Bound<'py, PyAny>>,
         t_start: Option<f64>,
-    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>)> {
+    ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>)> {
         let kind = self.kind(formulation)?;
         let (q0, qd0) = self.initial();
         let names = &self.evaluated.coordinates;
@@ -346,12 +347,12 @@ impl Model {
         };
         let times = seam::output_times(t_start, t_end, dt_out).map_err(|e| PyValueError::new_err(format!("run settings: {e}")))?;
         let settings = settings(&self.evaluated, t_end - t_start, method, rtol, atol, h)?;
-        let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
+        let (sys, y0) = System::start(&self.evaluated, kind, params.clone(), &q, &qdot).map_err(run_error)?;
         let run = py.detach(|| runtime::trajectory::simulate(&sys, &y0, &times, &settings, &mut |_| {})).map_err(run_error)?;
         let (rows, width) = (run.rows.len(), run.columns.len());
         let table = Array2::from_shape_vec((rows, width), run.rows.concat()).expect("rows x columns").into_pyarray(py);
         let events = run.events.into_iter().map(|e| (e.name, e.t, e.q)).collect();
-        Ok((kind.name(), run.columns, table, events))
+        Ok((kind.name(), run.columns, table, events, params))
     }
 
     /// The linear model `x' = A x + B u` of `formulation` about `q`, `qdot` (the file's
@@ -392,6 +393,28 @@ impl Model {
         let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(|e| model_error(e.into()))?;
         files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;
         Ok(())
+    }
+
+    /// Writes the self-contained HTML page that plays a motion in 3-D (the `animate` crate):
+    /// `times` (T,) and the coordinates `q` (T, m) at them, with the parameters `params`.
+    #[pyo3(signature = (path, times, q, formulation="", params=None))]
+    fn animate(
+        &self,
+        path: std::path::PathBuf,
+        times: PyReadonlyArray1<'_, f64>,
+        q: PyReadonlyArray2<'_, f64>,
+        formulation: &str,
+        params: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let model = self.source.model().map_err(model_error)?;
+        let params = self.param_values(params)?;
+        let times = times.as_array().to_vec();
+        let q: Vec<f64> = q.as_array().iter().copied().collect();
+        let motion = animate::Motion { formulation, times: &times, q: &q };
+        animate::write(&path, &model, &params, &motion).map_err(|e| match e {
+            animate::AnimateError::File(e) => pyo3::exceptions::PyOSError::new_err(e.to_string()),
+            other => PyValueError::new_err(other.to_string()),
+        })
     }
 
     /// Pickled as its file name and text: a Dask worker derives it again on arrival.

@@ -1,0 +1,183 @@
+//! The motion shown: a trajectory written as one self-contained HTML page that plays it in 3-D
+//! (its script and data inside, no network needed), each body as its equivalent inertia box
+//! (the uniform box with the body's mass and principal moments, along its principal axes; a
+//! point mass as a small cube), each frame as its axes, with a time slider, play/pause and the
+//! time shown. The command line's `simulate --animate OUT.html` and the Python wheel's
+//! `Model.animate` write it.
+//!
+//! ```
+//! let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+//! let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+//! let motion = animate::Motion { formulation: "kane", times: &[0.0, 0.1], q: &[0.0, 0.0, 0.0, 0.1, 0.0, 0.2] };
+//! let html = animate::page(&model, &params, &motion).unwrap();
+//! assert!(html.starts_with("<!DOCTYPE html>") && !html.contains("/*DATA*/"));
+//! ```
+
+use generator::model::Model;
+use generator::pose::Poser;
+use nalgebra::{Matrix3, SymmetricEigen};
+
+/// The page's template: its script reads the JSON the writer puts in place of `/*DATA*/`.
+const TEMPLATE: &str = include_str!("page.html");
+
+/// A run to show: its output times and the coordinates at each, row-major (`times.len()` rows
+/// of the model's coordinates).
+pub struct Motion<'a> {
+    pub formulation: &'a str,
+    pub times: &'a [f64],
+    pub q: &'a [f64],
+}
+
+/// Why no page was written.
+#[derive(Debug, thiserror::Error)]
+pub enum AnimateError {
+    #[error("the motion has {rows} rows of {got} values for {times} times; the model has {expected} coordinates")]
+    Shape { rows: usize, got: usize, times: usize, expected: usize },
+    #[error("the motion has no samples")]
+    Empty,
+    #[error("the model's kinematics cannot be evaluated: {0}")]
+    Evaluate(#[from] generator::symbolic::eval::EvalError),
+    #[error("a coordinate is not finite at t = {t}: nothing to draw there")]
+    NotFinite { t: f64 },
+    #[error(transparent)]
+    File(#[from] files::FileError),
+}
+
+/// A body's box: half-extents along its principal axes (columns of `axes`, row-major, in its
+/// frame), from its principal moments: a box of sides `a, b, c` and mass `m` has
+/// `I_a = m (b^2 + c^2) / 12`, so `a^2 = 6 (I_b + I_c - I_a) / m`.
+///
+/// ```
+/// // A uniform rod along x: 1 kg, 2 m long, I = m L^2 / 12 about y and z.
+/// let (half, _) = animate::inertia_box(1.0, &[0.0, 0.0, 0.0, 0.0, 1.0 / 3.0, 0.0, 0.0, 0.0, 1.0 / 3.0]);
+/// assert!((half[0] - 1.0).abs() < 1e-12 && half[1] < 1e-6 && half[2] < 1e-6);
+/// ```
+pub fn inertia_box(mass: f64, inertia: &[f64; 9]) -> ([f64; 3], [f64; 9]) {
+    let m = Matrix3::from_row_slice(inertia);
+    let eigen = SymmetricEigen::new(m);
+    let moments = eigen.eigenvalues;
+    let half: [f64; 3] = std::array::from_fn(|k| {
+        let (a, b, c) = (moments[k], moments[(k + 1) % 3], moments[(k + 2) % 3]);
+        let side2 = 6.0 * (b + c - a) / mass.max(f64::MIN_POSITIVE);
+        side2.max(0.0).sqrt() / 2.0
+    });
+    let v = eigen.eigenvectors;
+    (half, std::array::from_fn(|k| v[(k / 3, k % 3)]))
+}
+
+/// The page showing `motion` of `model` with parameters `params` (the model's order).
+pub fn page(model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<String, AnimateError> {
+    let m = model.coordinates.len();
+    let rows = motion.times.len();
+    if rows == 0 {
+        return Err(AnimateError::Empty);
+    }
+    if motion.q.len() != rows * m {
+        return Err(AnimateError::Shape { rows, got: motion.q.len() / rows.max(1), times: rows, expected: m });
+    }
+    let poser = Poser::new(model, params)?;
+    let mut poses = Vec::with_capacity(rows);
+    for (i, &t) in motion.times.iter().enumerate() {
+        let q = &motion.q[i * m..(i + 1) * m];
+        if !q.iter().all(|x| x.is_finite()) {
+            return Err(AnimateError::NotFinite { t });
+        }
+        let frames = poser.frames_at(t, q)?;
+        poses.push(frames.iter().map(|p| p.origin.iter().chain(&p.rotation).map(|x| compact(*x)).collect::<Vec<_>>()).collect::<Vec<_>>());
+    }
+    let bodies: Vec<serde_json::Value> = poser
+        .bodies
+        .iter()
+        .map(|b| {
+            let (half, axes, point) = match &b.inertia {
+                Some(i) if i.iter().any(|x| *x != 0.0) => {
+                    let (half, axes) = inertia_box(b.mass, i);
+                    // A body thin along an axis (a rod) keeps a twentieth of its largest extent.
+                    let largest = half.iter().fold(0.0f64, |a, h| a.max(*h));
+                    (half.map(|h| h.max(0.05 * largest)), axes, false)
+                }
+                _ => ([0.0; 3], [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], true),
+            };
+            serde_json::json!({ "name": b.name, "frame": b.frame, "center": b.com, "half": half, "axes": axes, "point": point })
+        })
+        .collect();
+    // The vertical of the drawing: against gravity where the model has it, else z.
+    let up = match poser.gravity {
+        Some(g) if g[1].abs() > g[2].abs() && g[1].abs() >= g[0].abs() => 1,
+        _ => 2,
+    };
+    let data = serde_json::json!({
+        "model": model.name,
+        "formulation": motion.formulation,
+        "times": motion.times,
+        "frames": poser.frame_names,
+        "bodies": bodies,
+        "poses": poses,
+        "up": up,
+    });
+    // JSON inside a script element: `</` would end it, so it is written `<\/` (the same string).
+    let json = serde_json::to_string(&data).expect("plain data").replace("</", "<\\/");
+    Ok(TEMPLATE.replacen("/*DATA*/", &json, 1))
+}
+
+/// A float with the digits a drawing needs (single precision's shortest round trip).
+fn compact(x: f64) -> serde_json::Value {
+    let short: f64 = format!("{}", x as f32).parse().expect("a float prints as a float");
+    serde_json::Value::from(short)
+}
+
+/// [`page`], written to `path` atomically (through an exclusive temporary file; never over what
+/// is not a regular file).
+pub fn write(path: &std::path::Path, model: &Model, params: &[f64], motion: &Motion<'_>) -> Result<(), AnimateError> {
+    let html = page(model, params, motion)?;
+    files::write_creating_folder(path, html.as_bytes())?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cart_pendulum() -> (Model, Vec<f64>) {
+        let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+        let params = model.parameters.iter().map(|(_, v)| *v).collect();
+        (model, params)
+    }
+
+    /// The box of a body is its inertia's: its principal moments come back from the box.
+    #[test]
+    fn the_box_has_the_bodys_moments() {
+        let inertia = [2.0, 0.3, 0.0, 0.3, 1.5, 0.1, 0.0, 0.1, 1.2];
+        let mass = 3.0;
+        let (half, axes) = inertia_box(mass, &inertia);
+        let side: Vec<f64> = half.iter().map(|h| 2.0 * h).collect();
+        let moments = [(side[1].powi(2) + side[2].powi(2)), (side[0].powi(2) + side[2].powi(2)), (side[0].powi(2) + side[1].powi(2))].map(|s| mass * s / 12.0);
+        // R diag(moments) R^T is the inertia.
+        let r = Matrix3::from_row_slice(&axes);
+        let back = r * Matrix3::from_diagonal(&nalgebra::Vector3::from(moments)) * r.transpose();
+        for k in 0..9 {
+            assert!((back[(k / 3, k % 3)] - inertia[k]).abs() < 1e-12, "{back}");
+        }
+    }
+
+    /// A name that would end the script element reaches the page as data.
+    #[test]
+    fn a_name_cannot_end_the_script() {
+        let (model, params) = cart_pendulum();
+        let html = page(&model, &params, &Motion { formulation: "</script><script>alert(1)</script>", times: &[0.0], q: &[0.0; 3] }).unwrap();
+        assert!(!html.contains("</script><script>alert(1)"));
+        assert!(html.contains(r"<\/script><script>alert(1)<\/script>"));
+        assert_eq!(html.matches("</script>").count(), TEMPLATE.matches("</script>").count());
+    }
+
+    /// The wrong shape, no samples or a NaN is refused, naming why.
+    #[test]
+    fn bad_motions_are_refused() {
+        let (model, params) = cart_pendulum();
+        let e = page(&model, &params, &Motion { formulation: "kane", times: &[0.0, 1.0], q: &[0.0; 5] }).unwrap_err();
+        assert!(matches!(e, AnimateError::Shape { expected: 3, .. }), "{e}");
+        assert!(matches!(page(&model, &params, &Motion { formulation: "kane", times: &[], q: &[] }), Err(AnimateError::Empty)));
+        let e = page(&model, &params, &Motion { formulation: "kane", times: &[0.0, 0.5], q: &[0.0, 0.0, 0.0, f64::NAN, 0.0, 0.0] }).unwrap_err();
+        assert!(matches!(e, AnimateError::NotFinite { t: 0.5 }), "{e}");
+    }
+}

@@ -1,0 +1,112 @@
+//! Where the model's frames and bodies are: the symbolic kinematics evaluated at given times
+//! and coordinates (the origin and rotation of every frame in the world), and each body's
+//! mass, centre of mass and inertia as numbers, for drawing the motion.
+//!
+//! ```
+//! use generator::pose::Poser;
+//! let model = generator::model::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/cart_pendulum.ron")).unwrap();
+//! let params: Vec<f64> = model.parameters.iter().map(|(_, v)| *v).collect();
+//! let poser = Poser::new(&model, &params).unwrap();
+//! // The cart's frame follows x.
+//! let poses = poser.frames_at(0.0, &[0.0, 0.0, 1.5]).unwrap();
+//! let cart = poser.frame_names.iter().position(|n| n == "cart").unwrap();
+//! assert_eq!(poses[cart].origin, [1.5, 0.0, 0.0]);
+//! ```
+
+use crate::model::Model;
+use crate::symbolic::Expr;
+use crate::symbolic::eval::{Env, EvalError};
+
+/// A frame's place in the world: its origin, and its rotation (row-major, columns the frame's
+/// axes in world components).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    pub origin: [f64; 3],
+    pub rotation: [f64; 9],
+}
+
+/// A body's mass properties, as numbers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyValues {
+    pub name: String,
+    /// Index into [`Poser::frame_names`].
+    pub frame: usize,
+    pub mass: f64,
+    /// Centre of mass, in the frame.
+    pub com: [f64; 3],
+    /// Inertia about the centre of mass in frame components, row-major (`None`: a point mass).
+    pub inertia: Option<[f64; 9]>,
+}
+
+/// The model's frame poses as functions of `t` and `q`, with its parameters set.
+pub struct Poser {
+    /// The frames' names; the world is first.
+    pub frame_names: Vec<String>,
+    pub bodies: Vec<BodyValues>,
+    /// The gravity vector of the model's `Gravity` force, if it has one.
+    pub gravity: Option<[f64; 3]>,
+    model: Model,
+    env: Env,
+    /// Per frame, its 12 expressions: origin, then rotation row-major.
+    expressions: Vec<Expr>,
+}
+
+impl Poser {
+    /// The poser of `model` with the parameters `params` (the model's order: `parameters`).
+    pub fn new(model: &Model, params: &[f64]) -> Result<Poser, EvalError> {
+        let mut env = Env::default();
+        for ((symbol, _), value) in model.parameters.iter().zip(params) {
+            env.set(*symbol, *value);
+        }
+        for (name, body) in &model.time_functions {
+            env.define(*name, model.t, *body);
+        }
+        let mut expressions = Vec::with_capacity(12 * model.frames.len());
+        for frame in &model.frames {
+            expressions.extend(frame.origin);
+            expressions.extend(frame.rotation.data.iter().copied());
+        }
+        let number = |e: Expr| e.eval(&env);
+        let bodies = model
+            .bodies
+            .iter()
+            .map(|b| {
+                let inertia = match &b.inertia {
+                    Some(m) => {
+                        let values = Expr::eval_all(&m.data, &env)?;
+                        Some(std::array::from_fn(|k| values[k]))
+                    }
+                    None => None,
+                };
+                Ok(BodyValues {
+                    name: b.name.clone(),
+                    frame: b.frame,
+                    mass: number(b.mass)?,
+                    com: [number(b.com[0])?, number(b.com[1])?, number(b.com[2])?],
+                    inertia,
+                })
+            })
+            .collect::<Result<_, EvalError>>()?;
+        let gravity = model
+            .forces
+            .iter()
+            .find_map(|f| match f {
+                crate::model::Force::Gravity { vector } => Some(vector),
+                _ => None,
+            })
+            .map(|v| Ok::<_, EvalError>([number(v[0])?, number(v[1])?, number(v[2])?]))
+            .transpose()?;
+        Ok(Poser { frame_names: model.frames.iter().map(|f| f.name.clone()).collect(), bodies, gravity, model: model.clone(), env, expressions })
+    }
+
+    /// Every frame's pose at time `t` and coordinates `q`.
+    pub fn frames_at(&self, t: f64, q: &[f64]) -> Result<Vec<Pose>, EvalError> {
+        let mut env = self.env.clone();
+        env.set(self.model.t, t);
+        for (symbol, value) in self.model.coordinates.iter().zip(q) {
+            env.set(*symbol, *value);
+        }
+        let values = Expr::eval_all(&self.expressions, &env)?;
+        Ok(values.chunks_exact(12).map(|v| Pose { origin: [v[0], v[1], v[2]], rotation: std::array::from_fn(|k| v[3 + k]) }).collect())
+    }
+}

@@ -1,0 +1,102 @@
+"""The animation page in headless Chromium: it loads without errors, the bodies it draws at two
+times are where the trajectory puts them (the page's own state against positions computed here
+from the coordinates), and the screenshots show each body's colour at the place the page says."""
+
+import colorsys
+import json
+import math
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import multibody
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--window-size=900,650",
+]
+
+
+def chromium(tmp_path, *args):
+    assert CHROMIUM, "the browser test needs Debian's chromium (.ci/python installs it)"
+    profile = tmp_path / "profile"
+    out = subprocess.run([CHROMIUM, *FLAGS, f"--user-data-dir={profile}", *args], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+def page_state(tmp_path, url):
+    dom = chromium(tmp_path, "--dump-dom", url)
+    errors = re.search(r'<pre id="errors">(.*?)</pre>', dom, re.S).group(1)
+    assert errors.strip() == "", errors
+    return json.loads(re.search(r'<pre id="state">(.*?)</pre>', dom, re.S).group(1).replace("&quot;", '"'))
+
+
+def hue_at(image, x, y, radius=4):
+    """The hues (degrees) of the saturated pixels in a square around (x, y)."""
+    hues = []
+    for j in range(int(y) - radius, int(y) + radius + 1):
+        for i in range(int(x) - radius, int(x) + radius + 1):
+            r, g, b = image.getpixel((i, j))[:3]
+            h, s, v = colorsys.rgb_to_hsv(r / 255, g / 255, b / 255)
+            if s > 0.35 and v > 0.15:
+                hues.append(360 * h)
+    return hues
+
+
+def test_the_page_shows_the_bodies_where_the_trajectory_puts_them(tmp_path):
+    from PIL import Image
+
+    m = multibody.load("cart_pendulum")
+    run = m.simulate("kane", t_end=3.0, dt_out=0.01, frame=False)
+    path = tmp_path / "cart pendulum.html"
+    m.animate(run, path)
+    html = path.read_text()
+    # Self-contained: no address the page would fetch.
+    assert "http://" not in html and "https://" not in html and "src=" not in html
+    l = m.params["l"]
+    names = ["cart", "bar1", "bar2"]
+    for t in [0.5, 2.5]:
+        i = int(np.argmin(np.abs(run["t"] - t)))
+        url = path.as_uri() + f"#t={run['t'][i]}&size=800x520"
+        state = page_state(tmp_path, url)
+        assert state["index"] == i and math.isclose(state["t"], run["t"][i])
+        x, a, b = run["x"][i], run["theta1"][i], run["theta2"][i]
+        expected = {
+            "cart": [x, 0.0, 0.0],
+            "bar1": [x + l / 2 * math.sin(a), -l / 2 * math.cos(a), 0.0],
+            "bar2": [x + l * math.sin(a) + l / 2 * math.sin(b), -l * math.cos(a) - l / 2 * math.cos(b), 0.0],
+        }
+        assert [body["name"] for body in state["bodies"]] == names
+        for body in state["bodies"]:
+            assert np.allclose(body["center"], expected[body["name"]], atol=1e-5), (t, body)
+        shot = tmp_path / f"shot_{t}.png"
+        chromium(tmp_path, f"--screenshot={shot}", url)
+        image = Image.open(shot).convert("RGB")
+        for k, name in enumerate(names):
+            want = (30 + k * 137.508) % 360
+            px, py = state["screen"][k]
+            hues = hue_at(image, px + state["offset"][0], py + state["offset"][1])
+            close = [h for h in hues if min(abs(h - want), 360 - abs(h - want)) < 15]
+            assert len(close) >= 10, (t, name, want, hues[:20])
+    # The cart moved between the two times, and so did its place on the page.
+    assert abs(run["x"][250] - run["x"][50]) > 0.05
+
+
+def test_the_page_refuses_a_trajectory_of_another_model(tmp_path):
+    m = multibody.load("cart_pendulum")
+    other = multibody.load("three_body").simulate("kane", t_end=0.2, dt_out=0.1, frame=False)
+    with pytest.raises(KeyError):
+        m.animate(other, tmp_path / "x.html")
