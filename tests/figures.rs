@@ -276,3 +276,29 @@ fn the_goals_quote_the_pinocchio_file() {
     }
     assert_eq!(verdicts, 6);
 }
+
+/// The Python figures of the README and docs/python.md are docs/benchmarks/python.json's
+/// (`python python/benchmarks/ensemble.py` writes it, outside CI).
+#[test]
+fn the_python_figures_are_the_benchmark_file() {
+    let file = json("docs/benchmarks/python.json");
+    let first = &file["import_to_first_rhs"];
+    let runs = &file["ensemble"];
+    let number = |v: &serde_json::Value| v.as_f64().unwrap();
+    let total = format!("{:.2} s", number(&first["total_s"]));
+    let per_second = |k: &str| format!("{:.0}", number(&runs["runs_per_second"][k]));
+    let speedup = format!("{:.0} times", number(&runs["speedup_all_cores"]));
+    let readme = read("README.md");
+    let page = read("docs/python.md");
+    for (text, source) in [(&readme, "README.md"), (&page, "docs/python.md")] {
+        assert_quoted(text, &format!("takes {total}"), source);
+        assert_quoted(text, &format!("{} runs/s", per_second("solve_ivp")), source);
+    }
+    assert_quoted(&readme, &format!("runs {} runs/s", per_second("all_cores")), "README.md");
+    assert_quoted(&readme, &format!("({} on one thread)", per_second("one_thread")), "README.md");
+    assert_quoted(&readme, &format!("{speedup} a Python loop"), "README.md");
+    assert_quoted(&page, &format!("runs {} runs/s on every core and {} on one thread", per_second("all_cores"), per_second("one_thread")), "docs/python.md");
+    assert_quoted(&page, &format!("{speedup} fewer than the ensemble"), "docs/python.md");
+    // The loop and the ensemble ran the same runs.
+    assert!(number(&runs["largest_difference_at_the_end"]) < 1e-8);
+}

@@ -39,6 +39,8 @@ __all__ = [
     "loads",
     "ensemble",
     "built_in",
+    "pendulum_on_cart",
+    "floating_chain",
     "METHODS",
 ]
 
@@ -59,6 +61,18 @@ def loads(text: str, name: str = "<string>") -> "Model":
 def _restore(file: str, text: str) -> "Model":
     """The model a pickle carries, derived once per process for each text."""
     return loads(text, name=file)
+
+
+def pendulum_on_cart(n: int) -> "Model":
+    """SymPy's ``n_link_pendulum_on_cart(n)``: a cart (``q0``, ignorable) carrying n point
+    masses on massless links at absolute angles ``q1..qn``, gravity along -y."""
+    return loads(_multibody._example_text("pendulum_on_cart", n), name=f"pendulum_on_cart_{n}")
+
+
+def floating_chain(n: int) -> "Model":
+    """n rigid links on revolute joints alternating about z and y, on a free-floating base (its
+    position ignorable), no gravity: the spatial chain of the benchmarks."""
+    return loads(_multibody._example_text("floating_chain", n), name=f"floating_chain_{n}")
 
 
 class Linear(NamedTuple):

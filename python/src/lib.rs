@@ -524,6 +524,22 @@ fn _from_source(file: String, text: String) -> PyResult<Model> {
     Model::open(::load::Source { file, text })
 }
 
+/// The RON text of one of the generator's model families: `pendulum_on_cart` (SymPy's
+/// `n_link_pendulum_on_cart`: n point masses on massless links, the cart ignorable) or
+/// `floating_chain` (n rigid links on alternating revolute joints on a free-floating base).
+#[pyfunction]
+fn _example_text(family: &str, n: usize) -> PyResult<String> {
+    if !(1..=500).contains(&n) {
+        return Err(PyValueError::new_err(format!("n = {n}: a chain of 1 to 500 links")));
+    }
+    let builder = match family {
+        "pendulum_on_cart" => generator::model::examples::n_link_pendulum_on_cart(n),
+        "floating_chain" => generator::model::examples::floating_chain(n),
+        other => return Err(PyValueError::new_err(format!("no model family `{other}` (known: pendulum_on_cart, floating_chain)"))),
+    };
+    Ok(builder.to_ron())
+}
+
 /// The names of the models built into the wheel (`multibody.load(name)` takes them).
 #[pyfunction]
 fn built_in() -> Vec<&'static str> {
@@ -537,6 +553,7 @@ fn _multibody(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(loads, m)?)?;
     m.add_function(wrap_pyfunction!(_from_source, m)?)?;
     m.add_function(wrap_pyfunction!(built_in, m)?)?;
+    m.add_function(wrap_pyfunction!(_example_text, m)?)?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     m.add("ModelError", m.py().get_type::<ModelError>())?;
     m.add("SimulationError", m.py().get_type::<SimulationError>())?;
