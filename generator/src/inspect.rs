@@ -27,7 +27,8 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     let reports = &d.reports;
     let chosen = &d.ignorable;
     let s = chosen.len();
-    let show = |e: Expr| if latex { e.to_latex() } else { e.to_string() };
+    // An expression in a line of prose: inline math (`$...$`) in LaTeX.
+    let show = |e: Expr| if latex { format!("${}$", e.to_latex()) } else { e.to_string() };
     let names: Vec<String> = model.coordinates.iter().map(|q| q.name()).collect();
     let mut out = String::new();
     let w = &mut out;

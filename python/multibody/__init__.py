@@ -247,10 +247,15 @@ class Model:
         self._native.animate(str(path), times, q, meta.get("formulation", ""), meta.get("params"))
 
 
+# Characters with a meaning in LaTeX's text mode, written as themselves.
+_TEXT_ESCAPES = {c: "\\" + c for c in "{}_#$%&"}
+_TEXT_ESCAPES.update({"\\": "\\textbackslash{}", "^": "\\textasciicircum{}", "~": "\\textasciitilde{}"})
+
+
 def notebook_latex(text: str) -> str:
     """``inspect(latex=True)`` made into what a notebook renders: each
-    ``\\begin{aligned} ... \\end{aligned}`` block inside ``$$ ... $$``, the lines of text
-    between them as ``\\text{...}`` lines of their own display."""
+    ``\\begin{aligned} ... \\end{aligned}`` block inside ``$$ ... $$``, each line of text
+    between them a display of its own: its prose as ``\\text{...}``, its ``$...$`` as math."""
     out, block = [], None
     for line in text.splitlines():
         stripped = line.strip()
@@ -262,8 +267,14 @@ def notebook_latex(text: str) -> str:
         elif stripped.startswith("\\begin{aligned}"):
             block = [line]
         elif stripped:
-            escaped = "".join("\\" + c if c in "{}_^#$%&" else ("\\backslash " if c == "\\" else c) for c in stripped)
-            out.append("$$\\text{" + escaped + "}$$")
+            # Prose as text, the expressions it holds (`$...$`) as math.
+            parts = stripped.split("$")
+            pieces = [
+                "\\text{" + "".join(_TEXT_ESCAPES.get(c, c) for c in part) + "}" if k % 2 == 0 else part
+                for k, part in enumerate(parts)
+                if part
+            ]
+            out.append("$$" + " ".join(pieces) + "$$")
     return "\n".join(out)
 
 

@@ -133,6 +133,34 @@ def test_inspect_and_notebook_latex():
     assert len(blocks) > 3
 
 
+def katex(root):
+    """KaTeX from npm, in target/ (installed on first use; needs node and npm)."""
+    import shutil
+    import subprocess
+
+    folder = root / "target" / "katex"
+    module = folder / "node_modules" / "katex"
+    if not module.is_dir():
+        assert shutil.which("npm"), "the LaTeX test renders with KaTeX: it needs node and npm"
+        subprocess.run(["npm", "install", "--silent", "--prefix", str(folder), "katex@0.16"], check=True)
+    return module
+
+
+@pytest.mark.parametrize("name", ["cart_pendulum", "three_body", "rolling_disk", "tumbling_body", "winch"])
+def test_the_notebook_latex_renders(root, name):
+    """Every display block of `_repr_latex_` renders in KaTeX, strictly: the notebook shows
+    equations, not errors."""
+    import subprocess
+
+    latex = multibody.load(name)._repr_latex_()
+    # Every expression is math: no backslash is left in the prose.
+    assert "\\textbackslash" not in latex
+    script = root / "python" / "tests" / "render_latex.js"
+    out = subprocess.run(["node", str(script), str(katex(root))], input=latex, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert int(out.stdout) == latex.count("$$") // 2 > 10
+
+
 def test_generate_rust_writes_what_the_generator_writes(tmp_path, root, monkeypatch):
     import subprocess
 
