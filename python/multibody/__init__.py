@@ -302,10 +302,16 @@ def ensemble(
     states, reached = _multibody.ensemble(
         model._native, np.asarray(t_eval, dtype=float), params, q0, qdot0, formulation, method, rtol, atol, h, threads
     )
+    return _ensemble_result(states, reached, return_reached)
+
+
+def _ensemble_result(states, reached, return_reached):
+    """What ``ensemble`` returns; without ``return_reached``, a warning names the members a
+    terminal event stopped early."""
     stopped = np.flatnonzero(reached < states.shape[1])
     if stopped.size and not return_reached:
         _warnings.warn(
             f"{stopped.size} members stopped early at a terminal event (rows after it are NaN): members {stopped[:10].tolist()}",
-            stacklevel=2,
+            stacklevel=3,
         )
     return (states, reached) if return_reached else states

@@ -67,12 +67,4 @@ def ensemble(client, model, t_eval, params=None, q0=None, qdot0=None, chunk_size
     parts = client.gather(futures)
     states = np.concatenate([p[0] for p in parts])
     reached = np.concatenate([p[1] for p in parts])
-    stopped = np.flatnonzero(reached < states.shape[1])
-    if stopped.size and not return_reached:
-        import warnings
-
-        warnings.warn(
-            f"{stopped.size} members stopped early at a terminal event (rows after it are NaN): members {stopped[:10].tolist()}",
-            stacklevel=2,
-        )
-    return (states, reached) if return_reached else states
+    return multibody._ensemble_result(states, reached, return_reached)

@@ -90,6 +90,30 @@ impl Model {
         Ok(self.exact.get_or_init(|| loaded.model))
     }
 
+    /// The system of `formulation` on `model` (the plain one, or the exact-Jacobian one) and the
+    /// state `x` checked against it: what `rhs` and `jacobian` evaluate.
+    fn at(
+        &self,
+        model: &seam::Model,
+        formulation: Option<&str>,
+        x: &Bound<'_, PyAny>,
+        params: Option<&Bound<'_, PyAny>>,
+        momenta: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(System, Vec<f64>)> {
+        let kind = self.kind(formulation)?;
+        let sys = self.system(model, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
+        let x = vector(x, "x")?;
+        check_len(&x, sys.form.states(), "x")?;
+        Ok((sys, x))
+    }
+
+    /// The coordinates and rates given (by name or in order) over the file's initial values.
+    fn coordinates_and_rates(&self, q: Option<&Bound<'_, PyAny>>, qdot: Option<&Bound<'_, PyAny>>) -> PyResult<(Vec<f64>, Vec<f64>)> {
+        let (q0, qd0) = self.initial();
+        let names = &self.evaluated.coordinates;
+        Ok((named_values(q, names, &q0, "coordinate")?, named_values(qdot, names, &qd0, "coordinate rate")?))
+    }
+
     fn system(&self, model: &seam::Model, kind: FormulationKind, params: Vec<f64>, momenta: Option<Vec<f64>>) -> PyResult<System> {
         let ignorable = model.ignorable.len();
         let g_i = match momenta {
@@ -257,10 +281,7 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
         let kind = self.kind(formulation)?;
-        let (q0, qd0) = self.initial();
-        let names = &self.evaluated.coordinates;
-        let q = named_values(q, names, &q0, "coordinate")?;
-        let qdot = named_values(qdot, names, &qd0, "coordinate rate")?;
+        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
         let params = self.param_values(params)?;
         let (sys, y0) = System::start(&self.evaluated, kind, params, &q, &qdot).map_err(run_error)?;
         Ok((y0.into_pyarray(py), sys.g_i.into_pyarray(py)))
@@ -278,10 +299,7 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let kind = self.kind(formulation)?;
-        let sys = self.system(&self.evaluated, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
-        let x = vector(x, "x")?;
-        check_len(&x, sys.form.states(), "x")?;
+        let (sys, x) = self.at(&self.evaluated, formulation, x, params, momenta)?;
         let mut dx = vec![0.0; x.len()];
         sys.rhs(t, &x, &mut dx).map_err(run_error)?;
         Ok(dx.into_pyarray(py))
@@ -300,11 +318,7 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let kind = self.kind(formulation)?;
-        let exact = self.exact(py)?;
-        let sys = self.system(exact, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
-        let x = vector(x, "x")?;
-        check_len(&x, sys.form.states(), "x")?;
+        let (sys, x) = self.at(self.exact(py)?, formulation, x, params, momenta)?;
         let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &x).map_err(run_error)?;
         let n = x.len();
         Ok(Array2::from_shape_vec((n, n), jac).expect("n x n").into_pyarray(py))
@@ -332,10 +346,7 @@ impl Model {
         t_start: Option<f64>,
     ) -> PyResult<(&'static str, Vec<String>, Bound<'py, PyArray2<f64>>, Vec<(String, f64, Vec<f64>)>, Vec<f64>)> {
         let kind = self.kind(formulation)?;
-        let (q0, qd0) = self.initial();
-        let names = &self.evaluated.coordinates;
-        let q = named_values(q, names, &q0, "coordinate")?;
-        let qdot = named_values(qdot, names, &qd0, "coordinate rate")?;
+        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
         let params = self.param_values(params)?;
         let file_run = self.evaluated.run;
         let (t_start, t_end, dt_out) = match (file_run, t_end, dt_out) {
@@ -369,14 +380,8 @@ impl Model {
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<numpy::Complex64>>)> {
         let kind = self.kind(formulation)?;
         let exact = self.exact(py)?;
-        let (q0, qd0) = self.initial();
-        let names = &self.evaluated.coordinates;
-        let at = runtime::linearize::Operating {
-            q: named_values(q, names, &q0, "coordinate")?,
-            qdot: named_values(qdot, names, &qd0, "coordinate rate")?,
-            params: self.param_values(params)?,
-            held: vec![],
-        };
+        let (q, qdot) = self.coordinates_and_rates(q, qdot)?;
+        let at = runtime::linearize::Operating { q, qdot, params: self.param_values(params)?, held: vec![] };
         let linear = runtime::linearize::linearize(exact, kind, &at).map_err(run_error)?;
         let (b, _) = runtime::linearize::input_matrix(exact, kind, &at, &exact.inputs).map_err(run_error)?;
         let k = linear.a.nrows();
