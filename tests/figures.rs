@@ -302,3 +302,40 @@ fn the_python_figures_are_the_benchmark_file() {
     // The loop and the ensemble ran the same runs.
     assert!(number(&runs["largest_difference_at_the_end"]) < 1e-8);
 }
+
+/// docs/goals.md's SymEngine table is docs/scaling/symengine.json (written by
+/// `docs/scaling/symengine_pendulum.py`, outside CI), and its two verdicts follow from it.
+#[test]
+fn the_symengine_figures_are_the_script_file() {
+    let goals = read("docs/goals.md");
+    let file = json("docs/scaling/symengine.json");
+    let records = file["records"].as_array().unwrap();
+    assert!(records.len() >= 5);
+    let f = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    for r in records {
+        let row = format!(
+            "| {} | {:.2} | {:.3} | {:.2} | {} | {} | {:.2} | {} |",
+            r["n"],
+            f(r, "ours_seconds"),
+            f(r, "symengine_seconds"),
+            f(r, "time_ratio"),
+            r["ours_kane_assembly_ops"],
+            r["symengine_cse_ops"],
+            f(r, "ops_ratio"),
+            r["ours_kept_as_built"]
+        );
+        assert_quoted(&goals, &row, "docs/scaling/symengine.json");
+        assert!((f(r, "time_ratio") - f(r, "ours_seconds") / f(r, "symengine_seconds")).abs() < 1e-9);
+    }
+    let range = |k: &str| {
+        let values: Vec<f64> = records.iter().map(|r| f(r, k)).collect();
+        (values.iter().copied().fold(f64::INFINITY, f64::min), values.iter().copied().fold(0.0, f64::max))
+    };
+    let (t_lo, t_hi) = range("time_ratio");
+    let (o_lo, o_hi) = range("ops_ratio");
+    let time_met = t_hi <= 1.0;
+    let ops_met = o_hi <= 0.4 && records.iter().all(|r| r["ours_kept_as_built"] == 0);
+    let verdict = |met: bool| if met { "met" } else { "missed" };
+    assert_quoted(&goals, &format!("at most 1 at every n: {} ({t_lo:.2} to {t_hi:.2})", verdict(time_met)), "docs/scaling/symengine.json");
+    assert_quoted(&goals, &format!("no node kept as built:\n  {} ({o_lo:.2} to {o_hi:.2}", verdict(ops_met)), "docs/scaling/symengine.json");
+}

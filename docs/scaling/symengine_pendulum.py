@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""SymEngine (the C++ algebra system, through its Python package) beside our generator on the
+n-link pendulum on a cart, measured side by side and interleaved in one run; outside CI.
+
+    python3 -m venv target/peers/symengine && target/peers/symengine/bin/pip install symengine
+    cargo build --release -p generator
+    target/peers/symengine/bin/python docs/scaling/symengine_pendulum.py --sizes 5,10,20,30,40,50,60
+
+writes docs/scaling/symengine.json. For each n, alternately, `--repeats` times each, in fresh
+processes, CPU time (user + system) of:
+
+- ours: `generator MODEL.ron -o OUT.rs`, the whole generation (load, derive all four
+  formulations, Definition 1, the reduced form, emission), on the model the generator's
+  `n_link_pendulum_on_cart(n)` writes (`cargo run --release -p generator --example write_model`);
+  its Kane assembly count and the nodes its simplifier kept "as built" read from its summary;
+- SymEngine's: a direct derivation of the same system, positions -> Jacobians J ->
+  M = sum m J^T J, F = -sum m J^T (dJ/dt) q' - dV/dq, then `cse([M, F])`, counted by
+  `count_ops` over the replacements and the reduced expressions (as docs/scaling/sympy_kane.py
+  counts SymPy's).
+
+The minimum over the repeats of each is recorded, with the ratios ours / SymEngine's.
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+GENERATOR = ROOT / "target" / "release" / "generator"
+
+
+def symengine_derivation(n):
+    """SymEngine's M and F of the n-link pendulum on a cart and their CSE: (seconds, ops)."""
+    import symengine as se
+
+    start = time.process_time()
+    q = se.symbols(" ".join(f"q{i}" for i in range(n + 1)))
+    qd = se.symbols(" ".join(f"qd{i}" for i in range(n + 1)))
+    m = se.symbols(" ".join(f"m{i}" for i in range(n + 1)))
+    lengths = se.symbols(" ".join(f"l{i}" for i in range(n)))
+    g = se.Symbol("g")
+    if n == 1:
+        lengths = [lengths]
+    # The cart at (q0, 0); mass i at the end of link i-1, at the absolute angle q_i from +y.
+    positions = [(q[0], se.Integer(0))]
+    x, y = q[0], se.Integer(0)
+    for i in range(1, n + 1):
+        x = x - lengths[i - 1] * se.sin(q[i])
+        y = y + lengths[i - 1] * se.cos(q[i])
+        positions.append((x, y))
+    size = n + 1
+    mass = se.zeros(size, size)
+    forcing = se.zeros(size, 1)
+    for i, (px, py) in enumerate(positions):
+        jac = se.Matrix([[se.diff(px, qj) for qj in q], [se.diff(py, qj) for qj in q]])
+        djac = se.zeros(2, size)
+        for j in range(size):
+            djac = djac + jac.diff(q[j]) * qd[j]
+        qd_vec = se.Matrix(list(qd))
+        mass = mass + m[i] * (jac.T * jac)
+        forcing = forcing - m[i] * (jac.T * (djac * qd_vec))
+        potential = m[i] * g * py
+        forcing = forcing - se.Matrix([se.diff(potential, qj) for qj in q])
+    entries = [mass[r, c] for r in range(size) for c in range(r, size)] + [forcing[r, 0] for r in range(size)]
+    replacements, reduced = se.cse(entries)
+    seconds = time.process_time() - start
+    ops = sum(se.count_ops(e) for _, e in replacements) + sum(se.count_ops(e) for e in reduced)
+    return seconds, int(ops)
+
+
+def children_cpu():
+    usage = os.times()
+    return usage.children_user + usage.children_system
+
+
+def ours(model_file, out_file):
+    """CPU seconds of the generator's whole generation, its Kane assembly count, and the nodes
+    its simplifier kept as built."""
+    before = children_cpu()
+    done = subprocess.run([str(GENERATOR), str(model_file), "-o", str(out_file)], capture_output=True, text=True)
+    seconds = children_cpu() - before
+    if done.returncode != 0:
+        raise SystemExit(f"the generator failed on {model_file}:\n{done.stderr}")
+    kane = re.search(r"kane::rhs\s+\d+ lets, assembly (\d+) ops", done.stderr)
+    kept = re.search(r"(\d+) nodes over the term limit \(kept as built\)", done.stderr)
+    return seconds, int(kane.group(1)), int(kept.group(1)) if kept else 0
+
+
+def theirs(n):
+    """SymEngine's derivation in a fresh process: (CPU seconds measured inside, ops)."""
+    done = subprocess.run([sys.executable, __file__, "--one", str(n)], capture_output=True, text=True, check=True)
+    seconds, ops = done.stdout.split()
+    return float(seconds), int(ops)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sizes", default="5,10,20,30")
+    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    args = p.parse_args()
+    if args.one is not None:
+        seconds, ops = symengine_derivation(args.one)
+        print(seconds, ops)
+        return
+    import symengine
+
+    if not GENERATOR.is_file():
+        raise SystemExit(f"no {GENERATOR}: run `cargo build --release -p generator` first")
+    records = []
+    with tempfile.TemporaryDirectory() as folder:
+        for n in [int(s) for s in args.sizes.split(",")]:
+            model = Path(folder) / f"pendulum_on_cart_{n}.ron"
+            text = subprocess.run(
+                ["cargo", "run", "--release", "-q", "-p", "generator", "--example", "write_model", "--", "pendulum", str(n)],
+                cwd=ROOT,
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout
+            model.write_text(text)
+            mine, other = [], []
+            for _ in range(args.repeats):
+                mine.append(ours(model, Path(folder) / "out.rs"))
+                other.append(theirs(n))
+            best_ours = min(mine, key=lambda r: r[0])
+            best_theirs = min(other, key=lambda r: r[0])
+            record = {
+                "n": n,
+                "ours_seconds": best_ours[0],
+                "ours_kane_assembly_ops": best_ours[1],
+                "ours_kept_as_built": best_ours[2],
+                "symengine_seconds": best_theirs[0],
+                "symengine_cse_ops": best_theirs[1],
+                "time_ratio": best_ours[0] / best_theirs[0],
+                "ops_ratio": best_ours[1] / best_theirs[1],
+            }
+            records.append(record)
+            print(
+                f"n = {n}: ours {record['ours_seconds']:.3f} s, SymEngine {record['symengine_seconds']:.3f} s "
+                f"(ratio {record['time_ratio']:.2f}); Kane assembly {record['ours_kane_assembly_ops']} ops, "
+                f"SymEngine's cse {record['symengine_cse_ops']} (ratio {record['ops_ratio']:.2f}); "
+                f"kept as built {record['ours_kept_as_built']}",
+                file=sys.stderr,
+                flush=True,
+            )
+    out = ROOT / "docs" / "scaling" / "symengine.json"
+    document = {
+        "command": "target/peers/symengine/bin/python docs/scaling/symengine_pendulum.py --sizes " + args.sizes,
+        "symengine": symengine.__version__,
+        "repeats": args.repeats,
+        "records": records,
+    }
+    out.write_text(json.dumps(document, indent=1) + "\n")
+    print(f"wrote {out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
