@@ -90,21 +90,22 @@ impl Model {
         Ok(self.exact.get_or_init(|| loaded.model))
     }
 
-    /// The system of `formulation` on `model` (the plain one, or the exact-Jacobian one) and the
-    /// state `x` checked against it: what `rhs` and `jacobian` evaluate.
-    fn at(
+    /// What a call at a state evaluates: `formulation` of `model` (the plain one, or the
+    /// exact-Jacobian one), the parameters, the momenta, and the state `x` checked against it.
+    fn at<'m>(
         &self,
-        model: &seam::Model,
+        model: &'m seam::Model,
         formulation: Option<&str>,
         x: &Bound<'_, PyAny>,
         params: Option<&Bound<'_, PyAny>>,
         momenta: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(System, Vec<f64>)> {
+    ) -> PyResult<Call<'m>> {
         let kind = self.kind(formulation)?;
-        let sys = self.system(model, kind, self.param_values(params)?, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
+        let form = model.formulation(kind).expect("the kind is the model's");
+        let g_i = self.momenta(model, kind, momenta.map(|m| vector(m, "momenta")).transpose()?)?;
         let x = vector(x, "x")?;
-        check_len(&x, sys.form.states(), "x")?;
-        Ok((sys, x))
+        check_len(&x, form.states(), "x")?;
+        Ok(Call { model, form, params: self.param_values(params)?, g_i, x })
     }
 
     /// The coordinates and rates given (by name or in order) over the file's initial values.
@@ -114,20 +115,27 @@ impl Model {
         Ok((named_values(q, names, &q0, "coordinate")?, named_values(qdot, names, &qd0, "coordinate rate")?))
     }
 
-    fn system(&self, model: &seam::Model, kind: FormulationKind, params: Vec<f64>, momenta: Option<Vec<f64>>) -> PyResult<System> {
+    /// The conserved momenta a call is given, checked (only the reduced formulation needs them).
+    fn momenta(&self, model: &seam::Model, kind: FormulationKind, momenta: Option<Vec<f64>>) -> PyResult<Vec<f64>> {
         let ignorable = model.ignorable.len();
-        let g_i = match momenta {
-            Some(g) if g.len() == ignorable => g,
-            Some(g) => return Err(PyValueError::new_err(format!("momenta has {} values, the model has {ignorable} ignorable coordinates", g.len()))),
-            None if kind == FormulationKind::ReducedVolterra && ignorable > 0 => {
-                return Err(PyValueError::new_err(
-                    "the reduced formulation needs the conserved momenta of the ignorable coordinates: pass momenta=, the second value initial_state returns",
-                ));
-            }
-            None => vec![0.0; ignorable],
-        };
-        System::new(model, kind, params, g_i).map_err(run_error)
+        match momenta {
+            Some(g) if g.len() == ignorable => Ok(g),
+            Some(g) => Err(PyValueError::new_err(format!("momenta has {} values, the model has {ignorable} ignorable coordinates", g.len()))),
+            None if kind == FormulationKind::ReducedVolterra && ignorable > 0 => Err(PyValueError::new_err(
+                "the reduced formulation needs the conserved momenta of the ignorable coordinates: pass momenta=, the second value initial_state returns",
+            )),
+            None => Ok(vec![0.0; ignorable]),
+        }
     }
+}
+
+/// A call's formulation, parameters, momenta and state (see `Model::at`).
+struct Call<'m> {
+    model: &'m seam::Model,
+    form: &'m seam::Formulation,
+    params: Vec<f64>,
+    g_i: Vec<f64>,
+    x: Vec<f64>,
 }
 
 /// Values by name (a dict) or in order (a sequence), over `defaults`.
@@ -299,9 +307,10 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (sys, x) = self.at(&self.evaluated, formulation, x, params, momenta)?;
-        let mut dx = vec![0.0; x.len()];
-        sys.rhs(t, &x, &mut dx).map_err(run_error)?;
+        // The formulation's own function: no system (and none of its copies) per call.
+        let call = self.at(&self.evaluated, formulation, x, params, momenta)?;
+        let mut dx = vec![0.0; call.x.len()];
+        call.form.rhs(t, &call.x, &call.params, &call.g_i, &mut dx).map_err(run_error)?;
         Ok(dx.into_pyarray(py))
     }
 
@@ -318,9 +327,10 @@ impl Model {
         params: Option<&Bound<'py, PyAny>>,
         momenta: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let (sys, x) = self.at(self.exact(py)?, formulation, x, params, momenta)?;
-        let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &x).map_err(run_error)?;
-        let n = x.len();
+        let call = self.at(self.exact(py)?, formulation, x, params, momenta)?;
+        let sys = System::new(call.model, call.form.kind, call.params, call.g_i).map_err(run_error)?;
+        let (_, jac, _) = runtime::linearize::state_jacobian(&sys, t, &call.x).map_err(run_error)?;
+        let n = call.x.len();
         Ok(Array2::from_shape_vec((n, n), jac).expect("n x n").into_pyarray(py))
     }
 
