@@ -9,7 +9,6 @@ use clap::Args;
 use files::write_creating_folder as write_file;
 use runtime::system::System;
 use runtime::trajectory;
-use seam::FormulationKind;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -60,20 +59,11 @@ fn series_controller(model: &seam::Model, given: &[(String, PathBuf)]) -> Result
     Ok(Some(runtime::inputs::Controller::series(series)))
 }
 
-/// The formulation a simulation runs by default: the paper's reduced method where the model
-/// has it, else Kane's, else the first.
-fn default_kind(model: &seam::Model) -> FormulationKind {
-    [FormulationKind::ReducedVolterra, FormulationKind::Kane]
-        .into_iter()
-        .find(|k| model.formulation(*k).is_some())
-        .unwrap_or_else(|| model.formulations[0].kind)
-}
-
 pub fn simulate(args: &SimulateArgs) -> Result<(), CliError> {
     let model = crate::evaluated(&args.model, &args.run.values.param, args.run.jacobians(), load::Route::of(args.run.values.compiled))?;
     let kind = match args.formulation {
         Some(f) => formulations(&model, &[f])?[0],
-        None => default_kind(&model),
+        None => model.default_kind(),
     };
     let reference = args.run.reference(&model)?;
     let settings = args.run.settings(&model, reference.t_end - reference.t_start);

@@ -61,13 +61,7 @@ impl Model {
 
     fn kind(&self, formulation: Option<&str>) -> PyResult<FormulationKind> {
         let available = || self.evaluated.kinds().iter().map(|k| k.name()).collect::<Vec<_>>().join(", ");
-        let Some(name) = formulation else {
-            // The paper's reduced method where the model has it, else Kane's, else the first.
-            return Ok([FormulationKind::ReducedVolterra, FormulationKind::Kane]
-                .into_iter()
-                .find(|k| self.evaluated.formulation(*k).is_some())
-                .unwrap_or(self.evaluated.formulations[0].kind));
-        };
+        let Some(name) = formulation else { return Ok(self.evaluated.default_kind()) };
         match FormulationKind::from_name(name) {
             Some(k) if self.evaluated.formulation(k).is_some() => Ok(k),
             _ => Err(PyValueError::new_err(format!("model `{}` has no formulation `{name}` (it has: {})", self.evaluated.module, available()))),
@@ -87,6 +81,13 @@ impl Model {
         }
         let model = self.source.model().map_err(model_error)?;
         let loaded = py.detach(|| ::load::evaluate(&model, ::load::Jacobians::Exact { only: None }, ::load::Route::Jit, &mut |_| {})).map_err(model_error)?;
+        // What the second derivation warns of (exact Jacobians over the budget replaced by
+        // differences, for one) is news: the first load's warnings were told already.
+        let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+        for line in loaded.warnings.iter().filter(|w| !self.warnings.contains(w)) {
+            let message = std::ffi::CString::new(format!("{}: {line}", self.evaluated.name)).unwrap_or_default();
+            PyErr::warn(py, category.as_any(), &message, 1)?;
+        }
         Ok(self.exact.get_or_init(|| loaded.model))
     }
 

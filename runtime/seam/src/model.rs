@@ -200,6 +200,12 @@ impl Model {
         self.formulations.iter().find(|f| f.kind == kind)
     }
 
+    /// The formulation a run uses when none is named: the paper's reduced method where the
+    /// model has it, else Kane's, else its first.
+    pub fn default_kind(&self) -> FormulationKind {
+        [FormulationKind::ReducedVolterra, FormulationKind::Kane].into_iter().find(|k| self.formulation(*k).is_some()).unwrap_or(self.formulations[0].kind)
+    }
+
     /// The kinds the model has, in its order.
     pub fn kinds(&self) -> Vec<FormulationKind> {
         self.formulations.iter().map(|f| f.kind).collect()
