@@ -203,26 +203,48 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Refuses to write Rust over the model itself, or over any `.ron` file, unless `force`.
-fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Result<(), String> {
-    if force {
-        return Ok(());
-    }
+/// Why writing Rust to a path would replace a model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Overwrite {
+    /// The output is the model file itself.
+    ModelItself,
+    /// The output is a `.ron` file (another model, most likely).
+    RonFile,
+}
+
+/// Whether writing Rust from the model file `input` to `output` would replace a model: every
+/// front end that writes a module (`generate -o`, the wheel's `generate_rust`) asks, and words
+/// the refusal its own way.
+///
+/// ```
+/// use generator::command::{Overwrite, overwrites_a_model};
+/// use std::path::Path;
+/// assert_eq!(overwrites_a_model(Path::new("m.ron"), Path::new("m.ron")), Some(Overwrite::ModelItself));
+/// assert_eq!(overwrites_a_model(Path::new("m.ron"), Path::new("other.RON")), Some(Overwrite::RonFile));
+/// assert_eq!(overwrites_a_model(Path::new("m.ron"), Path::new("m.rs")), None);
+/// ```
+pub fn overwrites_a_model(input: &Path, output: &Path) -> Option<Overwrite> {
     let same = match (std::fs::canonicalize(input), std::fs::canonicalize(output)) {
         (Ok(a), Ok(b)) => a == b,
         _ => input == output,
     };
     if same {
-        return Err(format!(
+        return Some(Overwrite::ModelItself);
+    }
+    output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")).then_some(Overwrite::RonFile)
+}
+
+/// Refuses to write Rust over the model itself, or over any `.ron` file, unless `force`.
+fn refuse_overwriting_a_model(input: &Path, output: &Path, force: bool) -> Result<(), String> {
+    match overwrites_a_model(input, output).filter(|_| !force) {
+        None => Ok(()),
+        Some(Overwrite::ModelItself) => Err(format!(
             "error: the output `{}` is the model file itself: writing Rust there would destroy the model\n  help: give another path with -o (or --force if you mean it)",
             files::printable_path(output)
-        ));
-    }
-    if output.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
-        return Err(format!(
+        )),
+        Some(Overwrite::RonFile) => Err(format!(
             "error: the output `{}` is a `.ron` file: the generator writes Rust, and this would replace a model\n  help: write to a `.rs` path (or pass --force if you mean it)",
             files::printable_path(output)
-        ));
+        )),
     }
-    Ok(())
 }

@@ -229,10 +229,10 @@ class Model:
         model's inputs."""
         return Linear(*self._native.linearize(formulation, q, qdot, params))
 
-    def generate_rust(self, path) -> None:
+    def generate_rust(self, path, force: bool = False) -> None:
         """Writes the model's Rust module (as the ``generator`` command does) to ``path``,
-        atomically."""
-        self._native.generate_rust(path)
+        atomically; the model file itself or any ``.ron`` file is refused unless ``force``."""
+        self._native.generate_rust(path, force)
 
     def animate(self, result, path) -> None:
         """Writes a self-contained HTML page (no network needed to view it) that plays

@@ -403,8 +403,25 @@ impl Model {
     }
 
     /// Writes the model's Rust module (what `generator MODEL -o PATH` writes) to `path`,
-    /// atomically; a file already holding the same bytes is left alone.
-    fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+    /// atomically; a file already holding the same bytes is left alone. Refuses the model file
+    /// itself and any `.ron` file unless `force`.
+    #[pyo3(signature = (path, force=false))]
+    fn generate_rust(&self, py: Python<'_>, path: std::path::PathBuf, force: bool) -> PyResult<()> {
+        use generator::command::{Overwrite, overwrites_a_model};
+        let shown = files::printable_path(&path);
+        match overwrites_a_model(std::path::Path::new(&self.source.file), &path).filter(|_| !force) {
+            None => {}
+            Some(Overwrite::ModelItself) => {
+                return Err(PyValueError::new_err(format!(
+                    "`{shown}` is the model file itself: writing Rust there would destroy the model (give another path, or force=True if you mean it)"
+                )));
+            }
+            Some(Overwrite::RonFile) => {
+                return Err(PyValueError::new_err(format!(
+                    "`{shown}` is a `.ron` file: this writes Rust, and would replace a model (write to a `.rs` path, or force=True if you mean it)"
+                )));
+            }
+        }
         let model = self.source.model().map_err(model_error)?;
         let generated = py.detach(|| generator::emit::generate(&model, &generator::emit::Options::from_model(&model))).map_err(|e| model_error(e.into()))?;
         files::write_if_changed(&path, generated.code.as_bytes()).map_err(|e| pyo3::exceptions::PyOSError::new_err(e.to_string()))?;

@@ -173,6 +173,25 @@ def test_generate_rust_writes_what_the_generator_writes(tmp_path, root, monkeypa
     assert "pub fn model()" in expected
 
 
+def test_generate_rust_never_writes_over_a_model(tmp_path, root):
+    model_file = tmp_path / "mine.ron"
+    text = (root / "models" / "cart_pendulum.ron").read_text()
+    model_file.write_text(text)
+    m = multibody.load(model_file)
+    with pytest.raises(ValueError, match="the model file itself"):
+        m.generate_rust(model_file)
+    other = tmp_path / "other.ron"
+    other.write_text("kept")
+    with pytest.raises(ValueError, match="a `.ron` file"):
+        m.generate_rust(other)
+    assert model_file.read_text() == text and other.read_text() == "kept"
+    # A directory in the way is never replaced.
+    (tmp_path / "taken.rs").mkdir()
+    with pytest.raises(OSError):
+        m.generate_rust(tmp_path / "taken.rs")
+    assert (tmp_path / "taken.rs").is_dir()
+
+
 def test_linearize_the_inverted_pendulum():
     m = multibody.load("inverted_pendulum")
     lin = m.linearize("kane", q={c: 0.0 for c in m.coordinates}, qdot={c: 0.0 for c in m.coordinates})
