@@ -21,6 +21,7 @@ pub mod lagrange;
 pub mod maggi;
 pub mod mechanics;
 pub mod power;
+pub mod recursive;
 pub mod reduced;
 pub mod volterra;
 

@@ -116,6 +116,35 @@ pub struct FrameKinematics {
     pub omega: [Expr; 3],
     /// Velocity of the origin in the frame's own components.
     pub velocity: [Expr; 3],
+    /// The joint to the parent frame (`None` for the world).
+    pub joint: Option<Joint>,
+}
+
+/// How a frame moves relative to its parent: the transform and the relative velocity, in the
+/// frame's own components. `omega = R^T omega_parent + joint.omega` and
+/// `velocity = R^T (v_parent + omega_parent x t) + joint.velocity`: what a recursion over the
+/// tree (Featherstone's spatial transforms) needs.
+#[derive(Clone, Debug)]
+pub struct Joint {
+    /// Index of the parent in the model's frames (the world is 0).
+    pub parent: usize,
+    /// `R`: the frame's components to the parent's.
+    pub rotation: Matrix,
+    /// `t`: the origin's offset in the parent's components.
+    pub translation: [Expr; 3],
+    /// The angular velocity relative to the parent, own components.
+    pub omega: [Expr; 3],
+    /// `R^T t'`: the origin's velocity relative to the parent, own components.
+    pub velocity: [Expr; 3],
+}
+
+impl crate::symbolic::transfer::Transfer for Joint {
+    fn visit(&mut self, v: &mut dyn crate::symbolic::transfer::Visitor) {
+        self.rotation.visit(v);
+        self.translation.visit(v);
+        self.omega.visit(v);
+        self.velocity.visit(v);
+    }
 }
 
 impl crate::symbolic::transfer::Transfer for FrameKinematics {
@@ -124,6 +153,9 @@ impl crate::symbolic::transfer::Transfer for FrameKinematics {
         self.rotation.visit(v);
         self.omega.visit(v);
         self.velocity.visit(v);
+        if let Some(j) = &mut self.joint {
+            j.visit(v);
+        }
     }
 }
 
@@ -131,12 +163,13 @@ impl FrameKinematics {
     /// The world frame.
     pub fn world() -> FrameKinematics {
         let z = [Expr::zero(), Expr::zero(), Expr::zero()];
-        FrameKinematics { name: "world".into(), origin: z, rotation: Matrix::identity(3), omega: z, velocity: z }
+        FrameKinematics { name: "world".into(), origin: z, rotation: Matrix::identity(3), omega: z, velocity: z, joint: None }
     }
 
-    /// A child frame: this frame moved by `translation` (in this frame's components) and
-    /// turned by the elementary rotations `turns`, applied in order about the current axes.
-    pub fn child(&self, name: &str, translation: &[Expr; 3], turns: &[(Axis, Expr)], chain: &TimeChain) -> FrameKinematics {
+    /// A child frame: this frame (number `parent` in the model) moved by `translation` (in this
+    /// frame's components) and turned by the elementary rotations `turns`, applied in order
+    /// about the current axes.
+    pub fn child(&self, parent: usize, name: &str, translation: &[Expr; 3], turns: &[(Axis, Expr)], chain: &TimeChain) -> FrameKinematics {
         let offset = mat_vec(&self.rotation, translation);
         let origin = add3(&self.origin, &offset);
         let mut r_pc = Matrix::identity(3);
@@ -145,24 +178,26 @@ impl FrameKinematics {
         }
         let r_cp = r_pc.transpose();
         // omega_child = R_pc^T omega_parent + sum_k (R_{k+1}..R_n)^T e_k alpha_k'.
-        let mut omega = mat_vec(&r_cp, &self.omega);
+        let mut relative = [Expr::zero(), Expr::zero(), Expr::zero()];
         let mut tail = Matrix::identity(3);
         for (axis, angle) in turns.iter().rev() {
             let rate = chain.dt(*angle);
             let e_k = tail.transpose().col(axis.index());
-            omega = add3(&omega, &[e_k[0] * rate, e_k[1] * rate, e_k[2] * rate]);
+            relative = add3(&relative, &[e_k[0] * rate, e_k[1] * rate, e_k[2] * rate]);
             tail = rotation(*axis, *angle).mul(&tail);
         }
+        let omega = add3(&mat_vec(&r_cp, &self.omega), &relative);
         // v_child = R_pc^T (v_parent + omega_parent x t + t').
         let moving = add3(&add3(&self.velocity, &cross(&self.omega, translation)), &chain.dt3(translation));
-        FrameKinematics { name: name.to_string(), origin, rotation: self.rotation.mul(&r_pc), omega, velocity: mat_vec(&r_cp, &moving) }
+        let joint = Joint { parent, rotation: r_pc.clone(), translation: *translation, omega: relative, velocity: mat_vec(&r_cp, &chain.dt3(translation)) };
+        FrameKinematics { name: name.to_string(), origin, rotation: self.rotation.mul(&r_pc), omega, velocity: mat_vec(&r_cp, &moving), joint: Some(joint) }
     }
 
     /// A child frame: this frame moved by `translation` and turned by the unit quaternion
     /// (Euler parameters) `e = (e0, e1, e2, e3)`: `R = (e0^2 - |e_v|^2) I + 2 e_v e_v^T + 2 e0 [e_v]x`
     /// (written in squares, orthogonal where `|e| = 1`), its own angular velocity `2 G(e) e'` with
     /// `G = [-e_v, e0 I - [e_v]x]`, the relation that holds on the unit sphere.
-    pub fn child_quaternion(&self, name: &str, translation: &[Expr; 3], e: &[Expr; 4], chain: &TimeChain) -> FrameKinematics {
+    pub fn child_quaternion(&self, parent: usize, name: &str, translation: &[Expr; 3], e: &[Expr; 4], chain: &TimeChain) -> FrameKinematics {
         let [e0, e1, e2, e3] = *e;
         let two = Expr::int(2);
         let r_pc = Matrix::from_rows(vec![
@@ -177,12 +212,14 @@ impl FrameKinematics {
         let r_cp = r_pc.transpose();
         let omega = add3(&mat_vec(&r_cp, &self.omega), &own);
         let moving = add3(&add3(&self.velocity, &cross(&self.omega, translation)), &chain.dt3(translation));
+        let joint = Joint { parent, rotation: r_pc.clone(), translation: *translation, omega: own, velocity: mat_vec(&r_cp, &chain.dt3(translation)) };
         FrameKinematics {
             name: name.to_string(),
             origin: add3(&self.origin, &offset),
             rotation: self.rotation.mul(&r_pc),
             omega,
             velocity: mat_vec(&r_cp, &moving),
+            joint: Some(joint),
         }
     }
 
@@ -230,8 +267,8 @@ mod tests {
         let e = [c1 * c2 * c3 + s1 * s2 * s3, c1 * c2 * s3 - s1 * s2 * c3, c1 * s2 * c3 + s1 * c2 * s3, s1 * c2 * c3 - c1 * s2 * s3];
         let z = [Expr::zero(), Expr::zero(), Expr::zero()];
         let two = Expr::int(2);
-        let quaternion = FrameKinematics::world().child_quaternion("q", &z, &e, &chain);
-        let euler = FrameKinematics::world().child("e", &z, &[(Axis::Z, two * a), (Axis::Y, two * b), (Axis::X, two * c)], &chain);
+        let quaternion = FrameKinematics::world().child_quaternion(0, "q", &z, &e, &chain);
+        let euler = FrameKinematics::world().child(0, "e", &z, &[(Axis::Z, two * a), (Axis::Y, two * b), (Axis::X, two * c)], &chain);
         for i in 0..3 {
             for j in 0..3 {
                 let d = quaternion.rotation.get(i, j) - euler.rotation.get(i, j);
@@ -248,7 +285,7 @@ mod tests {
         let qd: Vec<Expr> = names.iter().map(|n| Expr::sym(&format!("{n}'"))).collect();
         let chain = TimeChain::new(Symbol::new("t"), q.iter().copied().zip(qd.iter().copied()).collect());
         let z = [Expr::zero(), Expr::zero(), Expr::zero()];
-        let f = FrameKinematics::world().child("m", &z, &[(Axis::Z, q[0].expr()), (Axis::Y, q[1].expr()), (Axis::X, q[2].expr())], &chain);
+        let f = FrameKinematics::world().child(0, "m", &z, &[(Axis::Z, q[0].expr()), (Axis::Y, q[1].expr()), (Axis::X, q[2].expr())], &chain);
         let (th, ph) = (q[1].expr(), q[2].expr());
         let expected = [qd[2] - th.sin() * qd[0], ph.cos() * qd[1] + ph.sin() * th.cos() * qd[0], -ph.sin() * qd[1] + ph.cos() * th.cos() * qd[0]];
         for k in 0..3 {
@@ -263,8 +300,8 @@ mod tests {
         let q: Vec<Symbol> = names.iter().map(|n| Symbol::new(n)).collect();
         let chain = TimeChain::new(Symbol::new("t"), q.iter().map(|s| (*s, Expr::sym(&format!("{}'", s.name())))).collect());
         let (l, z) = (Expr::sym("l"), Expr::zero());
-        let base = FrameKinematics::world().child("base", &[q[0].expr(), z, z], &[(Axis::Z, q[1].expr())], &chain);
-        let link = base.child("link", &[l, z, l * q[0].expr()], &[(Axis::Y, q[2].expr() - q[1].expr())], &chain);
+        let base = FrameKinematics::world().child(0, "base", &[q[0].expr(), z, z], &[(Axis::Z, q[1].expr())], &chain);
+        let link = base.child(1, "link", &[l, z, l * q[0].expr()], &[(Axis::Y, q[2].expr() - q[1].expr())], &chain);
         let world = velocity(&link.origin, &chain);
         let own = link.from_world(&world);
         for k in 0..3 {

@@ -17,8 +17,8 @@
 //! let (t, x, y, psi, phi) = (Symbol::new("t"), Symbol::new("x"), Symbol::new("y"), Symbol::new("psi"), Symbol::new("phi"));
 //! let rates: Vec<_> = [x, y, psi, phi].iter().map(|s| (*s, Symbol::new(&format!("{}'", s.name())).expr())).collect();
 //! let chain = TimeChain::new(t, rates);
-//! let heading = FrameKinematics::world().child("h", &[x.expr(), y.expr(), Expr::one()], &[(Axis::Z, psi.expr())], &chain);
-//! let disk = heading.child("d", &[Expr::zero(), Expr::zero(), Expr::zero()], &[(Axis::Y, phi.expr())], &chain);
+//! let heading = FrameKinematics::world().child(0, "h", &[x.expr(), y.expr(), Expr::one()], &[(Axis::Z, psi.expr())], &chain);
+//! let disk = heading.child(1, "d", &[Expr::zero(), Expr::zero(), Expr::zero()], &[(Axis::Y, phi.expr())], &chain);
 //! let z = Expr::zero();
 //! let c = contact(&disk, &[z, z, z], &[z, Expr::one(), z], Expr::one(), &chain);
 //! assert!(c.height.is_zero());

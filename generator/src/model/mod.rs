@@ -1086,7 +1086,7 @@ impl<'a> Builder<'a> {
             let mut still = Vec::new();
             for i in pending {
                 let f = &def.frames[i];
-                let Some(parent) = done.iter().find(|d| d.name == f.parent).cloned() else {
+                let Some(parent_index) = done.iter().position(|d| d.name == f.parent) else {
                     if !def.frames.iter().any(|g| g.name == f.parent) {
                         return Err(self.err(
                             ErrorKind::UnknownFrame,
@@ -1099,6 +1099,7 @@ impl<'a> Builder<'a> {
                     still.push(i);
                     continue;
                 };
+                let parent = done[parent_index].clone();
                 let place = format!("frames[{i}] ({})", f.name);
                 let zero = vec!["0".to_string(), "0".to_string(), "0".to_string()];
                 let translation = self.vec3(f.translation.as_ref().unwrap_or(&zero), &format!("{place}.translation"), Scope::Position)?;
@@ -1116,7 +1117,7 @@ impl<'a> Builder<'a> {
                     let e = [e0, e1, e2, e3].map(|x| self.expr(x, &format!("{rp}[0]"), Scope::Position));
                     let [e0, e1, e2, e3] = e;
                     let e = [e0?, e1?, e2?, e3?];
-                    done.push(parent.child_quaternion(&f.name, &translation, &e, chain));
+                    done.push(parent.child_quaternion(parent_index, &f.name, &translation, &e, chain));
                     continue;
                 }
                 let mut turns = Vec::new();
@@ -1134,7 +1135,7 @@ impl<'a> Builder<'a> {
                         }
                     }
                 }
-                done.push(parent.child(&f.name, &translation, &turns, chain));
+                done.push(parent.child(parent_index, &f.name, &translation, &turns, chain));
             }
             if still.len() == before {
                 let names: Vec<&str> = still.iter().map(|i| def.frames[*i].name.as_str()).collect();

@@ -1,0 +1,477 @@
+//! Kane's equations of a tree of frames by recursion over the tree, as straight-line
+//! definitions instead of one symbolic expression per matrix entry.
+//!
+//! The dense form writes each entry of `M_K = sum_k Phi_k^T I_k Phi_k` (`Phi_k` the partial
+//! spatial velocities of frame `k` by the quasi-velocities) as its own sum over the bodies beyond
+//! both joints: `O(n^3)` operations on a chain of `n` links. Here the same matrix comes from
+//! the composite-rigid-body algorithm (Featherstone, *Rigid Body Dynamics Algorithms*, 6.2) and
+//! the inertia forces from the recursive Newton-Euler algorithm (5.3), generalized to any
+//! quasi-velocities `u` with `q' = W u + X`:
+//!
+//! - each frame's velocity relative to its parent, in its own components, is
+//!   `v_rel = S_k u + s_k` (`S_k` a 6 x p matrix with few nonzero columns on a tree of joints);
+//! - forward: `V_k = X_k V_parent + v_rel`, `a_k = X_k a_parent + V_k x v_rel + d/dt v_rel` at
+//!   `u' = 0` (spatial velocity and acceleration in own components);
+//! - backward: the composite inertia `I^c_k = I_k + sum_children X^T I^c X` and the composite
+//!   force `f^c_k = I_k a_k + V_k x* I_k V_k + sum_children X^T f^c`;
+//! - `M_K = sum_a [S_a^T I^c_a S_a + sum_{b ancestor of a} (S_b^T X_{a->b}^* I^c_a S_a + transpose)]`
+//!   and `L_K = U_K - sum_k S_k^T f^c_k` (`U_K = W^T (Q - dV/dq)` as the dense form has it).
+//!
+//! `O(n^2)` operations for the matrix of a chain and `O(n)` for the forcing. Each vector the
+//! recursion forms becomes a named intermediate ([`Recursion::definitions`]): the symbolic core
+//! flattens sums, and a flattened composite inertia would be the dense form again. Emission
+//! keeps whichever assembly takes fewer operations ([`crate::emit`]).
+//!
+//! ```
+//! use generator::formulation::{mechanics, recursive, volterra};
+//! let model = generator::model::load("../models/three_body.ron").unwrap();
+//! let mech = mechanics::derive(&model);
+//! let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+//! let r = recursive::derive(&model, &mech, &kane).unwrap();
+//! assert_eq!((r.mass.rows, r.forcing.len()), (8, 8));
+//! assert!(!r.definitions.is_empty());
+//! ```
+
+use super::mechanics::Mechanics;
+use super::volterra::Volterra;
+use crate::kinematics::{Joint, TimeChain, add3, cross, dot, mat_vec};
+use crate::model::Model;
+use crate::symbolic::transfer::{Transfer, Visitor};
+use crate::symbolic::{Expr, Matrix, Symbol};
+use std::collections::HashMap;
+
+/// The mass matrix and forcing of Kane's equations as a program: `definitions` evaluated in
+/// order, then `mass` and `forcing` in terms of them, the state, the parameters and `t`.
+#[derive(Clone, Debug)]
+pub struct Recursion {
+    /// Intermediate values, each defined from the inputs and earlier ones.
+    pub definitions: Vec<(Symbol, Expr)>,
+    /// `M_K` (symmetric), in the definitions.
+    pub mass: Matrix,
+    /// `L_K`, in the definitions.
+    pub forcing: Vec<Expr>,
+}
+
+impl Transfer for Recursion {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        for (s, e) in &mut self.definitions {
+            s.visit(v);
+            e.visit(v);
+        }
+        self.mass.visit(v);
+        self.forcing.visit(v);
+    }
+}
+
+impl Recursion {
+    /// `mass` and `forcing` with the definitions substituted back: the dense form's values.
+    pub fn expanded(&self) -> (Matrix, Vec<Expr>) {
+        let mut map: HashMap<Symbol, Expr> = HashMap::new();
+        for (s, e) in &self.definitions {
+            let value = e.subs(&map);
+            map.insert(*s, value);
+        }
+        (self.mass.map(|e| e.subs(&map)), Expr::subs_all(&self.forcing, &map))
+    }
+}
+
+/// A spatial motion vector `(omega, v)` at a frame's origin, in its components.
+#[derive(Clone, Copy, Debug)]
+struct Motion {
+    w: [Expr; 3],
+    v: [Expr; 3],
+}
+
+/// A spatial force `(n, f)`: the moment about a frame's origin and the force.
+#[derive(Clone, Copy, Debug)]
+struct Force {
+    n: [Expr; 3],
+    f: [Expr; 3],
+}
+
+/// A spatial inertia about a frame's origin: mass, first moment `h = m c`, and the inertia
+/// matrix about the origin (symmetric).
+#[derive(Clone, Debug)]
+struct Inertia {
+    m: Expr,
+    h: [Expr; 3],
+    i: Matrix,
+}
+
+fn zero3() -> [Expr; 3] {
+    [Expr::zero(), Expr::zero(), Expr::zero()]
+}
+
+fn scale3(k: Expr, a: &[Expr; 3]) -> [Expr; 3] {
+    a.map(|x| if x.is_zero() || k.is_zero() { Expr::zero() } else { k * x })
+}
+
+fn sub3(a: &[Expr; 3], b: &[Expr; 3]) -> [Expr; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+impl Motion {
+    fn is_zero(&self) -> bool {
+        self.w.iter().chain(&self.v).all(|e| e.is_zero())
+    }
+    /// This motion (the parent's) seen in the child's components at its origin.
+    fn to_child(&self, joint: &Joint) -> Motion {
+        let rt = joint.rotation.transpose();
+        Motion { w: mat_vec(&rt, &self.w), v: mat_vec(&rt, &add3(&self.v, &cross(&self.w, &joint.translation))) }
+    }
+    fn add(&self, o: &Motion) -> Motion {
+        Motion { w: add3(&self.w, &o.w), v: add3(&self.v, &o.v) }
+    }
+    /// The spatial cross product `self x m` of two motions.
+    fn cross_motion(&self, m: &Motion) -> Motion {
+        Motion { w: cross(&self.w, &m.w), v: add3(&cross(&self.w, &m.v), &cross(&self.v, &m.w)) }
+    }
+    /// The spatial cross product `self x* f` of a motion and a force.
+    fn cross_force(&self, f: &Force) -> Force {
+        Force { n: add3(&cross(&self.w, &f.n), &cross(&self.v, &f.f)), f: cross(&self.w, &f.f) }
+    }
+    /// The power `self . f`.
+    fn power(&self, f: &Force) -> Expr {
+        dot(&self.w, &f.n) + dot(&self.v, &f.f)
+    }
+}
+
+impl Force {
+    fn zero() -> Force {
+        Force { n: zero3(), f: zero3() }
+    }
+    fn is_zero(&self) -> bool {
+        self.n.iter().chain(&self.f).all(|e| e.is_zero())
+    }
+    fn add(&self, o: &Force) -> Force {
+        Force { n: add3(&self.n, &o.n), f: add3(&self.f, &o.f) }
+    }
+    /// This force (the child's) in the parent's components, about its origin.
+    fn to_parent(&self, joint: &Joint) -> Force {
+        let f = mat_vec(&joint.rotation, &self.f);
+        Force { n: add3(&mat_vec(&joint.rotation, &self.n), &cross(&joint.translation, &f)), f }
+    }
+}
+
+impl Inertia {
+    fn zero() -> Inertia {
+        Inertia { m: Expr::zero(), h: zero3(), i: Matrix::zeros(3, 3) }
+    }
+    fn is_zero(&self) -> bool {
+        self.m.is_zero() && self.h.iter().all(|e| e.is_zero()) && self.i.data.iter().all(|e| e.is_zero())
+    }
+    /// A body of mass `m` with its centre of mass at `c` and inertia `ic` about it.
+    fn body(m: Expr, c: &[Expr; 3], ic: Option<&Matrix>) -> Inertia {
+        let h = scale3(m, c);
+        let mut i = ic.cloned().unwrap_or_else(|| Matrix::zeros(3, 3));
+        // Parallel axes: + m (|c|^2 1 - c c^T).
+        for r in 0..3 {
+            for s in 0..3 {
+                let mut e = -(c[r] * c[s]);
+                if r == s {
+                    e = e + dot(c, c);
+                }
+                i.set(r, s, i.get(r, s) + m * e);
+            }
+        }
+        Inertia { m, h, i }
+    }
+    fn add(&self, o: &Inertia) -> Inertia {
+        Inertia { m: self.m + o.m, h: add3(&self.h, &o.h), i: self.i.add(&o.i) }
+    }
+    /// `I v`: the momentum `(I_o w + h x v, m v - h x w)` of the motion `v`.
+    fn apply(&self, v: &Motion) -> Force {
+        Force { n: add3(&mat_vec(&self.i, &v.w), &cross(&self.h, &v.v)), f: sub3(&scale3(self.m, &v.v), &cross(&self.h, &v.w)) }
+    }
+    /// This inertia (the child's) about the parent's origin, in its components:
+    /// `X^T I X` = `h' = R h + m t`, `I' = R I R^T + m (|t|^2 1 - t t^T) + 2 (t . Rh) 1 - Rh t^T - t Rh^T`.
+    fn to_parent(&self, joint: &Joint) -> Inertia {
+        let r = &joint.rotation;
+        let t = &joint.translation;
+        let rh = mat_vec(r, &self.h);
+        let h = add3(&rh, &scale3(self.m, t));
+        let mut i = r.mul(&self.i).mul(&r.transpose());
+        let tt = dot(t, t);
+        let th = dot(t, &rh);
+        for a in 0..3 {
+            for b in 0..3 {
+                let mut e = -(self.m * t[a] * t[b]) - rh[a] * t[b] - t[a] * rh[b];
+                if a == b {
+                    e = e + self.m * tt + Expr::int(2) * th;
+                }
+                i.set(a, b, i.get(a, b) + e);
+            }
+        }
+        Inertia { m: self.m, h, i }
+    }
+}
+
+/// The definitions under construction.
+struct Program {
+    definitions: Vec<(Symbol, Expr)>,
+}
+
+impl Program {
+    /// `e` as a named intermediate (numbers and symbols as they are).
+    fn bind(&mut self, e: Expr) -> Expr {
+        if e.as_num().is_some() || e.as_sym().is_some() {
+            return e;
+        }
+        let s = Symbol::internal(&format!("rec{}", self.definitions.len()));
+        self.definitions.push((s, e));
+        s.expr()
+    }
+    fn bind3(&mut self, v: [Expr; 3]) -> [Expr; 3] {
+        v.map(|e| self.bind(e))
+    }
+    fn motion(&mut self, m: Motion) -> Motion {
+        Motion { w: self.bind3(m.w), v: self.bind3(m.v) }
+    }
+    fn force(&mut self, f: Force) -> Force {
+        Force { n: self.bind3(f.n), f: self.bind3(f.f) }
+    }
+    fn inertia(&mut self, i: Inertia) -> Inertia {
+        let m = self.bind(i.m);
+        let h = self.bind3(i.h);
+        let mut out = Matrix::zeros(3, 3);
+        for a in 0..3 {
+            for b in a..3 {
+                let e = self.bind(i.i.get(a, b));
+                out.set(a, b, e);
+                out.set(b, a, e);
+            }
+        }
+        Inertia { m, h, i: out }
+    }
+}
+
+/// One frame's joint in the quasi-velocities: `v_rel = S u + s` with its columns.
+struct JointRates {
+    /// `v_rel` in `(q, u, t)`.
+    relative: Motion,
+    /// `(column, S[:, column])` for the columns not identically zero.
+    columns: Vec<(usize, Motion)>,
+    /// `d/dt v_rel` at `u' = 0`.
+    drift: Motion,
+}
+
+/// Kane's equations of `model` by the recursion over its frames, from its Kane form `kane`
+/// (for `q' = W u + X` and the applied forces `U_K`). `None` when no frame moves a body.
+pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recursion> {
+    let tidy = &mech.tidy;
+    let frames = &model.frames;
+    let p = kane.u.len();
+    let to_u: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(kane.qdot.iter().copied()).collect();
+    let chain = TimeChain::new(model.t, model.coordinates.iter().copied().zip(kane.qdot.iter().copied()).collect());
+    // The tree: the model's frames, then one node per body whose centre of mass moves in its
+    // frame (a point on a boom), joined to the frame by that motion.
+    let by_rates = TimeChain::new(model.t, model.coordinates.iter().zip(&model.velocities).map(|(q, v)| (*q, v.expr())).collect());
+    let mut joints: Vec<Option<Joint>> = frames.iter().map(|f| f.joint.clone()).collect();
+    let mut own: Vec<Inertia> = vec![Inertia::zero(); frames.len()];
+    for b in &model.bodies {
+        let moves = b.com.iter().any(|e| e.contains(model.t) || model.coordinates.iter().any(|q| e.contains(*q)));
+        if moves {
+            joints.push(Some(Joint { parent: b.frame, rotation: Matrix::identity(3), translation: b.com, omega: zero3(), velocity: by_rates.dt3(&b.com) }));
+            own.push(Inertia::body(b.mass, &zero3(), b.inertia.as_ref()));
+        } else {
+            own[b.frame] = own[b.frame].add(&Inertia::body(b.mass, &b.com, b.inertia.as_ref()));
+        }
+    }
+    let nodes = joints.len();
+    // Nodes carrying mass in their subtree (the others need no recursion).
+    let mut massive: Vec<bool> = own.iter().map(|i| !i.is_zero()).collect();
+    for k in (1..nodes).rev() {
+        if massive[k] {
+            let parent = joints[k].as_ref()?.parent;
+            massive[parent] = true;
+        }
+    }
+    if !(1..nodes).any(|k| massive[k]) {
+        return None;
+    }
+    let rates: Vec<Option<JointRates>> = joints
+        .iter()
+        .enumerate()
+        .map(|(k, joint)| {
+            let joint = joint.as_ref()?;
+            if !massive[k] {
+                return None;
+            }
+            let in_u = |v: &[Expr; 3]| -> [Expr; 3] { v.map(|e| tidy.rational(e.subs(&to_u))) };
+            let relative = Motion { w: in_u(&joint.omega), v: in_u(&joint.velocity) };
+            let columns: Vec<(usize, Motion)> = (0..p)
+                .filter_map(|c| {
+                    let u = kane.u[c];
+                    let d = |v: &[Expr; 3]| v.map(|e| tidy.rational(e.diff(u)));
+                    let col = Motion { w: d(&relative.w), v: d(&relative.v) };
+                    (!col.is_zero()).then_some((c, col))
+                })
+                .collect();
+            let drift = Motion { w: relative.w.map(|e| tidy.of(chain.dt(e))), v: relative.v.map(|e| tidy.of(chain.dt(e))) };
+            Some(JointRates { relative, columns, drift })
+        })
+        .collect();
+    let mut prog = Program { definitions: Vec::new() };
+    // Forward: velocities and accelerations at u' = 0.
+    let still = Motion { w: zero3(), v: zero3() };
+    let mut velocity = vec![still; nodes];
+    let mut accel = vec![still; nodes];
+    for k in 1..nodes {
+        let (Some(joint), Some(r)) = (joints[k].as_ref(), rates[k].as_ref()) else { continue };
+        let (vp, ap) = (velocity[joint.parent], accel[joint.parent]);
+        let v = prog.motion(vp.to_child(joint).add(&r.relative));
+        let a = ap.to_child(joint).add(&v.cross_motion(&r.relative)).add(&r.drift);
+        velocity[k] = v;
+        accel[k] = prog.motion(a);
+    }
+    // Backward: composite inertias and forces.
+    let mut composite: Vec<Inertia> = own.clone();
+    let mut forces: Vec<Force> = vec![Force::zero(); nodes];
+    for k in 1..nodes {
+        if !own[k].is_zero() {
+            let i = &own[k];
+            let v = velocity[k];
+            forces[k] = i.apply(&accel[k]).add(&v.cross_force(&i.apply(&v)));
+        }
+    }
+    for k in (1..nodes).rev() {
+        let Some(joint) = joints[k].as_ref() else { continue };
+        if !massive[k] {
+            continue;
+        }
+        composite[k] = prog.inertia(composite[k].clone());
+        forces[k] = prog.force(forces[k]);
+        if joint.parent != 0 {
+            composite[joint.parent] = composite[joint.parent].add(&composite[k].to_parent(joint));
+            forces[joint.parent] = forces[joint.parent].add(&forces[k].to_parent(joint));
+        }
+    }
+    // L_K = U_K - sum_k S_k^T f^c_k.
+    let mut forcing: Vec<Vec<Expr>> = kane.u_ni.iter().map(|e| vec![*e]).collect();
+    // M_K from the composite inertias, walking each joint's columns up to the root.
+    let mut mass: Vec<Vec<Vec<Expr>>> = vec![vec![Vec::new(); p]; p];
+    for a in 1..nodes {
+        let Some(r) = rates[a].as_ref() else { continue };
+        for (c, s) in &r.columns {
+            forcing[*c].push(-s.power(&forces[a]));
+        }
+        let mut carried: Vec<(usize, Force)> = r.columns.iter().map(|(c, s)| (*c, prog.force(composite[a].apply(s)))).collect();
+        for (c, f) in &carried {
+            for (d, s) in &r.columns {
+                mass[*d][*c].push(s.power(f));
+            }
+        }
+        let mut j = a;
+        loop {
+            let joint = joints[j].as_ref().expect("a frame below the world has a joint");
+            let parent = joint.parent;
+            if parent == 0 {
+                break;
+            }
+            carried = carried.into_iter().map(|(c, f)| (c, if f.is_zero() { f } else { prog.force(f.to_parent(joint)) })).collect();
+            if let Some(rp) = rates[parent].as_ref() {
+                for (c, f) in &carried {
+                    for (d, s) in &rp.columns {
+                        let e = s.power(f);
+                        mass[*d][*c].push(e);
+                        mass[*c][*d].push(e);
+                    }
+                }
+            }
+            j = parent;
+        }
+    }
+    let mut m = Matrix::zeros(p, p);
+    for (d, row) in mass.into_iter().enumerate() {
+        for (c, terms) in row.into_iter().enumerate() {
+            m.set(d, c, Expr::sum(terms));
+        }
+    }
+    Some(Recursion { definitions: prog.definitions, mass: m, forcing: forcing.into_iter().map(Expr::sum).collect() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formulation::mechanics;
+    use crate::formulation::volterra;
+    use crate::symbolic::eval::Env;
+
+    /// A deterministic generator of test values (SplitMix64).
+    fn next(state: &mut u64) -> f64 {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    /// The recursion gives the dense form's `M_K` and `L_K` at random states of every model
+    /// with frames (values of the coordinates, quasi-velocities, parameters and `t`).
+    fn agrees(path: &str) {
+        let model = crate::model::load(path).unwrap();
+        let mech = mechanics::derive(&model);
+        let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        let r = derive(&model, &mech, &kane).expect("a tree of frames with bodies");
+        let mut seed = 7u64;
+        for _ in 0..3 {
+            let mut env = Env::default();
+            for (s, v) in &model.parameters {
+                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
+            }
+            env.set(crate::symbolic::Symbol::new("pi"), std::f64::consts::PI);
+            for (f, body) in &model.time_functions {
+                env.define(*f, model.t, *body);
+            }
+            env.set(model.t, next(&mut seed));
+            for q in model.coordinates.iter().chain(&kane.u) {
+                env.set(*q, next(&mut seed));
+            }
+            // Euler parameters on the unit sphere, where their kinematics hold.
+            let unit: Vec<Symbol> = ["e0", "e1", "e2", "e3"].iter().filter_map(|n| model.coordinates.iter().copied().find(|q| q.name() == *n)).collect();
+            let norm = unit.iter().map(|q| env.get(*q).unwrap().powi(2)).sum::<f64>().sqrt();
+            for q in &unit {
+                env.set(*q, env.get(*q).unwrap() / norm);
+            }
+            for (s, e) in &r.definitions {
+                let v = e.eval(&env).unwrap();
+                env.set(*s, v);
+            }
+            let p = kane.u.len();
+            for i in 0..p {
+                let want = kane.l_ni[i].eval(&env).unwrap();
+                let got = r.forcing[i].eval(&env).unwrap();
+                assert!((want - got).abs() <= 1e-10 * (1.0 + want.abs()), "{path}: L[{i}] {got} against {want}");
+                for j in 0..p {
+                    let want = kane.mass_ni.get(i, j).eval(&env).unwrap();
+                    let got = r.mass.get(i, j).eval(&env).unwrap();
+                    assert!((want - got).abs() <= 1e-10 * (1.0 + want.abs()), "{path}: M[{i}][{j}] {got} against {want}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_recursion_gives_the_dense_mass_matrix_and_forcing() {
+        for name in [
+            "three_body",
+            "satellite_boom",
+            "cart_pendulum",
+            "pendulum_on_cart_5",
+            "three_body_quaternion",
+            "satellite_boom_quaternion",
+            "tumbling_body",
+            "rolling_disk",
+            "winch",
+            "bouncing_ball",
+            "cartesian_pendulum",
+            "inverted_pendulum",
+            "spring_cart",
+            "stiff_pendulum",
+            "bicycle",
+        ] {
+            agrees(&format!("../models/{name}.ron"));
+        }
+    }
+}
