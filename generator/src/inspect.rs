@@ -17,12 +17,14 @@ use std::fmt::Write;
 pub fn inspect(model: &Model, latex: bool) -> Result<String, ModelError> {
     crate::model::in_own_context(model, |model| {
         let d = crate::formulation::derive(model, &Request::all())?;
-        Ok(report(model, &d, latex))
+        let assemblies = crate::emit::assembly::describe(model, &d, &crate::emit::Options::from_model(model))?;
+        Ok(report(model, &d, &assemblies, latex))
     })
 }
 
-/// The report of a derivation, as text or LaTeX.
-pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
+/// The report of a derivation, as text or LaTeX, with each formulation's assembly as
+/// [`crate::emit::assembly::describe`] gives it.
+pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], latex: bool) -> String {
     let mech = &d.mechanics;
     let reports = &d.reports;
     let chosen = &d.ignorable;
@@ -49,9 +51,10 @@ pub fn report(model: &Model, d: &Derivation, latex: bool) -> String {
     for e in &d.equations {
         let _ = writeln!(w, "  {:<17} {:>3} states, {:>3} equations", e.name(), e.states(work), e.equations);
     }
-    let _ = writeln!(w, "\nhow each right-hand side solves its matrix (the plan the emitted code and the evaluator follow):");
+    let _ = writeln!(w, "\nhow each right-hand side assembles and solves its matrix (the plan the emitted code and the evaluator follow):");
     for e in &d.equations {
-        let _ = writeln!(w, "  {:<17} {}: {}", e.name(), e.matrix_name, crate::emit::ldl::Solve::for_equations(e).describe());
+        let assembly = assemblies.iter().find(|(name, _)| name == e.name()).map_or(String::new(), |(_, how)| format!("; {how}"));
+        let _ = writeln!(w, "  {:<17} {}: {}{assembly}", e.name(), e.matrix_name, crate::emit::ldl::Solve::for_equations(e).describe());
     }
     let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];
     section(w, "energies:", &mut items, latex);

@@ -24,9 +24,15 @@ fn is_leaf(e: Expr) -> bool {
 
 /// The subexpressions to bind, in an order where each comes after everything it uses.
 pub fn plan(outputs: &[Expr]) -> Vec<Expr> {
+    plan_with(outputs, &FxHashSet::default())
+}
+
+/// [`plan`], binding every node of `forced` too (the named intermediates of a recursion,
+/// which later outputs read by name).
+pub fn plan_with(outputs: &[Expr], forced: &FxHashSet<Expr>) -> Vec<Expr> {
     let order = post_order(outputs);
     let mut uses: HashMap<Expr, usize> = HashMap::default();
-    let mut force = FxHashSet::default();
+    let mut force = forced.clone();
     for e in outputs {
         *uses.entry(*e).or_default() += 1;
     }

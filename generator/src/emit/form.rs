@@ -15,6 +15,14 @@ use super::shared::FromMechanics;
 use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::{Expr, Symbol};
+
+/// A right-hand side's chosen assembly: its body, what it reads (to decide whether it reads
+/// `t`) and the summary's description of the choice.
+pub(super) struct Assembled {
+    pub body: super::function::Body,
+    pub reads: Vec<Expr>,
+    pub description: String,
+}
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::{BTreeSet, HashMap};
@@ -106,7 +114,7 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let checks = self.runtime_factors(f);
-        let (assemble, depends_on_time, solve) = self.assemble(f, shared, &checks)?;
+        let (assemble, depends_on_time, solve, assembly) = self.assemble(f, shared, &checks)?;
         let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
@@ -117,7 +125,7 @@ impl Emitter<'_> {
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
-        self.forms.push((name.to_string(), n_states, f.equations, solve.describe()));
+        self.forms.push((name.to_string(), n_states, f.equations, format!("{}; {assembly}", solve.describe())));
         let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
@@ -175,21 +183,27 @@ impl Emitter<'_> {
     /// `W` and `c`, and the power `Q . q'` when forces do work (with the moving constraints'
     /// power's offset, then its weights on the solution, [`crate::formulation::power`]).
     pub(super) fn rate_outputs(&self, f: &Equations, shared: &FromMechanics) -> Vec<Expr> {
+        self.rate_outputs_of(f, shared, (&f.qdot, &f.mass, &f.forcing))
+    }
+
+    /// [`Emitter::rate_outputs`] with the rates, matrix and forcing given (the dense form's or
+    /// the recursion's).
+    fn rate_outputs_of(&self, f: &Equations, shared: &FromMechanics, (qdot, mass, forcing): (&[Expr], &crate::symbolic::Matrix, &[Expr])) -> Vec<Expr> {
         let model = self.model;
-        let n = f.mass.rows;
-        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
+        let n = mass.rows;
+        let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| qdot[j]).collect();
         for i in 0..n {
             for j in 0..n {
-                outputs.push(f.mass.get(i.min(j), i.max(j)));
+                outputs.push(mass.get(i.min(j), i.max(j)));
             }
         }
-        outputs.extend(f.forcing.iter().copied());
+        outputs.extend(forcing.iter().copied());
         if let Some((w, c)) = &f.post {
             outputs.extend(w.data.iter().copied());
             outputs.extend(c.iter().copied());
         }
         if self.work {
-            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(f.qdot.iter().copied()).collect();
+            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
             let offset = f.constraint_power.as_ref().map_or(Expr::zero(), |(_, offset)| *offset);
             outputs.push(shared.power.subs(&to_qdot) + offset);
             if let Some((weights, _)) = &f.constraint_power {
@@ -199,9 +213,48 @@ impl Emitter<'_> {
         outputs
     }
 
+    /// The right-hand side's body: the dense form's entries, or the recursion over the tree of
+    /// frames where its body takes fewer operations ([`super::assembly::prefers_recursion`]).
+    pub(super) fn assembly(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<Assembled, ModelError> {
+        let rhs_name = format!("{}::rhs", f.name());
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
+        // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
+        // the constraint residuals for Baumgarte.
+        let tail = |mut outputs: Vec<Expr>| {
+            outputs.extend(checks.iter().copied());
+            if let Some(stab) = &f.stabilization {
+                outputs.extend(stab.iter().map(|(r, _)| *r));
+                outputs.extend(stab.iter().map(|(_, p)| *p));
+            }
+            outputs
+        };
+        // What decides whether the right-hand side reads `t`: the rates, matrix, forcing and
+        // checks it assembles (not the stabilization's residuals).
+        let reads: Vec<Expr> = self.rate_outputs(f, shared).into_iter().chain(checks.iter().copied()).collect();
+        let dense = tail(self.rate_outputs(f, shared));
+        let body = self.trial_body(&rhs_name, &[], &dense, &inputs, &args)?;
+        let Some(r) = &f.recursion else {
+            let description = format!("assembly: dense entries, {} operations", body.ops.total());
+            return Ok(Assembled { body, reads, description });
+        };
+        let rates = self.rate_outputs_of(f, shared, (&r.qdot, &r.mass, &r.forcing));
+        let recursive = self.trial_body(&rhs_name, &r.definitions, &tail(rates.clone()), &inputs, &args)?;
+        let (by_tree, by_entries) = (recursive.ops.total(), body.ops.total());
+        if super::assembly::prefers_recursion(by_tree, by_entries) {
+            let reads = rates.into_iter().chain(checks.iter().copied()).chain(r.definitions.iter().map(|(_, e)| *e)).collect();
+            let description = format!("assembly: recursion over the tree of frames, {by_tree} operations (dense entries: {by_entries})");
+            Ok(Assembled { body: recursive, reads, description })
+        } else {
+            let description = format!("assembly: dense entries, {by_entries} operations (recursion over the tree of frames: {by_tree})");
+            Ok(Assembled { body, reads, description })
+        }
+    }
+
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`,
     /// whether the right-hand side reads `t` (decided on the same outputs), and how it solves.
-    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool, Solve), ModelError> {
+    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool, Solve, String), ModelError> {
         let model = self.model;
         let name = f.name();
         let work = self.work;
@@ -210,19 +263,11 @@ impl Emitter<'_> {
         let n_speeds = f.speeds.len();
         let n = f.mass.rows;
         let args = state_args();
-        let inputs = self.state_inputs(f);
-        // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
-        // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
-        // the constraint residuals for Baumgarte.
-        let mut outputs = self.rate_outputs(f, shared);
-        outputs.extend(checks.iter().copied());
+        let rhs_name = format!("{name}::rhs");
+        let Assembled { body: b, reads, description: assembly } = self.assembly(f, shared, checks)?;
         let t = model.t;
-        let depends_on_time = outputs.iter().any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
-        if let Some(stab) = &f.stabilization {
-            outputs.extend(stab.iter().map(|(r, _)| *r));
-            outputs.extend(stab.iter().map(|(_, p)| *p));
-        }
-        let b = self.body(&format!("{name}::rhs"), &outputs, &inputs, &args)?;
+        let depends_on_time = reads.iter().any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
+        let b = self.record_body(&rhs_name, b, &args)?;
         let plan = Solve::for_equations(f);
         let mut solve = plan.cost();
         if f.constraint_power.is_some() {
@@ -409,7 +454,7 @@ impl Emitter<'_> {
                 assemble(t, state, params, g_i).matrix
             }
         };
-        Ok((items, depends_on_time, plan))
+        Ok((items, depends_on_time, plan, assembly))
     }
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {

@@ -15,7 +15,7 @@
 //! assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x);
 //! ```
 
-use super::cse::plan;
+use super::cse::plan_with;
 use super::lower::{LowerError, lower};
 use super::ops::OpCount;
 use super::optimize::{expand_angle_sums, factor_sums_with, share_reciprocals};
@@ -100,8 +100,47 @@ pub fn body(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_le
 
 /// [`body`] with the Horner memo of [`factor_sums_with`] kept by the caller (one per module).
 pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], max_lets: usize, horner: &mut HashMap<Expr, Expr>) -> Result<Body, LowerError> {
-    let outputs = &share_pairs(&share_reciprocals(&factor_sums_with(&expand_angle_sums(outputs), horner)));
-    let bound = plan(outputs);
+    body_with_definitions(name, &[], outputs, inputs, args, max_lets, horner)
+}
+
+/// [`body_with`] where the outputs may read named intermediates: `definitions` in order, each
+/// in terms of the inputs and the ones before it (a recursion's vectors, which the symbolic
+/// core would otherwise flatten into the outputs). Each gets its own `let` (or scratch slot),
+/// computed before anything that reads it, and shares subexpressions with everything else.
+///
+/// ```
+/// use generator::emit::function::{Arg, Input, body_with_definitions};
+/// use generator::symbolic::{Expr, Symbol};
+/// use quote::quote;
+/// let x = Expr::sym("x");
+/// let s = Symbol::internal("s");
+/// let args = [Arg::new("state", quote!(&[f64; 1]))];
+/// let inputs = [Input::new(x.as_sym().unwrap(), "x", 0, quote!(state[0]))];
+/// let b = body_with_definitions("f", &[(s, x.sin() + x)], &[s.expr() * s.expr() + 1, s.expr() * x], &inputs, &args, usize::MAX, &mut Default::default()).unwrap();
+/// assert_eq!(b.lets, 1); // s = sin(x) + x, once, read by both outputs
+/// assert_eq!(b.stmts.len(), 2); // let x = state[0]; let x0 = f64::sin(x) + x;
+/// ```
+pub fn body_with_definitions(
+    name: &str,
+    definitions: &[(Symbol, Expr)],
+    outputs: &[Expr],
+    inputs: &[Input],
+    args: &[Arg],
+    max_lets: usize,
+    horner: &mut HashMap<Expr, Expr>,
+) -> Result<Body, LowerError> {
+    let definitions = &needed(definitions, outputs);
+    let all: Vec<Expr> = definitions.iter().map(|(_, e)| *e).chain(outputs.iter().copied()).collect();
+    let all = share_pairs(&share_reciprocals(&factor_sums_with(&expand_angle_sums(&all), horner)));
+    let (defined, outputs) = all.split_at(definitions.len());
+    // Each name's value: a bound node, or the leaf it stands for (resolved through other names).
+    let mut value: HashMap<Symbol, Expr> = HashMap::default();
+    for ((s, _), d) in definitions.iter().zip(defined) {
+        let resolved = d.as_sym().and_then(|x| value.get(&x).copied()).unwrap_or(*d);
+        value.insert(*s, resolved);
+    }
+    let forced: HashSet<Expr> = defined.iter().copied().filter(|d| d.as_num().is_none() && d.as_sym().is_none()).collect();
+    let bound = plan_with(&all, &forced);
     let by_symbol: HashMap<Symbol, &Input> = inputs.iter().map(|i| (i.symbol, i)).collect();
     let taken: HashSet<String> = inputs.iter().map(|i| i.ident.clone()).chain(args.iter().map(|a| a.name.clone())).collect();
     let mut ops = OpCount::default();
@@ -110,13 +149,14 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
         let index: HashMap<Expr, usize> = bound.iter().enumerate().map(|(k, e)| (*e, k)).collect();
         let symbols = SymbolUse::new(&by_symbol);
         let reference = |e: Expr| index.get(&e).map(|&k| syntax::ident(&names[k]));
+        let lookup = |s: Symbol| named(s, &value, &symbols, &reference);
         let mut lets = Vec::new();
         for (k, e) in bound.iter().enumerate() {
-            let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
+            let (t, o) = lower(*e, &lookup, &reference)?;
             ops.merge(&o);
             lets.push(syntax::let_stmt(&names[k], t));
         }
-        let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
+        let outs = lower_outputs(outputs, &lookup, &reference, &mut ops)?;
         let used = symbols.used.into_inner();
         let (mut stmts, used_args) = input_lets(inputs, &used);
         stmts.extend(lets);
@@ -132,9 +172,10 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
     let mut all_used_args = BTreeSet::new();
     for (j, chunk) in bound.chunks(max_lets.max(1)).enumerate() {
         let symbols = SymbolUse::new(&by_symbol);
+        let lookup = |s: Symbol| named(s, &value, &symbols, &reference);
         let mut lines = Vec::new();
         for e in chunk {
-            let (t, o) = lower(*e, &|s| symbols.lookup(s), &reference)?;
+            let (t, o) = lower(*e, &lookup, &reference)?;
             ops.merge(&o);
             let target = reference(*e).expect("bound");
             lines.push(syntax::assign_stmt(target, t));
@@ -156,7 +197,8 @@ pub fn body_with(name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg], m
         all_used_args.extend(0..args.len());
     }
     let symbols = SymbolUse::new(&by_symbol);
-    let outs = lower_outputs(outputs, &symbols, &reference, &mut ops)?;
+    let lookup = |s: Symbol| named(s, &value, &symbols, &reference);
+    let outs = lower_outputs(outputs, &lookup, &reference, &mut ops)?;
     let (mut stmts, used_args) = input_lets(inputs, &symbols.used.into_inner());
     all_used_args.extend(used_args);
     stmts.push(syn::parse_quote!(let mut v = [0.0f64; #size];));
@@ -182,10 +224,49 @@ impl<'a> SymbolUse<'a> {
     }
 }
 
+/// The definitions the outputs read, directly or through later definitions (a recursion forms
+/// vectors some of whose components nothing reads).
+fn needed(definitions: &[(Symbol, Expr)], outputs: &[Expr]) -> Vec<(Symbol, Expr)> {
+    if definitions.is_empty() {
+        return Vec::new();
+    }
+    let names: HashSet<Symbol> = definitions.iter().map(|(s, _)| *s).collect();
+    let mut wanted: HashSet<Symbol> = HashSet::default();
+    let read = |e: Expr, wanted: &mut HashSet<Symbol>| {
+        for s in e.free_symbols() {
+            if names.contains(&s) {
+                wanted.insert(s);
+            }
+        }
+    };
+    for e in outputs {
+        read(*e, &mut wanted);
+    }
+    for (s, e) in definitions.iter().rev() {
+        if wanted.contains(s) {
+            read(*e, &mut wanted);
+        }
+    }
+    definitions.iter().filter(|(s, _)| wanted.contains(s)).cloned().collect()
+}
+
+/// A symbol's value: a named intermediate's bound node (or the leaf it stands for), else the
+/// input.
+fn named(s: Symbol, value: &HashMap<Symbol, Expr>, symbols: &SymbolUse, reference: &dyn Fn(Expr) -> Option<syn::Expr>) -> Option<syn::Expr> {
+    match value.get(&s) {
+        None => symbols.lookup(s),
+        Some(v) => match (v.as_sym(), v.as_num()) {
+            (Some(x), _) => symbols.lookup(x),
+            (_, Some(_)) => lower(*v, &|_| None, &|_| None).ok().map(|(t, _)| t),
+            _ => reference(*v),
+        },
+    }
+}
+
 /// Each output as tokens: a bound name, or the lowered expression.
 fn lower_outputs(
     outputs: &[Expr],
-    symbols: &SymbolUse,
+    symbol: &dyn Fn(Symbol) -> Option<syn::Expr>,
     reference: &dyn Fn(Expr) -> Option<syn::Expr>,
     ops: &mut OpCount,
 ) -> Result<Vec<syn::Expr>, LowerError> {
@@ -193,7 +274,7 @@ fn lower_outputs(
     for e in outputs {
         let (t, o) = match reference(*e) {
             Some(t) => (t, OpCount::default()),
-            None => lower(*e, &|s| symbols.lookup(s), reference)?,
+            None => lower(*e, symbol, reference)?,
         };
         ops.merge(&o);
         outs.push(t);

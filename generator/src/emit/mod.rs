@@ -12,6 +12,7 @@
 //! eprintln!("{}", out.summary);
 //! ```
 
+pub mod assembly;
 pub mod builder;
 pub mod cse;
 pub mod form;

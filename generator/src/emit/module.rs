@@ -2,7 +2,7 @@
 //! rate, momenta, constraint residuals) and one submodule per formulation ([`super::form`]).
 //! It only emits: everything it writes comes from one [`Derivation`].
 
-use super::function::{Arg, Body, Input, arg_list, body_with, ident};
+use super::function::{Arg, Body, Input, arg_list, body_with_definitions, ident};
 use super::lower::literal;
 use super::names::Names;
 use super::prepare::Preparer;
@@ -190,6 +190,19 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         };
         Ok(Generated { code, summary, program })
     })
+}
+
+/// Each formulation's assembly of its right-hand side, as the summary describes it
+/// ([`super::assembly`]): the same bodies [`generate`] compares, built from a derivation.
+pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
+    let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
+    let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
+    let mut out = Vec::new();
+    for f in &d.equations {
+        let checks = em.runtime_factors(f);
+        out.push((f.name().to_string(), em.assembly(f, &shared, &checks)?.description));
+    }
+    Ok(out)
 }
 
 /// The deriving thread's side of [`generate`]: the mechanics and every formulation but the
@@ -722,9 +735,29 @@ impl Emitter<'_> {
 
     /// Emits the body for `outputs` and records its cost under `name`.
     pub(super) fn body(&mut self, name: &str, outputs: &[Expr], inputs: &[Input], args: &[Arg]) -> Result<Placed, ModelError> {
+        let b = self.trial_body(name, &[], outputs, inputs, args)?;
+        self.record_body(name, b, args)
+    }
+
+    /// The body for `outputs` reading the named intermediates `definitions`, built but not
+    /// recorded (to compare assemblies).
+    pub(super) fn trial_body(
+        &mut self,
+        name: &str,
+        definitions: &[(Symbol, Expr)],
+        outputs: &[Expr],
+        inputs: &[Input],
+        args: &[Arg],
+    ) -> Result<Body, ModelError> {
         let prepared = self.prep.prepare_all(outputs);
+        let defined: Vec<(Symbol, Expr)> = definitions.iter().map(|(s, e)| (*s, self.prep.prepare(*e))).collect();
         let short = name.rsplit("::").next().unwrap_or(name);
-        let b = body_with(short, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner).map_err(|e| self.emission_error(name, e))?;
+        body_with_definitions(short, &defined, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner)
+            .map_err(|e| self.emission_error(name, e))
+    }
+
+    /// Records `b`'s cost under `name` (and its tape), and places it.
+    pub(super) fn record_body(&mut self, name: &str, b: Body, args: &[Arg]) -> Result<Placed, ModelError> {
         self.functions.push(FunctionCost { name: name.to_string(), lets: b.lets, ops: b.ops.clone(), solve: Default::default() });
         if self.tapes.is_some() {
             let tape = self.tape(&b, args).map_err(|e| self.emission_error(name, e))?;

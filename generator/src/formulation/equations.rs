@@ -53,6 +53,9 @@ pub struct Equations {
     /// `R . q' = weights . x + offset` for the solution `x` ([`super::power`]); filled in by
     /// [`super::derive_with`].
     pub constraint_power: Option<(Vec<Expr>, Expr)>,
+    /// The same `mass` and `forcing` as a recursion over the tree of frames (Kane's form):
+    /// emission keeps it where it takes fewer operations ([`super::recursive`]).
+    pub recursion: Option<super::recursive::Recursion>,
 }
 
 impl Transfer for Equations {
@@ -67,6 +70,9 @@ impl Transfer for Equations {
         self.singular.visit(v);
         self.stabilization.visit(v);
         self.constraint_power.visit(v);
+        if let Some(r) = &mut self.recursion {
+            r.visit(v);
+        }
     }
 }
 

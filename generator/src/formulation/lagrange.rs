@@ -62,6 +62,7 @@ impl Method for Lagrange {
             stabilization: Some(stabilization),
             elimination: "none (multipliers solved with the accelerations)",
             constraint_power: None,
+            recursion: None,
         })
     }
 }

@@ -53,6 +53,7 @@ impl Method for Maggi {
             stabilization: None,
             elimination: kane.route,
             constraint_power: None,
+            recursion: None,
         })
     }
 }

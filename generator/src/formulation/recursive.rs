@@ -50,6 +50,9 @@ pub struct Recursion {
     pub mass: Matrix,
     /// `L_K`, in the definitions.
     pub forcing: Vec<Expr>,
+    /// Every coordinate's rate `q' = W u + X`, in the definitions (the reduced form's reads
+    /// the ignorable rates the definitions solve for).
+    pub qdot: Vec<Expr>,
 }
 
 impl Transfer for Recursion {
@@ -60,6 +63,7 @@ impl Transfer for Recursion {
         }
         self.mass.visit(v);
         self.forcing.visit(v);
+        self.qdot.visit(v);
     }
 }
 
@@ -115,7 +119,7 @@ impl Motion {
         self.w.iter().chain(&self.v).all(|e| e.is_zero())
     }
     /// This motion (the parent's) seen in the child's components at its origin.
-    fn to_child(&self, joint: &Joint) -> Motion {
+    fn in_child(&self, joint: &Joint) -> Motion {
         let rt = joint.rotation.transpose();
         Motion { w: mat_vec(&rt, &self.w), v: mat_vec(&rt, &add3(&self.v, &cross(&self.w, &joint.translation))) }
     }
@@ -147,7 +151,7 @@ impl Force {
         Force { n: add3(&self.n, &o.n), f: add3(&self.f, &o.f) }
     }
     /// This force (the child's) in the parent's components, about its origin.
-    fn to_parent(&self, joint: &Joint) -> Force {
+    fn in_parent(&self, joint: &Joint) -> Force {
         let f = mat_vec(&joint.rotation, &self.f);
         Force { n: add3(&mat_vec(&joint.rotation, &self.n), &cross(&joint.translation, &f)), f }
     }
@@ -169,7 +173,7 @@ impl Inertia {
             for s in 0..3 {
                 let mut e = -(c[r] * c[s]);
                 if r == s {
-                    e = e + dot(c, c);
+                    e += dot(c, c);
                 }
                 i.set(r, s, i.get(r, s) + m * e);
             }
@@ -197,7 +201,7 @@ impl Inertia {
             for b in 0..3 {
                 let mut e = -(self.m * t[a] * t[b]) - rh[a] * t[b] - t[a] * rh[b];
                 if a == b {
-                    e = e + self.m * tt + Expr::int(2) * th;
+                    e += self.m * tt + Expr::int(2) * th;
                 }
                 i.set(a, b, i.get(a, b) + e);
             }
@@ -209,6 +213,8 @@ impl Inertia {
 /// The definitions under construction.
 struct Program {
     definitions: Vec<(Symbol, Expr)>,
+    /// The names' prefix, distinct per program so that one can extend another's definitions.
+    prefix: &'static str,
 }
 
 impl Program {
@@ -217,7 +223,7 @@ impl Program {
         if e.as_num().is_some() || e.as_sym().is_some() {
             return e;
         }
-        let s = Symbol::internal(&format!("rec{}", self.definitions.len()));
+        let s = Symbol::internal(&format!("{}{}", self.prefix, self.definitions.len()));
         self.definitions.push((s, e));
         s.expr()
     }
@@ -311,7 +317,7 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recurs
             Some(JointRates { relative, columns, drift })
         })
         .collect();
-    let mut prog = Program { definitions: Vec::new() };
+    let mut prog = Program { definitions: Vec::new(), prefix: "rec" };
     // Forward: velocities and accelerations at u' = 0.
     let still = Motion { w: zero3(), v: zero3() };
     let mut velocity = vec![still; nodes];
@@ -319,8 +325,8 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recurs
     for k in 1..nodes {
         let (Some(joint), Some(r)) = (joints[k].as_ref(), rates[k].as_ref()) else { continue };
         let (vp, ap) = (velocity[joint.parent], accel[joint.parent]);
-        let v = prog.motion(vp.to_child(joint).add(&r.relative));
-        let a = ap.to_child(joint).add(&v.cross_motion(&r.relative)).add(&r.drift);
+        let v = prog.motion(vp.in_child(joint).add(&r.relative));
+        let a = ap.in_child(joint).add(&v.cross_motion(&r.relative)).add(&r.drift);
         velocity[k] = v;
         accel[k] = prog.motion(a);
     }
@@ -343,7 +349,7 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recurs
         forces[k] = prog.force(forces[k]);
         if joint.parent != 0 {
             composite[joint.parent] = composite[joint.parent].add(&composite[k].to_parent(joint));
-            forces[joint.parent] = forces[joint.parent].add(&forces[k].to_parent(joint));
+            forces[joint.parent] = forces[joint.parent].add(&forces[k].in_parent(joint));
         }
     }
     // L_K = U_K - sum_k S_k^T f^c_k.
@@ -368,7 +374,7 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recurs
             if parent == 0 {
                 break;
             }
-            carried = carried.into_iter().map(|(c, f)| (c, if f.is_zero() { f } else { prog.force(f.to_parent(joint)) })).collect();
+            carried = carried.into_iter().map(|(c, f)| (c, if f.is_zero() { f } else { prog.force(f.in_parent(joint)) })).collect();
             if let Some(rp) = rates[parent].as_ref() {
                 for (c, f) in &carried {
                     for (d, s) in &rp.columns {
@@ -387,7 +393,89 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recurs
             m.set(d, c, Expr::sum(terms));
         }
     }
-    Some(Recursion { definitions: prog.definitions, mass: m, forcing: forcing.into_iter().map(Expr::sum).collect() })
+    Some(Recursion { definitions: prog.definitions, mass: m, forcing: forcing.into_iter().map(Expr::sum).collect(), qdot: kane.qdot.clone() })
+}
+
+/// The reduced Volterra equations of `model` from Kane's recursion `kane_rec`, as the Schur
+/// complement ([`super::volterra::by_schur_complement`], the same algebra on the recursion's
+/// values): `u_I` from the momenta `G_I`, then
+/// `M_NI = M_NN - M_NI M_II^-1 M_IN`, `L_NI = L_N - M_NI M_II^-1 L_I`. `M_II` and the momenta's
+/// offsets are the dense form's (small and simplified: the total mass on a floating base);
+/// everything else is read from the recursion. `None` where the reduced form is not Kane's
+/// Schur complement.
+pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_rec: &Recursion, reduced: &Volterra) -> Option<Recursion> {
+    use crate::symbolic::limits::Limits;
+    use crate::symbolic::matrix::{SolveOptions, solve};
+    let super::volterra::SchurMap { map, rates, .. } = super::volterra::schur_map(model, mech, &reduced.ignorable, &model.quasi_reduced, kane)?;
+    let (m, s, n_u) = (mech.m, rates.len(), map.len());
+    let mut prog = Program { definitions: Vec::new(), prefix: "red" };
+    // The definitions that read no quasi-velocity (the composite inertias and everything the
+    // matrix is built from) stay as they are, first.
+    let speeds: std::collections::HashSet<Symbol> = kane.u.iter().copied().collect();
+    let mut moving: std::collections::HashSet<Symbol> = std::collections::HashSet::new();
+    for (sym, e) in &kane_rec.definitions {
+        if e.free_symbols().iter().any(|x| speeds.contains(x) || moving.contains(x)) {
+            moving.insert(*sym);
+        } else {
+            prog.definitions.push((*sym, *e));
+        }
+    }
+    let mk = kane_rec.mass.map(|e| prog.bind(*e));
+    let dense = &kane.mass_ni;
+    let mut m_ii = Matrix::zeros(s, s);
+    for a in 0..s {
+        for b in 0..s {
+            m_ii.set(a, b, dense.get(rates[a], rates[b]));
+        }
+    }
+    let opts =
+        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    // u_I = M_II^-1 (G - n - M_IN u_N), n the momenta at u = 0.
+    let mut rhs = Matrix::zeros(s, 1);
+    for (a, &j) in reduced.ignorable.iter().enumerate() {
+        let n = mech.tidy.of(Expr::sum((0..m).map(|c| mech.mass.get(j, c) * kane.x[c])) + mech.n[j]);
+        let coupled = Expr::sum(map.iter().zip(&reduced.u).map(|(&r, u)| mk.get(rates[a], r) * u.expr()));
+        rhs.set(a, 0, reduced.g[a].expr() - n - coupled);
+    }
+    let v_i = solve(&m_ii, &rhs, &opts).ok()?;
+    let mut sigma: HashMap<Symbol, Expr> = HashMap::new();
+    for (k, &r) in map.iter().enumerate() {
+        sigma.insert(kane.u[r], reduced.u[k].expr());
+    }
+    for (b, &r) in rates.iter().enumerate() {
+        let v = prog.bind(v_i.x.get(b, 0));
+        sigma.insert(kane.u[r], v);
+    }
+    // The definitions that read the quasi-velocities, renamed, in the reduced ones.
+    for (sym, e) in &kane_rec.definitions {
+        if moving.contains(sym) {
+            let v = prog.bind(e.subs(&sigma));
+            sigma.insert(*sym, v);
+        }
+    }
+    let l_k: Vec<Expr> = kane_rec.forcing.iter().map(|e| e.subs(&sigma)).collect();
+    let qdot = Expr::subs_all(&kane_rec.qdot, &sigma);
+    // M_II Z = [M_IN | L_I].
+    let mut right = Matrix::zeros(s, n_u + 1);
+    for (a, &ra) in rates.iter().enumerate() {
+        for (k, &rk) in map.iter().enumerate() {
+            right.set(a, k, mk.get(ra, rk));
+        }
+        right.set(a, n_u, prog.bind(l_k[ra]));
+    }
+    let zs = solve(&m_ii, &right, &opts).ok()?;
+    let zs = zs.x.map(|e| prog.bind(*e));
+    let coupling = |k: usize, col: usize| Expr::sum((0..s).map(|a| mk.get(map[k], rates[a]) * zs.get(a, col)));
+    let mut mass = Matrix::zeros(n_u, n_u);
+    for k in 0..n_u {
+        for l in k..n_u {
+            let e = mk.get(map[k], map[l]) - coupling(k, l);
+            mass.set(k, l, e);
+            mass.set(l, k, e);
+        }
+    }
+    let forcing = (0..n_u).map(|k| l_k[map[k]] - coupling(k, n_u)).collect();
+    Some(Recursion { definitions: prog.definitions, mass, forcing, qdot })
 }
 
 #[cfg(test)]
@@ -407,6 +495,29 @@ mod tests {
         (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     }
 
+    /// Random values of the parameters (near their own), `t`, the coordinates (Euler
+    /// parameters on the unit sphere, where their kinematics hold) and `speeds`.
+    fn random_state(model: &Model, speeds: &[Symbol], seed: &mut u64) -> Env {
+        let mut env = Env::default();
+        for (s, v) in &model.parameters {
+            env.set(*s, *v * (1.0 + 0.2 * next(seed)));
+        }
+        env.set(crate::symbolic::Symbol::new("pi"), std::f64::consts::PI);
+        for (f, body) in &model.time_functions {
+            env.define(*f, model.t, *body);
+        }
+        env.set(model.t, next(seed));
+        for q in model.coordinates.iter().chain(speeds) {
+            env.set(*q, next(seed));
+        }
+        let unit: Vec<Symbol> = ["e0", "e1", "e2", "e3"].iter().filter_map(|n| model.coordinates.iter().copied().find(|q| q.name() == *n)).collect();
+        let norm = unit.iter().map(|q| env.get(*q).unwrap().powi(2)).sum::<f64>().sqrt();
+        for q in &unit {
+            env.set(*q, env.get(*q).unwrap() / norm);
+        }
+        env
+    }
+
     /// The recursion gives the dense form's `M_K` and `L_K` at random states of every model
     /// with frames (values of the coordinates, quasi-velocities, parameters and `t`).
     fn agrees(path: &str) {
@@ -416,24 +527,7 @@ mod tests {
         let r = derive(&model, &mech, &kane).expect("a tree of frames with bodies");
         let mut seed = 7u64;
         for _ in 0..3 {
-            let mut env = Env::default();
-            for (s, v) in &model.parameters {
-                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
-            }
-            env.set(crate::symbolic::Symbol::new("pi"), std::f64::consts::PI);
-            for (f, body) in &model.time_functions {
-                env.define(*f, model.t, *body);
-            }
-            env.set(model.t, next(&mut seed));
-            for q in model.coordinates.iter().chain(&kane.u) {
-                env.set(*q, next(&mut seed));
-            }
-            // Euler parameters on the unit sphere, where their kinematics hold.
-            let unit: Vec<Symbol> = ["e0", "e1", "e2", "e3"].iter().filter_map(|n| model.coordinates.iter().copied().find(|q| q.name() == *n)).collect();
-            let norm = unit.iter().map(|q| env.get(*q).unwrap().powi(2)).sum::<f64>().sqrt();
-            for q in &unit {
-                env.set(*q, env.get(*q).unwrap() / norm);
-            }
+            let mut env = random_state(&model, &kane.u, &mut seed);
             for (s, e) in &r.definitions {
                 let v = e.eval(&env).unwrap();
                 env.set(*s, v);
@@ -450,6 +544,48 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The reduced recursion gives the dense reduced form's `M_NI`, `L_NI` at random states
+    /// and momenta.
+    fn reduced_agrees(model: &Model) {
+        let path = &model.name;
+        let model = model.clone();
+        let mech = mechanics::derive(&model);
+        let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+        let chosen = crate::formulation::ignorable::choose(&model, &crate::formulation::ignorable::analyze(&model, &mech)).unwrap();
+        assert!(!chosen.is_empty(), "{path}: no ignorable coordinate");
+        let reduced = volterra::derive_reduced(&model, &mech, &chosen, &model.quasi_reduced, &kane).unwrap();
+        let rec = derive(&model, &mech, &kane).unwrap();
+        let r = reduce(&model, &mech, &kane, &rec, &reduced).unwrap_or_else(|| panic!("{path}: the Schur route"));
+        let mut seed = 11u64;
+        for _ in 0..3 {
+            let speeds: Vec<Symbol> = reduced.u.iter().chain(&reduced.g).copied().collect();
+            let mut env = random_state(&model, &speeds, &mut seed);
+            for (s, e) in &r.definitions {
+                let v = e.eval(&env).unwrap();
+                env.set(*s, v);
+            }
+            let n = reduced.u.len();
+            for i in 0..n {
+                let want = reduced.l_ni[i].eval(&env).unwrap();
+                let got = r.forcing[i].eval(&env).unwrap();
+                assert!((want - got).abs() <= 1e-10 * (1.0 + want.abs()), "{path}: L_NI[{i}] {got} against {want}");
+                for j in 0..n {
+                    let want = reduced.mass_ni.get(i, j).eval(&env).unwrap();
+                    let got = r.mass.get(i, j).eval(&env).unwrap();
+                    assert!((want - got).abs() <= 1e-10 * (1.0 + want.abs()), "{path}: M_NI[{i}][{j}] {got} against {want}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_reduced_recursion_gives_the_dense_reduced_form() {
+        for name in ["three_body", "satellite_boom", "pendulum_on_cart_5", "three_body_quaternion"] {
+            reduced_agrees(&crate::model::load(format!("../models/{name}.ron")).unwrap());
+        }
+        reduced_agrees(&crate::model::examples::floating_chain(3).build().unwrap());
     }
 
     #[test]

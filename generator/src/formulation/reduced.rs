@@ -51,6 +51,10 @@ impl Method for ReducedVolterra {
         let mut mass = v.mass_ni.clone();
         let mut forcing = v.l_ni.clone();
         let mut singular = v.singular_factors.clone();
+        let mut recursion = shared.kane.and_then(|kane| {
+            let rec = super::recursive::derive(model, shared.mech, kane)?;
+            super::recursive::reduce(model, shared.mech, kane, &rec, v)
+        });
         let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
         if !shared.integrate_ignorable {
             if let Some((j, place)) = needed(model, v).into_iter().find_map(|(j, p)| p.map(|p| (j, p))) {
@@ -69,6 +73,14 @@ impl Method for ReducedVolterra {
             forcing = Expr::subs_all(&forcing, &zero);
             mass = Matrix { rows: mass.rows, cols: mass.cols, data: Expr::subs_all(&mass.data, &zero) };
             singular = Expr::subs_all(&singular, &zero);
+            if let Some(r) = &mut recursion {
+                for (_, e) in &mut r.definitions {
+                    *e = e.subs(&zero);
+                }
+                r.mass = r.mass.map(|e| e.subs(&zero));
+                r.forcing = Expr::subs_all(&r.forcing, &zero);
+                r.qdot = Expr::subs_all(&r.qdot, &zero);
+            }
         }
         Ok(Equations {
             kind: self.kind(),
@@ -87,6 +99,7 @@ impl Method for ReducedVolterra {
             stabilization: None,
             elimination: v.route,
             constraint_power: None,
+            recursion,
         })
     }
 }

@@ -154,17 +154,20 @@ pub fn derive_reduced(model: &Model, mech: &Mechanics, ignorable: &[usize], quas
     }
 }
 
-/// The reduced equations as the Schur complement of Kane's, `None` unless Kane's
-/// quasi-velocities are the reduced ones (in any order) plus the ignorable rates `q_I'`.
-///
-/// With `u = [u_N; v_I]`, `v_I = q_I'`, Kane's equations are `M_K u' = L_K`. The momenta
-/// `G_I = dT/dq_I'` are linear in `u`, `G = K_N u_N + K_I v_I + n`, which gives `v_I` from
-/// `(u_N, G)`; eliminating `v_I'` between the two blocks of Kane's equations leaves
-/// `(M_NN - M_NI M_II^-1 M_IN) u_N' = L_N - M_NI M_II^-1 L_I`: p - s equations, exactly the
-/// reduced Volterra equations for `u_N` (the same `M_NI`, since `K_I = M_II` when `u_N` does
-/// not involve `q_I'`), at the cost of Kane's assembly and an s x s elimination.
-pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Option<Volterra> {
-    let tidy = &mech.tidy;
+/// Where the reduced quasi-velocities and the ignorable rates sit among Kane's.
+pub struct SchurMap {
+    /// Kane's index of each reduced quasi-velocity.
+    pub map: Vec<usize>,
+    /// Kane's index of each ignorable coordinate's rate `q_I'`.
+    pub rates: Vec<usize>,
+    /// `Y`, `Z` of the reduced quasi-velocities.
+    pub y: Matrix,
+    pub z: Vec<Expr>,
+}
+
+/// The [`SchurMap`], `None` unless Kane's quasi-velocities are the reduced ones (in any order)
+/// plus the ignorable rates `q_I'` and no reduced one involves a `q_I'`.
+pub fn schur_map(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Option<SchurMap> {
     let (m, s) = (mech.m, ignorable.len());
     let n_u = quasi.len();
     if n_u + s != kane.u.len() {
@@ -190,6 +193,23 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
         used[r] = true;
         rates.push(r);
     }
+    Some(SchurMap { map, rates, y, z })
+}
+
+/// The reduced equations as the Schur complement of Kane's, `None` unless Kane's
+/// quasi-velocities are the reduced ones (in any order) plus the ignorable rates `q_I'`.
+///
+/// With `u = [u_N; v_I]`, `v_I = q_I'`, Kane's equations are `M_K u' = L_K`. The momenta
+/// `G_I = dT/dq_I'` are linear in `u`, `G = K_N u_N + K_I v_I + n`, which gives `v_I` from
+/// `(u_N, G)`; eliminating `v_I'` between the two blocks of Kane's equations leaves
+/// `(M_NN - M_NI M_II^-1 M_IN) u_N' = L_N - M_NI M_II^-1 L_I`: p - s equations, exactly the
+/// reduced Volterra equations for `u_N` (the same `M_NI`, since `K_I = M_II` when `u_N` does
+/// not involve `q_I'`), at the cost of Kane's assembly and an s x s elimination.
+pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize], quasi: &[Expr], kane: &Volterra) -> Option<Volterra> {
+    let tidy = &mech.tidy;
+    let (m, s) = (mech.m, ignorable.len());
+    let n_u = quasi.len();
+    let SchurMap { map, rates, y, z } = schur_map(model, mech, ignorable, quasi, kane)?;
     let g: Vec<Symbol> = ignorable.iter().map(|&j| momentum_symbol(model, j)).collect();
     let u: Vec<Symbol> = (0..n_u).map(quasi_symbol).collect();
     // The momenta in Kane's quasi-velocities: T = u^T M_K u / 2 + u^T N_K + T0 and u_N free of
