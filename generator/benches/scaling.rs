@@ -1,5 +1,6 @@
-//! The scaling benchmark: the n-link pendulum on a cart and the spatial chain on a floating
-//! base (`generator::model::examples`), derived and emitted at growing n. Writes
+//! The scaling benchmark: the n-link pendulum on a cart, the spatial chain on a floating base
+//! and the planar free chain written in absolute angles (`generator::model::examples`), derived
+//! and emitted at growing n. Writes
 //! `docs/scaling.md` (a table per model: derive time per stage, emit time, peak memory,
 //! operations per formulation split into assembly and solve, rustc time, ns per call) and
 //! `docs/plots/scaling.svg` (log-log: derive + emit time and assembly operations against n).
@@ -7,7 +8,7 @@
 //! ```sh
 //! cargo bench -p generator --bench scaling                      # default sizes
 //! cargo bench -p generator --bench scaling -- --sympy           # SymPy's KanesMethod beside it
-//! cargo bench -p generator --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --compile-up-to 20 --out /tmp/x
+//! cargo bench -p generator --bench scaling -- --pendulum 5,10,20,50 --floating 2,4,8,20 --planar 5,20 --compile-up-to 20 --out /tmp/x
 //! ```
 //!
 //! Each size runs in a child process (this program, re-invoked), so peak memory is its own and
@@ -19,7 +20,7 @@
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use generator::emit::{Options, generate};
-use generator::model::examples::{floating_chain, n_link_pendulum_on_cart};
+use generator::model::examples::{floating_chain, n_link_pendulum_on_cart, planar_chain_absolute};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -39,6 +40,9 @@ struct Record {
     derive_ms: f64,
     stages_ms: Vec<(String, f64)>,
     emit_ms: f64,
+    /// CPU time of the whole child (user + system, both threads), seconds.
+    #[serde(default)]
+    cpu_s: f64,
     peak_mb: f64,
     /// Per formulation: (name, assembly ops, solve ops).
     ops: Vec<(String, usize, usize)>,
@@ -70,11 +74,30 @@ fn peak_mb() -> f64 {
         .map_or(f64::NAN, |kb| kb / 1024.0)
 }
 
+/// CPU seconds this process has used so far (user + system, every thread), from
+/// `/proc/self/stat` (clock ticks of 1/100 s, the kernel's fixed `USER_HZ`).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // The fields after the command name (which is in parentheses and may hold spaces).
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let fields: Vec<f64> = rest.split_whitespace().map(|x| x.parse().unwrap_or(f64::NAN)).collect();
+    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name.
+    fields.get(11).zip(fields.get(12)).map_or(f64::NAN, |(u, s)| (u + s) / 100.0)
+}
+
+/// The models the benchmark scales, by their key.
+const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
+
 /// The child: one model at one size.
 fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
-    let builder = if kind == "pendulum" { n_link_pendulum_on_cart(n) } else { floating_chain(n) };
+    let builder = match kind {
+        "pendulum" => n_link_pendulum_on_cart(n),
+        "floating" => floating_chain(n),
+        _ => planar_chain_absolute(n),
+    };
     let model = builder.build().expect("the benchmark models are valid");
     let out = generate(&model, &Options::from_model(&model)).expect("the benchmark models generate");
+    let cpu_s = cpu_seconds();
     let s = &out.summary;
     let mut record = Record {
         model: kind.to_string(),
@@ -82,6 +105,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
         derive_ms: s.derive_time.as_secs_f64() * 1e3,
         stages_ms: s.stages.iter().map(|(k, d)| (k.to_string(), d.as_secs_f64() * 1e3)).collect(),
         emit_ms: s.emit_time.as_secs_f64() * 1e3,
+        cpu_s,
         peak_mb: peak_mb(),
         ops: FORMS.iter().filter_map(|f| s.ops(&format!("{f}::rhs")).map(|c| (f.to_string(), c.ops.total(), c.solve.total()))).collect(),
         code_bytes: out.code.len(),
@@ -150,6 +174,7 @@ fn main() {
     let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
     let mut pendulum = vec![2, 5, 10, 20, 30, 50];
     let mut floating = vec![2, 4, 6, 8, 12, 20];
+    let mut planar = vec![5, 10, 20];
     let mut compile_up_to = 20;
     let mut out = root.join("docs");
     let mut sympy = false;
@@ -158,6 +183,7 @@ fn main() {
         match a.as_str() {
             "--pendulum" => pendulum = list(it.next().expect("--pendulum needs sizes")),
             "--floating" => floating = list(it.next().expect("--floating needs sizes")),
+            "--planar" => planar = list(it.next().expect("--planar needs sizes")),
             "--compile-up-to" => compile_up_to = it.next().and_then(|s| s.parse().ok()).expect("--compile-up-to needs a size"),
             "--out" => out = PathBuf::from(it.next().expect("--out needs a directory")),
             "--sympy" => sympy = true,
@@ -168,14 +194,14 @@ fn main() {
     std::fs::create_dir_all(&work).expect("a scratch directory");
     let exe = std::env::current_exe().expect("this program's path");
     let mut records = Vec::new();
-    for (kind, sizes) in [("pendulum", &pendulum), ("floating", &floating)] {
+    for (kind, sizes) in KINDS.into_iter().zip([&pendulum, &floating, &planar]) {
         for &n in sizes {
             eprintln!("scaling: {kind} n = {n} ...");
             let compile = if n <= compile_up_to { "compile" } else { "no" };
             let child = Command::new(&exe).args(["--one", kind, &n.to_string(), compile]).arg(&work).output().expect("the child runs");
             assert!(child.status.success(), "{kind} n = {n} failed: {}", String::from_utf8_lossy(&child.stderr));
             let r: Record = serde_json::from_slice(&child.stdout).expect("the child's record");
-            eprintln!("scaling: {kind} n = {n}: derive {:.0} ms, emit {:.0} ms, {:.0} MB", r.derive_ms, r.emit_ms, r.peak_mb);
+            eprintln!("scaling: {kind} n = {n}: derive {:.0} ms, emit {:.0} ms, CPU {:.2} s, {:.0} MB", r.derive_ms, r.emit_ms, r.cpu_s, r.peak_mb);
             records.push(r);
         }
     }
@@ -224,7 +250,7 @@ fn main() {
         }
     }
     std::fs::create_dir_all(out.join("plots")).expect("the output directory");
-    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &scenes, &inspects, &pendulum, &floating, compile_up_to, sympy));
+    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &scenes, &inspects, [&pendulum, &floating, &planar], compile_up_to, sympy));
     plot(&out.join("plots/scaling.svg"), &records, &peers);
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
     std::fs::write(out.join("scaling/ours.json"), serde_json::to_string_pretty(&records).unwrap()).expect("the records are written");
@@ -287,7 +313,19 @@ fn goals(records: &[Record], peers: &[(String, Vec<SympyRecord>)], scenes: &[(&s
     if let Some(r) = find("floating", 20) {
         md += &format!("| spatial chain on a floating base, n = 20 (beyond the issue's table) | - | {:.1} s, {:.0} MB | |\n", total(r), r.peak_mb);
     }
-    let g: Vec<String> = ["pendulum", "floating"].iter().filter_map(|k| growth(records, k).map(|e| format!("{k} n^{e:.1}"))).collect();
+    if let Some(r) = find("planar", 20) {
+        let ok = r.cpu_s < 0.5 && r.peak_mb < 200.0;
+        md += &format!(
+            "| planar free chain of 20 rods in absolute angles, derive + emit, CPU (both threads) and peak memory | < 0.5 s, < 200 MB | {:.2} s, {:.0} MB | {} |\n",
+            r.cpu_s,
+            r.peak_mb,
+            verdict(
+                ok,
+                "its frames all hang from the world, so every rod's position is a sum of cosines of sums of angles that the mechanics expands and simplifies term by term (see the table below)"
+            )
+        );
+    }
+    let g: Vec<String> = KINDS.iter().filter_map(|k| growth(records, k).map(|e| format!("{k} n^{e:.1}"))).collect();
     let sympy_growth: Vec<String> = peers
         .iter()
         .filter_map(|(k, p)| {
@@ -377,8 +415,7 @@ fn report(
     peers: &[(String, Vec<SympyRecord>)],
     scenes: &[(&str, f64)],
     inspects: &[(&str, f64)],
-    pendulum: &[usize],
-    floating: &[usize],
+    [pendulum, floating, planar]: [&Vec<usize>; 3],
     compile_up_to: usize,
     sympy: bool,
 ) -> String {
@@ -388,19 +425,23 @@ fn report(
         md += " -- --sympy";
     }
     md += &format!(
-        "` (sizes: pendulum {:?}, floating {:?}; modules compiled up to n = {compile_up_to}), every size in a fresh process. \
+        "` (sizes: pendulum {:?}, floating {:?}, planar {:?}; modules compiled up to n = {compile_up_to}), every size in a fresh process. \
          Times are wall-clock on the machine that ran it, one run (the scenes: best of {SCENE_RUNS} fresh processes); operation counts are deterministic. \
          Generation runs on two threads: every formulation but the last is emitted while the next is derived, so \"emit\" is what is left after the derivation. \
          \"Assembly\" is what a right-hand side computes before its dense solve (comparable with SymPy's \
          `count_ops(cse([M, F]))`), \"solve\" that of the emitted solve (LDL^T for Maggi, Kane and the reduced method; the worst case of LU with partial pivoting for Lagrange).\n\n",
-        pendulum, floating
+        pendulum, floating, planar
     );
     md += &goals(records, peers, scenes, inspects);
-    let title = |k: &str| if k == "pendulum" { "The n-link pendulum on a cart (s = 1)" } else { "The spatial chain on a floating base (s = 3)" };
-    for kind in ["pendulum", "floating"] {
+    let title = |k: &str| match k {
+        "pendulum" => "The n-link pendulum on a cart (s = 1)",
+        "floating" => "The spatial chain on a floating base (s = 3)",
+        _ => "The planar free chain of n rods in absolute angles (s = 2)",
+    };
+    for kind in KINDS {
         md += &format!("## {}\n\n", title(kind));
-        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call |\n";
-        md += "|---|---|---|---|---|---|---|---|---|---|\n";
+        md += "| n | derive ms (mechanics / ignorable / kane / reduced / formulations) | emit ms after the derivation | CPU s | peak MB | assembly ops: lagrange / maggi / kane / reduced | solve ops: kane / reduced | module KB | rustc s | ns per call: lagrange / maggi / kane / reduced | in-process (JIT) / compiled, per call |\n";
+        md += "|---|---|---|---|---|---|---|---|---|---|---|\n";
         for r in records.iter().filter(|r| r.model == kind) {
             let stages: Vec<String> = r.stages_ms.iter().map(|(_, v)| format!("{v:.0}")).collect();
             let asm: Vec<String> = FORMS.iter().map(|f| ops_of(r, f).map_or("-".into(), |(a, _)| a.to_string())).collect();
@@ -408,11 +449,12 @@ fn report(
             let ns: Vec<String> = FORMS.iter().map(|f| r.ns_per_call.iter().find(|(n, _)| n == f).map_or("-".into(), |(_, v)| format!("{v:.0}"))).collect();
             let jit: Vec<String> = jit_ratios(r).iter().map(|x| format!("{x:.2}")).collect();
             md += &format!(
-                "| {} | {:.0} ({}) | {:.0} | {:.0} | {} | {} | {:.0} | {} | {} | {} |\n",
+                "| {} | {:.0} ({}) | {:.0} | {:.2} | {:.0} | {} | {} | {:.0} | {} | {} | {} |\n",
                 r.n,
                 r.derive_ms,
                 stages.join(" / "),
                 r.emit_ms,
+                r.cpu_s,
                 r.peak_mb,
                 asm.join(" / "),
                 solve.join(" / "),
@@ -453,10 +495,10 @@ fn plot(path: &Path, records: &[Record], peers: &[(String, Vec<SympyRecord>)]) {
     let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
     root.fill(&WHITE).expect("a white background");
     let (left, right) = root.split_horizontally(500);
-    let colors = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40)];
+    let colors = [RGBColor(31, 119, 180), RGBColor(255, 127, 14), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189)];
     let mut series_time: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
     let mut series_ops: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
-    for kind in ["pendulum", "floating"] {
+    for kind in KINDS {
         let rs: Vec<&Record> = records.iter().filter(|r| r.model == kind).collect();
         series_time.push((format!("ours, {kind}"), rs.iter().map(|r| (r.n as f64, (r.derive_ms + r.emit_ms) / 1e3)).collect()));
         series_ops.push((format!("ours (Kane), {kind}"), rs.iter().filter_map(|r| ops_of(r, "kane").map(|(a, _)| (r.n as f64, a as f64))).collect()));

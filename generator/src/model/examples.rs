@@ -116,3 +116,47 @@ mod tests {
         assert_eq!((m.m(), m.bodies.len(), m.quasi_reduced.len()), (9, 4, 6));
     }
 }
+
+/// A planar free-floating chain of n uniform rods written in absolute angles: rod 0 (the base)
+/// has its end at `(x, y)` and turns by `a0`; rod k is joined to the end of rod k-1 by the
+/// joint angle `ak`. Every rod's frame hangs from the world, turned by its absolute angle
+/// `a0 + a1 + ... + ak` and placed at its joint, `(x + sum_j L cos(a0 + ... + aj), y + ...)`
+/// over the rods before it: the way the chain is written when each rod's orientation is
+/// thought of on its own, not as a tree of relative joints. Rods of mass `m`, length `L`,
+/// inertia `m L^2 / 12` about their centre; no gravity. `x`, `y` are ignorable (s = 2).
+///
+/// ```
+/// let model = generator::model::examples::planar_chain_absolute(4).build().unwrap();
+/// assert_eq!(model.m(), 6); // x, y and the four angles
+/// ```
+pub fn planar_chain_absolute(n: usize) -> ModelBuilder {
+    let mut b = ModelBuilder::new(format!("planar_chain_absolute_{n}"))
+        .description(format!("planar free chain of {n} rods, frames turned by absolute angles"))
+        .parameter("m", 1.0)
+        .parameter("L", 1.0)
+        .coordinate("x")
+        .coordinate("y");
+    for k in 0..n {
+        b = b.coordinate(format!("a{k}"));
+    }
+    let absolute = |k: usize| (0..=k).map(|j| format!("a{j}")).collect::<Vec<_>>().join(" + ");
+    for k in 0..n {
+        let (mut px, mut py) = ("x".to_string(), "y".to_string());
+        for j in 0..k {
+            px += &format!(" + L*cos({})", absolute(j));
+            py += &format!(" + L*sin({})", absolute(j));
+        }
+        let name = format!("rod{k}");
+        b = b
+            .frame(Frame::new(&name, "world").translation([&px, &py, "0"]).rotate_z(absolute(k)))
+            .body(Body::new(&name, &name, "m").com(["L/2", "0", "0"]).diagonal(["0", "m*L^2/12", "m*L^2/12"]));
+    }
+    let angles: Vec<String> = (0..n).map(|k| format!("a{k}'")).collect();
+    let mut full = angles.clone();
+    full.extend(["x'".to_string(), "y'".to_string()]);
+    let mut q0: Vec<(String, String)> = vec![("x".into(), "0".into()), ("y".into(), "0".into())];
+    q0.extend((0..n).map(|k| (format!("a{k}"), format!("{}", 0.2 / (k + 1) as f64))));
+    let mut qd0: Vec<(String, String)> = vec![("x".into(), "0.1".into()), ("y".into(), "-0.1".into())];
+    qd0.extend((0..n).map(|k| (format!("a{k}"), if k % 2 == 0 { "0.3".to_string() } else { "-0.2".to_string() })));
+    b.quasi_velocities(full, angles).ignorable(["x", "y"]).initial(q0, qd0).simulation(10.0, 0.01)
+}
