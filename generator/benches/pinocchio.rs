@@ -17,6 +17,9 @@
 //! instructions (FMA, AVX2) and us none. Both sides time one call the same way (the best, over
 //! 7 rounds, of the mean of 200 calls at one state), in separate processes run alternately,
 //! round after round; each figure is the best over the rounds, so both met the same machine.
+//! A third side is ours with the newer instructions too: the module emitted with fused
+//! multiply-adds (`Options::fma`) and compiled with `-C target-cpu=native`, timed in the same
+//! rounds.
 
 #[path = "support/timing.rs"]
 mod timing;
@@ -140,20 +143,30 @@ fn main() {
         eprintln!("pinocchio: {} ...", case.label);
         let generated = generate(&case.model, &Options::from_model(&case.model)).expect("the benchmark models generate");
         let ops = |f: &str| generated.summary.ops(&format!("{f}::rhs")).map(|c| (c.ops.total(), c.solve.total())).expect("the formulation is emitted");
-        let (exe, _) = timing::compile(&work.join(case.aba.0).join(case.aba.1.to_string()), &generated.code);
+        let dir = work.join(case.aba.0).join(case.aba.1.to_string());
+        let (exe, _) = timing::compile(&dir, &generated.code);
+        let fused = generate(&case.model, &Options { fma: true, ..Options::from_model(&case.model) }).expect("the benchmark models generate");
+        let (native, _) = timing::compile_with(&dir.join("native"), &fused.code, &["-C", "target-cpu=native"]);
         let (mut pin_best, mut dof) = (f64::INFINITY, 0);
         let mut ours_best = [f64::INFINITY; 4];
+        let mut native_best = [f64::INFINITY; 4];
         for _ in 0..rounds {
             let (ns, n) = aba_ns(&aba, case.aba);
             (pin_best, dof) = (pin_best.min(ns), n);
-            for (f, ns) in timing::run(&exe) {
-                let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
-                ours_best[k] = ours_best[k].min(ns);
+            for (best, exe) in [(&mut ours_best, &exe), (&mut native_best, &native)] {
+                for (f, ns) in timing::run(exe) {
+                    let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
+                    best[k] = best[k].min(ns);
+                }
             }
         }
         let (kane, reduced) = (ours_best[2], ours_best[3]);
+        let (kane_native, reduced_native) = (native_best[2], native_best[3]);
         let ((ka, ks), (ra, rs)) = (ops("kane"), ops("reduced_volterra"));
-        eprintln!("pinocchio: {}: ABA {pin_best:.0} ns, Kane {kane:.0} ns, reduced {reduced:.0} ns", case.label);
+        eprintln!(
+            "pinocchio: {}: ABA {pin_best:.0} ns, Kane {kane:.0} ns, reduced {reduced:.0} ns (FMA + native: {kane_native:.0}, {reduced_native:.0})",
+            case.label
+        );
         rows.push(vec![
             case.label.clone(),
             dof.to_string(),
@@ -164,10 +177,28 @@ fn main() {
             format!("{:.2}", reduced / pin_best),
             format!("{ka} + {ks}"),
             format!("{ra} + {rs}"),
+            format!("{kane_native:.0}"),
+            format!("{reduced_native:.0}"),
+            format!("{:.2}", kane_native / pin_best),
+            format!("{:.2}", reduced_native / pin_best),
         ]);
     }
     let _ = std::fs::remove_dir_all(&work);
-    let columns = ["model", "dof", "Pinocchio ABA ns", "Kane ns", "reduced ns", "Kane / ABA", "reduced / ABA", "Kane ops (assembly + solve)", "reduced ops"];
+    let columns = [
+        "model",
+        "dof",
+        "Pinocchio ABA ns",
+        "Kane ns",
+        "reduced ns",
+        "Kane / ABA",
+        "reduced / ABA",
+        "Kane ops (assembly + solve)",
+        "reduced ops",
+        "Kane ns, FMA + native",
+        "reduced ns, FMA + native",
+        "Kane / ABA, FMA + native",
+        "reduced / ABA, FMA + native",
+    ];
     let file = serde_json::json!({ "command": "cargo bench -p generator --bench pinocchio", "columns": columns, "rows": rows });
     let text = serde_json::to_string_pretty(&file).expect("json") + "\n";
     let tmp = out.with_extension("json.tmp");

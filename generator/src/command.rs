@@ -70,6 +70,10 @@ pub struct GenerateArgs {
     /// runtime parameters.
     #[arg(long)]
     pub parameter_jacobian: bool,
+    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies: build the module with
+    /// `-C target-cpu=native` or `-C target-feature=+fma` where the CPU has them.
+    #[arg(long)]
+    pub fma: bool,
     /// Split functions with more than N common subexpressions into helpers.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     pub max_lets: Option<u64>,
@@ -172,6 +176,7 @@ pub fn generate(args: GenerateArgs) -> Result<(), Failure> {
     if args.parameter_jacobian {
         options.parameter_jacobian = true;
     }
+    options.fma = args.fma;
     if let Some(n) = args.max_lets {
         options.max_lets_per_function = n as usize;
     }

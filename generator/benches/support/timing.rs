@@ -29,13 +29,18 @@ fn timing_program() -> String {
 /// Writes `code` (an emitted module) and the timing program into `dir` and compiles them
 /// (`rustc -C opt-level=3`, plain x86-64); the program's path and rustc's seconds.
 pub fn compile(dir: &Path, code: &str) -> (PathBuf, f64) {
+    compile_with(dir, code, &[])
+}
+
+/// [`compile`] with more rustc flags (`-C target-cpu=native`).
+pub fn compile_with(dir: &Path, code: &str, flags: &[&str]) -> (PathBuf, f64) {
     std::fs::create_dir_all(dir).expect("a scratch directory");
     std::fs::write(dir.join("model.rs"), code).expect("the module is written");
     std::fs::write(dir.join("main.rs"), timing_program()).expect("the timing program is written");
     rustc_support::seam_rlib(); // built once, outside the timing
     let exe = dir.join("timing");
     let start = Instant::now();
-    let status = rustc_support::rustc().args(["-C", "opt-level=3", "-o"]).arg(&exe).arg(dir.join("main.rs")).status().expect("rustc runs");
+    let status = rustc_support::rustc().args(["-C", "opt-level=3"]).args(flags).arg("-o").arg(&exe).arg(dir.join("main.rs")).status().expect("rustc runs");
     let seconds = start.elapsed().as_secs_f64();
     assert!(status.success(), "the emitted module compiles");
     (exe, seconds)

@@ -38,6 +38,7 @@ pub struct Builder {
     max_lets_per_function: Option<usize>,
     jacobian: Option<bool>,
     parameter_jacobian: Option<bool>,
+    fma: bool,
     seam_path: String,
     cargo_metadata: bool,
 }
@@ -87,6 +88,7 @@ impl Builder {
             max_lets_per_function: None,
             jacobian: None,
             parameter_jacobian: None,
+            fma: false,
             seam_path: super::DEFAULT_SEAM_PATH.to_string(),
             cargo_metadata: true,
         }
@@ -146,6 +148,13 @@ impl Builder {
         self
     }
 
+    /// Emit fused multiply-adds ([`crate::emit::fma`]; default off). Build the crate with
+    /// `-C target-cpu=native` or `-C target-feature=+fma` where the CPU has them.
+    pub fn fma(mut self, on: bool) -> Builder {
+        self.fma = on;
+        self
+    }
+
     /// The seam crate's path in the emitted code (default `::seam`; `runtime::seam` for a crate
     /// that depends on the runtime only).
     pub fn seam_path(mut self, path: impl Into<String>) -> Builder {
@@ -180,6 +189,7 @@ impl Builder {
         if let Some(j) = self.parameter_jacobian {
             o.parameter_jacobian = j;
         }
+        o.fma = self.fma;
         o.seam_path = self.seam_path.clone();
         o
     }

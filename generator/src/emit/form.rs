@@ -15,6 +15,9 @@ use super::shared::FromMechanics;
 use crate::formulation::Equations;
 use crate::model::ModelError;
 use crate::symbolic::{Expr, Symbol};
+use proc_macro2::{Literal, TokenStream};
+use quote::quote;
+use std::collections::{BTreeSet, HashMap};
 
 /// A right-hand side's chosen assembly: its body, what it reads (to decide whether it reads
 /// `t`) and the summary's description of the choice.
@@ -23,9 +26,6 @@ pub(super) struct Assembled {
     pub reads: Vec<Expr>,
     pub description: String,
 }
-use proc_macro2::{Literal, TokenStream};
-use quote::quote;
-use std::collections::{BTreeSet, HashMap};
 
 /// Largest singular factor (tree nodes) named by its formula in `Failure::Singular`.
 const MAX_CONDITION_TREE: u32 = 200;
@@ -213,43 +213,44 @@ impl Emitter<'_> {
         outputs
     }
 
+    /// The outputs of a right-hand side's body from its rates, matrix and forcing: then the
+    /// singular factors, then the constraint residuals for Baumgarte.
+    fn rhs_outputs(f: &Equations, rates: Vec<Expr>, checks: &[Expr]) -> Vec<Expr> {
+        let mut outputs = rates;
+        outputs.extend(checks.iter().copied());
+        if let Some(stab) = &f.stabilization {
+            outputs.extend(stab.iter().map(|(r, _)| *r));
+            outputs.extend(stab.iter().map(|(_, p)| *p));
+        }
+        outputs
+    }
+
     /// The right-hand side's body: the dense form's entries, or the recursion over the tree of
-    /// frames where its body takes fewer operations ([`super::assembly::prefers_recursion`]).
+    /// frames where its body takes fewer operations ([`super::assembly::prefers_recursion`]:
+    /// both bodies are built, and the counts compared are the emitted code's).
     pub(super) fn assembly(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<Assembled, ModelError> {
         let rhs_name = format!("{}::rhs", f.name());
         let args = state_args();
         let inputs = self.state_inputs(f);
-        // Outputs, in order: kept rates, the matrix (both triangles read the upper entry, so
-        // CSE binds it once), the forcing, Maggi's W and c, the power, the singular factors,
-        // the constraint residuals for Baumgarte.
-        let tail = |mut outputs: Vec<Expr>| {
-            outputs.extend(checks.iter().copied());
-            if let Some(stab) = &f.stabilization {
-                outputs.extend(stab.iter().map(|(r, _)| *r));
-                outputs.extend(stab.iter().map(|(_, p)| *p));
-            }
-            outputs
-        };
         // What decides whether the right-hand side reads `t`: the rates, matrix, forcing and
         // checks it assembles (not the stabilization's residuals).
-        let reads: Vec<Expr> = self.rate_outputs(f, shared).into_iter().chain(checks.iter().copied()).collect();
-        let dense = tail(self.rate_outputs(f, shared));
-        let body = self.trial_body(&rhs_name, &[], &dense, &inputs, &args)?;
+        let rates = self.rate_outputs(f, shared);
+        let reads: Vec<Expr> = rates.iter().copied().chain(checks.iter().copied()).collect();
+        let body = self.trial_body(&rhs_name, &[], &Self::rhs_outputs(f, rates, checks), &inputs, &args)?;
         let Some(r) = &f.recursion else {
-            let description = format!("assembly: dense entries, {} operations", body.ops.total());
-            return Ok(Assembled { body, reads, description });
+            return Ok(Assembled { body, reads, description: "assembly: dense entries".to_string() });
         };
         let rates = self.rate_outputs_of(f, shared, (&r.qdot, &r.mass, &r.forcing));
-        let recursive = self.trial_body(&rhs_name, &r.definitions, &tail(rates.clone()), &inputs, &args)?;
+        let tree_reads = rates.iter().copied().chain(checks.iter().copied()).chain(r.definitions.iter().map(|(_, e)| *e)).collect();
+        let recursive = self.trial_body(&rhs_name, &r.definitions, &Self::rhs_outputs(f, rates, checks), &inputs, &args)?;
         let (by_tree, by_entries) = (recursive.ops.total(), body.ops.total());
-        if super::assembly::prefers_recursion(by_tree, by_entries) {
-            let reads = rates.into_iter().chain(checks.iter().copied()).chain(r.definitions.iter().map(|(_, e)| *e)).collect();
+        Ok(if super::assembly::prefers_recursion(by_tree, by_entries) {
             let description = format!("assembly: recursion over the tree of frames, {by_tree} operations (dense entries: {by_entries})");
-            Ok(Assembled { body: recursive, reads, description })
+            Assembled { body: recursive, reads: tree_reads, description }
         } else {
             let description = format!("assembly: dense entries, {by_entries} operations (recursion over the tree of frames: {by_tree})");
-            Ok(Assembled { body, reads, description })
-        }
+            Assembled { body, reads, description }
+        })
     }
 
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`,

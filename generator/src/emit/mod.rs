@@ -15,6 +15,7 @@
 pub mod assembly;
 pub mod builder;
 pub mod cse;
+pub mod fma;
 pub mod form;
 pub mod jacobian;
 pub mod ldl;
@@ -61,6 +62,9 @@ pub struct Options {
     /// Also compile every emitted function into a tape for in-process evaluation
     /// ([`crate::eval`]), returned as [`Generated::program`].
     pub tapes: bool,
+    /// Emit fused multiply-adds (`f64::mul_add`) in the function bodies, for targets that
+    /// have the instruction ([`fma`]). The tapes are the plain code's.
+    pub fma: bool,
 }
 
 /// The seam crate's path when nothing else is asked for.
@@ -87,6 +91,7 @@ impl Options {
             module_name: None,
             seam_path: DEFAULT_SEAM_PATH.to_string(),
             tapes: false,
+            fma: false,
         }
     }
 }

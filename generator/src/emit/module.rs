@@ -199,8 +199,14 @@ pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
     let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
     let mut out = Vec::new();
     for f in &d.equations {
-        let checks = em.runtime_factors(f);
-        out.push((f.name().to_string(), em.assembly(f, &shared, &checks)?.description));
+        // Without a recursion there is nothing to compare (and no body to build).
+        let description = if f.recursion.is_none() {
+            "assembly: dense entries".to_string()
+        } else {
+            let checks = em.runtime_factors(f);
+            em.assembly(f, &shared, &checks)?.description
+        };
+        out.push((f.name().to_string(), description));
     }
     Ok(out)
 }
@@ -807,7 +813,12 @@ impl Emitter<'_> {
 
     /// Leaves `b`'s trees in the splices, returning their placeholders.
     fn place(&mut self, b: Body) -> Placed {
-        let Body { stmts, outputs, helpers, used_args, .. } = b;
+        let Body { mut stmts, mut outputs, mut helpers, used_args, .. } = b;
+        if self.options.fma {
+            super::fma::fuse_stmts(&mut stmts);
+            outputs.iter_mut().for_each(super::fma::fuse);
+            helpers.iter_mut().for_each(super::fma::fuse_item);
+        }
         Placed {
             stmts: self.splices.stmts(stmts),
             outputs: outputs.into_iter().map(|e| self.splices.expr(e)).collect(),

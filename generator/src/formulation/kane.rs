@@ -46,7 +46,7 @@ impl Method for Kane {
             stabilization: None,
             elimination: v.route,
             constraint_power: None,
-            recursion: super::recursive::derive(shared.model, shared.mech, v),
+            recursion: shared.recursion.cloned(),
         })
     }
 }

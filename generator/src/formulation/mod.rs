@@ -60,6 +60,9 @@ pub struct Shared<'a> {
     pub kane: Option<&'a Volterra>,
     /// The reduced form, when requested.
     pub reduced: Option<&'a Volterra>,
+    /// Kane's equations by the recursion over the tree of frames, derived once for Kane's and
+    /// the reduced form ([`recursive::derive`]).
+    pub recursion: Option<&'a recursive::Recursion>,
     pub integrate_ignorable: bool,
 }
 
@@ -179,22 +182,27 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     // Where a constraint moves, each formulation also gives the power of its forces.
     let moving_force = power::constraints_move(&mech).then(|| mech.lagrange_force());
     let mut equations = Vec::new();
-    let mut formulate =
-        |stages: &mut dyn Stages, def: FormulationDef, method: &dyn Method, kane: Option<&Volterra>, reduced: Option<&Volterra>| -> Result<(), ModelError> {
-            if wants(def) {
-                let start = Instant::now();
-                let shared = Shared { model, mech: &mech, kane, reduced, integrate_ignorable: request.integrate_ignorable };
-                let mut eqs = method.equations(&shared)?;
-                if let Some(force) = &moving_force {
-                    eqs.constraint_power = Some(power::constraint_power(model, &mech, force, &eqs));
-                }
-                formulations += start.elapsed();
-                stages.equations(&eqs);
-                equations.push(eqs);
+    let mut formulate = |stages: &mut dyn Stages,
+                         def: FormulationDef,
+                         method: &dyn Method,
+                         kane: Option<&Volterra>,
+                         reduced: Option<&Volterra>,
+                         recursion: Option<&recursive::Recursion>|
+     -> Result<(), ModelError> {
+        if wants(def) {
+            let start = Instant::now();
+            let shared = Shared { model, mech: &mech, kane, reduced, recursion, integrate_ignorable: request.integrate_ignorable };
+            let mut eqs = method.equations(&shared)?;
+            if let Some(force) = &moving_force {
+                eqs.constraint_power = Some(power::constraint_power(model, &mech, force, &eqs));
             }
-            Ok(())
-        };
-    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None)?;
+            formulations += start.elapsed();
+            stages.equations(&eqs);
+            equations.push(eqs);
+        }
+        Ok(())
+    };
+    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None, None)?;
     clock = Instant::now();
     // Kane's form serves Kane, Maggi, and the reduced method's Schur route.
     let kane = if wants(FormulationDef::Kane) || wants(FormulationDef::Maggi) || wants(FormulationDef::ReducedVolterra) {
@@ -207,15 +215,19 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     let kane = kane?;
     times.push(("ignorable", decided.time));
     times.push(("kane", kane_time));
-    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None)?;
-    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None)?;
+    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, None)?;
+    let recursion = match &kane {
+        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => recursive::derive(model, &mech, k),
+        _ => None,
+    };
+    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, recursion.as_ref())?;
     clock = Instant::now();
     let reduced = match &kane {
         Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &decided.chosen, &model.quasi_reduced, k)?),
         _ => None,
     };
     times.push(("reduced", clock.elapsed()));
-    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref())?;
+    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), recursion.as_ref())?;
     times.push(("formulations", formulations));
     let cuts = crate::symbolic::report::take();
     Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times, cuts })

@@ -98,25 +98,6 @@ pub fn floating_chain(n: usize) -> ModelBuilder {
     b.quasi_velocities(full, reduced).ignorable(["X", "Y", "Z"]).initial(q0, qd0).simulation(10.0, 0.01)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn built_models_round_trip_through_ron() {
-        for b in [n_link_pendulum_on_cart(2), floating_chain(2)] {
-            let text = b.to_ron();
-            let from_text = crate::model::from_source("x.ron", &text).unwrap();
-            let built = b.build().unwrap();
-            assert_eq!(from_text.coordinates.len(), built.coordinates.len());
-            assert_eq!(from_text.bodies.len(), built.bodies.len());
-            assert_eq!(from_text.frames.len(), built.frames.len());
-        }
-        let m = floating_chain(3).build().unwrap();
-        assert_eq!((m.m(), m.bodies.len(), m.quasi_reduced.len()), (9, 4, 6));
-    }
-}
-
 /// A planar free-floating chain of n uniform rods written in absolute angles: rod 0 (the base)
 /// has its end at `(x, y)` and turns by `a0`; rod k is joined to the end of rod k-1 by the
 /// joint angle `ak`. Every rod's frame hangs from the world, turned by its absolute angle
@@ -159,4 +140,23 @@ pub fn planar_chain_absolute(n: usize) -> ModelBuilder {
     let mut qd0: Vec<(String, String)> = vec![("x".into(), "0.1".into()), ("y".into(), "-0.1".into())];
     qd0.extend((0..n).map(|k| (format!("a{k}"), if k % 2 == 0 { "0.3".to_string() } else { "-0.2".to_string() })));
     b.quasi_velocities(full, angles).ignorable(["x", "y"]).initial(q0, qd0).simulation(10.0, 0.01)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_models_round_trip_through_ron() {
+        for b in [n_link_pendulum_on_cart(2), floating_chain(2)] {
+            let text = b.to_ron();
+            let from_text = crate::model::from_source("x.ron", &text).unwrap();
+            let built = b.build().unwrap();
+            assert_eq!(from_text.coordinates.len(), built.coordinates.len());
+            assert_eq!(from_text.bodies.len(), built.bodies.len());
+            assert_eq!(from_text.frames.len(), built.frames.len());
+        }
+        let m = floating_chain(3).build().unwrap();
+        assert_eq!((m.m(), m.bodies.len(), m.quasi_reduced.len()), (9, 4, 6));
+    }
 }
