@@ -20,6 +20,11 @@
 //! A third side is ours with the newer instructions too: the module emitted with fused
 //! multiply-adds (`Options::fma`) and compiled with `-C target-cpu=native`, timed in the same
 //! rounds.
+//!
+//! Cycles per operation: each timing program first reads the clock it runs at (a chain of
+//! dependent register additions, one cycle each; `benches/support/timing.rs`), so a call's
+//! cycles are its ns times that clock, in the same process; divided by the reduced right-hand
+//! side's operations (assembly + solve, the plain module's count for both builds).
 
 #[path = "support/timing.rs"]
 mod timing;
@@ -150,13 +155,20 @@ fn main() {
         let (mut pin_best, mut dof) = (f64::INFINITY, 0);
         let mut ours_best = [f64::INFINITY; 4];
         let mut native_best = [f64::INFINITY; 4];
+        // Cycles per call: each run's ns times the clock that run read, the best over the rounds.
+        let mut ours_cycles = [f64::INFINITY; 4];
+        let mut native_cycles = [f64::INFINITY; 4];
+        let mut clock = 0.0f64;
         for _ in 0..rounds {
             let (ns, n) = aba_ns(&aba, case.aba);
             (pin_best, dof) = (pin_best.min(ns), n);
-            for (best, exe) in [(&mut ours_best, &exe), (&mut native_best, &native)] {
-                for (f, ns) in timing::run(exe) {
+            for (best, cycles, exe) in [(&mut ours_best, &mut ours_cycles, &exe), (&mut native_best, &mut native_cycles, &native)] {
+                let (ghz, calls) = timing::run(exe);
+                clock = clock.max(ghz);
+                for (f, ns) in calls {
                     let k = timing::FORMS.iter().position(|x| *x == f).expect("a formulation");
                     best[k] = best[k].min(ns);
+                    cycles[k] = cycles[k].min(ns * ghz);
                 }
             }
         }
@@ -181,6 +193,9 @@ fn main() {
             format!("{reduced_native:.0}"),
             format!("{:.2}", kane_native / pin_best),
             format!("{:.2}", reduced_native / pin_best),
+            format!("{clock:.2}"),
+            format!("{:.2}", ours_cycles[3] / (ra + rs) as f64),
+            format!("{:.2}", native_cycles[3] / (ra + rs) as f64),
         ]);
     }
     let _ = std::fs::remove_dir_all(&work);
@@ -198,6 +213,9 @@ fn main() {
         "reduced ns, FMA + native",
         "Kane / ABA, FMA + native",
         "reduced / ABA, FMA + native",
+        "clock GHz",
+        "reduced cycles / op",
+        "reduced cycles / op, FMA + native",
     ];
     let file = serde_json::json!({ "command": "cargo bench -p generator --bench pinocchio", "columns": columns, "rows": rows });
     let text = serde_json::to_string_pretty(&file).expect("json") + "\n";

@@ -114,7 +114,7 @@ fn measure(kind: &str, n: usize, compile: bool, work: &Path) -> Record {
     if compile {
         let (exe, rustc_s) = timing::compile(&work.join(format!("{kind}_{n}")), &out.code);
         record.rustc_s = Some(rustc_s);
-        record.ns_per_call = timing::run(&exe);
+        record.ns_per_call = timing::run(&exe).1;
         record.jit_ns_per_call = jit_ns_per_call(&model);
     }
     record

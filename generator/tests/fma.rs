@@ -24,10 +24,11 @@ fn fused_modules_give_the_plain_modules_rates_to_round_off() {
         assert!(!plain.code.contains("mul_add"), "{}: the plain module fuses", model.name);
         let calls = fused.code.matches("f64::mul_add(").count();
         assert!(calls > 50, "{}: {calls} fused multiply-adds", model.name);
-        // The same operation counts: fusing changes how they round, not what they compute.
+        // The same operation counts: fusing changes how they round, not what they compute; both
+        // compile without a parenthesis too many (`-D unused_parens`).
         assert_eq!(plain.summary.work_counters(), fused.summary.work_counters(), "{}", model.name);
-        let a = support::rustc::printed_rates(dir.path(), &format!("{}_plain", model.name), &plain.code, &["-C", "opt-level=1"]);
-        let b = support::rustc::printed_rates(dir.path(), &format!("{}_fma", model.name), &fused.code, &["-C", "opt-level=1"]);
+        let a = support::rustc::printed_rates(dir.path(), &format!("{}_plain", model.name), &plain.code, &["-C", "opt-level=1", "-D", "unused_parens"]);
+        let b = support::rustc::printed_rates(dir.path(), &format!("{}_fma", model.name), &fused.code, &["-C", "opt-level=1", "-D", "unused_parens"]);
         assert_eq!(a.len(), b.len());
         let (mut compared, mut differing) = (0, 0);
         for ((name, k, x), (name_b, k_b, y)) in a.iter().zip(&b) {

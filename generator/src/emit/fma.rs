@@ -41,6 +41,14 @@ struct Fuse;
 impl VisitMut for Fuse {
     fn visit_expr_mut(&mut self, e: &mut Expr) {
         syn::visit_mut::visit_expr_mut(self, e);
+        // A call fused inside parentheses needs them no more (rustc warns `unused_parens`).
+        if let Expr::Paren(p) = e
+            && is_operand(&p.expr)
+            && !matches!(*p.expr, Expr::Lit(_))
+        {
+            *e = (*p.expr).clone();
+            return;
+        }
         let Expr::Binary(b) = e else { return };
         let minus = match b.op {
             BinOp::Add(_) => false,
@@ -48,11 +56,14 @@ impl VisitMut for Fuse {
             _ => return,
         };
         let (left, right) = (&*b.left, &*b.right);
+        // The arguments of a call need no parentheses.
         let fused: Expr = if let Some((x, y)) = product(left) {
-            let c = if minus { negated(right) } else { right.clone() };
+            let c = if minus { negated(right) } else { strip(right) };
+            let (x, y) = (strip(&x), strip(&y));
             parse_quote!(f64::mul_add(#x, #y, #c))
         } else if let Some((x, y)) = product(right) {
-            let x = if minus { negated(&x) } else { x };
+            let x = if minus { negated(&x) } else { strip(&x) };
+            let (y, left) = (strip(&y), strip(left));
             parse_quote!(f64::mul_add(#x, #y, #left))
         } else {
             return;
@@ -70,11 +81,16 @@ fn product(e: &Expr) -> Option<(Expr, Expr)> {
     }
 }
 
+/// Whether `e` is a single operand: never needs parentheses around it.
+fn is_operand(e: &Expr) -> bool {
+    matches!(e, Expr::Path(_) | Expr::Lit(_) | Expr::Call(_) | Expr::MethodCall(_) | Expr::Index(_) | Expr::Paren(_) | Expr::Field(_))
+}
+
 /// `-e`, parenthesized only where `e` is not a single operand.
 fn negated(e: &Expr) -> Expr {
     match e {
         Expr::Unary(u) if matches!(u.op, syn::UnOp::Neg(_)) => strip(&u.expr),
-        Expr::Path(_) | Expr::Lit(_) | Expr::Call(_) | Expr::MethodCall(_) | Expr::Index(_) | Expr::Paren(_) | Expr::Field(_) => parse_quote!(-#e),
+        e if is_operand(e) => parse_quote!(-#e),
         _ => parse_quote!(-(#e)),
     }
 }
@@ -112,6 +128,10 @@ mod tests {
     #[test]
     fn nested_products_fuse_inside_calls_and_parentheses() {
         assert_eq!(show(parse_quote!(f64::sin(x * y + z))), "f64 :: sin (f64 :: mul_add (x , y , z))");
-        assert_eq!(show(parse_quote!((a * b + c) * d + e)), "f64 :: mul_add ((f64 :: mul_add (a , b , c)) , d , e)");
+        assert_eq!(show(parse_quote!((a * b + c) * d + e)), "f64 :: mul_add (f64 :: mul_add (a , b , c) , d , e)");
+        // Parentheses around an argument go; those a sum needs stay.
+        assert_eq!(show(parse_quote!((a + b) * c + (d + e))), "f64 :: mul_add (a + b , c , d + e)");
+        assert_eq!(show(parse_quote!((a / b) * c - (d + e))), "f64 :: mul_add (a / b , c , - (d + e))");
+        assert_eq!(show(parse_quote!(x * (a * b + c))), "x * f64 :: mul_add (a , b , c)");
     }
 }
