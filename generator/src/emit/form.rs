@@ -14,6 +14,7 @@ use super::ops::OpCount;
 use super::shared::FromMechanics;
 use crate::formulation::Equations;
 use crate::model::ModelError;
+use crate::symbolic::expr::any_contains;
 use crate::symbolic::{Expr, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
@@ -267,7 +268,8 @@ impl Emitter<'_> {
         let rhs_name = format!("{name}::rhs");
         let Assembled { body: b, reads, description: assembly } = self.assembly(f, shared, checks)?;
         let t = model.t;
-        let depends_on_time = reads.iter().any(|e| self.prep.prepare(*e).free_symbols().contains(&t));
+        let prepared = self.prep.prepare_all(&reads);
+        let depends_on_time = any_contains(&prepared, t);
         let b = self.record_body(&rhs_name, b, &args)?;
         let plan = Solve::for_equations(f);
         let mut solve = plan.cost();

@@ -846,8 +846,34 @@ impl Expr {
 
     /// True when `sym` occurs in the expression (exact, not the bloom mask).
     pub fn contains(self, sym: Symbol) -> bool {
-        self.may_contain(sym) && self.free_symbols().contains(&sym)
+        any_contains(&[self], sym)
     }
+}
+
+/// True when `sym` occurs in any of `exprs`: one walk over their shared DAG, which skips every
+/// node whose bloom mask rules the symbol out (so a symbol that occurs nowhere costs one mask
+/// test per root, whatever the expressions' size).
+///
+/// ```
+/// use generator::symbolic::{Expr, Symbol, expr::any_contains};
+/// let (x, y) = (Expr::sym("x"), Expr::sym("y"));
+/// assert!(any_contains(&[x.sin(), y * y], Symbol::new("y")));
+/// assert!(!any_contains(&[x.sin() * x], Symbol::new("y")));
+/// ```
+pub fn any_contains(exprs: &[Expr], sym: Symbol) -> bool {
+    let mut seen = rustc_hash::FxHashSet::default();
+    let mut stack: Vec<Expr> = exprs.iter().copied().filter(|e| e.may_contain(sym)).collect();
+    while let Some(e) = stack.pop() {
+        if !seen.insert(e) {
+            continue;
+        }
+        match &*e.node() {
+            Node::Sym(s) if *s == sym => return true,
+            Node::Apply(name, _) if *name == sym => return true,
+            _ => stack.extend(e.children().into_iter().filter(|c| c.may_contain(sym))),
+        }
+    }
+    false
 }
 
 /// Every node reachable from `outputs`, children before parents, each once, in a depth-first

@@ -345,7 +345,7 @@ impl Simplifier {
             self.report.work_limit_reached = true;
             return None;
         }
-        let mut out = Form { terms: FxHashMap::with_capacity_and_hasher((a.len() * b.len()).min(4 * self.limits.max_terms), Default::default()) };
+        let mut out = Form { terms: FxHashMap::with_capacity_and_hasher((a.len() * b.len()).min(64), Default::default()) };
         for (&(ma, ka), ca) in &a.terms {
             for (&(mb, kb), cb) in &b.terms {
                 let m = self.mono_mul(ma, mb);
