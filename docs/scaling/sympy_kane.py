@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
-"""SymPy's KanesMethod on the scaling benchmark's two models, for the side-by-side ratios in
-docs/scaling.md. Outside CI (it needs SymPy: `pip install sympy`).
+"""SymPy's KanesMethod on the scaling benchmark's two models and the paper's three scenes, for the
+side-by-side ratios in docs/scaling.md. Outside CI (it needs SymPy: `pip install sympy`).
 
     python3 docs/scaling/sympy_kane.py --model pendulum --sizes 5,10,20 --json out.json
+    python3 docs/scaling/sympy_kane.py --model three_body --json out.json
 
 For each size it prints and records: the time to build the model and run `kanes_equations`
 (derive), the time of `cse([M, F])`, and `count_ops` of that CSE (the operations to assemble
 the mass matrix and forcing), the count the generator's "assembly" column compares with.
 
 The models are the generator's `n_link_pendulum_on_cart` and `floating_chain`
-(generator/src/model/examples.rs): the same bodies, joints and generalized speeds.
+(generator/src/model/examples.rs) and the scenes `models/cart_pendulum.ron`,
+`models/three_body.ron` and `models/satellite_boom.ron`: the same bodies, joints, forces,
+constraints and generalized speeds (the full set of each scene's quasi-velocities). A scene
+has no size: `--sizes` is ignored and its record says n = 0.
 """
 
 import argparse
@@ -74,9 +78,140 @@ def floating_chain(n):
     return kane
 
 
+def zyx_base(N, names):
+    """A frame turned by ZYX angles from N, with its body-frame angular velocity as speeds w1..w3
+    and the kinematic equations that define them."""
+    psi, theta, phi = me.dynamicsymbols(names)
+    w = me.dynamicsymbols("w1:4")
+    t = me.dynamicsymbols._t
+    B = N.orientnew("B", "Body", (psi, theta, phi), "ZYX")
+    rates = B.ang_vel_in(N)
+    kd = [rates.dot(B.x) - w[0], rates.dot(B.y) - w[1], rates.dot(B.z) - w[2]]
+    B.set_ang_vel(N, w[0] * B.x + w[1] * B.y + w[2] * B.z)
+    return B, [psi, theta, phi], list(w), kd
+
+
+def translating_point(O, N, names, speeds):
+    """A point at (X, Y, Z) from O in N, moving with the speeds vx, vy, vz."""
+    X, Y, Z = me.dynamicsymbols(names)
+    vx, vy, vz = me.dynamicsymbols(speeds)
+    t = me.dynamicsymbols._t
+    G = O.locatenew("G", X * N.x + Y * N.y + Z * N.z)
+    G.set_vel(N, vx * N.x + vy * N.y + vz * N.z)
+    return G, [X, Y, Z], [vx, vy, vz], [X.diff(t) - vx, Y.diff(t) - vy, Z.diff(t) - vz]
+
+
+def cart_pendulum():
+    """Scene 1 (models/cart_pendulum.ron): a cart on x, bar AB turned by theta1 about z, bar BC
+    by theta2 (absolute), gravity along -y, the motor's torque pair tau, and the wheel's
+    velocity constraint l cos(theta1 - theta2) theta1' + l theta2' = 0. Speeds: u1 = theta1' -
+    theta2' and x' independent, theta2' dependent."""
+    th1, th2, x = me.dynamicsymbols("theta1 theta2 x")
+    u1, u2, u3 = me.dynamicsymbols("u1:4")
+    M, m1, m2, l, g, tau = sm.symbols("M m1 m2 l g tau")
+    t = me.dynamicsymbols._t
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    A = N.orientnew("A", "Axis", (th1, N.z))
+    Bf = N.orientnew("Bf", "Axis", (th2, N.z))
+    A.set_ang_vel(N, (u1 + u3) * N.z)
+    Bf.set_ang_vel(N, u3 * N.z)
+    cart = O.locatenew("cart", x * N.x)
+    cart.set_vel(N, u2 * N.x)
+    g1 = cart.locatenew("G1", -l / 2 * A.y)
+    g1.v2pt_theory(cart, N, A)
+    b = cart.locatenew("B", -l * A.y)
+    b.v2pt_theory(cart, N, A)
+    g2 = b.locatenew("G2", -l / 2 * Bf.y)
+    g2.v2pt_theory(b, N, Bf)
+    bodies = [
+        me.Particle("cart", cart, M),
+        me.RigidBody("bar1", g1, A, m1, (me.inertia(A, m1 * l**2 / 12, 0, m1 * l**2 / 12), g1)),
+        me.RigidBody("bar2", g2, Bf, m2, (me.inertia(Bf, m2 * l**2 / 12, 0, m2 * l**2 / 12), g2)),
+    ]
+    loads = [(cart, -M * g * N.y), (g1, -m1 * g * N.y), (g2, -m2 * g * N.y), (A, tau * N.z), (Bf, -tau * N.z)]
+    kd = [th1.diff(t) - (u1 + u3), th2.diff(t) - u3, x.diff(t) - u2]
+    constraint = [l * sm.cos(th1 - th2) * (u1 + u3) + l * u3]
+    kane = me.KanesMethod(N, q_ind=[th1, th2, x], u_ind=[u1, u2], u_dependent=[u3], kd_eqs=kd, velocity_constraints=constraint)
+    kane.kanes_equations(bodies, loads)
+    return kane
+
+
+def three_body():
+    """Scene 2 (models/three_body.ron): a middle body (products of inertia) free in space, two
+    outer bodies on revolute joints at (+a, 0, 0) about its z axis and (-a, 0, 0) about its y
+    axis, centres of mass at (+-d, 0, 0) in their frames, no gravity. Speeds: the middle body's
+    angular velocity in its own components, the joint rates, the translation rates (Eq. 74)."""
+    m0, Ixx, Iyy, Izz, Ixy, Ixz, Iyz, m1, m2, d, a, J1, J2 = sm.symbols("m0 Ixx Iyy Izz Ixy Ixz Iyz m1 m2 d a J1 J2")
+    g1, g2 = me.dynamicsymbols("gamma1 gamma2")
+    dg1, dg2 = me.dynamicsymbols("dgamma1 dgamma2")
+    t = me.dynamicsymbols._t
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    B, angles, w, kd = zyx_base(N, "psi theta phi")
+    G, position, v, kd_t = translating_point(O, N, "X Y Z", "vx vy vz")
+    L1 = B.orientnew("L1", "Axis", (g1, B.z))
+    L1.set_ang_vel(B, dg1 * B.z)
+    L2 = B.orientnew("L2", "Axis", (g2, B.y))
+    L2.set_ang_vel(B, dg2 * B.y)
+    ja = G.locatenew("JA", a * B.x)
+    ja.v2pt_theory(G, N, B)
+    jb = G.locatenew("JB", -a * B.x)
+    jb.v2pt_theory(G, N, B)
+    c1 = ja.locatenew("C1", d * L1.x)
+    c1.v2pt_theory(ja, N, L1)
+    c2 = jb.locatenew("C2", -d * L2.x)
+    c2.v2pt_theory(jb, N, L2)
+    bodies = [
+        me.RigidBody("middle", G, B, m0, (me.inertia(B, Ixx, Iyy, Izz, Ixy, Iyz, Ixz), G)),
+        me.RigidBody("body1", c1, L1, m1, (me.inertia(L1, J1, J2, J2), c1)),
+        me.RigidBody("body2", c2, L2, m2, (me.inertia(L2, J1, J2, J2), c2)),
+    ]
+    kd += [g1.diff(t) - dg1, g2.diff(t) - dg2] + kd_t
+    kane = me.KanesMethod(N, q_ind=angles + [g1, g2] + position, u_ind=w + [dg1, dg2] + v, kd_eqs=kd)
+    kane.kanes_equations(bodies, [])
+    return kane
+
+
+def satellite_boom():
+    """Scene 3 (models/satellite_boom.ron): a satellite (products of inertia) free in space and a
+    tip mass at (l/2 + rho, 0, 0) in its frame, pushed along the boom by the prescribed force
+    F(t) of Eq. (79), the reaction on the satellite's centre of mass. Speeds: the satellite's
+    angular velocity in its own components, rho', the translation rates (Eq. 78)."""
+    mg, Ixx, Iyy, Izz, Ixy, Ixz, Iyz, m, l = sm.symbols("mg Ixx Iyy Izz Ixy Ixz Iyz m l")
+    rho, drho = me.dynamicsymbols("rho drho")
+    t = me.dynamicsymbols._t
+    F = -sm.Rational(18, 1000) * sm.sin(sm.Rational(89, 1000) * t) + sm.Rational(12, 1000) * sm.cos(sm.Rational(485, 10000) * t)
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    B, angles, w, kd = zyx_base(N, "psi theta phi")
+    G, position, v, kd_t = translating_point(O, N, "X Y Z", "vx vy vz")
+    tip = G.locatenew("tip", (l / 2 + rho) * B.x)
+    tip.set_vel(B, drho * B.x)
+    tip.v1pt_theory(G, N, B)
+    bodies = [
+        me.RigidBody("satellite", G, B, mg, (me.inertia(B, Ixx, Iyy, Izz, Ixy, Iyz, Ixz), G)),
+        me.Particle("tip", tip, m),
+    ]
+    loads = [(tip, F * B.x), (G, -F * B.x)]
+    kd += [rho.diff(t) - drho] + kd_t
+    kane = me.KanesMethod(N, q_ind=angles + [rho] + position, u_ind=w + [drho] + v, kd_eqs=kd)
+    kane.kanes_equations(bodies, loads)
+    return kane
+
+
+SCENES = {"cart_pendulum": cart_pendulum, "three_body": three_body, "satellite_boom": satellite_boom}
+
+
 def measure(model, n):
     start = time.process_time()
-    kane = pendulum_on_cart(n) if model == "pendulum" else floating_chain(n)
+    if model in SCENES:
+        kane, n = SCENES[model](), 0
+    else:
+        kane = pendulum_on_cart(n) if model == "pendulum" else floating_chain(n)
     mass, forcing = kane.mass_matrix, kane.forcing
     derive = time.process_time() - start
     start = time.process_time()
@@ -88,12 +223,13 @@ def measure(model, n):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--model", choices=["pendulum", "floating"], required=True)
+    p.add_argument("--model", choices=["pendulum", "floating", *SCENES], required=True)
     p.add_argument("--sizes", default="2,4,8", help="comma-separated sizes n")
     p.add_argument("--json", help="write the records to this file")
     args = p.parse_args()
     records = []
-    for n in [int(x) for x in args.sizes.split(",")]:
+    sizes = [0] if args.model in SCENES else [int(x) for x in args.sizes.split(",")]
+    for n in sizes:
         r = measure(args.model, n)
         records.append(r)
         print(f"{r['model']} n={n}: derive {r['derive_seconds']:.2f} s, cse {r['cse_seconds']:.2f} s, {r['assembly_ops']} ops", flush=True)
