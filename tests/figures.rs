@@ -339,3 +339,19 @@ fn the_symengine_figures_are_the_script_file() {
     assert_quoted(&goals, &format!("at most 1 at every n: {} ({t_lo:.2} to {t_hi:.2})", verdict(time_met)), "docs/scaling/symengine.json");
     assert_quoted(&goals, &format!("no node kept as built:\n  {} ({o_lo:.2} to {o_hi:.2}", verdict(ops_met)), "docs/scaling/symengine.json");
 }
+
+/// docs/goals.md quotes the scaling benchmark's measured cells for the goals it measures: SymPy's
+/// derivation time on the paper's scenes against ours, and the planar chain in absolute angles.
+#[test]
+fn the_goals_quote_the_scaling_rows() {
+    let goals = read("docs/goals.md");
+    let scaling = read("docs/scaling.md");
+    for row in ["| derivation CPU, SymPy's `KanesMethod` / ours, each paper scene", "| planar free chain of 20 rods in absolute angles"] {
+        let line = scaling.lines().find(|l| l.starts_with(row)).unwrap_or_else(|| panic!("docs/scaling.md has no row `{row}`"));
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        let (measured, verdict) = (cells[3], cells[4]);
+        assert!(goals.contains(measured), "docs/goals.md does not quote `{measured}` from docs/scaling.md");
+        let word = if verdict.starts_with("met") { "met" } else { "missed" };
+        assert!(goals.contains(&format!("{measured}: {word}")), "docs/goals.md does not say `{measured}: {word}` as docs/scaling.md does");
+    }
+}
