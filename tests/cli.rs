@@ -162,6 +162,25 @@ fn sweep_and_linearize_run_on_a_model_file() {
     assert_eq!(csv.lines().count(), 1 + 5, "{csv}");
 }
 
+/// A stiff run whose exact Jacobians exceed `--max-nodes` goes on with differenced ones and
+/// says so: the same steps, more right-hand-side calls (a column of the Jacobian per state).
+#[test]
+fn exact_jacobians_over_the_node_budget_fall_back_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["compare", "cart_pendulum", "--method", "ros23", "--rtol", "1e-4", "--atol", "1e-4", "--repeats", "1", "--formulations", "kane", "--json", "-"];
+    let exact = multibody(dir.path(), &args);
+    let budget: Vec<&str> = args.iter().copied().chain(["--max-nodes", "3000"]).collect();
+    let differenced = multibody(dir.path(), &budget);
+    let warning = "the exact Jacobians need more expression nodes than the budget allows";
+    assert!(!String::from_utf8_lossy(&exact.stderr).contains(warning));
+    assert!(String::from_utf8_lossy(&differenced.stderr).contains(warning), "{}", String::from_utf8_lossy(&differenced.stderr));
+    let record = |out: &Output| -> serde_json::Value { serde_json::from_str(&ok(out)).unwrap() };
+    let (e, d) = (record(&exact), record(&differenced));
+    assert_eq!(e[0]["steps"], d[0]["steps"]);
+    let calls = |r: &serde_json::Value| r[0]["rhs_calls"].as_u64().unwrap();
+    assert!(calls(&d) > calls(&e), "differenced {} against exact {}", calls(&d), calls(&e));
+}
+
 #[test]
 fn the_stiff_integrator_is_selected_in_compare_and_sweep() {
     let dir = tempfile::tempdir().unwrap();
