@@ -402,7 +402,7 @@ impl Emitter<'_> {
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
         let (solve_call, solve_item, matrix_mut) = match (plan.sparse(), &plan) {
-            (Some(sparse), _) => (quote!(solve_ldl(&matrix, &mut force)), sparse.emit(), TokenStream::new()),
+            (Some(sparse), _) => (quote!(solve_ldl(&matrix, &mut force)), sparse.emit(&mut self.splices), TokenStream::new()),
             (None, Solve::Ldl(_)) => (quote!(solve_spd(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
             (None, Solve::Lu(_)) => (quote!(solve_dense(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
         };

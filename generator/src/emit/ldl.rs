@@ -24,6 +24,7 @@
 //! ```
 
 use super::ops::OpCount;
+use super::splice::Splices;
 use crate::formulation::Equations;
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::quote;
@@ -286,67 +287,63 @@ impl LdlPlan {
 
     /// The solve as straight-line code: `fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE],
     /// b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize>`, the same operations as [`Self::solve`].
-    pub fn emit(&self) -> TokenStream {
+    pub fn emit(&self, splices: &mut Splices) -> TokenStream {
+        use super::syntax::{assign_stmt, binary, ident, index, let_stmt, literal};
         let n = self.size();
-        let o: Vec<Literal> = self.order.iter().map(|&i| Literal::usize_unsuffixed(i)).collect();
-        let name = |s: String| Ident::new(&s, Span::call_site());
-        let l = |i: usize, k: usize| name(format!("l{i}_{k}"));
-        let (d, inv) = (|j: usize| name(format!("d{j}")), |j: usize| name(format!("inv{j}")));
-        let u = |i: usize, k: usize| name(format!("u{i}_{k}"));
-        let (y, x) = (|i: usize| name(format!("y{i}")), |i: usize| name(format!("x{i}")));
-        let mut stmts = Vec::new();
+        let o = &self.order;
+        let (l, u) = (|i: usize, k: usize| format!("l{i}_{k}"), |i: usize, k: usize| format!("u{i}_{k}"));
+        let (d, inv) = (|j: usize| format!("d{j}"), |j: usize| format!("inv{j}"));
+        let (y, x) = (|i: usize| format!("y{i}"), |i: usize| format!("x{i}"));
+        let mul = |a: String, b: String| binary(ident(&a), syn::BinOp::Mul(Default::default()), ident(&b));
+        // `first - a0 * b0 - a1 * b1 ...`, the products in the order given.
+        let minus_products = |first: syn::Expr, products: Vec<(String, String)>| {
+            products.into_iter().fold(first, |acc, (a, b)| binary(acc, syn::BinOp::Sub(Default::default()), mul(a, b)))
+        };
+        // `a[i][j]`.
+        let entry = |i: usize, j: usize| {
+            syn::Expr::Index(syn::ExprIndex {
+                attrs: vec![],
+                expr: Box::new(index("a", i)),
+                bracket_token: Default::default(),
+                index: Box::new(literal(Literal::usize_unsuffixed(j))),
+            })
+        };
+        // The straight-line code is built as trees (a 20 x 20 solve is thousands of products,
+        // which syn would otherwise parse back from tokens); the few fixed statements are parsed.
+        let mut stmts: Vec<syn::Stmt> = Vec::new();
         let diagonal = (0..n).map(|i| {
             let i = Literal::usize_unsuffixed(i);
             quote!(.max(a[#i][#i].abs()))
         });
-        stmts.push(quote!(let scale = 0.0f64 #(#diagonal)*;));
+        stmts.push(syn::parse_quote!(let scale = 0.0f64 #(#diagonal)*;));
         for j in 0..n {
-            let oj = &o[j];
-            let (dj, invj) = (d(j), inv(j));
-            let mut terms = Vec::new();
-            for &k in &self.rows[j] {
-                let (ljk, ujk) = (l(j, k), u(j, k));
-                terms.push(quote!(- #ljk * #ujk));
-            }
-            stmts.push(quote! {
-                let #dj = a[#oj][#oj] #(#terms)*;
+            let oj = o[j];
+            let products = self.rows[j].iter().map(|&k| (l(j, k), u(j, k))).collect();
+            stmts.push(let_stmt(&d(j), minus_products(entry(oj, oj), products)));
+            let (dj, oj_lit) = (Ident::new(&d(j), Span::call_site()), Literal::usize_unsuffixed(oj));
+            stmts.push(syn::parse_quote! {
                 if !(#dj > PIVOT_TOLERANCE * scale) {
-                    return Err(#oj);
+                    return Err(#oj_lit);
                 }
-                let #invj = 1.0 / #dj;
             });
+            stmts.push(let_stmt(&inv(j), binary(literal(Literal::f64_unsuffixed(1.0)), syn::BinOp::Div(Default::default()), ident(&d(j)))));
             for (i, _, ks) in self.entries.iter().filter(|e| e.1 == j) {
-                let (i, oi) = (*i, &o[*i]);
-                let (lij, uij) = (l(i, j), u(i, j));
-                let terms = self.shared[ks.clone()].iter().map(|&k| {
-                    let (lik, ujk) = (l(i, k), u(j, k));
-                    quote!(- #lik * #ujk)
-                });
-                stmts.push(quote! {
-                    let #uij = a[#oi][#oj] #(#terms)*;
-                    let #lij = #uij * #invj;
-                });
+                let i = *i;
+                let products = self.shared[ks.clone()].iter().map(|&k| (l(i, k), u(j, k))).collect();
+                stmts.push(let_stmt(&u(i, j), minus_products(entry(o[i], oj), products)));
+                stmts.push(let_stmt(&l(i, j), mul(u(i, j), inv(j))));
             }
         }
         for i in 0..n {
-            let (yi, oi) = (y(i), &o[i]);
-            let terms = self.rows[i].iter().map(|&k| {
-                let (lik, yk) = (l(i, k), y(k));
-                quote!(- #lik * #yk)
-            });
-            stmts.push(quote!(let #yi = b[#oi] #(#terms)*;));
+            let products = self.rows[i].iter().map(|&k| (l(i, k), y(k))).collect();
+            stmts.push(let_stmt(&y(i), minus_products(index("b", o[i]), products)));
         }
         for i in (0..n).rev() {
-            let (xi, yi, invi, oi) = (x(i), y(i), inv(i), &o[i]);
-            let terms = self.cols[i].iter().map(|&k| {
-                let (lki, xk) = (l(k, i), x(k));
-                quote!(- #lki * #xk)
-            });
-            stmts.push(quote! {
-                let #xi = #yi * #invi #(#terms)*;
-                b[#oi] = #xi;
-            });
+            let products = self.cols[i].iter().map(|&k| (l(k, i), x(k))).collect();
+            stmts.push(let_stmt(&x(i), minus_products(mul(y(i), inv(i)), products)));
+            stmts.push(assign_stmt(index("b", o[i]), ident(&x(i))));
         }
+        let stmts = splices.stmts(stmts);
         let order: Vec<String> = self.order.iter().map(|i| i.to_string()).collect();
         let doc = format!(
             "Solves `a x = b` in place for the symmetric positive definite `a` by `L D L^T`, rows eliminated in the order [{}] (counted from 0), skipping the structural zeros ({} fill-in); `Err(column)` when a pivot is not above `PIVOT_TOLERANCE` times the largest diagonal entry.",
@@ -358,7 +355,7 @@ impl LdlPlan {
             #[allow(clippy::all)]
             #[inline(never)]
             fn solve_ldl(a: &[[f64; MATRIX_SIZE]; MATRIX_SIZE], b: &mut [f64; MATRIX_SIZE]) -> Result<(), usize> {
-                #(#stmts)*
+                #stmts
                 Ok(())
             }
         }
