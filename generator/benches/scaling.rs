@@ -306,7 +306,8 @@ fn main() {
     // Per scene: SymPy's derivation CPU seconds and ours in milliseconds.
     let against_sympy: Vec<(&str, f64, f64)> =
         sympy_scenes.iter().filter_map(|(s, sympy_s)| scene_cpu.iter().find(|(c, _)| c == s).map(|(_, ours_ms)| (*s, *sympy_s, *ours_ms))).collect();
-    write_atomic(&out.join("scaling.md"), &report(&records, &peers, &scenes, &inspects, &against_sympy, [&pendulum, &floating, &planar], compile_up_to, sympy));
+    let measured = Measured { records: &records, peers: &peers, scenes: &scenes, inspects: &inspects, against_sympy: &against_sympy };
+    write_atomic(&out.join("scaling.md"), &report(&measured, [&pendulum, &floating, &planar], compile_up_to, sympy));
     plot(&out.join("plots/scaling.svg"), &records, &peers);
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
     std::fs::write(out.join("scaling/ours.json"), serde_json::to_string_pretty(&records).unwrap()).expect("the records are written");
@@ -348,13 +349,21 @@ fn growth(records: &[Record], kind: &str) -> Option<f64> {
     Some((t(b) / t(a)).ln() / (b.n as f64 / a.n as f64).ln())
 }
 
-fn goals(
-    records: &[Record],
-    peers: &[(String, Vec<SympyRecord>)],
-    scenes: &[(&str, f64)],
-    inspects: &[(&str, f64)],
-    against_sympy: &[(&str, f64, f64)],
-) -> String {
+/// What one run of the benchmark measured, for the report.
+struct Measured<'a> {
+    records: &'a [Record],
+    /// SymPy's records per model.
+    peers: &'a [(String, Vec<SympyRecord>)],
+    /// Per scene: the best wall milliseconds of a generation.
+    scenes: &'a [(&'a str, f64)],
+    /// Per scene: the best wall milliseconds of `inspect`.
+    inspects: &'a [(&'a str, f64)],
+    /// Per scene: SymPy's derivation CPU seconds and our generation's CPU milliseconds.
+    against_sympy: &'a [(&'a str, f64, f64)],
+}
+
+fn goals(m: &Measured) -> String {
+    let Measured { records, peers, scenes, inspects, against_sympy } = *m;
     let find = |kind: &str, n: usize| records.iter().find(|r| r.model == kind && r.n == n);
     let total = |r: &Record| (r.derive_ms + r.emit_ms) / 1e3;
     let verdict = |ok: bool, reason: &str| if ok { "met".to_string() } else { format!("missed: {reason}") };
@@ -484,17 +493,8 @@ fn jit_ratios(r: &Record) -> Vec<f64> {
         .collect()
 }
 
-#[allow(clippy::too_many_arguments)]
-fn report(
-    records: &[Record],
-    peers: &[(String, Vec<SympyRecord>)],
-    scenes: &[(&str, f64)],
-    inspects: &[(&str, f64)],
-    against_sympy: &[(&str, f64, f64)],
-    [pendulum, floating, planar]: [&Vec<usize>; 3],
-    compile_up_to: usize,
-    sympy: bool,
-) -> String {
+fn report(measured: &Measured, [pendulum, floating, planar]: [&Vec<usize>; 3], compile_up_to: usize, sympy: bool) -> String {
+    let (records, peers) = (measured.records, measured.peers);
     let mut md = String::from("# Scaling\n\n");
     md += "Measured by `cargo bench -p generator --bench scaling";
     if sympy {
@@ -508,7 +508,7 @@ fn report(
          `count_ops(cse([M, F]))`), \"solve\" that of the emitted solve (LDL^T for Maggi, Kane and the reduced method; the worst case of LU with partial pivoting for Lagrange).\n\n",
         pendulum, floating, planar
     );
-    md += &goals(records, peers, scenes, inspects, against_sympy);
+    md += &goals(measured);
     let title = |k: &str| match k {
         "pendulum" => "The n-link pendulum on a cart (s = 1)",
         "floating" => "The spatial chain on a floating base (s = 3)",
