@@ -107,6 +107,23 @@ fn cpu_microseconds() -> f64 {
     micros(usage.ru_utime) + micros(usage.ru_stime)
 }
 
+/// `docs/scaling/sympy_kane.py --model MODEL EXTRA...` in a fresh python3 process: its records,
+/// or None when it could not run (no python3, no SymPy).
+fn run_sympy(root: &Path, model: &str, extra: &[&str]) -> Option<Vec<SympyRecord>> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        records: Vec<SympyRecord>,
+    }
+    let json = std::env::temp_dir().join(format!("sympy-{model}-{}.json", std::process::id()));
+    let status = Command::new("python3").arg(root.join("docs/scaling/sympy_kane.py")).args(["--model", model]).args(extra).arg("--json").arg(&json).status();
+    let records = match status {
+        Ok(s) if s.success() => std::fs::read_to_string(&json).ok().and_then(|t| serde_json::from_str::<File>(&t).ok()).map(|f| f.records),
+        _ => None,
+    };
+    let _ = std::fs::remove_file(&json);
+    records
+}
+
 /// The models the benchmark scales, by their key.
 const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
 
@@ -257,22 +274,10 @@ fn main() {
             // SymPy takes minutes beyond these sizes (8 links of the spatial chain: about 45 s).
             let limit = if kind == "pendulum" { 30 } else { 8 };
             let sizes: Vec<String> = sizes.iter().filter(|&&n| n <= limit).map(|n| n.to_string()).collect();
-            let json = std::env::temp_dir().join(format!("sympy-{kind}-{}.json", std::process::id()));
             eprintln!("scaling: SymPy {kind} {} ...", sizes.join(","));
-            let status = Command::new("python3")
-                .arg(root.join("docs/scaling/sympy_kane.py"))
-                .args(["--model", kind, "--sizes", &sizes.join(","), "--json"])
-                .arg(&json)
-                .status();
-            if matches!(status, Ok(s) if s.success()) {
-                #[derive(serde::Deserialize)]
-                struct File {
-                    records: Vec<SympyRecord>,
-                }
-                let f: File = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-                peers.push((kind.to_string(), f.records));
-            } else {
-                eprintln!("scaling: SymPy not measured (python3 with sympy needed)");
+            match run_sympy(&root, kind, &["--sizes", &sizes.join(",")]) {
+                Some(records) => peers.push((kind.to_string(), records)),
+                None => eprintln!("scaling: SymPy not measured (python3 with sympy needed)"),
             }
         }
     }
@@ -281,22 +286,8 @@ fn main() {
     let mut sympy_scenes: Vec<(&str, f64)> = Vec::new();
     if sympy {
         for scene in SCENES {
-            let json = std::env::temp_dir().join(format!("sympy-{scene}-{}.json", std::process::id()));
-            let mut best = f64::INFINITY;
-            for _ in 0..SYMPY_SCENE_RUNS {
-                let status = Command::new("python3").arg(root.join("docs/scaling/sympy_kane.py")).args(["--model", scene, "--json"]).arg(&json).status();
-                if !matches!(status, Ok(s) if s.success()) {
-                    best = f64::NAN;
-                    break;
-                }
-                #[derive(serde::Deserialize)]
-                struct File {
-                    records: Vec<SympyRecord>,
-                }
-                let f: File = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-                best = best.min(f.records[0].derive_seconds);
-            }
-            let _ = std::fs::remove_file(&json);
+            let runs: Option<Vec<f64>> = (0..SYMPY_SCENE_RUNS).map(|_| Some(run_sympy(&root, scene, &[])?.first()?.derive_seconds)).collect();
+            let best = runs.map_or(f64::NAN, |r| r.into_iter().fold(f64::INFINITY, f64::min));
             if best.is_finite() {
                 sympy_scenes.push((scene, best));
             }
