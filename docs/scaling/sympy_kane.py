@@ -32,58 +32,11 @@ def pendulum_on_cart(n):
     return n_link_pendulum_on_cart(n, cart_force=False, joint_torques=False)
 
 
-def floating_chain(n):
-    """A rigid base (ZYX angles, position X, Y, Z) and n links on revolute joints alternating
-    about the parent's z and y axes, no gravity; speeds: the base's body-frame angular velocity,
-    the joint rates, the translation rates (scene 2's choice)."""
-    psi, theta, phi = me.dynamicsymbols("psi theta phi")
-    a = me.dynamicsymbols("a1:%d" % (n + 1))
-    X, Y, Z = me.dynamicsymbols("X Y Z")
-    w = me.dynamicsymbols("w1:4")
-    da = me.dynamicsymbols("da1:%d" % (n + 1))
-    vx, vy, vz = me.dynamicsymbols("vx vy vz")
-    mb, Ibx, Iby, Ibz, h, m, L, J1, J2 = sm.symbols("mb Ibx Iby Ibz h m L J1 J2")
-    t = me.dynamicsymbols._t
-
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    B = N.orientnew("B", "Body", (psi, theta, phi), "ZYX")
-    B.set_ang_vel(N, w[0] * B.x + w[1] * B.y + w[2] * B.z)
-    G = O.locatenew("G", X * N.x + Y * N.y + Z * N.z)
-    G.set_vel(N, vx * N.x + vy * N.y + vz * N.z)
-    bodies = [me.RigidBody("base", G, B, mb, (me.inertia(B, Ibx, Iby, Ibz), G))]
-    kd = [X.diff(t) - vx, Y.diff(t) - vy, Z.diff(t) - vz]
-    # w = the body-frame angular velocity of the ZYX rotation, in psi', theta', phi'.
-    frame_tmp = N.orientnew("Bt", "Body", (psi, theta, phi), "ZYX")
-    rates = frame_tmp.ang_vel_in(N)
-    kd += [rates.dot(frame_tmp.x) - w[0], rates.dot(frame_tmp.y) - w[1], rates.dot(frame_tmp.z) - w[2]]
-    parent, joint = B, G.locatenew("J1", h * B.x)
-    joint.v2pt_theory(G, N, B)
-    for i in range(n):
-        axis = parent.z if i % 2 == 0 else parent.y
-        Li = parent.orientnew("L%d" % (i + 1), "Axis", (a[i], axis))
-        Li.set_ang_vel(parent, da[i] * axis)
-        Ci = joint.locatenew("C%d" % (i + 1), L / 2 * Li.x)
-        Ci.v2pt_theory(joint, N, Li)
-        bodies.append(me.RigidBody("link%d" % (i + 1), Ci, Li, m, (me.inertia(Li, J1, J2, J2), Ci)))
-        kd.append(a[i].diff(t) - da[i])
-        nxt = joint.locatenew("J%d" % (i + 2), L * Li.x)
-        nxt.v2pt_theory(joint, N, Li)
-        parent, joint = Li, nxt
-    q = [psi, theta, phi] + list(a) + [X, Y, Z]
-    u = list(w) + list(da) + [vx, vy, vz]
-    kane = me.KanesMethod(N, q_ind=q, u_ind=u, kd_eqs=kd)
-    kane.kanes_equations(bodies, [])
-    return kane
-
-
 def zyx_base(N, names):
     """A frame turned by ZYX angles from N, with its body-frame angular velocity as speeds w1..w3
     and the kinematic equations that define them."""
     psi, theta, phi = me.dynamicsymbols(names)
     w = me.dynamicsymbols("w1:4")
-    t = me.dynamicsymbols._t
     B = N.orientnew("B", "Body", (psi, theta, phi), "ZYX")
     rates = B.ang_vel_in(N)
     kd = [rates.dot(B.x) - w[0], rates.dot(B.y) - w[1], rates.dot(B.z) - w[2]]
@@ -99,6 +52,42 @@ def translating_point(O, N, names, speeds):
     G = O.locatenew("G", X * N.x + Y * N.y + Z * N.z)
     G.set_vel(N, vx * N.x + vy * N.y + vz * N.z)
     return G, [X, Y, Z], [vx, vy, vz], [X.diff(t) - vx, Y.diff(t) - vy, Z.diff(t) - vz]
+
+
+def floating_chain(n):
+    """A rigid base (ZYX angles, position X, Y, Z) and n links on revolute joints alternating
+    about the parent's z and y axes, no gravity; speeds: the base's body-frame angular velocity,
+    the joint rates, the translation rates (scene 2's choice)."""
+    a = me.dynamicsymbols("a1:%d" % (n + 1))
+    da = me.dynamicsymbols("da1:%d" % (n + 1))
+    mb, Ibx, Iby, Ibz, h, m, L, J1, J2 = sm.symbols("mb Ibx Iby Ibz h m L J1 J2")
+    t = me.dynamicsymbols._t
+
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    B, angles, w, kd_w = zyx_base(N, "psi theta phi")
+    G, position, v, kd = translating_point(O, N, "X Y Z", "vx vy vz")
+    bodies = [me.RigidBody("base", G, B, mb, (me.inertia(B, Ibx, Iby, Ibz), G))]
+    kd += kd_w
+    parent, joint = B, G.locatenew("J1", h * B.x)
+    joint.v2pt_theory(G, N, B)
+    for i in range(n):
+        axis = parent.z if i % 2 == 0 else parent.y
+        Li = parent.orientnew("L%d" % (i + 1), "Axis", (a[i], axis))
+        Li.set_ang_vel(parent, da[i] * axis)
+        Ci = joint.locatenew("C%d" % (i + 1), L / 2 * Li.x)
+        Ci.v2pt_theory(joint, N, Li)
+        bodies.append(me.RigidBody("link%d" % (i + 1), Ci, Li, m, (me.inertia(Li, J1, J2, J2), Ci)))
+        kd.append(a[i].diff(t) - da[i])
+        nxt = joint.locatenew("J%d" % (i + 2), L * Li.x)
+        nxt.v2pt_theory(joint, N, Li)
+        parent, joint = Li, nxt
+    q = angles + list(a) + position
+    u = w + list(da) + v
+    kane = me.KanesMethod(N, q_ind=q, u_ind=u, kd_eqs=kd)
+    kane.kanes_equations(bodies, [])
+    return kane
 
 
 def cart_pendulum():
