@@ -45,3 +45,32 @@ fn chains_evaluated_in_process_equal_their_compiled_modules() {
         assert!(compared > 100, "{}: {compared} values", model.name);
     }
 }
+
+/// Maggi's `rhs` on the planar chain in absolute angles (no constraints: `W` reorders the
+/// speeds, `c` is zero) reuses the body of Lagrange's, its outputs reordered: both give the
+/// same rates of `[q; q']` at the same states, with the same operation counts.
+#[test]
+fn maggi_reusing_lagranges_body_gives_lagranges_rates() {
+    use generator::model::examples::planar_chain_absolute;
+    let model = planar_chain_absolute(4).build().unwrap();
+    let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
+    let (lagrange, maggi) = (summary.ops("lagrange::rhs").unwrap(), summary.ops("maggi::rhs").unwrap());
+    assert_eq!((lagrange.lets, &lagrange.ops), (maggi.lets, &maggi.ops));
+    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
+    let (lagrange, maggi) = (form("lagrange"), form("maggi"));
+    assert_eq!(lagrange.states(), maggi.states());
+    let mut compared = 0;
+    for k in 0..5 {
+        let y = state(lagrange.states(), k);
+        let g: Vec<f64> = (0..evaluated.ignorable.len()).map(|i| 0.2 * (i + k) as f64 - 0.1).collect();
+        let (mut dl, mut dm) = (vec![0.0; y.len()], vec![0.0; y.len()]);
+        lagrange.rhs(0.0, &y, &evaluated.default_params, &g, &mut dl).unwrap();
+        maggi.rhs(0.0, &y, &evaluated.default_params, &g, &mut dm).unwrap();
+        for (i, (l, m)) in dl.iter().zip(&dm).enumerate() {
+            assert!((l - m).abs() <= 1e-12 * l.abs().max(1.0), "state #{k} [{i}]: Lagrange {l:e}, Maggi {m:e}");
+            compared += usize::from(*l != 0.0);
+        }
+    }
+    assert!(compared > 20, "{compared} nonzero rates");
+}

@@ -6,6 +6,7 @@ use super::function::{Arg, Body, Input, arg_list, body_with_definitions, ident};
 use super::lower::literal;
 use super::names::Names;
 use super::prepare::Preparer;
+use super::reuse::{Bodies, Signature};
 use super::shared::FromMechanics;
 use super::splice::Splices;
 use super::{Function, FunctionCost, Generated, Options, Parameters, Summary};
@@ -53,6 +54,8 @@ pub(super) struct Emitter<'a> {
     pub work: bool,
     /// Horner forms, shared by every function of the module.
     pub horner: rustc_hash::FxHashMap<Expr, Expr>,
+    /// The bodies built so far, for functions with the same outputs.
+    pub bodies: Bodies,
     /// The seam crate's path in emitted code.
     pub seam: syn::Path,
     /// The bodies' syntax trees, placed into the parsed module at the end.
@@ -371,6 +374,7 @@ impl<'a> Emitter<'a> {
             forms: Vec::new(),
             work: false,
             horner: Default::default(),
+            bodies: Bodies::default(),
             seam,
             splices: Splices::default(),
             tapes: options.tapes.then(HashMap::new),
@@ -758,8 +762,14 @@ impl Emitter<'_> {
         let prepared = self.prep.prepare_all(outputs);
         let defined: Vec<(Symbol, Expr)> = definitions.iter().map(|(s, e)| (*s, self.prep.prepare(*e))).collect();
         let short = name.rsplit("::").next().unwrap_or(name);
-        body_with_definitions(short, &defined, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner)
-            .map_err(|e| self.emission_error(name, e))
+        let signature = Signature::new(short, &defined, inputs, args, self.options.max_lets_per_function);
+        if let Some(reused) = self.bodies.find(&signature, &prepared) {
+            return reused.map_err(|e| self.emission_error(name, e));
+        }
+        let body = body_with_definitions(short, &defined, &prepared, inputs, args, self.options.max_lets_per_function, &mut self.horner)
+            .map_err(|e| self.emission_error(name, e))?;
+        self.bodies.remember(signature, &prepared, &body);
+        Ok(body)
     }
 
     /// Records `b`'s cost under `name` (and its tape), and places it.
