@@ -126,11 +126,21 @@ impl Translation {
     pub fn cheaper(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
         let vw = v_world.map(|e| tidy.rational(e));
         let world_accel = tidy.of3(chain.dt3(&vw));
+        let world = Translation { partials: partials(tidy, &vw, rates), v: vw, in_body: false, accel: world_accel };
+        let world_ops = ops(&world.partials, &world.accel);
+        let vb = v_body.map(|e| tidy.rational(e));
+        let body_partials = partials(tidy, &vb, rates);
+        // The body form's partials alone cost at least the world form in all (operations over
+        // distinct nodes only grow with more outputs): it loses without its acceleration, the
+        // transport term that costs most to simplify. On the planar chain of 20 rods in
+        // absolute angles, every link from the third on.
+        if crate::symbolic::expr::dag_ops(&body_partials.concat()) >= world_ops {
+            return world;
+        }
         // A rate absent from the world acceleration (as simplified: no occurrence left).
-        let absent = |r: Symbol| !world_accel.iter().any(|e| e.contains(r));
-        let body = Translation::body_form(tidy, v_body, omega, rates, chain, absent);
-        let pw = partials(tidy, &vw, rates);
-        if body_ops(&body) < ops(&pw, &world_accel) { body } else { Translation { v: vw, in_body: false, partials: pw, accel: world_accel } }
+        let absent = |r: Symbol| !world.accel.iter().any(|e| e.contains(r));
+        let body = Translation::body_form_of(tidy, vb, body_partials, omega, rates, chain, absent);
+        if body_ops(&body) < world_ops { body } else { world }
     }
 
     /// The velocity in the frame's own components only: for a body whose velocity the
@@ -145,13 +155,23 @@ impl Translation {
     pub fn in_body(tidy: &Tidy, v_body: &[Expr; 3], v_world: &[Expr; 3], omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain) -> Translation {
         let world_accel = chain.dt3(v_world);
         let absent = |r: Symbol| world_accel.iter().all(|e| !e.contains(r) || crate::symbolic::zero::is_identically_zero(e.diff(r)));
-        Translation::body_form(tidy, v_body, omega, rates, chain, absent)
+        let vb = v_body.map(|e| tidy.rational(e));
+        let body_partials = partials(tidy, &vb, rates);
+        Translation::body_form_of(tidy, vb, body_partials, omega, rates, chain, absent)
     }
 
-    /// The body-components form: partials and the transport acceleration `dv/dt + omega x v`,
-    /// the rates for which `absent` holds set to zero in it.
-    fn body_form(tidy: &Tidy, v_body: &[Expr; 3], omega: &[Expr; 3], rates: &[Symbol], chain: &TimeChain, absent: impl Fn(Symbol) -> bool) -> Translation {
-        let vb = v_body.map(|e| tidy.rational(e));
+    /// The body-components form of the simplified velocity `vb` with its partials: the
+    /// transport acceleration `dv/dt + omega x v`, the rates for which `absent` holds set to
+    /// zero in it.
+    fn body_form_of(
+        tidy: &Tidy,
+        vb: [Expr; 3],
+        partials: Vec<[Expr; 3]>,
+        omega: &[Expr; 3],
+        rates: &[Symbol],
+        chain: &TimeChain,
+        absent: impl Fn(Symbol) -> bool,
+    ) -> Translation {
         let transport = tidy.of3(add3(&chain.dt3(&vb), &cross(omega, &vb)));
         // The transport form `dv/dt + omega x v` holds translation rates (a floating base's)
         // formally, where only the rotation's identities cancel them; but the acceleration is
@@ -159,7 +179,7 @@ impl Translation {
         // too, and is set to zero (exact, no test needed).
         let zeros: HashMap<Symbol, Expr> = rates.iter().filter(|r| absent(**r)).map(|r| (*r, Expr::zero())).collect();
         let transport = if zeros.is_empty() { transport } else { transport.map(|e| tidy.of(e.subs(&zeros))) };
-        Translation { partials: partials(tidy, &vb, rates), v: vb, in_body: true, accel: transport }
+        Translation { partials, v: vb, in_body: true, accel: transport }
     }
 }
 
