@@ -77,6 +77,29 @@ pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
     }
 }
 
+/// The first entry of the mass matrix (upper triangle, by rows) that depends on `q`, when the
+/// exact zero test proves it and proves every entry before it independent: then `L` depends on
+/// `q` too (an entry is the coefficient of its own product of rates in `T`), and the test on
+/// the whole of `L`, many times larger, is not needed. Where an entry cannot be decided, None:
+/// the test on `L` decides, as it always did.
+fn in_mass_matrix(mech: &Quantities, q: Symbol) -> Option<Failure> {
+    for r in 0..mech.m {
+        for c in r..mech.m {
+            let e = mech.mass.get(r, c);
+            if !e.contains(q) {
+                continue;
+            }
+            let d = e.diff(q);
+            match zero_test(d) {
+                ZeroVerdict::Zero { .. } => {}
+                ZeroVerdict::NonZero { .. } => return Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d }),
+                ZeroVerdict::Undecided { .. } => return None,
+            }
+        }
+    }
+    None
+}
+
 /// Checks Definition 1 for every coordinate.
 pub fn analyze(model: &Model, mech: &Quantities) -> Vec<CoordinateReport> {
     let m = mech.m;
@@ -85,9 +108,9 @@ pub fn analyze(model: &Model, mech: &Quantities) -> Vec<CoordinateReport> {
         .iter()
         .enumerate()
         .map(|(j, q)| {
-            let mut failure = None;
+            let mut failure = in_mass_matrix(mech, *q);
             // One test on L = T - V; only when it fails, the place it fails at.
-            if depends(mech.kinetic - mech.potential, *q).is_some() {
+            if failure.is_none() && depends(mech.kinetic - mech.potential, *q).is_some() {
                 'lag: for r in 0..m {
                     for c in r..m {
                         if let Some(d) = depends(mech.mass.get(r, c), *q) {
