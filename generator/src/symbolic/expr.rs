@@ -419,14 +419,12 @@ fn small_power(e: &Rat) -> Option<i32> {
 
 /// Sorts `(expr, rational)` pairs by structural key and merges equal exprs by adding the
 /// rationals; drops pairs whose rational becomes zero.
-fn merge_pairs(mut pairs: Vec<(Expr, Rat)>) -> Vec<(Expr, Rat)> {
-    let keys: Vec<u64> = with_pool(|p| pairs.iter().map(|(e, _)| p.keys[p.check(*e)]).collect());
-    let mut idx: Vec<usize> = (0..pairs.len()).collect();
-    idx.sort_by_key(|&i| (keys[i], pairs[i].0.id));
-    let mut out: Vec<(Expr, Rat)> = Vec::with_capacity(pairs.len());
-    let mut taken: Vec<Option<(Expr, Rat)>> = pairs.drain(..).map(Some).collect();
-    for i in idx {
-        let (e, c) = taken[i].take().expect("each pair is taken once");
+fn merge_pairs(pairs: Vec<(Expr, Rat)>) -> Vec<(Expr, Rat)> {
+    // Each pair with its sort key, in one vector (sorted in place, merged in one pass).
+    let mut keyed: Vec<((u64, u32), (Expr, Rat))> = with_pool(|p| pairs.into_iter().map(|(e, c)| ((p.keys[p.check(e)], e.id), (e, c))).collect());
+    keyed.sort_unstable_by_key(|(k, _)| *k);
+    let mut out: Vec<(Expr, Rat)> = Vec::with_capacity(keyed.len());
+    for (_, (e, c)) in keyed {
         match out.last_mut() {
             Some((last, acc)) if *last == e => *acc += c,
             _ => out.push((e, c)),
