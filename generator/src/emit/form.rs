@@ -104,6 +104,7 @@ impl Emitter<'_> {
 
     /// A formulation's submodule (see the module docs).
     pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
+        self.bodies.start(f.kind.speeds());
         let model = self.model;
         let m = model.m();
         let name = f.name();

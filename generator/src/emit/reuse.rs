@@ -4,11 +4,18 @@
 //! their `initial_state` and `velocities` coincide too. Building a body (pair sharing, sum
 //! factoring, Horner forms, lowering) is the emission's main cost; on the planar chain of 20
 //! rods in absolute angles, Maggi's `rhs` is a quarter of it.
+//!
+//! Only formulations whose states hold the same kind of speeds can share a body (the inputs
+//! differ otherwise), so the bodies are kept while formulations of one kind are emitted and let
+//! go when the kind changes. The copy kept is memory traded for time: on the 50-link pendulum
+//! on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from about 560 MB (no copies) to
+//! 680-740 MB (790 MB when every body was kept to the end), for a quarter less CPU.
 
 use super::function::{Arg, Body, Input};
 use super::lower::{LowerError, lower};
 use crate::symbolic::{Expr, Symbol};
 use rustc_hash::FxHashMap as HashMap;
+use seam::Speeds;
 
 /// What a body is built from besides its outputs: two requests with the same signature and the
 /// same non-constant outputs get the same statements.
@@ -38,6 +45,8 @@ impl Signature {
 #[derive(Default)]
 pub struct Bodies {
     built: Vec<Built>,
+    /// The kind of speeds of the formulation being emitted (None before the first).
+    speeds: Option<Speeds>,
 }
 
 struct Built {
@@ -57,6 +66,15 @@ fn occurrences(outputs: &[Expr]) -> HashMap<Expr, (usize, usize)> {
 }
 
 impl Bodies {
+    /// A formulation whose states hold `speeds` starts: the bodies kept for formulations of
+    /// another kind are let go.
+    pub fn start(&mut self, speeds: Speeds) {
+        if self.speeds != Some(speeds) {
+            self.built.clear();
+            self.speeds = Some(speeds);
+        }
+    }
+
     /// A body built before with this signature and the same non-constant outputs, each as
     /// often: its statements, with the outputs in `outputs`' order and the constants lowered
     /// here (they cost no operation, so the counts carry over).
@@ -131,5 +149,21 @@ mod tests {
         assert!(bodies.find(&Signature::new("g", &[], &inputs(), &args(), 100), &[first, second]).is_none(), "another name");
         assert!(bodies.find(&Signature::new("f", &[], &inputs(), &args(), 1), &[first, second]).is_none(), "another split");
         assert!(bodies.find(&signature, &[second, first]).is_some());
+    }
+
+    #[test]
+    fn bodies_are_let_go_when_the_kind_of_speeds_changes() {
+        let (a, b) = (Symbol::new("a").expr(), Symbol::new("b").expr());
+        let outputs = [a.sin() * b];
+        let (mut bodies, _) = built(&outputs);
+        let signature = Signature::new("f", &[], &inputs(), &args(), 100);
+        bodies.start(Speeds::Rates);
+        assert!(bodies.find(&signature, &outputs).is_none(), "kept from before the first formulation");
+        let body = body_with_definitions("f", &[], &outputs, &inputs(), &args(), 100, &mut Default::default()).unwrap();
+        bodies.remember(Signature::new("f", &[], &inputs(), &args(), 100), &outputs, &body);
+        bodies.start(Speeds::Rates);
+        assert!(bodies.find(&signature, &outputs).is_some(), "kept for Maggi after Lagrange");
+        bodies.start(Speeds::QuasiVelocities);
+        assert!(bodies.find(&signature, &outputs).is_none(), "let go for Kane");
     }
 }
