@@ -285,11 +285,11 @@ fn main() {
                 })
                 .fold((f64::INFINITY, f64::INFINITY), |(w, c), (a, b)| (w.min(a), c.min(b)))
         };
-        let ((generate_ms, cpu_ms), (inspect_ms, _)) = (best(&[]), best(&["inspect"]));
-        eprintln!("scaling: {scene}: generate {generate_ms:.1} ms ({cpu_ms:.1} ms of CPU), inspect {inspect_ms:.1} ms");
+        let ((generate_ms, cpu_ms), (inspect_ms, inspect_cpu_ms)) = (best(&[]), best(&["inspect"]));
+        eprintln!("scaling: {scene}: generate {generate_ms:.1} ms ({cpu_ms:.1} ms of CPU), inspect {inspect_ms:.1} ms ({inspect_cpu_ms:.1} ms of CPU)");
         scenes.push((scene, generate_ms));
         scene_cpu.push((scene, cpu_ms));
-        inspects.push((scene, inspect_ms));
+        inspects.push((scene, inspect_ms, inspect_cpu_ms));
     }
     let mut peers: Vec<(String, Vec<SympyRecord>)> = Vec::new();
     if sympy {
@@ -320,7 +320,8 @@ fn main() {
     // Per scene: SymPy's derivation CPU seconds and ours in milliseconds.
     let against_sympy: Vec<(&str, f64, f64)> =
         sympy_scenes.iter().filter_map(|(s, sympy_s)| scene_cpu.iter().find(|(c, _)| c == s).map(|(_, ours_ms)| (*s, *sympy_s, *ours_ms))).collect();
-    let measured = Measured { records: &records, peers: &peers, scenes: &scenes, inspects: &inspects, against_sympy: &against_sympy, planar_goal };
+    let measured =
+        Measured { records: &records, peers: &peers, scenes: &scenes, scene_cpu: &scene_cpu, inspects: &inspects, against_sympy: &against_sympy, planar_goal };
     write_atomic(&out.join("scaling.md"), &report(&measured, [&pendulum, &floating, &planar], compile_up_to, sympy));
     plot(&out.join("plots/scaling.svg"), &records, &peers);
     std::fs::create_dir_all(out.join("scaling")).expect("the output directory");
@@ -370,8 +371,10 @@ struct Measured<'a> {
     peers: &'a [(String, Vec<SympyRecord>)],
     /// Per scene: the best wall milliseconds of a generation.
     scenes: &'a [(&'a str, f64)],
-    /// Per scene: the best wall milliseconds of `inspect`.
-    inspects: &'a [(&'a str, f64)],
+    /// Per scene: the best CPU milliseconds of a generation.
+    scene_cpu: &'a [(&'a str, f64)],
+    /// Per scene: the best wall and the best CPU milliseconds of `inspect`.
+    inspects: &'a [(&'a str, f64, f64)],
     /// Per scene: SymPy's derivation CPU seconds and our generation's CPU milliseconds.
     against_sympy: &'a [(&'a str, f64, f64)],
     /// The planar chain of 20 rods: median CPU seconds and largest peak megabytes of
@@ -380,7 +383,7 @@ struct Measured<'a> {
 }
 
 fn goals(m: &Measured) -> String {
-    let Measured { records, peers, scenes, inspects, against_sympy, planar_goal } = *m;
+    let Measured { records, peers, scenes, scene_cpu, inspects, against_sympy, planar_goal } = *m;
     let find = |kind: &str, n: usize| records.iter().find(|r| r.model == kind && r.n == n);
     let total = |r: &Record| (r.derive_ms + r.emit_ms) / 1e3;
     let verdict = |ok: bool, reason: &str| if ok { "met".to_string() } else { format!("missed: {reason}") };
@@ -450,12 +453,21 @@ fn goals(m: &Measured) -> String {
             )
         );
     }
-    let ins: Vec<String> = inspects.iter().zip(scenes).map(|((s, i), (_, g))| format!("{s} {i:.0} against {g:.0} ms")).collect();
-    let ins_ok = inspects.iter().zip(scenes).all(|((_, i), (_, g))| i <= g);
+    // Cost is CPU: generation overlaps its emission with the derivation on a second thread,
+    // inspect derives on one, so their wall times say how the work is spread, not how much.
+    let generate_cpu = |scene: &str| scene_cpu.iter().find(|(s, _)| *s == scene).map(|(_, c)| *c);
+    let ins: Vec<(String, bool)> = inspects
+        .iter()
+        .zip(scenes)
+        .map(|((s, wall, cpu), (_, g_wall))| {
+            let g_cpu = generate_cpu(s).unwrap_or(f64::NAN);
+            (format!("{s} {cpu:.0} against {g_cpu:.0} ms of CPU ({wall:.0} against {g_wall:.0} ms wall)"), *cpu <= g_cpu)
+        })
+        .collect();
     md += &format!(
-        "| `inspect` costs no more than generation (one shared derivation) | inspect <= generate | {} | {} |\n",
-        ins.join(", "),
-        verdict(ins_ok, "printing")
+        "| `inspect` costs no more than generation (one shared derivation), CPU of the best run each | inspect <= generate | {} | {} |\n",
+        ins.iter().map(|(t, _)| t.as_str()).collect::<Vec<_>>().join(", "),
+        verdict(ins.iter().all(|(_, ok)| *ok), "inspect builds the trial bodies of the recursive formulations, as generation does")
     );
     let mut worst: Option<(String, usize, f64)> = None;
     for (kind, p) in peers {
