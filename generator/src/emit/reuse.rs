@@ -6,8 +6,9 @@
 //! rods in absolute angles, Maggi's `rhs` is a quarter of it.
 //!
 //! Only formulations whose states hold the same kind of speeds can share a body (the inputs
-//! differ otherwise), so the bodies are kept while formulations of one kind are emitted and let
-//! go when the kind changes. The copy kept is memory traded for time: on the 50-link pendulum
+//! differ otherwise), so a formulation's bodies are kept only when one of the same kind is still
+//! to be emitted (Lagrange's for Maggi, Kane's for the reduced form, which is Kane's without
+//! ignorable coordinates), and let go when the kind changes. The copy kept is memory traded for time: on the 50-link pendulum
 //! on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from about 560 MB (no copies) to
 //! 680-740 MB (790 MB when every body was kept to the end), for a quarter less CPU.
 
@@ -47,6 +48,8 @@ pub struct Bodies {
     built: Vec<Built>,
     /// The kind of speeds of the formulation being emitted (None before the first).
     speeds: Option<Speeds>,
+    /// Whether the bodies built now are kept: a formulation of the same kind follows.
+    keep: bool,
 }
 
 struct Built {
@@ -67,12 +70,14 @@ fn occurrences(outputs: &[Expr]) -> HashMap<Expr, (usize, usize)> {
 
 impl Bodies {
     /// A formulation whose states hold `speeds` starts: the bodies kept for formulations of
-    /// another kind are let go.
-    pub fn start(&mut self, speeds: Speeds) {
+    /// another kind are let go, and its own are kept when `followed` (a formulation of the same
+    /// kind is still to be emitted).
+    pub fn start(&mut self, speeds: Speeds, followed: bool) {
         if self.speeds != Some(speeds) {
             self.built.clear();
             self.speeds = Some(speeds);
         }
+        self.keep = followed;
     }
 
     /// A body built before with this signature and the same non-constant outputs, each as
@@ -93,8 +98,11 @@ impl Bodies {
         Some(lowered.map(|outputs| Body { outputs, ..built.body.clone() }))
     }
 
-    /// Keeps `body`, built under `signature` for `outputs`.
+    /// Keeps `body`, built under `signature` for `outputs`, if a later formulation may reuse it.
     pub fn remember(&mut self, signature: Signature, outputs: &[Expr], body: &Body) {
+        if !self.keep {
+            return;
+        }
         self.built.push(Built { signature, outputs: occurrences(outputs), body: body.clone() });
     }
 }
@@ -116,6 +124,7 @@ mod tests {
     fn built(outputs: &[Expr]) -> (Bodies, Body) {
         let body = body_with_definitions("f", &[], outputs, &inputs(), &args(), 100, &mut Default::default()).unwrap();
         let mut bodies = Bodies::default();
+        bodies.start(Speeds::Rates, true);
         bodies.remember(Signature::new("f", &[], &inputs(), &args(), 100), outputs, &body);
         (bodies, body)
     }
@@ -152,18 +161,22 @@ mod tests {
     }
 
     #[test]
-    fn bodies_are_let_go_when_the_kind_of_speeds_changes() {
+    fn bodies_are_kept_for_a_later_formulation_of_the_same_kind_only() {
         let (a, b) = (Symbol::new("a").expr(), Symbol::new("b").expr());
         let outputs = [a.sin() * b];
-        let (mut bodies, _) = built(&outputs);
-        let signature = Signature::new("f", &[], &inputs(), &args(), 100);
-        bodies.start(Speeds::Rates);
-        assert!(bodies.find(&signature, &outputs).is_none(), "kept from before the first formulation");
+        let signature = || Signature::new("f", &[], &inputs(), &args(), 100);
         let body = body_with_definitions("f", &[], &outputs, &inputs(), &args(), 100, &mut Default::default()).unwrap();
-        bodies.remember(Signature::new("f", &[], &inputs(), &args(), 100), &outputs, &body);
-        bodies.start(Speeds::Rates);
-        assert!(bodies.find(&signature, &outputs).is_some(), "kept for Maggi after Lagrange");
-        bodies.start(Speeds::QuasiVelocities);
-        assert!(bodies.find(&signature, &outputs).is_none(), "let go for Kane");
+        let mut bodies = Bodies::default();
+        bodies.remember(signature(), &outputs, &body);
+        assert!(bodies.find(&signature(), &outputs).is_none(), "before the first formulation: nothing follows");
+        bodies.start(Speeds::Rates, false);
+        bodies.remember(signature(), &outputs, &body);
+        assert!(bodies.find(&signature(), &outputs).is_none(), "no formulation of the same kind follows");
+        bodies.start(Speeds::Rates, true);
+        bodies.remember(signature(), &outputs, &body);
+        bodies.start(Speeds::Rates, false);
+        assert!(bodies.find(&signature(), &outputs).is_some(), "kept for Maggi after Lagrange");
+        bodies.start(Speeds::QuasiVelocities, true);
+        assert!(bodies.find(&signature(), &outputs).is_none(), "let go for Kane");
     }
 }
