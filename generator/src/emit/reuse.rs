@@ -10,7 +10,7 @@
 //! to be emitted (Lagrange's for Maggi, Kane's for the reduced form, which is Kane's without
 //! ignorable coordinates), and let go when the kind changes. The copy kept is memory traded for time: on the 50-link pendulum
 //! on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from about 560 MB (no copies) to
-//! 680-740 MB (790 MB when every body was kept to the end), for a quarter less CPU.
+//! about 670 MB (790 MB when every body was kept to the end), for a quarter less CPU.
 
 use super::function::{Arg, Body, Input};
 use super::lower::{LowerError, lower};
