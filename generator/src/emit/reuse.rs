@@ -8,9 +8,10 @@
 //! Only formulations whose states hold the same kind of speeds can share a body (the inputs
 //! differ otherwise), so a formulation's bodies are kept only when one of the same kind is still
 //! to be emitted (Lagrange's for Maggi, Kane's for the reduced form, which is Kane's without
-//! ignorable coordinates), and let go when the kind changes. The copy kept is memory traded for time: on the 50-link pendulum
-//! on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from about 560 MB (no copies) to
-//! about 670 MB (790 MB when every body was kept to the end), for a quarter less CPU.
+//! ignorable coordinates), and let go when the kind changes. The copy kept is memory traded for
+//! time: on the 50-link pendulum on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from
+//! about 560 MB (no copies) to about 670 MB (790 MB when every body was kept to the end), for a
+//! quarter less CPU.
 
 use super::function::{Arg, Body, Input};
 use super::lower::{LowerError, lower};
