@@ -54,6 +54,18 @@ def translating_point(O, N, names, speeds):
     return G, [X, Y, Z], [vx, vy, vz], [X.diff(t) - vx, Y.diff(t) - vy, Z.diff(t) - vz]
 
 
+def floating_base():
+    """The world frame N and a base frame B turned by ZYX angles (zyx_base) whose point G moves by
+    (X, Y, Z) from a fixed origin (translating_point): the floating chain's base and the scenes'
+    free bodies. The two kinematic-equation lists come back apart, for each model to order."""
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    B, angles, w, kd_w = zyx_base(N, "psi theta phi")
+    G, position, v, kd_t = translating_point(O, N, "X Y Z", "vx vy vz")
+    return N, B, angles, w, kd_w, G, position, v, kd_t
+
+
 def floating_chain(n):
     """A rigid base (ZYX angles, position X, Y, Z) and n links on revolute joints alternating
     about the parent's z and y axes, no gravity; speeds: the base's body-frame angular velocity,
@@ -63,11 +75,7 @@ def floating_chain(n):
     mb, Ibx, Iby, Ibz, h, m, L, J1, J2 = sm.symbols("mb Ibx Iby Ibz h m L J1 J2")
     t = me.dynamicsymbols._t
 
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    B, angles, w, kd_w = zyx_base(N, "psi theta phi")
-    G, position, v, kd = translating_point(O, N, "X Y Z", "vx vy vz")
+    N, B, angles, w, kd_w, G, position, v, kd = floating_base()
     bodies = [me.RigidBody("base", G, B, mb, (me.inertia(B, Ibx, Iby, Ibz), G))]
     kd += kd_w
     parent, joint = B, G.locatenew("J1", h * B.x)
@@ -136,11 +144,7 @@ def three_body():
     g1, g2 = me.dynamicsymbols("gamma1 gamma2")
     dg1, dg2 = me.dynamicsymbols("dgamma1 dgamma2")
     t = me.dynamicsymbols._t
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    B, angles, w, kd = zyx_base(N, "psi theta phi")
-    G, position, v, kd_t = translating_point(O, N, "X Y Z", "vx vy vz")
+    N, B, angles, w, kd, G, position, v, kd_t = floating_base()
     L1 = B.orientnew("L1", "Axis", (g1, B.z))
     L1.set_ang_vel(B, dg1 * B.z)
     L2 = B.orientnew("L2", "Axis", (g2, B.y))
@@ -173,11 +177,7 @@ def satellite_boom():
     rho, drho = me.dynamicsymbols("rho drho")
     t = me.dynamicsymbols._t
     F = -sm.Rational(18, 1000) * sm.sin(sm.Rational(89, 1000) * t) + sm.Rational(12, 1000) * sm.cos(sm.Rational(485, 10000) * t)
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    B, angles, w, kd = zyx_base(N, "psi theta phi")
-    G, position, v, kd_t = translating_point(O, N, "X Y Z", "vx vy vz")
+    N, B, angles, w, kd, G, position, v, kd_t = floating_base()
     tip = G.locatenew("tip", (l / 2 + rho) * B.x)
     tip.set_vel(B, drho * B.x)
     tip.v1pt_theory(G, N, B)
