@@ -104,10 +104,7 @@ impl Emitter<'_> {
 
     /// A formulation's submodule (see the module docs).
     pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
-        // Formulations are emitted in the paper's order: is one with the same speeds to come?
-        let later = seam::FormulationKind::ALL.into_iter().skip_while(|k| *k != f.kind).skip(1);
-        let followed = later.filter(|k| k.speeds() == f.kind.speeds()).any(|k| self.options.formulations.iter().any(|d| d.kind() == k));
-        self.bodies.start(f.kind.speeds(), followed);
+        self.bodies.start(f.kind);
         let model = self.model;
         let m = model.m();
         let name = f.name();

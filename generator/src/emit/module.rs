@@ -147,6 +147,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let tail = derived.map(|d| {
             let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
             let mut em = Emitter::new(model, options, seam, &shared);
+            em.bodies = Bodies::new(d.equations.last().map(|e| e.kind).into_iter().collect());
             let names = d.equations.iter().map(|e| e.name().to_string()).collect();
             (em.formulations_and_model_fn(d.equations.last(), names, &shared), d)
         });
@@ -200,6 +201,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
 pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
     let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
+    em.bodies = Bodies::new(d.equations.iter().map(|e| e.kind).collect());
     let mut out = Vec::new();
     for f in &d.equations {
         // Without a recursion there is nothing to compare (and no body to build).
@@ -260,6 +262,10 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     let Ok(chosen) = chosen else { return Ok(Part::empty()) };
     let shared = FromMechanics::new(&mech, &chosen, &model.velocities, model.t);
     let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
+    // Every requested formulation but the last, in the order they are derived (the paper's).
+    let mut sent: Vec<seam::FormulationKind> = seam::FormulationKind::ALL.into_iter().filter(|k| options.formulations.iter().any(|f| f.kind() == *k)).collect();
+    sent.pop();
+    em.bodies = Bodies::new(sent);
     let mut head = vec![em.header(&shared)];
     head.push(em.params());
     head.push(super::seam::failure_import(&em.seam));

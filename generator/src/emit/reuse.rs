@@ -7,17 +7,17 @@
 //!
 //! Only formulations whose states hold the same kind of speeds can share a body (the inputs
 //! differ otherwise), so a formulation's bodies are kept only when one of the same kind is still
-//! to be emitted (Lagrange's for Maggi, Kane's for the reduced form, which is Kane's without
-//! ignorable coordinates), and let go when the kind changes. The copy kept is memory traded for
-//! time: on the 50-link pendulum on a cart, whose Maggi `rhs` is Lagrange's, the peak rises from
-//! about 560 MB (no copies) to about 670 MB (790 MB when every body was kept to the end), for a
-//! quarter less CPU.
+//! to be emitted by the same emitter (Lagrange's for Maggi, Kane's for the reduced form, which
+//! is Kane's without ignorable coordinates), and let go when the kind changes. Measured on the
+//! 50-link pendulum on a cart, whose Maggi `rhs` is Lagrange's (command line, peak memory):
+//! about 560 MB without reuse, about 570 MB with it, 790 MB when every body was kept to the end
+//! (Kane's too, for a reduced form emitted on the other thread); the CPU about a quarter less.
 
 use super::function::{Arg, Body, Input};
 use super::lower::{LowerError, lower};
 use crate::symbolic::{Expr, Symbol};
 use rustc_hash::FxHashMap as HashMap;
-use seam::Speeds;
+use seam::{FormulationKind, Speeds};
 
 /// What a body is built from besides its outputs: two requests with the same signature and the
 /// same non-constant outputs get the same statements.
@@ -47,6 +47,8 @@ impl Signature {
 #[derive(Default)]
 pub struct Bodies {
     built: Vec<Built>,
+    /// The formulations the emitter emits, in order.
+    emits: Vec<FormulationKind>,
     /// The kind of speeds of the formulation being emitted (None before the first).
     speeds: Option<Speeds>,
     /// Whether the bodies built now are kept: a formulation of the same kind follows.
@@ -70,15 +72,20 @@ fn occurrences(outputs: &[Expr]) -> HashMap<Expr, (usize, usize)> {
 }
 
 impl Bodies {
-    /// A formulation whose states hold `speeds` starts: the bodies kept for formulations of
-    /// another kind are let go, and its own are kept when `followed` (a formulation of the same
-    /// kind is still to be emitted).
-    pub fn start(&mut self, speeds: Speeds, followed: bool) {
+    /// For an emitter that emits the formulations `emits`, in that order.
+    pub fn new(emits: Vec<FormulationKind>) -> Bodies {
+        Bodies { emits, ..Bodies::default() }
+    }
+
+    /// The formulation `kind` starts: the bodies kept for formulations of another kind of speeds
+    /// are let go, and its own are kept when one of its kind follows it in this emitter.
+    pub fn start(&mut self, kind: FormulationKind) {
+        let speeds = kind.speeds();
         if self.speeds != Some(speeds) {
             self.built.clear();
             self.speeds = Some(speeds);
         }
-        self.keep = followed;
+        self.keep = self.emits.iter().skip_while(|k| **k != kind).skip(1).any(|k| k.speeds() == speeds);
     }
 
     /// A body built before with this signature and the same non-constant outputs, each as
@@ -124,8 +131,8 @@ mod tests {
 
     fn built(outputs: &[Expr]) -> (Bodies, Body) {
         let body = body_with_definitions("f", &[], outputs, &inputs(), &args(), 100, &mut Default::default()).unwrap();
-        let mut bodies = Bodies::default();
-        bodies.start(Speeds::Rates, true);
+        let mut bodies = Bodies::new(vec![FormulationKind::Lagrange, FormulationKind::Maggi]);
+        bodies.start(FormulationKind::Lagrange);
         bodies.remember(Signature::new("f", &[], &inputs(), &args(), 100), outputs, &body);
         (bodies, body)
     }
@@ -163,21 +170,28 @@ mod tests {
 
     #[test]
     fn bodies_are_kept_for_a_later_formulation_of_the_same_kind_only() {
+        use FormulationKind::{Kane, Lagrange, Maggi, ReducedVolterra};
         let (a, b) = (Symbol::new("a").expr(), Symbol::new("b").expr());
         let outputs = [a.sin() * b];
         let signature = || Signature::new("f", &[], &inputs(), &args(), 100);
         let body = body_with_definitions("f", &[], &outputs, &inputs(), &args(), 100, &mut Default::default()).unwrap();
-        let mut bodies = Bodies::default();
+        let mut bodies = Bodies::new(vec![Lagrange, Maggi, Kane]);
         bodies.remember(signature(), &outputs, &body);
         assert!(bodies.find(&signature(), &outputs).is_none(), "before the first formulation: nothing follows");
-        bodies.start(Speeds::Rates, false);
+        bodies.start(Lagrange);
         bodies.remember(signature(), &outputs, &body);
-        assert!(bodies.find(&signature(), &outputs).is_none(), "no formulation of the same kind follows");
-        bodies.start(Speeds::Rates, true);
-        bodies.remember(signature(), &outputs, &body);
-        bodies.start(Speeds::Rates, false);
+        bodies.start(Maggi);
         assert!(bodies.find(&signature(), &outputs).is_some(), "kept for Maggi after Lagrange");
-        bodies.start(Speeds::QuasiVelocities, true);
+        bodies.remember(signature(), &outputs, &body);
+        bodies.start(Kane);
         assert!(bodies.find(&signature(), &outputs).is_none(), "let go for Kane");
+        bodies.remember(signature(), &outputs, &body);
+        bodies.start(Kane);
+        assert!(bodies.find(&signature(), &outputs).is_none(), "the reduced form is emitted elsewhere: Kane's are not kept");
+        let mut alone = Bodies::new(vec![Kane, ReducedVolterra]);
+        alone.start(Kane);
+        alone.remember(signature(), &outputs, &body);
+        alone.start(ReducedVolterra);
+        assert!(alone.find(&signature(), &outputs).is_some(), "kept for the reduced form after Kane");
     }
 }
