@@ -77,58 +77,52 @@ pub fn depends(e: Expr, q: Symbol) -> Option<Expr> {
     }
 }
 
-/// The first entry of the mass matrix (upper triangle, by rows) that depends on `q`, when the
-/// exact zero test proves it and proves every entry before it independent: then `L` depends on
-/// `q` too (an entry is the coefficient of its own product of rates in `T`), and the test on
-/// the whole of `L`, many times larger, is not needed. Where an entry cannot be decided, None:
-/// the test on `L` decides, as it always did.
-fn in_mass_matrix(mech: &Quantities, q: Symbol) -> Option<Failure> {
-    for r in 0..mech.m {
-        for c in r..mech.m {
-            let e = mech.mass.get(r, c);
-            if !e.contains(q) {
-                continue;
-            }
-            let d = e.diff(q);
-            match zero_test(d) {
-                ZeroVerdict::Zero { .. } => {}
-                ZeroVerdict::NonZero { .. } => return Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d }),
-                ZeroVerdict::Undecided { .. } => return None,
+/// Where `L = T - V` can depend on a coordinate, with the place each is reported as: the mass
+/// matrix's upper triangle by rows (`M[r][c]`, the first `m (m + 1) / 2`), then `N`, `T0`, `V`.
+fn lagrangian_parts(mech: &Quantities) -> Vec<(String, Expr)> {
+    let m = mech.m;
+    let mass = (0..m).flat_map(|r| (r..m).map(move |c| (r, c))).map(|(r, c)| (format!("M[{}][{}]", r + 1, c + 1), mech.mass.get(r, c)));
+    let rest = (0..m).map(|k| (format!("N[{}]", k + 1), mech.n[k])).chain([("T0".to_string(), mech.t0), ("V".to_string(), mech.potential)]);
+    mass.chain(rest).collect()
+}
+
+/// Where `L` depends on `q`, or None. A mass-matrix entry proven by the exact zero test to
+/// depend on `q` decides it at once, when every entry before it is proven independent: `L`
+/// depends on `q` then (an entry is the coefficient of its own product of rates in `T`), and
+/// the test on the whole of `L`, many times larger, is not needed. Otherwise one test on `L`,
+/// and only when it fails, the place it fails at (the mass entries proven independent are not
+/// tested again; after an undecided one, every place is, as [`depends`] reports).
+fn in_lagrangian(mech: &Quantities, parts: &[(String, Expr)], q: Symbol) -> Option<Failure> {
+    let mass_entries = mech.m * (mech.m + 1) / 2;
+    let mut from = mass_entries;
+    for (place, e) in &parts[..mass_entries] {
+        if !e.contains(q) {
+            continue;
+        }
+        let d = e.diff(q);
+        match zero_test(d) {
+            ZeroVerdict::Zero { .. } => {}
+            ZeroVerdict::NonZero { .. } => return Some(Failure::InLagrangian { place: place.clone(), derivative: d }),
+            ZeroVerdict::Undecided { .. } => {
+                from = 0;
+                break;
             }
         }
     }
-    None
+    depends(mech.kinetic - mech.potential, q)?;
+    parts[from..].iter().find_map(|(place, e)| depends(*e, q).map(|d| Failure::InLagrangian { place: place.clone(), derivative: d }))
 }
 
 /// Checks Definition 1 for every coordinate.
 pub fn analyze(model: &Model, mech: &Quantities) -> Vec<CoordinateReport> {
     let m = mech.m;
+    let parts = lagrangian_parts(mech);
     model
         .coordinates
         .iter()
         .enumerate()
         .map(|(j, q)| {
-            let mut failure = in_mass_matrix(mech, *q);
-            // One test on L = T - V; only when it fails, the place it fails at.
-            if failure.is_none() && depends(mech.kinetic - mech.potential, *q).is_some() {
-                'lag: for r in 0..m {
-                    for c in r..m {
-                        if let Some(d) = depends(mech.mass.get(r, c), *q) {
-                            failure = Some(Failure::InLagrangian { place: format!("M[{}][{}]", r + 1, c + 1), derivative: d });
-                            break 'lag;
-                        }
-                    }
-                }
-                if failure.is_none() {
-                    let parts = (0..m).map(|k| (format!("N[{}]", k + 1), mech.n[k])).chain([("T0".to_string(), mech.t0), ("V".to_string(), mech.potential)]);
-                    for (place, e) in parts {
-                        if let Some(d) = depends(e, *q) {
-                            failure = Some(Failure::InLagrangian { place, derivative: d });
-                            break;
-                        }
-                    }
-                }
-            }
+            let mut failure = in_lagrangian(mech, &parts, *q);
             if failure.is_none() {
                 for i in 0..mech.r {
                     let entry = mech.a.get(i, j);
