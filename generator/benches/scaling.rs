@@ -129,6 +129,14 @@ fn run_sympy(root: &Path, model: &str, extra: &[&str]) -> Option<Vec<SympyRecord
     records
 }
 
+/// This program re-invoked as the child `--one`: one model at one size (`compile`: "compile" or
+/// "no"), its record.
+fn one(exe: &Path, kind: &str, n: usize, compile: &str, work: &Path) -> Record {
+    let child = Command::new(exe).args(["--one", kind, &n.to_string(), compile]).arg(work).output().expect("the child runs");
+    assert!(child.status.success(), "{kind} n = {n} failed: {}", String::from_utf8_lossy(&child.stderr));
+    serde_json::from_slice(&child.stdout).expect("the child's record")
+}
+
 /// The models the benchmark scales, by their key.
 const KINDS: [&str; 3] = ["pendulum", "floating", "planar"];
 
@@ -242,21 +250,14 @@ fn main() {
         for &n in sizes {
             eprintln!("scaling: {kind} n = {n} ...");
             let compile = if n <= compile_up_to { "compile" } else { "no" };
-            let child = Command::new(&exe).args(["--one", kind, &n.to_string(), compile]).arg(&work).output().expect("the child runs");
-            assert!(child.status.success(), "{kind} n = {n} failed: {}", String::from_utf8_lossy(&child.stderr));
-            let r: Record = serde_json::from_slice(&child.stdout).expect("the child's record");
+            let r = one(&exe, kind, n, compile, &work);
             eprintln!("scaling: {kind} n = {n}: derive {:.0} ms, emit {:.0} ms, CPU {:.2} s, {:.0} MB", r.derive_ms, r.emit_ms, r.cpu_s, r.peak_mb);
             records.push(r);
         }
     }
     // The planar chain's goal row: the median CPU of fresh runs without compilation.
     let planar_goal = planar.contains(&20).then(|| {
-        let mut runs: Vec<Record> = (0..PLANAR_GOAL_RUNS)
-            .map(|_| {
-                let child = Command::new(&exe).args(["--one", "planar", "20", "no"]).arg(&work).output().expect("the child runs");
-                serde_json::from_slice(&child.stdout).expect("the child's record")
-            })
-            .collect();
+        let mut runs: Vec<Record> = (0..PLANAR_GOAL_RUNS).map(|_| one(&exe, "planar", 20, "no", &work)).collect();
         runs.sort_by(|a, b| a.cpu_s.total_cmp(&b.cpu_s));
         let peak = runs.iter().map(|r| r.peak_mb).fold(0.0, f64::max);
         eprintln!(
