@@ -1558,7 +1558,7 @@ pub mod kane {
         Assembly {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, l * x0]],
-            force: [F - u2 * u2 * x2, g * x2],
+            force: [F - x2 * u2 * u2, g * x2],
             power: F * u1,
             checks: [],
         }
@@ -1752,7 +1752,7 @@ pub mod kane {
                 [0.0, 0.0],
                 [-(x3 * x1), g * x1],
                 [0.0, 0.0],
-                [-(2.0 * u2 * x4), 0.0],
+                [-(2.0 * x4 * u2), 0.0],
             ],
             power: F * u1,
             d_power: [0.0, 0.0, F, 0.0],
@@ -1877,7 +1877,7 @@ pub mod kane {
         let x1 = l * mp;
         let x2 = -(x0 * x1);
         let x3 = f64::sin(th);
-        let x4 = x3 * (u2 * u2);
+        let x4 = x3 * u2 * u2;
         let x5 = x3 * g;
         let x6 = -(l * x0);
         let x7 = -(mp * x0);

@@ -2707,34 +2707,34 @@ pub mod kane {
         let x30 = (x10 * x8 + x20 * x22) * x23 * l2;
         let x31 = x12 * (x25 * x20 + x8 * x13) * l2;
         let x32 = (x10 * x13 + x25 * x22) * l3 * x12;
-        let x33 = u2 * l0 * u2;
+        let x33 = l0 * u2 * u2;
         let x34 = x16 * x33;
-        let x35 = u5 * (u5 * l3);
-        let x36 = u4 * l2 * u4;
-        let x37 = u3 * (l1 * u3);
-        let x38 = x37 * x17 + x34;
-        let x39 = x20 * x36 + x38;
-        let x40 = x35 * x22 + x39;
+        let x35 = u3 * (l1 * u3);
+        let x36 = x34 + x35 * x17;
+        let x37 = u4 * (u4 * l2);
+        let x38 = x36 + x37 * x20;
+        let x39 = l3 * u5 * u5;
+        let x40 = x38 + x39 * x22;
         let x41 = u6 * (u6 * l4);
         let x42 = x16 * x6 - x4 * x17;
-        let x43 = x16 * x8 - x4 * x20;
-        let x44 = x42 * x37 + x43 * x36;
-        let x45 = x10 * x16 - x4 * x22;
-        let x46 = x44 + x35 * x45;
-        let x47 = x16 * x13 - x25 * x4;
-        let x48 = m2 * x42;
-        let x49 = x20 * x6 - x8 * x17;
-        let x50 = x36 * x49;
-        let x51 = x33 * x42;
+        let x43 = m2 * x42;
+        let x44 = x16 * x8 - x4 * x20;
+        let x45 = x37 * x44 + x35 * x42;
+        let x46 = x10 * x16 - x4 * x22;
+        let x47 = x45 + x39 * x46;
+        let x48 = x16 * x13 - x25 * x4;
+        let x49 = x33 * x42;
+        let x50 = x20 * x6 - x8 * x17;
+        let x51 = x37 * x50;
         let x52 = x10 * x17 - x22 * x6;
-        let x53 = (x35 * x52 - x50) - x51;
+        let x53 = (-x49 - x51) + x39 * x52;
         let x54 = x25 * x6 - x17 * x13;
-        let x55 = x49 * x37;
-        let x56 = x43 * x33;
-        let x57 = x10 * x20 - x8 * x22;
-        let x58 = (x35 * x57 + x55) - x56;
-        let x59 = x20 * x13 - x25 * x8;
-        let x60 = (x33 * x45 + x52 * x37) + x57 * x36;
+        let x55 = x33 * x44;
+        let x56 = x50 * x35;
+        let x57 = x20 * x13 - x25 * x8;
+        let x58 = x10 * x20 - x8 * x22;
+        let x59 = (x56 + x39 * x58) - x55;
+        let x60 = (x33 * x46 + x37 * x58) + x52 * x35;
         let x61 = x10 * x25 - x22 * x13;
         Assembly {
             qdot: [u1, u2, u3, u4, u5, u6],
@@ -2747,17 +2747,16 @@ pub mod kane {
                 [x14, x26, x29, x31, x32, x12 * l4],
             ],
             force: [
-                -(x34 * m1 + m4 * x40 + x38 * m2 + x39 * m3 + (x41 * x25 + x40) * m5),
-                l0
-                    * (x3 * x16 * g - m4 * x46 - (x41 * x47 + x46) * m5 - x44 * m3
-                        - x37 * x48),
-                ((x50 + x51) * m3 - m4 * x53 + x2 * g * x17 - (x53 - x41 * x54) * m5
-                    + x33 * x48) * l1,
-                l2
-                    * (x20 * g * x1 + (x56 - x55) * m3 - m4 * x58
-                        - (x41 * x59 + x58) * m5),
-                l3 * (m4 * x60 + m5 * (x60 + x41 * x61) + x0 * g * x22),
-                (x59 * x36 + x25 * g + x47 * x33 - x35 * x61 - x54 * x37) * x12,
+                -(m4 * x40 + x34 * m1 + x38 * m3 + m2 * x36 + (x25 * x41 + x40) * m5),
+                (x3 * x16 * g - x35 * x43 - m5 * (x47 + x48 * x41) - m4 * x47 - x45 * m3)
+                    * l0,
+                l1
+                    * ((x49 + x51) * m3 + x33 * x43 - m4 * x53 - (x53 - x54 * x41) * m5
+                        + x2 * g * x17),
+                (x20 * g * x1 + (x55 - x56) * m3 - m5 * (x57 * x41 + x59) - x59 * m4)
+                    * l2,
+                (m4 * x60 + m5 * (x41 * x61 + x60) + x0 * g * x22) * l3,
+                (x57 * x37 - x39 * x61 + x25 * g + x48 * x33 - x35 * x54) * x12,
             ],
             checks: [],
         }
@@ -3126,72 +3125,72 @@ pub mod kane {
         let x55 = x13 * x17 + x37 * x32;
         let x56 = l3 * x16;
         let x57 = x55 * x56;
-        let x58 = u2 * l0;
+        let x58 = l0 * u2;
         let x59 = x58 * u2;
         let x60 = x22 * x59;
-        let x61 = u5 * l3;
-        let x62 = u5 * x61;
-        let x63 = u4 * l2;
-        let x64 = x63 * u4;
-        let x65 = l1 * u3;
-        let x66 = u3 * x65;
-        let x67 = x66 * x23 + x60;
-        let x68 = x27 * x64 + x67;
-        let x69 = x62 * x32 + x68;
+        let x61 = l1 * u3;
+        let x62 = u3 * x61;
+        let x63 = x60 + x62 * x23;
+        let x64 = u4 * l2;
+        let x65 = u4 * x64;
+        let x66 = x63 + x65 * x27;
+        let x67 = l3 * u5;
+        let x68 = x67 * u5;
+        let x69 = x66 + x68 * x32;
         let x70 = u6 * u6;
-        let x71 = x70 * l4;
+        let x71 = l4 * x70;
         let x72 = x22 * x7 - x4 * x23;
-        let x73 = x22 * x10 - x4 * x27;
-        let x74 = x72 * x66 + x73 * x64;
-        let x75 = x13 * x22 - x4 * x32;
-        let x76 = x74 + x62 * x75;
-        let x77 = x22 * x17 - x37 * x4;
-        let x78 = x3 * g;
-        let x79 = m2 * x72;
-        let x80 = x27 * x7 - x10 * x23;
-        let x81 = x64 * x80;
-        let x82 = x59 * x72;
+        let x73 = m2 * x72;
+        let x74 = x3 * g;
+        let x75 = x22 * x17 - x37 * x4;
+        let x76 = x22 * x10 - x4 * x27;
+        let x77 = x65 * x76 + x62 * x72;
+        let x78 = x13 * x22 - x4 * x32;
+        let x79 = x77 + x68 * x78;
+        let x80 = x59 * x72;
+        let x81 = x27 * x7 - x10 * x23;
+        let x82 = x65 * x81;
         let x83 = x13 * x23 - x32 * x7;
-        let x84 = (x62 * x83 - x81) - x82;
-        let x85 = x2 * g;
-        let x86 = x37 * x7 - x23 * x17;
-        let x87 = x80 * x66;
-        let x88 = x73 * x59;
-        let x89 = g * x1;
+        let x84 = (-x80 - x82) + x68 * x83;
+        let x85 = x37 * x7 - x23 * x17;
+        let x86 = x2 * g;
+        let x87 = g * x1;
+        let x88 = x59 * x76;
+        let x89 = x81 * x62;
         let x90 = x13 * x27 - x10 * x32;
-        let x91 = (x62 * x90 + x87) - x88;
+        let x91 = (x89 + x68 * x90) - x88;
         let x92 = x27 * x17 - x37 * x10;
-        let x93 = (x59 * x75 + x83 * x66) + x90 * x64;
+        let x93 = (x59 * x78 + x65 * x90) + x83 * x62;
         let x94 = x0 * g;
         let x95 = x13 * x37 - x32 * x17;
         let x96 = x22 * x20;
         let x97 = l0 * x72;
         let x98 = x97 * x8;
-        let x99 = l0 * x73;
+        let x99 = l0 * x76;
         let x100 = x11 * x99;
-        let x101 = l0 * x75;
+        let x101 = l0 * x78;
         let x102 = x14 * x101;
-        let x103 = x77 * x36;
+        let x103 = x75 * x36;
         let x104 = -x103;
-        let x105 = x24 * x66;
-        let x106 = x105 + x64 * x28;
-        let x107 = x106 + x62 * x33;
-        let x108 = x24 * x59;
+        let x105 = x24 * x62;
+        let x106 = x65 * x28 + x105;
+        let x107 = x68 * x33 + x106;
+        let x108 = x59 * x24;
         let x109 = x59 * x28;
-        let x110 = x33 * x59;
+        let x110 = x59 * x33;
         let x111 = x59 * x38;
         let x112 = x21 * x23;
         let x113 = x21 * x97;
-        let x114 = l1 * x80;
+        let x114 = l1 * x81;
         let x115 = x26 * x114;
         let x116 = l1 * x83;
         let x117 = x116 * x14;
-        let x118 = x46 * x86;
-        let x119 = x108 + x40 * x64;
-        let x120 = x119 + x62 * x43;
-        let x121 = x40 * x66;
-        let x122 = x43 * x66;
-        let x123 = x47 * x66;
+        let x118 = x46 * x85;
+        let x119 = x65 * x40 + x108;
+        let x120 = x68 * x43 + x119;
+        let x121 = x40 * x62;
+        let x122 = x62 * x43;
+        let x123 = x47 * x62;
         let x124 = x27 * x26;
         let x125 = x26 * x99;
         let x126 = x11 * x114;
@@ -3199,19 +3198,19 @@ pub mod kane {
         let x128 = x127 * x14;
         let x129 = x92 * x52;
         let x130 = -x129;
-        let x131 = x64 * x1;
+        let x131 = x65 * x1;
         let x132 = x109 + x121;
-        let x133 = x62 * x49 + x132;
-        let x134 = x49 * x64;
-        let x135 = x64 * x53;
+        let x133 = x132 + x68 * x49;
+        let x134 = x65 * x49;
+        let x135 = x65 * x53;
         let x136 = x31 * x32;
         let x137 = x31 * x101;
         let x138 = x116 * x31;
         let x139 = x127 * x31;
         let x140 = x56 * x95;
-        let x141 = x0 * x62;
-        let x142 = x134 + (x110 + x122);
-        let x143 = x55 * x62;
+        let x141 = x68 * x0;
+        let x142 = x110 + (x122 + x134);
+        let x143 = x68 * x55;
         let x144 = x37 * x16;
         let x145 = -x118;
         let x146 = -x140;
@@ -3219,9 +3218,9 @@ pub mod kane {
         let x148 = x147 + 2.0 * m3;
         let x149 = 2.0 * m2 + x148;
         let x150 = l3 * x147;
-        let x151 = -(x149 * x65);
-        let x152 = -(x63 * x148);
-        let x153 = -(x147 * x61);
+        let x151 = -(x149 * x61);
+        let x152 = -(x148 * x64);
+        let x153 = -(x67 * x147);
         Derivatives {
             qdot: [u1, u2, u3, u4, u5, u6],
             matrix: [
@@ -3233,15 +3232,15 @@ pub mod kane {
                 [x19, x39, x48, x54, x57, x16 * l4],
             ],
             force: [
-                -(x60 * m1 + m4 * x69 + x67 * m2 + x68 * m3 + (x37 * x71 + x69) * m5),
-                (x22 * x78 - m4 * x76 - m5 * (x77 * x71 + x76) - x74 * m3 - x66 * x79)
+                -(m4 * x69 + x60 * m1 + (x37 * x71 + x69) * m5 + x66 * m3 + m2 * x63),
+                (x22 * x74 - x62 * x73 - (x75 * x71 + x79) * m5 - m4 * x79 - x77 * m3)
                     * l0,
                 l1
-                    * ((x81 + x82) * m3 - m4 * x84 + x85 * x23 - (x84 - x86 * x71) * m5
-                        + x59 * x79),
-                ((x88 - x87) * m3 + x27 * x89 - m4 * x91 - m5 * (x92 * x71 + x91)) * l2,
-                l3 * (m4 * x93 + x94 * x32 + m5 * (x93 + x71 * x95)),
-                (x92 * x64 + x37 * g + x77 * x59 - x62 * x95 - x86 * x66) * x16,
+                    * ((x80 + x82) * m3 + x59 * x73 - m4 * x84 - m5 * (x84 - x85 * x71)
+                        + x86 * x23),
+                (x27 * x87 + (x88 - x89) * m3 - (x91 + x92 * x71) * m5 - x91 * m4) * l2,
+                (m4 * x93 + x94 * x32 + m5 * (x71 * x95 + x93)) * l3,
+                (x92 * x65 - x68 * x95 + x37 * g + x75 * x59 - x62 * x85) * x16,
             ],
             checks: [],
             d_qdot: [
@@ -3359,72 +3358,72 @@ pub mod kane {
             d_force: [
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x5 * x59,
-                    (x4 * x78 - x106 * m3 - m2 * x105 - m4 * x107
-                        - m5 * (x71 * x38 + x107)) * l0,
+                    x59 * x5,
+                    l0
+                        * (x4 * x74 - x106 * m3 - m4 * x107 - m2 * x105
+                            - m5 * (x71 * x38 + x107)),
                     x21 * x108,
-                    x26 * x109,
+                    x109 * x26,
                     x110 * x31,
                     x111 * x16,
                 ],
                 [
-                    -(x2 * x66 * x7),
+                    -(x2 * x62 * x7),
                     l0 * x2 * x105,
-                    l1
-                        * (x85 * x7 - x119 * m3 - m4 * x120 - m5 * (x120 + x47 * x71)
-                            - m2 * x108),
+                    (x86 * x7 - m4 * x120 - (x47 * x71 + x120) * m5 - m2 * x108
+                        - x119 * m3) * l1,
                     x26 * x121,
-                    x31 * x122,
-                    x123 * x16,
+                    x122 * x31,
+                    x16 * x123,
                 ],
                 [
-                    -(x10 * x64 * x1),
+                    -(x65 * x10 * x1),
                     x131 * x29,
                     x41 * x131,
-                    (x10 * x89 - x132 * m3 - (x133 + x71 * x53) * m5 - x133 * m4) * l2,
-                    x134 * x31,
+                    (x10 * x87 - x132 * m3 - m4 * x133 - (x133 + x71 * x53) * m5) * l2,
+                    x31 * x134,
                     x135 * x16,
                 ],
                 [
-                    -(x13 * x0 * x62),
+                    -(x68 * x13 * x0),
                     x141 * x34,
                     x141 * x44,
                     x141 * x50,
-                    l3 * (x13 * x94 - (x55 * x71 + x142) * m5 - m4 * x142),
-                    x143 * x16,
+                    l3 * (x13 * x94 - m4 * x142 - m5 * (x55 * x71 + x142)),
+                    x16 * x143,
                 ],
                 [
-                    -(x70 * x18),
-                    x70 * x39,
-                    x70 * x48,
-                    x70 * x54,
+                    -(x18 * x70),
+                    x39 * x70,
+                    x48 * x70,
+                    x54 * x70,
                     x70 * x57,
-                    (g * x17 - x111 - x143 - x123 - x135) * x16,
+                    (g * x17 - x135 - x111 - x143 - x123) * x16,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [
                     -(x58 * x22 * (x149 + 2.0 * m1)),
                     0.0,
                     x58 * l1 * x149 * x72,
-                    x58 * x73 * x148 * l2,
-                    x58 * x150 * x75,
-                    2.0 * x58 * x77 * x16,
+                    x58 * x76 * x148 * l2,
+                    x58 * x150 * x78,
+                    2.0 * x58 * x75 * x16,
                 ],
                 [
                     x23 * x151,
                     x97 * x151,
                     0.0,
-                    -(x148 * x80 * x65 * l2),
-                    x150 * x83 * x65,
-                    -(2.0 * x86 * x16 * x65),
+                    -(x148 * x81 * x61 * l2),
+                    x150 * x83 * x61,
+                    -(2.0 * x85 * x16 * x61),
                 ],
                 [
-                    x27 * x152,
-                    x99 * x152,
-                    x63 * x148 * x114,
+                    x152 * x27,
+                    x152 * x99,
+                    x148 * x64 * x114,
                     0.0,
-                    x63 * x150 * x90,
-                    2.0 * x92 * x63 * x16,
+                    x150 * x90 * x64,
+                    2.0 * x92 * x16 * x64,
                 ],
                 [
                     x153 * x32,
@@ -3432,7 +3431,7 @@ pub mod kane {
                     x116 * x153,
                     x127 * x153,
                     0.0,
-                    -(2.0 * x16 * x61 * x95),
+                    -(2.0 * x67 * x16 * x95),
                 ],
                 [
                     -(2.0 * u6 * x144),

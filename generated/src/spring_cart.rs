@@ -1721,20 +1721,20 @@ pub mod kane {
         let g = params.g;
         let x0 = mp * lp;
         let x1 = x0 * f64::cos(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = x + L0;
-        let x4 = x3 * x3;
-        let x5 = c_ * (1.0 / (-x3)) * u1;
+        let x2 = x + L0;
+        let x3 = x2 * x2;
+        let x4 = c_ * (1.0 / (-x2)) * u1;
+        let x5 = 2.0 * x + 2.0 * L0;
         let x6 = x0 * f64::sin(th);
         Assembly {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
             force: [
-                x2 * (0.5 * x5 - 0.5 * ((f64::sqrt(x4) - L0) * k / f64::sqrt(x4)))
+                (0.5 * x4 - 0.5 * ((f64::sqrt(x3) - L0) * k / f64::sqrt(x3))) * x5
                     + x6 * u2 * u2,
                 -(x6 * g),
             ],
-            power: 0.5 * x2 * u1 * x5,
+            power: 0.5 * x5 * u1 * x4,
             checks: [],
         }
     }
@@ -1911,22 +1911,22 @@ pub mod kane {
         let g = params.g;
         let x0 = mp * lp;
         let x1 = x0 * f64::cos(th);
-        let x2 = 2.0 * x + 2.0 * L0;
-        let x3 = x + L0;
-        let x4 = x3 * x3;
-        let x5 = f64::sqrt(x4) - L0;
-        let x6 = x5 * k / f64::sqrt(x4);
-        let x7 = 1.0 / (-x3);
-        let x8 = c_ * x7;
-        let x9 = x8 * u1;
-        let x10 = x0 * f64::sin(th);
-        let x11 = u2 * u2;
-        let x12 = u1 * x9;
-        let x13 = -x10;
+        let x2 = x0 * f64::sin(th);
+        let x3 = u2 * u2;
+        let x4 = x + L0;
+        let x5 = x4 * x4;
+        let x6 = f64::sqrt(x5) - L0;
+        let x7 = x6 * k / f64::sqrt(x5);
+        let x8 = 1.0 / (-x4);
+        let x9 = c_ * x8;
+        let x10 = x9 * u1;
+        let x11 = 2.0 * x + 2.0 * L0;
+        let x12 = u1 * x10;
+        let x13 = -x2;
         Derivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x1], [x1, x0 * lp]],
-            force: [x2 * (0.5 * x9 - 0.5 * x6) + x10 * x11, -(x10 * g)],
+            force: [x2 * x3 + (0.5 * x10 - 0.5 * x7) * x11, -(x2 * g)],
             checks: [],
             d_qdot: [[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
             d_matrix: [
@@ -1937,18 +1937,18 @@ pub mod kane {
             ],
             d_force: [
                 [
-                    x2
-                        * (0.5 * (x7 * x9)
-                            + x2 * (0.25 * (x5 / f64::powf(x4, 1.5)) - 0.25 * (x7 * x7))
-                                * k) - x6 + x9,
+                    x11
+                        * (0.5 * (x8 * x10)
+                            + x11 * (0.25 * (x6 / f64::powf(x5, 1.5)) - 0.25 * (x8 * x8))
+                                * k) - x7 + x10,
                     0.0,
                 ],
-                [x11 * x1, -(g * x1)],
-                [0.5 * x2 * x8, 0.0],
-                [2.0 * x10 * u2, 0.0],
+                [x3 * x1, -(g * x1)],
+                [0.5 * x11 * x9, 0.0],
+                [2.0 * x2 * u2, 0.0],
             ],
-            power: 0.5 * x2 * x12,
-            d_power: [x12 * (0.5 * (x2 * x7) + 1.0), 0.0, x2 * x9, 0.0],
+            power: 0.5 * x11 * x12,
+            d_power: [(0.5 * (x11 * x8) + 1.0) * x12, 0.0, x11 * x10, 0.0],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -2072,25 +2072,25 @@ pub mod kane {
         let x0 = mp * lp;
         let x1 = f64::cos(th);
         let x2 = x0 * x1;
-        let x3 = f64::sin(th);
-        let x4 = x3 * (u2 * u2);
-        let x5 = 2.0 * x + 2.0 * L0;
-        let x6 = x + L0;
-        let x7 = x6 * x6;
-        let x8 = f64::sqrt(x7) - L0;
-        let x9 = x8 * k / f64::sqrt(x7);
-        let x10 = 1.0 / (-x6);
-        let x11 = u1 * x10;
-        let x12 = c_ * x11;
-        let x13 = x3 * g;
-        let x14 = x5 * u1;
+        let x3 = x + L0;
+        let x4 = x3 * x3;
+        let x5 = f64::sqrt(x4) - L0;
+        let x6 = x5 * k / f64::sqrt(x4);
+        let x7 = 1.0 / (-x3);
+        let x8 = u1 * x7;
+        let x9 = c_ * x8;
+        let x10 = 2.0 * x + 2.0 * L0;
+        let x11 = f64::sin(th);
+        let x12 = x11 * u2 * u2;
+        let x13 = x11 * g;
+        let x14 = x10 * u1;
         let x15 = x1 * lp;
         let x16 = mp * x1;
-        let x17 = x5 * x8;
+        let x17 = x10 * x5;
         ParameterDerivatives {
             qdot: [u1, u2],
             matrix: [[mc + mp, x2], [x2, x0 * lp]],
-            force: [x0 * x4 + x5 * (0.5 * x12 - 0.5 * x9), -(x0 * x13)],
+            force: [(0.5 * x9 - 0.5 * x6) * x10 + x0 * x12, -(x0 * x13)],
             checks: [],
             d_qdot: [
                 [0.0, 0.0],
@@ -2112,29 +2112,30 @@ pub mod kane {
             ],
             d_force: [
                 [0.0, 0.0],
-                [x4 * lp, -(x13 * lp)],
-                [x4 * mp, -(x13 * mp)],
-                [-(0.5 * x17 / f64::sqrt(x7)), 0.0],
-                [0.5 * x5 * x11, 0.0],
+                [x12 * lp, -(x13 * lp)],
+                [x12 * mp, -(x13 * mp)],
+                [-(0.5 * x17 / f64::sqrt(x4)), 0.0],
+                [0.5 * x10 * x8, 0.0],
                 [
-                    x5
-                        * (0.5 * (x10 * x12)
-                            + (0.25 * (x17 / f64::powf(x7, 1.5))
-                                - 0.5
-                                    * ((0.5 * (x5 / f64::sqrt(x7)) - 1.0) / f64::sqrt(x7))) * k)
-                        - x9 + x12,
+                    x9 - x6
+                        + x10
+                            * (0.5 * (x9 * x7)
+                                + (0.25 * (x17 / f64::powf(x4, 1.5))
+                                    - 0.5
+                                        * ((0.5 * (x10 / f64::sqrt(x4)) - 1.0) / f64::sqrt(x4)))
+                                    * k),
                     0.0,
                 ],
-                [0.0, -(x0 * x3)],
+                [0.0, -(x0 * x11)],
             ],
-            power: 0.5 * x14 * x12,
+            power: 0.5 * x14 * x9,
             d_power: [
                 0.0,
                 0.0,
                 0.0,
                 0.0,
-                0.5 * x14 * x11,
-                u1 * (0.5 * (x5 * x10) + 1.0) * x12,
+                0.5 * x14 * x8,
+                u1 * x9 * (0.5 * (x10 * x7) + 1.0),
                 0.0,
             ],
         }

@@ -2101,21 +2101,21 @@ pub mod kane {
         let x5 = l * x0;
         let x6 = x5 - x;
         let x7 = x4 * x4 + x6 * x6;
-        let x8 = m2 * k;
-        let x9 = l * u1;
-        let x10 = zeta * (1.0 / x7)
-            * (2.0 * (x6 * (x9 * x1 - u2)) - 2.0 * (x4 * (x9 * x0 - u3)));
+        let x8 = l * u1;
+        let x9 = zeta * (2.0 * (x6 * (x8 * x1 - u2)) - 2.0 * (x4 * (x0 * x8 - u3)))
+            * (1.0 / x7);
+        let x10 = m2 * k;
         let x11 = 0.5 * ((f64::sqrt(x7) - L) * k / f64::sqrt(x7))
-            + 0.5 * (f64::sqrt(x8) * x10);
+            + 0.5 * (x9 * f64::sqrt(x10));
         let x12 = 2.0 * x - 2.0 * x5;
         let x13 = 2.0 * x3 + 2.0 * y;
         Assembly {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
             force: [l * (x2 * x11 - x0 * g * m1), -(x12 * x11), -x11 * x13 - m2 * g],
-            power: -(x10
-                * (0.5 * (u2 * f64::sqrt(x8) * x12) - 0.5 * (x9 * x2 * f64::sqrt(x8))
-                    + 0.5 * (f64::sqrt(x8) * u3 * x13))),
+            power: -(x9
+                * (0.5 * (f64::sqrt(x10) * u3 * x13) - 0.5 * (x2 * f64::sqrt(x10) * x8)
+                    + 0.5 * (f64::sqrt(x10) * x12 * u2))),
             checks: [],
         }
     }
@@ -2303,61 +2303,59 @@ pub mod kane {
         let zeta = params.zeta;
         let g = params.g;
         let x0 = f64::sin(th);
-        let x1 = f64::cos(th);
-        let x2 = 2.0 * (x0 * y) + 2.0 * (x * x1);
-        let x3 = l * x1;
-        let x4 = x3 + y;
-        let x5 = l * x0;
-        let x6 = x5 - x;
-        let x7 = x4 * x4 + x6 * x6;
-        let x8 = 1.0 / x7;
-        let x9 = zeta * x8;
-        let x10 = l * u1;
-        let x11 = x10 * x1;
-        let x12 = x10 * x0;
-        let x13 = 2.0 * (x6 * (x11 - u2)) - 2.0 * (x4 * (x12 - u3));
-        let x14 = x9 * x13;
-        let x15 = m2 * k;
-        let x16 = x14 * f64::sqrt(x15);
-        let x17 = (f64::sqrt(x7) - L) * k;
-        let x18 = x17 / f64::sqrt(x7);
-        let x19 = 0.5 * x16 + 0.5 * x18;
-        let x20 = g * m1;
-        let x21 = 2.0 * x - 2.0 * x5;
-        let x22 = 2.0 * x3 + 2.0 * y;
-        let x23 = (0.5 * (u2 * f64::sqrt(x15) * x21) - 0.5 * (x10 * x2 * f64::sqrt(x15)))
-            + 0.5 * (f64::sqrt(x15) * u3 * x22);
-        let x24 = 2.0 * (x * x0) - 2.0 * (y * x1);
-        let x25 = -(x2 * l);
-        let x26 = 2.0 * (x6 * x1) - 2.0 * (x4 * x0);
-        let x27 = (2.0 * x11 - 2.0 * u2 - 2.0 * (x4 * u1)) * x1
-            + x0 * (2.0 * x12 - 2.0 * (x6 * u1) - 2.0 * u3);
-        let x28 = x8 * x26;
-        let x29 = 0.25 * (x17 * x26 / f64::powf(x7, 1.5))
-            + x8
-                * (zeta
-                    * (0.5 * (f64::sqrt(x15) * x28 * x13) - 0.5 * (f64::sqrt(x15) * x27))
-                    - 0.25 * (x26 * k));
-        let x30 = x8 * x22;
-        let x31 = f64::sqrt(x15) * x0;
-        let x32 = k * x22;
-        let x33 = x0 / f64::sqrt(x7);
-        let x34 = x9 * l;
-        let x35 = -(x2 * x21);
-        let x36 = 2.0 * u2 - 2.0 * x11;
-        let x37 = x21 * (0.25 * (x17 / f64::powf(x7, 1.5)) + x8 * (0.5 * x16 - 0.25 * k))
-            - 0.5 * (x9 * x36 * f64::sqrt(x15));
-        let x38 = -(x2 * x22);
-        let x39 = 2.0 * u3 - 2.0 * x12;
+        let x1 = g * m1;
+        let x2 = f64::cos(th);
+        let x3 = 2.0 * (x0 * y) + 2.0 * (x * x2);
+        let x4 = l * x2;
+        let x5 = x4 + y;
+        let x6 = l * x0;
+        let x7 = x6 - x;
+        let x8 = x5 * x5 + x7 * x7;
+        let x9 = (f64::sqrt(x8) - L) * k;
+        let x10 = x9 / f64::sqrt(x8);
+        let x11 = m2 * k;
+        let x12 = 1.0 / x8;
+        let x13 = zeta * x12;
+        let x14 = l * u1;
+        let x15 = x14 * x2;
+        let x16 = x0 * x14;
+        let x17 = 2.0 * ((x15 - u2) * x7) - 2.0 * (x5 * (x16 - u3));
+        let x18 = x13 * x17;
+        let x19 = f64::sqrt(x11) * x18;
+        let x20 = 0.5 * x10 + 0.5 * x19;
+        let x21 = 2.0 * x - 2.0 * x6;
+        let x22 = 2.0 * x4 + 2.0 * y;
+        let x23 = (0.5 * (f64::sqrt(x11) * u3 * x22) - 0.5 * (x3 * f64::sqrt(x11) * x14))
+            + 0.5 * (f64::sqrt(x11) * x21 * u2);
+        let x24 = 2.0 * (x * x0) - 2.0 * (y * x2);
+        let x25 = 2.0 * (x7 * x2) - 2.0 * (x5 * x0);
+        let x26 = x12 * x25;
+        let x27 = x2 * (2.0 * x15 - 2.0 * u2 - 2.0 * (x5 * u1))
+            + x0 * (2.0 * x16 - 2.0 * (x7 * u1) - 2.0 * u3);
+        let x28 = 0.25 * (x9 * x25 / f64::powf(x8, 1.5))
+            + (zeta * (0.5 * (x17 * f64::sqrt(x11) * x26) - 0.5 * (f64::sqrt(x11) * x27))
+                - 0.25 * (x25 * k)) * x12;
+        let x29 = -(x3 * l);
+        let x30 = x0 / f64::sqrt(x8);
+        let x31 = x12 * x22;
+        let x32 = f64::sqrt(x11) * x0;
+        let x33 = k * x22;
+        let x34 = x13 * l;
+        let x35 = -(x3 * x21);
+        let x36 = 2.0 * u2 - 2.0 * x15;
+        let x37 = ((0.5 * x19 - 0.25 * k) * x12 + 0.25 * (x9 / f64::powf(x8, 1.5))) * x21
+            - 0.5 * (x13 * x36 * f64::sqrt(x11));
+        let x38 = -(x3 * x22);
+        let x39 = 2.0 * u3 - 2.0 * x16;
         let x40 = x22 * x22;
-        let x41 = x26 * x34;
-        let x42 = x9 * x21;
-        let x43 = -(0.5 * x42 * f64::sqrt(x15) * x22);
-        let x44 = x23 + 0.5 * (f64::sqrt(x15) * x13);
+        let x41 = x25 * x34;
+        let x42 = x13 * x21;
+        let x43 = -(0.5 * x42 * f64::sqrt(x11) * x22);
+        let x44 = 0.5 * (x17 * f64::sqrt(x11)) + x23;
         Derivatives {
             qdot: [u1, u2, u3],
             matrix: [[l * l * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x2 * x19 - x0 * x20), -(x21 * x19), -x19 * x22 - m2 * g],
+            force: [l * (x3 * x20 - x0 * x1), -(x21 * x20), -x20 * x22 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2377,74 +2375,77 @@ pub mod kane {
             ],
             d_force: [
                 [
-                    l * (x25 * x29 - x1 * x20 - x24 * x19),
-                    ((x16 + x18) * x1 + x21 * x29) * l,
-                    ((zeta
-                        * ((0.5 * (f64::sqrt(x15) * x30 * x26) + x31) * x13
-                            - 0.5 * (f64::sqrt(x15) * x27 * x22)) - 0.25 * (x32 * x26))
-                        * x8 + (x33 + 0.25 * (x26 * x22 / f64::powf(x7, 1.5))) * x17) * l,
+                    l * (x28 * x29 - x2 * x1 - x24 * x20),
+                    (x28 * x21 + (x10 + x19) * x2) * l,
+                    l
+                        * ((x30 + 0.25 * (x25 * x22 / f64::powf(x8, 1.5))) * x9
+                            + (zeta
+                                * (x17 * (0.5 * (f64::sqrt(x11) * x31 * x25) + x32)
+                                    - 0.5 * (f64::sqrt(x11) * x27 * x22)) - 0.25 * (x33 * x25))
+                                * x12),
                 ],
                 [
                     l
                         * ((zeta
-                            * ((f64::sqrt(x15) * x1 + 0.5 * (f64::sqrt(x15) * x8 * x35))
-                                * x13 + 0.5 * (x2 * x36 * f64::sqrt(x15)))
-                            - 0.25 * (x35 * k)) * x8
-                            + (x1 / f64::sqrt(x7) + 0.25 * (x35 / f64::powf(x7, 1.5)))
-                                * x17),
-                    x21 * x37 - x16 - x18,
+                            * (0.5 * (x3 * x36 * f64::sqrt(x11))
+                                + x17
+                                    * (f64::sqrt(x11) * x2
+                                        + 0.5 * (f64::sqrt(x11) * x12 * x35))) - 0.25 * (x35 * k))
+                            * x12
+                            + (x2 / f64::sqrt(x8) + 0.25 * (x35 / f64::powf(x8, 1.5)))
+                                * x9),
+                    x21 * x37 - x10 - x19,
                     x37 * x22,
                 ],
                 [
-                    l
-                        * ((0.25 * (x38 / f64::powf(x7, 1.5)) + x33) * x17
-                            + x8
-                                * (0.25 * (x2 * x32)
-                                    + zeta
-                                        * ((x31 - 0.5 * (x2 * f64::sqrt(x15) * x30)) * x13
-                                            + 0.5 * (x2 * f64::sqrt(x15) * x39)))),
-                    x21
-                        * (0.25 * (x17 * x22 / f64::powf(x7, 1.5))
-                            + x8
-                                * ((0.5 * (f64::sqrt(x15) * x30 * x13)
-                                    - 0.5 * (f64::sqrt(x15) * x39)) * zeta - 0.25 * x32)),
-                    x17 * (0.25 * (x40 / f64::powf(x7, 1.5)) - 1.0 / f64::sqrt(x7))
+                    ((0.25 * (x38 / f64::powf(x8, 1.5)) + x30) * x9
+                        + x12
+                            * (0.25 * (x3 * x33)
+                                + zeta
+                                    * (0.5 * (x3 * f64::sqrt(x11) * x39)
+                                        + (x32 - 0.5 * (x3 * f64::sqrt(x11) * x31)) * x17))) * l,
+                    (0.25 * (x9 * x22 / f64::powf(x8, 1.5))
                         + (zeta
-                            * (x13
-                                * (0.5 * (f64::sqrt(x15) * x30 * x22) - f64::sqrt(x15))
-                                - 0.5 * (f64::sqrt(x15) * x39 * x22)) - 0.25 * (x32 * x22))
-                            * x8,
+                            * (0.5 * (x17 * f64::sqrt(x11) * x31)
+                                - 0.5 * (f64::sqrt(x11) * x39)) - 0.25 * x33) * x12) * x21,
+                    x9 * (0.25 * (x40 / f64::powf(x8, 1.5)) - 1.0 / f64::sqrt(x8))
+                        + x12
+                            * (zeta
+                                * (x17
+                                    * (0.5 * (f64::sqrt(x11) * x31 * x22) - f64::sqrt(x11))
+                                    - 0.5 * (f64::sqrt(x11) * x39 * x22)) - 0.25 * (x33 * x22)),
                 ],
                 [
-                    -(0.5 * f64::sqrt(x15) * x25 * x41),
-                    -(0.5 * f64::sqrt(x15) * x21 * x41),
-                    -(0.5 * f64::sqrt(x15) * x41 * x22),
+                    -(0.5 * f64::sqrt(x11) * x29 * x41),
+                    -(0.5 * f64::sqrt(x11) * x21 * x41),
+                    -(0.5 * f64::sqrt(x11) * x41 * x22),
                 ],
                 [
-                    -(0.5 * f64::sqrt(x15) * x35 * x34),
-                    -(0.5 * x42 * f64::sqrt(x15) * x21),
+                    -(0.5 * f64::sqrt(x11) * x35 * x34),
+                    -(0.5 * x42 * f64::sqrt(x11) * x21),
                     x43,
                 ],
                 [
-                    -(0.5 * x38 * f64::sqrt(x15) * x34),
+                    -(0.5 * x38 * f64::sqrt(x11) * x34),
                     x43,
-                    -(0.5 * x9 * f64::sqrt(x15) * x40),
+                    -(0.5 * x13 * f64::sqrt(x11) * x40),
                 ],
             ],
-            power: -(x14 * x23),
+            power: -(x18 * x23),
             d_power: [
-                ((x23 * x28 - 0.5 * (x24 * f64::sqrt(x15) * u1)
-                    + f64::sqrt(x15) * x0 * u3 + u2 * f64::sqrt(x15) * x1) * x13
-                    - x23 * x27) * x34,
-                x9
-                    * ((x11 * f64::sqrt(x15) - u2 * f64::sqrt(x15) + x23 * x21 * x8)
-                        * x13 - x36 * x23),
-                x9
-                    * (x13 * (f64::sqrt(x15) * x12 - f64::sqrt(x15) * u3 + x23 * x30)
-                        - x23 * x39),
-                (0.5 * (x2 * f64::sqrt(x15) * x13) - x23 * x26) * x34,
-                -(x44 * x42),
-                -(x44 * x9 * x22),
+                (x17
+                    * (f64::sqrt(x11) * x0 * u3 + f64::sqrt(x11) * u2 * x2 + x26 * x23
+                        - 0.5 * (x24 * f64::sqrt(x11) * u1)) - x27 * x23) * x34,
+                x13
+                    * (x17
+                        * (x21 * x12 * x23 - f64::sqrt(x11) * u2 + x15 * f64::sqrt(x11))
+                        - x36 * x23),
+                x13
+                    * (x17 * (x31 * x23 - f64::sqrt(x11) * u3 + f64::sqrt(x11) * x16)
+                        - x39 * x23),
+                (0.5 * (x3 * x17 * f64::sqrt(x11)) - x25 * x23) * x34,
+                -(x42 * x44),
+                -(x13 * x44 * x22),
             ],
         }
     }
@@ -2570,50 +2571,52 @@ pub mod kane {
         let g = params.g;
         let x0 = l * l;
         let x1 = f64::sin(th);
-        let x2 = f64::cos(th);
-        let x3 = 2.0 * (x1 * y) + 2.0 * (x * x2);
-        let x4 = m2 * k;
-        let x5 = l * x1;
-        let x6 = x5 * u1;
-        let x7 = l * x2;
-        let x8 = x7 + y;
-        let x9 = x7 * u1;
-        let x10 = x5 - x;
-        let x11 = 2.0 * ((x9 - u2) * x10) - 2.0 * ((x6 - u3) * x8);
-        let x12 = x8 * x8 + x10 * x10;
-        let x13 = 1.0 / x12;
-        let x14 = x11 * x13;
-        let x15 = zeta * x14;
-        let x16 = f64::sqrt(x4) * x15;
-        let x17 = f64::sqrt(x12) - L;
-        let x18 = x17 * k;
-        let x19 = x18 / f64::sqrt(x12);
-        let x20 = 0.5 * x16 + 0.5 * x19;
-        let x21 = x1 * g * m1;
-        let x22 = 2.0 * x - 2.0 * x5;
-        let x23 = 2.0 * x7 + 2.0 * y;
-        let x24 = x23 * u3;
-        let x25 = -(x3 * l);
-        let x26 = u1 * x25;
-        let x27 = u2 * x22;
-        let x28 = 0.5 * (f64::sqrt(x4) * x24)
-            + (0.5 * (f64::sqrt(x4) * x26) + 0.5 * (f64::sqrt(x4) * x27));
-        let x29 = x15 * k;
-        let x30 = 0.25 * (x26 / f64::sqrt(x4)) + 0.25 * (x24 / f64::sqrt(x4))
-            + 0.25 * (x27 / f64::sqrt(x4));
-        let x31 = 2.0 * (x1 * x10) + 2.0 * (x2 * x8);
-        let x32 = x1 * (2.0 * x9 - 2.0 * u2 - 2.0 * (u1 * x8))
-            + (2.0 * u3 + 2.0 * (x10 * u1) - 2.0 * x6) * x2;
-        let x33 = 0.25 * (x31 * x18 / f64::powf(x12, 1.5))
-            + ((0.5 * (x31 * f64::sqrt(x4) * x14) - 0.5 * (f64::sqrt(x4) * x32)) * zeta
-                - 0.25 * (x31 * k)) * x13;
+        let x2 = x1 * g * m1;
+        let x3 = f64::cos(th);
+        let x4 = 2.0 * (x1 * y) + 2.0 * (x * x3);
+        let x5 = m2 * k;
+        let x6 = l * x3;
+        let x7 = x6 * u1;
+        let x8 = l * x1;
+        let x9 = x8 - x;
+        let x10 = x8 * u1;
+        let x11 = x6 + y;
+        let x12 = 2.0 * ((x7 - u2) * x9) - 2.0 * ((x10 - u3) * x11);
+        let x13 = x11 * x11 + x9 * x9;
+        let x14 = 1.0 / x13;
+        let x15 = x12 * x14;
+        let x16 = zeta * x15;
+        let x17 = f64::sqrt(x5) * x16;
+        let x18 = f64::sqrt(x13) - L;
+        let x19 = x18 * k;
+        let x20 = x19 / f64::sqrt(x13);
+        let x21 = 0.5 * x17 + 0.5 * x20;
+        let x22 = 2.0 * x - 2.0 * x8;
+        let x23 = 2.0 * x6 + 2.0 * y;
+        let x24 = -(x4 * l);
+        let x25 = x24 * u1;
+        let x26 = x23 * u3;
+        let x27 = x22 * u2;
+        let x28 = (0.5 * (f64::sqrt(x5) * x25) + 0.5 * (f64::sqrt(x5) * x26))
+            + 0.5 * (f64::sqrt(x5) * x27);
+        let x29 = x16 * k;
+        let x30 = 0.25 * (x26 / f64::sqrt(x5)) + 0.25 * (x25 / f64::sqrt(x5))
+            + 0.25 * (x27 / f64::sqrt(x5));
+        let x31 = 2.0 * (x1 * x9) + 2.0 * (x3 * x11);
+        let x32 = (2.0 * (x9 * u1) - 2.0 * x10 + 2.0 * u3) * x3
+            + x1 * (2.0 * x7 - 2.0 * (x11 * u1) - 2.0 * u2);
+        let x33 = 0.25 * (x31 * x19 / f64::powf(x13, 1.5))
+            + x14
+                * (zeta
+                    * (0.5 * (x31 * f64::sqrt(x5) * x15) - 0.5 * (f64::sqrt(x5) * x32))
+                    - 0.25 * (x31 * k));
         let x34 = x31 * x23;
-        let x35 = m2 * x15;
-        let x36 = 0.5 * (x17 / f64::sqrt(x12)) + 0.25 * (x35 / f64::sqrt(x4));
+        let x35 = m2 * x16;
+        let x36 = 0.5 * (x18 / f64::sqrt(x13)) + 0.25 * (x35 / f64::sqrt(x5));
         ParameterDerivatives {
             qdot: [u1, u2, u3],
             matrix: [[x0 * m1, 0.0, 0.0], [0.0, m2, 0.0], [0.0, 0.0, m2]],
-            force: [l * (x3 * x20 - x21), -(x22 * x20), -x23 * x20 - m2 * g],
+            force: [l * (x4 * x21 - x2), -(x22 * x21), -x23 * x21 - m2 * g],
             checks: [],
             d_qdot: [
                 [0.0, 0.0, 0.0],
@@ -2634,46 +2637,45 @@ pub mod kane {
                 [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
             ],
             d_force: [
-                [-(g * x5), 0.0, 0.0],
+                [-(g * x8), 0.0, 0.0],
                 [
-                    -(0.25 * x29 * x25 / f64::sqrt(x4)),
-                    -(0.25 * x29 * x22 / f64::sqrt(x4)),
-                    -(0.25 * (x29 * x23 / f64::sqrt(x4)) + g),
+                    -(0.25 * x24 * x29 / f64::sqrt(x5)),
+                    -(0.25 * x22 * x29 / f64::sqrt(x5)),
+                    -(g + 0.25 * (x23 * x29 / f64::sqrt(x5))),
                 ],
                 [
-                    -x3 * (l * x33 - 0.5 * x16 - 0.5 * x19) - x21,
-                    x1 * (x16 + x19) + x22 * x33,
-                    (0.25 * (x34 / f64::powf(x12, 1.5)) - x2 / f64::sqrt(x12)) * x18
-                        + x13
-                            * (zeta
-                                * ((0.5 * (x34 * f64::sqrt(x4) * x13) - f64::sqrt(x4) * x2)
-                                    * x11 - 0.5 * (f64::sqrt(x4) * x32 * x23))
-                                - 0.25 * (x34 * k)),
+                    -(l * x33 - 0.5 * x17 - 0.5 * x20) * x4 - x2,
+                    x22 * x33 + x1 * (x17 + x20),
+                    (0.25 * (x34 / f64::powf(x13, 1.5)) - x3 / f64::sqrt(x13)) * x19
+                        + (zeta
+                            * ((0.5 * (x34 * f64::sqrt(x5) * x14) - f64::sqrt(x5) * x3)
+                                * x12 - 0.5 * (f64::sqrt(x5) * x23 * x32))
+                            - 0.25 * (x34 * k)) * x14,
                 ],
                 [
-                    0.5 * x25 * k / f64::sqrt(x12),
-                    0.5 * x22 * k / f64::sqrt(x12),
-                    0.5 * x23 * k / f64::sqrt(x12),
+                    0.5 * x24 * k / f64::sqrt(x13),
+                    0.5 * x22 * k / f64::sqrt(x13),
+                    0.5 * x23 * k / f64::sqrt(x13),
                 ],
-                [-(x36 * x25), -(x22 * x36), -(x23 * x36)],
+                [-(x36 * x24), -(x36 * x22), -(x23 * x36)],
                 [
-                    -(0.5 * f64::sqrt(x4) * x14 * x25),
-                    -(0.5 * f64::sqrt(x4) * x22 * x14),
-                    -(0.5 * f64::sqrt(x4) * x23 * x14),
+                    -(0.5 * f64::sqrt(x5) * x24 * x15),
+                    -(0.5 * f64::sqrt(x5) * x22 * x15),
+                    -(0.5 * f64::sqrt(x5) * x23 * x15),
                 ],
-                [-(x5 * m1), 0.0, -m2],
+                [-(x8 * m1), 0.0, -m2],
             ],
-            power: -(x28 * x15),
+            power: -(x16 * x28),
             d_power: [
                 0.0,
-                -(x29 * x30),
-                zeta * x13
-                    * (x11
-                        * (0.5 * (x3 * f64::sqrt(x4) * u1) + u2 * f64::sqrt(x4) * x1
-                            - f64::sqrt(x4) * u3 * x2 + x28 * x31 * x13) - x28 * x32),
+                -(x30 * x29),
+                zeta
+                    * ((0.5 * (x4 * f64::sqrt(x5) * u1) + x31 * x14 * x28
+                        + f64::sqrt(x5) * x1 * u2 - f64::sqrt(x5) * u3 * x3) * x12
+                        - x32 * x28) * x14,
                 0.0,
-                -(x30 * x35),
-                -(x28 * x14),
+                -(x35 * x30),
+                -(x28 * x15),
                 0.0,
             ],
         }

@@ -74,3 +74,42 @@ fn maggi_reusing_lagranges_body_gives_lagranges_rates() {
     }
     assert!(compared > 20, "{compared} nonzero rates");
 }
+
+/// Kane's `rhs` on the same chain (its quasi-velocities are the rates in another order) reuses
+/// Lagrange's body with the speeds renamed and rebound to their places in Kane's state: at the
+/// same `q, q'`, Kane's `u'`, turned into `q''` by its own `velocities`, is Lagrange's `q''`.
+#[test]
+fn kane_reusing_lagranges_body_under_its_speeds_names_gives_lagranges_accelerations() {
+    use generator::model::examples::planar_chain_absolute;
+    let model = planar_chain_absolute(4).build().unwrap();
+    let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
+    let (lagrange, kane) = (summary.ops("lagrange::rhs").unwrap(), summary.ops("kane::rhs").unwrap());
+    assert_eq!((lagrange.lets, &lagrange.ops), (kane.lets, &kane.ops), "Kane's body is Lagrange's");
+    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
+    let (lagrange, kane) = (form("lagrange"), form("kane"));
+    let (m, p) = (model.m(), &evaluated.default_params);
+    let mut compared = 0;
+    for k in 0..5 {
+        let q = state(m, k);
+        let qdot = state(m, k + 7);
+        let states = |f: &seam::Formulation| {
+            let (mut y, mut g) = (vec![0.0; f.states()], vec![0.0; evaluated.ignorable.len()]);
+            f.initial_state(0.0, &q, &qdot, p, &mut y, &mut g).unwrap();
+            let mut d = vec![0.0; y.len()];
+            f.rhs(0.0, &y, p, &g, &mut d).unwrap();
+            (y, g, d)
+        };
+        let (_, _, dl) = states(lagrange);
+        let (mut y, g, dk) = states(kane);
+        assert_ne!(y[m..], qdot[..], "Kane's speeds are the rates in another order");
+        y[m..].copy_from_slice(&dk[m..]);
+        let (mut q_back, mut qddot) = (vec![0.0; m], vec![0.0; m]);
+        kane.velocities(0.0, &y, p, &g, &mut q_back, &mut qddot).unwrap();
+        for (i, (l, c)) in dl[m..].iter().zip(&qddot).enumerate() {
+            assert!((l - c).abs() <= 1e-12 * l.abs().max(1.0), "state #{k} q''[{i}]: Lagrange {l:e}, Kane {c:e}");
+            compared += usize::from(*l != 0.0);
+        }
+    }
+    assert!(compared > 15, "{compared} nonzero accelerations");
+}

@@ -102,9 +102,24 @@ impl Emitter<'_> {
         out
     }
 
+    /// The formulation `f` starts: the bodies kept for it, its speeds named as the rates they are
+    /// (where they are).
+    pub(super) fn start(&mut self, f: &Equations) {
+        let relabel = self.speeds_as_rates(f);
+        self.bodies.start(f.kind, relabel);
+    }
+
+    /// `f`'s speeds named as the coordinates' rates, where they are those rates in another
+    /// order ([`super::reuse::speeds_as_rates`]).
+    pub(super) fn speeds_as_rates(&self, f: &Equations) -> std::collections::HashMap<Symbol, Expr> {
+        let rates: Vec<Symbol> = f.kept.iter().map(|&j| self.model.velocities[j]).collect();
+        let qdot: Vec<Expr> = f.kept.iter().map(|&j| f.qdot[j]).collect();
+        super::reuse::speeds_as_rates(&f.speeds, &qdot, &rates)
+    }
+
     /// A formulation's submodule (see the module docs).
     pub(super) fn form(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {
-        self.bodies.start(f.kind);
+        self.start(f);
         let model = self.model;
         let m = model.m();
         let name = f.name();

@@ -27,7 +27,7 @@ pub mod ops;
 pub mod program;
 pub mod optimize;
 pub mod prepare;
-mod reuse;
+pub mod reuse;
 pub mod seam;
 pub mod share;
 pub mod shared;

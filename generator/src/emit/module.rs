@@ -197,15 +197,25 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
 }
 
 /// Each formulation's assembly of its right-hand side, as the summary describes it
-/// ([`super::assembly`]): the same bodies [`generate`] compares, built from a derivation.
+/// ([`super::assembly`]): the same bodies [`generate`] compares, built from a derivation by
+/// emitters that emit what [`generate`]'s two emit (every formulation but the last, and the
+/// last), so that a body reused there is reused here.
 pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
-    let mut em = Emitter::new(model, options, seam_path(model, options)?, &shared);
-    em.bodies = Bodies::new(d.equations.iter().map(|e| e.kind).collect());
+    let last = d.equations.len().saturating_sub(1);
+    let kinds: Vec<seam::FormulationKind> = d.equations.iter().map(|e| e.kind).collect();
+    let mut second = Emitter::new(model, options, seam_path(model, options)?, &shared);
+    second.bodies = Bodies::new(kinds[..last].to_vec());
+    let mut here = Emitter::new(model, options, seam_path(model, options)?, &shared);
+    here.bodies = Bodies::new(kinds[last..].to_vec());
     let mut out = Vec::new();
-    for f in &d.equations {
-        // Without a recursion there is nothing to compare (and no body to build).
-        let description = if f.recursion.is_none() {
+    for (k, f) in d.equations.iter().enumerate() {
+        let (em, group) = if k < last { (&mut second, &d.equations[k + 1..last]) } else { (&mut here, &[][..]) };
+        em.start(f);
+        // Without a recursion there is nothing to compare; the dense body is built only where
+        // a later formulation of the same emitter takes it under its speeds' names.
+        let feeds = || f.kind.speeds() == seam::Speeds::Rates && group.iter().any(|g| g.recursion.is_some() && !em.speeds_as_rates(g).is_empty());
+        let description = if f.recursion.is_none() && !feeds() {
             "assembly: dense entries".to_string()
         } else {
             let checks = em.runtime_factors(f);
