@@ -104,3 +104,44 @@ fn scene1_singular_set_is_reported() {
     env.set(model.coordinates[1], 0.9);
     assert!(det.eval(&env).unwrap().abs() > 1e-3);
 }
+
+/// Scene 2's reduced equations by the Schur route do not depend on the absolute orientation
+/// of the free system (its shape's inertia and forces are the same however it is turned): the
+/// coordinates `psi, theta, phi` are taken out of `M_NI` and `L_NI` exactly, and what is left
+/// equals the direct route's `M_NI` and `L_NI` (Eqs. 43-65) at random states.
+#[test]
+fn scene_2_reduced_equations_leave_out_the_absolute_orientation_and_equal_the_direct_route() {
+    let model = load("three_body");
+    let mech = mechanics::derive(&model);
+    let chosen = ignorable::choose(&model, &ignorable::analyze(&model, &mech)).unwrap();
+    let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+    let schur = volterra::derive_reduced(&model, &mech, &chosen, &model.quasi_reduced, &kane).unwrap();
+    let direct = volterra::derive(&model, &mech, &chosen, &model.quasi_reduced).unwrap();
+    let orientation: Vec<_> = model.coordinates.iter().filter(|q| ["psi", "theta", "phi"].contains(&q.name().as_str())).copied().collect();
+    assert_eq!(orientation.len(), 3);
+    for e in schur.mass_ni.data.iter().chain(&schur.l_ni) {
+        assert!(orientation.iter().all(|q| !e.contains(*q)), "{e} depends on the orientation");
+    }
+    let mut rng = SplitMix(7);
+    for trial in 0..5 {
+        let mut env = model.parameter_env();
+        for q in &model.coordinates {
+            env.set(*q, rng.uniform(-1.0, 1.0));
+        }
+        for (a, b) in schur.u.iter().zip(&direct.u) {
+            let x = rng.uniform(-1.5, 1.5);
+            env.set(*a, x);
+            env.set(*b, x);
+        }
+        for (a, b) in schur.g.iter().zip(&direct.g) {
+            let x = rng.uniform(-1.0, 1.0);
+            env.set(*a, x);
+            env.set(*b, x);
+        }
+        let pairs = schur.mass_ni.data.iter().zip(&direct.mass_ni.data).chain(schur.l_ni.iter().zip(&direct.l_ni));
+        for (k, (s, d)) in pairs.enumerate() {
+            let (s, d) = (s.eval(&env).unwrap(), d.eval(&env).unwrap());
+            assert!((s - d).abs() <= 1e-10 * (1.0 + d.abs()), "#{trial} entry {k}: Schur {s}, direct {d}");
+        }
+    }
+}

@@ -5766,20 +5766,14 @@ pub mod reduced_volterra {
         let x14 = -Ixy;
         let x15 = -Ixz;
         let x16 = m * x13;
-        let x17 = l * l;
-        let x18 = rho + l;
-        let x19 = x18 * x16;
-        let x20 = m * ((0.25 - 0.25 * x16) * x17 + rho * (x18 - x19));
-        let x21 = -Iyz;
-        let x22 = x20 + Izz;
-        let x23 = u1 * Ixz;
-        let x24 = Ixy * u1;
-        let x25 = u3 * Ixz;
-        let x26 = u2 * Ixy;
-        let x27 = m * u4 * ((2.0 * rho + l) * x16 - 2.0 * rho - l);
-        let x28 = Iyz * u1;
-        let x29 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x30 = x8 - x8 * x16;
+        let x17 = m * (1.0 - x16);
+        let x18 = x8 * x8 * x17;
+        let x19 = -Iyz;
+        let x20 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x21 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x22 = (x16 - 1.0) * m;
+        let x23 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x24 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
         Assembly {
             qdot: [
                 x3,
@@ -5797,21 +5791,17 @@ pub mod reduced_volterra {
             ],
             matrix: [
                 [Ixx, x14, x15, 0.0],
-                [x14, x20 + Iyy, x21, 0.0],
-                [x15, x21, x22, 0.0],
-                [0.0, 0.0, 0.0, m * (1.0 - x16)],
+                [x14, Iyy + x18, x19, 0.0],
+                [x15, x19, x18 + Izz, 0.0],
+                [0.0, 0.0, 0.0, x17],
             ],
             force: [
-                u3 * (u2 * Iyy - Iyz * u3 - x24) - u2 * (u3 * Izz - x23 - u2 * Iyz),
-                u3 * (x25 + x26 + u1 * (x22 - Ixx)) - x23 * u1 + u2 * (x27 - x28),
-                u2
-                    * (u1
-                        * (Ixx - Iyy
-                            + m * ((x19 - rho - l) * rho + x17 * (0.25 * x16 - 0.25)))
-                        - x25 - x26) + (x27 + x28) * u3 + u1 * x24,
-                x29 + m * (u2 * u2 * x30 + u3 * u3 * x30),
+                x21 * u3 - u2 * x20,
+                x20 * u1 - x8 * (u1 * x9 - 2.0 * (u2 * u4)) * x22 - x23 * u3,
+                x8 * (2.0 * (u3 * u4) - u1 * x12) * x22 + u2 * x23 - x21 * u1,
+                x24 + (u2 * x12 - u3 * x9) * x22,
             ],
-            power: x29 * u4,
+            power: x24 * u4,
             checks: [x0],
         }
     }
@@ -6156,45 +6146,41 @@ pub mod reduced_volterra {
         let x31 = -Ixy;
         let x32 = -Ixz;
         let x33 = m * x22;
-        let x34 = l * l;
-        let x35 = rho + l;
-        let x36 = x35 * x33;
-        let x37 = m * ((0.25 - 0.25 * x33) * x34 + rho * (x35 - x36));
-        let x38 = -Iyz;
-        let x39 = x37 + Izz;
-        let x40 = 1.0 - x33;
-        let x41 = u1 * Ixz;
-        let x42 = u2 * Iyz;
-        let x43 = Iyz * u3;
-        let x44 = Ixy * u1;
-        let x45 = u3 * Ixz;
-        let x46 = u2 * Ixy;
-        let x47 = x39 - Ixx;
-        let x48 = x46 + u1 * x47;
-        let x49 = 2.0 * rho + l;
-        let x50 = x33 * x49;
-        let x51 = x50 - 2.0 * rho - l;
-        let x52 = x51 * m;
-        let x53 = x52 * u4;
-        let x54 = Iyz * u1;
-        let x55 = x53 - x54;
-        let x56 = x53 + x54;
-        let x57 = Ixx - Iyy + m * ((x36 - rho - l) * rho + x34 * (0.25 * x33 - 0.25));
-        let x58 = u1 * x57 - x45;
-        let x59 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x60 = u3 * u3;
-        let x61 = -(x15 * x33);
-        let x62 = x15 + x61;
-        let x63 = u2 * u2;
-        let x64 = x30 * x33;
-        let x65 = x0 * x33;
-        let x66 = x49 - x50;
-        let x67 = x66 * m;
-        let x68 = u4 * (2.0 * x33 - 2.0);
-        let x69 = Ixy * u3;
-        let x70 = u2 * Ixz;
-        let x71 = Iyy - Izz;
-        let x72 = x15 * x33;
+        let x34 = 1.0 - x33;
+        let x35 = -(x15 * x34);
+        let x36 = -(x15 * m);
+        let x37 = -Iyz;
+        let x38 = x15 * m;
+        let x39 = u2 * Iyz;
+        let x40 = u1 * Ixz;
+        let x41 = u3 * Izz - x39 - x40;
+        let x42 = Iyz * u3;
+        let x43 = Ixy * u1;
+        let x44 = u2 * Iyy - x42 - x43;
+        let x45 = u1 * x16 - 2.0 * (u2 * u4);
+        let x46 = x33 - 1.0;
+        let x47 = m * x46;
+        let x48 = u3 * Ixz;
+        let x49 = u2 * Ixy;
+        let x50 = Ixx * u1 - x48 - x49;
+        let x51 = x15 * x47;
+        let x52 = 2.0 * (u3 * u4) - u1 * x20;
+        let x53 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x54 = x30 * x33;
+        let x55 = x0 * x33;
+        let x56 = 2.0 * x33 - 2.0;
+        let x57 = 2.0 - 2.0 * x33;
+        let x58 = u1 * x46;
+        let x59 = Ixy * u3;
+        let x60 = u2 * Ixz;
+        let x61 = x15 * x51;
+        let x62 = Izz - Ixx - x61;
+        let x63 = Ixx - Iyy;
+        let x64 = -(x15 * x33);
+        let x65 = Iyy - Izz;
+        let x66 = Iyz * u1;
+        let x67 = -((2.0 * rho + l) * x47);
+        let x68 = x15 * x33;
         Derivatives {
             qdot: [
                 x1 * x4,
@@ -6207,15 +6193,15 @@ pub mod reduced_volterra {
             ],
             matrix: [
                 [Ixx, x31, x32, 0.0],
-                [x31, x37 + Iyy, x38, 0.0],
-                [x32, x38, x39, 0.0],
-                [0.0, 0.0, 0.0, m * x40],
+                [x31, Iyy + x35 * x36, x37, 0.0],
+                [x32, x37, x15 * x38 * x34 + Izz, 0.0],
+                [0.0, 0.0, 0.0, m * x34],
             ],
             force: [
-                u3 * (u2 * Iyy - x43 - x44) - u2 * (u3 * Izz - x41 - x42),
-                u3 * (x45 + x48) - x41 * u1 + u2 * x55,
-                x56 * u3 + u2 * (x58 - x46) + u1 * x44,
-                x59 + (x60 * x62 + x63 * x62) * m,
+                x44 * u3 - u2 * x41,
+                x41 * u1 - x15 * x45 * x47 - x50 * u3,
+                u2 * x50 - x44 * u1 + x51 * x52,
+                x53 + (u2 * x20 - u3 * x16) * x47,
             ],
             checks: [x0],
             d_qdot: [
@@ -6233,8 +6219,8 @@ pub mod reduced_volterra {
                     0.0,
                     x8 * x7 + x4,
                     0.0,
-                    x64 * x9,
-                    x64 * x12,
+                    x54 * x9,
+                    x54 * x12,
                     (x6 * x29 + x17) * x33,
                 ],
                 [
@@ -6244,7 +6230,7 @@ pub mod reduced_volterra {
                     0.0,
                     -((x20 * (x13 - x11) + x19 * x16) * x33),
                     -(x33 * (x25 * x16 - x26 * x20)),
-                    (x2 * x20 - x16 * x3) * x65,
+                    (x2 * x20 - x16 * x3) * x55,
                 ],
                 [
                     0.0,
@@ -6253,23 +6239,23 @@ pub mod reduced_volterra {
                     0.0,
                     x33 * (u2 * x19 - x14 * u3),
                     (u2 * x25 - x26 * u3) * x33,
-                    x5 * x65,
+                    x5 * x55,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                [x1 * x2, x3, x2 * x7, 0.0, -(x19 * x61), -(x25 * x61), x15 * x3 * x65],
+                [x1 * x2, x3, x2 * x7, 0.0, -(x19 * x64), -(x25 * x64), x15 * x3 * x55],
                 [
                     x1 * x3,
                     -x2,
                     x7 * x3,
                     0.0,
-                    -(x14 * x72),
-                    -(x26 * x72),
-                    -(x15 * x2 * x65),
+                    -(x14 * x68),
+                    -(x26 * x68),
+                    -(x15 * x2 * x55),
                 ],
-                [0.0, 0.0, 0.0, 1.0, -(x9 * x65), -(x12 * x65), x6 * x33],
+                [0.0, 0.0, 0.0, 1.0, -(x9 * x55), -(x12 * x55), x6 * x33],
             ],
             d_matrix: [
                 [
@@ -6292,8 +6278,8 @@ pub mod reduced_volterra {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x67, 0.0, 0.0],
-                    [0.0, 0.0, x67, 0.0],
+                    [0.0, x56 * x36, 0.0, 0.0],
+                    [0.0, 0.0, x38 * x57, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
                 [
@@ -6345,20 +6331,35 @@ pub mod reduced_volterra {
                 [0.0, 0.0, 0.0, 0.0],
                 [
                     0.0,
-                    m * (x66 * u3 * u1 + u2 * x68),
-                    (u3 * x68 + x51 * u2 * u1) * m,
-                    m * (x60 * x40 + x63 * x40),
+                    (x34 * x45 - x15 * u3 * x58) * m,
+                    (x52 * x46 + u2 * x15 * x58) * m,
+                    -((u2 * u2 + u3 * u3) * x47),
                 ],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0],
-                [x70 - x69, u3 * x47 - 2.0 * x41 - x42, u2 * x57 + x43 + 2.0 * x44, 0.0],
-                [x41 + 2.0 * x42 + u3 * x71, x69 + x55, x58 - 2.0 * x46, x67 * u2],
-                [u2 * x71 - 2.0 * x43 - x44, 2.0 * x45 + x48, x56 - x70, x67 * u3],
-                [0.0, u2 * x52, u3 * x52, 0.0],
+                [
+                    x60 - x59,
+                    u3 * x62 - x39 - 2.0 * x40,
+                    (x63 + x61) * u2 + x42 + 2.0 * x43,
+                    0.0,
+                ],
+                [
+                    2.0 * x39 + x40 + u3 * x65,
+                    x59 + u4 * x57 * x36 - x66,
+                    (x63 + x35 * x38) * u1 - x48 - 2.0 * x49,
+                    u2 * x67,
+                ],
+                [
+                    u2 * x65 - 2.0 * x42 - x43,
+                    2.0 * x48 + x49 + x62 * u1,
+                    u4 * x38 * x56 - x60 + x66,
+                    x67 * u3,
+                ],
+                [0.0, m * x20 * x57, m * x56 * x16, 0.0],
             ],
-            power: x59 * u4,
-            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x59],
+            power: x53 * u4,
+            d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, x53],
         }
     }
     ///The right-hand side (as `rhs` writes it) and its exact derivative `jac[i][k] = d dstate[i] / d state[k]`, from the assembly's symbolic derivatives and the LU factors of the solved matrix. The work integral's column is zero: nothing depends on it.
@@ -6519,71 +6520,57 @@ pub mod reduced_volterra {
         let x28 = x27 * x19;
         let x29 = -Ixy;
         let x30 = -Ixz;
-        let x31 = m * x19;
-        let x32 = l * l;
-        let x33 = rho + l;
-        let x34 = x33 * x31;
-        let x35 = m * ((0.25 - 0.25 * x31) * x32 + rho * (x33 - x34));
-        let x36 = -Iyz;
-        let x37 = x35 + Izz;
-        let x38 = u1 * u1;
-        let x39 = -2.0 * rho - l;
-        let x40 = 2.0 * rho + l;
-        let x41 = x31 * x40;
-        let x42 = (x39 + x41) * m * u4;
-        let x43 = Iyz * u1;
-        let x44 = u3 * Ixz;
-        let x45 = u2 * Ixy;
-        let x46 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
-        let x47 = u2 * u2;
-        let x48 = x11 * x31;
-        let x49 = x11 - x48;
-        let x50 = u3 * u3;
-        let x51 = x19 * x19;
-        let x52 = x31 * x31;
-        let x53 = rho * x33;
-        let x54 = 0.25 * x32 + x53;
-        let x55 = x52 * x54;
-        let x56 = u2 * u4;
-        let x57 = u3 * u1;
-        let x58 = x57 * x54 - x56 * x40;
-        let x59 = u3 * u4;
-        let x60 = u2 * u1;
-        let x61 = x60 * (-0.25 * x32 - x53) - x59 * x40;
-        let x62 = x11 * x47 + x50 * x11;
-        let x63 = -x57;
-        let x64 = u2 * u3;
-        let x65 = -x60;
-        let x66 = -x64;
-        let x67 = (0.25 * x31 - 0.5) * x32 + rho * (x34 - 2.0 * rho - 2.0 * l);
-        let x68 = x31 * x67 + x54;
-        let x69 = 4.0 * rho + 2.0 * l - x41;
-        let x70 = x39 + x48;
-        let x71 = m * x49;
-        let x72 = x31 - 1.0;
-        let x73 = 0.5 - 0.5 * x31;
+        let x31 = x11 * x11;
+        let x32 = m * x19;
+        let x33 = m * (1.0 - x32);
+        let x34 = x31 * x33;
+        let x35 = -Iyz;
+        let x36 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x37 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x38 = m * (x32 - 1.0);
+        let x39 = u1 * x12 - 2.0 * (u2 * u4);
+        let x40 = -(x11 * x39);
+        let x41 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x42 = 2.0 * (u3 * u4) - u1 * x16;
+        let x43 = x11 * x42;
+        let x44 = 0.012 * f64::cos(0.0485 * t) - 0.018 * f64::sin(0.089 * t);
+        let x45 = u2 * x16;
+        let x46 = u3 * x12;
+        let x47 = x45 - x46;
+        let x48 = x19 * x19;
+        let x49 = x32 * x32;
+        let x50 = x31 * x49;
+        let x51 = u3 * u1;
+        let x52 = -x51;
+        let x53 = u2 * u1;
+        let x54 = u2 * u3;
+        let x55 = -x53;
+        let x56 = -x54;
+        let x57 = u2 * u2;
+        let x58 = u1 * u1;
+        let x59 = u3 * u3;
+        let x60 = (x32 - 2.0) * x32 + 1.0;
+        let x61 = x31 * x60;
+        let x62 = (2.0 - x32) * x32;
+        let x63 = x62 - 1.0;
+        let x64 = 0.5 * x32 - 0.5;
         ParameterDerivatives {
             qdot: [x3, x5 - x4, x6 * x3 + u1, u4, x20, x25, x28],
             matrix: [
                 [Ixx, x29, x30, 0.0],
-                [x29, x35 + Iyy, x36, 0.0],
-                [x30, x36, x37, 0.0],
-                [0.0, 0.0, 0.0, m * (1.0 - x31)],
+                [x29, Iyy + x34, x35, 0.0],
+                [x30, x35, Izz + x34, 0.0],
+                [0.0, 0.0, 0.0, x33],
             ],
             force: [
-                (u2 * Iyy - Iyz * u3 - Ixy * u1) * u3
-                    - u2 * (u3 * Izz - u2 * Iyz - u1 * Ixz),
-                u2 * (x42 - x43) - x38 * Ixz + u3 * (x44 + x45 + u1 * (x37 - Ixx)),
-                u2
-                    * (u1
-                        * (Ixx - Iyy
-                            + m * ((x34 - rho - l) * rho + x32 * (0.25 * x31 - 0.25)))
-                        - x44 - x45) + (x42 + x43) * u3 + x38 * Ixy,
-                x46 + m * (x47 * x49 + x50 * x49),
+                x37 * u3 - u2 * x36,
+                x38 * x40 + x36 * u1 - x41 * u3,
+                x43 * x38 + u2 * x41 - x37 * u1,
+                x44 + x47 * x38,
             ],
             checks: [x0],
             d_qdot: [
-                [0.0, 0.0, 0.0, 0.0, -(x18 * x51), -(x24 * x51), -(x27 * x51)],
+                [0.0, 0.0, 0.0, 0.0, -(x18 * x48), -(x24 * x48), -(x27 * x48)],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -6604,17 +6591,17 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    (0.5 * (u2 * x15) - 0.5 * (x10 * u3)) * x31,
-                    x31 * (0.5 * (u2 * x21) - 0.5 * (x22 * u3)),
-                    (0.5 * x5 - 0.5 * x4) * x0 * x31,
+                    (0.5 * (u2 * x15) - 0.5 * (x10 * u3)) * x32,
+                    x32 * (0.5 * (u2 * x21) - 0.5 * (x22 * u3)),
+                    (0.5 * x5 - 0.5 * x4) * x0 * x32,
                 ],
             ],
             d_matrix: [
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x55, 0.0, 0.0],
-                    [0.0, 0.0, x55, 0.0],
-                    [0.0, 0.0, 0.0, x52],
+                    [0.0, x50, 0.0, 0.0],
+                    [0.0, 0.0, x50, 0.0],
+                    [0.0, 0.0, 0.0, x49],
                 ],
                 [
                     [1.0, 0.0, 0.0, 0.0],
@@ -6654,42 +6641,34 @@ pub mod reduced_volterra {
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x68, 0.0, 0.0],
-                    [0.0, 0.0, x68, 0.0],
-                    [0.0, 0.0, 0.0, (x31 - 2.0) * x31 + 1.0],
+                    [0.0, x61, 0.0, 0.0],
+                    [0.0, 0.0, x61, 0.0],
+                    [0.0, 0.0, 0.0, x60],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0],
-                    [0.0, x71, 0.0, 0.0],
-                    [0.0, 0.0, x71, 0.0],
+                    [0.0, -(x11 * x38), 0.0, 0.0],
+                    [0.0, 0.0, x33 * x11, 0.0],
                     [0.0, 0.0, 0.0, 0.0],
                 ],
             ],
             d_force: [
-                [0.0, x52 * x58, x52 * x61, x62 * x52],
-                [0.0, x63, x60, 0.0],
-                [x64, 0.0, x65, 0.0],
-                [x66, x57, 0.0, 0.0],
-                [x63, x64, x38 - x47, 0.0],
-                [x60, x50 - x38, x66, 0.0],
-                [x47 - x50, x65, x57, 0.0],
+                [0.0, -(x49 * x40), -(x43 * x49), -(x47 * x49)],
+                [0.0, x52, x53, 0.0],
+                [x54, 0.0, x55, 0.0],
+                [x56, x51, 0.0, 0.0],
+                [x52, x54, x58 - x57, 0.0],
+                [x53, x59 - x58, x56, 0.0],
+                [x57 - x59, x55, x51, 0.0],
+                [0.0, x63 * x40, x63 * x43, x46 - x45 + x47 * x62],
                 [
                     0.0,
-                    x58 + x31 * (x56 * x69 + x57 * x67),
-                    x31
-                        * (x60
-                            * (x32 * (0.5 - 0.25 * x31)
-                                + rho * (2.0 * rho + 2.0 * l - x34)) + x59 * x69) + x61,
-                    x62 + (x47 * x70 + x50 * x70) * x31,
-                ],
-                [
-                    0.0,
-                    (x56 * x72 + x57 * x49) * m,
-                    m * (x59 * x72 + (x48 - rho - 0.5 * l) * x60),
-                    m * (x50 * x73 + x47 * x73),
+                    m * (x39 * (0.5 - 0.5 * x32) - x11 * x51 * x64),
+                    m * (x42 * x64 + x11 * x53 * x64),
+                    -((0.5 * x57 + 0.5 * x59) * x38),
                 ],
             ],
-            power: x46 * u4,
+            power: x44 * u4,
             d_power: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
         }
     }

@@ -7665,135 +7665,133 @@ pub mod reduced_volterra {
         let x2 = f64::cos(phi);
         let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
         let x4 = f64::sin(theta);
-        let x5 = f64::sin(gamma1);
-        let x6 = f64::cos(psi);
-        let x7 = x6 * x0;
-        let x8 = f64::cos(gamma1);
-        let x9 = x4 * x1;
+        let x5 = 1.0 / (m2 + m0 + m1);
+        let x6 = f64::sin(gamma2);
+        let x7 = f64::cos(psi);
+        let x8 = x7 * x0;
+        let x9 = f64::cos(gamma2);
         let x10 = f64::sin(psi);
-        let x11 = x2 * x10;
-        let x12 = x6 * x9 - x11;
-        let x13 = x8 * x12 - x5 * x7;
-        let x14 = x8 * a_ + d;
-        let x15 = x6 * (x5 * x9 + x8 * x0) - x5 * x11;
-        let x16 = a_ * x5;
-        let x17 = f64::cos(gamma2);
+        let x11 = x1 * x10;
+        let x12 = x4 * x2;
+        let x13 = x11 + x12 * x7;
+        let x14 = x6 * x8 + x9 * x13;
+        let x15 = d + x9 * a_;
+        let x16 = a_ * x6;
+        let x17 = f64::cos(gamma1);
         let x18 = x17 * d;
         let x19 = a_ + x18;
-        let x20 = -(m2 * x19);
-        let x21 = (x13 * x14 + x15 * x16) * m1 + x12 * x20;
-        let x22 = f64::sin(gamma2);
-        let x23 = x1 * x10;
-        let x24 = x4 * x2;
-        let x25 = x23 + x24 * x6;
-        let x26 = x22 * x7 + x17 * x25;
-        let x27 = d + x17 * a_;
-        let x28 = (x17 * x0 - x24 * x22) * x6 - x22 * x23;
-        let x29 = a_ * x22;
-        let x30 = x8 * d;
-        let x31 = a_ + x30;
-        let x32 = -(x31 * m1);
-        let x33 = m2 * (x26 * x27 - x28 * x29) + x32 * x25;
-        let x34 = u5 * m2;
-        let x35 = x5 * m1;
-        let x36 = m2 * x22;
-        let x37 = x35 * x25 - x36 * x12;
-        let x38 = u4 * m1;
-        let x39 = 1.0 / (m2 + m0 + m1);
-        let x40 = x6 * x2 + x9 * x10;
-        let x41 = x0 * x10;
-        let x42 = x8 * x40 - x5 * x41;
-        let x43 = x40 * x5 + x8 * x41;
-        let x44 = x40 * x20 + m1 * (x42 * x14 + x43 * x16);
-        let x45 = x6 * x1;
-        let x46 = x24 * x10;
-        let x47 = x46 - x45;
-        let x48 = x22 * x41 + x17 * x47;
-        let x49 = x35 * x47 - x36 * x40;
-        let x50 = (x45 - x46) * x22 + x17 * x41;
-        let x51 = m2 * (x27 * x48 - x50 * x29) + x32 * x47;
-        let x52 = x0 * x2;
-        let x53 = x17 * x52 - x4 * x22;
-        let x54 = x22 * x52 + x17 * x4;
-        let x55 = m2 * (x53 * x27 + x29 * x54) + x32 * x52;
-        let x56 = x0 * x1;
-        let x57 = x4 * x5 + x8 * x56;
-        let x58 = x0 * (x35 * x2 - x36 * x1);
-        let x59 = x56 * x5 - x8 * x4;
-        let x60 = (x57 * x14 + x59 * x16) * m1 + x56 * x20;
-        let x61 = x22 * x22;
-        let x62 = x5 * x5;
-        let x63 = x8 * x8;
-        let x64 = x17 * x17;
-        let x65 = d * d;
-        let x66 = J1 - J2;
-        let x67 = (x5 * x32 - x39 * (x37 * x33 + x51 * x49 + x58 * x55)) * d - Ixy
-            + x8 * x66 * x5;
-        let x68 = J2 - J1;
-        let x69 = x17 * x68 * x22
-            + (x36 * x19 - x39 * (x49 * x44 + x58 * x60 + x37 * x21)) * d - Ixz;
-        let x70 = m1 * x65;
-        let x71 = -(x39 * (x49 * x42 + x58 * x57 + x37 * x13) * x70);
-        let x72 = x39 * m2;
-        let x73 = -((x58 * x53 + x37 * x26 + x49 * x48) * x65 * x72);
-        let x74 = -Iyz - x39 * (x55 * x60 + x51 * x44 + x33 * x21);
-        let x75 = d * m1;
-        let x76 = -(x39 * x75 * (x57 * x55 + x51 * x42 + x33 * x13));
-        let x77 = m2 * d;
-        let x78 = J2 + (x27 - x39 * (x33 * x26 + x53 * x55 + x51 * x48)) * x77;
-        let x79 = J2 + (x14 - x39 * (x21 * x13 + x57 * x60 + x42 * x44)) * x75;
-        let x80 = -((x21 * x26 + x48 * x44 + x53 * x60) * d * x72);
-        let x81 = -((x57 * x53 + x42 * x48 + x26 * x13) * x70 * x72);
-        let x82 = u2 * x5;
-        let x83 = x8 * u1;
-        let x84 = x82 + x83;
-        let x85 = u3 + u4;
-        let x86 = x66 * x84;
-        let x87 = x85 * x86 - J2 * u4 * x84;
-        let x88 = u3 + 2.0 * u4;
-        let x89 = a_ * u3;
-        let x90 = d * (x82 * x88 + x88 * x83) + x89 * u1;
-        let x91 = x17 * u1;
-        let x92 = 2.0 * u5 + u2;
-        let x93 = u3 * x22;
-        let x94 = a_ * u2;
-        let x95 = d * (x92 * x93 - x91 * x92) - x94 * u1;
-        let x96 = x5 * u1;
-        let x97 = x96 * d - x31 * u2;
-        let x98 = x97 * x84;
-        let x99 = x89 * u3 * x5;
-        let x100 = x99 - x98;
-        let x101 = x8 * u4;
-        let x102 = x8 * u2 - x96;
-        let x103 = x89 * x101 - x85 * (u3 * x14 + d * u4) + x97 * x102;
-        let x104 = x22 * u1;
-        let x105 = -x104 * d - u3 * x19;
-        let x106 = x91 - x93;
-        let x107 = x105 * x106;
-        let x108 = u2 * x22 * x94;
-        let x109 = x107 + x108;
-        let x110 = x104 + x17 * u3;
-        let x111 = x17 * u5;
-        let x112 = u5 + u2;
-        let x113 = (u5 * d + u2 * x27) * x112 - x110 * x105 - x94 * x111;
-        let x114 = (x90 * x47 + x100 * x42 + x43 * x103) * m1
-            + m2 * (x109 * x48 + x50 * x113 + x95 * x40);
-        let x115 = m1 * (x103 * x15 + x90 * x25 + x100 * x13)
-            + m2 * (x109 * x26 + x95 * x12 + x113 * x28);
-        let x116 = (x59 * x103 + x100 * x57 + x90 * x52) * m1
-            + m2 * (x109 * x53 + x95 * x56 - x113 * x54);
-        let x117 = (J2 * x92 - J1 * x112) * x106;
-        let x118 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x119 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x120 = x110 * x68 * x106;
-        let x121 = a_ * u1;
-        let x122 = 2.0 * gamma2;
-        let x123 = f64::sin(x122);
-        let x124 = u1 * u1;
-        let x125 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x126 = x86 * x102;
-        let x127 = 2.0 * gamma1;
-        let x128 = f64::sin(x127);
+        let x20 = -(x19 * m1);
+        let x21 = f64::sin(gamma1);
+        let x22 = x4 * x1;
+        let x23 = x2 * x10;
+        let x24 = x7 * x22 - x23;
+        let x25 = x17 * x24 - x21 * x8;
+        let x26 = x17 * a_ + d;
+        let x27 = a_ * x21;
+        let x28 = x9 * d;
+        let x29 = a_ + x28;
+        let x30 = -(m2 * x29);
+        let x31 = u5 * m2;
+        let x32 = x21 * m1;
+        let x33 = m2 * x6;
+        let x34 = u4 * m1;
+        let x35 = x0 * x10;
+        let x36 = x7 * x2 + x22 * x10;
+        let x37 = x17 * x36 - x21 * x35;
+        let x38 = x7 * x1;
+        let x39 = x12 * x10;
+        let x40 = x39 - x38;
+        let x41 = x6 * x35 + x9 * x40;
+        let x42 = x0 * x1;
+        let x43 = x4 * x21 + x17 * x42;
+        let x44 = x0 * x2;
+        let x45 = x9 * x44 - x4 * x6;
+        let x46 = 1.0 - x5 * m2;
+        let x47 = 1.0 - x5 * m1;
+        let x48 = d * d;
+        let x49 = x6 * x6;
+        let x50 = x21 * x21;
+        let x51 = x17 * x17;
+        let x52 = x9 * x9;
+        let x53 = J1 - J2;
+        let x54 = d * m1;
+        let x55 = m2 * x29 + x20;
+        let x56 = x5 * x55;
+        let x57 = x21 * (x17 * x53 - x54 * (x19 + x56)) - Ixy;
+        let x58 = J2 - J1;
+        let x59 = m2 * d;
+        let x60 = x30 + x19 * m1;
+        let x61 = (x9 * x58 + x59 * (x5 * x60 + x29)) * x6 - Ixz;
+        let x62 = x33 * (x5 * d);
+        let x63 = x17 * x54 * x62;
+        let x64 = x54 * x21;
+        let x65 = -(x9 * x5 * x59 * x64);
+        let x66 = d * x6;
+        let x67 = x62 * x64;
+        let x68 = x67 - Iyz;
+        let x69 = (x15 - x5 * (x9 * x55 + x33 * x66)) * x59 + J2;
+        let x70 = J2 + x54 * (x26 - x5 * (x21 * x64 + x17 * x60));
+        let x71 = u2 * x21;
+        let x72 = x17 * u1;
+        let x73 = x71 + x72;
+        let x74 = u3 + u4;
+        let x75 = x53 * x73;
+        let x76 = x74 * x75 - J2 * u4 * x73;
+        let x77 = a_ * u3;
+        let x78 = x77 * u1;
+        let x79 = u3 + 2.0 * u4;
+        let x80 = x78 + (x71 * x79 + x79 * x72) * d;
+        let x81 = u2 * u2;
+        let x82 = u5 * (u5 + 2.0 * u2);
+        let x83 = u1 * u1;
+        let x84 = -x82 - x83;
+        let x85 = x9 * u1;
+        let x86 = x85 * u3;
+        let x87 = x80 * m1;
+        let x88 = m2 * (((x84 - x81) * x6 - x86) * d - x78) + x87;
+        let x89 = 2.0 * u5 + u2;
+        let x90 = u3 * x6;
+        let x91 = a_ * u2;
+        let x92 = x91 * u1;
+        let x93 = d * (x89 * x90 - x85 * x89) - x92;
+        let x94 = m2 * x93;
+        let x95 = -u3 * x79 - u4 * u4;
+        let x96 = u2 * x72;
+        let x97 = x94 + (d * (x21 * (x95 - x83) + x96) + x92) * m1;
+        let x98 = x17 * u4;
+        let x99 = x21 * u1;
+        let x100 = x17 * u2 - x99;
+        let x101 = x6 * u1 + x9 * u3;
+        let x102 = x9 * u5;
+        let x103 = u5 + u2;
+        let x104 = x85 - x90;
+        let x105 = (J2 * x89 - J1 * x103) * x104;
+        let x106 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x107 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x108 = u3 * u3;
+        let x109 = 2.0 * gamma2;
+        let x110 = f64::sin(x109);
+        let x111 = x81 + x108;
+        let x112 = a_ * x111;
+        let x113 = ((x71 * u1 + x17 * (x95 - x81)) * d - x112) * m1
+            + m2 * (x112 + (x9 * (x82 + x111) + u1 * x90) * d);
+        let x114 = a_ * u1;
+        let x115 = x58 * x104 * x101;
+        let x116 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x117 = x75 * x100;
+        let x118 = 2.0 * gamma1;
+        let x119 = f64::sin(x118);
+        let x120 = x77 * u3 * x21;
+        let x121 = x99 * d - x19 * u2;
+        let x122 = x121 * x73;
+        let x123 = x120 - x122;
+        let x124 = x77 * x98 - x74 * (u3 * x26 + d * u4) + x121 * x100;
+        let x125 = -u3 * x29 - u1 * x66;
+        let x126 = x104 * x125;
+        let x127 = u2 * x6 * x91;
+        let x128 = x126 + x127;
+        let x129 = (u5 * d + u2 * x15) * x103 - x91 * x102 - x101 * x125;
+        let x130 = (x17 * x124 - x21 * x123) * m1 + m2 * (x6 * x128 + x9 * x129);
         Assembly {
             qdot: [
                 x3,
@@ -7801,73 +7799,92 @@ pub mod reduced_volterra {
                 x4 * x3 + u1,
                 u4,
                 u5,
-                (G_X - x21 * u3 - u2 * x33 - d * (x34 * x26 + x37 * u1 + x38 * x13))
-                    * x39,
-                (G_Y - u3 * x44 - (x42 * x38 + x34 * x48 + x49 * u1) * d - x51 * u2)
-                    * x39,
-                x39
-                    * (G_Z - u2 * x55 - d * (x57 * x38 + x53 * x34 + x58 * u1)
-                        - u3 * x60),
+                x5
+                    * (G_X
+                        - u2
+                            * (m2
+                                * (x14 * x15 - ((x9 * x0 - x12 * x6) * x7 - x6 * x11) * x16)
+                                + x13 * x20)
+                        - u3
+                            * ((x25 * x26
+                                + (x7 * (x21 * x22 + x17 * x0) - x21 * x23) * x27) * m1
+                                + x30 * x24)
+                        - d * (x31 * x14 + (x32 * x13 - x33 * x24) * u1 + x34 * x25)),
+                x5
+                    * (G_Y - (x37 * x34 + x31 * x41 + (x32 * x40 - x33 * x36) * u1) * d
+                        - u2
+                            * (x40 * x20
+                                + m2 * (x15 * x41 - ((x38 - x39) * x6 + x9 * x35) * x16))
+                        - (x30 * x36 + m1 * (x37 * x26 + (x36 * x21 + x17 * x35) * x27))
+                            * u3),
+                x5
+                    * (G_Z
+                        - u3
+                            * (x30 * x42
+                                + (x43 * x26 + (x42 * x21 - x17 * x4) * x27) * m1)
+                        - u2
+                            * (m2 * (x45 * x15 + x16 * (x6 * x44 + x9 * x4)) + x20 * x44)
+                        - d * (x43 * x34 + x45 * x31 + x0 * u1 * (x32 * x2 - x33 * x1))),
             ],
             matrix: [
                 [
-                    (x61 + x62) * J2 + Ixx + (x63 + x64) * J1
-                        + (x36 * x22 - x39 * (x37 * x37 + x49 * x49 + x58 * x58)
-                            + x5 * x35) * x65,
-                    x67,
-                    x69,
-                    x71,
-                    x73,
+                    (x33 * x6 * x46 + x21 * x47 * x32) * x48 + (x49 + x50) * J2 + Ixx
+                        + (x51 + x52) * J1,
+                    x57,
+                    x61,
+                    x63,
+                    x65,
                 ],
                 [
+                    x57,
+                    Iyy + J2 * (x51 + 1.0)
+                        + m2 * (x48 - x62 * x66 + a_ * (a_ + 2.0 * x28)) - x19 * x20
+                        - x55 * x56 + x50 * J1,
+                    x68,
                     x67,
-                    Iyy - x39 * (x33 * x33 + x51 * x51 + x55 * x55) + J2 * (x63 + 1.0)
-                        - x31 * x32 + m2 * (x65 + a_ * (a_ + 2.0 * x18)) + x62 * J1,
-                    x74,
-                    x76,
-                    x78,
+                    x69,
                 ],
                 [
-                    x69,
-                    x74,
-                    x61 * J1 - x39 * (x44 * x44 + x60 * x60 + x21 * x21) + Izz
-                        + J2 * (x64 + 1.0) - x19 * x20
-                        + (a_ * (a_ + 2.0 * x30) + x65) * m1,
-                    x79,
-                    x80,
+                    x61,
+                    x68,
+                    x49 * J1 - x5 * (x60 * x60 + x64 * x64) + Izz + J2 * (x52 + 1.0)
+                        + (a_ * (a_ + 2.0 * x18) + x48) * m1 - x30 * x29,
+                    x70,
+                    x67,
                 ],
-                [x71, x76, x79, (1.0 - x39 * m1) * x70 + J2, x81],
-                [x73, x78, x80, x81, J2 + (1.0 - x72) * m2 * x65],
+                [x63, x67, x70, x54 * x47 * d + J2, x67],
+                [x65, x69, x67, x67, J2 + x59 * d * x46],
             ],
             force: [
-                x5 * x87
-                    + d
-                        * (x95 * x36 - x90 * x35
-                            - x39 * (-x49 * x114 - x37 * x115 - x58 * x116)) - x117 * x22
-                    - (x101 * x102 - x110 * x111) * J1 - u2 * x118 + x119 * u3,
-                x120 - x8 * x87 + x118 * u1
-                    - m2
-                        * (d
-                            * (d
-                                * ((0.5 * (u3 * x123) - f64::cos(x122) * u1) * u3
-                                    - 0.5 * (x124 * x123))
-                                + ((u3 * u3 - x124 - (u5 + 2.0 * u2) * u5) * x22
-                                    - 2.0 * (x91 * u3)) * a_) - x89 * x121)
-                    - x5 * u4 * x102 * J1 - x32 * x90
-                    - x39 * (-x33 * x115 - x51 * x114 - x55 * x116) - x125 * u3,
-                x126 - u5 * x110 * x22 * J1 - x95 * x20 + u2 * x125
-                    - x39 * (-x114 * x44 - x116 * x60 - x21 * x115)
+                x21 * x76 + (x33 * (x93 - x97 * x5) - (x80 - x5 * x88) * x32) * d
+                    - (x98 * x100 - x101 * x102) * J1 - x105 * x6 - u2 * x106
+                    + x107 * u3,
+                x88 * x56 - x17 * x76
+                    + m2
+                        * (x5 * x113 * x66
+                            - (a_ * (x6 * (x84 + x108) - 2.0 * x86)
+                                + d
+                                    * ((0.5 * (u3 * x110) - f64::cos(x109) * u1) * u3
+                                        - 0.5 * (x83 * x110))) * d + x77 * x114) + x106 * u1
+                    - x80 * x20 + x115 - x21 * u4 * x100 * J1 - x116 * u3,
+                x117 - u5 * x6 * x101 * J1 + u2 * x116
                     - (d
-                        * (a_
-                            * ((u2 * u2 - x124 - u4 * (2.0 * u3 + u4)) * x5
-                                + 2.0 * (u2 * x83))
-                            + (u2 * (0.5 * (u2 * x128) + u1 * f64::cos(x127))
-                                - 0.5 * (x124 * x128)) * d) + x121 * x94) * m1 - x119 * u1
-                    - x17 * x117,
-                x126 + x75 * (x98 - x99 - x39 * (-x115 * x13 - x57 * x116 - x42 * x114)),
-                x120
-                    + x77
-                        * (-x39 * (-x115 * x26 - x114 * x48 - x53 * x116) - x107 - x108),
+                        * (a_ * ((x81 - x83 - u4 * (2.0 * u3 + u4)) * x21 + 2.0 * x96)
+                            + (u2 * (0.5 * (u2 * x119) + u1 * f64::cos(x118))
+                                - 0.5 * (x83 * x119)) * d) + x114 * x91) * m1 - x107 * u1
+                    - x30 * x93 + x5 * (x97 * x60 - x113 * x64) - x9 * x105,
+                x117
+                    + x54
+                        * (x122 - x120
+                            + x5
+                                * (x17 * (x94 + (x124 * x21 + x17 * x123) * m1)
+                                    - x21 * x130)),
+                x115
+                    + x59
+                        * (-x126
+                            - x5
+                                * (-x6 * x130 - x9 * ((x9 * x128 - x129 * x6) * m2 + x87))
+                            - x127),
             ],
             checks: [x0],
         }
@@ -8308,579 +8325,446 @@ pub mod reduced_volterra {
         let G_X = g_i[0];
         let G_Y = g_i[1];
         let G_Z = g_i[2];
-        let x0 = f64::cos(theta);
-        let x1 = 1.0 / x0;
-        let x2 = f64::sin(phi);
-        let x3 = f64::cos(phi);
-        let x4 = u2 * x2 + u3 * x3;
-        let x5 = x1 * x4;
-        let x6 = u2 * x3 - u3 * x2;
-        let x7 = f64::sin(theta);
-        let x8 = x7 * x5;
-        let x9 = 1.0 / (m2 + m0 + m1);
-        let x10 = u5 * m2;
-        let x11 = f64::cos(gamma2);
-        let x12 = f64::sin(psi);
-        let x13 = x2 * x12;
-        let x14 = x7 * x3;
-        let x15 = f64::cos(psi);
-        let x16 = x13 + x14 * x15;
-        let x17 = x11 * x16;
+        let x0 = f64::cos(phi);
+        let x1 = f64::sin(phi);
+        let x2 = u2 * x1;
+        let x3 = u3 * x0 + x2;
+        let x4 = f64::cos(theta);
+        let x5 = 1.0 / x4;
+        let x6 = x3 * x5;
+        let x7 = u2 * x0 - u3 * x1;
+        let x8 = f64::sin(theta);
+        let x9 = x8 * x6;
+        let x10 = 1.0 / (m2 + m0 + m1);
+        let x11 = u5 * m2;
+        let x12 = f64::cos(gamma2);
+        let x13 = f64::sin(psi);
+        let x14 = x1 * x13;
+        let x15 = x8 * x0;
+        let x16 = f64::cos(psi);
+        let x17 = x14 + x15 * x16;
         let x18 = f64::sin(gamma2);
-        let x19 = x0 * x18;
-        let x20 = x15 * x19;
-        let x21 = x17 + x20;
-        let x22 = f64::sin(gamma1);
-        let x23 = x22 * m1;
-        let x24 = x16 * x23;
-        let x25 = m2 * x18;
-        let x26 = x7 * x2;
-        let x27 = x15 * x26;
-        let x28 = x3 * x12;
-        let x29 = x27 - x28;
-        let x30 = x25 * x29;
-        let x31 = x24 - x30;
-        let x32 = f64::cos(gamma1);
-        let x33 = x22 * x0;
-        let x34 = x32 * x29 - x15 * x33;
-        let x35 = u4 * m1;
-        let x36 = x32 * d;
-        let x37 = a_ + x36;
-        let x38 = -(m1 * x37);
-        let x39 = x11 * a_;
-        let x40 = x39 + d;
-        let x41 = x11 * x0;
-        let x42 = x14 * x18;
-        let x43 = (x41 - x42) * x15 - x18 * x13;
-        let x44 = a_ * x18;
-        let x45 = x38 * x16 + m2 * (x40 * x21 - x43 * x44);
-        let x46 = a_ * x22;
-        let x47 = x22 * x26 + x32 * x0;
-        let x48 = x47 * x15;
-        let x49 = x22 * x28;
-        let x50 = x48 - x49;
-        let x51 = x32 * a_;
-        let x52 = x51 + d;
-        let x53 = x11 * d;
-        let x54 = x53 + a_;
-        let x55 = -(m2 * x54);
-        let x56 = m1 * (x46 * x50 + x34 * x52) + x29 * x55;
-        let x57 = (-u2 * x45 - x56 * u3) - (x10 * x21 + u1 * x31 + x34 * x35) * d;
-        let x58 = x15 * x3 + x26 * x12;
-        let x59 = x58 * x55;
-        let x60 = x32 * x58;
-        let x61 = x0 * x12;
-        let x62 = x22 * x61;
-        let x63 = x60 - x62;
-        let x64 = x58 * x22;
-        let x65 = x32 * x61;
-        let x66 = x64 + x65;
-        let x67 = (x52 * x63 + x66 * x46) * m1;
-        let x68 = x59 + x67;
-        let x69 = x15 * x2;
-        let x70 = x14 * x12;
-        let x71 = x70 - x69;
-        let x72 = x38 * x71;
-        let x73 = x69 - x70;
-        let x74 = x11 * x61;
-        let x75 = x73 * x18 + x74;
-        let x76 = x18 * x61;
-        let x77 = x11 * x71;
-        let x78 = x76 + x77;
-        let x79 = m2 * (x40 * x78 - x75 * x44);
-        let x80 = x72 + x79;
-        let x81 = x25 * x58;
-        let x82 = x23 * x71;
-        let x83 = x82 - x81;
-        let x84 = x0 * x2;
-        let x85 = x7 * x22 + x32 * x84;
-        let x86 = x84 * x22;
-        let x87 = x32 * x7;
-        let x88 = x86 - x87;
-        let x89 = x84 * x55 + m1 * (x85 * x52 + x88 * x46);
-        let x90 = x7 * x18;
-        let x91 = x0 * x3;
-        let x92 = x11 * x91;
-        let x93 = x92 - x90;
-        let x94 = x18 * x91 + x11 * x7;
-        let x95 = m2 * (x40 * x93 + x44 * x94) + x38 * x91;
-        let x96 = x25 * x2;
-        let x97 = x23 * x3;
-        let x98 = x0 * (x97 - x96);
-        let x99 = (-x89 * u3 - u2 * x95) - d * (x85 * x35 + x93 * x10 + x98 * u1);
-        let x100 = x18 * x18;
-        let x101 = x22 * x22;
-        let x102 = d * d;
-        let x103 = x32 * x32;
-        let x104 = x11 * x11;
-        let x105 = x32 * x22;
-        let x106 = J1 - J2;
-        let x107 = (x38 * x22 - (x98 * x95 + x83 * x80 + x45 * x31) * x9) * d - Ixy
-            + x105 * x106;
-        let x108 = J2 - J1;
-        let x109 = x11 * x18;
-        let x110 = x108 * x109 - Ixz
-            + (x25 * x54 - x9 * (x89 * x98 + x68 * x83 + x56 * x31)) * d;
-        let x111 = x9 * d;
-        let x112 = x111 * m1;
-        let x113 = d * x112;
-        let x114 = -(x113 * (x83 * x63 + x34 * x31 + x98 * x85));
-        let x115 = m2 * d;
-        let x116 = x115 * x111;
-        let x117 = -(x116 * (x83 * x78 + x98 * x93 + x21 * x31));
-        let x118 = -x9 * (x89 * x95 + x68 * x80 + x56 * x45) - Iyz;
-        let x119 = -((x63 * x80 + x85 * x95 + x34 * x45) * x112);
-        let x120 = J2 + (x40 - (x80 * x78 + x21 * x45 + x93 * x95) * x9) * x115;
-        let x121 = d * m1;
-        let x122 = J2 + x121 * (x52 - x9 * (x89 * x85 + x68 * x63 + x56 * x34));
-        let x123 = m2 * x111;
-        let x124 = -((x68 * x78 + x89 * x93 + x56 * x21) * x123);
-        let x125 = x9 * m1;
-        let x126 = x121 * d;
-        let x127 = x115 * x112;
-        let x128 = -((x34 * x21 + x85 * x93 + x63 * x78) * x127);
-        let x129 = x9 * m2;
-        let x130 = x115 * d;
-        let x131 = 2.0 * u5 + u2;
-        let x132 = J2 * x131;
-        let x133 = u5 + u2;
-        let x134 = J1 * x133;
-        let x135 = x132 - x134;
-        let x136 = x11 * u1;
-        let x137 = u3 * x18;
-        let x138 = x136 - x137;
-        let x139 = x18 * x138;
-        let x140 = x22 * u1;
-        let x141 = x32 * u2;
-        let x142 = x141 - x140;
-        let x143 = x32 * x142;
-        let x144 = x18 * u1;
-        let x145 = x11 * u3;
-        let x146 = x144 + x145;
-        let x147 = -(x11 * x146);
-        let x148 = u3 + u4;
-        let x149 = u2 * x22;
-        let x150 = x32 * u1;
-        let x151 = x149 + x150;
-        let x152 = x106 * x151;
-        let x153 = J2 * u4;
-        let x154 = x148 * x152 - x153 * x151;
-        let x155 = x154 * x22;
-        let x156 = u2 * Iyz;
-        let x157 = u1 * Ixz;
-        let x158 = u3 * Izz - x156 - x157;
-        let x159 = a_ * u2;
-        let x160 = x11 * x159;
-        let x161 = u3 * x54;
-        let x162 = d * x18;
-        let x163 = u1 * x162;
-        let x164 = -x161 - x163;
-        let x165 = x164 * x146;
-        let x166 = (u5 * d + u2 * x40) * x133 - u5 * x160 - x165;
-        let x167 = x164 * x138;
-        let x168 = u2 * x44;
-        let x169 = u2 * x168;
-        let x170 = x167 + x169;
-        let x171 = d * (x131 * x137 - x136 * x131) - x159 * u1;
-        let x172 = x171 * x58;
-        let x173 = u3 * u1;
-        let x174 = u3 + 2.0 * u4;
-        let x175 = a_ * x173 + (x149 * x174 + x174 * x150) * d;
-        let x176 = x51 * u3 * u4 - x148 * (u3 * x52 + d * u4);
-        let x177 = x22 * d;
-        let x178 = x177 * u1;
-        let x179 = u2 * x37;
-        let x180 = x178 - x179;
-        let x181 = x180 * x142;
-        let x182 = x176 + x181;
-        let x183 = x180 * x151;
-        let x184 = u3 * x46;
-        let x185 = x184 * u3;
-        let x186 = x185 - x183;
-        let x187 = (x75 * x166 + x170 * x78 + x172) * m2
-            + (x175 * x71 + x66 * x182 + x63 * x186) * m1;
-        let x188 = (x93 * x170 + x171 * x84 - x166 * x94) * m2
-            + (x85 * x186 + x175 * x91 + x88 * x182) * m1;
-        let x189 = m2 * (x166 * x43 + x171 * x29 + x21 * x170)
-            + (x34 * x186 + x182 * x50 + x175 * x16) * m1;
-        let x190 = Iyz * u3;
-        let x191 = Ixy * u1;
-        let x192 = u2 * Iyy - x190 - x191;
-        let x193 = a_ * a_;
-        let x194 = u1 * u1;
+        let x19 = x4 * x18;
+        let x20 = x12 * x17 + x16 * x19;
+        let x21 = f64::sin(gamma1);
+        let x22 = x21 * m1;
+        let x23 = x17 * x22;
+        let x24 = m2 * x18;
+        let x25 = x8 * x1;
+        let x26 = x16 * x25;
+        let x27 = x0 * x13;
+        let x28 = x26 - x27;
+        let x29 = x24 * x28;
+        let x30 = f64::cos(gamma1);
+        let x31 = x21 * x4;
+        let x32 = x30 * x28 - x16 * x31;
+        let x33 = u4 * m1;
+        let x34 = x12 * d;
+        let x35 = x34 + a_;
+        let x36 = -(m2 * x35);
+        let x37 = a_ * x21;
+        let x38 = x21 * x25 + x30 * x4;
+        let x39 = x38 * x16;
+        let x40 = x21 * x27;
+        let x41 = x39 - x40;
+        let x42 = x30 * a_;
+        let x43 = x42 + d;
+        let x44 = x28 * x36 + m1 * (x37 * x41 + x32 * x43);
+        let x45 = x12 * a_;
+        let x46 = x45 + d;
+        let x47 = x12 * x4;
+        let x48 = x15 * x18;
+        let x49 = (x47 - x48) * x16 - x18 * x14;
+        let x50 = a_ * x18;
+        let x51 = x30 * d;
+        let x52 = a_ + x51;
+        let x53 = -(x52 * m1);
+        let x54 = m2 * (x46 * x20 - x49 * x50) + x17 * x53;
+        let x55 = (-u3 * x44 - u2 * x54)
+            - (x11 * x20 + u1 * (x23 - x29) + x32 * x33) * d;
+        let x56 = x16 * x1;
+        let x57 = x15 * x13;
+        let x58 = x57 - x56;
+        let x59 = x56 - x57;
+        let x60 = x4 * x13;
+        let x61 = x12 * x60;
+        let x62 = x59 * x18 + x61;
+        let x63 = x18 * x60;
+        let x64 = x12 * x58;
+        let x65 = x63 + x64;
+        let x66 = x53 * x58 + m2 * (x46 * x65 - x62 * x50);
+        let x67 = x16 * x0 + x25 * x13;
+        let x68 = x30 * x67;
+        let x69 = x21 * x60;
+        let x70 = x68 - x69;
+        let x71 = x67 * x21;
+        let x72 = x30 * x60;
+        let x73 = x71 + x72;
+        let x74 = x67 * x36;
+        let x75 = (x43 * x70 + x73 * x37) * m1 + x74;
+        let x76 = x24 * x67;
+        let x77 = x22 * x58;
+        let x78 = x4 * x0;
+        let x79 = x12 * x78 - x8 * x18;
+        let x80 = x18 * x78 + x12 * x8;
+        let x81 = m2 * (x46 * x79 + x50 * x80) + x53 * x78;
+        let x82 = x4 * x1;
+        let x83 = x8 * x21 + x30 * x82;
+        let x84 = x82 * x21;
+        let x85 = x30 * x8;
+        let x86 = x84 - x85;
+        let x87 = x82 * x36 + m1 * (x83 * x43 + x86 * x37);
+        let x88 = x24 * x1;
+        let x89 = x22 * x0;
+        let x90 = (-u2 * x81 - u3 * x87)
+            - d * (x83 * x33 + x79 * x11 + x4 * u1 * (x89 - x88));
+        let x91 = x18 * x18;
+        let x92 = x21 * x21;
+        let x93 = x30 * x30;
+        let x94 = x12 * x12;
+        let x95 = x10 * m1;
+        let x96 = 1.0 - x95;
+        let x97 = x10 * m2;
+        let x98 = 1.0 - x97;
+        let x99 = x98 * x18;
+        let x100 = d * d;
+        let x101 = J1 - J2;
+        let x102 = d * m1;
+        let x103 = m2 * x35;
+        let x104 = x53 + x103;
+        let x105 = x10 * x104;
+        let x106 = x52 + x105;
+        let x107 = x30 * x101 - x102 * x106;
+        let x108 = x107 * x21 - Ixy;
+        let x109 = x52 * m1;
+        let x110 = x109 + x36;
+        let x111 = x110 * x10;
+        let x112 = x35 + x111;
+        let x113 = m2 * d;
+        let x114 = J2 - J1;
+        let x115 = x12 * x114;
+        let x116 = (x112 * x113 + x115) * x18 - Ixz;
+        let x117 = x10 * x113;
+        let x118 = x117 * x102;
+        let x119 = x30 * x18;
+        let x120 = x118 * x119;
+        let x121 = x102 * x21;
+        let x122 = x117 * x121;
+        let x123 = x12 * x122;
+        let x124 = -x123;
+        let x125 = x117 * d;
+        let x126 = x18 * x122;
+        let x127 = x126 - Iyz;
+        let x128 = x113 * (x46 - x10 * (x91 * x113 + x12 * x104)) + J2;
+        let x129 = J2 + (x43 - x10 * (x30 * x110 + x21 * x121)) * x102;
+        let x130 = x102 * d;
+        let x131 = x96 * x130;
+        let x132 = x113 * d;
+        let x133 = 2.0 * u5 + u2;
+        let x134 = J2 * x133;
+        let x135 = u5 + u2;
+        let x136 = J1 * x135;
+        let x137 = x134 - x136;
+        let x138 = x12 * u1;
+        let x139 = u3 * x18;
+        let x140 = x138 - x139;
+        let x141 = x18 * x140;
+        let x142 = x21 * u1;
+        let x143 = x30 * u2;
+        let x144 = x143 - x142;
+        let x145 = x30 * x144;
+        let x146 = x18 * u1;
+        let x147 = x12 * u3;
+        let x148 = x146 + x147;
+        let x149 = -(x12 * x148);
+        let x150 = a_ * u3;
+        let x151 = x150 * u1;
+        let x152 = u2 * x21;
+        let x153 = u3 + 2.0 * u4;
+        let x154 = x30 * u1;
+        let x155 = x151 + (x152 * x153 + x153 * x154) * d;
+        let x156 = x155 * m1;
+        let x157 = u1 * u1;
+        let x158 = u5 * (u5 + 2.0 * u2);
+        let x159 = u2 * u2;
+        let x160 = -x158 - x159;
+        let x161 = x160 - x157;
+        let x162 = x147 * u1;
+        let x163 = m2 * ((x18 * x161 - x162) * d - x151);
+        let x164 = x156 + x163;
+        let x165 = x155 - x10 * x164;
+        let x166 = u3 * x153;
+        let x167 = u4 * u4;
+        let x168 = -x166 - x167;
+        let x169 = x168 - x157;
+        let x170 = x143 * u1;
+        let x171 = a_ * u2;
+        let x172 = x171 * u1;
+        let x173 = d * (x133 * x139 - x138 * x133) - x172;
+        let x174 = m2 * x173;
+        let x175 = (d * (x21 * x169 + x170) + x172) * m1 + x174;
+        let x176 = x173 - x10 * x175;
+        let x177 = u3 + u4;
+        let x178 = x152 + x154;
+        let x179 = x101 * x178;
+        let x180 = J2 * u4;
+        let x181 = x177 * x179 - x180 * x178;
+        let x182 = x181 * x21;
+        let x183 = u2 * Iyz;
+        let x184 = u1 * Ixz;
+        let x185 = u3 * Izz - x183 - x184;
+        let x186 = Iyz * u3;
+        let x187 = Ixy * u1;
+        let x188 = u2 * Iyy - x186 - x187;
+        let x189 = x30 * x181;
+        let x190 = u4 * J1;
+        let x191 = x144 * x21;
+        let x192 = a_ * u1;
+        let x193 = x10 * d;
+        let x194 = u2 * x142;
         let x195 = u3 * u3;
-        let x196 = x195 - x194;
-        let x197 = x196 - (u5 + 2.0 * u2) * u5;
-        let x198 = 2.0 * gamma2;
-        let x199 = f64::sin(x198);
-        let x200 = u3 * x199;
-        let x201 = f64::cos(x198);
-        let x202 = x201 * u1;
-        let x203 = x32 * x154;
-        let x204 = u4 * J1;
-        let x205 = x142 * x22;
-        let x206 = x108 * x146;
-        let x207 = x206 * x138;
-        let x208 = u3 * Ixz;
-        let x209 = u2 * Ixy;
-        let x210 = Ixx * u1 - x208 - x209;
-        let x211 = x152 * x142;
-        let x212 = x11 * x138;
-        let x213 = u5 * J1;
-        let x214 = -(x18 * x146);
-        let x215 = a_ * u1;
-        let x216 = u2 * u2 - x194 - u4 * (2.0 * u3 + u4);
+        let x196 = x159 + x195;
+        let x197 = a_ * x196;
+        let x198 = x146 * u3;
+        let x199 = m1 * ((x194 + x30 * (x168 - x159)) * d - x197)
+            + m2 * (x197 + (x12 * (x158 + x196) + x198) * d);
+        let x200 = 2.0 * gamma2;
+        let x201 = f64::sin(x200);
+        let x202 = u3 * x201;
+        let x203 = f64::cos(x200);
+        let x204 = x203 * u1;
+        let x205 = x195 - x157;
+        let x206 = x205 - x158;
+        let x207 = x114 * x140;
+        let x208 = x148 * x207;
+        let x209 = u3 * Ixz;
+        let x210 = u2 * Ixy;
+        let x211 = Ixx * u1 - x209 - x210;
+        let x212 = x179 * x144;
+        let x213 = x12 * x140;
+        let x214 = u5 * J1;
+        let x215 = -(x18 * x148);
+        let x216 = x159 - x157 - u4 * (2.0 * u3 + u4);
         let x217 = 2.0 * gamma1;
         let x218 = f64::sin(x217);
         let x219 = u2 * x218;
         let x220 = f64::cos(x217);
         let x221 = u1 * x220;
-        let x222 = x11 * x73;
-        let x223 = x222 - x76;
-        let x224 = x18 * x71 - x74;
-        let x225 = m2 * (x223 * x40 - x224 * x44);
-        let x226 = x73 * x38;
-        let x227 = x225 + x226;
-        let x228 = x62 - x60;
-        let x229 = x73 * x23;
-        let x230 = -x64 - x65;
-        let x231 = (x230 * x46 + x52 * x228) * m1;
-        let x232 = x231 - x59;
-        let x233 = d * x111;
-        let x234 = x227 + x80;
-        let x235 = x81 - x82;
-        let x236 = x235 - x229 - x81;
-        let x237 = x111 * (x236 * x45 - x234 * x31);
-        let x238 = x232 + x68;
-        let x239 = x111 * (x56 * x236 - x238 * x31);
-        let x240 = x113 * x236 * x34;
-        let x241 = x77 + x222;
-        let x242 = (x236 * x21 - x241 * x31) * x116;
-        let x243 = (-x56 * x234 - x238 * x45) * x9;
-        let x244 = -(x234 * x34 * x112);
-        let x245 = x123 * (-x234 * x21 - x241 * x45);
-        let x246 = -(x238 * x34 * x112);
-        let x247 = x123 * (-x238 * x21 - x56 * x241);
-        let x248 = -(x34 * x241 * x127);
-        let x249 = x187 + (x230 * x182 + x73 * x175 + x228 * x186) * m1
-            + (x166 * x224 - x172 + x223 * x170) * m2;
-        let x250 = x7 * x1;
-        let x251 = x9 * x99;
-        let x252 = x32 * x26;
-        let x253 = x33 - x252;
-        let x254 = x96 - x97;
-        let x255 = x7 * x254;
-        let x256 = x19 + x11 * x14;
-        let x257 = x26 * x55;
-        let x258 = (x253 * x52 - x47 * x46) * m1;
-        let x259 = x14 * x38;
-        let x260 = x42 - x41;
-        let x261 = m2 * (-x40 * x256 - x260 * x44);
-        let x262 = x15 * x31;
-        let x263 = x83 * x12;
-        let x264 = x80 * x12;
-        let x265 = x15 * x45;
-        let x266 = x259 - x264 - x265 - x261;
-        let x267 = x262 + x263 + x255;
-        let x268 = (x98 * x266 - x95 * x267) * x111;
-        let x269 = x56 * x15;
-        let x270 = x68 * x12;
-        let x271 = x257 - x269 - x258 - x270;
-        let x272 = x111 * (x98 * x271 - x89 * x267);
-        let x273 = x252 - x63 * x12 - x15 * x34 - x33;
-        let x274 = x113 * (x273 * x98 - x85 * x267);
-        let x275 = x256 - x78 * x12 - x15 * x21;
-        let x276 = x116 * (x98 * x275 - x93 * x267);
-        let x277 = x9 * (x95 * x271 + x89 * x266);
-        let x278 = (x273 * x95 + x85 * x266) * x112;
-        let x279 = x123 * (x95 * x275 + x93 * x266);
-        let x280 = (x85 * x271 + x273 * x89) * x112;
-        let x281 = (x89 * x275 + x93 * x271) * x123;
-        let x282 = x127 * (x85 * x275 + x273 * x93);
-        let x283 = x187 * x12 + x189 * x15
-            + (x166 * x260 - x256 * x170 - x171 * x26) * m2
-            + (x253 * x186 - x175 * x14 - x47 * x182) * m1;
-        let x284 = x28 - x27;
-        let x285 = x11 * x40;
-        let x286 = x18 * x44;
-        let x287 = m2 * (x284 * x285 - x29 * x286) + x38 * x284;
-        let x288 = x32 * x35;
-        let x289 = x284 * x23 - x25 * x16;
-        let x290 = x11 * x10;
-        let x291 = x55 + (x32 * x52 + x22 * x46) * m1;
-        let x292 = u3 * x291;
-        let x293 = -x25 * x71 - x58 * x23;
-        let x294 = m2 * (-x58 * x286 - x58 * x285) - x38 * x58;
-        let x295 = x23 * x2 + x25 * x3;
-        let x296 = -x38 - m2 * (x286 + x285);
-        let x297 = x296 * x2;
-        let x298 = -(x0 * x295);
-        let x299 = x111
-            * (-x294 * x83 - (x98 * x297 - x95 * x295) * x0 - x287 * x31 - x293 * x80
-                - x45 * x289);
-        let x300 = x16 * x31;
-        let x301 = x98 * x91;
-        let x302 = x71 * x83;
-        let x303 = x300 + x301 + x302;
-        let x304 = x111 * (-x303 * x291 - x89 * x298 - x68 * x293 - x56 * x289);
-        let x305 = x113 * (-x34 * x289 - x85 * x298 - x32 * x303 - x293 * x63);
-        let x306 = x98 * x84;
-        let x307 = x58 * x83;
-        let x308 = x116
-            * (x11 * (x306 + x307 - x284 * x31) - x293 * x78 - x21 * x289 - x93 * x298);
-        let x309 = x84 * x296;
-        let x310 = x95 * x91;
-        let x311 = x16 * x45;
-        let x312 = x71 * x80;
-        let x313 = x310 + x311 + x312;
-        let x314 = x9 * (-x313 * x291 - x56 * x287 - x68 * x294 - x309 * x89);
-        let x315 = x32 * x313;
-        let x316 = x112 * (-x315 - x294 * x63 - x309 * x85 - x34 * x287);
-        let x317 = x84 * x95;
-        let x318 = x58 * x80;
-        let x319 = (x11 * (x317 - x284 * x45 + x318) - x309 * x93 - x294 * x78
-            - x21 * x287) * x123;
-        let x320 = x89 * x91;
-        let x321 = x68 * x71;
-        let x322 = x56 * x16;
-        let x323 = x320 + x321 + x322;
-        let x324 = x32 * x323;
-        let x325 = x85 * x91 + x71 * x63 + x16 * x34;
-        let x326 = (-x324 - x325 * x291) * x112;
-        let x327 = x58 * x68;
-        let x328 = x89 * x84;
-        let x329 = x93 * x91 + x71 * x78 + x16 * x21;
-        let x330 = x123 * (x11 * (x327 - x56 * x284 + x328) - x329 * x291);
-        let x331 = -(x32 * x329);
-        let x332 = x58 * x63;
-        let x333 = x84 * x85;
-        let x334 = (x331 + x11 * (x332 + x333 - x284 * x34)) * x127;
-        let x335 = x11 * x170;
-        let x336 = x166 * x18;
-        let x337 = x22 * x182 + x32 * x186;
-        let x338 = m2 * (x171 * x71 - x335 * x58 + x336 * x58)
-            + (x71 * x337 - x175 * x58) * m1;
-        let x339 = m1 * (x16 * x337 + x175 * x284)
-            + m2 * (x335 * x284 + x336 * x29 + x171 * x16);
-        let x340 = (x337 * x3 - x175 * x2) * m1 + m2 * (x171 * x3 + (x336 - x335) * x2);
-        let x341 = -x189 * x16 - x188 * x91 - x187 * x71;
-        let x342 = -(x340 * x0);
-        let x343 = x32 * x341;
-        let x344 = x187 * x58;
-        let x345 = x84 * x188;
-        let x346 = x49 - x48;
-        let x347 = x52 * x346 + x51 * x50;
-        let x348 = x66 * x51 + x230 * x52;
-        let x349 = x87 - x86;
-        let x350 = x51 * x88 + x52 * x349;
-        let x351 = 2.0 * J2 - 2.0 * J1;
-        let x352 = x103 * x106
-            + x121 * (x177 * x22 - x32 * x37 + x9 * (-x315 - x177 * x303)) + x108 * x101;
-        let x353 = (-x98 * x350 - x348 * x83 - x324 - x347 * x31) * x112;
-        let x354 = x113 * (-x346 * x31 - x98 * x349 - x230 * x83 - x32 * x325 * m1);
-        let x355 = x331 * x127;
-        let x356 = 2.0 * J1 - 2.0 * J2;
-        let x357 = x125 * (-x95 * x350 - x348 * x80 - x347 * x45 - x177 * x323);
-        let x358 = x112 * (-x121 * x22 * x325 - x95 * x349 - x346 * x45 - x230 * x80);
-        let x359 = -(x22 * x329 * x127);
-        let x360 = x121
-            * (x9
-                * (-(x347 * x34 + x348 * x63 + x85 * x350) * m1 - x230 * x68 - x56 * x346
-                    - x89 * x349) - x46);
-        let x361 = m2 * x112;
-        let x362 = -(x361 * (x93 * x350 + x347 * x21 + x348 * x78));
-        let x363 = -(x127 * (x230 * x78 + x21 * x346 + x93 * x349));
-        let x364 = x141 * x174 - x140 * x174;
-        let x365 = x364 * d;
-        let x366 = x195 * x51;
-        let x367 = d * x151;
-        let x368 = x367 * x151;
-        let x369 = x366 + x176 - x368;
-        let x370 = x185 - x183 + x142 * x367;
-        let x371 = x365 * x71 + x369 * x63 + x66 * x370 + x230 * x186;
-        let x372 = x349 * x186 + x369 * x85 + x88 * x370 + x365 * x91;
-        let x373 = x50 * x370 + x369 * x34 + x365 * x16 + x346 * x186;
-        let x374 = x148 * x106;
-        let x375 = x142 * x374 + x153 * (x140 - x141);
-        let x376 = x22 * x151;
-        let x377 = u1 * x218;
-        let x378 = u2 * x220;
-        let x379 = x106 * x142 * x142 - x152 * x151;
-        let x380 = x40 * x43 - x11 * a_ * x43;
-        let x381 = a_ * (-x75 * x11 - x241 * x18) + x75 * x40;
-        let x382 = x39 * x94 - x40 * x94;
-        let x383 = x29 * x31;
-        let x384 = (x317 + x318) + x29 * x45;
-        let x385 = x123 * (x11 * x384 - x380 * x31 - x381 * x83 - x98 * x382);
-        let x386 = x56 * x29;
-        let x387 = x100 * x106 + x108 * x104
-            + (x11 * x54 - x18 * x162
-                + x9 * (x11 * (x327 + x386 + x328) - (x306 + x307 + x383) * x162))
-                * x115;
-        let x388 = (x29 * x34 + x333) + x332;
-        let x389 = x11 * x127 * x388;
-        let x390 = x29 * x21 + (x58 * x78 + x84 * x93);
-        let x391 = (x98 * x94 - x75 * x83 + x11 * x390 * m2 - x43 * x31) * x116;
-        let x392 = (-x56 * x380 - x68 * x381 - x89 * x382 - x384 * x162) * x129;
-        let x393 = -((x34 * x380 + x382 * x85 + x381 * x63) * x361);
-        let x394 = (x9
-            * (x95 * x94 - m2 * (x382 * x93 + x21 * x380 + x381 * x78) - x75 * x80
-                - x45 * x43) - x44) * x115;
-        let x395 = -(x18 * x127 * x388);
-        let x396 = (x89 * x94 - x75 * x68 - x390 * x115 * x18 - x56 * x43) * x123;
-        let x397 = -((x34 * x43 - x85 * x94 + x75 * x63) * x127);
-        let x398 = x137 - x136;
-        let x399 = x145 * x131 + x144 * x131;
-        let x400 = x398 * d;
-        let x401 = x400 * x146;
-        let x402 = d * x399;
-        let x403 = u2 * x160;
-        let x404 = x138 * x400;
-        let x405 = x403 + x404 - x165;
-        let x406 = x401 * x94 + x166 * (x90 - x92) + x402 * x84 + x93 * x405;
-        let x407 = x402 * x58 + x405 * x78 + x166 * x223 - x75 * x401;
-        let x408 = x402 * x29 - x401 * x43 + x21 * x405 + x166 * (-x17 - x20);
-        let x409 = (-x345 - x189 * x29) - x344;
-        let x410 = x108 * x138 * x138 - x206 * x146;
-        let x411 = (x213 + x134) - x132;
-        let x412 = x138 * x162;
-        let x413 = x11 * x164;
-        let x414 = x413 - x412;
-        let x415 = -x159 - x53 * x131;
-        let x416 = x18 * (x161 + x163 + d * x146);
-        let x417 = x32 * x180;
-        let x418 = x177 * x151 + x417;
-        let x419 = a_ * u3 + x36 * x174;
-        let x420 = x22 * (x179 - x178 + x142 * d);
-        let x421 = (x414 * x78 + x58 * x415 + x75 * x416) * m2
-            + (x71 * x419 - x418 * x63 + x66 * x420) * m1;
-        let x422 = (x420 * x50 - x34 * x418 + x16 * x419) * m1
-            + m2 * (x29 * x415 + x416 * x43 + x21 * x414);
-        let x423 = m1 * (x88 * x420 + x91 * x419 - x85 * x418)
-            + m2 * (x93 * x414 - x416 * x94 + x84 * x415);
-        let x424 = Ixy * u3;
-        let x425 = x374 - x153;
-        let x426 = u2 * Ixz;
-        let x427 = Izz - Ixx;
-        let x428 = x11 * x146;
-        let x429 = Ixx - Iyy;
-        let x430 = x376;
-        let x431 = x108 * x139;
-        let x432 = x121 * x174;
-        let x433 = x400 - x215;
-        let x434 = d * x133 + x40 * x133 + x39 * (u2 - u5);
-        let x435 = x417 - x142 * x37;
-        let x436 = x180 * x22 - x151 * x37;
-        let x437 = x177 * x174;
-        let x438 = m2 * (x75 * x434 + 2.0 * (x168 * x78) + x58 * x433)
-            + m1 * (x66 * x435 - x436 * x63 + x71 * x437);
-        let x439 = (2.0 * (x93 * x168) - x434 * x94 + x84 * x433) * m2
-            + (x437 * x91 + x88 * x435 - x85 * x436) * m1;
-        let x440 = m2 * (x29 * x433 + x434 * x43 + 2.0 * (x21 * x168))
-            + (x50 * x435 - x436 * x34 + x16 * x437) * m1;
-        let x441 = Iyy - Izz;
-        let x442 = Iyz * u1;
-        let x443 = u1 * x193;
-        let x444 = 2.0 * x149 + 2.0 * x150;
-        let x445 = x108 * x212;
-        let x446 = x32 * x152;
-        let x447 = x106 * x205 + x446;
-        let x448 = x115 * x131;
-        let x449 = x215 + x367;
-        let x450 = x51 * (u4 - u3) - x148 * d - x148 * x52;
-        let x451 = x413 - x146 * x54;
-        let x452 = x164 * x18;
-        let x453 = x138 * x54;
-        let x454 = -x452 - x453;
-        let x455 = x131 * x162;
-        let x456 = m1 * (x450 * x50 + x449 * x16 + 2.0 * (x184 * x34))
-            + m2 * (x454 * x21 - x451 * x43 + x29 * x455);
-        let x457 = (2.0 * (x184 * x85) + x450 * x88 + x449 * x91) * m1
-            + m2 * (x454 * x93 + x451 * x94 + x84 * x455);
-        let x458 = m2 * (x454 * x78 - x75 * x451 + x58 * x455)
-            + (2.0 * (x184 * x63) + x449 * x71 + x66 * x450) * m1;
-        let x459 = 2.0 * x137 - 2.0 * x136;
-        let x460 = x106 * x18 * x146 + x445;
-        let x461 = x152 - J2 * x151;
-        let x462 = 2.0 * u3 + 2.0 * u4;
-        let x463 = x16 * x444 - x462 * x50;
-        let x464 = x444 * x91 - x462 * x88;
-        let x465 = x71 * x444 - x66 * x462;
-        let x466 = 2.0 * J2 - J1;
-        let x467 = 2.0 * u5 + 2.0 * u2;
-        let x468 = x75 * x467 + x58 * x459;
-        let x469 = x84 * x459 - x467 * x94;
-        let x470 = x29 * x459 + x467 * x43;
+        let x222 = x150 * u3 * x21;
+        let x223 = x30 * x150;
+        let x224 = u4 * x223;
+        let x225 = x177 * (u3 * x43 + d * u4);
+        let x226 = x224 - x225;
+        let x227 = x142 * d;
+        let x228 = u2 * x52;
+        let x229 = x227 - x228;
+        let x230 = x144 * x229;
+        let x231 = x226 + x230;
+        let x232 = x229 * x178;
+        let x233 = x222 - x232;
+        let x234 = x174 + m1 * (x231 * x21 + x30 * x233);
+        let x235 = (u5 * d + u2 * x46) * x135;
+        let x236 = x12 * x171;
+        let x237 = u5 * x236;
+        let x238 = x146 * d;
+        let x239 = x35 * u3;
+        let x240 = -x238 - x239;
+        let x241 = x240 * x148;
+        let x242 = x235 - x237 - x241;
+        let x243 = x240 * x140;
+        let x244 = u2 * x18 * x171;
+        let x245 = x243 + x244;
+        let x246 = m2 * (x12 * x242 + x18 * x245);
+        let x247 = (x30 * x231 - x21 * x233) * m1;
+        let x248 = x246 + x247;
+        let x249 = m2 * (x12 * x245 - x18 * x242);
+        let x250 = x12 * x59;
+        let x251 = x250 - x63;
+        let x252 = -x71 - x72;
+        let x253 = x69 - x68;
+        let x254 = x8 * x5;
+        let x255 = x10 * x90;
+        let x256 = x19 + x12 * x15;
+        let x257 = x31 - x30 * x25;
+        let x258 = x88 - x89;
+        let x259 = a_ * x91;
+        let x260 = x27 - x26;
+        let x261 = x12 * x46;
+        let x262 = x30 * x33;
+        let x263 = x12 * x11;
+        let x264 = u3 * ((a_ * x92 + x30 * x43) * m1 + x36);
+        let x265 = x40 - x39;
+        let x266 = x85 - x84;
+        let x267 = x30 * x21;
+        let x268 = 2.0 * J2 - 2.0 * J1;
+        let x269 = x30 * x107 + (x114 + x131) * x92;
+        let x270 = -x126;
+        let x271 = x118 * (x30 * x12);
+        let x272 = -x271;
+        let x273 = 2.0 * a_ + 2.0 * x51;
+        let x274 = 2.0 * J1 - 2.0 * J2;
+        let x275 = x30 * x102;
+        let x276 = (x10 * (x110 - x275) - a_) * x121;
+        let x277 = x10 * x24;
+        let x278 = x30 * x169 - x194;
+        let x279 = x95 - 1.0;
+        let x280 = x143 * x153 - x142 * x153;
+        let x281 = x101 * x144;
+        let x282 = x180 * (x142 - x143) + x177 * x281;
+        let x283 = (x159 + x166 + x167) * x21 + x170;
+        let x284 = x113 * x18;
+        let x285 = u1 * x218;
+        let x286 = u2 * x220;
+        let x287 = x281 * x144 - x179 * x178;
+        let x288 = d * x178;
+        let x289 = x288 * x178;
+        let x290 = u3 * x223;
+        let x291 = x289 - x290;
+        let x292 = x21 * (x225 - x224 + x291) + x30 * x144 * x288;
+        let x293 = x117 * m1;
+        let x294 = x12 * x18;
+        let x295 = x113 * ((x97 - 1.0) * x91 * d + x12 * x112) + x91 * x101 + x114 * x94;
+        let x296 = x12 * x113;
+        let x297 = (x10 * (x104 - x296) - a_) * x284;
+        let x298 = 2.0 * x34 + 2.0 * a_;
+        let x299 = -x120;
+        let x300 = x12 * x161 + x198;
+        let x301 = x147 * x133 + x146 * x133;
+        let x302 = x139 - x138;
+        let x303 = (x160 - x195) * x18 + x162;
+        let x304 = x140 * x207 - x114 * x148 * x148;
+        let x305 = (x214 + x136) - x134;
+        let x306 = u2 * x236;
+        let x307 = x302 * d;
+        let x308 = x140 * x307;
+        let x309 = x306 - x235 + x237 + x308;
+        let x310 = x309 * x18 - x34 * x302 * x148;
+        let x311 = x18 * x148;
+        let x312 = Ixy * u3;
+        let x313 = x150 + x51 * x153;
+        let x314 = x313 * m1;
+        let x315 = m2 * (-2.0 * x238 - x239) + x314;
+        let x316 = x177 * x101;
+        let x317 = x316 - x180;
+        let x318 = -x171 - x34 * x133;
+        let x319 = m2 * x318;
+        let x320 = x319 + (x228 - 2.0 * x227) * m1;
+        let x321 = u2 * Ixz;
+        let x322 = Izz - Ixx;
+        let x323 = x115 * x148;
+        let x324 = x24 * u3 + u2 * x22;
+        let x325 = x30 * x281;
+        let x326 = x114 * x178;
+        let x327 = Ixx - Iyy;
+        let x328 = x30 * x229;
+        let x329 = x21 * x288 + x328;
+        let x330 = x144 * d - x227 + x228;
+        let x331 = d * x141;
+        let x332 = x12 * x240;
+        let x333 = x332 - x331;
+        let x334 = x238 + x239 + d * x148;
+        let x335 = (x30 * x330 + x329) * x22 + x24 * (x333 + x12 * x334);
+        let x336 = x18 * x207;
+        let x337 = x22 * x153;
+        let x338 = 2.0 * u5 + 2.0 * u2;
+        let x339 = x337 - x24 * x338;
+        let x340 = x307 - x192;
+        let x341 = m2 * x340;
+        let x342 = x109 * u1 + x341;
+        let x343 = Iyy - Izz;
+        let x344 = Iyz * u1;
+        let x345 = m2 * (x34 * x338 + 2.0 * x171) + m1 * (x227 - u2 * x273);
+        let x346 = x12 * x207;
+        let x347 = a_ * x192;
+        let x348 = 2.0 * x152 + 2.0 * x154;
+        let x349 = x30 * x179;
+        let x350 = x10 * x102;
+        let x351 = x21 * x229 - x52 * x178;
+        let x352 = x328 - x52 * x144;
+        let x353 = d * x135;
+        let x354 = x46 * x135;
+        let x355 = x45 * (u2 - u5);
+        let x356 = m2 * (x12 * (x353 + x354 + x355) + 2.0 * (x91 * x171))
+            + (x21 * x351 + x30 * x352) * m1;
+        let x357 = x192 + x288;
+        let x358 = x357 * m1;
+        let x359 = u1 * x36 + x358;
+        let x360 = 2.0 * u3 + 2.0 * u4;
+        let x361 = x24 * x133;
+        let x362 = x361 - x360 * x22;
+        let x363 = 2.0 * x139 - 2.0 * x138;
+        let x364 = m2 * (x238 + u3 * x298) + (-2.0 * x150 - x51 * x360) * m1;
+        let x365 = (-x177 * d - x177 * x43) + x42 * (u4 - u3);
+        let x366 = x332 - x35 * x148;
+        let x367 = x35 * x140;
+        let x368 = x240 * x18;
+        let x369 = -x367 - x368;
+        let x370 = (x30 * x365 - 2.0 * (x150 * x92)) * m1
+            + m2 * (x18 * x369 - x12 * x366);
+        let x371 = x179 - J2 * x178;
+        let x372 = -(x360 * x119);
+        let x373 = 2.0 * J2 - J1;
+        let x374 = x12 * x338;
         Derivatives {
             qdot: [
-                x5,
                 x6,
-                x8 + u1,
+                x7,
+                u1 + x9,
                 u4,
                 u5,
-                x9 * (G_X + x57),
-                x9
-                    * (G_Y - u3 * x68 - u2 * x80
-                        - d * (u1 * x83 + x10 * x78 + x35 * x63)),
-                x9 * (x99 + G_Z),
+                x10 * (G_X + x55),
+                x10
+                    * (G_Y - x66 * u2 - x75 * u3
+                        - d * (u1 * (x77 - x76) + x11 * x65 + x33 * x70)),
+                x10 * (x90 + G_Z),
             ],
             matrix: [
                 [
-                    (x100 + x101) * J2 + Ixx
-                        + (x25 * x18 - (x31 * x31 + x83 * x83 + x98 * x98) * x9
-                            + x22 * x23) * x102 + (x103 + x104) * J1,
-                    x107,
-                    x110,
-                    x114,
-                    x117,
-                ],
-                [
-                    x107,
-                    Iyy - x38 * x37 + J2 * (x103 + 1.0)
-                        + m2 * (a_ * (2.0 * x53 + a_) + x102)
-                        - x9 * (x80 * x80 + x45 * x45 + x95 * x95) + x101 * J1,
-                    x118,
-                    x119,
+                    (x91 + x92) * J2 + Ixx + (x93 + x94) * J1
+                        + (x96 * x21 * x22 + x24 * x99) * x100,
+                    x108,
+                    x116,
                     x120,
-                ],
-                [
-                    x110,
-                    x118,
-                    J2 * (x104 + 1.0) - x9 * (x89 * x89 + x56 * x56 + x68 * x68)
-                        + x100 * J1 - x54 * x55 + (a_ * (a_ + 2.0 * x36) + x102) * m1
-                        + Izz,
-                    x122,
                     x124,
                 ],
-                [x114, x119, x122, J2 + (1.0 - x125) * x126, x128],
-                [x117, x120, x124, x128, (1.0 - x129) * x130 + J2],
+                [
+                    x108,
+                    Iyy - x52 * x53 + m2 * (a_ * (2.0 * x34 + a_) - x91 * x125 + x100)
+                        + J2 * (x93 + 1.0) - x104 * x105 + x92 * J1,
+                    x127,
+                    x126,
+                    x128,
+                ],
+                [
+                    x116,
+                    x127,
+                    J2 * (x94 + 1.0) + x91 * J1 + (a_ * (a_ + 2.0 * x51) + x100) * m1
+                        + Izz - x35 * x36 - (x121 * x121 + x110 * x110) * x10,
+                    x129,
+                    x126,
+                ],
+                [x120, x126, x129, J2 + x131, x126],
+                [x124, x128, x126, x126, x98 * x132 + J2],
             ],
             force: [
-                x155 - x135 * x139 - (x143 * u4 + u5 * x147) * J1 - u2 * x158
-                    + d
-                        * (x171 * x25 - x9 * (-x187 * x83 - x98 * x188 - x189 * x31)
-                            - x175 * x23) + x192 * u3,
-                x158 * u1
-                    - m2
-                        * ((a_ * (x18 * x197 - 2.0 * (x11 * x173))
-                            + d * ((0.5 * x200 - x202) * u3 - 0.5 * (x194 * x199))) * d
-                            - x173 * x193) - x9 * (-x95 * x188 - x189 * x45 - x187 * x80)
-                    - x203 - x204 * x205 + x207 - x175 * x38 - x210 * u3,
-                x211 - x171 * x55 - x135 * x212
-                    - x9 * (-x189 * x56 - x187 * x68 - x89 * x188) + u2 * x210
-                    + x213 * x214 - x192 * u1
-                    - (x215 * x159
+                d * (x24 * x176 - x165 * x22) - x137 * x141
+                    - (x145 * u4 + u5 * x149) * J1 + x182 - u2 * x185 + x188 * u3,
+                x164 * x105 - x189 + x185 * u1 - x190 * x191
+                    + (x150 * x192 + x18 * x193 * x199
+                        - (d * ((0.5 * x202 - x204) * u3 - 0.5 * (x157 * x201))
+                            + (x18 * x206 - 2.0 * x162) * a_) * d) * m2 + x208
+                    - x155 * x53 - x211 * u3,
+                x212 - x137 * x213 + u2 * x211 + x214 * x215
+                    + x10 * (x110 * x175 - x199 * x121) - x188 * u1
+                    - (x192 * x171
                         + d
-                            * (a_ * (x216 * x22 + 2.0 * (x141 * u1))
-                                + (u2 * (0.5 * x219 + x221) - 0.5 * (x194 * x218)) * d))
-                        * m1,
-                x211
-                    + x121
-                        * (x183 - x185 - (-x189 * x34 - x85 * x188 - x187 * x63) * x9),
-                x115 * (-x9 * (-x189 * x21 - x93 * x188 - x187 * x78) - x167 - x169)
-                    + x207,
+                            * (a_ * (x216 * x21 + 2.0 * x170)
+                                + (u2 * (0.5 * x219 + x221) - 0.5 * (x157 * x218)) * d))
+                        * m1 - x173 * x36,
+                x212 + x102 * (x10 * (x30 * x234 - x21 * x248) - x222 + x232),
+                (-(-x18 * x248 - x12 * (x249 + x156)) * x10 - x243 - x244) * x113 + x208,
             ],
-            checks: [x0],
+            checks: [x4],
             d_qdot: [
                 [
                     0.0,
@@ -8888,47 +8772,43 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    x9
-                        * (-u2 * x227 - (x35 * x228 + x223 * x10 + (x229 + x81) * u1) * d
-                            - x232 * u3),
-                    x9 * x57,
+                    (-u2 * (m2 * (x251 * x46 - (x18 * x58 - x61) * x50) + x59 * x53)
+                        - u3 * ((x252 * x37 + x43 * x253) * m1 - x74)
+                        - (x33 * x253 + x251 * x11 + (x59 * x22 + x76) * u1) * d) * x10,
+                    x10 * x55,
                     0.0,
                 ],
                 [
-                    x5 * x250,
+                    x6 * x254,
                     0.0,
-                    x4 + x8 * x250,
+                    x9 * x254 + x3,
                     0.0,
                     0.0,
-                    x251 * x15,
-                    x251 * x12,
-                    (-d * (x253 * x35 + u1 * x255 - x10 * x256) - u3 * (x258 - x257)
-                        - u2 * (x261 - x259)) * x9,
+                    x16 * x255,
+                    x255 * x13,
+                    x10
+                        * (-u2 * (m2 * (-x46 * x256 - (x48 - x47) * x50) - x15 * x53)
+                            - u3 * ((x257 * x43 - x38 * x37) * m1 - x25 * x36)
+                            - d * (x257 * x33 + x8 * x258 * u1 - x11 * x256)),
                 ],
                 [
-                    x1 * x6,
-                    -x4,
-                    x6 * x250,
+                    x5 * x7,
+                    -x3,
+                    x7 * x254,
                     0.0,
                     0.0,
-                    x9
-                        * (-u2 * x287 - d * (x16 * x288 + u1 * x289 + x290 * x284)
-                            - x16 * x292),
-                    (-(u1 * x293 - x290 * x58 + x71 * x288) * d - x71 * x292 - u2 * x294)
-                        * x9,
-                    x9 * x0
-                        * ((x295 * u1 - x3 * x288 + x290 * x2) * d - x292 * x3
-                            - u2 * x297),
-                ],
-                [
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    0.0,
-                    ((-u4 * x346 - x16 * x151) * d - x347 * u3) * x125,
-                    ((-x71 * x151 - x230 * u4) * d - x348 * u3) * x125,
-                    ((-u4 * x349 - x151 * x91) * d - u3 * x350) * x125,
+                    x10
+                        * (-u2 * (m2 * (x260 * x261 - x259 * x28) + x260 * x53)
+                            - d
+                                * (x17 * x262 + u1 * (x260 * x22 - x24 * x17) + x263 * x260)
+                            - x17 * x264),
+                    x10
+                        * (-(u1 * (-x24 * x58 - x67 * x22) - x263 * x67 + x58 * x262) * d
+                            - u2 * (m2 * (-x259 * x67 - x67 * x261) - x67 * x53)
+                            - x58 * x264),
+                    x10 * x4
+                        * (((x22 * x1 + x24 * x0) * u1 - x0 * x262 + x263 * x1) * d
+                            - x264 * x0 - x2 * (-m2 * (x259 + x261) - x53)),
                 ],
                 [
                     0.0,
@@ -8936,9 +8816,24 @@ pub mod reduced_volterra {
                     0.0,
                     0.0,
                     0.0,
-                    ((x29 * x138 - u5 * x43) * d - u2 * x380) * x129,
-                    (d * (x58 * x138 - x75 * u5) - u2 * x381) * x129,
-                    (d * (u5 * x94 + x84 * x138) - u2 * x382) * x129,
+                    ((-u4 * x265 - x17 * x178) * d - (x43 * x265 + x42 * x41) * u3)
+                        * x95,
+                    ((-x58 * x178 - x252 * u4) * d - (x73 * x42 + x252 * x43) * u3)
+                        * x95,
+                    ((-u4 * x266 - x178 * x78) * d - u3 * (x42 * x86 + x43 * x266)) * x95,
+                ],
+                [
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    ((x28 * x140 - u5 * x49) * d - u2 * (x46 * x49 - x12 * a_ * x49))
+                        * x97,
+                    (d * (x67 * x140 - x62 * u5)
+                        - u2 * (a_ * (-x62 * x12 - (x64 + x250) * x18) + x62 * x46))
+                        * x97,
+                    (d * (u5 * x80 + x82 * x140) - u2 * (x45 * x80 - x46 * x80)) * x97,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
@@ -8949,160 +8844,92 @@ pub mod reduced_volterra {
                     1.0,
                     0.0,
                     0.0,
-                    x111 * (x30 - x24),
-                    x235 * x111,
-                    x254 * x0 * x111,
+                    x193 * (x29 - x23),
+                    (x76 - x77) * x193,
+                    x258 * x4 * x193,
                 ],
-                [x1 * x2, x3, x1 * x26, 0.0, 0.0, -(x9 * x45), -(x9 * x80), -(x9 * x95)],
                 [
-                    x1 * x3,
-                    -x2,
-                    x14 * x1,
+                    x5 * x1,
+                    x0,
+                    x5 * x25,
                     0.0,
                     0.0,
-                    -(x56 * x9),
-                    -(x9 * x68),
-                    -(x89 * x9),
+                    -(x10 * x54),
+                    -(x66 * x10),
+                    -(x10 * x81),
                 ],
-                [0.0, 0.0, 0.0, 1.0, 0.0, -(x34 * x112), -(x63 * x112), -(x85 * x112)],
-                [0.0, 0.0, 0.0, 0.0, 1.0, -(x123 * x21), -(x123 * x78), -(x123 * x93)],
+                [
+                    x5 * x0,
+                    -x1,
+                    x15 * x5,
+                    0.0,
+                    0.0,
+                    -(x10 * x44),
+                    -(x10 * x75),
+                    -(x10 * x87),
+                ],
+                [0.0, 0.0, 0.0, 1.0, 0.0, -(x32 * x350), -(x70 * x350), -(x83 * x350)],
+                [0.0, 0.0, 0.0, 0.0, 1.0, -(x117 * x20), -(x117 * x65), -(x117 * x79)],
             ],
             d_matrix: [
                 [
-                    [x233 * x31 * (-2.0 * x229 - 2.0 * x82), x237, x239, x240, x242],
-                    [
-                        x237,
-                        -(x9 * (2.0 * x225 + 2.0 * x72 + 2.0 * x79 + 2.0 * x226) * x45),
-                        x243,
-                        x244,
-                        x245,
-                    ],
-                    [x239, x243, -(x56 * x9 * (2.0 * x231 + 2.0 * x67)), x246, x247],
-                    [x240, x244, x246, 0.0, x248],
-                    [x242, x245, x247, x248, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                ],
+                [
+                    [x267 * (x130 * (2.0 - 2.0 * x95) + x268), x269, x270, x270, x272],
                     [
-                        -(x98 * x233 * (2.0 * x262 + 2.0 * x263 + 2.0 * x255)),
-                        x268,
-                        x272,
-                        x274,
+                        x269,
+                        x21 * (x30 * x274 - x102 * (x273 + 2.0 * x105)),
+                        x120,
+                        x120,
+                        x124,
+                    ],
+                    [
+                        x270,
+                        x120,
+                        (x10 * (2.0 * x109 - 2.0 * x275 + 2.0 * x36) - 2.0 * a_) * x121,
                         x276,
+                        x120,
                     ],
-                    [
-                        x268,
-                        x9 * x95 * (2.0 * x259 - 2.0 * x264 - 2.0 * x265 - 2.0 * x261),
-                        x277,
-                        x278,
-                        x279,
-                    ],
-                    [
-                        x272,
-                        x277,
-                        x89 * x9 * (2.0 * x257 - 2.0 * x269 - 2.0 * x258 - 2.0 * x270),
-                        x280,
-                        x281,
-                    ],
-                    [x274, x278, x280, 0.0, x282],
-                    [x276, x279, x281, x282, 0.0],
+                    [x270, x120, x276, 0.0, x120],
+                    [x272, x124, x120, x120, 0.0],
                 ],
                 [
+                    [x294 * ((2.0 - 2.0 * x97) * x132 + x268), x126, x295, x271, x126],
                     [
-                        -((2.0 * (x293 * x83) + 2.0 * (x98 * x298) + 2.0 * (x31 * x289))
-                            * x233),
+                        x126,
+                        (x10 * (2.0 * x53 - 2.0 * x296 + 2.0 * x103) - 2.0 * a_) * x284,
+                        x123,
+                        x123,
+                        x297,
+                    ],
+                    [
+                        x295,
+                        x123,
+                        x18 * (x12 * x274 - x113 * (2.0 * x111 + x298)),
                         x299,
-                        x304,
-                        x305,
-                        x308,
+                        x123,
                     ],
-                    [
-                        x299,
-                        -(x9
-                            * (2.0 * (x294 * x80) + 2.0 * (x287 * x45)
-                                + 2.0 * (x309 * x95))),
-                        x314,
-                        x316,
-                        x319,
-                    ],
-                    [
-                        x304,
-                        x314,
-                        -(x9 * (2.0 * x320 + 2.0 * x321 + 2.0 * x322) * x291),
-                        x326,
-                        x330,
-                    ],
-                    [x305, x316, x326, 0.0, x334],
-                    [x308, x319, x330, x334, 0.0],
-                ],
-                [
-                    [
-                        x32
-                            * (x351 * x22
-                                + x126
-                                    * (2.0 * x22
-                                        - x9 * (2.0 * x300 + 2.0 * x301 + 2.0 * x302))),
-                        x352,
-                        x353,
-                        x354,
-                        x355,
-                    ],
-                    [
-                        x352,
-                        (x32 * x356
-                            + (-2.0 * a_ - 2.0 * x36
-                                - (2.0 * x310 + 2.0 * x311 + 2.0 * x312) * x9) * x121)
-                            * x22,
-                        x357,
-                        x358,
-                        x359,
-                    ],
-                    [
-                        x353,
-                        x357,
-                        m1
-                            * (-2.0 * (d * x46)
-                                - x9
-                                    * (2.0 * (x347 * x56) + 2.0 * (x348 * x68)
-                                        + 2.0 * (x89 * x350))),
-                        x360,
-                        x362,
-                    ],
-                    [x354, x358, x360, 0.0, x363],
-                    [x355, x359, x362, x363, 0.0],
-                ],
-                [
-                    [
-                        x11
-                            * (x130
-                                * (2.0 * x18 + x9 * (2.0 * x306 + 2.0 * x307 + 2.0 * x383))
-                                + x351 * x18),
-                        x385,
-                        x387,
-                        x389,
-                        x391,
-                    ],
-                    [
-                        x385,
-                        m2
-                            * (-x9
-                                * (2.0 * (x380 * x45) + 2.0 * (x382 * x95)
-                                    + 2.0 * (x381 * x80)) - 2.0 * (d * x44)),
-                        x392,
-                        x393,
-                        x394,
-                    ],
-                    [
-                        x387,
-                        x392,
-                        (x11 * x356
-                            + x115
-                                * (-2.0 * x53 - 2.0 * a_
-                                    - x9 * (2.0 * x327 + 2.0 * x386 + 2.0 * x328))) * x18,
-                        x395,
-                        x396,
-                    ],
-                    [x389, x393, x395, 0.0, x397],
-                    [x391, x394, x396, x397, 0.0],
+                    [x271, x123, x299, 0.0, x123],
+                    [x126, x297, x123, x123, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -9162,155 +8989,131 @@ pub mod reduced_volterra {
                 ],
             ],
             d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x111 * (x249 * x31 - x189 * x236),
-                    x9 * (x249 * x45 + x189 * x234),
-                    x9 * (x56 * x249 + x189 * x238),
-                    x249 * x34 * x112,
-                    (x189 * x241 + x249 * x21) * x123,
+                    (d * (x279 * x280 * x21 - x277 * x278) - x30 * x165) * x102 + x189
+                        + (x30 * x178 + x191) * x190 + x282 * x21,
+                    x182 - x30 * x282 - x190 * (x145 - x21 * x178)
+                        + x102
+                            * (x10 * (x280 * x104 + x283 * x284 + x21 * x164)
+                                - x155 * x21 + x280 * x52),
+                    x102
+                        * (x10 * (x110 * x278 - x30 * x199 - x21 * (x175 + x283 * x102))
+                            - a_ * (x30 * x216 - 2.0 * x194)
+                            - d * ((x286 - 2.0 * x285) * u2 - x157 * x220)) + x287,
+                    x102
+                        * (x230 + x291
+                            + x10
+                                * (x30
+                                    * ((x30 * (x226 - x289 + x290) + x144 * x21 * x288) * m1
+                                        - x246 - x247) - x21 * (x234 + x292 * m1))) + x287,
+                    x293 * (x34 * x280 + x292 * x18),
                 ],
                 [
-                    (x188 * x267 + x98 * x283) * x111,
-                    x9 * (x283 * x95 - x188 * x266),
-                    x9 * (x89 * x283 - x188 * x271),
-                    (x85 * x283 - x273 * x188) * x112,
-                    x123 * (x93 * x283 - x188 * x275),
-                ],
-                [
-                    (x187 * x293 + x189 * x289 + x338 * x83 + x31 * x339
-                        - x0 * (x188 * x295 - x98 * x340)) * x111,
-                    x9
-                        * (x45 * x339 + x338 * x80 + x189 * x287 + x187 * x294
-                            - x0 * (-x188 * x297 - x340 * x95)),
-                    x9 * (x56 * x339 - x341 * x291 + x68 * x338 - x89 * x342),
-                    (x34 * x339 - x343 - x342 * x85 + x338 * x63) * x112,
-                    x123
-                        * (x21 * x339 - x342 * x93 + x11 * (x189 * x284 - x344 - x345)
-                            + x338 * x78),
-                ],
-                [
-                    x203
-                        + x121
-                            * (x9 * (x371 * x83 - x343 + x98 * x372 + x373 * x31)
-                                - x32 * x175 - x177 * x364) + (x32 * x151 + x205) * x204
-                        + x375 * x22,
-                    ((x373 * x45 + x372 * x95 - x177 * x341 + x371 * x80) * x9
-                        - (x175 * x22 - x364 * x37) * d) * m1 - x32 * x375
-                        - x204 * (x143 - x376) + x155,
-                    (x9
-                        * (x56 * x373 + x189 * x347 + x68 * x371 + x89 * x372
-                            + x187 * x348 + x188 * x350)
-                        - (a_ * (x32 * x216 - 2.0 * (x149 * u1))
-                            + d * ((x378 - 2.0 * x377) * u2 - x194 * x220)) * d) * m1
-                        + x379,
-                    x121
-                        * (x368 - x366 + x181
-                            + x9
-                                * (x189 * x346 + (x85 * x372 + x371 * x63 + x373 * x34) * m1
-                                    + x187 * x230 + x188 * x349)) + x379,
-                    x361 * (x373 * x21 + x93 * x372 + x371 * x78),
-                ],
-                [
-                    x213 * (x214 - x11 * x398) - x135 * (x214 + x212)
-                        + x115
-                            * (x399 * x162
-                                + x9 * (x98 * x406 + x83 * x407 + x408 * x31 + x11 * x409)
-                                + x11 * x171),
-                    x410
-                        + m2
-                            * (x9
-                                * (x189 * x380 + x187 * x381 + x382 * x188 + x407 * x80
-                                    + x95 * x406 + x45 * x408)
-                                - d
-                                    * (d * (2.0 * (x173 * x199) + x201 * x196)
-                                        + a_ * (x11 * x197 + 2.0 * (x173 * x18)))),
-                    (x9 * (x56 * x408 + x68 * x407 + x89 * x406 - x409 * x162)
-                        - (x171 * x18 - x54 * x399) * d) * m2
-                        + x18 * (x213 * x398 + x135 * x138) + x147 * x411,
-                    x361 * (x63 * x407 + x85 * x406 + x34 * x408),
-                    x410
-                        + x115
-                            * (x9
-                                * ((x407 * x78 + x21 * x408 + x93 * x406) * m2 - x188 * x94
-                                    + x189 * x43 + x75 * x187) - x403 - x404 + x165),
+                    x113 * (x12 * x176 + d * (x10 * x22 * x300 + x99 * x301))
+                        + x214 * (x215 - x12 * x302) - x137 * (x215 + x213),
+                    x113
+                        * (x10
+                            * (x12 * x199 + x300 * x104
+                                + x18 * (x113 * x303 - x156 - x163))
+                            - a_ * (x12 * x206 + 2.0 * x198)
+                            - (x203 * x205 + 2.0 * (x202 * u1)) * d) + x304,
+                    x18 * (x214 * x302 + x137 * x140)
+                        + x113
+                            * (x10 * (x18 * x175 - x303 * x121 + x110 * x301)
+                                - x18 * x173 + x35 * x301) + x149 * x305,
+                    x293 * (x51 * x301 - x21 * x310),
+                    (x241 - x306 - x308
+                        + x10
+                            * (x12 * (m2 * (x12 * x309 + x311 * x307) + x248)
+                                + (m2 * x310 - x249 - x156) * x18)) * x113 + x304,
                 ],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    (x25 * x415 - x9 * (-x83 * x421 - x31 * x422 - x98 * x423)
-                        - x23 * x419) * d - x424 + x105 * (x425 + x204) + x426
-                        + x109 * x411,
-                    x427 * u3
+                    x21 * (x30 * (x190 + x317) - x102 * (x313 - x315 * x10)) - x312
+                        + x18 * (x12 * x305 + x113 * (x318 - x10 * x320)) + x321,
+                    x322 * u3 + x323 + x92 * x190 - x53 * x313 + x315 * x105
+                        + x18 * (x125 * x324 + x207) - x183
                         - m2
                             * (d
-                                * (-(2.0 * x144 + 2.0 * x145) * a_
-                                    - (u1 * x199 + x201 * u3) * d) - u3 * x193) - x38 * x419
-                        - x156 - x103 * x425 + J2 * (x139 + x428) - 2.0 * x157
-                        + (x101 * u4 - x139 - x428) * J1
-                        - x9 * (-x423 * x95 - x80 * x421 - x45 * x422),
-                    u2 * x429 - x104 * x135 - x415 * x55
-                        - x9 * (-x56 * x422 - x68 * x421 - x89 * x423) + x190
-                        + 2.0 * x191 + (x143 - u5 * x100 - x430) * J1
-                        + J2 * (x430 - x143)
-                        - (d * (a_ * (2.0 * x141 - 2.0 * x140) + d * (x378 - x377))
-                            + a_ * x159) * m1,
-                    x108 * x430 + x143 * x106
-                        + (x418 - x9 * (-x63 * x421 - x85 * x423 - x34 * x422)) * x121,
-                    x11 * x206 + x431
-                        + x115
-                            * (x412 - x413
-                                - x9 * (-x21 * x422 - x93 * x423 - x421 * x78)),
+                                * (-(2.0 * x146 + 2.0 * x147) * a_
+                                    - (u1 * x201 + x203 * u3) * d) - a_ * x150) - 2.0 * x184
+                        - x93 * x317,
+                    x325 - x94 * x137 + x21 * (x326 - x102 * x324 * x193) + x111 * x320
+                        - x91 * x214 + u2 * x327 + x186 + 2.0 * x187
+                        - (d * (a_ * (2.0 * x143 - 2.0 * x142) + d * (x286 - x285))
+                            + a_ * x171) * m1 - x318 * x36,
+                    x325
+                        + (x10
+                            * (x30 * (x319 + (x330 * x92 - x30 * x329) * m1)
+                                - x21 * x335) + x329) * x102 + x326 * x21,
+                    x323 + x336
+                        + x113
+                            * (x331 - x332
+                                - x10
+                                    * (-x335 * x18
+                                        - x12 * (m2 * (x12 * x333 - x91 * x334) + x314))),
                 ],
                 [
-                    d
-                        * (x25 * x433 - x101 * x432
-                            - x9 * (-x83 * x438 - x439 * x98 - x440 * x31)) + x425 * x101
-                        + 2.0 * x156 - x431 + x157 + u3 * x441 - x103 * x204,
-                    x22 * (x32 * (x153 - x204 - x374) + x432 * x37) + x424
-                        + 2.0 * (u5 * x115 * x44)
-                        - x9 * (-x440 * x45 - x438 * x80 - x439 * x95) - x442,
-                    x429 * u1 - x208 - (x443 + d * (d * (x219 + x221) + a_ * x444)) * m1
-                        - 2.0 * x209 - x445 - x433 * x55
-                        - x9 * (-x56 * x440 - x89 * x439 - x68 * x438) + x447,
-                    x447 + x121 * (x436 - x9 * (-x34 * x440 - x439 * x85 - x63 * x438)),
-                    (-x9 * (-x438 * x78 - x439 * x93 - x440 * x21) - 2.0 * x168) * x115,
-                ],
-                [
-                    u2 * x441 - 2.0 * x190 - x191 - (x134 - x132) * x100 + x152 * x22
-                        + x213 * x104
+                    x92 * x317 + 2.0 * x183
                         + d
-                            * (x100 * x448 - x449 * x23
-                                - x9 * (-x456 * x31 - x98 * x457 - x458 * x83)),
-                    2.0 * x208 - m2 * (d * (d * (x200 - x202) + a_ * x459) - x443)
-                        + x427 * u1 + x209 - x9 * (-x95 * x457 - x458 * x80 - x456 * x45)
-                        - x446 + x460 - x449 * x38,
-                    x18 * (x448 * x54 - x11 * x411)
-                        - x9 * (-x89 * x457 - x56 * x456 - x68 * x458) - x426
-                        + 2.0 * (x121 * u4 * x46) + x442,
-                    x121 * (-x9 * (-x85 * x457 - x456 * x34 - x458 * x63) - 2.0 * x184),
-                    x115 * (x452 + x453 - x9 * (-x93 * x457 - x458 * x78 - x456 * x21))
-                        + x460,
+                            * (x24 * (x340 - x10 * x342)
+                                - (x21 * x153 - x10 * x339) * x121) + x184 - x336
+                        + u3 * x343 - x93 * x190,
+                    x267 * (x180 - x190 - x316) + x312 - x344
+                        + d
+                            * (x337 * x52 + x24 * (2.0 * (u5 * a_) + x10 * x345)
+                                + x339 * x105),
+                    x327 * u1 - x209 - x340 * x36 - x346 - 2.0 * x210
+                        - (x347 + d * (d * (x219 + x221) + a_ * x348)) * m1 + x349
+                        + x111 * x342 + x21 * (x281 - x350 * x345),
+                    (x351
+                        + x10
+                            * (x30 * (x341 + (x352 * x21 - x30 * x351) * m1)
+                                - x356 * x21)) * x102 + x281 * x21 + x349,
+                    x113
+                        * (x12 * x10
+                            * (x24 * (2.0 * x236 - x353 - x354 - x355) + x153 * x121)
+                            - (2.0 * x171 - x10 * x356) * x18),
                 ],
                 [
-                    x22 * x461
-                        + x126
-                            * (x9 * (x463 * x31 + x98 * x464 + x83 * x465) - x22 * x444)
-                        - x143 * J1,
-                    x121 * ((x465 * x80 + x463 * x45 + x464 * x95) * x9 + x444 * x37)
-                        - x205 * J1 - x32 * x461,
-                    x121 * (x9 * (x68 * x465 + x56 * x463 + x89 * x464) + x462 * x46),
-                    (x63 * x465 + x34 * x463 + x464 * x85) * x121 * x112,
-                    (x465 * x78 + x463 * x21 + x464 * x93) * x127,
+                    (x284 * (x18 * x133 - x10 * x362) - x22 * (x357 - x10 * x359)) * d
+                        + u2 * x343 - 2.0 * x186 - x187 - (x136 - x134) * x91
+                        + x179 * x21 + x214 * x94,
+                    2.0 * x209 + x322 * u1 - x357 * x53 + x346 + x210
+                        - m2 * (d * ((x202 - x204) * d + a_ * x363) - x347) + x359 * x105
+                        - x349 + (x101 * x148 + x117 * x364) * x18,
+                    (x362 * x111 + x22 * (2.0 * (a_ * u4) - x10 * x364) + x35 * x361) * d
+                        - x321 + x344 - x294 * x305,
+                    x102
+                        * (x30 * x10 * (x22 * (x365 + 2.0 * x223) + x284 * x133)
+                            + x21 * (-2.0 * x150 - x10 * x370)),
+                    x101 * x311 + x346
+                        + x113
+                            * (x367 + x368
+                                - x10
+                                    * (-x18 * x370
+                                        - x12 * (m2 * (x12 * x369 + x18 * x366) + x358))),
                 ],
                 [
-                    (x18 * x459 + x9 * (x468 * x83 + x98 * x469 + x470 * x31)) * x130
-                        - x147 * J1 - x139 * x466,
-                    x115 * (x467 * x44 + x9 * (x95 * x469 + x468 * x80 + x470 * x45)),
-                    x115 * (x459 * x54 + x9 * (x468 * x68 + x56 * x470 + x89 * x469))
-                        - x466 * x212 + J1 * x214,
-                    (x34 * x470 + x468 * x63 + x85 * x469) * x127,
-                    x115 * x123 * (x468 * x78 + x21 * x470 + x93 * x469),
+                    x21 * (x130 * (x279 * x348 + x360 * x277) + x371) - x145 * J1,
+                    x102 * (x348 * x106 + x117 * x372) - x191 * J1 - x30 * x371,
+                    -(x360 * x276),
+                    0.0,
+                    x118 * (x372 + x12 * x348),
+                ],
+                [
+                    x18 * (x132 * (x363 + x10 * (-m2 * x363 - x338 * x22)) - x140 * x373)
+                        - x149 * J1,
+                    x284 * (x10 * (x374 * x113 - x338 * x104) + a_ * x338),
+                    J1 * x215 - x373 * x213
+                        + (x10 * (x110 * x363 - x374 * x121) + x35 * x363) * x113,
+                    x118 * (x30 * x363 - x374 * x21),
+                    0.0,
                 ],
             ],
         }

@@ -514,7 +514,6 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> Assembly {
-        let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -541,196 +540,166 @@ pub mod reduced_volterra {
         let x1 = f64::sin(phi);
         let x2 = f64::cos(phi);
         let x3 = 1.0 / x0 * (u2 * x1 + u3 * x2);
-        let x4 = f64::sin(theta);
-        let x5 = f64::sin(gamma2);
-        let x6 = x5 * x5;
-        let x7 = f64::sin(gamma1);
-        let x8 = x7 * x7;
-        let x9 = f64::cos(gamma1);
-        let x10 = x9 * x9;
-        let x11 = f64::cos(gamma2);
-        let x12 = x11 * x11;
-        let x13 = m2 * x5;
-        let x14 = 1.0 / (m2 + m0 + m1);
-        let x15 = x7 * m1;
-        let x16 = f64::sin(psi);
-        let x17 = x1 * x16;
-        let x18 = x4 * x2;
-        let x19 = f64::cos(psi);
-        let x20 = x17 + x18 * x19;
-        let x21 = x4 * x1;
-        let x22 = x2 * x16;
-        let x23 = x19 * x21 - x22;
-        let x24 = x15 * x20 - x13 * x23;
-        let x25 = x19 * x1;
-        let x26 = x18 * x16;
-        let x27 = x26 - x25;
-        let x28 = x19 * x2 + x21 * x16;
-        let x29 = x15 * x27 - x13 * x28;
-        let x30 = x0 * (x15 * x2 - x13 * x1);
-        let x31 = d * d;
-        let x32 = J1 - J2;
-        let x33 = x9 * d;
-        let x34 = a_ + x33;
-        let x35 = x19 * x0;
-        let x36 = x5 * x35 + x11 * x20;
-        let x37 = d + x11 * a_;
-        let x38 = (x11 * x0 - x18 * x5) * x19 - x5 * x17;
-        let x39 = a_ * x5;
-        let x40 = -(x34 * m1);
-        let x41 = m2 * (x36 * x37 - x38 * x39) + x40 * x20;
-        let x42 = x0 * x16;
-        let x43 = x5 * x42 + x11 * x27;
-        let x44 = (x25 - x26) * x5 + x11 * x42;
-        let x45 = m2 * (x37 * x43 - x44 * x39) + x40 * x27;
-        let x46 = x0 * x2;
-        let x47 = x11 * x46 - x4 * x5;
-        let x48 = x5 * x46 + x11 * x4;
-        let x49 = m2 * (x47 * x37 + x39 * x48) + x40 * x46;
-        let x50 = x9 * x32 * x7 - Ixy
-            + d * (-x34 * x15 - x14 * (x24 * x41 + x45 * x29 + x30 * x49));
-        let x51 = J2 - J1;
-        let x52 = x11 * d;
-        let x53 = a_ + x52;
-        let x54 = -(m2 * x53);
-        let x55 = x9 * x28 - x7 * x42;
-        let x56 = x9 * a_ + d;
-        let x57 = x28 * x7 + x9 * x42;
-        let x58 = a_ * x7;
-        let x59 = x28 * x54 + m1 * (x55 * x56 + x57 * x58);
-        let x60 = x0 * x1;
-        let x61 = x4 * x7 + x9 * x60;
-        let x62 = x60 * x7 - x9 * x4;
-        let x63 = (x61 * x56 + x62 * x58) * m1 + x60 * x54;
-        let x64 = x9 * x23 - x7 * x35;
-        let x65 = x19 * (x7 * x21 + x9 * x0) - x7 * x22;
-        let x66 = (x64 * x56 + x65 * x58) * m1 + x23 * x54;
-        let x67 = x11 * x51 * x5
-            + (x13 * x53 - x14 * (x29 * x59 + x30 * x63 + x24 * x66)) * d - Ixz;
-        let x68 = x14 * m1;
-        let x69 = -(x68 * (x29 * x55 + x30 * x61 + x24 * x64) * x31);
-        let x70 = x14 * m2;
-        let x71 = -((x30 * x47 + x24 * x36 + x29 * x43) * x31 * x70);
-        let x72 = -Iyz - x14 * (x49 * x63 + x45 * x59 + x41 * x66);
-        let x73 = -(x68 * (x61 * x49 + x45 * x55 + x41 * x64) * d);
-        let x74 = m2 * d;
-        let x75 = J2 + (x37 - x14 * (x41 * x36 + x47 * x49 + x45 * x43)) * x74;
-        let x76 = d * m1;
-        let x77 = J2 + (x56 - x14 * (x66 * x64 + x61 * x63 + x55 * x59)) * x76;
-        let x78 = -((x66 * x36 + x43 * x59 + x47 * x63) * d * x70);
-        let x79 = m1 * x31;
-        let x80 = -((x61 * x47 + x55 * x43 + x36 * x64) * x79 * x70);
-        let x81 = u2 * x7;
-        let x82 = x9 * u1;
-        let x83 = x81 + x82;
-        let x84 = u3 + u4;
-        let x85 = x32 * x83;
-        let x86 = x84 * x85 - J2 * u4 * x83;
-        let x87 = u3 + 2.0 * u4;
-        let x88 = a_ * u3;
-        let x89 = d * (x81 * x87 + x87 * x82) + x88 * u1;
-        let x90 = x11 * u1;
-        let x91 = 2.0 * u5 + u2;
-        let x92 = u3 * x5;
-        let x93 = a_ * u2;
-        let x94 = d * (x91 * x92 - x90 * x91) - x93 * u1;
-        let x95 = x7 * u1;
-        let x96 = x95 * d - x34 * u2;
-        let x97 = x96 * x83;
-        let x98 = x88 * u3 * x7;
-        let x99 = x98 - x97;
-        let x100 = x9 * u4;
-        let x101 = x9 * u2 - x95;
-        let x102 = x88 * x100 - x84 * (u3 * x56 + d * u4) + x96 * x101;
-        let x103 = x5 * u1;
-        let x104 = -x103 * d - u3 * x53;
-        let x105 = x90 - x92;
-        let x106 = x104 * x105;
-        let x107 = u2 * x5 * x93;
-        let x108 = x106 + x107;
-        let x109 = x103 + x11 * u3;
-        let x110 = x11 * u5;
-        let x111 = u5 + u2;
-        let x112 = (u5 * d + u2 * x37) * x111 - x109 * x104 - x93 * x110;
-        let x113 = (x89 * x27 + x99 * x55 + x57 * x102) * m1
-            + m2 * (x108 * x43 + x44 * x112 + x94 * x28);
-        let x114 = m1 * (x102 * x65 + x89 * x20 + x99 * x64)
-            + m2 * (x108 * x36 + x94 * x23 + x112 * x38);
-        let x115 = (x62 * x102 + x99 * x61 + x89 * x46) * m1
-            + m2 * (x108 * x47 + x94 * x60 - x112 * x48);
-        let x116 = (J2 * x91 - J1 * x111) * x105;
-        let x117 = u3 * Izz - u2 * Iyz - u1 * Ixz;
-        let x118 = u2 * Iyy - Iyz * u3 - Ixy * u1;
-        let x119 = x109 * x51 * x105;
-        let x120 = a_ * u1;
-        let x121 = 2.0 * gamma2;
-        let x122 = f64::sin(x121);
-        let x123 = u1 * u1;
-        let x124 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
-        let x125 = x85 * x101;
-        let x126 = 2.0 * gamma1;
-        let x127 = f64::sin(x126);
+        let x4 = f64::sin(gamma2);
+        let x5 = x4 * x4;
+        let x6 = f64::sin(gamma1);
+        let x7 = x6 * x6;
+        let x8 = 1.0 / (m2 + m0 + m1);
+        let x9 = 1.0 - x8 * m2;
+        let x10 = 1.0 - x8 * m1;
+        let x11 = d * d;
+        let x12 = f64::cos(gamma1);
+        let x13 = x12 * x12;
+        let x14 = f64::cos(gamma2);
+        let x15 = x14 * x14;
+        let x16 = J1 - J2;
+        let x17 = d * m1;
+        let x18 = x12 * d;
+        let x19 = a_ + x18;
+        let x20 = x14 * d;
+        let x21 = a_ + x20;
+        let x22 = -(x19 * m1);
+        let x23 = m2 * x21 + x22;
+        let x24 = x8 * x23;
+        let x25 = x6 * (x12 * x16 - x17 * (x19 + x24)) - Ixy;
+        let x26 = J2 - J1;
+        let x27 = m2 * d;
+        let x28 = -(m2 * x21);
+        let x29 = x28 + x19 * m1;
+        let x30 = (x14 * x26 + x27 * (x8 * x29 + x21)) * x4 - Ixz;
+        let x31 = x8 * x27;
+        let x32 = x31 * x4;
+        let x33 = x12 * x32 * x17;
+        let x34 = x17 * x6;
+        let x35 = -(x14 * x31 * x34);
+        let x36 = x32 * x34;
+        let x37 = x36 - Iyz;
+        let x38 = d + x14 * a_;
+        let x39 = J2 + x27 * (x38 - x8 * (x5 * x27 + x14 * x23));
+        let x40 = x17 * x7;
+        let x41 = x12 * a_ + d;
+        let x42 = J2 + (x41 - x8 * (x40 + x12 * x29)) * x17;
+        let x43 = u2 * x6;
+        let x44 = x12 * u1;
+        let x45 = x43 + x44;
+        let x46 = u3 + u4;
+        let x47 = x16 * x45;
+        let x48 = x46 * x47 - J2 * u4 * x45;
+        let x49 = x12 * u4;
+        let x50 = x6 * u1;
+        let x51 = x12 * u2 - x50;
+        let x52 = x4 * u1 + x14 * u3;
+        let x53 = x14 * u5;
+        let x54 = 2.0 * u5 + u2;
+        let x55 = u5 + u2;
+        let x56 = x14 * u1;
+        let x57 = u3 * x4;
+        let x58 = x56 - x57;
+        let x59 = (J2 * x54 - J1 * x55) * x58;
+        let x60 = u3 * Izz - u2 * Iyz - u1 * Ixz;
+        let x61 = u2 * Iyy - Iyz * u3 - Ixy * u1;
+        let x62 = a_ * u3;
+        let x63 = x62 * u1;
+        let x64 = u3 + 2.0 * u4;
+        let x65 = x63 + (x43 * x64 + x64 * x44) * d;
+        let x66 = u2 * u2;
+        let x67 = u5 * (u5 + 2.0 * u2);
+        let x68 = u1 * u1;
+        let x69 = -x67 - x68;
+        let x70 = x56 * u3;
+        let x71 = x65 * m1;
+        let x72 = m2 * (((x69 - x66) * x4 - x70) * d - x63) + x71;
+        let x73 = a_ * u2;
+        let x74 = x73 * u1;
+        let x75 = d * (x54 * x57 - x56 * x54) - x74;
+        let x76 = m2 * x75;
+        let x77 = -u3 * x64 - u4 * u4;
+        let x78 = u2 * x44;
+        let x79 = x76 + (d * (x6 * (x77 - x68) + x78) + x74) * m1;
+        let x80 = u3 * u3;
+        let x81 = 2.0 * gamma2;
+        let x82 = f64::sin(x81);
+        let x83 = x66 + x80;
+        let x84 = a_ * x83;
+        let x85 = ((x43 * u1 + x12 * (x77 - x66)) * d - x84) * m1
+            + m2 * (x84 + (x14 * (x67 + x83) + u1 * x57) * d);
+        let x86 = d * x4;
+        let x87 = a_ * u1;
+        let x88 = x26 * x58 * x52;
+        let x89 = Ixx * u1 - u3 * Ixz - u2 * Ixy;
+        let x90 = x47 * x51;
+        let x91 = 2.0 * gamma1;
+        let x92 = f64::sin(x91);
+        let x93 = x62 * u3 * x6;
+        let x94 = x50 * d - x19 * u2;
+        let x95 = x94 * x45;
+        let x96 = x93 - x95;
+        let x97 = x62 * x49 - x46 * (u3 * x41 + d * u4) + x94 * x51;
+        let x98 = -u3 * x21 - u1 * x86;
+        let x99 = x58 * x98;
+        let x100 = u2 * x4 * x73;
+        let x101 = x99 + x100;
+        let x102 = (u5 * d + u2 * x38) * x55 - x73 * x53 - x52 * x98;
+        let x103 = (x12 * x97 - x6 * x96) * m1 + m2 * (x4 * x101 + x14 * x102);
         Assembly {
-            qdot: [x3, u2 * x2 - u3 * x1, x4 * x3 + u1, u4, u5],
+            qdot: [x3, u2 * x2 - u3 * x1, f64::sin(theta) * x3 + u1, u4, u5],
             matrix: [
                 [
-                    (x6 + x8) * J2 + Ixx + (x10 + x12) * J1
-                        + (x13 * x5 - x14 * (x24 * x24 + x29 * x29 + x30 * x30)
-                            + x7 * x15) * x31,
-                    x50,
-                    x67,
-                    x69,
-                    x71,
+                    (x5 + x7) * J2 + Ixx + (m2 * x5 * x9 + x7 * x10 * m1) * x11
+                        + (x13 + x15) * J1,
+                    x25,
+                    x30,
+                    x33,
+                    x35,
                 ],
                 [
-                    x50,
-                    Iyy - x14 * (x41 * x41 + x45 * x45 + x49 * x49) + J2 * (x10 + 1.0)
-                        - x34 * x40 + m2 * (x31 + a_ * (a_ + 2.0 * x52)) + x8 * J1,
-                    x72,
-                    x73,
-                    x75,
+                    x25,
+                    Iyy + J2 * (x13 + 1.0)
+                        + m2 * (x11 - x31 * x5 * d + a_ * (a_ + 2.0 * x20)) - x19 * x22
+                        - x23 * x24 + x7 * J1,
+                    x37,
+                    x36,
+                    x39,
                 ],
                 [
-                    x67,
-                    x72,
-                    x6 * J1 - x14 * (x59 * x59 + x63 * x63 + x66 * x66) + Izz
-                        + J2 * (x12 + 1.0) - x53 * x54
-                        + (a_ * (a_ + 2.0 * x33) + x31) * m1,
-                    x77,
-                    x78,
+                    x30,
+                    x37,
+                    x5 * J1 - x8 * (x29 * x29 + x17 * x40) + Izz + J2 * (x15 + 1.0)
+                        + (a_ * (a_ + 2.0 * x18) + x11) * m1 - x28 * x21,
+                    x42,
+                    x36,
                 ],
-                [x69, x73, x77, J2 + (1.0 - x68) * x79, x80],
-                [x71, x75, x78, x80, J2 + (1.0 - x70) * m2 * x31],
+                [x33, x36, x42, x17 * x10 * d + J2, x36],
+                [x35, x39, x36, x36, J2 + x27 * d * x9],
             ],
             force: [
-                x7 * x86
-                    + d
-                        * (x94 * x13 - x89 * x15
-                            - x14 * (-x29 * x113 - x24 * x114 - x30 * x115)) - x116 * x5
-                    - (x100 * x101 - x109 * x110) * J1 - u2 * x117 + x118 * u3,
-                x119 - x9 * x86 + x117 * u1
-                    - m2
-                        * (d
-                            * (d
-                                * ((0.5 * (u3 * x122) - f64::cos(x121) * u1) * u3
-                                    - 0.5 * (x123 * x122))
-                                + ((u3 * u3 - x123 - (u5 + 2.0 * u2) * u5) * x5
-                                    - 2.0 * (x90 * u3)) * a_) - x88 * x120)
-                    - x7 * u4 * x101 * J1 - x40 * x89
-                    - x14 * (-x41 * x114 - x45 * x113 - x49 * x115) - x124 * u3,
-                x125 - u5 * x109 * x5 * J1 - x94 * x54 + u2 * x124
-                    - x14 * (-x113 * x59 - x115 * x63 - x66 * x114)
+                x6 * x48 - (x49 * x51 - x52 * x53) * J1 - x59 * x4 - u2 * x60 + x61 * u3
+                    + d * (m2 * x4 * (x75 - x79 * x8) - (x65 - x8 * x72) * x6 * m1),
+                x72 * x24 - x12 * x48
+                    + m2
+                        * (x8 * x85 * x86
+                            - (a_ * (x4 * (x69 + x80) - 2.0 * x70)
+                                + d
+                                    * ((0.5 * (u3 * x82) - f64::cos(x81) * u1) * u3
+                                        - 0.5 * (x68 * x82))) * d + x62 * x87) + x60 * u1
+                    - x65 * x22 + x88 - x6 * u4 * x51 * J1 - x89 * u3,
+                x90 - u5 * x4 * x52 * J1 + u2 * x89
                     - (d
-                        * (a_
-                            * ((u2 * u2 - x123 - u4 * (2.0 * u3 + u4)) * x7
-                                + 2.0 * (u2 * x82))
-                            + (u2 * (0.5 * (u2 * x127) + u1 * f64::cos(x126))
-                                - 0.5 * (x123 * x127)) * d) + x120 * x93) * m1 - x118 * u1
-                    - x11 * x116,
-                x125 + x76 * (x97 - x98 - x14 * (-x114 * x64 - x61 * x115 - x55 * x113)),
-                x119
-                    + x74
-                        * (-x14 * (-x114 * x36 - x113 * x43 - x47 * x115) - x106 - x107),
+                        * (a_ * ((x66 - x68 - u4 * (2.0 * u3 + u4)) * x6 + 2.0 * x78)
+                            + (u2 * (0.5 * (u2 * x92) + u1 * f64::cos(x91))
+                                - 0.5 * (x68 * x92)) * d) + x87 * x73) * m1 - x61 * u1
+                    - x28 * x75 + x8 * (x79 * x29 - x85 * x34) - x14 * x59,
+                x90
+                    + x17
+                        * (x95 - x93
+                            + x8
+                                * (x12 * (x76 + (x97 * x6 + x12 * x96) * m1) - x6 * x103)),
+                x88
+                    + x27
+                        * (-x99
+                            - x8
+                                * (-x4 * x103 - x14 * ((x14 * x101 - x102 * x4) * m2 + x71))
+                            - x100),
             ],
             checks: [x0],
         }
@@ -1139,7 +1108,6 @@ pub mod reduced_volterra {
         params: &Params,
         _g_i: &[f64; NUM_IGNORABLE],
     ) -> Derivatives {
-        let psi = state[0];
         let theta = state[1];
         let phi = state[2];
         let gamma1 = state[3];
@@ -1167,696 +1135,404 @@ pub mod reduced_volterra {
         let x2 = f64::sin(phi);
         let x3 = f64::cos(phi);
         let x4 = u2 * x2 + u3 * x3;
-        let x5 = x1 * x4;
-        let x6 = u2 * x3 - u3 * x2;
-        let x7 = f64::sin(theta);
-        let x8 = x7 * x5;
-        let x9 = f64::sin(gamma2);
-        let x10 = x9 * x9;
-        let x11 = f64::sin(gamma1);
-        let x12 = x11 * x11;
-        let x13 = m2 * x9;
-        let x14 = f64::sin(psi);
-        let x15 = x2 * x14;
-        let x16 = x7 * x3;
-        let x17 = f64::cos(psi);
-        let x18 = x15 + x16 * x17;
-        let x19 = x11 * m1;
-        let x20 = x7 * x2;
-        let x21 = x17 * x20;
-        let x22 = x3 * x14;
-        let x23 = x21 - x22;
-        let x24 = x18 * x19 - x13 * x23;
-        let x25 = x17 * x3 + x20 * x14;
-        let x26 = x17 * x2;
-        let x27 = x16 * x14;
-        let x28 = x27 - x26;
-        let x29 = x19 * x28;
-        let x30 = x29 - x13 * x25;
-        let x31 = x13 * x2;
-        let x32 = x19 * x3;
-        let x33 = x0 * (x32 - x31);
-        let x34 = 1.0 / (m2 + m0 + m1);
-        let x35 = d * d;
-        let x36 = f64::cos(gamma1);
-        let x37 = x36 * x36;
-        let x38 = f64::cos(gamma2);
-        let x39 = x38 * x38;
-        let x40 = x36 * d;
-        let x41 = a_ + x40;
-        let x42 = -(m1 * x41);
-        let x43 = x42 * x28;
-        let x44 = x26 - x27;
-        let x45 = x0 * x14;
-        let x46 = x38 * x45;
-        let x47 = x44 * x9 + x46;
-        let x48 = a_ * x9;
-        let x49 = x38 * a_;
-        let x50 = x49 + d;
-        let x51 = x9 * x45;
-        let x52 = x38 * x28;
-        let x53 = x51 + x52;
-        let x54 = m2 * (x50 * x53 - x47 * x48);
-        let x55 = x43 + x54;
-        let x56 = x38 * x18;
-        let x57 = x0 * x9;
-        let x58 = x17 * x57;
-        let x59 = x56 + x58;
-        let x60 = x38 * x0;
-        let x61 = x16 * x9;
-        let x62 = (x60 - x61) * x17 - x9 * x15;
-        let x63 = x42 * x18 + m2 * (x50 * x59 - x62 * x48);
-        let x64 = x7 * x9;
-        let x65 = x0 * x3;
-        let x66 = x38 * x65;
-        let x67 = x66 - x64;
-        let x68 = x9 * x65 + x38 * x7;
-        let x69 = m2 * (x50 * x67 + x48 * x68) + x42 * x65;
-        let x70 = x36 * x11;
-        let x71 = J1 - J2;
-        let x72 = (x42 * x11 - x34 * (x30 * x55 + x63 * x24 + x33 * x69)) * d - Ixy
-            + x70 * x71;
-        let x73 = J2 - J1;
-        let x74 = x38 * x9;
-        let x75 = a_ * x11;
-        let x76 = x11 * x20 + x36 * x0;
-        let x77 = x76 * x17;
-        let x78 = x11 * x22;
-        let x79 = x77 - x78;
-        let x80 = x11 * x0;
-        let x81 = x36 * x23 - x17 * x80;
-        let x82 = x36 * a_;
-        let x83 = x82 + d;
-        let x84 = x38 * d;
-        let x85 = x84 + a_;
-        let x86 = -(m2 * x85);
-        let x87 = m1 * (x75 * x79 + x81 * x83) + x23 * x86;
-        let x88 = x0 * x2;
-        let x89 = x7 * x11 + x36 * x88;
-        let x90 = x88 * x11;
-        let x91 = x36 * x7;
-        let x92 = x90 - x91;
-        let x93 = x88 * x86 + m1 * (x89 * x83 + x92 * x75);
-        let x94 = x25 * x86;
-        let x95 = x36 * x25;
-        let x96 = x11 * x45;
-        let x97 = x95 - x96;
-        let x98 = x25 * x11;
-        let x99 = x36 * x45;
-        let x100 = x98 + x99;
-        let x101 = (x83 * x97 + x100 * x75) * m1;
-        let x102 = x94 + x101;
-        let x103 = x73 * x74 - Ixz
-            + d * (x13 * x85 - x34 * (x87 * x24 + x33 * x93 + x102 * x30));
-        let x104 = x34 * d;
-        let x105 = x104 * m1;
-        let x106 = d * x105;
-        let x107 = -(x106 * (x30 * x97 + x81 * x24 + x33 * x89));
-        let x108 = m2 * d;
-        let x109 = x108 * x104;
-        let x110 = -(x109 * (x30 * x53 + x33 * x67 + x59 * x24));
-        let x111 = -Iyz - x34 * (x102 * x55 + x69 * x93 + x87 * x63);
-        let x112 = -((x97 * x55 + x81 * x63 + x89 * x69) * x105);
-        let x113 = J2 + x108 * (x50 - x34 * (x55 * x53 + x67 * x69 + x59 * x63));
-        let x114 = d * m1;
-        let x115 = J2 + x114 * (x83 - x34 * (x89 * x93 + x87 * x81 + x102 * x97));
-        let x116 = m2 * x104;
-        let x117 = -(x116 * (x87 * x59 + x102 * x53 + x67 * x93));
-        let x118 = x34 * m1;
-        let x119 = x114 * d;
-        let x120 = x108 * x105;
-        let x121 = -((x81 * x59 + x89 * x67 + x97 * x53) * x120);
-        let x122 = x34 * m2;
-        let x123 = x108 * d;
-        let x124 = 2.0 * u5 + u2;
-        let x125 = J2 * x124;
-        let x126 = u5 + u2;
-        let x127 = J1 * x126;
-        let x128 = x125 - x127;
-        let x129 = x38 * u1;
-        let x130 = u3 * x9;
-        let x131 = x129 - x130;
-        let x132 = x9 * x131;
-        let x133 = x11 * u1;
-        let x134 = x36 * u2;
-        let x135 = x134 - x133;
-        let x136 = x36 * x135;
-        let x137 = x9 * u1;
-        let x138 = x38 * u3;
-        let x139 = x137 + x138;
-        let x140 = -(x38 * x139);
-        let x141 = u3 + u4;
-        let x142 = u2 * x11;
-        let x143 = x36 * u1;
-        let x144 = x142 + x143;
-        let x145 = x71 * x144;
-        let x146 = J2 * u4;
-        let x147 = x141 * x145 - x146 * x144;
-        let x148 = x147 * x11;
-        let x149 = u2 * Iyz;
-        let x150 = u1 * Ixz;
-        let x151 = u3 * Izz - x149 - x150;
-        let x152 = a_ * u2;
-        let x153 = x38 * x152;
-        let x154 = u3 * x85;
-        let x155 = d * x9;
-        let x156 = u1 * x155;
-        let x157 = -x154 - x156;
-        let x158 = x157 * x139;
-        let x159 = (u5 * d + u2 * x50) * x126 - u5 * x153 - x158;
-        let x160 = x157 * x131;
-        let x161 = u2 * x48;
-        let x162 = u2 * x161;
-        let x163 = x160 + x162;
-        let x164 = d * (x124 * x130 - x129 * x124) - x152 * u1;
-        let x165 = x164 * x25;
-        let x166 = u3 * u1;
-        let x167 = u3 + 2.0 * u4;
-        let x168 = a_ * x166 + (x142 * x167 + x167 * x143) * d;
-        let x169 = x82 * u3 * u4 - x141 * (u3 * x83 + d * u4);
-        let x170 = x11 * d;
-        let x171 = x170 * u1;
-        let x172 = u2 * x41;
-        let x173 = x171 - x172;
-        let x174 = x173 * x135;
-        let x175 = x169 + x174;
-        let x176 = x173 * x144;
-        let x177 = u3 * x75;
-        let x178 = x177 * u3;
-        let x179 = x178 - x176;
-        let x180 = (x47 * x159 + x163 * x53 + x165) * m2
-            + (x168 * x28 + x100 * x175 + x97 * x179) * m1;
-        let x181 = (x67 * x163 + x164 * x88 - x159 * x68) * m2
-            + (x89 * x179 + x168 * x65 + x92 * x175) * m1;
-        let x182 = m2 * (x159 * x62 + x164 * x23 + x59 * x163)
-            + (x81 * x179 + x175 * x79 + x168 * x18) * m1;
-        let x183 = Iyz * u3;
-        let x184 = Ixy * u1;
-        let x185 = u2 * Iyy - x183 - x184;
-        let x186 = a_ * a_;
-        let x187 = u1 * u1;
-        let x188 = u3 * u3;
-        let x189 = x188 - x187;
-        let x190 = x189 - (u5 + 2.0 * u2) * u5;
-        let x191 = 2.0 * gamma2;
-        let x192 = f64::sin(x191);
-        let x193 = u3 * x192;
-        let x194 = f64::cos(x191);
-        let x195 = x194 * u1;
-        let x196 = x36 * x147;
-        let x197 = u4 * J1;
-        let x198 = x135 * x11;
-        let x199 = x73 * x139;
-        let x200 = x199 * x131;
-        let x201 = u3 * Ixz;
-        let x202 = u2 * Ixy;
-        let x203 = Ixx * u1 - x201 - x202;
-        let x204 = x145 * x135;
-        let x205 = x38 * x131;
-        let x206 = u5 * J1;
-        let x207 = -(x9 * x139);
-        let x208 = a_ * u1;
-        let x209 = u2 * u2 - x187 - u4 * (2.0 * u3 + u4);
-        let x210 = 2.0 * gamma1;
-        let x211 = f64::sin(x210);
-        let x212 = u2 * x211;
-        let x213 = f64::cos(x210);
-        let x214 = u1 * x213;
-        let x215 = d * x104;
-        let x216 = x44 * x19;
-        let x217 = -x216 - x29;
-        let x218 = x38 * x44;
-        let x219 = x218 - x51;
-        let x220 = x9 * x28 - x46;
-        let x221 = m2 * (x219 * x50 - x220 * x48);
-        let x222 = x44 * x42;
-        let x223 = x221 + x222 + x55;
-        let x224 = x104 * (x63 * x217 - x223 * x24);
-        let x225 = -x98 - x99;
-        let x226 = x96 - x95;
-        let x227 = (x225 * x75 + x83 * x226) * m1;
-        let x228 = x227 - x94 + x102;
-        let x229 = (x87 * x217 - x228 * x24) * x104;
-        let x230 = x106 * x81 * x217;
-        let x231 = x52 + x218;
-        let x232 = x109 * (x59 * x217 - x231 * x24);
-        let x233 = x34 * (-x63 * x228 - x87 * x223);
-        let x234 = -(x81 * x223 * x105);
-        let x235 = (-x231 * x63 - x59 * x223) * x116;
-        let x236 = -(x81 * x228 * x105);
-        let x237 = (-x87 * x231 - x59 * x228) * x116;
-        let x238 = -(x81 * x231 * x120);
-        let x239 = x180 + (x225 * x175 + x44 * x168 + x226 * x179) * m1
-            + (x159 * x220 - x165 + x219 * x163) * m2;
-        let x240 = x7 * x1;
-        let x241 = x7 * (x31 - x32);
-        let x242 = x17 * x24;
-        let x243 = x30 * x14;
-        let x244 = x241 + x242 + x243;
-        let x245 = x55 * x14;
-        let x246 = x17 * x63;
-        let x247 = x16 * x42;
-        let x248 = x57 + x38 * x16;
-        let x249 = x61 - x60;
-        let x250 = m2 * (-x50 * x248 - x249 * x48);
-        let x251 = x247 - x245 - x246 - x250;
-        let x252 = x104 * (x33 * x251 - x244 * x69);
-        let x253 = x17 * x87;
-        let x254 = x20 * x86;
-        let x255 = x36 * x20;
-        let x256 = x80 - x255;
-        let x257 = (x256 * x83 - x76 * x75) * m1;
-        let x258 = x102 * x14;
-        let x259 = x254 - x253 - x257 - x258;
-        let x260 = x104 * (x33 * x259 - x244 * x93);
-        let x261 = x255 - x97 * x14 - x17 * x81 - x80;
-        let x262 = x106 * (x261 * x33 - x89 * x244);
-        let x263 = x248 - x53 * x14 - x17 * x59;
-        let x264 = (x33 * x263 - x244 * x67) * x109;
-        let x265 = x34 * (x251 * x93 + x259 * x69);
-        let x266 = (x89 * x251 + x261 * x69) * x105;
-        let x267 = x116 * (x263 * x69 + x67 * x251);
-        let x268 = (x259 * x89 + x261 * x93) * x105;
-        let x269 = (x259 * x67 + x263 * x93) * x116;
-        let x270 = x120 * (x89 * x263 + x261 * x67);
-        let x271 = x180 * x14 + x182 * x17
-            + (x159 * x249 - x248 * x163 - x164 * x20) * m2
-            + (x256 * x179 - x168 * x16 - x76 * x175) * m1;
-        let x272 = -x13 * x28 - x25 * x19;
-        let x273 = x19 * x2 + x13 * x3;
-        let x274 = -(x0 * x273);
-        let x275 = x22 - x21;
-        let x276 = x275 * x19 - x13 * x18;
-        let x277 = x9 * x48;
-        let x278 = x38 * x50;
-        let x279 = m2 * (-x25 * x277 - x25 * x278) - x42 * x25;
-        let x280 = m2 * (x275 * x278 - x23 * x277) + x42 * x275;
-        let x281 = -x42 - m2 * (x277 + x278);
-        let x282 = x281 * x2;
-        let x283 = (-x279 * x30 - x280 * x24 - x272 * x55 - x63 * x276
-            - (x33 * x282 - x273 * x69) * x0) * x104;
-        let x284 = x18 * x24;
-        let x285 = x33 * x65;
-        let x286 = x28 * x30;
-        let x287 = x284 + x285 + x286;
-        let x288 = x86 + (x36 * x83 + x11 * x75) * m1;
-        let x289 = (-x287 * x288 - x274 * x93 - x102 * x272 - x87 * x276) * x104;
-        let x290 = x106 * (-x81 * x276 - x89 * x274 - x36 * x287 - x272 * x97);
-        let x291 = x33 * x88;
-        let x292 = x25 * x30;
-        let x293 = x109
-            * (x38 * (x291 + x292 - x275 * x24) - x272 * x53 - x59 * x276 - x67 * x274);
-        let x294 = x88 * x281;
-        let x295 = x69 * x65;
-        let x296 = x18 * x63;
-        let x297 = x28 * x55;
-        let x298 = x295 + x296 + x297;
-        let x299 = x34 * (-x294 * x93 - x87 * x280 - x298 * x288 - x102 * x279);
-        let x300 = x36 * x298;
-        let x301 = (-x279 * x97 - x294 * x89 - x81 * x280 - x300) * x105;
-        let x302 = x88 * x69;
-        let x303 = x25 * x55;
-        let x304 = x116
-            * (x38 * (x302 - x275 * x63 + x303) - x294 * x67 - x279 * x53 - x59 * x280);
-        let x305 = x65 * x93;
-        let x306 = x102 * x28;
-        let x307 = x87 * x18;
-        let x308 = x305 + x306 + x307;
-        let x309 = x36 * x308;
-        let x310 = x89 * x65 + x28 * x97 + x18 * x81;
-        let x311 = (-x309 - x310 * x288) * x105;
-        let x312 = x88 * x93;
-        let x313 = x25 * x102;
-        let x314 = x67 * x65 + x28 * x53 + x18 * x59;
-        let x315 = (x38 * (x312 - x87 * x275 + x313) - x314 * x288) * x116;
-        let x316 = -(x36 * x314);
-        let x317 = x25 * x97;
-        let x318 = x88 * x89;
-        let x319 = (x316 + x38 * (x317 + x318 - x275 * x81)) * x120;
-        let x320 = x38 * x163;
-        let x321 = x159 * x9;
-        let x322 = x11 * x175 + x36 * x179;
-        let x323 = m2 * (x164 * x28 - x320 * x25 + x321 * x25)
-            + (x28 * x322 - x168 * x25) * m1;
-        let x324 = m1 * (x18 * x322 + x168 * x275)
-            + m2 * (x320 * x275 + x321 * x23 + x164 * x18);
-        let x325 = (x322 * x3 - x168 * x2) * m1 + m2 * (x164 * x3 + (x321 - x320) * x2);
-        let x326 = -x182 * x18 - x181 * x65 - x180 * x28;
-        let x327 = -(x325 * x0);
-        let x328 = x36 * x326;
-        let x329 = x180 * x25;
-        let x330 = x88 * x181;
-        let x331 = 2.0 * J2 - 2.0 * J1;
-        let x332 = (x170 * x11 - x36 * x41 + x34 * (-x170 * x287 - x300)) * x114
-            + x37 * x71 + x73 * x12;
-        let x333 = x91 - x90;
-        let x334 = x82 * x92 + x83 * x333;
-        let x335 = x100 * x82 + x225 * x83;
-        let x336 = x78 - x77;
-        let x337 = x83 * x336 + x82 * x79;
-        let x338 = (-x33 * x334 - x309 - x335 * x30 - x337 * x24) * x105;
-        let x339 = x106 * (-x336 * x24 - x33 * x333 - x225 * x30 - x36 * x310 * m1);
-        let x340 = x316 * x120;
-        let x341 = 2.0 * J1 - 2.0 * J2;
-        let x342 = x118 * (-x337 * x63 - x334 * x69 - x335 * x55 - x170 * x308);
-        let x343 = (-x63 * x336 - x114 * x11 * x310 - x333 * x69 - x225 * x55) * x105;
-        let x344 = -(x11 * x314 * x120);
-        let x345 = (x34
-            * (-x87 * x336 - (x337 * x81 + x335 * x97 + x89 * x334) * m1 - x225 * x102
-                - x333 * x93) - x75) * x114;
-        let x346 = m2 * x105;
-        let x347 = -(x346 * (x67 * x334 + x337 * x59 + x335 * x53));
-        let x348 = -(x120 * (x225 * x53 + x59 * x336 + x67 * x333));
-        let x349 = x134 * x167 - x133 * x167;
-        let x350 = x349 * d;
-        let x351 = x188 * x82;
-        let x352 = d * x144;
-        let x353 = x352 * x144;
-        let x354 = x351 + x169 - x353;
-        let x355 = x178 - x176 + x135 * x352;
-        let x356 = x350 * x28 + x354 * x97 + x100 * x355 + x225 * x179;
-        let x357 = x333 * x179 + x354 * x89 + x92 * x355 + x350 * x65;
-        let x358 = x79 * x355 + x354 * x81 + x350 * x18 + x336 * x179;
-        let x359 = x141 * x71;
-        let x360 = x135 * x359 + x146 * (x133 - x134);
-        let x361 = x11 * x144;
-        let x362 = u1 * x211;
-        let x363 = u2 * x213;
-        let x364 = x71 * x135 * x135 - x145 * x144;
-        let x365 = x23 * x24;
-        let x366 = x50 * x62 - x38 * a_ * x62;
-        let x367 = a_ * (-x47 * x38 - x231 * x9) + x47 * x50;
-        let x368 = x49 * x68 - x50 * x68;
-        let x369 = (x302 + x303) + x23 * x63;
-        let x370 = x116 * (x38 * x369 - x366 * x24 - x367 * x30 - x33 * x368);
-        let x371 = x23 * x87;
-        let x372 = x10 * x71 + x73 * x39
-            + x108
-                * (x34 * (x38 * (x312 + x313 + x371) - (x291 + x292 + x365) * x155)
-                    - x9 * x155 + x38 * x85);
-        let x373 = (x23 * x81 + x318) + x317;
-        let x374 = x38 * x120 * x373;
-        let x375 = x23 * x59 + (x25 * x53 + x88 * x67);
-        let x376 = (x33 * x68 - x47 * x30 + x38 * x375 * m2 - x62 * x24) * x109;
-        let x377 = (-x368 * x93 - x102 * x367 - x369 * x155 - x87 * x366) * x122;
-        let x378 = -((x81 * x366 + x368 * x89 + x367 * x97) * x346);
-        let x379 = x108
-            * (x34
-                * (x69 * x68 - m2 * (x368 * x67 + x59 * x366 + x367 * x53) - x47 * x55
-                    - x63 * x62) - x48);
-        let x380 = -(x9 * x120 * x373);
-        let x381 = x116 * (x68 * x93 - x87 * x62 - x47 * x102 - x375 * x108 * x9);
-        let x382 = -((x81 * x62 - x89 * x68 + x47 * x97) * x120);
-        let x383 = x130 - x129;
-        let x384 = x138 * x124 + x137 * x124;
-        let x385 = x383 * d;
-        let x386 = x385 * x139;
-        let x387 = d * x384;
-        let x388 = u2 * x153;
-        let x389 = x131 * x385;
-        let x390 = x388 + x389 - x158;
-        let x391 = x386 * x68 + x159 * (x64 - x66) + x387 * x88 + x67 * x390;
-        let x392 = x387 * x25 + x390 * x53 + x159 * x219 - x47 * x386;
-        let x393 = x387 * x23 - x386 * x62 + x59 * x390 + x159 * (-x56 - x58);
-        let x394 = (-x330 - x182 * x23) - x329;
-        let x395 = x73 * x131 * x131 - x199 * x139;
-        let x396 = (x206 + x127) - x125;
-        let x397 = x131 * x155;
-        let x398 = x38 * x157;
-        let x399 = x398 - x397;
-        let x400 = -x152 - x84 * x124;
-        let x401 = x9 * (x154 + x156 + d * x139);
-        let x402 = x36 * x173;
-        let x403 = x170 * x144 + x402;
-        let x404 = a_ * u3 + x40 * x167;
-        let x405 = x11 * (x172 - x171 + x135 * d);
-        let x406 = (x399 * x53 + x25 * x400 + x47 * x401) * m2
-            + (x28 * x404 - x403 * x97 + x100 * x405) * m1;
-        let x407 = (x405 * x79 - x81 * x403 + x18 * x404) * m1
-            + m2 * (x23 * x400 + x401 * x62 + x59 * x399);
-        let x408 = m1 * (x92 * x405 + x65 * x404 - x89 * x403)
-            + m2 * (x67 * x399 - x401 * x68 + x88 * x400);
-        let x409 = Ixy * u3;
-        let x410 = x359 - x146;
-        let x411 = u2 * Ixz;
-        let x412 = Izz - Ixx;
-        let x413 = x38 * x139;
-        let x414 = Ixx - Iyy;
-        let x415 = x361;
-        let x416 = x73 * x132;
-        let x417 = x114 * x167;
-        let x418 = x385 - x208;
-        let x419 = d * x126 + x50 * x126 + x49 * (u2 - u5);
-        let x420 = x402 - x135 * x41;
-        let x421 = x173 * x11 - x144 * x41;
-        let x422 = x170 * x167;
-        let x423 = m2 * (x47 * x419 + 2.0 * (x161 * x53) + x25 * x418)
-            + m1 * (x100 * x420 - x421 * x97 + x28 * x422);
-        let x424 = (2.0 * (x67 * x161) - x419 * x68 + x88 * x418) * m2
-            + (x422 * x65 + x92 * x420 - x89 * x421) * m1;
-        let x425 = m2 * (x23 * x418 + x419 * x62 + 2.0 * (x59 * x161))
-            + (x79 * x420 - x421 * x81 + x18 * x422) * m1;
-        let x426 = Iyy - Izz;
-        let x427 = Iyz * u1;
-        let x428 = u1 * x186;
-        let x429 = 2.0 * x142 + 2.0 * x143;
-        let x430 = x73 * x205;
-        let x431 = x36 * x145;
-        let x432 = x71 * x198 + x431;
-        let x433 = x108 * x124;
-        let x434 = x208 + x352;
-        let x435 = x82 * (u4 - u3) - x141 * d - x141 * x83;
-        let x436 = x398 - x139 * x85;
-        let x437 = x157 * x9;
-        let x438 = x131 * x85;
-        let x439 = -x437 - x438;
-        let x440 = x124 * x155;
-        let x441 = m1 * (x435 * x79 + x434 * x18 + 2.0 * (x177 * x81))
-            + m2 * (x439 * x59 - x436 * x62 + x23 * x440);
-        let x442 = (2.0 * (x177 * x89) + x435 * x92 + x434 * x65) * m1
-            + m2 * (x439 * x67 + x436 * x68 + x88 * x440);
-        let x443 = m2 * (x439 * x53 - x47 * x436 + x25 * x440)
-            + (2.0 * (x177 * x97) + x434 * x28 + x100 * x435) * m1;
-        let x444 = 2.0 * x130 - 2.0 * x129;
-        let x445 = x71 * x9 * x139 + x430;
-        let x446 = x145 - J2 * x144;
-        let x447 = 2.0 * u3 + 2.0 * u4;
-        let x448 = x18 * x429 - x447 * x79;
-        let x449 = x429 * x65 - x447 * x92;
-        let x450 = x28 * x429 - x100 * x447;
-        let x451 = 2.0 * J2 - J1;
-        let x452 = 2.0 * u5 + 2.0 * u2;
-        let x453 = x47 * x452 + x25 * x444;
-        let x454 = x88 * x444 - x452 * x68;
-        let x455 = x23 * x444 + x452 * x62;
+        let x5 = u2 * x3 - u3 * x2;
+        let x6 = f64::sin(theta) * x1;
+        let x7 = x4 * x6;
+        let x8 = f64::sin(gamma2);
+        let x9 = x8 * x8;
+        let x10 = f64::sin(gamma1);
+        let x11 = x10 * x10;
+        let x12 = m2 * x8;
+        let x13 = 1.0 / (m2 + m0 + m1);
+        let x14 = x13 * m2;
+        let x15 = 1.0 - x14;
+        let x16 = x8 * x15;
+        let x17 = x13 * m1;
+        let x18 = 1.0 - x17;
+        let x19 = x10 * m1;
+        let x20 = d * d;
+        let x21 = f64::cos(gamma1);
+        let x22 = x21 * x21;
+        let x23 = f64::cos(gamma2);
+        let x24 = x23 * x23;
+        let x25 = J1 - J2;
+        let x26 = d * m1;
+        let x27 = x21 * d;
+        let x28 = a_ + x27;
+        let x29 = -(x28 * m1);
+        let x30 = x23 * d;
+        let x31 = x30 + a_;
+        let x32 = m2 * x31;
+        let x33 = x29 + x32;
+        let x34 = x13 * x33;
+        let x35 = x28 + x34;
+        let x36 = x21 * x25 - x26 * x35;
+        let x37 = x36 * x10 - Ixy;
+        let x38 = x28 * m1;
+        let x39 = -(m2 * x31);
+        let x40 = x38 + x39;
+        let x41 = x40 * x13;
+        let x42 = x31 + x41;
+        let x43 = m2 * d;
+        let x44 = J2 - J1;
+        let x45 = x23 * x44;
+        let x46 = (x42 * x43 + x45) * x8 - Ixz;
+        let x47 = x13 * x43;
+        let x48 = x47 * x26;
+        let x49 = x21 * x8;
+        let x50 = x48 * x49;
+        let x51 = x26 * x10;
+        let x52 = x47 * x51;
+        let x53 = x23 * x52;
+        let x54 = -x53;
+        let x55 = x47 * d;
+        let x56 = x8 * x52;
+        let x57 = x56 - Iyz;
+        let x58 = x23 * a_;
+        let x59 = x58 + d;
+        let x60 = x43 * (x59 - x13 * (x9 * x43 + x23 * x33)) + J2;
+        let x61 = x21 * a_;
+        let x62 = x61 + d;
+        let x63 = J2 + (x62 - x13 * (x21 * x40 + x10 * x51)) * x26;
+        let x64 = x26 * d;
+        let x65 = x64 * x18;
+        let x66 = x43 * d;
+        let x67 = x10 * u1;
+        let x68 = x21 * u2;
+        let x69 = x68 - x67;
+        let x70 = x21 * x69;
+        let x71 = x8 * u1;
+        let x72 = x23 * u3;
+        let x73 = x71 + x72;
+        let x74 = -(x23 * x73);
+        let x75 = 2.0 * u5 + u2;
+        let x76 = J2 * x75;
+        let x77 = u5 + u2;
+        let x78 = J1 * x77;
+        let x79 = x76 - x78;
+        let x80 = x23 * u1;
+        let x81 = u3 * x8;
+        let x82 = x80 - x81;
+        let x83 = x79 * x82;
+        let x84 = a_ * u3;
+        let x85 = x84 * u1;
+        let x86 = u2 * x10;
+        let x87 = u3 + 2.0 * u4;
+        let x88 = x21 * u1;
+        let x89 = x85 + (x86 * x87 + x87 * x88) * d;
+        let x90 = x89 * m1;
+        let x91 = u1 * u1;
+        let x92 = u5 * (u5 + 2.0 * u2);
+        let x93 = u2 * u2;
+        let x94 = -x92 - x93;
+        let x95 = x94 - x91;
+        let x96 = x72 * u1;
+        let x97 = m2 * ((x8 * x95 - x96) * d - x85);
+        let x98 = x90 + x97;
+        let x99 = x89 - x13 * x98;
+        let x100 = u3 * x87;
+        let x101 = u4 * u4;
+        let x102 = -x100 - x101;
+        let x103 = x102 - x91;
+        let x104 = x68 * u1;
+        let x105 = a_ * u2;
+        let x106 = x105 * u1;
+        let x107 = d * (x75 * x81 - x80 * x75) - x106;
+        let x108 = m2 * x107;
+        let x109 = (d * (x10 * x103 + x104) + x106) * m1 + x108;
+        let x110 = x107 - x13 * x109;
+        let x111 = u3 + u4;
+        let x112 = x86 + x88;
+        let x113 = x25 * x112;
+        let x114 = J2 * u4;
+        let x115 = x111 * x113 - x114 * x112;
+        let x116 = x115 * x10;
+        let x117 = u2 * Iyz;
+        let x118 = u1 * Ixz;
+        let x119 = u3 * Izz - x117 - x118;
+        let x120 = Iyz * u3;
+        let x121 = Ixy * u1;
+        let x122 = u2 * Iyy - x120 - x121;
+        let x123 = a_ * u1;
+        let x124 = 2.0 * gamma2;
+        let x125 = f64::sin(x124);
+        let x126 = u3 * x125;
+        let x127 = f64::cos(x124);
+        let x128 = x127 * u1;
+        let x129 = u3 * u3;
+        let x130 = x129 - x91;
+        let x131 = x130 - x92;
+        let x132 = u2 * x67;
+        let x133 = x93 + x129;
+        let x134 = a_ * x133;
+        let x135 = u1 * x81;
+        let x136 = m1 * ((x132 + x21 * (x102 - x93)) * d - x134)
+            + m2 * (x134 + (x23 * (x92 + x133) + x135) * d);
+        let x137 = d * x8;
+        let x138 = x21 * x115;
+        let x139 = u4 * J1;
+        let x140 = x69 * x10;
+        let x141 = x44 * x82;
+        let x142 = x141 * x73;
+        let x143 = u3 * Ixz;
+        let x144 = u2 * Ixy;
+        let x145 = Ixx * u1 - x143 - x144;
+        let x146 = u5 * J1;
+        let x147 = -(x8 * x73);
+        let x148 = x113 * x69;
+        let x149 = x23 * x82;
+        let x150 = x93 - x91 - u4 * (2.0 * u3 + u4);
+        let x151 = 2.0 * gamma1;
+        let x152 = f64::sin(x151);
+        let x153 = u2 * x152;
+        let x154 = f64::cos(x151);
+        let x155 = u1 * x154;
+        let x156 = x84 * u3 * x10;
+        let x157 = x67 * d;
+        let x158 = u2 * x28;
+        let x159 = x157 - x158;
+        let x160 = x159 * x112;
+        let x161 = x21 * x84;
+        let x162 = u4 * x161;
+        let x163 = x111 * (u3 * x62 + d * u4);
+        let x164 = x162 - x163;
+        let x165 = x69 * x159;
+        let x166 = x164 + x165;
+        let x167 = x156 - x160;
+        let x168 = x108 + m1 * (x166 * x10 + x21 * x167);
+        let x169 = x31 * u3;
+        let x170 = u1 * x137;
+        let x171 = -x169 - x170;
+        let x172 = x82 * x171;
+        let x173 = u2 * x8 * x105;
+        let x174 = x172 + x173;
+        let x175 = (u5 * d + u2 * x59) * x77;
+        let x176 = x23 * x105;
+        let x177 = u5 * x176;
+        let x178 = x171 * x73;
+        let x179 = x175 - x177 - x178;
+        let x180 = m2 * (x8 * x174 + x23 * x179);
+        let x181 = (x21 * x166 - x10 * x167) * m1;
+        let x182 = x180 + x181;
+        let x183 = m2 * (x23 * x174 - x8 * x179);
+        let x184 = x21 * x10;
+        let x185 = 2.0 * J2 - 2.0 * J1;
+        let x186 = x11 * (x44 + x65) + x21 * x36;
+        let x187 = -x56;
+        let x188 = x48 * (x21 * x23);
+        let x189 = -x188;
+        let x190 = 2.0 * a_ + 2.0 * x27;
+        let x191 = 2.0 * J1 - 2.0 * J2;
+        let x192 = x21 * x26;
+        let x193 = (x13 * (x40 - x192) - a_) * x51;
+        let x194 = x13 * x12;
+        let x195 = x21 * x103 - x132;
+        let x196 = x68 * x87 - x67 * x87;
+        let x197 = x17 - 1.0;
+        let x198 = x25 * x69;
+        let x199 = x114 * (x67 - x68) + x111 * x198;
+        let x200 = (x93 + x100 + x101) * x10 + x104;
+        let x201 = x43 * x8;
+        let x202 = u1 * x152;
+        let x203 = u2 * x154;
+        let x204 = x198 * x69 - x113 * x112;
+        let x205 = d * x112;
+        let x206 = x205 * x112;
+        let x207 = u3 * x161;
+        let x208 = x206 - x207;
+        let x209 = x10 * (x163 - x162 + x208) + x21 * x69 * x205;
+        let x210 = x47 * m1;
+        let x211 = x23 * x8;
+        let x212 = x9 * x25 + x44 * x24 + (x23 * x42 + x9 * d * (x14 - 1.0)) * x43;
+        let x213 = x23 * x43;
+        let x214 = (x13 * (x33 - x213) - a_) * x201;
+        let x215 = 2.0 * x30 + 2.0 * a_;
+        let x216 = -x50;
+        let x217 = x81 - x80;
+        let x218 = x8 * x75;
+        let x219 = x72 * x75 + u1 * x218;
+        let x220 = x23 * x95 + x135;
+        let x221 = x82 * x141 - x44 * x73 * x73;
+        let x222 = (x94 - x129) * x8 + x96;
+        let x223 = (x146 + x78) - x76;
+        let x224 = u2 * x176;
+        let x225 = x217 * d;
+        let x226 = x82 * x225;
+        let x227 = x224 - x175 + x177 + x226;
+        let x228 = x217 * x73;
+        let x229 = x227 * x8 - x30 * x228;
+        let x230 = x84 + x27 * x87;
+        let x231 = x230 * m1;
+        let x232 = m2 * (-x169 - 2.0 * x170) + x231;
+        let x233 = x111 * x25;
+        let x234 = x233 - x114;
+        let x235 = Ixy * u3;
+        let x236 = -x105 - x30 * x75;
+        let x237 = m2 * x236;
+        let x238 = x237 + (x158 - 2.0 * x157) * m1;
+        let x239 = u2 * Ixz;
+        let x240 = x45 * x73;
+        let x241 = Izz - Ixx;
+        let x242 = x12 * u3 + u2 * x19;
+        let x243 = x21 * x198;
+        let x244 = Ixx - Iyy;
+        let x245 = x44 * x112;
+        let x246 = x21 * x159;
+        let x247 = x10 * x205 + x246;
+        let x248 = x69 * d - x157 + x158;
+        let x249 = x82 * x137;
+        let x250 = x23 * x171;
+        let x251 = x250 - x249;
+        let x252 = x169 + d * x73 + x170;
+        let x253 = x12 * (x251 + x23 * x252) + (x21 * x248 + x247) * x19;
+        let x254 = x8 * x141;
+        let x255 = x19 * x87;
+        let x256 = 2.0 * u5 + 2.0 * u2;
+        let x257 = x255 - x12 * x256;
+        let x258 = x225 - x123;
+        let x259 = m2 * x258;
+        let x260 = x38 * u1 + x259;
+        let x261 = Iyy - Izz;
+        let x262 = -(x13 * (m2 * (x30 * x256 + 2.0 * x105) + m1 * (x157 - u2 * x190)));
+        let x263 = Iyz * u1;
+        let x264 = x23 * x141;
+        let x265 = a_ * x123;
+        let x266 = 2.0 * x86 + 2.0 * x88;
+        let x267 = x21 * x113;
+        let x268 = x10 * x159 - x28 * x112;
+        let x269 = x246 - x28 * x69;
+        let x270 = d * x77;
+        let x271 = x59 * x77;
+        let x272 = x58 * (u2 - u5);
+        let x273 = m2 * (x23 * (x270 + x271 + x272) + 2.0 * (x9 * x105))
+            + (x10 * x268 + x21 * x269) * m1;
+        let x274 = 2.0 * u3 + 2.0 * u4;
+        let x275 = x12 * x75;
+        let x276 = x275 - x274 * x19;
+        let x277 = x123 + x205;
+        let x278 = x277 * m1;
+        let x279 = u1 * x39 + x278;
+        let x280 = x25 * x73;
+        let x281 = (-2.0 * x84 - x27 * x274) * m1 + (u3 * x215 + x170) * m2;
+        let x282 = 2.0 * x81 - 2.0 * x80;
+        let x283 = (-x111 * d - x111 * x62) + x61 * (u4 - u3);
+        let x284 = x31 * x82;
+        let x285 = x8 * x171;
+        let x286 = -x284 - x285;
+        let x287 = x250 - x31 * x73;
+        let x288 = (x21 * x283 - 2.0 * (x84 * x11)) * m1 + m2 * (x8 * x286 - x23 * x287);
+        let x289 = x113 - J2 * x112;
+        let x290 = -(x274 * x49);
+        let x291 = 2.0 * J2 - J1;
+        let x292 = x23 * x256;
         Derivatives {
-            qdot: [x5, x6, x8 + u1, u4, u5],
+            qdot: [x1 * x4, x5, x7 + u1, u4, u5],
             matrix: [
                 [
-                    (x10 + x12) * J2 + Ixx
-                        + (x13 * x9 - (x24 * x24 + x30 * x30 + x33 * x33) * x34
-                            + x11 * x19) * x35 + (x37 + x39) * J1,
-                    x72,
-                    x103,
-                    x107,
-                    x110,
+                    (x9 + x11) * J2 + (x12 * x16 + x10 * x18 * x19) * x20 + Ixx
+                        + (x22 + x24) * J1,
+                    x37,
+                    x46,
+                    x50,
+                    x54,
                 ],
                 [
-                    x72,
-                    Iyy - x42 * x41 + J2 * (x37 + 1.0)
-                        + m2 * (a_ * (2.0 * x84 + a_) + x35)
-                        - (x63 * x63 + x55 * x55 + x69 * x69) * x34 + x12 * J1,
-                    x111,
-                    x112,
-                    x113,
+                    x37,
+                    Iyy - x28 * x29 + m2 * (a_ * (2.0 * x30 + a_) - x9 * x55 + x20)
+                        + J2 * (x22 + 1.0) - x33 * x34 + x11 * J1,
+                    x57,
+                    x56,
+                    x60,
                 ],
                 [
-                    x103,
-                    x111,
-                    J2 * (x39 + 1.0) + x10 * J1 - x85 * x86
-                        + (a_ * (a_ + 2.0 * x40) + x35) * m1 + Izz
-                        - x34 * (x87 * x87 + x102 * x102 + x93 * x93),
-                    x115,
-                    x117,
+                    x46,
+                    x57,
+                    J2 * (x24 + 1.0) + x9 * J1 + (a_ * (a_ + 2.0 * x27) + x20) * m1 + Izz
+                        - x31 * x39 - (x51 * x51 + x40 * x40) * x13,
+                    x63,
+                    x56,
                 ],
-                [x107, x112, x115, J2 + (1.0 - x118) * x119, x121],
-                [x110, x113, x117, x121, (1.0 - x122) * x123 + J2],
+                [x50, x56, x63, J2 + x65, x56],
+                [x54, x60, x56, x56, J2 + x66 * x15],
             ],
             force: [
-                x148 - x128 * x132 - (x136 * u4 + u5 * x140) * J1 - u2 * x151
-                    + d
-                        * (x164 * x13 - x34 * (-x180 * x30 - x33 * x181 - x182 * x24)
-                            - x168 * x19) + x185 * u3,
-                x151 * u1
-                    - m2
-                        * ((a_ * (x9 * x190 - 2.0 * (x38 * x166))
-                            + d * ((0.5 * x193 - x195) * u3 - 0.5 * (x187 * x192))) * d
-                            - x166 * x186) - x196 - x197 * x198 + x200
-                    - x34 * (-x181 * x69 - x182 * x63 - x180 * x55) - x168 * x42
-                    - x203 * u3,
-                x204 - (-x180 * x102 - x181 * x93 - x182 * x87) * x34 - x164 * x86
-                    - x128 * x205 + u2 * x203 + x206 * x207 - x185 * u1
-                    - (x208 * x152
+                d * (x12 * x110 - x99 * x19) - (x70 * u4 + u5 * x74) * J1 - x83 * x8
+                    + x116 - u2 * x119 + x122 * u3,
+                x98 * x34
+                    + m2
+                        * (x84 * x123
+                            - (d * ((0.5 * x126 - x128) * u3 - 0.5 * (x91 * x125))
+                                + (x8 * x131 - 2.0 * x96) * a_) * d + x13 * x136 * x137)
+                    - x138 + x119 * u1 - x139 * x140 + x142 - x89 * x29 - x145 * u3,
+                x146 * x147 + x148 - x79 * x149 + u2 * x145 - x122 * u1
+                    - (x123 * x105
                         + d
-                            * (a_ * (x209 * x11 + 2.0 * (x134 * u1))
-                                + (u2 * (0.5 * x212 + x214) - 0.5 * (x187 * x211)) * d))
-                        * m1,
-                x204
-                    + x114
-                        * (x176 - x178 - (-x182 * x81 - x89 * x181 - x180 * x97) * x34),
-                x108 * (-x34 * (-x182 * x59 - x67 * x181 - x180 * x53) - x160 - x162)
-                    + x200,
+                            * (a_ * (x150 * x10 + 2.0 * x104)
+                                + (u2 * (0.5 * x153 + x155) - 0.5 * (x91 * x152)) * d)) * m1
+                    + x13 * (x40 * x109 - x136 * x51) - x107 * x39,
+                (x160 - x156 + x13 * (x21 * x168 - x10 * x182)) * x26 + x148,
+                (-x13 * (-x8 * x182 - x23 * (x90 + x183)) - x172 - x173) * x43 + x142,
             ],
             checks: [x0],
             d_qdot: [
                 [0.0, 0.0, 0.0, 0.0, 0.0],
-                [x5 * x240, 0.0, x4 + x8 * x240, 0.0, 0.0],
-                [x1 * x6, -x4, x6 * x240, 0.0, 0.0],
+                [x1 * x7, 0.0, x7 * x6 + x4, 0.0, 0.0],
+                [x1 * x5, -x4, x5 * x6, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 0.0],
                 [0.0, 0.0, 1.0, 0.0, 0.0],
-                [x1 * x2, x3, x1 * x20, 0.0, 0.0],
-                [x1 * x3, -x2, x16 * x1, 0.0, 0.0],
+                [x1 * x2, x3, x2 * x6, 0.0, 0.0],
+                [x1 * x3, -x2, x6 * x3, 0.0, 0.0],
                 [0.0, 0.0, 0.0, 1.0, 0.0],
                 [0.0, 0.0, 0.0, 0.0, 1.0],
             ],
             d_matrix: [
                 [
-                    [x215 * x24 * (-2.0 * x216 - 2.0 * x29), x224, x229, x230, x232],
-                    [
-                        x224,
-                        -(x34 * (2.0 * x221 + 2.0 * x43 + 2.0 * x54 + 2.0 * x222) * x63),
-                        x233,
-                        x234,
-                        x235,
-                    ],
-                    [x229, x233, -(x34 * x87 * (2.0 * x227 + 2.0 * x101)), x236, x237],
-                    [x230, x234, x236, 0.0, x238],
-                    [x232, x235, x237, x238, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [
-                        -(x33 * x215 * (2.0 * x241 + 2.0 * x242 + 2.0 * x243)),
-                        x252,
-                        x260,
-                        x262,
-                        x264,
-                    ],
-                    [
-                        x252,
-                        x34 * (2.0 * x247 - 2.0 * x245 - 2.0 * x246 - 2.0 * x250) * x69,
-                        x265,
-                        x266,
-                        x267,
-                    ],
-                    [
-                        x260,
-                        x265,
-                        (2.0 * x254 - 2.0 * x253 - 2.0 * x257 - 2.0 * x258) * x34 * x93,
-                        x268,
-                        x269,
-                    ],
-                    [x262, x266, x268, 0.0, x270],
-                    [x264, x267, x269, x270, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
-                    [
-                        -((2.0 * (x272 * x30) + 2.0 * (x33 * x274) + 2.0 * (x24 * x276))
-                            * x215),
-                        x283,
-                        x289,
-                        x290,
-                        x293,
-                    ],
-                    [
-                        x283,
-                        -(x34
-                            * (2.0 * (x279 * x55) + 2.0 * (x294 * x69)
-                                + 2.0 * (x63 * x280))),
-                        x299,
-                        x301,
-                        x304,
-                    ],
-                    [
-                        x289,
-                        x299,
-                        -(x34 * (2.0 * x305 + 2.0 * x306 + 2.0 * x307) * x288),
-                        x311,
-                        x315,
-                    ],
-                    [x290, x301, x311, 0.0, x319],
-                    [x293, x304, x315, x319, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
+                    [0.0, 0.0, 0.0, 0.0, 0.0],
                 ],
                 [
+                    [x184 * (x64 * (2.0 - 2.0 * x17) + x185), x186, x187, x187, x189],
+                    [x186, x10 * (x21 * x191 - x26 * (x190 + 2.0 * x34)), x50, x50, x54],
                     [
-                        x36
-                            * (x331 * x11
-                                + x119
-                                    * (2.0 * x11
-                                        - x34 * (2.0 * x284 + 2.0 * x285 + 2.0 * x286))),
-                        x332,
-                        x338,
-                        x339,
-                        x340,
+                        x187,
+                        x50,
+                        (x13 * (2.0 * x38 - 2.0 * x192 + 2.0 * x39) - 2.0 * a_) * x51,
+                        x193,
+                        x50,
                     ],
-                    [
-                        x332,
-                        x11
-                            * (x114
-                                * (-2.0 * a_ - 2.0 * x40
-                                    - x34 * (2.0 * x295 + 2.0 * x296 + 2.0 * x297))
-                                + x36 * x341),
-                        x342,
-                        x343,
-                        x344,
-                    ],
-                    [
-                        x338,
-                        x342,
-                        m1
-                            * (-x34
-                                * (2.0 * (x337 * x87) + 2.0 * (x335 * x102)
-                                    + 2.0 * (x334 * x93)) - 2.0 * (d * x75)),
-                        x345,
-                        x347,
-                    ],
-                    [x339, x343, x345, 0.0, x348],
-                    [x340, x344, x347, x348, 0.0],
+                    [x187, x50, x193, 0.0, x50],
+                    [x189, x54, x50, x50, 0.0],
                 ],
                 [
+                    [x211 * (x66 * (2.0 - 2.0 * x14) + x185), x56, x212, x188, x56],
                     [
-                        x38
-                            * (x123
-                                * (2.0 * x9 + x34 * (2.0 * x291 + 2.0 * x292 + 2.0 * x365))
-                                + x331 * x9),
-                        x370,
-                        x372,
-                        x374,
-                        x376,
+                        x56,
+                        (x13 * (2.0 * x29 - 2.0 * x213 + 2.0 * x32) - 2.0 * a_) * x201,
+                        x53,
+                        x53,
+                        x214,
                     ],
-                    [
-                        x370,
-                        m2
-                            * (-x34
-                                * (2.0 * (x63 * x366) + 2.0 * (x368 * x69)
-                                    + 2.0 * (x367 * x55)) - 2.0 * (d * x48)),
-                        x377,
-                        x378,
-                        x379,
-                    ],
-                    [
-                        x372,
-                        x377,
-                        x9
-                            * (x38 * x341
-                                + x108
-                                    * (-2.0 * x84 - 2.0 * a_
-                                        - x34 * (2.0 * x312 + 2.0 * x313 + 2.0 * x371))),
-                        x380,
-                        x381,
-                    ],
-                    [x374, x378, x380, 0.0, x382],
-                    [x376, x379, x381, x382, 0.0],
+                    [x212, x53, x8 * (x23 * x191 - x43 * (2.0 * x41 + x215)), x216, x53],
+                    [x188, x53, x216, 0.0, x53],
+                    [x56, x214, x53, x53, 0.0],
                 ],
                 [
                     [0.0, 0.0, 0.0, 0.0, 0.0],
@@ -1895,153 +1571,125 @@ pub mod reduced_volterra {
                 ],
             ],
             d_force: [
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0, 0.0, 0.0],
                 [
-                    x104 * (x239 * x24 - x182 * x217),
-                    x34 * (x239 * x63 + x182 * x223),
-                    x34 * (x239 * x87 + x182 * x228),
-                    x239 * x81 * x105,
-                    (x182 * x231 + x239 * x59) * x116,
+                    x138 + (x21 * x112 + x140) * x139
+                        + ((x196 * x197 * x10 - x194 * x195) * d - x21 * x99) * x26
+                        + x199 * x10,
+                    x116 - x21 * x199 - x139 * (x70 - x10 * x112)
+                        + x26
+                            * (x13 * (x196 * x33 + x200 * x201 + x10 * x98) - x89 * x10
+                                + x196 * x28),
+                    (x13 * (x40 * x195 - x21 * x136 - x10 * (x109 + x200 * x26))
+                        - a_ * (x21 * x150 - 2.0 * x132)
+                        - d * ((x203 - 2.0 * x202) * u2 - x91 * x154)) * x26 + x204,
+                    (x13
+                        * (x21
+                            * ((x21 * (x164 - x206 + x207) + x69 * x10 * x205) * m1
+                                - x180 - x181) - x10 * (x168 + x209 * m1)) + x165 + x208)
+                        * x26 + x204,
+                    x210 * (x30 * x196 + x209 * x8),
                 ],
                 [
-                    (x33 * x271 + x244 * x181) * x104,
-                    x34 * (x271 * x69 - x181 * x251),
-                    x34 * (x271 * x93 - x259 * x181),
-                    (x89 * x271 - x261 * x181) * x105,
-                    x116 * (x67 * x271 - x181 * x263),
+                    (x147 - x23 * x217) * x146 - x79 * (x147 + x149)
+                        + x43 * (x23 * x110 + d * (x219 * x16 + x13 * x220 * x19)),
+                    x221
+                        + (x13
+                            * (x23 * x136 + x220 * x33 + x8 * (x43 * x222 - x90 - x97))
+                            - a_ * (x23 * x131 + 2.0 * x135)
+                            - (x127 * x130 + 2.0 * (x126 * u1)) * d) * x43,
+                    x8 * (x83 + x146 * x217) + x74 * x223
+                        + x43
+                            * (x219 * x31 - x8 * x107
+                                + x13 * (x40 * x219 + x8 * x109 - x222 * x51)),
+                    (x27 * x219 - x10 * x229) * x210,
+                    x221
+                        + x43
+                            * (x178 - x224 - x226
+                                + x13
+                                    * (x8 * (m2 * x229 - x90 - x183)
+                                        + x23 * (m2 * (x23 * x227 + x228 * x137) + x182))),
                 ],
                 [
-                    (x180 * x272 + x182 * x276 + x323 * x30 + x24 * x324
-                        - x0 * (x181 * x273 - x33 * x325)) * x104,
-                    x34
-                        * (x323 * x55 + x63 * x324 + x182 * x280 + x180 * x279
-                            - (-x181 * x282 - x325 * x69) * x0),
-                    x34 * (x87 * x324 - x326 * x288 + x102 * x323 - x327 * x93),
-                    (x81 * x324 - x328 - x327 * x89 + x323 * x97) * x105,
-                    x116
-                        * (x59 * x324 - x327 * x67 + x38 * (x182 * x275 - x329 - x330)
-                            + x323 * x53),
-                ],
-                [
-                    x196
-                        + x114
-                            * (x34 * (x356 * x30 - x328 + x33 * x357 + x358 * x24)
-                                - x36 * x168 - x170 * x349) + (x36 * x144 + x198) * x197
-                        + x360 * x11,
-                    m1
-                        * (x34 * (x357 * x69 - x170 * x326 + x356 * x55 + x358 * x63)
-                            - (x168 * x11 - x349 * x41) * d) - x36 * x360
-                        - x197 * (x136 - x361) + x148,
-                    (x34
-                        * (x182 * x337 + x357 * x93 + x102 * x356 + x358 * x87
-                            + x180 * x335 + x181 * x334)
-                        - (a_ * (x36 * x209 - 2.0 * (x142 * u1))
-                            + d * ((x363 - 2.0 * x362) * u2 - x187 * x213)) * d) * m1
-                        + x364,
-                    x114
-                        * (x353 - x351 + x174
-                            + x34
-                                * (x182 * x336 + (x89 * x357 + x356 * x97 + x358 * x81) * m1
-                                    + x180 * x225 + x181 * x333)) + x364,
-                    x346 * (x358 * x59 + x67 * x357 + x356 * x53),
-                ],
-                [
-                    x206 * (x207 - x38 * x383) - x128 * (x207 + x205)
-                        + x108
-                            * (x384 * x155
-                                + x34 * (x33 * x391 + x30 * x392 + x393 * x24 + x38 * x394)
-                                + x38 * x164),
-                    x395
-                        + m2
-                            * (x34
-                                * (x182 * x366 + x180 * x367 + x368 * x181 + x391 * x69
-                                    + x392 * x55 + x63 * x393)
-                                - d
-                                    * (d * (2.0 * (x166 * x192) + x194 * x189)
-                                        + a_ * (x38 * x190 + 2.0 * (x166 * x9)))),
-                    x9 * (x206 * x383 + x128 * x131) + x140 * x396
-                        + m2
-                            * (x34
-                                * (x102 * x392 + x87 * x393 - x394 * x155 + x391 * x93)
-                                - (x164 * x9 - x85 * x384) * d),
-                    x346 * (x97 * x392 + x89 * x391 + x81 * x393),
-                    x395
-                        + x108
-                            * (x34
-                                * ((x392 * x53 + x59 * x393 + x67 * x391) * m2 - x181 * x68
-                                    + x182 * x62 + x47 * x180) - x388 - x389 + x158),
-                ],
-                [
-                    (x13 * x400 - x34 * (-x30 * x406 - x24 * x407 - x33 * x408)
-                        - x19 * x404) * d - x409 + x70 * (x410 + x197) + x411
-                        + x74 * x396,
-                    x412 * u3
+                    x10 * (x21 * (x139 + x234) - (x230 - x13 * x232) * x26) - x235
+                        + x8 * (x23 * x223 + x43 * (x236 - x13 * x238)) + x239,
+                    x240 + x241 * u3
                         - m2
-                            * (d
-                                * (-(2.0 * x137 + 2.0 * x138) * a_
-                                    - (u1 * x192 + x194 * u3) * d) - u3 * x186)
-                        - x34 * (-x55 * x406 - x63 * x407 - x408 * x69) - x42 * x404
-                        - x149 - x37 * x410 + J2 * (x132 + x413) - 2.0 * x150
-                        + (x12 * u4 - x132 - x413) * J1,
-                    u2 * x414 - x39 * x128 - x400 * x86 + x183 + 2.0 * x184
-                        + (x136 - u5 * x10 - x415) * J1 + J2 * (x415 - x136)
-                        - (-x87 * x407 - x102 * x406 - x408 * x93) * x34
-                        - (d * (a_ * (2.0 * x134 - 2.0 * x133) + d * (x363 - x362))
-                            + a_ * x152) * m1,
-                    x73 * x415 + x136 * x71
-                        + (x403 - x34 * (-x97 * x406 - x89 * x408 - x81 * x407)) * x114,
-                    x38 * x199 + x416
-                        + x108
-                            * (x397 - x398
-                                - x34 * (-x59 * x407 - x67 * x408 - x406 * x53)),
+                            * ((-(u1 * x125 + x127 * u3) * d
+                                - a_ * (2.0 * x71 + 2.0 * x72)) * d - a_ * x84) + x11 * x139
+                        - x29 * x230 + x8 * (x55 * x242 + x141) - x117 - 2.0 * x118
+                        + x232 * x34 - x22 * x234,
+                    x243 - x24 * x79 + x41 * x238 - x9 * x146 + u2 * x244 + x120
+                        + 2.0 * x121 + x10 * (x245 - x13 * x64 * x242)
+                        - (d * (a_ * (2.0 * x68 - 2.0 * x67) + d * (x203 - x202))
+                            + a_ * x105) * m1 - x236 * x39,
+                    x243
+                        + (x247
+                            + x13
+                                * (x21 * (x237 + (x248 * x11 - x21 * x247) * m1)
+                                    - x10 * x253)) * x26 + x245 * x10,
+                    x240 + x254
+                        + x43
+                            * (x249 - x250
+                                - x13
+                                    * (-x8 * x253
+                                        - x23 * (m2 * (x23 * x251 - x9 * x252) + x231))),
                 ],
                 [
-                    d
-                        * (x13 * x418 - x12 * x417
-                            - x34 * (-x30 * x423 - x424 * x33 - x425 * x24)) + x410 * x12
-                        + 2.0 * x149 - x416 + x150 + u3 * x426 - x37 * x197,
-                    x11 * (x36 * (x146 - x197 - x359) + x417 * x41) + x409
-                        + 2.0 * (u5 * x108 * x48) - x427
-                        - x34 * (-x425 * x63 - x423 * x55 - x424 * x69),
-                    x414 * u1 - x201 - (x428 + d * (d * (x212 + x214) + a_ * x429)) * m1
-                        - (-x424 * x93 - x102 * x423 - x87 * x425) * x34 - 2.0 * x202
-                        - x430 - x418 * x86 + x432,
-                    x432 + x114 * (x421 - x34 * (-x81 * x425 - x424 * x89 - x97 * x423)),
-                    (-x34 * (-x423 * x53 - x424 * x67 - x425 * x59) - 2.0 * x161) * x108,
-                ],
-                [
-                    u2 * x426 - 2.0 * x183 - x184 - (x127 - x125) * x10 + x145 * x11
-                        + x206 * x39
+                    x11 * x234 + 2.0 * x117
                         + d
-                            * (x10 * x433 - x434 * x19
-                                - x34 * (-x441 * x24 - x33 * x442 - x443 * x30)),
-                    2.0 * x201 - x34 * (-x443 * x55 - x441 * x63 - x69 * x442)
-                        - m2 * (d * (d * (x193 - x195) + a_ * x444) - x428) + x412 * u1
-                        + x202 - x431 + x445 - x434 * x42,
-                    x9 * (x433 * x85 - x38 * x396) - x411 + 2.0 * (x114 * u4 * x75)
-                        + x427 - x34 * (-x442 * x93 - x441 * x87 - x102 * x443),
-                    x114 * (-x34 * (-x89 * x442 - x441 * x81 - x443 * x97) - 2.0 * x177),
-                    x108 * (x437 + x438 - x34 * (-x67 * x442 - x443 * x53 - x441 * x59))
-                        + x445,
+                            * (x12 * (x258 - x13 * x260)
+                                - (x10 * x87 - x13 * x257) * x51) + x118 - x254 + u3 * x261
+                        - x22 * x139,
+                    x184 * (x114 - x139 - x233)
+                        + (x255 * x28 + x12 * (2.0 * (u5 * a_) - x262) + x257 * x34) * d
+                        + x235 - x263,
+                    x244 * u1 - x143 - x258 * x39 - x264 - 2.0 * x144
+                        - (x265 + d * (d * (x153 + x155) + a_ * x266)) * m1
+                        + x10 * (x262 * x26 + x198) + x267 + x41 * x260,
+                    (x268
+                        + x13
+                            * (x21 * (x259 + (x269 * x10 - x21 * x268) * m1)
+                                - x273 * x10)) * x26 + x198 * x10 + x267,
+                    x43
+                        * (x23 * x13
+                            * (x12 * (2.0 * x176 - x270 - x271 - x272) + x87 * x51)
+                            - (2.0 * x105 - x13 * x273) * x8),
                 ],
                 [
-                    x11 * x446
-                        + x119
-                            * (x34 * (x448 * x24 + x33 * x449 + x30 * x450) - x11 * x429)
-                        - x136 * J1,
-                    x114 * (x34 * (x450 * x55 + x448 * x63 + x449 * x69) + x429 * x41)
-                        - x198 * J1 - x36 * x446,
-                    x114 * (x34 * (x102 * x450 + x87 * x448 + x449 * x93) + x447 * x75),
-                    (x97 * x450 + x81 * x448 + x449 * x89) * x114 * x105,
-                    (x450 * x53 + x448 * x59 + x449 * x67) * x120,
+                    (x201 * (x218 - x13 * x276) - x19 * (x277 - x13 * x279)) * d
+                        + u2 * x261 - 2.0 * x120 - x121 - (x78 - x76) * x9 + x113 * x10
+                        + x146 * x24,
+                    2.0 * x143 + x241 * u1 + (x280 + x47 * x281) * x8 - x277 * x29 + x264
+                        + x144 - m2 * (d * ((x126 - x128) * d + a_ * x282) - x265)
+                        + x279 * x34 - x267,
+                    d * (x276 * x41 + (2.0 * (a_ * u4) - x13 * x281) * x19 + x31 * x275)
+                        - x239 + x263 - x211 * x223,
+                    (x21 * x13 * (x19 * (x283 + 2.0 * x161) + x201 * x75)
+                        + x10 * (-2.0 * x84 - x288 * x13)) * x26,
+                    (x284 + x285
+                        - x13
+                            * (-x288 * x8
+                                - x23 * (m2 * (x287 * x8 + x23 * x286) + x278))) * x43
+                        + x264 + x280 * x8,
                 ],
                 [
-                    (x9 * x444 + x34 * (x453 * x30 + x33 * x454 + x455 * x24)) * x123
-                        - x140 * J1 - x132 * x451,
-                    x108 * (x34 * (x455 * x63 + x453 * x55 + x454 * x69) + x452 * x48),
-                    x108 * (x34 * (x454 * x93 + x453 * x102 + x87 * x455) + x444 * x85)
-                        - x451 * x205 + J1 * x207,
-                    (x81 * x455 + x453 * x97 + x89 * x454) * x120,
-                    x108 * x116 * (x453 * x53 + x59 * x455 + x67 * x454),
+                    x10 * ((x274 * x194 + x197 * x266) * x64 + x289) - x70 * J1,
+                    x26 * (x266 * x35 + x47 * x290) - x140 * J1 - x21 * x289,
+                    -(x274 * x193),
+                    0.0,
+                    x48 * (x290 + x23 * x266),
+                ],
+                [
+                    x8 * (x66 * (x282 + x13 * (-m2 * x282 - x256 * x19)) - x82 * x291)
+                        - x74 * J1,
+                    x201 * (x13 * (x292 * x43 - x256 * x33) + a_ * x256),
+                    x147 * J1 - x291 * x149
+                        + (x13 * (x40 * x282 - x292 * x51) + x31 * x282) * x43,
+                    x48 * (x21 * x282 - x292 * x10),
+                    0.0,
                 ],
             ],
         }

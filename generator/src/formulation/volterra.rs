@@ -260,10 +260,14 @@ pub fn by_schur_complement(model: &Model, mech: &Mechanics, ignorable: &[usize],
     // combination of already simplified entries is left as it is (simplifying it costs more
     // than the rest of the reduction and finds little: 1.1 s of 2.4 s on the 50-link chain).
     let small = m <= super::mechanics::MAX_FOUR_ANGLE_COORDINATES;
+    // A free system's shape equations do not depend on where it is or how it is turned: the
+    // coordinates an entry does not depend on (decided exactly) are set to zero before it is
+    // simplified, which takes the absolute orientation's sines and cosines out of it (scene 2).
     let simplify = |e: Expr| {
         if !small {
             return e;
         }
+        let e = crate::symbolic::zero::settle_absent(e, &model.coordinates);
         let s = tidy.of(e);
         if crate::symbolic::expr::dag_ops(&[s]) < crate::symbolic::expr::dag_ops(&[e]) { s } else { e }
     };

@@ -147,6 +147,38 @@ pub fn prune_absent(e: Expr, symbols: &[Symbol]) -> Expr {
     out
 }
 
+/// `e` with each symbol of `symbols` it does not depend on set to zero, where `e` equals
+/// itself so (`e - e|s=0` identically zero, decided as [`zero_test`] decides): a coordinate
+/// that only cancels through identities (the absolute orientation of a free system in its
+/// shape's equations) leaves, and its sines and cosines with it. A symbol whose zero is
+/// outside `e`'s domain (a division by `sin s`) fails the test and stays.
+///
+/// ```
+/// use generator::symbolic::{Expr, Symbol, zero::{is_identically_zero, settle_absent}};
+/// let (a, b) = (Symbol::new("a"), Symbol::new("b"));
+/// // (cos a cos b + sin a sin b)^2 + (sin a cos b - cos a sin b)^2 = 1, for every a.
+/// let (ca, sa, cb, sb) = (a.expr().cos(), a.expr().sin(), b.expr().cos(), b.expr().sin());
+/// let e = (ca * cb + sa * sb).powi(2) + (sa * cb - ca * sb).powi(2) + b.expr();
+/// let settled = settle_absent(e, &[a]);
+/// assert!(!settled.contains(a) && is_identically_zero(settled - 1 - b.expr()));
+/// // 1 / sin(a) does depend on a.
+/// let f = b.expr() / a.expr().sin();
+/// assert_eq!(settle_absent(f, &[a]), f);
+/// ```
+pub fn settle_absent(e: Expr, symbols: &[Symbol]) -> Expr {
+    let mut out = e;
+    for s in symbols {
+        if !out.contains(*s) {
+            continue;
+        }
+        let settled = out.subs(&std::collections::HashMap::from([(*s, Expr::zero())]));
+        if zero_test(out - settled).is_zero() {
+            out = settled;
+        }
+    }
+    out
+}
+
 /// `zero_test(e).is_zero()`.
 pub fn is_identically_zero(e: Expr) -> bool {
     zero_test(e).is_zero()
