@@ -211,30 +211,26 @@ impl Bodies {
 /// taken by something else in the body.
 fn rename_inputs(body: &mut Body, rename: &StdHashMap<String, (Ident, syn::Expr)>) -> bool {
     let mut names = Names::default();
-    for s in &mut body.stmts {
-        names.visit_stmt_mut(s);
-    }
-    for e in &mut body.outputs {
-        names.visit_expr_mut(e);
-    }
-    for h in &mut body.helpers {
-        names.visit_item_mut(h);
-    }
+    visit_body(body, &mut names);
     let new: HashSet<String> = rename.values().map(|(i, _)| i.to_string()).collect();
     if names.0.iter().any(|n| new.contains(n) && !rename.contains_key(n)) {
         return false;
     }
-    let mut renamer = Renamer(rename);
+    visit_body(body, &mut Renamer(rename));
+    true
+}
+
+/// `visitor` over a body's statements, outputs and helpers.
+fn visit_body(body: &mut Body, visitor: &mut impl VisitMut) {
     for s in &mut body.stmts {
-        renamer.visit_stmt_mut(s);
+        visitor.visit_stmt_mut(s);
     }
     for e in &mut body.outputs {
-        renamer.visit_expr_mut(e);
+        visitor.visit_expr_mut(e);
     }
     for h in &mut body.helpers {
-        renamer.visit_item_mut(h);
+        visitor.visit_item_mut(h);
     }
-    true
 }
 
 /// Every identifier of a syntax tree (collected, not changed).
