@@ -147,7 +147,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
         let tail = derived.map(|d| {
             let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
             let mut em = Emitter::new(model, options, seam, &shared);
-            em.bodies = Bodies::new(d.equations.last().map(|e| e.kind).into_iter().collect());
+            em.bodies = Bodies::new(split_between_emitters(d.equations.iter().map(|e| e.kind).collect()).1);
             let names = d.equations.iter().map(|e| e.name().to_string()).collect();
             (em.formulations_and_model_fn(d.equations.last(), names, &shared), d)
         });
@@ -202,12 +202,12 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
 /// last), so that a body reused there is reused here.
 pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &Options) -> Result<Vec<(String, String)>, ModelError> {
     let shared = FromMechanics::new(&d.mechanics, &d.ignorable, &model.velocities, model.t);
-    let last = d.equations.len().saturating_sub(1);
-    let kinds: Vec<seam::FormulationKind> = d.equations.iter().map(|e| e.kind).collect();
+    let (sent, kept) = split_between_emitters(d.equations.iter().map(|e| e.kind).collect());
+    let last = sent.len();
     let mut second = Emitter::new(model, options, seam_path(model, options)?, &shared);
-    second.bodies = Bodies::new(kinds[..last].to_vec());
+    second.bodies = Bodies::new(sent);
     let mut here = Emitter::new(model, options, seam_path(model, options)?, &shared);
-    here.bodies = Bodies::new(kinds[last..].to_vec());
+    here.bodies = Bodies::new(kept);
     let mut out = Vec::new();
     for (k, f) in d.equations.iter().enumerate() {
         let (em, group) = if k < last { (&mut second, &d.equations[k + 1..last]) } else { (&mut here, &[][..]) };
@@ -224,6 +224,17 @@ pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
         out.push((f.name().to_string(), description));
     }
     Ok(out)
+}
+
+/// The formulations `kinds` (in the order they are derived) as [`generate`]'s two emitters share
+/// them: every one but the last on the second thread, the last on the deriving thread.
+///
+/// ```text
+/// [Lagrange, Maggi, Kane, ReducedVolterra] -> ([Lagrange, Maggi, Kane], [ReducedVolterra])
+/// ```
+fn split_between_emitters(mut kinds: Vec<seam::FormulationKind>) -> (Vec<seam::FormulationKind>, Vec<seam::FormulationKind>) {
+    let last = kinds.pop();
+    (kinds, last.into_iter().collect())
 }
 
 /// The deriving thread's side of [`generate`]: the mechanics and every formulation but the
@@ -272,10 +283,9 @@ fn analyze_and_emit(inbox: Receiver<Job>, ignorable_back: Sender<Result<(Vec<usi
     let Ok(chosen) = chosen else { return Ok(Part::empty()) };
     let shared = FromMechanics::new(&mech, &chosen, &model.velocities, model.t);
     let mut em = Emitter::new(&model, options, seam_path(&model, options)?, &shared);
-    // Every requested formulation but the last, in the order they are derived (the paper's).
-    let mut sent: Vec<seam::FormulationKind> = seam::FormulationKind::ALL.into_iter().filter(|k| options.formulations.iter().any(|f| f.kind() == *k)).collect();
-    sent.pop();
-    em.bodies = Bodies::new(sent);
+    // The requested formulations in the order they are derived (the paper's).
+    let requested = seam::FormulationKind::ALL.into_iter().filter(|k| options.formulations.iter().any(|f| f.kind() == *k)).collect();
+    em.bodies = Bodies::new(split_between_emitters(requested).0);
     let mut head = vec![em.header(&shared)];
     head.push(em.params());
     head.push(super::seam::failure_import(&em.seam));
@@ -1030,5 +1040,13 @@ mod tests {
     fn comments_hold_one_line_whatever_the_text() {
         assert_eq!(super::one_line("a\nfn evil() {}\r\u{1b}"), "a\\nfn evil() {}\\r\\u{1b}");
         assert_eq!(super::one_line("cart_pendulum.ron"), "cart_pendulum.ron");
+    }
+
+    #[test]
+    fn every_formulation_but_the_last_goes_to_the_second_emitter() {
+        use seam::FormulationKind::{Kane, Lagrange, Maggi, ReducedVolterra};
+        assert_eq!(super::split_between_emitters(vec![Lagrange, Maggi, Kane, ReducedVolterra]), (vec![Lagrange, Maggi, Kane], vec![ReducedVolterra]));
+        assert_eq!(super::split_between_emitters(vec![Kane]), (vec![], vec![Kane]));
+        assert_eq!(super::split_between_emitters(vec![]), (vec![], vec![]));
     }
 }
