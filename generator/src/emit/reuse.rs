@@ -162,7 +162,9 @@ impl Bodies {
     /// binds them, the outputs in `outputs`' order and the constants lowered here (they cost no
     /// operation, so the counts carry over).
     pub fn find(&self, signature: &Signature, outputs: &[Expr]) -> Option<Result<Body, LowerError>> {
-        if self.built.is_empty() {
+        // Naming the outputs as rates costs a pass over them: only where a body of this name was built.
+        let same_name = |b: &Built| b.key.name == signature.name && b.key.args == signature.args && b.key.max_lets == signature.max_lets;
+        if !self.built.iter().any(same_name) {
             return None;
         }
         let (key, named, position) = self.key(signature, outputs)?;
