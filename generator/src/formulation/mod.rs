@@ -23,6 +23,7 @@ pub mod mechanics;
 pub mod power;
 pub mod recursive;
 pub mod reduced;
+mod spatial;
 pub mod volterra;
 
 pub use equations::{Equations, Method};
