@@ -13,6 +13,7 @@
 //! assert_eq!(d.ignorable, vec![2]);
 //! ```
 
+pub mod articulated;
 pub mod classical;
 pub mod equations;
 pub mod ignorable;

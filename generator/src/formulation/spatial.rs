@@ -60,6 +60,10 @@ impl Motion {
     pub(super) fn cross_force(&self, f: &Force) -> Force {
         Force { n: add3(&cross(&self.w, &f.n), &cross(&self.v, &f.f)), f: cross(&self.w, &f.f) }
     }
+    /// `k self`.
+    pub(super) fn scale(&self, k: Expr) -> Motion {
+        Motion { w: scale3(k, &self.w), v: scale3(k, &self.v) }
+    }
     /// The power `self . f`.
     pub(super) fn power(&self, f: &Force) -> Expr {
         dot(&self.w, &f.n) + dot(&self.v, &f.f)
@@ -75,6 +79,10 @@ impl Force {
     }
     pub(super) fn add(&self, o: &Force) -> Force {
         Force { n: add3(&self.n, &o.n), f: add3(&self.f, &o.f) }
+    }
+    /// `k self`.
+    pub(super) fn scale(&self, k: Expr) -> Force {
+        Force { n: scale3(k, &self.n), f: scale3(k, &self.f) }
     }
     /// This force (the child's) in the parent's components, about its origin.
     pub(super) fn in_parent(&self, joint: &Joint) -> Force {
@@ -174,5 +182,90 @@ impl Program {
             }
         }
         Inertia { m, h, i: out }
+    }
+}
+
+/// `[a]x`: the matrix of the cross product `a x .`.
+pub(super) fn skew(a: &[Expr; 3]) -> Matrix {
+    let z = Expr::zero();
+    Matrix::from_rows(vec![vec![z, -a[2], a[1]], vec![a[2], z, -a[0]], vec![-a[1], a[0], z]])
+}
+
+/// A symmetric spatial inertia in blocks, `[A B; B^T C]` (`n = A w + B v`, `f = B^T w + C v`):
+/// a rigid body's, or an articulated body's (Featherstone 7.1), which is no rigid body's.
+#[derive(Clone, Debug)]
+pub(super) struct SpatialInertia {
+    pub(super) a: Matrix,
+    pub(super) b: Matrix,
+    pub(super) c: Matrix,
+}
+
+impl SpatialInertia {
+    /// The rigid body `i`: `A = I_o`, `B = [h]x`, `C = m 1`.
+    pub(super) fn rigid(i: &Inertia) -> SpatialInertia {
+        SpatialInertia { a: i.i.clone(), b: skew(&i.h), c: Matrix::identity(3).map(|e| if e.is_zero() { *e } else { i.m }) }
+    }
+    pub(super) fn add(&self, o: &SpatialInertia) -> SpatialInertia {
+        SpatialInertia { a: self.a.add(&o.a), b: self.b.add(&o.b), c: self.c.add(&o.c) }
+    }
+    /// `I v`.
+    pub(super) fn apply(&self, v: &Motion) -> Force {
+        Force { n: add3(&mat_vec(&self.a, &v.w), &mat_vec(&self.b, &v.v)), f: add3(&mat_vec(&self.b.transpose(), &v.w), &mat_vec(&self.c, &v.v)) }
+    }
+    /// `I - k U U^T` for the force `U = (n, f)`.
+    pub(super) fn minus_outer(&self, u: &Force, k: Expr) -> SpatialInertia {
+        let outer = |x: &[Expr; 3], y: &[Expr; 3], m: &Matrix| {
+            let mut out = m.clone();
+            for r in 0..3 {
+                for s in 0..3 {
+                    if !x[r].is_zero() && !y[s].is_zero() {
+                        out.set(r, s, m.get(r, s) - k * x[r] * y[s]);
+                    }
+                }
+            }
+            out
+        };
+        SpatialInertia { a: outer(&u.n, &u.n, &self.a), b: outer(&u.n, &u.f, &self.b), c: outer(&u.f, &u.f, &self.c) }
+    }
+    /// This inertia (the child's) about the parent's origin, in its components, `X^T I X`:
+    /// with `A1 = R A R^T` (likewise `B1`, `C1`) and `T = [t]x`,
+    /// `A' = A1 - B1 T - (B1 T)^T - T C1 T`, `B' = B1 + T C1`, `C' = C1`.
+    pub(super) fn to_parent(&self, joint: &Joint) -> SpatialInertia {
+        let r = &joint.rotation;
+        let rt = r.transpose();
+        let turn = |m: &Matrix| r.mul(m).mul(&rt);
+        let (a1, b1, c1) = (turn(&self.a), turn(&self.b), turn(&self.c));
+        let t = skew(&joint.translation);
+        let b1t = b1.mul(&t);
+        let tc1 = t.mul(&c1);
+        let tc1t = tc1.mul(&t);
+        let mut a = Matrix::zeros(3, 3);
+        for i in 0..3 {
+            for j in 0..3 {
+                a.set(i, j, a1.get(i, j) - b1t.get(i, j) - b1t.get(j, i) - tc1t.get(i, j));
+            }
+        }
+        SpatialInertia { a, b: b1.add(&tc1), c: c1 }
+    }
+}
+
+impl Program {
+    /// Each entry of `i` as a named intermediate (the symmetric blocks' upper triangles).
+    pub(super) fn spatial_inertia(&mut self, i: SpatialInertia) -> SpatialInertia {
+        let symmetric = |m: &Matrix, prog: &mut Program| {
+            let mut out = Matrix::zeros(3, 3);
+            for r in 0..3 {
+                for s in r..3 {
+                    let e = prog.bind(m.get(r, s));
+                    out.set(r, s, e);
+                    out.set(s, r, e);
+                }
+            }
+            out
+        };
+        let a = symmetric(&i.a, self);
+        let c = symmetric(&i.c, self);
+        let b = i.b.map(|e| self.bind(*e));
+        SpatialInertia { a, b, c }
     }
 }

@@ -1,0 +1,367 @@
+//! Kane's accelerations of a tree of frames by the articulated-body algorithm (Featherstone,
+//! *Rigid Body Dynamics Algorithms*, 7.3): `u'` directly, in `O(n)` operations on a chain of `n`
+//! links, with no mass matrix and no dense solve.
+//!
+//! The composite-body recursion ([`super::recursive`]) still forms the `n x n` matrix that a
+//! dense `L D L^T` then factors (`n^3 / 3` operations); here each joint's axes are eliminated
+//! where they hang, from the leaves in:
+//!
+//! - the joints' own rates `w = J u`: each frame's relative velocity `v_rel = S u + s` has
+//!   columns that are numeric multiples of a few axes `S'` (one for a hinge written in
+//!   relative angles `q(i+1) - q(i)` of absolute coordinates, whose two columns are `+-` the
+//!   same axis), so `v_rel = S' w + s` with `J` a numeric matrix, triangular in some order of
+//!   the joints (else: no recursion);
+//! - the applied forces `tau = J^-T U_K` by substitution;
+//! - forward: velocities `v_k = X v_parent + v_rel` and bias accelerations
+//!   `c_k = v_k x v_rel + d/dt v_rel` at `u' = 0`;
+//! - backward: articulated inertias and bias forces
+//!   `I^A_k = I_k + sum_children X^T (I^A - U D^-1 U^T) X`,
+//!   `p^A_k = v_k x* I_k v_k + sum_children X^T (p^A + I^a c + U D^-1 (tau - S'^T p^A))`
+//!   with `U = I^A S'` and `D = S'^T U`;
+//! - forward: `a' = X a_parent + c`, `w' = D^-1 (tau - S'^T p^A - U^T a')`, `a = a' + S' w'`;
+//! - `u' = J^-1 w'` by substitution.
+//!
+//! The pivots `D` (each joint's articulated inertia along its axes; an `L D L^T` of `D` for a
+//! joint of several axes) vanish exactly where the mass matrix is singular: they are the checks
+//! a right-hand side makes before it divides. Joints of several axes are taken on the world
+//! alone (a floating base).
+//!
+//! ```
+//! use generator::formulation::{articulated, mechanics, volterra};
+//! let model = generator::model::load("../models/pendulum_on_cart_5.ron").unwrap();
+//! let mech = mechanics::derive(&model);
+//! let kane = volterra::derive(&model, &mech, &[], &model.quasi_full).unwrap();
+//! let aba = articulated::derive(&model, &mech, &kane).unwrap();
+//! assert_eq!((aba.accelerations.len(), aba.pivots.len()), (6, 6));
+//! ```
+
+use super::mechanics::Mechanics;
+use super::recursive::{Tree, tree};
+use super::spatial::{Force, Motion, Program, SpatialInertia, zero3};
+use super::volterra::Volterra;
+use crate::model::Model;
+use crate::symbolic::transfer::{Transfer, Visitor};
+use crate::symbolic::{Expr, Symbol};
+
+/// Kane's accelerations as a program: `definitions` evaluated in order, then `accelerations`
+/// (`u'`, in Kane's order of the quasi-velocities) in terms of them, the state, the parameters
+/// and `t`.
+#[derive(Clone, Debug)]
+pub struct Articulated {
+    /// Intermediate values, each defined from the inputs and earlier ones.
+    pub definitions: Vec<(Symbol, Expr)>,
+    /// `u'`.
+    pub accelerations: Vec<Expr>,
+    /// The joints' pivots `D`, each to be checked nonzero before the accelerations are read.
+    pub pivots: Vec<Expr>,
+    /// Every coordinate's rate `q' = W u + X`.
+    pub qdot: Vec<Expr>,
+}
+
+impl Transfer for Articulated {
+    fn visit(&mut self, v: &mut dyn Visitor) {
+        for (s, e) in &mut self.definitions {
+            s.visit(v);
+            e.visit(v);
+        }
+        self.accelerations.visit(v);
+        self.pivots.visit(v);
+        self.qdot.visit(v);
+    }
+}
+
+/// One axis of a joint: its motion `S'` and its rate `w = sum_c J[c] u_c` (numeric `J[c]`).
+struct Axis {
+    node: usize,
+    motion: Motion,
+    row: Vec<(usize, Expr)>,
+}
+
+/// The joints' axes: each column of a joint's `S` a numeric multiple of one of its axes.
+/// `None` when a column is another combination of them.
+fn axes(t: &Tree, mech: &Mechanics) -> Vec<Axis> {
+    let mut out: Vec<Axis> = Vec::new();
+    for (node, rates) in t.rates.iter().enumerate() {
+        let Some(rates) = rates else { continue };
+        let first = out.len();
+        for (c, s) in &rates.columns {
+            let multiple = out[first..].iter().position(|axis| {
+                let (a, b) = (components(&axis.motion), components(s));
+                let Some(k) = a.iter().position(|e| !e.is_zero()) else { return false };
+                let ratio = mech.tidy.of(b[k] / a[k]);
+                ratio.as_num().is_some() && a.iter().zip(&b).all(|(x, y)| mech.tidy.of(*y - ratio * *x).is_zero())
+            });
+            match multiple {
+                Some(j) => {
+                    let axis = &out[first + j];
+                    let k = components(&axis.motion).iter().position(|e| !e.is_zero()).expect("an axis is not zero");
+                    let ratio = mech.tidy.of(components(s)[k] / components(&axis.motion)[k]);
+                    out[first + j].row.push((*c, ratio));
+                }
+                None => out.push(Axis { node, motion: *s, row: vec![(*c, Expr::one())] }),
+            }
+        }
+    }
+    out
+}
+
+fn components(m: &Motion) -> [Expr; 6] {
+    [m.w[0], m.w[1], m.w[2], m.v[0], m.v[1], m.v[2]]
+}
+
+/// An order of the axes in which `J` is lower triangular: each axis's row holds one column
+/// not held by the rows before it (its pivot, returned beside it). `None` where there is none.
+fn triangular(axes: &[Axis], p: usize) -> Option<Vec<(usize, usize)>> {
+    let mut solved = vec![false; p];
+    let mut placed = vec![false; axes.len()];
+    let mut order = Vec::with_capacity(axes.len());
+    while order.len() < axes.len() {
+        let next = (0..axes.len()).find_map(|d| {
+            if placed[d] {
+                return None;
+            }
+            let mut open = axes[d].row.iter().filter(|(c, _)| !solved[*c]);
+            match (open.next(), open.next()) {
+                (Some((c, _)), None) => Some((d, *c)),
+                _ => None,
+            }
+        })?;
+        placed[next.0] = true;
+        solved[next.1] = true;
+        order.push(next);
+    }
+    Some(order)
+}
+
+/// The coefficient of column `c` in `row`.
+fn coefficient(row: &[(usize, Expr)], c: usize) -> Option<Expr> {
+    row.iter().find(|(k, _)| *k == c).map(|(_, e)| *e)
+}
+
+/// `x = D^-1 b` for the symmetric `D` of a joint of several axes, by an unrolled `L D L^T`
+/// whose pivots are pushed to `pivots`.
+fn solve_small(prog: &mut Program, d: &[Vec<Expr>], b: &[Expr], pivots: &mut Vec<Expr>) -> Vec<Expr> {
+    let r = b.len();
+    let mut l = vec![vec![Expr::zero(); r]; r];
+    let mut diag = vec![Expr::zero(); r];
+    let mut inv = vec![Expr::zero(); r];
+    for j in 0..r {
+        let dj = prog.bind(d[j][j] - Expr::sum((0..j).map(|k| l[j][k] * l[j][k] * diag[k])));
+        pivots.push(dj);
+        diag[j] = dj;
+        inv[j] = prog.bind(dj.recip());
+        for i in j + 1..r {
+            l[i][j] = prog.bind((d[i][j] - Expr::sum((0..j).map(|k| l[i][k] * l[j][k] * diag[k]))) * inv[j]);
+        }
+    }
+    let mut y = vec![Expr::zero(); r];
+    for i in 0..r {
+        y[i] = prog.bind(b[i] - Expr::sum((0..i).map(|k| l[i][k] * y[k])));
+    }
+    let mut x = vec![Expr::zero(); r];
+    for i in (0..r).rev() {
+        x[i] = prog.bind(y[i] * inv[i] - Expr::sum((i + 1..r).map(|k| l[k][i] * x[k])));
+    }
+    x
+}
+
+/// Kane's accelerations of `model` by the articulated-body algorithm, from its Kane form
+/// `kane` (for `q' = W u + X` and the applied forces `U_K`). `None` where the tree's joints do
+/// not split the quasi-velocities into one rate per axis by a triangular `J`, or a joint of
+/// several axes hangs below another frame.
+pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articulated> {
+    let t = tree(model, mech, kane)?;
+    let p = kane.u.len();
+    let axes = axes(&t, mech);
+    if axes.len() != p {
+        return None;
+    }
+    let order = triangular(&axes, p)?;
+    let nodes = t.joints.len();
+    let mut by_node: Vec<Vec<usize>> = vec![Vec::new(); nodes];
+    for (d, axis) in axes.iter().enumerate() {
+        by_node[axis.node].push(d);
+    }
+    if (1..nodes).any(|k| by_node[k].len() > 1 && t.joints[k].as_ref().is_some_and(|j| j.parent != 0)) {
+        return None;
+    }
+    let mut prog = Program { definitions: Vec::new(), prefix: "aba" };
+    // tau = J^-T U_K: J^T is upper triangular in the order, so from the last axis back.
+    let mut tau = vec![Expr::zero(); p];
+    for (at, &(d, c)) in order.iter().enumerate().rev() {
+        let later = order[at + 1..].iter().filter_map(|&(e, _)| coefficient(&axes[e].row, c).map(|k| k * tau[e]));
+        let pivot = coefficient(&axes[d].row, c).expect("the pivot is in its row");
+        tau[d] = prog.bind((kane.u_ni[c] - Expr::sum(later)) / pivot);
+    }
+    // Forward: velocities and bias accelerations.
+    let still = Motion { w: zero3(), v: zero3() };
+    let mut velocity = vec![still; nodes];
+    let mut bias = vec![still; nodes];
+    for k in 1..nodes {
+        let (Some(joint), Some(r)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
+        let v = prog.motion(velocity[joint.parent].in_child(joint).add(&r.relative));
+        bias[k] = prog.motion(v.cross_motion(&r.relative).add(&r.drift));
+        velocity[k] = v;
+    }
+    // Backward: articulated inertias and bias forces.
+    let mut inertia: Vec<SpatialInertia> = t.own.iter().map(SpatialInertia::rigid).collect();
+    let mut force: Vec<Force> = (0..nodes)
+        .map(|k| if t.own[k].is_zero() { Force::zero() } else { velocity[k].cross_force(&t.own[k].apply(&velocity[k])) })
+        .collect();
+    let mut pivots = Vec::new();
+    // Per axis: U = I^A S', and D^-1 with its joint's other entries (one axis: 1 / D).
+    let mut u_of = vec![Force::zero(); p];
+    let mut reciprocal = vec![Expr::zero(); p];
+    let mut free = vec![Expr::zero(); p];
+    let mut joint_d: Vec<Vec<Vec<Expr>>> = vec![Vec::new(); nodes];
+    for k in (1..nodes).rev() {
+        let (Some(joint), Some(_)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
+        let ia = prog.spatial_inertia(inertia[k].clone());
+        let pa = prog.force(force[k]);
+        for &d in &by_node[k] {
+            u_of[d] = prog.force(ia.apply(&axes[d].motion));
+            free[d] = prog.bind(tau[d] - axes[d].motion.power(&pa));
+        }
+        let dm: Vec<Vec<Expr>> = by_node[k].iter().map(|&i| by_node[k].iter().map(|&j| prog.bind(axes[i].motion.power(&u_of[j]))).collect()).collect();
+        if let [d] = by_node[k][..] {
+            pivots.push(dm[0][0]);
+            reciprocal[d] = prog.bind(dm[0][0].recip());
+        }
+        joint_d[k] = dm;
+        if joint.parent == 0 {
+            continue;
+        }
+        let (ia_passed, pa_passed) = match by_node[k][..] {
+            [] => (ia.clone(), pa.add(&ia.apply(&bias[k]))),
+            [d] => {
+                let passed = ia.minus_outer(&u_of[d], reciprocal[d]);
+                let pa = pa.add(&passed.apply(&bias[k])).add(&u_of[d].scale(reciprocal[d] * free[d]));
+                (passed, pa)
+            }
+            _ => unreachable!("joints of several axes hang from the world"),
+        };
+        inertia[joint.parent] = inertia[joint.parent].add(&ia_passed.to_parent(joint));
+        force[joint.parent] = force[joint.parent].add(&pa_passed.in_parent(joint));
+    }
+    // Forward: accelerations.
+    let mut accel = vec![still; nodes];
+    let mut w_dot = vec![Expr::zero(); p];
+    for k in 1..nodes {
+        let (Some(joint), Some(_)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
+        let a_prime = accel[joint.parent].in_child(joint).add(&bias[k]);
+        let axes_k = &by_node[k];
+        let rhs: Vec<Expr> = axes_k.iter().map(|&d| free[d] - a_prime.power(&u_of[d])).collect();
+        let solved = match axes_k[..] {
+            [] => Vec::new(),
+            [d] => vec![prog.bind(reciprocal[d] * rhs[0])],
+            _ => solve_small(&mut prog, &joint_d[k], &rhs, &mut pivots),
+        };
+        let mut a = a_prime;
+        for (&d, w) in axes_k.iter().zip(&solved) {
+            w_dot[d] = *w;
+            a = a.add(&axes[d].motion.scale(*w));
+        }
+        accel[k] = if axes_k.is_empty() { a } else { prog.motion(a) };
+    }
+    // u' = J^-1 w': J is lower triangular in the order.
+    let mut u_dot = vec![Expr::zero(); p];
+    for &(d, c) in &order {
+        let known = axes[d].row.iter().filter(|(k, _)| *k != c).map(|(k, e)| *e * u_dot[*k]);
+        let pivot = coefficient(&axes[d].row, c).expect("the pivot is in its row");
+        u_dot[c] = prog.bind((w_dot[d] - Expr::sum(known)) / pivot);
+    }
+    Some(Articulated { definitions: prog.definitions, accelerations: u_dot, pivots, qdot: kane.qdot.clone() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formulation::{mechanics, volterra};
+    use crate::symbolic::eval::Env;
+
+    /// A deterministic generator of test values (SplitMix64).
+    fn next(state: &mut u64) -> f64 {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    /// `x` with `a x = b` by Gaussian elimination with partial pivoting (a test's reference).
+    fn gauss(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+        let n = b.len();
+        for c in 0..n {
+            let r = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap();
+            a.swap(c, r);
+            b.swap(c, r);
+            for i in c + 1..n {
+                let k = a[i][c] / a[c][c];
+                for j in c..n {
+                    a[i][j] -= k * a[c][j];
+                }
+                b[i] -= k * b[c];
+            }
+        }
+        let mut x = vec![0.0; n];
+        for i in (0..n).rev() {
+            x[i] = (b[i] - (i + 1..n).map(|j| a[i][j] * x[j]).sum::<f64>()) / a[i][i];
+        }
+        x
+    }
+
+    /// The articulated-body accelerations solve Kane's dense `M_K u' = L_K` at random states,
+    /// and the pivots' product is `det M_K / det J^2` up to sign (none vanish at random).
+    fn agrees(model: &Model) -> usize {
+        let mech = mechanics::derive(model);
+        let kane = volterra::derive(model, &mech, &[], &model.quasi_full).unwrap();
+        let aba = derive(model, &mech, &kane).unwrap_or_else(|| panic!("{}: no articulated-body form", model.name));
+        let p = kane.u.len();
+        let mut seed = 3u64;
+        for _ in 0..3 {
+            let mut env = Env::default();
+            for (s, v) in &model.parameters {
+                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
+            }
+            env.set(Symbol::new("pi"), std::f64::consts::PI);
+            for (f, body) in &model.time_functions {
+                env.define(*f, model.t, *body);
+            }
+            env.set(model.t, next(&mut seed));
+            for q in model.coordinates.iter().chain(&kane.u) {
+                env.set(*q, next(&mut seed));
+            }
+            let m: Vec<Vec<f64>> = (0..p).map(|i| (0..p).map(|j| kane.mass_ni.get(i, j).eval(&env).unwrap()).collect()).collect();
+            let l: Vec<f64> = kane.l_ni.iter().map(|e| e.eval(&env).unwrap()).collect();
+            let want = gauss(m, l);
+            for (s, e) in &aba.definitions {
+                let v = e.eval(&env).unwrap();
+                env.set(*s, v);
+            }
+            for (i, w) in want.iter().enumerate() {
+                let got = aba.accelerations[i].eval(&env).unwrap();
+                assert!((got - w).abs() <= 1e-9 * (1.0 + w.abs()), "{}: u'[{i}] {got} against {w}", model.name);
+            }
+            for d in &aba.pivots {
+                assert!(d.eval(&env).unwrap() > 0.0, "{}: a pivot not positive", model.name);
+            }
+        }
+        aba.pivots.len()
+    }
+
+    #[test]
+    fn the_articulated_body_accelerations_solve_kanes_equations() {
+        // The pendulum's hinges are written in relative angles of absolute coordinates: two
+        // columns per hinge, one axis.
+        assert_eq!(agrees(&crate::model::load("../models/pendulum_on_cart_5.ron").unwrap()), 6);
+        assert_eq!(agrees(&crate::model::examples::n_link_pendulum_on_cart(3).build().unwrap()), 4);
+        // A floating base (six axes on the world, one L D L^T) and hinges below it.
+        assert_eq!(agrees(&crate::model::examples::floating_chain(3).build().unwrap()), 9);
+        for name in ["three_body", "satellite_boom"] {
+            let model = crate::model::load(format!("../models/{name}.ron")).unwrap();
+            let p = volterra::derive(&model, &mechanics::derive(&model), &[], &model.quasi_full).unwrap().u.len();
+            assert_eq!(agrees(&model), p, "{name}");
+        }
+    }
+}
