@@ -913,7 +913,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -921,6 +920,7 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];

@@ -433,7 +433,6 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -441,6 +440,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -1301,8 +1301,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1310,6 +1308,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -2285,7 +2285,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -2293,6 +2292,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -3204,7 +3204,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -3212,6 +3211,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];

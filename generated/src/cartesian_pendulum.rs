@@ -361,7 +361,6 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -369,6 +368,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -823,8 +823,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -832,6 +830,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = w[0][0] * force[0] + c[0];
@@ -1343,7 +1343,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1351,6 +1350,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -1800,7 +1800,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1808,6 +1807,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];

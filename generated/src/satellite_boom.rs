@@ -662,7 +662,6 @@ pub mod lagrange {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -670,6 +669,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -2389,8 +2389,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -2398,6 +2396,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -4559,7 +4559,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -4567,6 +4566,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -5870,7 +5870,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -5878,6 +5877,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];

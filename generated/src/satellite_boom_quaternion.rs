@@ -721,7 +721,6 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -729,6 +728,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -2598,8 +2598,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -2607,6 +2605,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -4891,7 +4891,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -4899,6 +4898,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];
@@ -6224,7 +6224,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -6232,6 +6231,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = qdot[2];

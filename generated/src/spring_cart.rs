@@ -377,7 +377,6 @@ pub mod lagrange {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -385,6 +384,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -1063,8 +1063,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1072,6 +1070,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = w[0][0] * force[0] + w[0][1] * force[1] + c[0];
@@ -1779,7 +1779,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1787,6 +1786,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -2433,7 +2433,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let power = a.power;
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -2441,6 +2440,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let power = a.power;
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];

@@ -384,7 +384,6 @@ pub mod lagrange {
             }
         }
         let (qdot, mut matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (power, power_weights) = (a.power, a.power_weights);
         if let Err(column) = solve_dense(&mut matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -392,6 +391,7 @@ pub mod lagrange {
                 value: column as f64,
             });
         }
+        let (power, power_weights) = (a.power, a.power_weights);
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -1076,8 +1076,6 @@ pub mod maggi {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (w, c) = (a.w, a.c);
-        let (power, power_weights) = (a.power, a.power_weights);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1085,6 +1083,8 @@ pub mod maggi {
                 value: column as f64,
             });
         }
+        let (w, c) = (a.w, a.c);
+        let (power, power_weights) = (a.power, a.power_weights);
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = w[0][0] * force[0] + c[0];
@@ -1808,7 +1808,6 @@ pub mod kane {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (power, power_weights) = (a.power, a.power_weights);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -1816,6 +1815,7 @@ pub mod kane {
                 value: column as f64,
             });
         }
+        let (power, power_weights) = (a.power, a.power_weights);
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];
@@ -2559,7 +2559,6 @@ pub mod reduced_volterra {
             }
         }
         let (qdot, matrix, mut force) = (a.qdot, a.matrix, a.force);
-        let (power, power_weights) = (a.power, a.power_weights);
         if let Err(column) = solve_ldl(&matrix, &mut force) {
             return Err(Failure::Singular {
                 t,
@@ -2567,6 +2566,7 @@ pub mod reduced_volterra {
                 value: column as f64,
             });
         }
+        let (power, power_weights) = (a.power, a.power_weights);
         dstate[0] = qdot[0];
         dstate[1] = qdot[1];
         dstate[2] = force[0];

@@ -53,8 +53,9 @@ pub fn report(model: &Model, d: &Derivation, assemblies: &[(String, String)], la
     }
     let _ = writeln!(w, "\nhow each right-hand side assembles and solves its matrix (the plan the emitted code and the evaluator follow):");
     for e in &d.equations {
-        let assembly = assemblies.iter().find(|(name, _)| name == e.name()).map_or(String::new(), |(_, how)| format!("; {how}"));
-        let _ = writeln!(w, "  {:<17} {}: {}{assembly}", e.name(), e.matrix_name, crate::emit::ldl::Solve::for_equations(e).describe());
+        let how =
+            assemblies.iter().find(|(name, _)| name == e.name()).map_or_else(|| crate::emit::ldl::Solve::for_equations(e).describe(), |(_, how)| how.clone());
+        let _ = writeln!(w, "  {:<17} {}: {how}", e.name(), e.matrix_name);
     }
     let mut items = vec![("T".to_string(), mech.kinetic), ("V".to_string(), mech.potential)];
     section(w, "energies:", &mut items, latex);

@@ -26,6 +26,30 @@ pub(super) struct Assembled {
     pub body: super::function::Body,
     pub reads: Vec<Expr>,
     pub description: String,
+    /// How the right-hand side solves: its matrix's plan, or no solve.
+    pub solve: Solve,
+    /// What each check the route adds after the formulation's own means (the articulated-body
+    /// recursion's pivots).
+    pub pivots: Vec<String>,
+}
+
+/// A right-hand side's items and what the module's summary says of them.
+struct RhsItems {
+    items: TokenStream,
+    /// Whether it reads `t`.
+    depends_on_time: bool,
+    solve: Solve,
+    /// How it assembles.
+    assembly: String,
+    /// What each of its checks' vanishing means.
+    conditions: Vec<String>,
+}
+
+/// The body that assembles a matrix and forcing to solve, and what it reads.
+struct ByMatrix {
+    body: super::function::Body,
+    reads: Vec<Expr>,
+    description: String,
 }
 
 /// Largest singular factor (tree nodes) named by its formula in `Failure::Singular`.
@@ -131,7 +155,7 @@ impl Emitter<'_> {
             state_names.push("W".into());
         }
         let checks = self.runtime_factors(f);
-        let (assemble, depends_on_time, solve, assembly) = self.assemble(f, shared, &checks)?;
+        let RhsItems { items: assemble, depends_on_time, solve, assembly, conditions } = self.assemble(f, shared, &checks)?;
         let init = self.initial_state(f, shared)?;
         let vel = self.velocities_fn(f, &checks)?;
         let margin = self.singular_margin(f, &checks)?;
@@ -156,7 +180,7 @@ impl Emitter<'_> {
                 state_names: state_names.clone(),
                 matrix_size: f.mass.rows,
                 post: f.post.as_ref().map(|(w, _)| (w.rows, w.cols)),
-                conditions: conditions(&checks),
+                conditions,
                 matrix_name: f.matrix_name.to_string(),
                 stabilization: f.stabilization.as_ref().map(|s| s.len()),
                 power_weights: f.constraint_power.is_some(),
@@ -206,7 +230,6 @@ impl Emitter<'_> {
     /// [`Emitter::rate_outputs`] with the rates, matrix and forcing given (the dense form's or
     /// the recursion's).
     fn rate_outputs_of(&self, f: &Equations, shared: &FromMechanics, (qdot, mass, forcing): (&[Expr], &crate::symbolic::Matrix, &[Expr])) -> Vec<Expr> {
-        let model = self.model;
         let n = mass.rows;
         let mut outputs: Vec<Expr> = f.kept.iter().map(|&j| qdot[j]).collect();
         for i in 0..n {
@@ -220,14 +243,19 @@ impl Emitter<'_> {
             outputs.extend(c.iter().copied());
         }
         if self.work {
-            let to_qdot: HashMap<Symbol, Expr> = model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
             let offset = f.constraint_power.as_ref().map_or(Expr::zero(), |(_, offset)| *offset);
-            outputs.push(shared.power.subs(&to_qdot) + offset);
+            outputs.push(self.power_output(shared, qdot) + offset);
             if let Some((weights, _)) = &f.constraint_power {
                 outputs.extend(weights.iter().copied());
             }
         }
         outputs
+    }
+
+    /// The power `Q . q'` of the applied forces with the rates `qdot`.
+    fn power_output(&self, shared: &FromMechanics, qdot: &[Expr]) -> Expr {
+        let to_qdot: HashMap<Symbol, Expr> = self.model.velocities.iter().copied().zip(qdot.iter().copied()).collect();
+        shared.power.subs(&to_qdot)
     }
 
     /// The outputs of a right-hand side's body from its rates, matrix and forcing: then the
@@ -244,8 +272,43 @@ impl Emitter<'_> {
 
     /// The right-hand side's body: the dense form's entries, or the recursion over the tree of
     /// frames where its body takes fewer operations ([`super::assembly::prefers_recursion`]:
-    /// both bodies are built, and the counts compared are the emitted code's).
+    /// both bodies are built, and the counts compared are the emitted code's); then, where the
+    /// articulated-body recursion gives the rates with fewer operations than that body and its
+    /// solve ([`super::assembly::prefers_articulated`]), that one, with no matrix.
     pub(super) fn assembly(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<Assembled, ModelError> {
+        let by_matrix = self.matrix_assembly(f, shared, checks)?;
+        let plan = Solve::for_equations(f);
+        let ByMatrix { body, reads, description } = by_matrix;
+        let (assembly_total, solve_total) = (body.ops.total(), plan.cost().total());
+        let matrix_route = |description: String| Assembled { body, reads, description, solve: plan.clone(), pivots: Vec::new() };
+        let Some(a) = f.articulated.as_ref().filter(|_| f.post.is_none() && f.stabilization.is_none() && f.constraint_power.is_none()) else {
+            return Ok(matrix_route(description));
+        };
+        let rhs_name = format!("{}::rhs", f.name());
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        let mut rates: Vec<Expr> = f.kept.iter().map(|&j| a.qdot[j]).collect();
+        rates.extend(a.accelerations.iter().copied());
+        if self.work {
+            rates.push(self.power_output(shared, &a.qdot));
+        }
+        let all_checks: Vec<Expr> = checks.iter().chain(&a.pivots).copied().collect();
+        let reads = rates.iter().copied().chain(all_checks.iter().copied()).chain(a.definitions.iter().map(|(_, e)| *e)).collect();
+        let direct = self.trial_body(&rhs_name, &a.definitions, &Self::rhs_outputs(f, rates, &all_checks), &inputs, &args)?;
+        let by_recursion = direct.ops.total();
+        Ok(if super::assembly::prefers_articulated(by_recursion, assembly_total + solve_total) {
+            let description =
+                format!("assembly: articulated-body recursion, {by_recursion} operations and no solve (the matrix's: {assembly_total} + solve {solve_total})");
+            let pivots = (1..=a.pivots.len()).map(|k| format!("pivot {k} of the articulated-body recursion vanishes ({} singular)", f.matrix_name)).collect();
+            Assembled { body: direct, reads, description, solve: Solve::Articulated { pivots: a.pivots.len() }, pivots }
+        } else {
+            matrix_route(format!("{description} (articulated-body recursion: {by_recursion} operations, no solve)"))
+        })
+    }
+
+    /// The body that assembles the matrix and forcing to solve: the dense form's entries or the
+    /// recursion over the tree of frames, the one with fewer operations.
+    fn matrix_assembly(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<ByMatrix, ModelError> {
         let rhs_name = format!("{}::rhs", f.name());
         let args = state_args();
         let inputs = self.state_inputs(f);
@@ -255,7 +318,7 @@ impl Emitter<'_> {
         let reads: Vec<Expr> = rates.iter().copied().chain(checks.iter().copied()).collect();
         let body = self.trial_body(&rhs_name, &[], &Self::rhs_outputs(f, rates, checks), &inputs, &args)?;
         let Some(r) = &f.recursion else {
-            return Ok(Assembled { body, reads, description: "assembly: dense entries".to_string() });
+            return Ok(ByMatrix { body, reads, description: "assembly: dense entries".to_string() });
         };
         let rates = self.rate_outputs_of(f, shared, (&r.qdot, &r.mass, &r.forcing));
         let tree_reads = rates.iter().copied().chain(checks.iter().copied()).chain(r.definitions.iter().map(|(_, e)| *e)).collect();
@@ -263,16 +326,29 @@ impl Emitter<'_> {
         let (by_tree, by_entries) = (recursive.ops.total(), body.ops.total());
         Ok(if super::assembly::prefers_recursion(by_tree, by_entries) {
             let description = format!("assembly: recursion over the tree of frames, {by_tree} operations (dense entries: {by_entries})");
-            Assembled { body: recursive, reads: tree_reads, description }
+            ByMatrix { body: recursive, reads: tree_reads, description }
         } else {
             let description = format!("assembly: dense entries, {by_entries} operations (recursion over the tree of frames: {by_tree})");
-            Assembled { body, reads, description }
+            ByMatrix { body, reads, description }
         })
+    }
+
+    /// The matrix alone, for `matrix` where the right-hand side assembles none: the recursion
+    /// over the tree of frames where there is one, else the dense entries.
+    fn matrix_body(&mut self, f: &Equations) -> Result<super::module::Placed, ModelError> {
+        let name = format!("{}::matrix", f.name());
+        let args = state_args();
+        let inputs = self.state_inputs(f);
+        let n = f.mass.rows;
+        let (definitions, mass) = f.recursion.as_ref().map_or((&[][..], &f.mass), |r| (&r.definitions[..], &r.mass));
+        let outputs: Vec<Expr> = (0..n).flat_map(|i| (0..n).map(move |j| mass.get(i.min(j), i.max(j)))).collect();
+        let b = self.trial_body(&name, definitions, &outputs, &inputs, &args)?;
+        self.record_body(&name, b, &args)
     }
 
     /// `Assembly`, `assemble`, `finish`, `rhs`, `rhs_baumgarte` (Lagrange) and `matrix`,
     /// whether the right-hand side reads `t` (decided on the same outputs), and how it solves.
-    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<(TokenStream, bool, Solve, String), ModelError> {
+    fn assemble(&mut self, f: &Equations, shared: &FromMechanics, checks: &[Expr]) -> Result<RhsItems, ModelError> {
         let model = self.model;
         let name = f.name();
         let work = self.work;
@@ -282,12 +358,11 @@ impl Emitter<'_> {
         let n = f.mass.rows;
         let args = state_args();
         let rhs_name = format!("{name}::rhs");
-        let Assembled { body: b, reads, description: assembly } = self.assembly(f, shared, checks)?;
+        let Assembled { body: b, reads, description: assembly, solve: plan, pivots } = self.assembly(f, shared, checks)?;
         let t = model.t;
         let prepared = self.prep.prepare_all(&reads);
         let depends_on_time = any_contains(&prepared, t);
         let b = self.record_body(&rhs_name, b, &args)?;
-        let plan = Solve::for_equations(f);
         let mut solve = plan.cost();
         if f.constraint_power.is_some() {
             // The moving constraints' power after the solve: `power_weights . x`.
@@ -303,11 +378,17 @@ impl Emitter<'_> {
             s
         };
         let qd_out = take(nq);
-        let rows: Vec<TokenStream> = take(n * n).chunks(n).map(|r| quote!([#(#r),*])).collect();
+        let rows: Vec<TokenStream> = take(if plan.reads_matrix() { n * n } else { 0 }).chunks(n).map(|r| quote!([#(#r),*])).collect();
         let force_out = take(n);
-        let (n_l, nq_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(checks.len()));
-        let mut fields = vec![quote!(qdot: [f64; #nq_l]), quote!(matrix: [[f64; #n_l]; #n_l]), quote!(force: [f64; #n_l])];
-        let mut values = vec![quote!(qdot: [#(#qd_out),*]), quote!(matrix: [#(#rows),*]), quote!(force: [#(#force_out),*])];
+        let mut conditions = conditions(checks);
+        conditions.extend(pivots);
+        let (n_l, nq_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(conditions.len()));
+        let mut fields = vec![quote!(qdot: [f64; #nq_l]), quote!(force: [f64; #n_l])];
+        let mut values = vec![quote!(qdot: [#(#qd_out),*]), quote!(force: [#(#force_out),*])];
+        if plan.reads_matrix() {
+            fields.insert(1, quote!(matrix: [[f64; #n_l]; #n_l]));
+            values.insert(1, quote!(matrix: [#(#rows),*]));
+        }
         // The speeds' rates from the solution x (in `force` after the solve).
         let speed_values: Vec<TokenStream> = match &f.post {
             None => (0..n_speeds)
@@ -361,10 +442,9 @@ impl Emitter<'_> {
         } else {
             TokenStream::new()
         };
-        let check_out = take(checks.len());
+        let check_out = take(conditions.len());
         fields.push(quote!(checks: [f64; #nc_l]));
         values.push(quote!(checks: [#(#check_out),*]));
-        let conditions = conditions(checks);
         let stabilized = match &f.stabilization {
             None => TokenStream::new(),
             Some(stab) => {
@@ -417,10 +497,41 @@ impl Emitter<'_> {
             if f.post.is_some() || name == "lagrange" { "q'" } else { "u" },
         ));
         let matrix_doc = doc(&format!("The matrix `rhs` solves numerically ({matrix_name}), for monitoring its conditioning."));
-        let (solve_call, solve_item, matrix_mut) = match (plan.sparse(), &plan) {
-            (Some(sparse), _) => (quote!(solve_ldl(&matrix, &mut force)), sparse.emit(&mut self.splices), TokenStream::new()),
-            (None, Solve::Ldl(_)) => (quote!(solve_spd(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
-            (None, Solve::Lu(_)) => (quote!(solve_dense(&mut matrix, &mut force)), TokenStream::new(), quote!(mut)),
+        let solve_with = |call: TokenStream, matrix_mut: TokenStream| {
+            quote! {
+                let (qdot, #matrix_mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+                if let Err(column) = #call {
+                    return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
+                }
+            }
+        };
+        let (solve_stmts, solve_item) = match (plan.sparse(), &plan) {
+            (Some(sparse), _) => (solve_with(quote!(solve_ldl(&matrix, &mut force)), TokenStream::new()), sparse.emit(&mut self.splices)),
+            (None, Solve::Ldl(_)) => (solve_with(quote!(solve_spd(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
+            (None, Solve::Lu(_)) => (solve_with(quote!(solve_dense(&mut matrix, &mut force)), quote!(mut)), TokenStream::new()),
+            (None, Solve::Articulated { .. }) => (quote!(let (qdot, force) = (a.qdot, a.force);), TokenStream::new()),
+        };
+        let matrix_fn = if plan.reads_matrix() {
+            quote! {
+                #matrix_doc
+                pub fn matrix(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE]) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+                    assemble(t, state, params, g_i).matrix
+                }
+            }
+        } else {
+            let m = self.matrix_body(f)?;
+            let (stmts, helpers) = (&m.stmts, &m.helpers);
+            let fn_args = arg_list(&args, &m.used_args);
+            let rows: Vec<TokenStream> = m.outputs.chunks(n).map(|r| quote!([#(#r),*])).collect();
+            quote! {
+                #matrix_doc
+                #[allow(non_snake_case, clippy::all)]
+                pub fn matrix(#(#fn_args),*) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
+                    #stmts
+                    [#(#rows),*]
+                }
+                #helpers
+            }
         };
         let items = quote! {
             #[doc = "Size of the matrix `rhs` solves numerically."]
@@ -447,12 +558,9 @@ impl Emitter<'_> {
                         return Err(Failure::Singular { t, condition: condition.into(), value });
                     }
                 }
-                let (qdot, #matrix_mut matrix, mut force) = (a.qdot, a.matrix, a.force);
+                #solve_stmts
                 #unpack_post
                 #unpack_power
-                if let Err(column) = #solve_call {
-                    return Err(Failure::Singular { t, condition: #matrix_name.into(), value: column as f64 });
-                }
                 #(dstate[#qd_idx] = qdot[#qd_idx];)*
                 #(dstate[#s_idx] = #speed_values;)*
                 #power_stmt
@@ -468,12 +576,9 @@ impl Emitter<'_> {
                 finish(t, assemble(t, state, params, g_i), dstate)
             }
             #stabilized
-            #matrix_doc
-            pub fn matrix(t: f64, state: &[f64; STATES], params: &Params, g_i: &[f64; NUM_IGNORABLE]) -> [[f64; MATRIX_SIZE]; MATRIX_SIZE] {
-                assemble(t, state, params, g_i).matrix
-            }
+            #matrix_fn
         };
-        Ok((items, depends_on_time, plan, assembly))
+        Ok(RhsItems { items, depends_on_time, solve: plan, assembly, conditions })
     }
 
     fn initial_state(&mut self, f: &Equations, shared: &FromMechanics) -> Result<TokenStream, ModelError> {

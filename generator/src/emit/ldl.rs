@@ -369,6 +369,9 @@ pub enum Solve {
     Lu(usize),
     /// The symmetric positive definite matrices of the other formulations.
     Ldl(Box<LdlPlan>),
+    /// No solve: the right-hand side's body gives the speeds' rates by the articulated-body
+    /// recursion ([`crate::formulation::articulated`]), having checked its `pivots`.
+    Articulated { pivots: usize },
 }
 
 impl Solve {
@@ -405,6 +408,7 @@ impl Solve {
         match self {
             Solve::Lu(n) => super::form::solve_cost(*n),
             Solve::Ldl(plan) => plan.cost(),
+            Solve::Articulated { .. } => OpCount::default(),
         }
     }
 
@@ -413,7 +417,14 @@ impl Solve {
         match self {
             Solve::Lu(n) => format!("LU with partial pivoting, {n} x {n}, at most {} operations", self.cost().total()),
             Solve::Ldl(plan) => plan.describe(),
+            Solve::Articulated { pivots } => format!("no solve: the articulated-body recursion gives the rates, {pivots} pivots checked"),
         }
+    }
+
+    /// True where the right-hand side assembles a matrix to solve (not by the articulated-body
+    /// recursion).
+    pub fn reads_matrix(&self) -> bool {
+        !matches!(self, Solve::Articulated { .. })
     }
 
     /// The plan, where it is `L D L^T` skipping structural zeros (emitted as `solve_ldl`).

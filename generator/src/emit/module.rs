@@ -196,7 +196,7 @@ pub(super) fn generate(model: &Model, options: &Options) -> Result<Generated, Mo
     })
 }
 
-/// Each formulation's assembly of its right-hand side, as the summary describes it
+/// Each formulation's solve and assembly of its right-hand side, as the summary describes them
 /// ([`super::assembly`]): the same bodies [`generate`] compares, built from a derivation by
 /// emitters that emit what [`generate`]'s two emit (every formulation but the last, and the
 /// last), so that a body reused there is reused here.
@@ -214,12 +214,14 @@ pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
         em.start(f);
         // Without a recursion there is nothing to compare; the dense body is built only where
         // a later formulation of the same emitter takes it under its speeds' names.
-        let feeds = || f.kind.speeds() == seam::Speeds::Rates && group.iter().any(|g| g.recursion.is_some() && !em.speeds_as_rates(g).is_empty());
-        let description = if f.recursion.is_none() && !feeds() {
-            "assembly: dense entries".to_string()
+        let tree = |g: &formulation::Equations| g.recursion.is_some() || g.articulated.is_some();
+        let feeds = || f.kind.speeds() == seam::Speeds::Rates && group.iter().any(|g| tree(g) && !em.speeds_as_rates(g).is_empty());
+        let description = if !tree(f) && !feeds() {
+            format!("{}; assembly: dense entries", super::ldl::Solve::for_equations(f).describe())
         } else {
             let checks = em.runtime_factors(f);
-            em.assembly(f, &shared, &checks)?.description
+            let chosen = em.assembly(f, &shared, &checks)?;
+            format!("{}; {}", chosen.solve.describe(), chosen.description)
         };
         out.push((f.name().to_string(), description));
     }

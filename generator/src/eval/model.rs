@@ -38,6 +38,8 @@ pub struct EvaluatedForm {
     initial_state: Box<dyn Kernel>,
     velocities: Box<dyn Kernel>,
     singular_margin: Box<dyn Kernel>,
+    /// `matrix`'s own tape where `rhs` assembles none (the articulated-body recursion).
+    matrix: Option<Box<dyn Kernel>>,
     /// The exact Jacobians' tapes, when the module has them.
     jacobian: Option<Box<dyn Kernel>>,
     parameter_jacobian: Option<Box<dyn Kernel>>,
@@ -115,6 +117,7 @@ impl Evaluated {
                     initial_state: take(&format!("{name}::initial_state"), tapes)?,
                     velocities: take(&format!("{name}::velocities"), tapes)?,
                     singular_margin: take(&format!("{name}::singular_margin"), tapes)?,
+                    matrix: take(&format!("{name}::matrix"), tapes),
                     jacobian: take(&format!("{name}::jacobian"), tapes),
                     parameter_jacobian: take(&format!("{name}::parameter_jacobian"), tapes),
                     shape: shape.clone(),
@@ -304,7 +307,7 @@ impl EvaluatedForm {
                 out
             };
             let qdot = take(nq);
-            let (matrix_out, force_out) = (take(n * n), take(n));
+            let (matrix_out, force_out) = (take(if s.solve.reads_matrix() { n * n } else { 0 }), take(n));
             let post = s.post.map(|(rw, cw)| (take(rw * cw), take(rw)));
             let power = if s.work { Some(take(1)[0]) } else { None };
             let power_weights = if s.power_weights { take(n) } else { &[] };
@@ -330,6 +333,8 @@ impl EvaluatedForm {
                 let solved = match &s.solve {
                     Solve::Ldl(plan) => COLUMN.with(|scratch| plan.solve(matrix, force, &mut scratch.borrow_mut())),
                     Solve::Lu(_) => solve_dense(n, matrix, force, pivots),
+                    // The body's forcing slots hold the rates already.
+                    Solve::Articulated { .. } => Ok(()),
                 };
                 if let Err(column) = solved {
                     return Err(Failure::Singular { t, condition: Cow::Owned(s.matrix_name.clone()), value: column as f64 });
@@ -585,7 +590,10 @@ impl FormulationFunctions for EvaluatedForm {
         self.check_state(state, params, g_i)?;
         let (nq, n) = (self.shape.kept.len(), self.shape.matrix_size);
         check("out", out, n * n)?;
-        run(&*self.rhs, t, params, g_i, state, |o| out.copy_from_slice(&o[nq..nq + n * n]));
+        match &self.matrix {
+            Some(own) => run(&**own, t, params, g_i, state, |o| out.copy_from_slice(&o[..n * n])),
+            None => run(&*self.rhs, t, params, g_i, state, |o| out.copy_from_slice(&o[nq..nq + n * n])),
+        }
         Ok(())
     }
 

@@ -205,9 +205,8 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articu
     }
     // Backward: articulated inertias and bias forces.
     let mut inertia: Vec<SpatialInertia> = t.own.iter().map(SpatialInertia::rigid).collect();
-    let mut force: Vec<Force> = (0..nodes)
-        .map(|k| if t.own[k].is_zero() { Force::zero() } else { velocity[k].cross_force(&t.own[k].apply(&velocity[k])) })
-        .collect();
+    let mut force: Vec<Force> =
+        (0..nodes).map(|k| if t.own[k].is_zero() { Force::zero() } else { velocity[k].cross_force(&t.own[k].apply(&velocity[k])) }).collect();
     let mut pivots = Vec::new();
     // Per axis: U = I^A S', and D^-1 with its joint's other entries (one axis: 1 / D).
     let mut u_of = vec![Force::zero(); p];

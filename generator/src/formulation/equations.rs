@@ -56,6 +56,10 @@ pub struct Equations {
     /// The same `mass` and `forcing` as a recursion over the tree of frames (Kane's form):
     /// emission keeps it where it takes fewer operations ([`super::recursive`]).
     pub recursion: Option<super::recursive::Recursion>,
+    /// The speeds' rates `u'` of the same equations by the articulated-body recursion, with no
+    /// matrix and no solve (Kane's form on a tree): emission keeps it where its right-hand
+    /// side takes fewer operations than an assembly and its solve ([`super::articulated`]).
+    pub articulated: Option<super::articulated::Articulated>,
 }
 
 impl Transfer for Equations {
@@ -72,6 +76,9 @@ impl Transfer for Equations {
         self.constraint_power.visit(v);
         if let Some(r) = &mut self.recursion {
             r.visit(v);
+        }
+        if let Some(a) = &mut self.articulated {
+            a.visit(v);
         }
     }
 }

@@ -46,7 +46,8 @@ impl Method for Kane {
             stabilization: None,
             elimination: v.route,
             constraint_power: None,
-            recursion: shared.recursion.cloned(),
+            recursion: shared.trees.composite.cloned(),
+            articulated: shared.trees.articulated.cloned(),
         })
     }
 }

@@ -63,6 +63,7 @@ impl Method for Lagrange {
             elimination: "none (multipliers solved with the accelerations)",
             constraint_power: None,
             recursion: None,
+            articulated: None,
         })
     }
 }

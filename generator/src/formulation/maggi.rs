@@ -54,6 +54,7 @@ impl Method for Maggi {
             elimination: kane.route,
             constraint_power: None,
             recursion: None,
+            articulated: None,
         })
     }
 }

@@ -62,10 +62,19 @@ pub struct Shared<'a> {
     pub kane: Option<&'a Volterra>,
     /// The reduced form, when requested.
     pub reduced: Option<&'a Volterra>,
-    /// Kane's equations by the recursion over the tree of frames, derived once for Kane's and
-    /// the reduced form ([`recursive::derive`]).
-    pub recursion: Option<&'a recursive::Recursion>,
+    /// Kane's equations by the recursions over the tree of frames, derived once for Kane's and
+    /// the reduced form.
+    pub trees: Trees<'a>,
     pub integrate_ignorable: bool,
+}
+
+/// Kane's equations by the recursions over a tree of frames, where the model is one.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Trees<'a> {
+    /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions ([`recursive::derive`]).
+    pub composite: Option<&'a recursive::Recursion>,
+    /// `u'` by the articulated-body recursion ([`articulated::derive`]).
+    pub articulated: Option<&'a articulated::Articulated>,
 }
 
 /// Everything derived from a model, once.
@@ -189,11 +198,11 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
                          method: &dyn Method,
                          kane: Option<&Volterra>,
                          reduced: Option<&Volterra>,
-                         recursion: Option<&recursive::Recursion>|
+                         trees: Trees|
      -> Result<(), ModelError> {
         if wants(def) {
             let start = Instant::now();
-            let shared = Shared { model, mech: &mech, kane, reduced, recursion, integrate_ignorable: request.integrate_ignorable };
+            let shared = Shared { model, mech: &mech, kane, reduced, trees, integrate_ignorable: request.integrate_ignorable };
             let mut eqs = method.equations(&shared)?;
             if let Some(force) = &moving_force {
                 eqs.constraint_power = Some(power::constraint_power(model, &mech, force, &eqs));
@@ -204,7 +213,7 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
         }
         Ok(())
     };
-    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None, None)?;
+    formulate(stages, FormulationDef::Lagrange, &lagrange::Lagrange, None, None, Trees::default())?;
     clock = Instant::now();
     // Kane's form serves Kane, Maggi, and the reduced method's Schur route.
     let kane = if wants(FormulationDef::Kane) || wants(FormulationDef::Maggi) || wants(FormulationDef::ReducedVolterra) {
@@ -217,19 +226,24 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     let kane = kane?;
     times.push(("ignorable", decided.time));
     times.push(("kane", kane_time));
-    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, None)?;
+    formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, Trees::default())?;
     let recursion = match &kane {
         Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => recursive::derive(model, &mech, k),
         _ => None,
     };
-    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, recursion.as_ref())?;
+    let articulated = match &kane {
+        Some(k) if wants(FormulationDef::Kane) => articulated::derive(model, &mech, k),
+        _ => None,
+    };
+    let trees = Trees { composite: recursion.as_ref(), articulated: articulated.as_ref() };
+    formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, trees)?;
     clock = Instant::now();
     let reduced = match &kane {
         Some(k) if wants(FormulationDef::ReducedVolterra) => Some(volterra::derive_reduced(model, &mech, &decided.chosen, &model.quasi_reduced, k)?),
         _ => None,
     };
     times.push(("reduced", clock.elapsed()));
-    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), recursion.as_ref())?;
+    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), Trees { articulated: None, ..trees })?;
     times.push(("formulations", formulations));
     let cuts = crate::symbolic::report::take();
     Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times, cuts })

@@ -51,7 +51,7 @@ impl Method for ReducedVolterra {
         let mut mass = v.mass_ni.clone();
         let mut forcing = v.l_ni.clone();
         let mut singular = v.singular_factors.clone();
-        let mut recursion = shared.kane.zip(shared.recursion).and_then(|(kane, rec)| super::recursive::reduce(model, shared.mech, kane, rec, v));
+        let mut recursion = shared.kane.zip(shared.trees.composite).and_then(|(kane, rec)| super::recursive::reduce(model, shared.mech, kane, rec, v));
         let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
         if !shared.integrate_ignorable {
             if let Some((j, place)) = needed(model, v).into_iter().find_map(|(j, p)| p.map(|p| (j, p))) {
@@ -97,6 +97,7 @@ impl Method for ReducedVolterra {
             elimination: v.route,
             constraint_power: None,
             recursion,
+            articulated: None,
         })
     }
 }
