@@ -1,7 +1,8 @@
-//! Kane's right-hand side by the articulated-body recursion (no matrix, no solve), where the
-//! generator chooses it: the 20-link pendulum on a cart, evaluated in-process. Its rates equal
-//! Lagrange's, its `matrix` is still the mass matrix, and a joint with nothing beyond it (a
-//! massless last bob) stops it with `Failure::Singular` naming the pivot instead of NaN.
+//! Kane's and the reduced right-hand sides by the articulated-body recursion (no matrix, no
+//! solve), where the generator chooses it: the 20-link pendulum on a cart, evaluated in-process.
+//! Kane's rates equal Lagrange's, the reduced form's equal Kane's, `matrix` is still the mass
+//! matrix, and a joint with nothing beyond it (a massless last bob) stops it with
+//! `Failure::Singular` naming the pivot instead of NaN.
 
 use generator::emit::{Options, generate};
 use generator::model::examples::n_link_pendulum_on_cart;
@@ -64,23 +65,54 @@ fn kanes_articulated_body_rates_are_lagranges_and_its_matrix_is_the_mass_matrix(
     assert!(compared > 60, "{compared} nonzero accelerations");
 }
 
+/// The reduced form's speeds are coordinates' rates (all but the cart's, which its momentum
+/// replaces): at the same `q, q'` their rates are Lagrange's accelerations of those coordinates.
+#[test]
+fn the_reduced_articulated_body_rates_are_lagranges_accelerations() {
+    let model = n_link_pendulum_on_cart(20).build().unwrap();
+    let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
+    let how = &summary.solves.iter().find(|(name, _)| name == "reduced_volterra").unwrap().1;
+    assert!(how.starts_with("no solve: the articulated-body recursion"), "{how}");
+    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
+    let (lagrange, reduced) = (form("lagrange"), form("reduced_volterra"));
+    let (m, p, s) = (model.m(), &evaluated.default_params, evaluated.ignorable.len());
+    let mut compared = 0;
+    for k in 0..4 {
+        let (q, qdot) = (state(m, k), state(m, k + 3));
+        let dl = both(lagrange, &q, &qdot, p, s).2.unwrap();
+        let (y, _, dr) = both(reduced, &q, &qdot, p, s);
+        let dr = dr.unwrap();
+        let kept = reduced.states() - reduced.layout.speeds - usize::from(reduced.layout.work);
+        for (i, u) in y[kept..kept + reduced.layout.speeds].iter().enumerate() {
+            let j = qdot.iter().position(|v| v == u).expect("a speed is a coordinate's rate");
+            let (want, got) = (dl[m + j], dr[kept + i]);
+            assert!((want - got).abs() <= 1e-10 * want.abs().max(1.0), "state #{k} speed {i} (q{j}''): reduced {got:e}, Lagrange {want:e}");
+            compared += usize::from(want != 0.0);
+        }
+    }
+    assert!(compared > 60, "{compared} nonzero rates");
+}
+
 #[test]
 fn a_massless_last_bob_stops_the_articulated_body_recursion_at_its_pivot() {
     let model = n_link_pendulum_on_cart(20).build().unwrap();
     let evaluated = generator::eval::evaluate(&model).unwrap();
-    let kane = evaluated.formulations.iter().find(|f| f.name() == "kane").unwrap();
     let last = evaluated.parameter_names.iter().position(|n| n == "m20").expect("the last bob's mass");
-    let mut p = evaluated.default_params.clone();
     let (m, s) = (model.m(), evaluated.ignorable.len());
     let (q, qdot) = (state(m, 1), state(m, 2));
-    let (y, g, _) = both(kane, &q, &qdot, &p, s);
-    p[last] = 0.0;
-    let mut d = vec![0.0; y.len()];
-    match kane.rhs(0.0, &y, &p, &g, &mut d) {
-        Err(Failure::Singular { condition, value, .. }) => {
-            assert!(condition.contains("pivot") && condition.contains("articulated-body"), "{condition}");
-            assert!(value.abs() <= 1e-12, "{value}");
+    for name in ["kane", "reduced_volterra"] {
+        let form = evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
+        let mut p = evaluated.default_params.clone();
+        let (y, g, _) = both(form, &q, &qdot, &p, s);
+        p[last] = 0.0;
+        let mut d = vec![0.0; y.len()];
+        match form.rhs(0.0, &y, &p, &g, &mut d) {
+            Err(Failure::Singular { condition, value, .. }) => {
+                assert!(condition.contains("pivot") && condition.contains("articulated-body"), "{name}: {condition}");
+                assert!(value.abs() <= 1e-12, "{name}: {value}");
+            }
+            other => panic!("{name}: expected the pivot's singularity, got {other:?}"),
         }
-        other => panic!("expected the pivot's singularity, got {other:?}"),
     }
 }

@@ -272,6 +272,91 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articu
     Some(Articulated { definitions: prog.definitions, accelerations: u_dot, pivots, qdot: kane.qdot.clone() })
 }
 
+/// The reduced Volterra equations' rates `u_N'` of `model` by the articulated-body recursion,
+/// from Kane's (`kane_aba`, of the Kane form `kane`) and the reduced form `reduced`: the
+/// ignorable rates from the momenta first, `u_I = M_II^-1 (G_I - G_I|u_I=0)`, where
+/// `G_I|u_I=0 = S_I^T h` is the momentum of the subtree the ignorable axes move (`h` summed from
+/// the leaves at `u_I = 0`) and `M_II` the dense form's (small and simplified: the total mass on
+/// a floating base), then Kane's recursion at that `u`. `None` unless each ignorable rate is
+/// the rate of one axis of a joint on the world, alone in its row of `J`.
+pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Articulated, reduced: &Volterra) -> Option<Articulated> {
+    use crate::symbolic::limits::Limits;
+    use crate::symbolic::matrix::{SolveOptions, solve};
+    use std::collections::{HashMap, HashSet};
+    let super::volterra::SchurMap { map, rates, .. } = super::volterra::schur_map(model, mech, &reduced.ignorable, &model.quasi_reduced, kane)?;
+    let t = tree(model, mech, kane)?;
+    let axes = axes(&t, mech);
+    // Each ignorable rate: its axis, the coefficient of the rate in its row.
+    let mut ignorable_axes = Vec::with_capacity(rates.len());
+    for &c in &rates {
+        let mut holding = axes.iter().filter(|a| a.row.iter().any(|(k, _)| *k == c));
+        let (Some(axis), None) = (holding.next(), holding.next()) else { return None };
+        let on_world = t.joints[axis.node].as_ref().is_some_and(|j| j.parent == 0);
+        let [(_, k)] = axis.row[..] else { return None };
+        if !on_world {
+            return None;
+        }
+        ignorable_axes.push((axis, k));
+    }
+    let (s, n_u) = (rates.len(), map.len());
+    let mut prog = Program { definitions: Vec::new(), prefix: "abr" };
+    // The momentum at u_I = 0: velocities from the leaves' parents out, momenta back in.
+    let mut at_rest: HashMap<Symbol, Expr> = map.iter().zip(&reduced.u).map(|(&r, u)| (kane.u[r], u.expr())).collect();
+    for &r in &rates {
+        at_rest.insert(kane.u[r], Expr::zero());
+    }
+    let nodes = t.joints.len();
+    let still = Motion { w: zero3(), v: zero3() };
+    let mut velocity = vec![still; nodes];
+    for k in 1..nodes {
+        let (Some(joint), Some(r)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
+        let relative = Motion { w: r.relative.w.map(|e| e.subs(&at_rest)), v: r.relative.v.map(|e| e.subs(&at_rest)) };
+        velocity[k] = prog.motion(velocity[joint.parent].in_child(joint).add(&relative));
+    }
+    let mut momentum: Vec<Force> = (0..nodes).map(|k| if t.own[k].is_zero() { Force::zero() } else { t.own[k].apply(&velocity[k]) }).collect();
+    for k in (1..nodes).rev() {
+        let (Some(joint), Some(_)) = (t.joints[k].as_ref(), t.rates[k].as_ref()) else { continue };
+        momentum[k] = prog.force(momentum[k]);
+        if joint.parent != 0 {
+            momentum[joint.parent] = momentum[joint.parent].add(&momentum[k].in_parent(joint));
+        }
+    }
+    // u_I = M_II^-1 (G - G|u_I=0).
+    let mut m_ii = crate::symbolic::Matrix::zeros(s, s);
+    let mut rhs = crate::symbolic::Matrix::zeros(s, 1);
+    for (a, &ra) in rates.iter().enumerate() {
+        for (b, &rb) in rates.iter().enumerate() {
+            m_ii.set(a, b, kane.mass_ni.get(ra, rb));
+        }
+        let (axis, k) = &ignorable_axes[a];
+        rhs.set(a, 0, reduced.g[a].expr() - *k * axis.motion.power(&momentum[axis.node]));
+    }
+    let opts =
+        SolveOptions { constants: model.constant_symbols(), limits: Limits { max_terms: 2_000, max_work: 400_000 }, determinant: false, normalize: false };
+    let u_i = solve(&m_ii, &rhs, &opts).ok()?;
+    let mut sigma: HashMap<Symbol, Expr> = map.iter().zip(&reduced.u).map(|(&r, u)| (kane.u[r], u.expr())).collect();
+    for (b, &r) in rates.iter().enumerate() {
+        let v = prog.bind(u_i.x.get(b, 0));
+        sigma.insert(kane.u[r], v);
+    }
+    // Kane's recursion at that u: the definitions that read a quasi-velocity, renamed.
+    let speeds: HashSet<Symbol> = kane.u.iter().copied().collect();
+    let mut moving: HashSet<Symbol> = HashSet::new();
+    for (sym, e) in &kane_aba.definitions {
+        if e.free_symbols().iter().any(|x| speeds.contains(x) || moving.contains(x)) {
+            moving.insert(*sym);
+            let v = prog.bind(e.subs(&sigma));
+            sigma.insert(*sym, v);
+        } else {
+            prog.definitions.push((*sym, *e));
+        }
+    }
+    let accelerations = (0..n_u).map(|k| kane_aba.accelerations[map[k]].subs(&sigma)).collect();
+    let pivots = Expr::subs_all(&kane_aba.pivots, &sigma);
+    let qdot = Expr::subs_all(&kane_aba.qdot, &sigma);
+    Some(Articulated { definitions: prog.definitions, accelerations, pivots, qdot })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -347,6 +432,57 @@ mod tests {
             }
         }
         aba.pivots.len()
+    }
+
+    /// The reduced recursion's `u_N'` solve the dense reduced `M_NI u_N' = L_NI` at random
+    /// states and momenta.
+    fn reduced_agrees(model: &Model) {
+        let mech = mechanics::derive(model);
+        let kane = volterra::derive(model, &mech, &[], &model.quasi_full).unwrap();
+        let chosen = crate::formulation::ignorable::choose(model, &crate::formulation::ignorable::analyze(model, &mech)).unwrap();
+        let reduced = volterra::derive_reduced(model, &mech, &chosen, &model.quasi_reduced, &kane).unwrap();
+        let aba = derive(model, &mech, &kane).unwrap();
+        let r = reduce(model, &mech, &kane, &aba, &reduced).unwrap_or_else(|| panic!("{}: no reduced recursion", model.name));
+        let n = reduced.u.len();
+        let mut seed = 5u64;
+        for _ in 0..3 {
+            let mut env = Env::default();
+            for (s, v) in &model.parameters {
+                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
+            }
+            env.set(Symbol::new("pi"), std::f64::consts::PI);
+            for (f, body) in &model.time_functions {
+                env.define(*f, model.t, *body);
+            }
+            env.set(model.t, next(&mut seed));
+            for q in model.coordinates.iter().chain(&reduced.u).chain(&reduced.g) {
+                env.set(*q, next(&mut seed));
+            }
+            let m: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| reduced.mass_ni.get(i, j).eval(&env).unwrap()).collect()).collect();
+            let l: Vec<f64> = reduced.l_ni.iter().map(|e| e.eval(&env).unwrap()).collect();
+            let want = gauss(m, l);
+            for (s, e) in &r.definitions {
+                let v = e.eval(&env).unwrap();
+                env.set(*s, v);
+            }
+            for (i, w) in want.iter().enumerate() {
+                let got = r.accelerations[i].eval(&env).unwrap();
+                assert!((got - w).abs() <= 1e-9 * (1.0 + w.abs()), "{}: u_N'[{i}] {got} against {w}", model.name);
+            }
+            for (j, e) in reduced.qdot.iter().enumerate() {
+                let (want, got) = (e.eval(&env).unwrap(), r.qdot[j].eval(&env).unwrap());
+                assert!((got - want).abs() <= 1e-9 * (1.0 + want.abs()), "{}: q'[{j}] {got} against {want}", model.name);
+            }
+        }
+    }
+
+    #[test]
+    fn the_reduced_articulated_body_rates_solve_the_reduced_equations() {
+        reduced_agrees(&crate::model::load("../models/pendulum_on_cart_5.ron").unwrap());
+        reduced_agrees(&crate::model::examples::floating_chain(3).build().unwrap());
+        for name in ["satellite_boom", "three_body"] {
+            reduced_agrees(&crate::model::load(format!("../models/{name}.ron")).unwrap());
+        }
     }
 
     #[test]

@@ -232,7 +232,7 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
         _ => None,
     };
     let articulated = match &kane {
-        Some(k) if wants(FormulationDef::Kane) => articulated::derive(model, &mech, k),
+        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => articulated::derive(model, &mech, k),
         _ => None,
     };
     let trees = Trees { composite: recursion.as_ref(), articulated: articulated.as_ref() };
@@ -243,7 +243,7 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
         _ => None,
     };
     times.push(("reduced", clock.elapsed()));
-    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), Trees { articulated: None, ..trees })?;
+    formulate(stages, FormulationDef::ReducedVolterra, &reduced::ReducedVolterra, kane.as_ref(), reduced.as_ref(), trees)?;
     times.push(("formulations", formulations));
     let cuts = crate::symbolic::report::take();
     Ok(Derivation { mechanics: mech, reports: decided.reports, ignorable: decided.chosen, kane, reduced, equations, stages: times, cuts })

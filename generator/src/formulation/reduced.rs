@@ -52,6 +52,7 @@ impl Method for ReducedVolterra {
         let mut forcing = v.l_ni.clone();
         let mut singular = v.singular_factors.clone();
         let mut recursion = shared.kane.zip(shared.trees.composite).and_then(|(kane, rec)| super::recursive::reduce(model, shared.mech, kane, rec, v));
+        let mut articulated = shared.kane.zip(shared.trees.articulated).and_then(|(kane, aba)| super::articulated::reduce(model, shared.mech, kane, aba, v));
         let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
         if !shared.integrate_ignorable {
             if let Some((j, place)) = needed(model, v).into_iter().find_map(|(j, p)| p.map(|p| (j, p))) {
@@ -78,6 +79,14 @@ impl Method for ReducedVolterra {
                 r.forcing = Expr::subs_all(&r.forcing, &zero);
                 r.qdot = Expr::subs_all(&r.qdot, &zero);
             }
+            if let Some(a) = &mut articulated {
+                for (_, e) in &mut a.definitions {
+                    *e = e.subs(&zero);
+                }
+                a.accelerations = Expr::subs_all(&a.accelerations, &zero);
+                a.pivots = Expr::subs_all(&a.pivots, &zero);
+                a.qdot = Expr::subs_all(&a.qdot, &zero);
+            }
         }
         Ok(Equations {
             kind: self.kind(),
@@ -97,7 +106,7 @@ impl Method for ReducedVolterra {
             elimination: v.route,
             constraint_power: None,
             recursion,
-            articulated: None,
+            articulated,
         })
     }
 }
