@@ -31,6 +31,24 @@ pub fn prefers_articulated(by_recursion: usize, by_matrix: usize) -> bool {
     by_recursion < by_matrix
 }
 
+/// True where the articulated-body recursion may win and its body is worth building: its
+/// program's operations before the emitter's sharing, `articulated`, are at most the
+/// composite-body recursion's, `composite` (counted the same way), and the solve it saves
+/// together (a tie is built: the emitted counts decide). Where it is more, it only adds to the composite recursion what the solve would
+/// cost (scene 2's Kane: 1028 against 746 + 241 before sharing; 846 against 454 + 241 once emitted).
+/// Without a composite recursion to compare with, it is built.
+///
+/// ```
+/// use generator::emit::assembly::worth_building_articulated;
+/// assert!(worth_building_articulated(3629, Some(2562), 1362));
+/// assert!(!worth_building_articulated(1028, Some(746), 241));
+/// assert!(worth_building_articulated(2801, Some(1902), 899)); // the spatial 6-link chain
+/// assert!(worth_building_articulated(1028, None, 241));
+/// ```
+pub fn worth_building_articulated(articulated: usize, composite: Option<usize>, solve: usize) -> bool {
+    composite.is_none_or(|c| articulated <= c + solve)
+}
+
 /// Each formulation's solve and assembly, `(name, description)`, as the generator chooses them
 /// from the derivation `d` under `options` (the summary's text).
 ///

@@ -284,6 +284,17 @@ impl Emitter<'_> {
         let Some(a) = f.articulated.as_ref().filter(|_| f.post.is_none() && f.stabilization.is_none() && f.constraint_power.is_none()) else {
             return Ok(matrix_route(description));
         };
+        let estimate = super::function::program_ops(&a.definitions, &a.accelerations.iter().chain(&a.pivots).copied().collect::<Vec<_>>());
+        let composite = f.recursion.as_ref().map(|r| {
+            let outputs: Vec<Expr> = r.mass.data.iter().chain(&r.forcing).copied().collect();
+            super::function::program_ops(&r.definitions, &outputs)
+        });
+        if !super::assembly::worth_building_articulated(estimate, composite, solve_total) {
+            let c = composite.expect("built without a composite recursion");
+            return Ok(matrix_route(format!(
+                "{description} (articulated-body recursion not built: {estimate} operations before sharing against the composite recursion's {c} and the solve's {solve_total})"
+            )));
+        }
         let rhs_name = format!("{}::rhs", f.name());
         let args = state_args();
         let inputs = self.state_inputs(f);

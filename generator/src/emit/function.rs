@@ -224,6 +224,21 @@ impl<'a> SymbolUse<'a> {
     }
 }
 
+/// Operations of `outputs` and the `definitions` they read, before emission's sharing
+/// ([`crate::symbolic::expr::dag_ops`]): a cheap estimate of a program's size.
+///
+/// ```
+/// use generator::emit::function::program_ops;
+/// use generator::symbolic::{Expr, Symbol};
+/// let (x, d, unread) = (Symbol::new("x"), Symbol::internal("d0"), Symbol::internal("d1"));
+/// let definitions = [(d, x.expr() * x.expr() + Expr::int(1)), (unread, x.expr().sin())];
+/// assert_eq!(program_ops(&definitions, &[d.expr() * Expr::int(3)]), 3); // pow, add, mul
+/// ```
+pub fn program_ops(definitions: &[(Symbol, Expr)], outputs: &[Expr]) -> usize {
+    let read: Vec<Expr> = needed(definitions, outputs).into_iter().map(|(_, e)| e).chain(outputs.iter().copied()).collect();
+    crate::symbolic::expr::dag_ops(&read)
+}
+
 /// The definitions the outputs read, directly or through later definitions (a recursion forms
 /// vectors some of whose components nothing reads).
 fn needed(definitions: &[(Symbol, Expr)], outputs: &[Expr]) -> Vec<(Symbol, Expr)> {
