@@ -4,7 +4,8 @@
 //! matrix, and a joint with nothing beyond it (a massless last bob) stops it with
 //! `Failure::Singular` naming the pivot instead of NaN.
 
-use generator::emit::{Options, generate};
+use generator::emit::{Options, Summary};
+use generator::model::Model;
 use generator::model::examples::n_link_pendulum_on_cart;
 use seam::{Failure, Formulation};
 
@@ -21,16 +22,26 @@ fn both(f: &Formulation, q: &[f64], qdot: &[f64], p: &[f64], ignorable: usize) -
     (y, g, r)
 }
 
+/// The 20-link pendulum evaluated in-process, with the generator's summary of the same emission.
+fn pendulum() -> (Model, seam::Model, Summary) {
+    let model = n_link_pendulum_on_cart(20).build().unwrap();
+    let (evaluated, summary) = generator::eval::evaluate_reporting(&model, &Options::from_model(&model)).unwrap();
+    (model, evaluated, summary)
+}
+
+/// The formulation `name` gives its rates by the articulated-body recursion.
+fn assert_articulated(summary: &Summary, name: &str) {
+    let how = &summary.solves.iter().find(|(n, _)| n == name).unwrap().1;
+    assert!(how.starts_with("no solve: the articulated-body recursion"), "{name}: {how}");
+}
+
 #[test]
 fn kanes_articulated_body_rates_are_lagranges_and_its_matrix_is_the_mass_matrix() {
-    let model = n_link_pendulum_on_cart(20).build().unwrap();
-    let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
-    let kane_solve = &summary.solves.iter().find(|(name, _)| name == "kane").unwrap().1;
-    assert!(kane_solve.starts_with("no solve: the articulated-body recursion"), "{kane_solve}");
+    let (model, evaluated, summary) = pendulum();
+    assert_articulated(&summary, "kane");
     let (kane_ops, lagrange_ops) = (summary.ops("kane::rhs").unwrap(), summary.ops("lagrange::rhs").unwrap());
     assert_eq!(kane_ops.solve.total(), 0);
     assert!(kane_ops.total() < lagrange_ops.total(), "{} against {}", kane_ops.total(), lagrange_ops.total());
-    let evaluated = generator::eval::evaluate(&model).unwrap();
     let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
     let (lagrange, kane) = (form("lagrange"), form("kane"));
     let (m, p, s) = (model.m(), &evaluated.default_params, evaluated.ignorable.len());
@@ -69,11 +80,8 @@ fn kanes_articulated_body_rates_are_lagranges_and_its_matrix_is_the_mass_matrix(
 /// replaces): at the same `q, q'` their rates are Lagrange's accelerations of those coordinates.
 #[test]
 fn the_reduced_articulated_body_rates_are_lagranges_accelerations() {
-    let model = n_link_pendulum_on_cart(20).build().unwrap();
-    let summary = generate(&model, &Options::from_model(&model)).unwrap().summary;
-    let how = &summary.solves.iter().find(|(name, _)| name == "reduced_volterra").unwrap().1;
-    assert!(how.starts_with("no solve: the articulated-body recursion"), "{how}");
-    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let (model, evaluated, summary) = pendulum();
+    assert_articulated(&summary, "reduced_volterra");
     let form = |name: &str| evaluated.formulations.iter().find(|f| f.name() == name).unwrap();
     let (lagrange, reduced) = (form("lagrange"), form("reduced_volterra"));
     let (m, p, s) = (model.m(), &evaluated.default_params, evaluated.ignorable.len());
@@ -96,8 +104,9 @@ fn the_reduced_articulated_body_rates_are_lagranges_accelerations() {
 
 #[test]
 fn a_massless_last_bob_stops_the_articulated_body_recursion_at_its_pivot() {
-    let model = n_link_pendulum_on_cart(20).build().unwrap();
-    let evaluated = generator::eval::evaluate(&model).unwrap();
+    let (model, evaluated, summary) = pendulum();
+    assert_articulated(&summary, "kane");
+    assert_articulated(&summary, "reduced_volterra");
     let last = evaluated.parameter_names.iter().position(|n| n == "m20").expect("the last bob's mass");
     let (m, s) = (model.m(), evaluated.ignorable.len());
     let (q, qdot) = (state(m, 1), state(m, 2));

@@ -49,6 +49,12 @@ pub fn worth_building_articulated(articulated: usize, composite: Option<usize>, 
     composite.is_none_or(|c| articulated <= c + solve)
 }
 
+/// The summary's and `inspect`'s line for a right-hand side: how it solves, then how it
+/// assembles.
+pub(super) fn summary_line(solve: &super::ldl::Solve, assembly: &str) -> String {
+    format!("{}; {assembly}", solve.describe())
+}
+
 /// Each formulation's solve and assembly, `(name, description)`, as the generator chooses them
 /// from the derivation `d` under `options` (the summary's text).
 ///

@@ -28,9 +28,6 @@ pub(super) struct Assembled {
     pub description: String,
     /// How the right-hand side solves: its matrix's plan, or no solve.
     pub solve: Solve,
-    /// What each check the route adds after the formulation's own means (the articulated-body
-    /// recursion's pivots).
-    pub pivots: Vec<String>,
 }
 
 /// A right-hand side's items and what the module's summary says of them.
@@ -166,7 +163,7 @@ impl Emitter<'_> {
         let eqs = usize_lit(f.equations);
         let integrates = f.kept.len() == m;
         let mod_doc = doc(&format!("{}: {n_states} states, {} equations.", f.label, f.equations));
-        self.forms.push((name.to_string(), n_states, f.equations, format!("{}; {assembly}", solve.describe())));
+        self.forms.push((name.to_string(), n_states, f.equations, super::assembly::summary_line(&solve, &assembly)));
         let seam_const = super::seam::formulation_const(&self.seam, f.kind, f.stabilization.is_some(), self.options.jacobian, self.emits_parameter_jacobian());
         let kept: Vec<Literal> = f.kept.iter().map(|&j| usize_lit(j)).collect();
         let (n_kept, n_speeds) = (usize_lit(f.kept.len()), usize_lit(f.speeds.len()));
@@ -280,7 +277,7 @@ impl Emitter<'_> {
         let plan = Solve::for_equations(f);
         let ByMatrix { body, reads, description } = by_matrix;
         let (assembly_total, solve_total) = (body.ops.total(), plan.cost().total());
-        let matrix_route = |description: String| Assembled { body, reads, description, solve: plan.clone(), pivots: Vec::new() };
+        let matrix_route = |description: String| Assembled { body, reads, description, solve: plan.clone() };
         let Some(a) = f.articulated.as_ref().filter(|_| f.post.is_none() && f.stabilization.is_none() && f.constraint_power.is_none()) else {
             return Ok(matrix_route(description));
         };
@@ -310,8 +307,7 @@ impl Emitter<'_> {
         Ok(if super::assembly::prefers_articulated(by_recursion, assembly_total + solve_total) {
             let description =
                 format!("assembly: articulated-body recursion, {by_recursion} operations and no solve (the matrix's: {assembly_total} + solve {solve_total})");
-            let pivots = (1..=a.pivots.len()).map(|k| format!("pivot {k} of the articulated-body recursion vanishes ({} singular)", f.matrix_name)).collect();
-            Assembled { body: direct, reads, description, solve: Solve::Articulated { pivots: a.pivots.len() }, pivots }
+            Assembled { body: direct, reads, description, solve: Solve::Articulated { pivots: a.pivots.len() } }
         } else {
             matrix_route(format!("{description} (articulated-body recursion: {by_recursion} operations, no solve)"))
         })
@@ -369,7 +365,7 @@ impl Emitter<'_> {
         let n = f.mass.rows;
         let args = state_args();
         let rhs_name = format!("{name}::rhs");
-        let Assembled { body: b, reads, description: assembly, solve: plan, pivots } = self.assembly(f, shared, checks)?;
+        let Assembled { body: b, reads, description: assembly, solve: plan } = self.assembly(f, shared, checks)?;
         let t = model.t;
         let prepared = self.prep.prepare_all(&reads);
         let depends_on_time = any_contains(&prepared, t);
@@ -392,7 +388,10 @@ impl Emitter<'_> {
         let rows: Vec<TokenStream> = take(if plan.reads_matrix() { n * n } else { 0 }).chunks(n).map(|r| quote!([#(#r),*])).collect();
         let force_out = take(n);
         let mut conditions = conditions(checks);
-        conditions.extend(pivots);
+        if let Solve::Articulated { pivots } = &plan {
+            // The articulated-body recursion's pivots follow the formulation's own checks.
+            conditions.extend((1..=*pivots).map(|k| format!("pivot {k} of the articulated-body recursion vanishes ({} singular)", f.matrix_name)));
+        }
         let (n_l, nq_l, nc_l) = (usize_lit(n), usize_lit(nq), usize_lit(conditions.len()));
         let mut fields = vec![quote!(qdot: [f64; #nq_l]), quote!(force: [f64; #n_l])];
         let mut values = vec![quote!(qdot: [#(#qd_out),*]), quote!(force: [#(#force_out),*])];

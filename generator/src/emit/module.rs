@@ -217,11 +217,11 @@ pub(super) fn assemblies(model: &Model, d: &formulation::Derivation, options: &O
         let tree = |g: &formulation::Equations| g.recursion.is_some() || g.articulated.is_some();
         let feeds = || f.kind.speeds() == seam::Speeds::Rates && group.iter().any(|g| tree(g) && !em.speeds_as_rates(g).is_empty());
         let description = if !tree(f) && !feeds() {
-            format!("{}; assembly: dense entries", super::ldl::Solve::for_equations(f).describe())
+            super::assembly::summary_line(&super::ldl::Solve::for_equations(f), "assembly: dense entries")
         } else {
             let checks = em.runtime_factors(f);
             let chosen = em.assembly(f, &shared, &checks)?;
-            format!("{}; {}", chosen.solve.describe(), chosen.description)
+            super::assembly::summary_line(&chosen.solve, &chosen.description)
         };
         out.push((f.name().to_string(), description));
     }

@@ -221,7 +221,7 @@ impl ModelFunctions for Evaluated {
 /// `PIVOT_TOLERANCE` times the largest entry. It is [`lu_factor`] then [`lu_solve`]: the same
 /// operations in the same order (the row swaps applied to `b` first, then the same
 /// eliminations by column), so the same numbers as the module's one-pass elimination.
-fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) -> Result<(), usize> {
+pub(crate) fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64], pivots: &mut Vec<usize>) -> Result<(), usize> {
     pivots.resize(n, 0);
     lu_factor(n, a, pivots)?;
     lu_solve(n, a, pivots, b);

@@ -60,10 +60,7 @@ pub struct Articulated {
 
 impl Transfer for Articulated {
     fn visit(&mut self, v: &mut dyn Visitor) {
-        for (s, e) in &mut self.definitions {
-            s.visit(v);
-            e.visit(v);
-        }
+        self.definitions.visit(v);
         self.accelerations.visit(v);
         self.pivots.visit(v);
         self.qdot.visit(v);
@@ -77,32 +74,29 @@ struct Axis {
     row: Vec<(usize, Expr)>,
 }
 
-/// The joints' axes: each column of a joint's `S` a numeric multiple of one of its axes.
-/// `None` when a column is another combination of them.
+/// The joints' axes: each column of a joint's `S` a numeric multiple of one of its axes found
+/// before it, or a new axis.
 fn axes(t: &Tree, mech: &Mechanics) -> Vec<Axis> {
     let mut out: Vec<Axis> = Vec::new();
     for (node, rates) in t.rates.iter().enumerate() {
         let Some(rates) = rates else { continue };
         let first = out.len();
         for (c, s) in &rates.columns {
-            let multiple = out[first..].iter().position(|axis| {
-                let (a, b) = (components(&axis.motion), components(s));
-                let Some(k) = a.iter().position(|e| !e.is_zero()) else { return false };
-                let ratio = mech.tidy.of(b[k] / a[k]);
-                ratio.as_num().is_some() && a.iter().zip(&b).all(|(x, y)| mech.tidy.of(*y - ratio * *x).is_zero())
-            });
-            match multiple {
-                Some(j) => {
-                    let axis = &out[first + j];
-                    let k = components(&axis.motion).iter().position(|e| !e.is_zero()).expect("an axis is not zero");
-                    let ratio = mech.tidy.of(components(s)[k] / components(&axis.motion)[k]);
-                    out[first + j].row.push((*c, ratio));
-                }
+            match out[first..].iter_mut().find_map(|axis| multiple(&axis.motion, s, mech).map(|k| (axis, k))) {
+                Some((axis, k)) => axis.row.push((*c, k)),
                 None => out.push(Axis { node, motion: *s, row: vec![(*c, Expr::one())] }),
             }
         }
     }
     out
+}
+
+/// `k` with `s = k axis`, where `k` is a number.
+fn multiple(axis: &Motion, s: &Motion, mech: &Mechanics) -> Option<Expr> {
+    let (a, b) = (components(axis), components(s));
+    let i = a.iter().position(|e| !e.is_zero())?;
+    let k = mech.tidy.of(b[i] / a[i]);
+    (k.as_num().is_some() && a.iter().zip(&b).all(|(x, y)| mech.tidy.of(*y - k * *x).is_zero())).then_some(k)
 }
 
 fn components(m: &Motion) -> [Expr; 6] {
@@ -170,9 +164,13 @@ fn solve_small(prog: &mut Program, d: &[Vec<Expr>], b: &[Expr], pivots: &mut Vec
 /// not split the quasi-velocities into one rate per axis by a triangular `J`, or a joint of
 /// several axes hangs below another frame.
 pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articulated> {
-    let t = tree(model, mech, kane)?;
+    on_tree(&tree(model, mech, kane)?, mech, kane)
+}
+
+/// [`derive`] on the tree `t` of Kane's form `kane`.
+pub(super) fn on_tree(t: &Tree, mech: &Mechanics, kane: &Volterra) -> Option<Articulated> {
     let p = kane.u.len();
-    let axes = axes(&t, mech);
+    let axes = axes(t, mech);
     if axes.len() != p {
         return None;
     }
@@ -280,12 +278,16 @@ pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Articu
 /// a floating base), then Kane's recursion at that `u`. `None` unless each ignorable rate is
 /// the rate of one axis of a joint on the world, alone in its row of `J`.
 pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Articulated, reduced: &Volterra) -> Option<Articulated> {
+    reduce_on(&tree(model, mech, kane)?, model, mech, kane, kane_aba, reduced)
+}
+
+/// [`reduce`] on the tree `t` of Kane's form `kane`.
+pub(super) fn reduce_on(t: &Tree, model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Articulated, reduced: &Volterra) -> Option<Articulated> {
     use crate::symbolic::limits::Limits;
     use crate::symbolic::matrix::{SolveOptions, solve};
     use std::collections::{HashMap, HashSet};
     let super::volterra::SchurMap { map, rates, .. } = super::volterra::schur_map(model, mech, &reduced.ignorable, &model.quasi_reduced, kane)?;
-    let t = tree(model, mech, kane)?;
-    let axes = axes(&t, mech);
+    let axes = axes(t, mech);
     // Each ignorable rate: its axis, the coefficient of the rate in its row.
     let mut ignorable_axes = Vec::with_capacity(rates.len());
     for &c in &rates {
@@ -360,39 +362,15 @@ pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_aba: &Artic
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formulation::test_states::random_state;
     use crate::formulation::{mechanics, volterra};
-    use crate::symbolic::eval::Env;
 
-    /// A deterministic generator of test values (SplitMix64).
-    fn next(state: &mut u64) -> f64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-
-    /// `x` with `a x = b` by Gaussian elimination with partial pivoting (a test's reference).
-    fn gauss(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+    /// `x` with `a x = b` by the evaluator's LU with partial pivoting (a test's reference).
+    fn solve(a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
         let n = b.len();
-        for c in 0..n {
-            let r = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap();
-            a.swap(c, r);
-            b.swap(c, r);
-            for i in c + 1..n {
-                let k = a[i][c] / a[c][c];
-                for j in c..n {
-                    a[i][j] -= k * a[c][j];
-                }
-                b[i] -= k * b[c];
-            }
-        }
-        let mut x = vec![0.0; n];
-        for i in (0..n).rev() {
-            x[i] = (b[i] - (i + 1..n).map(|j| a[i][j] * x[j]).sum::<f64>()) / a[i][i];
-        }
-        x
+        let mut flat: Vec<f64> = a.into_iter().flatten().collect();
+        crate::eval::model::solve_dense(n, &mut flat, &mut b, &mut Vec::new()).unwrap();
+        b
     }
 
     /// The articulated-body accelerations solve Kane's dense `M_K u' = L_K` at random states,
@@ -404,21 +382,10 @@ mod tests {
         let p = kane.u.len();
         let mut seed = 3u64;
         for _ in 0..3 {
-            let mut env = Env::default();
-            for (s, v) in &model.parameters {
-                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
-            }
-            env.set(Symbol::new("pi"), std::f64::consts::PI);
-            for (f, body) in &model.time_functions {
-                env.define(*f, model.t, *body);
-            }
-            env.set(model.t, next(&mut seed));
-            for q in model.coordinates.iter().chain(&kane.u) {
-                env.set(*q, next(&mut seed));
-            }
+            let mut env = random_state(model, &kane.u, &mut seed);
             let m: Vec<Vec<f64>> = (0..p).map(|i| (0..p).map(|j| kane.mass_ni.get(i, j).eval(&env).unwrap()).collect()).collect();
             let l: Vec<f64> = kane.l_ni.iter().map(|e| e.eval(&env).unwrap()).collect();
-            let want = gauss(m, l);
+            let want = solve(m, l);
             for (s, e) in &aba.definitions {
                 let v = e.eval(&env).unwrap();
                 env.set(*s, v);
@@ -446,21 +413,11 @@ mod tests {
         let n = reduced.u.len();
         let mut seed = 5u64;
         for _ in 0..3 {
-            let mut env = Env::default();
-            for (s, v) in &model.parameters {
-                env.set(*s, *v * (1.0 + 0.2 * next(&mut seed)));
-            }
-            env.set(Symbol::new("pi"), std::f64::consts::PI);
-            for (f, body) in &model.time_functions {
-                env.define(*f, model.t, *body);
-            }
-            env.set(model.t, next(&mut seed));
-            for q in model.coordinates.iter().chain(&reduced.u).chain(&reduced.g) {
-                env.set(*q, next(&mut seed));
-            }
+            let speeds: Vec<Symbol> = reduced.u.iter().chain(&reduced.g).copied().collect();
+            let mut env = random_state(model, &speeds, &mut seed);
             let m: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| reduced.mass_ni.get(i, j).eval(&env).unwrap()).collect()).collect();
             let l: Vec<f64> = reduced.l_ni.iter().map(|e| e.eval(&env).unwrap()).collect();
-            let want = gauss(m, l);
+            let want = solve(m, l);
             for (s, e) in &r.definitions {
                 let v = e.eval(&env).unwrap();
                 env.set(*s, v);

@@ -74,12 +74,8 @@ impl Transfer for Equations {
         self.singular.visit(v);
         self.stabilization.visit(v);
         self.constraint_power.visit(v);
-        if let Some(r) = &mut self.recursion {
-            r.visit(v);
-        }
-        if let Some(a) = &mut self.articulated {
-            a.visit(v);
-        }
+        self.recursion.visit(v);
+        self.articulated.visit(v);
     }
 }
 

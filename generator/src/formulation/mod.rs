@@ -25,6 +25,8 @@ pub mod power;
 pub mod recursive;
 pub mod reduced;
 mod spatial;
+#[cfg(test)]
+mod test_states;
 pub mod volterra;
 
 pub use equations::{Equations, Method};
@@ -71,6 +73,8 @@ pub struct Shared<'a> {
 /// Kane's equations by the recursions over a tree of frames, where the model is one.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Trees<'a> {
+    /// The model's frames as a tree in Kane's quasi-velocities ([`recursive::Tree`]).
+    pub frames: Option<&'a recursive::Tree>,
     /// `M_K` and `L_K` by the composite-body and Newton-Euler recursions ([`recursive::derive`]).
     pub composite: Option<&'a recursive::Recursion>,
     /// `u'` by the articulated-body recursion ([`articulated::derive`]).
@@ -227,15 +231,14 @@ pub fn derive_with(model: &Model, request: &Request, stages: &mut dyn Stages) ->
     times.push(("ignorable", decided.time));
     times.push(("kane", kane_time));
     formulate(stages, FormulationDef::Maggi, &maggi::Maggi, kane.as_ref(), None, Trees::default())?;
-    let recursion = match &kane {
-        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => recursive::derive(model, &mech, k),
+    // The tree of frames, once, for both recursions of Kane's and the reduced form.
+    let frames = match &kane {
+        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => recursive::tree(model, &mech, k).zip(Some(k)),
         _ => None,
     };
-    let articulated = match &kane {
-        Some(k) if wants(FormulationDef::Kane) || wants(FormulationDef::ReducedVolterra) => articulated::derive(model, &mech, k),
-        _ => None,
-    };
-    let trees = Trees { composite: recursion.as_ref(), articulated: articulated.as_ref() };
+    let recursion = frames.as_ref().and_then(|(t, k)| recursive::on_tree(t, k));
+    let articulated = frames.as_ref().and_then(|(t, k)| articulated::on_tree(t, &mech, k));
+    let trees = Trees { frames: frames.as_ref().map(|(t, _)| t), composite: recursion.as_ref(), articulated: articulated.as_ref() };
     formulate(stages, FormulationDef::Kane, &kane::Kane, kane.as_ref(), None, trees)?;
     clock = Instant::now();
     let reduced = match &kane {

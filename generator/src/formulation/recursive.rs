@@ -58,10 +58,7 @@ pub struct Recursion {
 
 impl Transfer for Recursion {
     fn visit(&mut self, v: &mut dyn Visitor) {
-        for (s, e) in &mut self.definitions {
-            s.visit(v);
-            e.visit(v);
-        }
+        self.definitions.visit(v);
         self.mass.visit(v);
         self.forcing.visit(v);
         self.qdot.visit(v);
@@ -81,6 +78,7 @@ impl Recursion {
 }
 
 /// One frame's joint in the quasi-velocities: `v_rel = S u + s` with its columns.
+#[derive(Debug)]
 pub(super) struct JointRates {
     /// `v_rel` in `(q, u, t)`.
     pub(super) relative: Motion,
@@ -90,9 +88,10 @@ pub(super) struct JointRates {
     pub(super) drift: Motion,
 }
 
-/// A model's frames as a tree of rigid bodies in Kane's quasi-velocities, shared by the
-/// recursions ([`derive`], [`super::articulated`]).
-pub(super) struct Tree {
+/// A model's frames as a tree of rigid bodies in Kane's quasi-velocities, built once and shared
+/// by the recursions ([`derive`], [`super::articulated`]).
+#[derive(Debug)]
+pub struct Tree {
     /// Each node's joint to its parent (`None` for the world); the model's frames first, then
     /// a node per body whose centre of mass moves in its frame.
     pub(super) joints: Vec<Option<Joint>>,
@@ -168,7 +167,12 @@ pub(super) fn tree(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<T
 /// (for `q' = W u + X` and the applied forces `U_K`). `None` when no body hangs below a frame
 /// below the world (every frame on the world: the dense form is the recursion already).
 pub fn derive(model: &Model, mech: &Mechanics, kane: &Volterra) -> Option<Recursion> {
-    let Tree { joints, own, rates } = tree(model, mech, kane)?;
+    on_tree(&tree(model, mech, kane)?, kane)
+}
+
+/// [`derive`] on the tree `t` of Kane's form `kane`.
+pub(super) fn on_tree(t: &Tree, kane: &Volterra) -> Option<Recursion> {
+    let (joints, own, rates) = (&t.joints, &t.own, &t.rates);
     let nodes = joints.len();
     let p = kane.u.len();
     let massive: Vec<bool> = rates.iter().map(Option::is_some).collect();
@@ -337,41 +341,8 @@ pub fn reduce(model: &Model, mech: &Mechanics, kane: &Volterra, kane_rec: &Recur
 mod tests {
     use super::*;
     use crate::formulation::mechanics;
+    use crate::formulation::test_states::random_state;
     use crate::formulation::volterra;
-    use crate::symbolic::eval::Env;
-
-    /// A deterministic generator of test values (SplitMix64).
-    fn next(state: &mut u64) -> f64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-
-    /// Random values of the parameters (near their own), `t`, the coordinates (Euler
-    /// parameters on the unit sphere, where their kinematics hold) and `speeds`.
-    fn random_state(model: &Model, speeds: &[Symbol], seed: &mut u64) -> Env {
-        let mut env = Env::default();
-        for (s, v) in &model.parameters {
-            env.set(*s, *v * (1.0 + 0.2 * next(seed)));
-        }
-        env.set(crate::symbolic::Symbol::new("pi"), std::f64::consts::PI);
-        for (f, body) in &model.time_functions {
-            env.define(*f, model.t, *body);
-        }
-        env.set(model.t, next(seed));
-        for q in model.coordinates.iter().chain(speeds) {
-            env.set(*q, next(seed));
-        }
-        let unit: Vec<Symbol> = ["e0", "e1", "e2", "e3"].iter().filter_map(|n| model.coordinates.iter().copied().find(|q| q.name() == *n)).collect();
-        let norm = unit.iter().map(|q| env.get(*q).unwrap().powi(2)).sum::<f64>().sqrt();
-        for q in &unit {
-            env.set(*q, env.get(*q).unwrap() / norm);
-        }
-        env
-    }
 
     /// The recursion gives the dense form's `M_K` and `L_K` at random states of every model
     /// with frames (values of the coordinates, quasi-velocities, parameters and `t`).

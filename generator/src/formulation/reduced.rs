@@ -52,7 +52,11 @@ impl Method for ReducedVolterra {
         let mut forcing = v.l_ni.clone();
         let mut singular = v.singular_factors.clone();
         let mut recursion = shared.kane.zip(shared.trees.composite).and_then(|(kane, rec)| super::recursive::reduce(model, shared.mech, kane, rec, v));
-        let mut articulated = shared.kane.zip(shared.trees.articulated).and_then(|(kane, aba)| super::articulated::reduce(model, shared.mech, kane, aba, v));
+        let mut articulated = shared
+            .kane
+            .zip(shared.trees.frames)
+            .zip(shared.trees.articulated)
+            .and_then(|((kane, frames), aba)| super::articulated::reduce_on(frames, model, shared.mech, kane, aba, v));
         let kept: Vec<usize> = if shared.integrate_ignorable { (0..m).collect() } else { (0..m).filter(|j| !v.ignorable.contains(j)).collect() };
         if !shared.integrate_ignorable {
             if let Some((j, place)) = needed(model, v).into_iter().find_map(|(j, p)| p.map(|p| (j, p))) {
